@@ -1,0 +1,3 @@
+"""mst: design tool for multi-sensitivity soft tactile sensors."""
+
+__version__ = "0.1.0"

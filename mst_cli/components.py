@@ -1,0 +1,58 @@
+"""Catalogue data of bought components: magnet grades, magnetometer boards, TPU.
+
+Facts only, each with its source. Nothing here computes physics.
+"""
+
+from __future__ import annotations
+
+from .geometry import Board
+
+# NdFeB remanence Br (T), typical range per grade; the tool uses the mid value.
+# Source: shared/reference/README.md (manufacturers' grade tables).
+MAGNET_GRADES_T: dict[str, tuple[float, float]] = {
+    "N35": (1.17, 1.22),
+    "N38": (1.22, 1.26),
+    "N40": (1.25, 1.29),
+    "N42": (1.28, 1.32),
+    "N45": (1.32, 1.37),
+    "N48": (1.37, 1.42),
+    "N50": (1.40, 1.45),
+    "N52": (1.43, 1.48),
+}
+
+
+def grade_remanence_T(grade: str) -> float:
+    lo, hi = MAGNET_GRADES_T[grade]
+    return round(0.5 * (lo + hi), 4)
+
+
+# Carrier boards of the MLX90393. Dimensions read off the boards' published design files
+# (shared/reference/README.md); measure a real board before relying on a tight fit.
+# The SparkFun board is the Qwiic standard 1 x 1 inch with the chip at its centre (nominal; the
+# reference data gives no dimensions for it). The bare QFN entry is a 10 x 10 mm custom carrier with the chip at its centre.
+BOARDS: dict[str, Board] = {
+    "adafruit-4022": Board(
+        key="adafruit-4022", name="Adafruit 4022 MLX90393 (STEMMA QT)",
+        length_mm=25.4, width_mm=17.78, thickness_mm=1.6, chip_x_mm=12.6, chip_y_mm=8.3,
+        holes_xy_mm=((2.54, 2.54), (22.86, 2.54), (2.54, 15.24), (22.86, 15.24)),
+    ),
+    "adafruit-4022-original": Board(
+        key="adafruit-4022-original", name="Adafruit 4022 MLX90393 (original)",
+        length_mm=22.86, width_mm=19.05, thickness_mm=1.6,
+        chip_x_mm=11.43, chip_y_mm=9.525,
+    ),
+    "sparkfun-14571": Board(
+        key="sparkfun-14571", name="SparkFun SEN-14571 MLX90393 (Qwiic)",
+        length_mm=25.4, width_mm=25.4, thickness_mm=1.6, chip_x_mm=12.7, chip_y_mm=12.7,
+    ),
+    "bare-qfn": Board(
+        key="bare-qfn", name="bare MLX90393 QFN-16 on a 10 x 10 mm custom board",
+        length_mm=10.0, width_mm=10.0, thickness_mm=1.0, chip_x_mm=5.0, chip_y_mm=5.0,
+    ),
+}
+
+DEFAULT_BOARD = "adafruit-4022"
+
+
+def default_board() -> Board:
+    return BOARDS[DEFAULT_BOARD]

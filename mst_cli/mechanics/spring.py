@@ -1,0 +1,110 @@
+"""Rung L0 ``spring``: closed-form reduced beam model of one hex layer.
+
+Each inclined wall is a clamped-guided beam: the pad end is clamped (the pads are bonded to
+rigid plates and, by left-right symmetry, do not rotate) and the chevron tip is guided (by
+the mirror symmetry about z = h/2 it does not rotate) and free to move sideways (nothing
+pushes on it horizontally). A vertical tip force F, split into a transverse part F cos(theta)
+and an axial part F sin(theta), moves the tip vertically by
+
+    delta / F = cos^2(theta) * (L^3 / (12 E I) + L / (kappa G A)) + sin^2(theta) * L / (E A)
+
+(bending and Timoshenko shear of a clamped-guided beam, plus axial shortening; e.g. Roark's
+Formulas for Stress and Strain, 8th ed., Table 8.1 case 1e, and Timoshenko & Gere). Two walls
+in series make a chevron, two chevrons in parallel make a strut, n_s struts act in parallel:
+
+    k = n_s / c_wall    [N/mm]
+
+After the cavity closes, the layer is a block of solid TPU: the top and bottom pads (2t of
+material) pressed together over the inner width W - 2t/sin(theta) and the strut widths; that
+finite locked stiffness carries the force past the lock.
+
+The kernels are pure numpy, vectorised over any broadcastable arrays, and return finite
+numbers for every input with positive t, h, b, n_s and theta in (0, 90) deg -- including cells
+that the validity checks reject (the geometry kernels floor the lengths).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .. import geometry as geo
+
+SHEAR_COEFFICIENT_RECT = 5.0 / 6.0  # Timoshenko shear coefficient of a rectangular section
+
+
+def wall_compliance_mm_per_N(theta_rad, t_mm, h_mm, b_mm, E_MPa, nu,
+                             bending=True, shear=True, axial=True):
+    """Vertical compliance of one clamped-guided inclined wall, mm/N.
+
+    The switches drop terms for the textbook-limit tests (slender wall: bending only;
+    theta -> 90 deg: axial only).
+    """
+    L = geo.wall_centreline_length_mm(theta_rad, t_mm, h_mm)
+    area = b_mm * t_mm
+    inertia = b_mm * t_mm ** 3 / 12.0
+    G = E_MPa / (2.0 * (1.0 + nu))
+    cos2 = np.cos(theta_rad) ** 2
+    sin2 = np.sin(theta_rad) ** 2
+    c = np.zeros(np.broadcast(theta_rad, t_mm, h_mm, b_mm, E_MPa).shape)
+    if bending:
+        c = c + cos2 * L ** 3 / (12.0 * E_MPa * inertia)
+    if shear:
+        c = c + cos2 * L / (SHEAR_COEFFICIENT_RECT * G * area)
+    if axial:
+        c = c + sin2 * L / (E_MPa * area)
+    return c
+
+
+def layer_stiffness_N_per_mm(theta_rad, t_mm, h_mm, b_mm, n_struts, E_MPa, nu):
+    """Small-load stiffness k of a whole layer (n_s struts, 2 chevrons each, 2 walls each)."""
+    c_wall = wall_compliance_mm_per_N(theta_rad, t_mm, h_mm, b_mm, E_MPa, nu)
+    # chevron = 2 walls in series (2 c); strut = 2 chevrons in parallel; n_s struts in parallel
+    return 2.0 * n_struts / (2.0 * c_wall)
+
+
+def locked_stiffness_N_per_mm(theta_rad, t_mm, width_mm, b_mm, n_struts, E_MPa):
+    """Stiffness once the cavity has closed: 2t of solid TPU over the contact width."""
+    contact_width = np.maximum(2.0 * geo.inner_tip_half_width_mm(theta_rad, t_mm, width_mm), t_mm)
+    return E_MPa * n_struts * b_mm * contact_width / (2.0 * t_mm)
+
+
+@dataclass(frozen=True)
+class LinearLockingLayer:
+    """Bilinear force-displacement law of one layer: k until d_lock, k_locked after.
+
+    Implements the layer protocol the stack solver uses: ``displacement_mm(F)``,
+    ``k_N_per_mm``, ``d_lock_mm``, ``lock_force_N``.
+    """
+
+    k_N_per_mm: float
+    d_lock_mm: float
+    k_locked_N_per_mm: float
+
+    @property
+    def lock_force_N(self) -> float:
+        return self.k_N_per_mm * self.d_lock_mm
+
+    def displacement_mm(self, force_N):
+        F = np.asarray(force_N, dtype=float)
+        R = self.lock_force_N
+        return np.where(F <= R, F / self.k_N_per_mm,
+                        self.d_lock_mm + (F - R) / self.k_locked_N_per_mm)
+
+
+def spring_arrays(theta_rad, t_mm, h_mm, b_mm, n_struts, width_mm, contact_allowance_mm, E_MPa, nu):
+    """(k, d_lock, k_locked) for many layers at once: the design loop's entry point."""
+    k = layer_stiffness_N_per_mm(theta_rad, t_mm, h_mm, b_mm, n_struts, E_MPa, nu)
+    d_lock = geo.lock_stroke_mm(t_mm, h_mm, contact_allowance_mm)
+    k_locked = locked_stiffness_N_per_mm(theta_rad, t_mm, width_mm, b_mm, n_struts, E_MPa)
+    return k, d_lock, k_locked
+
+
+def spring_layer(cell: geo.HexCell, material) -> LinearLockingLayer:
+    """The L0 law of one concrete cell."""
+    k, d_lock, k_locked = spring_arrays(
+        cell.theta_rad, cell.t_mm, cell.h_mm, cell.b_mm, cell.struts_per_chevron,
+        cell.width_mm, cell.contact_allowance_mm,
+        material.youngs_modulus_MPa, material.poisson_ratio)
+    return LinearLockingLayer(float(k), float(d_lock), float(k_locked))

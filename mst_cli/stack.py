@@ -1,0 +1,91 @@
+"""Layers in series: the piecewise force-displacement curve of the stack.
+
+The same force passes through every layer, so the stack compression is the sum of the layer
+compressions, d(F) = sum_j d_j(F). Each layer locks at its own force R_j; sorted, the R_j
+split the force axis into regimes. With bilinear layers (rung L0) d(F) is piecewise linear
+with breakpoints exactly at the sorted R_j, so evaluating it at those points and
+interpolating linearly between them is exact, not an approximation: no time stepping.
+
+Pure numpy; no I/O.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+def series_displacement_mm(force_N, k_N_per_mm, d_lock_mm, k_locked_N_per_mm):
+    """Stack compression of bilinear layers in series, vectorised over designs.
+
+    ``k``, ``d_lock``, ``k_locked`` have shape (..., n_layers); ``force_N`` has shape (..., m)
+    (broadcast against the leading axes). Returns shape (..., m).
+    """
+    F = np.asarray(force_N, dtype=float)[..., :, None]
+    k = np.asarray(k_N_per_mm, dtype=float)[..., None, :]
+    dl = np.asarray(d_lock_mm, dtype=float)[..., None, :]
+    kl = np.asarray(k_locked_N_per_mm, dtype=float)[..., None, :]
+    R = k * dl
+    d_layer = np.where(F <= R, F / k, dl + (F - R) / kl)
+    return d_layer.sum(axis=-1)
+
+
+@dataclass(frozen=True)
+class Stack:
+    """A stack of layer laws (see :mod:`mst_cli.mechanics`), listed bottom to top."""
+
+    layers: tuple
+
+    @property
+    def lock_forces_N(self) -> np.ndarray:
+        """R_j of each layer, in the layers' own order."""
+        return np.array([law.lock_force_N for law in self.layers])
+
+    @property
+    def lock_order(self) -> np.ndarray:
+        """Indices of the layers in the order they lock (stable for equal R)."""
+        return np.argsort(self.lock_forces_N, kind="stable")
+
+    @property
+    def regime_bounds_N(self) -> np.ndarray:
+        """Force thresholds 0 = R_0 < R_(1) < ... < R_(n): the regimes' edges, sorted."""
+        return np.concatenate([[0.0], np.sort(self.lock_forces_N)])
+
+    @property
+    def last_lock_force_N(self) -> float:
+        return float(self.lock_forces_N.max())
+
+    @property
+    def compliance_per_regime_mm_per_N(self) -> np.ndarray:
+        """Compliance dd/dF inside each regime (before the first lock: sum of 1/k_j)."""
+        mids = 0.5 * (self.regime_bounds_N[:-1] + self.regime_bounds_N[1:])
+        return np.array([self.local_compliance_mm_per_N(f) for f in mids])
+
+    def local_compliance_mm_per_N(self, force_N: float) -> float:
+        total = 0.0
+        for law in self.layers:
+            total += (1.0 / law.k_N_per_mm if force_N < law.lock_force_N
+                      else 1.0 / law.k_locked_N_per_mm)
+        return total
+
+    def displacement_mm(self, force_N):
+        """d(F) for F >= 0 (past the last lock the locked stiffnesses carry the load)."""
+        F = np.asarray(force_N, dtype=float)
+        return sum(law.displacement_mm(F) for law in self.layers)
+
+    def force_N(self, displacement_mm):
+        """F(d), the exact inverse of d(F) (piecewise linear between the breakpoints)."""
+        d = np.asarray(displacement_mm, dtype=float)
+        F_knots = self.regime_bounds_N
+        d_knots = self.displacement_mm(F_knots)
+        # past the last knot: every layer locked, compliance sum(1/k_locked)
+        c_end = sum(1.0 / law.k_locked_N_per_mm for law in self.layers)
+        inside = np.interp(d, d_knots, F_knots)
+        beyond = F_knots[-1] + (d - d_knots[-1]) / c_end
+        return np.where(d <= d_knots[-1], inside, beyond)
+
+    @property
+    def lock_displacements_mm(self) -> np.ndarray:
+        """Stack compression at each sorted lock force."""
+        return self.displacement_mm(self.regime_bounds_N[1:])
