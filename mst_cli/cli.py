@@ -120,3 +120,7 @@ def simulate(design_file, out_dir, field_model, mechanics, as_json):
     else:
         click.echo(terminal_table(doc, geometry, resp))
         click.echo(f"wrote {out}/report.json, response.csv, response.png")
+
+
+# Commands that live in their own modules (each keeps its heavy imports inside the command
+# function). One add_command line per command, below this comment.

@@ -33,7 +33,11 @@ def series_displacement_mm(force_N, k_N_per_mm, d_lock_mm, k_locked_N_per_mm):
 
 @dataclass(frozen=True)
 class Stack:
-    """A stack of layer laws (see :mod:`mst_cli.mechanics`), listed bottom to top."""
+    """A stack of layer laws (see :mod:`mst_cli.mechanics`), listed bottom to top.
+
+    Every law is piecewise linear between its knots, so the sum d(F) is piecewise linear
+    between the union of all knots: interpolating on them is exact.
+    """
 
     layers: tuple
 
@@ -57,17 +61,25 @@ class Stack:
         return float(self.lock_forces_N.max())
 
     @property
-    def compliance_per_regime_mm_per_N(self) -> np.ndarray:
-        """Compliance dd/dF inside each regime (before the first lock: sum of 1/k_j)."""
-        mids = 0.5 * (self.regime_bounds_N[:-1] + self.regime_bounds_N[1:])
-        return np.array([self.local_compliance_mm_per_N(f) for f in mids])
+    def knots_N(self) -> np.ndarray:
+        """0 and every layer's knots up to the last lock, ascending and unique."""
+        F_end = self.last_lock_force_N
+        ks = [0.0, F_end] + [f for law in self.layers for f in law.knots_N if f < F_end]
+        return np.unique(np.asarray(ks, dtype=float))
+
+    @property
+    def locked_compliance_mm_per_N(self) -> float:
+        """Past the last lock every layer is on its locked branch."""
+        return sum(1.0 / law.k_locked_N_per_mm for law in self.layers)
 
     def local_compliance_mm_per_N(self, force_N: float) -> float:
-        total = 0.0
-        for law in self.layers:
-            total += (1.0 / law.k_N_per_mm if force_N < law.lock_force_N
-                      else 1.0 / law.k_locked_N_per_mm)
-        return total
+        """dd/dF on the segment that contains ``force_N`` (right-continuous at knots)."""
+        knots = self.knots_N
+        if force_N >= knots[-1]:
+            return self.locked_compliance_mm_per_N
+        i = int(np.searchsorted(knots, force_N, side="right")) - 1
+        d = self.displacement_mm(knots[i:i + 2])
+        return float((d[1] - d[0]) / (knots[i + 1] - knots[i]))
 
     def displacement_mm(self, force_N):
         """d(F) for F >= 0 (past the last lock the locked stiffnesses carry the load)."""
@@ -75,14 +87,12 @@ class Stack:
         return sum(law.displacement_mm(F) for law in self.layers)
 
     def force_N(self, displacement_mm):
-        """F(d), the exact inverse of d(F) (piecewise linear between the breakpoints)."""
+        """F(d), the exact inverse of d(F) (both piecewise linear on the same knots)."""
         d = np.asarray(displacement_mm, dtype=float)
-        F_knots = self.regime_bounds_N
+        F_knots = self.knots_N
         d_knots = self.displacement_mm(F_knots)
-        # past the last knot: every layer locked, compliance sum(1/k_locked)
-        c_end = sum(1.0 / law.k_locked_N_per_mm for law in self.layers)
         inside = np.interp(d, d_knots, F_knots)
-        beyond = F_knots[-1] + (d - d_knots[-1]) / c_end
+        beyond = F_knots[-1] + (d - d_knots[-1]) / self.locked_compliance_mm_per_N
         return np.where(d <= d_knots[-1], inside, beyond)
 
     @property

@@ -1,8 +1,15 @@
 """Layer mechanics: a ladder of models of one collapsible layer (DESIGN.md section 4).
 
-Every model turns a :class:`~mst_cli.geometry.HexCell` and a material into a layer law with
-``displacement_mm(force_N)`` (monotone), ``k_N_per_mm``, ``d_lock_mm`` and ``lock_force_N``;
-the stack solver needs nothing else.
+Every model turns a :class:`~mst_cli.geometry.HexCell` and a material into a *layer law*,
+an object with
+
+* ``displacement_mm(force_N)``: compression for forces >= 0, vectorised, monotone, and
+  piecewise linear between the law's knots (a tabulated curve is linear between samples);
+* ``knots_N``: ascending forces > 0 where the slope changes (the lock force among them);
+* ``k_N_per_mm``: small-load stiffness; ``d_lock_mm``, ``lock_force_N``: where the cavity
+  closes; ``k_locked_N_per_mm``: stiffness past the last knot (the locked branch).
+
+The stack solver (:mod:`mst_cli.stack`) needs nothing else, so it is exact for every rung.
 """
 
 from __future__ import annotations

@@ -74,8 +74,7 @@ def locked_stiffness_N_per_mm(theta_rad, t_mm, width_mm, b_mm, n_struts, E_MPa):
 class LinearLockingLayer:
     """Bilinear force-displacement law of one layer: k until d_lock, k_locked after.
 
-    Implements the layer protocol the stack solver uses: ``displacement_mm(F)``,
-    ``k_N_per_mm``, ``d_lock_mm``, ``lock_force_N``.
+    Implements the layer-law protocol of :mod:`mst_cli.mechanics`.
     """
 
     k_N_per_mm: float
@@ -85,6 +84,10 @@ class LinearLockingLayer:
     @property
     def lock_force_N(self) -> float:
         return self.k_N_per_mm * self.d_lock_mm
+
+    @property
+    def knots_N(self) -> tuple[float, ...]:
+        return (self.lock_force_N,)
 
     def displacement_mm(self, force_N):
         F = np.asarray(force_N, dtype=float)
