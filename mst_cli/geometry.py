@@ -93,6 +93,29 @@ def profile_area_mm2(theta_rad, t_mm, h_mm, width_mm):
     return h_mm * (a_out + c_out) - h_in * (a_in + c_in)
 
 
+# Names of the cell validity rules, in the order :func:`cell_margins_mm` stacks them.
+CELL_RULES = ("wall", "strut_width", "cavity_gap", "lock_stroke", "pad_width", "strut_spacing")
+
+
+def cell_margins_mm(theta_rad, t_mm, h_mm, b_mm, width_mm, depth_mm, struts_per_chevron,
+                    contact_allowance_mm, min_wall_mm, min_gap_mm, nozzle_mm):
+    """Signed margins (mm, >= 0 satisfied) of every cell rule, stacked on a last axis.
+
+    Shape (..., len(CELL_RULES)), order :data:`CELL_RULES`. :meth:`HexCell.margins` reads this
+    kernel; the design loop calls it on thousands of candidates at once.
+    """
+    cavity = cavity_height_mm(t_mm, h_mm)
+    parts = (
+        t_mm - min_wall_mm,
+        b_mm - min_wall_mm,
+        cavity - min_gap_mm,
+        cavity - contact_allowance_mm,
+        inner_pad_half_width_mm(theta_rad, t_mm, h_mm, width_mm) - nozzle_mm,
+        strut_gap_mm(depth_mm, b_mm, struts_per_chevron) - min_gap_mm,
+    )
+    return np.stack(np.broadcast_arrays(*parts), axis=-1).astype(float)
+
+
 def unloaded_gap_mm(sum_h_mm, n_layers, housing: "Housing", board: "Board"):
     """Magnet pole face to Hall plates with no load, for arrays of total layer height.
 
@@ -215,25 +238,25 @@ class HexCell:
         return [v for v in self.margins(printer) if v.margin_mm < 0.0]
 
     def margins(self, printer: Printer = Printer()) -> list[Violation]:
-        """Signed margin of every rule in mm (>= 0 satisfied); used as optimiser constraints."""
-        rules = [
-            ("wall", self.t_mm - printer.min_wall_mm,
-             f"wall t = {self.t_mm:g} mm is thinner than the printable minimum {printer.min_wall_mm:g} mm"),
-            ("strut_width", self.b_mm - printer.min_wall_mm,
-             f"strut width b = {self.b_mm:g} mm is below the printable minimum {printer.min_wall_mm:g} mm"),
-            ("cavity_gap", self.cavity_height_mm - printer.min_gap_mm,
-             f"cavity h - 2t = {self.cavity_height_mm:g} mm is below the printable gap {printer.min_gap_mm:g} mm"),
-            ("lock_stroke", self.cavity_height_mm - self.contact_allowance_mm,
-             f"cavity h - 2t = {self.cavity_height_mm:g} mm leaves no stroke after the "
-             f"{self.contact_allowance_mm:g} mm contact allowance"),
-            ("pad_width", self.p_inner_mm - printer.nozzle_mm,
-             f"inner pad half-width {self.p_inner_mm:g} mm is below one nozzle "
-             f"({printer.nozzle_mm:g} mm): theta too small for this h and W"),
-            ("strut_spacing", self.strut_gap_mm - printer.min_gap_mm,
-             f"gap between struts {self.strut_gap_mm:g} mm is below the printable gap "
-             f"{printer.min_gap_mm:g} mm: too many or too wide struts for D = {self.depth_mm:g} mm"),
-        ]
-        return [Violation(name, float(margin), msg) for name, margin, msg in rules]
+        """Signed margin of every rule in mm (>= 0 satisfied); used as optimiser constraints.
+
+        The margins come from :func:`cell_margins_mm` (one source of truth with the design loop).
+        """
+        margins = cell_margins_mm(self.theta_rad, self.t_mm, self.h_mm, self.b_mm, self.width_mm,
+                                  self.depth_mm, self.struts_per_chevron, self.contact_allowance_mm,
+                                  printer.min_wall_mm, printer.min_gap_mm, printer.nozzle_mm)
+        messages = {
+            "wall": f"wall t = {self.t_mm:g} mm is thinner than the printable minimum {printer.min_wall_mm:g} mm",
+            "strut_width": f"strut width b = {self.b_mm:g} mm is below the printable minimum {printer.min_wall_mm:g} mm",
+            "cavity_gap": f"cavity h - 2t = {self.cavity_height_mm:g} mm is below the printable gap {printer.min_gap_mm:g} mm",
+            "lock_stroke": (f"cavity h - 2t = {self.cavity_height_mm:g} mm leaves no stroke after the "
+                            f"{self.contact_allowance_mm:g} mm contact allowance"),
+            "pad_width": (f"inner pad half-width {self.p_inner_mm:g} mm is below one nozzle "
+                          f"({printer.nozzle_mm:g} mm): theta too small for this h and W"),
+            "strut_spacing": (f"gap between struts {self.strut_gap_mm:g} mm is below the printable gap "
+                              f"{printer.min_gap_mm:g} mm: too many or too wide struts for D = {self.depth_mm:g} mm"),
+        }
+        return [Violation(name, float(m), messages[name]) for name, m in zip(CELL_RULES, margins)]
 
 
 @dataclass(frozen=True)
