@@ -152,7 +152,13 @@ def simulate(geometry: SensorGeometry, material, mechanics: str = "spring",
     dl = np.array([law.d_lock_mm for law in laws])
     gap_edges = gap0 - stack.displacement_mm(edges)
     B_edges = field_T(gap_edges)
-    S = np.diff(B_edges / B_edges[0] - 1.0) / np.diff(edges)
+    widths = np.diff(edges)
+    degenerate = widths <= 1e-9 * edges[-1]
+    S = np.diff(B_edges / B_edges[0] - 1.0) / np.where(degenerate, 1.0, widths)
+    for i in np.flatnonzero(degenerate):
+        # zero-width band: the secant's limit is the local slope at that force
+        dB = (field_T(gap_edges[i] + GAP_STEP_MM) - field_T(gap_edges[i] - GAP_STEP_MM)) / (2 * GAP_STEP_MM)
+        S[i] = -dB * stack.band_start_compliance_mm_per_N(i) / B0
 
     B_full = float(B_edges[-1])
     Bmax_vec = np.abs(Bvec[F <= F_last + 1e-12]).max(axis=0)
@@ -164,7 +170,7 @@ def simulate(geometry: SensorGeometry, material, mechanics: str = "spring",
     order = stack.lock_order
     for i in range(n):
         lo, hi = edges[i], edges[i + 1]
-        s_band = slope[band == i]
+        s_band = slope[band == i] if not degenerate[i] else np.array([S[i]])
         j = int(order[i])
         regimes.append(Regime(
             index=i + 1, layer=j + 1, force_from_N=float(lo), force_to_N=float(hi),
@@ -177,6 +183,10 @@ def simulate(geometry: SensorGeometry, material, mechanics: str = "spring",
         ))
 
     warnings = []
+    for i in np.flatnonzero(degenerate):
+        warnings.append(f"layers {', '.join(str(int(j) + 1) for j in order[i - 1:i + 1])} lock at the "
+                        f"same force {edges[i + 1]:.4g} N: regime {i + 1} has zero width (its S is "
+                        f"the local slope there)")
     if list(order) != list(range(n)):
         warnings.append("layers do not lock bottom-to-top in file order: lock order is "
                         + ", ".join(str(j + 1) for j in order))

@@ -81,6 +81,26 @@ class Stack:
         d = self.displacement_mm(knots[i:i + 2])
         return float((d[1] - d[0]) / (knots[i + 1] - knots[i]))
 
+    def band_start_compliance_mm_per_N(self, regime: int) -> float:
+        """dd/dF at the start of regime ``regime`` (0-based), ties split by the lock order.
+
+        Layers that lock before the regime sit on their locked branch; the others on their
+        slope just below the regime's start force. For a regime of zero width (two layers
+        locking at the same force) this is the limit of the secant as the width shrinks.
+        """
+        F = self.regime_bounds_N[regime]
+        step = 1e-9 * max(F, 1e-12)
+        total = 0.0
+        for pos, j in enumerate(self.lock_order):
+            law = self.layers[j]
+            if pos < regime:
+                total += 1.0 / law.k_locked_N_per_mm
+            else:
+                lo = max(F - step, 0.0)
+                d = law.displacement_mm(np.array([lo, lo + step]))
+                total += float((d[1] - d[0]) / step)
+        return total
+
     def displacement_mm(self, force_N):
         """d(F) for F >= 0 (past the last lock the locked stiffnesses carry the load)."""
         F = np.asarray(force_N, dtype=float)

@@ -14,9 +14,9 @@ in series make a chevron, two chevrons in parallel make a strut, n_s struts act 
 
     k = n_s / c_wall    [N/mm]
 
-After the cavity closes, the layer is a block of solid TPU: the top and bottom pads (2t of
-material) pressed together over the inner width W - 2t/sin(theta) and the strut widths; that
-finite locked stiffness carries the force past the lock.
+After the cavity closes, the top and bottom pads (2t of solid TPU) press on each other over
+the inner width W - 2t/sin(theta) and the strut widths; that contact column acts in parallel
+with the walls, which go on bending. The sum is the finite locked stiffness past the lock.
 
 The kernels are pure numpy, vectorised over any broadcastable arrays, and return finite
 numbers for every input with positive t, h, b, n_s and theta in (0, 90) deg -- including cells
@@ -64,8 +64,8 @@ def layer_stiffness_N_per_mm(theta_rad, t_mm, h_mm, b_mm, n_struts, E_MPa, nu):
     return 2.0 * n_struts / (2.0 * c_wall)
 
 
-def locked_stiffness_N_per_mm(theta_rad, t_mm, width_mm, b_mm, n_struts, E_MPa):
-    """Stiffness once the cavity has closed: 2t of solid TPU over the contact width."""
+def contact_stiffness_N_per_mm(theta_rad, t_mm, width_mm, b_mm, n_struts, E_MPa):
+    """Stiffness of the closed cavity's contact column: 2t of solid TPU over the contact width."""
     contact_width = np.maximum(2.0 * geo.inner_tip_half_width_mm(theta_rad, t_mm, width_mm), t_mm)
     return E_MPa * n_struts * b_mm * contact_width / (2.0 * t_mm)
 
@@ -100,7 +100,7 @@ def spring_arrays(theta_rad, t_mm, h_mm, b_mm, n_struts, width_mm, contact_allow
     """(k, d_lock, k_locked) for many layers at once: the design loop's entry point."""
     k = layer_stiffness_N_per_mm(theta_rad, t_mm, h_mm, b_mm, n_struts, E_MPa, nu)
     d_lock = geo.lock_stroke_mm(t_mm, h_mm, contact_allowance_mm)
-    k_locked = locked_stiffness_N_per_mm(theta_rad, t_mm, width_mm, b_mm, n_struts, E_MPa)
+    k_locked = k + contact_stiffness_N_per_mm(theta_rad, t_mm, width_mm, b_mm, n_struts, E_MPa)
     return k, d_lock, k_locked
 
 

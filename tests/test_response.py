@@ -1,0 +1,93 @@
+"""The sensor's forward model against hand-computed and theorem-fixed numbers."""
+
+import numpy as np
+import pytest
+
+from mst_cli.field import axial_Bz_T, axial_dBz_dz_T_per_mm
+from mst_cli.geometry import HexCell, SensorGeometry
+from mst_cli.material import Material
+from mst_cli.mechanics import layer_law
+from mst_cli.response import field_magnitude_T, regime_kernel, simulate
+
+MAT = Material()
+REF = SensorGeometry((HexCell(25, 0.6, 2.0), HexCell(33, 1.0, 2.8), HexCell(37, 1.4, 3.5)))
+
+
+def test_single_layer_by_hand():
+    cell = HexCell(30, 0.8, 3.0)
+    g = SensorGeometry((cell,))
+    law = layer_law(cell, MAT)
+    r = simulate(g, MAT)
+    B0 = axial_Bz_T(g.gap0_mm, 3.0, 2.0, 1.3)
+    B1 = axial_Bz_T(g.gap0_mm - cell.d_lock_mm, 3.0, 2.0, 1.3)
+    assert r.B0_T == pytest.approx(B0, rel=1e-12)
+    assert r.lock_forces_N == pytest.approx([law.k_N_per_mm * cell.d_lock_mm])
+    assert r.regimes[0].sensitivity_secant_per_N == pytest.approx((B1 / B0 - 1) / law.lock_force_N, rel=1e-12)
+    assert r.gap_min_mm == pytest.approx(g.gap0_mm - cell.d_lock_mm)
+
+
+def test_sensitivity_is_gradient_over_stiffness_for_a_small_stroke():
+    # S = g / k_eff with g = -(1/B0) dB/dgap (DESIGN.md section 2), exact as the stroke -> 0;
+    # the secant's error is first order in the stroke (half the field's curvature term)
+    errors = []
+    for stroke in (0.02, 0.01, 0.005):
+        cell = HexCell(30, 0.8, 1.72, contact_allowance_mm=0.12 - stroke)
+        g = SensorGeometry((cell,))
+        r = simulate(g, MAT)
+        grad = -axial_dBz_dz_T_per_mm(g.gap0_mm, 3.0, 2.0, 1.3) / axial_Bz_T(g.gap0_mm, 3.0, 2.0, 1.3)
+        k = layer_law(cell, MAT).k_N_per_mm
+        errors.append(r.regimes[0].sensitivity_secant_per_N / (grad / k) - 1)
+    assert errors[0] / errors[1] == pytest.approx(2.0, rel=0.02)
+    assert errors[1] / errors[2] == pytest.approx(2.0, rel=0.02)
+    assert abs(errors[2]) < 2e-3
+
+
+def test_secant_lies_between_local_slopes_and_curves_are_monotone():
+    r = simulate(REF, MAT)
+    assert r.dB_rel[0] == 0.0
+    assert np.all(np.diff(r.dB_rel) > 0) and np.all(np.diff(r.displacement_mm) > 0)
+    for reg in r.regimes:   # mean value theorem
+        assert reg.sensitivity_min_per_N <= reg.sensitivity_secant_per_N <= reg.sensitivity_max_per_N
+    # each regime is softer to the field than the one before (a stiffer stack moves less)
+    S = [reg.sensitivity_secant_per_N for reg in r.regimes]
+    assert S[0] > S[1] > S[2]
+
+
+def test_vectorised_kernel_agrees_with_simulate():
+    r = simulate(REF, MAT)
+    laws = [layer_law(c, MAT) for c in REF.layers]
+    k, dl, kl = (np.array([getattr(l, a) for l in laws]) for a in ("k_N_per_mm", "d_lock_mm", "k_locked_N_per_mm"))
+    R, S, gap, B = regime_kernel(k, dl, kl, REF.gap0_mm, lambda gp: field_magnitude_T(gp, REF, "axial"))
+    assert np.allclose(R, r.lock_forces_N, rtol=1e-13)
+    assert np.allclose(S, [x.sensitivity_secant_per_N for x in r.regimes], rtol=1e-12)
+    assert B[-1] == pytest.approx(r.B_full_T, rel=1e-13)
+
+
+def test_force_resolution_is_field_resolution_over_B0_S():
+    r = simulate(REF, MAT, noise_uT_rms=3.0)
+    for reg in r.regimes:
+        assert reg.force_resolution_N == pytest.approx(3e-6 / (r.B0_T * reg.sensitivity_secant_per_N))
+        assert reg.force_resolution_worst_N >= reg.force_resolution_N
+
+
+def test_points_past_the_last_lock_are_flagged_out_of_range():
+    r = simulate(REF, MAT)
+    last = r.lock_forces_N[-1]
+    assert np.all(r.in_range == (r.force_N <= last * (1 + 1e-12)))
+    assert r.force_N.max() > last
+
+
+def test_field_model_choice_is_reported_and_dipole_reads_high():
+    from dataclasses import replace
+    assert simulate(REF, MAT).field_model == "axial"
+    assert simulate(replace(REF, chip_offset_mm=(0.5, 0.0)), MAT).field_model == "cylinder"
+    assert simulate(REF, MAT, field_model="dipole").B0_T > simulate(REF, MAT).B0_T
+
+
+def test_a_magnet_too_close_saturates_the_chip_and_says_so():
+    from dataclasses import replace
+    from mst_cli.geometry import Housing
+    close = replace(REF, layers=(HexCell(30, 0.4, 1.2),), housing=Housing(cover_mm=0.2, pocket_floor_mm=0.2))
+    r = simulate(close, MAT)
+    assert r.B_full_T > 0.05 and r.saturated and r.chip_setting is None
+    assert any("saturation" in w for w in r.warnings)

@@ -1,0 +1,110 @@
+"""Rung L0 against textbook limits and an independent matrix frame analysis."""
+
+import math
+
+import numpy as np
+import pytest
+
+from mst_cli.geometry import HexCell
+from mst_cli.material import Material
+from mst_cli.mechanics import layer_law
+from mst_cli.mechanics.spring import (SHEAR_COEFFICIENT_RECT, layer_stiffness_N_per_mm,
+                                      wall_compliance_mm_per_N)
+
+E, NU = 12.0, 0.45
+
+
+def timoshenko_frame_compliance(theta_rad, L, b, t, E, nu):
+    """Vertical tip compliance of one inclined member by the direct stiffness method.
+
+    Independent of the closed form: a 2-node Timoshenko frame element (axial + bending with
+    the shear parameter phi = 12 E I / (kappa G A L^2)), rotated to the global frame;
+    node 1 clamped, node 2 with rotation fixed and free in x and y; unit vertical load.
+    """
+    A, I = b * t, b * t ** 3 / 12.0
+    G = E / (2 * (1 + nu))
+    phi = 12 * E * I / (SHEAR_COEFFICIENT_RECT * G * A * L ** 2)
+    a = E * A / L
+    c = E * I / (L ** 3 * (1 + phi))
+    k_local = np.array([
+        [a, 0, 0, -a, 0, 0],
+        [0, 12 * c, 6 * c * L, 0, -12 * c, 6 * c * L],
+        [0, 6 * c * L, (4 + phi) * c * L ** 2, 0, -6 * c * L, (2 - phi) * c * L ** 2],
+        [-a, 0, 0, a, 0, 0],
+        [0, -12 * c, -6 * c * L, 0, 12 * c, -6 * c * L],
+        [0, 6 * c * L, (2 - phi) * c * L ** 2, 0, -6 * c * L, (4 + phi) * c * L ** 2],
+    ])
+    cs, sn = math.cos(theta_rad), math.sin(theta_rad)
+    rot = np.array([[cs, sn, 0], [-sn, cs, 0], [0, 0, 1]])
+    T = np.zeros((6, 6))
+    T[:3, :3] = T[3:, 3:] = rot
+    K = T.T @ k_local @ T
+    free = [3, 4]                       # node 2: x and y free, rotation fixed
+    u = np.linalg.solve(K[np.ix_(free, free)], np.array([0.0, 1.0]))
+    return u[1]
+
+
+@pytest.mark.parametrize("theta_deg", [15, 25, 37, 45, 60, 75])
+@pytest.mark.parametrize("t_mm,h_mm", [(0.4, 2.0), (1.0, 3.0), (1.4, 6.0)])
+def test_wall_compliance_equals_matrix_frame_analysis(theta_deg, t_mm, h_mm):
+    th = math.radians(theta_deg)
+    cell = HexCell(theta_deg, t_mm, h_mm)
+    ref = timoshenko_frame_compliance(th, cell.wall_length_mm, cell.b_mm, t_mm, E, NU)
+    got = wall_compliance_mm_per_N(th, t_mm, h_mm, cell.b_mm, E, NU)
+    assert got == pytest.approx(ref, rel=1e-10)
+
+
+def test_slender_wall_tends_to_pure_bending():
+    """t/L -> 0: shear and axial terms vanish as (t/L)^2 against bending."""
+    th, b = math.radians(30), 1.0
+    ratios = []
+    for t in (0.2, 0.02, 0.002):
+        h = 2 * t + 200 * t  # keeps t/L small and shrinking in proportion
+        full = wall_compliance_mm_per_N(th, t, h, b, E, NU)
+        L = 0.5 * (h - t) / math.sin(th)
+        bending = math.cos(th) ** 2 * L ** 3 / (12 * E * b * t ** 3 / 12)
+        ratios.append(full / bending - 1)
+    assert ratios[0] < 1e-3
+    assert ratios[1] == pytest.approx(ratios[0], rel=0.05)   # same t/L -> same ratio
+    # and at a fixed height, thinner walls approach pure bending quadratically
+    h = 5.0
+    r = [wall_compliance_mm_per_N(th, t, h, b, E, NU)
+         / (math.cos(th) ** 2 * (0.5 * (h - t) / math.sin(th)) ** 3 / (E * b * t ** 3)) - 1
+         for t in (0.1, 0.05)]
+    assert r[0] / r[1] == pytest.approx(4.0, rel=0.05)
+
+
+def test_vertical_wall_is_axial_only():
+    """theta -> 90 deg: the wall is a column, compliance L / (E A)."""
+    th = math.radians(90 - 1e-7)
+    t, h, b = 1.0, 4.0, 1.0
+    L = 0.5 * (h - t)
+    assert wall_compliance_mm_per_N(th, t, h, b, E, NU) == pytest.approx(L / (E * b * t), rel=1e-9)
+
+
+def test_layer_stiffness_scales_with_struts_modulus_and_width():
+    th, t, h, b = math.radians(30), 0.8, 3.0, 0.8
+    k = layer_stiffness_N_per_mm(th, t, h, b, 4, E, NU)
+    assert layer_stiffness_N_per_mm(th, t, h, b, 8, E, NU) == pytest.approx(2 * k)
+    assert layer_stiffness_N_per_mm(th, t, h, 2 * b, 4, E, NU) == pytest.approx(2 * k)
+    assert layer_stiffness_N_per_mm(th, t, h, b, 4, 3 * E, NU) == pytest.approx(3 * k)
+
+
+def test_layer_is_two_walls_in_series_times_two_chevrons_times_struts():
+    cell = HexCell(30, 0.8, 3.0, struts_per_chevron=5)
+    law = layer_law(cell, Material(youngs_modulus_MPa=E, poisson_ratio=NU))
+    c_wall = timoshenko_frame_compliance(cell.theta_rad, cell.wall_length_mm, cell.b_mm, 0.8, E, NU)
+    chevron = 1.0 / (2 * c_wall)
+    assert law.k_N_per_mm == pytest.approx(2 * 5 * chevron, rel=1e-10)
+    assert law.lock_force_N == pytest.approx(law.k_N_per_mm * (3.0 - 1.6 - 0.1))
+
+
+def test_locked_stiffness_is_walls_plus_contact_column():
+    """Past the lock the walls keep bending while 2t of pads carry load over the contact width."""
+    cell = HexCell(25, 0.6, 2.0)
+    law = layer_law(cell, Material(youngs_modulus_MPa=E, poisson_ratio=NU))
+    contact_width = 30.0 - 2 * 0.6 / math.sin(math.radians(25))
+    column = E * 4 * 0.6 * contact_width / (2 * 0.6)
+    assert law.k_locked_N_per_mm == pytest.approx(law.k_N_per_mm + column, rel=1e-12)
+    # for the soft reference layer the locked stiffness is hundreds of times the open one
+    assert law.k_locked_N_per_mm / law.k_N_per_mm > 300
