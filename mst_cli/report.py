@@ -1,7 +1,7 @@
 """Turning a :class:`~mst_cli.response.Response` into what people and programs read.
 
 ``report_dict`` (JSON, units in every key), ``response_csv``, ``terminal_table`` and
-``plot_response`` (PNG, matplotlib's Agg backend, imported only here and only when called).
+``plot_response`` (PNG through matplotlib's Figure API -- no pyplot -- imported only when called).
 """
 
 from __future__ import annotations
@@ -125,11 +125,12 @@ def terminal_table(doc, geometry: SensorGeometry, resp: Response) -> str:
 
 def plot_response(resp: Response, path, title: str = "") -> None:
     """F-d with the lock points, and dB/B0-F with the regimes shaded."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    # Figure without pyplot: no GUI backend machinery, and Figure.savefig renders with Agg
+    from matplotlib.figure import Figure
 
-    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(10, 4.2), constrained_layout=True)
+    fig = Figure(figsize=(10, 4.2))
+    ax1, ax2 = fig.subplots(1, 2)
+    fig.subplots_adjust(left=0.07, right=0.98, bottom=0.12, top=0.9, wspace=0.22)
     inr = resp.in_range
     ax1.plot(resp.displacement_mm[inr], resp.force_N[inr], color="C0", label="in range")
     ax1.plot(resp.displacement_mm[~inr], resp.force_N[~inr], color="C0", ls=":", label="out of range")
@@ -152,5 +153,4 @@ def plot_response(resp: Response, path, title: str = "") -> None:
     ax2.legend(loc="upper left", fontsize=8)
     ax2.grid(alpha=0.3)
     fig.suptitle(title or f"mechanics={resp.mechanics}, field={resp.field_model}")
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    fig.savefig(path, dpi=110, format="png")
