@@ -124,3 +124,6 @@ def simulate(design_file, out_dir, field_model, mechanics, as_json):
 
 # Commands that live in their own modules (each keeps its heavy imports inside the command
 # function). One add_command line per command, below this comment.
+from .cli_export import check, export  # noqa: E402
+main.add_command(export)
+main.add_command(check)

@@ -213,6 +213,11 @@ class HexCell:
         return tuple((j + 0.5) * pitch - 0.5 * self.depth_mm for j in range(n))
 
     @property
+    def wall_horizontal_width_mm(self) -> float:
+        """Width of an inclined wall in a horizontal section (one printed layer): t / sin(theta)."""
+        return self.t_mm / math.sin(self.theta_rad)
+
+    @property
     def profile_area_mm2(self) -> float:
         return float(profile_area_mm2(self.theta_rad, self.t_mm, self.h_mm, self.width_mm))
 
@@ -348,14 +353,48 @@ class SensorGeometry:
 
     @property
     def base_length_mm(self) -> float:
-        """Base size along x: the cell width, or wider when the board needs it."""
-        need = self.board.length_mm + 2 * (self.housing.board_clearance_mm + self.housing.side_wall_mm)
+        """Base size along x, centred on the magnet axis: the cell width, or wider when the
+        board slot (which need not be centred: the chip is) needs side walls around it."""
+        x0, x1, _, _ = self.slot_xy_mm
+        need = 2 * (max(-x0, x1) + self.housing.side_wall_mm)
         return max(self.width_mm, need)
 
     @property
     def base_width_mm(self) -> float:
-        need = self.board.width_mm + 2 * (self.housing.board_clearance_mm + self.housing.side_wall_mm)
+        """Base size along y, centred on the magnet axis (see :attr:`base_length_mm`)."""
+        _, _, y0, y1 = self.slot_xy_mm
+        need = 2 * (max(-y0, y1) + self.housing.side_wall_mm)
         return max(self.depth_mm, need)
+
+    @property
+    def board_origin_xy_mm(self) -> tuple[float, float]:
+        """Board's lower-left corner, placed so that the chip sits at ``chip_offset_mm``."""
+        return (self.chip_offset_mm[0] - self.board.chip_x_mm,
+                self.chip_offset_mm[1] - self.board.chip_y_mm)
+
+    @property
+    def slot_xy_mm(self) -> tuple[float, float, float, float]:
+        """Board slot (x0, x1, y0, y1): the board outline plus the clearance all round.
+
+        The slot is open through the base's -x face (the board slides in along +x until it
+        stops at x1, which locates the chip); the cable exit leaves through the +x wall.
+        """
+        bx, by = self.board_origin_xy_mm
+        c = self.housing.board_clearance_mm
+        return (bx - c, bx + self.board.length_mm + c, by - c, by + self.board.width_mm + c)
+
+    @property
+    def slot_height_mm(self) -> float:
+        """Clear height of the slot: board + chip + air clearance, up to the cover."""
+        return self.z_cover_bottom_mm - self.z_board_bottom_mm
+
+    @property
+    def cable_exit_y_mm(self) -> tuple[float, float]:
+        """y range of the cable exit through the +x wall: centred on the chip, inside the slot."""
+        _, _, y0, y1 = self.slot_xy_mm
+        half = 0.5 * self.housing.cable_exit_width_mm
+        yc = self.chip_offset_mm[1]
+        return (max(y0, yc - half), min(y1, yc + half))
 
     # -- base
     @property
@@ -421,6 +460,56 @@ class SensorGeometry:
     @property
     def total_height_mm(self) -> float:
         return self.z_pause_mm + self.housing.cap_top_mm
+
+    @property
+    def body_bbox_mm(self) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
+        """Bounding box (min, max) of the printed body: base or cells, whichever is wider."""
+        x = 0.5 * max(self.base_length_mm, self.width_mm)
+        y = 0.5 * max(self.base_width_mm, self.depth_mm)
+        return (-x, -y, 0.0), (x, y, self.total_height_mm)
+
+    @property
+    def pocket_volume_mm3(self) -> float:
+        """Magnet pocket: cylinder of pocket diameter and depth, plus the 45 deg entry chamfer
+        c at its top (a frustum of radii r and r + c minus the cylinder it replaces)."""
+        r, c = 0.5 * self.pocket_diameter_mm, self.housing.pocket_chamfer_mm
+        frustum = math.pi * c / 3.0 * (r * r + r * (r + c) + (r + c) ** 2)
+        return math.pi * r * r * self.pocket_depth_mm + frustum - math.pi * r * r * c
+
+    @property
+    def pocket_curved_area_mm2(self) -> float:
+        """Curved surface of the pocket (cylinder wall + chamfer cone): a mesh of chord
+        deflection delta changes the pocket volume by at most delta times this area."""
+        r, c = 0.5 * self.pocket_diameter_mm, self.housing.pocket_chamfer_mm
+        return (2 * math.pi * r * (self.pocket_depth_mm - c)
+                + math.pi * (2 * r + c) * c * math.sqrt(2.0))
+
+    @property
+    def base_volume_mm3(self) -> float:
+        """Base block minus the board slot (open to -x) and the cable exit (through +x)."""
+        L, Wb = self.base_length_mm, self.base_width_mm
+        _, x1, y0, y1 = self.slot_xy_mm
+        e0, e1 = self.cable_exit_y_mm
+        slot = (x1 + 0.5 * L) * (y1 - y0) * self.slot_height_mm
+        exit_ = (0.5 * L - x1) * max(e1 - e0, 0.0) * self.slot_height_mm
+        return L * Wb * self.z_base_top_mm - slot - exit_
+
+    @property
+    def plates_volume_mm3(self) -> float:
+        """Solid plates between layers, each W x D x plate thickness."""
+        return (len(self.layers) - 1) * self.width_mm * self.depth_mm * self.housing.plate_mm
+
+    @property
+    def cap_volume_mm3(self) -> float:
+        """Cap (W x D, from the stack top to the total height) minus the magnet pocket."""
+        return (self.width_mm * self.depth_mm * (self.total_height_mm - self.z_stack_top_mm)
+                - self.pocket_volume_mm3)
+
+    @property
+    def body_volume_mm3(self) -> float:
+        """Volume of the one printed TPU body: analytic sum of its parts."""
+        return (self.base_volume_mm3 + sum(c.volume_mm3 for c in self.layers)
+                + self.plates_volume_mm3 + self.cap_volume_mm3)
 
     @property
     def gap0_mm(self) -> float:

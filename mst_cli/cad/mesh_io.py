@@ -1,0 +1,144 @@
+"""Triangle meshes of a B-rep solid and their files (binary STL, 3MF, STEP).
+
+Output is deterministic: the same solid and tolerance give byte-identical STL and 3MF files
+(no time stamps, fixed zip dates, vertices merged in first-seen order), and the STEP header
+carries a fixed time stamp.
+"""
+
+from __future__ import annotations
+
+import io
+import zipfile
+from pathlib import Path
+
+import numpy as np
+
+# Fixed STEP header time stamp and 3MF zip member date: output depends only on the input.
+STEP_TIMESTAMP = "2000-01-01T00:00:00"
+_ZIP_DATE = (1980, 1, 1, 0, 0, 0)
+
+
+def tessellate(solid, tolerance_mm: float, angular_tolerance_rad: float = 0.1):
+    """Indexed triangle mesh of ``solid`` with outward normals.
+
+    OCCT's incremental mesher discretises every edge once and shares it between the two
+    faces it bounds, so the faces' meshes meet vertex to vertex; merging equal coordinates
+    gives a closed mesh. ``tolerance_mm`` is the largest chord deviation from the surface.
+
+    Returns
+    -------
+    vertices : (n, 3) float64 array, mm
+    triangles : (m, 3) int64 array of vertex indices, counter-clockwise seen from outside
+    """
+    from OCP.BRep import BRep_Tool
+    from OCP.BRepMesh import BRepMesh_IncrementalMesh
+    from OCP.TopAbs import TopAbs_REVERSED
+    from OCP.TopLoc import TopLoc_Location
+
+    shape = solid.wrapped
+    BRepMesh_IncrementalMesh(shape, tolerance_mm, False, angular_tolerance_rad, False)
+    verts, tris, offset = [], [], 0
+    for face in (f.wrapped for f in solid.faces()):
+        loc = TopLoc_Location()
+        poly = BRep_Tool.Triangulation_s(face, loc)
+        trsf = loc.Transformation()
+        n = poly.NbNodes()
+        pts = [poly.Node(i).Transformed(trsf) for i in range(1, n + 1)]
+        verts.append(np.array([(p.X(), p.Y(), p.Z()) for p in pts], dtype=float).reshape(-1, 3))
+        t = np.array([poly.Triangle(i).Get() for i in range(1, poly.NbTriangles() + 1)],
+                     dtype=np.int64).reshape(-1, 3) - 1
+        if face.Orientation() == TopAbs_REVERSED:
+            t = t[:, ::-1]
+        tris.append(t + offset)
+        offset += n
+    vertices = np.concatenate(verts)
+    triangles = np.concatenate(tris)
+    return merge_vertices(vertices, triangles)
+
+
+def merge_vertices(vertices: np.ndarray, triangles: np.ndarray, digits: int = 9):
+    """Weld vertices whose coordinates agree to ``digits`` decimals (mm); drop triangles
+    that collapse. Keeps the first-seen order so that the result is deterministic."""
+    key = np.round(vertices, digits)
+    _, first, inverse = np.unique(key, axis=0, return_index=True, return_inverse=True)
+    order = np.argsort(first)                       # unique rows in first-seen order
+    rank = np.empty_like(order)
+    rank[order] = np.arange(order.size)
+    new_vertices = vertices[first[order]]
+    new_triangles = rank[inverse.reshape(-1)][triangles]
+    keep = ((new_triangles[:, 0] != new_triangles[:, 1]) & (new_triangles[:, 1] != new_triangles[:, 2])
+            & (new_triangles[:, 0] != new_triangles[:, 2]))
+    return new_vertices, new_triangles[keep]
+
+
+def stl_bytes(vertices: np.ndarray, triangles: np.ndarray, header: str = "mst sensor body, mm") -> bytes:
+    """Binary STL: 80-byte header, triangle count, then normal + 3 vertices per triangle."""
+    tri = vertices[triangles]
+    normals = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    length = np.linalg.norm(normals, axis=1, keepdims=True)
+    normals = np.divide(normals, length, out=np.zeros_like(normals), where=length > 0)
+    record = np.zeros(len(triangles), dtype=[("n", "<f4", 3), ("v", "<f4", (3, 3)), ("attr", "<u2")])
+    record["n"] = normals
+    record["v"] = tri
+    head = header.encode("ascii")[:80].ljust(80, b" ")
+    return head + np.uint32(len(triangles)).tobytes() + record.tobytes()
+
+
+def _xml_number(x: float) -> str:
+    return f"{x:.6f}".rstrip("0").rstrip(".") if x else "0"
+
+
+def three_mf_bytes(vertices: np.ndarray, triangles: np.ndarray, name: str) -> bytes:
+    """A 3MF package (3MF Core Specification 1.x) holding one mesh object, unit mm."""
+    vert_xml = "".join(f'<vertex x="{_xml_number(x)}" y="{_xml_number(y)}" z="{_xml_number(z)}"/>'
+                       for x, y, z in vertices)
+    tri_xml = "".join(f'<triangle v1="{a}" v2="{b}" v3="{c}"/>' for a, b, c in triangles)
+    safe = (name.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;")
+            .replace('"', "&quot;"))
+    model = ('<?xml version="1.0" encoding="UTF-8"?>\n'
+             '<model unit="millimeter" xml:lang="en-US" '
+             'xmlns="http://schemas.microsoft.com/3dmanufacturing/core/2015/02">\n'
+             f'<metadata name="Title">{safe}</metadata>\n'
+             '<resources>\n'
+             f'<object id="1" type="model" name="{safe}"><mesh><vertices>{vert_xml}</vertices>'
+             f'<triangles>{tri_xml}</triangles></mesh></object>\n'
+             '</resources>\n<build><item objectid="1"/></build>\n</model>\n')
+    content_types = ('<?xml version="1.0" encoding="UTF-8"?>\n'
+                     '<Types xmlns="http://schemas.openxmlformats.org/package/2006/content-types">'
+                     '<Default Extension="rels" '
+                     'ContentType="application/vnd.openxmlformats-package.relationships+xml"/>'
+                     '<Default Extension="model" '
+                     'ContentType="application/vnd.ms-package.3dmanufacturing-3dmodel+xml"/>'
+                     '</Types>\n')
+    rels = ('<?xml version="1.0" encoding="UTF-8"?>\n'
+            '<Relationships xmlns="http://schemas.openxmlformats.org/package/2006/relationships">'
+            '<Relationship Target="/3D/3dmodel.model" Id="rel0" '
+            'Type="http://schemas.microsoft.com/3dmanufacturing/2013/01/3dmodel"/>'
+            '</Relationships>\n')
+    buf = io.BytesIO()
+    with zipfile.ZipFile(buf, "w", compression=zipfile.ZIP_DEFLATED) as zf:
+        for member, text in (("[Content_Types].xml", content_types), ("_rels/.rels", rels),
+                             ("3D/3dmodel.model", model)):
+            info = zipfile.ZipInfo(member, date_time=_ZIP_DATE)
+            info.compress_type = zipfile.ZIP_DEFLATED
+            info.external_attr = 0o644 << 16
+            zf.writestr(info, text)
+    return buf.getvalue()
+
+
+def write_step(assembly, path: Path) -> None:
+    """STEP AP214 file of the named assembly, with a fixed header time stamp."""
+    from build123d import export_step
+    if not export_step(assembly, str(path), timestamp=STEP_TIMESTAMP):
+        raise RuntimeError(f"STEP export to {path} failed")
+
+
+def is_closed_oriented(triangles: np.ndarray) -> bool:
+    """True when every directed edge appears once and its reverse once: the mesh is closed
+    and consistently wound (the cheap necessary condition checked before writing)."""
+    e = np.concatenate([triangles[:, [0, 1]], triangles[:, [1, 2]], triangles[:, [2, 0]]])
+    directed = np.unique(e, axis=0)
+    if len(directed) != len(e):
+        return False
+    fwd = set(map(tuple, directed.tolist()))
+    return all((b, a) in fwd for a, b in fwd)

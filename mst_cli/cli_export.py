@@ -1,0 +1,139 @@
+"""``mst export`` and ``mst check``: the printable body and its geometry checks.
+
+build123d (CAD) and trimesh/manifold3d (checks) are imported inside the commands, so that
+importing :mod:`mst_cli.cli` stays cheap.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+import time
+from pathlib import Path
+
+import click
+
+from .cli import EXIT_TARGETS, default_out_dir, handles_input_errors
+
+DEFAULT_STL_TOLERANCE_MM = 0.01
+
+
+def _progress(t0: float, message: str) -> None:
+    click.echo(f"[{time.perf_counter() - t0:5.2f} s] {message}", err=True)
+
+
+def _load_design(path: Path):
+    """A design file's document and geometry; a spec gets a clear exit-2 message."""
+    from .cli import load_design_document
+    from .schema import InputError, load_document
+
+    doc = load_document(path)
+    if not doc.is_design:
+        if doc.is_spec:
+            # The inverse design (mst_cli.design, issue 3) is not wired in here yet.
+            raise InputError("layers", f"{len(doc.layers)} target layers",
+                             "this is a spec (targets, no theta/t/h): run 'mst design' on it "
+                             "first, then export the design file it writes")
+        doc.require_geometry()
+    return load_design_document(path)
+
+
+@click.command("export")
+@click.argument("path", type=click.Path(dir_okay=False, path_type=Path))
+@click.option("--stl", "want_stl", is_flag=True, help="Write sensor.stl (the one printable TPU body).")
+@click.option("--step", "want_step", is_flag=True,
+              help="Write sensor.step: assembly of the body, the magnet and the board.")
+@click.option("--3mf", "want_3mf", is_flag=True, help="Write sensor.3mf (the body, mm).")
+@click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), default=None,
+              help="Output folder [default: ./mst-out/<name>/].")
+@click.option("--stl-tolerance", "stl_tolerance_mm", type=float, default=DEFAULT_STL_TOLERANCE_MM,
+              show_default=True, help="Largest chord deviation of the mesh from the curved "
+                                      "surfaces (the magnet pocket), mm.")
+@handles_input_errors
+def export(path, want_stl, want_step, want_3mf, out_dir, stl_tolerance_mm):
+    """Build the printable sensor of the design file PATH and write it.
+
+    Without a format flag, writes STL and STEP. Always writes export.json: the design's own
+    expected volume, bounding box, pocket, slot and feature sizes, which 'mst check' reads.
+    Parts are in print orientation: base on the build plate, magnet axis along z. Pause the
+    print at the reported height to drop the magnet into its pocket.
+    """
+    from .schema import InputError
+
+    if not 1e-4 <= stl_tolerance_mm <= 1.0:
+        raise InputError("--stl-tolerance", stl_tolerance_mm, "must be a number from 0.0001 to 1 mm")
+    if not (want_stl or want_step or want_3mf):
+        want_stl = want_step = True
+    t0 = time.perf_counter()
+    doc, geometry = _load_design(path)
+    _progress(t0, f"loaded {path} ({len(geometry.layers)} layers)")
+
+    from .cad.assembly import build_sensor, check_fits
+    from .cad.manifest import MANIFEST_NAME, export_manifest
+    from .cad import mesh_io
+    from .outputs import staged
+
+    check_fits(geometry)
+    _progress(t0, "building the body: base, layers, plates, cap (one fuse)")
+    cad = build_sensor(geometry)
+    names = (["sensor.stl"] if want_stl else []) + (["sensor.step"] if want_step else []) \
+        + (["sensor.3mf"] if want_3mf else [])
+    out = out_dir or default_out_dir(doc.name)
+    with staged(out) as st:
+        if want_stl or want_3mf:
+            vertices, triangles = mesh_io.tessellate(cad.body, stl_tolerance_mm)
+            if not mesh_io.is_closed_oriented(triangles):
+                raise RuntimeError("the tessellated body is not closed: please report this design")
+            _progress(t0, f"meshed: {len(triangles)} triangles at {stl_tolerance_mm:g} mm")
+            if want_stl:
+                st.path("sensor.stl").write_bytes(mesh_io.stl_bytes(vertices, triangles))
+                _progress(t0, "wrote sensor.stl")
+            if want_3mf:
+                st.path("sensor.3mf").write_bytes(mesh_io.three_mf_bytes(vertices, triangles, doc.name))
+                _progress(t0, "wrote sensor.3mf")
+        if want_step:
+            mesh_io.write_step(cad.assembly(doc.name), st.path("sensor.step"))
+            _progress(t0, "wrote sensor.step (body, magnet, board)")
+        st.write_json(MANIFEST_NAME, export_manifest(doc.name, geometry, doc.printer,
+                                                     stl_tolerance_mm, names))
+    if geometry.magnet_tilt_deg:
+        click.echo(f"note: magnet_tilt_deg = {geometry.magnet_tilt_deg:g} is an assembly error "
+                   "in the forward model; the pocket is built on the axis", err=True)
+    click.echo(f"body volume {geometry.body_volume_mm3:.1f} mm3, height {geometry.total_height_mm:.2f} mm; "
+               f"pause the print at z = {geometry.z_pause_mm:.2f} mm to insert the magnet")
+    click.echo(f"wrote {out}/{', '.join(names + [MANIFEST_NAME])}")
+
+
+@click.command("check")
+@click.argument("path", type=click.Path(path_type=Path))
+@click.option("--json", "as_json", is_flag=True, help="Print the results as JSON instead of the table.")
+@click.option("--nozzle", "nozzle_mm", type=float, default=None,
+              help="Nozzle diameter for the wall checks, mm [default: the design's printer.nozzle_mm].")
+@handles_input_errors
+def check(path, as_json, nozzle_mm):
+    """Check the body that 'mst export' wrote (PATH: its folder, or the STL in it).
+
+    Prints a table of named checks, measured on the mesh against the design's own expected
+    values in export.json. Exit 1 naming the failed checks, 2 for unreadable input.
+    """
+    from .checks import load_manifest, load_mesh, resolve_paths, results_dict, results_table, run_checks
+    from .schema import InputError
+
+    if nozzle_mm is not None and not 0.05 <= nozzle_mm <= 5.0:
+        raise InputError("--nozzle", nozzle_mm, "must be a nozzle diameter from 0.05 to 5 mm")
+    stl, manifest_path = resolve_paths(path)
+    manifest = load_manifest(manifest_path)
+    mesh = load_mesh(stl)
+    try:
+        results = run_checks(mesh, manifest, nozzle_mm)
+    except (KeyError, TypeError, IndexError) as exc:
+        raise InputError("export.json", str(manifest_path),
+                         f"malformed ({type(exc).__name__}: {exc}): rewrite it with 'mst export'") from None
+    summary = results_dict(results, str(stl))
+    if as_json:
+        click.echo(json.dumps(summary, indent=2))
+    else:
+        click.echo(results_table(results))
+    if summary["failed"]:
+        click.echo(f"mst check: failed: {', '.join(summary['failed'])}", err=True)
+        sys.exit(EXIT_TARGETS)
