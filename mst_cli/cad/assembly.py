@@ -67,7 +67,7 @@ class SensorCAD:
 
     def assembly(self, name: str) -> Compound:
         """Named STEP assembly: the body, the magnet and the board as separate parts."""
-        body = Compound([self.body], label="sensor body (TPU)")
+        body = Compound([self.body], label="sensor_body")
         magnet = Compound([self.magnet], label="magnet")
         return Compound(children=[body, magnet, self.board], label=name)
 
@@ -77,5 +77,5 @@ def build_sensor(geometry: SensorGeometry) -> SensorCAD:
     body = build_body(geometry)
     pcb, chip = parts.board_solids(geometry)
     board = Compound(children=[Compound([pcb], label="pcb"), Compound([chip], label="MLX90393")],
-                     label=f"board {geometry.board.key}")
+                     label=f"board_{geometry.board.key}")
     return SensorCAD(body=body, magnet=parts.magnet_solid(geometry), board=board)

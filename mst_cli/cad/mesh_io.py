@@ -8,6 +8,8 @@ carries a fixed time stamp.
 from __future__ import annotations
 
 import io
+import itertools
+import re
 import zipfile
 from pathlib import Path
 
@@ -126,12 +128,44 @@ def three_mf_bytes(vertices: np.ndarray, triangles: np.ndarray, name: str) -> by
     return buf.getvalue()
 
 
+# One NEXT_ASSEMBLY_USAGE_OCCURRENCE record, possibly wrapped over several lines.
+_NAUO = re.compile(rb"#\d+ = NEXT_ASSEMBLY_USAGE_OCCURRENCE\('\d+'.*?\);\n", re.DOTALL)
+_NAUO_ID = re.compile(rb"NEXT_ASSEMBLY_USAGE_OCCURRENCE\('\d+'")
+
+
+def _wrap_record(record: bytes, width: int = 80) -> bytes:
+    """Break a STEP record after commas so that lines stay within ``width`` columns."""
+    lines, line = [], b""
+    for piece in re.split(rb"(?<=,)", record):
+        if line and len(line) + len(piece) > width:
+            lines.append(line)
+            line = b"  "
+        line += piece
+    return b"\n".join(lines + [line]) + b"\n"
+
+
+def _renumber_nauo(data: bytes) -> bytes:
+    counter = itertools.count(1)
+
+    def one(match):
+        record = b"".join(part.strip() for part in match.group(0).splitlines())
+        record = _NAUO_ID.sub(b"NEXT_ASSEMBLY_USAGE_OCCURRENCE('%d'" % next(counter), record)
+        return _wrap_record(record)
+    return _NAUO.sub(one, data)
+
+
 def write_step(assembly, path: Path) -> None:
-    """STEP AP214 file of the named assembly, with a fixed header time stamp."""
+    """STEP AP214 file of the named assembly, deterministic.
+
+    The header gets a fixed time stamp, and the ids of the assembly-usage records -- which
+    OCCT draws from a process-wide counter -- are renumbered 1, 2, ... in file order (they
+    only need to be unique within the file); those records are re-wrapped at 80 columns.
+    """
     from build123d import export_step
+    path = Path(path)
     if not export_step(assembly, str(path), timestamp=STEP_TIMESTAMP):
         raise RuntimeError(f"STEP export to {path} failed")
-
+    path.write_bytes(_renumber_nauo(path.read_bytes()))
 
 def is_closed_oriented(triangles: np.ndarray) -> bool:
     """True when every directed edge appears once and its reverse once: the mesh is closed

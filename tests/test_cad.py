@@ -1,0 +1,249 @@
+"""The CAD of the printed body against geometry fixed by hand calculation.
+
+Golden numbers of the reference design are worked out below from the housing defaults and the
+Adafruit 4022 board (DESIGN.md, reference/README.md), not read off the CAD.
+"""
+
+import io
+import math
+import xml.etree.ElementTree as ET
+import zipfile
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+import trimesh
+from build123d import Edge, import_step
+
+from mst_cli.cad import mesh_io, parts
+from mst_cli.cad.assembly import build_body, build_sensor
+from mst_cli.cli import load_design_document
+from mst_cli.components import BOARDS
+from mst_cli.geometry import Housing, HexCell, SensorGeometry
+from mst_cli.schema import InputError
+
+ROOT = Path(__file__).resolve().parents[1]
+FORWARD = ROOT / "configs" / "mohammadi2021-forward.yaml"
+RAY_XY = (0.0123, 0.0071)           # off the symmetry lines, like mst check
+
+
+@pytest.fixture(scope="module")
+def reference():
+    doc, geometry = load_design_document(FORWARD)
+    return geometry, build_sensor(geometry)
+
+
+def shoelace(points):
+    x, y = np.array(points).T
+    return 0.5 * abs(np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y))
+
+
+def solid_intervals_z(solid, x, y, z_top):
+    """z ranges of material along the vertical line (x, y): B-rep line/solid intersection."""
+    edges = solid.intersect(Edge.make_line((x, y, -1.0), (x, y, z_top + 1.0))).edges()
+    return sorted(tuple(sorted((e.vertices()[0].Z, e.vertices()[-1].Z))) for e in edges)
+
+
+def common_volume(a, b):
+    common = a.intersect(b)
+    return 0.0 if common is None else sum(s.volume for s in common.solids())
+
+
+def air_gaps_z(solid, x, y, z_top):
+    iv = solid_intervals_z(solid, x, y, z_top)
+    return [(a[1], b[0]) for a, b in zip(iv[:-1], iv[1:]) if b[0] - a[1] > 1e-9]
+
+
+# --------------------------------------------------------------------------- golden reference
+def test_reference_bbox_golden(reference):
+    g, cad = reference
+    # z: floor 1 + board 1.6 + chip 1 + air 0.3 + cover 0.8 = 4.7; layers 2 + 2.8 + 3.5;
+    #    2 plates x 1.2; pocket floor 0.6 + pocket 2.1 + cap top 0.8     -> 18.9 mm
+    # y: slot -8.3-0.2 .. 17.78-8.3+0.2 = 9.68, + side wall 1.2         -> +-10.88 mm
+    # x: slot -12.8 .. 13.0, + 1.2 = 14.2 < the cell's 15                -> +-15 mm
+    bb = cad.body.bounding_box()
+    assert (bb.min.X, bb.min.Y, bb.min.Z) == pytest.approx((-15.0, -10.88, 0.0), abs=1e-7)
+    assert (bb.max.X, bb.max.Y, bb.max.Z) == pytest.approx((15.0, 10.88, 18.9), abs=1e-7)
+
+
+def test_reference_volume_golden(reference):
+    g, cad = reference
+    base = 30 * 21.76 * 4.7 - (13.0 + 15.0) * 18.18 * 2.9 - (15.0 - 13.0) * 8.0 * 2.9
+    layers = sum(
+        (shoelace(c.outer_profile_xz()) - shoelace(c.inner_profile_xz())) * c.t_mm * 4
+        for c in g.layers)
+    plates = 2 * 30 * 20 * 1.2
+    r, c = 3.1, 0.3
+    pocket = math.pi * r ** 2 * 2.1 + math.pi * c / 3 * (r ** 2 + r * (r + c) + (r + c) ** 2) - math.pi * r ** 2 * c
+    cap = 30 * 20 * 3.5 - pocket
+    expected = base + layers + plates + cap
+    assert cad.body.volume == pytest.approx(expected, rel=1e-9)
+    assert g.body_volume_mm3 == pytest.approx(expected, rel=1e-12)
+    assert cad.body.is_valid
+
+
+def test_layer_volume_is_profile_area_times_strut_widths(reference):
+    g, _ = reference
+    for cell, zb in zip(g.layers, g.layer_bottoms_mm):
+        struts = parts.layer_struts(cell, zb)
+        assert len(struts) == cell.struts_per_chevron
+        area = shoelace(cell.outer_profile_xz()) - shoelace(cell.inner_profile_xz())
+        assert sum(s.volume for s in struts) == pytest.approx(area * cell.b_mm * cell.struts_per_chevron,
+                                                              rel=1e-9)
+
+
+def test_gap0_is_what_the_cad_builds(reference):
+    g, cad = reference
+    # pocket floor: the topmost air gap on the axis; slot floor: the lowest air gap at the chip
+    pocket_floor = air_gaps_z(cad.body, *RAY_XY, g.total_height_mm)[-1][0]
+    slot_floor, slot_top = air_gaps_z(cad.body, RAY_XY[0] + g.chip_offset_mm[0],
+                                      RAY_XY[1] + g.chip_offset_mm[1], g.total_height_mm)[0]
+    hall = slot_floor + g.board.thickness_mm + 0.5 * g.board.chip_height_mm
+    assert pocket_floor - hall == pytest.approx(g.gap0_mm, abs=1e-9)
+    assert pocket_floor - hall == pytest.approx(12.9, abs=1e-9)     # 16.0 - (1 + 1.6 + 0.5)
+    assert slot_top - slot_floor == pytest.approx(1.6 + 1.0 + 0.3, abs=1e-9)
+
+
+@pytest.mark.parametrize("key", sorted(BOARDS))
+def test_every_board_gives_the_model_gap_and_a_closed_slot(key):
+    """bd_warehouse style: every catalogue entry builds, the chip sits where the model says."""
+    cells = (HexCell(30, 0.8, 2.4), HexCell(40, 1.2, 3.2))
+    offset = (1.5, -0.7)
+    g = SensorGeometry(cells, board=BOARDS[key], chip_offset_mm=offset)
+    body = build_body(g)
+    assert body.is_valid and body.volume == pytest.approx(g.body_volume_mm3, rel=1e-9)
+    pocket_floor = air_gaps_z(body, *RAY_XY, g.total_height_mm)[-1][0]
+    slot_floor = air_gaps_z(body, offset[0] + RAY_XY[0], offset[1] + RAY_XY[1], g.total_height_mm)[0][0]
+    gap = pocket_floor - (slot_floor + g.board.thickness_mm + 0.5 * g.board.chip_height_mm)
+    assert gap == pytest.approx(g.gap0_mm, abs=1e-9)
+    # the board (PCB + chip) fits in its slot: it does not intersect the body
+    board = build_sensor(g).board
+    assert sum(common_volume(s, body) for s in board.solids()) == pytest.approx(0.0, abs=1e-9)
+    # side walls of at least housing.side_wall_mm around the (off-centre) slot
+    x0, x1, y0, y1 = g.slot_xy_mm
+    w = g.housing.side_wall_mm
+    assert 0.5 * g.base_length_mm - x1 >= w - 1e-12
+    assert min(0.5 * g.base_width_mm - y1, y0 + 0.5 * g.base_width_mm) >= w - 1e-12
+
+
+# --------------------------------------------------------------------------- magnet pocket
+@pytest.mark.parametrize("chamfer", [0.0, 0.3])
+def test_pocket_volume_is_pi_r2_depth_plus_chamfer(chamfer):
+    g = SensorGeometry((HexCell(30, 0.8, 2.4),), housing=Housing(pocket_chamfer_mm=chamfer))
+    r = 0.5 * (6.0 + 2 * 0.1)
+    depth = 2.0 + 0.1
+    excess = math.pi * chamfer / 3 * (r ** 2 + r * (r + chamfer) + (r + chamfer) ** 2) - math.pi * r ** 2 * chamfer
+    pocket = parts.magnet_pocket(g)
+    assert pocket.volume == pytest.approx(math.pi * r ** 2 * depth + excess, rel=1e-9)
+    # the magnet sits inside the pocket, its face on the floor
+    magnet = parts.magnet_solid(g)
+    assert common_volume(magnet, pocket) == pytest.approx(magnet.volume, rel=1e-9)
+    assert magnet.bounding_box().min.Z == pytest.approx(g.z_magnet_bottom_mm)
+
+
+def test_pocket_too_wide_for_the_cap_is_an_input_error():
+    g = SensorGeometry((HexCell(30, 0.8, 2.4, width_mm=30, depth_mm=8, struts_per_chevron=2),))
+    with pytest.raises(InputError, match="magnet.diameter_mm"):
+        build_body(g)
+
+
+# --------------------------------------------------------------------------- random sweep
+def random_valid_geometries(n, seed=4):
+    rng = np.random.default_rng(seed)
+    out = []
+    while len(out) < n:
+        n_s = int(rng.integers(1, 6))
+        cells = tuple(HexCell(float(rng.uniform(15, 60)), float(rng.uniform(0.4, 2.0)),
+                              float(rng.uniform(1.2, 6.0)), struts_per_chevron=n_s)
+                      for _ in range(int(rng.integers(1, 4))))
+        if any(c.violations() for c in cells):
+            continue
+        board = BOARDS[sorted(BOARDS)[int(rng.integers(len(BOARDS)))]]
+        offset = tuple(float(v) for v in rng.uniform(-2, 2, size=2))
+        out.append(SensorGeometry(cells, board=board, chip_offset_mm=offset))
+    return out
+
+
+@pytest.mark.parametrize("g", random_valid_geometries(6), ids=lambda g: f"{len(g.layers)}layers")
+def test_random_valid_designs_build_watertight_bodies(g):
+    body = build_body(g)
+    assert body.is_valid
+    v = body.volume
+    # analytic envelope: more than the solid blocks without the layers' struts, less than the
+    # bounding box; and the exact analytic sum of the parts
+    (x0, y0, z0), (x1, y1, z1) = g.body_bbox_mm
+    floor = g.base_volume_mm3 + g.plates_volume_mm3 + g.cap_volume_mm3
+    assert floor < v < (x1 - x0) * (y1 - y0) * (z1 - z0)
+    assert v == pytest.approx(g.body_volume_mm3, rel=1e-9)
+    vertices, triangles = mesh_io.tessellate(body, 0.02)
+    assert mesh_io.is_closed_oriented(triangles)
+    mesh = trimesh.Trimesh(vertices, triangles, process=False)
+    assert mesh.is_watertight and mesh.is_volume
+    # chord deviation 0.02 mm only affects the pocket: volume within delta x curved area
+    assert abs(mesh.volume - v) <= 0.02 * g.pocket_curved_area_mm2 + 1e-9 * v
+
+
+# --------------------------------------------------------------------------- files
+def test_step_round_trip_keeps_volume_and_names(reference, tmp_path):
+    g, cad = reference
+    path = tmp_path / "sensor.step"
+    mesh_io.write_step(cad.assembly("ref"), path)
+    back = import_step(str(path))
+    labels = {}
+
+    def walk(node):
+        labels[node.label] = node
+        for child in getattr(node, "children", ()):
+            walk(child)
+    walk(back)
+    body = labels["sensor_body"]
+    assert body.volume == pytest.approx(cad.body.volume, rel=1e-6)
+    magnet = labels["magnet"]
+    assert magnet.volume == pytest.approx(g.magnet.volume_mm3, rel=1e-6)
+    assert labels["board_adafruit-4022"].volume == pytest.approx(25.4 * 17.78 * 1.6 + 3 * 3 * 1, rel=1e-6)
+    assert {"pcb", "MLX90393"} <= set(labels)
+    # deterministic: a second write is byte-identical (fixed header time stamp)
+    path2 = tmp_path / "again.step"
+    mesh_io.write_step(cad.assembly("ref"), path2)
+    assert path.read_bytes() == path2.read_bytes()
+
+
+def test_stl_and_3mf_hold_the_same_closed_mesh(reference):
+    g, cad = reference
+    vertices, triangles = mesh_io.tessellate(cad.body, 0.01)
+    stl = mesh_io.stl_bytes(vertices, triangles)
+    assert len(stl) == 84 + 50 * len(triangles)
+    assert stl == mesh_io.stl_bytes(*mesh_io.tessellate(cad.body, 0.01))
+    mesh = trimesh.load(io.BytesIO(stl), file_type="stl")
+    assert mesh.is_watertight and mesh.is_volume
+    assert abs(mesh.volume - g.body_volume_mm3) <= 0.01 * g.pocket_curved_area_mm2 + 1e-5 * mesh.volume
+    # 3MF: parse the XML independently and compare the enclosed volume (divergence theorem)
+    with zipfile.ZipFile(io.BytesIO(mesh_io.three_mf_bytes(vertices, triangles, "ref"))) as zf:
+        assert {"[Content_Types].xml", "_rels/.rels", "3D/3dmodel.model"} <= set(zf.namelist())
+        root = ET.fromstring(zf.read("3D/3dmodel.model"))
+    ns = {"m": "http://schemas.microsoft.com/3dmanufacturing/core/2015/02"}
+    assert root.get("unit") == "millimeter"
+    v = np.array([[float(e.get(k)) for k in "xyz"] for e in root.iterfind(".//m:vertex", ns)])
+    t = np.array([[int(e.get(k)) for k in ("v1", "v2", "v3")] for e in root.iterfind(".//m:triangle", ns)])
+    a, b, c = v[t[:, 0]], v[t[:, 1]], v[t[:, 2]]
+    volume = np.einsum("ij,ij->i", a, np.cross(b, c)).sum() / 6.0
+    assert volume == pytest.approx(mesh.volume, rel=1e-5)
+
+
+def test_merge_vertices_welds_duplicates_in_first_seen_order():
+    v = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 0, 0], [0, 0, 0], [0, 0, 1]], float)
+    t = np.array([[0, 1, 2], [3, 4, 5], [0, 3, 1]])
+    nv, nt = mesh_io.merge_vertices(v, t)
+    assert nv.tolist() == [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]]
+    assert nt.tolist() == [[0, 1, 2], [1, 0, 3]]        # the degenerate third triangle is dropped
+
+
+def test_housing_change_moves_the_pause_height():
+    cells = (HexCell(30, 0.8, 2.4),)
+    a = SensorGeometry(cells)
+    b = replace(a, housing=Housing(cover_mm=1.6))
+    assert b.z_pause_mm - a.z_pause_mm == pytest.approx(0.8)
+    assert b.gap0_mm - a.gap0_mm == pytest.approx(0.8)
+    body = build_body(b)
+    assert air_gaps_z(body, *RAY_XY, b.total_height_mm)[-1][1] == pytest.approx(b.z_pause_mm, abs=1e-9)
