@@ -127,3 +127,5 @@ def simulate(design_file, out_dir, field_model, mechanics, as_json):
 from .cli_export import check, export  # noqa: E402
 main.add_command(export)
 main.add_command(check)
+from .cli_design import design  # noqa: E402
+main.add_command(design)

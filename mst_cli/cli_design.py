@@ -1,0 +1,105 @@
+"""``mst design``: inverse design from target sensitivities and force ranges (nlopt)."""
+
+from __future__ import annotations
+
+import json
+import sys
+import time
+from pathlib import Path
+
+import click
+
+from .cli import default_out_dir, handles_input_errors, write_simulation
+
+
+class _Progress:
+    """A compact progress line on stderr: live on a terminal, a line every few seconds otherwise.
+
+    Short runs (the usual case, well under a second) print nothing.
+    """
+
+    def __init__(self, quiet: bool):
+        self.quiet = quiet
+        self.tty = sys.stderr.isatty()
+        self.t0 = time.monotonic()
+        self.last = self.t0
+        self.shown = False
+
+    def __call__(self, done, total, phase, worst_err):
+        if self.quiet:
+            return
+        now = time.monotonic()
+        if now - self.t0 < 1.0 or now - self.last < (0.2 if self.tty else 5.0):
+            return
+        self.last = now
+        width = 24
+        fill = int(width * done / max(total, 1))
+        line = (f"mst design: [{'#' * fill}{'.' * (width - fill)}] {done}/{total} evaluations, "
+                f"{phase}, worst error {100 * worst_err:.2f} %")
+        if self.tty:
+            click.echo("\r" + line, err=True, nl=False)
+            self.shown = True
+        else:
+            click.echo(line, err=True)
+
+    def close(self):
+        if self.shown:
+            click.echo("", err=True)
+
+
+@click.command()
+@click.argument("spec_file", type=click.Path(dir_okay=False, path_type=Path))
+@click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), default=None,
+              help="Output folder [default: ./mst-out/<name>/].")
+@click.option("--seed", type=click.IntRange(min=0), default=None,
+              help="Seed of the random starts [default: the file's design.seed, else 0]. "
+                   "Same spec and seed give a byte-identical design.yaml.")
+@click.option("--max-evaluations", type=click.IntRange(min=10), default=None,
+              help="Budget of candidate evaluations [default: design.max_evaluations, else 20000].")
+@click.option("--quiet", "-q", is_flag=True, help="No table and no progress; exit code and files only.")
+@click.option("--json", "as_json", is_flag=True, help="Print report.json to stdout instead of the table.")
+@handles_input_errors
+def design(spec_file, out_dir, seed, max_evaluations, quiet, as_json):
+    """Find theta, t, h of every layer so that the sensor meets SPEC_FILE's targets.
+
+    Per layer the spec gives a target sensitivity S (dB/B0 per newton, secant over the
+    regime) and the force R at which that layer locks (the regime's end). Three variables
+    per layer meet two targets; the spare freedom picks the design whose S and R change
+    least when every wall is printed 0.05 mm off (reported per layer). Every achieved number
+    comes from re-running the forward model (mst simulate) on the written design.
+
+    Writes design.yaml (loadable by mst simulate and mst export), report.json,
+    response.csv and response.png.
+
+    \b
+    Exit codes:
+      0  every target within the tolerance (design.tolerance_rel, default 2 %)
+      1  physically unreachable: the nearest design is written and the binding
+         target or constraint is named (field change the magnet cannot give,
+         forces outside what printable walls reach, S rising with force, ...)
+      2  invalid or self-contradictory spec (e.g. ranges that do not increase)
+    """
+    from .design import design_document
+    from .report import report_dict
+    from .schema import load_document
+
+    doc = load_document(spec_file)
+    progress = _Progress(quiet or as_json)
+    try:
+        result = design_document(doc, seed=seed, max_evaluations=max_evaluations, progress=progress)
+    finally:
+        progress.close()
+    out = out_dir or default_out_dir(doc.name)
+    extra = result.report_extra()
+    write_simulation(result.document, result.geometry, result.response, out,
+                     extra_files={"design.yaml": result.design_yaml_dict()}, extra_report=extra)
+    if as_json:
+        click.echo(json.dumps(report_dict(result.document, result.geometry, result.response, extra),
+                              indent=2))
+    elif not quiet:
+        click.echo(result.table())
+        click.echo(f"wrote {out}/design.yaml, report.json, response.csv, response.png "
+                   f"({result.elapsed_s:.2f} s)")
+    if result.exit_code:
+        click.echo(f"mst design: targets not met: {result.binding}: {result.reasons[0]}", err=True)
+    sys.exit(result.exit_code)

@@ -1,0 +1,261 @@
+"""The inverse-design problem: variables, targets, constraints and the tie-break, vectorised.
+
+Every function here takes arrays of candidate designs (any leading shape) and evaluates them
+with the same kernels the forward model uses (``spring_arrays``, ``unloaded_gap_mm``,
+``regime_kernel``, ``cell_margins_mm``), so thousands of candidates cost one numpy call.
+
+Variables
+    Per layer theta (deg), t (mm), h (mm), optimised as u in [0, 1]^(3n), layer-major
+    (theta_1, t_1, h_1, theta_2, ...). theta maps linearly onto its bounds; t and h map
+    logarithmically, because the wall stiffness goes like (t/L)^3: equal steps in u are then
+    equal *relative* changes of k, which keeps one initial step right for every layer.
+
+Match objective (phase 1)
+    sum_i w_i [ ln(S_i / S*_i)^2 + ln(R_i / R*_i)^2 ],  R_i the lock force of layer i (file
+    order, bottom to top) and S_i the secant sensitivity of regime i. The log makes a 2 % miss
+    of a 0.03 1/N target weigh as much as a 2 % miss of a 0.26 1/N one.
+
+Constraints (g <= 0 is satisfied; every g is scaled to order one)
+    * cell rules of :func:`~mst_cli.geometry.cell_margins_mm` for every layer, in nozzles;
+    * lock order with margin: R_(i+1) >= (1 + lock_margin_rel) R_i, so regime i ends when layer
+      i locks and the layers lock bottom to top in file order;
+    * chip below saturation: |B| at the last lock <= (1 - saturation_margin_rel) x 50 mT, and
+      never above what the MLX90393's coarsest setting reads with the headroom
+      :func:`~mst_cli.magnetometer.choose_setting` keeps;
+    * optional total height: SensorGeometry.total_height_mm <= design.max_height_mm.
+
+Tie-break (phase 2, "robust to the printer")
+    Three variables per layer and two targets leave one spare degree of freedom per layer. A
+    maker cannot print t exactly: extrusion width drifts with the filament and the flow
+    calibration, the same way for every wall of one print. Among the designs that meet the
+    targets, the tool therefore picks the one whose S_i and R_i move least when *every* wall
+    is printed PRINT_ERROR_T_MM = 0.05 mm thicker or thinner (the strut width b moves with t
+    when b = t). The quantity minimised is the RMS over the 2n outputs and both signs of
+    ln(out(t +- 0.05 mm) / out(t)); it is reported per layer.
+"""
+
+from __future__ import annotations
+
+import inspect
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .. import geometry as geo
+from .. import magnetometer as mlx
+from ..field import axial_Bz_T, choose_field_model
+from ..mechanics.spring import spring_arrays
+from ..response import field_magnitude_T, regime_kernel
+
+PRINT_ERROR_T_MM = 0.05      # wall-thickness printing error the tie-break guards against
+# headroom choose_setting keeps between the largest field and a setting's range (one source)
+CHIP_HEADROOM = inspect.signature(mlx.choose_setting).parameters["margin"].default
+_TINY = 1e-300
+
+
+@dataclass
+class Evaluation:
+    """Everything the optimiser needs about a batch of candidates (leading shape ``...``)."""
+
+    theta_deg: np.ndarray          # (..., n)
+    t_mm: np.ndarray               # (..., n)
+    h_mm: np.ndarray               # (..., n)
+    R_N: np.ndarray                # (..., n) lock force of each layer, file order
+    S_per_N: np.ndarray            # (..., n) secant sensitivity of regime i (sorted locks)
+    B_full_T: np.ndarray           # (...)   |B| at the last lock
+    gap0_mm: np.ndarray            # (...)
+    total_height_mm: np.ndarray    # (...)
+    cell_margins_mm: np.ndarray    # (..., n, len(CELL_RULES))
+    log_err: np.ndarray            # (..., 2n) ln(S/S*) for every regime, then ln(R/R*)
+    constraints: np.ndarray        # (..., m) g <= 0 satisfied
+    objective: np.ndarray          # (...)  weighted sum of squared log errors
+
+    @property
+    def feasible(self) -> np.ndarray:
+        return np.all(self.constraints <= 0.0, axis=-1)
+
+    @property
+    def violation(self) -> np.ndarray:
+        """Sum of positive constraint values (0 for a feasible candidate)."""
+        return np.sum(np.maximum(self.constraints, 0.0), axis=-1)
+
+    @property
+    def rel_err(self) -> np.ndarray:
+        """Relative errors out/target - 1, same layout as ``log_err``."""
+        return np.expm1(self.log_err)
+
+
+class DesignProblem:
+    """The targets, bounds and constants of one spec document, with vectorised evaluation.
+
+    Parameters
+    ----------
+    doc : mst_cli.schema.Document
+        A spec: every layer has ``target_sensitivity_per_N`` and ``target_range_N``.
+    """
+
+    def __init__(self, doc):
+        doc.require_targets()
+        self.doc = doc
+        self.n = len(doc.layers)
+        d = doc.design
+        self.tolerance_rel = float(d["tolerance_rel"])
+        self.lock_margin_rel = float(d["lock_margin_rel"])
+        self.saturation_margin_rel = float(d["saturation_margin_rel"])
+        self.max_height_mm = d.get("max_height_mm")
+        self.lo = np.array([d["theta_deg_bounds"][0], d["t_mm_bounds"][0], d["h_mm_bounds"][0]])
+        self.hi = np.array([d["theta_deg_bounds"][1], d["t_mm_bounds"][1], d["h_mm_bounds"][1]])
+        self.S_target = np.array([la.target_sensitivity_per_N for la in doc.layers], dtype=float)
+        self.R_target = np.array([la.target_range_N for la in doc.layers], dtype=float)
+        self.weights = np.array([la.weight for la in doc.layers], dtype=float)
+        self.family = doc.family
+        self.printer = doc.printer
+        self.E_MPa = doc.material.youngs_modulus_MPa
+        self.nu = doc.material.poisson_ratio
+
+        # a probe geometry (any cells) gives the field scene and the fixed height offsets
+        probe_cells = [doc.family.cell(45.0, 1.0, 3.0) for _ in range(self.n)]
+        probe = doc.geometry(probe_cells)
+        self.probe = probe
+        requested = None if doc.field_model == "auto" else doc.field_model
+        self.field_model = choose_field_model(probe.chip_offset_mm, probe.magnet_tilt_deg, requested)
+        self.height_offset_mm = probe.total_height_mm - sum(c.h_mm for c in probe_cells)
+        self.B_limit_T = min(1.0 - self.saturation_margin_rel, 1.0 / CHIP_HEADROOM) * mlx.SATURATION_T
+        self.n_constraints = (self.n * len(geo.CELL_RULES) + (self.n - 1) + 1
+                              + (1 if self.max_height_mm is not None else 0))
+
+    # ----------------------------------------------------------------- variables
+    @property
+    def dim(self) -> int:
+        return 3 * self.n
+
+    def to_physical(self, u):
+        """(theta_deg, t_mm, h_mm), each (..., n), from normalised u (..., 3n)."""
+        u = np.asarray(u, dtype=float).reshape(np.shape(u)[:-1] + (self.n, 3))
+        theta = self.lo[0] + u[..., 0] * (self.hi[0] - self.lo[0])
+        t = self.lo[1] * (self.hi[1] / self.lo[1]) ** u[..., 1]
+        h = self.lo[2] * (self.hi[2] / self.lo[2]) ** u[..., 2]
+        return theta, t, h
+
+    def to_unit(self, theta_deg, t_mm, h_mm):
+        """Inverse of :meth:`to_physical` (not clipped)."""
+        u0 = (np.asarray(theta_deg, float) - self.lo[0]) / (self.hi[0] - self.lo[0])
+        u1 = np.log(np.asarray(t_mm, float) / self.lo[1]) / math.log(self.hi[1] / self.lo[1])
+        u2 = np.log(np.asarray(h_mm, float) / self.lo[2]) / math.log(self.hi[2] / self.lo[2])
+        u = np.stack([u0, u1, u2], axis=-1)
+        return u.reshape(u.shape[:-2] + (3 * self.n,))
+
+    # ----------------------------------------------------------------- physics
+    def field_T(self, gap_mm):
+        """|B| (T) at the chip for an array of gaps: the forward model's field, same model."""
+        if self.field_model == "axial":
+            m = self.probe.magnet
+            return axial_Bz_T(gap_mm, m.radius_mm, m.thickness_mm, m.remanence_T)
+        return field_magnitude_T(gap_mm, self.probe, self.field_model)
+
+    def responses(self, theta_deg, t_mm, h_mm):
+        """(R_N per layer, S_per_N per regime, B_full_T, gap0_mm) of candidate stacks."""
+        fam = self.family
+        theta = np.radians(theta_deg)
+        b = t_mm if fam.strut_width_mm is None else np.full_like(t_mm, fam.strut_width_mm)
+        k, d_lock, k_locked = spring_arrays(theta, t_mm, h_mm, b, fam.struts_per_chevron,
+                                            fam.width_mm, fam.contact_allowance_mm, self.E_MPa, self.nu)
+        gap0 = geo.unloaded_gap_mm(h_mm.sum(axis=-1), self.n, self.probe.housing, self.probe.board)
+        _, S, _, B = regime_kernel(k, d_lock, k_locked, gap0, self.field_T)
+        return k * d_lock, S, B[..., -1], gap0
+
+    def evaluate_physical(self, theta_deg, t_mm, h_mm) -> Evaluation:
+        theta_deg, t_mm, h_mm = np.broadcast_arrays(*(np.asarray(a, dtype=float)
+                                                      for a in (theta_deg, t_mm, h_mm)))
+        fam, pr = self.family, self.printer
+        R, S, B_full, gap0 = self.responses(theta_deg, t_mm, h_mm)
+        b = t_mm if fam.strut_width_mm is None else np.full_like(t_mm, fam.strut_width_mm)
+        margins = geo.cell_margins_mm(np.radians(theta_deg), t_mm, h_mm, b, fam.width_mm, fam.depth_mm,
+                                      fam.struts_per_chevron, fam.contact_allowance_mm,
+                                      pr.min_wall_mm, pr.min_gap_mm, pr.nozzle_mm)
+        height = self.height_offset_mm + h_mm.sum(axis=-1)
+
+        logR = np.log(np.maximum(R, _TINY))
+        g = [(-margins / pr.nozzle_mm).reshape(margins.shape[:-2] + (-1,))]
+        if self.n > 1:
+            g.append(math.log1p(self.lock_margin_rel) - np.diff(logR, axis=-1))
+        g.append(np.log(np.maximum(B_full, _TINY) / self.B_limit_T)[..., None])
+        if self.max_height_mm is not None:
+            g.append(((height - self.max_height_mm) / pr.nozzle_mm)[..., None])
+        constraints = np.concatenate(g, axis=-1)
+
+        log_err = np.concatenate([np.log(np.maximum(S, _TINY) / self.S_target),
+                                  logR - np.log(self.R_target)], axis=-1)
+        w = np.concatenate([self.weights, self.weights])
+        objective = np.sum(w * log_err ** 2, axis=-1)
+        return Evaluation(theta_deg, t_mm, h_mm, R, S, B_full, gap0, height, margins, log_err,
+                          constraints, objective)
+
+    def evaluate(self, u) -> Evaluation:
+        return self.evaluate_physical(*self.to_physical(u))
+
+    # ----------------------------------------------------------------- tie-break
+    def print_shift_log(self, theta_deg, t_mm, h_mm, dt_mm: float = PRINT_ERROR_T_MM):
+        """ln(out(t + s dt) / out(t)) for s = +1, -1: shape (2, ..., 2n), S then R.
+
+        The three stacks (nominal, thicker, thinner) go through the kernels in one call.
+        """
+        theta_deg, t_mm, h_mm = np.broadcast_arrays(*(np.asarray(a, dtype=float)
+                                                      for a in (theta_deg, t_mm, h_mm)))
+        shifts = np.array([0.0, dt_mm, -dt_mm]).reshape((3,) + (1,) * t_mm.ndim)
+        T = np.broadcast_to(theta_deg, (3,) + theta_deg.shape)
+        H = np.broadcast_to(h_mm, (3,) + h_mm.shape)
+        R, S, _, _ = self.responses(T, np.maximum(t_mm + shifts, geo.LENGTH_FLOOR_MM), H)
+        out = np.log(np.maximum(np.concatenate([S, R], axis=-1), _TINY))
+        return out[1:] - out[:1]
+
+    def tie_break(self, theta_deg, t_mm, h_mm):
+        """RMS of :meth:`print_shift_log` over both signs and all 2n outputs (...)."""
+        d = self.print_shift_log(theta_deg, t_mm, h_mm)
+        return np.sqrt(np.mean(d ** 2, axis=(0, -1)))
+
+    # ----------------------------------------------------------------- reporting helpers
+    def constraint_names(self) -> list[str]:
+        """A readable name for every entry of ``Evaluation.constraints``."""
+        names = [f"layer {i + 1} {rule}" for i in range(self.n) for rule in geo.CELL_RULES]
+        names += [f"lock order: layer {i + 2} must lock >= {1 + self.lock_margin_rel:g} x layer {i + 1}"
+                  for i in range(self.n - 1)]
+        names.append(f"chip saturation: field at full load <= {self.B_limit_T * 1e3:.1f} mT")
+        if self.max_height_mm is not None:
+            names.append(f"total height <= {self.max_height_mm:g} mm")
+        return names
+
+    def output_names(self) -> list[str]:
+        return [f"S_{i + 1}" for i in range(self.n)] + [f"R_{i + 1}" for i in range(self.n)]
+
+    @property
+    def targets(self) -> np.ndarray:
+        return np.concatenate([self.S_target, self.R_target])
+
+    # ----------------------------------------------------------------- random valid designs
+    def sample_feasible(self, rng: np.random.Generator, count: int, slack: float = 0.05,
+                        batch: int = 4096, max_batches: int = 200):
+        """``count`` random designs that satisfy every constraint with ``slack`` to spare.
+
+        Layers of each random candidate are re-ordered by lock force (so that they lock bottom
+        to top) before the constraints are checked. Used to make random *reachable* specs for
+        the round-trip test and the benchmark. Returns (theta_deg, t_mm, h_mm), each (count, n).
+        """
+        found = []
+        total = 0
+        for _ in range(max_batches):
+            theta, t, h = self.to_physical(rng.random((batch, self.dim)))
+            R, _, _, _ = self.responses(theta, t, h)
+            order = np.argsort(R, axis=-1)
+            theta, t, h = (np.take_along_axis(a, order, axis=-1) for a in (theta, t, h))
+            ok = np.all(self.evaluate_physical(theta, t, h).constraints <= -slack, axis=-1)
+            if ok.any():
+                found.append(np.stack([theta[ok], t[ok], h[ok]]))
+                total += int(ok.sum())
+            if total >= count:
+                break
+        if total < count:
+            raise RuntimeError(f"only {total} of {count} random designs satisfy the constraints")
+        a = np.concatenate(found, axis=1)[:, :count]
+        return a[0], a[1], a[2]
