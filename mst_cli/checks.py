@@ -55,6 +55,9 @@ class Check:
 def resolve_paths(path: str | Path) -> tuple[Path, Path]:
     """(STL, export.json) for a folder written by ``mst export`` or an STL inside it."""
     path = Path(path)
+    if not path.exists():
+        raise InputError("PATH", str(path), "does not exist: give the folder 'mst export' wrote "
+                                            "or the .stl in it")
     if path.is_dir():
         stl, manifest = path / "sensor.stl", path / "export.json"
     elif path.suffix.lower() == ".stl":
@@ -134,11 +137,12 @@ def air_gaps(manifold, origin, direction, length_mm: float) -> list[tuple[float,
     return gaps
 
 
-def vertical_gaps(manifold, x: float, y: float, z_top: float) -> list[tuple[float, float]]:
-    """Air intervals (z_low, z_high) in mm along the vertical line through (x, y)."""
-    start = -1.0
+def vertical_gaps(manifold, x: float, y: float, z_top: float, z_bottom: float = 0.0) -> list[tuple[float, float]]:
+    """Air intervals (z_low, z_high) in mm along the vertical line through (x, y), for a body
+    between z_bottom and z_top."""
+    start = z_bottom - 1.0
     return [(start + a, start + b)
-            for a, b in air_gaps(manifold, (x, y, start), (0, 0, 1), z_top + 2.0)]
+            for a, b in air_gaps(manifold, (x, y, start), (0, 0, 1), z_top - z_bottom + 2.0)]
 
 
 def section_boxes(manifold, z_mm: float) -> list[tuple[float, float, float, float]]:
@@ -159,8 +163,23 @@ def section_hole_area(manifold, z_mm: float, x: float, y: float) -> float:
 
 def shells(mesh) -> tuple[int, int, list[float]]:
     """(bodies, internal voids, signed shell volumes): a closed shell of negative volume is a
-    cavity inside another shell."""
-    volumes = [float(part.volume) for part in mesh.split(only_watertight=False)]
+    cavity inside another shell.
+
+    Shells are the connected components of the triangles (sharing vertices); each one's
+    signed volume is the divergence-theorem sum of det(a, b, c) / 6 over its triangles.
+    """
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    faces = np.asarray(mesh.faces)
+    n_vertices = len(mesh.vertices)
+    edges = faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
+    graph = coo_matrix((np.ones(len(edges)), (edges[:, 0], edges[:, 1])), shape=(n_vertices, n_vertices))
+    _, labels = connected_components(graph, directed=False)
+    face_label = np.unique(labels[faces[:, 0]], return_inverse=True)[1].reshape(-1)
+    tri = np.asarray(mesh.vertices)[faces]
+    signed = np.einsum("ij,ij->i", tri[:, 0], np.cross(tri[:, 1], tri[:, 2])) / 6.0
+    volumes = np.bincount(face_label, weights=signed).tolist()
     return sum(v > 0 for v in volumes), sum(v < 0 for v in volumes), volumes
 
 

@@ -1,0 +1,178 @@
+"""mst_cli.checks: every check passes on the exported reference body and fails when the mesh
+or the expectation is broken in the way that check is about."""
+
+import copy
+import io
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+import trimesh
+
+from mst_cli import checks
+from mst_cli.cad import mesh_io
+from mst_cli.cad.assembly import build_sensor
+from mst_cli.cad.manifest import export_manifest
+from mst_cli.cli import load_design_document
+
+ROOT = Path(__file__).resolve().parents[1]
+FORWARD = ROOT / "configs" / "mohammadi2021-forward.yaml"
+
+
+@pytest.fixture(scope="module")
+def exported():
+    doc, g = load_design_document(FORWARD)
+    vertices, triangles = mesh_io.tessellate(build_sensor(g).body, 0.01)
+    stl = mesh_io.stl_bytes(vertices, triangles)
+    manifest = export_manifest(doc.name, g, doc.printer, 0.01, ["sensor.stl"])
+    return stl, manifest, g
+
+
+def mesh_of(stl):
+    return trimesh.load(io.BytesIO(stl), file_type="stl")
+
+
+def by_name(results):
+    return {c.name: c for c in results}
+
+
+def failed(results):
+    return {c.name for c in results if not c.passed and not c.info}
+
+
+def test_reference_body_passes_every_check(exported):
+    stl, manifest, g = exported
+    res = by_name(checks.run_checks(mesh_of(stl), manifest))
+    assert not failed(res.values())
+    assert set(res) == {"watertight", "is_volume", "manifold3d", "one_body", "volume", "bbox",
+                        "wall_thickness", "strut_width", "strut_spacing", "cavity_gap", "magnet_pocket",
+                        "board_slot", "magnet_chip_gap", "overhang"}
+    # measured on the mesh, equal to the design's own numbers
+    assert res["wall_thickness"].values["per_layer_mm"] == pytest.approx([0.6, 1.0, 1.4], abs=1e-4)
+    assert res["cavity_gap"].values["per_layer_mm"] == pytest.approx([0.8, 0.8, 0.7], abs=1e-4)
+    assert res["strut_spacing"].values["min_mm"] == pytest.approx(5.0 - 1.4, abs=1e-4)
+    assert res["magnet_chip_gap"].values["measured_mm"] == pytest.approx(g.gap0_mm, abs=1e-4)
+    assert res["overhang"].values["per_layer_deg"] == pytest.approx([25.0, 33.0, 37.0], abs=1e-3)
+    assert res["overhang"].values["below_limit_layers"] == [1, 2, 3]
+    # the void shell is the magnet pocket: pi r^2 depth + chamfer, minus at most delta x area
+    r = 3.1
+    void = res["magnet_pocket"].values["volume_mm3"]
+    assert g.pocket_volume_mm3 - 0.01 * g.pocket_curved_area_mm2 <= void <= g.pocket_volume_mm3 + 1e-3
+    assert math.pi * (r - 0.01) ** 2 <= math.pi * (res["magnet_pocket"].values["diameter_mm"] / 2) ** 2 <= math.pi * r * r
+
+
+def test_a_missing_triangle_breaks_watertight_volume_and_manifold(exported):
+    stl, manifest, _ = exported
+    mesh = mesh_of(stl)
+    holed = trimesh.Trimesh(mesh.vertices, mesh.faces[1:], process=False)
+    bad = failed(checks.run_checks(holed, manifest))
+    assert {"watertight", "is_volume", "manifold3d"} <= bad
+
+
+def test_a_flipped_triangle_breaks_the_winding(exported):
+    stl, manifest, _ = exported
+    mesh = mesh_of(stl)
+    faces = mesh.faces.copy()
+    faces[0] = faces[0, ::-1]
+    flipped = trimesh.Trimesh(mesh.vertices, faces, process=False)
+    assert flipped.is_watertight        # still closed: only the orientation is wrong
+    assert "is_volume" in failed(checks.run_checks(flipped, manifest))
+
+
+def test_a_second_body_is_caught(exported):
+    stl, manifest, _ = exported
+    mesh = mesh_of(stl)
+    twin = mesh.copy()
+    twin.apply_translation((100.0, 0.0, 0.0))
+    both = trimesh.util.concatenate([mesh, twin])
+    res = by_name(checks.run_checks(both, manifest))
+    assert res["one_body"].measured.startswith("2 body")
+    assert {"one_body", "volume", "bbox"} <= failed(res.values())
+
+
+def test_a_scaled_body_fails_volume_bbox_and_dimensions(exported):
+    stl, manifest, _ = exported
+    mesh = mesh_of(stl)
+    mesh.apply_scale(1.01)
+    bad = failed(checks.run_checks(mesh, manifest))
+    assert {"volume", "bbox", "wall_thickness", "magnet_pocket", "board_slot", "magnet_chip_gap"} <= bad
+
+
+@pytest.mark.parametrize("edit, check", [
+    (lambda m: m["body"].__setitem__("volume_mm3", m["body"]["volume_mm3"] + 1.0), "volume"),
+    (lambda m: m["body"]["bbox_max_mm"].__setitem__(2, m["body"]["bbox_max_mm"][2] + 0.01), "bbox"),
+    (lambda m: m["printer"].__setitem__("min_gap_mm", 0.75), "cavity_gap"),
+    (lambda m: m["printer"].__setitem__("min_gap_mm", 3.7), "strut_spacing"),
+    (lambda m: m.__setitem__("gap0_mm", m["gap0_mm"] + 0.01), "magnet_chip_gap"),
+    (lambda m: m["magnet_pocket"].__setitem__("diameter_mm", 6.3), "magnet_pocket"),
+    (lambda m: m["magnet_pocket"].__setitem__("floor_z_mm", 16.1), "magnet_pocket"),
+    (lambda m: m["board_slot"].__setitem__("x1_mm", 13.1), "board_slot"),
+    (lambda m: m["board_slot"].__setitem__("y0_mm", -8.4), "board_slot"),
+    (lambda m: m["layers"][1].__setitem__("t_mm", 1.05), "wall_thickness"),
+    (lambda m: m["layers"][0].__setitem__("theta_deg", 26.0), "wall_thickness"),
+    (lambda m: m["body"].__setitem__("internal_voids", 0), "one_body"),
+])
+def test_each_expectation_is_enforced(exported, edit, check):
+    stl, manifest, _ = exported
+    wrong = copy.deepcopy(manifest)
+    edit(wrong)
+    assert check in failed(checks.run_checks(mesh_of(stl), wrong))
+
+
+def test_nozzle_wider_than_the_thinnest_wall_fails(exported):
+    stl, manifest, _ = exported
+    bad = failed(checks.run_checks(mesh_of(stl), manifest, nozzle_mm=0.8))
+    assert bad == {"wall_thickness", "strut_width"}
+    assert not failed(checks.run_checks(mesh_of(stl), manifest, nozzle_mm=0.6))
+
+
+# --------------------------------------------------------------------------- measurements
+def test_crossings_and_gaps_on_a_hollow_box():
+    outer = trimesh.creation.box((10, 10, 10))
+    inner = trimesh.creation.box((4, 4, 4))
+    inner.invert()                                    # a cavity: inward-facing shell
+    hollow = trimesh.util.concatenate([outer, inner])
+    assert checks.shells(hollow)[:2] == (1, 1)
+    assert hollow.volume == pytest.approx(1000 - 64)
+    m, status = checks.to_manifold(hollow)
+    assert status == "NoError"
+    assert np.allclose(checks.vertical_gaps(m, 0.1, 0.2, 5.0, -5.0), [(-2.0, 2.0)])
+    assert np.allclose(checks.air_gaps(m, (-8, 0.1, 0.2), (1, 0, 0), 16.0), [(6.0, 10.0)])
+    assert checks.section_hole_area(m, 0.0, 0.0, 0.0) == pytest.approx(16.0)
+    assert np.allclose(checks.section_boxes(m, 0.0), [(-5, -5, 5, 5)])
+
+
+def test_downward_wall_angle_of_a_tilted_face():
+    # a wedge whose sloping underside rises at 30 deg from horizontal
+    a = math.radians(30)
+    pts = np.array([[0, 0, 0], [10, 0, 10 * math.tan(a)], [0, 0, 10 * math.tan(a)]])
+    v = np.vstack([pts, pts + [0, 5, 0]])
+    f = np.array([[0, 2, 1], [3, 4, 5], [0, 1, 4], [0, 4, 3], [1, 2, 5], [1, 5, 4], [2, 0, 3], [2, 3, 5]])
+    wedge = trimesh.Trimesh(v, f, process=False)
+    if wedge.volume < 0:
+        wedge.invert()
+    assert wedge.is_volume
+    ang = checks.downward_wall_angles_deg(wedge, -1.0, 10.0)
+    assert ang == pytest.approx([30.0, 30.0])
+
+
+def test_unreadable_inputs_are_input_errors(tmp_path):
+    from mst_cli.schema import InputError
+    (tmp_path / "sensor.stl").write_bytes(b"not a mesh at all")
+    (tmp_path / "export.json").write_text("{broken")
+    with pytest.raises(InputError, match="export.json"):
+        checks.load_manifest(tmp_path / "export.json")
+    with pytest.raises(InputError):
+        checks.load_mesh(tmp_path / "sensor.stl")
+    lonely = tmp_path / "lonely"
+    lonely.mkdir()
+    (lonely / "sensor.stl").write_bytes(b"")
+    with pytest.raises(InputError, match="export.json not found"):
+        checks.resolve_paths(lonely / "sensor.stl")
+    with pytest.raises(InputError, match="does not exist"):
+        checks.resolve_paths(tmp_path / "missing")
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    with pytest.raises(InputError, match="no such STL"):
+        checks.resolve_paths(empty)
