@@ -22,20 +22,30 @@ def _progress(t0: float, message: str) -> None:
     click.echo(f"[{time.perf_counter() - t0:5.2f} s] {message}", err=True)
 
 
-def _load_design(path: Path):
-    """A design file's document and geometry; a spec gets a clear exit-2 message."""
+def _load_design(path: Path, t0: float):
+    """(document, geometry, design result or None) of PATH.
+
+    A design file is loaded as ``mst simulate`` loads it. A spec (targets, no theta/t/h) is
+    designed first with the library behind ``mst design`` (:func:`mst_cli.design.design_document`).
+    """
     from .cli import load_design_document
     from .schema import InputError, load_document
 
     doc = load_document(path)
-    if not doc.is_design:
-        if doc.is_spec:
-            # The inverse design (mst_cli.design, issue 3) is not wired in here yet.
-            raise InputError("layers", f"{len(doc.layers)} target layers",
-                             "this is a spec (targets, no theta/t/h): run 'mst design' on it "
-                             "first, then export the design file it writes")
-        doc.require_geometry()
-    return load_design_document(path)
+    if doc.is_design:
+        return (*load_design_document(path), None)
+    if not doc.is_spec:
+        doc.require_geometry()              # names the first missing key (exit 2)
+    from .design import design_document
+    _progress(t0, f"{path} is a spec: designing theta, t, h first (as 'mst design' does)")
+    result = design_document(doc)
+    geometry = result.geometry
+    for i, v in geometry.violations(result.document.printer):
+        raise InputError(f"layers[{i}]", {"theta_deg": geometry.layers[i].theta_deg,
+                                          "t_mm": geometry.layers[i].t_mm, "h_mm": geometry.layers[i].h_mm},
+                         f"the designed cell is invalid ({v.rule}): {v.message}")
+    _progress(t0, f"designed: targets {result.status}")
+    return result.document, geometry, result
 
 
 @click.command("export")
@@ -53,7 +63,9 @@ def _load_design(path: Path):
 def export(path, want_stl, want_step, want_3mf, out_dir, stl_tolerance_mm):
     """Build the printable sensor of the design file PATH and write it.
 
-    Without a format flag, writes STL and STEP. Always writes export.json: the design's own
+    PATH may also be a spec (targets only): it is designed first, as 'mst design' does, and
+    the design is written next to the body as design.yaml (exit 1 if the targets are not met;
+    the nearest design is still exported). Without a format flag, writes STL and STEP. Always writes export.json: the design's own
     expected volume, bounding box, pocket, slot and feature sizes, which 'mst check' reads.
     Parts are in print orientation: base on the build plate, magnet axis along z. Pause the
     print at the reported height to drop the magnet into its pocket.
@@ -65,7 +77,7 @@ def export(path, want_stl, want_step, want_3mf, out_dir, stl_tolerance_mm):
     if not (want_stl or want_step or want_3mf):
         want_stl = want_step = True
     t0 = time.perf_counter()
-    doc, geometry = _load_design(path)
+    doc, geometry, designed = _load_design(path, t0)
     _progress(t0, f"loaded {path} ({len(geometry.layers)} layers)")
 
     from .cad.assembly import build_sensor, check_fits
@@ -94,6 +106,10 @@ def export(path, want_stl, want_step, want_3mf, out_dir, stl_tolerance_mm):
         if want_step:
             mesh_io.write_step(cad.assembly(doc.name), st.path("sensor.step"))
             _progress(t0, "wrote sensor.step (body, magnet, board)")
+        if designed is not None:
+            # the design the body was built from, loadable by mst simulate / mst export
+            st.write_yaml("design.yaml", designed.design_yaml_dict())
+            names.append("design.yaml")
         st.write_json(MANIFEST_NAME, export_manifest(doc.name, geometry, doc.printer,
                                                      stl_tolerance_mm, names))
     if geometry.magnet_tilt_deg:
@@ -102,6 +118,10 @@ def export(path, want_stl, want_step, want_3mf, out_dir, stl_tolerance_mm):
     click.echo(f"body volume {geometry.body_volume_mm3:.1f} mm3, height {geometry.total_height_mm:.2f} mm; "
                f"pause the print at z = {geometry.z_pause_mm:.2f} mm to insert the magnet")
     click.echo(f"wrote {out}/{', '.join(names + [MANIFEST_NAME])}")
+    if designed is not None and designed.exit_code:
+        click.echo(f"mst export: targets not met ({designed.binding}: {designed.reasons[0]}); "
+                   "the body of the nearest design was written", err=True)
+        sys.exit(designed.exit_code)
 
 
 @click.command("check")

@@ -103,10 +103,27 @@ def test_default_out_dir_and_default_formats(tmp_path, monkeypatch):
 
 
 # --------------------------------------------------------------------------- bad input: exit 2
-def test_a_spec_asks_for_mst_design_first(tmp_path):
-    r = run(["export", SPEC, "--out", tmp_path / "o"])
-    assert r.exit_code == 2
-    assert "mst design" in r.stderr and len(r.stderr.strip().splitlines()) == 1
+def test_a_spec_is_designed_first_and_its_design_written(tmp_path):
+    out = tmp_path / "o"
+    r = run(["export", SPEC, "--out", out])
+    assert r.exit_code == 0, r.output + r.stderr
+    assert "is a spec: designing" in r.stderr
+    assert {p.name for p in out.iterdir()} == {"sensor.stl", "sensor.step", "design.yaml", "export.json"}
+    assert run(["check", out]).exit_code == 0
+    # the written design.yaml rebuilds exactly the same body
+    again = tmp_path / "again"
+    assert run(["export", out / "design.yaml", "--stl", "--out", again]).exit_code == 0
+    assert (again / "sensor.stl").read_bytes() == (out / "sensor.stl").read_bytes()
+
+
+def test_a_file_that_is_neither_design_nor_spec_exits_2(tmp_path):
+    raw = yaml.safe_load(SPEC.read_text())
+    raw["layers"][0] = {"theta_deg": 30, "t_mm": 0.8, "h_mm": 2.4}     # one geometry, rest targets
+    raw["layers"][1] = {"theta_deg": 30, "t_mm": 0.8, "h_mm": 2.4, "target_range_N": 3.0}
+    bad = tmp_path / "mixed.yaml"
+    bad.write_text(yaml.safe_dump(raw))
+    r = run(["export", bad, "--out", tmp_path / "o"])
+    assert r.exit_code == 2 and "layers[2]" in r.stderr
     assert not (tmp_path / "o").exists()
 
 
