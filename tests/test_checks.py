@@ -176,3 +176,34 @@ def test_unreadable_inputs_are_input_errors(tmp_path):
     empty.mkdir()
     with pytest.raises(InputError, match="no such STL"):
         checks.resolve_paths(empty)
+
+
+def _random_geometries(n, seed=11):
+    from mst_cli.components import BOARDS
+    from mst_cli.geometry import HexCell, SensorGeometry
+    rng = np.random.default_rng(seed)
+    out = []
+    while len(out) < n:
+        n_s = int(rng.integers(1, 6))
+        cells = tuple(HexCell(float(rng.uniform(15, 60)), float(rng.uniform(0.4, 2.0)),
+                              float(rng.uniform(1.2, 6.0)), struts_per_chevron=n_s)
+                      for _ in range(int(rng.integers(1, 4))))
+        if any(c.violations() for c in cells):
+            continue
+        board = BOARDS[sorted(BOARDS)[int(rng.integers(len(BOARDS)))]]
+        offset = tuple(float(v) for v in rng.uniform(-3, 3, size=2))
+        out.append(SensorGeometry(cells, board=board, chip_offset_mm=offset))
+    return out
+
+
+@pytest.mark.parametrize("g", _random_geometries(3), ids=lambda g: f"{g.board.key}")
+def test_random_valid_designs_pass_every_check(g):
+    """Seeded designs inside the bounds, random board and chip offset: the measurements find
+    each layer's walls, cavity, the pocket and the off-centre slot where the design puts them."""
+    from mst_cli.geometry import Printer
+    vertices, triangles = mesh_io.tessellate(build_sensor(g).body, 0.02)
+    manifest = export_manifest("random", g, Printer(), 0.02, ["sensor.stl"])
+    res = by_name(checks.run_checks(mesh_of(mesh_io.stl_bytes(vertices, triangles)), manifest))
+    assert not failed(res.values()), {k: (c.measured, c.expected, c.note) for k, c in res.items() if not c.passed}
+    assert res["wall_thickness"].values["per_layer_mm"] == pytest.approx([c.t_mm for c in g.layers], abs=1e-3)
+    assert res["overhang"].values["per_layer_deg"] == pytest.approx([c.theta_deg for c in g.layers], abs=1e-3)
