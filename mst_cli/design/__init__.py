@@ -166,8 +166,8 @@ def design_document(doc: Document, *, seed: int | None = None, progress=None,
                          la.weight) for a, b, c, la in zip(theta, t, h, doc.layers)]
     designed = doc.with_layers(layers)
     geometry = designed.geometry()
-    field = None if doc.field_model == "auto" else doc.field_model
-    resp = simulate(geometry, doc.material, mechanics=doc.mechanics, field_model=field,
+    field_model = None if doc.field_model == "auto" else doc.field_model
+    resp = simulate(geometry, doc.material, mechanics=doc.mechanics, field_model=field_model,
                     noise_uT_rms=doc.noise_uT_rms)
 
     # -- verification on the forward model
@@ -201,6 +201,9 @@ def design_document(doc: Document, *, seed: int | None = None, progress=None,
                                   f"design.max_height_mm = {problem.max_height_mm:g} mm")
     met = all(row["within_tolerance"] for row in targets) and not checks
     binding, reasons = (None, []) if met else explain.diagnose(problem, u_written, S, R, checks)
+    if not met and not sol.matched and sol.evaluations >= max_evaluations:
+        reasons.append(f"the evaluation budget ({max_evaluations}) was spent before the targets were "
+                       "met: raise design.max_evaluations (or --max-evaluations) to search further")
 
     # -- print-error sensitivity, re-measured with the forward model
     pe_layers = []
@@ -209,7 +212,7 @@ def design_document(doc: Document, *, seed: int | None = None, progress=None,
         cells = [doc.family.cell(a, max(b + sign * PRINT_ERROR_T_MM, geo.LENGTH_FLOOR_MM), c)
                  for a, b, c in zip(theta, t, h)]
         r2 = simulate(designed.geometry(cells), doc.material, mechanics=doc.mechanics,
-                      field_model=field, noise_uT_rms=doc.noise_uT_rms)
+                      field_model=field_model, noise_uT_rms=doc.noise_uT_rms)
         shifted[key] = _layer_outputs(r2, n)
     logs = []
     for i in range(n):

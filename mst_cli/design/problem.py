@@ -152,7 +152,8 @@ class DesignProblem:
         if self.field_model == "axial":
             m = self.probe.magnet
             return axial_Bz_T(gap_mm, m.radius_mm, m.thickness_mm, m.remanence_T)
-        return field_magnitude_T(gap_mm, self.probe, self.field_model)
+        gap = np.asarray(gap_mm, dtype=float)      # magpylib takes a flat list of observers
+        return field_magnitude_T(gap.ravel(), self.probe, self.field_model).reshape(gap.shape)
 
     def responses(self, theta_deg, t_mm, h_mm):
         """(R_N per layer, S_per_N per regime, B_full_T, gap0_mm) of candidate stacks."""

@@ -228,7 +228,7 @@ def solve(problem: DesignProblem, *, seed: int = 0, max_evaluations: int = 20000
         return bool(np.all(g <= FEASIBILITY_TOL)) and math.log1p(err) <= match_log and math.log1p(-err) >= -match_log
 
     # -- screening: one vectorised batch
-    n_screen = int(min(SCREEN_PER_DIM * dim, max(budget.left // 4, 64)))
+    n_screen = int(max(1, min(SCREEN_PER_DIM * dim, budget.left // 4)))
     U = rng.random((n_screen, dim))
     ev = problem.evaluate(U)
     viol = np.sum(np.maximum(safe_constraints(ev), 0.0), axis=-1)
