@@ -129,3 +129,5 @@ main.add_command(export)
 main.add_command(check)
 from .cli_design import design  # noqa: E402
 main.add_command(design)
+from .cli_bench import bench  # noqa: E402
+main.add_command(bench)

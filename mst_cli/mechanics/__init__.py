@@ -14,12 +14,32 @@ The stack solver (:mod:`mst_cli.stack`) needs nothing else, so it is exact for e
 
 from __future__ import annotations
 
-MODELS = ("spring",)  # cheapest first; dearer rungs register here
+MODELS = ("spring", "frame", "continuum")  # cheapest first
 
 
 def layer_law(cell, material, model: str = "spring"):
-    """The force-displacement law of one layer with the named mechanics model."""
+    """The force-displacement law of one layer with the named mechanics model.
+
+    ``frame`` and ``continuum`` laws are cached per (cell, material): both are frozen.
+    """
     if model == "spring":
         from .spring import spring_layer
         return spring_layer(cell, material)
+    if model == "frame":
+        from .frame import frame_layer
+        return frame_layer(cell, material)
+    if model == "continuum":
+        from .continuum import continuum_layer
+        return continuum_layer(cell, material)
     raise ValueError(f"unknown mechanics model {model!r}; choose from {', '.join(MODELS)}")
+
+
+def uncached_layer_law(cell, material, model: str = "spring"):
+    """:func:`layer_law` without the per-cell caches (for timing)."""
+    if model == "frame":
+        from .frame import frame_layer
+        return frame_layer.__wrapped__(cell, material)
+    if model == "continuum":
+        from .continuum import continuum_layer
+        return continuum_layer.__wrapped__(cell, material)
+    return layer_law(cell, material, model)

@@ -96,18 +96,28 @@ class LinearLockingLayer:
                         self.d_lock_mm + (F - R) / self.k_locked_N_per_mm)
 
 
-def spring_arrays(theta_rad, t_mm, h_mm, b_mm, n_struts, width_mm, contact_allowance_mm, E_MPa, nu):
-    """(k, d_lock, k_locked) for many layers at once: the design loop's entry point."""
+def spring_arrays(theta_rad, t_mm, h_mm, b_mm, n_struts, width_mm, contact_allowance_mm, E_MPa, nu,
+                  corrected=False):
+    """(k, d_lock, k_locked) for many layers at once: the design loop's entry point.
+
+    ``corrected`` multiplies the beam-theory k by the joint correction fitted against rung L2
+    (:mod:`mst_cli.mechanics.correction`, a function of t/L and theta); False (the default
+    for now, see the bench for before/after) gives the textbook value.
+    """
     k = layer_stiffness_N_per_mm(theta_rad, t_mm, h_mm, b_mm, n_struts, E_MPa, nu)
+    if corrected:
+        from .correction import stiffness_factor
+        t_over_L = t_mm / geo.wall_centreline_length_mm(theta_rad, t_mm, h_mm)
+        k = k * stiffness_factor(t_over_L, theta_rad)
     d_lock = geo.lock_stroke_mm(t_mm, h_mm, contact_allowance_mm)
     k_locked = k + contact_stiffness_N_per_mm(theta_rad, t_mm, width_mm, b_mm, n_struts, E_MPa)
     return k, d_lock, k_locked
 
 
-def spring_layer(cell: geo.HexCell, material) -> LinearLockingLayer:
-    """The L0 law of one concrete cell."""
+def spring_layer(cell: geo.HexCell, material, corrected: bool = False) -> LinearLockingLayer:
+    """The L0 law of one concrete cell (``corrected=True``: with the joint correction)."""
     k, d_lock, k_locked = spring_arrays(
         cell.theta_rad, cell.t_mm, cell.h_mm, cell.b_mm, cell.struts_per_chevron,
         cell.width_mm, cell.contact_allowance_mm,
-        material.youngs_modulus_MPa, material.poisson_ratio)
+        material.youngs_modulus_MPa, material.poisson_ratio, corrected)
     return LinearLockingLayer(float(k), float(d_lock), float(k_locked))

@@ -1,0 +1,38 @@
+"""The speed/accuracy ladder benchmark: runs the same measurement as `mst bench`, prints the
+table, writes bench.md/json/png to --out, and stores the measured median stiffness errors in
+mst_cli/data/ladder_errors.json (read by mst_cli.bench.cheapest_model_for).
+
+Run:  .venv/bin/python benchmarks/bench_ladder.py --samples 24 --seed 0 --out mst-out/bench
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+from mst_cli.bench import ERRORS_FILE, bench_markdown, ladder_errors, plot_bench, run_bench
+from mst_cli.outputs import staged
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--samples", type=int, default=24)
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--out", type=Path, default=Path("mst-out/bench"))
+    args = ap.parse_args()
+    result = run_bench(args.samples, args.seed)
+    result["command"] = (f".venv/bin/python benchmarks/bench_ladder.py --samples {args.samples} "
+                         f"--seed {args.seed}")
+    md = bench_markdown(result)
+    with staged(args.out) as st:
+        st.write_json("bench.json", result)
+        st.write_text("bench.md", md)
+        plot_bench(result, st.path("bench.png"))
+    ERRORS_FILE.write_text(json.dumps(ladder_errors(result), indent=2) + "\n")
+    print(md)
+    print(f"wrote {args.out}/bench.md, bench.json, bench.png and {ERRORS_FILE}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,292 @@
+"""Measuring the speed/accuracy ladder: what ``mst bench`` reports (DESIGN.md section 4).
+
+Pure measurement library (no CLI, no plotting imports at module level): a seeded sample of
+valid cells across the design bounds, every mechanics rung timed per layer and compared with
+the reference rung L2 (stiffness, lock displacement, lock force), and the field models compared
+with magpylib's exact cylinder over the gaps designs use. :func:`cheapest_model_for` reads the
+measured errors stored with the package (mst_cli/data/ladder_errors.json, written by
+benchmarks/bench_ladder.py) and picks the cheapest rung that meets a requested accuracy.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from pathlib import Path
+
+import numpy as np
+
+from .geometry import HexCell, Magnet
+
+BOUNDS = {"theta_deg": (15.0, 60.0), "t_mm": (0.4, 2.0), "h_mm": (1.2, 6.0)}
+LADDER = ("spring", "spring-corrected", "frame", "continuum")          # cheapest first; continuum is the reference
+ERRORS_FILE = Path(__file__).resolve().parent / "data" / "ladder_errors.json"
+
+
+def sample_cells(n: int, seed: int = 0, max_t_over_L: float = 0.6) -> list[HexCell]:
+    """n valid cells drawn uniformly in (theta, t, h) inside BOUNDS (rejection sampling:
+    HexCell.violations() empty and t/L <= max_t_over_L, the range of the walls' beam models)."""
+    rng = np.random.default_rng(seed)
+    out = []
+    while len(out) < n:
+        th, t, h = (rng.uniform(*BOUNDS[k]) for k in ("theta_deg", "t_mm", "h_mm"))
+        c = HexCell(round(float(th), 3), round(float(t), 3), round(float(h), 3))
+        if not c.violations() and c.t_mm / c.wall_length_mm <= max_t_over_L:
+            out.append(c)
+    return out
+
+
+def _law(model, cell, material):
+    from .mechanics import uncached_layer_law
+    from .mechanics.spring import spring_layer
+    if model in ("spring", "spring-corrected"):
+        return spring_layer(cell, material, corrected=model == "spring-corrected")
+    return uncached_layer_law(cell, material, model)
+
+
+def time_per_layer_s(model, cells, material, repeat: int = 1) -> float:
+    """Median wall-clock time of one layer law (no caches), s."""
+    times = []
+    for c in cells:
+        best = np.inf
+        for _ in range(repeat):
+            t0 = time.perf_counter()
+            _law(model, c, material)
+            best = min(best, time.perf_counter() - t0)
+        times.append(best)
+    return float(np.median(times))
+
+
+def spring_vectorised_time_per_layer_s(cells, material, repeat: int = 20) -> float:
+    """Per-layer time of L0 as the design loop calls it: spring_arrays over all cells at once."""
+    from .mechanics.spring import spring_arrays
+    arr = {k: np.array([getattr(c, k) for c in cells]) for k in ("theta_rad", "t_mm", "h_mm", "b_mm")}
+    best = np.inf
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        spring_arrays(arr["theta_rad"], arr["t_mm"], arr["h_mm"], arr["b_mm"], 4, 30.0, 0.1,
+                      material.youngs_modulus_MPa, material.poisson_ratio, corrected=True)
+        best = min(best, time.perf_counter() - t0)
+    return best / len(cells)
+
+
+def compare_mechanics(cells, material, models=("spring", "spring-corrected", "frame"),
+                      reference="continuum"):
+    """Per cell and model: k, d_lock, lock force and relative errors against the reference.
+
+    A rung that raises on a cell is recorded with its error message (never dropped silently).
+    """
+    rows = []
+    for c in cells:
+        row = {"theta_deg": c.theta_deg, "t_mm": c.t_mm, "h_mm": c.h_mm,
+               "t_over_L": c.t_mm / c.wall_length_mm}
+        try:
+            ref = _law(reference, c, material)
+            row[reference] = {"k_N_per_mm": ref.k_N_per_mm, "d_lock_mm": ref.d_lock_mm,
+                              "lock_force_N": ref.lock_force_N}
+        except Exception as exc:      # noqa: BLE001 - recorded, reported in the table
+            row[reference] = {"error": f"{type(exc).__name__}: {exc}"}
+            ref = None
+        for m in models:
+            try:
+                law = _law(m, c, material)
+                entry = {"k_N_per_mm": law.k_N_per_mm, "d_lock_mm": law.d_lock_mm,
+                         "lock_force_N": law.lock_force_N}
+                if ref is not None:
+                    entry["err_k"] = law.k_N_per_mm / ref.k_N_per_mm - 1.0
+                    entry["err_d_lock"] = law.d_lock_mm / ref.d_lock_mm - 1.0
+                    entry["err_lock_force"] = law.lock_force_N / ref.lock_force_N - 1.0
+            except Exception as exc:  # noqa: BLE001
+                entry = {"error": f"{type(exc).__name__}: {exc}"}
+            row[m] = entry
+        rows.append(row)
+    return rows
+
+
+def summarise(rows, model):
+    """Median and 90th-percentile |error| of one model over the rows where both solved."""
+    out = {"failures": 0}
+    for key in ("err_k", "err_d_lock", "err_lock_force"):
+        vals = np.array([abs(r[model][key]) for r in rows if key in r.get(model, {})])
+        out[key] = {"median": float(np.median(vals)) if vals.size else None,
+                    "p90": float(np.percentile(vals, 90)) if vals.size else None,
+                    "max": float(vals.max()) if vals.size else None, "n": int(vals.size)}
+    out["failures"] = sum(1 for r in rows if "error" in r.get(model, {}))
+    return out
+
+
+def field_errors(gaps_mm, magnet: Magnet = Magnet()):
+    """Relative error of |B| on the axis of the dipole and axial models against magpylib."""
+    from . import field as fld
+    g = np.asarray(gaps_mm, dtype=float)
+    exact = np.linalg.norm(fld.field_at_chip_T(g, magnet, "cylinder"), axis=-1)
+    out = {}
+    for m in ("dipole", "axial"):
+        B = np.linalg.norm(fld.field_at_chip_T(g, magnet, m), axis=-1)
+        out[m] = (B / exact - 1.0).tolist()
+    return out
+
+
+def field_times_s(gaps_mm, magnet: Magnet = Magnet(), repeat: int = 20):
+    """Per-point time of each field model on the gap array, s."""
+    from . import field as fld
+    g = np.asarray(gaps_mm, dtype=float)
+    out = {}
+    for m in ("dipole", "axial", "cylinder"):
+        best = np.inf
+        for _ in range(repeat):
+            t0 = time.perf_counter()
+            fld.field_at_chip_T(g, magnet, m)
+            best = min(best, time.perf_counter() - t0)
+        out[m] = best / g.size
+    return out
+
+
+# --------------------------------------------------------------------------- model choice
+def load_ladder_errors(path: Path = ERRORS_FILE) -> dict:
+    """The measured median stiffness errors and times per rung stored with the package."""
+    return json.loads(Path(path).read_text())
+
+
+def cheapest_model_for(accuracy_rel: float, errors: dict | None = None) -> tuple[str, float]:
+    """The cheapest mechanics rung whose MEASURED median |stiffness error| against L2 is at
+    most ``accuracy_rel`` (e.g. 0.05 for 5 %), and that error.
+
+    The reference rung ``continuum`` has error 0 by definition, so it is returned when no
+    cheaper rung qualifies. Raises ValueError for accuracy_rel <= 0 or not finite.
+    """
+    if not (np.isfinite(accuracy_rel) and accuracy_rel > 0):
+        raise ValueError(f"accuracy_rel must be a positive number, got {accuracy_rel!r}")
+    errors = load_ladder_errors() if errors is None else errors
+    for model in LADDER:
+        err = 0.0 if model == LADDER[-1] else errors["models"][model]["median_abs_err_k"]
+        if err <= accuracy_rel:
+            return model, float(err)
+    return LADDER[-1], 0.0
+
+
+# --------------------------------------------------------------------------- the whole bench
+def mesh_convergence(cells, material, meshes=((2, 8, 2), (3, 12, 4), (4, 16, 5), (6, 24, 6))):
+    """L2 small-strain k on successively finer meshes (n_thick, n_length, corner levels)."""
+    from .mechanics.continuum import linear_stiffness_N_per_mm
+    out = []
+    for c in cells:
+        ks = [linear_stiffness_N_per_mm(c, material, *m) for m in meshes]
+        out.append({"theta_deg": c.theta_deg, "t_mm": c.t_mm, "h_mm": c.h_mm,
+                    "meshes": [list(m) for m in meshes], "k_N_per_mm": ks,
+                    "rel_to_finest": [k / ks[-1] - 1.0 for k in ks]})
+    return out
+
+
+def run_bench(samples: int = 24, seed: int = 0, quick: bool = False, material=None) -> dict:
+    """Measure every rung and field model; returns the JSON-ready result."""
+    from .material import Material
+    material = material or Material()
+    cells = sample_cells(samples, seed)
+    rows = compare_mechanics(cells, material)
+    timing_cells = cells[: max(3, len(cells) // 4)]
+    times = {m: time_per_layer_s(m, timing_cells, material)
+             for m in ("spring", "spring-corrected", "frame", "continuum")}
+    times["spring-vectorised"] = spring_vectorised_time_per_layer_s(cells, material)
+    models = {}
+    for m in ("spring", "spring-corrected", "frame"):
+        s = summarise(rows, m)
+        models[m] = {"time_per_layer_s": times[m], "median_abs_err_k": s["err_k"]["median"],
+                     "summary": s}
+    models["spring-corrected"]["time_per_layer_vectorised_s"] = times["spring-vectorised"]
+    ref_fail = sum(1 for r in rows if "error" in r["continuum"])
+    models["continuum"] = {"time_per_layer_s": times["continuum"], "median_abs_err_k": 0.0,
+                           "failures": ref_fail}
+    gaps = np.linspace(5.0, 20.0, 31)
+    ferr = field_errors(gaps)
+    result = {
+        "command": f"mst bench --samples {samples} --seed {seed}" + (" --quick" if quick else ""),
+        "samples": samples, "seed": seed, "bounds": BOUNDS, "max_t_over_L": 0.6,
+        "models": models, "rows": rows,
+        "field": {"gaps_mm": gaps.tolist(), "rel_error": ferr, "time_per_point_s": field_times_s(gaps),
+                  "max_abs_error": {m: float(np.max(np.abs(v))) for m, v in ferr.items()}},
+    }
+    if not quick:
+        result["mesh_convergence"] = mesh_convergence(cells[:3], material)
+    return result
+
+
+def _pct(x):
+    return "n/a" if x is None else f"{100 * x:.1f} %"
+
+
+def bench_markdown(result: dict) -> str:
+    """The table a person reads (bench.md)."""
+    m = result["models"]
+    t_ref = m["continuum"]["time_per_layer_s"]
+    lines = [f"# mst bench\n\n`{result['command']}` — {result['samples']} valid cells, theta 15–60 deg, "
+             f"t 0.4–2.0 mm, h 1.2–6 mm, t/L <= 0.6; errors against L2 `continuum` "
+             f"(median / 90th percentile of |error|).\n",
+             "| rung | time per layer | speed-up vs L2 | stiffness k | lock displacement | lock force | failures |",
+             "|---|---|---|---|---|---|---|"]
+    labels = {"spring": "L0 spring, textbook (before correction)",
+              "spring-corrected": "L0 spring, corrected (after)", "frame": "L1 frame"}
+    for key in ("spring", "spring-corrected", "frame"):
+        s = m[key]["summary"]
+        t = m[key]["time_per_layer_s"]
+        lines.append(f"| {labels[key]} | {t * 1e6:.1f} µs | {t_ref / t:,.0f}x | "
+                     f"{_pct(s['err_k']['median'])} / {_pct(s['err_k']['p90'])} | "
+                     f"{_pct(s['err_d_lock']['median'])} / {_pct(s['err_d_lock']['p90'])} | "
+                     f"{_pct(s['err_lock_force']['median'])} / {_pct(s['err_lock_force']['p90'])} | "
+                     f"{s['failures']} |")
+    tv = m["spring-corrected"]["time_per_layer_vectorised_s"]
+    lines.append(f"| L0 corrected, vectorised (design loop) | {tv * 1e6:.3f} µs | {t_ref / tv:,.0f}x | same | same | same | 0 |")
+    lines.append(f"| L2 continuum (reference) | {t_ref * 1e3:.0f} ms | 1x | — | — | — | "
+                 f"{m['continuum']['failures']} |")
+    f = result["field"]
+    lines += ["", f"Field models against magpylib's exact cylinder, on the axis, gaps "
+                  f"{f['gaps_mm'][0]:g}–{f['gaps_mm'][-1]:g} mm (max |error|, time per point):", "",
+              "| model | max abs error | time per point |", "|---|---|---|"]
+    for mname in ("dipole", "axial"):
+        lines.append(f"| {mname} | {_pct(f['max_abs_error'][mname])} | {f['time_per_point_s'][mname] * 1e6:.2f} µs |")
+    lines.append(f"| cylinder (magpylib) | reference | {f['time_per_point_s']['cylinder'] * 1e6:.2f} µs |")
+    if "mesh_convergence" in result:
+        lines += ["", "L2 mesh convergence (small-strain k relative to the finest mesh; "
+                      "mesh = elements across t, along the wall, corner refinement rounds):", ""]
+        for r in result["mesh_convergence"]:
+            parts = ", ".join(f"{tuple(mm)}: {100 * e:+.2f} %" for mm, e in zip(r["meshes"], r["rel_to_finest"]))
+            lines.append(f"- theta {r['theta_deg']:g}, t {r['t_mm']:g}, h {r['h_mm']:g}: {parts}")
+    worst = sorted((r for r in result["rows"] if "err_k" in r.get("frame", {})),
+                   key=lambda r: -abs(r["frame"]["err_lock_force"]))[:3]
+    if worst:
+        lines += ["", "Where the cheap rungs fail most (largest L1 lock-force error):", ""]
+        for r in worst:
+            lines.append(f"- theta {r['theta_deg']:g}, t {r['t_mm']:g}, h {r['h_mm']:g} (t/L {r['t_over_L']:.2f}): "
+                         f"L0 k {_pct(r['spring-corrected']['err_k'])}, R {_pct(r['spring-corrected']['err_lock_force'])}; "
+                         f"L1 k {_pct(r['frame']['err_k'])}, R {_pct(r['frame']['err_lock_force'])}")
+    return "\n".join(lines) + "\n"
+
+
+def plot_bench(result: dict, path) -> None:
+    """Log-log |stiffness error| (median) against time per layer, one point per rung."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(figsize=(6, 4))
+    m = result["models"]
+    for key, mark in (("spring", "x"), ("spring-corrected", "o"), ("frame", "s")):
+        s = m[key]["summary"]
+        e = max(s["err_k"]["median"] or 1e-6, 1e-6)
+        ax.loglog([m[key]["time_per_layer_s"]], [e], mark, label=f"{key} (median)")
+        ax.loglog([m[key]["time_per_layer_s"]], [max(s["err_k"]["p90"] or 1e-6, 1e-6)], mark,
+                  alpha=0.4, label=f"{key} (p90)")
+    ax.axvline(m["continuum"]["time_per_layer_s"], color="k", ls="--", label="continuum (reference)")
+    ax.set_xlabel("time per layer [s]")
+    ax.set_ylabel("|error in k| against L2")
+    ax.legend(fontsize=7)
+    ax.grid(True, which="both", alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def ladder_errors(result: dict) -> dict:
+    """What cheapest_model_for needs, from a bench result (stored as ladder_errors.json)."""
+    return {"command": result["command"],
+            "models": {k: {"median_abs_err_k": v["median_abs_err_k"], "time_per_layer_s": v["time_per_layer_s"]}
+                       for k, v in result["models"].items()}}
