@@ -236,7 +236,7 @@ class _Wall:
             f, K = self.assemble(u)
             reaction = abs(f[self.tip_w])
             scale = max(reaction, 1e-14 * self.EA) if scale is None else max(scale, reaction)
-            if np.linalg.norm(f[free]) <= rtol * scale:
+            if np.linalg.norm(f[free]) <= rtol * scale + 1e-13 * self.EA:
                 return u, it
             du = np.linalg.solve(K[np.ix_(free, free)], -f[free])
             if not np.all(np.isfinite(du)):
