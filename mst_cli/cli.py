@@ -95,7 +95,8 @@ def main():
               help="Magnet field model [default: the file's model.field, else auto = the cheapest "
                    "exact one: axial on the axis, cylinder off it].")
 @click.option("--mechanics", type=click.Choice(["spring", "frame", "continuum"]), default=None,
-              help="Layer mechanics model [default: the file's model.mechanics, else spring].")
+              help="Layer mechanics model [default: the cheapest whose measured error meets the "
+                   "file's model.accuracy_rel, else the file's model.mechanics, else spring].")
 @click.option("--json", "as_json", is_flag=True, help="Print report.json to stdout instead of the table.")
 @handles_input_errors
 def simulate(design_file, out_dir, field_model, mechanics, as_json):
@@ -105,12 +106,16 @@ def simulate(design_file, out_dir, field_model, mechanics, as_json):
     folder and prints a per-regime table: stiffness, force band, secant sensitivity S
     (dB/B0 per newton) with its local min..max, and the force resolution dF of the chip.
     """
+    from .ladder import choose_mechanics
     from .report import report_dict, terminal_table
     from .response import simulate as run
 
     doc, geometry = load_design_document(design_file)
     field_choice = field_model or doc.field_model
-    resp = run(geometry, doc.material, mechanics=mechanics or doc.mechanics,
+    choice = choose_mechanics(mechanics, doc.accuracy_rel, doc.mechanics)
+    if choice.message() and not as_json:
+        click.echo(choice.message())
+    resp = run(geometry, doc.material, mechanics=choice.mechanics,
                field_model=None if field_choice == "auto" else field_choice,
                noise_uT_rms=doc.noise_uT_rms)
     out = out_dir or default_out_dir(doc.name)

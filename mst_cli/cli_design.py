@@ -56,10 +56,15 @@ class _Progress:
                    "Same spec and seed give a byte-identical design.yaml.")
 @click.option("--max-evaluations", type=click.IntRange(min=10), default=None,
               help="Budget of candidate evaluations [default: design.max_evaluations, else 20000].")
+@click.option("--refine", type=click.Choice(["frame", "continuum"]), default=None,
+              help="Polish the L0 optimum with a dearer mechanics model (output space mapping: "
+                   "L0 targets corrected by the dear model's miss, L0 re-solved, repeated); every "
+                   "achieved number then comes from that model [default: model.accuracy_rel's "
+                   "pick, else model.mechanics if not spring, else no refinement].")
 @click.option("--quiet", "-q", is_flag=True, help="No table and no progress; exit code and files only.")
 @click.option("--json", "as_json", is_flag=True, help="Print report.json to stdout instead of the table.")
 @handles_input_errors
-def design(spec_file, out_dir, seed, max_evaluations, quiet, as_json):
+def design(spec_file, out_dir, seed, max_evaluations, refine, quiet, as_json):
     """Find theta, t, h of every layer so that the sensor meets SPEC_FILE's targets.
 
     Per layer the spec gives a target sensitivity S (dB/B0 per newton, secant over the
@@ -71,6 +76,10 @@ def design(spec_file, out_dir, seed, max_evaluations, quiet, as_json):
     Writes design.yaml (loadable by mst simulate and mst export), report.json,
     response.csv and response.png.
 
+    With --refine frame|continuum (or model.accuracy_rel asking for a dearer rung, or
+    model.mechanics: frame|continuum) the fast L0 optimum is polished for that model and the
+    targets are judged by it; report.json's refinement section lists the iterations.
+
     \b
     Exit codes:
       0  every target within the tolerance (design.tolerance_rel, default 2 %)
@@ -80,13 +89,25 @@ def design(spec_file, out_dir, seed, max_evaluations, quiet, as_json):
       2  invalid or self-contradictory spec (e.g. ranges that do not increase)
     """
     from .design import design_document
+    from .ladder import choose_mechanics
     from .report import report_dict
     from .schema import load_document
 
     doc = load_document(spec_file)
+    choice = choose_mechanics(refine, doc.accuracy_rel, doc.mechanics)
+    if choice.message() and not (quiet or as_json):
+        click.echo(choice.message() + ("" if choice.mechanics == "spring"
+                                       else f": L0 design refined with {choice.mechanics}"))
     progress = _Progress(quiet or as_json)
     try:
-        result = design_document(doc, seed=seed, max_evaluations=max_evaluations, progress=progress)
+        if choice.mechanics == "spring":
+            from dataclasses import replace
+            result = design_document(replace(doc, mechanics="spring"), seed=seed,
+                                     max_evaluations=max_evaluations, progress=progress)
+        else:
+            from .design.refine import refine_document
+            result = refine_document(doc, choice.mechanics, seed=seed,
+                                     max_evaluations=max_evaluations, progress=progress)
     finally:
         progress.close()
     out = out_dir or default_out_dir(doc.name)

@@ -141,6 +141,9 @@ SECTIONS: dict[str, dict[str, Rule]] = {
     "model": {
         "mechanics": Rule("str", choices=MECHANICS_MODELS),
         "field": Rule("str", choices=("auto",) + FIELD_MODELS),
+        # relative accuracy of the layer stiffness against the continuum reference: the tool
+        # picks the cheapest mechanics rung whose measured median error meets it (mst_cli.ladder)
+        "accuracy_rel": Rule("float", lo=0.0, lo_open=True, hi=1.0, hi_open=True, nullable=True),
     },
     "design": {
         "tolerance_rel": Rule("float", lo=0.0, lo_open=True, hi=1.0),
@@ -234,6 +237,7 @@ class Document:
     field_model: str            # "auto" or one of FIELD_MODELS
     design: dict
     source: str = "<memory>"
+    accuracy_rel: float | None = None   # model.accuracy_rel: requested stiffness accuracy
 
     @property
     def is_design(self) -> bool:
@@ -363,7 +367,7 @@ def parse_document(raw: Any, source: str = "<memory>") -> Document:
         chip_offset_mm=mm.get("chip_offset_mm", (0.0, 0.0)),
         magnet_tilt_deg=mm.get("magnet_tilt_deg", 0.0), housing=housing, printer=printer,
         mechanics=model.get("mechanics", "spring"), field_model=model.get("field", "auto"),
-        design=design, source=source)
+        design=design, source=source, accuracy_rel=model.get("accuracy_rel"))
 
 
 def load_document(path: str | Path) -> Document:
@@ -407,6 +411,7 @@ def document_to_dict(doc: Document, layers=None) -> dict:
                          "chip_offset_mm": list(doc.chip_offset_mm), "magnet_tilt_deg": doc.magnet_tilt_deg},
         "housing": {f.name: getattr(doc.housing, f.name) for f in fields(geo.Housing)},
         "printer": {f.name: getattr(doc.printer, f.name) for f in fields(geo.Printer)},
-        "model": {"mechanics": doc.mechanics, "field": doc.field_model},
+        "model": {"mechanics": doc.mechanics, "field": doc.field_model,
+                  **({"accuracy_rel": doc.accuracy_rel} if doc.accuracy_rel is not None else {})},
         "layers": out_layers,
     }

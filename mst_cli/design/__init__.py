@@ -152,8 +152,9 @@ def design_document(doc: Document, *, seed: int | None = None, progress=None,
     doc.require_targets()
     if doc.mechanics != "spring":
         raise InputError("model.mechanics", doc.mechanics,
-                         "mst design optimises with the L0 'spring' model: set model.mechanics: spring "
-                         "(check the result with the dearer rungs via mst simulate --mechanics)")
+                         "design_document optimises with the L0 'spring' model: set model.mechanics: "
+                         "spring, or refine for a dearer rung (mst design --refine frame|continuum, "
+                         "mst_cli.design.refine.refine_document)")
     problem = DesignProblem(doc)
     explain.check_contradictions(problem)
     seed = int(doc.design["seed"] if seed is None else seed)
@@ -161,13 +162,30 @@ def design_document(doc: Document, *, seed: int | None = None, progress=None,
 
     sol = solve(problem, seed=seed, max_evaluations=max_evaluations, progress=progress, local=local)
     theta, t, h = (np.round(a, ROUND_DECIMALS) for a in problem.to_physical(sol.u))
+    return verify_design(doc, problem, theta, t, h, sol, seed=seed, max_evaluations=max_evaluations,
+                         mechanics=doc.mechanics, t_start=t_start)
+
+
+def verify_design(doc: Document, problem: DesignProblem, theta, t, h, sol, *, seed: int,
+                  max_evaluations: int, mechanics: str, t_start: float | None = None) -> DesignResult:
+    """Write (theta, t, h) into the spec ``doc`` and judge it with ``mechanics``'s forward model.
+
+    Every achieved number, constraint check and print-error measure comes from
+    :func:`mst_cli.response.simulate` with ``mechanics`` on the written (rounded) design;
+    ``problem`` (the L0 problem of ``doc``'s targets) only explains a miss. ``sol`` is the
+    solver's result (its ``matched``, ``evaluations``, ... are reported).
+    """
+    from . import explain
+
+    t_start = time.perf_counter() if t_start is None else t_start
+    theta, t, h = (np.asarray(a, dtype=float) for a in (theta, t, h))
     u_written = problem.to_unit(theta, t, h)
     layers = [LayerEntry(float(a), float(b), float(c), la.target_sensitivity_per_N, la.target_range_N,
                          la.weight) for a, b, c, la in zip(theta, t, h, doc.layers)]
     designed = doc.with_layers(layers)
     geometry = designed.geometry()
     field_model = None if doc.field_model == "auto" else doc.field_model
-    resp = simulate(geometry, doc.material, mechanics=doc.mechanics, field_model=field_model,
+    resp = simulate(geometry, doc.material, mechanics=mechanics, field_model=field_model,
                     noise_uT_rms=doc.noise_uT_rms)
 
     # -- verification on the forward model
@@ -211,7 +229,7 @@ def design_document(doc: Document, *, seed: int | None = None, progress=None,
     for sign, key in ((1.0, "plus"), (-1.0, "minus")):
         cells = [doc.family.cell(a, max(b + sign * PRINT_ERROR_T_MM, geo.LENGTH_FLOOR_MM), c)
                  for a, b, c in zip(theta, t, h)]
-        r2 = simulate(designed.geometry(cells), doc.material, mechanics=doc.mechanics,
+        r2 = simulate(designed.geometry(cells), doc.material, mechanics=mechanics,
                       field_model=field_model, noise_uT_rms=doc.noise_uT_rms)
         shifted[key] = _layer_outputs(r2, n)
     logs = []
@@ -247,4 +265,4 @@ def design_document(doc: Document, *, seed: int | None = None, progress=None,
         elapsed_s=time.perf_counter() - t_start, warnings=list(resp.warnings))
 
 
-__all__ = ["DesignResult", "design_document", "design_dict", "DesignProblem"]
+__all__ = ["DesignResult", "design_document", "design_dict", "verify_design", "DesignProblem"]

@@ -1,0 +1,194 @@
+"""mst design --refine (output space mapping onto a dearer rung) and model.accuracy_rel.
+
+The refined design is judged independently: the test re-simulates the written design.yaml with
+the frame model itself. The rung picked for an accuracy follows the measured ladder errors
+stored with the package (read here, so the expectation moves with the data).
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+from click.testing import CliRunner
+
+from mst_cli.bench import ERRORS_FILE
+from mst_cli.cli import main
+from mst_cli.ladder import choose_mechanics
+from mst_cli.response import simulate
+from mst_cli.schema import load_document
+
+ROOT = Path(__file__).resolve().parents[1]
+SPEC = ROOT / "configs" / "mohammadi2021.yaml"
+USER_LADDER = ("spring", "frame", "continuum")      # cheapest first; continuum is the reference
+
+
+def _run(args):
+    return CliRunner().invoke(main, [str(a) for a in args], catch_exceptions=False)
+
+
+def _achieved(path, mechanics):
+    """(S per regime, R per layer, targets) of a written design, simulated here."""
+    doc = load_document(path)
+    resp = simulate(doc.geometry(), doc.material, mechanics=mechanics)
+    S = np.array([r.sensitivity_secant_per_N for r in resp.regimes])
+    R = np.zeros(len(doc.layers))
+    for r in resp.regimes:
+        R[r.layer - 1] = r.force_to_N
+    S_t = np.array([la.target_sensitivity_per_N for la in doc.layers])
+    R_t = np.array([la.target_range_N for la in doc.layers])
+    return S, R, S_t, R_t, doc
+
+
+def _stored_err(errors, m):
+    """Stored median |stiffness error| of user rung m (an older file names the corrected L0
+    "spring-corrected"; it is the user's spring rung)."""
+    if m == "continuum":
+        return 0.0
+    models = errors["models"]
+    key = "spring-corrected" if m == "spring" and "spring-corrected" in models else m
+    return models[key]["median_abs_err_k"]
+
+
+def _expected_rung(accuracy_rel, errors):
+    """The cheapest user rung whose stored median stiffness error is <= accuracy_rel."""
+    for m in USER_LADDER:
+        err = _stored_err(errors, m)
+        if err <= accuracy_rel:
+            return m, err
+    raise AssertionError("continuum always qualifies")
+
+
+def _with_model(raw: dict, tmp_path: Path, name: str, **model) -> Path:
+    raw = dict(raw)
+    raw["model"] = {**(raw.get("model") or {}), **model}
+    path = tmp_path / name
+    path.write_text(yaml.safe_dump(raw, sort_keys=False))
+    return path
+
+
+ONE_LAYER = {"name": "one", "layers": [{"theta_deg": 40.0, "t_mm": 1.0, "h_mm": 3.0}]}
+
+
+# --------------------------------------------------------------------------- refinement
+def test_refine_frame_meets_every_target_by_the_frame_model(tmp_path):
+    out = tmp_path / "out"
+    res = _run(["design", SPEC, "--refine", "frame", "--out", out])
+    assert res.exit_code == 0, res.output
+    S, R, S_t, R_t, doc = _achieved(out / "design.yaml", "frame")
+    tol = doc.design["tolerance_rel"]
+    assert np.all(np.abs(S / S_t - 1.0) <= tol), S / S_t - 1.0
+    assert np.all(np.abs(R / R_t - 1.0) <= tol), R / R_t - 1.0
+    assert doc.mechanics == "frame"           # mst simulate design.yaml reproduces the frame numbers
+
+    report = json.loads((out / "report.json").read_text())
+    assert report["models"]["mechanics"] == "frame"
+    ref = report["refinement"]
+    assert ref["inner_model"] == "spring" and ref["model"] == "frame"
+    errs = [it["max_abs_error_rel"] for it in ref["iterations"]]
+    assert 1 <= len(errs) <= ref["max_iterations"]
+    assert errs[-1] <= tol
+    # the reported achieved numbers are the frame model's on the written design
+    got_S = [row["achieved_sensitivity_per_N"] for row in report["design"]["targets"]]
+    np.testing.assert_allclose(got_S, S, rtol=1e-9)
+    # the first iterate is the plain L0 design: its frame error is what refinement removed
+    if errs[0] > tol:
+        assert len(errs) > 1
+
+
+def test_refine_not_met_exits_1_naming_the_worst_target(tmp_path):
+    # one iteration only: the plain L0 design judged by frame; exit 1 unless it already meets
+    from mst_cli.design.refine import refine_document
+    doc = load_document(SPEC)
+    result = refine_document(doc, "frame", max_iterations=1)
+    assert result.response.mechanics == "frame"
+    worst = max(max(abs(r["sensitivity_error_rel"]), abs(r["range_error_rel"])) for r in result.targets)
+    if worst > doc.design["tolerance_rel"]:
+        assert result.exit_code == 1
+        assert "frame model" in result.binding and result.binding.startswith("layer ")
+    else:
+        assert result.exit_code == 0
+
+
+# --------------------------------------------------------------------------- accuracy_rel
+def _accuracies(errors):
+    """Accuracies just above and below every stored nonzero error, inside (0, 1)."""
+    vals = {0.9}
+    for m in USER_LADDER[:-1]:
+        e = _stored_err(errors, m)
+        vals |= {e * 1.001, e * 0.999}
+    return sorted(v for v in vals if 0.0 < v < 1.0)
+
+
+def test_simulate_accuracy_rel_picks_the_rung_the_stored_errors_give(tmp_path):
+    errors = json.loads(ERRORS_FILE.read_text())
+    for i, acc in enumerate(_accuracies(errors)):
+        expected, err = _expected_rung(acc, errors)
+        path = _with_model(ONE_LAYER, tmp_path, f"d{i}.yaml", accuracy_rel=acc)
+        res = _run(["simulate", path, "--out", tmp_path / f"o{i}"])
+        assert res.exit_code == 0, res.output
+        first = res.output.splitlines()[0]
+        assert first.startswith(f"mechanics: {expected} (measured median stiffness error"), first
+        assert "requested" in first
+        report = json.loads((tmp_path / f"o{i}" / "report.json").read_text())
+        assert report["models"]["mechanics"] == expected
+
+
+def test_choice_walks_the_ladder_with_given_errors():
+    # L0 variants as the bench may list them (textbook, corrected) all count as "spring"
+    errors = {"models": {"spring-textbook": {"median_abs_err_k": 0.30},
+                         "spring": {"median_abs_err_k": 0.10},
+                         "spring-corrected": {"median_abs_err_k": 0.10},
+                         "frame": {"median_abs_err_k": 0.02}}}
+    assert choose_mechanics(None, 0.2, "spring", errors).mechanics == "spring"
+    c = choose_mechanics(None, 0.05, "spring", errors)
+    assert (c.mechanics, c.measured_err_rel) == ("frame", 0.02)
+    assert c.message() == "mechanics: frame (measured median stiffness error 2 % <= requested 5 %)"
+    assert choose_mechanics(None, 0.01, "spring", errors).mechanics == "continuum"
+    # an explicit flag wins; without accuracy_rel the file's mechanics is used
+    assert choose_mechanics("spring", 0.01, "frame", errors).mechanics == "spring"
+    assert choose_mechanics("spring", 0.01, "frame", errors).message() is None
+    assert choose_mechanics(None, None, "frame", errors).mechanics == "frame"
+
+
+def test_explicit_mechanics_flag_wins_over_accuracy_rel(tmp_path):
+    path = _with_model(ONE_LAYER, tmp_path, "d.yaml", accuracy_rel=0.9)   # would pick spring
+    res = _run(["simulate", path, "--mechanics", "frame", "--out", tmp_path / "o"])
+    assert res.exit_code == 0, res.output
+    assert "measured median" not in res.output
+    assert json.loads((tmp_path / "o" / "report.json").read_text())["models"]["mechanics"] == "frame"
+
+
+def test_design_accuracy_rel_and_explicit_refine(tmp_path):
+    raw = yaml.safe_load(SPEC.read_text())
+    errors = json.loads(ERRORS_FILE.read_text())
+    path = _with_model(raw, tmp_path, "s.yaml", accuracy_rel=0.9)
+    expected, _ = _expected_rung(0.9, errors)
+    res = _run(["design", path, "--out", tmp_path / "a"])
+    assert res.exit_code in (0, 1), res.output
+    assert res.output.splitlines()[0].startswith(f"mechanics: {expected} ")
+    report = json.loads((tmp_path / "a" / "report.json").read_text())
+    assert report["models"]["mechanics"] == expected
+    assert ("refinement" in report) == (expected != "spring")
+    # --refine wins over accuracy_rel's pick
+    res = _run(["design", path, "--refine", "frame", "--out", tmp_path / "b", "--quiet"])
+    assert res.exit_code == 0, res.output
+    report = json.loads((tmp_path / "b" / "report.json").read_text())
+    assert report["models"]["mechanics"] == "frame"
+    assert report["refinement"]["inner_model"] == "spring"
+
+
+@pytest.mark.parametrize("value", [0, 1.5, "high"])
+@pytest.mark.parametrize("command", ["simulate", "design"])
+def test_invalid_accuracy_rel_exits_2_naming_the_field(tmp_path, value, command):
+    base = ONE_LAYER if command == "simulate" else yaml.safe_load(SPEC.read_text())
+    path = _with_model(base, tmp_path, "bad.yaml", accuracy_rel=value)
+    out = tmp_path / "o"
+    res = CliRunner().invoke(main, [command, str(path), "--out", str(out)])
+    assert res.exit_code == 2
+    lines = [ln for ln in res.output.splitlines() if ln.strip()]
+    assert len(lines) == 1 and "model.accuracy_rel" in lines[0], res.output
+    assert not out.exists()
