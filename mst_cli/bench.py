@@ -19,7 +19,9 @@ import numpy as np
 from .geometry import HexCell, Magnet
 
 BOUNDS = {"theta_deg": (15.0, 60.0), "t_mm": (0.4, 2.0), "h_mm": (1.2, 6.0)}
-LADDER = ("spring", "spring-corrected", "frame", "continuum")          # cheapest first; continuum is the reference
+LADDER = ("spring-textbook", "spring", "frame", "continuum")          # cheapest first; continuum is the reference
+# what a user can pick: "spring-textbook" is L0 without its fitted correction, a bench row only
+USER_LADDER = ("spring", "frame", "continuum")
 ERRORS_FILE = Path(__file__).resolve().parent / "data" / "ladder_errors.json"
 
 
@@ -39,8 +41,8 @@ def sample_cells(n: int, seed: int = 0, max_t_over_L: float = 0.6) -> list[HexCe
 def _law(model, cell, material):
     from .mechanics import uncached_layer_law
     from .mechanics.spring import spring_layer
-    if model in ("spring", "spring-corrected"):
-        return spring_layer(cell, material, corrected=model == "spring-corrected")
+    if model in ("spring-textbook", "spring"):
+        return spring_layer(cell, material, corrected=model == "spring")
     return uncached_layer_law(cell, material, model)
 
 
@@ -70,7 +72,7 @@ def spring_vectorised_time_per_layer_s(cells, material, repeat: int = 20) -> flo
     return best / len(cells)
 
 
-def compare_mechanics(cells, material, models=("spring", "spring-corrected", "frame"),
+def compare_mechanics(cells, material, models=("spring-textbook", "spring", "frame"),
                       reference="continuum"):
     """Per cell and model: k, d_lock, lock force and relative errors against the reference.
 
@@ -158,7 +160,7 @@ def cheapest_model_for(accuracy_rel: float, errors: dict | None = None) -> tuple
     if not (np.isfinite(accuracy_rel) and accuracy_rel > 0):
         raise ValueError(f"accuracy_rel must be a positive number, got {accuracy_rel!r}")
     errors = load_ladder_errors() if errors is None else errors
-    for model in LADDER:
+    for model in USER_LADDER:
         err = 0.0 if model == LADDER[-1] else errors["models"][model]["median_abs_err_k"]
         if err <= accuracy_rel:
             return model, float(err)
@@ -186,14 +188,14 @@ def run_bench(samples: int = 24, seed: int = 0, quick: bool = False, material=No
     rows = compare_mechanics(cells, material)
     timing_cells = cells[: max(3, len(cells) // 4)]
     times = {m: time_per_layer_s(m, timing_cells, material)
-             for m in ("spring", "spring-corrected", "frame", "continuum")}
+             for m in ("spring-textbook", "spring", "frame", "continuum")}
     times["spring-vectorised"] = spring_vectorised_time_per_layer_s(cells, material)
     models = {}
-    for m in ("spring", "spring-corrected", "frame"):
+    for m in ("spring-textbook", "spring", "frame"):
         s = summarise(rows, m)
         models[m] = {"time_per_layer_s": times[m], "median_abs_err_k": s["err_k"]["median"],
                      "summary": s}
-    models["spring-corrected"]["time_per_layer_vectorised_s"] = times["spring-vectorised"]
+    models["spring"]["time_per_layer_vectorised_s"] = times["spring-vectorised"]
     ref_fail = sum(1 for r in rows if "error" in r["continuum"])
     models["continuum"] = {"time_per_layer_s": times["continuum"], "median_abs_err_k": 0.0,
                            "failures": ref_fail}
@@ -224,9 +226,9 @@ def bench_markdown(result: dict) -> str:
              f"(median / 90th percentile of |error|).\n",
              "| rung | time per layer | speed-up vs L2 | stiffness k | lock displacement | lock force | failures |",
              "|---|---|---|---|---|---|---|"]
-    labels = {"spring": "L0 spring, textbook (before correction)",
-              "spring-corrected": "L0 spring, corrected (after)", "frame": "L1 frame"}
-    for key in ("spring", "spring-corrected", "frame"):
+    labels = {"spring-textbook": "L0 spring, textbook (before correction)",
+              "spring": "L0 spring, corrected (after)", "frame": "L1 frame"}
+    for key in ("spring-textbook", "spring", "frame"):
         s = m[key]["summary"]
         t = m[key]["time_per_layer_s"]
         lines.append(f"| {labels[key]} | {t * 1e6:.1f} µs | {t_ref / t:,.0f}x | "
@@ -234,7 +236,7 @@ def bench_markdown(result: dict) -> str:
                      f"{_pct(s['err_d_lock']['median'])} / {_pct(s['err_d_lock']['p90'])} | "
                      f"{_pct(s['err_lock_force']['median'])} / {_pct(s['err_lock_force']['p90'])} | "
                      f"{s['failures']} |")
-    tv = m["spring-corrected"]["time_per_layer_vectorised_s"]
+    tv = m["spring"]["time_per_layer_vectorised_s"]
     lines.append(f"| L0 corrected, vectorised (design loop) | {tv * 1e6:.3f} µs | {t_ref / tv:,.0f}x | same | same | same | 0 |")
     lines.append(f"| L2 continuum (reference) | {t_ref * 1e3:.0f} ms | 1x | — | — | — | "
                  f"{m['continuum']['failures']} |")
@@ -257,7 +259,7 @@ def bench_markdown(result: dict) -> str:
         lines += ["", "Where the cheap rungs fail most (largest L1 lock-force error):", ""]
         for r in worst:
             lines.append(f"- theta {r['theta_deg']:g}, t {r['t_mm']:g}, h {r['h_mm']:g} (t/L {r['t_over_L']:.2f}): "
-                         f"L0 k {_pct(r['spring-corrected']['err_k'])}, R {_pct(r['spring-corrected']['err_lock_force'])}; "
+                         f"L0 k {_pct(r['spring']['err_k'])}, R {_pct(r['spring']['err_lock_force'])}; "
                          f"L1 k {_pct(r['frame']['err_k'])}, R {_pct(r['frame']['err_lock_force'])}")
     return "\n".join(lines) + "\n"
 
@@ -269,7 +271,7 @@ def plot_bench(result: dict, path) -> None:
     import matplotlib.pyplot as plt
     fig, ax = plt.subplots(figsize=(6, 4))
     m = result["models"]
-    for key, mark in (("spring", "x"), ("spring-corrected", "o"), ("frame", "s")):
+    for key, mark in (("spring-textbook", "x"), ("spring", "o"), ("frame", "s")):
         s = m[key]["summary"]
         e = max(s["err_k"]["median"] or 1e-6, 1e-6)
         ax.loglog([m[key]["time_per_layer_s"]], [e], mark, label=f"{key} (median)")

@@ -171,9 +171,11 @@ TARGET_KEYS = ("target_sensitivity_per_N", "target_range_N")
 TOP_KEYS = ("name", "layers") + tuple(SECTIONS)
 
 # Default bounds of the design variables: printable with a 0.4 mm nozzle (t >= one line).
+# theta >= 25 deg: the shallowest wall of the printed sensors of Mohammadi et al. (2021);
+# shallower walls overhang more than 65 deg from vertical and print poorly in TPU.
 DEFAULT_DESIGN = {
     "tolerance_rel": 0.02,
-    "theta_deg_bounds": (15.0, 60.0),
+    "theta_deg_bounds": (25.0, 60.0),
     "t_mm_bounds": (0.4, 2.0),
     "h_mm_bounds": (1.2, 6.0),
     "max_height_mm": None,

@@ -19,7 +19,7 @@ from mst_cli.design import design_document
 from mst_cli.design.explain import limits
 from mst_cli.design.problem import PRINT_ERROR_T_MM, DesignProblem
 from mst_cli.response import simulate
-from mst_cli.schema import InputError, load_document, parse_document
+from mst_cli.schema import DEFAULT_DESIGN, InputError, load_document, parse_document
 
 ROOT = Path(__file__).resolve().parents[1]
 SPEC = ROOT / "configs" / "mohammadi2021.yaml"
@@ -120,7 +120,8 @@ def test_vectorised_problem_agrees_with_the_forward_model(seed, n_layers):
 def test_unit_variables_map_onto_the_bounds_and_back():
     P = DesignProblem(load_document(SPEC))
     theta, t, h = P.to_physical(np.array([0, 0, 0, 1, 1, 1, 0.5, 0.5, 0.5]))
-    assert theta == pytest.approx([15, 60, 37.5]) and t == pytest.approx([0.4, 2.0, math.sqrt(0.8)])
+    lo, hi = DEFAULT_DESIGN["theta_deg_bounds"]
+    assert theta == pytest.approx([lo, hi, 0.5 * (lo + hi)]) and t == pytest.approx([0.4, 2.0, math.sqrt(0.8)])
     assert h == pytest.approx([1.2, 6.0, math.sqrt(7.2)])                 # log scale: geometric mean
     u = np.random.default_rng(1).random(9)
     assert P.to_unit(*P.to_physical(u)) == pytest.approx(u)
@@ -145,7 +146,7 @@ def test_tie_break_is_the_most_print_robust_of_the_one_layer_solutions():
     bounds that satisfy every rule, and check that none is more robust to a 0.05 mm wall error
     than the design mst picked.
     """
-    doc = spec_doc([(0.12, 3.0)])
+    doc = spec_doc([(0.1, 5.0)], theta_deg_bounds=[15.0, 60.0])   # a broad family needs walls < 25 deg
     result = design_document(doc)
     assert result.status == "met"
     P = DesignProblem(doc)

@@ -9,7 +9,7 @@ from mst_cli.geometry import HexCell
 from mst_cli.material import Material
 from mst_cli.mechanics import layer_law
 from mst_cli.mechanics.spring import (SHEAR_COEFFICIENT_RECT, layer_stiffness_N_per_mm,
-                                      wall_compliance_mm_per_N)
+                                      spring_layer, wall_compliance_mm_per_N)
 
 E, NU = 12.0, 0.45
 
@@ -92,7 +92,7 @@ def test_layer_stiffness_scales_with_struts_modulus_and_width():
 
 def test_layer_is_two_walls_in_series_times_two_chevrons_times_struts():
     cell = HexCell(30, 0.8, 3.0, struts_per_chevron=5)
-    law = layer_law(cell, Material(youngs_modulus_MPa=E, poisson_ratio=NU))
+    law = spring_layer(cell, Material(youngs_modulus_MPa=E, poisson_ratio=NU), corrected=False)
     c_wall = timoshenko_frame_compliance(cell.theta_rad, cell.wall_length_mm, cell.b_mm, 0.8, E, NU)
     chevron = 1.0 / (2 * c_wall)
     assert law.k_N_per_mm == pytest.approx(2 * 5 * chevron, rel=1e-10)

@@ -32,14 +32,32 @@ def design_matrix(t_over_L, theta_rad):
 
 
 @functools.lru_cache(maxsize=1)
+def _fit() -> dict:
+    """The stored fit; a missing file is an installation error, never a silent 'no correction'."""
+    return json.loads(DATA.read_text())
+
+
 def coefficients() -> np.ndarray:
-    """The stored fit (zeros, i.e. no correction, when the data file is missing)."""
-    if not DATA.exists():
-        return np.zeros(len(TERMS))
-    return np.asarray(json.loads(DATA.read_text())["coefficients"], dtype=float)
+    return np.asarray(_fit()["coefficients"], dtype=float)
+
+
+def fitted_t_over_L_max() -> float:
+    return float(_fit()["fitted_on"]["t_over_L_range"][1])
+
+
+def fitted_theta_rad_range() -> tuple[float, float]:
+    lo, hi = _fit()["fitted_on"]["theta_deg_range"]
+    return float(np.radians(lo)), float(np.radians(hi))
 
 
 def stiffness_factor(t_over_L, theta_rad):
-    """k_L2 / k_L0 predicted by the fit; x is clipped to the fitted range [0, 1]."""
-    x = np.clip(np.asarray(t_over_L, dtype=float), 0.0, 1.0)
-    return np.exp(design_matrix(x, theta_rad) @ coefficients())
+    """k_L2 / k_L0 predicted by the fit.
+
+    x = t/L is clipped to [0, the largest t/L fitted]: past its data the cubic swings (at
+    theta 60 deg it would fall from 0.87 at t/L 0.6 to 0.41 at 1.0), so stubbier walls keep
+    the factor of the stubbiest fitted wall. theta is held inside its fitted range likewise
+    (optimisers probe far outside the bounds, where the polynomial in theta would overflow).
+    """
+    x = np.clip(np.asarray(t_over_L, dtype=float), 0.0, fitted_t_over_L_max())
+    theta = np.clip(np.asarray(theta_rad, dtype=float), *fitted_theta_rad_range())
+    return np.exp(design_matrix(x, theta) @ coefficients())
