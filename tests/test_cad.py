@@ -13,6 +13,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+
+import sampling
 import trimesh
 from build123d import Edge, import_step
 
@@ -150,19 +152,7 @@ def test_pocket_too_wide_for_the_cap_is_an_input_error():
 
 # --------------------------------------------------------------------------- random sweep
 def random_valid_geometries(n, seed=4):
-    rng = np.random.default_rng(seed)
-    out = []
-    while len(out) < n:
-        n_s = int(rng.integers(1, 6))
-        cells = tuple(HexCell(float(rng.uniform(15, 60)), float(rng.uniform(0.4, 2.0)),
-                              float(rng.uniform(1.2, 6.0)), struts_per_chevron=n_s)
-                      for _ in range(int(rng.integers(1, 4))))
-        if any(c.violations() for c in cells):
-            continue
-        board = BOARDS[sorted(BOARDS)[int(rng.integers(len(BOARDS)))]]
-        offset = tuple(float(v) for v in rng.uniform(-2, 2, size=2))
-        out.append(SensorGeometry(cells, board=board, chip_offset_mm=offset))
-    return out
+    return sampling.random_valid_geometries(n, seed, max_offset_mm=2.0)
 
 
 @pytest.mark.parametrize("g", random_valid_geometries(6), ids=lambda g: f"{len(g.layers)}layers")

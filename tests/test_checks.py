@@ -179,21 +179,8 @@ def test_unreadable_inputs_are_input_errors(tmp_path):
 
 
 def _random_geometries(n, seed=11):
-    from mst_cli.components import BOARDS
-    from mst_cli.geometry import HexCell, SensorGeometry
-    rng = np.random.default_rng(seed)
-    out = []
-    while len(out) < n:
-        n_s = int(rng.integers(1, 6))
-        cells = tuple(HexCell(float(rng.uniform(15, 60)), float(rng.uniform(0.4, 2.0)),
-                              float(rng.uniform(1.2, 6.0)), struts_per_chevron=n_s)
-                      for _ in range(int(rng.integers(1, 4))))
-        if any(c.violations() for c in cells):
-            continue
-        board = BOARDS[sorted(BOARDS)[int(rng.integers(len(BOARDS)))]]
-        offset = tuple(float(v) for v in rng.uniform(-3, 3, size=2))
-        out.append(SensorGeometry(cells, board=board, chip_offset_mm=offset))
-    return out
+    import sampling
+    return sampling.random_valid_geometries(n, seed, max_offset_mm=3.0)
 
 
 @pytest.mark.parametrize("g", _random_geometries(3), ids=lambda g: f"{g.board.key}")

@@ -1,0 +1,23 @@
+"""Seeded random sensors inside the design bounds, shared by the CAD and check sweeps."""
+
+import numpy as np
+
+from mst_cli.components import BOARDS
+from mst_cli.geometry import HexCell, SensorGeometry
+
+
+def random_valid_geometries(n, seed, max_offset_mm):
+    """n sensors of 1-3 valid layers, random struts, board and chip offset (|x|, |y| <= max)."""
+    rng = np.random.default_rng(seed)
+    out = []
+    while len(out) < n:
+        n_s = int(rng.integers(1, 6))
+        cells = tuple(HexCell(float(rng.uniform(15, 60)), float(rng.uniform(0.4, 2.0)),
+                              float(rng.uniform(1.2, 6.0)), struts_per_chevron=n_s)
+                      for _ in range(int(rng.integers(1, 4))))
+        if any(c.violations() for c in cells):
+            continue
+        board = BOARDS[sorted(BOARDS)[int(rng.integers(len(BOARDS)))]]
+        offset = tuple(float(v) for v in rng.uniform(-max_offset_mm, max_offset_mm, size=2))
+        out.append(SensorGeometry(cells, board=board, chip_offset_mm=offset))
+    return out
