@@ -359,17 +359,7 @@ def solve_continuum(cell: geo.HexCell, material, n_thick: int = DEFAULT_N_THICK,
     if bad:
         why = bad[0].message if bad[0] is not None else "h <= 2t or p <= 0"
         raise ValueError(f"continuum model needs a meshable cell: {why}")
-    from scipy.sparse.linalg import spsolve
     allowance = cell.contact_allowance_mm
-
-    def linear_k(problem):
-        """Small-strain stiffness: one linear solve with the tangent at u = 0."""
-        _, K0 = problem.assemble(np.zeros(problem.basis.N))
-        ul = np.zeros(problem.basis.N)
-        ul[problem.tip_z] = -0.5
-        f = problem.free
-        ul[f] = spsolve(K0[f][:, f].tocsc(), -K0[f][:, problem.tip_z] @ ul[problem.tip_z])
-        return float(-(K0 @ ul)[problem.tip_z].sum() * problem.depth_factor)
 
     fine = _Problem(cell, material, n_thick, n_length, levels)
     k_lin = linear_k(fine)
@@ -438,14 +428,18 @@ def solve_continuum(cell: geo.HexCell, material, n_thick: int = DEFAULT_N_THICK,
 def linear_stiffness_N_per_mm(cell: geo.HexCell, material, n_thick: int = DEFAULT_N_THICK,
                               n_length: int = DEFAULT_N_LENGTH, levels: int = DEFAULT_LEVELS) -> float:
     """Small-strain layer stiffness k (N/mm) of the L2 model alone (one linear solve)."""
+    return linear_k(_Problem(cell, material, n_thick, n_length, levels))
+
+
+def linear_k(problem) -> float:
+    """Small-strain stiffness of a built problem: one linear solve with the tangent at u = 0."""
     from scipy.sparse.linalg import spsolve
-    prob = _Problem(cell, material, n_thick, n_length, levels)
-    _, K0 = prob.assemble(np.zeros(prob.basis.N))
-    ul = np.zeros(prob.basis.N)
-    ul[prob.tip_z] = -0.5
-    f = prob.free
-    ul[f] = spsolve(K0[f][:, f].tocsc(), -K0[f][:, prob.tip_z] @ ul[prob.tip_z])
-    return float(-(K0 @ ul)[prob.tip_z].sum() * prob.depth_factor)
+    _, K0 = problem.assemble(np.zeros(problem.basis.N))
+    ul = np.zeros(problem.basis.N)
+    ul[problem.tip_z] = -0.5
+    f = problem.free
+    ul[f] = spsolve(K0[f][:, f].tocsc(), -K0[f][:, problem.tip_z] @ ul[problem.tip_z])
+    return float(-(K0 @ ul)[problem.tip_z].sum() * problem.depth_factor)
 
 
 @functools.lru_cache(maxsize=256)
