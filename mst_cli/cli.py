@@ -16,7 +16,7 @@ import click
 
 from . import __version__
 
-EXIT_OK, EXIT_TARGETS, EXIT_INPUT = 0, 1, 2
+EXIT_TARGETS, EXIT_INPUT = 1, 2  # success is a normal return (0)
 
 
 def fail_input(message: str) -> None:

@@ -86,12 +86,18 @@ def report_dict(doc, geometry: SensorGeometry, resp: Response, extra: dict | Non
 
 def response_csv(resp: Response) -> str:
     """One row per force sample; units in the header."""
+    from .magnetometer import quantise_lsb
+
     buf = io.StringIO()
-    buf.write("force_N,displacement_mm,gap_mm,Bx_mT,By_mT,Bz_mT,B_abs_mT,dB_rel,in_range\n")
+    buf.write("force_N,displacement_mm,gap_mm,Bx_mT,By_mT,Bz_mT,B_abs_mT,dB_rel,in_range,Bz_code_lsb\n")
     data = np.column_stack([resp.force_N, resp.displacement_mm, resp.gap_mm, resp.B_T * 1e3,
                             resp.B_abs_T * 1e3, resp.dB_rel])
-    for row, ok in zip(data, resp.in_range):
-        buf.write(",".join(f"{v:.9g}" for v in row) + f",{int(ok)}\n")
+    # what the chip would output along z at the chosen GAIN_SEL/RES (empty when saturated)
+    setting = resp.chip_setting
+    codes = (quantise_lsb(resp.B_T[:, 2], setting.z_uT_per_lsb) if setting is not None
+             else [""] * len(data))
+    for row, ok, code in zip(data, resp.in_range, codes):
+        buf.write(",".join(f"{v:.9g}" for v in row) + f",{int(ok)},{code}\n")
     return buf.getvalue()
 
 

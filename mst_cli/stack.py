@@ -114,8 +114,3 @@ class Stack:
         inside = np.interp(d, d_knots, F_knots)
         beyond = F_knots[-1] + (d - d_knots[-1]) / self.locked_compliance_mm_per_N
         return np.where(d <= d_knots[-1], inside, beyond)
-
-    @property
-    def lock_displacements_mm(self) -> np.ndarray:
-        """Stack compression at each sorted lock force."""
-        return self.displacement_mm(self.regime_bounds_N[1:])

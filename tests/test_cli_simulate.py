@@ -27,8 +27,12 @@ def test_simulate_writes_report_csv_and_png(tmp_path):
     assert rep["models"] == {"mechanics": "spring", "field": "axial"}
     assert len(rep["regimes"]) == 3 and rep["B0_mT"] > 0 and rep["gap_min_mm"] < rep["gap0_mm"]
     assert rep["magnetometer"]["gain_sel"] is not None
-    header = (out / "response.csv").read_text().splitlines()[0]
-    assert header.startswith("force_N,displacement_mm,gap_mm")
+    lines = (out / "response.csv").read_text().splitlines()
+    assert lines[0].startswith("force_N,displacement_mm,gap_mm")
+    # the chip's z code is the field divided by the chosen LSB size, rounded
+    last = dict(zip(lines[0].split(","), lines[-1].split(",")))
+    lsb_uT = rep["magnetometer"]["z_uT_per_lsb"]
+    assert int(last["Bz_code_lsb"]) == round(float(last["Bz_mT"]) * 1e3 / lsb_uT)
     assert (out / "response.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert "regime" in r.output and "S [1/N]" in r.output
 
