@@ -1,5 +1,6 @@
 """The speed/accuracy ladder benchmark: runs the same measurement as `mst bench`, prints the
-table, writes bench.md/json/png to --out, and stores the measured median stiffness errors in
+table, writes bench.md/json/png to --out, and stores the measured median errors (stiffness,
+lock force, lock displacement) in
 mst_cli/data/ladder_errors.json (read by mst_cli.bench.cheapest_model_for).
 
 Run:  .venv/bin/python benchmarks/bench_ladder.py --samples 24 --seed 0 --out mst-out/bench

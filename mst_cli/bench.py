@@ -146,25 +146,42 @@ def field_times_s(gaps_mm, magnet: Magnet = Magnet(), repeat: int = 20):
 
 # --------------------------------------------------------------------------- model choice
 def load_ladder_errors(path: Path = ERRORS_FILE) -> dict:
-    """The measured median stiffness errors and times per rung stored with the package."""
+    """The measured median errors (stiffness, lock force, lock displacement) and times per rung
+    stored with the package."""
     return json.loads(Path(path).read_text())
 
 
-def cheapest_model_for(accuracy_rel: float, errors: dict | None = None) -> tuple[str, float]:
-    """The cheapest mechanics rung whose MEASURED median |stiffness error| against L2 is at
-    most ``accuracy_rel`` (e.g. 0.05 for 5 %), and that error.
+def rung_errors(model: str, errors: dict) -> dict:
+    """Measured median |error| of one rung against L2: {"k": .., "lock_force": ..} (0 for L2).
 
-    The reference rung ``continuum`` has error 0 by definition, so it is returned when no
-    cheaper rung qualifies. Raises ValueError for accuracy_rel <= 0 or not finite.
+    These are the two numbers a design's targets rest on: the sensitivity S follows the layer
+    stiffness k, the force range R is the lock force. A rung without a stored lock-force
+    error (a bench before it was measured) counts as unmeasured there, i.e. infinitely wrong.
+    """
+    if model == LADDER[-1]:
+        return {"k": 0.0, "lock_force": 0.0}
+    entry = errors["models"][model]
+    return {"k": float(entry["median_abs_err_k"]),
+            "lock_force": float(entry.get("median_abs_err_lock_force", np.inf))}
+
+
+def cheapest_model_for(accuracy_rel: float, errors: dict | None = None) -> tuple[str, dict]:
+    """The cheapest mechanics rung whose MEASURED median |error| against L2, in stiffness AND
+    in lock force, is at most ``accuracy_rel`` (e.g. 0.05 for 5 %), and those errors.
+
+    A rung is only as accurate as the worse of the two: a correct k with a lock force 50 %
+    off would put every force range of a design off by that much. The reference rung
+    ``continuum`` has error 0 by definition, so it is returned when no cheaper rung
+    qualifies. Raises ValueError for accuracy_rel <= 0 or not finite.
     """
     if not (np.isfinite(accuracy_rel) and accuracy_rel > 0):
         raise ValueError(f"accuracy_rel must be a positive number, got {accuracy_rel!r}")
     errors = load_ladder_errors() if errors is None else errors
     for model in USER_LADDER:
-        err = 0.0 if model == LADDER[-1] else errors["models"][model]["median_abs_err_k"]
-        if err <= accuracy_rel:
-            return model, float(err)
-    return LADDER[-1], 0.0
+        err = rung_errors(model, errors)
+        if max(err.values()) <= accuracy_rel:
+            return model, err
+    return LADDER[-1], rung_errors(LADDER[-1], errors)
 
 
 # --------------------------------------------------------------------------- the whole bench
@@ -265,23 +282,25 @@ def bench_markdown(result: dict) -> str:
 
 
 def plot_bench(result: dict, path) -> None:
-    """Log-log |stiffness error| (median) against time per layer, one point per rung."""
+    """Log-log median and p90 |error| against time per layer, one point per rung: stiffness
+    on the left, lock force on the right."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    fig, ax = plt.subplots(figsize=(6, 4))
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4), sharey=True)
     m = result["models"]
-    for key, mark in (("spring-textbook", "x"), ("spring", "o"), ("frame", "s")):
-        s = m[key]["summary"]
-        e = max(s["err_k"]["median"] or 1e-6, 1e-6)
-        ax.loglog([m[key]["time_per_layer_s"]], [e], mark, label=f"{key} (median)")
-        ax.loglog([m[key]["time_per_layer_s"]], [max(s["err_k"]["p90"] or 1e-6, 1e-6)], mark,
-                  alpha=0.4, label=f"{key} (p90)")
-    ax.axvline(m["continuum"]["time_per_layer_s"], color="k", ls="--", label="continuum (reference)")
-    ax.set_xlabel("time per layer [s]")
-    ax.set_ylabel("|error in k| against L2")
-    ax.legend(fontsize=7)
-    ax.grid(True, which="both", alpha=0.3)
+    for ax, key_err, label in ((axes[0], "err_k", "stiffness k"), (axes[1], "err_lock_force", "lock force R")):
+        for key, mark in (("spring-textbook", "x"), ("spring", "o"), ("frame", "s")):
+            s = m[key]["summary"][key_err]
+            t = [m[key]["time_per_layer_s"]]
+            ax.loglog(t, [max(s["median"] or 1e-6, 1e-6)], mark, label=f"{key} (median)")
+            ax.loglog(t, [max(s["p90"] or 1e-6, 1e-6)], mark, alpha=0.4, label=f"{key} (p90)")
+        ax.axvline(m["continuum"]["time_per_layer_s"], color="k", ls="--", label="continuum (reference)")
+        ax.set_xlabel("time per layer [s]")
+        ax.set_title(f"|error in {label}| against L2")
+        ax.grid(True, which="both", alpha=0.3)
+    axes[0].set_ylabel("relative error")
+    axes[1].legend(fontsize=7)
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)
@@ -290,5 +309,14 @@ def plot_bench(result: dict, path) -> None:
 def ladder_errors(result: dict) -> dict:
     """What cheapest_model_for needs, from a bench result (stored as ladder_errors.json)."""
     return {"command": result["command"],
-            "models": {k: {"median_abs_err_k": v["median_abs_err_k"], "time_per_layer_s": v["time_per_layer_s"]}
-                       for k, v in result["models"].items()}}
+            "models": {k: _stored_errors(v) for k, v in result["models"].items()}}
+
+
+def _stored_errors(entry: dict) -> dict:
+    out = {"median_abs_err_k": entry["median_abs_err_k"], "time_per_layer_s": entry["time_per_layer_s"]}
+    if "summary" in entry:
+        out["median_abs_err_lock_force"] = entry["summary"]["err_lock_force"]["median"]
+        out["median_abs_err_d_lock"] = entry["summary"]["err_d_lock"]["median"]
+    else:                                   # the reference itself
+        out["median_abs_err_lock_force"] = out["median_abs_err_d_lock"] = 0.0
+    return out

@@ -27,12 +27,13 @@ def field_magnitude_T(gap_mm, geometry: SensorGeometry, model: str):
     return np.linalg.norm(B, axis=-1)
 
 
-def regime_kernel(k_N_per_mm, d_lock_mm, k_locked_N_per_mm, gap0_mm, field_T):
-    """Lock forces and secant sensitivities of many bilinear stacks at once.
+def regime_kernel(k_N_per_mm, d_lock_mm, k_locked_N_per_mm, gap0_mm, field_T, lock_force_N=None):
+    """Lock forces and secant sensitivities of many L0 stacks at once.
 
     Parameters
     ----------
     k_N_per_mm, d_lock_mm, k_locked_N_per_mm : array (..., n_layers)
+    lock_force_N : array (..., n_layers), optional    [default k * d_lock, bilinear layers]
     gap0_mm : array (...)       unloaded magnet-to-chip gap
     field_T : callable          |B| (T) of an array of gaps (mm)
 
@@ -44,9 +45,10 @@ def regime_kernel(k_N_per_mm, d_lock_mm, k_locked_N_per_mm, gap0_mm, field_T):
     B_T : (..., n+1)            |B| at those forces
     """
     k = np.asarray(k_N_per_mm, dtype=float)
-    R_sorted = np.sort(k * np.asarray(d_lock_mm, dtype=float), axis=-1)
+    R = k * np.asarray(d_lock_mm, dtype=float) if lock_force_N is None else np.asarray(lock_force_N, dtype=float)
+    R_sorted = np.sort(R, axis=-1)
     F = np.concatenate([np.zeros(R_sorted.shape[:-1] + (1,)), R_sorted], axis=-1)
-    d = series_displacement_mm(F, k, d_lock_mm, k_locked_N_per_mm)
+    d = series_displacement_mm(F, k, d_lock_mm, k_locked_N_per_mm, R)
     gap = np.asarray(gap0_mm, dtype=float)[..., None] - d
     B = field_T(gap)
     rel = B / B[..., :1] - 1.0
@@ -147,7 +149,7 @@ def simulate(geometry: SensorGeometry, material, mechanics: str = "spring",
     slope = -dB_dgap * compliance / B0
 
     # secant sensitivities from the stack itself, so they hold for every mechanics rung
-    # (regime_kernel gives the same numbers for bilinear layers; the design loop uses it)
+    # (regime_kernel gives the same numbers for L0 layers; the design loop uses it)
     k = np.array([law.k_N_per_mm for law in laws])
     dl = np.array([law.d_lock_mm for law in laws])
     gap_edges = gap0 - stack.displacement_mm(edges)

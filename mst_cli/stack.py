@@ -2,9 +2,10 @@
 
 The same force passes through every layer, so the stack compression is the sum of the layer
 compressions, d(F) = sum_j d_j(F). Each layer locks at its own force R_j; sorted, the R_j
-split the force axis into regimes. With bilinear layers (rung L0) d(F) is piecewise linear
-with breakpoints exactly at the sorted R_j, so evaluating it at those points and
-interpolating linearly between them is exact, not an approximation: no time stepping.
+split the force axis into regimes. Every layer law is piecewise linear between its knots
+(rung L0: the knee and R_j), so d(F) is piecewise linear with breakpoints exactly at the
+union of the knots: evaluating it there and interpolating linearly is exact, not an
+approximation: no time stepping.
 
 Pure numpy; no I/O.
 """
@@ -16,18 +17,20 @@ from dataclasses import dataclass
 import numpy as np
 
 
-def series_displacement_mm(force_N, k_N_per_mm, d_lock_mm, k_locked_N_per_mm):
-    """Stack compression of bilinear layers in series, vectorised over designs.
+def series_displacement_mm(force_N, k_N_per_mm, d_lock_mm, k_locked_N_per_mm, lock_force_N=None):
+    """Stack compression of L0 layers in series, vectorised over designs.
 
-    ``k``, ``d_lock``, ``k_locked`` have shape (..., n_layers); ``force_N`` has shape (..., m)
-    (broadcast against the leading axes). Returns shape (..., m).
+    ``k``, ``d_lock``, ``k_locked`` and ``lock_force_N`` (None: R = k d_lock, bilinear) have
+    shape (..., n_layers); ``force_N`` has shape (..., m) (broadcast against the leading axes).
+    Returns shape (..., m).
     """
+    from .mechanics.spring import layer_displacement_mm
+    k = np.asarray(k_N_per_mm, dtype=float)
+    dl = np.asarray(d_lock_mm, dtype=float)
+    R = k * dl if lock_force_N is None else np.asarray(lock_force_N, dtype=float)
     F = np.asarray(force_N, dtype=float)[..., :, None]
-    k = np.asarray(k_N_per_mm, dtype=float)[..., None, :]
-    dl = np.asarray(d_lock_mm, dtype=float)[..., None, :]
-    kl = np.asarray(k_locked_N_per_mm, dtype=float)[..., None, :]
-    R = k * dl
-    d_layer = np.where(F <= R, F / k, dl + (F - R) / kl)
+    d_layer = layer_displacement_mm(F, k[..., None, :], dl[..., None, :], R[..., None, :],
+                                    np.asarray(k_locked_N_per_mm, dtype=float)[..., None, :])
     return d_layer.sum(axis=-1)
 
 

@@ -10,22 +10,35 @@ from mst_cli.bench import (cheapest_model_for, field_errors, load_ladder_errors,
                            summarise)
 from mst_cli.cli import main
 
-ERRORS = {"models": {"spring-textbook": {"median_abs_err_k": 0.16}, "spring": {"median_abs_err_k": 0.02},
-                     "frame": {"median_abs_err_k": 0.015}, "continuum": {"median_abs_err_k": 0.0}}}
+ERRORS = {"models": {
+    "spring-textbook": {"median_abs_err_k": 0.16, "median_abs_err_lock_force": 0.9},
+    "spring": {"median_abs_err_k": 0.02, "median_abs_err_lock_force": 0.5},
+    "frame": {"median_abs_err_k": 0.015, "median_abs_err_lock_force": 0.06},
+    "continuum": {"median_abs_err_k": 0.0, "median_abs_err_lock_force": 0.0}}}
 
 
-@pytest.mark.parametrize("acc, model", [(0.5, "spring"), (0.1, "spring"),
-                                        (0.016, "frame"), (0.001, "continuum")])
-def test_cheapest_model_meets_the_accuracy(acc, model):
+@pytest.mark.parametrize("acc, model", [(0.6, "spring"), (0.5, "spring"), (0.1, "frame"),
+                                        (0.06, "frame"), (0.05, "continuum"), (0.001, "continuum")])
+def test_cheapest_model_meets_the_accuracy_in_stiffness_and_lock_force(acc, model):
     chosen, err = cheapest_model_for(acc, ERRORS)
-    assert chosen == model and err <= acc
+    assert chosen == model and err["k"] <= acc and err["lock_force"] <= acc
+
+
+def test_a_rung_with_good_stiffness_but_bad_lock_force_is_not_chosen():
+    # spring's 2 % stiffness error meets 10 %, its 50 % lock-force error does not
+    assert cheapest_model_for(0.10, ERRORS)[0] == "frame"
+    unmeasured = {"models": {"spring": {"median_abs_err_k": 0.02}, "frame": {"median_abs_err_k": 0.015}}}
+    assert cheapest_model_for(0.5, unmeasured)[0] == "continuum"
 
 
 def test_cheapest_model_reads_the_stored_measurement():
-    stored = load_ladder_errors()
-    chosen, err = cheapest_model_for(0.10)
-    assert err == pytest.approx(0.0 if chosen == "continuum" else stored["models"][chosen]["median_abs_err_k"])
-    assert err <= 0.10
+    stored = load_ladder_errors()["models"]
+    for acc in (0.9, 0.10, 0.01):
+        chosen, err = cheapest_model_for(acc)
+        if chosen != "continuum":
+            assert err == {"k": stored[chosen]["median_abs_err_k"],
+                           "lock_force": stored[chosen]["median_abs_err_lock_force"]}
+        assert max(err.values()) <= acc
 
 
 @pytest.mark.parametrize("bad", [0.0, -0.1, float("nan")])

@@ -44,17 +44,15 @@ def _achieved(path, mechanics):
 
 
 def _stored_err(errors, m):
-    """Stored median |stiffness error| of user rung m (an older file names the corrected L0
-    "spring-corrected"; it is the user's spring rung)."""
+    """Stored median |error| of user rung m: the worse of stiffness and lock force."""
     if m == "continuum":
         return 0.0
-    models = errors["models"]
-    key = "spring-corrected" if m == "spring" and "spring-corrected" in models else m
-    return models[key]["median_abs_err_k"]
+    entry = errors["models"][m]
+    return max(entry["median_abs_err_k"], entry["median_abs_err_lock_force"])
 
 
 def _expected_rung(accuracy_rel, errors):
-    """The cheapest user rung whose stored median stiffness error is <= accuracy_rel."""
+    """The cheapest user rung whose stored median errors are <= accuracy_rel."""
     for m in USER_LADDER:
         err = _stored_err(errors, m)
         if err <= accuracy_rel:
@@ -131,22 +129,22 @@ def test_simulate_accuracy_rel_picks_the_rung_the_stored_errors_give(tmp_path):
         res = _run(["simulate", path, "--out", tmp_path / f"o{i}"])
         assert res.exit_code == 0, res.output
         first = res.output.splitlines()[0]
-        assert first.startswith(f"mechanics: {expected} (measured median stiffness error"), first
+        assert first.startswith(f"mechanics: {expected} (measured median error against continuum"), first
         assert "requested" in first
         report = json.loads((tmp_path / f"o{i}" / "report.json").read_text())
         assert report["models"]["mechanics"] == expected
 
 
 def test_choice_walks_the_ladder_with_given_errors():
-    # L0 variants as the bench may list them (textbook, corrected) all count as "spring"
-    errors = {"models": {"spring-textbook": {"median_abs_err_k": 0.30},
-                         "spring": {"median_abs_err_k": 0.10},
-                         "spring-corrected": {"median_abs_err_k": 0.10},
-                         "frame": {"median_abs_err_k": 0.02}}}
+    errors = {"models": {"spring-textbook": {"median_abs_err_k": 0.30, "median_abs_err_lock_force": 0.6},
+                         "spring": {"median_abs_err_k": 0.10, "median_abs_err_lock_force": 0.15},
+                         "frame": {"median_abs_err_k": 0.02, "median_abs_err_lock_force": 0.04}}}
     assert choose_mechanics(None, 0.2, "spring", errors).mechanics == "spring"
+    assert choose_mechanics(None, 0.12, "spring", errors).mechanics == "frame"   # R decides
     c = choose_mechanics(None, 0.05, "spring", errors)
-    assert (c.mechanics, c.measured_err_rel) == ("frame", 0.02)
-    assert c.message() == "mechanics: frame (measured median stiffness error 2 % <= requested 5 %)"
+    assert (c.mechanics, c.measured_err_k_rel, c.measured_err_lock_force_rel) == ("frame", 0.02, 0.04)
+    assert c.message() == ("mechanics: frame (measured median error against continuum: stiffness 2 %, "
+                           "lock force 4 %; requested <= 5 %)")
     assert choose_mechanics(None, 0.01, "spring", errors).mechanics == "continuum"
     # an explicit flag wins; without accuracy_rel the file's mechanics is used
     assert choose_mechanics("spring", 0.01, "frame", errors).mechanics == "spring"

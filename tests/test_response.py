@@ -19,24 +19,25 @@ def test_single_layer_by_hand():
     law = layer_law(cell, MAT)
     r = simulate(g, MAT)
     B0 = axial_Bz_T(g.gap0_mm, 3.0, 2.0, 1.3)
-    B1 = axial_Bz_T(g.gap0_mm - cell.d_lock_mm, 3.0, 2.0, 1.3)
+    B1 = axial_Bz_T(g.gap0_mm - law.d_lock_mm, 3.0, 2.0, 1.3)
     assert r.B0_T == pytest.approx(B0, rel=1e-12)
-    assert r.lock_forces_N == pytest.approx([law.k_N_per_mm * cell.d_lock_mm])
+    assert r.lock_forces_N == pytest.approx([law.lock_force_N])
     assert r.regimes[0].sensitivity_secant_per_N == pytest.approx((B1 / B0 - 1) / law.lock_force_N, rel=1e-12)
-    assert r.gap_min_mm == pytest.approx(g.gap0_mm - cell.d_lock_mm)
+    assert r.gap_min_mm == pytest.approx(g.gap0_mm - law.d_lock_mm)
 
 
-def test_sensitivity_is_gradient_over_stiffness_for_a_small_stroke():
-    # S = g / k_eff with g = -(1/B0) dB/dgap (DESIGN.md section 2), exact as the stroke -> 0;
-    # the secant's error is first order in the stroke (half the field's curvature term)
+def test_sensitivity_is_gradient_times_secant_compliance_for_a_small_stroke():
+    # S = g c with g = -(1/B0) dB/dgap (DESIGN.md section 2) and c = d_lock / R the layer's
+    # secant compliance, exact as the stroke -> 0; the secant's error is first order in the
+    # stroke (half the field's curvature term)
     errors = []
     for stroke in (0.02, 0.01, 0.005):
         cell = HexCell(30, 0.8, 1.72, contact_allowance_mm=0.12 - stroke)
         g = SensorGeometry((cell,))
         r = simulate(g, MAT)
         grad = -axial_dBz_dz_T_per_mm(g.gap0_mm, 3.0, 2.0, 1.3) / axial_Bz_T(g.gap0_mm, 3.0, 2.0, 1.3)
-        k = layer_law(cell, MAT).k_N_per_mm
-        errors.append(r.regimes[0].sensitivity_secant_per_N / (grad / k) - 1)
+        law = layer_law(cell, MAT)
+        errors.append(r.regimes[0].sensitivity_secant_per_N / (grad * law.d_lock_mm / law.lock_force_N) - 1)
     assert errors[0] / errors[1] == pytest.approx(2.0, rel=0.02)
     assert errors[1] / errors[2] == pytest.approx(2.0, rel=0.02)
     assert abs(errors[2]) < 2e-3
@@ -56,8 +57,10 @@ def test_secant_lies_between_local_slopes_and_curves_are_monotone():
 def test_vectorised_kernel_agrees_with_simulate():
     r = simulate(REF, MAT)
     laws = [layer_law(c, MAT) for c in REF.layers]
-    k, dl, kl = (np.array([getattr(l, a) for l in laws]) for a in ("k_N_per_mm", "d_lock_mm", "k_locked_N_per_mm"))
-    R, S, gap, B = regime_kernel(k, dl, kl, REF.gap0_mm, lambda gp: field_magnitude_T(gp, REF, "axial"))
+    k, dl, kl, R_law = (np.array([getattr(l, a) for l in laws])
+                        for a in ("k_N_per_mm", "d_lock_mm", "k_locked_N_per_mm", "lock_force_N"))
+    assert np.all(R_law < k * dl)           # the softened laws: two knots before each lock
+    R, S, gap, B = regime_kernel(k, dl, kl, REF.gap0_mm, lambda gp: field_magnitude_T(gp, REF, "axial"), R_law)
     assert np.allclose(R, r.lock_forces_N, rtol=1e-13)
     assert np.allclose(S, [x.sensitivity_secant_per_N for x in r.regimes], rtol=1e-12)
     assert B[-1] == pytest.approx(r.B_full_T, rel=1e-13)

@@ -7,8 +7,8 @@ import pytest
 
 from mst_cli.geometry import HexCell
 from mst_cli.material import Material
-from mst_cli.mechanics import layer_law
-from mst_cli.mechanics.spring import (SHEAR_COEFFICIENT_RECT, layer_stiffness_N_per_mm,
+from mst_cli.mechanics import correction, layer_law
+from mst_cli.mechanics.spring import (KNEE_FRACTION, SHEAR_COEFFICIENT_RECT, layer_stiffness_N_per_mm,
                                       spring_layer, wall_compliance_mm_per_N)
 
 E, NU = 12.0, 0.45
@@ -108,3 +108,52 @@ def test_locked_stiffness_is_walls_plus_contact_column():
     assert law.k_locked_N_per_mm == pytest.approx(law.k_N_per_mm + column, rel=1e-12)
     # for the soft reference layer the locked stiffness is hundreds of times the open one
     assert law.k_locked_N_per_mm / law.k_N_per_mm > 300
+
+
+def test_softened_law_is_continuous_and_passes_its_knee_and_lock_point():
+    cell = HexCell(45, 0.8, 4.0)
+    law = spring_layer(cell, Material(youngs_modulus_MPa=E, poisson_ratio=NU))
+    k, dl, R = law.k_N_per_mm, law.d_lock_mm, law.lock_force_N
+    assert 0 < R < k * dl                                  # steep walls soften before the lock
+    knee, lock = law.knots_N
+    assert (knee, lock) == pytest.approx((KNEE_FRACTION * R, R), rel=1e-15)
+    assert law.displacement_mm(knee) == pytest.approx(knee / k, rel=1e-14)
+    assert law.displacement_mm(R) == pytest.approx(dl, rel=1e-14)
+    eps = 1e-9 * R
+    for F in (knee, R):                                    # no jump at either knot
+        assert law.displacement_mm(F + eps) - law.displacement_mm(F - eps) < 1e-6 * dl
+    # slopes: k first, the secant through the lock point next, k_locked after
+    d = law.displacement_mm
+    assert (d(0.5 * knee) - 0) / (0.5 * knee) == pytest.approx(1 / k, rel=1e-12)
+    assert (dl - knee / k) / (R - knee) == pytest.approx((d(0.9 * R) - d(0.6 * R)) / (0.3 * R), rel=1e-12)
+    assert (d(2 * R) - dl) / R == pytest.approx(1 / law.k_locked_N_per_mm, rel=1e-12)
+
+
+def test_textbook_law_is_bilinear_with_the_pads_stroke():
+    cell = HexCell(45, 0.8, 4.0)
+    law = spring_layer(cell, Material(youngs_modulus_MPa=E, poisson_ratio=NU), corrected=False)
+    assert law.knots_N == (law.lock_force_N,)
+    assert law.d_lock_mm == pytest.approx(cell.h_mm - 2 * cell.t_mm - cell.contact_allowance_mm)
+    assert law.lock_force_N == pytest.approx(law.k_N_per_mm * law.d_lock_mm, rel=1e-15)
+
+
+def test_lock_corrections_vanish_with_the_stroke():
+    # the softening is large rotation, first order in the stroke: none without a stroke
+    x, theta = np.array([0.1, 0.3, 0.5]), np.radians([25.0, 40.0, 60.0])
+    for sigma, close in ((0.0, 0.0), (1e-6, 1e-5)):
+        assert np.allclose(correction.lock_force_factor(x, theta, sigma), 1.0, atol=close + 1e-15)
+        assert np.allclose(correction.lock_stroke_factor(x, theta, sigma), 1.0, atol=close + 1e-15)
+    assert np.all(correction.lock_force_factor(x, theta, 1.0) < 1.0)
+
+
+def test_fast_correction_polynomials_equal_the_fitted_design_matrices():
+    # the fit uses the design matrices, the kernels a written-out form: they must agree
+    rng = np.random.default_rng(0)
+    x, th = rng.uniform(0, 0.6, 50), rng.uniform(*correction.fitted_theta_rad_range(), 50)
+    s = th - np.pi / 4
+    assert np.allclose(correction._stiffness_poly(x, s, correction._coef(None)),
+                       correction.design_matrix(x, th) @ correction.coefficients(), rtol=1e-12, atol=1e-14)
+    for key in ("lock_force", "lock_stroke"):
+        coef = correction._coef(key)
+        assert np.allclose(correction._lock_poly(x, s, coef),
+                           correction.lock_design_matrix(x, th) @ np.array(coef), rtol=1e-12, atol=1e-14)

@@ -160,11 +160,11 @@ class DesignProblem:
         fam = self.family
         theta = np.radians(theta_deg)
         b = t_mm if fam.strut_width_mm is None else np.full_like(t_mm, fam.strut_width_mm)
-        k, d_lock, k_locked = spring_arrays(theta, t_mm, h_mm, b, fam.struts_per_chevron,
-                                            fam.width_mm, fam.contact_allowance_mm, self.E_MPa, self.nu)
+        k, d_lock, R, k_locked = spring_arrays(theta, t_mm, h_mm, b, fam.struts_per_chevron,
+                                               fam.width_mm, fam.contact_allowance_mm, self.E_MPa, self.nu)
         gap0 = geo.unloaded_gap_mm(h_mm.sum(axis=-1), self.n, self.probe.housing, self.probe.board)
-        _, S, _, B = regime_kernel(k, d_lock, k_locked, gap0, self.field_T)
-        return k * d_lock, S, B[..., -1], gap0
+        _, S, _, B = regime_kernel(k, d_lock, k_locked, gap0, self.field_T, R)
+        return R, S, B[..., -1], gap0
 
     def evaluate_physical(self, theta_deg, t_mm, h_mm) -> Evaluation:
         theta_deg, t_mm, h_mm = np.broadcast_arrays(*(np.asarray(a, dtype=float)

@@ -18,6 +18,11 @@ After the cavity closes, the top and bottom pads (2t of solid TPU) press on each
 the inner width W - 2t/sin(theta) and the strut widths; that contact column acts in parallel
 with the walls, which go on bending. The sum is the finite locked stiffness past the lock.
 
+The corrected law (the default) also carries the fitted lock point of rung L2
+(:mod:`mst_cli.mechanics.correction`): the walls soften as they rotate, so the cavity closes at
+R < k d_lock. Before the lock the law is then two straight pieces: slope k up to the knee
+F = KNEE_FRACTION * R, then straight to (d_lock, R). The textbook law is bilinear (R = k d_lock).
+
 The kernels are pure numpy, vectorised over any broadcastable arrays, and return finite
 numbers for every input with positive t, h, b, n_s and theta in (0, 90) deg -- including cells
 that the validity checks reject (the geometry kernels floor the lengths).
@@ -32,6 +37,10 @@ import numpy as np
 from .. import geometry as geo
 
 SHEAR_COEFFICIENT_RECT = 5.0 / 6.0  # Timoshenko shear coefficient of a rectangular section
+# Where the softened pre-lock curve bends, as a fraction of the lock force. Chosen against the
+# L2 curves of 12 bench cells (seed 0): the largest displacement error of the two-piece curve,
+# in units of d_lock, has median 3.3 % at 0.4 (4.3 % at 0.3, 5.2 % at 0.5, 11 % at 0.7).
+KNEE_FRACTION = 0.4
 
 
 def wall_compliance_mm_per_N(theta_rad, t_mm, h_mm, b_mm, E_MPa, nu,
@@ -70,55 +79,82 @@ def contact_stiffness_N_per_mm(theta_rad, t_mm, width_mm, b_mm, n_struts, E_MPa)
     return E_MPa * n_struts * b_mm * contact_width / (2.0 * t_mm)
 
 
+def layer_displacement_mm(force_N, k_N_per_mm, d_lock_mm, lock_force_N, k_locked_N_per_mm):
+    """Compression of L0 layers at force F, vectorised (all arguments broadcast).
+
+    Slope k up to the knee F1 = KNEE_FRACTION * R, straight on to (d_lock, R), then k_locked.
+    With R = k d_lock (textbook) the two pre-lock pieces are one line.
+    """
+    F = np.asarray(force_N, dtype=float)
+    k = np.asarray(k_N_per_mm, dtype=float)
+    dl = np.asarray(d_lock_mm, dtype=float)
+    R = np.asarray(lock_force_N, dtype=float)
+    F1 = KNEE_FRACTION * R
+    d1 = F1 / k
+    # d1 <= KNEE_FRACTION * d_lock < d_lock because R <= k d_lock (spring_arrays caps it)
+    soft = d1 + (F - F1) * (dl - d1) / np.maximum(R - F1, 1e-300)
+    return np.where(F <= F1, F / k, np.where(F <= R, soft, dl + (F - R) / k_locked_N_per_mm))
+
+
 @dataclass(frozen=True)
 class LinearLockingLayer:
-    """Bilinear force-displacement law of one layer: k until d_lock, k_locked after.
+    """Piecewise-linear law of one L0 layer: k, a softened stretch to (d_lock, R), k_locked after.
 
-    Implements the layer-law protocol of :mod:`mst_cli.mechanics`.
+    Implements the layer-law protocol of :mod:`mst_cli.mechanics`. ``lock_force_N`` None
+    means the bilinear law, R = k d_lock.
     """
 
     k_N_per_mm: float
     d_lock_mm: float
     k_locked_N_per_mm: float
+    lock_force_N: float | None = None
 
-    @property
-    def lock_force_N(self) -> float:
-        return self.k_N_per_mm * self.d_lock_mm
+    def __post_init__(self):
+        if self.lock_force_N is None:
+            object.__setattr__(self, "lock_force_N", self.k_N_per_mm * self.d_lock_mm)
 
     @property
     def knots_N(self) -> tuple[float, ...]:
-        return (self.lock_force_N,)
+        R = self.lock_force_N
+        if R >= self.k_N_per_mm * self.d_lock_mm * (1.0 - 1e-12):
+            return (R,)
+        return (KNEE_FRACTION * R, R)
 
     def displacement_mm(self, force_N):
-        F = np.asarray(force_N, dtype=float)
-        R = self.lock_force_N
-        return np.where(F <= R, F / self.k_N_per_mm,
-                        self.d_lock_mm + (F - R) / self.k_locked_N_per_mm)
+        return layer_displacement_mm(force_N, self.k_N_per_mm, self.d_lock_mm, self.lock_force_N,
+                                     self.k_locked_N_per_mm)
 
 
 def spring_arrays(theta_rad, t_mm, h_mm, b_mm, n_struts, width_mm, contact_allowance_mm, E_MPa, nu,
                   corrected=True):
-    """(k, d_lock, k_locked) for many layers at once: the design loop's entry point.
+    """(k, d_lock, R, k_locked) for many layers at once: the design loop's entry point.
 
-    ``corrected`` (default) multiplies the beam-theory k by the joint correction fitted
-    against rung L2 (:mod:`mst_cli.mechanics.correction`, a function of t/L and theta; median
-    stiffness error against L2 1.7 % instead of 16.5 %, see ``mst bench``); False gives the
-    textbook value.
+    ``corrected`` (default) applies the fits against rung L2
+    (:mod:`mst_cli.mechanics.correction`, functions of t/L and theta): the joint factor on k
+    (median stiffness error against L2 1.7 % instead of 16.5 %, see ``mst bench``) and the
+    softened lock point (R, d_lock). False gives textbook beam theory: R = k d_lock, d_lock
+    where the pads meet.
     """
     k = layer_stiffness_N_per_mm(theta_rad, t_mm, h_mm, b_mm, n_struts, E_MPa, nu)
-    if corrected:
-        from .correction import stiffness_factor
-        t_over_L = t_mm / geo.wall_centreline_length_mm(theta_rad, t_mm, h_mm)
-        k = k * stiffness_factor(t_over_L, theta_rad)
     d_lock = geo.lock_stroke_mm(t_mm, h_mm, contact_allowance_mm)
+    R = k * d_lock
+    if corrected:
+        from . import correction
+        L = geo.wall_centreline_length_mm(theta_rad, t_mm, h_mm)
+        t_over_L = t_mm / L
+        sigma = correction.stroke_ratio(d_lock, L, theta_rad)
+        k = k * correction.stiffness_factor(t_over_L, theta_rad)
+        R = k * d_lock * correction.lock_force_factor(t_over_L, theta_rad, sigma)
+        d_lock = d_lock * correction.lock_stroke_factor(t_over_L, theta_rad, sigma)
+        R = np.minimum(R, k * d_lock)           # walls only soften before the lock
     k_locked = k + contact_stiffness_N_per_mm(theta_rad, t_mm, width_mm, b_mm, n_struts, E_MPa)
-    return k, d_lock, k_locked
+    return k, d_lock, R, k_locked
 
 
 def spring_layer(cell: geo.HexCell, material, corrected: bool = True) -> LinearLockingLayer:
     """The L0 law of one concrete cell (``corrected=False``: textbook beam theory only)."""
-    k, d_lock, k_locked = spring_arrays(
+    k, d_lock, R, k_locked = spring_arrays(
         cell.theta_rad, cell.t_mm, cell.h_mm, cell.b_mm, cell.struts_per_chevron,
         cell.width_mm, cell.contact_allowance_mm,
         material.youngs_modulus_MPa, material.poisson_ratio, corrected)
-    return LinearLockingLayer(float(k), float(d_lock), float(k_locked))
+    return LinearLockingLayer(float(k), float(d_lock), float(k_locked), float(R))
