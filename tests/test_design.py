@@ -271,3 +271,13 @@ def test_off_axis_chip_designs_with_the_exact_cylinder_field(tmp_path):
     S, R, _, _, resp = forward(result, tmp_path)
     assert resp.field_model == "cylinder"
     assert np.all(np.abs(S / [0.26, 0.08] - 1) <= 0.02) and np.all(np.abs(R / [0.9, 4.8] - 1) <= 0.02)
+
+
+def test_designed_walls_stay_where_the_l0_corrections_were_fitted(tmp_path):
+    # unconstrained, the loop drifted to t/L 0.68 (past the fit) and missed the continuum
+    # model by 16 %; every wall must be at most as stubby as the stubbiest fitted one
+    from mst_cli.mechanics.correction import fitted_t_over_L_max
+    result = design_document(load_document(SPEC))
+    _, _, _, geometry, _ = forward(result, tmp_path)
+    for c in geometry.layers:
+        assert c.t_mm / c.wall_length_mm <= fitted_t_over_L_max() * (1 + 1e-6)

@@ -17,6 +17,7 @@ Match objective (phase 1)
 
 Constraints (g <= 0 is satisfied; every g is scaled to order one)
     * cell rules of :func:`~mst_cli.geometry.cell_margins_mm` for every layer, in nozzles;
+    * wall slenderness t/L at most the largest t/L L0's corrections were fitted on (0.6);
     * lock order with margin: R_(i+1) >= (1 + lock_margin_rel) R_i, so regime i ends when layer
       i locks and the layers lock bottom to top in file order;
     * chip below saturation: |B| at the last lock <= (1 - saturation_margin_rel) x 50 mT, and
@@ -45,6 +46,7 @@ import numpy as np
 from .. import geometry as geo
 from .. import magnetometer as mlx
 from ..field import axial_Bz_T, choose_field_model
+from ..mechanics import correction
 from ..mechanics.spring import spring_arrays
 from ..response import field_magnitude_T, regime_kernel
 
@@ -122,7 +124,10 @@ class DesignProblem:
         self.field_model = choose_field_model(probe.chip_offset_mm, probe.magnet_tilt_deg, requested)
         self.height_offset_mm = probe.total_height_mm - sum(c.h_mm for c in probe_cells)
         self.B_limit_T = min(1.0 - self.saturation_margin_rel, 1.0 / CHIP_HEADROOM) * mlx.SATURATION_T
-        self.n_constraints = (self.n * len(geo.CELL_RULES) + (self.n - 1) + 1
+        # L0's fitted corrections hold for walls up to this t/L; stubbier walls are extrapolation
+        # (the design loop otherwise drifts there: it is where k and R grow fastest)
+        self.t_over_L_max = correction.fitted_t_over_L_max()
+        self.n_constraints = (self.n * len(geo.CELL_RULES) + self.n + (self.n - 1) + 1
                               + (1 if self.max_height_mm is not None else 0))
 
     # ----------------------------------------------------------------- variables
@@ -179,6 +184,8 @@ class DesignProblem:
 
         logR = np.log(np.maximum(R, _TINY))
         g = [(-margins / pr.nozzle_mm).reshape(margins.shape[:-2] + (-1,))]
+        t_over_L = t_mm / geo.wall_centreline_length_mm(np.radians(theta_deg), t_mm, h_mm)
+        g.append(t_over_L / self.t_over_L_max - 1.0)
         if self.n > 1:
             g.append(math.log1p(self.lock_margin_rel) - np.diff(logR, axis=-1))
         g.append(np.log(np.maximum(B_full, _TINY) / self.B_limit_T)[..., None])
@@ -220,6 +227,8 @@ class DesignProblem:
     def constraint_names(self) -> list[str]:
         """A readable name for every entry of ``Evaluation.constraints``."""
         names = [f"layer {i + 1} {rule}" for i in range(self.n) for rule in geo.CELL_RULES]
+        names += [f"layer {i + 1} wall t/L <= {self.t_over_L_max:.2f} (the range L0 is fitted on)"
+                  for i in range(self.n)]
         names += [f"lock order: layer {i + 2} must lock >= {1 + self.lock_margin_rel:g} x layer {i + 1}"
                   for i in range(self.n - 1)]
         names.append(f"chip saturation: field at full load <= {self.B_limit_T * 1e3:.1f} mT")
