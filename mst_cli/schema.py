@@ -141,8 +141,8 @@ SECTIONS: dict[str, dict[str, Rule]] = {
     "model": {
         "mechanics": Rule("str", choices=MECHANICS_MODELS),
         "field": Rule("str", choices=("auto",) + FIELD_MODELS),
-        # relative accuracy of the layer stiffness against the continuum reference: the tool
-        # picks the cheapest mechanics rung whose measured median error meets it (mst_cli.ladder)
+        # relative accuracy of layer stiffness and lock force against the continuum reference: the
+        # tool picks the cheapest mechanics rung whose measured median errors meet it (mst_cli.ladder)
         "accuracy_rel": Rule("float", lo=0.0, lo_open=True, hi=1.0, hi_open=True, nullable=True),
     },
     "design": {
@@ -239,7 +239,7 @@ class Document:
     field_model: str            # "auto" or one of FIELD_MODELS
     design: dict
     source: str = "<memory>"
-    accuracy_rel: float | None = None   # model.accuracy_rel: requested stiffness accuracy
+    accuracy_rel: float | None = None   # model.accuracy_rel: requested accuracy of k and R
 
     @property
     def is_design(self) -> bool:
