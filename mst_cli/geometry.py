@@ -25,7 +25,7 @@ thickness t. The profile is extruded by the strut width b, n_s times along the d
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 

@@ -16,6 +16,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .mechanics.spring import layer_displacement_mm
+
 
 def series_displacement_mm(force_N, k_N_per_mm, d_lock_mm, k_locked_N_per_mm, lock_force_N=None):
     """Stack compression of L0 layers in series, vectorised over designs.
@@ -24,7 +26,6 @@ def series_displacement_mm(force_N, k_N_per_mm, d_lock_mm, k_locked_N_per_mm, lo
     shape (..., n_layers); ``force_N`` has shape (..., m) (broadcast against the leading axes).
     Returns shape (..., m).
     """
-    from .mechanics.spring import layer_displacement_mm
     k = np.asarray(k_N_per_mm, dtype=float)
     dl = np.asarray(d_lock_mm, dtype=float)
     R = k * dl if lock_force_N is None else np.asarray(lock_force_N, dtype=float)

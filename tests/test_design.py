@@ -274,7 +274,7 @@ def test_off_axis_chip_designs_with_the_exact_cylinder_field(tmp_path):
 
 
 def test_designed_walls_stay_where_the_l0_corrections_were_fitted(tmp_path):
-    # unconstrained, the loop drifted to t/L 0.68 (past the fit) and missed the continuum
+    # before this constraint the loop drifted to t/L 0.68 (past the fit) and missed the continuum
     # model by 16 %; every wall must be at most as stubby as the stubbiest fitted one
     from mst_cli.mechanics.correction import fitted_t_over_L_max
     result = design_document(load_document(SPEC))

@@ -151,9 +151,9 @@ def test_fast_correction_polynomials_equal_the_fitted_design_matrices():
     rng = np.random.default_rng(0)
     x, th = rng.uniform(0, 0.6, 50), rng.uniform(*correction.fitted_theta_rad_range(), 50)
     s = th - np.pi / 4
-    assert np.allclose(correction._stiffness_poly(x, s, correction._coef(None)),
-                       correction.design_matrix(x, th) @ correction.coefficients(), rtol=1e-12, atol=1e-14)
+    assert np.allclose(correction._stiffness_poly(x, s, correction.coefficients()),
+                       correction.design_matrix(x, th) @ np.array(correction.coefficients()), rtol=1e-12, atol=1e-14)
     for key in ("lock_force", "lock_stroke"):
-        coef = correction._coef(key)
+        coef = correction.coefficients(key)
         assert np.allclose(correction._lock_poly(x, s, coef),
                            correction.lock_design_matrix(x, th) @ np.array(coef), rtol=1e-12, atol=1e-14)

@@ -11,7 +11,6 @@ reduced model -- the tip held in x, or free to rotate -- breaks both.
 """
 
 import math
-from types import SimpleNamespace
 
 import numpy as np
 import pytest

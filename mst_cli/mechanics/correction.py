@@ -58,12 +58,9 @@ def _fit() -> dict:
     return json.loads(DATA.read_text())
 
 
-def coefficients() -> np.ndarray:
-    return np.asarray(_fit()["coefficients"], dtype=float)
-
-
 @functools.lru_cache(maxsize=4)
-def _coef(key: str | None) -> tuple[float, ...]:
+def coefficients(key: str | None = None) -> tuple[float, ...]:
+    """Stored coefficients: of the stiffness fit (None), "lock_force" or "lock_stroke"."""
     return tuple(map(float, _fit()["coefficients"] if key is None else _fit()[key]["coefficients"]))
 
 
@@ -103,7 +100,7 @@ def stroke_ratio(d_lock_mm, wall_length_mm, theta_rad):
 def _lock_ratio(key, t_over_L, theta_rad, sigma):
     sig = np.clip(np.asarray(sigma, dtype=float), 0.0, _fit()["fitted_on"]["stroke_ratio_range"][1])
     x, theta = _clipped(t_over_L, theta_rad)
-    return np.exp(sig * _lock_poly(x, theta - np.pi / 4, _coef(key)))
+    return np.exp(sig * _lock_poly(x, theta - np.pi / 4, coefficients(key)))
 
 
 def lock_force_factor(t_over_L, theta_rad, sigma):
@@ -128,4 +125,4 @@ def stiffness_factor(t_over_L, theta_rad):
     (optimisers probe far outside the bounds, where the polynomial in theta would overflow).
     """
     x, theta = _clipped(t_over_L, theta_rad)
-    return np.exp(_stiffness_poly(x, theta - np.pi / 4, _coef(None)))
+    return np.exp(_stiffness_poly(x, theta - np.pi / 4, coefficients()))

@@ -25,12 +25,12 @@ and does not count. After contact the layer's stiffness is the walls' last tange
 The layer law (:func:`frame_layer`) multiplies the beam forces by the joint factor of
 :mod:`mst_cli.mechanics.correction` (fitted against L2, a function of t/L and theta): the
 beam's rigid clamps at the pad mid-plane and the tip are what that factor corrects.
-:func:`solve_frame` itself returns the pure beam solution. Joint models of L1's own were
-tried against the 174 L2 cells of the fit: rigid end zones from the joint geometry (half the
-root overlap, half the tip overlap t/(2 tan theta)) gave 16 % median |error| in k, a haunched
-section following the profile 24 %, beam theory alone 18 %; the near-crack at the cavity's
-tip vertex makes the joints softer than rigid and stiffer than absent, which only a fit
-captures, so L1 reuses L0's.
+:func:`solve_frame` itself returns the pure beam solution. Joint models of L1's own,
+rigid end zones from the joint geometry, were measured against L2 on the fit's 150 cells
+(benchmarks/model_choices.py): median |error| in k 18.7 % with none (beam theory), 14.7 % with
+half the geometric overlaps rigid, 77 % with all of them. The near-crack at the cavity's tip
+vertex makes the joints softer than rigid and stiffer than absent, which the fit captures and
+these do not, so L1 reuses L0's factor.
 
 Also here: :class:`TabulatedLockingLayer`, the layer law of a sampled monotone curve, shared
 with rung L2.

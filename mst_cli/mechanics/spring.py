@@ -38,8 +38,9 @@ from .. import geometry as geo
 
 SHEAR_COEFFICIENT_RECT = 5.0 / 6.0  # Timoshenko shear coefficient of a rectangular section
 # Where the softened pre-lock curve bends, as a fraction of the lock force. Chosen against the
-# L2 curves of 12 bench cells (seed 0): the largest displacement error of the two-piece curve,
-# in units of d_lock, has median 3.3 % at 0.4 (4.3 % at 0.3, 5.2 % at 0.5, 11 % at 0.7).
+# L2 curves of 12 bench cells (seed 0, benchmarks/model_choices.py): the largest displacement
+# error of the two-piece curve, in units of d_lock, has median 3.3 % at 0.4 (4.3 % at 0.3,
+# 5.2 % at 0.5, 11 % at 0.7).
 KNEE_FRACTION = 0.4
 
 
