@@ -1,8 +1,9 @@
 """Fit the L0 corrections against the L2 continuum model; writes mst_cli/data/l0_correction.json.
 
-Three ratios of a plane-stress strut depend only on the profile's shape, i.e. on theta and
-t/L (and nu, and the contact allowance relative to the cell): all forces scale with E b, and
-the shape scaled by L is fixed by theta and t/L.
+Three ratios of the plane-strain web (L0 with E' = E / (1 - nu^2), L2 with lambda_3 = 1)
+depend only on the profile's shape, i.e. on theta and t/L (and nu, and the contact allowance
+relative to the cell): all forces scale with E b, and the shape scaled by L is fixed by theta
+and t/L. The web width b = D drops out.
 
 * stiffness: k_L2 / k_L0 (linear solves). Model ln(ratio) = x * P3(x, s), x = t/L,
   s = theta - pi/4, so the correction vanishes in the slender limit (beam theory).
@@ -47,12 +48,16 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--samples", type=int, default=150)
     ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--max-t-over-L", type=float, default=0.6,
+                    help="stubbiest wall sampled (the fitted box's t/L edge) [default: 0.6]")
+    ap.add_argument("--out", type=Path, default=correction.DATA,
+                    help="where to write the fit [default: the package's mst_cli/data/l0_correction.json]")
     args = ap.parse_args()
     mat = Material()
-    cells = sample_cells(args.samples, args.seed)
+    cells = sample_cells(args.samples, args.seed, args.max_t_over_L)
     x = np.array([c.t_mm / c.wall_length_mm for c in cells])
     th = np.array([c.theta_rad for c in cells])
-    k0 = np.array([float(layer_stiffness_N_per_mm(c.theta_rad, c.t_mm, c.h_mm, c.b_mm, c.struts_per_chevron,
+    k0 = np.array([float(layer_stiffness_N_per_mm(c.theta_rad, c.t_mm, c.h_mm, c.b_mm,
                                                   mat.youngs_modulus_MPa, mat.poisson_ratio)) for c in cells])
     k2 = np.array([linear_stiffness_N_per_mm(c, mat) for c in cells])
     coef_k, stats_k = _lstsq(correction.design_matrix(x, th), np.log(k2 / k0))
@@ -83,9 +88,10 @@ def main():
                       "theta_deg_range": [float(np.degrees(th.min())), float(np.degrees(th.max()))],
                       "stroke_ratio_range": [float(sigma.min()), float(sigma.max())],
                       **stats_k},
-        "command": f".venv/bin/python benchmarks/fit_l0_correction.py --samples {args.samples} --seed {args.seed}",
+        "command": (f".venv/bin/python benchmarks/fit_l0_correction.py --samples {args.samples} --seed {args.seed}"
+                    + (f" --max-t-over-L {args.max_t_over_L:g}" if args.max_t_over_L != 0.6 else "")),
     }
-    path = Path(correction.__file__).parent.parent / "data" / "l0_correction.json"
+    path = args.out
     path.write_text(json.dumps(out, indent=2) + "\n")
     for name, s in (("k_L2/k_L0", stats_k), ("R_L2/(k d_lock)", stats_R), ("d_lock,L2/d_lock,L0", stats_d)):
         lo, hi = s["ratio_range"]

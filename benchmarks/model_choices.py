@@ -58,7 +58,7 @@ def joint_table(cells, mat):
             Lf = L - share * (root_zone + tip_zone)
             # a clamped-guided wall of clear length Lf: same formula, h chosen to give Lf
             h_eff = 2.0 * Lf * np.sin(th) + t
-            rows[name].append(float(layer_stiffness_N_per_mm(th, t, h_eff, c.b_mm, c.struts_per_chevron,
+            rows[name].append(float(layer_stiffness_N_per_mm(th, t, h_eff, c.b_mm,
                                                              mat.youngs_modulus_MPa, mat.poisson_ratio)))
     print(f"\nL1 joint models against L2 linear stiffness ({len(cells)} cells, seed 1):")
     print("model                      median |err|   p90 |err|")

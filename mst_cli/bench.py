@@ -66,7 +66,7 @@ def spring_vectorised_time_per_layer_s(cells, material, repeat: int = 20) -> flo
     best = np.inf
     for _ in range(repeat):
         t0 = time.perf_counter()
-        spring_arrays(arr["theta_rad"], arr["t_mm"], arr["h_mm"], arr["b_mm"], 4, 30.0, 0.1,
+        spring_arrays(arr["theta_rad"], arr["t_mm"], arr["h_mm"], arr["b_mm"], 30.0, 0.1,
                       material.youngs_modulus_MPa, material.poisson_ratio, corrected=True)
         best = min(best, time.perf_counter() - t0)
     return best / len(cells)

@@ -3,19 +3,22 @@
 Pure functions: a mesh and the ``export.json`` manifest in, a list of :class:`Check` out. The
 manifest holds the design's own expected values (computed from the geometry object), so each
 check compares a number *measured on the mesh* -- by ray casts, plane sections and face
-normals -- with the design:
+normals -- with the design. The STL lies in print orientation; the manifest's ``print``
+section gives the rotation back to the sensor frame, where the design's dimensions live.
 
 * ``watertight``, ``is_volume`` (consistent winding, positive volume), ``manifold3d`` (the mesh
   is accepted as a manifold), ``one_body`` (one shell of positive volume plus the closed
   magnet pocket as the only internal void);
 * ``volume`` and ``bbox`` against the analytic sum of the parts;
-* ``wall_thickness``, ``strut_width``, ``strut_spacing``, ``cavity_gap`` against the nozzle
-  and the minimum printable gap, measured in horizontal sections through each layer's walls
-  and along vertical rays through its cavity;
+* ``wall_thickness``, ``web_depth``, ``cavity_gap`` against the nozzle and the minimum
+  printable gap, measured in sections through each layer's walls and along rays through its
+  cavity;
 * ``magnet_pocket``, ``board_slot`` and ``magnet_chip_gap`` (the unloaded distance the forward
   model uses, rebuilt from the measured pocket floor and slot floor);
-* ``overhang`` (report only): the measured inclination of each layer's down-facing walls in
-  print orientation against the usual 45 deg limit.
+* print orientation: ``overhang`` (every down-facing face at least 45 deg from horizontal, so
+  nothing needs support or a bridge), ``layer_grid`` (every horizontal face on a boundary of
+  the print layers, so the slicer prints it where it was designed) and ``magnet_pause`` (the
+  magnet goes in whole before the layer after the pause, which starts the pocket's roof).
 """
 
 from __future__ import annotations
@@ -33,6 +36,9 @@ from .schema import InputError
 # ~2e-6 mm at 20 mm from the origin. Dimensions measured on planar faces must agree to this.
 PLANAR_TOL_MM = 1e-4
 OVERHANG_LIMIT_DEG = 45.0
+# Mesh heights in print orientation are float32 values up to ~30 mm (~2e-6 mm steps) that went
+# through one rotation: a face "on" a layer boundary lies within this of it.
+LAYER_GRID_TOL_MM = 1e-4
 # Rays are cast slightly off the symmetry lines so they never run exactly along an edge of the
 # triangulation (rectangles are split on their diagonals, which cross the axis).
 _RAY_OFFSET_MM = (0.0123, 0.0071)
@@ -77,7 +83,8 @@ def load_manifest(path: Path) -> dict:
         data = json.loads(Path(path).read_text())
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
         raise InputError("export.json", str(path), f"cannot be read as JSON ({type(exc).__name__})") from None
-    for key in ("body", "magnet_pocket", "board_slot", "layers", "printer", "gap0_mm", "stl_tolerance_mm"):
+    for key in ("body", "magnet_pocket", "board_slot", "layers", "printer", "gap0_mm", "stl_tolerance_mm",
+                "print"):
         if key not in data:
             raise InputError(f"export.json.{key}", None, "missing: rewrite it with 'mst export'")
     return data
@@ -183,44 +190,33 @@ def shells(mesh) -> tuple[int, int, list[float]]:
     return sum(v > 0 for v in volumes), sum(v < 0 for v in volumes), volumes
 
 
-def downward_wall_angles_deg(mesh, z0: float, z1: float) -> np.ndarray:
-    """Inclination from horizontal (deg) of the down-facing, non-horizontal faces whose
-    centroid lies strictly between z0 and z1. A face at alpha from horizontal has a normal
-    alpha from the vertical: n_z = -cos(alpha)."""
-    nz = mesh.face_normals[:, 2]
-    zc = mesh.triangles_center[:, 2]
-    pick = (zc > z0 + 1e-6) & (zc < z1 - 1e-6) & (nz < -1e-9) & (nz > -1 + 1e-9)
-    return np.degrees(np.arccos(np.clip(-nz[pick], -1.0, 1.0)))
-
-
 # --------------------------------------------------------------------------- the checks
 def _fmt(x: float, digits: int = 4) -> str:
     return f"{x:.{digits}g}"
 
 
-def run_checks(mesh, manifest: dict, nozzle_mm: float | None = None) -> list[Check]:
-    """Every check of the module docstring, in order. Pure: reads only its arguments."""
-    body, pocket, slot = manifest["body"], manifest["magnet_pocket"], manifest["board_slot"]
-    printer = manifest["printer"]
-    nozzle = float(printer["nozzle_mm"] if nozzle_mm is None else nozzle_mm)
-    min_gap = float(printer["min_gap_mm"])
-    delta = float(manifest["stl_tolerance_mm"])
-    out: list[Check] = []
+def to_sensor_frame(mesh, manifest: dict):
+    """A copy of the print-oriented mesh in the sensor frame (the manifest's rotation undone)."""
+    pr = manifest["print"]
+    rot = np.asarray(pr["rotation"], dtype=float)
+    shift = np.asarray(pr["translation_mm"], dtype=float)
+    out = mesh.copy()
+    out.vertices = (np.asarray(mesh.vertices) - shift) @ rot      # R^T (p - T), row vectors
+    return out
 
-    # -- mesh validity
-    out.append(Check("watertight", bool(mesh.is_watertight), str(bool(mesh.is_watertight)), "True",
-                     "every edge shared by exactly two triangles"))
-    out.append(Check("is_volume", bool(mesh.is_volume), str(bool(mesh.is_volume)), "True",
-                     "watertight, consistent winding, outward normals"))
-    manifold, status = to_manifold(mesh)
+
+def _mesh_checks(mesh, manifold, status, manifest) -> tuple[list[Check], list[float]]:
+    body = manifest["body"]
+    out = [Check("watertight", bool(mesh.is_watertight), str(bool(mesh.is_watertight)), "True",
+                 "every edge shared by exactly two triangles"),
+           Check("is_volume", bool(mesh.is_volume), str(bool(mesh.is_volume)), "True",
+                 "watertight, consistent winding, outward normals")]
     ok_manifold = status == "NoError" and not manifold.is_empty()
     out.append(Check("manifold3d", ok_manifold, status, "NoError", "manifold3d accepts the mesh"))
     bodies, voids, shell_volumes = shells(mesh)
     out.append(Check("one_body", bodies == body["bodies"] and voids == body["internal_voids"],
                      f"{bodies} body, {voids} void", f"{body['bodies']} body, {body['internal_voids']} void",
                      "the closed magnet pocket is the only void", values={"shell_volumes_mm3": shell_volumes}))
-
-    # -- volume and bounding box
     vol, vol_exp, vol_tol = float(mesh.volume), float(body["volume_mm3"]), float(body["volume_tolerance_mm3"])
     out.append(Check("volume", abs(vol - vol_exp) <= vol_tol, f"{vol:.3f} mm3",
                      f"{vol_exp:.3f} +- {vol_tol:.3f} mm3", "analytic sum of base, layers, plates, cap",
@@ -232,138 +228,192 @@ def run_checks(mesh, manifest: dict, nozzle_mm: float | None = None) -> list[Che
     out.append(Check("bbox", bb_err <= PLANAR_TOL_MM, " x ".join(_fmt(v) for v in size) + " mm",
                      " x ".join(_fmt(v) for v in esize) + " mm", f"largest corner error {bb_err:.1e} mm",
                      values={"min_mm": bmin.tolist(), "max_mm": bmax.tolist(), "error_mm": bb_err}))
+    return out, shell_volumes
 
-    # -- layers: walls, struts, cavities, overhangs
-    walls, widths, spacings, cavities, angles = [], [], [], [], []
+
+def _per_layer(vals, unit="mm"):
+    return ", ".join(_fmt(v) for v in vals) + f" {unit}"
+
+
+def _layer_checks(mesh, manifold, manifest, nozzle: float, min_gap: float) -> list[Check]:
+    """Walls, web depth and cavities of every layer, measured in the sensor frame."""
+    z_top = manifest["body"]["bbox_max_mm"][2]
+    walls, depths, cavities = [], [], []
     shape_errors: list[str] = []
     for i, layer in enumerate(manifest["layers"]):
-        zb, h, t, b = layer["z_bottom_mm"], layer["h_mm"], layer["t_mm"], layer["b_mm"]
-        n_struts = len(layer["strut_centres_y_mm"])
-        ang = downward_wall_angles_deg(mesh, zb, zb + h)
-        theta = float(np.median(ang)) if ang.size else float("nan")
-        angles.append(theta)
-        if not abs(theta - layer["theta_deg"]) <= 1e-2:
-            shape_errors.append(f"layer {i + 1} wall angle {theta:.3f} deg, design {layer['theta_deg']:g}")
-        # Horizontal section halfway between the bottom pad's top (z = t) and the side vertex
-        # (z = h/2): it cuts only the lower walls, 2 per strut, each t / sin(theta) wide in x.
+        zb, h, t = layer["z_bottom_mm"], layer["h_mm"], layer["t_mm"]
+        theta = math.radians(layer["theta_deg"])
+        # Section halfway between the bottom pad's top (z = t) and the side vertex (z = h/2):
+        # it cuts only the two lower walls, each t / sin(theta) wide in x, D deep in y.
         boxes = section_boxes(manifold, zb + 0.5 * (t + 0.5 * h))
-        if len(boxes) != 2 * n_struts:
-            shape_errors.append(f"layer {i + 1} section has {len(boxes)} wall cuts, design {2 * n_struts}")
-        if boxes:
-            wx = np.array([x1 - x0 for x0, _, x1, _ in boxes])
-            wy = np.array([y1 - y0 for _, y0, _, y1 in boxes])
-            walls.append(float(wx.min() * math.sin(math.radians(theta))))
-            widths.append(float(wy.min()))
-            # clear gaps between neighbouring struts on the same side (x > 0)
-            right = sorted((y0, y1) for x0, y0, x1, y1 in boxes if x0 > 0)
-            spacings += [b0 - a1 for (_, a1), (b0, _) in zip(right[:-1], right[1:])]
-        # Vertical ray through the first strut's cavity, near x = 0: the air gap inside the
-        # layer's z range is the cavity, h - 2t high.
-        y_c = layer["strut_centres_y_mm"][0]
-        gaps = [g for g in vertical_gaps(manifold, _RAY_OFFSET_MM[0], y_c + _RAY_OFFSET_MM[1],
-                                         body["bbox_max_mm"][2])
-                if zb < 0.5 * (g[0] + g[1]) < zb + h]
-        cavities.append(gaps[0][1] - gaps[0][0] if len(gaps) == 1 else float("nan"))
-        for got, want, what in ((walls[-1] if boxes else float("nan"), t, "wall t"),
-                                (widths[-1] if boxes else float("nan"), b, "strut width b"),
-                                (cavities[-1], layer["cavity_height_mm"], "cavity h - 2t")):
+        if len(boxes) != 2:
+            shape_errors.append(f"layer {i + 1} section has {len(boxes)} wall cuts, design 2")
+        wall = float(min(x1 - x0 for x0, _, x1, _ in boxes) * math.sin(theta)) if boxes else math.nan
+        depth = float(min(y1 - y0 for _, y0, _, y1 in boxes)) if boxes else math.nan
+        # Vertical ray through the cavity near x = y = 0: the air gap inside the layer's z range
+        gaps = [g for g in vertical_gaps(manifold, *_RAY_OFFSET_MM, z_top) if zb < 0.5 * (g[0] + g[1]) < zb + h]
+        cavity = gaps[0][1] - gaps[0][0] if len(gaps) == 1 else math.nan
+        walls.append(wall)
+        depths.append(depth)
+        cavities.append(cavity)
+        for got, want, what in ((wall, t, "wall t"), (depth, layer["web_depth_mm"], "web depth D"),
+                                (cavity, layer["cavity_height_mm"], "cavity h - 2t")):
             if not abs(got - want) <= 10 * PLANAR_TOL_MM:
                 shape_errors.append(f"layer {i + 1} {what} {got:.4f} mm, design {want:g}")
+    layers = manifest["layers"]
+    return [
+        Check("wall_thickness", min(walls) >= nozzle - PLANAR_TOL_MM and not shape_errors,
+              _per_layer(walls), f">= nozzle {nozzle:g} mm; design " + _per_layer([la["t_mm"] for la in layers]),
+              "; ".join(shape_errors) or "wall normal thickness from sections across the stack",
+              values={"per_layer_mm": walls, "nozzle_mm": nozzle}),
+        Check("web_depth", all(abs(d - la["web_depth_mm"]) <= 10 * PLANAR_TOL_MM for d, la in zip(depths, layers)),
+              _per_layer(depths), "design " + _per_layer([la["web_depth_mm"] for la in layers]),
+              "every wall runs the whole depth (the print height)", values={"per_layer_mm": depths}),
+        Check("cavity_gap", all(c >= min_gap - PLANAR_TOL_MM for c in cavities),
+              _per_layer(cavities), f">= min gap {min_gap:g} mm; design " +
+              _per_layer([la["cavity_height_mm"] for la in layers]),
+              "vertical ray through each cavity", values={"per_layer_mm": cavities}),
+    ]
 
-    def per_layer(vals, unit="mm"):
-        return ", ".join(_fmt(v) for v in vals) + f" {unit}"
 
-    min_wall = min(walls) if walls else float("nan")
-    out.append(Check("wall_thickness", min_wall >= nozzle - PLANAR_TOL_MM and not shape_errors,
-                     per_layer(walls), f">= nozzle {nozzle:g} mm; design " +
-                     per_layer([la["t_mm"] for la in manifest["layers"]]),
-                     "; ".join(shape_errors) or "wall normal thickness from horizontal sections",
-                     values={"per_layer_mm": walls, "nozzle_mm": nozzle}))
-    min_width = min(widths) if widths else float("nan")
-    out.append(Check("strut_width", min_width >= nozzle - PLANAR_TOL_MM, per_layer(widths),
-                     f">= nozzle {nozzle:g} mm", values={"per_layer_mm": widths}))
-    min_spacing = min(spacings) if spacings else math.inf
-    out.append(Check("strut_spacing", min_spacing >= min_gap - PLANAR_TOL_MM,
-                     "single strut" if not spacings else f"{min_spacing:.4g} mm",
-                     f">= min gap {min_gap:g} mm", "clear gap between neighbouring struts",
-                     values={"min_mm": min_spacing if spacings else None}))
-    out.append(Check("cavity_gap", all(c >= min_gap - PLANAR_TOL_MM for c in cavities),
-                     per_layer(cavities), f">= min gap {min_gap:g} mm; design " +
-                     per_layer([la["cavity_height_mm"] for la in manifest["layers"]]),
-                     "vertical ray through each cavity", values={"per_layer_mm": cavities}))
-
-    # -- magnet pocket: vertical ray on the axis (the pocket is the topmost air gap) and a
-    # horizontal section through its cylindrical part.
-    z_top = body["bbox_max_mm"][2]
-    axis_gaps = vertical_gaps(manifold, *_RAY_OFFSET_MM, z_top)
-    p_lo, p_hi = axis_gaps[-1] if axis_gaps else (float("nan"), float("nan"))
-    z_mid = pocket["floor_z_mm"] + 0.5 * (pocket["depth_mm"] - pocket["chamfer_mm"])
-    hole = section_hole_area(manifold, z_mid, 0.0, 0.0)
-    d_meas = 2.0 * math.sqrt(hole / math.pi)
-    r = 0.5 * pocket["diameter_mm"]
-    # A polygon with chord deviation <= delta lies between circles of radius r - delta and r.
-    d_ok = 2 * (r - delta) - PLANAR_TOL_MM <= d_meas <= 2 * r + PLANAR_TOL_MM
+def _pocket_check(manifold, manifest, shell_volumes, voids) -> tuple[Check, float]:
+    """Pocket depth and floor along the axis, its section area and its void volume."""
+    pocket, body = manifest["magnet_pocket"], manifest["body"]
+    delta = float(manifest["stl_tolerance_mm"])
+    axis_gaps = vertical_gaps(manifold, *_RAY_OFFSET_MM, body["bbox_max_mm"][2])
+    p_lo, p_hi = axis_gaps[-1] if axis_gaps else (math.nan, math.nan)
+    area = section_hole_area(manifold, pocket["section_z_mm"], 0.0, 0.0)
+    r = pocket["radius_mm"]
+    # the half circle, as a polygon of chord deviation <= delta, loses at most delta x pi r
+    area_ok = pocket["section_area_mm2"] - delta * math.pi * r - 1e-3 <= area <= pocket["section_area_mm2"] + 1e-3
     depth_ok = abs((p_hi - p_lo) - pocket["depth_mm"]) <= PLANAR_TOL_MM
     floor_ok = abs(p_lo - pocket["floor_z_mm"]) <= PLANAR_TOL_MM
     void_vol = -min(shell_volumes) if voids else 0.0
     void_tol = delta * pocket["curved_area_mm2"] + 1e-5 * pocket["volume_mm3"]
     void_ok = abs(void_vol - pocket["volume_mm3"]) <= void_tol
-    out.append(Check("magnet_pocket", d_ok and depth_ok and floor_ok and void_ok,
-                     f"D {d_meas:.3f}, depth {p_hi - p_lo:.3f}, floor z {p_lo:.3f} mm, {void_vol:.2f} mm3",
-                     f"D {pocket['diameter_mm']:g}, depth {pocket['depth_mm']:g}, floor z "
-                     f"{pocket['floor_z_mm']:.3f} mm, {pocket['volume_mm3']:.2f} mm3",
-                     f"pause the print at z = {pocket['pause_height_mm']:.2f} mm to insert the magnet",
-                     values={"diameter_mm": d_meas, "depth_mm": p_hi - p_lo, "floor_z_mm": p_lo,
-                             "volume_mm3": void_vol}))
+    return Check("magnet_pocket", area_ok and depth_ok and floor_ok and void_ok,
+                 f"section {area:.3f} mm2, depth {p_hi - p_lo:.3f}, floor z {p_lo:.3f} mm, {void_vol:.2f} mm3",
+                 f"section {pocket['section_area_mm2']:.3f} mm2, depth {pocket['depth_mm']:g}, floor z "
+                 f"{pocket['floor_z_mm']:.3f} mm, {pocket['volume_mm3']:.2f} mm3",
+                 "U-shaped pocket open upwards in the print, closed by a 45 deg roof",
+                 values={"section_area_mm2": area, "depth_mm": p_hi - p_lo, "floor_z_mm": p_lo,
+                         "volume_mm3": void_vol}), p_lo
 
-    # -- board slot: vertical ray at the chip, horizontal rays across the slot.
+
+def _slot_check(manifold, manifest) -> tuple[Check, float]:
+    """Slot floor height, width and floor along the depth, and the cable windows' floors."""
+    slot, body = manifest["board_slot"], manifest["body"]
+    z_top = body["bbox_max_mm"][2]
+    x_far, y_far = body["bbox_max_mm"][0] + 1.0, body["bbox_max_mm"][1] + 1.0
     cx, cy = slot["chip_xy_mm"]
     chip_gaps = vertical_gaps(manifold, cx + _RAY_OFFSET_MM[0], cy + _RAY_OFFSET_MM[1], z_top)
-    s_lo, s_hi = chip_gaps[0] if chip_gaps else (float("nan"), float("nan"))
+    s_lo, s_hi = chip_gaps[0] if chip_gaps else (math.nan, math.nan)
     z_s = 0.5 * (slot["floor_z_mm"] + slot["top_z_mm"])
-    x_far = body["bbox_max_mm"][0] + 1.0
-    y_far = body["bbox_max_mm"][1] + 1.0
-    # along +y at the chip: air between the slot's side walls
-    y_gaps = [(a - y_far, b - y_far) for a, b in
-              air_gaps(manifold, (cx + _RAY_OFFSET_MM[0], -y_far, z_s), (0, 1, 0), 2 * y_far)]
-    y0m, y1m = y_gaps[0] if len(y_gaps) == 1 else (float("nan"), float("nan"))
-    # along +x beside the cable exit: the slot is open to -x, so the first hit is its end wall
-    e0, e1 = slot["cable_exit_y_mm"]
-    y_side = 0.5 * (slot["y0_mm"] + e0) if e0 - slot["y0_mm"] > 2 * PLANAR_TOL_MM \
-        else 0.5 * (slot["y1_mm"] + e1)
-    hits = crossings(manifold, (-x_far, y_side, z_s), (1, 0, 0), 2 * x_far)
-    x1m = hits[0][0] - x_far if hits and hits[0][1] else float("nan")
-    # along +y through the +x wall: the cable exit
-    x_wall = 0.5 * (slot["x1_mm"] + body["bbox_max_mm"][0])
-    e_gaps = [(a - y_far, b - y_far) for a, b in
-              air_gaps(manifold, (x_wall, -y_far, z_s), (0, 1, 0), 2 * y_far)]
-    exit_w = e_gaps[0][1] - e_gaps[0][0] if len(e_gaps) == 1 else 0.0
-    meas = {"floor_z_mm": s_lo, "top_z_mm": s_hi, "y0_mm": y0m, "y1_mm": y1m, "x1_mm": x1m,
-            "cable_exit_width_mm": exit_w}
-    want = {"floor_z_mm": slot["floor_z_mm"], "top_z_mm": slot["top_z_mm"], "y0_mm": slot["y0_mm"],
-            "y1_mm": slot["y1_mm"], "x1_mm": slot["x1_mm"], "cable_exit_width_mm": e1 - e0}
-    bad = [k for k in meas if not abs(meas[k] - want[k]) <= PLANAR_TOL_MM]
-    out.append(Check("board_slot", not bad,
-                     f"{y1m - y0m:.3f} wide, end x {x1m:.3f}, z {s_lo:.3f}..{s_hi:.3f}, exit {exit_w:.3f} mm",
-                     f"{slot['width_y_mm']:.3f} wide, end x {slot['x1_mm']:.3f}, z {slot['floor_z_mm']:.3f}.."
-                     f"{slot['top_z_mm']:.3f}, exit {e1 - e0:.3f} mm",
-                     ("mismatch: " + ", ".join(bad)) if bad else f"board {slot['board']}, slides in from -x",
-                     values=meas))
 
-    # -- the forward model's magnet-chip distance, rebuilt from what was measured
-    gap_meas = p_lo - (s_lo + slot["board_thickness_mm"] + 0.5 * slot["chip_height_mm"])
+    def first_exit_y(x):
+        """y where a ray up the depth first leaves the solid (the floor of an open slot)."""
+        hits = crossings(manifold, (x, -y_far, z_s), (0, 1, 0), 2 * y_far)
+        leave = [s for s, entering in hits if not entering]
+        return leave[0] - y_far if leave else math.nan
+
+    floor_y = first_exit_y(cx + _RAY_OFFSET_MM[0])
+    # across the slot below the windows: the one closed air gap is the slot's width
+    windows = slot["cable_windows"]
+    y_across = 0.5 * (slot["floor_y_mm"] + min([w["floor_y_mm"] for w in windows], default=slot["floor_y_mm"] + 2.0))
+    x_gaps = [(a - x_far, b - x_far) for a, b in air_gaps(manifold, (-x_far, y_across, z_s), (1, 0, 0), 2 * x_far)]
+    x0m, x1m = x_gaps[0] if len(x_gaps) == 1 else (math.nan, math.nan)
+    meas = {"floor_z_mm": s_lo, "top_z_mm": s_hi, "floor_y_mm": floor_y, "x0_mm": x0m, "x1_mm": x1m}
+    want = {k: slot[k] for k in meas}
+    for j, w in enumerate(windows):
+        x_mid = 0.5 * (w["x_inner_mm"] + w["x_outer_mm"])
+        meas[f"window_{j + 1}_floor_y_mm"] = first_exit_y(x_mid)
+        want[f"window_{j + 1}_floor_y_mm"] = w["floor_y_mm"]
+    bad = [k for k in meas if not abs(meas[k] - want[k]) <= PLANAR_TOL_MM]
+    return Check("board_slot", not bad,
+                 f"{x1m - x0m:.3f} wide, floor y {floor_y:.3f}, z {s_lo:.3f}..{s_hi:.3f}, {len(windows)} windows",
+                 f"{slot['x1_mm'] - slot['x0_mm']:.3f} wide, floor y {slot['floor_y_mm']:.3f}, z "
+                 f"{slot['floor_z_mm']:.3f}..{slot['top_z_mm']:.3f}, {len(windows)} windows",
+                 ("mismatch: " + ", ".join(bad)) if bad else
+                 f"board {slot['board']} slides in through the face on top in the print (+y)",
+                 values=meas), s_lo
+
+
+def _print_checks(mesh, manifest) -> list[Check]:
+    """Overhangs, layer grid and magnet pause, measured on the mesh as it lies on the bed."""
+    pr, pocket = manifest["print"], manifest["magnet_pocket"]
+    lh = float(pr["layer_height_mm"])
+    z0 = float(mesh.bounds[0][2])
+    nz = mesh.face_normals[:, 2]
+    zc = mesh.triangles_center[:, 2] - z0
+    area = mesh.area_faces
+    # down-facing faces off the bed: material above air. Inclination from horizontal alpha has
+    # n_z = -cos(alpha); alpha < 45 deg needs support or a bridge.
+    down = (nz < -1e-9) & (zc > LAYER_GRID_TOL_MM)
+    incl = np.degrees(np.arccos(np.clip(-nz[down], -1.0, 1.0)))
+    steep = incl < OVERHANG_LIMIT_DEG - 1e-3
+    worst = float(incl.min()) if incl.size else 90.0
+    out = [Check("overhang", not steep.any(), f"min {worst:.2f} deg, {float(area[down][steep].sum()):.3f} mm2 below",
+                 f">= {OVERHANG_LIMIT_DEG:g} deg from horizontal for every down-facing face",
+                 "in print orientation: nothing needs support or a bridge",
+                 values={"min_inclination_deg": worst, "area_below_limit_mm2": float(area[down][steep].sum())})]
+    # horizontal faces must lie on layer boundaries -- but for the chord of the pocket's round
+    # bottom, which the mesher may leave flat (the slicer draws a curve as a staircase anyway)
+    flat = np.abs(np.abs(nz) - 1.0) < 1e-9
+    c = mesh.triangles_center
+    r, floor_z = pocket["radius_mm"], pocket["floor_z_mm"]
+    in_round_bottom = ((np.abs(c[:, 0]) <= r + 1e-6) & (c[:, 1] <= -floor_z + 1e-6)
+                       & (c[:, 1] >= -(floor_z + pocket["depth_mm"]) - 1e-6)
+                       & (zc >= 0.5 * pr["height_mm"] - r - 1e-6) & (zc < 0.5 * pr["height_mm"]))
+    flat &= ~in_round_bottom
+    heights = np.unique(np.round(zc[flat], 6))
+    off = [float(z) for z in heights if abs(z / lh - round(z / lh)) * lh > LAYER_GRID_TOL_MM]
+    out.append(Check("layer_grid", not off, f"{len(heights)} heights, {len(off)} off the grid",
+                     f"every horizontal face on a multiple of {lh:g} mm",
+                     ("off: " + ", ".join(f"{z:.4f}" for z in off[:5])) if off else
+                     "the slicer prints every horizontal face where it was designed",
+                     values={"heights_mm": heights.tolist(), "off_grid_mm": off}))
+    # the magnet pause: on a layer boundary, above the magnet, at or below the roof's start
+    pause = pr["pause"]
+    z_pause = float(pause["z_mm"])
+    d = float(pocket["depth_mm"])
+    # the pocket along the build direction, through its mid-depth: from the U's bottom up to
+    # the roof's ridge; the roof starts its rise below the ridge
+    y_mid = -(pocket["floor_z_mm"] + 0.5 * d)
+    cols = air_gaps(to_manifold(mesh)[0], (0.0123, y_mid, z0 - 1.0), (0, 0, 1),
+                    float(mesh.bounds[1][2] - z0) + 2.0)
+    roof_start = cols[-1][1] - 1.0 - float(pocket["roof_rise_mm"]) if cols else math.nan
+    ok = (abs(z_pause / lh - round(z_pause / lh)) * lh <= LAYER_GRID_TOL_MM
+          and pause["after_layer"] == round(z_pause / lh)
+          and pr["magnet_top_z_mm"] <= z_pause + 1e-9 and roof_start >= z_pause - PLANAR_TOL_MM)
+    out.append(Check("magnet_pause", ok, f"roof starts at z {roof_start:.3f} mm",
+                     f"pause after layer {pause['after_layer']} at z {z_pause:.2f} mm, magnet top "
+                     f"{pr['magnet_top_z_mm']:.2f} mm",
+                     f"pause after layer {pause['after_layer']} (z = {z_pause:.2f} mm) to drop the magnet in",
+                     values={"roof_start_z_mm": roof_start, "pause_z_mm": z_pause}))
+    return out
+
+
+def run_checks(mesh, manifest: dict, nozzle_mm: float | None = None) -> list[Check]:
+    """Every check of the module docstring, in order. Pure: reads only its arguments.
+
+    ``mesh`` is the STL as written (print orientation)."""
+    printer = manifest["printer"]
+    nozzle = float(printer["nozzle_mm"] if nozzle_mm is None else nozzle_mm)
+    min_gap = float(printer["min_gap_mm"])
+    sensor = to_sensor_frame(mesh, manifest)
+    manifold, status = to_manifold(sensor)
+    out, shell_volumes = _mesh_checks(sensor, manifold, status, manifest)
+    voids = sum(v < 0 for v in shell_volumes)
+    out += _layer_checks(sensor, manifold, manifest, nozzle, min_gap)
+    pocket_check, pocket_floor = _pocket_check(manifold, manifest, shell_volumes, voids)
+    slot_check, slot_floor = _slot_check(manifold, manifest)
+    out += [pocket_check, slot_check]
+    slot = manifest["board_slot"]
+    gap_meas = pocket_floor - (slot_floor + slot["board_thickness_mm"] + 0.5 * slot["chip_height_mm"])
     out.append(Check("magnet_chip_gap", abs(gap_meas - manifest["gap0_mm"]) <= PLANAR_TOL_MM,
                      f"{gap_meas:.4f} mm", f"{manifest['gap0_mm']:.4f} mm (forward model gap0)",
                      "pocket floor - (slot floor + board + chip/2)", values={"measured_mm": gap_meas}))
-
-    # -- overhangs in print orientation (report only)
-    steep = [i + 1 for i, a in enumerate(angles) if a < OVERHANG_LIMIT_DEG]
-    out.append(Check("overhang", True, per_layer(angles, "deg"),
-                     f"report: limit {OVERHANG_LIMIT_DEG:g} deg from horizontal",
-                     (f"layers {', '.join(map(str, steep))} have walls below {OVERHANG_LIMIT_DEG:g} deg: "
-                      "short TPU struts usually bridge, print a test layer") if steep
-                     else "every wall at or above the limit",
-                     info=True, values={"per_layer_deg": angles, "below_limit_layers": steep}))
+    out += _print_checks(mesh, manifest)
     return out
 
 

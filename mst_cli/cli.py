@@ -136,3 +136,5 @@ from .cli_design import design  # noqa: E402
 main.add_command(design)
 from .cli_bench import bench  # noqa: E402
 main.add_command(bench)
+from .cli_slice import slice_  # noqa: E402
+main.add_command(slice_)

@@ -67,8 +67,10 @@ def export(path, want_stl, want_step, want_3mf, out_dir, stl_tolerance_mm):
     the design is written next to the body as design.yaml (exit 1 if the targets are not met;
     the nearest design is still exported). Without a format flag, writes STL and STEP. Always writes export.json: the design's own
     expected volume, bounding box, pocket, slot and feature sizes, which 'mst check' reads.
-    Parts are in print orientation: base on the build plate, magnet axis along z. Pause the
-    print at the reported height to drop the magnet into its pocket.
+    STL and 3MF are in print orientation: the part lies on its side (sensor -y face on the
+    bed), so every layer is a prism along the build direction and nothing needs support. The
+    3MF carries PrusaSlicer's pause for the magnet; the terminal and export.json give its
+    layer and height. STEP is the assembly in the sensor frame (z up the stack).
     """
     from .schema import InputError
 
@@ -80,7 +82,7 @@ def export(path, want_stl, want_step, want_3mf, out_dir, stl_tolerance_mm):
     doc, geometry, designed = _load_design(path, t0)
     _progress(t0, f"loaded {path} ({len(geometry.layers)} layers)")
 
-    from .cad.assembly import build_sensor, check_fits
+    from .cad.assembly import build_sensor, check_fits, print_mesh
     from .cad.manifest import MANIFEST_NAME, export_manifest
     from .cad import mesh_io
     from .outputs import staged
@@ -93,15 +95,15 @@ def export(path, want_stl, want_step, want_3mf, out_dir, stl_tolerance_mm):
     out = out_dir or default_out_dir(doc.name)
     with staged(out) as st:
         if want_stl or want_3mf:
-            vertices, triangles = mesh_io.tessellate(cad.body, stl_tolerance_mm)
-            if not mesh_io.is_closed_oriented(triangles):
-                raise RuntimeError("the tessellated body is not closed: please report this design")
+            vertices, triangles = print_mesh(geometry, cad.body, stl_tolerance_mm)
             _progress(t0, f"meshed: {len(triangles)} triangles at {stl_tolerance_mm:g} mm")
             if want_stl:
                 st.path("sensor.stl").write_bytes(mesh_io.stl_bytes(vertices, triangles))
                 _progress(t0, "wrote sensor.stl")
             if want_3mf:
-                st.path("sensor.3mf").write_bytes(mesh_io.three_mf_bytes(vertices, triangles, doc.name))
+                st.path("sensor.3mf").write_bytes(mesh_io.three_mf_bytes(
+                    vertices, triangles, doc.name, pause_after_z_mm=geometry.pause_height_mm,
+                    layer_height_mm=geometry.layer_height_mm))
                 _progress(t0, "wrote sensor.3mf")
         if want_step:
             mesh_io.write_step(cad.assembly(doc.name), st.path("sensor.step"))
@@ -115,8 +117,11 @@ def export(path, want_stl, want_step, want_3mf, out_dir, stl_tolerance_mm):
     if geometry.magnet_tilt_deg:
         click.echo(f"note: magnet_tilt_deg = {geometry.magnet_tilt_deg:g} is an assembly error "
                    "in the forward model; the pocket is built on the axis", err=True)
-    click.echo(f"body volume {geometry.body_volume_mm3:.1f} mm3, height {geometry.total_height_mm:.2f} mm; "
-               f"pause the print at z = {geometry.z_pause_mm:.2f} mm to insert the magnet")
+    click.echo(f"body volume {geometry.body_volume_mm3:.1f} mm3, sensor height {geometry.total_height_mm:.2f} mm; "
+               f"prints on its side, {geometry.depth_mm:g} mm high in "
+               f"{int(round(geometry.depth_mm / geometry.layer_height_mm))} layers of {geometry.layer_height_mm:g} mm")
+    click.echo(f"pause after layer {geometry.pause_after_layer} (z = {geometry.pause_height_mm:.2f} mm) "
+               "to drop the magnet into its pocket" + (" (the 3MF carries the pause)" if want_3mf else ""))
     click.echo(f"wrote {out}/{', '.join(names + [MANIFEST_NAME])}")
     if designed is not None and designed.exit_code:
         click.echo(f"mst export: targets not met ({designed.binding}: {designed.reasons[0]}); "

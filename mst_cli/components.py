@@ -5,7 +5,7 @@ Facts only, each with its source. Nothing here computes physics.
 
 from __future__ import annotations
 
-from .geometry import Board
+from .geometry import Board, Connector
 
 # NdFeB remanence Br (T), typical range per grade; the tool uses the mid value.
 # Source: shared/reference/README.md (manufacturers' grade tables).
@@ -30,11 +30,24 @@ def grade_remanence_T(grade: str) -> float:
 # (shared/reference/README.md); measure a real board before relying on a tight fit.
 # The SparkFun board is the Qwiic standard 1 x 1 inch with the chip at its centre (nominal; the
 # reference data gives no dimensions for it). The bare QFN entry is a 10 x 10 mm custom carrier with the chip at its centre.
+# STEMMA QT and Qwiic are JST SH 4-pin side-entry sockets (SM04B-SRSS-TB): 2.95 mm mounting
+# height (JST SH catalogue), taken here as 6.0 mm along the board edge and 4.25 mm deep, mouth
+# flush with the board's short edges, centred on them (nominal, from product photos: measure).
+_JST_SH_H_MM, _JST_SH_W_MM, _JST_SH_D_MM = 2.95, 6.0, 4.25
+
+
+def _edge_sockets(length_mm: float, width_mm: float) -> tuple[Connector, Connector]:
+    y0, y1 = 0.5 * (width_mm - _JST_SH_W_MM), 0.5 * (width_mm + _JST_SH_W_MM)
+    return (Connector(0.0, _JST_SH_D_MM, y0, y1, _JST_SH_H_MM, "-x"),
+            Connector(length_mm - _JST_SH_D_MM, length_mm, y0, y1, _JST_SH_H_MM, "+x"))
+
+
 BOARDS: dict[str, Board] = {
     "adafruit-4022": Board(
         key="adafruit-4022", name="Adafruit 4022 MLX90393 (STEMMA QT)",
         length_mm=25.4, width_mm=17.78, thickness_mm=1.6, chip_x_mm=12.6, chip_y_mm=8.3,
         holes_xy_mm=((2.54, 2.54), (22.86, 2.54), (2.54, 15.24), (22.86, 15.24)),
+        connectors=_edge_sockets(25.4, 17.78),
     ),
     "adafruit-4022-original": Board(
         key="adafruit-4022-original", name="Adafruit 4022 MLX90393 (original)",
@@ -44,6 +57,7 @@ BOARDS: dict[str, Board] = {
     "sparkfun-14571": Board(
         key="sparkfun-14571", name="SparkFun SEN-14571 MLX90393 (Qwiic)",
         length_mm=25.4, width_mm=25.4, thickness_mm=1.6, chip_x_mm=12.7, chip_y_mm=12.7,
+        connectors=_edge_sockets(25.4, 25.4),
     ),
     "bare-qfn": Board(
         key="bare-qfn", name="bare MLX90393 QFN-16 on a 10 x 10 mm custom board",

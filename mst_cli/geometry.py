@@ -19,7 +19,11 @@ The "hex" cell (DESIGN.md section 3), profile in the x-z plane, x across the wid
         (-p,0)              (p,0)
 
 with p = W/2 - (h/2)/tan(theta). The inner boundary is that hexagon offset inward by the wall
-thickness t. The profile is extruded by the strut width b, n_s times along the depth D.
+thickness t. The profile is one continuous web through the whole depth D (y): the sensor prints
+lying on its side, so every layer is a prism along the build direction and each print layer
+draws the profile's walls and cavities as lines in the bed plane (docs/printing.md). Sizes
+along y are whole numbers of print layers; the few that are not set by the user (slot floor,
+pocket top) are snapped to the layer grid here, and the snapping is reported.
 """
 
 from __future__ import annotations
@@ -73,11 +77,6 @@ def lock_stroke_mm(t_mm, h_mm, contact_allowance_mm):
     return np.maximum(cavity_height_mm(t_mm, h_mm) - contact_allowance_mm, LENGTH_FLOOR_MM)
 
 
-def strut_gap_mm(depth_mm, strut_width_mm, struts_per_chevron):
-    """Clear gap between neighbouring struts, struts centred at pitch D/n_s."""
-    return depth_mm / struts_per_chevron - strut_width_mm
-
-
 def profile_area_mm2(theta_rad, t_mm, h_mm, width_mm):
     """Area of the hex profile's material (outer hexagon minus inner hexagon), mm^2.
 
@@ -94,11 +93,11 @@ def profile_area_mm2(theta_rad, t_mm, h_mm, width_mm):
 
 
 # Names of the cell validity rules, in the order :func:`cell_margins_mm` stacks them.
-CELL_RULES = ("wall", "strut_width", "cavity_gap", "lock_stroke", "pad_width", "strut_spacing")
+CELL_RULES = ("wall", "cavity_gap", "lock_stroke", "pad_width")
 
 
-def cell_margins_mm(theta_rad, t_mm, h_mm, b_mm, width_mm, depth_mm, struts_per_chevron,
-                    contact_allowance_mm, min_wall_mm, min_gap_mm, nozzle_mm):
+def cell_margins_mm(theta_rad, t_mm, h_mm, width_mm, contact_allowance_mm, min_wall_mm, min_gap_mm,
+                    nozzle_mm):
     """Signed margins (mm, >= 0 satisfied) of every cell rule, stacked on a last axis.
 
     Shape (..., len(CELL_RULES)), order :data:`CELL_RULES`. :meth:`HexCell.margins` reads this
@@ -107,11 +106,9 @@ def cell_margins_mm(theta_rad, t_mm, h_mm, b_mm, width_mm, depth_mm, struts_per_
     cavity = cavity_height_mm(t_mm, h_mm)
     parts = (
         t_mm - min_wall_mm,
-        b_mm - min_wall_mm,
         cavity - min_gap_mm,
         cavity - contact_allowance_mm,
         inner_pad_half_width_mm(theta_rad, t_mm, h_mm, width_mm) - nozzle_mm,
-        strut_gap_mm(depth_mm, b_mm, struts_per_chevron) - min_gap_mm,
     )
     return np.stack(np.broadcast_arrays(*parts), axis=-1).astype(float)
 
@@ -119,10 +116,11 @@ def cell_margins_mm(theta_rad, t_mm, h_mm, b_mm, width_mm, depth_mm, struts_per_
 def unloaded_gap_mm(sum_h_mm, n_layers, housing: "Housing", board: "Board"):
     """Magnet pole face to Hall plates with no load, for arrays of total layer height.
 
-    Hall plates at the package centre -> chip top -> air clearance -> cover -> layers with
-    plates between them -> pocket floor -> magnet face. :class:`SensorGeometry` reads this too.
+    Hall plates at the package centre -> chip top -> the board's taller parts (headroom) -> air
+    clearance -> cover -> layers with plates between them -> pocket floor -> magnet face.
+    :class:`SensorGeometry` reads this too.
     """
-    return (0.5 * board.chip_height_mm + housing.chip_clearance_mm + housing.cover_mm
+    return (board.headroom_mm - 0.5 * board.chip_height_mm + housing.chip_clearance_mm + housing.cover_mm
             + sum_h_mm + (n_layers - 1) * housing.plate_mm + housing.pocket_floor_mm)
 
 
@@ -152,10 +150,11 @@ class Violation:
 
 @dataclass(frozen=True)
 class HexCell:
-    """One collapsible layer of the "hex" family (DESIGN.md section 3).
+    """One collapsible layer of the "hex" family (DESIGN.md section 3, docs/design.md).
 
     Parameters are the design variables theta (deg), t (mm), h (mm) and the family constants.
-    ``strut_width_mm`` None means b = t.
+    The profile runs as one continuous web through the whole depth D (the part prints on its
+    side; discrete struts would start each as a mid-air island), so the web width b equals D.
     """
 
     theta_deg: float
@@ -163,8 +162,6 @@ class HexCell:
     h_mm: float
     width_mm: float = 30.0
     depth_mm: float = 20.0
-    struts_per_chevron: int = 4
-    strut_width_mm: float | None = None
     contact_allowance_mm: float = 0.1
 
     # -- derived quantities (all read the kernels above)
@@ -174,8 +171,8 @@ class HexCell:
 
     @property
     def b_mm(self) -> float:
-        """Strut width along the depth (default: equal to the wall thickness)."""
-        return self.t_mm if self.strut_width_mm is None else self.strut_width_mm
+        """Width of the web along y: the whole depth D (what the mechanics multiply by)."""
+        return self.depth_mm
 
     @property
     def p_mm(self) -> float:
@@ -198,23 +195,8 @@ class HexCell:
         return float(lock_stroke_mm(self.t_mm, self.h_mm, self.contact_allowance_mm))
 
     @property
-    def strut_pitch_mm(self) -> float:
-        return self.depth_mm / self.struts_per_chevron
-
-    @property
-    def strut_gap_mm(self) -> float:
-        return float(strut_gap_mm(self.depth_mm, self.b_mm, self.struts_per_chevron))
-
-    @property
-    def strut_centres_y_mm(self) -> tuple[float, ...]:
-        """y of each strut's mid-plane, measured from the cell's centre (symmetric)."""
-        pitch = self.strut_pitch_mm
-        n = self.struts_per_chevron
-        return tuple((j + 0.5) * pitch - 0.5 * self.depth_mm for j in range(n))
-
-    @property
     def wall_horizontal_width_mm(self) -> float:
-        """Width of an inclined wall in a horizontal section (one printed layer): t / sin(theta)."""
+        """Width of an inclined wall in a horizontal section of the sensor: t / sin(theta)."""
         return self.t_mm / math.sin(self.theta_rad)
 
     @property
@@ -223,8 +205,8 @@ class HexCell:
 
     @property
     def volume_mm3(self) -> float:
-        """Material volume of the layer: profile area x strut width x number of struts."""
-        return self.profile_area_mm2 * self.b_mm * self.struts_per_chevron
+        """Material volume of the layer: profile area x web width D."""
+        return self.profile_area_mm2 * self.b_mm
 
     def outer_profile_xz(self) -> list[tuple[float, float]]:
         """Outer hexagon, counter-clockwise from the bottom-right pad corner (mm)."""
@@ -247,19 +229,16 @@ class HexCell:
 
         The margins come from :func:`cell_margins_mm` (one source of truth with the design loop).
         """
-        margins = cell_margins_mm(self.theta_rad, self.t_mm, self.h_mm, self.b_mm, self.width_mm,
-                                  self.depth_mm, self.struts_per_chevron, self.contact_allowance_mm,
-                                  printer.min_wall_mm, printer.min_gap_mm, printer.nozzle_mm)
+        margins = cell_margins_mm(self.theta_rad, self.t_mm, self.h_mm, self.width_mm,
+                                  self.contact_allowance_mm, printer.min_wall_mm, printer.min_gap_mm,
+                                  printer.nozzle_mm)
         messages = {
             "wall": f"wall t = {self.t_mm:g} mm is thinner than the printable minimum {printer.min_wall_mm:g} mm",
-            "strut_width": f"strut width b = {self.b_mm:g} mm is below the printable minimum {printer.min_wall_mm:g} mm",
             "cavity_gap": f"cavity h - 2t = {self.cavity_height_mm:g} mm is below the printable gap {printer.min_gap_mm:g} mm",
             "lock_stroke": (f"cavity h - 2t = {self.cavity_height_mm:g} mm leaves no stroke after the "
                             f"{self.contact_allowance_mm:g} mm contact allowance"),
             "pad_width": (f"inner pad half-width {self.p_inner_mm:g} mm is below one nozzle "
                           f"({printer.nozzle_mm:g} mm): theta too small for this h and W"),
-            "strut_spacing": (f"gap between struts {self.strut_gap_mm:g} mm is below the printable gap "
-                              f"{printer.min_gap_mm:g} mm: too many or too wide struts for D = {self.depth_mm:g} mm"),
         }
         return [Violation(name, float(m), messages[name]) for name, m in zip(CELL_RULES, margins)]
 
@@ -283,6 +262,20 @@ class Magnet:
 
 
 @dataclass(frozen=True)
+class Connector:
+    """A part on the board's top face that the housing must clear, mm from the board's
+    lower-left corner. ``facing`` is the side its mouth opens to ("-x" or "+x"): the housing
+    leaves a window there for the cable."""
+
+    x0_mm: float
+    x1_mm: float
+    y0_mm: float
+    y1_mm: float
+    height_mm: float
+    facing: str
+
+
+@dataclass(frozen=True)
 class Board:
     """A magnetometer carrier board (catalogue in :mod:`mst_cli.components`)."""
 
@@ -297,37 +290,56 @@ class Board:
     hole_diameter_mm: float = 2.5
     chip_size_mm: float = 3.0       # QFN-16, 3 x 3 x 1 mm, Hall plates at its centre
     chip_height_mm: float = 1.0
+    connectors: tuple[Connector, ...] = ()
+
+    @property
+    def headroom_mm(self) -> float:
+        """Height of the tallest part on the board's top face (the chip or a connector)."""
+        return max([self.chip_height_mm] + [c.height_mm for c in self.connectors])
 
 
 @dataclass(frozen=True)
 class Housing:
-    """Base (board housing) and top cap (magnet pocket) dimensions, mm.
+    """Base (board housing), plates and top cap (magnet pocket), mm, in the sensor frame.
 
-    z runs up from the build plate. The base holds the board face-up on ``base_floor_mm`` of
-    material; above the chip an air clearance, then the cover on which the first layer sits.
-    The cap holds the magnet in a closed pocket: the print is paused at the pocket's top to
-    drop the magnet in.
+    The base holds the board face-up on ``base_floor_mm`` of material; above the board's
+    tallest part an air clearance, then the cover on which the first layer sits. The board
+    slides into its slot through the face that is on top in the print (+y), down to a floor;
+    connector cables leave through windows in the side walls. The cap holds the magnet in a
+    pocket that is open upwards in the print until the pause, then closed by a 45 deg roof.
     """
 
     base_floor_mm: float = 1.0
     board_clearance_mm: float = 0.2      # all round the board in its slot
-    chip_clearance_mm: float = 0.3       # air between chip top and the cover's underside
+    chip_clearance_mm: float = 0.3       # air between the board's tallest part and the cover
     cover_mm: float = 0.8                # solid TPU between that air gap and layer 1
-    side_wall_mm: float = 1.2            # thinnest wall of the base around the board slot
+    side_wall_mm: float = 1.2            # thinnest wall around the slot and the pocket
     plate_mm: float = 1.2                # solid plate between two collapsible layers
     pocket_floor_mm: float = 0.6         # TPU between the top layer and the magnet's face
     pocket_clearance_mm: float = 0.1     # radial and axial clearance around the magnet
-    pocket_chamfer_mm: float = 0.3       # entry chamfer at the pocket's top edge
-    cap_top_mm: float = 0.8              # TPU above the magnet (printed after the pause)
-    cable_exit_width_mm: float = 8.0     # opening in the base side wall for the cable
+    cap_top_mm: float = 0.8              # TPU above the magnet's upper face
+
+
+def snap_to_layers_mm(height_mm: float, layer_height_mm: float, mode: str) -> float:
+    """A print height snapped to the layer grid: mode "down", "up" or "nearest" (halves up).
+    Heights within 1e-9 layers of a boundary count as on it (float noise)."""
+    n = height_mm / layer_height_mm
+    if abs(n - round(n)) < 1e-9:
+        n = float(round(n))
+    whole = {"down": math.floor, "up": math.ceil, "nearest": lambda v: math.floor(v + 0.5 + 1e-9)}[mode](n)
+    return round(whole * layer_height_mm, 9)
 
 
 @dataclass(frozen=True)
 class SensorGeometry:
     """The whole stacked sensor: base + layers (bottom to top) separated by plates + cap.
 
-    Every z below is measured from the build plate, mm. The magnet-to-chip distance follows
-    from these numbers; it is never an independent input.
+    Sensor frame (used everywhere but the printed mesh): z up the stack from the base's
+    underside, x across the cell width, y along the depth, the magnet axis on x = y = 0. The
+    magnet-to-chip distance follows from these numbers; it is never an independent input.
+
+    Print frame (STL/3MF): the part lies on its -y face, rotated +90 deg about x:
+    print (x, y, z) = (x, -z, y + D/2). Heights along the build direction are sensor y + D/2.
     """
 
     layers: tuple[HexCell, ...]
@@ -336,6 +348,7 @@ class SensorGeometry:
     housing: Housing = Housing()
     chip_offset_mm: tuple[float, float] = (0.0, 0.0)   # chip centre relative to magnet axis
     magnet_tilt_deg: float = 0.0                        # tilt of the magnet axis about y
+    printer: Printer = Printer()
 
     def __post_init__(self):
         if self.board is None:
@@ -349,52 +362,80 @@ class SensorGeometry:
 
     @property
     def depth_mm(self) -> float:
+        """D: the depth of every part of the body, and its height as printed."""
         return self.layers[0].depth_mm
+
+    @property
+    def layer_height_mm(self) -> float:
+        return self.printer.layer_height_mm
+
+    def print_height_mm(self, y_mm: float) -> float:
+        """Height above the bed, in the print, of the sensor-frame coordinate y."""
+        return y_mm + 0.5 * self.depth_mm
+
+    def _snapped_y_mm(self, y_mm: float, mode: str) -> float:
+        return snap_to_layers_mm(self.print_height_mm(y_mm), self.layer_height_mm, mode) - 0.5 * self.depth_mm
 
     @property
     def base_length_mm(self) -> float:
         """Base size along x, centred on the magnet axis: the cell width, or wider when the
         board slot (which need not be centred: the chip is) needs side walls around it."""
-        x0, x1, _, _ = self.slot_xy_mm
+        x0, x1 = self.slot_x_mm
         need = 2 * (max(-x0, x1) + self.housing.side_wall_mm)
         return max(self.width_mm, need)
 
     @property
     def base_width_mm(self) -> float:
-        """Base size along y, centred on the magnet axis (see :attr:`base_length_mm`)."""
-        _, _, y0, y1 = self.slot_xy_mm
-        need = 2 * (max(-y0, y1) + self.housing.side_wall_mm)
-        return max(self.depth_mm, need)
+        """Base size along y: the depth D, like every other part (the body is one prism)."""
+        return self.depth_mm
+
+    # -- board slot
+    @property
+    def slot_floor_y_mm(self) -> float:
+        """y of the slot floor the board rests on: where the chip puts the board's lower edge,
+        snapped to the nearest layer boundary (an up-facing face prints on one)."""
+        nominal = self.chip_offset_mm[1] - self.board.chip_y_mm
+        return self._snapped_y_mm(nominal, "nearest")
 
     @property
     def board_origin_xy_mm(self) -> tuple[float, float]:
-        """Board's lower-left corner, placed so that the chip sits at ``chip_offset_mm``."""
-        return (self.chip_offset_mm[0] - self.board.chip_x_mm,
-                self.chip_offset_mm[1] - self.board.chip_y_mm)
+        """Board's lower-left corner as printed: x from the chip offset, y on the slot floor."""
+        return (self.chip_offset_mm[0] - self.board.chip_x_mm, self.slot_floor_y_mm)
 
     @property
-    def slot_xy_mm(self) -> tuple[float, float, float, float]:
-        """Board slot (x0, x1, y0, y1): the board outline plus the clearance all round.
-
-        The slot is open through the base's -x face (the board slides in along +x until it
-        stops at x1, which locates the chip); the cable exit leaves through the +x wall.
-        """
+    def chip_xy_printed_mm(self) -> tuple[float, float]:
+        """Where the chip sits in the printed housing (y differs from the nominal chip offset
+        by the floor's snap to the layer grid, at most half a layer)."""
         bx, by = self.board_origin_xy_mm
+        return (bx + self.board.chip_x_mm, by + self.board.chip_y_mm)
+
+    @property
+    def slot_x_mm(self) -> tuple[float, float]:
+        """Board slot (x0, x1): the board outline plus the clearance on both sides."""
+        bx = self.board_origin_xy_mm[0]
         c = self.housing.board_clearance_mm
-        return (bx - c, bx + self.board.length_mm + c, by - c, by + self.board.width_mm + c)
+        return (bx - c, bx + self.board.length_mm + c)
 
     @property
     def slot_height_mm(self) -> float:
-        """Clear height of the slot: board + chip + air clearance, up to the cover."""
+        """Clear height of the slot: board + its tallest part + air clearance, up to the cover."""
         return self.z_cover_bottom_mm - self.z_board_bottom_mm
 
     @property
-    def cable_exit_y_mm(self) -> tuple[float, float]:
-        """y range of the cable exit through the +x wall: centred on the chip, inside the slot."""
-        _, _, y0, y1 = self.slot_xy_mm
-        half = 0.5 * self.housing.cable_exit_width_mm
-        yc = self.chip_offset_mm[1]
-        return (max(y0, yc - half), min(y1, yc + half))
+    def cable_windows(self) -> tuple[tuple[float, float, float, float, float], ...]:
+        """Windows through the base's side walls for the connectors' cables, as
+        (x_inner, x_outer, y_floor, z0, z1): from the slot wall out through the base's x face,
+        from a floor just below the connector (snapped down to the layer grid) up through the
+        face on top in the print, over the slot's height above the board."""
+        x0, x1 = self.slot_x_mm
+        L2 = 0.5 * self.base_length_mm
+        c = self.housing.board_clearance_mm
+        out = []
+        for con in self.board.connectors:
+            y_floor = self._snapped_y_mm(self.slot_floor_y_mm + con.y0_mm - c, "down")
+            x_in, x_out = (x0, -L2) if con.facing == "-x" else (x1, L2)
+            out.append((x_in, x_out, y_floor, self.z_board_top_mm, self.z_cover_bottom_mm))
+        return tuple(out)
 
     # -- base
     @property
@@ -416,7 +457,7 @@ class SensorGeometry:
 
     @property
     def z_cover_bottom_mm(self) -> float:
-        return self.z_chip_top_mm + self.housing.chip_clearance_mm
+        return self.z_board_top_mm + self.board.headroom_mm + self.housing.chip_clearance_mm
 
     @property
     def z_base_top_mm(self) -> float:
@@ -440,11 +481,16 @@ class SensorGeometry:
 
     # -- cap and magnet
     @property
+    def pocket_radius_mm(self) -> float:
+        return self.magnet.radius_mm + self.housing.pocket_clearance_mm
+
+    @property
     def pocket_diameter_mm(self) -> float:
-        return self.magnet.diameter_mm + 2 * self.housing.pocket_clearance_mm
+        return 2.0 * self.pocket_radius_mm
 
     @property
     def pocket_depth_mm(self) -> float:
+        """Pocket size along the magnet axis (sensor z): magnet thickness + clearance."""
         return self.magnet.thickness_mm + self.housing.pocket_clearance_mm
 
     @property
@@ -453,46 +499,82 @@ class SensorGeometry:
         return self.z_stack_top_mm + self.housing.pocket_floor_mm
 
     @property
-    def z_pause_mm(self) -> float:
-        """Print height at which to pause and insert the magnet: the pocket's top."""
-        return self.z_magnet_bottom_mm + self.pocket_depth_mm
+    def z_magnet_top_mm(self) -> float:
+        return self.z_magnet_bottom_mm + self.magnet.thickness_mm
+
+    @property
+    def pocket_top_y_mm(self) -> float:
+        """y where the pocket's straight sides end (it is a U open towards +y: a half disc
+        below y = 0, straight sides above): the pocket radius, snapped up to the layer grid,
+        so the magnet is wholly below the layer printed after the pause."""
+        return self._snapped_y_mm(self.pocket_radius_mm, "up")
+
+    @property
+    def pocket_roof_rise_mm(self) -> float:
+        """Rise of the pocket's gable roof: half the pocket depth (45 deg), rounded up to whole
+        layers so that the ridge closes on a layer boundary (the last layer before it then
+        leaves a slit narrower than a line, not a slot to bridge along the ridge)."""
+        return snap_to_layers_mm(0.5 * self.pocket_depth_mm, self.layer_height_mm, "up")
+
+    @property
+    def pocket_roof_apex_y_mm(self) -> float:
+        """Apex (ridge) of the pocket's gable roof, at least 45 deg from horizontal."""
+        return self.pocket_top_y_mm + self.pocket_roof_rise_mm
+
+    @property
+    def pause_height_mm(self) -> float:
+        """Print height at which to pause and drop the magnet in: the top of the last layer
+        before the roof (a layer boundary)."""
+        return self.print_height_mm(self.pocket_top_y_mm)
+
+    @property
+    def pause_after_layer(self) -> int:
+        """Number (from 1) of the print layer after which the print pauses."""
+        return int(round(self.pause_height_mm / self.layer_height_mm))
 
     @property
     def total_height_mm(self) -> float:
-        return self.z_pause_mm + self.housing.cap_top_mm
+        return self.z_magnet_top_mm + self.housing.pocket_clearance_mm + self.housing.cap_top_mm
 
     @property
     def body_bbox_mm(self) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
-        """Bounding box (min, max) of the printed body: base or cells, whichever is wider."""
+        """Bounding box (min, max) of the body in the sensor frame: base or cells, whichever
+        is wider."""
         x = 0.5 * max(self.base_length_mm, self.width_mm)
-        y = 0.5 * max(self.base_width_mm, self.depth_mm)
+        y = 0.5 * self.depth_mm
         return (-x, -y, 0.0), (x, y, self.total_height_mm)
+
+    def pocket_section_area_mm2(self, z_mm: float) -> float:
+        """Area of the pocket in the x-y plane at height z (inside the pocket's z range): the
+        lower half disc, the straight-sided part up to the pocket top and the strip of the
+        45 deg roof, which reaches its apex at the pocket's mid height."""
+        r, d = self.pocket_radius_mm, self.pocket_depth_mm
+        roof = self.pocket_roof_rise_mm * max(1.0 - abs(z_mm - (self.z_magnet_bottom_mm + 0.5 * d)) / (0.5 * d), 0.0)
+        return 0.5 * math.pi * r * r + 2 * r * (self.pocket_top_y_mm + roof)
 
     @property
     def pocket_volume_mm3(self) -> float:
-        """Magnet pocket: cylinder of pocket diameter and depth, plus the 45 deg entry chamfer
-        c at its top (a frustum of radii r and r + c minus the cylinder it replaces)."""
-        r, c = 0.5 * self.pocket_diameter_mm, self.housing.pocket_chamfer_mm
-        frustum = math.pi * c / 3.0 * (r * r + r * (r + c) + (r + c) ** 2)
-        return math.pi * r * r * self.pocket_depth_mm + frustum - math.pi * r * r * c
+        """The U-shaped pocket (its x-y section times the depth) plus the roof: a triangular
+        prism of base ``pocket_depth`` and height ``pocket_roof_rise_mm``, 2 r long."""
+        r, d = self.pocket_radius_mm, self.pocket_depth_mm
+        return (0.5 * math.pi * r * r + 2 * r * self.pocket_top_y_mm) * d + r * d * self.pocket_roof_rise_mm
 
     @property
     def pocket_curved_area_mm2(self) -> float:
-        """Curved surface of the pocket (cylinder wall + chamfer cone): a mesh of chord
-        deflection delta changes the pocket volume by at most delta times this area."""
-        r, c = 0.5 * self.pocket_diameter_mm, self.housing.pocket_chamfer_mm
-        return (2 * math.pi * r * (self.pocket_depth_mm - c)
-                + math.pi * (2 * r + c) * c * math.sqrt(2.0))
+        """Curved surface of the pocket (the half cylinder): a mesh of chord deflection delta
+        changes the pocket volume by at most delta times this area."""
+        return math.pi * self.pocket_radius_mm * self.pocket_depth_mm
 
     @property
     def base_volume_mm3(self) -> float:
-        """Base block minus the board slot (open to -x) and the cable exit (through +x)."""
-        L, Wb = self.base_length_mm, self.base_width_mm
-        _, x1, y0, y1 = self.slot_xy_mm
-        e0, e1 = self.cable_exit_y_mm
-        slot = (x1 + 0.5 * L) * (y1 - y0) * self.slot_height_mm
-        exit_ = (0.5 * L - x1) * max(e1 - e0, 0.0) * self.slot_height_mm
-        return L * Wb * self.z_base_top_mm - slot - exit_
+        """Base block minus the board slot and the cable windows (open through the +y face)."""
+        L, D = self.base_length_mm, self.depth_mm
+        x0, x1 = self.slot_x_mm
+        y_top = 0.5 * D
+        slot = (x1 - x0) * (y_top - self.slot_floor_y_mm) * self.slot_height_mm
+        windows = sum(abs(x_out - x_in) * (y_top - yf) * (z1 - z0)
+                      for x_in, x_out, yf, z0, z1 in self.cable_windows)
+        return L * D * self.z_base_top_mm - slot - windows
 
     @property
     def plates_volume_mm3(self) -> float:
@@ -524,3 +606,36 @@ class SensorGeometry:
     def violations(self, printer: Printer = Printer()) -> list[tuple[int, Violation]]:
         """Broken cell rules as (layer index from 0, violation)."""
         return [(i, v) for i, c in enumerate(self.layers) for v in c.violations(printer)]
+
+    def housing_violations(self) -> list[tuple[str, float, str]]:
+        """Broken housing rules as (field, value, what is allowed): what the body needs to be
+        one printable solid with a closed pocket and a slot that holds the board."""
+        h, D, lh = self.housing, self.depth_mm, self.layer_height_mm
+        out = []
+        if abs(D / lh - round(D / lh)) > 1e-6:
+            out.append(("family.depth_mm", D, f"must be a whole number of print layers "
+                                              f"(printer.layer_height_mm = {lh:g}): D is the printed height"))
+        room_x = 0.5 * self.width_mm - h.side_wall_mm
+        if self.pocket_radius_mm > room_x:
+            out.append(("magnet.diameter_mm", self.magnet.diameter_mm,
+                        f"the pocket radius {self.pocket_radius_mm:g} mm (with clearance) must be <= "
+                        f"{room_x:g} mm: width_mm/2 minus housing.side_wall_mm"))
+        floor_room = self.slot_floor_y_mm + 0.5 * D
+        if floor_room < h.side_wall_mm - 1e-9:
+            out.append(("family.depth_mm", D,
+                        f"the board {self.board.key} hangs {self.board.chip_y_mm:g} mm below its chip: "
+                        f"its slot floor needs depth_mm >= {2 * (self.board.chip_y_mm - self.chip_offset_mm[1] + h.side_wall_mm):g} mm "
+                        f"(housing.side_wall_mm under it), or another board"))
+        roof_room = 0.5 * D - self.pocket_roof_apex_y_mm
+        if roof_room < h.side_wall_mm - 1e-9:
+            out.append(("family.depth_mm", D,
+                        f"the magnet pocket's roof needs depth_mm >= "
+                        f"{2 * (self.pocket_roof_apex_y_mm + h.side_wall_mm):g} mm "
+                        "(housing.side_wall_mm above its apex)"))
+        return out
+
+    # -- print frame
+    def to_print_frame(self, points_mm):
+        """Sensor-frame points (..., 3) to the print frame: (x, -z, y + D/2)."""
+        p = np.asarray(points_mm, dtype=float)
+        return np.stack([p[..., 0], -p[..., 2], p[..., 1] + 0.5 * self.depth_mm], axis=-1)

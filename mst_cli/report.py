@@ -25,7 +25,6 @@ def report_dict(doc, geometry: SensorGeometry, resp: Response, extra: dict | Non
         layers.append({
             "layer": i + 1,
             "theta_deg": cell.theta_deg, "t_mm": cell.t_mm, "h_mm": cell.h_mm, "b_mm": cell.b_mm,
-            "struts_per_chevron": cell.struts_per_chevron,
             "pad_half_width_mm": cell.p_mm, "wall_length_mm": cell.wall_length_mm,
             "cavity_height_mm": cell.cavity_height_mm, "d_lock_mm": cell.d_lock_mm,
             "k_N_per_mm": reg.k_layer_N_per_mm, "lock_force_N": reg.force_to_N,
@@ -74,7 +73,9 @@ def report_dict(doc, geometry: SensorGeometry, resp: Response, extra: dict | Non
             "total_height_mm": geometry.total_height_mm,
             "base_length_mm": geometry.base_length_mm, "base_width_mm": geometry.base_width_mm,
             "z_hall_mm": geometry.z_hall_mm, "z_magnet_bottom_mm": geometry.z_magnet_bottom_mm,
-            "magnet_insert_pause_height_mm": geometry.z_pause_mm,
+            "print_height_mm": geometry.depth_mm,
+            "magnet_pause_after_layer": geometry.pause_after_layer,
+            "magnet_pause_height_mm": geometry.pause_height_mm,
             "chip_offset_mm": list(geometry.chip_offset_mm), "magnet_tilt_deg": geometry.magnet_tilt_deg,
         },
         "warnings": list(resp.warnings),

@@ -112,8 +112,6 @@ SECTIONS: dict[str, dict[str, Rule]] = {
         "type": Rule("str", choices=("hex",)),
         "width_mm": positive(hi=500),
         "depth_mm": positive(hi=500),
-        "struts_per_chevron": Rule("int", lo=1, hi=50),
-        "strut_width_mm": positive(hi=500, nullable=True),
         "contact_allowance_mm": nonneg(hi=10),
     },
     "material": {
@@ -135,7 +133,7 @@ SECTIONS: dict[str, dict[str, Rule]] = {
         "magnet_tilt_deg": Rule("float", lo=-45, hi=45, unit="deg"),
     },
     "housing": {f.name: nonneg(hi=100) if f.name in ("board_clearance_mm", "chip_clearance_mm",
-                                                      "pocket_clearance_mm", "pocket_chamfer_mm")
+                                                      "pocket_clearance_mm")
                 else positive(hi=100) for f in fields(geo.Housing)},
     "printer": {f.name: positive(hi=10) for f in fields(geo.Printer)},
     "model": {
@@ -158,6 +156,19 @@ SECTIONS: dict[str, dict[str, Rule]] = {
     },
 }
 
+# Keys of earlier versions that no longer mean anything, with why (a file that sets one is
+# refused with that reason rather than silently built differently).
+REMOVED_KEYS: dict[str, str] = {
+    "family.struts_per_chevron": "removed in mst 0.2: the cell is one continuous web through the "
+                                 "whole depth (the part prints on its side); delete the key",
+    "family.strut_width_mm": "removed in mst 0.2: the web runs the whole depth_mm; delete the key "
+                             "and set depth_mm",
+    "housing.pocket_chamfer_mm": "removed in mst 0.2: the pocket is open upwards in the print until "
+                                 "the magnet pause; delete the key",
+    "housing.cable_exit_width_mm": "removed in mst 0.2: cables leave through the slot's open end "
+                                   "and the connector windows; delete the key",
+}
+
 LAYER_RULES: dict[str, Rule] = {
     "theta_deg": Rule("float", lo=0.0, hi=90.0, lo_open=True, hi_open=True, unit="deg"),
     "t_mm": positive(hi=100),
@@ -171,11 +182,11 @@ TARGET_KEYS = ("target_sensitivity_per_N", "target_range_N")
 TOP_KEYS = ("name", "layers") + tuple(SECTIONS)
 
 # Default bounds of the design variables: printable with a 0.4 mm nozzle (t >= one line).
-# theta >= 25 deg: the shallowest wall of the printed sensors of Mohammadi et al. (2021);
-# shallower walls overhang more than 65 deg from vertical and print poorly in TPU.
+# The part prints on its side, so the walls are lines in the bed plane at any theta: the
+# bounds are those the mechanics are verified on (theta 15-60 deg, mst bench).
 DEFAULT_DESIGN = {
     "tolerance_rel": 0.02,
-    "theta_deg_bounds": (25.0, 60.0),
+    "theta_deg_bounds": (15.0, 60.0),
     "t_mm_bounds": (0.4, 2.0),
     "h_mm_bounds": (1.2, 6.0),
     "max_height_mm": None,
@@ -193,13 +204,11 @@ class CellFamily:
 
     width_mm: float = 30.0
     depth_mm: float = 20.0
-    struts_per_chevron: int = 4
-    strut_width_mm: float | None = None
     contact_allowance_mm: float = 0.1
 
     def cell(self, theta_deg: float, t_mm: float, h_mm: float) -> geo.HexCell:
         return geo.HexCell(float(theta_deg), float(t_mm), float(h_mm), self.width_mm, self.depth_mm,
-                           self.struts_per_chevron, self.strut_width_mm, self.contact_allowance_mm)
+                           self.contact_allowance_mm)
 
 
 @dataclass(frozen=True)
@@ -255,7 +264,7 @@ class Document:
             self.require_geometry()
             cells = [self.family.cell(la.theta_deg, la.t_mm, la.h_mm) for la in self.layers]
         return geo.SensorGeometry(tuple(cells), self.magnet, self.board, self.housing,
-                                  self.chip_offset_mm, self.magnet_tilt_deg)
+                                  self.chip_offset_mm, self.magnet_tilt_deg, self.printer)
 
     def require_geometry(self):
         for i, layer in enumerate(self.layers):
@@ -287,6 +296,8 @@ def _section(raw: dict, name: str) -> dict:
     rules = SECTIONS[name]
     out = {}
     for key, value in data.items():
+        if f"{name}.{key}" in REMOVED_KEYS:
+            raise InputError(f"{name}.{key}", value, REMOVED_KEYS[f"{name}.{key}"])
         if key not in rules:
             raise InputError(f"{name}.{key}", value, "unknown key; allowed: " + ", ".join(rules))
         out[key] = rules[key].check(f"{name}.{key}", value)
@@ -316,8 +327,6 @@ def parse_document(raw: Any, source: str = "<memory>") -> Document:
 
     fam = _section(raw, "family")
     fam.pop("type", None)
-    if "struts_per_chevron" in fam:
-        fam["struts_per_chevron"] = int(fam["struts_per_chevron"])
     family = CellFamily(**fam)
 
     material = Material(**_section(raw, "material"))
@@ -339,6 +348,13 @@ def parse_document(raw: Any, source: str = "<memory>") -> Document:
                                               0.0, 90.0, hi_open=True)
     design["t_mm_bounds"] = _pair_bounds("design.t_mm_bounds", design["t_mm_bounds"], 0.0, 100.0)
     design["h_mm_bounds"] = _pair_bounds("design.h_mm_bounds", design["h_mm_bounds"], 0.0, 100.0)
+
+    # The housing rules (printable depth, pocket and slot inside the body) do not depend on the
+    # layers' theta, t, h: check them on any cell of the family, before any design work.
+    probe = geo.SensorGeometry((family.cell(45.0, 1.0, 3.0),), magnet, board, housing,
+                               mm.get("chip_offset_mm", (0.0, 0.0)), 0.0, printer)
+    for field_name, value, allowed in probe.housing_violations():
+        raise InputError(field_name, value, allowed)
 
     layers_raw = raw.get("layers")
     if not isinstance(layers_raw, list) or not 1 <= len(layers_raw) <= MAX_LAYERS:
@@ -403,7 +419,6 @@ def document_to_dict(doc: Document, layers=None) -> dict:
     return {
         "name": doc.name,
         "family": {"type": "hex", "width_mm": fam.width_mm, "depth_mm": fam.depth_mm,
-                   "struts_per_chevron": fam.struts_per_chevron, "strut_width_mm": fam.strut_width_mm,
                    "contact_allowance_mm": fam.contact_allowance_mm},
         "material": {"name": doc.material.name, "youngs_modulus_MPa": doc.material.youngs_modulus_MPa,
                      "poisson_ratio": doc.material.poisson_ratio},

@@ -58,26 +58,31 @@ def air_gaps_z(solid, x, y, z_top):
 
 
 # --------------------------------------------------------------------------- golden reference
+# Sensor frame. z: floor 1 + board 1.6 + tallest part 2.95 (JST SH sockets) + air 0.3 + cover 0.8
+#    = 6.65; layers 2 + 2.8 + 3.5; 2 plates x 1.2; pocket floor 0.6 + pocket 2.1 + cap 0.8 -> 20.85
+# y: the depth, +-10. Print heights are y + 10, on a 0.2 mm grid:
+#    slot floor: chip at y = 0 puts the board's edge at -8.3 (print 1.7, half-way: up to 1.8)
+#    -> y = -8.2; windows from 5.89 (socket edge) - 0.2 above the floor = -2.51 (print 7.49,
+#    down to 7.4) -> y = -2.6; pocket sides up to r = 3.1 (print 13.1, up to 13.2) -> y = 3.2,
+#    then a roof rising half the pocket depth, 1.05, up to whole layers: 1.2
+# x: slot -12.8 .. 13.0, + side wall 1.2 = 14.2 < the cell's 15 -> +-15 mm
 def test_reference_bbox_golden(reference):
     g, cad = reference
-    # z: floor 1 + board 1.6 + chip 1 + air 0.3 + cover 0.8 = 4.7; layers 2 + 2.8 + 3.5;
-    #    2 plates x 1.2; pocket floor 0.6 + pocket 2.1 + cap top 0.8     -> 18.9 mm
-    # y: slot -8.3-0.2 .. 17.78-8.3+0.2 = 9.68, + side wall 1.2         -> +-10.88 mm
-    # x: slot -12.8 .. 13.0, + 1.2 = 14.2 < the cell's 15                -> +-15 mm
     bb = cad.body.bounding_box()
-    assert (bb.min.X, bb.min.Y, bb.min.Z) == pytest.approx((-15.0, -10.88, 0.0), abs=1e-7)
-    assert (bb.max.X, bb.max.Y, bb.max.Z) == pytest.approx((15.0, 10.88, 18.9), abs=1e-7)
+    assert (bb.min.X, bb.min.Y, bb.min.Z) == pytest.approx((-15.0, -10.0, 0.0), abs=1e-7)
+    assert (bb.max.X, bb.max.Y, bb.max.Z) == pytest.approx((15.0, 10.0, 20.85), abs=1e-7)
+    assert (g.slot_floor_y_mm, g.pocket_top_y_mm) == pytest.approx((-8.2, 3.2), abs=1e-9)
+    assert [w[2] for w in g.cable_windows] == pytest.approx([-2.6, -2.6], abs=1e-9)
+    assert (g.pause_height_mm, g.pause_after_layer) == (pytest.approx(13.2, abs=1e-9), 66)
 
 
 def test_reference_volume_golden(reference):
     g, cad = reference
-    base = 30 * 21.76 * 4.7 - (13.0 + 15.0) * 18.18 * 2.9 - (15.0 - 13.0) * 8.0 * 2.9
-    layers = sum(
-        (shoelace(c.outer_profile_xz()) - shoelace(c.inner_profile_xz())) * c.t_mm * 4
-        for c in g.layers)
+    base = 30 * 20 * 6.65 - 25.8 * 18.2 * 4.85 - (2.2 + 2.0) * 12.6 * 3.25
+    layers = sum((shoelace(c.outer_profile_xz()) - shoelace(c.inner_profile_xz())) * 20 for c in g.layers)
     plates = 2 * 30 * 20 * 1.2
-    r, c = 3.1, 0.3
-    pocket = math.pi * r ** 2 * 2.1 + math.pi * c / 3 * (r ** 2 + r * (r + c) + (r + c) ** 2) - math.pi * r ** 2 * c
+    r, d = 3.1, 2.1
+    pocket = (math.pi * r ** 2 / 2 + 2 * r * 3.2) * d + r * d * 1.2     # roof rises 1.2 mm
     cap = 30 * 20 * 3.5 - pocket
     expected = base + layers + plates + cap
     assert cad.body.volume == pytest.approx(expected, rel=1e-9)
@@ -85,59 +90,67 @@ def test_reference_volume_golden(reference):
     assert cad.body.is_valid
 
 
-def test_layer_volume_is_profile_area_times_strut_widths(reference):
+def test_layer_volume_is_profile_area_times_depth(reference):
     g, _ = reference
     for cell, zb in zip(g.layers, g.layer_bottoms_mm):
-        struts = parts.layer_struts(cell, zb)
-        assert len(struts) == cell.struts_per_chevron
         area = shoelace(cell.outer_profile_xz()) - shoelace(cell.inner_profile_xz())
-        assert sum(s.volume for s in struts) == pytest.approx(area * cell.b_mm * cell.struts_per_chevron,
-                                                              rel=1e-9)
+        assert parts.layer_web(cell, zb).volume == pytest.approx(area * cell.depth_mm, rel=1e-9)
 
 
 def test_gap0_is_what_the_cad_builds(reference):
     g, cad = reference
     # pocket floor: the topmost air gap on the axis; slot floor: the lowest air gap at the chip
     pocket_floor = air_gaps_z(cad.body, *RAY_XY, g.total_height_mm)[-1][0]
-    slot_floor, slot_top = air_gaps_z(cad.body, RAY_XY[0] + g.chip_offset_mm[0],
-                                      RAY_XY[1] + g.chip_offset_mm[1], g.total_height_mm)[0]
+    cx, cy = g.chip_xy_printed_mm
+    slot_floor, slot_top = air_gaps_z(cad.body, RAY_XY[0] + cx, RAY_XY[1] + cy, g.total_height_mm)[0]
     hall = slot_floor + g.board.thickness_mm + 0.5 * g.board.chip_height_mm
     assert pocket_floor - hall == pytest.approx(g.gap0_mm, abs=1e-9)
-    assert pocket_floor - hall == pytest.approx(12.9, abs=1e-9)     # 16.0 - (1 + 1.6 + 0.5)
-    assert slot_top - slot_floor == pytest.approx(1.6 + 1.0 + 0.3, abs=1e-9)
+    assert pocket_floor - hall == pytest.approx(14.85, abs=1e-9)     # 17.95 - (1 + 1.6 + 0.5)
+    assert slot_top - slot_floor == pytest.approx(1.6 + 2.95 + 0.3, abs=1e-9)
 
 
 @pytest.mark.parametrize("key", sorted(BOARDS))
-def test_every_board_gives_the_model_gap_and_a_closed_slot(key):
+def test_every_board_gives_the_model_gap_and_an_open_slot(key):
     """bd_warehouse style: every catalogue entry builds, the chip sits where the model says."""
-    cells = (HexCell(30, 0.8, 2.4), HexCell(40, 1.2, 3.2))
+    cells = (HexCell(30, 0.8, 2.4, depth_mm=30.0), HexCell(40, 1.2, 3.2, depth_mm=30.0))
     offset = (1.5, -0.7)
     g = SensorGeometry(cells, board=BOARDS[key], chip_offset_mm=offset)
+    assert g.housing_violations() == []
     body = build_body(g)
     assert body.is_valid and body.volume == pytest.approx(g.body_volume_mm3, rel=1e-9)
     pocket_floor = air_gaps_z(body, *RAY_XY, g.total_height_mm)[-1][0]
-    slot_floor = air_gaps_z(body, offset[0] + RAY_XY[0], offset[1] + RAY_XY[1], g.total_height_mm)[0][0]
+    cx, cy = g.chip_xy_printed_mm
+    assert abs(cy - offset[1]) <= 0.5 * g.layer_height_mm + 1e-9
+    slot_floor = air_gaps_z(body, cx + RAY_XY[0], cy + RAY_XY[1], g.total_height_mm)[0][0]
     gap = pocket_floor - (slot_floor + g.board.thickness_mm + 0.5 * g.board.chip_height_mm)
     assert gap == pytest.approx(g.gap0_mm, abs=1e-9)
-    # the board (PCB + chip) fits in its slot: it does not intersect the body
+    # the board (PCB, chip, sockets) fits in its slot: it does not intersect the body
     board = build_sensor(g).board
     assert sum(common_volume(s, body) for s in board.solids()) == pytest.approx(0.0, abs=1e-9)
-    # side walls of at least housing.side_wall_mm around the (off-centre) slot
-    x0, x1, y0, y1 = g.slot_xy_mm
+    # side walls of at least housing.side_wall_mm beside and under the (off-centre) slot
+    x0, x1 = g.slot_x_mm
     w = g.housing.side_wall_mm
-    assert 0.5 * g.base_length_mm - x1 >= w - 1e-12
-    assert min(0.5 * g.base_width_mm - y1, y0 + 0.5 * g.base_width_mm) >= w - 1e-12
+    assert min(0.5 * g.base_length_mm - x1, x0 + 0.5 * g.base_length_mm) >= w - 1e-12
+    assert g.slot_floor_y_mm + 0.5 * g.depth_mm >= w - 1e-12
 
 
 # --------------------------------------------------------------------------- magnet pocket
-@pytest.mark.parametrize("chamfer", [0.0, 0.3])
-def test_pocket_volume_is_pi_r2_depth_plus_chamfer(chamfer):
-    g = SensorGeometry((HexCell(30, 0.8, 2.4),), housing=Housing(pocket_chamfer_mm=chamfer))
-    r = 0.5 * (6.0 + 2 * 0.1)
-    depth = 2.0 + 0.1
-    excess = math.pi * chamfer / 3 * (r ** 2 + r * (r + chamfer) + (r + chamfer) ** 2) - math.pi * r ** 2 * chamfer
+@pytest.mark.parametrize("diameter_mm", [4.0, 6.0, 8.0])
+def test_pocket_is_a_u_with_a_45_degree_roof(diameter_mm):
+    from mst_cli.geometry import Magnet
+    g = SensorGeometry((HexCell(30, 0.8, 2.4),), magnet=Magnet(diameter_mm, 2.0))
+    r, d = 0.5 * diameter_mm + 0.1, 2.1
+    y_top = math.ceil(round((10 + r) / 0.2, 6)) * 0.2 - 10
     pocket = parts.magnet_pocket(g)
-    assert pocket.volume == pytest.approx(math.pi * r ** 2 * depth + excess, rel=1e-9)
+    rise = 1.2                          # d/2 = 1.05 up to whole 0.2 mm layers
+    assert pocket.volume == pytest.approx((math.pi * r * r / 2 + 2 * r * y_top) * d + r * d * rise, rel=1e-9)
+    bb = pocket.bounding_box()
+    assert (bb.min.Y, bb.max.Y) == pytest.approx((-r, y_top + rise), abs=1e-9)
+    # the roof: every down-facing face of the pocket's air is the gable, atan(1.2 / 1.05) steep
+    for face in pocket.faces():
+        n = face.normal_at(face.center())
+        if n.Y > 1e-9:                  # the pocket's outward normal up: the body's roof
+            assert math.degrees(math.acos(n.Y)) == pytest.approx(math.degrees(math.atan(rise / 1.05)), abs=1e-9)
     # the magnet sits inside the pocket, its face on the floor
     magnet = parts.magnet_solid(g)
     assert common_volume(magnet, pocket) == pytest.approx(magnet.volume, rel=1e-9)
@@ -145,7 +158,7 @@ def test_pocket_volume_is_pi_r2_depth_plus_chamfer(chamfer):
 
 
 def test_pocket_too_wide_for_the_cap_is_an_input_error():
-    g = SensorGeometry((HexCell(30, 0.8, 2.4, width_mm=30, depth_mm=8, struts_per_chevron=2),))
+    g = SensorGeometry((HexCell(30, 0.8, 2.4, width_mm=8, depth_mm=20),))
     with pytest.raises(InputError, match="magnet.diameter_mm"):
         build_body(g)
 
@@ -191,8 +204,9 @@ def test_step_round_trip_keeps_volume_and_names(reference, tmp_path):
     assert body.volume == pytest.approx(cad.body.volume, rel=1e-6)
     magnet = labels["magnet"]
     assert magnet.volume == pytest.approx(g.magnet.volume_mm3, rel=1e-6)
-    assert labels["board_adafruit-4022"].volume == pytest.approx(25.4 * 17.78 * 1.6 + 3 * 3 * 1, rel=1e-6)
-    assert {"pcb", "MLX90393"} <= set(labels)
+    assert labels["board_adafruit-4022"].volume == pytest.approx(
+        25.4 * 17.78 * 1.6 + 3 * 3 * 1 + 2 * 6.0 * 4.25 * 2.95, rel=1e-6)
+    assert {"pcb", "MLX90393", "connector_1", "connector_2"} <= set(labels)
     # deterministic: a second write is byte-identical (fixed header time stamp)
     path2 = tmp_path / "again.step"
     mesh_io.write_step(cad.assembly("ref"), path2)
@@ -229,11 +243,12 @@ def test_merge_vertices_welds_duplicates_in_first_seen_order():
     assert nt.tolist() == [[0, 1, 2], [1, 0, 3]]        # the degenerate third triangle is dropped
 
 
-def test_housing_change_moves_the_pause_height():
+def test_cover_moves_the_magnet_but_not_the_pause():
     cells = (HexCell(30, 0.8, 2.4),)
     a = SensorGeometry(cells)
     b = replace(a, housing=Housing(cover_mm=1.6))
-    assert b.z_pause_mm - a.z_pause_mm == pytest.approx(0.8)
+    # the pause is a print height (along the depth): the stack's height does not move it
+    assert b.pause_height_mm == a.pause_height_mm
     assert b.gap0_mm - a.gap0_mm == pytest.approx(0.8)
     body = build_body(b)
-    assert air_gaps_z(body, *RAY_XY, b.total_height_mm)[-1][1] == pytest.approx(b.z_pause_mm, abs=1e-9)
+    assert air_gaps_z(body, *RAY_XY, b.total_height_mm)[-1][0] == pytest.approx(b.z_magnet_bottom_mm, abs=1e-9)

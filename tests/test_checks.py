@@ -12,7 +12,7 @@ import trimesh
 
 from mst_cli import checks
 from mst_cli.cad import mesh_io
-from mst_cli.cad.assembly import build_sensor
+from mst_cli.cad.assembly import build_sensor, print_mesh
 from mst_cli.cad.manifest import export_manifest
 from mst_cli.cli import load_design_document
 
@@ -23,7 +23,7 @@ FORWARD = ROOT / "configs" / "mohammadi2021-forward.yaml"
 @pytest.fixture(scope="module")
 def exported():
     doc, g = load_design_document(FORWARD)
-    vertices, triangles = mesh_io.tessellate(build_sensor(g).body, 0.01)
+    vertices, triangles = print_mesh(g, build_sensor(g).body, 0.01)
     stl = mesh_io.stl_bytes(vertices, triangles)
     manifest = export_manifest(doc.name, g, doc.printer, 0.01, ["sensor.stl"])
     return stl, manifest, g
@@ -46,20 +46,23 @@ def test_reference_body_passes_every_check(exported):
     res = by_name(checks.run_checks(mesh_of(stl), manifest))
     assert not failed(res.values())
     assert set(res) == {"watertight", "is_volume", "manifold3d", "one_body", "volume", "bbox",
-                        "wall_thickness", "strut_width", "strut_spacing", "cavity_gap", "magnet_pocket",
-                        "board_slot", "magnet_chip_gap", "overhang"}
+                        "wall_thickness", "web_depth", "cavity_gap", "magnet_pocket",
+                        "board_slot", "magnet_chip_gap", "overhang", "layer_grid", "magnet_pause"}
     # measured on the mesh, equal to the design's own numbers
     assert res["wall_thickness"].values["per_layer_mm"] == pytest.approx([0.6, 1.0, 1.4], abs=1e-4)
     assert res["cavity_gap"].values["per_layer_mm"] == pytest.approx([0.8, 0.8, 0.7], abs=1e-4)
-    assert res["strut_spacing"].values["min_mm"] == pytest.approx(5.0 - 1.4, abs=1e-4)
+    assert res["web_depth"].values["per_layer_mm"] == pytest.approx([20.0] * 3, abs=1e-4)
     assert res["magnet_chip_gap"].values["measured_mm"] == pytest.approx(g.gap0_mm, abs=1e-4)
-    assert res["overhang"].values["per_layer_deg"] == pytest.approx([25.0, 33.0, 37.0], abs=1e-3)
-    assert res["overhang"].values["below_limit_layers"] == [1, 2, 3]
-    # the void shell is the magnet pocket: pi r^2 depth + chamfer, minus at most delta x area
+    # lying on its side, the only down-facing faces are the pocket's roof, atan(1.2/1.05) steep
+    assert res["overhang"].values["min_inclination_deg"] == pytest.approx(math.degrees(math.atan(1.2 / 1.05)), abs=1e-3)
+    assert res["magnet_pause"].values["roof_start_z_mm"] == pytest.approx(13.2, abs=1e-4)
+    # the void shell is the magnet pocket, minus at most delta x curved area
     r = 3.1
     void = res["magnet_pocket"].values["volume_mm3"]
     assert g.pocket_volume_mm3 - 0.01 * g.pocket_curved_area_mm2 <= void <= g.pocket_volume_mm3 + 1e-3
-    assert math.pi * (r - 0.01) ** 2 <= math.pi * (res["magnet_pocket"].values["diameter_mm"] / 2) ** 2 <= math.pi * r * r
+    # its section at mid-depth: half disc + straight sides to y = 3.2 + the roof up to its apex
+    area = res["magnet_pocket"].values["section_area_mm2"]
+    assert math.pi * r * r / 2 - 0.01 * math.pi * r <= area - 2 * r * (3.2 + 1.2) <= math.pi * r * r / 2 + 1e-6
 
 
 def test_a_missing_triangle_breaks_watertight_volume_and_manifold(exported):
@@ -103,12 +106,16 @@ def test_a_scaled_body_fails_volume_bbox_and_dimensions(exported):
     (lambda m: m["body"].__setitem__("volume_mm3", m["body"]["volume_mm3"] + 1.0), "volume"),
     (lambda m: m["body"]["bbox_max_mm"].__setitem__(2, m["body"]["bbox_max_mm"][2] + 0.01), "bbox"),
     (lambda m: m["printer"].__setitem__("min_gap_mm", 0.75), "cavity_gap"),
-    (lambda m: m["printer"].__setitem__("min_gap_mm", 3.7), "strut_spacing"),
+    (lambda m: m["print"]["pause"].__setitem__("z_mm", 12.8), "magnet_pause"),
+    (lambda m: m["print"]["pause"].__setitem__("after_layer", 65), "magnet_pause"),
+    (lambda m: m["print"].__setitem__("layer_height_mm", 0.15), "layer_grid"),
+    (lambda m: m["layers"][2].__setitem__("web_depth_mm", 19.8), "web_depth"),
     (lambda m: m.__setitem__("gap0_mm", m["gap0_mm"] + 0.01), "magnet_chip_gap"),
-    (lambda m: m["magnet_pocket"].__setitem__("diameter_mm", 6.3), "magnet_pocket"),
-    (lambda m: m["magnet_pocket"].__setitem__("floor_z_mm", 16.1), "magnet_pocket"),
+    (lambda m: m["magnet_pocket"].__setitem__("section_area_mm2", 42.5), "magnet_pocket"),
+    (lambda m: m["magnet_pocket"].__setitem__("floor_z_mm", 17.9), "magnet_pocket"),
     (lambda m: m["board_slot"].__setitem__("x1_mm", 13.1), "board_slot"),
-    (lambda m: m["board_slot"].__setitem__("y0_mm", -8.4), "board_slot"),
+    (lambda m: m["board_slot"].__setitem__("floor_y_mm", -8.4), "board_slot"),
+    (lambda m: m["board_slot"]["cable_windows"][0].__setitem__("floor_y_mm", -2.8), "board_slot"),
     (lambda m: m["layers"][1].__setitem__("t_mm", 1.05), "wall_thickness"),
     (lambda m: m["layers"][0].__setitem__("theta_deg", 26.0), "wall_thickness"),
     (lambda m: m["body"].__setitem__("internal_voids", 0), "one_body"),
@@ -123,7 +130,7 @@ def test_each_expectation_is_enforced(exported, edit, check):
 def test_nozzle_wider_than_the_thinnest_wall_fails(exported):
     stl, manifest, _ = exported
     bad = failed(checks.run_checks(mesh_of(stl), manifest, nozzle_mm=0.8))
-    assert bad == {"wall_thickness", "strut_width"}
+    assert bad == {"wall_thickness"}
     assert not failed(checks.run_checks(mesh_of(stl), manifest, nozzle_mm=0.6))
 
 
@@ -143,18 +150,17 @@ def test_crossings_and_gaps_on_a_hollow_box():
     assert np.allclose(checks.section_boxes(m, 0.0), [(-5, -5, 5, 5)])
 
 
-def test_downward_wall_angle_of_a_tilted_face():
-    # a wedge whose sloping underside rises at 30 deg from horizontal
-    a = math.radians(30)
-    pts = np.array([[0, 0, 0], [10, 0, 10 * math.tan(a)], [0, 0, 10 * math.tan(a)]])
-    v = np.vstack([pts, pts + [0, 5, 0]])
-    f = np.array([[0, 2, 1], [3, 4, 5], [0, 1, 4], [0, 4, 3], [1, 2, 5], [1, 5, 4], [2, 0, 3], [2, 3, 5]])
-    wedge = trimesh.Trimesh(v, f, process=False)
-    if wedge.volume < 0:
-        wedge.invert()
-    assert wedge.is_volume
-    ang = checks.downward_wall_angles_deg(wedge, -1.0, 10.0)
-    assert ang == pytest.approx([30.0, 30.0])
+def test_a_part_tilted_off_its_side_fails_the_print_checks(exported):
+    """Stood upright (the old orientation) the cavity roofs face down at 0 deg and the walls'
+    undersides at theta: overhang and layer grid must catch it."""
+    stl, manifest, _ = exported
+    mesh = mesh_of(stl)
+    mesh.apply_transform(trimesh.transformations.rotation_matrix(math.radians(10.0), [1, 0, 0]))
+    mesh.apply_translation([0, 0, -mesh.bounds[0][2]])
+    bad = failed(checks.run_checks(mesh, manifest))
+    assert {"overhang"} <= bad
+    res = by_name(checks.run_checks(mesh, manifest))
+    assert res["overhang"].values["min_inclination_deg"] < 45.0
 
 
 def test_unreadable_inputs_are_input_errors(tmp_path):
@@ -188,9 +194,9 @@ def test_random_valid_designs_pass_every_check(g):
     """Seeded designs inside the bounds, random board and chip offset: the measurements find
     each layer's walls, cavity, the pocket and the off-centre slot where the design puts them."""
     from mst_cli.geometry import Printer
-    vertices, triangles = mesh_io.tessellate(build_sensor(g).body, 0.02)
+    vertices, triangles = print_mesh(g, build_sensor(g).body, 0.02)
     manifest = export_manifest("random", g, Printer(), 0.02, ["sensor.stl"])
     res = by_name(checks.run_checks(mesh_of(mesh_io.stl_bytes(vertices, triangles)), manifest))
     assert not failed(res.values()), {k: (c.measured, c.expected, c.note) for k, c in res.items() if not c.passed}
     assert res["wall_thickness"].values["per_layer_mm"] == pytest.approx([c.t_mm for c in g.layers], abs=1e-3)
-    assert res["overhang"].values["per_layer_deg"] == pytest.approx([c.theta_deg for c in g.layers], abs=1e-3)
+    assert res["overhang"].values["min_inclination_deg"] >= 45.0 - 1e-3

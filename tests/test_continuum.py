@@ -1,10 +1,12 @@
-"""Rung L2 (scikit-fem continuum): equilibrium, linear limits, beam-theory limit."""
+"""Rung L2 (scikit-fem continuum): plane-strain small-strain limits (material tangent, patch
+test, cantilever), equilibrium, beam-theory limit."""
 
 import numpy as np
 import pytest
 
 from mst_cli.geometry import HexCell
 from mst_cli.material import Material
+from mst_cli.mechanics import continuum as L2
 from mst_cli.mechanics import layer_law
 from mst_cli.mechanics.continuum import (_kinematics, _lame_3d, linear_stiffness_N_per_mm,
                                          solve_continuum)
@@ -13,18 +15,37 @@ from mst_cli.mechanics.spring import spring_layer
 MAT = Material()
 
 
-def test_tangent_at_rest_is_plane_stress_elasticity():
-    mu, lam = _lame_3d(12.0, 0.45)
+E, NU = 12.0, 0.45
+E_PS = E / (1 - NU ** 2)     # plane-strain modulus
+
+
+def test_tangent_at_rest_is_plane_strain_elasticity():
+    mu, lam = _lame_3d(E, NU)
     I = np.eye(2)[:, :, None]
-    P, FiT, lnJ, beta = _kinematics(I + 0.0, mu, lam)
+    P, _, _ = _kinematics(I + 0.0, mu, lam)
     assert np.allclose(P, 0.0)
-    # plane-stress Lame constant 2 mu lam / (2 mu + lam) = E nu / (1 - nu^2)
-    assert lam * beta[0] == pytest.approx(12.0 * 0.45 / (1 - 0.45 ** 2))
+    # d P / d F at rest, by central differences, against Hooke's law in plane strain
+    # (eps_yy = 0): C_1111 = E (1 - nu) / ((1 + nu)(1 - 2 nu)), C_1122 = E nu / ((1 + nu)(1 - 2 nu)),
+    # C_1212 = E / (2 (1 + nu)), written from E and nu (not from the Lame constants above)
+    c11 = E * (1 - NU) / ((1 + NU) * (1 - 2 * NU))
+    c12 = E * NU / ((1 + NU) * (1 - 2 * NU))
+    g = E / (2 * (1 + NU))
+    eps = 1e-7
+    C = np.zeros((2, 2, 2, 2))
+    for k in range(2):
+        for l in range(2):
+            dF = np.zeros((2, 2, 1))
+            dF[k, l] = eps
+            C[:, :, k, l] = (_kinematics(I + dF, mu, lam)[0] - _kinematics(I - dF, mu, lam)[0])[..., 0] / (2 * eps)
+    assert C[0, 0, 0, 0] == pytest.approx(c11, rel=1e-6) and C[1, 1, 1, 1] == pytest.approx(c11, rel=1e-6)
+    assert C[0, 0, 1, 1] == pytest.approx(c12, rel=1e-6) and C[1, 1, 0, 0] == pytest.approx(c12, rel=1e-6)
+    for ij in ((0, 1, 0, 1), (0, 1, 1, 0), (1, 0, 0, 1), (1, 0, 1, 0)):
+        assert C[ij] == pytest.approx(g, rel=1e-6)
 
 
-def test_uniaxial_small_stretch_has_youngs_modulus():
-    mu, lam = _lame_3d(12.0, 0.45)
-    # find F22 with P22 = 0 for F11 = 1 + eps by bisection; then P11 / eps -> E
+def test_uniaxial_small_stretch_has_the_plane_strain_modulus():
+    mu, lam = _lame_3d(E, NU)
+    # find F22 with P22 = 0 for F11 = 1 + eps by bisection; then P11 / eps -> E / (1 - nu^2)
     eps = 1e-6
     lo, hi = 1 - 1e-5, 1.0
     for _ in range(80):
@@ -32,7 +53,74 @@ def test_uniaxial_small_stretch_has_youngs_modulus():
         F = np.array([[1 + eps, 0], [0, mid]])[:, :, None]
         P = _kinematics(F, mu, lam)[0]
         lo, hi = (mid, hi) if P[1, 1, 0] < 0 else (lo, mid)
-    assert P[0, 0, 0] / eps == pytest.approx(12.0, rel=1e-4)
+    assert P[0, 0, 0] / eps == pytest.approx(E_PS, rel=1e-4)
+    # and the lateral strain is the plane-strain Poisson ratio nu / (1 - nu)
+    assert (1 - mid) / eps == pytest.approx(NU / (1 - NU), rel=1e-4)
+
+
+class _Block:
+    """The L2 kernel (:meth:`_Problem.assemble`, the Neo-Hookean residual and tangent) on a
+    rectangle [0, Lx] x [0, Lz] of P2 triangles; small-strain solves with the tangent at rest."""
+
+    def __init__(self, Lx, Lz, nx, nz):
+        from skfem import Basis, ElementTriP2, ElementVector, MeshTri
+        mesh = MeshTri.init_tensor(np.linspace(0, Lx, nx + 1), np.linspace(0, Lz, nz + 1))
+        self.basis = Basis(mesh, ElementVector(ElementTriP2()), intorder=4)
+        self.mu, self.lam = _lame_3d(E, NU)
+        self.xy = self.basis.doflocs
+        self.is_x = np.zeros(self.basis.N, bool)
+        self.is_x[self.basis.nodal_dofs[0]] = True
+        self.is_x[self.basis.facet_dofs[0]] = True
+
+    def assemble(self, u, need_K=True):
+        return L2._Problem.assemble(self, u, need_K)
+
+    def linear(self, prescribed: dict):
+        """Solve K u = 0 with u[dof] = value for the prescribed dofs; returns u and K u."""
+        from scipy.sparse.linalg import spsolve
+        _, K = self.assemble(np.zeros(self.basis.N))
+        pinned = np.array(sorted(prescribed))
+        u = np.zeros(self.basis.N)
+        u[pinned] = [prescribed[i] for i in pinned]
+        free = np.setdiff1d(np.arange(self.basis.N), pinned)
+        u[free] = spsolve(K[free][:, free].tocsc(), -K[free][:, pinned] @ u[pinned])
+        return u, K @ u
+
+
+def test_patch_uniaxial_plane_strain_compression_is_exact():
+    # a block squeezed between frictionless plates: homogeneous uniaxial stress in z, eps_yy = 0;
+    # the exact small-strain solution is in the P2 space, so the FE must reproduce it exactly:
+    # force per unit depth = E' eps W, lateral strain nu / (1 - nu) eps
+    W, H, d = 3.0, 2.0, 1e-3
+    blk = _Block(W, H, 3, 4)
+    x, z = blk.xy
+    bottom_z = np.flatnonzero(np.isclose(z, 0) & ~blk.is_x)
+    top_z = np.flatnonzero(np.isclose(z, H) & ~blk.is_x)
+    origin_x = np.flatnonzero(np.isclose(x, 0) & np.isclose(z, 0) & blk.is_x)
+    u, f = blk.linear({**{i: 0.0 for i in bottom_z}, **{i: -d for i in top_z}, origin_x[0]: 0.0})
+    assert -f[top_z].sum() == pytest.approx(E_PS * d / H * W, rel=1e-9)
+    right_x = np.flatnonzero(np.isclose(x, W) & blk.is_x)
+    assert np.allclose(u[right_x], NU / (1 - NU) * d / H * W, rtol=1e-9)
+
+
+def test_cantilever_tip_deflection_is_plane_strain_timoshenko():
+    # a web 20 t long, its end face moved down uniformly (free to rotate and to move in x: an
+    # end shear load); the root face held plane and upright (u_x = 0, u_z = 0 on the axis: the
+    # mirror plane of a beam twice as long, i.e. Timoshenko's clamp, without the extra Poisson
+    # restraint of a bonded face). Timoshenko, per unit depth: delta / P = L^3 / (3 E' I)
+    # + L / (kappa G A), I = t^3 / 12, A = t, kappa = 5/6. With E instead of E' the beam would
+    # be 20 % softer; what remains (restrained end warping) is O(t/L)^2 of the shear term.
+    L, t = 20.0, 1.0
+    blk = _Block(L, t, 80, 4)
+    x, z = blk.xy
+    root_x = np.flatnonzero(np.isclose(x, 0) & blk.is_x)
+    root_axis_z = np.flatnonzero(np.isclose(x, 0) & np.isclose(z, 0.5 * t) & ~blk.is_x)
+    tip_z = np.flatnonzero(np.isclose(x, L) & ~blk.is_x)
+    u, f = blk.linear({**{i: 0.0 for i in root_x}, root_axis_z[0]: 0.0, **{i: -1.0 for i in tip_z}})
+    P = -f[tip_z].sum()
+    G = E / (2 * (1 + NU))
+    compliance = L ** 3 / (3 * E_PS * t ** 3 / 12) + L / (5 / 6 * G * t)
+    assert 1.0 / P == pytest.approx(compliance, rel=2e-3)
 
 
 def test_slender_wall_tends_to_beam_theory():

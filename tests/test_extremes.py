@@ -23,14 +23,14 @@ MAT = Material()
        corrected=st.booleans())
 def test_spring_is_finite_and_positive_everywhere_in_the_bounds(theta, t, h, corrected):
     # valid or not: the optimiser evaluates infeasible points too
-    k, dl, R, kl = spring_arrays(np.radians(theta), t, h, t, 4, 30.0, 0.1, 12.0, 0.45, corrected)
+    k, dl, R, kl = spring_arrays(np.radians(theta), t, h, 20.0, 30.0, 0.1, 12.0, 0.45, corrected)
     assert np.isfinite([k, dl, R, kl]).all() and k > 0 and dl > 0 and 0 < R <= k * dl and kl >= k
 
 
 def test_spring_vectorised_over_the_corners():
     th, t, h = np.meshgrid(np.radians([15, 60]), [0.4, 2.0], [1.2, 6.0], indexing="ij")
     for corrected in (False, True):
-        k, dl, R, kl = spring_arrays(th, t, h, t, 4, 30.0, 0.1, 12.0, 0.45, corrected)
+        k, dl, R, kl = spring_arrays(th, t, h, 20.0, 30.0, 0.1, 12.0, 0.45, corrected)
         assert np.isfinite(k).all() and (k > 0).all() and (kl > k).all() and (R > 0).all()
 
 

@@ -25,7 +25,7 @@ layer = st.tuples(theta, t_mm, h_mm)
 def test_vectorised_spring_is_finite_and_positive_on_a_dense_grid_of_the_bounds():
     th, t, h = np.meshgrid(np.radians(np.linspace(*TH, 40)), np.linspace(*T, 40), np.linspace(*H, 40))
     with np.errstate(all="raise"):
-        k, dl, R, kl = spring_arrays(th, t, h, t, 4, 30.0, 0.1, 12.0, 0.45)
+        k, dl, R, kl = spring_arrays(th, t, h, 20.0, 30.0, 0.1, 12.0, 0.45)
     for a in (k, dl, R, kl):
         assert np.all(np.isfinite(a)) and np.all(a > 0)
     assert np.all(kl > k)
@@ -33,11 +33,11 @@ def test_vectorised_spring_is_finite_and_positive_on_a_dense_grid_of_the_bounds(
 
 
 @settings(max_examples=200, deadline=None)
-@given(st.lists(layer, min_size=1, max_size=6), st.integers(1, 8))
-def test_stack_curve_is_finite_and_strictly_monotone(layers, n_struts):
+@given(st.lists(layer, min_size=1, max_size=6), st.floats(4.0, 60.0))
+def test_stack_curve_is_finite_and_strictly_monotone(layers, depth_mm):
     th, t, h = (np.array(v, dtype=float) for v in zip(*layers))
     with np.errstate(all="raise"):
-        k, dl, R, kl = spring_arrays(np.radians(th), t, h, t, n_struts, 30.0, 0.1, 12.0, 0.45)
+        k, dl, R, kl = spring_arrays(np.radians(th), t, h, depth_mm, 30.0, 0.1, 12.0, 0.45)
         F = np.linspace(0.0, 10 * R.max(), 301)
         d = series_displacement_mm(F, k, dl, kl, R)
     assert np.all(np.isfinite(d)) and np.all(np.diff(d) > 0)

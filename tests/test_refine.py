@@ -22,7 +22,8 @@ from mst_cli.response import simulate
 from mst_cli.schema import load_document
 
 ROOT = Path(__file__).resolve().parents[1]
-SPEC = ROOT / "configs" / "mohammadi2021.yaml"
+SPEC = ROOT / "configs" / "fingertip.yaml"       # met by the printable cell
+PAPER = ROOT / "configs" / "mohammadi2021.yaml"   # the paper's own targets
 USER_LADDER = ("spring", "frame", "continuum")      # cheapest first; continuum is the reference
 
 
@@ -72,24 +73,26 @@ ONE_LAYER = {"name": "one", "layers": [{"theta_deg": 40.0, "t_mm": 1.0, "h_mm": 
 
 
 # --------------------------------------------------------------------------- refinement
-def test_refine_frame_meets_every_target_by_the_frame_model(tmp_path):
+def test_refine_continuum_meets_every_target_by_the_continuum_model(tmp_path):
+    # the printable web's soft layers sit at shallow walls, where the frame rung's beam contact
+    # closes early (README, Models): refinement is checked on the reference rung
     out = tmp_path / "out"
-    res = _run(["design", SPEC, "--refine", "frame", "--out", out])
+    res = _run(["design", SPEC, "--refine", "continuum", "--out", out])
     assert res.exit_code == 0, res.output
-    S, R, S_t, R_t, doc = _achieved(out / "design.yaml", "frame")
+    S, R, S_t, R_t, doc = _achieved(out / "design.yaml", "continuum")
     tol = doc.design["tolerance_rel"]
     assert np.all(np.abs(S / S_t - 1.0) <= tol), S / S_t - 1.0
     assert np.all(np.abs(R / R_t - 1.0) <= tol), R / R_t - 1.0
-    assert doc.mechanics == "frame"           # mst simulate design.yaml reproduces the frame numbers
+    assert doc.mechanics == "continuum"       # mst simulate design.yaml reproduces these numbers
 
     report = json.loads((out / "report.json").read_text())
-    assert report["models"]["mechanics"] == "frame"
+    assert report["models"]["mechanics"] == "continuum"
     ref = report["refinement"]
-    assert ref["inner_model"] == "spring" and ref["model"] == "frame"
+    assert ref["inner_model"] == "spring" and ref["model"] == "continuum"
     errs = [it["max_abs_error_rel"] for it in ref["iterations"]]
     assert 1 <= len(errs) <= ref["max_iterations"]
     assert errs[-1] <= tol
-    # the reported achieved numbers are the frame model's on the written design
+    # the reported achieved numbers are the continuum model's on the written design
     got_S = [row["achieved_sensitivity_per_N"] for row in report["design"]["targets"]]
     np.testing.assert_allclose(got_S, S, rtol=1e-9)
     # the first iterate is the plain L0 design: its frame error is what refinement removed
@@ -172,10 +175,10 @@ def test_design_accuracy_rel_and_explicit_refine(tmp_path):
     assert report["models"]["mechanics"] == expected
     assert ("refinement" in report) == (expected != "spring")
     # --refine wins over accuracy_rel's pick
-    res = _run(["design", path, "--refine", "frame", "--out", tmp_path / "b", "--quiet"])
+    res = _run(["design", path, "--refine", "continuum", "--out", tmp_path / "b", "--quiet"])
     assert res.exit_code == 0, res.output
     report = json.loads((tmp_path / "b" / "report.json").read_text())
-    assert report["models"]["mechanics"] == "frame"
+    assert report["models"]["mechanics"] == "continuum"
     assert report["refinement"]["inner_model"] == "spring"
 
 

@@ -1,4 +1,8 @@
-"""Rung L0 against textbook limits and an independent matrix frame analysis."""
+"""Rung L0 against textbook limits and an independent matrix frame analysis.
+
+The walls are webs D = 20 mm wide and 0.4-2 mm thick: plane strain, so every bending and
+axial reference below uses E' = E / (1 - nu^2) (shear G = E / 2 (1 + nu) unchanged).
+"""
 
 import math
 
@@ -9,9 +13,10 @@ from mst_cli.geometry import HexCell
 from mst_cli.material import Material
 from mst_cli.mechanics import correction, layer_law
 from mst_cli.mechanics.spring import (KNEE_FRACTION, SHEAR_COEFFICIENT_RECT, layer_stiffness_N_per_mm,
-                                      spring_layer, wall_compliance_mm_per_N)
+                                      pad_compression_modulus_MPa, spring_layer, wall_compliance_mm_per_N)
 
 E, NU = 12.0, 0.45
+E_PS = E / (1 - NU ** 2)          # plane-strain modulus of a wide web
 
 
 def timoshenko_frame_compliance(theta_rad, L, b, t, E, nu):
@@ -20,12 +25,14 @@ def timoshenko_frame_compliance(theta_rad, L, b, t, E, nu):
     Independent of the closed form: a 2-node Timoshenko frame element (axial + bending with
     the shear parameter phi = 12 E I / (kappa G A L^2)), rotated to the global frame;
     node 1 clamped, node 2 with rotation fixed and free in x and y; unit vertical load.
+    Plane strain (a web b wide): axial and bending stiffness with E / (1 - nu^2).
     """
     A, I = b * t, b * t ** 3 / 12.0
+    Ep = E / (1 - nu ** 2)
     G = E / (2 * (1 + nu))
-    phi = 12 * E * I / (SHEAR_COEFFICIENT_RECT * G * A * L ** 2)
-    a = E * A / L
-    c = E * I / (L ** 3 * (1 + phi))
+    phi = 12 * Ep * I / (SHEAR_COEFFICIENT_RECT * G * A * L ** 2)
+    a = Ep * A / L
+    c = Ep * I / (L ** 3 * (1 + phi))
     k_local = np.array([
         [a, 0, 0, -a, 0, 0],
         [0, 12 * c, 6 * c * L, 0, -12 * c, 6 * c * L],
@@ -62,50 +69,98 @@ def test_slender_wall_tends_to_pure_bending():
         h = 2 * t + 200 * t  # keeps t/L small and shrinking in proportion
         full = wall_compliance_mm_per_N(th, t, h, b, E, NU)
         L = 0.5 * (h - t) / math.sin(th)
-        bending = math.cos(th) ** 2 * L ** 3 / (12 * E * b * t ** 3 / 12)
+        bending = math.cos(th) ** 2 * L ** 3 / (12 * E_PS * b * t ** 3 / 12)
         ratios.append(full / bending - 1)
     assert ratios[0] < 1e-3
     assert ratios[1] == pytest.approx(ratios[0], rel=0.05)   # same t/L -> same ratio
     # and at a fixed height, thinner walls approach pure bending quadratically
     h = 5.0
     r = [wall_compliance_mm_per_N(th, t, h, b, E, NU)
-         / (math.cos(th) ** 2 * (0.5 * (h - t) / math.sin(th)) ** 3 / (E * b * t ** 3)) - 1
+         / (math.cos(th) ** 2 * (0.5 * (h - t) / math.sin(th)) ** 3 / (E_PS * b * t ** 3)) - 1
          for t in (0.1, 0.05)]
     assert r[0] / r[1] == pytest.approx(4.0, rel=0.05)
 
 
 def test_vertical_wall_is_axial_only():
-    """theta -> 90 deg: the wall is a column, compliance L / (E A)."""
+    """theta -> 90 deg: the wall is a column, compliance L / (E' A) (plane strain)."""
     th = math.radians(90 - 1e-7)
     t, h, b = 1.0, 4.0, 1.0
     L = 0.5 * (h - t)
-    assert wall_compliance_mm_per_N(th, t, h, b, E, NU) == pytest.approx(L / (E * b * t), rel=1e-9)
+    assert wall_compliance_mm_per_N(th, t, h, b, E, NU) == pytest.approx(L / (E_PS * b * t), rel=1e-9)
 
 
-def test_layer_stiffness_scales_with_struts_modulus_and_width():
-    th, t, h, b = math.radians(30), 0.8, 3.0, 0.8
-    k = layer_stiffness_N_per_mm(th, t, h, b, 4, E, NU)
-    assert layer_stiffness_N_per_mm(th, t, h, b, 8, E, NU) == pytest.approx(2 * k)
-    assert layer_stiffness_N_per_mm(th, t, h, 2 * b, 4, E, NU) == pytest.approx(2 * k)
-    assert layer_stiffness_N_per_mm(th, t, h, b, 4, 3 * E, NU) == pytest.approx(3 * k)
+def test_layer_stiffness_scales_with_web_width_and_modulus():
+    th, t, h, b = math.radians(30), 0.8, 3.0, 20.0
+    k = layer_stiffness_N_per_mm(th, t, h, b, E, NU)
+    assert layer_stiffness_N_per_mm(th, t, h, 2 * b, E, NU) == pytest.approx(2 * k)
+    assert layer_stiffness_N_per_mm(th, t, h, b, 3 * E, NU) == pytest.approx(3 * k)
 
 
-def test_layer_is_two_walls_in_series_times_two_chevrons_times_struts():
-    cell = HexCell(30, 0.8, 3.0, struts_per_chevron=5)
+def test_plane_strain_stiffens_a_slender_wall_by_one_over_one_minus_nu_squared():
+    # slender: bending dominates, and bending goes with E'; nu = 0 is plane stress
+    th, t, h, b = math.radians(40), 0.1, 20.0, 20.0
+    ratio = layer_stiffness_N_per_mm(th, t, h, b, E, NU) / layer_stiffness_N_per_mm(th, t, h, b, E, 0.0)
+    assert ratio == pytest.approx(1 / (1 - NU ** 2), rel=1e-3)
+
+
+def test_layer_is_two_walls_in_series_times_two_chevrons():
+    cell = HexCell(30, 0.8, 3.0, depth_mm=17.0)
     law = spring_layer(cell, Material(youngs_modulus_MPa=E, poisson_ratio=NU), corrected=False)
-    c_wall = timoshenko_frame_compliance(cell.theta_rad, cell.wall_length_mm, cell.b_mm, 0.8, E, NU)
+    c_wall = timoshenko_frame_compliance(cell.theta_rad, cell.wall_length_mm, 17.0, 0.8, E, NU)
     chevron = 1.0 / (2 * c_wall)
-    assert law.k_N_per_mm == pytest.approx(2 * 5 * chevron, rel=1e-10)
+    assert law.k_N_per_mm == pytest.approx(2 * chevron, rel=1e-10)
     assert law.lock_force_N == pytest.approx(law.k_N_per_mm * (3.0 - 1.6 - 0.1))
 
 
+def bonded_layer_modulus_fe(E, nu, a, H):
+    """Compression modulus (mean stress / strain) of a layer 2a wide and H thick bonded to two
+    rigid plates, plane strain, from scikit-fem's own linear elasticity (P2 triangles, the
+    right half with u_x = 0 on the mirror plane x = 0, elements graded towards the free edge).
+    Independent of the closed form it checks."""
+    from skfem import Basis, ElementTriP2, ElementVector, MeshTri, asm, condense, solve
+    from skfem.models.elasticity import lame_parameters, linear_elasticity
+    nx = max(8, int(math.ceil(16 * a / H)))
+    xs = a * np.sin(0.5 * np.pi * np.linspace(0, 1, nx + 1))
+    mesh = MeshTri.init_tensor(xs, np.linspace(0, H, 9)).refined(2 if a / H < 2 else 1)
+    basis = Basis(mesh, ElementVector(ElementTriP2()))
+    K = asm(linear_elasticity(*lame_parameters(E, nu)), basis)
+    bottom = basis.get_dofs(lambda x: np.isclose(x[1], 0.0))
+    top = basis.get_dofs(lambda x: np.isclose(x[1], H))
+    mirror = basis.get_dofs(lambda x: np.isclose(x[0], 0.0))
+    top_z = np.concatenate([top.nodal["u^2"], top.facet["u^2"]])
+    fixed = np.concatenate([bottom.all(), top.all(), mirror.nodal["u^1"], mirror.facet["u^1"]])
+    u = np.zeros(basis.N)
+    u[top_z] = -1.0
+    u = solve(*condense(K, np.zeros(basis.N), x=u, D=fixed))
+    return -(K @ u)[top_z].sum() / a * H
+
+
+@pytest.mark.parametrize("a_over_H", [1.0, 2.0, 4.0, 8.0, 16.0])
+def test_pad_compression_modulus_equals_fe_of_a_bonded_layer(a_over_H):
+    # the design range: contact half-width c = 7-14 mm over 2t = 0.8-4 mm, a/H >= 1.7
+    fe = bonded_layer_modulus_fe(E, NU, a_over_H, 1.0)
+    assert float(pad_compression_modulus_MPa(E, NU, a_over_H, 1.0)) == pytest.approx(fe, rel=0.01)
+
+
+def test_pad_compression_modulus_limits():
+    M = E * (1 - NU) / ((1 + NU) * (1 - 2 * NU))           # constrained (oedometric) modulus
+    assert float(pad_compression_modulus_MPa(E, NU, 1e6, 1.0)) == pytest.approx(M, rel=1e-5)
+    assert float(pad_compression_modulus_MPa(E, NU, 1e-6, 1.0)) == pytest.approx(E_PS, rel=1e-9)
+    assert float(pad_compression_modulus_MPa(E, 0.0, 3.0, 1.0)) == pytest.approx(E, rel=1e-12)
+    # nearly incompressible: the squeeze-film layer, 4 mu (1 + (a/H)^2)
+    nu = 0.5 - 1e-9
+    mu = E / (2 * (1 + nu))
+    assert float(pad_compression_modulus_MPa(E, nu, 3.0, 1.0)) == pytest.approx(4 * mu * (1 + 9.0), rel=1e-5)
+
+
 def test_locked_stiffness_is_walls_plus_contact_column():
-    """Past the lock the walls keep bending while 2t of pads carry load over the contact width."""
+    """Past the lock the walls keep bending while the closed pads (2t, bonded to the plates)
+    carry load over the contact width 2c and the whole web width D."""
     cell = HexCell(25, 0.6, 2.0)
     law = layer_law(cell, Material(youngs_modulus_MPa=E, poisson_ratio=NU))
-    contact_width = 30.0 - 2 * 0.6 / math.sin(math.radians(25))
-    column = E * 4 * 0.6 * contact_width / (2 * 0.6)
-    assert law.k_locked_N_per_mm == pytest.approx(law.k_N_per_mm + column, rel=1e-12)
+    c = 15.0 - 0.6 / math.sin(math.radians(25))           # inner tip half-width
+    column = bonded_layer_modulus_fe(E, NU, c, 1.2) * 20.0 * 2 * c / 1.2
+    assert law.k_locked_N_per_mm - law.k_N_per_mm == pytest.approx(column, rel=0.01)
     # for the soft reference layer the locked stiffness is hundreds of times the open one
     assert law.k_locked_N_per_mm / law.k_N_per_mm > 300
 

@@ -77,7 +77,7 @@ def test_frame_one_wall_equals_full_chevron_along_the_whole_path(cell):
         for dd in np.linspace(d_prev, d, 4)[1:]:
             u, f_top = full.solve(u, dd)
         d_prev = d
-        F_full = 2 * cell.struts_per_chevron * f_top
+        F_full = 2 * f_top                  # two chevrons of the web in parallel
         assert F_full == pytest.approx(F, rel=1e-7)
         U = u.reshape(-1, 3)
         n = full.tip
@@ -126,7 +126,7 @@ class HalfChevronContinuum:
         self.zero = np.flatnonzero(bottom | (top & is_x) | (cut & is_x))
         self.pinned = np.union1d(self.zero, self.top_z)
         self.free = np.setdiff1d(np.arange(self.basis.N), self.pinned)
-        self.depth_factor = 2.0 * cell.struts_per_chevron * cell.b_mm
+        self.depth_factor = 2.0 * cell.b_mm    # two chevrons of a web b = D wide
         self.is_x = is_x
 
     def assemble(self, u, need_K=True):

@@ -12,29 +12,18 @@ from . import parts
 
 
 def check_fits(geometry: SensorGeometry) -> None:
-    """Raise :class:`InputError` when the pocket cannot be built inside the cap's footprint.
-
-    The cell rules (HexCell.violations) are checked by the caller; these are the housing rules
-    that only the CAD needs: the chamfered pocket must leave at least one side wall of
-    material to the cap's sides.
-    """
-    h = geometry.housing
-    outer_r = 0.5 * geometry.pocket_diameter_mm + h.pocket_chamfer_mm
-    room = 0.5 * min(geometry.width_mm, geometry.depth_mm) - h.side_wall_mm
-    if outer_r > room:
-        raise InputError("magnet.diameter_mm", geometry.magnet.diameter_mm,
-                         f"the pocket (radius {outer_r:g} mm incl. clearance and chamfer) needs "
-                         f"<= {room:g} mm: min(width_mm, depth_mm)/2 minus housing.side_wall_mm")
-    if h.pocket_chamfer_mm >= geometry.pocket_depth_mm:
-        raise InputError("housing.pocket_chamfer_mm", h.pocket_chamfer_mm,
-                         f"must be smaller than the pocket depth {geometry.pocket_depth_mm:g} mm")
+    """Raise :class:`InputError` for the first broken housing rule (the pocket and the slot
+    must fit inside the body, the depth must be whole print layers): see
+    :meth:`SensorGeometry.housing_violations`. The cell rules are checked by the caller."""
+    for field, value, allowed in geometry.housing_violations():
+        raise InputError(field, value, allowed)
 
 
 def body_solids(geometry: SensorGeometry) -> tuple[list[Solid], list[Solid]]:
     """(solids to fuse, solids to cut) of the printed body, bottom to top."""
     keep = [parts.base_block(geometry)]
     for cell, z_bottom in zip(geometry.layers, geometry.layer_bottoms_mm):
-        keep += parts.layer_struts(cell, z_bottom)
+        keep.append(parts.layer_web(cell, z_bottom))
     keep += parts.plates(geometry)
     keep.append(parts.cap_block(geometry))
     cut = parts.base_cuts(geometry) + [parts.magnet_pocket(geometry)]
@@ -44,7 +33,7 @@ def body_solids(geometry: SensorGeometry) -> tuple[list[Solid], list[Solid]]:
 def build_body(geometry: SensorGeometry) -> Solid:
     """The one printed TPU body: every part fused in one boolean, then the cavities cut.
 
-    The struts' pads touch the base, plates and cap face to face, so the fuse bonds them; one
+    The webs' pads touch the base, plates and cap face to face, so the fuse bonds them; one
     multi-argument fuse (not a growing loop) keeps it to a single boolean operation.
     """
     check_fits(geometry)
@@ -73,9 +62,20 @@ class SensorCAD:
 
 
 def build_sensor(geometry: SensorGeometry) -> SensorCAD:
-    """Build the body, the magnet and the board of ``geometry`` in print orientation."""
+    """Build the body, the magnet and the board of ``geometry`` in the sensor frame."""
     body = build_body(geometry)
-    pcb, chip = parts.board_solids(geometry)
-    board = Compound(children=[Compound([pcb], label="pcb"), Compound([chip], label="MLX90393")],
-                     label=f"board_{geometry.board.key}")
+    pcb, chip, *sockets = parts.board_solids(geometry)
+    children = [Compound([pcb], label="pcb"), Compound([chip], label="MLX90393")]
+    children += [Compound([s], label=f"connector_{i + 1}") for i, s in enumerate(sockets)]
+    board = Compound(children=children, label=f"board_{geometry.board.key}")
     return SensorCAD(body=body, magnet=parts.magnet_solid(geometry), board=board)
+
+
+def print_mesh(geometry: SensorGeometry, body: Solid, tolerance_mm: float):
+    """(vertices, triangles) of the body as it lies on the bed (the STL/3MF frame): the
+    tessellation, closed and outward-oriented, turned into the print frame."""
+    from . import mesh_io
+    vertices, triangles = mesh_io.tessellate(body, tolerance_mm)
+    if not mesh_io.is_closed_oriented(triangles):
+        raise RuntimeError("the tessellated body is not closed: please report this design")
+    return geometry.to_print_frame(vertices), triangles     # a rotation: winding is kept

@@ -90,8 +90,39 @@ def _xml_number(x: float) -> str:
     return f"{x:.6f}".rstrip("0").rstrip(".") if x else "0"
 
 
-def three_mf_bytes(vertices: np.ndarray, triangles: np.ndarray, name: str) -> bytes:
-    """A 3MF package (3MF Core Specification 1.x) holding one mesh object, unit mm."""
+# PrusaSlicer's per-height custom G-code inside a 3MF project (PrusaSlicer 2.2+, read by the
+# GUI and by its command line): Metadata/Prusa_Slicer_custom_gcode_per_print_z.xml, one <code>
+# per event. ``type`` is CustomGCode::Type (ColorChange 0, PausePrint 1, ToolChange 2,
+# Template 3, Custom 4); ``gcode`` is the command written for PrusaSlicer <= 2.2, which has no
+# ``type``. An event at print_z is emitted at the start of the layer whose top is the first one
+# at or above print_z, after the move to that layer and before its first extrusion.
+PRUSA_CUSTOM_GCODE_MEMBER = "Metadata/Prusa_Slicer_custom_gcode_per_print_z.xml"
+PRUSA_PAUSE_PRINT_TYPE = 1
+
+
+def prusa_pause_xml(pause_after_z_mm: float, layer_height_mm: float, message: str = "") -> str:
+    """The custom G-code member asking for one pause after the layer whose top is
+    ``pause_after_z_mm``: the event sits at the top of the next layer (as the GUI stores it)."""
+    print_z = round(pause_after_z_mm + layer_height_mm, 6)
+    safe = (message.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;")
+            .replace('"', "&quot;"))
+    return ('<?xml version="1.0" encoding="utf-8"?>\n<custom_gcodes_per_print_z>\n'
+            f'<code print_z="{_xml_number(print_z)}" type="{PRUSA_PAUSE_PRINT_TYPE}" extruder="1" '
+            f'color="" extra="{safe}" gcode="M601"/>\n'
+            '<mode value="SingleExtruder"/>\n</custom_gcodes_per_print_z>\n')
+
+
+def three_mf_bytes(vertices: np.ndarray, triangles: np.ndarray, name: str,
+                   pause_after_z_mm: float | None = None, layer_height_mm: float = 0.2,
+                   pause_message: str = "insert the magnet") -> bytes:
+    """A 3MF package (3MF Core Specification 1.x) holding one mesh object, unit mm.
+
+    With ``pause_after_z_mm``, the package also carries PrusaSlicer's per-height custom G-code
+    with one "pause print" after the layer whose top is at that height (layers of
+    ``layer_height_mm``): PrusaSlicer's GUI shows the pause on its layer slider and its command
+    line writes the profile's pause_print_gcode (``;PAUSE_PRINT``, ``M117 <message>``, then
+    e.g. M601) between that layer's last move and the next layer's first.
+    """
     vert_xml = "".join(f'<vertex x="{_xml_number(x)}" y="{_xml_number(y)}" z="{_xml_number(z)}"/>'
                        for x, y, z in vertices)
     tri_xml = "".join(f'<triangle v1="{a}" v2="{b}" v3="{c}"/>' for a, b, c in triangles)
@@ -117,10 +148,16 @@ def three_mf_bytes(vertices: np.ndarray, triangles: np.ndarray, name: str) -> by
             '<Relationship Target="/3D/3dmodel.model" Id="rel0" '
             'Type="http://schemas.microsoft.com/3dmanufacturing/2013/01/3dmodel"/>'
             '</Relationships>\n')
+    if pause_after_z_mm is not None:        # every part of the package needs a content type
+        content_types = content_types.replace(
+            '</Types>', '<Default Extension="xml" ContentType="application/xml"/></Types>')
+    members = [("[Content_Types].xml", content_types), ("_rels/.rels", rels), ("3D/3dmodel.model", model)]
+    if pause_after_z_mm is not None:
+        members.append((PRUSA_CUSTOM_GCODE_MEMBER,
+                        prusa_pause_xml(pause_after_z_mm, layer_height_mm, pause_message)))
     buf = io.BytesIO()
     with zipfile.ZipFile(buf, "w", compression=zipfile.ZIP_DEFLATED) as zf:
-        for member, text in (("[Content_Types].xml", content_types), ("_rels/.rels", rels),
-                             ("3D/3dmodel.model", model)):
+        for member, text in members:
             info = zipfile.ZipInfo(member, date_time=_ZIP_DATE)
             info.compress_type = zipfile.ZIP_DEFLATED
             info.external_attr = 0o644 << 16

@@ -2,8 +2,8 @@
 
 Every dimension is read from :class:`mst_cli.geometry.SensorGeometry` (and the
 :class:`~mst_cli.geometry.HexCell` of each layer); nothing here stores a number of its own.
-Parts are in print orientation: z up from the build plate, the magnet axis along z through
-x = y = 0.
+Parts are built in the sensor frame (z up the stack, the magnet axis along z through x = y = 0);
+the mesh files are turned into the print frame (lying on the -y face) when they are written.
 
 Each builder returns plain :class:`build123d.Solid` objects so that the body can be fused in
 a single boolean operation (:func:`mst_cli.cad.assembly.build_body`).
@@ -29,20 +29,18 @@ def _polygon_xz(points_xz, y_mm: float) -> Wire:
     return Wire.make_polygon([(x, y_mm, z) for x, z in points_xz], close=True)
 
 
-def layer_struts(cell: HexCell, z_bottom_mm: float) -> list[Solid]:
+def layer_web(cell: HexCell, z_bottom_mm: float) -> Solid:
     """One collapsible layer: the hex profile (outer hexagon minus its inward offset by t,
-    DESIGN.md section 3) extruded by the strut width b along y, once per strut centre.
+    DESIGN.md section 3) extruded through the whole depth D along y, centred on y = 0.
 
     The bottom and top pads lie flat on z_bottom and z_bottom + h so that they fuse with the
     base/plate below and the plate/cap above.
     """
     outer = [(x, z + z_bottom_mm) for x, z in cell.outer_profile_xz()]
     inner = [(x, z + z_bottom_mm) for x, z in cell.inner_profile_xz()]
-    b = cell.b_mm
-    # Profile face in the plane y = -b/2, extruded by +b: the strut is centred on y = 0.
-    face = Face(_polygon_xz(outer, -0.5 * b), [_polygon_xz(inner, -0.5 * b)])
-    strut = Solid.extrude(face, (0.0, b, 0.0))
-    return [strut.moved(Location((0.0, y, 0.0))) for y in cell.strut_centres_y_mm]
+    d = cell.depth_mm
+    face = Face(_polygon_xz(outer, -0.5 * d), [_polygon_xz(inner, -0.5 * d)])
+    return Solid.extrude(face, (0.0, d, 0.0))
 
 
 def plates(geometry: SensorGeometry) -> list[Solid]:
@@ -56,18 +54,26 @@ def plates(geometry: SensorGeometry) -> list[Solid]:
 
 
 def magnet_pocket(geometry: SensorGeometry) -> Solid:
-    """The closed pocket that receives the magnet: a cylinder of the pocket diameter from the
-    pocket floor (z_magnet_bottom) up to the pause height, its top edge chamfered at 45 deg
-    by ``housing.pocket_chamfer_mm``. Built as one solid of revolution about z."""
-    r = 0.5 * geometry.pocket_diameter_mm
-    c = geometry.housing.pocket_chamfer_mm
-    z0, z1 = geometry.z_magnet_bottom_mm, geometry.z_pause_mm
-    if c > 0.0:
-        rz = [(0.0, z0), (r, z0), (r, z1 - c), (r + c, z1), (0.0, z1)]
-    else:
-        rz = [(0.0, z0), (r, z0), (r, z1), (0.0, z1)]
-    section = Face(Wire.make_polygon([(x, 0.0, z) for x, z in rz], close=True))
-    return Solid.revolve(section, 360.0, Axis.Z)
+    """The closed pocket that receives the magnet, as one prism along z (the magnet axis)
+    over the pocket's depth, plus its roof.
+
+    Its section across the axis is a U open towards +y (up in the print): a half disc of the
+    pocket radius below y = 0 and straight sides up to ``pocket_top_y_mm`` (a layer boundary,
+    where the print pauses). Above that a gable closes it, its ridge along x on a layer
+    boundary, at least 45 deg steep: each layer after the pause overhangs less than a layer
+    height, so nothing is bridged.
+    """
+    r = geometry.pocket_radius_mm
+    z0, d = geometry.z_magnet_bottom_mm, geometry.pocket_depth_mm
+    y_top = geometry.pocket_top_y_mm
+    disc = Solid.make_cylinder(r, d).moved(Location((0.0, 0.0, z0)))
+    sides = box(-r, r, 0.0, y_top, z0, z0 + d)
+    # gable: triangle in the y-z plane (base on y = y_top across the depth, apex at the
+    # ridge), extruded along x over the pocket's width
+    tri = [(y_top, z0), (geometry.pocket_roof_apex_y_mm, z0 + 0.5 * d), (y_top, z0 + d)]
+    roof = Solid.extrude(Face(Wire.make_polygon([(-r, y, z) for y, z in tri], close=True)),
+                         (2.0 * r, 0.0, 0.0))
+    return disc.fuse(sides, roof).clean()
 
 
 def cap_block(geometry: SensorGeometry) -> Solid:
@@ -77,27 +83,28 @@ def cap_block(geometry: SensorGeometry) -> Solid:
 
 
 def base_block(geometry: SensorGeometry) -> Solid:
-    """The base block (base_length x base_width, up to the top of the cover), without cuts."""
-    L2, B2 = 0.5 * geometry.base_length_mm, 0.5 * geometry.base_width_mm
-    return box(-L2, L2, -B2, B2, 0.0, geometry.z_base_top_mm)
+    """The base block (base_length x D, up to the top of the cover), without cuts."""
+    L2, d2 = 0.5 * geometry.base_length_mm, 0.5 * geometry.depth_mm
+    return box(-L2, L2, -d2, d2, 0.0, geometry.z_base_top_mm)
 
 
 def base_cuts(geometry: SensorGeometry) -> list[Solid]:
-    """Board slot and cable exit, as cutting tools.
+    """Board slot and cable windows, as cutting tools.
 
     The slot (board outline + clearance, from the base floor to the cover's underside) runs
-    out through the -x face: the board slides in along +x until it stops at the slot's end,
-    which puts the chip under the magnet axis (plus ``chip_offset_mm``). The cable exit is a
-    notch of ``housing.cable_exit_width_mm`` through the +x wall, centred on the chip.
+    from its floor at ``slot_floor_y_mm`` out through the +y face, the face on top in the
+    print: the board slides in along -y until it rests on the floor, which puts the chip
+    under the magnet axis. Each connector's cable leaves through a window in the side wall
+    beside it, open through the same face; so nothing in the base is bridged.
     """
-    L2 = 0.5 * geometry.base_length_mm
-    x0, x1, y0, y1 = geometry.slot_xy_mm
+    x0, x1 = geometry.slot_x_mm
+    y_out = 0.5 * geometry.depth_mm + _OVERCUT_MM
     z0, z1 = geometry.z_board_bottom_mm, geometry.z_cover_bottom_mm
-    cuts = [box(-L2 - _OVERCUT_MM, x1, y0, y1, z0, z1)]
-    e0, e1 = geometry.cable_exit_y_mm
-    if e1 > e0:
-        # starts inside the slot (already empty) so it never shares the slot's end face
-        cuts.append(box(0.5 * (x0 + x1), L2 + _OVERCUT_MM, e0, e1, z0, z1))
+    cuts = [box(x0, x1, geometry.slot_floor_y_mm, y_out, z0, z1)]
+    for x_in, x_out, y_floor, wz0, wz1 in geometry.cable_windows:
+        # from just inside the slot (already empty) to past the outer face
+        a, b = (x_out - _OVERCUT_MM, x_in + _OVERCUT_MM) if x_out < x_in else (x_in - _OVERCUT_MM, x_out + _OVERCUT_MM)
+        cuts.append(box(a, b, y_floor, y_out, wz0, wz1))
     return cuts
 
 
@@ -109,13 +116,15 @@ def magnet_solid(geometry: SensorGeometry) -> Solid:
 
 
 def board_solids(geometry: SensorGeometry) -> list[Solid]:
-    """The carrier board on the slot floor and the QFN package on it (Hall plates at the
-    package centre, which is where the forward model puts the field point)."""
+    """The carrier board on the slot floor, the QFN package on it (Hall plates at the package
+    centre, where the forward model puts the field point) and its connectors."""
     bd = geometry.board
     bx, by = geometry.board_origin_xy_mm
-    pcb = box(bx, bx + bd.length_mm, by, by + bd.width_mm,
-              geometry.z_board_bottom_mm, geometry.z_board_top_mm)
-    cx, cy = geometry.chip_offset_mm
+    zb, zt = geometry.z_board_bottom_mm, geometry.z_board_top_mm
+    pcb = box(bx, bx + bd.length_mm, by, by + bd.width_mm, zb, zt)
+    cx, cy = geometry.chip_xy_printed_mm
     s2 = 0.5 * bd.chip_size_mm
-    chip = box(cx - s2, cx + s2, cy - s2, cy + s2, geometry.z_board_top_mm, geometry.z_chip_top_mm)
-    return [pcb, chip]
+    chip = box(cx - s2, cx + s2, cy - s2, cy + s2, zt, geometry.z_chip_top_mm)
+    sockets = [box(bx + c.x0_mm, bx + c.x1_mm, by + c.y0_mm, by + c.y1_mm, zt, zt + c.height_mm)
+               for c in bd.connectors]
+    return [pcb, chip] + sockets

@@ -61,14 +61,6 @@ def check_contradictions(problem: DesignProblem) -> None:
         raise InputError("design.h_mm_bounds", [float(h_lo), float(h_hi)],
                          f"the upper bound must be >= {need_h:g} mm: two walls of at least "
                          f"{t_min:g} mm plus a printable cavity of {pr.min_gap_mm:g} mm")
-    if fam.strut_width_mm is not None and fam.strut_width_mm < pr.min_wall_mm:
-        raise InputError("family.strut_width_mm", fam.strut_width_mm,
-                         f"must be >= printer.min_wall_mm = {pr.min_wall_mm:g} mm")
-    b_min = t_min if fam.strut_width_mm is None else fam.strut_width_mm
-    if geo.strut_gap_mm(fam.depth_mm, b_min, fam.struts_per_chevron) < pr.min_gap_mm:
-        raise InputError("family.struts_per_chevron", fam.struts_per_chevron,
-                         f"leaves struts closer than printer.min_gap_mm = {pr.min_gap_mm:g} mm "
-                         f"in depth {fam.depth_mm:g} mm even at the thinnest strut {b_min:g} mm")
     if problem.max_height_mm is not None:
         lowest = problem.height_offset_mm + problem.n * max(h_lo, need_h)
         if problem.max_height_mm < lowest:
@@ -118,10 +110,9 @@ def limits(problem: DesignProblem) -> Limits:
         h_sum_max = min(h_sum_max, problem.max_height_mm - problem.height_offset_mm)
     gap0_max = float(geo.unloaded_gap_mm(h_sum_max, n, housing, board))
     theta_lo = math.radians(problem.lo[0])
-    b_hi = problem.hi[1] if fam.strut_width_mm is None else fam.strut_width_mm
     # locked stiffness = walls + contact column >= the contact column alone
-    k_locked_min = float(contact_stiffness_N_per_mm(theta_lo, problem.hi[1], fam.width_mm, b_hi,
-                                                   fam.struts_per_chevron, problem.E_MPa))
+    k_locked_min = float(contact_stiffness_N_per_mm(theta_lo, problem.hi[1], fam.width_mm,
+                                                   fam.depth_mm, problem.E_MPa))
     locked_give = n * R[-1] * (1 + tol) / k_locked_min
     gap_min = float(geo.unloaded_gap_mm(0.0, n, housing, board) + n * (2 * t_min + fam.contact_allowance_mm)
                     - locked_give)
@@ -131,9 +122,7 @@ def limits(problem: DesignProblem) -> Limits:
 
     axes = [np.linspace(problem.lo[j], problem.hi[j], GRID_POINTS) for j in range(3)]
     th, t, h = (a.ravel() for a in np.meshgrid(*axes, indexing="ij"))
-    b = t if fam.strut_width_mm is None else np.full_like(t, fam.strut_width_mm)
-    margins = geo.cell_margins_mm(np.radians(th), t, h, b, fam.width_mm, fam.depth_mm,
-                                  fam.struts_per_chevron, fam.contact_allowance_mm,
+    margins = geo.cell_margins_mm(np.radians(th), t, h, fam.width_mm, fam.contact_allowance_mm,
                                   pr.min_wall_mm, pr.min_gap_mm, pr.nozzle_mm)
     ok = np.all(margins >= 0.0, axis=-1)
     Rl, _, _, _ = problem.responses(th[ok, None], t[ok, None], h[ok, None]) if ok.any() else (None,) * 4

@@ -164,9 +164,7 @@ class DesignProblem:
         """(R_N per layer, S_per_N per regime, B_full_T, gap0_mm) of candidate stacks."""
         fam = self.family
         theta = np.radians(theta_deg)
-        b = t_mm if fam.strut_width_mm is None else np.full_like(t_mm, fam.strut_width_mm)
-        k, d_lock, R, k_locked = spring_arrays(theta, t_mm, h_mm, b, fam.struts_per_chevron,
-                                               fam.width_mm, fam.contact_allowance_mm, self.E_MPa, self.nu)
+        k, d_lock, R, k_locked = spring_arrays(theta, t_mm, h_mm, fam.depth_mm, fam.width_mm, fam.contact_allowance_mm, self.E_MPa, self.nu)
         gap0 = geo.unloaded_gap_mm(h_mm.sum(axis=-1), self.n, self.probe.housing, self.probe.board)
         _, S, _, B = regime_kernel(k, d_lock, k_locked, gap0, self.field_T, R)
         return R, S, B[..., -1], gap0
@@ -176,10 +174,9 @@ class DesignProblem:
                                                       for a in (theta_deg, t_mm, h_mm)))
         fam, pr = self.family, self.printer
         R, S, B_full, gap0 = self.responses(theta_deg, t_mm, h_mm)
-        b = t_mm if fam.strut_width_mm is None else np.full_like(t_mm, fam.strut_width_mm)
-        margins = geo.cell_margins_mm(np.radians(theta_deg), t_mm, h_mm, b, fam.width_mm, fam.depth_mm,
-                                      fam.struts_per_chevron, fam.contact_allowance_mm,
-                                      pr.min_wall_mm, pr.min_gap_mm, pr.nozzle_mm)
+        margins = geo.cell_margins_mm(np.radians(theta_deg), t_mm, h_mm, fam.width_mm,
+                                      fam.contact_allowance_mm, pr.min_wall_mm, pr.min_gap_mm,
+                                      pr.nozzle_mm)
         height = self.height_offset_mm + h_mm.sum(axis=-1)
 
         logR = np.log(np.maximum(R, _TINY))

@@ -1,7 +1,7 @@
-"""Rung L2 ``continuum``: nonlinear plane-stress finite elements of the real hex profile.
+"""Rung L2 ``continuum``: nonlinear plane-strain finite elements of the real hex profile.
 
-The reference model of the ladder (DESIGN.md section 4). One strut's profile (x across the
-width, z up) is meshed from the :class:`~mst_cli.geometry.HexCell` polygons, with quadratic
+The reference model of the ladder (DESIGN.md section 4). The layer's profile (x across the
+width, z up; one continuous web through the depth D along y) is meshed from the :class:`~mst_cli.geometry.HexCell` polygons, with quadratic
 triangles (P2: linear triangles lock in bending at nu = 0.45), and loaded by displacement
 control with a compressible Neo-Hookean material up to the onset of contact.
 
@@ -19,15 +19,15 @@ bottom pad's right part plus the lower right wall:
   u_z = -d/2, free to slide in x (no shear traction on a mirror plane).
 
 The tip reaction f (N per mm of depth) is the force carried by one chevron whose compression is
-d. Two chevrons per strut and n_s struts of width b act in parallel:  F = 2 n_s b f.
+d. The web's two chevrons act in parallel over its width b = D:  F = 2 b f.
 
-Plane stress (struts of width b, default b = t, free faces along y): the out-of-plane stretch
-lambda_3 at every quadrature point solves S_33 = 0 for the compressible Neo-Hookean energy
+Plane strain (the web is D = 20 mm wide, its walls 0.4-2 mm thick: away from the faces
+y = +-D/2 nothing can stretch along y), lambda_3 = 1: the compressible Neo-Hookean energy
 W = mu/2 (I_1 - 3) - mu ln J + lambda/2 (ln J)^2 (e.g. Bonet & Wood, "Nonlinear Continuum
-Mechanics for Finite Element Analysis", 2nd ed., section 6.4.3), with the 3D Lame constants of
-the material's small-strain E and nu; the consistent tangent includes d lambda_3 / dF, so the
-small-strain limit is plane-stress linear elasticity (effective lambda* = 2 mu lambda /
-(2 mu + lambda)).
+Mechanics for Finite Element Analysis", 2nd ed., section 6.4.3) of the in-plane F, with the
+3D Lame constants of the material's small-strain E and nu. Its small-strain limit is
+plane-strain linear elasticity (uniaxial modulus E' = E / (1 - nu^2); tests/test_continuum.py
+checks the tangent, a patch test and a Timoshenko cantilever).
 
 Contact: the cavity is "closed" when the clear gap between the inner surface and its mirror
 image across z = h/2 falls to the cell's contact allowance anywhere on the inner pad or on the
@@ -157,28 +157,14 @@ def _lame_3d(E_MPa, nu):
     return mu, lam
 
 
-def _stretch_33(J2, mu, lam):
-    """Out-of-plane stretch with S_33 = 0: mu (l^2 - 1) + lam ln(J2 l) = 0 (monotone in l)."""
-    l3 = np.ones_like(J2)
-    lnJ2 = np.log(J2)
-    for _ in range(30):
-        g = mu * (l3 ** 2 - 1.0) + lam * (lnJ2 + np.log(l3))
-        step = g / (2.0 * mu * l3 + lam / l3)
-        l3 = np.maximum(l3 - step, 0.5 * l3)
-        if np.max(np.abs(step)) < 1e-13:
-            break
-    return l3
-
-
 def _kinematics(Fm, mu, lam):
-    """Plane-stress Neo-Hookean at F (2, 2, ...): first Piola stress and tangent pieces."""
-    J2 = Fm[0, 0] * Fm[1, 1] - Fm[0, 1] * Fm[1, 0]
-    Finv_T = np.array([[Fm[1, 1], -Fm[1, 0]], [-Fm[0, 1], Fm[0, 0]]]) / J2
-    l3 = _stretch_33(J2, mu, lam)
-    lnJ = np.log(J2 * l3)
-    beta = 2.0 * mu * l3 ** 2 / (2.0 * mu * l3 ** 2 + lam)
+    """Plane-strain Neo-Hookean at the in-plane F (2, 2, ...), lambda_3 = 1: the first Piola
+    stress P = mu F + (lam ln J - mu) F^-T and the pieces of its tangent (F^-T, ln J)."""
+    J = Fm[0, 0] * Fm[1, 1] - Fm[0, 1] * Fm[1, 0]
+    Finv_T = np.array([[Fm[1, 1], -Fm[1, 0]], [-Fm[0, 1], Fm[0, 0]]]) / J
+    lnJ = np.log(J)
     P = mu * Fm + (lam * lnJ - mu) * Finv_T
-    return P, Finv_T, lnJ, beta
+    return P, Finv_T, lnJ
 
 
 # --------------------------------------------------------------------------- solver
@@ -236,7 +222,7 @@ class _Problem:
         # every z-dof of the inner wall face may touch the mirror plane (frictionless)
         self.inner_z = np.setdiff1d(np.flatnonzero(on_wall_face & ~is_x), self.tip_z)
         self.h2 = h2
-        self.depth_factor = 2.0 * cell.struts_per_chevron * cell.b_mm   # F = 2 n_s b f
+        self.depth_factor = 2.0 * cell.b_mm   # F = 2 b f: two chevrons of a web b wide
 
     # residual and tangent -------------------------------------------------------
     def assemble(self, u, need_K=True):
@@ -246,7 +232,7 @@ class _Problem:
         w = self.basis.interpolate(u)
         G = w.grad if hasattr(w, "grad") else grad(w)
         Fm = G + np.eye(2)[:, :, None, None]
-        P, FiT, lnJ, beta = _kinematics(Fm, mu, lam)
+        P, FiT, lnJ = _kinematics(Fm, mu, lam)
         if not np.all(np.isfinite(P)) or np.any(Fm[0, 0] * Fm[1, 1] - Fm[0, 1] * Fm[1, 0] <= 0):
             raise FloatingPointError("inverted element")
 
@@ -262,7 +248,7 @@ class _Problem:
             dFT = np.einsum("ji...->ij...", dF)
             t1 = np.einsum("ij...,jk...,kl...->il...", FiT, dFT, FiT)
             tr = np.einsum("ij...,ij...->...", FiT, dF)
-            return mu * dF - (lam * lnJ - mu) * t1 + lam * beta * FiT * tr
+            return mu * dF - (lam * lnJ - mu) * t1 + lam * FiT * tr
 
         @BilinearForm
         def tan(du, v, _):
@@ -451,6 +437,6 @@ def continuum_layer(cell: geo.HexCell, material) -> TabulatedLockingLayer:
     # locked: the walls' last tangent in parallel with the closed cavity's contact column (L0)
     k_walls = max((F[-1] - F[-2]) / (d[-1] - d[-2]), 0.0)
     k_locked = k_walls + float(contact_stiffness_N_per_mm(
-        cell.theta_rad, cell.t_mm, cell.width_mm, cell.b_mm, cell.struts_per_chevron,
-        material.youngs_modulus_MPa))
+        cell.theta_rad, cell.t_mm, cell.width_mm, cell.b_mm, material.youngs_modulus_MPa,
+        material.poisson_ratio))
     return TabulatedLockingLayer.from_curve(d, F, res.k_linear_N_per_mm, k_locked)

@@ -3,7 +3,8 @@
 Beam theory clamps each wall at the pad's mid-plane and at the chevron's tip; the real
 profile's joints are finite blocks with a near-crack at the cavity's tip vertex, so thick or
 shallow walls (large t/L, small theta) are stiffer or softer than the beam says. The ratio
-k_L2 / k_L0 depends only on theta and t/L (both scale with E b; see
+k_L2 / k_L0 depends only on theta and t/L (and nu: both are plane strain and scale with E b;
+see
 benchmarks/fit_l0_correction.py, which fits and stores the coefficients in
 mst_cli/data/l0_correction.json):
 
@@ -12,8 +13,8 @@ mst_cli/data/l0_correction.json):
 so the factor tends to 1 for slender walls (x -> 0), the beam-theory limit.
 
 Beam theory is also linear, but the walls rotate a lot before the cavity closes (the stroke
-is most of their height), so the real lock force R is below k d_lock -- by 25 % at the
-median, 70 % for steep walls -- and the cavity closes a little before the pads meet. Two more
+is most of their height), so the real lock force R is below k d_lock -- by 35 % at the
+median of the 24 bench cells, up to 70 % for steep walls -- and the cavity closes a little before the pads meet. Two more
 fits give R / (k d_lock) and d_lock / (h - 2t - a):
 
     ln(ratio) = sigma * Q(x, s),  Q a full cubic,  sigma = d_lock / (L sin theta)
@@ -21,7 +22,8 @@ fits give R / (k d_lock) and d_lock / (h - 2t - a):
 sigma is the stroke as a fraction of one wall's rise: the softening is a large-rotation
 effect, first order in the stroke, so both ratios tend to 1 as the stroke vanishes.
 
-Fitted for nu = 0.45, b = t and a 0.1 mm contact allowance (``fitted_on`` in the data file).
+Fitted for nu = 0.45 and a 0.1 mm contact allowance, plane strain (the web of b = D), against
+the plane-strain L2 (``fitted_on`` in the data file); b drops out of every ratio.
 Vectorised, pure.
 """
 

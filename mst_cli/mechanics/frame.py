@@ -5,16 +5,18 @@ mid-plane (z = t/2) to the chevron tip (z = h/2), the same line and length L tha
 (:attr:`HexCell.wall_length_mm`). Boundary conditions are those of one wall of a symmetric
 chevron (see :mod:`mst_cli.mechanics.spring`): clamped at the pad, which is bonded to the rigid
 plate; at the tip, on the mirror plane z = h/2, no rotation and no horizontal force, vertical
-motion prescribed (-d/2 for a layer compression d). Two walls in series make a chevron, two
-chevrons and n_s struts act in parallel, so the layer force is F = 2 n_s f_wall.
+motion prescribed (-d/2 for a layer compression d). Two walls in series make a chevron and
+the web's two chevrons act in parallel, so the layer force is F = 2 f_wall (f_wall for the
+whole web width b = D).
 
 Elements are corotational (Crisfield, "Non-linear Finite Element Analysis of Solids and
 Structures", Vol. 1, ch. 7; Battini & Pacoste, Comput. Methods Appl. Mech. Eng. 191 (2002)
 1755): the rigid rotation of each element's chord is taken out exactly and the remaining
 local deformation (stretch, two end rotations) is small and linear, with the shear-flexible
 local stiffness EI/l (4+phi)/(1+phi), EI/l (2-phi)/(1+phi), phi = 12 EI/(kappa G A l^2).
-Large rotations of the walls are exact; strains are assumed small. Plane stress: a strut of
-width b (default b = t) is a beam with free faces, modulus E.
+Large rotations of the walls are exact; strains are assumed small. Plane strain: the wall is
+a web b = D wide (20 mm against 0.4-2 mm thick) whose sections cannot contract along y, so
+EA = E' b t and EI = E' b t^3 / 12 with E' = E / (1 - nu^2), as in rung L0; G is unchanged.
 
 Load: displacement control with adaptive steps. Contact: the cavity closes when the clear gap
 between the wall's inner surface (centre line offset by t/2 along the rotated section normal)
@@ -27,8 +29,9 @@ The layer law (:func:`frame_layer`) multiplies the beam forces by the joint fact
 beam's rigid clamps at the pad mid-plane and the tip are what that factor corrects.
 :func:`solve_frame` itself returns the pure beam solution. Joint models of L1's own,
 rigid end zones from the joint geometry, were measured against L2 on the fit's 150 cells
-(benchmarks/model_choices.py): median |error| in k 18.7 % with none (beam theory), 14.7 % with
-half the geometric overlaps rigid, 77 % with all of them. The near-crack at the cavity's tip
+(benchmarks/model_choices.py, plane strain): median |error| in k 23.7 % with none (beam
+theory), 11.9 % with half the geometric overlaps rigid, 61 % with all of them (L0's fitted
+factor: 1.7 %, ``mst bench``). The near-crack at the cavity's tip
 vertex makes the joints softer than rigid and stiffer than absent, which the fit captures and
 these do not, so L1 reuses L0's factor.
 
@@ -45,6 +48,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import geometry as geo
+from .spring import plane_strain_modulus_MPa
 
 DEFAULT_N_ELEMENTS = 12
 SHEAR_COEFFICIENT_RECT = 5.0 / 6.0
@@ -190,7 +194,8 @@ class _Wall:
         self.beta0 = np.full(n_el, th)
         E, nu = material.youngs_modulus_MPa, material.poisson_ratio
         G = E / (2.0 * (1.0 + nu))
-        self.EA, self.EI = E * b * t, E * b * t ** 3 / 12.0
+        E_ps = plane_strain_modulus_MPa(E, nu)          # a web b = D wide: plane strain
+        self.EA, self.EI = E_ps * b * t, E_ps * b * t ** 3 / 12.0
         self.phi = 12.0 * self.EI / (SHEAR_COEFFICIENT_RECT * G * b * t * self.l0 ** 2)
         self.n_nodes = n_el + 1
         ndof = 3 * self.n_nodes
@@ -263,7 +268,7 @@ def solve_frame(cell: geo.HexCell, material, n_elements: int = DEFAULT_N_ELEMENT
         raise ValueError(f"frame model needs a cell with p > 0 and h - 2t > the contact allowance "
                          f"(theta={cell.theta_deg:g} deg, t={cell.t_mm:g} mm, h={cell.h_mm:g} mm)")
     wall = _Wall(cell, material, n_elements)
-    factor = 2.0 * cell.struts_per_chevron
+    factor = 2.0                      # two chevrons in parallel
     allowance = cell.contact_allowance_mm
     u = np.zeros(wall.ndof)
 
@@ -335,6 +340,6 @@ def frame_layer(cell: geo.HexCell, material) -> TabulatedLockingLayer:
     # locked: the walls' last tangent in parallel with the closed cavity's contact column (L0)
     k_walls = max((F[-1] - F[-2]) / (d[-1] - d[-2]), 0.0)
     k_locked = k_walls + float(contact_stiffness_N_per_mm(
-        cell.theta_rad, cell.t_mm, cell.width_mm, cell.b_mm, cell.struts_per_chevron,
-        material.youngs_modulus_MPa))
+        cell.theta_rad, cell.t_mm, cell.width_mm, cell.b_mm, material.youngs_modulus_MPa,
+        material.poisson_ratio))
     return TabulatedLockingLayer.from_curve(d, F, res.k_linear_N_per_mm * joint, k_locked, res.snap_through)
