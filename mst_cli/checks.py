@@ -338,7 +338,7 @@ def _slot_check(manifold, manifest) -> tuple[Check, float]:
                  values=meas), s_lo
 
 
-def _print_checks(mesh, manifest) -> list[Check]:
+def _print_checks(mesh, sensor_manifold, manifest) -> list[Check]:
     """Overhangs, layer grid and magnet pause, measured on the mesh as it lies on the bed."""
     pr, pocket = manifest["print"], manifest["magnet_pocket"]
     lh = float(pr["layer_height_mm"])
@@ -376,11 +376,11 @@ def _print_checks(mesh, manifest) -> list[Check]:
     pause = pr["pause"]
     z_pause = float(pause["z_mm"])
     d = float(pocket["depth_mm"])
-    # the pocket along the build direction, through its mid-depth: from the U's bottom up to
-    # the roof's ridge; the roof starts its rise below the ridge
-    y_mid = -(pocket["floor_z_mm"] + 0.5 * d)
-    cols = air_gaps(to_manifold(mesh)[0], (0.0123, y_mid, z0 - 1.0), (0, 0, 1),
-                    float(mesh.bounds[1][2] - z0) + 2.0)
+    # the pocket along the build direction (sensor +y), through its mid-depth: from the U's
+    # bottom up to the roof's ridge; the roof starts its rise below the ridge
+    half = 0.5 * float(pr["height_mm"])
+    cols = air_gaps(sensor_manifold, (0.0123, -half - 1.0, pocket["floor_z_mm"] + 0.5 * d), (0, 1, 0),
+                    2.0 * half + 2.0)
     roof_start = cols[-1][1] - 1.0 - float(pocket["roof_rise_mm"]) if cols else math.nan
     ok = (abs(z_pause / lh - round(z_pause / lh)) * lh <= LAYER_GRID_TOL_MM
           and pause["after_layer"] == round(z_pause / lh)
@@ -413,7 +413,7 @@ def run_checks(mesh, manifest: dict, nozzle_mm: float | None = None) -> list[Che
     out.append(Check("magnet_chip_gap", abs(gap_meas - manifest["gap0_mm"]) <= PLANAR_TOL_MM,
                      f"{gap_meas:.4f} mm", f"{manifest['gap0_mm']:.4f} mm (forward model gap0)",
                      "pocket floor - (slot floor + board + chip/2)", values={"measured_mm": gap_meas}))
-    out += _print_checks(mesh, manifest)
+    out += _print_checks(mesh, manifold, manifest)
     return out
 
 

@@ -11,8 +11,6 @@ Skips when PrusaSlicer is not installed, except in CI (CI=true), where it fails.
 """
 
 import json
-import os
-import shutil
 from pathlib import Path
 
 import pytest
@@ -25,7 +23,7 @@ MAX_SPAN_MM = 5.0
 STL_TOLERANCE_MM = 0.01          # mst export's default
 RANDOM_N, RANDOM_SEED = 20, 9
 
-from slicer_support import HAVE_SLICER, IN_CI, need_slicer  # noqa: E402,F401
+from slicer_support import need_slicer  # noqa: E402
 
 # design id -> {"span_mm", "span_layer", "span_z_mm", "print_time_s", "pause_after_layer"}; filled by
 # the per-design fixture, read by the last test

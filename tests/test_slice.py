@@ -8,7 +8,6 @@ when it is not installed, except in CI (CI=true), where they fail.
 
 import io
 import json
-import os
 import shutil
 import zipfile
 from pathlib import Path
@@ -26,7 +25,7 @@ PROFILE = ROOT / "configs" / "print" / "tpu85a-0.4mm.ini"
 FORWARD = ROOT / "configs" / "mohammadi2021-forward.yaml"
 W = 0.45            # line width of the synthetic G-code
 
-from slicer_support import HAVE_SLICER, IN_CI, need_slicer  # noqa: E402,F401
+from slicer_support import HAVE_SLICER, need_slicer  # noqa: E402
 
 
 
