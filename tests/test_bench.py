@@ -31,6 +31,15 @@ def test_a_rung_with_good_stiffness_but_bad_lock_force_is_not_chosen():
     assert cheapest_model_for(0.5, unmeasured)[0] == "continuum"
 
 
+def test_stored_ladder_was_measured_on_the_printable_box():
+    stored = load_ladder_errors()
+    assert "bench_ladder.py" in stored["command"]
+    # L0's fits cover the whole box, so the corrected L0 must beat its textbook form there
+    m = stored["models"]
+    assert m["spring"]["median_abs_err_k"] < 0.25 * m["spring-textbook"]["median_abs_err_k"]
+    assert m["spring"]["median_abs_err_lock_force"] < 0.25 * m["spring-textbook"]["median_abs_err_lock_force"]
+
+
 def test_cheapest_model_reads_the_stored_measurement():
     stored = load_ladder_errors()["models"]
     for acc in (0.9, 0.10, 0.01):
@@ -51,7 +60,21 @@ def test_sample_is_valid_seeded_and_inside_the_bounds():
     a, b = sample_cells(20, seed=3), sample_cells(20, seed=3)
     assert a == b
     for c in a:
-        assert not c.violations() and 15 <= c.theta_deg <= 60 and 0.4 <= c.t_mm <= 2 and 1.2 <= c.h_mm <= 6
+        assert not c.violations() and 5 <= c.theta_deg <= 75 and 0.4 <= c.t_mm <= 3 and 1.2 <= c.h_mm <= 8
+
+
+def test_sample_covers_the_printable_box_without_a_t_over_L_cap():
+    # the cell rules are the only filter: shallow walls and walls shorter than they are thick
+    # (t/L > 1, up to 1.7 at theta 75 deg) are drawn, not just the old beam range t/L <= 0.6
+    cells = sample_cells(400, seed=5)
+    x = np.array([c.t_mm / c.wall_length_mm for c in cells])
+    th = np.array([c.theta_deg for c in cells])
+    assert x.max() > 1.2 and (x > 1.0).mean() > 0.04 and (th < 15).mean() > 0.03
+    assert x.max() < 1.75                       # h >= 2t + 0.4 caps t/L below ~1.7
+    # the experiment knobs still narrow it
+    assert all(c.t_mm / c.wall_length_mm <= 0.6 for c in sample_cells(20, 5, max_t_over_L=0.6))
+    assert all(c.t_mm / c.wall_length_mm >= 1.0 for c in sample_cells(10, 5, min_t_over_L=1.0))
+    assert all(5 <= c.theta_deg <= 15 for c in sample_cells(10, 5, bounds={"theta_deg": (5.0, 15.0)}))
 
 
 def test_field_errors_axial_is_exact_and_dipole_overestimates():
@@ -75,6 +98,8 @@ def test_bench_command_writes_three_files(tmp_path):
     assert {p.name for p in out.iterdir()} == {"bench.md", "bench.json", "bench.png"}
     data = json.loads((out / "bench.json").read_text())
     assert set(data["models"]) == {"spring-textbook", "spring", "frame", "continuum"}
+    assert data["bounds"]["theta_deg"] == [5.0, 75.0]
+    assert "theta 5–75 deg" in (out / "bench.md").read_text()
 
 
 def test_bench_rejects_bad_samples(tmp_path):

@@ -162,3 +162,41 @@ def test_frame_and_continuum_agree_for_a_slender_layer():
 def test_unmeshable_cell_is_a_clear_error():
     with pytest.raises(ValueError, match="continuum model needs"):
         solve_continuum(HexCell(30, 1.0, 2.0), MAT)
+
+
+@pytest.mark.parametrize("cell", [HexCell(5, 1.0, 2.45), HexCell(10, 0.4, 5.14), HexCell(75, 3.0, 6.45)],
+                         ids=str)
+def test_default_mesh_is_converged_at_the_box_corners(cell):
+    # shallow walls end in a solid tip wedge t / tan(theta) long (11 t at 5 deg), meshed as a
+    # block of its own; stubby steep walls are shorter than thick. The default mesh's k is
+    # within 2 % of one with 4x the elements across and 2x along, 2 more corner refinements
+    k = linear_stiffness_N_per_mm(cell, MAT)
+    k_fine = linear_stiffness_N_per_mm(cell, MAT, 6, 24, 6)
+    assert k == pytest.approx(k_fine, rel=0.02)
+
+
+def test_quarter_mesh_has_no_degenerate_or_inverted_triangles():
+    for cell in (HexCell(5, 0.4, 1.25), HexCell(40, 1.0, 3.0), HexCell(75, 3.0, 6.45)):
+        p, t, _ = L2.quarter_profile_mesh(cell)
+        a, b, c = p[:, t[0]], p[:, t[1]], p[:, t[2]]
+        area2 = (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
+        assert (area2 > 0).all()
+        # the mesh covers the quarter profile: pad from x_cut plus the wall and its tip wedge
+        out = cell.outer_profile_xz()
+        inn = cell.inner_profile_xz()
+        x_cut = max(0.0, inn[0][0] - L2.PAD_LENGTH_IN_T * cell.t_mm)
+        pad = (out[0][0] - x_cut) * cell.t_mm - 0.5 * (out[0][0] - inn[0][0]) * cell.t_mm
+        # wall + wedge = the quadrilateral A, B, C, D (shoelace)
+        quad = np.array([out[0], out[1], inn[1], inn[0]])
+        wall = 0.5 * abs(np.dot(quad[:, 0], np.roll(quad[:, 1], -1)) - np.dot(quad[:, 1], np.roll(quad[:, 0], -1)))
+        assert 0.5 * area2.sum() == pytest.approx(pad + wall, rel=1e-9)
+
+
+def test_shallow_thin_wall_counts_only_faces_that_can_close():
+    # at theta 5 deg the cavity's tip wedge is thinner than the 0.1 mm allowance for 0.57 mm:
+    # points there are closed at rest. Only gaps of at least twice the allowance count, so the
+    # cavity closes (walls first) part-way through the stroke, not at once
+    cell = HexCell(5, 0.4, 1.25)
+    res = solve_continuum(cell, MAT)
+    assert res.contact_at == "wall"
+    assert 0.3 * cell.d_lock_mm < res.d_contact_mm < cell.d_lock_mm

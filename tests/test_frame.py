@@ -89,3 +89,14 @@ def test_monotone_envelope_snaps_through_at_the_peak():
 def test_invalid_cell_is_a_clear_error():
     with pytest.raises(ValueError, match="frame model needs"):
         solve_frame(HexCell(30, 1.0, 2.0), MAT)
+
+
+def test_shallow_thin_wall_closes_part_way_not_at_once():
+    # as in L2: a point of the inner face counts for contact only if its gap at rest is at
+    # least twice the allowance (at theta 5 deg the cavity's tip is thinner than that for
+    # 1.15 mm, more than a 0.4 mm wall)
+    from mst_cli.mechanics.frame import solve_frame
+    cell = HexCell(5, 0.4, 1.25)
+    res = solve_frame(cell, MAT)
+    assert 0.2 * cell.d_lock_mm < res.d_contact_mm <= cell.d_lock_mm * (1 + 1e-9)
+    assert np.isfinite(res.force_N).all() and res.force_N[-1] > 0

@@ -201,14 +201,59 @@ def test_lock_corrections_vanish_with_the_stroke():
     assert np.all(correction.lock_force_factor(x, theta, 1.0) < 1.0)
 
 
-def test_fast_correction_polynomials_equal_the_fitted_design_matrices():
-    # the fit uses the design matrices, the kernels a written-out form: they must agree
-    rng = np.random.default_rng(0)
-    x, th = rng.uniform(0, 0.6, 50), rng.uniform(*correction.fitted_theta_rad_range(), 50)
-    s = th - np.pi / 4
-    assert np.allclose(correction._stiffness_poly(x, s, correction.coefficients()),
-                       correction.design_matrix(x, th) @ np.array(correction.coefficients()), rtol=1e-12, atol=1e-14)
-    for key in ("lock_force", "lock_stroke"):
-        coef = correction.coefficients(key)
-        assert np.allclose(correction._lock_poly(x, s, coef),
-                           correction.lock_design_matrix(x, th) @ np.array(coef), rtol=1e-12, atol=1e-14)
+def test_stiffness_correction_vanishes_for_slender_walls():
+    # every term of the joint fit vanishes with x = t/L: beam theory is exact for slender walls
+    theta = np.radians(np.linspace(5, 75, 15))
+    for x, tol in ((0.0, 0.0), (1e-4, 2e-3)):
+        assert np.allclose(correction.stiffness_factor(x, theta), 1.0, atol=tol)
+    assert np.allclose(correction.design_matrix(0.0, theta), 0.0)
+
+
+def test_stiffness_correction_over_the_printable_box():
+    # shallow walls end in a solid tip wedge t / tan(theta) long: far stiffer than the beam
+    # clamped at the centre line (x5 and more at theta 5-10 deg); stubby steep walls are softer
+    # than beam theory with its rigid clamps (the joints give: 0.75 at theta 75, t/L 1.6)
+    assert correction.stiffness_factor(0.15, np.radians(7.0)) > 3.0
+    assert 0.6 < correction.stiffness_factor(1.6, np.radians(75.0)) < 0.9
+    # finite and bounded wherever an optimiser may probe, valid cell or not: the inputs are
+    # held in the fitted box, where the largest factor is at its shallowest, stubbiest corner
+    # (theta 5 deg, y = t/(h - t) = 0.88: the beam's free length L (1 - y) is an eighth of L)
+    x, th = np.meshgrid(np.linspace(-1, 5, 40), np.radians(np.linspace(0.5, 89.5, 40)))
+    for sigma in (0.0, 0.5, 1.0, 2.5):
+        for f in (correction.stiffness_factor(x, th), correction.lock_force_factor(x, th, sigma),
+                  correction.lock_stroke_factor(x, th, sigma)):
+            assert np.isfinite(f).all() and (f > 0).all() and f.max() < 50
+
+
+def test_fitted_box_is_the_printable_box():
+    fit = correction._fit()["fitted_on"]
+    assert fit["t_over_L_range"][1] > 1.6                   # walls shorter than they are thick
+    lo, hi = np.degrees(correction.fitted_theta_rad_range())
+    assert lo < 5.5 and hi > 74.5
+    assert correction.fitted_t_over_L_max() == fit["t_over_L_range"][1]
+
+
+def test_corrected_spring_meets_l2_across_the_box_out_of_sample():
+    # the stored verification (benchmarks/fit_l0_correction.py): L0 corrected against L2 on
+    # cells it was not fitted on, every band of t/L and theta
+    oos = correction._fit()["out_of_sample"]
+    assert oos["seed"] != correction._fit()["fitted_on"]["seed"]
+    for band, s in oos["bands"]["spring"].items():
+        assert s["n"] > 0 and s["failures"] == 0, band
+        assert s["median_abs_err_k"] < 0.03 and s["median_abs_err_lock_force"] < 0.05, band
+
+
+def test_expected_error_reads_the_measured_band_table():
+    table = correction._fit()["out_of_sample"]["expected_error"]
+    err = np.array(table["median_abs_err_lock_force"])
+    # vectorised, one value per (t/L, theta); each band's own measured median
+    x = np.array([0.3, 0.3, 0.3, 0.8, 0.8, 1.3, 1.3])
+    th = np.radians([10.0, 40.0, 70.0, 40.0, 70.0, 40.0, 70.0])
+    got = correction.expected_error_rel(x, th)
+    assert got.shape == (7,)
+    assert np.allclose(got, [err[0, 0], err[0, 1], err[0, 2], err[1, 1], err[1, 2], err[2, 1], err[2, 2]])
+    assert float(correction.expected_error_rel(0.3, np.radians(40.0))) == err[0, 1]
+    # past the outer edges: the nearest band; every value a positive fraction
+    assert correction.expected_error_rel(5.0, np.radians(89.0)) == err[-1, -1]
+    assert correction.expected_error_rel(-1.0, np.radians(1.0)) == err[0, 0]
+    assert (err > 0).all() and (err < 1).all()

@@ -31,9 +31,12 @@ checks the tangent, a patch test and a Timoshenko cantilever).
 
 Contact: the cavity is "closed" when the clear gap between the inner surface and its mirror
 image across z = h/2 falls to the cell's contact allowance anywhere on the inner pad or on the
-inner wall face, except the last wall thickness t next to the cavity's tip vertex (there the
-gap starts at zero: that corner is a wedge, not a face that can close). Nominally the pads
-meet at d = h - 2t - allowance, as in rung L0.
+inner wall face, except next to the cavity's tip vertex, where the gap starts at zero: that
+corner is a wedge, not a face that can close. The excluded part is the last wall thickness t
+and, for shallow walls, as much more as has a gap below twice the allowance at rest (the
+distance allowance / sin(theta) from the vertex; at theta = 5 deg that is 1.15 mm, more than
+a 0.4 mm wall). Nominally the pads meet at d = h - 2t - allowance, as in rung L0; the pads are
+elastic, so under stiff (shallow, stubby) walls they meet up to a few per cent later.
 
 scikit-fem is imported inside the functions, never at module import (``mst`` stays fast).
 """
@@ -60,6 +63,11 @@ DEFAULT_N_LENGTH = 12
 DEFAULT_LEVELS = 4
 REFINE_RADIUS_IN_T = 0.5    # first refinement radius around a corner, in wall thicknesses
 PAD_LENGTH_IN_T = 4.0       # length of pad kept next to the wall root, in wall thicknesses
+WEDGE_ASPECT = 1.5          # tip wedge: column width over local element height
+WEDGE_APEX_FRACTION = 0.1   # tip wedge: the last column spans the last 10 % of its length
+# Contact is searched up to this multiple of the rigid-pad stroke h - 2t - allowance (the
+# elastic pads under stiff walls meet up to ~5 % late; beyond this the solve is an error).
+D_MAX_OVER_NOMINAL = 1.5
 
 
 class ContinuumError(RuntimeError):
@@ -84,26 +92,54 @@ def _map_quad(corners, xi, eta):
     return pts  # (len(xi), len(eta), 2)
 
 
+def _wedge_columns(n_thick: int, wedge_over_t: float) -> np.ndarray:
+    """Column positions xi in [0, 1] along the tip wedge (xi = 0 at its thick end, 1 at the
+    apex): each column about WEDGE_ASPECT times as wide as the local element height, the
+    widths shrinking with the wedge's thickness (1 - xi); the last column ends at the apex."""
+    q = min(0.5, WEDGE_ASPECT / (n_thick * max(wedge_over_t, 1e-12)))
+    one_minus = [1.0]
+    while one_minus[-1] > WEDGE_APEX_FRACTION:
+        one_minus.append(one_minus[-1] * (1.0 - q))
+    return 1.0 - np.array(one_minus[:-1] + [0.0])
+
+
 def quarter_profile_mesh(cell: geo.HexCell, n_thick: int = DEFAULT_N_THICK,
                          n_length: int = DEFAULT_N_LENGTH):
     """Triangle mesh of the quarter profile (bottom pad's right part + lower right wall).
 
-    Built from the cell's own polygons: wall quad = outer root (p, 0), outer tip (W/2, h/2),
-    inner tip, inner root (the inner pad corner); pad quad = from the cut x_cut to the wall
-    root, bottom z = 0 to top z = t. Returns (points (2, N), triangles (3, M), x_cut_mm).
+    Built from the cell's own polygons in three structured blocks:
+
+    * pad quad: from the cut x_cut to the wall root, bottom z = 0 to top z = t;
+    * wall quad: outer root A = (p, 0), B' (the point of the outer face opposite the cavity's
+      tip vertex C: B'C is normal to the wall and t long), C, inner root D (the inner pad
+      corner) -- a well-shaped quad of thickness t at every theta;
+    * tip wedge B' B C, B = (W/2, h/2) the outer tip: the solid between the outer face and the
+      mirror plane beyond the cavity's tip, t / tan(theta) long (11 t at theta = 5 deg). It is
+      meshed with columns graded towards its apex, so that shallow walls keep elements about
+      as wide as they are high there. (Mapping the whole wall as one quad A B C D stretched
+      the n_thick elements across the tip face B C, t / sin(theta) long, and at theta = 5 deg
+      left the small-strain k 35 % off its converged value.)
+
+    Returns (points (2, N), triangles (3, M), x_cut_mm).
     """
     outer = cell.outer_profile_xz()
     inner = cell.inner_profile_xz()
-    A, B = outer[0], outer[1]          # (p, 0), (W/2, h/2)
-    D, C = inner[0], inner[1]          # (a, t), (c, h/2)
+    A, B = np.asarray(outer[0], float), np.asarray(outer[1], float)   # (p, 0), (W/2, h/2)
+    D, C = np.asarray(inner[0], float), np.asarray(inner[1], float)   # (a, t), (c, h/2)
     t = cell.t_mm
+    u_wall = (B - A) / np.hypot(*(B - A))
+    Bp = A + float((C - A) @ u_wall) * u_wall                            # B'
     x_cut = max(0.0, D[0] - PAD_LENGTH_IN_T * t)
     n_pad = max(2, int(math.ceil(n_length * 0.5)))
-    wall = _map_quad((A, B, C, D), _graded(n_length, True), np.linspace(0, 1, n_thick + 1))
-    pad = _map_quad(((x_cut, 0.0), A, D, (x_cut, t)), _graded(n_pad, False),
-                    np.linspace(0, 1, n_thick + 1))
+    across = np.linspace(0, 1, n_thick + 1)
+    wall = _map_quad((A, Bp, C, D), _graded(n_length, True), across)
+    pad = _map_quad(((x_cut, 0.0), A, D, (x_cut, t)), _graded(n_pad, False), across)
+    xi = _wedge_columns(n_thick, float(np.hypot(*(B - Bp))) / t)
+    X, E = np.meshgrid(xi, across, indexing="ij")
+    wedge = (Bp[None, None, :] + X[..., None] * (B - Bp)[None, None, :]
+             + (E * (1.0 - X))[..., None] * (C - Bp)[None, None, :])
     blocks, tris, offset = [], [], 0
-    for grid in (pad, wall):
+    for grid in (pad, wall, wedge):
         ni, nj = grid.shape[:2]
         idx = offset + np.arange(ni * nj).reshape(ni, nj)
         a, b = idx[:-1, :-1].ravel(), idx[1:, :-1].ravel()
@@ -114,11 +150,13 @@ def quarter_profile_mesh(cell: geo.HexCell, n_thick: int = DEFAULT_N_THICK,
         offset += ni * nj
     pts = np.concatenate(blocks)
     tri = np.concatenate(tris, axis=1)
-    # merge the nodes shared by the two blocks (the wall-root line)
+    # merge the nodes shared by the blocks (the wall-root line, the line B'C, the apex B)
     key = np.round(pts / max(cell.h_mm, 1.0) * 1e9).astype(np.int64)
     _, first, inverse = np.unique(key, axis=0, return_index=True, return_inverse=True)
     pts = pts[first]
     tri = inverse.ravel()[tri]
+    # the wedge's last column collapses onto the apex: drop its degenerate triangles
+    tri = np.ascontiguousarray(tri[:, (tri[0] != tri[1]) & (tri[1] != tri[2]) & (tri[0] != tri[2])])
     # counter-clockwise orientation
     p0, p1, p2 = pts[tri[0]], pts[tri[1]], pts[tri[2]]
     area2 = (p1[:, 0] - p0[:, 0]) * (p2[:, 1] - p0[:, 1]) - (p1[:, 1] - p0[:, 1]) * (p2[:, 0] - p0[:, 0])
@@ -206,7 +244,8 @@ class _Problem:
         self.dirichlet = np.union1d(self.fixed_zero, self.tip_z)
         self.free = np.setdiff1d(np.arange(b.N), self.dirichlet)
         # inner-surface points that can close the cavity: the inner pad face z = t and the
-        # inner wall face, minus the last t next to the cavity's tip vertex (a wedge)
+        # inner wall face, minus the wedge next to the cavity's tip vertex: the last t, and
+        # wherever the gap at rest is below twice the allowance (2 r sin(theta) < 2 a)
         inner = cell.inner_profile_xz()
         (ax, az), (cx, cz) = inner[0], inner[1]
         ux = np.array([cx - ax, cz - az]) / math.hypot(cx - ax, cz - az)
@@ -216,7 +255,8 @@ class _Problem:
         on_wall_face = (np.abs(across) < tol) & (along >= -tol)
         L_face = math.hypot(cx - ax, cz - az)
         on_pad_face = (np.abs(xy[1] - t) < tol) & (xy[0] <= ax + tol)
-        wall_ok = on_wall_face & (along <= L_face - t)
+        wedge = max(t, cell.contact_allowance_mm / math.sin(cell.theta_rad))
+        wall_ok = on_wall_face & (along <= L_face - wedge)
         self.gap_pts_pad = np.flatnonzero(on_pad_face & ~is_x)      # z-dofs
         self.gap_pts_wall = np.flatnonzero(wall_ok & ~is_x)
         # every z-dof of the inner wall face may touch the mirror plane (frictionless)
@@ -365,7 +405,9 @@ def solve_continuum(cell: geo.HexCell, material, n_thick: int = DEFAULT_N_THICK,
     active = None
     contact_at = "pad"
     for _ in range(max_steps):
-        d_try = min(d + step, d_nom * 1.05)
+        if d >= D_MAX_OVER_NOMINAL * d_nom * (1.0 - 1e-12):
+            raise ContinuumError(f"no contact up to {D_MAX_OVER_NOMINAL:g} times the pads' stroke for {cell}")
+        d_try = min(d + step, d_nom * D_MAX_OVER_NOMINAL)
         try:
             u_new, it, act_new = prob.solve_step(u, d_try, active)
         except FloatingPointError:

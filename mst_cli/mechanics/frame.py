@@ -22,16 +22,18 @@ Load: displacement control with adaptive steps. Contact: the cavity closes when 
 between the wall's inner surface (centre line offset by t/2 along the rotated section normal)
 and its mirror image across z = h/2 -- or between the two inner pads, h - 2t - d -- falls to the
 cell's contact allowance; the last wall thickness t next to the cavity's tip vertex is a wedge
-and does not count. After contact the layer's stiffness is the walls' last tangent plus L0's contact column.
+and does not count, nor (shallow walls) any point whose gap at rest is below twice the
+allowance -- the same rule as rung L2's. After contact the layer's stiffness is the walls' last tangent plus L0's contact column.
 
 The layer law (:func:`frame_layer`) multiplies the beam forces by the joint factor of
 :mod:`mst_cli.mechanics.correction` (fitted against L2, a function of t/L and theta): the
 beam's rigid clamps at the pad mid-plane and the tip are what that factor corrects.
 :func:`solve_frame` itself returns the pure beam solution. Joint models of L1's own,
-rigid end zones from the joint geometry, were measured against L2 on the fit's 150 cells
-(benchmarks/model_choices.py, plane strain): median |error| in k 23.7 % with none (beam
-theory), 11.9 % with half the geometric overlaps rigid, 61 % with all of them (L0's fitted
-factor: 1.7 %, ``mst bench``). The near-crack at the cavity's tip
+rigid end zones from the joint geometry, were measured against L2 on the 150 cells of the
+earlier fit, theta 15-60 deg, t/L <= 0.6 (benchmarks/model_choices.py, plane strain): median
+|error| in k 23.7 % with none (beam theory), 11.9 % with half the geometric overlaps rigid,
+61 % with all of them (L0's fitted factor then: 1.7 %; over the printable box now 1.0 %,
+``mst bench``). The near-crack at the cavity's tip
 vertex makes the joints softer than rigid and stiffer than absent, which the fit captures and
 these do not, so L1 reuses L0's factor.
 
@@ -209,7 +211,9 @@ class _Wall:
         p_in = self.X + self.half_t * self.n0[None, :]
         vertex = np.asarray(inner[1])
         before_vertex = (vertex - p_in) @ self.u_dir
-        self.gap_nodes = np.flatnonzero((p_in[:, 1] >= t - 1e-12) & (before_vertex >= t))
+        rest_gap = 2.0 * (0.5 * cell.h_mm - p_in[:, 1])
+        self.gap_nodes = np.flatnonzero((p_in[:, 1] >= t - 1e-12) & (before_vertex >= t)
+                                        & (rest_gap >= 2.0 * cell.contact_allowance_mm))
         self.pad_gap0 = cell.h_mm - 2.0 * t
         self.ndof = ndof
 
