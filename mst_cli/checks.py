@@ -78,27 +78,138 @@ def resolve_paths(path: str | Path) -> tuple[Path, Path]:
     return stl, manifest
 
 
+# Sizes in export.json and coordinates in the STL: a sensor body is centimetres, so anything
+# beyond a metre is no body mst wrote (and 1e37 would overflow the measurements).
+MAX_COORD_MM = 1000.0
+MAX_MANIFEST_BYTES = 10_000_000
+MAX_STL_BYTES = 500_000_000
+
+# What run_checks reads from export.json, with the type of each field: "num" a finite number
+# within +-MAX_COORD_MM (bool is not a number), "pos" a size from MIN_SIZE_MM (a finer layer,
+# tolerance or nozzle would overflow the layer counts) to MAX_COORD_MM, "vol" an area or volume
+# from 0 to MAX_VOLUME, "int", "str", (kind, n) a list of n of kind, [spec] a list of up to
+# MAX_LIST entries of spec (layers: at least one), {..} a mapping.
+MAX_LIST = 64
+MAX_VOLUME = 1e9
+MIN_SIZE_MM = 1e-3
+_LAYER = {"z_bottom_mm": "num", "h_mm": "pos", "t_mm": "pos", "theta_deg": "num",
+          "web_depth_mm": "pos", "cavity_height_mm": "num"}
+_WINDOW = {"x_inner_mm": "num", "x_outer_mm": "num", "floor_y_mm": "num"}
+MANIFEST_FIELDS = {
+    "stl_tolerance_mm": "pos",
+    "gap0_mm": "num",
+    "print": {"rotation": (("num", 3), 3), "translation_mm": ("num", 3), "layer_height_mm": "pos",
+              "height_mm": "pos", "magnet_top_z_mm": "num", "pause": {"after_layer": "int", "z_mm": "num"}},
+    "body": {"volume_mm3": "vol", "volume_tolerance_mm3": "vol", "bbox_min_mm": ("num", 3),
+             "bbox_max_mm": ("num", 3), "bodies": "int", "internal_voids": "int"},
+    "layers": [_LAYER],
+    "magnet_pocket": {k: "vol" if k.endswith(("_mm2", "_mm3")) else "num"
+                      for k in ("section_z_mm", "radius_mm", "section_area_mm2", "depth_mm",
+                                "floor_z_mm", "curved_area_mm2", "volume_mm3", "roof_rise_mm")},
+    "board_slot": {"board": "str", "chip_xy_mm": ("num", 2), "floor_z_mm": "num", "top_z_mm": "num",
+                   "floor_y_mm": "num", "x0_mm": "num", "x1_mm": "num", "board_thickness_mm": "num",
+                   "chip_height_mm": "num", "cable_windows": [_WINDOW]},
+    "printer": {"nozzle_mm": "pos", "min_gap_mm": "pos"},
+}
+_KIND_TEXT = {"num": f"a finite number within +-{MAX_COORD_MM:g}", "pos": f"a size from {MIN_SIZE_MM:g} to {MAX_COORD_MM:g}",
+              "vol": f"a number from 0 to {MAX_VOLUME:g}", "int": "an integer", "str": "a string"}
+
+
+def _is_number(v) -> bool:
+    # abs(v) <= limit is False for NaN and infinities, and exact for integers of any size
+    return isinstance(v, (int, float)) and not isinstance(v, bool) and abs(v) <= MAX_COORD_MM
+
+
+def _describe(spec) -> str:
+    if isinstance(spec, str):
+        return _KIND_TEXT[spec]
+    if isinstance(spec, tuple):
+        return f"a list of {spec[1]} entries, each {_describe(spec[0])}"
+    if isinstance(spec, list):
+        return f"a list of up to {MAX_LIST} mappings"
+    return "a mapping with " + ", ".join(spec)
+
+
+def validate_manifest(data, spec=None, path: str = "export.json") -> None:
+    """InputError naming the first field of export.json that is missing or of the wrong type or
+    nesting (``export.json.layers[2].t_mm``): everything :func:`run_checks` reads is checked here,
+    so a KeyError or TypeError inside a check is a bug, not a malformed file."""
+    spec = MANIFEST_FIELDS if spec is None else spec
+    ok = True
+    if isinstance(spec, str):
+        ok = {"num": _is_number, "pos": lambda v: _is_number(v) and v >= MIN_SIZE_MM,
+              "vol": lambda v: isinstance(v, (int, float)) and not isinstance(v, bool) and 0 <= v <= MAX_VOLUME,
+              "int": lambda v: isinstance(v, int) and not isinstance(v, bool) and abs(v) <= 10**9,
+              "str": lambda v: isinstance(v, str)}[spec](data)
+    elif isinstance(spec, tuple):
+        ok = isinstance(data, list) and len(data) == spec[1]
+        if ok:
+            for i, item in enumerate(data):
+                validate_manifest(item, spec[0], f"{path}[{i}]")
+    elif isinstance(spec, list):
+        ok = isinstance(data, list) and (1 if path.endswith(".layers") else 0) <= len(data) <= MAX_LIST
+        if ok:
+            for i, item in enumerate(data):
+                validate_manifest(item, spec[0], f"{path}[{i}]")
+    else:
+        ok = isinstance(data, dict)
+        if ok:
+            for key, sub in spec.items():
+                if key not in data:
+                    raise InputError(f"{path}.{key}", None, "missing: rewrite it with 'mst export'")
+                validate_manifest(data[key], sub, f"{path}.{key}")
+    if not ok:
+        shown = data if not isinstance(data, (dict, list)) else type(data).__name__
+        raise InputError(path, shown, f"must be {_describe(spec)}: rewrite it with 'mst export'")
+
+
 def load_manifest(path: Path) -> dict:
+    """export.json, validated field by field (:func:`validate_manifest`)."""
     try:
-        data = json.loads(Path(path).read_text())
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        if Path(path).stat().st_size > MAX_MANIFEST_BYTES:
+            raise InputError("export.json", str(path), f"is larger than {MAX_MANIFEST_BYTES} bytes: "
+                                                       "rewrite it with 'mst export'")
+        data = json.loads(Path(path).read_text(), parse_constant=_refuse_constant)
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError, RecursionError) as exc:
         raise InputError("export.json", str(path), f"cannot be read as JSON ({type(exc).__name__})") from None
-    for key in ("body", "magnet_pocket", "board_slot", "layers", "printer", "gap0_mm", "stl_tolerance_mm",
-                "print"):
-        if key not in data:
-            raise InputError(f"export.json.{key}", None, "missing: rewrite it with 'mst export'")
+    except ValueError as exc:                       # NaN / Infinity, which JSON does not have
+        raise InputError("export.json", str(path), f"cannot be read as JSON ({exc})") from None
+    validate_manifest(data)
+    rotation = np.asarray(data["print"]["rotation"], dtype=float)
+    if not (np.allclose(rotation @ rotation.T, np.eye(3), atol=1e-6) and np.linalg.det(rotation) > 0):
+        raise InputError("export.json.print.rotation", data["print"]["rotation"],
+                         "must be a rotation matrix (orthonormal, determinant +1): rewrite it with 'mst export'")
     return data
 
 
+def _refuse_constant(name: str):
+    raise ValueError(f"{name} is not a JSON number")
+
+
 def load_mesh(path: Path):
-    """Read an STL into a trimesh (vertices merged); InputError when it is not a mesh."""
+    """Read an STL into a trimesh (vertices merged); InputError when it is not a mesh, or when
+    a coordinate is not finite or beyond +-MAX_COORD_MM (nothing is measured on such a mesh)."""
     import trimesh
     try:
-        mesh = trimesh.load(str(path), file_type="stl", force="mesh")
+        size = Path(path).stat().st_size
+    except OSError as exc:
+        raise InputError("PATH", str(path), f"cannot be read ({exc.strerror})") from None
+    if size > MAX_STL_BYTES:
+        raise InputError("PATH", str(path), f"is larger than {MAX_STL_BYTES} bytes: no body mst exports")
+    try:
+        with np.errstate(all="ignore"):
+            mesh = trimesh.load(str(path), file_type="stl", force="mesh", process=False)
     except Exception as exc:      # trimesh raises many kinds on garbage; all mean "unreadable"
         raise InputError("PATH", str(path), f"cannot be read as an STL mesh ({type(exc).__name__})") from None
     if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
         raise InputError("PATH", str(path), "holds no triangles")
+    vertices = np.asarray(mesh.vertices)
+    bad = ~np.isfinite(vertices).all(axis=1) | (np.abs(np.nan_to_num(vertices, nan=0.0)) > MAX_COORD_MM).any(axis=1)
+    if bad.any():
+        i = int(np.flatnonzero(bad)[0])
+        raise InputError("PATH", str(path), f"vertex {i} at {vertices[i].tolist()} mm: every coordinate "
+                                            f"must be finite and within +-{MAX_COORD_MM:g} mm")
+    mesh.process()                # what trimesh.load(process=True) does, now on finite coordinates
     return mesh
 
 
@@ -418,10 +529,11 @@ def run_checks(mesh, manifest: dict, nozzle_mm: float | None = None) -> list[Che
 
 
 def results_dict(checks: list[Check], stl_path: str) -> dict:
-    """JSON form (``mst check --json``)."""
+    """JSON form (``mst check --json``); a value that could not be measured (NaN) is null."""
+    from .outputs import finite_or_none
     failed = [c.name for c in checks if not c.passed and not c.info]
-    return {"path": stl_path, "passed": not failed, "failed": failed,
-            "checks": [asdict(c) for c in checks]}
+    return finite_or_none({"path": stl_path, "passed": not failed, "failed": failed,
+                           "checks": [asdict(c) for c in checks]})
 
 
 def results_table(checks: list[Check]) -> str:

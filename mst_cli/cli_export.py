@@ -76,10 +76,15 @@ def export(path, want_stl, want_step, want_3mf, out_dir, stl_tolerance_mm):
 
     if not 1e-4 <= stl_tolerance_mm <= 1.0:
         raise InputError("--stl-tolerance", stl_tolerance_mm, "must be a number from 0.0001 to 1 mm")
+    from .outputs import check_out_dir
+
     if not (want_stl or want_step or want_3mf):
         want_stl = want_step = True
+    if out_dir is not None:
+        check_out_dir(out_dir)            # a bad output path is refused before any work
     t0 = time.perf_counter()
     doc, geometry, designed = _load_design(path, t0)
+    check_out_dir(out_dir or default_out_dir(doc.name))
     _progress(t0, f"loaded {path} ({len(geometry.layers)} layers)")
 
     from .cad.assembly import build_sensor, check_fits, print_mesh
@@ -147,16 +152,14 @@ def check(path, as_json, nozzle_mm):
     if nozzle_mm is not None and not 0.05 <= nozzle_mm <= 5.0:
         raise InputError("--nozzle", nozzle_mm, "must be a nozzle diameter from 0.05 to 5 mm")
     stl, manifest_path = resolve_paths(path)
+    # both inputs are validated before anything is measured: every field run_checks reads (type,
+    # nesting, finite and sane size) and every STL coordinate (finite, within a metre)
     manifest = load_manifest(manifest_path)
     mesh = load_mesh(stl)
-    try:
-        results = run_checks(mesh, manifest, nozzle_mm)
-    except (KeyError, TypeError, IndexError) as exc:
-        raise InputError("export.json", str(manifest_path),
-                         f"malformed ({type(exc).__name__}: {exc}): rewrite it with 'mst export'") from None
+    results = run_checks(mesh, manifest, nozzle_mm)
     summary = results_dict(results, str(stl))
     if as_json:
-        click.echo(json.dumps(summary, indent=2))
+        click.echo(json.dumps(summary, indent=2, allow_nan=False))
     else:
         click.echo(results_table(results))
     if summary["failed"]:

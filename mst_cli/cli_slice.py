@@ -346,6 +346,8 @@ def slice_(path, profile, out_dir, max_span_mm, as_json, no_plot):
         "reasons": reasons,
     }
     names = ["sensor.gcode", "slice.json"] + ([] if no_plot else ["print.png"])
+    from .outputs import finite_or_none
+    report = finite_or_none(report)       # nothing measured (NaN) is null: JSON holds no NaN
     with staged(out) as st:
         st.write_text("sensor.gcode", gtext)
         st.write_json("slice.json", report)
@@ -354,7 +356,7 @@ def slice_(path, profile, out_dir, max_span_mm, as_json, no_plot):
                        str(manifest.get("name") or folder.name))
     _progress(t0, f"wrote {out}/{', '.join(names)}")
     if as_json:
-        click.echo(json.dumps(report, indent=2))
+        click.echo(json.dumps(report, indent=2, allow_nan=False))
     else:
         click.echo(summary_table(report))
     if failed:

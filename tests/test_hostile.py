@@ -1,0 +1,795 @@
+"""Hostile input and faults (issue 13): no traceback, no hang, no silent acceptance, nothing
+half-written. One section per class of the issue; each holds at least one test that failed on
+the tree before the fix. The last section is the property suite: hostile documents generated
+from the schema's own rules, run through ``mst simulate`` in-process."""
+
+import errno
+import json
+import math
+import os
+import re
+import signal
+import subprocess
+import sys
+import tempfile
+import textwrap
+import time
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+from click.testing import CliRunner
+from hypothesis import HealthCheck, event, given, settings, strategies as st
+
+from mst_cli import __version__
+from mst_cli.cli import main
+from mst_cli.outputs import STAGING_PREFIX, Staging, staged
+from mst_cli.schema import LAYER_RULES, SECTIONS, TOP_KEYS, load_document
+
+ROOT = Path(__file__).resolve().parents[1]
+FORWARD = ROOT / "configs" / "mohammadi2021-forward.yaml"
+SPEC = ROOT / "configs" / "fingertip.yaml"
+PYTHON = sys.executable
+LAYER = {"theta_deg": 25, "t_mm": 0.6, "h_mm": 2.0}
+OUTPUTS = {"report.json", "response.csv", "response.png"}
+
+
+def run(args, **kwargs):
+    return CliRunner().invoke(main, [str(a) for a in args], **kwargs)
+
+
+def timed(args, **kwargs):
+    t0 = time.perf_counter()
+    r = run(args, **kwargs)
+    return r, time.perf_counter() - t0
+
+
+def one_line(r) -> str:
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1, lines
+    return lines[0]
+
+
+def refused(r, field=None) -> str:
+    """Exit 2, one line on stderr naming ``field``, no traceback; returns the line."""
+    assert r.exit_code == 2, (r.exit_code, r.output, r.stderr)
+    assert r.exception is None or isinstance(r.exception, SystemExit), r.exception
+    line = one_line(r)
+    if field is not None:
+        assert line.startswith(f"mst: invalid input: {field}"), line
+    return line
+
+
+def staging_left(folder: Path) -> list[Path]:
+    return [p for p in Path(folder).rglob(f"{STAGING_PREFIX}*")]
+
+
+def no_constant(name):
+    raise AssertionError(f"{name} in JSON output")
+
+
+def load_json_strict(path: Path):
+    return json.loads(Path(path).read_text(), parse_constant=no_constant)
+
+
+def write(tmp_path, text, name="in.yaml") -> Path:
+    f = tmp_path / name
+    f.write_text(text)
+    return f
+
+
+def doc_text(**sections) -> str:
+    d = {"name": "x", "layers": [dict(LAYER)]}
+    d.update(sections)
+    return yaml.safe_dump(d)
+
+
+@pytest.fixture(scope="module", autouse=True)
+def warm_imports():
+    """Import the schema's dependencies once, so the timings below measure the refusal only."""
+    load_document(FORWARD)
+
+
+# =========================================================================== 1. unbounded work
+def alias_bomb() -> str:
+    lines = ['a0: &a0 ["lol", "lol", "lol", "lol", "lol", "lol", "lol", "lol", "lol"]']
+    for i in range(1, 10):
+        lines.append(f"a{i}: &a{i} [" + ", ".join([f"*a{i - 1}"] * 9) + "]")
+    return "\n".join(lines) + "\nname: bomb\nlayers: [*a9]\n"
+
+
+def test_alias_bomb_is_refused_in_well_under_a_second(tmp_path):
+    r, dt = timed(["simulate", write(tmp_path, alias_bomb()), "--out", tmp_path / "o"])
+    line = refused(r, "(file)")
+    assert "aliases expanded" in line and dt < 1.0, (line, dt)
+    assert not (tmp_path / "o").exists()
+
+
+def test_recursive_alias_and_merge_keys_are_refused(tmp_path):
+    r = run(["simulate", write(tmp_path, "name: x\nx: &a [1, *a]\nlayers: []\n"), "--out", tmp_path / "o"])
+    assert "recursive" in refused(r, "(file)")
+    r = run(["simulate", write(tmp_path, "name: x\nmagnet:\n  <<: {diameter_mm: 6}\nlayers: [{theta_deg: 25, "
+                                         "t_mm: 0.6, h_mm: 2}]\n"), "--out", tmp_path / "o"])
+    assert "merge keys" in refused(r, "magnet.<<")
+
+
+def test_aliases_within_the_cap_still_load(tmp_path):
+    # yaml.safe_dump writes anchors for a repeated Python object: such files keep working
+    text = yaml.safe_dump({"name": "al", "layers": [LAYER] * 2})
+    assert "&id001" in text
+    assert run(["simulate", write(tmp_path, text), "--out", tmp_path / "o"]).exit_code == 0
+
+
+def test_a_50_MB_list_is_refused_before_parsing(tmp_path):
+    big = tmp_path / "big.yaml"
+    big.write_text("name: big\nlayers:\n" + "  - 1\n" * (50_000_000 // 6))
+    r, dt = timed(["simulate", big, "--out", tmp_path / "o"])
+    assert "larger than 1000000 bytes" in refused(r, "(file)") and dt < 1.0, dt
+
+
+def test_a_list_just_under_the_size_cap_stops_at_the_node_cap(tmp_path):
+    text = "name: x\nx: [" + ",".join(["0"] * 480_000) + "]\nlayers: []\n"
+    assert len(text) < 1_000_000
+    r, dt = timed(["simulate", write(tmp_path, text), "--out", tmp_path / "o"])
+    assert "more than 5000 values" in refused(r, "(file)") and dt < 1.0, dt
+
+
+def test_deep_nesting_is_refused(tmp_path):
+    text = "name: x\nx: " + "[" * 50_000 + "]" * 50_000 + "\nlayers: []\n"
+    r, dt = timed(["simulate", write(tmp_path, text), "--out", tmp_path / "o"])
+    assert "nested too deeply" in refused(r, "(file)") and dt < 1.0, dt
+
+
+def test_absurd_chip_offset_is_refused_by_its_bounds(tmp_path):
+    f = write(tmp_path, "name: x\nmagnetometer: {chip_offset_mm: [1.0e+300, 0]}\n"
+                        "layers: [{theta_deg: 25, t_mm: 0.6, h_mm: 2}]\n")
+    r, dt = timed(["simulate", f, "--out", tmp_path / "o"])
+    line = refused(r, "magnetometer.chip_offset_mm[0]")
+    assert "<= 100 mm" in line and dt < 1.0, (line, dt)
+
+
+@pytest.mark.parametrize("digits", [50, 1000, 5000])
+def test_integers_with_thousands_of_digits_are_refused_with_a_short_line(tmp_path, digits):
+    f = write(tmp_path, "name: x\nmagnetometer: {noise_uT_rms: " + "7" * digits + "}\n"
+                        "layers: [{theta_deg: 25, t_mm: 0.6, h_mm: 2}]\n")
+    r, dt = timed(["simulate", f, "--out", tmp_path / "o"])
+    line = refused(r, "magnetometer.noise_uT_rms")
+    assert len(line) < 300 and dt < 1.0, (line, dt)
+
+
+def numeric_rules():
+    """(path, rule) of every numeric key outside the design section (another owner's)."""
+    for section, rules in SECTIONS.items():
+        if section == "design":
+            continue
+        for key, rule in rules.items():
+            if rule.kind in ("float", "int", "pair"):
+                yield f"{section}.{key}", rule
+    for key, rule in LAYER_RULES.items():
+        yield f"layers[].{key}", rule
+
+
+@pytest.mark.parametrize("path,rule", list(numeric_rules()), ids=lambda v: v if isinstance(v, str) else "")
+def test_every_numeric_key_has_a_lower_and_an_upper_bound(path, rule):
+    assert rule.lo is not None and rule.hi is not None, path
+    assert math.isfinite(rule.lo) and math.isfinite(rule.hi) and rule.lo < rule.hi
+    assert abs(rule.lo) < 1e6 and abs(rule.hi) <= 1e6
+
+
+def test_the_documented_ranges_match_the_schema():
+    text = (ROOT / "docs" / "file-format.md").read_text()
+    for path, rule in numeric_rules():
+        key = path.replace("layers[].", "layers[i].")
+        row = re.search(rf"^\| `{re.escape(key)}` \| ([^|]+) \|", text, re.M)
+        assert row, f"docs/file-format.md has no range row for {key}"
+        cell = row.group(1)
+        assert f"{rule.lo:g}" in cell and f"{rule.hi:g}" in cell, (key, cell, rule)
+
+
+# =========================================================================== 2. silent acceptance
+@pytest.mark.parametrize("text,field,line", [
+    ("name: a\nname: b\nlayers: [{theta_deg: 25, t_mm: 0.6, h_mm: 2}]\n", "name", 2),
+    ("name: a\nmagnet:\n  diameter_mm: 6\n  diameter_mm: 8\nlayers: [{theta_deg: 25, t_mm: 0.6, h_mm: 2}]\n",
+     "magnet.diameter_mm", 4),
+    ("name: a\nlayers:\n  - theta_deg: 25\n    t_mm: 0.6\n    h_mm: 2\n    t_mm: 0.8\n", "layers[0].t_mm", 6),
+    ("name: a\nlayers: [{theta_deg: 25, t_mm: 0.6, h_mm: 2}]\nlayers: [{theta_deg: 25, t_mm: 1, h_mm: 3}]\n",
+     "layers", 3),
+], ids=["top", "section", "layer", "layers"])
+def test_duplicate_keys_are_refused_naming_the_key_path_and_line(tmp_path, text, field, line):
+    r = run(["simulate", write(tmp_path, text), "--out", tmp_path / "o"])
+    msg = refused(r, field)
+    assert f"line {line}: duplicate key" in msg, msg
+    assert not (tmp_path / "o").exists()
+
+
+SATURATED_ONE_LAYER = """\
+name: sat
+family: {width_mm: 40, depth_mm: 34}
+magnet: {diameter_mm: 20, thickness_mm: 10, grade: N52}
+layers:
+  - {theta_deg: 25, t_mm: 0.6, h_mm: 2.0}
+"""
+
+
+def test_one_layer_saturated_design_writes_null_with_a_reason_not_nan(tmp_path):
+    out = tmp_path / "o"
+    r = run(["simulate", write(tmp_path, SATURATED_ONE_LAYER), "--out", out, "--json"])
+    assert r.exit_code == 0, r.output + r.stderr
+    rep = load_json_strict(out / "report.json")
+    assert json.loads(r.stdout, parse_constant=no_constant) == rep
+    reg = rep["regimes"][0]
+    assert reg["force_resolution_N"] is None and "saturates" in reg["force_resolution_N_reason"]
+    assert rep["magnetometer"]["field_resolution_uT"] is None
+    assert "nan" not in r.stdout.lower()
+
+
+def test_one_layer_design_and_spec_reports_are_finite(tmp_path):
+    r = run(["simulate", write(tmp_path, doc_text(name="one")), "--out", tmp_path / "s"])
+    assert r.exit_code == 0, r.stderr
+    load_json_strict(tmp_path / "s" / "report.json")
+    spec = doc_text(name="onespec", layers=[{"target_sensitivity_per_N": 0.03, "target_range_N": 10}])
+    r = run(["design", write(tmp_path, spec, "spec.yaml"), "--out", tmp_path / "d", "-q"])
+    assert r.exit_code in (0, 1), r.stderr
+    load_json_strict(tmp_path / "d" / "report.json")
+
+
+def test_json_writer_refuses_nan_instead_of_writing_it(tmp_path):
+    with pytest.raises(ValueError):
+        with staged(tmp_path / "o") as st:
+            st.write_json("x.json", {"a": float("nan")})
+    assert not (tmp_path / "o").exists()
+
+
+# =========================================================================== 3. float edges
+@pytest.mark.filterwarnings("error")
+@pytest.mark.parametrize("section,key", [
+    ("magnet", "diameter_mm"), ("magnet", "thickness_mm"), ("magnet", "remanence_T"),
+    ("family", "width_mm"), ("family", "depth_mm"), ("material", "youngs_modulus_MPa"),
+    ("housing", "cover_mm"), ("printer", "layer_height_mm"), ("printer", "nozzle_mm"),
+])
+@pytest.mark.parametrize("value", [1e-308, 5e-324, 1e308])
+def test_float_edges_in_sections_are_refused(tmp_path, section, key, value):
+    r = run(["simulate", write(tmp_path, doc_text(**{section: {key: value}})), "--out", tmp_path / "o"])
+    refused(r, f"{section}.{key}")
+    assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.filterwarnings("error")
+@pytest.mark.parametrize("key,value", [("theta_deg", 1e-308), ("t_mm", 1e-308), ("h_mm", 1e-308),
+                                       ("h_mm", 1e308), ("weight", 1e-308)])
+def test_float_edges_in_layers_are_refused(tmp_path, key, value):
+    layer = dict(LAYER, **{key: value})
+    r = run(["simulate", write(tmp_path, doc_text(layers=[layer])), "--out", tmp_path / "o"])
+    refused(r, f"layers[0].{key}")
+
+
+@pytest.mark.filterwarnings("error")
+@pytest.mark.parametrize("key", ["target_sensitivity_per_N", "target_range_N"])
+def test_tiny_targets_are_refused_before_design(tmp_path, key):
+    layer = {"target_sensitivity_per_N": 0.03, "target_range_N": 10.0, key: 1e-308}
+    r = run(["design", write(tmp_path, doc_text(layers=[layer])), "--out", tmp_path / "o"])
+    refused(r, f"layers[0].{key}")
+
+
+@pytest.mark.filterwarnings("error")
+def test_extreme_accuracy_request_is_refused(tmp_path):
+    r = run(["simulate", write(tmp_path, doc_text(model={"accuracy_rel": 1e-308})), "--out", tmp_path / "o"])
+    refused(r, "model.accuracy_rel")
+
+
+# =========================================================================== 4. file-system faults
+def test_out_below_a_regular_file(tmp_path):
+    blocker = tmp_path / "afile"
+    blocker.write_text("keep")
+    r = run(["simulate", FORWARD, "--out", blocker / "sub"])
+    assert r.exit_code == 2 and (r.exception is None or isinstance(r.exception, SystemExit))
+    line = one_line(r)
+    assert line == f"mst: invalid path: {blocker}: Not a directory (ENOTDIR)", line
+    assert blocker.read_text() == "keep"
+
+
+@pytest.mark.parametrize("cmd", [["export", FORWARD, "--stl"], ["design", SPEC]], ids=["export", "design"])
+def test_a_bad_output_path_is_refused_before_the_work(tmp_path, cmd):
+    blocker = tmp_path / "afile"
+    blocker.write_text("keep")
+    r, dt = timed(cmd + ["--out", blocker / "sub"])
+    assert r.exit_code == 2 and dt < 1.5, (r.stderr, dt)
+    assert one_line(r) == f"mst: invalid path: {blocker}: Not a directory (ENOTDIR)"
+
+
+def test_read_only_output_folder_names_the_path_and_reason(tmp_path, monkeypatch):
+    # root ignores permission bits: simulate the read-only file system where the folder is made
+    import mst_cli.outputs as outputs
+
+    def read_only(*a, **k):
+        raise OSError(errno.EROFS, os.strerror(errno.EROFS), str(k.get("dir", a[-1] if a else "")))
+    monkeypatch.setattr(outputs.tempfile, "mkdtemp", read_only)
+    out = tmp_path / "ro" / "x"
+    r = run(["simulate", FORWARD, "--out", out])
+    assert r.exit_code == 2
+    assert one_line(r) == f"mst: invalid path: {out}: Read-only file system (EROFS)"
+    assert not (tmp_path / "ro").exists()
+
+
+@pytest.mark.skipif(os.geteuid() == 0, reason="root writes into read-only folders")
+def test_read_only_folder_for_real(tmp_path):
+    ro = tmp_path / "ro"
+    ro.mkdir()
+    ro.chmod(0o555)
+    try:
+        r = run(["simulate", FORWARD, "--out", ro / "x"])
+        assert r.exit_code == 2 and "Permission denied (EACCES)" in one_line(r)
+    finally:
+        ro.chmod(0o755)
+
+
+def test_name_too_long_for_the_default_output_folder(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    f = write(tmp_path, doc_text(name="n" * 300))
+    r = run(["simulate", f])
+    assert r.exit_code == 2
+    line = one_line(r)
+    assert line.startswith("mst: invalid path: mst-out/nnnn") and line.endswith(
+        "File name too long (ENAMETOOLONG)"), line
+    assert not (tmp_path / "mst-out").exists()
+
+
+def test_nul_in_the_name_and_in_out(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    f = write(tmp_path, 'name: "a\\0b"\nlayers: [{theta_deg: 25, t_mm: 0.6, h_mm: 2}]\n')
+    assert "NUL" in refused(run(["simulate", f]), "name")
+    r = run(["simulate", FORWARD, "--out", "o\0x"])
+    assert r.exit_code == 2 and "holds a NUL byte (EINVAL)" in one_line(r)
+    assert list(tmp_path.iterdir()) == [f]
+
+
+def test_full_disk_exits_1_and_keeps_the_earlier_complete_output(tmp_path, monkeypatch):
+    out = tmp_path / "o"
+    assert run(["simulate", FORWARD, "--out", out]).exit_code == 0
+    before = {p.name: p.read_bytes() for p in out.iterdir()}
+    real_write_text = Path.write_text
+
+    def full_disk(self, *a, **k):
+        if STAGING_PREFIX in str(self):
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))     # a write(): no file name
+        return real_write_text(self, *a, **k)
+    monkeypatch.setattr(Path, "write_text", full_disk)
+    r = run(["simulate", FORWARD, "--out", out])
+    assert r.exit_code == 1
+    assert one_line(r) == f"mst: system error: {out / 'report.json'}: No space left on device (ENOSPC)"
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == before
+    assert not staging_left(tmp_path)
+
+
+# =========================================================================== 5. interrupted runs
+STAGE_AND_SLEEP = textwrap.dedent("""
+    import sys, time
+    from pathlib import Path
+    from mst_cli.outputs import staged
+    with staged(Path(sys.argv[1])) as st:
+        st.write_text("report.json", "{}")
+        print("staged", flush=True)
+        time.sleep(60)
+""")
+
+SIMULATE_SLOW_PLOT = textwrap.dedent("""
+    import sys, time
+    import mst_cli.report as report
+    plot = report.plot_response
+    def slow(*a, **k):
+        plot(*a, **k)
+        print("staged", flush=True)
+        time.sleep(60)
+    report.plot_response = slow
+    from mst_cli.cli import main
+    main(["simulate", sys.argv[2], "--out", sys.argv[1]], prog_name="mst")
+""")
+
+
+def interrupt(script, out: Path, sig, *extra):
+    p = subprocess.Popen([PYTHON, "-c", script, str(out), *map(str, extra)], stdout=subprocess.PIPE,
+                         stderr=subprocess.PIPE, text=True, cwd=out.parent)
+    try:
+        assert p.stdout.readline().strip().endswith("staged")
+        assert staging_left(out)                     # the staging folder exists now
+        p.send_signal(sig)
+        _, err = p.communicate(timeout=30)
+    finally:
+        if p.poll() is None:
+            p.kill()
+    return p.returncode, err
+
+
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT, signal.SIGHUP], ids=lambda s: s.name)
+def test_signals_remove_the_staging_folder(tmp_path, sig):
+    out = tmp_path / "new"
+    code, err = interrupt(STAGE_AND_SLEEP, out, sig)
+    assert code in (128 + sig, -sig, 1), (code, err)
+    assert not out.exists(), list(out.iterdir())          # nothing at all: the folder was new
+
+
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT], ids=lambda s: s.name)
+def test_interrupted_simulate_keeps_the_earlier_complete_output(tmp_path, sig):
+    out = tmp_path / "o"
+    assert run(["simulate", FORWARD, "--out", out]).exit_code == 0
+    before = {p.name: p.read_bytes() for p in out.iterdir()}
+    code, err = interrupt(SIMULATE_SLOW_PLOT, out, sig, FORWARD)
+    assert code == 128 + sig, (code, err)
+    assert err.strip().splitlines()[-1] == f"mst: interrupted ({sig.name}): nothing half-written was left"
+    assert len(err.strip().splitlines()) == 1, err
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == before
+
+
+def dead_pid() -> int:
+    p = subprocess.Popen([PYTHON, "-c", "pass"])
+    p.wait()
+    return p.pid
+
+
+def test_stale_staging_of_a_killed_run_is_removed_by_the_next_run(tmp_path):
+    out = tmp_path / "o"
+    out.mkdir()
+    killed = out / f"{STAGING_PREFIX}{dead_pid()}-abc"              # the pid is gone: stale
+    killed.mkdir()
+    (killed / "report.json").write_text("{half")
+    old = out / f"{STAGING_PREFIX}oldstyle"                          # no pid, an hour old: stale
+    old.mkdir()
+    os.utime(old, (time.time() - 3600, time.time() - 3600))
+    sleeper = subprocess.Popen([PYTHON, "-c", "import time; time.sleep(60)"])
+    try:
+        live = out / f"{STAGING_PREFIX}{sleeper.pid}-xyz"            # a live run's: left alone
+        live.mkdir()
+        fresh = out / f"{STAGING_PREFIX}fresh"                        # no pid, new: ignored
+        fresh.mkdir()
+        r = run(["simulate", FORWARD, "--out", out])
+        assert r.exit_code == 0, r.stderr
+        assert not killed.exists() and not old.exists()
+        assert live.exists() and fresh.exists()
+        assert OUTPUTS <= {p.name for p in out.iterdir()}
+    finally:
+        sleeper.kill()
+        sleeper.wait()
+
+
+def test_sigkilled_run_leaves_staging_that_the_next_run_removes(tmp_path):
+    out = tmp_path / "o"
+    p = subprocess.Popen([PYTHON, "-c", STAGE_AND_SLEEP, str(out)], stdout=subprocess.PIPE, text=True)
+    try:
+        assert p.stdout.readline().strip() == "staged"
+        p.kill()
+        p.wait()
+    finally:
+        if p.poll() is None:
+            p.kill()
+    assert staging_left(out)
+    assert run(["simulate", FORWARD, "--out", out]).exit_code == 0
+    assert not staging_left(out) and {p.name for p in out.iterdir()} == OUTPUTS
+
+
+def test_staging_folder_records_the_pid():
+    with tempfile.TemporaryDirectory() as d:
+        st = Staging(Path(d))
+        try:
+            assert st.tmp.name.startswith(f"{STAGING_PREFIX}{os.getpid()}-")
+        finally:
+            st.abort()
+
+
+# =========================================================================== 6. mst check
+@pytest.fixture(scope="module")
+def exported(tmp_path_factory):
+    out = tmp_path_factory.mktemp("export") / "out"
+    r = run(["export", FORWARD, "--stl", "--out", out])
+    assert r.exit_code == 0, r.output + r.stderr
+    return out
+
+
+def copy_export(exported: Path, dest: Path) -> Path:
+    dest.mkdir()
+    for p in exported.iterdir():
+        (dest / p.name).write_bytes(p.read_bytes())
+    return dest
+
+
+STL_DTYPE = np.dtype([("normal", "<f4", 3), ("v", "<f4", (3, 3)), ("attr", "<u2")])
+
+
+def poison_stl(folder: Path, value: float) -> None:
+    data = (folder / "sensor.stl").read_bytes()
+    tris = np.frombuffer(data[84:], dtype=STL_DTYPE).copy()
+    tris["v"][5, 1, 2] = value
+    (folder / "sensor.stl").write_bytes(data[:84] + tris.tobytes())
+
+
+@pytest.mark.parametrize("value", [float("nan"), float("inf"), 1e37], ids=["nan", "inf", "1e37"])
+def test_check_refuses_an_stl_with_non_finite_or_huge_coordinates(exported, tmp_path, value):
+    folder = copy_export(exported, tmp_path / "c")
+    poison_stl(folder, value)
+    r, dt = timed(["check", folder])
+    line = refused(r, "PATH")
+    assert "must be finite and within +-1000 mm" in line and dt < 5.0, (line, dt)
+
+
+def mutate(manifest: dict, path: str, value):
+    node = manifest
+    keys = re.findall(r"[^.\[\]]+", path)
+    for k in keys[:-1]:
+        node = node[int(k)] if k.isdigit() else node[k]
+    last = keys[-1]
+    if value is KeyError:
+        del node[last]
+    elif last.isdigit():
+        node[int(last)] = value
+    else:
+        node[last] = value
+
+
+@pytest.mark.parametrize("path,value", [
+    ("layers", "three"), ("layers", []), ("layers.0.t_mm", "0.6"), ("layers.0", [1, 2]),
+    ("print.rotation", [[1, 0], [0, 1]]), ("print.rotation.1.2", None), ("print.pause.after_layer", 66.5),
+    ("body", []), ("body.bbox_max_mm", [1e37, 0, 0]), ("body.volume_mm3", True), ("board_slot.cable_windows", {}),
+    ("board_slot.cable_windows.0.floor_y_mm", {"a": 1}), ("magnet_pocket.radius_mm", KeyError),
+    ("printer.nozzle_mm", 0), ("gap0_mm", 10 ** 400), ("stl_tolerance_mm", [0.01]),
+])
+def test_check_refuses_a_manifest_of_wrong_type_or_nesting_before_measuring(exported, tmp_path, monkeypatch,
+                                                                              path, value):
+    import mst_cli.checks as checks
+    folder = copy_export(exported, tmp_path / "c")
+    manifest = json.loads((folder / "export.json").read_text())
+    mutate(manifest, path, value)
+    (folder / "export.json").write_text(json.dumps(manifest))
+    measured = []
+    monkeypatch.setattr(checks, "run_checks", lambda *a, **k: measured.append(1) or [])
+    r = run(["check", folder])
+    first = re.findall(r"[^.\[\]]+", path)[0]
+    line = refused(r, f"export.json.{first}")
+    assert len(line) < 400 and not measured, line
+
+
+def test_check_refuses_nan_in_the_manifest(exported, tmp_path):
+    folder = copy_export(exported, tmp_path / "c")
+    text = (folder / "export.json").read_text()
+    (folder / "export.json").write_text(re.sub(r'"gap0_mm": [^,]+,', '"gap0_mm": NaN,', text))
+    assert "NaN is not a JSON number" in refused(run(["check", folder]), "export.json")
+
+
+def test_a_bug_inside_a_check_is_not_reported_as_a_malformed_manifest(exported, monkeypatch):
+    import mst_cli.checks as checks
+
+    def broken(*a, **k):
+        raise KeyError("a bug")
+    monkeypatch.setattr(checks, "_slot_check", broken)
+    r = run(["check", exported])
+    assert isinstance(r.exception, KeyError), (r.exit_code, r.stderr)
+
+
+def test_check_json_holds_no_nan(exported):
+    r = run(["check", exported, "--json"])
+    assert r.exit_code == 0, r.stderr
+    json.loads(r.stdout, parse_constant=no_constant)
+
+
+# =========================================================================== 7. usage errors
+@pytest.mark.parametrize("args", [
+    ["simulate", "--bogus"],
+    ["simulate", FORWARD, "--field-model", "xx"],
+    ["simulate", ROOT / "configs"],
+    ["simulate"],
+    ["nope"],
+    ["design", SPEC, "--seed", "-1"],
+    ["export", FORWARD, "--stl-tolerance", "abc"],
+    ["check"],
+    ["bench", "--samples", "0"],
+    ["--bogus"],
+], ids=lambda a: " ".join(map(str, a)))
+def test_usage_errors_are_one_line_and_exit_2(args):
+    r = run(args)
+    assert r.exit_code == 2 and (r.exception is None or isinstance(r.exception, SystemExit))
+    line = one_line(r)
+    assert line.startswith("mst: usage error: ") and "--help" in line, line
+    assert r.stdout == ""
+
+
+def test_help_and_version_still_work():
+    r = run(["--help"])
+    assert r.exit_code == 0 and r.stdout.startswith("Usage: ") and "simulate" in r.stdout
+    r = run(["simulate", "--help"])
+    assert r.exit_code == 0 and "DESIGN_FILE" in r.stdout
+    r = run(["--version"])
+    assert r.exit_code == 0 and __version__ in r.stdout
+
+
+def test_usage_error_from_the_installed_command():
+    mst = Path(PYTHON).parent / "mst"
+    if not mst.exists():
+        pytest.skip("console script not installed")
+    p = subprocess.run([str(mst), "simulate", "--bogus"], capture_output=True, text=True, timeout=60)
+    assert p.returncode == 2 and p.stdout == ""
+    assert p.stderr.count("\n") == 1 and p.stderr.startswith("mst: usage error: No such option")
+
+
+# =========================================================================== 8. property suite
+class Raw(str):
+    """A YAML literal written as is (unquoted): .nan, 1.0e+400, a 3000-digit integer."""
+
+
+RAW_LITERALS = [".nan", ".NaN", ".inf", "-.inf", "1.0e+400", "-1.0e+400", "1.0e-400", "0x7fffffffffffffffffffffff",
+                "1" * 5000, "-" + "9" * 3000, "1_000_000_000_000_000", "190:20:30", "0o777777777777777777777777"]
+EXTREME_FLOATS = [1e-308, -1e-308, 5e-324, 1e308, -1e308, 1e300, -1e300, 0.0, -0.0, 1e-30, 1e30, 1e15]
+
+
+def rule_values(rule):
+    """Values on and just past the rule's own bounds and choices."""
+    vals = []
+    for b in (rule.lo, rule.hi):
+        if b is not None:
+            vals += [b, math.nextafter(b, -math.inf), math.nextafter(b, math.inf), -b, 10 * b + 1]
+    vals += list(rule.choices) + (["not-a-choice"] if rule.choices else [])
+    if rule.kind == "pair" and rule.lo is not None:
+        vals += [[rule.lo, rule.hi], [rule.hi, rule.lo], [rule.lo], [rule.hi, rule.hi, 0]]
+    return vals
+
+
+scalars = st.one_of(
+    st.sampled_from(EXTREME_FLOATS),
+    st.floats(allow_nan=True, allow_infinity=True),
+    st.integers(min_value=-10 ** 40, max_value=10 ** 40),
+    st.sampled_from(["nan", "NaN", "inf", "-inf", "1e400", "", "0x10", "six"]),
+    st.sampled_from(RAW_LITERALS).map(Raw),
+    st.none(), st.booleans(), st.text(max_size=8),
+)
+values = st.one_of(scalars, st.lists(scalars, max_size=3), st.dictionaries(st.text(max_size=4), scalars, max_size=2))
+junk_keys = st.text(alphabet="abcxyz_<&*!\n\0. ", min_size=1, max_size=6)
+
+
+def in_bounds(rule):
+    """Valid but extreme values of the rule: its closed ends, just inside them, the middle."""
+    if rule.choices:
+        return list(rule.choices)
+    if rule.lo is None or rule.hi is None:
+        return []
+    lo, hi = rule.lo, rule.hi
+    vals = [math.nextafter(lo, math.inf), math.nextafter(hi, -math.inf), 0.5 * (lo + hi)]
+    vals += [lo] if not rule.lo_open else []
+    vals += [hi] if not rule.hi_open else []
+    vals += [math.sqrt(lo * hi)] if lo > 0 else []
+    if rule.kind == "pair":
+        return [[a, b] for a in vals for b in vals[:2]]
+    if rule.kind == "int":
+        return sorted({int(math.ceil(v)) for v in vals if lo <= math.ceil(v) <= hi})
+    return vals
+
+
+def value_for(rule):
+    """Half the time a valid extreme (so the run goes on to the arithmetic), else hostile."""
+    valid, own = in_bounds(rule), rule_values(rule)
+    hostile = st.one_of(st.sampled_from(own), values) if own else values
+    return st.one_of(st.sampled_from(valid), hostile) if valid else hostile
+
+
+@st.composite
+def hostile_documents(draw):
+    doc = {"name": "h", "model": {"mechanics": "spring"},
+           "layers": [dict(LAYER), {"theta_deg": 33, "t_mm": 1.0, "h_mm": 2.8}]}
+    for _ in range(draw(st.integers(1, 4))):
+        op = draw(st.sampled_from(["section"] * 3 + ["layer"] * 2 + ["top", "drop", "resize", "name"]))
+        if op == "section":
+            section = draw(st.sampled_from(sorted(SECTIONS)))
+            rules = SECTIONS[section]
+            key = draw(st.one_of(st.sampled_from(sorted(rules)), junk_keys))
+            body = doc.setdefault(section, {})
+            if not isinstance(body, dict):
+                body = doc[section] = {}
+            body[key] = draw(value_for(rules[key]) if key in rules else values)
+        elif op == "layer" and isinstance(doc.get("layers"), list) and doc["layers"]:
+            i = draw(st.integers(0, len(doc["layers"]) - 1))
+            key = draw(st.one_of(st.sampled_from(sorted(LAYER_RULES)), junk_keys))
+            if isinstance(doc["layers"][i], dict):
+                doc["layers"][i][key] = draw(value_for(LAYER_RULES[key]) if key in LAYER_RULES else values)
+        elif op == "top":
+            doc[draw(st.one_of(st.sampled_from(TOP_KEYS), junk_keys))] = draw(values)
+        elif op == "drop":
+            doc.pop(draw(st.sampled_from(TOP_KEYS)), None)
+        elif op == "resize" and isinstance(doc.get("layers"), list):
+            n = draw(st.integers(0, 8))
+            doc["layers"] = [dict(doc["layers"][i % len(doc["layers"])]) if doc["layers"] else dict(LAYER)
+                             for i in range(n)]
+        elif op == "name":
+            doc["name"] = draw(st.sampled_from(["n" * 300, "a\0b", "../up", ".hidden", "", "a/b", "ok\nnext",
+                                                "x" * 100, "µ-sensor", "tab\there"]))
+    raws = {}
+
+    def placeholder(v):
+        if isinstance(v, Raw):
+            token = f"RAW{len(raws)}TOKEN"
+            raws[token] = str(v)
+            return token
+        if isinstance(v, dict):
+            return {k: placeholder(x) for k, x in v.items()}
+        if isinstance(v, list):
+            return [placeholder(x) for x in v]
+        return v
+    text = yaml.safe_dump(placeholder(doc), sort_keys=False, allow_unicode=True)
+    for token, literal in raws.items():
+        text = text.replace(token, literal)
+    if draw(st.booleans()) and draw(st.booleans()):
+        text += draw(st.sampled_from(["name: again\n", "layers: []\n", "model: {}\n"]))   # duplicate key
+    return text
+
+
+def check_invariants(folder: Path, r, dt: float, caught) -> None:
+    assert r.exit_code in (0, 1, 2), (r.exit_code, r.stderr, r.exception)
+    assert r.exception is None or isinstance(r.exception, SystemExit), repr(r.exception)
+    if r.exit_code == 2:
+        assert len(r.stderr.strip().splitlines()) == 1, r.stderr
+    assert not [w for w in caught if issubclass(w.category, RuntimeWarning)], [str(w.message) for w in caught]
+    assert "Traceback" not in r.stderr
+    assert not staging_left(folder)
+    written = [p for p in folder.rglob("*") if p.is_file() and p.name != "in.yaml"]
+    by_folder = {}
+    for p in written:
+        by_folder.setdefault(p.parent, set()).add(p.name)
+    for names in by_folder.values():           # all of a run's files, or none
+        assert names == OUTPUTS, names
+    if written:
+        assert r.exit_code == 0
+    for p in written:
+        if p.suffix == ".json":
+            load_json_strict(p)
+    assert dt < 5.0, dt
+
+
+@settings(max_examples=400, deadline=None, derandomize=True, database=None,
+          suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
+@given(text=hostile_documents(), default_out=st.booleans())
+def test_property_hostile_documents_keep_the_contract(text, default_out):
+    with tempfile.TemporaryDirectory() as d:
+        folder = Path(d)
+        f = folder / "in.yaml"
+        f.write_text(text)
+        args = ["simulate", f] + ([] if default_out else ["--out", folder / "out"])
+        cwd = os.getcwd()
+        os.chdir(folder)
+        try:
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("always")
+                r, dt = timed(args)
+        finally:
+            os.chdir(cwd)
+        event(f"exit {r.exit_code}")
+        check_invariants(folder, r, dt, caught)
+
+
+MANIFEST_PATHS = ["layers", "layers.0", "layers.0.t_mm", "layers.1.z_bottom_mm", "print", "print.rotation",
+                  "print.rotation.0", "print.rotation.0.0", "print.pause", "print.pause.after_layer",
+                  "print.layer_height_mm", "body", "body.bbox_min_mm", "body.bbox_max_mm.2", "body.volume_mm3",
+                  "body.bodies", "magnet_pocket", "magnet_pocket.section_z_mm", "board_slot.cable_windows",
+                  "board_slot.chip_xy_mm", "board_slot.board", "printer.nozzle_mm", "printer.min_gap_mm",
+                  "gap0_mm", "stl_tolerance_mm"]
+
+
+@settings(max_examples=150, deadline=None, derandomize=True, database=None,
+          suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
+@given(path=st.sampled_from(MANIFEST_PATHS),
+       value=st.one_of(st.floats(-2000, 2000), st.integers(-100, 100), values, st.just(KeyError),
+                       st.sampled_from([1e37, -1e37, 10 ** 30, 1e-300, 0, -1]), st.sampled_from(MANIFEST_PATHS)))
+def test_property_hostile_manifests_keep_the_contract(exported, path, value):
+    with tempfile.TemporaryDirectory() as d:
+        folder = copy_export(exported, Path(d) / "c")
+        manifest = json.loads((folder / "export.json").read_text())
+        mutate(manifest, path, value)
+        (folder / "export.json").write_text(json.dumps(manifest))
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            r, dt = timed(["check", folder, "--json"])
+        event(f"exit {r.exit_code}: {r.stderr.strip()[:60]}")
+        assert r.exit_code in (0, 1, 2), (r.exit_code, r.stderr, r.exception)
+        assert r.exception is None or isinstance(r.exception, SystemExit), repr(r.exception)
+        if r.exit_code == 2:
+            assert len(r.stderr.strip().splitlines()) == 1, r.stderr
+        else:
+            json.loads(r.stdout, parse_constant=no_constant)
+        assert not [w for w in caught if issubclass(w.category, RuntimeWarning)], [str(w.message) for w in caught]
+        assert dt < 20.0, dt
