@@ -61,10 +61,17 @@ class _Progress:
                    "L0 targets corrected by the dear model's miss, L0 re-solved, repeated); every "
                    "achieved number then comes from that model [default: model.accuracy_rel's "
                    "pick, else model.mechanics if not spring, else no refinement].")
+@click.option("--pareto", "pareto_count", type=click.IntRange(min=2, max=60), default=None, metavar="N",
+              help="Also map the trade among designs that meet the targets: up to N non-dominated "
+                   "designs over total height, worst force resolution and print robustness, "
+                   "written to pareto.csv (one design per row, units in the header) and "
+                   "pareto.png, the chosen one (design.objective's weights) marked.")
+@click.option("--pareto-designs", is_flag=True,
+              help="With --pareto: also write every front design as pareto/design-NN.yaml.")
 @click.option("--quiet", "-q", is_flag=True, help="No table and no progress; exit code and files only.")
 @click.option("--json", "as_json", is_flag=True, help="Print report.json to stdout instead of the table.")
 @handles_input_errors
-def design(spec_file, out_dir, seed, max_evaluations, refine, quiet, as_json):
+def design(spec_file, out_dir, seed, max_evaluations, refine, pareto_count, pareto_designs, quiet, as_json):
     """Find theta, t, h of every layer so that the sensor meets SPEC_FILE's targets.
 
     Per layer the spec gives a target sensitivity S (dB/B0 per newton, secant over the
@@ -94,13 +101,31 @@ def design(spec_file, out_dir, seed, max_evaluations, refine, quiet, as_json):
     from .schema import load_document
 
     doc = load_document(spec_file)
+    from .outputs import check_out_dir
+    check_out_dir(out_dir or default_out_dir(doc.name))   # a bad output path: refused before any work
+    if pareto_designs and pareto_count is None:
+        from .schema import InputError
+        raise InputError("--pareto-designs", True, "needs --pareto N")
     choice = choose_mechanics(refine, doc.accuracy_rel, doc.mechanics)
+    if pareto_count is not None and choice.mechanics != "spring":
+        from .schema import InputError
+        raise InputError("--pareto", pareto_count, f"maps the front with the L0 spring model; drop "
+                         f"--refine/model.accuracy_rel (asked for {choice.mechanics}) or refine one "
+                         f"front design afterwards with --pareto-designs and mst design --refine")
     if choice.message() and not (quiet or as_json):
         click.echo(choice.message() + ("" if choice.mechanics == "spring"
                                        else f": L0 design refined with {choice.mechanics}"))
     progress = _Progress(quiet or as_json)
+    front = None
+    t_start = time.perf_counter()
     try:
-        if choice.mechanics == "spring":
+        if pareto_count is not None:
+            from dataclasses import replace
+
+            from .design.pareto import pareto_front
+            result, front = pareto_front(replace(doc, mechanics="spring"), pareto_count, seed=seed,
+                                         max_evaluations=max_evaluations, progress=progress)
+        elif choice.mechanics == "spring":
             from dataclasses import replace
             result = design_document(replace(doc, mechanics="spring"), seed=seed,
                                      max_evaluations=max_evaluations, progress=progress)
@@ -112,15 +137,37 @@ def design(spec_file, out_dir, seed, max_evaluations, refine, quiet, as_json):
         progress.close()
     out = out_dir or default_out_dir(doc.name)
     extra = result.report_extra()
+    extra_files = {"design.yaml": result.design_yaml_dict()}
+    writers = None
+    if front:
+        from .design.pareto import pareto_csv, plot_pareto
+        extra["pareto"] = {"designs": len(front), "requested": pareto_count,
+                           "files": ["pareto.csv", "pareto.png"]
+                           + ([f"pareto/design-{k + 1:02d}.yaml" for k in range(len(front))]
+                              if pareto_designs else [])}
+        if pareto_designs:
+            extra_files.update({f"pareto/design-{k + 1:02d}.yaml": p.result.design_yaml_dict()
+                                for k, p in enumerate(front)})
+
+        def writers(st):
+            st.write_text("pareto.csv", pareto_csv(front))
+            plot_pareto(front, st.path("pareto.png"), title=f"{doc.name}: designs that meet every target")
     write_simulation(result.document, result.geometry, result.response, out,
-                     extra_files={"design.yaml": result.design_yaml_dict()}, extra_report=extra)
+                     extra_files=extra_files, extra_report=extra, more=writers)
     if as_json:
         click.echo(json.dumps(report_dict(result.document, result.geometry, result.response, extra),
-                              indent=2))
+                              indent=2, allow_nan=False))
     elif not quiet:
         click.echo(result.table())
-        click.echo(f"wrote {out}/design.yaml, report.json, response.csv, response.png "
-                   f"({result.elapsed_s:.2f} s)")
+        if front:
+            from .design.pareto import front_table
+            click.echo(front_table(front))
+        elif pareto_count is not None:
+            click.echo("Pareto front: not mapped (the targets are not met)")
+        files = "design.yaml, report.json, response.csv, response.png" + (
+            ", pareto.csv, pareto.png" if front else "") + (
+            f", pareto/ ({len(front)} designs)" if front and pareto_designs else "")
+        click.echo(f"wrote {out}/{files} ({time.perf_counter() - t_start:.2f} s)")
     if result.exit_code:
         click.echo(f"mst design: targets not met: {result.binding}: {result.reasons[0]}", err=True)
     sys.exit(result.exit_code)

@@ -302,6 +302,11 @@ class Board:
 class Housing:
     """Base (board housing), plates and top cap (magnet pocket), mm, in the sensor frame.
 
+    The defaults are as thin as a 0.4 mm nozzle prints solid (two extrusion lines; the pocket
+    floor one line, because the top layer's pad, at least one line itself, lies under it): every
+    tenth of a millimetre here is part height and magnet-chip gap not spent on the layers
+    (:meth:`SensorGeometry.height_budget_mm` reports the split).
+
     The base holds the board face-up on ``base_floor_mm`` of material; above the board's
     tallest part an air clearance, then the cover on which the first layer sits. The board
     slides into its slot through the face that is on top in the print (+y), down to a floor;
@@ -309,13 +314,13 @@ class Housing:
     pocket that is open upwards in the print until the pause, then closed by a 45 deg roof.
     """
 
-    base_floor_mm: float = 1.0
+    base_floor_mm: float = 0.8           # two extrusion lines under the board
     board_clearance_mm: float = 0.2      # all round the board in its slot
     chip_clearance_mm: float = 0.3       # air between the board's tallest part and the cover
-    cover_mm: float = 0.8                # solid TPU between that air gap and layer 1
+    cover_mm: float = 0.8                # solid TPU between that air gap and layer 1 (2 lines)
     side_wall_mm: float = 1.2            # thinnest wall around the slot and the pocket
-    plate_mm: float = 1.2                # solid plate between two collapsible layers
-    pocket_floor_mm: float = 0.6         # TPU between the top layer and the magnet's face
+    plate_mm: float = 0.8                # solid plate between two collapsible layers (2 lines)
+    pocket_floor_mm: float = 0.4         # one line on the top layer's pad (>= 0.4 mm itself)
     pocket_clearance_mm: float = 0.1     # radial and axial clearance around the magnet
     cap_top_mm: float = 0.8              # TPU above the magnet's upper face
 
@@ -598,6 +603,29 @@ class SensorGeometry:
         """Unloaded distance from the magnet's lower pole face to the Hall plates."""
         return float(unloaded_gap_mm(sum(c.h_mm for c in self.layers), len(self.layers),
                                      self.housing, self.board))
+
+    def height_budget_mm(self) -> dict:
+        """Where the part's height and the magnet-chip gap go (mm): the housing overhead is
+        everything not spent on the collapsible layers; the gap splits into the chip side
+        (Hall plates to layer 1: board parts, air, cover), the stack (layers and plates) and
+        the magnet side (pocket floor)."""
+        layers = sum(c.h_mm for c in self.layers)
+        plates = (len(self.layers) - 1) * self.housing.plate_mm
+        chip_side = self.z_base_top_mm - self.z_hall_mm
+        magnet_side = self.z_magnet_bottom_mm - self.z_stack_top_mm
+        return {
+            "total_height_mm": self.total_height_mm,
+            "layers_mm": layers,
+            "plates_mm": plates,
+            "base_mm": self.z_base_top_mm,
+            "cap_mm": self.total_height_mm - self.z_stack_top_mm,
+            "housing_overhead_mm": self.total_height_mm - layers,
+            "board_headroom_mm": self.board.headroom_mm,
+            "gap0_mm": self.gap0_mm,
+            "gap_chip_side_mm": chip_side,
+            "gap_stack_mm": layers + plates,
+            "gap_magnet_side_mm": magnet_side,
+        }
 
     @property
     def total_lock_stroke_mm(self) -> float:

@@ -7,6 +7,7 @@
 from __future__ import annotations
 
 import io
+import math
 
 import numpy as np
 
@@ -78,11 +79,44 @@ def report_dict(doc, geometry: SensorGeometry, resp: Response, extra: dict | Non
             "magnet_pause_height_mm": geometry.pause_height_mm,
             "chip_offset_mm": list(geometry.chip_offset_mm), "magnet_tilt_deg": geometry.magnet_tilt_deg,
         },
+        "height_budget": geometry.height_budget_mm(),
         "warnings": list(resp.warnings),
     }
     if extra:
         out.update(extra)
-    return out
+    return nulls_with_reasons(out, _undefined_reasons(resp))
+
+
+def _undefined_reasons(resp: Response) -> dict:
+    """Why a quantity of this response has no value (key -> sentence)."""
+    reasons = {}
+    if resp.chip_setting is None or not math.isfinite(resp.field_resolution_T):
+        why = ("undefined: the field saturates the MLX90393 at full load, so no gain setting "
+               "resolves it (see warnings)")
+        reasons.update(force_resolution_N=why, force_resolution_worst_N=why, field_resolution_uT=why)
+    return reasons
+
+
+def nulls_with_reasons(data, reasons: dict | None = None):
+    """``data`` with every non-finite number replaced by null and, in a mapping, a ``<key>_reason``
+    key beside it saying why (JSON has no NaN; report.json never holds one)."""
+    reasons = reasons or {}
+    if isinstance(data, dict):
+        out = {}
+        for key, value in data.items():
+            if isinstance(value, float) and not math.isfinite(value):
+                out[key] = None
+                out[f"{key}_reason"] = reasons.get(key, "undefined: not a finite number for this design")
+            else:
+                out[key] = nulls_with_reasons(value, reasons)
+        for key, value in data.items():           # a None the code set on purpose: say why too
+            if value is None and key in reasons and f"{key}_reason" not in out:
+                out[f"{key}_reason"] = reasons[key]
+        return out
+    if isinstance(data, (list, tuple)):
+        return [None if isinstance(v, float) and not math.isfinite(v) else nulls_with_reasons(v, reasons)
+                for v in data]
+    return data
 
 
 def response_csv(resp: Response) -> str:
@@ -102,6 +136,16 @@ def response_csv(resp: Response) -> str:
     return buf.getvalue()
 
 
+def height_budget_line(geometry: SensorGeometry) -> str:
+    """One line: the part's height split into layers and housing, and the gap's split."""
+    b = geometry.height_budget_mm()
+    return (f"height {b['total_height_mm']:.2f} mm = layers {b['layers_mm']:.2f} + housing "
+            f"{b['housing_overhead_mm']:.2f} (base {b['base_mm']:.2f}, plates {b['plates_mm']:.2f}, "
+            f"cap {b['cap_mm']:.2f}); gap {b['gap0_mm']:.2f} mm = chip side {b['gap_chip_side_mm']:.2f} "
+            f"(board parts {b['board_headroom_mm']:.2f} mm tall) + stack {b['gap_stack_mm']:.2f} "
+            f"+ magnet side {b['gap_magnet_side_mm']:.2f}")
+
+
 def terminal_table(doc, geometry: SensorGeometry, resp: Response) -> str:
     """The short table ``mst simulate`` prints."""
     targets = {i + 1: la for i, la in enumerate(doc.layers)}
@@ -116,7 +160,7 @@ def terminal_table(doc, geometry: SensorGeometry, resp: Response) -> str:
             f"{r.index:>6} {r.layer:>5} {c.theta_deg:>6.1f} {c.t_mm:>5.2f} {c.h_mm:>5.2f} "
             f"{r.k_layer_N_per_mm:>7.3f} {r.force_from_N:>7.3f}-{r.force_to_N:<7.3f} "
             f"{r.sensitivity_secant_per_N:>8.4f} {r.sensitivity_min_per_N:>7.4f}..{r.sensitivity_max_per_N:<6.4f} "
-            f"{r.force_resolution_N * 1e3:>8.2f}")
+            + (f"{r.force_resolution_N * 1e3:>8.2f}" if math.isfinite(r.force_resolution_N) else f"{'-':>8}"))
         t = targets.get(r.index)
         if t is not None and t.has_targets:
             lines[-1] += (f"   target S {t.target_sensitivity_per_N:g}, R {t.target_range_N:g}")
@@ -125,6 +169,7 @@ def terminal_table(doc, geometry: SensorGeometry, resp: Response) -> str:
     lines.append(f"gap {resp.gap0_mm:.2f} -> {resp.gap_min_mm:.2f} mm, B0 {resp.B0_T * 1e3:.3f} mT, "
                  f"B full load {resp.B_full_T * 1e3:.3f} mT, Br {resp.remanence_T:g} T; chip {chip}")
     lines.append(f"range ends at {resp.max_force_N:.3f} N (all layers locked; beyond is out of range)")
+    lines.append(height_budget_line(geometry))
     for w in resp.warnings:
         lines.append(f"warning: {w}")
     return "\n".join(lines)

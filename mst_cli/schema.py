@@ -2,8 +2,10 @@
 
 A *design* gives theta, t, h for every layer; a *spec* gives target sensitivities and ranges
 instead (a file may give both). Both share every other section. Units are in the key names.
-Only ``yaml.safe_load`` is used. Every problem raises :class:`InputError` naming the field, the
-value and what is allowed; the CLI turns that into one line and exit code 2.
+Files are read with :mod:`mst_cli.yaml_io` (a ``yaml.SafeLoader`` without anchors, aliases or
+duplicate keys, size-capped). Every numeric key is bounded above and below. Every problem
+raises :class:`InputError` naming the field, the value and what is allowed; the CLI turns that
+into one line and exit code 2.
 """
 
 from __future__ import annotations
@@ -20,9 +22,22 @@ from .components import BOARDS, DEFAULT_BOARD, MAGNET_GRADES_T, grade_remanence_
 from .field import FIELD_MODELS
 from .magnetometer import DEFAULT_NOISE_uT
 from .material import Material
+from .mechanics.correction import VERIFIED_BOX
+
+# the terms of design.objective (mst_cli.design.problem reads the same tuple)
+OBJECTIVE_TERMS = ("height", "force_resolution", "print_robustness")
+DEFAULT_OBJECTIVE = {"height": 1.0, "force_resolution": 1.0, "print_robustness": 1.0}
 
 MAX_LAYERS = 6
 MECHANICS_MODELS = ("spring", "frame", "continuum")
+
+
+MAX_SHOWN_CHARS = 120      # a value longer than this is shortened in the one-line message
+
+
+def _shown(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= MAX_SHOWN_CHARS else f"{text[:MAX_SHOWN_CHARS - 40]}... ({len(text)} chars)"
 
 
 class InputError(ValueError):
@@ -30,7 +45,8 @@ class InputError(ValueError):
 
     def __init__(self, field: str, value: Any, allowed: str):
         self.field, self.value, self.allowed = field, value, allowed
-        super().__init__(f"{field} = {value!r}: {allowed}")
+        field = str(field) if len(str(field)) <= MAX_SHOWN_CHARS else _shown(str(field))
+        super().__init__(f"{field} = {_shown(value)}: {allowed}")
 
 
 # --------------------------------------------------------------------------- field rules
@@ -38,7 +54,7 @@ class InputError(ValueError):
 class Rule:
     """What one key accepts: a kind and optional bounds (open or closed) or choices."""
 
-    kind: str                       # "float", "int", "str", "bool", "pair"
+    kind: str                       # "float", "int", "str", "bool", "pair", "weights"
     lo: float | None = None
     hi: float | None = None
     lo_open: bool = False
@@ -48,6 +64,9 @@ class Rule:
     unit: str = ""
 
     def describe(self) -> str:
+        if self.kind == "weights":
+            return (f"must be a mapping of weights >= 0 (at least one > 0) with keys from "
+                    f"{', '.join(self.choices)}")
         if self.choices:
             return "one of " + ", ".join(map(str, self.choices))
         kind = {"float": "a number", "int": "an integer", "str": "a string", "bool": "true or false",
@@ -66,6 +85,17 @@ class Rule:
             if self.nullable:
                 return None
             raise InputError(path, value, self.describe())
+        if self.kind == "weights":
+            if not isinstance(value, dict) or not value:
+                raise InputError(path, value, self.describe())
+            out = {}
+            for key, w in value.items():
+                if key not in self.choices:
+                    raise InputError(f"{path}.{key}", w, "unknown term; allowed: " + ", ".join(self.choices))
+                out[key] = Rule("float", lo=0.0, hi=1e3).check(f"{path}.{key}", w)
+            if not any(out.values()):
+                raise InputError(path, value, self.describe())
+            return out
         if self.kind == "pair":
             if not isinstance(value, (list, tuple)) or len(value) != 2:
                 raise InputError(path, value, self.describe())
@@ -107,52 +137,64 @@ def nonneg(unit="mm", hi=None):
     return Rule("float", lo=0.0, hi=hi, unit=unit)
 
 
+def span(lo, hi, unit="mm", nullable=False, hi_open=False):
+    """A closed physical range: every numeric input is bounded below and above before any
+    arithmetic, so no value such as 1e-308 or 1e300 reaches a division or a field model."""
+    return Rule("float", lo=lo, hi=hi, unit=unit, nullable=nullable, hi_open=hi_open)
+
+
+# Housing: clearances may be zero, walls and floors at least 0.01 mm. Printer: per-key ranges.
+HOUSING_CLEARANCES = ("board_clearance_mm", "chip_clearance_mm", "pocket_clearance_mm")
+PRINTER_RANGES_MM = {"nozzle_mm": (0.05, 5.0), "layer_height_mm": (0.01, 2.0)}
+
+
 SECTIONS: dict[str, dict[str, Rule]] = {
     "family": {
         "type": Rule("str", choices=("hex",)),
-        "width_mm": positive(hi=500),
-        "depth_mm": positive(hi=500),
+        "width_mm": span(1.0, 500),
+        "depth_mm": span(1.0, 500),
         "contact_allowance_mm": nonneg(hi=10),
     },
     "material": {
         "name": Rule("str"),
-        "youngs_modulus_MPa": positive("MPa", hi=1e5),
+        "youngs_modulus_MPa": span(1e-3, 1e5, "MPa"),
         "poisson_ratio": Rule("float", lo=0.0, hi=0.5, hi_open=True),
     },
     "magnet": {
-        "diameter_mm": positive(hi=100),
-        "thickness_mm": positive(hi=100),
+        "diameter_mm": span(0.1, 100),
+        "thickness_mm": span(0.1, 100),
         "grade": Rule("str", choices=tuple(MAGNET_GRADES_T)),
-        "remanence_T": Rule("float", lo=0.0, lo_open=True, hi=2.0, unit="T", nullable=True),
+        "remanence_T": span(0.01, 2.0, "T", nullable=True),
     },
     "magnetometer": {
         "model": Rule("str", choices=("MLX90393",)),
         "board": Rule("str", choices=tuple(BOARDS)),
         "noise_uT_rms": Rule("float", lo=0.0, hi=1000, unit="uT"),
-        "chip_offset_mm": Rule("pair", unit="mm"),
+        "chip_offset_mm": Rule("pair", lo=-100.0, hi=100.0, unit="mm"),
         "magnet_tilt_deg": Rule("float", lo=-45, hi=45, unit="deg"),
     },
-    "housing": {f.name: nonneg(hi=100) if f.name in ("board_clearance_mm", "chip_clearance_mm",
-                                                      "pocket_clearance_mm")
-                else positive(hi=100) for f in fields(geo.Housing)},
-    "printer": {f.name: positive(hi=10) for f in fields(geo.Printer)},
+    "housing": {f.name: nonneg(hi=100) if f.name in HOUSING_CLEARANCES else span(0.01, 100)
+                for f in fields(geo.Housing)},
+    "printer": {f.name: span(*PRINTER_RANGES_MM.get(f.name, (0.01, 10.0))) for f in fields(geo.Printer)},
     "model": {
         "mechanics": Rule("str", choices=MECHANICS_MODELS),
         "field": Rule("str", choices=("auto",) + FIELD_MODELS),
         # relative accuracy of layer stiffness and lock force against the continuum reference: the
         # tool picks the cheapest mechanics rung whose measured median errors meet it (mst_cli.ladder)
-        "accuracy_rel": Rule("float", lo=0.0, lo_open=True, hi=1.0, hi_open=True, nullable=True),
+        "accuracy_rel": span(1e-4, 1.0, "", nullable=True, hi_open=True),
     },
     "design": {
-        "tolerance_rel": Rule("float", lo=0.0, lo_open=True, hi=1.0),
+        "tolerance_rel": span(1e-4, 0.5, ""),
         "theta_deg_bounds": Rule("pair", unit="deg"),
         "t_mm_bounds": Rule("pair", unit="mm"),
         "h_mm_bounds": Rule("pair", unit="mm"),
-        "max_height_mm": positive(hi=1000, nullable=True),
+        "max_height_mm": span(1.0, 1000, nullable=True),
         "lock_margin_rel": Rule("float", lo=0.0, hi=1.0),
         "saturation_margin_rel": Rule("float", lo=0.0, hi=0.9),
-        "seed": Rule("int", lo=0),
+        "seed": Rule("int", lo=0, hi=2**32 - 1),
         "max_evaluations": Rule("int", lo=10, hi=10_000_000),
+        # weights of the preference among designs that meet the targets (mst_cli.design.problem)
+        "objective": Rule("weights", choices=OBJECTIVE_TERMS),
     },
 }
 
@@ -170,30 +212,31 @@ REMOVED_KEYS: dict[str, str] = {
 }
 
 LAYER_RULES: dict[str, Rule] = {
-    "theta_deg": Rule("float", lo=0.0, hi=90.0, lo_open=True, hi_open=True, unit="deg"),
-    "t_mm": positive(hi=100),
-    "h_mm": positive(hi=100),
-    "target_sensitivity_per_N": positive("1/N", hi=1e3),
-    "target_range_N": positive("N", hi=1e4),
-    "weight": positive("", hi=1e3),
+    "theta_deg": span(0.1, 90.0, "deg", hi_open=True),
+    "t_mm": span(0.01, 100),
+    "h_mm": span(0.01, 100),
+    "target_sensitivity_per_N": span(1e-6, 1e3, "1/N"),
+    "target_range_N": span(1e-3, 1e4, "N"),
+    "weight": span(1e-3, 1e3, ""),
 }
 GEOMETRY_KEYS = ("theta_deg", "t_mm", "h_mm")
 TARGET_KEYS = ("target_sensitivity_per_N", "target_range_N")
 TOP_KEYS = ("name", "layers") + tuple(SECTIONS)
 
-# Default bounds of the design variables: printable with a 0.4 mm nozzle (t >= one line).
-# The part prints on its side, so the walls are lines in the bed plane at any theta: the
-# bounds are those the mechanics are verified on (theta 15-60 deg, mst bench).
+# Default bounds of the design variables: the printable box (t >= one 0.4 mm line; the part
+# prints on its side, so the walls are lines in the bed plane at any theta), which is also the
+# box every mechanics rung is fitted and measured on (mechanics.correction.VERIFIED_BOX).
 DEFAULT_DESIGN = {
     "tolerance_rel": 0.02,
-    "theta_deg_bounds": (15.0, 60.0),
-    "t_mm_bounds": (0.4, 2.0),
-    "h_mm_bounds": (1.2, 6.0),
+    "theta_deg_bounds": VERIFIED_BOX["theta_deg"],
+    "t_mm_bounds": VERIFIED_BOX["t_mm"],
+    "h_mm_bounds": VERIFIED_BOX["h_mm"],
     "max_height_mm": None,
     "lock_margin_rel": 0.1,
     "saturation_margin_rel": 0.1,
     "seed": 0,
     "max_evaluations": 20000,
+    "objective": DEFAULT_OBJECTIVE,
 }
 
 
@@ -322,8 +365,10 @@ def parse_document(raw: Any, source: str = "<memory>") -> Document:
             raise InputError(str(key), raw[key], "unknown top-level key; allowed: " + ", ".join(TOP_KEYS))
     name = raw.get("name", Path(source).stem if source != "<memory>" else "sensor")
     name = Rule("str").check("name", name)
-    if not name or any(c in name for c in "/\\") or name.startswith("."):
-        raise InputError("name", name, "must be a non-empty file-name-safe string")
+    if (not name or any(c in name for c in "/\\") or name.startswith(".")
+            or any(ord(c) < 32 or ord(c) == 127 for c in name)):
+        raise InputError("name", name, "must be a non-empty file-name-safe string (no '/', '\\', "
+                                       "control characters or NUL; not starting with '.')")
 
     fam = _section(raw, "family")
     fam.pop("type", None)
@@ -344,10 +389,11 @@ def parse_document(raw: Any, source: str = "<memory>") -> Document:
 
     design = dict(DEFAULT_DESIGN)
     design.update(_section(raw, "design"))
+    design["objective"] = {**DEFAULT_OBJECTIVE, **design["objective"]}
     design["theta_deg_bounds"] = _pair_bounds("design.theta_deg_bounds", design["theta_deg_bounds"],
-                                              0.0, 90.0, hi_open=True)
-    design["t_mm_bounds"] = _pair_bounds("design.t_mm_bounds", design["t_mm_bounds"], 0.0, 100.0)
-    design["h_mm_bounds"] = _pair_bounds("design.h_mm_bounds", design["h_mm_bounds"], 0.0, 100.0)
+                                              1.0, 89.0)
+    design["t_mm_bounds"] = _pair_bounds("design.t_mm_bounds", design["t_mm_bounds"], 0.01, 100.0)
+    design["h_mm_bounds"] = _pair_bounds("design.h_mm_bounds", design["h_mm_bounds"], 0.01, 100.0)
 
     # The housing rules (printable depth, pocket and slot inside the body) do not depend on the
     # layers' theta, t, h: check them on any cell of the family, before any design work.
@@ -390,15 +436,26 @@ def parse_document(raw: Any, source: str = "<memory>") -> Document:
 
 def load_document(path: str | Path) -> Document:
     """Read and validate a design or spec file."""
+    from .yaml_io import MAX_INPUT_BYTES, FileTooLarge, YAMLRefused, load_text, read_text_capped
+
     path = Path(path)
     try:
-        text = path.read_text()
+        text = read_text_capped(path)       # at most MAX_INPUT_BYTES + 1 bytes are read
     except FileNotFoundError:
         raise InputError("(file)", str(path), "file not found") from None
-    except (IsADirectoryError, PermissionError, UnicodeDecodeError) as exc:
+    except FileTooLarge:
+        raise InputError("(file)", str(path), f"is larger than {MAX_INPUT_BYTES} bytes: a design "
+                                              "file is a few KB") from None
+    except UnicodeDecodeError as exc:
         raise InputError("(file)", str(path), f"cannot be read as text ({type(exc).__name__})") from None
+    except (OSError, ValueError) as exc:    # ValueError: a NUL in the path
+        reason = getattr(exc, "strerror", None) or str(exc)
+        raise InputError("(file)", str(path), f"cannot be read ({reason})") from None
     try:
-        raw = yaml.safe_load(text)
+        raw = load_text(text)
+    except YAMLRefused as exc:
+        raise InputError(exc.path, exc.value, (f"line {exc.line}: " if exc.line is not None else "")
+                         + exc.reason) from None
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         where = f" at line {mark.line + 1}" if mark is not None else ""

@@ -58,8 +58,8 @@ def air_gaps_z(solid, x, y, z_top):
 
 
 # --------------------------------------------------------------------------- golden reference
-# Sensor frame. z: floor 1 + board 1.6 + tallest part 2.95 (JST SH sockets) + air 0.3 + cover 0.8
-#    = 6.65; layers 2 + 2.8 + 3.5; 2 plates x 1.2; pocket floor 0.6 + pocket 2.1 + cap 0.8 -> 20.85
+# Sensor frame. z: floor 0.8 + board 1.6 + tallest part 2.95 (JST SH sockets) + air 0.3 + cover 0.8
+#    = 6.45; layers 2 + 2.8 + 3.5; 2 plates x 0.8; pocket floor 0.4 + pocket 2.1 + cap 0.8 -> 19.65
 # y: the depth, +-10. Print heights are y + 10, on a 0.2 mm grid:
 #    slot floor: chip at y = 0 puts the board's edge at -8.3 (print 1.7, half-way: up to 1.8)
 #    -> y = -8.2; windows from 5.89 (socket edge) - 0.2 above the floor = -2.51 (print 7.49,
@@ -70,7 +70,7 @@ def test_reference_bbox_golden(reference):
     g, cad = reference
     bb = cad.body.bounding_box()
     assert (bb.min.X, bb.min.Y, bb.min.Z) == pytest.approx((-15.0, -10.0, 0.0), abs=1e-7)
-    assert (bb.max.X, bb.max.Y, bb.max.Z) == pytest.approx((15.0, 10.0, 20.85), abs=1e-7)
+    assert (bb.max.X, bb.max.Y, bb.max.Z) == pytest.approx((15.0, 10.0, 19.65), abs=1e-7)
     assert (g.slot_floor_y_mm, g.pocket_top_y_mm) == pytest.approx((-8.2, 3.2), abs=1e-9)
     assert [w[2] for w in g.cable_windows] == pytest.approx([-2.6, -2.6], abs=1e-9)
     assert (g.pause_height_mm, g.pause_after_layer) == (pytest.approx(13.2, abs=1e-9), 66)
@@ -78,12 +78,12 @@ def test_reference_bbox_golden(reference):
 
 def test_reference_volume_golden(reference):
     g, cad = reference
-    base = 30 * 20 * 6.65 - 25.8 * 18.2 * 4.85 - (2.2 + 2.0) * 12.6 * 3.25
+    base = 30 * 20 * 6.45 - 25.8 * 18.2 * 4.85 - (2.2 + 2.0) * 12.6 * 3.25
     layers = sum((shoelace(c.outer_profile_xz()) - shoelace(c.inner_profile_xz())) * 20 for c in g.layers)
-    plates = 2 * 30 * 20 * 1.2
+    plates = 2 * 30 * 20 * 0.8
     r, d = 3.1, 2.1
     pocket = (math.pi * r ** 2 / 2 + 2 * r * 3.2) * d + r * d * 1.2     # roof rises 1.2 mm
-    cap = 30 * 20 * 3.5 - pocket
+    cap = 30 * 20 * 3.3 - pocket
     expected = base + layers + plates + cap
     assert cad.body.volume == pytest.approx(expected, rel=1e-9)
     assert g.body_volume_mm3 == pytest.approx(expected, rel=1e-12)
@@ -105,7 +105,7 @@ def test_gap0_is_what_the_cad_builds(reference):
     slot_floor, slot_top = air_gaps_z(cad.body, RAY_XY[0] + cx, RAY_XY[1] + cy, g.total_height_mm)[0]
     hall = slot_floor + g.board.thickness_mm + 0.5 * g.board.chip_height_mm
     assert pocket_floor - hall == pytest.approx(g.gap0_mm, abs=1e-9)
-    assert pocket_floor - hall == pytest.approx(14.85, abs=1e-9)     # 17.95 - (1 + 1.6 + 0.5)
+    assert pocket_floor - hall == pytest.approx(13.85, abs=1e-9)     # 16.75 - (0.8 + 1.6 + 0.5)
     assert slot_top - slot_floor == pytest.approx(1.6 + 2.95 + 0.3, abs=1e-9)
 
 

@@ -11,7 +11,7 @@
 4. the verification decides the status: every target within tolerance and every constraint
    held -> exit 0; otherwise exit 1 with the binding reason (:func:`explain.diagnose`).
 
-The print-error sensitivity (the tie-break, see :mod:`.problem`) is re-measured the same
+The print-error sensitivity (the robustness term of the preference, :mod:`.problem`) is re-measured the same
 way: the forward model on the design with every wall 0.05 mm thicker and thinner.
 """
 
@@ -24,6 +24,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .. import geometry as geo
+from ..report import height_budget_line
 from ..response import Response, simulate
 from ..schema import Document, InputError, LayerEntry, document_to_dict
 from .problem import PRINT_ERROR_T_MM, DesignProblem
@@ -44,13 +45,14 @@ class DesignResult:
     reasons: list[str]
     targets: list[dict]                 # per layer: target vs achieved (forward model)
     checks: dict                        # failed constraint name -> message (empty when all hold)
-    print_error: dict                   # tie-break measure per layer (forward model)
+    print_error: dict                   # print robustness per layer (forward model)
     seed: int
     evaluations: int
     max_evaluations: int
     solver: dict
     elapsed_s: float = 0.0
     warnings: list[str] = field(default_factory=list)
+    objective: dict = field(default_factory=dict)   # design.objective's weights and terms
 
     @property
     def exit_code(self) -> int:
@@ -67,6 +69,7 @@ class DesignResult:
             "reasons": self.reasons, "tolerance_rel": self.document.design["tolerance_rel"],
             "targets": self.targets, "constraints_failed": self.checks,
             "print_error_sensitivity": self.print_error,
+            "objective": self.objective,
             "seed": self.seed, "evaluations": self.evaluations,
             "max_evaluations": self.max_evaluations, "solver": self.solver,
         }}
@@ -91,7 +94,9 @@ class DesignResult:
                 f"{100 * pe['dS_rel_worst']:>13.1f} {100 * pe['dR_rel_worst']:>6.1f}{ok}")
         resp, g = self.response, self.geometry
         lines.append(f"gap {resp.gap0_mm:.2f} -> {resp.gap_min_mm:.2f} mm, B0 {resp.B0_T * 1e3:.3f} mT, "
-                     f"B full load {resp.B_full_T * 1e3:.3f} mT, total height {g.total_height_mm:.2f} mm")
+                     f"B full load {resp.B_full_T * 1e3:.3f} mT, worst force resolution "
+                     f"{1e3 * max(r.force_resolution_N for r in resp.regimes):.1f} mN")
+        lines.append(height_budget_line(g))
         if self.status == "met":
             lines.append(f"all {2 * len(self.targets)} targets met within {100 * tol:g} % "
                          f"(forward model, mechanics={resp.mechanics}, field={resp.field_model})")
@@ -246,23 +251,32 @@ def verify_design(doc: Document, problem: DesignProblem, theta, t, h, sol, *, se
     print_error = {
         "print_error_t_mm": PRINT_ERROR_T_MM,
         "meaning": "relative change of S_i and R_i when every wall is printed this much thicker (plus) "
-                   "or thinner (minus); the design minimises its RMS among the designs that meet the targets",
+                   "or thinner (minus); its RMS is the print_robustness term of design.objective's preference",
         "rms_log_change": float(np.sqrt(np.mean(np.square(logs)))),
         "layers": pe_layers,
     }
+    weights = doc.design.get("objective") or {}
+    objective = {
+        "weights": dict(weights),
+        "meaning": "among the designs that meet every target, the one with the lowest weighted sum of "
+                   "ln(total_height_mm), ln(worst_force_resolution_N) and print_robustness_rms",
+        "total_height_mm": geometry.total_height_mm,
+        "worst_force_resolution_N": max(r.force_resolution_N for r in resp.regimes),
+        "print_robustness_rms": print_error["rms_log_change"],
+    }
     solver_info = {
-        "method": f"screening + nlopt LD_{sol.local.upper()} (multi-start match, tie-break polish, re-match)"
+        "method": f"screening + nlopt LD_{sol.local.upper()} (multi-start match, preference polish, re-match)"
                   if sol.local == "slsqp" else
-                  f"screening + nlopt LN_{sol.local.upper()} (multi-start match, tie-break polish, re-match)",
+                  f"screening + nlopt LN_{sol.local.upper()} (multi-start match, preference polish, re-match)",
         "matched": sol.matched, "starts_used": sol.starts_used,
-        "tie_break_before": sol.tie_break_before, "tie_break_after": sol.tie_break_after,
+        "preference_before": sol.preference_before, "preference_after": sol.preference_after,
         "runs_ended": sol.stops,
     }
     return DesignResult(
         document=designed, geometry=geometry, response=resp, status="met" if met else "not met",
         binding=binding, reasons=reasons, targets=targets, checks=checks, print_error=print_error,
         seed=seed, evaluations=sol.evaluations, max_evaluations=max_evaluations, solver=solver_info,
-        elapsed_s=time.perf_counter() - t_start, warnings=list(resp.warnings))
+        elapsed_s=time.perf_counter() - t_start, warnings=list(resp.warnings), objective=objective)
 
 
 __all__ = ["DesignResult", "design_document", "design_dict", "verify_design", "DesignProblem"]

@@ -125,7 +125,7 @@ def limits(problem: DesignProblem) -> Limits:
     margins = geo.cell_margins_mm(np.radians(th), t, h, fam.width_mm, fam.contact_allowance_mm,
                                   pr.min_wall_mm, pr.min_gap_mm, pr.nozzle_mm)
     ok = np.all(margins >= 0.0, axis=-1)
-    Rl, _, _, _ = problem.responses(th[ok, None], t[ok, None], h[ok, None]) if ok.any() else (None,) * 4
+    Rl = problem.responses(th[ok, None], t[ok, None], h[ok, None])[0] if ok.any() else None
     if Rl is None:
         return Limits(needed, needed_min, field_max, gap_min, gap0_max, math.nan, math.nan, (), ())
     Rl = Rl[:, 0]

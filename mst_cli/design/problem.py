@@ -1,4 +1,4 @@
-"""The inverse-design problem: variables, targets, constraints and the tie-break, vectorised.
+"""The inverse-design problem: variables, targets, constraints and the preference, vectorised.
 
 Every function here takes arrays of candidate designs (any leading shape) and evaluates them
 with the same kernels the forward model uses (``spring_arrays``, ``unloaded_gap_mm``,
@@ -25,14 +25,21 @@ Constraints (g <= 0 is satisfied; every g is scaled to order one)
       :func:`~mst_cli.magnetometer.choose_setting` keeps;
     * optional total height: SensorGeometry.total_height_mm <= design.max_height_mm.
 
-Tie-break (phase 2, "robust to the printer")
-    Three variables per layer and two targets leave one spare degree of freedom per layer. A
-    maker cannot print t exactly: extrusion width drifts with the filament and the flow
-    calibration, the same way for every wall of one print. Among the designs that meet the
-    targets, the tool therefore picks the one whose S_i and R_i move least when *every* wall
-    is printed PRINT_ERROR_T_MM = 0.05 mm thicker or thinner (the strut width b moves with t
-    when b = t). The quantity minimised is the RMS over the 2n outputs and both signs of
-    ln(out(t +- 0.05 mm) / out(t)); it is reported per layer.
+Preference among the designs that meet the targets (phase 2, ``design.objective``)
+    Three variables per layer and two targets leave one spare degree of freedom per layer.
+    The tool spends it on a weighted sum of three terms, each a log so that a weight prices a
+    *relative* change the same anywhere (:data:`OBJECTIVE_TERMS`):
+
+    * ``height``: ln(total part height / mm) -- a fingertip has to be small;
+    * ``force_resolution``: ln(worst force resolution / N), the noise-limited
+      sigma_B / (B0 min_i S_i): with the S_i pinned by the targets this rewards a strong B0,
+      i.e. a magnet close to the chip. The chip's quantisation is left out here because it
+      is a step function of the chosen setting (and below the default 2 uT noise for every
+      setting that holds <= 50 mT); the report gives the exact figure;
+    * ``print_robustness``: how much S_i and R_i move when *every* wall is printed
+      PRINT_ERROR_T_MM = 0.05 mm thicker or thinner (extrusion width drifts with the filament
+      and the flow calibration, the same way for every wall of one print): the RMS over the
+      2n outputs and both signs of ln(out(t +- 0.05 mm) / out(t)); reported per layer.
 """
 
 from __future__ import annotations
@@ -49,8 +56,10 @@ from ..field import axial_Bz_T, choose_field_model
 from ..mechanics import correction
 from ..mechanics.spring import spring_arrays
 from ..response import field_magnitude_T, regime_kernel
+from ..schema import DEFAULT_OBJECTIVE, OBJECTIVE_TERMS
 
-PRINT_ERROR_T_MM = 0.05      # wall-thickness printing error the tie-break guards against
+PRINT_ERROR_T_MM = 0.05      # wall-thickness printing error the robustness term guards against
+
 # headroom choose_setting keeps between the largest field and a setting's range (one source)
 CHIP_HEADROOM = inspect.signature(mlx.choose_setting).parameters["margin"].default
 _TINY = 1e-300
@@ -66,6 +75,7 @@ class Evaluation:
     R_N: np.ndarray                # (..., n) lock force of each layer, file order
     S_per_N: np.ndarray            # (..., n) secant sensitivity of regime i (sorted locks)
     B_full_T: np.ndarray           # (...)   |B| at the last lock
+    B0_T: np.ndarray               # (...)   |B| unloaded
     gap0_mm: np.ndarray            # (...)
     total_height_mm: np.ndarray    # (...)
     cell_margins_mm: np.ndarray    # (..., n, len(CELL_RULES))
@@ -115,6 +125,10 @@ class DesignProblem:
         self.printer = doc.printer
         self.E_MPa = doc.material.youngs_modulus_MPa
         self.nu = doc.material.poisson_ratio
+        self.noise_T = 1e-6 * doc.noise_uT_rms
+        objective = dict(DEFAULT_OBJECTIVE)
+        objective.update(d.get("objective") or {})
+        self.objective_weights = np.array([objective[k] for k in OBJECTIVE_TERMS], dtype=float)
 
         # a probe geometry (any cells) gives the field scene and the fixed height offsets
         probe_cells = [doc.family.cell(45.0, 1.0, 3.0) for _ in range(self.n)]
@@ -161,19 +175,19 @@ class DesignProblem:
         return field_magnitude_T(gap.ravel(), self.probe, self.field_model).reshape(gap.shape)
 
     def responses(self, theta_deg, t_mm, h_mm):
-        """(R_N per layer, S_per_N per regime, B_full_T, gap0_mm) of candidate stacks."""
+        """(R_N per layer, S_per_N per regime, B_full_T, gap0_mm, B0_T) of candidate stacks."""
         fam = self.family
         theta = np.radians(theta_deg)
         k, d_lock, R, k_locked = spring_arrays(theta, t_mm, h_mm, fam.depth_mm, fam.width_mm, fam.contact_allowance_mm, self.E_MPa, self.nu)
         gap0 = geo.unloaded_gap_mm(h_mm.sum(axis=-1), self.n, self.probe.housing, self.probe.board)
         _, S, _, B = regime_kernel(k, d_lock, k_locked, gap0, self.field_T, R)
-        return R, S, B[..., -1], gap0
+        return R, S, B[..., -1], gap0, B[..., 0]
 
     def evaluate_physical(self, theta_deg, t_mm, h_mm) -> Evaluation:
         theta_deg, t_mm, h_mm = np.broadcast_arrays(*(np.asarray(a, dtype=float)
                                                       for a in (theta_deg, t_mm, h_mm)))
         fam, pr = self.family, self.printer
-        R, S, B_full, gap0 = self.responses(theta_deg, t_mm, h_mm)
+        R, S, B_full, gap0, B0 = self.responses(theta_deg, t_mm, h_mm)
         margins = geo.cell_margins_mm(np.radians(theta_deg), t_mm, h_mm, fam.width_mm,
                                       fam.contact_allowance_mm, pr.min_wall_mm, pr.min_gap_mm,
                                       pr.nozzle_mm)
@@ -194,13 +208,13 @@ class DesignProblem:
                                   logR - np.log(self.R_target)], axis=-1)
         w = np.concatenate([self.weights, self.weights])
         objective = np.sum(w * log_err ** 2, axis=-1)
-        return Evaluation(theta_deg, t_mm, h_mm, R, S, B_full, gap0, height, margins, log_err,
+        return Evaluation(theta_deg, t_mm, h_mm, R, S, B_full, B0, gap0, height, margins, log_err,
                           constraints, objective)
 
     def evaluate(self, u) -> Evaluation:
         return self.evaluate_physical(*self.to_physical(u))
 
-    # ----------------------------------------------------------------- tie-break
+    # ----------------------------------------------------------------- preference
     def print_shift_log(self, theta_deg, t_mm, h_mm, dt_mm: float = PRINT_ERROR_T_MM):
         """ln(out(t + s dt) / out(t)) for s = +1, -1: shape (2, ..., 2n), S then R.
 
@@ -211,14 +225,31 @@ class DesignProblem:
         shifts = np.array([0.0, dt_mm, -dt_mm]).reshape((3,) + (1,) * t_mm.ndim)
         T = np.broadcast_to(theta_deg, (3,) + theta_deg.shape)
         H = np.broadcast_to(h_mm, (3,) + h_mm.shape)
-        R, S, _, _ = self.responses(T, np.maximum(t_mm + shifts, geo.LENGTH_FLOOR_MM), H)
+        R, S, _, _, _ = self.responses(T, np.maximum(t_mm + shifts, geo.LENGTH_FLOOR_MM), H)
         out = np.log(np.maximum(np.concatenate([S, R], axis=-1), _TINY))
         return out[1:] - out[:1]
 
-    def tie_break(self, theta_deg, t_mm, h_mm):
-        """RMS of :meth:`print_shift_log` over both signs and all 2n outputs (...)."""
+    def print_robustness(self, theta_deg, t_mm, h_mm):
+        """Print robustness: RMS of :meth:`print_shift_log` over both signs and all 2n outputs."""
         d = self.print_shift_log(theta_deg, t_mm, h_mm)
         return np.sqrt(np.mean(d ** 2, axis=(0, -1)))
+
+    def worst_force_resolution_N(self, ev: Evaluation):
+        """Noise-limited force resolution of the least sensitive regime, sigma_B / (B0 min S)."""
+        return self.noise_T / np.maximum(ev.B0_T * np.min(ev.S_per_N, axis=-1), _TINY)
+
+    def objective_terms(self, ev: Evaluation, robustness=None):
+        """The preference terms (..., len(OBJECTIVE_TERMS)) of evaluated candidates: ln height,
+        ln worst force resolution, print robustness (computed unless given)."""
+        if robustness is None:
+            robustness = self.print_robustness(ev.theta_deg, ev.t_mm, ev.h_mm)
+        return np.stack([np.log(ev.total_height_mm), np.log(self.worst_force_resolution_N(ev)),
+                         np.asarray(robustness, dtype=float)], axis=-1)
+
+    def preference(self, ev: Evaluation, weights=None):
+        """Weighted sum of :meth:`objective_terms` (lower is better): what phase 2 minimises."""
+        w = self.objective_weights if weights is None else np.asarray(weights, dtype=float)
+        return self.objective_terms(ev) @ w
 
     # ----------------------------------------------------------------- reporting helpers
     def constraint_names(self) -> list[str]:
@@ -253,7 +284,7 @@ class DesignProblem:
         total = 0
         for _ in range(max_batches):
             theta, t, h = self.to_physical(rng.random((batch, self.dim)))
-            R, _, _, _ = self.responses(theta, t, h)
+            R, _, _, _, _ = self.responses(theta, t, h)
             order = np.argsort(R, axis=-1)
             theta, t, h = (np.take_along_axis(a, order, axis=-1) for a in (theta, t, h))
             ok = np.all(self.evaluate_physical(theta, t, h).constraints <= -slack, axis=-1)

@@ -151,7 +151,7 @@ def refine_document(doc: Document, model: str, *, seed: int | None = None, progr
         layers = [replace(la, target_sensitivity_per_N=float(a), target_range_N=float(b))
                   for la, a, b in zip(doc.layers, s, r)]
         if k == 0:
-            # the plain L0 design of the real targets (global search, tie-break)
+            # the plain L0 design of the real targets (global search, preference)
             inner = design_document(inner_doc.with_layers(layers), seed=seed, progress=progress,
                                     max_evaluations=max_evaluations)
             evaluations += inner.evaluations
@@ -160,7 +160,7 @@ def refine_document(doc: Document, model: str, *, seed: int | None = None, progr
             inner_status = inner.status
         else:
             # warm start: a local L0 match of the corrected targets from the previous design,
-            # so the spare freedom (the tie-break) does not jump to another branch
+            # so the spare freedom (the preference) does not jump to another branch
             problem_k = DesignProblem(inner_doc.with_layers(layers))
             theta, t, h, n_eval, inner_met = _local_match(problem_k, theta, t, h)
             evaluations += n_eval
@@ -225,16 +225,16 @@ class _SolverFacts:
     evaluations: int
     local: str
     starts_used: int
-    tie_break_before: float | None
-    tie_break_after: float | None
+    preference_before: float | None
+    preference_after: float | None
     stops: dict
 
     @classmethod
     def from_result(cls, res: DesignResult, evaluations: int) -> "_SolverFacts":
         s = res.solver
         local = "slsqp" if "SLSQP" in s["method"] else "cobyla"
-        return cls(s["matched"], evaluations, local, s["starts_used"], s["tie_break_before"],
-                   s["tie_break_after"], s["runs_ended"])
+        return cls(s["matched"], evaluations, local, s["starts_used"], s["preference_before"],
+                   s["preference_after"], s["runs_ended"])
 
 
 __all__ = ["refine_document", "RefinedResult", "REFINE_MODELS", "MAX_ITERATIONS"]

@@ -1,17 +1,17 @@
-"""nlopt driver: seeded multi-start local search for the match, then a tie-break polish.
+"""nlopt driver: seeded multi-start local search for the match, then the preference among matching designs.
 
 1. Screening: a seeded batch of random candidates in the unit box goes through the vectorised
    problem in one call; the best by (match objective + penalty x constraint violation) become
    the starting points.
 2. Match (phase 1): a local nlopt run from each start in turn, on the normalised variables,
    until one reaches every target within MATCH_FRACTION x tolerance.
-3. Tie-break (phase 2): from that point, minimise the print-error sensitivity
-   (:meth:`DesignProblem.tie_break`) with every target kept within BAND_FRACTION x tolerance
-   as extra constraints.
+3. Preference (phase 2): from that point, minimise the weighted preference of
+   ``design.objective`` (:meth:`DesignProblem.preference`: height, force resolution, print
+   robustness) with every target kept within BAND_FRACTION x tolerance as extra constraints.
 4. Re-match (phase 3): the polish may sit anywhere in that band; a short match run with a
    small step pulls every target back within MATCH_FRACTION x tolerance without leaving the
    robust region.
-5. Final polish (phase 4): the tie-break again from there, with the band narrowed to
+5. Final polish (phase 4): the preference again from there, with the band narrowed to
    MATCH_FRACTION x tolerance, so the design is the most robust one among those that meet
    every target to that tighter band (phase 3 alone can slide off a bound, for example).
 
@@ -81,10 +81,10 @@ class Tracker:
 class SolveResult:
     u: np.ndarray                    # best point (normalised)
     matched: bool                    # phase 1 reached MATCH_FRACTION x tolerance
-    evaluations: int                 # candidate designs through the kernels (tie-break: 3 each)
+    evaluations: int                 # candidate designs through the kernels (preference: 3 each)
     starts_used: int
-    tie_break_before: float | None   # tie-break value at the phase-1 point
-    tie_break_after: float | None
+    preference_before: float | None  # preference (design.objective) at the phase-1 point
+    preference_after: float | None
     local: str = "slsqp"
     stops: list[str] = field(default_factory=list)   # how each nlopt run ended
 
@@ -200,111 +200,178 @@ class _Phase:
             stops.append("nlopt failure")
 
 
-def solve(problem: DesignProblem, *, seed: int = 0, max_evaluations: int = 20000, progress=None,
-          local: str = "slsqp", max_time_s: float = MAX_TIME_S) -> SolveResult:
-    """Find normalised variables meeting the targets, then polish the tie-break."""
-    if local not in LOCAL_METHODS:
-        raise ValueError(f"local method {local!r}: choose from {', '.join(LOCAL_METHODS)}")
-    rng = np.random.default_rng(seed)
-    budget = _Budget(max_evaluations, progress, max_time_s)
-    dim, tol = problem.dim, problem.tolerance_rel
-    match_log = math.log1p(MATCH_FRACTION * tol)
-    stops: list[str] = []
-    # a local iteration costs ~6n+1 evaluations with gradients, 1 without
-    per_iter = 2 * dim + 1 if local == "slsqp" else 1
-    iters_per_start = 60 * dim if local == "slsqp" else 200 * dim
+def _per_iter(problem, local):
+    """Evaluations one local iteration costs: u and its 2 dim neighbours with gradients."""
+    return 2 * problem.dim + 1 if local == "slsqp" else 1
 
-    def safe_constraints(ev):
-        return ev.constraints + ROUNDING_SAFETY
 
-    def max_err(ev):
-        return np.max(np.abs(ev.rel_err), axis=-1)
+def _iters_per_start(problem, local):
+    return 60 * problem.dim if local == "slsqp" else 200 * problem.dim
 
-    def match_batch(U):
-        ev = problem.evaluate(U)
-        return ev.objective, safe_constraints(ev), 1, float(max_err(ev)[0])
 
-    def match_goal(f, g, err):
-        return bool(np.all(g <= FEASIBILITY_TOL)) and math.log1p(err) <= match_log and math.log1p(-err) >= -match_log
+def _safe_constraints(ev):
+    return ev.constraints + ROUNDING_SAFETY
 
+
+def _max_err(ev):
+    return np.max(np.abs(ev.rel_err), axis=-1)
+
+
+class _Matcher:
+    """Phase-1 pieces shared by the first match and the re-match."""
+
+    def __init__(self, problem: DesignProblem):
+        self.problem = problem
+        self.match_log = math.log1p(MATCH_FRACTION * problem.tolerance_rel)
+
+    def batch(self, U):
+        ev = self.problem.evaluate(U)
+        return ev.objective, _safe_constraints(ev), 1, float(_max_err(ev)[0])
+
+    def goal(self, f, g, err):
+        return (bool(np.all(g <= FEASIBILITY_TOL)) and math.log1p(err) <= self.match_log
+                and math.log1p(-err) >= -self.match_log)
+
+    def matched_at(self, u) -> bool:
+        e = self.problem.evaluate(u)
+        return bool(np.all(_safe_constraints(e) <= FEASIBILITY_TOL)
+                    and np.max(np.abs(e.log_err)) <= self.match_log)
+
+
+def _match(problem, rng, budget, local, stops):
+    """Screening and phase 1: (best u, matched, starts used)."""
+    dim = problem.dim
+    per_iter, iters = _per_iter(problem, local), _iters_per_start(problem, local)
+    m = _Matcher(problem)
     # -- screening: one vectorised batch
     n_screen = int(max(1, min(SCREEN_PER_DIM * dim, budget.left // 4)))
     U = rng.random((n_screen, dim))
     ev = problem.evaluate(U)
-    viol = np.sum(np.maximum(safe_constraints(ev), 0.0), axis=-1)
+    viol = np.sum(np.maximum(_safe_constraints(ev), 0.0), axis=-1)
     merit = np.where(np.isfinite(ev.objective), ev.objective, 1e30) + 10.0 * viol
     order = np.argsort(merit, kind="stable")
     starts = U[order[:N_STARTS]]
-    budget.spend(n_screen, "screening", float(max_err(ev).min()))
+    budget.spend(n_screen, "screening", float(_max_err(ev).min()))
 
-    def matched_at(u) -> bool:
-        e = problem.evaluate(u)
-        return bool(np.all(safe_constraints(e) <= FEASIBILITY_TOL)
-                    and np.max(np.abs(e.log_err)) <= match_log)
-
-    # -- phase 1: match the targets
     best = Tracker()
     i0 = int(order[0])
     best.offer(U[i0], float(ev.objective[i0]), float(viol[i0]))
-    matched = False
     starts_used = 0
     for x0 in starts:
         if budget.left <= 0:
             break
         starts_used += 1
-        phase = _Phase(problem, match_batch, problem.n_constraints, best, budget, "match", match_goal)
-        phase.run(x0, local, min(iters_per_start, budget.left // per_iter), INITIAL_STEP, stops)
-        if matched_at(best.u):
-            matched = True
-            break
+        phase = _Phase(problem, m.batch, problem.n_constraints, best, budget, "match", m.goal)
+        phase.run(x0, local, min(iters, budget.left // per_iter), INITIAL_STEP, stops)
+        if m.matched_at(best.u):
+            return best.u, True, starts_used
+    return best.u, False, starts_used
 
-    result = SolveResult(u=best.u, matched=matched, evaluations=budget.used, starts_used=starts_used,
-                         tie_break_before=None, tie_break_after=None, local=local, stops=stops)
-    if not matched or budget.left <= 3 * per_iter:
-        return result
 
-    # -- phase 2: tie-break inside the tolerance band
-    e = problem.evaluate(best.u)
-    tie0 = float(problem.tie_break(e.theta_deg, e.t_mm, e.h_mm))
+def prefer(problem: DesignProblem, u_matched, budget, local: str, stops: list, weights=None):
+    """Phases 2-4 from a matched point: the design that meets the targets and minimises the
+    preference (:meth:`DesignProblem.preference` with ``weights``, default design.objective).
+    Returns (u, preference before, preference after)."""
+    per_iter, iters = _per_iter(problem, local), _iters_per_start(problem, local)
+    m = _Matcher(problem)
+    tol = problem.tolerance_rel
+
+    def pref(u):
+        return float(problem.preference(problem.evaluate(u), weights))
 
     def polish_run(u0, band, step):
-        def tie_batch(U):
+        def pref_batch(U):
             ev = problem.evaluate(U)
-            tb = problem.tie_break(ev.theta_deg, ev.t_mm, ev.h_mm)
             # two smooth constraints per output (|x| has no derivative where the error is 0)
-            g = np.concatenate([safe_constraints(ev), ev.log_err - band, -ev.log_err - band], axis=-1)
-            return tb, g, 3, float(max_err(ev)[0])
+            g = np.concatenate([_safe_constraints(ev), ev.log_err - band, -ev.log_err - band], axis=-1)
+            return problem.preference(ev, weights), g, 3, float(_max_err(ev)[0])
 
         tracker = Tracker()
-        ev = problem.evaluate(u0)
-        tracker.offer(u0, float(problem.tie_break(ev.theta_deg, ev.t_mm, ev.h_mm)), 0.0)
+        tracker.offer(u0, pref(u0), 0.0)
         if budget.left > 3 * per_iter:
-            phase = _Phase(problem, tie_batch, problem.n_constraints + 4 * problem.n, tracker, budget,
-                           "tie-break")
-            phase.run(u0, local, min(iters_per_start, budget.left // (3 * per_iter)), step, stops)
+            phase = _Phase(problem, pref_batch, problem.n_constraints + 4 * problem.n, tracker, budget,
+                           "preference")
+            phase.run(u0, local, min(iters, budget.left // (3 * per_iter)), step, stops)
         return tracker.u
 
+    before = pref(u_matched)
+    e = problem.evaluate(u_matched)
     band = max(math.log1p(BAND_FRACTION * tol), float(np.max(np.abs(e.log_err))))
-    polished = polish_run(best.u, band, 0.5 * INITIAL_STEP)
+    polished = polish_run(u_matched, band, 0.5 * INITIAL_STEP)
 
     # -- phase 3: pull the targets back to MATCH_FRACTION x tolerance, with a small step
     rematch = Tracker()
     e = problem.evaluate(polished)
     rematch.offer(polished, float(e.objective), 0.0)
-    if not matched_at(polished) and budget.left > per_iter:
-        phase = _Phase(problem, match_batch, problem.n_constraints, rematch, budget, "re-match", match_goal)
-        phase.run(polished, local, min(iters_per_start, budget.left // per_iter), 0.02 * INITIAL_STEP, stops)
-    final = rematch.u if matched_at(rematch.u) else best.u
+    if not m.matched_at(polished) and budget.left > per_iter:
+        phase = _Phase(problem, m.batch, problem.n_constraints, rematch, budget, "re-match", m.goal)
+        phase.run(polished, local, min(iters, budget.left // per_iter), 0.02 * INITIAL_STEP, stops)
+    final = rematch.u if m.matched_at(rematch.u) else u_matched
 
-    # -- phase 4: tie-break once more, inside the narrow band
+    # -- phase 4: the preference once more, inside the narrow band
     e = problem.evaluate(final)
-    narrow = max(match_log, float(np.max(np.abs(e.log_err))))
+    narrow = max(m.match_log, float(np.max(np.abs(e.log_err))))
     candidate = polish_run(final, narrow, 0.02 * INITIAL_STEP)
-    if matched_at(candidate):
+    if m.matched_at(candidate):
         final = candidate
-    e = problem.evaluate(final)
-    result.u = final
+    return final, before, pref(final)
+
+
+def solve(problem: DesignProblem, *, seed: int = 0, max_evaluations: int = 20000, progress=None,
+          local: str = "slsqp", max_time_s: float = MAX_TIME_S, weights=None) -> SolveResult:
+    """Find normalised variables meeting the targets, then minimise the preference."""
+    if local not in LOCAL_METHODS:
+        raise ValueError(f"local method {local!r}: choose from {', '.join(LOCAL_METHODS)}")
+    rng = np.random.default_rng(seed)
+    budget = _Budget(max_evaluations, progress, max_time_s)
+    stops: list[str] = []
+    u, matched, starts_used = _match(problem, rng, budget, local, stops)
+    result = SolveResult(u=u, matched=matched, evaluations=budget.used, starts_used=starts_used,
+                         preference_before=None, preference_after=None, local=local, stops=stops)
+    if not matched or budget.left <= 3 * _per_iter(problem, local):
+        return result
+    result.u, result.preference_before, result.preference_after = prefer(
+        problem, u, budget, local, stops, weights)
     result.evaluations = budget.used
-    result.tie_break_before = tie0
-    result.tie_break_after = float(problem.tie_break(e.theta_deg, e.t_mm, e.h_mm))
     return result
+
+
+def pareto_weights(count: int) -> np.ndarray:
+    """``count`` weight vectors over OBJECTIVE_TERMS spread over the simplex (deterministic):
+    the three corners first, then a triangular lattice, refined until there are enough."""
+    corners = [np.eye(3)[i] for i in range(3)]
+    out = list(corners)
+    level = 2
+    while len(out) < count:
+        for i in range(level + 1):
+            for j in range(level + 1 - i):
+                w = np.array([i, j, level - i - j], dtype=float) / level
+                if not any(np.allclose(w, v) for v in out):
+                    out.append(w)
+        level *= 2
+    return np.array(out[:count])
+
+
+def match_once(problem: DesignProblem, *, seed: int = 0, max_evaluations: int = 20000,
+               progress=None, local: str = "slsqp", max_time_s: float = MAX_TIME_S):
+    """One match (screening + phase 1), then phases 2-4 on demand for any weighting.
+
+    Returns (SolveResult of the match, ``prefer_with(weights) -> (u, evaluations)``); each call
+    of ``prefer_with`` starts from the matched point with a fresh ``max_evaluations`` budget.
+    ``prefer_with`` is None when the targets could not be matched.
+    """
+    rng = np.random.default_rng(seed)
+    budget = _Budget(max_evaluations, progress, max_time_s)
+    stops: list[str] = []
+    u, matched, starts_used = _match(problem, rng, budget, local, stops)
+    result = SolveResult(u=u, matched=matched, evaluations=budget.used, starts_used=starts_used,
+                         preference_before=None, preference_after=None, local=local, stops=stops)
+    if not matched:
+        return result, None
+
+    def prefer_with(weights):
+        b = _Budget(max_evaluations, progress, max_time_s)
+        u_w, _, _ = prefer(problem, u, b, local, stops, weights)
+        return u_w, b.used
+
+    return result, prefer_with

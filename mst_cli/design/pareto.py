@@ -1,0 +1,207 @@
+"""The trade among designs that meet the targets: part height, force resolution, print robustness.
+
+Every design that meets a spec still has one free variable per layer (three variables, two
+targets). ``design.objective`` prices three things against each other (:mod:`.problem`):
+
+* the part's total height (mm) -- what a fingertip has room for;
+* the worst force resolution over the regimes (N): the chip's field resolution over B0 S_i,
+  i.e. how small a force step the sensor can tell apart in its least sensitive band;
+* print robustness: the RMS relative change of every S_i and R_i when every wall is printed
+  0.05 mm off.
+
+:func:`pareto_front` maps that trade: one match, then the preference polish for a sequence of
+weightings spread over the simplex (:func:`mst_cli.design.solver.pareto_weights`), each design
+re-simulated by the forward model and kept when it meets the targets and no other design is
+at least as good in all three numbers and better in one. The numbers that decide dominance
+are the forward model's, the same the report prints.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..schema import OBJECTIVE_TERMS, Document
+from . import ROUND_DECIMALS, DesignResult, design_document, verify_design
+from .problem import DesignProblem
+
+# Two designs whose three numbers agree to these relative amounts are the same point.
+SAME_POINT_REL = 2e-3
+MAX_WEIGHTINGS_PER_POINT = 4        # weightings tried per requested point before giving up
+
+
+@dataclass
+class ParetoDesign:
+    """One design of the front, judged by the forward model."""
+
+    result: DesignResult
+    weights: tuple[float, float, float] | None   # None for the chosen design (design.objective)
+    chosen: bool = False
+
+    @property
+    def height_mm(self) -> float:
+        return float(self.result.geometry.total_height_mm)
+
+    @property
+    def worst_force_resolution_N(self) -> float:
+        return max(r.force_resolution_N for r in self.result.response.regimes)
+
+    @property
+    def print_robustness_rms(self) -> float:
+        return float(self.result.print_error["rms_log_change"])
+
+    @property
+    def metrics(self) -> np.ndarray:
+        return np.array([self.height_mm, self.worst_force_resolution_N, self.print_robustness_rms])
+
+
+def non_dominated(metrics: np.ndarray) -> np.ndarray:
+    """Boolean mask of the rows of ``metrics`` (k, m), all minimised, that no other row
+    dominates (<= in every column and < in one)."""
+    m = np.asarray(metrics, dtype=float)
+    le = np.all(m[:, None, :] <= m[None, :, :], axis=-1)     # le[j, i]: j <= i everywhere
+    lt = np.any(m[:, None, :] < m[None, :, :], axis=-1)
+    dominated = np.any(le & lt, axis=0)
+    return ~dominated
+
+
+def _same_point(a: np.ndarray, b: np.ndarray) -> bool:
+    return bool(np.all(np.abs(a - b) <= SAME_POINT_REL * np.maximum(np.abs(a), np.abs(b))))
+
+
+def _spread(front: list[ParetoDesign], count: int) -> list[ParetoDesign]:
+    """At most ``count`` designs of a front, sorted by height: the chosen one and the best in
+    each number, then those nearest to heights evenly spaced between the extremes (a weight
+    lattice crowds its points where the trade is flat)."""
+    front = sorted(front, key=lambda p: p.height_mm)
+    if len(front) <= count:
+        return front
+    M = np.array([p.metrics for p in front])
+    keep = {i for i, p in enumerate(front) if p.chosen}
+    keep |= {int(np.argmin(M[:, j])) for j in range(M.shape[1])}
+    for target in np.linspace(M[:, 0].min(), M[:, 0].max(), count):
+        if len(keep) >= count:
+            break
+        free = [i for i in range(len(front)) if i not in keep]
+        keep.add(min(free, key=lambda i: abs(M[i, 0] - target)))
+    return [front[i] for i in sorted(keep)]
+
+
+def pareto_front(doc: Document, count: int, *, seed: int | None = None, progress=None,
+                 max_evaluations: int | None = None, local: str = "slsqp"):
+    """(chosen DesignResult, front): up to ``count`` non-dominated designs meeting the targets.
+
+    The chosen design is the one ``mst design`` writes (design.objective's weights); it is on
+    the front unless another design dominates it (it then is listed all the same, marked).
+    Fewer than ``count`` designs come back when the spec's free variables do not give that
+    many distinct trade-offs (a one-layer spec with tight bounds, say).
+    """
+    from .solver import match_once, pareto_weights
+
+    chosen = design_document(doc, seed=seed, progress=progress, max_evaluations=max_evaluations,
+                             local=local)
+    if chosen.status != "met":
+        return chosen, []
+    problem = DesignProblem(doc)
+    seed = int(doc.design["seed"] if seed is None else seed)
+    max_evaluations = int(doc.design["max_evaluations"] if max_evaluations is None else max_evaluations)
+    sol, prefer_with = match_once(problem, seed=seed, max_evaluations=max_evaluations, local=local)
+    points = [ParetoDesign(chosen, None, chosen=True)]
+    if prefer_with is None:
+        return chosen, points
+
+    def front_of(pts):
+        mask = non_dominated(np.array([p.metrics for p in pts]))
+        return [p for p, keep in zip(pts, mask) if keep or p.chosen]
+
+    for w in pareto_weights(MAX_WEIGHTINGS_PER_POINT * count):
+        u, used = prefer_with(w)
+        sol.evaluations += used
+        theta, t, h = (np.round(a, ROUND_DECIMALS) for a in problem.to_physical(u))
+        res = verify_design(doc, problem, theta, t, h, sol, seed=seed, max_evaluations=max_evaluations,
+                            mechanics="spring")
+        if res.status != "met":
+            continue
+        cand = ParetoDesign(res, tuple(float(x) for x in w))
+        if any(_same_point(cand.metrics, p.metrics) for p in points):
+            continue
+        points.append(cand)
+        if len(front_of(points)) >= count:
+            break
+    return chosen, _spread(front_of(points), count)
+
+
+# --------------------------------------------------------------------------- output
+CSV_LAYER_COLUMNS = ("theta_deg", "t_mm", "h_mm")
+
+
+def pareto_rows(front: list[ParetoDesign]) -> tuple[list[str], list[list]]:
+    """(header, rows) of pareto.csv: one design per row, units in the header."""
+    n = len(front[0].result.targets)
+    header = (["design", "chosen", "total_height_mm", "worst_force_resolution_mN",
+               "print_robustness_rms_pct", "gap0_mm", "B0_mT"]
+              + [f"weight_{k}" for k in OBJECTIVE_TERMS]
+              + [f"layer{i + 1}_{c}" for i in range(n) for c in CSV_LAYER_COLUMNS])
+    rows = []
+    for k, p in enumerate(front):
+        resp = p.result.response
+        w = p.weights if p.weights is not None else tuple(
+            p.result.document.design["objective"][key] for key in OBJECTIVE_TERMS)
+        row = [k + 1, int(p.chosen), round(p.height_mm, 3), round(1e3 * p.worst_force_resolution_N, 3),
+               round(100 * p.print_robustness_rms, 2), round(resp.gap0_mm, 3), round(resp.B0_T * 1e3, 4)]
+        row += [round(x, 3) for x in w]
+        for c in p.result.targets:
+            row += [c["theta_deg"], c["t_mm"], c["h_mm"]]
+        rows.append(row)
+    return header, rows
+
+
+def pareto_csv(front: list[ParetoDesign]) -> str:
+    header, rows = pareto_rows(front)
+    return "\n".join([",".join(header)] + [",".join(str(x) for x in r) for r in rows]) + "\n"
+
+
+def plot_pareto(front: list[ParetoDesign], path, title: str = "") -> None:
+    """Height against worst force resolution, coloured by print robustness; chosen ringed."""
+    from matplotlib.figure import Figure
+
+    M = np.array([p.metrics for p in front])
+    fig = Figure(figsize=(6.4, 4.6))
+    ax = fig.subplots()
+    fig.subplots_adjust(left=0.12, right=0.95, bottom=0.12, top=0.9)
+    sc = ax.scatter(M[:, 0], 1e3 * M[:, 1], c=100 * M[:, 2], cmap="viridis", s=46, zorder=3)
+    cbar = fig.colorbar(sc, ax=ax)
+    cbar.set_label("print robustness: RMS change of S, R at t +- 0.05 mm [%]")
+    for k, p in enumerate(front):
+        ax.annotate(str(k + 1), (M[k, 0], 1e3 * M[k, 1]), textcoords="offset points", xytext=(5, 4),
+                    fontsize=8)
+        if p.chosen:
+            ax.scatter([M[k, 0]], [1e3 * M[k, 1]], s=190, facecolors="none", edgecolors="C3",
+                       linewidths=1.8, zorder=4, label="chosen (design.objective)")
+    ax.set_xlabel("total part height [mm]")
+    ax.set_ylabel("worst force resolution [mN]")
+    ax.grid(alpha=0.3)
+    if any(p.chosen for p in front):
+        ax.legend(loc="upper right", fontsize=8)
+    fig.suptitle(title or "designs that meet the targets")
+    fig.savefig(path, dpi=110, format="png")
+
+
+def front_table(front: list[ParetoDesign]) -> str:
+    """The front as ``mst design --pareto`` prints it."""
+    lines = [f"Pareto front: {len(front)} designs that meet every target (forward model)",
+             f"{'#':>3} {'height':>7} {'dF worst':>9} {'print':>6}  {'theta [deg]':<20} {'t [mm]':<18} h [mm]",
+             f"{'':>3} {'[mm]':>7} {'[mN]':>9} {'[%]':>6}"]
+    for k, p in enumerate(front):
+        rows = p.result.targets
+        mark = "  <-- chosen" if p.chosen else ""
+        theta = "/".join(f"{r['theta_deg']:.1f}" for r in rows)
+        t = "/".join(f"{r['t_mm']:.2f}" for r in rows)
+        h = "/".join(f"{r['h_mm']:.2f}" for r in rows)
+        lines.append(f"{k + 1:>3} {p.height_mm:>7.2f} {1e3 * p.worst_force_resolution_N:>9.2f} "
+                     f"{100 * p.print_robustness_rms:>6.1f}  {theta:<20} {t:<18} {h}{mark}")
+    return "\n".join(lines)
+
+
+__all__ = ["ParetoDesign", "pareto_front", "non_dominated", "pareto_csv", "plot_pareto", "front_table"]
