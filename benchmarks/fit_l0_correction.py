@@ -17,19 +17,28 @@ and t/L. The web width b = D drops out. The model terms are in mst_cli/mechanics
 
 Least squares over a seeded sample of valid cells in the printable box (mst_cli.bench.BOUNDS:
 theta 5-75 deg, t 0.4-3 mm, h 1.2-8 mm, every cell rule met; t/L up to 1.7): --samples cells
-drawn uniformly, topped up with --shallow-samples at theta 5-15 deg and --stubby-samples with
-t/L >= 1 (the uniform draw gives those corners 6 % and 9 % of its cells), seeds seed, 10 seed + 1
-and 10 seed + 2.
+drawn uniformly, topped up with --shallow-samples at theta 5-15 deg, --stubby-samples with
+t/L >= 1 (the uniform draw gives those corners 6 % and 9 % of its cells) and --thin-samples in
+the thin band where the design optimiser drives compact designs (THIN_BOUNDS: t 0.4-0.6 mm at
+the printable minimum wall, h 1.2-3.5 mm, theta 5-45 deg; a/t up to 0.25), seeds seed,
+10 seed + 1, 10 seed + 2 and 10 seed + 3.
 
 Then verified out of sample on the same kind of sample with --verify-seed: median and max
 |error| against L2 of L0 (corrected and textbook) and L1 in k, R and d_lock, overall and per
-band of t/L (0-0.6, 0.6-1.0, 1.0-1.7) and theta (5-15, 15-60, 60-75 deg), stored under
+band of t/L (0-0.6, 0.6-1.0, 1.0-1.7) and theta (5-15, 15-60, 60-75 deg) and in the thin
+band (its own --verify-thin cells plus any other cell inside THIN_BOUNDS), stored under
 "out_of_sample" with the (t/L x theta) table of L0's median lock-force error that
 correction.expected_error_rel reads. The same numbers on the fitted cells go under "in_sample".
 
+Known limit (of L2, not of the fit): L2 reads the lock at the inner-face mesh node nearest the
+excluded tip wedge (mst_cli.mechanics.continuum), so for shallow thin walls its d_lock and R
+form a sawtooth in theta -- at t 0.401, h 1.829 mm d_lock / (h - 2t - a) falls smoothly from
+0.666 (13.0 deg) to 0.640 (14.5 deg), then jumps to 0.739 (14.8 deg) as a node leaves the
+wedge. The smooth fit runs through the teeth; EXAMPLE_CELLS[0] sits at a tooth's bottom.
+
 Run:  .venv/bin/python benchmarks/fit_l0_correction.py
-      [--samples 300 --shallow-samples 60 --stubby-samples 60 --seed 1]
-      [--verify-samples 150 --verify-shallow 30 --verify-stubby 30 --verify-seed 2]
+      [--samples 300 --shallow-samples 60 --stubby-samples 60 --thin-samples 100 --seed 1]
+      [--verify-samples 150 --verify-shallow 30 --verify-stubby 30 --verify-thin 60 --verify-seed 2]
       [--l2-cache FILE]   (L2 results per cell, read and extended: refits without re-solving)
 """
 
@@ -53,6 +62,11 @@ from mst_cli.mechanics.spring import layer_stiffness_N_per_mm, spring_layer
 # (none in the box) counts in the outermost band
 X_BANDS = ((0.0, 0.6), (0.6, 1.0), (1.0, 1.7))
 THETA_BANDS = ((5.0, 15.0), (15.0, 60.0), (60.0, 75.0))
+# the thin band: compact designs, walls at the printable minimum, small shallow cavities
+THIN_BOUNDS = {"theta_deg": (5.0, 45.0), "t_mm": (0.4, 0.6), "h_mm": (1.2, 3.5)}
+THIN_BAND = f"thin t {THIN_BOUNDS['t_mm'][0]:g}-{THIN_BOUNDS['t_mm'][1]:g} mm"
+# cells the optimiser produced where the fit before the thin band was 4-19 % off in R
+EXAMPLE_CELLS = ((14.3027, 0.4012, 1.8288), (31.4754, 0.4016, 1.9893), (52.0618, 0.4243, 1.9832))
 
 
 def _in_band(v, bands, i):
@@ -61,11 +75,18 @@ def _in_band(v, bands, i):
     return (v >= lo) & (v < hi)
 
 
-def fit_cells(samples, shallow, stubby, seed, max_t_over_L=np.inf):
+def fit_cells(samples, shallow, stubby, seed, max_t_over_L=np.inf, thin=0):
     return (sample_cells(samples, seed, max_t_over_L)
             + (sample_cells(shallow, 10 * seed + 1, max_t_over_L, bounds={"theta_deg": (5.0, 15.0)})
                if shallow else [])
-            + (sample_cells(stubby, 10 * seed + 2, max_t_over_L, min_t_over_L=1.0) if stubby else []))
+            + (sample_cells(stubby, 10 * seed + 2, max_t_over_L, min_t_over_L=1.0) if stubby else [])
+            + (sample_cells(thin, 10 * seed + 3, max_t_over_L, bounds=THIN_BOUNDS) if thin else []))
+
+
+def in_thin_band(cells):
+    return np.array([all(THIN_BOUNDS[k][0] <= v <= THIN_BOUNDS[k][1]
+                         for k, v in (("theta_deg", c.theta_deg), ("t_mm", c.t_mm), ("h_mm", c.h_mm)))
+                     for c in cells], dtype=bool)
 
 
 def _key(c):
@@ -174,6 +195,9 @@ def band_table(cells, errors):
             t[f"t/L {lo:g}-{hi:g}"] = _stats(errs, _in_band(x, X_BANDS, i))
         for i, (lo, hi) in enumerate(THETA_BANDS):
             t[f"theta {lo:g}-{hi:g} deg"] = _stats(errs, _in_band(th, THETA_BANDS, i))
+        thin = in_thin_band(cells)
+        if thin.any():
+            t[THIN_BAND] = _stats(errs, thin)
         table[m] = t
     # L0's lock-force error on the (t/L x theta) grid, for correction.expected_error_rel
     grid, counts = [], []
@@ -190,6 +214,11 @@ def band_table(cells, errors):
                 "theta_deg_edges": [b[0] for b in THETA_BANDS],
                 "median_abs_err_lock_force": grid, "n": counts,
                 "note": "bands without a measured cell (n = 0) take the worst band of their t/L row"}
+    if THIN_BAND in table["spring"]:
+        s = table["spring"][THIN_BAND]
+        expected["thin"] = {"t_mm_max": THIN_BOUNDS["t_mm"][1], "theta_deg_max": THIN_BOUNDS["theta_deg"][1],
+                            "h_mm_range": list(THIN_BOUNDS["h_mm"]),
+                            "median_abs_err_lock_force": s["median_abs_err_lock_force"], "n": s["n"]}
     return table, expected
 
 
@@ -209,10 +238,13 @@ def main():
     ap.add_argument("--samples", type=int, default=300)
     ap.add_argument("--shallow-samples", type=int, default=60)
     ap.add_argument("--stubby-samples", type=int, default=60)
+    ap.add_argument("--thin-samples", type=int, default=100,
+                    help="extra cells in the thin band (THIN_BOUNDS), seed 10 seed + 3")
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--verify-samples", type=int, default=150)
     ap.add_argument("--verify-shallow", type=int, default=30)
     ap.add_argument("--verify-stubby", type=int, default=30)
+    ap.add_argument("--verify-thin", type=int, default=60)
     ap.add_argument("--verify-seed", type=int, default=2)
     ap.add_argument("--max-t-over-L", type=float, default=np.inf,
                     help="stubbiest wall sampled [default: none, the cell rules decide]")
@@ -224,13 +256,16 @@ def main():
     if args.verify_seed == args.seed:
         ap.error("--verify-seed must differ from --seed (the check is out of sample)")
     mat = Material()
-    cells = fit_cells(args.samples, args.shallow_samples, args.stubby_samples, args.seed, args.max_t_over_L)
+    cells = fit_cells(args.samples, args.shallow_samples, args.stubby_samples, args.seed, args.max_t_over_L,
+                      args.thin_samples)
     ref = l2_results(cells, mat, args.l2_cache)
     (coef_k, stats_k), (coef_R, stats_R), (coef_d, stats_d), box = fit(cells, ref, mat)
     command = (f".venv/bin/python benchmarks/fit_l0_correction.py --samples {args.samples} "
                f"--shallow-samples {args.shallow_samples} --stubby-samples {args.stubby_samples} "
+               f"--thin-samples {args.thin_samples} "
                f"--seed {args.seed} --verify-samples {args.verify_samples} --verify-shallow "
-               f"{args.verify_shallow} --verify-stubby {args.verify_stubby} --verify-seed {args.verify_seed}"
+               f"{args.verify_shallow} --verify-stubby {args.verify_stubby} --verify-thin {args.verify_thin} "
+               f"--verify-seed {args.verify_seed}"
                + (f" --max-t-over-L {args.max_t_over_L:g}" if np.isfinite(args.max_t_over_L) else ""))
     out = {
         "model": "ln(k_L2/k_L0) = sum_i c_i * terms_i(x = t/L, s = theta - pi/4, y = x / (2 sin theta), "
@@ -238,9 +273,10 @@ def main():
         "terms": correction.TERMS,
         "coefficients": [float(c) for c in coef_k],
         "lock_force": {"model": "ln(R_L2 / (k d_lock)) = sigma * sum_i c_i * lock_terms_i(x, s, y, sigma, "
-                                "e = exp(-2x/sigma), w = 1 - x/(1 - y) floored smoothly at 0), sigma = d_lock / (L sin theta)",
+                                "e = exp(-2x/sigma), w = 1 - x/(1 - y) floored smoothly at 0, "
+                                "r = allowance/t = (1 - sigma/2)/y - 1), sigma = d_lock / (L sin theta)",
                        "terms": correction.LOCK_TERMS, "coefficients": [float(c) for c in coef_R], **stats_R},
-        "lock_stroke": {"model": "ln(d_lock,L2 / (h - 2t - allowance)) = sigma * sum_i c_i * lock_terms_i(x, s, y, sigma, e, w)",
+        "lock_stroke": {"model": "ln(d_lock,L2 / (h - 2t - allowance)) = sigma * sum_i c_i * lock_terms_i(x, s, y, sigma, e, w, r)",
                         "terms": correction.LOCK_TERMS, "coefficients": [float(c) for c in coef_d], **stats_d},
         "fitted_on": {"samples": len(cells), "seed": args.seed, "poisson_ratio": mat.poisson_ratio,
                       "contact_allowance_mm": cells[0].contact_allowance_mm, **box, **stats_k},
@@ -252,12 +288,17 @@ def main():
     correction.clear_caches()
     in_table, _ = band_table(cells, rung_errors(cells, ref, mat))
     vcells = fit_cells(args.verify_samples, args.verify_shallow, args.verify_stubby, args.verify_seed,
-                       args.max_t_over_L)
+                       args.max_t_over_L, args.verify_thin)
     vref = l2_results(vcells, mat, args.l2_cache)
     table, expected = band_table(vcells, rung_errors(vcells, ref=vref, mat=mat))
     out["in_sample"] = {"cells": len(cells), "bands": in_table}
+    xcells = [geo.HexCell(*c) for c in EXAMPLE_CELLS]
+    xerr = rung_errors(xcells, l2_results(xcells, mat, args.l2_cache), mat)["spring"]
     out["out_of_sample"] = {"cells": len(vcells), "seed": args.verify_seed, "bands": table,
-                            "expected_error": expected}
+                            "expected_error": expected,
+                            "example_cells": [{"theta_deg": c.theta_deg, "t_mm": c.t_mm, "h_mm": c.h_mm,
+                                               "err_k": e[0], "err_lock_force": e[1], "err_d_lock": e[2]}
+                                              for c, e in zip(xcells, xerr)]}
     args.out.write_text(json.dumps(out, indent=2) + "\n")
     correction.clear_caches()
     for name, s in (("k_L2/k_L0", stats_k), ("R_L2/(k d_lock)", stats_R), ("d_lock,L2/d_lock,L0", stats_d)):
@@ -269,6 +310,9 @@ def main():
     print("L0 median |R error| by (t/L, theta) band (rows t/L from", expected["t_over_L_edges"],
           ", columns theta from", expected["theta_deg_edges"], "):", expected["median_abs_err_lock_force"],
           "n", expected["n"])
+    for e in out["out_of_sample"]["example_cells"]:
+        print(f"  example theta {e['theta_deg']:g} t {e['t_mm']:g} h {e['h_mm']:g}: L0 error k {e['err_k']:+.1%}"
+              f"  R {e['err_lock_force']:+.1%}  d_lock {e['err_d_lock']:+.1%}")
     print(f"wrote {args.out}")
 
 

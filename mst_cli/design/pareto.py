@@ -18,6 +18,7 @@ are the forward model's, the same the report prints.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -26,8 +27,10 @@ from ..schema import OBJECTIVE_TERMS, Document
 from . import ROUND_DECIMALS, DesignResult, design_document, verify_design
 from .problem import DesignProblem
 
-# Two designs whose three numbers agree to these relative amounts are the same point.
-SAME_POINT_REL = 2e-3
+# Two designs are the same point of the front when they differ by less than one print layer
+# in height, 2 % in force resolution and 1 percentage point in print robustness: differences a
+# user cannot act on (a weight lattice crowds its points where the trade is flat).
+SAME_POINT = np.array([0.2, 0.02, 0.01])        # mm, relative, absolute
 MAX_WEIGHTINGS_PER_POINT = 4        # weightings tried per requested point before giving up
 
 
@@ -67,7 +70,8 @@ def non_dominated(metrics: np.ndarray) -> np.ndarray:
 
 
 def _same_point(a: np.ndarray, b: np.ndarray) -> bool:
-    return bool(np.all(np.abs(a - b) <= SAME_POINT_REL * np.maximum(np.abs(a), np.abs(b))))
+    diff = np.array([abs(a[0] - b[0]), abs(math.log(a[1] / b[1])), abs(a[2] - b[2])])
+    return bool(np.all(diff < SAME_POINT))
 
 
 def _spread(front: list[ParetoDesign], count: int) -> list[ParetoDesign]:
@@ -163,28 +167,33 @@ def pareto_csv(front: list[ParetoDesign]) -> str:
 
 
 def plot_pareto(front: list[ParetoDesign], path, title: str = "") -> None:
-    """Height against worst force resolution, coloured by print robustness; chosen ringed."""
+    """Two views of the front against part height: print robustness (the trade a short part
+    pays) and worst force resolution; the chosen design ringed, every design numbered as in
+    pareto.csv."""
     from matplotlib.figure import Figure
 
     M = np.array([p.metrics for p in front])
-    fig = Figure(figsize=(6.4, 4.6))
-    ax = fig.subplots()
-    fig.subplots_adjust(left=0.12, right=0.95, bottom=0.12, top=0.9)
-    sc = ax.scatter(M[:, 0], 1e3 * M[:, 1], c=100 * M[:, 2], cmap="viridis", s=46, zorder=3)
-    cbar = fig.colorbar(sc, ax=ax)
-    cbar.set_label("print robustness: RMS change of S, R at t +- 0.05 mm [%]")
-    for k, p in enumerate(front):
-        ax.annotate(str(k + 1), (M[k, 0], 1e3 * M[k, 1]), textcoords="offset points", xytext=(5, 4),
-                    fontsize=8)
-        if p.chosen:
-            ax.scatter([M[k, 0]], [1e3 * M[k, 1]], s=190, facecolors="none", edgecolors="C3",
-                       linewidths=1.8, zorder=4, label="chosen (design.objective)")
-    ax.set_xlabel("total part height [mm]")
-    ax.set_ylabel("worst force resolution [mN]")
-    ax.grid(alpha=0.3)
-    if any(p.chosen for p in front):
-        ax.legend(loc="upper right", fontsize=8)
-    fig.suptitle(title or "designs that meet the targets")
+    x = M[:, 0]
+    fig = Figure(figsize=(10, 4.2))
+    axes = fig.subplots(1, 2)
+    fig.subplots_adjust(left=0.07, right=0.98, bottom=0.13, top=0.88, wspace=0.25)
+    panels = ((100 * M[:, 2], "print robustness: RMS change of S_i, R_i at t +- 0.05 mm [%]"),
+              (1e3 * M[:, 1], "worst force resolution [mN]"))
+    for ax, (y, label) in zip(axes, panels):
+        ax.plot(x, y, "-", color="0.7", zorder=1)
+        ax.scatter(x, y, s=40, color="C0", zorder=3)
+        for k, p in enumerate(front):
+            ax.annotate(str(k + 1), (x[k], y[k]), textcoords="offset points", xytext=(5, 4), fontsize=8)
+            if p.chosen:
+                ax.scatter([x[k]], [y[k]], s=190, facecolors="none", edgecolors="C3", linewidths=1.8,
+                           zorder=4, label="chosen (design.objective)")
+        ax.set_xlabel("total part height [mm]")
+        ax.set_ylabel(label, fontsize=9)
+        ax.margins(0.08)
+        ax.grid(alpha=0.3)
+        if any(p.chosen for p in front):
+            ax.legend(loc="best", fontsize=8)
+    fig.suptitle(title or "designs that meet every target")
     fig.savefig(path, dpi=110, format="png")
 
 

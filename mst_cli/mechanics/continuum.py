@@ -21,7 +21,7 @@ bottom pad's right part plus the lower right wall:
 The tip reaction f (N per mm of depth) is the force carried by one chevron whose compression is
 d. The web's two chevrons act in parallel over its width b = D:  F = 2 b f.
 
-Plane strain (the web is D = 20 mm wide, its walls 0.4-2 mm thick: away from the faces
+Plane strain (the web is D = 20 mm wide, its walls 0.4-3 mm thick: away from the faces
 y = +-D/2 nothing can stretch along y), lambda_3 = 1: the compressible Neo-Hookean energy
 W = mu/2 (I_1 - 3) - mu ln J + lambda/2 (ln J)^2 (e.g. Bonet & Wood, "Nonlinear Continuum
 Mechanics for Finite Element Analysis", 2nd ed., section 6.4.3) of the in-plane F, with the

@@ -34,7 +34,9 @@ the inner wall face's gap at rest, one wall thickness from the cavity's tip vert
 stroke: where it is small the walls touch before the pads do, and e switches those terms on;
 w = 1 - t / L_in (smoothly floored at 0) is the part of the inner face that can touch at all.
 At given (x, theta), sigma = 2 (1 - y (1 + a/t)) also carries the allowance over the wall
-thickness, a/t, which decides where a shallow cavity's thin tip counts as closed.
+thickness, r = a/t, which decides where a shallow cavity's thin tip counts as closed; terms
+r, r s, r sigma (r recovered from x, theta, sigma) carry it for the thin walls (t 0.4-0.6 mm,
+r 0.17-0.25) where compact designs live, sampled apart in the fit (its thin band).
 
 Fitted for nu = 0.45 and a 0.1 mm contact allowance, plane strain (the web of b = D), against
 the plane-strain L2 (``fitted_on`` in the data file), over the printable box (theta 5-75 deg,
@@ -56,7 +58,8 @@ TERMS = ["x", "x^2", "x^3", "x*s", "x^2*s", "x*s^2", "x^2*s^2", "x*s^3", "x^3*s"
          "ly", "ly*s", "ly*s^2", "ly^2", "ly^2*s", "y", "y*s"]
 LOCK_TERMS = ["1", "x", "s", "x^2", "x*s", "s^2", "x^3", "x^2*s", "x*s^2", "s^3",
               "y", "y*s", "y^2", "y*x", "sigma", "sigma*x", "sigma*s", "sigma^2", "sigma*y",
-              "e", "e*s", "e*x", "e^2", "e*sigma", "w", "w*s", "w*x", "w^2", "w*sigma"]
+              "e", "e*s", "e*x", "e^2", "e*sigma", "w", "w*s", "w*x", "w^2", "w*sigma",
+              "r", "r*s", "r*sigma"]
 DATA = Path(__file__).resolve().parent.parent / "data" / "l0_correction.json"
 
 # The printable box every rung is fitted and measured on, and the default design bounds
@@ -69,6 +72,10 @@ VERIFIED_BOX = {"theta_deg": (5.0, 75.0), "t_mm": (0.4, 3.0), "h_mm": (1.2, 8.0)
 # y = t / (h - t) < t / (t + min cavity) = 0.88 for every valid cell (t <= 3 mm, h - 2t >= 0.4
 # mm); the fitted box holds it there (``fitted_on.y_range``), this only keeps the log finite
 Y_MAX = 0.95
+# r = allowance / t is recovered from (t/L, theta, sigma) (sigma = 2 (1 - y (1 + r))) and held in
+# [0, R_MAX] (printable cells: a / 3 mm to a / 0.4 mm = 0.03-0.25 at a = 0.1 mm); _on_cells
+# keeps the probes on the fitted cells, this only keeps the terms bounded anywhere
+R_MAX = 1.0
 
 
 def _y(x, theta):
@@ -97,10 +104,23 @@ def lock_design_matrix(t_over_L, theta_rad, sigma):
     y = _y(x, th)
     e = np.exp(-2.0 * x / np.maximum(sig, 1e-12))
     w = _face_beyond_wedge(x, y)
+    r = allowance_over_t(x, th, sig)
     return np.stack(np.broadcast_arrays(
         np.ones_like(x), x, s, x ** 2, x * s, s ** 2, x ** 3, x ** 2 * s, x * s ** 2, s ** 3,
         y, y * s, y ** 2, y * x, sig, sig * x, sig * s, sig ** 2, sig * y,
-        e, e * s, e * x, e ** 2, e * sig, w, w * s, w * x, w ** 2, w * sig), axis=-1)
+        e, e * s, e * x, e ** 2, e * sig, w, w * s, w * x, w ** 2, w * sig,
+        r, r * s, r * sig), axis=-1)
+
+
+def allowance_over_t(t_over_L, theta_rad, sigma):
+    """r = allowance / t of the cell with this (t/L, theta, sigma): sigma = 2 (1 - y (1 + r)),
+    so r = (1 - sigma / 2) / y - 1, held in [0, R_MAX] (and finite as y -> 0). At the thinnest
+    printable wall r = 0.25: the allowance is a quarter of the wall, and the shallow cavity's
+    thin tip, whose gap at rest is below the allowance for a / sin(theta), zips shut early."""
+    x = np.asarray(t_over_L, dtype=float)
+    y = _y(x, np.asarray(theta_rad, dtype=float))
+    r = (1.0 - 0.5 * np.asarray(sigma, dtype=float)) / np.maximum(y, 1e-6) - 1.0
+    return np.clip(r, 0.0, R_MAX)
 
 
 def _face_beyond_wedge(x, y, eps=0.05):
@@ -207,14 +227,16 @@ def stiffness_factor(t_over_L, theta_rad):
     return np.exp(design_matrix(x, theta) @ _coef())
 
 
-def expected_error_rel(t_over_L, theta_rad):
+def expected_error_rel(t_over_L, theta_rad, t_mm=None):
     """Median |relative error| of the corrected L0 lock force R against L2, measured out of
     sample in the band of (t/L, theta) each cell falls in (``out_of_sample`` in the data
     file; bands: t/L 0-0.6-1.0-, theta 5-15-60-75 deg). Vectorised, pure.
 
     A band the measurement had no cell in (e.g. t/L > 0.6 at theta < 15 deg, which the cell
     rules exclude) takes the worst band of the same t/L range. Points outside the bands fall in
-    the nearest one.
+    the nearest one. Given the wall thickness t_mm, cells of the thin band (the compact
+    designs: t below ``thin.t_mm_max``, theta below ``thin.theta_deg_max``, sampled and
+    measured apart) take its own measured median instead.
     """
     table = _fit()["out_of_sample"]["expected_error"]
     x_edges = np.asarray(table["t_over_L_edges"], dtype=float)
@@ -224,4 +246,10 @@ def expected_error_rel(t_over_L, theta_rad):
                 0, err.shape[0] - 1)
     j = np.clip(np.searchsorted(th_edges, np.asarray(theta_rad, dtype=float), side="right") - 1,
                 0, err.shape[1] - 1)
-    return err[i, j]
+    out = err[i, j]
+    thin = table.get("thin")
+    if t_mm is None or thin is None:
+        return out
+    in_thin = ((np.asarray(t_mm, dtype=float) < thin["t_mm_max"])
+               & (np.asarray(theta_rad, dtype=float) < np.radians(thin["theta_deg_max"])))
+    return np.where(in_thin, thin["median_abs_err_lock_force"], out)

@@ -15,7 +15,7 @@ Structures", Vol. 1, ch. 7; Battini & Pacoste, Comput. Methods Appl. Mech. Eng. 
 local deformation (stretch, two end rotations) is small and linear, with the shear-flexible
 local stiffness EI/l (4+phi)/(1+phi), EI/l (2-phi)/(1+phi), phi = 12 EI/(kappa G A l^2).
 Large rotations of the walls are exact; strains are assumed small. Plane strain: the wall is
-a web b = D wide (20 mm against 0.4-2 mm thick) whose sections cannot contract along y, so
+a web b = D wide (20 mm against 0.4-3 mm thick) whose sections cannot contract along y, so
 EA = E' b t and EI = E' b t^3 / 12 with E' = E / (1 - nu^2), as in rung L0; G is unchanged.
 
 Load: displacement control with adaptive steps. Contact: the cavity closes when the clear gap

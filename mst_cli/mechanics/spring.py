@@ -1,7 +1,7 @@
 """Rung L0 ``spring``: closed-form reduced beam model of one hex layer.
 
 The layer's profile is one continuous web through the whole depth D (the part prints on its
-side; :class:`~mst_cli.geometry.HexCell`, b = D, default 20 mm). Its walls are 0.4-2 mm thick
+side; :class:`~mst_cli.geometry.HexCell`, b = D, default 20 mm). Its walls are 0.4-3 mm thick
 and 1-8 mm long, so they bend in plane strain: a section cannot contract along y, and bending
 and stretching see E' = E / (1 - nu^2) (1.25 E at nu = 0.45) instead of E; shear sees G.
 
@@ -55,7 +55,7 @@ KNEE_FRACTION = 0.4
 def plane_strain_modulus_MPa(E_MPa, nu):
     """E' = E / (1 - nu^2): the bending and axial modulus of a web much wider than thick.
 
-    The web runs the whole depth D (20 mm) while its walls are 0.4-2 mm thick, so a wall's
+    The web runs the whole depth D (20 mm) while its walls are 0.4-3 mm thick, so a wall's
     cross-sections cannot contract along y (anticlastic curvature and the Poisson contraction
     are suppressed except within about a wall thickness of the free faces y = +-D/2):
     eps_yy = 0, sigma_yy = nu (sigma_xx + sigma_zz), and a fibre along the wall has the
@@ -187,8 +187,9 @@ def spring_arrays(theta_rad, t_mm, h_mm, b_mm, width_mm, contact_allowance_mm, E
     """(k, d_lock, R, k_locked) for many layers at once: the design loop's entry point.
 
     ``corrected`` (default) applies the fits against rung L2
-    (:mod:`mst_cli.mechanics.correction`, functions of t/L and theta): the joint factor on k
-    (median stiffness error against L2 1.7 % instead of 20.9 %, see ``mst bench``) and the
+    (:mod:`mst_cli.mechanics.correction`, functions of t/L, theta and the stroke): the joint
+    factor on k (median stiffness error against L2 about 1 % instead of 14 % over the printable
+    box, measured by ``mst bench``; mst_cli/data/ladder_errors.json) and the
     softened lock point (R, d_lock). False gives textbook beam theory: R = k d_lock, d_lock
     where the pads meet.
     """
