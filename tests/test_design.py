@@ -351,3 +351,22 @@ def test_designed_walls_stay_where_the_l0_corrections_were_fitted(tmp_path):
     _, _, _, geometry, _ = forward(result, tmp_path)
     for c in geometry.layers:
         assert c.t_mm / c.wall_length_mm <= fitted_t_over_L_max() * (1 + 1e-6)
+
+
+def test_nlopt_generic_failure_ends_a_run_not_the_command(monkeypatch):
+    """nlopt >= 2.11 raises its own nlopt.runtime_error (not a RuntimeError) when SLSQP's line
+    search fails; a 6-layer spec of the design benchmark hit it. The run must end like any
+    other nlopt stop, with the best point kept."""
+    import nlopt
+
+    from mst_cli.design.solver import solve
+
+    failure = getattr(nlopt, "runtime_error", RuntimeError)
+
+    def broken(self, x0):
+        raise failure("nlopt failure")
+
+    monkeypatch.setattr(nlopt.opt, "optimize", broken)
+    P = DesignProblem(load_document(SPEC))
+    result = solve(P, max_evaluations=2000)
+    assert "nlopt failure" in result.stops and result.u is not None

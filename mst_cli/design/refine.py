@@ -75,7 +75,7 @@ def _local_match(problem: DesignProblem, theta, t, h, maxeval: int = LOCAL_MAX_E
     """
     import nlopt
 
-    from .solver import ROUNDING_SAFETY
+    from .solver import ROUNDING_SAFETY, _nlopt_failures
 
     u0 = np.clip(problem.to_unit(theta, t, h), 0.0, 1.0)
     count = [0]
@@ -103,7 +103,7 @@ def _local_match(problem: DesignProblem, theta, t, h, maxeval: int = LOCAL_MAX_E
     opt.set_xtol_rel(1e-10)
     try:
         opt.optimize(u0)
-    except (nlopt.RoundoffLimited, ValueError, RuntimeError):
+    except (nlopt.RoundoffLimited, ValueError, RuntimeError, *_nlopt_failures()):
         pass                                    # keep the best feasible point seen
     u = best[0]
     theta2, t2, h2 = (np.round(a, ROUND_DECIMALS) for a in problem.to_physical(u))

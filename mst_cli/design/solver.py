@@ -111,6 +111,13 @@ class _Budget:
         return max(self.deadline - time.monotonic(), 1e-3)
 
 
+def _nlopt_failures() -> tuple:
+    """nlopt's generic failure: Python's RuntimeError up to nlopt 2.10, its own
+    ``nlopt.runtime_error`` (not a RuntimeError) from 2.11 on."""
+    import nlopt
+    return tuple(e for e in (getattr(nlopt, "runtime_error", None),) if isinstance(e, type))
+
+
 class _Stop(Exception):
     """Raised inside a callback when the budget is gone or the phase's goal is reached."""
 
@@ -173,6 +180,7 @@ class _Phase:
     def run(self, x0, local: str, maxeval: int, step: float, stops: list):
         import nlopt
 
+        NLOPT_FAILURES = _nlopt_failures()
         dim = self.problem.dim
         alg = nlopt.LD_SLSQP if local == "slsqp" else nlopt.LN_COBYLA
         opt = nlopt.opt(alg, dim)
@@ -196,7 +204,7 @@ class _Phase:
             stops.append("forced stop")
         except nlopt.RoundoffLimited:
             stops.append("roundoff-limited")
-        except RuntimeError:               # nlopt's generic failure (e.g. SLSQP line search)
+        except (RuntimeError, *NLOPT_FAILURES):   # nlopt's generic failure (SLSQP line search)
             stops.append("nlopt failure")
 
 
