@@ -95,20 +95,20 @@ def design(spec_file, out_dir, seed, max_evaluations, refine, pareto_count, pare
          forces outside what printable walls reach, S rising with force, ...)
       2  invalid or self-contradictory spec (e.g. ranges that do not increase)
     """
+    from dataclasses import replace
+
     from .design import design_document
     from .ladder import choose_mechanics
     from .report import report_dict
-    from .schema import load_document
+    from .schema import InputError, load_document
 
     doc = load_document(spec_file)
     from .outputs import check_out_dir
     check_out_dir(out_dir or default_out_dir(doc.name))   # a bad output path: refused before any work
     if pareto_designs and pareto_count is None:
-        from .schema import InputError
         raise InputError("--pareto-designs", True, "needs --pareto N")
     choice = choose_mechanics(refine, doc.accuracy_rel, doc.mechanics)
     if pareto_count is not None and choice.mechanics != "spring":
-        from .schema import InputError
         raise InputError("--pareto", pareto_count, f"maps the front with the L0 spring model; drop "
                          f"--refine/model.accuracy_rel (asked for {choice.mechanics}) or refine one "
                          f"front design afterwards with --pareto-designs and mst design --refine")
@@ -120,13 +120,10 @@ def design(spec_file, out_dir, seed, max_evaluations, refine, pareto_count, pare
     t_start = time.perf_counter()
     try:
         if pareto_count is not None:
-            from dataclasses import replace
-
             from .design.pareto import pareto_front
             result, front = pareto_front(replace(doc, mechanics="spring"), pareto_count, seed=seed,
                                          max_evaluations=max_evaluations, progress=progress)
         elif choice.mechanics == "spring":
-            from dataclasses import replace
             result = design_document(replace(doc, mechanics="spring"), seed=seed,
                                      max_evaluations=max_evaluations, progress=progress)
         else:

@@ -126,8 +126,7 @@ class DesignProblem:
         self.E_MPa = doc.material.youngs_modulus_MPa
         self.nu = doc.material.poisson_ratio
         self.noise_T = 1e-6 * doc.noise_uT_rms
-        objective = dict(DEFAULT_OBJECTIVE)
-        objective.update(d.get("objective") or {})
+        objective = {**DEFAULT_OBJECTIVE, **(d.get("objective") or {})}   # documents built in code
         self.objective_weights = np.array([objective[k] for k in OBJECTIVE_TERMS], dtype=float)
 
         # a probe geometry (any cells) gives the field scene and the fixed height offsets

@@ -325,21 +325,26 @@ def prefer(problem: DesignProblem, u_matched, budget, local: str, stops: list, w
     return final, before, pref(final)
 
 
-def solve(problem: DesignProblem, *, seed: int = 0, max_evaluations: int = 20000, progress=None,
-          local: str = "slsqp", max_time_s: float = MAX_TIME_S, weights=None) -> SolveResult:
-    """Find normalised variables meeting the targets, then minimise the preference."""
+def _matched(problem: DesignProblem, seed: int, max_evaluations: int, progress, local: str,
+             max_time_s: float):
+    """Screening and phase 1 under a fresh budget: (SolveResult of the match, that budget)."""
     if local not in LOCAL_METHODS:
         raise ValueError(f"local method {local!r}: choose from {', '.join(LOCAL_METHODS)}")
-    rng = np.random.default_rng(seed)
     budget = _Budget(max_evaluations, progress, max_time_s)
     stops: list[str] = []
-    u, matched, starts_used = _match(problem, rng, budget, local, stops)
-    result = SolveResult(u=u, matched=matched, evaluations=budget.used, starts_used=starts_used,
-                         preference_before=None, preference_after=None, local=local, stops=stops)
-    if not matched or budget.left <= 3 * _per_iter(problem, local):
+    u, matched, starts_used = _match(problem, np.random.default_rng(seed), budget, local, stops)
+    return SolveResult(u=u, matched=matched, evaluations=budget.used, starts_used=starts_used,
+                       preference_before=None, preference_after=None, local=local, stops=stops), budget
+
+
+def solve(problem: DesignProblem, *, seed: int = 0, max_evaluations: int = 20000, progress=None,
+          local: str = "slsqp", max_time_s: float = MAX_TIME_S, weights=None) -> SolveResult:
+    """Find normalised variables meeting the targets, then minimise the preference (one budget)."""
+    result, budget = _matched(problem, seed, max_evaluations, progress, local, max_time_s)
+    if not result.matched or budget.left <= 3 * _per_iter(problem, local):
         return result
     result.u, result.preference_before, result.preference_after = prefer(
-        problem, u, budget, local, stops, weights)
+        problem, result.u, budget, local, result.stops, weights)
     result.evaluations = budget.used
     return result
 
@@ -368,18 +373,13 @@ def match_once(problem: DesignProblem, *, seed: int = 0, max_evaluations: int = 
     of ``prefer_with`` starts from the matched point with a fresh ``max_evaluations`` budget.
     ``prefer_with`` is None when the targets could not be matched.
     """
-    rng = np.random.default_rng(seed)
-    budget = _Budget(max_evaluations, progress, max_time_s)
-    stops: list[str] = []
-    u, matched, starts_used = _match(problem, rng, budget, local, stops)
-    result = SolveResult(u=u, matched=matched, evaluations=budget.used, starts_used=starts_used,
-                         preference_before=None, preference_after=None, local=local, stops=stops)
-    if not matched:
+    result, _ = _matched(problem, seed, max_evaluations, progress, local, max_time_s)
+    if not result.matched:
         return result, None
 
     def prefer_with(weights):
         b = _Budget(max_evaluations, progress, max_time_s)
-        u_w, _, _ = prefer(problem, u, b, local, stops, weights)
+        u_w, _, _ = prefer(problem, result.u, b, local, result.stops, weights)
         return u_w, b.used
 
     return result, prefer_with
