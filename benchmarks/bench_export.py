@@ -46,7 +46,7 @@ from pathlib import Path
 t = time.perf_counter(); out = []
 import build123d
 out.append(("import build123d", time.perf_counter() - t)); t = time.perf_counter()
-from mst_cli.cli import load_design_document
+from mst_cli.io.schema import load_design_document
 from mst_cli.cad.assembly import build_sensor
 from mst_cli.cad import mesh_io
 doc, g = load_design_document({str(DESIGN)!r})

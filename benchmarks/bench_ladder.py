@@ -1,11 +1,11 @@
 """The speed/accuracy ladder benchmark: runs the same measurement as `mst bench`, prints the
 table, writes bench.md/json/png to --out, and stores the measured median errors (stiffness,
 lock force, lock displacement) in
-mst_cli/data/ladder_errors.json (read by mst_cli.bench.cheapest_model_for).
+mst_cli/model/data/ladder_errors.json (read by mst_cli.model.ladder.cheapest_model_for).
 
 Run:  .venv/bin/python benchmarks/bench_ladder.py --samples 48 --seed 0 --out mst-out/bench
 
-The cells are drawn uniformly in the printable box (mst_cli.bench.BOUNDS: theta 5-75 deg,
+The cells are drawn uniformly in the printable box (mst_cli.bench.ladder_bench.BOUNDS: theta 5-75 deg,
 t 0.4-3 mm, h 1.2-8 mm, every cell rule met; t/L up to 1.7). 48 cells rather than the 24 of
 `mst bench`'s default: the box is larger and the stored medians pick the rung.
 """
@@ -16,8 +16,9 @@ import argparse
 import json
 from pathlib import Path
 
-from mst_cli.bench import ERRORS_FILE, bench_markdown, ladder_errors, plot_bench, run_bench
-from mst_cli.outputs import staged
+from mst_cli.model.ladder import ERRORS_FILE
+from mst_cli.bench.ladder_bench import bench_markdown, ladder_errors, plot_bench, run_bench
+from mst_cli.io.outputs import staged
 
 
 def main():

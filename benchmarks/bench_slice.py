@@ -6,8 +6,8 @@ On the reference export (configs/mohammadi2021-forward.yaml, `mst export --stl -
 
 * PrusaSlicer's own slice time (as `mst slice` runs it: the profile as given, then again
   with automatic support on, which `mst slice` uses to prove no support is needed);
-* parsing its G-code (:func:`mst_cli.gcode.parse_gcode`);
-* the free-span analysis (:func:`mst_cli.gcode.free_spans`, per move and with joined moves);
+* parsing its G-code (:func:`mst_cli.cad.gcode.parse_gcode`);
+* the free-span analysis (:func:`mst_cli.cad.gcode.free_spans`, per move and with joined moves);
 * the wall time of the whole `mst slice` command, interpreter start included (with and
   without drawing print.png);
 
@@ -71,8 +71,8 @@ def main() -> None:
     args = ap.parse_args()
     n = max(1, args.repeats)
 
-    from mst_cli import gcode as G
-    from mst_cli import slicer as S
+    from mst_cli.cad import gcode as G
+    from mst_cli.cad import slicer as S
 
     exe = S.find_prusa_slicer()
     profile = S.bundled_profile()

@@ -1,5 +1,5 @@
 """Fit the L0 corrections against the L2 continuum model and verify them out of sample;
-writes mst_cli/data/l0_correction.json.
+writes mst_cli/model/data/l0_correction.json.
 
 Three ratios of the plane-strain web (L0 with E' = E / (1 - nu^2), L2 with lambda_3 = 1)
 depend only on the profile's shape, i.e. on theta and t/L (and nu, and the contact allowance
@@ -15,7 +15,7 @@ and t/L. The web width b = D drops out. The model terms are in mst_cli/mechanics
 * lock stroke: d_lock,L2 / (h - 2t - allowance) -- the cavity closes early where the rotated
   wall faces meet before the pads do. Same form.
 
-Least squares over a seeded sample of valid cells in the printable box (mst_cli.bench.BOUNDS:
+Least squares over a seeded sample of valid cells in the printable box (mst_cli.bench.ladder_bench.BOUNDS:
 theta 5-75 deg, t 0.4-3 mm, h 1.2-8 mm, every cell rule met; t/L up to 1.7): --samples cells
 drawn uniformly, topped up with --shallow-samples at theta 5-15 deg, --stubby-samples with
 t/L >= 1 (the uniform draw gives those corners 6 % and 9 % of its cells) and --thin-samples in
@@ -31,7 +31,7 @@ band (its own --verify-thin cells plus any other cell inside THIN_BOUNDS), store
 correction.expected_error_rel reads. The same numbers on the fitted cells go under "in_sample".
 
 Known limit (of L2, not of the fit): L2 reads the lock at the inner-face mesh node nearest the
-excluded tip wedge (mst_cli.mechanics.continuum), so for shallow thin walls its d_lock and R
+excluded tip wedge (mst_cli.model.mechanics.continuum), so for shallow thin walls its d_lock and R
 form a sawtooth in theta -- at t 0.401, h 1.829 mm d_lock / (h - 2t - a) falls smoothly from
 0.666 (13.0 deg) to 0.640 (14.5 deg), then jumps to 0.739 (14.8 deg) as a node leaves the
 wedge. The smooth fit runs through the teeth; EXAMPLE_CELLS[0] sits at a tooth's bottom.
@@ -51,12 +51,12 @@ from pathlib import Path
 
 import numpy as np
 
-from mst_cli import geometry as geo
-from mst_cli.bench import BOUNDS, sample_cells
-from mst_cli.geometry import Printer
-from mst_cli.material import Material
-from mst_cli.mechanics import correction, uncached_layer_law
-from mst_cli.mechanics.spring import layer_stiffness_N_per_mm, spring_layer
+from mst_cli.model import geometry as geo
+from mst_cli.bench.ladder_bench import BOUNDS, sample_cells
+from mst_cli.model.geometry import Printer
+from mst_cli.model.material import Material
+from mst_cli.model.mechanics import correction, uncached_layer_law
+from mst_cli.model.mechanics.spring import layer_stiffness_N_per_mm, spring_layer
 
 # the bands of the report and of correction.expected_error_rel; a cell past the outer edges
 # (none in the box) counts in the outermost band
@@ -157,7 +157,7 @@ def fit(cells, ref, mat):
 
 def rung_errors(cells, ref, mat):
     """Relative errors against L2 of L0 textbook, L0 corrected and L1, per cell."""
-    from mst_cli.mechanics.frame import frame_layer
+    from mst_cli.model.mechanics.frame import frame_layer
     out = {"spring-textbook": [], "spring": [], "frame": []}
     for c, r in zip(cells, ref):
         laws = {"spring-textbook": spring_layer(c, mat, corrected=False), "spring": spring_layer(c, mat)}
@@ -251,7 +251,7 @@ def main():
     ap.add_argument("--l2-cache", type=Path, default=None,
                     help="JSON file of L2 results per cell, read and extended")
     ap.add_argument("--out", type=Path, default=correction.DATA,
-                    help="where to write the fit [default: the package's mst_cli/data/l0_correction.json]")
+                    help="where to write the fit [default: the package's mst_cli/model/data/l0_correction.json]")
     args = ap.parse_args()
     if args.verify_seed == args.seed:
         ap.error("--verify-seed must differ from --seed (the check is out of sample)")

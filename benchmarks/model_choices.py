@@ -20,11 +20,11 @@ import argparse
 
 import numpy as np
 
-from mst_cli.bench import sample_cells
-from mst_cli.material import Material
-from mst_cli.mechanics import uncached_layer_law
-from mst_cli.mechanics.continuum import linear_stiffness_N_per_mm
-from mst_cli.mechanics.spring import layer_stiffness_N_per_mm
+from mst_cli.bench.ladder_bench import sample_cells
+from mst_cli.model.material import Material
+from mst_cli.model.mechanics import uncached_layer_law
+from mst_cli.model.mechanics.continuum import linear_stiffness_N_per_mm
+from mst_cli.model.mechanics.spring import layer_stiffness_N_per_mm
 
 
 def knee_table(cells, mat, fractions=(0.3, 0.4, 0.5, 0.6, 0.7)):

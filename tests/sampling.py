@@ -2,8 +2,8 @@
 
 import numpy as np
 
-from mst_cli.components import BOARDS
-from mst_cli.geometry import HexCell, SensorGeometry
+from mst_cli.model.components import BOARDS
+from mst_cli.model.geometry import HexCell, SensorGeometry
 
 
 def random_valid_geometries(n, seed, max_offset_mm):

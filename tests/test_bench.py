@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from mst_cli.bench import (cheapest_model_for, field_errors, load_ladder_errors, sample_cells,
-                           summarise)
-from mst_cli.cli import main
+from mst_cli.model.ladder import cheapest_model_for, load_ladder_errors
+from mst_cli.bench.ladder_bench import field_errors, sample_cells, summarise
+from mst_cli.cli.app import main
 
 ERRORS = {"models": {
     "spring-textbook": {"median_abs_err_k": 0.16, "median_abs_err_lock_force": 0.9},
@@ -80,7 +80,7 @@ def test_sample_covers_the_printable_box_without_a_t_over_L_cap():
 def test_field_errors_axial_is_exact_and_dipole_overestimates():
     err = field_errors(np.array([5.0, 10.0, 15.0]))
     assert np.max(np.abs(err["axial"])) < 1e-9
-    # DESIGN.md: dipole about +10 % at 10 mm, +5 % at 15 mm from the face
+    # docs/design.md: dipole about +10 % at 10 mm, +5 % at 15 mm from the face
     assert err["dipole"][1] == pytest.approx(0.10, abs=0.02)
     assert err["dipole"][2] == pytest.approx(0.05, abs=0.015)
 

@@ -1,7 +1,7 @@
 """The CAD of the printed body against geometry fixed by hand calculation.
 
 Golden numbers of the reference design are worked out below from the housing defaults and the
-Adafruit 4022 board (DESIGN.md, reference/README.md), not read off the CAD.
+Adafruit 4022 board (docs/design.md section 8), not read off the CAD.
 """
 
 import io
@@ -20,10 +20,10 @@ from build123d import Edge, import_step
 
 from mst_cli.cad import mesh_io, parts
 from mst_cli.cad.assembly import build_body, build_sensor
-from mst_cli.cli import load_design_document
-from mst_cli.components import BOARDS
-from mst_cli.geometry import Housing, HexCell, SensorGeometry
-from mst_cli.schema import InputError
+from mst_cli.io.schema import load_design_document
+from mst_cli.model.components import BOARDS
+from mst_cli.model.geometry import HexCell, Housing, SensorGeometry
+from mst_cli.errors import InputError
 
 ROOT = Path(__file__).resolve().parents[1]
 FORWARD = ROOT / "configs" / "mohammadi2021-forward.yaml"
@@ -137,7 +137,7 @@ def test_every_board_gives_the_model_gap_and_an_open_slot(key):
 # --------------------------------------------------------------------------- magnet pocket
 @pytest.mark.parametrize("diameter_mm", [4.0, 6.0, 8.0])
 def test_pocket_is_a_u_with_a_45_degree_roof(diameter_mm):
-    from mst_cli.geometry import Magnet
+    from mst_cli.model.geometry import Magnet
     g = SensorGeometry((HexCell(30, 0.8, 2.4),), magnet=Magnet(diameter_mm, 2.0))
     r, d = 0.5 * diameter_mm + 0.1, 2.1
     y_top = math.ceil(round((10 + r) / 0.2, 6)) * 0.2 - 10

@@ -23,14 +23,14 @@ import pytest
 import yaml
 from click.testing import CliRunner
 
-from mst_cli import calibration as cal
-from mst_cli import magnetometer as mlx
-from mst_cli.cli import main
-from mst_cli.components import grade_remanence_T
-from mst_cli.geometry import Housing
-from mst_cli.response import simulate
-from mst_cli.schema import load_document, parse_document
-from mst_cli.serial_lines import SampleParser, parse_line
+from mst_cli.calibrate import fit as cal
+from mst_cli.model import chip as mlx
+from mst_cli.cli.app import main
+from mst_cli.model.components import grade_remanence_T
+from mst_cli.model.geometry import Housing
+from mst_cli.model.response import simulate
+from mst_cli.io.schema import load_document, parse_document
+from mst_cli.io.serial_lines import parse_line, SampleParser
 
 ROOT = Path(__file__).resolve().parents[1]
 DESIGN = ROOT / "configs" / "mohammadi2021-forward.yaml"
@@ -321,7 +321,7 @@ def test_serial_stream_from_a_pseudo_terminal(loadtest, tmp_path):
     master, slave = pty.openpty()
     tty.setraw(slave)
     mst = Path(sys.executable).with_name("mst")
-    cmd = [str(mst)] if mst.exists() else [sys.executable, "-c", "from mst_cli.cli import main; main()"]
+    cmd = [str(mst)] if mst.exists() else [sys.executable, "-c", "from mst_cli.cli.app import main; main()"]
     proc = subprocess.Popen(cmd + ["read", str(loadtest["out"] / "calibrated.yaml"), "--serial",
                                    os.ttyname(slave), "--out", str(tmp_path / "o")],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)

@@ -1,4 +1,4 @@
-"""mst_cli.checks: every check passes on the exported reference body and fails when the mesh
+"""mst_cli.cad.checks: every check passes on the exported reference body and fails when the mesh
 or the expectation is broken in the way that check is about."""
 
 import copy
@@ -10,11 +10,11 @@ import numpy as np
 import pytest
 import trimesh
 
-from mst_cli import checks
+from mst_cli.cad import checks
 from mst_cli.cad import mesh_io
 from mst_cli.cad.assembly import build_sensor, print_mesh
 from mst_cli.cad.manifest import export_manifest
-from mst_cli.cli import load_design_document
+from mst_cli.io.schema import load_design_document
 
 ROOT = Path(__file__).resolve().parents[1]
 FORWARD = ROOT / "configs" / "mohammadi2021-forward.yaml"
@@ -164,7 +164,7 @@ def test_a_part_tilted_off_its_side_fails_the_print_checks(exported):
 
 
 def test_unreadable_inputs_are_input_errors(tmp_path):
-    from mst_cli.schema import InputError
+    from mst_cli.errors import InputError
     (tmp_path / "sensor.stl").write_bytes(b"not a mesh at all")
     (tmp_path / "export.json").write_text("{broken")
     with pytest.raises(InputError, match="export.json"):
@@ -193,7 +193,7 @@ def _random_geometries(n, seed=11):
 def test_random_valid_designs_pass_every_check(g):
     """Seeded designs inside the bounds, random board and chip offset: the measurements find
     each layer's walls, cavity, the pocket and the off-centre slot where the design puts them."""
-    from mst_cli.geometry import Printer
+    from mst_cli.model.geometry import Printer
     vertices, triangles = print_mesh(g, build_sensor(g).body, 0.02)
     manifest = export_manifest("random", g, Printer(), 0.02, ["sensor.stl"])
     res = by_name(checks.run_checks(mesh_of(mesh_io.stl_bytes(vertices, triangles)), manifest))

@@ -7,7 +7,7 @@ import pytest
 import yaml
 from click.testing import CliRunner
 
-from mst_cli.cli import main
+from mst_cli.cli.app import main
 
 ROOT = Path(__file__).resolve().parents[1]
 FORWARD = ROOT / "configs" / "mohammadi2021-forward.yaml"
@@ -111,7 +111,7 @@ def test_missing_file_exits_2(tmp_path):
 
 
 def test_staged_outputs_vanish_when_the_command_fails(tmp_path):
-    from mst_cli.outputs import staged
+    from mst_cli.io.outputs import staged
     out = tmp_path / "new"
     with pytest.raises(RuntimeError):
         with staged(out) as st:

@@ -1,6 +1,6 @@
 """Inverse design (library level): round trips, the reference spec, the preference, diagnoses.
 
-Every check of an achieved number re-runs the forward model (mst_cli.response.simulate) on the
+Every check of an achieved number re-runs the forward model (mst_cli.model.response.simulate) on the
 design as written to design.yaml and loaded back, and compares it with the spec's targets.
 """
 
@@ -14,13 +14,14 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.optimize import fsolve
 
-from mst_cli import geometry as geo
+from mst_cli.model import geometry as geo
 from mst_cli.design import design_document
 from mst_cli.design.explain import limits
-from mst_cli.design.problem import PRINT_ERROR_T_MM, DesignProblem
-from mst_cli.mechanics.correction import VERIFIED_BOX
-from mst_cli.response import simulate
-from mst_cli.schema import DEFAULT_DESIGN, InputError, load_document, parse_document
+from mst_cli.design.problem import DesignProblem, PRINT_ERROR_T_MM
+from mst_cli.model.mechanics.correction import VERIFIED_BOX
+from mst_cli.model.response import simulate
+from mst_cli.io.schema import DEFAULT_DESIGN, load_document, parse_document
+from mst_cli.errors import InputError
 
 ROOT = Path(__file__).resolve().parents[1]
 SPEC = ROOT / "configs" / "fingertip.yaml"       # met by the printable cell
@@ -65,7 +66,7 @@ def random_specs(n_layers, count, seed):
 @pytest.mark.parametrize("config, max_height_mm", [("mohammadi2021.yaml", None),
                                                    ("mohammadi2021-compact.yaml", 16.0)])
 def test_paper_targets_are_met_and_the_compact_part_is_at_most_16_mm(config, max_height_mm, tmp_path):
-    """The paper's S = 0.26/0.08/0.03 1/N and R = 0.9/4.8/16.2 N (DESIGN.md's table), re-simulated
+    """The paper's S = 0.26/0.08/0.03 1/N and R = 0.9/4.8/16.2 N (docs/design.md's table), re-simulated
     from the written design.yaml; with a board without connector sockets in at most 16 mm."""
     result = design_document(load_document(ROOT / "configs" / config))
     assert result.status == "met", result.reasons
@@ -346,7 +347,7 @@ def test_off_axis_chip_designs_with_the_exact_cylinder_field(tmp_path):
 def test_designed_walls_stay_where_the_l0_corrections_were_fitted(tmp_path):
     # every wall at most as stubby as the stubbiest fitted one (the fit now spans the printable
     # box, so this constraint no longer binds inside the default bounds; it guards user bounds)
-    from mst_cli.mechanics.correction import fitted_t_over_L_max
+    from mst_cli.model.mechanics.correction import fitted_t_over_L_max
     result = design_document(load_document(SPEC))
     _, _, _, geometry, _ = forward(result, tmp_path)
     for c in geometry.layers:

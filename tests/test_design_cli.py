@@ -9,7 +9,7 @@ import numpy as np
 import yaml
 from click.testing import CliRunner
 
-from mst_cli.cli import main
+from mst_cli.cli.app import main
 
 ROOT = Path(__file__).resolve().parents[1]
 SPEC = ROOT / "configs" / "fingertip.yaml"       # met by the printable cell
@@ -104,7 +104,7 @@ def test_unreachable_spec_exits_1_names_the_reason_and_writes_the_nearest_design
 
 
 def test_importing_the_cli_does_not_import_nlopt_or_the_design_package():
-    code = ("import sys, mst_cli.cli; "
+    code = ("import sys, mst_cli.cli.app; "
             "bad = [m for m in ('nlopt', 'mst_cli.design', 'build123d', 'matplotlib.pyplot') if m in sys.modules]; "
             "print(bad); sys.exit(1 if bad else 0)")
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)

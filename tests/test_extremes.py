@@ -5,15 +5,15 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from mst_cli import field as fld
-from mst_cli.geometry import HexCell, Magnet, SensorGeometry
-from mst_cli.material import Material
-from mst_cli.mechanics import layer_law
-from mst_cli.mechanics.continuum import solve_continuum
-from mst_cli.mechanics.frame import solve_frame
-from mst_cli.mechanics.spring import LinearLockingLayer, spring_arrays
-from mst_cli.response import simulate
-from mst_cli.stack import Stack
+from mst_cli.model import field as fld
+from mst_cli.model.geometry import HexCell, Magnet, SensorGeometry
+from mst_cli.model.material import Material
+from mst_cli.model.mechanics import layer_law
+from mst_cli.model.mechanics.continuum import solve_continuum
+from mst_cli.model.mechanics.frame import solve_frame
+from mst_cli.model.mechanics.spring import LinearLockingLayer, spring_arrays
+from mst_cli.model.response import simulate
+from mst_cli.model.stack import Stack
 
 MAT = Material()
 

@@ -4,8 +4,9 @@ import numpy as np
 import pytest
 import magpylib as magpy
 
-from mst_cli.field import (axial_Bz_T, axial_dBz_dz_T_per_mm, choose_field_model, field_at_chip_T)
-from mst_cli.geometry import Magnet
+from mst_cli.model.field import (axial_Bz_T, axial_dBz_dz_T_per_mm, choose_field_model,
+                                 field_at_chip_T)
+from mst_cli.model.geometry import Magnet
 
 MAG = Magnet(6.0, 2.0, 1.3)
 
@@ -23,7 +24,7 @@ def test_axial_equals_magpylib_on_axis():
 
 
 def test_reference_table_is_reproduced():
-    # shared/reference/README.md: Bz of a 6 x 2 mm disc, Br 1.3 T, on the axis
+    # docs/design.md section 8: Bz of a 6 x 2 mm disc, Br 1.3 T, on the axis
     z = [1, 2, 3, 4, 5, 6, 8, 10, 12, 15, 20]
     table_mT = [254.07, 159.44, 97.75, 61.38, 40.07, 27.24, 13.97, 8.006, 4.979, 2.732, 1.231]
     got = axial_Bz_T(np.array(z, float), 3.0, 2.0, 1.3) * 1e3
@@ -38,7 +39,7 @@ def test_axial_gradient_is_the_derivative():
 
 @pytest.mark.parametrize("gap_mm,excess", [(4, 0.52), (6, 0.25), (10, 0.10), (15, 0.05)])
 def test_dipole_overestimates_by_the_documented_amount(gap_mm, excess):
-    # DESIGN.md section 4: +52 % at 4 mm, +25 % at 6, +10 % at 10, +5 % at 15 from the face
+    # docs/design.md section 4: +52 % at 4 mm, +25 % at 6, +10 % at 10, +5 % at 15 from the face
     dip = field_at_chip_T(np.array([gap_mm]), MAG, "dipole")[0, 2]
     exact = field_at_chip_T(np.array([gap_mm]), MAG, "axial")[0, 2]
     assert dip / exact - 1 == pytest.approx(excess, abs=0.01)

@@ -5,11 +5,11 @@ import math
 import numpy as np
 import pytest
 
-from mst_cli.geometry import HexCell
-from mst_cli.material import Material
-from mst_cli.mechanics import layer_law
-from mst_cli.mechanics.frame import _element_forces, monotone_envelope, solve_frame
-from mst_cli.mechanics.spring import spring_layer
+from mst_cli.model.geometry import HexCell
+from mst_cli.model.material import Material
+from mst_cli.model.mechanics import layer_law
+from mst_cli.model.mechanics.frame import _element_forces, monotone_envelope, solve_frame
+from mst_cli.model.mechanics.spring import spring_layer
 
 MAT = Material()
 
@@ -95,7 +95,7 @@ def test_shallow_thin_wall_closes_part_way_not_at_once():
     # as in L2: a point of the inner face counts for contact only if its gap at rest is at
     # least twice the allowance (at theta 5 deg the cavity's tip is thinner than that for
     # 1.15 mm, more than a 0.4 mm wall)
-    from mst_cli.mechanics.frame import solve_frame
+    from mst_cli.model.mechanics.frame import solve_frame
     cell = HexCell(5, 0.4, 1.25)
     res = solve_frame(cell, MAT)
     assert 0.2 * cell.d_lock_mm < res.d_contact_mm <= cell.d_lock_mm * (1 + 1e-9)

@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from mst_cli.geometry import HexCell, Printer, SensorGeometry
+from mst_cli.model.geometry import HexCell, Printer, SensorGeometry
 
 
 def shoelace(poly):
@@ -95,7 +95,7 @@ def test_print_frame_is_a_rotation_that_puts_the_minus_y_face_on_the_bed():
 @pytest.mark.parametrize("layer_mm", [0.1, 0.15, 0.2, 0.3])
 @pytest.mark.parametrize("diameter_mm", [3.0, 5.0, 6.0, 8.0])
 def test_pause_is_a_layer_boundary_with_the_magnet_wholly_below_it(layer_mm, diameter_mm):
-    from mst_cli.geometry import Magnet
+    from mst_cli.model.geometry import Magnet
     g = SensorGeometry(tuple(CELLS[:2]), magnet=Magnet(diameter_mm, 2.0), printer=Printer(layer_height_mm=layer_mm))
     n = g.pause_height_mm / layer_mm
     assert n == pytest.approx(round(n), abs=1e-9) and g.pause_after_layer == round(n)
@@ -109,7 +109,7 @@ def test_pause_is_a_layer_boundary_with_the_magnet_wholly_below_it(layer_mm, dia
 
 
 def test_snapping_rounds_to_the_layer_grid_as_asked():
-    from mst_cli.geometry import snap_to_layers_mm
+    from mst_cli.model.geometry import snap_to_layers_mm
     assert snap_to_layers_mm(1.7, 0.2, "down") == pytest.approx(1.6)
     assert snap_to_layers_mm(1.7, 0.2, "up") == pytest.approx(1.8)
     assert snap_to_layers_mm(1.75, 0.2, "nearest") == pytest.approx(1.8)
@@ -132,7 +132,7 @@ def test_slot_floor_and_chip_as_printed():
 
 
 def test_housing_rules_name_the_field():
-    from mst_cli.components import BOARDS
+    from mst_cli.model.components import BOARDS
     ok = SensorGeometry(tuple(CELLS[:3]))
     assert ok.housing_violations() == []
     odd = SensorGeometry((HexCell(30, 1.0, 3.0, depth_mm=20.1),))

@@ -24,9 +24,9 @@ from click.testing import CliRunner
 from hypothesis import HealthCheck, event, given, settings, strategies as st
 
 from mst_cli import __version__
-from mst_cli.cli import main
-from mst_cli.outputs import STAGING_PREFIX, Staging, staged
-from mst_cli.schema import LAYER_RULES, SECTIONS, TOP_KEYS, load_document
+from mst_cli.cli.app import main
+from mst_cli.io.outputs import staged, Staging, STAGING_PREFIX
+from mst_cli.io.schema import LAYER_RULES, load_document, SECTIONS, TOP_KEYS
 
 ROOT = Path(__file__).resolve().parents[1]
 FORWARD = ROOT / "configs" / "mohammadi2021-forward.yaml"
@@ -301,7 +301,7 @@ def test_a_bad_output_path_is_refused_before_the_work(tmp_path, cmd):
 
 def test_read_only_output_folder_names_the_path_and_reason(tmp_path, monkeypatch):
     # root ignores permission bits: simulate the read-only file system where the folder is made
-    import mst_cli.outputs as outputs
+    import mst_cli.io.outputs as outputs
 
     def read_only(*a, **k):
         raise OSError(errno.EROFS, os.strerror(errno.EROFS), str(k.get("dir", a[-1] if a else "")))
@@ -367,7 +367,7 @@ def test_full_disk_exits_1_and_keeps_the_earlier_complete_output(tmp_path, monke
 STAGE_AND_SLEEP = textwrap.dedent("""
     import sys, time
     from pathlib import Path
-    from mst_cli.outputs import staged
+    from mst_cli.io.outputs import staged
     with staged(Path(sys.argv[1])) as st:
         st.write_text("report.json", "{}")
         print("staged", flush=True)
@@ -376,14 +376,14 @@ STAGE_AND_SLEEP = textwrap.dedent("""
 
 SIMULATE_SLOW_PLOT = textwrap.dedent("""
     import sys, time
-    import mst_cli.report as report
+    import mst_cli.io.report as report
     plot = report.plot_response
     def slow(*a, **k):
         plot(*a, **k)
         print("staged", flush=True)
         time.sleep(60)
     report.plot_response = slow
-    from mst_cli.cli import main
+    from mst_cli.cli.app import main
     main(["simulate", sys.argv[2], "--out", sys.argv[1]], prog_name="mst")
 """)
 
@@ -535,7 +535,7 @@ def mutate(manifest: dict, path: str, value):
 ])
 def test_check_refuses_a_manifest_of_wrong_type_or_nesting_before_measuring(exported, tmp_path, monkeypatch,
                                                                               path, value):
-    import mst_cli.checks as checks
+    import mst_cli.cad.checks as checks
     folder = copy_export(exported, tmp_path / "c")
     manifest = json.loads((folder / "export.json").read_text())
     mutate(manifest, path, value)
@@ -556,7 +556,7 @@ def test_check_refuses_nan_in_the_manifest(exported, tmp_path):
 
 
 def test_a_bug_inside_a_check_is_not_reported_as_a_malformed_manifest(exported, monkeypatch):
-    import mst_cli.checks as checks
+    import mst_cli.cad.checks as checks
 
     def broken(*a, **k):
         raise KeyError("a bug")

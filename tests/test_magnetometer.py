@@ -1,4 +1,4 @@
-"""MLX90393 setting choice against the datasheet table (shared/reference/mlx90393.csv)."""
+"""MLX90393 setting choice against the datasheet table (Melexis MLX90393 datasheet Rev 011, Table 17)."""
 
 import csv
 from pathlib import Path
@@ -6,7 +6,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from mst_cli import magnetometer as mlx
+from mst_cli.model import chip as mlx
 
 SHARED = Path(__file__).resolve().parents[2] / "shared" / "reference" / "mlx90393.csv"
 

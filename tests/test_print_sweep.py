@@ -16,7 +16,7 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 
-from mst_cli.cli import main
+from mst_cli.cli.app import main
 
 ROOT = Path(__file__).resolve().parents[1]
 MAX_SPAN_MM = 5.0
@@ -35,7 +35,7 @@ MEASURED = {}
 # --------------------------------------------------------------------------- the designs
 def _config_designs():
     """(id, loader) of every configs/*.yaml that is a design (theta/t/h on every layer)."""
-    from mst_cli.schema import load_document
+    from mst_cli.io.schema import load_document
     out = []
     for path in sorted((ROOT / "configs").glob("*.yaml")):
         if load_document(path).is_design:
@@ -44,7 +44,7 @@ def _config_designs():
 
 
 def _load_config(path):
-    from mst_cli.cli import load_design_document
+    from mst_cli.io.schema import load_design_document
     doc, g = load_design_document(path)
     return doc.name, g, doc.printer
 
@@ -53,7 +53,7 @@ def _designed_spec():
     """The design `mst design` / `mst export` make from the reference spec (targets met or
     not, a valid buildable design)."""
     from mst_cli.design import design_document
-    from mst_cli.schema import load_document
+    from mst_cli.io.schema import load_document
     result = design_document(load_document(ROOT / "configs" / "mohammadi2021.yaml"))
     g = result.geometry
     assert not list(g.violations(result.document.printer)), "the designed cell is invalid"
@@ -62,7 +62,7 @@ def _designed_spec():
 
 def _random(k):
     import sampling
-    from mst_cli.geometry import Printer
+    from mst_cli.model.geometry import Printer
     g = sampling.random_valid_geometries(RANDOM_N, seed=RANDOM_SEED, max_offset_mm=2.0)[k]
     return f"random-{k:02d}", g, Printer()
 
@@ -80,7 +80,7 @@ def export_body(folder: Path, name: str, g, printer, tolerance_mm: float = STL_T
     does (print orientation, the magnet pause in the 3MF); returns the manifest."""
     from mst_cli.cad import mesh_io
     from mst_cli.cad.assembly import build_sensor, check_fits, print_mesh
-    from mst_cli.cad.manifest import MANIFEST_NAME, export_manifest
+    from mst_cli.cad.manifest import export_manifest, MANIFEST_NAME
 
     check_fits(g)
     vertices, triangles = print_mesh(g, build_sensor(g).body, tolerance_mm)
@@ -129,7 +129,7 @@ def test_sliced_body_prints(sliced):
 
 
 def test_mst_check_passes_on_the_same_mesh(sliced):
-    from mst_cli import checks
+    from mst_cli.cad import checks
     key, _, manifest, folder, _, _ = sliced
     results = checks.run_checks(checks.load_mesh(folder / "sensor.stl"), manifest)
     bad = {c.name: (c.measured, c.expected, c.note) for c in results if not c.passed and not c.info}

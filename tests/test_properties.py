@@ -5,12 +5,12 @@ import warnings
 import numpy as np
 from hypothesis import given, settings, strategies as st
 
-from mst_cli.geometry import HexCell, SensorGeometry
-from mst_cli.material import Material
-from mst_cli.mechanics.spring import spring_arrays
-from mst_cli.response import simulate
-from mst_cli.schema import DEFAULT_DESIGN
-from mst_cli.stack import series_displacement_mm
+from mst_cli.model.geometry import HexCell, SensorGeometry
+from mst_cli.model.material import Material
+from mst_cli.model.mechanics.spring import spring_arrays
+from mst_cli.model.response import simulate
+from mst_cli.io.schema import DEFAULT_DESIGN
+from mst_cli.model.stack import series_displacement_mm
 
 TH = DEFAULT_DESIGN["theta_deg_bounds"]
 T = DEFAULT_DESIGN["t_mm_bounds"]

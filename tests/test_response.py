@@ -3,11 +3,11 @@
 import numpy as np
 import pytest
 
-from mst_cli.field import axial_Bz_T, axial_dBz_dz_T_per_mm
-from mst_cli.geometry import HexCell, SensorGeometry
-from mst_cli.material import Material
-from mst_cli.mechanics import layer_law
-from mst_cli.response import field_magnitude_T, regime_kernel, simulate
+from mst_cli.model.field import axial_Bz_T, axial_dBz_dz_T_per_mm
+from mst_cli.model.geometry import HexCell, SensorGeometry
+from mst_cli.model.material import Material
+from mst_cli.model.mechanics import layer_law
+from mst_cli.model.response import field_magnitude_T, regime_kernel, simulate
 
 MAT = Material()
 REF = SensorGeometry((HexCell(25, 0.6, 2.0), HexCell(33, 1.0, 2.8), HexCell(37, 1.4, 3.5)))
@@ -27,7 +27,7 @@ def test_single_layer_by_hand():
 
 
 def test_sensitivity_is_gradient_times_secant_compliance_for_a_small_stroke():
-    # S = g c with g = -(1/B0) dB/dgap (DESIGN.md section 2) and c = d_lock / R the layer's
+    # S = g c with g = -(1/B0) dB/dgap (docs/design.md section 2) and c = d_lock / R the layer's
     # secant compliance, exact as the stroke -> 0; the secant's error is first order in the
     # stroke (half the field's curvature term)
     errors = []
@@ -89,7 +89,7 @@ def test_field_model_choice_is_reported_and_dipole_reads_high():
 
 def test_a_magnet_too_close_saturates_the_chip_and_says_so():
     from dataclasses import replace
-    from mst_cli.geometry import Housing
+    from mst_cli.model.geometry import Housing
     close = replace(REF, layers=(HexCell(30, 0.4, 1.2),), housing=Housing(cover_mm=0.2, pocket_floor_mm=0.2))
     r = simulate(close, MAT)
     assert r.B_full_T > 0.05 and r.saturated and r.chip_setting is None

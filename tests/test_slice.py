@@ -16,9 +16,9 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from mst_cli import gcode as G
+from mst_cli.cad import gcode as G
 from mst_cli.cad import mesh_io
-from mst_cli.cli import main
+from mst_cli.cli.app import main
 
 ROOT = Path(__file__).resolve().parents[1]
 PROFILE = ROOT / "configs" / "print" / "tpu85a-0.4mm.ini"
@@ -357,7 +357,7 @@ def test_missing_prusa_slicer_is_exit_2_with_how_to_install(tmp_path, monkeypatc
     ("layer_height = 0.2\nlayer_height = 0.3\n", "set twice"),
 ])
 def test_profile_that_is_no_prusaslicer_config_is_exit_2(tmp_path, monkeypatch, text, reason):
-    import mst_cli.slicer as S
+    import mst_cli.cad.slicer as S
     monkeypatch.setattr(S, "find_prusa_slicer", lambda: "/bin/true")
     monkeypatch.setattr(S, "known_options", lambda exe: frozenset({"layer_height"}))
     bad = tmp_path / "bad.ini"
@@ -377,7 +377,7 @@ def test_profile_with_unknown_option_is_exit_2(tmp_path):
 
 
 def test_bundled_profile_is_complete_and_tpu():
-    import mst_cli.slicer as S
+    import mst_cli.cad.slicer as S
     values = S.parse_ini(PROFILE.read_text())
     assert values["layer_height"] == values["first_layer_height"] == "0.2"
     assert values["nozzle_diameter"] == "0.4" and values["support_material"] == "0"

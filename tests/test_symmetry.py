@@ -15,10 +15,10 @@ import math
 import numpy as np
 import pytest
 
-from mst_cli.geometry import HexCell
-from mst_cli.material import Material
-from mst_cli.mechanics import continuum as L2
-from mst_cli.mechanics.frame import _element_forces, _Wall, solve_frame
+from mst_cli.model.geometry import HexCell
+from mst_cli.model.material import Material
+from mst_cli.model.mechanics import continuum as L2
+from mst_cli.model.mechanics.frame import _element_forces, _Wall, solve_frame
 
 MAT = Material()
 CELLS = [HexCell(35, 0.8, 3.0), HexCell(25, 0.6, 2.0), HexCell(55, 0.5, 5.0)]

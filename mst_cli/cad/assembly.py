@@ -6,9 +6,9 @@ from dataclasses import dataclass
 
 from build123d import Compound, Solid
 
-from ..geometry import SensorGeometry
-from ..schema import InputError
-from . import parts
+from mst_cli.model.geometry import SensorGeometry
+from mst_cli.errors import InputError
+from mst_cli.cad import parts
 
 
 def check_fits(geometry: SensorGeometry) -> None:
@@ -74,7 +74,7 @@ def build_sensor(geometry: SensorGeometry) -> SensorCAD:
 def print_mesh(geometry: SensorGeometry, body: Solid, tolerance_mm: float):
     """(vertices, triangles) of the body as it lies on the bed (the STL/3MF frame): the
     tessellation, closed and outward-oriented, turned into the print frame."""
-    from . import mesh_io
+    from mst_cli.cad import mesh_io
     vertices, triangles = mesh_io.tessellate(body, tolerance_mm)
     if not mesh_io.is_closed_oriented(triangles):
         raise RuntimeError("the tessellated body is not closed: please report this design")

@@ -8,8 +8,8 @@ describes the mesh files as they lie on the bed. No CAD library is imported here
 
 from __future__ import annotations
 
-from .. import __version__
-from ..geometry import Printer, SensorGeometry
+from mst_cli import __version__
+from mst_cli.model.geometry import Printer, SensorGeometry
 
 MANIFEST_NAME = "export.json"
 MANIFEST_FORMAT = 2

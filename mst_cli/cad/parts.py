@@ -1,7 +1,7 @@
 """Parametric B-rep parts of the sensor, built with build123d from the one geometry object.
 
-Every dimension is read from :class:`mst_cli.geometry.SensorGeometry` (and the
-:class:`~mst_cli.geometry.HexCell` of each layer); nothing here stores a number of its own.
+Every dimension is read from :class:`mst_cli.model.geometry.SensorGeometry` (and the
+:class:`~mst_cli.model.geometry.HexCell` of each layer); nothing here stores a number of its own.
 Parts are built in the sensor frame (z up the stack, the magnet axis along z through x = y = 0);
 the mesh files are turned into the print frame (lying on the -y face) when they are written.
 
@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from build123d import Axis, Face, Location, Solid, Wire
 
-from ..geometry import HexCell, SensorGeometry
+from mst_cli.model.geometry import HexCell, SensorGeometry
 
 # Cutting tools that end on an outer face of the part are extended past it by this much, so
 # the boolean never has to resolve two coplanar faces (the result is the same solid).
@@ -31,7 +31,7 @@ def _polygon_xz(points_xz, y_mm: float) -> Wire:
 
 def layer_web(cell: HexCell, z_bottom_mm: float) -> Solid:
     """One collapsible layer: the hex profile (outer hexagon minus its inward offset by t,
-    DESIGN.md section 3) extruded through the whole depth D along y, centred on y = 0.
+    docs/design.md section 3) extruded through the whole depth D along y, centred on y = 0.
 
     The bottom and top pads lie flat on z_bottom and z_bottom + h so that they fuse with the
     base/plate below and the plate/cap above.

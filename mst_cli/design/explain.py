@@ -3,7 +3,7 @@
 The split is deliberate and documented in ``mst design --help``:
 
 * **contradictory input -> exit 2** (:func:`check_contradictions`, raises
-  :class:`~mst_cli.schema.InputError` naming the field): statements in the file that no
+  :class:`~mst_cli.errors.InputError` naming the field): statements in the file that no
   physics can reconcile -- lock forces that do not increase (they are cumulative thresholds,
   R_1 < R_2 < ...), or that increase by less than the file's own ``lock_margin_rel`` allows
   even at the edges of the tolerance; variable bounds that leave no printable cell for the
@@ -23,10 +23,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import geometry as geo
-from ..mechanics.spring import contact_stiffness_N_per_mm
-from ..schema import InputError
-from .problem import DesignProblem
+from mst_cli.model import geometry as geo
+from mst_cli.model.mechanics.spring import contact_stiffness_N_per_mm
+from mst_cli.errors import InputError
+from mst_cli.design.problem import DesignProblem
 
 GRID_POINTS = 41          # per variable, for the printable lock-force range
 ACTIVE_TOL = 0.02         # a scaled constraint within this of zero counts as binding

@@ -23,9 +23,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..schema import OBJECTIVE_TERMS, Document
-from . import ROUND_DECIMALS, DesignResult, design_document, verify_design
-from .problem import DesignProblem
+from mst_cli.io.schema import Document, OBJECTIVE_TERMS
+from mst_cli.design.document import design_document, DesignResult, ROUND_DECIMALS, verify_design
+from mst_cli.design.problem import DesignProblem
 
 # Two designs are the same point of the front when they differ by less than one print layer
 # in height, 2 % in force resolution and 1 percentage point in print robustness: differences a
@@ -101,7 +101,7 @@ def pareto_front(doc: Document, count: int, *, seed: int | None = None, progress
     Fewer than ``count`` designs come back when the spec's free variables do not give that
     many distinct trade-offs (a one-layer spec with tight bounds, say).
     """
-    from .solver import match_once, pareto_weights
+    from mst_cli.design.solver import match_once, pareto_weights
 
     chosen = design_document(doc, seed=seed, progress=progress, max_evaluations=max_evaluations,
                              local=local)

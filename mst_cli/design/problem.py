@@ -16,13 +16,13 @@ Match objective (phase 1)
     of a 0.03 1/N target weigh as much as a 2 % miss of a 0.26 1/N one.
 
 Constraints (g <= 0 is satisfied; every g is scaled to order one)
-    * cell rules of :func:`~mst_cli.geometry.cell_margins_mm` for every layer, in nozzles;
+    * cell rules of :func:`~mst_cli.model.geometry.cell_margins_mm` for every layer, in nozzles;
     * wall slenderness t/L at most the largest t/L L0's corrections were fitted on (0.6);
     * lock order with margin: R_(i+1) >= (1 + lock_margin_rel) R_i, so regime i ends when layer
       i locks and the layers lock bottom to top in file order;
     * chip below saturation: |B| at the last lock <= (1 - saturation_margin_rel) x 50 mT, and
       never above what the MLX90393's coarsest setting reads with the headroom
-      :func:`~mst_cli.magnetometer.choose_setting` keeps;
+      :func:`~mst_cli.model.chip.choose_setting` keeps;
     * optional total height: SensorGeometry.total_height_mm <= design.max_height_mm.
 
 Preference among the designs that meet the targets (phase 2, ``design.objective``)
@@ -50,13 +50,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import geometry as geo
-from .. import magnetometer as mlx
-from ..field import axial_Bz_T, choose_field_model
-from ..mechanics import correction
-from ..mechanics.spring import spring_arrays
-from ..response import field_magnitude_T, regime_kernel
-from ..schema import DEFAULT_OBJECTIVE, OBJECTIVE_TERMS
+from mst_cli.model import geometry as geo
+from mst_cli.model import chip as mlx
+from mst_cli.model.field import axial_Bz_T, choose_field_model
+from mst_cli.model.mechanics import correction
+from mst_cli.model.mechanics.spring import spring_arrays
+from mst_cli.model.response import field_magnitude_T, regime_kernel
+from mst_cli.io.schema import DEFAULT_OBJECTIVE, OBJECTIVE_TERMS
 
 PRINT_ERROR_T_MM = 0.05      # wall-thickness printing error the robustness term guards against
 
@@ -103,7 +103,7 @@ class DesignProblem:
 
     Parameters
     ----------
-    doc : mst_cli.schema.Document
+    doc : mst_cli.io.schema.Document
         A spec: every layer has ``target_sensitivity_per_N`` and ``target_range_N``.
     """
 

@@ -20,10 +20,12 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ..response import simulate
-from ..schema import Document, InputError
-from . import ROUND_DECIMALS, DesignResult, _layer_outputs, design_document, verify_design
-from .problem import DesignProblem
+from mst_cli.model.response import simulate
+from mst_cli.io.schema import Document
+from mst_cli.errors import InputError
+from mst_cli.design.document import (_layer_outputs, design_document, DesignResult, ROUND_DECIMALS,
+                            verify_design)
+from mst_cli.design.problem import DesignProblem
 
 REFINE_MODELS = ("frame", "continuum")
 MAX_ITERATIONS = 6
@@ -75,7 +77,7 @@ def _local_match(problem: DesignProblem, theta, t, h, maxeval: int = LOCAL_MAX_E
     """
     import nlopt
 
-    from .solver import ROUNDING_SAFETY, _nlopt_failures
+    from mst_cli.design.solver import _nlopt_failures, ROUNDING_SAFETY
 
     u0 = np.clip(problem.to_unit(theta, t, h), 0.0, 1.0)
     count = [0]

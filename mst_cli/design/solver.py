@@ -37,7 +37,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .problem import DesignProblem
+from mst_cli.design.problem import DesignProblem
 
 INITIAL_STEP = 0.1           # fraction of every (normalised) variable's range
 MATCH_FRACTION = 0.05        # phase 1 ends when every |error| <= this x tolerance

@@ -1,0 +1,1 @@
+"""Measuring the speed/accuracy ladder (``mst bench``): sampling, timing and error tables."""

@@ -1,0 +1,606 @@
+"""Calibrating a printed sensor against its load test, and the inverse map (issue 11).
+
+A printed sensor differs from its design file: walls come out thicker or thinner, the
+filament's modulus is not the data sheet's, the board sits a little higher or lower, the magnet
+is weaker than its grade. This module fits those few physical parameters to a load test
+(force against field at the chip) with the design's own forward model, and turns the fitted
+model into a monotone map from a reading back to a force.
+
+Parameters (:data:`PARAMETERS`), each with the scale of a typical print or assembly deviation
+(the unit the fit and the identifiability test work in):
+
+* ``modulus_factor``   effective Young's modulus / the design's: every layer's k, R and
+                       locked stiffness scale with it (the L0, L1 and L2 laws are all linear in
+                       E at fixed nu, so d(F; f E) = d(F / f; E) exactly);
+* ``wall_offset_mm``   added to every layer's wall thickness t: changes k (about t^3), the lock
+                       stroke (h - 2t) and the lock force, through the cell and mechanics code;
+* ``gap_offset_mm``    added to the unloaded magnet-to-chip gap;
+* ``remanence_factor`` the magnet's remanence / the design's (the field is linear in it).
+
+Forward prediction: :class:`ForwardModel` builds the perturbed cells with the family's own
+:meth:`~mst_cli.io.schema.CellFamily.cell`, their layer laws (:func:`mst_cli.model.mechanics.layer_law`)
+and the stack, then the field at the chip (:func:`mst_cli.model.field.field_at_chip_T`). The cheap
+``spring`` rung is evaluated directly (a fraction of a millisecond per load test); a dearer rung
+(``frame``, ``continuum``) by output space mapping: the fit runs on the spring stack plus the
+dearer rung's displacement difference at the current wall offset, which is re-evaluated until
+the fitted offset stops moving (so the converged model is the dearer rung's own).
+
+The fit (:func:`fit_parameters`): weighted least squares (scipy ``least_squares``, trust region
+reflective within physical bounds) of |B| in units of the chip's noise. Uncertainties from the
+Jacobian, J^T J, scaled by the reduced chi-square when it exceeds 1 (model error). A parameter
+is *identifiable* when the data fix it to within a third of its typical deviation; the worst
+one that is not is held at the design's value and the fit repeated, until every free parameter
+is identifiable. The singular values of the scaled Jacobian and the correlation matrix are
+reported as well.
+
+The inverse map (:class:`InverseMap`): from |B| to force on the calibrated model's in-range
+branch (no load to the last lock), strictly monotone, with the regime of each entry and the
+local force resolution there; readings beyond the ends (by more than three field resolutions)
+are flagged, never extrapolated.
+
+Pure: no file or terminal I/O.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from mst_cli.model import field as fld
+from mst_cli.model import chip as mlx
+from mst_cli.model.geometry import LENGTH_FLOOR_MM
+from mst_cli.model.mechanics import layer_law
+from mst_cli.model.stack import Stack
+
+# --------------------------------------------------------------------------- parameters
+
+
+@dataclass(frozen=True)
+class Parameter:
+    name: str
+    unit: str
+    nominal: float
+    scale: float            # a typical print/assembly deviation: the fit's unit of this parameter
+    description: str
+
+
+PARAMETERS: dict[str, Parameter] = {p.name: p for p in (
+    Parameter("modulus_factor", "", 1.0, 0.10,
+              "effective Young's modulus / the design's (scales every layer's k, R, k_locked)"),
+    Parameter("wall_offset_mm", "mm", 0.0, 0.05,
+              "added to every layer's wall thickness t (changes k, R and d_lock)"),
+    Parameter("gap_offset_mm", "mm", 0.0, 0.30,
+              "added to the unloaded magnet-to-chip gap"),
+    Parameter("remanence_factor", "", 1.0, 0.05,
+              "magnet remanence / the design's"),
+)}
+DEFAULT_PARAMETERS = tuple(PARAMETERS)
+
+IDENTIFIABLE_STD = 1.0 / 3.0     # std / typical deviation below which a parameter counts as fixed by the data
+MIN_POINTS_PER_PARAMETER = 5     # a load test needs at least this many samples per fitted parameter
+MIN_POINTS = 12
+FAIL_RESIDUAL_REL = 0.05         # fit failed: residual RMS above this fraction of the load test's field span
+MIN_STROKE_MM = 0.05             # a perturbed cell keeps at least this lock stroke and wall
+MAX_SPACE_MAPPING_ITERATIONS = 6
+
+
+class CalibrationFailed(RuntimeError):
+    """The fit itself failed (not the input's form): the message says why."""
+
+
+def parameter_bounds(doc) -> dict[str, tuple[float, float]]:
+    """Physical bounds of each parameter for this design: every perturbed cell keeps a wall and
+    a lock stroke, the gap stays open at full stroke, E and Br stay inside the file format."""
+    a = doc.family.contact_allowance_mm
+    t = np.array([la.t_mm for la in doc.layers])
+    h = np.array([la.h_mm for la in doc.layers])
+    th = np.radians([la.theta_deg for la in doc.layers])
+    p = 0.5 * doc.family.width_mm - 0.5 * h / np.tan(th)          # outer pad half-width
+    wall_lo = max(-0.5, float(np.max(MIN_STROKE_MM - t)))
+    wall_hi = min(0.5, float(np.min(0.5 * (h - a - MIN_STROKE_MM) - t)),
+                  float(np.min((p - MIN_STROKE_MM) / np.tan(0.5 * th) - t)))
+    hs = doc.housing
+    # the gap offset is written into the housing (chip clearance, then pocket floor, then cover)
+    gap_lo = -(hs.chip_clearance_mm + (hs.pocket_floor_mm - 0.01) + (hs.cover_mm - 0.01))
+    E, Br = doc.material.youngs_modulus_MPa, doc.magnet.remanence_T
+    return {
+        "modulus_factor": (max(0.2, 1e-3 / E), min(5.0, 1e5 / E)),
+        "wall_offset_mm": (wall_lo, max(wall_hi, wall_lo + 1e-6)),
+        "gap_offset_mm": (max(gap_lo, -3.0), 5.0),
+        "remanence_factor": (max(0.2, 0.01 / Br), min(1.6, 2.0 / Br)),
+    }
+
+
+def full_values(values: dict) -> dict:
+    """Every parameter: the given values, the others at their nominal (design) values."""
+    return {n: float(values.get(n, p.nominal)) for n, p in PARAMETERS.items()}
+
+
+# --------------------------------------------------------------------------- forward model
+class _Correction:
+    """Output space mapping: d_dear(F) - d_spring(F) at one wall offset, as a function of the
+    force in the design's modulus units (piecewise linear; linear past the last knot)."""
+
+    def __init__(self, wall_offset_mm: float, spring: Stack, dear: Stack):
+        self.wall_offset_mm = wall_offset_mm
+        F_end = max(spring.last_lock_force_N, dear.last_lock_force_N)
+        F = np.unique(np.concatenate([spring.knots_N, dear.knots_N, np.linspace(0.0, F_end, 801)]))
+        self.F = F
+        self.delta = dear.displacement_mm(F) - spring.displacement_mm(F)
+        self.slope = dear.locked_compliance_mm_per_N - spring.locked_compliance_mm_per_N
+
+    def __call__(self, F):
+        F = np.asarray(F, dtype=float)
+        inside = np.interp(F, self.F, self.delta)
+        return np.where(F <= self.F[-1], inside, self.delta[-1] + (F - self.F[-1]) * self.slope)
+
+
+class ForwardModel:
+    """|B| (and the field vector) at the chip for given forces and parameter values."""
+
+    def __init__(self, doc, mechanics: str = "spring", field_model: str | None = None):
+        doc.require_geometry()
+        self.doc = doc
+        self.geometry = doc.geometry()
+        self.mechanics = mechanics
+        g = self.geometry
+        self.field_model = fld.choose_field_model(g.chip_offset_mm, g.magnet_tilt_deg,
+                                                  None if field_model in (None, "auto") else field_model)
+        self.gap0_mm = g.gap0_mm
+        self._stacks: dict[tuple[str, float], Stack] = {}
+        self.correction: _Correction | None = None
+        self.evaluations = 0
+
+    def cells(self, wall_offset_mm: float):
+        fam = self.doc.family
+        return tuple(fam.cell(la.theta_deg, la.t_mm + wall_offset_mm, la.h_mm) for la in self.doc.layers)
+
+    def stack(self, wall_offset_mm: float, mechanics: str = "spring") -> Stack:
+        key = (mechanics, round(float(wall_offset_mm), 12))
+        st = self._stacks.get(key)
+        if st is None:
+            if len(self._stacks) > 256:
+                self._stacks.clear()
+            laws = tuple(layer_law(c, self.doc.material, mechanics) for c in self.cells(wall_offset_mm))
+            st = self._stacks[key] = Stack(laws)
+        return st
+
+    def update_correction(self, wall_offset_mm: float) -> None:
+        """Re-anchor the space mapping at this wall offset (dearer rungs only)."""
+        if self.mechanics != "spring":
+            self.correction = _Correction(wall_offset_mm, self.stack(wall_offset_mm),
+                                          self.stack(wall_offset_mm, self.mechanics))
+
+    def displacement_mm(self, force_N, values: dict):
+        v = full_values(values)
+        F = np.maximum(np.asarray(force_N, dtype=float), 0.0) / v["modulus_factor"]
+        d = self.stack(v["wall_offset_mm"]).displacement_mm(F)
+        if self.correction is not None:
+            d = d + self.correction(F)
+        return d
+
+    def field_T(self, force_N, values: dict):
+        """Field vector (m, 3) at the chip."""
+        v = full_values(values)
+        self.evaluations += 1
+        gap = self.gap0_mm + v["gap_offset_mm"] - self.displacement_mm(force_N, v)
+        g = self.geometry
+        B = fld.field_at_chip_T(np.maximum(gap, LENGTH_FLOOR_MM), g.magnet, self.field_model,
+                                g.chip_offset_mm, g.magnet_tilt_deg)
+        return v["remanence_factor"] * B
+
+    def field_abs_T(self, force_N, values: dict):
+        return np.linalg.norm(self.field_T(force_N, values), axis=-1)
+
+    def last_lock_force_N(self, values: dict) -> float:
+        v = full_values(values)
+        return v["modulus_factor"] * self.stack(v["wall_offset_mm"], self.mechanics).last_lock_force_N
+
+
+# --------------------------------------------------------------------------- the fit
+@dataclass
+class FitResult:
+    names: tuple[str, ...]              # parameters fitted (identifiable ones)
+    values: dict                        # every parameter (held ones at the design's value)
+    std: dict                           # 1-sigma uncertainty of each fitted parameter
+    identifiable: dict                  # fitted parameter -> whether the data fix it (IDENTIFIABLE_STD)
+    held: dict                          # parameter -> why it was held at the design's value
+    correlation: list                   # among the fitted parameters (their order)
+    singular_values: list               # of the Jacobian in units of noise and typical deviation
+    first_pass: dict                    # the fit of every requested parameter: std in typical deviations
+    residual_T: np.ndarray              # measured |B| - model |B| per sample
+    sigma_T: float
+    chi2_reduced: float
+    evaluations: int
+    iterations: int                     # space-mapping iterations (1 for spring)
+    message: str
+    model: ForwardModel = field(repr=False)
+
+    @property
+    def residual_rms_T(self) -> float:
+        return float(np.sqrt(np.mean(self.residual_T ** 2)))
+
+
+def _solve(model: ForwardModel, force_N, B_abs_T, sigma_T, names, start: dict, bounds: dict,
+           max_nfev: int = 400):
+    from scipy.optimize import least_squares
+
+    P = [PARAMETERS[n] for n in names]
+    x0 = np.array([(start[n] - p.nominal) / p.scale for n, p in zip(names, P)])
+    lo = np.array([(bounds[n][0] - p.nominal) / p.scale for n, p in zip(names, P)])
+    hi = np.array([(bounds[n][1] - p.nominal) / p.scale for n, p in zip(names, P)])
+    x0 = np.clip(x0, lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo))
+    fixed = {n: v for n, v in start.items() if n not in names}
+
+    def values_of(x):
+        return {**fixed, **{n: p.nominal + p.scale * xi for n, p, xi in zip(names, P, x)}}
+
+    def residual(x):
+        return (model.field_abs_T(force_N, values_of(x)) - B_abs_T) / sigma_T
+
+    res = least_squares(residual, x0, bounds=(lo, hi), method="trf", x_scale=1.0,
+                        diff_step=1e-6, xtol=1e-10, ftol=1e-10, gtol=1e-10, max_nfev=max_nfev)
+    at_bound = [n for n, xi, a, b in zip(names, res.x, lo, hi)
+                if min(xi - a, b - xi) < 1e-6 * (b - a) and res.active_mask[names.index(n)] != 0]
+    return res, values_of(res.x), at_bound
+
+
+MECHANICAL = ("modulus_factor", "wall_offset_mm")
+GRID_MODULUS = np.geomspace(0.6, 1.6, 7)
+GRID_WALL_MM = np.linspace(-0.15, 0.15, 7)
+GRID_MAX_SAMPLES = 300
+
+
+def _global_start(model, force_N, B_abs_T, sigma_T, names, bounds) -> dict:
+    """A start in the right basin. The load curve has kinks where layers lock, so the cost has
+    local minima in the mechanical parameters (a lock point matched to the wrong one): scan a
+    grid of modulus factor x wall offset, fitting only the field parameters at each node, then
+    polish the best few nodes with every parameter free and keep the best."""
+    if len(force_N) > GRID_MAX_SAMPLES:         # the scan needs the curve's shape, not every sample
+        keep = np.argsort(force_N)[np.linspace(0, len(force_N) - 1, GRID_MAX_SAMPLES).astype(int)]
+        force_N, B_abs_T = force_N[keep], B_abs_T[keep]
+    grid_names = [n for n in MECHANICAL if n in names]
+    inner = tuple(n for n in names if n not in MECHANICAL)
+    axes = {"modulus_factor": GRID_MODULUS, "wall_offset_mm": GRID_WALL_MM}
+    nodes = [{}]
+    for n in grid_names:
+        lo, hi = bounds[n]
+        vals = np.unique(np.clip(axes[n], lo, hi))
+        nodes = [{**node, n: float(v)} for node in nodes for v in vals]
+    scored = []
+    for node in nodes:
+        start = full_values(node)
+        if inner:
+            res, values, _ = _solve(model, force_N, B_abs_T, sigma_T, inner, start, bounds, max_nfev=30)
+            cost = res.cost
+        else:
+            values = start
+            cost = 0.5 * np.sum(((model.field_abs_T(force_N, start) - B_abs_T) / sigma_T) ** 2)
+        scored.append((float(cost), values))
+    scored.sort(key=lambda cv: cv[0])
+    best = None
+    for _, values in scored[:3]:
+        res, vals, _ = _solve(model, force_N, B_abs_T, sigma_T, tuple(names), values, bounds, max_nfev=100)
+        if best is None or res.cost < best[0]:
+            best = (res.cost, vals)
+    return full_values(best[1])
+
+
+def _uncertainty(jac, chi2_red):
+    """Covariance of the scaled parameters from the Jacobian (SVD; a zero singular value gives
+    an infinite variance along its direction)."""
+    _, s, vt = np.linalg.svd(jac, full_matrices=False)
+    with np.errstate(divide="ignore"):
+        inv = np.where(s > 1e-12 * max(s.max(initial=0.0), 1e-300), 1.0 / s ** 2, np.inf)
+    cov = (vt.T * inv) @ vt if np.all(np.isfinite(inv)) else np.full((len(s), len(s)), np.inf)
+    cov = cov * max(chi2_red, 1.0)
+    if not np.all(np.isfinite(cov)):
+        n = len(s)
+        std = np.full(n, np.inf)
+        corr = np.full((n, n), np.nan)
+    else:
+        std = np.sqrt(np.clip(np.diag(cov), 0.0, None))
+        with np.errstate(invalid="ignore", divide="ignore"):
+            corr = cov / np.outer(std, std)
+    return s, std, corr
+
+
+def fit_parameters(doc, force_N, B_abs_T, sigma_T: float, names=DEFAULT_PARAMETERS,
+                   mechanics: str = "spring", field_model: str | None = None) -> FitResult:
+    """Fit ``names`` to a load test (forces in N, |B| in T, per-sample noise sigma in T).
+
+    Raises :class:`CalibrationFailed` when the optimiser fails, a parameter ends on its physical
+    bound, or the fitted model still misses the data by more than :data:`FAIL_RESIDUAL_REL` of
+    the load test's field span.
+    """
+    force_N = np.asarray(force_N, dtype=float)
+    B_abs_T = np.asarray(B_abs_T, dtype=float)
+    names = tuple(names)
+    unknown = [n for n in names if n not in PARAMETERS]
+    if unknown:
+        raise ValueError(f"unknown calibration parameter(s) {unknown}; choose from {', '.join(PARAMETERS)}")
+    model = ForwardModel(doc, mechanics, field_model)
+    bounds = parameter_bounds(doc)
+    span_T = float(np.ptp(B_abs_T))
+    if span_T <= 0:
+        raise CalibrationFailed("the field does not change over the load test: nothing to fit")
+    rho = np.corrcoef(force_N, B_abs_T)[0, 1] if np.ptp(force_N) > 0 else 0.0
+    if not rho > 0:
+        raise CalibrationFailed(f"|B| falls as the force rises (correlation {rho:.2f}): the magnet "
+                                "moves towards the chip under load in every design, so this load "
+                                "test does not belong to this sensor (or its columns are swapped)")
+
+    start = _global_start(model, force_N, B_abs_T, sigma_T, names, bounds)
+    free = list(names)
+    held: dict[str, str] = {}
+    first_pass: dict = {}
+    iterations = 0
+    while True:
+        model.correction = None
+        model.update_correction(start["wall_offset_mm"])
+        values = start
+        for iterations in range(1, MAX_SPACE_MAPPING_ITERATIONS + 1):
+            res, values, at_bound = _solve(model, force_N, B_abs_T, sigma_T, tuple(free), values, bounds)
+            if model.mechanics == "spring" or model.correction is None:
+                break
+            if abs(values["wall_offset_mm"] - model.correction.wall_offset_mm) < 1e-4:
+                break
+            model.update_correction(values["wall_offset_mm"])
+        if res.status <= 0:
+            raise CalibrationFailed(f"the least-squares fit did not converge ({res.message})")
+        n, p = len(force_N), len(free)
+        chi2_red = float(2.0 * res.cost / max(n - p, 1))
+        s, std, corr = _uncertainty(res.jac, chi2_red)
+        if not first_pass:
+            first_pass = {"parameters": list(free), "std_in_typical_deviations": [float(v) for v in std],
+                          "singular_values": [float(v) for v in s],
+                          "correlation": [[None if not math.isfinite(c) else float(c) for c in row]
+                                          for row in np.atleast_2d(corr)]}
+        worst = int(np.argmax(std))
+        if std[worst] > IDENTIFIABLE_STD and len(free) > 1:
+            name = free.pop(worst)
+            held[name] = (f"not identifiable from this load test: the data fix it only to "
+                          f"+-{std[worst]:.3g} x its typical deviation ({PARAMETERS[name].scale:g}"
+                          f"{' ' + PARAMETERS[name].unit if PARAMETERS[name].unit else ''}); held at the "
+                          f"design's value")
+            start = full_values({k: v for k, v in values.items() if k in free})
+            continue
+        break
+
+    for name in at_bound:
+        if name in free:
+            raise CalibrationFailed(
+                f"{name} ended on its physical bound ({values[name]:.4g}, allowed "
+                f"{bounds[name][0]:.4g}..{bounds[name][1]:.4g}): the design file does not describe "
+                "the sensor of this load test")
+    residual = B_abs_T - model.field_abs_T(force_N, values)
+    rms = float(np.sqrt(np.mean(residual ** 2)))
+    if rms > FAIL_RESIDUAL_REL * span_T:
+        raise CalibrationFailed(
+            f"the fitted model misses the load test by {rms * 1e6:.4g} uT RMS, "
+            f"{100 * rms / span_T:.3g} % of the field's span {span_T * 1e6:.4g} uT (limit "
+            f"{100 * FAIL_RESIDUAL_REL:g} %): the design file does not describe this sensor, or the "
+            "load test mixes loading and unloading, off-axis or slipping loads")
+    std_named = {nm: float(sd * PARAMETERS[nm].scale) for nm, sd in zip(free, std)}
+    return FitResult(
+        names=tuple(free), values=full_values(values), std=std_named,
+        identifiable={nm: bool(sd <= IDENTIFIABLE_STD) for nm, sd in zip(free, std)}, held=held,
+        correlation=[[float(c) for c in row] for row in np.atleast_2d(corr)],
+        singular_values=[float(v) for v in s], first_pass=first_pass, residual_T=residual,
+        sigma_T=float(sigma_T), chi2_reduced=chi2_red, evaluations=model.evaluations,
+        iterations=iterations, message=str(res.message), model=model)
+
+
+# --------------------------------------------------------------------------- calibrated design
+def apply_parameters(doc, values: dict, name: str | None = None, mechanics: str | None = None):
+    """The design document with the fitted values written into its own keys, and a list of the
+    edits made (each a sentence). Loadable by ``mst simulate`` (same rules, same model).
+
+    * modulus_factor    -> material.youngs_modulus_MPa
+    * wall_offset_mm    -> every layers[i].t_mm (and printer.min_wall_mm / min_gap_mm / nozzle_mm
+                           lowered when a thinner wall or cavity would break their rules: this
+                           file models the sensor as printed, it is not a file to print)
+    * gap_offset_mm     -> housing.chip_clearance_mm (what remains below zero from
+                           housing.pocket_floor_mm, then housing.cover_mm)
+    * remanence_factor  -> magnet.remanence_T
+    """
+    from mst_cli.model import geometry as geo
+    from mst_cli.io.schema import LayerEntry
+
+    v = full_values(values)
+    edits = []
+    material = replace(doc.material, youngs_modulus_MPa=doc.material.youngs_modulus_MPa * v["modulus_factor"])
+    if v["modulus_factor"] != 1.0:
+        edits.append(f"material.youngs_modulus_MPa {doc.material.youngs_modulus_MPa:g} -> "
+                     f"{material.youngs_modulus_MPa:.6g}")
+    dt = v["wall_offset_mm"]
+    layers = tuple(replace(la, t_mm=round(la.t_mm + dt, 9)) if la.t_mm is not None else la
+                   for la in doc.layers)
+    if dt:
+        edits.append(f"layers[*].t_mm {dt:+.4g} mm")
+    magnet = replace(doc.magnet, remanence_T=doc.magnet.remanence_T * v["remanence_factor"])
+    if v["remanence_factor"] != 1.0:
+        edits.append(f"magnet.remanence_T {doc.magnet.remanence_T:g} -> {magnet.remanence_T:.6g}")
+
+    hs = doc.housing
+    left = v["gap_offset_mm"]
+    new = {}
+    clearance = hs.chip_clearance_mm + left
+    if clearance >= 0:
+        new["chip_clearance_mm"] = clearance
+    else:
+        new["chip_clearance_mm"] = 0.0
+        left = clearance
+        for key in ("pocket_floor_mm", "cover_mm"):
+            take = max(left, -(getattr(hs, key) - 0.01))
+            new[key] = getattr(hs, key) + take
+            left -= take
+        if left < -1e-12:
+            raise CalibrationFailed(f"gap_offset_mm {v['gap_offset_mm']:.4g} cannot be written into "
+                                    "the housing keys (it would need negative clearances)")
+    new = {k: round(val, 9) for k, val in new.items()}
+    housing = replace(hs, **new)
+    if v["gap_offset_mm"]:
+        edits.append("housing." + ", housing.".join(f"{k} {getattr(hs, k):g} -> {val:.6g}" for k, val in new.items())
+                     + f" (gap offset {v['gap_offset_mm']:+.4g} mm)")
+
+    pr = doc.printer
+    t_min = min(la.t_mm for la in layers)
+    cav_min = min(la.h_mm - 2 * la.t_mm for la in layers)
+    pad_min = min(float(geo.inner_pad_half_width_mm(math.radians(la.theta_deg), la.t_mm, la.h_mm,
+                                                    doc.family.width_mm)) for la in layers)
+    printer = replace(pr, min_wall_mm=min(pr.min_wall_mm, round(math.floor(t_min * 1e4) / 1e4, 4)),
+                      min_gap_mm=min(pr.min_gap_mm, round(math.floor(cav_min * 1e4) / 1e4, 4)),
+                      nozzle_mm=min(pr.nozzle_mm, max(0.05, round(math.floor(pad_min * 1e4) / 1e4, 4))))
+    for key in ("min_wall_mm", "min_gap_mm", "nozzle_mm"):
+        if getattr(printer, key) != getattr(pr, key):
+            edits.append(f"printer.{key} {getattr(pr, key):g} -> {getattr(printer, key):g} (the as-printed "
+                         "cells are thinner than the printing rules: this file models the print, do not print it)")
+    out = replace(doc, name=name or doc.name, layers=layers, material=material, magnet=magnet,
+                  housing=housing, printer=printer,
+                  mechanics=mechanics or doc.mechanics, accuracy_rel=None)
+    assert all(isinstance(la, LayerEntry) for la in out.layers)
+    return out, edits
+
+
+# --------------------------------------------------------------------------- inverse map
+FLAGS = ("ok", "above_calibrated", "below_range", "above_range", "saturated")
+# above_calibrated: inside the model's range but above the largest force of the load test (the
+# force is given: the fitted physics carries it there, but no sample checked it)
+END_TOLERANCE_SIGMA = 3.0        # readings within this many field resolutions of an end are clamped to it
+
+
+@dataclass
+class InverseMap:
+    """Monotone |B| -> force on one model's in-range branch (no load to the last lock)."""
+
+    force_N: np.ndarray             # ascending, 0 .. last lock force
+    B_abs_T: np.ndarray             # strictly ascending
+    Bz_T: np.ndarray                # the z component at the same forces (signed)
+    edges_N: np.ndarray             # regime edges 0, R_1, ..., R_n
+    field_resolution_T: float       # noise or LSB, the larger
+    chip_setting: mlx.ChipSetting | None
+    calibrated_to_N: float | None = None    # the load test's largest force (None: not calibrated)
+
+    @property
+    def n_regimes(self) -> int:
+        return len(self.edges_N) - 1
+
+    @property
+    def tolerance_T(self) -> float:
+        return END_TOLERANCE_SIGMA * self.field_resolution_T
+
+    def regime_of(self, force_N):
+        F = np.asarray(force_N, dtype=float)
+        return np.clip(np.searchsorted(self.edges_N, F, side="right"), 1, self.n_regimes)
+
+    def local_resolution_N(self, force_N=None):
+        """Force resolution at each grid point (or at given forces): field resolution over the
+        smaller of the two neighbouring secant slopes d|B|/dF (the worse side)."""
+        dB = np.diff(self.B_abs_T) / np.maximum(np.diff(self.force_N), 1e-300)
+        left = np.concatenate([[dB[0]], dB])
+        right = np.concatenate([dB, [dB[-1]]])
+        res = self.field_resolution_T / np.minimum(left, right)
+        if force_N is None:
+            return res
+        return np.interp(np.asarray(force_N, dtype=float), self.force_N, res)
+
+    def force(self, B_abs_T, saturated=None):
+        """(force_N with NaN where flagged, regime (0 where flagged), flag strings)."""
+        B = np.asarray(B_abs_T, dtype=float)
+        F = np.interp(B, self.B_abs_T, self.force_N)
+        flag = np.full(B.shape, "ok", dtype=object)
+        tol = self.tolerance_T
+        if self.calibrated_to_N is not None:
+            B_cal = float(np.interp(self.calibrated_to_N, self.force_N, self.B_abs_T))
+            flag[B > B_cal + tol] = "above_calibrated"
+        flag[B < self.B_abs_T[0] - tol] = "below_range"
+        flag[B > self.B_abs_T[-1] + tol] = "above_range"
+        if saturated is not None:
+            flag[np.asarray(saturated, dtype=bool)] = "saturated"
+        bad = (flag != "ok") & (flag != "above_calibrated")
+        F = np.where(bad, np.nan, F)
+        regime = np.where(bad, 0, self.regime_of(np.where(bad, 0.0, F)))
+        return F, regime, flag
+
+    def table(self, n: int = 256):
+        """n entries evenly spaced in |B| from no load to the last lock: (|B|, Bz, F, regime,
+        resolution)."""
+        B = np.linspace(self.B_abs_T[0], self.B_abs_T[-1], n)
+        F = np.interp(B, self.B_abs_T, self.force_N)
+        F[0], F[-1] = self.force_N[0], self.force_N[-1]
+        Bz = np.interp(F, self.force_N, self.Bz_T)
+        return B, Bz, F, self.regime_of(np.minimum(F, self.edges_N[-1] * (1 - 1e-12))), self.local_resolution_N(F)
+
+    def z_code_table(self, setting: mlx.ChipSetting, n_max: int = 256):
+        """Entries evenly spaced in |Z code| at ``setting``, from no load to the last lock:
+        (codes, force_N, regime, resolution_N). CalibrationFailed if |Bz| is not monotone in
+        force (an off-axis chip far from the axis): no Z-only table can then exist."""
+        Bz = np.abs(self.Bz_T)
+        if not np.all(np.diff(Bz) > 0):
+            raise CalibrationFailed("|Bz| is not strictly increasing with force on this model: a "
+                                    "table indexed by the Z code alone cannot exist")
+        lsb = setting.z_uT_per_lsb * 1e-6
+        c0 = int(math.ceil(Bz[0] / lsb))
+        c1 = int(math.floor(Bz[-1] / lsb))
+        if c1 - c0 < 2:
+            raise CalibrationFailed(f"the field changes by only {c1 - c0} LSB over the whole range at "
+                                    f"GAIN_SEL {setting.gain_sel}, RES {setting.res}")
+        codes = np.unique(np.rint(np.linspace(c0, c1, min(n_max, c1 - c0 + 1))).astype(np.int64))
+        F = np.interp(codes * lsb, Bz, self.force_N)
+        # resolution in force of one field resolution at the chip's z setting
+        dBz = np.gradient(Bz, self.force_N)
+        res_T = max(self.field_resolution_T, lsb)
+        res = res_T / np.maximum(np.interp(F, self.force_N, dBz), 1e-300)
+        res = np.maximum(res, self.local_resolution_N(F) * res_T / self.field_resolution_T)
+        return codes, F, self.regime_of(np.minimum(F, self.edges_N[-1] * (1 - 1e-12))), res
+
+    @classmethod
+    def from_response(cls, resp) -> "InverseMap":
+        """From a :class:`~mst_cli.model.response.Response` (the same model ``mst simulate`` runs)."""
+        keep = resp.in_range
+        F = resp.force_N[keep]
+        B = resp.B_abs_T[keep]
+        Bz = resp.B_T[keep, 2]
+        # zero-width regimes and repeated edges: keep the first of equal forces
+        F, idx = np.unique(F, return_index=True)
+        B, Bz = B[idx], Bz[idx]
+        if not np.all(np.diff(B) > 0):
+            raise CalibrationFailed("|B| is not strictly increasing with force on this model: no "
+                                    "monotone map from reading to force exists")
+        edges = np.array([0.0] + [r.force_to_N for r in resp.regimes])
+        return cls(F, B, Bz, edges, float(resp.field_resolution_T) if math.isfinite(resp.field_resolution_T)
+                   else 1e-6 * resp.noise_uT_rms, resp.chip_setting)
+
+
+def inverse_map(doc, mechanics: str = "spring", field_model: str | None = None,
+                points_per_regime: int = 600) -> tuple[InverseMap, object]:
+    """The inverse map of a design document, and the response it came from."""
+    from mst_cli.model.response import simulate
+
+    resp = simulate(doc.geometry(), doc.material, mechanics=mechanics,
+                    field_model=None if field_model in (None, "auto") else field_model,
+                    noise_uT_rms=doc.noise_uT_rms, points_per_regime=points_per_regime)
+    return InverseMap.from_response(resp), resp
+
+
+def field_sigma_T(noise_uT_rms: float, setting: mlx.ChipSetting | None) -> float:
+    """Per-sample standard deviation of a |B| reading: chip noise and LSB rounding."""
+    lsb = setting.z_uT_per_lsb if setting is not None else 0.0
+    return 1e-6 * math.sqrt(noise_uT_rms ** 2 + lsb ** 2 / 12.0) if (noise_uT_rms or lsb) else 1e-6
+
+
+LIMITATIONS = (
+    "hysteresis: TPU is viscoelastic; the model and the table are one elastic loading curve, so "
+    "readings while the load relaxes or cycles differ by the material's hysteresis",
+    "unloading: the table follows the loading branch; on unloading the cells reopen later and "
+    "the same field means a smaller force",
+    "off-axis loads: the model has one force along the stack axis; a tilted, off-centre or "
+    "shear load moves the magnet sideways and changes the field without the axial force",
+    "beyond the last lock: all layers are closed and the field barely changes; readings above "
+    "the table's last entry are flagged, not extrapolated",
+    "drift: temperature (the MLX90393's TCMP is off in the assumed HALLCONF), the Earth's and "
+    "nearby fields, creep and wear of the print shift the unloaded reading; re-zero or re-calibrate",
+)

@@ -1,0 +1,32 @@
+"""``mst bench``: the measured speed/accuracy table of the model ladder."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+
+
+@click.command()
+@click.option("--samples", type=click.IntRange(min=1, max=500), default=24, show_default=True,
+              help="Number of seeded valid designs across the bounds.")
+@click.option("--seed", type=int, default=0, show_default=True, help="Random seed of the sample.")
+@click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), default=None,
+              help="Output folder [default: ./mst-out/bench/].")
+@click.option("--quick", is_flag=True, help="Skip the L2 mesh-convergence study.")
+def bench(samples, seed, out_dir, quick):
+    """Measure every mechanics rung (spring, frame) and field model against the reference
+    (continuum FE; magpylib) and write bench.md, bench.json and bench.png (error vs time)."""
+    from mst_cli.bench.ladder_bench import bench_markdown, plot_bench, run_bench
+    from mst_cli.cli.common import default_out_dir
+    from mst_cli.io.outputs import staged
+
+    result = run_bench(samples=samples, seed=seed, quick=quick)
+    out = out_dir or default_out_dir("bench")
+    md = bench_markdown(result)
+    with staged(out) as st:
+        st.write_json("bench.json", result)
+        st.write_text("bench.md", md)
+        plot_bench(result, st.path("bench.png"))
+    click.echo(md)
+    click.echo(f"wrote {out}/bench.md, bench.json, bench.png")

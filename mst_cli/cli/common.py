@@ -1,0 +1,133 @@
+"""What every ``mst`` command shares: exit codes, the one-line error contract, the group class
+and the design-file loader.
+
+Exit codes (docs/design.md section 5): 0 success, 1 targets not met / checks failed, 2 invalid
+input (one line naming the field, the value and what is allowed). Command modules import from
+here; nothing here imports a command.
+"""
+
+from __future__ import annotations
+
+import errno
+import functools
+import json
+import os
+import sys
+from pathlib import Path
+
+import click
+
+
+EXIT_TARGETS, EXIT_INPUT = 1, 2  # success is a normal return (0)
+EXIT_FAULT = 1                   # the machine failed (full disk, I/O error): not the input's fault
+
+# errno values that are the machine's fault rather than a bad path: exit 1, not 2
+MACHINE_FAULTS = frozenset(getattr(errno, name) for name in (
+    "ENOSPC", "EDQUOT", "EIO", "ENOMEM", "EMFILE", "ENFILE", "EFBIG", "EAGAIN", "EBUSY",
+    "ETXTBSY", "ESTALE", "ENOLCK", "EREMOTEIO", "ENOBUFS", "EINTR") if hasattr(errno, name))
+
+
+def one_line(text: str) -> str:
+    """``text`` with every control character escaped: what goes to stderr is always one line."""
+    return "".join(c if c.isprintable() or c == " " else repr(c)[1:-1] for c in str(text))
+
+
+def fail_input(message: str) -> None:
+    click.echo(one_line(f"mst: invalid input: {message}"), err=True)
+    sys.exit(EXIT_INPUT)
+
+
+def os_error_line(exc: OSError) -> tuple[str, int]:
+    """(one line naming the path and the errno reason, exit code) of a file-system error."""
+    code = EXIT_FAULT if exc.errno in MACHINE_FAULTS else EXIT_INPUT
+    name = errno.errorcode.get(exc.errno, "") if exc.errno is not None else ""
+    reason = exc.strerror or (os.strerror(exc.errno) if exc.errno else str(exc))
+    paths = " -> ".join(str(p) for p in (exc.filename, exc.filename2) if p is not None) or "(unknown path)"
+    kind = "system error" if code == EXIT_FAULT else "invalid path"
+    return one_line(f"mst: {kind}: {paths}: {reason}" + (f" ({name})" if name else "")), code
+
+
+def handles_input_errors(func):
+    """Turn :class:`~mst_cli.errors.InputError` into one line on stderr and exit code 2, and an
+    OSError into one line naming the path and the errno reason (exit 2 for a bad path, 1 for a
+    machine fault such as a full disk). The group (:class:`MstGroup`) does the same for any
+    command without this decorator."""
+    @functools.wraps(func)
+    def wrapper(*args, **kwargs):
+        from mst_cli.errors import InputError
+        try:
+            return func(*args, **kwargs)
+        except InputError as exc:
+            fail_input(str(exc))
+        except OSError as exc:
+            if exc.errno == errno.EPIPE:
+                raise                     # click closes stdout quietly
+            line, code = os_error_line(exc)
+            click.echo(line, err=True)
+            sys.exit(code)
+    return wrapper
+
+
+class MstGroup(click.Group):
+    """click's group with the tool's one-line error contract: usage errors (unknown option, bad
+    value, missing argument, a folder where a file belongs) are one line ``mst: usage error: ...``
+    and exit 2; an interrupt is one line and exit 128 + signal. ``--help`` and ``--version`` are
+    click's own."""
+
+    def main(self, args=None, prog_name=None, complete_var=None, standalone_mode=True, **extra):
+        if not standalone_mode:
+            return super().main(args, prog_name, complete_var, standalone_mode=False, **extra)
+        from mst_cli.io.outputs import Interrupted
+        from mst_cli.errors import InputError
+        try:
+            rv = super().main(args, prog_name or "mst", complete_var, standalone_mode=False, **extra)
+        except click.exceptions.NoArgsIsHelpError as exc:
+            exc.show()                    # bare 'mst': the help, as click prints it
+            sys.exit(exc.exit_code)
+        except click.UsageError as exc:
+            where = exc.ctx.command_path if exc.ctx is not None else "mst"
+            click.echo(one_line(f"mst: usage error: {exc.format_message()} "
+                                f"(see '{where} --help')"), err=True)
+            sys.exit(exc.exit_code)
+        except click.ClickException as exc:
+            click.echo(one_line(f"mst: {exc.format_message()}"), err=True)
+            sys.exit(exc.exit_code)
+        except click.Abort:               # Ctrl-C (SIGINT) or end of input at a prompt
+            click.echo("mst: interrupted (SIGINT): nothing half-written was left", err=True)
+            sys.exit(130)
+        except Interrupted as exc:
+            click.echo(f"mst: interrupted ({exc.name}): nothing half-written was left", err=True)
+            sys.exit(exc.code)
+        except InputError as exc:
+            fail_input(str(exc))
+        except OSError as exc:
+            line, code = os_error_line(exc)
+            click.echo(line, err=True)
+            sys.exit(code)
+        except ValueError as exc:
+            if "null byte" not in str(exc):   # only os's refusal of a NUL in a path (in-process
+                raise                         # callers; argv cannot hold one)
+            click.echo("mst: invalid path: a path argument holds a NUL byte (EINVAL)", err=True)
+            sys.exit(EXIT_INPUT)
+        sys.exit(rv if isinstance(rv, int) and not isinstance(rv, bool) else 0)
+
+
+def default_out_dir(name: str) -> Path:
+    return Path("mst-out") / name
+
+
+def write_simulation(doc, geometry, resp, out_dir: Path, extra_files=None, extra_report=None, more=None):
+    """report.json, response.csv, response.png (+ extra YAML files, + whatever ``more(staging)``
+    writes) into out_dir, atomically."""
+    from mst_cli.io.outputs import staged
+    from mst_cli.io.report import plot_response, report_dict, response_csv
+
+    with staged(out_dir) as st:
+        for name, data in (extra_files or {}).items():
+            st.write_yaml(name, data)
+        st.write_json("report.json", report_dict(doc, geometry, resp, extra_report))
+        st.write_text("response.csv", response_csv(resp))
+        plot_response(resp, st.path("response.png"), title=doc.name)
+        if more is not None:
+            more(st)
+    return out_dir

@@ -1,0 +1,171 @@
+"""``mst design``: inverse design from target sensitivities and force ranges (nlopt)."""
+
+from __future__ import annotations
+
+import json
+import sys
+import time
+from pathlib import Path
+
+import click
+
+from mst_cli.cli.common import default_out_dir, handles_input_errors, write_simulation
+
+
+class _Progress:
+    """A compact progress line on stderr: live on a terminal, a line every few seconds otherwise.
+
+    Short runs (the usual case, well under a second) print nothing.
+    """
+
+    def __init__(self, quiet: bool):
+        self.quiet = quiet
+        self.tty = sys.stderr.isatty()
+        self.t0 = time.monotonic()
+        self.last = self.t0
+        self.shown = False
+
+    def __call__(self, done, total, phase, worst_err):
+        if self.quiet:
+            return
+        now = time.monotonic()
+        if now - self.t0 < 1.0 or now - self.last < (0.2 if self.tty else 5.0):
+            return
+        self.last = now
+        width = 24
+        fill = int(width * done / max(total, 1))
+        line = (f"mst design: [{'#' * fill}{'.' * (width - fill)}] {done}/{total} evaluations, "
+                f"{phase}, worst error {100 * worst_err:.2f} %")
+        if self.tty:
+            click.echo("\r" + line, err=True, nl=False)
+            self.shown = True
+        else:
+            click.echo(line, err=True)
+
+    def close(self):
+        if self.shown:
+            click.echo("", err=True)
+
+
+@click.command()
+@click.argument("spec_file", type=click.Path(dir_okay=False, path_type=Path))
+@click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), default=None,
+              help="Output folder [default: ./mst-out/<name>/].")
+@click.option("--seed", type=click.IntRange(min=0), default=None,
+              help="Seed of the random starts [default: the file's design.seed, else 0]. "
+                   "Same spec and seed give a byte-identical design.yaml.")
+@click.option("--max-evaluations", type=click.IntRange(min=10), default=None,
+              help="Budget of candidate evaluations [default: design.max_evaluations, else 20000].")
+@click.option("--refine", type=click.Choice(["frame", "continuum"]), default=None,
+              help="Polish the L0 optimum with a dearer mechanics model (output space mapping: "
+                   "L0 targets corrected by the dear model's miss, L0 re-solved, repeated); every "
+                   "achieved number then comes from that model [default: model.accuracy_rel's "
+                   "pick, else model.mechanics if not spring, else no refinement].")
+@click.option("--pareto", "pareto_count", type=click.IntRange(min=2, max=60), default=None, metavar="N",
+              help="Also map the trade among designs that meet the targets: up to N non-dominated "
+                   "designs over total height, worst force resolution and print robustness, "
+                   "written to pareto.csv (one design per row, units in the header) and "
+                   "pareto.png, the chosen one (design.objective's weights) marked.")
+@click.option("--pareto-designs", is_flag=True,
+              help="With --pareto: also write every front design as pareto/design-NN.yaml.")
+@click.option("--quiet", "-q", is_flag=True, help="No table and no progress; exit code and files only.")
+@click.option("--json", "as_json", is_flag=True, help="Print report.json to stdout instead of the table.")
+@handles_input_errors
+def design(spec_file, out_dir, seed, max_evaluations, refine, pareto_count, pareto_designs, quiet, as_json):
+    """Find theta, t, h of every layer so that the sensor meets SPEC_FILE's targets.
+
+    Per layer the spec gives a target sensitivity S (dB/B0 per newton, secant over the
+    regime) and the force R at which that layer locks (the regime's end). Three variables
+    per layer meet two targets; the spare freedom picks the design whose S and R change
+    least when every wall is printed 0.05 mm off (reported per layer). Every achieved number
+    comes from re-running the forward model (mst simulate) on the written design.
+
+    Writes design.yaml (loadable by mst simulate and mst export), report.json,
+    response.csv and response.png.
+
+    With --refine frame|continuum (or model.accuracy_rel asking for a dearer rung, or
+    model.mechanics: frame|continuum) the fast L0 optimum is polished for that model and the
+    targets are judged by it; report.json's refinement section lists the iterations.
+
+    \b
+    Exit codes:
+      0  every target within the tolerance (design.tolerance_rel, default 2 %)
+      1  physically unreachable: the nearest design is written and the binding
+         target or constraint is named (field change the magnet cannot give,
+         forces outside what printable walls reach, S rising with force, ...)
+      2  invalid or self-contradictory spec (e.g. ranges that do not increase)
+    """
+    from dataclasses import replace
+
+    from mst_cli.design import design_document
+    from mst_cli.model.ladder import choose_mechanics
+    from mst_cli.io.report import report_dict
+    from mst_cli.errors import InputError
+    from mst_cli.io.schema import load_document
+
+    doc = load_document(spec_file)
+    from mst_cli.io.outputs import check_out_dir
+    check_out_dir(out_dir or default_out_dir(doc.name))   # a bad output path: refused before any work
+    if pareto_designs and pareto_count is None:
+        raise InputError("--pareto-designs", True, "needs --pareto N")
+    choice = choose_mechanics(refine, doc.accuracy_rel, doc.mechanics)
+    if pareto_count is not None and choice.mechanics != "spring":
+        raise InputError("--pareto", pareto_count, f"maps the front with the L0 spring model; drop "
+                         f"--refine/model.accuracy_rel (asked for {choice.mechanics}) or refine one "
+                         f"front design afterwards with --pareto-designs and mst design --refine")
+    if choice.message() and not (quiet or as_json):
+        click.echo(choice.message() + ("" if choice.mechanics == "spring"
+                                       else f": L0 design refined with {choice.mechanics}"))
+    progress = _Progress(quiet or as_json)
+    front = None
+    t_start = time.perf_counter()
+    try:
+        if pareto_count is not None:
+            from mst_cli.design.pareto import pareto_front
+            result, front = pareto_front(replace(doc, mechanics="spring"), pareto_count, seed=seed,
+                                         max_evaluations=max_evaluations, progress=progress)
+        elif choice.mechanics == "spring":
+            result = design_document(replace(doc, mechanics="spring"), seed=seed,
+                                     max_evaluations=max_evaluations, progress=progress)
+        else:
+            from mst_cli.design.refine import refine_document
+            result = refine_document(doc, choice.mechanics, seed=seed,
+                                     max_evaluations=max_evaluations, progress=progress)
+    finally:
+        progress.close()
+    out = out_dir or default_out_dir(doc.name)
+    extra = result.report_extra()
+    extra_files = {"design.yaml": result.design_yaml_dict()}
+    writers = None
+    if front:
+        from mst_cli.design.pareto import pareto_csv, plot_pareto
+        extra["pareto"] = {"designs": len(front), "requested": pareto_count,
+                           "files": ["pareto.csv", "pareto.png"]
+                           + ([f"pareto/design-{k + 1:02d}.yaml" for k in range(len(front))]
+                              if pareto_designs else [])}
+        if pareto_designs:
+            extra_files.update({f"pareto/design-{k + 1:02d}.yaml": p.result.design_yaml_dict()
+                                for k, p in enumerate(front)})
+
+        def writers(st):
+            st.write_text("pareto.csv", pareto_csv(front))
+            plot_pareto(front, st.path("pareto.png"), title=f"{doc.name}: designs that meet every target")
+    write_simulation(result.document, result.geometry, result.response, out,
+                     extra_files=extra_files, extra_report=extra, more=writers)
+    if as_json:
+        click.echo(json.dumps(report_dict(result.document, result.geometry, result.response, extra),
+                              indent=2, allow_nan=False))
+    elif not quiet:
+        click.echo(result.table())
+        if front:
+            from mst_cli.design.pareto import front_table
+            click.echo(front_table(front))
+        elif pareto_count is not None:
+            click.echo("Pareto front: not mapped (the targets are not met)")
+        files = "design.yaml, report.json, response.csv, response.png" + (
+            ", pareto.csv, pareto.png" if front else "") + (
+            f", pareto/ ({len(front)} designs)" if front and pareto_designs else "")
+        click.echo(f"wrote {out}/{files} ({time.perf_counter() - t_start:.2f} s)")
+    if result.exit_code:
+        click.echo(f"mst design: targets not met: {result.binding}: {result.reasons[0]}", err=True)
+    sys.exit(result.exit_code)

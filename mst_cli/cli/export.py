@@ -1,0 +1,168 @@
+"""``mst export`` and ``mst check``: the printable body and its geometry checks.
+
+build123d (CAD) and trimesh/manifold3d (checks) are imported inside the commands, so that
+importing :mod:`mst_cli.cli.app` stays cheap.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+import time
+from pathlib import Path
+
+import click
+
+from mst_cli.cli.common import default_out_dir, EXIT_TARGETS, handles_input_errors
+
+DEFAULT_STL_TOLERANCE_MM = 0.01
+
+
+def _progress(t0: float, message: str) -> None:
+    click.echo(f"[{time.perf_counter() - t0:5.2f} s] {message}", err=True)
+
+
+def _load_design(path: Path, t0: float):
+    """(document, geometry, design result or None) of PATH.
+
+    A design file is loaded as ``mst simulate`` loads it. A spec (targets, no theta/t/h) is
+    designed first with the library behind ``mst design`` (:func:`mst_cli.design.design_document`).
+    """
+    from mst_cli.errors import InputError
+    from mst_cli.io.schema import load_design_document, load_document
+
+    doc = load_document(path)
+    if doc.is_design:
+        return (*load_design_document(path), None)
+    if not doc.is_spec:
+        doc.require_geometry()              # names the first missing key (exit 2)
+    from mst_cli.design import design_document
+    _progress(t0, f"{path} is a spec: designing theta, t, h first (as 'mst design' does)")
+    result = design_document(doc)
+    geometry = result.geometry
+    for i, v in geometry.violations(result.document.printer):
+        raise InputError(f"layers[{i}]", {"theta_deg": geometry.layers[i].theta_deg,
+                                          "t_mm": geometry.layers[i].t_mm, "h_mm": geometry.layers[i].h_mm},
+                         f"the designed cell is invalid ({v.rule}): {v.message}")
+    _progress(t0, f"designed: targets {result.status}")
+    return result.document, geometry, result
+
+
+@click.command("export")
+@click.argument("path", type=click.Path(dir_okay=False, path_type=Path))
+@click.option("--stl", "want_stl", is_flag=True, help="Write sensor.stl (the one printable TPU body).")
+@click.option("--step", "want_step", is_flag=True,
+              help="Write sensor.step: assembly of the body, the magnet and the board.")
+@click.option("--3mf", "want_3mf", is_flag=True, help="Write sensor.3mf (the body, mm).")
+@click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), default=None,
+              help="Output folder [default: ./mst-out/<name>/].")
+@click.option("--stl-tolerance", "stl_tolerance_mm", type=float, default=DEFAULT_STL_TOLERANCE_MM,
+              show_default=True, help="Largest chord deviation of the mesh from the curved "
+                                      "surfaces (the magnet pocket), mm.")
+@handles_input_errors
+def export(path, want_stl, want_step, want_3mf, out_dir, stl_tolerance_mm):
+    """Build the printable sensor of the design file PATH and write it.
+
+    PATH may also be a spec (targets only): it is designed first, as 'mst design' does, and
+    the design is written next to the body as design.yaml (exit 1 if the targets are not met;
+    the nearest design is still exported). Without a format flag, writes STL and STEP. Always writes export.json: the design's own
+    expected volume, bounding box, pocket, slot and feature sizes, which 'mst check' reads.
+    STL and 3MF are in print orientation: the part lies on its side (sensor -y face on the
+    bed), so every layer is a prism along the build direction and nothing needs support. The
+    3MF carries PrusaSlicer's pause for the magnet; the terminal and export.json give its
+    layer and height. STEP is the assembly in the sensor frame (z up the stack).
+    """
+    from mst_cli.errors import InputError
+
+    if not 1e-4 <= stl_tolerance_mm <= 1.0:
+        raise InputError("--stl-tolerance", stl_tolerance_mm, "must be a number from 0.0001 to 1 mm")
+    from mst_cli.io.outputs import check_out_dir
+
+    if not (want_stl or want_step or want_3mf):
+        want_stl = want_step = True
+    if out_dir is not None:
+        check_out_dir(out_dir)            # a bad output path is refused before any work
+    t0 = time.perf_counter()
+    doc, geometry, designed = _load_design(path, t0)
+    check_out_dir(out_dir or default_out_dir(doc.name))
+    _progress(t0, f"loaded {path} ({len(geometry.layers)} layers)")
+
+    from mst_cli.cad.assembly import build_sensor, check_fits, print_mesh
+    from mst_cli.cad.manifest import export_manifest, MANIFEST_NAME
+    from mst_cli.cad import mesh_io
+    from mst_cli.io.outputs import staged
+
+    check_fits(geometry)
+    _progress(t0, "building the body: base, layers, plates, cap (one fuse)")
+    cad = build_sensor(geometry)
+    names = (["sensor.stl"] if want_stl else []) + (["sensor.step"] if want_step else []) \
+        + (["sensor.3mf"] if want_3mf else [])
+    out = out_dir or default_out_dir(doc.name)
+    with staged(out) as st:
+        if want_stl or want_3mf:
+            vertices, triangles = print_mesh(geometry, cad.body, stl_tolerance_mm)
+            _progress(t0, f"meshed: {len(triangles)} triangles at {stl_tolerance_mm:g} mm")
+            if want_stl:
+                st.path("sensor.stl").write_bytes(mesh_io.stl_bytes(vertices, triangles))
+                _progress(t0, "wrote sensor.stl")
+            if want_3mf:
+                st.path("sensor.3mf").write_bytes(mesh_io.three_mf_bytes(
+                    vertices, triangles, doc.name, pause_after_z_mm=geometry.pause_height_mm,
+                    layer_height_mm=geometry.layer_height_mm))
+                _progress(t0, "wrote sensor.3mf")
+        if want_step:
+            mesh_io.write_step(cad.assembly(doc.name), st.path("sensor.step"))
+            _progress(t0, "wrote sensor.step (body, magnet, board)")
+        if designed is not None:
+            # the design the body was built from, loadable by mst simulate / mst export
+            st.write_yaml("design.yaml", designed.design_yaml_dict())
+            names.append("design.yaml")
+        st.write_json(MANIFEST_NAME, export_manifest(doc.name, geometry, doc.printer,
+                                                     stl_tolerance_mm, names))
+    if geometry.magnet_tilt_deg:
+        click.echo(f"note: magnet_tilt_deg = {geometry.magnet_tilt_deg:g} is an assembly error "
+                   "in the forward model; the pocket is built on the axis", err=True)
+    click.echo(f"body volume {geometry.body_volume_mm3:.1f} mm3, sensor height {geometry.total_height_mm:.2f} mm; "
+               f"prints on its side, {geometry.depth_mm:g} mm high in "
+               f"{int(round(geometry.depth_mm / geometry.layer_height_mm))} layers of {geometry.layer_height_mm:g} mm")
+    click.echo(f"pause after layer {geometry.pause_after_layer} (z = {geometry.pause_height_mm:.2f} mm) "
+               "to drop the magnet into its pocket" + (" (the 3MF carries the pause)" if want_3mf else ""))
+    click.echo(f"wrote {out}/{', '.join(names + [MANIFEST_NAME])}")
+    if designed is not None and designed.exit_code:
+        click.echo(f"mst export: targets not met ({designed.binding}: {designed.reasons[0]}); "
+                   "the body of the nearest design was written", err=True)
+        sys.exit(designed.exit_code)
+
+
+@click.command("check")
+@click.argument("path", type=click.Path(path_type=Path))
+@click.option("--json", "as_json", is_flag=True, help="Print the results as JSON instead of the table.")
+@click.option("--nozzle", "nozzle_mm", type=float, default=None,
+              help="Nozzle diameter for the wall checks, mm [default: the design's printer.nozzle_mm].")
+@handles_input_errors
+def check(path, as_json, nozzle_mm):
+    """Check the body that 'mst export' wrote (PATH: its folder, or the STL in it).
+
+    Prints a table of named checks, measured on the mesh against the design's own expected
+    values in export.json. Exit 1 naming the failed checks, 2 for unreadable input.
+    """
+    from mst_cli.cad.checks import (load_manifest, load_mesh, resolve_paths, results_dict,
+                                    results_table, run_checks)
+    from mst_cli.errors import InputError
+
+    if nozzle_mm is not None and not 0.05 <= nozzle_mm <= 5.0:
+        raise InputError("--nozzle", nozzle_mm, "must be a nozzle diameter from 0.05 to 5 mm")
+    stl, manifest_path = resolve_paths(path)
+    # both inputs are validated before anything is measured: every field run_checks reads (type,
+    # nesting, finite and sane size) and every STL coordinate (finite, within a metre)
+    manifest = load_manifest(manifest_path)
+    mesh = load_mesh(stl)
+    results = run_checks(mesh, manifest, nozzle_mm)
+    summary = results_dict(results, str(stl))
+    if as_json:
+        click.echo(json.dumps(summary, indent=2, allow_nan=False))
+    else:
+        click.echo(results_table(results))
+    if summary["failed"]:
+        click.echo(f"mst check: failed: {', '.join(summary['failed'])}", err=True)
+        sys.exit(EXIT_TARGETS)

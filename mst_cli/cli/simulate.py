@@ -1,0 +1,54 @@
+"""``mst simulate``: the forward model of one design file, its report, curves and picture."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import click
+
+from mst_cli.cli.common import default_out_dir, handles_input_errors, write_simulation
+
+
+@click.command()
+@click.argument("design_file", type=click.Path(dir_okay=False, path_type=Path))
+@click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), default=None,
+              help="Output folder [default: ./mst-out/<name>/].")
+@click.option("--field-model", type=click.Choice(["auto", "dipole", "axial", "cylinder"]), default=None,
+              help="Magnet field model [default: the file's model.field, else auto = the cheapest "
+                   "exact one: axial on the axis, cylinder off it].")
+@click.option("--mechanics", type=click.Choice(["spring", "frame", "continuum"]), default=None,
+              help="Layer mechanics model [default: the cheapest whose measured error meets the "
+                   "file's model.accuracy_rel, else the file's model.mechanics, else spring].")
+@click.option("--json", "as_json", is_flag=True, help="Print report.json to stdout instead of the table.")
+@handles_input_errors
+def simulate(design_file, out_dir, field_model, mechanics, as_json):
+    """Predict force-displacement and field-force curves of DESIGN_FILE.
+
+    Writes report.json (units in keys), response.csv and response.png into the output
+    folder and prints a per-regime table: stiffness, force band, secant sensitivity S
+    (dB/B0 per newton) with its local min..max, and the force resolution dF of the chip.
+    """
+    from mst_cli.model.ladder import choose_mechanics
+    from mst_cli.io.report import report_dict, terminal_table
+    from mst_cli.model.response import simulate as run
+
+    from mst_cli.io.outputs import check_out_dir
+
+    from mst_cli.io.schema import load_design_document
+    doc, geometry = load_design_document(design_file)
+    out = out_dir or default_out_dir(doc.name)
+    check_out_dir(out)                    # a bad output path is refused before any work
+    field_choice = field_model or doc.field_model
+    choice = choose_mechanics(mechanics, doc.accuracy_rel, doc.mechanics)
+    if choice.message() and not as_json:
+        click.echo(choice.message())
+    resp = run(geometry, doc.material, mechanics=choice.mechanics,
+               field_model=None if field_choice == "auto" else field_choice,
+               noise_uT_rms=doc.noise_uT_rms)
+    write_simulation(doc, geometry, resp, out)
+    if as_json:
+        click.echo(json.dumps(report_dict(doc, geometry, resp), indent=2, allow_nan=False))
+    else:
+        click.echo(terminal_table(doc, geometry, resp))
+        click.echo(f"wrote {out}/report.json, response.csv, response.png")

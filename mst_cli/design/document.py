@@ -1,0 +1,283 @@
+"""Inverse design: from target sensitivities S_i and lock forces R_i to theta, t, h per layer.
+
+:func:`design_document` is the library entry point of ``mst design``:
+
+1. :func:`explain.check_contradictions` rejects a self-contradictory spec (InputError, exit 2);
+2. :func:`solver.solve` searches the normalised variables (vectorised problem, nlopt);
+3. the result is rounded to ROUND_DECIMALS (0.1 um, 1e-4 deg: far below what a printer
+   resolves, and inside the optimiser's rounding slack so every rule still holds), written
+   into a copy of the spec (targets kept), and **re-simulated with the forward model**
+   (:func:`mst_cli.model.response.simulate`): every achieved number reported comes from that run;
+4. the verification decides the status: every target within tolerance and every constraint
+   held -> exit 0; otherwise exit 1 with the binding reason (:func:`explain.diagnose`).
+
+The print-error sensitivity (the robustness term of the preference, :mod:`.problem`) is re-measured the same
+way: the forward model on the design with every wall 0.05 mm thicker and thinner.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from mst_cli.model import geometry as geo
+from mst_cli.io.report import height_budget_line
+from mst_cli.model.response import Response, simulate
+from mst_cli.io.schema import Document, document_to_dict, LayerEntry
+from mst_cli.errors import InputError
+from mst_cli.design.problem import DesignProblem, PRINT_ERROR_T_MM
+
+ROUND_DECIMALS = 4
+EXIT_MET, EXIT_NOT_MET = 0, 1
+
+
+@dataclass
+class DesignResult:
+    """A designed document, its forward-model response and the diagnostics."""
+
+    document: Document
+    geometry: geo.SensorGeometry
+    response: Response
+    status: str                         # "met" or "not met"
+    binding: str | None                 # what binds when not met
+    reasons: list[str]
+    targets: list[dict]                 # per layer: target vs achieved (forward model)
+    checks: dict                        # failed constraint name -> message (empty when all hold)
+    print_error: dict                   # print robustness per layer (forward model)
+    seed: int
+    evaluations: int
+    max_evaluations: int
+    solver: dict
+    elapsed_s: float = 0.0
+    warnings: list[str] = field(default_factory=list)
+    objective: dict = field(default_factory=dict)   # design.objective's weights and terms
+
+    @property
+    def exit_code(self) -> int:
+        return EXIT_MET if self.status == "met" else EXIT_NOT_MET
+
+    def design_yaml_dict(self) -> dict:
+        """design.yaml: the spec with theta, t, h filled in (loadable by ``mst simulate``)."""
+        return design_dict(self.document)
+
+    def report_extra(self) -> dict:
+        """The ``design`` block of report.json (reproducible: no wall-clock numbers)."""
+        return {"design": {
+            "status": self.status, "exit_code": self.exit_code, "binding": self.binding,
+            "reasons": self.reasons, "tolerance_rel": self.document.design["tolerance_rel"],
+            "targets": self.targets, "constraints_failed": self.checks,
+            "print_error_sensitivity": self.print_error,
+            "objective": self.objective,
+            "seed": self.seed, "evaluations": self.evaluations,
+            "max_evaluations": self.max_evaluations, "solver": self.solver,
+        }}
+
+    def table(self) -> str:
+        """Target against achieved per layer (forward model), as ``mst design`` prints it."""
+        tol = self.document.design["tolerance_rel"]
+        lines = [f"{self.document.name}: {len(self.targets)} layers designed, tolerance "
+                 f"{100 * tol:g} %, seed {self.seed}, {self.evaluations} evaluations",
+                 f"{'layer':>5} {'theta':>7} {'t':>6} {'h':>6} | {'S target':>8} {'S got':>8} {'err':>6} | "
+                 f"{'R target':>8} {'R got':>8} {'err':>6} | {'t+-0.05mm: dS':>13} {'dR':>6}",
+                 f"{'':>5} {'[deg]':>7} {'[mm]':>6} {'[mm]':>6} | {'[1/N]':>8} {'[1/N]':>8} {'[%]':>6} | "
+                 f"{'[N]':>8} {'[N]':>8} {'[%]':>6} | {'[%]':>13} {'[%]':>6}"]
+        for row, pe in zip(self.targets, self.print_error["layers"]):
+            ok = "" if row["within_tolerance"] else "  <-- missed"
+            lines.append(
+                f"{row['layer']:>5} {row['theta_deg']:>7.2f} {row['t_mm']:>6.3f} {row['h_mm']:>6.3f} | "
+                f"{row['target_sensitivity_per_N']:>8.4g} {row['achieved_sensitivity_per_N']:>8.4g} "
+                f"{100 * row['sensitivity_error_rel']:>+6.2f} | "
+                f"{row['target_range_N']:>8.4g} {row['achieved_range_N']:>8.4g} "
+                f"{100 * row['range_error_rel']:>+6.2f} | "
+                f"{100 * pe['dS_rel_worst']:>13.1f} {100 * pe['dR_rel_worst']:>6.1f}{ok}")
+        resp, g = self.response, self.geometry
+        lines.append(f"gap {resp.gap0_mm:.2f} -> {resp.gap_min_mm:.2f} mm, B0 {resp.B0_T * 1e3:.3f} mT, "
+                     f"B full load {resp.B_full_T * 1e3:.3f} mT, worst force resolution "
+                     f"{1e3 * max(r.force_resolution_N for r in resp.regimes):.1f} mN")
+        lines.append(height_budget_line(g))
+        if self.status == "met":
+            lines.append(f"all {2 * len(self.targets)} targets met within {100 * tol:g} % "
+                         f"(forward model, mechanics={resp.mechanics}, field={resp.field_model})")
+        else:
+            lines.append(f"NOT MET -- binding: {self.binding}")
+            lines += [f"  - {r}" for r in self.reasons]
+        for w in self.warnings:
+            lines.append(f"warning: {w}")
+        return "\n".join(lines)
+
+
+def design_dict(doc: Document) -> dict:
+    """document_to_dict plus the spec's ``design`` section, so the file can be designed again."""
+    out = document_to_dict(doc)
+    d = {}
+    for key, value in doc.design.items():
+        d[key] = list(value) if isinstance(value, tuple) else value
+    layers = out.pop("layers")
+    out["design"] = d
+    out["layers"] = layers
+    return out
+
+
+def _layer_outputs(resp: Response, n: int):
+    """(S per regime, R per layer in file order) from a forward-model response."""
+    S = np.array([r.sensitivity_secant_per_N for r in resp.regimes])
+    R = np.zeros(n)
+    for r in resp.regimes:
+        R[r.layer - 1] = r.force_to_N
+    return S, R
+
+
+def design_document(doc: Document, *, seed: int | None = None, progress=None,
+                    max_evaluations: int | None = None, local: str = "slsqp") -> DesignResult:
+    """Design theta, t, h for every layer of the spec ``doc``.
+
+    Parameters
+    ----------
+    doc : Document
+        A spec (every layer has target_sensitivity_per_N and target_range_N).
+    seed : int, optional
+        Seeds the screening batch [default: design.seed of the file]. Same spec and seed give
+        the same design.
+    progress : callable, optional
+        ``progress(evaluations_done, max_evaluations, phase, worst_error_rel)``.
+    max_evaluations : int, optional
+        Budget of candidate evaluations [default: design.max_evaluations of the file].
+
+    Raises
+    ------
+    InputError
+        Not a spec, or a spec that contradicts itself (exit code 2).
+    """
+    from mst_cli.design import explain
+    from mst_cli.design.solver import solve
+
+    t_start = time.perf_counter()
+    doc.require_targets()
+    if doc.mechanics != "spring":
+        raise InputError("model.mechanics", doc.mechanics,
+                         "design_document optimises with the L0 'spring' model: set model.mechanics: "
+                         "spring, or refine for a dearer rung (mst design --refine frame|continuum, "
+                         "mst_cli.design.refine.refine_document)")
+    problem = DesignProblem(doc)
+    explain.check_contradictions(problem)
+    seed = int(doc.design["seed"] if seed is None else seed)
+    max_evaluations = int(doc.design["max_evaluations"] if max_evaluations is None else max_evaluations)
+
+    sol = solve(problem, seed=seed, max_evaluations=max_evaluations, progress=progress, local=local)
+    theta, t, h = (np.round(a, ROUND_DECIMALS) for a in problem.to_physical(sol.u))
+    return verify_design(doc, problem, theta, t, h, sol, seed=seed, max_evaluations=max_evaluations,
+                         mechanics=doc.mechanics, t_start=t_start)
+
+
+def verify_design(doc: Document, problem: DesignProblem, theta, t, h, sol, *, seed: int,
+                  max_evaluations: int, mechanics: str, t_start: float | None = None) -> DesignResult:
+    """Write (theta, t, h) into the spec ``doc`` and judge it with ``mechanics``'s forward model.
+
+    Every achieved number, constraint check and print-error measure comes from
+    :func:`mst_cli.model.response.simulate` with ``mechanics`` on the written (rounded) design;
+    ``problem`` (the L0 problem of ``doc``'s targets) only explains a miss. ``sol`` is the
+    solver's result (its ``matched``, ``evaluations``, ... are reported).
+    """
+    from mst_cli.design import explain
+
+    t_start = time.perf_counter() if t_start is None else t_start
+    theta, t, h = (np.asarray(a, dtype=float) for a in (theta, t, h))
+    u_written = problem.to_unit(theta, t, h)
+    layers = [LayerEntry(float(a), float(b), float(c), la.target_sensitivity_per_N, la.target_range_N,
+                         la.weight) for a, b, c, la in zip(theta, t, h, doc.layers)]
+    designed = doc.with_layers(layers)
+    geometry = designed.geometry()
+    field_model = None if doc.field_model == "auto" else doc.field_model
+    resp = simulate(geometry, doc.material, mechanics=mechanics, field_model=field_model,
+                    noise_uT_rms=doc.noise_uT_rms)
+
+    # -- verification on the forward model
+    n, tol = problem.n, problem.tolerance_rel
+    S, R = _layer_outputs(resp, n)
+    targets = []
+    for i in range(n):
+        eS = S[i] / problem.S_target[i] - 1.0
+        eR = R[i] / problem.R_target[i] - 1.0
+        targets.append({
+            "layer": i + 1, "theta_deg": float(theta[i]), "t_mm": float(t[i]), "h_mm": float(h[i]),
+            "target_sensitivity_per_N": float(problem.S_target[i]), "achieved_sensitivity_per_N": float(S[i]),
+            "sensitivity_error_rel": float(eS),
+            "target_range_N": float(problem.R_target[i]), "achieved_range_N": float(R[i]),
+            "range_error_rel": float(eR),
+            "within_tolerance": bool(abs(eS) <= tol and abs(eR) <= tol),
+        })
+    checks = {}
+    for i, v in geometry.violations(doc.printer):
+        checks[f"layer {i + 1} {v.rule}"] = f"layer {i + 1}: {v.message}"
+    for i in range(1, n):
+        if R[i] < (1 + problem.lock_margin_rel) * R[i - 1]:
+            checks[f"lock order {i}-{i + 1}"] = (
+                f"layer {i + 1} locks at {R[i]:.4g} N, less than {1 + problem.lock_margin_rel:g} x "
+                f"layer {i}'s {R[i - 1]:.4g} N (design.lock_margin_rel)")
+    if resp.saturated or resp.B_full_T > problem.B_limit_T:
+        checks["chip saturation"] = (f"field at full load {resp.B_full_T * 1e3:.2f} mT exceeds the "
+                                     f"limit {problem.B_limit_T * 1e3:.2f} mT (design.saturation_margin_rel)")
+    if problem.max_height_mm is not None and geometry.total_height_mm > problem.max_height_mm:
+        checks["total height"] = (f"total height {geometry.total_height_mm:.2f} mm exceeds "
+                                  f"design.max_height_mm = {problem.max_height_mm:g} mm")
+    met = all(row["within_tolerance"] for row in targets) and not checks
+    binding, reasons = (None, []) if met else explain.diagnose(problem, u_written, S, R, checks)
+    if not met and not sol.matched and sol.evaluations >= max_evaluations:
+        reasons.append(f"the evaluation budget ({max_evaluations}) was spent before the targets were "
+                       "met: raise design.max_evaluations (or --max-evaluations) to search further")
+
+    # -- print-error sensitivity, re-measured with the forward model
+    pe_layers = []
+    shifted = {}
+    for sign, key in ((1.0, "plus"), (-1.0, "minus")):
+        cells = [doc.family.cell(a, max(b + sign * PRINT_ERROR_T_MM, geo.LENGTH_FLOOR_MM), c)
+                 for a, b, c in zip(theta, t, h)]
+        r2 = simulate(designed.geometry(cells), doc.material, mechanics=mechanics,
+                      field_model=field_model, noise_uT_rms=doc.noise_uT_rms)
+        shifted[key] = _layer_outputs(r2, n)
+    logs = []
+    for i in range(n):
+        row = {"layer": i + 1}
+        for key in ("plus", "minus"):
+            S2, R2 = shifted[key]
+            row[f"dS_rel_t_{key}"] = float(S2[i] / S[i] - 1.0)
+            row[f"dR_rel_t_{key}"] = float(R2[i] / R[i] - 1.0)
+            logs += [math.log(S2[i] / S[i]), math.log(R2[i] / R[i])]
+        row["dS_rel_worst"] = max(abs(row["dS_rel_t_plus"]), abs(row["dS_rel_t_minus"]))
+        row["dR_rel_worst"] = max(abs(row["dR_rel_t_plus"]), abs(row["dR_rel_t_minus"]))
+        pe_layers.append(row)
+    print_error = {
+        "print_error_t_mm": PRINT_ERROR_T_MM,
+        "meaning": "relative change of S_i and R_i when every wall is printed this much thicker (plus) "
+                   "or thinner (minus); its RMS is the print_robustness term of design.objective's preference",
+        "rms_log_change": float(np.sqrt(np.mean(np.square(logs)))),
+        "layers": pe_layers,
+    }
+    weights = doc.design.get("objective") or {}
+    objective = {
+        "weights": dict(weights),
+        "meaning": "among the designs that meet every target, the one with the lowest weighted sum of "
+                   "ln(total_height_mm), ln(worst_force_resolution_N) and print_robustness_rms",
+        "total_height_mm": geometry.total_height_mm,
+        "worst_force_resolution_N": max(r.force_resolution_N for r in resp.regimes),
+        "print_robustness_rms": print_error["rms_log_change"],
+    }
+    solver_info = {
+        "method": f"screening + nlopt LD_{sol.local.upper()} (multi-start match, preference polish, re-match)"
+                  if sol.local == "slsqp" else
+                  f"screening + nlopt LN_{sol.local.upper()} (multi-start match, preference polish, re-match)",
+        "matched": sol.matched, "starts_used": sol.starts_used,
+        "preference_before": sol.preference_before, "preference_after": sol.preference_after,
+        "runs_ended": sol.stops,
+    }
+    return DesignResult(
+        document=designed, geometry=geometry, response=resp, status="met" if met else "not met",
+        binding=binding, reasons=reasons, targets=targets, checks=checks, print_error=print_error,
+        seed=seed, evaluations=sol.evaluations, max_evaluations=max_evaluations, solver=solver_info,
+        elapsed_s=time.perf_counter() - t_start, warnings=list(resp.warnings), objective=objective)
+
+
+__all__ = ["DesignResult", "design_document", "design_dict", "verify_design", "DesignProblem"]

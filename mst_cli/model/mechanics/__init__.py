@@ -1,0 +1,45 @@
+"""Layer mechanics: a ladder of models of one collapsible layer (docs/design.md section 4).
+
+Every model turns a :class:`~mst_cli.model.geometry.HexCell` and a material into a *layer law*,
+an object with
+
+* ``displacement_mm(force_N)``: compression for forces >= 0, vectorised, monotone, and
+  piecewise linear between the law's knots (a tabulated curve is linear between samples);
+* ``knots_N``: ascending forces > 0 where the slope changes (the lock force among them);
+* ``k_N_per_mm``: small-load stiffness; ``d_lock_mm``, ``lock_force_N``: where the cavity
+  closes; ``k_locked_N_per_mm``: stiffness past the last knot (the locked branch).
+
+The stack solver (:mod:`mst_cli.model.stack`) needs nothing else, so it is exact for every rung.
+"""
+
+from __future__ import annotations
+
+MODELS = ("spring", "frame", "continuum")  # cheapest first
+
+
+def layer_law(cell, material, model: str = "spring"):
+    """The force-displacement law of one layer with the named mechanics model.
+
+    ``frame`` and ``continuum`` laws are cached per (cell, material): both are frozen.
+    """
+    if model == "spring":
+        from mst_cli.model.mechanics.spring import spring_layer
+        return spring_layer(cell, material)
+    if model == "frame":
+        from mst_cli.model.mechanics.frame import frame_layer
+        return frame_layer(cell, material)
+    if model == "continuum":
+        from mst_cli.model.mechanics.continuum import continuum_layer
+        return continuum_layer(cell, material)
+    raise ValueError(f"unknown mechanics model {model!r}; choose from {', '.join(MODELS)}")
+
+
+def uncached_layer_law(cell, material, model: str = "spring"):
+    """:func:`layer_law` without the per-cell caches (for timing)."""
+    if model == "frame":
+        from mst_cli.model.mechanics.frame import frame_layer
+        return frame_layer.__wrapped__(cell, material)
+    if model == "continuum":
+        from mst_cli.model.mechanics.continuum import continuum_layer
+        return continuum_layer.__wrapped__(cell, material)
+    return layer_law(cell, material, model)

@@ -1,0 +1,255 @@
+"""Corrections of rung L0 fitted against rung L2: joint stiffness, lock force, lock stroke.
+
+Beam theory clamps each wall at the pad's mid-plane and at the chevron's tip; the real
+profile's joints are finite blocks with a near-crack at the cavity's tip vertex, so thick or
+shallow walls (large t/L, small theta) are stiffer or softer than the beam says. The ratio
+k_L2 / k_L0 depends only on theta and t/L (and nu: both are plane strain and scale with E b;
+see benchmarks/fit_l0_correction.py, which fits and stores the coefficients in
+mst_cli/model/data/l0_correction.json):
+
+    ln(k_L2 / k_L0) = sum_i c_i f_i(x, s, y),   x = t/L, s = theta - pi/4,
+                      y = x / (2 sin theta) = t / (h - t)
+
+with terms x, x^2, x^3, x s, ... (the polynomial of the thin and moderately thick walls) and
+y, ln(1/(1 - y)) (times powers of s): y is the part of the centre line L that lies inside the
+two joints -- the free inner face is L (1 - y) long -- and the beam's bending compliance goes
+with the cube of the free length, so ln(L / L_free) = ln(1/(1 - y)) is what makes shallow
+walls (theta 5-15 deg, where the tip joint is a solid wedge t / tan(theta) long) up to ten
+times stiffer than the beam. Every term vanishes with x, so the factor tends to 1 for slender
+walls (x -> 0), the beam-theory limit. y < t / (t + 0.4 mm) < 0.9 for every valid cell.
+
+Beam theory is also linear, but the walls rotate a lot before the cavity closes (the stroke
+is most of their height), so the real lock force R is below k d_lock -- by up to 90 % for
+tall steep walls -- and the cavity closes before the pads meet where the walls touch first
+(shallow walls: the cavity's tip is a thin wedge that zips shut). Two more fits give
+R / (k d_lock) and d_lock / (h - 2t - a):
+
+    ln(ratio) = sigma * sum_i c_i g_i(x, s, y, sigma, e),   sigma = d_lock / (L sin theta),
+                                                            e = exp(-2x / sigma)
+
+sigma is the stroke as a fraction of one wall's rise: the softening is a large-rotation
+effect, first order in the stroke, so both ratios tend to 1 as the stroke vanishes. g is a
+full cubic in (x, s) plus terms in y, sigma, e and w; 2x / sigma = 2 t sin(theta) / d_lock is
+the inner wall face's gap at rest, one wall thickness from the cavity's tip vertex, over the
+stroke: where it is small the walls touch before the pads do, and e switches those terms on;
+w = 1 - t / L_in (smoothly floored at 0) is the part of the inner face that can touch at all.
+At given (x, theta), sigma = 2 (1 - y (1 + a/t)) also carries the allowance over the wall
+thickness, r = a/t, which decides where a shallow cavity's thin tip counts as closed; terms
+r, r s, r sigma (r recovered from x, theta, sigma) carry it for the thin walls (t 0.4-0.6 mm,
+r 0.17-0.25) where compact designs live, sampled apart in the fit (its thin band).
+
+Fitted for nu = 0.45 and a 0.1 mm contact allowance, plane strain (the web of b = D), against
+the plane-strain L2 (``fitted_on`` in the data file), over the printable box (theta 5-75 deg,
+t 0.4-3 mm, h 1.2-8 mm, every cell rule met: t/L up to 1.7); b drops out of every ratio.
+Outside the fitted box the inputs are held at its edge. The errors left, measured out of
+sample per band of t/L and theta, are in the data file too (:func:`expected_error_rel`).
+Vectorised, pure.
+"""
+
+from __future__ import annotations
+
+import functools
+import json
+from pathlib import Path
+
+import numpy as np
+
+TERMS = ["x", "x^2", "x^3", "x*s", "x^2*s", "x*s^2", "x^2*s^2", "x*s^3", "x^3*s",
+         "ly", "ly*s", "ly*s^2", "ly^2", "ly^2*s", "y", "y*s"]
+LOCK_TERMS = ["1", "x", "s", "x^2", "x*s", "s^2", "x^3", "x^2*s", "x*s^2", "s^3",
+              "y", "y*s", "y^2", "y*x", "sigma", "sigma*x", "sigma*s", "sigma^2", "sigma*y",
+              "e", "e*s", "e*x", "e^2", "e*sigma", "w", "w*s", "w*x", "w^2", "w*sigma",
+              "r", "r*s", "r*sigma"]
+DATA = Path(__file__).resolve().parent.parent / "data" / "l0_correction.json"
+
+# The printable box every rung is fitted and measured on, and the default design bounds
+# (mst_cli.io.schema reads it; so do mst_cli.bench.ladder_bench and the fit): walls from one nozzle line to
+# 3 mm, from 5 deg (shallow) to 75 deg (steep), 1.2-8 mm layers; the cell rules
+# (HexCell.violations) cut out what does not print or has no stroke. Inside it t/L reaches 1.7
+# (walls shorter than they are thick). Below 5 deg a 30 mm cell's pads vanish for most h (the
+# pad rule), above 75 deg the walls are columns whose stroke is mostly their own shortening.
+VERIFIED_BOX = {"theta_deg": (5.0, 75.0), "t_mm": (0.4, 3.0), "h_mm": (1.2, 8.0)}
+# y = t / (h - t) < t / (t + min cavity) = 0.88 for every valid cell (t <= 3 mm, h - 2t >= 0.4
+# mm); the fitted box holds it there (``fitted_on.y_range``), this only keeps the log finite
+Y_MAX = 0.95
+# r = allowance / t is recovered from (t/L, theta, sigma) (sigma = 2 (1 - y (1 + r))) and held in
+# [0, R_MAX] (printable cells: a / 3 mm to a / 0.4 mm = 0.03-0.25 at a = 0.1 mm); _on_cells
+# keeps the probes on the fitted cells, this only keeps the terms bounded anywhere
+R_MAX = 1.0
+
+
+def _y(x, theta):
+    """y = x / (2 sin theta) = t / (h - t), held below Y_MAX."""
+    return np.minimum(x / (2.0 * np.sin(theta)), Y_MAX)
+
+
+def design_matrix(t_over_L, theta_rad):
+    """The stiffness fit's terms (TERMS) at (x = t/L, theta), stacked on a last axis."""
+    x = np.asarray(t_over_L, dtype=float)
+    th = np.asarray(theta_rad, dtype=float)
+    s = th - np.pi / 4
+    y = _y(x, th)
+    ly = -np.log1p(-y)
+    return np.stack(np.broadcast_arrays(
+        x, x ** 2, x ** 3, x * s, x ** 2 * s, x * s ** 2, x ** 2 * s ** 2, x * s ** 3, x ** 3 * s,
+        ly, ly * s, ly * s ** 2, ly ** 2, ly ** 2 * s, y, y * s), axis=-1)
+
+
+def lock_design_matrix(t_over_L, theta_rad, sigma):
+    """The lock fits' terms g_i (LOCK_TERMS), stacked on a last axis (not yet times sigma)."""
+    x = np.asarray(t_over_L, dtype=float)
+    th = np.asarray(theta_rad, dtype=float)
+    sig = np.asarray(sigma, dtype=float)
+    s = th - np.pi / 4
+    y = _y(x, th)
+    e = np.exp(-2.0 * x / np.maximum(sig, 1e-12))
+    w = _face_beyond_wedge(x, y)
+    r = allowance_over_t(x, th, sig)
+    return np.stack(np.broadcast_arrays(
+        np.ones_like(x), x, s, x ** 2, x * s, s ** 2, x ** 3, x ** 2 * s, x * s ** 2, s ** 3,
+        y, y * s, y ** 2, y * x, sig, sig * x, sig * s, sig ** 2, sig * y,
+        e, e * s, e * x, e ** 2, e * sig, w, w * s, w * x, w ** 2, w * sig,
+        r, r * s, r * sig), axis=-1)
+
+
+def allowance_over_t(t_over_L, theta_rad, sigma):
+    """r = allowance / t of the cell with this (t/L, theta, sigma): sigma = 2 (1 - y (1 + r)),
+    so r = (1 - sigma / 2) / y - 1, held in [0, R_MAX] (and finite as y -> 0). At the thinnest
+    printable wall r = 0.25: the allowance is a quarter of the wall, and the shallow cavity's
+    thin tip, whose gap at rest is below the allowance for a / sin(theta), zips shut early."""
+    x = np.asarray(t_over_L, dtype=float)
+    y = _y(x, np.asarray(theta_rad, dtype=float))
+    r = (1.0 - 0.5 * np.asarray(sigma, dtype=float)) / np.maximum(y, 1e-6) - 1.0
+    return np.clip(r, 0.0, R_MAX)
+
+
+def _face_beyond_wedge(x, y, eps=0.05):
+    """w = 1 - t / L_in, smoothly floored at 0: the part of the inner wall face (L_in = L (1 - y)
+    long) more than one wall thickness from the cavity's tip vertex, the part that can touch
+    its mirror image before the pads meet. w = 0: only the pads can close the cavity."""
+    u = 1.0 - x / np.maximum(1.0 - y, 1e-3)
+    return 0.5 * (u + np.sqrt(u * u + eps * eps))
+
+
+@functools.lru_cache(maxsize=1)
+def _fit() -> dict:
+    """The stored fit; a missing file is an installation error, never a silent 'no correction'."""
+    return json.loads(DATA.read_text())
+
+
+@functools.lru_cache(maxsize=4)
+def _coef(key: str | None = None) -> np.ndarray:
+    return np.array(coefficients(key))
+
+
+@functools.lru_cache(maxsize=4)
+def coefficients(key: str | None = None) -> tuple[float, ...]:
+    """Stored coefficients: of the stiffness fit (None), "lock_force" or "lock_stroke"."""
+    return tuple(map(float, _fit()["coefficients"] if key is None else _fit()[key]["coefficients"]))
+
+
+def clear_caches() -> None:
+    """Forget the stored fit (after benchmarks/fit_l0_correction.py rewrote the file)."""
+    for f in (_fit, _coef, coefficients):
+        f.cache_clear()
+
+
+def fitted_t_over_L_max() -> float:
+    return float(_fit()["fitted_on"]["t_over_L_range"][1])
+
+
+def fitted_theta_rad_range() -> tuple[float, float]:
+    lo, hi = _fit()["fitted_on"]["theta_deg_range"]
+    return float(np.radians(lo)), float(np.radians(hi))
+
+
+def _clipped(t_over_L, theta_rad):
+    """(t/L, theta) held inside the fitted box: theta in its range, then 0 <= t/L <= the
+    fitted maximum and y = t/L / (2 sin theta) = t / (h - t) <= its fitted maximum -- the box
+    of valid cells is not a rectangle in (t/L, theta): at theta = 15 deg t/L stops at 0.45."""
+    theta = np.clip(np.asarray(theta_rad, dtype=float), *fitted_theta_rad_range())
+    x_max = np.minimum(fitted_t_over_L_max(), 2.0 * np.sin(theta) * _fit()["fitted_on"]["y_range"][1])
+    x = np.clip(np.asarray(t_over_L, dtype=float), 0.0, x_max)
+    return x, theta
+
+
+def stroke_ratio(d_lock_mm, wall_length_mm, theta_rad):
+    """sigma = d_lock / (L sin theta): the stroke over one wall's rise (0 to about 2)."""
+    return np.asarray(d_lock_mm, dtype=float) / (np.asarray(wall_length_mm, dtype=float) * np.sin(theta_rad))
+
+
+def _on_cells(x, theta, sigma):
+    """sigma moved onto the cells the fit saw. For a cell sigma = 2 (1 - y (1 + a/t)) (a the
+    contact allowance), so at given (t/L, theta) it only spans a/t = a/3 mm to a/0.4 mm
+    (``fitted_on.allowance_over_t_range``); the terms are evaluated there, and at the
+    fitted stroke range's edges."""
+    fit = _fit()["fitted_on"]
+    r_lo, r_hi = fit["allowance_over_t_range"]
+    y = _y(x, theta)
+    lo = np.maximum(2.0 * (1.0 - y * (1.0 + r_hi)), fit["stroke_ratio_range"][0])
+    hi = np.maximum(np.minimum(2.0 * (1.0 - y * (1.0 + r_lo)), fit["stroke_ratio_range"][1]), lo)
+    return np.clip(sigma, lo, hi)
+
+
+def _lock_ratio(key, t_over_L, theta_rad, sigma):
+    """exp(sigma g(x, theta, sigma')): the leading sigma is the cell's own (held in
+    [0, the largest fitted]), so the ratio tends to 1 with the stroke; the terms g are taken at
+    the nearest fitted cell, (x, theta) in the box and sigma' = :func:`_on_cells`."""
+    sig = np.clip(np.asarray(sigma, dtype=float), 0.0, _fit()["fitted_on"]["stroke_ratio_range"][1])
+    x, theta = _clipped(t_over_L, theta_rad)
+    return np.exp(sig * (lock_design_matrix(x, theta, _on_cells(x, theta, sig)) @ _coef(key)))
+
+
+def lock_force_factor(t_over_L, theta_rad, sigma):
+    """R_L2 / (k d_lock) predicted by the fit (k the corrected L0 stiffness, d_lock = h - 2t - a).
+
+    Held inside the fitted (t/L, theta, sigma) box like :func:`stiffness_factor`.
+    """
+    return _lock_ratio("lock_force", t_over_L, theta_rad, sigma)
+
+
+def lock_stroke_factor(t_over_L, theta_rad, sigma):
+    """d_lock,L2 / (h - 2t - a) predicted by the fit, at most the largest ratio L2 gave on
+    the fitted cells (a few per cent above 1: the pads are elastic and, under stiff walls,
+    meet a little after the rigid-pad stroke)."""
+    return np.minimum(_lock_ratio("lock_stroke", t_over_L, theta_rad, sigma),
+                      _fit()["lock_stroke"]["ratio_range"][1])
+
+
+def stiffness_factor(t_over_L, theta_rad):
+    """k_L2 / k_L0 predicted by the fit.
+
+    x = t/L is clipped to [0, the largest t/L fitted] and theta to its fitted range (optimisers
+    probe far outside the bounds, where the terms would swing or overflow): cells outside the
+    box keep the factor of its nearest edge.
+    """
+    x, theta = _clipped(t_over_L, theta_rad)
+    return np.exp(design_matrix(x, theta) @ _coef())
+
+
+def expected_error_rel(t_over_L, theta_rad, t_mm=None):
+    """Median |relative error| of the corrected L0 lock force R against L2, measured out of
+    sample in the band of (t/L, theta) each cell falls in (``out_of_sample`` in the data
+    file; bands: t/L 0-0.6-1.0-, theta 5-15-60-75 deg). Vectorised, pure.
+
+    A band the measurement had no cell in (e.g. t/L > 0.6 at theta < 15 deg, which the cell
+    rules exclude) takes the worst band of the same t/L range. Points outside the bands fall in
+    the nearest one. Given the wall thickness t_mm, cells of the thin band (the compact
+    designs: t below ``thin.t_mm_max``, theta below ``thin.theta_deg_max``, sampled and
+    measured apart) take its own measured median instead.
+    """
+    table = _fit()["out_of_sample"]["expected_error"]
+    x_edges = np.asarray(table["t_over_L_edges"], dtype=float)
+    th_edges = np.radians(np.asarray(table["theta_deg_edges"], dtype=float))
+    err = np.asarray(table["median_abs_err_lock_force"], dtype=float)      # (n_x, n_theta)
+    i = np.clip(np.searchsorted(x_edges, np.asarray(t_over_L, dtype=float), side="right") - 1,
+                0, err.shape[0] - 1)
+    j = np.clip(np.searchsorted(th_edges, np.asarray(theta_rad, dtype=float), side="right") - 1,
+                0, err.shape[1] - 1)
+    out = err[i, j]
+    thin = table.get("thin")
+    if t_mm is None or thin is None:
+        return out
+    in_thin = ((np.asarray(t_mm, dtype=float) < thin["t_mm_max"])
+               & (np.asarray(theta_rad, dtype=float) < np.radians(thin["theta_deg_max"])))
+    return np.where(in_thin, thin["median_abs_err_lock_force"], out)

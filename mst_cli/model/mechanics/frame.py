@@ -1,0 +1,349 @@
+"""Rung L1 ``frame``: geometrically nonlinear (corotational) beam model of one hex layer.
+
+Each inclined wall is a chain of 2D Timoshenko beam elements on its centre line, from the pad
+mid-plane (z = t/2) to the chevron tip (z = h/2), the same line and length L that rung L0 uses
+(:attr:`HexCell.wall_length_mm`). Boundary conditions are those of one wall of a symmetric
+chevron (see :mod:`mst_cli.model.mechanics.spring`): clamped at the pad, which is bonded to the rigid
+plate; at the tip, on the mirror plane z = h/2, no rotation and no horizontal force, vertical
+motion prescribed (-d/2 for a layer compression d). Two walls in series make a chevron and
+the web's two chevrons act in parallel, so the layer force is F = 2 f_wall (f_wall for the
+whole web width b = D).
+
+Elements are corotational (Crisfield, "Non-linear Finite Element Analysis of Solids and
+Structures", Vol. 1, ch. 7; Battini & Pacoste, Comput. Methods Appl. Mech. Eng. 191 (2002)
+1755): the rigid rotation of each element's chord is taken out exactly and the remaining
+local deformation (stretch, two end rotations) is small and linear, with the shear-flexible
+local stiffness EI/l (4+phi)/(1+phi), EI/l (2-phi)/(1+phi), phi = 12 EI/(kappa G A l^2).
+Large rotations of the walls are exact; strains are assumed small. Plane strain: the wall is
+a web b = D wide (20 mm against 0.4-3 mm thick) whose sections cannot contract along y, so
+EA = E' b t and EI = E' b t^3 / 12 with E' = E / (1 - nu^2), as in rung L0; G is unchanged.
+
+Load: displacement control with adaptive steps. Contact: the cavity closes when the clear gap
+between the wall's inner surface (centre line offset by t/2 along the rotated section normal)
+and its mirror image across z = h/2 -- or between the two inner pads, h - 2t - d -- falls to the
+cell's contact allowance; the last wall thickness t next to the cavity's tip vertex is a wedge
+and does not count, nor (shallow walls) any point whose gap at rest is below twice the
+allowance -- the same rule as rung L2's. After contact the layer's stiffness is the walls' last tangent plus L0's contact column.
+
+The layer law (:func:`frame_layer`) multiplies the beam forces by the joint factor of
+:mod:`mst_cli.model.mechanics.correction` (fitted against L2, a function of t/L and theta): the
+beam's rigid clamps at the pad mid-plane and the tip are what that factor corrects.
+:func:`solve_frame` itself returns the pure beam solution. Joint models of L1's own,
+rigid end zones from the joint geometry, were measured against L2 on the 150 cells of the
+earlier fit, theta 15-60 deg, t/L <= 0.6 (benchmarks/model_choices.py, plane strain): median
+|error| in k 23.7 % with none (beam theory), 11.9 % with half the geometric overlaps rigid,
+61 % with all of them (L0's fitted factor then: 1.7 %; over the printable box now 1.0 %,
+``mst bench``). The near-crack at the cavity's tip
+vertex makes the joints softer than rigid and stiffer than absent, which the fit captures and
+these do not, so L1 reuses L0's factor.
+
+Also here: :class:`TabulatedLockingLayer`, the layer law of a sampled monotone curve, shared
+with rung L2.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from mst_cli.model import geometry as geo
+from mst_cli.model.mechanics.spring import plane_strain_modulus_MPa
+
+DEFAULT_N_ELEMENTS = 12
+SHEAR_COEFFICIENT_RECT = 5.0 / 6.0
+
+
+class FrameError(RuntimeError):
+    """The frame solve did not converge (reported, never returned as a silent number)."""
+
+
+# --------------------------------------------------------------------------- tabulated law
+def monotone_envelope(d_mm, F_N):
+    """The force-controlled path of a displacement-controlled curve.
+
+    Under a force (the stack is force-driven) a layer whose F(d) falls after a peak snaps
+    through at the peak force to the next point where F is higher again. Returns the samples
+    with strictly increasing F and d; a plateau ends at the last sample (contact) with the
+    peak force (plus a relative 1e-9 so that d(F) stays a function).
+    """
+    d = np.asarray(d_mm, dtype=float)
+    F = np.asarray(F_N, dtype=float)
+    keep_d, keep_F = [d[0]], [F[0]]
+    for di, Fi in zip(d[1:], F[1:]):
+        if Fi > keep_F[-1] and di > keep_d[-1]:
+            keep_d.append(di)
+            keep_F.append(Fi)
+    if keep_d[-1] < d[-1]:              # snapped: contact reached at the peak force
+        keep_d.append(d[-1])
+        keep_F.append(keep_F[-1] * (1.0 + 1e-9) + 1e-300)
+    return np.array(keep_d), np.array(keep_F)
+
+
+@dataclass(frozen=True)
+class TabulatedLockingLayer:
+    """Layer law from a sampled curve: linear between samples up to the lock, then locked.
+
+    Implements the layer-law protocol of :mod:`mst_cli.model.mechanics`. ``d_samples_mm`` and
+    ``F_samples_N`` start at (0, 0), increase strictly, and end at contact onset.
+    """
+
+    d_samples_mm: tuple[float, ...]
+    F_samples_N: tuple[float, ...]
+    k_N_per_mm: float                 # small-load stiffness (the linear solve)
+    k_locked_N_per_mm: float
+    snap_through: bool = False        # F(d) had a falling branch before contact
+
+    @classmethod
+    def from_curve(cls, d_mm, F_N, k_linear_N_per_mm, k_locked_N_per_mm, snap_through=None):
+        d = np.asarray(d_mm, dtype=float)
+        F = np.asarray(F_N, dtype=float)
+        if not (np.all(np.diff(d) > 0) and np.all(np.diff(F) > 0) and d[0] == 0 and F[0] == 0):
+            raise ValueError("a tabulated layer law needs a strictly increasing curve from (0, 0)")
+        snap = bool(snap_through) if snap_through is not None else False
+        return cls(tuple(map(float, d)), tuple(map(float, F)), float(k_linear_N_per_mm),
+                   float(k_locked_N_per_mm), snap)
+
+    @property
+    def d_lock_mm(self) -> float:
+        return self.d_samples_mm[-1]
+
+    @property
+    def lock_force_N(self) -> float:
+        return self.F_samples_N[-1]
+
+    @property
+    def knots_N(self) -> tuple[float, ...]:
+        return self.F_samples_N[1:]
+
+    def displacement_mm(self, force_N):
+        F = np.asarray(force_N, dtype=float)
+        inside = np.interp(F, self.F_samples_N, self.d_samples_mm)
+        beyond = self.d_lock_mm + (F - self.lock_force_N) / self.k_locked_N_per_mm
+        return np.where(F <= self.lock_force_N, inside, beyond)
+
+
+# --------------------------------------------------------------------------- corotational beam
+def _element_forces(X, U, l0, beta0, EA, EI, phi, need_K=True):
+    """Internal forces (and tangents) of corotational Timoshenko elements, vectorised.
+
+    X: (n+1, 2) node coordinates; U: (n+1, 3) nodal (u_x, u_z, rotation); per element l0, beta0.
+    Returns f_e (n, 6), K_e (n, 6, 6).
+    """
+    x1 = X[:-1] + U[:-1, :2]
+    x2 = X[1:] + U[1:, :2]
+    dx = x2 - x1
+    ln = np.hypot(dx[:, 0], dx[:, 1])
+    c, s = dx[:, 0] / ln, dx[:, 1] / ln
+    # rigid chord rotation beta - beta0, wrapped to (-pi, pi]
+    c0, s0 = np.cos(beta0), np.sin(beta0)
+    alpha = np.arctan2(s * c0 - c * s0, c * c0 + s * s0)
+    ubar = ln - l0
+    th1 = U[:-1, 2] - alpha
+    th2 = U[1:, 2] - alpha
+    k11 = EI / l0 * (4.0 + phi) / (1.0 + phi)
+    k12 = EI / l0 * (2.0 - phi) / (1.0 + phi)
+    N = EA / l0 * ubar
+    M1 = k11 * th1 + k12 * th2
+    M2 = k12 * th1 + k11 * th2
+    zero = np.zeros_like(c)
+    r = np.stack([-c, -s, zero, c, s, zero], axis=1)
+    z = np.stack([s, -c, zero, -s, c, zero], axis=1)
+    e3 = np.zeros((len(c), 6)); e3[:, 2] = 1.0
+    e6 = np.zeros((len(c), 6)); e6[:, 5] = 1.0
+    B = np.stack([r, -z / ln[:, None] + e3, -z / ln[:, None] + e6], axis=1)      # (n, 3, 6)
+    fl = np.stack([N, M1, M2], axis=1)
+    f = np.einsum("nij,ni->nj", B, fl)
+    if not need_K:
+        return f, None
+    Kl = np.zeros((len(c), 3, 3))
+    Kl[:, 0, 0] = EA / l0
+    Kl[:, 1, 1] = Kl[:, 2, 2] = k11
+    Kl[:, 1, 2] = Kl[:, 2, 1] = k12
+    K = np.einsum("nki,nkl,nlj->nij", B, Kl, B)
+    K += (N / ln)[:, None, None] * np.einsum("ni,nj->nij", z, z)
+    K += ((M1 + M2) / ln ** 2)[:, None, None] * (np.einsum("ni,nj->nij", r, z) + np.einsum("ni,nj->nij", z, r))
+    return f, K
+
+
+@dataclass(frozen=True)
+class FrameResult:
+    """Force-displacement of one layer from the frame solve, up to contact onset."""
+
+    displacement_mm: np.ndarray
+    force_N: np.ndarray
+    k_linear_N_per_mm: float
+    d_contact_mm: float
+    contact_at: str                  # "pad" or "wall"
+    newton_iterations: int
+    snap_through: bool
+
+
+class _Wall:
+    def __init__(self, cell: geo.HexCell, material, n_el: int):
+        th = cell.theta_rad
+        t, b = cell.t_mm, cell.b_mm
+        outer, inner = cell.outer_profile_xz(), cell.inner_profile_xz()
+        tip = 0.5 * (np.asarray(outer[1]) + np.asarray(inner[1]))    # centre of the tip section
+        L = cell.wall_length_mm
+        self.u_dir = np.array([math.cos(th), math.sin(th)])
+        self.n0 = np.array([-math.sin(th), math.cos(th)])            # towards the cavity
+        s = np.linspace(0.0, L, n_el + 1)
+        self.X = tip[None, :] - (L - s)[:, None] * self.u_dir[None, :]
+        self.l0 = np.full(n_el, L / n_el)
+        self.beta0 = np.full(n_el, th)
+        E, nu = material.youngs_modulus_MPa, material.poisson_ratio
+        G = E / (2.0 * (1.0 + nu))
+        E_ps = plane_strain_modulus_MPa(E, nu)          # a web b = D wide: plane strain
+        self.EA, self.EI = E_ps * b * t, E_ps * b * t ** 3 / 12.0
+        self.phi = 12.0 * self.EI / (SHEAR_COEFFICIENT_RECT * G * b * t * self.l0 ** 2)
+        self.n_nodes = n_el + 1
+        ndof = 3 * self.n_nodes
+        self.tip_w = ndof - 2
+        fixed = [0, 1, 2, ndof - 2, ndof - 1]
+        self.free = np.setdiff1d(np.arange(ndof), fixed)
+        self.dofs = (3 * np.arange(n_el)[:, None] + np.arange(6)[None, :])   # (n, 6)
+        self.half_t = 0.5 * t
+        self.h2 = 0.5 * cell.h_mm
+        # which nodes' inner-surface points can close the cavity (above the pad, off the wedge)
+        p_in = self.X + self.half_t * self.n0[None, :]
+        vertex = np.asarray(inner[1])
+        before_vertex = (vertex - p_in) @ self.u_dir
+        rest_gap = 2.0 * (0.5 * cell.h_mm - p_in[:, 1])
+        self.gap_nodes = np.flatnonzero((p_in[:, 1] >= t - 1e-12) & (before_vertex >= t)
+                                        & (rest_gap >= 2.0 * cell.contact_allowance_mm))
+        self.pad_gap0 = cell.h_mm - 2.0 * t
+        self.ndof = ndof
+
+    def assemble(self, u, need_K=True):
+        U = u.reshape(-1, 3)
+        fe, Ke = _element_forces(self.X, U, self.l0, self.beta0, self.EA, self.EI, self.phi, need_K)
+        f = np.zeros(self.ndof)
+        np.add.at(f, self.dofs, fe)
+        if not need_K:
+            return f, None
+        K = np.zeros((self.ndof, self.ndof))
+        np.add.at(K, (self.dofs[:, :, None], self.dofs[:, None, :]), Ke)
+        return f, K
+
+    def gaps(self, u, d):
+        U = u.reshape(-1, 3)[self.gap_nodes]
+        rot = U[:, 2]
+        n = np.stack([self.n0[0] * np.cos(rot) - self.n0[1] * np.sin(rot),
+                      self.n0[0] * np.sin(rot) + self.n0[1] * np.cos(rot)], axis=1)
+        z_in = self.X[self.gap_nodes, 1] + U[:, 1] + self.half_t * n[:, 1]
+        plane = self.h2 - 0.5 * d
+        g_wall = float(2.0 * (plane - z_in).min()) if len(z_in) else math.inf
+        return self.pad_gap0 - d, g_wall
+
+    def solve_step(self, u, d, max_iter=30, rtol=1e-10):
+        u = u.copy()
+        f, K = self.assemble(u)
+        du_pres = -0.5 * d - u[self.tip_w]
+        free = self.free
+        u[free] += np.linalg.solve(K[np.ix_(free, free)], -f[free] - K[free, self.tip_w] * du_pres)
+        u[self.tip_w] += du_pres
+        scale = None
+        for it in range(1, max_iter + 1):
+            f, K = self.assemble(u)
+            reaction = abs(f[self.tip_w])
+            scale = max(reaction, 1e-14 * self.EA) if scale is None else max(scale, reaction)
+            if np.linalg.norm(f[free]) <= rtol * scale + 1e-13 * self.EA:
+                return u, it
+            du = np.linalg.solve(K[np.ix_(free, free)], -f[free])
+            if not np.all(np.isfinite(du)):
+                raise FloatingPointError("singular tangent")
+            u[free] += du
+        raise FloatingPointError("Newton did not converge")
+
+
+def solve_frame(cell: geo.HexCell, material, n_elements: int = DEFAULT_N_ELEMENTS,
+                first_step_frac: float = 0.125, max_steps: int = 400) -> FrameResult:
+    """Nonlinear force-displacement of one layer up to contact onset (see module docstring).
+
+    Raises
+    ------
+    ValueError     for a cell without a cavity stroke (h - 2t <= allowance) or with p <= 0
+    FrameError     when the steps shrink below 1e-7 of the stroke without converging
+    """
+    if not (cell.p_mm > 0 and cell.cavity_height_mm > cell.contact_allowance_mm):
+        raise ValueError(f"frame model needs a cell with p > 0 and h - 2t > the contact allowance "
+                         f"(theta={cell.theta_deg:g} deg, t={cell.t_mm:g} mm, h={cell.h_mm:g} mm)")
+    wall = _Wall(cell, material, n_elements)
+    factor = 2.0                      # two chevrons in parallel
+    allowance = cell.contact_allowance_mm
+    u = np.zeros(wall.ndof)
+
+    # small-load stiffness: the tangent at u = 0, tip moved by -1/2 per unit layer compression
+    f0, K0 = wall.assemble(u)
+    free = wall.free
+    ul = np.zeros_like(u)
+    ul[wall.tip_w] = -0.5
+    ul[free] = np.linalg.solve(K0[np.ix_(free, free)], -K0[free, wall.tip_w] * ul[wall.tip_w])
+    k_lin = float(-(K0 @ ul)[wall.tip_w] * factor)
+
+    d_nom = cell.cavity_height_mm - allowance
+    step = first_step_frac * d_nom
+    ds, Fs, d, total_it = [0.0], [0.0], 0.0, 0
+    g_prev = min(wall.gaps(u, 0.0))
+    for _ in range(max_steps):
+        d_try = min(d + step, d_nom * (1.0 + 1e-9) + 1e-12)
+        try:
+            u_new, it = wall.solve_step(u, d_try)
+        except (FloatingPointError, np.linalg.LinAlgError):
+            step *= 0.5
+            if step < 1e-7 * d_nom:
+                raise FrameError(f"frame solve stalled at d = {d:.4g} mm for {cell}")
+            continue
+        total_it += it
+        gp, gw = wall.gaps(u_new, d_try)
+        if min(gp, gw) <= allowance + 1e-12 * d_nom:
+            lo, hi, g_lo, g_hi, u_lo = d, d_try, g_prev, min(gp, gw), u
+            uc, dc = u_new, d_try
+            for _ in range(30):
+                if abs(min(gp, gw) - allowance) <= 1e-9 * d_nom or hi - lo <= 1e-12 * d_nom:
+                    break
+                dc = lo + (g_lo - allowance) / max(g_lo - g_hi, 1e-300) * (hi - lo)
+                dc = min(max(dc, lo + 1e-3 * (hi - lo)), hi - 1e-3 * (hi - lo))
+                uc, it = wall.solve_step(u_lo, dc)
+                total_it += it
+                gp, gw = wall.gaps(uc, dc)
+                if min(gp, gw) > allowance:
+                    lo, g_lo, u_lo = dc, min(gp, gw), uc
+                else:
+                    hi, g_hi = dc, min(gp, gw)
+            f, _ = wall.assemble(uc, need_K=False)
+            ds.append(dc)
+            Fs.append(-f[wall.tip_w] * factor)
+            contact = "wall" if gw < gp else "pad"
+            break
+        f, _ = wall.assemble(u_new, need_K=False)
+        ds.append(d_try)
+        Fs.append(-f[wall.tip_w] * factor)
+        u, d, g_prev = u_new, d_try, min(gp, gw)
+        step *= 1.5 if it <= 3 else (1.0 if it <= 6 else 0.5)
+    else:
+        raise FrameError(f"no contact found within {max_steps} steps for {cell}")
+    F = np.array(Fs)
+    snap = bool(np.any(np.diff(F) <= 0))
+    return FrameResult(np.array(ds), F, k_lin, float(ds[-1]), contact, total_it, snap)
+
+
+@functools.lru_cache(maxsize=4096)
+def frame_layer(cell: geo.HexCell, material) -> TabulatedLockingLayer:
+    """The L1 law of one cell: the frame curve up to contact, then the locked branch (walls + contact column)."""
+    from mst_cli.model.mechanics.spring import contact_stiffness_N_per_mm
+    from mst_cli.model.mechanics.correction import stiffness_factor
+    res = solve_frame(cell, material)
+    # the beam clamps the wall at the pad mid-plane and the tip; the finite joints' effect is
+    # the same fitted factor as L0's (a function of t/L and theta only), applied to the forces
+    joint = float(stiffness_factor(cell.t_mm / cell.wall_length_mm, cell.theta_rad))
+    d, F = monotone_envelope(res.displacement_mm, res.force_N * joint)
+    # locked: the walls' last tangent in parallel with the closed cavity's contact column (L0)
+    k_walls = max((F[-1] - F[-2]) / (d[-1] - d[-2]), 0.0)
+    k_locked = k_walls + float(contact_stiffness_N_per_mm(
+        cell.theta_rad, cell.t_mm, cell.width_mm, cell.b_mm, material.youngs_modulus_MPa,
+        material.poisson_ratio))
+    return TabulatedLockingLayer.from_curve(d, F, res.k_linear_N_per_mm * joint, k_locked, res.snap_through)

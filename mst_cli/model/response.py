@@ -1,0 +1,203 @@
+"""Forward model of the whole sensor: force -> compression -> gap -> field -> dB/B0.
+
+:func:`regime_kernel` is the vectorised core shared by ``mst simulate`` and the design loop
+(so S_i and R_i are computed in one place). :func:`simulate` wraps it for one design and adds
+the curves, local slopes, the chip setting and the force resolution. Pure: no I/O.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from mst_cli.model import field as fld
+from mst_cli.model import chip as mlx
+from mst_cli.model.geometry import SensorGeometry
+from mst_cli.model.mechanics import layer_law
+from mst_cli.model.stack import series_displacement_mm, Stack
+
+GAP_STEP_MM = 1e-4   # central-difference step for d|B|/d gap with the non-closed-form models
+
+
+def field_magnitude_T(gap_mm, geometry: SensorGeometry, model: str):
+    """|B| at the chip for an array of gaps (the quantity the sensor reads)."""
+    B = fld.field_at_chip_T(gap_mm, geometry.magnet, model, geometry.chip_offset_mm,
+                            geometry.magnet_tilt_deg)
+    return np.linalg.norm(B, axis=-1)
+
+
+def regime_kernel(k_N_per_mm, d_lock_mm, k_locked_N_per_mm, gap0_mm, field_T, lock_force_N=None):
+    """Lock forces and secant sensitivities of many L0 stacks at once.
+
+    Parameters
+    ----------
+    k_N_per_mm, d_lock_mm, k_locked_N_per_mm : array (..., n_layers)
+    lock_force_N : array (..., n_layers), optional    [default k * d_lock, bilinear layers]
+    gap0_mm : array (...)       unloaded magnet-to-chip gap
+    field_T : callable          |B| (T) of an array of gaps (mm)
+
+    Returns
+    -------
+    R_sorted_N : (..., n)       lock forces in locking order (regime edges R_1 < ... < R_n)
+    S_per_N : (..., n)          secant sensitivity of each regime, (dB/B0 over band) / band
+    gap_mm : (..., n+1)         gap at F = 0, R_1, ..., R_n
+    B_T : (..., n+1)            |B| at those forces
+    """
+    k = np.asarray(k_N_per_mm, dtype=float)
+    R = k * np.asarray(d_lock_mm, dtype=float) if lock_force_N is None else np.asarray(lock_force_N, dtype=float)
+    R_sorted = np.sort(R, axis=-1)
+    F = np.concatenate([np.zeros(R_sorted.shape[:-1] + (1,)), R_sorted], axis=-1)
+    d = series_displacement_mm(F, k, d_lock_mm, k_locked_N_per_mm, R)
+    gap = np.asarray(gap0_mm, dtype=float)[..., None] - d
+    B = field_T(gap)
+    rel = B / B[..., :1] - 1.0
+    S = np.diff(rel, axis=-1) / np.maximum(np.diff(F, axis=-1), 1e-300)
+    return R_sorted, S, gap, B
+
+
+@dataclass
+class Regime:
+    """One force band between two successive lock forces."""
+
+    index: int                      # regime number from 1
+    layer: int                      # index (from 1, bottom to top) of the layer that locks at its end
+    force_from_N: float
+    force_to_N: float
+    k_layer_N_per_mm: float
+    d_lock_layer_mm: float
+    k_effective_N_per_mm: float     # 1 / stack compliance inside the band
+    sensitivity_secant_per_N: float
+    sensitivity_min_per_N: float
+    sensitivity_max_per_N: float
+    force_resolution_N: float       # field resolution / (B0 * S secant)
+    force_resolution_worst_N: float  # field resolution / (B0 * S min)
+
+
+@dataclass
+class Response:
+    """Everything ``mst simulate`` reports about one design."""
+
+    mechanics: str
+    field_model: str
+    force_N: np.ndarray
+    displacement_mm: np.ndarray
+    gap_mm: np.ndarray
+    B_T: np.ndarray                 # (m, 3) field vector at the chip
+    B_abs_T: np.ndarray
+    dB_rel: np.ndarray              # (|B| - B0) / B0
+    in_range: np.ndarray            # False past the last lock
+    regimes: list[Regime]
+    B0_T: float
+    B_full_T: float                 # at the last lock force
+    gap0_mm: float
+    gap_min_mm: float               # at the last lock force
+    remanence_T: float
+    chip_setting: mlx.ChipSetting | None
+    saturated: bool
+    field_resolution_T: float
+    noise_uT_rms: float
+    warnings: list[str] = field(default_factory=list)
+
+    @property
+    def lock_forces_N(self) -> list[float]:
+        return [r.force_to_N for r in self.regimes]
+
+    @property
+    def max_force_N(self) -> float:
+        return self.regimes[-1].force_to_N
+
+
+def simulate(geometry: SensorGeometry, material, mechanics: str = "spring",
+             field_model: str | None = None, noise_uT_rms: float = mlx.DEFAULT_NOISE_uT,
+             points_per_regime: int = 200, overload: float = 0.25) -> Response:
+    """Curves and per-regime figures of one design.
+
+    The force axis runs from 0 to (1 + overload) x the last lock force; points past the last
+    lock are flagged ``in_range = False`` (the sensor's range has ended there, the model only
+    shows the stiff locked branch).
+    """
+    model = fld.choose_field_model(geometry.chip_offset_mm, geometry.magnet_tilt_deg, field_model)
+    laws = tuple(layer_law(c, material, mechanics) for c in geometry.layers)
+    stack = Stack(laws)
+    edges = stack.regime_bounds_N
+    n = len(laws)
+
+    # force grid: uniform inside each regime, the edges included exactly, then the overload
+    pieces = [np.linspace(edges[i], edges[i + 1], points_per_regime, endpoint=False) for i in range(n)]
+    F_last = edges[-1]
+    pieces.append(np.linspace(F_last, F_last * (1.0 + overload), max(points_per_regime // 4, 2)))
+    F = np.concatenate(pieces)
+    d = stack.displacement_mm(F)
+    gap0 = geometry.gap0_mm
+    gap = gap0 - d
+    Bvec = fld.field_at_chip_T(gap, geometry.magnet, model, geometry.chip_offset_mm,
+                               geometry.magnet_tilt_deg)
+    Babs = np.linalg.norm(Bvec, axis=-1)
+    B0 = float(Babs[0])
+    rel = Babs / B0 - 1.0
+
+    # local slope d(dB/B0)/dF = (1/B0) d|B|/dgap * dgap/dF, with dgap/dF = -compliance
+    field_T = lambda g: field_magnitude_T(g, geometry, model)  # noqa: E731
+    dB_dgap = (field_T(gap + GAP_STEP_MM) - field_T(gap - GAP_STEP_MM)) / (2 * GAP_STEP_MM)
+    # compliance is one-sided at the lock forces: evaluate it just inside each point's band
+    band = np.clip(np.searchsorted(edges, F, side="right") - 1, 0, n)
+    lo_b, hi_b = edges[band], np.append(edges, np.inf)[band + 1]
+    width = np.where(np.isfinite(hi_b), hi_b - lo_b, F_last)
+    F_inside = np.clip(F, lo_b + 1e-9 * width, hi_b - 1e-9 * width)
+    compliance = np.array([stack.local_compliance_mm_per_N(f) for f in F_inside])
+    slope = -dB_dgap * compliance / B0
+
+    # secant sensitivities from the stack itself, so they hold for every mechanics rung
+    # (regime_kernel gives the same numbers for L0 layers; the design loop uses it)
+    k = np.array([law.k_N_per_mm for law in laws])
+    dl = np.array([law.d_lock_mm for law in laws])
+    gap_edges = gap0 - stack.displacement_mm(edges)
+    B_edges = field_T(gap_edges)
+    widths = np.diff(edges)
+    degenerate = widths <= 1e-9 * edges[-1]
+    S = np.diff(B_edges / B_edges[0] - 1.0) / np.where(degenerate, 1.0, widths)
+    for i in np.flatnonzero(degenerate):
+        # zero-width band: the secant's limit is the local slope at that force
+        dB = (field_T(gap_edges[i] + GAP_STEP_MM) - field_T(gap_edges[i] - GAP_STEP_MM)) / (2 * GAP_STEP_MM)
+        S[i] = -dB * stack.band_start_compliance_mm_per_N(i) / B0
+
+    B_full = float(B_edges[-1])
+    Bmax_vec = np.abs(Bvec[F <= F_last + 1e-12]).max(axis=0)
+    setting = mlx.choose_setting(max(Bmax_vec[0], Bmax_vec[1]), Bmax_vec[2])
+    saturated = setting is None or B_full >= mlx.SATURATION_T
+    res_T = mlx.field_resolution_T(setting, noise_uT_rms) if setting else float("nan")
+
+    regimes = []
+    order = stack.lock_order
+    for i in range(n):
+        lo, hi = edges[i], edges[i + 1]
+        s_band = slope[band == i] if not degenerate[i] else np.array([S[i]])
+        j = int(order[i])
+        regimes.append(Regime(
+            index=i + 1, layer=j + 1, force_from_N=float(lo), force_to_N=float(hi),
+            k_layer_N_per_mm=float(k[j]), d_lock_layer_mm=float(dl[j]),
+            k_effective_N_per_mm=1.0 / stack.local_compliance_mm_per_N(0.5 * (lo + hi)),
+            sensitivity_secant_per_N=float(S[i]),
+            sensitivity_min_per_N=float(s_band.min()), sensitivity_max_per_N=float(s_band.max()),
+            force_resolution_N=res_T / (B0 * float(S[i])),
+            force_resolution_worst_N=res_T / (B0 * float(s_band.min())),
+        ))
+
+    warnings = []
+    for i in np.flatnonzero(degenerate):
+        warnings.append(f"layers {', '.join(str(int(j) + 1) for j in order[i - 1:i + 1])} lock at the "
+                        f"same force {edges[i + 1]:.4g} N: regime {i + 1} has zero width (its S is "
+                        f"the local slope there)")
+    if list(order) != list(range(n)):
+        warnings.append("layers do not lock bottom-to-top in file order: lock order is "
+                        + ", ".join(str(j + 1) for j in order))
+    if saturated:
+        warnings.append(f"field at full load {B_full * 1e3:.1f} mT exceeds the MLX90393's range "
+                        f"({mlx.SATURATION_T * 1e3:.0f} mT saturation): move the magnet away")
+    return Response(
+        mechanics=mechanics, field_model=model, force_N=F, displacement_mm=d, gap_mm=gap,
+        B_T=Bvec, B_abs_T=Babs, dB_rel=rel, in_range=F <= F_last * (1 + 1e-12), regimes=regimes,
+        B0_T=B0, B_full_T=B_full, gap0_mm=gap0, gap_min_mm=float(gap_edges[-1]),
+        remanence_T=geometry.magnet.remanence_T, chip_setting=setting, saturated=saturated,
+        field_resolution_T=res_T, noise_uT_rms=noise_uT_rms, warnings=warnings)

@@ -1,0 +1,120 @@
+"""Layers in series: the piecewise force-displacement curve of the stack.
+
+The same force passes through every layer, so the stack compression is the sum of the layer
+compressions, d(F) = sum_j d_j(F). Each layer locks at its own force R_j; sorted, the R_j
+split the force axis into regimes. Every layer law is piecewise linear between its knots
+(rung L0: the knee and R_j), so d(F) is piecewise linear with breakpoints exactly at the
+union of the knots: evaluating it there and interpolating linearly is exact, not an
+approximation: no time stepping.
+
+Pure numpy; no I/O.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from mst_cli.model.mechanics.spring import layer_displacement_mm
+
+
+def series_displacement_mm(force_N, k_N_per_mm, d_lock_mm, k_locked_N_per_mm, lock_force_N=None):
+    """Stack compression of L0 layers in series, vectorised over designs.
+
+    ``k``, ``d_lock``, ``k_locked`` and ``lock_force_N`` (None: R = k d_lock, bilinear) have
+    shape (..., n_layers); ``force_N`` has shape (..., m) (broadcast against the leading axes).
+    Returns shape (..., m).
+    """
+    k = np.asarray(k_N_per_mm, dtype=float)
+    dl = np.asarray(d_lock_mm, dtype=float)
+    R = k * dl if lock_force_N is None else np.asarray(lock_force_N, dtype=float)
+    F = np.asarray(force_N, dtype=float)[..., :, None]
+    d_layer = layer_displacement_mm(F, k[..., None, :], dl[..., None, :], R[..., None, :],
+                                    np.asarray(k_locked_N_per_mm, dtype=float)[..., None, :])
+    return d_layer.sum(axis=-1)
+
+
+@dataclass(frozen=True)
+class Stack:
+    """A stack of layer laws (see :mod:`mst_cli.model.mechanics`), listed bottom to top.
+
+    Every law is piecewise linear between its knots, so the sum d(F) is piecewise linear
+    between the union of all knots: interpolating on them is exact.
+    """
+
+    layers: tuple
+
+    @property
+    def lock_forces_N(self) -> np.ndarray:
+        """R_j of each layer, in the layers' own order."""
+        return np.array([law.lock_force_N for law in self.layers])
+
+    @property
+    def lock_order(self) -> np.ndarray:
+        """Indices of the layers in the order they lock (stable for equal R)."""
+        return np.argsort(self.lock_forces_N, kind="stable")
+
+    @property
+    def regime_bounds_N(self) -> np.ndarray:
+        """Force thresholds 0 = R_0 < R_(1) < ... < R_(n): the regimes' edges, sorted."""
+        return np.concatenate([[0.0], np.sort(self.lock_forces_N)])
+
+    @property
+    def last_lock_force_N(self) -> float:
+        return float(self.lock_forces_N.max())
+
+    @property
+    def knots_N(self) -> np.ndarray:
+        """0 and every layer's knots up to the last lock, ascending and unique."""
+        F_end = self.last_lock_force_N
+        ks = [0.0, F_end] + [f for law in self.layers for f in law.knots_N if f < F_end]
+        return np.unique(np.asarray(ks, dtype=float))
+
+    @property
+    def locked_compliance_mm_per_N(self) -> float:
+        """Past the last lock every layer is on its locked branch."""
+        return sum(1.0 / law.k_locked_N_per_mm for law in self.layers)
+
+    def local_compliance_mm_per_N(self, force_N: float) -> float:
+        """dd/dF on the segment that contains ``force_N`` (right-continuous at knots)."""
+        knots = self.knots_N
+        if force_N >= knots[-1]:
+            return self.locked_compliance_mm_per_N
+        i = int(np.searchsorted(knots, force_N, side="right")) - 1
+        d = self.displacement_mm(knots[i:i + 2])
+        return float((d[1] - d[0]) / (knots[i + 1] - knots[i]))
+
+    def band_start_compliance_mm_per_N(self, regime: int) -> float:
+        """dd/dF at the start of regime ``regime`` (0-based), ties split by the lock order.
+
+        Layers that lock before the regime sit on their locked branch; the others on their
+        slope just below the regime's start force. For a regime of zero width (two layers
+        locking at the same force) this is the limit of the secant as the width shrinks.
+        """
+        F = self.regime_bounds_N[regime]
+        step = 1e-9 * max(F, 1e-12)
+        total = 0.0
+        for pos, j in enumerate(self.lock_order):
+            law = self.layers[j]
+            if pos < regime:
+                total += 1.0 / law.k_locked_N_per_mm
+            else:
+                lo = max(F - step, 0.0)
+                d = law.displacement_mm(np.array([lo, lo + step]))
+                total += float((d[1] - d[0]) / step)
+        return total
+
+    def displacement_mm(self, force_N):
+        """d(F) for F >= 0 (past the last lock the locked stiffnesses carry the load)."""
+        F = np.asarray(force_N, dtype=float)
+        return sum(law.displacement_mm(F) for law in self.layers)
+
+    def force_N(self, displacement_mm):
+        """F(d), the exact inverse of d(F) (both piecewise linear on the same knots)."""
+        d = np.asarray(displacement_mm, dtype=float)
+        F_knots = self.knots_N
+        d_knots = self.displacement_mm(F_knots)
+        inside = np.interp(d, d_knots, F_knots)
+        beyond = F_knots[-1] + (d - d_knots[-1]) / self.locked_compliance_mm_per_N
+        return np.where(d <= d_knots[-1], inside, beyond)

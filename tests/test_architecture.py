@@ -1,0 +1,148 @@
+"""The package's layering, read from the source: imports only go down, and nothing cycles.
+
+Every ``import`` and ``from ... import`` of the package is counted, the ones inside functions
+(lazy imports) included, so a cycle hidden behind a late import fails here too. Importing
+``a.b.c`` also runs ``a`` and ``a.b``; those package edges count, except a module's own
+ancestors (Python loads them first whatever the module does).
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+PACKAGE = ROOT / "mst_cli"
+
+# lowest first; a module may import from its own layer or any layer listed before it
+LAYERS = (
+    ("mst_cli", "mst_cli.errors"),
+    ("mst_cli.model",),
+    ("mst_cli.io",),
+    ("mst_cli.design", "mst_cli.calibrate", "mst_cli.bench", "mst_cli.cad"),
+    ("mst_cli.cli",),
+)
+
+
+def _modules() -> dict[str, tuple[Path, bool]]:
+    out = {}
+    for path in PACKAGE.rglob("*.py"):
+        parts = list(path.relative_to(ROOT).with_suffix("").parts)
+        is_package = parts[-1] == "__init__"
+        if is_package:
+            parts = parts[:-1]
+        out[".".join(parts)] = (path, is_package)
+    return out
+
+
+MODULES = _modules()
+
+
+def _absolute(name: str, module: str, is_package: bool, level: int) -> str:
+    if not level:
+        return name
+    base = module.split(".") if is_package else module.split(".")[:-1]
+    base = base[: len(base) - (level - 1)]
+    return ".".join(base + ([name] if name else []))
+
+
+def _nearest_module(dotted: str) -> str | None:
+    while dotted and dotted not in MODULES:
+        dotted = dotted.rpartition(".")[0]
+    return dotted or None
+
+
+def import_graph() -> dict[str, set[str]]:
+    """module -> the package modules that importing it runs (lazy imports included)."""
+    graph = {}
+    for module, (path, is_package) in MODULES.items():
+        targets = set()
+        for node in ast.walk(ast.parse(path.read_text(), str(path))):
+            if isinstance(node, ast.Import):
+                names = [a.name for a in node.names]
+            elif isinstance(node, ast.ImportFrom):
+                base = _absolute(node.module or "", module, is_package, node.level)
+                names = [base] + [f"{base}.{a.name}" for a in node.names]
+            else:
+                continue
+            for name in names:
+                found = _nearest_module(name) if name.startswith("mst_cli") else None
+                if found is None:
+                    continue
+                parts = found.split(".")
+                for i in range(1, len(parts) + 1):   # a.b.c runs a, a.b, a.b.c
+                    target = ".".join(parts[:i])
+                    if target != module and not module.startswith(target + "."):
+                        targets.add(target)
+        graph[module] = targets
+    return graph
+
+
+def _layer_of(module: str) -> int:
+    best, best_len = None, -1
+    for i, prefixes in enumerate(LAYERS):
+        for prefix in prefixes:
+            if (module == prefix or module.startswith(prefix + ".")) and len(prefix) > best_len:
+                best, best_len = i, len(prefix)
+    assert best is not None, f"{module} belongs to no layer: add it to LAYERS"
+    return best
+
+
+def _cycles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """Strongly connected components with more than one module (Tarjan)."""
+    index, low, on_stack, stack, found = {}, {}, set(), [], []
+
+    def visit(v):
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        on_stack.add(v)
+        for w in graph[v]:
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on_stack:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            component = []
+            while True:
+                w = stack.pop()
+                on_stack.discard(w)
+                component.append(w)
+                if w == v:
+                    break
+            if len(component) > 1:
+                found.append(sorted(component))
+
+    for v in sorted(graph):
+        if v not in index:
+            visit(v)
+    return found
+
+
+def test_the_graph_sees_lazy_imports():
+    # the mechanics package picks a rung by importing the rung's module inside a function
+    graph = import_graph()
+    assert "mst_cli.model.mechanics.continuum" in graph["mst_cli.model.mechanics"]
+    assert "mst_cli.cli.common" in graph["mst_cli.cli.design"]
+
+
+def test_no_import_cycle_lazy_imports_included():
+    assert _cycles(import_graph()) == []
+
+
+def test_a_cycle_would_be_found():
+    assert _cycles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == [["a", "b", "c"]]
+
+
+@pytest.mark.parametrize("module", sorted(MODULES))
+def test_imports_only_go_down(module):
+    own = _layer_of(module)
+    upward = sorted(t for t in import_graph()[module] if _layer_of(t) > own)
+    assert upward == [], f"{module} (layer {own}) imports from a higher layer: {upward}"
+
+
+def test_no_top_level_module_but_the_errors():
+    top = sorted(p.name for p in PACKAGE.glob("*.py"))
+    assert top == ["__init__.py", "errors.py"]
