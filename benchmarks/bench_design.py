@@ -46,8 +46,8 @@ def cli_times(repeats: int) -> list[float]:
 
 def random_specs(n_layers: int, count: int, seed: int):
     from mst_cli.design.problem import DesignProblem
-    from mst_cli.model.response import simulate
     from mst_cli.io.schema import LayerEntry, load_document
+    from mst_cli.model.response import simulate
 
     base = load_document(SPEC)
     probe_doc = base.with_layers([LayerEntry(target_sensitivity_per_N=1.0, target_range_N=i + 1.0)
@@ -65,8 +65,8 @@ def random_specs(n_layers: int, count: int, seed: int):
 
 def recheck(result) -> bool:
     """Forward model on design.yaml as a user would load it, against the spec's targets."""
-    from mst_cli.model.response import simulate
     from mst_cli.io.schema import parse_document
+    from mst_cli.model.response import simulate
 
     doc = parse_document(yaml.safe_load(yaml.safe_dump(result.design_yaml_dict(), sort_keys=False)))
     geometry = doc.geometry()

@@ -16,9 +16,9 @@ import argparse
 import json
 from pathlib import Path
 
-from mst_cli.model.ladder import ERRORS_FILE
 from mst_cli.bench.ladder_bench import bench_markdown, ladder_errors, plot_bench, run_bench
 from mst_cli.io.outputs import staged
+from mst_cli.model.ladder import ERRORS_FILE
 
 
 def main():

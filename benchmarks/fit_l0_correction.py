@@ -51,8 +51,8 @@ from pathlib import Path
 
 import numpy as np
 
-from mst_cli.model import geometry as geo
 from mst_cli.bench.ladder_bench import BOUNDS, sample_cells
+from mst_cli.model import geometry as geo
 from mst_cli.model.geometry import Printer
 from mst_cli.model.material import Material
 from mst_cli.model.mechanics import correction, uncached_layer_law
@@ -163,7 +163,7 @@ def rung_errors(cells, ref, mat):
         laws = {"spring-textbook": spring_layer(c, mat, corrected=False), "spring": spring_layer(c, mat)}
         try:
             laws["frame"] = frame_layer.__wrapped__(c, mat)
-        except Exception as exc:       # noqa: BLE001 - counted as a failure in the table
+        except Exception as exc:
             laws["frame"] = exc
         for m, law in laws.items():
             if isinstance(law, Exception):
@@ -276,7 +276,8 @@ def main():
                                 "e = exp(-2x/sigma), w = 1 - x/(1 - y) floored smoothly at 0, "
                                 "r = allowance/t = (1 - sigma/2)/y - 1), sigma = d_lock / (L sin theta)",
                        "terms": correction.LOCK_TERMS, "coefficients": [float(c) for c in coef_R], **stats_R},
-        "lock_stroke": {"model": "ln(d_lock,L2 / (h - 2t - allowance)) = sigma * sum_i c_i * lock_terms_i(x, s, y, sigma, e, w, r)",
+        "lock_stroke": {"model": "ln(d_lock,L2 / (h - 2t - allowance)) = "
+                                 "sigma * sum_i c_i * lock_terms_i(x, s, y, sigma, e, w, r)",
                         "terms": correction.LOCK_TERMS, "coefficients": [float(c) for c in coef_d], **stats_d},
         "fitted_on": {"samples": len(cells), "seed": args.seed, "poisson_ratio": mat.poisson_ratio,
                       "contact_allowance_mm": cells[0].contact_allowance_mm, **box, **stats_k},
@@ -306,7 +307,8 @@ def main():
         print(f"{name}: from {lo:.3f} to {hi:.3f}; after the fit median |residual| "
               f"{s['median_abs_residual']:.2%}, max {s['max_abs_residual']:.2%}")
     _print_table(f"in sample ({len(cells)} fitted cells), median / max |error| against L2:", in_table)
-    _print_table(f"out of sample ({len(vcells)} cells, seed {args.verify_seed}), median / max |error| against L2:", table)
+    _print_table(f"out of sample ({len(vcells)} cells, seed {args.verify_seed}), "
+                 "median / max |error| against L2:", table)
     print("L0 median |R error| by (t/L, theta) band (rows t/L from", expected["t_over_L_edges"],
           ", columns theta from", expected["theta_deg_edges"], "):", expected["median_abs_err_lock_force"],
           "n", expected["n"])

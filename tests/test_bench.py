@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from mst_cli.model.ladder import cheapest_model_for, load_ladder_errors
 from mst_cli.bench.ladder_bench import field_errors, sample_cells, summarise
 from mst_cli.cli.app import main
+from mst_cli.model.ladder import cheapest_model_for, load_ladder_errors
 
 ERRORS = {"models": {
     "spring-textbook": {"median_abs_err_k": 0.16, "median_abs_err_lock_force": 0.9},

@@ -13,17 +13,16 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
 import sampling
 import trimesh
 from build123d import Edge, import_step
 
 from mst_cli.cad import mesh_io, parts
 from mst_cli.cad.assembly import build_body, build_sensor
+from mst_cli.errors import InputError
 from mst_cli.io.schema import load_design_document
 from mst_cli.model.components import BOARDS
 from mst_cli.model.geometry import HexCell, Housing, SensorGeometry
-from mst_cli.errors import InputError
 
 ROOT = Path(__file__).resolve().parents[1]
 FORWARD = ROOT / "configs" / "mohammadi2021-forward.yaml"

@@ -24,13 +24,13 @@ import yaml
 from click.testing import CliRunner
 
 from mst_cli.calibrate import fit as cal
-from mst_cli.model import chip as mlx
 from mst_cli.cli.app import main
+from mst_cli.io.schema import load_document, parse_document
+from mst_cli.io.serial_lines import SampleParser, parse_line
+from mst_cli.model import chip as mlx
 from mst_cli.model.components import grade_remanence_T
 from mst_cli.model.geometry import Housing
 from mst_cli.model.response import simulate
-from mst_cli.io.schema import load_document, parse_document
-from mst_cli.io.serial_lines import parse_line, SampleParser
 
 ROOT = Path(__file__).resolve().parents[1]
 DESIGN = ROOT / "configs" / "mohammadi2021-forward.yaml"
@@ -172,7 +172,8 @@ def test_calibrated_yaml_is_the_fitted_model(loadtest, tmp_path):
     doc = load_document(out / "calibrated.yaml")
     design = load_document(DESIGN)
     values = {n: v["value"] for n, v in loadtest["report"]["parameters"].items()}
-    assert doc.material.youngs_modulus_MPa == pytest.approx(design.material.youngs_modulus_MPa * values["modulus_factor"])
+    E_MPa = design.material.youngs_modulus_MPa
+    assert doc.material.youngs_modulus_MPa == pytest.approx(E_MPa * values["modulus_factor"])
     assert doc.magnet.remanence_T == pytest.approx(design.magnet.remanence_T * values["remanence_factor"])
     assert doc.geometry().gap0_mm - design.geometry().gap0_mm == pytest.approx(values["gap_offset_mm"], abs=1e-6)
     for a, b in zip(doc.layers, design.layers):
@@ -194,7 +195,8 @@ def test_raw_codes_give_the_same_calibration(loadtest, tmp_path):
     assert r.exit_code == 0, r.output
     rep2 = json.loads((tmp_path / "o" / "calibration.json").read_text())
     for n in TRUTH:
-        assert rep2["parameters"][n]["value"] == pytest.approx(rep["parameters"][n]["value"], abs=1e-3 * max(1, abs(rep["parameters"][n]["value"])))
+        value = rep["parameters"][n]["value"]
+        assert rep2["parameters"][n]["value"] == pytest.approx(value, abs=1e-3 * max(1, abs(value)))
     assert rep2["chip_setting"]["source"] == "the load test"
 
 
@@ -355,7 +357,8 @@ def test_serial_stream_from_a_pseudo_terminal(loadtest, tmp_path):
     assert "above_range" in shown[4]
     assert "3 lines skipped" in err
     head, rows = read_forces(tmp_path / "o" / "forces.csv")
-    assert head[:4] == ["time_s", "Bx_uT", "By_uT", "Bz_uT"] and [x["flag"] for x in rows] == ["ok"] * 4 + ["above_range"]
+    assert head[:4] == ["time_s", "Bx_uT", "By_uT", "Bz_uT"]
+    assert [x["flag"] for x in rows] == ["ok"] * 4 + ["above_range"]
 
 
 def test_serial_line_formats():
@@ -405,16 +408,19 @@ BAD = {
     "short row": (lambda t: _edit(t, lambda l: l[:5] + ["1.0,0,3000"] + l[5:]), [], "has 3 fields, the header 4"),
     "force in kN": (lambda t: t.replace("force_N", "force_kN"), [], "'force_kN'"),
     "force in grams": (lambda t: t.replace("force_N", "force_g"), [], "x 0.00980665"),
-    "grams labelled N": (lambda t: _edit(t, lambda l: [l[0]] + [f"{float(x.split(',')[0]) * 101.97:.3f}," + x.split(",", 1)[1] for x in l[1:]]),
+    "grams labelled N": (lambda t: _edit(t, lambda l: [l[0]] + [f"{float(x.split(',')[0]) * 101.97:.3f},"
+                                                                + x.split(",", 1)[1] for x in l[1:]]),
                          [], "must be newtons"),
     "field in mT": (lambda t: t.replace("Bz_uT", "Bz_mT"), [], "'Bz_mT'"),
     "too few points": (lambda t: _edit(t, lambda l: l[:9]), [], "needs at least 20 samples"),
     "saturated sample": (lambda t: _edit(t, _saturated), [], "saturated sample"),
     "two chip settings": (lambda t: _edit(t, lambda l: [l[0] + ",gain_sel,res"] + [x + ",7,0" for x in l[1:30]]
                                           + [x + ",5,0" for x in l[30:]]), [], "one chip setting"),
-    "flags disagree with columns": (lambda t: _edit(t, lambda l: [l[0] + ",gain_sel,res"] + [x + ",7,0" for x in l[1:]]),
+    "flags disagree with columns": (lambda t: _edit(t, lambda l: [l[0] + ",gain_sel,res"]
+                                                   + [x + ",7,0" for x in l[1:]]),
                                     ["--gain-sel", "5", "--res", "0"], "another chip setting"),
-    "field beyond the setting's range": (lambda t: _edit(t, lambda l: l[:20] + [l[20].rsplit(",", 1)[0] + ",9000.0"] + l[21:]),
+    "field beyond the setting's range": (lambda t: _edit(t, lambda l: l[:20] + [l[20].rsplit(",", 1)[0] + ",9000.0"]
+                                                        + l[21:]),
                                          ["--gain-sel", "7", "--res", "0"], "another chip setting"),
     "reversed load cell": (lambda t: _edit(t, lambda l: [l[0]] + ["-" + x for x in l[1:]]), [], "sign reversed"),
     "empty file": (lambda t: "", [], "no header row"),

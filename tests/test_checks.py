@@ -10,8 +10,7 @@ import numpy as np
 import pytest
 import trimesh
 
-from mst_cli.cad import checks
-from mst_cli.cad import mesh_io
+from mst_cli.cad import checks, mesh_io
 from mst_cli.cad.assembly import build_sensor, print_mesh
 from mst_cli.cad.manifest import export_manifest
 from mst_cli.io.schema import load_design_document

@@ -8,8 +8,7 @@ from mst_cli.model.geometry import HexCell
 from mst_cli.model.material import Material
 from mst_cli.model.mechanics import continuum as L2
 from mst_cli.model.mechanics import layer_law
-from mst_cli.model.mechanics.continuum import (_kinematics, _lame_3d, linear_stiffness_N_per_mm,
-                                               solve_continuum)
+from mst_cli.model.mechanics.continuum import _kinematics, _lame_3d, linear_stiffness_N_per_mm, solve_continuum
 from mst_cli.model.mechanics.spring import spring_layer
 
 MAT = Material()

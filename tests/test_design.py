@@ -14,14 +14,14 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.optimize import fsolve
 
-from mst_cli.model import geometry as geo
 from mst_cli.design import design_document
 from mst_cli.design.explain import limits
-from mst_cli.design.problem import DesignProblem, PRINT_ERROR_T_MM
+from mst_cli.design.problem import PRINT_ERROR_T_MM, DesignProblem
+from mst_cli.errors import InputError
+from mst_cli.io.schema import DEFAULT_DESIGN, load_document, parse_document
+from mst_cli.model import geometry as geo
 from mst_cli.model.mechanics.correction import VERIFIED_BOX
 from mst_cli.model.response import simulate
-from mst_cli.io.schema import DEFAULT_DESIGN, load_document, parse_document
-from mst_cli.errors import InputError
 
 ROOT = Path(__file__).resolve().parents[1]
 SPEC = ROOT / "configs" / "fingertip.yaml"       # met by the printable cell
@@ -190,15 +190,16 @@ def _one_layer_family(P, th0, t0, h0):
         theta = th0
         while P.lo[0] <= theta + direction <= P.hi[0]:
             theta += direction
-            x, _, ok, _ = fsolve(lambda x: P.evaluate_physical([theta], [math.exp(x[0])],
-                                                              [math.exp(x[1])]).log_err,
+            x, _, ok, _ = fsolve(lambda x, theta=theta: P.evaluate_physical([theta], [math.exp(x[0])],
+                                                                           [math.exp(x[1])]).log_err,
                                  guess, full_output=True)
             if ok != 1:
                 break
             guess = list(x)
             members.append((theta, math.exp(x[0]), math.exp(x[1])))
     for t_edge in P.lo[1], P.hi[1]:
-        x, _, ok, _ = fsolve(lambda x: P.evaluate_physical([10 * x[0]], [t_edge], [math.exp(x[1])]).log_err,
+        x, _, ok, _ = fsolve(lambda x, t_edge=t_edge: P.evaluate_physical([10 * x[0]], [t_edge],
+                                                                          [math.exp(x[1])]).log_err,
                              [th0 / 10, math.log(h0)], full_output=True)
         members.append((10 * x[0], t_edge, math.exp(x[1])))
     return [m for m in members if admissible(*m)]

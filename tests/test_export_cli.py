@@ -90,7 +90,8 @@ def test_output_is_deterministic_across_processes(tmp_path):
     outs = []
     for k in range(2):
         out = tmp_path / f"run{k}"
-        subprocess.run([sys.executable, "-c", "from mst_cli.cli.app import main; main()", "export", str(FORWARD), "--stl", "--step",
+        subprocess.run([sys.executable, "-c", "from mst_cli.cli.app import main; main()",
+                        "export", str(FORWARD), "--stl", "--step",
                         "--3mf", "--out", str(out)], check=True, capture_output=True, cwd=tmp_path)
         outs.append(out)
     for name in ("sensor.stl", "sensor.step", "sensor.3mf", "export.json"):

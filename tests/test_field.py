@@ -1,11 +1,10 @@
 """Field models against magpylib (an independent library) and the reference table."""
 
+import magpylib as magpy
 import numpy as np
 import pytest
-import magpylib as magpy
 
-from mst_cli.model.field import (axial_Bz_T, axial_dBz_dz_T_per_mm, choose_field_model,
-                                 field_at_chip_T)
+from mst_cli.model.field import axial_Bz_T, axial_dBz_dz_T_per_mm, choose_field_model, field_at_chip_T
 from mst_cli.model.geometry import Magnet
 
 MAG = Magnet(6.0, 2.0, 1.3)

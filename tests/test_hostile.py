@@ -21,12 +21,13 @@ import numpy as np
 import pytest
 import yaml
 from click.testing import CliRunner
-from hypothesis import HealthCheck, event, given, settings, strategies as st
+from hypothesis import HealthCheck, event, given, settings
+from hypothesis import strategies as st
 
 from mst_cli import __version__
 from mst_cli.cli.app import main
-from mst_cli.io.outputs import staged, Staging, STAGING_PREFIX
-from mst_cli.io.schema import LAYER_RULES, load_document, SECTIONS, TOP_KEYS
+from mst_cli.io.outputs import STAGING_PREFIX, Staging, staged
+from mst_cli.io.schema import LAYER_RULES, SECTIONS, TOP_KEYS, load_document
 
 ROOT = Path(__file__).resolve().parents[1]
 FORWARD = ROOT / "configs" / "mohammadi2021-forward.yaml"
@@ -236,9 +237,8 @@ def test_one_layer_design_and_spec_reports_are_finite(tmp_path):
 
 
 def test_json_writer_refuses_nan_instead_of_writing_it(tmp_path):
-    with pytest.raises(ValueError):
-        with staged(tmp_path / "o") as st:
-            st.write_json("x.json", {"a": float("nan")})
+    with pytest.raises(ValueError), staged(tmp_path / "o") as st:
+        st.write_json("x.json", {"a": float("nan")})
     assert not (tmp_path / "o").exists()
 
 

@@ -62,6 +62,7 @@ def _designed_spec():
 
 def _random(k):
     import sampling
+
     from mst_cli.model.geometry import Printer
     g = sampling.random_valid_geometries(RANDOM_N, seed=RANDOM_SEED, max_offset_mm=2.0)[k]
     return f"random-{k:02d}", g, Printer()
@@ -80,7 +81,7 @@ def export_body(folder: Path, name: str, g, printer, tolerance_mm: float = STL_T
     does (print orientation, the magnet pause in the 3MF); returns the manifest."""
     from mst_cli.cad import mesh_io
     from mst_cli.cad.assembly import build_sensor, check_fits, print_mesh
-    from mst_cli.cad.manifest import export_manifest, MANIFEST_NAME
+    from mst_cli.cad.manifest import MANIFEST_NAME, export_manifest
 
     check_fits(g)
     vertices, triangles = print_mesh(g, build_sensor(g).body, tolerance_mm)

@@ -3,13 +3,14 @@
 import warnings
 
 import numpy as np
-from hypothesis import given, settings, strategies as st
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
+from mst_cli.io.schema import DEFAULT_DESIGN
 from mst_cli.model.geometry import HexCell, SensorGeometry
 from mst_cli.model.material import Material
 from mst_cli.model.mechanics.spring import spring_arrays
 from mst_cli.model.response import simulate
-from mst_cli.io.schema import DEFAULT_DESIGN
 from mst_cli.model.stack import series_displacement_mm
 
 TH = DEFAULT_DESIGN["theta_deg_bounds"]

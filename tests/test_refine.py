@@ -15,11 +15,10 @@ import pytest
 import yaml
 from click.testing import CliRunner
 
-from mst_cli.model.ladder import ERRORS_FILE
 from mst_cli.cli.app import main
-from mst_cli.model.ladder import choose_mechanics
-from mst_cli.model.response import simulate
 from mst_cli.io.schema import load_document
+from mst_cli.model.ladder import ERRORS_FILE, choose_mechanics
+from mst_cli.model.response import simulate
 
 ROOT = Path(__file__).resolve().parents[1]
 SPEC = ROOT / "configs" / "fingertip.yaml"       # met by the printable cell

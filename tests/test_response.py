@@ -89,6 +89,7 @@ def test_field_model_choice_is_reported_and_dipole_reads_high():
 
 def test_a_magnet_too_close_saturates_the_chip_and_says_so():
     from dataclasses import replace
+
     from mst_cli.model.geometry import Housing
     close = replace(REF, layers=(HexCell(30, 0.4, 1.2),), housing=Housing(cover_mm=0.2, pocket_floor_mm=0.2))
     r = simulate(close, MAT)

@@ -28,8 +28,6 @@ W = 0.45            # line width of the synthetic G-code
 from slicer_support import HAVE_SLICER, need_slicer  # noqa: E402
 
 
-
-
 # --------------------------------------------------------------------------- synthetic G-code
 def gcode_text(layers, relative=True, pause_after=None):
     """G-code of layers = [[(type, [(x0, y0, x1, y1), ...]), ...], ...], 0.2 mm each."""

@@ -12,9 +12,14 @@ import pytest
 from mst_cli.model.geometry import HexCell
 from mst_cli.model.material import Material
 from mst_cli.model.mechanics import correction, layer_law
-from mst_cli.model.mechanics.spring import (KNEE_FRACTION, layer_stiffness_N_per_mm,
-                                            pad_compression_modulus_MPa, SHEAR_COEFFICIENT_RECT,
-                                            spring_layer, wall_compliance_mm_per_N)
+from mst_cli.model.mechanics.spring import (
+    KNEE_FRACTION,
+    SHEAR_COEFFICIENT_RECT,
+    layer_stiffness_N_per_mm,
+    pad_compression_modulus_MPa,
+    spring_layer,
+    wall_compliance_mm_per_N,
+)
 
 E, NU = 12.0, 0.45
 E_PS = E / (1 - NU ** 2)          # plane-strain modulus of a wide web

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from mst_cli.model.mechanics.spring import LinearLockingLayer
-from mst_cli.model.stack import series_displacement_mm, Stack
+from mst_cli.model.stack import Stack, series_displacement_mm
 
 # layer A: k 1 N/mm, locks after 1 mm (R 1 N); layer B: k 4, locks after 0.5 mm (R 2 N)
 A = LinearLockingLayer(1.0, 1.0, 1000.0)

@@ -10,15 +10,12 @@ benchmarks/bench_ladder.py) and picks the cheapest rung that meets a requested a
 
 from __future__ import annotations
 
-import json
 import time
-from pathlib import Path
 
 import numpy as np
 
 from mst_cli.model.geometry import HexCell, Magnet
 from mst_cli.model.mechanics.correction import VERIFIED_BOX
-from mst_cli.model.ladder import LADDER
 
 # The printable box (mechanics.correction.VERIFIED_BOX, also the default design bounds): every
 # rung is fitted and measured on it.
@@ -90,7 +87,7 @@ def compare_mechanics(cells, material, models=("spring-textbook", "spring", "fra
             ref = _law(reference, c, material)
             row[reference] = {"k_N_per_mm": ref.k_N_per_mm, "d_lock_mm": ref.d_lock_mm,
                               "lock_force_N": ref.lock_force_N}
-        except Exception as exc:      # noqa: BLE001 - recorded, reported in the table
+        except Exception as exc:
             row[reference] = {"error": f"{type(exc).__name__}: {exc}"}
             ref = None
         for m in models:
@@ -102,7 +99,7 @@ def compare_mechanics(cells, material, models=("spring-textbook", "spring", "fra
                     entry["err_k"] = law.k_N_per_mm / ref.k_N_per_mm - 1.0
                     entry["err_d_lock"] = law.d_lock_mm / ref.d_lock_mm - 1.0
                     entry["err_lock_force"] = law.lock_force_N / ref.lock_force_N - 1.0
-            except Exception as exc:  # noqa: BLE001
+            except Exception as exc:
                 entry = {"error": f"{type(exc).__name__}: {exc}"}
             row[m] = entry
         rows.append(row)
@@ -121,9 +118,10 @@ def summarise(rows, model):
     return out
 
 
-def field_errors(gaps_mm, magnet: Magnet = Magnet()):
+def field_errors(gaps_mm, magnet: Magnet | None = None):
     """Relative error of |B| on the axis of the dipole and axial models against magpylib."""
     from mst_cli.model import field as fld
+    magnet = Magnet() if magnet is None else magnet
     g = np.asarray(gaps_mm, dtype=float)
     exact = np.linalg.norm(fld.field_at_chip_T(g, magnet, "cylinder"), axis=-1)
     out = {}
@@ -133,9 +131,10 @@ def field_errors(gaps_mm, magnet: Magnet = Magnet()):
     return out
 
 
-def field_times_s(gaps_mm, magnet: Magnet = Magnet(), repeat: int = 20):
+def field_times_s(gaps_mm, magnet: Magnet | None = None, repeat: int = 20):
     """Per-point time of each field model on the gap array, s."""
     from mst_cli.model import field as fld
+    magnet = Magnet() if magnet is None else magnet
     g = np.asarray(gaps_mm, dtype=float)
     out = {}
     for m in ("dipole", "axial", "cylinder"):
@@ -222,7 +221,8 @@ def bench_markdown(result: dict) -> str:
                      f"{_pct(s['err_lock_force']['median'])} / {_pct(s['err_lock_force']['p90'])} | "
                      f"{s['failures']} |")
     tv = m["spring"]["time_per_layer_vectorised_s"]
-    lines.append(f"| L0 corrected, vectorised (design loop) | {tv * 1e6:.3f} µs | {t_ref / tv:,.0f}x | same | same | same | 0 |")
+    lines.append(f"| L0 corrected, vectorised (design loop) | {tv * 1e6:.3f} µs | {t_ref / tv:,.0f}x "
+                 "| same | same | same | 0 |")
     lines.append(f"| L2 continuum (reference) | {t_ref * 1e3:.0f} ms | 1x | — | — | — | "
                  f"{m['continuum']['failures']} |")
     f = result["field"]

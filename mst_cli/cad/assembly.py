@@ -6,9 +6,9 @@ from dataclasses import dataclass
 
 from build123d import Compound, Solid
 
-from mst_cli.model.geometry import SensorGeometry
-from mst_cli.errors import InputError
 from mst_cli.cad import parts
+from mst_cli.errors import InputError
+from mst_cli.model.geometry import SensorGeometry
 
 
 def check_fits(geometry: SensorGeometry) -> None:

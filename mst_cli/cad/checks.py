@@ -111,7 +111,8 @@ MANIFEST_FIELDS = {
                    "chip_height_mm": "num", "cable_windows": [_WINDOW]},
     "printer": {"nozzle_mm": "pos", "min_gap_mm": "pos"},
 }
-_KIND_TEXT = {"num": f"a finite number within +-{MAX_COORD_MM:g}", "pos": f"a size from {MIN_SIZE_MM:g} to {MAX_COORD_MM:g}",
+_KIND_TEXT = {"num": f"a finite number within +-{MAX_COORD_MM:g}",
+              "pos": f"a size from {MIN_SIZE_MM:g} to {MAX_COORD_MM:g}",
               "vol": f"a number from 0 to {MAX_VOLUME:g}", "int": "an integer", "str": "a string"}
 
 

@@ -11,7 +11,7 @@ a single boolean operation (:func:`mst_cli.cad.assembly.build_body`).
 
 from __future__ import annotations
 
-from build123d import Axis, Face, Location, Solid, Wire
+from build123d import Face, Location, Solid, Wire
 
 from mst_cli.model.geometry import HexCell, SensorGeometry
 

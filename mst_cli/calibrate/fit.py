@@ -48,8 +48,8 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from mst_cli.model import field as fld
 from mst_cli.model import chip as mlx
+from mst_cli.model import field as fld
 from mst_cli.model.geometry import LENGTH_FLOOR_MM
 from mst_cli.model.mechanics import layer_law
 from mst_cli.model.stack import Stack
@@ -341,7 +341,7 @@ def fit_parameters(doc, force_N, B_abs_T, sigma_T: float, names=DEFAULT_PARAMETE
         model.correction = None
         model.update_correction(start["wall_offset_mm"])
         values = start
-        for iterations in range(1, MAX_SPACE_MAPPING_ITERATIONS + 1):
+        for _ in range(MAX_SPACE_MAPPING_ITERATIONS):
             res, values, at_bound = _solve(model, force_N, B_abs_T, sigma_T, tuple(free), values, bounds)
             if model.mechanics == "spring" or model.correction is None:
                 break
@@ -406,8 +406,8 @@ def apply_parameters(doc, values: dict, name: str | None = None, mechanics: str 
                            housing.pocket_floor_mm, then housing.cover_mm)
     * remanence_factor  -> magnet.remanence_T
     """
-    from mst_cli.model import geometry as geo
     from mst_cli.io.schema import LayerEntry
+    from mst_cli.model import geometry as geo
 
     v = full_values(values)
     edits = []
@@ -558,7 +558,7 @@ class InverseMap:
         return codes, F, self.regime_of(np.minimum(F, self.edges_N[-1] * (1 - 1e-12))), res
 
     @classmethod
-    def from_response(cls, resp) -> "InverseMap":
+    def from_response(cls, resp) -> InverseMap:
         """From a :class:`~mst_cli.model.response.Response` (the same model ``mst simulate`` runs)."""
         keep = resp.in_range
         F = resp.force_N[keep]

@@ -24,8 +24,8 @@ from pathlib import Path
 
 import numpy as np
 
-from mst_cli.model import chip as mlx
 from mst_cli.errors import InputError
+from mst_cli.model import chip as mlx
 
 MAX_INPUT_BYTES = 20_000_000
 MAX_ROWS = 200_000

@@ -193,7 +193,6 @@ static inline int mst_force_from_z(int32_t z_code, int32_t *force_mN, uint8_t *r
 
 def plot_calibration(path, F, B_meas_T, design_model, cal_model, residual_T, sigma_T, title):
     """Measured |B| against force with the design's and the calibrated curves; residuals."""
-    import numpy as np
     from matplotlib.figure import Figure
 
     fig = Figure(figsize=(10, 4.2))
@@ -250,11 +249,11 @@ def calibrate(design_file, load_test, out_dir, mechanics, params, gain_sel, res,
 
     from mst_cli.calibrate import fit as cal
     from mst_cli.calibrate.loadtest import check_load_test, parse_readings, read_text
-    from mst_cli.model.chip import field_resolution_T
-    from mst_cli.io.outputs import check_out_dir, finite_or_none, staged
-    from mst_cli.model.response import simulate
     from mst_cli.errors import InputError
+    from mst_cli.io.outputs import check_out_dir, finite_or_none, staged
     from mst_cli.io.schema import document_to_dict, parse_document
+    from mst_cli.model.chip import field_resolution_T
+    from mst_cli.model.response import simulate
 
     names = _parse_params(params)
     from mst_cli.io.schema import load_design_document
@@ -439,7 +438,8 @@ def _summary(doc, lt, load_test, mechanics, fit, names, design_regimes, cal_regi
         lines.append(f"forces of the load test from its own readings (F >= {in_sample['from_force_N']:.3g} N): "
                      f"median error calibrated {100 * in_sample['median_rel']:.3g} % (95th pct "
                      f"{100 * in_sample['p95_rel']:.3g} %), {design_part}"
-                     + (f", {design_errors['flagged']} out of the design's range" if design_errors.get("flagged") else ""))
+                     + (f", {design_errors['flagged']} out of the design's range"
+                        if design_errors.get("flagged") else ""))
     if setting is not None:
         lines.append(f"table for GAIN_SEL {setting.gain_sel}, RES {setting.res} "
                      f"({setting.z_uT_per_lsb} uT/LSB on Z)")
@@ -457,7 +457,8 @@ def _calibration_note(model_file: Path) -> tuple[str | None, dict | None]:
     except (OSError, ValueError):
         return (f"{Path(model_file).name} has no {CALIBRATION_JSON} beside it: forces come from the "
                 "design as drawn, not as printed (run mst calibrate; expect errors of tens of percent)"), None
-    if not isinstance(record, dict) or record.get("calibrated_yaml_sha256") != hashlib.sha256(text.encode()).hexdigest():
+    digest = hashlib.sha256(text.encode()).hexdigest()
+    if not isinstance(record, dict) or record.get("calibrated_yaml_sha256") != digest:
         return (f"{CALIBRATION_JSON} beside {Path(model_file).name} belongs to another file: forces may "
                 "not be calibrated"), None
     return None, record
@@ -498,9 +499,9 @@ def read(model_file, readings, port, baud, count, timeout_s, raw, gain_sel, res,
     """
     from mst_cli.calibrate import fit as cal
     from mst_cli.calibrate.loadtest import parse_readings, read_text, setting_of
-    from mst_cli.model.chip import field_resolution_T
-    from mst_cli.io.outputs import check_out_dir
     from mst_cli.errors import InputError
+    from mst_cli.io.outputs import check_out_dir
+    from mst_cli.model.chip import field_resolution_T
 
     baud = int(baud)
     if (readings is None) == (port is None):

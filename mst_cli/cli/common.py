@@ -10,13 +10,11 @@ from __future__ import annotations
 
 import errno
 import functools
-import json
 import os
 import sys
 from pathlib import Path
 
 import click
-
 
 EXIT_TARGETS, EXIT_INPUT = 1, 2  # success is a normal return (0)
 EXIT_FAULT = 1                   # the machine failed (full disk, I/O error): not the input's fault
@@ -77,8 +75,8 @@ class MstGroup(click.Group):
     def main(self, args=None, prog_name=None, complete_var=None, standalone_mode=True, **extra):
         if not standalone_mode:
             return super().main(args, prog_name, complete_var, standalone_mode=False, **extra)
-        from mst_cli.io.outputs import Interrupted
         from mst_cli.errors import InputError
+        from mst_cli.io.outputs import Interrupted
         try:
             rv = super().main(args, prog_name or "mst", complete_var, standalone_mode=False, **extra)
         except click.exceptions.NoArgsIsHelpError as exc:

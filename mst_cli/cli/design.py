@@ -98,10 +98,10 @@ def design(spec_file, out_dir, seed, max_evaluations, refine, pareto_count, pare
     from dataclasses import replace
 
     from mst_cli.design import design_document
-    from mst_cli.model.ladder import choose_mechanics
-    from mst_cli.io.report import report_dict
     from mst_cli.errors import InputError
+    from mst_cli.io.report import report_dict
     from mst_cli.io.schema import load_document
+    from mst_cli.model.ladder import choose_mechanics
 
     doc = load_document(spec_file)
     from mst_cli.io.outputs import check_out_dir

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import click
 
-from mst_cli.cli.common import default_out_dir, EXIT_TARGETS, handles_input_errors
+from mst_cli.cli.common import EXIT_TARGETS, default_out_dir, handles_input_errors
 
 DEFAULT_STL_TOLERANCE_MM = 0.01
 
@@ -65,8 +65,9 @@ def export(path, want_stl, want_step, want_3mf, out_dir, stl_tolerance_mm):
 
     PATH may also be a spec (targets only): it is designed first, as 'mst design' does, and
     the design is written next to the body as design.yaml (exit 1 if the targets are not met;
-    the nearest design is still exported). Without a format flag, writes STL and STEP. Always writes export.json: the design's own
-    expected volume, bounding box, pocket, slot and feature sizes, which 'mst check' reads.
+    the nearest design is still exported). Without a format flag, writes STL and STEP. Always
+    writes export.json: the design's own expected volume, bounding box, pocket, slot and
+    feature sizes, which 'mst check' reads.
     STL and 3MF are in print orientation: the part lies on its side (sensor -y face on the
     bed), so every layer is a prism along the build direction and nothing needs support. The
     3MF carries PrusaSlicer's pause for the magnet; the terminal and export.json give its
@@ -87,9 +88,9 @@ def export(path, want_stl, want_step, want_3mf, out_dir, stl_tolerance_mm):
     check_out_dir(out_dir or default_out_dir(doc.name))
     _progress(t0, f"loaded {path} ({len(geometry.layers)} layers)")
 
-    from mst_cli.cad.assembly import build_sensor, check_fits, print_mesh
-    from mst_cli.cad.manifest import export_manifest, MANIFEST_NAME
     from mst_cli.cad import mesh_io
+    from mst_cli.cad.assembly import build_sensor, check_fits, print_mesh
+    from mst_cli.cad.manifest import MANIFEST_NAME, export_manifest
     from mst_cli.io.outputs import staged
 
     check_fits(geometry)
@@ -146,8 +147,7 @@ def check(path, as_json, nozzle_mm):
     Prints a table of named checks, measured on the mesh against the design's own expected
     values in export.json. Exit 1 naming the failed checks, 2 for unreadable input.
     """
-    from mst_cli.cad.checks import (load_manifest, load_mesh, resolve_paths, results_dict,
-                                    results_table, run_checks)
+    from mst_cli.cad.checks import load_manifest, load_mesh, resolve_paths, results_dict, results_table, run_checks
     from mst_cli.errors import InputError
 
     if nozzle_mm is not None and not 0.05 <= nozzle_mm <= 5.0:

@@ -29,13 +29,11 @@ def simulate(design_file, out_dir, field_model, mechanics, as_json):
     folder and prints a per-regime table: stiffness, force band, secant sensitivity S
     (dB/B0 per newton) with its local min..max, and the force resolution dF of the chip.
     """
-    from mst_cli.model.ladder import choose_mechanics
-    from mst_cli.io.report import report_dict, terminal_table
-    from mst_cli.model.response import simulate as run
-
     from mst_cli.io.outputs import check_out_dir
-
+    from mst_cli.io.report import report_dict, terminal_table
     from mst_cli.io.schema import load_design_document
+    from mst_cli.model.ladder import choose_mechanics
+    from mst_cli.model.response import simulate as run
     doc, geometry = load_design_document(design_file)
     out = out_dir or default_out_dir(doc.name)
     check_out_dir(out)                    # a bad output path is refused before any work

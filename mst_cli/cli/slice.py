@@ -8,6 +8,7 @@ imported only to draw print.png.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import sys
 import tempfile
@@ -153,10 +154,8 @@ def plot_print(path: Path, triangles, bed_xy, shift_xyz, g, spans, title: str) -
     ax.set_xlim(*bx)
     ax.set_ylim(*by)
     ax.set_zlim(0, max(hi[2], 1.0))
-    try:
+    with contextlib.suppress(AttributeError):       # matplotlib < 3.3 has no box aspect
         ax.set_box_aspect((bx[1] - bx[0], by[1] - by[0], max(hi[2], 1.0)))
-    except AttributeError:
-        pass
     ax.set_xlabel("x (mm)")
     ax.set_ylabel("y (mm)")
     ax.set_zlabel("z (mm)")
@@ -230,8 +229,8 @@ def slice_(path, profile, out_dir, max_span_mm, as_json, no_plot):
 
     from mst_cli.cad import gcode as G
     from mst_cli.cad import slicer as S
-    from mst_cli.io.outputs import staged
     from mst_cli.errors import InputError
+    from mst_cli.io.outputs import staged
 
     if not 0 < max_span_mm <= 1000:
         raise InputError("--max-span", max_span_mm, "must be a length from 0 to 1000 mm")
@@ -340,7 +339,8 @@ def slice_(path, profile, out_dir, max_span_mm, as_json, no_plot):
                                      "max_span_mm": round(s.length_mm, 3)} for s in spans.per_layer]},
         "pause": pause_report,
         "support": {"needed": bool(support_n), "volume_mm3": round(support_mm3, 2),
-                    "extrusions": support_n, "layers": [support_layers[0], support_layers[-1]] if support_layers else []},
+                    "extrusions": support_n,
+                    "layers": [support_layers[0], support_layers[-1]] if support_layers else []},
         "cavity_gaps": cavity_gap_report(g, manifest, shift, z_shift),
         "failed": failed,
         "reasons": reasons,
@@ -395,7 +395,8 @@ def summary_table(r: dict) -> str:
         (f"after layer {exp['after_layer']}, " if exp.get("after_layer") else "") + f"z {exp['z_mm']:.2f} mm")
     lines.append(f"pause             found {found}; export.json asks {exp_s}  [{ok('pause')}]")
     sup = r["support"]
-    lines.append(f"support           {'needed: %.0f mm3' % sup['volume_mm3'] if sup['needed'] else 'none generated'}"
+    support = f"needed: {sup['volume_mm3']:.0f} mm3" if sup["needed"] else "none generated"
+    lines.append(f"support           {support}"
                  f"  [{ok('support')}]")
     gaps = r["cavity_gaps"]
     if gaps == "not given":

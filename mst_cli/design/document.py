@@ -23,12 +23,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from mst_cli.model import geometry as geo
-from mst_cli.io.report import height_budget_line
-from mst_cli.model.response import Response, simulate
-from mst_cli.io.schema import Document, document_to_dict, LayerEntry
+from mst_cli.design.problem import PRINT_ERROR_T_MM, DesignProblem
 from mst_cli.errors import InputError
-from mst_cli.design.problem import DesignProblem, PRINT_ERROR_T_MM
+from mst_cli.io.report import height_budget_line
+from mst_cli.io.schema import Document, LayerEntry, document_to_dict
+from mst_cli.model import geometry as geo
+from mst_cli.model.response import Response, simulate
 
 ROUND_DECIMALS = 4
 EXIT_MET, EXIT_NOT_MET = 0, 1

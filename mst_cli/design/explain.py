@@ -23,10 +23,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from mst_cli.design.problem import DesignProblem
+from mst_cli.errors import InputError
 from mst_cli.model import geometry as geo
 from mst_cli.model.mechanics.spring import contact_stiffness_N_per_mm
-from mst_cli.errors import InputError
-from mst_cli.design.problem import DesignProblem
 
 GRID_POINTS = 41          # per variable, for the printable lock-force range
 ACTIVE_TOL = 0.02         # a scaled constraint within this of zero counts as binding

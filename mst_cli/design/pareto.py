@@ -23,9 +23,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mst_cli.io.schema import Document, OBJECTIVE_TERMS
-from mst_cli.design.document import design_document, DesignResult, ROUND_DECIMALS, verify_design
+from mst_cli.design.document import ROUND_DECIMALS, DesignResult, design_document, verify_design
 from mst_cli.design.problem import DesignProblem
+from mst_cli.io.schema import OBJECTIVE_TERMS, Document
 
 # Two designs are the same point of the front when they differ by less than one print layer
 # in height, 2 % in force resolution and 1 percentage point in print robustness: differences a

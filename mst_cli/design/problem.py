@@ -50,13 +50,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mst_cli.model import geometry as geo
+from mst_cli.io.schema import DEFAULT_OBJECTIVE, OBJECTIVE_TERMS
 from mst_cli.model import chip as mlx
+from mst_cli.model import geometry as geo
 from mst_cli.model.field import axial_Bz_T, choose_field_model
 from mst_cli.model.mechanics import correction
 from mst_cli.model.mechanics.spring import spring_arrays
 from mst_cli.model.response import field_magnitude_T, regime_kernel
-from mst_cli.io.schema import DEFAULT_OBJECTIVE, OBJECTIVE_TERMS
 
 PRINT_ERROR_T_MM = 0.05      # wall-thickness printing error the robustness term guards against
 
@@ -177,7 +177,8 @@ class DesignProblem:
         """(R_N per layer, S_per_N per regime, B_full_T, gap0_mm, B0_T) of candidate stacks."""
         fam = self.family
         theta = np.radians(theta_deg)
-        k, d_lock, R, k_locked = spring_arrays(theta, t_mm, h_mm, fam.depth_mm, fam.width_mm, fam.contact_allowance_mm, self.E_MPa, self.nu)
+        k, d_lock, R, k_locked = spring_arrays(theta, t_mm, h_mm, fam.depth_mm, fam.width_mm,
+                                               fam.contact_allowance_mm, self.E_MPa, self.nu)
         gap0 = geo.unloaded_gap_mm(h_mm.sum(axis=-1), self.n, self.probe.housing, self.probe.board)
         _, S, _, B = regime_kernel(k, d_lock, k_locked, gap0, self.field_T, R)
         return R, S, B[..., -1], gap0, B[..., 0]

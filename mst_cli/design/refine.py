@@ -20,12 +20,11 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from mst_cli.model.response import simulate
-from mst_cli.io.schema import Document
-from mst_cli.errors import InputError
-from mst_cli.design.document import (_layer_outputs, design_document, DesignResult, ROUND_DECIMALS,
-                            verify_design)
+from mst_cli.design.document import ROUND_DECIMALS, DesignResult, _layer_outputs, design_document, verify_design
 from mst_cli.design.problem import DesignProblem
+from mst_cli.errors import InputError
+from mst_cli.io.schema import Document
+from mst_cli.model.response import simulate
 
 REFINE_MODELS = ("frame", "continuum")
 MAX_ITERATIONS = 6
@@ -77,7 +76,7 @@ def _local_match(problem: DesignProblem, theta, t, h, maxeval: int = LOCAL_MAX_E
     """
     import nlopt
 
-    from mst_cli.design.solver import _nlopt_failures, ROUNDING_SAFETY
+    from mst_cli.design.solver import ROUNDING_SAFETY, _nlopt_failures
 
     u0 = np.clip(problem.to_unit(theta, t, h), 0.0, 1.0)
     count = [0]
@@ -232,7 +231,7 @@ class _SolverFacts:
     stops: dict
 
     @classmethod
-    def from_result(cls, res: DesignResult, evaluations: int) -> "_SolverFacts":
+    def from_result(cls, res: DesignResult, evaluations: int) -> _SolverFacts:
         s = res.solver
         local = "slsqp" if "SLSQP" in s["method"] else "cobyla"
         return cls(s["matched"], evaluations, local, s["starts_used"], s["preference_before"],

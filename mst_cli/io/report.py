@@ -21,7 +21,7 @@ def report_dict(doc, geometry: SensorGeometry, resp: Response, extra: dict | Non
     """Machine-readable report of one simulated design."""
     setting = resp.chip_setting
     layers = []
-    for i, (cell, entry) in enumerate(zip(geometry.layers, doc.layers)):
+    for i, cell in enumerate(geometry.layers):
         reg = next(r for r in resp.regimes if r.layer == i + 1)
         layers.append({
             "layer": i + 1,

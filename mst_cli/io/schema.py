@@ -17,12 +17,12 @@ from typing import Any
 
 import yaml
 
-from mst_cli.model import geometry as geo
-from mst_cli.model.components import BOARDS, DEFAULT_BOARD, grade_remanence_T, MAGNET_GRADES_T
-from mst_cli.model.field import FIELD_MODELS
-from mst_cli.model.chip import DEFAULT_NOISE_uT
-from mst_cli.model.material import Material
 from mst_cli.errors import InputError
+from mst_cli.model import geometry as geo
+from mst_cli.model.chip import DEFAULT_NOISE_uT
+from mst_cli.model.components import BOARDS, DEFAULT_BOARD, MAGNET_GRADES_T, grade_remanence_T
+from mst_cli.model.field import FIELD_MODELS
+from mst_cli.model.material import Material
 from mst_cli.model.mechanics.correction import VERIFIED_BOX
 
 # the terms of design.objective (mst_cli.design.problem reads the same tuple)
@@ -309,7 +309,7 @@ class Document:
                                      "a spec needs target_sensitivity_per_N and target_range_N "
                                      "for every layer")
 
-    def with_layers(self, layers) -> "Document":
+    def with_layers(self, layers) -> Document:
         return replace(self, layers=tuple(layers))
 
 
@@ -420,8 +420,7 @@ def parse_document(raw: Any, source: str = "<memory>") -> Document:
 
 def load_document(path: str | Path) -> Document:
     """Read and validate a design or spec file."""
-    from mst_cli.io.yaml_io import (FileTooLarge, load_text, MAX_INPUT_BYTES, read_text_capped,
-                                    YAMLRefused)
+    from mst_cli.io.yaml_io import MAX_INPUT_BYTES, FileTooLarge, YAMLRefused, load_text, read_text_capped
 
     path = Path(path)
     try:

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+
 @dataclass(frozen=True)
 class Connector:
     """A part on the board's top face that the housing must clear, mm from the board's
@@ -68,7 +69,8 @@ def grade_remanence_T(grade: str) -> float:
 # Carrier boards of the MLX90393. Dimensions read off the boards' published design files
 # (docs/design.md section 8); measure a real board before relying on a tight fit.
 # The SparkFun board is the Qwiic standard 1 x 1 inch with the chip at its centre (nominal; the
-# reference data gives no dimensions for it). The bare QFN entry is a 10 x 10 mm custom carrier with the chip at its centre.
+# reference data gives no dimensions for it). The bare QFN entry is a 10 x 10 mm custom carrier
+# with the chip at its centre.
 # STEMMA QT and Qwiic are JST SH 4-pin side-entry sockets (SM04B-SRSS-TB): 2.95 mm mounting
 # height (JST SH catalogue), taken here as 6.0 mm along the board edge and 4.25 mm deep, mouth
 # flush with the board's short edges, centred on them (nominal, from product photos: measure).

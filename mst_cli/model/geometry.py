@@ -115,7 +115,7 @@ def cell_margins_mm(theta_rad, t_mm, h_mm, width_mm, contact_allowance_mm, min_w
     return np.stack(np.broadcast_arrays(*parts), axis=-1).astype(float)
 
 
-def unloaded_gap_mm(sum_h_mm, n_layers, housing: "Housing", board: "Board"):
+def unloaded_gap_mm(sum_h_mm, n_layers, housing: Housing, board: Board):
     """Magnet pole face to Hall plates with no load, for arrays of total layer height.
 
     Hall plates at the package centre -> chip top -> the board's taller parts (headroom) -> air
@@ -236,7 +236,8 @@ class HexCell:
                                   printer.nozzle_mm)
         messages = {
             "wall": f"wall t = {self.t_mm:g} mm is thinner than the printable minimum {printer.min_wall_mm:g} mm",
-            "cavity_gap": f"cavity h - 2t = {self.cavity_height_mm:g} mm is below the printable gap {printer.min_gap_mm:g} mm",
+            "cavity_gap": f"cavity h - 2t = {self.cavity_height_mm:g} mm is below the printable gap "
+                          f"{printer.min_gap_mm:g} mm",
             "lock_stroke": (f"cavity h - 2t = {self.cavity_height_mm:g} mm leaves no stroke after the "
                             f"{self.contact_allowance_mm:g} mm contact allowance"),
             "pad_width": (f"inner pad half-width {self.p_inner_mm:g} mm is below one nozzle "
@@ -616,7 +617,8 @@ class SensorGeometry:
         if floor_room < h.side_wall_mm - 1e-9:
             out.append(("family.depth_mm", D,
                         f"the board {self.board.key} hangs {self.board.chip_y_mm:g} mm below its chip: "
-                        f"its slot floor needs depth_mm >= {2 * (self.board.chip_y_mm - self.chip_offset_mm[1] + h.side_wall_mm):g} mm "
+                        f"its slot floor needs depth_mm >= "
+                        f"{2 * (self.board.chip_y_mm - self.chip_offset_mm[1] + h.side_wall_mm):g} mm "
                         f"(housing.side_wall_mm under it), or another board"))
         roof_room = 0.5 * D - self.pocket_roof_apex_y_mm
         if roof_room < h.side_wall_mm - 1e-9:

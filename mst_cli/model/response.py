@@ -11,11 +11,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from mst_cli.model import field as fld
 from mst_cli.model import chip as mlx
+from mst_cli.model import field as fld
 from mst_cli.model.geometry import SensorGeometry
 from mst_cli.model.mechanics import layer_law
-from mst_cli.model.stack import series_displacement_mm, Stack
+from mst_cli.model.stack import Stack, series_displacement_mm
 
 GAP_STEP_MM = 1e-4   # central-difference step for d|B|/d gap with the non-closed-form models
 

@@ -1,9 +1,10 @@
 """Rung L2 ``continuum``: nonlinear plane-strain finite elements of the real hex profile.
 
 The reference model of the ladder (docs/design.md section 4). The layer's profile (x across the
-width, z up; one continuous web through the depth D along y) is meshed from the :class:`~mst_cli.model.geometry.HexCell` polygons, with quadratic
-triangles (P2: linear triangles lock in bending at nu = 0.45), and loaded by displacement
-control with a compressible Neo-Hookean material up to the onset of contact.
+width, z up; one continuous web through the depth D along y) is meshed from the
+:class:`~mst_cli.model.geometry.HexCell` polygons, with quadratic triangles (P2: linear
+triangles lock in bending at nu = 0.45), and loaded by displacement control with a compressible
+Neo-Hookean material up to the onset of contact.
 
 Symmetry and boundary conditions (a quarter of the profile: x >= 0, z <= h/2)
 ---------------------------------------------------------------------------
@@ -50,7 +51,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from mst_cli.model import geometry as geo
-from mst_cli.model.mechanics.frame import monotone_envelope, TabulatedLockingLayer
+from mst_cli.model.mechanics.frame import TabulatedLockingLayer, monotone_envelope
 
 # Default mesh: elements across the wall thickness and along the wall (the pad gets the same
 # number across and a graded number along), then DEFAULT_LEVELS rounds of local refinement
@@ -413,7 +414,7 @@ def solve_continuum(cell: geo.HexCell, material, n_thick: int = DEFAULT_N_THICK,
         except FloatingPointError:
             step *= 0.5
             if step < 1e-6 * d_nom:
-                raise ContinuumError(f"continuum solve stalled at d = {d:.4g} mm for {cell}")
+                raise ContinuumError(f"continuum solve stalled at d = {d:.4g} mm for {cell}") from None
             continue
         total_it += it
         gp, gw = prob.gaps(u_new, d_try)

@@ -23,7 +23,8 @@ between the wall's inner surface (centre line offset by t/2 along the rotated se
 and its mirror image across z = h/2 -- or between the two inner pads, h - 2t - d -- falls to the
 cell's contact allowance; the last wall thickness t next to the cavity's tip vertex is a wedge
 and does not count, nor (shallow walls) any point whose gap at rest is below twice the
-allowance -- the same rule as rung L2's. After contact the layer's stiffness is the walls' last tangent plus L0's contact column.
+allowance -- the same rule as rung L2's. After contact the layer's stiffness is the walls' last
+tangent plus L0's contact column.
 
 The layer law (:func:`frame_layer`) multiplies the beam forces by the joint factor of
 :mod:`mst_cli.model.mechanics.correction` (fitted against L2, a function of t/L and theta): the
@@ -151,8 +152,10 @@ def _element_forces(X, U, l0, beta0, EA, EI, phi, need_K=True):
     zero = np.zeros_like(c)
     r = np.stack([-c, -s, zero, c, s, zero], axis=1)
     z = np.stack([s, -c, zero, -s, c, zero], axis=1)
-    e3 = np.zeros((len(c), 6)); e3[:, 2] = 1.0
-    e6 = np.zeros((len(c), 6)); e6[:, 5] = 1.0
+    e3 = np.zeros((len(c), 6))
+    e3[:, 2] = 1.0
+    e6 = np.zeros((len(c), 6))
+    e6[:, 5] = 1.0
     B = np.stack([r, -z / ln[:, None] + e3, -z / ln[:, None] + e6], axis=1)      # (n, 3, 6)
     fl = np.stack([N, M1, M2], axis=1)
     f = np.einsum("nij,ni->nj", B, fl)
@@ -295,7 +298,7 @@ def solve_frame(cell: geo.HexCell, material, n_elements: int = DEFAULT_N_ELEMENT
         except (FloatingPointError, np.linalg.LinAlgError):
             step *= 0.5
             if step < 1e-7 * d_nom:
-                raise FrameError(f"frame solve stalled at d = {d:.4g} mm for {cell}")
+                raise FrameError(f"frame solve stalled at d = {d:.4g} mm for {cell}") from None
             continue
         total_it += it
         gp, gw = wall.gaps(u_new, d_try)
@@ -334,8 +337,8 @@ def solve_frame(cell: geo.HexCell, material, n_elements: int = DEFAULT_N_ELEMENT
 @functools.lru_cache(maxsize=4096)
 def frame_layer(cell: geo.HexCell, material) -> TabulatedLockingLayer:
     """The L1 law of one cell: the frame curve up to contact, then the locked branch (walls + contact column)."""
-    from mst_cli.model.mechanics.spring import contact_stiffness_N_per_mm
     from mst_cli.model.mechanics.correction import stiffness_factor
+    from mst_cli.model.mechanics.spring import contact_stiffness_N_per_mm
     res = solve_frame(cell, material)
     # the beam clamps the wall at the pad mid-plane and the tip; the finite joints' effect is
     # the same fitted factor as L0's (a function of t/L and theta only), applied to the forces
