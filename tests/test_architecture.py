@@ -9,6 +9,7 @@ ancestors (Python loads them first whatever the module does).
 from __future__ import annotations
 
 import ast
+import re
 from pathlib import Path
 
 import pytest
@@ -146,3 +147,14 @@ def test_imports_only_go_down(module):
 def test_no_top_level_module_but_the_errors():
     top = sorted(p.name for p in PACKAGE.glob("*.py"))
     assert top == ["__init__.py", "errors.py"]
+def test_documentation_lives_in_the_repository():
+    # no file points to a design document or reference data outside the clone
+    outside = re.compile(r"\bDESIGN\.md|shared/reference|\.\./shared")
+    hits = []
+    for path in [*PACKAGE.rglob("*.py"), *(ROOT / "docs").rglob("*.md"), *(ROOT / "benchmarks").rglob("*.py"),
+                 *(ROOT / "configs").rglob("*.yaml"), ROOT / "README.md"]:
+        for n, line in enumerate(path.read_text().splitlines(), 1):
+            if outside.search(line):
+                hits.append(f"{path.relative_to(ROOT)}:{n}")
+    assert hits == []
+    assert (ROOT / "docs" / "design.md").is_file()

@@ -76,8 +76,10 @@ def design(spec_file, out_dir, seed, max_evaluations, refine, pareto_count, pare
 
     Per layer the spec gives a target sensitivity S (dB/B0 per newton, secant over the
     regime) and the force R at which that layer locks (the regime's end). Three variables
-    per layer meet two targets; the spare freedom picks the design whose S and R change
-    least when every wall is printed 0.05 mm off (reported per layer). Every achieved number
+    per layer meet two targets; the spare freedom picks, among the designs that meet them,
+    the one that minimises the spec's design.objective: a weighted sum of total height,
+    worst force resolution and print robustness (how much S and R change when every wall is
+    printed 0.05 mm off; reported per layer). --pareto N maps the trade. Every achieved number
     comes from re-running the forward model (mst simulate) on the written design.
 
     Writes design.yaml (loadable by mst simulate and mst export), report.json,

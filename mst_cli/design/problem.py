@@ -17,7 +17,8 @@ Match objective (phase 1)
 
 Constraints (g <= 0 is satisfied; every g is scaled to order one)
     * cell rules of :func:`~mst_cli.model.geometry.cell_margins_mm` for every layer, in nozzles;
-    * wall slenderness t/L at most the largest t/L L0's corrections were fitted on (0.6);
+    * wall slenderness t/L at most the largest t/L L0's corrections were fitted on
+      (:func:`~mst_cli.model.mechanics.correction.fitted_t_over_L_max`);
     * lock order with margin: R_(i+1) >= (1 + lock_margin_rel) R_i, so regime i ends when layer
       i locks and the layers lock bottom to top in file order;
     * chip below saturation: |B| at the last lock <= (1 - saturation_margin_rel) x 50 mT, and
