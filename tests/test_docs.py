@@ -27,3 +27,18 @@ def test_ci_runs_the_readme_test_command():
 def test_first_command_runs_a_bundled_example():
     words = shlex.split(quick_start_commands()[0].split("&&")[-1])
     assert words[0].endswith("mst") and (ROOT / words[-1]).is_file()
+
+
+def test_file_format_tables_are_generated_from_the_declarations():
+    """docs/file-format.md's field tables are what mst_cli.io.schema generates from the one
+    declaration of each key: they cannot drift (python -m mst_cli.io.schema docs/file-format.md
+    rewrites them after a change)."""
+    from mst_cli.io.schema import FIELD_TABLE, SECTION_TYPES, field_table_markdown, with_field_tables
+
+    text = (ROOT / "docs" / "file-format.md").read_text()
+    blocks = {m.group(2): m.group(0) for m in FIELD_TABLE.finditer(text)}
+    assert sorted(blocks) == sorted(["layers", *SECTION_TYPES]), "one marked table per section"
+    assert len(FIELD_TABLE.findall(text)) == len(blocks), "a section's table is marked twice"
+    for section, block in blocks.items():
+        assert field_table_markdown(section) in block, f"docs/file-format.md: the {section} table is stale"
+    assert with_field_tables(text) == text

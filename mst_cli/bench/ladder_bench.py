@@ -63,12 +63,13 @@ def time_per_layer_s(model, cells, material, repeat: int = 1) -> float:
 def spring_vectorised_time_per_layer_s(cells, material, repeat: int = 20) -> float:
     """Per-layer time of L0 as the design loop calls it: spring_arrays over all cells at once."""
     from mst_cli.model.mechanics.spring import spring_arrays
-    arr = {k: np.array([getattr(c, k) for c in cells]) for k in ("theta_rad", "t_mm", "h_mm", "b_mm")}
+    # the family constants too come from the cells (HexCell's declared defaults), not literals
+    arrays = [np.array([getattr(c, k) for c in cells])
+              for k in ("theta_rad", "t_mm", "h_mm", "b_mm", "width_mm", "contact_allowance_mm")]
     best = np.inf
     for _ in range(repeat):
         t0 = time.perf_counter()
-        spring_arrays(arr["theta_rad"], arr["t_mm"], arr["h_mm"], arr["b_mm"], 30.0, 0.1,
-                      material.youngs_modulus_MPa, material.poisson_ratio, corrected=True)
+        spring_arrays(*arrays, material.youngs_modulus_MPa, material.poisson_ratio, corrected=True)
         best = min(best, time.perf_counter() - t0)
     return best / len(cells)
 

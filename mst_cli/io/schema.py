@@ -6,12 +6,20 @@ Files are read with :mod:`mst_cli.io.yaml_io` (a ``yaml.SafeLoader`` without anc
 duplicate keys, size-capped). Every numeric key is bounded above and below. Every problem
 raises :class:`InputError` naming the field, the value and what is allowed; the CLI turns that
 into one line and exit code 2.
+
+Each key is declared once, as a typed dataclass field made with :func:`spec` (unit, bounds or
+choices, null, meaning, default): the model's own dataclasses (``HexCell``, ``Magnet``,
+``Housing``, ``Printer``, ``SensorGeometry``) where the model keeps the value, the section
+classes below otherwise. The validation rules (:data:`SECTIONS`, :data:`LAYER_RULES`), the
+defaults, :func:`document_to_dict` and the tables of docs/file-format.md
+(:func:`field_table_markdown`) are all read from those declarations.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, fields, replace
+import re
+from dataclasses import MISSING, dataclass, fields, replace
 from pathlib import Path
 from typing import Any
 
@@ -20,25 +28,44 @@ import yaml
 from mst_cli.errors import InputError
 from mst_cli.model import geometry as geo
 from mst_cli.model.chip import DEFAULT_NOISE_uT
-from mst_cli.model.components import BOARDS, DEFAULT_BOARD, MAGNET_GRADES_T, grade_remanence_T
+from mst_cli.model.components import BOARDS, DEFAULT_BOARD, grade_remanence_T
 from mst_cli.model.field import FIELD_MODELS
+from mst_cli.model.fields import spec
 from mst_cli.model.material import Material
 from mst_cli.model.mechanics.correction import VERIFIED_BOX
 
 # the terms of design.objective (mst_cli.design.problem reads the same tuple)
 OBJECTIVE_TERMS = ("height", "force_resolution", "print_robustness")
-DEFAULT_OBJECTIVE = {"height": 1.0, "force_resolution": 1.0, "print_robustness": 1.0}
+DEFAULT_OBJECTIVE = dict.fromkeys(OBJECTIVE_TERMS, 1.0)
 
 MAX_LAYERS = 6
 MECHANICS_MODELS = ("spring", "frame", "continuum")
 
 
 # --------------------------------------------------------------------------- field rules
+RULE_KEYS = ("lo", "hi", "lo_open", "hi_open", "choices", "nullable", "unit")   # spec() metadata a Rule reads
+
+
+def default_of(f) -> Any:
+    """The declared default of a dataclass field (MISSING when it has none)."""
+    return f.default_factory() if f.default_factory is not MISSING else f.default
+
+
+def adopt(owner: type, name: str, **changes):
+    """Field ``name`` of the dataclass ``owner`` exposed under the same key by a section class:
+    its default and metadata as declared there, with ``changes`` on top (bounds and meaning for
+    a class that declares none, such as Material; a different default)."""
+    f = owner.__dataclass_fields__[name]
+    meta = {**f.metadata, **changes}
+    default = meta.pop("default", f.default)
+    return spec(default, **meta)
+
+
 @dataclass(frozen=True)
 class Rule:
     """What one key accepts: a kind and optional bounds (open or closed) or choices."""
 
-    kind: str                       # "float", "int", "str", "bool", "pair", "weights"
+    kind: str                       # "float", "int", "str", "bool", "pair", "bounds", "weights"
     lo: float | None = None
     hi: float | None = None
     lo_open: bool = False
@@ -47,10 +74,21 @@ class Rule:
     nullable: bool = False
     unit: str = ""
 
+    @classmethod
+    def of(cls, f) -> Rule:
+        """The rule a :func:`spec` field declares; its kind is the annotation's unless given
+        (``float | None`` is a float: whether null is allowed is ``nullable``'s to say)."""
+        kind = f.metadata["kind"] or str(f.type).split(" | ")[0]
+        return cls(kind, **{k: f.metadata[k] for k in RULE_KEYS})
+
     def describe(self) -> str:
+        unit = f" {self.unit}" if self.unit else ""
         if self.kind == "weights":
-            return (f"must be a mapping of weights >= 0 (at least one > 0) with keys from "
+            return (f"must be a mapping of weights >= {self.lo:g} (at least one > 0) with keys from "
                     f"{', '.join(self.choices)}")
+        if self.kind == "bounds":
+            return (f"must be [low, high] with {self.lo:g} <= low < high {'<' if self.hi_open else '<='} "
+                    f"{self.hi:g}{unit}")
         if self.choices:
             return "one of " + ", ".join(map(str, self.choices))
         kind = {"float": "a number", "int": "an integer", "str": "a string", "bool": "true or false",
@@ -60,7 +98,6 @@ class Rule:
             parts.append(f"{'>' if self.lo_open else '>='} {self.lo:g}")
         if self.hi is not None:
             parts.append(f"{'<' if self.hi_open else '<='} {self.hi:g}")
-        unit = f" {self.unit}" if self.unit else ""
         null = " (or null)" if self.nullable else ""
         return f"must be {kind}{' ' + ' and '.join(parts) if parts else ''}{unit}{null}"
 
@@ -73,17 +110,19 @@ class Rule:
             if not isinstance(value, dict) or not value:
                 raise InputError(path, value, self.describe())
             out = {}
+            weight = Rule("float", lo=self.lo, hi=self.hi)
             for key, w in value.items():
                 if key not in self.choices:
                     raise InputError(f"{path}.{key}", w, "unknown term; allowed: " + ", ".join(self.choices))
-                out[key] = Rule("float", lo=0.0, hi=1e3).check(f"{path}.{key}", w)
+                out[key] = weight.check(f"{path}.{key}", w)
             if not any(out.values()):
                 raise InputError(path, value, self.describe())
             return out
-        if self.kind == "pair":
+        if self.kind in ("pair", "bounds"):
             if not isinstance(value, (list, tuple)) or len(value) != 2:
                 raise InputError(path, value, self.describe())
-            return tuple(self._number(f"{path}[{i}]", v) for i, v in enumerate(value))
+            # a [low, high] pair's bounds are checked by ordered() once its section is read
+            return tuple(self._number(f"{path}[{i}]", v, bounded=self.kind == "pair") for i, v in enumerate(value))
         if self.kind == "str":
             if not isinstance(value, str):
                 raise InputError(path, value, self.describe())
@@ -100,10 +139,17 @@ class Rule:
             return int(self._bounded(path, value))
         return self._number(path, value)
 
-    def _number(self, path, value):
+    def ordered(self, path: str, pair) -> tuple[float, float]:
+        """A "bounds" pair: low < high, both inside the rule's bounds."""
+        a, b = pair
+        if not (self.lo <= a < b and (b < self.hi if self.hi_open else b <= self.hi)):
+            raise InputError(path, list(pair), self.describe())
+        return (a, b)
+
+    def _number(self, path, value, bounded=True):
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
             raise InputError(path, value, self.describe())
-        return float(self._bounded(path, value))
+        return float(self._bounded(path, value) if bounded else value)
 
     def _bounded(self, path, value):
         if self.lo is not None and (value <= self.lo if self.lo_open else value < self.lo):
@@ -112,75 +158,183 @@ class Rule:
             raise InputError(path, value, self.describe())
         return value
 
-
-def positive(unit="mm", hi=None, nullable=False):
-    return Rule("float", lo=0.0, lo_open=True, hi=hi, unit=unit, nullable=nullable)
-
-
-def nonneg(unit="mm", hi=None):
-    return Rule("float", lo=0.0, hi=hi, unit=unit)
-
-
-def span(lo, hi, unit="mm", nullable=False, hi_open=False):
-    """A closed physical range: every numeric input is bounded below and above before any
-    arithmetic, so no value such as 1e-308 or 1e300 reaches a division or a field model."""
-    return Rule("float", lo=lo, hi=hi, unit=unit, nullable=nullable, hi_open=hi_open)
-
-
-# Housing: clearances may be zero, walls and floors at least 0.01 mm. Printer: per-key ranges.
-HOUSING_CLEARANCES = ("board_clearance_mm", "chip_clearance_mm", "pocket_clearance_mm")
-PRINTER_RANGES_MM = {"nozzle_mm": (0.05, 5.0), "layer_height_mm": (0.01, 2.0)}
+    def allowed_markdown(self) -> str:
+        """What the key accepts, as the tables of docs/file-format.md write it."""
+        choices = ", ".join(f"`{c}`" for c in self.choices)
+        if self.kind in ("str", "bool"):
+            if self.choices:
+                return ("one of " if len(self.choices) > 1 else "") + choices
+            return {"str": "any text", "bool": "true or false"}[self.kind]
+        lo, hi = _number_text(self.lo), _number_text(self.hi)       # every number is bounded both ways
+        below, above = ("<" if self.lo_open else "≤"), ("<" if self.hi_open else "≤")
+        if self.kind == "weights":
+            return f"weights {lo} {below} w {above} {hi} (at least one > 0) for any of {choices}"
+        if self.kind == "bounds":
+            return f"[low, high], {lo} {below} low < high {above} {hi}"
+        span = f"{lo} {below} {'each' if self.kind == 'pair' else 'value'} {above} {hi}"
+        return ({"pair": "two numbers, ", "int": "integer, "}.get(self.kind, "") + span
+                + (", or null" if self.nullable else ""))
 
 
-SECTIONS: dict[str, dict[str, Rule]] = {
-    "family": {
-        "type": Rule("str", choices=("hex",)),
-        "width_mm": span(1.0, 500),
-        "depth_mm": span(1.0, 500),
-        "contact_allowance_mm": nonneg(hi=10),
-    },
-    "material": {
-        "name": Rule("str"),
-        "youngs_modulus_MPa": span(1e-3, 1e5, "MPa"),
-        "poisson_ratio": Rule("float", lo=0.0, hi=0.5, hi_open=True),
-    },
-    "magnet": {
-        "diameter_mm": span(0.1, 100),
-        "thickness_mm": span(0.1, 100),
-        "grade": Rule("str", choices=tuple(MAGNET_GRADES_T)),
-        "remanence_T": span(0.01, 2.0, "T", nullable=True),
-    },
-    "magnetometer": {
-        "model": Rule("str", choices=("MLX90393",)),
-        "board": Rule("str", choices=tuple(BOARDS)),
-        "noise_uT_rms": Rule("float", lo=0.0, hi=1000, unit="uT"),
-        "chip_offset_mm": Rule("pair", lo=-100.0, hi=100.0, unit="mm"),
-        "magnet_tilt_deg": Rule("float", lo=-45, hi=45, unit="deg"),
-    },
-    "housing": {f.name: nonneg(hi=100) if f.name in HOUSING_CLEARANCES else span(0.01, 100)
-                for f in fields(geo.Housing)},
-    "printer": {f.name: span(*PRINTER_RANGES_MM.get(f.name, (0.01, 10.0))) for f in fields(geo.Printer)},
-    "model": {
-        "mechanics": Rule("str", choices=MECHANICS_MODELS),
-        "field": Rule("str", choices=("auto",) + FIELD_MODELS),
-        # relative accuracy of layer stiffness and lock force against the continuum reference: the
-        # tool picks the cheapest mechanics rung whose measured median errors meet it (mst_cli.model.ladder)
-        "accuracy_rel": span(1e-4, 1.0, "", nullable=True, hi_open=True),
-    },
-    "design": {
-        "tolerance_rel": span(1e-4, 0.5, ""),
-        "theta_deg_bounds": Rule("pair", unit="deg"),
-        "t_mm_bounds": Rule("pair", unit="mm"),
-        "h_mm_bounds": Rule("pair", unit="mm"),
-        "max_height_mm": span(1.0, 1000, nullable=True),
-        "lock_margin_rel": Rule("float", lo=0.0, hi=1.0),
-        "saturation_margin_rel": Rule("float", lo=0.0, hi=0.9),
-        "seed": Rule("int", lo=0, hi=2**32 - 1),
-        "max_evaluations": Rule("int", lo=10, hi=10_000_000),
-        # weights of the preference among designs that meet the targets (mst_cli.design.problem)
-        "objective": Rule("weights", choices=OBJECTIVE_TERMS),
-    },
+def _number_text(value) -> str:
+    return str(value) if isinstance(value, int) else f"{value:g}"
+
+
+# --------------------------------------------------------------------------- the sections
+# Sections whose keys are not fields of a model dataclass (or not all of them, or not in the
+# file's order) declare them here; housing and printer are geo.Housing and geo.Printer as they are.
+@dataclass(frozen=True)
+class CellFamily:
+    """Family constants shared by every layer; builds a :class:`HexCell` from (theta, t, h)."""
+
+    type: str = spec("hex", choices=("hex",), meaning="cell family (only `hex` for now)")
+    width_mm: float = adopt(geo.HexCell, "width_mm")
+    depth_mm: float = adopt(geo.HexCell, "depth_mm")
+    contact_allowance_mm: float = adopt(geo.HexCell, "contact_allowance_mm")
+
+    def cell(self, theta_deg: float, t_mm: float, h_mm: float) -> geo.HexCell:
+        return geo.HexCell(float(theta_deg), float(t_mm), float(h_mm), self.width_mm, self.depth_mm,
+                           self.contact_allowance_mm)
+
+
+@dataclass(frozen=True)
+class MaterialSection:
+    """The ``material`` section: :class:`Material`'s fields with its defaults, bounded here."""
+
+    name: str = adopt(Material, "name", meaning="name of the printed material")
+    youngs_modulus_MPa: float = adopt(Material, "youngs_modulus_MPa", lo=1e-3, hi=1e5, unit="MPa",
+                                      meaning="small-strain Young's modulus (NinjaTek NinjaFlex 85A data sheet)")
+    poisson_ratio: float = adopt(Material, "poisson_ratio", lo=0.0, hi=0.5, hi_open=True, meaning="Poisson's ratio ν")
+
+
+_GRADE = default_of(geo.Magnet.__dataclass_fields__["grade"])
+
+
+@dataclass(frozen=True)
+class MagnetSection:
+    """The ``magnet`` section: an axially magnetised NdFeB disc (:class:`geo.Magnet`)."""
+
+    diameter_mm: float = adopt(geo.Magnet, "diameter_mm")
+    thickness_mm: float = adopt(geo.Magnet, "thickness_mm")
+    grade: str = adopt(geo.Magnet, "grade")
+    remanence_T: float | None = spec(None, lo=0.01, hi=2.0, unit="T", nullable=True,
+                                     meaning=f"Br; null means the grade's mid value "
+                                             f"({_GRADE}: {grade_remanence_T(_GRADE):.2f} T)")
+
+    def magnet(self) -> geo.Magnet:
+        return geo.Magnet(self.diameter_mm, self.thickness_mm, self.remanence_T or grade_remanence_T(self.grade),
+                          self.grade)
+
+
+@dataclass(frozen=True)
+class MagnetometerSection:
+    """The ``magnetometer`` section: the chip, its board and where it sits."""
+
+    model: str = spec("MLX90393", choices=("MLX90393",), meaning="the magnetometer chip")
+    board: str = spec(DEFAULT_BOARD, choices=tuple(BOARDS),
+                      meaning="carrier board (docs/design.md §8): its tallest part sets the housing's headroom")
+    noise_uT_rms: float = spec(DEFAULT_NOISE_uT, lo=0.0, hi=1000.0, unit="uT",
+                               meaning="RMS field noise; the force resolution uses the larger of this and one LSB")
+    chip_offset_mm: tuple[float, float] = adopt(geo.SensorGeometry, "chip_offset_mm")
+    magnet_tilt_deg: float = adopt(geo.SensorGeometry, "magnet_tilt_deg")
+
+
+@dataclass(frozen=True)
+class ModelSection:
+    """The ``model`` section: which models answer."""
+
+    mechanics: str = spec("spring", choices=MECHANICS_MODELS,
+                          meaning="mechanics of a layer: `spring` (L0), `frame` (L1), `continuum` (L2)")
+    field: str = spec("auto", choices=("auto",) + FIELD_MODELS,
+                      meaning="magnet field model; `auto` is the cheapest exact one: `axial` on the axis, "
+                              "`cylinder` off it (`dipole` only when asked)")
+    # relative accuracy of layer stiffness and lock force against the continuum reference: the
+    # tool picks the cheapest mechanics rung whose measured median errors meet it (mst_cli.model.ladder)
+    accuracy_rel: float | None = spec(
+        None, lo=1e-4, hi=1.0, hi_open=True, nullable=True, omit_default=True,
+        meaning="requested relative accuracy of the layer stiffness and of the lock force against the "
+                "`continuum` reference (e.g. 0.05 for 5 %): `mst simulate` uses the cheapest mechanics rung "
+                "whose measured median errors (`mst bench`) in both meet it, `mst design` refines with that rung "
+                "(`spring`: no refinement), and both print which rung was picked. An explicit `--mechanics` / "
+                "`--refine` flag wins; `mechanics` is then ignored")
+
+
+@dataclass(frozen=True)
+class DesignOptions:
+    """The ``design`` section: options of ``mst design`` (a :class:`Document` keeps them as a dict).
+
+    The default bounds of the design variables are the printable box (t >= one 0.4 mm line; the
+    part prints on its side, so the walls are lines in the bed plane at any theta), which is also
+    the box every mechanics rung is fitted and measured on (mechanics.correction.VERIFIED_BOX).
+    """
+
+    tolerance_rel: float = spec(0.02, lo=1e-4, hi=0.5, meaning="relative tolerance on every S_i and R_i")
+    theta_deg_bounds: tuple[float, float] = spec(
+        VERIFIED_BOX["theta_deg"], kind="bounds", lo=1.0, hi=89.0, unit="deg",
+        meaning="bounds of θ (default: the box the mechanics are fitted and verified on; the part prints on "
+                "its side, so θ sets no overhang)")
+    t_mm_bounds: tuple[float, float] = spec(VERIFIED_BOX["t_mm"], kind="bounds", lo=0.01, hi=100.0, unit="mm",
+                                            meaning="bounds of t (the default starts at one nozzle line)")
+    h_mm_bounds: tuple[float, float] = spec(VERIFIED_BOX["h_mm"], kind="bounds", lo=0.01, hi=100.0, unit="mm",
+                                            meaning="bounds of h")
+    max_height_mm: float | None = spec(None, lo=1.0, hi=1000.0, unit="mm", nullable=True,
+                                       meaning="optional limit on the printed sensor's total height")
+    lock_margin_rel: float = spec(0.1, lo=0.0, hi=1.0, meaning="R_(i+1) ≥ (1 + margin) R_i")
+    saturation_margin_rel: float = spec(0.1, lo=0.0, hi=0.9, meaning="chip field ≤ (1 − margin) × 50 mT")
+    seed: int = spec(0, lo=0, hi=2**32 - 1, meaning="random seed of the multi-start")
+    max_evaluations: int = spec(20000, lo=10, hi=10_000_000, meaning="cap on forward evaluations")
+    # weights of the preference among designs that meet the targets (mst_cli.design.problem)
+    objective: dict[str, float] = spec(
+        default_factory=lambda: dict(DEFAULT_OBJECTIVE), kind="weights", choices=OBJECTIVE_TERMS, lo=0.0, hi=1e3,
+        meaning="weights of the preference among the designs that meet every target (any subset of the keys; "
+                "the others keep their default): `height` prices ln(total part height), `force_resolution` "
+                "ln(worst noise-limited force resolution σ_B / (B0 min S_i)), `print_robustness` the RMS relative "
+                "change of every S_i and R_i with every wall printed ±0.05 mm. `mst design --pareto N` maps the "
+                "whole trade")
+
+
+@dataclass(frozen=True)
+class LayerEntry:
+    """One entry of ``layers``: the geometry (a design), the targets (a spec) or both."""
+
+    theta_deg: float | None = spec(None, lo=0.1, hi=90.0, hi_open=True, unit="deg", omit_default=True,
+                                   meaning="strut wall angle from horizontal")
+    t_mm: float | None = spec(None, lo=0.01, hi=100.0, unit="mm", omit_default=True,
+                              meaning="wall (and pad) thickness t")
+    h_mm: float | None = spec(None, lo=0.01, hi=100.0, unit="mm", omit_default=True, meaning="layer height h (outer)")
+    target_sensitivity_per_N: float | None = spec(
+        None, lo=1e-6, hi=1e3, unit="1/N", omit_default=True,
+        meaning="spec: secant sensitivity S_i of regime i, (ΔB/B0 over the band) / band width")
+    target_range_N: float | None = spec(
+        None, lo=1e-3, hi=1e4, unit="N", omit_default=True,
+        meaning="spec: force R_i at which regime i ends (cumulative: regimes are 0–R_1, R_1–R_2, …)")
+    weight: float = spec(1.0, lo=1e-3, hi=1e3, omit_default=True,
+                         meaning="spec: weight of this layer's targets in the objective")
+
+    @property
+    def has_geometry(self) -> bool:
+        return None not in (self.theta_deg, self.t_mm, self.h_mm)
+
+    @property
+    def has_targets(self) -> bool:
+        return None not in (self.target_sensitivity_per_N, self.target_range_N)
+
+
+# Every section of the file, in file order, and the dataclass that declares its keys.
+SECTION_TYPES: dict[str, type] = {
+    "family": CellFamily,
+    "material": MaterialSection,
+    "magnet": MagnetSection,
+    "magnetometer": MagnetometerSection,
+    "housing": geo.Housing,
+    "printer": geo.Printer,
+    "model": ModelSection,
+    "design": DesignOptions,
 }
+SECTIONS: dict[str, dict[str, Rule]] = {name: {f.name: Rule.of(f) for f in fields(cls)}
+                                        for name, cls in SECTION_TYPES.items()}
+LAYER_RULES: dict[str, Rule] = {f.name: Rule.of(f) for f in fields(LayerEntry)}
+DEFAULT_DESIGN = {f.name: default_of(f) for f in fields(DesignOptions)}
 
 # Keys of earlier versions that no longer mean anything, with why (a file that sets one is
 # refused with that reason rather than silently built differently).
@@ -195,67 +349,12 @@ REMOVED_KEYS: dict[str, str] = {
                                    "and the connector windows; delete the key",
 }
 
-LAYER_RULES: dict[str, Rule] = {
-    "theta_deg": span(0.1, 90.0, "deg", hi_open=True),
-    "t_mm": span(0.01, 100),
-    "h_mm": span(0.01, 100),
-    "target_sensitivity_per_N": span(1e-6, 1e3, "1/N"),
-    "target_range_N": span(1e-3, 1e4, "N"),
-    "weight": span(1e-3, 1e3, ""),
-}
 GEOMETRY_KEYS = ("theta_deg", "t_mm", "h_mm")
 TARGET_KEYS = ("target_sensitivity_per_N", "target_range_N")
 TOP_KEYS = ("name", "layers") + tuple(SECTIONS)
 
-# Default bounds of the design variables: the printable box (t >= one 0.4 mm line; the part
-# prints on its side, so the walls are lines in the bed plane at any theta), which is also the
-# box every mechanics rung is fitted and measured on (mechanics.correction.VERIFIED_BOX).
-DEFAULT_DESIGN = {
-    "tolerance_rel": 0.02,
-    "theta_deg_bounds": VERIFIED_BOX["theta_deg"],
-    "t_mm_bounds": VERIFIED_BOX["t_mm"],
-    "h_mm_bounds": VERIFIED_BOX["h_mm"],
-    "max_height_mm": None,
-    "lock_margin_rel": 0.1,
-    "saturation_margin_rel": 0.1,
-    "seed": 0,
-    "max_evaluations": 20000,
-    "objective": DEFAULT_OBJECTIVE,
-}
-
 
 # --------------------------------------------------------------------------- documents
-@dataclass(frozen=True)
-class CellFamily:
-    """Family constants shared by every layer; builds a :class:`HexCell` from (theta, t, h)."""
-
-    width_mm: float = 30.0
-    depth_mm: float = 20.0
-    contact_allowance_mm: float = 0.1
-
-    def cell(self, theta_deg: float, t_mm: float, h_mm: float) -> geo.HexCell:
-        return geo.HexCell(float(theta_deg), float(t_mm), float(h_mm), self.width_mm, self.depth_mm,
-                           self.contact_allowance_mm)
-
-
-@dataclass(frozen=True)
-class LayerEntry:
-    theta_deg: float | None = None
-    t_mm: float | None = None
-    h_mm: float | None = None
-    target_sensitivity_per_N: float | None = None
-    target_range_N: float | None = None
-    weight: float = 1.0
-
-    @property
-    def has_geometry(self) -> bool:
-        return None not in (self.theta_deg, self.t_mm, self.h_mm)
-
-    @property
-    def has_targets(self) -> bool:
-        return None not in (self.target_sensitivity_per_N, self.target_range_N)
-
-
 @dataclass(frozen=True)
 class Document:
     """A loaded design or spec file: everything except per-layer data is shared."""
@@ -276,6 +375,17 @@ class Document:
     design: dict
     source: str = "<memory>"
     accuracy_rel: float | None = None   # model.accuracy_rel: requested accuracy of k and R
+
+    def section(self, name: str):
+        """The values of the file section ``name``, as an object with its keys as attributes."""
+        if name == "magnetometer":
+            return MagnetometerSection(board=self.board.key, noise_uT_rms=self.noise_uT_rms,
+                                       chip_offset_mm=tuple(self.chip_offset_mm), magnet_tilt_deg=self.magnet_tilt_deg)
+        if name == "model":
+            return ModelSection(mechanics=self.mechanics, field=self.field_model, accuracy_rel=self.accuracy_rel)
+        if name == "design":
+            return DesignOptions(**self.design)
+        return getattr(self, name)      # family, material, magnet, housing, printer: kept as the file has them
 
     @property
     def is_design(self) -> bool:
@@ -331,12 +441,17 @@ def _section(raw: dict, name: str) -> dict:
     return out
 
 
-def _pair_bounds(path: str, pair, lo: float, hi: float, hi_open=False) -> tuple[float, float]:
-    a, b = pair
-    if not (lo <= a < b and (b < hi if hi_open else b <= hi)):
-        raise InputError(path, list(pair), f"must be [low, high] with {lo:g} <= low < high "
-                                           f"{'<' if hi_open else '<='} {hi:g}")
-    return (a, b)
+def _design_options(given: dict) -> dict:
+    """The ``design`` section as the dict a :class:`Document` keeps: defaults for the keys not
+    given, the objective's weights merged into the default ones (a file may weigh some terms
+    only) and every [low, high] pair checked once the whole section is read."""
+    options = DesignOptions(**given)
+    design = {f.name: getattr(options, f.name) for f in fields(DesignOptions)}
+    design["objective"] = {**DEFAULT_OBJECTIVE, **design["objective"]}
+    for key, rule in SECTIONS["design"].items():
+        if rule.kind == "bounds":
+            design[key] = rule.ordered(f"design.{key}", design[key])
+    return design
 
 
 def parse_document(raw: Any, source: str = "<memory>") -> Document:
@@ -354,35 +469,21 @@ def parse_document(raw: Any, source: str = "<memory>") -> Document:
         raise InputError("name", name, "must be a non-empty file-name-safe string (no '/', '\\', "
                                        "control characters or NUL; not starting with '.')")
 
-    fam = _section(raw, "family")
-    fam.pop("type", None)
-    family = CellFamily(**fam)
-
+    # the sections in file order, each from its declaration: keys not given take its defaults
+    family = CellFamily(**_section(raw, "family"))
     material = Material(**_section(raw, "material"))
-
-    mag = _section(raw, "magnet")
-    grade = mag.get("grade", "N42")
-    remanence = mag.get("remanence_T") or grade_remanence_T(grade)
-    magnet = geo.Magnet(mag.get("diameter_mm", 6.0), mag.get("thickness_mm", 2.0), remanence, grade)
-
-    mm = _section(raw, "magnetometer")
-    board = BOARDS[mm.get("board", DEFAULT_BOARD)]
+    magnet = MagnetSection(**_section(raw, "magnet")).magnet()
+    meter = MagnetometerSection(**_section(raw, "magnetometer"))
+    board = BOARDS[meter.board]
     housing = geo.Housing(**_section(raw, "housing"))
     printer = geo.Printer(**_section(raw, "printer"))
-    model = _section(raw, "model")
-
-    design = dict(DEFAULT_DESIGN)
-    design.update(_section(raw, "design"))
-    design["objective"] = {**DEFAULT_OBJECTIVE, **design["objective"]}
-    design["theta_deg_bounds"] = _pair_bounds("design.theta_deg_bounds", design["theta_deg_bounds"],
-                                              1.0, 89.0)
-    design["t_mm_bounds"] = _pair_bounds("design.t_mm_bounds", design["t_mm_bounds"], 0.01, 100.0)
-    design["h_mm_bounds"] = _pair_bounds("design.h_mm_bounds", design["h_mm_bounds"], 0.01, 100.0)
+    model = ModelSection(**_section(raw, "model"))
+    design = _design_options(_section(raw, "design"))
 
     # The housing rules (printable depth, pocket and slot inside the body) do not depend on the
     # layers' theta, t, h: check them on any cell of the family, before any design work.
-    probe = geo.SensorGeometry((family.cell(45.0, 1.0, 3.0),), magnet, board, housing,
-                               mm.get("chip_offset_mm", (0.0, 0.0)), 0.0, printer)
+    probe = geo.SensorGeometry((family.cell(45.0, 1.0, 3.0),), magnet, board, housing, meter.chip_offset_mm,
+                               0.0, printer)
     for field_name, value, allowed in probe.housing_violations():
         raise InputError(field_name, value, allowed)
 
@@ -411,11 +512,10 @@ def parse_document(raw: Any, source: str = "<memory>") -> Document:
 
     return Document(
         name=name, layers=tuple(layers), family=family, material=material, magnet=magnet,
-        board=board, noise_uT_rms=mm.get("noise_uT_rms", DEFAULT_NOISE_uT),
-        chip_offset_mm=mm.get("chip_offset_mm", (0.0, 0.0)),
-        magnet_tilt_deg=mm.get("magnet_tilt_deg", 0.0), housing=housing, printer=printer,
-        mechanics=model.get("mechanics", "spring"), field_model=model.get("field", "auto"),
-        design=design, source=source, accuracy_rel=model.get("accuracy_rel"))
+        board=board, noise_uT_rms=meter.noise_uT_rms, chip_offset_mm=meter.chip_offset_mm,
+        magnet_tilt_deg=meter.magnet_tilt_deg, housing=housing, printer=printer,
+        mechanics=model.mechanics, field_model=model.field,
+        design=design, source=source, accuracy_rel=model.accuracy_rel)
 
 
 def load_document(path: str | Path) -> Document:
@@ -447,32 +547,29 @@ def load_document(path: str | Path) -> Document:
     return parse_document(raw, source=str(path))
 
 
+def section_to_dict(declared: type, values) -> dict:
+    """The keys ``declared`` (a section or layer dataclass) declares, read from ``values`` (any
+    object with those attributes), as a file writes them: pairs as lists; a key declared
+    ``omit_default`` is left out while it holds its default."""
+    out = {}
+    for f in fields(declared):
+        value = getattr(values, f.name)
+        if f.metadata["omit_default"] and value == default_of(f):
+            continue
+        out[f.name] = list(value) if isinstance(value, (tuple, list)) else value
+    return out
+
+
 def document_to_dict(doc: Document, layers=None) -> dict:
-    """Serialise a document back to the file format (all sections, explicit values)."""
+    """Serialise a document back to the file format (all sections but ``design``, explicit values;
+    mst_cli.design.document.design_dict adds a spec's ``design`` section)."""
     layers = doc.layers if layers is None else layers
-    out_layers = []
-    for la in layers:
-        entry = {k: getattr(la, k) for k in GEOMETRY_KEYS + TARGET_KEYS if getattr(la, k) is not None}
-        if la.weight != 1.0:
-            entry["weight"] = la.weight
-        out_layers.append(entry)
-    fam = doc.family
-    return {
-        "name": doc.name,
-        "family": {"type": "hex", "width_mm": fam.width_mm, "depth_mm": fam.depth_mm,
-                   "contact_allowance_mm": fam.contact_allowance_mm},
-        "material": {"name": doc.material.name, "youngs_modulus_MPa": doc.material.youngs_modulus_MPa,
-                     "poisson_ratio": doc.material.poisson_ratio},
-        "magnet": {"diameter_mm": doc.magnet.diameter_mm, "thickness_mm": doc.magnet.thickness_mm,
-                   "grade": doc.magnet.grade, "remanence_T": doc.magnet.remanence_T},
-        "magnetometer": {"model": "MLX90393", "board": doc.board.key, "noise_uT_rms": doc.noise_uT_rms,
-                         "chip_offset_mm": list(doc.chip_offset_mm), "magnet_tilt_deg": doc.magnet_tilt_deg},
-        "housing": {f.name: getattr(doc.housing, f.name) for f in fields(geo.Housing)},
-        "printer": {f.name: getattr(doc.printer, f.name) for f in fields(geo.Printer)},
-        "model": {"mechanics": doc.mechanics, "field": doc.field_model,
-                  **({"accuracy_rel": doc.accuracy_rel} if doc.accuracy_rel is not None else {})},
-        "layers": out_layers,
-    }
+    out = {"name": doc.name}
+    for name, declared in SECTION_TYPES.items():
+        if name != "design":
+            out[name] = section_to_dict(declared, doc.section(name))
+    out["layers"] = [section_to_dict(LayerEntry, la) for la in layers]
+    return out
 
 
 def load_design_document(path):
@@ -485,3 +582,46 @@ def load_design_document(path):
                                           "h_mm": geometry.layers[i].h_mm},
                          f"invalid cell ({v.rule}): {v.message}")
     return doc, geometry
+
+
+
+# --------------------------------------------------------------------------- docs/file-format.md
+def _default_markdown(f, rule: Rule) -> str:
+    value = default_of(f)
+    if value is None:
+        return "null" if rule.nullable else "—"        # — : no default (a layer gives a group or none)
+    if isinstance(value, str):
+        return f"`{value}`"
+    if isinstance(value, dict):
+        return "`{" + ", ".join(f"{k}: {_number_text(v)}" for k, v in value.items()) + "}`"
+    if isinstance(value, tuple):
+        return "[" + ", ".join(map(_number_text, value)) + "]"
+    return _number_text(value)
+
+
+def field_table_markdown(section: str) -> str:
+    """The table of one section (or ``layers``) in docs/file-format.md, from the declarations."""
+    declared, prefix = (LayerEntry, "layers[i]") if section == "layers" else (SECTION_TYPES[section], section)
+    rows = ["| key | allowed | unit | default | meaning |", "|---|---|---|---|---|"]
+    for f in fields(declared):
+        rule = Rule.of(f)
+        cells = (f"`{prefix}.{f.name}`", rule.allowed_markdown(), rule.unit or "–", _default_markdown(f, rule),
+                 f.metadata["meaning"])
+        rows.append("| " + " | ".join(c.replace("|", "\\|") for c in cells) + " |")
+    return "\n".join(rows)
+
+
+FIELD_TABLE = re.compile(r"(<!-- fields:(\w+) -->\n).*?(<!-- /fields -->)", re.S)
+
+
+def with_field_tables(text: str) -> str:
+    """``text`` (docs/file-format.md) with every table between ``<!-- fields:SECTION -->`` and
+    ``<!-- /fields -->`` regenerated: ``python -m mst_cli.io.schema docs/file-format.md``."""
+    return FIELD_TABLE.sub(lambda m: m.group(1) + field_table_markdown(m.group(2)) + "\n" + m.group(3), text)
+
+
+if __name__ == "__main__":     # rewrite the field tables of the files named (docs/file-format.md)
+    import sys
+
+    for doc_path in map(Path, sys.argv[1:]):
+        doc_path.write_text(with_field_tables(doc_path.read_text()))

@@ -33,7 +33,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mst_cli.model.components import Board, default_board
+from mst_cli.model.components import MAGNET_GRADES_T, Board, default_board
+from mst_cli.model.fields import spec
 
 # Lengths are floored at this value inside the kernels so that every point of the design
 # bounds -- valid or not -- gives finite numbers; the validity checks report the violation.
@@ -135,10 +136,10 @@ class Printer:
     min_gap_mm: the narrowest slot that stays open when printed (= nozzle).
     """
 
-    nozzle_mm: float = 0.4
-    layer_height_mm: float = 0.2
-    min_wall_mm: float = 0.4
-    min_gap_mm: float = 0.4
+    nozzle_mm: float = spec(0.4, lo=0.05, hi=5.0, unit="mm", meaning="nozzle diameter")
+    layer_height_mm: float = spec(0.2, lo=0.01, hi=2.0, unit="mm", meaning="print layer height")
+    min_wall_mm: float = spec(0.4, lo=0.01, hi=10.0, unit="mm", meaning="thinnest printable wall (one line)")
+    min_gap_mm: float = spec(0.4, lo=0.01, hi=10.0, unit="mm", meaning="narrowest printable gap")
 
 
 @dataclass(frozen=True)
@@ -162,9 +163,16 @@ class HexCell:
     theta_deg: float
     t_mm: float
     h_mm: float
-    width_mm: float = 30.0
-    depth_mm: float = 20.0
-    contact_allowance_mm: float = 0.1
+    # the family constants (the file's `family` section)
+    width_mm: float = spec(30.0, lo=1.0, hi=500.0, unit="mm", meaning="W, across the chevrons (x)")
+    depth_mm: float = spec(20.0, lo=1.0, hi=500.0, unit="mm",
+                           meaning="D, along the chevrons (y): every layer is one continuous web this deep, and "
+                                   "the part prints lying on its side, so D is also its printed height: a whole "
+                                   "number of `printer.layer_height_mm`")
+    contact_allowance_mm: float = spec(0.1, lo=0.0, hi=10.0, unit="mm",
+                                       meaning="subtracted from the cavity h − 2t to give the locking stroke "
+                                               "d_lock (half a 0.2 mm print layer: surface roughness of the "
+                                               "closing faces)")
 
     # -- derived quantities (all read the kernels above)
     @property
@@ -250,10 +258,10 @@ class HexCell:
 class Magnet:
     """Axially magnetised NdFeB disc (default: diameter 6 x 2 mm, N42, Br = 1.3 T)."""
 
-    diameter_mm: float = 6.0
-    thickness_mm: float = 2.0
-    remanence_T: float = 1.3
-    grade: str = "N42"
+    diameter_mm: float = spec(6.0, lo=0.1, hi=100.0, unit="mm", meaning="diameter of the disc")
+    thickness_mm: float = spec(2.0, lo=0.1, hi=100.0, unit="mm", meaning="thickness of the disc, along its axis")
+    remanence_T: float = 1.3            # Br; the file's key (null: the grade's value) is declared in io.schema
+    grade: str = spec("N42", choices=tuple(MAGNET_GRADES_T), meaning="NdFeB grade: sets Br when `remanence_T` is null")
 
     @property
     def radius_mm(self) -> float:
@@ -280,15 +288,24 @@ class Housing:
     pocket that is open upwards in the print until the pause, then closed by a 45 deg roof.
     """
 
-    base_floor_mm: float = 0.8           # two extrusion lines under the board
-    board_clearance_mm: float = 0.2      # all round the board in its slot
-    chip_clearance_mm: float = 0.3       # air between the board's tallest part and the cover
-    cover_mm: float = 0.8                # solid TPU between that air gap and layer 1 (2 lines)
-    side_wall_mm: float = 1.2            # thinnest wall around the slot and the pocket
-    plate_mm: float = 0.8                # solid plate between two collapsible layers (2 lines)
-    pocket_floor_mm: float = 0.4         # one line on the top layer's pad (>= 0.4 mm itself)
-    pocket_clearance_mm: float = 0.1     # radial and axial clearance around the magnet
-    cap_top_mm: float = 0.8              # TPU above the magnet's upper face
+    # clearances may be zero; walls and floors are at least 0.01 mm
+    base_floor_mm: float = spec(0.8, lo=0.01, hi=100.0, unit="mm",
+                                meaning="material under the board (two extrusion lines)")
+    board_clearance_mm: float = spec(0.2, lo=0.0, hi=100.0, unit="mm", meaning="all round the board in its slot")
+    chip_clearance_mm: float = spec(0.3, lo=0.0, hi=100.0, unit="mm",
+                                    meaning="air between the board's tallest part (chip or connector) and the cover")
+    cover_mm: float = spec(0.8, lo=0.01, hi=100.0, unit="mm",
+                           meaning="solid cover between that air and layer 1 (two lines)")
+    side_wall_mm: float = spec(1.2, lo=0.01, hi=100.0, unit="mm",
+                               meaning="thinnest wall beside and under the board slot and above the pocket's roof")
+    plate_mm: float = spec(0.8, lo=0.01, hi=100.0, unit="mm", meaning="solid plate between two layers (two lines)")
+    pocket_floor_mm: float = spec(0.4, lo=0.01, hi=100.0, unit="mm",
+                                  meaning="material between the top layer's pad and the magnet (one line; the pad "
+                                          "under it is at least one more)")
+    pocket_clearance_mm: float = spec(0.1, lo=0.0, hi=100.0, unit="mm",
+                                      meaning="radial and axial clearance around the magnet")
+    cap_top_mm: float = spec(0.8, lo=0.01, hi=100.0, unit="mm",
+                             meaning="material above the magnet (printed after the pause)")
 
 
 def snap_to_layers_mm(height_mm: float, layer_height_mm: float, mode: str) -> float:
@@ -317,8 +334,12 @@ class SensorGeometry:
     magnet: Magnet = Magnet()
     board: Board | None = None
     housing: Housing = Housing()
-    chip_offset_mm: tuple[float, float] = (0.0, 0.0)   # chip centre relative to magnet axis
-    magnet_tilt_deg: float = 0.0                        # tilt of the magnet axis about y
+    chip_offset_mm: tuple[float, float] = spec(
+        (0.0, 0.0), kind="pair", lo=-100.0, hi=100.0, unit="mm",
+        meaning="chip centre relative to the magnet axis (x, y); non-zero selects the `cylinder` field model")
+    magnet_tilt_deg: float = spec(
+        0.0, lo=-45.0, hi=45.0, unit="deg",
+        meaning="tilt of the magnet axis about y; non-zero selects the `cylinder` field model")
     printer: Printer = Printer()
 
     def __post_init__(self):
