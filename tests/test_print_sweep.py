@@ -25,6 +25,8 @@ RANDOM_N, RANDOM_SEED = 20, 9
 
 from slicer_support import need_slicer  # noqa: E402
 
+pytestmark = pytest.mark.slow      # most tests here run PrusaSlicer
+
 # design id -> {"span_mm", "span_layer", "span_z_mm", "print_time_s", "pause_after_layer"}; filled by
 # the per-design fixture, read by the last test
 MEASURED = {}

@@ -27,6 +27,8 @@ W = 0.45            # line width of the synthetic G-code
 
 from slicer_support import HAVE_SLICER, need_slicer  # noqa: E402
 
+pytestmark = pytest.mark.slow      # most tests here run PrusaSlicer
+
 
 # --------------------------------------------------------------------------- synthetic G-code
 def gcode_text(layers, relative=True, pause_after=None):

@@ -157,6 +157,7 @@ class HalfChevronContinuum:
         raise AssertionError("half-chevron Newton did not converge")
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("cell", CELLS, ids=str)
 def test_continuum_quarter_equals_half_chevron_small_strain(cell):
     half = HalfChevronContinuum(cell, L2.DEFAULT_LEVELS)
@@ -178,6 +179,7 @@ def test_continuum_quarter_equals_half_chevron_small_strain(cell):
             assert u[a] + u[b] == pytest.approx(-d, abs=1e-8 * d)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("cell", CELLS[:2], ids=str)
 def test_continuum_quarter_equals_half_chevron_large_strain(cell):
     # the nonlinear path runs on the unrefined mesh (solve_continuum scales its forces by
@@ -198,6 +200,7 @@ def test_continuum_quarter_equals_half_chevron_large_strain(cell):
     assert checked >= 2, res.displacement_mm
 
 
+@pytest.mark.slow
 def test_continuum_pad_cut_is_far_enough_from_the_wall(monkeypatch):
     # the quarter model keeps PAD_LENGTH_IN_T wall thicknesses of pad and holds the cut in x;
     # the bonded pad's stresses decay within a few t (Saint-Venant), so keeping the whole pad
