@@ -179,7 +179,7 @@ def test_random_valid_designs_build_watertight_bodies(g):
     assert floor < v < (x1 - x0) * (y1 - y0) * (z1 - z0)
     assert v == pytest.approx(g.body_volume_mm3, rel=1e-9)
     vertices, triangles = mesh_io.tessellate(body, 0.02)
-    assert mesh_io.is_closed_oriented(triangles)
+    assert mesh_io.is_closed_oriented(vertices, triangles)
     mesh = trimesh.Trimesh(vertices, triangles, process=False)
     assert mesh.is_watertight and mesh.is_volume
     # chord deviation 0.02 mm only affects the pocket: volume within delta x curved area
@@ -240,6 +240,43 @@ def test_merge_vertices_welds_duplicates_in_first_seen_order():
     nv, nt = mesh_io.merge_vertices(v, t)
     assert nv.tolist() == [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]]
     assert nt.tolist() == [[0, 1, 2], [1, 0, 3]]        # the degenerate third triangle is dropped
+
+
+def test_closed_oriented_catches_a_hole_and_a_flipped_triangle():
+    box = trimesh.creation.box((1, 2, 3))
+    v, t = np.asarray(box.vertices), np.asarray(box.faces)
+    assert mesh_io.is_closed_oriented(v, t)
+    assert not mesh_io.is_closed_oriented(v, t[1:])
+    flipped = t.copy()
+    flipped[0] = flipped[0, ::-1]
+    assert not mesh_io.is_closed_oriented(v, flipped)
+
+
+def test_tessellation_keeps_the_corner_order_of_earlier_exports(reference):
+    """STL and 3MF store each triangle's corners in order: the mesh read through build123d must
+    list them as mst's own face-by-face readout of the OCCT triangulation did (reversed faces
+    (n3, n2, n1)), so that exports stay byte-identical. The readout is redone here by hand."""
+    from OCP.BRep import BRep_Tool
+    from OCP.TopAbs import TopAbs_REVERSED
+    from OCP.TopLoc import TopLoc_Location
+
+    _, cad = reference
+    vertices, triangles = mesh_io.tessellate(cad.body, 0.01)
+    points, tris, offset = [], [], 0
+    for face in (f.wrapped for f in cad.body.faces()):
+        loc = TopLoc_Location()
+        poly = BRep_Tool.Triangulation_s(face, loc)
+        trsf = loc.Transformation()
+        nodes = (poly.Node(i).Transformed(trsf) for i in range(1, poly.NbNodes() + 1))
+        points += [(p.X(), p.Y(), p.Z()) for p in nodes]
+        t = np.array([poly.Triangle(i).Get() for i in range(1, poly.NbTriangles() + 1)]) - 1
+        tris.append((t[:, ::-1] if face.Orientation() == TopAbs_REVERSED else t) + offset)
+        offset += poly.NbNodes()
+    key = np.round(np.array(points), 9)
+    _, first, inverse = np.unique(key, axis=0, return_index=True, return_inverse=True)
+    rank = np.argsort(np.argsort(first))                # welded in first-seen order
+    assert np.array_equal(vertices, np.array(points)[np.sort(first)])
+    assert np.array_equal(triangles, rank[inverse.reshape(-1)][np.concatenate(tris)])
 
 
 def test_cover_moves_the_magnet_but_not_the_pause():

@@ -1,18 +1,20 @@
 """mst_cli.cad.checks: every check passes on the exported reference body and fails when the mesh
-or the expectation is broken in the way that check is about."""
+or the expectation is broken in the way that check is about; the measurements (cad.measure) on
+a known solid; the typed manifest (cad.manifest) refuses what it cannot check."""
 
 import copy
 import io
 import math
+import re
 from pathlib import Path
 
 import numpy as np
 import pytest
 import trimesh
 
-from mst_cli.cad import checks, mesh_io
+from mst_cli.cad import checks, measure, mesh_io
 from mst_cli.cad.assembly import build_sensor, print_mesh
-from mst_cli.cad.manifest import export_manifest
+from mst_cli.cad.manifest import Manifest, export_manifest, load_manifest
 from mst_cli.io.schema import load_design_document
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -139,14 +141,14 @@ def test_crossings_and_gaps_on_a_hollow_box():
     inner = trimesh.creation.box((4, 4, 4))
     inner.invert()                                    # a cavity: inward-facing shell
     hollow = trimesh.util.concatenate([outer, inner])
-    assert checks.shells(hollow)[:2] == (1, 1)
+    assert measure.shells(hollow)[:2] == (1, 1)
     assert hollow.volume == pytest.approx(1000 - 64)
-    m, status = checks.to_manifold(hollow)
+    m, status = measure.to_manifold(hollow)
     assert status == "NoError"
-    assert np.allclose(checks.vertical_gaps(m, 0.1, 0.2, 5.0, -5.0), [(-2.0, 2.0)])
-    assert np.allclose(checks.air_gaps(m, (-8, 0.1, 0.2), (1, 0, 0), 16.0), [(6.0, 10.0)])
-    assert checks.section_hole_area(m, 0.0, 0.0, 0.0) == pytest.approx(16.0)
-    assert np.allclose(checks.section_boxes(m, 0.0), [(-5, -5, 5, 5)])
+    assert np.allclose(measure.vertical_gaps(m, 0.1, 0.2, 5.0, -5.0), [(-2.0, 2.0)])
+    assert np.allclose(measure.air_gaps(m, (-8, 0.1, 0.2), (1, 0, 0), 16.0), [(6.0, 10.0)])
+    assert measure.section_hole_area(m, 0.0, 0.0, 0.0) == pytest.approx(16.0)
+    assert np.allclose(measure.section_boxes(m, 0.0), [(-5, -5, 5, 5)])
 
 
 def test_a_part_tilted_off_its_side_fails_the_print_checks(exported):
@@ -167,7 +169,7 @@ def test_unreadable_inputs_are_input_errors(tmp_path):
     (tmp_path / "sensor.stl").write_bytes(b"not a mesh at all")
     (tmp_path / "export.json").write_text("{broken")
     with pytest.raises(InputError, match="export.json"):
-        checks.load_manifest(tmp_path / "export.json")
+        load_manifest(tmp_path / "export.json")
     with pytest.raises(InputError):
         checks.load_mesh(tmp_path / "sensor.stl")
     lonely = tmp_path / "lonely"
@@ -199,3 +201,57 @@ def test_random_valid_designs_pass_every_check(g):
     assert not failed(res.values()), {k: (c.measured, c.expected, c.note) for k, c in res.items() if not c.passed}
     assert res["wall_thickness"].values["per_layer_mm"] == pytest.approx([c.t_mm for c in g.layers], abs=1e-3)
     assert res["overhang"].values["min_inclination_deg"] >= 45.0 - 1e-3
+
+
+# --------------------------------------------------------------------------- structure
+def test_the_mesh_is_measured_once_and_each_check_compares(exported, monkeypatch):
+    stl, manifest, _ = exported
+    typed = Manifest.from_dict(manifest)
+    calls = []
+    real = checks.measure
+    monkeypatch.setattr(checks, "measure", lambda *a: calls.append(1) or real(*a))
+    results = checks.run_checks(mesh_of(stl), typed)
+    assert len(calls) == 1
+    assert [c.name for c in results] == [f.__name__.removeprefix("check_") for f in checks.CHECKS]
+    # a check is a pure comparison: the same measurements against another expectation
+    measured = real(mesh_of(stl), typed)
+    wider = checks.check_wall_thickness(measured, checks.replace(typed, printer=checks.replace(
+        typed.printer, nozzle_mm=0.8)))
+    assert not wider.passed and wider.values["nozzle_mm"] == 0.8
+
+
+def test_the_manifest_is_typed_and_validated_on_load(exported, tmp_path):
+    import json
+
+    from mst_cli.errors import InputError
+    _, manifest, g = exported
+    typed = Manifest.from_dict(manifest)
+    assert typed.print.pause.after_layer == g.pause_after_layer and isinstance(typed.print.pause.after_layer, int)
+    assert typed.layers[0].t_mm == 0.6 and isinstance(typed.body.bbox_max_mm, tuple)
+    assert typed.board_slot.cable_windows[0].floor_y_mm == manifest["board_slot"]["cable_windows"][0]["floor_y_mm"]
+    (tmp_path / "export.json").write_text(json.dumps(manifest))
+    assert load_manifest(tmp_path / "export.json") == typed
+    for edit, field in [
+        (lambda m: m["layers"][1].pop("t_mm"), "export.json.layers[1].t_mm"),
+        (lambda m: m["body"].__setitem__("bodies", 1.5), "export.json.body.bodies"),
+        (lambda m: m["print"]["translation_mm"].__setitem__(2, float("inf")), "export.json.print.translation_mm[2]"),
+        (lambda m: m["print"].__setitem__("rotation", [[1, 0, 0], [0, 1, 0], [0, 0, -1]]),
+         "export.json.print.rotation"),
+        (lambda m: m["board_slot"].__setitem__("board", 4022), "export.json.board_slot.board"),
+    ]:
+        wrong = copy.deepcopy(manifest)
+        edit(wrong)
+        with pytest.raises(InputError, match=re.escape(field)):
+            Manifest.from_dict(wrong)
+
+
+def test_a_bug_in_a_check_is_raised_as_it_is(exported, monkeypatch):
+    """The manifest is valid: a KeyError inside a check is a bug and must not be turned into
+    anything else."""
+    stl, manifest, _ = exported
+
+    def broken(m, x):
+        return {}["a bug"]
+    monkeypatch.setattr(checks, "CHECKS", checks.CHECKS + (broken,))
+    with pytest.raises(KeyError, match="a bug"):
+        checks.run_checks(mesh_of(stl), manifest)

@@ -1,15 +1,29 @@
-"""``export.json``: what the exported body should measure, read by ``mst check`` and ``mst slice``.
+"""``export.json``: what the exported body should measure, written by ``mst export`` and read by
+``mst check`` and ``mst slice``.
 
 Every number is read from the geometry object (analytic, not measured on the CAD), so
 ``mst check`` compares the written mesh against the design itself. Units are in the keys.
 Dimensions are in the sensor frame (z up the stack) except in the ``print`` section, which
-describes the mesh files as they lie on the bed. No CAD library is imported here.
+describes the mesh files as they lie on the bed. No CAD or mesh library is imported here.
+
+Writing: :func:`export_manifest` (a JSON-ready dict). Reading: :func:`load_manifest` gives a
+:class:`Manifest`, the typed part ``mst check`` uses, validated field by field on load (type,
+nesting, finite and sane size): a malformed file is an :class:`~mst_cli.errors.InputError`
+naming the field, so a KeyError or TypeError inside a check is a bug, not bad input.
 """
 
 from __future__ import annotations
 
+import json
+from dataclasses import dataclass, field, fields
+from pathlib import Path
+from typing import TYPE_CHECKING
+
 from mst_cli import __version__
-from mst_cli.model.geometry import Printer, SensorGeometry
+from mst_cli.errors import InputError
+
+if TYPE_CHECKING:                 # annotations only: reading export.json needs no geometry model
+    from mst_cli.model.geometry import Printer, SensorGeometry
 
 MANIFEST_NAME = "export.json"
 MANIFEST_FORMAT = 2
@@ -125,3 +139,205 @@ def export_manifest(name: str, geometry: SensorGeometry, printer: Printer, stl_t
             "cavity_gap_mm": min(c.cavity_height_mm for c in cells),
         },
     }
+
+
+# --------------------------------------------------------------------------- reading
+# Sizes in export.json: a sensor body is centimetres, so anything beyond a metre is no body mst
+# wrote (and 1e37 would overflow the measurements).
+MAX_COORD_MM = 1000.0
+MAX_MANIFEST_BYTES = 10_000_000
+MAX_LIST = 64
+MAX_VOLUME = 1e9
+# a finer layer, tolerance or nozzle would overflow the layer counts
+MIN_SIZE_MM = 1e-3
+
+
+def _kind(kind):
+    """A field of export.json: ``kind`` is "num" (a finite number within +-MAX_COORD_MM; bool is
+    not a number), "pos" (a size from MIN_SIZE_MM to MAX_COORD_MM), "vol" (an area or volume from
+    0 to MAX_VOLUME), "int", "str", (kind, n) a list of exactly n, ListOf a list of up to
+    MAX_LIST, or a dataclass below (a mapping)."""
+    return field(metadata={"kind": kind})
+
+
+@dataclass(frozen=True)
+class ListOf:
+    """A list of up to MAX_LIST mappings of ``kind``, at least ``min_len`` of them."""
+
+    kind: type
+    min_len: int = 0
+
+
+@dataclass(frozen=True)
+class Pause:
+    after_layer: int = _kind("int")
+    z_mm: float = _kind("num")
+
+
+@dataclass(frozen=True)
+class PrintFrame:
+    """How the mesh lies on the bed: print = rotation @ sensor + translation (row-vector form in
+    :func:`mst_cli.cad.measure.to_sensor_frame`)."""
+
+    rotation: tuple[tuple[float, float, float], ...] = _kind((("num", 3), 3))
+    translation_mm: tuple[float, float, float] = _kind(("num", 3))
+    layer_height_mm: float = _kind("pos")
+    height_mm: float = _kind("pos")
+    magnet_top_z_mm: float = _kind("num")
+    pause: Pause = _kind(Pause)
+
+
+@dataclass(frozen=True)
+class Body:
+    volume_mm3: float = _kind("vol")
+    volume_tolerance_mm3: float = _kind("vol")
+    bbox_min_mm: tuple[float, float, float] = _kind(("num", 3))
+    bbox_max_mm: tuple[float, float, float] = _kind(("num", 3))
+    bodies: int = _kind("int")
+    internal_voids: int = _kind("int")
+
+
+@dataclass(frozen=True)
+class Layer:
+    z_bottom_mm: float = _kind("num")
+    h_mm: float = _kind("pos")
+    t_mm: float = _kind("pos")
+    theta_deg: float = _kind("num")
+    web_depth_mm: float = _kind("pos")
+    cavity_height_mm: float = _kind("num")
+
+
+@dataclass(frozen=True)
+class Pocket:
+    section_z_mm: float = _kind("num")
+    radius_mm: float = _kind("num")
+    section_area_mm2: float = _kind("vol")
+    depth_mm: float = _kind("num")
+    floor_z_mm: float = _kind("num")
+    curved_area_mm2: float = _kind("vol")
+    volume_mm3: float = _kind("vol")
+    roof_rise_mm: float = _kind("num")
+
+
+@dataclass(frozen=True)
+class CableWindow:
+    x_inner_mm: float = _kind("num")
+    x_outer_mm: float = _kind("num")
+    floor_y_mm: float = _kind("num")
+
+
+@dataclass(frozen=True)
+class Slot:
+    board: str = _kind("str")
+    chip_xy_mm: tuple[float, float] = _kind(("num", 2))
+    floor_z_mm: float = _kind("num")
+    top_z_mm: float = _kind("num")
+    floor_y_mm: float = _kind("num")
+    x0_mm: float = _kind("num")
+    x1_mm: float = _kind("num")
+    board_thickness_mm: float = _kind("num")
+    chip_height_mm: float = _kind("num")
+    cable_windows: tuple[CableWindow, ...] = _kind(ListOf(CableWindow))
+
+
+@dataclass(frozen=True)
+class PrinterLimits:
+    nozzle_mm: float = _kind("pos")
+    min_gap_mm: float = _kind("pos")
+
+
+@dataclass(frozen=True)
+class Manifest:
+    """What ``mst check`` reads from export.json, typed and validated (:meth:`from_dict`).
+    Fields are the file's keys, in the order they are validated."""
+
+    stl_tolerance_mm: float = _kind("pos")
+    gap0_mm: float = _kind("num")
+    print: PrintFrame = _kind(PrintFrame)
+    body: Body = _kind(Body)
+    layers: tuple[Layer, ...] = _kind(ListOf(Layer, min_len=1))
+    magnet_pocket: Pocket = _kind(Pocket)
+    board_slot: Slot = _kind(Slot)
+    printer: PrinterLimits = _kind(PrinterLimits)
+
+    @classmethod
+    def from_dict(cls, data) -> Manifest:
+        """The manifest of a parsed export.json (or of :func:`export_manifest`'s dict): an
+        InputError names the first field that is missing, of the wrong type or nesting, out of
+        range (``export.json.layers[2].t_mm``), or a rotation that is not one."""
+        manifest = _parse(cls, data, "export.json")
+        import numpy as np
+        rotation = np.asarray(manifest.print.rotation, dtype=float)
+        if not (np.allclose(rotation @ rotation.T, np.eye(3), atol=1e-6) and np.linalg.det(rotation) > 0):
+            raise InputError("export.json.print.rotation", data["print"]["rotation"],
+                             "must be a rotation matrix (orthonormal, determinant +1): rewrite it with 'mst export'")
+        return manifest
+
+
+def _is_number(v) -> bool:
+    # abs(v) <= limit is False for NaN and infinities, and exact for integers of any size
+    return isinstance(v, (int, float)) and not isinstance(v, bool) and abs(v) <= MAX_COORD_MM
+
+
+_SCALAR_OK = {
+    "num": _is_number,
+    "pos": lambda v: _is_number(v) and v >= MIN_SIZE_MM,
+    "vol": lambda v: isinstance(v, (int, float)) and not isinstance(v, bool) and 0 <= v <= MAX_VOLUME,
+    "int": lambda v: isinstance(v, int) and not isinstance(v, bool) and abs(v) <= 10**9,
+    "str": lambda v: isinstance(v, str),
+}
+_KIND_TEXT = {"num": f"a finite number within +-{MAX_COORD_MM:g}",
+              "pos": f"a size from {MIN_SIZE_MM:g} to {MAX_COORD_MM:g}",
+              "vol": f"a number from 0 to {MAX_VOLUME:g}", "int": "an integer", "str": "a string"}
+
+
+def _describe(kind) -> str:
+    if isinstance(kind, str):
+        return _KIND_TEXT[kind]
+    if isinstance(kind, tuple):
+        return f"a list of {kind[1]} entries, each {_describe(kind[0])}"
+    if isinstance(kind, ListOf):
+        return f"a list of up to {MAX_LIST} mappings"
+    return "a mapping with " + ", ".join(f.name for f in fields(kind))
+
+
+def _parse(kind, data, path: str):
+    """``data`` as ``kind`` (see :func:`_kind`), checked before it is read: numbers become
+    floats, lists tuples, mappings dataclasses. ``path`` names the field in errors."""
+    if isinstance(kind, str):
+        if _SCALAR_OK[kind](data):
+            return data if kind in ("int", "str") else float(data)
+    elif isinstance(kind, tuple):
+        sub, n = kind
+        if isinstance(data, list) and len(data) == n:
+            return tuple(_parse(sub, item, f"{path}[{i}]") for i, item in enumerate(data))
+    elif isinstance(kind, ListOf):
+        if isinstance(data, list) and kind.min_len <= len(data) <= MAX_LIST:
+            return tuple(_parse(kind.kind, item, f"{path}[{i}]") for i, item in enumerate(data))
+    elif isinstance(data, dict):
+        values = {}
+        for f in fields(kind):
+            if f.name not in data:
+                raise InputError(f"{path}.{f.name}", None, "missing: rewrite it with 'mst export'")
+            values[f.name] = _parse(f.metadata["kind"], data[f.name], f"{path}.{f.name}")
+        return kind(**values)
+    shown = data if not isinstance(data, (dict, list)) else type(data).__name__
+    raise InputError(path, shown, f"must be {_describe(kind)}: rewrite it with 'mst export'")
+
+
+def load_manifest(path: Path) -> Manifest:
+    """export.json, validated field by field (:meth:`Manifest.from_dict`)."""
+    try:
+        if Path(path).stat().st_size > MAX_MANIFEST_BYTES:
+            raise InputError("export.json", str(path), f"is larger than {MAX_MANIFEST_BYTES} bytes: "
+                                                       "rewrite it with 'mst export'")
+        data = json.loads(Path(path).read_text(), parse_constant=_refuse_constant)
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError, RecursionError) as exc:
+        raise InputError("export.json", str(path), f"cannot be read as JSON ({type(exc).__name__})") from None
+    except ValueError as exc:                       # NaN / Infinity, which JSON does not have
+        raise InputError("export.json", str(path), f"cannot be read as JSON ({exc})") from None
+    return Manifest.from_dict(data)
+
+
+def _refuse_constant(name: str):
+    raise ValueError(f"{name} is not a JSON number")

@@ -1,30 +1,36 @@
-"""Triangle meshes of a B-rep solid and their files (binary STL, 3MF, STEP).
+"""Triangle meshes of a B-rep solid: tessellation (OCP, build123d), welding and the closed-mesh
+test (trimesh), binary STL (trimesh).
 
-Output is deterministic: the same solid and tolerance give byte-identical STL and 3MF files
-(no time stamps, fixed zip dates, vertices merged in first-seen order), and the STEP header
-carries a fixed time stamp.
+Output is deterministic: the same solid and tolerance give the same vertices (welded in
+first-seen order) and triangles, so byte-identical STL files. The 3MF and STEP writers, which
+need more care for that, are in :mod:`mst_cli.cad.deterministic`; their names are re-exported
+here for the callers that write all the mesh files from one module.
 """
 
 from __future__ import annotations
 
-import io
-import itertools
-import re
-import zipfile
-from pathlib import Path
-
 import numpy as np
 
-# Fixed STEP header time stamp and 3MF zip member date: output depends only on the input.
-STEP_TIMESTAMP = "2000-01-01T00:00:00"
-_ZIP_DATE = (1980, 1, 1, 0, 0, 0)
+from mst_cli.cad.deterministic import (
+    PRUSA_CUSTOM_GCODE_MEMBER,
+    PRUSA_PAUSE_PRINT_TYPE,
+    STEP_TIMESTAMP,
+    prusa_pause_xml,
+    three_mf_bytes,
+    write_step,
+)
+
+__all__ = ["PRUSA_CUSTOM_GCODE_MEMBER", "PRUSA_PAUSE_PRINT_TYPE", "STEP_TIMESTAMP", "is_closed_oriented",
+           "merge_vertices", "prusa_pause_xml", "stl_bytes", "tessellate", "three_mf_bytes", "write_step"]
+
+STL_HEADER = "mst sensor body, mm"
 
 
 def tessellate(solid, tolerance_mm: float, angular_tolerance_rad: float = 0.1):
     """Indexed triangle mesh of ``solid`` with outward normals.
 
     OCCT's incremental mesher discretises every edge once and shares it between the two
-    faces it bounds, so the faces' meshes meet vertex to vertex; merging equal coordinates
+    faces it bounds, so the faces' meshes meet vertex to vertex; welding equal coordinates
     gives a closed mesh. ``tolerance_mm`` is the largest chord deviation from the surface.
 
     Returns
@@ -32,184 +38,65 @@ def tessellate(solid, tolerance_mm: float, angular_tolerance_rad: float = 0.1):
     vertices : (n, 3) float64 array, mm
     triangles : (m, 3) int64 array of vertex indices, counter-clockwise seen from outside
     """
-    from OCP.BRep import BRep_Tool
     from OCP.BRepMesh import BRepMesh_IncrementalMesh
-    from OCP.TopAbs import TopAbs_REVERSED
-    from OCP.TopLoc import TopLoc_Location
 
-    shape = solid.wrapped
-    BRepMesh_IncrementalMesh(shape, tolerance_mm, False, angular_tolerance_rad, False)
-    verts, tris, offset = [], [], 0
-    for face in (f.wrapped for f in solid.faces()):
-        loc = TopLoc_Location()
-        poly = BRep_Tool.Triangulation_s(face, loc)
-        trsf = loc.Transformation()
-        n = poly.NbNodes()
-        pts = [poly.Node(i).Transformed(trsf) for i in range(1, n + 1)]
-        verts.append(np.array([(p.X(), p.Y(), p.Z()) for p in pts], dtype=float).reshape(-1, 3))
-        t = np.array([poly.Triangle(i).Get() for i in range(1, poly.NbTriangles() + 1)],
-                     dtype=np.int64).reshape(-1, 3) - 1
-        if face.Orientation() == TopAbs_REVERSED:
-            t = t[:, ::-1]
-        tris.append(t + offset)
-        offset += n
-    vertices = np.concatenate(verts)
-    triangles = np.concatenate(tris)
+    # Mesh here rather than in build123d's Shape.mesh, which asks for a *relative* deflection:
+    # --stl-tolerance and the pocket's volume tolerance in export.json are absolute (mm).
+    # Shape.tessellate then finds a fine enough triangulation and only reads it back.
+    BRepMesh_IncrementalMesh(solid.wrapped, tolerance_mm, False, angular_tolerance_rad, False)
+    points, corners = solid.tessellate(tolerance_mm, angular_tolerance_rad)
+    vertices = np.array([tuple(p) for p in points], dtype=float).reshape(-1, 3)
+    triangles = np.array(corners, dtype=np.int64).reshape(-1, 3)
+    _keep_corner_order(solid, triangles)
     return merge_vertices(vertices, triangles)
 
 
+def _keep_corner_order(solid, triangles: np.ndarray) -> None:
+    """Start each triangle of a reversed face at the corner mst has always written first.
+
+    build123d lists a reversed face's triangle (n1, n3, n2), mst wrote (n3, n2, n1): the same
+    oriented triangle, but STL and 3MF store the corner order, so exports of a design would
+    change bytes without changing shape. Rolled in place, face by face as build123d lists them.
+    """
+    from OCP.BRep import BRep_Tool
+    from OCP.TopAbs import TopAbs_REVERSED
+    from OCP.TopLoc import TopLoc_Location
+
+    faces = [f.wrapped for f in solid.faces()]
+    counts = [BRep_Tool.Triangulation_s(f, TopLoc_Location()).NbTriangles() for f in faces]
+    reversed_ = np.repeat([f.Orientation() == TopAbs_REVERSED for f in faces], counts)
+    triangles[reversed_] = np.roll(triangles[reversed_], -1, axis=1)
+
+
+def _trimesh(vertices: np.ndarray, triangles: np.ndarray):
+    import trimesh
+    # process=False: trimesh must not reorder, weld or drop anything behind our back
+    return trimesh.Trimesh(vertices=vertices, faces=triangles, process=False)
+
+
 def merge_vertices(vertices: np.ndarray, triangles: np.ndarray, digits: int = 9):
-    """Weld vertices whose coordinates agree to ``digits`` decimals (mm); drop triangles
-    that collapse. Keeps the first-seen order so that the result is deterministic."""
-    key = np.round(vertices, digits)
-    _, first, inverse = np.unique(key, axis=0, return_index=True, return_inverse=True)
-    order = np.argsort(first)                       # unique rows in first-seen order
-    rank = np.empty_like(order)
-    rank[order] = np.arange(order.size)
-    new_vertices = vertices[first[order]]
-    new_triangles = rank[inverse.reshape(-1)][triangles]
-    keep = ((new_triangles[:, 0] != new_triangles[:, 1]) & (new_triangles[:, 1] != new_triangles[:, 2])
-            & (new_triangles[:, 0] != new_triangles[:, 2]))
-    return new_vertices, new_triangles[keep]
+    """Weld vertices whose coordinates agree to ``digits`` decimals (mm) (trimesh, which keeps
+    the first-seen order, so the result is deterministic); drop triangles that collapse."""
+    mesh = _trimesh(vertices, triangles)
+    mesh.merge_vertices(digits_vertex=digits)
+    faces = np.asarray(mesh.faces, dtype=np.int64)
+    # a triangle whose corners welded together has no area: by index, not by a size tolerance
+    keep = (faces[:, 0] != faces[:, 1]) & (faces[:, 1] != faces[:, 2]) & (faces[:, 0] != faces[:, 2])
+    return np.asarray(mesh.vertices, dtype=float), faces[keep]
 
 
-def stl_bytes(vertices: np.ndarray, triangles: np.ndarray, header: str = "mst sensor body, mm") -> bytes:
-    """Binary STL: 80-byte header, triangle count, then normal + 3 vertices per triangle."""
-    tri = vertices[triangles]
-    normals = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
-    length = np.linalg.norm(normals, axis=1, keepdims=True)
-    normals = np.divide(normals, length, out=np.zeros_like(normals), where=length > 0)
-    record = np.zeros(len(triangles), dtype=[("n", "<f4", 3), ("v", "<f4", (3, 3)), ("attr", "<u2")])
-    record["n"] = normals
-    record["v"] = tri
-    head = header.encode("ascii")[:80].ljust(80, b" ")
-    return head + np.uint32(len(triangles)).tobytes() + record.tobytes()
+def is_closed_oriented(vertices: np.ndarray, triangles: np.ndarray) -> bool:
+    """True when the mesh is closed (every edge shared by two triangles) and consistently wound:
+    trimesh's watertight and winding tests, checked before anything is written."""
+    mesh = _trimesh(vertices, triangles)
+    return bool(mesh.is_watertight and mesh.is_winding_consistent)
 
 
-def _xml_number(x: float) -> str:
-    return f"{x:.6f}".rstrip("0").rstrip(".") if x else "0"
+def stl_bytes(vertices: np.ndarray, triangles: np.ndarray, header: str = STL_HEADER) -> bytes:
+    """Binary STL (trimesh): 80-byte header, triangle count, then normal + 3 vertices per
+    triangle, in the order of ``triangles``."""
+    from trimesh.exchange.stl import export_stl
 
-
-# PrusaSlicer's per-height custom G-code inside a 3MF project (PrusaSlicer 2.2+, read by the
-# GUI and by its command line): Metadata/Prusa_Slicer_custom_gcode_per_print_z.xml, one <code>
-# per event. ``type`` is CustomGCode::Type (ColorChange 0, PausePrint 1, ToolChange 2,
-# Template 3, Custom 4); ``gcode`` is the command written for PrusaSlicer <= 2.2, which has no
-# ``type``. An event at print_z is emitted at the start of the layer whose top is the first one
-# at or above print_z, after the move to that layer and before its first extrusion.
-PRUSA_CUSTOM_GCODE_MEMBER = "Metadata/Prusa_Slicer_custom_gcode_per_print_z.xml"
-PRUSA_PAUSE_PRINT_TYPE = 1
-
-
-def prusa_pause_xml(pause_after_z_mm: float, layer_height_mm: float, message: str = "") -> str:
-    """The custom G-code member asking for one pause after the layer whose top is
-    ``pause_after_z_mm``: the event sits at the top of the next layer (as the GUI stores it)."""
-    print_z = round(pause_after_z_mm + layer_height_mm, 6)
-    safe = (message.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;")
-            .replace('"', "&quot;"))
-    return ('<?xml version="1.0" encoding="utf-8"?>\n<custom_gcodes_per_print_z>\n'
-            f'<code print_z="{_xml_number(print_z)}" type="{PRUSA_PAUSE_PRINT_TYPE}" extruder="1" '
-            f'color="" extra="{safe}" gcode="M601"/>\n'
-            '<mode value="SingleExtruder"/>\n</custom_gcodes_per_print_z>\n')
-
-
-def three_mf_bytes(vertices: np.ndarray, triangles: np.ndarray, name: str,
-                   pause_after_z_mm: float | None = None, layer_height_mm: float = 0.2,
-                   pause_message: str = "insert the magnet") -> bytes:
-    """A 3MF package (3MF Core Specification 1.x) holding one mesh object, unit mm.
-
-    With ``pause_after_z_mm``, the package also carries PrusaSlicer's per-height custom G-code
-    with one "pause print" after the layer whose top is at that height (layers of
-    ``layer_height_mm``): PrusaSlicer's GUI shows the pause on its layer slider and its command
-    line writes the profile's pause_print_gcode (``;PAUSE_PRINT``, ``M117 <message>``, then
-    e.g. M601) between that layer's last move and the next layer's first.
-    """
-    vert_xml = "".join(f'<vertex x="{_xml_number(x)}" y="{_xml_number(y)}" z="{_xml_number(z)}"/>'
-                       for x, y, z in vertices)
-    tri_xml = "".join(f'<triangle v1="{a}" v2="{b}" v3="{c}"/>' for a, b, c in triangles)
-    safe = (name.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;")
-            .replace('"', "&quot;"))
-    model = ('<?xml version="1.0" encoding="UTF-8"?>\n'
-             '<model unit="millimeter" xml:lang="en-US" '
-             'xmlns="http://schemas.microsoft.com/3dmanufacturing/core/2015/02">\n'
-             f'<metadata name="Title">{safe}</metadata>\n'
-             '<resources>\n'
-             f'<object id="1" type="model" name="{safe}"><mesh><vertices>{vert_xml}</vertices>'
-             f'<triangles>{tri_xml}</triangles></mesh></object>\n'
-             '</resources>\n<build><item objectid="1"/></build>\n</model>\n')
-    content_types = ('<?xml version="1.0" encoding="UTF-8"?>\n'
-                     '<Types xmlns="http://schemas.openxmlformats.org/package/2006/content-types">'
-                     '<Default Extension="rels" '
-                     'ContentType="application/vnd.openxmlformats-package.relationships+xml"/>'
-                     '<Default Extension="model" '
-                     'ContentType="application/vnd.ms-package.3dmanufacturing-3dmodel+xml"/>'
-                     '</Types>\n')
-    rels = ('<?xml version="1.0" encoding="UTF-8"?>\n'
-            '<Relationships xmlns="http://schemas.openxmlformats.org/package/2006/relationships">'
-            '<Relationship Target="/3D/3dmodel.model" Id="rel0" '
-            'Type="http://schemas.microsoft.com/3dmanufacturing/2013/01/3dmodel"/>'
-            '</Relationships>\n')
-    if pause_after_z_mm is not None:        # every part of the package needs a content type
-        content_types = content_types.replace(
-            '</Types>', '<Default Extension="xml" ContentType="application/xml"/></Types>')
-    members = [("[Content_Types].xml", content_types), ("_rels/.rels", rels), ("3D/3dmodel.model", model)]
-    if pause_after_z_mm is not None:
-        members.append((PRUSA_CUSTOM_GCODE_MEMBER,
-                        prusa_pause_xml(pause_after_z_mm, layer_height_mm, pause_message)))
-    buf = io.BytesIO()
-    with zipfile.ZipFile(buf, "w", compression=zipfile.ZIP_DEFLATED) as zf:
-        for member, text in members:
-            info = zipfile.ZipInfo(member, date_time=_ZIP_DATE)
-            info.compress_type = zipfile.ZIP_DEFLATED
-            info.external_attr = 0o644 << 16
-            zf.writestr(info, text)
-    return buf.getvalue()
-
-
-# One NEXT_ASSEMBLY_USAGE_OCCURRENCE record, possibly wrapped over several lines.
-_NAUO = re.compile(rb"#\d+ = NEXT_ASSEMBLY_USAGE_OCCURRENCE\('\d+'.*?\);\n", re.DOTALL)
-_NAUO_ID = re.compile(rb"NEXT_ASSEMBLY_USAGE_OCCURRENCE\('\d+'")
-
-
-def _wrap_record(record: bytes, width: int = 80) -> bytes:
-    """Break a STEP record after commas so that lines stay within ``width`` columns."""
-    lines, line = [], b""
-    for piece in re.split(rb"(?<=,)", record):
-        if line and len(line) + len(piece) > width:
-            lines.append(line)
-            line = b"  "
-        line += piece
-    return b"\n".join(lines + [line]) + b"\n"
-
-
-def _renumber_nauo(data: bytes) -> bytes:
-    counter = itertools.count(1)
-
-    def one(match):
-        record = b"".join(part.strip() for part in match.group(0).splitlines())
-        record = _NAUO_ID.sub(b"NEXT_ASSEMBLY_USAGE_OCCURRENCE('%d'" % next(counter), record)
-        return _wrap_record(record)
-    return _NAUO.sub(one, data)
-
-
-def write_step(assembly, path: Path) -> None:
-    """STEP AP214 file of the named assembly, deterministic.
-
-    The header gets a fixed time stamp, and the ids of the assembly-usage records -- which
-    OCCT draws from a process-wide counter -- are renumbered 1, 2, ... in file order (they
-    only need to be unique within the file); those records are re-wrapped at 80 columns.
-    """
-    from build123d import export_step
-    path = Path(path)
-    if not export_step(assembly, str(path), timestamp=STEP_TIMESTAMP):
-        raise RuntimeError(f"STEP export to {path} failed")
-    path.write_bytes(_renumber_nauo(path.read_bytes()))
-
-def is_closed_oriented(triangles: np.ndarray) -> bool:
-    """True when every directed edge appears once and its reverse once: the mesh is closed
-    and consistently wound (the cheap necessary condition checked before writing)."""
-    e = np.concatenate([triangles[:, [0, 1]], triangles[:, [1, 2]], triangles[:, [2, 0]]])
-    directed = np.unique(e, axis=0)
-    if len(directed) != len(e):
-        return False
-    fwd = set(map(tuple, directed.tolist()))
-    return all((b, a) in fwd for a, b in fwd)
+    data = export_stl(_trimesh(vertices, triangles))
+    # trimesh leaves the free-text header zero; name the file as mst always has
+    return header.encode("ascii")[:80].ljust(80, b" ") + data[80:]

@@ -227,7 +227,7 @@ def has_prusa_pause(path: Path) -> bool:
     """True when a 3MF carries PrusaSlicer per-height custom G-code with a pause."""
     import zipfile
 
-    from mst_cli.cad.mesh_io import PRUSA_CUSTOM_GCODE_MEMBER, PRUSA_PAUSE_PRINT_TYPE
+    from mst_cli.cad.deterministic import PRUSA_CUSTOM_GCODE_MEMBER, PRUSA_PAUSE_PRINT_TYPE
     try:
         with zipfile.ZipFile(path) as zf:
             text = zf.read(PRUSA_CUSTOM_GCODE_MEMBER).decode("utf-8")

@@ -1,7 +1,7 @@
 """``mst export`` and ``mst check``: the printable body and its geometry checks.
 
-build123d (CAD) and trimesh/manifold3d (checks) are imported inside the commands, so that
-importing :mod:`mst_cli.cli.app` stays cheap.
+build123d (CAD) and trimesh/manifold3d (mesh files and checks) are imported inside the
+commands, so that importing :mod:`mst_cli.cli.app` stays cheap.
 """
 
 from __future__ import annotations
@@ -147,14 +147,16 @@ def check(path, as_json, nozzle_mm):
     Prints a table of named checks, measured on the mesh against the design's own expected
     values in export.json. Exit 1 naming the failed checks, 2 for unreadable input.
     """
-    from mst_cli.cad.checks import load_manifest, load_mesh, resolve_paths, results_dict, results_table, run_checks
+    from mst_cli.cad.checks import load_mesh, resolve_paths, results_dict, results_table, run_checks
+    from mst_cli.cad.manifest import load_manifest
     from mst_cli.errors import InputError
 
     if nozzle_mm is not None and not 0.05 <= nozzle_mm <= 5.0:
         raise InputError("--nozzle", nozzle_mm, "must be a nozzle diameter from 0.05 to 5 mm")
     stl, manifest_path = resolve_paths(path)
-    # both inputs are validated before anything is measured: every field run_checks reads (type,
-    # nesting, finite and sane size) and every STL coordinate (finite, within a metre)
+    # both inputs are validated before anything is measured: every field the checks read (type,
+    # nesting, finite and sane size) and every STL coordinate (finite, within a metre). Nothing
+    # below catches KeyError/TypeError: past this point one is a bug in a check, not bad input.
     manifest = load_manifest(manifest_path)
     mesh = load_mesh(stl)
     results = run_checks(mesh, manifest, nozzle_mm)
