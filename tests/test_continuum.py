@@ -11,6 +11,8 @@ from mst_cli.model.mechanics import layer_law
 from mst_cli.model.mechanics.continuum import _kinematics, _lame_3d, linear_stiffness_N_per_mm, solve_continuum
 from mst_cli.model.mechanics.spring import spring_layer
 
+pytestmark = pytest.mark.slow      # every test here runs L2 or its kernel
+
 MAT = Material()
 
 
@@ -100,6 +102,31 @@ def test_patch_uniaxial_plane_strain_compression_is_exact():
     assert -f[top_z].sum() == pytest.approx(E_PS * d / H * W, rel=1e-9)
     right_x = np.flatnonzero(np.isclose(x, W) & blk.is_x)
     assert np.allclose(u[right_x], NU / (1 - NU) * d / H * W, rtol=1e-9)
+
+
+def test_tangent_is_the_derivative_of_the_residual_at_a_large_strain():
+    # the hand-vectorised kernel: K(u) v against central differences of r along v, at a
+    # state with ~10 % strains and rotations (bending plus shear of the block)
+    blk = _Block(2.0, 1.0, 4, 3)
+    x, z = blk.xy
+    u = np.where(blk.is_x, 0.1 * x * z - 0.05 * z * z, -0.08 * x * x + 0.03 * x * z)
+    v = np.where(blk.is_x, np.sin(1.3 * x + z), np.cos(x - 0.7 * z))
+    _, K = blk.assemble(u)
+    eps = 1e-6
+    fd = (blk.assemble(u + eps * v, False)[0] - blk.assemble(u - eps * v, False)[0]) / (2 * eps)
+    assert np.allclose(K @ v, fd, rtol=0, atol=1e-7 * np.abs(fd).max())
+    assert abs(K - K.T).max() <= 1e-12 * abs(K).max()          # hyperelastic: symmetric
+
+
+def test_free_block_is_the_sliced_tangent():
+    from scipy.sparse import csc_matrix
+    prob = L2._Problem(HexCell(40, 0.8, 3.0), MAT, L2.DEFAULT_N_THICK, L2.DEFAULT_N_LENGTH, 0)
+    _, K = prob.assemble(np.zeros(prob.basis.N))
+    for pinned in ((), prob.inner_z[:3]):
+        free, pos, indices, indptr = prob.free_block(pinned)
+        assert np.array_equal(free, np.setdiff1d(prob.free, pinned))
+        block = csc_matrix((K.data[pos], indices, indptr), shape=(free.size, free.size))
+        assert abs(block - K[free][:, free]).max() == 0.0
 
 
 def test_cantilever_tip_deflection_is_plane_strain_timoshenko():

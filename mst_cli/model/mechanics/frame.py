@@ -38,8 +38,9 @@ earlier fit, theta 15-60 deg, t/L <= 0.6 (benchmarks/model_choices.py, plane str
 vertex makes the joints softer than rigid and stiffer than absent, which the fit captures and
 these do not, so L1 reuses L0's factor.
 
-Also here: :class:`TabulatedLockingLayer`, the layer law of a sampled monotone curve, shared
-with rung L2.
+Also here, shared with rung L2: :class:`TabulatedLockingLayer`, the layer law of a sampled
+monotone curve, and :func:`locked_tabulated_law`, which adds the locked branch to a path. The
+path itself is followed by :mod:`mst_cli.model.mechanics.path`, L2's driver too.
 """
 
 from __future__ import annotations
@@ -51,10 +52,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from mst_cli.model import geometry as geo
-from mst_cli.model.mechanics.spring import plane_strain_modulus_MPa
+from mst_cli.model.mechanics.path import PathError, StepControl, follow_to_event
+from mst_cli.model.mechanics.spring import (
+    SHEAR_COEFFICIENT_RECT,
+    contact_stiffness_N_per_mm,
+    plane_strain_modulus_MPa,
+)
 
 DEFAULT_N_ELEMENTS = 12
-SHEAR_COEFFICIENT_RECT = 5.0 / 6.0
 
 
 class FrameError(RuntimeError):
@@ -266,10 +271,13 @@ def solve_frame(cell: geo.HexCell, material, n_elements: int = DEFAULT_N_ELEMENT
                 first_step_frac: float = 0.125, max_steps: int = 400) -> FrameResult:
     """Nonlinear force-displacement of one layer up to contact onset (see module docstring).
 
+    The path is followed by :func:`mst_cli.model.mechanics.path.follow_to_event` (its default
+    tolerances) up to the rigid pads' stroke, where contact is certain.
+
     Raises
     ------
     ValueError     for a cell without a cavity stroke (h - 2t <= allowance) or with p <= 0
-    FrameError     when the steps shrink below 1e-7 of the stroke without converging
+    FrameError     when the path cannot be followed (steps stalled, a failed solve near contact)
     """
     if not (cell.p_mm > 0 and cell.cavity_height_mm > cell.contact_allowance_mm):
         raise ValueError(f"frame model needs a cell with p > 0 and h - 2t > the contact allowance "
@@ -287,66 +295,48 @@ def solve_frame(cell: geo.HexCell, material, n_elements: int = DEFAULT_N_ELEMENT
     ul[free] = np.linalg.solve(K0[np.ix_(free, free)], -K0[free, wall.tip_w] * ul[wall.tip_w])
     k_lin = float(-(K0 @ ul)[wall.tip_w] * factor)
 
+    def margin(u, d):
+        gp, gw = wall.gaps(u, d)
+        return min(gp, gw) - allowance, ("wall" if gw < gp else "pad")
+
+    def force(u, d):
+        f, _ = wall.assemble(u, need_K=False)
+        return -f[wall.tip_w] * factor
+
     d_nom = cell.cavity_height_mm - allowance
-    step = first_step_frac * d_nom
-    ds, Fs, d, total_it = [0.0], [0.0], 0.0, 0
-    g_prev = min(wall.gaps(u, 0.0))
-    for _ in range(max_steps):
-        d_try = min(d + step, d_nom * (1.0 + 1e-9) + 1e-12)
-        try:
-            u_new, it = wall.solve_step(u, d_try)
-        except (FloatingPointError, np.linalg.LinAlgError):
-            step *= 0.5
-            if step < 1e-7 * d_nom:
-                raise FrameError(f"frame solve stalled at d = {d:.4g} mm for {cell}") from None
-            continue
-        total_it += it
-        gp, gw = wall.gaps(u_new, d_try)
-        if min(gp, gw) <= allowance + 1e-12 * d_nom:
-            lo, hi, g_lo, g_hi, u_lo = d, d_try, g_prev, min(gp, gw), u
-            uc, dc = u_new, d_try
-            for _ in range(30):
-                if abs(min(gp, gw) - allowance) <= 1e-9 * d_nom or hi - lo <= 1e-12 * d_nom:
-                    break
-                dc = lo + (g_lo - allowance) / max(g_lo - g_hi, 1e-300) * (hi - lo)
-                dc = min(max(dc, lo + 1e-3 * (hi - lo)), hi - 1e-3 * (hi - lo))
-                uc, it = wall.solve_step(u_lo, dc)
-                total_it += it
-                gp, gw = wall.gaps(uc, dc)
-                if min(gp, gw) > allowance:
-                    lo, g_lo, u_lo = dc, min(gp, gw), uc
-                else:
-                    hi, g_hi = dc, min(gp, gw)
-            f, _ = wall.assemble(uc, need_K=False)
-            ds.append(dc)
-            Fs.append(-f[wall.tip_w] * factor)
-            contact = "wall" if gw < gp else "pad"
-            break
-        f, _ = wall.assemble(u_new, need_K=False)
-        ds.append(d_try)
-        Fs.append(-f[wall.tip_w] * factor)
-        u, d, g_prev = u_new, d_try, min(gp, gw)
-        step *= 1.5 if it <= 3 else (1.0 if it <= 6 else 0.5)
-    else:
-        raise FrameError(f"no contact found within {max_steps} steps for {cell}")
-    F = np.array(Fs)
+    # the rigid pads meet at d_nom: a cap just past it ends every path in contact
+    d_cap = d_nom * (1.0 + 1e-9) + 1e-12
+    try:
+        path = follow_to_event(wall.solve_step, margin, force, u, d_nom, d_cap,
+                               StepControl(first_step_rel=first_step_frac, max_steps=max_steps))
+    except PathError as exc:
+        raise FrameError(f"frame solve: {exc} for {cell}") from None
+    F = np.array([0.0] + path.observations)
     snap = bool(np.any(np.diff(F) <= 0))
-    return FrameResult(np.array(ds), F, k_lin, float(ds[-1]), contact, total_it, snap)
+    return FrameResult(np.array([0.0] + path.d_mm), F, k_lin, float(path.d_mm[-1]), path.event_at,
+                       path.iterations, snap)
+
+
+def locked_tabulated_law(cell: geo.HexCell, material, d_mm, F_N, k_linear_N_per_mm,
+                         snap_through: bool = False) -> TabulatedLockingLayer:
+    """The law of a path sampled up to contact (rungs L1 and L2): its force-controlled envelope,
+    then the locked branch, the walls' last tangent in parallel with the closed cavity's
+    contact column (L0's :func:`~mst_cli.model.mechanics.spring.contact_stiffness_N_per_mm`)."""
+    d, F = monotone_envelope(d_mm, F_N)
+    k_walls = max((F[-1] - F[-2]) / (d[-1] - d[-2]), 0.0)
+    k_locked = k_walls + float(contact_stiffness_N_per_mm(
+        cell.theta_rad, cell.t_mm, cell.width_mm, cell.b_mm, material.youngs_modulus_MPa,
+        material.poisson_ratio))
+    return TabulatedLockingLayer.from_curve(d, F, k_linear_N_per_mm, k_locked, snap_through)
 
 
 @functools.lru_cache(maxsize=4096)
 def frame_layer(cell: geo.HexCell, material) -> TabulatedLockingLayer:
     """The L1 law of one cell: the frame curve up to contact, then the locked branch (walls + contact column)."""
     from mst_cli.model.mechanics.correction import stiffness_factor
-    from mst_cli.model.mechanics.spring import contact_stiffness_N_per_mm
     res = solve_frame(cell, material)
     # the beam clamps the wall at the pad mid-plane and the tip; the finite joints' effect is
     # the same fitted factor as L0's (a function of t/L and theta only), applied to the forces
     joint = float(stiffness_factor(cell.t_mm / cell.wall_length_mm, cell.theta_rad))
-    d, F = monotone_envelope(res.displacement_mm, res.force_N * joint)
-    # locked: the walls' last tangent in parallel with the closed cavity's contact column (L0)
-    k_walls = max((F[-1] - F[-2]) / (d[-1] - d[-2]), 0.0)
-    k_locked = k_walls + float(contact_stiffness_N_per_mm(
-        cell.theta_rad, cell.t_mm, cell.width_mm, cell.b_mm, material.youngs_modulus_MPa,
-        material.poisson_ratio))
-    return TabulatedLockingLayer.from_curve(d, F, res.k_linear_N_per_mm * joint, k_locked, res.snap_through)
+    return locked_tabulated_law(cell, material, res.displacement_mm, res.force_N * joint,
+                                res.k_linear_N_per_mm * joint, res.snap_through)
