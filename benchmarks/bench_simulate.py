@@ -1,11 +1,19 @@
-"""Speed of the forward model (issue: mst simulate). Prints a table; asserts nothing.
+"""Speed of the quick commands as ratios against a floor (issue 14). Prints tables; asserts nothing.
 
-    python benchmarks/bench_simulate.py [--repeats N]
+    python benchmarks/bench_simulate.py [--repeats N] [--no-export]
 
-* layer evaluations per second of the vectorised L0 spring kernel (goal >= 1e6 / s);
-* wall time of `mst simulate` on the three-layer reference design, interpreter start
-  included (goal <= 0.8 s median);
-* import time of mst_cli.cli.app, and whether it pulled in a heavy module (it must not).
+Every command runs as a subprocess, interpreter start included, and every figure is a
+ratio to the **floor** measured in the same run: ``python -c "import numpy, yaml, click"``,
+the interpreter and the three libraries no command can avoid. The commands run round-robin
+(one of each per round, after one warm-up round that is not counted), so a machine shared
+with other work slows them all alike and the ratios hold where absolute seconds do not.
+
+* ``mst --help``, ``mst simulate --no-plot`` (goal <= 1.5x the floor), ``mst simulate``
+  (with response.png: the picture's cost is the difference), ``mst simulate --json``,
+  ``mst design`` on configs/mohammadi2021.yaml with --no-plot --quiet (goal <= 2.5x),
+  ``mst check`` and ``mst export --stl`` (build123d's import is most of it);
+* which heavy libraries each quick command imported (none for simulate; nlopt for design);
+* the vectorised L0 kernel's layer evaluations per second (goal >= 1e6 / s).
 """
 
 from __future__ import annotations
@@ -21,10 +29,59 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-HEAVY = ("build123d", "OCP", "skfem", "matplotlib.pyplot", "nlopt")
+FORWARD = ROOT / "configs" / "mohammadi2021-forward.yaml"
+SPEC = ROOT / "configs" / "mohammadi2021.yaml"
+HEAVY = ("matplotlib", "scipy", "skfem", "magpylib", "nlopt", "build123d", "OCP", "trimesh", "manifold3d")
 
 
-def l0_rate(n_layers: int, repeats: int) -> tuple[float, float]:
+def mst_exe() -> str:
+    exe = Path(sys.executable).with_name("mst")
+    return str(exe) if exe.exists() else "mst"
+
+
+def commands(tmp: Path, export_dir: Path, with_export: bool) -> dict[str, tuple[list[str], str]]:
+    """name -> (argv with {i} for the round, goal). Each round writes into its own folder."""
+    mst = mst_exe()
+    cmds = {
+        'floor: python -c "import numpy, yaml, click"': ([sys.executable, "-c", "import numpy, yaml, click"], ""),
+        "mst --help": ([mst, "--help"], ""),
+        "mst simulate --no-plot": ([mst, "simulate", str(FORWARD), "--out", f"{tmp}/np{{i}}", "--no-plot"],
+                                   "<= 1.5"),
+        "mst simulate (draws response.png)": ([mst, "simulate", str(FORWARD), "--out", f"{tmp}/p{{i}}"], ""),
+        "mst simulate --json": ([mst, "simulate", str(FORWARD), "--out", f"{tmp}/j{{i}}", "--json"], ""),
+        "mst design mohammadi2021 --no-plot -q": ([mst, "design", str(SPEC), "--out", f"{tmp}/d{{i}}",
+                                                  "--no-plot", "--quiet"], "<= 2.5"),
+        "mst check (3 layers)": ([mst, "check", str(export_dir)], ""),
+    }
+    if with_export:
+        cmds["mst export --stl (3 layers)"] = ([mst, "export", str(FORWARD), "--stl", "--out", f"{tmp}/e{{i}}"], "")
+    return cmds
+
+
+def round_robin(cmds: dict, repeats: int) -> dict[str, list[float]]:
+    times = {name: [] for name in cmds}
+    for i in range(-1, repeats):                 # round -1 warms the caches and is not counted
+        for name, (argv, _) in cmds.items():
+            run = [a.replace("{i}", str(i + 1)) for a in argv]
+            t0 = time.perf_counter()
+            subprocess.run(run, check=True, capture_output=True)
+            if i >= 0:
+                times[name].append(time.perf_counter() - t0)
+    return times
+
+
+def heavy_imports(args: list[str]) -> list[str]:
+    """The heavy libraries a command imports, run in-process in a fresh interpreter."""
+    code = ("import sys\nfrom mst_cli.cli.app import main\n"
+            f"sys.argv = ['mst'] + {args!r}\n"
+            "try:\n    main()\nexcept SystemExit:\n    pass\n"
+            f"print(','.join(m for m in {HEAVY!r} if m in sys.modules), file=sys.stderr)\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    last = out.stderr.strip().splitlines()[-1] if out.stderr.strip() else ""
+    return [m for m in last.split(",") if m]
+
+
+def l0_rate(n_layers: int, repeats: int) -> float:
     from mst_cli.model.mechanics.spring import spring_arrays
     rng = np.random.default_rng(0)
     th = np.radians(rng.uniform(15, 60, n_layers))
@@ -35,55 +92,53 @@ def l0_rate(n_layers: int, repeats: int) -> tuple[float, float]:
         t0 = time.perf_counter()
         spring_arrays(th, t, h, t, 4, 30.0, 0.1, 12.0, 0.45)
         times.append(time.perf_counter() - t0)
-    med = statistics.median(times)
-    return n_layers / med, med
-
-
-def simulate_wall(repeats: int) -> list[float]:
-    exe = Path(sys.executable).with_name("mst")
-    cmd = [str(exe) if exe.exists() else "mst", "simulate", str(ROOT / "configs/mohammadi2021-forward.yaml")]
-    times = []
-    with tempfile.TemporaryDirectory() as tmp:
-        for i in range(repeats):
-            t0 = time.perf_counter()
-            subprocess.run(cmd + ["--out", f"{tmp}/o{i}"], check=True, capture_output=True)
-            times.append(time.perf_counter() - t0)
-    return times
-
-
-def import_cost(repeats: int) -> tuple[float, list[str]]:
-    code = ("import sys, time; t = time.perf_counter(); import mst_cli.cli.app; "
-            "print(time.perf_counter() - t); "
-            f"print(','.join(m for m in {HEAVY!r} if m in sys.modules))")
-    times, heavy = [], []
-    for _ in range(repeats):
-        out = subprocess.run([sys.executable, "-c", code], check=True, capture_output=True, text=True)
-        lines = out.stdout.splitlines()
-        times.append(float(lines[0]))
-        heavy = [m for m in (lines[1].split(",") if len(lines) > 1 else []) if m]
-    return statistics.median(times), heavy
+    return n_layers / statistics.median(times)
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--repeats", type=int, default=7)
+    ap.add_argument("--repeats", type=int, default=9)
+    ap.add_argument("--no-export", action="store_true", help="skip mst export (about 2 s a run)")
     args = ap.parse_args()
 
-    rate, med = l0_rate(1_000_000, args.repeats)
-    sim = simulate_wall(args.repeats)
-    imp, heavy = import_cost(args.repeats)
-    rows = [
-        ("L0 layer evaluations / s (1e6 layers per call)", f"{rate:.3g}", ">= 1e6"),
-        ("mst simulate, 3 layers, median wall [s]", f"{statistics.median(sim):.3f}", "<= 0.8"),
-        ("mst simulate, min / max wall [s]", f"{min(sim):.3f} / {max(sim):.3f}", ""),
-        ("import mst_cli.cli.app, median [s]", f"{imp:.3f}", ""),
-        ("heavy modules imported by mst_cli.cli.app", ", ".join(heavy) or "none", "none"),
-    ]
-    print(f"# bench_simulate ({args.repeats} repeats, {sys.platform}, python {sys.version.split()[0]})")
-    print(f"| {'measure':<48} | {'value':>15} | {'goal':>7} |")
-    print(f"|{'-' * 50}|{'-' * 17}|{'-' * 9}|")
-    for name, value, goal in rows:
-        print(f"| {name:<48} | {value:>15} | {goal:>7} |")
+    with tempfile.TemporaryDirectory() as d:
+        tmp = Path(d)
+        export_dir = tmp / "export"
+        subprocess.run([mst_exe(), "export", str(FORWARD), "--stl", "--out", str(export_dir)],
+                       check=True, capture_output=True)
+        cmds = commands(tmp, export_dir, not args.no_export)
+        times = round_robin(cmds, args.repeats)
+        heavy = {
+            "mst simulate --no-plot": heavy_imports(["simulate", str(FORWARD), "--out", f"{tmp}/h1", "--no-plot"]),
+            "mst simulate --json": heavy_imports(["simulate", str(FORWARD), "--out", f"{tmp}/h2", "--json"]),
+            "mst design --no-plot": heavy_imports(["design", str(SPEC), "--out", f"{tmp}/h3", "--no-plot", "-q"]),
+            "mst simulate": heavy_imports(["simulate", str(FORWARD), "--out", f"{tmp}/h4"]),
+        }
+    rate = l0_rate(1_000_000, 5)
+
+    med = {name: statistics.median(ts) for name, ts in times.items()}
+    floor = next(iter(med.values()))
+    print(f"# bench_simulate ({args.repeats} rounds, {sys.platform}, python {sys.version.split()[0]}); "
+          f"ratios against the floor measured in the same run")
+    print(f"| {'command':<46} | {'median [s]':>10} | {'min / max [s]':>13} | {'x floor':>7} | {'goal':>11} |")
+    print(f"|{'-' * 48}|{'-' * 12}|{'-' * 15}|{'-' * 9}|{'-' * 13}|")
+    for name, (_, goal) in cmds.items():
+        ts = times[name]
+        ratio = med[name] / floor
+        mark = "" if not goal else (" ok" if ratio <= float(goal.split()[-1]) else " MISS")
+        print(f"| {name:<46} | {med[name]:>10.3f} | {min(ts):>5.3f} / {max(ts):<5.3f} | {ratio:>7.2f} "
+              f"| {goal + mark:>11} |")
+    drawn, bare = med["mst simulate (draws response.png)"], med["mst simulate --no-plot"]
+    print()
+    print(f"response.png costs {drawn - bare:.3f} s: {100 * (drawn - bare) / drawn:.0f} % of 'mst simulate' "
+          f"({drawn / floor:.2f}x the floor with it, {bare / floor:.2f}x without)")
+    print()
+    print(f"| {'command':<26} | {'heavy libraries imported':<30} |")
+    print(f"|{'-' * 28}|{'-' * 32}|")
+    for name, mods in heavy.items():
+        print(f"| {name:<26} | {', '.join(mods) or 'none':<30} |")
+    print()
+    print(f"L0 layer evaluations / s (1e6 layers per call): {rate:.3g} (goal >= 1e6)")
 
 
 if __name__ == "__main__":

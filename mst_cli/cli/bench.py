@@ -6,6 +6,8 @@ from pathlib import Path
 
 import click
 
+from mst_cli.cli.common import drop_stale, no_plot_option
+
 
 @click.command()
 @click.option("--samples", type=click.IntRange(min=1, max=500), default=24, show_default=True,
@@ -14,9 +16,11 @@ import click
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), default=None,
               help="Output folder [default: ./mst-out/bench/].")
 @click.option("--quick", is_flag=True, help="Skip the L2 mesh-convergence study.")
-def bench(samples, seed, out_dir, quick):
+@no_plot_option("bench.png", "about 0.5 s of matplotlib import and render", has_json=False)
+def bench(samples, seed, out_dir, quick, no_plot):
     """Measure every mechanics rung (spring, frame) and field model against the reference
-    (continuum FE; magpylib) and write bench.md, bench.json and bench.png (error vs time)."""
+    (continuum FE; magpylib) and write bench.md, bench.json and bench.png (error vs time;
+    not with --no-plot)."""
     from mst_cli.bench.ladder_bench import bench_markdown, plot_bench, run_bench
     from mst_cli.cli.common import default_out_dir
     from mst_cli.io.outputs import staged
@@ -27,6 +31,9 @@ def bench(samples, seed, out_dir, quick):
     with staged(out) as st:
         st.write_json("bench.json", result)
         st.write_text("bench.md", md)
-        plot_bench(result, st.path("bench.png"))
+        if no_plot:
+            drop_stale(st, ["bench.png"])
+        else:
+            plot_bench(result, st.path("bench.png"))
     click.echo(md)
-    click.echo(f"wrote {out}/bench.md, bench.json, bench.png")
+    click.echo(f"wrote {out}/bench.md, bench.json" + ("" if no_plot else ", bench.png"))

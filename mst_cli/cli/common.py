@@ -114,18 +114,49 @@ def default_out_dir(name: str) -> Path:
     return Path("mst-out") / name
 
 
-def write_simulation(doc, geometry, resp, out_dir: Path, extra_files=None, extra_report=None, more=None):
+def no_plot_option(picture: str, cost: str, has_json: bool = True):
+    """``--no-plot`` with one meaning on every command that draws: ``picture`` is not drawn,
+    matplotlib is never imported, and an old ``picture`` in the output folder is removed with
+    the commit. ``cost`` says what the picture costs (measured: benchmarks/bench_simulate.py).
+    With ``has_json``, ``--json`` implies it."""
+    implied = " --json implies it." if has_json else ""
+    return click.option("--no-plot", "no_plot", is_flag=True,
+                        help=f"Draw no {picture} and import no matplotlib ({cost}). An old {picture} "
+                             f"in the output folder is removed, never left beside newer results.{implied}")
+
+
+def drop_stale(staging, names) -> None:
+    """Remove ``names`` from the output folder of ``staging`` (an :func:`mst_cli.io.outputs.staged`
+    folder): pictures this run did not draw must not survive beside its new files.
+
+    Called as the last step inside the ``staged`` block, after every new file is written and
+    before they are renamed in: if the run fails earlier the old set stays whole, and an old
+    picture is never seen next to newer results."""
+    for name in names:
+        target = staging.out_dir / name
+        if target.is_file() or target.is_symlink():
+            target.unlink()
+
+
+def write_simulation(doc, geometry, resp, out_dir: Path, extra_files=None, extra_report=None, more=None,
+                     plot: bool = True):
     """report.json, response.csv, response.png (+ extra YAML files, + whatever ``more(staging)``
-    writes) into out_dir, atomically."""
+    writes) into out_dir, atomically; returns the report written (what ``--json`` prints).
+    ``plot=False``: no response.png (any old one is removed) and matplotlib is not imported."""
     from mst_cli.io.outputs import staged
-    from mst_cli.io.report import plot_response, report_dict, response_csv
+    from mst_cli.io.report import report_dict, response_csv
 
     with staged(out_dir) as st:
         for name, data in (extra_files or {}).items():
             st.write_yaml(name, data)
-        st.write_json("report.json", report_dict(doc, geometry, resp, extra_report))
+        report = report_dict(doc, geometry, resp, extra_report)
+        st.write_json("report.json", report)
         st.write_text("response.csv", response_csv(resp))
-        plot_response(resp, st.path("response.png"), title=doc.name)
+        if plot:
+            from mst_cli.io.report import plot_response
+            plot_response(resp, st.path("response.png"), title=doc.name)
         if more is not None:
             more(st)
-    return out_dir
+        if not plot:
+            drop_stale(st, ["response.png"])
+    return report

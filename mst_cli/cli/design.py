@@ -9,7 +9,7 @@ from pathlib import Path
 
 import click
 
-from mst_cli.cli.common import default_out_dir, handles_input_errors, write_simulation
+from mst_cli.cli.common import default_out_dir, drop_stale, handles_input_errors, no_plot_option, write_simulation
 
 
 class _Progress:
@@ -69,9 +69,13 @@ class _Progress:
 @click.option("--pareto-designs", is_flag=True,
               help="With --pareto: also write every front design as pareto/design-NN.yaml.")
 @click.option("--quiet", "-q", is_flag=True, help="No table and no progress; exit code and files only.")
-@click.option("--json", "as_json", is_flag=True, help="Print report.json to stdout instead of the table.")
+@click.option("--json", "as_json", is_flag=True,
+              help="Print report.json to stdout instead of the table (implies --no-plot).")
+@no_plot_option("response.png or pareto.png",
+                "about half of a run on the reference spec: 0.45 s of matplotlib import and render")
 @handles_input_errors
-def design(spec_file, out_dir, seed, max_evaluations, refine, pareto_count, pareto_designs, quiet, as_json):
+def design(spec_file, out_dir, seed, max_evaluations, refine, pareto_count, pareto_designs, quiet, as_json,
+           no_plot):
     """Find theta, t, h of every layer so that the sensor meets SPEC_FILE's targets.
 
     Per layer the spec gives a target sensitivity S (dB/B0 per newton, secant over the
@@ -83,7 +87,7 @@ def design(spec_file, out_dir, seed, max_evaluations, refine, pareto_count, pare
     comes from re-running the forward model (mst simulate) on the written design.
 
     Writes design.yaml (loadable by mst simulate and mst export), report.json,
-    response.csv and response.png.
+    response.csv and response.png (not with --no-plot or --json).
 
     With --refine frame|continuum (or model.accuracy_rel asking for a dearer rung, or
     model.mechanics: frame|continuum) the fast L0 optimum is polished for that model and the
@@ -101,7 +105,6 @@ def design(spec_file, out_dir, seed, max_evaluations, refine, pareto_count, pare
 
     from mst_cli.design import design_document
     from mst_cli.errors import InputError
-    from mst_cli.io.report import report_dict
     from mst_cli.io.schema import load_document
     from mst_cli.model.ladder import choose_mechanics
 
@@ -138,11 +141,12 @@ def design(spec_file, out_dir, seed, max_evaluations, refine, pareto_count, pare
     out = out_dir or default_out_dir(doc.name)
     extra = result.report_extra()
     extra_files = {"design.yaml": result.design_yaml_dict()}
+    plot = not (no_plot or as_json)
     writers = None
     if front:
         from mst_cli.design.pareto import pareto_csv, plot_pareto
         extra["pareto"] = {"designs": len(front), "requested": pareto_count,
-                           "files": ["pareto.csv", "pareto.png"]
+                           "files": ["pareto.csv"] + (["pareto.png"] if plot else [])
                            + ([f"pareto/design-{k + 1:02d}.yaml" for k in range(len(front))]
                               if pareto_designs else [])}
         if pareto_designs:
@@ -151,12 +155,14 @@ def design(spec_file, out_dir, seed, max_evaluations, refine, pareto_count, pare
 
         def writers(st):
             st.write_text("pareto.csv", pareto_csv(front))
-            plot_pareto(front, st.path("pareto.png"), title=f"{doc.name}: designs that meet every target")
-    write_simulation(result.document, result.geometry, result.response, out,
-                     extra_files=extra_files, extra_report=extra, more=writers)
+            if plot:
+                plot_pareto(front, st.path("pareto.png"), title=f"{doc.name}: designs that meet every target")
+            else:
+                drop_stale(st, ["pareto.png"])
+    report = write_simulation(result.document, result.geometry, result.response, out,
+                              extra_files=extra_files, extra_report=extra, more=writers, plot=plot)
     if as_json:
-        click.echo(json.dumps(report_dict(result.document, result.geometry, result.response, extra),
-                              indent=2, allow_nan=False))
+        click.echo(json.dumps(report, indent=2, allow_nan=False))
     elif not quiet:
         click.echo(result.table())
         if front:
@@ -164,8 +170,8 @@ def design(spec_file, out_dir, seed, max_evaluations, refine, pareto_count, pare
             click.echo(front_table(front))
         elif pareto_count is not None:
             click.echo("Pareto front: not mapped (the targets are not met)")
-        files = "design.yaml, report.json, response.csv, response.png" + (
-            ", pareto.csv, pareto.png" if front else "") + (
+        files = "design.yaml, report.json, response.csv" + (", response.png" if plot else "") + (
+            ", pareto.csv" + (", pareto.png" if plot else "") if front else "") + (
             f", pareto/ ({len(front)} designs)" if front and pareto_designs else "")
         click.echo(f"wrote {out}/{files} ({time.perf_counter() - t_start:.2f} s)")
     if result.exit_code:

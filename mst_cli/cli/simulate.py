@@ -7,7 +7,7 @@ from pathlib import Path
 
 import click
 
-from mst_cli.cli.common import default_out_dir, handles_input_errors, write_simulation
+from mst_cli.cli.common import default_out_dir, handles_input_errors, no_plot_option, write_simulation
 
 
 @click.command()
@@ -20,17 +20,20 @@ from mst_cli.cli.common import default_out_dir, handles_input_errors, write_simu
 @click.option("--mechanics", type=click.Choice(["spring", "frame", "continuum"]), default=None,
               help="Layer mechanics model [default: the cheapest whose measured error meets the "
                    "file's model.accuracy_rel, else the file's model.mechanics, else spring].")
-@click.option("--json", "as_json", is_flag=True, help="Print report.json to stdout instead of the table.")
+@click.option("--json", "as_json", is_flag=True,
+              help="Print report.json to stdout instead of the table (implies --no-plot).")
+@no_plot_option("response.png", "about 2/3 of a run: 0.45 s of matplotlib import and render")
 @handles_input_errors
-def simulate(design_file, out_dir, field_model, mechanics, as_json):
+def simulate(design_file, out_dir, field_model, mechanics, as_json, no_plot):
     """Predict force-displacement and field-force curves of DESIGN_FILE.
 
-    Writes report.json (units in keys), response.csv and response.png into the output
-    folder and prints a per-regime table: stiffness, force band, secant sensitivity S
-    (dB/B0 per newton) with its local min..max, and the force resolution dF of the chip.
+    Writes report.json (units in keys), response.csv and response.png (not with --no-plot
+    or --json) into the output folder and prints a per-regime table: stiffness, force band,
+    secant sensitivity S (dB/B0 per newton) with its local min..max, and the force
+    resolution dF of the chip.
     """
     from mst_cli.io.outputs import check_out_dir
-    from mst_cli.io.report import report_dict, terminal_table
+    from mst_cli.io.report import terminal_table
     from mst_cli.io.schema import load_design_document
     from mst_cli.model.ladder import choose_mechanics
     from mst_cli.model.response import simulate as run
@@ -44,9 +47,10 @@ def simulate(design_file, out_dir, field_model, mechanics, as_json):
     resp = run(geometry, doc.material, mechanics=choice.mechanics,
                field_model=None if field_choice == "auto" else field_choice,
                noise_uT_rms=doc.noise_uT_rms)
-    write_simulation(doc, geometry, resp, out)
+    plot = not (no_plot or as_json)
+    report = write_simulation(doc, geometry, resp, out, plot=plot)
     if as_json:
-        click.echo(json.dumps(report_dict(doc, geometry, resp), indent=2, allow_nan=False))
+        click.echo(json.dumps(report, indent=2, allow_nan=False))
     else:
         click.echo(terminal_table(doc, geometry, resp))
-        click.echo(f"wrote {out}/report.json, response.csv, response.png")
+        click.echo(f"wrote {out}/report.json, response.csv" + (", response.png" if plot else ""))

@@ -17,7 +17,7 @@ from pathlib import Path
 
 import click
 
-from mst_cli.cli.common import EXIT_TARGETS, handles_input_errors
+from mst_cli.cli.common import EXIT_TARGETS, drop_stale, handles_input_errors, no_plot_option
 
 DEFAULT_MAX_SPAN_MM = 5.0
 MODEL_NAMES = ("sensor.3mf", "sensor.stl")
@@ -212,7 +212,7 @@ def plot_print(path: Path, triangles, bed_xy, shift_xyz, g, spans, title: str) -
 @click.option("--max-span", "max_span_mm", type=float, default=DEFAULT_MAX_SPAN_MM, show_default=True,
               help="Longest free span allowed (extrusion with nothing under it), mm.")
 @click.option("--json", "as_json", is_flag=True, help="Print slice.json instead of the summary.")
-@click.option("--no-plot", "no_plot", is_flag=True, help="Do not draw print.png.")
+@no_plot_option("print.png", "about 0.8 s: matplotlib and a 3D view of the part", has_json=False)
 @handles_input_errors
 def slice_(path, profile, out_dir, max_span_mm, as_json, no_plot):
     """Slice the body 'mst export' wrote (PATH: its folder) with PrusaSlicer and judge it.
@@ -220,10 +220,10 @@ def slice_(path, profile, out_dir, max_span_mm, as_json, no_plot):
     Slices sensor.3mf (which carries the magnet pause; sensor.stl if there is no 3MF) with the
     profile and writes sensor.gcode, slice.json (print time, filament, layers, longest free
     span and where, the pause found against the one export.json asks for, support, designed
-    against as-sliced cavity gaps) and print.png. Slices a second time with automatic support
-    on to prove that none is needed. Exit 1 naming the broken limit (free span over --max-span,
-    pause missing or misplaced, support needed); exit 2 when PrusaSlicer is not installed or
-    the profile is not a PrusaSlicer config.
+    against as-sliced cavity gaps) and print.png (not with --no-plot). Slices a
+    second time with automatic support on to prove that none is needed. Exit 1 naming the
+    broken limit (free span over --max-span, pause missing or misplaced, support needed);
+    exit 2 when PrusaSlicer is not installed or the profile is not a PrusaSlicer config.
     """
     import numpy as np
 
@@ -345,15 +345,19 @@ def slice_(path, profile, out_dir, max_span_mm, as_json, no_plot):
         "failed": failed,
         "reasons": reasons,
     }
-    names = ["sensor.gcode", "slice.json"] + ([] if no_plot else ["print.png"])
+    # unlike simulate and design, --json still draws here: tests/test_slice.py relies on it
+    plot = not no_plot
+    names = ["sensor.gcode", "slice.json"] + (["print.png"] if plot else [])
     from mst_cli.io.outputs import finite_or_none
     report = finite_or_none(report)       # nothing measured (NaN) is null: JSON holds no NaN
     with staged(out) as st:
         st.write_text("sensor.gcode", gtext)
         st.write_json("slice.json", report)
-        if not no_plot:
+        if plot:
             plot_print(st.path("print.png"), triangles, centre, (shift[0], shift[1], z_shift), g, spans,
                        str(manifest.get("name") or folder.name))
+        else:
+            drop_stale(st, ["print.png"])
     _progress(t0, f"wrote {out}/{', '.join(names)}")
     if as_json:
         click.echo(json.dumps(report, indent=2, allow_nan=False))

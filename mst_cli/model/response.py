@@ -145,7 +145,7 @@ def simulate(geometry: SensorGeometry, material, mechanics: str = "spring",
     lo_b, hi_b = edges[band], np.append(edges, np.inf)[band + 1]
     width = np.where(np.isfinite(hi_b), hi_b - lo_b, F_last)
     F_inside = np.clip(F, lo_b + 1e-9 * width, hi_b - 1e-9 * width)
-    compliance = np.array([stack.local_compliance_mm_per_N(f) for f in F_inside])
+    compliance = stack.local_compliance_mm_per_N(F_inside)     # one lookup for all samples: O(n) in layers
     slope = -dB_dgap * compliance / B0
 
     # secant sensitivities from the stack itself, so they hold for every mechanics rung
@@ -160,7 +160,8 @@ def simulate(geometry: SensorGeometry, material, mechanics: str = "spring",
     for i in np.flatnonzero(degenerate):
         # zero-width band: the secant's limit is the local slope at that force
         dB = (field_T(gap_edges[i] + GAP_STEP_MM) - field_T(gap_edges[i] - GAP_STEP_MM)) / (2 * GAP_STEP_MM)
-        S[i] = -dB * stack.band_start_compliance_mm_per_N(i) / B0
+        # squeeze: the cylinder model gives shape (1,) for one gap, which S[i] cannot hold
+        S[i] = -float(np.squeeze(dB)) * stack.band_start_compliance_mm_per_N(i) / B0
 
     B_full = float(B_edges[-1])
     Bmax_vec = np.abs(Bvec[F <= F_last + 1e-12]).max(axis=0)
@@ -170,6 +171,7 @@ def simulate(geometry: SensorGeometry, material, mechanics: str = "spring",
 
     regimes = []
     order = stack.lock_order
+    mid_compliance = stack.local_compliance_mm_per_N(0.5 * (edges[:-1] + edges[1:]))   # one lookup, not n
     for i in range(n):
         lo, hi = edges[i], edges[i + 1]
         s_band = slope[band == i] if not degenerate[i] else np.array([S[i]])
@@ -177,7 +179,7 @@ def simulate(geometry: SensorGeometry, material, mechanics: str = "spring",
         regimes.append(Regime(
             index=i + 1, layer=j + 1, force_from_N=float(lo), force_to_N=float(hi),
             k_layer_N_per_mm=float(k[j]), d_lock_layer_mm=float(dl[j]),
-            k_effective_N_per_mm=1.0 / stack.local_compliance_mm_per_N(0.5 * (lo + hi)),
+            k_effective_N_per_mm=1.0 / float(mid_compliance[i]),
             sensitivity_secant_per_N=float(S[i]),
             sensitivity_min_per_N=float(s_band.min()), sensitivity_max_per_N=float(s_band.max()),
             force_resolution_N=res_T / (B0 * float(S[i])),
