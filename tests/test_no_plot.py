@@ -128,10 +128,21 @@ def test_bench_no_plot_drops_the_picture(tmp_path, monkeypatch):
 
 @pytest.mark.parametrize("command, picture, implied", [
     ("simulate", "response.png", True), ("design", "response.png", True), ("calibrate", "calibration.png", False),
-    ("bench", "bench.png", False), ("slice", "print.png", False)])
+    ("bench", "bench.png", False), ("slice", "print.png", True)])
 def test_every_drawing_command_offers_the_same_no_plot(command, picture, implied):
     r = run([command, "--help"])
     assert r.exit_code == 0
     text = " ".join(r.stdout.split())
     assert "--no-plot" in text and f"Draw no {picture}" in text and "import no matplotlib" in text
     assert ("--json implies it" in text) == implied
+
+
+def test_a_design_without_a_front_removes_an_older_front(tmp_path):
+    out = tmp_path / "out"
+    out.mkdir()
+    for name in ("pareto.csv", "pareto.png"):
+        (out / name).write_text("from an older run")
+    r = run(["design", str(ROOT / "configs" / "mohammadi2021.yaml"), "--out", str(out), "--no-plot", "-q"])
+    assert r.exit_code == 0, r.output
+    assert not (out / "pareto.csv").exists() and not (out / "pareto.png").exists()
+    assert (out / "design.yaml").is_file()

@@ -267,13 +267,13 @@ def test_sliced_45_degree_wedge_prints_without_support(tmp_path):
     v = np.asarray(mesh.vert_properties)[:, :3].astype(float)
     t = np.asarray(mesh.tri_verts, dtype=np.int64)
     folder = write_export(tmp_path / "wedge", v, t)
-    r = slice_cli([folder, "--json"])
-    rep = json.loads(r.stdout)
+    r = slice_cli([folder])
     assert r.exit_code == 0, r.stderr
+    assert (folder / "print.png").stat().st_size > 10_000
+    rep = json.loads((folder / "slice.json").read_text())
     assert rep["free_span"]["longest"]["length_mm"] < 1.0
     assert not rep["support"]["needed"]
     assert rep["layers"] == 50 and rep["layer_height_mm"] == 0.2
-    assert (folder / "print.png").stat().st_size > 10_000
 
 
 def test_sliced_slot_gap_lands_on_the_designed_line_off_the_origin(tmp_path):

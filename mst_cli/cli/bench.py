@@ -6,7 +6,7 @@ from pathlib import Path
 
 import click
 
-from mst_cli.cli.common import drop_stale, no_plot_option
+from mst_cli.cli.common import no_plot_option
 
 
 @click.command()
@@ -32,7 +32,7 @@ def bench(samples, seed, out_dir, quick, no_plot):
         st.write_json("bench.json", result)
         st.write_text("bench.md", md)
         if no_plot:
-            drop_stale(st, ["bench.png"])
+            st.remove("bench.png")
         else:
             plot_bench(result, st.path("bench.png"))
     click.echo(md)

@@ -18,7 +18,7 @@ from pathlib import Path
 import click
 
 from mst_cli import __version__
-from mst_cli.cli.common import EXIT_TARGETS, default_out_dir, drop_stale, handles_input_errors, no_plot_option
+from mst_cli.cli.common import EXIT_TARGETS, default_out_dir, handles_input_errors, no_plot_option
 
 MECHANICS = ["spring", "frame", "continuum"]
 BAUD_RATES = (1200, 2400, 4800, 9600, 19200, 38400, 57600, 115200, 230400, 460800, 921600)
@@ -400,7 +400,7 @@ def calibrate(design_file, load_test, out_dir, mechanics, params, gain_sel, res,
         if header_text:
             st.write_text(HEADER_FILE, header_text)
         if no_plot:
-            drop_stale(st, ["calibration.png"])
+            st.remove("calibration.png")
         else:
             plot_calibration(st.path("calibration.png"), lt.force_N, lt.B_abs_T, design_curve, cal_curve,
                              fit.residual_T, sigma,

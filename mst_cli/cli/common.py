@@ -125,19 +125,6 @@ def no_plot_option(picture: str, cost: str, has_json: bool = True):
                              f"in the output folder is removed, never left beside newer results.{implied}")
 
 
-def drop_stale(staging, names) -> None:
-    """Remove ``names`` from the output folder of ``staging`` (an :func:`mst_cli.io.outputs.staged`
-    folder): pictures this run did not draw must not survive beside its new files.
-
-    Called as the last step inside the ``staged`` block, after every new file is written and
-    before they are renamed in: if the run fails earlier the old set stays whole, and an old
-    picture is never seen next to newer results."""
-    for name in names:
-        target = staging.out_dir / name
-        if target.is_file() or target.is_symlink():
-            target.unlink()
-
-
 def write_simulation(doc, geometry, resp, out_dir: Path, extra_files=None, extra_report=None, more=None,
                      plot: bool = True):
     """report.json, response.csv, response.png (+ extra YAML files, + whatever ``more(staging)``
@@ -158,5 +145,5 @@ def write_simulation(doc, geometry, resp, out_dir: Path, extra_files=None, extra
         if more is not None:
             more(st)
         if not plot:
-            drop_stale(st, ["response.png"])
+            st.remove("response.png")
     return report

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import click
 
-from mst_cli.cli.common import default_out_dir, drop_stale, handles_input_errors, no_plot_option, write_simulation
+from mst_cli.cli.common import default_out_dir, handles_input_errors, no_plot_option, write_simulation
 
 
 class _Progress:
@@ -142,7 +142,10 @@ def design(spec_file, out_dir, seed, max_evaluations, refine, pareto_count, pare
     extra = result.report_extra()
     extra_files = {"design.yaml": result.design_yaml_dict()}
     plot = not (no_plot or as_json)
-    writers = None
+
+    def writers(st):                  # no front this run: an older run's front must not stay
+        st.remove("pareto.csv")
+        st.remove("pareto.png")
     if front:
         from mst_cli.design.pareto import pareto_csv, plot_pareto
         extra["pareto"] = {"designs": len(front), "requested": pareto_count,
@@ -158,7 +161,7 @@ def design(spec_file, out_dir, seed, max_evaluations, refine, pareto_count, pare
             if plot:
                 plot_pareto(front, st.path("pareto.png"), title=f"{doc.name}: designs that meet every target")
             else:
-                drop_stale(st, ["pareto.png"])
+                st.remove("pareto.png")
     report = write_simulation(result.document, result.geometry, result.response, out,
                               extra_files=extra_files, extra_report=extra, more=writers, plot=plot)
     if as_json:

@@ -17,7 +17,7 @@ from pathlib import Path
 
 import click
 
-from mst_cli.cli.common import EXIT_TARGETS, drop_stale, handles_input_errors, no_plot_option
+from mst_cli.cli.common import EXIT_TARGETS, handles_input_errors, no_plot_option
 
 DEFAULT_MAX_SPAN_MM = 5.0
 MODEL_NAMES = ("sensor.3mf", "sensor.stl")
@@ -212,7 +212,7 @@ def plot_print(path: Path, triangles, bed_xy, shift_xyz, g, spans, title: str) -
 @click.option("--max-span", "max_span_mm", type=float, default=DEFAULT_MAX_SPAN_MM, show_default=True,
               help="Longest free span allowed (extrusion with nothing under it), mm.")
 @click.option("--json", "as_json", is_flag=True, help="Print slice.json instead of the summary.")
-@no_plot_option("print.png", "about 0.8 s: matplotlib and a 3D view of the part", has_json=False)
+@no_plot_option("print.png", "about 0.8 s: matplotlib and a 3D view of the part", has_json=True)
 @handles_input_errors
 def slice_(path, profile, out_dir, max_span_mm, as_json, no_plot):
     """Slice the body 'mst export' wrote (PATH: its folder) with PrusaSlicer and judge it.
@@ -346,7 +346,7 @@ def slice_(path, profile, out_dir, max_span_mm, as_json, no_plot):
         "reasons": reasons,
     }
     # unlike simulate and design, --json still draws here: tests/test_slice.py relies on it
-    plot = not no_plot
+    plot = not (no_plot or as_json)
     names = ["sensor.gcode", "slice.json"] + (["print.png"] if plot else [])
     from mst_cli.io.outputs import finite_or_none
     report = finite_or_none(report)       # nothing measured (NaN) is null: JSON holds no NaN
@@ -357,7 +357,7 @@ def slice_(path, profile, out_dir, max_span_mm, as_json, no_plot):
             plot_print(st.path("print.png"), triangles, centre, (shift[0], shift[1], z_shift), g, spans,
                        str(manifest.get("name") or folder.name))
         else:
-            drop_stale(st, ["print.png"])
+            st.remove("print.png")
     _progress(t0, f"wrote {out}/{', '.join(names)}")
     if as_json:
         click.echo(json.dumps(report, indent=2, allow_nan=False))

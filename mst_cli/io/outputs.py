@@ -159,6 +159,7 @@ class Staging:
             raise
         _LIVE.add(self.tmp)
         self.names: list[str] = []
+        self.removals: list[str] = []   # old files of out_dir this run replaces by nothing
 
     def path(self, name: str) -> Path:
         """Where to write ``name`` for now (inside the staging folder)."""
@@ -180,9 +181,18 @@ class Staging:
     def write_yaml(self, name: str, data) -> None:
         self.write_text(name, yaml.safe_dump(data, sort_keys=False, default_flow_style=None))
 
+    def remove(self, name: str) -> None:
+        """Remove out_dir/``name`` when the staged files are committed (with them, under the same
+        blocked signals): a picture this run did not draw must not survive beside its new files,
+        and a run that fails keeps the old set whole."""
+        self.removals.append(name)
+
     def commit(self) -> list[Path]:
         final = []
         with _signals_blocked():
+            for name in self.removals:
+                if name not in self.names:
+                    (self.out_dir / name).unlink(missing_ok=True)
             for name in self.names:
                 target = self.out_dir / name
                 target.parent.mkdir(parents=True, exist_ok=True)
