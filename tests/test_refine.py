@@ -8,6 +8,7 @@ stored with the package (read here, so the expectation moves with the data).
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -111,6 +112,101 @@ def test_refine_not_met_exits_1_naming_the_worst_target(tmp_path):
         assert "frame model" in result.binding and result.binding.startswith("layer ")
     else:
         assert result.exit_code == 0
+
+
+def test_refine_reports_the_rung_that_measured_the_print_error(tmp_path):
+    # no model.accuracy_rel: the cheap corrected rung L0 measures the print sensitivity, and the
+    # report and the terminal say so; the numbers are L0's own ratios at t +- 0.05 mm
+    from mst_cli.design.problem import PRINT_ERROR_T_MM
+    out = tmp_path / "out"
+    res = _run(["design", SPEC, "--refine", "frame", "--out", out])
+    assert res.exit_code in (0, 1), res.output
+    assert "print error (t+-0.05 mm columns) measured with mechanics=spring" in res.output
+    pe = json.loads((out / "report.json").read_text())["design"]["print_error_sensitivity"]
+    assert pe["mechanics"] == "spring" and "accuracy_rel" in pe["mechanics_rule"]
+    doc = load_document(out / "design.yaml")
+    g = doc.geometry()
+    nominal = simulate(g, doc.material, mechanics="spring")
+    thick = [doc.family.cell(c.theta_deg, c.t_mm + PRINT_ERROR_T_MM, c.h_mm) for c in g.layers]
+    plus = simulate(doc.geometry(thick), doc.material, mechanics="spring")
+    for row, r0, r1 in zip(pe["layers"], nominal.regimes, plus.regimes):
+        assert row["dS_rel_t_plus"] == pytest.approx(r1.sensitivity_secant_per_N / r0.sensitivity_secant_per_N - 1,
+                                                     rel=1e-9)
+
+
+def test_print_error_rung_follows_accuracy_rel():
+    from mst_cli.design.refine import print_error_rung
+    errors = {"models": {"spring": {"median_abs_err_k": 0.01, "median_abs_err_lock_force": 0.015},
+                         "frame": {"median_abs_err_k": 0.01, "median_abs_err_lock_force": 0.09}}}
+    doc = load_document(SPEC)
+    assert print_error_rung(doc, "continuum", errors)[0] == "spring"            # nothing asked
+    assert print_error_rung(replace(doc, accuracy_rel=0.05), "continuum", errors)[0] == "spring"
+    assert print_error_rung(replace(doc, accuracy_rel=0.01), "continuum", errors)[0] == "continuum"
+    rung, rule = print_error_rung(replace(doc, accuracy_rel=0.01), "frame", errors)
+    assert rung == "frame" and "capped" in rule            # never dearer than the refining rung
+
+
+def test_print_error_on_the_dear_rung_when_asked():
+    from mst_cli.design.problem import PRINT_ERROR_T_MM
+    from mst_cli.design.refine import refine_document
+    result = refine_document(load_document(SPEC), "frame", max_iterations=1, print_error_mechanics="frame")
+    assert result.print_error["mechanics"] == "frame"
+    g, doc = result.geometry, result.document
+    nominal = simulate(g, doc.material, mechanics="frame")
+    thin = [doc.family.cell(c.theta_deg, c.t_mm - PRINT_ERROR_T_MM, c.h_mm) for c in g.layers]
+    minus = simulate(doc.geometry(thin), doc.material, mechanics="frame")
+    for row, r0, r1 in zip(result.print_error["layers"], nominal.regimes, minus.regimes):
+        assert row["dR_rel_t_minus"] == pytest.approx(r1.force_to_N / r0.force_to_N - 1, rel=1e-9)
+
+
+def test_local_match_evaluates_each_point_once_in_batches():
+    # the warm-started L0 match: objective and every constraint of a point come from one
+    # evaluation, and gradients come in batches (it was ~7000 single-point calls per match)
+    from mst_cli.design import design_document
+    from mst_cli.design.problem import DesignProblem
+    from mst_cli.design.refine import _local_match
+    doc = replace(load_document(PAPER), mechanics="spring")
+    res = design_document(doc)
+    x0 = [np.array([getattr(la, k) for la in res.document.layers]) for k in ("theta_deg", "t_mm", "h_mm")]
+    moved = [replace(la, target_sensitivity_per_N=1.03 * la.target_sensitivity_per_N,
+                     target_range_N=0.95 * la.target_range_N) for la in doc.layers]
+    problem = DesignProblem(doc.with_layers(moved))
+    seen = []
+    evaluate = problem.evaluate
+    problem.evaluate = lambda u: seen.append(np.atleast_2d(u).copy()) or evaluate(u)
+    theta, t, h, n_eval, met = _local_match(problem, *x0)
+    assert met
+    rows = np.concatenate(seen)
+    assert len(seen) < 100 and len(rows) <= n_eval + 5
+    assert len({r.tobytes() for r in rows}) >= 0.95 * len(rows)     # no point evaluated twice over
+    ev = problem.evaluate_physical(theta, t, h)
+    assert np.all(np.abs(ev.rel_err) <= problem.tolerance_rel)
+
+
+def _mapping_errors(A, z_star, steps, secant=True):
+    """Max |dear log error| per iteration on the linear map e(z) = A (z - z*)."""
+    from mst_cli.design.refine import _SecantMapping
+    z, m, errs = np.zeros(len(z_star)), _SecantMapping(len(z_star)), []
+    for _ in range(steps):
+        e = A @ (z - z_star)
+        errs.append(np.abs(e).max())
+        z = m.next_targets(z, e)[0] if secant else z - e
+    return np.array(errs)
+
+
+def test_secant_mapping_beats_plain_space_mapping_on_an_over_correcting_map():
+    # the reference spec's dear/L0 map over-corrects by about a third, errors alternating in
+    # sign (A ~ 1.35 I): the plain step shrinks the error 3x per dear solve, the secant step
+    # learns the factor from two iterates and lands on the third
+    rng = np.random.default_rng(0)
+    z_star = rng.standard_normal(6)
+    aligned = _mapping_errors(1.35 * np.eye(6), z_star, 3)
+    assert aligned[2] < 1e-9 * aligned[0]
+    assert _mapping_errors(1.35 * np.eye(6), z_star, 3, secant=False)[2] > 0.1 * aligned[0]
+    # coupled outputs: rank-one updates need more steps, and still beat the plain step
+    A = 1.35 * np.eye(6) + 0.05 * rng.standard_normal((6, 6))
+    sec, plain = _mapping_errors(A, z_star, 5), _mapping_errors(A, z_star, 5, secant=False)
+    assert np.all(sec[2:] < 0.5 * plain[2:])
 
 
 # --------------------------------------------------------------------------- accuracy_rel

@@ -12,7 +12,9 @@
    held -> exit 0; otherwise exit 1 with the binding reason (:func:`explain.diagnose`).
 
 The print-error sensitivity (the robustness term of the preference, :mod:`.problem`) is re-measured the same
-way: the forward model on the design with every wall 0.05 mm thicker and thinner.
+way: the forward model on the design with every wall 0.05 mm thicker and thinner (with L0 when a
+refined design does not ask for more: :func:`mst_cli.design.refine.print_error_rung`); report.json
+names the rung (``print_error_sensitivity.mechanics``).
 """
 
 from __future__ import annotations
@@ -32,6 +34,7 @@ from mst_cli.model.response import Response, simulate
 
 ROUND_DECIMALS = 4
 EXIT_MET, EXIT_NOT_MET = 0, 1
+SAME_RUNG_RULE = "the rung that judges the design"   # print error's rung when the caller names none
 
 
 @dataclass
@@ -98,6 +101,10 @@ class DesignResult:
                      f"B full load {resp.B_full_T * 1e3:.3f} mT, worst force resolution "
                      f"{1e3 * max(r.force_resolution_N for r in resp.regimes):.1f} mN")
         lines.append(height_budget_line(g))
+        pe_mechanics = self.print_error.get("mechanics", resp.mechanics)
+        if pe_mechanics != resp.mechanics or self.print_error.get("mechanics_rule") != SAME_RUNG_RULE:
+            lines.append(f"print error (t+-{self.print_error['print_error_t_mm']:g} mm columns) measured with "
+                         f"mechanics={pe_mechanics}: {self.print_error['mechanics_rule']}")
         if self.status == "met":
             lines.append(f"all {2 * len(self.targets)} targets met within {100 * tol:g} % "
                          f"(forward model, mechanics={resp.mechanics}, field={resp.field_model})")
@@ -173,13 +180,17 @@ def design_document(doc: Document, *, seed: int | None = None, progress=None,
 
 
 def verify_design(doc: Document, problem: DesignProblem, theta, t, h, sol, *, seed: int,
-                  max_evaluations: int, mechanics: str, t_start: float | None = None) -> DesignResult:
+                  max_evaluations: int, mechanics: str, t_start: float | None = None,
+                  print_error_mechanics: str | None = None,
+                  print_error_rule: str | None = None) -> DesignResult:
     """Write (theta, t, h) into the spec ``doc`` and judge it with ``mechanics``'s forward model.
 
-    Every achieved number, constraint check and print-error measure comes from
+    Every achieved number and constraint check comes from
     :func:`mst_cli.model.response.simulate` with ``mechanics`` on the written (rounded) design;
     ``problem`` (the L0 problem of ``doc``'s targets) only explains a miss. ``sol`` is the
-    solver's result (its ``matched``, ``evaluations``, ... are reported).
+    solver's result (its ``matched``, ``evaluations``, ... are reported). The print-error
+    sensitivity is measured with ``print_error_mechanics`` [default: ``mechanics``], nominal and
+    shifted designs alike, and reported with that rung and ``print_error_rule`` (why it).
     """
     from mst_cli.design import explain
 
@@ -229,13 +240,20 @@ def verify_design(doc: Document, problem: DesignProblem, theta, t, h, sol, *, se
         reasons.append(f"the evaluation budget ({max_evaluations}) was spent before the targets were "
                        "met: raise design.max_evaluations (or --max-evaluations) to search further")
 
-    # -- print-error sensitivity, re-measured with the forward model
+    # -- print-error sensitivity, re-measured with a forward model (one rung for all three runs:
+    # a ratio of two rungs would mix the model gap into the print sensitivity)
+    pe_mechanics = mechanics if print_error_mechanics is None else print_error_mechanics
+    if pe_mechanics == mechanics:
+        S_pe, R_pe = S, R
+    else:
+        S_pe, R_pe = _layer_outputs(simulate(geometry, doc.material, mechanics=pe_mechanics,
+                                             field_model=field_model, noise_uT_rms=doc.noise_uT_rms), n)
     pe_layers = []
     shifted = {}
     for sign, key in ((1.0, "plus"), (-1.0, "minus")):
         cells = [doc.family.cell(a, max(b + sign * PRINT_ERROR_T_MM, geo.LENGTH_FLOOR_MM), c)
                  for a, b, c in zip(theta, t, h)]
-        r2 = simulate(designed.geometry(cells), doc.material, mechanics=mechanics,
+        r2 = simulate(designed.geometry(cells), doc.material, mechanics=pe_mechanics,
                       field_model=field_model, noise_uT_rms=doc.noise_uT_rms)
         shifted[key] = _layer_outputs(r2, n)
     logs = []
@@ -243,9 +261,9 @@ def verify_design(doc: Document, problem: DesignProblem, theta, t, h, sol, *, se
         row = {"layer": i + 1}
         for key in ("plus", "minus"):
             S2, R2 = shifted[key]
-            row[f"dS_rel_t_{key}"] = float(S2[i] / S[i] - 1.0)
-            row[f"dR_rel_t_{key}"] = float(R2[i] / R[i] - 1.0)
-            logs += [math.log(S2[i] / S[i]), math.log(R2[i] / R[i])]
+            row[f"dS_rel_t_{key}"] = float(S2[i] / S_pe[i] - 1.0)
+            row[f"dR_rel_t_{key}"] = float(R2[i] / R_pe[i] - 1.0)
+            logs += [math.log(S2[i] / S_pe[i]), math.log(R2[i] / R_pe[i])]
         row["dS_rel_worst"] = max(abs(row["dS_rel_t_plus"]), abs(row["dS_rel_t_minus"]))
         row["dR_rel_worst"] = max(abs(row["dR_rel_t_plus"]), abs(row["dR_rel_t_minus"]))
         pe_layers.append(row)
@@ -254,6 +272,8 @@ def verify_design(doc: Document, problem: DesignProblem, theta, t, h, sol, *, se
         "meaning": "relative change of S_i and R_i when every wall is printed this much thicker (plus) "
                    "or thinner (minus); its RMS is the print_robustness term of design.objective's preference",
         "rms_log_change": float(np.sqrt(np.mean(np.square(logs)))),
+        "mechanics": pe_mechanics,
+        "mechanics_rule": print_error_rule or SAME_RUNG_RULE,
         "layers": pe_layers,
     }
     weights = doc.design.get("objective") or {}

@@ -5,16 +5,25 @@ The optimiser's inner model is always L0 (``spring``: microseconds, vectorised).
 from L0's by a smooth, slowly varying factor. Output space mapping (defect correction, Bandler
 et al., IEEE Trans. MTT 52 (2004) 337) corrects the *targets* given to L0 by that factor:
 
-    s_{k+1} = s_k * S_target / S_dear(x_k),   r_{k+1} = r_k * R_target / R_dear(x_k),
+    s_{k+1} = S_L0(x_k) * S_target / S_dear(x_k),   r_{k+1} = R_L0(x_k) * R_target / R_dear(x_k),
 
-where x_k is the L0 design for targets (s_k, r_k). At a fixed point the dear model meets the
-real targets. Each step costs one L0 design (about a second) and one dear simulation. The best
-iterate by the dear model's max |log error| is kept and judged by the dear model
-(:func:`mst_cli.design.verify_design`): every achieved number reported comes from it.
+where x_k is the L0 design for targets (s_k, r_k) (so S_L0(x_k) = s_k when the match meets them).
+At a fixed point the dear model meets the real targets. From the second step on, a secant
+(Broyden) estimate of how the dear outputs follow the L0 targets scales the correction
+(:class:`_SecantMapping`): on the reference spec the plain step over-corrects by a third each
+time, and every step costs dear solves.
+
+Each step costs one warm-started L0 match (tens of milliseconds: batched SLSQP, one evaluation
+per point) and one dear simulation (one law per layer; the rungs cache laws per cell, so the
+final judgement of the best iterate solves nothing again). The best iterate by the dear model's
+max |log error| is kept and judged by the dear model (:func:`mst_cli.design.verify_design`):
+every achieved number reported comes from it. The print-error sensitivity is measured with L0
+unless the spec asks for more accuracy (:func:`print_error_rung`), and report.json says which.
 """
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass, field, replace
 
@@ -29,8 +38,13 @@ from mst_cli.model.response import simulate
 REFINE_MODELS = ("frame", "continuum")
 MAX_ITERATIONS = 6
 STOP_FRACTION = 0.5             # iterate until the dear model is within this x tolerance (margin)
-LOCAL_STEP = 0.02               # initial COBYLA step of the warm-started L0 match (unit variables)
-LOCAL_MAX_EVALUATIONS = 4000    # L0 evaluations per warm-started match (~50 us each)
+LOCAL_STEP = 0.02               # initial step of the COBYLA fallback (unit variables)
+LOCAL_TRUST = 0.15              # the warm-started match moves at most this far (unit variables)
+LOCAL_MATCH_LOG = 1e-6          # it ends when every L0 output is this close (log) to its target:
+                                # far below the dear rung's own numerical noise
+LOCAL_MAX_EVALUATIONS = 4000    # L0 candidate designs per warm-started match (batched)
+LOCAL_FALLBACK_EVALUATIONS = 1000  # of which COBYLA may use after an unmatched SLSQP run: targets
+                                # out of reach in the trust box stay out of reach for it too
 
 
 @dataclass
@@ -48,6 +62,47 @@ class RefinedResult(DesignResult):
                  + ", ".join(f"{100 * it['max_abs_error_rel']:.2f} %"
                              for it in self.refinement["iterations"])]
         return "\n".join(lines) + "\n" + super().table()
+
+
+class _SecantMapping:
+    """Broyden's secant estimate J of d(dear log outputs)/d(L0 log targets), from J = I.
+
+    Plain output space mapping steps z -= e: right when the dear/L0 ratio does not move with
+    the design. On the reference spec it over-corrects by about a third every iteration (the
+    errors alternate in sign and shrink 3x per dear solve); one rank-1 update from two iterates
+    learns that, and z -= J^-1 e then lands in one step (aggressive space mapping, Bandler et
+    al. 2004). Dear solves are most of the cost, so an iteration saved is worth it. The plain step is
+    used, and J reset, when the last step made the worst error grow or J is near singular:
+    contact and the dear mesh make the map only piecewise smooth.
+    """
+
+    MAX_COND = 1e3          # J beyond this is a secant taken across a jump
+    MAX_STEP_RATIO = 3.0    # a step this many times the plain one is not trusted
+
+    def __init__(self, size: int):
+        self.J = np.eye(size)
+        self.prev: tuple[np.ndarray, np.ndarray] | None = None
+
+    def next_targets(self, z, e):
+        """Next L0 log targets from L0's log outputs ``z`` at the current design and the dear
+        model's log errors ``e`` there; returns (z_next, "secant" | "plain")."""
+        plain = z - e
+        if self.prev is not None:
+            z0, e0 = self.prev
+            dz, de = z - z0, e - e0
+            if np.max(np.abs(e)) >= np.max(np.abs(e0)):
+                self.J = np.eye(len(z))        # the last step did not help: start afresh
+            elif float(dz @ dz) > 0.0:
+                self.J = self.J + np.outer(de - self.J @ dz, dz) / float(dz @ dz)
+        self.prev = (z, e)
+        if np.linalg.cond(self.J) > self.MAX_COND:
+            self.J = np.eye(len(z))
+            return plain, "plain"
+        step = -np.linalg.solve(self.J, e)
+        if not np.all(np.isfinite(step)) or np.linalg.norm(step) > self.MAX_STEP_RATIO * np.linalg.norm(e):
+            self.J = np.eye(len(z))
+            return plain, "plain"
+        return z + step, "plain" if np.allclose(self.J, np.eye(len(z))) else "secant"
 
 
 @dataclass
@@ -68,54 +123,105 @@ def _dear_errors(doc: Document, geometry, model: str, S_t, R_t):
 
 
 def _local_match(problem: DesignProblem, theta, t, h, maxeval: int = LOCAL_MAX_EVALUATIONS):
-    """Local L0 match of ``problem``'s targets from (theta, t, h): nlopt COBYLA on the
-    normalised variables, every design rule kept (with the solver's rounding slack).
+    """Local L0 match of ``problem``'s targets from (theta, t, h), every design rule kept (with
+    the solver's rounding slack), on the normalised variables.
 
-    Returns the rounded (theta, t, h), the evaluations used and whether every L0 output is
-    within the tolerance of the (corrected) targets.
+    nlopt LD_SLSQP inside a box of +-LOCAL_TRUST around the start (so the spare freedom stays
+    on the previous design's branch), with the solver's batched machinery
+    (:class:`~mst_cli.design.solver._Phase`): objective and every constraint of a point come
+    from one evaluation (the mconstraint callback fills them all; the last point is cached),
+    and a point with its central-difference gradient is one batched kernel call of 2 dim + 1
+    candidates. Should SLSQP fail (line search, roundoff) or end on no feasible point, LN_COBYLA
+    continues from its best point (single points, still one evaluation each); when SLSQP
+    converged short of the targets they are out of reach in the box, and COBYLA is not tried.
+
+    Returns the rounded (theta, t, h), the candidate designs evaluated and whether every L0
+    output is within the tolerance of the (corrected) targets.
     """
-    import nlopt
-
-    from mst_cli.design.solver import ROUNDING_SAFETY, _nlopt_failures
+    from mst_cli.design.solver import FEASIBILITY_TOL, MAX_TIME_S, ROUNDING_SAFETY, Tracker, _Budget, _Matcher, _Phase
 
     u0 = np.clip(problem.to_unit(theta, t, h), 0.0, 1.0)
-    count = [0]
-    best = [u0.copy(), np.inf]
+    lo, hi = np.maximum(u0 - LOCAL_TRUST, 0.0), np.minimum(u0 + LOCAL_TRUST, 1.0)
+    matcher = _Matcher(problem)
+    budget = _Budget(maxeval, None, MAX_TIME_S)
+    best = Tracker()
 
-    def objective(u, grad):
-        count[0] += 1
+    max_rel = -math.expm1(-LOCAL_MATCH_LOG)     # |rel| below this keeps |log| below LOCAL_MATCH_LOG
+
+    def goal(f, g, err):
+        return bool(np.all(g <= FEASIBILITY_TOL)) and err <= max_rel
+
+    def matched(u):
         ev = problem.evaluate(u)
-        f = float(ev.objective)
-        if np.all(ev.constraints + ROUNDING_SAFETY <= 0.0) and f < best[1]:
-            best[0], best[1] = u.copy(), f
-        return f if np.isfinite(f) else 1e30
+        return bool(np.all(ev.constraints + ROUNDING_SAFETY <= FEASIBILITY_TOL)
+                    and np.max(np.abs(ev.log_err)) <= LOCAL_MATCH_LOG)
 
-    def constraints(result, u, grad):
-        result[:] = problem.evaluate(u).constraints + ROUNDING_SAFETY
-
-    opt = nlopt.opt(nlopt.LN_COBYLA, problem.dim)
-    opt.set_lower_bounds(np.zeros(problem.dim))
-    opt.set_upper_bounds(np.ones(problem.dim))
-    opt.set_min_objective(objective)
-    opt.add_inequality_mconstraint(constraints, np.full(problem.n_constraints, 1e-12))
-    opt.set_initial_step(LOCAL_STEP)
-    opt.set_maxeval(maxeval)
-    opt.set_ftol_abs(1e-14)
-    opt.set_xtol_rel(1e-10)
-    try:
-        opt.optimize(u0)
-    except (nlopt.RoundoffLimited, ValueError, RuntimeError, *_nlopt_failures()):
-        pass                                    # keep the best feasible point seen
-    u = best[0]
+    phase = _Phase(problem, matcher.batch, problem.n_constraints, best, budget, "refine match", goal)
+    converged = _run_local(phase, "slsqp", u0, lo, hi, budget.left // (2 * problem.dim + 1), LOCAL_STEP)
+    if not matched(best.u) and not (converged and best.feasible) and budget.left > 0:
+        phase = _Phase(problem, matcher.batch, problem.n_constraints, best, budget, "refine match", goal)
+        _run_local(phase, "cobyla", best.u, lo, hi, min(budget.left, LOCAL_FALLBACK_EVALUATIONS), LOCAL_STEP)
+    u = u0 if best.u is None or not best.feasible else best.u
     theta2, t2, h2 = (np.round(a, ROUND_DECIMALS) for a in problem.to_physical(u))
     ev = problem.evaluate_physical(theta2, t2, h2)
     met = bool(np.all(np.abs(ev.rel_err) <= problem.tolerance_rel))
-    return theta2, t2, h2, count[0], met
+    return theta2, t2, h2, budget.used, met
+
+
+def _run_local(phase, local: str, u0, lo, hi, maxeval: int, step: float) -> bool:
+    """One nlopt run of ``phase``'s callbacks in the box [lo, hi]; the phase's tracker keeps
+    the best point whatever way the run ends. True when nlopt ended on its own stopping rules
+    or the goal (False: a failure, roundoff or the budget)."""
+    import nlopt
+
+    from mst_cli.design.solver import _nlopt_failures, _Stop
+
+    opt = nlopt.opt(nlopt.LD_SLSQP if local == "slsqp" else nlopt.LN_COBYLA, phase.problem.dim)
+    opt.set_lower_bounds(lo)
+    opt.set_upper_bounds(hi)
+    opt.set_min_objective(phase.objective)
+    opt.add_inequality_mconstraint(phase.constraints, np.zeros(phase.m))
+    opt.set_initial_step(np.full(phase.problem.dim, step))
+    opt.set_maxeval(max(int(maxeval), 1))
+    opt.set_maxtime(phase.budget.time_left())
+    opt.set_xtol_rel(1e-10)
+    opt.set_ftol_abs(1e-16)
+    try:
+        opt.optimize(np.clip(u0, lo, hi))
+    except _Stop as stop:
+        return stop.reason == "goal reached"
+    except (nlopt.ForcedStop, nlopt.RoundoffLimited, ValueError, RuntimeError, *_nlopt_failures()):
+        return False                            # the tracker holds the best point seen
+    return opt.last_optimize_result() != nlopt.MAXEVAL_REACHED
+
+
+def print_error_rung(doc: Document, model: str, errors: dict | None = None) -> tuple[str, str]:
+    """The rung that measures a refined design's print-error sensitivity, and why (one line).
+
+    The rule: L0 (``spring``), unless the spec's ``model.accuracy_rel`` asks for more than L0's
+    measured accuracy; then the rung that accuracy picks (:func:`~mst_cli.model.ladder.choose_mechanics`),
+    never dearer than ``model``. The print sensitivity is a ratio of two runs of one model
+    (walls +-0.05 mm against nominal), and L0's measured median errors against L2 (about 1 % in
+    stiffness and 1.5 % in lock force, ``ladder_errors.json``) are small beside the 10-50 % changes
+    it measures; the dear rung there costs 2 solves per layer for a second digit.
+    """
+    from mst_cli.model.ladder import USER_LADDER, choose_mechanics, load_ladder_errors, rung_errors
+
+    errors = load_ladder_errors() if errors is None else errors
+    if doc.accuracy_rel is None:
+        err = rung_errors("spring", errors)
+        return "spring", (f"L0 (measured median error against continuum: stiffness {100 * err['k']:.2g} %, "
+                          f"lock force {100 * err['lock_force']:.2g} %); a model.accuracy_rel below "
+                          f"that measures it with a dearer rung")
+    asked = choose_mechanics(None, doc.accuracy_rel, "spring", errors).mechanics
+    rung = min(asked, model, key=USER_LADDER.index)
+    return rung, (f"model.accuracy_rel = {doc.accuracy_rel:g} picks {asked}"
+                  + ("" if rung == asked else f", capped at the refining rung {model}"))
 
 
 def refine_document(doc: Document, model: str, *, seed: int | None = None, progress=None,
-                    max_evaluations: int | None = None,
-                    max_iterations: int = MAX_ITERATIONS) -> DesignResult:
+                    max_evaluations: int | None = None, max_iterations: int = MAX_ITERATIONS,
+                    print_error_mechanics: str | None = None) -> DesignResult:
     """Design ``doc`` with L0, then polish the result for the dear ``model`` by space mapping.
 
     Parameters
@@ -129,13 +235,16 @@ def refine_document(doc: Document, model: str, *, seed: int | None = None, progr
     max_iterations : int
         Dear-model evaluations at most (the first is the plain L0 design). The loop stops
         early once every dear-model error is within STOP_FRACTION x design.tolerance_rel.
+    print_error_mechanics : str, optional
+        The rung that measures the print-error sensitivity [default: :func:`print_error_rung`].
 
     Returns
     -------
     DesignResult
-        Judged by ``model``: ``response``, ``targets``, ``checks``, ``print_error`` all come from
-        ``model``'s forward model on the written design; ``refinement`` (in ``report_extra``)
-        records the iterations. Status "met" when every target is within design.tolerance_rel.
+        Judged by ``model``: ``response``, ``targets``, ``checks`` come from ``model``'s forward
+        model on the written design; ``print_error`` from the rung it names (``mechanics``);
+        ``refinement`` (in ``report_extra``) records the iterations. Status "met" when every
+        target is within design.tolerance_rel.
     """
     if model not in REFINE_MODELS:
         raise InputError("--refine", model, "one of " + ", ".join(REFINE_MODELS))
@@ -147,7 +256,10 @@ def refine_document(doc: Document, model: str, *, seed: int | None = None, progr
     inner_doc = replace(doc, mechanics="spring")
     s, r = S_t.copy(), R_t.copy()
     history, best, evaluations = [], None, 0
+    mapping = _SecantMapping(2 * len(S_t))
+    problem = DesignProblem(inner_doc)          # the L0 problem of the real targets (explains a miss)
     stopped = f"iteration cap ({max_iterations}) reached"
+    step_kind = "none (the spec's targets)"
     for k in range(max_iterations):
         layers = [replace(la, target_sensitivity_per_N=float(a), target_range_N=float(b))
                   for la, a, b in zip(doc.layers, s, r)]
@@ -174,7 +286,7 @@ def refine_document(doc: Document, model: str, *, seed: int | None = None, progr
         history.append({
             "iteration": k + 1, "max_abs_log_error": worst,
             "max_abs_error_rel": float(np.abs(rel).max()),
-            "inner_status": inner_status,
+            "inner_status": inner_status, "l0_targets_update": step_kind,
             "l0_targets_sensitivity_per_N": s.tolist(), "l0_targets_range_N": r.tolist(),
             "theta_deg": theta.tolist(), "t_mm": t.tolist(), "h_mm": h.tolist(),
         })
@@ -184,15 +296,25 @@ def refine_document(doc: Document, model: str, *, seed: int | None = None, progr
             stopped = (f"{model} model meets every target within {100 * STOP_FRACTION * tol:g} % "
                        f"(half the tolerance) at iteration {k + 1}")
             break
-        # output space mapping: correct the L0 targets by the dear model's miss
-        s, r = s * np.exp(-lS), r * np.exp(-lR)
+        # output space mapping: correct the L0 targets by the dear model's miss, through the
+        # secant estimate of how the dear outputs follow the L0 targets; start from what L0
+        # gives at x_k, not what it was asked for (the same when the local match met them, and
+        # a consistent secant pair when it could not)
+        ev = problem.evaluate_physical(theta, t, h)
+        z_l0 = np.log(np.concatenate([ev.S_per_N, ev.R_N]))
+        z, step_kind = mapping.next_targets(z_l0, np.concatenate([lS, lR]))
+        s, r = np.exp(z[:len(s)]), np.exp(z[len(s):])
 
     final_doc = replace(doc, mechanics=model)
-    problem = DesignProblem(inner_doc)          # the L0 problem of the real targets: explains a miss
     sol = _SolverFacts.from_result(inner, evaluations)
+    if print_error_mechanics is None:
+        pe_rung, pe_rule = print_error_rung(doc, model)
+    else:
+        pe_rung, pe_rule = print_error_mechanics, "asked for by the caller"
     result = verify_design(final_doc, problem, best.theta, best.t, best.h, sol,
                            seed=inner.seed, max_evaluations=inner.max_evaluations,
-                           mechanics=model, t_start=t_start)
+                           mechanics=model, t_start=t_start,
+                           print_error_mechanics=pe_rung, print_error_rule=pe_rule)
     if result.status != "met":
         worst_row = max(result.targets, key=lambda row: max(abs(row["sensitivity_error_rel"]),
                                                             abs(row["range_error_rel"])))
@@ -208,7 +330,8 @@ def refine_document(doc: Document, model: str, *, seed: int | None = None, progr
                                      f"(tolerance {100 * tol:g} %): {stopped}")
     refinement = {
         "inner_model": "spring", "model": model,
-        "method": "output space mapping: L0 targets scaled by target / dear-achieved, L0 re-designed",
+        "method": "output space mapping: L0 targets corrected by the dear model's log miss (plain, or "
+                  "through a Broyden secant estimate of d dear / d L0 target), L0 re-matched locally",
         "iterations": history,
         "best_iteration": 1 + min(range(len(history)), key=lambda i: history[i]["max_abs_log_error"]),
         "stopped": stopped, "max_iterations": max_iterations,
@@ -238,4 +361,4 @@ class _SolverFacts:
                    s["preference_after"], s["runs_ended"])
 
 
-__all__ = ["refine_document", "RefinedResult", "REFINE_MODELS", "MAX_ITERATIONS"]
+__all__ = ["refine_document", "print_error_rung", "RefinedResult", "REFINE_MODELS", "MAX_ITERATIONS"]

@@ -1,0 +1,153 @@
+"""Cost of `mst design --refine` against the plain L0 design (issue 14). Prints a table; asserts nothing.
+
+    python benchmarks/bench_refine.py [--repeats 3] [--spec configs/mohammadi2021.yaml] [--baseline DIR]
+
+Three commands on one spec, timed in the same run so their ratios are comparable on a shared
+machine: `mst design`, `mst design --refine frame`, `mst design --refine continuum` (wall time
+of the command via subprocess: interpreter start and every output file included; median of
+--repeats runs, interleaved so a burst of load hits every mode alike). Goal: --refine continuum
+at most 4x the plain design. ``--baseline DIR`` adds the two refine commands run with DIR first
+on PYTHONPATH (a copy of another version of the ``mst_cli`` package), in the same interleaved
+loop, so a before/after comparison shares the machine's load.
+
+Each mode is then run once more, in a fresh interpreter of its own (cold caches, like the
+command), with counters on:
+
+* dear-rung law requests (``layer_law(cell, material, frame|continuum)``) and the laws actually
+  solved (the rung's per-cell cache misses; requests when the rung has no cache);
+* DesignProblem.evaluate_physical calls (every evaluate goes through it: one call is one
+  batched kernel call) and the candidate designs they held.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+SPEC = ROOT / "configs" / "mohammadi2021.yaml"
+MST = Path(sys.executable).parent / "mst"      # the console script of this environment
+MODES = (("mst design", []), ("--refine frame", ["--refine", "frame"]),
+         ("--refine continuum", ["--refine", "continuum"]))
+GOAL_RATIO = 4.0                               # --refine continuum / plain design
+
+
+def _env(pythonpath: Path | None) -> dict | None:
+    if pythonpath is None:
+        return None
+    return {**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, [str(pythonpath),
+                                                                      os.environ.get("PYTHONPATH")]))}
+
+
+def command_times(spec: Path, repeats: int, modes) -> dict[str, list[float]]:
+    times = {label: [] for label, _, _ in modes}
+    with tempfile.TemporaryDirectory() as tmp:
+        for i in range(repeats):
+            for j, (label, flags, path) in enumerate(modes):
+                t0 = time.perf_counter()
+                r = subprocess.run([str(MST), "design", str(spec), *flags, "--out", f"{tmp}/o{i}-{j}", "-q"],
+                                   capture_output=True, env=_env(path))
+                times[label].append(time.perf_counter() - t0)
+                if r.returncode not in (0, 1):           # 1 = targets not met: still a timed run
+                    raise SystemExit(f"mst design {' '.join(flags)} failed: {r.stderr.decode()}")
+    return times
+
+
+def count_run(spec: Path, flags: list[str]) -> dict:
+    """In this interpreter: run the command once with counters; returns the counts."""
+    import numpy as np
+
+    from mst_cli.cli.app import main
+    from mst_cli.design.problem import DesignProblem
+    from mst_cli.model.mechanics import continuum, frame
+
+    calls = {"evaluate_calls": 0, "evaluate_points": 0}
+    original = DesignProblem.evaluate_physical
+
+    def counted(self, theta_deg, t_mm, h_mm):
+        calls["evaluate_calls"] += 1
+        calls["evaluate_points"] += int(np.prod(np.shape(theta_deg)[:-1], dtype=int))
+        return original(self, theta_deg, t_mm, h_mm)
+
+    DesignProblem.evaluate_physical = counted
+    requests = {"frame": 0, "continuum": 0}
+    for module, name in ((frame, "frame_layer"), (continuum, "continuum_layer")):
+        inner = getattr(module, name)
+        rung = name.split("_")[0]
+
+        def wrapper(cell, material, _inner=inner, _rung=rung):
+            requests[_rung] += 1
+            return _inner(cell, material)
+        wrapper.__wrapped__ = getattr(inner, "__wrapped__", inner)
+        wrapper.inner = inner
+        setattr(module, name, wrapper)          # layer_law imports it from the module per call
+
+    with tempfile.TemporaryDirectory() as tmp:
+        t0 = time.perf_counter()
+        with contextlib.suppress(SystemExit):        # the command's exit code: not a count
+            main(["design", str(spec), *flags, "--out", f"{tmp}/o", "-q"], standalone_mode=False)
+        elapsed = time.perf_counter() - t0
+    solved = {}
+    for module, name in ((frame, "frame_layer"), (continuum, "continuum_layer")):
+        inner = getattr(module, name).inner
+        rung = name.split("_")[0]
+        solved[rung] = inner.cache_info().misses if hasattr(inner, "cache_info") else requests[rung]
+    return {**calls, "law_requests": requests, "laws_solved": solved, "in_process_s": elapsed}
+
+
+def counts(spec: Path, modes) -> dict[str, dict]:
+    out = {}
+    for label, flags, path in modes:
+        r = subprocess.run([sys.executable, __file__, "--count", json.dumps(flags), "--spec", str(spec)],
+                           capture_output=True, text=True, check=True, env=_env(path))
+        out[label] = json.loads(r.stdout.strip().splitlines()[-1])
+    return out
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--spec", type=Path, default=SPEC)
+    ap.add_argument("--baseline", type=Path, default=None,
+                    help="a directory holding another mst_cli package: its refine rows are added")
+    ap.add_argument("--count", default=None, help=argparse.SUPPRESS)   # internal: one counted run
+    args = ap.parse_args()
+    if args.count is not None:
+        print(json.dumps(count_run(args.spec, json.loads(args.count))))
+        return
+
+    modes = [(label, flags, None) for label, flags in MODES]
+    if args.baseline is not None:
+        modes += [(f"{label} (baseline)", flags, args.baseline.resolve()) for label, flags in MODES[1:]]
+    times = command_times(args.spec, args.repeats, modes)
+    n = counts(args.spec, modes)
+    plain = statistics.median(times[MODES[0][0]])
+    print(f"spec {args.spec.name}, {args.repeats} runs per command (interleaved), one run of this script"
+          + (f"; baseline package: {args.baseline}" if args.baseline else ""))
+    head = (f"{'command':<31} {'median s':>9} {'min s':>7} {'max s':>7} {'x plain':>8} "
+            f"{'dear laws solved':>16} {'law requests':>12} {'evaluate calls':>14} {'points':>9}")
+    print(head)
+    print("-" * len(head))
+    for label, flags, _ in modes:
+        ts, c = times[label], n[label]
+        rung = flags[1] if flags else None
+        solved = c["laws_solved"][rung] if rung else 0
+        req = c["law_requests"][rung] if rung else 0
+        print(f"{label:<31} {statistics.median(ts):>9.2f} {min(ts):>7.2f} {max(ts):>7.2f} "
+              f"{statistics.median(ts) / plain:>8.2f} {solved:>16d} {req:>12d} "
+              f"{c['evaluate_calls']:>14d} {c['evaluate_points']:>9d}")
+    ratio = statistics.median(times[MODES[-1][0]]) / plain
+    print(f"goal: --refine continuum <= {GOAL_RATIO:g}x the plain design: {ratio:.2f}x "
+          f"({'met' if ratio <= GOAL_RATIO else 'NOT met'})")
+
+
+if __name__ == "__main__":
+    main()
