@@ -64,7 +64,7 @@ BAD_FILES = {
     "not a mapping": ("- 1\n- 2\n", "(file)"),
     "missing layers": (yaml.safe_dump({"name": "x"}), "layers"),
     "no layers": (doc(layers=[]), "layers"),
-    "seven layers": (doc(layers=GOOD_LAYERS * 3 + GOOD_LAYERS[:1]), "layers"),
+    "thirteen layers": (doc(layers=GOOD_LAYERS * 6 + GOOD_LAYERS[:1]), "layers"),
     "missing key": (doc(layers=[{"theta_deg": 25, "t_mm": 0.6}]), "layers[0]"),
     "wrong type": (doc(layers=[{"theta_deg": [25], "t_mm": 0.6, "h_mm": 2}]), "layers[0].theta_deg"),
     "string number": (doc(layers=[{"theta_deg": "twenty", "t_mm": 0.6, "h_mm": 2}]), "layers[0].theta_deg"),
