@@ -11,11 +11,18 @@ benchmarks/bench_ladder.py) and picks the cheapest rung that meets a requested a
 from __future__ import annotations
 
 import time
+from collections.abc import Iterable, Sequence
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from mst_cli.model.geometry import HexCell, Magnet
 from mst_cli.model.mechanics.correction import VERIFIED_BOX
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
+
+    from mst_cli.model.material import Material
 
 # The printable box (mechanics.correction.VERIFIED_BOX, also the default design bounds): every
 # rung is fitted and measured on it.
@@ -74,8 +81,9 @@ def spring_vectorised_time_per_layer_s(cells, material, repeat: int = 20) -> flo
     return best / len(cells)
 
 
-def compare_mechanics(cells, material, models=("spring-textbook", "spring", "frame"),
-                      reference="continuum"):
+def compare_mechanics(cells: Iterable[HexCell], material: Material,
+                      models: Sequence[str] = ("spring-textbook", "spring", "frame"),
+                      reference: str = "continuum") -> list[dict]:
     """Per cell and model: k, d_lock, lock force and relative errors against the reference.
 
     A rung that raises on a cell is recorded with its error message (never dropped silently).
@@ -107,7 +115,7 @@ def compare_mechanics(cells, material, models=("spring-textbook", "spring", "fra
     return rows
 
 
-def summarise(rows, model):
+def summarise(rows: Sequence[dict], model: str) -> dict:
     """Median and 90th-percentile |error| of one model over the rows where both solved."""
     out = {"failures": 0}
     for key in ("err_k", "err_d_lock", "err_lock_force"):
@@ -119,7 +127,7 @@ def summarise(rows, model):
     return out
 
 
-def field_errors(gaps_mm, magnet: Magnet | None = None):
+def field_errors(gaps_mm: ArrayLike, magnet: Magnet | None = None) -> dict[str, list[float]]:
     """Relative error of |B| on the axis of the dipole and axial models against magpylib."""
     from mst_cli.model import field as fld
     magnet = Magnet() if magnet is None else magnet
@@ -132,7 +140,7 @@ def field_errors(gaps_mm, magnet: Magnet | None = None):
     return out
 
 
-def field_times_s(gaps_mm, magnet: Magnet | None = None, repeat: int = 20):
+def field_times_s(gaps_mm: ArrayLike, magnet: Magnet | None = None, repeat: int = 20) -> dict[str, float]:
     """Per-point time of each field model on the gap array, s."""
     from mst_cli.model import field as fld
     magnet = Magnet() if magnet is None else magnet
@@ -149,7 +157,9 @@ def field_times_s(gaps_mm, magnet: Magnet | None = None, repeat: int = 20):
 
 
 # --------------------------------------------------------------------------- the whole bench
-def mesh_convergence(cells, material, meshes=((2, 8, 2), (3, 12, 4), (4, 16, 5), (6, 24, 6))):
+def mesh_convergence(cells: Iterable[HexCell], material: Material,
+                     meshes: Sequence[tuple[int, int, int]] = ((2, 8, 2), (3, 12, 4), (4, 16, 5), (6, 24, 6)),
+                     ) -> list[dict]:
     """L2 small-strain k on successively finer meshes (n_thick, n_length, corner levels)."""
     from mst_cli.model.mechanics.continuum import linear_stiffness_N_per_mm
     out = []
@@ -255,7 +265,7 @@ BANDS = {"t/L": ("t_over_L", ((0.0, 0.6), (0.6, 1.0), (1.0, 1.7))),
          "theta": ("theta_deg", ((5.0, 15.0), (15.0, 60.0), (60.0, 75.0)))}
 
 
-def band_summary(rows, model):
+def band_summary(rows: Sequence[dict], model: str) -> dict[str, dict]:
     """Median |error| in k and lock force of one rung per band of t/L and of theta (the
     outermost bands take whatever lies past their outer edge)."""
     out = {}

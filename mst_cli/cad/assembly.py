@@ -3,12 +3,16 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 from build123d import Compound, Solid
 
 from mst_cli.cad import parts
 from mst_cli.errors import InputError
 from mst_cli.model.geometry import SensorGeometry
+
+if TYPE_CHECKING:
+    import numpy as np
 
 
 def check_fits(geometry: SensorGeometry) -> None:
@@ -71,7 +75,7 @@ def build_sensor(geometry: SensorGeometry) -> SensorCAD:
     return SensorCAD(body=body, magnet=parts.magnet_solid(geometry), board=board)
 
 
-def print_mesh(geometry: SensorGeometry, body: Solid, tolerance_mm: float):
+def print_mesh(geometry: SensorGeometry, body: Solid, tolerance_mm: float) -> tuple[np.ndarray, np.ndarray]:
     """(vertices, triangles) of the body as it lies on the bed (the STL/3MF frame): the
     tessellation, closed and outward-oriented, turned into the print frame."""
     from mst_cli.cad import mesh_io

@@ -27,12 +27,16 @@ from __future__ import annotations
 import math
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from mst_cli.cad.manifest import MAX_COORD_MM, Manifest
 from mst_cli.cad.measure import LAYER_GRID_TOL_MM, Measurements, measure
 from mst_cli.errors import InputError
+
+if TYPE_CHECKING:
+    import trimesh
 
 # Planar features are exact in the B-rep; the STL stores float32 coordinates, which resolve
 # ~2e-6 mm at 20 mm from the origin. Dimensions measured on planar faces must agree to this.
@@ -78,7 +82,7 @@ def resolve_paths(path: str | Path) -> tuple[Path, Path]:
     return stl, manifest
 
 
-def load_mesh(path: Path):
+def load_mesh(path: Path) -> trimesh.Trimesh:
     """Read an STL into a trimesh (vertices merged); InputError when it is not a mesh, or when
     a coordinate is not finite or beyond +-MAX_COORD_MM (nothing is measured on such a mesh)."""
     import trimesh

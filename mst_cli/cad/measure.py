@@ -11,10 +11,15 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from mst_cli.cad.manifest import Manifest
+
+if TYPE_CHECKING:
+    import manifold3d
+    import trimesh
 
 # Mesh heights in print orientation are float32 values up to ~30 mm (~2e-6 mm steps) that went
 # through one rotation: a face "on" a layer boundary (or on the bed) lies within this of it.
@@ -25,7 +30,7 @@ _RAY_OFFSET_MM = (0.0123, 0.0071)
 
 
 # --------------------------------------------------------------------------- primitives
-def to_manifold(mesh):
+def to_manifold(mesh: trimesh.Trimesh) -> tuple[manifold3d.Manifold, str]:
     """manifold3d view of the mesh and its status name ("NoError" when it is a manifold)."""
     import manifold3d as mf
     m = mf.Manifold(mf.Mesh(vert_properties=np.ascontiguousarray(mesh.vertices, dtype=np.float32),
@@ -112,7 +117,7 @@ def shells(mesh) -> tuple[int, int, list[float]]:
     return sum(v > 0 for v in volumes), sum(v < 0 for v in volumes), volumes
 
 
-def to_sensor_frame(mesh, manifest: Manifest):
+def to_sensor_frame(mesh: trimesh.Trimesh, manifest: Manifest) -> trimesh.Trimesh:
     """A copy of the print-oriented mesh in the sensor frame (the manifest's rotation undone)."""
     rot = np.asarray(manifest.print.rotation, dtype=float)
     shift = np.asarray(manifest.print.translation_mm, dtype=float)

@@ -9,6 +9,8 @@ here for the callers that write all the mesh files from one module.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from mst_cli.cad.deterministic import (
@@ -20,13 +22,16 @@ from mst_cli.cad.deterministic import (
     write_step,
 )
 
+if TYPE_CHECKING:
+    from build123d import Solid
+
 __all__ = ["PRUSA_CUSTOM_GCODE_MEMBER", "PRUSA_PAUSE_PRINT_TYPE", "STEP_TIMESTAMP", "is_closed_oriented",
            "merge_vertices", "prusa_pause_xml", "stl_bytes", "tessellate", "three_mf_bytes", "write_step"]
 
 STL_HEADER = "mst sensor body, mm"
 
 
-def tessellate(solid, tolerance_mm: float, angular_tolerance_rad: float = 0.1):
+def tessellate(solid: Solid, tolerance_mm: float, angular_tolerance_rad: float = 0.1) -> tuple[np.ndarray, np.ndarray]:
     """Indexed triangle mesh of ``solid`` with outward normals.
 
     OCCT's incremental mesher discretises every edge once and shares it between the two
@@ -74,7 +79,7 @@ def _trimesh(vertices: np.ndarray, triangles: np.ndarray):
     return trimesh.Trimesh(vertices=vertices, faces=triangles, process=False)
 
 
-def merge_vertices(vertices: np.ndarray, triangles: np.ndarray, digits: int = 9):
+def merge_vertices(vertices: np.ndarray, triangles: np.ndarray, digits: int = 9) -> tuple[np.ndarray, np.ndarray]:
     """Weld vertices whose coordinates agree to ``digits`` decimals (mm) (trimesh, which keeps
     the first-seen order, so the result is deterministic); drop triangles that collapse."""
     mesh = _trimesh(vertices, triangles)

@@ -45,6 +45,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -53,6 +54,12 @@ from mst_cli.model import field as fld
 from mst_cli.model.geometry import LENGTH_FLOOR_MM
 from mst_cli.model.mechanics import layer_law
 from mst_cli.model.stack import Stack
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
+
+    from mst_cli.io.schema import Document
+    from mst_cli.model.geometry import HexCell
 
 # --------------------------------------------------------------------------- parameters
 
@@ -153,7 +160,7 @@ class ForwardModel:
         self.correction: _Correction | None = None
         self.evaluations = 0
 
-    def cells(self, wall_offset_mm: float):
+    def cells(self, wall_offset_mm: float) -> tuple[HexCell, ...]:
         fam = self.doc.family
         return tuple(fam.cell(la.theta_deg, la.t_mm + wall_offset_mm, la.h_mm) for la in self.doc.layers)
 
@@ -173,7 +180,7 @@ class ForwardModel:
             self.correction = _Correction(wall_offset_mm, self.stack(wall_offset_mm),
                                           self.stack(wall_offset_mm, self.mechanics))
 
-    def displacement_mm(self, force_N, values: dict):
+    def displacement_mm(self, force_N: ArrayLike, values: dict) -> np.ndarray:
         v = full_values(values)
         F = np.maximum(np.asarray(force_N, dtype=float), 0.0) / v["modulus_factor"]
         d = self.stack(v["wall_offset_mm"]).displacement_mm(F)
@@ -181,7 +188,7 @@ class ForwardModel:
             d = d + self.correction(F)
         return d
 
-    def field_T(self, force_N, values: dict):
+    def field_T(self, force_N: ArrayLike, values: dict) -> np.ndarray:
         """Field vector (m, 3) at the chip."""
         v = full_values(values)
         self.evaluations += 1
@@ -191,7 +198,7 @@ class ForwardModel:
                                 g.chip_offset_mm, g.magnet_tilt_deg)
         return v["remanence_factor"] * B
 
-    def field_abs_T(self, force_N, values: dict):
+    def field_abs_T(self, force_N: ArrayLike, values: dict) -> np.ndarray:
         return np.linalg.norm(self.field_T(force_N, values), axis=-1)
 
     def last_lock_force_N(self, values: dict) -> float:
@@ -394,7 +401,8 @@ def fit_parameters(doc, force_N, B_abs_T, sigma_T: float, names=DEFAULT_PARAMETE
 
 
 # --------------------------------------------------------------------------- calibrated design
-def apply_parameters(doc, values: dict, name: str | None = None, mechanics: str | None = None):
+def apply_parameters(doc: Document, values: dict, name: str | None = None,
+                     mechanics: str | None = None) -> tuple[Document, list[str]]:
     """The design document with the fitted values written into its own keys, and a list of the
     edits made (each a sentence). Loadable by ``mst simulate`` (same rules, same model).
 
@@ -492,11 +500,11 @@ class InverseMap:
     def tolerance_T(self) -> float:
         return END_TOLERANCE_SIGMA * self.field_resolution_T
 
-    def regime_of(self, force_N):
+    def regime_of(self, force_N: ArrayLike) -> np.ndarray:
         F = np.asarray(force_N, dtype=float)
         return np.clip(np.searchsorted(self.edges_N, F, side="right"), 1, self.n_regimes)
 
-    def local_resolution_N(self, force_N=None):
+    def local_resolution_N(self, force_N: ArrayLike | None = None) -> np.ndarray:
         """Force resolution at each grid point (or at given forces): field resolution over the
         smaller of the two neighbouring secant slopes d|B|/dF (the worse side)."""
         dB = np.diff(self.B_abs_T) / np.maximum(np.diff(self.force_N), 1e-300)
@@ -507,7 +515,8 @@ class InverseMap:
             return res
         return np.interp(np.asarray(force_N, dtype=float), self.force_N, res)
 
-    def force(self, B_abs_T, saturated=None):
+    def force(self, B_abs_T: ArrayLike,
+              saturated: ArrayLike | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(force_N with NaN where flagged, regime (0 where flagged), flag strings)."""
         B = np.asarray(B_abs_T, dtype=float)
         F = np.interp(B, self.B_abs_T, self.force_N)
@@ -525,7 +534,7 @@ class InverseMap:
         regime = np.where(bad, 0, self.regime_of(np.where(bad, 0.0, F)))
         return F, regime, flag
 
-    def table(self, n: int = 256):
+    def table(self, n: int = 256) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """n entries evenly spaced in |B| from no load to the last lock: (|B|, Bz, F, regime,
         resolution)."""
         B = np.linspace(self.B_abs_T[0], self.B_abs_T[-1], n)
@@ -534,7 +543,8 @@ class InverseMap:
         Bz = np.interp(F, self.force_N, self.Bz_T)
         return B, Bz, F, self.regime_of(np.minimum(F, self.edges_N[-1] * (1 - 1e-12))), self.local_resolution_N(F)
 
-    def z_code_table(self, setting: mlx.ChipSetting, n_max: int = 256):
+    def z_code_table(self, setting: mlx.ChipSetting,
+                     n_max: int = 256) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Entries evenly spaced in |Z code| at ``setting``, from no load to the last lock:
         (codes, force_N, regime, resolution_N). CalibrationFailed if |Bz| is not monotone in
         force (an off-axis chip far from the axis): no Z-only table can then exist."""

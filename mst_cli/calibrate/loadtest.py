@@ -19,6 +19,7 @@ from __future__ import annotations
 import csv
 import math
 import re
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -208,7 +209,8 @@ def parse_readings(text: str, source: str, *, need_force: bool, gain_sel: int | 
                     force_N=F, raw=raw, setting=one)
 
 
-def field_of(values, raw: bool, setting: mlx.ChipSetting | None, where: str):
+def field_of(values: Sequence[float], raw: bool, setting: mlx.ChipSetting | None,
+             where: str) -> tuple[np.ndarray, bool]:
     """(field vector in T, saturated) of one sample: x, y, z in microtesla, or raw codes.
 
     InputError when the sample cannot come from ``setting`` (a code or a field beyond what the

@@ -53,16 +53,16 @@ def load_command(name: str) -> click.Command | None:
 class LazyMstGroup(MstGroup):
     """:class:`MstGroup` whose commands are imported on first use."""
 
-    def list_commands(self, ctx):
+    def list_commands(self, ctx: click.Context) -> list[str]:
         return list(COMMANDS)
 
-    def get_command(self, ctx, cmd_name):
+    def get_command(self, ctx: click.Context, cmd_name: str) -> click.Command | None:
         return load_command(cmd_name)
 
 
 @click.group(cls=LazyMstGroup, context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(__version__, prog_name="mst")
-def main():
+def main() -> None:
     """Design multi-sensitivity soft tactile (MST) sensors.
 
     A stack of collapsible 3D-printed TPU layers, a magnet above it and an MLX90393

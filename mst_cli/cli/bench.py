@@ -17,7 +17,7 @@ from mst_cli.cli.common import no_plot_option
               help="Output folder [default: ./mst-out/bench/].")
 @click.option("--quick", is_flag=True, help="Skip the L2 mesh-convergence study.")
 @no_plot_option("bench.png", "about 0.5 s of matplotlib import and render", has_json=False)
-def bench(samples, seed, out_dir, quick, no_plot):
+def bench(samples: int, seed: int, out_dir: Path | None, quick: bool, no_plot: bool) -> None:
     """Measure every mechanics rung (spring, frame) and field model against the reference
     (continuum FE; magpylib) and write bench.md, bench.json and bench.png (error vs time;
     not with --no-plot)."""

@@ -14,11 +14,15 @@ import math
 import sys
 import time
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import click
 
 from mst_cli import __version__
 from mst_cli.cli.common import EXIT_TARGETS, default_out_dir, handles_input_errors, no_plot_option
+
+if TYPE_CHECKING:
+    import numpy as np
 
 MECHANICS = ["spring", "frame", "continuum"]
 BAUD_RATES = (1200, 2400, 4800, 9600, 19200, 38400, 57600, 115200, 230400, 460800, 921600)
@@ -191,7 +195,9 @@ static inline int mst_force_from_z(int32_t z_code, int32_t *force_mN, uint8_t *r
 """
 
 
-def plot_calibration(path, F, B_meas_T, design_model, cal_model, residual_T, sigma_T, title):
+def plot_calibration(path: Path, F: np.ndarray, B_meas_T: np.ndarray, design_model: tuple[np.ndarray, np.ndarray],
+                     cal_model: tuple[np.ndarray, np.ndarray], residual_T: np.ndarray, sigma_T: float,
+                     title: str) -> None:
     """Measured |B| against force with the design's and the calibrated curves; residuals."""
     from matplotlib.figure import Figure
 
@@ -233,7 +239,8 @@ def plot_calibration(path, F, B_meas_T, design_model, cal_model, residual_T, sig
               help="Entries of the lookup table (CSV and C header).")
 @no_plot_option("calibration.png", "about 40 % of a run: 0.45 s of matplotlib import and render", has_json=False)
 @handles_input_errors
-def calibrate(design_file, load_test, out_dir, mechanics, params, gain_sel, res, table_size, no_plot):
+def calibrate(design_file: Path, load_test: Path, out_dir: Path | None, mechanics: str, params: str,
+              gain_sel: int | None, res: int | None, table_size: int, no_plot: bool) -> None:
     """Fit DESIGN_FILE's print parameters to a LOAD_TEST of the printed sensor.
 
     LOAD_TEST is a CSV with force_N,Bx_uT,By_uT,Bz_uT (or raw codes Bx_code_lsb,By_code_lsb,
@@ -489,7 +496,9 @@ def _calibration_note(model_file: Path) -> tuple[str | None, dict | None]:
               help="Output folder of forces.csv [default: ./mst-out/<name>-read/; with --serial "
                    "only when given].")
 @handles_input_errors
-def read(model_file, readings, port, baud, count, timeout_s, raw, gain_sel, res, mechanics, out_dir):
+def read(model_file: Path, readings: Path | None, port: str | None, baud: str, count: int | None,
+         timeout_s: float | None, raw: bool, gain_sel: int | None, res: int | None, mechanics: str | None,
+         out_dir: Path | None) -> None:
     """Turn MLX90393 readings into forces with MODEL_FILE (a calibrated.yaml).
 
     READINGS is a CSV with Bx_uT,By_uT,Bz_uT (or Bx_code_lsb,By_code_lsb,Bz_code_lsb with
@@ -614,7 +623,7 @@ def _read_file(doc, imap, rd, out):
     click.echo(f"wrote {out}/forces.csv")
 
 
-def cal_flags():
+def cal_flags() -> tuple[str, ...]:
     from mst_cli.calibrate.fit import FLAGS
     return FLAGS
 

@@ -12,9 +12,21 @@ import errno
 import functools
 import os
 import sys
+from collections.abc import Callable, Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING, Any, ParamSpec, TypeVar
 
 import click
+
+if TYPE_CHECKING:
+    from mst_cli.io.outputs import Staging
+    from mst_cli.io.schema import Document
+    from mst_cli.model.geometry import SensorGeometry
+    from mst_cli.model.response import Response
+
+_P = ParamSpec("_P")
+_R = TypeVar("_R")
+_F = TypeVar("_F", bound=Callable[..., Any])
 
 EXIT_TARGETS, EXIT_INPUT = 1, 2  # success is a normal return (0)
 EXIT_FAULT = 1                   # the machine failed (full disk, I/O error): not the input's fault
@@ -45,7 +57,7 @@ def os_error_line(exc: OSError) -> tuple[str, int]:
     return one_line(f"mst: {kind}: {paths}: {reason}" + (f" ({name})" if name else "")), code
 
 
-def handles_input_errors(func):
+def handles_input_errors(func: Callable[_P, _R]) -> Callable[_P, _R]:
     """Turn :class:`~mst_cli.errors.InputError` into one line on stderr and exit code 2, and an
     OSError into one line naming the path and the errno reason (exit 2 for a bad path, 1 for a
     machine fault such as a full disk). The group (:class:`MstGroup`) does the same for any
@@ -72,7 +84,8 @@ class MstGroup(click.Group):
     and exit 2; an interrupt is one line and exit 128 + signal. ``--help`` and ``--version`` are
     click's own."""
 
-    def main(self, args=None, prog_name=None, complete_var=None, standalone_mode=True, **extra):
+    def main(self, args: Sequence[str] | None = None, prog_name: str | None = None, complete_var: str | None = None,
+             standalone_mode: bool = True, **extra: Any) -> Any:
         if not standalone_mode:
             return super().main(args, prog_name, complete_var, standalone_mode=False, **extra)
         from mst_cli.errors import InputError
@@ -114,7 +127,7 @@ def default_out_dir(name: str) -> Path:
     return Path("mst-out") / name
 
 
-def no_plot_option(picture: str, cost: str, has_json: bool = True):
+def no_plot_option(picture: str, cost: str, has_json: bool = True) -> Callable[[_F], _F]:
     """``--no-plot`` with one meaning on every command that draws: ``picture`` is not drawn,
     matplotlib is never imported, and an old ``picture`` in the output folder is removed with
     the commit. ``cost`` says what the picture costs (measured: benchmarks/bench_simulate.py).
@@ -125,8 +138,9 @@ def no_plot_option(picture: str, cost: str, has_json: bool = True):
                              f"in the output folder is removed, never left beside newer results.{implied}")
 
 
-def write_simulation(doc, geometry, resp, out_dir: Path, extra_files=None, extra_report=None, more=None,
-                     plot: bool = True):
+def write_simulation(doc: Document, geometry: SensorGeometry, resp: Response, out_dir: Path,
+                     extra_files: dict[str, Any] | None = None, extra_report: dict | None = None,
+                     more: Callable[[Staging], None] | None = None, plot: bool = True) -> dict:
     """report.json, response.csv, response.png (+ extra YAML files, + whatever ``more(staging)``
     writes) into out_dir, atomically; returns the report written (what ``--json`` prints).
     ``plot=False``: no response.png (any old one is removed) and matplotlib is not imported."""

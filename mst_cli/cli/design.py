@@ -74,8 +74,8 @@ class _Progress:
 @no_plot_option("response.png or pareto.png",
                 "about half of a run on the reference spec: 0.45 s of matplotlib import and render")
 @handles_input_errors
-def design(spec_file, out_dir, seed, max_evaluations, refine, pareto_count, pareto_designs, quiet, as_json,
-           no_plot):
+def design(spec_file: Path, out_dir: Path | None, seed: int | None, max_evaluations: int | None, refine: str | None,
+           pareto_count: int | None, pareto_designs: bool, quiet: bool, as_json: bool, no_plot: bool) -> None:
     """Find theta, t, h of every layer so that the sensor meets SPEC_FILE's targets.
 
     Per layer the spec gives a target sensitivity S (dB/B0 per newton, secant over the

@@ -60,7 +60,8 @@ def _load_design(path: Path, t0: float):
               show_default=True, help="Largest chord deviation of the mesh from the curved "
                                       "surfaces (the magnet pocket), mm.")
 @handles_input_errors
-def export(path, want_stl, want_step, want_3mf, out_dir, stl_tolerance_mm):
+def export(path: Path, want_stl: bool, want_step: bool, want_3mf: bool, out_dir: Path | None,
+           stl_tolerance_mm: float) -> None:
     """Build the printable sensor of the design file PATH and write it.
 
     PATH may also be a spec (targets only): it is designed first, as 'mst design' does, and
@@ -141,7 +142,7 @@ def export(path, want_stl, want_step, want_3mf, out_dir, stl_tolerance_mm):
 @click.option("--nozzle", "nozzle_mm", type=float, default=None,
               help="Nozzle diameter for the wall checks, mm [default: the design's printer.nozzle_mm].")
 @handles_input_errors
-def check(path, as_json, nozzle_mm):
+def check(path: Path, as_json: bool, nozzle_mm: float | None) -> None:
     """Check the body that 'mst export' wrote (PATH: its folder, or the STL in it).
 
     Prints a table of named checks, measured on the mesh against the design's own expected

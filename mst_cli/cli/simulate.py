@@ -24,7 +24,8 @@ from mst_cli.cli.common import default_out_dir, handles_input_errors, no_plot_op
               help="Print report.json to stdout instead of the table (implies --no-plot).")
 @no_plot_option("response.png", "about 2/3 of a run: 0.45 s of matplotlib import and render")
 @handles_input_errors
-def simulate(design_file, out_dir, field_model, mechanics, as_json, no_plot):
+def simulate(design_file: Path, out_dir: Path | None, field_model: str | None, mechanics: str | None, as_json: bool,
+             no_plot: bool) -> None:
     """Predict force-displacement and field-force curves of DESIGN_FILE.
 
     Writes report.json (units in keys), response.csv and response.png (not with --no-plot

@@ -14,10 +14,14 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import click
 
 from mst_cli.cli.common import EXIT_TARGETS, handles_input_errors, no_plot_option
+
+if TYPE_CHECKING:
+    from mst_cli.cad.gcode import GCode
 
 DEFAULT_MAX_SPAN_MM = 5.0
 MODEL_NAMES = ("sensor.3mf", "sensor.stl")
@@ -97,7 +101,7 @@ def judge_pause(pauses, expected: dict, layer_height_mm: float) -> tuple[dict, s
     return report, problem
 
 
-def cavity_gap_report(g, manifest: dict, shift_xy, z_shift: float):
+def cavity_gap_report(g: GCode, manifest: dict, shift_xy: tuple[float, float], z_shift: float) -> str | list[dict]:
     """Designed against as-sliced gaps along export.json's print.cavity_lines."""
     from mst_cli.cad.gcode import gap_at
     lines = (manifest.get("print") or {}).get("cavity_lines")
@@ -214,7 +218,8 @@ def plot_print(path: Path, triangles, bed_xy, shift_xyz, g, spans, title: str) -
 @click.option("--json", "as_json", is_flag=True, help="Print slice.json instead of the summary.")
 @no_plot_option("print.png", "about 0.8 s: matplotlib and a 3D view of the part", has_json=True)
 @handles_input_errors
-def slice_(path, profile, out_dir, max_span_mm, as_json, no_plot):
+def slice_(path: Path, profile: Path | None, out_dir: Path | None, max_span_mm: float, as_json: bool,
+           no_plot: bool) -> None:
     """Slice the body 'mst export' wrote (PATH: its folder) with PrusaSlicer and judge it.
 
     Slices sensor.3mf (which carries the magnet pause; sensor.stl if there is no 3MF) with the

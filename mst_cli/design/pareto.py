@@ -20,12 +20,16 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from mst_cli.design.document import ROUND_DECIMALS, DesignResult, design_document, verify_design
 from mst_cli.design.problem import DesignProblem
 from mst_cli.io.schema import OBJECTIVE_TERMS, Document
+
+if TYPE_CHECKING:
+    from collections.abc import Callable
 
 # Two designs are the same point of the front when they differ by less than one print layer
 # in height, 2 % in force resolution and 1 percentage point in print robustness: differences a
@@ -92,8 +96,9 @@ def _spread(front: list[ParetoDesign], count: int) -> list[ParetoDesign]:
     return [front[i] for i in sorted(keep)]
 
 
-def pareto_front(doc: Document, count: int, *, seed: int | None = None, progress=None,
-                 max_evaluations: int | None = None, local: str = "slsqp"):
+def pareto_front(doc: Document, count: int, *, seed: int | None = None,
+                 progress: Callable[[int, int, str, float], None] | None = None,
+                 max_evaluations: int | None = None, local: str = "slsqp") -> tuple[DesignResult, list[ParetoDesign]]:
     """(chosen DesignResult, front): up to ``count`` non-dominated designs meeting the targets.
 
     The chosen design is the one ``mst design`` writes (design.objective's weights); it is on

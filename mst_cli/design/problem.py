@@ -48,6 +48,7 @@ from __future__ import annotations
 import inspect
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -58,6 +59,9 @@ from mst_cli.model.field import axial_Bz_T, choose_field_model
 from mst_cli.model.mechanics import correction
 from mst_cli.model.mechanics.spring import spring_arrays
 from mst_cli.model.response import field_magnitude_T, regime_kernel
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
 
 PRINT_ERROR_T_MM = 0.05      # wall-thickness printing error the robustness term guards against
 
@@ -149,7 +153,7 @@ class DesignProblem:
     def dim(self) -> int:
         return 3 * self.n
 
-    def to_physical(self, u):
+    def to_physical(self, u: ArrayLike) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(theta_deg, t_mm, h_mm), each (..., n), from normalised u (..., 3n)."""
         u = np.asarray(u, dtype=float).reshape(np.shape(u)[:-1] + (self.n, 3))
         theta = self.lo[0] + u[..., 0] * (self.hi[0] - self.lo[0])
@@ -157,7 +161,7 @@ class DesignProblem:
         h = self.lo[2] * (self.hi[2] / self.lo[2]) ** u[..., 2]
         return theta, t, h
 
-    def to_unit(self, theta_deg, t_mm, h_mm):
+    def to_unit(self, theta_deg: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike) -> np.ndarray:
         """Inverse of :meth:`to_physical` (not clipped)."""
         u0 = (np.asarray(theta_deg, float) - self.lo[0]) / (self.hi[0] - self.lo[0])
         u1 = np.log(np.asarray(t_mm, float) / self.lo[1]) / math.log(self.hi[1] / self.lo[1])
@@ -166,7 +170,7 @@ class DesignProblem:
         return u.reshape(u.shape[:-2] + (3 * self.n,))
 
     # ----------------------------------------------------------------- physics
-    def field_T(self, gap_mm):
+    def field_T(self, gap_mm: ArrayLike) -> np.ndarray:
         """|B| (T) at the chip for an array of gaps: the forward model's field, same model."""
         if self.field_model == "axial":
             m = self.probe.magnet
@@ -174,7 +178,8 @@ class DesignProblem:
         gap = np.asarray(gap_mm, dtype=float)      # magpylib takes a flat list of observers
         return field_magnitude_T(gap.ravel(), self.probe, self.field_model).reshape(gap.shape)
 
-    def responses(self, theta_deg, t_mm, h_mm):
+    def responses(self, theta_deg: np.ndarray, t_mm: np.ndarray,
+                  h_mm: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """(R_N per layer, S_per_N per regime, B_full_T, gap0_mm, B0_T) of candidate stacks."""
         fam = self.family
         theta = np.radians(theta_deg)
@@ -216,7 +221,8 @@ class DesignProblem:
         return self.evaluate_physical(*self.to_physical(u))
 
     # ----------------------------------------------------------------- preference
-    def print_shift_log(self, theta_deg, t_mm, h_mm, dt_mm: float = PRINT_ERROR_T_MM):
+    def print_shift_log(self, theta_deg: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike,
+                        dt_mm: float = PRINT_ERROR_T_MM) -> np.ndarray:
         """ln(out(t + s dt) / out(t)) for s = +1, -1: shape (2, ..., 2n), S then R.
 
         The three stacks (nominal, thicker, thinner) go through the kernels in one call.
@@ -230,16 +236,16 @@ class DesignProblem:
         out = np.log(np.maximum(np.concatenate([S, R], axis=-1), _TINY))
         return out[1:] - out[:1]
 
-    def print_robustness(self, theta_deg, t_mm, h_mm):
+    def print_robustness(self, theta_deg: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike) -> np.ndarray:
         """Print robustness: RMS of :meth:`print_shift_log` over both signs and all 2n outputs."""
         d = self.print_shift_log(theta_deg, t_mm, h_mm)
         return np.sqrt(np.mean(d ** 2, axis=(0, -1)))
 
-    def worst_force_resolution_N(self, ev: Evaluation):
+    def worst_force_resolution_N(self, ev: Evaluation) -> np.ndarray:
         """Noise-limited force resolution of the least sensitive regime, sigma_B / (B0 min S)."""
         return self.noise_T / np.maximum(ev.B0_T * np.min(ev.S_per_N, axis=-1), _TINY)
 
-    def objective_terms(self, ev: Evaluation, robustness=None):
+    def objective_terms(self, ev: Evaluation, robustness: ArrayLike | None = None) -> np.ndarray:
         """The preference terms (..., len(OBJECTIVE_TERMS)) of evaluated candidates: ln height,
         ln worst force resolution, print robustness (computed unless given)."""
         if robustness is None:
@@ -247,7 +253,7 @@ class DesignProblem:
         return np.stack([np.log(ev.total_height_mm), np.log(self.worst_force_resolution_N(ev)),
                          np.asarray(robustness, dtype=float)], axis=-1)
 
-    def preference(self, ev: Evaluation, weights=None):
+    def preference(self, ev: Evaluation, weights: ArrayLike | None = None) -> np.ndarray:
         """Weighted sum of :meth:`objective_terms` (lower is better): what phase 2 minimises."""
         w = self.objective_weights if weights is None else np.asarray(weights, dtype=float)
         return self.objective_terms(ev) @ w
@@ -274,7 +280,7 @@ class DesignProblem:
 
     # ----------------------------------------------------------------- random valid designs
     def sample_feasible(self, rng: np.random.Generator, count: int, slack: float = 0.05,
-                        batch: int = 4096, max_batches: int = 200):
+                        batch: int = 4096, max_batches: int = 200) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``count`` random designs that satisfy every constraint with ``slack`` to spare.
 
         Layers of each random candidate are re-ordered by lock force (so that they lock bottom

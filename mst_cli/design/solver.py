@@ -34,10 +34,16 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from mst_cli.design.problem import DesignProblem
+
+if TYPE_CHECKING:
+    from collections.abc import Callable
+
+    from numpy.typing import ArrayLike
 
 INITIAL_STEP = 0.1           # fraction of every (normalised) variable's range
 MATCH_FRACTION = 0.05        # phase 1 ends when every |error| <= this x tolerance
@@ -276,7 +282,8 @@ def _match(problem, rng, budget, local, stops):
     return best.u, False, starts_used
 
 
-def prefer(problem: DesignProblem, u_matched, budget, local: str, stops: list, weights=None):
+def prefer(problem: DesignProblem, u_matched: np.ndarray, budget: _Budget, local: str, stops: list,
+           weights: ArrayLike | None = None) -> tuple[np.ndarray, float, float]:
     """Phases 2-4 from a matched point: the design that meets the targets and minimises the
     preference (:meth:`DesignProblem.preference` with ``weights``, default design.objective).
     Returns (u, preference before, preference after)."""
@@ -366,7 +373,9 @@ def pareto_weights(count: int) -> np.ndarray:
 
 
 def match_once(problem: DesignProblem, *, seed: int = 0, max_evaluations: int = 20000,
-               progress=None, local: str = "slsqp", max_time_s: float = MAX_TIME_S):
+               progress: Callable[[int, int, str, float], None] | None = None, local: str = "slsqp",
+               max_time_s: float = MAX_TIME_S,
+               ) -> tuple[SolveResult, Callable[[ArrayLike | None], tuple[np.ndarray, int]] | None]:
     """One match (screening + phase 1), then phases 2-4 on demand for any weighting.
 
     Returns (SolveResult of the match, ``prefer_with(weights) -> (u, evaluations)``); each call

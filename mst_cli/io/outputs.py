@@ -25,8 +25,10 @@ import signal
 import tempfile
 import threading
 import time
+from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
+from typing import Any
 
 import yaml
 
@@ -53,7 +55,7 @@ def dumps_json(data, **kwargs) -> str:
     return json.dumps(data, allow_nan=False, **kwargs)
 
 
-def finite_or_none(data):
+def finite_or_none(data: Any) -> Any:
     """A copy of nested dicts/lists/tuples with every non-finite float replaced by None."""
     if isinstance(data, dict):
         return {k: finite_or_none(v) for k, v in data.items()}
@@ -257,7 +259,7 @@ def _terminate_raises():
 
 
 @contextmanager
-def staged(out_dir: Path):
+def staged(out_dir: Path) -> Iterator[Staging]:
     """``with staged(dir) as st: st.write_json(...)`` -- renamed into place on success only.
 
     An OSError without a path (a full disk while writing) is given the output folder's path.

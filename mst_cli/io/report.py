@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import io
 import math
+from typing import Any
 
 import numpy as np
 
@@ -97,7 +98,7 @@ def _undefined_reasons(resp: Response) -> dict:
     return reasons
 
 
-def nulls_with_reasons(data, reasons: dict | None = None):
+def nulls_with_reasons(data: Any, reasons: dict | None = None) -> Any:
     """``data`` with every non-finite number replaced by null and, in a mapping, a ``<key>_reason``
     key beside it saying why (JSON has no NaN; report.json never holds one)."""
     reasons = reasons or {}

@@ -55,7 +55,7 @@ def default_of(f) -> Any:
     return f.default_factory() if f.default_factory is not MISSING else f.default
 
 
-def adopt(owner: type, name: str, **changes):
+def adopt(owner: type, name: str, **changes: Any) -> Any:
     """Field ``name`` of the dataclass ``owner`` exposed under the same key by a section class:
     its default and metadata as declared there, with ``changes`` on top (bounds and meaning for
     a class that declares none, such as Material; a different default)."""
@@ -105,7 +105,7 @@ class Rule:
         null = " (or null)" if self.nullable else ""
         return f"must be {kind}{' ' + ' and '.join(parts) if parts else ''}{unit}{null}"
 
-    def check(self, path: str, value: Any):
+    def check(self, path: str, value: Any) -> Any:
         if value is None:
             if self.nullable:
                 return None
@@ -380,7 +380,7 @@ class Document:
     source: str = "<memory>"
     accuracy_rel: float | None = None   # model.accuracy_rel: requested accuracy of k and R
 
-    def section(self, name: str):
+    def section(self, name: str) -> Any:
         """The values of the file section ``name``, as an object with its keys as attributes."""
         if name == "magnetometer":
             return MagnetometerSection(board=self.board.key, noise_uT_rms=self.noise_uT_rms,
@@ -407,7 +407,7 @@ class Document:
         return geo.SensorGeometry(tuple(cells), self.magnet, self.board, self.housing,
                                   self.chip_offset_mm, self.magnet_tilt_deg, self.printer)
 
-    def require_geometry(self):
+    def require_geometry(self) -> None:
         for i, layer in enumerate(self.layers):
             for key in GEOMETRY_KEYS:
                 if getattr(layer, key) is None:
@@ -415,7 +415,7 @@ class Document:
                                      "a design needs theta_deg, t_mm and h_mm for every layer "
                                      "(this looks like a spec: run 'mst design' on it)")
 
-    def require_targets(self):
+    def require_targets(self) -> None:
         for i, layer in enumerate(self.layers):
             for key in TARGET_KEYS:
                 if getattr(layer, key) is None:
@@ -577,7 +577,7 @@ def document_to_dict(doc: Document, layers=None) -> dict:
     return out
 
 
-def load_design_document(path):
+def load_design_document(path: str | Path) -> tuple[Document, geo.SensorGeometry]:
     """Load a design file and check its cells; InputError on any broken rule."""
     doc = load_document(path)
     geometry = doc.geometry()

@@ -39,7 +39,7 @@ BARE = re.compile(rf"^\s*({NUMBER})\s*[,;\s]\s*({NUMBER})\s*[,;\s]\s*({NUMBER})\
 TRAILING_UNIT = re.compile(rf"({UNIT})\s*$", re.IGNORECASE)
 
 
-def parse_line(line: str, raw: bool = False):
+def parse_line(line: str, raw: bool = False) -> tuple[float, float, float] | None:
     """(x, y, z) in microtesla (or raw codes with ``raw``) from one line, or None."""
     line = line.strip()
     if not line:
@@ -71,7 +71,7 @@ class SampleParser:
         self.skipped = 0
         self._axes: dict[str, float] = {}
 
-    def feed(self, line: str):
+    def feed(self, line: str) -> tuple[float, float, float] | None:
         sample = parse_line(line, self.raw)
         if sample is not None:
             self._axes = {}

@@ -21,6 +21,7 @@ Only the safe constructors of ``yaml.SafeLoader`` are used.
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import yaml
 
@@ -72,7 +73,7 @@ class StrictLoader(yaml.SafeLoader):
                               f"more than {MAX_NODES} values (aliases expanded): a design file "
                               "holds a few dozen")
 
-    def compose_node(self, parent, index):
+    def compose_node(self, parent: yaml.Node | None, index: int | yaml.Node | None) -> yaml.Node | None:
         event = self.peek_event()
         if isinstance(event, yaml.AliasEvent):
             if event.anchor in self._open_anchors:
@@ -98,7 +99,7 @@ class StrictLoader(yaml.SafeLoader):
             self._anchor_sizes[anchor] = self._expanded - before
         return node
 
-    def construct_yaml_int(self, node):
+    def construct_yaml_int(self, node: yaml.ScalarNode) -> int | HugeNumber:
         text = self.construct_scalar(node)
         if len(text) > MAX_INT_CHARS:
             return HugeNumber(text)
@@ -141,7 +142,7 @@ def check_keys(node, path: str = "") -> None:
                 stack.append((item, f"{path}[{i}]" if path else f"[{i}]"))
 
 
-def load_text(text: str):
+def load_text(text: str) -> Any:
     """Parse one YAML document with :class:`StrictLoader`; YAMLRefused / yaml.YAMLError on bad
     input (``None`` for an empty document)."""
     loader = StrictLoader(text)

@@ -14,8 +14,12 @@ import csv
 from dataclasses import dataclass
 from functools import lru_cache
 from importlib import resources
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
 
 SATURATION_T = 50e-3
 CODE_RANGE_LSB = {0: 32768, 1: 32768, 2: 22000, 3: 11000}
@@ -57,7 +61,7 @@ def choose_setting(max_abs_xy_T: float, max_abs_z_T: float, margin: float = 1.1)
     return None
 
 
-def quantise_lsb(B_T, uT_per_lsb: float):
+def quantise_lsb(B_T: ArrayLike, uT_per_lsb: float) -> np.ndarray:
     """Output code of a field component (round to nearest LSB)."""
     return np.rint(np.asarray(B_T) * 1e6 / uT_per_lsb).astype(np.int64)
 

@@ -18,12 +18,19 @@ model that is exact for the scene.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
+
+    from mst_cli.model.geometry import Magnet
 
 FIELD_MODELS = ("dipole", "axial", "cylinder")
 
 
-def axial_Bz_T(z_mm, radius_mm, thickness_mm, remanence_T):
+def axial_Bz_T(z_mm: ArrayLike, radius_mm: float, thickness_mm: float, remanence_T: float) -> np.ndarray:
     """Exact B_z on the axis at distance z_mm (>= 0) below the pole face."""
     z = np.asarray(z_mm, dtype=float)
     R2 = radius_mm ** 2
@@ -31,7 +38,8 @@ def axial_Bz_T(z_mm, radius_mm, thickness_mm, remanence_T):
     return 0.5 * remanence_T * (zL / np.sqrt(R2 + zL ** 2) - z / np.sqrt(R2 + z ** 2))
 
 
-def axial_dBz_dz_T_per_mm(z_mm, radius_mm, thickness_mm, remanence_T):
+def axial_dBz_dz_T_per_mm(z_mm: ArrayLike, radius_mm: float, thickness_mm: float,
+                          remanence_T: float) -> np.ndarray:
     """d B_z / d z of :func:`axial_Bz_T` (negative: the field falls with distance)."""
     z = np.asarray(z_mm, dtype=float)
     R2 = radius_mm ** 2
@@ -39,7 +47,8 @@ def axial_dBz_dz_T_per_mm(z_mm, radius_mm, thickness_mm, remanence_T):
     return 0.5 * remanence_T * (R2 / (R2 + zL ** 2) ** 1.5 - R2 / (R2 + z ** 2) ** 1.5)
 
 
-def dipole_B_T(r_mm, radius_mm, thickness_mm, remanence_T, axis=(0.0, 0.0, 1.0)):
+def dipole_B_T(r_mm: ArrayLike, radius_mm: float, thickness_mm: float, remanence_T: float,
+               axis: ArrayLike = (0.0, 0.0, 1.0)) -> np.ndarray:
     """Point-dipole field at positions ``r_mm`` (..., 3) relative to the magnet centre.
 
     B = mu0/(4 pi r^3) [3 (m.r^) r^ - m] with m = Br V / mu0, so mu0 m = Br V: the magnet's
@@ -55,7 +64,8 @@ def dipole_B_T(r_mm, radius_mm, thickness_mm, remanence_T, axis=(0.0, 0.0, 1.0))
     return (3.0 * m_dot * unit - moment) / (4.0 * np.pi * dist ** 3)
 
 
-def cylinder_B_T(r_mm, diameter_mm, thickness_mm, remanence_T, tilt_deg=0.0):
+def cylinder_B_T(r_mm: ArrayLike, diameter_mm: float, thickness_mm: float, remanence_T: float,
+                 tilt_deg: float = 0.0) -> np.ndarray:
     """Exact field of the cylinder at positions ``r_mm`` (..., 3) relative to its centre.
 
     The magnet is tilted by ``tilt_deg`` about the y axis. magpylib works in metres.
@@ -81,7 +91,8 @@ def choose_field_model(offset_mm=(0.0, 0.0), tilt_deg=0.0, requested: str | None
     return "axial" if on_axis else "cylinder"
 
 
-def field_at_chip_T(gap_mm, magnet, model: str, offset_mm=(0.0, 0.0), tilt_deg=0.0):
+def field_at_chip_T(gap_mm: ArrayLike, magnet: Magnet, model: str, offset_mm: tuple[float, float] = (0.0, 0.0),
+                    tilt_deg: float = 0.0) -> np.ndarray:
     """Field vector (..., 3) at the Hall plates for every magnet-face-to-chip gap (mm).
 
     ``offset_mm`` is the chip's (x, y) position relative to the magnet axis; ``tilt_deg`` tilts

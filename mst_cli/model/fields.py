@@ -2,11 +2,14 @@
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import MISSING, field
+from typing import Any
 
 
-def spec(default=MISSING, *, meaning: str, unit: str = "", lo=None, hi=None, lo_open=False, hi_open=False,
-         choices=(), nullable=False, kind=None, omit_default=False, default_factory=MISSING):
+def spec(default: Any = MISSING, *, meaning: str, unit: str = "", lo: float | None = None, hi: float | None = None,
+         lo_open: bool = False, hi_open: bool = False, choices: Iterable[Any] = (), nullable: bool = False,
+         kind: str | None = None, omit_default: bool = False, default_factory: Any = MISSING) -> Any:
     """A dataclass field that design files may set: its default, plus metadata saying what a file
     may give (unit, bounds or choices, whether null is allowed, a one-line meaning).
 

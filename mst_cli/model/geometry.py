@@ -30,11 +30,15 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from mst_cli.model.components import MAGNET_GRADES_T, Board, default_board
 from mst_cli.model.fields import spec
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
 
 # Lengths are floored at this value inside the kernels so that every point of the design
 # bounds -- valid or not -- gives finite numbers; the validity checks report the violation.
@@ -42,12 +46,12 @@ LENGTH_FLOOR_MM = 1e-6
 
 
 # --------------------------------------------------------------------------- kernels
-def pad_half_width_mm(theta_rad, h_mm, width_mm):
+def pad_half_width_mm(theta_rad: ArrayLike, h_mm: ArrayLike, width_mm: ArrayLike) -> np.ndarray:
     """Half width p of the outer top/bottom pad: p = W/2 - (h/2)/tan(theta)."""
     return 0.5 * width_mm - 0.5 * h_mm / np.tan(theta_rad)
 
 
-def inner_pad_half_width_mm(theta_rad, t_mm, h_mm, width_mm):
+def inner_pad_half_width_mm(theta_rad: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike, width_mm: ArrayLike) -> np.ndarray:
     """Half width of the inner (cavity-side) pad: the outer vertex offset inward by t.
 
     Offsetting the hexagon's edges by t moves the bottom vertex (p, 0) to
@@ -56,12 +60,12 @@ def inner_pad_half_width_mm(theta_rad, t_mm, h_mm, width_mm):
     return pad_half_width_mm(theta_rad, h_mm, width_mm) - t_mm * np.tan(0.5 * theta_rad)
 
 
-def inner_tip_half_width_mm(theta_rad, t_mm, width_mm):
+def inner_tip_half_width_mm(theta_rad: ArrayLike, t_mm: ArrayLike, width_mm: ArrayLike) -> np.ndarray:
     """x of the inner hexagon's side vertex: the tip W/2 offset inward by t/sin(theta)."""
     return 0.5 * width_mm - t_mm / np.sin(theta_rad)
 
 
-def wall_centreline_length_mm(theta_rad, t_mm, h_mm):
+def wall_centreline_length_mm(theta_rad: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike) -> np.ndarray:
     """Length of one inclined wall along its centre line (offset t/2 from the outside).
 
     The centre line rises (h - t)/2 at angle theta: L = (h - t) / (2 sin theta). Floored at
@@ -70,17 +74,17 @@ def wall_centreline_length_mm(theta_rad, t_mm, h_mm):
     return np.maximum(0.5 * (h_mm - t_mm) / np.sin(theta_rad), LENGTH_FLOOR_MM)
 
 
-def cavity_height_mm(t_mm, h_mm):
+def cavity_height_mm(t_mm: ArrayLike, h_mm: ArrayLike) -> np.ndarray:
     """Clear height of the cavity at the centre, h - 2t (negative for an invalid cell)."""
     return h_mm - 2.0 * t_mm
 
 
-def lock_stroke_mm(t_mm, h_mm, contact_allowance_mm):
+def lock_stroke_mm(t_mm: ArrayLike, h_mm: ArrayLike, contact_allowance_mm: ArrayLike) -> np.ndarray:
     """Compression d_lock at which the cavity closes: h - 2t - allowance, floored > 0."""
     return np.maximum(cavity_height_mm(t_mm, h_mm) - contact_allowance_mm, LENGTH_FLOOR_MM)
 
 
-def profile_area_mm2(theta_rad, t_mm, h_mm, width_mm):
+def profile_area_mm2(theta_rad: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike, width_mm: ArrayLike) -> np.ndarray:
     """Area of the hex profile's material (outer hexagon minus inner hexagon), mm^2.
 
     A hexagon with pad half-width a, tip half-width c and height H has area (2a + 2c)/2 * H
@@ -99,8 +103,9 @@ def profile_area_mm2(theta_rad, t_mm, h_mm, width_mm):
 CELL_RULES = ("wall", "cavity_gap", "lock_stroke", "pad_width")
 
 
-def cell_margins_mm(theta_rad, t_mm, h_mm, width_mm, contact_allowance_mm, min_wall_mm, min_gap_mm,
-                    nozzle_mm):
+def cell_margins_mm(theta_rad: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike, width_mm: ArrayLike,
+                    contact_allowance_mm: ArrayLike, min_wall_mm: ArrayLike, min_gap_mm: ArrayLike,
+                    nozzle_mm: ArrayLike) -> np.ndarray:
     """Signed margins (mm, >= 0 satisfied) of every cell rule, stacked on a last axis.
 
     Shape (..., len(CELL_RULES)), order :data:`CELL_RULES`. :meth:`HexCell.margins` reads this
@@ -116,7 +121,7 @@ def cell_margins_mm(theta_rad, t_mm, h_mm, width_mm, contact_allowance_mm, min_w
     return np.stack(np.broadcast_arrays(*parts), axis=-1).astype(float)
 
 
-def unloaded_gap_mm(sum_h_mm, n_layers, housing: Housing, board: Board):
+def unloaded_gap_mm(sum_h_mm: ArrayLike, n_layers: int, housing: Housing, board: Board) -> np.ndarray:
     """Magnet pole face to Hall plates with no load, for arrays of total layer height.
 
     Hall plates at the package centre -> chip top -> the board's taller parts (headroom) -> air
@@ -650,7 +655,7 @@ class SensorGeometry:
         return out
 
     # -- print frame
-    def to_print_frame(self, points_mm):
+    def to_print_frame(self, points_mm: ArrayLike) -> np.ndarray:
         """Sensor-frame points (..., 3) to the print frame: (x, -z, y + D/2)."""
         p = np.asarray(points_mm, dtype=float)
         return np.stack([p[..., 0], -p[..., 2], p[..., 1] + 0.5 * self.depth_mm], axis=-1)

@@ -7,7 +7,9 @@ the curves, local slopes, the chip setting and the force resolution. Pure: no I/
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -17,17 +19,22 @@ from mst_cli.model.geometry import SensorGeometry
 from mst_cli.model.mechanics import layer_law
 from mst_cli.model.stack import Stack, series_displacement_mm
 
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
+
 GAP_STEP_MM = 1e-4   # central-difference step for d|B|/d gap with the non-closed-form models
 
 
-def field_magnitude_T(gap_mm, geometry: SensorGeometry, model: str):
+def field_magnitude_T(gap_mm: ArrayLike, geometry: SensorGeometry, model: str) -> np.ndarray:
     """|B| at the chip for an array of gaps (the quantity the sensor reads)."""
     B = fld.field_at_chip_T(gap_mm, geometry.magnet, model, geometry.chip_offset_mm,
                             geometry.magnet_tilt_deg)
     return np.linalg.norm(B, axis=-1)
 
 
-def regime_kernel(k_N_per_mm, d_lock_mm, k_locked_N_per_mm, gap0_mm, field_T, lock_force_N=None):
+def regime_kernel(k_N_per_mm: ArrayLike, d_lock_mm: ArrayLike, k_locked_N_per_mm: ArrayLike, gap0_mm: ArrayLike,
+                  field_T: Callable[[np.ndarray], np.ndarray],
+                  lock_force_N: ArrayLike | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Lock forces and secant sensitivities of many L0 stacks at once.
 
     Parameters

@@ -14,13 +14,18 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import cached_property
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from mst_cli.model.mechanics.spring import layer_displacement_mm
 
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
 
-def series_displacement_mm(force_N, k_N_per_mm, d_lock_mm, k_locked_N_per_mm, lock_force_N=None):
+
+def series_displacement_mm(force_N: ArrayLike, k_N_per_mm: ArrayLike, d_lock_mm: ArrayLike,
+                           k_locked_N_per_mm: ArrayLike, lock_force_N: ArrayLike | None = None) -> np.ndarray:
     """Stack compression of L0 layers in series, vectorised over designs.
 
     ``k``, ``d_lock``, ``k_locked`` and ``lock_force_N`` (None: R = k d_lock, bilinear) have
@@ -88,7 +93,7 @@ class Stack:
         """Past the last lock every layer is on its locked branch."""
         return sum(1.0 / law.k_locked_N_per_mm for law in self.layers)
 
-    def local_compliance_mm_per_N(self, force_N):
+    def local_compliance_mm_per_N(self, force_N: ArrayLike) -> float | np.ndarray:
         """dd/dF on the segment that contains ``force_N`` (right-continuous at knots), for a
         number (float) or an array of forces >= 0 (array of the same shape)."""
         knots, slopes = self._segment_compliance
@@ -117,12 +122,12 @@ class Stack:
                 total += float((d[1] - d[0]) / step)
         return total
 
-    def displacement_mm(self, force_N):
+    def displacement_mm(self, force_N: ArrayLike) -> np.ndarray:
         """d(F) for F >= 0 (past the last lock the locked stiffnesses carry the load)."""
         F = np.asarray(force_N, dtype=float)
         return sum(law.displacement_mm(F) for law in self.layers)
 
-    def force_N(self, displacement_mm):
+    def force_N(self, displacement_mm: ArrayLike) -> np.ndarray:
         """F(d), the exact inverse of d(F) (both piecewise linear on the same knots)."""
         d = np.asarray(displacement_mm, dtype=float)
         F_knots = self.knots_N

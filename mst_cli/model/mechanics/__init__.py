@@ -14,10 +14,19 @@ The stack solver (:mod:`mst_cli.model.stack`) needs nothing else, so it is exact
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from mst_cli.model.geometry import HexCell
+    from mst_cli.model.material import Material
+    from mst_cli.model.mechanics.frame import TabulatedLockingLayer
+    from mst_cli.model.mechanics.spring import LinearLockingLayer
+
 MODELS = ("spring", "frame", "continuum")  # cheapest first
 
 
-def layer_law(cell, material, model: str = "spring"):
+def layer_law(cell: HexCell, material: Material,
+              model: str = "spring") -> LinearLockingLayer | TabulatedLockingLayer:
     """The force-displacement law of one layer with the named mechanics model.
 
     ``frame`` and ``continuum`` laws are cached per (cell, material): both are frozen.
@@ -34,7 +43,8 @@ def layer_law(cell, material, model: str = "spring"):
     raise ValueError(f"unknown mechanics model {model!r}; choose from {', '.join(MODELS)}")
 
 
-def uncached_layer_law(cell, material, model: str = "spring"):
+def uncached_layer_law(cell: HexCell, material: Material,
+                       model: str = "spring") -> LinearLockingLayer | TabulatedLockingLayer:
     """:func:`layer_law` without the per-cell caches (for timing)."""
     if model == "frame":
         from mst_cli.model.mechanics.frame import frame_layer

@@ -48,12 +48,16 @@ import functools
 import math
 import weakref
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from mst_cli.model import geometry as geo
 from mst_cli.model.mechanics.frame import TabulatedLockingLayer, locked_tabulated_law
 from mst_cli.model.mechanics.path import PathError, StepControl, follow_to_event
+
+if TYPE_CHECKING:
+    from skfem import MeshTri
 
 # Default mesh: elements across the wall thickness and along the wall (the pad gets the same
 # number across and a graded number along), then DEFAULT_LEVELS rounds of local refinement
@@ -107,7 +111,7 @@ def _wedge_columns(n_thick: int, wedge_over_t: float) -> np.ndarray:
 
 
 def quarter_profile_mesh(cell: geo.HexCell, n_thick: int = DEFAULT_N_THICK,
-                         n_length: int = DEFAULT_N_LENGTH):
+                         n_length: int = DEFAULT_N_LENGTH) -> tuple[np.ndarray, np.ndarray, float]:
     """Triangle mesh of the quarter profile (bottom pad's right part + lower right wall).
 
     Built from the cell's own polygons in three structured blocks:
@@ -169,7 +173,7 @@ def quarter_profile_mesh(cell: geo.HexCell, n_thick: int = DEFAULT_N_THICK,
 
 
 def refined_quarter_mesh(cell: geo.HexCell, n_thick: int = DEFAULT_N_THICK,
-                         n_length: int = DEFAULT_N_LENGTH, levels: int = DEFAULT_LEVELS):
+                         n_length: int = DEFAULT_N_LENGTH, levels: int = DEFAULT_LEVELS) -> tuple[MeshTri, float]:
     """:func:`quarter_profile_mesh` with ``levels`` rounds of refinement at the corners.
 
     Round i refines (red-green) the triangles whose centroid lies within 0.5 t / 2^i of the

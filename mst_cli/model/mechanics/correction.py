@@ -51,8 +51,12 @@ from __future__ import annotations
 import functools
 import json
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
 
 TERMS = ["x", "x^2", "x^3", "x*s", "x^2*s", "x*s^2", "x^2*s^2", "x*s^3", "x^3*s",
          "ly", "ly*s", "ly*s^2", "ly^2", "ly^2*s", "y", "y*s"]
@@ -83,7 +87,7 @@ def _y(x, theta):
     return np.minimum(x / (2.0 * np.sin(theta)), Y_MAX)
 
 
-def design_matrix(t_over_L, theta_rad):
+def design_matrix(t_over_L: ArrayLike, theta_rad: ArrayLike) -> np.ndarray:
     """The stiffness fit's terms (TERMS) at (x = t/L, theta), stacked on a last axis."""
     x = np.asarray(t_over_L, dtype=float)
     th = np.asarray(theta_rad, dtype=float)
@@ -95,7 +99,7 @@ def design_matrix(t_over_L, theta_rad):
         ly, ly * s, ly * s ** 2, ly ** 2, ly ** 2 * s, y, y * s), axis=-1)
 
 
-def lock_design_matrix(t_over_L, theta_rad, sigma):
+def lock_design_matrix(t_over_L: ArrayLike, theta_rad: ArrayLike, sigma: ArrayLike) -> np.ndarray:
     """The lock fits' terms g_i (LOCK_TERMS), stacked on a last axis (not yet times sigma)."""
     x = np.asarray(t_over_L, dtype=float)
     th = np.asarray(theta_rad, dtype=float)
@@ -112,7 +116,7 @@ def lock_design_matrix(t_over_L, theta_rad, sigma):
         r, r * s, r * sig), axis=-1)
 
 
-def allowance_over_t(t_over_L, theta_rad, sigma):
+def allowance_over_t(t_over_L: ArrayLike, theta_rad: ArrayLike, sigma: ArrayLike) -> np.ndarray:
     """r = allowance / t of the cell with this (t/L, theta, sigma): sigma = 2 (1 - y (1 + r)),
     so r = (1 - sigma / 2) / y - 1, held in [0, R_MAX] (and finite as y -> 0). At the thinnest
     printable wall r = 0.25: the allowance is a quarter of the wall, and the shallow cavity's
@@ -173,7 +177,7 @@ def _clipped(t_over_L, theta_rad):
     return x, theta
 
 
-def stroke_ratio(d_lock_mm, wall_length_mm, theta_rad):
+def stroke_ratio(d_lock_mm: ArrayLike, wall_length_mm: ArrayLike, theta_rad: ArrayLike) -> np.ndarray:
     """sigma = d_lock / (L sin theta): the stroke over one wall's rise (0 to about 2)."""
     return np.asarray(d_lock_mm, dtype=float) / (np.asarray(wall_length_mm, dtype=float) * np.sin(theta_rad))
 
@@ -200,7 +204,7 @@ def _lock_ratio(key, t_over_L, theta_rad, sigma):
     return np.exp(sig * (lock_design_matrix(x, theta, _on_cells(x, theta, sig)) @ _coef(key)))
 
 
-def lock_force_factor(t_over_L, theta_rad, sigma):
+def lock_force_factor(t_over_L: ArrayLike, theta_rad: ArrayLike, sigma: ArrayLike) -> np.ndarray:
     """R_L2 / (k d_lock) predicted by the fit (k the corrected L0 stiffness, d_lock = h - 2t - a).
 
     Held inside the fitted (t/L, theta, sigma) box like :func:`stiffness_factor`.
@@ -208,7 +212,7 @@ def lock_force_factor(t_over_L, theta_rad, sigma):
     return _lock_ratio("lock_force", t_over_L, theta_rad, sigma)
 
 
-def lock_stroke_factor(t_over_L, theta_rad, sigma):
+def lock_stroke_factor(t_over_L: ArrayLike, theta_rad: ArrayLike, sigma: ArrayLike) -> np.ndarray:
     """d_lock,L2 / (h - 2t - a) predicted by the fit, at most the largest ratio L2 gave on
     the fitted cells (a few per cent above 1: the pads are elastic and, under stiff walls,
     meet a little after the rigid-pad stroke)."""
@@ -216,7 +220,7 @@ def lock_stroke_factor(t_over_L, theta_rad, sigma):
                       _fit()["lock_stroke"]["ratio_range"][1])
 
 
-def stiffness_factor(t_over_L, theta_rad):
+def stiffness_factor(t_over_L: ArrayLike, theta_rad: ArrayLike) -> np.ndarray:
     """k_L2 / k_L0 predicted by the fit.
 
     x = t/L is clipped to [0, the largest t/L fitted] and theta to its fitted range (optimisers
@@ -227,7 +231,7 @@ def stiffness_factor(t_over_L, theta_rad):
     return np.exp(design_matrix(x, theta) @ _coef())
 
 
-def expected_error_rel(t_over_L, theta_rad, t_mm=None):
+def expected_error_rel(t_over_L: ArrayLike, theta_rad: ArrayLike, t_mm: ArrayLike | None = None) -> np.ndarray:
     """Median |relative error| of the corrected L0 lock force R against L2, measured out of
     sample in the band of (t/L, theta) each cell falls in (``out_of_sample`` in the data
     file; bands: t/L 0-0.6-1.0-, theta 5-15-60-75 deg). Vectorised, pure.

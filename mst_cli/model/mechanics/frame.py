@@ -48,6 +48,7 @@ from __future__ import annotations
 import functools
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -59,6 +60,9 @@ from mst_cli.model.mechanics.spring import (
     plane_strain_modulus_MPa,
 )
 
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
+
 DEFAULT_N_ELEMENTS = 12
 
 
@@ -67,7 +71,7 @@ class FrameError(RuntimeError):
 
 
 # --------------------------------------------------------------------------- tabulated law
-def monotone_envelope(d_mm, F_N):
+def monotone_envelope(d_mm: ArrayLike, F_N: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     """The force-controlled path of a displacement-controlled curve.
 
     Under a force (the stack is force-driven) a layer whose F(d) falls after a peak snaps
@@ -124,7 +128,7 @@ class TabulatedLockingLayer:
     def knots_N(self) -> tuple[float, ...]:
         return self.F_samples_N[1:]
 
-    def displacement_mm(self, force_N):
+    def displacement_mm(self, force_N: ArrayLike) -> np.ndarray:
         F = np.asarray(force_N, dtype=float)
         inside = np.interp(F, self.F_samples_N, self.d_samples_mm)
         beyond = self.d_lock_mm + (F - self.lock_force_N) / self.k_locked_N_per_mm

@@ -39,10 +39,14 @@ including cells that the validity checks reject (the geometry kernels floor the 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from mst_cli.model import geometry as geo
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
 
 SHEAR_COEFFICIENT_RECT = 5.0 / 6.0  # Timoshenko shear coefficient of a rectangular section
 # Where the softened pre-lock curve bends, as a fraction of the lock force. Chosen against the
@@ -52,7 +56,7 @@ SHEAR_COEFFICIENT_RECT = 5.0 / 6.0  # Timoshenko shear coefficient of a rectangu
 KNEE_FRACTION = 0.4
 
 
-def plane_strain_modulus_MPa(E_MPa, nu):
+def plane_strain_modulus_MPa(E_MPa: ArrayLike, nu: ArrayLike) -> np.ndarray:
     """E' = E / (1 - nu^2): the bending and axial modulus of a web much wider than thick.
 
     The web runs the whole depth D (20 mm) while its walls are 0.4-3 mm thick, so a wall's
@@ -65,8 +69,9 @@ def plane_strain_modulus_MPa(E_MPa, nu):
     return E_MPa / (1.0 - nu * nu)
 
 
-def wall_compliance_mm_per_N(theta_rad, t_mm, h_mm, b_mm, E_MPa, nu,
-                             bending=True, shear=True, axial=True):
+def wall_compliance_mm_per_N(theta_rad: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike, b_mm: ArrayLike,
+                             E_MPa: ArrayLike, nu: ArrayLike, bending: bool = True, shear: bool = True,
+                             axial: bool = True) -> np.ndarray:
     """Vertical compliance of one clamped-guided inclined wall (a web b wide), mm/N.
 
     Plane strain: bending and axial terms with E' = E / (1 - nu^2), shear with G.
@@ -90,14 +95,16 @@ def wall_compliance_mm_per_N(theta_rad, t_mm, h_mm, b_mm, E_MPa, nu,
     return c
 
 
-def layer_stiffness_N_per_mm(theta_rad, t_mm, h_mm, b_mm, E_MPa, nu):
+def layer_stiffness_N_per_mm(theta_rad: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike, b_mm: ArrayLike,
+                             E_MPa: ArrayLike, nu: ArrayLike) -> np.ndarray:
     """Small-load stiffness k of a whole layer (a web of width b: 2 chevrons of 2 walls each)."""
     c_wall = wall_compliance_mm_per_N(theta_rad, t_mm, h_mm, b_mm, E_MPa, nu)
     # chevron = 2 walls in series (2 c); the layer = 2 chevrons in parallel
     return 2.0 / (2.0 * c_wall)
 
 
-def pad_compression_modulus_MPa(E_MPa, nu, half_width_mm, thickness_mm):
+def pad_compression_modulus_MPa(E_MPa: ArrayLike, nu: ArrayLike, half_width_mm: ArrayLike,
+                                thickness_mm: ArrayLike) -> np.ndarray:
     """Apparent compression modulus of a layer bonded to rigid plates on both faces, in plane
     strain (long along y), half-width a, thickness H:
 
@@ -118,7 +125,8 @@ def pad_compression_modulus_MPa(E_MPa, nu, half_width_mm, thickness_mm):
     return E_ps + (M - E_ps) * (1.0 - np.tanh(x) / x)
 
 
-def contact_stiffness_N_per_mm(theta_rad, t_mm, width_mm, b_mm, E_MPa, nu=0.0):
+def contact_stiffness_N_per_mm(theta_rad: ArrayLike, t_mm: ArrayLike, width_mm: ArrayLike, b_mm: ArrayLike,
+                               E_MPa: ArrayLike, nu: ArrayLike = 0.0) -> np.ndarray:
     """Stiffness of the closed cavity's contact column: 2t of solid TPU over the contact width.
 
     Which modulus: the closed pads (t each, bonded to the rigid plates on their outer faces)
@@ -136,7 +144,8 @@ def contact_stiffness_N_per_mm(theta_rad, t_mm, width_mm, b_mm, E_MPa, nu=0.0):
     return E_c * b_mm * 2.0 * half / (2.0 * t_mm)
 
 
-def layer_displacement_mm(force_N, k_N_per_mm, d_lock_mm, lock_force_N, k_locked_N_per_mm):
+def layer_displacement_mm(force_N: ArrayLike, k_N_per_mm: ArrayLike, d_lock_mm: ArrayLike, lock_force_N: ArrayLike,
+                          k_locked_N_per_mm: ArrayLike) -> np.ndarray:
     """Compression of L0 layers at force F, vectorised (all arguments broadcast).
 
     Slope k up to the knee F1 = KNEE_FRACTION * R, straight on to (d_lock, R), then k_locked.
@@ -177,13 +186,14 @@ class LinearLockingLayer:
             return (R,)
         return (KNEE_FRACTION * R, R)
 
-    def displacement_mm(self, force_N):
+    def displacement_mm(self, force_N: ArrayLike) -> np.ndarray:
         return layer_displacement_mm(force_N, self.k_N_per_mm, self.d_lock_mm, self.lock_force_N,
                                      self.k_locked_N_per_mm)
 
 
-def spring_arrays(theta_rad, t_mm, h_mm, b_mm, width_mm, contact_allowance_mm, E_MPa, nu,
-                  corrected=True):
+def spring_arrays(theta_rad: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike, b_mm: ArrayLike, width_mm: ArrayLike,
+                  contact_allowance_mm: ArrayLike, E_MPa: ArrayLike, nu: ArrayLike,
+                  corrected: bool = True) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """(k, d_lock, R, k_locked) for many layers at once: the design loop's entry point.
 
     ``corrected`` (default) applies the fits against rung L2
