@@ -297,3 +297,12 @@ def test_allowance_over_t_term_is_recovered_and_bounded():
     r = correction.allowance_over_t(np.array([0.0, 1e-9, 5.0]), np.radians([0.5, 45.0, 89.0]),
                                     np.array([-1.0, 3.0, 0.0]))
     assert np.isfinite(r).all() and (r >= 0).all() and (r <= correction.R_MAX).all()
+
+
+def test_lock_factors_from_one_design_matrix_equal_the_two_fits_bit_for_bit():
+    from mst_cli.model.mechanics import correction
+    rng = np.random.default_rng(3)
+    x, theta, sigma = rng.uniform(0, 2, 2000), np.radians(rng.uniform(0, 90, 2000)), rng.uniform(-0.5, 3, 2000)
+    force, stroke = correction.lock_factors(x, theta, sigma)
+    assert np.array_equal(force, correction.lock_force_factor(x, theta, sigma))
+    assert np.array_equal(stroke, correction.lock_stroke_factor(x, theta, sigma))

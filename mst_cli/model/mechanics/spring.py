@@ -212,8 +212,9 @@ def spring_arrays(theta_rad: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike, b_mm: 
         t_over_L = t_mm / L
         sigma = correction.stroke_ratio(d_lock, L, theta_rad)
         k = k * correction.stiffness_factor(t_over_L, theta_rad)
-        R = k * d_lock * correction.lock_force_factor(t_over_L, theta_rad, sigma)
-        d_lock = d_lock * correction.lock_stroke_factor(t_over_L, theta_rad, sigma)
+        force_factor, stroke_factor = correction.lock_factors(t_over_L, theta_rad, sigma)
+        R = k * d_lock * force_factor
+        d_lock = d_lock * stroke_factor
         R = np.minimum(R, k * d_lock)           # walls only soften before the lock
     k_locked = k + contact_stiffness_N_per_mm(theta_rad, t_mm, width_mm, b_mm, E_MPa, nu)
     return k, d_lock, R, k_locked
