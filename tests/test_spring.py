@@ -17,6 +17,7 @@ from mst_cli.model.mechanics.spring import (
     SHEAR_COEFFICIENT_RECT,
     layer_stiffness_N_per_mm,
     pad_compression_modulus_MPa,
+    spring_arrays,
     spring_layer,
     wall_compliance_mm_per_N,
 )
@@ -306,3 +307,17 @@ def test_lock_factors_from_one_design_matrix_equal_the_two_fits_bit_for_bit():
     force, stroke = correction.lock_factors(x, theta, sigma)
     assert np.array_equal(force, correction.lock_force_factor(x, theta, sigma))
     assert np.array_equal(stroke, correction.lock_stroke_factor(x, theta, sigma))
+
+
+def test_a_cells_law_does_not_depend_on_its_batch():
+    """The same cells in any shape and order give the same bits: the lock and stiffness fits
+    are summed in one order (no BLAS), so the solver's batches agree with single calls."""
+    rng = np.random.default_rng(0)
+    th, t, h = np.radians(rng.uniform(10, 70, (19, 3))), rng.uniform(0.4, 2.5, (19, 3)), rng.uniform(1.5, 7, (19, 3))
+    args = (20.0, 25.0, 0.1, 30.0, 0.45)
+    grid = spring_arrays(th, t, h, *args)
+    flat = spring_arrays(th.ravel(), t.ravel(), h.ravel(), *args)
+    rev = spring_arrays(th.ravel()[::-1].copy(), t.ravel()[::-1].copy(), h.ravel()[::-1].copy(), *args)
+    for a, b, c in zip(grid, flat, rev):
+        np.testing.assert_array_equal(a.ravel(), b)
+        np.testing.assert_array_equal(b, c[::-1])

@@ -195,6 +195,18 @@ def _on_cells(x, theta, sigma):
     return np.clip(sigma, lo, hi)
 
 
+def _weighted_sum(terms: np.ndarray, coef: np.ndarray) -> np.ndarray:
+    """sum_j terms[..., j] coef[j], the same bits for a cell whatever batch it comes in.
+
+    ``terms @ coef`` hands the product to BLAS, whose kernel (and so its summation order)
+    depends on the array's shape: a cell's law then moved by ~1e-13 between a batch of 19
+    stacks and the same cells in another shape, and the optimiser's path, which is chaotic in
+    the last bits, with it. numpy's own einsum loop (no BLAS without ``optimize``) sums every
+    cell's terms in one order, and is faster here than the BLAS call.
+    """
+    return np.einsum("...j,j->...", terms, coef)
+
+
 def _lock_ratios(keys, t_over_L, theta_rad, sigma):
     """exp(sigma g(x, theta, sigma')) for each fit in ``keys``, one design matrix for all: the
     leading sigma is the cell's own (held in [0, the largest fitted]), so the ratio tends to 1
@@ -203,7 +215,7 @@ def _lock_ratios(keys, t_over_L, theta_rad, sigma):
     sig = np.clip(np.asarray(sigma, dtype=float), 0.0, _fit()["fitted_on"]["stroke_ratio_range"][1])
     x, theta = _clipped(t_over_L, theta_rad)
     terms = lock_design_matrix(x, theta, _on_cells(x, theta, sig))
-    return [np.exp(sig * (terms @ _coef(key))) for key in keys]
+    return [np.exp(sig * _weighted_sum(terms, _coef(key))) for key in keys]
 
 
 def _lock_ratio(key, t_over_L, theta_rad, sigma):
@@ -241,7 +253,7 @@ def stiffness_factor(t_over_L: ArrayLike, theta_rad: ArrayLike) -> np.ndarray:
     box keep the factor of its nearest edge.
     """
     x, theta = _clipped(t_over_L, theta_rad)
-    return np.exp(design_matrix(x, theta) @ _coef())
+    return np.exp(_weighted_sum(design_matrix(x, theta), _coef()))
 
 
 def expected_error_rel(t_over_L: ArrayLike, theta_rad: ArrayLike, t_mm: ArrayLike | None = None) -> np.ndarray:
