@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 import sys
 import time
 from pathlib import Path
@@ -34,8 +35,8 @@ class _Progress:
         self.last = now
         width = 24
         fill = int(width * done / max(total, 1))
-        line = (f"mst design: [{'#' * fill}{'.' * (width - fill)}] {done}/{total} evaluations, "
-                f"{phase}, worst error {100 * worst_err:.2f} %")
+        worst = f"worst error {100 * worst_err:.2f} %" if math.isfinite(worst_err) else "no candidate yet"
+        line = f"mst design: [{'#' * fill}{'.' * (width - fill)}] {done}/{total} evaluations, {phase}, {worst}"
         if self.tty:
             click.echo("\r" + line, err=True, nl=False)
             self.shown = True

@@ -146,8 +146,8 @@ def design_document(doc: Document, *, seed: int | None = None, progress=None,
     doc : Document
         A spec (every layer has target_sensitivity_per_N and target_range_N).
     seed : int, optional
-        Seeds the screening batch [default: design.seed of the file]. Same spec and seed give
-        the same design.
+        Seeds the multi-start screening, should the match need it [default: design.seed of
+        the file]. Same spec and seed give the same design.
     progress : callable, optional
         ``progress(evaluations_done, max_evaluations, phase, worst_error_rel)``.
     max_evaluations : int, optional
@@ -286,9 +286,9 @@ def verify_design(doc: Document, problem: DesignProblem, theta, t, h, sol, *, se
         "print_robustness_rms": print_error["rms_log_change"],
     }
     solver_info = {
-        "method": f"screening + nlopt LD_{sol.local.upper()} (multi-start match, preference polish, re-match)"
-                  if sol.local == "slsqp" else
-                  f"screening + nlopt LN_{sol.local.upper()} (multi-start match, preference polish, re-match)",
+        "method": "layer-by-layer start + Gauss-Newton match, nlopt "
+                  f"{'LD' if sol.local == 'slsqp' else 'LN'}_{sol.local.upper()} preference polish and "
+                  "re-match (seeded multi-start if the start fails)",
         "matched": sol.matched, "starts_used": sol.starts_used,
         "preference_before": sol.preference_before, "preference_after": sol.preference_after,
         "runs_ended": sol.stops,

@@ -67,7 +67,9 @@ PRINT_ERROR_T_MM = 0.05      # wall-thickness printing error the robustness term
 
 # headroom choose_setting keeps between the largest field and a setting's range (one source)
 CHIP_HEADROOM = inspect.signature(mlx.choose_setting).parameters["margin"].default
-_TINY = 1e-300
+TINY = 1e-300                # floor of anything a log is taken of (a collapsed output, not a crash)
+VIOLATION_PENALTY = 10.0     # merit per unit of constraint violation (g is scaled to order one)
+DEDUPE_MIN_CELLS = 64        # below this many cells, sorting out repeats costs more than it saves
 
 
 @dataclass
@@ -96,6 +98,12 @@ class Evaluation:
     def violation(self) -> np.ndarray:
         """Sum of positive constraint values (0 for a feasible candidate)."""
         return np.sum(np.maximum(self.constraints, 0.0), axis=-1)
+
+    def merit(self, slack: float = 0.0) -> np.ndarray:
+        """Match objective plus VIOLATION_PENALTY x the violation of the constraints tightened by
+        ``slack``: how screening and the starts rank candidates that may break a rule."""
+        violation = np.sum(np.maximum(self.constraints + slack, 0.0), axis=-1)
+        return np.where(np.isfinite(self.objective), self.objective, 1e30) + VIOLATION_PENALTY * violation
 
     @property
     def rel_err(self) -> np.ndarray:
@@ -155,7 +163,11 @@ class DesignProblem:
 
     def to_physical(self, u: ArrayLike) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(theta_deg, t_mm, h_mm), each (..., n), from normalised u (..., 3n)."""
-        u = np.asarray(u, dtype=float).reshape(np.shape(u)[:-1] + (self.n, 3))
+        return self.cell_to_physical(np.asarray(u, dtype=float).reshape(np.shape(u)[:-1] + (self.n, 3)))
+
+    def cell_to_physical(self, u_cell: ArrayLike) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(theta_deg, t_mm, h_mm), each (...), of single cells from normalised (..., 3)."""
+        u = np.asarray(u_cell, dtype=float)
         theta = self.lo[0] + u[..., 0] * (self.hi[0] - self.lo[0])
         t = self.lo[1] * (self.hi[1] / self.lo[1]) ** u[..., 1]
         h = self.lo[2] * (self.hi[2] / self.lo[2]) ** u[..., 2]
@@ -178,39 +190,80 @@ class DesignProblem:
         gap = np.asarray(gap_mm, dtype=float)      # magpylib takes a flat list of observers
         return field_magnitude_T(gap.ravel(), self.probe, self.field_model).reshape(gap.shape)
 
+    def gap0_mm(self, sum_h_mm: ArrayLike) -> np.ndarray:
+        """Unloaded magnet-to-chip gap of stacks whose layer heights add up to ``sum_h_mm``."""
+        return geo.unloaded_gap_mm(sum_h_mm, self.n, self.probe.housing, self.probe.board)
+
+    def layer_constraints(self, theta_deg: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike) -> np.ndarray:
+        """The rules each layer meets on its own, (..., len(CELL_RULES) + 1), g <= 0 satisfied:
+        the cell rules in nozzles, then t/L over the largest t/L L0 is fitted on, minus 1."""
+        margins, t_over_L_g = self._layer_rules(theta_deg, t_mm, h_mm)
+        return np.concatenate([-margins / self.printer.nozzle_mm, t_over_L_g[..., None]], axis=-1)
+
+    def _layer_rules(self, theta_deg, t_mm, h_mm):
+        """(cell margins in mm (..., len(CELL_RULES)), t/L constraint (...)) of cells."""
+        fam, pr = self.family, self.printer
+        theta = np.radians(theta_deg)
+        margins = geo.cell_margins_mm(theta, t_mm, h_mm, fam.width_mm, fam.contact_allowance_mm,
+                                      pr.min_wall_mm, pr.min_gap_mm, pr.nozzle_mm)
+        t_over_L = t_mm / geo.wall_centreline_length_mm(theta, t_mm, h_mm)
+        return margins, t_over_L / self.t_over_L_max - 1.0
+
+    def layer_laws(self, theta_deg: ArrayLike, t_mm: ArrayLike,
+                   h_mm: ArrayLike) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """L0 laws (k, d_lock, R, k_locked) of every cell, each distinct cell computed once.
+
+        The batches the solver sends repeat cells: a finite-difference gradient moves one
+        variable per neighbour, so its 2 x 3n + 1 stacks of n cells hold only n + 6n distinct
+        cells (84 of 876 at 12 layers), and the print-robustness term sends each of them at
+        three wall thicknesses. Sorting the cells (a lexsort, far cheaper than the kernel) and
+        computing the distinct ones makes a gradient's spring-law cost linear in the layer count
+        instead of quadratic. Every cell goes through the same elementwise kernel either way.
+        """
+        fam = self.family
+        cells = np.stack(np.broadcast_arrays(theta_deg, t_mm, h_mm), axis=-1)
+        flat = cells.reshape(-1, 3)
+        inverse = None
+        if len(flat) >= DEDUPE_MIN_CELLS:
+            order = np.lexsort(flat.T[::-1])
+            ordered = flat[order]
+            first = np.concatenate([[True], np.any(ordered[1:] != ordered[:-1], axis=1)])
+            inverse = np.empty(len(flat), dtype=np.intp)
+            inverse[order] = np.cumsum(first) - 1
+            flat = ordered[first]
+        theta, t, h = np.ascontiguousarray(flat.T)     # contiguous: numpy's vector loops, as before
+        laws = spring_arrays(np.radians(theta), t, h, fam.depth_mm, fam.width_mm, fam.contact_allowance_mm,
+                             self.E_MPa, self.nu)
+        if inverse is not None:
+            laws = tuple(a[inverse] for a in laws)
+        return tuple(a.reshape(cells.shape[:-1]) for a in laws)
+
     def responses(self, theta_deg: np.ndarray, t_mm: np.ndarray,
                   h_mm: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """(R_N per layer, S_per_N per regime, B_full_T, gap0_mm, B0_T) of candidate stacks."""
-        fam = self.family
-        theta = np.radians(theta_deg)
-        k, d_lock, R, k_locked = spring_arrays(theta, t_mm, h_mm, fam.depth_mm, fam.width_mm,
-                                               fam.contact_allowance_mm, self.E_MPa, self.nu)
-        gap0 = geo.unloaded_gap_mm(h_mm.sum(axis=-1), self.n, self.probe.housing, self.probe.board)
+        k, d_lock, R, k_locked = self.layer_laws(theta_deg, t_mm, h_mm)
+        gap0 = self.gap0_mm(h_mm.sum(axis=-1))
         _, S, _, B = regime_kernel(k, d_lock, k_locked, gap0, self.field_T, R)
         return R, S, B[..., -1], gap0, B[..., 0]
 
     def evaluate_physical(self, theta_deg, t_mm, h_mm) -> Evaluation:
         theta_deg, t_mm, h_mm = np.broadcast_arrays(*(np.asarray(a, dtype=float)
                                                       for a in (theta_deg, t_mm, h_mm)))
-        fam, pr = self.family, self.printer
+        pr = self.printer
         R, S, B_full, gap0, B0 = self.responses(theta_deg, t_mm, h_mm)
-        margins = geo.cell_margins_mm(np.radians(theta_deg), t_mm, h_mm, fam.width_mm,
-                                      fam.contact_allowance_mm, pr.min_wall_mm, pr.min_gap_mm,
-                                      pr.nozzle_mm)
+        margins, t_over_L_g = self._layer_rules(theta_deg, t_mm, h_mm)
         height = self.height_offset_mm + h_mm.sum(axis=-1)
 
-        logR = np.log(np.maximum(R, _TINY))
-        g = [(-margins / pr.nozzle_mm).reshape(margins.shape[:-2] + (-1,))]
-        t_over_L = t_mm / geo.wall_centreline_length_mm(np.radians(theta_deg), t_mm, h_mm)
-        g.append(t_over_L / self.t_over_L_max - 1.0)
+        logR = np.log(np.maximum(R, TINY))
+        g = [(-margins / pr.nozzle_mm).reshape(margins.shape[:-2] + (-1,)), t_over_L_g]
         if self.n > 1:
             g.append(math.log1p(self.lock_margin_rel) - np.diff(logR, axis=-1))
-        g.append(np.log(np.maximum(B_full, _TINY) / self.B_limit_T)[..., None])
+        g.append(np.log(np.maximum(B_full, TINY) / self.B_limit_T)[..., None])
         if self.max_height_mm is not None:
             g.append(((height - self.max_height_mm) / pr.nozzle_mm)[..., None])
         constraints = np.concatenate(g, axis=-1)
 
-        log_err = np.concatenate([np.log(np.maximum(S, _TINY) / self.S_target),
+        log_err = np.concatenate([np.log(np.maximum(S, TINY) / self.S_target),
                                   logR - np.log(self.R_target)], axis=-1)
         w = np.concatenate([self.weights, self.weights])
         objective = np.sum(w * log_err ** 2, axis=-1)
@@ -233,7 +286,7 @@ class DesignProblem:
         T = np.broadcast_to(theta_deg, (3,) + theta_deg.shape)
         H = np.broadcast_to(h_mm, (3,) + h_mm.shape)
         R, S, _, _, _ = self.responses(T, np.maximum(t_mm + shifts, geo.LENGTH_FLOOR_MM), H)
-        out = np.log(np.maximum(np.concatenate([S, R], axis=-1), _TINY))
+        out = np.log(np.maximum(np.concatenate([S, R], axis=-1), TINY))
         return out[1:] - out[:1]
 
     def print_robustness(self, theta_deg: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike) -> np.ndarray:
@@ -243,7 +296,7 @@ class DesignProblem:
 
     def worst_force_resolution_N(self, ev: Evaluation) -> np.ndarray:
         """Noise-limited force resolution of the least sensitive regime, sigma_B / (B0 min S)."""
-        return self.noise_T / np.maximum(ev.B0_T * np.min(ev.S_per_N, axis=-1), _TINY)
+        return self.noise_T / np.maximum(ev.B0_T * np.min(ev.S_per_N, axis=-1), TINY)
 
     def objective_terms(self, ev: Evaluation, robustness: ArrayLike | None = None) -> np.ndarray:
         """The preference terms (..., len(OBJECTIVE_TERMS)) of evaluated candidates: ln height,

@@ -1,16 +1,20 @@
-"""nlopt driver: seeded multi-start local search for the match, then the preference among matching designs.
+"""The design search: a start built layer by layer, Gauss-Newton onto the targets, then the
+preference among matching designs (nlopt), with a seeded multi-start behind it.
 
-1. Screening: a seeded batch of random candidates in the unit box goes through the vectorised
-   problem in one call; the best by (match objective + penalty x constraint violation) become
-   the starting points.
-2. Match (phase 1): a local nlopt run from each start in turn, on the normalised variables,
+1. Layer-by-layer start (:mod:`mst_cli.design.seed`): given the gap, each layer's two targets
+   pin it alone, so n lookups in one table of cells replace a blind search in 3n dimensions.
+2. Match (phase 1): :func:`newton_match` pulls the 2n outputs onto their targets from there
+   (Gauss-Newton, minimum-norm steps, violated constraints held); should it stall, an nlopt
+   run goes on from its best point. Only if that fails too does the old multi-start search
+   run: a seeded batch of random candidates through the vectorised problem in one call, the
+   best by (match objective + penalty x constraint violation) as starts for nlopt runs,
    until one reaches every target within MATCH_FRACTION x tolerance.
 3. Preference (phase 2): from that point, minimise the weighted preference of
    ``design.objective`` (:meth:`DesignProblem.preference`: height, force resolution, print
    robustness) with every target kept within BAND_FRACTION x tolerance as extra constraints.
-4. Re-match (phase 3): the polish may sit anywhere in that band; a short match run with a
-   small step pulls every target back within MATCH_FRACTION x tolerance without leaving the
-   robust region.
+4. Re-match (phase 3): the polish may sit anywhere in that band; Gauss-Newton (or, should it
+   stall, a short nlopt match run with a small step) pulls every target back within
+   MATCH_FRACTION x tolerance without leaving the robust region.
 5. Final polish (phase 4): the preference again from there, with the band narrowed to
    MATCH_FRACTION x tolerance, so the design is the most robust one among those that meet
    every target to that tighter band (phase 3 alone can slide off a bound, for example).
@@ -38,6 +42,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from mst_cli.design import seed
 from mst_cli.design.problem import DesignProblem
 
 if TYPE_CHECKING:
@@ -55,6 +60,9 @@ N_STARTS = 24                # starting points kept from the screening
 FD_STEP = 1e-6               # central-difference step in normalised variables
 FEASIBILITY_TOL = 1e-9       # SLSQP lands on active constraints to ~1e-13; far inside the
                              # ROUNDING_SAFETY slack, so such points count as feasible
+NEWTON_STEPS = 8             # Gauss-Newton steps of a match before SLSQP takes over
+NEWTON_ACTIVE_PASSES = 4     # times a step's set of held constraints may grow
+NEWTON_BACKTRACK = (1.0, 0.5, 0.25, 0.125)   # step fractions tried, in one batch
 MAX_TIME_S = 120.0           # safety net only; normal runs stop on evaluation counts
 LOCAL_METHODS = ("slsqp", "cobyla")
 
@@ -252,25 +260,100 @@ class _Matcher:
                     and np.max(np.abs(e.log_err)) <= self.match_log)
 
 
+def newton_match(problem: DesignProblem, u0: np.ndarray, tracker: Tracker, budget: _Budget,
+                 phase: str) -> bool:
+    """Pull the 2n outputs onto their targets by Gauss-Newton; True when the match goal is met.
+
+    Matching is a square-free least-squares problem: 2n log errors in 3n unknowns, zero at the
+    solution. A quasi-Newton method (SLSQP) has to learn its curvature over dozens of
+    iterations, 3n-dimensional ones; Gauss-Newton has it from one Jacobian (the same batched
+    central differences SLSQP uses) and converges in a handful of steps from a few per cent
+    away. Each step is the minimum-norm solution of J du = -r, so the spare freedom per layer
+    stays where it was (the preference phases chose it). Constraints the linearised step
+    would break, and bounds it would cross, are held at zero as extra equations and the step
+    is solved again; a backtracking search on the screening's merit keeps it from overshooting.
+    Every point evaluated is offered to ``tracker``. False: the caller's SLSQP goes on from
+    ``tracker.u``.
+    """
+    m = _Matcher(problem)
+    dim = problem.dim
+    u = np.clip(np.asarray(u0, float), 0.0, 1.0)
+    eye = np.eye(dim) * FD_STEP
+    for _ in range(NEWTON_STEPS):
+        if budget.left < 2 * dim + 1 + len(NEWTON_BACKTRACK):
+            return False
+        ev = problem.evaluate(np.concatenate([u[None], u + eye, u - eye]))
+        r, g = ev.log_err, _safe_constraints(ev)
+        merit = ev.merit(ROUNDING_SAFETY)
+        err = float(_max_err(ev)[0])
+        budget.spend(2 * dim + 1, phase, err)
+        tracker.offer(u, float(ev.objective[0]), float(np.sum(np.maximum(g[0], 0.0))))
+        if m.goal(float(ev.objective[0]), g[0], err):
+            return True
+        if not (np.all(np.isfinite(r)) and np.all(np.isfinite(g))):
+            return False
+        J = ((r[1:dim + 1] - r[dim + 1:]) / (2 * FD_STEP)).T              # (2n, dim)
+        G = ((g[1:dim + 1] - g[dim + 1:]) / (2 * FD_STEP)).T              # (m, dim)
+        rows, rhs = [J], [-r[0]]
+        held_g = np.zeros(len(g[0]), bool)
+        held_u = np.zeros(dim, bool)
+        for _ in range(NEWTON_ACTIVE_PASSES):
+            du = np.linalg.lstsq(np.concatenate(rows), np.concatenate(rhs), rcond=None)[0]
+            new_g = (g[0] + G @ du > 0.0) & ~held_g
+            new_u = ((u + du < 0.0) | (u + du > 1.0)) & ~held_u
+            if not (new_g.any() or new_u.any()):
+                break
+            rows += [G[new_g], np.eye(dim)[new_u]]
+            rhs += [-g[0][new_g],
+                    np.where(u + du < 0.0, -u, 1.0 - u)[new_u]]
+            held_g |= new_g
+            held_u |= new_u
+        trials = np.clip(u + np.asarray(NEWTON_BACKTRACK)[:, None] * du, 0.0, 1.0)
+        et = problem.evaluate(trials)
+        budget.spend(len(trials), phase, float(_max_err(et).min()))
+        better = np.flatnonzero(et.merit(ROUNDING_SAFETY) < merit[0])
+        if len(better) == 0:
+            return False
+        u = trials[better[0]]
+    return False
+
+
 def _match(problem, rng, budget, local, stops):
     """Screening and phase 1: (best u, matched, starts used)."""
     dim = problem.dim
     per_iter, iters = _per_iter(problem, local), _iters_per_start(problem, local)
     m = _Matcher(problem)
+    best = Tracker()
+    starts_used = 0
+    # -- the layer-by-layer start (mst_cli.design.seed): n searches in 3 dimensions, one table
+    # one table cell is one layer law: 1/n of a candidate stack (at most a quarter of the budget)
+    grid = seed.grid_within(problem.n * budget.left / 4)
+    u0 = None
+    if math.prod(grid) <= problem.n * budget.left / 4:
+        table = seed.CellTable(problem, ROUNDING_SAFETY, grid)
+        u0, stacks = seed.seed_with_cost(problem, ROUNDING_SAFETY, table)
+        budget.spend(math.ceil(table.cells / problem.n) + stacks, "seed", math.inf)
+    if u0 is not None and budget.left > 0:
+        starts_used += 1
+        if newton_match(problem, u0, best, budget, "match"):
+            stops.append("newton")
+            return best.u, True, starts_used
+        u0 = best.u
+        phase = _Phase(problem, m.batch, problem.n_constraints, best, budget, "match", m.goal)
+        phase.run(u0, local, min(iters, budget.left // per_iter), INITIAL_STEP, stops)
+        if m.matched_at(best.u):
+            return best.u, True, starts_used
     # -- screening: one vectorised batch
     n_screen = int(max(1, min(SCREEN_PER_DIM * dim, budget.left // 4)))
     U = rng.random((n_screen, dim))
     ev = problem.evaluate(U)
     viol = np.sum(np.maximum(_safe_constraints(ev), 0.0), axis=-1)
-    merit = np.where(np.isfinite(ev.objective), ev.objective, 1e30) + 10.0 * viol
-    order = np.argsort(merit, kind="stable")
+    order = np.argsort(ev.merit(ROUNDING_SAFETY), kind="stable")
     starts = U[order[:N_STARTS]]
     budget.spend(n_screen, "screening", float(_max_err(ev).min()))
 
-    best = Tracker()
     i0 = int(order[0])
     best.offer(U[i0], float(ev.objective[i0]), float(viol[i0]))
-    starts_used = 0
     for x0 in starts:
         if budget.left <= 0:
             break
@@ -318,7 +401,8 @@ def prefer(problem: DesignProblem, u_matched: np.ndarray, budget: _Budget, local
     rematch = Tracker()
     e = problem.evaluate(polished)
     rematch.offer(polished, float(e.objective), 0.0)
-    if not m.matched_at(polished) and budget.left > per_iter:
+    if (not m.matched_at(polished) and not newton_match(problem, polished, rematch, budget, "re-match")
+            and budget.left > per_iter):
         phase = _Phase(problem, m.batch, problem.n_constraints, rematch, budget, "re-match", m.goal)
         phase.run(polished, local, min(iters, budget.left // per_iter), 0.02 * INITIAL_STEP, stops)
     final = rematch.u if m.matched_at(rematch.u) else u_matched

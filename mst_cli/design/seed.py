@@ -1,0 +1,130 @@
+"""A starting design built layer by layer: the match decomposed along the physics.
+
+The targets pin one layer each, given the gap:
+
+* R_j is layer j's own lock force: it depends on layer j's cell alone;
+* the stack is in series, so in regime i (layers below i locked, i and above still free) the
+  compression grows by the sum of the layers' increments over [R_(i-1), R_i]. The targets
+  S_i fix |B| at every regime edge, B_i = B0 (1 + sum_(m<=i) S_m (R_m - R_(m-1))); the field
+  model, inverted, turns that into the gap at every edge and so into the stack compression
+  D_i the regime must add. Of that, the free layers above i take their share (known once
+  they are chosen: the loop runs from the top layer down), the locked ones below take
+  dF / k_locked (small), and layer i takes the rest.
+
+So each layer is a two-target, three-variable choice from one table of cells evaluated once
+(a grid over the unit box of (theta, t, h), the same for every layer): the cell nearest to
+(R_i, its increment) in log terms among those that meet every per-layer rule. The gap depends
+on the total height, so the pass repeats with the gap of the cells just chosen. The table costs
+one kernel call whatever the layer count, and the loop is O(n) small lookups: this replaces a
+blind search in 3n dimensions, whose cost grows with the dimension, with n searches in three.
+
+The result is a start, not a design: the knee of the L0 law, the lower layers' locked
+compliance and the grid spacing leave a few per cent, which the local solver removes.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from mst_cli.design.problem import TINY
+from mst_cli.model.mechanics.spring import layer_displacement_mm
+
+if TYPE_CHECKING:
+    from mst_cli.design.problem import DesignProblem
+
+GRID = (13, 25, 25)          # table points along theta, t, h (normalised, uniform in u)
+PASSES = 8                   # at most; the passes stop when no layer changes its cell
+FIELD_GRID = 512             # gaps on which |B| is tabulated for the inversion
+
+
+def grid_within(max_cells: float, grid: tuple[int, int, int] = GRID) -> tuple[int, int, int]:
+    """``grid`` shrunk evenly along every axis (at least 3 points each) to hold at most
+    ``max_cells`` cells: a small evaluation budget gets a coarser table, not none."""
+    scale = min(1.0, (max(max_cells, 27.0) / float(np.prod(grid))) ** (1.0 / 3.0))
+    return tuple(max(3, int(k * scale)) for k in grid)
+
+
+def table_units(grid: tuple[int, int, int] = GRID) -> np.ndarray:
+    """Normalised cells (count, 3) of the table, theta slowest."""
+    axes = [np.linspace(0.0, 1.0, k) for k in grid]
+    return np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
+
+
+class CellTable:
+    """The L0 law and per-layer feasibility of every table cell (one kernel call)."""
+
+    def __init__(self, problem: DesignProblem, slack: float, grid: tuple[int, int, int] = GRID):
+        u = table_units(grid)
+        theta, t, h = problem.cell_to_physical(u)
+        ok = np.all(problem.layer_constraints(theta, t, h) + slack <= 0.0, axis=-1)
+        k, d_lock, R, k_locked = problem.layer_laws(theta[ok], t[ok], h[ok])
+        self.u = u[ok]
+        self.h_mm = h[ok]
+        self.k, self.d_lock, self.R, self.k_locked = k, d_lock, R, k_locked
+        self.cells = len(u)
+
+    def displacement_mm(self, force_N: float) -> np.ndarray:
+        """Compression of every table cell at ``force_N``."""
+        return layer_displacement_mm(force_N, self.k, self.d_lock, self.R, self.k_locked)
+
+
+def _edge_gaps_mm(problem: DesignProblem, gap0_mm: float) -> np.ndarray | None:
+    """Gap at F = 0, R*_1, ..., R*_n that makes |B| follow the S targets (None: out of reach)."""
+    R = np.concatenate([[0.0], problem.R_target])
+    rise = np.concatenate([[0.0], np.cumsum(problem.S_target * np.diff(R))])
+    gaps = np.linspace(gap0_mm, 1e-3 * gap0_mm, FIELD_GRID)      # closing: |B| should rise
+    B = problem.field_T(gaps)
+    rising = np.concatenate([[True], np.diff(B) > 0.0])
+    stop = int(np.argmin(rising)) if not rising.all() else len(B)
+    B, gaps = B[:stop], gaps[:stop]
+    want = B[0] * (1.0 + rise)
+    if stop < 2 or want[-1] > B[-1]:
+        return None
+    return np.interp(want, B, gaps)
+
+
+def seed_unit(problem: DesignProblem, slack: float, table: CellTable | None = None) -> np.ndarray | None:
+    """Normalised start (3n,) built layer by layer (module docstring), or None when the targets
+    give the decomposition nothing to work with (lock targets not increasing, a field rise the
+    magnet cannot give, no cell meeting the per-layer rules)."""
+    return seed_with_cost(problem, slack, table)[0]
+
+
+def seed_with_cost(problem: DesignProblem, slack: float,
+                   table: CellTable | None = None) -> tuple[np.ndarray | None, int]:
+    """(:func:`seed_unit`, candidate stacks it evaluated; the table's cells not included)."""
+    R_target = problem.R_target
+    if np.any(np.diff(R_target) <= 0.0) or np.any(problem.S_target <= 0.0):
+        return None, 0
+    table = table if table is not None else CellTable(problem, slack)
+    if len(table.u) == 0:
+        return None, 0
+    n = problem.n
+    F = np.concatenate([[0.0], R_target])
+    d_at = [table.displacement_mm(f) for f in F]                 # every cell at every edge force
+    increment = [d_at[i + 1] - d_at[i] for i in range(n)]
+    log_R = np.log(np.maximum(table.R, TINY))
+    # first guess: each layer's lock force alone; the passes then add the field's demands
+    chosen = np.argmin(np.abs(log_R[None, :] - np.log(R_target)[:, None]), axis=1)
+    candidates = []
+    for _ in range(PASSES):
+        before = chosen.copy()
+        gaps = _edge_gaps_mm(problem, float(problem.gap0_mm(table.h_mm[chosen].sum())))
+        if gaps is None:
+            break
+        stack_increment = -np.diff(gaps)                         # D_i - D_(i-1), i = 1..n
+        for j in range(n - 1, -1, -1):
+            above = sum(increment[j][chosen[m]] for m in range(j + 1, n))
+            below = sum((F[j + 1] - F[j]) / table.k_locked[chosen[m]] for m in range(j))
+            need = max(stack_increment[j] - above - below, 1e-3 * stack_increment[j])
+            miss = (log_R - np.log(R_target[j])) ** 2 + (np.log(np.maximum(increment[j], TINY)) - np.log(need)) ** 2
+            chosen[j] = int(np.argmin(miss))
+        candidates.append(table.u[chosen].reshape(-1))
+        if np.array_equal(chosen, before):
+            break
+    if not candidates:
+        return None, 0
+    U = np.array(candidates)
+    return U[int(np.argmin(problem.evaluate(U).merit(slack)))], len(U)
