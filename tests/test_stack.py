@@ -99,3 +99,23 @@ def test_compliance_is_the_sum_of_the_layer_slopes():
     assert s.local_compliance_mm_per_N(np.array([0.1, 0.2])) == pytest.approx([1 + 0.25 + 1 / 0.3] * 2)
     assert s.local_compliance_mm_per_N(0.5) == pytest.approx(1 + 0.25 + 1 / 500, rel=1e-12)
     assert s.local_compliance_mm_per_N(1.5) == pytest.approx(1e-3 + 0.25 + 1 / 500, rel=1e-12)
+
+
+@pytest.mark.parametrize("n_layers", [1, 3, 12])
+def test_curve_interpolated_on_the_knots_is_the_sum_of_the_layer_laws(n_layers):
+    """d(F) is linear between the union of the knots, so interpolating there is exact: it
+    equals the layers' own laws summed at every force, before and past the last lock."""
+    from mst_cli.model.mechanics.frame import TabulatedLockingLayer
+    rng = np.random.default_rng(10 + n_layers)
+    laws = []
+    for j in range(n_layers):
+        k, dl = rng.uniform(0.5, 20), rng.uniform(0.3, 1.5)
+        if j % 2:
+            d = np.linspace(0, dl, 9)
+            laws.append(TabulatedLockingLayer.from_curve(d, k * d * (1 - 0.3 * d / dl), k, 300 * k))
+        else:
+            laws.append(LinearLockingLayer(k, dl, 300 * k, 0.7 * k * dl))
+    s = Stack(tuple(laws))
+    F = np.concatenate([rng.uniform(0, 2 * s.last_lock_force_N, 2000), s.knots_N, [0.0]])
+    direct = sum(law.displacement_mm(F) for law in laws)
+    np.testing.assert_allclose(s.displacement_mm(F), direct, rtol=1e-12, atol=1e-15)

@@ -16,7 +16,7 @@ import numpy as np
 from mst_cli.model import chip as mlx
 from mst_cli.model import field as fld
 from mst_cli.model.geometry import SensorGeometry
-from mst_cli.model.mechanics import layer_law
+from mst_cli.model.mechanics import layer_laws
 from mst_cli.model.stack import Stack, series_displacement_mm
 
 if TYPE_CHECKING:
@@ -125,7 +125,7 @@ def simulate(geometry: SensorGeometry, material, mechanics: str = "spring",
     shows the stiff locked branch).
     """
     model = fld.choose_field_model(geometry.chip_offset_mm, geometry.magnet_tilt_deg, field_model)
-    laws = tuple(layer_law(c, material, mechanics) for c in geometry.layers)
+    laws = layer_laws(geometry.layers, material, mechanics)
     stack = Stack(laws)
     edges = stack.regime_bounds_N
     n = len(laws)

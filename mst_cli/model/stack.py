@@ -84,9 +84,14 @@ class Stack:
         """(knots, dd/dF on each segment between them): one pass over the layers for the whole
         curve, so a compliance lookup is a binary search, not a sum over the layers.
         The stack is frozen, so this is computed once."""
-        knots = self.knots_N
-        d = self.displacement_mm(knots)
+        knots, d = self._knot_displacement_mm
         return knots, np.diff(d) / np.diff(knots)
+
+    @cached_property
+    def _knot_displacement_mm(self) -> tuple[np.ndarray, np.ndarray]:
+        """(knots, d at the knots), each layer's law summed there once."""
+        knots = self.knots_N
+        return knots, sum(law.displacement_mm(knots) for law in self.layers)
 
     @property
     def locked_compliance_mm_per_N(self) -> float:
@@ -123,15 +128,21 @@ class Stack:
         return total
 
     def displacement_mm(self, force_N: ArrayLike) -> np.ndarray:
-        """d(F) for F >= 0 (past the last lock the locked stiffnesses carry the load)."""
+        """d(F) for F >= 0 (past the last lock the locked stiffnesses carry the load).
+
+        Interpolated on the knots, which is exact (d is linear between them): a curve of m
+        samples costs O(m), where summing the layers' laws at every sample cost O(m n), and
+        the samples themselves grow with the regimes, so O(n^2) in layers.
+        """
         F = np.asarray(force_N, dtype=float)
-        return sum(law.displacement_mm(F) for law in self.layers)
+        knots, d = self._knot_displacement_mm
+        beyond = d[-1] + (F - knots[-1]) * self.locked_compliance_mm_per_N
+        return np.where(F <= knots[-1], np.interp(F, knots, d), beyond)
 
     def force_N(self, displacement_mm: ArrayLike) -> np.ndarray:
         """F(d), the exact inverse of d(F) (both piecewise linear on the same knots)."""
         d = np.asarray(displacement_mm, dtype=float)
-        F_knots = self.knots_N
-        d_knots = self.displacement_mm(F_knots)
+        F_knots, d_knots = self._knot_displacement_mm
         inside = np.interp(d, d_knots, F_knots)
         beyond = F_knots[-1] + (d - d_knots[-1]) / self.locked_compliance_mm_per_N
         return np.where(d <= d_knots[-1], inside, beyond)

@@ -43,6 +43,15 @@ def layer_law(cell: HexCell, material: Material,
     raise ValueError(f"unknown mechanics model {model!r}; choose from {', '.join(MODELS)}")
 
 
+def layer_laws(cells, material: Material,
+               model: str = "spring") -> tuple[LinearLockingLayer | TabulatedLockingLayer, ...]:
+    """:func:`layer_law` of every cell of a stack; the spring rung's in one kernel call."""
+    if model == "spring":
+        from mst_cli.model.mechanics.spring import spring_layers
+        return spring_layers(cells, material)
+    return tuple(layer_law(c, material, model) for c in cells)
+
+
 def uncached_layer_law(cell: HexCell, material: Material,
                        model: str = "spring") -> LinearLockingLayer | TabulatedLockingLayer:
     """:func:`layer_law` without the per-cell caches (for timing)."""

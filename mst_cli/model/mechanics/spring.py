@@ -220,6 +220,17 @@ def spring_arrays(theta_rad: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike, b_mm: 
     return k, d_lock, R, k_locked
 
 
+def spring_layers(cells, material, corrected: bool = True) -> tuple[LinearLockingLayer, ...]:
+    """The L0 laws of a stack's cells from one kernel call (a layer's law does not depend on
+    the batch it is computed in: the same numbers as the design loop's batches)."""
+    fields = ("theta_rad", "t_mm", "h_mm", "b_mm", "width_mm", "contact_allowance_mm")
+    columns = [np.array([getattr(c, name) for c in cells], dtype=float) for name in fields]
+    k, d_lock, R, k_locked = spring_arrays(*columns, material.youngs_modulus_MPa, material.poisson_ratio,
+                                           corrected)
+    return tuple(LinearLockingLayer(float(a), float(b), float(c), float(d))
+                 for a, b, c, d in zip(k, d_lock, k_locked, R))
+
+
 def spring_layer(cell: geo.HexCell, material, corrected: bool = True) -> LinearLockingLayer:
     """The L0 law of one concrete cell (``corrected=False``: textbook beam theory only)."""
     k, d_lock, R, k_locked = spring_arrays(
