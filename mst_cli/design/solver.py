@@ -264,8 +264,8 @@ def newton_match(problem: DesignProblem, u0: np.ndarray, tracker: Tracker, budge
                  phase: str) -> bool:
     """Pull the 2n outputs onto their targets by Gauss-Newton; True when the match goal is met.
 
-    Matching is a square-free least-squares problem: 2n log errors in 3n unknowns, zero at the
-    solution. A quasi-Newton method (SLSQP) has to learn its curvature over dozens of
+    Matching is an underdetermined least-squares problem: 2n log errors in 3n unknowns, zero
+    at the solution. A quasi-Newton method (SLSQP) has to learn its curvature over dozens of
     iterations, 3n-dimensional ones; Gauss-Newton has it from one Jacobian (the same batched
     central differences SLSQP uses) and converges in a handful of steps from a few per cent
     away. Each step is the minimum-norm solution of J du = -r, so the spare freedom per layer
@@ -325,8 +325,8 @@ def _match(problem, rng, budget, local, stops):
     m = _Matcher(problem)
     best = Tracker()
     starts_used = 0
-    # -- the layer-by-layer start (mst_cli.design.seed): n searches in 3 dimensions, one table
-    # one table cell is one layer law: 1/n of a candidate stack (at most a quarter of the budget)
+    # -- the layer-by-layer start (mst_cli.design.seed): n searches in 3 dimensions in one
+    # table of cells; a cell is one layer law, 1/n of a candidate (at most a quarter of the budget)
     grid = seed.grid_within(problem.n * budget.left / 4)
     u0 = None
     if math.prod(grid) <= problem.n * budget.left / 4:
@@ -336,7 +336,7 @@ def _match(problem, rng, budget, local, stops):
     if u0 is not None and budget.left > 0:
         starts_used += 1
         if newton_match(problem, u0, best, budget, "match"):
-            stops.append("newton")
+            stops.append("newton: goal reached")
             return best.u, True, starts_used
         u0 = best.u
         phase = _Phase(problem, m.batch, problem.n_constraints, best, budget, "match", m.goal)
@@ -401,8 +401,10 @@ def prefer(problem: DesignProblem, u_matched: np.ndarray, budget: _Budget, local
     rematch = Tracker()
     e = problem.evaluate(polished)
     rematch.offer(polished, float(e.objective), 0.0)
-    if (not m.matched_at(polished) and not newton_match(problem, polished, rematch, budget, "re-match")
-            and budget.left > per_iter):
+    newton = not m.matched_at(polished) and newton_match(problem, polished, rematch, budget, "re-match")
+    if newton:
+        stops.append("newton: goal reached")
+    elif not m.matched_at(polished) and budget.left > per_iter:
         phase = _Phase(problem, m.batch, problem.n_constraints, rematch, budget, "re-match", m.goal)
         phase.run(polished, local, min(iters, budget.left // per_iter), 0.02 * INITIAL_STEP, stops)
     final = rematch.u if m.matched_at(rematch.u) else u_matched
