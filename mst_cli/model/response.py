@@ -179,18 +179,24 @@ def simulate(geometry: SensorGeometry, material, mechanics: str = "spring",
     regimes = []
     order = stack.lock_order
     mid_compliance = stack.local_compliance_mm_per_N(0.5 * (edges[:-1] + edges[1:]))   # one lookup, not n
+    # slope extremes of every band in one pass: F ascends, so each band's samples are one run,
+    # [starts[i], starts[i + 1]); band n is the overload past the last lock, never empty
+    starts = np.minimum(np.searchsorted(band, np.arange(n + 1)), len(band) - 1)
+    present = np.diff(starts) > 0
+    slope_min = np.minimum.reduceat(slope, starts)
+    slope_max = np.maximum.reduceat(slope, starts)
     for i in range(n):
         lo, hi = edges[i], edges[i + 1]
-        s_band = slope[band == i] if not degenerate[i] else np.array([S[i]])
+        s_lo, s_hi = (S[i], S[i]) if degenerate[i] or not present[i] else (slope_min[i], slope_max[i])
         j = int(order[i])
         regimes.append(Regime(
             index=i + 1, layer=j + 1, force_from_N=float(lo), force_to_N=float(hi),
             k_layer_N_per_mm=float(k[j]), d_lock_layer_mm=float(dl[j]),
             k_effective_N_per_mm=1.0 / float(mid_compliance[i]),
             sensitivity_secant_per_N=float(S[i]),
-            sensitivity_min_per_N=float(s_band.min()), sensitivity_max_per_N=float(s_band.max()),
+            sensitivity_min_per_N=float(s_lo), sensitivity_max_per_N=float(s_hi),
             force_resolution_N=res_T / (B0 * float(S[i])),
-            force_resolution_worst_N=res_T / (B0 * float(s_band.min())),
+            force_resolution_worst_N=res_T / (B0 * float(s_lo)),
         ))
 
     warnings = []
