@@ -19,6 +19,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from user_env import as_installed
+
 ROOT = Path(__file__).resolve().parents[1]
 DESIGN = ROOT / "configs" / "mohammadi2021-forward.yaml"
 
@@ -67,6 +69,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--repeats", type=int, default=5)
     args = ap.parse_args()
+    as_installed()                 # commands start from bytecode, as an installed copy does
 
     with tempfile.TemporaryDirectory() as tmp:
         exp = wall_times(lambda i: ["export", str(DESIGN), "--stl", "--step", "--out", f"{tmp}/o{i}"],

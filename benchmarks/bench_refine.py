@@ -32,6 +32,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from user_env import as_installed
+
 ROOT = Path(__file__).resolve().parents[1]
 SPEC = ROOT / "configs" / "mohammadi2021.yaml"
 MST = Path(sys.executable).parent / "mst"      # the console script of this environment
@@ -120,6 +122,7 @@ def main() -> None:
                     help="a directory holding another mst_cli package: its refine rows are added")
     ap.add_argument("--count", default=None, help=argparse.SUPPRESS)   # internal: one counted run
     args = ap.parse_args()
+    as_installed()                 # commands start from bytecode, as an installed copy does
     if args.count is not None:
         print(json.dumps(count_run(args.spec, json.loads(args.count))))
         return

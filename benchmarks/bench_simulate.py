@@ -27,6 +27,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from user_env import as_installed
 
 ROOT = Path(__file__).resolve().parents[1]
 FORWARD = ROOT / "configs" / "mohammadi2021-forward.yaml"
@@ -100,6 +101,7 @@ def main() -> None:
     ap.add_argument("--repeats", type=int, default=9)
     ap.add_argument("--no-export", action="store_true", help="skip mst export (about 2 s a run)")
     args = ap.parse_args()
+    as_installed()                 # commands start from bytecode, as an installed copy does
 
     with tempfile.TemporaryDirectory() as d:
         tmp = Path(d)

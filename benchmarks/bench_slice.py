@@ -27,6 +27,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from user_env import as_installed
 
 ROOT = Path(__file__).resolve().parents[1]
 DESIGN = ROOT / "configs" / "mohammadi2021-forward.yaml"
@@ -69,6 +70,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--repeats", type=int, default=5)
     args = ap.parse_args()
+    as_installed()                 # commands start from bytecode, as an installed copy does
     n = max(1, args.repeats)
 
     from mst_cli.cad import gcode as G
