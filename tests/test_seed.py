@@ -45,13 +45,13 @@ def test_decomposition_is_exact_for_designs_made_of_table_cells(n_layers):
     rng = np.random.default_rng(7 + n_layers)
     for _ in range(3):
         u_true, problem = table_design(n_layers, rng)
-        u = seed.seed_unit(problem, SLACK)
+        u, _ = seed.seed_start(problem, SLACK)
         np.testing.assert_array_equal(u, u_true)
         assert float(problem.evaluate(u).objective) == 0.0
 
 
 def test_start_needs_increasing_ranges():
-    assert seed.seed_unit(problem_with_targets([0.2, 0.1], [3.0, 2.0]), SLACK) is None
+    assert seed.seed_start(problem_with_targets([0.2, 0.1], [3.0, 2.0]), SLACK) == (None, 0)
 
 
 def test_grid_shrinks_with_the_budget_but_keeps_three_points_per_axis():

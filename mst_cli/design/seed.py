@@ -85,16 +85,12 @@ def _edge_gaps_mm(problem: DesignProblem, gap0_mm: float) -> np.ndarray | None:
     return np.interp(want, B, gaps)
 
 
-def seed_unit(problem: DesignProblem, slack: float, table: CellTable | None = None) -> np.ndarray | None:
-    """Normalised start (3n,) built layer by layer (module docstring), or None when the targets
-    give the decomposition nothing to work with (lock targets not increasing, a field rise the
-    magnet cannot give, no cell meeting the per-layer rules)."""
-    return seed_with_cost(problem, slack, table)[0]
-
-
-def seed_with_cost(problem: DesignProblem, slack: float,
-                   table: CellTable | None = None) -> tuple[np.ndarray | None, int]:
-    """(:func:`seed_unit`, candidate stacks it evaluated; the table's cells not included)."""
+def seed_start(problem: DesignProblem, slack: float,
+               table: CellTable | None = None) -> tuple[np.ndarray | None, int]:
+    """(normalised start (3n,) built layer by layer, candidate stacks evaluated for it; the
+    table's cells not counted). The start is None when the targets give the decomposition
+    nothing to work with: lock targets not increasing, a field rise the magnet cannot give, no
+    cell meeting the per-layer rules."""
     R_target = problem.R_target
     if np.any(np.diff(R_target) <= 0.0) or np.any(problem.S_target <= 0.0):
         return None, 0

@@ -331,7 +331,7 @@ def _match(problem, rng, budget, local, stops):
     u0 = None
     if math.prod(grid) <= problem.n * budget.left / 4:
         table = seed.CellTable(problem, ROUNDING_SAFETY, grid)
-        u0, stacks = seed.seed_with_cost(problem, ROUNDING_SAFETY, table)
+        u0, stacks = seed.seed_start(problem, ROUNDING_SAFETY, table)
         budget.spend(math.ceil(table.cells / problem.n) + stacks, "seed", math.inf)
     if u0 is not None and budget.left > 0:
         starts_used += 1

@@ -233,7 +233,4 @@ def spring_layers(cells, material, corrected: bool = True) -> tuple[LinearLockin
 
 def spring_layer(cell: geo.HexCell, material, corrected: bool = True) -> LinearLockingLayer:
     """The L0 law of one concrete cell (``corrected=False``: textbook beam theory only)."""
-    k, d_lock, R, k_locked = spring_arrays(
-        cell.theta_rad, cell.t_mm, cell.h_mm, cell.b_mm, cell.width_mm, cell.contact_allowance_mm,
-        material.youngs_modulus_MPa, material.poisson_ratio, corrected)
-    return LinearLockingLayer(float(k), float(d_lock), float(k_locked), float(R))
+    return spring_layers((cell,), material, corrected)[0]
