@@ -218,11 +218,61 @@ def test_quarter_mesh_has_no_degenerate_or_inverted_triangles():
         assert 0.5 * area2.sum() == pytest.approx(pad + wall, rel=1e-9)
 
 
-def test_shallow_thin_wall_counts_only_faces_that_can_close():
-    # at theta 5 deg the cavity's tip wedge is thinner than the 0.1 mm allowance for 0.57 mm:
-    # points there are closed at rest. Only gaps of at least twice the allowance count, so the
-    # cavity closes (walls first) part-way through the stroke, not at once
-    cell = HexCell(5, 0.4, 1.25)
+def _neighbour_deviation(values):
+    v = np.asarray(values)
+    return np.abs(v[1:-1] / (0.5 * (v[:-2] + v[2:])) - 1.0)
+
+
+def test_lock_force_is_smooth_in_theta_where_the_old_criterion_jumped():
+    # the reference design's first layer (t 0.40, h 1.87) near theta 15 deg: the old gap
+    # criterion's excluded tip wedge switched mesh nodes at 15.25-15.5 deg and R jumped 18 %.
+    # The lock is now the stiffness knee of the contact solution: a smooth function of theta
+    R = [solve_continuum(HexCell(th, 0.40, 1.87), MAT).force_N[-1] for th in np.arange(14.5, 16.01, 0.25)]
+    assert _neighbour_deviation(R).max() < 0.005
+    assert np.all(np.diff(R) > 0)          # stiffer (steeper) walls lock at higher forces
+
+
+@pytest.mark.parametrize("cell", [HexCell(14, 0.40, 1.87), HexCell(5, 0.4, 1.25), HexCell(33, 1.0, 2.8),
+                                  HexCell(60, 0.6, 4.0)], ids=str)
+def test_the_lock_is_a_stiffness_jump(cell):
+    # just past the lock the layer is at least LOCK_STIFFNESS_FACTOR times stiffer than at
+    # rest: a wall pinched between the plate and its mirror, or the pads meeting
     res = solve_continuum(cell, MAT)
-    assert res.contact_at == "wall"
-    assert 0.3 * cell.d_lock_mm < res.d_contact_mm < cell.d_lock_mm
+    assert res.lock_stiffness_ratio >= L2.LOCK_STIFFNESS_FACTOR
+    assert res.reaction_balance < 1e-6     # outer-face contact reactions included
+    # the lock lies within the stroke of the pads, which are elastic and meet a little late
+    assert res.d_contact_mm <= (cell.h_mm - 2 * cell.t_mm - cell.contact_allowance_mm) * 1.05
+
+
+def test_contact_forces_push_and_no_face_penetrates():
+    # frictionless unilateral contact: at a converged state every active inner point presses
+    # down on the mirror plane, every active outer point up on the plate, and no point lies
+    # beyond its obstacle
+    cell = HexCell(33, 1.0, 2.8)
+    prob = L2._Problem(cell, MAT, L2.DEFAULT_N_THICK, L2.DEFAULT_N_LENGTH, 0)
+    u, active = np.zeros(prob.basis.N), None
+    for d in np.linspace(0.05, 0.7, 14):
+        u, _, active, r = prob._newton(u, d, active, pads=True)
+    assert active[prob.n_inner:].any() and active[: prob.n_inner].any()
+    sign = prob.contact_sign
+    assert np.all(sign[active] * r[prob.contact_dofs[active]] <= 1e-9)
+    assert np.all(sign * (u[prob.contact_dofs] - prob.obstacle(0.7)) <= 1e-8)
+
+
+def test_before_any_contact_the_path_is_the_contact_free_one():
+    # contact only adds constraints once a face reaches its obstacle: below that the solve is
+    # the same equations (the force at small compression is the linear stiffness)
+    cell = HexCell(33, 1.0, 2.8)
+    prob = L2._Problem(cell, MAT, L2.DEFAULT_N_THICK, L2.DEFAULT_N_LENGTH, 0)
+    u, _, active, r = prob._newton(np.zeros(prob.basis.N), 1e-4, None, pads=True)
+    F, _ = prob.force(u, active, r)
+    assert F / 1e-4 == pytest.approx(L2.linear_k(prob), rel=1e-3)
+    assert not np.any(active)
+
+
+@pytest.mark.parametrize("cell", [HexCell(14, 0.40, 1.87), HexCell(33, 1.0, 2.8)], ids=str)
+def test_lock_force_is_mesh_converged(cell):
+    # twice the elements across the wall and along it: the lock force moves less than 1 %
+    R = solve_continuum(cell, MAT).force_N[-1]
+    R_fine = solve_continuum(cell, MAT, n_thick=6, n_length=24).force_N[-1]
+    assert R == pytest.approx(R_fine, rel=0.01)

@@ -54,7 +54,7 @@ import numpy as np
 
 from mst_cli.model import geometry as geo
 from mst_cli.model.mechanics.frame import TabulatedLockingLayer, locked_tabulated_law
-from mst_cli.model.mechanics.path import PathError, StepControl, follow_to_event
+from mst_cli.model.mechanics.path import PathError, PathTolerances, StepControl, follow_to_event
 
 if TYPE_CHECKING:
     from skfem import MeshTri
@@ -75,6 +75,14 @@ WEDGE_APEX_FRACTION = 0.1   # tip wedge: the last column spans the last 10 % of 
 # Contact is searched up to this multiple of the rigid-pad stroke h - 2t - allowance (the
 # elastic pads under stiff walls meet up to ~5 % late; beyond this the solve is an error).
 D_MAX_OVER_NOMINAL = 1.5
+# The lock (docs/design.md section 4): the first compression at which the layer's tangent
+# stiffness reaches this multiple of its small-load stiffness k. Where a wall is pinched
+# between the plate and its mirror, or the pads meet, the tangent jumps 20-80 fold within a
+# few micrometres, so the lock force hardly depends on the factor; the gradual stiffening of
+# faces zipping shut before that (up to ~2.5 k) stays part of the pre-lock curve.
+LOCK_STIFFNESS_FACTOR = 5.0
+# the tangent jumps at the lock, so the event is bisected, to 1e-5 of the stroke
+LOCK_TOLERANCES = PathTolerances(event_gap_rel=0.0, event_width_rel=1e-5, max_event_iterations=40, bisect=True)
 
 
 class ContinuumError(RuntimeError):
@@ -304,6 +312,8 @@ class ContinuumResult:
     n_dofs: int
     reaction_balance: float          # |force across the mirror plane - support reaction| / force
     mesh_scale: float                # k on the refined mesh / k on the path's mesh
+    lock_stiffness_ratio: float = math.nan   # tangent / k just past the lock (>= LOCK_STIFFNESS_FACTOR)
+    contact_points: np.ndarray | None = None  # surface points in contact at each sample
 
 
 class _Problem:
@@ -329,26 +339,56 @@ class _Problem:
         self.dirichlet = np.union1d(self.fixed_zero, self.tip_z)
         self.free = np.setdiff1d(np.arange(b.N), self.dirichlet)
         self._blocks = {}             # free_block's cache: pinned set -> (free, gather, CSC pattern)
-        # inner-surface points that can close the cavity: the inner pad face z = t and the
-        # inner wall face, minus the wedge next to the cavity's tip vertex: the last t, and
-        # wherever the gap at rest is below twice the allowance (2 r sin(theta) < 2 a)
-        inner = cell.inner_profile_xz()
-        (ax, az), (cx, cz) = inner[0], inner[1]
-        ux = np.array([cx - ax, cz - az]) / math.hypot(cx - ax, cz - az)
-        rel = xy - np.array([[ax], [az]])
-        along = ux[0] * rel[0] + ux[1] * rel[1]
-        across = -ux[1] * rel[0] + ux[0] * rel[1]
-        on_wall_face = (np.abs(across) < tol) & (along >= -tol)
-        L_face = math.hypot(cx - ax, cz - az)
-        on_pad_face = (np.abs(xy[1] - t) < tol) & (xy[0] <= ax + tol)
-        wedge = max(t, cell.contact_allowance_mm / math.sin(cell.theta_rad))
-        wall_ok = on_wall_face & (along <= L_face - wedge)
-        self.gap_pts_pad = np.flatnonzero(on_pad_face & ~is_x)      # z-dofs
-        self.gap_pts_wall = np.flatnonzero(wall_ok & ~is_x)
-        # every z-dof of the inner wall face may touch the mirror plane (frictionless)
-        self.inner_z = np.setdiff1d(np.flatnonzero(on_wall_face & ~is_x), self.tip_z)
+        self.x_cut = x_cut
+        self._contact_sets(cell, xy, is_x, tol, on_bottom, on_tip)
         self.h2 = h2
         self.depth_factor = 2.0 * cell.b_mm   # F = 2 b f: two chevrons of a web b wide
+
+    def _contact_sets(self, cell, xy, is_x, tol, on_bottom, on_tip):
+        """The z-dofs of every surface that can close, each with its side and offset.
+
+        * inner faces (the inner pad face z = t and the inner wall face) against their mirror
+          images across the moving mid-plane: z + u_z <= h/2 - d/2 - g_c/2 (sign +1);
+        * the outer wall face against the plate below it, z = 0: z + u_z >= g_c (sign -1).
+
+        g_c is the clear gap at which two printed faces touch: the contact allowance (the
+        roughness and elephant's foot of two printed faces, section 4 of docs/design.md), but
+        never more than the gap at rest, so that no point starts inside its obstacle (next
+        to the cavity's tip vertex and the outer root corner the faces meet at an angle and
+        the gap at rest falls to zero): g_c = min(allowance, gap at rest). The obstacle is a
+        continuous function of position, so no mesh node decides where contact may start.
+        """
+        t, h2, a = cell.t_mm, 0.5 * cell.h_mm, cell.contact_allowance_mm
+        inner = cell.inner_profile_xz()
+        (ax, az), (cx, cz) = inner[0], inner[1]
+        outer = cell.outer_profile_xz()
+        (px, pz), (bx, bz) = outer[0], outer[1]
+
+        def on_segment(x0, z0, x1, z1):
+            ux = np.array([x1 - x0, z1 - z0]) / math.hypot(x1 - x0, z1 - z0)
+            rel = xy - np.array([[x0], [z0]])
+            along = ux[0] * rel[0] + ux[1] * rel[1]
+            across = -ux[1] * rel[0] + ux[0] * rel[1]
+            return (np.abs(across) < tol) & (along >= -tol) & (along <= math.hypot(x1 - x0, z1 - z0) + tol)
+
+        z_dof = ~is_x & ~on_tip & ~on_bottom
+        on_pad_face = (np.abs(xy[1] - t) < tol) & (xy[0] <= ax + tol)
+        self.pad_z = np.flatnonzero(on_pad_face & z_dof)
+        wall_in = np.flatnonzero(on_segment(ax, az, cx, cz) & ~on_pad_face & z_dof)
+        wall_out = np.flatnonzero(on_segment(px, pz, bx, bz) & z_dof)
+        self.inner_z = np.concatenate([self.pad_z, wall_in])
+        z = xy[1]
+        rest_in = 2.0 * (h2 - z[self.inner_z])              # gap to the mirror image at rest
+        rest_out = z[wall_out]                              # gap to the plate at rest
+        # clear gap at touch: the allowance between the pads (parallel faces), none where faces
+        # close at an angle (zipping from a vertex)
+        touch_in = np.where(np.arange(self.inner_z.size) < self.pad_z.size, a, 0.0)
+        self.contact_dofs = np.concatenate([self.inner_z, wall_out])
+        self.contact_sign = np.concatenate([np.ones(self.inner_z.size), -np.ones(wall_out.size)])
+        self.n_inner = self.inner_z.size
+        # obstacle position in u_z at d = 0, and its rate with d (the mirror plane moves by -d/2)
+        self.obstacle_u0 = np.concatenate([0.5 * (rest_in - touch_in), -rest_out])
+        self.obstacle_rate = np.concatenate([np.full(self.inner_z.size, -0.5), np.zeros(wall_out.size)])
 
     # residual and tangent -------------------------------------------------------
     def assemble(self, u, need_K=True):
@@ -361,13 +401,36 @@ class _Problem:
         r, state = asm.residual(u, self.mu, self.lam)
         return r, (asm.tangent(state, self.mu, self.lam) if need_K else None)
 
-    def gaps(self, u, d):
-        """Clear gap to the mirror image across the moving mid-plane z = h/2 - d/2."""
-        z = self.basis.doflocs[1]
-        plane = self.h2 - 0.5 * d
-        g_pad = 2.0 * (plane - (z[self.gap_pts_pad] + u[self.gap_pts_pad]))
-        g_wall = 2.0 * (plane - (z[self.gap_pts_wall] + u[self.gap_pts_wall]))
-        return (g_pad.min() if g_pad.size else np.inf, g_wall.min() if g_wall.size else np.inf)
+    def obstacle(self, d):
+        """Where each contact dof's u_z meets its obstacle at compression d (mm)."""
+        return self.obstacle_u0 + self.obstacle_rate * d
+
+    def tangent_k(self, u, active, d, need_K=None):
+        """Tangent stiffness dF/dd (N/mm) of the converged state (u, active) at compression d:
+        one linear solve with the state's tangent, the tip and the active inner contacts moving
+        with the mirror plane, the active outer contacts held on the plate."""
+        from scipy.sparse import csc_matrix
+        from scipy.sparse.linalg import spsolve
+        asm = _assembler(self.basis)
+        if active is None:
+            active = np.zeros(self.contact_dofs.size, bool)
+        _, kin = asm.residual(u, self.mu, self.lam)
+        K = asm.tangent(kin, self.mu, self.lam)
+        contact = self.contact_dofs[active]
+        free, pos, indices, indptr = self.free_block(np.sort(contact))
+        v = np.zeros(self.basis.N)
+        v[self.tip_z] = -0.5
+        v[contact] = self.obstacle_rate[active]
+        v[free] = spsolve(csc_matrix((K.data[pos], indices, indptr), shape=(free.size, free.size)), -(K @ v)[free])
+        f = K @ v
+        inner = active.copy()
+        inner[self.n_inner:] = False
+        return float(-(f[self.tip_z].sum() + f[self.contact_dofs[inner]].sum()) * self.depth_factor)
+
+    def pad_margin(self, u, d):
+        """Smallest clear gap between the inner pads, less the allowance (mm; <= 0: they meet)."""
+        ob = self.obstacle(d)[: self.pad_z.size]
+        return 2.0 * float((ob - u[self.pad_z]).min()) if self.pad_z.size else math.inf
 
     def free_block(self, pinned_extra=()):
         """The free dofs with ``pinned_extra`` also pinned, and how to cut their block out of
@@ -385,41 +448,45 @@ class _Problem:
             block = self._blocks[key] = (free, sub.data.astype(np.int64) - 1, sub.indices, sub.indptr)
         return block
 
-    def solve_step(self, u, d, active=None, max_iter=30, rtol=1e-8):
-        """Newton at compression d from the state u, with frictionless contact of the inner
-        wall face on the mirror plane as an active set updated inside the iterations
-        (penetrating points are pinned to the plane, points whose contact force would pull
-        are released; converged when the residual is small and the set no longer changes).
+    def solve_step(self, u, d, active=None, max_iter=30, rtol=1e-8, pads=False):
+        """Newton at compression d from the state u, with frictionless contact of every face
+        that can close (:meth:`_contact_sets`) as an active set updated inside the iterations
+        (penetrating points are pinned to their obstacle, points whose contact force would
+        pull are released; converged when the residual is small and the set no longer
+        changes). ``pads``: whether the inner pads may touch (past the lock).
 
         Returns (u, iterations, active set); iterations counts the residual checks after the
         first pass (which imposes the new d), as :func:`~mst_cli.model.mechanics.path.follow_to_event` expects.
         """
-        u, it, active, _ = self._newton(u, d, active, max_iter, rtol)
+        u, it, active, _ = self._newton(u, d, active, max_iter, rtol, pads)
         return u, it, active
 
-    def _newton(self, u, d, active=None, max_iter=30, rtol=1e-8):
+    def _newton(self, u, d, active=None, max_iter=30, rtol=1e-8, pads=False):
         """:meth:`solve_step`, also returning the residual at the solution (for :meth:`force`)."""
         from scipy.sparse import csc_matrix
         from scipy.sparse.linalg import spsolve
         asm = _assembler(self.basis)
-        active = np.zeros(self.inner_z.size, bool) if active is None else active.copy()
+        dofs, sign = self.contact_dofs, self.contact_sign
+        eligible = np.ones(dofs.size, bool)
+        if not pads:
+            eligible[: self.pad_z.size] = False
+        active = np.zeros(dofs.size, bool) if active is None else active & eligible
         u = u.copy()
-        plane = self.h2 - 0.5 * d
-        z0_inner = self.basis.doflocs[1][self.inner_z]
+        obstacle = self.obstacle(d)
         tol = 1e-9 * self.cell.h_mm
         scale = None
         r, kin = asm.residual(u, self.mu, self.lam)
         for it in range(1, max_iter + 1):
-            contact = self.inner_z[active]
+            contact = dofs[active]
             pinned = np.concatenate([self.tip_z, contact])
-            target = np.concatenate([np.full(self.tip_z.size, -0.5 * d), plane - z0_inner[active]])
-            free, pos, indices, indptr = self.free_block(contact)
+            target = np.concatenate([np.full(self.tip_z.size, -0.5 * d), obstacle[active]])
+            free, pos, indices, indptr = self.free_block(np.sort(contact))
             reaction = abs(r[pinned].sum())
             scale = max(reaction, 1e-12 * self.mu * self.cell.t_mm) if scale is None else max(scale, reaction)
             jump = target - u[pinned]
             if it > 1 and np.linalg.norm(r[free]) <= rtol * scale and not np.any(np.abs(jump) > tol):
-                penetrating = ~active & (z0_inner + u[self.inner_z] > plane + tol)
-                pulling = active & (r[self.inner_z] > 0.0)
+                penetrating = eligible & ~active & (sign * (u[dofs] - obstacle) > tol)
+                pulling = active & (sign * r[dofs] > 0.0)
                 if not penetrating.any() and not pulling.any():
                     return u, it - 1, active, r
                 active = (active | penetrating) & ~pulling
@@ -447,18 +514,23 @@ class _Problem:
                 raise FloatingPointError("every damped Newton update inverts an element")
             u = u_try
             if it > 1:     # let the set follow the iterate (semi-smooth Newton)
-                penetrating = ~active & (z0_inner + u[self.inner_z] > plane + tol)
-                active = active | penetrating
+                active = active | (eligible & (sign * (u[dofs] - obstacle) > tol))
         raise FloatingPointError("Newton did not converge")
 
     def force(self, u, active, r=None):
-        """Layer force F (N) = what crosses the mirror plane (tip face + contact), and the
-        relative imbalance against the support reactions (equilibrium check). ``r``: the
-        residual at u, when the caller has it."""
+        """Layer force F (N) = what crosses the mirror plane (tip face + inner contact), and the
+        relative imbalance against the support reactions (bonded face, pad cut, and the outer
+        face's contact with the plate: an equilibrium check). ``r``: the residual at u."""
         if r is None:
             r, _ = self.assemble(u, need_K=False)
-        f_mirror = -(r[self.tip_z].sum() + r[self.inner_z[active]].sum())
-        balance = abs(f_mirror - r[self.support_z].sum()) / max(abs(f_mirror), 1e-300)
+        inner = active.copy()
+        inner[self.n_inner:] = False
+        outer = active.copy()
+        outer[: self.n_inner] = False
+        f_mirror = -(r[self.tip_z].sum() + r[self.contact_dofs[inner]].sum())
+        support = np.setdiff1d(self.support_z, self.contact_dofs[active])
+        f_support = r[support].sum() + r[self.contact_dofs[outer]].sum()
+        balance = abs(f_mirror - f_support) / max(abs(f_mirror), 1e-300)
         return f_mirror * self.depth_factor, balance
 
 
@@ -496,29 +568,57 @@ def solve_continuum(cell: geo.HexCell, material, n_thick: int = DEFAULT_N_THICK,
     mesh_scale = k_lin / linear_k(prob) if levels else 1.0
     u = np.zeros(prob.basis.N)
 
-    d_nom = cell.h_mm - 2 * cell.t_mm - allowance     # pads meet here if nothing else does
+    d_nom = cell.h_mm - 2 * cell.t_mm - allowance     # pads meet here if the pads were rigid
+    k_path = linear_k(prob) if levels else k_lin
 
-    def solve(state, d):
-        u, it, active, r = prob._newton(state[0], d, state[1])
-        return (u, active, r), it
+    def solve(state, d, depth=0):
+        try:
+            u, it, active, r = prob._newton(state[0], d, state[1], pads=True)
+        except FloatingPointError:
+            # sub-step from the given state (the event search starts each trial from the
+            # bracket's near end, which can be a long step away where a wall is pinched)
+            if depth >= 3 or state[2] is None:
+                raise
+            d0 = state[3] if len(state) > 3 else None
+            if d0 is None:
+                raise
+            mid, it0 = solve(state, 0.5 * (d0 + d), depth + 1)
+            end, it1 = solve(mid, d, depth + 1)
+            return end, it0 + it1
+        return (u, active, r, d), it
 
     def margin(state, d):
-        gp, gw = prob.gaps(state[0], d)
-        return min(gp, gw) - allowance, ("wall" if gw < gp else "pad")
+        # the lock: the tangent stiffness reaches LOCK_STIFFNESS_FACTOR x the small-load k
+        # (a face pinched between the plate and its mirror, or the pads meeting)
+        return LOCK_STIFFNESS_FACTOR - prob.tangent_k(state[0], state[1], d) / k_path, _lock_label(prob, state[1])
 
     def observe(state, d):
-        F, balance = prob.force(*state)
-        return F * mesh_scale, balance
+        F, balance = prob.force(*state[:3])
+        return F * mesh_scale, balance, int(state[1].sum())
 
     try:
-        path = follow_to_event(solve, margin, observe, (u, None, None), d_nom, D_MAX_OVER_NOMINAL * d_nom,
-                               StepControl(first_step_rel=first_step_frac, max_steps=max_steps))
+        path = follow_to_event(solve, margin, observe, (u, None, None, 0.0), d_nom, D_MAX_OVER_NOMINAL * d_nom,
+                               StepControl(first_step_rel=first_step_frac, max_steps=max_steps), LOCK_TOLERANCES)
     except PathError as exc:
         raise ContinuumError(f"continuum solve: {exc} for {cell}") from None
-    F = np.array([0.0] + [F for F, _ in path.observations])
+    F = np.array([0.0] + [F for F, _, _ in path.observations])
     balance = path.observations[-1][1]
+    contacts = np.array([0] + [n for _, _, n in path.observations])
+    # one step on into the locked branch: how much stiffer the layer is there
+    d_after = path.d_mm[-1] + LOCK_TOLERANCES.event_width_rel * d_nom * 10
+    try:
+        after, _ = solve(path.state, d_after)
+        ratio_after = prob.tangent_k(after[0], after[1], d_after) / k_path
+    except FloatingPointError:
+        ratio_after = math.nan
     return ContinuumResult(np.array([0.0] + path.d_mm), F, k_lin, float(path.d_mm[-1]), path.event_at,
-                           path.iterations, int(fine.basis.N), float(balance), float(mesh_scale))
+                           path.iterations, int(fine.basis.N), float(balance), float(mesh_scale), float(ratio_after),
+                           contacts)
+
+
+def _lock_label(prob, active) -> str:
+    """What closed at the lock: "pad" when the pads touch, else "wall" (a wall pinched)."""
+    return "pad" if active is not None and active[: prob.pad_z.size].any() else "wall"
 
 
 def linear_stiffness_N_per_mm(cell: geo.HexCell, material, n_thick: int = DEFAULT_N_THICK,

@@ -56,6 +56,9 @@ class PathTolerances:
     event_clamp_rel: float = 1e-3
     # secant trials at most; then the last trial is taken (it is within the bracket anyway)
     max_event_iterations: int = 30
+    # halve the bracket instead of the secant guess: for a margin that jumps at the event (a
+    # tangent stiffness as a contact closes), where regula falsi creeps from one side
+    bisect: bool = False
 
 
 @dataclass(frozen=True)
@@ -133,8 +136,11 @@ def _locate_event(solve, margin, d_ref_mm, tol, failures, lo, m_lo, s_lo, hi, m_
         if abs(mc) <= tol.event_gap_rel * d_ref_mm or hi - lo <= tol.event_width_rel * d_ref_mm:
             break
         inset = tol.event_clamp_rel * (hi - lo)
-        dc = lo + m_lo / max(m_lo - m_hi, 1e-300) * (hi - lo)
-        dc = min(max(dc, lo + inset), hi - inset)
+        if tol.bisect:
+            dc = 0.5 * (lo + hi)
+        else:
+            dc = lo + m_lo / max(m_lo - m_hi, 1e-300) * (hi - lo)
+            dc = min(max(dc, lo + inset), hi - inset)
         try:
             sc, it = solve(s_lo, dc)
         except failures as exc:
