@@ -324,7 +324,7 @@ class _Problem:
         self.basis = Basis(self.mesh, ElementVector(ElementTriP2()), intorder=4)
         self.mu, self.lam = _lame_3d(material.youngs_modulus_MPa, material.poisson_ratio)
         b = self.basis
-        h2, t = 0.5 * cell.h_mm, cell.t_mm
+        h2 = 0.5 * cell.h_mm
         tol = 1e-9 * max(cell.width_mm, cell.h_mm)
         xy = b.doflocs                     # (2, ndofs): location of every dof
         is_x = np.zeros(b.N, bool)
