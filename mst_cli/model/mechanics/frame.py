@@ -58,6 +58,7 @@ from mst_cli.model.mechanics.spring import (
     SHEAR_COEFFICIENT_RECT,
     contact_stiffness_N_per_mm,
     plane_strain_modulus_MPa,
+    spring_layer,
 )
 
 if TYPE_CHECKING:
@@ -299,9 +300,15 @@ def solve_frame(cell: geo.HexCell, material, n_elements: int = DEFAULT_N_ELEMENT
     ul[free] = np.linalg.solve(K0[np.ix_(free, free)], -K0[free, wall.tip_w] * ul[wall.tip_w])
     k_lin = float(-(K0 @ ul)[wall.tip_w] * factor)
 
+    # the lock stroke: L2's (its stiffness knee, where a wall is pinched or the pads meet),
+    # through L0's fit of it; a beam has no faces to pinch. Where the walls' inner faces would
+    # reach the mirror plane before that, the beam passes through it (L2's zipping contact
+    # there stiffens its curve by a few per cent; the bench measures the difference)
+    d_lock = min(spring_layer(cell, material).d_lock_mm, cell.cavity_height_mm - allowance)
+
     def margin(u, d):
-        gp, gw = wall.gaps(u, d)
-        return min(gp, gw) - allowance, ("wall" if gw < gp else "pad")
+        gp, _ = wall.gaps(u, d)
+        return min(gp - allowance, d_lock - d), ("pad" if gp - allowance <= d_lock - d else "wall")
 
     def force(u, d):
         f, _ = wall.assemble(u, need_K=False)
