@@ -30,14 +30,13 @@ band (its own --verify-thin cells plus any other cell inside THIN_BOUNDS), store
 "out_of_sample" with the (t/L x theta) table of L0's median lock-force error that
 correction.expected_error_rel reads. The same numbers on the fitted cells go under "in_sample".
 
-Known limit (of L2, not of the fit): L2 reads the lock at the inner-face mesh node nearest the
-excluded tip wedge (mst_cli.model.mechanics.continuum), so for shallow thin walls its d_lock and R
-form a sawtooth in theta -- at t 0.401, h 1.829 mm d_lock / (h - 2t - a) falls smoothly from
-0.666 (13.0 deg) to 0.640 (14.5 deg), then jumps to 0.739 (14.8 deg) as a node leaves the
-wedge. The smooth fit runs through the teeth; EXAMPLE_CELLS[0] sits at a tooth's bottom.
+The L2 lock is its stiffness knee (docs/design.md section 4): a wall pinched between the plate
+and its mirror, or the pads meeting. Before 0.6 it was read at the inner-face mesh node next
+to an excluded tip wedge, and d_lock and R formed a sawtooth in theta (15 % at t 0.401,
+h 1.829 mm, theta 14.5-14.8 deg); benchmarks/sweep_lock.py shows the new one is smooth.
 
 Run:  .venv/bin/python benchmarks/fit_l0_correction.py
-      [--samples 300 --shallow-samples 60 --stubby-samples 60 --thin-samples 100 --seed 1]
+      [--samples 300 --shallow-samples 60 --stubby-samples 60 --thin-samples 200 --seed 1]
       [--verify-samples 150 --verify-shallow 30 --verify-stubby 30 --verify-thin 60 --verify-seed 2]
       [--l2-cache FILE]   (L2 results per cell, read and extended: refits without re-solving)
 """
@@ -238,7 +237,7 @@ def main():
     ap.add_argument("--samples", type=int, default=300)
     ap.add_argument("--shallow-samples", type=int, default=60)
     ap.add_argument("--stubby-samples", type=int, default=60)
-    ap.add_argument("--thin-samples", type=int, default=100,
+    ap.add_argument("--thin-samples", type=int, default=200,
                     help="extra cells in the thin band (THIN_BOUNDS), seed 10 seed + 3")
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--verify-samples", type=int, default=150)

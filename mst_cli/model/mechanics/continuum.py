@@ -537,13 +537,17 @@ class _Problem:
 def solve_continuum(cell: geo.HexCell, material, n_thick: int = DEFAULT_N_THICK,
                     n_length: int = DEFAULT_N_LENGTH, levels: int = DEFAULT_LEVELS,
                     first_step_frac: float = 0.125,
-                    max_steps: int = 200) -> ContinuumResult:
+                    max_steps: int = 200, path_levels: int = 0) -> ContinuumResult:
     """Nonlinear force-displacement of one layer up to contact onset.
 
     Displacement control with adaptive steps: a step that fails to converge is halved, a step
     that converges in few Newton iterations lets the next grow. The onset of contact is
     bracketed between two converged steps and located by secant iteration on the gap (the
     driver and its tolerances are L1's too: :mod:`mst_cli.model.mechanics.path`).
+
+    ``path_levels``: corner refinement rounds of the path's own mesh (default 0; its forces
+    are scaled by the linear stiffness ratio to the ``levels`` mesh). A convergence study
+    knob: benchmarks/sweep_lock.py and docs/design.md section 4 give what it changes.
 
     Raises
     ------
@@ -564,12 +568,12 @@ def solve_continuum(cell: geo.HexCell, material, n_thick: int = DEFAULT_N_THICK,
     # elements at the cavity's near-crack tip invert long before contact. Its forces are
     # scaled by k_fine / k_coarse, the ratio of the two meshes' linear stiffnesses (the
     # corner singularity's mesh error; the benchmark's convergence study records it).
-    prob = _Problem(cell, material, n_thick, n_length, 0) if levels else fine
-    mesh_scale = k_lin / linear_k(prob) if levels else 1.0
+    prob = _Problem(cell, material, n_thick, n_length, path_levels) if levels != path_levels else fine
+    mesh_scale = k_lin / linear_k(prob) if levels != path_levels else 1.0
     u = np.zeros(prob.basis.N)
 
     d_nom = cell.h_mm - 2 * cell.t_mm - allowance     # pads meet here if the pads were rigid
-    k_path = linear_k(prob) if levels else k_lin
+    k_path = linear_k(prob) if levels != path_levels else k_lin
 
     def solve(state, d, depth=0):
         try:

@@ -226,15 +226,20 @@ def lock_factors(t_over_L: ArrayLike, theta_rad: ArrayLike, sigma: ArrayLike) ->
     """(:func:`lock_force_factor`, :func:`lock_stroke_factor`) from one design matrix: what
     the design loop's L0 kernel needs per call, at half the cost of the two calls."""
     force, stroke = _lock_ratios(("lock_force", "lock_stroke"), t_over_L, theta_rad, sigma)
-    return force, np.minimum(stroke, _fit()["lock_stroke"]["ratio_range"][1])
+    return (np.minimum(force, _fit()["lock_force"]["ratio_range"][1]),
+            np.minimum(stroke, _fit()["lock_stroke"]["ratio_range"][1]))
 
 
 def lock_force_factor(t_over_L: ArrayLike, theta_rad: ArrayLike, sigma: ArrayLike) -> np.ndarray:
     """R_L2 / (k d_lock) predicted by the fit (k the corrected L0 stiffness, d_lock = h - 2t - a).
 
-    Held inside the fitted (t/L, theta, sigma) box like :func:`stiffness_factor`.
+    Held inside the fitted (t/L, theta, sigma) box like :func:`stiffness_factor`, and at most
+    the largest ratio L2 gave on the fitted cells: the box of (t/L, theta, sigma) holds
+    corners no cell reaches (a small t/L at a shallow theta has a small sigma), where the
+    polynomial would climb past 100.
     """
-    return _lock_ratio("lock_force", t_over_L, theta_rad, sigma)
+    return np.minimum(_lock_ratio("lock_force", t_over_L, theta_rad, sigma),
+                      _fit()["lock_force"]["ratio_range"][1])
 
 
 def lock_stroke_factor(t_over_L: ArrayLike, theta_rad: ArrayLike, sigma: ArrayLike) -> np.ndarray:
