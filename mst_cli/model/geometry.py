@@ -175,9 +175,9 @@ class HexCell:
                                    "the part prints lying on its side, so D is also its printed height: a whole "
                                    "number of `printer.layer_height_mm`")
     contact_allowance_mm: float = spec(0.1, lo=0.0, hi=10.0, unit="mm",
-                                       meaning="subtracted from the cavity h − 2t to give the locking stroke "
-                                               "d_lock (half a 0.2 mm print layer: surface roughness of the "
-                                               "closing faces)")
+                                       meaning="clear gap left between the two printed pads when they touch "
+                                               "(the roughness of their layer lines); with rigid pads a layer "
+                                               "locks by h − 2t − a at the latest")
 
     # -- derived quantities (all read the kernels above)
     @property
