@@ -1,7 +1,13 @@
-"""Hostile input and faults (issue 13): no traceback, no hang, no silent acceptance, nothing
-half-written. One section per class of the issue; each holds at least one test that failed on
-the tree before the fix. The last section is the property suite: hostile documents generated
-from the schema's own rules, run through ``mst simulate`` in-process."""
+"""Hostile input and faults (issues 13 and 22): no traceback, no hang, no silent acceptance,
+nothing half-written. One section per class of the issues; each holds at least one test that
+failed on the tree before the fix. Sections 8 and 17 are the property suites: hostile documents
+generated from the schema's own rules, run through ``mst simulate`` in-process; load tests and
+readings from their column rules, export.json from the Manifest type (through ``mst check`` and
+``mst slice``), slicer results, and designs at their bounds through what export writes.
+
+Tests that send signals set the dispositions they rely on in the child (a background or nohup
+shell starts children with SIGINT/SIGHUP ignored); the suite passes from a terminal, a pipe or
+a background shell."""
 
 import errno
 import json
@@ -388,9 +394,29 @@ SIMULATE_SLOW_PLOT = textwrap.dedent("""
 """)
 
 
+HANDLED = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
+
+
+def default_dispositions():
+    """In the child before exec: SIGINT/SIGTERM/SIGHUP at their defaults. A background or nohup
+    shell starts its children with SIGINT/SIGHUP ignored (issue 22), and an ignored disposition
+    survives exec; the tests below are about the default ones, so they set them."""
+    for sig in HANDLED:
+        signal.signal(sig, signal.SIG_DFL)
+
+
+def ignoring(*sigs):
+    """A preexec_fn: the defaults, then ``sigs`` ignored (as nohup or 'cmd &' start a child)."""
+    def setup():
+        default_dispositions()
+        for sig in sigs:
+            signal.signal(sig, signal.SIG_IGN)
+    return setup
+
+
 def interrupt(script, out: Path, sig, *extra):
     p = subprocess.Popen([PYTHON, "-c", script, str(out), *map(str, extra)], stdout=subprocess.PIPE,
-                         stderr=subprocess.PIPE, text=True, cwd=out.parent)
+                         stderr=subprocess.PIPE, text=True, cwd=out.parent, preexec_fn=default_dispositions)
     try:
         assert p.stdout.readline().strip().endswith("staged")
         assert staging_left(out)                     # the staging folder exists now
@@ -420,6 +446,39 @@ def test_interrupted_simulate_keeps_the_earlier_complete_output(tmp_path, sig):
     assert err.strip().splitlines()[-1] == f"mst: interrupted ({sig.name}): nothing half-written was left"
     assert len(err.strip().splitlines()) == 1, err
     assert {p.name: p.read_bytes() for p in out.iterdir()} == before
+
+
+STAGE_AND_WAIT = textwrap.dedent("""
+    import sys
+    from pathlib import Path
+    from mst_cli.io.outputs import staged
+    with staged(Path(sys.argv[1])) as st:
+        st.write_text("report.json", "{}")
+        print("staged", flush=True)
+        sys.stdin.readline()                     # the test's go-ahead, after its signals
+        st.write_text("response.csv", "F\\n")
+    print("committed", flush=True)
+""")
+
+
+@pytest.mark.parametrize("sigs", [(signal.SIGHUP,), (signal.SIGINT, signal.SIGHUP), (signal.SIGTERM,)],
+                         ids=lambda s: "+".join(x.name for x in s))
+def test_a_signal_ignored_at_start_stays_ignored_and_the_run_completes(tmp_path, sigs):
+    # the decision of issue 22: mst keeps a disposition it inherits as ignored (nohup, 'cmd &'
+    # in a script): such a run is not stopped by that signal and writes its whole output
+    out = tmp_path / "o"
+    p = subprocess.Popen([PYTHON, "-c", STAGE_AND_WAIT, str(out)], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+                         stderr=subprocess.PIPE, text=True, preexec_fn=ignoring(*sigs))
+    try:
+        assert p.stdout.readline().strip() == "staged"
+        for sig in sigs:
+            p.send_signal(sig)
+        stdout, err = p.communicate("go\n", timeout=30)
+    finally:
+        if p.poll() is None:
+            p.kill()
+    assert p.returncode == 0 and stdout.strip() == "committed", (p.returncode, err)
+    assert {q.name for q in out.iterdir()} == {"report.json", "response.csv"}
 
 
 def dead_pid() -> int:
