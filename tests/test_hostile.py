@@ -852,3 +852,92 @@ def test_property_hostile_manifests_keep_the_contract(exported, path, value):
             json.loads(r.stdout, parse_constant=no_constant)
         assert not [w for w in caught if issubclass(w.category, RuntimeWarning)], [str(w.message) for w in caught]
         assert dt < 20.0, dt
+
+
+# =========================================================================== issue 22: round two
+# Each section below is one class of issue 22; each test failed (a hang, a traceback, a wrong
+# exit code or message) on the tree before its fix.
+MST = "import sys; from mst_cli.cli.app import main; main(sys.argv[1:], prog_name='mst')"
+
+
+def mst_process(args, timeout=120, **kwargs) -> subprocess.CompletedProcess:
+    """``mst ARGS`` in its own process, bounded: a command that blocks fails the test."""
+    return subprocess.run([PYTHON, "-c", MST, *map(str, args)], capture_output=True, text=True,
+                          timeout=timeout, **kwargs)
+
+
+def refused_line(p: subprocess.CompletedProcess, code: int = 2) -> str:
+    assert p.returncode == code, (p.returncode, p.stdout, p.stderr)
+    assert "Traceback" not in p.stderr, p.stderr
+    lines = p.stderr.strip().splitlines()
+    assert len(lines) == 1, lines
+    return lines[0]
+
+
+# ----------------------------------------------------------------- 9. special files (FIFO, devices)
+@pytest.fixture(scope="module")
+def loadtest_files(tmp_path_factory):
+    """A small valid load test and readings file of the forward design (its own model + noise)."""
+    from mst_cli.io.schema import load_document
+    from mst_cli.model.response import simulate
+    doc = load_document(FORWARD)
+    resp = simulate(doc.geometry(), doc.material, noise_uT_rms=doc.noise_uT_rms)
+    rng = np.random.default_rng(5)
+    F = np.sort(rng.uniform(0, resp.max_force_N, 40))
+    B = np.stack([np.interp(F, resp.force_N, resp.B_T[:, i]) for i in range(3)], -1) * 1e6
+    B = B + rng.normal(0, 2.0, B.shape)
+    d = tmp_path_factory.mktemp("lt")
+    (d / "lt.csv").write_text("force_N,Bx_uT,By_uT,Bz_uT\n"
+                              + "".join(f"{f:.4f},{x:.3f},{y:.3f},{z:.3f}\n" for f, (x, y, z) in zip(F, B)))
+    (d / "readings.csv").write_text("Bx_uT,By_uT,Bz_uT\n" + "".join(f"{x:.3f},{y:.3f},{z:.3f}\n" for x, y, z in B))
+    return {"dir": d, "lt": d / "lt.csv", "readings": d / "readings.csv", "resp": resp, "F": F, "B_uT": B}
+
+
+def fifo(tmp_path, name) -> Path:
+    path = tmp_path / name
+    os.mkfifo(path)
+    return path
+
+
+@pytest.mark.parametrize("case", ["calibrate-loadtest", "read-readings", "calibrate-design", "read-model",
+                                  "simulate", "check-manifest", "slice-profile"])
+def test_a_fifo_is_refused_naming_the_path_without_blocking(tmp_path, loadtest_files, exported, case):
+    out = tmp_path / "o"
+    if case == "calibrate-loadtest":
+        args, name = ["calibrate", FORWARD, fifo(tmp_path, "lt.csv")], "lt.csv"
+    elif case == "read-readings":
+        args, name = ["read", FORWARD, fifo(tmp_path, "r.csv")], "r.csv"
+    elif case == "calibrate-design":
+        args, name = ["calibrate", fifo(tmp_path, "d.yaml"), loadtest_files["lt"]], "d.yaml"
+    elif case == "read-model":
+        args, name = ["read", fifo(tmp_path, "m.yaml"), loadtest_files["readings"]], "m.yaml"
+    elif case == "simulate":
+        args, name = ["simulate", fifo(tmp_path, "d.yaml")], "d.yaml"
+    elif case == "check-manifest":
+        folder = copy_export(exported, tmp_path / "c")
+        (folder / "export.json").unlink()
+        os.mkfifo(folder / "export.json")
+        args, name, out = ["check", folder], "export.json", None
+    else:
+        args, name, out = ["slice", exported, "--profile", fifo(tmp_path, "p.ini")], "p.ini", None
+    p = mst_process(args + (["--out", out] if out else []), timeout=60)
+    line = refused_line(p)
+    assert "a FIFO (named pipe)" in line and name in line, line
+    assert out is None or not out.exists()
+
+
+def test_a_fifo_beside_the_model_in_place_of_calibration_json_does_not_block(tmp_path, loadtest_files):
+    model = tmp_path / "model.yaml"
+    model.write_text(FORWARD.read_text())
+    fifo(tmp_path, "calibration.json")
+    p = mst_process(["read", model, loadtest_files["readings"], "--out", tmp_path / "o"], timeout=60)
+    assert p.returncode == 0, p.stderr
+    assert "has no calibration.json beside it" in p.stderr
+    assert (tmp_path / "o" / "forces.csv").is_file()
+
+
+@pytest.mark.parametrize("cmd", ["calibrate", "read"])
+def test_a_device_as_the_csv_is_refused_by_kind(tmp_path, cmd):
+    args = [cmd, FORWARD, "/dev/zero", "--out", tmp_path / "o"]
+    line = refused(run(args), "(file)")
+    assert "a character device" in line and "/dev/zero" in line, line

@@ -325,18 +325,18 @@ def _parse(kind, data, path: str):
     raise InputError(path, shown, f"must be {_describe(kind)}: rewrite it with 'mst export'")
 
 
-def load_manifest(path: Path) -> Manifest:
-    """export.json, validated field by field (:meth:`Manifest.from_dict`)."""
+def load_manifest(path: Path, kind: type = Manifest) -> Manifest:
+    """export.json, validated field by field (``kind.from_dict``, :class:`Manifest` by default)."""
+    from mst_cli.io.files import read_input_text
+    text = read_input_text(path, MAX_MANIFEST_BYTES, field="export.json", what="JSON file",
+                           too_large=": rewrite it with 'mst export'")
     try:
-        if Path(path).stat().st_size > MAX_MANIFEST_BYTES:
-            raise InputError("export.json", str(path), f"is larger than {MAX_MANIFEST_BYTES} bytes: "
-                                                       "rewrite it with 'mst export'")
-        data = json.loads(Path(path).read_text(), parse_constant=_refuse_constant)
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError, RecursionError) as exc:
+        data = json.loads(text, parse_constant=_refuse_constant)
+    except (json.JSONDecodeError, RecursionError) as exc:
         raise InputError("export.json", str(path), f"cannot be read as JSON ({type(exc).__name__})") from None
     except ValueError as exc:                       # NaN / Infinity, which JSON does not have
         raise InputError("export.json", str(path), f"cannot be read as JSON ({exc})") from None
-    return Manifest.from_dict(data)
+    return kind.from_dict(data)
 
 
 def _refuse_constant(name: str):

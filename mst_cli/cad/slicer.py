@@ -28,6 +28,10 @@ INSTALL_HINT = ("install it with 'sudo apt-get install prusa-slicer' (Debian/Ubu
                 f"or in ${ENV_EXECUTABLE}")
 DEFAULT_TIMEOUT_S = 300.0
 PROFILE_NAME = "tpu85a-0.4mm.ini"
+MAX_PROFILE_BYTES = 1_000_000       # a full PrusaSlicer config is about 20 KB
+
+
+GCODE_END = "; prusaslicer_config = end"      # the last line of every G-code PrusaSlicer writes
 
 
 class SlicerError(RuntimeError):
@@ -112,13 +116,11 @@ def parse_ini(text: str, where: str = "profile") -> dict[str, str]:
 
 def check_profile(path: Path, exe: str) -> dict[str, str]:
     """The settings of a PrusaSlicer FFF config, or InputError (exit 2) with the reason."""
+    from mst_cli.io.files import read_input_text
     path = Path(path)
-    if not path.is_file():
+    if not path.exists():
         raise InputError("--profile", str(path), "no such file (a PrusaSlicer .ini config)")
-    try:
-        text = path.read_text(encoding="utf-8")
-    except (UnicodeDecodeError, OSError) as exc:
-        raise InputError("--profile", str(path), f"not a text config file ({type(exc).__name__})") from None
+    text = read_input_text(path, MAX_PROFILE_BYTES, field="--profile", what="PrusaSlicer .ini config")
     values = parse_ini(text, str(path))
     if not values:
         raise InputError("--profile", str(path), "holds no settings: not a PrusaSlicer config")

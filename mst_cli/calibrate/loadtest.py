@@ -26,6 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from mst_cli.errors import InputError
+from mst_cli.io.files import read_input_text
 from mst_cli.model import chip as mlx
 
 MAX_INPUT_BYTES = 20_000_000
@@ -72,20 +73,9 @@ def setting_of(gain_sel: int, res: int) -> mlx.ChipSetting:
 
 
 def read_text(path: str | Path, what: str = "CSV file") -> str:
-    path = Path(path)
-    try:
-        with open(path, "rb") as fh:
-            data = fh.read(MAX_INPUT_BYTES + 1)
-    except FileNotFoundError:
-        raise InputError("(file)", str(path), "file not found") from None
-    except IsADirectoryError:
-        raise InputError("(file)", str(path), f"is a folder, not a {what}") from None
-    if len(data) > MAX_INPUT_BYTES:
-        raise InputError("(file)", str(path), f"is larger than {MAX_INPUT_BYTES} bytes")
-    try:
-        return data.decode("utf-8-sig")
-    except UnicodeDecodeError:
-        raise InputError("(file)", str(path), f"is not a UTF-8 text {what}") from None
+    """The text of a load test or readings file: a regular file (a FIFO or a device is refused
+    before it is opened, so nothing blocks) of at most MAX_INPUT_BYTES, UTF-8 (a BOM is fine)."""
+    return read_input_text(path, MAX_INPUT_BYTES, what=what, encoding="utf-8-sig")
 
 
 def _delimiter(header_line: str) -> str:

@@ -462,11 +462,13 @@ def _summary(doc, lt, load_test, mechanics, fit, names, design_regimes, cal_regi
 def _calibration_note(model_file: Path) -> tuple[str | None, dict | None]:
     """(None, the record) when MODEL has a matching calibration.json beside it, else (a warning
     sentence, None)."""
+    from mst_cli.io.files import read_input_text
+    from mst_cli.io.yaml_io import MAX_INPUT_BYTES
     sidecar = Path(model_file).with_name(CALIBRATION_JSON)
-    try:
-        record = json.loads(sidecar.read_text())
-        text = Path(model_file).read_text()
-    except (OSError, ValueError):
+    try:               # regular files only: a FIFO in their place must not block
+        record = json.loads(read_input_text(sidecar, MAX_INPUT_BYTES, field=CALIBRATION_JSON))
+        text = read_input_text(model_file, MAX_INPUT_BYTES)
+    except ValueError:                   # InputError (unreadable, not a file) and bad JSON
         return (f"{Path(model_file).name} has no {CALIBRATION_JSON} beside it: forces come from the "
                 "design as drawn, not as printed (run mst calibrate; expect errors of tens of percent)"), None
     digest = hashlib.sha256(text.encode()).hexdigest()

@@ -525,21 +525,12 @@ def parse_document(raw: Any, source: str = "<memory>") -> Document:
 
 def load_document(path: str | Path) -> Document:
     """Read and validate a design or spec file."""
-    from mst_cli.io.yaml_io import MAX_INPUT_BYTES, FileTooLarge, YAMLRefused, load_text, read_text_capped
+    from mst_cli.io.files import read_input_text
+    from mst_cli.io.yaml_io import MAX_INPUT_BYTES, YAMLRefused, load_text
 
     path = Path(path)
-    try:
-        text = read_text_capped(path)       # at most MAX_INPUT_BYTES + 1 bytes are read
-    except FileNotFoundError:
-        raise InputError("(file)", str(path), "file not found") from None
-    except FileTooLarge:
-        raise InputError("(file)", str(path), f"is larger than {MAX_INPUT_BYTES} bytes: a design "
-                                              "file is a few KB") from None
-    except UnicodeDecodeError as exc:
-        raise InputError("(file)", str(path), f"cannot be read as text ({type(exc).__name__})") from None
-    except (OSError, ValueError) as exc:    # ValueError: a NUL in the path
-        reason = getattr(exc, "strerror", None) or str(exc)
-        raise InputError("(file)", str(path), f"cannot be read ({reason})") from None
+    # a regular file only (a FIFO would block), at most MAX_INPUT_BYTES + 1 bytes read
+    text = read_input_text(path, MAX_INPUT_BYTES, what="YAML file", too_large=": a design file is a few KB")
     try:
         raw = load_text(text)
     except YAMLRefused as exc:
