@@ -941,3 +941,175 @@ def test_a_device_as_the_csv_is_refused_by_kind(tmp_path, cmd):
     args = [cmd, FORWARD, "/dev/zero", "--out", tmp_path / "o"]
     line = refused(run(args), "(file)")
     assert "a character device" in line and "/dev/zero" in line, line
+
+
+# ----------------------------------------------------------------- 10. mst slice trusts export.json
+BUNDLED_PROFILE = ROOT / "configs" / "print" / "tpu85a-0.4mm.ini"
+FAKE_EXE = "/fake/prusa-slicer"
+
+
+def box_gcode(layers: int = 25, pause_after: int | None = None, layer_h: float = 0.2, size: float = 10.0,
+              centre=(125.0, 105.0), end: bool = True, **config) -> str:
+    """PrusaSlicer-like G-code of a square tube ``size`` wide, ``layers`` high, with the footer and
+    the closing config block PrusaSlicer writes (``end=False``: without the last line)."""
+    x0, y0 = centre[0] - size / 2, centre[1] - size / 2
+    corners = [(x0, y0), (x0 + size, y0), (x0 + size, y0 + size), (x0, y0 + size), (x0, y0)]
+    out = ["M83", "G90", "G92 E0"]
+    for k in range(1, layers + 1):
+        z = round(k * layer_h, 4)
+        out += [";LAYER_CHANGE", f";Z:{z:g}", f";HEIGHT:{layer_h:g}", f"G1 Z{z:g} F600"]
+        if pause_after is not None and k == pause_after + 1:
+            out += [";PAUSE_PRINT", "M117 magnet", "M601"]
+        out += [";TYPE:External perimeter", ";WIDTH:0.45", f"G1 X{corners[0][0]:.3f} Y{corners[0][1]:.3f}"]
+        out += [f"G1 X{x:.3f} Y{y:.3f} E0.40000" for x, y in corners[1:]]
+    out += ["; filament used [mm] = 100.0", "; filament used [cm3] = 0.24", "; total filament used [g] = 0.29",
+            "; estimated printing time (normal mode) = 10m 5s", "; prusaslicer_config = begin",
+            "; pause_print_gcode = M601", f"; layer_height = {layer_h:g}"]
+    out += [f"; {k} = {v}" for k, v in config.items()]
+    out += ["; prusaslicer_config = end"] if end else []
+    return "\n".join(out) + "\n"
+
+
+class FakeSlicer:
+    """PrusaSlicer's command line as mst drives it, in-process (``cad.slicer._run``): --save
+    writes the bundled profile, --help names a version, --export-gcode writes ``gcode`` (bytes,
+    or None: nothing) and exits with ``code``. ``calls`` counts the slices."""
+
+    def __init__(self, gcode: bytes | None, code: int = 0):
+        self.gcode, self.code, self.calls = gcode, code, 0
+
+    def __call__(self, args, timeout_s):
+        if "--save" in args:
+            Path(args[args.index("--save") + 1]).write_text(BUNDLED_PROFILE.read_text())
+            return subprocess.CompletedProcess(args, 0, "", "")
+        if "--help" in args:
+            return subprocess.CompletedProcess(args, 0, "PrusaSlicer-2.7.0+fake\n", "")
+        self.calls += 1
+        if self.gcode is not None:
+            Path(args[args.index("--output") + 1]).write_bytes(self.gcode)
+        return subprocess.CompletedProcess(args, self.code, "", "Slicing done\n")
+
+
+@pytest.fixture
+def fake_slicer(monkeypatch):
+    """Install a FakeSlicer (G-code of the forward design's pause by default); returns it."""
+    import mst_cli.cad.slicer as S
+
+    def install(gcode=None, code=0):
+        fake = FakeSlicer(gcode, code)
+        monkeypatch.setattr(S, "find_prusa_slicer", lambda: FAKE_EXE)
+        monkeypatch.setattr(S, "_run", fake)
+        S.known_options.cache_clear()
+        return fake
+    yield install
+    S.known_options.cache_clear()
+
+
+def slice_export(exported: Path, dest: Path, manifest=None) -> Path:
+    """A copy of the export (STL + export.json, or ``manifest`` as export.json) to slice."""
+    folder = copy_export(exported, dest)
+    if manifest is not None:
+        (folder / "export.json").write_text(manifest if isinstance(manifest, str) else json.dumps(manifest))
+    return folder
+
+
+def exported_manifest(exported: Path) -> dict:
+    return json.loads((exported / "export.json").read_text())
+
+
+def good_gcode(exported: Path) -> bytes:
+    pause = exported_manifest(exported)["print"]["pause"]
+    return box_gcode(layers=pause["after_layer"] + 10, pause_after=pause["after_layer"]).encode()
+
+
+def test_fake_slicer_g_code_of_the_reference_export_passes(exported, tmp_path, fake_slicer):
+    fake = fake_slicer(good_gcode(exported))
+    folder = slice_export(exported, tmp_path / "s")
+    r = run(["slice", folder, "--no-plot", "--json"])
+    assert r.exit_code == 0, r.stderr
+    assert fake.calls == 2 and json.loads(r.stdout)["pause"]["ok"]
+
+
+@pytest.mark.parametrize("path,value,field", [
+    (None, [1, 2], "export.json"),
+    ("print.pause.z_mm", "1e400", "export.json.print.pause.z_mm"),
+    ("print.pause.after_layer", "abc", "export.json.print.pause.after_layer"),
+    ("print.pause.after_layer", 1e30, "export.json.print.pause.after_layer"),
+    ("print.layer_height_mm", "NaN", "export.json"),
+    ("print.cavity_lines.0", {"layer": 1}, "export.json.print.cavity_lines[0].x_mm"),
+    ("print", "x", "export.json.print"),
+    ("name", 7, "export.json.name"),
+], ids=["list", "pause-1e400", "layer-abc", "layer-1e30", "nan-layer-height", "cavity-line", "print", "name"])
+def test_slice_validates_export_json_before_slicing(exported, tmp_path, fake_slicer, path, value, field):
+    fake = fake_slicer(good_gcode(exported))
+    manifest = exported_manifest(exported)
+    if path is None:
+        text = json.dumps(value)
+    else:
+        literal = value if value in ("1e400", "NaN") else None
+        mutate(manifest, path, "@@" if literal else value)
+        text = json.dumps(manifest).replace('"@@"', literal) if literal else json.dumps(manifest)
+    folder = slice_export(exported, tmp_path / "s", text)
+    r = run(["slice", folder, "--no-plot"])
+    line = refused(r, field)
+    assert fake.calls == 0, "sliced before the manifest was checked"
+    assert not (folder / "sensor.gcode").exists() and not staging_left(folder), line
+
+
+# ----------------------------------------------------------------- 11. a slicer that lies
+FAKE_SLICER_SCRIPT = """#!{python}
+import sys
+print("Slicing done")          # and exit 0, writing nothing
+"""
+
+
+def test_a_slicer_that_exits_0_and_writes_nothing_is_a_one_line_machine_fault(exported, tmp_path, monkeypatch):
+    fake = tmp_path / "prusa-slicer"
+    fake.write_text(FAKE_SLICER_SCRIPT.format(python=PYTHON))
+    fake.chmod(0o755)
+    monkeypatch.setenv("MST_PRUSA_SLICER", str(fake))
+    folder = slice_export(exported, tmp_path / "s")
+    before = sorted(p.name for p in folder.iterdir())
+    r = run(["slice", folder, "--no-plot"])
+    assert r.exit_code == 1 and (r.exception is None or isinstance(r.exception, SystemExit)), r.exception
+    line = one_line(r)
+    assert line.startswith("mst slice: prusa-slicer --save") and "exited 0 but wrote no config" in line, line
+    assert sorted(p.name for p in folder.iterdir()) == before
+
+
+@pytest.mark.parametrize("gcode,reason", [
+    (None, "exited 0 but wrote no G-code"),
+    (b"", "an empty G-code file"),
+    (b"\xff\xfe\x00garbage", "not UTF-8"),
+    ("truncated", "it is truncated"),
+    ("no-end", "it is truncated"),
+    (box_gcode(layers=0).encode(), "without one extrusion of the part"),
+], ids=["nothing", "empty", "binary", "truncated", "no-end", "no-part"])
+def test_slicer_output_that_is_missing_empty_or_truncated_is_exit_1(exported, tmp_path, fake_slicer, gcode, reason):
+    good = good_gcode(exported)
+    gcode = {"truncated": good[:len(good) // 2], "no-end": box_gcode(end=False).encode()}.get(gcode, gcode)
+    fake_slicer(gcode)
+    folder = slice_export(exported, tmp_path / "s")
+    before = sorted(p.name for p in folder.iterdir())
+    r = run(["slice", folder, "--no-plot"])
+    assert r.exit_code == 1 and (r.exception is None or isinstance(r.exception, SystemExit)), r.exception
+    lines = [s for s in r.stderr.strip().splitlines() if not s.startswith("[")]      # not the progress lines
+    assert len(lines) == 1 and reason in lines[0] and lines[0].endswith("nothing was written"), lines
+    assert sorted(p.name for p in folder.iterdir()) == before
+
+
+# ----------------------------------------------------------------- 15. a profile's post-processing
+def test_a_profiles_post_process_script_is_named_in_one_line(exported, tmp_path, fake_slicer):
+    fake_slicer(good_gcode(exported))
+    profile = tmp_path / "pp.ini"
+    profile.write_text(BUNDLED_PROFILE.read_text().replace("post_process = \n",
+                                                           "post_process = /usr/local/bin/strip-moves --fast\n"))
+    folder = slice_export(exported, tmp_path / "s")
+    r = run(["slice", folder, "--no-plot", "--json", "--profile", profile])
+    assert r.exit_code == 0, r.stderr
+    notes = [s for s in r.stderr.splitlines() if s.startswith("mst slice: note")]
+    assert notes == ["mst slice: note: the profile's post_process runs '/usr/local/bin/strip-moves --fast' on "
+                     "each G-code (your script; what is measured is its output)"], notes
+    assert json.loads(r.stdout)["post_process"] == ["/usr/local/bin/strip-moves --fast"]
+    r = run(["slice", folder, "--no-plot"])                  # the bundled profile runs nothing
+    assert r.exit_code == 0 and "mst slice: note" not in r.stderr
