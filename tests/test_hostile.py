@@ -1098,6 +1098,50 @@ def test_slicer_output_that_is_missing_empty_or_truncated_is_exit_1(exported, tm
     assert sorted(p.name for p in folder.iterdir()) == before
 
 
+# ----------------------------------------------------------------- 12. a full disk during export
+def file_size_limit(nbytes: int):
+    """A preexec_fn: writes past ``nbytes`` fail with EFBIG (Python ignores SIGXFSZ), as a full
+    file system would fail them, in every writer of the process, OCCT's included."""
+    import resource
+
+    def setup():
+        default_dispositions()
+        resource.setrlimit(resource.RLIMIT_FSIZE, (nbytes, nbytes))
+    return setup
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("fmt,name", [("--step", "sensor.step"), ("--stl", "sensor.stl"), ("--3mf", "sensor.3mf")])
+def test_export_onto_a_full_disk_is_one_line_exit_1_for_every_writer(tmp_path, fmt, name):
+    out = tmp_path / "o"
+    p = mst_process(["export", FORWARD, fmt, "--out", out], timeout=300, preexec_fn=file_size_limit(5_000))
+    line = [s for s in p.stderr.strip().splitlines() if not s.startswith("[")]
+    assert p.returncode == 1 and "Traceback" not in p.stderr, p.stderr
+    assert line == [f"mst: system error: {out / name}: File too large (EFBIG)"], line
+    assert not out.exists()
+
+
+def test_step_writer_failure_on_a_full_disk_names_the_file(tmp_path, monkeypatch):
+    import mst_cli.cad.deterministic as det
+    real = Path.write_bytes
+
+    def full(self, data):
+        if self.suffix == ".step":
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        return real(self, data)
+    monkeypatch.setattr(Path, "write_bytes", full)
+    monkeypatch.setattr(det, "_renumber_nauo", lambda data: data)
+    out = tmp_path / "o"
+
+    class Assembly:
+        pass
+    monkeypatch.setattr("build123d.export_step", lambda assembly, target, **k: target.write(b"ISO-10303-21;"))
+    with pytest.raises(OSError) as exc, staged(out) as st:
+        st.write_bytes("sensor.step", det.step_bytes(Assembly()))
+    assert exc.value.errno == errno.ENOSPC and exc.value.filename == str(out / "sensor.step")
+    assert not out.exists()
+
+
 # ----------------------------------------------------------------- 15. a profile's post-processing
 def test_a_profiles_post_process_script_is_named_in_one_line(exported, tmp_path, fake_slicer):
     fake_slicer(good_gcode(exported))

@@ -105,15 +105,15 @@ def export(path: Path, want_stl: bool, want_step: bool, want_3mf: bool, out_dir:
             vertices, triangles = print_mesh(geometry, cad.body, stl_tolerance_mm)
             _progress(t0, f"meshed: {len(triangles)} triangles at {stl_tolerance_mm:g} mm")
             if want_stl:
-                st.path("sensor.stl").write_bytes(mesh_io.stl_bytes(vertices, triangles))
+                st.write_bytes("sensor.stl", mesh_io.stl_bytes(vertices, triangles))
                 _progress(t0, "wrote sensor.stl")
             if want_3mf:
-                st.path("sensor.3mf").write_bytes(mesh_io.three_mf_bytes(
+                st.write_bytes("sensor.3mf", mesh_io.three_mf_bytes(
                     vertices, triangles, doc.name, pause_after_z_mm=geometry.pause_height_mm,
                     layer_height_mm=geometry.layer_height_mm))
                 _progress(t0, "wrote sensor.3mf")
         if want_step:
-            mesh_io.write_step(cad.assembly(doc.name), st.path("sensor.step"))
+            st.write_bytes("sensor.step", mesh_io.step_bytes(cad.assembly(doc.name)))
             _progress(t0, "wrote sensor.step (body, magnet, board)")
         if designed is not None:
             # the design the body was built from, loadable by mst simulate / mst export
