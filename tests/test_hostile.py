@@ -638,6 +638,7 @@ def test_check_json_holds_no_nan(exported):
     ["simulate"],
     ["nope"],
     ["design", SPEC, "--seed", "-1"],
+    ["bench", "--seed", "-5"],
     ["export", FORWARD, "--stl-tolerance", "abc"],
     ["check"],
     ["bench", "--samples", "0"],
@@ -1140,6 +1141,28 @@ def test_step_writer_failure_on_a_full_disk_names_the_file(tmp_path, monkeypatch
         st.write_bytes("sensor.step", det.step_bytes(Assembly()))
     assert exc.value.errno == errno.ENOSPC and exc.value.filename == str(out / "sensor.step")
     assert not out.exists()
+
+
+# ----------------------------------------------------------------- 13. bounds two commands share
+def test_the_finest_stl_tolerance_export_writes_is_one_check_accepts(tmp_path):
+    from mst_cli.cad.manifest import STL_TOLERANCE_MM
+    lo, hi = STL_TOLERANCE_MM
+    out = tmp_path / "fine"
+    assert run(["export", FORWARD, "--stl", "--out", out, "--stl-tolerance", lo]).exit_code == 0
+    r = run(["check", out, "--json"])
+    assert r.exit_code in (0, 1) and "stl_tolerance" not in r.stderr, r.stderr
+    assert json.loads(r.stdout)["checks"]
+    assert "must be a number from" in refused(run(["export", FORWARD, "--stl-tolerance", lo / 2]), "--stl-tolerance")
+    assert "must be a number from" in refused(run(["export", FORWARD, "--stl-tolerance", hi * 2]), "--stl-tolerance")
+
+
+def test_every_seed_option_has_the_spec_files_range():
+    from mst_cli.cli.app import load_command
+    from mst_cli.io.schema import SECTIONS
+    rule = SECTIONS["design"]["seed"]
+    for name in ("design", "bench"):
+        (opt,) = [p for p in load_command(name).params if p.name == "seed"]
+        assert (opt.type.min, opt.type.max) == (rule.lo, rule.hi), name
 
 
 # ----------------------------------------------------------------- 15. a profile's post-processing

@@ -74,10 +74,12 @@ def export(path: Path, want_stl: bool, want_step: bool, want_3mf: bool, out_dir:
     3MF carries PrusaSlicer's pause for the magnet; the terminal and export.json give its
     layer and height. STEP is the assembly in the sensor frame (z up the stack).
     """
+    from mst_cli.cad.manifest import STL_TOLERANCE_MM  # one bound, shared with mst check
     from mst_cli.errors import InputError
 
-    if not 1e-4 <= stl_tolerance_mm <= 1.0:
-        raise InputError("--stl-tolerance", stl_tolerance_mm, "must be a number from 0.0001 to 1 mm")
+    lo, hi = STL_TOLERANCE_MM
+    if not lo <= stl_tolerance_mm <= hi:
+        raise InputError("--stl-tolerance", stl_tolerance_mm, f"must be a number from {lo:g} to {hi:g} mm")
     from mst_cli.io.outputs import check_out_dir
 
     if not (want_stl or want_step or want_3mf):
