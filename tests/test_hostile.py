@@ -1165,6 +1165,29 @@ def test_every_seed_option_has_the_spec_files_range():
         assert (opt.type.min, opt.type.max) == (rule.lo, rule.hi), name
 
 
+# ----------------------------------------------------------------- 14. saturation and noise
+def test_read_flags_a_50_mT_reading_saturated(tmp_path):
+    f = write(tmp_path, "Bx_uT,By_uT,Bz_uT\n0,0,50000\n0,0,-50000.0\n30000,0,40000\n0,0,49999\n", "r.csv")
+    r = run(["read", FORWARD, f, "--out", tmp_path / "o"])
+    assert r.exit_code == 0, r.stderr
+    rows = (tmp_path / "o" / "forces.csv").read_text().splitlines()[1:]
+    flags = [row.split(",")[5] for row in rows]
+    assert flags[:2] == ["saturated", "saturated"] and flags[2:] == ["above_range", "above_range"], flags
+
+
+def test_a_noise_only_load_test_is_named_as_no_relation(tmp_path, loadtest_files):
+    rng = np.random.default_rng(1)
+    F = loadtest_files["F"]
+    B = np.array([0.0, 0.0, -3000.0]) + rng.normal(0, 2.0, (len(F), 3))
+    f = write(tmp_path, "force_N,Bx_uT,By_uT,Bz_uT\n" + "".join(
+        f"{a:.4f},{x:.3f},{y:.3f},{z:.3f}\n" for a, (x, y, z) in zip(F, B)), "noise.csv")
+    r = run(["calibrate", FORWARD, f, "--out", tmp_path / "o", "--no-plot"])
+    assert r.exit_code == 1, r.output
+    line = one_line(r)
+    assert "does not follow the force at all" in line and "falls" not in line, line
+    assert not (tmp_path / "o").exists()
+
+
 # ----------------------------------------------------------------- 15. a profile's post-processing
 def test_a_profiles_post_process_script_is_named_in_one_line(exported, tmp_path, fake_slicer):
     fake_slicer(good_gcode(exported))
@@ -1180,3 +1203,26 @@ def test_a_profiles_post_process_script_is_named_in_one_line(exported, tmp_path,
     assert json.loads(r.stdout)["post_process"] == ["/usr/local/bin/strip-moves --fast"]
     r = run(["slice", folder, "--no-plot"])                  # the bundled profile runs nothing
     assert r.exit_code == 0 and "mst slice: note" not in r.stderr
+
+
+# ----------------------------------------------------------------- 16. a long load test
+def test_a_load_tests_field_magnitude_is_computed_once():
+    from mst_cli.calibrate.loadtest import parse_readings
+    rd = parse_readings("Bx_uT,By_uT,Bz_uT\n" + "1,2,3\n" * 5, "r.csv", need_force=False)
+    assert rd.B_abs_T is rd.B_abs_T                       # a per-row rd.B_abs_T[i] is O(1) now
+
+
+@pytest.mark.slow
+def test_a_40000_sample_load_test_calibrates_in_seconds_with_a_progress_line(tmp_path, loadtest_files):
+    resp = loadtest_files["resp"]
+    rng = np.random.default_rng(2)
+    F = np.sort(rng.uniform(0, resp.max_force_N, 40_000))
+    B = np.stack([np.interp(F, resp.force_N, resp.B_T[:, i]) for i in range(3)], -1) * 1e6
+    B += rng.normal(0, 2.0, B.shape)
+    f = tmp_path / "big.csv"
+    f.write_text("force_N,Bx_uT,By_uT,Bz_uT\n" + "".join(
+        f"{a:.4f},{x:.3f},{y:.3f},{z:.3f}\n" for a, (x, y, z) in zip(F, B)))
+    assert f.stat().st_size > 1_000_000
+    r, dt = timed(["calibrate", FORWARD, f, "--out", tmp_path / "o", "--no-plot"])
+    assert r.exit_code == 0, r.output
+    assert "fitting 40000 samples" in r.stderr and dt < 15.0, (r.stderr, dt)      # 21.7 s before
