@@ -9,6 +9,7 @@ Tests that send signals set the dispositions they rely on in the child (a backgr
 shell starts children with SIGINT/SIGHUP ignored); the suite passes from a terminal, a pipe or
 a background shell."""
 
+import contextlib
 import errno
 import json
 import math
@@ -1226,3 +1227,324 @@ def test_a_40000_sample_load_test_calibrates_in_seconds_with_a_progress_line(tmp
     r, dt = timed(["calibrate", FORWARD, f, "--out", tmp_path / "o", "--no-plot"])
     assert r.exit_code == 0, r.output
     assert "fitting 40000 samples" in r.stderr and dt < 15.0, (r.stderr, dt)      # 21.7 s before
+
+
+# =========================================================================== 17. property suite, round two
+PROPERTY = dict(deadline=None, derandomize=True, database=None,
+                suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large,
+                                       HealthCheck.function_scoped_fixture])
+
+
+def contract(r, dt: float, caught, folder: Path, outputs: set[str], required: set[str], limit_s: float,
+             chatter: tuple[str, ...] = (), judged: str | None = None) -> None:
+    """The CLI contract on one run: exit 0/1/2, never an exception; a refusal is one line
+    (besides ``chatter``: progress and warnings); no RuntimeWarning; nothing staged left; the
+    folder holds all of a run's ``required`` files (exit 0, or exit 1 with the ``judged`` line:
+    a result that fails a limit is still written) or none of ``outputs``; JSON strict."""
+    assert r.exit_code in (0, 1, 2), (r.exit_code, r.stderr, r.exception)
+    assert r.exception is None or isinstance(r.exception, SystemExit), repr(r.exception)
+    assert "Traceback" not in r.stderr
+    said = [s for s in r.stderr.strip().splitlines() if s and not s.startswith(chatter)]
+    if r.exit_code == 2:
+        assert len(said) == 1 and said[0].startswith("mst: "), said
+    assert not [w for w in caught if issubclass(w.category, RuntimeWarning)], [str(w.message) for w in caught]
+    assert not staging_left(folder)
+    written = {p.name for p in folder.rglob("*") if p.is_file() and p.name in outputs}
+    complete = r.exit_code == 0 or (r.exit_code == 1 and judged is not None and judged in r.stderr)
+    assert required <= written if complete else written == set(), (r.exit_code, written, r.stderr)
+    for p in folder.rglob("*.json"):
+        if p.name in outputs:
+            load_json_strict(p)
+    assert dt < limit_s, dt
+
+
+def invoke(args):
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        r, dt = timed(args)
+    return r, dt, caught
+
+
+# ----------------------------------------------------------------- load tests and readings
+HOSTILE_CELLS = ["nan", "NaN", "inf", "-inf", "1e400", "-1e400", "1e-400", "", " ", "abc", "0x10", "1_0", "+5",
+                 "--1", "1,5", '"3"', "5e", "١٢", "\0", "50000", "-50000", "32768", "-32768", "1e15", "3.5"]
+WRONG_UNIT_COLUMNS = ["force_kN", "load_g", "Bz_mT", "bx_gauss", "F", "time_s", "note"]
+
+
+@st.composite
+def reading_files(draw, need_force: bool, resp, setting):
+    """A load test (``need_force``) or readings CSV drawn from the column rules of
+    mst_cli.calibrate.loadtest: its column names (uT or raw codes, force, chip setting), the
+    chip's ranges for the numbers, then hostile cells, rows, headers and separators."""
+    from mst_cli.calibrate import loadtest as lt
+    from mst_cli.model import chip as mlx
+    raw = draw(st.booleans()) and setting is not None
+    cols = list(lt.CODE_COLUMNS if raw else lt.UT_COLUMNS)
+    if need_force or draw(st.booleans()):
+        cols.insert(0, lt.FORCE_COLUMN)
+    with_setting = draw(st.booleans())
+    if with_setting:
+        cols += list(lt.SETTING_COLUMNS)
+    cols += draw(st.lists(st.sampled_from(WRONG_UNIT_COLUMNS), max_size=1))
+    if draw(st.integers(0, 5)) == 0:
+        cols = draw(st.permutations(cols))
+    n = draw(st.sampled_from([0, 1, 5, 13, 40]))
+    F = np.sort(np.asarray(draw(st.lists(st.floats(0, 1.05 * resp.max_force_N), min_size=n, max_size=n)), float))
+    B = np.stack([np.interp(F, resp.force_N, resp.B_T[:, i]) for i in range(3)], -1) * 1e6 if n else np.zeros((0, 3))
+    B = B + np.random.default_rng(draw(st.integers(0, 9))).normal(0, 2.0, B.shape)
+    limit = mlx.CODE_RANGE_LSB[setting.res] if setting is not None else 0
+    rows = []
+    for f, b in zip(F, B):
+        cells = {lt.FORCE_COLUMN: f"{f:.4f}", "gain_sel": str(setting.gain_sel) if setting else "0",
+                 "res": str(setting.res) if setting else "0"}
+        if raw:
+            lsb = (setting.xy_uT_per_lsb, setting.xy_uT_per_lsb, setting.z_uT_per_lsb)
+            codes = np.clip(np.round(b / np.array(lsb)), -limit, limit).astype(int)
+            cells.update({c: str(v) for c, v in zip(lt.CODE_COLUMNS, codes)})
+        else:
+            cells.update({c: f"{v:.3f}" for c, v in zip(lt.UT_COLUMNS, b)})
+        rows.append([cells.get(c, "x") for c in cols])
+    edges = [str(v) for v in (limit - 1, limit, -limit, 25000, 50000, -50000, 49999.999, 1e9)]
+    for _ in range(draw(st.integers(0, 3))):
+        if rows:
+            i, j = draw(st.integers(0, len(rows) - 1)), draw(st.integers(0, len(cols) - 1))
+            rows[i][j] = draw(st.sampled_from(HOSTILE_CELLS + edges))
+    if rows and draw(st.integers(0, 6)) == 0:
+        rows[draw(st.integers(0, len(rows) - 1))].pop()                       # a short row
+    delim = draw(st.sampled_from([",", ",", ";", "\t"]))
+    lines = [delim.join(cols)] + [delim.join(r) for r in rows]
+    if draw(st.integers(0, 6)) == 0:
+        extra = draw(st.sampled_from(["# comment", "", "   ", delim.join(cols)]))
+        lines.insert(draw(st.integers(0, len(lines))), extra)
+    text = "\n".join(lines) + draw(st.sampled_from(["\n", "", "\r\n"]))
+    return ("\ufeff" if draw(st.integers(0, 8)) == 0 else "") + text
+
+
+@pytest.fixture(scope="module")
+def forward_response(loadtest_files):
+    return loadtest_files["resp"]
+
+
+CAL_OUTPUTS = {"calibrated.yaml", "calibration.json", "residuals.csv", "lookup.csv", "force_table.h"}
+
+
+@contextlib.contextmanager
+def run_on_csv(command: str, text: str, *options):
+    """``mst COMMAND FORWARD in.csv --out o OPTIONS`` in a fresh folder: (folder, result, seconds,
+    warnings caught)."""
+    with tempfile.TemporaryDirectory() as d:
+        folder = Path(d)
+        (folder / "in.csv").write_text(text)
+        r, dt, caught = invoke([command, FORWARD, folder / "in.csv", "--out", folder / "o", *options])
+        event(f"exit {r.exit_code}")
+        yield folder, r, dt, caught
+
+
+@settings(max_examples=40, **PROPERTY)
+@given(data=st.data())
+def test_property_load_tests_from_the_column_rules_keep_the_contract(forward_response, data):
+    resp = forward_response
+    text = data.draw(reading_files(True, resp, resp.chip_setting))
+    with run_on_csv("calibrate", text, "--no-plot") as (folder, r, dt, caught):
+        contract(r, dt, caught, folder, CAL_OUTPUTS, CAL_OUTPUTS - {"force_table.h"}, 20.0)
+        if r.exit_code == 1:
+            assert r.stderr.count("\n") == 1 and r.stderr.startswith("mst: calibration failed"), r.stderr
+
+
+@settings(max_examples=60, **PROPERTY)
+@given(data=st.data())
+def test_property_readings_from_the_column_rules_keep_the_contract(forward_response, data):
+    resp = forward_response
+    text = data.draw(reading_files(False, resp, resp.chip_setting))
+    with run_on_csv("read", text) as (folder, r, dt, caught):
+        contract(r, dt, caught, folder, {"forces.csv"}, {"forces.csv"}, 10.0, chatter=("mst read: warning",))
+        assert r.exit_code in (0, 2), r.stderr
+        if r.exit_code == 0:
+            flags = [row.rsplit(",", 2)[-2] for row in (folder / "o" / "forces.csv").read_text().splitlines()[1:]]
+            from mst_cli.calibrate.fit import FLAGS
+            assert set(flags) <= set(FLAGS), flags
+
+
+# ----------------------------------------------------------------- manifests from the Manifest type
+def manifest_paths(kind=None, prefix=""):
+    """(dotted path, kind) of every field of export.json as :class:`Manifest` declares it."""
+    from dataclasses import fields as dc_fields
+    from dataclasses import is_dataclass
+
+    from mst_cli.cad.manifest import ListOf, Manifest
+    kind = Manifest if kind is None else kind
+    for f in dc_fields(kind):
+        sub, path = f.metadata["kind"], f"{prefix}{f.name}"
+        yield path, sub
+        if isinstance(sub, ListOf):              # (a ListOf is itself a dataclass instance)
+            yield from manifest_paths(sub.kind, path + ".0.")
+        elif isinstance(sub, type) and is_dataclass(sub):
+            yield from manifest_paths(sub, path + ".")
+
+
+def valid_for(kind):
+    """Values the manifest's field ``kind`` accepts, drawn from its own bounds."""
+    from dataclasses import fields as dc_fields
+    from dataclasses import is_dataclass
+
+    from mst_cli.cad import manifest as M
+    if isinstance(kind, str):
+        return {"num": st.floats(-M.MAX_COORD_MM, M.MAX_COORD_MM), "pos": st.floats(M.MIN_SIZE_MM, M.MAX_COORD_MM),
+                "tol": st.floats(*M.STL_TOLERANCE_MM), "vol": st.floats(0, M.MAX_VOLUME),
+                "int": st.integers(-10 ** 9, 10 ** 9), "str": st.text(max_size=12)}[kind]
+    if isinstance(kind, tuple):
+        return st.lists(valid_for(kind[0]), min_size=kind[1], max_size=kind[1])
+    if isinstance(kind, M.ListOf):
+        return st.lists(valid_for(kind.kind), min_size=kind.min_len, max_size=3)
+    assert isinstance(kind, type) and is_dataclass(kind)
+    return st.fixed_dictionaries({f.name: valid_for(f.metadata["kind"]) for f in dc_fields(kind)})
+
+
+MANIFEST_FIELDS = list(manifest_paths())
+SLICE_READS = ("name", "print", "print.layer_height_mm", "print.pause", "print.cavity_lines")
+
+
+@st.composite
+def generated_manifests(draw, base: dict):
+    """export.json: the reference export's with 1-3 fields of the Manifest type redrawn, from
+    the field's own kind (mostly valid: the run goes on to the arithmetic) or hostile."""
+    manifest = json.loads(json.dumps(base))
+    for _ in range(draw(st.integers(1, 3))):
+        path, kind = draw(st.sampled_from(MANIFEST_FIELDS))
+        value = draw(st.one_of(valid_for(kind), valid_for(kind), values, st.just(KeyError),
+                               st.sampled_from([1e37, -1e37, 10 ** 30, 1e-300, 0, -1, 1e-4, 1e-3, 1000.0])))
+        with contextlib.suppress(KeyError, IndexError, TypeError):   # the path is gone (an earlier
+            mutate(manifest, path, value)                               # draw replaced its parent)
+    return manifest
+
+
+@pytest.fixture(scope="module")
+def slice_base(exported):
+    return exported_manifest(exported)
+
+
+@settings(max_examples=60, **PROPERTY)
+@given(data=st.data())
+def test_property_manifests_from_the_manifest_type_keep_the_contract_in_check_and_slice(
+        exported, slice_base, fake_slicer, data):
+    from mst_cli.cad.manifest import Manifest, SliceManifest
+    from mst_cli.errors import InputError
+    manifest = data.draw(generated_manifests(slice_base))
+    fake_slicer(good_gcode(exported))
+    try:
+        Manifest.from_dict(manifest)
+        whole = True
+    except InputError:
+        whole = False
+    if whole:
+        SliceManifest.from_dict(manifest)        # what check accepts, slice accepts: one set of rules
+    with tempfile.TemporaryDirectory() as d:
+        folder = slice_export(exported, Path(d) / "c", manifest)
+        r, dt, caught = invoke(["check", folder, "--json"])
+        contract(r, dt, caught, folder, set(), set(), 20.0)
+        checked = r.exit_code
+        assert (checked == 2) != whole, (checked, r.stderr)
+        r, dt, caught = invoke(["slice", folder, "--no-plot", "--json"])
+        event(f"check {checked}, slice {r.exit_code}")
+        contract(r, dt, caught, folder, {"sensor.gcode", "slice.json"}, {"sensor.gcode", "slice.json"}, 20.0,
+                 chatter=("[",), judged="mst slice: failed: ")
+        if r.exit_code == 2:
+            assert checked == 2, r.stderr        # slice refuses only what check refuses too
+        if r.exit_code != 2:
+            report = load_json_strict(folder / "slice.json")
+            assert report["name"] == manifest.get("name")
+
+
+# ----------------------------------------------------------------- slicer results
+@st.composite
+def slicer_results(draw, good: bytes):
+    """What a slicer may leave: the good G-code, empty, truncated anywhere, bytes dropped or
+    garbled, numbers made hostile, the closing block gone, or nothing with exit 0 or 1."""
+    code = draw(st.sampled_from([0, 0, 0, 1]))
+    op = draw(st.sampled_from(["good", "none", "empty", "truncate", "garble", "numbers", "drop-lines", "no-end"]))
+    data = good
+    if op == "none":
+        return None, code
+    if op == "empty":
+        data = draw(st.sampled_from([b"", b"\n", b"   \n\n"]))
+    elif op == "truncate":
+        data = good[:draw(st.integers(0, len(good) - 1))]
+    elif op == "garble":
+        at = draw(st.integers(0, len(good)))
+        data = good[:at] + draw(st.binary(min_size=1, max_size=12)) + good[at:]
+    elif op == "numbers":
+        text = good.decode()
+        tokens = list(re.finditer(r"-?\d+\.?\d*", text))
+        for _ in range(draw(st.integers(1, 4))):
+            m = draw(st.sampled_from(tokens))
+            text = text[:m.start()] + draw(st.sampled_from(["nan", "inf", "1e400", "-0", "99999999", "1e-300", "",
+                                                            "0", "-5"])) + text[m.end():]
+            tokens = list(re.finditer(r"-?\d+\.?\d*", text))
+        data = text.encode()
+    elif op == "drop-lines":
+        lines = good.decode().splitlines(keepends=True)
+        keep = draw(st.lists(st.booleans(), min_size=len(lines), max_size=len(lines)))
+        data = "".join(line for line, k in zip(lines, keep) if k or "prusaslicer_config = end" in line).encode()
+    elif op == "no-end":
+        data = good.decode().replace("; prusaslicer_config = end\n", "").encode()
+    return data, code
+
+
+@settings(max_examples=80, **PROPERTY)
+@given(data=st.data())
+def test_property_slicer_results_keep_the_contract(exported, fake_slicer, data):
+    gcode, code = data.draw(slicer_results(good_gcode(exported)))
+    fake_slicer(gcode, code)
+    with tempfile.TemporaryDirectory() as d:
+        folder = slice_export(exported, Path(d) / "c")
+        r, dt, caught = invoke(["slice", folder, "--no-plot", "--json"])
+        event(f"exit {r.exit_code}")
+        contract(r, dt, caught, folder, {"sensor.gcode", "slice.json"}, {"sensor.gcode", "slice.json"}, 20.0,
+                 chatter=("[",), judged="mst slice: failed: ")
+        said = [s for s in r.stderr.strip().splitlines() if not s.startswith("[")]
+        if r.exit_code == 1:
+            assert len(said) == 1 and said[0].startswith("mst slice: "), said
+        if r.exit_code == 0 or "mst slice: failed: " in r.stderr:
+            assert gcode is not None and (folder / "sensor.gcode").read_bytes() == gcode
+
+
+# ----------------------------------------------------------------- one owner per shared bound
+@st.composite
+def valid_design_documents(draw):
+    """A design of 1-4 layers with printer, family, magnet and housing keys at valid extremes
+    of their own schema rules (in_bounds above)."""
+    doc = yaml.safe_load(FORWARD.read_text())
+    for section in ("printer", "family", "housing", "magnet"):
+        rules = SECTIONS[section]
+        for key in draw(st.lists(st.sampled_from(sorted(rules)), max_size=2, unique=True)):
+            choices = in_bounds(rules[key])
+            if choices:
+                doc.setdefault(section, {})[key] = draw(st.sampled_from(choices))
+    n = draw(st.integers(1, 4))
+    doc["layers"] = [doc["layers"][i % len(doc["layers"])] for i in range(n)]
+    doc["name"] = draw(st.sampled_from(["p", "µ-sensor", "x" * 60]))
+    return doc
+
+
+@settings(max_examples=150, **PROPERTY)
+@given(raw=valid_design_documents(), tolerance=st.one_of(st.floats(1e-4, 1.0), st.sampled_from([1e-4, 1.0])))
+def test_property_what_export_writes_check_and_slice_accept(raw, tolerance):
+    from hypothesis import assume
+
+    from mst_cli.cad.assembly import check_fits
+    from mst_cli.cad.manifest import STL_TOLERANCE_MM, Manifest, SliceManifest, export_manifest
+    from mst_cli.errors import InputError
+    from mst_cli.io.schema import parse_document
+    lo, hi = STL_TOLERANCE_MM
+    assume(lo <= tolerance <= hi)                 # what 'mst export --stl-tolerance' accepts
+    try:
+        doc = parse_document(raw)
+        geometry = doc.geometry()
+        assume(not geometry.violations(doc.printer))
+        check_fits(geometry)                      # what 'mst export' checks before it writes
+    except InputError:
+        assume(False)
+    event(f"{len(geometry.layers)} layers")
+    manifest = json.loads(json.dumps(export_manifest(doc.name, geometry, doc.printer, tolerance, ["sensor.stl"])))
+    Manifest.from_dict(manifest)                  # mst check reads it
+    SliceManifest.from_dict(manifest)             # mst slice reads it
