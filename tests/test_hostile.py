@@ -1157,6 +1157,15 @@ def test_the_finest_stl_tolerance_export_writes_is_one_check_accepts(tmp_path):
     assert "must be a number from" in refused(run(["export", FORWARD, "--stl-tolerance", hi * 2]), "--stl-tolerance")
 
 
+def test_check_nozzle_has_the_design_files_range(exported):
+    from mst_cli.io.schema import SECTIONS
+    rule = SECTIONS["printer"]["nozzle_mm"]
+    for value in (rule.lo, rule.hi):
+        assert run(["check", exported, "--nozzle", value]).exit_code in (0, 1)
+    for value in (rule.lo / 2, rule.hi * 2):
+        assert f"from {rule.lo:g} to {rule.hi:g} mm" in refused(run(["check", exported, "--nozzle", value]), "--nozzle")
+
+
 def test_every_seed_option_has_the_spec_files_range():
     from mst_cli.cli.app import load_command
     from mst_cli.io.schema import SECTIONS

@@ -154,8 +154,13 @@ def check(path: Path, as_json: bool, nozzle_mm: float | None) -> None:
     from mst_cli.cad.manifest import load_manifest
     from mst_cli.errors import InputError
 
-    if nozzle_mm is not None and not 0.05 <= nozzle_mm <= 5.0:
-        raise InputError("--nozzle", nozzle_mm, "must be a nozzle diameter from 0.05 to 5 mm")
+    if nozzle_mm is not None:                    # one bound: printer.nozzle_mm's in a design file
+        from dataclasses import fields
+
+        from mst_cli.model.geometry import Printer
+        lo, hi = next((f.metadata["lo"], f.metadata["hi"]) for f in fields(Printer) if f.name == "nozzle_mm")
+        if not lo <= nozzle_mm <= hi:
+            raise InputError("--nozzle", nozzle_mm, f"must be a nozzle diameter from {lo:g} to {hi:g} mm")
     stl, manifest_path = resolve_paths(path)
     # both inputs are validated before anything is measured: every field the checks read (type,
     # nesting, finite and sane size) and every STL coordinate (finite, within a metre). Nothing
