@@ -1,8 +1,15 @@
-"""Hostile input and faults (issue 13): no traceback, no hang, no silent acceptance, nothing
-half-written. One section per class of the issue; each holds at least one test that failed on
-the tree before the fix. The last section is the property suite: hostile documents generated
-from the schema's own rules, run through ``mst simulate`` in-process."""
+"""Hostile input and faults (issues 13 and 22): no traceback, no hang, no silent acceptance,
+nothing half-written. One section per class of the issues; each holds at least one test that
+failed on the tree before the fix. Sections 8 and 17 are the property suites: hostile documents
+generated from the schema's own rules, run through ``mst simulate`` in-process; load tests and
+readings from their column rules, export.json from the Manifest type (through ``mst check`` and
+``mst slice``), slicer results, and designs at their bounds through what export writes.
 
+Tests that send signals set the dispositions they rely on in the child (a background or nohup
+shell starts children with SIGINT/SIGHUP ignored); the suite passes from a terminal, a pipe or
+a background shell."""
+
+import contextlib
 import errno
 import json
 import math
@@ -388,9 +395,29 @@ SIMULATE_SLOW_PLOT = textwrap.dedent("""
 """)
 
 
+HANDLED = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
+
+
+def default_dispositions():
+    """In the child before exec: SIGINT/SIGTERM/SIGHUP at their defaults. A background or nohup
+    shell starts its children with SIGINT/SIGHUP ignored (issue 22), and an ignored disposition
+    survives exec; the tests below are about the default ones, so they set them."""
+    for sig in HANDLED:
+        signal.signal(sig, signal.SIG_DFL)
+
+
+def ignoring(*sigs):
+    """A preexec_fn: the defaults, then ``sigs`` ignored (as nohup or 'cmd &' start a child)."""
+    def setup():
+        default_dispositions()
+        for sig in sigs:
+            signal.signal(sig, signal.SIG_IGN)
+    return setup
+
+
 def interrupt(script, out: Path, sig, *extra):
     p = subprocess.Popen([PYTHON, "-c", script, str(out), *map(str, extra)], stdout=subprocess.PIPE,
-                         stderr=subprocess.PIPE, text=True, cwd=out.parent)
+                         stderr=subprocess.PIPE, text=True, cwd=out.parent, preexec_fn=default_dispositions)
     try:
         assert p.stdout.readline().strip().endswith("staged")
         assert staging_left(out)                     # the staging folder exists now
@@ -420,6 +447,39 @@ def test_interrupted_simulate_keeps_the_earlier_complete_output(tmp_path, sig):
     assert err.strip().splitlines()[-1] == f"mst: interrupted ({sig.name}): nothing half-written was left"
     assert len(err.strip().splitlines()) == 1, err
     assert {p.name: p.read_bytes() for p in out.iterdir()} == before
+
+
+STAGE_AND_WAIT = textwrap.dedent("""
+    import sys
+    from pathlib import Path
+    from mst_cli.io.outputs import staged
+    with staged(Path(sys.argv[1])) as st:
+        st.write_text("report.json", "{}")
+        print("staged", flush=True)
+        sys.stdin.readline()                     # the test's go-ahead, after its signals
+        st.write_text("response.csv", "F\\n")
+    print("committed", flush=True)
+""")
+
+
+@pytest.mark.parametrize("sigs", [(signal.SIGHUP,), (signal.SIGINT, signal.SIGHUP), (signal.SIGTERM,)],
+                         ids=lambda s: "+".join(x.name for x in s))
+def test_a_signal_ignored_at_start_stays_ignored_and_the_run_completes(tmp_path, sigs):
+    # the decision of issue 22: mst keeps a disposition it inherits as ignored (nohup, 'cmd &'
+    # in a script): such a run is not stopped by that signal and writes its whole output
+    out = tmp_path / "o"
+    p = subprocess.Popen([PYTHON, "-c", STAGE_AND_WAIT, str(out)], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+                         stderr=subprocess.PIPE, text=True, preexec_fn=ignoring(*sigs))
+    try:
+        assert p.stdout.readline().strip() == "staged"
+        for sig in sigs:
+            p.send_signal(sig)
+        stdout, err = p.communicate("go\n", timeout=30)
+    finally:
+        if p.poll() is None:
+            p.kill()
+    assert p.returncode == 0 and stdout.strip() == "committed", (p.returncode, err)
+    assert {q.name for q in out.iterdir()} == {"report.json", "response.csv"}
 
 
 def dead_pid() -> int:
@@ -579,6 +639,7 @@ def test_check_json_holds_no_nan(exported):
     ["simulate"],
     ["nope"],
     ["design", SPEC, "--seed", "-1"],
+    ["bench", "--seed", "-5"],
     ["export", FORWARD, "--stl-tolerance", "abc"],
     ["check"],
     ["bench", "--samples", "0"],
@@ -793,3 +854,706 @@ def test_property_hostile_manifests_keep_the_contract(exported, path, value):
             json.loads(r.stdout, parse_constant=no_constant)
         assert not [w for w in caught if issubclass(w.category, RuntimeWarning)], [str(w.message) for w in caught]
         assert dt < 20.0, dt
+
+
+# =========================================================================== issue 22: round two
+# Each section below is one class of issue 22; each test failed (a hang, a traceback, a wrong
+# exit code or message) on the tree before its fix.
+MST = "import sys; from mst_cli.cli.app import main; main(sys.argv[1:], prog_name='mst')"
+
+
+def mst_process(args, timeout=120, **kwargs) -> subprocess.CompletedProcess:
+    """``mst ARGS`` in its own process, bounded: a command that blocks fails the test."""
+    return subprocess.run([PYTHON, "-c", MST, *map(str, args)], capture_output=True, text=True,
+                          timeout=timeout, **kwargs)
+
+
+def refused_line(p: subprocess.CompletedProcess, code: int = 2) -> str:
+    assert p.returncode == code, (p.returncode, p.stdout, p.stderr)
+    assert "Traceback" not in p.stderr, p.stderr
+    lines = p.stderr.strip().splitlines()
+    assert len(lines) == 1, lines
+    return lines[0]
+
+
+# ----------------------------------------------------------------- 9. special files (FIFO, devices)
+@pytest.fixture(scope="module")
+def loadtest_files(tmp_path_factory):
+    """A small valid load test and readings file of the forward design (its own model + noise)."""
+    from mst_cli.io.schema import load_document
+    from mst_cli.model.response import simulate
+    doc = load_document(FORWARD)
+    resp = simulate(doc.geometry(), doc.material, noise_uT_rms=doc.noise_uT_rms)
+    rng = np.random.default_rng(5)
+    F = np.sort(rng.uniform(0, resp.max_force_N, 40))
+    B = np.stack([np.interp(F, resp.force_N, resp.B_T[:, i]) for i in range(3)], -1) * 1e6
+    B = B + rng.normal(0, 2.0, B.shape)
+    d = tmp_path_factory.mktemp("lt")
+    (d / "lt.csv").write_text("force_N,Bx_uT,By_uT,Bz_uT\n"
+                              + "".join(f"{f:.4f},{x:.3f},{y:.3f},{z:.3f}\n" for f, (x, y, z) in zip(F, B)))
+    (d / "readings.csv").write_text("Bx_uT,By_uT,Bz_uT\n" + "".join(f"{x:.3f},{y:.3f},{z:.3f}\n" for x, y, z in B))
+    return {"dir": d, "lt": d / "lt.csv", "readings": d / "readings.csv", "resp": resp, "F": F, "B_uT": B}
+
+
+def fifo(tmp_path, name) -> Path:
+    path = tmp_path / name
+    os.mkfifo(path)
+    return path
+
+
+@pytest.mark.parametrize("case", ["calibrate-loadtest", "read-readings", "calibrate-design", "read-model",
+                                  "simulate", "check-manifest", "slice-profile"])
+def test_a_fifo_is_refused_naming_the_path_without_blocking(tmp_path, loadtest_files, exported, case):
+    out = tmp_path / "o"
+    if case == "calibrate-loadtest":
+        args, name = ["calibrate", FORWARD, fifo(tmp_path, "lt.csv")], "lt.csv"
+    elif case == "read-readings":
+        args, name = ["read", FORWARD, fifo(tmp_path, "r.csv")], "r.csv"
+    elif case == "calibrate-design":
+        args, name = ["calibrate", fifo(tmp_path, "d.yaml"), loadtest_files["lt"]], "d.yaml"
+    elif case == "read-model":
+        args, name = ["read", fifo(tmp_path, "m.yaml"), loadtest_files["readings"]], "m.yaml"
+    elif case == "simulate":
+        args, name = ["simulate", fifo(tmp_path, "d.yaml")], "d.yaml"
+    elif case == "check-manifest":
+        folder = copy_export(exported, tmp_path / "c")
+        (folder / "export.json").unlink()
+        os.mkfifo(folder / "export.json")
+        args, name, out = ["check", folder], "export.json", None
+    else:
+        args, name, out = ["slice", exported, "--profile", fifo(tmp_path, "p.ini")], "p.ini", None
+    p = mst_process(args + (["--out", out] if out else []), timeout=60)
+    line = refused_line(p)
+    assert "a FIFO (named pipe)" in line and name in line, line
+    assert out is None or not out.exists()
+
+
+def test_a_fifo_beside_the_model_in_place_of_calibration_json_does_not_block(tmp_path, loadtest_files):
+    model = tmp_path / "model.yaml"
+    model.write_text(FORWARD.read_text())
+    fifo(tmp_path, "calibration.json")
+    p = mst_process(["read", model, loadtest_files["readings"], "--out", tmp_path / "o"], timeout=60)
+    assert p.returncode == 0, p.stderr
+    assert "has no calibration.json beside it" in p.stderr
+    assert (tmp_path / "o" / "forces.csv").is_file()
+
+
+@pytest.mark.parametrize("cmd", ["calibrate", "read"])
+def test_a_device_as_the_csv_is_refused_by_kind(tmp_path, cmd):
+    args = [cmd, FORWARD, "/dev/zero", "--out", tmp_path / "o"]
+    line = refused(run(args), "(file)")
+    assert "a character device" in line and "/dev/zero" in line, line
+
+
+# ----------------------------------------------------------------- 10. mst slice trusts export.json
+BUNDLED_PROFILE = ROOT / "configs" / "print" / "tpu85a-0.4mm.ini"
+FAKE_EXE = "/fake/prusa-slicer"
+
+
+def box_gcode(layers: int = 25, pause_after: int | None = None, layer_h: float = 0.2, size: float = 10.0,
+              centre=(125.0, 105.0), end: bool = True, **config) -> str:
+    """PrusaSlicer-like G-code of a square tube ``size`` wide, ``layers`` high, with the footer and
+    the closing config block PrusaSlicer writes (``end=False``: without the last line)."""
+    x0, y0 = centre[0] - size / 2, centre[1] - size / 2
+    corners = [(x0, y0), (x0 + size, y0), (x0 + size, y0 + size), (x0, y0 + size), (x0, y0)]
+    out = ["M83", "G90", "G92 E0"]
+    for k in range(1, layers + 1):
+        z = round(k * layer_h, 4)
+        out += [";LAYER_CHANGE", f";Z:{z:g}", f";HEIGHT:{layer_h:g}", f"G1 Z{z:g} F600"]
+        if pause_after is not None and k == pause_after + 1:
+            out += [";PAUSE_PRINT", "M117 magnet", "M601"]
+        out += [";TYPE:External perimeter", ";WIDTH:0.45", f"G1 X{corners[0][0]:.3f} Y{corners[0][1]:.3f}"]
+        out += [f"G1 X{x:.3f} Y{y:.3f} E0.40000" for x, y in corners[1:]]
+    out += ["; filament used [mm] = 100.0", "; filament used [cm3] = 0.24", "; total filament used [g] = 0.29",
+            "; estimated printing time (normal mode) = 10m 5s", "; prusaslicer_config = begin",
+            "; pause_print_gcode = M601", f"; layer_height = {layer_h:g}"]
+    out += [f"; {k} = {v}" for k, v in config.items()]
+    out += ["; prusaslicer_config = end"] if end else []
+    return "\n".join(out) + "\n"
+
+
+class FakeSlicer:
+    """PrusaSlicer's command line as mst drives it, in-process (``cad.slicer._run``): --save
+    writes the bundled profile, --help names a version, --export-gcode writes ``gcode`` (bytes,
+    or None: nothing) and exits with ``code``. ``calls`` counts the slices."""
+
+    def __init__(self, gcode: bytes | None, code: int = 0):
+        self.gcode, self.code, self.calls = gcode, code, 0
+
+    def __call__(self, args, timeout_s):
+        if "--save" in args:
+            Path(args[args.index("--save") + 1]).write_text(BUNDLED_PROFILE.read_text())
+            return subprocess.CompletedProcess(args, 0, "", "")
+        if "--help" in args:
+            return subprocess.CompletedProcess(args, 0, "PrusaSlicer-2.7.0+fake\n", "")
+        self.calls += 1
+        if self.gcode is not None:
+            Path(args[args.index("--output") + 1]).write_bytes(self.gcode)
+        return subprocess.CompletedProcess(args, self.code, "", "Slicing done\n")
+
+
+@pytest.fixture
+def fake_slicer(monkeypatch):
+    """Install a FakeSlicer (G-code of the forward design's pause by default); returns it."""
+    import mst_cli.cad.slicer as S
+
+    def install(gcode=None, code=0):
+        fake = FakeSlicer(gcode, code)
+        monkeypatch.setattr(S, "find_prusa_slicer", lambda: FAKE_EXE)
+        monkeypatch.setattr(S, "_run", fake)
+        S.known_options.cache_clear()
+        return fake
+    yield install
+    S.known_options.cache_clear()
+
+
+def slice_export(exported: Path, dest: Path, manifest=None) -> Path:
+    """A copy of the export (STL + export.json, or ``manifest`` as export.json) to slice."""
+    folder = copy_export(exported, dest)
+    if manifest is not None:
+        (folder / "export.json").write_text(manifest if isinstance(manifest, str) else json.dumps(manifest))
+    return folder
+
+
+def exported_manifest(exported: Path) -> dict:
+    return json.loads((exported / "export.json").read_text())
+
+
+def good_gcode(exported: Path) -> bytes:
+    pause = exported_manifest(exported)["print"]["pause"]
+    return box_gcode(layers=pause["after_layer"] + 10, pause_after=pause["after_layer"]).encode()
+
+
+def test_fake_slicer_g_code_of_the_reference_export_passes(exported, tmp_path, fake_slicer):
+    fake = fake_slicer(good_gcode(exported))
+    folder = slice_export(exported, tmp_path / "s")
+    r = run(["slice", folder, "--no-plot", "--json"])
+    assert r.exit_code == 0, r.stderr
+    assert fake.calls == 2 and json.loads(r.stdout)["pause"]["ok"]
+
+
+@pytest.mark.parametrize("path,value,field", [
+    (None, [1, 2], "export.json"),
+    ("print.pause.z_mm", "1e400", "export.json.print.pause.z_mm"),
+    ("print.pause.after_layer", "abc", "export.json.print.pause.after_layer"),
+    ("print.pause.after_layer", 1e30, "export.json.print.pause.after_layer"),
+    ("print.layer_height_mm", "NaN", "export.json"),
+    ("print.cavity_lines.0", {"layer": 1}, "export.json.print.cavity_lines[0].x_mm"),
+    ("print", "x", "export.json.print"),
+    ("name", 7, "export.json.name"),
+], ids=["list", "pause-1e400", "layer-abc", "layer-1e30", "nan-layer-height", "cavity-line", "print", "name"])
+def test_slice_validates_export_json_before_slicing(exported, tmp_path, fake_slicer, path, value, field):
+    fake = fake_slicer(good_gcode(exported))
+    manifest = exported_manifest(exported)
+    if path is None:
+        text = json.dumps(value)
+    else:
+        literal = value if value in ("1e400", "NaN") else None
+        mutate(manifest, path, "@@" if literal else value)
+        text = json.dumps(manifest).replace('"@@"', literal) if literal else json.dumps(manifest)
+    folder = slice_export(exported, tmp_path / "s", text)
+    r = run(["slice", folder, "--no-plot"])
+    line = refused(r, field)
+    assert fake.calls == 0, "sliced before the manifest was checked"
+    assert not (folder / "sensor.gcode").exists() and not staging_left(folder), line
+
+
+# ----------------------------------------------------------------- 11. a slicer that lies
+FAKE_SLICER_SCRIPT = """#!{python}
+import sys
+print("Slicing done")          # and exit 0, writing nothing
+"""
+
+
+def test_a_slicer_that_exits_0_and_writes_nothing_is_a_one_line_machine_fault(exported, tmp_path, monkeypatch):
+    fake = tmp_path / "prusa-slicer"
+    fake.write_text(FAKE_SLICER_SCRIPT.format(python=PYTHON))
+    fake.chmod(0o755)
+    monkeypatch.setenv("MST_PRUSA_SLICER", str(fake))
+    folder = slice_export(exported, tmp_path / "s")
+    before = sorted(p.name for p in folder.iterdir())
+    r = run(["slice", folder, "--no-plot"])
+    assert r.exit_code == 1 and (r.exception is None or isinstance(r.exception, SystemExit)), r.exception
+    line = one_line(r)
+    assert line.startswith("mst slice: prusa-slicer --save") and "exited 0 but wrote no config" in line, line
+    assert sorted(p.name for p in folder.iterdir()) == before
+
+
+@pytest.mark.parametrize("gcode,reason", [
+    (None, "exited 0 but wrote no G-code"),
+    (b"", "an empty G-code file"),
+    (b"\xff\xfe\x00garbage", "not UTF-8"),
+    ("truncated", "it is truncated"),
+    ("no-end", "it is truncated"),
+    (box_gcode(layers=0).encode(), "without one extrusion of the part"),
+], ids=["nothing", "empty", "binary", "truncated", "no-end", "no-part"])
+def test_slicer_output_that_is_missing_empty_or_truncated_is_exit_1(exported, tmp_path, fake_slicer, gcode, reason):
+    good = good_gcode(exported)
+    gcode = {"truncated": good[:len(good) // 2], "no-end": box_gcode(end=False).encode()}.get(gcode, gcode)
+    fake_slicer(gcode)
+    folder = slice_export(exported, tmp_path / "s")
+    before = sorted(p.name for p in folder.iterdir())
+    r = run(["slice", folder, "--no-plot"])
+    assert r.exit_code == 1 and (r.exception is None or isinstance(r.exception, SystemExit)), r.exception
+    lines = [s for s in r.stderr.strip().splitlines() if not s.startswith("[")]      # not the progress lines
+    assert len(lines) == 1 and reason in lines[0] and lines[0].endswith("nothing was written"), lines
+    assert sorted(p.name for p in folder.iterdir()) == before
+
+
+# ----------------------------------------------------------------- 12. a full disk during export
+def file_size_limit(nbytes: int):
+    """A preexec_fn: writes past ``nbytes`` fail with EFBIG (Python ignores SIGXFSZ), as a full
+    file system would fail them, in every writer of the process, OCCT's included."""
+    import resource
+
+    def setup():
+        default_dispositions()
+        resource.setrlimit(resource.RLIMIT_FSIZE, (nbytes, nbytes))
+    return setup
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("fmt,name", [("--step", "sensor.step"), ("--stl", "sensor.stl"), ("--3mf", "sensor.3mf")])
+def test_export_onto_a_full_disk_is_one_line_exit_1_for_every_writer(tmp_path, fmt, name):
+    out = tmp_path / "o"
+    p = mst_process(["export", FORWARD, fmt, "--out", out], timeout=300, preexec_fn=file_size_limit(5_000))
+    line = [s for s in p.stderr.strip().splitlines() if not s.startswith("[")]
+    assert p.returncode == 1 and "Traceback" not in p.stderr, p.stderr
+    assert line == [f"mst: system error: {out / name}: File too large (EFBIG)"], line
+    assert not out.exists()
+
+
+def test_step_writer_failure_on_a_full_disk_names_the_file(tmp_path, monkeypatch):
+    import mst_cli.cad.deterministic as det
+    real = Path.write_bytes
+
+    def full(self, data):
+        if self.suffix == ".step":
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        return real(self, data)
+    monkeypatch.setattr(Path, "write_bytes", full)
+    monkeypatch.setattr(det, "_renumber_nauo", lambda data: data)
+    out = tmp_path / "o"
+
+    class Assembly:
+        pass
+    monkeypatch.setattr("build123d.export_step", lambda assembly, target, **k: target.write(b"ISO-10303-21;"))
+    with pytest.raises(OSError) as exc, staged(out) as st:
+        st.write_bytes("sensor.step", det.step_bytes(Assembly()))
+    assert exc.value.errno == errno.ENOSPC and exc.value.filename == str(out / "sensor.step")
+    assert not out.exists()
+
+
+# ----------------------------------------------------------------- 13. bounds two commands share
+def test_the_finest_stl_tolerance_export_writes_is_one_check_accepts(tmp_path):
+    from mst_cli.cad.manifest import STL_TOLERANCE_MM
+    lo, hi = STL_TOLERANCE_MM
+    out = tmp_path / "fine"
+    assert run(["export", FORWARD, "--stl", "--out", out, "--stl-tolerance", lo]).exit_code == 0
+    r = run(["check", out, "--json"])
+    assert r.exit_code in (0, 1) and "stl_tolerance" not in r.stderr, r.stderr
+    assert json.loads(r.stdout)["checks"]
+    assert "must be a number from" in refused(run(["export", FORWARD, "--stl-tolerance", lo / 2]), "--stl-tolerance")
+    assert "must be a number from" in refused(run(["export", FORWARD, "--stl-tolerance", hi * 2]), "--stl-tolerance")
+
+
+def test_check_nozzle_has_the_design_files_range(exported):
+    from mst_cli.io.schema import SECTIONS
+    rule = SECTIONS["printer"]["nozzle_mm"]
+    for value in (rule.lo, rule.hi):
+        assert run(["check", exported, "--nozzle", value]).exit_code in (0, 1)
+    for value in (rule.lo / 2, rule.hi * 2):
+        assert f"from {rule.lo:g} to {rule.hi:g} mm" in refused(run(["check", exported, "--nozzle", value]), "--nozzle")
+
+
+def test_every_seed_option_has_the_spec_files_range():
+    from mst_cli.cli.app import load_command
+    from mst_cli.io.schema import SECTIONS
+    rule = SECTIONS["design"]["seed"]
+    for name in ("design", "bench"):
+        (opt,) = [p for p in load_command(name).params if p.name == "seed"]
+        assert (opt.type.min, opt.type.max) == (rule.lo, rule.hi), name
+
+
+# ----------------------------------------------------------------- 14. saturation and noise
+def test_read_flags_a_50_mT_reading_saturated(tmp_path):
+    f = write(tmp_path, "Bx_uT,By_uT,Bz_uT\n0,0,50000\n0,0,-50000.0\n30000,0,40000\n0,0,49999\n", "r.csv")
+    r = run(["read", FORWARD, f, "--out", tmp_path / "o"])
+    assert r.exit_code == 0, r.stderr
+    rows = (tmp_path / "o" / "forces.csv").read_text().splitlines()[1:]
+    flags = [row.split(",")[5] for row in rows]
+    assert flags[:2] == ["saturated", "saturated"] and flags[2:] == ["above_range", "above_range"], flags
+
+
+def test_a_noise_only_load_test_is_named_as_no_relation(tmp_path, loadtest_files):
+    rng = np.random.default_rng(1)
+    F = loadtest_files["F"]
+    B = np.array([0.0, 0.0, -3000.0]) + rng.normal(0, 2.0, (len(F), 3))
+    f = write(tmp_path, "force_N,Bx_uT,By_uT,Bz_uT\n" + "".join(
+        f"{a:.4f},{x:.3f},{y:.3f},{z:.3f}\n" for a, (x, y, z) in zip(F, B)), "noise.csv")
+    r = run(["calibrate", FORWARD, f, "--out", tmp_path / "o", "--no-plot"])
+    assert r.exit_code == 1, r.output
+    line = one_line(r)
+    assert "does not follow the force at all" in line and "falls" not in line, line
+    assert not (tmp_path / "o").exists()
+
+
+# ----------------------------------------------------------------- 15. a profile's post-processing
+def test_a_profiles_post_process_script_is_named_in_one_line(exported, tmp_path, fake_slicer):
+    fake_slicer(good_gcode(exported))
+    profile = tmp_path / "pp.ini"
+    profile.write_text(BUNDLED_PROFILE.read_text().replace("post_process = \n",
+                                                           "post_process = /usr/local/bin/strip-moves --fast\n"))
+    folder = slice_export(exported, tmp_path / "s")
+    r = run(["slice", folder, "--no-plot", "--json", "--profile", profile])
+    assert r.exit_code == 0, r.stderr
+    notes = [s for s in r.stderr.splitlines() if s.startswith("mst slice: note")]
+    assert notes == ["mst slice: note: the profile's post_process runs '/usr/local/bin/strip-moves --fast' on "
+                     "each G-code (your script; what is measured is its output)"], notes
+    assert json.loads(r.stdout)["post_process"] == ["/usr/local/bin/strip-moves --fast"]
+    r = run(["slice", folder, "--no-plot"])                  # the bundled profile runs nothing
+    assert r.exit_code == 0 and "mst slice: note" not in r.stderr
+
+
+# ----------------------------------------------------------------- 16. a long load test
+def test_a_load_tests_field_magnitude_is_computed_once():
+    from mst_cli.calibrate.loadtest import parse_readings
+    rd = parse_readings("Bx_uT,By_uT,Bz_uT\n" + "1,2,3\n" * 5, "r.csv", need_force=False)
+    assert rd.B_abs_T is rd.B_abs_T                       # a per-row rd.B_abs_T[i] is O(1) now
+
+
+@pytest.mark.slow
+def test_a_40000_sample_load_test_calibrates_in_seconds_with_a_progress_line(tmp_path, loadtest_files):
+    resp = loadtest_files["resp"]
+    rng = np.random.default_rng(2)
+    F = np.sort(rng.uniform(0, resp.max_force_N, 40_000))
+    B = np.stack([np.interp(F, resp.force_N, resp.B_T[:, i]) for i in range(3)], -1) * 1e6
+    B += rng.normal(0, 2.0, B.shape)
+    f = tmp_path / "big.csv"
+    f.write_text("force_N,Bx_uT,By_uT,Bz_uT\n" + "".join(
+        f"{a:.4f},{x:.3f},{y:.3f},{z:.3f}\n" for a, (x, y, z) in zip(F, B)))
+    assert f.stat().st_size > 1_000_000
+    r, dt = timed(["calibrate", FORWARD, f, "--out", tmp_path / "o", "--no-plot"])
+    assert r.exit_code == 0, r.output
+    assert "fitting 40000 samples" in r.stderr and dt < 15.0, (r.stderr, dt)      # 21.7 s before
+
+
+# =========================================================================== 17. property suite, round two
+PROPERTY = dict(deadline=None, derandomize=True, database=None,
+                suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large,
+                                       HealthCheck.function_scoped_fixture])
+
+
+def contract(r, dt: float, caught, folder: Path, outputs: set[str], required: set[str], limit_s: float,
+             chatter: tuple[str, ...] = (), judged: str | None = None) -> None:
+    """The CLI contract on one run: exit 0/1/2, never an exception; a refusal is one line
+    (besides ``chatter``: progress and warnings); no RuntimeWarning; nothing staged left; the
+    folder holds all of a run's ``required`` files (exit 0, or exit 1 with the ``judged`` line:
+    a result that fails a limit is still written) or none of ``outputs``; JSON strict."""
+    assert r.exit_code in (0, 1, 2), (r.exit_code, r.stderr, r.exception)
+    assert r.exception is None or isinstance(r.exception, SystemExit), repr(r.exception)
+    assert "Traceback" not in r.stderr
+    said = [s for s in r.stderr.strip().splitlines() if s and not s.startswith(chatter)]
+    if r.exit_code == 2:
+        assert len(said) == 1 and said[0].startswith("mst: "), said
+    assert not [w for w in caught if issubclass(w.category, RuntimeWarning)], [str(w.message) for w in caught]
+    assert not staging_left(folder)
+    written = {p.name for p in folder.rglob("*") if p.is_file() and p.name in outputs}
+    complete = r.exit_code == 0 or (r.exit_code == 1 and judged is not None and judged in r.stderr)
+    assert required <= written if complete else written == set(), (r.exit_code, written, r.stderr)
+    for p in folder.rglob("*.json"):
+        if p.name in outputs:
+            load_json_strict(p)
+    assert dt < limit_s, dt
+
+
+def invoke(args):
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        r, dt = timed(args)
+    return r, dt, caught
+
+
+# ----------------------------------------------------------------- load tests and readings
+HOSTILE_CELLS = ["nan", "NaN", "inf", "-inf", "1e400", "-1e400", "1e-400", "", " ", "abc", "0x10", "1_0", "+5",
+                 "--1", "1,5", '"3"', "5e", "١٢", "\0", "50000", "-50000", "32768", "-32768", "1e15", "3.5"]
+WRONG_UNIT_COLUMNS = ["force_kN", "load_g", "Bz_mT", "bx_gauss", "F", "time_s", "note"]
+
+
+@st.composite
+def reading_files(draw, need_force: bool, resp, setting):
+    """A load test (``need_force``) or readings CSV drawn from the column rules of
+    mst_cli.calibrate.loadtest: its column names (uT or raw codes, force, chip setting), the
+    chip's ranges for the numbers, then hostile cells, rows, headers and separators."""
+    from mst_cli.calibrate import loadtest as lt
+    from mst_cli.model import chip as mlx
+    raw = draw(st.booleans()) and setting is not None
+    cols = list(lt.CODE_COLUMNS if raw else lt.UT_COLUMNS)
+    if need_force or draw(st.booleans()):
+        cols.insert(0, lt.FORCE_COLUMN)
+    with_setting = draw(st.booleans())
+    if with_setting:
+        cols += list(lt.SETTING_COLUMNS)
+    cols += draw(st.lists(st.sampled_from(WRONG_UNIT_COLUMNS), max_size=1))
+    if draw(st.integers(0, 5)) == 0:
+        cols = draw(st.permutations(cols))
+    n = draw(st.sampled_from([0, 1, 5, 13, 40]))
+    F = np.sort(np.asarray(draw(st.lists(st.floats(0, 1.05 * resp.max_force_N), min_size=n, max_size=n)), float))
+    B = np.stack([np.interp(F, resp.force_N, resp.B_T[:, i]) for i in range(3)], -1) * 1e6 if n else np.zeros((0, 3))
+    B = B + np.random.default_rng(draw(st.integers(0, 9))).normal(0, 2.0, B.shape)
+    limit = mlx.CODE_RANGE_LSB[setting.res] if setting is not None else 0
+    rows = []
+    for f, b in zip(F, B):
+        cells = {lt.FORCE_COLUMN: f"{f:.4f}", "gain_sel": str(setting.gain_sel) if setting else "0",
+                 "res": str(setting.res) if setting else "0"}
+        if raw:
+            lsb = (setting.xy_uT_per_lsb, setting.xy_uT_per_lsb, setting.z_uT_per_lsb)
+            codes = np.clip(np.round(b / np.array(lsb)), -limit, limit).astype(int)
+            cells.update({c: str(v) for c, v in zip(lt.CODE_COLUMNS, codes)})
+        else:
+            cells.update({c: f"{v:.3f}" for c, v in zip(lt.UT_COLUMNS, b)})
+        rows.append([cells.get(c, "x") for c in cols])
+    edges = [str(v) for v in (limit - 1, limit, -limit, 25000, 50000, -50000, 49999.999, 1e9)]
+    for _ in range(draw(st.integers(0, 3))):
+        if rows:
+            i, j = draw(st.integers(0, len(rows) - 1)), draw(st.integers(0, len(cols) - 1))
+            rows[i][j] = draw(st.sampled_from(HOSTILE_CELLS + edges))
+    if rows and draw(st.integers(0, 6)) == 0:
+        rows[draw(st.integers(0, len(rows) - 1))].pop()                       # a short row
+    delim = draw(st.sampled_from([",", ",", ";", "\t"]))
+    lines = [delim.join(cols)] + [delim.join(r) for r in rows]
+    if draw(st.integers(0, 6)) == 0:
+        extra = draw(st.sampled_from(["# comment", "", "   ", delim.join(cols)]))
+        lines.insert(draw(st.integers(0, len(lines))), extra)
+    text = "\n".join(lines) + draw(st.sampled_from(["\n", "", "\r\n"]))
+    return ("\ufeff" if draw(st.integers(0, 8)) == 0 else "") + text
+
+
+@pytest.fixture(scope="module")
+def forward_response(loadtest_files):
+    return loadtest_files["resp"]
+
+
+CAL_OUTPUTS = {"calibrated.yaml", "calibration.json", "residuals.csv", "lookup.csv", "force_table.h"}
+
+
+@contextlib.contextmanager
+def run_on_csv(command: str, text: str, *options):
+    """``mst COMMAND FORWARD in.csv --out o OPTIONS`` in a fresh folder: (folder, result, seconds,
+    warnings caught)."""
+    with tempfile.TemporaryDirectory() as d:
+        folder = Path(d)
+        (folder / "in.csv").write_text(text)
+        r, dt, caught = invoke([command, FORWARD, folder / "in.csv", "--out", folder / "o", *options])
+        event(f"exit {r.exit_code}")
+        yield folder, r, dt, caught
+
+
+@settings(max_examples=40, **PROPERTY)
+@given(data=st.data())
+def test_property_load_tests_from_the_column_rules_keep_the_contract(forward_response, data):
+    resp = forward_response
+    text = data.draw(reading_files(True, resp, resp.chip_setting))
+    with run_on_csv("calibrate", text, "--no-plot") as (folder, r, dt, caught):
+        contract(r, dt, caught, folder, CAL_OUTPUTS, CAL_OUTPUTS - {"force_table.h"}, 20.0)
+        if r.exit_code == 1:
+            assert r.stderr.count("\n") == 1 and r.stderr.startswith("mst: calibration failed"), r.stderr
+
+
+@settings(max_examples=60, **PROPERTY)
+@given(data=st.data())
+def test_property_readings_from_the_column_rules_keep_the_contract(forward_response, data):
+    resp = forward_response
+    text = data.draw(reading_files(False, resp, resp.chip_setting))
+    with run_on_csv("read", text) as (folder, r, dt, caught):
+        contract(r, dt, caught, folder, {"forces.csv"}, {"forces.csv"}, 10.0, chatter=("mst read: warning",))
+        assert r.exit_code in (0, 2), r.stderr
+        if r.exit_code == 0:
+            flags = [row.rsplit(",", 2)[-2] for row in (folder / "o" / "forces.csv").read_text().splitlines()[1:]]
+            from mst_cli.calibrate.fit import FLAGS
+            assert set(flags) <= set(FLAGS), flags
+
+
+# ----------------------------------------------------------------- manifests from the Manifest type
+def manifest_paths(kind=None, prefix=""):
+    """(dotted path, kind) of every field of export.json as :class:`Manifest` declares it."""
+    from dataclasses import fields as dc_fields
+    from dataclasses import is_dataclass
+
+    from mst_cli.cad.manifest import ListOf, Manifest
+    kind = Manifest if kind is None else kind
+    for f in dc_fields(kind):
+        sub, path = f.metadata["kind"], f"{prefix}{f.name}"
+        yield path, sub
+        if isinstance(sub, ListOf):              # (a ListOf is itself a dataclass instance)
+            yield from manifest_paths(sub.kind, path + ".0.")
+        elif isinstance(sub, type) and is_dataclass(sub):
+            yield from manifest_paths(sub, path + ".")
+
+
+def valid_for(kind):
+    """Values the manifest's field ``kind`` accepts, drawn from its own bounds."""
+    from dataclasses import fields as dc_fields
+    from dataclasses import is_dataclass
+
+    from mst_cli.cad import manifest as M
+    if isinstance(kind, str):
+        return {"num": st.floats(-M.MAX_COORD_MM, M.MAX_COORD_MM), "pos": st.floats(M.MIN_SIZE_MM, M.MAX_COORD_MM),
+                "tol": st.floats(*M.STL_TOLERANCE_MM), "vol": st.floats(0, M.MAX_VOLUME),
+                "int": st.integers(-10 ** 9, 10 ** 9), "str": st.text(max_size=12)}[kind]
+    if isinstance(kind, tuple):
+        return st.lists(valid_for(kind[0]), min_size=kind[1], max_size=kind[1])
+    if isinstance(kind, M.ListOf):
+        return st.lists(valid_for(kind.kind), min_size=kind.min_len, max_size=3)
+    assert isinstance(kind, type) and is_dataclass(kind)
+    return st.fixed_dictionaries({f.name: valid_for(f.metadata["kind"]) for f in dc_fields(kind)})
+
+
+MANIFEST_FIELDS = list(manifest_paths())
+SLICE_READS = ("name", "print", "print.layer_height_mm", "print.pause", "print.cavity_lines")
+
+
+@st.composite
+def generated_manifests(draw, base: dict):
+    """export.json: the reference export's with 1-3 fields of the Manifest type redrawn, from
+    the field's own kind (mostly valid: the run goes on to the arithmetic) or hostile."""
+    manifest = json.loads(json.dumps(base))
+    for _ in range(draw(st.integers(1, 3))):
+        path, kind = draw(st.sampled_from(MANIFEST_FIELDS))
+        value = draw(st.one_of(valid_for(kind), valid_for(kind), values, st.just(KeyError),
+                               st.sampled_from([1e37, -1e37, 10 ** 30, 1e-300, 0, -1, 1e-4, 1e-3, 1000.0])))
+        with contextlib.suppress(KeyError, IndexError, TypeError):   # the path is gone (an earlier
+            mutate(manifest, path, value)                               # draw replaced its parent)
+    return manifest
+
+
+@pytest.fixture(scope="module")
+def slice_base(exported):
+    return exported_manifest(exported)
+
+
+@settings(max_examples=60, **PROPERTY)
+@given(data=st.data())
+def test_property_manifests_from_the_manifest_type_keep_the_contract_in_check_and_slice(
+        exported, slice_base, fake_slicer, data):
+    from mst_cli.cad.manifest import Manifest, SliceManifest
+    from mst_cli.errors import InputError
+    manifest = data.draw(generated_manifests(slice_base))
+    fake_slicer(good_gcode(exported))
+    try:
+        Manifest.from_dict(manifest)
+        whole = True
+    except InputError:
+        whole = False
+    if whole:
+        SliceManifest.from_dict(manifest)        # what check accepts, slice accepts: one set of rules
+    with tempfile.TemporaryDirectory() as d:
+        folder = slice_export(exported, Path(d) / "c", manifest)
+        r, dt, caught = invoke(["check", folder, "--json"])
+        contract(r, dt, caught, folder, set(), set(), 20.0)
+        checked = r.exit_code
+        assert (checked == 2) != whole, (checked, r.stderr)
+        r, dt, caught = invoke(["slice", folder, "--no-plot", "--json"])
+        event(f"check {checked}, slice {r.exit_code}")
+        contract(r, dt, caught, folder, {"sensor.gcode", "slice.json"}, {"sensor.gcode", "slice.json"}, 20.0,
+                 chatter=("[",), judged="mst slice: failed: ")
+        if r.exit_code == 2:
+            assert checked == 2, r.stderr        # slice refuses only what check refuses too
+        if r.exit_code != 2:
+            report = load_json_strict(folder / "slice.json")
+            assert report["name"] == manifest.get("name")
+
+
+# ----------------------------------------------------------------- slicer results
+@st.composite
+def slicer_results(draw, good: bytes):
+    """What a slicer may leave: the good G-code, empty, truncated anywhere, bytes dropped or
+    garbled, numbers made hostile, the closing block gone, or nothing with exit 0 or 1."""
+    code = draw(st.sampled_from([0, 0, 0, 1]))
+    op = draw(st.sampled_from(["good", "none", "empty", "truncate", "garble", "numbers", "drop-lines", "no-end"]))
+    data = good
+    if op == "none":
+        return None, code
+    if op == "empty":
+        data = draw(st.sampled_from([b"", b"\n", b"   \n\n"]))
+    elif op == "truncate":
+        data = good[:draw(st.integers(0, len(good) - 1))]
+    elif op == "garble":
+        at = draw(st.integers(0, len(good)))
+        data = good[:at] + draw(st.binary(min_size=1, max_size=12)) + good[at:]
+    elif op == "numbers":
+        text = good.decode()
+        tokens = list(re.finditer(r"-?\d+\.?\d*", text))
+        for _ in range(draw(st.integers(1, 4))):
+            m = draw(st.sampled_from(tokens))
+            text = text[:m.start()] + draw(st.sampled_from(["nan", "inf", "1e400", "-0", "99999999", "1e-300", "",
+                                                            "0", "-5"])) + text[m.end():]
+            tokens = list(re.finditer(r"-?\d+\.?\d*", text))
+        data = text.encode()
+    elif op == "drop-lines":
+        lines = good.decode().splitlines(keepends=True)
+        keep = draw(st.lists(st.booleans(), min_size=len(lines), max_size=len(lines)))
+        data = "".join(line for line, k in zip(lines, keep) if k or "prusaslicer_config = end" in line).encode()
+    elif op == "no-end":
+        data = good.decode().replace("; prusaslicer_config = end\n", "").encode()
+    return data, code
+
+
+@settings(max_examples=80, **PROPERTY)
+@given(data=st.data())
+def test_property_slicer_results_keep_the_contract(exported, fake_slicer, data):
+    gcode, code = data.draw(slicer_results(good_gcode(exported)))
+    fake_slicer(gcode, code)
+    with tempfile.TemporaryDirectory() as d:
+        folder = slice_export(exported, Path(d) / "c")
+        r, dt, caught = invoke(["slice", folder, "--no-plot", "--json"])
+        event(f"exit {r.exit_code}")
+        contract(r, dt, caught, folder, {"sensor.gcode", "slice.json"}, {"sensor.gcode", "slice.json"}, 20.0,
+                 chatter=("[",), judged="mst slice: failed: ")
+        said = [s for s in r.stderr.strip().splitlines() if not s.startswith("[")]
+        if r.exit_code == 1:
+            assert len(said) == 1 and said[0].startswith("mst slice: "), said
+        if r.exit_code == 0 or "mst slice: failed: " in r.stderr:
+            assert gcode is not None and (folder / "sensor.gcode").read_bytes() == gcode
+
+
+# ----------------------------------------------------------------- one owner per shared bound
+@st.composite
+def valid_design_documents(draw):
+    """A design of 1-4 layers with printer, family, magnet and housing keys at valid extremes
+    of their own schema rules (in_bounds above)."""
+    doc = yaml.safe_load(FORWARD.read_text())
+    for section in ("printer", "family", "housing", "magnet"):
+        rules = SECTIONS[section]
+        for key in draw(st.lists(st.sampled_from(sorted(rules)), max_size=2, unique=True)):
+            choices = in_bounds(rules[key])
+            if choices:
+                doc.setdefault(section, {})[key] = draw(st.sampled_from(choices))
+    n = draw(st.integers(1, 4))
+    doc["layers"] = [doc["layers"][i % len(doc["layers"])] for i in range(n)]
+    doc["name"] = draw(st.sampled_from(["p", "µ-sensor", "x" * 60]))
+    return doc
+
+
+@settings(max_examples=150, **PROPERTY)
+@given(raw=valid_design_documents(), tolerance=st.one_of(st.floats(1e-4, 1.0), st.sampled_from([1e-4, 1.0])))
+def test_property_what_export_writes_check_and_slice_accept(raw, tolerance):
+    from hypothesis import assume
+
+    from mst_cli.cad.assembly import check_fits
+    from mst_cli.cad.manifest import STL_TOLERANCE_MM, Manifest, SliceManifest, export_manifest
+    from mst_cli.errors import InputError
+    from mst_cli.io.schema import parse_document
+    lo, hi = STL_TOLERANCE_MM
+    assume(lo <= tolerance <= hi)                 # what 'mst export --stl-tolerance' accepts
+    try:
+        doc = parse_document(raw)
+        geometry = doc.geometry()
+        assume(not geometry.violations(doc.printer))
+        check_fits(geometry)                      # what 'mst export' checks before it writes
+    except InputError:
+        assume(False)
+    event(f"{len(geometry.layers)} layers")
+    manifest = json.loads(json.dumps(export_manifest(doc.name, geometry, doc.printer, tolerance, ["sensor.stl"])))
+    Manifest.from_dict(manifest)                  # mst check reads it
+    SliceManifest.from_dict(manifest)             # mst slice reads it

@@ -74,9 +74,9 @@ def resolve_paths(path: str | Path) -> tuple[Path, Path]:
         stl, manifest = path, path.parent / "export.json"
     else:
         raise InputError("PATH", str(path), "must be a folder written by 'mst export' or an .stl in it")
-    if not stl.is_file():
+    if not stl.exists():
         raise InputError("PATH", str(stl), "no such STL file (run 'mst export --stl' first)")
-    if not manifest.is_file():
+    if not manifest.exists():
         raise InputError("PATH", str(manifest), "export.json not found next to the STL: "
                                                 "run 'mst export' to write it")
     return stl, manifest
@@ -85,16 +85,15 @@ def resolve_paths(path: str | Path) -> tuple[Path, Path]:
 def load_mesh(path: Path) -> trimesh.Trimesh:
     """Read an STL into a trimesh (vertices merged); InputError when it is not a mesh, or when
     a coordinate is not finite or beyond +-MAX_COORD_MM (nothing is measured on such a mesh)."""
+    import io
+
     import trimesh
-    try:
-        size = Path(path).stat().st_size
-    except OSError as exc:
-        raise InputError("PATH", str(path), f"cannot be read ({exc.strerror})") from None
-    if size > MAX_STL_BYTES:
-        raise InputError("PATH", str(path), f"is larger than {MAX_STL_BYTES} bytes: no body mst exports")
+
+    from mst_cli.io.files import read_input
+    data = read_input(path, MAX_STL_BYTES, field="PATH", what="STL file", too_large=": no body mst exports")
     try:
         with np.errstate(all="ignore"):
-            mesh = trimesh.load(str(path), file_type="stl", force="mesh", process=False)
+            mesh = trimesh.load(io.BytesIO(data), file_type="stl", force="mesh", process=False)
     except Exception as exc:      # trimesh raises many kinds on garbage; all mean "unreadable"
         raise InputError("PATH", str(path), f"cannot be read as an STL mesh ({type(exc).__name__})") from None
     if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:

@@ -128,14 +128,21 @@ def _renumber_nauo(data: bytes) -> bytes:
 
 
 def write_step(assembly, path: Path) -> None:
+    """Write :func:`step_bytes` of the assembly to ``path``."""
+    Path(path).write_bytes(step_bytes(assembly))
+
+
+def step_bytes(assembly) -> bytes:
     """STEP AP214 file of the named assembly, deterministic.
 
     The header gets a fixed time stamp, and the ids of the assembly-usage records -- which
     OCCT draws from a process-wide counter -- are renumbered 1, 2, ... in file order (they
     only need to be unique within the file); those records are re-wrapped at 80 columns.
+    OCCT writes into memory and Python writes the file, so a full disk is an OSError naming
+    the path and the errno reason, as for every other writer (OCCT's own file writer only
+    says "Failed to write STEP file").
     """
     from build123d import export_step
-    path = Path(path)
-    if not export_step(assembly, str(path), timestamp=STEP_TIMESTAMP):
-        raise RuntimeError(f"STEP export to {path} failed")
-    path.write_bytes(_renumber_nauo(path.read_bytes()))
+    buf = io.BytesIO()
+    export_step(assembly, buf, timestamp=STEP_TIMESTAMP)      # RuntimeError if OCCT fails
+    return _renumber_nauo(buf.getvalue())

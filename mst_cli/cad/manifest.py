@@ -10,12 +10,18 @@ Writing: :func:`export_manifest` (a JSON-ready dict). Reading: :func:`load_manif
 :class:`Manifest`, the typed part ``mst check`` uses, validated field by field on load (type,
 nesting, finite and sane size): a malformed file is an :class:`~mst_cli.errors.InputError`
 naming the field, so a KeyError or TypeError inside a check is a bug, not bad input.
+``mst slice`` reads :class:`SliceManifest` (``load_manifest(path, SliceManifest)``): the few keys
+it uses, each optional (any hand-made body can be sliced), each of the same kind as in
+:class:`Manifest`, so the two commands share every rule.
+
+Bounds that a writer and a reader share live here once: :data:`STL_TOLERANCE_MM` is both what
+``mst export --stl-tolerance`` accepts and what ``export.json.stl_tolerance_mm`` may hold.
 """
 
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass, field, fields
+from dataclasses import MISSING, dataclass, field, fields
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -150,14 +156,22 @@ MAX_LIST = 64
 MAX_VOLUME = 1e9
 # a finer layer, tolerance or nozzle would overflow the layer counts
 MIN_SIZE_MM = 1e-3
+# the chord tolerance of the mesh: 'mst export --stl-tolerance' and export.json's stl_tolerance_mm
+STL_TOLERANCE_MM = (1e-4, 1.0)
 
 
 def _kind(kind):
     """A field of export.json: ``kind`` is "num" (a finite number within +-MAX_COORD_MM; bool is
-    not a number), "pos" (a size from MIN_SIZE_MM to MAX_COORD_MM), "vol" (an area or volume from
-    0 to MAX_VOLUME), "int", "str", (kind, n) a list of exactly n, ListOf a list of up to
-    MAX_LIST, or a dataclass below (a mapping)."""
+    not a number), "pos" (a size from MIN_SIZE_MM to MAX_COORD_MM), "tol" (STL_TOLERANCE_MM),
+    "vol" (an area or volume from 0 to MAX_VOLUME), "int", "str", (kind, n) a list of exactly n,
+    ListOf a list of up to MAX_LIST, or a dataclass below (a mapping). A field with a default
+    may be missing (``optional``)."""
     return field(metadata={"kind": kind})
+
+
+def _optional(kind, default=None):
+    """A field that may be missing from the file (then ``default``); given, it is ``kind``."""
+    return field(default=default, metadata={"kind": kind})
 
 
 @dataclass(frozen=True)
@@ -175,6 +189,19 @@ class Pause:
 
 
 @dataclass(frozen=True)
+class CavityLine:
+    """A line of the print frame across one layer's cavity: its designed gap, which ``mst slice``
+    measures in the G-code."""
+
+    layer: int = _kind("int")
+    x_mm: float = _kind("num")
+    z_mm: float = _kind("num")
+    y_low_mm: float = _kind("num")
+    y_high_mm: float = _kind("num")
+    gap_mm: float = _kind("num")
+
+
+@dataclass(frozen=True)
 class PrintFrame:
     """How the mesh lies on the bed: print = rotation @ sensor + translation (row-vector form in
     :func:`mst_cli.cad.measure.to_sensor_frame`)."""
@@ -185,6 +212,7 @@ class PrintFrame:
     height_mm: float = _kind("pos")
     magnet_top_z_mm: float = _kind("num")
     pause: Pause = _kind(Pause)
+    cavity_lines: tuple[CavityLine, ...] = _kind(ListOf(CavityLine))
 
 
 @dataclass(frozen=True)
@@ -251,7 +279,8 @@ class Manifest:
     """What ``mst check`` reads from export.json, typed and validated (:meth:`from_dict`).
     Fields are the file's keys, in the order they are validated."""
 
-    stl_tolerance_mm: float = _kind("pos")
+    name: str = _kind("str")
+    stl_tolerance_mm: float = _kind("tol")
     gap0_mm: float = _kind("num")
     print: PrintFrame = _kind(PrintFrame)
     body: Body = _kind(Body)
@@ -274,6 +303,29 @@ class Manifest:
         return manifest
 
 
+@dataclass(frozen=True)
+class SlicePrint:
+    """The keys of ``print`` that ``mst slice`` reads (each optional)."""
+
+    layer_height_mm: float | None = _optional("pos")
+    pause: Pause | None = _optional(Pause)
+    cavity_lines: tuple[CavityLine, ...] = _optional(ListOf(CavityLine), ())
+
+
+@dataclass(frozen=True)
+class SliceManifest:
+    """What ``mst slice`` reads from export.json: the name, the pause asked for and the cavity
+    lines, validated before anything is sliced with :class:`Manifest`'s own field kinds. Every
+    key is optional: a hand-made export of any body slices (a missing pause is "not given")."""
+
+    name: str | None = _optional("str")
+    print: SlicePrint = _optional(SlicePrint, SlicePrint())
+
+    @classmethod
+    def from_dict(cls, data) -> SliceManifest:
+        return _parse(cls, data, "export.json")
+
+
 def _is_number(v) -> bool:
     # abs(v) <= limit is False for NaN and infinities, and exact for integers of any size
     return isinstance(v, (int, float)) and not isinstance(v, bool) and abs(v) <= MAX_COORD_MM
@@ -282,12 +334,14 @@ def _is_number(v) -> bool:
 _SCALAR_OK = {
     "num": _is_number,
     "pos": lambda v: _is_number(v) and v >= MIN_SIZE_MM,
+    "tol": lambda v: _is_number(v) and STL_TOLERANCE_MM[0] <= v <= STL_TOLERANCE_MM[1],
     "vol": lambda v: isinstance(v, (int, float)) and not isinstance(v, bool) and 0 <= v <= MAX_VOLUME,
     "int": lambda v: isinstance(v, int) and not isinstance(v, bool) and abs(v) <= 10**9,
     "str": lambda v: isinstance(v, str),
 }
 _KIND_TEXT = {"num": f"a finite number within +-{MAX_COORD_MM:g}",
               "pos": f"a size from {MIN_SIZE_MM:g} to {MAX_COORD_MM:g}",
+              "tol": f"a tolerance from {STL_TOLERANCE_MM[0]:g} to {STL_TOLERANCE_MM[1]:g} mm",
               "vol": f"a number from 0 to {MAX_VOLUME:g}", "int": "an integer", "str": "a string"}
 
 
@@ -317,6 +371,9 @@ def _parse(kind, data, path: str):
     elif isinstance(data, dict):
         values = {}
         for f in fields(kind):
+            if f.name not in data and f.default is not MISSING:
+                values[f.name] = f.default
+                continue
             if f.name not in data:
                 raise InputError(f"{path}.{f.name}", None, "missing: rewrite it with 'mst export'")
             values[f.name] = _parse(f.metadata["kind"], data[f.name], f"{path}.{f.name}")
@@ -325,18 +382,19 @@ def _parse(kind, data, path: str):
     raise InputError(path, shown, f"must be {_describe(kind)}: rewrite it with 'mst export'")
 
 
-def load_manifest(path: Path) -> Manifest:
-    """export.json, validated field by field (:meth:`Manifest.from_dict`)."""
+def load_manifest(path: Path, kind: type = Manifest) -> Manifest | SliceManifest:
+    """export.json, validated field by field (``kind.from_dict``: :class:`Manifest` for ``mst
+    check``, :class:`SliceManifest` for ``mst slice``)."""
+    from mst_cli.io.files import read_input_text
+    text = read_input_text(path, MAX_MANIFEST_BYTES, field="export.json", what="JSON file",
+                           too_large=": rewrite it with 'mst export'")
     try:
-        if Path(path).stat().st_size > MAX_MANIFEST_BYTES:
-            raise InputError("export.json", str(path), f"is larger than {MAX_MANIFEST_BYTES} bytes: "
-                                                       "rewrite it with 'mst export'")
-        data = json.loads(Path(path).read_text(), parse_constant=_refuse_constant)
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError, RecursionError) as exc:
+        data = json.loads(text, parse_constant=_refuse_constant)
+    except (json.JSONDecodeError, RecursionError) as exc:
         raise InputError("export.json", str(path), f"cannot be read as JSON ({type(exc).__name__})") from None
     except ValueError as exc:                       # NaN / Infinity, which JSON does not have
         raise InputError("export.json", str(path), f"cannot be read as JSON ({exc})") from None
-    return Manifest.from_dict(data)
+    return kind.from_dict(data)
 
 
 def _refuse_constant(name: str):

@@ -18,6 +18,7 @@ from mst_cli.cad.deterministic import (
     PRUSA_PAUSE_PRINT_TYPE,
     STEP_TIMESTAMP,
     prusa_pause_xml,
+    step_bytes,
     three_mf_bytes,
     write_step,
 )
@@ -26,7 +27,7 @@ if TYPE_CHECKING:
     from build123d import Solid
 
 __all__ = ["PRUSA_CUSTOM_GCODE_MEMBER", "PRUSA_PAUSE_PRINT_TYPE", "STEP_TIMESTAMP", "is_closed_oriented",
-           "merge_vertices", "prusa_pause_xml", "stl_bytes", "tessellate", "three_mf_bytes", "write_step"]
+           "merge_vertices", "prusa_pause_xml", "step_bytes", "stl_bytes", "tessellate", "three_mf_bytes", "write_step"]
 
 STL_HEADER = "mst sensor body, mm"
 

@@ -28,10 +28,24 @@ INSTALL_HINT = ("install it with 'sudo apt-get install prusa-slicer' (Debian/Ubu
                 f"or in ${ENV_EXECUTABLE}")
 DEFAULT_TIMEOUT_S = 300.0
 PROFILE_NAME = "tpu85a-0.4mm.ini"
+MAX_PROFILE_BYTES = 1_000_000       # a full PrusaSlicer config is about 20 KB
+
+
+GCODE_END = "; prusaslicer_config = end"      # the last line of every G-code PrusaSlicer writes
 
 
 class SlicerError(RuntimeError):
-    """PrusaSlicer ran but did not produce G-code (the message is its own last error line)."""
+    """PrusaSlicer ran but did not produce what it was asked for: no file, an empty or
+    truncated one, or one that is not text (the message says which; exit 1, a machine fault)."""
+
+
+def _no_output(r: subprocess.CompletedProcess, what: str) -> str:
+    """Why PrusaSlicer wrote no ``what``: its last error line, or that it claimed success."""
+    if r.returncode == 0:
+        return f"exited 0 but wrote no {what}"
+    lines = _clean(r.stderr + "\n" + r.stdout)
+    errors = [s for s in lines if "rror" in s or "annot" in s or "nvalid" in s] or lines
+    return errors[-1] if errors else f"exit code {r.returncode}, no {what} written"
 
 
 def bundled_profile() -> Path:
@@ -83,9 +97,14 @@ def known_options(exe: str) -> frozenset[str]:
         out = Path(tmp) / "defaults.ini"
         r = _run([exe, "--save", str(out)], 60)
         if not out.is_file():
-            lines = _clean(r.stderr + r.stdout)
-            raise SlicerError(f"prusa-slicer --save failed: {lines[-1] if lines else 'no output'}")
-        return frozenset(parse_ini(out.read_text(), str(out)).keys())
+            raise SlicerError(f"prusa-slicer --save (its default config) failed: {_no_output(r, 'config')}")
+        try:
+            keys = frozenset(parse_ini(out.read_text(encoding="utf-8"), str(out)).keys())
+        except (InputError, UnicodeDecodeError):
+            keys = frozenset()
+        if not keys:
+            raise SlicerError("prusa-slicer --save wrote a default config that is empty or not one")
+        return keys
 
 
 def parse_ini(text: str, where: str = "profile") -> dict[str, str]:
@@ -112,13 +131,11 @@ def parse_ini(text: str, where: str = "profile") -> dict[str, str]:
 
 def check_profile(path: Path, exe: str) -> dict[str, str]:
     """The settings of a PrusaSlicer FFF config, or InputError (exit 2) with the reason."""
+    from mst_cli.io.files import read_input_text
     path = Path(path)
-    if not path.is_file():
+    if not path.exists():
         raise InputError("--profile", str(path), "no such file (a PrusaSlicer .ini config)")
-    try:
-        text = path.read_text(encoding="utf-8")
-    except (UnicodeDecodeError, OSError) as exc:
-        raise InputError("--profile", str(path), f"not a text config file ({type(exc).__name__})") from None
+    text = read_input_text(path, MAX_PROFILE_BYTES, field="--profile", what="PrusaSlicer .ini config")
     values = parse_ini(text, str(path))
     if not values:
         raise InputError("--profile", str(path), "holds no settings: not a PrusaSlicer config")
@@ -174,12 +191,35 @@ def slice_model(exe: str, model: Path, profile: Path, out_gcode: Path, centre_xy
     seconds = time.perf_counter() - t0
     lines = _clean(r.stderr + "\n" + r.stdout)
     if r.returncode != 0 or not out_gcode.is_file():
-        errors = [s for s in lines if "rror" in s or "annot" in s or "nvalid" in s] or lines
-        message = errors[-1] if errors else f"exit code {r.returncode}, no G-code written"
+        message = _no_output(r, "G-code")
         if "reading config file" in message or "config" in message.lower() and "load" in message.lower():
             raise InputError("--profile", str(profile), f"PrusaSlicer rejects it: {message}")
         raise SlicerError(f"prusa-slicer failed on {model.name}: {message}")
     return SliceRun(out_gcode, seconds, lines)
+
+
+def read_gcode(path: Path) -> str:
+    """The text of G-code PrusaSlicer wrote; SlicerError when it is empty, not text, or ends
+    before its closing config block (truncated: a full disk, a killed slicer, a post-process
+    script that cut it)."""
+    data = Path(path).read_bytes()
+    if not data.strip():
+        raise SlicerError(f"prusa-slicer wrote an empty G-code file ({Path(path).name})")
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise SlicerError(f"prusa-slicer wrote G-code that is not UTF-8 text (byte {exc.start})") from None
+    if text.rstrip().rsplit("\n", 1)[-1].strip() != GCODE_END:
+        raise SlicerError(f"prusa-slicer wrote G-code that ends before its closing '{GCODE_END}' line: "
+                          "it is truncated")
+    return text
+
+
+def post_process_scripts(values: dict[str, str]) -> list[str]:
+    """The scripts a profile's ``post_process`` makes PrusaSlicer run on the G-code it writes
+    (one per line; the .ini writes a line break as the two characters backslash, n)."""
+    text = values.get("post_process", "").replace("\\n", "\n")
+    return [s.strip() for s in text.splitlines() if s.strip()]
 
 
 def slicer_version(exe: str) -> str:

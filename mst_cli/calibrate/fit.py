@@ -89,6 +89,7 @@ IDENTIFIABLE_STD = 1.0 / 3.0     # std / typical deviation below which a paramet
 MIN_POINTS_PER_PARAMETER = 5     # a load test needs at least this many samples per fitted parameter
 MIN_POINTS = 12
 FAIL_RESIDUAL_REL = 0.05         # fit failed: residual RMS above this fraction of the load test's field span
+NO_RELATION_SIGMA = 3.0          # |B| unrelated to force: |correlation| within this many sigma of 0
 MIN_STROKE_MM = 0.05             # a perturbed cell keeps at least this lock stroke and wall
 MAX_SPACE_MAPPING_ITERATIONS = 6
 
@@ -333,7 +334,14 @@ def fit_parameters(doc, force_N, B_abs_T, sigma_T: float, names=DEFAULT_PARAMETE
     span_T = float(np.ptp(B_abs_T))
     if span_T <= 0:
         raise CalibrationFailed("the field does not change over the load test: nothing to fit")
-    rho = np.corrcoef(force_N, B_abs_T)[0, 1] if np.ptp(force_N) > 0 else 0.0
+    rho = float(np.corrcoef(force_N, B_abs_T)[0, 1]) if np.ptp(force_N) > 0 else 0.0
+    # with no relation at all, |rho| of n samples stays below ~3/sqrt(n - 2) (3 sigma)
+    noise_rho = NO_RELATION_SIGMA / math.sqrt(max(len(force_N) - 2, 1))
+    if not abs(rho) > noise_rho:
+        raise CalibrationFailed(f"|B| does not follow the force at all (correlation {rho:.2f} over "
+                                f"{len(force_N)} samples, within the +-{noise_rho:.2g} that noise alone "
+                                "gives): the field columns hold no response of this sensor (magnet "
+                                "missing, wrong chip or columns)")
     if not rho > 0:
         raise CalibrationFailed(f"|B| falls as the force rises (correlation {rho:.2f}): the magnet "
                                 "moves towards the chip under load in every design, so this load "

@@ -17,6 +17,7 @@ column: the CLI turns it into one line and exit code 2.
 from __future__ import annotations
 
 import csv
+import functools
 import math
 import re
 from collections.abc import Sequence
@@ -26,6 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from mst_cli.errors import InputError
+from mst_cli.io.files import read_input_text
 from mst_cli.model import chip as mlx
 
 MAX_INPUT_BYTES = 20_000_000
@@ -52,12 +54,13 @@ class Readings:
     lines: list[int]                # line number of each row in the file (from 1)
     B_T: np.ndarray                 # (n, 3) field in tesla
     saturated: np.ndarray           # (n,) bool
-    force_N: np.ndarray | None      # the load cell's force (load tests)
+    force_N: np.ndarray | None      # the load cell's force (load tests; readings with a force_N column)
     raw: bool                       # the file held raw codes
     setting: mlx.ChipSetting | None  # the one chip setting of every row, when known
 
-    @property
+    @functools.cached_property
     def B_abs_T(self) -> np.ndarray:
+        """|B| of every row, computed once (a per-row call would cost O(rows) each)."""
         return np.linalg.norm(self.B_T, axis=1)
 
     def __len__(self) -> int:
@@ -72,20 +75,9 @@ def setting_of(gain_sel: int, res: int) -> mlx.ChipSetting:
 
 
 def read_text(path: str | Path, what: str = "CSV file") -> str:
-    path = Path(path)
-    try:
-        with open(path, "rb") as fh:
-            data = fh.read(MAX_INPUT_BYTES + 1)
-    except FileNotFoundError:
-        raise InputError("(file)", str(path), "file not found") from None
-    except IsADirectoryError:
-        raise InputError("(file)", str(path), f"is a folder, not a {what}") from None
-    if len(data) > MAX_INPUT_BYTES:
-        raise InputError("(file)", str(path), f"is larger than {MAX_INPUT_BYTES} bytes")
-    try:
-        return data.decode("utf-8-sig")
-    except UnicodeDecodeError:
-        raise InputError("(file)", str(path), f"is not a UTF-8 text {what}") from None
+    """The text of a load test or readings file: a regular file (a FIFO or a device is refused
+    before it is opened, so nothing blocks) of at most MAX_INPUT_BYTES, UTF-8 (a BOM is fine)."""
+    return read_input_text(path, MAX_INPUT_BYTES, what=what, encoding="utf-8-sig")
 
 
 def _delimiter(header_line: str) -> str:
@@ -168,7 +160,8 @@ def parse_readings(text: str, source: str, *, need_force: bool, gain_sel: int | 
     has_setting_cols = all(c in header for c in SETTING_COLUMNS)
 
     B = np.empty((len(data_rows), 3))
-    F = np.empty(len(data_rows)) if need_force else None
+    with_force = need_force or FORCE_COLUMN in header       # a readings file may carry the reference
+    F = np.empty(len(data_rows)) if with_force else None
     sat = np.zeros(len(data_rows), dtype=bool)
     rows, lines = [], []
     first_setting = None
@@ -197,7 +190,7 @@ def parse_readings(text: str, source: str, *, need_force: bool, gain_sel: int | 
             first_setting = first_setting or row_setting
         values = [_number(source, line, c, row[idx[c]]) for c in cols]
         B[r], sat[r] = field_of(values, raw, setting, f"{source} line {line}")
-        if need_force:
+        if with_force:
             F[r] = _number(source, line, FORCE_COLUMN, row[idx[FORCE_COLUMN]])
         rows.append(row)
         lines.append(line)
@@ -230,10 +223,10 @@ def field_of(values: Sequence[float], raw: bool, setting: mlx.ChipSetting | None
                                  f"outside the +-{limit} codes the chip outputs at RES {setting.res}: "
                                  "the readings come from another chip setting")
         lsb = np.array([setting.xy_uT_per_lsb, setting.xy_uT_per_lsb, setting.z_uT_per_lsb])
-        B = np.asarray(values, dtype=float) * lsb * 1e-6
+        B_uT = np.asarray(values, dtype=float) * lsb
         saturated = any(abs(v) >= limit - 1 for v in values)
     else:
-        B = np.asarray(values, dtype=float) * 1e-6
+        B_uT = np.asarray(values, dtype=float)
         saturated = False
         if setting is not None:
             ranges = (setting.xy_range_T, setting.xy_range_T, setting.z_range_T)
@@ -246,9 +239,10 @@ def field_of(values: Sequence[float], raw: bool, setting: mlx.ChipSetting | None
                                      "another chip setting")
                 if abs(v) * 1e-6 >= rng - 1.5e-6 * lsb:
                     saturated = True
-    if np.any(np.abs(B) >= mlx.SATURATION_T):
+    # compared in microtesla, as read: 50000 uT x 1e-6 is 0.049999999999999996 T, below 50 mT
+    if np.any(np.abs(B_uT) >= mlx.SATURATION_T * 1e6):
         saturated = True
-    return B, bool(saturated)
+    return B_uT * 1e-6, bool(saturated)
 
 
 def check_load_test(lt: Readings, n_parameters: int, design_range_N: float,

@@ -6,13 +6,13 @@ from pathlib import Path
 
 import click
 
-from mst_cli.cli.common import no_plot_option
+from mst_cli.cli.common import no_plot_option, seed_type
 
 
 @click.command()
 @click.option("--samples", type=click.IntRange(min=1, max=500), default=24, show_default=True,
               help="Number of seeded valid designs across the bounds.")
-@click.option("--seed", type=int, default=0, show_default=True, help="Random seed of the sample.")
+@click.option("--seed", type=seed_type(), default=0, show_default=True, help="Random seed of the sample.")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), default=None,
               help="Output folder [default: ./mst-out/bench/].")
 @click.option("--quick", is_flag=True, help="Skip the L2 mesh-convergence study.")

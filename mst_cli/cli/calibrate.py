@@ -31,6 +31,7 @@ CALIBRATED_YAML = "calibrated.yaml"
 HEADER_FILE = "force_table.h"
 SCHEMA_VERSION = 1
 ERROR_FROM_RANGE = 0.1     # force errors are quoted on readings above this fraction of the range
+PROGRESS_FROM_SAMPLES = 10_000   # a load test this long gets a progress line (40 000 samples: 2-3 s)
 
 
 def _fail_fit(reason: str, what: str = "calibration failed"):
@@ -59,7 +60,7 @@ def force_errors(F_model, F_true, range_N: float) -> dict:
     import numpy as np
 
     F_model, F_true = np.asarray(F_model, dtype=float), np.asarray(F_true, dtype=float)
-    use = F_true >= ERROR_FROM_RANGE * range_N
+    use = (F_true >= ERROR_FROM_RANGE * range_N) & (F_true > 0)
     flagged = int(np.sum(use & ~np.isfinite(F_model)))
     ok = use & np.isfinite(F_model)
     if not ok.any():
@@ -256,7 +257,7 @@ def calibrate(design_file: Path, load_test: Path, out_dir: Path | None, mechanic
     import yaml
 
     from mst_cli.calibrate import fit as cal
-    from mst_cli.calibrate.loadtest import check_load_test, parse_readings, read_text
+    from mst_cli.calibrate.loadtest import MAX_ROWS, check_load_test, parse_readings, read_text
     from mst_cli.errors import InputError
     from mst_cli.io.outputs import check_out_dir, finite_or_none, staged
     from mst_cli.io.schema import document_to_dict, parse_document
@@ -276,6 +277,9 @@ def calibrate(design_file: Path, load_test: Path, out_dir: Path | None, mechanic
     setting_for_noise = lt.setting or design_resp.chip_setting
     sigma = cal.field_sigma_T(doc.noise_uT_rms, setting_for_noise)
     t0 = time.monotonic()
+    if len(lt) >= PROGRESS_FROM_SAMPLES:      # a long load test: say what the next seconds are
+        click.echo(f"mst calibrate: fitting {len(lt)} samples of {Path(load_test).name} "
+                   f"(seconds; a load test holds at most {MAX_ROWS} rows)", err=True)
     try:
         fit = cal.fit_parameters(doc, lt.force_N, lt.B_abs_T, sigma, names, mechanics)
         cal_doc, edits = cal.apply_parameters(doc, fit.values, name=f"{doc.name}-calibrated",
@@ -462,11 +466,13 @@ def _summary(doc, lt, load_test, mechanics, fit, names, design_regimes, cal_regi
 def _calibration_note(model_file: Path) -> tuple[str | None, dict | None]:
     """(None, the record) when MODEL has a matching calibration.json beside it, else (a warning
     sentence, None)."""
+    from mst_cli.io.files import read_input_text
+    from mst_cli.io.yaml_io import MAX_INPUT_BYTES
     sidecar = Path(model_file).with_name(CALIBRATION_JSON)
-    try:
-        record = json.loads(sidecar.read_text())
-        text = Path(model_file).read_text()
-    except (OSError, ValueError):
+    try:               # regular files only: a FIFO in their place must not block
+        record = json.loads(read_input_text(sidecar, MAX_INPUT_BYTES, field=CALIBRATION_JSON))
+        text = read_input_text(model_file, MAX_INPUT_BYTES)
+    except ValueError:                   # InputError (unreadable, not a file) and bad JSON
         return (f"{Path(model_file).name} has no {CALIBRATION_JSON} beside it: forces come from the "
                 "design as drawn, not as printed (run mst calibrate; expect errors of tens of percent)"), None
     digest = hashlib.sha256(text.encode()).hexdigest()
@@ -608,8 +614,8 @@ def _read_file(doc, imap, rd, out):
              + "".join(f", {counts[k]} {k.replace('_', ' ')}"
                        for k in ("above_calibrated", "below_range", "above_range", "saturated") if counts[k])
              + (f"; forces {np.nanmin(F):.4g}-{np.nanmax(F):.4g} N" if ok.any() else "")]
-    if "force_N" in rd.header:
-        ref = np.array([float(r[rd.header.index("force_N")]) for r in rd.rows])
+    if rd.force_N is not None and len(rd) and float(np.max(rd.force_N)) > 0:
+        ref = rd.force_N
         err = force_errors(F, ref, float(np.max(ref)))      # the same readings for any model
         if "median_rel" in err:
             lines.append(f"against force_N_reference (readings >= {err['from_force_N']:.3g} N): median error "

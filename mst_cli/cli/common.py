@@ -123,6 +123,12 @@ class MstGroup(click.Group):
         sys.exit(rv if isinstance(rv, int) and not isinstance(rv, bool) else 0)
 
 
+def seed_type() -> click.IntRange:
+    """The click type of every --seed option: the range design.seed has in a spec file."""
+    from mst_cli.model.fields import SEED_RANGE
+    return click.IntRange(*SEED_RANGE)
+
+
 def default_out_dir(name: str) -> Path:
     return Path("mst-out") / name
 

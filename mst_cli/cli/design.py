@@ -10,7 +10,7 @@ from pathlib import Path
 
 import click
 
-from mst_cli.cli.common import default_out_dir, handles_input_errors, no_plot_option, write_simulation
+from mst_cli.cli.common import default_out_dir, handles_input_errors, no_plot_option, seed_type, write_simulation
 
 
 class _Progress:
@@ -52,7 +52,7 @@ class _Progress:
 @click.argument("spec_file", type=click.Path(dir_okay=False, path_type=Path))
 @click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), default=None,
               help="Output folder [default: ./mst-out/<name>/].")
-@click.option("--seed", type=click.IntRange(min=0), default=None,
+@click.option("--seed", type=seed_type(), default=None,
               help="Seed of the random starts [default: the file's design.seed, else 0]. "
                    "Same spec and seed give a byte-identical design.yaml.")
 @click.option("--max-evaluations", type=click.IntRange(min=10), default=None,

@@ -74,10 +74,12 @@ def export(path: Path, want_stl: bool, want_step: bool, want_3mf: bool, out_dir:
     3MF carries PrusaSlicer's pause for the magnet; the terminal and export.json give its
     layer and height. STEP is the assembly in the sensor frame (z up the stack).
     """
+    from mst_cli.cad.manifest import STL_TOLERANCE_MM  # one bound, shared with mst check
     from mst_cli.errors import InputError
 
-    if not 1e-4 <= stl_tolerance_mm <= 1.0:
-        raise InputError("--stl-tolerance", stl_tolerance_mm, "must be a number from 0.0001 to 1 mm")
+    lo, hi = STL_TOLERANCE_MM
+    if not lo <= stl_tolerance_mm <= hi:
+        raise InputError("--stl-tolerance", stl_tolerance_mm, f"must be a number from {lo:g} to {hi:g} mm")
     from mst_cli.io.outputs import check_out_dir
 
     if not (want_stl or want_step or want_3mf):
@@ -105,15 +107,15 @@ def export(path: Path, want_stl: bool, want_step: bool, want_3mf: bool, out_dir:
             vertices, triangles = print_mesh(geometry, cad.body, stl_tolerance_mm)
             _progress(t0, f"meshed: {len(triangles)} triangles at {stl_tolerance_mm:g} mm")
             if want_stl:
-                st.path("sensor.stl").write_bytes(mesh_io.stl_bytes(vertices, triangles))
+                st.write_bytes("sensor.stl", mesh_io.stl_bytes(vertices, triangles))
                 _progress(t0, "wrote sensor.stl")
             if want_3mf:
-                st.path("sensor.3mf").write_bytes(mesh_io.three_mf_bytes(
+                st.write_bytes("sensor.3mf", mesh_io.three_mf_bytes(
                     vertices, triangles, doc.name, pause_after_z_mm=geometry.pause_height_mm,
                     layer_height_mm=geometry.layer_height_mm))
                 _progress(t0, "wrote sensor.3mf")
         if want_step:
-            mesh_io.write_step(cad.assembly(doc.name), st.path("sensor.step"))
+            st.write_bytes("sensor.step", mesh_io.step_bytes(cad.assembly(doc.name)))
             _progress(t0, "wrote sensor.step (body, magnet, board)")
         if designed is not None:
             # the design the body was built from, loadable by mst simulate / mst export
@@ -152,8 +154,13 @@ def check(path: Path, as_json: bool, nozzle_mm: float | None) -> None:
     from mst_cli.cad.manifest import load_manifest
     from mst_cli.errors import InputError
 
-    if nozzle_mm is not None and not 0.05 <= nozzle_mm <= 5.0:
-        raise InputError("--nozzle", nozzle_mm, "must be a nozzle diameter from 0.05 to 5 mm")
+    if nozzle_mm is not None:                    # one bound: printer.nozzle_mm's in a design file
+        from dataclasses import fields
+
+        from mst_cli.model.geometry import Printer
+        lo, hi = next((f.metadata["lo"], f.metadata["hi"]) for f in fields(Printer) if f.name == "nozzle_mm")
+        if not lo <= nozzle_mm <= hi:
+            raise InputError("--nozzle", nozzle_mm, f"must be a nozzle diameter from {lo:g} to {hi:g} mm")
     stl, manifest_path = resolve_paths(path)
     # both inputs are validated before anything is measured: every field the checks read (type,
     # nesting, finite and sane size) and every STL coordinate (finite, within a metre). Nothing

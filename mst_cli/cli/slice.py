@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import contextlib
 import json
+import math
 import sys
 import tempfile
 import time
@@ -18,10 +19,11 @@ from typing import TYPE_CHECKING
 
 import click
 
-from mst_cli.cli.common import EXIT_TARGETS, handles_input_errors, no_plot_option
+from mst_cli.cli.common import EXIT_FAULT, EXIT_TARGETS, handles_input_errors, no_plot_option, one_line
 
 if TYPE_CHECKING:
     from mst_cli.cad.gcode import GCode
+    from mst_cli.cad.manifest import SliceManifest
 
 DEFAULT_MAX_SPAN_MM = 5.0
 MODEL_NAMES = ("sensor.3mf", "sensor.stl")
@@ -50,25 +52,17 @@ def resolve_export(path: Path) -> tuple[Path, Path, Path | None, Path | None]:
     if not (three_mf.is_file() or stl.is_file()):
         raise InputError("PATH", str(folder), "holds neither sensor.3mf nor sensor.stl: "
                                               "run 'mst export DESIGN.yaml --3mf --stl --out DIR' first")
-    if not manifest.is_file():
+    if not manifest.exists():
         raise InputError("PATH", str(folder), "holds no export.json: run 'mst export' again into this folder")
-    try:
-        json.loads(manifest.read_text())
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise InputError("export.json", str(manifest), f"not JSON ({exc})") from None
     return folder, manifest, three_mf if three_mf.is_file() else None, stl if stl.is_file() else None
 
 
-def expected_pause(manifest: dict) -> dict:
-    """The pause export.json asks for: print.pause {after_layer, z_mm}, else the old
-    magnet_pocket.pause_height_mm (a height only), else nothing."""
-    pause = (manifest.get("print") or {}).get("pause")
-    if isinstance(pause, dict) and "z_mm" in pause:
-        return {"after_layer": pause.get("after_layer"), "z_mm": float(pause["z_mm"]), "source": "print.pause"}
-    height = (manifest.get("magnet_pocket") or {}).get("pause_height_mm")
-    if height is not None:
-        return {"after_layer": None, "z_mm": float(height), "source": "magnet_pocket.pause_height_mm"}
-    return {}
+def expected_pause(manifest: SliceManifest) -> dict:
+    """The pause export.json asks for (print.pause {after_layer, z_mm}), else nothing."""
+    pause = manifest.print.pause
+    if pause is None:
+        return {}
+    return {"after_layer": pause.after_layer, "z_mm": pause.z_mm, "source": "print.pause"}
 
 
 def judge_pause(pauses, expected: dict, layer_height_mm: float) -> tuple[dict, str | None]:
@@ -101,23 +95,22 @@ def judge_pause(pauses, expected: dict, layer_height_mm: float) -> tuple[dict, s
     return report, problem
 
 
-def cavity_gap_report(g: GCode, manifest: dict, shift_xy: tuple[float, float], z_shift: float) -> str | list[dict]:
+def cavity_gap_report(g: GCode, manifest: SliceManifest, shift_xy: tuple[float, float],
+                      z_shift: float) -> str | list[dict]:
     """Designed against as-sliced gaps along export.json's print.cavity_lines."""
     from mst_cli.cad.gcode import gap_at
-    lines = (manifest.get("print") or {}).get("cavity_lines")
+    lines = manifest.print.cavity_lines
     if not lines:
         return "not given"
     rows = []
     for c in lines:
-        z = float(c["z_mm"]) + z_shift
-        layer = g.layer_at(z)
-        row = {"layer": c.get("layer"), "x_mm": c["x_mm"], "z_mm": c["z_mm"],
-               "designed_gap_mm": c.get("gap_mm"), "designed_y_mm": [c["y_low_mm"], c["y_high_mm"]]}
+        layer = g.layer_at(c.z_mm + z_shift)
+        row = {"layer": c.layer, "x_mm": c.x_mm, "z_mm": c.z_mm,
+               "designed_gap_mm": c.gap_mm, "designed_y_mm": [c.y_low_mm, c.y_high_mm]}
         if layer is None:
             row.update(sliced_layer=None, sliced_gap_mm=None, sliced_y_mm=None)
         else:
-            gap = gap_at(layer, "x", float(c["x_mm"]) + shift_xy[0],
-                         float(c["y_low_mm"]) + shift_xy[1], float(c["y_high_mm"]) + shift_xy[1])
+            gap = gap_at(layer, "x", c.x_mm + shift_xy[0], c.y_low_mm + shift_xy[1], c.y_high_mm + shift_xy[1])
             row["sliced_layer"] = layer.index
             if gap is None:
                 row.update(sliced_gap_mm=0.0, sliced_y_mm=None)
@@ -228,12 +221,26 @@ def slice_(path: Path, profile: Path | None, out_dir: Path | None, max_span_mm: 
     against as-sliced cavity gaps) and print.png (not with --no-plot). Slices a
     second time with automatic support on to prove that none is needed. Exit 1 naming the
     broken limit (free span over --max-span, pause missing or misplaced, support needed);
-    exit 2 when PrusaSlicer is not installed or the profile is not a PrusaSlicer config.
+    exit 2 when PrusaSlicer is not installed, the profile is not a PrusaSlicer config or
+    export.json is malformed (checked before slicing, with mst check's rules); exit 1 when
+    PrusaSlicer misbehaves (no G-code, an empty or truncated one). A profile's post_process
+    scripts run as PrusaSlicer runs them; one line names them.
     """
+    from mst_cli.cad import slicer as S
+    try:
+        _slice(path, profile, out_dir, max_span_mm, as_json, no_plot)
+    except S.SlicerError as exc:
+        click.echo(one_line(f"mst slice: {exc}; nothing was written"), err=True)
+        sys.exit(EXIT_FAULT)
+
+
+def _slice(path: Path, profile: Path | None, out_dir: Path | None, max_span_mm: float, as_json: bool,
+           no_plot: bool) -> None:
     import numpy as np
 
     from mst_cli.cad import gcode as G
     from mst_cli.cad import slicer as S
+    from mst_cli.cad.manifest import SliceManifest, load_manifest
     from mst_cli.errors import InputError
     from mst_cli.io.outputs import staged
 
@@ -244,7 +251,11 @@ def slice_(path: Path, profile: Path | None, out_dir: Path | None, max_span_mm: 
     profile = Path(profile) if profile is not None else S.bundled_profile()
     settings = S.check_profile(profile, exe)
     folder, manifest_path, three_mf, stl = resolve_export(path)
-    manifest = json.loads(manifest_path.read_text())
+    manifest = load_manifest(manifest_path, SliceManifest)    # before any slicing: exit 2 naming the key
+    scripts = S.post_process_scripts(settings)
+    if scripts:
+        click.echo(one_line(f"mst slice: note: the profile's post_process runs {', '.join(map(repr, scripts))} "
+                            "on each G-code (your script; what is measured is its output)"), err=True)
     model = three_mf or stl
     triangles = S.read_stl(stl) if stl is not None else S.read_3mf(three_mf)
     if len(triangles) == 0:
@@ -260,27 +271,24 @@ def slice_(path: Path, profile: Path | None, out_dir: Path | None, max_span_mm: 
     z_shift = -float(lo[2]) + 0.0
     out = out_dir or folder
     with tempfile.TemporaryDirectory(prefix="mst-slice-") as tmp:
-        try:
-            run1 = S.slice_model(exe, model, profile, Path(tmp) / "sensor.gcode", centre)
-            _progress(t0, f"sliced {model.name} in {run1.seconds:.2f} s")
-            run2 = S.slice_model(exe, model, profile, Path(tmp) / "support.gcode", centre,
-                                 ("--support-material", "--support-material-auto"))
-            _progress(t0, f"sliced again with automatic support in {run2.seconds:.2f} s")
-        except S.SlicerError as exc:
-            click.echo(f"mst slice: {exc}", err=True)
-            sys.exit(EXIT_TARGETS)
-        gtext = run1.gcode_path.read_text()
+        run1 = S.slice_model(exe, model, profile, Path(tmp) / "sensor.gcode", centre)
+        _progress(t0, f"sliced {model.name} in {run1.seconds:.2f} s")
+        run2 = S.slice_model(exe, model, profile, Path(tmp) / "support.gcode", centre,
+                             ("--support-material", "--support-material-auto"))
+        _progress(t0, f"sliced again with automatic support in {run2.seconds:.2f} s")
+        gtext = S.read_gcode(run1.gcode_path)
         g = G.parse_gcode(gtext)
-        gs = G.parse_gcode(run2.gcode_path.read_text())
+        gs = G.parse_gcode(S.read_gcode(run2.gcode_path))
     _progress(t0, f"read {len(g.layers)} layers")
-    if not g.layers:
-        click.echo("mst slice: the G-code has no layers", err=True)
-        sys.exit(EXIT_TARGETS)
+    if not any(lay.of_part().any() for lay in g.layers):
+        raise S.SlicerError("prusa-slicer wrote G-code without one extrusion of the part")
     spans = G.free_spans(g)
     joined = G.free_spans(g, join_moves=True)
     _progress(t0, "measured the free spans")
 
     layer_h = _num(settings.get("layer_height"), g.layers[min(1, len(g.layers) - 1)].height_mm)
+    if not (isinstance(layer_h, float) and math.isfinite(layer_h) and layer_h > 0):
+        raise S.SlicerError(f"prusa-slicer wrote G-code with a layer height of {layer_h} mm")
     pause_report, pause_problem = judge_pause(g.pauses, expected_pause(manifest), layer_h)
     pause_report["pause_print_gcode"] = g.config.get("pause_print_gcode", settings.get("pause_print_gcode"))
     pause_report["model_carries_pause"] = bool(three_mf is not None and S.has_prusa_pause(three_mf))
@@ -319,9 +327,10 @@ def slice_(path: Path, profile: Path | None, out_dir: Path | None, max_span_mm: 
     top_z = g.layers[-1].z_mm
     report = {
         "format": 1,
-        "name": manifest.get("name"),
+        "name": manifest.name,
         "slicer": version,
         "profile": str(profile),
+        "post_process": scripts,
         "model_sliced": model.name,
         "slice_time_s": round(run1.seconds, 3),
         "print_time_s": g.print_time_s,
@@ -360,7 +369,7 @@ def slice_(path: Path, profile: Path | None, out_dir: Path | None, max_span_mm: 
         st.write_json("slice.json", report)
         if plot:
             plot_print(st.path("print.png"), triangles, centre, (shift[0], shift[1], z_shift), g, spans,
-                       str(manifest.get("name") or folder.name))
+                       str(manifest.name or folder.name))
         else:
             st.remove("print.png")
     _progress(t0, f"wrote {out}/{', '.join(names)}")

@@ -170,8 +170,16 @@ class Staging:
         return self.tmp / name
 
     def write_text(self, name: str, text: str) -> None:
+        self._write(name, lambda path: path.write_text(text))
+
+    def write_bytes(self, name: str, data: bytes) -> None:
+        self._write(name, lambda path: path.write_bytes(data))
+
+    def _write(self, name: str, write) -> None:
+        """``write(staged path)``; an OSError (a full disk) names out_dir/``name``, not the
+        staging folder."""
         try:
-            self.path(name).write_text(text)
+            write(self.path(name))
         except OSError as exc:
             if exc.filename is None or STAGING_PREFIX in str(exc.filename):
                 exc.filename, exc.filename2 = str(self.out_dir / name), None

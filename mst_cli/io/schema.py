@@ -30,7 +30,7 @@ from mst_cli.model import geometry as geo
 from mst_cli.model.chip import DEFAULT_NOISE_uT
 from mst_cli.model.components import BOARDS, DEFAULT_BOARD, grade_remanence_T
 from mst_cli.model.field import FIELD_MODELS
-from mst_cli.model.fields import spec
+from mst_cli.model.fields import SEED_RANGE, spec
 from mst_cli.model.material import Material
 from mst_cli.model.mechanics.correction import VERIFIED_BOX
 
@@ -285,7 +285,7 @@ class DesignOptions:
                                        meaning="optional limit on the printed sensor's total height")
     lock_margin_rel: float = spec(0.1, lo=0.0, hi=1.0, meaning="R_(i+1) ≥ (1 + margin) R_i")
     saturation_margin_rel: float = spec(0.1, lo=0.0, hi=0.9, meaning="chip field ≤ (1 − margin) × 50 mT")
-    seed: int = spec(0, lo=0, hi=2**32 - 1, meaning="random seed of the multi-start")
+    seed: int = spec(0, lo=SEED_RANGE[0], hi=SEED_RANGE[1], meaning="random seed of the multi-start")
     max_evaluations: int = spec(20000, lo=10, hi=10_000_000, meaning="cap on forward evaluations")
     # weights of the preference among designs that meet the targets (mst_cli.design.problem)
     objective: dict[str, float] = spec(
@@ -525,21 +525,12 @@ def parse_document(raw: Any, source: str = "<memory>") -> Document:
 
 def load_document(path: str | Path) -> Document:
     """Read and validate a design or spec file."""
-    from mst_cli.io.yaml_io import MAX_INPUT_BYTES, FileTooLarge, YAMLRefused, load_text, read_text_capped
+    from mst_cli.io.files import read_input_text
+    from mst_cli.io.yaml_io import MAX_INPUT_BYTES, YAMLRefused, load_text
 
     path = Path(path)
-    try:
-        text = read_text_capped(path)       # at most MAX_INPUT_BYTES + 1 bytes are read
-    except FileNotFoundError:
-        raise InputError("(file)", str(path), "file not found") from None
-    except FileTooLarge:
-        raise InputError("(file)", str(path), f"is larger than {MAX_INPUT_BYTES} bytes: a design "
-                                              "file is a few KB") from None
-    except UnicodeDecodeError as exc:
-        raise InputError("(file)", str(path), f"cannot be read as text ({type(exc).__name__})") from None
-    except (OSError, ValueError) as exc:    # ValueError: a NUL in the path
-        reason = getattr(exc, "strerror", None) or str(exc)
-        raise InputError("(file)", str(path), f"cannot be read ({reason})") from None
+    # a regular file only (a FIFO would block), at most MAX_INPUT_BYTES + 1 bytes read
+    text = read_input_text(path, MAX_INPUT_BYTES, what="YAML file", too_large=": a design file is a few KB")
     try:
         raw = load_text(text)
     except YAMLRefused as exc:

@@ -20,7 +20,6 @@ Only the safe constructors of ``yaml.SafeLoader`` are used.
 
 from __future__ import annotations
 
-from pathlib import Path
 from typing import Any
 
 import yaml
@@ -155,16 +154,3 @@ def load_text(text: str) -> Any:
     finally:
         loader.dispose()
 
-
-class FileTooLarge(ValueError):
-    pass
-
-
-def read_text_capped(path: Path, limit: int = MAX_INPUT_BYTES) -> str:
-    """The text of ``path``, reading at most ``limit`` + 1 bytes (FileTooLarge beyond the limit).
-    OSError and UnicodeDecodeError pass through."""
-    with open(path, "rb") as fh:
-        data = fh.read(limit + 1)
-    if len(data) > limit:
-        raise FileTooLarge(f"larger than {limit} bytes")
-    return data.decode("utf-8")

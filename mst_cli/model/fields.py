@@ -6,6 +6,10 @@ from collections.abc import Iterable
 from dataclasses import MISSING, field
 from typing import Any
 
+# The random seed's range, shared by design.seed in a spec, 'mst design --seed' and 'mst bench
+# --seed' (one owner: what one accepts, the others accept).
+SEED_RANGE = (0, 2**32 - 1)
+
 
 def spec(default: Any = MISSING, *, meaning: str, unit: str = "", lo: float | None = None, hi: float | None = None,
          lo_open: bool = False, hi_open: bool = False, choices: Iterable[Any] = (), nullable: bool = False,

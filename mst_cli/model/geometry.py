@@ -646,6 +646,13 @@ class SensorGeometry:
                         f"its slot floor needs depth_mm >= "
                         f"{2 * (self.board.chip_y_mm - self.chip_offset_mm[1] + h.side_wall_mm):g} mm "
                         f"(housing.side_wall_mm under it), or another board"))
+        low = min((w[2] for w in self.cable_windows), default=None)      # the lowest window floor
+        if low is not None and low + 0.5 * D < h.side_wall_mm - 1e-9:
+            most = h.board_clearance_mm - (h.side_wall_mm - (low + 0.5 * D))
+            out.append(("housing.board_clearance_mm", h.board_clearance_mm,
+                        f"the cable windows reach {low:g} mm, through the body's -y face: "
+                        f"housing.side_wall_mm must stay under them (here a clearance of at most "
+                        f"about {max(most, 0.0):.3g} mm), or a deeper family.depth_mm"))
         roof_room = 0.5 * D - self.pocket_roof_apex_y_mm
         if roof_room < h.side_wall_mm - 1e-9:
             out.append(("family.depth_mm", D,
