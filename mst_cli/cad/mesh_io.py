@@ -1,5 +1,6 @@
-"""Triangle meshes of a B-rep solid: tessellation (OCP, build123d), welding and the closed-mesh
-test (trimesh), binary STL (trimesh).
+"""Triangle meshes: tessellation of a B-rep solid (OCP, build123d) and welding (trimesh), for the
+CAD path; the closed-mesh test and binary STL (numpy only, so that writing a mesh built by
+:mod:`mst_cli.cad.mesh_body` imports no mesh library).
 
 Output is deterministic: the same solid and tolerance give the same vertices (welded in
 first-seen order) and triangles, so byte-identical STL files. The 3MF and STEP writers, which
@@ -29,9 +30,12 @@ __all__ = ["PRUSA_CUSTOM_GCODE_MEMBER", "PRUSA_PAUSE_PRINT_TYPE", "STEP_TIMESTAM
            "merge_vertices", "prusa_pause_xml", "stl_bytes", "tessellate", "three_mf_bytes", "write_step"]
 
 STL_HEADER = "mst sensor body, mm"
+# largest angle (rad) one mesh segment of a curved surface spans, in both meshers
+ANGULAR_TOLERANCE_RAD = 0.1
 
 
-def tessellate(solid: Solid, tolerance_mm: float, angular_tolerance_rad: float = 0.1) -> tuple[np.ndarray, np.ndarray]:
+def tessellate(solid: Solid, tolerance_mm: float,
+               angular_tolerance_rad: float = ANGULAR_TOLERANCE_RAD) -> tuple[np.ndarray, np.ndarray]:
     """Indexed triangle mesh of ``solid`` with outward normals.
 
     OCCT's incremental mesher discretises every edge once and shares it between the two
@@ -90,18 +94,44 @@ def merge_vertices(vertices: np.ndarray, triangles: np.ndarray, digits: int = 9)
     return np.asarray(mesh.vertices, dtype=float), faces[keep]
 
 
+def directed_edges(triangles: np.ndarray) -> np.ndarray:
+    """(3m, 2) directed edges (a, b) of the triangles, each triangle's three in order."""
+    t = np.asarray(triangles, dtype=np.int64)
+    return np.stack([t, np.roll(t, -1, axis=1)], axis=-1).reshape(-1, 2)
+
+
+def edge_counts(triangles: np.ndarray) -> tuple[bool, bool]:
+    """(watertight, winding consistent): every undirected edge used by exactly two triangles;
+    and no directed edge used twice (two neighbours run a shared edge in opposite directions)."""
+    e = directed_edges(triangles)
+    if len(e) == 0:
+        return False, False
+    _, undirected = np.unique(np.sort(e, axis=1), axis=0, return_counts=True)
+    _, directed = np.unique(e, axis=0, return_counts=True)
+    return bool(np.all(undirected == 2)), bool(np.all(directed == 1))
+
+
 def is_closed_oriented(vertices: np.ndarray, triangles: np.ndarray) -> bool:
-    """True when the mesh is closed (every edge shared by two triangles) and consistently wound:
-    trimesh's watertight and winding tests, checked before anything is written."""
-    mesh = _trimesh(vertices, triangles)
-    return bool(mesh.is_watertight and mesh.is_winding_consistent)
+    """True when the mesh is closed (every edge shared by two triangles) and consistently wound,
+    checked before anything is written (numpy: the export path imports no mesh library)."""
+    return all(edge_counts(triangles))
+
+
+def face_normals(vertices: np.ndarray, triangles: np.ndarray) -> np.ndarray:
+    """Unit normal of every triangle (right-hand rule; zero for a degenerate triangle)."""
+    tri = np.asarray(vertices, dtype=float)[np.asarray(triangles, dtype=np.int64)]
+    n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    length = np.linalg.norm(n, axis=1)
+    return np.divide(n, length[:, None], out=np.zeros_like(n), where=length[:, None] > 0)
 
 
 def stl_bytes(vertices: np.ndarray, triangles: np.ndarray, header: str = STL_HEADER) -> bytes:
-    """Binary STL (trimesh): 80-byte header, triangle count, then normal + 3 vertices per
-    triangle, in the order of ``triangles``."""
-    from trimesh.exchange.stl import export_stl
+    """Binary STL: 80-byte header, triangle count, then normal + 3 vertices per triangle
+    (float32, little-endian) and a zero attribute, in the order of ``triangles``."""
+    t = np.asarray(triangles, dtype=np.int64)
+    record = np.zeros(len(t), dtype=[("normal", "<f4", 3), ("corners", "<f4", (3, 3)), ("attr", "<u2")])
+    record["normal"] = face_normals(vertices, t)
+    record["corners"] = np.asarray(vertices, dtype=float)[t]
+    return (header.encode("ascii")[:80].ljust(80, b" ") + np.uint32(len(t)).astype("<u4").tobytes()
+            + record.tobytes())
 
-    data = export_stl(_trimesh(vertices, triangles))
-    # trimesh leaves the free-text header zero; name the file as mst always has
-    return header.encode("ascii")[:80].ljust(80, b" ") + data[80:]
