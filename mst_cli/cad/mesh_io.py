@@ -10,6 +10,7 @@ here for the callers that write all the mesh files from one module.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -135,3 +136,86 @@ def stl_bytes(vertices: np.ndarray, triangles: np.ndarray, header: str = STL_HEA
     return (header.encode("ascii")[:80].ljust(80, b" ") + np.uint32(len(t)).astype("<u4").tobytes()
             + record.tobytes())
 
+
+# --------------------------------------------------------------------------- reading (mst check)
+# trimesh welds the vertices of a loaded STL to this many decimals (its tol.merge = 1e-8)
+WELD_DIGITS = 8
+
+
+@dataclass(frozen=True, eq=False)
+class Mesh:
+    """An indexed triangle mesh and what ``mst check`` measures on it, in numpy only (trimesh
+    imports scipy.spatial, a third of a second, for none of it). Attribute names as trimesh's."""
+
+    vertices: np.ndarray            # (n, 3) float64, mm
+    faces: np.ndarray               # (m, 3) int64
+
+    @classmethod
+    def of(cls, mesh) -> Mesh:
+        """A Mesh of anything with ``vertices`` and ``faces`` (a trimesh.Trimesh, say)."""
+        return cls(np.asarray(mesh.vertices, dtype=float), np.asarray(mesh.faces, dtype=np.int64))
+
+    def moved(self, vertices: np.ndarray) -> Mesh:
+        return Mesh(np.asarray(vertices, dtype=float), self.faces)
+
+    @property
+    def triangles(self) -> np.ndarray:
+        return self.vertices[self.faces]
+
+    @property
+    def bounds(self) -> np.ndarray:
+        return np.array([self.vertices.min(axis=0), self.vertices.max(axis=0)])
+
+    @property
+    def volume(self) -> float:
+        """Signed volume (divergence theorem): positive for a closed mesh with outward normals."""
+        tri = self.triangles
+        return float(np.einsum("ij,ij->i", tri[:, 0], np.cross(tri[:, 1], tri[:, 2])).sum() / 6.0)
+
+    @property
+    def face_normals(self) -> np.ndarray:
+        return face_normals(self.vertices, self.faces)
+
+    @property
+    def area_faces(self) -> np.ndarray:
+        tri = self.triangles
+        return 0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)
+
+    @property
+    def triangles_center(self) -> np.ndarray:
+        return self.triangles.mean(axis=1)
+
+    @property
+    def is_watertight(self) -> bool:
+        return edge_counts(self.faces)[0]
+
+    @property
+    def is_winding_consistent(self) -> bool:
+        return edge_counts(self.faces)[1]
+
+    @property
+    def is_volume(self) -> bool:
+        """Watertight, consistently wound, finite and of positive volume (trimesh's test)."""
+        return (self.is_watertight and self.is_winding_consistent and bool(np.isfinite(self.vertices).all())
+                and self.volume > 0.0)
+
+
+def weld(vertices: np.ndarray, triangles: np.ndarray, digits: int = WELD_DIGITS) -> Mesh:
+    """One vertex per coordinate rounded to ``digits`` decimals (kept in first-seen order)."""
+    key = np.round(np.asarray(vertices, dtype=float) * 10.0 ** digits).astype(np.int64)
+    _, first, inverse = np.unique(key, axis=0, return_index=True, return_inverse=True)
+    rank = np.argsort(np.argsort(first))
+    return Mesh(np.asarray(vertices, dtype=float)[np.sort(first)],
+                rank[inverse.reshape(-1)][np.asarray(triangles, dtype=np.int64)])
+
+
+def binary_stl_triangles(data: bytes) -> np.ndarray | None:
+    """(m, 3, 3) corners of a binary STL, or None when ``data`` is not one (its size must be
+    84 + 50 x the triangle count in its header)."""
+    if len(data) < 84:
+        return None
+    count = int(np.frombuffer(data, dtype="<u4", count=1, offset=80)[0])
+    if len(data) != 84 + 50 * count or count == 0:
+        return None
+    record = np.dtype([("normal", "<f4", 3), ("corners", "<f4", (3, 3)), ("attr", "<u2")])
+    return np.frombuffer(data, dtype=record, offset=84)["corners"].astype(float)
