@@ -102,7 +102,7 @@ def main() -> None:
           "reference 1.1 x the worst of both fronts")
     head = f"| {'spec':<10} | {'new s':>6} | {'new pts':>7} |"
     if old:
-        head += f" {'old s':>6} | {'old pts':>7} | {'HV new':>8} | {'HV old':>8} | {'HV new/old':>10} |"
+        head += f" {'old s':>6} | {'old pts':>7} | {'HV new':>8} | {'HV old':>8} | {'HV new/old - 1':>14} |"
     print(head)
     print("|" + "|".join("-" * (len(c)) for c in head.split("|")[1:-1]) + "|")
     ratios = []
@@ -114,17 +114,19 @@ def main() -> None:
             if n["front"] and o["front"]:
                 hv_new, hv_old = compare(n, o)
                 ratios.append(hv_new / hv_old if hv_old else float("nan"))
-                hv = f" {hv_new:>8.4f} | {hv_old:>8.4f} | {ratios[-1]:>10.4f} |"
+                hv = f" {hv_new:>8.4f} | {hv_old:>8.4f} | {ratios[-1] - 1.0:>+14.1e} |"
             else:
-                hv = f" {'-':>8} | {'-':>8} | {'-':>10} |"
+                hv = f" {'-':>8} | {'-':>8} | {'-':>14} |"
             line += f" {o['seconds']:>6.2f} | {len(o['front']):>7} |" + hv
         print(line, flush=True)
     print()
     print(f"median seconds: new {statistics.median(r['seconds'] for r in new):.2f}"
           + (f", old {statistics.median(r['seconds'] for r in old):.2f}" if old else ""))
     if ratios:
-        print(f"hypervolume new / old: median {statistics.median(ratios):.4f}, min {min(ratios):.4f}, "
-              f"specs with new >= old: {sum(r >= 1.0 - 1e-9 for r in ratios)}/{len(ratios)}")
+        print(f"hypervolume new / old - 1: median {statistics.median(ratios) - 1:+.1e}, "
+              f"min {min(ratios) - 1:+.1e}, max {max(ratios) - 1:+.1e}; specs with new >= old: "
+              f"{sum(r >= 1.0 for r in ratios)}/{len(ratios)}, within 1e-6 of old or above: "
+              f"{sum(r >= 1.0 - 1e-6 for r in ratios)}/{len(ratios)}")
 
 
 if __name__ == "__main__":

@@ -465,28 +465,6 @@ def pareto_weights(count: int) -> np.ndarray:
     return np.array(out[:count])
 
 
-def match_once(problem: DesignProblem, *, seed: int = 0, max_evaluations: int = 20000,
-               progress: Callable[[int, int, str, float], None] | None = None, local: str = "slsqp",
-               max_time_s: float = MAX_TIME_S,
-               ) -> tuple[SolveResult, Callable[[ArrayLike | None], tuple[np.ndarray, int]] | None]:
-    """One match (screening + phase 1), then phases 2-4 on demand for any weighting.
-
-    Returns (SolveResult of the match, ``prefer_with(weights) -> (u, evaluations)``); each call
-    of ``prefer_with`` starts from the matched point with a fresh ``max_evaluations`` budget.
-    ``prefer_with`` is None when the targets could not be matched.
-    """
-    result, _ = _matched(problem, seed, max_evaluations, progress, local, max_time_s)
-    if not result.matched:
-        return result, None
-
-    def prefer_with(weights):
-        b = _Budget(max_evaluations, progress, max_time_s)
-        u_w, _, _ = prefer(problem, result.u, b, local, result.stops, weights)
-        return u_w, b.used
-
-    return result, prefer_with
-
-
 # --------------------------------------------------------------------------- many weightings at once
 class _SharedEvaluations:
     """Local runs of several weightings in lockstep, their evaluations batched into one kernel call.
