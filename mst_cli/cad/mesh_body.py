@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from mst_cli.cad import shapes
+from mst_cli.cad import mesh_io, shapes
 from mst_cli.cad.mesh_io import ANGULAR_TOLERANCE_RAD
 from mst_cli.model.geometry import SensorGeometry
 
@@ -120,8 +120,11 @@ def canonical(vertices: np.ndarray, triangles: np.ndarray) -> tuple[np.ndarray, 
 def body_mesh(geometry: SensorGeometry, tolerance_mm: float) -> tuple[np.ndarray, np.ndarray]:
     """(vertices, triangles) of the body in the sensor frame, closed and outward-oriented."""
     mesh = body_manifold(geometry, tolerance_mm).to_mesh64()
-    vertices = np.asarray(mesh.vert_properties, dtype=float)[:, :3]
-    return canonical(vertices, np.asarray(mesh.tri_verts, dtype=np.int64))
+    vertices, triangles = canonical(np.asarray(mesh.vert_properties, dtype=float)[:, :3],
+                                    np.asarray(mesh.tri_verts, dtype=np.int64))
+    if not mesh_io.is_closed_oriented(vertices, triangles):
+        raise RuntimeError("the meshed body is not closed: please report this design")
+    return vertices, triangles
 
 
 def print_mesh(geometry: SensorGeometry, tolerance_mm: float) -> tuple[np.ndarray, np.ndarray]:
