@@ -145,7 +145,7 @@ def test_bad_objective_key_is_refused(tmp_path):
 # --------------------------------------------------------------------------- shared work
 def test_batched_polishes_are_the_one_at_a_time_polishes():
     """prefer_many runs every weighting's own local run, only its kernel calls batched: each
-    ends where prefer alone ends (to solver noise far below the written rounding)."""
+    ends where prefer alone ends, to the bit."""
     from mst_cli.design.problem import DesignProblem
     from mst_cli.design.solver import _Budget, _matched, prefer, prefer_many
 
@@ -156,7 +156,7 @@ def test_batched_polishes_are_the_one_at_a_time_polishes():
     for w, (u, used) in zip(weights, batched):
         budget = _Budget(20000, None, 120.0)
         alone, _, _ = prefer(problem, sol.u, budget, "slsqp", [], w)
-        assert np.abs(u - alone).max() < 1e-6
+        assert np.array_equal(u, alone) and used == budget.used
         assert used > 0
 
 

@@ -111,6 +111,11 @@ class Evaluation:
         return np.expm1(self.log_err)
 
 
+def robustness_of_shifts(d: np.ndarray) -> np.ndarray:
+    """RMS over both signs and all outputs of :meth:`DesignProblem.print_shift_log`'s (2, ..., 2n)."""
+    return np.sqrt(np.mean(d ** 2, axis=(0, -1)))
+
+
 class DesignProblem:
     """The targets, bounds and constants of one spec document, with vectorised evaluation.
 
@@ -298,8 +303,7 @@ class DesignProblem:
     def print_robustness(self, theta_deg: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike,
                          nominal: tuple | None = None) -> np.ndarray:
         """Print robustness: RMS of :meth:`print_shift_log` over both signs and all 2n outputs."""
-        d = self.print_shift_log(theta_deg, t_mm, h_mm, nominal=nominal)
-        return np.sqrt(np.mean(d ** 2, axis=(0, -1)))
+        return robustness_of_shifts(self.print_shift_log(theta_deg, t_mm, h_mm, nominal=nominal))
 
     def worst_force_resolution_N(self, ev: Evaluation) -> np.ndarray:
         """Noise-limited force resolution of the least sensitive regime, sigma_B / (B0 min S)."""

@@ -44,7 +44,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from mst_cli.design import seed
-from mst_cli.design.problem import DesignProblem, Evaluation
+from mst_cli.design.problem import DesignProblem, Evaluation, robustness_of_shifts
 
 if TYPE_CHECKING:
     from collections.abc import Callable
@@ -490,9 +490,11 @@ class _SharedEvaluations:
         if len(self.pending) == self.live:
             self.all_waiting.set()
 
-    def ask(self, job: int, U: np.ndarray) -> tuple[Evaluation, np.ndarray]:
+    def ask(self, job: int, u: np.ndarray) -> tuple[Evaluation, np.ndarray]:
+        """Evaluation and preference terms of ``u`` (one point (dim,) or a batch (k, dim)),
+        each row's bits as :meth:`DesignProblem.evaluate` alone gives them."""
         with self.lock:
-            self.pending[job] = U
+            self.pending[job] = u
             self._check()
         self.ready[job].wait()
         self.ready[job].clear()
@@ -500,15 +502,19 @@ class _SharedEvaluations:
 
     def _serve(self) -> None:
         jobs = sorted(self.pending)
-        U = np.concatenate([self.pending[j] for j in jobs])
+        U = np.concatenate([self.pending[j].reshape(-1, self.problem.dim) for j in jobs])
         ev = self.problem.evaluate(U)
-        terms = self.problem.objective_terms(ev)
+        shifts = self.problem.print_shift_log(ev.theta_deg, ev.t_mm, ev.h_mm, nominal=(ev.S_per_N, ev.R_N))
         start = 0
         for j in jobs:
-            rows = slice(start, start + len(self.pending[j]))
-            start = rows.stop
-            self.results[j] = (Evaluation(**{f.name: getattr(ev, f.name)[rows] for f in fields(Evaluation)}),
-                               terms[rows])
+            flat = self.pending[j].ndim == 1
+            rows = start if flat else slice(start, start + len(self.pending[j]))
+            start += 1 if flat else len(self.pending[j])
+            ev_j = Evaluation(**{f.name: getattr(ev, f.name)[rows] for f in fields(Evaluation)})
+            # the RMS over the job's own rows, laid out as a call of its own would (a reduction
+            # over two axes sums in an order that depends on the array's shape)
+            robustness = robustness_of_shifts(np.ascontiguousarray(shifts[:, rows]))
+            self.results[j] = (ev_j, self.problem.objective_terms(ev_j, robustness))
         self.pending.clear()
         for j in jobs:
             self.ready[j].set()
@@ -560,11 +566,7 @@ class _BatchedProblem:
         return getattr(self._shared.problem, name)
 
     def evaluate(self, u) -> Evaluation:
-        u = np.asarray(u, dtype=float)
-        ev, terms = self._shared.ask(self._job, u.reshape(-1, u.shape[-1]))
-        if u.ndim == 1:
-            ev = Evaluation(**{f.name: getattr(ev, f.name)[0] for f in fields(Evaluation)})
-            terms = terms[0]
+        ev, terms = self._shared.ask(self._job, np.asarray(u, dtype=float))
         self._last = (ev, terms)
         return ev
 
