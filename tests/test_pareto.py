@@ -198,3 +198,10 @@ def test_print_robustness_reuses_the_nominal_stack_exactly():
     full = problem.print_robustness(ev.theta_deg, ev.t_mm, ev.h_mm)
     reused = problem.print_robustness(ev.theta_deg, ev.t_mm, ev.h_mm, nominal=(ev.S_per_N, ev.R_N))
     assert np.array_equal(full, reused, equal_nan=True)
+
+
+def test_no_runs_no_wait():
+    from mst_cli.design.problem import DesignProblem
+    from mst_cli.design.solver import _SharedEvaluations
+
+    assert _SharedEvaluations(DesignProblem(load_document(SPEC))).run([]) == []

@@ -523,6 +523,8 @@ class _SharedEvaluations:
         """Each job called with its own batched view of the problem; their results in order."""
         out: list = [None] * len(jobs)
         errors: list[BaseException] = []
+        if not jobs:
+            return out
 
         def worker(i, job):
             try:
