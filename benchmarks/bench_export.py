@@ -1,12 +1,13 @@
-"""Speed of `mst export` and `mst check` (issue: export and check). Prints a table; asserts nothing.
+"""Speed of `mst export` and `mst check` as ratios to the floor (issues: export and check, 25).
+Prints tables; asserts nothing.
 
     python benchmarks/bench_export.py [--repeats N]
 
-* wall time of `mst export --stl --step` on the three-layer reference design, interpreter
-  start included (goal <= 6 s median);
-* wall time of `mst check` on what it wrote (goal <= 2 s median);
-* where export spends its time, from one in-process run (build123d import, build + fuse,
-  mesh + STL, STEP).
+Round-robin in one run (as bench_simulate.py): the floor ``python -c "import numpy, yaml,
+click"``, `mst export --stl --3mf` (meshed with manifold3d, no CAD kernel; goal <= 3x),
+`mst export --step` (the build123d assembly), `mst check` on what export wrote (goal <= 3x),
+each on the three-layer reference design, interpreter start included. Then where each export
+path spends its time, from one in-process run per path in a fresh interpreter.
 """
 
 from __future__ import annotations
@@ -16,78 +17,85 @@ import statistics
 import subprocess
 import sys
 import tempfile
-import time
 from pathlib import Path
 
+from bench_simulate import mst_exe, round_robin
 from user_env import as_installed
 
 ROOT = Path(__file__).resolve().parents[1]
 DESIGN = ROOT / "configs" / "mohammadi2021-forward.yaml"
 
-
-def mst_cmd() -> list[str]:
-    exe = Path(sys.executable).with_name("mst")
-    return [str(exe) if exe.exists() else "mst"]
-
-
-def wall_times(args_for_run, repeats: int) -> list[float]:
-    times = []
-    for i in range(repeats):
-        cmd = mst_cmd() + args_for_run(i)
-        t0 = time.perf_counter()
-        subprocess.run(cmd, check=True, capture_output=True)
-        times.append(time.perf_counter() - t0)
-    return times
-
-
-def stages() -> list[tuple[str, float]]:
-    """Split of one export, in a fresh interpreter (so the import cost is real)."""
-    code = f"""
-import time, tempfile
-from pathlib import Path
-t = time.perf_counter(); out = []
+STAGES = {
+    "mesh path (--stl --3mf)": """
+import manifold3d
+mark("import manifold3d")
+from mst_cli.io.schema import load_design_document
+from mst_cli.cad import mesh_io, mesh_body
+doc, g = load_design_document({design!r})
+mark("load the design")
+v, f = mesh_body.print_mesh(g, 0.01)
+mark("build and mesh the body")
+mesh_io.stl_bytes(v, f); mesh_io.three_mf_bytes(v, f, doc.name, pause_after_z_mm=g.pause_height_mm)
+mark("STL + 3MF bytes")
+""",
+    "CAD path (--step)": """
 import build123d
-out.append(("import build123d", time.perf_counter() - t)); t = time.perf_counter()
+mark("import build123d")
 from mst_cli.io.schema import load_design_document
 from mst_cli.cad.assembly import build_sensor
 from mst_cli.cad import mesh_io
-doc, g = load_design_document({str(DESIGN)!r})
+doc, g = load_design_document({design!r})
 cad = build_sensor(g)
-out.append(("build + fuse the body", time.perf_counter() - t)); t = time.perf_counter()
-v, f = mesh_io.tessellate(cad.body, 0.01); data = mesh_io.stl_bytes(v, f)
-out.append(("mesh + STL bytes", time.perf_counter() - t)); t = time.perf_counter()
+mark("build + fuse the B-rep body")
 with tempfile.TemporaryDirectory() as d:
     mesh_io.write_step(cad.assembly(doc.name), Path(d) / "s.step")
-out.append(("STEP assembly", time.perf_counter() - t))
-for name, s in out: print(name + "|" + repr(s))
-"""
+mark("STEP assembly")
+""",
+}
+
+
+def stages(body: str) -> list[tuple[str, float]]:
+    """Split of one export path, in a fresh interpreter (so the import cost is real)."""
+    code = ("import time, tempfile\nfrom pathlib import Path\nt = [time.perf_counter()]\n"
+            "def mark(name):\n    now = time.perf_counter(); print(name + '|' + repr(now - t[0])); t[0] = now\n"
+            + body.format(design=str(DESIGN)))
     res = subprocess.run([sys.executable, "-c", code], check=True, capture_output=True, text=True)
     return [(line.split("|")[0], float(line.split("|")[1])) for line in res.stdout.splitlines()]
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--repeats", type=int, default=5)
+    ap.add_argument("--repeats", type=int, default=7)
     args = ap.parse_args()
     as_installed()                 # commands start from bytecode, as an installed copy does
 
+    mst = mst_exe()
     with tempfile.TemporaryDirectory() as tmp:
-        exp = wall_times(lambda i: ["export", str(DESIGN), "--stl", "--step", "--out", f"{tmp}/o{i}"],
-                         args.repeats)
-        chk = wall_times(lambda i: ["check", f"{tmp}/o{i}"], args.repeats)
-    split = stages()
-    e_med, c_med = statistics.median(exp), statistics.median(chk)
-    rows = [
-        ("mst export --stl --step, 3 layers, median [s]", f"{e_med:.2f}", "<= 6", f"{e_med / 6.0:.2f}"),
-        ("mst export, min / max [s]", f"{min(exp):.2f} / {max(exp):.2f}", "", ""),
-        ("mst check, median [s]", f"{c_med:.2f}", "<= 2", f"{c_med / 2.0:.2f}"),
-        ("mst check, min / max [s]", f"{min(chk):.2f} / {max(chk):.2f}", "", ""),
-    ] + [(f"  export stage: {name} [s]", f"{s:.2f}", "", "") for name, s in split]
-    print(f"# bench_export ({args.repeats} repeats, {sys.platform}, python {sys.version.split()[0]})")
-    print(f"| {'measure':<46} | {'value':>11} | {'goal':>5} | {'value/goal':>10} |")
-    print(f"|{'-' * 48}|{'-' * 13}|{'-' * 7}|{'-' * 12}|")
-    for name, value, goal, ratio in rows:
-        print(f"| {name:<46} | {value:>11} | {goal:>5} | {ratio:>10} |")
+        subprocess.run([mst, "export", str(DESIGN), "--stl", "--out", f"{tmp}/ref"], check=True, capture_output=True)
+        cmds = {
+            'floor: python -c "import numpy, yaml, click"': ([sys.executable, "-c", "import numpy, yaml, click"], ""),
+            "mst export --stl --3mf": ([mst, "export", str(DESIGN), "--stl", "--3mf", "--out", f"{tmp}/m{{i}}"],
+                                       "<= 3"),
+            "mst export --step": ([mst, "export", str(DESIGN), "--step", "--out", f"{tmp}/s{{i}}"], ""),
+            "mst check": ([mst, "check", f"{tmp}/ref"], "<= 3"),
+        }
+        times = round_robin(cmds, args.repeats)
+    med = {name: statistics.median(ts) for name, ts in times.items()}
+    floor = next(iter(med.values()))
+    print(f"# bench_export ({args.repeats} rounds, {sys.platform}, python {sys.version.split()[0]}); "
+          "3-layer reference design; ratios against the floor measured in the same run")
+    print(f"| {'command':<46} | {'median [s]':>10} | {'min / max [s]':>13} | {'x floor':>7} | {'goal':>9} |")
+    print(f"|{'-' * 48}|{'-' * 12}|{'-' * 15}|{'-' * 9}|{'-' * 11}|")
+    for name, (_, goal) in cmds.items():
+        ts, ratio = times[name], med[name] / floor
+        mark = "" if not goal else (" ok" if ratio <= float(goal.split()[-1]) else " MISS")
+        print(f"| {name:<46} | {med[name]:>10.3f} | {min(ts):>5.3f} / {max(ts):<5.3f} | {ratio:>7.2f} "
+              f"| {goal + mark:>9} |")
+    for path, body in STAGES.items():
+        print()
+        print(f"{path}, one in-process run:")
+        for name, s in stages(body):
+            print(f"  {name:<32} {s:7.3f} s")
 
 
 if __name__ == "__main__":

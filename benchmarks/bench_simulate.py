@@ -1,6 +1,6 @@
-"""Speed of the quick commands as ratios against a floor (issue 14). Prints tables; asserts nothing.
+"""Speed of the quick commands as ratios against a floor (issues 14, 25). Prints tables; asserts nothing.
 
-    python benchmarks/bench_simulate.py [--repeats N] [--no-export]
+    python benchmarks/bench_simulate.py [--repeats N] [--no-pareto]
 
 Every command runs as a subprocess, interpreter start included, and every figure is a
 ratio to the **floor** measured in the same run: ``python -c "import numpy, yaml, click"``,
@@ -10,8 +10,10 @@ with other work slows them all alike and the ratios hold where absolute seconds 
 
 * ``mst --help``, ``mst simulate --no-plot`` (goal <= 1.5x the floor), ``mst simulate``
   (with response.png: the picture's cost is the difference), ``mst simulate --json``,
-  ``mst design`` on configs/mohammadi2021.yaml with --no-plot --quiet (goal <= 2.5x),
-  ``mst check`` and ``mst export --stl`` (build123d's import is most of it);
+  ``mst design`` on configs/mohammadi2021.yaml with --no-plot --quiet (goal <= 2x),
+  ``mst design --pareto 12`` on the same spec (goal <= 10x), ``mst check`` (goal <= 3x),
+  ``mst export --stl --3mf`` (meshes, no CAD kernel; goal <= 3x) and ``mst export --step``
+  (build123d's import is most of it);
 * which heavy libraries each quick command imported (none for simulate; nlopt for design);
 * the vectorised L0 kernel's layer evaluations per second (goal >= 1e6 / s).
 """
@@ -40,7 +42,7 @@ def mst_exe() -> str:
     return str(exe) if exe.exists() else "mst"
 
 
-def commands(tmp: Path, export_dir: Path, with_export: bool) -> dict[str, tuple[list[str], str]]:
+def commands(tmp: Path, export_dir: Path, with_pareto: bool) -> dict[str, tuple[list[str], str]]:
     """name -> (argv with {i} for the round, goal). Each round writes into its own folder."""
     mst = mst_exe()
     cmds = {
@@ -51,11 +53,15 @@ def commands(tmp: Path, export_dir: Path, with_export: bool) -> dict[str, tuple[
         "mst simulate (draws response.png)": ([mst, "simulate", str(FORWARD), "--out", f"{tmp}/p{{i}}"], ""),
         "mst simulate --json": ([mst, "simulate", str(FORWARD), "--out", f"{tmp}/j{{i}}", "--json"], ""),
         "mst design mohammadi2021 --no-plot -q": ([mst, "design", str(SPEC), "--out", f"{tmp}/d{{i}}",
-                                                  "--no-plot", "--quiet"], "<= 2.5"),
-        "mst check (3 layers)": ([mst, "check", str(export_dir)], ""),
+                                                  "--no-plot", "--quiet"], "<= 2"),
+        "mst check (3 layers)": ([mst, "check", str(export_dir)], "<= 3"),
+        "mst export --stl --3mf (3 layers)": ([mst, "export", str(FORWARD), "--stl", "--3mf",
+                                               "--out", f"{tmp}/e{{i}}"], "<= 3"),
+        "mst export --step (3 layers)": ([mst, "export", str(FORWARD), "--step", "--out", f"{tmp}/s{{i}}"], ""),
     }
-    if with_export:
-        cmds["mst export --stl (3 layers)"] = ([mst, "export", str(FORWARD), "--stl", "--out", f"{tmp}/e{{i}}"], "")
+    if with_pareto:
+        cmds["mst design mohammadi2021 --pareto 12 --no-plot -q"] = (
+            [mst, "design", str(SPEC), "--pareto", "12", "--out", f"{tmp}/p{{i}}", "--no-plot", "--quiet"], "<= 10")
     return cmds
 
 
@@ -99,7 +105,7 @@ def l0_rate(n_layers: int, repeats: int) -> float:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--repeats", type=int, default=9)
-    ap.add_argument("--no-export", action="store_true", help="skip mst export (about 2 s a run)")
+    ap.add_argument("--no-pareto", action="store_true", help="skip mst design --pareto 12 (seconds a run)")
     args = ap.parse_args()
     as_installed()                 # commands start from bytecode, as an installed copy does
 
@@ -108,13 +114,15 @@ def main() -> None:
         export_dir = tmp / "export"
         subprocess.run([mst_exe(), "export", str(FORWARD), "--stl", "--out", str(export_dir)],
                        check=True, capture_output=True)
-        cmds = commands(tmp, export_dir, not args.no_export)
+        cmds = commands(tmp, export_dir, not args.no_pareto)
         times = round_robin(cmds, args.repeats)
         heavy = {
             "mst simulate --no-plot": heavy_imports(["simulate", str(FORWARD), "--out", f"{tmp}/h1", "--no-plot"]),
             "mst simulate --json": heavy_imports(["simulate", str(FORWARD), "--out", f"{tmp}/h2", "--json"]),
             "mst design --no-plot": heavy_imports(["design", str(SPEC), "--out", f"{tmp}/h3", "--no-plot", "-q"]),
             "mst simulate": heavy_imports(["simulate", str(FORWARD), "--out", f"{tmp}/h4"]),
+            "mst check": heavy_imports(["check", str(export_dir)]),
+            "mst export --stl --3mf": heavy_imports(["export", str(FORWARD), "--stl", "--3mf", "--out", f"{tmp}/h5"]),
         }
     rate = l0_rate(1_000_000, 5)
 
@@ -122,13 +130,13 @@ def main() -> None:
     floor = next(iter(med.values()))
     print(f"# bench_simulate ({args.repeats} rounds, {sys.platform}, python {sys.version.split()[0]}); "
           f"ratios against the floor measured in the same run")
-    print(f"| {'command':<46} | {'median [s]':>10} | {'min / max [s]':>13} | {'x floor':>7} | {'goal':>11} |")
-    print(f"|{'-' * 48}|{'-' * 12}|{'-' * 15}|{'-' * 9}|{'-' * 13}|")
+    print(f"| {'command':<50} | {'median [s]':>10} | {'min / max [s]':>13} | {'x floor':>7} | {'goal':>11} |")
+    print(f"|{'-' * 52}|{'-' * 12}|{'-' * 15}|{'-' * 9}|{'-' * 13}|")
     for name, (_, goal) in cmds.items():
         ts = times[name]
         ratio = med[name] / floor
         mark = "" if not goal else (" ok" if ratio <= float(goal.split()[-1]) else " MISS")
-        print(f"| {name:<46} | {med[name]:>10.3f} | {min(ts):>5.3f} / {max(ts):<5.3f} | {ratio:>7.2f} "
+        print(f"| {name:<50} | {med[name]:>10.3f} | {min(ts):>5.3f} / {max(ts):<5.3f} | {ratio:>7.2f} "
               f"| {goal + mark:>11} |")
     drawn, bare = med["mst simulate (draws response.png)"], med["mst simulate --no-plot"]
     print()

@@ -255,3 +255,51 @@ def test_a_bug_in_a_check_is_raised_as_it_is(exported, monkeypatch):
     monkeypatch.setattr(checks, "CHECKS", checks.CHECKS + (broken,))
     with pytest.raises(KeyError, match="a bug"):
         checks.run_checks(mesh_of(stl), manifest)
+
+
+# --------------------------------------------------------------------------- numpy mesh (no trimesh)
+def test_numpy_mesh_reads_and_measures_as_trimesh_does(exported, tmp_path):
+    """load_mesh reads a binary STL with numpy: the same welded mesh, volume, bounds, normals,
+    areas and closedness trimesh gives, and the same shells as scipy's connected components."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    stl, manifest, _ = exported
+    (tmp_path / "sensor.stl").write_bytes(stl)
+    ours, theirs = checks.load_mesh(tmp_path / "sensor.stl"), mesh_of(stl)
+    assert len(ours.vertices) == len(theirs.vertices) and len(ours.faces) == len(theirs.faces)
+    assert ours.volume == pytest.approx(theirs.volume, rel=1e-12)
+    assert np.allclose(ours.bounds, theirs.bounds, atol=0)
+    assert np.allclose(np.sort(ours.area_faces), np.sort(theirs.area_faces), rtol=1e-9)
+    assert (ours.is_watertight, ours.is_winding_consistent, ours.is_volume) == (True, True, True)
+    faces = ours.faces[1:]
+    holed = mesh_io.Mesh(ours.vertices, faces)
+    assert not holed.is_watertight and not holed.is_volume
+    # components of two copies side by side: each is the body and its pocket void
+    v = np.concatenate([ours.vertices, ours.vertices + 100.0])
+    f = np.concatenate([ours.faces, ours.faces + len(ours.vertices)])
+    edges = f[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
+    labels = measure.vertex_components(len(v), edges)
+    n, ref = connected_components(coo_matrix((np.ones(len(edges)), (edges[:, 0], edges[:, 1])),
+                                             shape=(len(v), len(v))), directed=False)
+    assert len(np.unique(labels)) == n == 4
+    assert np.array_equal(np.unique(ref, return_inverse=True)[1], np.unique(labels, return_inverse=True)[1])
+    res = by_name(checks.run_checks(ours, manifest))
+    assert not failed(res.values())
+
+
+def test_mst_check_imports_neither_trimesh_nor_scipy(tmp_path):
+    import subprocess
+    import sys
+
+    from mst_cli.cad import mesh_body
+    doc, g = load_design_document(FORWARD)
+    (tmp_path / "sensor.stl").write_bytes(mesh_io.stl_bytes(*mesh_body.print_mesh(g, 0.01)))
+    (tmp_path / "export.json").write_text(
+        __import__("json").dumps(export_manifest(doc.name, g, doc.printer, 0.01, ["sensor.stl"])))
+    code = ("import sys\nfrom mst_cli.cli.app import main\n"
+            f"sys.argv = ['mst', 'check', {str(tmp_path)!r}]\n"
+            "try:\n    main()\nexcept SystemExit as e:\n    assert not e.code, e.code\n"
+            "print('loaded:' + ','.join(m for m in ('trimesh', 'scipy', 'build123d') if m in sys.modules))\n")
+    out = subprocess.run([sys.executable, "-c", code], check=True, capture_output=True, text=True)
+    assert out.stdout.strip().splitlines()[-1] == "loaded:"

@@ -140,3 +140,68 @@ def test_bad_objective_key_is_refused(tmp_path):
     path.write_text(yaml.safe_dump(raw))
     r = CliRunner().invoke(main, ["design", str(path), "--out", str(tmp_path / "o")])
     assert r.exit_code == 2 and "design.objective.hieght" in r.output
+
+
+# --------------------------------------------------------------------------- shared work
+def test_batched_polishes_are_the_one_at_a_time_polishes():
+    """prefer_many runs every weighting's own local run, only its kernel calls batched: each
+    ends where prefer alone ends, to the bit."""
+    from mst_cli.design.problem import DesignProblem
+    from mst_cli.design.solver import _Budget, _matched, prefer, prefer_many
+
+    problem = DesignProblem(load_document(ROOT / "configs" / "mohammadi2021.yaml"))
+    sol, _ = _matched(problem, 0, 20000, None, "slsqp", 120.0)
+    weights = list(pareto_weights(6))
+    batched = prefer_many(problem, [sol.u] * len(weights), weights, max_evaluations=20000)
+    for w, (u, used) in zip(weights, batched):
+        budget = _Budget(20000, None, 120.0)
+        alone, _, _ = prefer(problem, sol.u, budget, "slsqp", [], w)
+        assert np.array_equal(u, alone) and used == budget.used
+        assert used > 0
+
+
+def test_batched_polish_hands_back_an_error():
+    from mst_cli.design.problem import DesignProblem
+    from mst_cli.design.solver import _SharedEvaluations
+
+    problem = DesignProblem(load_document(ROOT / "configs" / "mohammadi2021.yaml"))
+
+    def fine(p):
+        return float(p.evaluate(np.full(problem.dim, 0.5)).objective)
+
+    def broken(p):
+        p.evaluate(np.full((2, problem.dim), 0.5))
+        raise ValueError("inside a run")
+
+    with pytest.raises(ValueError, match="inside a run"):
+        _SharedEvaluations(problem).run([fine, broken, fine])
+    one, two = _SharedEvaluations(problem).run([fine, fine])
+    assert one == two == float(problem.evaluate(np.full(problem.dim, 0.5)).objective)
+
+
+def test_front_matches_once_and_reuses_the_chosen_designs_match(monkeypatch):
+    """The screening and the match run once for the whole front (the chosen design's)."""
+    from mst_cli.design import pareto, solver
+
+    calls = []
+    real = solver._matched
+    monkeypatch.setattr(solver, "_matched", lambda *a, **k: calls.append(1) or real(*a, **k))
+    chosen, front = pareto.pareto_front(load_document(SPEC), 4)
+    assert len(calls) == 1 and chosen.status == "met" and len(front) >= 2
+
+
+def test_print_robustness_reuses_the_nominal_stack_exactly():
+    from mst_cli.design.problem import DesignProblem
+
+    problem = DesignProblem(load_document(ROOT / "configs" / "mohammadi2021.yaml"))
+    ev = problem.evaluate(np.random.default_rng(3).random((200, problem.dim)))
+    full = problem.print_robustness(ev.theta_deg, ev.t_mm, ev.h_mm)
+    reused = problem.print_robustness(ev.theta_deg, ev.t_mm, ev.h_mm, nominal=(ev.S_per_N, ev.R_N))
+    assert np.array_equal(full, reused, equal_nan=True)
+
+
+def test_no_runs_no_wait():
+    from mst_cli.design.problem import DesignProblem
+    from mst_cli.design.solver import _SharedEvaluations
+
+    assert _SharedEvaluations(DesignProblem(load_document(SPEC))).run([]) == []

@@ -82,11 +82,12 @@ def export_body(folder: Path, name: str, g, printer, tolerance_mm: float = STL_T
     """Write sensor.stl, sensor.3mf and export.json into folder as `mst export --stl --3mf`
     does (print orientation, the magnet pause in the 3MF); returns the manifest."""
     from mst_cli.cad import mesh_io
-    from mst_cli.cad.assembly import build_sensor, check_fits, print_mesh
     from mst_cli.cad.manifest import MANIFEST_NAME, export_manifest
+    from mst_cli.cad.mesh_body import print_mesh
+    from mst_cli.cad.shapes import check_fits
 
     check_fits(g)
-    vertices, triangles = print_mesh(g, build_sensor(g).body, tolerance_mm)
+    vertices, triangles = print_mesh(g, tolerance_mm)
     folder.mkdir(parents=True, exist_ok=True)
     (folder / "sensor.stl").write_bytes(mesh_io.stl_bytes(vertices, triangles))
     (folder / "sensor.3mf").write_bytes(mesh_io.three_mf_bytes(

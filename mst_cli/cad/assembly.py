@@ -7,30 +7,20 @@ from typing import TYPE_CHECKING
 
 from build123d import Compound, Solid
 
-from mst_cli.cad import parts
-from mst_cli.errors import InputError
+from mst_cli.cad import parts, shapes
+from mst_cli.cad.shapes import check_fits as check_fits  # re-exported: the callers check first
 from mst_cli.model.geometry import SensorGeometry
 
 if TYPE_CHECKING:
     import numpy as np
 
 
-def check_fits(geometry: SensorGeometry) -> None:
-    """Raise :class:`InputError` for the first broken housing rule (the pocket and the slot
-    must fit inside the body, the depth must be whole print layers): see
-    :meth:`SensorGeometry.housing_violations`. The cell rules are checked by the caller."""
-    for field, value, allowed in geometry.housing_violations():
-        raise InputError(field, value, allowed)
-
-
 def body_solids(geometry: SensorGeometry) -> tuple[list[Solid], list[Solid]]:
-    """(solids to fuse, solids to cut) of the printed body, bottom to top."""
-    keep = [parts.base_block(geometry)]
-    for cell, z_bottom in zip(geometry.layers, geometry.layer_bottoms_mm):
-        keep.append(parts.layer_web(cell, z_bottom))
-    keep += parts.plates(geometry)
-    keep.append(parts.cap_block(geometry))
-    cut = parts.base_cuts(geometry) + [parts.magnet_pocket(geometry)]
+    """(solids to fuse, solids to cut) of the printed body, bottom to top
+    (:func:`mst_cli.cad.shapes.body_plan`)."""
+    plan = shapes.body_plan(geometry)
+    keep = [parts.solid(s) for s in plan.keep]
+    cut = [parts.solid(s) for s in plan.cut] + [parts.fused(plan.pocket)]
     return keep, cut
 
 
@@ -40,7 +30,6 @@ def build_body(geometry: SensorGeometry) -> Solid:
     The webs' pads touch the base, plates and cap face to face, so the fuse bonds them; one
     multi-argument fuse (not a growing loop) keeps it to a single boolean operation.
     """
-    check_fits(geometry)
     keep, cut = body_solids(geometry)
     fused = keep[0].fuse(*keep[1:])
     body = fused.cut(*cut).clean()

@@ -24,19 +24,18 @@ The manifest validated itself on load, so a KeyError or TypeError in here is a b
 
 from __future__ import annotations
 
+import io
 import math
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 import numpy as np
 
 from mst_cli.cad.manifest import MAX_COORD_MM, Manifest
 from mst_cli.cad.measure import LAYER_GRID_TOL_MM, Measurements, measure
+from mst_cli.cad.mesh_io import Mesh, binary_stl_triangles, weld
 from mst_cli.errors import InputError
-
-if TYPE_CHECKING:
-    import trimesh
+from mst_cli.io.files import read_input
 
 # Planar features are exact in the B-rep; the STL stores float32 coordinates, which resolve
 # ~2e-6 mm at 20 mm from the origin. Dimensions measured on planar faces must agree to this.
@@ -82,15 +81,28 @@ def resolve_paths(path: str | Path) -> tuple[Path, Path]:
     return stl, manifest
 
 
-def load_mesh(path: Path) -> trimesh.Trimesh:
-    """Read an STL into a trimesh (vertices merged); InputError when it is not a mesh, or when
-    a coordinate is not finite or beyond +-MAX_COORD_MM (nothing is measured on such a mesh)."""
-    import io
-
-    import trimesh
-
-    from mst_cli.io.files import read_input
+def load_mesh(path: Path) -> Mesh:
+    """Read an STL into a :class:`~mst_cli.cad.mesh_io.Mesh` (vertices welded); InputError when
+    it is not a regular file or not a mesh, or when a coordinate is not finite or beyond
+    +-MAX_COORD_MM (nothing is measured on such a mesh). A binary STL is read with numpy;
+    anything else (an ASCII STL, garbage) goes through trimesh, which says whether it is a
+    mesh at all."""
     data = read_input(path, MAX_STL_BYTES, field="PATH", what="STL file", too_large=": no body mst exports")
+    corners = binary_stl_triangles(data)
+    if corners is not None:
+        vertices, faces = corners.reshape(-1, 3), np.arange(3 * len(corners)).reshape(-1, 3)
+    else:
+        vertices, faces = _load_with_trimesh(path, data)
+    bad = ~np.isfinite(vertices).all(axis=1) | (np.abs(np.nan_to_num(vertices, nan=0.0)) > MAX_COORD_MM).any(axis=1)
+    if bad.any():
+        i = int(np.flatnonzero(bad)[0])
+        raise InputError("PATH", str(path), f"vertex {i} at {vertices[i].tolist()} mm: every coordinate "
+                                            f"must be finite and within +-{MAX_COORD_MM:g} mm")
+    return weld(vertices, faces)        # what trimesh.load(process=True) does, on finite coordinates
+
+
+def _load_with_trimesh(path: Path, data: bytes) -> tuple[np.ndarray, np.ndarray]:
+    import trimesh      # heavy (pulls scipy.spatial): only for files that are not binary STL
     try:
         with np.errstate(all="ignore"):
             mesh = trimesh.load(io.BytesIO(data), file_type="stl", force="mesh", process=False)
@@ -98,14 +110,7 @@ def load_mesh(path: Path) -> trimesh.Trimesh:
         raise InputError("PATH", str(path), f"cannot be read as an STL mesh ({type(exc).__name__})") from None
     if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
         raise InputError("PATH", str(path), "holds no triangles")
-    vertices = np.asarray(mesh.vertices)
-    bad = ~np.isfinite(vertices).all(axis=1) | (np.abs(np.nan_to_num(vertices, nan=0.0)) > MAX_COORD_MM).any(axis=1)
-    if bad.any():
-        i = int(np.flatnonzero(bad)[0])
-        raise InputError("PATH", str(path), f"vertex {i} at {vertices[i].tolist()} mm: every coordinate "
-                                            f"must be finite and within +-{MAX_COORD_MM:g} mm")
-    mesh.process()                # what trimesh.load(process=True) does, now on finite coordinates
-    return mesh
+    return np.asarray(mesh.vertices, dtype=float), np.asarray(mesh.faces, dtype=np.int64)
 
 
 # --------------------------------------------------------------------------- the checks

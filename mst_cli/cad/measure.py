@@ -1,10 +1,11 @@
 """What ``mst check`` measures on an exported mesh, measured once (:func:`measure`).
 
 Numbers come from the mesh itself -- ray casts and plane sections (manifold3d), face normals,
-shells and volume (trimesh) -- at the places the design (:class:`~mst_cli.cad.manifest.Manifest`)
-says a feature is; :mod:`mst_cli.cad.checks` compares them with the design's values. The STL
-lies in print orientation; the manifest's ``print`` section turns it back to the sensor frame,
-where the design's dimensions live. A feature that is not found measures NaN.
+shells and volume (numpy, :class:`~mst_cli.cad.mesh_io.Mesh`) -- at the places the design
+(:class:`~mst_cli.cad.manifest.Manifest`) says a feature is; :mod:`mst_cli.cad.checks` compares
+them with the design's values. The STL lies in print orientation; the manifest's ``print``
+section turns it back to the sensor frame, where the design's dimensions live. A feature that
+is not found measures NaN.
 """
 
 from __future__ import annotations
@@ -16,10 +17,10 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from mst_cli.cad.manifest import Manifest
+from mst_cli.cad.mesh_io import Mesh
 
 if TYPE_CHECKING:
     import manifold3d
-    import trimesh
 
 # Mesh heights in print orientation are float32 values up to ~30 mm (~2e-6 mm steps) that went
 # through one rotation: a face "on" a layer boundary (or on the bed) lies within this of it.
@@ -30,7 +31,7 @@ _RAY_OFFSET_MM = (0.0123, 0.0071)
 
 
 # --------------------------------------------------------------------------- primitives
-def to_manifold(mesh: trimesh.Trimesh) -> tuple[manifold3d.Manifold, str]:
+def to_manifold(mesh: Mesh) -> tuple[manifold3d.Manifold, str]:
     """manifold3d view of the mesh and its status name ("NoError" when it is a manifold)."""
     import manifold3d as mf
     m = mf.Manifold(mf.Mesh(vert_properties=np.ascontiguousarray(mesh.vertices, dtype=np.float32),
@@ -95,6 +96,24 @@ def section_hole_area(manifold, z_mm: float, x: float, y: float) -> float:
     return best if math.isfinite(best) else 0.0
 
 
+def vertex_components(n_vertices: int, edges: np.ndarray) -> np.ndarray:
+    """Component label of every vertex of a graph: the smallest vertex index it is joined to
+    (hooking along every edge and pointer jumping, in numpy; a few passes per doubling)."""
+    label = np.arange(n_vertices)
+    a, b = edges[:, 0], edges[:, 1]
+    while True:
+        la, lb = label[a], label[b]
+        low = np.minimum(la, lb)
+        new = label.copy()
+        np.minimum.at(new, la, low)             # hook both roots onto the smaller one
+        np.minimum.at(new, lb, low)
+        while not np.array_equal(new, new[new]):
+            new = new[new]                      # compress to the roots
+        if np.array_equal(new, label):
+            return label
+        label = new
+
+
 def shells(mesh) -> tuple[int, int, list[float]]:
     """(bodies, internal voids, signed shell volumes): a closed shell of negative volume is a
     cavity inside another shell.
@@ -102,14 +121,8 @@ def shells(mesh) -> tuple[int, int, list[float]]:
     Shells are the connected components of the triangles (sharing vertices); each one's
     signed volume is the divergence-theorem sum of det(a, b, c) / 6 over its triangles.
     """
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
-
     faces = np.asarray(mesh.faces)
-    n_vertices = len(mesh.vertices)
-    edges = faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
-    graph = coo_matrix((np.ones(len(edges)), (edges[:, 0], edges[:, 1])), shape=(n_vertices, n_vertices))
-    _, labels = connected_components(graph, directed=False)
+    labels = vertex_components(len(mesh.vertices), faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2))
     face_label = np.unique(labels[faces[:, 0]], return_inverse=True)[1].reshape(-1)
     tri = np.asarray(mesh.vertices)[faces]
     signed = np.einsum("ij,ij->i", tri[:, 0], np.cross(tri[:, 1], tri[:, 2])) / 6.0
@@ -117,13 +130,11 @@ def shells(mesh) -> tuple[int, int, list[float]]:
     return sum(v > 0 for v in volumes), sum(v < 0 for v in volumes), volumes
 
 
-def to_sensor_frame(mesh: trimesh.Trimesh, manifest: Manifest) -> trimesh.Trimesh:
-    """A copy of the print-oriented mesh in the sensor frame (the manifest's rotation undone)."""
+def to_sensor_frame(mesh: Mesh, manifest: Manifest) -> Mesh:
+    """The print-oriented mesh in the sensor frame (the manifest's rotation undone)."""
     rot = np.asarray(manifest.print.rotation, dtype=float)
     shift = np.asarray(manifest.print.translation_mm, dtype=float)
-    out = mesh.copy()
-    out.vertices = (np.asarray(mesh.vertices) - shift) @ rot      # R^T (p - T), row vectors
-    return out
+    return mesh.moved((mesh.vertices - shift) @ rot)      # R^T (p - T), row vectors
 
 
 # --------------------------------------------------------------------------- measurements
@@ -185,7 +196,9 @@ class Measurements:
 
 def measure(mesh, manifest: Manifest) -> Measurements:
     """Measure ``mesh`` (the STL as written, print orientation) where ``manifest`` puts each
-    feature. Reads only its arguments."""
+    feature. Reads only its arguments; ``mesh`` may be a trimesh.Trimesh or a
+    :class:`~mst_cli.cad.mesh_io.Mesh`."""
+    mesh = Mesh.of(mesh)
     sensor = to_sensor_frame(mesh, manifest)
     manifold, status = to_manifold(sensor)
     bodies, voids, shell_volumes = shells(sensor)

@@ -1,7 +1,7 @@
 """``mst export`` and ``mst check``: the printable body and its geometry checks.
 
-build123d (CAD) and trimesh/manifold3d (mesh files and checks) are imported inside the
-commands, so that importing :mod:`mst_cli.cli.app` stays cheap.
+manifold3d (the STL and 3MF meshes, and the checks) and build123d (CAD: only for --step) are
+imported inside the commands, so that importing :mod:`mst_cli.cli.app` stays cheap.
 """
 
 from __future__ import annotations
@@ -92,20 +92,20 @@ def export(path: Path, want_stl: bool, want_step: bool, want_3mf: bool, out_dir:
     _progress(t0, f"loaded {path} ({len(geometry.layers)} layers)")
 
     from mst_cli.cad import mesh_io
-    from mst_cli.cad.assembly import build_sensor, check_fits, print_mesh
     from mst_cli.cad.manifest import MANIFEST_NAME, export_manifest
+    from mst_cli.cad.shapes import check_fits
     from mst_cli.io.outputs import staged
 
     check_fits(geometry)
-    _progress(t0, "building the body: base, layers, plates, cap (one fuse)")
-    cad = build_sensor(geometry)
     names = (["sensor.stl"] if want_stl else []) + (["sensor.step"] if want_step else []) \
         + (["sensor.3mf"] if want_3mf else [])
     out = out_dir or default_out_dir(doc.name)
     with staged(out) as st:
         if want_stl or want_3mf:
-            vertices, triangles = print_mesh(geometry, cad.body, stl_tolerance_mm)
-            _progress(t0, f"meshed: {len(triangles)} triangles at {stl_tolerance_mm:g} mm")
+            from mst_cli.cad.mesh_body import print_mesh
+            vertices, triangles = print_mesh(geometry, stl_tolerance_mm)
+            _progress(t0, f"meshed the body (base, layers, plates, cap; pocket and slot cut): "
+                          f"{len(triangles)} triangles at {stl_tolerance_mm:g} mm")
             if want_stl:
                 st.write_bytes("sensor.stl", mesh_io.stl_bytes(vertices, triangles))
                 _progress(t0, "wrote sensor.stl")
@@ -115,6 +115,9 @@ def export(path: Path, want_stl: bool, want_step: bool, want_3mf: bool, out_dir:
                     layer_height_mm=geometry.layer_height_mm))
                 _progress(t0, "wrote sensor.3mf")
         if want_step:
+            from mst_cli.cad.assembly import build_sensor
+            _progress(t0, "building the CAD body: base, layers, plates, cap (one fuse)")
+            cad = build_sensor(geometry)
             st.write_bytes("sensor.step", mesh_io.step_bytes(cad.assembly(doc.name)))
             _progress(t0, "wrote sensor.step (body, magnet, board)")
         if designed is not None:

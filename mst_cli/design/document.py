@@ -138,7 +138,8 @@ def _layer_outputs(resp: Response, n: int):
 
 
 def design_document(doc: Document, *, seed: int | None = None, progress=None,
-                    max_evaluations: int | None = None, local: str = "slsqp") -> DesignResult:
+                    max_evaluations: int | None = None, local: str = "slsqp",
+                    solution: list | None = None) -> DesignResult:
     """Design theta, t, h for every layer of the spec ``doc``.
 
     Parameters
@@ -152,6 +153,9 @@ def design_document(doc: Document, *, seed: int | None = None, progress=None,
         ``progress(evaluations_done, max_evaluations, phase, worst_error_rel)``.
     max_evaluations : int, optional
         Budget of candidate evaluations [default: design.max_evaluations of the file].
+    solution : list, optional
+        Receives the solver's :class:`~mst_cli.design.solver.SolveResult` (its matched point
+        is where :func:`mst_cli.design.pareto.pareto_front` starts every other weighting).
 
     Raises
     ------
@@ -175,8 +179,11 @@ def design_document(doc: Document, *, seed: int | None = None, progress=None,
 
     sol = solve(problem, seed=seed, max_evaluations=max_evaluations, progress=progress, local=local)
     theta, t, h = (np.round(a, ROUND_DECIMALS) for a in problem.to_physical(sol.u))
-    return verify_design(doc, problem, theta, t, h, sol, seed=seed, max_evaluations=max_evaluations,
-                         mechanics=doc.mechanics, t_start=t_start)
+    result = verify_design(doc, problem, theta, t, h, sol, seed=seed, max_evaluations=max_evaluations,
+                           mechanics=doc.mechanics, t_start=t_start)
+    if solution is not None:
+        solution.append(sol)
+    return result
 
 
 def verify_design(doc: Document, problem: DesignProblem, theta, t, h, sol, *, seed: int,

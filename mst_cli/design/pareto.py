@@ -19,7 +19,7 @@ are the forward model's, the same the report prints.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -36,6 +36,7 @@ if TYPE_CHECKING:
 # user cannot act on (a weight lattice crowds its points where the trade is flat).
 SAME_POINT = np.array([0.2, 0.02, 0.01])        # mm, relative, absolute
 MAX_WEIGHTINGS_PER_POINT = 4        # weightings tried per requested point before giving up
+WAVE_PER_POINT = MAX_WEIGHTINGS_PER_POINT   # weightings polished together (one batched wave)
 
 
 @dataclass
@@ -96,6 +97,10 @@ def _spread(front: list[ParetoDesign], count: int) -> list[ParetoDesign]:
     return [front[i] for i in sorted(keep)]
 
 
+def _waves(weights: np.ndarray, size: int) -> list[np.ndarray]:
+    return [weights[i:i + size] for i in range(0, len(weights), size)]
+
+
 def pareto_front(doc: Document, count: int, *, seed: int | None = None,
                  progress: Callable[[int, int, str, float], None] | None = None,
                  max_evaluations: int | None = None, local: str = "slsqp") -> tuple[DesignResult, list[ParetoDesign]]:
@@ -105,39 +110,50 @@ def pareto_front(doc: Document, count: int, *, seed: int | None = None,
     the front unless another design dominates it (it then is listed all the same, marked).
     Fewer than ``count`` designs come back when the spec's free variables do not give that
     many distinct trade-offs (a one-layer spec with tight bounds, say).
-    """
-    from mst_cli.design.solver import match_once, pareto_weights
 
+    The work is shared: the screening and the match run once (the chosen design's solve), and
+    every weighting starts its polish from that matched point; the weightings are polished
+    together, each in its own local run, with their kernel calls batched into one
+    (:func:`mst_cli.design.solver.prefer_many`). Designs are then judged in the weightings'
+    order, as one at a time would be, until the front holds ``count`` designs.
+    """
+    from mst_cli.design.solver import pareto_weights, prefer_many
+
+    solution: list = []
     chosen = design_document(doc, seed=seed, progress=progress, max_evaluations=max_evaluations,
-                             local=local)
+                             local=local, solution=solution)
     if chosen.status != "met":
         return chosen, []
+    points = [ParetoDesign(chosen, None, chosen=True)]
+    sol = solution[0]
+    if sol.u_matched is None:
+        return chosen, points
     problem = DesignProblem(doc)
     seed = int(doc.design["seed"] if seed is None else seed)
     max_evaluations = int(doc.design["max_evaluations"] if max_evaluations is None else max_evaluations)
-    sol, prefer_with = match_once(problem, seed=seed, max_evaluations=max_evaluations, local=local)
-    points = [ParetoDesign(chosen, None, chosen=True)]
-    if prefer_with is None:
-        return chosen, points
+    # what a front design reports of the solver: the shared match and its own polish
+    front_sol = replace(sol, preference_before=None, preference_after=None, stops=[])
 
     def front_of(pts):
         mask = non_dominated(np.array([p.metrics for p in pts]))
         return [p for p, keep in zip(pts, mask) if keep or p.chosen]
 
-    for w in pareto_weights(MAX_WEIGHTINGS_PER_POINT * count):
-        u, used = prefer_with(w)
-        sol.evaluations += used
-        theta, t, h = (np.round(a, ROUND_DECIMALS) for a in problem.to_physical(u))
-        res = verify_design(doc, problem, theta, t, h, sol, seed=seed, max_evaluations=max_evaluations,
-                            mechanics="spring")
-        if res.status != "met":
-            continue
-        cand = ParetoDesign(res, tuple(float(x) for x in w))
-        if any(_same_point(cand.metrics, p.metrics) for p in points):
-            continue
-        points.append(cand)
-        if len(front_of(points)) >= count:
-            break
+    for wave in _waves(pareto_weights(MAX_WEIGHTINGS_PER_POINT * count), WAVE_PER_POINT * count):
+        polished = prefer_many(problem, [sol.u_matched] * len(wave), list(wave), max_evaluations=max_evaluations,
+                               local=local, stops=front_sol.stops)
+        for w, (u, used) in zip(wave, polished):
+            front_sol.evaluations += used
+            theta, t, h = (np.round(a, ROUND_DECIMALS) for a in problem.to_physical(u))
+            res = verify_design(doc, problem, theta, t, h, front_sol, seed=seed, max_evaluations=max_evaluations,
+                                mechanics="spring")
+            if res.status != "met":
+                continue
+            cand = ParetoDesign(res, tuple(float(x) for x in w))
+            if any(_same_point(cand.metrics, p.metrics) for p in points):
+                continue
+            points.append(cand)
+            if len(front_of(points)) >= count:
+                return chosen, _spread(front_of(points), count)
     return chosen, _spread(front_of(points), count)
 
 

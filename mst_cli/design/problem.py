@@ -111,6 +111,11 @@ class Evaluation:
         return np.expm1(self.log_err)
 
 
+def robustness_of_shifts(d: np.ndarray) -> np.ndarray:
+    """RMS over both signs and all outputs of :meth:`DesignProblem.print_shift_log`'s (2, ..., 2n)."""
+    return np.sqrt(np.mean(d ** 2, axis=(0, -1)))
+
+
 class DesignProblem:
     """The targets, bounds and constants of one spec document, with vectorised evaluation.
 
@@ -276,24 +281,29 @@ class DesignProblem:
 
     # ----------------------------------------------------------------- preference
     def print_shift_log(self, theta_deg: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike,
-                        dt_mm: float = PRINT_ERROR_T_MM) -> np.ndarray:
+                        dt_mm: float = PRINT_ERROR_T_MM, nominal: tuple | None = None) -> np.ndarray:
         """ln(out(t + s dt) / out(t)) for s = +1, -1: shape (2, ..., 2n), S then R.
 
-        The three stacks (nominal, thicker, thinner) go through the kernels in one call.
+        The stacks (nominal, thicker, thinner) go through the kernels in one call; ``nominal``
+        = (S_per_N, R_N) of the unshifted stacks, when the caller has them, spares the first.
         """
         theta_deg, t_mm, h_mm = np.broadcast_arrays(*(np.asarray(a, dtype=float)
                                                       for a in (theta_deg, t_mm, h_mm)))
-        shifts = np.array([0.0, dt_mm, -dt_mm]).reshape((3,) + (1,) * t_mm.ndim)
-        T = np.broadcast_to(theta_deg, (3,) + theta_deg.shape)
-        H = np.broadcast_to(h_mm, (3,) + h_mm.shape)
+        steps = [0.0, dt_mm, -dt_mm] if nominal is None else [dt_mm, -dt_mm]
+        shifts = np.array(steps).reshape((len(steps),) + (1,) * t_mm.ndim)
+        T = np.broadcast_to(theta_deg, (len(steps),) + theta_deg.shape)
+        H = np.broadcast_to(h_mm, (len(steps),) + h_mm.shape)
         R, S, _, _, _ = self.responses(T, np.maximum(t_mm + shifts, geo.LENGTH_FLOOR_MM), H)
         out = np.log(np.maximum(np.concatenate([S, R], axis=-1), TINY))
-        return out[1:] - out[:1]
+        if nominal is None:
+            return out[1:] - out[:1]
+        base = np.log(np.maximum(np.concatenate([nominal[0], nominal[1]], axis=-1), TINY))
+        return out - base[None]
 
-    def print_robustness(self, theta_deg: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike) -> np.ndarray:
+    def print_robustness(self, theta_deg: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike,
+                         nominal: tuple | None = None) -> np.ndarray:
         """Print robustness: RMS of :meth:`print_shift_log` over both signs and all 2n outputs."""
-        d = self.print_shift_log(theta_deg, t_mm, h_mm)
-        return np.sqrt(np.mean(d ** 2, axis=(0, -1)))
+        return robustness_of_shifts(self.print_shift_log(theta_deg, t_mm, h_mm, nominal=nominal))
 
     def worst_force_resolution_N(self, ev: Evaluation) -> np.ndarray:
         """Noise-limited force resolution of the least sensitive regime, sigma_B / (B0 min S)."""
@@ -303,7 +313,7 @@ class DesignProblem:
         """The preference terms (..., len(OBJECTIVE_TERMS)) of evaluated candidates: ln height,
         ln worst force resolution, print robustness (computed unless given)."""
         if robustness is None:
-            robustness = self.print_robustness(ev.theta_deg, ev.t_mm, ev.h_mm)
+            robustness = self.print_robustness(ev.theta_deg, ev.t_mm, ev.h_mm, nominal=(ev.S_per_N, ev.R_N))
         return np.stack([np.log(ev.total_height_mm), np.log(self.worst_force_resolution_N(ev)),
                          np.asarray(robustness, dtype=float)], axis=-1)
 

@@ -36,14 +36,15 @@ safety net that normal runs never reach), so the same seed gives the same design
 from __future__ import annotations
 
 import math
+import threading
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from typing import TYPE_CHECKING
 
 import numpy as np
 
 from mst_cli.design import seed
-from mst_cli.design.problem import DesignProblem
+from mst_cli.design.problem import DesignProblem, Evaluation, robustness_of_shifts
 
 if TYPE_CHECKING:
     from collections.abc import Callable
@@ -101,6 +102,7 @@ class SolveResult:
     preference_after: float | None
     local: str = "slsqp"
     stops: list[str] = field(default_factory=list)   # how each nlopt run ended
+    u_matched: np.ndarray | None = None              # the phase-1 point the preference started from
 
 
 class _Budget:
@@ -434,6 +436,8 @@ def solve(problem: DesignProblem, *, seed: int = 0, max_evaluations: int = 20000
           local: str = "slsqp", max_time_s: float = MAX_TIME_S, weights=None) -> SolveResult:
     """Find normalised variables meeting the targets, then minimise the preference (one budget)."""
     result, budget = _matched(problem, seed, max_evaluations, progress, local, max_time_s)
+    if result.matched:
+        result.u_matched = result.u
     if not result.matched or budget.left <= 3 * _per_iter(problem, local):
         return result
     result.u, result.preference_before, result.preference_after = prefer(
@@ -447,34 +451,151 @@ def pareto_weights(count: int) -> np.ndarray:
     the three corners first, then a triangular lattice, refined until there are enough."""
     corners = [np.eye(3)[i] for i in range(3)]
     out = list(corners)
+    seen = {tuple(np.round(w, 12)) for w in out}
     level = 2
     while len(out) < count:
         for i in range(level + 1):
             for j in range(level + 1 - i):
                 w = np.array([i, j, level - i - j], dtype=float) / level
-                if not any(np.allclose(w, v) for v in out):
+                key = tuple(np.round(w, 12))
+                if key not in seen:
+                    seen.add(key)
                     out.append(w)
         level *= 2
     return np.array(out[:count])
 
 
-def match_once(problem: DesignProblem, *, seed: int = 0, max_evaluations: int = 20000,
-               progress: Callable[[int, int, str, float], None] | None = None, local: str = "slsqp",
-               max_time_s: float = MAX_TIME_S,
-               ) -> tuple[SolveResult, Callable[[ArrayLike | None], tuple[np.ndarray, int]] | None]:
-    """One match (screening + phase 1), then phases 2-4 on demand for any weighting.
+# --------------------------------------------------------------------------- many weightings at once
+class _SharedEvaluations:
+    """Local runs of several weightings in lockstep, their evaluations batched into one kernel call.
 
-    Returns (SolveResult of the match, ``prefer_with(weights) -> (u, evaluations)``); each call
-    of ``prefer_with`` starts from the matched point with a fresh ``max_evaluations`` budget.
-    ``prefer_with`` is None when the targets could not be matched.
+    nlopt drives each run through callbacks, so runs cannot hand over a batch themselves: each
+    runs in its own thread against a :class:`_BatchedProblem`, whose ``evaluate`` posts its
+    points here and waits. When every live run waits, the calling thread evaluates all posted
+    points in one call (with the preference terms, the print-shifted stacks included) and
+    wakes each run with its rows. Only one thread computes at a time, and a round's batch
+    holds the runs in a fixed order, so the result depends on the inputs only.
     """
-    result, _ = _matched(problem, seed, max_evaluations, progress, local, max_time_s)
-    if not result.matched:
-        return result, None
 
-    def prefer_with(weights):
-        b = _Budget(max_evaluations, progress, max_time_s)
-        u_w, _, _ = prefer(problem, result.u, b, local, result.stops, weights)
-        return u_w, b.used
+    def __init__(self, problem: DesignProblem):
+        self.problem = problem
+        self.lock = threading.Lock()
+        self.all_waiting = threading.Event()
+        self.pending: dict[int, np.ndarray] = {}
+        self.results: dict[int, tuple] = {}
+        self.ready: list[threading.Event] = []
+        self.live = 0
 
-    return result, prefer_with
+    def _check(self) -> None:           # with self.lock held
+        if len(self.pending) == self.live:
+            self.all_waiting.set()
+
+    def ask(self, job: int, u: np.ndarray) -> tuple[Evaluation, np.ndarray]:
+        """Evaluation and preference terms of ``u`` (one point (dim,) or a batch (k, dim)),
+        each row's bits as :meth:`DesignProblem.evaluate` alone gives them."""
+        with self.lock:
+            self.pending[job] = u
+            self._check()
+        self.ready[job].wait()
+        self.ready[job].clear()
+        return self.results.pop(job)
+
+    def _serve(self) -> None:
+        jobs = sorted(self.pending)
+        U = np.concatenate([self.pending[j].reshape(-1, self.problem.dim) for j in jobs])
+        ev = self.problem.evaluate(U)
+        shifts = self.problem.print_shift_log(ev.theta_deg, ev.t_mm, ev.h_mm, nominal=(ev.S_per_N, ev.R_N))
+        start = 0
+        for j in jobs:
+            flat = self.pending[j].ndim == 1
+            rows = start if flat else slice(start, start + len(self.pending[j]))
+            start += 1 if flat else len(self.pending[j])
+            ev_j = Evaluation(**{f.name: getattr(ev, f.name)[rows] for f in fields(Evaluation)})
+            # the RMS over the job's own rows, laid out as a call of its own would (a reduction
+            # over two axes sums in an order that depends on the array's shape)
+            robustness = robustness_of_shifts(np.ascontiguousarray(shifts[:, rows]))
+            self.results[j] = (ev_j, self.problem.objective_terms(ev_j, robustness))
+        self.pending.clear()
+        for j in jobs:
+            self.ready[j].set()
+
+    def run(self, jobs: list[Callable[[DesignProblem], object]]) -> list:
+        """Each job called with its own batched view of the problem; their results in order."""
+        out: list = [None] * len(jobs)
+        errors: list[BaseException] = []
+        if not jobs:
+            return out
+
+        def worker(i, job):
+            try:
+                out[i] = job(_BatchedProblem(self, i))
+            except BaseException as exc:        # handed to the caller below
+                errors.append(exc)
+            finally:
+                with self.lock:
+                    self.live -= 1
+                    self._check()
+
+        self.live = len(jobs)
+        self.ready = [threading.Event() for _ in jobs]
+        threads = [threading.Thread(target=worker, args=(i, job), daemon=True) for i, job in enumerate(jobs)]
+        for t in threads:
+            t.start()
+        while True:
+            self.all_waiting.wait()
+            with self.lock:
+                self.all_waiting.clear()
+                if len(self.pending) != self.live:
+                    continue
+                if self.live == 0:
+                    break
+                self._serve()
+        for t in threads:
+            t.join()
+        if errors:
+            raise errors[0]
+        return out
+
+
+class _BatchedProblem:
+    """A :class:`DesignProblem` whose evaluations go through :class:`_SharedEvaluations`."""
+
+    def __init__(self, shared: _SharedEvaluations, job: int):
+        self._shared, self._job = shared, job
+        self._last: tuple | None = None
+
+    def __getattr__(self, name):
+        return getattr(self._shared.problem, name)
+
+    def evaluate(self, u) -> Evaluation:
+        ev, terms = self._shared.ask(self._job, np.asarray(u, dtype=float))
+        self._last = (ev, terms)
+        return ev
+
+    def preference(self, ev: Evaluation, weights: ArrayLike | None = None) -> np.ndarray:
+        if self._last is None or ev is not self._last[0]:
+            return self._shared.problem.preference(ev, weights)
+        w = self._shared.problem.objective_weights if weights is None else np.asarray(weights, dtype=float)
+        return self._last[1] @ w
+
+
+def prefer_many(problem: DesignProblem, starts: list[np.ndarray], weightings: list[ArrayLike], *,
+                max_evaluations: int, local: str = "slsqp", max_time_s: float = MAX_TIME_S,
+                stops: list | None = None) -> list[tuple[np.ndarray, int]]:
+    """Phases 2-4 (:func:`prefer`) for every (start, weighting) pair, each with a fresh
+    ``max_evaluations`` budget, their kernel calls batched across the weightings.
+    Returns (u, evaluations) per pair, in order."""
+    run_stops: list[list[str]] = [[] for _ in starts]
+
+    def job(k):
+        def run(batched):
+            budget = _Budget(max_evaluations, None, max_time_s)
+            u, _, _ = prefer(batched, starts[k], budget, local, run_stops[k], weightings[k])
+            return u, budget.used
+        return run
+
+    out = _SharedEvaluations(problem).run([job(k) for k in range(len(starts))])
+    if stops is not None:
+        for s in run_stops:
+            stops.extend(s)
+    return out

@@ -1,0 +1,195 @@
+"""The printed body as plain shapes: boxes, prisms and cylinders, read from the one geometry object.
+
+This is the one place that turns :class:`mst_cli.model.geometry.SensorGeometry` into solids.
+It imports no CAD or mesh library: :mod:`mst_cli.cad.parts` makes B-rep solids of these shapes
+with build123d (the STEP assembly), :mod:`mst_cli.cad.mesh_body` makes meshes of the same
+shapes with manifold3d (the STL and the 3MF). Both fuse the ``keep`` shapes of
+:func:`body_plan` and cut its ``cut`` shapes, so the two bodies differ only where a mesh must
+approximate the pocket's round bottom by a polygon.
+
+Shapes are in the sensor frame (z up the stack, the magnet axis along z through x = y = 0).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from mst_cli.errors import InputError
+from mst_cli.model.geometry import HexCell, SensorGeometry
+
+# Cutting tools that end on an outer face of the part are extended past it by this much, so
+# the boolean never has to resolve two coplanar faces (the result is the same solid).
+OVERCUT_MM = 1.0
+
+# the two in-plane axes of a prism's profile, by the axis it is swept along: a right-handed
+# (cyclic) order, so that a profile counter-clockwise in (a, b) sweeps outward-facing
+PROFILE_AXES = {"x": ("y", "z"), "y": ("z", "x"), "z": ("x", "y")}
+
+
+@dataclass(frozen=True)
+class Box:
+    """Axis-aligned box between lo = (x0, y0, z0) and hi = (x1, y1, z1), mm."""
+
+    lo: tuple[float, float, float]
+    hi: tuple[float, float, float]
+
+
+@dataclass(frozen=True)
+class Prism:
+    """A polygon (with holes) in the plane across ``axis``, swept along it from ``start`` over
+    ``length`` (mm). Profile points are (a, b) in the axes :data:`PROFILE_AXES` names."""
+
+    axis: str
+    outer: tuple[tuple[float, float], ...]
+    holes: tuple[tuple[tuple[float, float], ...], ...]
+    start: float
+    length: float
+
+    def point(self, a: float, b: float, s: float) -> tuple[float, float, float]:
+        """The sensor-frame point at profile coordinates (a, b) and ``s`` along the axis."""
+        coords = {self.axis: s, PROFILE_AXES[self.axis][0]: a, PROFILE_AXES[self.axis][1]: b}
+        return (coords["x"], coords["y"], coords["z"])
+
+
+@dataclass(frozen=True)
+class Cylinder:
+    """Round cylinder with its axis along z: radius, centre of the lower face, height (mm)."""
+
+    radius: float
+    base: tuple[float, float, float]
+    height: float
+
+
+def box(x0: float, x1: float, y0: float, y1: float, z0: float, z1: float) -> Box:
+    return Box((x0, y0, z0), (x1, y1, z1))
+
+
+def check_fits(geometry: SensorGeometry) -> None:
+    """Raise :class:`InputError` for the first broken housing rule (the pocket and the slot
+    must fit inside the body, the depth must be whole print layers): see
+    :meth:`SensorGeometry.housing_violations`. The cell rules are checked by the caller."""
+    for field, value, allowed in geometry.housing_violations():
+        raise InputError(field, value, allowed)
+
+
+def _xz_to_prism_profile(points_xz) -> tuple[tuple[float, float], ...]:
+    """Profile points (x, z) as (a, b) = (z, x) of a prism swept along y."""
+    return tuple((z, x) for x, z in points_xz)
+
+
+def layer_web(cell: HexCell, z_bottom_mm: float) -> Prism:
+    """One collapsible layer: the hex profile (outer hexagon minus its inward offset by t,
+    docs/design.md section 3) swept through the whole depth D along y, centred on y = 0.
+
+    The bottom and top pads lie flat on z_bottom and z_bottom + h so that they fuse with the
+    base/plate below and the plate/cap above.
+    """
+    outer = [(x, z + z_bottom_mm) for x, z in cell.outer_profile_xz()]
+    inner = [(x, z + z_bottom_mm) for x, z in cell.inner_profile_xz()]
+    d = cell.depth_mm
+    return Prism("y", _xz_to_prism_profile(outer), (_xz_to_prism_profile(inner),), -0.5 * d, d)
+
+
+def plates(geometry: SensorGeometry) -> list[Box]:
+    """Solid plates (W x D x plate thickness) between consecutive layers."""
+    w2, d2 = 0.5 * geometry.width_mm, 0.5 * geometry.depth_mm
+    out = []
+    for cell, z_bottom in zip(geometry.layers[:-1], geometry.layer_bottoms_mm[:-1]):
+        z0 = z_bottom + cell.h_mm
+        out.append(box(-w2, w2, -d2, d2, z0, z0 + geometry.housing.plate_mm))
+    return out
+
+
+def magnet_pocket(geometry: SensorGeometry) -> list[Cylinder | Box | Prism]:
+    """The closed pocket that receives the magnet, as shapes to fuse: a disc over the pocket's
+    depth along z (the magnet axis), the straight sides and the roof.
+
+    Its section across the axis is a U open towards +y (up in the print): a half disc of the
+    pocket radius below y = 0 and straight sides up to ``pocket_top_y_mm`` (a layer boundary,
+    where the print pauses). Above that a gable closes it, its ridge along x on a layer
+    boundary, at least 45 deg steep: each layer after the pause overhangs less than a layer
+    height, so nothing is bridged.
+    """
+    r = geometry.pocket_radius_mm
+    z0, d = geometry.z_magnet_bottom_mm, geometry.pocket_depth_mm
+    y_top = geometry.pocket_top_y_mm
+    disc = Cylinder(r, (0.0, 0.0, z0), d)
+    sides = box(-r, r, 0.0, y_top, z0, z0 + d)
+    # gable: triangle in the y-z plane (base on y = y_top across the depth, apex at the
+    # ridge), swept along x over the pocket's width
+    tri = ((y_top, z0), (geometry.pocket_roof_apex_y_mm, z0 + 0.5 * d), (y_top, z0 + d))
+    roof = Prism("x", tri, (), -r, 2.0 * r)
+    return [disc, sides, roof]
+
+
+def cap_block(geometry: SensorGeometry) -> Box:
+    """The cap above the stack (W x D, up to the total height), without its pocket."""
+    w2, d2 = 0.5 * geometry.width_mm, 0.5 * geometry.depth_mm
+    return box(-w2, w2, -d2, d2, geometry.z_stack_top_mm, geometry.total_height_mm)
+
+
+def base_block(geometry: SensorGeometry) -> Box:
+    """The base block (base_length x D, up to the top of the cover), without cuts."""
+    L2, d2 = 0.5 * geometry.base_length_mm, 0.5 * geometry.depth_mm
+    return box(-L2, L2, -d2, d2, 0.0, geometry.z_base_top_mm)
+
+
+def base_cuts(geometry: SensorGeometry) -> list[Box]:
+    """Board slot and cable windows, as cutting tools.
+
+    The slot (board outline + clearance, from the base floor to the cover's underside) runs
+    from its floor at ``slot_floor_y_mm`` out through the +y face, the face on top in the
+    print: the board slides in along -y until it rests on the floor, which puts the chip
+    under the magnet axis. Each connector's cable leaves through a window in the side wall
+    beside it, open through the same face; so nothing in the base is bridged.
+    """
+    x0, x1 = geometry.slot_x_mm
+    y_out = 0.5 * geometry.depth_mm + OVERCUT_MM
+    z0, z1 = geometry.z_board_bottom_mm, geometry.z_cover_bottom_mm
+    cuts = [box(x0, x1, geometry.slot_floor_y_mm, y_out, z0, z1)]
+    for x_in, x_out, y_floor, wz0, wz1 in geometry.cable_windows:
+        # from just inside the slot (already empty) to past the outer face
+        a, b = (x_out - OVERCUT_MM, x_in + OVERCUT_MM) if x_out < x_in else (x_in - OVERCUT_MM, x_out + OVERCUT_MM)
+        cuts.append(box(a, b, y_floor, y_out, wz0, wz1))
+    return cuts
+
+
+@dataclass(frozen=True)
+class BodyPlan:
+    """The printed body: fuse ``keep`` (bottom to top), then cut ``cut`` (the base's slot and
+    windows) and the union of ``pocket`` (the magnet pocket's pieces)."""
+
+    keep: tuple[Box | Prism, ...]
+    cut: tuple[Box, ...]
+    pocket: tuple[Cylinder | Box | Prism, ...]
+
+
+def body_plan(geometry: SensorGeometry) -> BodyPlan:
+    """The shapes of the one printed TPU body, after :func:`check_fits`."""
+    check_fits(geometry)
+    keep = [base_block(geometry)]
+    keep += [layer_web(cell, z_bottom) for cell, z_bottom in zip(geometry.layers, geometry.layer_bottoms_mm)]
+    keep += plates(geometry)
+    keep.append(cap_block(geometry))
+    return BodyPlan(tuple(keep), tuple(base_cuts(geometry)), tuple(magnet_pocket(geometry)))
+
+
+def magnet(geometry: SensorGeometry) -> Cylinder:
+    """The magnet resting on the pocket floor (its lower pole face at z_magnet_bottom)."""
+    m = geometry.magnet
+    return Cylinder(m.radius_mm, (0.0, 0.0, geometry.z_magnet_bottom_mm), m.thickness_mm)
+
+
+def board(geometry: SensorGeometry) -> list[Box]:
+    """The carrier board on the slot floor, the QFN package on it (Hall plates at the package
+    centre, where the forward model puts the field point) and its connectors."""
+    bd = geometry.board
+    bx, by = geometry.board_origin_xy_mm
+    zb, zt = geometry.z_board_bottom_mm, geometry.z_board_top_mm
+    pcb = box(bx, bx + bd.length_mm, by, by + bd.width_mm, zb, zt)
+    cx, cy = geometry.chip_xy_printed_mm
+    s2 = 0.5 * bd.chip_size_mm
+    chip = box(cx - s2, cx + s2, cy - s2, cy + s2, zt, geometry.z_chip_top_mm)
+    sockets = [box(bx + c.x0_mm, bx + c.x1_mm, by + c.y0_mm, by + c.y1_mm, zt, zt + c.height_mm)
+               for c in bd.connectors]
+    return [pcb, chip] + sockets
