@@ -102,7 +102,7 @@ def load_mesh(path: Path) -> Mesh:
 
 
 def _load_with_trimesh(path: Path, data: bytes) -> tuple[np.ndarray, np.ndarray]:
-    import trimesh      # heavy (pulls scipy.spatial): only for files that are not binary STL
+    import trimesh  # heavy (pulls scipy.spatial): only for files that are not binary STL
     try:
         with np.errstate(all="ignore"):
             mesh = trimesh.load(io.BytesIO(data), file_type="stl", force="mesh", process=False)
