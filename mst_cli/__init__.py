@@ -1,3 +1,3 @@
 """mst: design tool for multi-sensitivity soft tactile sensors."""
 
-__version__ = "0.5.0"
+__version__ = "0.6.0"
