@@ -27,7 +27,7 @@ import numpy as np
 
 from mst_cli.model import geometry as geo
 from mst_cli.model.mechanics import continuum as L2
-from mst_cli.model.mechanics.path import PathError, StepControl, follow_to_event
+from mst_cli.model.mechanics.path import PathError
 
 
 # --------------------------------------------------------------------------- mesh
@@ -201,41 +201,14 @@ def solve_to_lock(prob) -> dict:
 
     Returns k (small-load), d_lock, R (F at the lock), the equilibrium check, what closed,
     Newton iterations and the path's points (d, F)."""
-    cell = prob.cell
-    d_nom = cell.h_mm - 2 * cell.t_mm - cell.contact_allowance_mm
     k = L2.linear_k(prob)
-
-    def solve(state, d, depth=0):
-        try:
-            u, it, active, r = prob._newton(state[0], d, state[1], pads=True)
-        except FloatingPointError:
-            if depth >= 3 or state[2] is None:
-                raise
-            d0 = state[3] if len(state) > 3 else None
-            if d0 is None:
-                raise
-            mid, it0 = solve(state, 0.5 * (d0 + d), depth + 1)
-            end, it1 = solve(mid, d, depth + 1)
-            return end, it0 + it1
-        return (u, active, r, d), it
-
-    def margin(state, d):
-        return (L2.LOCK_STIFFNESS_FACTOR - prob.tangent_k(state[0], state[1], d) / k,
-                L2._lock_label(prob, state[1]))
-
-    def observe(state, d):
-        return prob.force(*state[:3])
-
     try:
-        path = follow_to_event(solve, margin, observe, (np.zeros(prob.basis.N), None, None, 0.0), d_nom,
-                               L2.D_MAX_OVER_NOMINAL * d_nom, StepControl(first_step_rel=0.125),
-                               L2.LOCK_TOLERANCES)
+        path, _ = L2.follow_to_lock(prob, k)
     except PathError as exc:
-        raise L2.ContinuumError(f"3D check: {exc} for {cell}") from None
-    out = {"k": k, "d_lock": float(path.d_mm[-1]), "R": float(path.observations[-1][0]),
-           "balance": float(path.observations[-1][1]), "at": path.event_at, "iterations": path.iterations,
-           "d": np.array(path.d_mm), "F": np.array([o[0] for o in path.observations])}
-    return out
+        raise L2.ContinuumError(f"3D check: {exc} for {prob.cell}") from None
+    return {"k": k, "d_lock": float(path.d_mm[-1]), "R": float(path.observations[-1][0]),
+            "balance": float(path.observations[-1][1]), "at": path.event_at, "iterations": path.iterations,
+            "d": np.array(path.d_mm), "F": np.array([o[0] for o in path.observations])}
 
 
 def depth_grading(cell: geo.HexCell, fine: bool) -> np.ndarray:

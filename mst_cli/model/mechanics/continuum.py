@@ -560,7 +560,6 @@ def solve_continuum(cell: geo.HexCell, material, n_thick: int = DEFAULT_N_THICK,
     if bad:
         why = bad[0].message if bad[0] is not None else "h <= 2t or p <= 0"
         raise ValueError(f"continuum model needs a meshable cell: {why}")
-    allowance = cell.contact_allowance_mm
 
     fine = _Problem(cell, material, n_thick, n_length, levels)
     k_lin = linear_k(fine)
@@ -569,11 +568,32 @@ def solve_continuum(cell: geo.HexCell, material, n_thick: int = DEFAULT_N_THICK,
     # scaled by k_fine / k_coarse, the ratio of the two meshes' linear stiffnesses (the
     # corner singularity's mesh error; the benchmark's convergence study records it).
     prob = _Problem(cell, material, n_thick, n_length, path_levels) if levels != path_levels else fine
-    mesh_scale = k_lin / linear_k(prob) if levels != path_levels else 1.0
-    u = np.zeros(prob.basis.N)
-
-    d_nom = cell.h_mm - 2 * cell.t_mm - allowance     # pads meet here if the pads were rigid
     k_path = linear_k(prob) if levels != path_levels else k_lin
+    mesh_scale = k_lin / k_path
+    try:
+        path, ratio_after = follow_to_lock(prob, k_path, StepControl(first_step_rel=first_step_frac,
+                                                                      max_steps=max_steps))
+    except PathError as exc:
+        raise ContinuumError(f"continuum solve: {exc} for {cell}") from None
+    F = np.array([0.0] + [F * mesh_scale for F, _, _ in path.observations])
+    balance = path.observations[-1][1]
+    contacts = np.array([0] + [n for _, _, n in path.observations])
+    return ContinuumResult(np.array([0.0] + path.d_mm), F, k_lin, float(path.d_mm[-1]), path.event_at,
+                           path.iterations, int(fine.basis.N), float(balance), float(mesh_scale), float(ratio_after),
+                           contacts)
+
+
+def follow_to_lock(prob, k_ref_N_per_mm: float, steps: StepControl | None = None) -> tuple:
+    """Follow a built problem's load path from rest to its lock (the tangent stiffness reaching
+    LOCK_STIFFNESS_FACTOR x ``k_ref_N_per_mm``), then one short step on into the locked branch.
+
+    Works on any problem with L2's interface (``_newton``, ``tangent_k``, ``force``; the 3D
+    check in benchmarks/ reuses it). Returns (the :class:`~mst_cli.model.mechanics.path.PathResult`,
+    whose observations are (F in N, equilibrium imbalance, contact points in contact), and the
+    tangent / k just past the lock (nan when that step does not converge)). Raises PathError.
+    """
+    cell = prob.cell
+    d_nom = cell.h_mm - 2 * cell.t_mm - cell.contact_allowance_mm     # pads meet here if rigid
 
     def solve(state, d, depth=0):
         try:
@@ -583,41 +603,29 @@ def solve_continuum(cell: geo.HexCell, material, n_thick: int = DEFAULT_N_THICK,
             # bracket's near end, which can be a long step away where a wall is pinched)
             if depth >= 3 or state[2] is None:
                 raise
-            d0 = state[3] if len(state) > 3 else None
-            if d0 is None:
-                raise
-            mid, it0 = solve(state, 0.5 * (d0 + d), depth + 1)
+            mid, it0 = solve(state, 0.5 * (state[3] + d), depth + 1)
             end, it1 = solve(mid, d, depth + 1)
             return end, it0 + it1
         return (u, active, r, d), it
 
     def margin(state, d):
-        # the lock: the tangent stiffness reaches LOCK_STIFFNESS_FACTOR x the small-load k
-        # (a face pinched between the plate and its mirror, or the pads meeting)
-        return LOCK_STIFFNESS_FACTOR - prob.tangent_k(state[0], state[1], d) / k_path, _lock_label(prob, state[1])
+        # a face pinched between the plate and its mirror, or the pads meeting
+        return LOCK_STIFFNESS_FACTOR - prob.tangent_k(state[0], state[1], d) / k_ref_N_per_mm, \
+            _lock_label(prob, state[1])
 
     def observe(state, d):
         F, balance = prob.force(*state[:3])
-        return F * mesh_scale, balance, int(state[1].sum())
+        return F, balance, int(state[1].sum())
 
-    try:
-        path = follow_to_event(solve, margin, observe, (u, None, None, 0.0), d_nom, D_MAX_OVER_NOMINAL * d_nom,
-                               StepControl(first_step_rel=first_step_frac, max_steps=max_steps), LOCK_TOLERANCES)
-    except PathError as exc:
-        raise ContinuumError(f"continuum solve: {exc} for {cell}") from None
-    F = np.array([0.0] + [F for F, _, _ in path.observations])
-    balance = path.observations[-1][1]
-    contacts = np.array([0] + [n for _, _, n in path.observations])
-    # one step on into the locked branch: how much stiffer the layer is there
+    path = follow_to_event(solve, margin, observe, (np.zeros(prob.basis.N), None, None, 0.0), d_nom,
+                           D_MAX_OVER_NOMINAL * d_nom, steps or StepControl(), LOCK_TOLERANCES)
     d_after = path.d_mm[-1] + LOCK_TOLERANCES.event_width_rel * d_nom * 10
     try:
         after, _ = solve(path.state, d_after)
-        ratio_after = prob.tangent_k(after[0], after[1], d_after) / k_path
+        ratio_after = prob.tangent_k(after[0], after[1], d_after) / k_ref_N_per_mm
     except FloatingPointError:
         ratio_after = math.nan
-    return ContinuumResult(np.array([0.0] + path.d_mm), F, k_lin, float(path.d_mm[-1]), path.event_at,
-                           path.iterations, int(fine.basis.N), float(balance), float(mesh_scale), float(ratio_after),
-                           contacts)
+    return path, ratio_after
 
 
 def _lock_label(prob, active) -> str:
