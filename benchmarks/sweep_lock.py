@@ -8,6 +8,7 @@ halving of the step). ``--mesh`` also solves each cell on two finer meshes.
 
 Run:  .venv/bin/python benchmarks/sweep_lock.py                       # the three sweeps
       .venv/bin/python benchmarks/sweep_lock.py --mesh                # + mesh convergence
+      .venv/bin/python benchmarks/sweep_lock.py --factors             # + R against the lock factor
       .venv/bin/python benchmarks/sweep_lock.py --sweep theta=12:16:0.25 --cell 0,0.40,1.87
 """
 
@@ -19,6 +20,7 @@ import numpy as np
 
 from mst_cli.model.geometry import HexCell
 from mst_cli.model.material import Material
+from mst_cli.model.mechanics import continuum
 from mst_cli.model.mechanics.continuum import solve_continuum
 
 # (variable, start, stop, step, fixed theta, t, h): the issue's sweep at the reference
@@ -49,6 +51,9 @@ def run_sweep(var, start, stop, step, theta, t, h, mat) -> float:
         print(f"{x:8.3f} {res.force_N[-1]:10.5f} {res.d_contact_mm:10.5f} {res.contact_at:>6} "
               f"{res.lock_stiffness_ratio:9.1f}")
     dev = neighbour_deviation(R)
+    if dev.size == 0:
+        print("(fewer than three points: no neighbour deviation)")
+        return float("nan")
     print(f"largest deviation from the neighbours' mean: {100 * dev.max():.3f} %")
     return float(dev.max())
 
@@ -61,11 +66,30 @@ def run_mesh(mat):
         print(f"{str(cell):>22} " + " ".join(f"{100 * (r / R[-1] - 1):+8.2f}%" for r in R))
 
 
+FACTOR_CELLS = [(14, 0.4, 1.87), (33, 1.0, 2.8), (60, 0.6, 4.0), (45, 2.5, 6.5), (5, 0.4, 1.25), (25, 0.6, 2.0)]
+
+
+def run_factors(mat, factors=(3.0, 5.0, 10.0)):
+    print("\nlock force against the lock's stiffness factor (tangent / k at the lock)")
+    print(f"{'cell (theta, t, h)':>22} " + " ".join(f"{f'x{f:g}':>10}" for f in factors) + "   spread")
+    default = continuum.LOCK_STIFFNESS_FACTOR
+    try:
+        for cell in FACTOR_CELLS:
+            R = []
+            for f in factors:
+                continuum.LOCK_STIFFNESS_FACTOR = f
+                R.append(solve_continuum(HexCell(*cell), mat).force_N[-1])
+            print(f"{str(cell):>22} " + " ".join(f"{r:10.4f}" for r in R) + f"   {100 * (max(R) / min(R) - 1):.2f} %")
+    finally:
+        continuum.LOCK_STIFFNESS_FACTOR = default
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sweep", help="VAR=START:STOP:STEP (VAR theta, t or h); with --cell")
     ap.add_argument("--cell", help="theta,t,h of the fixed parameters (the swept one is ignored)")
     ap.add_argument("--mesh", action="store_true", help="also the mesh convergence table")
+    ap.add_argument("--factors", action="store_true", help="also R against the lock's stiffness factor")
     args = ap.parse_args()
     mat = Material()
     sweeps = SWEEPS
@@ -77,6 +101,8 @@ def main():
         run_sweep(*s, mat)
     if args.mesh:
         run_mesh(mat)
+    if args.factors:
+        run_factors(mat)
 
 
 if __name__ == "__main__":
