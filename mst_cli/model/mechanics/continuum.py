@@ -4,7 +4,7 @@ The reference model of the ladder (docs/design.md section 4). The layer's profil
 width, z up; one continuous web through the depth D along y) is meshed from the
 :class:`~mst_cli.model.geometry.HexCell` polygons, with quadratic triangles (P2: linear
 triangles lock in bending at nu = 0.45), and loaded by displacement control with a compressible
-Neo-Hookean material up to the onset of contact.
+Neo-Hookean material through closure, up to the lock.
 
 Symmetry and boundary conditions (a quarter of the profile: x >= 0, z <= h/2)
 ---------------------------------------------------------------------------
@@ -30,14 +30,14 @@ Mechanics for Finite Element Analysis", 2nd ed., section 6.4.3) of the in-plane 
 plane-strain linear elasticity (uniaxial modulus E' = E / (1 - nu^2); tests/test_continuum.py
 checks the tangent, a patch test and a Timoshenko cantilever).
 
-Contact: the cavity is "closed" when the clear gap between the inner surface and its mirror
-image across z = h/2 falls to the cell's contact allowance anywhere on the inner pad or on the
-inner wall face, except next to the cavity's tip vertex, where the gap starts at zero: that
-corner is a wedge, not a face that can close. The excluded part is the last wall thickness t
-and, for shallow walls, as much more as has a gap below twice the allowance at rest (the
-distance allowance / sin(theta) from the vertex; at theta = 5 deg that is 1.15 mm, more than
-a 0.4 mm wall). Nominally the pads meet at d = h - 2t - allowance, as in rung L0; the pads are
-elastic, so under stiff (shallow, stubby) walls they meet up to a few per cent later.
+Contact (:meth:`_Problem._contact_sets`): frictionless, by an active set inside Newton, of the
+inner pad and wall faces against the moving mirror plane z = h/2 - d/2 and of the wall's outer
+face against the plate z = 0. The pads touch at the contact allowance (the roughness of two
+printed faces); faces that close at an angle, from the cavity's tip vertex and the outer wall
+root, touch at zero gap. The lock (:func:`follow_to_lock`) is the first compression at which
+the tangent stiffness reaches LOCK_STIFFNESS_FACTOR x k: a wall pinched between the plate and
+its mirror, or the pads meeting (docs/design.md section 4). With rigid pads that is at most
+d = h - 2t - allowance; the pads are elastic, so they meet up to a few per cent later.
 
 scikit-fem is imported inside the functions, never at module import (``mst`` stays fast).
 """
@@ -301,13 +301,13 @@ def _assembler(basis) -> _Assembler:
 # --------------------------------------------------------------------------- solver
 @dataclass(frozen=True)
 class ContinuumResult:
-    """Force-displacement of one layer from the FE solve, up to contact onset."""
+    """Force-displacement of one layer from the FE solve, up to its lock."""
 
     displacement_mm: np.ndarray      # layer compression d at every converged step
     force_N: np.ndarray              # layer force F at those steps
     k_linear_N_per_mm: float         # small-strain (linear) stiffness, by-product
-    d_contact_mm: float              # where the cavity closes (last sample)
-    contact_at: str                  # "pad" or "wall"
+    d_contact_mm: float              # the lock: where the tangent reaches LOCK_STIFFNESS_FACTOR x k (last sample)
+    contact_at: str                  # what closed there: "pad" (the pads meet) or "wall" (a wall pinched)
     newton_iterations: int
     n_dofs: int
     reaction_balance: float          # |force across the mirror plane - support reaction| / force
@@ -538,12 +538,12 @@ def solve_continuum(cell: geo.HexCell, material, n_thick: int = DEFAULT_N_THICK,
                     n_length: int = DEFAULT_N_LENGTH, levels: int = DEFAULT_LEVELS,
                     first_step_frac: float = 0.125,
                     max_steps: int = 200, path_levels: int = 0) -> ContinuumResult:
-    """Nonlinear force-displacement of one layer up to contact onset.
+    """Nonlinear force-displacement of one layer through closure, up to its lock.
 
     Displacement control with adaptive steps: a step that fails to converge is halved, a step
-    that converges in few Newton iterations lets the next grow. The onset of contact is
-    bracketed between two converged steps and located by secant iteration on the gap (the
-    driver and its tolerances are L1's too: :mod:`mst_cli.model.mechanics.path`).
+    that converges in few Newton iterations lets the next grow. The lock, where the tangent
+    stiffness jumps, is bracketed between two converged steps and bisected
+    (:func:`follow_to_lock`; the driver is L1's too: :mod:`mst_cli.model.mechanics.path`).
 
     ``path_levels``: corner refinement rounds of the path's own mesh (default 0; its forces
     are scaled by the linear stiffness ratio to the ``levels`` mesh). A convergence study
@@ -660,6 +660,6 @@ def linear_k(problem) -> float:
 
 @functools.lru_cache(maxsize=256)
 def continuum_layer(cell: geo.HexCell, material) -> TabulatedLockingLayer:
-    """The L2 law of one cell: the FE curve up to contact, then the locked branch (walls + contact column)."""
+    """The L2 law of one cell: the FE curve up to its lock, then the locked branch (walls + contact column)."""
     res = solve_continuum(cell, material)
     return locked_tabulated_law(cell, material, res.displacement_mm, res.force_N, res.k_linear_N_per_mm)

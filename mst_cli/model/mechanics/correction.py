@@ -19,10 +19,11 @@ times stiffer than the beam. Every term vanishes with x, so the factor tends to 
 walls (x -> 0), the beam-theory limit. y < t / (t + 0.4 mm) < 0.9 for every valid cell.
 
 Beam theory is also linear, but the walls rotate a lot before the cavity closes (the stroke
-is most of their height), so the real lock force R is below k d_lock -- by up to 90 % for
-tall steep walls -- and the cavity closes before the pads meet where the walls touch first
-(shallow walls: the cavity's tip is a thin wedge that zips shut). Two more fits give
-R / (k d_lock) and d_lock / (h - 2t - a):
+is most of their height), so the real lock force R differs from k d_lock -- below it for
+tall steep walls, which soften, above it where faces zipping shut stiffen the walls first --
+and the lock (L2's stiffness knee: a wall pinched between the plate and its mirror, or the
+pads meeting; docs/design.md section 4) can come a little before the rigid pads' stroke. Two
+more fits give R / (k d_lock) and d_lock / (h - 2t - a):
 
     ln(ratio) = sigma * sum_i c_i g_i(x, s, y, sigma, e),   sigma = d_lock / (L sin theta),
                                                             e = exp(-2x / sigma)
@@ -119,8 +120,7 @@ def lock_design_matrix(t_over_L: ArrayLike, theta_rad: ArrayLike, sigma: ArrayLi
 def allowance_over_t(t_over_L: ArrayLike, theta_rad: ArrayLike, sigma: ArrayLike) -> np.ndarray:
     """r = allowance / t of the cell with this (t/L, theta, sigma): sigma = 2 (1 - y (1 + r)),
     so r = (1 - sigma / 2) / y - 1, held in [0, R_MAX] (and finite as y -> 0). At the thinnest
-    printable wall r = 0.25: the allowance is a quarter of the wall, and the shallow cavity's
-    thin tip, whose gap at rest is below the allowance for a / sin(theta), zips shut early."""
+    printable wall r = 0.25: the allowance (the pads' touch gap) is a quarter of the wall."""
     x = np.asarray(t_over_L, dtype=float)
     y = _y(x, np.asarray(theta_rad, dtype=float))
     r = (1.0 - 0.5 * np.asarray(sigma, dtype=float)) / np.maximum(y, 1e-6) - 1.0

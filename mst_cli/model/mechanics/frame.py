@@ -18,13 +18,11 @@ Large rotations of the walls are exact; strains are assumed small. Plane strain:
 a web b = D wide (20 mm against 0.4-3 mm thick) whose sections cannot contract along y, so
 EA = E' b t and EI = E' b t^3 / 12 with E' = E / (1 - nu^2), as in rung L0; G is unchanged.
 
-Load: displacement control with adaptive steps. Contact: the cavity closes when the clear gap
-between the wall's inner surface (centre line offset by t/2 along the rotated section normal)
-and its mirror image across z = h/2 -- or between the two inner pads, h - 2t - d -- falls to the
-cell's contact allowance; the last wall thickness t next to the cavity's tip vertex is a wedge
-and does not count, nor (shallow walls) any point whose gap at rest is below twice the
-allowance -- the same rule as rung L2's. After contact the layer's stiffness is the walls' last
-tangent plus L0's contact column.
+Load: displacement control with adaptive steps, up to the lock. A beam has no faces to pinch
+or pads to meet, so the lock stroke is L2's (its stiffness knee, docs/design.md section 4)
+through L0's fit of it, at most the rigid pads' stroke h - 2t - a. Where the walls' inner faces
+would reach the mirror plane before that, the beam passes through it. After the lock the
+layer's stiffness is the walls' last tangent plus L0's contact column.
 
 The layer law (:func:`frame_layer`) multiplies the beam forces by the joint factor of
 :mod:`mst_cli.model.mechanics.correction` (fitted against L2, a function of t/L and theta): the
@@ -220,14 +218,6 @@ class _Wall:
         self.dofs = (3 * np.arange(n_el)[:, None] + np.arange(6)[None, :])   # (n, 6)
         self.half_t = 0.5 * t
         self.h2 = 0.5 * cell.h_mm
-        # which nodes' inner-surface points can close the cavity (above the pad, off the wedge)
-        p_in = self.X + self.half_t * self.n0[None, :]
-        vertex = np.asarray(inner[1])
-        before_vertex = (vertex - p_in) @ self.u_dir
-        rest_gap = 2.0 * (0.5 * cell.h_mm - p_in[:, 1])
-        self.gap_nodes = np.flatnonzero((p_in[:, 1] >= t - 1e-12) & (before_vertex >= t)
-                                        & (rest_gap >= 2.0 * cell.contact_allowance_mm))
-        self.pad_gap0 = cell.h_mm - 2.0 * t
         self.ndof = ndof
 
     def assemble(self, u, need_K=True):
@@ -240,16 +230,6 @@ class _Wall:
         K = np.zeros((self.ndof, self.ndof))
         np.add.at(K, (self.dofs[:, :, None], self.dofs[:, None, :]), Ke)
         return f, K
-
-    def gaps(self, u, d):
-        U = u.reshape(-1, 3)[self.gap_nodes]
-        rot = U[:, 2]
-        n = np.stack([self.n0[0] * np.cos(rot) - self.n0[1] * np.sin(rot),
-                      self.n0[0] * np.sin(rot) + self.n0[1] * np.cos(rot)], axis=1)
-        z_in = self.X[self.gap_nodes, 1] + U[:, 1] + self.half_t * n[:, 1]
-        plane = self.h2 - 0.5 * d
-        g_wall = float(2.0 * (plane - z_in).min()) if len(z_in) else math.inf
-        return self.pad_gap0 - d, g_wall
 
     def solve_step(self, u, d, max_iter=30, rtol=1e-10):
         u = u.copy()
@@ -301,14 +281,13 @@ def solve_frame(cell: geo.HexCell, material, n_elements: int = DEFAULT_N_ELEMENT
     k_lin = float(-(K0 @ ul)[wall.tip_w] * factor)
 
     # the lock stroke: L2's (its stiffness knee, where a wall is pinched or the pads meet),
-    # through L0's fit of it; a beam has no faces to pinch. Where the walls' inner faces would
-    # reach the mirror plane before that, the beam passes through it (L2's zipping contact
-    # there stiffens its curve by a few per cent; the bench measures the difference)
-    d_lock = min(spring_layer(cell, material).d_lock_mm, cell.cavity_height_mm - allowance)
+    # through L0's fit of it (module docstring); "pad" when that is the rigid pads' stroke
+    d_pads = cell.cavity_height_mm - allowance
+    d_lock = min(spring_layer(cell, material).d_lock_mm, d_pads)
+    closes = "pad" if d_lock >= d_pads else "wall"
 
     def margin(u, d):
-        gp, _ = wall.gaps(u, d)
-        return min(gp - allowance, d_lock - d), ("pad" if gp - allowance <= d_lock - d else "wall")
+        return d_lock - d, closes
 
     def force(u, d):
         f, _ = wall.assemble(u, need_K=False)
