@@ -204,7 +204,7 @@ def design_document(doc: Document, *, seed: int | None = None, progress=None,
     theta, t, h = (np.round(a, ROUND_DECIMALS) for a in problem.to_physical(sol.u))
     result = verify_design(doc, problem, theta, t, h, sol, seed=seed, max_evaluations=max_evaluations,
                            mechanics=doc.mechanics, t_start=t_start)
-    if name_height and PRINT_DEVIATION_CHECK in result.checks:
+    if name_height and result.status != "met" and problem.max_print_deviation_rel is not None:
         _name_lowest_height(doc, result, seed=seed, max_evaluations=max_evaluations, local=local)
     if solution is not None:
         solution.append(sol)
