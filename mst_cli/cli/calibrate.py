@@ -258,6 +258,8 @@ def calibrate(design_file: Path, load_test: Path, out_dir: Path | None, mechanic
 
     from mst_cli.calibrate import fit as cal
     from mst_cli.calibrate.loadtest import MAX_ROWS, check_load_test, parse_readings, read_text
+    from mst_cli.calibrate.record import CONSTANTS_KEY as design_constants_key
+    from mst_cli.calibrate.record import design_constants
     from mst_cli.errors import InputError
     from mst_cli.io.outputs import check_out_dir, finite_or_none, staged
     from mst_cli.io.schema import document_to_dict, parse_document
@@ -346,6 +348,8 @@ def calibrate(design_file: Path, load_test: Path, out_dir: Path | None, mechanic
     report = {
         "schema_version": SCHEMA_VERSION,
         "design": str(design_file), "load_test": str(load_test),
+        # what the fitted factors multiply: mst design --calibration reads them (calibrate.record)
+        design_constants_key: design_constants(doc),
         "calibrated_yaml": CALIBRATED_YAML,
         "calibrated_yaml_sha256": hashlib.sha256(yaml_text.encode()).hexdigest(),
         "models": {"mechanics": mechanics, "field": fit.model.field_model,
