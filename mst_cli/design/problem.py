@@ -29,7 +29,7 @@ Constraints (g <= 0 is satisfied; every g is scaled to order one)
       at most that fraction when every wall is printed +- printer.wall_tolerance_mm (one smooth
       constraint per output and sign, so the worst case is a constraint, not only a weight).
 
-The part as printed (docs/design.md section 9)
+The part as printed (docs/design.md section 10)
     The variables are the walls as drawn; the physics sees the walls as printed, t +
     printer.wall_offset_mm, with the modulus times printer.modulus_factor and the gap plus
     printer.gap_offset_mm (what ``mst calibrate`` fitted on an earlier print). The cell rules

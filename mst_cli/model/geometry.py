@@ -149,7 +149,7 @@ class Printer:
     layer_height_mm: float = spec(0.2, lo=0.01, hi=2.0, unit="mm", meaning="print layer height")
     min_wall_mm: float = spec(0.4, lo=0.01, hi=10.0, unit="mm", meaning="thinnest printable wall (one line)")
     min_gap_mm: float = spec(0.4, lo=0.01, hi=10.0, unit="mm", meaning="narrowest printable gap")
-    # how this printer and filament miss the drawing (docs/design.md section 9): the design is
+    # how this printer and filament miss the drawing (docs/design.md section 10): the design is
     # made for the part as printed, the export draws the nominal part
     wall_offset_mm: float = spec(0.0, lo=-0.5, hi=0.5, unit="mm",
                                  meaning="systematic wall error: every wall prints this much thicker than drawn "
