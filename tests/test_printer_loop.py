@@ -167,11 +167,15 @@ def _calibration_cases(loop):
     old = {k: v for k, v in good.items() if k != "design_constants"}
     broken = json.loads(json.dumps(good))
     broken["parameters"]["wall_offset_mm"]["value"] = "thick"
+    closing = json.loads(json.dumps(good))
+    closing["parameters"]["wall_offset_mm"]["value"] = 0.2       # would print the narrowest cavity shut
     return {"missing": None, "not json": "{not json", "other material": json.dumps(other),
-            "older calibrate": json.dumps(old), "bad value": json.dumps(broken), "a list": "[1, 2]"}
+            "older calibrate": json.dumps(old), "bad value": json.dumps(broken), "a list": "[1, 2]",
+            "closes the cavity": json.dumps(closing)}
 
 
-@pytest.mark.parametrize("case", ["missing", "not json", "other material", "older calibrate", "bad value", "a list"])
+@pytest.mark.parametrize("case", ["missing", "not json", "other material", "older calibrate", "bad value", "a list",
+                                  "closes the cavity"])
 def test_a_bad_calibration_exits_2_in_one_line_writing_nothing(loop, tmp_path, case):
     text = _calibration_cases(loop)[case]
     path = tmp_path / "calibration.json"
@@ -183,6 +187,8 @@ def test_a_bad_calibration_exits_2_in_one_line_writing_nothing(loop, tmp_path, c
     assert len(lines) == 1 and "--calibration" in lines[0], r.output
     if case == "other material":
         assert "'PLA'" in lines[0] and "material.name" in lines[0]
+    if case == "closes the cavity":
+        assert "printer.wall_offset_mm" in lines[0] and "0.15 mm" in lines[0]
     assert not (tmp_path / "out").exists()
 
 
@@ -254,3 +260,20 @@ def test_max_print_deviation_no_height_can(tmp_path):
              "--no-plot"])
     assert r.exit_code == 1, r.output
     assert "mst design: targets not met: design.max_print_deviation_rel: no height meets" in r.output
+
+
+@pytest.mark.parametrize("key,value,allowed,more", [
+    ("wall_offset_mm", 0.2, "0.15 mm", {}),      # (min gap 0.4 - allowance 0.1) / 2: the cavity would close
+    ("wall_offset_mm", -0.25, "-0.2 mm", {"min_wall_mm": 0.2}),     # a one-line wall would print to nothing
+    ("gap_offset_mm", -1.6, "-1.48 mm", {}),     # more than clearance + pocket floor + cover can close
+])
+def test_a_printer_that_would_print_a_broken_cell_exits_2(tmp_path, key, value, allowed, more):
+    raw = yaml.safe_load(SPEC.read_text())
+    raw["printer"] = {key: value, **more}
+    spec = tmp_path / "spec.yaml"
+    spec.write_text(yaml.safe_dump(raw))
+    r = run(["design", spec, "--out", tmp_path / "out", "--no-plot"])
+    assert r.exit_code == 2, r.output
+    lines = r.output.strip().splitlines()
+    assert len(lines) == 1 and f"printer.{key} = {value}" in lines[0] and allowed in lines[0], r.output
+    assert not (tmp_path / "out").exists()

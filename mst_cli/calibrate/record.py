@@ -149,6 +149,7 @@ def apply_calibration(doc: Document, cal: PrinterCalibration) -> Document:
     """``doc`` with the taken values in its ``printer`` section and magnet (each checked against
     its key's declared bounds: InputError naming the key and ``--calibration``)."""
     from mst_cli.io.schema import SECTIONS
+    from mst_cli.model.geometry import printer_violations
 
     printer, magnet = {}, {}
     for t in cal.taken:
@@ -159,7 +160,10 @@ def apply_calibration(doc: Document, cal: PrinterCalibration) -> Document:
         except InputError as exc:
             raise InputError(f"{t.key} (from {OPTION} {cal.path})", t.value, exc.allowed) from None
         (printer if section == "printer" else magnet)[key] = t.value
-    return replace(doc, printer=replace(doc.printer, **printer), magnet=replace(doc.magnet, **magnet))
+    out = replace(doc, printer=replace(doc.printer, **printer), magnet=replace(doc.magnet, **magnet))
+    for key, value, allowed in printer_violations(out.printer, out.housing, out.family.contact_allowance_mm):
+        raise InputError(f"{key} (from {OPTION} {cal.path})", value, allowed)
+    return out
 
 
 __all__ = ["read_calibration", "apply_calibration", "design_constants", "PrinterCalibration", "Taken"]

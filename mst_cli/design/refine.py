@@ -268,7 +268,7 @@ def refine_document(doc: Document, model: str, *, seed: int | None = None, progr
         if k == 0:
             # the plain L0 design of the real targets (global search, preference)
             inner = design_document(inner_doc.with_layers(layers), seed=seed, progress=progress,
-                                    max_evaluations=max_evaluations)
+                                    max_evaluations=max_evaluations, name_height=False)
             evaluations += inner.evaluations
             theta, t, h = (np.array([getattr(la, key) for la in inner.document.layers])
                            for key in ("theta_deg", "t_mm", "h_mm"))
