@@ -119,8 +119,9 @@ class DesignResult:
                      + (f" (limit {100 * limit:g} %)" if limit is not None else ""))
         pr = self.document.printer
         if (pr.wall_offset_mm, pr.modulus_factor, pr.gap_offset_mm) != (0.0, 1.0, 0.0):
-            lines.append(f"designed as printed: walls drawn t, printed t {pr.wall_offset_mm:+.3f} mm; modulus x "
-                         f"{pr.modulus_factor:.3f}; gap {pr.gap_offset_mm:+.3f} mm (printer section of design.yaml)")
+            lines.append(f"designed as printed: walls print {pr.wall_offset_mm:+.4f} mm off the t above (drawn), "
+                         f"modulus x {pr.modulus_factor:.4f}, gap {pr.gap_offset_mm:+.4f} mm (design.yaml's printer "
+                         "section)")
         pe_mechanics = self.print_error.get("mechanics", resp.mechanics)
         if pe_mechanics != resp.mechanics or self.print_error.get("mechanics_rule") != SAME_RUNG_RULE:
             lines.append(f"print error (t+-{self.print_error['print_error_t_mm']:g} mm columns) measured with "
