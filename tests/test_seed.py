@@ -9,6 +9,7 @@ import pytest
 from mst_cli.design import seed, solver
 from mst_cli.design.problem import DesignProblem
 from mst_cli.io.schema import LayerEntry, load_document
+from mst_cli.model.mechanics.depth import web_modulus_MPa
 from mst_cli.model.mechanics.spring import spring_arrays
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -84,8 +85,9 @@ def test_finite_difference_batch_computes_each_distinct_cell_once_with_the_same_
     eye = np.eye(problem.dim) * solver.FD_STEP
     theta, t, h = problem.to_physical(np.concatenate([u[None], u + eye, u - eye]))
     fam = problem.family
+    E_web = web_modulus_MPa(np.radians(theta), t, h, fam.depth_mm, problem.E_MPa, problem.nu)
     direct = spring_arrays(np.radians(theta), t, h, fam.depth_mm, fam.width_mm, fam.contact_allowance_mm,
-                           problem.E_MPa, problem.nu)
+                           E_web, problem.nu)
     sizes = []
     import mst_cli.design.problem as problem_module
     original = problem_module.spring_arrays

@@ -68,6 +68,7 @@ from mst_cli.model import chip as mlx
 from mst_cli.model import geometry as geo
 from mst_cli.model.field import axial_Bz_T, choose_field_model
 from mst_cli.model.mechanics import correction
+from mst_cli.model.mechanics.depth import web_modulus_MPa
 from mst_cli.model.mechanics.spring import spring_arrays
 from mst_cli.model.response import field_magnitude_T, regime_kernel
 
@@ -259,8 +260,9 @@ class DesignProblem:
         theta, t, h = np.ascontiguousarray(flat.T)     # contiguous columns: numpy's vector loops
         if self.wall_offset_mm:
             t = np.maximum(t + self.wall_offset_mm, geo.LENGTH_FLOOR_MM)
-        laws = spring_arrays(np.radians(theta), t, h, fam.depth_mm, fam.width_mm, fam.contact_allowance_mm,
-                             self.E_MPa, self.nu)
+        theta_rad = np.radians(theta)
+        E = web_modulus_MPa(theta_rad, t, h, fam.depth_mm, self.E_MPa, self.nu)   # as mechanics.layer_laws
+        laws = spring_arrays(theta_rad, t, h, fam.depth_mm, fam.width_mm, fam.contact_allowance_mm, E, self.nu)
         if inverse is not None:
             laws = tuple(a[inverse] for a in laws)
         return tuple(a.reshape(cells.shape[:-1]) for a in laws)

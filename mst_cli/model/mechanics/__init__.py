@@ -10,11 +10,19 @@ an object with
   closes; ``k_locked_N_per_mm``: stiffness past the last knot (the locked branch).
 
 The stack solver (:mod:`mst_cli.model.stack`) needs nothing else, so it is exact for every rung.
+
+Every rung is plane strain; :func:`layer_law` and :func:`layer_laws` give the layer of the web
+as printed, D deep with free faces, by handing the rung the modulus of
+:func:`mst_cli.model.mechanics.depth.in_web` (every rung is linear in E). The rungs' own
+functions, and :func:`uncached_layer_law` (the fits and the ladder benchmark, which compare
+rungs with each other), stay plane strain.
 """
 
 from __future__ import annotations
 
 from typing import TYPE_CHECKING
+
+from mst_cli.model.mechanics.depth import in_web
 
 if TYPE_CHECKING:
     from mst_cli.model.geometry import HexCell
@@ -31,6 +39,11 @@ def layer_law(cell: HexCell, material: Material,
 
     ``frame`` and ``continuum`` laws are cached per (cell, material): both are frozen.
     """
+    return _plane_strain_law(cell, in_web(cell, material), model)
+
+
+def _plane_strain_law(cell: HexCell, material: Material,
+                      model: str) -> LinearLockingLayer | TabulatedLockingLayer:
     if model == "spring":
         from mst_cli.model.mechanics.spring import spring_layer
         return spring_layer(cell, material)
@@ -48,17 +61,18 @@ def layer_laws(cells, material: Material,
     """:func:`layer_law` of every cell of a stack; the spring rung's in one kernel call."""
     if model == "spring":
         from mst_cli.model.mechanics.spring import spring_layers
-        return spring_layers(cells, material)
+        return spring_layers(cells, material, modulus_MPa=[in_web(c, material).youngs_modulus_MPa for c in cells])
     return tuple(layer_law(c, material, model) for c in cells)
 
 
 def uncached_layer_law(cell: HexCell, material: Material,
                        model: str = "spring") -> LinearLockingLayer | TabulatedLockingLayer:
-    """:func:`layer_law` without the per-cell caches (for timing)."""
+    """The rung's plane-strain law without the per-cell caches (for timing and for the fits,
+    which compare plane-strain rungs)."""
     if model == "frame":
         from mst_cli.model.mechanics.frame import frame_layer
         return frame_layer.__wrapped__(cell, material)
     if model == "continuum":
         from mst_cli.model.mechanics.continuum import continuum_layer
         return continuum_layer.__wrapped__(cell, material)
-    return layer_law(cell, material, model)
+    return _plane_strain_law(cell, material, model)

@@ -220,13 +220,16 @@ def spring_arrays(theta_rad: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike, b_mm: 
     return k, d_lock, R, k_locked
 
 
-def spring_layers(cells, material, corrected: bool = True) -> tuple[LinearLockingLayer, ...]:
+def spring_layers(cells, material, corrected: bool = True,
+                  modulus_MPa: ArrayLike | None = None) -> tuple[LinearLockingLayer, ...]:
     """The L0 laws of a stack's cells from one kernel call (a layer's law does not depend on
-    the batch it is computed in: the same numbers as the design loop's batches)."""
+    the batch it is computed in: the same numbers as the design loop's batches). ``modulus_MPa``:
+    one modulus per cell instead of the material's (the web's finite depth,
+    :func:`mst_cli.model.mechanics.depth.web_modulus_MPa`)."""
     fields = ("theta_rad", "t_mm", "h_mm", "b_mm", "width_mm", "contact_allowance_mm")
     columns = [np.array([getattr(c, name) for c in cells], dtype=float) for name in fields]
-    k, d_lock, R, k_locked = spring_arrays(*columns, material.youngs_modulus_MPa, material.poisson_ratio,
-                                           corrected)
+    E = material.youngs_modulus_MPa if modulus_MPa is None else np.asarray(modulus_MPa, dtype=float)
+    k, d_lock, R, k_locked = spring_arrays(*columns, E, material.poisson_ratio, corrected)
     return tuple(LinearLockingLayer(float(a), float(b), float(c), float(d))
                  for a, b, c, d in zip(k, d_lock, k_locked, R))
 
