@@ -5,10 +5,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from test_calibrate import DESIGN, PrintedSensor
 
 from mst_cli.calibrate import fit as cal
 from mst_cli.io.schema import load_document
-from test_calibrate import DESIGN, PrintedSensor
 
 
 @pytest.fixture(scope="module")
