@@ -19,20 +19,30 @@ from typing import TYPE_CHECKING
 from mst_cli.errors import InputError
 
 if TYPE_CHECKING:
+    from mst_cli.cad.checks import Check
+    from mst_cli.cad.slicing import SliceResult
     from mst_cli.calibrate.calibration import Calibration
     from mst_cli.calibrate.reading import ForceReadings, SerialSamples
+    from mst_cli.design.document import DesignResult
+    from mst_cli.design.pareto import ParetoDesign
     from mst_cli.io.schema import Document
+    from mst_cli.model.response import Response
 
-__all__ = ["InputError", "load", "load_design", "parse_params", "calibrate", "read",
-           "read_serial"]
+__all__ = ["InputError", "load", "load_design", "simulate", "design", "pareto", "designed", "export", "check",
+           "slice", "parse_params", "calibrate", "read", "read_serial"]
 
 DEFAULT_PARAMETERS = ("modulus_factor", "wall_offset_mm", "gap_offset_mm", "remanence_factor")
 
 
 def __getattr__(name: str):
-    if name == "CalibrationFailed":       # the fit's own error class, without importing the fit
+    # the verbs' own error classes (CalibrationFailed: a fit failed; SlicerError: PrusaSlicer
+    # misbehaved), without importing their modules before they are asked for
+    if name == "CalibrationFailed":
         from mst_cli.calibrate.fit import CalibrationFailed
         return CalibrationFailed
+    if name == "SlicerError":
+        from mst_cli.cad.slicer import SlicerError
+        return SlicerError
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
@@ -61,6 +71,203 @@ def load_design(path: str | Path | Document) -> Document:
         return load_design_document(path)[0]
     design_geometry(path)
     return path
+
+
+def simulate(design: str | Path | Document, *, mechanics: str | None = None,
+             field_model: str | None = None) -> Response:
+    """The forward model of a design (``mst simulate``).
+
+    Parameters
+    ----------
+    design : str, Path or Document
+        A design file (or its Document).
+    mechanics : {"spring", "frame", "continuum"}, optional
+        Layer mechanics [default: the cheapest rung whose measured error meets the file's
+        model.accuracy_rel, else its model.mechanics].
+    field_model : {"auto", "dipole", "axial", "cylinder"}, optional
+        Magnet field model [default: the file's model.field].
+
+    Returns
+    -------
+    Response
+        ``.force_N`` (m,) in N against ``.displacement_mm``, ``.gap_mm``, ``.B_T`` (m, 3) and
+        ``.B_abs_T`` (m,) in T, ``.dB_rel`` (m,); ``.in_range`` (m,) False past the last lock;
+        ``.regimes`` with each band's ``sensitivity_secant_per_N`` (S) and ``force_to_N`` (R).
+    """
+    from mst_cli.model.ladder import choose_mechanics
+    from mst_cli.model.response import simulate as run
+    doc = load_design(design)
+    field_choice = field_model or doc.field_model
+    choice = choose_mechanics(mechanics, doc.accuracy_rel, doc.mechanics)
+    return run(doc.geometry(), doc.material, mechanics=choice.mechanics,
+               field_model=None if field_choice == "auto" else field_choice, noise_uT_rms=doc.noise_uT_rms)
+
+
+def design(spec: str | Path | Document, *, seed: int | None = None, max_evaluations: int | None = None,
+           refine: str | None = None, progress: Callable | None = None) -> DesignResult:
+    """Inverse design from target S_i and R_i to theta, t, h per layer (``mst design``).
+
+    Parameters
+    ----------
+    spec : str, Path or Document
+        A spec file (per layer target_sensitivity_per_N and target_range_N).
+    seed : int, optional
+        Same spec and seed give the same design.
+    max_evaluations : int, optional
+        The solver's budget of forward-model evaluations.
+    refine : {"frame", "continuum"}, optional
+        Polish the L0 optimum for a dearer model by space mapping (default: the spec's
+        model.accuracy_rel pick, else model.mechanics if not spring).
+
+    Returns
+    -------
+    DesignResult
+        ``.document`` (the design), ``.geometry``, ``.response`` (the forward model on it),
+        ``.status`` ("met" / "not met", ``.binding`` and ``.reasons`` say why), ``.targets``
+        (per layer target against achieved), ``.table()``, ``.design_yaml_dict()``.
+    """
+    from dataclasses import replace
+
+    from mst_cli.design import design_document
+    from mst_cli.model.ladder import choose_mechanics
+    doc = load(spec) if isinstance(spec, (str, Path)) else spec
+    choice = choose_mechanics(refine, doc.accuracy_rel, doc.mechanics)
+    if choice.mechanics == "spring":
+        return design_document(replace(doc, mechanics="spring"), seed=seed, max_evaluations=max_evaluations,
+                               progress=progress)
+    from mst_cli.design.refine import refine_document
+    return refine_document(doc, choice.mechanics, seed=seed, max_evaluations=max_evaluations, progress=progress)
+
+
+def pareto(spec: str | Path | Document, count: int, *, seed: int | None = None, max_evaluations: int | None = None,
+           progress: Callable | None = None) -> tuple[DesignResult, list[ParetoDesign]]:
+    """The trade among designs that meet every target (``mst design --pareto N``), with L0.
+
+    Returns
+    -------
+    (DesignResult, list of ParetoDesign)
+        The chosen design (design.objective's weights) and up to ``count`` non-dominated
+        designs, each with ``.height_mm``, ``.worst_force_resolution_N``,
+        ``.print_robustness_rms`` and its ``.result``.
+    """
+    from dataclasses import replace
+
+    from mst_cli.design.pareto import pareto_front
+    if not 2 <= count <= 60:
+        raise InputError("--pareto", count, "must be an integer from 2 to 60")
+    doc = load(spec) if isinstance(spec, (str, Path)) else spec
+    return pareto_front(replace(doc, mechanics="spring"), count, seed=seed, max_evaluations=max_evaluations,
+                        progress=progress)
+
+
+def designed(path: str | Path, progress: Callable[[str], None] | None = None
+             ) -> tuple[Document, DesignResult | None]:
+    """A design file as it is, or a spec designed first (as ``mst export SPEC`` does): the
+    design's Document and, for a spec, the DesignResult it came from. InputError when a cell
+    breaks a rule."""
+    doc = load(path)
+    if doc.is_design:
+        return load_design(path), None
+    if not doc.is_spec:
+        doc.require_geometry()              # names the first missing key
+    if progress is not None:
+        progress(f"{path} is a spec: designing theta, t, h first (as 'mst design' does)")
+    from mst_cli.design import design_document
+    result = design_document(doc)
+    geometry = result.geometry
+    for i, v in geometry.violations(result.document.printer):
+        raise InputError(f"layers[{i}]", {"theta_deg": geometry.layers[i].theta_deg,
+                                          "t_mm": geometry.layers[i].t_mm, "h_mm": geometry.layers[i].h_mm},
+                         f"the designed cell is invalid ({v.rule}): {v.message}")
+    if progress is not None:
+        progress(f"designed: targets {result.status}")
+    return result.document, result
+
+
+def export(design: str | Path | Document, out: str | Path, *, stl: bool = True, three_mf: bool = False,
+           step: bool = False, stl_tolerance_mm: float = 0.01,
+           progress: Callable[[str], None] | None = None) -> list[Path]:
+    """The printable body of a design (a spec is designed first) into ``out`` (``mst export``).
+
+    Parameters
+    ----------
+    design : str, Path or Document
+        A design or spec file, or a design's Document.
+    out : str or Path
+        Folder for sensor.stl / sensor.3mf (print orientation: lying on its side, mm),
+        sensor.step (sensor frame) and export.json (the design's expected dimensions).
+    stl_tolerance_mm : float
+        Largest chord deviation of the mesh from the curved surfaces, mm (1e-4 to 1).
+
+    Returns
+    -------
+    list of Path
+        The files written, export.json last.
+    """
+    from mst_cli.cad.exporting import check_stl_tolerance, write_export
+    check_stl_tolerance(stl_tolerance_mm)
+    if isinstance(design, (str, Path)):
+        doc, result = designed(design, progress)
+    else:
+        doc, result = load_design(design), None
+    names = write_export(doc, doc.geometry(), Path(out), stl=stl, step=step, three_mf=three_mf,
+                         stl_tolerance_mm=stl_tolerance_mm,
+                         design_yaml=result.design_yaml_dict() if result is not None else None, progress=progress)
+    return [Path(out) / n for n in names]
+
+
+def check(path: str | Path, *, nozzle_mm: float | None = None) -> list[Check]:
+    """Measure an exported mesh against its export.json (``mst check``).
+
+    Parameters
+    ----------
+    path : str or Path
+        The folder ``export`` wrote, or the .stl in it.
+    nozzle_mm : float, optional
+        Nozzle diameter for the wall checks [default: the design's printer.nozzle_mm].
+
+    Returns
+    -------
+    list of Check
+        One per check, in report order: ``.name``, ``.passed``, ``.measured`` and
+        ``.expected`` (text with units), ``.note``, ``.values`` (numbers, units in the keys).
+    """
+    from mst_cli.cad.checks import load_mesh, resolve_export, run_checks
+    from mst_cli.cad.manifest import load_manifest
+    found = resolve_export(path)
+    # both inputs are validated before anything is measured
+    manifest = load_manifest(found.manifest)
+    return run_checks(load_mesh(found.stl), manifest, nozzle_mm)
+
+
+def slice(path: str | Path, *, profile: str | Path | None = None, out: str | Path | None = None,
+          max_span_mm: float = 5.0, plot: bool = False, progress: Callable[[str], None] | None = None,
+          note: Callable[[str], None] | None = None) -> SliceResult:
+    """Slice an export with PrusaSlicer and judge whether it prints (``mst slice``; the
+    command's name, so it shadows the builtin ``slice`` inside this module, which never uses it).
+
+    Parameters
+    ----------
+    path : str or Path
+        The folder ``export`` wrote (sensor.3mf, else sensor.stl, and export.json).
+    profile : str or Path, optional
+        PrusaSlicer config [default: the bundled TPU 85A profile].
+    out : str or Path, optional
+        Folder for sensor.gcode, slice.json and (``plot``) print.png [default: ``path``].
+    max_span_mm : float
+        Longest free span allowed (extrusion with nothing under it), mm.
+
+    Returns
+    -------
+    SliceResult
+        ``.report`` (slice.json: print time s, filament g, layers, the longest free span mm,
+        the pause found against the one asked for, support, cavity gaps mm), ``.checks``,
+        ``.failed`` (names of the broken limits), ``.summary()``.
+    """
+    from mst_cli.cad.slicing import slice_export
+    result = slice_export(path, profile, max_span_mm, progress, note)
+    result.write(Path(out) if out is not None else None, plot=plot)
+    return result
 
 
 def parse_params(text: str) -> tuple[str, ...]:
