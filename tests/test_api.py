@@ -1,0 +1,37 @@
+"""mst_cli.api: the verbs a script calls, and what the package re-exports of them."""
+
+from __future__ import annotations
+
+import importlib
+import inspect
+import subprocess
+import sys
+
+import mst_cli
+from mst_cli import api
+
+
+def test_the_package_names_stay_the_verbs_after_every_subpackage_is_imported():
+    for sub in ("design", "calibrate", "cad", "model", "io", "bench", "cli.app"):
+        importlib.import_module(f"mst_cli.{sub}")
+    for name in mst_cli.__all__:
+        if name != "api":
+            assert getattr(mst_cli, name) is getattr(api, name), name
+    # the two verbs named like subpackages are the api's only
+    assert inspect.ismodule(mst_cli.design) and inspect.ismodule(mst_cli.calibrate)
+    assert inspect.isfunction(api.design) and inspect.isfunction(api.calibrate)
+
+
+def test_every_verb_documents_itself():
+    for name in api.__all__:
+        obj = getattr(api, name)
+        if inspect.isfunction(obj):
+            assert obj.__doc__ and len(obj.__doc__.strip()) > 40, name
+
+
+def test_importing_the_package_loads_no_verb_module():
+    # `import mst_cli` stays as light as the command line's start: each verb imports its own
+    code = ("import sys, mst_cli; heavy = [m for m in sys.modules if m.startswith(('mst_cli.design', "
+            "'mst_cli.cad', 'mst_cli.calibrate', 'numpy', 'scipy'))]; print(heavy)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.strip() == "[]"
