@@ -9,7 +9,9 @@ ancestors (Python loads them first whatever the module does).
 from __future__ import annotations
 
 import ast
+import fnmatch
 import re
+import tomllib
 from pathlib import Path
 
 import pytest
@@ -162,3 +164,11 @@ def test_documentation_lives_in_the_repository():
                 hits.append(f"{path.relative_to(ROOT)}:{n}")
     assert hits == []
     assert (ROOT / "docs" / "design.md").is_file()
+
+
+def test_every_data_file_ships_with_the_package():
+    # a regular 'pip install .' copies only modules and the package-data globs: a data file the
+    # globs miss is found in the source tree and nowhere else (.ci/run runs such an install)
+    globs = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]["package-data"]["mst_cli"]
+    data = [p.relative_to(PACKAGE).as_posix() for p in PACKAGE.rglob("data/*") if p.is_file()]
+    assert data and [d for d in data if not any(fnmatch.fnmatch(d, g) for g in globs)] == []
