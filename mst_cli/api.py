@@ -118,6 +118,8 @@ def design(spec: str | Path | Document, *, seed: int | None = None, max_evaluati
     refine : {"frame", "continuum"}, optional
         Polish the L0 optimum for a dearer model by space mapping (default: the spec's
         model.accuracy_rel pick, else model.mechanics if not spring).
+    progress : callable(done, total, phase, worst_error_rel), optional
+        Called as the solver spends its budget.
 
     Returns
     -------
@@ -141,7 +143,8 @@ def design(spec: str | Path | Document, *, seed: int | None = None, max_evaluati
 
 def pareto(spec: str | Path | Document, count: int, *, seed: int | None = None, max_evaluations: int | None = None,
            progress: Callable | None = None) -> tuple[DesignResult, list[ParetoDesign]]:
-    """The trade among designs that meet every target (``mst design --pareto N``), with L0.
+    """The trade among designs that meet every target (``mst design --pareto N``), mapped with
+    L0 (the spring rung) whatever the spec's model section asks.
 
     Returns
     -------
@@ -232,10 +235,19 @@ def check(path: str | Path, *, nozzle_mm: float | None = None) -> list[Check]:
         One per check, in report order: ``.name``, ``.passed``, ``.measured`` and
         ``.expected`` (text with units), ``.note``, ``.values`` (numbers, units in the keys).
     """
+    from dataclasses import fields
+
     from mst_cli.cad.checks import load_mesh, resolve_export, run_checks
     from mst_cli.cad.manifest import load_manifest
+    from mst_cli.model.geometry import Printer
+    if nozzle_mm is not None:                    # one bound: printer.nozzle_mm's in a design file
+        lo, hi = next((f.metadata["lo"], f.metadata["hi"]) for f in fields(Printer) if f.name == "nozzle_mm")
+        if not lo <= nozzle_mm <= hi:
+            raise InputError("--nozzle", nozzle_mm, f"must be a nozzle diameter from {lo:g} to {hi:g} mm")
     found = resolve_export(path)
-    # both inputs are validated before anything is measured
+    # both inputs are validated before anything is measured: every field the checks read (type,
+    # nesting, finite and sane size) and every STL coordinate (finite, within a metre). Past
+    # this point a KeyError or TypeError is a bug in a check, not bad input.
     manifest = load_manifest(found.manifest)
     return run_checks(load_mesh(found.stl), manifest, nozzle_mm)
 

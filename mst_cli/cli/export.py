@@ -94,25 +94,10 @@ def check(path: Path, as_json: bool, nozzle_mm: float | None) -> None:
     Prints a table of named checks, measured on the mesh against the design's own expected
     values in export.json. Exit 1 naming the failed checks, 2 for unreadable input.
     """
-    from mst_cli.cad.checks import load_mesh, resolve_export, results_dict, results_table, run_checks
-    from mst_cli.cad.manifest import load_manifest
-    from mst_cli.errors import InputError
+    from mst_cli.cad.checks import resolve_export, results_dict, results_table
 
-    if nozzle_mm is not None:                    # one bound: printer.nozzle_mm's in a design file
-        from dataclasses import fields
-
-        from mst_cli.model.geometry import Printer
-        lo, hi = next((f.metadata["lo"], f.metadata["hi"]) for f in fields(Printer) if f.name == "nozzle_mm")
-        if not lo <= nozzle_mm <= hi:
-            raise InputError("--nozzle", nozzle_mm, f"must be a nozzle diameter from {lo:g} to {hi:g} mm")
-    found = resolve_export(path)
-    stl, manifest_path = found.stl, found.manifest
-    # both inputs are validated before anything is measured: every field the checks read (type,
-    # nesting, finite and sane size) and every STL coordinate (finite, within a metre). Nothing
-    # below catches KeyError/TypeError: past this point one is a bug in a check, not bad input.
-    manifest = load_manifest(manifest_path)
-    mesh = load_mesh(stl)
-    results = run_checks(mesh, manifest, nozzle_mm)
+    results = api.check(path, nozzle_mm=nozzle_mm)
+    stl = resolve_export(path).stl
     summary = results_dict(results, str(stl))
     if as_json:
         click.echo(json.dumps(summary, indent=2, allow_nan=False))
