@@ -1,4 +1,4 @@
-"""mst from Python: the command line's verbs as functions (``import mst_cli as mst``).
+"""mst from Python: the command line's verbs as functions (``from mst_cli import api as mst``).
 
 Each function takes the options of its command (same names, same defaults, same checks: bad
 input raises :class:`~mst_cli.errors.InputError` naming the field, the value and what is
@@ -31,9 +31,6 @@ if TYPE_CHECKING:
 __all__ = ["InputError", "load", "load_design", "simulate", "design", "pareto", "designed", "export", "check",
            "slice", "parse_params", "calibrate", "read", "read_serial"]
 
-DEFAULT_PARAMETERS = ("modulus_factor", "wall_offset_mm", "gap_offset_mm", "remanence_factor")
-
-
 def __getattr__(name: str):
     # the verbs' own error classes (CalibrationFailed: a fit failed; SlicerError: PrusaSlicer
     # misbehaved), without importing their modules before they are asked for
@@ -44,6 +41,12 @@ def __getattr__(name: str):
         from mst_cli.cad.slicer import SlicerError
         return SlicerError
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def _one_of(option: str, value: str | None, allowed: Sequence[str]) -> None:
+    """InputError unless ``value`` is None or one of ``allowed`` (click's Choice, for scripts)."""
+    if value is not None and value not in allowed:
+        raise InputError(option, value, "must be one of " + ", ".join(allowed))
 
 
 def load(path: str | Path) -> Document:
@@ -95,7 +98,10 @@ def simulate(design: str | Path | Document, *, mechanics: str | None = None,
         ``.regimes`` with each band's ``sensitivity_secant_per_N`` (S) and ``force_to_N`` (R).
     """
     from mst_cli.model.ladder import choose_mechanics
+    from mst_cli.model.mechanics import MODELS
     from mst_cli.model.response import simulate as run
+    _one_of("--mechanics", mechanics, MODELS)
+    _one_of("--field-model", field_model, ("auto", "dipole", "axial", "cylinder"))
     doc = load_design(design)
     field_choice = field_model or doc.field_model
     choice = choose_mechanics(mechanics, doc.accuracy_rel, doc.mechanics)
@@ -132,6 +138,7 @@ def design(spec: str | Path | Document, *, seed: int | None = None, max_evaluati
 
     from mst_cli.design import design_document
     from mst_cli.model.ladder import choose_mechanics
+    _one_of("--refine", refine, ("frame", "continuum"))
     doc = load(spec) if isinstance(spec, (str, Path)) else spec
     choice = choose_mechanics(refine, doc.accuracy_rel, doc.mechanics)
     if choice.mechanics == "spring":
@@ -290,7 +297,7 @@ def parse_params(text: str) -> tuple[str, ...]:
 
 def calibrate(design: str | Path | Document, load_test: str | Path, *, out: str | Path | None = None,
               plot: bool = False, design_file: str | Path | None = None, mechanics: str = "spring",
-              params: Sequence[str] | str = DEFAULT_PARAMETERS, gain_sel: int | None = None,
+              params: Sequence[str] | str | None = None, gain_sel: int | None = None,
               res: int | None = None, table_size: int = 256,
               progress: Callable[[str], None] | None = None) -> Calibration:
     """Fit a design's print parameters to a load test of the printed sensor (``mst calibrate``).
@@ -310,8 +317,9 @@ def calibrate(design: str | Path | Document, load_test: str | Path, *, out: str 
         Also draw calibration.png into ``out`` (imports matplotlib).
     mechanics : {"spring", "frame", "continuum"}
         Layer mechanics of the fit; frame and continuum by space mapping on spring.
-    params : sequence of str or str
-        Parameters to fit (names of :data:`mst_cli.calibrate.fit.PARAMETERS`, or "a,b").
+    params : sequence of str or str, optional
+        Parameters to fit (names of :data:`mst_cli.calibrate.fit.PARAMETERS`, or "a,b")
+        [default: all four].
     gain_sel, res : int, optional
         The MLX90393 setting the load test was read at (0-7, 0-3).
     table_size : int
@@ -330,9 +338,14 @@ def calibrate(design: str | Path | Document, load_test: str | Path, *, out: str 
         A bad file or option. CalibrationFailed: the fit failed (the message says why).
     """
     from mst_cli.calibrate.calibration import calibrate as run
+    from mst_cli.calibrate.fit import DEFAULT_PARAMETERS
     from mst_cli.io.outputs import check_out_dir
-    if isinstance(params, str):
-        params = parse_params(params)
+    from mst_cli.model.mechanics import MODELS
+    _one_of("--mechanics", mechanics, MODELS)
+    if params is None:
+        params = DEFAULT_PARAMETERS
+    else:                                     # the rules of --params: known names, each once
+        params = parse_params(params if isinstance(params, str) else ",".join(params))
     if not 16 <= table_size <= 4096:
         raise InputError("--table-size", table_size, "must be an integer from 16 to 4096")
     design_file = design_file or (design if isinstance(design, (str, Path)) else design.name)
@@ -353,7 +366,9 @@ def _reader(design: str | Path | Document, model_file: str | Path | None, mechan
     from mst_cli.calibrate.reading import ForceReader
     from mst_cli.io.outputs import check_out_dir
     from mst_cli.model.ladder import choose_mechanics
+    from mst_cli.model.mechanics import MODELS
 
+    _one_of("--mechanics", mechanics, MODELS)
     doc = load_design(design)
     if model_file is None:
         if not isinstance(design, (str, Path)):

@@ -6,6 +6,9 @@ import importlib
 import inspect
 import subprocess
 import sys
+from pathlib import Path
+
+import pytest
 
 import mst_cli
 from mst_cli import api
@@ -35,3 +38,20 @@ def test_importing_the_package_loads_no_verb_module():
             "'mst_cli.cad', 'mst_cli.calibrate', 'numpy', 'scipy'))]; print(heavy)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "[]"
+
+
+FORWARD = Path(__file__).resolve().parents[1] / "configs" / "mohammadi2021-forward.yaml"
+
+
+@pytest.mark.parametrize("call, option", [
+    (lambda: api.simulate(FORWARD, mechanics="beam"), "--mechanics"),
+    (lambda: api.simulate(FORWARD, field_model="exact"), "--field-model"),
+    (lambda: api.design(FORWARD, refine="spring"), "--refine"),
+    (lambda: api.calibrate(FORWARD, "unused.csv", params=["modulus_factor", "stiffness"]), "--params"),
+    (lambda: api.calibrate(FORWARD, "unused.csv", table_size=8), "--table-size"),
+    (lambda: api.check(FORWARD.parent, nozzle_mm=-1.0), "--nozzle"),
+])
+def test_a_script_gets_the_commands_input_errors(call, option):
+    with pytest.raises(api.InputError) as exc:
+        call()
+    assert exc.value.field == option

@@ -53,7 +53,7 @@ def calibrate(design_file: Path, load_test: Path, out_dir: Path | None, mechanic
     calibration.png (not with --no-plot). Exit 2 on bad input, 1 when the fit fails (with why); nothing is
     written then.
     """
-    names = api.parse_params(params)
+    names = api.parse_params(params)              # --params is refused before the design is read
     doc = api.load_design(design_file)
     out = out_dir or default_out_dir(f"{doc.name}-calibration")
     try:
