@@ -15,9 +15,9 @@ from test_calibrate import DESIGN, TRUTH, PrintedSensor
 from mst_cli import api as mst
 from mst_cli.calibrate import fit as cal
 from mst_cli.calibrate.accuracy import force_errors
+from mst_cli.calibrate.calibration_json import CalibrationRecord, record_beside
 from mst_cli.calibrate.header import c_header
 from mst_cli.calibrate.loadtest import setting_of as loadtest_setting_of
-from mst_cli.calibrate.record import CalibrationRecord, record_beside
 from mst_cli.calibrate.tables import cell, quoted
 from mst_cli.io.schema import load_document
 

@@ -16,7 +16,7 @@ from scipy.optimize import fsolve
 
 from mst_cli.design import design_document
 from mst_cli.design.explain import limits
-from mst_cli.design.problem import PRINT_ERROR_T_MM, DesignProblem
+from mst_cli.design.problem import DesignProblem
 from mst_cli.errors import InputError
 from mst_cli.io.schema import DEFAULT_DESIGN, load_document, parse_document
 from mst_cli.model import geometry as geo
@@ -26,6 +26,7 @@ from mst_cli.model.response import simulate
 ROOT = Path(__file__).resolve().parents[1]
 SPEC = ROOT / "configs" / "fingertip.yaml"       # met by the printable cell
 PAPER = ROOT / "configs" / "mohammadi2021.yaml"   # the paper's own targets
+PRINT_ERROR_T_MM = geo.Printer().wall_tolerance_mm     # the default printer's wall tolerance
 
 
 def spec_doc(targets, **design):

@@ -117,7 +117,8 @@ def test_refine_not_met_exits_1_naming_the_worst_target(tmp_path):
 def test_refine_reports_the_rung_that_measured_the_print_error(tmp_path):
     # no model.accuracy_rel: the cheap corrected rung L0 measures the print sensitivity, and the
     # report and the terminal say so; the numbers are L0's own ratios at t +- 0.05 mm
-    from mst_cli.design.problem import PRINT_ERROR_T_MM
+    from mst_cli.model.geometry import Printer
+    PRINT_ERROR_T_MM = Printer().wall_tolerance_mm        # the default printer's
     out = tmp_path / "out"
     res = _run(["design", SPEC, "--refine", "frame", "--out", out])
     assert res.exit_code in (0, 1), res.output
@@ -147,7 +148,8 @@ def test_print_error_rung_follows_accuracy_rel():
 
 
 def test_print_error_on_the_dear_rung_when_asked():
-    from mst_cli.design.problem import PRINT_ERROR_T_MM
+    from mst_cli.model.geometry import Printer
+    PRINT_ERROR_T_MM = Printer().wall_tolerance_mm        # the default printer's
     from mst_cli.design.refine import refine_document
     result = refine_document(load_document(SPEC), "frame", max_iterations=1, print_error_mechanics="frame")
     assert result.print_error["mechanics"] == "frame"

@@ -16,9 +16,16 @@ import yaml
 from mst_cli import __version__
 from mst_cli.calibrate import fit as cal
 from mst_cli.calibrate.accuracy import force_errors
+from mst_cli.calibrate.calibration_json import (
+    CALIBRATED_YAML,
+    CALIBRATION_JSON,
+    SCHEMA_VERSION,
+    CalibrationRecord,
+    sha256_text,
+)
 from mst_cli.calibrate.header import HEADER_FILE, c_header
 from mst_cli.calibrate.loadtest import MAX_ROWS, Readings, check_load_test, parse_readings, read_text
-from mst_cli.calibrate.record import CALIBRATED_YAML, CALIBRATION_JSON, SCHEMA_VERSION, CalibrationRecord, sha256_text
+from mst_cli.calibrate.record import design_constants
 from mst_cli.calibrate.tables import lookup_csv, residuals_csv
 from mst_cli.errors import InputError
 from mst_cli.io.outputs import staged
@@ -228,6 +235,7 @@ def _record(doc, design_file, load_test_file, mechanics, names, lt, fit, sigma, 
     design_regimes, cal_regimes = regime_rows(design_resp), regime_rows(cal_resp)
     return CalibrationRecord(
         schema_version=SCHEMA_VERSION, design=str(design_file), load_test=str(load_test_file),
+        design_constants=design_constants(doc),
         calibrated_yaml=CALIBRATED_YAML, calibrated_yaml_sha256=yaml_sha256,
         models={"mechanics": mechanics, "field": fit.model.field_model, "space_mapping_iterations": fit.iterations},
         samples=len(lt), force_range_N=[float(lt.force_N.min()), float(lt.force_N.max())],

@@ -121,6 +121,27 @@ def parameter_bounds(doc) -> dict[str, tuple[float, float]]:
     }
 
 
+# the printer keys that say how a print misses its drawing, at "no miss" (model.geometry.Printer)
+PRINTER_NOMINAL = {"wall_offset_mm": 0.0, "modulus_factor": 1.0, "gap_offset_mm": 0.0}
+
+
+def printer_values(doc) -> dict:
+    """The print parameters (:data:`PARAMETERS`' names) a document's ``printer`` section declares:
+    what its printer is known to do to the drawing (the remanence is the magnet's own key)."""
+    pr = doc.printer
+    return {"modulus_factor": pr.modulus_factor, "wall_offset_mm": pr.wall_offset_mm,
+            "gap_offset_mm": pr.gap_offset_mm, "remanence_factor": 1.0}
+
+
+def as_printed(doc: Document, extra_wall_mm: float = 0.0) -> Document:
+    """The design ``doc`` as its printer makes it (walls + offset + ``extra_wall_mm``, modulus and
+    gap as the ``printer`` section says), through :func:`apply_parameters`: the one path from a
+    drawing to the part whose physics is simulated, for design and calibration alike."""
+    values = printer_values(doc)          # within bounds: geometry.printer_violations at parse time
+    values["wall_offset_mm"] += extra_wall_mm
+    return apply_parameters(doc, values)[0]
+
+
 def full_values(values: dict) -> dict:
     """Every parameter: the given values, the others at their nominal (design) values."""
     return {n: float(values.get(n, p.nominal)) for n, p in PARAMETERS.items()}
@@ -467,9 +488,16 @@ def apply_parameters(doc: Document, values: dict, name: str | None = None,
     cav_min = min(la.h_mm - 2 * la.t_mm for la in layers)
     pad_min = min(float(geo.inner_pad_half_width_mm(math.radians(la.theta_deg), la.t_mm, la.h_mm,
                                                     doc.family.width_mm)) for la in layers)
+    # the values are the print's own (the fit models the drawn walls and the material's E), so
+    # the printer's declared deviations are spent: left in, a simulation would apply them twice
     printer = replace(pr, min_wall_mm=min(pr.min_wall_mm, round(math.floor(t_min * 1e4) / 1e4, 4)),
                       min_gap_mm=min(pr.min_gap_mm, round(math.floor(cav_min * 1e4) / 1e4, 4)),
-                      nozzle_mm=min(pr.nozzle_mm, max(0.05, round(math.floor(pad_min * 1e4) / 1e4, 4))))
+                      nozzle_mm=min(pr.nozzle_mm, max(0.05, round(math.floor(pad_min * 1e4) / 1e4, 4))),
+                      **PRINTER_NOMINAL)
+    spent = [f"printer.{key} {getattr(pr, key):g} -> {value:g}" for key, value in PRINTER_NOMINAL.items()
+             if getattr(pr, key) != value]
+    if spent:
+        edits.append(", ".join(spent) + " (the values above are the print's)")
     for key in ("min_wall_mm", "min_gap_mm", "nozzle_mm"):
         if getattr(printer, key) != getattr(pr, key):
             edits.append(f"printer.{key} {getattr(pr, key):g} -> {getattr(printer, key):g} (the as-printed "

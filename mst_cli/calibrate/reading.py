@@ -16,8 +16,8 @@ import numpy as np
 
 from mst_cli.calibrate import fit as cal
 from mst_cli.calibrate.accuracy import ERROR_FROM_RANGE, force_errors
+from mst_cli.calibrate.calibration_json import CalibrationRecord, record_beside
 from mst_cli.calibrate.loadtest import Readings, field_of
-from mst_cli.calibrate.record import CalibrationRecord, record_beside
 from mst_cli.calibrate.tables import FORCES_COLUMNS, cell, forces_csv
 from mst_cli.io.schema import Document
 from mst_cli.io.serial_lines import LineSource, SampleParser

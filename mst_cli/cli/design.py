@@ -67,6 +67,12 @@ class _Progress:
                    "designs over total height, worst force resolution and print robustness, "
                    "written to pareto.csv (one design per row, units in the header) and "
                    "pareto.png, the chosen one (design.objective's weights) marked.")
+@click.option("--calibration", "calibration", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              metavar="CAL/calibration.json",
+              help="Design for the printer as an earlier print measured it: take the wall offset, modulus "
+                   "factor, gap offset and remanence that mst calibrate fitted on a print of any design "
+                   "(same printer and filament) into printer.* and magnet.remanence_T; parameters the "
+                   "calibration held are not used, and named.")
 @click.option("--pareto-designs", is_flag=True,
               help="With --pareto: also write every front design as pareto/design-NN.yaml.")
 @click.option("--quiet", "-q", is_flag=True, help="No table and no progress; exit code and files only.")
@@ -76,7 +82,8 @@ class _Progress:
                 "about half of a run on the reference spec: 0.45 s of matplotlib import and render")
 @handles_input_errors
 def design(spec_file: Path, out_dir: Path | None, seed: int | None, max_evaluations: int | None, refine: str | None,
-           pareto_count: int | None, pareto_designs: bool, quiet: bool, as_json: bool, no_plot: bool) -> None:
+           pareto_count: int | None, calibration: Path | None, pareto_designs: bool, quiet: bool, as_json: bool,
+           no_plot: bool) -> None:
     """Find theta, t, h of every layer so that the sensor meets SPEC_FILE's targets.
 
     Per layer the spec gives a target sensitivity S (dB/B0 per newton, secant over the
@@ -84,8 +91,11 @@ def design(spec_file: Path, out_dir: Path | None, seed: int | None, max_evaluati
     per layer meet two targets; the spare freedom picks, among the designs that meet them,
     the one that minimises the spec's design.objective: a weighted sum of total height,
     worst force resolution and print robustness (how much S and R change when every wall is
-    printed 0.05 mm off; reported per layer). --pareto N maps the trade. Every achieved number
-    comes from re-running the forward model (mst simulate) on the written design.
+    printed printer.wall_tolerance_mm off, default 0.05 mm; reported per layer, with the worst
+    change beside the RMS). --pareto N maps the trade. The walls are designed as printed
+    (printer.wall_offset_mm, printer.modulus_factor; --calibration takes them from an earlier
+    print) and design.yaml draws them as drawn. Every achieved number comes from re-running
+    the forward model on the written design as printed.
 
     Writes design.yaml (loadable by mst simulate and mst export), report.json,
     response.csv and response.png (not with --no-plot or --json).
@@ -110,6 +120,11 @@ def design(spec_file: Path, out_dir: Path | None, seed: int | None, max_evaluati
     from mst_cli.model.ladder import choose_mechanics
 
     doc = load_document(spec_file)
+    cal = None
+    if calibration is not None:
+        from mst_cli.calibrate.record import apply_calibration, read_calibration
+        cal = read_calibration(calibration, doc)
+        doc = apply_calibration(doc, cal)
     from mst_cli.io.outputs import check_out_dir
     check_out_dir(out_dir or default_out_dir(doc.name))   # a bad output path: refused before any work
     if pareto_designs and pareto_count is None:
@@ -122,6 +137,8 @@ def design(spec_file: Path, out_dir: Path | None, seed: int | None, max_evaluati
     if choice.message() and not (quiet or as_json):
         click.echo(choice.message() + ("" if choice.mechanics == "spring"
                                        else f": L0 design refined with {choice.mechanics}"))
+    if cal is not None and not (quiet or as_json):
+        click.echo("\n".join(cal.lines()))
     progress = _Progress(quiet or as_json)
     front = None
     t_start = time.perf_counter()
@@ -141,6 +158,8 @@ def design(spec_file: Path, out_dir: Path | None, seed: int | None, max_evaluati
         progress.close()
     out = out_dir or default_out_dir(doc.name)
     extra = result.report_extra()
+    if cal is not None:
+        extra["design"]["calibration"] = cal.report()
     extra_files = {"design.yaml": result.design_yaml_dict()}
     plot = not (no_plot or as_json)
 

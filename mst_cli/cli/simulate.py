@@ -31,7 +31,9 @@ def simulate(design_file: Path, out_dir: Path | None, field_model: str | None, m
     Writes report.json (units in keys), response.csv and response.png (not with --no-plot
     or --json) into the output folder and prints a per-regime table: stiffness, force band,
     secant sensitivity S (dB/B0 per newton) with its local min..max, and the force
-    resolution dF of the chip.
+    resolution dF of the chip. The part is simulated as printed: walls + printer.wall_offset_mm,
+    modulus x printer.modulus_factor, gap + printer.gap_offset_mm (a design made with
+    mst design --calibration carries them; they are 0, 1, 0 by default).
     """
     from mst_cli.io.outputs import check_out_dir
     from mst_cli.io.report import terminal_table
@@ -45,11 +47,19 @@ def simulate(design_file: Path, out_dir: Path | None, field_model: str | None, m
     choice = choose_mechanics(mechanics, doc.accuracy_rel, doc.mechanics)
     if choice.message() and not as_json:
         click.echo(choice.message())
-    resp = run(geometry, doc.material, mechanics=choice.mechanics,
+    from mst_cli.calibrate.fit import PRINTER_NOMINAL, as_printed
+    printed = as_printed(doc)
+    pr = doc.printer
+    deviations = {key: getattr(pr, key) for key in PRINTER_NOMINAL if getattr(pr, key) != PRINTER_NOMINAL[key]}
+    if deviations and not as_json:
+        click.echo("as printed: " + ", ".join(f"printer.{k} = {v:g}" for k, v in deviations.items())
+                   + " (the walls drawn are the file's t_mm)")
+    resp = run(printed.geometry(), printed.material, mechanics=choice.mechanics,
                field_model=None if field_choice == "auto" else field_choice,
                noise_uT_rms=doc.noise_uT_rms)
     plot = not (no_plot or as_json)
-    report = write_simulation(doc, geometry, resp, out, plot=plot)
+    report = write_simulation(doc, geometry, resp, out, plot=plot,
+                              extra_report={"as_printed": {f"printer.{k}": getattr(pr, k) for k in PRINTER_NOMINAL}})
     if as_json:
         click.echo(json.dumps(report, indent=2, allow_nan=False))
     else:

@@ -11,10 +11,16 @@
 4. the verification decides the status: every target within tolerance and every constraint
    held -> exit 0; otherwise exit 1 with the binding reason (:func:`explain.diagnose`).
 
+The design is judged as printed: the written design.yaml keeps the walls as drawn (what
+``mst export`` draws) and its ``printer`` section says how they print; every simulation here
+runs :func:`mst_cli.calibrate.fit.as_printed` of it (walls + printer.wall_offset_mm, modulus x
+printer.modulus_factor, gap + printer.gap_offset_mm).
+
 The print-error sensitivity (the robustness term of the preference, :mod:`.problem`) is re-measured the same
-way: the forward model on the design with every wall 0.05 mm thicker and thinner (with L0 when a
-refined design does not ask for more: :func:`mst_cli.design.refine.print_error_rung`); report.json
-names the rung (``print_error_sensitivity.mechanics``).
+way: the forward model on the printed design with every wall printer.wall_tolerance_mm thicker and
+thinner (with L0 when a refined design does not ask for more:
+:func:`mst_cli.design.refine.print_error_rung`); report.json names the rung
+(``print_error_sensitivity.mechanics``) and gives the RMS and the worst relative change.
 """
 
 from __future__ import annotations
@@ -25,7 +31,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from mst_cli.design.problem import PRINT_ERROR_T_MM, DesignProblem
+from mst_cli.calibrate.fit import as_printed
+from mst_cli.design.problem import DesignProblem
 from mst_cli.errors import InputError
 from mst_cli.io.report import height_budget_line
 from mst_cli.io.schema import Document, LayerEntry, document_to_dict
@@ -35,6 +42,8 @@ from mst_cli.model.response import Response, simulate
 ROUND_DECIMALS = 4
 EXIT_MET, EXIT_NOT_MET = 0, 1
 SAME_RUNG_RULE = "the rung that judges the design"   # print error's rung when the caller names none
+WARN_PRINT_DEVIATION_REL = 0.25      # above this worst change a design without a limit says so
+PRINT_DEVIATION_CHECK = "print deviation"    # the check design.max_print_deviation_rel fails
 
 
 @dataclass
@@ -81,13 +90,15 @@ class DesignResult:
     def table(self) -> str:
         """Target against achieved per layer (forward model), as ``mst design`` prints it."""
         tol = self.document.design["tolerance_rel"]
+        pe = self.print_error
+        shift = f"t+-{pe['print_error_t_mm']:g}mm: dS"
         lines = [f"{self.document.name}: {len(self.targets)} layers designed, tolerance "
                  f"{100 * tol:g} %, seed {self.seed}, {self.evaluations} evaluations",
                  f"{'layer':>5} {'theta':>7} {'t':>6} {'h':>6} | {'S target':>8} {'S got':>8} {'err':>6} | "
-                 f"{'R target':>8} {'R got':>8} {'err':>6} | {'t+-0.05mm: dS':>13} {'dR':>6}",
+                 f"{'R target':>8} {'R got':>8} {'err':>6} | {shift:>13} {'dR':>6}",
                  f"{'':>5} {'[deg]':>7} {'[mm]':>6} {'[mm]':>6} | {'[1/N]':>8} {'[1/N]':>8} {'[%]':>6} | "
                  f"{'[N]':>8} {'[N]':>8} {'[%]':>6} | {'[%]':>13} {'[%]':>6}"]
-        for row, pe in zip(self.targets, self.print_error["layers"]):
+        for row, pl in zip(self.targets, self.print_error["layers"]):
             ok = "" if row["within_tolerance"] else "  <-- missed"
             lines.append(
                 f"{row['layer']:>5} {row['theta_deg']:>7.2f} {row['t_mm']:>6.3f} {row['h_mm']:>6.3f} | "
@@ -95,12 +106,22 @@ class DesignResult:
                 f"{100 * row['sensitivity_error_rel']:>+6.2f} | "
                 f"{row['target_range_N']:>8.4g} {row['achieved_range_N']:>8.4g} "
                 f"{100 * row['range_error_rel']:>+6.2f} | "
-                f"{100 * pe['dS_rel_worst']:>13.1f} {100 * pe['dR_rel_worst']:>6.1f}{ok}")
+                f"{100 * pl['dS_rel_worst']:>13.1f} {100 * pl['dR_rel_worst']:>6.1f}{ok}")
         resp, g = self.response, self.geometry
         lines.append(f"gap {resp.gap0_mm:.2f} -> {resp.gap_min_mm:.2f} mm, B0 {resp.B0_T * 1e3:.3f} mT, "
                      f"B full load {resp.B_full_T * 1e3:.3f} mT, worst force resolution "
                      f"{1e3 * max(r.force_resolution_N for r in resp.regimes):.1f} mN")
         lines.append(height_budget_line(g))
+        pe = self.print_error
+        limit = pe.get("max_print_deviation_rel")
+        lines.append(f"print: walls +-{pe['print_error_t_mm']:g} mm change S_i, R_i by "
+                     f"{100 * pe['worst_change_rel']:.1f} % at worst, {100 * pe['rms_log_change']:.1f} % RMS"
+                     + (f" (limit {100 * limit:g} %)" if limit is not None else ""))
+        pr = self.document.printer
+        if (pr.wall_offset_mm, pr.modulus_factor, pr.gap_offset_mm) != (0.0, 1.0, 0.0):
+            lines.append(f"designed as printed: walls print {pr.wall_offset_mm:+.4f} mm off the t above (drawn), "
+                         f"modulus x {pr.modulus_factor:.4f}, gap {pr.gap_offset_mm:+.4f} mm (design.yaml's printer "
+                         "section)")
         pe_mechanics = self.print_error.get("mechanics", resp.mechanics)
         if pe_mechanics != resp.mechanics or self.print_error.get("mechanics_rule") != SAME_RUNG_RULE:
             lines.append(f"print error (t+-{self.print_error['print_error_t_mm']:g} mm columns) measured with "
@@ -139,7 +160,7 @@ def _layer_outputs(resp: Response, n: int):
 
 def design_document(doc: Document, *, seed: int | None = None, progress=None,
                     max_evaluations: int | None = None, local: str = "slsqp",
-                    solution: list | None = None) -> DesignResult:
+                    solution: list | None = None, name_height: bool = True) -> DesignResult:
     """Design theta, t, h for every layer of the spec ``doc``.
 
     Parameters
@@ -156,6 +177,9 @@ def design_document(doc: Document, *, seed: int | None = None, progress=None,
     solution : list, optional
         Receives the solver's :class:`~mst_cli.design.solver.SolveResult` (its matched point
         is where :func:`mst_cli.design.pareto.pareto_front` starts every other weighting).
+    name_height : bool
+        When design.max_print_deviation_rel is what fails, design again to name the lowest part
+        height at which it is met (:func:`_name_lowest_height`) [default: True].
 
     Raises
     ------
@@ -181,9 +205,52 @@ def design_document(doc: Document, *, seed: int | None = None, progress=None,
     theta, t, h = (np.round(a, ROUND_DECIMALS) for a in problem.to_physical(sol.u))
     result = verify_design(doc, problem, theta, t, h, sol, seed=seed, max_evaluations=max_evaluations,
                            mechanics=doc.mechanics, t_start=t_start)
+    if name_height and result.status != "met" and problem.max_print_deviation_rel is not None:
+        _name_lowest_height(doc, result, seed=seed, max_evaluations=max_evaluations, local=local)
     if solution is not None:
         solution.append(sol)
     return result
+
+
+HEIGHT_ONLY = {"height": 1.0, "force_resolution": 0.0, "print_robustness": 0.0}
+ROBUSTNESS_ONLY = {"height": 0.0, "force_resolution": 0.0, "print_robustness": 1.0}
+
+
+def _name_lowest_height(doc: Document, result: DesignResult, **run) -> None:
+    """Make design.max_print_deviation_rel the binding reason of ``result`` when it is what keeps
+    the spec from being met, naming the lowest part height at which it is met (or that none is).
+
+    It binds when the same spec without the limit is met. The lowest height is the design of
+    the spec with the limit, no height limit and the height as the only preference; when that
+    misses too, the most robust design the search finds (no limit, robustness the only
+    preference) says how close any height comes.
+    """
+    from dataclasses import replace
+
+    limit = doc.design["max_print_deviation_rel"]
+
+    def variant(**design):
+        return design_document(replace(doc, design={**doc.design, **design}), name_height=False, **run)
+
+    if variant(max_print_deviation_rel=None).status != "met":
+        return                                        # something else binds as well
+    lowest = variant(max_height_mm=None, objective=HEIGHT_ONLY)
+    tol_mm = doc.printer.wall_tolerance_mm
+    if lowest.status == "met":
+        height = lowest.geometry.total_height_mm
+        reason = (f"design.max_print_deviation_rel = {100 * limit:g} % (walls ± {tol_mm:g} mm) is met from a total "
+                  f"height of {height:.2f} mm (the lowest design found with it"
+                  + (f"; design.max_height_mm is {doc.design['max_height_mm']:g} mm" if doc.design.get("max_height_mm")
+                     is not None else "") + f"): allow {height:.2f} mm or more, or relax the limit")
+    else:
+        best = variant(max_print_deviation_rel=None, max_height_mm=None, objective=ROBUSTNESS_ONLY)
+        reason = (f"no height meets design.max_print_deviation_rel = {100 * limit:g} % (walls ± {tol_mm:g} mm) "
+                  f"inside the design bounds: the least print-sensitive design found ("
+                  f"{best.geometry.total_height_mm:.2f} mm) still changes some S_i or R_i by "
+                  f"{100 * best.print_error['worst_change_rel']:.1f} %; relax the limit, or calibrate the printer "
+                  "(--calibration) so that a smaller printer.wall_tolerance_mm holds")
+    result.binding = "design.max_print_deviation_rel"
+    result.reasons.insert(0, reason)
 
 
 def verify_design(doc: Document, problem: DesignProblem, theta, t, h, sol, *, seed: int,
@@ -207,10 +274,15 @@ def verify_design(doc: Document, problem: DesignProblem, theta, t, h, sol, *, se
     layers = [LayerEntry(float(a), float(b), float(c), la.target_sensitivity_per_N, la.target_range_N,
                          la.weight) for a, b, c, la in zip(theta, t, h, doc.layers)]
     designed = doc.with_layers(layers)
-    geometry = designed.geometry()
+    geometry = designed.geometry()                       # as drawn: what export draws
     field_model = None if doc.field_model == "auto" else doc.field_model
-    resp = simulate(geometry, doc.material, mechanics=mechanics, field_model=field_model,
-                    noise_uT_rms=doc.noise_uT_rms)
+
+    def simulate_printed(extra_wall_mm: float, rung: str) -> Response:
+        printed = as_printed(designed, extra_wall_mm)    # as the printer makes it
+        return simulate(printed.geometry(), printed.material, mechanics=rung, field_model=field_model,
+                        noise_uT_rms=doc.noise_uT_rms)
+
+    resp = simulate_printed(0.0, mechanics)
 
     # -- verification on the forward model
     n, tol = problem.n, problem.tolerance_rel
@@ -241,28 +313,18 @@ def verify_design(doc: Document, problem: DesignProblem, theta, t, h, sol, *, se
     if problem.max_height_mm is not None and geometry.total_height_mm > problem.max_height_mm:
         checks["total height"] = (f"total height {geometry.total_height_mm:.2f} mm exceeds "
                                   f"design.max_height_mm = {problem.max_height_mm:g} mm")
-    met = all(row["within_tolerance"] for row in targets) and not checks
-    binding, reasons = (None, []) if met else explain.diagnose(problem, u_written, S, R, checks)
-    if not met and not sol.matched and sol.evaluations >= max_evaluations:
-        reasons.append(f"the evaluation budget ({max_evaluations}) was spent before the targets were "
-                       "met: raise design.max_evaluations (or --max-evaluations) to search further")
-
     # -- print-error sensitivity, re-measured with a forward model (one rung for all three runs:
     # a ratio of two rungs would mix the model gap into the print sensitivity)
     pe_mechanics = mechanics if print_error_mechanics is None else print_error_mechanics
     if pe_mechanics == mechanics:
         S_pe, R_pe = S, R
     else:
-        S_pe, R_pe = _layer_outputs(simulate(geometry, doc.material, mechanics=pe_mechanics,
-                                             field_model=field_model, noise_uT_rms=doc.noise_uT_rms), n)
+        S_pe, R_pe = _layer_outputs(simulate_printed(0.0, pe_mechanics), n)
     pe_layers = []
     shifted = {}
+    tol_mm = float(doc.printer.wall_tolerance_mm)
     for sign, key in ((1.0, "plus"), (-1.0, "minus")):
-        cells = [doc.family.cell(a, max(b + sign * PRINT_ERROR_T_MM, geo.LENGTH_FLOOR_MM), c)
-                 for a, b, c in zip(theta, t, h)]
-        r2 = simulate(designed.geometry(cells), doc.material, mechanics=pe_mechanics,
-                      field_model=field_model, noise_uT_rms=doc.noise_uT_rms)
-        shifted[key] = _layer_outputs(r2, n)
+        shifted[key] = _layer_outputs(simulate_printed(sign * tol_mm, pe_mechanics), n)
     logs = []
     for i in range(n):
         row = {"layer": i + 1}
@@ -274,15 +336,37 @@ def verify_design(doc: Document, problem: DesignProblem, theta, t, h, sol, *, se
         row["dS_rel_worst"] = max(abs(row["dS_rel_t_plus"]), abs(row["dS_rel_t_minus"]))
         row["dR_rel_worst"] = max(abs(row["dR_rel_t_plus"]), abs(row["dR_rel_t_minus"]))
         pe_layers.append(row)
+    worst = max(max(row["dS_rel_worst"], row["dR_rel_worst"]) for row in pe_layers)
     print_error = {
-        "print_error_t_mm": PRINT_ERROR_T_MM,
-        "meaning": "relative change of S_i and R_i when every wall is printed this much thicker (plus) "
-                   "or thinner (minus); its RMS is the print_robustness term of design.objective's preference",
+        "print_error_t_mm": tol_mm,
+        "meaning": "relative change of S_i and R_i when every wall is printed printer.wall_tolerance_mm "
+                   "thicker (plus) or thinner (minus) than expected; its RMS is the print_robustness term of "
+                   "design.objective's preference, worst_change_rel the largest |change| of any S_i or R_i "
+                   "(design.max_print_deviation_rel limits it)",
         "rms_log_change": float(np.sqrt(np.mean(np.square(logs)))),
+        "worst_change_rel": float(worst),
+        "max_print_deviation_rel": problem.max_print_deviation_rel,
         "mechanics": pe_mechanics,
         "mechanics_rule": print_error_rule or SAME_RUNG_RULE,
         "layers": pe_layers,
     }
+    limit = problem.max_print_deviation_rel
+    if limit is not None and worst > limit:
+        checks[PRINT_DEVIATION_CHECK] = (
+            f"a wall {tol_mm:g} mm off changes some S_i or R_i by {100 * worst:.1f} %, more than "
+            f"design.max_print_deviation_rel = {100 * limit:g} %")
+    met = all(row["within_tolerance"] for row in targets) and not checks
+    binding, reasons = (None, []) if met else explain.diagnose(problem, u_written, S, R, checks)
+    if not met and not sol.matched and sol.evaluations >= max_evaluations:
+        reasons.append(f"the evaluation budget ({max_evaluations}) was spent before the targets were "
+                       "met: raise design.max_evaluations (or --max-evaluations) to search further")
+    warnings = list(resp.warnings)
+    if limit is None and worst > WARN_PRINT_DEVIATION_REL:
+        warnings.append(
+            f"a wall {tol_mm:g} mm off its expected thickness changes some S_i or R_i by up to "
+            f"{100 * worst:.0f} %: calibrate a first print and design again with --calibration "
+            "(README: From a first print to a second), or trade height for robustness (mst design --pareto 12, "
+            "design.max_print_deviation_rel)")
     weights = doc.design.get("objective") or {}
     objective = {
         "weights": dict(weights),
@@ -304,7 +388,7 @@ def verify_design(doc: Document, problem: DesignProblem, theta, t, h, sol, *, se
         document=designed, geometry=geometry, response=resp, status="met" if met else "not met",
         binding=binding, reasons=reasons, targets=targets, checks=checks, print_error=print_error,
         seed=seed, evaluations=sol.evaluations, max_evaluations=max_evaluations, solver=solver_info,
-        elapsed_s=time.perf_counter() - t_start, warnings=list(resp.warnings), objective=objective)
+        elapsed_s=time.perf_counter() - t_start, warnings=warnings, objective=objective)
 
 
 __all__ = ["DesignResult", "design_document", "design_dict", "verify_design", "DesignProblem"]

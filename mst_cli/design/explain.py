@@ -103,18 +103,18 @@ def limits(problem: DesignProblem) -> Limits:
     R_hi_prev = np.concatenate([[0.0], R[:-1] * (1 + tol)])
     needed_min = float(np.sum(S * (1 - tol) * np.maximum(R_lo_edge - R_hi_prev, 0.0)))
 
-    housing, board = problem.probe.housing, problem.probe.board
     t_min = max(problem.lo[1], pr.min_wall_mm)
     h_sum_max = n * problem.hi[2]
     if problem.max_height_mm is not None:
         h_sum_max = min(h_sum_max, problem.max_height_mm - problem.height_offset_mm)
-    gap0_max = float(geo.unloaded_gap_mm(h_sum_max, n, housing, board))
+    gap0_max = float(problem.gap0_mm(h_sum_max))                 # as built (printer.gap_offset_mm)
     theta_lo = math.radians(problem.lo[0])
     # locked stiffness = walls + contact column >= the contact column alone
     k_locked_min = float(contact_stiffness_N_per_mm(theta_lo, problem.hi[1], fam.width_mm,
                                                    fam.depth_mm, problem.E_MPa))
     locked_give = n * R[-1] * (1 + tol) / k_locked_min
-    gap_min = float(geo.unloaded_gap_mm(0.0, n, housing, board) + n * (2 * t_min + fam.contact_allowance_mm)
+    t_printed = t_min + problem.wall_offset_mm
+    gap_min = float(problem.gap0_mm(0.0) + n * (2 * t_printed + fam.contact_allowance_mm)
                     - locked_give)
     gaps = np.linspace(max(gap_min, 1e-3), max(gap0_max, gap_min + 1e-3), 400)
     B = problem.field_T(gaps)

@@ -7,7 +7,8 @@ targets). ``design.objective`` prices three things against each other (:mod:`.pr
 * the worst force resolution over the regimes (N): the chip's field resolution over B0 S_i,
   i.e. how small a force step the sensor can tell apart in its least sensitive band;
 * print robustness: the RMS relative change of every S_i and R_i when every wall is printed
-  0.05 mm off.
+  printer.wall_tolerance_mm (default 0.05 mm) off; pareto.csv, pareto.png and the table give the
+  worst change of any S_i or R_i beside it.
 
 :func:`pareto_front` maps that trade: one match, then the preference polish for a sequence of
 weightings spread over the simplex (:func:`mst_cli.design.solver.pareto_weights`), each design
@@ -58,6 +59,11 @@ class ParetoDesign:
     @property
     def print_robustness_rms(self) -> float:
         return float(self.result.print_error["rms_log_change"])
+
+    @property
+    def print_worst_change(self) -> float:
+        """Worst relative change of any S_i or R_i at walls +- the printer's tolerance."""
+        return float(self.result.print_error["worst_change_rel"])
 
     @property
     def metrics(self) -> np.ndarray:
@@ -165,7 +171,7 @@ def pareto_rows(front: list[ParetoDesign]) -> tuple[list[str], list[list]]:
     """(header, rows) of pareto.csv: one design per row, units in the header."""
     n = len(front[0].result.targets)
     header = (["design", "chosen", "total_height_mm", "worst_force_resolution_mN",
-               "print_robustness_rms_pct", "gap0_mm", "B0_mT"]
+               "print_robustness_rms_pct", "print_worst_change_pct", "gap0_mm", "B0_mT"]
               + [f"weight_{k}" for k in OBJECTIVE_TERMS]
               + [f"layer{i + 1}_{c}" for i in range(n) for c in CSV_LAYER_COLUMNS])
     rows = []
@@ -174,7 +180,8 @@ def pareto_rows(front: list[ParetoDesign]) -> tuple[list[str], list[list]]:
         w = p.weights if p.weights is not None else tuple(
             p.result.document.design["objective"][key] for key in OBJECTIVE_TERMS)
         row = [k + 1, int(p.chosen), round(p.height_mm, 3), round(1e3 * p.worst_force_resolution_N, 3),
-               round(100 * p.print_robustness_rms, 2), round(resp.gap0_mm, 3), round(resp.B0_T * 1e3, 4)]
+               round(100 * p.print_robustness_rms, 2), round(100 * p.print_worst_change, 2),
+               round(resp.gap0_mm, 3), round(resp.B0_T * 1e3, 4)]
         row += [round(x, 3) for x in w]
         for c in p.result.targets:
             row += [c["theta_deg"], c["t_mm"], c["h_mm"]]
@@ -198,11 +205,18 @@ def plot_pareto(front: list[ParetoDesign], path, title: str = "") -> None:
     fig = Figure(figsize=(10, 4.2))
     axes = fig.subplots(1, 2)
     fig.subplots_adjust(left=0.07, right=0.98, bottom=0.13, top=0.88, wspace=0.25)
-    panels = ((100 * M[:, 2], "print robustness: RMS change of S_i, R_i at t +- 0.05 mm [%]"),
+    tol_mm = front[0].result.print_error["print_error_t_mm"]
+    worst = np.array([100 * p.print_worst_change for p in front])
+    panels = ((100 * M[:, 2], f"change of S_i, R_i at t +- {tol_mm:g} mm [%]"),
               (1e3 * M[:, 1], "worst force resolution [mN]"))
     for ax, (y, label) in zip(axes, panels):
         ax.plot(x, y, "-", color="0.7", zorder=1)
-        ax.scatter(x, y, s=40, color="C0", zorder=3)
+        ax.scatter(x, y, s=40, color="C0", zorder=3, label="RMS" if ax is axes[0] else None)
+        if ax is axes[0]:                      # the worst case beside the RMS
+            ax.plot(x, worst, "-", color="0.85", zorder=1)
+            ax.scatter(x, worst, s=40, marker="^", color="C1", zorder=3, label="worst S_i or R_i")
+            for k in range(len(front)):
+                ax.annotate(str(k + 1), (x[k], worst[k]), textcoords="offset points", xytext=(5, 4), fontsize=8)
         for k, p in enumerate(front):
             ax.annotate(str(k + 1), (x[k], y[k]), textcoords="offset points", xytext=(5, 4), fontsize=8)
             if p.chosen:
@@ -212,7 +226,7 @@ def plot_pareto(front: list[ParetoDesign], path, title: str = "") -> None:
         ax.set_ylabel(label, fontsize=9)
         ax.margins(0.08)
         ax.grid(alpha=0.3)
-        if any(p.chosen for p in front):
+        if any(p.chosen for p in front) or ax is axes[0]:
             ax.legend(loc="best", fontsize=8)
     fig.suptitle(title or "designs that meet every target")
     fig.savefig(path, dpi=110, format="png")
@@ -221,8 +235,9 @@ def plot_pareto(front: list[ParetoDesign], path, title: str = "") -> None:
 def front_table(front: list[ParetoDesign]) -> str:
     """The front as ``mst design --pareto`` prints it."""
     lines = [f"Pareto front: {len(front)} designs that meet every target (forward model)",
-             f"{'#':>3} {'height':>7} {'dF worst':>9} {'print':>6}  {'theta [deg]':<20} {'t [mm]':<18} h [mm]",
-             f"{'':>3} {'[mm]':>7} {'[mN]':>9} {'[%]':>6}"]
+             f"{'#':>3} {'height':>7} {'dF worst':>9} {'print':>6} {'worst':>6}  {'theta [deg]':<20} "
+             f"{'t [mm]':<18} h [mm]",
+             f"{'':>3} {'[mm]':>7} {'[mN]':>9} {'RMS %':>6} {'[%]':>6}"]
     for k, p in enumerate(front):
         rows = p.result.targets
         mark = "  <-- chosen" if p.chosen else ""
@@ -230,7 +245,8 @@ def front_table(front: list[ParetoDesign]) -> str:
         t = "/".join(f"{r['t_mm']:.2f}" for r in rows)
         h = "/".join(f"{r['h_mm']:.2f}" for r in rows)
         lines.append(f"{k + 1:>3} {p.height_mm:>7.2f} {1e3 * p.worst_force_resolution_N:>9.2f} "
-                     f"{100 * p.print_robustness_rms:>6.1f}  {theta:<20} {t:<18} {h}{mark}")
+                     f"{100 * p.print_robustness_rms:>6.1f} {100 * p.print_worst_change:>6.1f}  "
+                     f"{theta:<20} {t:<18} {h}{mark}")
     return "\n".join(lines)
 
 

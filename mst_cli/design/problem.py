@@ -24,7 +24,16 @@ Constraints (g <= 0 is satisfied; every g is scaled to order one)
     * chip below saturation: |B| at the last lock <= (1 - saturation_margin_rel) x 50 mT, and
       never above what the MLX90393's coarsest setting reads with the headroom
       :func:`~mst_cli.model.chip.choose_setting` keeps;
-    * optional total height: SensorGeometry.total_height_mm <= design.max_height_mm.
+    * optional total height: SensorGeometry.total_height_mm <= design.max_height_mm;
+    * optional print deviation (``design.max_print_deviation_rel``): every S_i and R_i changes by
+      at most that fraction when every wall is printed +- printer.wall_tolerance_mm (one smooth
+      constraint per output and sign, so the worst case is a constraint, not only a weight).
+
+The part as printed (docs/design.md section 10)
+    The variables are the walls as drawn; the physics sees the walls as printed, t +
+    printer.wall_offset_mm, with the modulus times printer.modulus_factor and the gap plus
+    printer.gap_offset_mm (what ``mst calibrate`` fitted on an earlier print). The cell rules
+    judge the drawing (what the slicer gets); the t/L range of L0's fit judges the printed wall.
 
 Preference among the designs that meet the targets (phase 2, ``design.objective``)
     Three variables per layer and two targets leave one spare degree of freedom per layer.
@@ -38,9 +47,11 @@ Preference among the designs that meet the targets (phase 2, ``design.objective`
       is a step function of the chosen setting (and below the default 2 uT noise for every
       setting that holds <= 50 mT); the report gives the exact figure;
     * ``print_robustness``: how much S_i and R_i move when *every* wall is printed
-      PRINT_ERROR_T_MM = 0.05 mm thicker or thinner (extrusion width drifts with the filament
-      and the flow calibration, the same way for every wall of one print): the RMS over the
-      2n outputs and both signs of ln(out(t +- 0.05 mm) / out(t)); reported per layer.
+      printer.wall_tolerance_mm (default 0.05 mm) thicker or thinner than expected (extrusion
+      width drifts with the filament and the flow calibration, the same way for every wall of
+      one print): the RMS over the 2n outputs and both signs of ln(out(t +- tol) / out(t));
+      reported per layer, beside the worst relative change of any output (the verification,
+      :func:`mst_cli.design.document.verify_design`, measures both on the forward model).
 """
 
 from __future__ import annotations
@@ -62,8 +73,6 @@ from mst_cli.model.response import field_magnitude_T, regime_kernel
 
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
-
-PRINT_ERROR_T_MM = 0.05      # wall-thickness printing error the robustness term guards against
 
 # headroom choose_setting keeps between the largest field and a setting's range (one source)
 CHIP_HEADROOM = inspect.signature(mlx.choose_setting).parameters["margin"].default
@@ -141,7 +150,12 @@ class DesignProblem:
         self.weights = np.array([la.weight for la in doc.layers], dtype=float)
         self.family = doc.family
         self.printer = doc.printer
-        self.E_MPa = doc.material.youngs_modulus_MPa
+        # the part as printed: walls + offset, modulus x factor, gap + offset (module docstring)
+        self.wall_offset_mm = float(doc.printer.wall_offset_mm)
+        self.wall_tolerance_mm = float(doc.printer.wall_tolerance_mm)
+        self.gap_offset_mm = float(doc.printer.gap_offset_mm)
+        self.E_MPa = doc.material.youngs_modulus_MPa * doc.printer.modulus_factor
+        self.max_print_deviation_rel = d.get("max_print_deviation_rel")
         self.nu = doc.material.poisson_ratio
         self.noise_T = 1e-6 * doc.noise_uT_rms
         objective = {**DEFAULT_OBJECTIVE, **(d.get("objective") or {})}   # documents built in code
@@ -159,7 +173,8 @@ class DesignProblem:
         # (the design loop otherwise drifts there: it is where k and R grow fastest)
         self.t_over_L_max = correction.fitted_t_over_L_max()
         self.n_constraints = (self.n * len(geo.CELL_RULES) + self.n + (self.n - 1) + 1
-                              + (1 if self.max_height_mm is not None else 0))
+                              + (1 if self.max_height_mm is not None else 0)
+                              + (8 * self.n if self.max_print_deviation_rel is not None else 0))
 
     # ----------------------------------------------------------------- variables
     @property
@@ -196,12 +211,13 @@ class DesignProblem:
         return field_magnitude_T(gap.ravel(), self.probe, self.field_model).reshape(gap.shape)
 
     def gap0_mm(self, sum_h_mm: ArrayLike) -> np.ndarray:
-        """Unloaded magnet-to-chip gap of stacks whose layer heights add up to ``sum_h_mm``."""
-        return geo.unloaded_gap_mm(sum_h_mm, self.n, self.probe.housing, self.probe.board)
+        """Unloaded magnet-to-chip gap, as built, of stacks whose layer heights add up to ``sum_h_mm``."""
+        return geo.unloaded_gap_mm(sum_h_mm, self.n, self.probe.housing, self.probe.board) + self.gap_offset_mm
 
     def layer_constraints(self, theta_deg: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike) -> np.ndarray:
         """The rules each layer meets on its own, (..., len(CELL_RULES) + 1), g <= 0 satisfied:
-        the cell rules in nozzles, then t/L over the largest t/L L0 is fitted on, minus 1."""
+        the cell rules in nozzles (drawn walls), then the printed wall's t/L over the largest t/L
+        L0 is fitted on, minus 1."""
         margins, t_over_L_g = self._layer_rules(theta_deg, t_mm, h_mm)
         return np.concatenate([-margins / self.printer.nozzle_mm, t_over_L_g[..., None]], axis=-1)
 
@@ -211,12 +227,15 @@ class DesignProblem:
         theta = np.radians(theta_deg)
         margins = geo.cell_margins_mm(theta, t_mm, h_mm, fam.width_mm, fam.contact_allowance_mm,
                                       pr.min_wall_mm, pr.min_gap_mm, pr.nozzle_mm)
-        t_over_L = t_mm / geo.wall_centreline_length_mm(theta, t_mm, h_mm)
+        t_printed = np.maximum(np.asarray(t_mm) + self.wall_offset_mm, geo.LENGTH_FLOOR_MM)
+        t_over_L = t_printed / geo.wall_centreline_length_mm(theta, t_printed, h_mm)
         return margins, t_over_L / self.t_over_L_max - 1.0
 
     def layer_laws(self, theta_deg: ArrayLike, t_mm: ArrayLike,
                    h_mm: ArrayLike) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """L0 laws (k, d_lock, R, k_locked) of every cell, each distinct cell computed once.
+        """L0 laws (k, d_lock, R, k_locked) of every cell as printed (``t_mm`` drawn, the law's
+        wall t + printer.wall_offset_mm, its modulus times printer.modulus_factor), each distinct
+        cell computed once.
 
         The batches the solver sends repeat cells: a finite-difference gradient moves one
         variable per neighbour, so its 2 x 3n + 1 stacks of n cells hold only n + 6n distinct
@@ -238,6 +257,8 @@ class DesignProblem:
             inverse[order] = np.cumsum(first) - 1
             flat = ordered[first]
         theta, t, h = np.ascontiguousarray(flat.T)     # contiguous columns: numpy's vector loops
+        if self.wall_offset_mm:
+            t = np.maximum(t + self.wall_offset_mm, geo.LENGTH_FLOOR_MM)
         laws = spring_arrays(np.radians(theta), t, h, fam.depth_mm, fam.width_mm, fam.contact_allowance_mm,
                              self.E_MPa, self.nu)
         if inverse is not None:
@@ -267,6 +288,8 @@ class DesignProblem:
         g.append(np.log(np.maximum(B_full, TINY) / self.B_limit_T)[..., None])
         if self.max_height_mm is not None:
             g.append(((height - self.max_height_mm) / pr.nozzle_mm)[..., None])
+        if self.max_print_deviation_rel is not None:
+            g.append(self.print_deviation_constraints(theta_deg, t_mm, h_mm, S, R))
         constraints = np.concatenate(g, axis=-1)
 
         log_err = np.concatenate([np.log(np.maximum(S, TINY) / self.S_target),
@@ -280,15 +303,25 @@ class DesignProblem:
         return self.evaluate_physical(*self.to_physical(u))
 
     # ----------------------------------------------------------------- preference
+    def print_deviation_constraints(self, theta_deg, t_mm, h_mm, S, R) -> np.ndarray:
+        """(..., 8n) g <= 0 when every output's change at t +- tolerance lies within
+        +- design.max_print_deviation_rel: ln(1 - m) <= ln(out'/out) <= ln(1 + m), per sign and output."""
+        m = self.max_print_deviation_rel
+        d = self.print_shift_log(theta_deg, t_mm, h_mm, nominal=(S, R))       # (2, ..., 2n)
+        g = np.concatenate([d - math.log1p(m), math.log1p(-m) - d], axis=-1)    # (2, ..., 4n)
+        return np.moveaxis(g, 0, -2).reshape(g.shape[1:-1] + (-1,))
+
     def print_shift_log(self, theta_deg: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike,
-                        dt_mm: float = PRINT_ERROR_T_MM, nominal: tuple | None = None) -> np.ndarray:
-        """ln(out(t + s dt) / out(t)) for s = +1, -1: shape (2, ..., 2n), S then R.
+                        dt_mm: float | None = None, nominal: tuple | None = None) -> np.ndarray:
+        """ln(out(t + s dt) / out(t)) for s = +1, -1: shape (2, ..., 2n), S then R; ``dt_mm``
+        defaults to printer.wall_tolerance_mm.
 
         The stacks (nominal, thicker, thinner) go through the kernels in one call; ``nominal``
         = (S_per_N, R_N) of the unshifted stacks, when the caller has them, spares the first.
         """
         theta_deg, t_mm, h_mm = np.broadcast_arrays(*(np.asarray(a, dtype=float)
                                                       for a in (theta_deg, t_mm, h_mm)))
+        dt_mm = self.wall_tolerance_mm if dt_mm is None else dt_mm
         steps = [0.0, dt_mm, -dt_mm] if nominal is None else [dt_mm, -dt_mm]
         shifts = np.array(steps).reshape((len(steps),) + (1,) * t_mm.ndim)
         T = np.broadcast_to(theta_deg, (len(steps),) + theta_deg.shape)
@@ -333,6 +366,12 @@ class DesignProblem:
         names.append(f"chip saturation: field at full load <= {self.B_limit_T * 1e3:.1f} mT")
         if self.max_height_mm is not None:
             names.append(f"total height <= {self.max_height_mm:g} mm")
+        if self.max_print_deviation_rel is not None:
+            m = self.max_print_deviation_rel
+            outs = self.output_names()
+            names += [f"print deviation: {o} at t {sign} {self.wall_tolerance_mm:g} mm {side} "
+                      f"{'+' if side == '<=' else '-'}{100 * m:g} %"
+                      for sign in "+-" for side in ("<=", ">=") for o in outs]
         return names
 
     def output_names(self) -> list[str]:

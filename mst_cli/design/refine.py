@@ -29,6 +29,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from mst_cli.calibrate.fit import as_printed
 from mst_cli.design.document import ROUND_DECIMALS, DesignResult, _layer_outputs, design_document, verify_design
 from mst_cli.design.problem import DesignProblem
 from mst_cli.errors import InputError
@@ -113,11 +114,12 @@ class _Iterate:
     max_log_err: float
 
 
-def _dear_errors(doc: Document, geometry, model: str, S_t, R_t):
-    """(S, R) of the dear model on a design and the log errors against the real targets."""
-    field_model = None if doc.field_model == "auto" else doc.field_model
-    resp = simulate(geometry, doc.material, mechanics=model, field_model=field_model,
-                    noise_uT_rms=doc.noise_uT_rms)
+def _dear_errors(designed: Document, model: str, S_t, R_t):
+    """(S, R) of the dear model on a design as printed and the log errors against the real targets."""
+    field_model = None if designed.field_model == "auto" else designed.field_model
+    printed = as_printed(designed)
+    resp = simulate(printed.geometry(), printed.material, mechanics=model, field_model=field_model,
+                    noise_uT_rms=designed.noise_uT_rms)
     S, R = _layer_outputs(resp, len(S_t))
     return S, R, np.log(S / S_t), np.log(R / R_t)
 
@@ -266,7 +268,7 @@ def refine_document(doc: Document, model: str, *, seed: int | None = None, progr
         if k == 0:
             # the plain L0 design of the real targets (global search, preference)
             inner = design_document(inner_doc.with_layers(layers), seed=seed, progress=progress,
-                                    max_evaluations=max_evaluations)
+                                    max_evaluations=max_evaluations, name_height=False)
             evaluations += inner.evaluations
             theta, t, h = (np.array([getattr(la, key) for la in inner.document.layers])
                            for key in ("theta_deg", "t_mm", "h_mm"))
@@ -278,9 +280,9 @@ def refine_document(doc: Document, model: str, *, seed: int | None = None, progr
             theta, t, h, n_eval, inner_met = _local_match(problem_k, theta, t, h)
             evaluations += n_eval
             inner_status = "met" if inner_met else "not met"
-        S, R, lS, lR = _dear_errors(doc, inner_doc.with_layers(
+        S, R, lS, lR = _dear_errors(inner_doc.with_layers(
             [replace(la, theta_deg=float(a), t_mm=float(b), h_mm=float(c))
-             for la, a, b, c in zip(doc.layers, theta, t, h)]).geometry(), model, S_t, R_t)
+             for la, a, b, c in zip(doc.layers, theta, t, h)]), model, S_t, R_t)
         worst = float(max(np.abs(lS).max(), np.abs(lR).max()))
         rel = np.concatenate([S / S_t - 1.0, R / R_t - 1.0])
         history.append({

@@ -293,8 +293,13 @@ class DesignOptions:
         meaning="weights of the preference among the designs that meet every target (any subset of the keys; "
                 "the others keep their default): `height` prices ln(total part height), `force_resolution` "
                 "ln(worst noise-limited force resolution σ_B / (B0 min S_i)), `print_robustness` the RMS relative "
-                "change of every S_i and R_i with every wall printed ±0.05 mm. `mst design --pareto N` maps the "
-                "whole trade")
+                "change of every S_i and R_i with every wall printed ± `printer.wall_tolerance_mm`. "
+                "`mst design --pareto N` maps the whole trade")
+    max_print_deviation_rel: float | None = spec(
+        None, lo=1e-3, hi=0.95, nullable=True,
+        meaning="optional limit on the worst relative change of any S_i or R_i when every wall is printed "
+                "± `printer.wall_tolerance_mm`: a constraint, not a weight. When no design meets it, `mst design` "
+                "exits 1 and names the lowest part height at which one does (or says that none does)")
 
 
 @dataclass(frozen=True)

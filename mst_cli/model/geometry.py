@@ -135,16 +135,56 @@ def unloaded_gap_mm(sum_h_mm: ArrayLike, n_layers: int, housing: Housing, board:
 # --------------------------------------------------------------------------- objects
 @dataclass(frozen=True)
 class Printer:
-    """What the printer can make. Defaults: 0.4 mm nozzle, 0.2 mm layers.
+    """What the printer can make, and how it misses. Defaults: 0.4 mm nozzle, 0.2 mm layers.
 
     min_wall_mm: one extrusion line of TPU (= nozzle) is the thinnest reliable wall.
     min_gap_mm: the narrowest slot that stays open when printed (= nozzle).
+    wall_offset_mm, modulus_factor, gap_offset_mm: the systematic difference between the part
+    as drawn and as printed (what ``mst calibrate`` fits on an earlier print); geometry and
+    export stay nominal, the forward model of a document applies them
+    (:func:`mst_cli.calibrate.fit.as_printed`). wall_tolerance_mm: the scatter left after that.
     """
 
     nozzle_mm: float = spec(0.4, lo=0.05, hi=5.0, unit="mm", meaning="nozzle diameter")
     layer_height_mm: float = spec(0.2, lo=0.01, hi=2.0, unit="mm", meaning="print layer height")
     min_wall_mm: float = spec(0.4, lo=0.01, hi=10.0, unit="mm", meaning="thinnest printable wall (one line)")
     min_gap_mm: float = spec(0.4, lo=0.01, hi=10.0, unit="mm", meaning="narrowest printable gap")
+    # how this printer and filament miss the drawing (docs/design.md section 10): the design is
+    # made for the part as printed, the export draws the nominal part
+    wall_offset_mm: float = spec(0.0, lo=-0.3, hi=0.4, unit="mm",
+                                 meaning="systematic wall error: every wall prints this much thicker than drawn "
+                                         "(`mst calibrate`'s wall_offset_mm). `mst design` draws the walls so that "
+                                         "the walls as printed meet the targets; `export` draws the drawn walls")
+    wall_tolerance_mm: float = spec(0.05, lo=0.001, hi=0.5, unit="mm",
+                                    meaning="± scatter of the printed walls around drawn + offset (one print to "
+                                            "the next): `mst design` reports the worst and RMS change of every "
+                                            "S_i and R_i over it")
+    modulus_factor: float = spec(1.0, lo=0.2, hi=5.0,
+                                 meaning="printed modulus / `material.youngs_modulus_MPa` (`mst calibrate`'s "
+                                         "modulus_factor)")
+    gap_offset_mm: float = spec(0.0, lo=-3.0, hi=5.0, unit="mm",
+                                meaning="magnet–chip gap as built minus as drawn (`mst calibrate`'s gap_offset_mm: "
+                                        "cover, pocket floor, board seating); the model adds it, `export` does not")
+
+
+def printer_violations(printer: Printer, housing: Housing, contact_allowance_mm: float) -> list[tuple[str, float, str]]:
+    """Broken rules of the printer's deviations as (field, value, what is allowed): every cell the
+    printing rules allow must still print with a wall and an open cavity (so that the drawn
+    rules guarantee the printed cell works), and the gap offset must fit the housing's
+    clearance, pocket floor and cover (what ``calibrate.fit.apply_parameters`` can close)."""
+    out = []
+    hi = 0.5 * (printer.min_gap_mm - contact_allowance_mm)
+    if not -printer.min_wall_mm < printer.wall_offset_mm < hi:
+        out.append(("printer.wall_offset_mm", printer.wall_offset_mm,
+                    f"must lie between -{printer.min_wall_mm:g} mm (printer.min_wall_mm: a wall of one line "
+                    f"would print to nothing) and {hi:g} mm ((printer.min_gap_mm - family.contact_allowance_mm)/2: "
+                    "the narrowest cavity would print closed), both excluded"))
+    lo = -(housing.chip_clearance_mm + housing.pocket_floor_mm + housing.cover_mm - 0.02)
+    if printer.gap_offset_mm < lo:
+        out.append(("printer.gap_offset_mm", printer.gap_offset_mm,
+                    f"must be >= {lo:g} mm for this housing: the gap cannot close by more than "
+                    "housing.chip_clearance_mm + pocket_floor_mm + cover_mm (less 0.01 mm each)"))
+    return out
 
 
 @dataclass(frozen=True)
@@ -624,7 +664,7 @@ class SensorGeometry:
         """Broken housing rules as (field, value, what is allowed): what the body needs to be
         one printable solid with a closed pocket and a slot that holds the board."""
         h, D, lh = self.housing, self.depth_mm, self.layer_height_mm
-        out = []
+        out = printer_violations(self.printer, h, self.layers[0].contact_allowance_mm)
         if abs(D / lh - round(D / lh)) > 1e-6:
             out.append(("family.depth_mm", D, f"must be a whole number of print layers "
                                               f"(printer.layer_height_mm = {lh:g}): D is the printed height"))
