@@ -96,7 +96,10 @@ def simulate(design: str | Path | Document, *, mechanics: str | None = None,
         ``.force_N`` (m,) in N against ``.displacement_mm``, ``.gap_mm``, ``.B_T`` (m, 3) and
         ``.B_abs_T`` (m,) in T, ``.dB_rel`` (m,); ``.in_range`` (m,) False past the last lock;
         ``.regimes`` with each band's ``sensitivity_secant_per_N`` (S) and ``force_to_N`` (R).
+        The part as printed, as the command models it: walls + printer.wall_offset_mm, modulus
+        x printer.modulus_factor, gap + printer.gap_offset_mm.
     """
+    from mst_cli.calibrate.fit import as_printed
     from mst_cli.model.ladder import choose_mechanics
     from mst_cli.model.mechanics import MODELS
     from mst_cli.model.response import simulate as run
@@ -105,12 +108,14 @@ def simulate(design: str | Path | Document, *, mechanics: str | None = None,
     doc = load_design(design)
     field_choice = field_model or doc.field_model
     choice = choose_mechanics(mechanics, doc.accuracy_rel, doc.mechanics)
-    return run(doc.geometry(), doc.material, mechanics=choice.mechanics,
+    printed = as_printed(doc)
+    return run(printed.geometry(), printed.material, mechanics=choice.mechanics,
                field_model=None if field_choice == "auto" else field_choice, noise_uT_rms=doc.noise_uT_rms)
 
 
 def design(spec: str | Path | Document, *, seed: int | None = None, max_evaluations: int | None = None,
-           refine: str | None = None, progress: Callable | None = None) -> DesignResult:
+           refine: str | None = None, calibration: str | Path | None = None,
+           progress: Callable | None = None) -> DesignResult:
     """Inverse design from target S_i and R_i to theta, t, h per layer (``mst design``).
 
     Parameters
@@ -124,6 +129,9 @@ def design(spec: str | Path | Document, *, seed: int | None = None, max_evaluati
     refine : {"frame", "continuum"}, optional
         Polish the L0 optimum for a dearer model by space mapping (default: the spec's
         model.accuracy_rel pick, else model.mechanics if not spring).
+    calibration : str or Path, optional
+        An earlier print's calibration.json: its fitted wall offset, modulus factor, gap offset
+        and remanence go into the spec's ``printer`` keys and magnet (held ones are not used).
     progress : callable(done, total, phase, worst_error_rel), optional
         Called as the solver spends its budget.
 
@@ -140,6 +148,9 @@ def design(spec: str | Path | Document, *, seed: int | None = None, max_evaluati
     from mst_cli.model.ladder import choose_mechanics
     _one_of("--refine", refine, ("frame", "continuum"))
     doc = load(spec) if isinstance(spec, (str, Path)) else spec
+    if calibration is not None:
+        from mst_cli.calibrate.record import apply_calibration, read_calibration
+        doc = apply_calibration(doc, read_calibration(calibration, doc))
     choice = choose_mechanics(refine, doc.accuracy_rel, doc.mechanics)
     if choice.mechanics == "spring":
         return design_document(replace(doc, mechanics="spring"), seed=seed, max_evaluations=max_evaluations,

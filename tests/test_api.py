@@ -6,6 +6,7 @@ import importlib
 import inspect
 import subprocess
 import sys
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
@@ -55,3 +56,13 @@ def test_a_script_gets_the_commands_input_errors(call, option):
     with pytest.raises(api.InputError) as exc:
         call()
     assert exc.value.field == option
+
+
+def test_simulate_models_the_part_as_printed():
+    # a printer that prints every wall 0.05 mm thick: the same sensor as walls drawn 0.05 mm thicker
+    doc = api.load_design(FORWARD)
+    offset = replace(doc, printer=replace(doc.printer, wall_offset_mm=0.05))
+    drawn = replace(doc, layers=tuple(replace(la, t_mm=la.t_mm + 0.05) for la in doc.layers))
+    a, b = api.simulate(offset), api.simulate(drawn)
+    assert [r.force_to_N for r in a.regimes] == pytest.approx([r.force_to_N for r in b.regimes], rel=1e-9)
+    assert [r.force_to_N for r in a.regimes] != pytest.approx([r.force_to_N for r in api.simulate(doc).regimes])

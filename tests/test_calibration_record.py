@@ -143,3 +143,11 @@ def test_the_record_round_trips_and_guards_its_model(calibration, tmp_path):
     (tmp_path / "calibrated.yaml").write_text((out / "calibrated.yaml").read_text() + "# edited\n")
     note, record = record_beside(tmp_path / "calibrated.yaml")
     assert record is None and "belongs to another file" in note
+
+
+def test_the_next_design_takes_the_calibrated_printer(calibration):
+    result, out = calibration
+    spec = DESIGN.parent / "mohammadi2021.yaml"
+    designed = mst.design(spec, seed=0, calibration=out / "calibration.json")
+    assert designed.document.printer.wall_offset_mm == pytest.approx(result.fit.values["wall_offset_mm"])
+    assert designed.status == "met"
