@@ -176,13 +176,13 @@ def test_unreadable_inputs_are_input_errors(tmp_path):
     lonely.mkdir()
     (lonely / "sensor.stl").write_bytes(b"")
     with pytest.raises(InputError, match="export.json not found"):
-        checks.resolve_paths(lonely / "sensor.stl")
+        checks.resolve_export(lonely / "sensor.stl")
     with pytest.raises(InputError, match="does not exist"):
-        checks.resolve_paths(tmp_path / "missing")
+        checks.resolve_export(tmp_path / "missing")
     empty = tmp_path / "empty"
     empty.mkdir()
     with pytest.raises(InputError, match="no such STL"):
-        checks.resolve_paths(empty)
+        checks.resolve_export(empty)
 
 
 def _random_geometries(n, seed=11):

@@ -141,3 +141,14 @@ def test_housing_rules_name_the_field():
     assert "family.depth_mm" in [f for f, _, _ in big.housing_violations()]
     assert SensorGeometry((HexCell(30, 1.0, 3.0, depth_mm=30.0),),
                           board=BOARDS["sparkfun-14571"]).housing_violations() == []
+
+
+def test_the_geometry_judges_walls_by_its_own_printer():
+    # a 0.5 mm wall is printable on a 0.4 mm nozzle and not on a 0.6 mm one: the sensor's
+    # own printer decides, unless another is asked for
+    cell = HexCell(30, 0.5, 3.0)
+    coarse = Printer(nozzle_mm=0.6, min_wall_mm=0.6, min_gap_mm=0.6)
+    g = SensorGeometry((cell,), printer=coarse)
+    assert [v.rule for _, v in g.violations()] == ["wall"]
+    assert g.violations(Printer()) == []
+    assert SensorGeometry((cell,)).violations() == []

@@ -946,7 +946,7 @@ def test_a_device_as_the_csv_is_refused_by_kind(tmp_path, cmd):
 
 
 # ----------------------------------------------------------------- 10. mst slice trusts export.json
-BUNDLED_PROFILE = ROOT / "configs" / "print" / "tpu85a-0.4mm.ini"
+BUNDLED_PROFILE = ROOT / "mst_cli" / "cad" / "data" / "tpu85a-0.4mm.ini"
 FAKE_EXE = "/fake/prusa-slicer"
 
 

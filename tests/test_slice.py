@@ -6,9 +6,11 @@ known width placed off the origin, a box with a pause) with the real PrusaSlicer
 when it is not installed, except in CI (CI=true), where they fail.
 """
 
+import fnmatch
 import io
 import json
 import shutil
+import tomllib
 import zipfile
 from pathlib import Path
 
@@ -16,12 +18,13 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
+import mst_cli
 from mst_cli.cad import gcode as G
 from mst_cli.cad import mesh_io
 from mst_cli.cli.app import main
 
 ROOT = Path(__file__).resolve().parents[1]
-PROFILE = ROOT / "configs" / "print" / "tpu85a-0.4mm.ini"
+PROFILE = ROOT / "mst_cli" / "cad" / "data" / "tpu85a-0.4mm.ini"
 FORWARD = ROOT / "configs" / "mohammadi2021-forward.yaml"
 W = 0.45            # line width of the synthetic G-code
 
@@ -387,3 +390,15 @@ def test_bundled_profile_is_complete_and_tpu():
     assert all(15 <= s <= 25 for s in speeds)
     if HAVE_SLICER:
         assert set(values) == set(S.known_options(shutil.which("prusa-slicer")))
+
+
+def test_the_bundled_profile_ships_as_package_data():
+    # a regular 'pip install .' copies only the package and its package-data globs: the profile
+    # must be one of them, or 'mst slice' outside the source tree finds no profile (.ci/run
+    # slices from such an install)
+    import mst_cli.cad.slicer as S
+    package = Path(mst_cli.__file__).parent
+    profile = S.bundled_profile()
+    assert profile.is_file() and package in profile.parents
+    globs = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]["package-data"]["mst_cli"]
+    assert any(fnmatch.fnmatch(profile.relative_to(package).as_posix(), g) for g in globs)

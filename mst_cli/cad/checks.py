@@ -61,24 +61,45 @@ class Check:
 
 
 # --------------------------------------------------------------------------- inputs
-def resolve_paths(path: str | Path) -> tuple[Path, Path]:
-    """(STL, export.json) for a folder written by ``mst export`` or an STL inside it."""
+@dataclass(frozen=True)
+class ExportFiles:
+    """The files of a folder ``mst export`` wrote (a mesh that is not there is None)."""
+
+    folder: Path
+    manifest: Path              # export.json
+    stl: Path | None
+    three_mf: Path | None
+
+
+def resolve_export(path: str | Path, need_stl: bool = True) -> ExportFiles:
+    """The export at ``path``: the folder 'mst export' wrote, or the .stl (or, without
+    ``need_stl``, the .3mf) in it. InputError when it does not exist, when its mesh (the STL,
+    ``mst check``'s; either, ``mst slice``'s) or export.json is missing."""
     path = Path(path)
     if not path.exists():
         raise InputError("PATH", str(path), "does not exist: give the folder 'mst export' wrote "
                                             "or the .stl in it")
+    suffix = path.suffix.lower()
     if path.is_dir():
-        stl, manifest = path / "sensor.stl", path / "export.json"
-    elif path.suffix.lower() == ".stl":
-        stl, manifest = path, path.parent / "export.json"
+        folder, stl = path, path / "sensor.stl"
+    elif suffix == ".stl" or (suffix == ".3mf" and not need_stl):
+        folder, stl = path.parent, path if suffix == ".stl" else path.parent / "sensor.stl"
     else:
         raise InputError("PATH", str(path), "must be a folder written by 'mst export' or an .stl in it")
-    if not stl.exists():
+    three_mf = folder / "sensor.3mf"
+    # mst check reads whatever sits at the STL's name (a FIFO or a folder there is refused by
+    # kind when it is read); mst slice slices only regular files
+    found = ExportFiles(folder, folder / "export.json", stl if (stl.exists() if need_stl else stl.is_file()) else None,
+                        three_mf if three_mf.is_file() else None)
+    if need_stl and found.stl is None:
         raise InputError("PATH", str(stl), "no such STL file (run 'mst export --stl' first)")
-    if not manifest.exists():
-        raise InputError("PATH", str(manifest), "export.json not found next to the STL: "
-                                                "run 'mst export' to write it")
-    return stl, manifest
+    if found.stl is None and found.three_mf is None:
+        raise InputError("PATH", str(folder), "holds neither sensor.3mf nor sensor.stl: "
+                                              "run 'mst export DESIGN.yaml --3mf --stl --out DIR' first")
+    if not found.manifest.exists():
+        raise InputError("PATH", str(found.manifest), "export.json not found next to the mesh: "
+                                                      "run 'mst export' to write it")
+    return found
 
 
 def load_mesh(path: Path) -> Mesh:

@@ -309,9 +309,6 @@ class SpanReport:
     longest: Span | None            # over all layers (None: nothing above layer 1)
     per_layer: list[Span]           # one per analysed layer (layers 2..), in order
 
-    def per_layer_max_mm(self) -> list[tuple[int, float, float]]:
-        return [(s.layer, s.z_mm, s.length_mm) for s in self.per_layer]
-
 
 def rasterise(segments: np.ndarray, origin_xy, shape, px_per_mm: float) -> np.ndarray:
     """Boolean image (rows: y, cols: x) of the segments drawn as lines of their own width

@@ -15,6 +15,7 @@ import subprocess
 import tempfile
 import time
 from dataclasses import dataclass
+from importlib import resources
 from pathlib import Path
 
 import numpy as np
@@ -49,9 +50,10 @@ def _no_output(r: subprocess.CompletedProcess, what: str) -> str:
 
 
 def bundled_profile() -> Path:
-    """configs/print/tpu85a-0.4mm.ini of the source tree (mst is installed editable)."""
-    source_tree = Path(__file__).resolve().parents[2]
-    return source_tree / "configs" / "print" / PROFILE_NAME
+    """The TPU 85A profile shipped as package data (``mst_cli/cad/data``): found the same way in
+    an editable and a regular install (pip installs packages as files, so it is a real path
+    PrusaSlicer can load)."""
+    return Path(str(resources.files("mst_cli.cad").joinpath("data", PROFILE_NAME)))
 
 
 def find_prusa_slicer() -> str:

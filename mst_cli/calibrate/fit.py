@@ -377,7 +377,7 @@ def fit_parameters(doc, force_N, B_abs_T, sigma_T: float, names=DEFAULT_PARAMETE
         model.correction = None
         model.update_correction(start["wall_offset_mm"])
         values = start
-        for _ in range(MAX_SPACE_MAPPING_ITERATIONS):
+        for iterations in range(1, MAX_SPACE_MAPPING_ITERATIONS + 1):  # noqa: B007 (reported)
             res, values, at_bound = _solve(model, force_N, B_abs_T, sigma_T, tuple(free), values, bounds)
             if model.mechanics == "spring" or model.correction is None:
                 break

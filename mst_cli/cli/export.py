@@ -13,39 +13,14 @@ from pathlib import Path
 
 import click
 
+from mst_cli import api
 from mst_cli.cli.common import EXIT_TARGETS, default_out_dir, handles_input_errors
 
-DEFAULT_STL_TOLERANCE_MM = 0.01
+DEFAULT_STL_TOLERANCE_MM = 0.01     # cad.exporting's (not imported here: app.py loads this module cheaply)
 
 
 def _progress(t0: float, message: str) -> None:
     click.echo(f"[{time.perf_counter() - t0:5.2f} s] {message}", err=True)
-
-
-def _load_design(path: Path, t0: float):
-    """(document, geometry, design result or None) of PATH.
-
-    A design file is loaded as ``mst simulate`` loads it. A spec (targets, no theta/t/h) is
-    designed first with the library behind ``mst design`` (:func:`mst_cli.design.design_document`).
-    """
-    from mst_cli.errors import InputError
-    from mst_cli.io.schema import load_design_document, load_document
-
-    doc = load_document(path)
-    if doc.is_design:
-        return (*load_design_document(path), None)
-    if not doc.is_spec:
-        doc.require_geometry()              # names the first missing key (exit 2)
-    from mst_cli.design import design_document
-    _progress(t0, f"{path} is a spec: designing theta, t, h first (as 'mst design' does)")
-    result = design_document(doc)
-    geometry = result.geometry
-    for i, v in geometry.violations(result.document.printer):
-        raise InputError(f"layers[{i}]", {"theta_deg": geometry.layers[i].theta_deg,
-                                          "t_mm": geometry.layers[i].t_mm, "h_mm": geometry.layers[i].h_mm},
-                         f"the designed cell is invalid ({v.rule}): {v.message}")
-    _progress(t0, f"designed: targets {result.status}")
-    return result.document, geometry, result
 
 
 @click.command("export")
@@ -74,58 +49,24 @@ def export(path: Path, want_stl: bool, want_step: bool, want_3mf: bool, out_dir:
     3MF carries PrusaSlicer's pause for the magnet; the terminal and export.json give its
     layer and height. STEP is the assembly in the sensor frame (z up the stack).
     """
-    from mst_cli.cad.manifest import STL_TOLERANCE_MM  # one bound, shared with mst check
-    from mst_cli.errors import InputError
-
-    lo, hi = STL_TOLERANCE_MM
-    if not lo <= stl_tolerance_mm <= hi:
-        raise InputError("--stl-tolerance", stl_tolerance_mm, f"must be a number from {lo:g} to {hi:g} mm")
+    from mst_cli.cad.exporting import check_stl_tolerance, write_export
     from mst_cli.io.outputs import check_out_dir
 
+    check_stl_tolerance(stl_tolerance_mm)          # one bound, shared with mst check
     if not (want_stl or want_step or want_3mf):
         want_stl = want_step = True
     if out_dir is not None:
         check_out_dir(out_dir)            # a bad output path is refused before any work
     t0 = time.perf_counter()
-    doc, geometry, designed = _load_design(path, t0)
+    doc, designed = api.designed(path, progress=lambda message: _progress(t0, message))
+    geometry = designed.geometry if designed is not None else doc.geometry()
     check_out_dir(out_dir or default_out_dir(doc.name))
     _progress(t0, f"loaded {path} ({len(geometry.layers)} layers)")
-
-    from mst_cli.cad import mesh_io
-    from mst_cli.cad.manifest import MANIFEST_NAME, export_manifest
-    from mst_cli.cad.shapes import check_fits
-    from mst_cli.io.outputs import staged
-
-    check_fits(geometry)
-    names = (["sensor.stl"] if want_stl else []) + (["sensor.step"] if want_step else []) \
-        + (["sensor.3mf"] if want_3mf else [])
     out = out_dir or default_out_dir(doc.name)
-    with staged(out) as st:
-        if want_stl or want_3mf:
-            from mst_cli.cad.mesh_body import print_mesh
-            vertices, triangles = print_mesh(geometry, stl_tolerance_mm)
-            _progress(t0, f"meshed the body (base, layers, plates, cap; pocket and slot cut): "
-                          f"{len(triangles)} triangles at {stl_tolerance_mm:g} mm")
-            if want_stl:
-                st.write_bytes("sensor.stl", mesh_io.stl_bytes(vertices, triangles))
-                _progress(t0, "wrote sensor.stl")
-            if want_3mf:
-                st.write_bytes("sensor.3mf", mesh_io.three_mf_bytes(
-                    vertices, triangles, doc.name, pause_after_z_mm=geometry.pause_height_mm,
-                    layer_height_mm=geometry.layer_height_mm))
-                _progress(t0, "wrote sensor.3mf")
-        if want_step:
-            from mst_cli.cad.assembly import build_sensor
-            _progress(t0, "building the CAD body: base, layers, plates, cap (one fuse)")
-            cad = build_sensor(geometry)
-            st.write_bytes("sensor.step", mesh_io.step_bytes(cad.assembly(doc.name)))
-            _progress(t0, "wrote sensor.step (body, magnet, board)")
-        if designed is not None:
-            # the design the body was built from, loadable by mst simulate / mst export
-            st.write_yaml("design.yaml", designed.design_yaml_dict())
-            names.append("design.yaml")
-        st.write_json(MANIFEST_NAME, export_manifest(doc.name, geometry, doc.printer,
-                                                     stl_tolerance_mm, names))
+    names = write_export(doc, geometry, out, stl=want_stl, step=want_step, three_mf=want_3mf,
+                         stl_tolerance_mm=stl_tolerance_mm,
+                         design_yaml=designed.design_yaml_dict() if designed is not None else None,
+                         progress=lambda message: _progress(t0, message))
     if geometry.magnet_tilt_deg:
         click.echo(f"note: magnet_tilt_deg = {geometry.magnet_tilt_deg:g} is an assembly error "
                    "in the forward model; the pocket is built on the axis", err=True)
@@ -134,7 +75,7 @@ def export(path: Path, want_stl: bool, want_step: bool, want_3mf: bool, out_dir:
                f"{int(round(geometry.depth_mm / geometry.layer_height_mm))} layers of {geometry.layer_height_mm:g} mm")
     click.echo(f"pause after layer {geometry.pause_after_layer} (z = {geometry.pause_height_mm:.2f} mm) "
                "to drop the magnet into its pocket" + (" (the 3MF carries the pause)" if want_3mf else ""))
-    click.echo(f"wrote {out}/{', '.join(names + [MANIFEST_NAME])}")
+    click.echo(f"wrote {out}/{', '.join(names)}")
     if designed is not None and designed.exit_code:
         click.echo(f"mst export: targets not met ({designed.binding}: {designed.reasons[0]}); "
                    "the body of the nearest design was written", err=True)
@@ -153,24 +94,10 @@ def check(path: Path, as_json: bool, nozzle_mm: float | None) -> None:
     Prints a table of named checks, measured on the mesh against the design's own expected
     values in export.json. Exit 1 naming the failed checks, 2 for unreadable input.
     """
-    from mst_cli.cad.checks import load_mesh, resolve_paths, results_dict, results_table, run_checks
-    from mst_cli.cad.manifest import load_manifest
-    from mst_cli.errors import InputError
+    from mst_cli.cad.checks import resolve_export, results_dict, results_table
 
-    if nozzle_mm is not None:                    # one bound: printer.nozzle_mm's in a design file
-        from dataclasses import fields
-
-        from mst_cli.model.geometry import Printer
-        lo, hi = next((f.metadata["lo"], f.metadata["hi"]) for f in fields(Printer) if f.name == "nozzle_mm")
-        if not lo <= nozzle_mm <= hi:
-            raise InputError("--nozzle", nozzle_mm, f"must be a nozzle diameter from {lo:g} to {hi:g} mm")
-    stl, manifest_path = resolve_paths(path)
-    # both inputs are validated before anything is measured: every field the checks read (type,
-    # nesting, finite and sane size) and every STL coordinate (finite, within a metre). Nothing
-    # below catches KeyError/TypeError: past this point one is a bug in a check, not bad input.
-    manifest = load_manifest(manifest_path)
-    mesh = load_mesh(stl)
-    results = run_checks(mesh, manifest, nozzle_mm)
+    results = api.check(path, nozzle_mm=nozzle_mm)
+    stl = resolve_export(path).stl
     summary = results_dict(results, str(stl))
     if as_json:
         click.echo(json.dumps(summary, indent=2, allow_nan=False))

@@ -576,13 +576,18 @@ def document_to_dict(doc: Document, layers=None) -> dict:
 def load_design_document(path: str | Path) -> tuple[Document, geo.SensorGeometry]:
     """Load a design file and check its cells; InputError on any broken rule."""
     doc = load_document(path)
+    return doc, design_geometry(doc)
+
+
+def design_geometry(doc: Document) -> geo.SensorGeometry:
+    """The sensor of a design document whose cells are all valid; InputError on any broken rule."""
     geometry = doc.geometry()
     for i, v in geometry.violations(doc.printer):
         raise InputError(f"layers[{i}]", {"theta_deg": geometry.layers[i].theta_deg,
                                           "t_mm": geometry.layers[i].t_mm,
                                           "h_mm": geometry.layers[i].h_mm},
                          f"invalid cell ({v.rule}): {v.message}")
-    return doc, geometry
+    return geometry
 
 
 

@@ -521,10 +521,6 @@ class SensorGeometry:
         return self.magnet.radius_mm + self.housing.pocket_clearance_mm
 
     @property
-    def pocket_diameter_mm(self) -> float:
-        return 2.0 * self.pocket_radius_mm
-
-    @property
     def pocket_depth_mm(self) -> float:
         """Pocket size along the magnet axis (sensor z): magnet thickness + clearance."""
         return self.magnet.thickness_mm + self.housing.pocket_clearance_mm
@@ -658,12 +654,10 @@ class SensorGeometry:
             "gap_magnet_side_mm": magnet_side,
         }
 
-    @property
-    def total_lock_stroke_mm(self) -> float:
-        return sum(c.d_lock_mm for c in self.layers)
-
-    def violations(self, printer: Printer = Printer()) -> list[tuple[int, Violation]]:
-        """Broken cell rules as (layer index from 0, violation)."""
+    def violations(self, printer: Printer | None = None) -> list[tuple[int, Violation]]:
+        """Broken cell rules as (layer index from 0, violation), judged by ``printer`` (default:
+        the printer this geometry is printed on, not a default one)."""
+        printer = self.printer if printer is None else printer
         return [(i, v) for i, c in enumerate(self.layers) for v in c.violations(printer)]
 
     def housing_violations(self) -> list[tuple[str, float, str]]:

@@ -1,0 +1,65 @@
+"""What ``mst export`` writes for one design: the print-orientation meshes (STL, 3MF with the
+magnet pause), the STEP assembly and export.json, atomically (all or none).
+
+The mesh kernel (manifold3d) is imported only when a mesh is asked for and the CAD kernel
+(build123d, seconds to import) only for STEP.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+
+from mst_cli.cad import mesh_io
+from mst_cli.cad.manifest import MANIFEST_NAME, STL_TOLERANCE_MM, export_manifest
+from mst_cli.cad.shapes import check_fits
+from mst_cli.errors import InputError
+from mst_cli.io.outputs import staged
+from mst_cli.io.schema import Document
+from mst_cli.model.geometry import SensorGeometry
+
+DEFAULT_STL_TOLERANCE_MM = 0.01
+
+
+def check_stl_tolerance(stl_tolerance_mm: float) -> None:
+    """InputError unless the chord tolerance is one export.json may hold."""
+    lo, hi = STL_TOLERANCE_MM
+    if not lo <= stl_tolerance_mm <= hi:
+        raise InputError("--stl-tolerance", stl_tolerance_mm, f"must be a number from {lo:g} to {hi:g} mm")
+
+
+def write_export(doc: Document, geometry: SensorGeometry, out: Path, *, stl: bool = True, step: bool = False,
+                 three_mf: bool = False, stl_tolerance_mm: float = DEFAULT_STL_TOLERANCE_MM,
+                 design_yaml: dict | None = None, progress: Callable[[str], None] | None = None) -> list[str]:
+    """Write the asked formats, ``design_yaml`` as design.yaml when given (the design a spec
+    became) and export.json into ``out``; the names written (export.json last)."""
+    say = progress or (lambda message: None)
+    check_stl_tolerance(stl_tolerance_mm)
+    check_fits(geometry)
+    names = (["sensor.stl"] if stl else []) + (["sensor.step"] if step else []) + (["sensor.3mf"] if three_mf else [])
+    with staged(out) as st:
+        if stl or three_mf:
+            from mst_cli.cad.mesh_body import print_mesh
+            vertices, triangles = print_mesh(geometry, stl_tolerance_mm)
+            say(f"meshed the body (base, layers, plates, cap; pocket and slot cut): "
+                f"{len(triangles)} triangles at {stl_tolerance_mm:g} mm")
+            if stl:
+                st.write_bytes("sensor.stl", mesh_io.stl_bytes(vertices, triangles))
+                say("wrote sensor.stl")
+            if three_mf:
+                st.write_bytes("sensor.3mf", mesh_io.three_mf_bytes(
+                    vertices, triangles, doc.name, pause_after_z_mm=geometry.pause_height_mm,
+                    layer_height_mm=geometry.layer_height_mm))
+                say("wrote sensor.3mf")
+        if step:
+            from mst_cli.cad.assembly import build_sensor  # build123d: seconds to import
+            say("building the CAD body: base, layers, plates, cap (one fuse)")
+            cad = build_sensor(geometry)
+            st.write_bytes("sensor.step", mesh_io.step_bytes(cad.assembly(doc.name)))
+            say("wrote sensor.step (body, magnet, board)")
+        if design_yaml is not None:
+            # the design the body was built from, loadable by mst simulate / mst export
+            st.write_yaml("design.yaml", design_yaml)
+            names.append("design.yaml")
+        st.write_json(MANIFEST_NAME, export_manifest(doc.name, geometry, doc.printer, stl_tolerance_mm, names))
+    return names + [MANIFEST_NAME]

@@ -1,0 +1,135 @@
+"""Judging the sliced print: what ``mst slice`` measures in PrusaSlicer's G-code against what
+export.json asks for, one :class:`~mst_cli.cad.checks.Check` per question as ``mst check``'s
+mesh checks are:
+
+* ``free_span``: no extrusion has more than ``max_span_mm`` of its centreline with nothing of
+  the layer below under it;
+* ``pause``: exactly the one pause export.json asks for, on its layer boundary (none when it
+  asks for none);
+* ``support``: the slicer, told to generate support automatically, generates none;
+* ``cavity_gaps`` (report only): the designed cavity gaps against the gaps in the sliced layer.
+
+Each Check's ``values`` is its section of slice.json; a failed one's ``note`` is the reason.
+Pure: G-code and manifest in, Checks out (no slicer, no files).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from mst_cli.cad.checks import Check
+from mst_cli.cad.gcode import SUPPORT_TYPES, GCode, Pause, Span, SpanReport, gap_at
+from mst_cli.cad.manifest import SliceManifest
+
+Shift = tuple[float, float]       # G-code = print frame + shift (x, y), mm
+
+
+def expected_pause(manifest: SliceManifest) -> dict:
+    """The pause export.json asks for (print.pause {after_layer, z_mm}), else nothing."""
+    pause = manifest.print.pause
+    if pause is None:
+        return {}
+    return {"after_layer": pause.after_layer, "z_mm": pause.z_mm, "source": "print.pause"}
+
+
+def _pause_problem(pauses: list[Pause], expected: dict, layer_height_mm: float) -> str | None:
+    if not expected:
+        return None if len(pauses) <= 1 else f"{len(pauses)} pauses in the G-code, export.json asks for none"
+    if not pauses:
+        return (f"no pause in the G-code (export.json asks for one at z = {expected['z_mm']:.2f} mm"
+                + (f", after layer {expected['after_layer']}" if expected.get("after_layer") else "") + ")")
+    if len(pauses) > 1:
+        return f"{len(pauses)} pauses in the G-code, export.json asks for one"
+    p = pauses[0]
+    z_ok = abs(p.z_mm - expected["z_mm"]) < 1e-3
+    layer_ok = expected.get("after_layer") in (None, p.after_layer)
+    boundary = abs(expected["z_mm"] / layer_height_mm - round(expected["z_mm"] / layer_height_mm)) < 1e-3
+    if p.mid_layer:
+        return f"the pause (G-code line {p.line}) falls in the middle of layer {p.after_layer + 1}"
+    if not (z_ok and layer_ok):
+        return (f"pause after layer {p.after_layer} (z = {p.z_mm:.2f} mm), export.json asks for "
+                + (f"layer {expected['after_layer']}, " if expected.get("after_layer") else "")
+                + f"z = {expected['z_mm']:.2f} mm")
+    if not boundary:
+        return f"pause height {expected['z_mm']:.2f} mm is not on a layer boundary"
+    return None
+
+
+def check_pause(pauses: list[Pause], manifest: SliceManifest, layer_height_mm: float) -> Check:
+    """The pauses found in the G-code against the one export.json asks for."""
+    expected = expected_pause(manifest)
+    found = [{"after_layer": p.after_layer, "z_mm": round(p.z_mm, 4), "command": p.command,
+              "mid_layer": p.mid_layer, "gcode_line": p.line} for p in pauses]
+    problem = _pause_problem(pauses, expected, layer_height_mm)
+    found_text = ", ".join(f"after layer {f['after_layer']} (z {f['z_mm']:.2f} mm"
+                           f"{', mid-layer' if f['mid_layer'] else ''}) {f['command']}" for f in found) or "none"
+    layer = f"after layer {expected['after_layer']}, " if expected.get("after_layer") else ""
+    asked = f"{layer}z {expected['z_mm']:.2f} mm" if expected else "not given"
+    return Check("pause", problem is None, found_text, asked, problem or "",
+                 values={"found": found, "expected": dict(expected) if expected else "not given",
+                         "ok": problem is None})
+
+
+def _span_dict(s: Span | None, shift: Shift) -> dict | None:
+    if s is None:
+        return None
+    return {"length_mm": round(s.length_mm, 3), "layer": s.layer, "z_mm": round(s.z_mm, 4),
+            "x_mm": round(s.x_mm - shift[0], 3), "y_mm": round(s.y_mm - shift[1], 3),
+            "gcode_xy_mm": [round(s.x_mm, 3), round(s.y_mm, 3)], "type": s.type}
+
+
+def check_free_span(spans: SpanReport, joined: SpanReport, max_span_mm: float, shift: Shift) -> Check:
+    """The longest free span (``joined``: with travel moves joined) against ``max_span_mm``."""
+    s = spans.longest
+    too_long = s is not None and s.length_mm > max_span_mm
+    note = (f"free span {s.length_mm:.1f} mm > {max_span_mm:g} mm (layer {s.layer}, z = {s.z_mm:.2f} mm, "
+            f"{s.type})") if too_long else ""
+    return Check("free_span", not too_long, "none (one layer)" if s is None else f"{s.length_mm:.2f} mm",
+                 f"<= {max_span_mm:g} mm", note,
+                 values={"max_allowed_mm": max_span_mm, "longest": _span_dict(s, shift),
+                         "longest_joined_moves": _span_dict(joined.longest, shift),
+                         "per_layer": [{"layer": p.layer, "z_mm": round(p.z_mm, 4),
+                                        "max_span_mm": round(p.length_mm, 3)} for p in spans.per_layer]})
+
+
+def check_support(with_auto_support: GCode) -> Check:
+    """The G-code of a second slice with automatic support on holds no support extrusion."""
+    g = with_auto_support
+    volume = g.type_volume_mm3(SUPPORT_TYPES)
+    n = int(sum(np.isin(lay.types, SUPPORT_TYPES).sum() for lay in g.layers))
+    layers = [lay.index for lay in g.layers if np.isin(lay.types, SUPPORT_TYPES).any()]
+    note = f"the slicer generates {volume:.0f} mm3 of support (layers {layers[0]}-{layers[-1]})" if n else ""
+    return Check("support", not n, f"needed: {volume:.0f} mm3" if n else "none generated", "none", note,
+                 values={"needed": bool(n), "volume_mm3": round(volume, 2), "extrusions": n,
+                         "layers": [layers[0], layers[-1]] if layers else []})
+
+
+def cavity_gaps(g: GCode, manifest: SliceManifest, shift: Shift, z_shift: float) -> Check:
+    """Designed against as-sliced gaps along export.json's print.cavity_lines (report only:
+    ``values["lines"]`` is a row per line, or "not given")."""
+    lines = manifest.print.cavity_lines
+    if not lines:
+        return Check("cavity_gaps", True, "-", "not given", "not given in export.json", info=True,
+                     values={"lines": "not given"})
+    rows = []
+    for c in lines:
+        layer = g.layer_at(c.z_mm + z_shift)
+        row = {"layer": c.layer, "x_mm": c.x_mm, "z_mm": c.z_mm,
+               "designed_gap_mm": c.gap_mm, "designed_y_mm": [c.y_low_mm, c.y_high_mm]}
+        if layer is None:
+            row.update(sliced_layer=None, sliced_gap_mm=None, sliced_y_mm=None)
+        else:
+            gap = gap_at(layer, "x", c.x_mm + shift[0], c.y_low_mm + shift[1], c.y_high_mm + shift[1])
+            row["sliced_layer"] = layer.index
+            if gap is None:
+                row.update(sliced_gap_mm=0.0, sliced_y_mm=None)
+            else:
+                row.update(sliced_gap_mm=round(gap[1] - gap[0], 4),
+                           sliced_y_mm=[round(gap[0] - shift[1], 4), round(gap[1] - shift[1], 4)])
+        if row.get("designed_gap_mm") is not None and row.get("sliced_gap_mm") is not None:
+            row["difference_mm"] = round(row["sliced_gap_mm"] - float(row["designed_gap_mm"]), 4)
+        rows.append(row)
+    sliced = ", ".join("-" if r["sliced_gap_mm"] is None else f"{r['sliced_gap_mm']:.2f}" for r in rows)
+    designed = ", ".join(f"{float(r['designed_gap_mm']):.2f}" for r in rows)
+    return Check("cavity_gaps", True, f"{sliced} mm", f"{designed} mm (designed)",
+                 "gaps along export.json's print.cavity_lines", info=True, values={"lines": rows})

@@ -1,0 +1,35 @@
+"""``calibration.png``: the load test against the design's and the calibrated curves, and the
+residuals against the chip's noise. matplotlib is imported inside (about 0.45 s): a run with
+``--no-plot`` never pays for it."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+
+def plot_calibration(path: Path, F: np.ndarray, B_meas_T: np.ndarray, design_model: tuple[np.ndarray, np.ndarray],
+                     cal_model: tuple[np.ndarray, np.ndarray], residual_T: np.ndarray, sigma_T: float,
+                     title: str) -> None:
+    """Measured |B| against force with the design's and the calibrated curves; residuals."""
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(10, 4.2))
+    ax1, ax2 = fig.subplots(1, 2)
+    fig.subplots_adjust(left=0.08, right=0.98, bottom=0.12, top=0.9, wspace=0.25)
+    ax1.plot(F, B_meas_T * 1e3, ".", color="k", ms=4, label="load test")
+    for (Fm, Bm), label, style in ((design_model, "design", "C3--"), (cal_model, "calibrated", "C0-")):
+        ax1.plot(Fm, Bm * 1e3, style, label=label)
+    ax1.set_xlabel("force F [N]")
+    ax1.set_ylabel("|B| at the chip [mT]")
+    ax1.legend(loc="upper left")
+    ax1.grid(alpha=0.3)
+    ax2.axhspan(-2 * sigma_T * 1e6, 2 * sigma_T * 1e6, color="C0", alpha=0.12, label="+-2 sigma noise")
+    ax2.plot(F, residual_T * 1e6, ".", color="C0", label="measured - calibrated")
+    ax2.set_xlabel("force F [N]")
+    ax2.set_ylabel("residual |B| [uT]")
+    ax2.legend(loc="upper left", fontsize=8)
+    ax2.grid(alpha=0.3)
+    fig.suptitle(title)
+    fig.savefig(path, dpi=110, format="png")

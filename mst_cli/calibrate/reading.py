@@ -1,0 +1,154 @@
+"""Readings to forces with a calibrated model (what ``mst read`` does): a :class:`ForceReader`
+is one model's inverse map, told whether a matching calibration.json stands beside the model
+file; it reads a file of readings (:meth:`~ForceReader.read`) or a live serial stream
+(:meth:`~ForceReader.stream`). Flagged readings have no force: never extrapolated."""
+
+from __future__ import annotations
+
+import io
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from mst_cli.calibrate import fit as cal
+from mst_cli.calibrate.accuracy import ERROR_FROM_RANGE, force_errors
+from mst_cli.calibrate.calibration_json import CalibrationRecord, record_beside
+from mst_cli.calibrate.loadtest import Readings, field_of
+from mst_cli.calibrate.tables import FORCES_COLUMNS, cell, forces_csv
+from mst_cli.io.schema import Document
+from mst_cli.io.serial_lines import LineSource, SampleParser
+from mst_cli.model.chip import ChipSetting, field_resolution_T
+
+FORCES_FILE = "forces.csv"
+
+
+@dataclass
+class ForceReadings:
+    """The forces of a readings file: force_N (NaN where flagged), regime (0 where flagged),
+    flag (:data:`~mst_cli.calibrate.fit.FLAGS`) and force_resolution_N, one per reading."""
+
+    name: str
+    readings: Readings
+    force_N: np.ndarray
+    regime: np.ndarray
+    flag: np.ndarray
+    force_resolution_N: np.ndarray
+
+    def csv(self) -> str:
+        """forces.csv: the input columns and the force, regime, flag and resolution of each row."""
+        return forces_csv(self.readings, self.force_N, self.regime, self.flag, self.force_resolution_N)
+
+    def errors(self) -> dict | None:
+        """Force errors against the file's own force_N column (None without one)."""
+        ref = self.readings.force_N
+        if ref is None or not len(ref) or float(np.max(ref)) <= 0:
+            return None
+        return force_errors(self.force_N, ref, float(np.max(ref)))      # the same readings for any model
+
+    def summary(self) -> str:
+        F, flag = self.force_N, self.flag
+        counts = {k: int(np.sum(flag == k)) for k in cal.FLAGS}
+        ok = np.isfinite(F)
+        lines = [f"{self.name}: {len(self.readings)} readings: {counts['ok']} in range"
+                 + "".join(f", {counts[k]} {k.replace('_', ' ')}"
+                           for k in ("above_calibrated", "below_range", "above_range", "saturated") if counts[k])
+                 + (f"; forces {np.nanmin(F):.4g}-{np.nanmax(F):.4g} N" if ok.any() else "")]
+        err = self.errors()
+        if err is not None and "median_rel" in err:
+            lines.append(f"against force_N_reference (readings >= {err['from_force_N']:.3g} N): median error "
+                         f"{100 * err['median_rel']:.3g} %, 95th percentile {100 * err['p95_rel']:.3g} %, "
+                         f"max {100 * err['max_rel']:.3g} %, RMS {err['rms_N']:.4g} N"
+                         + (f"; {err['flagged']} flagged" if err["flagged"] else ""))
+        elif err is not None and err["readings"]:
+            lines.append(f"against force_N_reference: all {err['readings']} readings >= "
+                         f"{ERROR_FROM_RANGE:g} x range are flagged")
+        return "\n".join(lines)
+
+
+@dataclass
+class SerialSamples:
+    """Samples of a serial stream: (seconds since the start, the line's three values, force N,
+    regime, flag) each, and how many lines were not a sample."""
+
+    raw: bool
+    samples: list[tuple[float, tuple[float, float, float], float, int, str]] = field(default_factory=list)
+    skipped: int = 0
+
+    def csv(self, imap: cal.InverseMap) -> str:
+        cols = ("Bx_code_lsb", "By_code_lsb", "Bz_code_lsb") if self.raw else ("Bx_uT", "By_uT", "Bz_uT")
+        buf = io.StringIO()
+        buf.write(",".join(("time_s",) + cols + FORCES_COLUMNS) + "\n")
+        for t, values, f, r, fl in self.samples:
+            res_N = float(imap.local_resolution_N(f)) if math.isfinite(f) else None
+            buf.write(",".join([f"{t:.4f}"] + [f"{v:.9g}" for v in values]
+                               + [cell(f), str(r) if math.isfinite(f) else "", fl, cell(res_N, ".6g")]) + "\n")
+        return buf.getvalue()
+
+
+@dataclass
+class ForceReader:
+    """One model file's reading -> force map and the warning it comes with (None: calibrated,
+    and the model still gives the recorded curve)."""
+
+    document: Document
+    inverse_map: cal.InverseMap
+    warning: str | None
+    record: CalibrationRecord | None
+
+    @classmethod
+    def open(cls, doc: Document, model_file: str | Path, mechanics: str,
+             setting: ChipSetting | None = None) -> ForceReader:
+        """The reader of ``doc`` (loaded from ``model_file``) with ``mechanics``; ``setting`` is
+        the chip's (else the one the model chooses): its LSB bounds the field resolution.
+        CalibrationFailed when the model has no monotone map."""
+        imap, resp = cal.inverse_map(doc, mechanics)
+        chip = setting or resp.chip_setting
+        if chip is not None:
+            imap.field_resolution_T = max(imap.field_resolution_T, field_resolution_T(chip, doc.noise_uT_rms))
+        note, record = record_beside(Path(model_file))
+        top = record.calibrated_top_N() if record else None
+        if top is not None:
+            imap.calibrated_to_N = min(top, float(imap.force_N[-1]))
+        if note is None:
+            note = record.curve_changed(imap)
+        return cls(doc, imap, note, record)
+
+    def read(self, rd: Readings) -> ForceReadings:
+        F, regime, flag = self.inverse_map.force(rd.B_abs_T, rd.saturated)
+        res = self.inverse_map.local_resolution_N(np.where(np.isfinite(F), F, 0.0))
+        return ForceReadings(self.document.name, rd, F, regime, flag, res)
+
+    def stream(self, port: str, baud: int, count: int | None, timeout_s: float | None, raw: bool,
+               setting: ChipSetting | None, show: Callable[[str], None]) -> SerialSamples:
+        """Read ``port`` until it closes, ``count`` samples, ``timeout_s`` of silence or Ctrl-C,
+        showing each sample's force through ``show``."""
+        src = LineSource(port, baud, timeout_s)
+        out = SerialSamples(raw)
+        parser = SampleParser(raw)
+        t0 = time.monotonic()
+        try:
+            for line in src:
+                values = parser.feed(line)
+                if values is None:
+                    continue
+                B, sat = field_of(values, raw, setting, f"{port} sample {len(out.samples) + 1}")
+                Babs = float(np.linalg.norm(B))
+                F, regime, flag = self.inverse_map.force(np.array([Babs]), np.array([sat]))
+                f, r, fl = float(F[0]), int(regime[0]), str(flag[0])
+                out.samples.append((time.monotonic() - t0, values, f, r, fl))
+                shown = (f"F = {f:8.3f} N  regime {r}" if math.isfinite(f) else f"F = {'-':>8}    ")
+                if fl != "ok":
+                    shown += f"  {fl}"
+                show(f"{len(out.samples):6d}  {shown}  |B| {Babs * 1e3:.4f} mT")
+                if count is not None and len(out.samples) >= count:
+                    break
+        except KeyboardInterrupt:
+            pass
+        finally:
+            src.close()
+            out.skipped = parser.skipped
+        return out

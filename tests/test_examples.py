@@ -1,0 +1,90 @@
+"""docs/examples run as a user runs them, and what they print is checked against what the
+physics or an independent source fixes (the spec's targets, the known print errors, ...)."""
+
+from __future__ import annotations
+
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+from test_calibrate import TRUTH, PrintedSensor
+
+ROOT = Path(__file__).resolve().parents[1]
+EXAMPLES = ROOT / "docs" / "examples"
+NUMBER = r"[-+]?\d+(?:\.\d+)?"
+
+
+def run_example(name: str, cwd: Path) -> str:
+    r = subprocess.run([sys.executable, str(EXAMPLES / name)], cwd=cwd, capture_output=True, text=True, timeout=600)
+    assert r.returncode == 0, r.stderr
+    return r.stdout
+
+
+def test_examples_are_short_scripts():
+    scripts = sorted(EXAMPLES.glob("*.py"))
+    assert 4 <= len(scripts) <= 6
+    for path in scripts:
+        assert len(path.read_text().splitlines()) <= 40, path.name
+
+
+def test_design_meets_the_spec_targets(tmp_path):
+    out = run_example("design_and_plot.py", tmp_path)
+    spec = yaml.safe_load((ROOT / "configs" / "mohammadi2021.yaml").read_text())
+    rows = re.findall(rf"\| S ({NUMBER}) 1/N .*?\| R ({NUMBER}) N", out)
+    assert len(rows) == len(spec["layers"]) and "targets met" in out
+    for (S, R), layer in zip(rows, spec["layers"]):
+        assert float(S) == pytest.approx(layer["target_sensitivity_per_N"], rel=spec["design"]["tolerance_rel"])
+        assert float(R) == pytest.approx(layer["target_range_N"], rel=spec["design"]["tolerance_rel"])
+    assert (tmp_path / "mst-out" / "examples" / "design.png").stat().st_size > 0
+
+
+def test_a_thicker_wall_locks_later_and_is_less_sensitive(tmp_path):
+    out = run_example("sweep_wall.py", tmp_path)
+    t, S, R = np.array(re.findall(rf"t = ({NUMBER}) mm: S_1 = ({NUMBER}) 1/N, R_1 = ({NUMBER}) N", out), float).T
+    # bending stiffness grows as t^3 and outruns the shorter stroke: R rises, S falls
+    assert len(t) == 7 and np.all(np.diff(t) > 0)
+    assert np.all(np.diff(R) > 0) and np.all(np.diff(S) < 0)
+
+
+def test_the_exported_body_passes_every_check(tmp_path):
+    out = run_example("export_and_check.py", tmp_path)
+    results = re.findall(r"^(\w+)\s+(PASS|FAIL)\s", out, re.M)
+    assert len(results) >= 10 and all(r == "PASS" for _, r in results), out
+    written = {p.name for p in (tmp_path / "mst-out" / "examples" / "print").iterdir()}
+    assert {"sensor.stl", "sensor.3mf", "export.json"} <= written
+
+
+def test_the_bundled_load_test_is_the_known_printed_sensor():
+    # regenerated as tests/test_calibrate.py builds its printed sensor: the truth the example
+    # recovers is TRUTH
+    s = PrintedSensor()
+    rng = np.random.default_rng(11)
+    F = np.sort(rng.uniform(0.0, s.range_N, 60))
+    assert (EXAMPLES / "loadtest.csv").read_text() == s.csv_uT(F, s.codes(F, rng))
+
+
+def test_calibration_recovers_the_print_errors(tmp_path):
+    out = run_example("calibrate_and_read.py", tmp_path)
+    fitted = {n: (float(v), float(sd)) for n, v, sd in re.findall(rf"^(\w+)\s+({NUMBER}) \+- ({NUMBER})$", out, re.M)}
+    assert set(fitted) == set(TRUTH)
+    for name, (value, std) in fitted.items():
+        assert abs(value - TRUTH[name]) < 3 * std + 1e-3, name
+    median = float(re.search(rf"median force error ({NUMBER}) %", out).group(1))
+    assert median < 1.0                 # noise of 2 uT on a field span of mT: well under a percent
+
+
+@pytest.mark.slow
+def test_the_ladder_rungs_agree_on_one_cell(tmp_path):
+    out = run_example("ladder_rungs.py", tmp_path)
+    laws = {r: (float(k), float(F), float(d)) for r, k, F, d in re.findall(
+        rf"^(\w+)\s+k ({NUMBER}) N/mm, locks at ({NUMBER}) N after ({NUMBER}) mm", out, re.M)}
+    assert set(laws) == {"spring", "frame", "continuum"}
+    k2, F2, d2 = laws["continuum"]
+    for k, F, d in laws.values():
+        # the cheap rungs are fitted to the continuum's stiffness and share the cell's lock stroke
+        assert k == pytest.approx(k2, rel=0.02) and d == pytest.approx(d2, rel=0.02)
+        assert F == pytest.approx(F2, rel=0.15)
