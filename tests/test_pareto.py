@@ -200,6 +200,29 @@ def test_print_robustness_reuses_the_nominal_stack_exactly():
     assert np.array_equal(full, reused, equal_nan=True)
 
 
+@pytest.mark.parametrize("limit", [None, 0.5])
+def test_one_kernel_call_for_nominal_and_shifted_stacks_gives_the_same_bits(tmp_path, limit):
+    """evaluate_with_shifts (the batched polish's call) equals evaluate and print_shift_log
+    called apart, every field to the bit, with and without the print-deviation constraints."""
+    import yaml
+
+    from mst_cli.design.problem import DesignProblem
+
+    raw = yaml.safe_load((ROOT / "configs" / "mohammadi2021.yaml").read_text())
+    if limit is not None:
+        raw["design"] = {**(raw.get("design") or {}), "max_print_deviation_rel": limit}
+    path = tmp_path / "spec.yaml"
+    path.write_text(yaml.safe_dump(raw))
+    problem = DesignProblem(load_document(path))
+    U = np.random.default_rng(5).random((300, problem.dim))
+    ev, shifts = problem.evaluate_with_shifts(U)
+    apart = problem.evaluate(U)
+    for name in vars(apart):
+        assert np.array_equal(getattr(ev, name), getattr(apart, name), equal_nan=True), name
+    alone = problem.print_shift_log(apart.theta_deg, apart.t_mm, apart.h_mm)
+    assert np.array_equal(shifts, alone, equal_nan=True)
+
+
 def test_no_runs_no_wait():
     from mst_cli.design.problem import DesignProblem
     from mst_cli.design.solver import _SharedEvaluations

@@ -466,6 +466,8 @@ def pareto_weights(count: int) -> np.ndarray:
 
 
 # --------------------------------------------------------------------------- many weightings at once
+_EVALUATION_FIELDS = tuple(f.name for f in fields(Evaluation))
+
 class _SharedEvaluations:
     """Local runs of several weightings in lockstep, their evaluations batched into one kernel call.
 
@@ -502,19 +504,23 @@ class _SharedEvaluations:
 
     def _serve(self) -> None:
         jobs = sorted(self.pending)
-        U = np.concatenate([self.pending[j].reshape(-1, self.problem.dim) for j in jobs])
-        ev = self.problem.evaluate(U)
-        shifts = self.problem.print_shift_log(ev.theta_deg, ev.t_mm, ev.h_mm, nominal=(ev.S_per_N, ev.R_N))
+        problem = self.problem
+        U = np.concatenate([self.pending[j].reshape(-1, problem.dim) for j in jobs])
+        ev, shifts = problem.evaluate_with_shifts(U)
+        # ln height and ln force resolution are elementwise or row-wise: one call for the batch
+        terms = problem.objective_terms(ev, np.zeros(len(U)))
+        columns = [getattr(ev, name) for name in _EVALUATION_FIELDS]
         start = 0
         for j in jobs:
             flat = self.pending[j].ndim == 1
             rows = start if flat else slice(start, start + len(self.pending[j]))
             start += 1 if flat else len(self.pending[j])
-            ev_j = Evaluation(**{f.name: getattr(ev, f.name)[rows] for f in fields(Evaluation)})
+            ev_j = Evaluation(*(c[rows] for c in columns))
             # the RMS over the job's own rows, laid out as a call of its own would (a reduction
             # over two axes sums in an order that depends on the array's shape)
-            robustness = robustness_of_shifts(np.ascontiguousarray(shifts[:, rows]))
-            self.results[j] = (ev_j, self.problem.objective_terms(ev_j, robustness))
+            terms_j = terms[rows].copy()
+            terms_j[..., -1] = robustness_of_shifts(np.ascontiguousarray(shifts[:, rows]))
+            self.results[j] = (ev_j, terms_j)
         self.pending.clear()
         for j in jobs:
             self.ready[j].set()
