@@ -38,6 +38,7 @@ from __future__ import annotations
 import math
 import threading
 import time
+from collections import OrderedDict
 from dataclasses import dataclass, field, fields
 from typing import TYPE_CHECKING
 
@@ -467,6 +468,7 @@ def pareto_weights(count: int) -> np.ndarray:
 
 # --------------------------------------------------------------------------- many weightings at once
 _EVALUATION_FIELDS = tuple(f.name for f in fields(Evaluation))
+RECENT_EVALUATIONS = 64      # per run: the points SLSQP asks for again (a stalled line search)
 
 class _SharedEvaluations:
     """Local runs of several weightings in lockstep, their evaluations batched into one kernel call.
@@ -485,7 +487,7 @@ class _SharedEvaluations:
         self.all_waiting = threading.Event()
         self.pending: dict[int, np.ndarray] = {}
         self.results: dict[int, tuple] = {}
-        self.ready: list[threading.Event] = []
+        self.ready: list = []
         self.live = 0
 
     def _check(self) -> None:           # with self.lock held
@@ -498,8 +500,7 @@ class _SharedEvaluations:
         with self.lock:
             self.pending[job] = u
             self._check()
-        self.ready[job].wait()
-        self.ready[job].clear()
+        self.ready[job].acquire()         # released by _serve when the job's rows are in
         return self.results.pop(job)
 
     def _serve(self) -> None:
@@ -523,7 +524,7 @@ class _SharedEvaluations:
             self.results[j] = (ev_j, terms_j)
         self.pending.clear()
         for j in jobs:
-            self.ready[j].set()
+            self.ready[j].release()
 
     def run(self, jobs: list[Callable[[DesignProblem], object]]) -> list:
         """Each job called with its own batched view of the problem; their results in order."""
@@ -543,7 +544,9 @@ class _SharedEvaluations:
                     self._check()
 
         self.live = len(jobs)
-        self.ready = [threading.Event() for _ in jobs]
+        self.ready = [threading.Lock() for _ in jobs]      # each held until its job's rows are in
+        for ready in self.ready:
+            ready.acquire()
         threads = [threading.Thread(target=worker, args=(i, job), daemon=True) for i, job in enumerate(jobs)]
         for t in threads:
             t.start()
@@ -569,14 +572,24 @@ class _BatchedProblem:
     def __init__(self, shared: _SharedEvaluations, job: int):
         self._shared, self._job = shared, job
         self._last: tuple | None = None
+        self._recent: OrderedDict = OrderedDict()
 
     def __getattr__(self, name):
         return getattr(self._shared.problem, name)
 
     def evaluate(self, u) -> Evaluation:
-        ev, terms = self._shared.ask(self._job, np.asarray(u, dtype=float))
-        self._last = (ev, terms)
-        return ev
+        u = np.asarray(u, dtype=float)
+        key = (u.shape, u.tobytes())
+        last = self._recent.get(key)
+        if last is None:
+            last = self._shared.ask(self._job, u)
+            self._recent[key] = last
+            if len(self._recent) > RECENT_EVALUATIONS:
+                self._recent.popitem(last=False)
+        else:
+            self._recent.move_to_end(key)
+        self._last = last
+        return last[0]
 
     def preference(self, ev: Evaluation, weights: ArrayLike | None = None) -> np.ndarray:
         if self._last is None or ev is not self._last[0]:
