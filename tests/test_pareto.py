@@ -179,6 +179,28 @@ def test_batched_polish_hands_back_an_error():
     assert one == two == float(problem.evaluate(np.full(problem.dim, 0.5)).objective)
 
 
+def test_an_interrupt_inside_a_batched_polish_stops_it_at_once():
+    """A KeyboardInterrupt (or mst's Interrupted) in one run ends them all at once; only an
+    Exception waits for the other runs."""
+    from mst_cli.design.problem import DesignProblem
+    from mst_cli.design.solver import _SharedEvaluations
+
+    problem = DesignProblem(load_document(ROOT / "configs" / "mohammadi2021.yaml"))
+    finished = []
+
+    def fine(p):
+        for _ in range(3):
+            p.evaluate(np.full(problem.dim, 0.5) + 0.01 * len(finished))
+        finished.append(1)
+
+    def interrupted(p):
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        _SharedEvaluations(problem).run([fine, interrupted, fine])
+    assert finished == []
+
+
 def test_front_matches_once_and_reuses_the_chosen_designs_match(monkeypatch):
     """The screening and the match run once for the whole front (the chosen design's)."""
     from mst_cli.design import pareto, solver

@@ -36,7 +36,6 @@ safety net that normal runs never reach), so the same seed gives the same design
 from __future__ import annotations
 
 import math
-import threading
 import time
 from collections import OrderedDict
 from dataclasses import dataclass, field, fields
@@ -474,96 +473,81 @@ class _SharedEvaluations:
     """Local runs of several weightings in lockstep, their evaluations batched into one kernel call.
 
     nlopt drives each run through callbacks, so runs cannot hand over a batch themselves: each
-    runs in its own thread against a :class:`_BatchedProblem`, whose ``evaluate`` posts its
-    points here and waits. When every live run waits, the calling thread evaluates all posted
-    points in one call (with the preference terms, the print-shifted stacks included) and
-    wakes each run with its rows. Only one thread computes at a time, and a round's batch
-    holds the runs in a fixed order, so the result depends on the inputs only.
+    runs in a greenlet of its own against a :class:`_BatchedProblem`, whose ``evaluate`` hands
+    its points to the calling greenlet and is resumed with its rows. When every live run has
+    handed over, the caller evaluates all their points in one call (with the preference terms,
+    the print-shifted stacks included) and resumes each run, in a fixed order, with its rows.
+    The runs take turns in one thread (a switch costs a microsecond, where a thread's wake-up
+    costs tens), so the result depends on the inputs only.
     """
 
     def __init__(self, problem: DesignProblem):
         self.problem = problem
-        self.lock = threading.Lock()
-        self.all_waiting = threading.Event()
-        self.pending: dict[int, np.ndarray] = {}
-        self.results: dict[int, tuple] = {}
-        self.ready: list = []
-        self.live = 0
-
-    def _check(self) -> None:           # with self.lock held
-        if len(self.pending) == self.live:
-            self.all_waiting.set()
+        self.caller = None
 
     def ask(self, job: int, u: np.ndarray) -> tuple[Evaluation, np.ndarray]:
         """Evaluation and preference terms of ``u`` (one point (dim,) or a batch (k, dim)),
         each row's bits as :meth:`DesignProblem.evaluate` alone gives them."""
-        with self.lock:
-            self.pending[job] = u
-            self._check()
-        self.ready[job].acquire()         # released by _serve when the job's rows are in
-        return self.results.pop(job)
+        return self.caller.switch(u)
 
-    def _serve(self) -> None:
-        jobs = sorted(self.pending)
+    def _serve(self, pending: dict[int, np.ndarray]) -> dict[int, tuple]:
+        jobs = sorted(pending)
         problem = self.problem
-        U = np.concatenate([self.pending[j].reshape(-1, problem.dim) for j in jobs])
+        U = np.concatenate([pending[j].reshape(-1, problem.dim) for j in jobs])
         ev, shifts = problem.evaluate_with_shifts(U)
         # ln height and ln force resolution are elementwise or row-wise: one call for the batch
         terms = problem.objective_terms(ev, np.zeros(len(U)))
         columns = [getattr(ev, name) for name in _EVALUATION_FIELDS]
+        results = {}
         start = 0
         for j in jobs:
-            flat = self.pending[j].ndim == 1
-            rows = start if flat else slice(start, start + len(self.pending[j]))
-            start += 1 if flat else len(self.pending[j])
+            flat = pending[j].ndim == 1
+            rows = start if flat else slice(start, start + len(pending[j]))
+            start += 1 if flat else len(pending[j])
             ev_j = Evaluation(*(c[rows] for c in columns))
             # the RMS over the job's own rows, laid out as a call of its own would (a reduction
             # over two axes sums in an order that depends on the array's shape)
             terms_j = terms[rows].copy()
             terms_j[..., -1] = robustness_of_shifts(np.ascontiguousarray(shifts[:, rows]))
-            self.results[j] = (ev_j, terms_j)
-        self.pending.clear()
-        for j in jobs:
-            self.ready[j].release()
+            results[j] = (ev_j, terms_j)
+        return results
 
     def run(self, jobs: list[Callable[[DesignProblem], object]]) -> list:
-        """Each job called with its own batched view of the problem; their results in order."""
-        out: list = [None] * len(jobs)
-        errors: list[BaseException] = []
-        if not jobs:
-            return out
+        """Each job called with its own batched view of the problem; their results in order.
+        A job's Exception is raised once every other job has finished; anything else (an
+        interrupt) at once."""
+        from greenlet import getcurrent, greenlet
 
-        def worker(i, job):
+        out: list = [None] * len(jobs)
+        errors: list[Exception] = []
+        self.caller = getcurrent()
+
+        def body(i, job):
             try:
                 out[i] = job(_BatchedProblem(self, i))
-            except BaseException as exc:        # handed to the caller below
+            except Exception as exc:        # handed to the caller below
                 errors.append(exc)
-            finally:
-                with self.lock:
-                    self.live -= 1
-                    self._check()
+            return _DONE
 
-        self.live = len(jobs)
-        self.ready = [threading.Lock() for _ in jobs]      # each held until its job's rows are in
-        for ready in self.ready:
-            ready.acquire()
-        threads = [threading.Thread(target=worker, args=(i, job), daemon=True) for i, job in enumerate(jobs)]
-        for t in threads:
-            t.start()
-        while True:
-            self.all_waiting.wait()
-            with self.lock:
-                self.all_waiting.clear()
-                if len(self.pending) != self.live:
-                    continue
-                if self.live == 0:
-                    break
-                self._serve()
-        for t in threads:
-            t.join()
+        runs = [greenlet(body) for _ in jobs]
+        pending: dict[int, np.ndarray] = {}
+        for i, (run, job) in enumerate(zip(runs, jobs)):
+            asked = run.switch(i, job)
+            if asked is not _DONE:
+                pending[i] = asked
+        while pending:
+            results = self._serve(pending)
+            pending = {}
+            for j in sorted(results):
+                asked = runs[j].switch(results[j])
+                if asked is not _DONE:
+                    pending[j] = asked
         if errors:
             raise errors[0]
         return out
+
+
+_DONE = object()     # what a finished run hands back instead of points
 
 
 class _BatchedProblem:
