@@ -373,10 +373,18 @@ class DesignProblem:
         return np.stack([np.log(ev.total_height_mm), np.log(self.worst_force_resolution_N(ev)),
                          np.asarray(robustness, dtype=float)], axis=-1)
 
-    def preference(self, ev: Evaluation, weights: ArrayLike | None = None) -> np.ndarray:
-        """Weighted sum of :meth:`objective_terms` (lower is better): what phase 2 minimises."""
+    def preference(self, ev: Evaluation, weights: ArrayLike | None = None,
+                   terms: np.ndarray | None = None) -> np.ndarray:
+        """Weighted sum of :meth:`objective_terms` (lower is better): what phase 2 minimises;
+        ``terms``: those of ``ev``, when the caller has them (:meth:`evaluate_terms`)."""
         w = self.objective_weights if weights is None else np.asarray(weights, dtype=float)
-        return self.objective_terms(ev) @ w
+        return (self.objective_terms(ev) if terms is None else terms) @ w
+
+    def evaluate_terms(self, u) -> tuple[Evaluation, np.ndarray]:
+        """(:meth:`evaluate`, :meth:`objective_terms`) of candidates, the print-shifted stacks of
+        the robustness term in the same kernel call (:meth:`evaluate_with_shifts`)."""
+        ev, shifts = self.evaluate_with_shifts(u)
+        return ev, self.objective_terms(ev, robustness_of_shifts(shifts))
 
     # ----------------------------------------------------------------- reporting helpers
     def constraint_names(self) -> list[str]:

@@ -257,7 +257,11 @@ class _Matcher:
                 and math.log1p(-err) >= -self.match_log)
 
     def matched_at(self, u) -> bool:
-        e = self.problem.evaluate(u)
+        return self.matched(self.problem.evaluate(u))
+
+    def matched(self, e) -> bool:
+        """Every constraint (with the rounding slack) and every target within MATCH_FRACTION x
+        tolerance, of one evaluated point."""
         return bool(np.all(_safe_constraints(e) <= FEASIBILITY_TOL)
                     and np.max(np.abs(e.log_err)) <= self.match_log)
 
@@ -376,48 +380,51 @@ def prefer(problem: DesignProblem, u_matched: np.ndarray, budget: _Budget, local
     m = _Matcher(problem)
     tol = problem.tolerance_rel
 
-    def pref(u):
-        return float(problem.preference(problem.evaluate(u), weights))
+    def pref_at(u):
+        """(evaluation, preference) of one point: one kernel call, the print-shifted stacks in it."""
+        ev, terms = problem.evaluate_terms(u)
+        return ev, float(problem.preference(ev, weights, terms))
 
-    def polish_run(u0, band, step):
+    def polish_run(u0, pref0, band, step):
         def pref_batch(U):
-            ev = problem.evaluate(U)
+            ev, terms = problem.evaluate_terms(U)
             # two smooth constraints per output (|x| has no derivative where the error is 0)
             g = np.concatenate([_safe_constraints(ev), ev.log_err - band, -ev.log_err - band], axis=-1)
-            return problem.preference(ev, weights), g, 3, float(_max_err(ev)[0])
+            return problem.preference(ev, weights, terms), g, 3, float(_max_err(ev)[0])
 
         tracker = Tracker()
-        tracker.offer(u0, pref(u0), 0.0)
+        tracker.offer(u0, pref0, 0.0)
         if budget.left > 3 * per_iter:
             phase = _Phase(problem, pref_batch, problem.n_constraints + 4 * problem.n, tracker, budget,
                            "preference")
             phase.run(u0, local, min(iters, budget.left // (3 * per_iter)), step, stops)
         return tracker.u
 
-    before = pref(u_matched)
-    e = problem.evaluate(u_matched)
+    e, before = pref_at(u_matched)
     band = max(math.log1p(BAND_FRACTION * tol), float(np.max(np.abs(e.log_err))))
-    polished = polish_run(u_matched, band, 0.5 * INITIAL_STEP)
+    polished = polish_run(u_matched, before, band, 0.5 * INITIAL_STEP)
 
     # -- phase 3: pull the targets back to MATCH_FRACTION x tolerance, with a small step
     rematch = Tracker()
     e = problem.evaluate(polished)
     rematch.offer(polished, float(e.objective), 0.0)
-    newton = not m.matched_at(polished) and newton_match(problem, polished, rematch, budget, "re-match")
+    polished_matched = m.matched(e)
+    newton = not polished_matched and newton_match(problem, polished, rematch, budget, "re-match")
     if newton:
         stops.append("newton: goal reached")
-    elif not m.matched_at(polished) and budget.left > per_iter:
+    elif not polished_matched and budget.left > per_iter:
         phase = _Phase(problem, m.batch, problem.n_constraints, rematch, budget, "re-match", m.goal)
         phase.run(polished, local, min(iters, budget.left // per_iter), 0.02 * INITIAL_STEP, stops)
     final = rematch.u if m.matched_at(rematch.u) else u_matched
 
     # -- phase 4: the preference once more, inside the narrow band
-    e = problem.evaluate(final)
+    e, after = pref_at(final)
     narrow = max(m.match_log, float(np.max(np.abs(e.log_err))))
-    candidate = polish_run(final, narrow, 0.02 * INITIAL_STEP)
+    candidate = polish_run(final, after, narrow, 0.02 * INITIAL_STEP)
     if m.matched_at(candidate):
         final = candidate
-    return final, before, pref(final)
+        after = pref_at(final)[1]
+    return final, before, after
 
 
 def _matched(problem: DesignProblem, seed: int, max_evaluations: int, progress, local: str,
@@ -555,31 +562,26 @@ class _BatchedProblem:
 
     def __init__(self, shared: _SharedEvaluations, job: int):
         self._shared, self._job = shared, job
-        self._last: tuple | None = None
         self._recent: OrderedDict = OrderedDict()
 
     def __getattr__(self, name):
         return getattr(self._shared.problem, name)
 
-    def evaluate(self, u) -> Evaluation:
+    def evaluate_terms(self, u) -> tuple[Evaluation, np.ndarray]:
         u = np.asarray(u, dtype=float)
         key = (u.shape, u.tobytes())
-        last = self._recent.get(key)
-        if last is None:
-            last = self._shared.ask(self._job, u)
-            self._recent[key] = last
+        got = self._recent.get(key)
+        if got is None:
+            got = self._shared.ask(self._job, u)
+            self._recent[key] = got
             if len(self._recent) > RECENT_EVALUATIONS:
                 self._recent.popitem(last=False)
         else:
             self._recent.move_to_end(key)
-        self._last = last
-        return last[0]
+        return got
 
-    def preference(self, ev: Evaluation, weights: ArrayLike | None = None) -> np.ndarray:
-        if self._last is None or ev is not self._last[0]:
-            return self._shared.problem.preference(ev, weights)
-        w = self._shared.problem.objective_weights if weights is None else np.asarray(weights, dtype=float)
-        return self._last[1] @ w
+    def evaluate(self, u) -> Evaluation:
+        return self.evaluate_terms(u)[0]
 
 
 def prefer_many(problem: DesignProblem, starts: list[np.ndarray], weightings: list[ArrayLike], *,
