@@ -568,6 +568,9 @@ class _BatchedProblem:
         return getattr(self._shared.problem, name)
 
     def evaluate_terms(self, u) -> tuple[Evaluation, np.ndarray]:
+        """The shared round's rows for ``u``; a point among the run's last RECENT_EVALUATIONS
+        requests gets its rows again without a round (the same bits: the kernels are exact
+        functions of the point)."""
         u = np.asarray(u, dtype=float)
         key = (u.shape, u.tobytes())
         got = self._recent.get(key)
