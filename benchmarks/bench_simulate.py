@@ -1,6 +1,6 @@
 """Speed of the quick commands as ratios against a floor (issues 14, 25). Prints tables; asserts nothing.
 
-    python benchmarks/bench_simulate.py [--repeats N] [--no-pareto] [--baseline DIR]
+    python benchmarks/bench_simulate.py [--repeats N] [--no-pareto] [--no-refine] [--baseline DIR]
 
 Every command runs as a subprocess, interpreter start included, and every figure is a
 ratio to the **floor** measured in the same run: ``python -c "import numpy, yaml, click"``,
@@ -11,7 +11,8 @@ with other work slows them all alike and the ratios hold where absolute seconds 
 * ``mst --help``, ``mst simulate --no-plot`` (goal <= 1.5x the floor), ``mst simulate``
   (with response.png: the picture's cost is the difference), ``mst simulate --json``,
   ``mst design`` on configs/mohammadi2021.yaml with --no-plot --quiet (goal <= 2x),
-  ``mst design --pareto 12`` on the same spec (goal <= 10x), ``mst check`` (goal <= 3x),
+  ``mst design --pareto 12`` on the same spec (goal <= 10x), ``mst design --refine continuum``
+  on the same spec (goal <= 6x), ``mst check`` (goal <= 3x),
   ``mst export --stl --3mf`` (meshes, no CAD kernel; goal <= 3x) and ``mst export --step``
   (build123d's import is most of it);
 * which heavy libraries each quick command imported (none for simulate; nlopt for design);
@@ -47,7 +48,7 @@ def mst_exe() -> str:
     return str(exe) if exe.exists() else "mst"
 
 
-def commands(tmp: Path, export_dir: Path, with_pareto: bool) -> dict[str, tuple[list[str], str]]:
+def commands(tmp: Path, export_dir: Path, with_pareto: bool, with_refine: bool) -> dict[str, tuple[list[str], str]]:
     """name -> (argv with {i} for the round, goal). Each round writes into its own folder."""
     mst = mst_exe()
     cmds = {
@@ -66,7 +67,11 @@ def commands(tmp: Path, export_dir: Path, with_pareto: bool) -> dict[str, tuple[
     }
     if with_pareto:
         cmds["mst design mohammadi2021 --pareto 12 --no-plot -q"] = (
-            [mst, "design", str(SPEC), "--pareto", "12", "--out", f"{tmp}/p{{i}}", "--no-plot", "--quiet"], "<= 10")
+            [mst, "design", str(SPEC), "--pareto", "12", "--out", f"{tmp}/f{{i}}", "--no-plot", "--quiet"], "<= 10")
+    if with_refine:
+        cmds["mst design mohammadi2021 --refine continuum --no-plot -q"] = (
+            [mst, "design", str(SPEC), "--refine", "continuum", "--out", f"{tmp}/r{{i}}", "--no-plot", "--quiet"],
+            "<= 6")
     return cmds
 
 
@@ -122,6 +127,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--repeats", type=int, default=9)
     ap.add_argument("--no-pareto", action="store_true", help="skip mst design --pareto 12 (seconds a run)")
+    ap.add_argument("--no-refine", action="store_true", help="skip mst design --refine continuum (seconds a run)")
     ap.add_argument("--baseline", type=Path, default=None, help="a checkout of another version to compare")
     args = ap.parse_args()
     as_installed()                 # commands start from bytecode, as an installed copy does
@@ -131,7 +137,7 @@ def main() -> None:
         export_dir = tmp / "export"
         subprocess.run([mst_exe(), "export", str(FORWARD), "--stl", "--out", str(export_dir)],
                        check=True, capture_output=True)
-        cmds = commands(tmp, export_dir, not args.no_pareto)
+        cmds = commands(tmp, export_dir, not args.no_pareto, not args.no_refine)
         cmds = with_baseline(cmds, args.baseline.resolve()) if args.baseline else \
             {name: (argv, goal, None) for name, (argv, goal) in cmds.items()}
         times = round_robin(cmds, args.repeats)
