@@ -16,8 +16,9 @@ command), with counters on:
 * dear-rung law requests (``layer_law(cell, material, frame|continuum)``) and the laws actually
   solved (the rung's per-cell cache misses; requests when the rung has no cache);
 * DesignProblem._evaluate_physical calls (every evaluation goes through it, with or without the
-  print-shifted stacks: one call is one batched kernel call; evaluate_physical before 0.7, whose
-  print-shifted stacks went through a kernel call of their own) and the candidate designs they held.
+  print-shifted stacks: one call is one batched kernel call; in an older checkout
+  evaluate_physical, whose print-shifted stacks went through kernel calls of their own, not
+  counted) and the candidate designs they held.
 """
 
 from __future__ import annotations
@@ -73,7 +74,8 @@ def count_run(spec: Path, flags: list[str]) -> dict:
     from mst_cli.model.mechanics import continuum, frame
 
     calls = {"evaluate_calls": 0, "evaluate_points": 0}
-    name = "_evaluate_physical" if hasattr(DesignProblem, "_evaluate_physical") else "evaluate_physical"  # < 0.7
+    # an older checkout (--baseline) has no _evaluate_physical: its evaluate_physical then
+    name = "_evaluate_physical" if hasattr(DesignProblem, "_evaluate_physical") else "evaluate_physical"
     original = getattr(DesignProblem, name)
 
     def counted(self, theta_deg, t_mm, h_mm, *more):
