@@ -15,8 +15,10 @@ command), with counters on:
 
 * dear-rung law requests (``layer_law(cell, material, frame|continuum)``) and the laws actually
   solved (the rung's per-cell cache misses; requests when the rung has no cache);
-* DesignProblem.evaluate_physical calls (every evaluate goes through it: one call is one
-  batched kernel call) and the candidate designs they held.
+* DesignProblem._evaluate_physical calls (every evaluation goes through it, with or without the
+  print-shifted stacks: one call is one batched kernel call; in an older checkout
+  evaluate_physical, whose print-shifted stacks went through kernel calls of their own, not
+  counted) and the candidate designs they held.
 """
 
 from __future__ import annotations
@@ -72,14 +74,16 @@ def count_run(spec: Path, flags: list[str]) -> dict:
     from mst_cli.model.mechanics import continuum, frame
 
     calls = {"evaluate_calls": 0, "evaluate_points": 0}
-    original = DesignProblem.evaluate_physical
+    # an older checkout (--baseline) has no _evaluate_physical: its evaluate_physical then
+    name = "_evaluate_physical" if hasattr(DesignProblem, "_evaluate_physical") else "evaluate_physical"
+    original = getattr(DesignProblem, name)
 
-    def counted(self, theta_deg, t_mm, h_mm):
+    def counted(self, theta_deg, t_mm, h_mm, *more):
         calls["evaluate_calls"] += 1
         calls["evaluate_points"] += int(np.prod(np.shape(theta_deg)[:-1], dtype=int))
-        return original(self, theta_deg, t_mm, h_mm)
+        return original(self, theta_deg, t_mm, h_mm, *more)
 
-    DesignProblem.evaluate_physical = counted
+    setattr(DesignProblem, name, counted)
     requests = {"frame": 0, "continuum": 0}
     for module, name in ((frame, "frame_layer"), (continuum, "continuum_layer")):
         inner = getattr(module, name)

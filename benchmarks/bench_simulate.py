@@ -1,6 +1,6 @@
 """Speed of the quick commands as ratios against a floor (issues 14, 25). Prints tables; asserts nothing.
 
-    python benchmarks/bench_simulate.py [--repeats N] [--no-pareto]
+    python benchmarks/bench_simulate.py [--repeats N] [--no-pareto] [--no-refine] [--baseline DIR]
 
 Every command runs as a subprocess, interpreter start included, and every figure is a
 ratio to the **floor** measured in the same run: ``python -c "import numpy, yaml, click"``,
@@ -11,16 +11,22 @@ with other work slows them all alike and the ratios hold where absolute seconds 
 * ``mst --help``, ``mst simulate --no-plot`` (goal <= 1.5x the floor), ``mst simulate``
   (with response.png: the picture's cost is the difference), ``mst simulate --json``,
   ``mst design`` on configs/mohammadi2021.yaml with --no-plot --quiet (goal <= 2x),
-  ``mst design --pareto 12`` on the same spec (goal <= 10x), ``mst check`` (goal <= 3x),
+  ``mst design --pareto 12`` on the same spec (goal <= 10x), ``mst design --refine continuum``
+  on the same spec (goal <= 6x), ``mst check`` (goal <= 3x),
   ``mst export --stl --3mf`` (meshes, no CAD kernel; goal <= 3x) and ``mst export --step``
   (build123d's import is most of it);
 * which heavy libraries each quick command imported (none for simulate; nlopt for design);
 * the vectorised L0 kernel's layer evaluations per second (goal >= 1e6 / s).
+
+``--baseline DIR`` (a checkout of another version, e.g. ``git archive 04dbf0a | tar -x -C DIR``)
+adds the rows with a goal run again with DIR first on PYTHONPATH, marked "(baseline)", in the
+same round robin: a before/after comparison in one run.
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import statistics
 import subprocess
 import sys
@@ -42,7 +48,7 @@ def mst_exe() -> str:
     return str(exe) if exe.exists() else "mst"
 
 
-def commands(tmp: Path, export_dir: Path, with_pareto: bool) -> dict[str, tuple[list[str], str]]:
+def commands(tmp: Path, export_dir: Path, with_pareto: bool, with_refine: bool) -> dict[str, tuple[list[str], str]]:
     """name -> (argv with {i} for the round, goal). Each round writes into its own folder."""
     mst = mst_exe()
     cmds = {
@@ -61,17 +67,32 @@ def commands(tmp: Path, export_dir: Path, with_pareto: bool) -> dict[str, tuple[
     }
     if with_pareto:
         cmds["mst design mohammadi2021 --pareto 12 --no-plot -q"] = (
-            [mst, "design", str(SPEC), "--pareto", "12", "--out", f"{tmp}/p{{i}}", "--no-plot", "--quiet"], "<= 10")
+            [mst, "design", str(SPEC), "--pareto", "12", "--out", f"{tmp}/f{{i}}", "--no-plot", "--quiet"], "<= 10")
+    if with_refine:
+        cmds["mst design mohammadi2021 --refine continuum --no-plot -q"] = (
+            [mst, "design", str(SPEC), "--refine", "continuum", "--out", f"{tmp}/r{{i}}", "--no-plot", "--quiet"],
+            "<= 6")
     return cmds
+
+
+def with_baseline(cmds: dict, baseline: Path) -> dict[str, tuple[list[str], str, dict | None]]:
+    """Every command with a goal once more, run with ``baseline`` first on PYTHONPATH."""
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, [str(baseline), os.environ.get("PYTHONPATH")]))}
+    out = {}
+    for name, (argv, goal) in cmds.items():
+        out[name] = (argv, goal, None)
+        if goal:
+            out[f"{name} (baseline)"] = ([a.replace("{i}", "b{i}") if "{i}" in a else a for a in argv], goal, env)
+    return out
 
 
 def round_robin(cmds: dict, repeats: int) -> dict[str, list[float]]:
     times = {name: [] for name in cmds}
     for i in range(-1, repeats):                 # round -1 warms the caches and is not counted
-        for name, (argv, _) in cmds.items():
+        for name, (argv, _, env) in cmds.items():
             run = [a.replace("{i}", str(i + 1)) for a in argv]
             t0 = time.perf_counter()
-            subprocess.run(run, check=True, capture_output=True)
+            subprocess.run(run, check=True, capture_output=True, env=env)
             if i >= 0:
                 times[name].append(time.perf_counter() - t0)
     return times
@@ -106,6 +127,8 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--repeats", type=int, default=9)
     ap.add_argument("--no-pareto", action="store_true", help="skip mst design --pareto 12 (seconds a run)")
+    ap.add_argument("--no-refine", action="store_true", help="skip mst design --refine continuum (seconds a run)")
+    ap.add_argument("--baseline", type=Path, default=None, help="a checkout of another version to compare")
     args = ap.parse_args()
     as_installed()                 # commands start from bytecode, as an installed copy does
 
@@ -114,7 +137,9 @@ def main() -> None:
         export_dir = tmp / "export"
         subprocess.run([mst_exe(), "export", str(FORWARD), "--stl", "--out", str(export_dir)],
                        check=True, capture_output=True)
-        cmds = commands(tmp, export_dir, not args.no_pareto)
+        cmds = commands(tmp, export_dir, not args.no_pareto, not args.no_refine)
+        cmds = with_baseline(cmds, args.baseline.resolve()) if args.baseline else \
+            {name: (argv, goal, None) for name, (argv, goal) in cmds.items()}
         times = round_robin(cmds, args.repeats)
         heavy = {
             "mst simulate --no-plot": heavy_imports(["simulate", str(FORWARD), "--out", f"{tmp}/h1", "--no-plot"]),
@@ -130,13 +155,14 @@ def main() -> None:
     floor = next(iter(med.values()))
     print(f"# bench_simulate ({args.repeats} rounds, {sys.platform}, python {sys.version.split()[0]}); "
           f"ratios against the floor measured in the same run")
-    print(f"| {'command':<50} | {'median [s]':>10} | {'min / max [s]':>13} | {'x floor':>7} | {'goal':>11} |")
-    print(f"|{'-' * 52}|{'-' * 12}|{'-' * 15}|{'-' * 9}|{'-' * 13}|")
-    for name, (_, goal) in cmds.items():
+    width = max(len(name) for name in cmds)
+    print(f"| {'command':<{width}} | {'median [s]':>10} | {'min / max [s]':>13} | {'x floor':>7} | {'goal':>11} |")
+    print(f"|{'-' * (width + 2)}|{'-' * 12}|{'-' * 15}|{'-' * 9}|{'-' * 13}|")
+    for name, (_, goal, _) in cmds.items():
         ts = times[name]
         ratio = med[name] / floor
         mark = "" if not goal else (" ok" if ratio <= float(goal.split()[-1]) else " MISS")
-        print(f"| {name:<50} | {med[name]:>10.3f} | {min(ts):>5.3f} / {max(ts):<5.3f} | {ratio:>7.2f} "
+        print(f"| {name:<{width}} | {med[name]:>10.3f} | {min(ts):>5.3f} / {max(ts):<5.3f} | {ratio:>7.2f} "
               f"| {goal + mark:>11} |")
     drawn, bare = med["mst simulate (draws response.png)"], med["mst simulate --no-plot"]
     print()

@@ -179,6 +179,28 @@ def test_batched_polish_hands_back_an_error():
     assert one == two == float(problem.evaluate(np.full(problem.dim, 0.5)).objective)
 
 
+def test_an_interrupt_inside_a_batched_polish_stops_it_at_once():
+    """A KeyboardInterrupt (or mst's Interrupted) in one run ends them all at once; only an
+    Exception waits for the other runs."""
+    from mst_cli.design.problem import DesignProblem
+    from mst_cli.design.solver import _SharedEvaluations
+
+    problem = DesignProblem(load_document(ROOT / "configs" / "mohammadi2021.yaml"))
+    finished = []
+
+    def fine(p):
+        for _ in range(3):
+            p.evaluate(np.full(problem.dim, 0.5) + 0.01 * len(finished))
+        finished.append(1)
+
+    def interrupted(p):
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        _SharedEvaluations(problem).run([fine, interrupted, fine])
+    assert finished == []
+
+
 def test_front_matches_once_and_reuses_the_chosen_designs_match(monkeypatch):
     """The screening and the match run once for the whole front (the chosen design's)."""
     from mst_cli.design import pareto, solver
@@ -198,6 +220,29 @@ def test_print_robustness_reuses_the_nominal_stack_exactly():
     full = problem.print_robustness(ev.theta_deg, ev.t_mm, ev.h_mm)
     reused = problem.print_robustness(ev.theta_deg, ev.t_mm, ev.h_mm, nominal=(ev.S_per_N, ev.R_N))
     assert np.array_equal(full, reused, equal_nan=True)
+
+
+@pytest.mark.parametrize("limit", [None, 0.5])
+def test_one_kernel_call_for_nominal_and_shifted_stacks_gives_the_same_bits(tmp_path, limit):
+    """evaluate_with_shifts (the batched polish's call) equals evaluate and print_shift_log
+    called apart, every field to the bit, with and without the print-deviation constraints."""
+    import yaml
+
+    from mst_cli.design.problem import DesignProblem
+
+    raw = yaml.safe_load((ROOT / "configs" / "mohammadi2021.yaml").read_text())
+    if limit is not None:
+        raw["design"] = {**(raw.get("design") or {}), "max_print_deviation_rel": limit}
+    path = tmp_path / "spec.yaml"
+    path.write_text(yaml.safe_dump(raw))
+    problem = DesignProblem(load_document(path))
+    U = np.random.default_rng(5).random((300, problem.dim))
+    ev, shifts = problem.evaluate_with_shifts(U)
+    apart = problem.evaluate(U)
+    for name in vars(apart):
+        assert np.array_equal(getattr(ev, name), getattr(apart, name), equal_nan=True), name
+    alone = problem.print_shift_log(apart.theta_deg, apart.t_mm, apart.h_mm)
+    assert np.array_equal(shifts, alone, equal_nan=True)
 
 
 def test_no_runs_no_wait():

@@ -144,12 +144,17 @@ def pareto_front(doc: Document, count: int, *, seed: int | None = None,
         mask = non_dominated(np.array([p.metrics for p in pts]))
         return [p for p, keep in zip(pts, mask) if keep or p.chosen]
 
+    judged: set[bytes] = set()        # designs (as written) already judged: the same verdict again
     for wave in _waves(pareto_weights(MAX_WEIGHTINGS_PER_POINT * count), WAVE_PER_POINT * count):
         polished = prefer_many(problem, [sol.u_matched] * len(wave), list(wave), max_evaluations=max_evaluations,
                                local=local, stops=front_sol.stops)
         for w, (u, used) in zip(wave, polished):
             front_sol.evaluations += used
             theta, t, h = (np.round(a, ROUND_DECIMALS) for a in problem.to_physical(u))
+            key = np.concatenate([theta, t, h]).tobytes()
+            if key in judged:     # many weightings polish to one design: met or not, it is a repeat
+                continue
+            judged.add(key)
             res = verify_design(doc, problem, theta, t, h, front_sol, seed=seed, max_evaluations=max_evaluations,
                                 mechanics="spring")
             if res.status != "met":

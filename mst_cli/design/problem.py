@@ -276,10 +276,32 @@ class DesignProblem:
         return R, S, B[..., -1], gap0, B[..., 0]
 
     def evaluate_physical(self, theta_deg, t_mm, h_mm) -> Evaluation:
+        return self._evaluate_physical(theta_deg, t_mm, h_mm, False)[0]
+
+    def evaluate_with_shifts(self, u) -> tuple[Evaluation, np.ndarray]:
+        """(:meth:`evaluate`, :meth:`print_shift_log` of the same candidates), the nominal and
+        the two print-shifted stacks through the kernels in one call: each candidate's numbers
+        are, to the bit, those of the two calls (the kernels give a stack the same bits in any
+        batch)."""
+        return self._evaluate_physical(*self.to_physical(u), True)
+
+    def _evaluate_physical(self, theta_deg, t_mm, h_mm, with_shifts: bool) -> tuple[Evaluation, np.ndarray | None]:
         theta_deg, t_mm, h_mm = np.broadcast_arrays(*(np.asarray(a, dtype=float)
                                                       for a in (theta_deg, t_mm, h_mm)))
         pr = self.printer
-        R, S, B_full, gap0, B0 = self.responses(theta_deg, t_mm, h_mm)
+        shifts = None
+        if with_shifts:          # nominal, thicker, thinner walls (print_shift_log's steps)
+            dt = self.wall_tolerance_mm
+            T = np.broadcast_to(theta_deg, (3,) + theta_deg.shape)
+            H = np.broadcast_to(h_mm, (3,) + h_mm.shape)
+            t3 = np.stack([t_mm, np.maximum(t_mm + dt, geo.LENGTH_FLOOR_MM),
+                           np.maximum(t_mm + -dt, geo.LENGTH_FLOOR_MM)])
+            R3, S3, B_full3, gap03, B03 = self.responses(T, t3, H)
+            R, S, B_full, gap0, B0 = R3[0], S3[0], B_full3[0], gap03[0], B03[0]
+            base = np.log(np.maximum(np.concatenate([S, R], axis=-1), TINY))
+            shifts = np.log(np.maximum(np.concatenate([S3[1:], R3[1:]], axis=-1), TINY)) - base[None]
+        else:
+            R, S, B_full, gap0, B0 = self.responses(theta_deg, t_mm, h_mm)
         margins, t_over_L_g = self._layer_rules(theta_deg, t_mm, h_mm)
         height = self.height_offset_mm + h_mm.sum(axis=-1)
 
@@ -291,7 +313,7 @@ class DesignProblem:
         if self.max_height_mm is not None:
             g.append(((height - self.max_height_mm) / pr.nozzle_mm)[..., None])
         if self.max_print_deviation_rel is not None:
-            g.append(self.print_deviation_constraints(theta_deg, t_mm, h_mm, S, R))
+            g.append(self.print_deviation_constraints(theta_deg, t_mm, h_mm, S, R, shifts))
         constraints = np.concatenate(g, axis=-1)
 
         log_err = np.concatenate([np.log(np.maximum(S, TINY) / self.S_target),
@@ -299,17 +321,18 @@ class DesignProblem:
         w = np.concatenate([self.weights, self.weights])
         objective = np.sum(w * log_err ** 2, axis=-1)
         return Evaluation(theta_deg, t_mm, h_mm, R, S, B_full, B0, gap0, height, margins, log_err,
-                          constraints, objective)
+                          constraints, objective), shifts
 
     def evaluate(self, u) -> Evaluation:
         return self.evaluate_physical(*self.to_physical(u))
 
     # ----------------------------------------------------------------- preference
-    def print_deviation_constraints(self, theta_deg, t_mm, h_mm, S, R) -> np.ndarray:
+    def print_deviation_constraints(self, theta_deg, t_mm, h_mm, S, R, shifts=None) -> np.ndarray:
         """(..., 8n) g <= 0 when every output's change at t +- tolerance lies within
-        +- design.max_print_deviation_rel: ln(1 - m) <= ln(out'/out) <= ln(1 + m), per sign and output."""
+        +- design.max_print_deviation_rel: ln(1 - m) <= ln(out'/out) <= ln(1 + m), per sign and output.
+        ``shifts``: the candidates' :meth:`print_shift_log`, when the caller has it."""
         m = self.max_print_deviation_rel
-        d = self.print_shift_log(theta_deg, t_mm, h_mm, nominal=(S, R))       # (2, ..., 2n)
+        d = self.print_shift_log(theta_deg, t_mm, h_mm, nominal=(S, R)) if shifts is None else shifts  # (2, ..., 2n)
         g = np.concatenate([d - math.log1p(m), math.log1p(-m) - d], axis=-1)    # (2, ..., 4n)
         return np.moveaxis(g, 0, -2).reshape(g.shape[1:-1] + (-1,))
 
@@ -352,10 +375,18 @@ class DesignProblem:
         return np.stack([np.log(ev.total_height_mm), np.log(self.worst_force_resolution_N(ev)),
                          np.asarray(robustness, dtype=float)], axis=-1)
 
-    def preference(self, ev: Evaluation, weights: ArrayLike | None = None) -> np.ndarray:
-        """Weighted sum of :meth:`objective_terms` (lower is better): what phase 2 minimises."""
+    def preference(self, ev: Evaluation, weights: ArrayLike | None = None,
+                   terms: np.ndarray | None = None) -> np.ndarray:
+        """Weighted sum of :meth:`objective_terms` (lower is better): what phase 2 minimises;
+        ``terms``: those of ``ev``, when the caller has them (:meth:`evaluate_terms`)."""
         w = self.objective_weights if weights is None else np.asarray(weights, dtype=float)
-        return self.objective_terms(ev) @ w
+        return (self.objective_terms(ev) if terms is None else terms) @ w
+
+    def evaluate_terms(self, u) -> tuple[Evaluation, np.ndarray]:
+        """(:meth:`evaluate`, :meth:`objective_terms`) of candidates, the print-shifted stacks of
+        the robustness term in the same kernel call (:meth:`evaluate_with_shifts`)."""
+        ev, shifts = self.evaluate_with_shifts(u)
+        return ev, self.objective_terms(ev, robustness_of_shifts(shifts))
 
     # ----------------------------------------------------------------- reporting helpers
     def constraint_names(self) -> list[str]:

@@ -36,8 +36,8 @@ safety net that normal runs never reach), so the same seed gives the same design
 from __future__ import annotations
 
 import math
-import threading
 import time
+from collections import OrderedDict
 from dataclasses import dataclass, field, fields
 from typing import TYPE_CHECKING
 
@@ -257,7 +257,11 @@ class _Matcher:
                 and math.log1p(-err) >= -self.match_log)
 
     def matched_at(self, u) -> bool:
-        e = self.problem.evaluate(u)
+        return self.matched(self.problem.evaluate(u))
+
+    def matched(self, e) -> bool:
+        """Every constraint (with the rounding slack) and every target within MATCH_FRACTION x
+        tolerance, of one evaluated point."""
         return bool(np.all(_safe_constraints(e) <= FEASIBILITY_TOL)
                     and np.max(np.abs(e.log_err)) <= self.match_log)
 
@@ -376,48 +380,51 @@ def prefer(problem: DesignProblem, u_matched: np.ndarray, budget: _Budget, local
     m = _Matcher(problem)
     tol = problem.tolerance_rel
 
-    def pref(u):
-        return float(problem.preference(problem.evaluate(u), weights))
+    def pref_at(u):
+        """(evaluation, preference) of one point: one kernel call, the print-shifted stacks in it."""
+        ev, terms = problem.evaluate_terms(u)
+        return ev, float(problem.preference(ev, weights, terms))
 
-    def polish_run(u0, band, step):
+    def polish_run(u0, pref0, band, step):
         def pref_batch(U):
-            ev = problem.evaluate(U)
+            ev, terms = problem.evaluate_terms(U)
             # two smooth constraints per output (|x| has no derivative where the error is 0)
             g = np.concatenate([_safe_constraints(ev), ev.log_err - band, -ev.log_err - band], axis=-1)
-            return problem.preference(ev, weights), g, 3, float(_max_err(ev)[0])
+            return problem.preference(ev, weights, terms), g, 3, float(_max_err(ev)[0])
 
         tracker = Tracker()
-        tracker.offer(u0, pref(u0), 0.0)
+        tracker.offer(u0, pref0, 0.0)
         if budget.left > 3 * per_iter:
             phase = _Phase(problem, pref_batch, problem.n_constraints + 4 * problem.n, tracker, budget,
                            "preference")
             phase.run(u0, local, min(iters, budget.left // (3 * per_iter)), step, stops)
         return tracker.u
 
-    before = pref(u_matched)
-    e = problem.evaluate(u_matched)
+    e, before = pref_at(u_matched)
     band = max(math.log1p(BAND_FRACTION * tol), float(np.max(np.abs(e.log_err))))
-    polished = polish_run(u_matched, band, 0.5 * INITIAL_STEP)
+    polished = polish_run(u_matched, before, band, 0.5 * INITIAL_STEP)
 
     # -- phase 3: pull the targets back to MATCH_FRACTION x tolerance, with a small step
     rematch = Tracker()
     e = problem.evaluate(polished)
     rematch.offer(polished, float(e.objective), 0.0)
-    newton = not m.matched_at(polished) and newton_match(problem, polished, rematch, budget, "re-match")
+    polished_matched = m.matched(e)
+    newton = not polished_matched and newton_match(problem, polished, rematch, budget, "re-match")
     if newton:
         stops.append("newton: goal reached")
-    elif not m.matched_at(polished) and budget.left > per_iter:
+    elif not polished_matched and budget.left > per_iter:
         phase = _Phase(problem, m.batch, problem.n_constraints, rematch, budget, "re-match", m.goal)
         phase.run(polished, local, min(iters, budget.left // per_iter), 0.02 * INITIAL_STEP, stops)
     final = rematch.u if m.matched_at(rematch.u) else u_matched
 
     # -- phase 4: the preference once more, inside the narrow band
-    e = problem.evaluate(final)
+    e, after = pref_at(final)
     narrow = max(m.match_log, float(np.max(np.abs(e.log_err))))
-    candidate = polish_run(final, narrow, 0.02 * INITIAL_STEP)
+    candidate = polish_run(final, after, narrow, 0.02 * INITIAL_STEP)
     if m.matched_at(candidate):
         final = candidate
-    return final, before, pref(final)
+        after = pref_at(final)[1]
+    return final, before, after
 
 
 def _matched(problem: DesignProblem, seed: int, max_evaluations: int, progress, local: str,
@@ -466,95 +473,88 @@ def pareto_weights(count: int) -> np.ndarray:
 
 
 # --------------------------------------------------------------------------- many weightings at once
+_EVALUATION_FIELDS = tuple(f.name for f in fields(Evaluation))
+RECENT_EVALUATIONS = 64      # per run: the points SLSQP asks for again (a stalled line search)
+
 class _SharedEvaluations:
     """Local runs of several weightings in lockstep, their evaluations batched into one kernel call.
 
     nlopt drives each run through callbacks, so runs cannot hand over a batch themselves: each
-    runs in its own thread against a :class:`_BatchedProblem`, whose ``evaluate`` posts its
-    points here and waits. When every live run waits, the calling thread evaluates all posted
-    points in one call (with the preference terms, the print-shifted stacks included) and
-    wakes each run with its rows. Only one thread computes at a time, and a round's batch
-    holds the runs in a fixed order, so the result depends on the inputs only.
+    runs in a greenlet of its own against a :class:`_BatchedProblem`, whose ``evaluate`` hands
+    its points to the calling greenlet and is resumed with its rows. When every live run has
+    handed over, the caller evaluates all their points in one call (with the preference terms,
+    the print-shifted stacks included) and resumes each run, in a fixed order, with its rows.
+    The runs take turns in one thread (a switch costs a microsecond, where a thread's wake-up
+    costs tens), so the result depends on the inputs only.
     """
 
     def __init__(self, problem: DesignProblem):
         self.problem = problem
-        self.lock = threading.Lock()
-        self.all_waiting = threading.Event()
-        self.pending: dict[int, np.ndarray] = {}
-        self.results: dict[int, tuple] = {}
-        self.ready: list[threading.Event] = []
-        self.live = 0
-
-    def _check(self) -> None:           # with self.lock held
-        if len(self.pending) == self.live:
-            self.all_waiting.set()
+        self.caller = None
 
     def ask(self, job: int, u: np.ndarray) -> tuple[Evaluation, np.ndarray]:
         """Evaluation and preference terms of ``u`` (one point (dim,) or a batch (k, dim)),
         each row's bits as :meth:`DesignProblem.evaluate` alone gives them."""
-        with self.lock:
-            self.pending[job] = u
-            self._check()
-        self.ready[job].wait()
-        self.ready[job].clear()
-        return self.results.pop(job)
+        return self.caller.switch(u)
 
-    def _serve(self) -> None:
-        jobs = sorted(self.pending)
-        U = np.concatenate([self.pending[j].reshape(-1, self.problem.dim) for j in jobs])
-        ev = self.problem.evaluate(U)
-        shifts = self.problem.print_shift_log(ev.theta_deg, ev.t_mm, ev.h_mm, nominal=(ev.S_per_N, ev.R_N))
+    def _serve(self, pending: dict[int, np.ndarray]) -> dict[int, tuple]:
+        jobs = sorted(pending)
+        problem = self.problem
+        U = np.concatenate([pending[j].reshape(-1, problem.dim) for j in jobs])
+        ev, shifts = problem.evaluate_with_shifts(U)
+        # ln height and ln force resolution are elementwise or row-wise: one call for the batch
+        terms = problem.objective_terms(ev, np.zeros(len(U)))
+        columns = [getattr(ev, name) for name in _EVALUATION_FIELDS]
+        results = {}
         start = 0
         for j in jobs:
-            flat = self.pending[j].ndim == 1
-            rows = start if flat else slice(start, start + len(self.pending[j]))
-            start += 1 if flat else len(self.pending[j])
-            ev_j = Evaluation(**{f.name: getattr(ev, f.name)[rows] for f in fields(Evaluation)})
+            flat = pending[j].ndim == 1
+            rows = start if flat else slice(start, start + len(pending[j]))
+            start += 1 if flat else len(pending[j])
+            ev_j = Evaluation(*(c[rows] for c in columns))
             # the RMS over the job's own rows, laid out as a call of its own would (a reduction
             # over two axes sums in an order that depends on the array's shape)
-            robustness = robustness_of_shifts(np.ascontiguousarray(shifts[:, rows]))
-            self.results[j] = (ev_j, self.problem.objective_terms(ev_j, robustness))
-        self.pending.clear()
-        for j in jobs:
-            self.ready[j].set()
+            terms_j = terms[rows].copy()
+            terms_j[..., -1] = robustness_of_shifts(np.ascontiguousarray(shifts[:, rows]))
+            results[j] = (ev_j, terms_j)
+        return results
 
     def run(self, jobs: list[Callable[[DesignProblem], object]]) -> list:
-        """Each job called with its own batched view of the problem; their results in order."""
-        out: list = [None] * len(jobs)
-        errors: list[BaseException] = []
-        if not jobs:
-            return out
+        """Each job called with its own batched view of the problem; their results in order.
+        A job's Exception is raised once every other job has finished; anything else (an
+        interrupt) at once."""
+        from greenlet import getcurrent, greenlet
 
-        def worker(i, job):
+        out: list = [None] * len(jobs)
+        errors: list[Exception] = []
+        self.caller = getcurrent()
+
+        def body(i, job):
             try:
                 out[i] = job(_BatchedProblem(self, i))
-            except BaseException as exc:        # handed to the caller below
+            except Exception as exc:        # handed to the caller below
                 errors.append(exc)
-            finally:
-                with self.lock:
-                    self.live -= 1
-                    self._check()
+            return _DONE
 
-        self.live = len(jobs)
-        self.ready = [threading.Event() for _ in jobs]
-        threads = [threading.Thread(target=worker, args=(i, job), daemon=True) for i, job in enumerate(jobs)]
-        for t in threads:
-            t.start()
-        while True:
-            self.all_waiting.wait()
-            with self.lock:
-                self.all_waiting.clear()
-                if len(self.pending) != self.live:
-                    continue
-                if self.live == 0:
-                    break
-                self._serve()
-        for t in threads:
-            t.join()
+        runs = [greenlet(body) for _ in jobs]
+        pending: dict[int, np.ndarray] = {}
+        for i, (run, job) in enumerate(zip(runs, jobs)):
+            asked = run.switch(i, job)
+            if asked is not _DONE:
+                pending[i] = asked
+        while pending:
+            results = self._serve(pending)
+            pending = {}
+            for j in sorted(results):
+                asked = runs[j].switch(results[j])
+                if asked is not _DONE:
+                    pending[j] = asked
         if errors:
             raise errors[0]
         return out
+
+
+_DONE = object()     # what a finished run hands back instead of points
 
 
 class _BatchedProblem:
@@ -562,21 +562,29 @@ class _BatchedProblem:
 
     def __init__(self, shared: _SharedEvaluations, job: int):
         self._shared, self._job = shared, job
-        self._last: tuple | None = None
+        self._recent: OrderedDict = OrderedDict()
 
     def __getattr__(self, name):
         return getattr(self._shared.problem, name)
 
-    def evaluate(self, u) -> Evaluation:
-        ev, terms = self._shared.ask(self._job, np.asarray(u, dtype=float))
-        self._last = (ev, terms)
-        return ev
+    def evaluate_terms(self, u) -> tuple[Evaluation, np.ndarray]:
+        """The shared round's rows for ``u``; a point among the run's last RECENT_EVALUATIONS
+        requests gets its rows again without a round (the same bits: the kernels are exact
+        functions of the point)."""
+        u = np.asarray(u, dtype=float)
+        key = (u.shape, u.tobytes())
+        got = self._recent.get(key)
+        if got is None:
+            got = self._shared.ask(self._job, u)
+            self._recent[key] = got
+            if len(self._recent) > RECENT_EVALUATIONS:
+                self._recent.popitem(last=False)
+        else:
+            self._recent.move_to_end(key)
+        return got
 
-    def preference(self, ev: Evaluation, weights: ArrayLike | None = None) -> np.ndarray:
-        if self._last is None or ev is not self._last[0]:
-            return self._shared.problem.preference(ev, weights)
-        w = self._shared.problem.objective_weights if weights is None else np.asarray(weights, dtype=float)
-        return self._last[1] @ w
+    def evaluate(self, u) -> Evaluation:
+        return self.evaluate_terms(u)[0]
 
 
 def prefer_many(problem: DesignProblem, starts: list[np.ndarray], weightings: list[ArrayLike], *,
