@@ -112,21 +112,45 @@ def design(spec_file: Path, out_dir: Path | None, seed: int | None, max_evaluati
          forces outside what printable walls reach, S rising with force, ...)
       2  invalid or self-contradictory spec (e.g. ranges that do not increase)
     """
-    from dataclasses import replace
-
-    from mst_cli.design import design_document
-    from mst_cli.errors import InputError
-    from mst_cli.io.schema import load_document
-    from mst_cli.model.ladder import choose_mechanics
-
-    doc = load_document(spec_file)
-    cal = None
-    if calibration is not None:
-        from mst_cli.calibrate.record import apply_calibration, read_calibration
-        cal = read_calibration(calibration, doc)
-        doc = apply_calibration(doc, cal)
     from mst_cli.io.outputs import check_out_dir
-    check_out_dir(out_dir or default_out_dir(doc.name))   # a bad output path: refused before any work
+    doc, cal = _spec_with_calibration(spec_file, calibration)
+    out = out_dir or default_out_dir(doc.name)
+    check_out_dir(out)                    # a bad output path: refused before any work
+    choice = _mechanics_choice(doc, refine, pareto_count, pareto_designs)
+    talk = not (quiet or as_json)
+    if choice.message() and talk:
+        click.echo(choice.message() + ("" if choice.mechanics == "spring"
+                                       else f": L0 design refined with {choice.mechanics}"))
+    if cal is not None and talk:
+        click.echo("\n".join(cal.lines()))
+    t_start = time.perf_counter()
+    result, front = _solve(doc, refine, pareto_count, seed, max_evaluations, _Progress(not talk))
+    plot = not (no_plot or as_json)
+    report = _write(result, front, cal, out, pareto_count, pareto_designs, plot, doc.name)
+    if as_json:
+        click.echo(json.dumps(report, indent=2, allow_nan=False))
+    elif not quiet:
+        _print_summary(result, front, pareto_count, pareto_designs, out, plot, time.perf_counter() - t_start)
+    if result.exit_code:
+        click.echo(f"mst design: targets not met: {result.binding}: {result.reasons[0]}", err=True)
+    sys.exit(result.exit_code)
+
+
+def _spec_with_calibration(spec_file: Path, calibration: Path | None) -> tuple:
+    """The spec, with an earlier print's calibration applied (and that calibration, or None)."""
+    from mst_cli.io.schema import load_document
+    doc = load_document(spec_file)
+    if calibration is None:
+        return doc, None
+    from mst_cli.calibrate.record import apply_calibration, read_calibration
+    cal = read_calibration(calibration, doc)
+    return apply_calibration(doc, cal), cal
+
+
+def _mechanics_choice(doc, refine: str | None, pareto_count: int | None, pareto_designs: bool):
+    """The rung the design is judged by; the options that cannot go together are refused."""
+    from mst_cli.errors import InputError
+    from mst_cli.model.ladder import choose_mechanics
     if pareto_designs and pareto_count is None:
         raise InputError("--pareto-designs", True, "needs --pareto N")
     choice = choose_mechanics(refine, doc.accuracy_rel, doc.mechanics)
@@ -134,36 +158,32 @@ def design(spec_file: Path, out_dir: Path | None, seed: int | None, max_evaluati
         raise InputError("--pareto", pareto_count, f"maps the front with the L0 spring model; drop "
                          f"--refine/model.accuracy_rel (asked for {choice.mechanics}) or refine one "
                          f"front design afterwards with --pareto-designs and mst design --refine")
-    if choice.message() and not (quiet or as_json):
-        click.echo(choice.message() + ("" if choice.mechanics == "spring"
-                                       else f": L0 design refined with {choice.mechanics}"))
-    if cal is not None and not (quiet or as_json):
-        click.echo("\n".join(cal.lines()))
-    progress = _Progress(quiet or as_json)
-    front = None
-    t_start = time.perf_counter()
+    return choice
+
+
+def _solve(doc, refine: str | None, pareto_count: int | None, seed: int | None, max_evaluations: int | None,
+           progress: _Progress) -> tuple:
+    """(the design result, the Pareto front or None) through the library's API."""
+    from mst_cli import api
     try:
         if pareto_count is not None:
-            from mst_cli.design.pareto import pareto_front
-            result, front = pareto_front(replace(doc, mechanics="spring"), pareto_count, seed=seed,
-                                         max_evaluations=max_evaluations, progress=progress)
-        elif choice.mechanics == "spring":
-            result = design_document(replace(doc, mechanics="spring"), seed=seed,
-                                     max_evaluations=max_evaluations, progress=progress)
-        else:
-            from mst_cli.design.refine import refine_document
-            result = refine_document(doc, choice.mechanics, seed=seed,
-                                     max_evaluations=max_evaluations, progress=progress)
+            return api.pareto(doc, pareto_count, seed=seed, max_evaluations=max_evaluations, progress=progress)
+        return api.design(doc, seed=seed, max_evaluations=max_evaluations, refine=refine,
+                          progress=progress), None
     finally:
         progress.close()
-    out = out_dir or default_out_dir(doc.name)
+
+
+def _write(result, front, cal, out: Path, pareto_count: int | None, pareto_designs: bool, plot: bool,
+           name: str) -> dict:
+    """design.yaml, the report files and, with a front, pareto.csv/png (and its designs); returns
+    report.json's dict. Without a front an older run's front files are removed."""
     extra = result.report_extra()
     if cal is not None:
         extra["design"]["calibration"] = cal.report()
     extra_files = {"design.yaml": result.design_yaml_dict()}
-    plot = not (no_plot or as_json)
 
-    def writers(st):                  # no front this run: an older run's front must not stay
+    def writers(st):
         st.remove("pareto.csv")
         st.remove("pareto.png")
     if front:
@@ -179,24 +199,22 @@ def design(spec_file: Path, out_dir: Path | None, seed: int | None, max_evaluati
         def writers(st):
             st.write_text("pareto.csv", pareto_csv(front))
             if plot:
-                plot_pareto(front, st.path("pareto.png"), title=f"{doc.name}: designs that meet every target")
+                plot_pareto(front, st.path("pareto.png"), title=f"{name}: designs that meet every target")
             else:
                 st.remove("pareto.png")
-    report = write_simulation(result.document, result.geometry, result.response, out,
-                              extra_files=extra_files, extra_report=extra, more=writers, plot=plot)
-    if as_json:
-        click.echo(json.dumps(report, indent=2, allow_nan=False))
-    elif not quiet:
-        click.echo(result.table())
-        if front:
-            from mst_cli.design.pareto import front_table
-            click.echo(front_table(front))
-        elif pareto_count is not None:
-            click.echo("Pareto front: not mapped (the targets are not met)")
-        files = "design.yaml, report.json, response.csv" + (", response.png" if plot else "") + (
-            ", pareto.csv" + (", pareto.png" if plot else "") if front else "") + (
-            f", pareto/ ({len(front)} designs)" if front and pareto_designs else "")
-        click.echo(f"wrote {out}/{files} ({time.perf_counter() - t_start:.2f} s)")
-    if result.exit_code:
-        click.echo(f"mst design: targets not met: {result.binding}: {result.reasons[0]}", err=True)
-    sys.exit(result.exit_code)
+    return write_simulation(result.document, result.geometry, result.response, out,
+                            extra_files=extra_files, extra_report=extra, more=writers, plot=plot)
+
+
+def _print_summary(result, front, pareto_count: int | None, pareto_designs: bool, out: Path, plot: bool,
+                   seconds: float) -> None:
+    click.echo(result.table())
+    if front:
+        from mst_cli.design.pareto import front_table
+        click.echo(front_table(front))
+    elif pareto_count is not None:
+        click.echo("Pareto front: not mapped (the targets are not met)")
+    files = "design.yaml, report.json, response.csv" + (", response.png" if plot else "") + (
+        ", pareto.csv" + (", pareto.png" if plot else "") if front else "") + (
+        f", pareto/ ({len(front)} designs)" if front and pareto_designs else "")
+    click.echo(f"wrote {out}/{files} ({seconds:.2f} s)")
