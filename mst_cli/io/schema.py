@@ -106,31 +106,21 @@ class Rule:
         return f"must be {kind}{' ' + ' and '.join(parts) if parts else ''}{unit}{null}"
 
     def check(self, path: str, value: Any) -> Any:
+        """The value as the rule reads it (float, int, str, bool, a pair, a weights dict), or an
+        InputError naming ``path``, the value and what is allowed."""
         if value is None:
             if self.nullable:
                 return None
             raise InputError(path, value, self.describe())
         if self.kind == "weights":
-            if not isinstance(value, dict) or not value:
-                raise InputError(path, value, self.describe())
-            out = {}
-            weight = Rule("float", lo=self.lo, hi=self.hi)
-            for key, w in value.items():
-                if key not in self.choices:
-                    raise InputError(f"{path}.{key}", w, "unknown term; allowed: " + ", ".join(self.choices))
-                out[key] = weight.check(f"{path}.{key}", w)
-            if not any(out.values()):
-                raise InputError(path, value, self.describe())
-            return out
+            return self._weights(path, value)
         if self.kind in ("pair", "bounds"):
             if not isinstance(value, (list, tuple)) or len(value) != 2:
                 raise InputError(path, value, self.describe())
             # a [low, high] pair's bounds are checked by ordered() once its section is read
             return tuple(self._number(f"{path}[{i}]", v, bounded=self.kind == "pair") for i, v in enumerate(value))
         if self.kind == "str":
-            if not isinstance(value, str):
-                raise InputError(path, value, self.describe())
-            if self.choices and value not in self.choices:
+            if not isinstance(value, str) or (self.choices and value not in self.choices):
                 raise InputError(path, value, self.describe())
             return value
         if self.kind == "bool":
@@ -142,6 +132,20 @@ class Rule:
                 raise InputError(path, value, self.describe())
             return int(self._bounded(path, value))
         return self._number(path, value)
+
+    def _weights(self, path: str, value: Any) -> dict:
+        """A non-empty {term: weight} of known terms, not all zero."""
+        if not isinstance(value, dict) or not value:
+            raise InputError(path, value, self.describe())
+        out = {}
+        weight = Rule("float", lo=self.lo, hi=self.hi)
+        for key, w in value.items():
+            if key not in self.choices:
+                raise InputError(f"{path}.{key}", w, "unknown term; allowed: " + ", ".join(self.choices))
+            out[key] = weight.check(f"{path}.{key}", w)
+        if not any(out.values()):
+            raise InputError(path, value, self.describe())
+        return out
 
     def ordered(self, path: str, pair) -> tuple[float, float]:
         """A "bounds" pair: low < high, both inside the rule's bounds."""
