@@ -7,6 +7,8 @@
   centreline with nothing of layer n - 1 under it (a strand held only at its ends).
 * :func:`gaps_along_line` gives the air between extrusions along a line across one layer, to
   compare a designed cavity gap with the one that prints.
+* :func:`material_across` gives the material along lines across a wall's centre line, to
+  compare a designed wall thickness with the one that prints.
 
 Conventions: the G-code frame (mm, bed coordinates); layers are numbered from 1 and carry the
 height of their top (``;Z:``). A pause found at the start of layer k is reported as "after
@@ -410,13 +412,11 @@ def free_spans(gcode: GCode, px_per_mm: float = 20.0, step_mm: float | None = No
 
 
 # --------------------------------------------------------------------------- gaps on a line
-def covered_intervals(segments: np.ndarray, axis: str, value: float) -> np.ndarray:
-    """Where the line {axis = value} crosses the extrusions (centreline +- width/2, round
-    ends): (m, 2) sorted, merged intervals of the other coordinate."""
+def _stroke_spans(segments: np.ndarray, axis: str, value: float) -> tuple[np.ndarray, np.ndarray]:
+    """Where the line {axis = value} crosses each extrusion (centreline +- width/2, round ends):
+    per segment (lo, hi) of the other coordinate, lo > hi where it misses."""
     if axis not in ("x", "y"):
         raise ValueError("axis must be 'x' or 'y'")
-    if len(segments) == 0:
-        return np.zeros((0, 2))
     s = segments.astype(float)
     if axis == "y":                 # swap roles: the line y = value, measure along x
         s = s[:, [1, 0, 3, 2, 4]]
@@ -450,8 +450,11 @@ def covered_intervals(segments: np.ndarray, axis: str, value: float) -> np.ndarr
     body = nz & np.isfinite(ylo)
     lo = np.where(body, np.minimum(lo, ylo), lo)
     hi = np.where(body, np.maximum(hi, yhi), hi)
-    hit = hi >= lo
-    iv = np.stack([lo[hit], hi[hit]], axis=1)
+    return lo, hi
+
+
+def _merge(iv: np.ndarray) -> np.ndarray:
+    """Sorted, merged (m, 2) intervals of (k, 2) ones."""
     if len(iv) == 0:
         return iv.reshape(0, 2)
     iv = iv[np.argsort(iv[:, 0])]
@@ -462,6 +465,63 @@ def covered_intervals(segments: np.ndarray, axis: str, value: float) -> np.ndarr
         else:
             merged.append([l, h])
     return np.array(merged)
+
+
+def covered_intervals(segments: np.ndarray, axis: str, value: float) -> np.ndarray:
+    """Where the line {axis = value} crosses the extrusions (centreline +- width/2, round
+    ends): (m, 2) sorted, merged intervals of the other coordinate."""
+    if axis not in ("x", "y"):
+        raise ValueError("axis must be 'x' or 'y'")
+    if len(segments) == 0:
+        return np.zeros((0, 2))
+    lo, hi = _stroke_spans(segments, axis, value)
+    hit = hi >= lo
+    return _merge(np.stack([lo[hit], hi[hit]], axis=1))
+
+
+@dataclass
+class Across:
+    """The material a line across a wall meets: the run of extrusion that holds the wall's
+    centre line, its length and how many extrusion centrelines cross the line inside it."""
+
+    width_mm: float                 # 0.0: no extrusion within reach of the centre line
+    n_lines: int
+    offset_mm: tuple[float, float] | None     # the run, signed distance from the centre line
+
+
+def material_across(segments: np.ndarray, start_xy, end_xy, stations: int, reach_mm: float) -> list[Across]:
+    """At ``stations`` points evenly along the centre line start -> end (one at its midpoint
+    when the two coincide), the run of material along the line perpendicular to it: the merged
+    extrusion strokes (each its own width, round ends) that cover the centre line, or come
+    within ``reach_mm`` of it (the nearest such run). Its length is the wall as the slicer lays
+    it down: one line of width w gives w, two overlapping perimeters their outer edges' distance
+    (not the sum of their widths, which counts the overlap twice)."""
+    a, b = np.asarray(start_xy, dtype=float), np.asarray(end_xy, dtype=float)
+    length = float(np.hypot(*(b - a)))
+    u = (b - a) / length if length > 0 else np.array([1.0, 0.0])
+    n = np.array([-u[1], u[0]])
+    s = np.asarray(segments, dtype=float).reshape(-1, 5)
+    rel0, rel1 = s[:, 0:2] - a, s[:, 2:4] - a
+    # the segments in (along, across) coordinates: the line across at 'along = station'
+    sr = np.column_stack([rel0 @ u, rel0 @ n, rel1 @ u, rel1 @ n, s[:, 4]])
+    out = []
+    for station in (np.linspace(0.0, length, stations) if length > 0 and stations > 1 else [0.5 * length]):
+        lo, hi = _stroke_spans(sr, "x", float(station)) if len(sr) else (np.zeros(0), np.zeros(0))
+        hit = hi >= lo
+        runs = _merge(np.stack([lo[hit], hi[hit]], axis=1))
+        distance = np.maximum(0.0, np.maximum(runs[:, 0], -runs[:, 1])) if len(runs) else np.zeros(0)
+        if not len(runs) or distance.min() > reach_mm:
+            out.append(Across(0.0, 0, None))
+            continue
+        r0, r1 = runs[int(np.argmin(distance))]
+        # centrelines crossing the line inside the run (half-open along: a shared vertex counts once)
+        s0, s1 = sr[:, 0], sr[:, 2]
+        crosses = (np.minimum(s0, s1) <= station) & (station < np.maximum(s0, s1))
+        f = np.where(crosses, (station - s0) / np.where(s1 != s0, s1 - s0, 1.0), 0.0)
+        r_at = sr[:, 1] + f * (sr[:, 3] - sr[:, 1])
+        n_lines = int(np.sum(crosses & (r_at >= r0) & (r_at <= r1)))
+        out.append(Across(float(r1 - r0), n_lines, (float(r0), float(r1))))
+    return out
 
 
 def gaps_along_line(layer: Layer, axis: str, value: float, lo: float | None = None,

@@ -36,8 +36,8 @@ MANIFEST_FORMAT = 2
 
 
 def print_section(g: SensorGeometry) -> dict:
-    """How the part lies on the bed, where the print pauses, and the designed cavity gaps along
-    lines of the print frame (what ``mst slice`` compares with the G-code)."""
+    """How the part lies on the bed, where the print pauses, and the designed cavity gaps and
+    wall centre lines in the print frame (what ``mst slice`` compares with the G-code)."""
     lo, hi = g.body_bbox_mm
     corners = g.to_print_frame([lo, hi])
     lh = g.layer_height_mm
@@ -49,6 +49,14 @@ def print_section(g: SensorGeometry) -> dict:
         cavity_lines.append({"layer": i + 1, "x_mm": 0.0, "z_mm": z_measure,
                              "y_low_mm": -(zb + cell.h_mm - cell.t_mm), "y_high_mm": -(zb + cell.t_mm),
                              "gap_mm": cell.cavity_height_mm})
+    # every inclined wall cuts every print layer along the same line (print y = -sensor z):
+    # the middle of its free stretch, measured over the print layers above the first
+    wall_lines = []
+    for i, (cell, zb) in enumerate(zip(g.layers, g.layer_bottoms_mm)):
+        for name, (xa, za), (xb, zb_) in cell.wall_centrelines_xz():
+            wall_lines.append({"layer": i + 1, "wall": name, "t_mm": cell.t_mm,
+                               "x0_mm": xa, "y0_mm": -(zb + za), "x1_mm": xb, "y1_mm": -(zb + zb_),
+                               "z_low_mm": lh, "z_high_mm": g.depth_mm})
     return {
         "orientation": "lying on the sensor's -y face: print (x, y, z) = (x, -z, y + depth/2)",
         "rotation": [[1, 0, 0], [0, 0, -1], [0, 1, 0]],
@@ -62,12 +70,14 @@ def print_section(g: SensorGeometry) -> dict:
                   "why": "drop the magnet into its pocket"},
         "magnet_top_z_mm": g.print_height_mm(g.magnet.radius_mm),
         "cavity_lines": cavity_lines,
+        "wall_lines": wall_lines,
     }
 
 
 def export_manifest(name: str, geometry: SensorGeometry, printer: Printer, stl_tolerance_mm: float,
-                    files: list[str]) -> dict:
-    """The expected dimensions of the exported body (see module docstring)."""
+                    files: list[str], design: dict | None = None) -> dict:
+    """The expected dimensions of the exported body (see module docstring); ``design`` (the
+    design document as its file holds it) lets ``mst slice`` simulate the walls as sliced."""
     g, h = geometry, geometry.housing
     bbox_min, bbox_max = g.body_bbox_mm
     x0, x1 = g.slot_x_mm
@@ -144,6 +154,7 @@ def export_manifest(name: str, geometry: SensorGeometry, printer: Printer, stl_t
             "wall_mm": min(c.t_mm for c in cells),
             "cavity_gap_mm": min(c.cavity_height_mm for c in cells),
         },
+        **({"design": design} if design is not None else {}),
     }
 
 
@@ -199,6 +210,23 @@ class CavityLine:
     y_low_mm: float = _kind("num")
     y_high_mm: float = _kind("num")
     gap_mm: float = _kind("num")
+
+
+@dataclass(frozen=True)
+class WallLine:
+    """The centre line of one inclined wall in the print frame (the middle of the stretch where
+    it stands free) and the print heights it is measured over: ``mst slice`` measures the
+    as-sliced wall across it."""
+
+    layer: int = _kind("int")
+    wall: str = _kind("str")
+    t_mm: float = _kind("pos")
+    x0_mm: float = _kind("num")
+    y0_mm: float = _kind("num")
+    x1_mm: float = _kind("num")
+    y1_mm: float = _kind("num")
+    z_low_mm: float = _kind("num")
+    z_high_mm: float = _kind("num")
 
 
 @dataclass(frozen=True)
@@ -310,16 +338,21 @@ class SlicePrint:
     layer_height_mm: float | None = _optional("pos")
     pause: Pause | None = _optional(Pause)
     cavity_lines: tuple[CavityLine, ...] = _optional(ListOf(CavityLine), ())
+    wall_lines: tuple[WallLine, ...] = _optional(ListOf(WallLine), ())
 
 
 @dataclass(frozen=True)
 class SliceManifest:
-    """What ``mst slice`` reads from export.json: the name, the pause asked for and the cavity
-    lines, validated before anything is sliced with :class:`Manifest`'s own field kinds. Every
-    key is optional: a hand-made export of any body slices (a missing pause is "not given")."""
+    """What ``mst slice`` reads from export.json: the name, the pause asked for, the cavity and
+    wall lines and the design document, validated before anything is sliced with
+    :class:`Manifest`'s own field kinds (the design with the design-file rules, when it is
+    simulated). Every key is optional: a hand-made export of any body slices (a missing pause
+    is "not given"), and an export.json written before the walls were measured slices without
+    them."""
 
     name: str | None = _optional("str")
     print: SlicePrint = _optional(SlicePrint, SlicePrint())
+    design: dict | None = _optional("map")
 
     @classmethod
     def from_dict(cls, data) -> SliceManifest:
@@ -338,11 +371,13 @@ _SCALAR_OK = {
     "vol": lambda v: isinstance(v, (int, float)) and not isinstance(v, bool) and 0 <= v <= MAX_VOLUME,
     "int": lambda v: isinstance(v, int) and not isinstance(v, bool) and abs(v) <= 10**9,
     "str": lambda v: isinstance(v, str),
+    "map": lambda v: isinstance(v, dict),
 }
 _KIND_TEXT = {"num": f"a finite number within +-{MAX_COORD_MM:g}",
               "pos": f"a size from {MIN_SIZE_MM:g} to {MAX_COORD_MM:g}",
               "tol": f"a tolerance from {STL_TOLERANCE_MM[0]:g} to {STL_TOLERANCE_MM[1]:g} mm",
-              "vol": f"a number from 0 to {MAX_VOLUME:g}", "int": "an integer", "str": "a string"}
+              "vol": f"a number from 0 to {MAX_VOLUME:g}", "int": "an integer", "str": "a string",
+              "map": "a mapping (a design document)"}
 
 
 def _describe(kind) -> str:
@@ -360,7 +395,7 @@ def _parse(kind, data, path: str):
     floats, lists tuples, mappings dataclasses. ``path`` names the field in errors."""
     if isinstance(kind, str):
         if _SCALAR_OK[kind](data):
-            return data if kind in ("int", "str") else float(data)
+            return data if kind in ("int", "str", "map") else float(data)
     elif isinstance(kind, tuple):
         sub, n = kind
         if isinstance(data, list) and len(data) == n:
