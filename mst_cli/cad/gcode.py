@@ -481,21 +481,25 @@ def covered_intervals(segments: np.ndarray, axis: str, value: float) -> np.ndarr
 
 @dataclass
 class Across:
-    """The material a line across a wall meets: the run of extrusion that holds the wall's
-    centre line, its length and how many extrusion centrelines cross the line inside it."""
+    """The material a line across a wall meets: the runs of extrusion inside the wall, from the
+    first one's outer edge to the last one's (``offset_mm``, signed distance from the centre
+    line), and how many extrusion centrelines cross the line between them."""
 
-    width_mm: float                 # 0.0: no extrusion within reach of the centre line
+    width_mm: float                 # 0.0: no extrusion reaches into the wall's core
     n_lines: int
-    offset_mm: tuple[float, float] | None     # the run, signed distance from the centre line
+    offset_mm: tuple[float, float] | None
 
 
-def material_across(segments: np.ndarray, start_xy, end_xy, stations: int, reach_mm: float) -> list[Across]:
+def material_across(segments: np.ndarray, start_xy, end_xy, stations: int, core_mm: float) -> list[Across]:
     """At ``stations`` points evenly along the centre line start -> end (one at its midpoint
-    when the two coincide), the run of material along the line perpendicular to it: the merged
-    extrusion strokes (each its own width, round ends) that cover the centre line, or come
-    within ``reach_mm`` of it (the nearest such run). Its length is the wall as the slicer lays
-    it down: one line of width w gives w, two overlapping perimeters their outer edges' distance
-    (not the sum of their widths, which counts the overlap twice)."""
+    when the two coincide), the wall along the line perpendicular to it: the merged extrusion
+    strokes (each its own width, round ends) that reach into its core, within ``core_mm`` of
+    the centre line, measured from the outer edge of the first to that of the last.
+
+    That is the wall as the slicer lays it down: one line of width w gives w, overlapping
+    perimeters their outer edges' distance (not the sum of their widths, which counts the overlap
+    twice), and the small voids a zig-zag infill leaves at its turns stay inside the wall.
+    Material beyond air outside the core (a plate, the pad) is not the wall."""
     a, b = np.asarray(start_xy, dtype=float), np.asarray(end_xy, dtype=float)
     length = float(np.hypot(*(b - a)))
     u = (b - a) / length if length > 0 else np.array([1.0, 0.0])
@@ -509,18 +513,18 @@ def material_across(segments: np.ndarray, start_xy, end_xy, stations: int, reach
         lo, hi = _stroke_spans(sr, "x", float(station)) if len(sr) else (np.zeros(0), np.zeros(0))
         hit = hi >= lo
         runs = _merge(np.stack([lo[hit], hi[hit]], axis=1))
-        distance = np.maximum(0.0, np.maximum(runs[:, 0], -runs[:, 1])) if len(runs) else np.zeros(0)
-        if not len(runs) or distance.min() > reach_mm:
+        wall = runs[(runs[:, 1] > -core_mm) & (runs[:, 0] < core_mm)] if len(runs) else runs
+        if not len(wall):
             out.append(Across(0.0, 0, None))
             continue
-        r0, r1 = runs[int(np.argmin(distance))]
-        # centrelines crossing the line inside the run (half-open along: a shared vertex counts once)
+        r0, r1 = float(wall[0, 0]), float(wall[-1, 1])
+        # centrelines crossing the line inside the wall (half-open along: a shared vertex counts once)
         s0, s1 = sr[:, 0], sr[:, 2]
         crosses = (np.minimum(s0, s1) <= station) & (station < np.maximum(s0, s1))
         f = np.where(crosses, (station - s0) / np.where(s1 != s0, s1 - s0, 1.0), 0.0)
         r_at = sr[:, 1] + f * (sr[:, 3] - sr[:, 1])
         n_lines = int(np.sum(crosses & (r_at >= r0) & (r_at <= r1)))
-        out.append(Across(float(r1 - r0), n_lines, (float(r0), float(r1))))
+        out.append(Across(r1 - r0, n_lines, (r0, r1)))
     return out
 
 

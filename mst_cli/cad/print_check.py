@@ -138,6 +138,9 @@ def cavity_gaps(g: GCode, manifest: SliceManifest, shift: Shift, z_shift: float)
 
 
 WALL_STATIONS = 5        # lines across each wall, evenly along the middle of its free stretch
+# Extrusion within this of a wall's designed faces may be a neighbour's (the plate beyond a
+# narrow notch); what reaches deeper into the wall is the wall.
+WALL_FACE_MARGIN_MM = 0.05
 
 
 def walls_as_sliced(g: GCode, manifest: SliceManifest, shift: Shift, z_shift: float) -> Check:
@@ -158,7 +161,8 @@ def walls_as_sliced(g: GCode, manifest: SliceManifest, shift: Shift, z_shift: fl
             if not w.z_low_mm < layer.z_mm - z_shift <= w.z_high_mm + 1e-6:
                 continue
             samples += material_across(layer.segments[layer.of_part()], (w.x0_mm + shift[0], w.y0_mm + shift[1]),
-                                       (w.x1_mm + shift[0], w.y1_mm + shift[1]), WALL_STATIONS, 0.5 * w.t_mm)
+                                       (w.x1_mm + shift[0], w.y1_mm + shift[1]), WALL_STATIONS,
+                                       max(0.5 * w.t_mm - WALL_FACE_MARGIN_MM, 0.25 * w.t_mm))
         width = np.array([a.width_mm for a in samples])
         n_lines = np.array([a.n_lines for a in samples], dtype=int)
         row = {"wall": w.wall, "designed_t_mm": w.t_mm, "samples": len(samples)}
