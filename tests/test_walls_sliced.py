@@ -6,6 +6,7 @@ wall centre lines are checked against the hex profile; the prediction against th
 uniform wall offset. The real slice of the reference export is in tests/test_slice.py.
 """
 
+import json
 import math
 
 import numpy as np
@@ -13,9 +14,9 @@ import pytest
 
 from mst_cli import api
 from mst_cli.cad import gcode as G
-from mst_cli.cad.manifest import SliceManifest
+from mst_cli.cad.manifest import Manifest, SliceManifest, export_manifest
 from mst_cli.cad.print_check import walls_as_sliced
-from mst_cli.cad.sliced_model import design_document, predict
+from mst_cli.cad.sliced_model import predict
 from mst_cli.calibrate.fit import with_walls
 from mst_cli.errors import InputError
 from mst_cli.io.schema import document_to_dict
@@ -177,10 +178,19 @@ def test_sliced_walls_thinner_than_the_printing_rules_are_still_simulated(forwar
     assert predict(forward, [0.0, 1.0, 1.4])["error"].startswith("a wall is missing")
 
 
-def test_a_malformed_design_in_export_json_names_its_field(forward):
+@pytest.mark.parametrize("kind", [Manifest, SliceManifest])
+def test_a_malformed_design_in_export_json_names_its_field(forward, kind):
+    # check and slice read it with one rule: the design file's
     d = document_to_dict(forward)
-    assert design_document(d).layers == forward.layers
-    d["layers"][1]["t_mm"] = -1
-    with pytest.raises(InputError) as exc:
-        design_document(d)
-    assert exc.value.field.startswith("export.json.design.layers")
+    assert SliceManifest.from_dict({"design": d}).design.layers == forward.layers
+    base = export_manifest(forward.name, forward.geometry(), forward.printer, 0.01, ["sensor.stl"], design=d)
+    assert kind.from_dict(json.loads(json.dumps(base))).design.layers == forward.layers
+    for edit, field in ((lambda m: m["design"]["layers"][1].update(t_mm=-1), "export.json.design.layers[1].t_mm"),
+                        (lambda m: m["design"]["layers"][0].update(t_mm=0.95), "export.json.design.layers[0]"),
+                        (lambda m: m["design"]["layers"][2].pop("t_mm"), "export.json.design.layers"),
+                        (lambda m: m.update(design=[1, 2]), "export.json.design")):
+        bad = json.loads(json.dumps(base))
+        edit(bad)
+        with pytest.raises(InputError) as exc:
+            kind.from_dict(bad)
+        assert exc.value.field.startswith(field), (exc.value.field, field)

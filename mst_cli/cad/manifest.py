@@ -28,7 +28,8 @@ from typing import TYPE_CHECKING
 from mst_cli import __version__
 from mst_cli.errors import InputError
 
-if TYPE_CHECKING:                 # annotations only: reading export.json needs no geometry model
+if TYPE_CHECKING:                 # annotations only: reading export.json needs no geometry model (but for its design)
+    from mst_cli.io.schema import Document
     from mst_cli.model.geometry import Printer, SensorGeometry
 
 MANIFEST_NAME = "export.json"
@@ -174,7 +175,8 @@ STL_TOLERANCE_MM = (1e-4, 1.0)
 def _kind(kind):
     """A field of export.json: ``kind`` is "num" (a finite number within +-MAX_COORD_MM; bool is
     not a number), "pos" (a size from MIN_SIZE_MM to MAX_COORD_MM), "tol" (STL_TOLERANCE_MM),
-    "vol" (an area or volume from 0 to MAX_VOLUME), "int", "str", (kind, n) a list of exactly n,
+    "vol" (an area or volume from 0 to MAX_VOLUME), "int", "str", "design" (a design document,
+    :func:`_design_document`), (kind, n) a list of exactly n,
     ListOf a list of up to MAX_LIST, or a dataclass below (a mapping). A field with a default
     may be missing (``optional``)."""
     return field(metadata={"kind": kind})
@@ -241,6 +243,7 @@ class PrintFrame:
     magnet_top_z_mm: float = _kind("num")
     pause: Pause = _kind(Pause)
     cavity_lines: tuple[CavityLine, ...] = _kind(ListOf(CavityLine))
+    wall_lines: tuple[WallLine, ...] = _optional(ListOf(WallLine), ())     # exports before issue 21 lack it
 
 
 @dataclass(frozen=True)
@@ -316,6 +319,7 @@ class Manifest:
     magnet_pocket: Pocket = _kind(Pocket)
     board_slot: Slot = _kind(Slot)
     printer: PrinterLimits = _kind(PrinterLimits)
+    design: Document | None = _optional("design")          # exports before issue 21 lack it
 
     @classmethod
     def from_dict(cls, data) -> Manifest:
@@ -352,7 +356,7 @@ class SliceManifest:
 
     name: str | None = _optional("str")
     print: SlicePrint = _optional(SlicePrint, SlicePrint())
-    design: dict | None = _optional("map")
+    design: Document | None = _optional("design")
 
     @classmethod
     def from_dict(cls, data) -> SliceManifest:
@@ -371,13 +375,11 @@ _SCALAR_OK = {
     "vol": lambda v: isinstance(v, (int, float)) and not isinstance(v, bool) and 0 <= v <= MAX_VOLUME,
     "int": lambda v: isinstance(v, int) and not isinstance(v, bool) and abs(v) <= 10**9,
     "str": lambda v: isinstance(v, str),
-    "map": lambda v: isinstance(v, dict),
 }
 _KIND_TEXT = {"num": f"a finite number within +-{MAX_COORD_MM:g}",
               "pos": f"a size from {MIN_SIZE_MM:g} to {MAX_COORD_MM:g}",
               "tol": f"a tolerance from {STL_TOLERANCE_MM[0]:g} to {STL_TOLERANCE_MM[1]:g} mm",
-              "vol": f"a number from 0 to {MAX_VOLUME:g}", "int": "an integer", "str": "a string",
-              "map": "a mapping (a design document)"}
+              "vol": f"a number from 0 to {MAX_VOLUME:g}", "int": "an integer", "str": "a string"}
 
 
 def _describe(kind) -> str:
@@ -393,9 +395,11 @@ def _describe(kind) -> str:
 def _parse(kind, data, path: str):
     """``data`` as ``kind`` (see :func:`_kind`), checked before it is read: numbers become
     floats, lists tuples, mappings dataclasses. ``path`` names the field in errors."""
+    if kind == "design":
+        return _design_document(data, path)
     if isinstance(kind, str):
         if _SCALAR_OK[kind](data):
-            return data if kind in ("int", "str", "map") else float(data)
+            return data if kind in ("int", "str") else float(data)
     elif isinstance(kind, tuple):
         sub, n = kind
         if isinstance(data, list) and len(data) == n:
@@ -415,6 +419,24 @@ def _parse(kind, data, path: str):
         return kind(**values)
     shown = data if not isinstance(data, (dict, list)) else type(data).__name__
     raise InputError(path, shown, f"must be {_describe(kind)}: rewrite it with 'mst export'")
+
+
+def _design_document(data, path: str) -> Document:
+    """export.json's ``design``: the design document the body was built from, with the
+    design-file rules (every cell printable and working); an InputError names the field inside
+    it (``export.json.design.layers[1].t_mm``)."""
+    from mst_cli.io.schema import design_geometry, parse_document
+    if not isinstance(data, dict):
+        raise InputError(path, type(data).__name__ if isinstance(data, list) else data,
+                         "must be a mapping (the design document): rewrite it with 'mst export'")
+    try:
+        doc = parse_document(data, source=path)
+        if not doc.is_design:
+            raise InputError("layers", None, "must give every layer's theta_deg, t_mm and h_mm (a design)")
+        design_geometry(doc)
+    except InputError as exc:
+        raise InputError(f"{path}.{exc.field}", exc.value, f"{exc.allowed}: rewrite it with 'mst export'") from None
+    return doc
 
 
 def load_manifest(path: Path, kind: type = Manifest) -> Manifest | SliceManifest:

@@ -4,29 +4,14 @@ wall thicknesses the G-code lays down in place of the drawn ones, beside the des
 Both runs are :func:`mst_cli.api.simulate` (the model ``mst simulate`` runs: the file's
 mechanics and field model, the printer section's corrections), so the only difference between
 the two columns is each layer's wall thickness t. The thickness comes from
-:func:`mst_cli.cad.print_check.walls_as_sliced`; the design's file rules are checked before
-anything is sliced (:func:`design_document`).
+:func:`mst_cli.cad.print_check.walls_as_sliced`; the design (export.json's ``design``) is read
+with the design-file rules before anything is sliced (:mod:`mst_cli.cad.manifest`).
 """
 
 from __future__ import annotations
 
 from mst_cli.errors import InputError
 from mst_cli.io.schema import Document
-
-
-def design_document(design: dict) -> Document:
-    """export.json's ``design`` as a design Document (the design-file rules; an InputError
-    names the field as ``export.json.design.<field>``)."""
-    from mst_cli.api import load_design
-    from mst_cli.io.schema import parse_document
-    try:
-        doc = parse_document(design, source="export.json.design")
-        if not doc.is_design:
-            raise InputError("layers", None, "must give every layer's theta_deg, t_mm and h_mm (a design, not a spec)")
-        return load_design(doc)
-    except InputError as exc:
-        raise InputError(f"export.json.design.{exc.field}", exc.value,
-                         f"{exc.allowed}: rewrite it with 'mst export'") from None
 
 
 def _change(new: float, old: float) -> float | None:

@@ -98,10 +98,6 @@ def slice_export(path: str | Path, profile: str | Path | None = None, max_span_m
     settings = S.check_profile(profile, exe)
     files = resolve_export(path, need_stl=False)
     manifest = load_manifest(files.manifest, SliceManifest)    # before any slicing: exit 2 naming the key
-    design = None
-    if manifest.design is not None:
-        from mst_cli.cad.sliced_model import design_document
-        design = design_document(manifest.design)                # the design-file rules, also before slicing
     scripts = S.post_process_scripts(settings)
     if scripts and note is not None:
         note(f"the profile's post_process runs {', '.join(map(repr, scripts))} on each G-code "
@@ -143,7 +139,7 @@ def slice_export(path: str | Path, profile: str | Path | None = None, max_span_m
               check_support(gs), cavity_gaps(g, manifest, shift, z_shift),
               walls_as_sliced(g, manifest, shift, z_shift)]
     span_check, pause_check, support_check, gaps, walls = checks
-    walls_report = {"layers": walls.values["layers"], "predicted": _predicted(design, walls.values["layers"])}
+    walls_report = {"layers": walls.values["layers"], "predicted": _predicted(manifest.design, walls.values["layers"])}
     if isinstance(walls_report["predicted"], dict):
         say("simulated the walls as sliced")
     pause_report = dict(pause_check.values,
