@@ -1,8 +1,8 @@
 """What the walls as sliced do to the sensor: the design export.json carries, simulated with the
 wall thicknesses the G-code lays down in place of the drawn ones, beside the design itself.
 
-Both runs are :func:`mst_cli.api.simulate` (the model ``mst simulate`` runs: the file's
-mechanics and field model, the printer section's corrections), so the only difference between
+Both runs are :func:`mst_cli.calibrate.fit.simulate_as_printed` (what ``mst simulate`` runs: the
+file's mechanics and field model, the printer section's corrections), so the only difference between
 the two columns is each layer's wall thickness t. The thickness comes from
 :func:`mst_cli.cad.print_check.walls_as_sliced`; the design (export.json's ``design``) is read
 with the design-file rules before anything is sliced (:mod:`mst_cli.cad.manifest`).
@@ -22,13 +22,15 @@ def predict(doc: Document, sliced_t_mm: list[float]) -> dict:
     """S_i and R_i of ``doc`` as designed and with layer i's wall ``sliced_t_mm[i]`` (a row per
     regime, relative changes), or ``{"error": why}`` when the sliced walls make no sensor the
     model can run (a wall missing, a cavity closed)."""
-    from mst_cli.api import simulate
-    from mst_cli.calibrate.fit import with_walls
-    designed = simulate(doc)
+    from mst_cli.calibrate.fit import simulate_as_printed, with_walls
+    from mst_cli.io.schema import design_geometry
+    designed = simulate_as_printed(doc)
     if min(sliced_t_mm) <= 0:
         return {"error": "a wall is missing from the G-code (sliced width 0): nothing to simulate"}
     try:
-        sliced = simulate(with_walls(doc, sliced_t_mm))
+        walls = with_walls(doc, sliced_t_mm)
+        design_geometry(walls)                      # the cell rules a working cell keeps (lock stroke)
+        sliced = simulate_as_printed(walls)
     except InputError as exc:
         return {"error": f"the walls as sliced make no working cell: {exc}"}
     rows = []

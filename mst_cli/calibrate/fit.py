@@ -60,6 +60,7 @@ if TYPE_CHECKING:
 
     from mst_cli.io.schema import Document
     from mst_cli.model.geometry import HexCell, Printer
+    from mst_cli.model.response import Response
 
 # --------------------------------------------------------------------------- parameters
 
@@ -140,6 +141,19 @@ def as_printed(doc: Document, extra_wall_mm: float = 0.0) -> Document:
     values = printer_values(doc)          # within bounds: geometry.printer_violations at parse time
     values["wall_offset_mm"] += extra_wall_mm
     return apply_parameters(doc, values)[0]
+
+
+def simulate_as_printed(doc: Document, mechanics: str | None = None, field_model: str | None = None) -> Response:
+    """The forward model of a valid design as ``mst simulate`` runs it (:func:`mst_cli.api.simulate`):
+    the part as printed (:func:`as_printed`), the mechanics rung the file's accuracy asks for
+    (else its ``model.mechanics``), the file's field model unless one is given."""
+    from mst_cli.model.ladder import choose_mechanics
+    from mst_cli.model.response import simulate as run
+    field_choice = field_model or doc.field_model
+    choice = choose_mechanics(mechanics, doc.accuracy_rel, doc.mechanics)
+    printed = as_printed(doc)
+    return run(printed.geometry(), printed.material, mechanics=choice.mechanics,
+               field_model=None if field_choice == "auto" else field_choice, noise_uT_rms=doc.noise_uT_rms)
 
 
 def full_values(values: dict) -> dict:
