@@ -99,18 +99,11 @@ def simulate(design: str | Path | Document, *, mechanics: str | None = None,
         The part as printed, as the command models it: walls + printer.wall_offset_mm, modulus
         x printer.modulus_factor, gap + printer.gap_offset_mm.
     """
-    from mst_cli.calibrate.fit import as_printed
-    from mst_cli.model.ladder import choose_mechanics
+    from mst_cli.calibrate.fit import simulate_as_printed
     from mst_cli.model.mechanics import MODELS
-    from mst_cli.model.response import simulate as run
     _one_of("--mechanics", mechanics, MODELS)
     _one_of("--field-model", field_model, ("auto", "dipole", "axial", "cylinder"))
-    doc = load_design(design)
-    field_choice = field_model or doc.field_model
-    choice = choose_mechanics(mechanics, doc.accuracy_rel, doc.mechanics)
-    printed = as_printed(doc)
-    return run(printed.geometry(), printed.material, mechanics=choice.mechanics,
-               field_model=None if field_choice == "auto" else field_choice, noise_uT_rms=doc.noise_uT_rms)
+    return simulate_as_printed(load_design(design), mechanics, field_model)
 
 
 def design(spec: str | Path | Document, *, seed: int | None = None, max_evaluations: int | None = None,

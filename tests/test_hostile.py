@@ -1392,6 +1392,12 @@ def manifest_paths(kind=None, prefix=""):
             yield from manifest_paths(sub, path + ".")
 
 
+def forward_design_dict() -> dict:
+    """The reference design as export.json's ``design`` holds it."""
+    from mst_cli.io.schema import document_to_dict, load_document
+    return document_to_dict(load_document(FORWARD))
+
+
 def valid_for(kind):
     """Values the manifest's field ``kind`` accepts, drawn from its own bounds."""
     from dataclasses import fields as dc_fields
@@ -1401,7 +1407,8 @@ def valid_for(kind):
     if isinstance(kind, str):
         return {"num": st.floats(-M.MAX_COORD_MM, M.MAX_COORD_MM), "pos": st.floats(M.MIN_SIZE_MM, M.MAX_COORD_MM),
                 "tol": st.floats(*M.STL_TOLERANCE_MM), "vol": st.floats(0, M.MAX_VOLUME),
-                "int": st.integers(-10 ** 9, 10 ** 9), "str": st.text(max_size=12)}[kind]
+                "int": st.integers(-10 ** 9, 10 ** 9), "str": st.text(max_size=12),
+                "design": st.just(forward_design_dict())}[kind]
     if isinstance(kind, tuple):
         return st.lists(valid_for(kind[0]), min_size=kind[1], max_size=kind[1])
     if isinstance(kind, M.ListOf):
@@ -1411,7 +1418,8 @@ def valid_for(kind):
 
 
 MANIFEST_FIELDS = list(manifest_paths())
-SLICE_READS = ("name", "print", "print.layer_height_mm", "print.pause", "print.cavity_lines")
+SLICE_READS = ("name", "print", "print.layer_height_mm", "print.pause", "print.cavity_lines", "print.wall_lines",
+               "design")
 
 
 @st.composite

@@ -9,6 +9,7 @@ when it is not installed, except in CI (CI=true), where they fail.
 import fnmatch
 import io
 import json
+import math
 import shutil
 import tomllib
 import zipfile
@@ -16,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import yaml
 from click.testing import CliRunner
 
 import mst_cli
@@ -288,7 +290,11 @@ def test_sliced_slot_gap_lands_on_the_designed_line_off_the_origin(tmp_path):
     v = v + off
     lines = [{"layer": 1, "x_mm": 6.0 + off[0], "z_mm": 1.5, "y_low_mm": 3.0 + off[1],
               "y_high_mm": 4.0 + off[1], "gap_mm": 1.0}]
-    extra = {"print": {"layer_height_mm": 0.2, "cavity_lines": lines,
+    # and the two 3 mm walls beside the slot, measured across (along y) away from their junction
+    walls = [{"layer": 1, "wall": name, "t_mm": 3.0, "x0_mm": 4.0 + off[0], "x1_mm": 9.0 + off[0],
+              "y0_mm": yc + off[1], "y1_mm": yc + off[1], "z_low_mm": 0.2, "z_high_mm": 3.0}
+             for name, yc in (("below the slot", 1.5), ("above the slot", 5.5))]
+    extra = {"print": {"layer_height_mm": 0.2, "cavity_lines": lines, "wall_lines": walls,
                        "bbox_min_mm": list(v.min(0)), "bbox_max_mm": list(v.max(0))}}
     folder = write_export(tmp_path / "slot", v, t, extra)
     r = slice_cli([folder, "--no-plot", "--json"])
@@ -299,6 +305,13 @@ def test_sliced_slot_gap_lands_on_the_designed_line_off_the_origin(tmp_path):
     assert row["sliced_y_mm"] == pytest.approx([3.0 + off[1], 4.0 + off[1]], abs=0.1)
     # the part's paths sit half a line inside its bounding box on every side
     assert rep["frame"]["path_inset_from_bbox_mm"] == pytest.approx([0.225] * 4, abs=0.05)
+    # perimeters and solid infill across each 3 mm wall: the run of material is the wall, 3 mm
+    (layer,) = rep["walls_as_sliced"]["layers"]
+    for wall in layer["walls"]:
+        assert wall["sliced_t_mm"] == pytest.approx(3.0, abs=0.05) and wall["missing"] == 0
+        assert wall["n_lines"] >= 4 and wall["samples"] == 14 * 5
+    # a hand-made export.json carries no design: nothing to simulate, said so
+    assert rep["walls_as_sliced"]["predicted"].startswith("not given: export.json has no design")
 
 
 def test_sliced_3mf_pauses_between_the_right_layers(tmp_path):
@@ -311,6 +324,9 @@ def test_sliced_3mf_pauses_between_the_right_layers(tmp_path):
     rep = json.loads(r.stdout)
     (p,) = rep["pause"]["found"]
     assert (p["after_layer"], p["z_mm"], p["command"], p["mid_layer"]) == (10, 2.0, "M601", False)
+    # an export.json without wall lines (hand-made, or written before them) slices, saying so
+    assert rep["walls_as_sliced"]["layers"] == "not given"
+    assert "no print.wall_lines" in rep["walls_as_sliced"]["predicted"]
     lines = (folder / "sensor.gcode").read_text().splitlines()
     pause_line = p["gcode_line"] - 1
     z_change = max(i for i, s in enumerate(lines[:pause_line]) if s.startswith(";Z:"))
@@ -341,6 +357,31 @@ def test_reference_export_prints(tmp_path):
     assert not rep["support"]["needed"]
     (p,) = rep["pause"]["found"]
     assert p["after_layer"] == manifest["print"]["pause"]["after_layer"]
+    # the walls as sliced (0.6, 1.0, 1.4 mm): every wall there, within a tenth of a line of its
+    # drawing, in as many lines as fit across it
+    walls = rep["walls_as_sliced"]
+    assert [la["designed_t_mm"] for la in walls["layers"]] == [la["t_mm"] for la in manifest["layers"]]
+    for la in walls["layers"]:
+        t = la["designed_t_mm"]
+        assert len(la["walls"]) == 4
+        for wall in la["walls"]:
+            assert wall["missing"] == 0 and wall["sliced_t_mm"] == pytest.approx(t, abs=0.045)
+            assert max(1, int(t / 0.45)) <= wall["n_lines"] <= math.ceil(t / 0.45)
+    # ... and their predicted S, R: the design re-simulated with those widths written in by hand
+    doc = yaml.safe_load(FORWARD.read_text())
+    for entry, la in zip(doc["layers"], walls["layers"]):
+        entry["t_mm"] = la["sliced_t_mm"]
+    (tmp_path / "sliced.yaml").write_text(yaml.safe_dump(doc))
+    again = mst_cli.api.simulate(tmp_path / "sliced.yaml")
+    designed = mst_cli.api.simulate(FORWARD)
+    rows = walls["predicted"]["regimes"]
+    assert len(rows) == len(again.regimes) == 3
+    for row, reg, d in zip(rows, again.regimes, designed.regimes):
+        assert row["S_sliced_per_N"] == pytest.approx(reg.sensitivity_secant_per_N, rel=1e-9)
+        assert row["R_sliced_N"] == pytest.approx(reg.force_to_N, rel=1e-9)
+        assert row["S_designed_per_N"] == pytest.approx(d.sensitivity_secant_per_N, rel=1e-12)
+        assert row["R_designed_N"] == pytest.approx(d.force_to_N, rel=1e-12)
+    assert "wall L3" in slice_cli([out, "--no-plot"]).stdout
 
 
 # --------------------------------------------------------------------------- CLI errors

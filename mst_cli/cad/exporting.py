@@ -15,7 +15,7 @@ from mst_cli.cad.manifest import MANIFEST_NAME, STL_TOLERANCE_MM, export_manifes
 from mst_cli.cad.shapes import check_fits
 from mst_cli.errors import InputError
 from mst_cli.io.outputs import staged
-from mst_cli.io.schema import Document
+from mst_cli.io.schema import Document, document_to_dict
 from mst_cli.model.geometry import SensorGeometry
 
 DEFAULT_STL_TOLERANCE_MM = 0.01
@@ -61,5 +61,6 @@ def write_export(doc: Document, geometry: SensorGeometry, out: Path, *, stl: boo
             # the design the body was built from, loadable by mst simulate / mst export
             st.write_yaml("design.yaml", design_yaml)
             names.append("design.yaml")
-        st.write_json(MANIFEST_NAME, export_manifest(doc.name, geometry, doc.printer, stl_tolerance_mm, names))
+        st.write_json(MANIFEST_NAME, export_manifest(doc.name, geometry, doc.printer, stl_tolerance_mm, names,
+                                                      design=document_to_dict(doc)))
     return names + [MANIFEST_NAME]

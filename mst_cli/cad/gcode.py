@@ -7,6 +7,8 @@
   centreline with nothing of layer n - 1 under it (a strand held only at its ends).
 * :func:`gaps_along_line` gives the air between extrusions along a line across one layer, to
   compare a designed cavity gap with the one that prints.
+* :func:`material_across` gives the material along lines across a wall's centre line, to
+  compare a designed wall thickness with the one that prints.
 
 Conventions: the G-code frame (mm, bed coordinates); layers are numbered from 1 and carry the
 height of their top (``;Z:``). A pause found at the start of layer k is reported as "after
@@ -410,13 +412,11 @@ def free_spans(gcode: GCode, px_per_mm: float = 20.0, step_mm: float | None = No
 
 
 # --------------------------------------------------------------------------- gaps on a line
-def covered_intervals(segments: np.ndarray, axis: str, value: float) -> np.ndarray:
-    """Where the line {axis = value} crosses the extrusions (centreline +- width/2, round
-    ends): (m, 2) sorted, merged intervals of the other coordinate."""
+def _stroke_spans(segments: np.ndarray, axis: str, value: float) -> tuple[np.ndarray, np.ndarray]:
+    """Where the line {axis = value} crosses each extrusion (centreline +- width/2, round ends):
+    per segment (lo, hi) of the other coordinate, lo > hi where it misses."""
     if axis not in ("x", "y"):
         raise ValueError("axis must be 'x' or 'y'")
-    if len(segments) == 0:
-        return np.zeros((0, 2))
     s = segments.astype(float)
     if axis == "y":                 # swap roles: the line y = value, measure along x
         s = s[:, [1, 0, 3, 2, 4]]
@@ -450,8 +450,11 @@ def covered_intervals(segments: np.ndarray, axis: str, value: float) -> np.ndarr
     body = nz & np.isfinite(ylo)
     lo = np.where(body, np.minimum(lo, ylo), lo)
     hi = np.where(body, np.maximum(hi, yhi), hi)
-    hit = hi >= lo
-    iv = np.stack([lo[hit], hi[hit]], axis=1)
+    return lo, hi
+
+
+def _merge(iv: np.ndarray) -> np.ndarray:
+    """Sorted, merged (m, 2) intervals of (k, 2) ones."""
     if len(iv) == 0:
         return iv.reshape(0, 2)
     iv = iv[np.argsort(iv[:, 0])]
@@ -462,6 +465,67 @@ def covered_intervals(segments: np.ndarray, axis: str, value: float) -> np.ndarr
         else:
             merged.append([l, h])
     return np.array(merged)
+
+
+def covered_intervals(segments: np.ndarray, axis: str, value: float) -> np.ndarray:
+    """Where the line {axis = value} crosses the extrusions (centreline +- width/2, round
+    ends): (m, 2) sorted, merged intervals of the other coordinate."""
+    if axis not in ("x", "y"):
+        raise ValueError("axis must be 'x' or 'y'")
+    if len(segments) == 0:
+        return np.zeros((0, 2))
+    lo, hi = _stroke_spans(segments, axis, value)
+    hit = hi >= lo
+    return _merge(np.stack([lo[hit], hi[hit]], axis=1))
+
+
+@dataclass
+class Across:
+    """The material a line across a wall meets: the runs of extrusion inside the wall, from the
+    first one's outer edge to the last one's (``offset_mm``, signed distance from the centre
+    line), and how many extrusion centrelines cross the line between them."""
+
+    width_mm: float                 # 0.0: no extrusion reaches into the wall's core
+    n_lines: int
+    offset_mm: tuple[float, float] | None
+
+
+def material_across(segments: np.ndarray, start_xy, end_xy, stations: int, core_mm: float) -> list[Across]:
+    """At ``stations`` points evenly along the centre line start -> end (one at its midpoint
+    when the two coincide), the wall along the line perpendicular to it: the merged extrusion
+    strokes (each its own width, round ends) that reach into its core, within ``core_mm`` of
+    the centre line, measured from the outer edge of the first to that of the last.
+
+    That is the wall as the slicer lays it down: one line of width w gives w, overlapping
+    perimeters their outer edges' distance (not the sum of their widths, which counts the overlap
+    twice), and the small voids a zig-zag infill leaves at its turns stay inside the wall.
+    Material beyond air outside the core (a plate, the pad) is not the wall."""
+    a, b = np.asarray(start_xy, dtype=float), np.asarray(end_xy, dtype=float)
+    length = float(np.hypot(*(b - a)))
+    u = (b - a) / length if length > 0 else np.array([1.0, 0.0])
+    n = np.array([-u[1], u[0]])
+    s = np.asarray(segments, dtype=float).reshape(-1, 5)
+    rel0, rel1 = s[:, 0:2] - a, s[:, 2:4] - a
+    # the segments in (along, across) coordinates: the line across at 'along = station'
+    sr = np.column_stack([rel0 @ u, rel0 @ n, rel1 @ u, rel1 @ n, s[:, 4]])
+    out = []
+    for station in (np.linspace(0.0, length, stations) if length > 0 and stations > 1 else [0.5 * length]):
+        lo, hi = _stroke_spans(sr, "x", float(station)) if len(sr) else (np.zeros(0), np.zeros(0))
+        hit = hi >= lo
+        runs = _merge(np.stack([lo[hit], hi[hit]], axis=1))
+        wall = runs[(runs[:, 1] > -core_mm) & (runs[:, 0] < core_mm)] if len(runs) else runs
+        if not len(wall):
+            out.append(Across(0.0, 0, None))
+            continue
+        r0, r1 = float(wall[0, 0]), float(wall[-1, 1])
+        # centrelines crossing the line inside the wall (half-open along: a shared vertex counts once)
+        s0, s1 = sr[:, 0], sr[:, 2]
+        crosses = (np.minimum(s0, s1) <= station) & (station < np.maximum(s0, s1))
+        f = np.where(crosses, (station - s0) / np.where(s1 != s0, s1 - s0, 1.0), 0.0)
+        r_at = sr[:, 1] + f * (sr[:, 3] - sr[:, 1])
+        n_lines = int(np.sum(crosses & (r_at >= r0) & (r_at <= r1)))
+        out.append(Across(r1 - r0, n_lines, (r0, r1)))
+    return out
 
 
 def gaps_along_line(layer: Layer, axis: str, value: float, lo: float | None = None,

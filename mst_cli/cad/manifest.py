@@ -28,7 +28,8 @@ from typing import TYPE_CHECKING
 from mst_cli import __version__
 from mst_cli.errors import InputError
 
-if TYPE_CHECKING:                 # annotations only: reading export.json needs no geometry model
+if TYPE_CHECKING:                 # annotations only: reading export.json needs no geometry model (but for its design)
+    from mst_cli.io.schema import Document
     from mst_cli.model.geometry import Printer, SensorGeometry
 
 MANIFEST_NAME = "export.json"
@@ -36,8 +37,8 @@ MANIFEST_FORMAT = 2
 
 
 def print_section(g: SensorGeometry) -> dict:
-    """How the part lies on the bed, where the print pauses, and the designed cavity gaps along
-    lines of the print frame (what ``mst slice`` compares with the G-code)."""
+    """How the part lies on the bed, where the print pauses, and the designed cavity gaps and
+    wall centre lines in the print frame (what ``mst slice`` compares with the G-code)."""
     lo, hi = g.body_bbox_mm
     corners = g.to_print_frame([lo, hi])
     lh = g.layer_height_mm
@@ -49,6 +50,14 @@ def print_section(g: SensorGeometry) -> dict:
         cavity_lines.append({"layer": i + 1, "x_mm": 0.0, "z_mm": z_measure,
                              "y_low_mm": -(zb + cell.h_mm - cell.t_mm), "y_high_mm": -(zb + cell.t_mm),
                              "gap_mm": cell.cavity_height_mm})
+    # every inclined wall cuts every print layer along the same line (print y = -sensor z):
+    # the middle of its free stretch, measured over the print layers above the first
+    wall_lines = []
+    for i, (cell, zb) in enumerate(zip(g.layers, g.layer_bottoms_mm)):
+        for name, (xa, za), (xb, zb_) in cell.wall_centrelines_xz():
+            wall_lines.append({"layer": i + 1, "wall": name, "t_mm": cell.t_mm,
+                               "x0_mm": xa, "y0_mm": -(zb + za), "x1_mm": xb, "y1_mm": -(zb + zb_),
+                               "z_low_mm": lh, "z_high_mm": g.depth_mm})
     return {
         "orientation": "lying on the sensor's -y face: print (x, y, z) = (x, -z, y + depth/2)",
         "rotation": [[1, 0, 0], [0, 0, -1], [0, 1, 0]],
@@ -62,12 +71,14 @@ def print_section(g: SensorGeometry) -> dict:
                   "why": "drop the magnet into its pocket"},
         "magnet_top_z_mm": g.print_height_mm(g.magnet.radius_mm),
         "cavity_lines": cavity_lines,
+        "wall_lines": wall_lines,
     }
 
 
 def export_manifest(name: str, geometry: SensorGeometry, printer: Printer, stl_tolerance_mm: float,
-                    files: list[str]) -> dict:
-    """The expected dimensions of the exported body (see module docstring)."""
+                    files: list[str], design: dict | None = None) -> dict:
+    """The expected dimensions of the exported body (see module docstring); ``design`` (the
+    design document as its file holds it) lets ``mst slice`` simulate the walls as sliced."""
     g, h = geometry, geometry.housing
     bbox_min, bbox_max = g.body_bbox_mm
     x0, x1 = g.slot_x_mm
@@ -144,6 +155,7 @@ def export_manifest(name: str, geometry: SensorGeometry, printer: Printer, stl_t
             "wall_mm": min(c.t_mm for c in cells),
             "cavity_gap_mm": min(c.cavity_height_mm for c in cells),
         },
+        **({"design": design} if design is not None else {}),
     }
 
 
@@ -163,7 +175,8 @@ STL_TOLERANCE_MM = (1e-4, 1.0)
 def _kind(kind):
     """A field of export.json: ``kind`` is "num" (a finite number within +-MAX_COORD_MM; bool is
     not a number), "pos" (a size from MIN_SIZE_MM to MAX_COORD_MM), "tol" (STL_TOLERANCE_MM),
-    "vol" (an area or volume from 0 to MAX_VOLUME), "int", "str", (kind, n) a list of exactly n,
+    "vol" (an area or volume from 0 to MAX_VOLUME), "int", "str", "design" (a design document,
+    :func:`_design_document`), (kind, n) a list of exactly n,
     ListOf a list of up to MAX_LIST, or a dataclass below (a mapping). A field with a default
     may be missing (``optional``)."""
     return field(metadata={"kind": kind})
@@ -202,6 +215,23 @@ class CavityLine:
 
 
 @dataclass(frozen=True)
+class WallLine:
+    """The centre line of one inclined wall in the print frame (the middle of the stretch where
+    it stands free) and the print heights it is measured over: ``mst slice`` measures the
+    as-sliced wall across it."""
+
+    layer: int = _kind("int")
+    wall: str = _kind("str")
+    t_mm: float = _kind("pos")
+    x0_mm: float = _kind("num")
+    y0_mm: float = _kind("num")
+    x1_mm: float = _kind("num")
+    y1_mm: float = _kind("num")
+    z_low_mm: float = _kind("num")
+    z_high_mm: float = _kind("num")
+
+
+@dataclass(frozen=True)
 class PrintFrame:
     """How the mesh lies on the bed: print = rotation @ sensor + translation (row-vector form in
     :func:`mst_cli.cad.measure.to_sensor_frame`)."""
@@ -213,6 +243,7 @@ class PrintFrame:
     magnet_top_z_mm: float = _kind("num")
     pause: Pause = _kind(Pause)
     cavity_lines: tuple[CavityLine, ...] = _kind(ListOf(CavityLine))
+    wall_lines: tuple[WallLine, ...] = _optional(ListOf(WallLine), ())     # exports before issue 21 lack it
 
 
 @dataclass(frozen=True)
@@ -288,6 +319,7 @@ class Manifest:
     magnet_pocket: Pocket = _kind(Pocket)
     board_slot: Slot = _kind(Slot)
     printer: PrinterLimits = _kind(PrinterLimits)
+    design: Document | None = _optional("design")          # exports before issue 21 lack it
 
     @classmethod
     def from_dict(cls, data) -> Manifest:
@@ -310,16 +342,21 @@ class SlicePrint:
     layer_height_mm: float | None = _optional("pos")
     pause: Pause | None = _optional(Pause)
     cavity_lines: tuple[CavityLine, ...] = _optional(ListOf(CavityLine), ())
+    wall_lines: tuple[WallLine, ...] = _optional(ListOf(WallLine), ())
 
 
 @dataclass(frozen=True)
 class SliceManifest:
-    """What ``mst slice`` reads from export.json: the name, the pause asked for and the cavity
-    lines, validated before anything is sliced with :class:`Manifest`'s own field kinds. Every
-    key is optional: a hand-made export of any body slices (a missing pause is "not given")."""
+    """What ``mst slice`` reads from export.json: the name, the pause asked for, the cavity and
+    wall lines and the design document, validated before anything is sliced with
+    :class:`Manifest`'s own field kinds (the design with the design-file rules, when it is
+    simulated). Every key is optional: a hand-made export of any body slices (a missing pause
+    is "not given"), and an export.json written before the walls were measured slices without
+    them."""
 
     name: str | None = _optional("str")
     print: SlicePrint = _optional(SlicePrint, SlicePrint())
+    design: Document | None = _optional("design")
 
     @classmethod
     def from_dict(cls, data) -> SliceManifest:
@@ -358,6 +395,8 @@ def _describe(kind) -> str:
 def _parse(kind, data, path: str):
     """``data`` as ``kind`` (see :func:`_kind`), checked before it is read: numbers become
     floats, lists tuples, mappings dataclasses. ``path`` names the field in errors."""
+    if kind == "design":
+        return _design_document(data, path)
     if isinstance(kind, str):
         if _SCALAR_OK[kind](data):
             return data if kind in ("int", "str") else float(data)
@@ -380,6 +419,24 @@ def _parse(kind, data, path: str):
         return kind(**values)
     shown = data if not isinstance(data, (dict, list)) else type(data).__name__
     raise InputError(path, shown, f"must be {_describe(kind)}: rewrite it with 'mst export'")
+
+
+def _design_document(data, path: str) -> Document:
+    """export.json's ``design``: the design document the body was built from, with the
+    design-file rules (every cell printable and working); an InputError names the field inside
+    it (``export.json.design.layers[1].t_mm``)."""
+    from mst_cli.io.schema import design_geometry, parse_document
+    if not isinstance(data, dict):
+        raise InputError(path, type(data).__name__ if isinstance(data, list) else data,
+                         "must be a mapping (the design document): rewrite it with 'mst export'")
+    try:
+        doc = parse_document(data, source=path)
+        if not doc.is_design:
+            raise InputError("layers", None, "must give every layer's theta_deg, t_mm and h_mm (a design)")
+        design_geometry(doc)
+    except InputError as exc:
+        raise InputError(f"{path}.{exc.field}", exc.value, f"{exc.allowed}: rewrite it with 'mst export'") from None
+    return doc
 
 
 def load_manifest(path: Path, kind: type = Manifest) -> Manifest | SliceManifest:

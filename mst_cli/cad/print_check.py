@@ -8,6 +8,8 @@ mesh checks are:
   asks for none);
 * ``support``: the slicer, told to generate support automatically, generates none;
 * ``cavity_gaps`` (report only): the designed cavity gaps against the gaps in the sliced layer.
+* ``walls_as_sliced`` (report only): every inclined wall's designed thickness against the width
+  of the extrusion the G-code lays across it.
 
 Each Check's ``values`` is its section of slice.json; a failed one's ``note`` is the reason.
 Pure: G-code and manifest in, Checks out (no slicer, no files).
@@ -18,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 
 from mst_cli.cad.checks import Check
-from mst_cli.cad.gcode import SUPPORT_TYPES, GCode, Pause, Span, SpanReport, gap_at
+from mst_cli.cad.gcode import SUPPORT_TYPES, GCode, Pause, Span, SpanReport, gap_at, material_across
 from mst_cli.cad.manifest import SliceManifest
 
 Shift = tuple[float, float]       # G-code = print frame + shift (x, y), mm
@@ -133,3 +135,53 @@ def cavity_gaps(g: GCode, manifest: SliceManifest, shift: Shift, z_shift: float)
     designed = ", ".join(f"{float(r['designed_gap_mm']):.2f}" for r in rows)
     return Check("cavity_gaps", True, f"{sliced} mm", f"{designed} mm (designed)",
                  "gaps along export.json's print.cavity_lines", info=True, values={"lines": rows})
+
+
+WALL_STATIONS = 5        # lines across each wall, evenly along the middle of its free stretch
+# Extrusion within this of a wall's designed faces may be a neighbour's (the plate beyond a
+# narrow notch); what reaches deeper into the wall is the wall.
+WALL_FACE_MARGIN_MM = 0.05
+
+
+def walls_as_sliced(g: GCode, manifest: SliceManifest, shift: Shift, z_shift: float) -> Check:
+    """Designed against as-sliced wall thickness along export.json's print.wall_lines (report
+    only: ``values["layers"]`` is a row per stack layer with its walls, or "not given").
+
+    A wall's sliced width is the median, over :data:`WALL_STATIONS` lines across it in every
+    print layer of its z range, of the run of extrusion that holds its centre line
+    (:func:`~mst_cli.cad.gcode.material_across`); a layer's is the mean of its walls'."""
+    lines = manifest.print.wall_lines
+    if not lines:
+        return Check("walls_as_sliced", True, "-", "not given", "not given in export.json", info=True,
+                     values={"layers": "not given"})
+    walls: dict[int, list[dict]] = {}
+    for w in lines:
+        samples = []
+        for layer in g.layers:
+            if not w.z_low_mm < layer.z_mm - z_shift <= w.z_high_mm + 1e-6:
+                continue
+            samples += material_across(layer.segments[layer.of_part()], (w.x0_mm + shift[0], w.y0_mm + shift[1]),
+                                       (w.x1_mm + shift[0], w.y1_mm + shift[1]), WALL_STATIONS,
+                                       max(0.5 * w.t_mm - WALL_FACE_MARGIN_MM, 0.25 * w.t_mm))
+        width = np.array([a.width_mm for a in samples])
+        n_lines = np.array([a.n_lines for a in samples], dtype=int)
+        row = {"wall": w.wall, "designed_t_mm": w.t_mm, "samples": len(samples)}
+        if samples:
+            row.update(sliced_t_mm=round(float(np.median(width)), 4),
+                       sliced_t_min_mm=round(float(width.min()), 4), sliced_t_max_mm=round(float(width.max()), 4),
+                       n_lines=int(np.bincount(n_lines).argmax()), missing=int((width == 0).sum()))
+        else:
+            row.update(sliced_t_mm=None, sliced_t_min_mm=None, sliced_t_max_mm=None, n_lines=None, missing=0)
+        walls.setdefault(w.layer, []).append(row)
+    rows = []
+    for layer, ws in sorted(walls.items()):
+        sliced = [r["sliced_t_mm"] for r in ws]
+        t = round(float(np.mean(sliced)), 4) if None not in sliced else None
+        designed = float(np.mean([r["designed_t_mm"] for r in ws]))
+        rows.append({"layer": layer, "designed_t_mm": designed, "sliced_t_mm": t,
+                     "difference_mm": round(t - designed, 4) if t is not None else None,
+                     "n_lines": sorted({r["n_lines"] for r in ws if r["n_lines"] is not None}), "walls": ws})
+    sliced_text = ", ".join("-" if r["sliced_t_mm"] is None else f"{r['sliced_t_mm']:.3f}" for r in rows)
+    designed_text = ", ".join(f"{r['designed_t_mm']:.3f}" for r in rows)
+    return Check("walls_as_sliced", True, f"{sliced_text} mm", f"{designed_text} mm (designed)",
+                 "walls across export.json's print.wall_lines", info=True, values={"layers": rows})

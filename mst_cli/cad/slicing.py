@@ -21,7 +21,7 @@ from mst_cli.cad import gcode as G
 from mst_cli.cad import slicer as S
 from mst_cli.cad.checks import Check, resolve_export
 from mst_cli.cad.manifest import SliceManifest, load_manifest
-from mst_cli.cad.print_check import cavity_gaps, check_free_span, check_pause, check_support
+from mst_cli.cad.print_check import cavity_gaps, check_free_span, check_pause, check_support, walls_as_sliced
 from mst_cli.errors import InputError
 from mst_cli.io.outputs import finite_or_none, staged
 
@@ -136,8 +136,12 @@ def slice_export(path: str | Path, profile: str | Path | None = None, max_span_m
     if not (isinstance(layer_h, float) and math.isfinite(layer_h) and layer_h > 0):
         raise S.SlicerError(f"prusa-slicer wrote G-code with a layer height of {layer_h} mm")
     checks = [check_free_span(spans, joined, max_span_mm, shift), check_pause(g.pauses, manifest, layer_h),
-              check_support(gs), cavity_gaps(g, manifest, shift, z_shift)]
-    span_check, pause_check, support_check, gaps = checks
+              check_support(gs), cavity_gaps(g, manifest, shift, z_shift),
+              walls_as_sliced(g, manifest, shift, z_shift)]
+    span_check, pause_check, support_check, gaps, walls = checks
+    walls_report = {"layers": walls.values["layers"], "predicted": _predicted(manifest.design, walls.values["layers"])}
+    if isinstance(walls_report["predicted"], dict):
+        say("simulated the walls as sliced")
     pause_report = dict(pause_check.values,
                         pause_print_gcode=g.config.get("pause_print_gcode", settings.get("pause_print_gcode")),
                         model_carries_pause=carries_pause)
@@ -173,11 +177,24 @@ def slice_export(path: str | Path, profile: str | Path | None = None, max_span_m
         "pause": pause_report,
         "support": support_check.values,
         "cavity_gaps": gaps.values["lines"],
+        "walls_as_sliced": walls_report,
         "failed": [c.name for c in failed],
         "reasons": [c.note for c in failed],
     }
     return SliceResult(finite_or_none(report), gtext, checks, files.folder, triangles, centre,
                        (shift[0], shift[1], z_shift), g, spans)
+
+
+def _predicted(design, layers) -> dict | str:
+    """S_i and R_i as designed and as sliced (:mod:`mst_cli.cad.sliced_model`), or why not."""
+    if layers == "not given":
+        return "not given: export.json has no print.wall_lines (an older export: run 'mst export' again)"
+    if design is None:
+        return "not given: export.json has no design (an older export: run 'mst export' again)"
+    if len(layers) != len(design.layers) or any(r["sliced_t_mm"] is None for r in layers):
+        return "not given: export.json's wall lines do not cover every layer of its design"
+    from mst_cli.cad.sliced_model import predict
+    return predict(design, [r["sliced_t_mm"] for r in layers])
 
 
 def summary_table(r: dict) -> str:
@@ -217,4 +234,36 @@ def summary_table(r: dict) -> str:
             dg = c.get('designed_gap_mm')
             lines.append(f"cavity gap L{c.get('layer')}     designed {'-' if dg is None else f'{float(dg):.2f}'} mm, "
                          f"as sliced {sl} mm (x {c['x_mm']}, z {c['z_mm']})")
+    lines += _walls_lines(r.get("walls_as_sliced"))
     return "\n".join(lines)
+
+
+def _change_text(designed: float | None, sliced: float | None, rel: float | None, unit: str, fmt: str) -> str:
+    if designed is None or sliced is None:
+        return "-"
+    change = "" if rel is None else f" ({100 * rel:+.1f} %)"
+    return f"{designed:{fmt}} -> {sliced:{fmt}}{unit}{change}"
+
+
+def _walls_lines(w: dict | None) -> list[str]:
+    """The walls as sliced and their predicted S and R, for the terminal table."""
+    if w is None or w["layers"] == "not given":
+        return ["walls as sliced   not given in export.json (an older export: run 'mst export' again)"]
+    out = []
+    for la in w["layers"]:
+        walls = ", ".join("-" if x["sliced_t_mm"] is None else f"{x['sliced_t_mm']:.3f}" for x in la["walls"])
+        t = "-" if la["sliced_t_mm"] is None else f"{la['sliced_t_mm']:.3f}"
+        out.append(f"wall L{la['layer']}           designed {la['designed_t_mm']:.3f} mm, as sliced {t} mm "
+                   f"(walls {walls}; {'/'.join(map(str, la['n_lines']))} line(s) across)")
+    p = w["predicted"]
+    if isinstance(p, str):
+        out.append(f"predicted S, R    {p}")
+    elif "error" in p:
+        out.append(f"predicted S, R    {p['error']}")
+    else:
+        for g in p["regimes"]:
+            s_text = _change_text(g["S_designed_per_N"], g["S_sliced_per_N"], g["S_change_rel"], " /N", ".4f")
+            r_text = _change_text(g["R_designed_N"], g["R_sliced_N"], g["R_change_rel"], " N", ".3f")
+            out.append(f"predicted regime {g['regime']}  S {s_text}, R {r_text} (designed -> as sliced, "
+                       f"{p['mechanics']})")
+    return out

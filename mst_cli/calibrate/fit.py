@@ -59,7 +59,8 @@ if TYPE_CHECKING:
     from numpy.typing import ArrayLike
 
     from mst_cli.io.schema import Document
-    from mst_cli.model.geometry import HexCell
+    from mst_cli.model.geometry import HexCell, Printer
+    from mst_cli.model.response import Response
 
 # --------------------------------------------------------------------------- parameters
 
@@ -140,6 +141,19 @@ def as_printed(doc: Document, extra_wall_mm: float = 0.0) -> Document:
     values = printer_values(doc)          # within bounds: geometry.printer_violations at parse time
     values["wall_offset_mm"] += extra_wall_mm
     return apply_parameters(doc, values)[0]
+
+
+def simulate_as_printed(doc: Document, mechanics: str | None = None, field_model: str | None = None) -> Response:
+    """The forward model of a valid design as ``mst simulate`` runs it (:func:`mst_cli.api.simulate`):
+    the part as printed (:func:`as_printed`), the mechanics rung the file's accuracy asks for
+    (else its ``model.mechanics``), the file's field model unless one is given."""
+    from mst_cli.model.ladder import choose_mechanics
+    from mst_cli.model.response import simulate as run
+    field_choice = field_model or doc.field_model
+    choice = choose_mechanics(mechanics, doc.accuracy_rel, doc.mechanics)
+    printed = as_printed(doc)
+    return run(printed.geometry(), printed.material, mechanics=choice.mechanics,
+               field_model=None if field_choice == "auto" else field_choice, noise_uT_rms=doc.noise_uT_rms)
 
 
 def full_values(values: dict) -> dict:
@@ -444,7 +458,6 @@ def apply_parameters(doc: Document, values: dict, name: str | None = None,
     * remanence_factor  -> magnet.remanence_T
     """
     from mst_cli.io.schema import LayerEntry
-    from mst_cli.model import geometry as geo
 
     v = full_values(values)
     edits = []
@@ -484,16 +497,9 @@ def apply_parameters(doc: Document, values: dict, name: str | None = None,
                      + f" (gap offset {v['gap_offset_mm']:+.4g} mm)")
 
     pr = doc.printer
-    t_min = min(la.t_mm for la in layers)
-    cav_min = min(la.h_mm - 2 * la.t_mm for la in layers)
-    pad_min = min(float(geo.inner_pad_half_width_mm(math.radians(la.theta_deg), la.t_mm, la.h_mm,
-                                                    doc.family.width_mm)) for la in layers)
     # the values are the print's own (the fit models the drawn walls and the material's E), so
     # the printer's declared deviations are spent: left in, a simulation would apply them twice
-    printer = replace(pr, min_wall_mm=min(pr.min_wall_mm, round(math.floor(t_min * 1e4) / 1e4, 4)),
-                      min_gap_mm=min(pr.min_gap_mm, round(math.floor(cav_min * 1e4) / 1e4, 4)),
-                      nozzle_mm=min(pr.nozzle_mm, max(0.05, round(math.floor(pad_min * 1e4) / 1e4, 4))),
-                      **PRINTER_NOMINAL)
+    printer = replace(_rules_for(doc, layers), **PRINTER_NOMINAL)
     spent = [f"printer.{key} {getattr(pr, key):g} -> {value:g}" for key, value in PRINTER_NOMINAL.items()
              if getattr(pr, key) != value]
     if spent:
@@ -507,6 +513,31 @@ def apply_parameters(doc: Document, values: dict, name: str | None = None,
                   mechanics=mechanics or doc.mechanics, accuracy_rel=None)
     assert all(isinstance(la, LayerEntry) for la in out.layers)
     return out, edits
+
+
+def _rules_for(doc: Document, layers) -> Printer:
+    """``doc``'s printer with its printing rules (min_wall_mm, min_gap_mm, nozzle_mm) lowered
+    where the cells of ``layers`` break them: a file that models a print, not one to print."""
+    from mst_cli.model import geometry as geo
+    pr = doc.printer
+    t_min = min(la.t_mm for la in layers)
+    cav_min = min(la.h_mm - 2 * la.t_mm for la in layers)
+    pad_min = min(float(geo.inner_pad_half_width_mm(math.radians(la.theta_deg), la.t_mm, la.h_mm,
+                                                    doc.family.width_mm)) for la in layers)
+    return replace(pr, min_wall_mm=min(pr.min_wall_mm, round(math.floor(t_min * 1e4) / 1e4, 4)),
+                   min_gap_mm=min(pr.min_gap_mm, round(math.floor(cav_min * 1e4) / 1e4, 4)),
+                   nozzle_mm=min(pr.nozzle_mm, max(0.05, round(math.floor(pad_min * 1e4) / 1e4, 4))))
+
+
+def with_walls(doc: Document, t_mm) -> Document:
+    """The design ``doc`` with layer i's wall thickness set to ``t_mm[i]`` (e.g. the width the
+    slicer lays down), everything else as it is, so :func:`mst_cli.api.simulate` predicts the
+    part those walls make with the model and printer corrections the design itself is simulated
+    with. Printing rules the new walls break are lowered (this models a print, not a drawing)."""
+    if len(t_mm) != len(doc.layers):
+        raise ValueError(f"{len(t_mm)} wall thicknesses for {len(doc.layers)} layers")
+    layers = tuple(replace(la, t_mm=round(float(t), 9)) for la, t in zip(doc.layers, t_mm))
+    return replace(doc, layers=layers, printer=_rules_for(doc, layers))
 
 
 # --------------------------------------------------------------------------- inverse map
