@@ -33,8 +33,12 @@ from mst_cli.model.geometry import HexCell
 from mst_cli.model.material import Material
 from mst_cli.model.mechanics import continuum as L2
 
-CELLS = [("shallow", HexCell(14, 0.40, 1.87)), ("mid", HexCell(33, 1.0, 2.8)),
-         ("stubby", HexCell(45, 2.5, 6.5)), ("steep", HexCell(60, 0.6, 4.0))]
+CELLS = [
+    ("shallow", HexCell(14, 0.40, 1.87)),
+    ("mid", HexCell(33, 1.0, 2.8)),
+    ("stubby", HexCell(45, 2.5, 6.5)),
+    ("steep", HexCell(60, 0.6, 4.0)),
+]
 
 
 def run(cell, material, n_thick, n_length, fine_too, inplane):
@@ -78,23 +82,32 @@ def main() -> None:
         res = run(cell, material, args.n_thick, args.n_length, not args.no_fine, args.inplane)
         rows.append((name, cell, res))
         f, h, p = res["free"], res["held"], res["2D"]
-        print(f"# {name} {cell.theta_deg:g} deg t {cell.t_mm:g} h {cell.h_mm:g}: {res['seconds']:.0f} s "
-              f"(3D free: {f['dofs']} dofs, {f['seconds']:.0f} s, {f['iterations']} Newton iterations, "
-              f"closes at the {f['at']}, 2D at the {p['at']}, held at the {h['at']})", flush=True)
+        print(
+            f"# {name} {cell.theta_deg:g} deg t {cell.t_mm:g} h {cell.h_mm:g}: {res['seconds']:.0f} s "
+            f"(3D free: {f['dofs']} dofs, {f['seconds']:.0f} s, {f['iterations']} Newton iterations, "
+            f"closes at the {f['at']}, 2D at the {p['at']}, held at the {h['at']})",
+            flush=True,
+        )
 
-    print(f"\nin-plane mesh {args.n_thick} x {args.n_length} (L2 levels = 0), depth y in [0, D/2] = [0, 10] mm, "
-          f"6 layers graded to the free face (t/2 there)\n")
-    print("| cell | t/D | k 2D | k 3D held | k 3D free | k free/2D | k free/held | R 2D | R 3D held | R 3D free "
-          "| R free/2D | R free/held | d_lock free/2D | fine grading: k, R free/2D |")
+    print(
+        f"\nin-plane mesh {args.n_thick} x {args.n_length} (L2 levels = 0), depth y in [0, D/2] = [0, 10] mm, "
+        f"6 layers graded to the free face (t/2 there)\n"
+    )
+    print(
+        "| cell | t/D | k 2D | k 3D held | k 3D free | k free/2D | k free/held | R 2D | R 3D held | R 3D free "
+        "| R free/2D | R free/held | d_lock free/2D | fine grading: k, R free/2D |"
+    )
     print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     for name, cell, res in rows:
         p, h, f = res["2D"], res["held"], res["free"]
         fine = res.get("fine")
-        conv = (f"{fine['k'] / p['k']:.4f}, {fine['R'] / p['R']:.4f}" if fine else "-")
-        print(f"| {name} ({cell.theta_deg:g}, {cell.t_mm:g}, {cell.h_mm:g}) | {cell.t_mm / cell.b_mm:.3f} "
-              f"| {p['k']:.4g} | {h['k']:.4g} | {f['k']:.4g} | {f['k'] / p['k']:.4f} | {f['k'] / h['k']:.4f} "
-              f"| {p['R']:.4g} | {h['R']:.4g} | {f['R']:.4g} | {f['R'] / p['R']:.4f} | {f['R'] / h['R']:.4f} "
-              f"| {f['d_lock'] / p['d_lock']:.4f} | {conv} |")
+        conv = f"{fine['k'] / p['k']:.4f}, {fine['R'] / p['R']:.4f}" if fine else "-"
+        print(
+            f"| {name} ({cell.theta_deg:g}, {cell.t_mm:g}, {cell.h_mm:g}) | {cell.t_mm / cell.b_mm:.3f} "
+            f"| {p['k']:.4g} | {h['k']:.4g} | {f['k']:.4g} | {f['k'] / p['k']:.4f} | {f['k'] / h['k']:.4f} "
+            f"| {p['R']:.4g} | {h['R']:.4g} | {f['R']:.4g} | {f['R'] / p['R']:.4f} | {f['R'] / h['R']:.4f} "
+            f"| {f['d_lock'] / p['d_lock']:.4f} | {conv} |"
+        )
     if len(rows) >= 2:
         # the free faces' softening of k, 1 - k free/held, fitted by the forms a candidate
         # correction could take (least squares over the cells run)
@@ -106,8 +119,10 @@ def main() -> None:
             X = np.stack(cols, axis=1)
             coef = np.linalg.lstsq(X, deficit, rcond=None)[0]
             miss = X @ coef - deficit
-            print(f"  fit {label}: coefficients {', '.join(f'{c:.4f}' for c in coef)}; "
-                  f"largest miss {np.abs(miss).max():.4f}")
+            print(
+                f"  fit {label}: coefficients {', '.join(f'{c:.4f}' for c in coef)}; "
+                f"largest miss {np.abs(miss).max():.4f}"
+            )
     if any("inplane" in r for _, _, r in rows):
         print("\nlinear k on the 3 x 12 in-plane mesh (coarse depth grading)\n")
         print("| cell | k 2D | k 3D held | k 3D free | free/2D | free/held |")

@@ -39,7 +39,7 @@ from user_env import as_installed
 
 ROOT = Path(__file__).resolve().parents[1]
 SPEC = ROOT / "configs" / "mohammadi2021.yaml"
-MST = Path(sys.executable).parent / "mst"      # the console script of this environment
+MST = Path(sys.executable).parent / "mst"  # the console script of this environment
 
 
 def cli_times(repeats: int) -> list[float]:
@@ -47,8 +47,7 @@ def cli_times(repeats: int) -> list[float]:
     with tempfile.TemporaryDirectory() as tmp:
         for i in range(repeats):
             t0 = time.perf_counter()
-            r = subprocess.run([str(MST), "design", str(SPEC), "--out",
-                                f"{tmp}/o{i}", "-q"], capture_output=True)
+            r = subprocess.run([str(MST), "design", str(SPEC), "--out", f"{tmp}/o{i}", "-q"], capture_output=True)
             times.append(time.perf_counter() - t0)
             if r.returncode != 0:
                 raise SystemExit(f"mst design failed: {r.stderr.decode()}")
@@ -61,18 +60,24 @@ def random_specs(n_layers: int, count: int, seed: int):
     from mst_cli.model.response import simulate
 
     base = load_document(SPEC)
-    probe_doc = base.with_layers([LayerEntry(target_sensitivity_per_N=1.0, target_range_N=i + 1.0)
-                                  for i in range(n_layers)])
+    probe_doc = base.with_layers(
+        [LayerEntry(target_sensitivity_per_N=1.0, target_range_N=i + 1.0) for i in range(n_layers)]
+    )
     probe = DesignProblem(probe_doc)
     # deep stacks that lock in order with margin are rare among random ones: draw longer
-    theta, t, h = probe.sample_feasible(np.random.default_rng(seed), count,
-                                        max_batches=200 if n_layers <= 6 else 4000)
+    theta, t, h = probe.sample_feasible(np.random.default_rng(seed), count, max_batches=200 if n_layers <= 6 else 4000)
     docs = []
     for j in range(count):
         cells = [probe.family.cell(*x) for x in zip(theta[j], t[j], h[j])]
         resp = simulate(probe_doc.geometry(cells), probe_doc.material)
-        docs.append(base.with_layers([LayerEntry(target_sensitivity_per_N=r.sensitivity_secant_per_N,
-                                                 target_range_N=r.force_to_N) for r in resp.regimes]))
+        docs.append(
+            base.with_layers(
+                [
+                    LayerEntry(target_sensitivity_per_N=r.sensitivity_secant_per_N, target_range_N=r.force_to_N)
+                    for r in resp.regimes
+                ]
+            )
+        )
     return docs
 
 
@@ -105,9 +110,14 @@ def sweep(docs, local: str) -> list[dict]:
     for k, doc in enumerate(docs):
         t0 = time.perf_counter()
         result = design_document(doc, seed=k, local=local)
-        rows.append(dict(seconds=time.perf_counter() - t0, evaluations=result.evaluations,
-                         ok=bool(result.status == "met" and recheck(result)),
-                         preference=result.solver.get("preference_after")))
+        rows.append(
+            dict(
+                seconds=time.perf_counter() - t0,
+                evaluations=result.evaluations,
+                ok=bool(result.status == "met" and recheck(result)),
+                preference=result.solver.get("preference_after"),
+            )
+        )
     return rows
 
 
@@ -117,9 +127,13 @@ def specs_for(n_layers: int, count: int):
 
 def summary(rows: list[dict]) -> tuple[float, float, float, float, float]:
     prefs = [r["preference"] for r in rows if r["preference"] is not None]
-    return (sum(r["ok"] for r in rows) / len(rows), statistics.median(r["seconds"] for r in rows),
-            max(r["seconds"] for r in rows), statistics.median(r["evaluations"] for r in rows),
-            statistics.median(prefs) if prefs else math.nan)
+    return (
+        sum(r["ok"] for r in rows) / len(rows),
+        statistics.median(r["seconds"] for r in rows),
+        max(r["seconds"] for r in rows),
+        statistics.median(r["evaluations"] for r in rows),
+        statistics.median(prefs) if prefs else math.nan,
+    )
 
 
 def targets_of(docs) -> list[list[tuple[float, float]]]:
@@ -130,15 +144,20 @@ def docs_from(targets) -> list:
     from mst_cli.io.schema import LayerEntry, load_document
 
     base = load_document(SPEC)
-    return [base.with_layers([LayerEntry(target_sensitivity_per_N=s, target_range_N=r) for s, r in t])
-            for t in targets]
+    return [base.with_layers([LayerEntry(target_sensitivity_per_N=s, target_range_N=r) for s, r in t]) for t in targets]
 
 
 def baseline_rows(directory: Path, docs, local: str) -> list[dict]:
     """The sweep run by the package in ``directory`` on the same targets (a child process)."""
     env = dict(os.environ, PYTHONPATH=str(directory))
-    out = subprocess.run([sys.executable, __file__, "--worker", local], env=env, input=json.dumps(targets_of(docs)),
-                         capture_output=True, text=True, check=True)
+    out = subprocess.run(
+        [sys.executable, __file__, "--worker", local],
+        env=env,
+        input=json.dumps(targets_of(docs)),
+        capture_output=True,
+        text=True,
+        check=True,
+    )
     return json.loads(out.stdout)
 
 
@@ -152,8 +171,8 @@ def main():
     ap.add_argument("--baseline", type=Path, default=None, help="a checkout of another version to compare")
     ap.add_argument("--worker", help=argparse.SUPPRESS)
     args = ap.parse_args()
-    as_installed()                 # commands start from bytecode, as an installed copy does
-    if args.worker:                   # child of --baseline: targets on stdin, rows as JSON on stdout
+    as_installed()  # commands start from bytecode, as an installed copy does
+    if args.worker:  # child of --baseline: targets on stdin, rows as JSON on stdout
         print(json.dumps(sweep(docs_from(json.load(sys.stdin)), args.worker)))
         return
 
@@ -167,14 +186,20 @@ def main():
         t0 = time.perf_counter()
         res = design_document(doc)
         lib.append(time.perf_counter() - t0)
-    print(f"reference spec {SPEC.name}: `mst design` command median {statistics.median(cli):.2f} s "
-          f"(min {min(cli):.2f}, max {max(cli):.2f}, {args.repeats} runs, interpreter start and all "
-          f"outputs included; goal <= 2 s)")
-    print(f"  library design_document median {statistics.median(lib):.3f} s, {res.evaluations} "
-          f"evaluations, status {res.status}, print-error RMS {res.print_error['rms_log_change']:.4f}")
+    print(
+        f"reference spec {SPEC.name}: `mst design` command median {statistics.median(cli):.2f} s "
+        f"(min {min(cli):.2f}, max {max(cli):.2f}, {args.repeats} runs, interpreter start and all "
+        f"outputs included; goal <= 2 s)"
+    )
+    print(
+        f"  library design_document median {statistics.median(lib):.3f} s, {res.evaluations} "
+        f"evaluations, status {res.status}, print-error RMS {res.print_error['rms_log_change']:.4f}"
+    )
     print()
-    head = (f"{'layers':>6} {'method':>7} {'specs':>5} {'success':>8} {'median s':>9} {'max s':>7} "
-            f"{'median evals':>12} {'median pref':>11}")
+    head = (
+        f"{'layers':>6} {'method':>7} {'specs':>5} {'success':>8} {'median s':>9} {'max s':>7} "
+        f"{'median evals':>12} {'median pref':>11}"
+    )
     if args.baseline:
         head += f" | {'base success':>12} {'base median s':>13} {'base pref':>9} {'better/worse':>12}"
     print(head)
@@ -190,8 +215,11 @@ def main():
             if args.baseline:
                 base = baseline_rows(args.baseline.resolve(), docs[:use], local)
                 b_rate, b_med, _, _, b_pref = summary(base)
-                diff = [r["preference"] - b["preference"] for r, b in zip(rows, base)
-                        if r["ok"] and b["ok"] and None not in (r["preference"], b["preference"])]
+                diff = [
+                    r["preference"] - b["preference"]
+                    for r, b in zip(rows, base)
+                    if r["ok"] and b["ok"] and None not in (r["preference"], b["preference"])
+                ]
                 better = sum(d < -1e-3 for d in diff)
                 worse = sum(d > 1e-3 for d in diff)
                 line += f" | {100 * b_rate:>11.1f}% {b_med:>13.3f} {b_pref:>9.4f} {f'{better}/{worse}':>12}"

@@ -56,9 +56,11 @@ mark("STEP assembly")
 
 def stages(body: str) -> list[tuple[str, float]]:
     """Split of one export path, in a fresh interpreter (so the import cost is real)."""
-    code = ("import time, tempfile\nfrom pathlib import Path\nt = [time.perf_counter()]\n"
-            "def mark(name):\n    now = time.perf_counter(); print(name + '|' + repr(now - t[0])); t[0] = now\n"
-            + body.format(design=str(DESIGN)))
+    code = (
+        "import time, tempfile\nfrom pathlib import Path\nt = [time.perf_counter()]\n"
+        "def mark(name):\n    now = time.perf_counter(); print(name + '|' + repr(now - t[0])); t[0] = now\n"
+        + body.format(design=str(DESIGN))
+    )
     res = subprocess.run([sys.executable, "-c", code], check=True, capture_output=True, text=True)
     return [(line.split("|")[0], float(line.split("|")[1])) for line in res.stdout.splitlines()]
 
@@ -67,30 +69,36 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--repeats", type=int, default=7)
     args = ap.parse_args()
-    as_installed()                 # commands start from bytecode, as an installed copy does
+    as_installed()  # commands start from bytecode, as an installed copy does
 
     mst = mst_exe()
     with tempfile.TemporaryDirectory() as tmp:
         subprocess.run([mst, "export", str(DESIGN), "--stl", "--out", f"{tmp}/ref"], check=True, capture_output=True)
         cmds = {
             'floor: python -c "import numpy, yaml, click"': ([sys.executable, "-c", "import numpy, yaml, click"], ""),
-            "mst export --stl --3mf": ([mst, "export", str(DESIGN), "--stl", "--3mf", "--out", f"{tmp}/m{{i}}"],
-                                       "<= 3"),
+            "mst export --stl --3mf": (
+                [mst, "export", str(DESIGN), "--stl", "--3mf", "--out", f"{tmp}/m{{i}}"],
+                "<= 3",
+            ),
             "mst export --step": ([mst, "export", str(DESIGN), "--step", "--out", f"{tmp}/s{{i}}"], ""),
             "mst check": ([mst, "check", f"{tmp}/ref"], "<= 3"),
         }
         times = round_robin(cmds, args.repeats)
     med = {name: statistics.median(ts) for name, ts in times.items()}
     floor = next(iter(med.values()))
-    print(f"# bench_export ({args.repeats} rounds, {sys.platform}, python {sys.version.split()[0]}); "
-          "3-layer reference design; ratios against the floor measured in the same run")
+    print(
+        f"# bench_export ({args.repeats} rounds, {sys.platform}, python {sys.version.split()[0]}); "
+        "3-layer reference design; ratios against the floor measured in the same run"
+    )
     print(f"| {'command':<46} | {'median [s]':>10} | {'min / max [s]':>13} | {'x floor':>7} | {'goal':>9} |")
     print(f"|{'-' * 48}|{'-' * 12}|{'-' * 15}|{'-' * 9}|{'-' * 11}|")
     for name, (_, goal) in cmds.items():
         ts, ratio = times[name], med[name] / floor
         mark = "" if not goal else (" ok" if ratio <= float(goal.split()[-1]) else " MISS")
-        print(f"| {name:<46} | {med[name]:>10.3f} | {min(ts):>5.3f} / {max(ts):<5.3f} | {ratio:>7.2f} "
-              f"| {goal + mark:>9} |")
+        print(
+            f"| {name:<46} | {med[name]:>10.3f} | {min(ts):>5.3f} / {max(ts):<5.3f} | {ratio:>7.2f} "
+            f"| {goal + mark:>9} |"
+        )
     for path, body in STAGES.items():
         print()
         print(f"{path}, one in-process run:")

@@ -47,9 +47,18 @@ def measure(samples: int, seed: int, repeat: int) -> list[dict]:
             t0 = time.perf_counter()
             law = uncached_layer_law(cell, material, "continuum")
             best_s = min(best_s, time.perf_counter() - t0)
-        rows.append({"theta_deg": cell.theta_deg, "t_mm": cell.t_mm, "h_mm": cell.h_mm, "time_s": best_s,
-                     "k_N_per_mm": law.k_N_per_mm, "d_lock_mm": law.d_lock_mm,
-                     "lock_force_N": law.lock_force_N, "knots_N": list(law.knots_N)})
+        rows.append(
+            {
+                "theta_deg": cell.theta_deg,
+                "t_mm": cell.t_mm,
+                "h_mm": cell.h_mm,
+                "time_s": best_s,
+                "k_N_per_mm": law.k_N_per_mm,
+                "d_lock_mm": law.d_lock_mm,
+                "lock_force_N": law.lock_force_N,
+                "knots_N": list(law.knots_N),
+            }
+        )
     return rows
 
 
@@ -86,18 +95,33 @@ def main():
                 x = rel_diff(r, ref["rows"][i], k)
                 worst[k] = max(worst[k], x)
                 diffs[j] = f"{x:.1e}"
-        print(f"| {r['theta_deg']:g} | {r['t_mm']:g} | {r['h_mm']:g} | {1e3 * r['time_s']:.0f} | "
-              + " | ".join(diffs) + " |")
+        print(
+            f"| {r['theta_deg']:g} | {r['t_mm']:g} | {r['h_mm']:g} | {1e3 * r['time_s']:.0f} | "
+            + " | ".join(diffs)
+            + " |"
+        )
     print(f"\nmedian time per layer: {1e3 * median_s:.0f} ms")
     if ref is not None:
-        print(f"reference median (the implementation that wrote {args.reference.name}): "
-              f"{1e3 * ref['median_time_s']:.0f} ms; speed-up {ref['median_time_s'] / median_s:.2f}x")
-        print("max relative difference against the reference: "
-              + ", ".join(f"{k} {v:.1e}" for k, v in worst.items()))
+        print(
+            f"reference median (the implementation that wrote {args.reference.name}): "
+            f"{1e3 * ref['median_time_s']:.0f} ms; speed-up {ref['median_time_s'] / median_s:.2f}x"
+        )
+        print("max relative difference against the reference: " + ", ".join(f"{k} {v:.1e}" for k, v in worst.items()))
     if args.write_reference:
         args.reference.parent.mkdir(parents=True, exist_ok=True)
-        args.reference.write_text(json.dumps({"samples": args.samples, "seed": args.seed, "repeat": args.repeat,
-                                              "median_time_s": median_s, "rows": rows}, indent=1) + "\n")
+        args.reference.write_text(
+            json.dumps(
+                {
+                    "samples": args.samples,
+                    "seed": args.seed,
+                    "repeat": args.repeat,
+                    "median_time_s": median_s,
+                    "rows": rows,
+                },
+                indent=1,
+            )
+            + "\n"
+        )
         print(f"wrote {args.reference}")
 
 

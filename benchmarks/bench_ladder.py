@@ -28,8 +28,7 @@ def main():
     ap.add_argument("--out", type=Path, default=Path("mst-out/bench"))
     args = ap.parse_args()
     result = run_bench(args.samples, args.seed)
-    result["command"] = (f".venv/bin/python benchmarks/bench_ladder.py --samples {args.samples} "
-                         f"--seed {args.seed}")
+    result["command"] = f".venv/bin/python benchmarks/bench_ladder.py --samples {args.samples} --seed {args.seed}"
     md = bench_markdown(result)
     with staged(args.out) as st:
         st.write_json("bench.json", result)

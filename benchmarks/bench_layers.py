@@ -42,18 +42,20 @@ from user_env import as_installed
 ROOT = Path(__file__).resolve().parents[1]
 SPEC = ROOT / "configs" / "mohammadi2021.yaml"
 BASELINE_LAYERS = 3
-FIRST_LOCK_N = 0.5           # the softest layer of the shortest stacks locks at or above this
-RUN_UNCAPPED = ("import sys\nimport mst_cli.io.schema as schema\n"
-                "schema.MAX_LAYERS = max(schema.MAX_LAYERS, 12)   # this process only\n"
-                "from mst_cli.cli.app import main\nsys.argv[0] = 'mst'\nmain()\n")
+FIRST_LOCK_N = 0.5  # the softest layer of the shortest stacks locks at or above this
+RUN_UNCAPPED = (
+    "import sys\nimport mst_cli.io.schema as schema\n"
+    "schema.MAX_LAYERS = max(schema.MAX_LAYERS, 12)   # this process only\n"
+    "from mst_cli.cli.app import main\nsys.argv[0] = 'mst'\nmain()\n"
+)
 
 
 def synthetic_layers(n: int) -> list[tuple[float, float, float]]:
     """(theta_deg, t_mm, h_mm) of n printable layers, softest at the bottom."""
     x = np.linspace(0.0, 1.0, n) if n > 1 else np.array([0.5])
-    t = 0.45 * (1.6 / 0.45) ** x                 # geometric: k ~ (t/L)^3 rises evenly in log
+    t = 0.45 * (1.6 / 0.45) ** x  # geometric: k ~ (t/L)^3 rises evenly in log
     theta = 20.0 + 20.0 * x
-    h = 2.0 * t + 0.8                             # cavity 0.8 mm: two nozzles, stroke 0.7 mm
+    h = 2.0 * t + 0.8  # cavity 0.8 mm: two nozzles, stroke 0.7 mm
     return [(round(float(a), 3), round(float(b), 3), round(float(c), 3)) for a, b, c in zip(theta, t, h)]
 
 
@@ -72,8 +74,10 @@ def build(n: int):
     order = [r.layer for r in resp.regimes]
     if order != list(range(1, n + 1)):
         raise SystemExit(f"synthetic {n}-layer design locks in order {order}, not bottom to top")
-    layers = tuple(LayerEntry(target_sensitivity_per_N=r.sensitivity_secant_per_N, target_range_N=r.force_to_N)
-                   for r in resp.regimes)
+    layers = tuple(
+        LayerEntry(target_sensitivity_per_N=r.sensitivity_secant_per_N, target_range_N=r.force_to_N)
+        for r in resp.regimes
+    )
     return replace(base, name=f"synthetic-{n}", layers=layers), geometry, resp
 
 
@@ -82,8 +86,10 @@ def write_files(n: int, resp, folder: Path) -> tuple[Path, Path]:
     raw = yaml.safe_load(SPEC.read_text())
     design, spec = dict(raw, name=f"design-{n}"), dict(raw, name=f"spec-{n}")
     design["layers"] = [{"theta_deg": a, "t_mm": b, "h_mm": c} for a, b, c in synthetic_layers(n)]
-    spec["layers"] = [{"target_sensitivity_per_N": float(r.sensitivity_secant_per_N),
-                       "target_range_N": float(r.force_to_N)} for r in resp.regimes]
+    spec["layers"] = [
+        {"target_sensitivity_per_N": float(r.sensitivity_secant_per_N), "target_range_N": float(r.force_to_N)}
+        for r in resp.regimes
+    ]
     paths = folder / f"design-{n}.yaml", folder / f"spec-{n}.yaml"
     for path, data in zip(paths, (design, spec)):
         path.write_text(yaml.safe_dump(data, sort_keys=False))
@@ -102,11 +108,14 @@ def median_time(fn, repeats: int) -> float:
 def command_times(argvs: dict, repeats: int) -> dict:
     """Median wall time of each command, run round-robin so shared-machine load hits all alike."""
     times = {key: [] for key in argvs}
-    for i in range(-1, repeats):                   # round -1 warms the caches, not counted
+    for i in range(-1, repeats):  # round -1 warms the caches, not counted
         for key, argv in argvs.items():
             t0 = time.perf_counter()
-            subprocess.run([sys.executable, "-c", RUN_UNCAPPED, *[a.replace("{i}", str(i + 1)) for a in argv]],
-                           check=True, capture_output=True)
+            subprocess.run(
+                [sys.executable, "-c", RUN_UNCAPPED, *[a.replace("{i}", str(i + 1)) for a in argv]],
+                check=True,
+                capture_output=True,
+            )
             if i >= 0:
                 times[key].append(time.perf_counter() - t0)
     return {key: statistics.median(ts) for key, ts in times.items()}
@@ -124,21 +133,27 @@ def shortest_stacks(counts):
     base = load_document(SPEC)
     fam, pr, mat = base.family, base.printer, base.material
     margin = 1.0 + base.design["lock_margin_rel"]
-    th, t, cav = np.meshgrid(np.radians(np.arange(5.0, 75.01, 1.0)), np.arange(0.4, 3.001, 0.02),
-                             np.arange(0.4, 4.001, 0.02), indexing="ij")
+    th, t, cav = np.meshgrid(
+        np.radians(np.arange(5.0, 75.01, 1.0)), np.arange(0.4, 3.001, 0.02), np.arange(0.4, 4.001, 0.02), indexing="ij"
+    )
     h = 2.0 * t + cav
-    ok = (geo.cell_margins_mm(th, t, h, fam.width_mm, fam.contact_allowance_mm, pr.min_wall_mm,
-                              pr.min_gap_mm, pr.nozzle_mm) >= 0).all(-1)
+    ok = (
+        geo.cell_margins_mm(
+            th, t, h, fam.width_mm, fam.contact_allowance_mm, pr.min_wall_mm, pr.min_gap_mm, pr.nozzle_mm
+        )
+        >= 0
+    ).all(-1)
     ok &= (h <= 8.0) & (t / geo.wall_centreline_length_mm(th, t, h) <= correction.fitted_t_over_L_max())
     th, t, h = th[ok], t[ok], h[ok]
-    R = spring_arrays(th, t, h, fam.depth_mm, fam.width_mm, fam.contact_allowance_mm,
-                      mat.youngs_modulus_MPa, mat.poisson_ratio)[2]
+    R = spring_arrays(
+        th, t, h, fam.depth_mm, fam.width_mm, fam.contact_allowance_mm, mat.youngs_modulus_MPa, mat.poisson_ratio
+    )[2]
     out = {}
     for n in counts:
         cells, need = [], FIRST_LOCK_N
         for _ in range(n):
             j = np.flatnonzero(R >= need)
-            j = j[np.lexsort((R[j], h[j]))[0]]        # shortest, then the softest of those
+            j = j[np.lexsort((R[j], h[j]))[0]]  # shortest, then the softest of those
             cells.append(fam.cell(float(np.degrees(th[j])), float(t[j]), float(h[j])))
             need = margin * R[j]
         geometry = base.geometry(tuple(cells))
@@ -153,7 +168,7 @@ def main() -> None:
     ap.add_argument("--command-repeats", type=int, default=5, help="rounds of the commands")
     ap.add_argument("--layers", default="1,3,6,12")
     args = ap.parse_args()
-    as_installed()                 # commands start from bytecode, as an installed copy does
+    as_installed()  # commands start from bytecode, as an installed copy does
     counts = sorted(set([int(v) for v in args.layers.split(",")] + [BASELINE_LAYERS]))
 
     from mst_cli.design import design_document
@@ -165,15 +180,22 @@ def main() -> None:
         tmp = Path(d)
         for n in counts:
             spec, geometry, resp = build(n)
-            simulate(geometry, spec.material)                       # warm the imports and caches
+            simulate(geometry, spec.material)  # warm the imports and caches
             sim_s = median_time(lambda g=geometry, m=spec.material: simulate(g, m), args.repeats)
             results = []
-            design_s = median_time(lambda s=spec, out=results: out.append(design_document(s, seed=0)),
-                                   args.design_repeats)
+            design_s = median_time(
+                lambda s=spec, out=results: out.append(design_document(s, seed=0)), args.design_repeats
+            )
             res = results[-1]
             worst = max(max(abs(t["sensitivity_error_rel"]), abs(t["range_error_rel"])) for t in res.targets)
-            rows[n] = dict(sim_s=sim_s, design_s=design_s, status=res.exit_code, worst=worst,
-                           evaluations=res.evaluations, samples=len(resp.force_N))
+            rows[n] = dict(
+                sim_s=sim_s,
+                design_s=design_s,
+                status=res.exit_code,
+                worst=worst,
+                evaluations=res.evaluations,
+                samples=len(resp.force_N),
+            )
             design_file, spec_file = write_files(n, resp, tmp)
             argvs[("simulate", n)] = ["simulate", str(design_file), "--out", f"{tmp}/s{n}-{{i}}", "--no-plot"]
             argvs[("design", n)] = ["design", str(spec_file), "--out", f"{tmp}/d{n}-{{i}}", "--no-plot", "--quiet"]
@@ -182,30 +204,42 @@ def main() -> None:
 
     b = rows[BASELINE_LAYERS]
     cb = {kind: cmd[(kind, BASELINE_LAYERS)] for kind in ("simulate", "design")}
-    print(f"# bench_layers ({args.repeats} simulate / {args.design_repeats} design library repeats, "
-          f"{args.command_repeats} command rounds; {sys.platform}, python {sys.version.split()[0]})")
-    print("| layers | force samples | simulate() [ms] | x 3 | mst simulate --no-plot [s] | x 3 "
-          "| design_document() [s] | x 3 | mst design --no-plot [s] | x 3 | design: exit, worst miss, evaluations |")
+    print(
+        f"# bench_layers ({args.repeats} simulate / {args.design_repeats} design library repeats, "
+        f"{args.command_repeats} command rounds; {sys.platform}, python {sys.version.split()[0]})"
+    )
+    print(
+        "| layers | force samples | simulate() [ms] | x 3 | mst simulate --no-plot [s] | x 3 "
+        "| design_document() [s] | x 3 | mst design --no-plot [s] | x 3 | design: exit, worst miss, evaluations |"
+    )
     print("|---|---|---|---|---|---|---|---|---|---|---|")
     for n, r in rows.items():
         cs, cd = cmd[("simulate", n)], cmd[("design", n)]
-        print(f"| {n} | {r['samples']} | {r['sim_s'] * 1e3:.2f} | {r['sim_s'] / b['sim_s']:.2f} "
-              f"| {cs:.3f} | {cs / cb['simulate']:.2f} | {r['design_s']:.3f} | {r['design_s'] / b['design_s']:.2f} "
-              f"| {cd:.3f} | {cd / cb['design']:.2f} | {r['status']}, {100 * r['worst']:.2f} %, {r['evaluations']} |")
+        print(
+            f"| {n} | {r['samples']} | {r['sim_s'] * 1e3:.2f} | {r['sim_s'] / b['sim_s']:.2f} "
+            f"| {cs:.3f} | {cs / cb['simulate']:.2f} | {r['design_s']:.3f} | {r['design_s'] / b['design_s']:.2f} "
+            f"| {cd:.3f} | {cd / cb['design']:.2f} | {r['status']}, {100 * r['worst']:.2f} %, {r['evaluations']} |"
+        )
     print("goal: the 12-layer row at most 2x the 3-layer row (x 3 <= 2)")
     print()
-    print(f"Shortest printable stacks that lock in file order with the 10 % margin, from {FIRST_LOCK_N:g} N "
-          f"({printable} printable cells on the grid); Ø6 x 2 mm N42, default board:")
-    print("| layers | part height [mm] | gap0 -> at last lock [mm] | B0 [mT] | B at last lock [mT] "
-          "| last lock [N] | S first..last [1/N] | worst dF [mN] |")
+    print(
+        f"Shortest printable stacks that lock in file order with the 10 % margin, from {FIRST_LOCK_N:g} N "
+        f"({printable} printable cells on the grid); Ø6 x 2 mm N42, default board:"
+    )
+    print(
+        "| layers | part height [mm] | gap0 -> at last lock [mm] | B0 [mT] | B at last lock [mT] "
+        "| last lock [N] | S first..last [1/N] | worst dF [mN] |"
+    )
     print("|---|---|---|---|---|---|---|---|")
     for n, (g, resp) in sorted(stacks.items()):
         S = [r.sensitivity_secant_per_N for r in resp.regimes]
         dF = max(r.force_resolution_N for r in resp.regimes) * 1e3
         locks_in_order = [r.layer for r in resp.regimes] == list(range(1, n + 1))
-        print(f"| {n} | {g.total_height_mm:.2f} | {g.gap0_mm:.2f} -> {resp.gap_min_mm:.2f} | {resp.B0_T * 1e3:.3f} "
-              f"| {resp.B_full_T * 1e3:.3f} (limit {0.9 * SATURATION_T * 1e3:.0f}) | {resp.max_force_N:.3g} "
-              f"| {S[0]:.3g}..{S[-1]:.3g} | {dF:.3g}{'' if locks_in_order else ' (OUT OF ORDER)'} |")
+        print(
+            f"| {n} | {g.total_height_mm:.2f} | {g.gap0_mm:.2f} -> {resp.gap_min_mm:.2f} | {resp.B0_T * 1e3:.3f} "
+            f"| {resp.B_full_T * 1e3:.3f} (limit {0.9 * SATURATION_T * 1e3:.0f}) | {resp.max_force_N:.3g} "
+            f"| {S[0]:.3g}..{S[-1]:.3g} | {dF:.3g}{'' if locks_in_order else ' (OUT OF ORDER)'} |"
+        )
 
 
 if __name__ == "__main__":

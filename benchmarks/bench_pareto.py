@@ -42,7 +42,7 @@ def hypervolume(points: np.ndarray, ref: np.ndarray) -> float:
     if len(p) == 0:
         return 0.0
     axes = [np.unique(np.concatenate([p[:, j], [ref[j]]])) for j in range(3)]
-    lo = np.stack(np.meshgrid(*(a[:-1] for a in axes), indexing="ij"), axis=-1)        # cell corners
+    lo = np.stack(np.meshgrid(*(a[:-1] for a in axes), indexing="ij"), axis=-1)  # cell corners
     size = np.prod(np.stack(np.meshgrid(*(np.diff(a) for a in axes), indexing="ij"), axis=-1), axis=-1)
     covered = np.any(np.all(p[:, None, None, None, :] <= lo[None], axis=-1), axis=0)
     return float(np.sum(size[covered]))
@@ -58,16 +58,27 @@ def fronts(docs, count: int) -> list[dict]:
         chosen, front = pareto_front(doc, count)
         seconds = time.perf_counter() - t0
         chosen_metrics = [p.metrics.tolist() for p in front if p.chosen]
-        rows.append({"seconds": seconds, "status": chosen.status,
-                     "chosen": chosen_metrics[0] if chosen_metrics else None,
-                     "front": [p.metrics.tolist() for p in front]})
+        rows.append(
+            {
+                "seconds": seconds,
+                "status": chosen.status,
+                "chosen": chosen_metrics[0] if chosen_metrics else None,
+                "front": [p.metrics.tolist() for p in front],
+            }
+        )
     return rows
 
 
 def baseline_rows(directory: Path, docs, count: int) -> list[dict]:
     env = dict(os.environ, PYTHONPATH=str(directory))
-    out = subprocess.run([sys.executable, __file__, "--worker", str(count)], env=env,
-                         input=json.dumps(targets_of(docs)), capture_output=True, text=True, check=True)
+    out = subprocess.run(
+        [sys.executable, __file__, "--worker", str(count)],
+        env=env,
+        input=json.dumps(targets_of(docs)),
+        capture_output=True,
+        text=True,
+        check=True,
+    )
     return json.loads(out.stdout)
 
 
@@ -87,7 +98,7 @@ def main() -> None:
     ap.add_argument("--worker", help=argparse.SUPPRESS)
     args = ap.parse_args()
     as_installed()
-    if args.worker:                   # child of --baseline: targets on stdin, rows as JSON on stdout
+    if args.worker:  # child of --baseline: targets on stdin, rows as JSON on stdout
         print(json.dumps(fronts(docs_from(json.load(sys.stdin)), int(args.worker))))
         return
 
@@ -97,9 +108,11 @@ def main() -> None:
     names = ["reference"] + [f"random-{k:02d}" for k in range(args.specs)]
     new = fronts(docs, args.count)
     old = baseline_rows(args.baseline.resolve(), docs, args.count) if args.baseline else None
-    print(f"# bench_pareto: pareto_front(doc, {args.count}), library call, {sys.platform}, "
-          f"python {sys.version.split()[0]}; hypervolume on objectives / chosen design, "
-          "reference 1.1 x the worst of both fronts")
+    print(
+        f"# bench_pareto: pareto_front(doc, {args.count}), library call, {sys.platform}, "
+        f"python {sys.version.split()[0]}; hypervolume on objectives / chosen design, "
+        "reference 1.1 x the worst of both fronts"
+    )
     head = f"| {'spec':<10} | {'new s':>6} | {'new pts':>7} |"
     if old:
         head += f" {'old s':>6} | {'old pts':>7} | {'HV new':>8} | {'HV old':>8} | {'HV new/old - 1':>14} |"
@@ -120,13 +133,17 @@ def main() -> None:
             line += f" {o['seconds']:>6.2f} | {len(o['front']):>7} |" + hv
         print(line, flush=True)
     print()
-    print(f"median seconds: new {statistics.median(r['seconds'] for r in new):.2f}"
-          + (f", old {statistics.median(r['seconds'] for r in old):.2f}" if old else ""))
+    print(
+        f"median seconds: new {statistics.median(r['seconds'] for r in new):.2f}"
+        + (f", old {statistics.median(r['seconds'] for r in old):.2f}" if old else "")
+    )
     if ratios:
-        print(f"hypervolume new / old - 1: median {statistics.median(ratios) - 1:+.1e}, "
-              f"min {min(ratios) - 1:+.1e}, max {max(ratios) - 1:+.1e}; specs with new >= old: "
-              f"{sum(r >= 1.0 for r in ratios)}/{len(ratios)}, within 1e-6 of old or above: "
-              f"{sum(r >= 1.0 - 1e-6 for r in ratios)}/{len(ratios)}")
+        print(
+            f"hypervolume new / old - 1: median {statistics.median(ratios) - 1:+.1e}, "
+            f"min {min(ratios) - 1:+.1e}, max {max(ratios) - 1:+.1e}; specs with new >= old: "
+            f"{sum(r >= 1.0 for r in ratios)}/{len(ratios)}, within 1e-6 of old or above: "
+            f"{sum(r >= 1.0 - 1e-6 for r in ratios)}/{len(ratios)}"
+        )
 
 
 if __name__ == "__main__":

@@ -38,17 +38,19 @@ from user_env import as_installed
 
 ROOT = Path(__file__).resolve().parents[1]
 SPEC = ROOT / "configs" / "mohammadi2021.yaml"
-MST = Path(sys.executable).parent / "mst"      # the console script of this environment
-MODES = (("mst design", []), ("--refine frame", ["--refine", "frame"]),
-         ("--refine continuum", ["--refine", "continuum"]))
-GOAL_RATIO = 4.0                               # --refine continuum / plain design
+MST = Path(sys.executable).parent / "mst"  # the console script of this environment
+MODES = (
+    ("mst design", []),
+    ("--refine frame", ["--refine", "frame"]),
+    ("--refine continuum", ["--refine", "continuum"]),
+)
+GOAL_RATIO = 4.0  # --refine continuum / plain design
 
 
 def _env(pythonpath: Path | None) -> dict | None:
     if pythonpath is None:
         return None
-    return {**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, [str(pythonpath),
-                                                                      os.environ.get("PYTHONPATH")]))}
+    return {**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, [str(pythonpath), os.environ.get("PYTHONPATH")]))}
 
 
 def command_times(spec: Path, repeats: int, modes) -> dict[str, list[float]]:
@@ -57,10 +59,13 @@ def command_times(spec: Path, repeats: int, modes) -> dict[str, list[float]]:
         for i in range(repeats):
             for j, (label, flags, path) in enumerate(modes):
                 t0 = time.perf_counter()
-                r = subprocess.run([str(MST), "design", str(spec), *flags, "--out", f"{tmp}/o{i}-{j}", "-q"],
-                                   capture_output=True, env=_env(path))
+                r = subprocess.run(
+                    [str(MST), "design", str(spec), *flags, "--out", f"{tmp}/o{i}-{j}", "-q"],
+                    capture_output=True,
+                    env=_env(path),
+                )
                 times[label].append(time.perf_counter() - t0)
-                if r.returncode not in (0, 1):           # 1 = targets not met: still a timed run
+                if r.returncode not in (0, 1):  # 1 = targets not met: still a timed run
                     raise SystemExit(f"mst design {' '.join(flags)} failed: {r.stderr.decode()}")
     return times
 
@@ -92,13 +97,14 @@ def count_run(spec: Path, flags: list[str]) -> dict:
         def wrapper(cell, material, _inner=inner, _rung=rung):
             requests[_rung] += 1
             return _inner(cell, material)
+
         wrapper.__wrapped__ = getattr(inner, "__wrapped__", inner)
         wrapper.inner = inner
-        setattr(module, name, wrapper)          # layer_law imports it from the module per call
+        setattr(module, name, wrapper)  # layer_law imports it from the module per call
 
     with tempfile.TemporaryDirectory() as tmp:
         t0 = time.perf_counter()
-        with contextlib.suppress(SystemExit):        # the command's exit code: not a count
+        with contextlib.suppress(SystemExit):  # the command's exit code: not a count
             main(["design", str(spec), *flags, "--out", f"{tmp}/o", "-q"], standalone_mode=False)
         elapsed = time.perf_counter() - t0
     solved = {}
@@ -112,8 +118,13 @@ def count_run(spec: Path, flags: list[str]) -> dict:
 def counts(spec: Path, modes) -> dict[str, dict]:
     out = {}
     for label, flags, path in modes:
-        r = subprocess.run([sys.executable, __file__, "--count", json.dumps(flags), "--spec", str(spec)],
-                           capture_output=True, text=True, check=True, env=_env(path))
+        r = subprocess.run(
+            [sys.executable, __file__, "--count", json.dumps(flags), "--spec", str(spec)],
+            capture_output=True,
+            text=True,
+            check=True,
+            env=_env(path),
+        )
         out[label] = json.loads(r.stdout.strip().splitlines()[-1])
     return out
 
@@ -122,11 +133,15 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--spec", type=Path, default=SPEC)
-    ap.add_argument("--baseline", type=Path, default=None,
-                    help="a directory holding another mst_cli package: its refine rows are added")
-    ap.add_argument("--count", default=None, help=argparse.SUPPRESS)   # internal: one counted run
+    ap.add_argument(
+        "--baseline",
+        type=Path,
+        default=None,
+        help="a directory holding another mst_cli package: its refine rows are added",
+    )
+    ap.add_argument("--count", default=None, help=argparse.SUPPRESS)  # internal: one counted run
     args = ap.parse_args()
-    as_installed()                 # commands start from bytecode, as an installed copy does
+    as_installed()  # commands start from bytecode, as an installed copy does
     if args.count is not None:
         print(json.dumps(count_run(args.spec, json.loads(args.count))))
         return
@@ -137,10 +152,14 @@ def main() -> None:
     times = command_times(args.spec, args.repeats, modes)
     n = counts(args.spec, modes)
     plain = statistics.median(times[MODES[0][0]])
-    print(f"spec {args.spec.name}, {args.repeats} runs per command (interleaved), one run of this script"
-          + (f"; baseline package: {args.baseline}" if args.baseline else ""))
-    head = (f"{'command':<31} {'median s':>9} {'min s':>7} {'max s':>7} {'x plain':>8} "
-            f"{'dear laws solved':>16} {'law requests':>12} {'evaluate calls':>14} {'points':>9}")
+    print(
+        f"spec {args.spec.name}, {args.repeats} runs per command (interleaved), one run of this script"
+        + (f"; baseline package: {args.baseline}" if args.baseline else "")
+    )
+    head = (
+        f"{'command':<31} {'median s':>9} {'min s':>7} {'max s':>7} {'x plain':>8} "
+        f"{'dear laws solved':>16} {'law requests':>12} {'evaluate calls':>14} {'points':>9}"
+    )
     print(head)
     print("-" * len(head))
     for label, flags, _ in modes:
@@ -148,12 +167,16 @@ def main() -> None:
         rung = flags[1] if flags else None
         solved = c["laws_solved"][rung] if rung else 0
         req = c["law_requests"][rung] if rung else 0
-        print(f"{label:<31} {statistics.median(ts):>9.2f} {min(ts):>7.2f} {max(ts):>7.2f} "
-              f"{statistics.median(ts) / plain:>8.2f} {solved:>16d} {req:>12d} "
-              f"{c['evaluate_calls']:>14d} {c['evaluate_points']:>9d}")
+        print(
+            f"{label:<31} {statistics.median(ts):>9.2f} {min(ts):>7.2f} {max(ts):>7.2f} "
+            f"{statistics.median(ts) / plain:>8.2f} {solved:>16d} {req:>12d} "
+            f"{c['evaluate_calls']:>14d} {c['evaluate_points']:>9d}"
+        )
     ratio = statistics.median(times[MODES[-1][0]]) / plain
-    print(f"goal: --refine continuum <= {GOAL_RATIO:g}x the plain design: {ratio:.2f}x "
-          f"({'met' if ratio <= GOAL_RATIO else 'NOT met'})")
+    print(
+        f"goal: --refine continuum <= {GOAL_RATIO:g}x the plain design: {ratio:.2f}x "
+        f"({'met' if ratio <= GOAL_RATIO else 'NOT met'})"
+    )
 
 
 if __name__ == "__main__":

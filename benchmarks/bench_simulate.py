@@ -54,24 +54,30 @@ def commands(tmp: Path, export_dir: Path, with_pareto: bool, with_refine: bool) 
     cmds = {
         'floor: python -c "import numpy, yaml, click"': ([sys.executable, "-c", "import numpy, yaml, click"], ""),
         "mst --help": ([mst, "--help"], ""),
-        "mst simulate --no-plot": ([mst, "simulate", str(FORWARD), "--out", f"{tmp}/np{{i}}", "--no-plot"],
-                                   "<= 1.5"),
+        "mst simulate --no-plot": ([mst, "simulate", str(FORWARD), "--out", f"{tmp}/np{{i}}", "--no-plot"], "<= 1.5"),
         "mst simulate (draws response.png)": ([mst, "simulate", str(FORWARD), "--out", f"{tmp}/p{{i}}"], ""),
         "mst simulate --json": ([mst, "simulate", str(FORWARD), "--out", f"{tmp}/j{{i}}", "--json"], ""),
-        "mst design mohammadi2021 --no-plot -q": ([mst, "design", str(SPEC), "--out", f"{tmp}/d{{i}}",
-                                                  "--no-plot", "--quiet"], "<= 2"),
+        "mst design mohammadi2021 --no-plot -q": (
+            [mst, "design", str(SPEC), "--out", f"{tmp}/d{{i}}", "--no-plot", "--quiet"],
+            "<= 2",
+        ),
         "mst check (3 layers)": ([mst, "check", str(export_dir)], "<= 3"),
-        "mst export --stl --3mf (3 layers)": ([mst, "export", str(FORWARD), "--stl", "--3mf",
-                                               "--out", f"{tmp}/e{{i}}"], "<= 3"),
+        "mst export --stl --3mf (3 layers)": (
+            [mst, "export", str(FORWARD), "--stl", "--3mf", "--out", f"{tmp}/e{{i}}"],
+            "<= 3",
+        ),
         "mst export --step (3 layers)": ([mst, "export", str(FORWARD), "--step", "--out", f"{tmp}/s{{i}}"], ""),
     }
     if with_pareto:
         cmds["mst design mohammadi2021 --pareto 12 --no-plot -q"] = (
-            [mst, "design", str(SPEC), "--pareto", "12", "--out", f"{tmp}/f{{i}}", "--no-plot", "--quiet"], "<= 10")
+            [mst, "design", str(SPEC), "--pareto", "12", "--out", f"{tmp}/f{{i}}", "--no-plot", "--quiet"],
+            "<= 10",
+        )
     if with_refine:
         cmds["mst design mohammadi2021 --refine continuum --no-plot -q"] = (
             [mst, "design", str(SPEC), "--refine", "continuum", "--out", f"{tmp}/r{{i}}", "--no-plot", "--quiet"],
-            "<= 6")
+            "<= 6",
+        )
     return cmds
 
 
@@ -88,7 +94,7 @@ def with_baseline(cmds: dict, baseline: Path) -> dict[str, tuple[list[str], str,
 
 def round_robin(cmds: dict, repeats: int) -> dict[str, list[float]]:
     times = {name: [] for name in cmds}
-    for i in range(-1, repeats):                 # round -1 warms the caches and is not counted
+    for i in range(-1, repeats):  # round -1 warms the caches and is not counted
         for name, (argv, _, env) in cmds.items():
             run = [a.replace("{i}", str(i + 1)) for a in argv]
             t0 = time.perf_counter()
@@ -100,10 +106,12 @@ def round_robin(cmds: dict, repeats: int) -> dict[str, list[float]]:
 
 def heavy_imports(args: list[str]) -> list[str]:
     """The heavy libraries a command imports, run in-process in a fresh interpreter."""
-    code = ("import sys\nfrom mst_cli.cli.app import main\n"
-            f"sys.argv = ['mst'] + {args!r}\n"
-            "try:\n    main()\nexcept SystemExit:\n    pass\n"
-            f"print(','.join(m for m in {HEAVY!r} if m in sys.modules), file=sys.stderr)\n")
+    code = (
+        "import sys\nfrom mst_cli.cli.app import main\n"
+        f"sys.argv = ['mst'] + {args!r}\n"
+        "try:\n    main()\nexcept SystemExit:\n    pass\n"
+        f"print(','.join(m for m in {HEAVY!r} if m in sys.modules), file=sys.stderr)\n"
+    )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     last = out.stderr.strip().splitlines()[-1] if out.stderr.strip() else ""
     return [m for m in last.split(",") if m]
@@ -111,6 +119,7 @@ def heavy_imports(args: list[str]) -> list[str]:
 
 def l0_rate(n_layers: int, repeats: int) -> float:
     from mst_cli.model.mechanics.spring import spring_arrays
+
     rng = np.random.default_rng(0)
     th = np.radians(rng.uniform(15, 60, n_layers))
     t = rng.uniform(0.4, 2.0, n_layers)
@@ -130,16 +139,20 @@ def main() -> None:
     ap.add_argument("--no-refine", action="store_true", help="skip mst design --refine continuum (seconds a run)")
     ap.add_argument("--baseline", type=Path, default=None, help="a checkout of another version to compare")
     args = ap.parse_args()
-    as_installed()                 # commands start from bytecode, as an installed copy does
+    as_installed()  # commands start from bytecode, as an installed copy does
 
     with tempfile.TemporaryDirectory() as d:
         tmp = Path(d)
         export_dir = tmp / "export"
-        subprocess.run([mst_exe(), "export", str(FORWARD), "--stl", "--out", str(export_dir)],
-                       check=True, capture_output=True)
+        subprocess.run(
+            [mst_exe(), "export", str(FORWARD), "--stl", "--out", str(export_dir)], check=True, capture_output=True
+        )
         cmds = commands(tmp, export_dir, not args.no_pareto, not args.no_refine)
-        cmds = with_baseline(cmds, args.baseline.resolve()) if args.baseline else \
-            {name: (argv, goal, None) for name, (argv, goal) in cmds.items()}
+        cmds = (
+            with_baseline(cmds, args.baseline.resolve())
+            if args.baseline
+            else {name: (argv, goal, None) for name, (argv, goal) in cmds.items()}
+        )
         times = round_robin(cmds, args.repeats)
         heavy = {
             "mst simulate --no-plot": heavy_imports(["simulate", str(FORWARD), "--out", f"{tmp}/h1", "--no-plot"]),
@@ -153,8 +166,10 @@ def main() -> None:
 
     med = {name: statistics.median(ts) for name, ts in times.items()}
     floor = next(iter(med.values()))
-    print(f"# bench_simulate ({args.repeats} rounds, {sys.platform}, python {sys.version.split()[0]}); "
-          f"ratios against the floor measured in the same run")
+    print(
+        f"# bench_simulate ({args.repeats} rounds, {sys.platform}, python {sys.version.split()[0]}); "
+        f"ratios against the floor measured in the same run"
+    )
     width = max(len(name) for name in cmds)
     print(f"| {'command':<{width}} | {'median [s]':>10} | {'min / max [s]':>13} | {'x floor':>7} | {'goal':>11} |")
     print(f"|{'-' * (width + 2)}|{'-' * 12}|{'-' * 15}|{'-' * 9}|{'-' * 13}|")
@@ -162,12 +177,16 @@ def main() -> None:
         ts = times[name]
         ratio = med[name] / floor
         mark = "" if not goal else (" ok" if ratio <= float(goal.split()[-1]) else " MISS")
-        print(f"| {name:<{width}} | {med[name]:>10.3f} | {min(ts):>5.3f} / {max(ts):<5.3f} | {ratio:>7.2f} "
-              f"| {goal + mark:>11} |")
+        print(
+            f"| {name:<{width}} | {med[name]:>10.3f} | {min(ts):>5.3f} / {max(ts):<5.3f} | {ratio:>7.2f} "
+            f"| {goal + mark:>11} |"
+        )
     drawn, bare = med["mst simulate (draws response.png)"], med["mst simulate --no-plot"]
     print()
-    print(f"response.png costs {drawn - bare:.3f} s: {100 * (drawn - bare) / drawn:.0f} % of 'mst simulate' "
-          f"({drawn / floor:.2f}x the floor with it, {bare / floor:.2f}x without)")
+    print(
+        f"response.png costs {drawn - bare:.3f} s: {100 * (drawn - bare) / drawn:.0f} % of 'mst simulate' "
+        f"({drawn / floor:.2f}x the floor with it, {bare / floor:.2f}x without)"
+    )
     print()
     print(f"| {'command':<26} | {'heavy libraries imported':<30} |")
     print(f"|{'-' * 28}|{'-' * 32}|")

@@ -55,8 +55,14 @@ def synthetic_gcode(n_layers: int = 100, seed: int = 1) -> str:
     for k in range(1, n_layers + 1):
         ys = np.arange(W / 2, 20 - W / 2 + 1e-9, W)
         segs = [(W / 2, y, 30 - W / 2, y) for y in ys] + [tuple(v) for v in rng.uniform(0, 20, (100, 4))]
-        out += [";LAYER_CHANGE", f";Z:{0.2 * k:.1f}", ";HEIGHT:0.2", f"G1 Z{0.2 * k:.1f}",
-                ";TYPE:Solid infill", f";WIDTH:{W}"]
+        out += [
+            ";LAYER_CHANGE",
+            f";Z:{0.2 * k:.1f}",
+            ";HEIGHT:0.2",
+            f"G1 Z{0.2 * k:.1f}",
+            ";TYPE:Solid infill",
+            f";WIDTH:{W}",
+        ]
         for x0, y0, x1, y1 in segs:
             out.append(f"G1 X{x0:.3f} Y{y0:.3f} F600")
             de = 0.03 * np.hypot(x1 - x0, y1 - y0)
@@ -70,7 +76,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--repeats", type=int, default=5)
     args = ap.parse_args()
-    as_installed()                 # commands start from bytecode, as an installed copy does
+    as_installed()  # commands start from bytecode, as an installed copy does
     n = max(1, args.repeats)
 
     from mst_cli.cad import gcode as G
@@ -88,22 +94,36 @@ def main() -> None:
     with tempfile.TemporaryDirectory(prefix="bench-slice-") as tmp:
         tmp = Path(tmp)
         export = tmp / "ref"
-        subprocess.run(mst_cmd() + ["export", str(DESIGN), "--stl", "--3mf", "--out", str(export)],
-                       check=True, capture_output=True)
+        subprocess.run(
+            mst_cmd() + ["export", str(DESIGN), "--stl", "--3mf", "--out", str(export)], check=True, capture_output=True
+        )
         model = export / "sensor.3mf"
         t_plain, run = timed(lambda: S.slice_model(exe, model, profile, tmp / "a.gcode", centre), n)
-        t_support, _ = timed(lambda: S.slice_model(exe, model, profile, tmp / "b.gcode", centre,
-                                                   ("--support-material", "--support-material-auto")), n)
+        t_support, _ = timed(
+            lambda: S.slice_model(
+                exe, model, profile, tmp / "b.gcode", centre, ("--support-material", "--support-material-auto")
+            ),
+            n,
+        )
         text = run.gcode_path.read_text()
         t_parse, g = timed(lambda: G.parse_gcode(text), n)
         t_span, spans = timed(lambda: G.free_spans(g), n)
         t_joined, _ = timed(lambda: G.free_spans(g, join_moves=True), n)
         moves = sum(len(lay.segments) for lay in g.layers)
-        t_cli, _ = timed(lambda: subprocess.run(mst_cmd() + ["slice", str(export), "--out", str(tmp / "c")],
-                                                check=True, capture_output=True), n)
-        t_cli_np, _ = timed(lambda: subprocess.run(mst_cmd() + ["slice", str(export), "--no-plot",
-                                                                 "--out", str(tmp / "d")],
-                                                   check=True, capture_output=True), n)
+        t_cli, _ = timed(
+            lambda: subprocess.run(
+                mst_cmd() + ["slice", str(export), "--out", str(tmp / "c")], check=True, capture_output=True
+            ),
+            n,
+        )
+        t_cli_np, _ = timed(
+            lambda: subprocess.run(
+                mst_cmd() + ["slice", str(export), "--no-plot", "--out", str(tmp / "d")],
+                check=True,
+                capture_output=True,
+            ),
+            n,
+        )
 
     ref = f"{len(g.layers)} layers, {moves} moves, {len(text) / 1e6:.1f} MB"
     row("PrusaSlicer slice, reference 3MF [s]", t_plain, note=ref)
@@ -121,8 +141,7 @@ def main() -> None:
     row("synthetic 100 layers: parse G-code [s]", t_sparse, note=f"{len(gs.layers)} layers, {smoves} moves")
     row("synthetic 100 layers: free spans [s]", t_sspan)
 
-    print(f"# bench_slice ({n} repeats, {S.slicer_version(exe)}, {sys.platform}, "
-          f"python {sys.version.split()[0]})")
+    print(f"# bench_slice ({n} repeats, {S.slicer_version(exe)}, {sys.platform}, python {sys.version.split()[0]})")
     print(f"| {'measure':<42} | {'median':>7} | {'min / max':>15} | note |")
     print(f"|{'-' * 44}|{'-' * 9}|{'-' * 17}|------|")
     for name, med, mm, note in rows:

@@ -24,14 +24,25 @@ from mst_cli.model.geometry import HexCell
 from mst_cli.model.material import Material
 from mst_cli.model.mechanics import continuum as L2
 
-CELLS = [(14, 0.4, 1.87), (5, 0.4, 1.25), (25, 0.6, 2.0), (33, 1.0, 2.8), (45, 2.5, 6.5), (60, 0.6, 4.0),
-         (70, 1.5, 6.0)]
+CELLS = [
+    (14, 0.4, 1.87),
+    (5, 0.4, 1.25),
+    (25, 0.6, 2.0),
+    (33, 1.0, 2.8),
+    (45, 2.5, 6.5),
+    (60, 0.6, 4.0),
+    (70, 1.5, 6.0),
+]
 ROOT = Path(__file__).resolve().parent.parent
 
 
 def old_module(rev: str):
-    src = subprocess.run(["git", "-C", str(ROOT), "show", f"{rev}:mst_cli/model/mechanics/continuum.py"],
-                         check=True, capture_output=True, text=True).stdout
+    src = subprocess.run(
+        ["git", "-C", str(ROOT), "show", f"{rev}:mst_cli/model/mechanics/continuum.py"],
+        check=True,
+        capture_output=True,
+        text=True,
+    ).stdout
     path = Path(tempfile.mkdtemp()) / "continuum_old.py"
     path.write_text(src)
     spec = importlib.util.spec_from_file_location("continuum_old", path)
@@ -47,8 +58,10 @@ def main():
     args = ap.parse_args()
     old = old_module(args.rev)
     mat = Material()
-    print(f"{'cell (theta, t, h)':>22} {'first contact d':>15} {'0.5 lock d':>10} {'max |dF| before contact':>24} "
-          f"{'F 0.6 / 0.5 - 1 at 0.5 lock':>28}")
+    print(
+        f"{'cell (theta, t, h)':>22} {'first contact d':>15} {'0.5 lock d':>10} {'max |dF| before contact':>24} "
+        f"{'F 0.6 / 0.5 - 1 at 0.5 lock':>28}"
+    )
     for cell_args in CELLS:
         cell = HexCell(*cell_args)
         ro = old.solve_continuum(cell, mat)

@@ -36,12 +36,12 @@ def graded_depth(length_mm: float, n_layers: int, first_mm: float, free_at_end: 
     (y = length when ``free_at_end``) ``first_mm`` thick (uniform if that is not thinner)."""
     if first_mm * n_layers >= length_mm or n_layers == 1:
         return np.linspace(0.0, length_mm, n_layers + 1)
-    lo, hi = 1.0, 10.0          # ratio r with first * (r^n - 1) / (r - 1) = length
+    lo, hi = 1.0, 10.0  # ratio r with first * (r^n - 1) / (r - 1) = length
     for _ in range(200):
         r = 0.5 * (lo + hi)
-        total = first_mm * (r ** n_layers - 1.0) / (r - 1.0)
+        total = first_mm * (r**n_layers - 1.0) / (r - 1.0)
         lo, hi = (r, hi) if total < length_mm else (lo, r)
-    sizes = first_mm * r ** np.arange(n_layers)      # from the free face inward
+    sizes = first_mm * r ** np.arange(n_layers)  # from the free face inward
     sizes *= length_mm / sizes.sum()
     y = np.concatenate([[0.0], np.cumsum(sizes[::-1])])
     y[-1] = length_mm
@@ -57,14 +57,16 @@ def extrude(points_xz: np.ndarray, triangles: np.ndarray, y: np.ndarray) -> tupl
     gets the diagonal b_j - t_i in every prism that shares it (conforming)."""
     n = points_xz.shape[1]
     nl = len(y) - 1
-    pts = np.vstack([np.tile(points_xz[0], nl + 1), np.repeat(np.asarray(y, float), n),
-                     np.tile(points_xz[1], nl + 1)])
+    pts = np.vstack([np.tile(points_xz[0], nl + 1), np.repeat(np.asarray(y, float), n), np.tile(points_xz[1], nl + 1)])
     s = np.sort(triangles, axis=0)
     tets = []
     for k in range(nl):
         b, t = s + k * n, s + (k + 1) * n
-        tets += [np.stack([b[0], b[1], b[2], t[0]]), np.stack([b[1], b[2], t[0], t[1]]),
-                 np.stack([b[2], t[0], t[1], t[2]])]
+        tets += [
+            np.stack([b[0], b[1], b[2], t[0]]),
+            np.stack([b[1], b[2], t[0], t[1]]),
+            np.stack([b[2], t[0], t[1], t[2]]),
+        ]
     tet = np.concatenate(tets, axis=1)
     # positive orientation
     p0, p1, p2, p3 = (pts[:, tet[i]] for i in range(4))
@@ -82,7 +84,7 @@ def kinematics(Fm, mu, lam):
     J = np.linalg.det(Fq)
     if np.any(J <= 0):
         raise FloatingPointError("inverted element")
-    FiT = np.moveaxis(np.linalg.inv(Fq), (-2, -1), (1, 0))      # (dim, dim, ...) = F^-T
+    FiT = np.moveaxis(np.linalg.inv(Fq), (-2, -1), (1, 0))  # (dim, dim, ...) = F^-T
     lnJ = np.log(J)
     return mu * Fm + (lam * lnJ - mu) * FiT, FiT, lnJ
 
@@ -93,10 +95,11 @@ class Assembler:
 
     def __init__(self, basis):
         from scipy.sparse import coo_matrix
+
         dofs = basis.element_dofs
         n_loc, n_el = dofs.shape
         self.dim = dim = basis.mesh.dim()
-        grads = np.array([basis.basis[i][0].grad for i in range(n_loc)])   # (n_loc, dim, dim, n_el, n_q)
+        grads = np.array([basis.basis[i][0].grad for i in range(n_loc)])  # (n_loc, dim, dim, n_el, n_q)
         n_q = grads.shape[-1]
         self.B = np.ascontiguousarray(grads.reshape(n_loc, dim * dim, n_el, n_q).transpose(2, 3, 1, 0))
         Bw = self.B * basis.dx[:, :, None, None]
@@ -126,14 +129,14 @@ class Assembler:
     def tangent(self, state, mu, lam):
         """A[(a, b), (m, n)] = mu d_am d_bn - (lam ln J - mu) FiT_an FiT_mb + lam FiT_ab FiT_mn."""
         from scipy.sparse import csr_matrix
+
         FiT, lnJ = state
         dim = self.dim
         Fi = FiT.transpose(2, 3, 0, 1)
         n_el, n_q = lnJ.shape
         f = Fi.reshape(n_el, n_q, dim * dim)
         swap = np.einsum("eqan,eqmb->eqabmn", Fi, Fi).reshape(n_el, n_q, dim * dim, dim * dim)
-        A = (lam * f[..., :, None] * f[..., None, :] - (lam * lnJ - mu)[..., None, None] * swap
-             + mu * np.eye(dim * dim))
+        A = lam * f[..., :, None] * f[..., None, :] - (lam * lnJ - mu)[..., None, None] * swap + mu * np.eye(dim * dim)
         AB = (A @ self.B).reshape(n_el, dim * dim * n_q, -1)
         K_el = self.BwT @ AB
         data = np.bincount(self.scatter, weights=K_el.ravel(), minlength=self.nnz)
@@ -149,9 +152,20 @@ class Problem3D(L2._Problem):
     turns the quarter's tip reaction into the layer force (default 2 b / depth modelled, the 2D
     rung's 2 b per mm of depth: 4 for y in [0, D/2] with the mirror at y = 0)."""
 
-    def __init__(self, cell: geo.HexCell, material, y_mm, n_thick: int = 2, n_length: int = 8,
-                 y_sym: bool = True, y_held_far: bool = False, intorder: int = 4, depth_factor=None):
+    def __init__(
+        self,
+        cell: geo.HexCell,
+        material,
+        y_mm,
+        n_thick: int = 2,
+        n_length: int = 8,
+        y_sym: bool = True,
+        y_held_far: bool = False,
+        intorder: int = 4,
+        depth_factor=None,
+    ):
         from skfem import Basis, ElementTetP2, ElementVector, MeshTet
+
         self.cell = cell
         pts2, tri2, x_cut = L2.quarter_profile_mesh(cell, n_thick, n_length)
         y_mm = np.asarray(y_mm, float)
@@ -206,9 +220,16 @@ def solve_to_lock(prob) -> dict:
         path, _ = L2.follow_to_lock(prob, k)
     except PathError as exc:
         raise L2.ContinuumError(f"3D check: {exc} for {prob.cell}") from None
-    return {"k": k, "d_lock": float(path.d_mm[-1]), "R": float(path.observations[-1][0]),
-            "balance": float(path.observations[-1][1]), "at": path.event_at, "iterations": path.iterations,
-            "d": np.array(path.d_mm), "F": np.array([o[0] for o in path.observations])}
+    return {
+        "k": k,
+        "d_lock": float(path.d_mm[-1]),
+        "R": float(path.observations[-1][0]),
+        "balance": float(path.observations[-1][1]),
+        "at": path.event_at,
+        "iterations": path.iterations,
+        "d": np.array(path.d_mm),
+        "F": np.array([o[0] for o in path.observations]),
+    }
 
 
 def depth_grading(cell: geo.HexCell, fine: bool) -> np.ndarray:
@@ -223,10 +244,23 @@ def plane_stress_material(material):
     """The plane-strain constants that give plane stress in 2D: E* = E (1 + 2 nu) / (1 + nu)^2,
     nu* = nu / (1 + nu) (so E* / (1 - nu*^2) = E)."""
     from mst_cli.model.material import Material
+
     E, nu = material.youngs_modulus_MPa, material.poisson_ratio
-    return Material(name=material.name + " (plane stress)", youngs_modulus_MPa=E * (1 + 2 * nu) / (1 + nu) ** 2,
-                    poisson_ratio=nu / (1 + nu))
+    return Material(
+        name=material.name + " (plane stress)",
+        youngs_modulus_MPa=E * (1 + 2 * nu) / (1 + nu) ** 2,
+        poisson_ratio=nu / (1 + nu),
+    )
 
 
-__all__ = ["Assembler", "Problem3D", "depth_grading", "extrude", "graded_depth", "kinematics",
-           "plane_stress_material", "problem_2d", "solve_to_lock"]
+__all__ = [
+    "Assembler",
+    "Problem3D",
+    "depth_grading",
+    "extrude",
+    "graded_depth",
+    "kinematics",
+    "plane_stress_material",
+    "problem_2d",
+    "solve_to_lock",
+]

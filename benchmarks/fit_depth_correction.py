@@ -44,8 +44,9 @@ DEPTH_PAIRS = [(8, 0.4, 1.4), (22, 1.0, 6.0), (38, 2.2, 7.7), (55, 1.0, 3.5), (6
 def shape_cells():
     """Valid cells over the printable box (theta 6-72 deg, t 0.4-2 mm, h up to 8 mm) at D = 20."""
     out = []
-    for theta, t, h_over_t in itertools.product((6, 10, 15, 22, 30, 38, 45, 55, 65, 72), (0.4, 1.0, 2.0),
-                                                (2.8, 3.5, 5.0, 7.0)):
+    for theta, t, h_over_t in itertools.product(
+        (6, 10, 15, 22, 30, 38, 45, 55, 65, 72), (0.4, 1.0, 2.0), (2.8, 3.5, 5.0, 7.0)
+    ):
         h = round(h_over_t * t, 3)
         cell = HexCell(theta, t, h, depth_mm=SHAPE_DEPTH_MM)
         if h <= 8.0 and not cell.violations():
@@ -71,10 +72,10 @@ def main() -> None:
     print("1. l does not depend on D: the boundary-layer width l = (1 - k free/held) D / (2 nu^2)")
     print(f"{'theta':>6} {'t':>5} {'h':>5} {'l at D 12':>10} {'l at D 20':>10} {'change':>7}")
     for theta, t, h in DEPTH_PAIRS:
-        ell = [(1 - free_over_held(HexCell(theta, t, h, depth_mm=D), material)) * D / (2 * nu ** 2)
-               for D in (12.0, 20.0)]
-        print(f"{theta:6g} {t:5g} {h:5g} {ell[0]:10.4f} {ell[1]:10.4f} {100 * (ell[0] / ell[1] - 1):+6.1f}%",
-              flush=True)
+        ell = [(1 - free_over_held(HexCell(theta, t, h, depth_mm=D), material)) * D / (2 * nu**2) for D in (12.0, 20.0)]
+        print(
+            f"{theta:6g} {t:5g} {h:5g} {ell[0]:10.4f} {ell[1]:10.4f} {100 * (ell[0] / ell[1] - 1):+6.1f}%", flush=True
+        )
 
     cells = shape_cells()[: args.limit or None]
     print(f"\n2. lam = l / t over {len(cells)} cells at D = {SHAPE_DEPTH_MM:g} mm")
@@ -83,13 +84,16 @@ def main() -> None:
     for cell in cells:
         t0 = time.perf_counter()
         ratio = free_over_held(cell, material)
-        lam = (1 - ratio) * cell.b_mm / (2 * nu ** 2 * cell.t_mm)
+        lam = (1 - ratio) * cell.b_mm / (2 * nu**2 * cell.t_mm)
         rows.append((cell.theta_rad, cell.t_mm, cell.h_mm, cell.b_mm, ratio))
-        print(f"{cell.theta_deg:6g} {cell.t_mm:5g} {cell.h_mm:6g} {cell.t_mm / (cell.h_mm - cell.t_mm):6.3f} "
-              f"{ratio:12.4f} {lam:7.3f} {time.perf_counter() - t0:5.1f}", flush=True)
+        print(
+            f"{cell.theta_deg:6g} {cell.t_mm:5g} {cell.h_mm:6g} {cell.t_mm / (cell.h_mm - cell.t_mm):6.3f} "
+            f"{ratio:12.4f} {lam:7.3f} {time.perf_counter() - t0:5.1f}",
+            flush=True,
+        )
     A = np.array(rows)
     theta, t, h, D, ratio = A.T
-    lam = (1 - ratio) * D / (2 * nu ** 2 * t)
+    lam = (1 - ratio) * D / (2 * nu**2 * t)
     X = depth.design_matrix(theta, t / (h - t))
     fit, hold = np.arange(len(A)) % 2 == 0, np.arange(len(A)) % 2 == 1
     coef = np.linalg.lstsq(X[fit], lam[fit], rcond=None)[0]
@@ -97,17 +101,30 @@ def main() -> None:
     miss = 100 * np.abs(pred / ratio - 1)
     none = 100 * np.abs(1 / ratio - 1)
     print(f"\nlam fitted on {fit.sum()} cells: {', '.join(f'{c:.4f}' for c in coef)} ({', '.join(depth.TERMS)})")
-    print("k 3D / corrected plane strain - 1, largest |.|: "
-          f"fitted cells {miss[fit].max():.2f} %, held-out cells {miss[hold].max():.2f} % "
-          f"(median {np.median(miss[hold]):.2f} %); "
-          f"uncorrected {none.max():.2f} % (median {np.median(none):.2f} %)")
+    print(
+        "k 3D / corrected plane strain - 1, largest |.|: "
+        f"fitted cells {miss[fit].max():.2f} %, held-out cells {miss[hold].max():.2f} % "
+        f"(median {np.median(miss[hold]):.2f} %); "
+        f"uncorrected {none.max():.2f} % (median {np.median(none):.2f} %)"
+    )
     if not args.no_write and not args.limit:
-        out = {"command": ".venv/bin/python benchmarks/fit_depth_correction.py", "terms": list(depth.TERMS),
-               "coefficients": [float(c) for c in coef], "fitted_on": {"cells": int(fit.sum()), "nu": nu,
-               "depth_mm": SHAPE_DEPTH_MM, "mesh": "2 x 8 in-plane, 6 depth layers graded to t/2 at the face"},
-               "held_out": {"cells": int(hold.sum()), "max_abs_err_k_pct": float(miss[hold].max()),
-                            "median_abs_err_k_pct": float(np.median(miss[hold])),
-                            "uncorrected_max_abs_err_k_pct": float(none.max())}}
+        out = {
+            "command": ".venv/bin/python benchmarks/fit_depth_correction.py",
+            "terms": list(depth.TERMS),
+            "coefficients": [float(c) for c in coef],
+            "fitted_on": {
+                "cells": int(fit.sum()),
+                "nu": nu,
+                "depth_mm": SHAPE_DEPTH_MM,
+                "mesh": "2 x 8 in-plane, 6 depth layers graded to t/2 at the face",
+            },
+            "held_out": {
+                "cells": int(hold.sum()),
+                "max_abs_err_k_pct": float(miss[hold].max()),
+                "median_abs_err_k_pct": float(np.median(miss[hold])),
+                "uncorrected_max_abs_err_k_pct": float(none.max()),
+            },
+        }
         depth.DATA.write_text(json.dumps(out, indent=1) + "\n")
         print(f"wrote {depth.DATA}")
 

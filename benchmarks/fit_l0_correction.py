@@ -75,17 +75,25 @@ def _in_band(v, bands, i):
 
 
 def fit_cells(samples, shallow, stubby, seed, max_t_over_L=np.inf, thin=0):
-    return (sample_cells(samples, seed, max_t_over_L)
-            + (sample_cells(shallow, 10 * seed + 1, max_t_over_L, bounds={"theta_deg": (5.0, 15.0)})
-               if shallow else [])
-            + (sample_cells(stubby, 10 * seed + 2, max_t_over_L, min_t_over_L=1.0) if stubby else [])
-            + (sample_cells(thin, 10 * seed + 3, max_t_over_L, bounds=THIN_BOUNDS) if thin else []))
+    return (
+        sample_cells(samples, seed, max_t_over_L)
+        + (sample_cells(shallow, 10 * seed + 1, max_t_over_L, bounds={"theta_deg": (5.0, 15.0)}) if shallow else [])
+        + (sample_cells(stubby, 10 * seed + 2, max_t_over_L, min_t_over_L=1.0) if stubby else [])
+        + (sample_cells(thin, 10 * seed + 3, max_t_over_L, bounds=THIN_BOUNDS) if thin else [])
+    )
 
 
 def in_thin_band(cells):
-    return np.array([all(THIN_BOUNDS[k][0] <= v <= THIN_BOUNDS[k][1]
-                         for k, v in (("theta_deg", c.theta_deg), ("t_mm", c.t_mm), ("h_mm", c.h_mm)))
-                     for c in cells], dtype=bool)
+    return np.array(
+        [
+            all(
+                THIN_BOUNDS[k][0] <= v <= THIN_BOUNDS[k][1]
+                for k, v in (("theta_deg", c.theta_deg), ("t_mm", c.t_mm), ("h_mm", c.h_mm))
+            )
+            for c in cells
+        ],
+        dtype=bool,
+    )
 
 
 def _key(c):
@@ -111,16 +119,24 @@ def l2_results(cells, mat, cache_path):
 def _lstsq(A, y):
     coef, *_ = np.linalg.lstsq(A, y, rcond=None)
     resid = np.exp(A @ coef - y) - 1.0
-    return coef, {"ratio_range": [float(np.exp(y.min())), float(np.exp(y.max()))],
-                  "median_abs_residual": float(np.median(np.abs(resid))),
-                  "max_abs_residual": float(np.max(np.abs(resid)))}
+    return coef, {
+        "ratio_range": [float(np.exp(y.min())), float(np.exp(y.max()))],
+        "median_abs_residual": float(np.median(np.abs(resid))),
+        "max_abs_residual": float(np.max(np.abs(resid))),
+    }
 
 
 def fit(cells, ref, mat):
     x = np.array([c.t_mm / c.wall_length_mm for c in cells])
     th = np.array([c.theta_rad for c in cells])
-    k0 = np.array([float(layer_stiffness_N_per_mm(c.theta_rad, c.t_mm, c.h_mm, c.b_mm,
-                                                  mat.youngs_modulus_MPa, mat.poisson_ratio)) for c in cells])
+    k0 = np.array(
+        [
+            float(
+                layer_stiffness_N_per_mm(c.theta_rad, c.t_mm, c.h_mm, c.b_mm, mat.youngs_modulus_MPa, mat.poisson_ratio)
+            )
+            for c in cells
+        ]
+    )
     k2 = np.array([r["k"] for r in ref])
     A_k = correction.design_matrix(x, th)
     coef_k, stats_k = _lstsq(A_k, np.log(k2 / k0))
@@ -142,21 +158,26 @@ def fit(cells, ref, mat):
     # the thickest wall on the smallest cavity, at the steepest theta for t/L
     t_max, gap = BOUNDS["t_mm"][1], Printer().min_gap_mm
     y_max = t_max / (t_max + gap)
-    box = {"t_over_L_range": [0.0, float(2.0 * np.sin(np.radians(BOUNDS["theta_deg"][1])) * y_max)],
-           "theta_deg_range": [float(v) for v in BOUNDS["theta_deg"]],
-           "y_range": [0.0, float(y_max)],
-           "allowance_over_t_range": [a / BOUNDS["t_mm"][1], a / BOUNDS["t_mm"][0]],
-           "stroke_ratio_range": [float(sigma.min()), float(sigma.max())],
-           "sampled": {"t_over_L_range": [float(x.min()), float(x.max())],
-                       "theta_deg_range": [float(np.degrees(th.min())), float(np.degrees(th.max()))],
-                       "y_range": [float(y.min()), float(y.max())],
-                       "t_mm_range": [float(t.min()), float(t.max())]}}
+    box = {
+        "t_over_L_range": [0.0, float(2.0 * np.sin(np.radians(BOUNDS["theta_deg"][1])) * y_max)],
+        "theta_deg_range": [float(v) for v in BOUNDS["theta_deg"]],
+        "y_range": [0.0, float(y_max)],
+        "allowance_over_t_range": [a / BOUNDS["t_mm"][1], a / BOUNDS["t_mm"][0]],
+        "stroke_ratio_range": [float(sigma.min()), float(sigma.max())],
+        "sampled": {
+            "t_over_L_range": [float(x.min()), float(x.max())],
+            "theta_deg_range": [float(np.degrees(th.min())), float(np.degrees(th.max()))],
+            "y_range": [float(y.min()), float(y.max())],
+            "t_mm_range": [float(t.min()), float(t.max())],
+        },
+    }
     return (coef_k, stats_k), (coef_R, stats_R), (coef_d, stats_d), box
 
 
 def rung_errors(cells, ref, mat):
     """Relative errors against L2 of L0 textbook, L0 corrected and L1, per cell."""
     from mst_cli.model.mechanics.frame import frame_layer
+
     out = {"spring-textbook": [], "spring": [], "frame": []}
     for c, r in zip(cells, ref):
         laws = {"spring-textbook": spring_layer(c, mat, corrected=False), "spring": spring_layer(c, mat)}
@@ -168,8 +189,7 @@ def rung_errors(cells, ref, mat):
             if isinstance(law, Exception):
                 out[m].append(None)
                 continue
-            out[m].append((law.k_N_per_mm / r["k"] - 1, law.lock_force_N / r["R"] - 1,
-                           law.d_lock_mm / r["d_lock"] - 1))
+            out[m].append((law.k_N_per_mm / r["k"] - 1, law.lock_force_N / r["R"] - 1, law.d_lock_mm / r["d_lock"] - 1))
     return out
 
 
@@ -209,15 +229,22 @@ def band_table(cells, errors):
         measured = [v for v in row if v is not None]
         grid.append([v if v is not None else max(measured) for v in row])
         counts.append(nrow)
-    expected = {"t_over_L_edges": [b[0] for b in X_BANDS],
-                "theta_deg_edges": [b[0] for b in THETA_BANDS],
-                "median_abs_err_lock_force": grid, "n": counts,
-                "note": "bands without a measured cell (n = 0) take the worst band of their t/L row"}
+    expected = {
+        "t_over_L_edges": [b[0] for b in X_BANDS],
+        "theta_deg_edges": [b[0] for b in THETA_BANDS],
+        "median_abs_err_lock_force": grid,
+        "n": counts,
+        "note": "bands without a measured cell (n = 0) take the worst band of their t/L row",
+    }
     if THIN_BAND in table["spring"]:
         s = table["spring"][THIN_BAND]
-        expected["thin"] = {"t_mm_max": THIN_BOUNDS["t_mm"][1], "theta_deg_max": THIN_BOUNDS["theta_deg"][1],
-                            "h_mm_range": list(THIN_BOUNDS["h_mm"]),
-                            "median_abs_err_lock_force": s["median_abs_err_lock_force"], "n": s["n"]}
+        expected["thin"] = {
+            "t_mm_max": THIN_BOUNDS["t_mm"][1],
+            "theta_deg_max": THIN_BOUNDS["theta_deg"][1],
+            "h_mm_range": list(THIN_BOUNDS["h_mm"]),
+            "median_abs_err_lock_force": s["median_abs_err_lock_force"],
+            "n": s["n"],
+        }
     return table, expected
 
 
@@ -226,10 +253,12 @@ def _print_table(title, table):
     for m, t in table.items():
         for band, s in t.items():
             if "median_abs_err_k" in s:
-                print(f"  {m:16s} {band:18s} n {s['n']:3d}  k {s['median_abs_err_k']:6.1%} / {s['max_abs_err_k']:6.1%}"
-                      f"  R {s['median_abs_err_lock_force']:6.1%} / {s['max_abs_err_lock_force']:6.1%}"
-                      f"  d_lock {s['median_abs_err_d_lock']:6.1%} / {s['max_abs_err_d_lock']:6.1%}"
-                      + (f"  failures {s['failures']}" if s["failures"] else ""))
+                print(
+                    f"  {m:16s} {band:18s} n {s['n']:3d}  k {s['median_abs_err_k']:6.1%} / {s['max_abs_err_k']:6.1%}"
+                    f"  R {s['median_abs_err_lock_force']:6.1%} / {s['max_abs_err_lock_force']:6.1%}"
+                    f"  d_lock {s['median_abs_err_d_lock']:6.1%} / {s['max_abs_err_d_lock']:6.1%}"
+                    + (f"  failures {s['failures']}" if s["failures"] else "")
+                )
 
 
 def main():
@@ -237,49 +266,73 @@ def main():
     ap.add_argument("--samples", type=int, default=300)
     ap.add_argument("--shallow-samples", type=int, default=60)
     ap.add_argument("--stubby-samples", type=int, default=60)
-    ap.add_argument("--thin-samples", type=int, default=200,
-                    help="extra cells in the thin band (THIN_BOUNDS), seed 10 seed + 3")
+    ap.add_argument(
+        "--thin-samples", type=int, default=200, help="extra cells in the thin band (THIN_BOUNDS), seed 10 seed + 3"
+    )
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--verify-samples", type=int, default=150)
     ap.add_argument("--verify-shallow", type=int, default=30)
     ap.add_argument("--verify-stubby", type=int, default=30)
     ap.add_argument("--verify-thin", type=int, default=60)
     ap.add_argument("--verify-seed", type=int, default=2)
-    ap.add_argument("--max-t-over-L", type=float, default=np.inf,
-                    help="stubbiest wall sampled [default: none, the cell rules decide]")
-    ap.add_argument("--l2-cache", type=Path, default=None,
-                    help="JSON file of L2 results per cell, read and extended")
-    ap.add_argument("--out", type=Path, default=correction.DATA,
-                    help="where to write the fit [default: the package's mst_cli/model/data/l0_correction.json]")
+    ap.add_argument(
+        "--max-t-over-L",
+        type=float,
+        default=np.inf,
+        help="stubbiest wall sampled [default: none, the cell rules decide]",
+    )
+    ap.add_argument("--l2-cache", type=Path, default=None, help="JSON file of L2 results per cell, read and extended")
+    ap.add_argument(
+        "--out",
+        type=Path,
+        default=correction.DATA,
+        help="where to write the fit [default: the package's mst_cli/model/data/l0_correction.json]",
+    )
     args = ap.parse_args()
     if args.verify_seed == args.seed:
         ap.error("--verify-seed must differ from --seed (the check is out of sample)")
     mat = Material()
-    cells = fit_cells(args.samples, args.shallow_samples, args.stubby_samples, args.seed, args.max_t_over_L,
-                      args.thin_samples)
+    cells = fit_cells(
+        args.samples, args.shallow_samples, args.stubby_samples, args.seed, args.max_t_over_L, args.thin_samples
+    )
     ref = l2_results(cells, mat, args.l2_cache)
     (coef_k, stats_k), (coef_R, stats_R), (coef_d, stats_d), box = fit(cells, ref, mat)
-    command = (f".venv/bin/python benchmarks/fit_l0_correction.py --samples {args.samples} "
-               f"--shallow-samples {args.shallow_samples} --stubby-samples {args.stubby_samples} "
-               f"--thin-samples {args.thin_samples} "
-               f"--seed {args.seed} --verify-samples {args.verify_samples} --verify-shallow "
-               f"{args.verify_shallow} --verify-stubby {args.verify_stubby} --verify-thin {args.verify_thin} "
-               f"--verify-seed {args.verify_seed}"
-               + (f" --max-t-over-L {args.max_t_over_L:g}" if np.isfinite(args.max_t_over_L) else ""))
+    command = (
+        f".venv/bin/python benchmarks/fit_l0_correction.py --samples {args.samples} "
+        f"--shallow-samples {args.shallow_samples} --stubby-samples {args.stubby_samples} "
+        f"--thin-samples {args.thin_samples} "
+        f"--seed {args.seed} --verify-samples {args.verify_samples} --verify-shallow "
+        f"{args.verify_shallow} --verify-stubby {args.verify_stubby} --verify-thin {args.verify_thin} "
+        f"--verify-seed {args.verify_seed}"
+        + (f" --max-t-over-L {args.max_t_over_L:g}" if np.isfinite(args.max_t_over_L) else "")
+    )
     out = {
         "model": "ln(k_L2/k_L0) = sum_i c_i * terms_i(x = t/L, s = theta - pi/4, y = x / (2 sin theta), "
-                 "ly = -ln(1 - y))",
+        "ly = -ln(1 - y))",
         "terms": correction.TERMS,
         "coefficients": [float(c) for c in coef_k],
-        "lock_force": {"model": "ln(R_L2 / (k d_lock)) = sigma * sum_i c_i * lock_terms_i(x, s, y, sigma, "
-                                "e = exp(-2x/sigma), w = 1 - x/(1 - y) floored smoothly at 0, "
-                                "r = allowance/t = (1 - sigma/2)/y - 1), sigma = d_lock / (L sin theta)",
-                       "terms": correction.LOCK_TERMS, "coefficients": [float(c) for c in coef_R], **stats_R},
-        "lock_stroke": {"model": "ln(d_lock,L2 / (h - 2t - allowance)) = "
-                                 "sigma * sum_i c_i * lock_terms_i(x, s, y, sigma, e, w, r)",
-                        "terms": correction.LOCK_TERMS, "coefficients": [float(c) for c in coef_d], **stats_d},
-        "fitted_on": {"samples": len(cells), "seed": args.seed, "poisson_ratio": mat.poisson_ratio,
-                      "contact_allowance_mm": cells[0].contact_allowance_mm, **box, **stats_k},
+        "lock_force": {
+            "model": "ln(R_L2 / (k d_lock)) = sigma * sum_i c_i * lock_terms_i(x, s, y, sigma, "
+            "e = exp(-2x/sigma), w = 1 - x/(1 - y) floored smoothly at 0, "
+            "r = allowance/t = (1 - sigma/2)/y - 1), sigma = d_lock / (L sin theta)",
+            "terms": correction.LOCK_TERMS,
+            "coefficients": [float(c) for c in coef_R],
+            **stats_R,
+        },
+        "lock_stroke": {
+            "model": "ln(d_lock,L2 / (h - 2t - allowance)) = sigma * sum_i c_i * lock_terms_i(x, s, y, sigma, e, w, r)",
+            "terms": correction.LOCK_TERMS,
+            "coefficients": [float(c) for c in coef_d],
+            **stats_d,
+        },
+        "fitted_on": {
+            "samples": len(cells),
+            "seed": args.seed,
+            "poisson_ratio": mat.poisson_ratio,
+            "contact_allowance_mm": cells[0].contact_allowance_mm,
+            **box,
+            **stats_k,
+        },
         "command": command,
     }
     # verify with the package's own kernels reading the file just written
@@ -287,33 +340,63 @@ def main():
     args.out.write_text(json.dumps(out, indent=2) + "\n")
     correction.clear_caches()
     in_table, _ = band_table(cells, rung_errors(cells, ref, mat))
-    vcells = fit_cells(args.verify_samples, args.verify_shallow, args.verify_stubby, args.verify_seed,
-                       args.max_t_over_L, args.verify_thin)
+    vcells = fit_cells(
+        args.verify_samples,
+        args.verify_shallow,
+        args.verify_stubby,
+        args.verify_seed,
+        args.max_t_over_L,
+        args.verify_thin,
+    )
     vref = l2_results(vcells, mat, args.l2_cache)
     table, expected = band_table(vcells, rung_errors(vcells, ref=vref, mat=mat))
     out["in_sample"] = {"cells": len(cells), "bands": in_table}
     xcells = [geo.HexCell(*c) for c in EXAMPLE_CELLS]
     xerr = rung_errors(xcells, l2_results(xcells, mat, args.l2_cache), mat)["spring"]
-    out["out_of_sample"] = {"cells": len(vcells), "seed": args.verify_seed, "bands": table,
-                            "expected_error": expected,
-                            "example_cells": [{"theta_deg": c.theta_deg, "t_mm": c.t_mm, "h_mm": c.h_mm,
-                                               "err_k": e[0], "err_lock_force": e[1], "err_d_lock": e[2]}
-                                              for c, e in zip(xcells, xerr)]}
+    out["out_of_sample"] = {
+        "cells": len(vcells),
+        "seed": args.verify_seed,
+        "bands": table,
+        "expected_error": expected,
+        "example_cells": [
+            {
+                "theta_deg": c.theta_deg,
+                "t_mm": c.t_mm,
+                "h_mm": c.h_mm,
+                "err_k": e[0],
+                "err_lock_force": e[1],
+                "err_d_lock": e[2],
+            }
+            for c, e in zip(xcells, xerr)
+        ],
+    }
     args.out.write_text(json.dumps(out, indent=2) + "\n")
     correction.clear_caches()
     for name, s in (("k_L2/k_L0", stats_k), ("R_L2/(k d_lock)", stats_R), ("d_lock,L2/d_lock,L0", stats_d)):
         lo, hi = s["ratio_range"]
-        print(f"{name}: from {lo:.3f} to {hi:.3f}; after the fit median |residual| "
-              f"{s['median_abs_residual']:.2%}, max {s['max_abs_residual']:.2%}")
+        print(
+            f"{name}: from {lo:.3f} to {hi:.3f}; after the fit median |residual| "
+            f"{s['median_abs_residual']:.2%}, max {s['max_abs_residual']:.2%}"
+        )
     _print_table(f"in sample ({len(cells)} fitted cells), median / max |error| against L2:", in_table)
-    _print_table(f"out of sample ({len(vcells)} cells, seed {args.verify_seed}), "
-                 "median / max |error| against L2:", table)
-    print("L0 median |R error| by (t/L, theta) band (rows t/L from", expected["t_over_L_edges"],
-          ", columns theta from", expected["theta_deg_edges"], "):", expected["median_abs_err_lock_force"],
-          "n", expected["n"])
+    _print_table(
+        f"out of sample ({len(vcells)} cells, seed {args.verify_seed}), median / max |error| against L2:", table
+    )
+    print(
+        "L0 median |R error| by (t/L, theta) band (rows t/L from",
+        expected["t_over_L_edges"],
+        ", columns theta from",
+        expected["theta_deg_edges"],
+        "):",
+        expected["median_abs_err_lock_force"],
+        "n",
+        expected["n"],
+    )
     for e in out["out_of_sample"]["example_cells"]:
-        print(f"  example theta {e['theta_deg']:g} t {e['t_mm']:g} h {e['h_mm']:g}: L0 error k {e['err_k']:+.1%}"
-              f"  R {e['err_lock_force']:+.1%}  d_lock {e['err_d_lock']:+.1%}")
+        print(
+            f"  example theta {e['theta_deg']:g} t {e['t_mm']:g} h {e['h_mm']:g}: L0 error k {e['err_k']:+.1%}"
+            f"  R {e['err_lock_force']:+.1%}  d_lock {e['err_d_lock']:+.1%}"
+        )
     print(f"wrote {args.out}")
 
 

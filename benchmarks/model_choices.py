@@ -52,14 +52,15 @@ def joint_table(cells, mat):
         outer = c.outer_profile_xz()
         tip = 0.5 * (np.asarray(outer[1]) + np.asarray(inner[1]))
         L = c.wall_length_mm
-        root_zone = (np.asarray(inner[0]) - (tip - L * u)) @ u     # inner face leaves the pad
-        tip_zone = t / (2.0 * np.tan(th))                          # the walls' strips overlap
+        root_zone = (np.asarray(inner[0]) - (tip - L * u)) @ u  # inner face leaves the pad
+        tip_zone = t / (2.0 * np.tan(th))  # the walls' strips overlap
         for name, share in zip(rows, (0.0, 0.5, 1.0)):
             Lf = L - share * (root_zone + tip_zone)
             # a clamped-guided wall of clear length Lf: same formula, h chosen to give Lf
             h_eff = 2.0 * Lf * np.sin(th) + t
-            rows[name].append(float(layer_stiffness_N_per_mm(th, t, h_eff, c.b_mm,
-                                                             mat.youngs_modulus_MPa, mat.poisson_ratio)))
+            rows[name].append(
+                float(layer_stiffness_N_per_mm(th, t, h_eff, c.b_mm, mat.youngs_modulus_MPa, mat.poisson_ratio))
+            )
     print(f"\nL1 joint models against L2 linear stiffness ({len(cells)} cells, seed 1):")
     print("model                      median |err|   p90 |err|")
     for name, k in rows.items():

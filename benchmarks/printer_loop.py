@@ -74,8 +74,10 @@ def main() -> None:
         B = B + rng.normal(0.0, NOISE_uT * 1e-6, B.shape)
         s = p1.chip_setting
         lsb = (s.xy_uT_per_lsb, s.xy_uT_per_lsb, s.z_uT_per_lsb)
-        rows = ["force_N,Bx_uT,By_uT,Bz_uT"] + [f"{f:.4f}," + ",".join(
-            f"{mlx.quantise_lsb(b[i], lsb[i]) * lsb[i]:.4f}" for i in range(3)) for f, b in zip(F, B)]
+        rows = ["force_N,Bx_uT,By_uT,Bz_uT"] + [
+            f"{f:.4f}," + ",".join(f"{mlx.quantise_lsb(b[i], lsb[i]) * lsb[i]:.4f}" for i in range(3))
+            for f, b in zip(F, B)
+        ]
         (d / "loadtest.csv").write_text("\n".join(rows) + "\n")
         mst("calibrate", d / "print1" / "design.yaml", d / "loadtest.csv", "--out", d / "cal", "--no-plot")
         cal = json.loads((d / "cal" / "calibration.json").read_text())
@@ -83,8 +85,10 @@ def main() -> None:
         p2 = printed(d / "print2" / "design.yaml")
         for name, resp in (("print 1", p1), ("print 2", p2)):
             dS, dR = misses(resp, doc)
-            print(f"{name}: S_i {', '.join(f'{x:+.2f}' for x in dS)} %, R_i {', '.join(f'{x:+.2f}' for x in dR)} %; "
-                  f"worst {max(np.abs(dS).max(), np.abs(dR).max()):.2f} %")
+            print(
+                f"{name}: S_i {', '.join(f'{x:+.2f}' for x in dS)} %, R_i {', '.join(f'{x:+.2f}' for x in dR)} %; "
+                f"worst {max(np.abs(dS).max(), np.abs(dR).max()):.2f} %"
+            )
         for name, par in cal["parameters"].items():
             state = "taken" if par["identifiable"] else "held"
             print(f"calibration: {name} {par['value']:+.4f} +- {par['std']:.4f} ({state})")

@@ -25,10 +25,12 @@ from mst_cli.model.mechanics.continuum import solve_continuum
 
 # (variable, start, stop, step, fixed theta, t, h): the sweep at the reference
 # design's first layer, a thickness sweep of a mid cell, a height sweep of a steep-ish cell
-SWEEPS = [("theta", 12.0, 16.0, 0.25, 0.0, 0.40, 1.87),
-          ("t", 0.80, 1.20, 0.02, 30.0, 0.0, 3.0),
-          ("h", 3.0, 4.0, 0.05, 45.0, 1.0, 0.0)]
-MESHES = [(3, 12), (4, 16), (6, 24)]      # (elements across the wall, along it)
+SWEEPS = [
+    ("theta", 12.0, 16.0, 0.25, 0.0, 0.40, 1.87),
+    ("t", 0.80, 1.20, 0.02, 30.0, 0.0, 3.0),
+    ("h", 3.0, 4.0, 0.05, 45.0, 1.0, 0.0),
+]
+MESHES = [(3, 12), (4, 16), (6, 24)]  # (elements across the wall, along it)
 MESH_CELLS = [(14, 0.40, 1.87), (33, 1.0, 2.8), (8, 0.5, 1.6), (45, 2.5, 6.5), (60, 0.6, 4.0), (70, 1.5, 6.0)]
 
 
@@ -48,8 +50,10 @@ def run_sweep(var, start, stop, step, theta, t, h, mat) -> float:
         p[var] = float(x)
         res = solve_continuum(HexCell(p["theta"], p["t"], p["h"]), mat)
         R.append(res.force_N[-1])
-        print(f"{x:8.3f} {res.force_N[-1]:10.5f} {res.d_contact_mm:10.5f} {res.contact_at:>6} "
-              f"{res.lock_stiffness_ratio:9.1f}")
+        print(
+            f"{x:8.3f} {res.force_N[-1]:10.5f} {res.d_contact_mm:10.5f} {res.contact_at:>6} "
+            f"{res.lock_stiffness_ratio:9.1f}"
+        )
     dev = neighbour_deviation(R)
     if dev.size == 0:
         print("(fewer than three points: no neighbour deviation)")

@@ -24,5 +24,17 @@ from mst_cli.api import (
     slice,
 )
 
-__all__ = ["api", "InputError", "check", "designed", "export", "load", "load_design", "pareto", "read",
-           "read_serial", "simulate", "slice"]
+__all__ = [
+    "api",
+    "InputError",
+    "check",
+    "designed",
+    "export",
+    "load",
+    "load_design",
+    "pareto",
+    "read",
+    "read_serial",
+    "simulate",
+    "slice",
+]

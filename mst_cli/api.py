@@ -28,17 +28,34 @@ if TYPE_CHECKING:
     from mst_cli.io.schema import Document
     from mst_cli.model.response import Response
 
-__all__ = ["InputError", "load", "load_design", "simulate", "design", "pareto", "designed", "export", "check",
-           "slice", "parse_params", "calibrate", "read", "read_serial"]
+__all__ = [
+    "InputError",
+    "load",
+    "load_design",
+    "simulate",
+    "design",
+    "pareto",
+    "designed",
+    "export",
+    "check",
+    "slice",
+    "parse_params",
+    "calibrate",
+    "read",
+    "read_serial",
+]
+
 
 def __getattr__(name: str):
     # the verbs' own error classes (CalibrationFailed: a fit failed; SlicerError: PrusaSlicer
     # misbehaved), without importing their modules before they are asked for
     if name == "CalibrationFailed":
         from mst_cli.calibrate.fit import CalibrationFailed
+
         return CalibrationFailed
     if name == "SlicerError":
         from mst_cli.cad.slicer import SlicerError
+
         return SlicerError
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
@@ -63,6 +80,7 @@ def load(path: str | Path) -> Document:
         ``.is_design`` / ``.is_spec`` say which; ``.geometry()`` builds a design's sensor.
     """
     from mst_cli.io.schema import load_document
+
     return load_document(path)
 
 
@@ -70,14 +88,16 @@ def load_design(path: str | Path | Document) -> Document:
     """A design file whose every cell is printable and works (InputError naming the first layer
     that breaks a rule); a Document is checked the same way and returned."""
     from mst_cli.io.schema import design_geometry, load_design_document
+
     if isinstance(path, (str, Path)):
         return load_design_document(path)[0]
     design_geometry(path)
     return path
 
 
-def simulate(design: str | Path | Document, *, mechanics: str | None = None,
-             field_model: str | None = None) -> Response:
+def simulate(
+    design: str | Path | Document, *, mechanics: str | None = None, field_model: str | None = None
+) -> Response:
     """The forward model of a design (``mst simulate``).
 
     Parameters
@@ -101,14 +121,21 @@ def simulate(design: str | Path | Document, *, mechanics: str | None = None,
     """
     from mst_cli.calibrate.fit import simulate_as_printed
     from mst_cli.model.mechanics import MODELS
+
     _one_of("--mechanics", mechanics, MODELS)
     _one_of("--field-model", field_model, ("auto", "dipole", "axial", "cylinder"))
     return simulate_as_printed(load_design(design), mechanics, field_model)
 
 
-def design(spec: str | Path | Document, *, seed: int | None = None, max_evaluations: int | None = None,
-           refine: str | None = None, calibration: str | Path | None = None,
-           progress: Callable | None = None) -> DesignResult:
+def design(
+    spec: str | Path | Document,
+    *,
+    seed: int | None = None,
+    max_evaluations: int | None = None,
+    refine: str | None = None,
+    calibration: str | Path | None = None,
+    progress: Callable | None = None,
+) -> DesignResult:
     """Inverse design from target S_i and R_i to theta, t, h per layer (``mst design``).
 
     Parameters
@@ -139,21 +166,31 @@ def design(spec: str | Path | Document, *, seed: int | None = None, max_evaluati
 
     from mst_cli.design import design_document
     from mst_cli.model.ladder import choose_mechanics
+
     _one_of("--refine", refine, ("frame", "continuum"))
     doc = load(spec) if isinstance(spec, (str, Path)) else spec
     if calibration is not None:
         from mst_cli.calibrate.record import apply_calibration, read_calibration
+
         doc = apply_calibration(doc, read_calibration(calibration, doc))
     choice = choose_mechanics(refine, doc.accuracy_rel, doc.mechanics)
     if choice.mechanics == "spring":
-        return design_document(replace(doc, mechanics="spring"), seed=seed, max_evaluations=max_evaluations,
-                               progress=progress)
+        return design_document(
+            replace(doc, mechanics="spring"), seed=seed, max_evaluations=max_evaluations, progress=progress
+        )
     from mst_cli.design.refine import refine_document
+
     return refine_document(doc, choice.mechanics, seed=seed, max_evaluations=max_evaluations, progress=progress)
 
 
-def pareto(spec: str | Path | Document, count: int, *, seed: int | None = None, max_evaluations: int | None = None,
-           progress: Callable | None = None) -> tuple[DesignResult, list[ParetoDesign]]:
+def pareto(
+    spec: str | Path | Document,
+    count: int,
+    *,
+    seed: int | None = None,
+    max_evaluations: int | None = None,
+    progress: Callable | None = None,
+) -> tuple[DesignResult, list[ParetoDesign]]:
     """The trade among designs that meet every target (``mst design --pareto N``), mapped with
     L0 (the spring rung) whatever the spec's model section asks.
 
@@ -167,15 +204,16 @@ def pareto(spec: str | Path | Document, count: int, *, seed: int | None = None, 
     from dataclasses import replace
 
     from mst_cli.design.pareto import pareto_front
+
     if not 2 <= count <= 60:
         raise InputError("--pareto", count, "must be an integer from 2 to 60")
     doc = load(spec) if isinstance(spec, (str, Path)) else spec
-    return pareto_front(replace(doc, mechanics="spring"), count, seed=seed, max_evaluations=max_evaluations,
-                        progress=progress)
+    return pareto_front(
+        replace(doc, mechanics="spring"), count, seed=seed, max_evaluations=max_evaluations, progress=progress
+    )
 
 
-def designed(path: str | Path, progress: Callable[[str], None] | None = None
-             ) -> tuple[Document, DesignResult | None]:
+def designed(path: str | Path, progress: Callable[[str], None] | None = None) -> tuple[Document, DesignResult | None]:
     """A design file as it is, or a spec designed first (as ``mst export SPEC`` does): the
     design's Document and, for a spec, the DesignResult it came from. InputError when a cell
     breaks a rule."""
@@ -183,24 +221,38 @@ def designed(path: str | Path, progress: Callable[[str], None] | None = None
     if doc.is_design:
         return load_design(path), None
     if not doc.is_spec:
-        doc.require_geometry()              # names the first missing key
+        doc.require_geometry()  # names the first missing key
     if progress is not None:
         progress(f"{path} is a spec: designing theta, t, h first (as 'mst design' does)")
     from mst_cli.design import design_document
+
     result = design_document(doc)
     geometry = result.geometry
     for i, v in geometry.violations(result.document.printer):
-        raise InputError(f"layers[{i}]", {"theta_deg": geometry.layers[i].theta_deg,
-                                          "t_mm": geometry.layers[i].t_mm, "h_mm": geometry.layers[i].h_mm},
-                         f"the designed cell is invalid ({v.rule}): {v.message}")
+        raise InputError(
+            f"layers[{i}]",
+            {
+                "theta_deg": geometry.layers[i].theta_deg,
+                "t_mm": geometry.layers[i].t_mm,
+                "h_mm": geometry.layers[i].h_mm,
+            },
+            f"the designed cell is invalid ({v.rule}): {v.message}",
+        )
     if progress is not None:
         progress(f"designed: targets {result.status}")
     return result.document, result
 
 
-def export(design: str | Path | Document, out: str | Path, *, stl: bool = True, three_mf: bool = False,
-           step: bool = False, stl_tolerance_mm: float = 0.01,
-           progress: Callable[[str], None] | None = None) -> list[Path]:
+def export(
+    design: str | Path | Document,
+    out: str | Path,
+    *,
+    stl: bool = True,
+    three_mf: bool = False,
+    step: bool = False,
+    stl_tolerance_mm: float = 0.01,
+    progress: Callable[[str], None] | None = None,
+) -> list[Path]:
     """The printable body of a design (a spec is designed first) into ``out`` (``mst export``).
 
     Parameters
@@ -219,14 +271,23 @@ def export(design: str | Path | Document, out: str | Path, *, stl: bool = True, 
         The files written, export.json last.
     """
     from mst_cli.cad.exporting import check_stl_tolerance, write_export
+
     check_stl_tolerance(stl_tolerance_mm)
     if isinstance(design, (str, Path)):
         doc, result = designed(design, progress)
     else:
         doc, result = load_design(design), None
-    names = write_export(doc, doc.geometry(), Path(out), stl=stl, step=step, three_mf=three_mf,
-                         stl_tolerance_mm=stl_tolerance_mm,
-                         design_yaml=result.design_yaml_dict() if result is not None else None, progress=progress)
+    names = write_export(
+        doc,
+        doc.geometry(),
+        Path(out),
+        stl=stl,
+        step=step,
+        three_mf=three_mf,
+        stl_tolerance_mm=stl_tolerance_mm,
+        design_yaml=result.design_yaml_dict() if result is not None else None,
+        progress=progress,
+    )
     return [Path(out) / n for n in names]
 
 
@@ -251,7 +312,8 @@ def check(path: str | Path, *, nozzle_mm: float | None = None) -> list[Check]:
     from mst_cli.cad.checks import load_mesh, resolve_export, run_checks
     from mst_cli.cad.manifest import load_manifest
     from mst_cli.model.geometry import Printer
-    if nozzle_mm is not None:                    # one bound: printer.nozzle_mm's in a design file
+
+    if nozzle_mm is not None:  # one bound: printer.nozzle_mm's in a design file
         lo, hi = next((f.metadata["lo"], f.metadata["hi"]) for f in fields(Printer) if f.name == "nozzle_mm")
         if not lo <= nozzle_mm <= hi:
             raise InputError("--nozzle", nozzle_mm, f"must be a nozzle diameter from {lo:g} to {hi:g} mm")
@@ -263,9 +325,16 @@ def check(path: str | Path, *, nozzle_mm: float | None = None) -> list[Check]:
     return run_checks(load_mesh(found.stl), manifest, nozzle_mm)
 
 
-def slice(path: str | Path, *, profile: str | Path | None = None, out: str | Path | None = None,
-          max_span_mm: float = 5.0, plot: bool = False, progress: Callable[[str], None] | None = None,
-          note: Callable[[str], None] | None = None) -> SliceResult:
+def slice(
+    path: str | Path,
+    *,
+    profile: str | Path | None = None,
+    out: str | Path | None = None,
+    max_span_mm: float = 5.0,
+    plot: bool = False,
+    progress: Callable[[str], None] | None = None,
+    note: Callable[[str], None] | None = None,
+) -> SliceResult:
     """Slice an export with PrusaSlicer and judge whether it prints (``mst slice``; the
     command's name, so it shadows the builtin ``slice`` inside this module, which never uses it).
 
@@ -288,6 +357,7 @@ def slice(path: str | Path, *, profile: str | Path | None = None, out: str | Pat
         ``.failed`` (names of the broken limits), ``.summary()``.
     """
     from mst_cli.cad.slicing import slice_export
+
     result = slice_export(path, profile, max_span_mm, progress, note)
     result.write(Path(out) if out is not None else None, plot=plot)
     return result
@@ -296,14 +366,24 @@ def slice(path: str | Path, *, profile: str | Path | None = None, out: str | Pat
 def parse_params(text: str) -> tuple[str, ...]:
     """The parameter names of ``--params`` ("modulus_factor,gap_offset_mm")."""
     from mst_cli.calibrate.calibration import parse_params as parse
+
     return parse(text)
 
 
-def calibrate(design: str | Path | Document, load_test: str | Path, *, out: str | Path | None = None,
-              plot: bool = False, design_file: str | Path | None = None, mechanics: str = "spring",
-              params: Sequence[str] | str | None = None, gain_sel: int | None = None,
-              res: int | None = None, table_size: int = 256,
-              progress: Callable[[str], None] | None = None) -> Calibration:
+def calibrate(
+    design: str | Path | Document,
+    load_test: str | Path,
+    *,
+    out: str | Path | None = None,
+    plot: bool = False,
+    design_file: str | Path | None = None,
+    mechanics: str = "spring",
+    params: Sequence[str] | str | None = None,
+    gain_sel: int | None = None,
+    res: int | None = None,
+    table_size: int = 256,
+    progress: Callable[[str], None] | None = None,
+) -> Calibration:
     """Fit a design's print parameters to a load test of the printed sensor (``mst calibrate``).
 
     Parameters
@@ -345,27 +425,45 @@ def calibrate(design: str | Path | Document, load_test: str | Path, *, out: str 
     from mst_cli.calibrate.fit import DEFAULT_PARAMETERS
     from mst_cli.io.outputs import check_out_dir
     from mst_cli.model.mechanics import MODELS
+
     _one_of("--mechanics", mechanics, MODELS)
     if params is None:
         params = DEFAULT_PARAMETERS
-    else:                                     # the rules of --params: known names, each once
+    else:  # the rules of --params: known names, each once
         params = parse_params(params if isinstance(params, str) else ",".join(params))
     if not 16 <= table_size <= 4096:
         raise InputError("--table-size", table_size, "must be an integer from 16 to 4096")
     design_file = design_file or (design if isinstance(design, (str, Path)) else design.name)
     doc = load_design(design)
     if out is not None:
-        check_out_dir(Path(out))              # a bad output path is refused before any work
-    result = run(doc, design_file, load_test, mechanics=mechanics, params=params, gain_sel=gain_sel, res=res,
-                 table_size=table_size, progress=progress)
+        check_out_dir(Path(out))  # a bad output path is refused before any work
+    result = run(
+        doc,
+        design_file,
+        load_test,
+        mechanics=mechanics,
+        params=params,
+        gain_sel=gain_sel,
+        res=res,
+        table_size=table_size,
+        progress=progress,
+    )
     if out is not None:
         result.write(Path(out), plot=plot)
     return result
 
 
-def _reader(design: str | Path | Document, model_file: str | Path | None, mechanics: str | None,
-            gain_sel: int | None, res: int | None, raw: bool, readings: str | Path | None,
-            out: str | Path | None, warn: Callable[[str], None] | None):
+def _reader(
+    design: str | Path | Document,
+    model_file: str | Path | None,
+    mechanics: str | None,
+    gain_sel: int | None,
+    res: int | None,
+    raw: bool,
+    readings: str | Path | None,
+    out: str | Path | None,
+    warn: Callable[[str], None] | None,
+):
     from mst_cli.calibrate.loadtest import parse_readings, read_text, setting_of
     from mst_cli.calibrate.reading import ForceReader
     from mst_cli.io.outputs import check_out_dir
@@ -376,8 +474,9 @@ def _reader(design: str | Path | Document, model_file: str | Path | None, mechan
     doc = load_design(design)
     if model_file is None:
         if not isinstance(design, (str, Path)):
-            raise InputError("model_file", None, "name the file the Document was loaded from "
-                                                 "(its calibration.json stands beside it)")
+            raise InputError(
+                "model_file", None, "name the file the Document was loaded from (its calibration.json stands beside it)"
+            )
         model_file = design
     if (gain_sel is None) != (res is None):
         raise InputError("--gain-sel/--res", f"{gain_sel}/{res}", "give both GAIN_SEL and RES, or neither")
@@ -399,9 +498,17 @@ def _reader(design: str | Path | Document, model_file: str | Path | None, mechan
     return reader, rd, setting
 
 
-def read(model: str | Path | Document, readings: str | Path, *, out: str | Path | None = None,
-         model_file: str | Path | None = None, mechanics: str | None = None, gain_sel: int | None = None,
-         res: int | None = None, warn: Callable[[str], None] | None = None) -> ForceReadings:
+def read(
+    model: str | Path | Document,
+    readings: str | Path,
+    *,
+    out: str | Path | None = None,
+    model_file: str | Path | None = None,
+    mechanics: str | None = None,
+    gain_sel: int | None = None,
+    res: int | None = None,
+    warn: Callable[[str], None] | None = None,
+) -> ForceReadings:
     """MLX90393 readings to forces with a calibrated model (``mst read READINGS.csv``).
 
     Parameters
@@ -426,6 +533,7 @@ def read(model: str | Path | Document, readings: str | Path, *, out: str | Path 
         ``.force_resolution_N`` (n,); ``.summary()``, ``.csv()``.
     """
     from mst_cli.io.outputs import staged
+
     reader, rd, _ = _reader(model, model_file, mechanics, gain_sel, res, False, readings, out, warn)
     result = reader.read(rd)
     if out is not None:
@@ -434,16 +542,29 @@ def read(model: str | Path | Document, readings: str | Path, *, out: str | Path 
     return result
 
 
-def read_serial(model: str | Path | Document, port: str, *, out: str | Path | None = None,
-                model_file: str | Path | None = None, baud: int = 115200, count: int | None = None,
-                timeout_s: float | None = None, raw: bool = False, mechanics: str | None = None,
-                gain_sel: int | None = None, res: int | None = None, warn: Callable[[str], None] | None = None,
-                status: Callable[[str], None] | None = None, show: Callable[[str], None] = print) -> SerialSamples:
+def read_serial(
+    model: str | Path | Document,
+    port: str,
+    *,
+    out: str | Path | None = None,
+    model_file: str | Path | None = None,
+    baud: int = 115200,
+    count: int | None = None,
+    timeout_s: float | None = None,
+    raw: bool = False,
+    mechanics: str | None = None,
+    gain_sel: int | None = None,
+    res: int | None = None,
+    warn: Callable[[str], None] | None = None,
+    status: Callable[[str], None] | None = None,
+    show: Callable[[str], None] = print,
+) -> SerialSamples:
     """A live MLX90393 stream to forces (``mst read --serial PORT``): one line per sample goes to
     ``show``; stops when the port closes, after ``count`` samples, ``timeout_s`` seconds of
     silence or Ctrl-C; ``status`` gets a line when reading starts. ``out``: forces.csv of every
     sample (time s, the three values, force N, regime, flag, resolution N)."""
     from mst_cli.io.outputs import staged
+
     reader, _, setting = _reader(model, model_file, mechanics, gain_sel, res, raw, None, out, warn)
     if status is not None:
         status(f"{reader.document.name}: reading {port} at {baud} baud (Ctrl-C to stop)")

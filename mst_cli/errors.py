@@ -10,12 +10,12 @@ from __future__ import annotations
 
 from typing import Any
 
-MAX_SHOWN_CHARS = 120      # a value longer than this is shortened in the one-line message
+MAX_SHOWN_CHARS = 120  # a value longer than this is shortened in the one-line message
 
 
 def _shown(value: Any) -> str:
     text = repr(value)
-    return text if len(text) <= MAX_SHOWN_CHARS else f"{text[:MAX_SHOWN_CHARS - 40]}... ({len(text)} chars)"
+    return text if len(text) <= MAX_SHOWN_CHARS else f"{text[: MAX_SHOWN_CHARS - 40]}... ({len(text)} chars)"
 
 
 class InputError(ValueError):

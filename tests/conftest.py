@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-os.environ.setdefault("MPLBACKEND", "Agg")     # before any test imports matplotlib
+os.environ.setdefault("MPLBACKEND", "Agg")  # before any test imports matplotlib
 
 ROOT = Path(__file__).resolve().parents[1]
 CONFIGS = ROOT / "configs"

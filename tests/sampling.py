@@ -12,10 +12,13 @@ def random_valid_geometries(n, seed, max_offset_mm):
     rng = np.random.default_rng(seed)
     out = []
     while len(out) < n:
-        depth = 0.2 * int(rng.integers(80, 151))           # 16-30 mm
-        cells = tuple(HexCell(float(rng.uniform(15, 60)), float(rng.uniform(0.4, 2.0)),
-                              float(rng.uniform(1.2, 6.0)), depth_mm=depth)
-                      for _ in range(int(rng.integers(1, 4))))
+        depth = 0.2 * int(rng.integers(80, 151))  # 16-30 mm
+        cells = tuple(
+            HexCell(
+                float(rng.uniform(15, 60)), float(rng.uniform(0.4, 2.0)), float(rng.uniform(1.2, 6.0)), depth_mm=depth
+            )
+            for _ in range(int(rng.integers(1, 4)))
+        )
         if any(c.violations() for c in cells):
             continue
         board = BOARDS[sorted(BOARDS)[int(rng.integers(len(BOARDS)))]]

@@ -27,6 +27,7 @@ def _block(a=2.0, b=1.5, H=1.0):
     """A distorted block [0, a] x [0, b] x [0, H] (x, y, z): uneven spacing in x and z, graded
     layers in y, the prisms split as in the benchmark's mesh."""
     from skfem import Basis, ElementTetP2, ElementVector, MeshTet, MeshTri
+
     tri = MeshTri.init_tensor(np.array([0.0, 0.3, 1.1, a]), np.array([0.0, 0.45, H]))
     pts, tet = C3.extrude(tri.p, tri.t, C3.graded_depth(b, 3, 0.2))
     basis = Basis(MeshTet(pts, tet), ElementVector(ElementTetP2()), intorder=4)
@@ -42,17 +43,21 @@ def _solve_block(basis, comp, asm, stretch, H=1.0):
     top), the symmetry planes x = 0 and y = 0 holding u_x and u_y, the sides free: Newton."""
     X = basis.doflocs
     top = (comp == 2) & np.isclose(X[2], H)
-    fixed = ((comp == 2) & np.isclose(X[2], 0.0)) | ((comp == 0) & np.isclose(X[0], 0.0)) \
+    fixed = (
+        ((comp == 2) & np.isclose(X[2], 0.0))
+        | ((comp == 0) & np.isclose(X[0], 0.0))
         | ((comp == 1) & np.isclose(X[1], 0.0))
+    )
     pinned = np.flatnonzero(fixed | top)
     free = np.setdiff1d(np.arange(basis.N), pinned)
-    u = np.where(comp == 2, (stretch - 1.0) * X[2], 0.0)     # start: the plates' motion spread through z
+    u = np.where(comp == 2, (stretch - 1.0) * X[2], 0.0)  # start: the plates' motion spread through z
     for _ in range(30):
         r, state = asm.residual(u, MU, LAM)
         if np.linalg.norm(r[free]) < 1e-12 * max(1.0, abs(r[top]).sum()):
             break
         K = asm.tangent(state, MU, LAM).tocsc()
         from scipy.sparse.linalg import spsolve
+
         u[free] -= spsolve(K[free][:, free], r[free])
     return u, r, top
 

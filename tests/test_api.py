@@ -35,8 +35,10 @@ def test_every_verb_documents_itself():
 
 def test_importing_the_package_loads_no_verb_module():
     # `import mst_cli` stays as light as the command line's start: each verb imports its own
-    code = ("import sys, mst_cli; heavy = [m for m in sys.modules if m.startswith(('mst_cli.design', "
-            "'mst_cli.cad', 'mst_cli.calibrate', 'numpy', 'scipy'))]; print(heavy)")
+    code = (
+        "import sys, mst_cli; heavy = [m for m in sys.modules if m.startswith(('mst_cli.design', "
+        "'mst_cli.cad', 'mst_cli.calibrate', 'numpy', 'scipy'))]; print(heavy)"
+    )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "[]"
 
@@ -44,14 +46,17 @@ def test_importing_the_package_loads_no_verb_module():
 FORWARD = Path(__file__).resolve().parents[1] / "configs" / "mohammadi2021-forward.yaml"
 
 
-@pytest.mark.parametrize("call, option", [
-    (lambda: api.simulate(FORWARD, mechanics="beam"), "--mechanics"),
-    (lambda: api.simulate(FORWARD, field_model="exact"), "--field-model"),
-    (lambda: api.design(FORWARD, refine="spring"), "--refine"),
-    (lambda: api.calibrate(FORWARD, "unused.csv", params=["modulus_factor", "stiffness"]), "--params"),
-    (lambda: api.calibrate(FORWARD, "unused.csv", table_size=8), "--table-size"),
-    (lambda: api.check(FORWARD.parent, nozzle_mm=-1.0), "--nozzle"),
-])
+@pytest.mark.parametrize(
+    "call, option",
+    [
+        (lambda: api.simulate(FORWARD, mechanics="beam"), "--mechanics"),
+        (lambda: api.simulate(FORWARD, field_model="exact"), "--field-model"),
+        (lambda: api.design(FORWARD, refine="spring"), "--refine"),
+        (lambda: api.calibrate(FORWARD, "unused.csv", params=["modulus_factor", "stiffness"]), "--params"),
+        (lambda: api.calibrate(FORWARD, "unused.csv", table_size=8), "--table-size"),
+        (lambda: api.check(FORWARD.parent, nozzle_mm=-1.0), "--nozzle"),
+    ],
+)
 def test_a_script_gets_the_commands_input_errors(call, option):
     with pytest.raises(api.InputError) as exc:
         call()

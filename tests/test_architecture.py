@@ -79,7 +79,7 @@ def import_graph() -> dict[str, set[str]]:
                 if found is None:
                     continue
                 parts = found.split(".")
-                for i in range(1, len(parts) + 1):   # a.b.c runs a, a.b, a.b.c
+                for i in range(1, len(parts) + 1):  # a.b.c runs a, a.b, a.b.c
                     target = ".".join(parts[:i])
                     if target != module and not module.startswith(target + "."):
                         targets.add(target)
@@ -153,12 +153,19 @@ def test_imports_only_go_down(module):
 def test_no_top_level_module_but_the_errors_and_the_api():
     top = sorted(p.name for p in PACKAGE.glob("*.py"))
     assert top == ["__init__.py", "api.py", "errors.py"]
+
+
 def test_documentation_lives_in_the_repository():
     # no file points to a design document or reference data outside the clone
     outside = re.compile(r"\bDESIGN\.md|shared/reference|\.\./shared")
     hits = []
-    for path in [*PACKAGE.rglob("*.py"), *(ROOT / "docs").rglob("*.md"), *(ROOT / "benchmarks").rglob("*.py"),
-                 *(ROOT / "configs").rglob("*.yaml"), ROOT / "README.md"]:
+    for path in [
+        *PACKAGE.rglob("*.py"),
+        *(ROOT / "docs").rglob("*.md"),
+        *(ROOT / "benchmarks").rglob("*.py"),
+        *(ROOT / "configs").rglob("*.yaml"),
+        ROOT / "README.md",
+    ]:
         for n, line in enumerate(path.read_text().splitlines(), 1):
             if outside.search(line):
                 hits.append(f"{path.relative_to(ROOT)}:{n}")

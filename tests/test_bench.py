@@ -10,15 +10,20 @@ from mst_cli.bench.ladder_bench import field_errors, sample_cells, summarise
 from mst_cli.cli.app import main
 from mst_cli.model.ladder import cheapest_model_for, load_ladder_errors
 
-ERRORS = {"models": {
-    "spring-textbook": {"median_abs_err_k": 0.16, "median_abs_err_lock_force": 0.9},
-    "spring": {"median_abs_err_k": 0.02, "median_abs_err_lock_force": 0.5},
-    "frame": {"median_abs_err_k": 0.015, "median_abs_err_lock_force": 0.06},
-    "continuum": {"median_abs_err_k": 0.0, "median_abs_err_lock_force": 0.0}}}
+ERRORS = {
+    "models": {
+        "spring-textbook": {"median_abs_err_k": 0.16, "median_abs_err_lock_force": 0.9},
+        "spring": {"median_abs_err_k": 0.02, "median_abs_err_lock_force": 0.5},
+        "frame": {"median_abs_err_k": 0.015, "median_abs_err_lock_force": 0.06},
+        "continuum": {"median_abs_err_k": 0.0, "median_abs_err_lock_force": 0.0},
+    }
+}
 
 
-@pytest.mark.parametrize("acc, model", [(0.6, "spring"), (0.5, "spring"), (0.1, "frame"),
-                                        (0.06, "frame"), (0.05, "continuum"), (0.001, "continuum")])
+@pytest.mark.parametrize(
+    "acc, model",
+    [(0.6, "spring"), (0.5, "spring"), (0.1, "frame"), (0.06, "frame"), (0.05, "continuum"), (0.001, "continuum")],
+)
 def test_cheapest_model_meets_the_accuracy_in_stiffness_and_lock_force(acc, model):
     chosen, err = cheapest_model_for(acc, ERRORS)
     assert chosen == model and err["k"] <= acc and err["lock_force"] <= acc
@@ -45,8 +50,10 @@ def test_cheapest_model_reads_the_stored_measurement():
     for acc in (0.9, 0.10, 0.01):
         chosen, err = cheapest_model_for(acc)
         if chosen != "continuum":
-            assert err == {"k": stored[chosen]["median_abs_err_k"],
-                           "lock_force": stored[chosen]["median_abs_err_lock_force"]}
+            assert err == {
+                "k": stored[chosen]["median_abs_err_k"],
+                "lock_force": stored[chosen]["median_abs_err_lock_force"],
+            }
         assert max(err.values()) <= acc
 
 
@@ -70,7 +77,7 @@ def test_sample_covers_the_printable_box_without_a_t_over_L_cap():
     x = np.array([c.t_mm / c.wall_length_mm for c in cells])
     th = np.array([c.theta_deg for c in cells])
     assert x.max() > 1.2 and (x > 1.0).mean() > 0.04 and (th < 15).mean() > 0.03
-    assert x.max() < 1.75                       # h >= 2t + 0.4 caps t/L below ~1.7
+    assert x.max() < 1.75  # h >= 2t + 0.4 caps t/L below ~1.7
     # the experiment knobs still narrow it
     assert all(c.t_mm / c.wall_length_mm <= 0.6 for c in sample_cells(20, 5, max_t_over_L=0.6))
     assert all(c.t_mm / c.wall_length_mm >= 1.0 for c in sample_cells(10, 5, min_t_over_L=1.0))

@@ -26,7 +26,7 @@ from mst_cli.model.geometry import HexCell, Housing, SensorGeometry
 
 ROOT = Path(__file__).resolve().parents[1]
 FORWARD = ROOT / "configs" / "mohammadi2021-forward.yaml"
-RAY_XY = (0.0123, 0.0071)           # off the symmetry lines, like mst check
+RAY_XY = (0.0123, 0.0071)  # off the symmetry lines, like mst check
 
 
 @pytest.fixture(scope="module")
@@ -81,7 +81,7 @@ def test_reference_volume_golden(reference):
     layers = sum((shoelace(c.outer_profile_xz()) - shoelace(c.inner_profile_xz())) * 20 for c in g.layers)
     plates = 2 * 30 * 20 * 0.8
     r, d = 3.1, 2.1
-    pocket = (math.pi * r ** 2 / 2 + 2 * r * 3.2) * d + r * d * 1.2     # roof rises 1.2 mm
+    pocket = (math.pi * r**2 / 2 + 2 * r * 3.2) * d + r * d * 1.2  # roof rises 1.2 mm
     cap = 30 * 20 * 3.3 - pocket
     expected = base + layers + plates + cap
     assert cad.body.volume == pytest.approx(expected, rel=1e-9)
@@ -104,7 +104,7 @@ def test_gap0_is_what_the_cad_builds(reference):
     slot_floor, slot_top = air_gaps_z(cad.body, RAY_XY[0] + cx, RAY_XY[1] + cy, g.total_height_mm)[0]
     hall = slot_floor + g.board.thickness_mm + 0.5 * g.board.chip_height_mm
     assert pocket_floor - hall == pytest.approx(g.gap0_mm, abs=1e-9)
-    assert pocket_floor - hall == pytest.approx(13.85, abs=1e-9)     # 16.75 - (0.8 + 1.6 + 0.5)
+    assert pocket_floor - hall == pytest.approx(13.85, abs=1e-9)  # 16.75 - (0.8 + 1.6 + 0.5)
     assert slot_top - slot_floor == pytest.approx(1.6 + 2.95 + 0.3, abs=1e-9)
 
 
@@ -137,18 +137,19 @@ def test_every_board_gives_the_model_gap_and_an_open_slot(key):
 @pytest.mark.parametrize("diameter_mm", [4.0, 6.0, 8.0])
 def test_pocket_is_a_u_with_a_45_degree_roof(diameter_mm):
     from mst_cli.model.geometry import Magnet
+
     g = SensorGeometry((HexCell(30, 0.8, 2.4),), magnet=Magnet(diameter_mm, 2.0))
     r, d = 0.5 * diameter_mm + 0.1, 2.1
     y_top = math.ceil(round((10 + r) / 0.2, 6)) * 0.2 - 10
     pocket = parts.magnet_pocket(g)
-    rise = 1.2                          # d/2 = 1.05 up to whole 0.2 mm layers
+    rise = 1.2  # d/2 = 1.05 up to whole 0.2 mm layers
     assert pocket.volume == pytest.approx((math.pi * r * r / 2 + 2 * r * y_top) * d + r * d * rise, rel=1e-9)
     bb = pocket.bounding_box()
     assert (bb.min.Y, bb.max.Y) == pytest.approx((-r, y_top + rise), abs=1e-9)
     # the roof: every down-facing face of the pocket's air is the gable, atan(1.2 / 1.05) steep
     for face in pocket.faces():
         n = face.normal_at(face.center())
-        if n.Y > 1e-9:                  # the pocket's outward normal up: the body's roof
+        if n.Y > 1e-9:  # the pocket's outward normal up: the body's roof
             assert math.degrees(math.acos(n.Y)) == pytest.approx(math.degrees(math.atan(rise / 1.05)), abs=1e-9)
     # the magnet sits inside the pocket, its face on the floor
     magnet = parts.magnet_solid(g)
@@ -198,13 +199,15 @@ def test_step_round_trip_keeps_volume_and_names(reference, tmp_path):
         labels[node.label] = node
         for child in getattr(node, "children", ()):
             walk(child)
+
     walk(back)
     body = labels["sensor_body"]
     assert body.volume == pytest.approx(cad.body.volume, rel=1e-6)
     magnet = labels["magnet"]
     assert magnet.volume == pytest.approx(g.magnet.volume_mm3, rel=1e-6)
     assert labels["board_adafruit-4022"].volume == pytest.approx(
-        25.4 * 17.78 * 1.6 + 3 * 3 * 1 + 2 * 6.0 * 4.25 * 2.95, rel=1e-6)
+        25.4 * 17.78 * 1.6 + 3 * 3 * 1 + 2 * 6.0 * 4.25 * 2.95, rel=1e-6
+    )
     assert {"pcb", "MLX90393", "connector_1", "connector_2"} <= set(labels)
     # deterministic: a second write is byte-identical (fixed header time stamp)
     path2 = tmp_path / "again.step"
@@ -239,7 +242,7 @@ def test_merge_vertices_welds_duplicates_in_first_seen_order():
     t = np.array([[0, 1, 2], [3, 4, 5], [0, 3, 1]])
     nv, nt = mesh_io.merge_vertices(v, t)
     assert nv.tolist() == [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]]
-    assert nt.tolist() == [[0, 1, 2], [1, 0, 3]]        # the degenerate third triangle is dropped
+    assert nt.tolist() == [[0, 1, 2], [1, 0, 3]]  # the degenerate third triangle is dropped
 
 
 def test_closed_oriented_catches_a_hole_and_a_flipped_triangle():
@@ -274,7 +277,7 @@ def test_tessellation_keeps_the_corner_order_of_earlier_exports(reference):
         offset += poly.NbNodes()
     key = np.round(np.array(points), 9)
     _, first, inverse = np.unique(key, axis=0, return_index=True, return_inverse=True)
-    rank = np.argsort(np.argsort(first))                # welded in first-seen order
+    rank = np.argsort(np.argsort(first))  # welded in first-seen order
     assert np.array_equal(vertices, np.array(points)[np.sort(first)])
     assert np.array_equal(triangles, rank[inverse.reshape(-1)][np.concatenate(tris)])
 

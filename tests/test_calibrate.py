@@ -62,15 +62,23 @@ class PrintedSensor:
         B = np.stack([np.interp(force_N, self.resp.force_N, self.resp.B_T[:, i]) for i in range(3)], -1)
         B = B + rng.normal(0.0, NOISE_uT * 1e-6, B.shape)
         s = self.setting
-        return np.stack([mlx.quantise_lsb(B[:, 0], s.xy_uT_per_lsb), mlx.quantise_lsb(B[:, 1], s.xy_uT_per_lsb),
-                         mlx.quantise_lsb(B[:, 2], s.z_uT_per_lsb)], -1)
+        return np.stack(
+            [
+                mlx.quantise_lsb(B[:, 0], s.xy_uT_per_lsb),
+                mlx.quantise_lsb(B[:, 1], s.xy_uT_per_lsb),
+                mlx.quantise_lsb(B[:, 2], s.z_uT_per_lsb),
+            ],
+            -1,
+        )
 
     def csv_uT(self, force_N, codes, with_force=True):
         s = self.setting
         lines = [("force_N," if with_force else "") + "Bx_uT,By_uT,Bz_uT"]
         for f, (x, y, z) in zip(force_N, codes):
-            lines.append((f"{f:.4f}," if with_force else "")
-                         + f"{x * s.xy_uT_per_lsb:.4f},{y * s.xy_uT_per_lsb:.4f},{z * s.z_uT_per_lsb:.4f}")
+            lines.append(
+                (f"{f:.4f}," if with_force else "")
+                + f"{x * s.xy_uT_per_lsb:.4f},{y * s.xy_uT_per_lsb:.4f},{z * s.z_uT_per_lsb:.4f}"
+            )
         return "\n".join(lines) + "\n"
 
 
@@ -91,8 +99,14 @@ def loadtest(sensor, tmp_path_factory):
     (d / "loadtest_codes.csv").write_text("\n".join(raw) + "\n")
     r = run(["calibrate", DESIGN, d / "loadtest.csv", "--out", d / "out"])
     assert r.exit_code == 0, r.output
-    return {"dir": d, "out": d / "out", "F": F, "codes": codes, "output": r.output,
-            "report": json.loads((d / "out" / "calibration.json").read_text())}
+    return {
+        "dir": d,
+        "out": d / "out",
+        "F": F,
+        "codes": codes,
+        "output": r.output,
+        "report": json.loads((d / "out" / "calibration.json").read_text()),
+    }
 
 
 @pytest.fixture(scope="module")
@@ -123,7 +137,7 @@ def test_calibration_recovers_the_print_errors(loadtest):
     for name, true in TRUTH.items():
         value, std = par[name]["value"], par[name]["std"]
         assert abs(value - true) < tolerance[name], (name, value, true)
-        assert abs(value - true) < 4 * std, (name, value, std)       # the uncertainty is honest
+        assert abs(value - true) < 4 * std, (name, value, std)  # the uncertainty is honest
     # the fit leaves the chip's noise: residual RMS ~ 2 uT (noise and LSB), chi2/dof ~ 1
     assert rep["residuals"]["rms_uT"] < 1.5 * NOISE_uT
     assert 0.4 < rep["residuals"]["chi2_reduced"] < 2.0
@@ -153,15 +167,17 @@ def test_calibrated_model_recovers_forces_the_design_misses(sensor, loadtest, ho
 
     r0 = run(["read", DESIGN, path, "--out", tmp_path / "design"])
     assert r0.exit_code == 0
-    assert "no calibration.json" in r0.output                 # the warning on stderr
+    assert "no calibration.json" in r0.output  # the warning on stderr
     _, rows0 = read_forces(tmp_path / "design" / "forces.csv")
     F0 = np.array([float(x["force_N"]) if x["force_N"] else np.nan for x in rows0])
     flagged = ~np.isfinite(F0)
-    err0 = np.where(flagged, 1.0, np.abs(F0 - F_true) / F_true)    # a flagged reading is a miss
+    err0 = np.where(flagged, 1.0, np.abs(F0 - F_true) / F_true)  # a flagged reading is a miss
     assert np.median(err0) > 0.2, np.median(err0)
-    print(f"holdout force error: calibrated median {100 * np.median(err):.2f} %, p95 "
-          f"{100 * np.percentile(err, 95):.2f} %; design median {100 * np.median(err0):.1f} % "
-          f"({int(flagged.sum())} of {len(F0)} flagged out of its range)")
+    print(
+        f"holdout force error: calibrated median {100 * np.median(err):.2f} %, p95 "
+        f"{100 * np.percentile(err, 95):.2f} %; design median {100 * np.median(err0):.1f} % "
+        f"({int(flagged.sum())} of {len(F0)} flagged out of its range)"
+    )
 
 
 def test_calibrated_yaml_is_the_fitted_model(loadtest, tmp_path):
@@ -181,17 +197,34 @@ def test_calibrated_yaml_is_the_fitted_model(loadtest, tmp_path):
     resp = simulate(doc.geometry(), doc.material)
     model = cal.ForwardModel(design)
     F = resp.force_N[resp.in_range]
-    assert np.max(np.abs(model.field_abs_T(F, values) - resp.B_abs_T[resp.in_range])) < 1e-8   # 0.01 uT
+    assert np.max(np.abs(model.field_abs_T(F, values) - resp.B_abs_T[resp.in_range])) < 1e-8  # 0.01 uT
     files = {p.name for p in out.iterdir()}
-    assert files == {"calibrated.yaml", "calibration.json", "residuals.csv", "lookup.csv", "force_table.h",
-                     "calibration.png"}
+    assert files == {
+        "calibrated.yaml",
+        "calibration.json",
+        "residuals.csv",
+        "lookup.csv",
+        "force_table.h",
+        "calibration.png",
+    }
 
 
 def test_raw_codes_give_the_same_calibration(loadtest, tmp_path):
     rep = loadtest["report"]
     setting = rep["chip_setting"]
-    r = run(["calibrate", DESIGN, loadtest["dir"] / "loadtest_codes.csv", "--out", tmp_path / "o",
-             "--gain-sel", setting["gain_sel"], "--res", setting["res"]])
+    r = run(
+        [
+            "calibrate",
+            DESIGN,
+            loadtest["dir"] / "loadtest_codes.csv",
+            "--out",
+            tmp_path / "o",
+            "--gain-sel",
+            setting["gain_sel"],
+            "--res",
+            setting["res"],
+        ]
+    )
     assert r.exit_code == 0, r.output
     rep2 = json.loads((tmp_path / "o" / "calibration.json").read_text())
     for n in TRUTH:
@@ -203,14 +236,24 @@ def test_raw_codes_give_the_same_calibration(loadtest, tmp_path):
 def test_params_option_holds_the_rest(loadtest, tmp_path):
     """Fitting the modulus alone, three print errors stay unmodelled: the fit cannot describe the
     data and says why (exit 1). Parameters not asked for stay at the design's values."""
-    r = run(["calibrate", DESIGN, loadtest["dir"] / "loadtest.csv", "--out", tmp_path / "o",
-             "--params", "modulus_factor"])
+    r = run(
+        ["calibrate", DESIGN, loadtest["dir"] / "loadtest.csv", "--out", tmp_path / "o", "--params", "modulus_factor"]
+    )
     assert r.exit_code == 1
     assert r.output.startswith("mst: calibration failed:") and "nothing was written" in r.output
     assert r.output.count("\n") == 1 and not (tmp_path / "o").exists()
     # without the remanence the gap offset stands in for it (the two correlate at 0.99): it fits
-    r = run(["calibrate", DESIGN, loadtest["dir"] / "loadtest.csv", "--out", tmp_path / "p",
-             "--params", "modulus_factor,wall_offset_mm,gap_offset_mm"])
+    r = run(
+        [
+            "calibrate",
+            DESIGN,
+            loadtest["dir"] / "loadtest.csv",
+            "--out",
+            tmp_path / "p",
+            "--params",
+            "modulus_factor,wall_offset_mm,gap_offset_mm",
+        ]
+    )
     assert r.exit_code == 0, r.output
     par = json.loads((tmp_path / "p" / "calibration.json").read_text())["parameters"]
     assert par["remanence_factor"]["requested"] is False and par["remanence_factor"]["value"] == 1.0
@@ -221,8 +264,16 @@ def test_params_option_holds_the_rest(loadtest, tmp_path):
 def test_lookup_table_and_c_header(loadtest, tmp_path):
     out = loadtest["out"]
     head, rows = read_forces(out / "lookup.csv")
-    assert head == ["B_abs_uT", "Bz_uT", "Bz_code_lsb", "force_N", "force_mN", "regime", "force_resolution_N",
-                    "calibrated"]
+    assert head == [
+        "B_abs_uT",
+        "Bz_uT",
+        "Bz_code_lsb",
+        "force_N",
+        "force_mN",
+        "regime",
+        "force_resolution_N",
+        "calibrated",
+    ]
     B = np.array([float(r["B_abs_uT"]) for r in rows])
     F = np.array([float(r["force_N"]) for r in rows])
     reg = np.array([int(r["regime"]) for r in rows])
@@ -237,8 +288,10 @@ def test_lookup_table_and_c_header(loadtest, tmp_path):
     assert f"#define MST_GAIN_SEL {setting['gain_sel']}" in text and f"#define MST_RES {setting['res']}" in text
     for word in ("hysteresis", "unloading", "off-axis"):
         assert word in text
-    arrays = {name: [float(v.rstrip("f")) for v in re.findall(r"-?[\d.e+-]+f?", body)]
-              for name, body in re.findall(r"(mst_\w+)\[MST_TABLE_LEN\] = \{(.*?)\};", text, re.S)}
+    arrays = {
+        name: [float(v.rstrip("f")) for v in re.findall(r"-?[\d.e+-]+f?", body)]
+        for name, body in re.findall(r"(mst_\w+)\[MST_TABLE_LEN\] = \{(.*?)\};", text, re.S)
+    }
     codes, force = np.array(arrays["mst_z_code"]), np.array(arrays["mst_force_mN"])
     assert len(codes) == len(force) == int(re.search(r"MST_TABLE_LEN (\d+)", text).group(1))
     assert np.all(np.diff(codes) > 0) and np.all(np.diff(force) >= 0) and np.any(np.diff(force) > 0)
@@ -246,28 +299,45 @@ def test_lookup_table_and_c_header(loadtest, tmp_path):
     gcc = shutil.which("gcc")
     if gcc is None:
         pytest.skip("gcc not installed: the header's syntax is not checked")
-    subprocess.run([gcc, "-fsyntax-only", "-std=c99", "-Wall", "-Wextra", "-Werror", "-x", "c",
-                    str(out / "force_table.h")], check=True, capture_output=True)
+    subprocess.run(
+        [gcc, "-fsyntax-only", "-std=c99", "-Wall", "-Wextra", "-Werror", "-x", "c", str(out / "force_table.h")],
+        check=True,
+        capture_output=True,
+    )
     # and it gives the Python table's forces: compile a tiny program against it
     (tmp_path / "main.c").write_text(
         '#include <stdio.h>\n#include <stdlib.h>\n#include "force_table.h"\n'
         "int main(int argc, char **argv) { for (int i = 1; i < argc; i++) { int32_t f = -1; uint8_t r = 0;\n"
-        "  int flag = mst_force_from_z((int32_t)atol(argv[i]), &f, &r); printf(\"%d %ld %d\\n\", flag, (long)f, r); }\n"
-        "  return 0; }\n")
+        '  int flag = mst_force_from_z((int32_t)atol(argv[i]), &f, &r); printf("%d %ld %d\\n", flag, (long)f, r); }\n'
+        "  return 0; }\n"
+    )
     exe = tmp_path / "lookup"
-    subprocess.run([gcc, "-std=c99", "-Wall", "-Werror", "-I", str(out), str(tmp_path / "main.c"), "-o", str(exe)],
-                   check=True, capture_output=True)
-    probe = [int(codes[0]) - 500, int(codes[0]), int((codes[0] + codes[-1]) // 2), -int(codes[40]),
-             int(codes[-1]) + 500, 32767]
-    got = [line.split() for line in subprocess.run([str(exe)] + [str(c) for c in probe], check=True,
-                                                    capture_output=True, text=True).stdout.splitlines()]
-    assert [int(g[0]) for g in got] == [1, 0, 0, 0, 2, 3]      # below, ok, ok, ok (either sign), above, saturated
+    subprocess.run(
+        [gcc, "-std=c99", "-Wall", "-Werror", "-I", str(out), str(tmp_path / "main.c"), "-o", str(exe)],
+        check=True,
+        capture_output=True,
+    )
+    probe = [
+        int(codes[0]) - 500,
+        int(codes[0]),
+        int((codes[0] + codes[-1]) // 2),
+        -int(codes[40]),
+        int(codes[-1]) + 500,
+        32767,
+    ]
+    got = [
+        line.split()
+        for line in subprocess.run(
+            [str(exe)] + [str(c) for c in probe], check=True, capture_output=True, text=True
+        ).stdout.splitlines()
+    ]
+    assert [int(g[0]) for g in got] == [1, 0, 0, 0, 2, 3]  # below, ok, ok, ok (either sign), above, saturated
     lsb = setting["z_uT_per_lsb"] * 1e-6
     doc = load_document(out / "calibrated.yaml")
     imap, _ = cal.inverse_map(doc)
     for code, g in zip(probe[1:4], got[1:4]):
         F_py = float(np.interp(abs(code) * lsb, np.abs(imap.Bz_T), imap.force_N))
-        assert abs(int(g[1]) * 1e-3 - F_py) < 0.01, (code, g, F_py)   # 10 mN, under the resolution
+        assert abs(int(g[1]) * 1e-3 - F_py) < 0.01, (code, g, F_py)  # 10 mN, under the resolution
 
 
 # --------------------------------------------------------------------------- mst read
@@ -280,32 +350,47 @@ def test_read_flags_instead_of_extrapolating(loadtest, tmp_path):
     B0, B1 = imap.B_abs_T[0] * 1e6, imap.B_abs_T[-1] * 1e6
     mid = 0.5 * (B0 + B1)
     path = tmp_path / "r.csv"
-    path.write_text("id,Bx_uT,By_uT,Bz_uT\n"
-                    f"a,0,0,{mid}\nb,0,0,{B0 - 200}\nc,0,0,{B1 + 200}\nd,0,0,60000\ne,0,0,{B0 - 1}\n")
+    path.write_text(
+        f"id,Bx_uT,By_uT,Bz_uT\na,0,0,{mid}\nb,0,0,{B0 - 200}\nc,0,0,{B1 + 200}\nd,0,0,60000\ne,0,0,{B0 - 1}\n"
+    )
     r = run(["read", loadtest["out"] / "calibrated.yaml", path, "--out", tmp_path / "o"])
     assert r.exit_code == 0, r.output
     head, rows = read_forces(tmp_path / "o" / "forces.csv")
     assert head == ["id", "Bx_uT", "By_uT", "Bz_uT", "force_N", "regime", "flag", "force_resolution_N"]
     assert [x["flag"] for x in rows] == ["ok", "below_range", "above_range", "saturated", "ok"]
     assert rows[0]["force_N"] and all(x["force_N"] == "" and x["regime"] == "" for x in rows[1:4])
-    assert float(rows[4]["force_N"]) == 0.0          # within noise of the unloaded field: no load
+    assert float(rows[4]["force_N"]) == 0.0  # within noise of the unloaded field: no load
     # raw codes need the setting; with it they give the same force as the same field in uT
     code = round(mid / s["z_uT_per_lsb"])
     raw = tmp_path / "raw.csv"
     raw.write_text(f"Bx_code_lsb,By_code_lsb,Bz_code_lsb\n0,0,{code}\n")
     r = run(["read", loadtest["out"] / "calibrated.yaml", raw, "--out", tmp_path / "p"])
     assert r.exit_code == 2 and "--gain-sel" in r.output and not (tmp_path / "p").exists()
-    r = run(["read", loadtest["out"] / "calibrated.yaml", raw, "--out", tmp_path / "p",
-             "--gain-sel", s["gain_sel"], "--res", s["res"]])
+    r = run(
+        [
+            "read",
+            loadtest["out"] / "calibrated.yaml",
+            raw,
+            "--out",
+            tmp_path / "p",
+            "--gain-sel",
+            s["gain_sel"],
+            "--res",
+            s["res"],
+        ]
+    )
     assert r.exit_code == 0
     _, rows2 = read_forces(tmp_path / "p" / "forces.csv")
     assert float(rows2[0]["force_N"]) == pytest.approx(float(rows[0]["force_N"]), abs=0.01)
 
 
-@pytest.mark.parametrize("args, message", [
-    ([], "give READINGS.csv or --serial PORT"),
-    (["READINGS", "--serial", "/dev/null"], "one of them"),
-])
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        ([], "give READINGS.csv or --serial PORT"),
+        (["READINGS", "--serial", "/dev/null"], "one of them"),
+    ],
+)
 def test_read_usage(loadtest, tmp_path, args, message):
     args = [loadtest["dir"] / "loadtest.csv" if a == "READINGS" else a for a in args]
     r = run(["read", loadtest["out"] / "calibrated.yaml", *args])
@@ -324,23 +409,39 @@ def test_serial_stream_from_a_pseudo_terminal(loadtest, tmp_path):
     tty.setraw(slave)
     mst = Path(sys.executable).with_name("mst")
     cmd = [str(mst)] if mst.exists() else [sys.executable, "-c", "from mst_cli.cli.app import main; main()"]
-    proc = subprocess.Popen(cmd + ["read", str(loadtest["out"] / "calibrated.yaml"), "--serial",
-                                   os.ttyname(slave), "--out", str(tmp_path / "o")],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    proc = subprocess.Popen(
+        cmd
+        + [
+            "read",
+            str(loadtest["out"] / "calibrated.yaml"),
+            "--serial",
+            os.ttyname(slave),
+            "--out",
+            str(tmp_path / "o"),
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     watchdog = threading.Timer(40.0, proc.kill)
     watchdog.start()
     try:
-        assert "reading" in proc.stderr.readline()           # the port is open
-        for line in ["Adafruit MLX90393 demo", "Found a MLX90393 sensor",
-                     f"X: 0.00 \tY: 0.00 \tZ: {Bm:.2f} uTesla ",
-                     f"X:0.0,Y:0.0,Z:{Bm:.2f}",
-                     f"0.0\t0.0\t{Bm / 1000:.5f} mT",
-                     "X: 0.0000 uT", "Y: 0.0000 uT", f"Z: {Bm:.4f} uT",    # readData: one axis a line
-                     "Unable to read XYZ data from the sensor.",
-                     f"X: 0 \tY: 0 \tZ: {B1 + 500:.2f} uTesla"]:
+        assert "reading" in proc.stderr.readline()  # the port is open
+        for line in [
+            "Adafruit MLX90393 demo",
+            "Found a MLX90393 sensor",
+            f"X: 0.00 \tY: 0.00 \tZ: {Bm:.2f} uTesla ",
+            f"X:0.0,Y:0.0,Z:{Bm:.2f}",
+            f"0.0\t0.0\t{Bm / 1000:.5f} mT",
+            "X: 0.0000 uT",
+            "Y: 0.0000 uT",
+            f"Z: {Bm:.4f} uT",  # readData: one axis a line
+            "Unable to read XYZ data from the sensor.",
+            f"X: 0 \tY: 0 \tZ: {B1 + 500:.2f} uTesla",
+        ]:
             os.write(master, (line + "\r\n").encode())
-        shown = [proc.stdout.readline() for _ in range(5)]   # live: one line per sample
-        os.close(master)                                      # then the board hangs up
+        shown = [proc.stdout.readline() for _ in range(5)]  # live: one line per sample
+        os.close(master)  # then the board hangs up
         master = None
         out, err = proc.communicate(timeout=30)
     finally:
@@ -372,14 +473,25 @@ def test_serial_line_formats():
     assert parse_line("10 20 3000", raw=True) == (10.0, 20.0, 3000.0)
     for junk in ("", "Starting Adafruit MLX90393 Demo", "X: 1 Y: 2", "Unable to read XYZ data", "1,2", "a,b,c"):
         assert parse_line(junk) is None
-    assert parse_line("12.3,-4.5,321.0 uT", raw=True) is None     # raw codes carry no unit
+    assert parse_line("12.3,-4.5,321.0 uT", raw=True) is None  # raw codes carry no unit
     # Adafruit_MLX90393's basicdemo prints readData one axis a line, then the event on one line
     p = SampleParser()
-    got = [p.feed(l) for l in ["Starting Adafruit MLX90393 Demo", "Found a MLX90393 sensor", "Gain set to: 1 x",
-                               "X: 12.3456 uT", "Y: -4.5000 uT", "Z: 321.0000 uT",
-                               "X: 12.35 \tY: -4.50 \tZ: 321.00 uTesla ", "X: 1 uT", "Z: 3 uT"]]
+    got = [
+        p.feed(l)
+        for l in [
+            "Starting Adafruit MLX90393 Demo",
+            "Found a MLX90393 sensor",
+            "Gain set to: 1 x",
+            "X: 12.3456 uT",
+            "Y: -4.5000 uT",
+            "Z: 321.0000 uT",
+            "X: 12.35 \tY: -4.50 \tZ: 321.00 uTesla ",
+            "X: 1 uT",
+            "Z: 3 uT",
+        ]
+    ]
     assert [g for g in got if g] == [(12.3456, -4.5, 321.0), (12.35, -4.5, 321.0)]
-    assert p.skipped == 4                                         # 3 banner lines, a Z without its X, Y
+    assert p.skipped == 4  # 3 banner lines, a Z without its X, Y
 
 
 # --------------------------------------------------------------------------- bad input
@@ -394,34 +506,53 @@ def _edit(text, fn):
 
 def _saturated(lines):
     parts = lines[30].split(",")
-    parts[3] = "60000.0"                                      # 60 mT: past the Hall plates' 50 mT
+    parts[3] = "60000.0"  # 60 mT: past the Hall plates' 50 mT
     return lines[:30] + [",".join(parts)] + lines[31:]
 
 
 BAD = {
     "missing column": (lambda t: t.replace(",Bz_uT", ",Bq_uT"), [], "Bz_uT"),
     "missing force column": (lambda t: t.replace("force_N,", "position_mm,"), [], "missing column force_N"),
-    "NaN": (lambda t: _edit(t, lambda l: l[:10] + [l[10].rsplit(",", 1)[0] + ",nan"] + l[11:]), [],
-            "line 11 Bz_uT = 'nan': must be a finite number"),
-    "non-numeric row": (lambda t: _edit(t, lambda l: l[:5] + ["1.0,abc,0,3000"] + l[5:]), [],
-                        "line 6 Bx_uT = 'abc': must be a number"),
+    "NaN": (
+        lambda t: _edit(t, lambda l: l[:10] + [l[10].rsplit(",", 1)[0] + ",nan"] + l[11:]),
+        [],
+        "line 11 Bz_uT = 'nan': must be a finite number",
+    ),
+    "non-numeric row": (
+        lambda t: _edit(t, lambda l: l[:5] + ["1.0,abc,0,3000"] + l[5:]),
+        [],
+        "line 6 Bx_uT = 'abc': must be a number",
+    ),
     "short row": (lambda t: _edit(t, lambda l: l[:5] + ["1.0,0,3000"] + l[5:]), [], "has 3 fields, the header 4"),
     "force in kN": (lambda t: t.replace("force_N", "force_kN"), [], "'force_kN'"),
     "force in grams": (lambda t: t.replace("force_N", "force_g"), [], "x 0.00980665"),
-    "grams labelled N": (lambda t: _edit(t, lambda l: [l[0]] + [f"{float(x.split(',')[0]) * 101.97:.3f},"
-                                                                + x.split(",", 1)[1] for x in l[1:]]),
-                         [], "must be newtons"),
+    "grams labelled N": (
+        lambda t: _edit(
+            t, lambda l: [l[0]] + [f"{float(x.split(',')[0]) * 101.97:.3f}," + x.split(",", 1)[1] for x in l[1:]]
+        ),
+        [],
+        "must be newtons",
+    ),
     "field in mT": (lambda t: t.replace("Bz_uT", "Bz_mT"), [], "'Bz_mT'"),
     "too few points": (lambda t: _edit(t, lambda l: l[:9]), [], "needs at least 20 samples"),
     "saturated sample": (lambda t: _edit(t, _saturated), [], "saturated sample"),
-    "two chip settings": (lambda t: _edit(t, lambda l: [l[0] + ",gain_sel,res"] + [x + ",7,0" for x in l[1:30]]
-                                          + [x + ",5,0" for x in l[30:]]), [], "one chip setting"),
-    "flags disagree with columns": (lambda t: _edit(t, lambda l: [l[0] + ",gain_sel,res"]
-                                                   + [x + ",7,0" for x in l[1:]]),
-                                    ["--gain-sel", "5", "--res", "0"], "another chip setting"),
-    "field beyond the setting's range": (lambda t: _edit(t, lambda l: l[:20] + [l[20].rsplit(",", 1)[0] + ",9000.0"]
-                                                        + l[21:]),
-                                         ["--gain-sel", "7", "--res", "0"], "another chip setting"),
+    "two chip settings": (
+        lambda t: _edit(
+            t, lambda l: [l[0] + ",gain_sel,res"] + [x + ",7,0" for x in l[1:30]] + [x + ",5,0" for x in l[30:]]
+        ),
+        [],
+        "one chip setting",
+    ),
+    "flags disagree with columns": (
+        lambda t: _edit(t, lambda l: [l[0] + ",gain_sel,res"] + [x + ",7,0" for x in l[1:]]),
+        ["--gain-sel", "5", "--res", "0"],
+        "another chip setting",
+    ),
+    "field beyond the setting's range": (
+        lambda t: _edit(t, lambda l: l[:20] + [l[20].rsplit(",", 1)[0] + ",9000.0"] + l[21:]),
+        ["--gain-sel", "7", "--res", "0"],
+        "another chip setting",
+    ),
     "reversed load cell": (lambda t: _edit(t, lambda l: [l[0]] + ["-" + x for x in l[1:]]), [], "sign reversed"),
     "empty file": (lambda t: "", [], "no header row"),
     "unknown parameter": (lambda t: t, ["--params", "modulus_factor,stiffness"], "unknown parameter"),
@@ -440,13 +571,24 @@ def test_bad_load_tests_exit_2_in_one_line(loadtest, tmp_path, case):
     assert r.output.startswith("mst: ") and r.output.count("\n") == 1, r.output
     if message is not None:
         assert message in r.output, r.output
-    assert not out.exists()                                    # nothing half-written
+    assert not out.exists()  # nothing half-written
 
 
 def test_raw_codes_beyond_the_resolution_setting(loadtest, tmp_path):
     """Codes of 12000+ cannot come from RES 3 (+-11000): another chip setting."""
-    r = run(["calibrate", DESIGN, loadtest["dir"] / "loadtest_codes.csv", "--out", tmp_path / "o",
-             "--gain-sel", "7", "--res", "3"])
+    r = run(
+        [
+            "calibrate",
+            DESIGN,
+            loadtest["dir"] / "loadtest_codes.csv",
+            "--out",
+            tmp_path / "o",
+            "--gain-sel",
+            "7",
+            "--res",
+            "3",
+        ]
+    )
     assert r.exit_code == 2 and "outside the +-11000 codes" in r.output and not (tmp_path / "o").exists()
     r = run(["calibrate", DESIGN, loadtest["dir"] / "loadtest_codes.csv", "--out", tmp_path / "o"])
     assert r.exit_code == 2 and "--gain-sel" in r.output
@@ -507,7 +649,7 @@ def test_a_load_test_that_stays_on_the_first_spring_holds_what_it_cannot_see(sen
     assert {"modulus_factor", "wall_offset_mm"} & set(held), held
     assert all("not identifiable" in why for why in held.values())
     assert "NO: held" in r.output
-    assert rep["calibrated_to_N"] == pytest.approx(F.max(), abs=1e-4)   # the CSV holds forces to 0.1 mN
+    assert rep["calibrated_to_N"] == pytest.approx(F.max(), abs=1e-4)  # the CSV holds forces to 0.1 mN
     path = tmp_path / "r.csv"
     Fr = np.array([0.5 * F_top, 3 * F_top])
     path.write_text(sensor.csv_uT(Fr, sensor.codes(Fr, rng), with_force=False))

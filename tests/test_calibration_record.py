@@ -37,7 +37,7 @@ def load_test():
 def test_the_fit_counts_its_space_mapping_iterations(load_test, mechanics):
     doc, F, B = load_test
     fit = cal.fit_parameters(doc, F, B, 2e-6, tuple(cal.PARAMETERS), mechanics)
-    if mechanics == "spring":          # the fitted rung itself: one solve, no mapping
+    if mechanics == "spring":  # the fitted rung itself: one solve, no mapping
         assert fit.iterations == 1
         return
     # the dear rung is corrected at the start's wall offset; the fit moves it, so at least one
@@ -54,7 +54,7 @@ def test_force_errors_by_hand():
     err = force_errors(F_model, F_true, 10.0)
     assert err["readings"] == 3 and err["flagged"] == 1 and err["from_force_N"] == pytest.approx(1.0)
     assert err["median_rel"] == pytest.approx(0.1) and err["max_rel"] == pytest.approx(0.1)
-    assert err["rms_N"] == pytest.approx(np.sqrt((0.2 ** 2 + 1.0 ** 2) / 2))
+    assert err["rms_N"] == pytest.approx(np.sqrt((0.2**2 + 1.0**2) / 2))
     assert force_errors([np.nan], [5.0], 10.0) == {"readings": 1, "flagged": 1}
 
 
@@ -72,8 +72,10 @@ def calibrated_map():
 
 
 def _arrays(text):
-    return {name: [float(v.strip().rstrip("f")) for v in body.split(",")]
-            for name, body in re.findall(r"(mst_\w+)\[MST_TABLE_LEN\] = \{(.*?)\};", text, re.S)}
+    return {
+        name: [float(v.strip().rstrip("f")) for v in body.split(",")]
+        for name, body in re.findall(r"(mst_\w+)\[MST_TABLE_LEN\] = \{(.*?)\};", text, re.S)
+    }
 
 
 def test_c_header_tabulates_the_inverse_map(calibrated_map, tmp_path):
@@ -95,21 +97,29 @@ def test_c_header_tabulates_the_inverse_map(calibrated_map, tmp_path):
     if gcc is None:
         pytest.skip("gcc not installed: the header is not compiled")
     (tmp_path / "force_table.h").write_text(text)
-    subprocess.run([gcc, "-fsyntax-only", "-std=c99", "-Wall", "-Wextra", "-Werror", "-x", "c",
-                    str(tmp_path / "force_table.h")], check=True, capture_output=True)
+    subprocess.run(
+        [gcc, "-fsyntax-only", "-std=c99", "-Wall", "-Wextra", "-Werror", "-x", "c", str(tmp_path / "force_table.h")],
+        check=True,
+        capture_output=True,
+    )
     # halfway between two entries the C lookup interpolates linearly, in integer mN
     (tmp_path / "main.c").write_text(
         '#include <stdio.h>\n#include <stdlib.h>\n#include "force_table.h"\n'
         "int main(int argc, char **argv) { int32_t f = -1; uint8_t r = 0;\n"
-        "  int flag = mst_force_from_z((int32_t)atol(argv[1]), &f, &r); printf(\"%d %ld %d\\n\", flag, (long)f, r);\n"
-        "  return 0; }\n")
+        '  int flag = mst_force_from_z((int32_t)atol(argv[1]), &f, &r); printf("%d %ld %d\\n", flag, (long)f, r);\n'
+        "  return 0; }\n"
+    )
     exe = tmp_path / "lookup"
-    subprocess.run([gcc, "-std=c99", "-I", str(tmp_path), str(tmp_path / "main.c"), "-o", str(exe)],
-                   check=True, capture_output=True)
+    subprocess.run(
+        [gcc, "-std=c99", "-I", str(tmp_path), str(tmp_path / "main.c"), "-o", str(exe)],
+        check=True,
+        capture_output=True,
+    )
     i = len(codes) // 3
     mid = int((codes[i] + codes[i + 1]) // 2)
-    flag, force, reg = map(int, subprocess.run([str(exe), str(mid)], check=True, capture_output=True,
-                                               text=True).stdout.split())
+    flag, force, reg = map(
+        int, subprocess.run([str(exe), str(mid)], check=True, capture_output=True, text=True).stdout.split()
+    )
     f0, f1 = round(F[i] * 1e3), round(F[i + 1] * 1e3)
     assert flag == 0 and reg == regime[i]
     assert force == f0 + (f1 - f0) * (mid - codes[i]) // (codes[i + 1] - codes[i])
@@ -128,7 +138,7 @@ def calibration(tmp_path_factory):
 
 def test_the_api_calibration_finds_the_print_errors(calibration):
     result, _ = calibration
-    for name in result.fit.names:       # the identifiable ones, within 3 sigma of the truth
+    for name in result.fit.names:  # the identifiable ones, within 3 sigma of the truth
         assert abs(result.fit.values[name] - TRUTH[name]) < 3 * result.fit.std[name] + 1e-3, name
 
 

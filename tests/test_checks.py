@@ -46,9 +46,23 @@ def test_reference_body_passes_every_check(exported):
     stl, manifest, g = exported
     res = by_name(checks.run_checks(mesh_of(stl), manifest))
     assert not failed(res.values())
-    assert set(res) == {"watertight", "is_volume", "manifold3d", "one_body", "volume", "bbox",
-                        "wall_thickness", "web_depth", "cavity_gap", "magnet_pocket",
-                        "board_slot", "magnet_chip_gap", "overhang", "layer_grid", "magnet_pause"}
+    assert set(res) == {
+        "watertight",
+        "is_volume",
+        "manifold3d",
+        "one_body",
+        "volume",
+        "bbox",
+        "wall_thickness",
+        "web_depth",
+        "cavity_gap",
+        "magnet_pocket",
+        "board_slot",
+        "magnet_chip_gap",
+        "overhang",
+        "layer_grid",
+        "magnet_pause",
+    }
     # measured on the mesh, equal to the design's own numbers
     assert res["wall_thickness"].values["per_layer_mm"] == pytest.approx([0.6, 1.0, 1.4], abs=1e-4)
     assert res["cavity_gap"].values["per_layer_mm"] == pytest.approx([0.8, 0.8, 0.7], abs=1e-4)
@@ -80,7 +94,7 @@ def test_a_flipped_triangle_breaks_the_winding(exported):
     faces = mesh.faces.copy()
     faces[0] = faces[0, ::-1]
     flipped = trimesh.Trimesh(mesh.vertices, faces, process=False)
-    assert flipped.is_watertight        # still closed: only the orientation is wrong
+    assert flipped.is_watertight  # still closed: only the orientation is wrong
     assert "is_volume" in failed(checks.run_checks(flipped, manifest))
 
 
@@ -103,24 +117,27 @@ def test_a_scaled_body_fails_volume_bbox_and_dimensions(exported):
     assert {"volume", "bbox", "wall_thickness", "magnet_pocket", "board_slot", "magnet_chip_gap"} <= bad
 
 
-@pytest.mark.parametrize("edit, check", [
-    (lambda m: m["body"].__setitem__("volume_mm3", m["body"]["volume_mm3"] + 1.0), "volume"),
-    (lambda m: m["body"]["bbox_max_mm"].__setitem__(2, m["body"]["bbox_max_mm"][2] + 0.01), "bbox"),
-    (lambda m: m["printer"].__setitem__("min_gap_mm", 0.75), "cavity_gap"),
-    (lambda m: m["print"]["pause"].__setitem__("z_mm", 12.8), "magnet_pause"),
-    (lambda m: m["print"]["pause"].__setitem__("after_layer", 65), "magnet_pause"),
-    (lambda m: m["print"].__setitem__("layer_height_mm", 0.15), "layer_grid"),
-    (lambda m: m["layers"][2].__setitem__("web_depth_mm", 19.8), "web_depth"),
-    (lambda m: m.__setitem__("gap0_mm", m["gap0_mm"] + 0.01), "magnet_chip_gap"),
-    (lambda m: m["magnet_pocket"].__setitem__("section_area_mm2", 42.5), "magnet_pocket"),
-    (lambda m: m["magnet_pocket"].__setitem__("floor_z_mm", 17.9), "magnet_pocket"),
-    (lambda m: m["board_slot"].__setitem__("x1_mm", 13.1), "board_slot"),
-    (lambda m: m["board_slot"].__setitem__("floor_y_mm", -8.4), "board_slot"),
-    (lambda m: m["board_slot"]["cable_windows"][0].__setitem__("floor_y_mm", -2.8), "board_slot"),
-    (lambda m: m["layers"][1].__setitem__("t_mm", 1.05), "wall_thickness"),
-    (lambda m: m["layers"][0].__setitem__("theta_deg", 26.0), "wall_thickness"),
-    (lambda m: m["body"].__setitem__("internal_voids", 0), "one_body"),
-])
+@pytest.mark.parametrize(
+    "edit, check",
+    [
+        (lambda m: m["body"].__setitem__("volume_mm3", m["body"]["volume_mm3"] + 1.0), "volume"),
+        (lambda m: m["body"]["bbox_max_mm"].__setitem__(2, m["body"]["bbox_max_mm"][2] + 0.01), "bbox"),
+        (lambda m: m["printer"].__setitem__("min_gap_mm", 0.75), "cavity_gap"),
+        (lambda m: m["print"]["pause"].__setitem__("z_mm", 12.8), "magnet_pause"),
+        (lambda m: m["print"]["pause"].__setitem__("after_layer", 65), "magnet_pause"),
+        (lambda m: m["print"].__setitem__("layer_height_mm", 0.15), "layer_grid"),
+        (lambda m: m["layers"][2].__setitem__("web_depth_mm", 19.8), "web_depth"),
+        (lambda m: m.__setitem__("gap0_mm", m["gap0_mm"] + 0.01), "magnet_chip_gap"),
+        (lambda m: m["magnet_pocket"].__setitem__("section_area_mm2", 42.5), "magnet_pocket"),
+        (lambda m: m["magnet_pocket"].__setitem__("floor_z_mm", 17.9), "magnet_pocket"),
+        (lambda m: m["board_slot"].__setitem__("x1_mm", 13.1), "board_slot"),
+        (lambda m: m["board_slot"].__setitem__("floor_y_mm", -8.4), "board_slot"),
+        (lambda m: m["board_slot"]["cable_windows"][0].__setitem__("floor_y_mm", -2.8), "board_slot"),
+        (lambda m: m["layers"][1].__setitem__("t_mm", 1.05), "wall_thickness"),
+        (lambda m: m["layers"][0].__setitem__("theta_deg", 26.0), "wall_thickness"),
+        (lambda m: m["body"].__setitem__("internal_voids", 0), "one_body"),
+    ],
+)
 def test_each_expectation_is_enforced(exported, edit, check):
     stl, manifest, _ = exported
     wrong = copy.deepcopy(manifest)
@@ -139,7 +156,7 @@ def test_nozzle_wider_than_the_thinnest_wall_fails(exported):
 def test_crossings_and_gaps_on_a_hollow_box():
     outer = trimesh.creation.box((10, 10, 10))
     inner = trimesh.creation.box((4, 4, 4))
-    inner.invert()                                    # a cavity: inward-facing shell
+    inner.invert()  # a cavity: inward-facing shell
     hollow = trimesh.util.concatenate([outer, inner])
     assert measure.shells(hollow)[:2] == (1, 1)
     assert hollow.volume == pytest.approx(1000 - 64)
@@ -166,6 +183,7 @@ def test_a_part_tilted_off_its_side_fails_the_print_checks(exported):
 
 def test_unreadable_inputs_are_input_errors(tmp_path):
     from mst_cli.errors import InputError
+
     (tmp_path / "sensor.stl").write_bytes(b"not a mesh at all")
     (tmp_path / "export.json").write_text("{broken")
     with pytest.raises(InputError, match="export.json"):
@@ -187,6 +205,7 @@ def test_unreadable_inputs_are_input_errors(tmp_path):
 
 def _random_geometries(n, seed=11):
     import sampling
+
     return sampling.random_valid_geometries(n, seed, max_offset_mm=3.0)
 
 
@@ -195,6 +214,7 @@ def test_random_valid_designs_pass_every_check(g):
     """Seeded designs inside the bounds, random board and chip offset: the measurements find
     each layer's walls, cavity, the pocket and the off-centre slot where the design puts them."""
     from mst_cli.model.geometry import Printer
+
     vertices, triangles = print_mesh(g, build_sensor(g).body, 0.02)
     manifest = export_manifest("random", g, Printer(), 0.02, ["sensor.stl"])
     res = by_name(checks.run_checks(mesh_of(mesh_io.stl_bytes(vertices, triangles)), manifest))
@@ -215,8 +235,9 @@ def test_the_mesh_is_measured_once_and_each_check_compares(exported, monkeypatch
     assert [c.name for c in results] == [f.__name__.removeprefix("check_") for f in checks.CHECKS]
     # a check is a pure comparison: the same measurements against another expectation
     measured = real(mesh_of(stl), typed)
-    wider = checks.check_wall_thickness(measured, checks.replace(typed, printer=checks.replace(
-        typed.printer, nozzle_mm=0.8)))
+    wider = checks.check_wall_thickness(
+        measured, checks.replace(typed, printer=checks.replace(typed.printer, nozzle_mm=0.8))
+    )
     assert not wider.passed and wider.values["nozzle_mm"] == 0.8
 
 
@@ -224,6 +245,7 @@ def test_the_manifest_is_typed_and_validated_on_load(exported, tmp_path):
     import json
 
     from mst_cli.errors import InputError
+
     _, manifest, g = exported
     typed = Manifest.from_dict(manifest)
     assert typed.print.pause.after_layer == g.pause_after_layer and isinstance(typed.print.pause.after_layer, int)
@@ -235,8 +257,10 @@ def test_the_manifest_is_typed_and_validated_on_load(exported, tmp_path):
         (lambda m: m["layers"][1].pop("t_mm"), "export.json.layers[1].t_mm"),
         (lambda m: m["body"].__setitem__("bodies", 1.5), "export.json.body.bodies"),
         (lambda m: m["print"]["translation_mm"].__setitem__(2, float("inf")), "export.json.print.translation_mm[2]"),
-        (lambda m: m["print"].__setitem__("rotation", [[1, 0, 0], [0, 1, 0], [0, 0, -1]]),
-         "export.json.print.rotation"),
+        (
+            lambda m: m["print"].__setitem__("rotation", [[1, 0, 0], [0, 1, 0], [0, 0, -1]]),
+            "export.json.print.rotation",
+        ),
         (lambda m: m["board_slot"].__setitem__("board", 4022), "export.json.board_slot.board"),
     ]:
         wrong = copy.deepcopy(manifest)
@@ -252,6 +276,7 @@ def test_a_bug_in_a_check_is_raised_as_it_is(exported, monkeypatch):
 
     def broken(m, x):
         return {}["a bug"]
+
     monkeypatch.setattr(checks, "CHECKS", checks.CHECKS + (broken,))
     with pytest.raises(KeyError, match="a bug"):
         checks.run_checks(mesh_of(stl), manifest)
@@ -280,8 +305,9 @@ def test_numpy_mesh_reads_and_measures_as_trimesh_does(exported, tmp_path):
     f = np.concatenate([ours.faces, ours.faces + len(ours.vertices)])
     edges = f[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
     labels = measure.vertex_components(len(v), edges)
-    n, ref = connected_components(coo_matrix((np.ones(len(edges)), (edges[:, 0], edges[:, 1])),
-                                             shape=(len(v), len(v))), directed=False)
+    n, ref = connected_components(
+        coo_matrix((np.ones(len(edges)), (edges[:, 0], edges[:, 1])), shape=(len(v), len(v))), directed=False
+    )
     assert len(np.unique(labels)) == n == 4
     assert np.array_equal(np.unique(ref, return_inverse=True)[1], np.unique(labels, return_inverse=True)[1])
     res = by_name(checks.run_checks(ours, manifest))
@@ -293,13 +319,17 @@ def test_mst_check_imports_neither_trimesh_nor_scipy(tmp_path):
     import sys
 
     from mst_cli.cad import mesh_body
+
     doc, g = load_design_document(FORWARD)
     (tmp_path / "sensor.stl").write_bytes(mesh_io.stl_bytes(*mesh_body.print_mesh(g, 0.01)))
     (tmp_path / "export.json").write_text(
-        __import__("json").dumps(export_manifest(doc.name, g, doc.printer, 0.01, ["sensor.stl"])))
-    code = ("import sys\nfrom mst_cli.cli.app import main\n"
-            f"sys.argv = ['mst', 'check', {str(tmp_path)!r}]\n"
-            "try:\n    main()\nexcept SystemExit as e:\n    assert not e.code, e.code\n"
-            "print('loaded:' + ','.join(m for m in ('trimesh', 'scipy', 'build123d') if m in sys.modules))\n")
+        __import__("json").dumps(export_manifest(doc.name, g, doc.printer, 0.01, ["sensor.stl"]))
+    )
+    code = (
+        "import sys\nfrom mst_cli.cli.app import main\n"
+        f"sys.argv = ['mst', 'check', {str(tmp_path)!r}]\n"
+        "try:\n    main()\nexcept SystemExit as e:\n    assert not e.code, e.code\n"
+        "print('loaded:' + ','.join(m for m in ('trimesh', 'scipy', 'build123d') if m in sys.modules))\n"
+    )
     out = subprocess.run([sys.executable, "-c", code], check=True, capture_output=True, text=True)
     assert out.stdout.strip().splitlines()[-1] == "loaded:"

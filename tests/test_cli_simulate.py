@@ -85,8 +85,10 @@ BAD_FILES = {
     "bad offset": (doc(magnetometer={"chip_offset_mm": [1]}), "magnetometer.chip_offset_mm"),
     "section not mapping": (doc(housing=[1, 2]), "housing"),
     "nan": ("name: x\nlayers:\n  - {theta_deg: .nan, t_mm: 0.6, h_mm: 2}\n", "layers[0].theta_deg"),
-    "spec given to simulate": (doc(layers=[{"target_sensitivity_per_N": 0.2, "target_range_N": 1}]),
-                               "layers[0].theta_deg"),
+    "spec given to simulate": (
+        doc(layers=[{"target_sensitivity_per_N": 0.2, "target_range_N": 1}]),
+        "layers[0].theta_deg",
+    ),
     "invalid cell": (doc(layers=[{"theta_deg": 25, "t_mm": 1.0, "h_mm": 2.1}]), "layers[0]"),
     "bad name": (doc(name="../escape"), "name"),
 }
@@ -113,6 +115,7 @@ def test_missing_file_exits_2(tmp_path):
 
 def test_staged_outputs_vanish_when_the_command_fails(tmp_path):
     from mst_cli.io.outputs import staged
+
     out = tmp_path / "new"
     with pytest.raises(RuntimeError), staged(out) as st:
         st.write_text("a.txt", "half")

@@ -11,13 +11,13 @@ from mst_cli.model.mechanics import layer_law
 from mst_cli.model.mechanics.continuum import _kinematics, _lame_3d, linear_stiffness_N_per_mm, solve_continuum
 from mst_cli.model.mechanics.spring import spring_layer
 
-pytestmark = pytest.mark.slow      # every test here runs L2 or its kernel
+pytestmark = pytest.mark.slow  # every test here runs L2 or its kernel
 
 MAT = Material()
 
 
 E, NU = 12.0, 0.45
-E_PS = E / (1 - NU ** 2)     # plane-strain modulus
+E_PS = E / (1 - NU**2)  # plane-strain modulus
 
 
 def test_tangent_at_rest_is_plane_strain_elasticity():
@@ -65,6 +65,7 @@ class _Block:
 
     def __init__(self, Lx, Lz, nx, nz):
         from skfem import Basis, ElementTriP2, ElementVector, MeshTri
+
         mesh = MeshTri.init_tensor(np.linspace(0, Lx, nx + 1), np.linspace(0, Lz, nz + 1))
         self.basis = Basis(mesh, ElementVector(ElementTriP2()), intorder=4)
         self.mu, self.lam = _lame_3d(E, NU)
@@ -79,6 +80,7 @@ class _Block:
     def linear(self, prescribed: dict):
         """Solve K u = 0 with u[dof] = value for the prescribed dofs; returns u and K u."""
         from scipy.sparse.linalg import spsolve
+
         _, K = self.assemble(np.zeros(self.basis.N))
         pinned = np.array(sorted(prescribed))
         u = np.zeros(self.basis.N)
@@ -115,11 +117,12 @@ def test_tangent_is_the_derivative_of_the_residual_at_a_large_strain():
     eps = 1e-6
     fd = (blk.assemble(u + eps * v, False)[0] - blk.assemble(u - eps * v, False)[0]) / (2 * eps)
     assert np.allclose(K @ v, fd, rtol=0, atol=1e-7 * np.abs(fd).max())
-    assert abs(K - K.T).max() <= 1e-12 * abs(K).max()          # hyperelastic: symmetric
+    assert abs(K - K.T).max() <= 1e-12 * abs(K).max()  # hyperelastic: symmetric
 
 
 def test_free_block_is_the_sliced_tangent():
     from scipy.sparse import csc_matrix
+
     prob = L2._Problem(HexCell(40, 0.8, 3.0), MAT, L2.DEFAULT_N_THICK, L2.DEFAULT_N_LENGTH, 0)
     _, K = prob.assemble(np.zeros(prob.basis.N))
     for pinned in ((), prob.inner_z[:3]):
@@ -145,12 +148,12 @@ def test_cantilever_tip_deflection_is_plane_strain_timoshenko():
     u, f = blk.linear({**{i: 0.0 for i in root_x}, root_axis_z[0]: 0.0, **{i: -1.0 for i in tip_z}})
     P = -f[tip_z].sum()
     G = E / (2 * (1 + NU))
-    compliance = L ** 3 / (3 * E_PS * t ** 3 / 12) + L / (5 / 6 * G * t)
+    compliance = L**3 / (3 * E_PS * t**3 / 12) + L / (5 / 6 * G * t)
     assert 1.0 / P == pytest.approx(compliance, rel=2e-3)
 
 
 def test_slender_wall_tends_to_beam_theory():
-    cell = HexCell(45, 0.4, 6.0)        # t/L ~ 0.1
+    cell = HexCell(45, 0.4, 6.0)  # t/L ~ 0.1
     k_fe = linear_stiffness_N_per_mm(cell, MAT)
     k_beam = spring_layer(cell, MAT, corrected=False).k_N_per_mm
     assert k_fe == pytest.approx(k_beam, rel=0.04)
@@ -199,8 +202,7 @@ def test_unmeshable_cell_is_a_clear_error():
         solve_continuum(HexCell(30, 1.0, 2.0), MAT)
 
 
-@pytest.mark.parametrize("cell", [HexCell(5, 1.0, 2.45), HexCell(10, 0.4, 5.14), HexCell(75, 3.0, 6.45)],
-                         ids=str)
+@pytest.mark.parametrize("cell", [HexCell(5, 1.0, 2.45), HexCell(10, 0.4, 5.14), HexCell(75, 3.0, 6.45)], ids=str)
 def test_default_mesh_is_converged_at_the_box_corners(cell):
     # shallow walls end in a solid tip wedge t / tan(theta) long (11 t at 5 deg), meshed as a
     # block of its own; stubby steep walls are shorter than thick. The default mesh's k is
@@ -238,17 +240,18 @@ def test_lock_force_is_smooth_in_theta_where_the_old_criterion_jumped():
     # The lock is now the stiffness knee of the contact solution: a smooth function of theta
     R = [solve_continuum(HexCell(th, 0.40, 1.87), MAT).force_N[-1] for th in np.arange(14.5, 16.01, 0.25)]
     assert _neighbour_deviation(R).max() < 0.005
-    assert np.all(np.diff(R) > 0)          # stiffer (steeper) walls lock at higher forces
+    assert np.all(np.diff(R) > 0)  # stiffer (steeper) walls lock at higher forces
 
 
-@pytest.mark.parametrize("cell", [HexCell(14, 0.40, 1.87), HexCell(5, 0.4, 1.25), HexCell(33, 1.0, 2.8),
-                                  HexCell(60, 0.6, 4.0)], ids=str)
+@pytest.mark.parametrize(
+    "cell", [HexCell(14, 0.40, 1.87), HexCell(5, 0.4, 1.25), HexCell(33, 1.0, 2.8), HexCell(60, 0.6, 4.0)], ids=str
+)
 def test_the_lock_is_a_stiffness_jump(cell):
     # just past the lock the layer is at least LOCK_STIFFNESS_FACTOR times stiffer than at
     # rest: a wall pinched between the plate and its mirror, or the pads meeting
     res = solve_continuum(cell, MAT)
     assert res.lock_stiffness_ratio >= L2.LOCK_STIFFNESS_FACTOR
-    assert res.reaction_balance < 1e-6     # outer-face contact reactions included
+    assert res.reaction_balance < 1e-6  # outer-face contact reactions included
     # the lock lies within the stroke of the pads, which are elastic and meet a little late
     assert res.d_contact_mm <= (cell.h_mm - 2 * cell.t_mm - cell.contact_allowance_mm) * 1.05
 
@@ -262,7 +265,7 @@ def test_contact_forces_push_and_no_face_penetrates():
     u, active = np.zeros(prob.basis.N), None
     for d in np.linspace(0.05, 0.7, 14):
         u, _, active, r = prob._newton(u, d, active, pads=True)
-    assert active[prob.n_inner:].any() and active[: prob.n_inner].any()
+    assert active[prob.n_inner :].any() and active[: prob.n_inner].any()
     sign = prob.contact_sign
     assert np.all(sign[active] * r[prob.contact_dofs[active]] <= 1e-9)
     assert np.all(sign * (u[prob.contact_dofs] - prob.obstacle(0.7)) <= 1e-8)

@@ -23,8 +23,10 @@ MAT = Material()
 NU = MAT.poisson_ratio
 
 
-@pytest.mark.parametrize("cell", [HexCell(27, 0.7, 2.5, depth_mm=16.0), HexCell(50, 1.6, 5.0, depth_mm=24.0),
-                                  HexCell(12, 0.5, 2.2, depth_mm=12.4)])
+@pytest.mark.parametrize(
+    "cell",
+    [HexCell(27, 0.7, 2.5, depth_mm=16.0), HexCell(50, 1.6, 5.0, depth_mm=24.0), HexCell(12, 0.5, 2.2, depth_mm=12.4)],
+)
 def test_factor_matches_the_3d_model_on_cells_outside_the_fit(cell):
     """k of the 3D web with a free face over k with that face held (exactly plane strain; the
     tetrahedra's discretisation cancels): the fit's held-out error was 0.27 % at most."""
@@ -32,7 +34,7 @@ def test_factor_matches_the_3d_model_on_cells_outside_the_fit(cell):
     k_held = mechanics.continuum.linear_k(C3.Problem3D(cell, MAT, grading, 2, 8, y_held_far=True))
     k_free = mechanics.continuum.linear_k(C3.Problem3D(cell, MAT, grading, 2, 8))
     phi = float(finite_depth_factor(cell.theta_rad, cell.t_mm, cell.h_mm, cell.b_mm, NU))
-    assert 1 - k_free / k_held > 0.005                     # the effect is there to be checked
+    assert 1 - k_free / k_held > 0.005  # the effect is there to be checked
     assert phi == pytest.approx(k_free / k_held, rel=4e-3)
 
 
@@ -40,10 +42,10 @@ def test_limits_plane_strain_deep_and_plane_stress_bound():
     theta, t, h = math.radians(40), 1.0, 3.5
     D = np.array([5.0, 10.0, 20.0, 80.0, 1e6])
     phi = finite_depth_factor(theta, t, h, D, NU)
-    assert np.all(np.diff(phi) > 0)                        # deeper webs are closer to plane strain
-    assert phi[-1] == pytest.approx(1.0, abs=1e-5)         # an infinitely deep web is plane strain
+    assert np.all(np.diff(phi) > 0)  # deeper webs are closer to plane strain
+    assert phi[-1] == pytest.approx(1.0, abs=1e-5)  # an infinitely deep web is plane strain
     # never softer than plane stress through the whole depth (E against E / (1 - nu^2))
-    assert np.all(finite_depth_factor(theta, 3.0, 8.0, np.array([0.5, 1.0, 2.0]), NU) >= 1 - NU ** 2 - 1e-12)
+    assert np.all(finite_depth_factor(theta, 3.0, 8.0, np.array([0.5, 1.0, 2.0]), NU) >= 1 - NU**2 - 1e-12)
     # the boundary layer scales with the cross-section: same shape, twice the size, twice the deficit
     d1 = 1 - finite_depth_factor(theta, t, h, 20.0, NU)
     d2 = 1 - finite_depth_factor(theta, 2 * t, 2 * h, 20.0, NU)

@@ -24,9 +24,9 @@ from mst_cli.model.mechanics.correction import VERIFIED_BOX
 from mst_cli.model.response import simulate
 
 ROOT = Path(__file__).resolve().parents[1]
-SPEC = ROOT / "configs" / "fingertip.yaml"       # met by the printable cell
-PAPER = ROOT / "configs" / "mohammadi2021.yaml"   # the paper's own targets
-PRINT_ERROR_T_MM = geo.Printer().wall_tolerance_mm     # the default printer's wall tolerance
+SPEC = ROOT / "configs" / "fingertip.yaml"  # met by the printable cell
+PAPER = ROOT / "configs" / "mohammadi2021.yaml"  # the paper's own targets
+PRINT_ERROR_T_MM = geo.Printer().wall_tolerance_mm  # the default printer's wall tolerance
 
 
 def spec_doc(targets, **design):
@@ -64,8 +64,7 @@ def random_specs(n_layers, count, seed):
 
 
 # --------------------------------------------------------------------------- the reference spec
-@pytest.mark.parametrize("config, max_height_mm", [("mohammadi2021.yaml", None),
-                                                   ("mohammadi2021-compact.yaml", 16.0)])
+@pytest.mark.parametrize("config, max_height_mm", [("mohammadi2021.yaml", None), ("mohammadi2021-compact.yaml", 16.0)])
 def test_paper_targets_are_met_and_the_compact_part_is_at_most_16_mm(config, max_height_mm, tmp_path):
     """The paper's S = 0.26/0.08/0.03 1/N and R = 0.9/4.8/16.2 N (docs/design.md's table), re-simulated
     from the written design.yaml; with a board without connector sockets in at most 16 mm."""
@@ -88,7 +87,7 @@ def test_issue_round_trip_designs_back_a_simulated_stubby_design(tmp_path):
     S = [r.sensitivity_secant_per_N for r in resp.regimes]
     R = [r.force_to_N for r in resp.regimes]
     assert [r.layer for r in resp.regimes] == [1, 2, 3]
-    assert max(c.t_mm / c.wall_length_mm for c in cells) > 0.85         # past the old 0.6 fence
+    assert max(c.t_mm / c.wall_length_mm for c in cells) > 0.85  # past the old 0.6 fence
     result = design_document(spec_doc(list(zip(S, R))))
     assert result.status == "met", result.reasons
     S2, R2, _, _, _ = forward(result, tmp_path)
@@ -109,8 +108,8 @@ def test_fingertip_spec_meets_all_six_targets_within_2_percent_with_printable_ce
         assert box["theta_deg"][0] <= cell.theta_deg <= box["theta_deg"][1]
         assert box["t_mm"][0] <= cell.t_mm <= box["t_mm"][1] and box["h_mm"][0] <= cell.h_mm <= box["h_mm"][1]
         assert cell.cavity_height_mm >= designed.printer.min_gap_mm
-    assert [r.layer for r in resp.regimes] == [1, 2, 3]               # locks bottom to top
-    assert R[1] >= 1.1 * R[0] and R[2] >= 1.1 * R[1]                   # with the lock margin
+    assert [r.layer for r in resp.regimes] == [1, 2, 3]  # locks bottom to top
+    assert R[1] >= 1.1 * R[0] and R[2] >= 1.1 * R[1]  # with the lock margin
     assert resp.B_full_T <= 0.9 * 50e-3 and not resp.saturated
     # the table and the report carry the forward-model numbers
     rows = result.targets
@@ -160,7 +159,7 @@ def test_unit_variables_map_onto_the_bounds_and_back():
     lo, hi = DEFAULT_DESIGN["theta_deg_bounds"]
     (t0, t1), (h0, h1) = DEFAULT_DESIGN["t_mm_bounds"], DEFAULT_DESIGN["h_mm_bounds"]
     assert theta == pytest.approx([lo, hi, 0.5 * (lo + hi)]) and t == pytest.approx([t0, t1, math.sqrt(t0 * t1)])
-    assert h == pytest.approx([h0, h1, math.sqrt(h0 * h1)])               # log scale: geometric mean
+    assert h == pytest.approx([h0, h1, math.sqrt(h0 * h1)])  # log scale: geometric mean
     u = np.random.default_rng(1).random(9)
     assert P.to_unit(*P.to_physical(u)) == pytest.approx(u)
 
@@ -180,6 +179,7 @@ def _one_layer_family(P, th0, t0, h0):
     with scipy's fsolve: continuation in theta from the chosen design, 0.5 deg at a time in both
     directions, solving S(t, h) = S*, R(t, h) = R*, plus the members on the t bounds solved for
     (theta, h); only members inside the bounds that satisfy every rule."""
+
     def admissible(theta, t, h):
         ev = P.evaluate_physical([theta], [t], [h])
         inside = np.all(P.lo - 1e-9 <= [theta, t, h]) and np.all([theta, t, h] <= P.hi + 1e-9)
@@ -191,26 +191,33 @@ def _one_layer_family(P, th0, t0, h0):
         theta = th0
         while P.lo[0] <= theta + direction <= P.hi[0]:
             theta += direction
-            x, _, ok, _ = fsolve(lambda x, theta=theta: P.evaluate_physical([theta], [math.exp(x[0])],
-                                                                           [math.exp(x[1])]).log_err,
-                                 guess, full_output=True)
+            x, _, ok, _ = fsolve(
+                lambda x, theta=theta: P.evaluate_physical([theta], [math.exp(x[0])], [math.exp(x[1])]).log_err,
+                guess,
+                full_output=True,
+            )
             if ok != 1:
                 break
             guess = list(x)
             members.append((theta, math.exp(x[0]), math.exp(x[1])))
     for t_edge in P.lo[1], P.hi[1]:
-        x, _, ok, _ = fsolve(lambda x, t_edge=t_edge: P.evaluate_physical([10 * x[0]], [t_edge],
-                                                                          [math.exp(x[1])]).log_err,
-                             [th0 / 10, math.log(h0)], full_output=True)
+        x, _, ok, _ = fsolve(
+            lambda x, t_edge=t_edge: P.evaluate_physical([10 * x[0]], [t_edge], [math.exp(x[1])]).log_err,
+            [th0 / 10, math.log(h0)],
+            full_output=True,
+        )
         members.append((10 * x[0], t_edge, math.exp(x[1])))
     return [m for m in members if admissible(*m)]
 
 
-@pytest.mark.parametrize("objective", [
-    {"height": 0.0, "force_resolution": 0.0, "print_robustness": 1.0},   # most print-robust
-    None,                                                                # the default weights
-    {"height": 1.0, "force_resolution": 0.0, "print_robustness": 0.0},   # shortest part
-])
+@pytest.mark.parametrize(
+    "objective",
+    [
+        {"height": 0.0, "force_resolution": 0.0, "print_robustness": 1.0},  # most print-robust
+        None,  # the default weights
+        {"height": 1.0, "force_resolution": 0.0, "print_robustness": 0.0},  # shortest part
+    ],
+)
 def test_chosen_design_minimises_the_preference_over_the_one_layer_solutions(objective):
     """One layer: 3 variables, 2 targets leave a one-parameter family of exact solutions; no
     member may have a lower preference (design.objective's weighted terms) than the design mst
@@ -249,7 +256,7 @@ def test_preference_terms_are_height_resolution_and_print_shift():
     B0 = float(P.field_T(np.array(geom.gap0_mm)))
     assert terms[1] == pytest.approx(math.log(doc.noise_uT_rms * 1e-6 / (B0 * ev.S_per_N.min())), rel=1e-9)
     shifts = P.print_shift_log(th, t, h)
-    assert terms[2] == pytest.approx(math.sqrt(np.mean(shifts ** 2)), rel=1e-12)
+    assert terms[2] == pytest.approx(math.sqrt(np.mean(shifts**2)), rel=1e-12)
     w = np.array([0.5, 2.0, 3.0])
     assert float(P.preference(ev, w)) == pytest.approx(float(terms @ w), rel=1e-12)
 
@@ -312,7 +319,7 @@ def test_force_too_small_for_any_printable_wall_is_named():
 
 
 def test_field_change_beyond_the_magnet_is_named():
-    doc = spec_doc([(1.0, 20.0)])                      # needs B_full / B0 = 21
+    doc = spec_doc([(1.0, 20.0)])  # needs B_full / B0 = 21
     lim = limits(DesignProblem(doc))
     assert lim.field_change_needed == pytest.approx(20.0)
     assert lim.field_change_max < 20.0
@@ -354,6 +361,7 @@ def test_designed_walls_stay_where_the_l0_corrections_were_fitted(tmp_path):
     # every wall at most as stubby as the stubbiest fitted one (the fit now spans the printable
     # box, so this constraint no longer binds inside the default bounds; it guards user bounds)
     from mst_cli.model.mechanics.correction import fitted_t_over_L_max
+
     result = design_document(load_document(SPEC))
     _, _, _, geometry, _ = forward(result, tmp_path)
     for c in geometry.layers:

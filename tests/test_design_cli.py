@@ -12,8 +12,8 @@ from click.testing import CliRunner
 from mst_cli.cli.app import main
 
 ROOT = Path(__file__).resolve().parents[1]
-SPEC = ROOT / "configs" / "fingertip.yaml"       # met by the printable cell
-PAPER = ROOT / "configs" / "mohammadi2021.yaml"   # the paper's own targets
+SPEC = ROOT / "configs" / "fingertip.yaml"  # met by the printable cell
+PAPER = ROOT / "configs" / "mohammadi2021.yaml"  # the paper's own targets
 
 
 def run(args):
@@ -92,7 +92,7 @@ def test_a_design_file_is_rejected_with_exit_2(tmp_path):
 
 
 def test_unreachable_spec_exits_1_names_the_reason_and_writes_the_nearest_design(tmp_path):
-    path = spec_file(tmp_path, [(1.0, 20.0)], max_evaluations=3000)     # B_full/B0 = 21
+    path = spec_file(tmp_path, [(1.0, 20.0)], max_evaluations=3000)  # B_full/B0 = 21
     out = tmp_path / "near"
     r = run(["design", path, "--out", out])
     assert r.exit_code == 1
@@ -104,8 +104,10 @@ def test_unreachable_spec_exits_1_names_the_reason_and_writes_the_nearest_design
 
 
 def test_importing_the_cli_does_not_import_nlopt_or_the_design_package():
-    code = ("import sys, mst_cli.cli.app; "
-            "bad = [m for m in ('nlopt', 'mst_cli.design', 'build123d', 'matplotlib.pyplot') if m in sys.modules]; "
-            "print(bad); sys.exit(1 if bad else 0)")
+    code = (
+        "import sys, mst_cli.cli.app; "
+        "bad = [m for m in ('nlopt', 'mst_cli.design', 'build123d', 'matplotlib.pyplot') if m in sys.modules]; "
+        "print(bad); sys.exit(1 if bad else 0)"
+    )
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert r.returncode == 0, r.stdout + r.stderr

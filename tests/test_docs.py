@@ -46,5 +46,6 @@ def test_file_format_tables_are_generated_from_the_declarations():
 
 def test_the_layer_count_in_the_docs_is_the_schema_cap():
     from mst_cli.io.schema import MAX_LAYERS
+
     text = (ROOT / "docs" / "file-format.md").read_text()
     assert f"## `layers` (required, 1 to {MAX_LAYERS} entries," in text

@@ -74,14 +74,18 @@ def test_calibration_recovers_the_print_errors(tmp_path):
     for name, (value, std) in fitted.items():
         assert abs(value - TRUTH[name]) < 3 * std + 1e-3, name
     median = float(re.search(rf"median force error ({NUMBER}) %", out).group(1))
-    assert median < 1.0                 # noise of 2 uT on a field span of mT: well under a percent
+    assert median < 1.0  # noise of 2 uT on a field span of mT: well under a percent
 
 
 @pytest.mark.slow
 def test_the_ladder_rungs_agree_on_one_cell(tmp_path):
     out = run_example("ladder_rungs.py", tmp_path)
-    laws = {r: (float(k), float(F), float(d)) for r, k, F, d in re.findall(
-        rf"^(\w+)\s+k ({NUMBER}) N/mm, locks at ({NUMBER}) N after ({NUMBER}) mm", out, re.M)}
+    laws = {
+        r: (float(k), float(F), float(d))
+        for r, k, F, d in re.findall(
+            rf"^(\w+)\s+k ({NUMBER}) N/mm, locks at ({NUMBER}) N after ({NUMBER}) mm", out, re.M
+        )
+    }
     assert set(laws) == {"spring", "frame", "continuum"}
     k2, F2, d2 = laws["continuum"]
     for k, F, d in laws.values():

@@ -14,8 +14,8 @@ from mst_cli.io.schema import load_document
 
 ROOT = Path(__file__).resolve().parents[1]
 FORWARD = ROOT / "configs" / "mohammadi2021-forward.yaml"
-SPEC = ROOT / "configs" / "fingertip.yaml"       # met by the printable cell
-PAPER = ROOT / "configs" / "mohammadi2021.yaml"   # the paper's own targets
+SPEC = ROOT / "configs" / "fingertip.yaml"  # met by the printable cell
+PAPER = ROOT / "configs" / "mohammadi2021.yaml"  # the paper's own targets
 DESIGNS = sorted(p for p in (ROOT / "configs").glob("*.yaml") if load_document(p).is_design)
 
 
@@ -54,8 +54,11 @@ def test_export_writes_files_progress_and_pause_height(reference_export):
     manifest = json.loads((out / "export.json").read_text())
     # printed on its side: the pause is a height along the 20 mm depth, the magnet's radius
     # plus clearance (3.1 mm) above the middle, rounded up to the 0.2 mm layers: 13.2 = layer 66
-    assert manifest["print"]["pause"] == {"after_layer": 66, "z_mm": pytest.approx(13.2),
-                                          "why": "drop the magnet into its pocket"}
+    assert manifest["print"]["pause"] == {
+        "after_layer": 66,
+        "z_mm": pytest.approx(13.2),
+        "why": "drop the magnet into its pocket",
+    }
     assert "pause after layer 66 (z = 13.20 mm)" in r.stdout
     assert manifest["files"] == ["sensor.stl", "sensor.step", "sensor.3mf"]
 
@@ -90,9 +93,23 @@ def test_output_is_deterministic_across_processes(tmp_path):
     outs = []
     for k in range(2):
         out = tmp_path / f"run{k}"
-        subprocess.run([sys.executable, "-c", "from mst_cli.cli.app import main; main()",
-                        "export", str(FORWARD), "--stl", "--step",
-                        "--3mf", "--out", str(out)], check=True, capture_output=True, cwd=tmp_path)
+        subprocess.run(
+            [
+                sys.executable,
+                "-c",
+                "from mst_cli.cli.app import main; main()",
+                "export",
+                str(FORWARD),
+                "--stl",
+                "--step",
+                "--3mf",
+                "--out",
+                str(out),
+            ],
+            check=True,
+            capture_output=True,
+            cwd=tmp_path,
+        )
         outs.append(out)
     for name in ("sensor.stl", "sensor.step", "sensor.3mf", "export.json"):
         assert (outs[0] / name).read_bytes() == (outs[1] / name).read_bytes(), name
@@ -122,7 +139,7 @@ def test_a_spec_is_designed_first_and_its_design_written(tmp_path):
 
 def test_a_file_that_is_neither_design_nor_spec_exits_2(tmp_path):
     raw = yaml.safe_load(SPEC.read_text())
-    raw["layers"][0] = {"theta_deg": 30, "t_mm": 0.8, "h_mm": 2.4}     # one geometry, rest targets
+    raw["layers"][0] = {"theta_deg": 30, "t_mm": 0.8, "h_mm": 2.4}  # one geometry, rest targets
     raw["layers"][1] = {"theta_deg": 30, "t_mm": 0.8, "h_mm": 2.4, "target_range_N": 3.0}
     bad = tmp_path / "mixed.yaml"
     bad.write_text(yaml.safe_dump(raw))
@@ -131,10 +148,13 @@ def test_a_file_that_is_neither_design_nor_spec_exits_2(tmp_path):
     assert not (tmp_path / "o").exists()
 
 
-@pytest.mark.parametrize("args, field", [
-    (["--stl-tolerance", "0"], "--stl-tolerance"),
-    (["--stl-tolerance", "5"], "--stl-tolerance"),
-])
+@pytest.mark.parametrize(
+    "args, field",
+    [
+        (["--stl-tolerance", "0"], "--stl-tolerance"),
+        (["--stl-tolerance", "5"], "--stl-tolerance"),
+    ],
+)
 def test_bad_options_exit_2_and_write_nothing(tmp_path, args, field):
     r = run(["export", FORWARD, "--out", tmp_path / "o"] + args)
     assert r.exit_code == 2 and field in r.stderr
@@ -143,13 +163,13 @@ def test_bad_options_exit_2_and_write_nothing(tmp_path, args, field):
 
 def test_invalid_cell_and_oversized_magnet_exit_2(tmp_path):
     raw = yaml.safe_load(FORWARD.read_text())
-    raw["layers"][0]["t_mm"] = 0.2                      # thinner than one nozzle line
+    raw["layers"][0]["t_mm"] = 0.2  # thinner than one nozzle line
     bad = tmp_path / "bad.yaml"
     bad.write_text(yaml.safe_dump(raw))
     r = run(["export", bad, "--out", tmp_path / "o"])
     assert r.exit_code == 2 and "layers[0]" in r.stderr
     raw = yaml.safe_load(FORWARD.read_text())
-    raw["magnet"]["diameter_mm"] = 28                   # pocket wider than the 30 mm wide cap
+    raw["magnet"]["diameter_mm"] = 28  # pocket wider than the 30 mm wide cap
     bad.write_text(yaml.safe_dump(raw))
     r = run(["export", bad, "--out", tmp_path / "o"])
     assert r.exit_code == 2 and "magnet.diameter_mm" in r.stderr

@@ -19,8 +19,7 @@ MAT = Material()
 
 
 @settings(max_examples=300, deadline=None)
-@given(theta=st.floats(5, 75), t=st.floats(0.4, 3.0), h=st.floats(1.2, 8.0),
-       corrected=st.booleans())
+@given(theta=st.floats(5, 75), t=st.floats(0.4, 3.0), h=st.floats(1.2, 8.0), corrected=st.booleans())
 def test_spring_is_finite_and_positive_everywhere_in_the_bounds(theta, t, h, corrected):
     # valid or not: the optimiser evaluates infeasible points too
     k, dl, R, kl = spring_arrays(np.radians(theta), t, h, 20.0, 30.0, 0.1, 12.0, 0.45, corrected)
@@ -54,17 +53,20 @@ def test_field_near_saturation_is_finite_and_monotone():
     assert np.allclose(Ba, Bc, rtol=1e-9)
 
 
-@pytest.mark.parametrize("layers", [
-    [(5, 0.4, 1.25), (75, 3.0, 6.45)],        # shallowest thin wall to stubbiest (t/L 1.68)
-    [(75, 0.4, 8.0), (10, 2.0, 4.45)],        # tall steep wall, shallow thick one
-    [(15, 0.4, 1.2), (60, 2.0, 6.0)],
-])
+@pytest.mark.parametrize(
+    "layers",
+    [
+        [(5, 0.4, 1.25), (75, 3.0, 6.45)],  # shallowest thin wall to stubbiest (t/L 1.68)
+        [(75, 0.4, 8.0), (10, 2.0, 4.45)],  # tall steep wall, shallow thick one
+        [(15, 0.4, 1.2), (60, 2.0, 6.0)],
+    ],
+)
 def test_simulate_at_the_corners_is_finite_or_warns(layers):
     cells = tuple(HexCell(*c) for c in layers)
     for mech in ("spring", "frame"):
         try:
             resp = simulate(SensorGeometry(cells), MAT, mechanics=mech)
-        except ValueError as exc:          # frame on an unmeshable corner: a clear message
+        except ValueError as exc:  # frame on an unmeshable corner: a clear message
             assert "frame model needs" in str(exc)
             continue
         assert np.isfinite(resp.displacement_mm).all() and np.isfinite(resp.B_abs_T).all()
@@ -75,15 +77,26 @@ def test_simulate_at_the_corners_is_finite_or_warns(layers):
 def _cell_at(theta, t_over_L, gap=0.45):
     """The thinnest printable wall with t/L on target: L = (h - t) / (2 sin theta) fixes
     h = t (1 + 2 sin(theta) / x); t is raised until the cavity h - 2t reaches ``gap``."""
-    q = 2 * np.sin(np.radians(theta)) / t_over_L - 1          # cavity / t
+    q = 2 * np.sin(np.radians(theta)) / t_over_L - 1  # cavity / t
     t = max(0.4, gap / q)
     return HexCell(theta, round(float(t), 4), round(float(t * (q + 2)), 4))
 
 
 # the corners of the printable box in (theta, t/L): at theta 5 deg t/L stops near 0.13 (the
 # pad rule), at 15 deg near 0.45, at 75 deg near 1.7 (walls shorter than they are thick)
-CORNERS = [(5, 0.04), (5, 0.12), (15, 0.05), (15, 0.44), (45, 0.075), (45, 0.6), (45, 1.2),
-           (75, 0.105), (75, 0.6), (75, 1.0), (75, 1.65)]
+CORNERS = [
+    (5, 0.04),
+    (5, 0.12),
+    (15, 0.05),
+    (15, 0.44),
+    (45, 0.075),
+    (45, 0.6),
+    (45, 1.2),
+    (75, 0.105),
+    (75, 0.6),
+    (75, 1.0),
+    (75, 1.65),
+]
 
 
 @pytest.mark.parametrize("theta, t_over_L", CORNERS)
@@ -104,7 +117,7 @@ def test_frame_at_theta_and_slenderness_corners(theta, t_over_L):
 
 
 def test_smallest_cavity():
-    cell = HexCell(40, 0.4, 0.4 * 2 + 0.4)        # h - 2t = the printable minimum gap
+    cell = HexCell(40, 0.4, 0.4 * 2 + 0.4)  # h - 2t = the printable minimum gap
     # the inner wall face is shorter than t: only the pads can close the cavity, at the
     # pads' stroke h - 2t - allowance = 0.3 mm (L1's pads are rigid: exactly; L2's elastic
     # ones meet 0.7 % later; L0's fit, at this edge of the box, within 10 %)
@@ -114,9 +127,18 @@ def test_smallest_cavity():
         assert law.d_lock_mm == pytest.approx(0.3, rel=rel)
 
 
-@pytest.mark.parametrize("cell", [HexCell(15, 0.4, 1.3), HexCell(60, 1.5, 6.0),
-                                  HexCell(5, 0.4, 1.25), HexCell(75, 3.0, 6.45), HexCell(75, 0.4, 8.0),
-                                  HexCell(10, 2.0, 4.45)], ids=str)
+@pytest.mark.parametrize(
+    "cell",
+    [
+        HexCell(15, 0.4, 1.3),
+        HexCell(60, 1.5, 6.0),
+        HexCell(5, 0.4, 1.25),
+        HexCell(75, 3.0, 6.45),
+        HexCell(75, 0.4, 8.0),
+        HexCell(10, 2.0, 4.45),
+    ],
+    ids=str,
+)
 def test_continuum_at_the_corners(cell):
     # shallowest thinnest wall, stubbiest (t/L 1.68), tallest steep (t/L 0.1), shallow thick
     res = solve_continuum(cell, MAT)

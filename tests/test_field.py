@@ -47,7 +47,7 @@ def test_dipole_overestimates_by_the_documented_amount(gap_mm, excess):
 def test_dipole_converges_to_exact_models_far_away():
     """The multipole correction to a dipole falls like (size / distance)^2."""
     gaps = np.array([20.0, 50.0, 200.0, 800.0])
-    r = gaps + 1.0                                 # distance from the magnet's centre
+    r = gaps + 1.0  # distance from the magnet's centre
     for off, tilt in [((0, 0), 0), ((2.0, -1.0), 0), ((1.5, 0.5), 7.0)]:
         dip = field_at_chip_T(gaps, MAG, "dipole", off, tilt)
         cyl = field_at_chip_T(gaps, MAG, "cylinder", off, tilt)

@@ -34,7 +34,7 @@ def test_rigid_rotation_gives_no_internal_force():
     X = np.array([[0.0, 0.0], [1.0, 0.3]])
     l0 = np.array([math.hypot(1.0, 0.3)])
     beta0 = np.array([math.atan2(0.3, 1.0)])
-    a = 1.1                                     # a large rigid rotation about node 1
+    a = 1.1  # a large rigid rotation about node 1
     R = np.array([[math.cos(a), -math.sin(a)], [math.sin(a), math.cos(a)]])
     U = np.zeros((2, 3))
     U[1, :2] = R @ X[1] - X[1]
@@ -62,6 +62,7 @@ def test_lock_stroke_is_l0s_fit_of_the_continuum_lock():
     # a beam has no faces to pinch: L1 follows its path to the lock stroke L0 fitted to L2's
     # stiffness knee (or the rigid pads' stroke, if that came first)
     from mst_cli.model.mechanics.spring import spring_layer
+
     for cell in (HexCell(33, 1.0, 2.8), HexCell(45, 0.5, 5.0), HexCell(14, 0.4, 1.87)):
         res = solve_frame(cell, MAT)
         expected = min(spring_layer(cell, MAT).d_lock_mm, cell.h_mm - 2 * cell.t_mm - cell.contact_allowance_mm)
@@ -91,6 +92,7 @@ def test_shallow_thin_wall_follows_to_its_lock():
     # at theta 5 deg the walls flatten onto the plate: the path reaches the lock stroke with
     # a finite, positive force
     from mst_cli.model.mechanics.frame import solve_frame
+
     cell = HexCell(5, 0.4, 1.25)
     res = solve_frame(cell, MAT)
     assert 0.2 * cell.d_lock_mm < res.d_contact_mm <= cell.d_lock_mm * (1 + 1e-9)

@@ -13,8 +13,14 @@ def shoelace(poly):
     return 0.5 * (np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))
 
 
-CELLS = [HexCell(25, 0.6, 2.0), HexCell(33, 1.0, 2.8), HexCell(37, 1.4, 3.5),
-         HexCell(15, 0.4, 1.2), HexCell(60, 2.0, 6.0), HexCell(45, 0.8, 3.0, width_mm=24)]
+CELLS = [
+    HexCell(25, 0.6, 2.0),
+    HexCell(33, 1.0, 2.8),
+    HexCell(37, 1.4, 3.5),
+    HexCell(15, 0.4, 1.2),
+    HexCell(60, 2.0, 6.0),
+    HexCell(45, 0.8, 3.0, width_mm=24),
+]
 
 
 @pytest.mark.parametrize("cell", CELLS)
@@ -29,7 +35,7 @@ def test_inner_edges_lie_at_distance_t_from_outer_edges(cell):
     outer, inner = np.array(cell.outer_profile_xz()), np.array(cell.inner_profile_xz())
     for i in range(6):
         a, b = outer[i], outer[(i + 1) % 6]
-        n = np.array([-(b - a)[1], (b - a)[0]]) / np.linalg.norm(b - a)   # inward (CCW polygon)
+        n = np.array([-(b - a)[1], (b - a)[0]]) / np.linalg.norm(b - a)  # inward (CCW polygon)
         for p in (inner[i], inner[(i + 1) % 6]):
             assert np.dot(p - a, n) == pytest.approx(cell.t_mm, abs=1e-12)
 
@@ -44,12 +50,15 @@ def test_walls_are_inclined_at_theta_and_pad_formula(cell):
     assert cell.cavity_height_mm == pytest.approx(cell.inner_profile_xz()[2][1] - cell.inner_profile_xz()[0][1])
 
 
-@pytest.mark.parametrize("rule,cell", [
-    ("wall", HexCell(30, 0.3, 3.0)),
-    ("cavity_gap", HexCell(30, 1.0, 2.3)),
-    ("lock_stroke", HexCell(30, 1.0, 2.05)),
-    ("pad_width", HexCell(15, 1.0, 7.9)),
-])
+@pytest.mark.parametrize(
+    "rule,cell",
+    [
+        ("wall", HexCell(30, 0.3, 3.0)),
+        ("cavity_gap", HexCell(30, 1.0, 2.3)),
+        ("lock_stroke", HexCell(30, 1.0, 2.05)),
+        ("pad_width", HexCell(15, 1.0, 7.9)),
+    ],
+)
 def test_each_broken_rule_is_named(rule, cell):
     assert rule in {v.rule for v in cell.violations(Printer())}
 
@@ -67,10 +76,12 @@ def test_stack_heights_and_gap_follow_from_the_parts():
     assert g.z_stack_top_mm == pytest.approx(g.z_base_top_mm + 2.0 + 2.8 + 3.5 + 2 * H.plate_mm)
     # two independent paths to the gap: z of the parts, and the vectorised kernel
     assert g.gap0_mm == pytest.approx(g.z_magnet_bottom_mm - g.z_hall_mm, abs=1e-12)
-    assert g.total_height_mm == pytest.approx(g.z_magnet_bottom_mm + g.magnet.thickness_mm
-                                              + H.pocket_clearance_mm + H.cap_top_mm)
+    assert g.total_height_mm == pytest.approx(
+        g.z_magnet_bottom_mm + g.magnet.thickness_mm + H.pocket_clearance_mm + H.cap_top_mm
+    )
     # a thicker cover moves the magnet away by exactly that much
     from dataclasses import replace
+
     g2 = SensorGeometry(cells, housing=replace(H, cover_mm=H.cover_mm + 0.5))
     assert g2.gap0_mm - g.gap0_mm == pytest.approx(0.5)
 
@@ -96,6 +107,7 @@ def test_print_frame_is_a_rotation_that_puts_the_minus_y_face_on_the_bed():
 @pytest.mark.parametrize("diameter_mm", [3.0, 5.0, 6.0, 8.0])
 def test_pause_is_a_layer_boundary_with_the_magnet_wholly_below_it(layer_mm, diameter_mm):
     from mst_cli.model.geometry import Magnet
+
     g = SensorGeometry(tuple(CELLS[:2]), magnet=Magnet(diameter_mm, 2.0), printer=Printer(layer_height_mm=layer_mm))
     n = g.pause_height_mm / layer_mm
     assert n == pytest.approx(round(n), abs=1e-9) and g.pause_after_layer == round(n)
@@ -110,6 +122,7 @@ def test_pause_is_a_layer_boundary_with_the_magnet_wholly_below_it(layer_mm, dia
 
 def test_snapping_rounds_to_the_layer_grid_as_asked():
     from mst_cli.model.geometry import snap_to_layers_mm
+
     assert snap_to_layers_mm(1.7, 0.2, "down") == pytest.approx(1.6)
     assert snap_to_layers_mm(1.7, 0.2, "up") == pytest.approx(1.8)
     assert snap_to_layers_mm(1.75, 0.2, "nearest") == pytest.approx(1.8)
@@ -133,14 +146,17 @@ def test_slot_floor_and_chip_as_printed():
 
 def test_housing_rules_name_the_field():
     from mst_cli.model.components import BOARDS
+
     ok = SensorGeometry(tuple(CELLS[:3]))
     assert ok.housing_violations() == []
     odd = SensorGeometry((HexCell(30, 1.0, 3.0, depth_mm=20.1),))
     assert [f for f, _, _ in odd.housing_violations()] == ["family.depth_mm"]
     big = SensorGeometry((HexCell(30, 1.0, 3.0),), board=BOARDS["sparkfun-14571"])
     assert "family.depth_mm" in [f for f, _, _ in big.housing_violations()]
-    assert SensorGeometry((HexCell(30, 1.0, 3.0, depth_mm=30.0),),
-                          board=BOARDS["sparkfun-14571"]).housing_violations() == []
+    assert (
+        SensorGeometry((HexCell(30, 1.0, 3.0, depth_mm=30.0),), board=BOARDS["sparkfun-14571"]).housing_violations()
+        == []
+    )
 
 
 def test_the_geometry_judges_walls_by_its_own_printer():

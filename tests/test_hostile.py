@@ -118,8 +118,16 @@ def test_alias_bomb_is_refused_in_well_under_a_second(tmp_path):
 def test_recursive_alias_and_merge_keys_are_refused(tmp_path):
     r = run(["simulate", write(tmp_path, "name: x\nx: &a [1, *a]\nlayers: []\n"), "--out", tmp_path / "o"])
     assert "recursive" in refused(r, "(file)")
-    r = run(["simulate", write(tmp_path, "name: x\nmagnet:\n  <<: {diameter_mm: 6}\nlayers: [{theta_deg: 25, "
-                                         "t_mm: 0.6, h_mm: 2}]\n"), "--out", tmp_path / "o"])
+    r = run(
+        [
+            "simulate",
+            write(
+                tmp_path, "name: x\nmagnet:\n  <<: {diameter_mm: 6}\nlayers: [{theta_deg: 25, t_mm: 0.6, h_mm: 2}]\n"
+            ),
+            "--out",
+            tmp_path / "o",
+        ]
+    )
     assert "merge keys" in refused(r, "magnet.<<")
 
 
@@ -151,8 +159,10 @@ def test_deep_nesting_is_refused(tmp_path):
 
 
 def test_absurd_chip_offset_is_refused_by_its_bounds(tmp_path):
-    f = write(tmp_path, "name: x\nmagnetometer: {chip_offset_mm: [1.0e+300, 0]}\n"
-                        "layers: [{theta_deg: 25, t_mm: 0.6, h_mm: 2}]\n")
+    f = write(
+        tmp_path,
+        "name: x\nmagnetometer: {chip_offset_mm: [1.0e+300, 0]}\nlayers: [{theta_deg: 25, t_mm: 0.6, h_mm: 2}]\n",
+    )
     r, dt = timed(["simulate", f, "--out", tmp_path / "o"])
     line = refused(r, "magnetometer.chip_offset_mm[0]")
     assert "<= 100 mm" in line and dt < 1.0, (line, dt)
@@ -160,8 +170,10 @@ def test_absurd_chip_offset_is_refused_by_its_bounds(tmp_path):
 
 @pytest.mark.parametrize("digits", [50, 1000, 5000])
 def test_integers_with_thousands_of_digits_are_refused_with_a_short_line(tmp_path, digits):
-    f = write(tmp_path, "name: x\nmagnetometer: {noise_uT_rms: " + "7" * digits + "}\n"
-                        "layers: [{theta_deg: 25, t_mm: 0.6, h_mm: 2}]\n")
+    f = write(
+        tmp_path,
+        "name: x\nmagnetometer: {noise_uT_rms: " + "7" * digits + "}\nlayers: [{theta_deg: 25, t_mm: 0.6, h_mm: 2}]\n",
+    )
     r, dt = timed(["simulate", f, "--out", tmp_path / "o"])
     line = refused(r, "magnetometer.noise_uT_rms")
     assert len(line) < 300 and dt < 1.0, (line, dt)
@@ -197,14 +209,24 @@ def test_the_documented_ranges_match_the_schema():
 
 
 # =========================================================================== 2. silent acceptance
-@pytest.mark.parametrize("text,field,line", [
-    ("name: a\nname: b\nlayers: [{theta_deg: 25, t_mm: 0.6, h_mm: 2}]\n", "name", 2),
-    ("name: a\nmagnet:\n  diameter_mm: 6\n  diameter_mm: 8\nlayers: [{theta_deg: 25, t_mm: 0.6, h_mm: 2}]\n",
-     "magnet.diameter_mm", 4),
-    ("name: a\nlayers:\n  - theta_deg: 25\n    t_mm: 0.6\n    h_mm: 2\n    t_mm: 0.8\n", "layers[0].t_mm", 6),
-    ("name: a\nlayers: [{theta_deg: 25, t_mm: 0.6, h_mm: 2}]\nlayers: [{theta_deg: 25, t_mm: 1, h_mm: 3}]\n",
-     "layers", 3),
-], ids=["top", "section", "layer", "layers"])
+@pytest.mark.parametrize(
+    "text,field,line",
+    [
+        ("name: a\nname: b\nlayers: [{theta_deg: 25, t_mm: 0.6, h_mm: 2}]\n", "name", 2),
+        (
+            "name: a\nmagnet:\n  diameter_mm: 6\n  diameter_mm: 8\nlayers: [{theta_deg: 25, t_mm: 0.6, h_mm: 2}]\n",
+            "magnet.diameter_mm",
+            4,
+        ),
+        ("name: a\nlayers:\n  - theta_deg: 25\n    t_mm: 0.6\n    h_mm: 2\n    t_mm: 0.8\n", "layers[0].t_mm", 6),
+        (
+            "name: a\nlayers: [{theta_deg: 25, t_mm: 0.6, h_mm: 2}]\nlayers: [{theta_deg: 25, t_mm: 1, h_mm: 3}]\n",
+            "layers",
+            3,
+        ),
+    ],
+    ids=["top", "section", "layer", "layers"],
+)
 def test_duplicate_keys_are_refused_naming_the_key_path_and_line(tmp_path, text, field, line):
     r = run(["simulate", write(tmp_path, text), "--out", tmp_path / "o"])
     msg = refused(r, field)
@@ -251,11 +273,20 @@ def test_json_writer_refuses_nan_instead_of_writing_it(tmp_path):
 
 # =========================================================================== 3. float edges
 @pytest.mark.filterwarnings("error")
-@pytest.mark.parametrize("section,key", [
-    ("magnet", "diameter_mm"), ("magnet", "thickness_mm"), ("magnet", "remanence_T"),
-    ("family", "width_mm"), ("family", "depth_mm"), ("material", "youngs_modulus_MPa"),
-    ("housing", "cover_mm"), ("printer", "layer_height_mm"), ("printer", "nozzle_mm"),
-])
+@pytest.mark.parametrize(
+    "section,key",
+    [
+        ("magnet", "diameter_mm"),
+        ("magnet", "thickness_mm"),
+        ("magnet", "remanence_T"),
+        ("family", "width_mm"),
+        ("family", "depth_mm"),
+        ("material", "youngs_modulus_MPa"),
+        ("housing", "cover_mm"),
+        ("printer", "layer_height_mm"),
+        ("printer", "nozzle_mm"),
+    ],
+)
 @pytest.mark.parametrize("value", [1e-308, 5e-324, 1e308])
 def test_float_edges_in_sections_are_refused(tmp_path, section, key, value):
     r = run(["simulate", write(tmp_path, doc_text(**{section: {key: value}})), "--out", tmp_path / "o"])
@@ -264,8 +295,9 @@ def test_float_edges_in_sections_are_refused(tmp_path, section, key, value):
 
 
 @pytest.mark.filterwarnings("error")
-@pytest.mark.parametrize("key,value", [("theta_deg", 1e-308), ("t_mm", 1e-308), ("h_mm", 1e-308),
-                                       ("h_mm", 1e308), ("weight", 1e-308)])
+@pytest.mark.parametrize(
+    "key,value", [("theta_deg", 1e-308), ("t_mm", 1e-308), ("h_mm", 1e-308), ("h_mm", 1e308), ("weight", 1e-308)]
+)
 def test_float_edges_in_layers_are_refused(tmp_path, key, value):
     layer = dict(LAYER, **{key: value})
     r = run(["simulate", write(tmp_path, doc_text(layers=[layer])), "--out", tmp_path / "o"])
@@ -312,6 +344,7 @@ def test_read_only_output_folder_names_the_path_and_reason(tmp_path, monkeypatch
 
     def read_only(*a, **k):
         raise OSError(errno.EROFS, os.strerror(errno.EROFS), str(k.get("dir", a[-1] if a else "")))
+
     monkeypatch.setattr(outputs.tempfile, "mkdtemp", read_only)
     out = tmp_path / "ro" / "x"
     r = run(["simulate", FORWARD, "--out", out])
@@ -338,8 +371,9 @@ def test_name_too_long_for_the_default_output_folder(tmp_path, monkeypatch):
     r = run(["simulate", f])
     assert r.exit_code == 2
     line = one_line(r)
-    assert line.startswith("mst: invalid path: mst-out/nnnn") and line.endswith(
-        "File name too long (ENAMETOOLONG)"), line
+    assert line.startswith("mst: invalid path: mst-out/nnnn") and line.endswith("File name too long (ENAMETOOLONG)"), (
+        line
+    )
     assert not (tmp_path / "mst-out").exists()
 
 
@@ -360,8 +394,9 @@ def test_full_disk_exits_1_and_keeps_the_earlier_complete_output(tmp_path, monke
 
     def full_disk(self, *a, **k):
         if STAGING_PREFIX in str(self):
-            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))     # a write(): no file name
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))  # a write(): no file name
         return real_write_text(self, *a, **k)
+
     monkeypatch.setattr(Path, "write_text", full_disk)
     r = run(["simulate", FORWARD, "--out", out])
     assert r.exit_code == 1
@@ -408,19 +443,27 @@ def default_dispositions():
 
 def ignoring(*sigs):
     """A preexec_fn: the defaults, then ``sigs`` ignored (as nohup or 'cmd &' start a child)."""
+
     def setup():
         default_dispositions()
         for sig in sigs:
             signal.signal(sig, signal.SIG_IGN)
+
     return setup
 
 
 def interrupt(script, out: Path, sig, *extra):
-    p = subprocess.Popen([PYTHON, "-c", script, str(out), *map(str, extra)], stdout=subprocess.PIPE,
-                         stderr=subprocess.PIPE, text=True, cwd=out.parent, preexec_fn=default_dispositions)
+    p = subprocess.Popen(
+        [PYTHON, "-c", script, str(out), *map(str, extra)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        cwd=out.parent,
+        preexec_fn=default_dispositions,
+    )
     try:
         assert p.stdout.readline().strip().endswith("staged")
-        assert staging_left(out)                     # the staging folder exists now
+        assert staging_left(out)  # the staging folder exists now
         p.send_signal(sig)
         _, err = p.communicate(timeout=30)
     finally:
@@ -434,7 +477,7 @@ def test_signals_remove_the_staging_folder(tmp_path, sig):
     out = tmp_path / "new"
     code, err = interrupt(STAGE_AND_SLEEP, out, sig)
     assert code in (128 + sig, -sig, 1), (code, err)
-    assert not out.exists(), list(out.iterdir())          # nothing at all: the folder was new
+    assert not out.exists(), list(out.iterdir())  # nothing at all: the folder was new
 
 
 @pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT], ids=lambda s: s.name)
@@ -462,14 +505,23 @@ STAGE_AND_WAIT = textwrap.dedent("""
 """)
 
 
-@pytest.mark.parametrize("sigs", [(signal.SIGHUP,), (signal.SIGINT, signal.SIGHUP), (signal.SIGTERM,)],
-                         ids=lambda s: "+".join(x.name for x in s))
+@pytest.mark.parametrize(
+    "sigs",
+    [(signal.SIGHUP,), (signal.SIGINT, signal.SIGHUP), (signal.SIGTERM,)],
+    ids=lambda s: "+".join(x.name for x in s),
+)
 def test_a_signal_ignored_at_start_stays_ignored_and_the_run_completes(tmp_path, sigs):
     # the decision of issue 22: mst keeps a disposition it inherits as ignored (nohup, 'cmd &'
     # in a script): such a run is not stopped by that signal and writes its whole output
     out = tmp_path / "o"
-    p = subprocess.Popen([PYTHON, "-c", STAGE_AND_WAIT, str(out)], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
-                         stderr=subprocess.PIPE, text=True, preexec_fn=ignoring(*sigs))
+    p = subprocess.Popen(
+        [PYTHON, "-c", STAGE_AND_WAIT, str(out)],
+        stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        preexec_fn=ignoring(*sigs),
+    )
     try:
         assert p.stdout.readline().strip() == "staged"
         for sig in sigs:
@@ -491,17 +543,17 @@ def dead_pid() -> int:
 def test_stale_staging_of_a_killed_run_is_removed_by_the_next_run(tmp_path):
     out = tmp_path / "o"
     out.mkdir()
-    killed = out / f"{STAGING_PREFIX}{dead_pid()}-abc"              # the pid is gone: stale
+    killed = out / f"{STAGING_PREFIX}{dead_pid()}-abc"  # the pid is gone: stale
     killed.mkdir()
     (killed / "report.json").write_text("{half")
-    old = out / f"{STAGING_PREFIX}oldstyle"                          # no pid, an hour old: stale
+    old = out / f"{STAGING_PREFIX}oldstyle"  # no pid, an hour old: stale
     old.mkdir()
     os.utime(old, (time.time() - 3600, time.time() - 3600))
     sleeper = subprocess.Popen([PYTHON, "-c", "import time; time.sleep(60)"])
     try:
-        live = out / f"{STAGING_PREFIX}{sleeper.pid}-xyz"            # a live run's: left alone
+        live = out / f"{STAGING_PREFIX}{sleeper.pid}-xyz"  # a live run's: left alone
         live.mkdir()
-        fresh = out / f"{STAGING_PREFIX}fresh"                        # no pid, new: ignored
+        fresh = out / f"{STAGING_PREFIX}fresh"  # no pid, new: ignored
         fresh.mkdir()
         r = run(["simulate", FORWARD, "--out", out])
         assert r.exit_code == 0, r.stderr
@@ -586,16 +638,32 @@ def mutate(manifest: dict, path: str, value):
         node[last] = value
 
 
-@pytest.mark.parametrize("path,value", [
-    ("layers", "three"), ("layers", []), ("layers.0.t_mm", "0.6"), ("layers.0", [1, 2]),
-    ("print.rotation", [[1, 0], [0, 1]]), ("print.rotation.1.2", None), ("print.pause.after_layer", 66.5),
-    ("body", []), ("body.bbox_max_mm", [1e37, 0, 0]), ("body.volume_mm3", True), ("board_slot.cable_windows", {}),
-    ("board_slot.cable_windows.0.floor_y_mm", {"a": 1}), ("magnet_pocket.radius_mm", KeyError),
-    ("printer.nozzle_mm", 0), ("gap0_mm", 10 ** 400), ("stl_tolerance_mm", [0.01]),
-])
-def test_check_refuses_a_manifest_of_wrong_type_or_nesting_before_measuring(exported, tmp_path, monkeypatch,
-                                                                              path, value):
+@pytest.mark.parametrize(
+    "path,value",
+    [
+        ("layers", "three"),
+        ("layers", []),
+        ("layers.0.t_mm", "0.6"),
+        ("layers.0", [1, 2]),
+        ("print.rotation", [[1, 0], [0, 1]]),
+        ("print.rotation.1.2", None),
+        ("print.pause.after_layer", 66.5),
+        ("body", []),
+        ("body.bbox_max_mm", [1e37, 0, 0]),
+        ("body.volume_mm3", True),
+        ("board_slot.cable_windows", {}),
+        ("board_slot.cable_windows.0.floor_y_mm", {"a": 1}),
+        ("magnet_pocket.radius_mm", KeyError),
+        ("printer.nozzle_mm", 0),
+        ("gap0_mm", 10**400),
+        ("stl_tolerance_mm", [0.01]),
+    ],
+)
+def test_check_refuses_a_manifest_of_wrong_type_or_nesting_before_measuring(
+    exported, tmp_path, monkeypatch, path, value
+):
     import mst_cli.cad.checks as checks
+
     folder = copy_export(exported, tmp_path / "c")
     manifest = json.loads((folder / "export.json").read_text())
     mutate(manifest, path, value)
@@ -620,6 +688,7 @@ def test_a_bug_inside_a_check_is_not_reported_as_a_malformed_manifest(exported, 
 
     def broken(*a, **k):
         raise KeyError("a bug")
+
     monkeypatch.setattr(checks, "CHECKS", tuple(broken if c is checks.check_board_slot else c for c in checks.CHECKS))
     r = run(["check", exported])
     assert isinstance(r.exception, KeyError), (r.exit_code, r.stderr)
@@ -632,19 +701,23 @@ def test_check_json_holds_no_nan(exported):
 
 
 # =========================================================================== 7. usage errors
-@pytest.mark.parametrize("args", [
-    ["simulate", "--bogus"],
-    ["simulate", FORWARD, "--field-model", "xx"],
-    ["simulate", ROOT / "configs"],
-    ["simulate"],
-    ["nope"],
-    ["design", SPEC, "--seed", "-1"],
-    ["bench", "--seed", "-5"],
-    ["export", FORWARD, "--stl-tolerance", "abc"],
-    ["check"],
-    ["bench", "--samples", "0"],
-    ["--bogus"],
-], ids=lambda a: " ".join(map(str, a)))
+@pytest.mark.parametrize(
+    "args",
+    [
+        ["simulate", "--bogus"],
+        ["simulate", FORWARD, "--field-model", "xx"],
+        ["simulate", ROOT / "configs"],
+        ["simulate"],
+        ["nope"],
+        ["design", SPEC, "--seed", "-1"],
+        ["bench", "--seed", "-5"],
+        ["export", FORWARD, "--stl-tolerance", "abc"],
+        ["check"],
+        ["bench", "--samples", "0"],
+        ["--bogus"],
+    ],
+    ids=lambda a: " ".join(map(str, a)),
+)
 def test_usage_errors_are_one_line_and_exit_2(args):
     r = run(args)
     assert r.exit_code == 2 and (r.exception is None or isinstance(r.exception, SystemExit))
@@ -676,8 +749,21 @@ class Raw(str):
     """A YAML literal written as is (unquoted): .nan, 1.0e+400, a 3000-digit integer."""
 
 
-RAW_LITERALS = [".nan", ".NaN", ".inf", "-.inf", "1.0e+400", "-1.0e+400", "1.0e-400", "0x7fffffffffffffffffffffff",
-                "1" * 5000, "-" + "9" * 3000, "1_000_000_000_000_000", "190:20:30", "0o777777777777777777777777"]
+RAW_LITERALS = [
+    ".nan",
+    ".NaN",
+    ".inf",
+    "-.inf",
+    "1.0e+400",
+    "-1.0e+400",
+    "1.0e-400",
+    "0x7fffffffffffffffffffffff",
+    "1" * 5000,
+    "-" + "9" * 3000,
+    "1_000_000_000_000_000",
+    "190:20:30",
+    "0o777777777777777777777777",
+]
 EXTREME_FLOATS = [1e-308, -1e-308, 5e-324, 1e308, -1e308, 1e300, -1e300, 0.0, -0.0, 1e-30, 1e30, 1e15]
 
 
@@ -696,10 +782,12 @@ def rule_values(rule):
 scalars = st.one_of(
     st.sampled_from(EXTREME_FLOATS),
     st.floats(allow_nan=True, allow_infinity=True),
-    st.integers(min_value=-10 ** 40, max_value=10 ** 40),
+    st.integers(min_value=-(10**40), max_value=10**40),
     st.sampled_from(["nan", "NaN", "inf", "-inf", "1e400", "", "0x10", "six"]),
     st.sampled_from(RAW_LITERALS).map(Raw),
-    st.none(), st.booleans(), st.text(max_size=8),
+    st.none(),
+    st.booleans(),
+    st.text(max_size=8),
 )
 values = st.one_of(scalars, st.lists(scalars, max_size=3), st.dictionaries(st.text(max_size=4), scalars, max_size=2))
 junk_keys = st.text(alphabet="abcxyz_<&*!\n\0. ", min_size=1, max_size=6)
@@ -732,8 +820,11 @@ def value_for(rule):
 
 @st.composite
 def hostile_documents(draw):
-    doc = {"name": "h", "model": {"mechanics": "spring"},
-           "layers": [dict(LAYER), {"theta_deg": 33, "t_mm": 1.0, "h_mm": 2.8}]}
+    doc = {
+        "name": "h",
+        "model": {"mechanics": "spring"},
+        "layers": [dict(LAYER), {"theta_deg": 33, "t_mm": 1.0, "h_mm": 2.8}],
+    }
     for _ in range(draw(st.integers(1, 4))):
         op = draw(st.sampled_from(["section"] * 3 + ["layer"] * 2 + ["top", "drop", "resize", "name"]))
         if op == "section":
@@ -755,11 +846,15 @@ def hostile_documents(draw):
             doc.pop(draw(st.sampled_from(TOP_KEYS)), None)
         elif op == "resize" and isinstance(doc.get("layers"), list):
             n = draw(st.integers(0, 8))
-            doc["layers"] = [dict(doc["layers"][i % len(doc["layers"])]) if doc["layers"] else dict(LAYER)
-                             for i in range(n)]
+            doc["layers"] = [
+                dict(doc["layers"][i % len(doc["layers"])]) if doc["layers"] else dict(LAYER) for i in range(n)
+            ]
         elif op == "name":
-            doc["name"] = draw(st.sampled_from(["n" * 300, "a\0b", "../up", ".hidden", "", "a/b", "ok\nnext",
-                                                "x" * 100, "µ-sensor", "tab\there"]))
+            doc["name"] = draw(
+                st.sampled_from(
+                    ["n" * 300, "a\0b", "../up", ".hidden", "", "a/b", "ok\nnext", "x" * 100, "µ-sensor", "tab\there"]
+                )
+            )
     raws = {}
 
     def placeholder(v):
@@ -772,11 +867,12 @@ def hostile_documents(draw):
         if isinstance(v, list):
             return [placeholder(x) for x in v]
         return v
+
     text = yaml.safe_dump(placeholder(doc), sort_keys=False, allow_unicode=True)
     for token, literal in raws.items():
         text = text.replace(token, literal)
     if draw(st.booleans()) and draw(st.booleans()):
-        text += draw(st.sampled_from(["name: again\n", "layers: []\n", "model: {}\n"]))   # duplicate key
+        text += draw(st.sampled_from(["name: again\n", "layers: []\n", "model: {}\n"]))  # duplicate key
     return text
 
 
@@ -792,7 +888,7 @@ def check_invariants(folder: Path, r, dt: float, caught) -> None:
     by_folder = {}
     for p in written:
         by_folder.setdefault(p.parent, set()).add(p.name)
-    for names in by_folder.values():           # all of a run's files, or none
+    for names in by_folder.values():  # all of a run's files, or none
         assert names == OUTPUTS, names
     if written:
         assert r.exit_code == 0
@@ -802,8 +898,13 @@ def check_invariants(folder: Path, r, dt: float, caught) -> None:
     assert dt < 5.0, dt
 
 
-@settings(max_examples=400, deadline=None, derandomize=True, database=None,
-          suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
+@settings(
+    max_examples=400,
+    deadline=None,
+    derandomize=True,
+    database=None,
+    suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large],
+)
 @given(text=hostile_documents(), default_out=st.booleans())
 def test_property_hostile_documents_keep_the_contract(text, default_out):
     with tempfile.TemporaryDirectory() as d:
@@ -823,19 +924,53 @@ def test_property_hostile_documents_keep_the_contract(text, default_out):
         check_invariants(folder, r, dt, caught)
 
 
-MANIFEST_PATHS = ["layers", "layers.0", "layers.0.t_mm", "layers.1.z_bottom_mm", "print", "print.rotation",
-                  "print.rotation.0", "print.rotation.0.0", "print.pause", "print.pause.after_layer",
-                  "print.layer_height_mm", "body", "body.bbox_min_mm", "body.bbox_max_mm.2", "body.volume_mm3",
-                  "body.bodies", "magnet_pocket", "magnet_pocket.section_z_mm", "board_slot.cable_windows",
-                  "board_slot.chip_xy_mm", "board_slot.board", "printer.nozzle_mm", "printer.min_gap_mm",
-                  "gap0_mm", "stl_tolerance_mm"]
+MANIFEST_PATHS = [
+    "layers",
+    "layers.0",
+    "layers.0.t_mm",
+    "layers.1.z_bottom_mm",
+    "print",
+    "print.rotation",
+    "print.rotation.0",
+    "print.rotation.0.0",
+    "print.pause",
+    "print.pause.after_layer",
+    "print.layer_height_mm",
+    "body",
+    "body.bbox_min_mm",
+    "body.bbox_max_mm.2",
+    "body.volume_mm3",
+    "body.bodies",
+    "magnet_pocket",
+    "magnet_pocket.section_z_mm",
+    "board_slot.cable_windows",
+    "board_slot.chip_xy_mm",
+    "board_slot.board",
+    "printer.nozzle_mm",
+    "printer.min_gap_mm",
+    "gap0_mm",
+    "stl_tolerance_mm",
+]
 
 
-@settings(max_examples=150, deadline=None, derandomize=True, database=None,
-          suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
-@given(path=st.sampled_from(MANIFEST_PATHS),
-       value=st.one_of(st.floats(-2000, 2000), st.integers(-100, 100), values, st.just(KeyError),
-                       st.sampled_from([1e37, -1e37, 10 ** 30, 1e-300, 0, -1]), st.sampled_from(MANIFEST_PATHS)))
+@settings(
+    max_examples=150,
+    deadline=None,
+    derandomize=True,
+    database=None,
+    suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture],
+)
+@given(
+    path=st.sampled_from(MANIFEST_PATHS),
+    value=st.one_of(
+        st.floats(-2000, 2000),
+        st.integers(-100, 100),
+        values,
+        st.just(KeyError),
+        st.sampled_from([1e37, -1e37, 10**30, 1e-300, 0, -1]),
+        st.sampled_from(MANIFEST_PATHS),
+    ),
+)
 def test_property_hostile_manifests_keep_the_contract(exported, path, value):
     with tempfile.TemporaryDirectory() as d:
         folder = copy_export(exported, Path(d) / "c")
@@ -864,8 +999,9 @@ MST = "import sys; from mst_cli.cli.app import main; main(sys.argv[1:], prog_nam
 
 def mst_process(args, timeout=120, **kwargs) -> subprocess.CompletedProcess:
     """``mst ARGS`` in its own process, bounded: a command that blocks fails the test."""
-    return subprocess.run([PYTHON, "-c", MST, *map(str, args)], capture_output=True, text=True,
-                          timeout=timeout, **kwargs)
+    return subprocess.run(
+        [PYTHON, "-c", MST, *map(str, args)], capture_output=True, text=True, timeout=timeout, **kwargs
+    )
 
 
 def refused_line(p: subprocess.CompletedProcess, code: int = 2) -> str:
@@ -882,6 +1018,7 @@ def loadtest_files(tmp_path_factory):
     """A small valid load test and readings file of the forward design (its own model + noise)."""
     from mst_cli.io.schema import load_document
     from mst_cli.model.response import simulate
+
     doc = load_document(FORWARD)
     resp = simulate(doc.geometry(), doc.material, noise_uT_rms=doc.noise_uT_rms)
     rng = np.random.default_rng(5)
@@ -889,8 +1026,9 @@ def loadtest_files(tmp_path_factory):
     B = np.stack([np.interp(F, resp.force_N, resp.B_T[:, i]) for i in range(3)], -1) * 1e6
     B = B + rng.normal(0, 2.0, B.shape)
     d = tmp_path_factory.mktemp("lt")
-    (d / "lt.csv").write_text("force_N,Bx_uT,By_uT,Bz_uT\n"
-                              + "".join(f"{f:.4f},{x:.3f},{y:.3f},{z:.3f}\n" for f, (x, y, z) in zip(F, B)))
+    (d / "lt.csv").write_text(
+        "force_N,Bx_uT,By_uT,Bz_uT\n" + "".join(f"{f:.4f},{x:.3f},{y:.3f},{z:.3f}\n" for f, (x, y, z) in zip(F, B))
+    )
     (d / "readings.csv").write_text("Bx_uT,By_uT,Bz_uT\n" + "".join(f"{x:.3f},{y:.3f},{z:.3f}\n" for x, y, z in B))
     return {"dir": d, "lt": d / "lt.csv", "readings": d / "readings.csv", "resp": resp, "F": F, "B_uT": B}
 
@@ -901,8 +1039,18 @@ def fifo(tmp_path, name) -> Path:
     return path
 
 
-@pytest.mark.parametrize("case", ["calibrate-loadtest", "read-readings", "calibrate-design", "read-model",
-                                  "simulate", "check-manifest", "slice-profile"])
+@pytest.mark.parametrize(
+    "case",
+    [
+        "calibrate-loadtest",
+        "read-readings",
+        "calibrate-design",
+        "read-model",
+        "simulate",
+        "check-manifest",
+        "slice-profile",
+    ],
+)
 def test_a_fifo_is_refused_naming_the_path_without_blocking(tmp_path, loadtest_files, exported, case):
     out = tmp_path / "o"
     if case == "calibrate-loadtest":
@@ -950,8 +1098,15 @@ BUNDLED_PROFILE = ROOT / "mst_cli" / "cad" / "data" / "tpu85a-0.4mm.ini"
 FAKE_EXE = "/fake/prusa-slicer"
 
 
-def box_gcode(layers: int = 25, pause_after: int | None = None, layer_h: float = 0.2, size: float = 10.0,
-              centre=(125.0, 105.0), end: bool = True, **config) -> str:
+def box_gcode(
+    layers: int = 25,
+    pause_after: int | None = None,
+    layer_h: float = 0.2,
+    size: float = 10.0,
+    centre=(125.0, 105.0),
+    end: bool = True,
+    **config,
+) -> str:
     """PrusaSlicer-like G-code of a square tube ``size`` wide, ``layers`` high, with the footer and
     the closing config block PrusaSlicer writes (``end=False``: without the last line)."""
     x0, y0 = centre[0] - size / 2, centre[1] - size / 2
@@ -964,9 +1119,15 @@ def box_gcode(layers: int = 25, pause_after: int | None = None, layer_h: float =
             out += [";PAUSE_PRINT", "M117 magnet", "M601"]
         out += [";TYPE:External perimeter", ";WIDTH:0.45", f"G1 X{corners[0][0]:.3f} Y{corners[0][1]:.3f}"]
         out += [f"G1 X{x:.3f} Y{y:.3f} E0.40000" for x, y in corners[1:]]
-    out += ["; filament used [mm] = 100.0", "; filament used [cm3] = 0.24", "; total filament used [g] = 0.29",
-            "; estimated printing time (normal mode) = 10m 5s", "; prusaslicer_config = begin",
-            "; pause_print_gcode = M601", f"; layer_height = {layer_h:g}"]
+    out += [
+        "; filament used [mm] = 100.0",
+        "; filament used [cm3] = 0.24",
+        "; total filament used [g] = 0.29",
+        "; estimated printing time (normal mode) = 10m 5s",
+        "; prusaslicer_config = begin",
+        "; pause_print_gcode = M601",
+        f"; layer_height = {layer_h:g}",
+    ]
     out += [f"; {k} = {v}" for k, v in config.items()]
     out += ["; prusaslicer_config = end"] if end else []
     return "\n".join(out) + "\n"
@@ -1003,6 +1164,7 @@ def fake_slicer(monkeypatch):
         monkeypatch.setattr(S, "_run", fake)
         S.known_options.cache_clear()
         return fake
+
     yield install
     S.known_options.cache_clear()
 
@@ -1032,16 +1194,20 @@ def test_fake_slicer_g_code_of_the_reference_export_passes(exported, tmp_path, f
     assert fake.calls == 2 and json.loads(r.stdout)["pause"]["ok"]
 
 
-@pytest.mark.parametrize("path,value,field", [
-    (None, [1, 2], "export.json"),
-    ("print.pause.z_mm", "1e400", "export.json.print.pause.z_mm"),
-    ("print.pause.after_layer", "abc", "export.json.print.pause.after_layer"),
-    ("print.pause.after_layer", 1e30, "export.json.print.pause.after_layer"),
-    ("print.layer_height_mm", "NaN", "export.json"),
-    ("print.cavity_lines.0", {"layer": 1}, "export.json.print.cavity_lines[0].x_mm"),
-    ("print", "x", "export.json.print"),
-    ("name", 7, "export.json.name"),
-], ids=["list", "pause-1e400", "layer-abc", "layer-1e30", "nan-layer-height", "cavity-line", "print", "name"])
+@pytest.mark.parametrize(
+    "path,value,field",
+    [
+        (None, [1, 2], "export.json"),
+        ("print.pause.z_mm", "1e400", "export.json.print.pause.z_mm"),
+        ("print.pause.after_layer", "abc", "export.json.print.pause.after_layer"),
+        ("print.pause.after_layer", 1e30, "export.json.print.pause.after_layer"),
+        ("print.layer_height_mm", "NaN", "export.json"),
+        ("print.cavity_lines.0", {"layer": 1}, "export.json.print.cavity_lines[0].x_mm"),
+        ("print", "x", "export.json.print"),
+        ("name", 7, "export.json.name"),
+    ],
+    ids=["list", "pause-1e400", "layer-abc", "layer-1e30", "nan-layer-height", "cavity-line", "print", "name"],
+)
 def test_slice_validates_export_json_before_slicing(exported, tmp_path, fake_slicer, path, value, field):
     fake = fake_slicer(good_gcode(exported))
     manifest = exported_manifest(exported)
@@ -1079,23 +1245,27 @@ def test_a_slicer_that_exits_0_and_writes_nothing_is_a_one_line_machine_fault(ex
     assert sorted(p.name for p in folder.iterdir()) == before
 
 
-@pytest.mark.parametrize("gcode,reason", [
-    (None, "exited 0 but wrote no G-code"),
-    (b"", "an empty G-code file"),
-    (b"\xff\xfe\x00garbage", "not UTF-8"),
-    ("truncated", "it is truncated"),
-    ("no-end", "it is truncated"),
-    (box_gcode(layers=0).encode(), "without one extrusion of the part"),
-], ids=["nothing", "empty", "binary", "truncated", "no-end", "no-part"])
+@pytest.mark.parametrize(
+    "gcode,reason",
+    [
+        (None, "exited 0 but wrote no G-code"),
+        (b"", "an empty G-code file"),
+        (b"\xff\xfe\x00garbage", "not UTF-8"),
+        ("truncated", "it is truncated"),
+        ("no-end", "it is truncated"),
+        (box_gcode(layers=0).encode(), "without one extrusion of the part"),
+    ],
+    ids=["nothing", "empty", "binary", "truncated", "no-end", "no-part"],
+)
 def test_slicer_output_that_is_missing_empty_or_truncated_is_exit_1(exported, tmp_path, fake_slicer, gcode, reason):
     good = good_gcode(exported)
-    gcode = {"truncated": good[:len(good) // 2], "no-end": box_gcode(end=False).encode()}.get(gcode, gcode)
+    gcode = {"truncated": good[: len(good) // 2], "no-end": box_gcode(end=False).encode()}.get(gcode, gcode)
     fake_slicer(gcode)
     folder = slice_export(exported, tmp_path / "s")
     before = sorted(p.name for p in folder.iterdir())
     r = run(["slice", folder, "--no-plot"])
     assert r.exit_code == 1 and (r.exception is None or isinstance(r.exception, SystemExit)), r.exception
-    lines = [s for s in r.stderr.strip().splitlines() if not s.startswith("[")]      # not the progress lines
+    lines = [s for s in r.stderr.strip().splitlines() if not s.startswith("[")]  # not the progress lines
     assert len(lines) == 1 and reason in lines[0] and lines[0].endswith("nothing was written"), lines
     assert sorted(p.name for p in folder.iterdir()) == before
 
@@ -1109,6 +1279,7 @@ def file_size_limit(nbytes: int):
     def setup():
         default_dispositions()
         resource.setrlimit(resource.RLIMIT_FSIZE, (nbytes, nbytes))
+
     return setup
 
 
@@ -1126,18 +1297,21 @@ def test_export_onto_a_full_disk_is_one_line_exit_1_for_every_writer(tmp_path, f
 
 def test_step_writer_failure_on_a_full_disk_names_the_file(tmp_path, monkeypatch):
     import mst_cli.cad.deterministic as det
+
     real = Path.write_bytes
 
     def full(self, data):
         if self.suffix == ".step":
             raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
         return real(self, data)
+
     monkeypatch.setattr(Path, "write_bytes", full)
     monkeypatch.setattr(det, "_renumber_nauo", lambda data: data)
     out = tmp_path / "o"
 
     class Assembly:
         pass
+
     monkeypatch.setattr("build123d.export_step", lambda assembly, target, **k: target.write(b"ISO-10303-21;"))
     with pytest.raises(OSError) as exc, staged(out) as st:
         st.write_bytes("sensor.step", det.step_bytes(Assembly()))
@@ -1148,6 +1322,7 @@ def test_step_writer_failure_on_a_full_disk_names_the_file(tmp_path, monkeypatch
 # ----------------------------------------------------------------- 13. bounds two commands share
 def test_the_finest_stl_tolerance_export_writes_is_one_check_accepts(tmp_path):
     from mst_cli.cad.manifest import STL_TOLERANCE_MM
+
     lo, hi = STL_TOLERANCE_MM
     out = tmp_path / "fine"
     assert run(["export", FORWARD, "--stl", "--out", out, "--stl-tolerance", lo]).exit_code == 0
@@ -1160,6 +1335,7 @@ def test_the_finest_stl_tolerance_export_writes_is_one_check_accepts(tmp_path):
 
 def test_check_nozzle_has_the_design_files_range(exported):
     from mst_cli.io.schema import SECTIONS
+
     rule = SECTIONS["printer"]["nozzle_mm"]
     for value in (rule.lo, rule.hi):
         assert run(["check", exported, "--nozzle", value]).exit_code in (0, 1)
@@ -1170,6 +1346,7 @@ def test_check_nozzle_has_the_design_files_range(exported):
 def test_every_seed_option_has_the_spec_files_range():
     from mst_cli.cli.app import load_command
     from mst_cli.io.schema import SECTIONS
+
     rule = SECTIONS["design"]["seed"]
     for name in ("design", "bench"):
         (opt,) = [p for p in load_command(name).params if p.name == "seed"]
@@ -1190,8 +1367,11 @@ def test_a_noise_only_load_test_is_named_as_no_relation(tmp_path, loadtest_files
     rng = np.random.default_rng(1)
     F = loadtest_files["F"]
     B = np.array([0.0, 0.0, -3000.0]) + rng.normal(0, 2.0, (len(F), 3))
-    f = write(tmp_path, "force_N,Bx_uT,By_uT,Bz_uT\n" + "".join(
-        f"{a:.4f},{x:.3f},{y:.3f},{z:.3f}\n" for a, (x, y, z) in zip(F, B)), "noise.csv")
+    f = write(
+        tmp_path,
+        "force_N,Bx_uT,By_uT,Bz_uT\n" + "".join(f"{a:.4f},{x:.3f},{y:.3f},{z:.3f}\n" for a, (x, y, z) in zip(F, B)),
+        "noise.csv",
+    )
     r = run(["calibrate", FORWARD, f, "--out", tmp_path / "o", "--no-plot"])
     assert r.exit_code == 1, r.output
     line = one_line(r)
@@ -1203,24 +1383,28 @@ def test_a_noise_only_load_test_is_named_as_no_relation(tmp_path, loadtest_files
 def test_a_profiles_post_process_script_is_named_in_one_line(exported, tmp_path, fake_slicer):
     fake_slicer(good_gcode(exported))
     profile = tmp_path / "pp.ini"
-    profile.write_text(BUNDLED_PROFILE.read_text().replace("post_process = \n",
-                                                           "post_process = /usr/local/bin/strip-moves --fast\n"))
+    profile.write_text(
+        BUNDLED_PROFILE.read_text().replace("post_process = \n", "post_process = /usr/local/bin/strip-moves --fast\n")
+    )
     folder = slice_export(exported, tmp_path / "s")
     r = run(["slice", folder, "--no-plot", "--json", "--profile", profile])
     assert r.exit_code == 0, r.stderr
     notes = [s for s in r.stderr.splitlines() if s.startswith("mst slice: note")]
-    assert notes == ["mst slice: note: the profile's post_process runs '/usr/local/bin/strip-moves --fast' on "
-                     "each G-code (your script; what is measured is its output)"], notes
+    assert notes == [
+        "mst slice: note: the profile's post_process runs '/usr/local/bin/strip-moves --fast' on "
+        "each G-code (your script; what is measured is its output)"
+    ], notes
     assert json.loads(r.stdout)["post_process"] == ["/usr/local/bin/strip-moves --fast"]
-    r = run(["slice", folder, "--no-plot"])                  # the bundled profile runs nothing
+    r = run(["slice", folder, "--no-plot"])  # the bundled profile runs nothing
     assert r.exit_code == 0 and "mst slice: note" not in r.stderr
 
 
 # ----------------------------------------------------------------- 16. a long load test
 def test_a_load_tests_field_magnitude_is_computed_once():
     from mst_cli.calibrate.loadtest import parse_readings
+
     rd = parse_readings("Bx_uT,By_uT,Bz_uT\n" + "1,2,3\n" * 5, "r.csv", need_force=False)
-    assert rd.B_abs_T is rd.B_abs_T                       # a per-row rd.B_abs_T[i] is O(1) now
+    assert rd.B_abs_T is rd.B_abs_T  # a per-row rd.B_abs_T[i] is O(1) now
 
 
 @pytest.mark.slow
@@ -1231,22 +1415,35 @@ def test_a_40000_sample_load_test_calibrates_in_seconds_with_a_progress_line(tmp
     B = np.stack([np.interp(F, resp.force_N, resp.B_T[:, i]) for i in range(3)], -1) * 1e6
     B += rng.normal(0, 2.0, B.shape)
     f = tmp_path / "big.csv"
-    f.write_text("force_N,Bx_uT,By_uT,Bz_uT\n" + "".join(
-        f"{a:.4f},{x:.3f},{y:.3f},{z:.3f}\n" for a, (x, y, z) in zip(F, B)))
+    f.write_text(
+        "force_N,Bx_uT,By_uT,Bz_uT\n" + "".join(f"{a:.4f},{x:.3f},{y:.3f},{z:.3f}\n" for a, (x, y, z) in zip(F, B))
+    )
     assert f.stat().st_size > 1_000_000
     r, dt = timed(["calibrate", FORWARD, f, "--out", tmp_path / "o", "--no-plot"])
     assert r.exit_code == 0, r.output
-    assert "fitting 40000 samples" in r.stderr and dt < 15.0, (r.stderr, dt)      # 21.7 s before
+    assert "fitting 40000 samples" in r.stderr and dt < 15.0, (r.stderr, dt)  # 21.7 s before
 
 
 # =========================================================================== 17. property suite, round two
-PROPERTY = dict(deadline=None, derandomize=True, database=None,
-                suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large,
-                                       HealthCheck.function_scoped_fixture])
+PROPERTY = dict(
+    deadline=None,
+    derandomize=True,
+    database=None,
+    suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large, HealthCheck.function_scoped_fixture],
+)
 
 
-def contract(r, dt: float, caught, folder: Path, outputs: set[str], required: set[str], limit_s: float,
-             chatter: tuple[str, ...] = (), judged: str | None = None) -> None:
+def contract(
+    r,
+    dt: float,
+    caught,
+    folder: Path,
+    outputs: set[str],
+    required: set[str],
+    limit_s: float,
+    chatter: tuple[str, ...] = (),
+    judged: str | None = None,
+) -> None:
     """The CLI contract on one run: exit 0/1/2, never an exception; a refusal is one line
     (besides ``chatter``: progress and warnings); no RuntimeWarning; nothing staged left; the
     folder holds all of a run's ``required`` files (exit 0, or exit 1 with the ``judged`` line:
@@ -1276,8 +1473,33 @@ def invoke(args):
 
 
 # ----------------------------------------------------------------- load tests and readings
-HOSTILE_CELLS = ["nan", "NaN", "inf", "-inf", "1e400", "-1e400", "1e-400", "", " ", "abc", "0x10", "1_0", "+5",
-                 "--1", "1,5", '"3"', "5e", "١٢", "\0", "50000", "-50000", "32768", "-32768", "1e15", "3.5"]
+HOSTILE_CELLS = [
+    "nan",
+    "NaN",
+    "inf",
+    "-inf",
+    "1e400",
+    "-1e400",
+    "1e-400",
+    "",
+    " ",
+    "abc",
+    "0x10",
+    "1_0",
+    "+5",
+    "--1",
+    "1,5",
+    '"3"',
+    "5e",
+    "١٢",
+    "\0",
+    "50000",
+    "-50000",
+    "32768",
+    "-32768",
+    "1e15",
+    "3.5",
+]
 WRONG_UNIT_COLUMNS = ["force_kN", "load_g", "Bz_mT", "bx_gauss", "F", "time_s", "note"]
 
 
@@ -1288,6 +1510,7 @@ def reading_files(draw, need_force: bool, resp, setting):
     chip's ranges for the numbers, then hostile cells, rows, headers and separators."""
     from mst_cli.calibrate import loadtest as lt
     from mst_cli.model import chip as mlx
+
     raw = draw(st.booleans()) and setting is not None
     cols = list(lt.CODE_COLUMNS if raw else lt.UT_COLUMNS)
     if need_force or draw(st.booleans()):
@@ -1305,8 +1528,11 @@ def reading_files(draw, need_force: bool, resp, setting):
     limit = mlx.CODE_RANGE_LSB[setting.res] if setting is not None else 0
     rows = []
     for f, b in zip(F, B):
-        cells = {lt.FORCE_COLUMN: f"{f:.4f}", "gain_sel": str(setting.gain_sel) if setting else "0",
-                 "res": str(setting.res) if setting else "0"}
+        cells = {
+            lt.FORCE_COLUMN: f"{f:.4f}",
+            "gain_sel": str(setting.gain_sel) if setting else "0",
+            "res": str(setting.res) if setting else "0",
+        }
         if raw:
             lsb = (setting.xy_uT_per_lsb, setting.xy_uT_per_lsb, setting.z_uT_per_lsb)
             codes = np.clip(np.round(b / np.array(lsb)), -limit, limit).astype(int)
@@ -1320,7 +1546,7 @@ def reading_files(draw, need_force: bool, resp, setting):
             i, j = draw(st.integers(0, len(rows) - 1)), draw(st.integers(0, len(cols) - 1))
             rows[i][j] = draw(st.sampled_from(HOSTILE_CELLS + edges))
     if rows and draw(st.integers(0, 6)) == 0:
-        rows[draw(st.integers(0, len(rows) - 1))].pop()                       # a short row
+        rows[draw(st.integers(0, len(rows) - 1))].pop()  # a short row
     delim = draw(st.sampled_from([",", ",", ";", "\t"]))
     lines = [delim.join(cols)] + [delim.join(r) for r in rows]
     if draw(st.integers(0, 6)) == 0:
@@ -1372,6 +1598,7 @@ def test_property_readings_from_the_column_rules_keep_the_contract(forward_respo
         if r.exit_code == 0:
             flags = [row.rsplit(",", 2)[-2] for row in (folder / "o" / "forces.csv").read_text().splitlines()[1:]]
             from mst_cli.calibrate.fit import FLAGS
+
             assert set(flags) <= set(FLAGS), flags
 
 
@@ -1382,11 +1609,12 @@ def manifest_paths(kind=None, prefix=""):
     from dataclasses import is_dataclass
 
     from mst_cli.cad.manifest import ListOf, Manifest
+
     kind = Manifest if kind is None else kind
     for f in dc_fields(kind):
         sub, path = f.metadata["kind"], f"{prefix}{f.name}"
         yield path, sub
-        if isinstance(sub, ListOf):              # (a ListOf is itself a dataclass instance)
+        if isinstance(sub, ListOf):  # (a ListOf is itself a dataclass instance)
             yield from manifest_paths(sub.kind, path + ".0.")
         elif isinstance(sub, type) and is_dataclass(sub):
             yield from manifest_paths(sub, path + ".")
@@ -1395,6 +1623,7 @@ def manifest_paths(kind=None, prefix=""):
 def forward_design_dict() -> dict:
     """The reference design as export.json's ``design`` holds it."""
     from mst_cli.io.schema import document_to_dict, load_document
+
     return document_to_dict(load_document(FORWARD))
 
 
@@ -1404,11 +1633,17 @@ def valid_for(kind):
     from dataclasses import is_dataclass
 
     from mst_cli.cad import manifest as M
+
     if isinstance(kind, str):
-        return {"num": st.floats(-M.MAX_COORD_MM, M.MAX_COORD_MM), "pos": st.floats(M.MIN_SIZE_MM, M.MAX_COORD_MM),
-                "tol": st.floats(*M.STL_TOLERANCE_MM), "vol": st.floats(0, M.MAX_VOLUME),
-                "int": st.integers(-10 ** 9, 10 ** 9), "str": st.text(max_size=12),
-                "design": st.just(forward_design_dict())}[kind]
+        return {
+            "num": st.floats(-M.MAX_COORD_MM, M.MAX_COORD_MM),
+            "pos": st.floats(M.MIN_SIZE_MM, M.MAX_COORD_MM),
+            "tol": st.floats(*M.STL_TOLERANCE_MM),
+            "vol": st.floats(0, M.MAX_VOLUME),
+            "int": st.integers(-(10**9), 10**9),
+            "str": st.text(max_size=12),
+            "design": st.just(forward_design_dict()),
+        }[kind]
     if isinstance(kind, tuple):
         return st.lists(valid_for(kind[0]), min_size=kind[1], max_size=kind[1])
     if isinstance(kind, M.ListOf):
@@ -1418,8 +1653,15 @@ def valid_for(kind):
 
 
 MANIFEST_FIELDS = list(manifest_paths())
-SLICE_READS = ("name", "print", "print.layer_height_mm", "print.pause", "print.cavity_lines", "print.wall_lines",
-               "design")
+SLICE_READS = (
+    "name",
+    "print",
+    "print.layer_height_mm",
+    "print.pause",
+    "print.cavity_lines",
+    "print.wall_lines",
+    "design",
+)
 
 
 @st.composite
@@ -1429,10 +1671,17 @@ def generated_manifests(draw, base: dict):
     manifest = json.loads(json.dumps(base))
     for _ in range(draw(st.integers(1, 3))):
         path, kind = draw(st.sampled_from(MANIFEST_FIELDS))
-        value = draw(st.one_of(valid_for(kind), valid_for(kind), values, st.just(KeyError),
-                               st.sampled_from([1e37, -1e37, 10 ** 30, 1e-300, 0, -1, 1e-4, 1e-3, 1000.0])))
-        with contextlib.suppress(KeyError, IndexError, TypeError):   # the path is gone (an earlier
-            mutate(manifest, path, value)                               # draw replaced its parent)
+        value = draw(
+            st.one_of(
+                valid_for(kind),
+                valid_for(kind),
+                values,
+                st.just(KeyError),
+                st.sampled_from([1e37, -1e37, 10**30, 1e-300, 0, -1, 1e-4, 1e-3, 1000.0]),
+            )
+        )
+        with contextlib.suppress(KeyError, IndexError, TypeError):  # the path is gone (an earlier
+            mutate(manifest, path, value)  # draw replaced its parent)
     return manifest
 
 
@@ -1444,9 +1693,11 @@ def slice_base(exported):
 @settings(max_examples=60, **PROPERTY)
 @given(data=st.data())
 def test_property_manifests_from_the_manifest_type_keep_the_contract_in_check_and_slice(
-        exported, slice_base, fake_slicer, data):
+    exported, slice_base, fake_slicer, data
+):
     from mst_cli.cad.manifest import Manifest, SliceManifest
     from mst_cli.errors import InputError
+
     manifest = data.draw(generated_manifests(slice_base))
     fake_slicer(good_gcode(exported))
     try:
@@ -1455,7 +1706,7 @@ def test_property_manifests_from_the_manifest_type_keep_the_contract_in_check_an
     except InputError:
         whole = False
     if whole:
-        SliceManifest.from_dict(manifest)        # what check accepts, slice accepts: one set of rules
+        SliceManifest.from_dict(manifest)  # what check accepts, slice accepts: one set of rules
     with tempfile.TemporaryDirectory() as d:
         folder = slice_export(exported, Path(d) / "c", manifest)
         r, dt, caught = invoke(["check", folder, "--json"])
@@ -1464,10 +1715,19 @@ def test_property_manifests_from_the_manifest_type_keep_the_contract_in_check_an
         assert (checked == 2) != whole, (checked, r.stderr)
         r, dt, caught = invoke(["slice", folder, "--no-plot", "--json"])
         event(f"check {checked}, slice {r.exit_code}")
-        contract(r, dt, caught, folder, {"sensor.gcode", "slice.json"}, {"sensor.gcode", "slice.json"}, 20.0,
-                 chatter=("[",), judged="mst slice: failed: ")
+        contract(
+            r,
+            dt,
+            caught,
+            folder,
+            {"sensor.gcode", "slice.json"},
+            {"sensor.gcode", "slice.json"},
+            20.0,
+            chatter=("[",),
+            judged="mst slice: failed: ",
+        )
         if r.exit_code == 2:
-            assert checked == 2, r.stderr        # slice refuses only what check refuses too
+            assert checked == 2, r.stderr  # slice refuses only what check refuses too
         if r.exit_code != 2:
             report = load_json_strict(folder / "slice.json")
             assert report["name"] == manifest.get("name")
@@ -1486,7 +1746,7 @@ def slicer_results(draw, good: bytes):
     if op == "empty":
         data = draw(st.sampled_from([b"", b"\n", b"   \n\n"]))
     elif op == "truncate":
-        data = good[:draw(st.integers(0, len(good) - 1))]
+        data = good[: draw(st.integers(0, len(good) - 1))]
     elif op == "garble":
         at = draw(st.integers(0, len(good)))
         data = good[:at] + draw(st.binary(min_size=1, max_size=12)) + good[at:]
@@ -1495,8 +1755,11 @@ def slicer_results(draw, good: bytes):
         tokens = list(re.finditer(r"-?\d+\.?\d*", text))
         for _ in range(draw(st.integers(1, 4))):
             m = draw(st.sampled_from(tokens))
-            text = text[:m.start()] + draw(st.sampled_from(["nan", "inf", "1e400", "-0", "99999999", "1e-300", "",
-                                                            "0", "-5"])) + text[m.end():]
+            text = (
+                text[: m.start()]
+                + draw(st.sampled_from(["nan", "inf", "1e400", "-0", "99999999", "1e-300", "", "0", "-5"]))
+                + text[m.end() :]
+            )
             tokens = list(re.finditer(r"-?\d+\.?\d*", text))
         data = text.encode()
     elif op == "drop-lines":
@@ -1517,8 +1780,17 @@ def test_property_slicer_results_keep_the_contract(exported, fake_slicer, data):
         folder = slice_export(exported, Path(d) / "c")
         r, dt, caught = invoke(["slice", folder, "--no-plot", "--json"])
         event(f"exit {r.exit_code}")
-        contract(r, dt, caught, folder, {"sensor.gcode", "slice.json"}, {"sensor.gcode", "slice.json"}, 20.0,
-                 chatter=("[",), judged="mst slice: failed: ")
+        contract(
+            r,
+            dt,
+            caught,
+            folder,
+            {"sensor.gcode", "slice.json"},
+            {"sensor.gcode", "slice.json"},
+            20.0,
+            chatter=("[",),
+            judged="mst slice: failed: ",
+        )
         said = [s for s in r.stderr.strip().splitlines() if not s.startswith("[")]
         if r.exit_code == 1:
             assert len(said) == 1 and said[0].startswith("mst slice: "), said
@@ -1553,16 +1825,17 @@ def test_property_what_export_writes_check_and_slice_accept(raw, tolerance):
     from mst_cli.cad.manifest import STL_TOLERANCE_MM, Manifest, SliceManifest, export_manifest
     from mst_cli.errors import InputError
     from mst_cli.io.schema import parse_document
+
     lo, hi = STL_TOLERANCE_MM
-    assume(lo <= tolerance <= hi)                 # what 'mst export --stl-tolerance' accepts
+    assume(lo <= tolerance <= hi)  # what 'mst export --stl-tolerance' accepts
     try:
         doc = parse_document(raw)
         geometry = doc.geometry()
         assume(not geometry.violations(doc.printer))
-        check_fits(geometry)                      # what 'mst export' checks before it writes
+        check_fits(geometry)  # what 'mst export' checks before it writes
     except InputError:
         assume(False)
     event(f"{len(geometry.layers)} layers")
     manifest = json.loads(json.dumps(export_manifest(doc.name, geometry, doc.printer, tolerance, ["sensor.stl"])))
-    Manifest.from_dict(manifest)                  # mst check reads it
-    SliceManifest.from_dict(manifest)             # mst slice reads it
+    Manifest.from_dict(manifest)  # mst check reads it
+    SliceManifest.from_dict(manifest)  # mst slice reads it

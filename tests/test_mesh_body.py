@@ -87,7 +87,8 @@ def test_mst_check_gives_both_paths_the_same_results(g):
     for key in ("floor_z_mm", "depth_mm"):
         assert new["magnet_pocket"].values[key] == pytest.approx(old["magnet_pocket"].values[key], abs=1e-4)
     assert new["overhang"].values["min_inclination_deg"] == pytest.approx(
-        old["overhang"].values["min_inclination_deg"], abs=1e-3)
+        old["overhang"].values["min_inclination_deg"], abs=1e-3
+    )
 
 
 def test_layer_prism_is_profile_area_times_depth():
@@ -115,8 +116,11 @@ def test_export_meshes_are_byte_identical_across_runs(tmp_path):
     outs = []
     for k in range(2):
         out = tmp_path / f"o{k}"
-        subprocess.run([str(mst) if mst.exists() else "mst", "export", str(FORWARD), "--stl", "--3mf",
-                        "--out", str(out)], check=True, capture_output=True)
+        subprocess.run(
+            [str(mst) if mst.exists() else "mst", "export", str(FORWARD), "--stl", "--3mf", "--out", str(out)],
+            check=True,
+            capture_output=True,
+        )
         outs.append(out)
     for name in ("sensor.stl", "sensor.3mf"):
         assert (outs[0] / name).read_bytes() == (outs[1] / name).read_bytes(), name
@@ -126,9 +130,11 @@ def test_export_meshes_are_byte_identical_across_runs(tmp_path):
 
 
 def test_export_imports_no_cad_kernel_without_step(tmp_path):
-    code = ("import sys\nfrom mst_cli.cli.app import main\n"
-            f"sys.argv = ['mst', 'export', {str(FORWARD)!r}, '--stl', '--3mf', '--out', {str(tmp_path / 'o')!r}]\n"
-            "try:\n    main()\nexcept SystemExit as e:\n    assert not e.code, e.code\n"
-            "print('loaded:' + ','.join(m for m in ('build123d', 'OCP', 'trimesh', 'scipy') if m in sys.modules))\n")
+    code = (
+        "import sys\nfrom mst_cli.cli.app import main\n"
+        f"sys.argv = ['mst', 'export', {str(FORWARD)!r}, '--stl', '--3mf', '--out', {str(tmp_path / 'o')!r}]\n"
+        "try:\n    main()\nexcept SystemExit as e:\n    assert not e.code, e.code\n"
+        "print('loaded:' + ','.join(m for m in ('build123d', 'OCP', 'trimesh', 'scipy') if m in sys.modules))\n"
+    )
     out = subprocess.run([sys.executable, "-c", code], check=True, capture_output=True, text=True)
     assert out.stdout.strip().splitlines()[-1] == "loaded:"

@@ -25,10 +25,12 @@ def run(args):
 def modules_after(args) -> set[str]:
     """Top-level packages a command imported: run in-process in a fresh interpreter (this test
     session may have imported matplotlib already)."""
-    code = ("import sys\nfrom mst_cli.cli.app import main\n"
-            f"sys.argv = ['mst'] + {[str(a) for a in args]!r}\n"
-            "try:\n    main()\nexcept SystemExit as exc:\n    assert not exc.code, exc.code\n"
-            "print(','.join(sorted({m.split('.')[0] for m in sys.modules})), file=sys.stderr)\n")
+    code = (
+        "import sys\nfrom mst_cli.cli.app import main\n"
+        f"sys.argv = ['mst'] + {[str(a) for a in args]!r}\n"
+        "try:\n    main()\nexcept SystemExit as exc:\n    assert not exc.code, exc.code\n"
+        "print(','.join(sorted({m.split('.')[0] for m in sys.modules})), file=sys.stderr)\n"
+    )
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT)
     assert r.returncode == 0, r.stderr
     return set(r.stderr.strip().splitlines()[-1].split(","))
@@ -40,7 +42,7 @@ def test_simulate_without_the_picture_writes_no_png_and_imports_no_matplotlib(tm
     mods = modules_after(["simulate", FORWARD, "--out", out, *flags])
     assert "matplotlib" not in mods
     assert {p.name for p in out.iterdir()} == SIM_FILES
-    assert "mst_cli" in mods                     # the probe did see the command's imports
+    assert "mst_cli" in mods  # the probe did see the command's imports
 
 
 def test_the_picture_imports_matplotlib_so_the_probe_can_see_it(tmp_path):
@@ -94,12 +96,14 @@ def _load_test_csv(path: Path) -> None:
     """A noise-free load test of the design itself (force_N, Bx_uT, By_uT, Bz_uT)."""
     from mst_cli.io.schema import load_design_document
     from mst_cli.model.response import simulate
+
     doc, geometry = load_design_document(FORWARD)
     resp = simulate(geometry, doc.material, noise_uT_rms=doc.noise_uT_rms)
     F = np.linspace(0.0, resp.max_force_N, 60)
     B = np.stack([np.interp(F, resp.force_N, resp.B_T[:, i]) for i in range(3)], -1) * 1e6
-    path.write_text("force_N,Bx_uT,By_uT,Bz_uT\n" + "".join(f"{f:.5f},{x:.4f},{y:.4f},{z:.4f}\n"
-                                                              for f, (x, y, z) in zip(F, B)))
+    path.write_text(
+        "force_N,Bx_uT,By_uT,Bz_uT\n" + "".join(f"{f:.5f},{x:.4f},{y:.4f},{z:.4f}\n" for f, (x, y, z) in zip(F, B))
+    )
 
 
 def test_calibrate_no_plot(tmp_path):
@@ -116,6 +120,7 @@ def test_calibrate_no_plot(tmp_path):
 
 def test_bench_no_plot_drops_the_picture(tmp_path, monkeypatch):
     from mst_cli.bench import ladder_bench
+
     monkeypatch.setattr(ladder_bench, "run_bench", lambda **kw: {"models": {}})
     monkeypatch.setattr(ladder_bench, "bench_markdown", lambda result: "# bench\n")
     out = tmp_path / "b"
@@ -126,9 +131,16 @@ def test_bench_no_plot_drops_the_picture(tmp_path, monkeypatch):
     assert {p.name for p in out.iterdir()} == {"bench.md", "bench.json"}
 
 
-@pytest.mark.parametrize("command, picture, implied", [
-    ("simulate", "response.png", True), ("design", "response.png", True), ("calibrate", "calibration.png", False),
-    ("bench", "bench.png", False), ("slice", "print.png", True)])
+@pytest.mark.parametrize(
+    "command, picture, implied",
+    [
+        ("simulate", "response.png", True),
+        ("design", "response.png", True),
+        ("calibrate", "calibration.png", False),
+        ("bench", "bench.png", False),
+        ("slice", "print.png", True),
+    ],
+)
 def test_every_drawing_command_offers_the_same_no_plot(command, picture, implied):
     r = run([command, "--help"])
     assert r.exit_code == 0

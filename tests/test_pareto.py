@@ -19,13 +19,17 @@ SPEC = ROOT / "configs" / "fingertip.yaml"
 
 
 def test_non_dominated_by_hand():
-    pts = np.array([[1, 5, 3],      # kept: best in column 0
-                    [2, 2, 2],      # kept
-                    [3, 3, 3],      # dominated by row 1
-                    [2, 2, 2.5],    # dominated by row 1 (equal in two, worse in one)
-                    [5, 1, 9]])     # kept: best in column 1
+    pts = np.array(
+        [
+            [1, 5, 3],  # kept: best in column 0
+            [2, 2, 2],  # kept
+            [3, 3, 3],  # dominated by row 1
+            [2, 2, 2.5],  # dominated by row 1 (equal in two, worse in one)
+            [5, 1, 9],
+        ]
+    )  # kept: best in column 1
     assert non_dominated(pts).tolist() == [True, True, False, False, True]
-    assert non_dominated(np.array([[1.0, 1.0], [1.0, 1.0]])).tolist() == [True, True]   # ties stay
+    assert non_dominated(np.array([[1.0, 1.0], [1.0, 1.0]])).tolist() == [True, True]  # ties stay
 
 
 @pytest.mark.parametrize("count", [3, 7, 12, 30])
@@ -33,16 +37,15 @@ def test_pareto_weights_lie_on_the_simplex(count):
     w = pareto_weights(count)
     assert w.shape == (count, 3)
     assert np.all(w >= 0) and np.allclose(w.sum(axis=1), 1.0)
-    assert np.allclose(w[:3], np.eye(3))                         # each term alone first
-    assert len({tuple(np.round(r, 9)) for r in w}) == count       # no weighting twice
-    assert np.allclose(pareto_weights(2 * count)[:count], w)       # a longer run extends a shorter one
+    assert np.allclose(w[:3], np.eye(3))  # each term alone first
+    assert len({tuple(np.round(r, 9)) for r in w}) == count  # no weighting twice
+    assert np.allclose(pareto_weights(2 * count)[:count], w)  # a longer run extends a shorter one
 
 
 @pytest.fixture(scope="module")
 def front_run(tmp_path_factory):
     out = tmp_path_factory.mktemp("pareto")
-    r = CliRunner().invoke(main, ["design", str(SPEC), "--out", str(out), "--pareto", "6",
-                                  "--pareto-designs"])
+    r = CliRunner().invoke(main, ["design", str(SPEC), "--out", str(out), "--pareto", "6", "--pareto-designs"])
     assert r.exit_code == 0, r.output
     with open(out / "pareto.csv") as f:
         rows = list(csv.DictReader(f))
@@ -54,8 +57,13 @@ def test_front_files_and_header_units(front_run):
     assert (out / "pareto.png").stat().st_size > 10_000
     assert 2 <= len(rows) <= 6
     header = rows[0].keys()
-    for col in ("total_height_mm", "worst_force_resolution_mN", "print_robustness_rms_pct",
-                "layer1_theta_deg", "layer3_h_mm"):
+    for col in (
+        "total_height_mm",
+        "worst_force_resolution_mN",
+        "print_robustness_rms_pct",
+        "layer1_theta_deg",
+        "layer3_h_mm",
+    ):
         assert col in header
     assert sum(int(r["chosen"]) for r in rows) == 1
     assert "Pareto front" in output and "<-- chosen" in output
@@ -63,8 +71,12 @@ def test_front_files_and_header_units(front_run):
 
 def test_front_is_mutually_non_dominated_and_spans_a_trade(front_run):
     _, rows, _ = front_run
-    M = np.array([[float(r["total_height_mm"]), float(r["worst_force_resolution_mN"]),
-                   float(r["print_robustness_rms_pct"])] for r in rows])
+    M = np.array(
+        [
+            [float(r["total_height_mm"]), float(r["worst_force_resolution_mN"]), float(r["print_robustness_rms_pct"])]
+            for r in rows
+        ]
+    )
     assert non_dominated(M).all()
     # a front of more than one design trades: the shortest part is not the most robust one
     assert np.argmin(M[:, 0]) != np.argmin(M[:, 2])
@@ -104,10 +116,13 @@ def test_objective_weights_move_the_design(tmp_path):
     """Pricing only height gives a part no taller than pricing only print robustness, and the
     robust one moves less with a 0.05 mm wall error: the weights do what they say."""
     import yaml
+
     raw = yaml.safe_load(SPEC.read_text())
     got = {}
-    for name, w in (("short", {"height": 1, "force_resolution": 0, "print_robustness": 0}),
-                    ("robust", {"height": 0, "force_resolution": 0, "print_robustness": 1})):
+    for name, w in (
+        ("short", {"height": 1, "force_resolution": 0, "print_robustness": 0}),
+        ("robust", {"height": 0, "force_resolution": 0, "print_robustness": 1}),
+    ):
         raw.setdefault("design", {})["objective"] = w
         raw["name"] = name
         path = tmp_path / f"{name}.yaml"
@@ -115,16 +130,18 @@ def test_objective_weights_move_the_design(tmp_path):
         r = CliRunner().invoke(main, ["design", str(path), "--out", str(tmp_path / name), "--json"])
         assert r.exit_code == 0, r.output
         rep = json.loads(r.output)
-        got[name] = (rep["geometry"]["total_height_mm"],
-                     rep["design"]["print_error_sensitivity"]["rms_log_change"])
+        got[name] = (rep["geometry"]["total_height_mm"], rep["design"]["print_error_sensitivity"]["rms_log_change"])
     assert got["short"][0] < got["robust"][0]
     assert got["robust"][1] < got["short"][1]
 
 
-@pytest.mark.parametrize("args, field", [
-    (["--pareto-designs"], "--pareto-designs"),
-    (["--pareto", "4", "--refine", "continuum"], "--pareto"),
-])
+@pytest.mark.parametrize(
+    "args, field",
+    [
+        (["--pareto-designs"], "--pareto-designs"),
+        (["--pareto", "4", "--refine", "continuum"], "--pareto"),
+    ],
+)
 def test_pareto_option_errors_are_one_line(tmp_path, args, field):
     r = CliRunner().invoke(main, ["design", str(SPEC), "--out", str(tmp_path / "o")] + args)
     assert r.exit_code == 2
@@ -134,6 +151,7 @@ def test_pareto_option_errors_are_one_line(tmp_path, args, field):
 
 def test_bad_objective_key_is_refused(tmp_path):
     import yaml
+
     raw = yaml.safe_load(SPEC.read_text())
     raw.setdefault("design", {})["objective"] = {"hieght": 1}
     path = tmp_path / "bad.yaml"

@@ -15,6 +15,7 @@ def _exact(iterations=1):
         assert state < d
         calls.append(d)
         return d, iterations
+
     return solve, calls
 
 
@@ -38,22 +39,22 @@ def test_cubic_margin_event_within_the_gap_tolerance():
     d_e = 0.61803
     solve, calls = _exact()
     tol = PathTolerances()
-    path = follow_to_event(solve, lambda s, d: ((d_e - d) * (1 + 5 * d * d), "wall"), _force, 0.0,
-                           d_ref_mm=1.0, d_max_mm=2.0, tol=tol)
+    path = follow_to_event(
+        solve, lambda s, d: ((d_e - d) * (1 + 5 * d * d), "wall"), _force, 0.0, d_ref_mm=1.0, d_max_mm=2.0, tol=tol
+    )
     # |m| <= 1e-9 and |dm/dd| >= 1 near the root: d within 1e-9 of d_e
     assert abs(path.d_mm[-1] - d_e) <= tol.event_gap_rel
     assert path.event_at == "wall"
-    assert len(calls) < 20                          # regula falsi, not bisection
+    assert len(calls) < 20  # regula falsi, not bisection
 
 
 def test_loose_tolerance_stops_the_secant_early():
     d_e = 0.61803
-    margin = lambda s, d: ((d_e - d) * (1 + 5 * d * d), "wall")   # noqa: E731
+    margin = lambda s, d: ((d_e - d) * (1 + 5 * d * d), "wall")  # noqa: E731
     solve_tight, tight = _exact()
     follow_to_event(solve_tight, margin, _force, 0.0, 1.0, 2.0)
     solve_loose, loose = _exact()
-    path = follow_to_event(solve_loose, margin, _force, 0.0, 1.0, 2.0,
-                           tol=PathTolerances(event_gap_rel=1e-3))
+    path = follow_to_event(solve_loose, margin, _force, 0.0, 1.0, 2.0, tol=PathTolerances(event_gap_rel=1e-3))
     assert len(loose) < len(tight) and abs(path.d_mm[-1] - d_e) < 1e-3
 
 
@@ -61,8 +62,7 @@ def test_event_at_the_cap_is_located_at_the_stroke():
     # L1's rigid pads: the gap closes at d_nom exactly and the path is capped just beyond it
     d_nom = 0.3
     solve, _ = _exact()
-    path = follow_to_event(solve, lambda s, d: (d_nom - d, "pad"), _force, 0.0, d_nom,
-                           d_nom * (1 + 1e-9) + 1e-12)
+    path = follow_to_event(solve, lambda s, d: (d_nom - d, "pad"), _force, 0.0, d_nom, d_nom * (1 + 1e-9) + 1e-12)
     assert path.d_mm[-1] == pytest.approx(d_nom, rel=1e-9)
 
 
@@ -73,8 +73,8 @@ def test_failed_steps_are_halved_and_many_iterations_shrink_the_next():
         if d - state > 0.05 + 1e-15:
             raise FloatingPointError("too far")
         return d, 8 if state == 0.0 else 5
-    path = follow_to_event(solve, lambda s, d: (0.2 - d, "pad"), _force, 0.0, 1.0, 2.0,
-                           StepControl(first_step_rel=0.1))
+
+    path = follow_to_event(solve, lambda s, d: (0.2 - d, "pad"), _force, 0.0, 1.0, 2.0, StepControl(first_step_rel=0.1))
     steps = np.diff([0.0] + path.d_mm[:-1])
     assert steps == pytest.approx([0.05] + [0.025] * (len(steps) - 1))
     assert abs(path.d_mm[-1] - 0.2) <= PathTolerances().event_gap_rel
@@ -83,6 +83,7 @@ def test_failed_steps_are_halved_and_many_iterations_shrink_the_next():
 def test_a_stalled_path_is_an_error():
     def solve(state, d):
         raise np.linalg.LinAlgError("singular")
+
     with pytest.raises(PathError, match="stalled at d = 0"):
         follow_to_event(solve, lambda s, d: (1.0 - d, "pad"), _force, 0.0, 1.0, 2.0)
 
@@ -92,8 +93,7 @@ def test_no_event_before_the_cap_is_an_error():
     with pytest.raises(PathError, match="no event up to d = 1.5"):
         follow_to_event(solve, lambda s, d: (5.0 - d, "pad"), _force, 0.0, 1.0, 1.5)
     with pytest.raises(PathError, match="within 3 steps"):
-        follow_to_event(solve, lambda s, d: (5.0 - d, "pad"), _force, 0.0, 1.0, 100.0,
-                        StepControl(max_steps=3))
+        follow_to_event(solve, lambda s, d: (5.0 - d, "pad"), _force, 0.0, 1.0, 100.0, StepControl(max_steps=3))
 
 
 def test_a_failed_solve_while_locating_the_event_is_an_error():
@@ -101,6 +101,6 @@ def test_a_failed_solve_while_locating_the_event_is_an_error():
         if 0.3 < d < 0.5:
             raise FloatingPointError("no equilibrium")
         return d, 1
+
     with pytest.raises(PathError, match="locating the event"):
-        follow_to_event(solve, lambda s, d: (0.4 - d, "pad"), _force, 0.0, 1.0, 2.0,
-                        StepControl(first_step_rel=0.3))
+        follow_to_event(solve, lambda s, d: (0.4 - d, "pad"), _force, 0.0, 1.0, 2.0, StepControl(first_step_rel=0.3))

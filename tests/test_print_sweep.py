@@ -20,24 +20,23 @@ from mst_cli.cli.app import main
 
 ROOT = Path(__file__).resolve().parents[1]
 MAX_SPAN_MM = 5.0
-STL_TOLERANCE_MM = 0.01          # mst export's default
+STL_TOLERANCE_MM = 0.01  # mst export's default
 RANDOM_N, RANDOM_SEED = 20, 9
 
 from slicer_support import need_slicer  # noqa: E402
 
-pytestmark = pytest.mark.slow      # most tests here run PrusaSlicer
+pytestmark = pytest.mark.slow  # most tests here run PrusaSlicer
 
 # design id -> {"span_mm", "span_layer", "span_z_mm", "print_time_s", "pause_after_layer"}; filled by
 # the per-design fixture, read by the last test
 MEASURED = {}
 
 
-
-
 # --------------------------------------------------------------------------- the designs
 def _config_designs():
     """(id, loader) of every configs/*.yaml that is a design (theta/t/h on every layer)."""
     from mst_cli.io.schema import load_document
+
     out = []
     for path in sorted((ROOT / "configs").glob("*.yaml")):
         if load_document(path).is_design:
@@ -47,6 +46,7 @@ def _config_designs():
 
 def _load_config(path):
     from mst_cli.io.schema import load_design_document
+
     doc, g = load_design_document(path)
     return doc.name, g, doc.printer
 
@@ -56,6 +56,7 @@ def _designed_spec():
     not, a valid buildable design)."""
     from mst_cli.design import design_document
     from mst_cli.io.schema import load_document
+
     result = design_document(load_document(ROOT / "configs" / "mohammadi2021.yaml"))
     g = result.geometry
     assert not list(g.violations(result.document.printer)), "the designed cell is invalid"
@@ -66,13 +67,16 @@ def _random(k):
     import sampling
 
     from mst_cli.model.geometry import Printer
+
     g = sampling.random_valid_geometries(RANDOM_N, seed=RANDOM_SEED, max_offset_mm=2.0)[k]
     return f"random-{k:02d}", g, Printer()
 
 
-DESIGNS = (_config_designs()
-           + [("designed-mohammadi2021", _designed_spec)]
-           + [(f"random-{k:02d}", lambda k=k: _random(k)) for k in range(RANDOM_N)])
+DESIGNS = (
+    _config_designs()
+    + [("designed-mohammadi2021", _designed_spec)]
+    + [(f"random-{k:02d}", lambda k=k: _random(k)) for k in range(RANDOM_N)]
+)
 IDS = [i for i, _ in DESIGNS]
 LOADERS = dict(DESIGNS)
 
@@ -90,8 +94,11 @@ def export_body(folder: Path, name: str, g, printer, tolerance_mm: float = STL_T
     vertices, triangles = print_mesh(g, tolerance_mm)
     folder.mkdir(parents=True, exist_ok=True)
     (folder / "sensor.stl").write_bytes(mesh_io.stl_bytes(vertices, triangles))
-    (folder / "sensor.3mf").write_bytes(mesh_io.three_mf_bytes(
-        vertices, triangles, name, pause_after_z_mm=g.pause_height_mm, layer_height_mm=g.layer_height_mm))
+    (folder / "sensor.3mf").write_bytes(
+        mesh_io.three_mf_bytes(
+            vertices, triangles, name, pause_after_z_mm=g.pause_height_mm, layer_height_mm=g.layer_height_mm
+        )
+    )
     manifest = export_manifest(name, g, printer, tolerance_mm, ["sensor.stl", "sensor.3mf"])
     (folder / MANIFEST_NAME).write_text(json.dumps(manifest, indent=2))
     return manifest
@@ -112,10 +119,16 @@ def sliced(request, tmp_path_factory):
         rep = None
     if rep is not None and rep["free_span"]["longest"] is not None:
         s = rep["free_span"]["longest"]
-        MEASURED[key] = {"span_mm": s["length_mm"], "span_layer": s["layer"], "span_z_mm": s["z_mm"],
-                         "span_type": s["type"], "print_time_s": rep["print_time_s"],
-                         "layers": rep["layers"], "pause_after_layer": manifest["print"]["pause"]["after_layer"],
-                         "failed": rep["failed"]}
+        MEASURED[key] = {
+            "span_mm": s["length_mm"],
+            "span_layer": s["layer"],
+            "span_z_mm": s["z_mm"],
+            "span_type": s["type"],
+            "print_time_s": rep["print_time_s"],
+            "layers": rep["layers"],
+            "pause_after_layer": manifest["print"]["pause"]["after_layer"],
+            "failed": rep["failed"],
+        }
     return key, g, manifest, folder, r, rep
 
 
@@ -127,13 +140,14 @@ def test_sliced_body_prints(sliced):
     assert longest["length_mm"] <= MAX_SPAN_MM, longest
     assert not rep["support"]["needed"], rep["support"]
     asked = manifest["print"]["pause"]
-    (p,) = rep["pause"]["found"]                           # exactly one pause ...
-    assert p["after_layer"] == asked["after_layer"] == g.pause_after_layer   # ... after the right layer
+    (p,) = rep["pause"]["found"]  # exactly one pause ...
+    assert p["after_layer"] == asked["after_layer"] == g.pause_after_layer  # ... after the right layer
     assert p["z_mm"] == pytest.approx(asked["z_mm"], abs=1e-3) and not p["mid_layer"]
 
 
 def test_mst_check_passes_on_the_same_mesh(sliced):
     from mst_cli.cad import checks
+
     key, _, manifest, folder, _, _ = sliced
     results = checks.run_checks(checks.load_mesh(folder / "sensor.stl"), manifest)
     bad = {c.name: (c.measured, c.expected, c.note) for c in results if not c.passed and not c.info}
@@ -148,8 +162,10 @@ def test_worst_free_span_over_all_designs():
     print(f"\n{'design':<26} {'span mm':>8} {'layer':>6} {'z mm':>6} {'print time':>11} {'pause after':>11}")
     for key, m in rows:
         t = m["print_time_s"]
-        print(f"{key:<26} {m['span_mm']:>8.2f} {m['span_layer']:>6} {m['span_z_mm']:>6.2f} "
-              f"{'-' if t is None else f'{t / 60:.1f} min':>11} {m['pause_after_layer']:>11}")
+        print(
+            f"{key:<26} {m['span_mm']:>8.2f} {m['span_layer']:>6} {m['span_z_mm']:>6.2f} "
+            f"{'-' if t is None else f'{t / 60:.1f} min':>11} {m['pause_after_layer']:>11}"
+        )
     missing = [k for k in IDS if k not in MEASURED]
     if missing:
         print(f"not measured: {', '.join(missing)}")

@@ -23,7 +23,7 @@ from mst_cli.model.response import simulate
 
 ROOT = Path(__file__).resolve().parents[1]
 SPEC = ROOT / "configs" / "mohammadi2021.yaml"
-PRINTER_WALL_MM, PRINTER_MODULUS = 0.06, 0.85         # the synthetic printer, hidden from the design
+PRINTER_WALL_MM, PRINTER_MODULUS = 0.06, 0.85  # the synthetic printer, hidden from the design
 NOISE_uT = 2.0
 
 
@@ -42,8 +42,10 @@ def outputs(resp):
 
 def targets(path=SPEC):
     doc = load_document(path)
-    return (np.array([la.target_sensitivity_per_N for la in doc.layers]),
-            np.array([la.target_range_N for la in doc.layers]))
+    return (
+        np.array([la.target_sensitivity_per_N for la in doc.layers]),
+        np.array([la.target_range_N for la in doc.layers]),
+    )
 
 
 def print_of(design_yaml, wall_mm=PRINTER_WALL_MM, modulus=PRINTER_MODULUS):
@@ -93,8 +95,7 @@ def loop(tmp_path_factory):
     load_test_csv(print1, d / "loadtest.csv", np.random.default_rng(11))
     cal = run(["calibrate", d / "print1" / "design.yaml", d / "loadtest.csv", "--out", d / "cal", "--no-plot"])
     assert cal.exit_code == 0, cal.output
-    second = run(["design", SPEC, "--calibration", d / "cal" / "calibration.json", "--out", d / "print2",
-                  "--no-plot"])
+    second = run(["design", SPEC, "--calibration", d / "cal" / "calibration.json", "--out", d / "print2", "--no-plot"])
     assert second.exit_code == 0, second.output
     return {"dir": d, "print1": print1, "second": second}
 
@@ -103,7 +104,7 @@ def test_the_first_print_misses_and_the_second_meets_every_target(loop):
     S_t, R_t = targets()
     S1, R1 = outputs(loop["print1"])
     miss1 = np.abs(np.concatenate([S1 / S_t, R1 / R_t]) - 1.0)
-    assert miss1.max() > 0.2                      # tens of percent: the printer is not the drawing
+    assert miss1.max() > 0.2  # tens of percent: the printer is not the drawing
     S2, R2 = outputs(print_of(loop["dir"] / "print2" / "design.yaml"))
     miss2 = np.abs(np.concatenate([S2 / S_t, R2 / R_t]) - 1.0)
     assert miss2.max() < 0.05, miss2
@@ -114,14 +115,18 @@ def test_the_second_design_says_what_it_took_and_draws_thinner_walls(loop):
     rec = json.loads((loop["dir"] / "cal" / "calibration.json").read_text())["parameters"]
     for key in ("printer.wall_offset_mm", "printer.modulus_factor", "printer.gap_offset_mm", "magnet.remanence_T"):
         assert key in out
-    assert f"± {rec['wall_offset_mm']['std']:.4f} mm" in out      # with its uncertainty
+    assert f"± {rec['wall_offset_mm']['std']:.4f} mm" in out  # with its uncertainty
     doc2 = load_document(loop["dir"] / "print2" / "design.yaml")
     assert doc2.printer.wall_offset_mm == pytest.approx(rec["wall_offset_mm"]["value"], abs=1e-12)
     assert doc2.printer.wall_offset_mm == pytest.approx(PRINTER_WALL_MM, abs=0.005)
     assert doc2.printer.modulus_factor == pytest.approx(PRINTER_MODULUS, abs=0.02)
     report = json.loads((loop["dir"] / "print2" / "report.json").read_text())["design"]
-    assert set(report["calibration"]["taken"]) == {"printer.wall_offset_mm", "printer.modulus_factor",
-                                                  "printer.gap_offset_mm", "magnet.remanence_T"}
+    assert set(report["calibration"]["taken"]) == {
+        "printer.wall_offset_mm",
+        "printer.modulus_factor",
+        "printer.gap_offset_mm",
+        "magnet.remanence_T",
+    }
 
 
 def test_export_draws_the_walls_as_drawn(loop, tmp_path):
@@ -141,16 +146,27 @@ def test_simulate_models_a_design_as_its_printer_section_says(loop, tmp_path):
     rep = json.loads((tmp_path / "report.json").read_text())
     S, R = outputs(as_the_file_says(design))
     got = [row["sensitivity_secant_per_N"] for row in rep["regimes"]]
-    assert got == pytest.approx(list(S), rel=1e-7)        # the model file keeps t to 1e-9 mm
+    assert got == pytest.approx(list(S), rel=1e-7)  # the model file keeps t to 1e-9 mm
 
 
 def test_a_parameter_the_calibration_held_is_not_used_and_named(loop, tmp_path):
     d = loop["dir"]
-    cal = run(["calibrate", d / "print1" / "design.yaml", d / "loadtest.csv", "--out", tmp_path / "cal",
-               "--params", "modulus_factor,wall_offset_mm", "--no-plot"])
+    cal = run(
+        [
+            "calibrate",
+            d / "print1" / "design.yaml",
+            d / "loadtest.csv",
+            "--out",
+            tmp_path / "cal",
+            "--params",
+            "modulus_factor,wall_offset_mm",
+            "--no-plot",
+        ]
+    )
     assert cal.exit_code == 0, cal.output
-    r = run(["design", SPEC, "--calibration", tmp_path / "cal" / "calibration.json", "--out", tmp_path / "d",
-             "--no-plot"])
+    r = run(
+        ["design", SPEC, "--calibration", tmp_path / "cal" / "calibration.json", "--out", tmp_path / "d", "--no-plot"]
+    )
     assert r.exit_code == 0, r.output
     for name in ("gap_offset_mm", "remanence_factor"):
         assert f"calibration: {name} not used: held by the calibration" in r.output
@@ -168,14 +184,21 @@ def _calibration_cases(loop):
     broken = json.loads(json.dumps(good))
     broken["parameters"]["wall_offset_mm"]["value"] = "thick"
     closing = json.loads(json.dumps(good))
-    closing["parameters"]["wall_offset_mm"]["value"] = 0.2       # would print the narrowest cavity shut
-    return {"missing": None, "not json": "{not json", "other material": json.dumps(other),
-            "older calibrate": json.dumps(old), "bad value": json.dumps(broken), "a list": "[1, 2]",
-            "closes the cavity": json.dumps(closing)}
+    closing["parameters"]["wall_offset_mm"]["value"] = 0.2  # would print the narrowest cavity shut
+    return {
+        "missing": None,
+        "not json": "{not json",
+        "other material": json.dumps(other),
+        "older calibrate": json.dumps(old),
+        "bad value": json.dumps(broken),
+        "a list": "[1, 2]",
+        "closes the cavity": json.dumps(closing),
+    }
 
 
-@pytest.mark.parametrize("case", ["missing", "not json", "other material", "older calibrate", "bad value", "a list",
-                                  "closes the cavity"])
+@pytest.mark.parametrize(
+    "case", ["missing", "not json", "other material", "older calibrate", "bad value", "a list", "closes the cavity"]
+)
 def test_a_bad_calibration_exits_2_in_one_line_writing_nothing(loop, tmp_path, case):
     text = _calibration_cases(loop)[case]
     path = tmp_path / "calibration.json"
@@ -207,11 +230,11 @@ def test_the_reported_worst_deviation_is_a_finite_difference_of_the_print(tmp_pa
     rms = math.sqrt(np.mean(np.log1p(np.array(changes)) ** 2))
     pe = json.loads((tmp_path / "out" / "report.json").read_text())["design"]["print_error_sensitivity"]
     assert pe["print_error_t_mm"] == 0.04
-    assert pe["worst_change_rel"] == pytest.approx(worst, rel=1e-7)      # walls kept to 1e-9 mm
+    assert pe["worst_change_rel"] == pytest.approx(worst, rel=1e-7)  # walls kept to 1e-9 mm
     assert pe["rms_log_change"] == pytest.approx(rms, rel=1e-7)
     assert f"walls +-0.04 mm change S_i, R_i by {100 * worst:.1f} % at worst" in r.output
     S_t, R_t = targets()
-    assert np.abs(base / np.concatenate([S_t, R_t]) - 1.0).max() < 0.02     # met as printed
+    assert np.abs(base / np.concatenate([S_t, R_t]) - 1.0).max() < 0.02  # met as printed
 
 
 def test_a_default_design_past_25_percent_says_so_in_one_line(tmp_path):
@@ -233,17 +256,32 @@ def _spec_with(tmp_path, name, **design):
 
 def test_max_print_deviation_is_met_or_names_the_lowest_height(tmp_path):
     limit = 0.5
-    tight = run(["design", _spec_with(tmp_path, "tight", max_print_deviation_rel=limit, max_height_mm=18.0),
-                 "--out", tmp_path / "tight", "--no-plot"])
+    tight = run(
+        [
+            "design",
+            _spec_with(tmp_path, "tight", max_print_deviation_rel=limit, max_height_mm=18.0),
+            "--out",
+            tmp_path / "tight",
+            "--no-plot",
+        ]
+    )
     assert tight.exit_code == 1, tight.output
     said = [line for line in tight.output.splitlines() if line.startswith("mst design: targets not met")]
     assert len(said) == 1 and "design.max_print_deviation_rel" in said[0]
     height = float(said[0].split("total height of ")[1].split(" mm")[0])
     assert height > 18.0
     # that height is enough: with it allowed the limit is met, re-simulated by hand
-    enough = run(["design", _spec_with(tmp_path, "enough", max_print_deviation_rel=limit,
-                                       max_height_mm=math.ceil(height * 100) / 100 + 0.01),
-                  "--out", tmp_path / "enough", "--no-plot"])
+    enough = run(
+        [
+            "design",
+            _spec_with(
+                tmp_path, "enough", max_print_deviation_rel=limit, max_height_mm=math.ceil(height * 100) / 100 + 0.01
+            ),
+            "--out",
+            tmp_path / "enough",
+            "--no-plot",
+        ]
+    )
     assert enough.exit_code == 0, enough.output
     design = tmp_path / "enough" / "design.yaml"
     base = np.concatenate(outputs(as_the_file_says(design)))
@@ -252,21 +290,25 @@ def test_max_print_deviation_is_met_or_names_the_lowest_height(tmp_path):
         assert np.abs(change).max() <= limit + 1e-6
     S_t, R_t = targets()
     assert np.abs(base / np.concatenate([S_t, R_t]) - 1.0).max() < 0.02
-    assert "warning: a wall" not in enough.output          # a limit was given: no advice line
+    assert "warning: a wall" not in enough.output  # a limit was given: no advice line
 
 
 def test_max_print_deviation_no_height_can(tmp_path):
-    r = run(["design", _spec_with(tmp_path, "never", max_print_deviation_rel=0.2), "--out", tmp_path / "o",
-             "--no-plot"])
+    r = run(
+        ["design", _spec_with(tmp_path, "never", max_print_deviation_rel=0.2), "--out", tmp_path / "o", "--no-plot"]
+    )
     assert r.exit_code == 1, r.output
     assert "mst design: targets not met: design.max_print_deviation_rel: no height meets" in r.output
 
 
-@pytest.mark.parametrize("key,value,allowed,more", [
-    ("wall_offset_mm", 0.2, "0.15 mm", {}),      # (min gap 0.4 - allowance 0.1) / 2: the cavity would close
-    ("wall_offset_mm", -0.25, "-0.2 mm", {"min_wall_mm": 0.2}),     # a one-line wall would print to nothing
-    ("gap_offset_mm", -1.6, "-1.48 mm", {}),     # more than clearance + pocket floor + cover can close
-])
+@pytest.mark.parametrize(
+    "key,value,allowed,more",
+    [
+        ("wall_offset_mm", 0.2, "0.15 mm", {}),  # (min gap 0.4 - allowance 0.1) / 2: the cavity would close
+        ("wall_offset_mm", -0.25, "-0.2 mm", {"min_wall_mm": 0.2}),  # a one-line wall would print to nothing
+        ("gap_offset_mm", -1.6, "-1.48 mm", {}),  # more than clearance + pocket floor + cover can close
+    ],
+)
 def test_a_printer_that_would_print_a_broken_cell_exits_2(tmp_path, key, value, allowed, more):
     raw = yaml.safe_load(SPEC.read_text())
     raw["printer"] = {key: value, **more}

@@ -30,7 +30,7 @@ def test_vectorised_spring_is_finite_and_positive_on_a_dense_grid_of_the_bounds(
     for a in (k, dl, R, kl):
         assert np.all(np.isfinite(a)) and np.all(a > 0)
     assert np.all(kl > k)
-    assert np.all(R <= k * dl * (1 + 1e-12))     # walls soften before the lock, never stiffen
+    assert np.all(R <= k * dl * (1 + 1e-12))  # walls soften before the lock, never stiffen
 
 
 @settings(max_examples=200, deadline=None)

@@ -22,9 +22,9 @@ from mst_cli.model.ladder import ERRORS_FILE, choose_mechanics
 from mst_cli.model.response import simulate
 
 ROOT = Path(__file__).resolve().parents[1]
-SPEC = ROOT / "configs" / "fingertip.yaml"       # met by the printable cell
-PAPER = ROOT / "configs" / "mohammadi2021.yaml"   # the paper's own targets
-USER_LADDER = ("spring", "frame", "continuum")      # cheapest first; continuum is the reference
+SPEC = ROOT / "configs" / "fingertip.yaml"  # met by the printable cell
+PAPER = ROOT / "configs" / "mohammadi2021.yaml"  # the paper's own targets
+USER_LADDER = ("spring", "frame", "continuum")  # cheapest first; continuum is the reference
 
 
 def _run(args):
@@ -83,7 +83,7 @@ def test_refine_continuum_meets_every_target_by_the_continuum_model(tmp_path):
     tol = doc.design["tolerance_rel"]
     assert np.all(np.abs(S / S_t - 1.0) <= tol), S / S_t - 1.0
     assert np.all(np.abs(R / R_t - 1.0) <= tol), R / R_t - 1.0
-    assert doc.mechanics == "continuum"       # mst simulate design.yaml reproduces these numbers
+    assert doc.mechanics == "continuum"  # mst simulate design.yaml reproduces these numbers
 
     report = json.loads((out / "report.json").read_text())
     assert report["models"]["mechanics"] == "continuum"
@@ -103,6 +103,7 @@ def test_refine_continuum_meets_every_target_by_the_continuum_model(tmp_path):
 def test_refine_not_met_exits_1_naming_the_worst_target(tmp_path):
     # one iteration only: the plain L0 design judged by frame; exit 1 unless it already meets
     from mst_cli.design.refine import refine_document
+
     doc = load_document(SPEC)
     result = refine_document(doc, "frame", max_iterations=1)
     assert result.response.mechanics == "frame"
@@ -118,7 +119,8 @@ def test_refine_reports_the_rung_that_measured_the_print_error(tmp_path):
     # no model.accuracy_rel: the cheap corrected rung L0 measures the print sensitivity, and the
     # report and the terminal say so; the numbers are L0's own ratios at t +- 0.05 mm
     from mst_cli.model.geometry import Printer
-    PRINT_ERROR_T_MM = Printer().wall_tolerance_mm        # the default printer's
+
+    PRINT_ERROR_T_MM = Printer().wall_tolerance_mm  # the default printer's
     out = tmp_path / "out"
     res = _run(["design", SPEC, "--refine", "frame", "--out", out])
     assert res.exit_code in (0, 1), res.output
@@ -131,26 +133,34 @@ def test_refine_reports_the_rung_that_measured_the_print_error(tmp_path):
     thick = [doc.family.cell(c.theta_deg, c.t_mm + PRINT_ERROR_T_MM, c.h_mm) for c in g.layers]
     plus = simulate(doc.geometry(thick), doc.material, mechanics="spring")
     for row, r0, r1 in zip(pe["layers"], nominal.regimes, plus.regimes):
-        assert row["dS_rel_t_plus"] == pytest.approx(r1.sensitivity_secant_per_N / r0.sensitivity_secant_per_N - 1,
-                                                     rel=1e-9)
+        assert row["dS_rel_t_plus"] == pytest.approx(
+            r1.sensitivity_secant_per_N / r0.sensitivity_secant_per_N - 1, rel=1e-9
+        )
 
 
 def test_print_error_rung_follows_accuracy_rel():
     from mst_cli.design.refine import print_error_rung
-    errors = {"models": {"spring": {"median_abs_err_k": 0.01, "median_abs_err_lock_force": 0.015},
-                         "frame": {"median_abs_err_k": 0.01, "median_abs_err_lock_force": 0.09}}}
+
+    errors = {
+        "models": {
+            "spring": {"median_abs_err_k": 0.01, "median_abs_err_lock_force": 0.015},
+            "frame": {"median_abs_err_k": 0.01, "median_abs_err_lock_force": 0.09},
+        }
+    }
     doc = load_document(SPEC)
-    assert print_error_rung(doc, "continuum", errors)[0] == "spring"            # nothing asked
+    assert print_error_rung(doc, "continuum", errors)[0] == "spring"  # nothing asked
     assert print_error_rung(replace(doc, accuracy_rel=0.05), "continuum", errors)[0] == "spring"
     assert print_error_rung(replace(doc, accuracy_rel=0.01), "continuum", errors)[0] == "continuum"
     rung, rule = print_error_rung(replace(doc, accuracy_rel=0.01), "frame", errors)
-    assert rung == "frame" and "capped" in rule            # never dearer than the refining rung
+    assert rung == "frame" and "capped" in rule  # never dearer than the refining rung
 
 
 def test_print_error_on_the_dear_rung_when_asked():
     from mst_cli.model.geometry import Printer
-    PRINT_ERROR_T_MM = Printer().wall_tolerance_mm        # the default printer's
+
+    PRINT_ERROR_T_MM = Printer().wall_tolerance_mm  # the default printer's
     from mst_cli.design.refine import refine_document
+
     result = refine_document(load_document(SPEC), "frame", max_iterations=1, print_error_mechanics="frame")
     assert result.print_error["mechanics"] == "frame"
     g, doc = result.geometry, result.document
@@ -167,11 +177,16 @@ def test_local_match_evaluates_each_point_once_in_batches():
     from mst_cli.design import design_document
     from mst_cli.design.problem import DesignProblem
     from mst_cli.design.refine import _local_match
+
     doc = replace(load_document(PAPER), mechanics="spring")
     res = design_document(doc)
     x0 = [np.array([getattr(la, k) for la in res.document.layers]) for k in ("theta_deg", "t_mm", "h_mm")]
-    moved = [replace(la, target_sensitivity_per_N=1.03 * la.target_sensitivity_per_N,
-                     target_range_N=0.95 * la.target_range_N) for la in doc.layers]
+    moved = [
+        replace(
+            la, target_sensitivity_per_N=1.03 * la.target_sensitivity_per_N, target_range_N=0.95 * la.target_range_N
+        )
+        for la in doc.layers
+    ]
     problem = DesignProblem(doc.with_layers(moved))
     seen = []
     evaluate = problem.evaluate
@@ -180,7 +195,7 @@ def test_local_match_evaluates_each_point_once_in_batches():
     assert met
     rows = np.concatenate(seen)
     assert len(seen) < 100 and len(rows) <= n_eval + 5
-    assert len({r.tobytes() for r in rows}) >= 0.95 * len(rows)     # no point evaluated twice over
+    assert len({r.tobytes() for r in rows}) >= 0.95 * len(rows)  # no point evaluated twice over
     ev = problem.evaluate_physical(theta, t, h)
     assert np.all(np.abs(ev.rel_err) <= problem.tolerance_rel)
 
@@ -188,6 +203,7 @@ def test_local_match_evaluates_each_point_once_in_batches():
 def _mapping_errors(A, z_star, steps, secant=True):
     """Max |dear log error| per iteration on the linear map e(z) = A (z - z*)."""
     from mst_cli.design.refine import _SecantMapping
+
     z, m, errs = np.zeros(len(z_star)), _SecantMapping(len(z_star)), []
     for _ in range(steps):
         e = A @ (z - z_star)
@@ -236,15 +252,20 @@ def test_simulate_accuracy_rel_picks_the_rung_the_stored_errors_give(tmp_path):
 
 
 def test_choice_walks_the_ladder_with_given_errors():
-    errors = {"models": {"spring-textbook": {"median_abs_err_k": 0.30, "median_abs_err_lock_force": 0.6},
-                         "spring": {"median_abs_err_k": 0.10, "median_abs_err_lock_force": 0.15},
-                         "frame": {"median_abs_err_k": 0.02, "median_abs_err_lock_force": 0.04}}}
+    errors = {
+        "models": {
+            "spring-textbook": {"median_abs_err_k": 0.30, "median_abs_err_lock_force": 0.6},
+            "spring": {"median_abs_err_k": 0.10, "median_abs_err_lock_force": 0.15},
+            "frame": {"median_abs_err_k": 0.02, "median_abs_err_lock_force": 0.04},
+        }
+    }
     assert choose_mechanics(None, 0.2, "spring", errors).mechanics == "spring"
-    assert choose_mechanics(None, 0.12, "spring", errors).mechanics == "frame"   # R decides
+    assert choose_mechanics(None, 0.12, "spring", errors).mechanics == "frame"  # R decides
     c = choose_mechanics(None, 0.05, "spring", errors)
     assert (c.mechanics, c.measured_err_k_rel, c.measured_err_lock_force_rel) == ("frame", 0.02, 0.04)
-    assert c.message() == ("mechanics: frame (measured median error against continuum: stiffness 2 %, "
-                           "lock force 4 %; requested <= 5 %)")
+    assert c.message() == (
+        "mechanics: frame (measured median error against continuum: stiffness 2 %, lock force 4 %; requested <= 5 %)"
+    )
     assert choose_mechanics(None, 0.01, "spring", errors).mechanics == "continuum"
     # an explicit flag wins; without accuracy_rel the file's mechanics is used
     assert choose_mechanics("spring", 0.01, "frame", errors).mechanics == "spring"
@@ -253,7 +274,7 @@ def test_choice_walks_the_ladder_with_given_errors():
 
 
 def test_explicit_mechanics_flag_wins_over_accuracy_rel(tmp_path):
-    path = _with_model(ONE_LAYER, tmp_path, "d.yaml", accuracy_rel=0.9)   # would pick spring
+    path = _with_model(ONE_LAYER, tmp_path, "d.yaml", accuracy_rel=0.9)  # would pick spring
     res = _run(["simulate", path, "--mechanics", "frame", "--out", tmp_path / "o"])
     assert res.exit_code == 0, res.output
     assert "measured median" not in res.output

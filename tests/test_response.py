@@ -47,7 +47,7 @@ def test_secant_lies_between_local_slopes_and_curves_are_monotone():
     r = simulate(REF, MAT)
     assert r.dB_rel[0] == 0.0
     assert np.all(np.diff(r.dB_rel) > 0) and np.all(np.diff(r.displacement_mm) > 0)
-    for reg in r.regimes:   # mean value theorem
+    for reg in r.regimes:  # mean value theorem
         assert reg.sensitivity_min_per_N <= reg.sensitivity_secant_per_N <= reg.sensitivity_max_per_N
     # each regime is softer to the field than the one before (a stiffer stack moves less)
     S = [reg.sensitivity_secant_per_N for reg in r.regimes]
@@ -57,9 +57,11 @@ def test_secant_lies_between_local_slopes_and_curves_are_monotone():
 def test_vectorised_kernel_agrees_with_simulate():
     r = simulate(REF, MAT)
     laws = [layer_law(c, MAT) for c in REF.layers]
-    k, dl, kl, R_law = (np.array([getattr(l, a) for l in laws])
-                        for a in ("k_N_per_mm", "d_lock_mm", "k_locked_N_per_mm", "lock_force_N"))
-    assert np.all(R_law < k * dl)           # the softened laws: two knots before each lock
+    k, dl, kl, R_law = (
+        np.array([getattr(l, a) for l in laws])
+        for a in ("k_N_per_mm", "d_lock_mm", "k_locked_N_per_mm", "lock_force_N")
+    )
+    assert np.all(R_law < k * dl)  # the softened laws: two knots before each lock
     R, S, gap, B = regime_kernel(k, dl, kl, REF.gap0_mm, lambda gp: field_magnitude_T(gp, REF, "axial"), R_law)
     assert np.allclose(R, r.lock_forces_N, rtol=1e-13)
     assert np.allclose(S, [x.sensitivity_secant_per_N for x in r.regimes], rtol=1e-12)
@@ -82,6 +84,7 @@ def test_points_past_the_last_lock_are_flagged_out_of_range():
 
 def test_field_model_choice_is_reported_and_dipole_reads_high():
     from dataclasses import replace
+
     assert simulate(REF, MAT).field_model == "axial"
     assert simulate(replace(REF, chip_offset_mm=(0.5, 0.0)), MAT).field_model == "cylinder"
     assert simulate(REF, MAT, field_model="dipole").B0_T > simulate(REF, MAT).B0_T
@@ -91,6 +94,7 @@ def test_a_magnet_too_close_saturates_the_chip_and_says_so():
     from dataclasses import replace
 
     from mst_cli.model.geometry import Housing
+
     close = replace(REF, layers=(HexCell(30, 0.4, 1.2),), housing=Housing(cover_mm=0.2, pocket_floor_mm=0.2))
     r = simulate(close, MAT)
     assert r.B_full_T > 0.05 and r.saturated and r.chip_setting is None

@@ -92,7 +92,7 @@ def test_every_field_is_declared_whole_and_its_rule_is_the_one_parsing_uses(sect
         assert rule.lo is not None and rule.hi is not None, "every number is bounded both ways"
         assert math.isfinite(rule.lo) and math.isfinite(rule.hi) and rule.lo < rule.hi
     default = default_of(f)
-    if default is not None:     # None: "not given" (a layer's group) or a nullable null
+    if default is not None:  # None: "not given" (a layer's group) or a nullable null
         rule.check(path_of(section, f.name), list(default) if isinstance(default, tuple) else default)
 
 
@@ -107,7 +107,7 @@ def test_a_file_without_a_key_gets_its_declared_default():
         if section == "layers":
             continue
         expect = default_of(f)
-        if (section, f.name) == ("magnet", "remanence_T"):      # null: the grade's value
+        if (section, f.name) == ("magnet", "remanence_T"):  # null: the grade's value
             expect = grade_remanence_T(doc.magnet.grade)
         assert value_in(doc, section, f.name) == expect, f"{section}.{f.name}"
 
@@ -147,10 +147,10 @@ def test_every_field_round_trips_a_value_other_than_its_default(section, f):
         pytest.skip("one allowed value: the default, which the default document round-trips")
     accepted = 0
     for value in values:
-        rule.check(path_of(section, f.name), value)         # the key's own rule accepts it ...
+        rule.check(path_of(section, f.name), value)  # the key's own rule accepts it ...
         try:
             doc = parse_document(raw_with(section, f.name, value))
-        except InputError:      # ... a rule across keys (housing, board, layer grid) may not
+        except InputError:  # ... a rule across keys (housing, board, layer grid) may not
             continue
         accepted += 1
         got = value_in(doc, section, f.name)

@@ -19,8 +19,9 @@ SLACK = solver.ROUNDING_SAFETY
 
 def problem_with_targets(S, R) -> DesignProblem:
     base = load_document(SPEC)
-    return DesignProblem(base.with_layers([LayerEntry(target_sensitivity_per_N=float(s), target_range_N=float(r))
-                                           for s, r in zip(S, R)]))
+    return DesignProblem(
+        base.with_layers([LayerEntry(target_sensitivity_per_N=float(s), target_range_N=float(r)) for s, r in zip(S, R)])
+    )
 
 
 def table_design(n_layers: int, rng) -> tuple[np.ndarray, DesignProblem]:
@@ -80,16 +81,18 @@ def test_gauss_newton_converges_in_a_few_steps_near_a_solution(n_layers):
 
 def test_finite_difference_batch_computes_each_distinct_cell_once_with_the_same_bits(monkeypatch):
     """A central-difference batch of 2 x 3n + 1 stacks holds n + 6n distinct cells."""
-    problem = problem_with_targets(0.3 / np.arange(1, 7), 2.0 ** np.arange(6))     # 222 cells, 42 distinct
+    problem = problem_with_targets(0.3 / np.arange(1, 7), 2.0 ** np.arange(6))  # 222 cells, 42 distinct
     u = np.random.default_rng(1).random(problem.dim)
     eye = np.eye(problem.dim) * solver.FD_STEP
     theta, t, h = problem.to_physical(np.concatenate([u[None], u + eye, u - eye]))
     fam = problem.family
     E_web = web_modulus_MPa(np.radians(theta), t, h, fam.depth_mm, problem.E_MPa, problem.nu)
-    direct = spring_arrays(np.radians(theta), t, h, fam.depth_mm, fam.width_mm, fam.contact_allowance_mm,
-                           E_web, problem.nu)
+    direct = spring_arrays(
+        np.radians(theta), t, h, fam.depth_mm, fam.width_mm, fam.contact_allowance_mm, E_web, problem.nu
+    )
     sizes = []
     import mst_cli.design.problem as problem_module
+
     original = problem_module.spring_arrays
     monkeypatch.setattr(problem_module, "spring_arrays", lambda th, *a: sizes.append(th.size) or original(th, *a))
     for a, b in zip(problem.layer_laws(theta, t, h), direct):

@@ -28,11 +28,11 @@ from mst_cli.cli.app import main
 ROOT = Path(__file__).resolve().parents[1]
 PROFILE = ROOT / "mst_cli" / "cad" / "data" / "tpu85a-0.4mm.ini"
 FORWARD = ROOT / "configs" / "mohammadi2021-forward.yaml"
-W = 0.45            # line width of the synthetic G-code
+W = 0.45  # line width of the synthetic G-code
 
 from slicer_support import HAVE_SLICER, need_slicer  # noqa: E402
 
-pytestmark = pytest.mark.slow      # most tests here run PrusaSlicer
+pytestmark = pytest.mark.slow  # most tests here run PrusaSlicer
 
 
 # --------------------------------------------------------------------------- synthetic G-code
@@ -47,12 +47,16 @@ def gcode_text(layers, relative=True, pause_after=None):
         for ftype, segs in features:
             out += [f";TYPE:{ftype}", f";WIDTH:{W}"]
             for x0, y0, x1, y1 in segs:
-                out.append(f"G1 X{x0:.3f} Y{y0:.3f} F600")          # travel
+                out.append(f"G1 X{x0:.3f} Y{y0:.3f} F600")  # travel
                 de = 0.03 * np.hypot(x1 - x0, y1 - y0)
                 e += de
                 out.append(f"G1 X{x1:.3f} Y{y1:.3f} E{(de if relative else e):.5f}")
-    out += ["; filament used [mm] = 123.45", "; filament used [cm3] = 0.30",
-            "; total filament used [g] = 0.36", "; estimated printing time (normal mode) = 1h 2m 3s"]
+    out += [
+        "; filament used [mm] = 123.45",
+        "; filament used [cm3] = 0.30",
+        "; total filament used [g] = 0.36",
+        "; estimated printing time (normal mode) = 1h 2m 3s",
+    ]
     return "\n".join(out) + "\n"
 
 
@@ -72,16 +76,16 @@ def test_bridge_between_two_pillars_spans_its_gap():
     assert r.longest.layer == 3 and r.longest.type == "Bridge infill"
     assert abs(r.longest.length_mm - L) < W
     assert abs(r.longest.x_mm - (3 + L / 2)) < 0.1
-    assert r.per_layer[0].length_mm == 0.0               # pillar on pillar
+    assert r.per_layer[0].length_mm == 0.0  # pillar on pillar
 
 
 def test_45_degree_overhang_is_supported_and_a_flatter_one_is_not():
     stair45 = [[("External perimeter", [(0.2 * k, 0, 0.2 * k, 10)])] for k in range(10)]
     r = G.free_spans(G.parse_gcode(gcode_text(stair45)))
-    assert r.longest.length_mm < 0.06                    # at most one sample at a line end
+    assert r.longest.length_mm < 0.06  # at most one sample at a line end
     stair = [[("External perimeter", [(0.35 * k, 0, 0.35 * k, 10)])] for k in range(10)]
     r = G.free_spans(G.parse_gcode(gcode_text(stair)))
-    assert abs(r.longest.length_mm - 10.0) < 0.06        # 0.35 mm > half a line: all in the air
+    assert abs(r.longest.length_mm - 10.0) < 0.06  # 0.35 mm > half a line: all in the air
 
 
 def test_cantilever_overhang_length():
@@ -98,7 +102,8 @@ def test_joined_moves_count_a_strand_that_turns_a_corner():
     # an L-shaped strand, two moves of one path: from x 0.5 (over the base, which ends at
     # x = 1) to x 6.5, then 4 mm along y: 5.5 mm and 5.5 + 4 mm in the air
     text = gcode_text([base, []]).replace(
-        "; filament", ";TYPE:Overhang perimeter\nG1 X0.5 Y0.5\nG1 X6.5 Y0.5 E0.2\nG1 X6.5 Y4.5 E0.2\n; filament", 1)
+        "; filament", ";TYPE:Overhang perimeter\nG1 X0.5 Y0.5\nG1 X6.5 Y0.5 E0.2\nG1 X6.5 Y4.5 E0.2\n; filament", 1
+    )
     g = G.parse_gcode(text)
     assert abs(G.free_spans(g).longest.length_mm - 5.5) < 0.1
     assert abs(G.free_spans(g, join_moves=True).longest.length_mm - 9.5) < 0.1
@@ -154,7 +159,7 @@ G90
     np.testing.assert_allclose(l1.segments, [[0, 0, 10, 0, 0.5], [10, 0, 10, 10, 0.5], [0, 10, 0, 0, 0.5]])
     np.testing.assert_allclose(l1.e_mm, [0.5, 0.5, 0.4])
     assert list(l1.types) == ["External perimeter"] * 3
-    assert l1.paths[0] == l1.paths[1] != l1.paths[2]            # the travel starts a new path
+    assert l1.paths[0] == l1.paths[1] != l1.paths[2]  # the travel starts a new path
     np.testing.assert_allclose(l2.segments, [[0, 0, 10, 0, 0.42], [10, 0, 5, 2, 0.42]])
     np.testing.assert_allclose(l2.e_mm, [0.3, 0.1])
     assert len(g.pauses) == 1
@@ -174,26 +179,41 @@ def test_pause_in_the_middle_of_a_layer_is_flagged():
 
 def test_gaps_along_a_line():
     # two walls along x, centrelines at y = 0 and y = 2, widths 0.45 and 0.5: air 0.225 .. 1.75
-    layer = G.Layer(1, 0.2, 0.2, np.array([[0, 0, 10, 0, 0.45], [0, 2, 10, 2, 0.5]]),
-                    np.array(["Perimeter", "Perimeter"], dtype=object), np.ones(2), np.arange(2))
+    layer = G.Layer(
+        1,
+        0.2,
+        0.2,
+        np.array([[0, 0, 10, 0, 0.45], [0, 2, 10, 2, 0.5]]),
+        np.array(["Perimeter", "Perimeter"], dtype=object),
+        np.ones(2),
+        np.arange(2),
+    )
     (gap,) = G.gaps_along_line(layer, "x", 5.0)
     assert gap == pytest.approx((0.225, 1.75))
     # near a round end the stroke is thinner: at x = 10.1 the first wall spans +-sqrt(.225^2-.1^2)
     (gap,) = G.gaps_along_line(layer, "x", 10.1)
-    assert gap[0] == pytest.approx(np.sqrt(0.225 ** 2 - 0.1 ** 2))
+    assert gap[0] == pytest.approx(np.sqrt(0.225**2 - 0.1**2))
     # a diagonal stroke crossing the line x = 0: half-width 0.225 / cos(45) along y
-    diag = G.Layer(1, 0.2, 0.2, np.array([[-1, -1, 1, 1, 0.45], [-1, 3, 1, 3, 0.45]]),
-                   np.array(["Perimeter"] * 2, dtype=object), np.ones(2), np.arange(2))
+    diag = G.Layer(
+        1,
+        0.2,
+        0.2,
+        np.array([[-1, -1, 1, 1, 0.45], [-1, 3, 1, 3, 0.45]]),
+        np.array(["Perimeter"] * 2, dtype=object),
+        np.ones(2),
+        np.arange(2),
+    )
     (gap,) = G.gaps_along_line(diag, "x", 0.0)
     assert gap == pytest.approx((0.225 * np.sqrt(2), 3 - 0.225))
     assert G.gap_at(layer, "x", 5.0, 0.2, 1.8) == pytest.approx((0.225, 1.75))
-    assert G.gaps_along_line(layer, "y", 1.0) == []        # the line runs between the walls
+    assert G.gaps_along_line(layer, "y", 1.0) == []  # the line runs between the walls
 
 
 # --------------------------------------------------------------------------- the 3MF pause
 def box_mesh(*boxes):
     """(vertices, triangles) of the union of axis-aligned boxes ((x0, y0, z0), (x1, y1, z1))."""
     import manifold3d as m3
+
     solid = None
     for lo, hi in boxes:
         b = m3.Manifold.cube(list(np.subtract(hi, lo))).translate(list(lo))
@@ -220,8 +240,9 @@ def test_3mf_pause_metadata_is_prusaslicers_and_deterministic():
 # --------------------------------------------------------------------------- real slicing
 def write_export(folder: Path, vertices, triangles, manifest_extra=None, pause_after_z=None, stl=True):
     folder.mkdir(parents=True, exist_ok=True)
-    (folder / "sensor.3mf").write_bytes(mesh_io.three_mf_bytes(vertices, triangles, "part",
-                                                               pause_after_z_mm=pause_after_z))
+    (folder / "sensor.3mf").write_bytes(
+        mesh_io.three_mf_bytes(vertices, triangles, "part", pause_after_z_mm=pause_after_z)
+    )
     if stl:
         (folder / "sensor.stl").write_bytes(mesh_io.stl_bytes(vertices, triangles))
     manifest = {"format": 1, "name": "part"}
@@ -245,9 +266,9 @@ def test_sliced_bridge_spans_its_gap(tmp_path):
     rep = json.loads(r.stdout)
     span = rep["free_span"]["longest"]
     assert abs(span["length_mm"] - L) < 0.5
-    assert 4 < span["z_mm"] <= 4.2 + 1e-6                  # the first layer over the gap
-    assert 4 < span["x_mm"] < 4 + L                         # print frame, over the gap
-    assert rep["failed"] == ["free_span"]               # PrusaSlicer bridges it: no support
+    assert 4 < span["z_mm"] <= 4.2 + 1e-6  # the first layer over the gap
+    assert 4 < span["x_mm"] < 4 + L  # print frame, over the gap
+    assert rep["failed"] == ["free_span"]  # PrusaSlicer bridges it: no support
     assert "mst slice: failed: free span" in r.stderr
     assert rep["pause"]["expected"] == "not given" and rep["pause"]["ok"]
     assert (folder / "sensor.gcode").is_file() and not (folder / "print.png").exists()
@@ -266,6 +287,7 @@ def test_sliced_mushroom_needs_support(tmp_path):
 def test_sliced_45_degree_wedge_prints_without_support(tmp_path):
     need_slicer()
     import manifold3d as m3
+
     # cross-section in (x, z): the right face overhangs at 45 degrees from x = 5 to x = 15
     wedge = m3.CrossSection([[(0, 0), (5, 0), (15, 10), (0, 10)]]).extrude(8).rotate([90, 0, 0])
     mesh = wedge.to_mesh()
@@ -288,14 +310,40 @@ def test_sliced_slot_gap_lands_on_the_designed_line_off_the_origin(tmp_path):
     off = np.array([7.0, -3.0, 0.0])
     v, t = box_mesh(((0, 0, 0), (10, 3, 3)), ((0, 4, 0), (10, 7, 3)), ((0, 0, 0), (2, 7, 3)))
     v = v + off
-    lines = [{"layer": 1, "x_mm": 6.0 + off[0], "z_mm": 1.5, "y_low_mm": 3.0 + off[1],
-              "y_high_mm": 4.0 + off[1], "gap_mm": 1.0}]
+    lines = [
+        {
+            "layer": 1,
+            "x_mm": 6.0 + off[0],
+            "z_mm": 1.5,
+            "y_low_mm": 3.0 + off[1],
+            "y_high_mm": 4.0 + off[1],
+            "gap_mm": 1.0,
+        }
+    ]
     # and the two 3 mm walls beside the slot, measured across (along y) away from their junction
-    walls = [{"layer": 1, "wall": name, "t_mm": 3.0, "x0_mm": 4.0 + off[0], "x1_mm": 9.0 + off[0],
-              "y0_mm": yc + off[1], "y1_mm": yc + off[1], "z_low_mm": 0.2, "z_high_mm": 3.0}
-             for name, yc in (("below the slot", 1.5), ("above the slot", 5.5))]
-    extra = {"print": {"layer_height_mm": 0.2, "cavity_lines": lines, "wall_lines": walls,
-                       "bbox_min_mm": list(v.min(0)), "bbox_max_mm": list(v.max(0))}}
+    walls = [
+        {
+            "layer": 1,
+            "wall": name,
+            "t_mm": 3.0,
+            "x0_mm": 4.0 + off[0],
+            "x1_mm": 9.0 + off[0],
+            "y0_mm": yc + off[1],
+            "y1_mm": yc + off[1],
+            "z_low_mm": 0.2,
+            "z_high_mm": 3.0,
+        }
+        for name, yc in (("below the slot", 1.5), ("above the slot", 5.5))
+    ]
+    extra = {
+        "print": {
+            "layer_height_mm": 0.2,
+            "cavity_lines": lines,
+            "wall_lines": walls,
+            "bbox_min_mm": list(v.min(0)),
+            "bbox_max_mm": list(v.max(0)),
+        }
+    }
     folder = write_export(tmp_path / "slot", v, t, extra)
     r = slice_cli([folder, "--no-plot", "--json"])
     assert r.exit_code == 0, r.stderr
@@ -317,8 +365,9 @@ def test_sliced_slot_gap_lands_on_the_designed_line_off_the_origin(tmp_path):
 def test_sliced_3mf_pauses_between_the_right_layers(tmp_path):
     need_slicer()
     v, t = box_mesh(((0, 0, 0), (10, 10, 4)))
-    folder = write_export(tmp_path / "box", v, t, {"print": {"pause": {"after_layer": 10, "z_mm": 2.0}}},
-                          pause_after_z=2.0, stl=False)
+    folder = write_export(
+        tmp_path / "box", v, t, {"print": {"pause": {"after_layer": 10, "z_mm": 2.0}}}, pause_after_z=2.0, stl=False
+    )
     r = slice_cli([folder, "--no-plot", "--json"])
     assert r.exit_code == 0, r.stderr
     rep = json.loads(r.stdout)
@@ -330,7 +379,7 @@ def test_sliced_3mf_pauses_between_the_right_layers(tmp_path):
     lines = (folder / "sensor.gcode").read_text().splitlines()
     pause_line = p["gcode_line"] - 1
     z_change = max(i for i, s in enumerate(lines[:pause_line]) if s.startswith(";Z:"))
-    assert lines[z_change] == ";Z:2.2"                       # after layer 10's last move ...
+    assert lines[z_change] == ";Z:2.2"  # after layer 10's last move ...
     assert not any(" E" in s and s.startswith("G1 X") for s in lines[z_change:pause_line])
     # ... and before layer 11's first extrusion
     # asked for another layer: exit 1 naming the pause
@@ -394,14 +443,18 @@ def test_missing_prusa_slicer_is_exit_2_with_how_to_install(tmp_path, monkeypatc
     assert "apt-get install prusa-slicer" in r.stderr
 
 
-@pytest.mark.parametrize("text, reason", [
-    ("hello world\n", "not 'key = value'"),
-    ("[print:TPU]\nlayer_height = 0.2\n", "config bundle"),
-    ("# only a comment\n", "no settings"),
-    ("layer_height = 0.2\nlayer_height = 0.3\n", "set twice"),
-])
+@pytest.mark.parametrize(
+    "text, reason",
+    [
+        ("hello world\n", "not 'key = value'"),
+        ("[print:TPU]\nlayer_height = 0.2\n", "config bundle"),
+        ("# only a comment\n", "no settings"),
+        ("layer_height = 0.2\nlayer_height = 0.3\n", "set twice"),
+    ],
+)
 def test_profile_that_is_no_prusaslicer_config_is_exit_2(tmp_path, monkeypatch, text, reason):
     import mst_cli.cad.slicer as S
+
     monkeypatch.setattr(S, "find_prusa_slicer", lambda: "/bin/true")
     monkeypatch.setattr(S, "known_options", lambda exe: frozenset({"layer_height"}))
     bad = tmp_path / "bad.ini"
@@ -422,12 +475,22 @@ def test_profile_with_unknown_option_is_exit_2(tmp_path):
 
 def test_bundled_profile_is_complete_and_tpu():
     import mst_cli.cad.slicer as S
+
     values = S.parse_ini(PROFILE.read_text())
     assert values["layer_height"] == values["first_layer_height"] == "0.2"
     assert values["nozzle_diameter"] == "0.4" and values["support_material"] == "0"
     assert values["max_volumetric_speed"] == "1.5" and values["pause_print_gcode"] == "M601"
-    speeds = [float(values[k]) for k in ("perimeter_speed", "external_perimeter_speed", "infill_speed",
-                                          "solid_infill_speed", "bridge_speed", "first_layer_speed")]
+    speeds = [
+        float(values[k])
+        for k in (
+            "perimeter_speed",
+            "external_perimeter_speed",
+            "infill_speed",
+            "solid_infill_speed",
+            "bridge_speed",
+            "first_layer_speed",
+        )
+    ]
     assert all(15 <= s <= 25 for s in speeds)
     if HAVE_SLICER:
         assert set(values) == set(S.known_options(shutil.which("prusa-slicer")))
@@ -438,6 +501,7 @@ def test_the_bundled_profile_ships_as_package_data():
     # must be one of them, or 'mst slice' outside the source tree finds no profile (.ci/run
     # slices from such an install)
     import mst_cli.cad.slicer as S
+
     package = Path(mst_cli.__file__).parent
     profile = S.bundled_profile()
     assert profile.is_file() and package in profile.parents

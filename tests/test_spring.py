@@ -24,7 +24,7 @@ from mst_cli.model.mechanics.spring import (
 )
 
 E, NU = 12.0, 0.45
-E_PS = E / (1 - NU ** 2)          # plane-strain modulus of a wide web
+E_PS = E / (1 - NU**2)  # plane-strain modulus of a wide web
 
 
 def timoshenko_frame_compliance(theta_rad, L, b, t, E, nu):
@@ -35,26 +35,28 @@ def timoshenko_frame_compliance(theta_rad, L, b, t, E, nu):
     node 1 clamped, node 2 with rotation fixed and free in x and y; unit vertical load.
     Plane strain (a web b wide): axial and bending stiffness with E / (1 - nu^2).
     """
-    A, I = b * t, b * t ** 3 / 12.0
-    Ep = E / (1 - nu ** 2)
+    A, I = b * t, b * t**3 / 12.0
+    Ep = E / (1 - nu**2)
     G = E / (2 * (1 + nu))
-    phi = 12 * Ep * I / (SHEAR_COEFFICIENT_RECT * G * A * L ** 2)
+    phi = 12 * Ep * I / (SHEAR_COEFFICIENT_RECT * G * A * L**2)
     a = Ep * A / L
-    c = Ep * I / (L ** 3 * (1 + phi))
-    k_local = np.array([
-        [a, 0, 0, -a, 0, 0],
-        [0, 12 * c, 6 * c * L, 0, -12 * c, 6 * c * L],
-        [0, 6 * c * L, (4 + phi) * c * L ** 2, 0, -6 * c * L, (2 - phi) * c * L ** 2],
-        [-a, 0, 0, a, 0, 0],
-        [0, -12 * c, -6 * c * L, 0, 12 * c, -6 * c * L],
-        [0, 6 * c * L, (2 - phi) * c * L ** 2, 0, -6 * c * L, (4 + phi) * c * L ** 2],
-    ])
+    c = Ep * I / (L**3 * (1 + phi))
+    k_local = np.array(
+        [
+            [a, 0, 0, -a, 0, 0],
+            [0, 12 * c, 6 * c * L, 0, -12 * c, 6 * c * L],
+            [0, 6 * c * L, (4 + phi) * c * L**2, 0, -6 * c * L, (2 - phi) * c * L**2],
+            [-a, 0, 0, a, 0, 0],
+            [0, -12 * c, -6 * c * L, 0, 12 * c, -6 * c * L],
+            [0, 6 * c * L, (2 - phi) * c * L**2, 0, -6 * c * L, (4 + phi) * c * L**2],
+        ]
+    )
     cs, sn = math.cos(theta_rad), math.sin(theta_rad)
     rot = np.array([[cs, sn, 0], [-sn, cs, 0], [0, 0, 1]])
     T = np.zeros((6, 6))
     T[:3, :3] = T[3:, 3:] = rot
     K = T.T @ k_local @ T
-    free = [3, 4]                       # node 2: x and y free, rotation fixed
+    free = [3, 4]  # node 2: x and y free, rotation fixed
     u = np.linalg.solve(K[np.ix_(free, free)], np.array([0.0, 1.0]))
     return u[1]
 
@@ -77,15 +79,18 @@ def test_slender_wall_tends_to_pure_bending():
         h = 2 * t + 200 * t  # keeps t/L small and shrinking in proportion
         full = wall_compliance_mm_per_N(th, t, h, b, E, NU)
         L = 0.5 * (h - t) / math.sin(th)
-        bending = math.cos(th) ** 2 * L ** 3 / (12 * E_PS * b * t ** 3 / 12)
+        bending = math.cos(th) ** 2 * L**3 / (12 * E_PS * b * t**3 / 12)
         ratios.append(full / bending - 1)
     assert ratios[0] < 1e-3
-    assert ratios[1] == pytest.approx(ratios[0], rel=0.05)   # same t/L -> same ratio
+    assert ratios[1] == pytest.approx(ratios[0], rel=0.05)  # same t/L -> same ratio
     # and at a fixed height, thinner walls approach pure bending quadratically
     h = 5.0
-    r = [wall_compliance_mm_per_N(th, t, h, b, E, NU)
-         / (math.cos(th) ** 2 * (0.5 * (h - t) / math.sin(th)) ** 3 / (E_PS * b * t ** 3)) - 1
-         for t in (0.1, 0.05)]
+    r = [
+        wall_compliance_mm_per_N(th, t, h, b, E, NU)
+        / (math.cos(th) ** 2 * (0.5 * (h - t) / math.sin(th)) ** 3 / (E_PS * b * t**3))
+        - 1
+        for t in (0.1, 0.05)
+    ]
     assert r[0] / r[1] == pytest.approx(4.0, rel=0.05)
 
 
@@ -108,7 +113,7 @@ def test_plane_strain_stiffens_a_slender_wall_by_one_over_one_minus_nu_squared()
     # slender: bending dominates, and bending goes with E'; nu = 0 is plane stress
     th, t, h, b = math.radians(40), 0.1, 20.0, 20.0
     ratio = layer_stiffness_N_per_mm(th, t, h, b, E, NU) / layer_stiffness_N_per_mm(th, t, h, b, E, 0.0)
-    assert ratio == pytest.approx(1 / (1 - NU ** 2), rel=1e-3)
+    assert ratio == pytest.approx(1 / (1 - NU**2), rel=1e-3)
 
 
 def test_layer_is_two_walls_in_series_times_two_chevrons():
@@ -127,6 +132,7 @@ def bonded_layer_modulus_fe(E, nu, a, H):
     Independent of the closed form it checks."""
     from skfem import Basis, ElementTriP2, ElementVector, MeshTri, asm, condense, solve
     from skfem.models.elasticity import lame_parameters, linear_elasticity
+
     nx = max(8, int(math.ceil(16 * a / H)))
     xs = a * np.sin(0.5 * np.pi * np.linspace(0, 1, nx + 1))
     mesh = MeshTri.init_tensor(xs, np.linspace(0, H, 9)).refined(2 if a / H < 2 else 1)
@@ -151,7 +157,7 @@ def test_pad_compression_modulus_equals_fe_of_a_bonded_layer(a_over_H):
 
 
 def test_pad_compression_modulus_limits():
-    M = E * (1 - NU) / ((1 + NU) * (1 - 2 * NU))           # constrained (oedometric) modulus
+    M = E * (1 - NU) / ((1 + NU) * (1 - 2 * NU))  # constrained (oedometric) modulus
     assert float(pad_compression_modulus_MPa(E, NU, 1e6, 1.0)) == pytest.approx(M, rel=1e-5)
     assert float(pad_compression_modulus_MPa(E, NU, 1e-6, 1.0)) == pytest.approx(E_PS, rel=1e-9)
     assert float(pad_compression_modulus_MPa(E, 0.0, 3.0, 1.0)) == pytest.approx(E, rel=1e-12)
@@ -166,7 +172,7 @@ def test_locked_stiffness_is_walls_plus_contact_column():
     carry load over the contact width 2c and the whole web width D."""
     cell = HexCell(25, 0.6, 2.0)
     law = layer_law(cell, Material(youngs_modulus_MPa=E, poisson_ratio=NU))
-    c = 15.0 - 0.6 / math.sin(math.radians(25))           # inner tip half-width
+    c = 15.0 - 0.6 / math.sin(math.radians(25))  # inner tip half-width
     column = bonded_layer_modulus_fe(E, NU, c, 1.2) * 20.0 * 2 * c / 1.2
     assert law.k_locked_N_per_mm - law.k_N_per_mm == pytest.approx(column, rel=0.01)
     # for the soft reference layer the locked stiffness is hundreds of times the open one
@@ -177,13 +183,13 @@ def test_softened_law_is_continuous_and_passes_its_knee_and_lock_point():
     cell = HexCell(45, 0.8, 4.0)
     law = spring_layer(cell, Material(youngs_modulus_MPa=E, poisson_ratio=NU))
     k, dl, R = law.k_N_per_mm, law.d_lock_mm, law.lock_force_N
-    assert 0 < R < k * dl                                  # steep walls soften before the lock
+    assert 0 < R < k * dl  # steep walls soften before the lock
     knee, lock = law.knots_N
     assert (knee, lock) == pytest.approx((KNEE_FRACTION * R, R), rel=1e-15)
     assert law.displacement_mm(knee) == pytest.approx(knee / k, rel=1e-14)
     assert law.displacement_mm(R) == pytest.approx(dl, rel=1e-14)
     eps = 1e-9 * R
-    for F in (knee, R):                                    # no jump at either knot
+    for F in (knee, R):  # no jump at either knot
         assert law.displacement_mm(F + eps) - law.displacement_mm(F - eps) < 1e-6 * dl
     # slopes: k first, the secant through the lock point next, k_locked after
     d = law.displacement_mm
@@ -228,14 +234,17 @@ def test_stiffness_correction_over_the_printable_box():
     # (theta 5 deg, y = t/(h - t) = 0.88: the beam's free length L (1 - y) is an eighth of L)
     x, th = np.meshgrid(np.linspace(-1, 5, 40), np.radians(np.linspace(0.5, 89.5, 40)))
     for sigma in (0.0, 0.5, 1.0, 2.5):
-        for f in (correction.stiffness_factor(x, th), correction.lock_force_factor(x, th, sigma),
-                  correction.lock_stroke_factor(x, th, sigma)):
+        for f in (
+            correction.stiffness_factor(x, th),
+            correction.lock_force_factor(x, th, sigma),
+            correction.lock_stroke_factor(x, th, sigma),
+        ):
             assert np.isfinite(f).all() and (f > 0).all() and f.max() < 50
 
 
 def test_fitted_box_is_the_printable_box():
     fit = correction._fit()["fitted_on"]
-    assert fit["t_over_L_range"][1] > 1.6                   # walls shorter than they are thick
+    assert fit["t_over_L_range"][1] > 1.6  # walls shorter than they are thick
     lo, hi = np.degrees(correction.fitted_theta_rad_range())
     assert lo < 5.5 and hi > 74.5
     assert correction.fitted_t_over_L_max() == fit["t_over_L_range"][1]
@@ -295,16 +304,17 @@ def test_allowance_over_t_term_is_recovered_and_bounded():
     # sigma = 2 (1 - y (1 + a/t)): a cell's a/t comes back from (t/L, theta, sigma)
     cell = HexCell(20.0, 0.4, 2.0)
     x, th = cell.t_mm / cell.wall_length_mm, cell.theta_rad
-    sigma = correction.stroke_ratio(cell.h_mm - 2 * cell.t_mm - cell.contact_allowance_mm,
-                                    cell.wall_length_mm, th)
+    sigma = correction.stroke_ratio(cell.h_mm - 2 * cell.t_mm - cell.contact_allowance_mm, cell.wall_length_mm, th)
     assert float(correction.allowance_over_t(x, th, sigma)) == pytest.approx(cell.contact_allowance_mm / 0.4)
-    r = correction.allowance_over_t(np.array([0.0, 1e-9, 5.0]), np.radians([0.5, 45.0, 89.0]),
-                                    np.array([-1.0, 3.0, 0.0]))
+    r = correction.allowance_over_t(
+        np.array([0.0, 1e-9, 5.0]), np.radians([0.5, 45.0, 89.0]), np.array([-1.0, 3.0, 0.0])
+    )
     assert np.isfinite(r).all() and (r >= 0).all() and (r <= correction.R_MAX).all()
 
 
 def test_lock_factors_from_one_design_matrix_equal_the_two_fits_bit_for_bit():
     from mst_cli.model.mechanics import correction
+
     rng = np.random.default_rng(3)
     x, theta, sigma = rng.uniform(0, 2, 2000), np.radians(rng.uniform(0, 90, 2000)), rng.uniform(-0.5, 3, 2000)
     force, stroke = correction.lock_factors(x, theta, sigma)

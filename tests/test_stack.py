@@ -69,25 +69,26 @@ def _compliance_one_segment(stack, force_N):
     if force_N >= knots[-1]:
         return stack.locked_compliance_mm_per_N
     i = int(np.searchsorted(knots, force_N, side="right")) - 1
-    d = stack.displacement_mm(knots[i:i + 2])
+    d = stack.displacement_mm(knots[i : i + 2])
     return float((d[1] - d[0]) / (knots[i + 1] - knots[i]))
 
 
 @pytest.mark.parametrize("n_layers", [1, 3, 12])
 def test_vectorised_compliance_is_the_per_force_definition_bit_for_bit(n_layers):
     from mst_cli.model.mechanics.frame import TabulatedLockingLayer
+
     rng = np.random.default_rng(n_layers)
     laws = []
     for j in range(n_layers):
         k, dl = rng.uniform(0.5, 20), rng.uniform(0.3, 1.5)
-        if j % 2:                  # a tabulated (frame-like) law: many knots, softening
+        if j % 2:  # a tabulated (frame-like) law: many knots, softening
             d = np.linspace(0, dl, 9)
             F = k * d * (1 - 0.3 * d / dl)
             laws.append(TabulatedLockingLayer.from_curve(d, F, k, 300 * k))
         else:
             laws.append(LinearLockingLayer(k, dl, 300 * k, 0.7 * k * dl))
     s = Stack(tuple(laws))
-    F = np.concatenate([np.linspace(0, 1.3 * s.last_lock_force_N, 997), s.knots_N])   # knots: right-continuous
+    F = np.concatenate([np.linspace(0, 1.3 * s.last_lock_force_N, 997), s.knots_N])  # knots: right-continuous
     got = s.local_compliance_mm_per_N(F)
     assert got.shape == F.shape
     assert [float(c) for c in got] == [_compliance_one_segment(s, float(f)) for f in F]
@@ -95,7 +96,7 @@ def test_vectorised_compliance_is_the_per_force_definition_bit_for_bit(n_layers)
 
 
 def test_compliance_is_the_sum_of_the_layer_slopes():
-    s = Stack((A, B, LinearLockingLayer(0.3, 0.8, 500.0)))      # locks at 0.24 N, then A (1 N), B (2 N)
+    s = Stack((A, B, LinearLockingLayer(0.3, 0.8, 500.0)))  # locks at 0.24 N, then A (1 N), B (2 N)
     assert s.local_compliance_mm_per_N(np.array([0.1, 0.2])) == pytest.approx([1 + 0.25 + 1 / 0.3] * 2)
     assert s.local_compliance_mm_per_N(0.5) == pytest.approx(1 + 0.25 + 1 / 500, rel=1e-12)
     assert s.local_compliance_mm_per_N(1.5) == pytest.approx(1e-3 + 0.25 + 1 / 500, rel=1e-12)
@@ -106,6 +107,7 @@ def test_curve_interpolated_on_the_knots_is_the_sum_of_the_layer_laws(n_layers):
     """d(F) is linear between the union of the knots, so interpolating there is exact: it
     equals the layers' own laws summed at every force, before and past the last lock."""
     from mst_cli.model.mechanics.frame import TabulatedLockingLayer
+
     rng = np.random.default_rng(10 + n_layers)
     laws = []
     for j in range(n_layers):

@@ -43,7 +43,7 @@ class FullChevronFrame:
         self.ndof = 3 * self.n_nodes
         top = 3 * (self.n_nodes - 1)
         self.top_w = top + 1
-        self.pinned = np.array([0, 1, 2, top, top + 1, top + 2])   # clamps; top u_z prescribed
+        self.pinned = np.array([0, 1, 2, top, top + 1, top + 2])  # clamps; top u_z prescribed
         self.free = np.setdiff1d(np.arange(self.ndof), self.pinned)
         self.dofs = 3 * np.arange(self.n_nodes - 1)[:, None] + np.arange(6)[None, :]
 
@@ -77,14 +77,14 @@ def test_frame_one_wall_equals_full_chevron_along_the_whole_path(cell):
         for dd in np.linspace(d_prev, d, 4)[1:]:
             u, f_top = full.solve(u, dd)
         d_prev = d
-        F_full = 2 * f_top                  # two chevrons of the web in parallel
+        F_full = 2 * f_top  # two chevrons of the web in parallel
         assert F_full == pytest.approx(F, rel=1e-7)
         U = u.reshape(-1, 3)
         n = full.tip
-        assert U[n, 1] == pytest.approx(-0.5 * d, rel=1e-8)        # tip on the moving mirror plane
-        assert abs(U[n, 2]) < 1e-9                                   # tip does not rotate
-        lower, upper = U[:n + 1], U[n:][::-1]
-        assert np.allclose(upper[:, 0], lower[:, 0], atol=1e-9 * d)   # mirror image in z
+        assert U[n, 1] == pytest.approx(-0.5 * d, rel=1e-8)  # tip on the moving mirror plane
+        assert abs(U[n, 2]) < 1e-9  # tip does not rotate
+        lower, upper = U[: n + 1], U[n:][::-1]
+        assert np.allclose(upper[:, 0], lower[:, 0], atol=1e-9 * d)  # mirror image in z
         assert np.allclose(upper[:, 1], -d - lower[:, 1], atol=1e-9 * d)
         assert np.allclose(upper[:, 2], -lower[:, 2], atol=1e-9)
 
@@ -93,6 +93,7 @@ def test_frame_one_wall_equals_full_chevron_along_the_whole_path(cell):
 def _mirrored_half_chevron(cell, levels):
     """The quarter mesh plus its mirror image across z = h/2, nodes on the plane merged."""
     from skfem import MeshTri
+
     mesh, x_cut = L2.refined_quarter_mesh(cell, levels=levels)
     p, t = mesh.p, mesh.t
     h = cell.h_mm
@@ -102,7 +103,7 @@ def _mirrored_half_chevron(cell, levels):
     mirror_index[on_plane] = np.flatnonzero(on_plane)
     mirror_index[off] = p.shape[1] + np.arange(off.size)
     p_all = np.hstack([p, np.vstack([p[0, off], h - p[1, off]])])
-    t_mirror = mirror_index[t][[0, 2, 1]]               # reflection flips orientation
+    t_mirror = mirror_index[t][[0, 2, 1]]  # reflection flips orientation
     return MeshTri(p_all, np.hstack([t, t_mirror])), x_cut
 
 
@@ -111,6 +112,7 @@ class HalfChevronContinuum:
 
     def __init__(self, cell, levels):
         from skfem import Basis, ElementTriP2, ElementVector
+
         mesh, x_cut = _mirrored_half_chevron(cell, levels)
         self.basis = Basis(mesh, ElementVector(ElementTriP2()), intorder=4)
         self.mu, self.lam = L2._lame_3d(MAT.youngs_modulus_MPa, MAT.poisson_ratio)
@@ -126,15 +128,16 @@ class HalfChevronContinuum:
         self.zero = np.flatnonzero(bottom | (top & is_x) | (cut & is_x))
         self.pinned = np.union1d(self.zero, self.top_z)
         self.free = np.setdiff1d(np.arange(self.basis.N), self.pinned)
-        self.depth_factor = 2.0 * cell.b_mm    # two chevrons of a web b = D wide
+        self.depth_factor = 2.0 * cell.b_mm  # two chevrons of a web b = D wide
         self.is_x = is_x
 
     def assemble(self, u, need_K=True):
-        return L2._Problem.assemble(self, u, need_K)      # the L2 kernel, on this mesh
+        return L2._Problem.assemble(self, u, need_K)  # the L2 kernel, on this mesh
 
     def linear(self, d):
         """Small-strain solution for a top-plate motion d: one solve with the tangent at rest."""
         from scipy.sparse.linalg import spsolve
+
         _, K = self.assemble(np.zeros(self.basis.N))
         u = np.zeros(self.basis.N)
         u[self.top_z] = -d
@@ -143,6 +146,7 @@ class HalfChevronContinuum:
 
     def solve(self, u, d, iterations=30):
         from scipy.sparse.linalg import spsolve
+
         u = u.copy()
         jump = np.zeros(self.basis.N)
         jump[self.top_z] = -d - u[self.top_z]
@@ -171,7 +175,7 @@ def test_continuum_quarter_equals_half_chevron_small_strain(cell):
     pair = pair.ravel()
     pairs = [np.flatnonzero(pair == g) for g in np.unique(pair)]
     pairs = [m for m in pairs if m.size == 2]
-    assert len(pairs) > 0.4 * half.basis.N       # every dof off the plane has its mirror twin
+    assert len(pairs) > 0.4 * half.basis.N  # every dof off the plane has its mirror twin
     for a, b in pairs:
         if half.is_x[a]:
             assert u[a] == pytest.approx(u[b], abs=1e-8 * d)

@@ -23,8 +23,8 @@ from mst_cli.io.schema import document_to_dict
 from mst_cli.model.geometry import HexCell
 
 ANGLE = math.radians(30.0)
-U = np.array([math.cos(ANGLE), math.sin(ANGLE)])     # the wall's direction
-N = np.array([-U[1], U[0]])                          # across it
+U = np.array([math.cos(ANGLE), math.sin(ANGLE)])  # the wall's direction
+N = np.array([-U[1], U[0]])  # across it
 
 
 def lines_along(offsets_mm, widths_mm, length_mm=4.0, origin=(2.0, 1.0)):
@@ -79,7 +79,7 @@ def test_voids_inside_a_thick_wall_stay_inside_it():
     # a 3 mm wall: two perimeters on each face, infill between them, 0.125 mm of air either side of it
     a, b = wall_ends()
     offsets = [-1.275, -0.85, 0.0, 1.275, 0.85]
-    widths = [0.45, 0.45, 1.0, 0.45, 0.45]           # infill -0.5..0.5, voids 0.5..0.625 and mirrored
+    widths = [0.45, 0.45, 1.0, 0.45, 0.45]  # infill -0.5..0.5, voids 0.5..0.625 and mirrored
     (r,) = G.material_across(lines_along(offsets, widths), a, b, 1, 1.45)
     assert r.width_mm == pytest.approx(3.0) and r.n_lines == 5
 
@@ -110,7 +110,7 @@ def test_wall_centre_lines_lie_midway_between_the_faces_on_the_free_stretch(thet
             assert abs((np.asarray(a) - p) @ nrm) == pytest.approx(t / 2)
             assert abs((np.asarray(b) - p) @ nrm) == pytest.approx(t / 2)
         u = (outer[k1] - outer[k0]) / np.hypot(*(outer[k1] - outer[k0]))
-        for end in (a, b):          # inside both faces' extent along the wall
+        for end in (a, b):  # inside both faces' extent along the wall
             s = (np.asarray(end) - outer[k0]) @ u
             assert s >= (inner[k0] - outer[k0]) @ u - 1e-9 and s >= -1e-9
             assert s <= (outer[k1] - outer[k0]) @ u + 1e-9 and s <= (inner[k1] - outer[k0]) @ u + 1e-9
@@ -120,8 +120,13 @@ def gcode_of(layers_segments, layer_height=0.2):
     """G-code text with one 'Perimeter' feature per layer: segments (x0, y0, x1, y1, w)."""
     out = ["G90", "M83", "G92 E0"]
     for k, segs in enumerate(layers_segments, start=1):
-        out += [";LAYER_CHANGE", f";Z:{layer_height * k:.3f}", f";HEIGHT:{layer_height}",
-                f"G1 Z{layer_height * k:.3f}", ";TYPE:Perimeter"]
+        out += [
+            ";LAYER_CHANGE",
+            f";Z:{layer_height * k:.3f}",
+            f";HEIGHT:{layer_height}",
+            f"G1 Z{layer_height * k:.3f}",
+            ";TYPE:Perimeter",
+        ]
         for x0, y0, x1, y1, w in segs:
             out += [f";WIDTH:{w}", f"G1 X{x0:.4f} Y{y0:.4f} F600", f"G1 X{x1:.4f} Y{y1:.4f} E0.05"]
     return "\n".join(out) + "\n"
@@ -131,9 +136,25 @@ def test_walls_as_sliced_reads_the_gcode_widths_over_the_walls_print_layers():
     # one wall along U through (2, 1) (print frame); the G-code frame is shifted by (100, 50)
     a, b = wall_ends()
     shift = (100.0, 50.0)
-    manifest = SliceManifest.from_dict({"print": {"wall_lines": [
-        {"layer": 1, "wall": "lower right", "t_mm": 0.8, "x0_mm": a[0], "y0_mm": a[1], "x1_mm": b[0],
-         "y1_mm": b[1], "z_low_mm": 0.2, "z_high_mm": 0.8}]}})
+    manifest = SliceManifest.from_dict(
+        {
+            "print": {
+                "wall_lines": [
+                    {
+                        "layer": 1,
+                        "wall": "lower right",
+                        "t_mm": 0.8,
+                        "x0_mm": a[0],
+                        "y0_mm": a[1],
+                        "x1_mm": b[0],
+                        "y1_mm": b[1],
+                        "z_low_mm": 0.2,
+                        "z_high_mm": 0.8,
+                    }
+                ]
+            }
+        }
+    )
     two = lines_along([-0.2, 0.2], [0.45, 0.45]) + [shift[0], shift[1], shift[0], shift[1], 0]
     wide = lines_along([0.0], [1.5]) + [shift[0], shift[1], shift[0], shift[1], 0]
     # layer 1 (a wide first layer) and layer 5 (above z_high) are outside the wall's z range
@@ -150,6 +171,7 @@ def test_walls_as_sliced_reads_the_gcode_widths_over_the_walls_print_layers():
 @pytest.fixture(scope="module")
 def forward():
     from pathlib import Path
+
     return api.load_design(Path(__file__).resolve().parents[1] / "configs" / "mohammadi2021-forward.yaml")
 
 
@@ -159,6 +181,7 @@ def test_uniformly_thicker_sliced_walls_predict_what_the_printer_wall_offset_pre
     dt = 0.05
     p = predict(forward, [la.t_mm + dt for la in forward.layers])
     from dataclasses import replace
+
     offset = api.simulate(replace(forward, printer=replace(forward.printer, wall_offset_mm=dt)))
     designed = api.simulate(forward)
     for row, reg, d in zip(p["regimes"], offset.regimes, designed.regimes):
@@ -185,10 +208,12 @@ def test_a_malformed_design_in_export_json_names_its_field(forward, kind):
     assert SliceManifest.from_dict({"design": d}).design.layers == forward.layers
     base = export_manifest(forward.name, forward.geometry(), forward.printer, 0.01, ["sensor.stl"], design=d)
     assert kind.from_dict(json.loads(json.dumps(base))).design.layers == forward.layers
-    for edit, field in ((lambda m: m["design"]["layers"][1].update(t_mm=-1), "export.json.design.layers[1].t_mm"),
-                        (lambda m: m["design"]["layers"][0].update(t_mm=0.95), "export.json.design.layers[0]"),
-                        (lambda m: m["design"]["layers"][2].pop("t_mm"), "export.json.design.layers"),
-                        (lambda m: m.update(design=[1, 2]), "export.json.design")):
+    for edit, field in (
+        (lambda m: m["design"]["layers"][1].update(t_mm=-1), "export.json.design.layers[1].t_mm"),
+        (lambda m: m["design"]["layers"][0].update(t_mm=0.95), "export.json.design.layers[0]"),
+        (lambda m: m["design"]["layers"][2].pop("t_mm"), "export.json.design.layers"),
+        (lambda m: m.update(design=[1, 2]), "export.json.design"),
+    ):
         bad = json.loads(json.dumps(base))
         edit(bad)
         with pytest.raises(InputError) as exc:

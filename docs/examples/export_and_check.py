@@ -1,6 +1,6 @@
 """Export the bundled design's printable body and measure the mesh against the design.
 
-    python docs/examples/export_and_check.py    # writes mst-out/examples/print/
+python docs/examples/export_and_check.py    # writes mst-out/examples/print/
 """
 
 from pathlib import Path
@@ -12,7 +12,7 @@ OUT = Path("mst-out/examples/print")
 
 files = mst.export(ROOT / "configs" / "mohammadi2021-forward.yaml", OUT, stl=True, three_mf=True)
 print("wrote " + ", ".join(f.name for f in files))
-checks = mst.check(OUT)                 # measured on sensor.stl against export.json
+checks = mst.check(OUT)  # measured on sensor.stl against export.json
 for check in checks:
     print(f"{check.name:<16} {'PASS' if check.passed else 'FAIL'}  {check.measured}  (expected {check.expected})")
 volume = next(c for c in checks if c.name == "volume").values

@@ -29,8 +29,9 @@ if TYPE_CHECKING:
 BOUNDS = VERIFIED_BOX
 
 
-def sample_cells(n: int, seed: int = 0, max_t_over_L: float = np.inf, bounds: dict | None = None,
-                 min_t_over_L: float = 0.0) -> list[HexCell]:
+def sample_cells(
+    n: int, seed: int = 0, max_t_over_L: float = np.inf, bounds: dict | None = None, min_t_over_L: float = 0.0
+) -> list[HexCell]:
     """n valid cells drawn uniformly in (theta, t, h) inside ``bounds`` (default BOUNDS) by
     rejection sampling: HexCell.violations() empty -- the only filter by default. The t/L
     window [min_t_over_L, max_t_over_L] (default: none) and narrower ``bounds`` are for
@@ -49,6 +50,7 @@ def sample_cells(n: int, seed: int = 0, max_t_over_L: float = np.inf, bounds: di
 def _law(model, cell, material):
     from mst_cli.model.mechanics import uncached_layer_law
     from mst_cli.model.mechanics.spring import spring_layer
+
     if model in ("spring-textbook", "spring"):
         return spring_layer(cell, material, corrected=model == "spring")
     return uncached_layer_law(cell, material, model)
@@ -70,9 +72,12 @@ def time_per_layer_s(model, cells, material, repeat: int = 1) -> float:
 def spring_vectorised_time_per_layer_s(cells, material, repeat: int = 20) -> float:
     """Per-layer time of L0 as the design loop calls it: spring_arrays over all cells at once."""
     from mst_cli.model.mechanics.spring import spring_arrays
+
     # the family constants too come from the cells (HexCell's declared defaults), not literals
-    arrays = [np.array([getattr(c, k) for c in cells])
-              for k in ("theta_rad", "t_mm", "h_mm", "b_mm", "width_mm", "contact_allowance_mm")]
+    arrays = [
+        np.array([getattr(c, k) for c in cells])
+        for k in ("theta_rad", "t_mm", "h_mm", "b_mm", "width_mm", "contact_allowance_mm")
+    ]
     best = np.inf
     for _ in range(repeat):
         t0 = time.perf_counter()
@@ -81,29 +86,33 @@ def spring_vectorised_time_per_layer_s(cells, material, repeat: int = 20) -> flo
     return best / len(cells)
 
 
-def compare_mechanics(cells: Iterable[HexCell], material: Material,
-                      models: Sequence[str] = ("spring-textbook", "spring", "frame"),
-                      reference: str = "continuum") -> list[dict]:
+def compare_mechanics(
+    cells: Iterable[HexCell],
+    material: Material,
+    models: Sequence[str] = ("spring-textbook", "spring", "frame"),
+    reference: str = "continuum",
+) -> list[dict]:
     """Per cell and model: k, d_lock, lock force and relative errors against the reference.
 
     A rung that raises on a cell is recorded with its error message (never dropped silently).
     """
     rows = []
     for c in cells:
-        row = {"theta_deg": c.theta_deg, "t_mm": c.t_mm, "h_mm": c.h_mm,
-               "t_over_L": c.t_mm / c.wall_length_mm}
+        row = {"theta_deg": c.theta_deg, "t_mm": c.t_mm, "h_mm": c.h_mm, "t_over_L": c.t_mm / c.wall_length_mm}
         try:
             ref = _law(reference, c, material)
-            row[reference] = {"k_N_per_mm": ref.k_N_per_mm, "d_lock_mm": ref.d_lock_mm,
-                              "lock_force_N": ref.lock_force_N}
+            row[reference] = {
+                "k_N_per_mm": ref.k_N_per_mm,
+                "d_lock_mm": ref.d_lock_mm,
+                "lock_force_N": ref.lock_force_N,
+            }
         except Exception as exc:
             row[reference] = {"error": f"{type(exc).__name__}: {exc}"}
             ref = None
         for m in models:
             try:
                 law = _law(m, c, material)
-                entry = {"k_N_per_mm": law.k_N_per_mm, "d_lock_mm": law.d_lock_mm,
-                         "lock_force_N": law.lock_force_N}
+                entry = {"k_N_per_mm": law.k_N_per_mm, "d_lock_mm": law.d_lock_mm, "lock_force_N": law.lock_force_N}
                 if ref is not None:
                     entry["err_k"] = law.k_N_per_mm / ref.k_N_per_mm - 1.0
                     entry["err_d_lock"] = law.d_lock_mm / ref.d_lock_mm - 1.0
@@ -120,9 +129,12 @@ def summarise(rows: Sequence[dict], model: str) -> dict:
     out = {"failures": 0}
     for key in ("err_k", "err_d_lock", "err_lock_force"):
         vals = np.array([abs(r[model][key]) for r in rows if key in r.get(model, {})])
-        out[key] = {"median": float(np.median(vals)) if vals.size else None,
-                    "p90": float(np.percentile(vals, 90)) if vals.size else None,
-                    "max": float(vals.max()) if vals.size else None, "n": int(vals.size)}
+        out[key] = {
+            "median": float(np.median(vals)) if vals.size else None,
+            "p90": float(np.percentile(vals, 90)) if vals.size else None,
+            "max": float(vals.max()) if vals.size else None,
+            "n": int(vals.size),
+        }
     out["failures"] = sum(1 for r in rows if "error" in r.get(model, {}))
     return out
 
@@ -130,6 +142,7 @@ def summarise(rows: Sequence[dict], model: str) -> dict:
 def field_errors(gaps_mm: ArrayLike, magnet: Magnet | None = None) -> dict[str, list[float]]:
     """Relative error of |B| on the axis of the dipole and axial models against magpylib."""
     from mst_cli.model import field as fld
+
     magnet = Magnet() if magnet is None else magnet
     g = np.asarray(gaps_mm, dtype=float)
     exact = np.linalg.norm(fld.field_at_chip_T(g, magnet, "cylinder"), axis=-1)
@@ -143,6 +156,7 @@ def field_errors(gaps_mm: ArrayLike, magnet: Magnet | None = None) -> dict[str, 
 def field_times_s(gaps_mm: ArrayLike, magnet: Magnet | None = None, repeat: int = 20) -> dict[str, float]:
     """Per-point time of each field model on the gap array, s."""
     from mst_cli.model import field as fld
+
     magnet = Magnet() if magnet is None else magnet
     g = np.asarray(gaps_mm, dtype=float)
     out = {}
@@ -157,48 +171,65 @@ def field_times_s(gaps_mm: ArrayLike, magnet: Magnet | None = None, repeat: int 
 
 
 # --------------------------------------------------------------------------- the whole bench
-def mesh_convergence(cells: Iterable[HexCell], material: Material,
-                     meshes: Sequence[tuple[int, int, int]] = ((2, 8, 2), (3, 12, 4), (4, 16, 5), (6, 24, 6)),
-                     ) -> list[dict]:
+def mesh_convergence(
+    cells: Iterable[HexCell],
+    material: Material,
+    meshes: Sequence[tuple[int, int, int]] = ((2, 8, 2), (3, 12, 4), (4, 16, 5), (6, 24, 6)),
+) -> list[dict]:
     """L2 small-strain k on successively finer meshes (n_thick, n_length, corner levels)."""
     from mst_cli.model.mechanics.continuum import linear_stiffness_N_per_mm
+
     out = []
     for c in cells:
         ks = [linear_stiffness_N_per_mm(c, material, *m) for m in meshes]
-        out.append({"theta_deg": c.theta_deg, "t_mm": c.t_mm, "h_mm": c.h_mm,
-                    "meshes": [list(m) for m in meshes], "k_N_per_mm": ks,
-                    "rel_to_finest": [k / ks[-1] - 1.0 for k in ks]})
+        out.append(
+            {
+                "theta_deg": c.theta_deg,
+                "t_mm": c.t_mm,
+                "h_mm": c.h_mm,
+                "meshes": [list(m) for m in meshes],
+                "k_N_per_mm": ks,
+                "rel_to_finest": [k / ks[-1] - 1.0 for k in ks],
+            }
+        )
     return out
 
 
 def run_bench(samples: int = 24, seed: int = 0, quick: bool = False, material=None) -> dict:
     """Measure every rung and field model; returns the JSON-ready result."""
     from mst_cli.model.material import Material
+
     material = material or Material()
     cells = sample_cells(samples, seed)
     rows = compare_mechanics(cells, material)
     timing_cells = cells[: max(3, len(cells) // 4)]
-    times = {m: time_per_layer_s(m, timing_cells, material)
-             for m in ("spring-textbook", "spring", "frame", "continuum")}
+    times = {
+        m: time_per_layer_s(m, timing_cells, material) for m in ("spring-textbook", "spring", "frame", "continuum")
+    }
     times["spring-vectorised"] = spring_vectorised_time_per_layer_s(cells, material)
     models = {}
     for m in ("spring-textbook", "spring", "frame"):
         s = summarise(rows, m)
-        models[m] = {"time_per_layer_s": times[m], "median_abs_err_k": s["err_k"]["median"],
-                     "summary": s}
+        models[m] = {"time_per_layer_s": times[m], "median_abs_err_k": s["err_k"]["median"], "summary": s}
     models["spring"]["time_per_layer_vectorised_s"] = times["spring-vectorised"]
     ref_fail = sum(1 for r in rows if "error" in r["continuum"])
-    models["continuum"] = {"time_per_layer_s": times["continuum"], "median_abs_err_k": 0.0,
-                           "failures": ref_fail}
+    models["continuum"] = {"time_per_layer_s": times["continuum"], "median_abs_err_k": 0.0, "failures": ref_fail}
     gaps = np.linspace(5.0, 20.0, 31)
     ferr = field_errors(gaps)
     result = {
         "command": f"mst bench --samples {samples} --seed {seed}" + (" --quick" if quick else ""),
-        "samples": samples, "seed": seed, "bounds": BOUNDS,
+        "samples": samples,
+        "seed": seed,
+        "bounds": BOUNDS,
         "max_t_over_L_sampled": max(r["t_over_L"] for r in rows),
-        "models": models, "rows": rows,
-        "field": {"gaps_mm": gaps.tolist(), "rel_error": ferr, "time_per_point_s": field_times_s(gaps),
-                  "max_abs_error": {m: float(np.max(np.abs(v))) for m, v in ferr.items()}},
+        "models": models,
+        "rows": rows,
+        "field": {
+            "gaps_mm": gaps.tolist(),
+            "rel_error": ferr,
+            "time_per_point_s": field_times_s(gaps),
+            "max_abs_error": {m: float(np.max(np.abs(v))) for m, v in ferr.items()},
+        },
     }
     if not quick:
         result["mesh_convergence"] = mesh_convergence(cells[:3], material)
@@ -214,55 +245,76 @@ def bench_markdown(result: dict) -> str:
     m = result["models"]
     t_ref = m["continuum"]["time_per_layer_s"]
     b = result["bounds"]
-    lines = [f"# mst bench\n\n`{result['command']}` — {result['samples']} valid cells drawn uniformly in the "
-             f"printable box: theta {b['theta_deg'][0]:g}–{b['theta_deg'][1]:g} deg, t {b['t_mm'][0]:g}–"
-             f"{b['t_mm'][1]:g} mm, h {b['h_mm'][0]:g}–{b['h_mm'][1]:g} mm, every cell rule met (t/L up to "
-             f"{result.get('max_t_over_L_sampled', float('nan')):.2f} in this sample; the L0 fits cover the "
-             f"whole box, to t/L 1.7); errors against L2 `continuum` (median / 90th percentile of |error|).\n",
-             "| rung | time per layer | speed-up vs L2 | stiffness k | lock displacement | lock force | failures |",
-             "|---|---|---|---|---|---|---|"]
-    labels = {"spring-textbook": "L0 spring, textbook (before correction)",
-              "spring": "L0 spring, corrected (after)", "frame": "L1 frame"}
+    lines = [
+        f"# mst bench\n\n`{result['command']}` — {result['samples']} valid cells drawn uniformly in the "
+        f"printable box: theta {b['theta_deg'][0]:g}–{b['theta_deg'][1]:g} deg, t {b['t_mm'][0]:g}–"
+        f"{b['t_mm'][1]:g} mm, h {b['h_mm'][0]:g}–{b['h_mm'][1]:g} mm, every cell rule met (t/L up to "
+        f"{result.get('max_t_over_L_sampled', float('nan')):.2f} in this sample; the L0 fits cover the "
+        f"whole box, to t/L 1.7); errors against L2 `continuum` (median / 90th percentile of |error|).\n",
+        "| rung | time per layer | speed-up vs L2 | stiffness k | lock displacement | lock force | failures |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    labels = {
+        "spring-textbook": "L0 spring, textbook (before correction)",
+        "spring": "L0 spring, corrected (after)",
+        "frame": "L1 frame",
+    }
     for key in ("spring-textbook", "spring", "frame"):
         s = m[key]["summary"]
         t = m[key]["time_per_layer_s"]
-        lines.append(f"| {labels[key]} | {t * 1e6:.1f} µs | {t_ref / t:,.0f}x | "
-                     f"{_pct(s['err_k']['median'])} / {_pct(s['err_k']['p90'])} | "
-                     f"{_pct(s['err_d_lock']['median'])} / {_pct(s['err_d_lock']['p90'])} | "
-                     f"{_pct(s['err_lock_force']['median'])} / {_pct(s['err_lock_force']['p90'])} | "
-                     f"{s['failures']} |")
+        lines.append(
+            f"| {labels[key]} | {t * 1e6:.1f} µs | {t_ref / t:,.0f}x | "
+            f"{_pct(s['err_k']['median'])} / {_pct(s['err_k']['p90'])} | "
+            f"{_pct(s['err_d_lock']['median'])} / {_pct(s['err_d_lock']['p90'])} | "
+            f"{_pct(s['err_lock_force']['median'])} / {_pct(s['err_lock_force']['p90'])} | "
+            f"{s['failures']} |"
+        )
     tv = m["spring"]["time_per_layer_vectorised_s"]
-    lines.append(f"| L0 corrected, vectorised (design loop) | {tv * 1e6:.3f} µs | {t_ref / tv:,.0f}x "
-                 "| same | same | same | 0 |")
-    lines.append(f"| L2 continuum (reference) | {t_ref * 1e3:.0f} ms | 1x | — | — | — | "
-                 f"{m['continuum']['failures']} |")
+    lines.append(
+        f"| L0 corrected, vectorised (design loop) | {tv * 1e6:.3f} µs | {t_ref / tv:,.0f}x | same | same | same | 0 |"
+    )
+    lines.append(f"| L2 continuum (reference) | {t_ref * 1e3:.0f} ms | 1x | — | — | — | {m['continuum']['failures']} |")
     f = result["field"]
-    lines += ["", f"Field models against magpylib's exact cylinder, on the axis, gaps "
-                  f"{f['gaps_mm'][0]:g}–{f['gaps_mm'][-1]:g} mm (max |error|, time per point):", "",
-              "| model | max abs error | time per point |", "|---|---|---|"]
+    lines += [
+        "",
+        f"Field models against magpylib's exact cylinder, on the axis, gaps "
+        f"{f['gaps_mm'][0]:g}–{f['gaps_mm'][-1]:g} mm (max |error|, time per point):",
+        "",
+        "| model | max abs error | time per point |",
+        "|---|---|---|",
+    ]
     for mname in ("dipole", "axial"):
         lines.append(f"| {mname} | {_pct(f['max_abs_error'][mname])} | {f['time_per_point_s'][mname] * 1e6:.2f} µs |")
     lines.append(f"| cylinder (magpylib) | reference | {f['time_per_point_s']['cylinder'] * 1e6:.2f} µs |")
     if "mesh_convergence" in result:
-        lines += ["", "L2 mesh convergence (small-strain k relative to the finest mesh; "
-                      "mesh = elements across t, along the wall, corner refinement rounds):", ""]
+        lines += [
+            "",
+            "L2 mesh convergence (small-strain k relative to the finest mesh; "
+            "mesh = elements across t, along the wall, corner refinement rounds):",
+            "",
+        ]
         for r in result["mesh_convergence"]:
             parts = ", ".join(f"{tuple(mm)}: {100 * e:+.2f} %" for mm, e in zip(r["meshes"], r["rel_to_finest"]))
             lines.append(f"- theta {r['theta_deg']:g}, t {r['t_mm']:g}, h {r['h_mm']:g}: {parts}")
     lines += band_lines(result["rows"])
-    worst = sorted((r for r in result["rows"] if "err_k" in r.get("frame", {})),
-                   key=lambda r: -abs(r["frame"]["err_lock_force"]))[:3]
+    worst = sorted(
+        (r for r in result["rows"] if "err_k" in r.get("frame", {})), key=lambda r: -abs(r["frame"]["err_lock_force"])
+    )[:3]
     if worst:
         lines += ["", "Where the cheap rungs fail most (largest L1 lock-force error):", ""]
         for r in worst:
-            lines.append(f"- theta {r['theta_deg']:g}, t {r['t_mm']:g}, h {r['h_mm']:g} (t/L {r['t_over_L']:.2f}): "
-                         f"L0 k {_pct(r['spring']['err_k'])}, R {_pct(r['spring']['err_lock_force'])}; "
-                         f"L1 k {_pct(r['frame']['err_k'])}, R {_pct(r['frame']['err_lock_force'])}")
+            lines.append(
+                f"- theta {r['theta_deg']:g}, t {r['t_mm']:g}, h {r['h_mm']:g} (t/L {r['t_over_L']:.2f}): "
+                f"L0 k {_pct(r['spring']['err_k'])}, R {_pct(r['spring']['err_lock_force'])}; "
+                f"L1 k {_pct(r['frame']['err_k'])}, R {_pct(r['frame']['err_lock_force'])}"
+            )
     return "\n".join(lines) + "\n"
 
 
-BANDS = {"t/L": ("t_over_L", ((0.0, 0.6), (0.6, 1.0), (1.0, 1.7))),
-         "theta": ("theta_deg", ((5.0, 15.0), (15.0, 60.0), (60.0, 75.0)))}
+BANDS = {
+    "t/L": ("t_over_L", ((0.0, 0.6), (0.6, 1.0), (1.0, 1.7))),
+    "theta": ("theta_deg", ((5.0, 15.0), (15.0, 60.0), (60.0, 75.0))),
+}
 
 
 def band_summary(rows: Sequence[dict], model: str) -> dict[str, dict]:
@@ -278,20 +330,28 @@ def band_summary(rows: Sequence[dict], model: str) -> dict[str, dict]:
             out[f"{name} {lo:g}-{hi:g}"] = {
                 "n": len(sel),
                 "k": s["err_k"]["median"] if s else None,
-                "lock_force": s["err_lock_force"]["median"] if s else None}
+                "lock_force": s["err_lock_force"]["median"] if s else None,
+            }
     return out
 
 
 def band_lines(rows) -> list[str]:
     """Markdown: the bench's errors per band of t/L and theta (the per-band out-of-sample
     table on 210 cells is in mst_cli/model/data/l0_correction.json, benchmarks/fit_l0_correction.py)."""
-    lines = ["", "Median |error| per band of this sample (k / lock force; n cells):", "",
-             "| band | n | L0 corrected | L1 frame |", "|---|---|---|---|"]
+    lines = [
+        "",
+        "Median |error| per band of this sample (k / lock force; n cells):",
+        "",
+        "| band | n | L0 corrected | L1 frame |",
+        "|---|---|---|---|",
+    ]
     sp, fr = band_summary(rows, "spring"), band_summary(rows, "frame")
     for band, s in sp.items():
         if s["n"]:
-            lines.append(f"| {band} | {s['n']} | {_pct(s['k'])} / {_pct(s['lock_force'])} | "
-                         f"{_pct(fr[band]['k'])} / {_pct(fr[band]['lock_force'])} |")
+            lines.append(
+                f"| {band} | {s['n']} | {_pct(s['k'])} / {_pct(s['lock_force'])} | "
+                f"{_pct(fr[band]['k'])} / {_pct(fr[band]['lock_force'])} |"
+            )
     return lines
 
 
@@ -299,8 +359,10 @@ def plot_bench(result: dict, path) -> None:
     """Log-log median and p90 |error| against time per layer, one point per rung: stiffness
     on the left, lock force on the right."""
     import matplotlib
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+
     fig, axes = plt.subplots(1, 2, figsize=(10, 4), sharey=True)
     m = result["models"]
     for ax, key_err, label in ((axes[0], "err_k", "stiffness k"), (axes[1], "err_lock_force", "lock force R")):
@@ -322,8 +384,7 @@ def plot_bench(result: dict, path) -> None:
 
 def ladder_errors(result: dict) -> dict:
     """What cheapest_model_for needs, from a bench result (stored as ladder_errors.json)."""
-    return {"command": result["command"],
-            "models": {k: _stored_errors(v) for k, v in result["models"].items()}}
+    return {"command": result["command"], "models": {k: _stored_errors(v) for k, v in result["models"].items()}}
 
 
 def _stored_errors(entry: dict) -> dict:
@@ -331,6 +392,6 @@ def _stored_errors(entry: dict) -> dict:
     if "summary" in entry:
         out["median_abs_err_lock_force"] = entry["summary"]["err_lock_force"]["median"]
         out["median_abs_err_d_lock"] = entry["summary"]["err_d_lock"]["median"]
-    else:                                   # the reference itself
+    else:  # the reference itself
         out["median_abs_err_lock_force"] = out["median_abs_err_d_lock"] = 0.0
     return out

@@ -68,7 +68,8 @@ def print_mesh(geometry: SensorGeometry, body: Solid, tolerance_mm: float) -> tu
     """(vertices, triangles) of the body as it lies on the bed (the STL/3MF frame): the
     tessellation, closed and outward-oriented, turned into the print frame."""
     from mst_cli.cad import mesh_io
+
     vertices, triangles = mesh_io.tessellate(body, tolerance_mm)
     if not mesh_io.is_closed_oriented(vertices, triangles):
         raise RuntimeError("the tessellated body is not closed: please report this design")
-    return geometry.to_print_frame(vertices), triangles     # a rotation: winding is kept
+    return geometry.to_print_frame(vertices), triangles  # a rotation: winding is kept

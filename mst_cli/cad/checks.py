@@ -56,7 +56,7 @@ class Check:
     measured: str
     expected: str
     note: str = ""
-    info: bool = False                    # report only: never fails
+    info: bool = False  # report only: never fails
     values: dict = field(default_factory=dict)
 
 
@@ -66,7 +66,7 @@ class ExportFiles:
     """The files of a folder ``mst export`` wrote (a mesh that is not there is None)."""
 
     folder: Path
-    manifest: Path              # export.json
+    manifest: Path  # export.json
     stl: Path | None
     three_mf: Path | None
 
@@ -77,8 +77,7 @@ def resolve_export(path: str | Path, need_stl: bool = True) -> ExportFiles:
     ``mst check``'s; either, ``mst slice``'s) or export.json is missing."""
     path = Path(path)
     if not path.exists():
-        raise InputError("PATH", str(path), "does not exist: give the folder 'mst export' wrote "
-                                            "or the .stl in it")
+        raise InputError("PATH", str(path), "does not exist: give the folder 'mst export' wrote or the .stl in it")
     suffix = path.suffix.lower()
     if path.is_dir():
         folder, stl = path, path / "sensor.stl"
@@ -89,16 +88,24 @@ def resolve_export(path: str | Path, need_stl: bool = True) -> ExportFiles:
     three_mf = folder / "sensor.3mf"
     # mst check reads whatever sits at the STL's name (a FIFO or a folder there is refused by
     # kind when it is read); mst slice slices only regular files
-    found = ExportFiles(folder, folder / "export.json", stl if (stl.exists() if need_stl else stl.is_file()) else None,
-                        three_mf if three_mf.is_file() else None)
+    found = ExportFiles(
+        folder,
+        folder / "export.json",
+        stl if (stl.exists() if need_stl else stl.is_file()) else None,
+        three_mf if three_mf.is_file() else None,
+    )
     if need_stl and found.stl is None:
         raise InputError("PATH", str(stl), "no such STL file (run 'mst export --stl' first)")
     if found.stl is None and found.three_mf is None:
-        raise InputError("PATH", str(folder), "holds neither sensor.3mf nor sensor.stl: "
-                                              "run 'mst export DESIGN.yaml --3mf --stl --out DIR' first")
+        raise InputError(
+            "PATH",
+            str(folder),
+            "holds neither sensor.3mf nor sensor.stl: run 'mst export DESIGN.yaml --3mf --stl --out DIR' first",
+        )
     if not found.manifest.exists():
-        raise InputError("PATH", str(found.manifest), "export.json not found next to the mesh: "
-                                                      "run 'mst export' to write it")
+        raise InputError(
+            "PATH", str(found.manifest), "export.json not found next to the mesh: run 'mst export' to write it"
+        )
     return found
 
 
@@ -117,17 +124,22 @@ def load_mesh(path: Path) -> Mesh:
     bad = ~np.isfinite(vertices).all(axis=1) | (np.abs(np.nan_to_num(vertices, nan=0.0)) > MAX_COORD_MM).any(axis=1)
     if bad.any():
         i = int(np.flatnonzero(bad)[0])
-        raise InputError("PATH", str(path), f"vertex {i} at {vertices[i].tolist()} mm: every coordinate "
-                                            f"must be finite and within +-{MAX_COORD_MM:g} mm")
-    return weld(vertices, faces)        # what trimesh.load(process=True) does, on finite coordinates
+        raise InputError(
+            "PATH",
+            str(path),
+            f"vertex {i} at {vertices[i].tolist()} mm: every coordinate "
+            f"must be finite and within +-{MAX_COORD_MM:g} mm",
+        )
+    return weld(vertices, faces)  # what trimesh.load(process=True) does, on finite coordinates
 
 
 def _load_with_trimesh(path: Path, data: bytes) -> tuple[np.ndarray, np.ndarray]:
     import trimesh  # heavy (pulls scipy.spatial): only for files that are not binary STL
+
     try:
         with np.errstate(all="ignore"):
             mesh = trimesh.load(io.BytesIO(data), file_type="stl", force="mesh", process=False)
-    except Exception as exc:      # trimesh raises many kinds on garbage; all mean "unreadable"
+    except Exception as exc:  # trimesh raises many kinds on garbage; all mean "unreadable"
         raise InputError("PATH", str(path), f"cannot be read as an STL mesh ({type(exc).__name__})") from None
     if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
         raise InputError("PATH", str(path), "holds no triangles")
@@ -152,31 +164,51 @@ def check_is_volume(m: Measurements, x: Manifest) -> Check:
 
 
 def check_manifold3d(m: Measurements, x: Manifest) -> Check:
-    return Check("manifold3d", m.manifold_status == "NoError" and not m.manifold_empty, m.manifold_status,
-                 "NoError", "manifold3d accepts the mesh")
+    return Check(
+        "manifold3d",
+        m.manifold_status == "NoError" and not m.manifold_empty,
+        m.manifold_status,
+        "NoError",
+        "manifold3d accepts the mesh",
+    )
 
 
 def check_one_body(m: Measurements, x: Manifest) -> Check:
     body = x.body
-    return Check("one_body", m.bodies == body.bodies and m.voids == body.internal_voids,
-                 f"{m.bodies} body, {m.voids} void", f"{body.bodies} body, {body.internal_voids} void",
-                 "the closed magnet pocket is the only void", values={"shell_volumes_mm3": m.shell_volumes_mm3})
+    return Check(
+        "one_body",
+        m.bodies == body.bodies and m.voids == body.internal_voids,
+        f"{m.bodies} body, {m.voids} void",
+        f"{body.bodies} body, {body.internal_voids} void",
+        "the closed magnet pocket is the only void",
+        values={"shell_volumes_mm3": m.shell_volumes_mm3},
+    )
 
 
 def check_volume(m: Measurements, x: Manifest) -> Check:
     vol, vol_exp, vol_tol = m.volume_mm3, x.body.volume_mm3, x.body.volume_tolerance_mm3
-    return Check("volume", abs(vol - vol_exp) <= vol_tol, f"{vol:.3f} mm3",
-                 f"{vol_exp:.3f} +- {vol_tol:.3f} mm3", "analytic sum of base, layers, plates, cap",
-                 values={"measured_mm3": vol, "expected_mm3": vol_exp, "tolerance_mm3": vol_tol})
+    return Check(
+        "volume",
+        abs(vol - vol_exp) <= vol_tol,
+        f"{vol:.3f} mm3",
+        f"{vol_exp:.3f} +- {vol_tol:.3f} mm3",
+        "analytic sum of base, layers, plates, cap",
+        values={"measured_mm3": vol, "expected_mm3": vol_exp, "tolerance_mm3": vol_tol},
+    )
 
 
 def check_bbox(m: Measurements, x: Manifest) -> Check:
     bmin, bmax = m.bbox_min_mm, m.bbox_max_mm
     emin, emax = np.asarray(x.body.bbox_min_mm), np.asarray(x.body.bbox_max_mm)
     err = float(max(np.abs(bmin - emin).max(), np.abs(bmax - emax).max()))
-    return Check("bbox", err <= PLANAR_TOL_MM, " x ".join(_fmt(v) for v in bmax - bmin) + " mm",
-                 " x ".join(_fmt(v) for v in emax - emin) + " mm", f"largest corner error {err:.1e} mm",
-                 values={"min_mm": bmin.tolist(), "max_mm": bmax.tolist(), "error_mm": err})
+    return Check(
+        "bbox",
+        err <= PLANAR_TOL_MM,
+        " x ".join(_fmt(v) for v in bmax - bmin) + " mm",
+        " x ".join(_fmt(v) for v in emax - emin) + " mm",
+        f"largest corner error {err:.1e} mm",
+        values={"min_mm": bmin.tolist(), "max_mm": bmax.tolist(), "error_mm": err},
+    )
 
 
 def check_wall_thickness(m: Measurements, x: Manifest) -> Check:
@@ -188,80 +220,120 @@ def check_wall_thickness(m: Measurements, x: Manifest) -> Check:
     for i, (s, layer) in enumerate(zip(m.layers, x.layers)):
         if s.wall_cuts != 2:
             shape_errors.append(f"layer {i + 1} section has {s.wall_cuts} wall cuts, design 2")
-        for got, want, what in ((s.wall_mm, layer.t_mm, "wall t"), (s.web_depth_mm, layer.web_depth_mm, "web depth D"),
-                                (s.cavity_mm, layer.cavity_height_mm, "cavity h - 2t")):
+        for got, want, what in (
+            (s.wall_mm, layer.t_mm, "wall t"),
+            (s.web_depth_mm, layer.web_depth_mm, "web depth D"),
+            (s.cavity_mm, layer.cavity_height_mm, "cavity h - 2t"),
+        ):
             if not abs(got - want) <= LAYER_TOL_MM:
                 shape_errors.append(f"layer {i + 1} {what} {got:.4f} mm, design {want:g}")
-    return Check("wall_thickness", min(walls) >= nozzle - PLANAR_TOL_MM and not shape_errors,
-                 _per_layer(walls), f">= nozzle {nozzle:g} mm; design " + _per_layer([la.t_mm for la in x.layers]),
-                 "; ".join(shape_errors) or "wall normal thickness from sections across the stack",
-                 values={"per_layer_mm": walls, "nozzle_mm": nozzle})
+    return Check(
+        "wall_thickness",
+        min(walls) >= nozzle - PLANAR_TOL_MM and not shape_errors,
+        _per_layer(walls),
+        f">= nozzle {nozzle:g} mm; design " + _per_layer([la.t_mm for la in x.layers]),
+        "; ".join(shape_errors) or "wall normal thickness from sections across the stack",
+        values={"per_layer_mm": walls, "nozzle_mm": nozzle},
+    )
 
 
 def check_web_depth(m: Measurements, x: Manifest) -> Check:
     depths = [s.web_depth_mm for s in m.layers]
-    return Check("web_depth", all(abs(d - la.web_depth_mm) <= LAYER_TOL_MM for d, la in zip(depths, x.layers)),
-                 _per_layer(depths), "design " + _per_layer([la.web_depth_mm for la in x.layers]),
-                 "every wall runs the whole depth (the print height)", values={"per_layer_mm": depths})
+    return Check(
+        "web_depth",
+        all(abs(d - la.web_depth_mm) <= LAYER_TOL_MM for d, la in zip(depths, x.layers)),
+        _per_layer(depths),
+        "design " + _per_layer([la.web_depth_mm for la in x.layers]),
+        "every wall runs the whole depth (the print height)",
+        values={"per_layer_mm": depths},
+    )
 
 
 def check_cavity_gap(m: Measurements, x: Manifest) -> Check:
     min_gap = x.printer.min_gap_mm
     cavities = [s.cavity_mm for s in m.layers]
-    return Check("cavity_gap", all(c >= min_gap - PLANAR_TOL_MM for c in cavities),
-                 _per_layer(cavities), f">= min gap {min_gap:g} mm; design " +
-                 _per_layer([la.cavity_height_mm for la in x.layers]),
-                 "vertical ray through each cavity", values={"per_layer_mm": cavities})
+    return Check(
+        "cavity_gap",
+        all(c >= min_gap - PLANAR_TOL_MM for c in cavities),
+        _per_layer(cavities),
+        f">= min gap {min_gap:g} mm; design " + _per_layer([la.cavity_height_mm for la in x.layers]),
+        "vertical ray through each cavity",
+        values={"per_layer_mm": cavities},
+    )
 
 
 def check_magnet_pocket(m: Measurements, x: Manifest) -> Check:
     """Pocket depth and floor along the axis, its section area and its void volume."""
     got, want, delta = m.pocket, x.magnet_pocket, x.stl_tolerance_mm
     # the half circle, as a polygon of chord deviation <= delta, loses at most delta x pi r
-    area_ok = (want.section_area_mm2 - delta * math.pi * want.radius_mm - 1e-3 <= got.section_area_mm2
-               <= want.section_area_mm2 + 1e-3)
+    area_ok = (
+        want.section_area_mm2 - delta * math.pi * want.radius_mm - 1e-3
+        <= got.section_area_mm2
+        <= want.section_area_mm2 + 1e-3
+    )
     depth_ok = abs(got.depth_mm - want.depth_mm) <= PLANAR_TOL_MM
     floor_ok = abs(got.floor_z_mm - want.floor_z_mm) <= PLANAR_TOL_MM
     void_tol = delta * want.curved_area_mm2 + 1e-5 * want.volume_mm3
     void_ok = abs(got.void_volume_mm3 - want.volume_mm3) <= void_tol
-    return Check("magnet_pocket", area_ok and depth_ok and floor_ok and void_ok,
-                 f"section {got.section_area_mm2:.3f} mm2, depth {got.depth_mm:.3f}, floor z {got.floor_z_mm:.3f} mm, "
-                 f"{got.void_volume_mm3:.2f} mm3",
-                 f"section {want.section_area_mm2:.3f} mm2, depth {want.depth_mm:g}, floor z "
-                 f"{want.floor_z_mm:.3f} mm, {want.volume_mm3:.2f} mm3",
-                 "U-shaped pocket open upwards in the print, closed by a 45 deg roof",
-                 values={"section_area_mm2": got.section_area_mm2, "depth_mm": got.depth_mm,
-                         "floor_z_mm": got.floor_z_mm, "volume_mm3": got.void_volume_mm3})
+    return Check(
+        "magnet_pocket",
+        area_ok and depth_ok and floor_ok and void_ok,
+        f"section {got.section_area_mm2:.3f} mm2, depth {got.depth_mm:.3f}, floor z {got.floor_z_mm:.3f} mm, "
+        f"{got.void_volume_mm3:.2f} mm3",
+        f"section {want.section_area_mm2:.3f} mm2, depth {want.depth_mm:g}, floor z "
+        f"{want.floor_z_mm:.3f} mm, {want.volume_mm3:.2f} mm3",
+        "U-shaped pocket open upwards in the print, closed by a 45 deg roof",
+        values={
+            "section_area_mm2": got.section_area_mm2,
+            "depth_mm": got.depth_mm,
+            "floor_z_mm": got.floor_z_mm,
+            "volume_mm3": got.void_volume_mm3,
+        },
+    )
 
 
 def check_board_slot(m: Measurements, x: Manifest) -> Check:
     """Slot floor height, width and floor along the depth, and the cable windows' floors."""
     got, slot = m.slot, x.board_slot
-    meas = {"floor_z_mm": got.floor_z_mm, "top_z_mm": got.top_z_mm, "floor_y_mm": got.floor_y_mm,
-            "x0_mm": got.x0_mm, "x1_mm": got.x1_mm}
+    meas = {
+        "floor_z_mm": got.floor_z_mm,
+        "top_z_mm": got.top_z_mm,
+        "floor_y_mm": got.floor_y_mm,
+        "x0_mm": got.x0_mm,
+        "x1_mm": got.x1_mm,
+    }
     want = {k: getattr(slot, k) for k in meas}
     for j, (window, floor_y) in enumerate(zip(slot.cable_windows, got.window_floor_y_mm)):
         meas[f"window_{j + 1}_floor_y_mm"] = floor_y
         want[f"window_{j + 1}_floor_y_mm"] = window.floor_y_mm
     bad = [k for k in meas if not abs(meas[k] - want[k]) <= PLANAR_TOL_MM]
     n = len(slot.cable_windows)
-    return Check("board_slot", not bad,
-                 f"{got.x1_mm - got.x0_mm:.3f} wide, floor y {got.floor_y_mm:.3f}, "
-                 f"z {got.floor_z_mm:.3f}..{got.top_z_mm:.3f}, {n} windows",
-                 f"{slot.x1_mm - slot.x0_mm:.3f} wide, floor y {slot.floor_y_mm:.3f}, z "
-                 f"{slot.floor_z_mm:.3f}..{slot.top_z_mm:.3f}, {n} windows",
-                 ("mismatch: " + ", ".join(bad)) if bad else
-                 f"board {slot.board} slides in through the face on top in the print (+y)",
-                 values=meas)
+    return Check(
+        "board_slot",
+        not bad,
+        f"{got.x1_mm - got.x0_mm:.3f} wide, floor y {got.floor_y_mm:.3f}, "
+        f"z {got.floor_z_mm:.3f}..{got.top_z_mm:.3f}, {n} windows",
+        f"{slot.x1_mm - slot.x0_mm:.3f} wide, floor y {slot.floor_y_mm:.3f}, z "
+        f"{slot.floor_z_mm:.3f}..{slot.top_z_mm:.3f}, {n} windows",
+        ("mismatch: " + ", ".join(bad))
+        if bad
+        else f"board {slot.board} slides in through the face on top in the print (+y)",
+        values=meas,
+    )
 
 
 def check_magnet_chip_gap(m: Measurements, x: Manifest) -> Check:
     """The forward model's unloaded gap, rebuilt from the measured pocket and slot floors."""
     slot = x.board_slot
     gap = m.pocket.floor_z_mm - (m.slot.floor_z_mm + slot.board_thickness_mm + 0.5 * slot.chip_height_mm)
-    return Check("magnet_chip_gap", abs(gap - x.gap0_mm) <= PLANAR_TOL_MM,
-                 f"{gap:.4f} mm", f"{x.gap0_mm:.4f} mm (forward model gap0)",
-                 "pocket floor - (slot floor + board + chip/2)", values={"measured_mm": gap})
+    return Check(
+        "magnet_chip_gap",
+        abs(gap - x.gap0_mm) <= PLANAR_TOL_MM,
+        f"{gap:.4f} mm",
+        f"{x.gap0_mm:.4f} mm (forward model gap0)",
+        "pocket floor - (slot floor + board + chip/2)",
+        values={"measured_mm": gap},
+    )
 
 
 def check_overhang(m: Measurements, x: Manifest) -> Check:
@@ -270,10 +342,14 @@ def check_overhang(m: Measurements, x: Manifest) -> Check:
     steep = incl < OVERHANG_LIMIT_DEG - 1e-3
     worst = float(incl.min()) if incl.size else 90.0
     below = float(m.down_area_mm2[steep].sum())
-    return Check("overhang", not steep.any(), f"min {worst:.2f} deg, {below:.3f} mm2 below",
-                 f">= {OVERHANG_LIMIT_DEG:g} deg from horizontal for every down-facing face",
-                 "in print orientation: nothing needs support or a bridge",
-                 values={"min_inclination_deg": worst, "area_below_limit_mm2": below})
+    return Check(
+        "overhang",
+        not steep.any(),
+        f"min {worst:.2f} deg, {below:.3f} mm2 below",
+        f">= {OVERHANG_LIMIT_DEG:g} deg from horizontal for every down-facing face",
+        "in print orientation: nothing needs support or a bridge",
+        values={"min_inclination_deg": worst, "area_below_limit_mm2": below},
+    )
 
 
 def _off_grid(z_mm: float, layer_height_mm: float) -> bool:
@@ -284,11 +360,16 @@ def check_layer_grid(m: Measurements, x: Manifest) -> Check:
     lh = x.print.layer_height_mm
     heights = m.flat_heights_mm
     off = [float(z) for z in heights if _off_grid(z, lh)]
-    return Check("layer_grid", not off, f"{len(heights)} heights, {len(off)} off the grid",
-                 f"every horizontal face on a multiple of {lh:g} mm",
-                 ("off: " + ", ".join(f"{z:.4f}" for z in off[:5])) if off else
-                 "the slicer prints every horizontal face where it was designed",
-                 values={"heights_mm": heights.tolist(), "off_grid_mm": off})
+    return Check(
+        "layer_grid",
+        not off,
+        f"{len(heights)} heights, {len(off)} off the grid",
+        f"every horizontal face on a multiple of {lh:g} mm",
+        ("off: " + ", ".join(f"{z:.4f}" for z in off[:5]))
+        if off
+        else "the slicer prints every horizontal face where it was designed",
+        values={"heights_mm": heights.tolist(), "off_grid_mm": off},
+    )
 
 
 def check_magnet_pause(m: Measurements, x: Manifest) -> Check:
@@ -297,18 +378,39 @@ def check_magnet_pause(m: Measurements, x: Manifest) -> Check:
     pause, z_pause = pr.pause, pr.pause.z_mm
     # the roof starts its rise below the ridge
     roof_start = m.pocket.ridge_z_mm - x.magnet_pocket.roof_rise_mm
-    ok = (not _off_grid(z_pause, lh) and pause.after_layer == round(z_pause / lh)
-          and pr.magnet_top_z_mm <= z_pause + 1e-9 and roof_start >= z_pause - PLANAR_TOL_MM)
-    return Check("magnet_pause", ok, f"roof starts at z {roof_start:.3f} mm",
-                 f"pause after layer {pause.after_layer} at z {z_pause:.2f} mm, magnet top "
-                 f"{pr.magnet_top_z_mm:.2f} mm",
-                 f"pause after layer {pause.after_layer} (z = {z_pause:.2f} mm) to drop the magnet in",
-                 values={"roof_start_z_mm": roof_start, "pause_z_mm": z_pause})
+    ok = (
+        not _off_grid(z_pause, lh)
+        and pause.after_layer == round(z_pause / lh)
+        and pr.magnet_top_z_mm <= z_pause + 1e-9
+        and roof_start >= z_pause - PLANAR_TOL_MM
+    )
+    return Check(
+        "magnet_pause",
+        ok,
+        f"roof starts at z {roof_start:.3f} mm",
+        f"pause after layer {pause.after_layer} at z {z_pause:.2f} mm, magnet top {pr.magnet_top_z_mm:.2f} mm",
+        f"pause after layer {pause.after_layer} (z = {z_pause:.2f} mm) to drop the magnet in",
+        values={"roof_start_z_mm": roof_start, "pause_z_mm": z_pause},
+    )
 
 
-CHECKS = (check_watertight, check_is_volume, check_manifold3d, check_one_body, check_volume, check_bbox,
-          check_wall_thickness, check_web_depth, check_cavity_gap, check_magnet_pocket, check_board_slot,
-          check_magnet_chip_gap, check_overhang, check_layer_grid, check_magnet_pause)
+CHECKS = (
+    check_watertight,
+    check_is_volume,
+    check_manifold3d,
+    check_one_body,
+    check_volume,
+    check_bbox,
+    check_wall_thickness,
+    check_web_depth,
+    check_cavity_gap,
+    check_magnet_pocket,
+    check_board_slot,
+    check_magnet_chip_gap,
+    check_overhang,
+    check_layer_grid,
+    check_magnet_pause,
+)
 
 
 def run_checks(mesh, manifest: Manifest | dict, nozzle_mm: float | None = None) -> list[Check]:
@@ -328,9 +430,11 @@ def run_checks(mesh, manifest: Manifest | dict, nozzle_mm: float | None = None) 
 def results_dict(checks: list[Check], stl_path: str) -> dict:
     """JSON form (``mst check --json``); a value that could not be measured (NaN) is null."""
     from mst_cli.io.outputs import finite_or_none
+
     failed = [c.name for c in checks if not c.passed and not c.info]
-    return finite_or_none({"path": stl_path, "passed": not failed, "failed": failed,
-                           "checks": [asdict(c) for c in checks]})
+    return finite_or_none(
+        {"path": stl_path, "passed": not failed, "failed": failed, "checks": [asdict(c) for c in checks]}
+    )
 
 
 def results_table(checks: list[Check]) -> str:

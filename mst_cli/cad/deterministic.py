@@ -43,15 +43,22 @@ def prusa_pause_xml(pause_after_z_mm: float, layer_height_mm: float, message: st
     """The custom G-code member asking for one pause after the layer whose top is
     ``pause_after_z_mm``: the event sits at the top of the next layer (as the GUI stores it)."""
     print_z = round(pause_after_z_mm + layer_height_mm, 6)
-    return ('<?xml version="1.0" encoding="utf-8"?>\n<custom_gcodes_per_print_z>\n'
-            f'<code print_z="{_xml_number(print_z)}" type="{PRUSA_PAUSE_PRINT_TYPE}" extruder="1" '
-            f'color="" extra="{_xml_escape(message)}" gcode="M601"/>\n'
-            '<mode value="SingleExtruder"/>\n</custom_gcodes_per_print_z>\n')
+    return (
+        '<?xml version="1.0" encoding="utf-8"?>\n<custom_gcodes_per_print_z>\n'
+        f'<code print_z="{_xml_number(print_z)}" type="{PRUSA_PAUSE_PRINT_TYPE}" extruder="1" '
+        f'color="" extra="{_xml_escape(message)}" gcode="M601"/>\n'
+        '<mode value="SingleExtruder"/>\n</custom_gcodes_per_print_z>\n'
+    )
 
 
-def three_mf_bytes(vertices: np.ndarray, triangles: np.ndarray, name: str,
-                   pause_after_z_mm: float | None = None, layer_height_mm: float = 0.2,
-                   pause_message: str = "insert the magnet") -> bytes:
+def three_mf_bytes(
+    vertices: np.ndarray,
+    triangles: np.ndarray,
+    name: str,
+    pause_after_z_mm: float | None = None,
+    layer_height_mm: float = 0.2,
+    pause_message: str = "insert the magnet",
+) -> bytes:
     """A 3MF package (3MF Core Specification 1.x) holding one mesh object, unit mm.
 
     With ``pause_after_z_mm``, the package also carries PrusaSlicer's per-height custom G-code
@@ -60,37 +67,44 @@ def three_mf_bytes(vertices: np.ndarray, triangles: np.ndarray, name: str,
     line writes the profile's pause_print_gcode (``;PAUSE_PRINT``, ``M117 <message>``, then
     e.g. M601) between that layer's last move and the next layer's first.
     """
-    vert_xml = "".join(f'<vertex x="{_xml_number(x)}" y="{_xml_number(y)}" z="{_xml_number(z)}"/>'
-                       for x, y, z in vertices)
+    vert_xml = "".join(
+        f'<vertex x="{_xml_number(x)}" y="{_xml_number(y)}" z="{_xml_number(z)}"/>' for x, y, z in vertices
+    )
     tri_xml = "".join(f'<triangle v1="{a}" v2="{b}" v3="{c}"/>' for a, b, c in triangles)
     safe = _xml_escape(name)
-    model = ('<?xml version="1.0" encoding="UTF-8"?>\n'
-             '<model unit="millimeter" xml:lang="en-US" '
-             'xmlns="http://schemas.microsoft.com/3dmanufacturing/core/2015/02">\n'
-             f'<metadata name="Title">{safe}</metadata>\n'
-             '<resources>\n'
-             f'<object id="1" type="model" name="{safe}"><mesh><vertices>{vert_xml}</vertices>'
-             f'<triangles>{tri_xml}</triangles></mesh></object>\n'
-             '</resources>\n<build><item objectid="1"/></build>\n</model>\n')
-    content_types = ('<?xml version="1.0" encoding="UTF-8"?>\n'
-                     '<Types xmlns="http://schemas.openxmlformats.org/package/2006/content-types">'
-                     '<Default Extension="rels" '
-                     'ContentType="application/vnd.openxmlformats-package.relationships+xml"/>'
-                     '<Default Extension="model" '
-                     'ContentType="application/vnd.ms-package.3dmanufacturing-3dmodel+xml"/>'
-                     '</Types>\n')
-    rels = ('<?xml version="1.0" encoding="UTF-8"?>\n'
-            '<Relationships xmlns="http://schemas.openxmlformats.org/package/2006/relationships">'
-            '<Relationship Target="/3D/3dmodel.model" Id="rel0" '
-            'Type="http://schemas.microsoft.com/3dmanufacturing/2013/01/3dmodel"/>'
-            '</Relationships>\n')
-    if pause_after_z_mm is not None:        # every part of the package needs a content type
+    model = (
+        '<?xml version="1.0" encoding="UTF-8"?>\n'
+        '<model unit="millimeter" xml:lang="en-US" '
+        'xmlns="http://schemas.microsoft.com/3dmanufacturing/core/2015/02">\n'
+        f'<metadata name="Title">{safe}</metadata>\n'
+        "<resources>\n"
+        f'<object id="1" type="model" name="{safe}"><mesh><vertices>{vert_xml}</vertices>'
+        f"<triangles>{tri_xml}</triangles></mesh></object>\n"
+        '</resources>\n<build><item objectid="1"/></build>\n</model>\n'
+    )
+    content_types = (
+        '<?xml version="1.0" encoding="UTF-8"?>\n'
+        '<Types xmlns="http://schemas.openxmlformats.org/package/2006/content-types">'
+        '<Default Extension="rels" '
+        'ContentType="application/vnd.openxmlformats-package.relationships+xml"/>'
+        '<Default Extension="model" '
+        'ContentType="application/vnd.ms-package.3dmanufacturing-3dmodel+xml"/>'
+        "</Types>\n"
+    )
+    rels = (
+        '<?xml version="1.0" encoding="UTF-8"?>\n'
+        '<Relationships xmlns="http://schemas.openxmlformats.org/package/2006/relationships">'
+        '<Relationship Target="/3D/3dmodel.model" Id="rel0" '
+        'Type="http://schemas.microsoft.com/3dmanufacturing/2013/01/3dmodel"/>'
+        "</Relationships>\n"
+    )
+    if pause_after_z_mm is not None:  # every part of the package needs a content type
         content_types = content_types.replace(
-            '</Types>', '<Default Extension="xml" ContentType="application/xml"/></Types>')
+            "</Types>", '<Default Extension="xml" ContentType="application/xml"/></Types>'
+        )
     members = [("[Content_Types].xml", content_types), ("_rels/.rels", rels), ("3D/3dmodel.model", model)]
     if pause_after_z_mm is not None:
-        members.append((PRUSA_CUSTOM_GCODE_MEMBER,
-                        prusa_pause_xml(pause_after_z_mm, layer_height_mm, pause_message)))
+        members.append((PRUSA_CUSTOM_GCODE_MEMBER, prusa_pause_xml(pause_after_z_mm, layer_height_mm, pause_message)))
     buf = io.BytesIO()
     with zipfile.ZipFile(buf, "w", compression=zipfile.ZIP_DEFLATED) as zf:
         for member, text in members:
@@ -124,6 +138,7 @@ def _renumber_nauo(data: bytes) -> bytes:
         record = b"".join(part.strip() for part in match.group(0).splitlines())
         record = _NAUO_ID.sub(b"NEXT_ASSEMBLY_USAGE_OCCURRENCE('%d'" % next(counter), record)
         return _wrap_record(record)
+
     return _NAUO.sub(one, data)
 
 
@@ -143,6 +158,7 @@ def step_bytes(assembly) -> bytes:
     says "Failed to write STEP file").
     """
     from build123d import export_step
+
     buf = io.BytesIO()
-    export_step(assembly, buf, timestamp=STEP_TIMESTAMP)      # RuntimeError if OCCT fails
+    export_step(assembly, buf, timestamp=STEP_TIMESTAMP)  # RuntimeError if OCCT fails
     return _renumber_nauo(buf.getvalue())

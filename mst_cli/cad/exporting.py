@@ -28,9 +28,18 @@ def check_stl_tolerance(stl_tolerance_mm: float) -> None:
         raise InputError("--stl-tolerance", stl_tolerance_mm, f"must be a number from {lo:g} to {hi:g} mm")
 
 
-def write_export(doc: Document, geometry: SensorGeometry, out: Path, *, stl: bool = True, step: bool = False,
-                 three_mf: bool = False, stl_tolerance_mm: float = DEFAULT_STL_TOLERANCE_MM,
-                 design_yaml: dict | None = None, progress: Callable[[str], None] | None = None) -> list[str]:
+def write_export(
+    doc: Document,
+    geometry: SensorGeometry,
+    out: Path,
+    *,
+    stl: bool = True,
+    step: bool = False,
+    three_mf: bool = False,
+    stl_tolerance_mm: float = DEFAULT_STL_TOLERANCE_MM,
+    design_yaml: dict | None = None,
+    progress: Callable[[str], None] | None = None,
+) -> list[str]:
     """Write the asked formats, ``design_yaml`` as design.yaml when given (the design a spec
     became) and export.json into ``out``; the names written (export.json last)."""
     say = progress or (lambda message: None)
@@ -40,19 +49,30 @@ def write_export(doc: Document, geometry: SensorGeometry, out: Path, *, stl: boo
     with staged(out) as st:
         if stl or three_mf:
             from mst_cli.cad.mesh_body import print_mesh
+
             vertices, triangles = print_mesh(geometry, stl_tolerance_mm)
-            say(f"meshed the body (base, layers, plates, cap; pocket and slot cut): "
-                f"{len(triangles)} triangles at {stl_tolerance_mm:g} mm")
+            say(
+                f"meshed the body (base, layers, plates, cap; pocket and slot cut): "
+                f"{len(triangles)} triangles at {stl_tolerance_mm:g} mm"
+            )
             if stl:
                 st.write_bytes("sensor.stl", mesh_io.stl_bytes(vertices, triangles))
                 say("wrote sensor.stl")
             if three_mf:
-                st.write_bytes("sensor.3mf", mesh_io.three_mf_bytes(
-                    vertices, triangles, doc.name, pause_after_z_mm=geometry.pause_height_mm,
-                    layer_height_mm=geometry.layer_height_mm))
+                st.write_bytes(
+                    "sensor.3mf",
+                    mesh_io.three_mf_bytes(
+                        vertices,
+                        triangles,
+                        doc.name,
+                        pause_after_z_mm=geometry.pause_height_mm,
+                        layer_height_mm=geometry.layer_height_mm,
+                    ),
+                )
                 say("wrote sensor.3mf")
         if step:
             from mst_cli.cad.assembly import build_sensor  # build123d: seconds to import
+
             say("building the CAD body: base, layers, plates, cap (one fuse)")
             cad = build_sensor(geometry)
             st.write_bytes("sensor.step", mesh_io.step_bytes(cad.assembly(doc.name)))
@@ -61,6 +81,8 @@ def write_export(doc: Document, geometry: SensorGeometry, out: Path, *, stl: boo
             # the design the body was built from, loadable by mst simulate / mst export
             st.write_yaml("design.yaml", design_yaml)
             names.append("design.yaml")
-        st.write_json(MANIFEST_NAME, export_manifest(doc.name, geometry, doc.printer, stl_tolerance_mm, names,
-                                                      design=document_to_dict(doc)))
+        st.write_json(
+            MANIFEST_NAME,
+            export_manifest(doc.name, geometry, doc.printer, stl_tolerance_mm, names, design=document_to_dict(doc)),
+        )
     return names + [MANIFEST_NAME]

@@ -38,10 +38,10 @@ class Layer:
     index: int
     z_mm: float
     height_mm: float
-    segments: np.ndarray            # (n, 5): x0, y0, x1, y1, width_mm
-    types: np.ndarray               # (n,) feature type strings
-    e_mm: np.ndarray                # (n,) filament length pushed by each segment
-    paths: np.ndarray               # (n,) path id: consecutive segments with no travel between
+    segments: np.ndarray  # (n, 5): x0, y0, x1, y1, width_mm
+    types: np.ndarray  # (n,) feature type strings
+    e_mm: np.ndarray  # (n,) filament length pushed by each segment
+    paths: np.ndarray  # (n,) path id: consecutive segments with no travel between
 
     @property
     def z_bottom_mm(self) -> float:
@@ -56,11 +56,11 @@ class Layer:
 class Pause:
     """A pause command: the line it is on, the command, and where it falls."""
 
-    line: int                       # 1-based line number in the G-code
+    line: int  # 1-based line number in the G-code
     command: str
-    after_layer: int                # layers wholly printed before the pause (0: before layer 1)
-    z_mm: float                     # top of that layer (0.0 for the bed)
-    mid_layer: bool                 # True when part of the layer being printed precedes it
+    after_layer: int  # layers wholly printed before the pause (0: before layer 1)
+    z_mm: float  # top of that layer (0.0 for the bed)
+    mid_layer: bool  # True when part of the layer being printed precedes it
 
 
 @dataclass
@@ -83,7 +83,7 @@ class GCode:
     def type_volume_mm3(self, types) -> float:
         """Volume of filament pushed by extrusions of the given feature types, mm3."""
         diameter = _float_or(self.config.get("filament_diameter", "").split(",")[0], FILAMENT_DIAMETER_MM)
-        area = math.pi * diameter ** 2 / 4
+        area = math.pi * diameter**2 / 4
         return float(sum(lay.e_mm[np.isin(lay.types, list(types))].sum() for lay in self.layers) * area)
 
 
@@ -95,8 +95,26 @@ def _float_or(text: str, default):
 
 
 # Commands that may be part of a pause_print_gcode macro but are no pause by themselves.
-_NOT_PAUSE = {"G0", "G1", "G2", "G3", "G4", "G90", "G91", "G92", "M82", "M83", "M117", "M400", "M104",
-              "M109", "M140", "M190", "M106", "M107"}
+_NOT_PAUSE = {
+    "G0",
+    "G1",
+    "G2",
+    "G3",
+    "G4",
+    "G90",
+    "G91",
+    "G92",
+    "M82",
+    "M83",
+    "M117",
+    "M400",
+    "M104",
+    "M109",
+    "M140",
+    "M190",
+    "M106",
+    "M107",
+}
 
 _WORD = re.compile(r"([A-Za-z])\s*([-+]?(?:\d+\.?\d*|\.\d+))")
 _TIME_PART = re.compile(r"(\d+)\s*([dhms])")
@@ -231,7 +249,7 @@ def parse_gcode(text: str, pause_gcode: str | None = None) -> GCode:
             continue
         head = code.split(None, 1)[0].upper()
         if head in ("G1", "G0"):
-            words = dict((k.upper(), float(v)) for k, v in _WORD.findall(code[len(head):]))
+            words = dict((k.upper(), float(v)) for k, v in _WORD.findall(code[len(head) :]))
             nx, ny, nz = x, y, z
             if "X" in words:
                 nx = words["X"] if abs_xyz else x + words["X"]
@@ -264,7 +282,7 @@ def parse_gcode(text: str, pause_gcode: str | None = None) -> GCode:
         elif head == "M83":
             abs_e = False
         elif head == "G92":
-            words = dict((k.upper(), float(v)) for k, v in _WORD.findall(code[len(head):]))
+            words = dict((k.upper(), float(v)) for k, v in _WORD.findall(code[len(head) :]))
             e = words.get("E", e if words else 0.0)
             x = words.get("X", x)
             y = words.get("Y", y)
@@ -272,7 +290,7 @@ def parse_gcode(text: str, pause_gcode: str | None = None) -> GCode:
         if head in pause_words:
             recent = pauses[-1] if pauses else None
             if recent is not None and recent.command == ";PAUSE_PRINT" and lineno - recent.line <= 10:
-                recent.command = head                   # the command PrusaSlicer wrote for it
+                recent.command = head  # the command PrusaSlicer wrote for it
             else:
                 pauses.append(_pause_here(lineno, head))
             last_was_extrusion = False
@@ -283,8 +301,17 @@ def parse_gcode(text: str, pause_gcode: str | None = None) -> GCode:
         zt = raw["z"] if raw["z"] is not None else prev_z + (raw["h"] or 0.0)
         h = raw["h"] if raw["h"] is not None else zt - prev_z
         seg = np.array(raw["seg"], dtype=float).reshape(-1, 5)
-        layers.append(Layer(i, float(zt), float(h), seg, np.array(raw["type"], dtype=object),
-                            np.array(raw["e"], dtype=float), np.array(raw["path"], dtype=np.int64)))
+        layers.append(
+            Layer(
+                i,
+                float(zt),
+                float(h),
+                seg,
+                np.array(raw["type"], dtype=object),
+                np.array(raw["e"], dtype=float),
+                np.array(raw["path"], dtype=np.int64),
+            )
+        )
         prev_z = zt
     for p in pauses:
         p.z_mm = layers[p.after_layer - 1].z_mm if p.after_layer >= 1 else 0.0
@@ -299,7 +326,7 @@ class Span:
     layer: int
     z_mm: float
     length_mm: float
-    x_mm: float                     # midpoint of the stretch
+    x_mm: float  # midpoint of the stretch
     y_mm: float
     start_xy_mm: tuple[float, float]
     end_xy_mm: tuple[float, float]
@@ -308,14 +335,15 @@ class Span:
 
 @dataclass
 class SpanReport:
-    longest: Span | None            # over all layers (None: nothing above layer 1)
-    per_layer: list[Span]           # one per analysed layer (layers 2..), in order
+    longest: Span | None  # over all layers (None: nothing above layer 1)
+    per_layer: list[Span]  # one per analysed layer (layers 2..), in order
 
 
 def rasterise(segments: np.ndarray, origin_xy, shape, px_per_mm: float) -> np.ndarray:
     """Boolean image (rows: y, cols: x) of the segments drawn as lines of their own width
     with round ends; pixel (r, c) covers [x0 + c/res, x0 + (c+1)/res) x [y0 + r/res, ...)."""
     from PIL import Image, ImageDraw
+
     img = Image.new("1", (int(shape[1]), int(shape[0])), 0)
     draw = ImageDraw.Draw(img)
     ox, oy = origin_xy
@@ -349,8 +377,9 @@ def _samples(segments: np.ndarray, step: float):
     return xy, ds, seg_idx
 
 
-def free_spans(gcode: GCode, px_per_mm: float = 20.0, step_mm: float | None = None,
-               join_moves: bool = False) -> SpanReport:
+def free_spans(
+    gcode: GCode, px_per_mm: float = 20.0, step_mm: float | None = None, join_moves: bool = False
+) -> SpanReport:
     """Longest free span of every layer above the first, and overall.
 
     A point of an extrusion's centreline is supported when the layer below has material
@@ -376,8 +405,7 @@ def free_spans(gcode: GCode, px_per_mm: float = 20.0, step_mm: float | None = No
             margin = float(bsegs[:, 4].max()) + 2.0 / px_per_mm
             lo = np.minimum(bsegs[:, [0, 1]].min(0), bsegs[:, [2, 3]].min(0)) - margin
             hi = np.maximum(bsegs[:, [0, 1]].max(0), bsegs[:, [2, 3]].max(0)) + margin
-            shape = (int(math.ceil((hi[1] - lo[1]) * px_per_mm)) + 1,
-                     int(math.ceil((hi[0] - lo[0]) * px_per_mm)) + 1)
+            shape = (int(math.ceil((hi[1] - lo[1]) * px_per_mm)) + 1, int(math.ceil((hi[0] - lo[0]) * px_per_mm)) + 1)
             mask = rasterise(bsegs, lo, shape, px_per_mm)
             col = np.floor((xy[:, 0] - lo[0]) * px_per_mm).astype(np.int64)
             row = np.floor((xy[:, 1] - lo[1]) * px_per_mm).astype(np.int64)
@@ -392,8 +420,9 @@ def free_spans(gcode: GCode, px_per_mm: float = 20.0, step_mm: float | None = No
         prev_free = np.r_[False, free[:-1]]
         start = free & ~(prev_free & same_path_prev)
         if not free.any():
-            per_layer.append(Span(layer.index, layer.z_mm, 0.0, math.nan, math.nan,
-                                  (math.nan, math.nan), (math.nan, math.nan), ""))
+            per_layer.append(
+                Span(layer.index, layer.z_mm, 0.0, math.nan, math.nan, (math.nan, math.nan), (math.nan, math.nan), "")
+            )
             continue
         run_id = np.cumsum(start) - 1
         lengths = np.bincount(run_id[free], weights=ds[free])
@@ -404,9 +433,18 @@ def free_spans(gcode: GCode, px_per_mm: float = 20.0, step_mm: float | None = No
         pa = xy[a] - (xy[min(a + 1, b)] - xy[a]) * 0.5 if b > a else xy[a]
         pb = xy[b] + (xy[b] - xy[max(b - 1, a)]) * 0.5 if b > a else xy[b]
         mid = xy[idx[len(idx) // 2]]
-        per_layer.append(Span(layer.index, layer.z_mm, float(lengths[best]), float(mid[0]), float(mid[1]),
-                              (float(pa[0]), float(pa[1])), (float(pb[0]), float(pb[1])),
-                              str(types[si[a]])))
+        per_layer.append(
+            Span(
+                layer.index,
+                layer.z_mm,
+                float(lengths[best]),
+                float(mid[0]),
+                float(mid[1]),
+                (float(pa[0]), float(pa[1])),
+                (float(pb[0]), float(pb[1])),
+                str(types[si[a]]),
+            )
+        )
     longest = max(per_layer, key=lambda s: s.length_mm) if per_layer else None
     return SpanReport(longest, per_layer)
 
@@ -418,7 +456,7 @@ def _stroke_spans(segments: np.ndarray, axis: str, value: float) -> tuple[np.nda
     if axis not in ("x", "y"):
         raise ValueError("axis must be 'x' or 'y'")
     s = segments.astype(float)
-    if axis == "y":                 # swap roles: the line y = value, measure along x
+    if axis == "y":  # swap roles: the line y = value, measure along x
         s = s[:, [1, 0, 3, 2, 4]]
     p0, p1, r = s[:, 0:2], s[:, 2:4], s[:, 4] / 2
     lo = np.full(len(s), np.inf)
@@ -426,7 +464,7 @@ def _stroke_spans(segments: np.ndarray, axis: str, value: float) -> tuple[np.nda
     # the two end discs
     for p in (p0, p1):
         dx = value - p[:, 0]
-        h2 = r ** 2 - dx ** 2
+        h2 = r**2 - dx**2
         ok = h2 >= 0
         h = np.sqrt(np.where(ok, h2, 0))
         lo = np.where(ok, np.minimum(lo, p[:, 1] - h), lo)
@@ -437,8 +475,9 @@ def _stroke_spans(segments: np.ndarray, axis: str, value: float) -> tuple[np.nda
     nz = length > 0
     n = np.zeros_like(d)
     n[nz] = np.stack([-d[nz, 1], d[nz, 0]], axis=1) / length[nz, None]
-    corners = np.stack([p0 + n * r[:, None], p1 + n * r[:, None], p1 - n * r[:, None], p0 - n * r[:, None]],
-                       axis=1)                                   # (k, 4, 2)
+    corners = np.stack(
+        [p0 + n * r[:, None], p1 + n * r[:, None], p1 - n * r[:, None], p0 - n * r[:, None]], axis=1
+    )  # (k, 4, 2)
     a = corners
     b = np.roll(corners, -1, axis=1)
     xa, ya, xb, yb = a[..., 0], a[..., 1], b[..., 0], b[..., 1]
@@ -485,7 +524,7 @@ class Across:
     first one's outer edge to the last one's (``offset_mm``, signed distance from the centre
     line), and how many extrusion centrelines cross the line between them."""
 
-    width_mm: float                 # 0.0: no extrusion reaches into the wall's core
+    width_mm: float  # 0.0: no extrusion reaches into the wall's core
     n_lines: int
     offset_mm: tuple[float, float] | None
 
@@ -509,7 +548,7 @@ def material_across(segments: np.ndarray, start_xy, end_xy, stations: int, core_
     # the segments in (along, across) coordinates: the line across at 'along = station'
     sr = np.column_stack([rel0 @ u, rel0 @ n, rel1 @ u, rel1 @ n, s[:, 4]])
     out = []
-    for station in (np.linspace(0.0, length, stations) if length > 0 and stations > 1 else [0.5 * length]):
+    for station in np.linspace(0.0, length, stations) if length > 0 and stations > 1 else [0.5 * length]:
         lo, hi = _stroke_spans(sr, "x", float(station)) if len(sr) else (np.zeros(0), np.zeros(0))
         hit = hi >= lo
         runs = _merge(np.stack([lo[hit], hi[hit]], axis=1))
@@ -528,8 +567,9 @@ def material_across(segments: np.ndarray, start_xy, end_xy, stations: int, core_
     return out
 
 
-def gaps_along_line(layer: Layer, axis: str, value: float, lo: float | None = None,
-                    hi: float | None = None) -> list[tuple[float, float]]:
+def gaps_along_line(
+    layer: Layer, axis: str, value: float, lo: float | None = None, hi: float | None = None
+) -> list[tuple[float, float]]:
     """Air intervals between the part's extrusions of ``layer`` along the line {axis = value}
     (e.g. axis 'x', value 3.0: the line x = 3 and intervals in y), optionally only inside
     [lo, hi]. Only gaps bounded by material on both sides are returned."""

@@ -28,7 +28,7 @@ from typing import TYPE_CHECKING
 from mst_cli import __version__
 from mst_cli.errors import InputError
 
-if TYPE_CHECKING:                 # annotations only: reading export.json needs no geometry model (but for its design)
+if TYPE_CHECKING:  # annotations only: reading export.json needs no geometry model (but for its design)
     from mst_cli.io.schema import Document
     from mst_cli.model.geometry import Printer, SensorGeometry
 
@@ -47,17 +47,34 @@ def print_section(g: SensorGeometry) -> dict:
     cavity_lines = []
     for i, (cell, zb) in enumerate(zip(g.layers, g.layer_bottoms_mm)):
         # print y = -sensor z: the cavity between the pads, on the axis x = 0
-        cavity_lines.append({"layer": i + 1, "x_mm": 0.0, "z_mm": z_measure,
-                             "y_low_mm": -(zb + cell.h_mm - cell.t_mm), "y_high_mm": -(zb + cell.t_mm),
-                             "gap_mm": cell.cavity_height_mm})
+        cavity_lines.append(
+            {
+                "layer": i + 1,
+                "x_mm": 0.0,
+                "z_mm": z_measure,
+                "y_low_mm": -(zb + cell.h_mm - cell.t_mm),
+                "y_high_mm": -(zb + cell.t_mm),
+                "gap_mm": cell.cavity_height_mm,
+            }
+        )
     # every inclined wall cuts every print layer along the same line (print y = -sensor z):
     # the middle of its free stretch, measured over the print layers above the first
     wall_lines = []
     for i, (cell, zb) in enumerate(zip(g.layers, g.layer_bottoms_mm)):
         for name, (xa, za), (xb, zb_) in cell.wall_centrelines_xz():
-            wall_lines.append({"layer": i + 1, "wall": name, "t_mm": cell.t_mm,
-                               "x0_mm": xa, "y0_mm": -(zb + za), "x1_mm": xb, "y1_mm": -(zb + zb_),
-                               "z_low_mm": lh, "z_high_mm": g.depth_mm})
+            wall_lines.append(
+                {
+                    "layer": i + 1,
+                    "wall": name,
+                    "t_mm": cell.t_mm,
+                    "x0_mm": xa,
+                    "y0_mm": -(zb + za),
+                    "x1_mm": xb,
+                    "y1_mm": -(zb + zb_),
+                    "z_low_mm": lh,
+                    "z_high_mm": g.depth_mm,
+                }
+            )
     return {
         "orientation": "lying on the sensor's -y face: print (x, y, z) = (x, -z, y + depth/2)",
         "rotation": [[1, 0, 0], [0, 0, -1], [0, 1, 0]],
@@ -67,16 +84,25 @@ def print_section(g: SensorGeometry) -> dict:
         "layers": int(round(g.depth_mm / lh)),
         "bbox_min_mm": corners.min(axis=0).tolist(),
         "bbox_max_mm": corners.max(axis=0).tolist(),
-        "pause": {"after_layer": g.pause_after_layer, "z_mm": g.pause_height_mm,
-                  "why": "drop the magnet into its pocket"},
+        "pause": {
+            "after_layer": g.pause_after_layer,
+            "z_mm": g.pause_height_mm,
+            "why": "drop the magnet into its pocket",
+        },
         "magnet_top_z_mm": g.print_height_mm(g.magnet.radius_mm),
         "cavity_lines": cavity_lines,
         "wall_lines": wall_lines,
     }
 
 
-def export_manifest(name: str, geometry: SensorGeometry, printer: Printer, stl_tolerance_mm: float,
-                    files: list[str], design: dict | None = None) -> dict:
+def export_manifest(
+    name: str,
+    geometry: SensorGeometry,
+    printer: Printer,
+    stl_tolerance_mm: float,
+    files: list[str],
+    design: dict | None = None,
+) -> dict:
     """The expected dimensions of the exported body (see module docstring); ``design`` (the
     design document as its file holds it) lets ``mst slice`` simulate the walls as sliced."""
     g, h = geometry, geometry.housing
@@ -107,7 +133,7 @@ def export_manifest(name: str, geometry: SensorGeometry, printer: Printer, stl_t
             "bbox_min_mm": list(bbox_min),
             "bbox_max_mm": list(bbox_max),
             "bodies": 1,
-            "internal_voids": 1,          # the closed magnet pocket
+            "internal_voids": 1,  # the closed magnet pocket
         },
         "magnet_pocket": {
             "radius_mm": g.pocket_radius_mm,
@@ -125,15 +151,18 @@ def export_manifest(name: str, geometry: SensorGeometry, printer: Printer, stl_t
         },
         "board_slot": {
             "board": g.board.key,
-            "x0_mm": x0, "x1_mm": x1,
+            "x0_mm": x0,
+            "x1_mm": x1,
             "floor_y_mm": g.slot_floor_y_mm,
             "open_face": "+y",
             "floor_z_mm": g.z_board_bottom_mm,
             "top_z_mm": g.z_cover_bottom_mm,
             "height_mm": g.slot_height_mm,
             "headroom_mm": g.board.headroom_mm,
-            "cable_windows": [{"x_inner_mm": a, "x_outer_mm": b, "floor_y_mm": yf, "z0_mm": z0, "z1_mm": z1}
-                              for a, b, yf, z0, z1 in g.cable_windows],
+            "cable_windows": [
+                {"x_inner_mm": a, "x_outer_mm": b, "floor_y_mm": yf, "z0_mm": z0, "z1_mm": z1}
+                for a, b, yf, z0, z1 in g.cable_windows
+            ],
             "board_thickness_mm": g.board.thickness_mm,
             "chip_height_mm": g.board.chip_height_mm,
             "chip_xy_mm": list(g.chip_xy_printed_mm),
@@ -144,13 +173,24 @@ def export_manifest(name: str, geometry: SensorGeometry, printer: Printer, stl_t
         "gap0_mm": g.gap0_mm,
         "base_top_z_mm": g.z_base_top_mm,
         "layers": [
-            {"z_bottom_mm": zb, "h_mm": c.h_mm, "theta_deg": c.theta_deg, "t_mm": c.t_mm,
-             "web_depth_mm": c.b_mm, "width_mm": c.width_mm, "cavity_height_mm": c.cavity_height_mm,
-             "wall_horizontal_width_mm": c.wall_horizontal_width_mm}
+            {
+                "z_bottom_mm": zb,
+                "h_mm": c.h_mm,
+                "theta_deg": c.theta_deg,
+                "t_mm": c.t_mm,
+                "web_depth_mm": c.b_mm,
+                "width_mm": c.width_mm,
+                "cavity_height_mm": c.cavity_height_mm,
+                "wall_horizontal_width_mm": c.wall_horizontal_width_mm,
+            }
             for c, zb in zip(cells, g.layer_bottoms_mm)
         ],
-        "printer": {"nozzle_mm": printer.nozzle_mm, "min_wall_mm": printer.min_wall_mm,
-                    "min_gap_mm": printer.min_gap_mm, "layer_height_mm": printer.layer_height_mm},
+        "printer": {
+            "nozzle_mm": printer.nozzle_mm,
+            "min_wall_mm": printer.min_wall_mm,
+            "min_gap_mm": printer.min_gap_mm,
+            "layer_height_mm": printer.layer_height_mm,
+        },
         "min_features": {
             "wall_mm": min(c.t_mm for c in cells),
             "cavity_gap_mm": min(c.cavity_height_mm for c in cells),
@@ -243,7 +283,7 @@ class PrintFrame:
     magnet_top_z_mm: float = _kind("num")
     pause: Pause = _kind(Pause)
     cavity_lines: tuple[CavityLine, ...] = _kind(ListOf(CavityLine))
-    wall_lines: tuple[WallLine, ...] = _optional(ListOf(WallLine), ())     # exports before issue 21 lack it
+    wall_lines: tuple[WallLine, ...] = _optional(ListOf(WallLine), ())  # exports before issue 21 lack it
 
 
 @dataclass(frozen=True)
@@ -319,7 +359,7 @@ class Manifest:
     magnet_pocket: Pocket = _kind(Pocket)
     board_slot: Slot = _kind(Slot)
     printer: PrinterLimits = _kind(PrinterLimits)
-    design: Document | None = _optional("design")          # exports before issue 21 lack it
+    design: Document | None = _optional("design")  # exports before issue 21 lack it
 
     @classmethod
     def from_dict(cls, data) -> Manifest:
@@ -328,10 +368,14 @@ class Manifest:
         range (``export.json.layers[2].t_mm``), or a rotation that is not one."""
         manifest = _parse(cls, data, "export.json")
         import numpy as np
+
         rotation = np.asarray(manifest.print.rotation, dtype=float)
         if not (np.allclose(rotation @ rotation.T, np.eye(3), atol=1e-6) and np.linalg.det(rotation) > 0):
-            raise InputError("export.json.print.rotation", data["print"]["rotation"],
-                             "must be a rotation matrix (orthonormal, determinant +1): rewrite it with 'mst export'")
+            raise InputError(
+                "export.json.print.rotation",
+                data["print"]["rotation"],
+                "must be a rotation matrix (orthonormal, determinant +1): rewrite it with 'mst export'",
+            )
         return manifest
 
 
@@ -376,10 +420,14 @@ _SCALAR_OK = {
     "int": lambda v: isinstance(v, int) and not isinstance(v, bool) and abs(v) <= 10**9,
     "str": lambda v: isinstance(v, str),
 }
-_KIND_TEXT = {"num": f"a finite number within +-{MAX_COORD_MM:g}",
-              "pos": f"a size from {MIN_SIZE_MM:g} to {MAX_COORD_MM:g}",
-              "tol": f"a tolerance from {STL_TOLERANCE_MM[0]:g} to {STL_TOLERANCE_MM[1]:g} mm",
-              "vol": f"a number from 0 to {MAX_VOLUME:g}", "int": "an integer", "str": "a string"}
+_KIND_TEXT = {
+    "num": f"a finite number within +-{MAX_COORD_MM:g}",
+    "pos": f"a size from {MIN_SIZE_MM:g} to {MAX_COORD_MM:g}",
+    "tol": f"a tolerance from {STL_TOLERANCE_MM[0]:g} to {STL_TOLERANCE_MM[1]:g} mm",
+    "vol": f"a number from 0 to {MAX_VOLUME:g}",
+    "int": "an integer",
+    "str": "a string",
+}
 
 
 def _describe(kind) -> str:
@@ -426,9 +474,13 @@ def _design_document(data, path: str) -> Document:
     design-file rules (every cell printable and working); an InputError names the field inside
     it (``export.json.design.layers[1].t_mm``)."""
     from mst_cli.io.schema import design_geometry, parse_document
+
     if not isinstance(data, dict):
-        raise InputError(path, type(data).__name__ if isinstance(data, list) else data,
-                         "must be a mapping (the design document): rewrite it with 'mst export'")
+        raise InputError(
+            path,
+            type(data).__name__ if isinstance(data, list) else data,
+            "must be a mapping (the design document): rewrite it with 'mst export'",
+        )
     try:
         doc = parse_document(data, source=path)
         if not doc.is_design:
@@ -443,13 +495,15 @@ def load_manifest(path: Path, kind: type = Manifest) -> Manifest | SliceManifest
     """export.json, validated field by field (``kind.from_dict``: :class:`Manifest` for ``mst
     check``, :class:`SliceManifest` for ``mst slice``)."""
     from mst_cli.io.files import read_input_text
-    text = read_input_text(path, MAX_MANIFEST_BYTES, field="export.json", what="JSON file",
-                           too_large=": rewrite it with 'mst export'")
+
+    text = read_input_text(
+        path, MAX_MANIFEST_BYTES, field="export.json", what="JSON file", too_large=": rewrite it with 'mst export'"
+    )
     try:
         data = json.loads(text, parse_constant=_refuse_constant)
     except (json.JSONDecodeError, RecursionError) as exc:
         raise InputError("export.json", str(path), f"cannot be read as JSON ({type(exc).__name__})") from None
-    except ValueError as exc:                       # NaN / Infinity, which JSON does not have
+    except ValueError as exc:  # NaN / Infinity, which JSON does not have
         raise InputError("export.json", str(path), f"cannot be read as JSON ({exc})") from None
     return kind.from_dict(data)
 

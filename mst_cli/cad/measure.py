@@ -34,8 +34,13 @@ _RAY_OFFSET_MM = (0.0123, 0.0071)
 def to_manifold(mesh: Mesh) -> tuple[manifold3d.Manifold, str]:
     """manifold3d view of the mesh and its status name ("NoError" when it is a manifold)."""
     import manifold3d as mf
-    m = mf.Manifold(mf.Mesh(vert_properties=np.ascontiguousarray(mesh.vertices, dtype=np.float32),
-                            tri_verts=np.ascontiguousarray(mesh.faces, dtype=np.uint32)))
+
+    m = mf.Manifold(
+        mf.Mesh(
+            vert_properties=np.ascontiguousarray(mesh.vertices, dtype=np.float32),
+            tri_verts=np.ascontiguousarray(mesh.faces, dtype=np.uint32),
+        )
+    )
     return m, m.status().name
 
 
@@ -76,8 +81,7 @@ def vertical_gaps(manifold, x: float, y: float, z_top: float, z_bottom: float = 
     """Air intervals (z_low, z_high) in mm along the vertical line through (x, y), for a body
     between z_bottom and z_top."""
     start = z_bottom - 1.0
-    return [(start + a, start + b)
-            for a, b in air_gaps(manifold, (x, y, start), (0, 0, 1), z_top - z_bottom + 2.0)]
+    return [(start + a, start + b) for a, b in air_gaps(manifold, (x, y, start), (0, 0, 1), z_top - z_bottom + 2.0)]
 
 
 def section_boxes(manifold, z_mm: float) -> list[tuple[float, float, float, float]]:
@@ -105,10 +109,10 @@ def vertex_components(n_vertices: int, edges: np.ndarray) -> np.ndarray:
         la, lb = label[a], label[b]
         low = np.minimum(la, lb)
         new = label.copy()
-        np.minimum.at(new, la, low)             # hook both roots onto the smaller one
+        np.minimum.at(new, la, low)  # hook both roots onto the smaller one
         np.minimum.at(new, lb, low)
         while not np.array_equal(new, new[new]):
-            new = new[new]                      # compress to the roots
+            new = new[new]  # compress to the roots
         if np.array_equal(new, label):
             return label
         label = new
@@ -134,7 +138,7 @@ def to_sensor_frame(mesh: Mesh, manifest: Manifest) -> Mesh:
     """The print-oriented mesh in the sensor frame (the manifest's rotation undone)."""
     rot = np.asarray(manifest.print.rotation, dtype=float)
     shift = np.asarray(manifest.print.translation_mm, dtype=float)
-    return mesh.moved((mesh.vertices - shift) @ rot)      # R^T (p - T), row vectors
+    return mesh.moved((mesh.vertices - shift) @ rot)  # R^T (p - T), row vectors
 
 
 # --------------------------------------------------------------------------- measurements
@@ -142,19 +146,19 @@ def to_sensor_frame(mesh: Mesh, manifest: Manifest) -> Mesh:
 class LayerSection:
     """One layer, measured in a section through its two lower walls and along the axis."""
 
-    wall_cuts: int                  # regions the section cuts (the design has 2 walls)
-    wall_mm: float                  # wall normal thickness: x width x sin(design theta)
-    web_depth_mm: float             # the walls' extent along y (the print height)
-    cavity_mm: float                # the one air gap on the axis inside the layer's z range
+    wall_cuts: int  # regions the section cuts (the design has 2 walls)
+    wall_mm: float  # wall normal thickness: x width x sin(design theta)
+    web_depth_mm: float  # the walls' extent along y (the print height)
+    cavity_mm: float  # the one air gap on the axis inside the layer's z range
 
 
 @dataclass(frozen=True)
 class PocketSize:
-    section_area_mm2: float         # hole of the section at the design's mid-depth, around the axis
-    floor_z_mm: float               # the topmost air gap on the axis: floor and top of the pocket
+    section_area_mm2: float  # hole of the section at the design's mid-depth, around the axis
+    floor_z_mm: float  # the topmost air gap on the axis: floor and top of the pocket
     top_z_mm: float
-    void_volume_mm3: float          # minus the signed volume of the inward shell (0 without one)
-    ridge_z_mm: float               # print height of the roof's ridge, along the build direction
+    void_volume_mm3: float  # minus the signed volume of the inward shell (0 without one)
+    ridge_z_mm: float  # print height of the roof's ridge, along the build direction
 
     @property
     def depth_mm(self) -> float:
@@ -163,10 +167,10 @@ class PocketSize:
 
 @dataclass(frozen=True)
 class SlotSize:
-    floor_z_mm: float               # the lowest air gap above the chip: board floor ...
-    top_z_mm: float                 # ... and cover underside
-    floor_y_mm: float               # where a ray up the depth first leaves the solid
-    x0_mm: float                    # the one air gap across the slot below the windows
+    floor_z_mm: float  # the lowest air gap above the chip: board floor ...
+    top_z_mm: float  # ... and cover underside
+    floor_y_mm: float  # where a ray up the depth first leaves the solid
+    x0_mm: float  # the one air gap across the slot below the windows
     x1_mm: float
     window_floor_y_mm: tuple[float, ...]
 
@@ -177,7 +181,7 @@ class Measurements:
 
     watertight: bool
     is_volume: bool
-    manifold_status: str            # manifold3d's status name ("NoError")
+    manifold_status: str  # manifold3d's status name ("NoError")
     manifold_empty: bool
     bodies: int
     voids: int
@@ -207,14 +211,23 @@ def measure(mesh, manifest: Manifest) -> Measurements:
     axis_gaps = vertical_gaps(manifold, *_RAY_OFFSET_MM, manifest.body.bbox_max_mm[2])
     down_incl, down_area, flat_heights = _measure_faces(mesh, manifest)
     return Measurements(
-        watertight=bool(sensor.is_watertight), is_volume=bool(sensor.is_volume),
-        manifold_status=status, manifold_empty=manifold.is_empty(),
-        bodies=bodies, voids=voids, shell_volumes_mm3=shell_volumes,
-        volume_mm3=float(sensor.volume), bbox_min_mm=bbox_min, bbox_max_mm=bbox_max,
+        watertight=bool(sensor.is_watertight),
+        is_volume=bool(sensor.is_volume),
+        manifold_status=status,
+        manifold_empty=manifold.is_empty(),
+        bodies=bodies,
+        voids=voids,
+        shell_volumes_mm3=shell_volumes,
+        volume_mm3=float(sensor.volume),
+        bbox_min_mm=bbox_min,
+        bbox_max_mm=bbox_max,
         layers=tuple(_measure_layer(manifold, layer, axis_gaps) for layer in manifest.layers),
         pocket=_measure_pocket(manifold, manifest, axis_gaps, shell_volumes if voids else []),
         slot=_measure_slot(manifold, manifest),
-        down_inclination_deg=down_incl, down_area_mm2=down_area, flat_heights_mm=flat_heights)
+        down_inclination_deg=down_incl,
+        down_area_mm2=down_area,
+        flat_heights_mm=flat_heights,
+    )
 
 
 def _measure_layer(manifold, layer, axis_gaps) -> LayerSection:
@@ -222,8 +235,9 @@ def _measure_layer(manifold, layer, axis_gaps) -> LayerSection:
     # Section halfway between the bottom pad's top (z = t) and the side vertex (z = h/2):
     # it cuts only the two lower walls, each t / sin(theta) wide in x, D deep in y.
     boxes = section_boxes(manifold, zb + 0.5 * (t + 0.5 * h))
-    wall = float(min(x1 - x0 for x0, _, x1, _ in boxes) * math.sin(math.radians(layer.theta_deg))) \
-        if boxes else math.nan
+    wall = (
+        float(min(x1 - x0 for x0, _, x1, _ in boxes) * math.sin(math.radians(layer.theta_deg))) if boxes else math.nan
+    )
     depth = float(min(y1 - y0 for _, y0, _, y1 in boxes)) if boxes else math.nan
     gaps = [g for g in axis_gaps if zb < 0.5 * (g[0] + g[1]) < zb + h]
     cavity = gaps[0][1] - gaps[0][0] if len(gaps) == 1 else math.nan
@@ -236,12 +250,16 @@ def _measure_pocket(manifold, manifest: Manifest, axis_gaps, void_shell_volumes)
     # along the build direction (sensor +y) through the pocket's mid-depth: from the U's bottom
     # up to the roof's ridge; the ray starts 1 mm below the bed (print z = sensor y + half)
     half = 0.5 * manifest.print.height_mm
-    cols = air_gaps(manifold, (0.0123, -half - 1.0, pocket.floor_z_mm + 0.5 * pocket.depth_mm), (0, 1, 0),
-                    2.0 * half + 2.0)
-    return PocketSize(section_area_mm2=section_hole_area(manifold, pocket.section_z_mm, 0.0, 0.0),
-                      floor_z_mm=floor, top_z_mm=top,
-                      void_volume_mm3=-min(void_shell_volumes) if void_shell_volumes else 0.0,
-                      ridge_z_mm=cols[-1][1] - 1.0 if cols else math.nan)
+    cols = air_gaps(
+        manifold, (0.0123, -half - 1.0, pocket.floor_z_mm + 0.5 * pocket.depth_mm), (0, 1, 0), 2.0 * half + 2.0
+    )
+    return PocketSize(
+        section_area_mm2=section_hole_area(manifold, pocket.section_z_mm, 0.0, 0.0),
+        floor_z_mm=floor,
+        top_z_mm=top,
+        void_volume_mm3=-min(void_shell_volumes) if void_shell_volumes else 0.0,
+        ridge_z_mm=cols[-1][1] - 1.0 if cols else math.nan,
+    )
 
 
 def _measure_slot(manifold, manifest: Manifest) -> SlotSize:
@@ -263,9 +281,14 @@ def _measure_slot(manifold, manifest: Manifest) -> SlotSize:
     y_across = 0.5 * (slot.floor_y_mm + min([w.floor_y_mm for w in windows], default=slot.floor_y_mm + 2.0))
     x_gaps = [(a - x_far, b - x_far) for a, b in air_gaps(manifold, (-x_far, y_across, z_s), (1, 0, 0), 2 * x_far)]
     x0, x1 = x_gaps[0] if len(x_gaps) == 1 else (math.nan, math.nan)
-    return SlotSize(floor_z_mm=floor_z, top_z_mm=top_z, floor_y_mm=first_exit_y(cx + _RAY_OFFSET_MM[0]),
-                    x0_mm=x0, x1_mm=x1,
-                    window_floor_y_mm=tuple(first_exit_y(0.5 * (w.x_inner_mm + w.x_outer_mm)) for w in windows))
+    return SlotSize(
+        floor_z_mm=floor_z,
+        top_z_mm=top_z,
+        floor_y_mm=first_exit_y(cx + _RAY_OFFSET_MM[0]),
+        x0_mm=x0,
+        x1_mm=x1,
+        window_floor_y_mm=tuple(first_exit_y(0.5 * (w.x_inner_mm + w.x_outer_mm)) for w in windows),
+    )
 
 
 def _measure_faces(mesh, manifest: Manifest) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -284,8 +307,12 @@ def _measure_faces(mesh, manifest: Manifest) -> tuple[np.ndarray, np.ndarray, np
     flat = np.abs(np.abs(nz) - 1.0) < 1e-9
     c = mesh.triangles_center
     r, floor_z = pocket.radius_mm, pocket.floor_z_mm
-    in_round_bottom = ((np.abs(c[:, 0]) <= r + 1e-6) & (c[:, 1] <= -floor_z + 1e-6)
-                       & (c[:, 1] >= -(floor_z + pocket.depth_mm) - 1e-6)
-                       & (zc >= 0.5 * pr.height_mm - r - 1e-6) & (zc < 0.5 * pr.height_mm))
+    in_round_bottom = (
+        (np.abs(c[:, 0]) <= r + 1e-6)
+        & (c[:, 1] <= -floor_z + 1e-6)
+        & (c[:, 1] >= -(floor_z + pocket.depth_mm) - 1e-6)
+        & (zc >= 0.5 * pr.height_mm - r - 1e-6)
+        & (zc < 0.5 * pr.height_mm)
+    )
     flat &= ~in_round_bottom
     return incl, mesh.area_faces[down], np.unique(np.round(zc[flat], 6))

@@ -29,8 +29,23 @@ if TYPE_CHECKING:
 
 # unit cube corners and its 12 outward triangles (counter-clockwise seen from outside)
 _CUBE_CORNERS = np.array([[i >> 0 & 1, i >> 1 & 1, i >> 2 & 1] for i in range(8)], dtype=float)
-_CUBE_TRIANGLES = np.array([[0, 2, 1], [1, 2, 3], [4, 5, 6], [5, 7, 6], [0, 1, 4], [1, 5, 4],
-                            [2, 6, 3], [3, 6, 7], [0, 4, 2], [2, 4, 6], [1, 3, 5], [3, 7, 5]], dtype=np.uint64)
+_CUBE_TRIANGLES = np.array(
+    [
+        [0, 2, 1],
+        [1, 2, 3],
+        [4, 5, 6],
+        [5, 7, 6],
+        [0, 1, 4],
+        [1, 5, 4],
+        [2, 6, 3],
+        [3, 6, 7],
+        [0, 4, 2],
+        [2, 4, 6],
+        [1, 3, 5],
+        [3, 7, 5],
+    ],
+    dtype=np.uint64,
+)
 
 
 def circle_segments(radius_mm: float, tolerance_mm: float) -> int:
@@ -45,6 +60,7 @@ def circle_segments(radius_mm: float, tolerance_mm: float) -> int:
 
 def _manifold(shape, tolerance_mm: float):
     import manifold3d as mf
+
     if isinstance(shape, shapes.Box):
         lo, hi = np.asarray(shape.lo, float), np.asarray(shape.hi, float)
         # corners at the box's own coordinates (no lo + size rounding): faces that the design
@@ -68,13 +84,14 @@ def _prism(shape: shapes.Prism):
     """A prism as an exact mesh: the profile's own coordinates at both ends (no rounding, so
     faces that touch another shape's fuse with it), caps triangulated by manifold3d."""
     import manifold3d as mf
+
     loops = [_ccw(shape.outer, True)] + [_ccw(h, False) for h in shape.holes]
     profile = np.concatenate(loops)
     k = len(profile)
     caps = np.asarray(mf.triangulate(loops), dtype=np.int64)
     sides = []
     first = 0
-    for loop in loops:                  # material on the left of every loop: walls face out
+    for loop in loops:  # material on the left of every loop: walls face out
         i = first + np.arange(len(loop))
         j = first + (np.arange(len(loop)) + 1) % len(loop)
         sides += [np.stack([i, j, j + k], axis=1), np.stack([i, j + k, i + k], axis=1)]
@@ -93,11 +110,13 @@ def _prism(shape: shapes.Prism):
 def body_manifold(geometry: SensorGeometry, tolerance_mm: float) -> manifold3d.Manifold:
     """The body as one manifold3d solid: the keep shapes fused, the cuts and the pocket cut."""
     import manifold3d as mf
+
     plan = shapes.body_plan(geometry)
     keep = mf.Manifold.batch_boolean([_manifold(s, tolerance_mm) for s in plan.keep], mf.OpType.Add)
     pocket = mf.Manifold.batch_boolean([_manifold(s, tolerance_mm) for s in plan.pocket], mf.OpType.Add)
-    body = mf.Manifold.batch_boolean([keep, *(_manifold(s, tolerance_mm) for s in plan.cut), pocket],
-                                     mf.OpType.Subtract)
+    body = mf.Manifold.batch_boolean(
+        [keep, *(_manifold(s, tolerance_mm) for s in plan.cut), pocket], mf.OpType.Subtract
+    )
     # one solid around one void (the closed pocket): two shells, one of negative volume
     shells = sorted(part.volume() for part in body.decompose())
     if body.status().name != "NoError" or len(shells) != 2 or not shells[0] < 0.0 < shells[1]:
@@ -120,8 +139,9 @@ def canonical(vertices: np.ndarray, triangles: np.ndarray) -> tuple[np.ndarray, 
 def body_mesh(geometry: SensorGeometry, tolerance_mm: float) -> tuple[np.ndarray, np.ndarray]:
     """(vertices, triangles) of the body in the sensor frame, closed and outward-oriented."""
     mesh = body_manifold(geometry, tolerance_mm).to_mesh64()
-    vertices, triangles = canonical(np.asarray(mesh.vert_properties, dtype=float)[:, :3],
-                                    np.asarray(mesh.tri_verts, dtype=np.int64))
+    vertices, triangles = canonical(
+        np.asarray(mesh.vert_properties, dtype=float)[:, :3], np.asarray(mesh.tri_verts, dtype=np.int64)
+    )
     if not mesh_io.is_closed_oriented(vertices, triangles):
         raise RuntimeError("the meshed body is not closed: please report this design")
     return vertices, triangles
@@ -130,4 +150,4 @@ def body_mesh(geometry: SensorGeometry, tolerance_mm: float) -> tuple[np.ndarray
 def print_mesh(geometry: SensorGeometry, tolerance_mm: float) -> tuple[np.ndarray, np.ndarray]:
     """(vertices, triangles) of the body as it lies on the bed (the STL/3MF frame)."""
     vertices, triangles = body_mesh(geometry, tolerance_mm)
-    return geometry.to_print_frame(vertices), triangles     # a rotation: winding is kept
+    return geometry.to_print_frame(vertices), triangles  # a rotation: winding is kept

@@ -28,16 +28,28 @@ from mst_cli.cad.deterministic import (
 if TYPE_CHECKING:
     from build123d import Solid
 
-__all__ = ["PRUSA_CUSTOM_GCODE_MEMBER", "PRUSA_PAUSE_PRINT_TYPE", "STEP_TIMESTAMP", "is_closed_oriented",
-           "merge_vertices", "prusa_pause_xml", "step_bytes", "stl_bytes", "tessellate", "three_mf_bytes", "write_step"]
+__all__ = [
+    "PRUSA_CUSTOM_GCODE_MEMBER",
+    "PRUSA_PAUSE_PRINT_TYPE",
+    "STEP_TIMESTAMP",
+    "is_closed_oriented",
+    "merge_vertices",
+    "prusa_pause_xml",
+    "step_bytes",
+    "stl_bytes",
+    "tessellate",
+    "three_mf_bytes",
+    "write_step",
+]
 
 STL_HEADER = "mst sensor body, mm"
 # largest angle (rad) one mesh segment of a curved surface spans, in both meshers
 ANGULAR_TOLERANCE_RAD = 0.1
 
 
-def tessellate(solid: Solid, tolerance_mm: float,
-               angular_tolerance_rad: float = ANGULAR_TOLERANCE_RAD) -> tuple[np.ndarray, np.ndarray]:
+def tessellate(
+    solid: Solid, tolerance_mm: float, angular_tolerance_rad: float = ANGULAR_TOLERANCE_RAD
+) -> tuple[np.ndarray, np.ndarray]:
     """Indexed triangle mesh of ``solid`` with outward normals.
 
     OCCT's incremental mesher discretises every edge once and shares it between the two
@@ -81,6 +93,7 @@ def _keep_corner_order(solid, triangles: np.ndarray) -> None:
 
 def _trimesh(vertices: np.ndarray, triangles: np.ndarray):
     import trimesh
+
     # process=False: trimesh must not reorder, weld or drop anything behind our back
     return trimesh.Trimesh(vertices=vertices, faces=triangles, process=False)
 
@@ -134,8 +147,7 @@ def stl_bytes(vertices: np.ndarray, triangles: np.ndarray, header: str = STL_HEA
     record = np.zeros(len(t), dtype=[("normal", "<f4", 3), ("corners", "<f4", (3, 3)), ("attr", "<u2")])
     record["normal"] = face_normals(vertices, t)
     record["corners"] = np.asarray(vertices, dtype=float)[t]
-    return (header.encode("ascii")[:80].ljust(80, b" ") + np.uint32(len(t)).astype("<u4").tobytes()
-            + record.tobytes())
+    return header.encode("ascii")[:80].ljust(80, b" ") + np.uint32(len(t)).astype("<u4").tobytes() + record.tobytes()
 
 
 # --------------------------------------------------------------------------- reading (mst check)
@@ -148,8 +160,8 @@ class Mesh:
     """An indexed triangle mesh and what ``mst check`` measures on it, in numpy only (trimesh
     imports scipy.spatial, a third of a second, for none of it). Attribute names as trimesh's."""
 
-    vertices: np.ndarray            # (n, 3) float64, mm
-    faces: np.ndarray               # (m, 3) int64
+    vertices: np.ndarray  # (n, 3) float64, mm
+    faces: np.ndarray  # (m, 3) int64
 
     @classmethod
     def of(cls, mesh) -> Mesh:
@@ -197,17 +209,23 @@ class Mesh:
     @property
     def is_volume(self) -> bool:
         """Watertight, consistently wound, finite and of positive volume (trimesh's test)."""
-        return (self.is_watertight and self.is_winding_consistent and bool(np.isfinite(self.vertices).all())
-                and self.volume > 0.0)
+        return (
+            self.is_watertight
+            and self.is_winding_consistent
+            and bool(np.isfinite(self.vertices).all())
+            and self.volume > 0.0
+        )
 
 
 def weld(vertices: np.ndarray, triangles: np.ndarray, digits: int = WELD_DIGITS) -> Mesh:
     """One vertex per coordinate rounded to ``digits`` decimals (kept in first-seen order)."""
-    key = np.round(np.asarray(vertices, dtype=float) * 10.0 ** digits).astype(np.int64)
+    key = np.round(np.asarray(vertices, dtype=float) * 10.0**digits).astype(np.int64)
     _, first, inverse = np.unique(key, axis=0, return_index=True, return_inverse=True)
     rank = np.argsort(np.argsort(first))
-    return Mesh(np.asarray(vertices, dtype=float)[np.sort(first)],
-                rank[inverse.reshape(-1)][np.asarray(triangles, dtype=np.int64)])
+    return Mesh(
+        np.asarray(vertices, dtype=float)[np.sort(first)],
+        rank[inverse.reshape(-1)][np.asarray(triangles, dtype=np.int64)],
+    )
 
 
 def binary_stl_triangles(data: bytes) -> np.ndarray | None:

@@ -25,6 +25,7 @@ def solid(shape: shapes.Box | shapes.Prism | shapes.Cylinder) -> Solid:
 
     def wire(points):
         return Wire.make_polygon([shape.point(a, b, shape.start) for a, b in points], close=True)
+
     face = Face(wire(shape.outer), [wire(h) for h in shape.holes])
     sweep = tuple(shape.length if axis == shape.axis else 0.0 for axis in "xyz")
     return Solid.extrude(face, sweep)

@@ -23,7 +23,7 @@ from mst_cli.cad.checks import Check
 from mst_cli.cad.gcode import SUPPORT_TYPES, GCode, Pause, Span, SpanReport, gap_at, material_across
 from mst_cli.cad.manifest import SliceManifest
 
-Shift = tuple[float, float]       # G-code = print frame + shift (x, y), mm
+Shift = tuple[float, float]  # G-code = print frame + shift (x, y), mm
 
 
 def expected_pause(manifest: SliceManifest) -> dict:
@@ -38,8 +38,11 @@ def _pause_problem(pauses: list[Pause], expected: dict, layer_height_mm: float) 
     if not expected:
         return None if len(pauses) <= 1 else f"{len(pauses)} pauses in the G-code, export.json asks for none"
     if not pauses:
-        return (f"no pause in the G-code (export.json asks for one at z = {expected['z_mm']:.2f} mm"
-                + (f", after layer {expected['after_layer']}" if expected.get("after_layer") else "") + ")")
+        return (
+            f"no pause in the G-code (export.json asks for one at z = {expected['z_mm']:.2f} mm"
+            + (f", after layer {expected['after_layer']}" if expected.get("after_layer") else "")
+            + ")"
+        )
     if len(pauses) > 1:
         return f"{len(pauses)} pauses in the G-code, export.json asks for one"
     p = pauses[0]
@@ -49,9 +52,11 @@ def _pause_problem(pauses: list[Pause], expected: dict, layer_height_mm: float) 
     if p.mid_layer:
         return f"the pause (G-code line {p.line}) falls in the middle of layer {p.after_layer + 1}"
     if not (z_ok and layer_ok):
-        return (f"pause after layer {p.after_layer} (z = {p.z_mm:.2f} mm), export.json asks for "
-                + (f"layer {expected['after_layer']}, " if expected.get("after_layer") else "")
-                + f"z = {expected['z_mm']:.2f} mm")
+        return (
+            f"pause after layer {p.after_layer} (z = {p.z_mm:.2f} mm), export.json asks for "
+            + (f"layer {expected['after_layer']}, " if expected.get("after_layer") else "")
+            + f"z = {expected['z_mm']:.2f} mm"
+        )
     if not boundary:
         return f"pause height {expected['z_mm']:.2f} mm is not on a layer boundary"
     return None
@@ -60,38 +65,76 @@ def _pause_problem(pauses: list[Pause], expected: dict, layer_height_mm: float) 
 def check_pause(pauses: list[Pause], manifest: SliceManifest, layer_height_mm: float) -> Check:
     """The pauses found in the G-code against the one export.json asks for."""
     expected = expected_pause(manifest)
-    found = [{"after_layer": p.after_layer, "z_mm": round(p.z_mm, 4), "command": p.command,
-              "mid_layer": p.mid_layer, "gcode_line": p.line} for p in pauses]
+    found = [
+        {
+            "after_layer": p.after_layer,
+            "z_mm": round(p.z_mm, 4),
+            "command": p.command,
+            "mid_layer": p.mid_layer,
+            "gcode_line": p.line,
+        }
+        for p in pauses
+    ]
     problem = _pause_problem(pauses, expected, layer_height_mm)
-    found_text = ", ".join(f"after layer {f['after_layer']} (z {f['z_mm']:.2f} mm"
-                           f"{', mid-layer' if f['mid_layer'] else ''}) {f['command']}" for f in found) or "none"
+    found_text = (
+        ", ".join(
+            f"after layer {f['after_layer']} (z {f['z_mm']:.2f} mm"
+            f"{', mid-layer' if f['mid_layer'] else ''}) {f['command']}"
+            for f in found
+        )
+        or "none"
+    )
     layer = f"after layer {expected['after_layer']}, " if expected.get("after_layer") else ""
     asked = f"{layer}z {expected['z_mm']:.2f} mm" if expected else "not given"
-    return Check("pause", problem is None, found_text, asked, problem or "",
-                 values={"found": found, "expected": dict(expected) if expected else "not given",
-                         "ok": problem is None})
+    return Check(
+        "pause",
+        problem is None,
+        found_text,
+        asked,
+        problem or "",
+        values={"found": found, "expected": dict(expected) if expected else "not given", "ok": problem is None},
+    )
 
 
 def _span_dict(s: Span | None, shift: Shift) -> dict | None:
     if s is None:
         return None
-    return {"length_mm": round(s.length_mm, 3), "layer": s.layer, "z_mm": round(s.z_mm, 4),
-            "x_mm": round(s.x_mm - shift[0], 3), "y_mm": round(s.y_mm - shift[1], 3),
-            "gcode_xy_mm": [round(s.x_mm, 3), round(s.y_mm, 3)], "type": s.type}
+    return {
+        "length_mm": round(s.length_mm, 3),
+        "layer": s.layer,
+        "z_mm": round(s.z_mm, 4),
+        "x_mm": round(s.x_mm - shift[0], 3),
+        "y_mm": round(s.y_mm - shift[1], 3),
+        "gcode_xy_mm": [round(s.x_mm, 3), round(s.y_mm, 3)],
+        "type": s.type,
+    }
 
 
 def check_free_span(spans: SpanReport, joined: SpanReport, max_span_mm: float, shift: Shift) -> Check:
     """The longest free span (``joined``: with travel moves joined) against ``max_span_mm``."""
     s = spans.longest
     too_long = s is not None and s.length_mm > max_span_mm
-    note = (f"free span {s.length_mm:.1f} mm > {max_span_mm:g} mm (layer {s.layer}, z = {s.z_mm:.2f} mm, "
-            f"{s.type})") if too_long else ""
-    return Check("free_span", not too_long, "none (one layer)" if s is None else f"{s.length_mm:.2f} mm",
-                 f"<= {max_span_mm:g} mm", note,
-                 values={"max_allowed_mm": max_span_mm, "longest": _span_dict(s, shift),
-                         "longest_joined_moves": _span_dict(joined.longest, shift),
-                         "per_layer": [{"layer": p.layer, "z_mm": round(p.z_mm, 4),
-                                        "max_span_mm": round(p.length_mm, 3)} for p in spans.per_layer]})
+    note = (
+        (f"free span {s.length_mm:.1f} mm > {max_span_mm:g} mm (layer {s.layer}, z = {s.z_mm:.2f} mm, {s.type})")
+        if too_long
+        else ""
+    )
+    return Check(
+        "free_span",
+        not too_long,
+        "none (one layer)" if s is None else f"{s.length_mm:.2f} mm",
+        f"<= {max_span_mm:g} mm",
+        note,
+        values={
+            "max_allowed_mm": max_span_mm,
+            "longest": _span_dict(s, shift),
+            "longest_joined_moves": _span_dict(joined.longest, shift),
+            "per_layer": [
+                {"layer": p.layer, "z_mm": round(p.z_mm, 4), "max_span_mm": round(p.length_mm, 3)}
+                for p in spans.per_layer
+            ],
+        },
+    )
 
 
 def check_support(with_auto_support: GCode) -> Check:
@@ -101,9 +144,19 @@ def check_support(with_auto_support: GCode) -> Check:
     n = int(sum(np.isin(lay.types, SUPPORT_TYPES).sum() for lay in g.layers))
     layers = [lay.index for lay in g.layers if np.isin(lay.types, SUPPORT_TYPES).any()]
     note = f"the slicer generates {volume:.0f} mm3 of support (layers {layers[0]}-{layers[-1]})" if n else ""
-    return Check("support", not n, f"needed: {volume:.0f} mm3" if n else "none generated", "none", note,
-                 values={"needed": bool(n), "volume_mm3": round(volume, 2), "extrusions": n,
-                         "layers": [layers[0], layers[-1]] if layers else []})
+    return Check(
+        "support",
+        not n,
+        f"needed: {volume:.0f} mm3" if n else "none generated",
+        "none",
+        note,
+        values={
+            "needed": bool(n),
+            "volume_mm3": round(volume, 2),
+            "extrusions": n,
+            "layers": [layers[0], layers[-1]] if layers else [],
+        },
+    )
 
 
 def cavity_gaps(g: GCode, manifest: SliceManifest, shift: Shift, z_shift: float) -> Check:
@@ -111,13 +164,19 @@ def cavity_gaps(g: GCode, manifest: SliceManifest, shift: Shift, z_shift: float)
     ``values["lines"]`` is a row per line, or "not given")."""
     lines = manifest.print.cavity_lines
     if not lines:
-        return Check("cavity_gaps", True, "-", "not given", "not given in export.json", info=True,
-                     values={"lines": "not given"})
+        return Check(
+            "cavity_gaps", True, "-", "not given", "not given in export.json", info=True, values={"lines": "not given"}
+        )
     rows = []
     for c in lines:
         layer = g.layer_at(c.z_mm + z_shift)
-        row = {"layer": c.layer, "x_mm": c.x_mm, "z_mm": c.z_mm,
-               "designed_gap_mm": c.gap_mm, "designed_y_mm": [c.y_low_mm, c.y_high_mm]}
+        row = {
+            "layer": c.layer,
+            "x_mm": c.x_mm,
+            "z_mm": c.z_mm,
+            "designed_gap_mm": c.gap_mm,
+            "designed_y_mm": [c.y_low_mm, c.y_high_mm],
+        }
         if layer is None:
             row.update(sliced_layer=None, sliced_gap_mm=None, sliced_y_mm=None)
         else:
@@ -126,18 +185,27 @@ def cavity_gaps(g: GCode, manifest: SliceManifest, shift: Shift, z_shift: float)
             if gap is None:
                 row.update(sliced_gap_mm=0.0, sliced_y_mm=None)
             else:
-                row.update(sliced_gap_mm=round(gap[1] - gap[0], 4),
-                           sliced_y_mm=[round(gap[0] - shift[1], 4), round(gap[1] - shift[1], 4)])
+                row.update(
+                    sliced_gap_mm=round(gap[1] - gap[0], 4),
+                    sliced_y_mm=[round(gap[0] - shift[1], 4), round(gap[1] - shift[1], 4)],
+                )
         if row.get("designed_gap_mm") is not None and row.get("sliced_gap_mm") is not None:
             row["difference_mm"] = round(row["sliced_gap_mm"] - float(row["designed_gap_mm"]), 4)
         rows.append(row)
     sliced = ", ".join("-" if r["sliced_gap_mm"] is None else f"{r['sliced_gap_mm']:.2f}" for r in rows)
     designed = ", ".join(f"{float(r['designed_gap_mm']):.2f}" for r in rows)
-    return Check("cavity_gaps", True, f"{sliced} mm", f"{designed} mm (designed)",
-                 "gaps along export.json's print.cavity_lines", info=True, values={"lines": rows})
+    return Check(
+        "cavity_gaps",
+        True,
+        f"{sliced} mm",
+        f"{designed} mm (designed)",
+        "gaps along export.json's print.cavity_lines",
+        info=True,
+        values={"lines": rows},
+    )
 
 
-WALL_STATIONS = 5        # lines across each wall, evenly along the middle of its free stretch
+WALL_STATIONS = 5  # lines across each wall, evenly along the middle of its free stretch
 # Extrusion within this of a wall's designed faces may be a neighbour's (the plate beyond a
 # narrow notch); what reaches deeper into the wall is the wall.
 WALL_FACE_MARGIN_MM = 0.05
@@ -152,24 +220,39 @@ def walls_as_sliced(g: GCode, manifest: SliceManifest, shift: Shift, z_shift: fl
     (:func:`~mst_cli.cad.gcode.material_across`); a layer's is the mean of its walls'."""
     lines = manifest.print.wall_lines
     if not lines:
-        return Check("walls_as_sliced", True, "-", "not given", "not given in export.json", info=True,
-                     values={"layers": "not given"})
+        return Check(
+            "walls_as_sliced",
+            True,
+            "-",
+            "not given",
+            "not given in export.json",
+            info=True,
+            values={"layers": "not given"},
+        )
     walls: dict[int, list[dict]] = {}
     for w in lines:
         samples = []
         for layer in g.layers:
             if not w.z_low_mm < layer.z_mm - z_shift <= w.z_high_mm + 1e-6:
                 continue
-            samples += material_across(layer.segments[layer.of_part()], (w.x0_mm + shift[0], w.y0_mm + shift[1]),
-                                       (w.x1_mm + shift[0], w.y1_mm + shift[1]), WALL_STATIONS,
-                                       max(0.5 * w.t_mm - WALL_FACE_MARGIN_MM, 0.25 * w.t_mm))
+            samples += material_across(
+                layer.segments[layer.of_part()],
+                (w.x0_mm + shift[0], w.y0_mm + shift[1]),
+                (w.x1_mm + shift[0], w.y1_mm + shift[1]),
+                WALL_STATIONS,
+                max(0.5 * w.t_mm - WALL_FACE_MARGIN_MM, 0.25 * w.t_mm),
+            )
         width = np.array([a.width_mm for a in samples])
         n_lines = np.array([a.n_lines for a in samples], dtype=int)
         row = {"wall": w.wall, "designed_t_mm": w.t_mm, "samples": len(samples)}
         if samples:
-            row.update(sliced_t_mm=round(float(np.median(width)), 4),
-                       sliced_t_min_mm=round(float(width.min()), 4), sliced_t_max_mm=round(float(width.max()), 4),
-                       n_lines=int(np.bincount(n_lines).argmax()), missing=int((width == 0).sum()))
+            row.update(
+                sliced_t_mm=round(float(np.median(width)), 4),
+                sliced_t_min_mm=round(float(width.min()), 4),
+                sliced_t_max_mm=round(float(width.max()), 4),
+                n_lines=int(np.bincount(n_lines).argmax()),
+                missing=int((width == 0).sum()),
+            )
         else:
             row.update(sliced_t_mm=None, sliced_t_min_mm=None, sliced_t_max_mm=None, n_lines=None, missing=0)
         walls.setdefault(w.layer, []).append(row)
@@ -178,10 +261,24 @@ def walls_as_sliced(g: GCode, manifest: SliceManifest, shift: Shift, z_shift: fl
         sliced = [r["sliced_t_mm"] for r in ws]
         t = round(float(np.mean(sliced)), 4) if None not in sliced else None
         designed = float(np.mean([r["designed_t_mm"] for r in ws]))
-        rows.append({"layer": layer, "designed_t_mm": designed, "sliced_t_mm": t,
-                     "difference_mm": round(t - designed, 4) if t is not None else None,
-                     "n_lines": sorted({r["n_lines"] for r in ws if r["n_lines"] is not None}), "walls": ws})
+        rows.append(
+            {
+                "layer": layer,
+                "designed_t_mm": designed,
+                "sliced_t_mm": t,
+                "difference_mm": round(t - designed, 4) if t is not None else None,
+                "n_lines": sorted({r["n_lines"] for r in ws if r["n_lines"] is not None}),
+                "walls": ws,
+            }
+        )
     sliced_text = ", ".join("-" if r["sliced_t_mm"] is None else f"{r['sliced_t_mm']:.3f}" for r in rows)
     designed_text = ", ".join(f"{r['designed_t_mm']:.3f}" for r in rows)
-    return Check("walls_as_sliced", True, f"{sliced_text} mm", f"{designed_text} mm (designed)",
-                 "walls across export.json's print.wall_lines", info=True, values={"layers": rows})
+    return Check(
+        "walls_as_sliced",
+        True,
+        f"{sliced_text} mm",
+        f"{designed_text} mm (designed)",
+        "walls across export.json's print.wall_lines",
+        info=True,
+        values={"layers": rows},
+    )

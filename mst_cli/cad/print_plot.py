@@ -11,17 +11,34 @@ import numpy as np
 
 from mst_cli.cad.gcode import GCode, SpanReport
 
-COLOURS = {"External perimeter": "#d62728", "Perimeter": "#ff7f0e", "Overhang perimeter": "#1f77b4",
-           "Internal infill": "#8c564b", "Solid infill": "#9467bd", "Top solid infill": "#e377c2",
-           "Bridge infill": "#17becf", "Gap fill": "#2ca02c", "Skirt/Brim": "#7f7f7f",
-           "Support material": "#bcbd22", "Support material interface": "#dbdb8d"}
+COLOURS = {
+    "External perimeter": "#d62728",
+    "Perimeter": "#ff7f0e",
+    "Overhang perimeter": "#1f77b4",
+    "Internal infill": "#8c564b",
+    "Solid infill": "#9467bd",
+    "Top solid infill": "#e377c2",
+    "Bridge infill": "#17becf",
+    "Gap fill": "#2ca02c",
+    "Skirt/Brim": "#7f7f7f",
+    "Support material": "#bcbd22",
+    "Support material interface": "#dbdb8d",
+}
 
 
-def plot_print(path: Path, triangles: np.ndarray, bed_xy: tuple[float, float], shift_xyz: tuple[float, float, float],
-               g: GCode, spans: SpanReport, title: str) -> None:
+def plot_print(
+    path: Path,
+    triangles: np.ndarray,
+    bed_xy: tuple[float, float],
+    shift_xyz: tuple[float, float, float],
+    g: GCode,
+    spans: SpanReport,
+    title: str,
+) -> None:
     """Draw print.png at ``path``: ``triangles`` (n, 3, 3) in the print frame, moved by
     ``shift_xyz`` onto the bed; the G-code's layers and its free spans."""
     import matplotlib
+
     matplotlib.use("Agg")
     from matplotlib.collections import LineCollection
     from matplotlib.figure import Figure
@@ -45,7 +62,7 @@ def plot_print(path: Path, triangles: np.ndarray, bed_xy: tuple[float, float], s
     ax.set_xlim(*bx)
     ax.set_ylim(*by)
     ax.set_zlim(0, max(hi[2], 1.0))
-    with contextlib.suppress(AttributeError):       # matplotlib < 3.3 has no box aspect
+    with contextlib.suppress(AttributeError):  # matplotlib < 3.3 has no box aspect
         ax.set_box_aspect((bx[1] - bx[0], by[1] - by[0], max(hi[2], 1.0)))
     ax.set_xlabel("x (mm)")
     ax.set_ylabel("y (mm)")
@@ -70,14 +87,17 @@ def plot_print(path: Path, triangles: np.ndarray, bed_xy: tuple[float, float], s
         for t in sorted(set(layer.types.tolist())):
             sel = layer.types == t
             segs = layer.segments[sel]
-            lc = LineCollection(segs[:, :4].reshape(-1, 2, 2), colors=COLOURS.get(t, "k"),
-                                linewidths=1.2, label=t if t not in seen else None)
+            lc = LineCollection(
+                segs[:, :4].reshape(-1, 2, 2),
+                colors=COLOURS.get(t, "k"),
+                linewidths=1.2,
+                label=t if t not in seen else None,
+            )
             seen.add(t)
             ax2.add_collection(lc)
         if worst is not None and worst.layer == layer.index and worst.length_mm > 0:
             (xa, ya), (xb, yb) = worst.start_xy_mm, worst.end_xy_mm
-            ax2.plot([xa, xb], [ya, yb], color="k", lw=3, alpha=0.5,
-                     label=f"free span {worst.length_mm:.1f} mm")
+            ax2.plot([xa, xb], [ya, yb], color="k", lw=3, alpha=0.5, label=f"free span {worst.length_mm:.1f} mm")
         part = layer.segments[layer.of_part()] if layer.of_part().any() else layer.segments
         ax2.set_xlim(part[:, [0, 2]].min() - 1, part[:, [0, 2]].max() + 1)
         ax2.set_ylim(part[:, [1, 3]].min() - 1, part[:, [1, 3]].max() + 1)

@@ -190,6 +190,5 @@ def board(geometry: SensorGeometry) -> list[Box]:
     cx, cy = geometry.chip_xy_printed_mm
     s2 = 0.5 * bd.chip_size_mm
     chip = box(cx - s2, cx + s2, cy - s2, cy + s2, zt, geometry.z_chip_top_mm)
-    sockets = [box(bx + c.x0_mm, bx + c.x1_mm, by + c.y0_mm, by + c.y1_mm, zt, zt + c.height_mm)
-               for c in bd.connectors]
+    sockets = [box(bx + c.x0_mm, bx + c.x1_mm, by + c.y0_mm, by + c.y1_mm, zt, zt + c.height_mm) for c in bd.connectors]
     return [pcb, chip] + sockets

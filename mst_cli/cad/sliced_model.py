@@ -24,12 +24,13 @@ def predict(doc: Document, sliced_t_mm: list[float]) -> dict:
     model can run (a wall missing, a cavity closed)."""
     from mst_cli.calibrate.fit import simulate_as_printed, with_walls
     from mst_cli.io.schema import design_geometry
+
     designed = simulate_as_printed(doc)
     if min(sliced_t_mm) <= 0:
         return {"error": "a wall is missing from the G-code (sliced width 0): nothing to simulate"}
     try:
         walls = with_walls(doc, sliced_t_mm)
-        design_geometry(walls)                      # the cell rules a working cell keeps (lock stroke)
+        design_geometry(walls)  # the cell rules a working cell keeps (lock stroke)
         sliced = simulate_as_printed(walls)
     except InputError as exc:
         return {"error": f"the walls as sliced make no working cell: {exc}"}
@@ -37,14 +38,21 @@ def predict(doc: Document, sliced_t_mm: list[float]) -> dict:
     for i in range(max(len(designed.regimes), len(sliced.regimes))):
         d = designed.regimes[i] if i < len(designed.regimes) else None
         s = sliced.regimes[i] if i < len(sliced.regimes) else None
-        row = {"regime": i + 1,
-               "locking_layer_designed": d.layer if d else None, "locking_layer_sliced": s.layer if s else None,
-               "S_designed_per_N": d.sensitivity_secant_per_N if d else None,
-               "S_sliced_per_N": s.sensitivity_secant_per_N if s else None,
-               "R_designed_N": d.force_to_N if d else None, "R_sliced_N": s.force_to_N if s else None}
+        row = {
+            "regime": i + 1,
+            "locking_layer_designed": d.layer if d else None,
+            "locking_layer_sliced": s.layer if s else None,
+            "S_designed_per_N": d.sensitivity_secant_per_N if d else None,
+            "S_sliced_per_N": s.sensitivity_secant_per_N if s else None,
+            "R_designed_N": d.force_to_N if d else None,
+            "R_sliced_N": s.force_to_N if s else None,
+        }
         row["S_change_rel"] = _change(row["S_sliced_per_N"], row["S_designed_per_N"]) if d and s else None
         row["R_change_rel"] = _change(row["R_sliced_N"], row["R_designed_N"]) if d and s else None
         rows.append(row)
-    return {"mechanics": designed.mechanics, "field_model": designed.field_model,
-            "printer_wall_offset_mm": doc.printer.wall_offset_mm,
-            "regimes": rows}
+    return {
+        "mechanics": designed.mechanics,
+        "field_model": designed.field_model,
+        "printer_wall_offset_mm": doc.printer.wall_offset_mm,
+        "regimes": rows,
+    }

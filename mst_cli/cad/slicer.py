@@ -24,15 +24,17 @@ from mst_cli.errors import InputError
 
 EXECUTABLES = ("prusa-slicer", "PrusaSlicer", "prusa-slicer-console")
 ENV_EXECUTABLE = "MST_PRUSA_SLICER"
-INSTALL_HINT = ("install it with 'sudo apt-get install prusa-slicer' (Debian/Ubuntu), or get "
-                "PrusaSlicer from https://www.prusa3d.com/prusaslicer/ and put it on PATH "
-                f"or in ${ENV_EXECUTABLE}")
+INSTALL_HINT = (
+    "install it with 'sudo apt-get install prusa-slicer' (Debian/Ubuntu), or get "
+    "PrusaSlicer from https://www.prusa3d.com/prusaslicer/ and put it on PATH "
+    f"or in ${ENV_EXECUTABLE}"
+)
 DEFAULT_TIMEOUT_S = 300.0
 PROFILE_NAME = "tpu85a-0.4mm.ini"
-MAX_PROFILE_BYTES = 1_000_000       # a full PrusaSlicer config is about 20 KB
+MAX_PROFILE_BYTES = 1_000_000  # a full PrusaSlicer config is about 20 KB
 
 
-GCODE_END = "; prusaslicer_config = end"      # the last line of every G-code PrusaSlicer writes
+GCODE_END = "; prusaslicer_config = end"  # the last line of every G-code PrusaSlicer writes
 
 
 class SlicerError(RuntimeError):
@@ -84,8 +86,9 @@ def _clean(stderr: str) -> list[str]:
 
 def _run(args: list[str], timeout_s: float) -> subprocess.CompletedProcess:
     try:
-        return subprocess.run(args, capture_output=True, text=True, timeout=timeout_s,
-                              env={**os.environ, "LC_ALL": "C"})
+        return subprocess.run(
+            args, capture_output=True, text=True, timeout=timeout_s, env={**os.environ, "LC_ALL": "C"}
+        )
     except subprocess.TimeoutExpired:
         raise SlicerError(f"prusa-slicer did not finish within {timeout_s:g} s") from None
     except OSError as exc:
@@ -118,9 +121,12 @@ def parse_ini(text: str, where: str = "profile") -> dict[str, str]:
         if not s or s[0] in "#;":
             continue
         if s.startswith("[") and s.endswith("]"):
-            raise InputError("--profile", where,
-                             f"line {n} '{s}' is a section header: this is a config bundle, not one "
-                             "PrusaSlicer config (export one with File > Export > Export Config)")
+            raise InputError(
+                "--profile",
+                where,
+                f"line {n} '{s}' is a section header: this is a config bundle, not one "
+                "PrusaSlicer config (export one with File > Export > Export Config)",
+            )
         if "=" not in s:
             raise InputError("--profile", where, f"line {n} is not 'key = value': {s[:60]!r}")
         key, value = s.split("=", 1)
@@ -134,6 +140,7 @@ def parse_ini(text: str, where: str = "profile") -> dict[str, str]:
 def check_profile(path: Path, exe: str) -> dict[str, str]:
     """The settings of a PrusaSlicer FFF config, or InputError (exit 2) with the reason."""
     from mst_cli.io.files import read_input_text
+
     path = Path(path)
     if not path.exists():
         raise InputError("--profile", str(path), "no such file (a PrusaSlicer .ini config)")
@@ -144,13 +151,17 @@ def check_profile(path: Path, exe: str) -> dict[str, str]:
     known = known_options(exe)
     unknown = sorted(k for k in values if k not in known)
     if unknown:
-        raise InputError("--profile", str(path),
-                         f"'{unknown[0]}' is not a PrusaSlicer option"
-                         + (f" ({len(unknown)} unknown keys)" if len(unknown) > 1 else "")
-                         + ": not a PrusaSlicer config for this version")
+        raise InputError(
+            "--profile",
+            str(path),
+            f"'{unknown[0]}' is not a PrusaSlicer option"
+            + (f" ({len(unknown)} unknown keys)" if len(unknown) > 1 else "")
+            + ": not a PrusaSlicer config for this version",
+        )
     if values.get("printer_technology", "FFF") != "FFF":
-        raise InputError("--profile", str(path),
-                         f"printer_technology = {values['printer_technology']}: an FFF config is needed")
+        raise InputError(
+            "--profile", str(path), f"printer_technology = {values['printer_technology']}: an FFF config is needed"
+        )
     return values
 
 
@@ -176,8 +187,15 @@ class SliceRun:
     messages: list[str]
 
 
-def slice_model(exe: str, model: Path, profile: Path, out_gcode: Path, centre_xy: tuple[float, float],
-                extra_args: tuple[str, ...] = (), timeout_s: float = DEFAULT_TIMEOUT_S) -> SliceRun:
+def slice_model(
+    exe: str,
+    model: Path,
+    profile: Path,
+    out_gcode: Path,
+    centre_xy: tuple[float, float],
+    extra_args: tuple[str, ...] = (),
+    timeout_s: float = DEFAULT_TIMEOUT_S,
+) -> SliceRun:
     """``prusa-slicer --export-gcode --load PROFILE --center X,Y [extra] MODEL --output OUT``.
 
     ``--center`` puts the centre of the model's bounding box (x, y) at ``centre_xy`` and the
@@ -186,8 +204,18 @@ def slice_model(exe: str, model: Path, profile: Path, out_gcode: Path, centre_xy
     out_gcode = Path(out_gcode)
     if out_gcode.exists():
         out_gcode.unlink()
-    args = [exe, "--export-gcode", "--load", str(profile), "--center",
-            f"{centre_xy[0]:g},{centre_xy[1]:g}", *extra_args, str(model), "--output", str(out_gcode)]
+    args = [
+        exe,
+        "--export-gcode",
+        "--load",
+        str(profile),
+        "--center",
+        f"{centre_xy[0]:g},{centre_xy[1]:g}",
+        *extra_args,
+        str(model),
+        "--output",
+        str(out_gcode),
+    ]
     t0 = time.perf_counter()
     r = _run(args, timeout_s)
     seconds = time.perf_counter() - t0
@@ -212,8 +240,7 @@ def read_gcode(path: Path) -> str:
     except UnicodeDecodeError as exc:
         raise SlicerError(f"prusa-slicer wrote G-code that is not UTF-8 text (byte {exc.start})") from None
     if text.rstrip().rsplit("\n", 1)[-1].strip() != GCODE_END:
-        raise SlicerError(f"prusa-slicer wrote G-code that ends before its closing '{GCODE_END}' line: "
-                          "it is truncated")
+        raise SlicerError(f"prusa-slicer wrote G-code that ends before its closing '{GCODE_END}' line: it is truncated")
     return text
 
 
@@ -240,8 +267,7 @@ def read_stl(path: Path) -> np.ndarray:
     if len(data) >= 84:
         n = int(np.frombuffer(data[80:84], dtype="<u4")[0])
         if 84 + 50 * n == len(data):
-            rec = np.frombuffer(data[84:], dtype=np.dtype([("n", "<f4", 3), ("v", "<f4", (3, 3)),
-                                                           ("a", "<u2")]))
+            rec = np.frombuffer(data[84:], dtype=np.dtype([("n", "<f4", 3), ("v", "<f4", (3, 3)), ("a", "<u2")]))
             return rec["v"].astype(float)
     nums = re.findall(rb"vertex\s+(\S+)\s+(\S+)\s+(\S+)", data)
     return np.array(nums, dtype=float).reshape(-1, 3, 3)
@@ -250,6 +276,7 @@ def read_stl(path: Path) -> np.ndarray:
 def read_3mf(path: Path) -> np.ndarray:
     """(m, 3, 3) triangle corners of the meshes of a 3MF package (build transforms ignored)."""
     import zipfile
+
     tris = []
     with zipfile.ZipFile(path) as zf:
         for name in zf.namelist():
@@ -257,10 +284,12 @@ def read_3mf(path: Path) -> np.ndarray:
                 continue
             text = zf.read(name).decode("utf-8")
             for mesh in re.findall(r"<mesh>(.*?)</mesh>", text, re.DOTALL):
-                v = np.array(re.findall(r'<vertex\s+x="([^"]+)"\s+y="([^"]+)"\s+z="([^"]+)"', mesh),
-                             dtype=float).reshape(-1, 3)
-                t = np.array(re.findall(r'<triangle\s+v1="(\d+)"\s+v2="(\d+)"\s+v3="(\d+)"', mesh),
-                             dtype=np.int64).reshape(-1, 3)
+                v = np.array(
+                    re.findall(r'<vertex\s+x="([^"]+)"\s+y="([^"]+)"\s+z="([^"]+)"', mesh), dtype=float
+                ).reshape(-1, 3)
+                t = np.array(
+                    re.findall(r'<triangle\s+v1="(\d+)"\s+v2="(\d+)"\s+v3="(\d+)"', mesh), dtype=np.int64
+                ).reshape(-1, 3)
                 tris.append(v[t])
     return np.concatenate(tris) if tris else np.zeros((0, 3, 3))
 
@@ -270,6 +299,7 @@ def has_prusa_pause(path: Path) -> bool:
     import zipfile
 
     from mst_cli.cad.deterministic import PRUSA_CUSTOM_GCODE_MEMBER, PRUSA_PAUSE_PRINT_TYPE
+
     try:
         with zipfile.ZipFile(path) as zf:
             text = zf.read(PRUSA_CUSTOM_GCODE_MEMBER).decode("utf-8")

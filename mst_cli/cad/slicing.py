@@ -50,14 +50,14 @@ class SliceResult:
 
     report: dict
     gcode_text: str
-    checks: list[Check]                 # free_span, pause, support, cavity_gaps (info)
-    folder: Path                        # the export's folder (the default output folder)
-    triangles: np.ndarray               # (n, 3, 3) the mesh sliced, print frame, mm
+    checks: list[Check]  # free_span, pause, support, cavity_gaps (info)
+    folder: Path  # the export's folder (the default output folder)
+    triangles: np.ndarray  # (n, 3, 3) the mesh sliced, print frame, mm
     bed_centre_mm: tuple[float, float]
-    shift_xyz_mm: tuple[float, float, float]     # G-code = print frame + shift
+    shift_xyz_mm: tuple[float, float, float]  # G-code = print frame + shift
     gcode: G.GCode
     spans: G.SpanReport
-    written: tuple[str, ...] = ()       # the files :meth:`write` wrote
+    written: tuple[str, ...] = ()  # the files :meth:`write` wrote
 
     @property
     def failed(self) -> list[str]:
@@ -72,8 +72,16 @@ class SliceResult:
             st.write_json(REPORT_FILE, self.report)
             if plot:
                 from mst_cli.cad.print_plot import plot_print
-                plot_print(st.path(PLOT_FILE), self.triangles, self.bed_centre_mm, self.shift_xyz_mm, self.gcode,
-                           self.spans, str(self.report["name"] or self.folder.name))
+
+                plot_print(
+                    st.path(PLOT_FILE),
+                    self.triangles,
+                    self.bed_centre_mm,
+                    self.shift_xyz_mm,
+                    self.gcode,
+                    self.spans,
+                    str(self.report["name"] or self.folder.name),
+                )
             else:
                 st.remove(PLOT_FILE)
         self.written = names
@@ -83,9 +91,13 @@ class SliceResult:
         return summary_table(self.report)
 
 
-def slice_export(path: str | Path, profile: str | Path | None = None, max_span_mm: float = DEFAULT_MAX_SPAN_MM,
-                 progress: Callable[[str], None] | None = None,
-                 note: Callable[[str], None] | None = None) -> SliceResult:
+def slice_export(
+    path: str | Path,
+    profile: str | Path | None = None,
+    max_span_mm: float = DEFAULT_MAX_SPAN_MM,
+    progress: Callable[[str], None] | None = None,
+    note: Callable[[str], None] | None = None,
+) -> SliceResult:
     """Slice the export at ``path`` (its folder, or a mesh in it) with ``profile`` (default: the
     bundled TPU 85A one) and judge it. InputError for bad input (checked before slicing),
     SlicerError when PrusaSlicer misbehaves. ``progress`` gets a line per step, ``note`` the
@@ -97,11 +109,13 @@ def slice_export(path: str | Path, profile: str | Path | None = None, max_span_m
     profile = Path(profile) if profile is not None else S.bundled_profile()
     settings = S.check_profile(profile, exe)
     files = resolve_export(path, need_stl=False)
-    manifest = load_manifest(files.manifest, SliceManifest)    # before any slicing: exit 2 naming the key
+    manifest = load_manifest(files.manifest, SliceManifest)  # before any slicing: exit 2 naming the key
     scripts = S.post_process_scripts(settings)
     if scripts and note is not None:
-        note(f"the profile's post_process runs {', '.join(map(repr, scripts))} on each G-code "
-             "(your script; what is measured is its output)")
+        note(
+            f"the profile's post_process runs {', '.join(map(repr, scripts))} on each G-code "
+            "(your script; what is measured is its output)"
+        )
     model = files.three_mf or files.stl
     triangles = S.read_stl(files.stl) if files.stl is not None else S.read_3mf(files.three_mf)
     if len(triangles) == 0:
@@ -115,12 +129,13 @@ def slice_export(path: str | Path, profile: str | Path | None = None, max_span_m
     centre = S.bed_centre(settings)
     lo, hi = triangles.reshape(-1, 3).min(0), triangles.reshape(-1, 3).max(0)
     shift = (centre[0] - (lo[0] + hi[0]) / 2, centre[1] - (lo[1] + hi[1]) / 2)
-    z_shift = -float(lo[2]) + 0.0          # + 0.0: a part already on the bed shifts by 0.0, not -0.0
+    z_shift = -float(lo[2]) + 0.0  # + 0.0: a part already on the bed shifts by 0.0, not -0.0
     with tempfile.TemporaryDirectory(prefix="mst-slice-") as tmp:
         run1 = S.slice_model(exe, model, profile, Path(tmp) / GCODE_FILE, centre)
         say(f"sliced {model.name} in {run1.seconds:.2f} s")
-        run2 = S.slice_model(exe, model, profile, Path(tmp) / "support.gcode", centre,
-                             ("--support-material", "--support-material-auto"))
+        run2 = S.slice_model(
+            exe, model, profile, Path(tmp) / "support.gcode", centre, ("--support-material", "--support-material-auto")
+        )
         say(f"sliced again with automatic support in {run2.seconds:.2f} s")
         gtext = S.read_gcode(run1.gcode_path)
         g = G.parse_gcode(gtext)
@@ -135,22 +150,32 @@ def slice_export(path: str | Path, profile: str | Path | None = None, max_span_m
     layer_h = _number(settings.get("layer_height"), g.layers[min(1, len(g.layers) - 1)].height_mm)
     if not (isinstance(layer_h, float) and math.isfinite(layer_h) and layer_h > 0):
         raise S.SlicerError(f"prusa-slicer wrote G-code with a layer height of {layer_h} mm")
-    checks = [check_free_span(spans, joined, max_span_mm, shift), check_pause(g.pauses, manifest, layer_h),
-              check_support(gs), cavity_gaps(g, manifest, shift, z_shift),
-              walls_as_sliced(g, manifest, shift, z_shift)]
+    checks = [
+        check_free_span(spans, joined, max_span_mm, shift),
+        check_pause(g.pauses, manifest, layer_h),
+        check_support(gs),
+        cavity_gaps(g, manifest, shift, z_shift),
+        walls_as_sliced(g, manifest, shift, z_shift),
+    ]
     span_check, pause_check, support_check, gaps, walls = checks
     walls_report = {"layers": walls.values["layers"], "predicted": _predicted(manifest.design, walls.values["layers"])}
     if isinstance(walls_report["predicted"], dict):
         say("simulated the walls as sliced")
-    pause_report = dict(pause_check.values,
-                        pause_print_gcode=g.config.get("pause_print_gcode", settings.get("pause_print_gcode")),
-                        model_carries_pause=carries_pause)
+    pause_report = dict(
+        pause_check.values,
+        pause_print_gcode=g.config.get("pause_print_gcode", settings.get("pause_print_gcode")),
+        model_carries_pause=carries_pause,
+    )
     # the frame: G-code = print frame + shift; check it with the extents of the part's paths
     part = np.concatenate([lay.segments[lay.of_part()] for lay in g.layers])
     gmin = np.minimum(part[:, [0, 1]].min(0), part[:, [2, 3]].min(0))
     gmax = np.maximum(part[:, [0, 1]].max(0), part[:, [2, 3]].max(0))
-    residual = [float(gmin[0] - (lo[0] + shift[0])), float(gmin[1] - (lo[1] + shift[1])),
-                float((hi[0] + shift[0]) - gmax[0]), float((hi[1] + shift[1]) - gmax[1])]
+    residual = [
+        float(gmin[0] - (lo[0] + shift[0])),
+        float(gmin[1] - (lo[1] + shift[1])),
+        float((hi[0] + shift[0]) - gmax[0]),
+        float((hi[1] + shift[1]) - gmax[1]),
+    ]
     failed = [c for c in checks if not c.passed and not c.info]
     report = {
         "format": 1,
@@ -169,10 +194,12 @@ def slice_export(path: str | Path, profile: str | Path | None = None, max_span_m
         "layer_height_mm": layer_h,
         "first_layer_height_mm": round(g.layers[0].height_mm, 4),
         "height_mm": round(g.layers[-1].z_mm, 4),
-        "frame": {"gcode_minus_print_xy_mm": [round(shift[0], 4), round(shift[1], 4)],
-                  "gcode_minus_print_z_mm": round(z_shift, 4),
-                  "bed_centre_mm": list(centre),
-                  "path_inset_from_bbox_mm": [round(r, 3) for r in residual]},
+        "frame": {
+            "gcode_minus_print_xy_mm": [round(shift[0], 4), round(shift[1], 4)],
+            "gcode_minus_print_z_mm": round(z_shift, 4),
+            "bed_centre_mm": list(centre),
+            "path_inset_from_bbox_mm": [round(r, 3) for r in residual],
+        },
         "free_span": span_check.values,
         "pause": pause_report,
         "support": support_check.values,
@@ -181,8 +208,9 @@ def slice_export(path: str | Path, profile: str | Path | None = None, max_span_m
         "failed": [c.name for c in failed],
         "reasons": [c.note for c in failed],
     }
-    return SliceResult(finite_or_none(report), gtext, checks, files.folder, triangles, centre,
-                       (shift[0], shift[1], z_shift), g, spans)
+    return SliceResult(
+        finite_or_none(report), gtext, checks, files.folder, triangles, centre, (shift[0], shift[1], z_shift), g, spans
+    )
 
 
 def _predicted(design, layers) -> dict | str:
@@ -194,46 +222,65 @@ def _predicted(design, layers) -> dict | str:
     if len(layers) != len(design.layers) or any(r["sliced_t_mm"] is None for r in layers):
         return "not given: export.json's wall lines do not cover every layer of its design"
     from mst_cli.cad.sliced_model import predict
+
     return predict(design, [r["sliced_t_mm"] for r in layers])
 
 
 def summary_table(r: dict) -> str:
     """The terminal table of a slice.json."""
-    lines = [f"{r['slicer']}, profile {Path(r['profile']).name}, sliced {r['model_sliced']} "
-             f"in {r['slice_time_s']:.2f} s"]
-    fil = (f"{r['filament_mm']:.0f} mm, {r['filament_cm3']:.2f} cm3, {r['filament_g']:.2f} g"
-           if r["filament_mm"] is not None else "unknown")
+    lines = [
+        f"{r['slicer']}, profile {Path(r['profile']).name}, sliced {r['model_sliced']} in {r['slice_time_s']:.2f} s"
+    ]
+    fil = (
+        f"{r['filament_mm']:.0f} mm, {r['filament_cm3']:.2f} cm3, {r['filament_g']:.2f} g"
+        if r["filament_mm"] is not None
+        else "unknown"
+    )
     lines.append(f"print time        {r['print_time']}; filament {fil}")
-    lines.append(f"layers            {r['layers']} x {r['layer_height_mm']:g} mm (first "
-                 f"{r['first_layer_height_mm']:g} mm), height {r['height_mm']:.2f} mm")
+    lines.append(
+        f"layers            {r['layers']} x {r['layer_height_mm']:g} mm (first "
+        f"{r['first_layer_height_mm']:g} mm), height {r['height_mm']:.2f} mm"
+    )
     s = r["free_span"]["longest"]
-    ok = lambda name: "FAIL" if name in r["failed"] else "ok"     # noqa: E731
+    ok = lambda name: "FAIL" if name in r["failed"] else "ok"  # noqa: E731
     if s is None:
         lines.append("free span         none (one layer)")
     else:
-        lines.append(f"free span         {s['length_mm']:.2f} mm (max {r['free_span']['max_allowed_mm']:g}) "
-                     f"at layer {s['layer']}, z {s['z_mm']:.2f} mm, x {s['x_mm']:.2f}, y {s['y_mm']:.2f} "
-                     f"(print frame), {s['type']}  [{ok('free_span')}]")
+        lines.append(
+            f"free span         {s['length_mm']:.2f} mm (max {r['free_span']['max_allowed_mm']:g}) "
+            f"at layer {s['layer']}, z {s['z_mm']:.2f} mm, x {s['x_mm']:.2f}, y {s['y_mm']:.2f} "
+            f"(print frame), {s['type']}  [{ok('free_span')}]"
+        )
     p = r["pause"]
-    found = ", ".join(f"after layer {f['after_layer']} (z {f['z_mm']:.2f} mm{', mid-layer' if f['mid_layer'] else ''}) "
-                      f"{f['command']}" for f in p["found"]) or "none"
+    found = (
+        ", ".join(
+            f"after layer {f['after_layer']} (z {f['z_mm']:.2f} mm{', mid-layer' if f['mid_layer'] else ''}) "
+            f"{f['command']}"
+            for f in p["found"]
+        )
+        or "none"
+    )
     exp = p["expected"]
-    exp_s = "not given" if exp == "not given" else (
-        (f"after layer {exp['after_layer']}, " if exp.get("after_layer") else "") + f"z {exp['z_mm']:.2f} mm")
+    exp_s = (
+        "not given"
+        if exp == "not given"
+        else ((f"after layer {exp['after_layer']}, " if exp.get("after_layer") else "") + f"z {exp['z_mm']:.2f} mm")
+    )
     lines.append(f"pause             found {found}; export.json asks {exp_s}  [{ok('pause')}]")
     sup = r["support"]
     support = f"needed: {sup['volume_mm3']:.0f} mm3" if sup["needed"] else "none generated"
-    lines.append(f"support           {support}"
-                 f"  [{ok('support')}]")
+    lines.append(f"support           {support}  [{ok('support')}]")
     gaps = r["cavity_gaps"]
     if gaps == "not given":
         lines.append("cavity gaps       not given in export.json")
     else:
         for c in gaps:
             sl = "-" if c.get("sliced_gap_mm") is None else f"{c['sliced_gap_mm']:.2f}"
-            dg = c.get('designed_gap_mm')
-            lines.append(f"cavity gap L{c.get('layer')}     designed {'-' if dg is None else f'{float(dg):.2f}'} mm, "
-                         f"as sliced {sl} mm (x {c['x_mm']}, z {c['z_mm']})")
+            dg = c.get("designed_gap_mm")
+            lines.append(
+                f"cavity gap L{c.get('layer')}     designed {'-' if dg is None else f'{float(dg):.2f}'} mm, "
+                f"as sliced {sl} mm (x {c['x_mm']}, z {c['z_mm']})"
+            )
     lines += _walls_lines(r.get("walls_as_sliced"))
     return "\n".join(lines)
 
@@ -253,8 +300,10 @@ def _walls_lines(w: dict | None) -> list[str]:
     for la in w["layers"]:
         walls = ", ".join("-" if x["sliced_t_mm"] is None else f"{x['sliced_t_mm']:.3f}" for x in la["walls"])
         t = "-" if la["sliced_t_mm"] is None else f"{la['sliced_t_mm']:.3f}"
-        out.append(f"wall L{la['layer']}           designed {la['designed_t_mm']:.3f} mm, as sliced {t} mm "
-                   f"(walls {walls}; {'/'.join(map(str, la['n_lines']))} line(s) across)")
+        out.append(
+            f"wall L{la['layer']}           designed {la['designed_t_mm']:.3f} mm, as sliced {t} mm "
+            f"(walls {walls}; {'/'.join(map(str, la['n_lines']))} line(s) across)"
+        )
     p = w["predicted"]
     if isinstance(p, str):
         out.append(f"predicted S, R    {p}")
@@ -264,6 +313,7 @@ def _walls_lines(w: dict | None) -> list[str]:
         for g in p["regimes"]:
             s_text = _change_text(g["S_designed_per_N"], g["S_sliced_per_N"], g["S_change_rel"], " /N", ".4f")
             r_text = _change_text(g["R_designed_N"], g["R_sliced_N"], g["R_change_rel"], " N", ".3f")
-            out.append(f"predicted regime {g['regime']}  S {s_text}, R {r_text} (designed -> as sliced, "
-                       f"{p['mechanics']})")
+            out.append(
+                f"predicted regime {g['regime']}  S {s_text}, R {r_text} (designed -> as sliced, {p['mechanics']})"
+            )
     return out

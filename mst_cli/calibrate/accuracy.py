@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike
 
-ERROR_FROM_RANGE = 0.1     # force errors are quoted on readings above this fraction of the range
+ERROR_FROM_RANGE = 0.1  # force errors are quoted on readings above this fraction of the range
 
 
 def force_errors(F_model: ArrayLike, F_true: ArrayLike, range_N: float) -> dict:
@@ -26,8 +26,12 @@ def force_errors(F_model: ArrayLike, F_true: ArrayLike, range_N: float) -> dict:
     if not ok.any():
         return {"readings": int(use.sum()), "flagged": flagged}
     rel = np.abs(F_model[ok] - F_true[ok]) / F_true[ok]
-    return {"readings": int(use.sum()), "flagged": flagged,
-            "from_force_N": ERROR_FROM_RANGE * range_N,
-            "median_rel": float(np.median(rel)), "p95_rel": float(np.percentile(rel, 95)),
-            "max_rel": float(rel.max()),
-            "rms_N": float(np.sqrt(np.mean((F_model[ok] - F_true[ok]) ** 2)))}
+    return {
+        "readings": int(use.sum()),
+        "flagged": flagged,
+        "from_force_N": ERROR_FROM_RANGE * range_N,
+        "median_rel": float(np.median(rel)),
+        "p95_rel": float(np.percentile(rel, 95)),
+        "max_rel": float(rel.max()),
+        "rms_N": float(np.sqrt(np.mean((F_model[ok] - F_true[ok]) ** 2))),
+    }

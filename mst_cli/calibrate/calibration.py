@@ -34,9 +34,11 @@ from mst_cli.model.chip import ChipSetting, field_resolution_T
 from mst_cli.model.response import Response, simulate
 
 PLOT_FILE = "calibration.png"
-PROGRESS_FROM_SAMPLES = 10_000   # a load test this long gets a progress line (40 000 samples: 2-3 s)
-YAML_PREAMBLE = ("# The design as printed: mst calibrate fitted it to a load test (calibration.json beside it).\n"
-                 "# It models the printed sensor for mst simulate and mst read; it is not a file to print.\n")
+PROGRESS_FROM_SAMPLES = 10_000  # a load test this long gets a progress line (40 000 samples: 2-3 s)
+YAML_PREAMBLE = (
+    "# The design as printed: mst calibrate fitted it to a load test (calibration.json beside it).\n"
+    "# It models the printed sensor for mst simulate and mst read; it is not a file to print.\n"
+)
 
 
 def parse_params(text: str) -> tuple[str, ...]:
@@ -54,11 +56,18 @@ def parse_params(text: str) -> tuple[str, ...]:
 
 def regime_rows(resp: Response) -> list[dict]:
     """Each regime's band, sensitivity, stiffness and force resolution (None when unresolved)."""
-    return [{"regime": r.index, "locking_layer": r.layer, "force_from_N": r.force_from_N,
-             "force_to_N": r.force_to_N, "sensitivity_secant_per_N": r.sensitivity_secant_per_N,
-             "k_effective_N_per_mm": r.k_effective_N_per_mm,
-             "force_resolution_N": r.force_resolution_N if np.isfinite(r.force_resolution_N) else None}
-            for r in resp.regimes]
+    return [
+        {
+            "regime": r.index,
+            "locking_layer": r.layer,
+            "force_from_N": r.force_from_N,
+            "force_to_N": r.force_to_N,
+            "sensitivity_secant_per_N": r.sensitivity_secant_per_N,
+            "k_effective_N_per_mm": r.k_effective_N_per_mm,
+            "force_resolution_N": r.force_resolution_N if np.isfinite(r.force_resolution_N) else None,
+        }
+        for r in resp.regimes
+    ]
 
 
 @dataclass
@@ -71,21 +80,22 @@ class Calibration:
     load_test: Readings
     load_test_name: str
     fit: cal.FitResult
-    inverse_map: cal.InverseMap                 # the calibrated model's reading -> force map
-    record: CalibrationRecord                   # calibration.json
+    inverse_map: cal.InverseMap  # the calibrated model's reading -> force map
+    record: CalibrationRecord  # calibration.json
     calibrated_yaml: str
     lookup_csv: str
     residuals_csv: str
-    header: str | None                          # force_table.h (None: see header_reason)
+    header: str | None  # force_table.h (None: see header_reason)
     header_reason: str | None
     header_setting: ChipSetting | None
-    design_curve: tuple[np.ndarray, np.ndarray]     # (force N, |B| T) of the design
+    design_curve: tuple[np.ndarray, np.ndarray]  # (force N, |B| T) of the design
     calibrated_curve: tuple[np.ndarray, np.ndarray]
 
     @property
     def file_names(self) -> list[str]:
-        return [CALIBRATED_YAML, CALIBRATION_JSON, "residuals.csv", "lookup.csv"] + ([HEADER_FILE] if self.header
-                                                                                   else [])
+        return [CALIBRATED_YAML, CALIBRATION_JSON, "residuals.csv", "lookup.csv"] + (
+            [HEADER_FILE] if self.header else []
+        )
 
     def write(self, out: Path, plot: bool = True) -> None:
         """Every file into ``out``, atomically; ``plot=False`` draws no calibration.png (and
@@ -101,17 +111,26 @@ class Calibration:
                 st.remove(PLOT_FILE)
             else:
                 from mst_cli.calibrate.plot import plot_calibration
-                plot_calibration(st.path(PLOT_FILE), self.load_test.force_N, self.load_test.B_abs_T,
-                                 self.design_curve, self.calibrated_curve, self.fit.residual_T,
-                                 self.fit.sigma_T,
-                                 f"{self.design.name}: load test against the design and the calibrated model")
+
+                plot_calibration(
+                    st.path(PLOT_FILE),
+                    self.load_test.force_N,
+                    self.load_test.B_abs_T,
+                    self.design_curve,
+                    self.calibrated_curve,
+                    self.fit.residual_T,
+                    self.fit.sigma_T,
+                    f"{self.design.name}: load test against the design and the calibrated model",
+                )
 
     def summary(self) -> str:
         """The table ``mst calibrate`` prints: parameters, residual, S and R, force errors."""
         r, fit, lt = self.record, self.fit, self.load_test
-        lines = [f"{self.design.name}: calibrated from {self.load_test_name} ({len(lt)} samples, "
-                 f"{lt.force_N.min():.3g}-{lt.force_N.max():.4g} N), mechanics={self.mechanics}",
-                 f"{'parameter':<18} {'design':>8} {'fitted':>10} {'+-1 sigma':>10}  identifiable"]
+        lines = [
+            f"{self.design.name}: calibrated from {self.load_test_name} ({len(lt)} samples, "
+            f"{lt.force_N.min():.3g}-{lt.force_N.max():.4g} N), mechanics={self.mechanics}",
+            f"{'parameter':<18} {'design':>8} {'fitted':>10} {'+-1 sigma':>10}  identifiable",
+        ]
         for n, p in cal.PARAMETERS.items():
             unit = f" {p.unit}" if p.unit else ""
             if n in fit.names:
@@ -121,58 +140,79 @@ class Calibration:
                 lines.append(f"{n:<18} {p.nominal:>8g} {'(held)':>10} {'':>10}{'':<3} NO: held at the design's value")
             else:
                 lines.append(f"{n:<18} {p.nominal:>8g} {'(held)':>10} {'':>10}{'':<3} not requested")
-        lines.append(f"residual |B| {fit.residual_rms_T * 1e6:.3g} uT RMS (noise {fit.sigma_T * 1e6:.3g} uT, "
-                     f"chi2/dof {fit.chi2_reduced:.3g})")
+        lines.append(
+            f"residual |B| {fit.residual_rms_T * 1e6:.3g} uT RMS (noise {fit.sigma_T * 1e6:.3g} uT, "
+            f"chi2/dof {fit.chi2_reduced:.3g})"
+        )
         lines.append(f"{'regime':>6} {'R design':>9} {'R calib.':>9} {'S design':>9} {'S calib.':>9} {'dF calib.':>9}")
         lines.append(f"{'':>6} {'[N]':>9} {'[N]':>9} {'[1/N]':>9} {'[1/N]':>9} {'[mN]':>9}")
         for row in r.regimes:
             d, c = row["design"], row["calibrated"]
             dF = f"{c['force_resolution_N'] * 1e3:9.2f}" if c["force_resolution_N"] is not None else f"{'-':>9}"
-            lines.append(f"{d['regime']:>6} {d['force_to_N']:>9.3f} {c['force_to_N']:>9.3f} "
-                         f"{d['sensitivity_secant_per_N']:>9.4f} {c['sensitivity_secant_per_N']:>9.4f} {dF}")
+            lines.append(
+                f"{d['regime']:>6} {d['force_to_N']:>9.3f} {c['force_to_N']:>9.3f} "
+                f"{d['sensitivity_secant_per_N']:>9.4f} {c['sensitivity_secant_per_N']:>9.4f} {dF}"
+            )
         in_sample, design_errors = r.force_errors_in_sample["calibrated"], r.force_errors_in_sample["design"]
         if "median_rel" in in_sample:
-            design_part = (f"design {100 * design_errors['median_rel']:.3g} %" if "median_rel" in design_errors
-                           else "design: all flagged")
-            lines.append(f"forces of the load test from its own readings (F >= {in_sample['from_force_N']:.3g} N): "
-                         f"median error calibrated {100 * in_sample['median_rel']:.3g} % (95th pct "
-                         f"{100 * in_sample['p95_rel']:.3g} %), {design_part}"
-                         + (f", {design_errors['flagged']} out of the design's range"
-                            if design_errors.get("flagged") else ""))
+            design_part = (
+                f"design {100 * design_errors['median_rel']:.3g} %"
+                if "median_rel" in design_errors
+                else "design: all flagged"
+            )
+            lines.append(
+                f"forces of the load test from its own readings (F >= {in_sample['from_force_N']:.3g} N): "
+                f"median error calibrated {100 * in_sample['median_rel']:.3g} % (95th pct "
+                f"{100 * in_sample['p95_rel']:.3g} %), {design_part}"
+                + (f", {design_errors['flagged']} out of the design's range" if design_errors.get("flagged") else "")
+            )
         s = self.header_setting
         if s is not None:
             lines.append(f"table for GAIN_SEL {s.gain_sel}, RES {s.res} ({s.z_uT_per_lsb} uT/LSB on Z)")
         return "\n".join(lines)
 
 
-def calibrate(doc: Document, design_file: str | Path, load_test_file: str | Path, *, mechanics: str = "spring",
-              params: Sequence[str] = cal.DEFAULT_PARAMETERS, gain_sel: int | None = None, res: int | None = None,
-              table_size: int = 256, progress: Callable[[str], None] | None = None) -> Calibration:
+def calibrate(
+    doc: Document,
+    design_file: str | Path,
+    load_test_file: str | Path,
+    *,
+    mechanics: str = "spring",
+    params: Sequence[str] = cal.DEFAULT_PARAMETERS,
+    gain_sel: int | None = None,
+    res: int | None = None,
+    table_size: int = 256,
+    progress: Callable[[str], None] | None = None,
+) -> Calibration:
     """Fit ``doc`` (loaded from ``design_file``, which the record names) to the load test in
     ``load_test_file``. InputError for a bad load test; CalibrationFailed (with why) when the
     fit fails or its values would make a design that does not load. ``progress`` gets a line
     before a long fit."""
     names = tuple(params)
-    lt = parse_readings(read_text(load_test_file), str(load_test_file), need_force=True, gain_sel=gain_sel,
-                        res=res, one_setting=True)
+    lt = parse_readings(
+        read_text(load_test_file), str(load_test_file), need_force=True, gain_sel=gain_sel, res=res, one_setting=True
+    )
     design_resp = simulate(doc.geometry(), doc.material, mechanics=mechanics, noise_uT_rms=doc.noise_uT_rms)
     check_load_test(lt, len(names), design_resp.max_force_N, cal.MIN_POINTS_PER_PARAMETER, cal.MIN_POINTS)
     sigma = cal.field_sigma_T(doc.noise_uT_rms, lt.setting or design_resp.chip_setting)
     t0 = time.monotonic()
-    if progress is not None and len(lt) >= PROGRESS_FROM_SAMPLES:   # say what the next seconds are
-        progress(f"fitting {len(lt)} samples of {Path(load_test_file).name} "
-                 f"(seconds; a load test holds at most {MAX_ROWS} rows)")
+    if progress is not None and len(lt) >= PROGRESS_FROM_SAMPLES:  # say what the next seconds are
+        progress(
+            f"fitting {len(lt)} samples of {Path(load_test_file).name} "
+            f"(seconds; a load test holds at most {MAX_ROWS} rows)"
+        )
     fit = cal.fit_parameters(doc, lt.force_N, lt.B_abs_T, sigma, names, mechanics)
     try:
         cal_doc, edits = cal.apply_parameters(doc, fit.values, name=f"{doc.name}-calibrated", mechanics=mechanics)
         cal_dict = document_to_dict(cal_doc)
-        parse_document(cal_dict, source=CALIBRATED_YAML)          # it loads as written
+        parse_document(cal_dict, source=CALIBRATED_YAML)  # it loads as written
         bad = cal_doc.geometry().violations(cal_doc.printer)
         if bad:
-            raise cal.CalibrationFailed(f"the calibrated cell of layer {bad[0][0] + 1} breaks "
-                                        f"{bad[0][1].rule}: {bad[0][1].message}")
+            raise cal.CalibrationFailed(
+                f"the calibrated cell of layer {bad[0][0] + 1} breaks {bad[0][1].rule}: {bad[0][1].message}"
+            )
         imap, cal_resp = cal.inverse_map(cal_doc, mechanics)
-    except InputError as exc:                                      # the fitted values break a file rule
+    except InputError as exc:  # the fitted values break a file rule
         raise cal.CalibrationFailed(f"the calibrated design would not load ({exc})") from None
     fit_s = time.monotonic() - t0
 
@@ -185,8 +225,13 @@ def calibrate(doc: Document, design_file: str | Path, load_test_file: str | Path
         header_reason = "the calibrated field saturates the MLX90393 at full load: no setting to tabulate"
     else:
         try:
-            header = c_header(imap, setting, cal_doc.name, f"{Path(design_file).name} and "
-                              f"{Path(load_test_file).name}", cal.LIMITATIONS)
+            header = c_header(
+                imap,
+                setting,
+                cal_doc.name,
+                f"{Path(design_file).name} and {Path(load_test_file).name}",
+                cal.LIMITATIONS,
+            )
         except cal.CalibrationFailed as exc:
             header_reason = str(exc)
 
@@ -198,29 +243,84 @@ def calibrate(doc: Document, design_file: str | Path, load_test_file: str | Path
     except cal.CalibrationFailed:
         design_errors = {}
     yaml_text = YAML_PREAMBLE + yaml.safe_dump(cal_dict, sort_keys=False, default_flow_style=None)
-    record = _record(doc, design_file, load_test_file, mechanics, names, lt, fit, sigma, setting, design_resp,
-                     cal_resp, imap, edits, table_size, header, header_reason, in_sample, design_errors,
-                     sha256_text(yaml_text), fit_s)
+    record = _record(
+        doc,
+        design_file,
+        load_test_file,
+        mechanics,
+        names,
+        lt,
+        fit,
+        sigma,
+        setting,
+        design_resp,
+        cal_resp,
+        imap,
+        edits,
+        table_size,
+        header,
+        header_reason,
+        in_sample,
+        design_errors,
+        sha256_text(yaml_text),
+        fit_s,
+    )
     F_grid = np.linspace(0.0, max(float(lt.force_N.max()), cal_resp.max_force_N), 400)
     return Calibration(
-        design=doc, calibrated=cal_doc, mechanics=mechanics, load_test=lt,
-        load_test_name=Path(load_test_file).name, fit=fit, inverse_map=imap, record=record,
-        calibrated_yaml=yaml_text, lookup_csv=lookup_csv(imap, setting, table_size),
-        residuals_csv=residuals_csv(lt, fit, F_fit, flag_fit), header=header, header_reason=header_reason,
+        design=doc,
+        calibrated=cal_doc,
+        mechanics=mechanics,
+        load_test=lt,
+        load_test_name=Path(load_test_file).name,
+        fit=fit,
+        inverse_map=imap,
+        record=record,
+        calibrated_yaml=yaml_text,
+        lookup_csv=lookup_csv(imap, setting, table_size),
+        residuals_csv=residuals_csv(lt, fit, F_fit, flag_fit),
+        header=header,
+        header_reason=header_reason,
         header_setting=setting,
         design_curve=(design_resp.force_N[design_resp.in_range], design_resp.B_abs_T[design_resp.in_range]),
-        calibrated_curve=(F_grid, fit.model.field_abs_T(F_grid, fit.values)))
+        calibrated_curve=(F_grid, fit.model.field_abs_T(F_grid, fit.values)),
+    )
 
 
-def _record(doc, design_file, load_test_file, mechanics, names, lt, fit, sigma, setting, design_resp, cal_resp,
-            imap, edits, table_size, header, header_reason, in_sample, design_errors, yaml_sha256,
-            fit_s) -> CalibrationRecord:
+def _record(
+    doc,
+    design_file,
+    load_test_file,
+    mechanics,
+    names,
+    lt,
+    fit,
+    sigma,
+    setting,
+    design_resp,
+    cal_resp,
+    imap,
+    edits,
+    table_size,
+    header,
+    header_reason,
+    in_sample,
+    design_errors,
+    yaml_sha256,
+    fit_s,
+) -> CalibrationRecord:
     parameters = {}
     for n, p in cal.PARAMETERS.items():
-        entry = {"value": fit.values[n], "std": fit.std.get(n), "design_value": p.nominal, "unit": p.unit,
-                 "typical_deviation": p.scale, "description": p.description,
-                 "requested": n in names, "fitted": n in fit.names,
-                 "identifiable": fit.identifiable.get(n, False) if n in names else None}
+        entry = {
+            "value": fit.values[n],
+            "std": fit.std.get(n),
+            "design_value": p.nominal,
+            "unit": p.unit,
+            "typical_deviation": p.scale,
+            "description": p.description,
+            "requested": n in names,
+            "fitted": n in fit.names,
+            "identifiable": fit.identifiable.get(n, False) if n in names else None,
+        }
         if n in fit.held:
             entry["held_because"] = fit.held[n]
         elif n not in names:
@@ -228,45 +328,64 @@ def _record(doc, design_file, load_test_file, mechanics, names, lt, fit, sigma, 
         parameters[n] = entry
     setting_record = None
     if setting is not None:
-        setting_record = {"gain_sel": setting.gain_sel, "res": setting.res,
-                          "z_uT_per_lsb": setting.z_uT_per_lsb, "xy_uT_per_lsb": setting.xy_uT_per_lsb,
-                          "source": "the load test" if lt.setting is not None else
-                                    "the finest setting that holds the calibrated field (the load test gave uT)"}
+        setting_record = {
+            "gain_sel": setting.gain_sel,
+            "res": setting.res,
+            "z_uT_per_lsb": setting.z_uT_per_lsb,
+            "xy_uT_per_lsb": setting.xy_uT_per_lsb,
+            "source": "the load test"
+            if lt.setting is not None
+            else "the finest setting that holds the calibrated field (the load test gave uT)",
+        }
     design_regimes, cal_regimes = regime_rows(design_resp), regime_rows(cal_resp)
     return CalibrationRecord(
-        schema_version=SCHEMA_VERSION, design=str(design_file), load_test=str(load_test_file),
+        schema_version=SCHEMA_VERSION,
+        design=str(design_file),
+        load_test=str(load_test_file),
         design_constants=design_constants(doc),
-        calibrated_yaml=CALIBRATED_YAML, calibrated_yaml_sha256=yaml_sha256,
+        calibrated_yaml=CALIBRATED_YAML,
+        calibrated_yaml_sha256=yaml_sha256,
         models={"mechanics": mechanics, "field": fit.model.field_model, "space_mapping_iterations": fit.iterations},
-        samples=len(lt), force_range_N=[float(lt.force_N.min()), float(lt.force_N.max())],
+        samples=len(lt),
+        force_range_N=[float(lt.force_N.min()), float(lt.force_N.max())],
         fitted_quantity="|B| at the chip (sqrt(Bx^2 + By^2 + Bz^2))",
-        chip_setting=setting_record, noise_sigma_uT=sigma * 1e6, parameters=parameters,
+        chip_setting=setting_record,
+        noise_sigma_uT=sigma * 1e6,
+        parameters=parameters,
         identifiability={
             "rule": f"a parameter is identifiable when the data fix it to within {cal.IDENTIFIABLE_STD:.3g} of "
-                    "its typical deviation (1 sigma); the worst one that is not is held at the design's "
-                    "value and the fit repeated",
+            "its typical deviation (1 sigma); the worst one that is not is held at the design's "
+            "value and the fit repeated",
             "fitted": list(fit.names),
             "held": fit.held,
             "singular_values": fit.singular_values,
             "correlation": {"parameters": list(fit.names), "matrix": fit.correlation},
             "first_pass": fit.first_pass,
         },
-        residuals={"rms_uT": fit.residual_rms_T * 1e6, "max_abs_uT": float(np.abs(fit.residual_T).max() * 1e6),
-                   "chi2_reduced": fit.chi2_reduced},
+        residuals={
+            "rms_uT": fit.residual_rms_T * 1e6,
+            "max_abs_uT": float(np.abs(fit.residual_T).max() * 1e6),
+            "chi2_reduced": fit.chi2_reduced,
+        },
         force_errors_in_sample={"calibrated": in_sample, "design": design_errors},
         regimes=[{"regime": d["regime"], "design": d, "calibrated": c} for d, c in zip(design_regimes, cal_regimes)],
         range_N={"design": design_resp.max_force_N, "calibrated": cal_resp.max_force_N},
         calibrated_to_N=imap.calibrated_to_N,
         edits=edits,
-        lookup_table={"csv": "lookup.csv", "entries": table_size,
-                      "notes": "|B| -> force on the calibrated loading curve from no load to the last "
-                               "lock, strictly increasing; readings beyond its ends by more than "
-                               "out_of_range_tolerance_uT are out of range (never extrapolated); "
-                               "calibrated = 0 marks entries above the load test's largest force "
-                               "(the fitted model, unchecked by a sample); see limitations",
-                      "c_header": HEADER_FILE if header else None,
-                      **({"c_header_reason": header_reason} if header_reason else {}),
-                      "out_of_range_tolerance_uT": imap.tolerance_T * 1e6},
-        limitations=list(cal.LIMITATIONS), mst_version=__version__,
+        lookup_table={
+            "csv": "lookup.csv",
+            "entries": table_size,
+            "notes": "|B| -> force on the calibrated loading curve from no load to the last "
+            "lock, strictly increasing; readings beyond its ends by more than "
+            "out_of_range_tolerance_uT are out of range (never extrapolated); "
+            "calibrated = 0 marks entries above the load test's largest force "
+            "(the fitted model, unchecked by a sample); see limitations",
+            "c_header": HEADER_FILE if header else None,
+            **({"c_header_reason": header_reason} if header_reason else {}),
+            "out_of_range_tolerance_uT": imap.tolerance_T * 1e6,
+        },
+        limitations=list(cal.LIMITATIONS),
+        mst_version=__version__,
         curve_check=CalibrationRecord.curve_points(imap),
-        fit={"evaluations": fit.evaluations, "seconds": fit_s, "message": fit.message})
+        fit={"evaluations": fit.evaluations, "seconds": fit_s, "message": fit.message},
+    )

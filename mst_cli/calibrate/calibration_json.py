@@ -83,8 +83,10 @@ class CalibrationRecord:
     def curve_points(imap: InverseMap) -> dict:
         """:attr:`curve_check` of an inverse map: |B| at evenly spaced forces up to the last lock."""
         F = np.linspace(0.0, imap.force_N[-1], CURVE_CHECK_POINTS)
-        return {"force_N": [float(f) for f in F],
-                "B_abs_uT": [float(b) * 1e6 for b in np.interp(F, imap.force_N, imap.B_abs_T)]}
+        return {
+            "force_N": [float(f) for f in F],
+            "B_abs_uT": [float(b) * 1e6 for b in np.interp(F, imap.force_N, imap.B_abs_T)],
+        }
 
     def calibrated_top_N(self) -> float | None:
         """The load test's largest force, when the record holds a usable one."""
@@ -103,9 +105,11 @@ class CalibrationRecord:
         now = np.interp(F, imap.force_N, imap.B_abs_T)
         worst = float(np.max(np.abs(now - B))) if len(F) else 0.0
         if worst > imap.field_resolution_T:
-            return (f"the model now gives a calibrated curve up to {worst * 1e6:.3g} uT away from the one "
-                    f"recorded at calibration (mst {self.mst_version or '?'}; field resolution "
-                    f"{imap.field_resolution_T * 1e6:.3g} uT): the model code changed, re-run mst calibrate")
+            return (
+                f"the model now gives a calibrated curve up to {worst * 1e6:.3g} uT away from the one "
+                f"recorded at calibration (mst {self.mst_version or '?'}; field resolution "
+                f"{imap.field_resolution_T * 1e6:.3g} uT): the model code changed, re-run mst calibrate"
+            )
         return None
 
 
@@ -113,14 +117,17 @@ def record_beside(model_file: Path) -> tuple[str | None, CalibrationRecord | Non
     """(None, the record) when MODEL has a matching calibration.json beside it, else (a warning
     sentence, None): the hash of the model file's text must be the one recorded."""
     sidecar = Path(model_file).with_name(CALIBRATION_JSON)
-    try:               # regular files only: a FIFO in their place must not block
+    try:  # regular files only: a FIFO in their place must not block
         data = json.loads(read_input_text(sidecar, MAX_INPUT_BYTES, field=CALIBRATION_JSON))
         text = read_input_text(model_file, MAX_INPUT_BYTES)
-    except ValueError:                   # InputError (unreadable, not a file) and bad JSON
-        return (f"{Path(model_file).name} has no {CALIBRATION_JSON} beside it: forces come from the "
-                "design as drawn, not as printed (run mst calibrate; expect errors of tens of percent)"), None
+    except ValueError:  # InputError (unreadable, not a file) and bad JSON
+        return (
+            f"{Path(model_file).name} has no {CALIBRATION_JSON} beside it: forces come from the "
+            "design as drawn, not as printed (run mst calibrate; expect errors of tens of percent)"
+        ), None
     record = CalibrationRecord.from_json(data) if isinstance(data, dict) else None
     if record is None or record.calibrated_yaml_sha256 != sha256_text(text):
-        return (f"{CALIBRATION_JSON} beside {Path(model_file).name} belongs to another file: forces may "
-                "not be calibrated"), None
+        return (
+            f"{CALIBRATION_JSON} beside {Path(model_file).name} belongs to another file: forces may not be calibrated"
+        ), None
     return None, record

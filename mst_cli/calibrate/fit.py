@@ -70,28 +70,35 @@ class Parameter:
     name: str
     unit: str
     nominal: float
-    scale: float            # a typical print/assembly deviation: the fit's unit of this parameter
+    scale: float  # a typical print/assembly deviation: the fit's unit of this parameter
     description: str
 
 
-PARAMETERS: dict[str, Parameter] = {p.name: p for p in (
-    Parameter("modulus_factor", "", 1.0, 0.10,
-              "effective Young's modulus / the design's (scales every layer's k, R, k_locked)"),
-    Parameter("wall_offset_mm", "mm", 0.0, 0.05,
-              "added to every layer's wall thickness t (changes k, R and d_lock)"),
-    Parameter("gap_offset_mm", "mm", 0.0, 0.30,
-              "added to the unloaded magnet-to-chip gap"),
-    Parameter("remanence_factor", "", 1.0, 0.05,
-              "magnet remanence / the design's"),
-)}
+PARAMETERS: dict[str, Parameter] = {
+    p.name: p
+    for p in (
+        Parameter(
+            "modulus_factor",
+            "",
+            1.0,
+            0.10,
+            "effective Young's modulus / the design's (scales every layer's k, R, k_locked)",
+        ),
+        Parameter(
+            "wall_offset_mm", "mm", 0.0, 0.05, "added to every layer's wall thickness t (changes k, R and d_lock)"
+        ),
+        Parameter("gap_offset_mm", "mm", 0.0, 0.30, "added to the unloaded magnet-to-chip gap"),
+        Parameter("remanence_factor", "", 1.0, 0.05, "magnet remanence / the design's"),
+    )
+}
 DEFAULT_PARAMETERS = tuple(PARAMETERS)
 
-IDENTIFIABLE_STD = 1.0 / 3.0     # std / typical deviation below which a parameter counts as fixed by the data
-MIN_POINTS_PER_PARAMETER = 5     # a load test needs at least this many samples per fitted parameter
+IDENTIFIABLE_STD = 1.0 / 3.0  # std / typical deviation below which a parameter counts as fixed by the data
+MIN_POINTS_PER_PARAMETER = 5  # a load test needs at least this many samples per fitted parameter
 MIN_POINTS = 12
-FAIL_RESIDUAL_REL = 0.05         # fit failed: residual RMS above this fraction of the load test's field span
-NO_RELATION_SIGMA = 3.0          # |B| unrelated to force: |correlation| within this many sigma of 0
-MIN_STROKE_MM = 0.05             # a perturbed cell keeps at least this lock stroke and wall
+FAIL_RESIDUAL_REL = 0.05  # fit failed: residual RMS above this fraction of the load test's field span
+NO_RELATION_SIGMA = 3.0  # |B| unrelated to force: |correlation| within this many sigma of 0
+MIN_STROKE_MM = 0.05  # a perturbed cell keeps at least this lock stroke and wall
 MAX_SPACE_MAPPING_ITERATIONS = 6
 
 
@@ -106,10 +113,11 @@ def parameter_bounds(doc) -> dict[str, tuple[float, float]]:
     t = np.array([la.t_mm for la in doc.layers])
     h = np.array([la.h_mm for la in doc.layers])
     th = np.radians([la.theta_deg for la in doc.layers])
-    p = 0.5 * doc.family.width_mm - 0.5 * h / np.tan(th)          # outer pad half-width
+    p = 0.5 * doc.family.width_mm - 0.5 * h / np.tan(th)  # outer pad half-width
     wall_lo = max(-0.5, float(np.max(MIN_STROKE_MM - t)))
-    wall_hi = min(0.5, float(np.min(0.5 * (h - a - MIN_STROKE_MM) - t)),
-                  float(np.min((p - MIN_STROKE_MM) / np.tan(0.5 * th) - t)))
+    wall_hi = min(
+        0.5, float(np.min(0.5 * (h - a - MIN_STROKE_MM) - t)), float(np.min((p - MIN_STROKE_MM) / np.tan(0.5 * th) - t))
+    )
     hs = doc.housing
     # the gap offset is written into the housing (chip clearance, then pocket floor, then cover)
     gap_lo = -(hs.chip_clearance_mm + (hs.pocket_floor_mm - 0.01) + (hs.cover_mm - 0.01))
@@ -130,15 +138,19 @@ def printer_values(doc) -> dict:
     """The print parameters (:data:`PARAMETERS`' names) a document's ``printer`` section declares:
     what its printer is known to do to the drawing (the remanence is the magnet's own key)."""
     pr = doc.printer
-    return {"modulus_factor": pr.modulus_factor, "wall_offset_mm": pr.wall_offset_mm,
-            "gap_offset_mm": pr.gap_offset_mm, "remanence_factor": 1.0}
+    return {
+        "modulus_factor": pr.modulus_factor,
+        "wall_offset_mm": pr.wall_offset_mm,
+        "gap_offset_mm": pr.gap_offset_mm,
+        "remanence_factor": 1.0,
+    }
 
 
 def as_printed(doc: Document, extra_wall_mm: float = 0.0) -> Document:
     """The design ``doc`` as its printer makes it (walls + offset + ``extra_wall_mm``, modulus and
     gap as the ``printer`` section says), through :func:`apply_parameters`: the one path from a
     drawing to the part whose physics is simulated, for design and calibration alike."""
-    values = printer_values(doc)          # within bounds: geometry.printer_violations at parse time
+    values = printer_values(doc)  # within bounds: geometry.printer_violations at parse time
     values["wall_offset_mm"] += extra_wall_mm
     return apply_parameters(doc, values)[0]
 
@@ -149,11 +161,17 @@ def simulate_as_printed(doc: Document, mechanics: str | None = None, field_model
     (else its ``model.mechanics``), the file's field model unless one is given."""
     from mst_cli.model.ladder import choose_mechanics
     from mst_cli.model.response import simulate as run
+
     field_choice = field_model or doc.field_model
     choice = choose_mechanics(mechanics, doc.accuracy_rel, doc.mechanics)
     printed = as_printed(doc)
-    return run(printed.geometry(), printed.material, mechanics=choice.mechanics,
-               field_model=None if field_choice == "auto" else field_choice, noise_uT_rms=doc.noise_uT_rms)
+    return run(
+        printed.geometry(),
+        printed.material,
+        mechanics=choice.mechanics,
+        field_model=None if field_choice == "auto" else field_choice,
+        noise_uT_rms=doc.noise_uT_rms,
+    )
 
 
 def full_values(values: dict) -> dict:
@@ -189,8 +207,9 @@ class ForwardModel:
         self.geometry = doc.geometry()
         self.mechanics = mechanics
         g = self.geometry
-        self.field_model = fld.choose_field_model(g.chip_offset_mm, g.magnet_tilt_deg,
-                                                  None if field_model in (None, "auto") else field_model)
+        self.field_model = fld.choose_field_model(
+            g.chip_offset_mm, g.magnet_tilt_deg, None if field_model in (None, "auto") else field_model
+        )
         self.gap0_mm = g.gap0_mm
         self._stacks: dict[tuple[str, float], Stack] = {}
         self.correction: _Correction | None = None
@@ -213,8 +232,9 @@ class ForwardModel:
     def update_correction(self, wall_offset_mm: float) -> None:
         """Re-anchor the space mapping at this wall offset (dearer rungs only)."""
         if self.mechanics != "spring":
-            self.correction = _Correction(wall_offset_mm, self.stack(wall_offset_mm),
-                                          self.stack(wall_offset_mm, self.mechanics))
+            self.correction = _Correction(
+                wall_offset_mm, self.stack(wall_offset_mm), self.stack(wall_offset_mm, self.mechanics)
+            )
 
     def displacement_mm(self, force_N: ArrayLike, values: dict) -> np.ndarray:
         v = full_values(values)
@@ -230,8 +250,9 @@ class ForwardModel:
         self.evaluations += 1
         gap = self.gap0_mm + v["gap_offset_mm"] - self.displacement_mm(force_N, v)
         g = self.geometry
-        B = fld.field_at_chip_T(np.maximum(gap, LENGTH_FLOOR_MM), g.magnet, self.field_model,
-                                g.chip_offset_mm, g.magnet_tilt_deg)
+        B = fld.field_at_chip_T(
+            np.maximum(gap, LENGTH_FLOOR_MM), g.magnet, self.field_model, g.chip_offset_mm, g.magnet_tilt_deg
+        )
         return v["remanence_factor"] * B
 
     def field_abs_T(self, force_N: ArrayLike, values: dict) -> np.ndarray:
@@ -245,29 +266,28 @@ class ForwardModel:
 # --------------------------------------------------------------------------- the fit
 @dataclass
 class FitResult:
-    names: tuple[str, ...]              # parameters fitted (identifiable ones)
-    values: dict                        # every parameter (held ones at the design's value)
-    std: dict                           # 1-sigma uncertainty of each fitted parameter
-    identifiable: dict                  # fitted parameter -> whether the data fix it (IDENTIFIABLE_STD)
-    held: dict                          # parameter -> why it was held at the design's value
-    correlation: list                   # among the fitted parameters (their order)
-    singular_values: list               # of the Jacobian in units of noise and typical deviation
-    first_pass: dict                    # the fit of every requested parameter: std in typical deviations
-    residual_T: np.ndarray              # measured |B| - model |B| per sample
+    names: tuple[str, ...]  # parameters fitted (identifiable ones)
+    values: dict  # every parameter (held ones at the design's value)
+    std: dict  # 1-sigma uncertainty of each fitted parameter
+    identifiable: dict  # fitted parameter -> whether the data fix it (IDENTIFIABLE_STD)
+    held: dict  # parameter -> why it was held at the design's value
+    correlation: list  # among the fitted parameters (their order)
+    singular_values: list  # of the Jacobian in units of noise and typical deviation
+    first_pass: dict  # the fit of every requested parameter: std in typical deviations
+    residual_T: np.ndarray  # measured |B| - model |B| per sample
     sigma_T: float
     chi2_reduced: float
     evaluations: int
-    iterations: int                     # space-mapping iterations (1 for spring)
+    iterations: int  # space-mapping iterations (1 for spring)
     message: str
     model: ForwardModel = field(repr=False)
 
     @property
     def residual_rms_T(self) -> float:
-        return float(np.sqrt(np.mean(self.residual_T ** 2)))
+        return float(np.sqrt(np.mean(self.residual_T**2)))
 
 
-def _solve(model: ForwardModel, force_N, B_abs_T, sigma_T, names, start: dict, bounds: dict,
-           max_nfev: int = 400):
+def _solve(model: ForwardModel, force_N, B_abs_T, sigma_T, names, start: dict, bounds: dict, max_nfev: int = 400):
     from scipy.optimize import least_squares
 
     P = [PARAMETERS[n] for n in names]
@@ -283,10 +303,23 @@ def _solve(model: ForwardModel, force_N, B_abs_T, sigma_T, names, start: dict, b
     def residual(x):
         return (model.field_abs_T(force_N, values_of(x)) - B_abs_T) / sigma_T
 
-    res = least_squares(residual, x0, bounds=(lo, hi), method="trf", x_scale=1.0,
-                        diff_step=1e-6, xtol=1e-10, ftol=1e-10, gtol=1e-10, max_nfev=max_nfev)
-    at_bound = [n for n, xi, a, b in zip(names, res.x, lo, hi)
-                if min(xi - a, b - xi) < 1e-6 * (b - a) and res.active_mask[names.index(n)] != 0]
+    res = least_squares(
+        residual,
+        x0,
+        bounds=(lo, hi),
+        method="trf",
+        x_scale=1.0,
+        diff_step=1e-6,
+        xtol=1e-10,
+        ftol=1e-10,
+        gtol=1e-10,
+        max_nfev=max_nfev,
+    )
+    at_bound = [
+        n
+        for n, xi, a, b in zip(names, res.x, lo, hi)
+        if min(xi - a, b - xi) < 1e-6 * (b - a) and res.active_mask[names.index(n)] != 0
+    ]
     return res, values_of(res.x), at_bound
 
 
@@ -301,7 +334,7 @@ def _global_start(model, force_N, B_abs_T, sigma_T, names, bounds) -> dict:
     local minima in the mechanical parameters (a lock point matched to the wrong one): scan a
     grid of modulus factor x wall offset, fitting only the field parameters at each node, then
     polish the best few nodes with every parameter free and keep the best."""
-    if len(force_N) > GRID_MAX_SAMPLES:         # the scan needs the curve's shape, not every sample
+    if len(force_N) > GRID_MAX_SAMPLES:  # the scan needs the curve's shape, not every sample
         keep = np.argsort(force_N)[np.linspace(0, len(force_N) - 1, GRID_MAX_SAMPLES).astype(int)]
         force_N, B_abs_T = force_N[keep], B_abs_T[keep]
     grid_names = [n for n in MECHANICAL if n in names]
@@ -336,7 +369,7 @@ def _uncertainty(jac, chi2_red):
     an infinite variance along its direction)."""
     _, s, vt = np.linalg.svd(jac, full_matrices=False)
     with np.errstate(divide="ignore"):
-        inv = np.where(s > 1e-12 * max(s.max(initial=0.0), 1e-300), 1.0 / s ** 2, np.inf)
+        inv = np.where(s > 1e-12 * max(s.max(initial=0.0), 1e-300), 1.0 / s**2, np.inf)
     cov = (vt.T * inv) @ vt if np.all(np.isfinite(inv)) else np.full((len(s), len(s)), np.inf)
     cov = cov * max(chi2_red, 1.0)
     if not np.all(np.isfinite(cov)):
@@ -350,8 +383,15 @@ def _uncertainty(jac, chi2_red):
     return s, std, corr
 
 
-def fit_parameters(doc, force_N, B_abs_T, sigma_T: float, names=DEFAULT_PARAMETERS,
-                   mechanics: str = "spring", field_model: str | None = None) -> FitResult:
+def fit_parameters(
+    doc,
+    force_N,
+    B_abs_T,
+    sigma_T: float,
+    names=DEFAULT_PARAMETERS,
+    mechanics: str = "spring",
+    field_model: str | None = None,
+) -> FitResult:
     """Fit ``names`` to a load test (forces in N, |B| in T, per-sample noise sigma in T).
 
     Raises :class:`CalibrationFailed` when the optimiser fails, a parameter ends on its physical
@@ -373,14 +413,18 @@ def fit_parameters(doc, force_N, B_abs_T, sigma_T: float, names=DEFAULT_PARAMETE
     # with no relation at all, |rho| of n samples stays below ~3/sqrt(n - 2) (3 sigma)
     noise_rho = NO_RELATION_SIGMA / math.sqrt(max(len(force_N) - 2, 1))
     if not abs(rho) > noise_rho:
-        raise CalibrationFailed(f"|B| does not follow the force at all (correlation {rho:.2f} over "
-                                f"{len(force_N)} samples, within the +-{noise_rho:.2g} that noise alone "
-                                "gives): the field columns hold no response of this sensor (magnet "
-                                "missing, wrong chip or columns)")
+        raise CalibrationFailed(
+            f"|B| does not follow the force at all (correlation {rho:.2f} over "
+            f"{len(force_N)} samples, within the +-{noise_rho:.2g} that noise alone "
+            "gives): the field columns hold no response of this sensor (magnet "
+            "missing, wrong chip or columns)"
+        )
     if not rho > 0:
-        raise CalibrationFailed(f"|B| falls as the force rises (correlation {rho:.2f}): the magnet "
-                                "moves towards the chip under load in every design, so this load "
-                                "test does not belong to this sensor (or its columns are swapped)")
+        raise CalibrationFailed(
+            f"|B| falls as the force rises (correlation {rho:.2f}): the magnet "
+            "moves towards the chip under load in every design, so this load "
+            "test does not belong to this sensor (or its columns are swapped)"
+        )
 
     start = _global_start(model, force_N, B_abs_T, sigma_T, names, bounds)
     free = list(names)
@@ -404,17 +448,23 @@ def fit_parameters(doc, force_N, B_abs_T, sigma_T: float, names=DEFAULT_PARAMETE
         chi2_red = float(2.0 * res.cost / max(n - p, 1))
         s, std, corr = _uncertainty(res.jac, chi2_red)
         if not first_pass:
-            first_pass = {"parameters": list(free), "std_in_typical_deviations": [float(v) for v in std],
-                          "singular_values": [float(v) for v in s],
-                          "correlation": [[None if not math.isfinite(c) else float(c) for c in row]
-                                          for row in np.atleast_2d(corr)]}
+            first_pass = {
+                "parameters": list(free),
+                "std_in_typical_deviations": [float(v) for v in std],
+                "singular_values": [float(v) for v in s],
+                "correlation": [
+                    [None if not math.isfinite(c) else float(c) for c in row] for row in np.atleast_2d(corr)
+                ],
+            }
         worst = int(np.argmax(std))
         if std[worst] > IDENTIFIABLE_STD and len(free) > 1:
             name = free.pop(worst)
-            held[name] = (f"not identifiable from this load test: the data fix it only to "
-                          f"+-{std[worst]:.3g} x its typical deviation ({PARAMETERS[name].scale:g}"
-                          f"{' ' + PARAMETERS[name].unit if PARAMETERS[name].unit else ''}); held at the "
-                          f"design's value")
+            held[name] = (
+                f"not identifiable from this load test: the data fix it only to "
+                f"+-{std[worst]:.3g} x its typical deviation ({PARAMETERS[name].scale:g}"
+                f"{' ' + PARAMETERS[name].unit if PARAMETERS[name].unit else ''}); held at the "
+                f"design's value"
+            )
             start = full_values({k: v for k, v in values.items() if k in free})
             continue
         break
@@ -424,28 +474,41 @@ def fit_parameters(doc, force_N, B_abs_T, sigma_T: float, names=DEFAULT_PARAMETE
             raise CalibrationFailed(
                 f"{name} ended on its physical bound ({values[name]:.4g}, allowed "
                 f"{bounds[name][0]:.4g}..{bounds[name][1]:.4g}): the design file does not describe "
-                "the sensor of this load test")
+                "the sensor of this load test"
+            )
     residual = B_abs_T - model.field_abs_T(force_N, values)
-    rms = float(np.sqrt(np.mean(residual ** 2)))
+    rms = float(np.sqrt(np.mean(residual**2)))
     if rms > FAIL_RESIDUAL_REL * span_T:
         raise CalibrationFailed(
             f"the fitted model misses the load test by {rms * 1e6:.4g} uT RMS, "
             f"{100 * rms / span_T:.3g} % of the field's span {span_T * 1e6:.4g} uT (limit "
             f"{100 * FAIL_RESIDUAL_REL:g} %): the design file does not describe this sensor, or the "
-            "load test mixes loading and unloading, off-axis or slipping loads")
+            "load test mixes loading and unloading, off-axis or slipping loads"
+        )
     std_named = {nm: float(sd * PARAMETERS[nm].scale) for nm, sd in zip(free, std)}
     return FitResult(
-        names=tuple(free), values=full_values(values), std=std_named,
-        identifiable={nm: bool(sd <= IDENTIFIABLE_STD) for nm, sd in zip(free, std)}, held=held,
+        names=tuple(free),
+        values=full_values(values),
+        std=std_named,
+        identifiable={nm: bool(sd <= IDENTIFIABLE_STD) for nm, sd in zip(free, std)},
+        held=held,
         correlation=[[float(c) for c in row] for row in np.atleast_2d(corr)],
-        singular_values=[float(v) for v in s], first_pass=first_pass, residual_T=residual,
-        sigma_T=float(sigma_T), chi2_reduced=chi2_red, evaluations=model.evaluations,
-        iterations=iterations, message=str(res.message), model=model)
+        singular_values=[float(v) for v in s],
+        first_pass=first_pass,
+        residual_T=residual,
+        sigma_T=float(sigma_T),
+        chi2_reduced=chi2_red,
+        evaluations=model.evaluations,
+        iterations=iterations,
+        message=str(res.message),
+        model=model,
+    )
 
 
 # --------------------------------------------------------------------------- calibrated design
-def apply_parameters(doc: Document, values: dict, name: str | None = None,
-                     mechanics: str | None = None) -> tuple[Document, list[str]]:
+def apply_parameters(
+    doc: Document, values: dict, name: str | None = None, mechanics: str | None = None
+) -> tuple[Document, list[str]]:
     """The design document with the fitted values written into its own keys, and a list of the
     edits made (each a sentence). Loadable by ``mst simulate`` (same rules, same model).
 
@@ -463,11 +526,11 @@ def apply_parameters(doc: Document, values: dict, name: str | None = None,
     edits = []
     material = replace(doc.material, youngs_modulus_MPa=doc.material.youngs_modulus_MPa * v["modulus_factor"])
     if v["modulus_factor"] != 1.0:
-        edits.append(f"material.youngs_modulus_MPa {doc.material.youngs_modulus_MPa:g} -> "
-                     f"{material.youngs_modulus_MPa:.6g}")
+        edits.append(
+            f"material.youngs_modulus_MPa {doc.material.youngs_modulus_MPa:g} -> {material.youngs_modulus_MPa:.6g}"
+        )
     dt = v["wall_offset_mm"]
-    layers = tuple(replace(la, t_mm=round(la.t_mm + dt, 9)) if la.t_mm is not None else la
-                   for la in doc.layers)
+    layers = tuple(replace(la, t_mm=round(la.t_mm + dt, 9)) if la.t_mm is not None else la for la in doc.layers)
     if dt:
         edits.append(f"layers[*].t_mm {dt:+.4g} mm")
     magnet = replace(doc.magnet, remanence_T=doc.magnet.remanence_T * v["remanence_factor"])
@@ -488,29 +551,47 @@ def apply_parameters(doc: Document, values: dict, name: str | None = None,
             new[key] = getattr(hs, key) + take
             left -= take
         if left < -1e-12:
-            raise CalibrationFailed(f"gap_offset_mm {v['gap_offset_mm']:.4g} cannot be written into "
-                                    "the housing keys (it would need negative clearances)")
+            raise CalibrationFailed(
+                f"gap_offset_mm {v['gap_offset_mm']:.4g} cannot be written into "
+                "the housing keys (it would need negative clearances)"
+            )
     new = {k: round(val, 9) for k, val in new.items()}
     housing = replace(hs, **new)
     if v["gap_offset_mm"]:
-        edits.append("housing." + ", housing.".join(f"{k} {getattr(hs, k):g} -> {val:.6g}" for k, val in new.items())
-                     + f" (gap offset {v['gap_offset_mm']:+.4g} mm)")
+        edits.append(
+            "housing."
+            + ", housing.".join(f"{k} {getattr(hs, k):g} -> {val:.6g}" for k, val in new.items())
+            + f" (gap offset {v['gap_offset_mm']:+.4g} mm)"
+        )
 
     pr = doc.printer
     # the values are the print's own (the fit models the drawn walls and the material's E), so
     # the printer's declared deviations are spent: left in, a simulation would apply them twice
     printer = replace(_rules_for(doc, layers), **PRINTER_NOMINAL)
-    spent = [f"printer.{key} {getattr(pr, key):g} -> {value:g}" for key, value in PRINTER_NOMINAL.items()
-             if getattr(pr, key) != value]
+    spent = [
+        f"printer.{key} {getattr(pr, key):g} -> {value:g}"
+        for key, value in PRINTER_NOMINAL.items()
+        if getattr(pr, key) != value
+    ]
     if spent:
         edits.append(", ".join(spent) + " (the values above are the print's)")
     for key in ("min_wall_mm", "min_gap_mm", "nozzle_mm"):
         if getattr(printer, key) != getattr(pr, key):
-            edits.append(f"printer.{key} {getattr(pr, key):g} -> {getattr(printer, key):g} (the as-printed "
-                         "cells are thinner than the printing rules: this file models the print, do not print it)")
-    out = replace(doc, name=name or doc.name, layers=layers, material=material, magnet=magnet,
-                  housing=housing, printer=printer,
-                  mechanics=mechanics or doc.mechanics, accuracy_rel=None)
+            edits.append(
+                f"printer.{key} {getattr(pr, key):g} -> {getattr(printer, key):g} (the as-printed "
+                "cells are thinner than the printing rules: this file models the print, do not print it)"
+            )
+    out = replace(
+        doc,
+        name=name or doc.name,
+        layers=layers,
+        material=material,
+        magnet=magnet,
+        housing=housing,
+        printer=printer,
+        mechanics=mechanics or doc.mechanics,
+        accuracy_rel=None,
+    )
     assert all(isinstance(la, LayerEntry) for la in out.layers)
     return out, edits
 
@@ -519,14 +600,20 @@ def _rules_for(doc: Document, layers) -> Printer:
     """``doc``'s printer with its printing rules (min_wall_mm, min_gap_mm, nozzle_mm) lowered
     where the cells of ``layers`` break them: a file that models a print, not one to print."""
     from mst_cli.model import geometry as geo
+
     pr = doc.printer
     t_min = min(la.t_mm for la in layers)
     cav_min = min(la.h_mm - 2 * la.t_mm for la in layers)
-    pad_min = min(float(geo.inner_pad_half_width_mm(math.radians(la.theta_deg), la.t_mm, la.h_mm,
-                                                    doc.family.width_mm)) for la in layers)
-    return replace(pr, min_wall_mm=min(pr.min_wall_mm, round(math.floor(t_min * 1e4) / 1e4, 4)),
-                   min_gap_mm=min(pr.min_gap_mm, round(math.floor(cav_min * 1e4) / 1e4, 4)),
-                   nozzle_mm=min(pr.nozzle_mm, max(0.05, round(math.floor(pad_min * 1e4) / 1e4, 4))))
+    pad_min = min(
+        float(geo.inner_pad_half_width_mm(math.radians(la.theta_deg), la.t_mm, la.h_mm, doc.family.width_mm))
+        for la in layers
+    )
+    return replace(
+        pr,
+        min_wall_mm=min(pr.min_wall_mm, round(math.floor(t_min * 1e4) / 1e4, 4)),
+        min_gap_mm=min(pr.min_gap_mm, round(math.floor(cav_min * 1e4) / 1e4, 4)),
+        nozzle_mm=min(pr.nozzle_mm, max(0.05, round(math.floor(pad_min * 1e4) / 1e4, 4))),
+    )
 
 
 def with_walls(doc: Document, t_mm) -> Document:
@@ -544,20 +631,20 @@ def with_walls(doc: Document, t_mm) -> Document:
 FLAGS = ("ok", "above_calibrated", "below_range", "above_range", "saturated")
 # above_calibrated: inside the model's range but above the largest force of the load test (the
 # force is given: the fitted physics carries it there, but no sample checked it)
-END_TOLERANCE_SIGMA = 3.0        # readings within this many field resolutions of an end are clamped to it
+END_TOLERANCE_SIGMA = 3.0  # readings within this many field resolutions of an end are clamped to it
 
 
 @dataclass
 class InverseMap:
     """Monotone |B| -> force on one model's in-range branch (no load to the last lock)."""
 
-    force_N: np.ndarray             # ascending, 0 .. last lock force
-    B_abs_T: np.ndarray             # strictly ascending
-    Bz_T: np.ndarray                # the z component at the same forces (signed)
-    edges_N: np.ndarray             # regime edges 0, R_1, ..., R_n
-    field_resolution_T: float       # noise or LSB, the larger
+    force_N: np.ndarray  # ascending, 0 .. last lock force
+    B_abs_T: np.ndarray  # strictly ascending
+    Bz_T: np.ndarray  # the z component at the same forces (signed)
+    edges_N: np.ndarray  # regime edges 0, R_1, ..., R_n
+    field_resolution_T: float  # noise or LSB, the larger
     chip_setting: mlx.ChipSetting | None
-    calibrated_to_N: float | None = None    # the load test's largest force (None: not calibrated)
+    calibrated_to_N: float | None = None  # the load test's largest force (None: not calibrated)
 
     @property
     def n_regimes(self) -> int:
@@ -582,8 +669,9 @@ class InverseMap:
             return res
         return np.interp(np.asarray(force_N, dtype=float), self.force_N, res)
 
-    def force(self, B_abs_T: ArrayLike,
-              saturated: ArrayLike | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def force(
+        self, B_abs_T: ArrayLike, saturated: ArrayLike | None = None
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(force_N with NaN where flagged, regime (0 where flagged), flag strings)."""
         B = np.asarray(B_abs_T, dtype=float)
         F = np.interp(B, self.B_abs_T, self.force_N)
@@ -610,21 +698,26 @@ class InverseMap:
         Bz = np.interp(F, self.force_N, self.Bz_T)
         return B, Bz, F, self.regime_of(np.minimum(F, self.edges_N[-1] * (1 - 1e-12))), self.local_resolution_N(F)
 
-    def z_code_table(self, setting: mlx.ChipSetting,
-                     n_max: int = 256) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    def z_code_table(
+        self, setting: mlx.ChipSetting, n_max: int = 256
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Entries evenly spaced in |Z code| at ``setting``, from no load to the last lock:
         (codes, force_N, regime, resolution_N). CalibrationFailed if |Bz| is not monotone in
         force (an off-axis chip far from the axis): no Z-only table can then exist."""
         Bz = np.abs(self.Bz_T)
         if not np.all(np.diff(Bz) > 0):
-            raise CalibrationFailed("|Bz| is not strictly increasing with force on this model: a "
-                                    "table indexed by the Z code alone cannot exist")
+            raise CalibrationFailed(
+                "|Bz| is not strictly increasing with force on this model: a "
+                "table indexed by the Z code alone cannot exist"
+            )
         lsb = setting.z_uT_per_lsb * 1e-6
         c0 = int(math.ceil(Bz[0] / lsb))
         c1 = int(math.floor(Bz[-1] / lsb))
         if c1 - c0 < 2:
-            raise CalibrationFailed(f"the field changes by only {c1 - c0} LSB over the whole range at "
-                                    f"GAIN_SEL {setting.gain_sel}, RES {setting.res}")
+            raise CalibrationFailed(
+                f"the field changes by only {c1 - c0} LSB over the whole range at "
+                f"GAIN_SEL {setting.gain_sel}, RES {setting.res}"
+            )
         codes = np.unique(np.rint(np.linspace(c0, c1, min(n_max, c1 - c0 + 1))).astype(np.int64))
         F = np.interp(codes * lsb, Bz, self.force_N)
         # resolution in force of one field resolution at the chip's z setting
@@ -645,28 +738,41 @@ class InverseMap:
         F, idx = np.unique(F, return_index=True)
         B, Bz = B[idx], Bz[idx]
         if not np.all(np.diff(B) > 0):
-            raise CalibrationFailed("|B| is not strictly increasing with force on this model: no "
-                                    "monotone map from reading to force exists")
+            raise CalibrationFailed(
+                "|B| is not strictly increasing with force on this model: no monotone map from reading to force exists"
+            )
         edges = np.array([0.0] + [r.force_to_N for r in resp.regimes])
-        return cls(F, B, Bz, edges, float(resp.field_resolution_T) if math.isfinite(resp.field_resolution_T)
-                   else 1e-6 * resp.noise_uT_rms, resp.chip_setting)
+        return cls(
+            F,
+            B,
+            Bz,
+            edges,
+            float(resp.field_resolution_T) if math.isfinite(resp.field_resolution_T) else 1e-6 * resp.noise_uT_rms,
+            resp.chip_setting,
+        )
 
 
-def inverse_map(doc, mechanics: str = "spring", field_model: str | None = None,
-                points_per_regime: int = 600) -> tuple[InverseMap, object]:
+def inverse_map(
+    doc, mechanics: str = "spring", field_model: str | None = None, points_per_regime: int = 600
+) -> tuple[InverseMap, object]:
     """The inverse map of a design document, and the response it came from."""
     from mst_cli.model.response import simulate
 
-    resp = simulate(doc.geometry(), doc.material, mechanics=mechanics,
-                    field_model=None if field_model in (None, "auto") else field_model,
-                    noise_uT_rms=doc.noise_uT_rms, points_per_regime=points_per_regime)
+    resp = simulate(
+        doc.geometry(),
+        doc.material,
+        mechanics=mechanics,
+        field_model=None if field_model in (None, "auto") else field_model,
+        noise_uT_rms=doc.noise_uT_rms,
+        points_per_regime=points_per_regime,
+    )
     return InverseMap.from_response(resp), resp
 
 
 def field_sigma_T(noise_uT_rms: float, setting: mlx.ChipSetting | None) -> float:
     """Per-sample standard deviation of a |B| reading: chip noise and LSB rounding."""
     lsb = setting.z_uT_per_lsb if setting is not None else 0.0
-    return 1e-6 * math.sqrt(noise_uT_rms ** 2 + lsb ** 2 / 12.0) if (noise_uT_rms or lsb) else 1e-6
+    return 1e-6 * math.sqrt(noise_uT_rms**2 + lsb**2 / 12.0) if (noise_uT_rms or lsb) else 1e-6
 
 
 LIMITATIONS = (

@@ -31,7 +31,7 @@ def c_float(value: float, digits: int = 4) -> str:
 def c_array(ctype: str, cname: str, values: Iterable, fmt: Callable[[float], str], per_line: int = 10) -> str:
     """``static const ctype cname[MST_TABLE_LEN] = {...};``, ``per_line`` values a line."""
     values = list(values)
-    lines = ["    " + ", ".join(fmt(v) for v in values[i:i + per_line]) for i in range(0, len(values), per_line)]
+    lines = ["    " + ", ".join(fmt(v) for v in values[i : i + per_line]) for i in range(0, len(values), per_line)]
     return f"static const {ctype} {cname}[MST_TABLE_LEN] = {{\n" + ",\n".join(lines) + "\n};\n"
 
 
@@ -44,8 +44,12 @@ def c_header(imap: InverseMap, setting: ChipSetting, name: str, sources: str, li
     top_N = imap.calibrated_to_N if imap.calibrated_to_N is not None else float(imap.force_N[-1])
     template = Template(resources.files(__package__).joinpath("data", TEMPLATE).read_text(encoding="utf-8"))
     return template.substitute(
-        name=name, sources=sources, gain_sel=setting.gain_sel, res=setting.res,
-        z_uT_per_lsb=setting.z_uT_per_lsb, z_uT_per_lsb_c=c_float(setting.z_uT_per_lsb, 6),
+        name=name,
+        sources=sources,
+        gain_sel=setting.gain_sel,
+        res=setting.res,
+        z_uT_per_lsb=setting.z_uT_per_lsb,
+        z_uT_per_lsb_c=c_float(setting.z_uT_per_lsb, 6),
         limitations="\n".join(f" *   - {line}" for line in limitations),
         table_len=len(codes),
         tolerance_lsb=max(1, int(math.ceil(imap.tolerance_T / lsb_T))),

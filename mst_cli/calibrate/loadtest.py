@@ -39,9 +39,17 @@ SETTING_COLUMNS = ("gain_sel", "res")
 # a column that looks like a force or a field in another unit: refused with the conversion
 FORCE_LIKE = re.compile(r"^(force|load|f|weight|mass)(_.*|\s*\[.*\]|\s*\(.*\))?$", re.IGNORECASE)
 FIELD_LIKE = re.compile(r"^(b|mag)_?[xyz](_.+|\s*\[.*\]|\s*\(.*\))$", re.IGNORECASE)
-FORCE_CONVERSIONS = {"kn": "x 1000", "mn": "x 0.001", "g": "x 0.00980665", "gf": "x 0.00980665",
-                     "kg": "x 9.80665", "kgf": "x 9.80665", "lbf": "x 4.44822", "lb": "x 4.44822",
-                     "n": "(rename it)"}
+FORCE_CONVERSIONS = {
+    "kn": "x 1000",
+    "mn": "x 0.001",
+    "g": "x 0.00980665",
+    "gf": "x 0.00980665",
+    "kg": "x 9.80665",
+    "kgf": "x 9.80665",
+    "lbf": "x 4.44822",
+    "lb": "x 4.44822",
+    "n": "(rename it)",
+}
 
 
 @dataclass
@@ -50,12 +58,12 @@ class Readings:
 
     source: str
     header: list[str]
-    rows: list[list[str]]           # the cells as written (for echoing the input columns)
-    lines: list[int]                # line number of each row in the file (from 1)
-    B_T: np.ndarray                 # (n, 3) field in tesla
-    saturated: np.ndarray           # (n,) bool
-    force_N: np.ndarray | None      # the load cell's force (load tests; readings with a force_N column)
-    raw: bool                       # the file held raw codes
+    rows: list[list[str]]  # the cells as written (for echoing the input columns)
+    lines: list[int]  # line number of each row in the file (from 1)
+    B_T: np.ndarray  # (n, 3) field in tesla
+    saturated: np.ndarray  # (n,) bool
+    force_N: np.ndarray | None  # the load cell's force (load tests; readings with a force_N column)
+    raw: bool  # the file held raw codes
     setting: mlx.ChipSetting | None  # the one chip setting of every row, when known
 
     @functools.cached_property
@@ -103,21 +111,33 @@ def _wrong_unit_force(source, header):
             unit = unit[0].strip("[]() ").lower()
             how = FORCE_CONVERSIONS.get(unit)
             hint = f" (convert: {how})" if how else ""
-            raise InputError(f"{source} column {name!r}", name,
-                             f"the force column must be {FORCE_COLUMN}, in newtons{hint}: no other "
-                             "unit is guessed")
+            raise InputError(
+                f"{source} column {name!r}",
+                name,
+                f"the force column must be {FORCE_COLUMN}, in newtons{hint}: no other unit is guessed",
+            )
 
 
 def _wrong_unit_field(source, header):
     for name in header:
         if name not in UT_COLUMNS + CODE_COLUMNS and FIELD_LIKE.match(name):
-            raise InputError(f"{source} column {name!r}", name,
-                             "the field columns must be Bx_uT, By_uT, Bz_uT (microtesla) or the raw "
-                             "codes Bx_code_lsb, By_code_lsb, Bz_code_lsb: no other unit is guessed")
+            raise InputError(
+                f"{source} column {name!r}",
+                name,
+                "the field columns must be Bx_uT, By_uT, Bz_uT (microtesla) or the raw "
+                "codes Bx_code_lsb, By_code_lsb, Bz_code_lsb: no other unit is guessed",
+            )
 
 
-def parse_readings(text: str, source: str, *, need_force: bool, gain_sel: int | None = None,
-                   res: int | None = None, one_setting: bool = False) -> Readings:
+def parse_readings(
+    text: str,
+    source: str,
+    *,
+    need_force: bool,
+    gain_sel: int | None = None,
+    res: int | None = None,
+    one_setting: bool = False,
+) -> Readings:
     """Parse and validate a load test (``need_force``) or a readings file.
 
     ``gain_sel``/``res``: the chip setting the readings were taken at (needed for raw codes;
@@ -128,11 +148,15 @@ def parse_readings(text: str, source: str, *, need_force: bool, gain_sel: int | 
         raise InputError("--gain-sel/--res", f"{gain_sel}/{res}", "give both GAIN_SEL and RES, or neither")
     flag_setting = setting_of(gain_sel, res) if gain_sel is not None else None
 
-    numbered = [(i + 1, line) for i, line in enumerate(text.splitlines())
-                if line.strip() and not line.lstrip().startswith("#")]
+    numbered = [
+        (i + 1, line) for i, line in enumerate(text.splitlines()) if line.strip() and not line.lstrip().startswith("#")
+    ]
     if not numbered:
-        raise InputError(source, "(empty)", "has no header row: expected columns "
-                         + (f"{FORCE_COLUMN}," if need_force else "") + ",".join(UT_COLUMNS))
+        raise InputError(
+            source,
+            "(empty)",
+            "has no header row: expected columns " + (f"{FORCE_COLUMN}," if need_force else "") + ",".join(UT_COLUMNS),
+        )
     delim = _delimiter(numbered[0][1])
     parsed = list(csv.reader([line for _, line in numbered], delimiter=delim))
     header = [h.strip() for h in parsed[0]]
@@ -141,8 +165,9 @@ def parse_readings(text: str, source: str, *, need_force: bool, gain_sel: int | 
         raise InputError(f"{source} header", dup, "a column name appears twice")
     if need_force and FORCE_COLUMN not in header:
         _wrong_unit_force(source, header)
-        raise InputError(f"{source} header", ",".join(header),
-                         f"missing column {FORCE_COLUMN} (the load cell's force in newtons)")
+        raise InputError(
+            f"{source} header", ",".join(header), f"missing column {FORCE_COLUMN} (the load cell's force in newtons)"
+        )
     if all(c in header for c in UT_COLUMNS):
         raw, cols = False, UT_COLUMNS
     elif all(c in header for c in CODE_COLUMNS):
@@ -150,9 +175,12 @@ def parse_readings(text: str, source: str, *, need_force: bool, gain_sel: int | 
     else:
         _wrong_unit_field(source, header)
         missing = [c for c in UT_COLUMNS if c not in header]
-        raise InputError(f"{source} header", ",".join(header),
-                         f"missing column(s) {', '.join(missing)} (or the raw codes "
-                         f"{', '.join(CODE_COLUMNS)} with --gain-sel/--res)")
+        raise InputError(
+            f"{source} header",
+            ",".join(header),
+            f"missing column(s) {', '.join(missing)} (or the raw codes "
+            f"{', '.join(CODE_COLUMNS)} with --gain-sel/--res)",
+        )
     data_rows = parsed[1:]
     if len(data_rows) > MAX_ROWS:
         raise InputError(source, f"{len(data_rows)} rows", f"at most {MAX_ROWS} rows")
@@ -160,32 +188,42 @@ def parse_readings(text: str, source: str, *, need_force: bool, gain_sel: int | 
     has_setting_cols = all(c in header for c in SETTING_COLUMNS)
 
     B = np.empty((len(data_rows), 3))
-    with_force = need_force or FORCE_COLUMN in header       # a readings file may carry the reference
+    with_force = need_force or FORCE_COLUMN in header  # a readings file may carry the reference
     F = np.empty(len(data_rows)) if with_force else None
     sat = np.zeros(len(data_rows), dtype=bool)
     rows, lines = [], []
     first_setting = None
     for r, (row, (line, _)) in enumerate(zip(data_rows, numbered[1:])):
         if len(row) != len(header):
-            raise InputError(f"{source} line {line}", delim.join(row),
-                             f"has {len(row)} fields, the header {len(header)}")
+            raise InputError(
+                f"{source} line {line}", delim.join(row), f"has {len(row)} fields, the header {len(header)}"
+            )
         row = [c.strip() for c in row]
         setting = flag_setting
         if has_setting_cols:
             g = _number(source, line, "gain_sel", row[idx["gain_sel"]])
             s = _number(source, line, "res", row[idx["res"]])
             if g != int(g) or s != int(s) or not (0 <= g <= 7 and 0 <= s <= 3):
-                raise InputError(f"{source} line {line} gain_sel/res", f"{row[idx['gain_sel']]}/{row[idx['res']]}",
-                                 "GAIN_SEL must be an integer 0-7 and RES 0-3")
+                raise InputError(
+                    f"{source} line {line} gain_sel/res",
+                    f"{row[idx['gain_sel']]}/{row[idx['res']]}",
+                    "GAIN_SEL must be an integer 0-7 and RES 0-3",
+                )
             row_setting = setting_of(int(g), int(s))
             if flag_setting is not None and row_setting != flag_setting:
-                raise InputError(f"{source} line {line} gain_sel/res", f"{int(g)}/{int(s)}",
-                                 f"differs from --gain-sel {flag_setting.gain_sel} --res {flag_setting.res}: "
-                                 "the readings come from another chip setting")
+                raise InputError(
+                    f"{source} line {line} gain_sel/res",
+                    f"{int(g)}/{int(s)}",
+                    f"differs from --gain-sel {flag_setting.gain_sel} --res {flag_setting.res}: "
+                    "the readings come from another chip setting",
+                )
             if one_setting and first_setting is not None and row_setting != first_setting:
-                raise InputError(f"{source} line {line} gain_sel/res", f"{int(g)}/{int(s)}",
-                                 f"a load test must come from one chip setting (earlier rows: "
-                                 f"{first_setting.gain_sel}/{first_setting.res})")
+                raise InputError(
+                    f"{source} line {line} gain_sel/res",
+                    f"{int(g)}/{int(s)}",
+                    f"a load test must come from one chip setting (earlier rows: "
+                    f"{first_setting.gain_sel}/{first_setting.res})",
+                )
             setting = row_setting
             first_setting = first_setting or row_setting
         values = [_number(source, line, c, row[idx[c]]) for c in cols]
@@ -198,12 +236,14 @@ def parse_readings(text: str, source: str, *, need_force: bool, gain_sel: int | 
     if one is None and has_setting_cols:
         settings = {(float(row[idx["gain_sel"]]), float(row[idx["res"]])) for row in rows}
         one = first_setting if len(settings) == 1 else None
-    return Readings(source=source, header=header, rows=rows, lines=lines, B_T=B, saturated=sat,
-                    force_N=F, raw=raw, setting=one)
+    return Readings(
+        source=source, header=header, rows=rows, lines=lines, B_T=B, saturated=sat, force_N=F, raw=raw, setting=one
+    )
 
 
-def field_of(values: Sequence[float], raw: bool, setting: mlx.ChipSetting | None,
-             where: str) -> tuple[np.ndarray, bool]:
+def field_of(
+    values: Sequence[float], raw: bool, setting: mlx.ChipSetting | None, where: str
+) -> tuple[np.ndarray, bool]:
     """(field vector in T, saturated) of one sample: x, y, z in microtesla, or raw codes.
 
     InputError when the sample cannot come from ``setting`` (a code or a field beyond what the
@@ -211,17 +251,23 @@ def field_of(values: Sequence[float], raw: bool, setting: mlx.ChipSetting | None
     cols = CODE_COLUMNS if raw else UT_COLUMNS
     if raw:
         if setting is None:
-            raise InputError("--gain-sel/--res", None,
-                             "raw codes need the chip setting they were read at: give --gain-sel "
-                             "and --res (or gain_sel,res columns)")
+            raise InputError(
+                "--gain-sel/--res",
+                None,
+                "raw codes need the chip setting they were read at: give --gain-sel "
+                "and --res (or gain_sel,res columns)",
+            )
         limit = mlx.CODE_RANGE_LSB[setting.res]
         for c, v in zip(cols, values):
             if v != int(v):
                 raise InputError(f"{where} {c}", v, "a raw code must be an integer")
             if abs(v) > limit:
-                raise InputError(f"{where} {c}", v,
-                                 f"outside the +-{limit} codes the chip outputs at RES {setting.res}: "
-                                 "the readings come from another chip setting")
+                raise InputError(
+                    f"{where} {c}",
+                    v,
+                    f"outside the +-{limit} codes the chip outputs at RES {setting.res}: "
+                    "the readings come from another chip setting",
+                )
         lsb = np.array([setting.xy_uT_per_lsb, setting.xy_uT_per_lsb, setting.z_uT_per_lsb])
         B_uT = np.asarray(values, dtype=float) * lsb
         saturated = any(abs(v) >= limit - 1 for v in values)
@@ -233,10 +279,13 @@ def field_of(values: Sequence[float], raw: bool, setting: mlx.ChipSetting | None
             lsbs = (setting.xy_uT_per_lsb, setting.xy_uT_per_lsb, setting.z_uT_per_lsb)
             for c, v, rng, lsb in zip(cols, values, ranges, lsbs):
                 if abs(v) * 1e-6 > rng + 1.5e-6 * lsb:
-                    raise InputError(f"{where} {c}", v,
-                                     f"beyond the {rng * 1e6:.6g} uT the chip reads at GAIN_SEL "
-                                     f"{setting.gain_sel}, RES {setting.res}: the readings come from "
-                                     "another chip setting")
+                    raise InputError(
+                        f"{where} {c}",
+                        v,
+                        f"beyond the {rng * 1e6:.6g} uT the chip reads at GAIN_SEL "
+                        f"{setting.gain_sel}, RES {setting.res}: the readings come from "
+                        "another chip setting",
+                    )
                 if abs(v) * 1e-6 >= rng - 1.5e-6 * lsb:
                     saturated = True
     # compared in microtesla, as read: 50000 uT x 1e-6 is 0.049999999999999996 T, below 50 mT
@@ -245,41 +294,60 @@ def field_of(values: Sequence[float], raw: bool, setting: mlx.ChipSetting | None
     return B_uT * 1e-6, bool(saturated)
 
 
-def check_load_test(lt: Readings, n_parameters: int, design_range_N: float,
-                    min_per_parameter: int, min_points: int) -> None:
+def check_load_test(
+    lt: Readings, n_parameters: int, design_range_N: float, min_per_parameter: int, min_points: int
+) -> None:
     """What a load test needs before a fit: enough samples, no saturated sample, forces that
     are plausibly newtons for this design."""
     n = len(lt)
     need = max(min_points, min_per_parameter * n_parameters)
     if n < need:
-        raise InputError(lt.source, f"{n} samples",
-                         f"needs at least {need} samples to fit {n_parameters} parameter(s) "
-                         f"({min_per_parameter} per parameter, {min_points} at least)")
+        raise InputError(
+            lt.source,
+            f"{n} samples",
+            f"needs at least {need} samples to fit {n_parameters} parameter(s) "
+            f"({min_per_parameter} per parameter, {min_points} at least)",
+        )
     distinct = len(np.unique(np.round(lt.force_N, 9)))
     if distinct < n_parameters + 2:
-        raise InputError(f"{lt.source} {FORCE_COLUMN}", f"{distinct} distinct forces",
-                         f"needs at least {n_parameters + 2} distinct force levels to fit {n_parameters} parameter(s)")
+        raise InputError(
+            f"{lt.source} {FORCE_COLUMN}",
+            f"{distinct} distinct forces",
+            f"needs at least {n_parameters + 2} distinct force levels to fit {n_parameters} parameter(s)",
+        )
     if lt.saturated.any():
         i = int(np.flatnonzero(lt.saturated)[0])
-        raise InputError(f"{lt.source} line {lt.lines[i]}", ",".join(lt.rows[i]),
-                         f"saturated sample ({int(lt.saturated.sum())} in all): the chip's output is at "
-                         "its limit, so the field is unknown; remove saturated rows or use a coarser "
-                         "GAIN_SEL/RES")
+        raise InputError(
+            f"{lt.source} line {lt.lines[i]}",
+            ",".join(lt.rows[i]),
+            f"saturated sample ({int(lt.saturated.sum())} in all): the chip's output is at "
+            "its limit, so the field is unknown; remove saturated rows or use a coarser "
+            "GAIN_SEL/RES",
+        )
     F = lt.force_N
     lo_tol = 0.02 * design_range_N
     if F.min() < -lo_tol:
         i = int(np.argmin(F))
-        raise InputError(f"{lt.source} line {lt.lines[i]} {FORCE_COLUMN}", float(F[i]),
-                         f"a pressing force is >= 0 N (tare noise down to -{lo_tol:.3g} N is accepted): "
-                         "is the load cell's sign reversed?")
+        raise InputError(
+            f"{lt.source} line {lt.lines[i]} {FORCE_COLUMN}",
+            float(F[i]),
+            f"a pressing force is >= 0 N (tare noise down to -{lo_tol:.3g} N is accepted): "
+            "is the load cell's sign reversed?",
+        )
     if F.max() > 4.0 * design_range_N:
         i = int(np.argmax(F))
-        raise InputError(f"{lt.source} line {lt.lines[i]} {FORCE_COLUMN}", float(F[i]),
-                         f"is {F.max() / design_range_N:.3g} x the design's whole range "
-                         f"({design_range_N:.4g} N): is the column in another unit (grams, mN)? "
-                         f"{FORCE_COLUMN} must be newtons")
+        raise InputError(
+            f"{lt.source} line {lt.lines[i]} {FORCE_COLUMN}",
+            float(F[i]),
+            f"is {F.max() / design_range_N:.3g} x the design's whole range "
+            f"({design_range_N:.4g} N): is the column in another unit (grams, mN)? "
+            f"{FORCE_COLUMN} must be newtons",
+        )
     if F.max() < 0.02 * design_range_N:
-        raise InputError(f"{lt.source} {FORCE_COLUMN}", float(F.max()),
-                         f"the largest force is under 2 % of the design's range ({design_range_N:.4g} N): "
-                         f"is the column in another unit (kN)? {FORCE_COLUMN} must be newtons, and a load "
-                         "test should press through the layers")
+        raise InputError(
+            f"{lt.source} {FORCE_COLUMN}",
+            float(F.max()),
+            f"the largest force is under 2 % of the design's range ({design_range_N:.4g} N): "
+            f"is the column in another unit (kN)? {FORCE_COLUMN} must be newtons, and a load "
+            "test should press through the layers",
+        )

@@ -9,9 +9,16 @@ from pathlib import Path
 import numpy as np
 
 
-def plot_calibration(path: Path, F: np.ndarray, B_meas_T: np.ndarray, design_model: tuple[np.ndarray, np.ndarray],
-                     cal_model: tuple[np.ndarray, np.ndarray], residual_T: np.ndarray, sigma_T: float,
-                     title: str) -> None:
+def plot_calibration(
+    path: Path,
+    F: np.ndarray,
+    B_meas_T: np.ndarray,
+    design_model: tuple[np.ndarray, np.ndarray],
+    cal_model: tuple[np.ndarray, np.ndarray],
+    residual_T: np.ndarray,
+    sigma_T: float,
+    title: str,
+) -> None:
     """Measured |B| against force with the design's and the calibrated curves; residuals."""
     from matplotlib.figure import Figure
 

@@ -47,25 +47,33 @@ class ForceReadings:
         ref = self.readings.force_N
         if ref is None or not len(ref) or float(np.max(ref)) <= 0:
             return None
-        return force_errors(self.force_N, ref, float(np.max(ref)))      # the same readings for any model
+        return force_errors(self.force_N, ref, float(np.max(ref)))  # the same readings for any model
 
     def summary(self) -> str:
         F, flag = self.force_N, self.flag
         counts = {k: int(np.sum(flag == k)) for k in cal.FLAGS}
         ok = np.isfinite(F)
-        lines = [f"{self.name}: {len(self.readings)} readings: {counts['ok']} in range"
-                 + "".join(f", {counts[k]} {k.replace('_', ' ')}"
-                           for k in ("above_calibrated", "below_range", "above_range", "saturated") if counts[k])
-                 + (f"; forces {np.nanmin(F):.4g}-{np.nanmax(F):.4g} N" if ok.any() else "")]
+        lines = [
+            f"{self.name}: {len(self.readings)} readings: {counts['ok']} in range"
+            + "".join(
+                f", {counts[k]} {k.replace('_', ' ')}"
+                for k in ("above_calibrated", "below_range", "above_range", "saturated")
+                if counts[k]
+            )
+            + (f"; forces {np.nanmin(F):.4g}-{np.nanmax(F):.4g} N" if ok.any() else "")
+        ]
         err = self.errors()
         if err is not None and "median_rel" in err:
-            lines.append(f"against force_N_reference (readings >= {err['from_force_N']:.3g} N): median error "
-                         f"{100 * err['median_rel']:.3g} %, 95th percentile {100 * err['p95_rel']:.3g} %, "
-                         f"max {100 * err['max_rel']:.3g} %, RMS {err['rms_N']:.4g} N"
-                         + (f"; {err['flagged']} flagged" if err["flagged"] else ""))
+            lines.append(
+                f"against force_N_reference (readings >= {err['from_force_N']:.3g} N): median error "
+                f"{100 * err['median_rel']:.3g} %, 95th percentile {100 * err['p95_rel']:.3g} %, "
+                f"max {100 * err['max_rel']:.3g} %, RMS {err['rms_N']:.4g} N"
+                + (f"; {err['flagged']} flagged" if err["flagged"] else "")
+            )
         elif err is not None and err["readings"]:
-            lines.append(f"against force_N_reference: all {err['readings']} readings >= "
-                         f"{ERROR_FROM_RANGE:g} x range are flagged")
+            lines.append(
+                f"against force_N_reference: all {err['readings']} readings >= {ERROR_FROM_RANGE:g} x range are flagged"
+            )
         return "\n".join(lines)
 
 
@@ -84,8 +92,14 @@ class SerialSamples:
         buf.write(",".join(("time_s",) + cols + FORCES_COLUMNS) + "\n")
         for t, values, f, r, fl in self.samples:
             res_N = float(imap.local_resolution_N(f)) if math.isfinite(f) else None
-            buf.write(",".join([f"{t:.4f}"] + [f"{v:.9g}" for v in values]
-                               + [cell(f), str(r) if math.isfinite(f) else "", fl, cell(res_N, ".6g")]) + "\n")
+            buf.write(
+                ",".join(
+                    [f"{t:.4f}"]
+                    + [f"{v:.9g}" for v in values]
+                    + [cell(f), str(r) if math.isfinite(f) else "", fl, cell(res_N, ".6g")]
+                )
+                + "\n"
+            )
         return buf.getvalue()
 
 
@@ -100,8 +114,9 @@ class ForceReader:
     record: CalibrationRecord | None
 
     @classmethod
-    def open(cls, doc: Document, model_file: str | Path, mechanics: str,
-             setting: ChipSetting | None = None) -> ForceReader:
+    def open(
+        cls, doc: Document, model_file: str | Path, mechanics: str, setting: ChipSetting | None = None
+    ) -> ForceReader:
         """The reader of ``doc`` (loaded from ``model_file``) with ``mechanics``; ``setting`` is
         the chip's (else the one the model chooses): its LSB bounds the field resolution.
         CalibrationFailed when the model has no monotone map."""
@@ -122,8 +137,16 @@ class ForceReader:
         res = self.inverse_map.local_resolution_N(np.where(np.isfinite(F), F, 0.0))
         return ForceReadings(self.document.name, rd, F, regime, flag, res)
 
-    def stream(self, port: str, baud: int, count: int | None, timeout_s: float | None, raw: bool,
-               setting: ChipSetting | None, show: Callable[[str], None]) -> SerialSamples:
+    def stream(
+        self,
+        port: str,
+        baud: int,
+        count: int | None,
+        timeout_s: float | None,
+        raw: bool,
+        setting: ChipSetting | None,
+        show: Callable[[str], None],
+    ) -> SerialSamples:
         """Read ``port`` until it closes, ``count`` samples, ``timeout_s`` of silence or Ctrl-C,
         showing each sample's force through ``show``."""
         src = LineSource(port, baud, timeout_s)
@@ -140,7 +163,7 @@ class ForceReader:
                 F, regime, flag = self.inverse_map.force(np.array([Babs]), np.array([sat]))
                 f, r, fl = float(F[0]), int(regime[0]), str(flag[0])
                 out.samples.append((time.monotonic() - t0, values, f, r, fl))
-                shown = (f"F = {f:8.3f} N  regime {r}" if math.isfinite(f) else f"F = {'-':>8}    ")
+                shown = f"F = {f:8.3f} N  regime {r}" if math.isfinite(f) else f"F = {'-':>8}    "
                 if fl != "ok":
                     shown += f"  {fl}"
                 show(f"{len(out.samples):6d}  {shown}  |B| {Babs * 1e3:.4f} mT")

@@ -29,27 +29,34 @@ if TYPE_CHECKING:
     from mst_cli.io.schema import Document
 
 OPTION = "--calibration"
-CONSTANTS_KEY = "design_constants"       # calibration.json: what the fitted factors multiply
+CONSTANTS_KEY = "design_constants"  # calibration.json: what the fitted factors multiply
 # where each fitted parameter goes in the next spec
-TARGET_KEY = {"wall_offset_mm": "printer.wall_offset_mm", "modulus_factor": "printer.modulus_factor",
-              "gap_offset_mm": "printer.gap_offset_mm", "remanence_factor": "magnet.remanence_T"}
+TARGET_KEY = {
+    "wall_offset_mm": "printer.wall_offset_mm",
+    "modulus_factor": "printer.modulus_factor",
+    "gap_offset_mm": "printer.gap_offset_mm",
+    "remanence_factor": "magnet.remanence_T",
+}
 
 
 def design_constants(doc: Document) -> dict:
     """The calibrated design's constants the fitted factors are relative to (calibration.json
     keeps them, so that another design can use the factors): material and remanence."""
-    return {"material_name": doc.material.name, "youngs_modulus_MPa": doc.material.youngs_modulus_MPa,
-            "remanence_T": doc.magnet.remanence_T}
+    return {
+        "material_name": doc.material.name,
+        "youngs_modulus_MPa": doc.material.youngs_modulus_MPa,
+        "remanence_T": doc.magnet.remanence_T,
+    }
 
 
 @dataclass(frozen=True)
 class Taken:
     """One parameter taken from the calibration, in the next spec's own key and unit."""
 
-    parameter: str          # PARAMETERS name
-    key: str                # the spec key it is written to
+    parameter: str  # PARAMETERS name
+    key: str  # the spec key it is written to
     value: float
-    std: float | None       # 1 sigma, same unit
+    std: float | None  # 1 sigma, same unit
     unit: str
 
 
@@ -60,25 +67,33 @@ class PrinterCalibration:
     path: str
     calibrated_design: str
     taken: list[Taken] = field(default_factory=list)
-    not_used: dict[str, str] = field(default_factory=dict)     # parameter -> why
+    not_used: dict[str, str] = field(default_factory=dict)  # parameter -> why
 
     def lines(self) -> list[str]:
         """What was taken, with what uncertainty, and what was not: as ``mst design`` prints it."""
+
         def one(t: Taken) -> str:
             value = f"{t.value:+.4f}" if t.unit == "mm" else f"{t.value:.4f}"
             std = f" ± {t.std:.4f}" if t.std is not None else ""
             return f"{t.key} {value}{std}{' ' + t.unit if t.unit else ''}"
-        out = [f"calibration {self.path} (a print of {self.calibrated_design}): "
-               + ("; ".join(one(t) for t in self.taken) if self.taken else "nothing identifiable to take")]
+
+        out = [
+            f"calibration {self.path} (a print of {self.calibrated_design}): "
+            + ("; ".join(one(t) for t in self.taken) if self.taken else "nothing identifiable to take")
+        ]
         out += [f"calibration: {name} not used: {why}" for name, why in self.not_used.items()]
         return out
 
     def report(self) -> dict:
         """report.json's ``calibration`` block."""
-        return {"file": self.path, "calibrated_design": self.calibrated_design,
-                "taken": {t.key: {"parameter": t.parameter, "value": t.value, "std": t.std, "unit": t.unit}
-                          for t in self.taken},
-                "not_used": dict(self.not_used)}
+        return {
+            "file": self.path,
+            "calibrated_design": self.calibrated_design,
+            "taken": {
+                t.key: {"parameter": t.parameter, "value": t.value, "std": t.std, "unit": t.unit} for t in self.taken
+            },
+            "not_used": dict(self.not_used),
+        }
 
 
 def _refuse(path, why: str):
@@ -88,10 +103,17 @@ def _refuse(path, why: str):
 def _number(path, where: str, value, *, positive: bool = False, nullable: bool = False) -> float | None:
     if value is None and nullable:
         return None
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) \
-            or (positive and value <= 0):
-        _refuse(path, f"{where} = {value!r} is not a {'positive ' if positive else ''}finite number: "
-                      "give the calibration.json mst calibrate wrote")
+    if (
+        isinstance(value, bool)
+        or not isinstance(value, (int, float))
+        or not math.isfinite(value)
+        or (positive and value <= 0)
+    ):
+        _refuse(
+            path,
+            f"{where} = {value!r} is not a {'positive ' if positive else ''}finite number: "
+            "give the calibration.json mst calibrate wrote",
+        )
     return float(value)
 
 
@@ -106,8 +128,9 @@ def read_calibration(path: str | Path, doc: Document) -> PrinterCalibration:
     from mst_cli.io.files import read_input_text
     from mst_cli.io.yaml_io import MAX_INPUT_BYTES
 
-    text = read_input_text(path, MAX_INPUT_BYTES, field=OPTION, what="calibration.json",
-                           too_large=": a calibration.json is a few kB")
+    text = read_input_text(
+        path, MAX_INPUT_BYTES, field=OPTION, what="calibration.json", too_large=": a calibration.json is a few kB"
+    )
     try:
         record = json.loads(text)
     except ValueError:
@@ -116,14 +139,19 @@ def read_calibration(path: str | Path, doc: Document) -> PrinterCalibration:
         _refuse(path, "has no 'parameters' mapping: give the calibration.json mst calibrate wrote")
     constants = record.get(CONSTANTS_KEY)
     if not isinstance(constants, dict):
-        _refuse(path, f"has no '{CONSTANTS_KEY}' (written by an mst calibrate before 0.7): "
-                      "run mst calibrate on that print again")
+        _refuse(
+            path,
+            f"has no '{CONSTANTS_KEY}' (written by an mst calibrate before 0.7): run mst calibrate on that print again",
+        )
     material = constants.get("material_name")
     if not isinstance(material, str):
         _refuse(path, f"{CONSTANTS_KEY}.material_name is missing: give the calibration.json mst calibrate wrote")
     if material != doc.material.name:
-        _refuse(path, f"was fitted on a print of material '{material}', this spec prints '{doc.material.name}' "
-                      "(material.name): calibrate a print of the same printer and filament")
+        _refuse(
+            path,
+            f"was fitted on a print of material '{material}', this spec prints '{doc.material.name}' "
+            "(material.name): calibrate a print of the same printer and filament",
+        )
     E_cal = _number(path, f"{CONSTANTS_KEY}.youngs_modulus_MPa", constants.get("youngs_modulus_MPa"), positive=True)
     Br_cal = _number(path, f"{CONSTANTS_KEY}.remanence_T", constants.get("remanence_T"), positive=True)
 
@@ -131,8 +159,9 @@ def read_calibration(path: str | Path, doc: Document) -> PrinterCalibration:
     for name, par in PARAMETERS.items():
         entry = record["parameters"].get(name)
         if not isinstance(entry, dict) or not isinstance(entry.get("fitted"), bool):
-            _refuse(path, f"parameters.{name} is missing or has no 'fitted': give the calibration.json "
-                          "mst calibrate wrote")
+            _refuse(
+                path, f"parameters.{name} is missing or has no 'fitted': give the calibration.json mst calibrate wrote"
+            )
         if not entry["fitted"]:
             why = entry.get("held_because")
             out.not_used[name] = "held by the calibration" + (f" ({why})" if isinstance(why, str) else "")

@@ -36,12 +36,18 @@ def lookup_csv(imap: InverseMap, setting: ChipSetting | None, n: int) -> str:
     buf = io.StringIO()
     code_col = setting is not None
     top = imap.calibrated_to_N if imap.calibrated_to_N is not None else float("inf")
-    buf.write("B_abs_uT,Bz_uT," + ("Bz_code_lsb," if code_col else "")
-              + "force_N,force_mN,regime,force_resolution_N,calibrated\n")
+    buf.write(
+        "B_abs_uT,Bz_uT,"
+        + ("Bz_code_lsb," if code_col else "")
+        + "force_N,force_mN,regime,force_resolution_N,calibrated\n"
+    )
     codes = quantise_lsb(Bz, setting.z_uT_per_lsb) if code_col else None
     for i in range(len(B)):
-        buf.write(f"{B[i] * 1e6:.6f},{Bz[i] * 1e6:.6f}," + (f"{int(codes[i])}," if code_col else "")
-                  + f"{F[i]:.9g},{F[i] * 1e3:.6g},{int(regime[i])},{res[i]:.6g},{int(F[i] <= top * (1 + 1e-9))}\n")
+        buf.write(
+            f"{B[i] * 1e6:.6f},{Bz[i] * 1e6:.6f},"
+            + (f"{int(codes[i])}," if code_col else "")
+            + f"{F[i]:.9g},{F[i] * 1e3:.6g},{int(regime[i])},{res[i]:.6g},{int(F[i] <= top * (1 + 1e-9))}\n"
+        )
     return buf.getvalue()
 
 
@@ -53,8 +59,10 @@ def residuals_csv(lt: Readings, fit: FitResult, F_fit: np.ndarray, flag_fit: Seq
     B_model = fit.model.field_abs_T(lt.force_N, fit.values)
     for i in range(len(lt)):
         f = "" if not math.isfinite(F_fit[i]) else f"{F_fit[i]:.9g}"
-        buf.write(f"{lt.lines[i]},{lt.force_N[i]:.9g},{lt.B_abs_T[i] * 1e6:.6f},{B_model[i] * 1e6:.6f},"
-                  f"{fit.residual_T[i] * 1e6:.6f},{f},{flag_fit[i]}\n")
+        buf.write(
+            f"{lt.lines[i]},{lt.force_N[i]:.9g},{lt.B_abs_T[i] * 1e6:.6f},{B_model[i] * 1e6:.6f},"
+            f"{fit.residual_T[i] * 1e6:.6f},{f},{flag_fit[i]}\n"
+        )
     return buf.getvalue()
 
 
@@ -66,6 +74,16 @@ def forces_csv(rd: Readings, F: np.ndarray, regime: np.ndarray, flag: Sequence[s
     buf.write(",".join(header + list(FORCES_COLUMNS)) + "\n")
     for i, row in enumerate(rd.rows):
         ok = bool(np.isfinite(F[i]))
-        buf.write(",".join([quoted(c) for c in row] + [cell(float(F[i])), str(int(regime[i])) if ok else "",
-                                                        flag[i], cell(float(res[i]), ".6g") if ok else ""]) + "\n")
+        buf.write(
+            ",".join(
+                [quoted(c) for c in row]
+                + [
+                    cell(float(F[i])),
+                    str(int(regime[i])) if ok else "",
+                    flag[i],
+                    cell(float(res[i]), ".6g") if ok else "",
+                ]
+            )
+            + "\n"
+        )
     return buf.getvalue()

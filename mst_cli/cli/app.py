@@ -25,27 +25,35 @@ def load_command(name: str) -> click.Command | None:
     Plain import statements, not importlib strings, so tests/test_architecture.py sees them."""
     if name == "simulate":
         from mst_cli.cli.simulate import simulate
+
         return simulate
     if name == "design":
         from mst_cli.cli.design import design
+
         return design
     if name == "export":
         from mst_cli.cli.export import export
+
         return export
     if name == "check":
         from mst_cli.cli.export import check
+
         return check
     if name == "bench":
         from mst_cli.cli.bench import bench
+
         return bench
     if name == "slice":
         from mst_cli.cli.slice import slice_
+
         return slice_
     if name == "calibrate":
         from mst_cli.cli.calibrate import calibrate
+
         return calibrate
     if name == "read":
         from mst_cli.cli.calibrate import read
+
         return read
     return None
 

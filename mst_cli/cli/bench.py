@@ -10,11 +10,21 @@ from mst_cli.cli.common import no_plot_option, seed_type
 
 
 @click.command()
-@click.option("--samples", type=click.IntRange(min=1, max=500), default=24, show_default=True,
-              help="Number of seeded valid designs across the bounds.")
+@click.option(
+    "--samples",
+    type=click.IntRange(min=1, max=500),
+    default=24,
+    show_default=True,
+    help="Number of seeded valid designs across the bounds.",
+)
 @click.option("--seed", type=seed_type(), default=0, show_default=True, help="Random seed of the sample.")
-@click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), default=None,
-              help="Output folder [default: ./mst-out/bench/].")
+@click.option(
+    "--out",
+    "out_dir",
+    type=click.Path(file_okay=False, path_type=Path),
+    default=None,
+    help="Output folder [default: ./mst-out/bench/].",
+)
 @click.option("--quick", is_flag=True, help="Skip the L2 mesh-convergence study.")
 @no_plot_option("bench.png", "about 0.5 s of matplotlib import and render", has_json=False)
 def bench(samples: int, seed: int, out_dir: Path | None, quick: bool, no_plot: bool) -> None:

@@ -29,12 +29,30 @@ _R = TypeVar("_R")
 _F = TypeVar("_F", bound=Callable[..., Any])
 
 EXIT_TARGETS, EXIT_INPUT = 1, 2  # success is a normal return (0)
-EXIT_FAULT = 1                   # the machine failed (full disk, I/O error): not the input's fault
+EXIT_FAULT = 1  # the machine failed (full disk, I/O error): not the input's fault
 
 # errno values that are the machine's fault rather than a bad path: exit 1, not 2
-MACHINE_FAULTS = frozenset(getattr(errno, name) for name in (
-    "ENOSPC", "EDQUOT", "EIO", "ENOMEM", "EMFILE", "ENFILE", "EFBIG", "EAGAIN", "EBUSY",
-    "ETXTBSY", "ESTALE", "ENOLCK", "EREMOTEIO", "ENOBUFS", "EINTR") if hasattr(errno, name))
+MACHINE_FAULTS = frozenset(
+    getattr(errno, name)
+    for name in (
+        "ENOSPC",
+        "EDQUOT",
+        "EIO",
+        "ENOMEM",
+        "EMFILE",
+        "ENFILE",
+        "EFBIG",
+        "EAGAIN",
+        "EBUSY",
+        "ETXTBSY",
+        "ESTALE",
+        "ENOLCK",
+        "EREMOTEIO",
+        "ENOBUFS",
+        "EINTR",
+    )
+    if hasattr(errno, name)
+)
 
 
 def one_line(text: str) -> str:
@@ -62,19 +80,22 @@ def handles_input_errors(func: Callable[_P, _R]) -> Callable[_P, _R]:
     OSError into one line naming the path and the errno reason (exit 2 for a bad path, 1 for a
     machine fault such as a full disk). The group (:class:`MstGroup`) does the same for any
     command without this decorator."""
+
     @functools.wraps(func)
     def wrapper(*args, **kwargs):
         from mst_cli.errors import InputError
+
         try:
             return func(*args, **kwargs)
         except InputError as exc:
             fail_input(str(exc))
         except OSError as exc:
             if exc.errno == errno.EPIPE:
-                raise                     # click closes stdout quietly
+                raise  # click closes stdout quietly
             line, code = os_error_line(exc)
             click.echo(line, err=True)
             sys.exit(code)
+
     return wrapper
 
 
@@ -84,26 +105,32 @@ class MstGroup(click.Group):
     and exit 2; an interrupt is one line and exit 128 + signal. ``--help`` and ``--version`` are
     click's own."""
 
-    def main(self, args: Sequence[str] | None = None, prog_name: str | None = None, complete_var: str | None = None,
-             standalone_mode: bool = True, **extra: Any) -> Any:
+    def main(
+        self,
+        args: Sequence[str] | None = None,
+        prog_name: str | None = None,
+        complete_var: str | None = None,
+        standalone_mode: bool = True,
+        **extra: Any,
+    ) -> Any:
         if not standalone_mode:
             return super().main(args, prog_name, complete_var, standalone_mode=False, **extra)
         from mst_cli.errors import InputError
         from mst_cli.io.outputs import Interrupted
+
         try:
             rv = super().main(args, prog_name or "mst", complete_var, standalone_mode=False, **extra)
         except click.exceptions.NoArgsIsHelpError as exc:
-            exc.show()                    # bare 'mst': the help, as click prints it
+            exc.show()  # bare 'mst': the help, as click prints it
             sys.exit(exc.exit_code)
         except click.UsageError as exc:
             where = exc.ctx.command_path if exc.ctx is not None else "mst"
-            click.echo(one_line(f"mst: usage error: {exc.format_message()} "
-                                f"(see '{where} --help')"), err=True)
+            click.echo(one_line(f"mst: usage error: {exc.format_message()} (see '{where} --help')"), err=True)
             sys.exit(exc.exit_code)
         except click.ClickException as exc:
             click.echo(one_line(f"mst: {exc.format_message()}"), err=True)
             sys.exit(exc.exit_code)
-        except click.Abort:               # Ctrl-C (SIGINT) or end of input at a prompt
+        except click.Abort:  # Ctrl-C (SIGINT) or end of input at a prompt
             click.echo("mst: interrupted (SIGINT): nothing half-written was left", err=True)
             sys.exit(130)
         except Interrupted as exc:
@@ -116,8 +143,8 @@ class MstGroup(click.Group):
             click.echo(line, err=True)
             sys.exit(code)
         except ValueError as exc:
-            if "null byte" not in str(exc):   # only os's refusal of a NUL in a path (in-process
-                raise                         # callers; argv cannot hold one)
+            if "null byte" not in str(exc):  # only os's refusal of a NUL in a path (in-process
+                raise  # callers; argv cannot hold one)
             click.echo("mst: invalid path: a path argument holds a NUL byte (EINVAL)", err=True)
             sys.exit(EXIT_INPUT)
         sys.exit(rv if isinstance(rv, int) and not isinstance(rv, bool) else 0)
@@ -126,6 +153,7 @@ class MstGroup(click.Group):
 def seed_type() -> click.IntRange:
     """The click type of every --seed option: the range design.seed has in a spec file."""
     from mst_cli.model.fields import SEED_RANGE
+
     return click.IntRange(*SEED_RANGE)
 
 
@@ -139,14 +167,25 @@ def no_plot_option(picture: str, cost: str, has_json: bool = True) -> Callable[[
     the commit. ``cost`` says what the picture costs (measured: benchmarks/bench_simulate.py).
     With ``has_json``, ``--json`` implies it."""
     implied = " --json implies it." if has_json else ""
-    return click.option("--no-plot", "no_plot", is_flag=True,
-                        help=f"Draw no {picture} and import no matplotlib ({cost}). An old {picture} "
-                             f"in the output folder is removed, never left beside newer results.{implied}")
+    return click.option(
+        "--no-plot",
+        "no_plot",
+        is_flag=True,
+        help=f"Draw no {picture} and import no matplotlib ({cost}). An old {picture} "
+        f"in the output folder is removed, never left beside newer results.{implied}",
+    )
 
 
-def write_simulation(doc: Document, geometry: SensorGeometry, resp: Response, out_dir: Path,
-                     extra_files: dict[str, Any] | None = None, extra_report: dict | None = None,
-                     more: Callable[[Staging], None] | None = None, plot: bool = True) -> dict:
+def write_simulation(
+    doc: Document,
+    geometry: SensorGeometry,
+    resp: Response,
+    out_dir: Path,
+    extra_files: dict[str, Any] | None = None,
+    extra_report: dict | None = None,
+    more: Callable[[Staging], None] | None = None,
+    plot: bool = True,
+) -> dict:
     """report.json, response.csv, response.png (+ extra YAML files, + whatever ``more(staging)``
     writes) into out_dir, atomically; returns the report written (what ``--json`` prints).
     ``plot=False``: no response.png (any old one is removed) and matplotlib is not imported."""
@@ -161,6 +200,7 @@ def write_simulation(doc: Document, geometry: SensorGeometry, resp: Response, ou
         st.write_text("response.csv", response_csv(resp))
         if plot:
             from mst_cli.io.report import plot_response
+
             plot_response(resp, st.path("response.png"), title=doc.name)
         if more is not None:
             more(st)

@@ -16,7 +16,7 @@ import click
 from mst_cli import api
 from mst_cli.cli.common import EXIT_TARGETS, default_out_dir, handles_input_errors
 
-DEFAULT_STL_TOLERANCE_MM = 0.01     # cad.exporting's (not imported here: app.py loads this module cheaply)
+DEFAULT_STL_TOLERANCE_MM = 0.01  # cad.exporting's (not imported here: app.py loads this module cheaply)
 
 
 def _progress(t0: float, message: str) -> None:
@@ -26,17 +26,29 @@ def _progress(t0: float, message: str) -> None:
 @click.command("export")
 @click.argument("path", type=click.Path(dir_okay=False, path_type=Path))
 @click.option("--stl", "want_stl", is_flag=True, help="Write sensor.stl (the one printable TPU body).")
-@click.option("--step", "want_step", is_flag=True,
-              help="Write sensor.step: assembly of the body, the magnet and the board.")
+@click.option(
+    "--step", "want_step", is_flag=True, help="Write sensor.step: assembly of the body, the magnet and the board."
+)
 @click.option("--3mf", "want_3mf", is_flag=True, help="Write sensor.3mf (the body, mm).")
-@click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), default=None,
-              help="Output folder [default: ./mst-out/<name>/].")
-@click.option("--stl-tolerance", "stl_tolerance_mm", type=float, default=DEFAULT_STL_TOLERANCE_MM,
-              show_default=True, help="Largest chord deviation of the mesh from the curved "
-                                      "surfaces (the magnet pocket), mm.")
+@click.option(
+    "--out",
+    "out_dir",
+    type=click.Path(file_okay=False, path_type=Path),
+    default=None,
+    help="Output folder [default: ./mst-out/<name>/].",
+)
+@click.option(
+    "--stl-tolerance",
+    "stl_tolerance_mm",
+    type=float,
+    default=DEFAULT_STL_TOLERANCE_MM,
+    show_default=True,
+    help="Largest chord deviation of the mesh from the curved surfaces (the magnet pocket), mm.",
+)
 @handles_input_errors
-def export(path: Path, want_stl: bool, want_step: bool, want_3mf: bool, out_dir: Path | None,
-           stl_tolerance_mm: float) -> None:
+def export(
+    path: Path, want_stl: bool, want_step: bool, want_3mf: bool, out_dir: Path | None, stl_tolerance_mm: float
+) -> None:
     """Build the printable sensor of the design file PATH and write it.
 
     PATH may also be a spec (targets only): it is designed first, as 'mst design' does, and
@@ -52,41 +64,63 @@ def export(path: Path, want_stl: bool, want_step: bool, want_3mf: bool, out_dir:
     from mst_cli.cad.exporting import check_stl_tolerance, write_export
     from mst_cli.io.outputs import check_out_dir
 
-    check_stl_tolerance(stl_tolerance_mm)          # one bound, shared with mst check
+    check_stl_tolerance(stl_tolerance_mm)  # one bound, shared with mst check
     if not (want_stl or want_step or want_3mf):
         want_stl = want_step = True
     if out_dir is not None:
-        check_out_dir(out_dir)            # a bad output path is refused before any work
+        check_out_dir(out_dir)  # a bad output path is refused before any work
     t0 = time.perf_counter()
     doc, designed = api.designed(path, progress=lambda message: _progress(t0, message))
     geometry = designed.geometry if designed is not None else doc.geometry()
     check_out_dir(out_dir or default_out_dir(doc.name))
     _progress(t0, f"loaded {path} ({len(geometry.layers)} layers)")
     out = out_dir or default_out_dir(doc.name)
-    names = write_export(doc, geometry, out, stl=want_stl, step=want_step, three_mf=want_3mf,
-                         stl_tolerance_mm=stl_tolerance_mm,
-                         design_yaml=designed.design_yaml_dict() if designed is not None else None,
-                         progress=lambda message: _progress(t0, message))
+    names = write_export(
+        doc,
+        geometry,
+        out,
+        stl=want_stl,
+        step=want_step,
+        three_mf=want_3mf,
+        stl_tolerance_mm=stl_tolerance_mm,
+        design_yaml=designed.design_yaml_dict() if designed is not None else None,
+        progress=lambda message: _progress(t0, message),
+    )
     if geometry.magnet_tilt_deg:
-        click.echo(f"note: magnet_tilt_deg = {geometry.magnet_tilt_deg:g} is an assembly error "
-                   "in the forward model; the pocket is built on the axis", err=True)
-    click.echo(f"body volume {geometry.body_volume_mm3:.1f} mm3, sensor height {geometry.total_height_mm:.2f} mm; "
-               f"prints on its side, {geometry.depth_mm:g} mm high in "
-               f"{int(round(geometry.depth_mm / geometry.layer_height_mm))} layers of {geometry.layer_height_mm:g} mm")
-    click.echo(f"pause after layer {geometry.pause_after_layer} (z = {geometry.pause_height_mm:.2f} mm) "
-               "to drop the magnet into its pocket" + (" (the 3MF carries the pause)" if want_3mf else ""))
+        click.echo(
+            f"note: magnet_tilt_deg = {geometry.magnet_tilt_deg:g} is an assembly error "
+            "in the forward model; the pocket is built on the axis",
+            err=True,
+        )
+    click.echo(
+        f"body volume {geometry.body_volume_mm3:.1f} mm3, sensor height {geometry.total_height_mm:.2f} mm; "
+        f"prints on its side, {geometry.depth_mm:g} mm high in "
+        f"{int(round(geometry.depth_mm / geometry.layer_height_mm))} layers of {geometry.layer_height_mm:g} mm"
+    )
+    click.echo(
+        f"pause after layer {geometry.pause_after_layer} (z = {geometry.pause_height_mm:.2f} mm) "
+        "to drop the magnet into its pocket" + (" (the 3MF carries the pause)" if want_3mf else "")
+    )
     click.echo(f"wrote {out}/{', '.join(names)}")
     if designed is not None and designed.exit_code:
-        click.echo(f"mst export: targets not met ({designed.binding}: {designed.reasons[0]}); "
-                   "the body of the nearest design was written", err=True)
+        click.echo(
+            f"mst export: targets not met ({designed.binding}: {designed.reasons[0]}); "
+            "the body of the nearest design was written",
+            err=True,
+        )
         sys.exit(designed.exit_code)
 
 
 @click.command("check")
 @click.argument("path", type=click.Path(path_type=Path))
 @click.option("--json", "as_json", is_flag=True, help="Print the results as JSON instead of the table.")
-@click.option("--nozzle", "nozzle_mm", type=float, default=None,
-              help="Nozzle diameter for the wall checks, mm [default: the design's printer.nozzle_mm].")
+@click.option(
+    "--nozzle",
+    "nozzle_mm",
+    type=float,
+    default=None,
+    help="Nozzle diameter for the wall checks, mm [default: the design's printer.nozzle_mm].",
+)
 @handles_input_errors
 def check(path: Path, as_json: bool, nozzle_mm: float | None) -> None:
     """Check the body that 'mst export' wrote (PATH: its folder, or the STL in it).

@@ -12,20 +12,40 @@ from mst_cli.cli.common import default_out_dir, handles_input_errors, no_plot_op
 
 @click.command()
 @click.argument("design_file", type=click.Path(dir_okay=False, path_type=Path))
-@click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), default=None,
-              help="Output folder [default: ./mst-out/<name>/].")
-@click.option("--field-model", type=click.Choice(["auto", "dipole", "axial", "cylinder"]), default=None,
-              help="Magnet field model [default: the file's model.field, else auto = the cheapest "
-                   "exact one: axial on the axis, cylinder off it].")
-@click.option("--mechanics", type=click.Choice(["spring", "frame", "continuum"]), default=None,
-              help="Layer mechanics model [default: the cheapest whose measured error meets the "
-                   "file's model.accuracy_rel, else the file's model.mechanics, else spring].")
-@click.option("--json", "as_json", is_flag=True,
-              help="Print report.json to stdout instead of the table (implies --no-plot).")
+@click.option(
+    "--out",
+    "out_dir",
+    type=click.Path(file_okay=False, path_type=Path),
+    default=None,
+    help="Output folder [default: ./mst-out/<name>/].",
+)
+@click.option(
+    "--field-model",
+    type=click.Choice(["auto", "dipole", "axial", "cylinder"]),
+    default=None,
+    help="Magnet field model [default: the file's model.field, else auto = the cheapest "
+    "exact one: axial on the axis, cylinder off it].",
+)
+@click.option(
+    "--mechanics",
+    type=click.Choice(["spring", "frame", "continuum"]),
+    default=None,
+    help="Layer mechanics model [default: the cheapest whose measured error meets the "
+    "file's model.accuracy_rel, else the file's model.mechanics, else spring].",
+)
+@click.option(
+    "--json", "as_json", is_flag=True, help="Print report.json to stdout instead of the table (implies --no-plot)."
+)
 @no_plot_option("response.png", "about 2/3 of a run: 0.45 s of matplotlib import and render")
 @handles_input_errors
-def simulate(design_file: Path, out_dir: Path | None, field_model: str | None, mechanics: str | None, as_json: bool,
-             no_plot: bool) -> None:
+def simulate(
+    design_file: Path,
+    out_dir: Path | None,
+    field_model: str | None,
+    mechanics: str | None,
+    as_json: bool,
+    no_plot: bool,
+) -> None:
     """Predict force-displacement and field-force curves of DESIGN_FILE.
 
     Writes report.json (units in keys), response.csv and response.png (not with --no-plot
@@ -40,26 +60,41 @@ def simulate(design_file: Path, out_dir: Path | None, field_model: str | None, m
     from mst_cli.io.schema import load_design_document
     from mst_cli.model.ladder import choose_mechanics
     from mst_cli.model.response import simulate as run
+
     doc, geometry = load_design_document(design_file)
     out = out_dir or default_out_dir(doc.name)
-    check_out_dir(out)                    # a bad output path is refused before any work
+    check_out_dir(out)  # a bad output path is refused before any work
     field_choice = field_model or doc.field_model
     choice = choose_mechanics(mechanics, doc.accuracy_rel, doc.mechanics)
     if choice.message() and not as_json:
         click.echo(choice.message())
     from mst_cli.calibrate.fit import PRINTER_NOMINAL, as_printed
+
     printed = as_printed(doc)
     pr = doc.printer
     deviations = {key: getattr(pr, key) for key in PRINTER_NOMINAL if getattr(pr, key) != PRINTER_NOMINAL[key]}
     if deviations and not as_json:
-        click.echo("as printed: " + ", ".join(f"printer.{k} = {v:g}" for k, v in deviations.items())
-                   + " (the walls drawn are the file's t_mm)")
-    resp = run(printed.geometry(), printed.material, mechanics=choice.mechanics,
-               field_model=None if field_choice == "auto" else field_choice,
-               noise_uT_rms=doc.noise_uT_rms)
+        click.echo(
+            "as printed: "
+            + ", ".join(f"printer.{k} = {v:g}" for k, v in deviations.items())
+            + " (the walls drawn are the file's t_mm)"
+        )
+    resp = run(
+        printed.geometry(),
+        printed.material,
+        mechanics=choice.mechanics,
+        field_model=None if field_choice == "auto" else field_choice,
+        noise_uT_rms=doc.noise_uT_rms,
+    )
     plot = not (no_plot or as_json)
-    report = write_simulation(doc, geometry, resp, out, plot=plot,
-                              extra_report={"as_printed": {f"printer.{k}": getattr(pr, k) for k in PRINTER_NOMINAL}})
+    report = write_simulation(
+        doc,
+        geometry,
+        resp,
+        out,
+        plot=plot,
+        extra_report={"as_printed": {f"printer.{k}": getattr(pr, k) for k in PRINTER_NOMINAL}},
+    )
     if as_json:
         click.echo(json.dumps(report, indent=2, allow_nan=False))
     else:

@@ -21,18 +21,35 @@ DEFAULT_MAX_SPAN_MM = 5.0
 
 @click.command("slice")
 @click.argument("path", type=click.Path(path_type=Path))
-@click.option("--profile", "profile", type=click.Path(path_type=Path), default=None,
-              help="PrusaSlicer config (.ini) [default: the TPU 85A profile shipped with mst, "
-                   "mst_cli/cad/data/tpu85a-0.4mm.ini].")
-@click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), default=None,
-              help="Output folder [default: PATH].")
-@click.option("--max-span", "max_span_mm", type=float, default=DEFAULT_MAX_SPAN_MM, show_default=True,
-              help="Longest free span allowed (extrusion with nothing under it), mm.")
+@click.option(
+    "--profile",
+    "profile",
+    type=click.Path(path_type=Path),
+    default=None,
+    help="PrusaSlicer config (.ini) [default: the TPU 85A profile shipped with mst, "
+    "mst_cli/cad/data/tpu85a-0.4mm.ini].",
+)
+@click.option(
+    "--out",
+    "out_dir",
+    type=click.Path(file_okay=False, path_type=Path),
+    default=None,
+    help="Output folder [default: PATH].",
+)
+@click.option(
+    "--max-span",
+    "max_span_mm",
+    type=float,
+    default=DEFAULT_MAX_SPAN_MM,
+    show_default=True,
+    help="Longest free span allowed (extrusion with nothing under it), mm.",
+)
 @click.option("--json", "as_json", is_flag=True, help="Print slice.json instead of the summary.")
 @no_plot_option("print.png", "about 0.8 s: matplotlib and a 3D view of the part", has_json=True)
 @handles_input_errors
-def slice_(path: Path, profile: Path | None, out_dir: Path | None, max_span_mm: float, as_json: bool,
-           no_plot: bool) -> None:
+def slice_(
+    path: Path, profile: Path | None, out_dir: Path | None, max_span_mm: float, as_json: bool, no_plot: bool
+) -> None:
     """Slice the body 'mst export' wrote (PATH: its folder) with PrusaSlicer and judge it.
 
     Slices sensor.3mf (which carries the magnet pause; sensor.stl if there is no 3MF) with the
@@ -51,11 +68,17 @@ def slice_(path: Path, profile: Path | None, out_dir: Path | None, max_span_mm: 
     def progress(message: str) -> None:
         click.echo(f"[{time.perf_counter() - t0:5.2f} s] {message}", err=True)
 
-    plot = not (no_plot or as_json)       # --json implies --no-plot, as on simulate and design
+    plot = not (no_plot or as_json)  # --json implies --no-plot, as on simulate and design
     try:
-        result = api.slice(path, profile=profile, out=out_dir, max_span_mm=max_span_mm, plot=plot,
-                           progress=progress, note=lambda line: click.echo(one_line(f"mst slice: note: {line}"),
-                                                                           err=True))
+        result = api.slice(
+            path,
+            profile=profile,
+            out=out_dir,
+            max_span_mm=max_span_mm,
+            plot=plot,
+            progress=progress,
+            note=lambda line: click.echo(one_line(f"mst slice: note: {line}"), err=True),
+        )
     except api.SlicerError as exc:
         click.echo(one_line(f"mst slice: {exc}; nothing was written"), err=True)
         sys.exit(EXIT_FAULT)

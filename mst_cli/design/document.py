@@ -41,9 +41,9 @@ from mst_cli.model.response import Response, simulate
 
 ROUND_DECIMALS = 4
 EXIT_MET, EXIT_NOT_MET = 0, 1
-SAME_RUNG_RULE = "the rung that judges the design"   # print error's rung when the caller names none
-WARN_PRINT_DEVIATION_REL = 0.25      # above this worst change a design without a limit says so
-PRINT_DEVIATION_CHECK = "print deviation"    # the check design.max_print_deviation_rel fails
+SAME_RUNG_RULE = "the rung that judges the design"  # print error's rung when the caller names none
+WARN_PRINT_DEVIATION_REL = 0.25  # above this worst change a design without a limit says so
+PRINT_DEVIATION_CHECK = "print deviation"  # the check design.max_print_deviation_rel fails
 
 
 @dataclass
@@ -53,19 +53,19 @@ class DesignResult:
     document: Document
     geometry: geo.SensorGeometry
     response: Response
-    status: str                         # "met" or "not met"
-    binding: str | None                 # what binds when not met
+    status: str  # "met" or "not met"
+    binding: str | None  # what binds when not met
     reasons: list[str]
-    targets: list[dict]                 # per layer: target vs achieved (forward model)
-    checks: dict                        # failed constraint name -> message (empty when all hold)
-    print_error: dict                   # print robustness per layer (forward model)
+    targets: list[dict]  # per layer: target vs achieved (forward model)
+    checks: dict  # failed constraint name -> message (empty when all hold)
+    print_error: dict  # print robustness per layer (forward model)
     seed: int
     evaluations: int
     max_evaluations: int
     solver: dict
     elapsed_s: float = 0.0
     warnings: list[str] = field(default_factory=list)
-    objective: dict = field(default_factory=dict)   # design.objective's weights and terms
+    objective: dict = field(default_factory=dict)  # design.objective's weights and terms
 
     @property
     def exit_code(self) -> int:
@@ -77,27 +77,37 @@ class DesignResult:
 
     def report_extra(self) -> dict:
         """The ``design`` block of report.json (reproducible: no wall-clock numbers)."""
-        return {"design": {
-            "status": self.status, "exit_code": self.exit_code, "binding": self.binding,
-            "reasons": self.reasons, "tolerance_rel": self.document.design["tolerance_rel"],
-            "targets": self.targets, "constraints_failed": self.checks,
-            "print_error_sensitivity": self.print_error,
-            "objective": self.objective,
-            "seed": self.seed, "evaluations": self.evaluations,
-            "max_evaluations": self.max_evaluations, "solver": self.solver,
-        }}
+        return {
+            "design": {
+                "status": self.status,
+                "exit_code": self.exit_code,
+                "binding": self.binding,
+                "reasons": self.reasons,
+                "tolerance_rel": self.document.design["tolerance_rel"],
+                "targets": self.targets,
+                "constraints_failed": self.checks,
+                "print_error_sensitivity": self.print_error,
+                "objective": self.objective,
+                "seed": self.seed,
+                "evaluations": self.evaluations,
+                "max_evaluations": self.max_evaluations,
+                "solver": self.solver,
+            }
+        }
 
     def table(self) -> str:
         """Target against achieved per layer (forward model), as ``mst design`` prints it."""
         tol = self.document.design["tolerance_rel"]
         pe = self.print_error
         shift = f"t+-{pe['print_error_t_mm']:g}mm: dS"
-        lines = [f"{self.document.name}: {len(self.targets)} layers designed, tolerance "
-                 f"{100 * tol:g} %, seed {self.seed}, {self.evaluations} evaluations",
-                 f"{'layer':>5} {'theta':>7} {'t':>6} {'h':>6} | {'S target':>8} {'S got':>8} {'err':>6} | "
-                 f"{'R target':>8} {'R got':>8} {'err':>6} | {shift:>13} {'dR':>6}",
-                 f"{'':>5} {'[deg]':>7} {'[mm]':>6} {'[mm]':>6} | {'[1/N]':>8} {'[1/N]':>8} {'[%]':>6} | "
-                 f"{'[N]':>8} {'[N]':>8} {'[%]':>6} | {'[%]':>13} {'[%]':>6}"]
+        lines = [
+            f"{self.document.name}: {len(self.targets)} layers designed, tolerance "
+            f"{100 * tol:g} %, seed {self.seed}, {self.evaluations} evaluations",
+            f"{'layer':>5} {'theta':>7} {'t':>6} {'h':>6} | {'S target':>8} {'S got':>8} {'err':>6} | "
+            f"{'R target':>8} {'R got':>8} {'err':>6} | {shift:>13} {'dR':>6}",
+            f"{'':>5} {'[deg]':>7} {'[mm]':>6} {'[mm]':>6} | {'[1/N]':>8} {'[1/N]':>8} {'[%]':>6} | "
+            f"{'[N]':>8} {'[N]':>8} {'[%]':>6} | {'[%]':>13} {'[%]':>6}",
+        ]
         for row, pl in zip(self.targets, self.print_error["layers"]):
             ok = "" if row["within_tolerance"] else "  <-- missed"
             lines.append(
@@ -106,29 +116,40 @@ class DesignResult:
                 f"{100 * row['sensitivity_error_rel']:>+6.2f} | "
                 f"{row['target_range_N']:>8.4g} {row['achieved_range_N']:>8.4g} "
                 f"{100 * row['range_error_rel']:>+6.2f} | "
-                f"{100 * pl['dS_rel_worst']:>13.1f} {100 * pl['dR_rel_worst']:>6.1f}{ok}")
+                f"{100 * pl['dS_rel_worst']:>13.1f} {100 * pl['dR_rel_worst']:>6.1f}{ok}"
+            )
         resp, g = self.response, self.geometry
-        lines.append(f"gap {resp.gap0_mm:.2f} -> {resp.gap_min_mm:.2f} mm, B0 {resp.B0_T * 1e3:.3f} mT, "
-                     f"B full load {resp.B_full_T * 1e3:.3f} mT, worst force resolution "
-                     f"{1e3 * max(r.force_resolution_N for r in resp.regimes):.1f} mN")
+        lines.append(
+            f"gap {resp.gap0_mm:.2f} -> {resp.gap_min_mm:.2f} mm, B0 {resp.B0_T * 1e3:.3f} mT, "
+            f"B full load {resp.B_full_T * 1e3:.3f} mT, worst force resolution "
+            f"{1e3 * max(r.force_resolution_N for r in resp.regimes):.1f} mN"
+        )
         lines.append(height_budget_line(g))
         pe = self.print_error
         limit = pe.get("max_print_deviation_rel")
-        lines.append(f"print: walls +-{pe['print_error_t_mm']:g} mm change S_i, R_i by "
-                     f"{100 * pe['worst_change_rel']:.1f} % at worst, {100 * pe['rms_log_change']:.1f} % RMS"
-                     + (f" (limit {100 * limit:g} %)" if limit is not None else ""))
+        lines.append(
+            f"print: walls +-{pe['print_error_t_mm']:g} mm change S_i, R_i by "
+            f"{100 * pe['worst_change_rel']:.1f} % at worst, {100 * pe['rms_log_change']:.1f} % RMS"
+            + (f" (limit {100 * limit:g} %)" if limit is not None else "")
+        )
         pr = self.document.printer
         if (pr.wall_offset_mm, pr.modulus_factor, pr.gap_offset_mm) != (0.0, 1.0, 0.0):
-            lines.append(f"designed as printed: walls print {pr.wall_offset_mm:+.4f} mm off the t above (drawn), "
-                         f"modulus x {pr.modulus_factor:.4f}, gap {pr.gap_offset_mm:+.4f} mm (design.yaml's printer "
-                         "section)")
+            lines.append(
+                f"designed as printed: walls print {pr.wall_offset_mm:+.4f} mm off the t above (drawn), "
+                f"modulus x {pr.modulus_factor:.4f}, gap {pr.gap_offset_mm:+.4f} mm (design.yaml's printer "
+                "section)"
+            )
         pe_mechanics = self.print_error.get("mechanics", resp.mechanics)
         if pe_mechanics != resp.mechanics or self.print_error.get("mechanics_rule") != SAME_RUNG_RULE:
-            lines.append(f"print error (t+-{self.print_error['print_error_t_mm']:g} mm columns) measured with "
-                         f"mechanics={pe_mechanics}: {self.print_error['mechanics_rule']}")
+            lines.append(
+                f"print error (t+-{self.print_error['print_error_t_mm']:g} mm columns) measured with "
+                f"mechanics={pe_mechanics}: {self.print_error['mechanics_rule']}"
+            )
         if self.status == "met":
-            lines.append(f"all {2 * len(self.targets)} targets met within {100 * tol:g} % "
-                         f"(forward model, mechanics={resp.mechanics}, field={resp.field_model})")
+            lines.append(
+                f"all {2 * len(self.targets)} targets met within {100 * tol:g} % "
+                f"(forward model, mechanics={resp.mechanics}, field={resp.field_model})"
+            )
         else:
             lines.append(f"NOT MET -- binding: {self.binding}")
             lines += [f"  - {r}" for r in self.reasons]
@@ -158,9 +179,16 @@ def _layer_outputs(resp: Response, n: int):
     return S, R
 
 
-def design_document(doc: Document, *, seed: int | None = None, progress=None,
-                    max_evaluations: int | None = None, local: str = "slsqp",
-                    solution: list | None = None, name_height: bool = True) -> DesignResult:
+def design_document(
+    doc: Document,
+    *,
+    seed: int | None = None,
+    progress=None,
+    max_evaluations: int | None = None,
+    local: str = "slsqp",
+    solution: list | None = None,
+    name_height: bool = True,
+) -> DesignResult:
     """Design theta, t, h for every layer of the spec ``doc``.
 
     Parameters
@@ -192,10 +220,13 @@ def design_document(doc: Document, *, seed: int | None = None, progress=None,
     t_start = time.perf_counter()
     doc.require_targets()
     if doc.mechanics != "spring":
-        raise InputError("model.mechanics", doc.mechanics,
-                         "design_document optimises with the L0 'spring' model: set model.mechanics: "
-                         "spring, or refine for a dearer rung (mst design --refine frame|continuum, "
-                         "mst_cli.design.refine.refine_document)")
+        raise InputError(
+            "model.mechanics",
+            doc.mechanics,
+            "design_document optimises with the L0 'spring' model: set model.mechanics: "
+            "spring, or refine for a dearer rung (mst design --refine frame|continuum, "
+            "mst_cli.design.refine.refine_document)",
+        )
     problem = DesignProblem(doc)
     explain.check_contradictions(problem)
     seed = int(doc.design["seed"] if seed is None else seed)
@@ -203,8 +234,18 @@ def design_document(doc: Document, *, seed: int | None = None, progress=None,
 
     sol = solve(problem, seed=seed, max_evaluations=max_evaluations, progress=progress, local=local)
     theta, t, h = (np.round(a, ROUND_DECIMALS) for a in problem.to_physical(sol.u))
-    result = verify_design(doc, problem, theta, t, h, sol, seed=seed, max_evaluations=max_evaluations,
-                           mechanics=doc.mechanics, t_start=t_start)
+    result = verify_design(
+        doc,
+        problem,
+        theta,
+        t,
+        h,
+        sol,
+        seed=seed,
+        max_evaluations=max_evaluations,
+        mechanics=doc.mechanics,
+        t_start=t_start,
+    )
     if name_height and result.status != "met" and problem.max_print_deviation_rel is not None:
         _name_lowest_height(doc, result, seed=seed, max_evaluations=max_evaluations, local=local)
     if solution is not None:
@@ -233,30 +274,49 @@ def _name_lowest_height(doc: Document, result: DesignResult, **run) -> None:
         return design_document(replace(doc, design={**doc.design, **design}), name_height=False, **run)
 
     if variant(max_print_deviation_rel=None).status != "met":
-        return                                        # something else binds as well
+        return  # something else binds as well
     lowest = variant(max_height_mm=None, objective=HEIGHT_ONLY)
     tol_mm = doc.printer.wall_tolerance_mm
     if lowest.status == "met":
         height = lowest.geometry.total_height_mm
-        reason = (f"design.max_print_deviation_rel = {100 * limit:g} % (walls ± {tol_mm:g} mm) is met from a total "
-                  f"height of {height:.2f} mm (the lowest design found with it"
-                  + (f"; design.max_height_mm is {doc.design['max_height_mm']:g} mm" if doc.design.get("max_height_mm")
-                     is not None else "") + f"): allow {height:.2f} mm or more, or relax the limit")
+        reason = (
+            f"design.max_print_deviation_rel = {100 * limit:g} % (walls ± {tol_mm:g} mm) is met from a total "
+            f"height of {height:.2f} mm (the lowest design found with it"
+            + (
+                f"; design.max_height_mm is {doc.design['max_height_mm']:g} mm"
+                if doc.design.get("max_height_mm") is not None
+                else ""
+            )
+            + f"): allow {height:.2f} mm or more, or relax the limit"
+        )
     else:
         best = variant(max_print_deviation_rel=None, max_height_mm=None, objective=ROBUSTNESS_ONLY)
-        reason = (f"no height meets design.max_print_deviation_rel = {100 * limit:g} % (walls ± {tol_mm:g} mm) "
-                  f"inside the design bounds: the least print-sensitive design found ("
-                  f"{best.geometry.total_height_mm:.2f} mm) still changes some S_i or R_i by "
-                  f"{100 * best.print_error['worst_change_rel']:.1f} %; relax the limit, or calibrate the printer "
-                  "(--calibration) so that a smaller printer.wall_tolerance_mm holds")
+        reason = (
+            f"no height meets design.max_print_deviation_rel = {100 * limit:g} % (walls ± {tol_mm:g} mm) "
+            f"inside the design bounds: the least print-sensitive design found ("
+            f"{best.geometry.total_height_mm:.2f} mm) still changes some S_i or R_i by "
+            f"{100 * best.print_error['worst_change_rel']:.1f} %; relax the limit, or calibrate the printer "
+            "(--calibration) so that a smaller printer.wall_tolerance_mm holds"
+        )
     result.binding = "design.max_print_deviation_rel"
     result.reasons.insert(0, reason)
 
 
-def verify_design(doc: Document, problem: DesignProblem, theta, t, h, sol, *, seed: int,
-                  max_evaluations: int, mechanics: str, t_start: float | None = None,
-                  print_error_mechanics: str | None = None,
-                  print_error_rule: str | None = None) -> DesignResult:
+def verify_design(
+    doc: Document,
+    problem: DesignProblem,
+    theta,
+    t,
+    h,
+    sol,
+    *,
+    seed: int,
+    max_evaluations: int,
+    mechanics: str,
+    t_start: float | None = None,
+    print_error_mechanics: str | None = None,
+    print_error_rule: str | None = None,
+) -> DesignResult:
     """Write (theta, t, h) into the spec ``doc`` and judge it with ``mechanics``'s forward model.
 
     Every achieved number and constraint check comes from
@@ -271,16 +331,19 @@ def verify_design(doc: Document, problem: DesignProblem, theta, t, h, sol, *, se
     t_start = time.perf_counter() if t_start is None else t_start
     theta, t, h = (np.asarray(a, dtype=float) for a in (theta, t, h))
     u_written = problem.to_unit(theta, t, h)
-    layers = [LayerEntry(float(a), float(b), float(c), la.target_sensitivity_per_N, la.target_range_N,
-                         la.weight) for a, b, c, la in zip(theta, t, h, doc.layers)]
+    layers = [
+        LayerEntry(float(a), float(b), float(c), la.target_sensitivity_per_N, la.target_range_N, la.weight)
+        for a, b, c, la in zip(theta, t, h, doc.layers)
+    ]
     designed = doc.with_layers(layers)
-    geometry = designed.geometry()                       # as drawn: what export draws
+    geometry = designed.geometry()  # as drawn: what export draws
     field_model = None if doc.field_model == "auto" else doc.field_model
 
     def simulate_printed(extra_wall_mm: float, rung: str) -> Response:
-        printed = as_printed(designed, extra_wall_mm)    # as the printer makes it
-        return simulate(printed.geometry(), printed.material, mechanics=rung, field_model=field_model,
-                        noise_uT_rms=doc.noise_uT_rms)
+        printed = as_printed(designed, extra_wall_mm)  # as the printer makes it
+        return simulate(
+            printed.geometry(), printed.material, mechanics=rung, field_model=field_model, noise_uT_rms=doc.noise_uT_rms
+        )
 
     resp = simulate_printed(0.0, mechanics)
 
@@ -291,14 +354,21 @@ def verify_design(doc: Document, problem: DesignProblem, theta, t, h, sol, *, se
     for i in range(n):
         eS = S[i] / problem.S_target[i] - 1.0
         eR = R[i] / problem.R_target[i] - 1.0
-        targets.append({
-            "layer": i + 1, "theta_deg": float(theta[i]), "t_mm": float(t[i]), "h_mm": float(h[i]),
-            "target_sensitivity_per_N": float(problem.S_target[i]), "achieved_sensitivity_per_N": float(S[i]),
-            "sensitivity_error_rel": float(eS),
-            "target_range_N": float(problem.R_target[i]), "achieved_range_N": float(R[i]),
-            "range_error_rel": float(eR),
-            "within_tolerance": bool(abs(eS) <= tol and abs(eR) <= tol),
-        })
+        targets.append(
+            {
+                "layer": i + 1,
+                "theta_deg": float(theta[i]),
+                "t_mm": float(t[i]),
+                "h_mm": float(h[i]),
+                "target_sensitivity_per_N": float(problem.S_target[i]),
+                "achieved_sensitivity_per_N": float(S[i]),
+                "sensitivity_error_rel": float(eS),
+                "target_range_N": float(problem.R_target[i]),
+                "achieved_range_N": float(R[i]),
+                "range_error_rel": float(eR),
+                "within_tolerance": bool(abs(eS) <= tol and abs(eR) <= tol),
+            }
+        )
     checks = {}
     for i, v in geometry.violations(doc.printer):
         checks[f"layer {i + 1} {v.rule}"] = f"layer {i + 1}: {v.message}"
@@ -306,13 +376,18 @@ def verify_design(doc: Document, problem: DesignProblem, theta, t, h, sol, *, se
         if R[i] < (1 + problem.lock_margin_rel) * R[i - 1]:
             checks[f"lock order {i}-{i + 1}"] = (
                 f"layer {i + 1} locks at {R[i]:.4g} N, less than {1 + problem.lock_margin_rel:g} x "
-                f"layer {i}'s {R[i - 1]:.4g} N (design.lock_margin_rel)")
+                f"layer {i}'s {R[i - 1]:.4g} N (design.lock_margin_rel)"
+            )
     if resp.saturated or resp.B_full_T > problem.B_limit_T:
-        checks["chip saturation"] = (f"field at full load {resp.B_full_T * 1e3:.2f} mT exceeds the "
-                                     f"limit {problem.B_limit_T * 1e3:.2f} mT (design.saturation_margin_rel)")
+        checks["chip saturation"] = (
+            f"field at full load {resp.B_full_T * 1e3:.2f} mT exceeds the "
+            f"limit {problem.B_limit_T * 1e3:.2f} mT (design.saturation_margin_rel)"
+        )
     if problem.max_height_mm is not None and geometry.total_height_mm > problem.max_height_mm:
-        checks["total height"] = (f"total height {geometry.total_height_mm:.2f} mm exceeds "
-                                  f"design.max_height_mm = {problem.max_height_mm:g} mm")
+        checks["total height"] = (
+            f"total height {geometry.total_height_mm:.2f} mm exceeds "
+            f"design.max_height_mm = {problem.max_height_mm:g} mm"
+        )
     # -- print-error sensitivity, re-measured with a forward model (one rung for all three runs:
     # a ratio of two rungs would mix the model gap into the print sensitivity)
     pe_mechanics = mechanics if print_error_mechanics is None else print_error_mechanics
@@ -340,9 +415,9 @@ def verify_design(doc: Document, problem: DesignProblem, theta, t, h, sol, *, se
     print_error = {
         "print_error_t_mm": tol_mm,
         "meaning": "relative change of S_i and R_i when every wall is printed printer.wall_tolerance_mm "
-                   "thicker (plus) or thinner (minus) than expected; its RMS is the print_robustness term of "
-                   "design.objective's preference, worst_change_rel the largest |change| of any S_i or R_i "
-                   "(design.max_print_deviation_rel limits it)",
+        "thicker (plus) or thinner (minus) than expected; its RMS is the print_robustness term of "
+        "design.objective's preference, worst_change_rel the largest |change| of any S_i or R_i "
+        "(design.max_print_deviation_rel limits it)",
         "rms_log_change": float(np.sqrt(np.mean(np.square(logs)))),
         "worst_change_rel": float(worst),
         "max_print_deviation_rel": problem.max_print_deviation_rel,
@@ -354,41 +429,60 @@ def verify_design(doc: Document, problem: DesignProblem, theta, t, h, sol, *, se
     if limit is not None and worst > limit:
         checks[PRINT_DEVIATION_CHECK] = (
             f"a wall {tol_mm:g} mm off changes some S_i or R_i by {100 * worst:.1f} %, more than "
-            f"design.max_print_deviation_rel = {100 * limit:g} %")
+            f"design.max_print_deviation_rel = {100 * limit:g} %"
+        )
     met = all(row["within_tolerance"] for row in targets) and not checks
     binding, reasons = (None, []) if met else explain.diagnose(problem, u_written, S, R, checks)
     if not met and not sol.matched and sol.evaluations >= max_evaluations:
-        reasons.append(f"the evaluation budget ({max_evaluations}) was spent before the targets were "
-                       "met: raise design.max_evaluations (or --max-evaluations) to search further")
+        reasons.append(
+            f"the evaluation budget ({max_evaluations}) was spent before the targets were "
+            "met: raise design.max_evaluations (or --max-evaluations) to search further"
+        )
     warnings = list(resp.warnings)
     if limit is None and worst > WARN_PRINT_DEVIATION_REL:
         warnings.append(
             f"a wall {tol_mm:g} mm off its expected thickness changes some S_i or R_i by up to "
             f"{100 * worst:.0f} %: calibrate a first print and design again with --calibration "
             "(README: From a first print to a second), or trade height for robustness (mst design --pareto 12, "
-            "design.max_print_deviation_rel)")
+            "design.max_print_deviation_rel)"
+        )
     weights = doc.design.get("objective") or {}
     objective = {
         "weights": dict(weights),
         "meaning": "among the designs that meet every target, the one with the lowest weighted sum of "
-                   "ln(total_height_mm), ln(worst_force_resolution_N) and print_robustness_rms",
+        "ln(total_height_mm), ln(worst_force_resolution_N) and print_robustness_rms",
         "total_height_mm": geometry.total_height_mm,
         "worst_force_resolution_N": max(r.force_resolution_N for r in resp.regimes),
         "print_robustness_rms": print_error["rms_log_change"],
     }
     solver_info = {
         "method": "layer-by-layer start + Gauss-Newton match, nlopt "
-                  f"{'LD' if sol.local == 'slsqp' else 'LN'}_{sol.local.upper()} preference polish and "
-                  "re-match (seeded multi-start if the start fails)",
-        "matched": sol.matched, "starts_used": sol.starts_used,
-        "preference_before": sol.preference_before, "preference_after": sol.preference_after,
+        f"{'LD' if sol.local == 'slsqp' else 'LN'}_{sol.local.upper()} preference polish and "
+        "re-match (seeded multi-start if the start fails)",
+        "matched": sol.matched,
+        "starts_used": sol.starts_used,
+        "preference_before": sol.preference_before,
+        "preference_after": sol.preference_after,
         "runs_ended": sol.stops,
     }
     return DesignResult(
-        document=designed, geometry=geometry, response=resp, status="met" if met else "not met",
-        binding=binding, reasons=reasons, targets=targets, checks=checks, print_error=print_error,
-        seed=seed, evaluations=sol.evaluations, max_evaluations=max_evaluations, solver=solver_info,
-        elapsed_s=time.perf_counter() - t_start, warnings=warnings, objective=objective)
+        document=designed,
+        geometry=geometry,
+        response=resp,
+        status="met" if met else "not met",
+        binding=binding,
+        reasons=reasons,
+        targets=targets,
+        checks=checks,
+        print_error=print_error,
+        seed=seed,
+        evaluations=sol.evaluations,
+        max_evaluations=max_evaluations,
+        solver=solver_info,
+        elapsed_s=time.perf_counter() - t_start,
+        warnings=warnings,
+        objective=objective,
+    )
 
 
 __all__ = ["DesignResult", "design_document", "design_dict", "verify_design", "DesignProblem"]

@@ -28,8 +28,8 @@ from mst_cli.errors import InputError
 from mst_cli.model import geometry as geo
 from mst_cli.model.mechanics.spring import contact_stiffness_N_per_mm
 
-GRID_POINTS = 41          # per variable, for the printable lock-force range
-ACTIVE_TOL = 0.02         # a scaled constraint within this of zero counts as binding
+GRID_POINTS = 41  # per variable, for the printable lock-force range
+ACTIVE_TOL = 0.02  # a scaled constraint within this of zero counts as binding
 
 
 def check_contradictions(problem: DesignProblem) -> None:
@@ -37,50 +37,63 @@ def check_contradictions(problem: DesignProblem) -> None:
     R, tol, m = problem.R_target, problem.tolerance_rel, problem.lock_margin_rel
     for i in range(1, problem.n):
         if R[i] <= R[i - 1]:
-            raise InputError(f"layers[{i}].target_range_N", float(R[i]),
-                             f"must be greater than layers[{i - 1}].target_range_N = {R[i - 1]:g} N: "
-                             "regime i ends where layer i locks, so the ranges are cumulative force "
-                             "thresholds that increase from the bottom layer to the top one")
+            raise InputError(
+                f"layers[{i}].target_range_N",
+                float(R[i]),
+                f"must be greater than layers[{i - 1}].target_range_N = {R[i - 1]:g} N: "
+                "regime i ends where layer i locks, so the ranges are cumulative force "
+                "thresholds that increase from the bottom layer to the top one",
+            )
         # the largest ratio the tolerance allows must still reach the lock margin
         if R[i] * (1 + tol) < (1 + m) * R[i - 1] * (1 - tol):
             need = (1 + m) * R[i - 1] * (1 - tol) / (1 + tol)
-            raise InputError(f"layers[{i}].target_range_N", float(R[i]),
-                             f"must be >= {need:.4g} N: layers lock in order with design.lock_margin_rel "
-                             f"= {m:g} (R_{i + 1} >= {1 + m:g} R_{i}) within the tolerance "
-                             f"{tol:g}; spread the ranges or lower design.lock_margin_rel")
+            raise InputError(
+                f"layers[{i}].target_range_N",
+                float(R[i]),
+                f"must be >= {need:.4g} N: layers lock in order with design.lock_margin_rel "
+                f"= {m:g} (R_{i + 1} >= {1 + m:g} R_{i}) within the tolerance "
+                f"{tol:g}; spread the ranges or lower design.lock_margin_rel",
+            )
     pr, fam = problem.printer, problem.family
     t_lo, t_hi = problem.lo[1], problem.hi[1]
     h_lo, h_hi = problem.lo[2], problem.hi[2]
     if t_hi < pr.min_wall_mm:
-        raise InputError("design.t_mm_bounds", [float(t_lo), float(t_hi)],
-                         f"the upper bound must reach the printable minimum wall "
-                         f"printer.min_wall_mm = {pr.min_wall_mm:g} mm")
+        raise InputError(
+            "design.t_mm_bounds",
+            [float(t_lo), float(t_hi)],
+            f"the upper bound must reach the printable minimum wall printer.min_wall_mm = {pr.min_wall_mm:g} mm",
+        )
     t_min = max(t_lo, pr.min_wall_mm)
     need_h = 2 * t_min + max(pr.min_gap_mm, fam.contact_allowance_mm)
     if h_hi < need_h:
-        raise InputError("design.h_mm_bounds", [float(h_lo), float(h_hi)],
-                         f"the upper bound must be >= {need_h:g} mm: two walls of at least "
-                         f"{t_min:g} mm plus a printable cavity of {pr.min_gap_mm:g} mm")
+        raise InputError(
+            "design.h_mm_bounds",
+            [float(h_lo), float(h_hi)],
+            f"the upper bound must be >= {need_h:g} mm: two walls of at least "
+            f"{t_min:g} mm plus a printable cavity of {pr.min_gap_mm:g} mm",
+        )
     if problem.max_height_mm is not None:
         lowest = problem.height_offset_mm + problem.n * max(h_lo, need_h)
         if problem.max_height_mm < lowest:
-            raise InputError("design.max_height_mm", problem.max_height_mm,
-                             f"must be >= {lowest:.4g} mm: the housing plus {problem.n} layers of "
-                             f"the smallest printable height")
+            raise InputError(
+                "design.max_height_mm",
+                problem.max_height_mm,
+                f"must be >= {lowest:.4g} mm: the housing plus {problem.n} layers of the smallest printable height",
+            )
 
 
 @dataclass(frozen=True)
 class Limits:
     """What this magnet, material and printer can give at all (used to explain failures)."""
 
-    field_change_needed: float        # sum S*_i (R*_i - R*_(i-1)), the spec's B_full/B0 - 1
-    field_change_needed_min: float    # the same with every target at the tolerance's edge
-    field_change_max: float           # upper bound over every geometry in the bounds
-    gap_min_mm: float                 # smallest magnet-chip gap any design can reach (bound)
-    gap0_max_mm: float                # largest unloaded gap within the bounds
-    R_min_N: float                    # lock-force range of printable single layers (grid)
+    field_change_needed: float  # sum S*_i (R*_i - R*_(i-1)), the spec's B_full/B0 - 1
+    field_change_needed_min: float  # the same with every target at the tolerance's edge
+    field_change_max: float  # upper bound over every geometry in the bounds
+    gap_min_mm: float  # smallest magnet-chip gap any design can reach (bound)
+    gap0_max_mm: float  # largest unloaded gap within the bounds
+    R_min_N: float  # lock-force range of printable single layers (grid)
     R_max_N: float
-    R_min_at: tuple                   # (theta_deg, t_mm, h_mm) of those extremes
+    R_min_at: tuple  # (theta_deg, t_mm, h_mm) of those extremes
     R_max_at: tuple
 
 
@@ -107,23 +120,22 @@ def limits(problem: DesignProblem) -> Limits:
     h_sum_max = n * problem.hi[2]
     if problem.max_height_mm is not None:
         h_sum_max = min(h_sum_max, problem.max_height_mm - problem.height_offset_mm)
-    gap0_max = float(problem.gap0_mm(h_sum_max))                 # as built (printer.gap_offset_mm)
+    gap0_max = float(problem.gap0_mm(h_sum_max))  # as built (printer.gap_offset_mm)
     theta_lo = math.radians(problem.lo[0])
     # locked stiffness = walls + contact column >= the contact column alone
-    k_locked_min = float(contact_stiffness_N_per_mm(theta_lo, problem.hi[1], fam.width_mm,
-                                                   fam.depth_mm, problem.E_MPa))
+    k_locked_min = float(contact_stiffness_N_per_mm(theta_lo, problem.hi[1], fam.width_mm, fam.depth_mm, problem.E_MPa))
     locked_give = n * R[-1] * (1 + tol) / k_locked_min
     t_printed = t_min + problem.wall_offset_mm
-    gap_min = float(problem.gap0_mm(0.0) + n * (2 * t_printed + fam.contact_allowance_mm)
-                    - locked_give)
+    gap_min = float(problem.gap0_mm(0.0) + n * (2 * t_printed + fam.contact_allowance_mm) - locked_give)
     gaps = np.linspace(max(gap_min, 1e-3), max(gap0_max, gap_min + 1e-3), 400)
     B = problem.field_T(gaps)
     field_max = float(min(B.max(), problem.B_limit_T) / B.min() - 1.0)
 
     axes = [np.linspace(problem.lo[j], problem.hi[j], GRID_POINTS) for j in range(3)]
     th, t, h = (a.ravel() for a in np.meshgrid(*axes, indexing="ij"))
-    margins = geo.cell_margins_mm(np.radians(th), t, h, fam.width_mm, fam.contact_allowance_mm,
-                                  pr.min_wall_mm, pr.min_gap_mm, pr.nozzle_mm)
+    margins = geo.cell_margins_mm(
+        np.radians(th), t, h, fam.width_mm, fam.contact_allowance_mm, pr.min_wall_mm, pr.min_gap_mm, pr.nozzle_mm
+    )
     ok = np.all(margins >= 0.0, axis=-1)
     Rl = problem.responses(th[ok, None], t[ok, None], h[ok, None])[0] if ok.any() else None
     if Rl is None:
@@ -131,8 +143,17 @@ def limits(problem: DesignProblem) -> Limits:
     Rl = Rl[:, 0]
     i_lo, i_hi = int(np.argmin(Rl)), int(np.argmax(Rl))
     cells = np.stack([th[ok], t[ok], h[ok]], axis=-1)
-    return Limits(needed, needed_min, field_max, gap_min, gap0_max, float(Rl[i_lo]), float(Rl[i_hi]),
-                  tuple(float(x) for x in cells[i_lo]), tuple(float(x) for x in cells[i_hi]))
+    return Limits(
+        needed,
+        needed_min,
+        field_max,
+        gap_min,
+        gap0_max,
+        float(Rl[i_lo]),
+        float(Rl[i_hi]),
+        tuple(float(x) for x in cells[i_lo]),
+        tuple(float(x) for x in cells[i_hi]),
+    )
 
 
 def diagnose(problem: DesignProblem, u, achieved_S, achieved_R, checks: dict) -> tuple[str, list[str]]:
@@ -145,35 +166,59 @@ def diagnose(problem: DesignProblem, u, achieved_S, achieved_R, checks: dict) ->
     reasons: list[tuple[str, str]] = []
     n, tol = problem.n, problem.tolerance_rel
     if lim.field_change_needed_min > lim.field_change_max:
-        reasons.append(("total field change", (
-            f"the targets need a total field change dB/B0 = sum S_i (R_i - R_(i-1)) = "
-            f"{lim.field_change_needed:.3g} (>= {lim.field_change_needed_min:.3g} at the tolerance's "
-            f"edge), but this magnet gives at most {lim.field_change_max:.3g} between the largest "
-            f"unloaded gap {lim.gap0_max_mm:.2f} mm and the smallest gap any stack can close to "
-            f"({max(lim.gap_min_mm, 0):.2f} mm, field capped at {problem.B_limit_T * 1e3:.1f} mT): "
-            "lower the sensitivities or ranges, or use a stronger/larger magnet")))
+        reasons.append(
+            (
+                "total field change",
+                (
+                    f"the targets need a total field change dB/B0 = sum S_i (R_i - R_(i-1)) = "
+                    f"{lim.field_change_needed:.3g} (>= {lim.field_change_needed_min:.3g} at the tolerance's "
+                    f"edge), but this magnet gives at most {lim.field_change_max:.3g} between the largest "
+                    f"unloaded gap {lim.gap0_max_mm:.2f} mm and the smallest gap any stack can close to "
+                    f"({max(lim.gap_min_mm, 0):.2f} mm, field capped at {problem.B_limit_T * 1e3:.1f} mT): "
+                    "lower the sensitivities or ranges, or use a stronger/larger magnet"
+                ),
+            )
+        )
     if math.isfinite(lim.R_min_N) and problem.R_target[0] * (1 + tol) < lim.R_min_N:
         th, t, h = lim.R_min_at
-        reasons.append(("R_1 too small", (
-            f"force too small for any printable wall: target R_1 = {problem.R_target[0]:g} N, but "
-            f"the softest printable layer within the bounds locks at about {lim.R_min_N:.3g} N "
-            f"(theta {th:.1f} deg, t {t:.2f} mm, h {h:.2f} mm); widen the bounds, use a softer "
-            "material or fewer struts")))
+        reasons.append(
+            (
+                "R_1 too small",
+                (
+                    f"force too small for any printable wall: target R_1 = {problem.R_target[0]:g} N, but "
+                    f"the softest printable layer within the bounds locks at about {lim.R_min_N:.3g} N "
+                    f"(theta {th:.1f} deg, t {t:.2f} mm, h {h:.2f} mm); widen the bounds, use a softer "
+                    "material or fewer struts"
+                ),
+            )
+        )
     if math.isfinite(lim.R_max_N) and problem.R_target[-1] * (1 - tol) > lim.R_max_N:
         th, t, h = lim.R_max_at
-        reasons.append((f"R_{n} too large", (
-            f"force too large for any printable layer: target R_{n} = {problem.R_target[-1]:g} N, "
-            f"but the stiffest printable layer within the bounds locks at about {lim.R_max_N:.3g} N "
-            f"(theta {th:.1f} deg, t {t:.2f} mm, h {h:.2f} mm); widen the bounds, use a stiffer "
-            "material or more struts")))
+        reasons.append(
+            (
+                f"R_{n} too large",
+                (
+                    f"force too large for any printable layer: target R_{n} = {problem.R_target[-1]:g} N, "
+                    f"but the stiffest printable layer within the bounds locks at about {lim.R_max_N:.3g} N "
+                    f"(theta {th:.1f} deg, t {t:.2f} mm, h {h:.2f} mm); widen the bounds, use a stiffer "
+                    "material or more struts"
+                ),
+            )
+        )
     for i in range(1, n):
         if problem.S_target[i] >= problem.S_target[i - 1]:
-            reasons.append((f"S_{i + 1} rises with force", (
-                f"sensitivity rises with force: target S_{i + 1} = {problem.S_target[i]:g} >= "
-                f"S_{i} = {problem.S_target[i - 1]:g} 1/N. Each lock takes a compliant layer out "
-                "of the stack, so S falls from regime to regime unless the field gradient grows "
-                f"faster than the stack stiffens; here the closest design reaches S_{i + 1} = "
-                f"{achieved_S[i]:.4g} 1/N")))
+            reasons.append(
+                (
+                    f"S_{i + 1} rises with force",
+                    (
+                        f"sensitivity rises with force: target S_{i + 1} = {problem.S_target[i]:g} >= "
+                        f"S_{i} = {problem.S_target[i - 1]:g} 1/N. Each lock takes a compliant layer out "
+                        "of the stack, so S falls from regime to regime unless the field gradient grows "
+                        f"faster than the stack stiffens; here the closest design reaches S_{i + 1} = "
+                        f"{achieved_S[i]:.4g} 1/N"
+                    ),
+                )
+            )
 
     # the output that misses most, and what holds the nearest design back
     targets = np.concatenate([problem.S_target, problem.R_target])
@@ -183,15 +228,17 @@ def diagnose(problem: DesignProblem, u, achieved_S, achieved_R, checks: dict) ->
     j = int(np.argmax(np.abs(err)))
     unit = "1/N" if j < n else "N"
     active = active_constraints(problem, u)
-    miss = (f"target {names[j]} = {targets[j]:g} {unit} not met: the nearest design reaches "
-            f"{achieved[j]:.4g} {unit} ({100 * err[j]:+.1f} %, tolerance {100 * tol:g} %)")
+    miss = (
+        f"target {names[j]} = {targets[j]:g} {unit} not met: the nearest design reaches "
+        f"{achieved[j]:.4g} {unit} ({100 * err[j]:+.1f} %, tolerance {100 * tol:g} %)"
+    )
     if active:
         miss += "; held back by: " + ", ".join(active)
     if abs(err[j]) > tol:
         reasons.append((names[j], miss))
     for name, message in checks.items():
         reasons.append((name, message))
-    if not reasons:          # nothing failed: the caller should not have asked
+    if not reasons:  # nothing failed: the caller should not have asked
         return "", []
     return reasons[0][0], [r for _, r in reasons]
 

@@ -35,9 +35,9 @@ if TYPE_CHECKING:
 # Two designs are the same point of the front when they differ by less than one print layer
 # in height, 2 % in force resolution and 1 percentage point in print robustness: differences a
 # user cannot act on (a weight lattice crowds its points where the trade is flat).
-SAME_POINT = np.array([0.2, 0.02, 0.01])        # mm, relative, absolute
-MAX_WEIGHTINGS_PER_POINT = 4        # weightings tried per requested point before giving up
-WAVE_PER_POINT = MAX_WEIGHTINGS_PER_POINT   # weightings polished together (one batched wave)
+SAME_POINT = np.array([0.2, 0.02, 0.01])  # mm, relative, absolute
+MAX_WEIGHTINGS_PER_POINT = 4  # weightings tried per requested point before giving up
+WAVE_PER_POINT = MAX_WEIGHTINGS_PER_POINT  # weightings polished together (one batched wave)
 
 
 @dataclass
@@ -45,7 +45,7 @@ class ParetoDesign:
     """One design of the front, judged by the forward model."""
 
     result: DesignResult
-    weights: tuple[float, float, float] | None   # None for the chosen design (design.objective)
+    weights: tuple[float, float, float] | None  # None for the chosen design (design.objective)
     chosen: bool = False
 
     @property
@@ -74,7 +74,7 @@ def non_dominated(metrics: np.ndarray) -> np.ndarray:
     """Boolean mask of the rows of ``metrics`` (k, m), all minimised, that no other row
     dominates (<= in every column and < in one)."""
     m = np.asarray(metrics, dtype=float)
-    le = np.all(m[:, None, :] <= m[None, :, :], axis=-1)     # le[j, i]: j <= i everywhere
+    le = np.all(m[:, None, :] <= m[None, :, :], axis=-1)  # le[j, i]: j <= i everywhere
     lt = np.any(m[:, None, :] < m[None, :, :], axis=-1)
     dominated = np.any(le & lt, axis=0)
     return ~dominated
@@ -104,12 +104,18 @@ def _spread(front: list[ParetoDesign], count: int) -> list[ParetoDesign]:
 
 
 def _waves(weights: np.ndarray, size: int) -> list[np.ndarray]:
-    return [weights[i:i + size] for i in range(0, len(weights), size)]
+    return [weights[i : i + size] for i in range(0, len(weights), size)]
 
 
-def pareto_front(doc: Document, count: int, *, seed: int | None = None,
-                 progress: Callable[[int, int, str, float], None] | None = None,
-                 max_evaluations: int | None = None, local: str = "slsqp") -> tuple[DesignResult, list[ParetoDesign]]:
+def pareto_front(
+    doc: Document,
+    count: int,
+    *,
+    seed: int | None = None,
+    progress: Callable[[int, int, str, float], None] | None = None,
+    max_evaluations: int | None = None,
+    local: str = "slsqp",
+) -> tuple[DesignResult, list[ParetoDesign]]:
     """(chosen DesignResult, front): up to ``count`` non-dominated designs meeting the targets.
 
     The chosen design is the one ``mst design`` writes (design.objective's weights); it is on
@@ -126,8 +132,9 @@ def pareto_front(doc: Document, count: int, *, seed: int | None = None,
     from mst_cli.design.solver import pareto_weights, prefer_many
 
     solution: list = []
-    chosen = design_document(doc, seed=seed, progress=progress, max_evaluations=max_evaluations,
-                             local=local, solution=solution)
+    chosen = design_document(
+        doc, seed=seed, progress=progress, max_evaluations=max_evaluations, local=local, solution=solution
+    )
     if chosen.status != "met":
         return chosen, []
     points = [ParetoDesign(chosen, None, chosen=True)]
@@ -144,19 +151,26 @@ def pareto_front(doc: Document, count: int, *, seed: int | None = None,
         mask = non_dominated(np.array([p.metrics for p in pts]))
         return [p for p, keep in zip(pts, mask) if keep or p.chosen]
 
-    judged: set[bytes] = set()        # designs (as written) already judged: the same verdict again
+    judged: set[bytes] = set()  # designs (as written) already judged: the same verdict again
     for wave in _waves(pareto_weights(MAX_WEIGHTINGS_PER_POINT * count), WAVE_PER_POINT * count):
-        polished = prefer_many(problem, [sol.u_matched] * len(wave), list(wave), max_evaluations=max_evaluations,
-                               local=local, stops=front_sol.stops)
+        polished = prefer_many(
+            problem,
+            [sol.u_matched] * len(wave),
+            list(wave),
+            max_evaluations=max_evaluations,
+            local=local,
+            stops=front_sol.stops,
+        )
         for w, (u, used) in zip(wave, polished):
             front_sol.evaluations += used
             theta, t, h = (np.round(a, ROUND_DECIMALS) for a in problem.to_physical(u))
             key = np.concatenate([theta, t, h]).tobytes()
-            if key in judged:     # many weightings polish to one design: met or not, it is a repeat
+            if key in judged:  # many weightings polish to one design: met or not, it is a repeat
                 continue
             judged.add(key)
-            res = verify_design(doc, problem, theta, t, h, front_sol, seed=seed, max_evaluations=max_evaluations,
-                                mechanics="spring")
+            res = verify_design(
+                doc, problem, theta, t, h, front_sol, seed=seed, max_evaluations=max_evaluations, mechanics="spring"
+            )
             if res.status != "met":
                 continue
             cand = ParetoDesign(res, tuple(float(x) for x in w))
@@ -175,18 +189,38 @@ CSV_LAYER_COLUMNS = ("theta_deg", "t_mm", "h_mm")
 def pareto_rows(front: list[ParetoDesign]) -> tuple[list[str], list[list]]:
     """(header, rows) of pareto.csv: one design per row, units in the header."""
     n = len(front[0].result.targets)
-    header = (["design", "chosen", "total_height_mm", "worst_force_resolution_mN",
-               "print_robustness_rms_pct", "print_worst_change_pct", "gap0_mm", "B0_mT"]
-              + [f"weight_{k}" for k in OBJECTIVE_TERMS]
-              + [f"layer{i + 1}_{c}" for i in range(n) for c in CSV_LAYER_COLUMNS])
+    header = (
+        [
+            "design",
+            "chosen",
+            "total_height_mm",
+            "worst_force_resolution_mN",
+            "print_robustness_rms_pct",
+            "print_worst_change_pct",
+            "gap0_mm",
+            "B0_mT",
+        ]
+        + [f"weight_{k}" for k in OBJECTIVE_TERMS]
+        + [f"layer{i + 1}_{c}" for i in range(n) for c in CSV_LAYER_COLUMNS]
+    )
     rows = []
     for k, p in enumerate(front):
         resp = p.result.response
-        w = p.weights if p.weights is not None else tuple(
-            p.result.document.design["objective"][key] for key in OBJECTIVE_TERMS)
-        row = [k + 1, int(p.chosen), round(p.height_mm, 3), round(1e3 * p.worst_force_resolution_N, 3),
-               round(100 * p.print_robustness_rms, 2), round(100 * p.print_worst_change, 2),
-               round(resp.gap0_mm, 3), round(resp.B0_T * 1e3, 4)]
+        w = (
+            p.weights
+            if p.weights is not None
+            else tuple(p.result.document.design["objective"][key] for key in OBJECTIVE_TERMS)
+        )
+        row = [
+            k + 1,
+            int(p.chosen),
+            round(p.height_mm, 3),
+            round(1e3 * p.worst_force_resolution_N, 3),
+            round(100 * p.print_robustness_rms, 2),
+            round(100 * p.print_worst_change, 2),
+            round(resp.gap0_mm, 3),
+            round(resp.B0_T * 1e3, 4),
+        ]
         row += [round(x, 3) for x in w]
         for c in p.result.targets:
             row += [c["theta_deg"], c["t_mm"], c["h_mm"]]
@@ -212,12 +246,14 @@ def plot_pareto(front: list[ParetoDesign], path, title: str = "") -> None:
     fig.subplots_adjust(left=0.07, right=0.98, bottom=0.13, top=0.88, wspace=0.25)
     tol_mm = front[0].result.print_error["print_error_t_mm"]
     worst = np.array([100 * p.print_worst_change for p in front])
-    panels = ((100 * M[:, 2], f"change of S_i, R_i at t +- {tol_mm:g} mm [%]"),
-              (1e3 * M[:, 1], "worst force resolution [mN]"))
+    panels = (
+        (100 * M[:, 2], f"change of S_i, R_i at t +- {tol_mm:g} mm [%]"),
+        (1e3 * M[:, 1], "worst force resolution [mN]"),
+    )
     for ax, (y, label) in zip(axes, panels):
         ax.plot(x, y, "-", color="0.7", zorder=1)
         ax.scatter(x, y, s=40, color="C0", zorder=3, label="RMS" if ax is axes[0] else None)
-        if ax is axes[0]:                      # the worst case beside the RMS
+        if ax is axes[0]:  # the worst case beside the RMS
             ax.plot(x, worst, "-", color="0.85", zorder=1)
             ax.scatter(x, worst, s=40, marker="^", color="C1", zorder=3, label="worst S_i or R_i")
             for k in range(len(front)):
@@ -225,8 +261,16 @@ def plot_pareto(front: list[ParetoDesign], path, title: str = "") -> None:
         for k, p in enumerate(front):
             ax.annotate(str(k + 1), (x[k], y[k]), textcoords="offset points", xytext=(5, 4), fontsize=8)
             if p.chosen:
-                ax.scatter([x[k]], [y[k]], s=190, facecolors="none", edgecolors="C3", linewidths=1.8,
-                           zorder=4, label="chosen (design.objective)")
+                ax.scatter(
+                    [x[k]],
+                    [y[k]],
+                    s=190,
+                    facecolors="none",
+                    edgecolors="C3",
+                    linewidths=1.8,
+                    zorder=4,
+                    label="chosen (design.objective)",
+                )
         ax.set_xlabel("total part height [mm]")
         ax.set_ylabel(label, fontsize=9)
         ax.margins(0.08)
@@ -239,19 +283,22 @@ def plot_pareto(front: list[ParetoDesign], path, title: str = "") -> None:
 
 def front_table(front: list[ParetoDesign]) -> str:
     """The front as ``mst design --pareto`` prints it."""
-    lines = [f"Pareto front: {len(front)} designs that meet every target (forward model)",
-             f"{'#':>3} {'height':>7} {'dF worst':>9} {'print':>6} {'worst':>6}  {'theta [deg]':<20} "
-             f"{'t [mm]':<18} h [mm]",
-             f"{'':>3} {'[mm]':>7} {'[mN]':>9} {'RMS %':>6} {'[%]':>6}"]
+    lines = [
+        f"Pareto front: {len(front)} designs that meet every target (forward model)",
+        f"{'#':>3} {'height':>7} {'dF worst':>9} {'print':>6} {'worst':>6}  {'theta [deg]':<20} {'t [mm]':<18} h [mm]",
+        f"{'':>3} {'[mm]':>7} {'[mN]':>9} {'RMS %':>6} {'[%]':>6}",
+    ]
     for k, p in enumerate(front):
         rows = p.result.targets
         mark = "  <-- chosen" if p.chosen else ""
         theta = "/".join(f"{r['theta_deg']:.1f}" for r in rows)
         t = "/".join(f"{r['t_mm']:.2f}" for r in rows)
         h = "/".join(f"{r['h_mm']:.2f}" for r in rows)
-        lines.append(f"{k + 1:>3} {p.height_mm:>7.2f} {1e3 * p.worst_force_resolution_N:>9.2f} "
-                     f"{100 * p.print_robustness_rms:>6.1f} {100 * p.print_worst_change:>6.1f}  "
-                     f"{theta:<20} {t:<18} {h}{mark}")
+        lines.append(
+            f"{k + 1:>3} {p.height_mm:>7.2f} {1e3 * p.worst_force_resolution_N:>9.2f} "
+            f"{100 * p.print_robustness_rms:>6.1f} {100 * p.print_worst_change:>6.1f}  "
+            f"{theta:<20} {t:<18} {h}{mark}"
+        )
     return "\n".join(lines)
 
 

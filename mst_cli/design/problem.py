@@ -77,28 +77,28 @@ if TYPE_CHECKING:
 
 # headroom choose_setting keeps between the largest field and a setting's range (one source)
 CHIP_HEADROOM = inspect.signature(mlx.choose_setting).parameters["margin"].default
-TINY = 1e-300                # floor of anything a log is taken of (a collapsed output, not a crash)
-VIOLATION_PENALTY = 10.0     # merit per unit of constraint violation (g is scaled to order one)
-DEDUPE_MIN_CELLS = 64        # below this many cells, sorting out repeats costs more than it saves
+TINY = 1e-300  # floor of anything a log is taken of (a collapsed output, not a crash)
+VIOLATION_PENALTY = 10.0  # merit per unit of constraint violation (g is scaled to order one)
+DEDUPE_MIN_CELLS = 64  # below this many cells, sorting out repeats costs more than it saves
 
 
 @dataclass
 class Evaluation:
     """Everything the optimiser needs about a batch of candidates (leading shape ``...``)."""
 
-    theta_deg: np.ndarray          # (..., n)
-    t_mm: np.ndarray               # (..., n)
-    h_mm: np.ndarray               # (..., n)
-    R_N: np.ndarray                # (..., n) lock force of each layer, file order
-    S_per_N: np.ndarray            # (..., n) secant sensitivity of regime i (sorted locks)
-    B_full_T: np.ndarray           # (...)   |B| at the last lock
-    B0_T: np.ndarray               # (...)   |B| unloaded
-    gap0_mm: np.ndarray            # (...)
-    total_height_mm: np.ndarray    # (...)
-    cell_margins_mm: np.ndarray    # (..., n, len(CELL_RULES))
-    log_err: np.ndarray            # (..., 2n) ln(S/S*) for every regime, then ln(R/R*)
-    constraints: np.ndarray        # (..., m) g <= 0 satisfied
-    objective: np.ndarray          # (...)  weighted sum of squared log errors
+    theta_deg: np.ndarray  # (..., n)
+    t_mm: np.ndarray  # (..., n)
+    h_mm: np.ndarray  # (..., n)
+    R_N: np.ndarray  # (..., n) lock force of each layer, file order
+    S_per_N: np.ndarray  # (..., n) secant sensitivity of regime i (sorted locks)
+    B_full_T: np.ndarray  # (...)   |B| at the last lock
+    B0_T: np.ndarray  # (...)   |B| unloaded
+    gap0_mm: np.ndarray  # (...)
+    total_height_mm: np.ndarray  # (...)
+    cell_margins_mm: np.ndarray  # (..., n, len(CELL_RULES))
+    log_err: np.ndarray  # (..., 2n) ln(S/S*) for every regime, then ln(R/R*)
+    constraints: np.ndarray  # (..., m) g <= 0 satisfied
+    objective: np.ndarray  # (...)  weighted sum of squared log errors
 
     @property
     def feasible(self) -> np.ndarray:
@@ -123,7 +123,7 @@ class Evaluation:
 
 def robustness_of_shifts(d: np.ndarray) -> np.ndarray:
     """RMS over both signs and all outputs of :meth:`DesignProblem.print_shift_log`'s (2, ..., 2n)."""
-    return np.sqrt(np.mean(d ** 2, axis=(0, -1)))
+    return np.sqrt(np.mean(d**2, axis=(0, -1)))
 
 
 class DesignProblem:
@@ -159,7 +159,7 @@ class DesignProblem:
         self.max_print_deviation_rel = d.get("max_print_deviation_rel")
         self.nu = doc.material.poisson_ratio
         self.noise_T = 1e-6 * doc.noise_uT_rms
-        objective = {**DEFAULT_OBJECTIVE, **(d.get("objective") or {})}   # documents built in code
+        objective = {**DEFAULT_OBJECTIVE, **(d.get("objective") or {})}  # documents built in code
         self.objective_weights = np.array([objective[k] for k in OBJECTIVE_TERMS], dtype=float)
 
         # a probe geometry (any cells) gives the field scene and the fixed height offsets
@@ -173,9 +173,14 @@ class DesignProblem:
         # L0's fitted corrections hold for walls up to this t/L; stubbier walls are extrapolation
         # (the design loop otherwise drifts there: it is where k and R grow fastest)
         self.t_over_L_max = correction.fitted_t_over_L_max()
-        self.n_constraints = (self.n * len(geo.CELL_RULES) + self.n + (self.n - 1) + 1
-                              + (1 if self.max_height_mm is not None else 0)
-                              + (8 * self.n if self.max_print_deviation_rel is not None else 0))
+        self.n_constraints = (
+            self.n * len(geo.CELL_RULES)
+            + self.n
+            + (self.n - 1)
+            + 1
+            + (1 if self.max_height_mm is not None else 0)
+            + (8 * self.n if self.max_print_deviation_rel is not None else 0)
+        )
 
     # ----------------------------------------------------------------- variables
     @property
@@ -208,7 +213,7 @@ class DesignProblem:
         if self.field_model == "axial":
             m = self.probe.magnet
             return axial_Bz_T(gap_mm, m.radius_mm, m.thickness_mm, m.remanence_T)
-        gap = np.asarray(gap_mm, dtype=float)      # magpylib takes a flat list of observers
+        gap = np.asarray(gap_mm, dtype=float)  # magpylib takes a flat list of observers
         return field_magnitude_T(gap.ravel(), self.probe, self.field_model).reshape(gap.shape)
 
     def gap0_mm(self, sum_h_mm: ArrayLike) -> np.ndarray:
@@ -226,14 +231,16 @@ class DesignProblem:
         """(cell margins in mm (..., len(CELL_RULES)), t/L constraint (...)) of cells."""
         fam, pr = self.family, self.printer
         theta = np.radians(theta_deg)
-        margins = geo.cell_margins_mm(theta, t_mm, h_mm, fam.width_mm, fam.contact_allowance_mm,
-                                      pr.min_wall_mm, pr.min_gap_mm, pr.nozzle_mm)
+        margins = geo.cell_margins_mm(
+            theta, t_mm, h_mm, fam.width_mm, fam.contact_allowance_mm, pr.min_wall_mm, pr.min_gap_mm, pr.nozzle_mm
+        )
         t_printed = np.maximum(np.asarray(t_mm) + self.wall_offset_mm, geo.LENGTH_FLOOR_MM)
         t_over_L = t_printed / geo.wall_centreline_length_mm(theta, t_printed, h_mm)
         return margins, t_over_L / self.t_over_L_max - 1.0
 
-    def layer_laws(self, theta_deg: ArrayLike, t_mm: ArrayLike,
-                   h_mm: ArrayLike) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    def layer_laws(
+        self, theta_deg: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """L0 laws (k, d_lock, R, k_locked) of every cell as printed (``t_mm`` drawn, the law's
         wall t + printer.wall_offset_mm, its modulus times printer.modulus_factor), each distinct
         cell computed once.
@@ -257,18 +264,19 @@ class DesignProblem:
             inverse = np.empty(len(flat), dtype=np.intp)
             inverse[order] = np.cumsum(first) - 1
             flat = ordered[first]
-        theta, t, h = np.ascontiguousarray(flat.T)     # contiguous columns: numpy's vector loops
+        theta, t, h = np.ascontiguousarray(flat.T)  # contiguous columns: numpy's vector loops
         if self.wall_offset_mm:
             t = np.maximum(t + self.wall_offset_mm, geo.LENGTH_FLOOR_MM)
         theta_rad = np.radians(theta)
-        E = web_modulus_MPa(theta_rad, t, h, fam.depth_mm, self.E_MPa, self.nu)   # as mechanics.layer_laws
+        E = web_modulus_MPa(theta_rad, t, h, fam.depth_mm, self.E_MPa, self.nu)  # as mechanics.layer_laws
         laws = spring_arrays(theta_rad, t, h, fam.depth_mm, fam.width_mm, fam.contact_allowance_mm, E, self.nu)
         if inverse is not None:
             laws = tuple(a[inverse] for a in laws)
         return tuple(a.reshape(cells.shape[:-1]) for a in laws)
 
-    def responses(self, theta_deg: np.ndarray, t_mm: np.ndarray,
-                  h_mm: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    def responses(
+        self, theta_deg: np.ndarray, t_mm: np.ndarray, h_mm: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """(R_N per layer, S_per_N per regime, B_full_T, gap0_mm, B0_T) of candidate stacks."""
         k, d_lock, R, k_locked = self.layer_laws(theta_deg, t_mm, h_mm)
         gap0 = self.gap0_mm(h_mm.sum(axis=-1))
@@ -286,16 +294,16 @@ class DesignProblem:
         return self._evaluate_physical(*self.to_physical(u), True)
 
     def _evaluate_physical(self, theta_deg, t_mm, h_mm, with_shifts: bool) -> tuple[Evaluation, np.ndarray | None]:
-        theta_deg, t_mm, h_mm = np.broadcast_arrays(*(np.asarray(a, dtype=float)
-                                                      for a in (theta_deg, t_mm, h_mm)))
+        theta_deg, t_mm, h_mm = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in (theta_deg, t_mm, h_mm)))
         pr = self.printer
         shifts = None
-        if with_shifts:          # nominal, thicker, thinner walls (print_shift_log's steps)
+        if with_shifts:  # nominal, thicker, thinner walls (print_shift_log's steps)
             dt = self.wall_tolerance_mm
             T = np.broadcast_to(theta_deg, (3,) + theta_deg.shape)
             H = np.broadcast_to(h_mm, (3,) + h_mm.shape)
-            t3 = np.stack([t_mm, np.maximum(t_mm + dt, geo.LENGTH_FLOOR_MM),
-                           np.maximum(t_mm + -dt, geo.LENGTH_FLOOR_MM)])
+            t3 = np.stack(
+                [t_mm, np.maximum(t_mm + dt, geo.LENGTH_FLOOR_MM), np.maximum(t_mm + -dt, geo.LENGTH_FLOOR_MM)]
+            )
             R3, S3, B_full3, gap03, B03 = self.responses(T, t3, H)
             R, S, B_full, gap0, B0 = R3[0], S3[0], B_full3[0], gap03[0], B03[0]
             base = np.log(np.maximum(np.concatenate([S, R], axis=-1), TINY))
@@ -316,12 +324,12 @@ class DesignProblem:
             g.append(self.print_deviation_constraints(theta_deg, t_mm, h_mm, S, R, shifts))
         constraints = np.concatenate(g, axis=-1)
 
-        log_err = np.concatenate([np.log(np.maximum(S, TINY) / self.S_target),
-                                  logR - np.log(self.R_target)], axis=-1)
+        log_err = np.concatenate([np.log(np.maximum(S, TINY) / self.S_target), logR - np.log(self.R_target)], axis=-1)
         w = np.concatenate([self.weights, self.weights])
-        objective = np.sum(w * log_err ** 2, axis=-1)
-        return Evaluation(theta_deg, t_mm, h_mm, R, S, B_full, B0, gap0, height, margins, log_err,
-                          constraints, objective), shifts
+        objective = np.sum(w * log_err**2, axis=-1)
+        return Evaluation(
+            theta_deg, t_mm, h_mm, R, S, B_full, B0, gap0, height, margins, log_err, constraints, objective
+        ), shifts
 
     def evaluate(self, u) -> Evaluation:
         return self.evaluate_physical(*self.to_physical(u))
@@ -333,19 +341,24 @@ class DesignProblem:
         ``shifts``: the candidates' :meth:`print_shift_log`, when the caller has it."""
         m = self.max_print_deviation_rel
         d = self.print_shift_log(theta_deg, t_mm, h_mm, nominal=(S, R)) if shifts is None else shifts  # (2, ..., 2n)
-        g = np.concatenate([d - math.log1p(m), math.log1p(-m) - d], axis=-1)    # (2, ..., 4n)
+        g = np.concatenate([d - math.log1p(m), math.log1p(-m) - d], axis=-1)  # (2, ..., 4n)
         return np.moveaxis(g, 0, -2).reshape(g.shape[1:-1] + (-1,))
 
-    def print_shift_log(self, theta_deg: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike,
-                        dt_mm: float | None = None, nominal: tuple | None = None) -> np.ndarray:
+    def print_shift_log(
+        self,
+        theta_deg: ArrayLike,
+        t_mm: ArrayLike,
+        h_mm: ArrayLike,
+        dt_mm: float | None = None,
+        nominal: tuple | None = None,
+    ) -> np.ndarray:
         """ln(out(t + s dt) / out(t)) for s = +1, -1: shape (2, ..., 2n), S then R; ``dt_mm``
         defaults to printer.wall_tolerance_mm.
 
         The stacks (nominal, thicker, thinner) go through the kernels in one call; ``nominal``
         = (S_per_N, R_N) of the unshifted stacks, when the caller has them, spares the first.
         """
-        theta_deg, t_mm, h_mm = np.broadcast_arrays(*(np.asarray(a, dtype=float)
-                                                      for a in (theta_deg, t_mm, h_mm)))
+        theta_deg, t_mm, h_mm = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in (theta_deg, t_mm, h_mm)))
         dt_mm = self.wall_tolerance_mm if dt_mm is None else dt_mm
         steps = [0.0, dt_mm, -dt_mm] if nominal is None else [dt_mm, -dt_mm]
         shifts = np.array(steps).reshape((len(steps),) + (1,) * t_mm.ndim)
@@ -358,8 +371,9 @@ class DesignProblem:
         base = np.log(np.maximum(np.concatenate([nominal[0], nominal[1]], axis=-1), TINY))
         return out - base[None]
 
-    def print_robustness(self, theta_deg: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike,
-                         nominal: tuple | None = None) -> np.ndarray:
+    def print_robustness(
+        self, theta_deg: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike, nominal: tuple | None = None
+    ) -> np.ndarray:
         """Print robustness: RMS of :meth:`print_shift_log` over both signs and all 2n outputs."""
         return robustness_of_shifts(self.print_shift_log(theta_deg, t_mm, h_mm, nominal=nominal))
 
@@ -372,11 +386,18 @@ class DesignProblem:
         ln worst force resolution, print robustness (computed unless given)."""
         if robustness is None:
             robustness = self.print_robustness(ev.theta_deg, ev.t_mm, ev.h_mm, nominal=(ev.S_per_N, ev.R_N))
-        return np.stack([np.log(ev.total_height_mm), np.log(self.worst_force_resolution_N(ev)),
-                         np.asarray(robustness, dtype=float)], axis=-1)
+        return np.stack(
+            [
+                np.log(ev.total_height_mm),
+                np.log(self.worst_force_resolution_N(ev)),
+                np.asarray(robustness, dtype=float),
+            ],
+            axis=-1,
+        )
 
-    def preference(self, ev: Evaluation, weights: ArrayLike | None = None,
-                   terms: np.ndarray | None = None) -> np.ndarray:
+    def preference(
+        self, ev: Evaluation, weights: ArrayLike | None = None, terms: np.ndarray | None = None
+    ) -> np.ndarray:
         """Weighted sum of :meth:`objective_terms` (lower is better): what phase 2 minimises;
         ``terms``: those of ``ev``, when the caller has them (:meth:`evaluate_terms`)."""
         w = self.objective_weights if weights is None else np.asarray(weights, dtype=float)
@@ -392,19 +413,26 @@ class DesignProblem:
     def constraint_names(self) -> list[str]:
         """A readable name for every entry of ``Evaluation.constraints``."""
         names = [f"layer {i + 1} {rule}" for i in range(self.n) for rule in geo.CELL_RULES]
-        names += [f"layer {i + 1} wall t/L <= {self.t_over_L_max:.2f} (the range L0 is fitted on)"
-                  for i in range(self.n)]
-        names += [f"lock order: layer {i + 2} must lock >= {1 + self.lock_margin_rel:g} x layer {i + 1}"
-                  for i in range(self.n - 1)]
+        names += [
+            f"layer {i + 1} wall t/L <= {self.t_over_L_max:.2f} (the range L0 is fitted on)" for i in range(self.n)
+        ]
+        names += [
+            f"lock order: layer {i + 2} must lock >= {1 + self.lock_margin_rel:g} x layer {i + 1}"
+            for i in range(self.n - 1)
+        ]
         names.append(f"chip saturation: field at full load <= {self.B_limit_T * 1e3:.1f} mT")
         if self.max_height_mm is not None:
             names.append(f"total height <= {self.max_height_mm:g} mm")
         if self.max_print_deviation_rel is not None:
             m = self.max_print_deviation_rel
             outs = self.output_names()
-            names += [f"print deviation: {o} at t {sign} {self.wall_tolerance_mm:g} mm {side} "
-                      f"{'+' if side == '<=' else '-'}{100 * m:g} %"
-                      for sign in "+-" for side in ("<=", ">=") for o in outs]
+            names += [
+                f"print deviation: {o} at t {sign} {self.wall_tolerance_mm:g} mm {side} "
+                f"{'+' if side == '<=' else '-'}{100 * m:g} %"
+                for sign in "+-"
+                for side in ("<=", ">=")
+                for o in outs
+            ]
         return names
 
     def output_names(self) -> list[str]:
@@ -415,8 +443,9 @@ class DesignProblem:
         return np.concatenate([self.S_target, self.R_target])
 
     # ----------------------------------------------------------------- random valid designs
-    def sample_feasible(self, rng: np.random.Generator, count: int, slack: float = 0.05,
-                        batch: int = 4096, max_batches: int = 200) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def sample_feasible(
+        self, rng: np.random.Generator, count: int, slack: float = 0.05, batch: int = 4096, max_batches: int = 200
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``count`` random designs that satisfy every constraint with ``slack`` to spare.
 
         Layers of each random candidate are re-ordered by lock force (so that they lock bottom

@@ -38,14 +38,14 @@ from mst_cli.model.response import simulate
 
 REFINE_MODELS = ("frame", "continuum")
 MAX_ITERATIONS = 6
-STOP_FRACTION = 0.5             # iterate until the dear model is within this x tolerance (margin)
-LOCAL_STEP = 0.02               # initial step of the COBYLA fallback (unit variables)
-LOCAL_TRUST = 0.15              # the warm-started match moves at most this far (unit variables)
-LOCAL_MATCH_LOG = 1e-6          # it ends when every L0 output is this close (log) to its target:
-                                # far below the dear rung's own numerical noise
-LOCAL_MAX_EVALUATIONS = 4000    # L0 candidate designs per warm-started match (batched)
+STOP_FRACTION = 0.5  # iterate until the dear model is within this x tolerance (margin)
+LOCAL_STEP = 0.02  # initial step of the COBYLA fallback (unit variables)
+LOCAL_TRUST = 0.15  # the warm-started match moves at most this far (unit variables)
+LOCAL_MATCH_LOG = 1e-6  # it ends when every L0 output is this close (log) to its target:
+# far below the dear rung's own numerical noise
+LOCAL_MAX_EVALUATIONS = 4000  # L0 candidate designs per warm-started match (batched)
 LOCAL_FALLBACK_EVALUATIONS = 1000  # of which COBYLA may use after an unmatched SLSQP run: targets
-                                # out of reach in the trust box stay out of reach for it too
+# out of reach in the trust box stay out of reach for it too
 
 
 @dataclass
@@ -58,10 +58,11 @@ class RefinedResult(DesignResult):
         return {**super().report_extra(), "refinement": self.refinement}
 
     def table(self) -> str:
-        lines = [f"refined for mechanics={self.refinement['model']} by output space mapping "
-                 f"(inner model L0 spring): max |error| per iteration "
-                 + ", ".join(f"{100 * it['max_abs_error_rel']:.2f} %"
-                             for it in self.refinement["iterations"])]
+        lines = [
+            f"refined for mechanics={self.refinement['model']} by output space mapping "
+            f"(inner model L0 spring): max |error| per iteration "
+            + ", ".join(f"{100 * it['max_abs_error_rel']:.2f} %" for it in self.refinement["iterations"])
+        ]
         return "\n".join(lines) + "\n" + super().table()
 
 
@@ -77,8 +78,8 @@ class _SecantMapping:
     contact and the dear mesh make the map only piecewise smooth.
     """
 
-    MAX_COND = 1e3          # J beyond this is a secant taken across a jump
-    MAX_STEP_RATIO = 3.0    # a step this many times the plain one is not trusted
+    MAX_COND = 1e3  # J beyond this is a secant taken across a jump
+    MAX_STEP_RATIO = 3.0  # a step this many times the plain one is not trusted
 
     def __init__(self, size: int):
         self.J = np.eye(size)
@@ -92,7 +93,7 @@ class _SecantMapping:
             z0, e0 = self.prev
             dz, de = z - z0, e - e0
             if np.max(np.abs(e)) >= np.max(np.abs(e0)):
-                self.J = np.eye(len(z))        # the last step did not help: start afresh
+                self.J = np.eye(len(z))  # the last step did not help: start afresh
             elif float(dz @ dz) > 0.0:
                 self.J = self.J + np.outer(de - self.J @ dz, dz) / float(dz @ dz)
         self.prev = (z, e)
@@ -118,8 +119,13 @@ def _dear_errors(designed: Document, model: str, S_t, R_t):
     """(S, R) of the dear model on a design as printed and the log errors against the real targets."""
     field_model = None if designed.field_model == "auto" else designed.field_model
     printed = as_printed(designed)
-    resp = simulate(printed.geometry(), printed.material, mechanics=model, field_model=field_model,
-                    noise_uT_rms=designed.noise_uT_rms)
+    resp = simulate(
+        printed.geometry(),
+        printed.material,
+        mechanics=model,
+        field_model=field_model,
+        noise_uT_rms=designed.noise_uT_rms,
+    )
     S, R = _layer_outputs(resp, len(S_t))
     return S, R, np.log(S / S_t), np.log(R / R_t)
 
@@ -148,15 +154,17 @@ def _local_match(problem: DesignProblem, theta, t, h, maxeval: int = LOCAL_MAX_E
     budget = _Budget(maxeval, None, MAX_TIME_S)
     best = Tracker()
 
-    max_rel = -math.expm1(-LOCAL_MATCH_LOG)     # |rel| below this keeps |log| below LOCAL_MATCH_LOG
+    max_rel = -math.expm1(-LOCAL_MATCH_LOG)  # |rel| below this keeps |log| below LOCAL_MATCH_LOG
 
     def goal(f, g, err):
         return bool(np.all(g <= FEASIBILITY_TOL)) and err <= max_rel
 
     def matched(u):
         ev = problem.evaluate(u)
-        return bool(np.all(ev.constraints + ROUNDING_SAFETY <= FEASIBILITY_TOL)
-                    and np.max(np.abs(ev.log_err)) <= LOCAL_MATCH_LOG)
+        return bool(
+            np.all(ev.constraints + ROUNDING_SAFETY <= FEASIBILITY_TOL)
+            and np.max(np.abs(ev.log_err)) <= LOCAL_MATCH_LOG
+        )
 
     phase = _Phase(problem, matcher.batch, problem.n_constraints, best, budget, "refine match", goal)
     converged = _run_local(phase, "slsqp", u0, lo, hi, budget.left // (2 * problem.dim + 1), LOCAL_STEP)
@@ -193,7 +201,7 @@ def _run_local(phase, local: str, u0, lo, hi, maxeval: int, step: float) -> bool
     except _Stop as stop:
         return stop.reason == "goal reached"
     except (nlopt.ForcedStop, nlopt.RoundoffLimited, ValueError, RuntimeError, *_nlopt_failures()):
-        return False                            # the tracker holds the best point seen
+        return False  # the tracker holds the best point seen
     return opt.last_optimize_result() != nlopt.MAXEVAL_REACHED
 
 
@@ -212,18 +220,29 @@ def print_error_rung(doc: Document, model: str, errors: dict | None = None) -> t
     errors = load_ladder_errors() if errors is None else errors
     if doc.accuracy_rel is None:
         err = rung_errors("spring", errors)
-        return "spring", (f"L0 (measured median error against continuum: stiffness {100 * err['k']:.2g} %, "
-                          f"lock force {100 * err['lock_force']:.2g} %); a model.accuracy_rel below "
-                          f"that measures it with a dearer rung")
+        return "spring", (
+            f"L0 (measured median error against continuum: stiffness {100 * err['k']:.2g} %, "
+            f"lock force {100 * err['lock_force']:.2g} %); a model.accuracy_rel below "
+            f"that measures it with a dearer rung"
+        )
     asked = choose_mechanics(None, doc.accuracy_rel, "spring", errors).mechanics
     rung = min(asked, model, key=USER_LADDER.index)
-    return rung, (f"model.accuracy_rel = {doc.accuracy_rel:g} picks {asked}"
-                  + ("" if rung == asked else f", capped at the refining rung {model}"))
+    return rung, (
+        f"model.accuracy_rel = {doc.accuracy_rel:g} picks {asked}"
+        + ("" if rung == asked else f", capped at the refining rung {model}")
+    )
 
 
-def refine_document(doc: Document, model: str, *, seed: int | None = None, progress=None,
-                    max_evaluations: int | None = None, max_iterations: int = MAX_ITERATIONS,
-                    print_error_mechanics: str | None = None) -> DesignResult:
+def refine_document(
+    doc: Document,
+    model: str,
+    *,
+    seed: int | None = None,
+    progress=None,
+    max_evaluations: int | None = None,
+    max_iterations: int = MAX_ITERATIONS,
+    print_error_mechanics: str | None = None,
+) -> DesignResult:
     """Design ``doc`` with L0, then polish the result for the dear ``model`` by space mapping.
 
     Parameters
@@ -259,19 +278,27 @@ def refine_document(doc: Document, model: str, *, seed: int | None = None, progr
     s, r = S_t.copy(), R_t.copy()
     history, best, evaluations = [], None, 0
     mapping = _SecantMapping(2 * len(S_t))
-    problem = DesignProblem(inner_doc)          # the L0 problem of the real targets (explains a miss)
+    problem = DesignProblem(inner_doc)  # the L0 problem of the real targets (explains a miss)
     stopped = f"iteration cap ({max_iterations}) reached"
     step_kind = "none (the spec's targets)"
     for k in range(max_iterations):
-        layers = [replace(la, target_sensitivity_per_N=float(a), target_range_N=float(b))
-                  for la, a, b in zip(doc.layers, s, r)]
+        layers = [
+            replace(la, target_sensitivity_per_N=float(a), target_range_N=float(b))
+            for la, a, b in zip(doc.layers, s, r)
+        ]
         if k == 0:
             # the plain L0 design of the real targets (global search, preference)
-            inner = design_document(inner_doc.with_layers(layers), seed=seed, progress=progress,
-                                    max_evaluations=max_evaluations, name_height=False)
+            inner = design_document(
+                inner_doc.with_layers(layers),
+                seed=seed,
+                progress=progress,
+                max_evaluations=max_evaluations,
+                name_height=False,
+            )
             evaluations += inner.evaluations
-            theta, t, h = (np.array([getattr(la, key) for la in inner.document.layers])
-                           for key in ("theta_deg", "t_mm", "h_mm"))
+            theta, t, h = (
+                np.array([getattr(la, key) for la in inner.document.layers]) for key in ("theta_deg", "t_mm", "h_mm")
+            )
             inner_status = inner.status
         else:
             # warm start: a local L0 match of the corrected targets from the previous design,
@@ -280,23 +307,40 @@ def refine_document(doc: Document, model: str, *, seed: int | None = None, progr
             theta, t, h, n_eval, inner_met = _local_match(problem_k, theta, t, h)
             evaluations += n_eval
             inner_status = "met" if inner_met else "not met"
-        S, R, lS, lR = _dear_errors(inner_doc.with_layers(
-            [replace(la, theta_deg=float(a), t_mm=float(b), h_mm=float(c))
-             for la, a, b, c in zip(doc.layers, theta, t, h)]), model, S_t, R_t)
+        S, R, lS, lR = _dear_errors(
+            inner_doc.with_layers(
+                [
+                    replace(la, theta_deg=float(a), t_mm=float(b), h_mm=float(c))
+                    for la, a, b, c in zip(doc.layers, theta, t, h)
+                ]
+            ),
+            model,
+            S_t,
+            R_t,
+        )
         worst = float(max(np.abs(lS).max(), np.abs(lR).max()))
         rel = np.concatenate([S / S_t - 1.0, R / R_t - 1.0])
-        history.append({
-            "iteration": k + 1, "max_abs_log_error": worst,
-            "max_abs_error_rel": float(np.abs(rel).max()),
-            "inner_status": inner_status, "l0_targets_update": step_kind,
-            "l0_targets_sensitivity_per_N": s.tolist(), "l0_targets_range_N": r.tolist(),
-            "theta_deg": theta.tolist(), "t_mm": t.tolist(), "h_mm": h.tolist(),
-        })
+        history.append(
+            {
+                "iteration": k + 1,
+                "max_abs_log_error": worst,
+                "max_abs_error_rel": float(np.abs(rel).max()),
+                "inner_status": inner_status,
+                "l0_targets_update": step_kind,
+                "l0_targets_sensitivity_per_N": s.tolist(),
+                "l0_targets_range_N": r.tolist(),
+                "theta_deg": theta.tolist(),
+                "t_mm": t.tolist(),
+                "h_mm": h.tolist(),
+            }
+        )
         if best is None or worst < best.max_log_err:
             best = _Iterate(theta, t, h, worst)
         if np.all(np.abs(rel) <= STOP_FRACTION * tol):
-            stopped = (f"{model} model meets every target within {100 * STOP_FRACTION * tol:g} % "
-                       f"(half the tolerance) at iteration {k + 1}")
+            stopped = (
+                f"{model} model meets every target within {100 * STOP_FRACTION * tol:g} % "
+                f"(half the tolerance) at iteration {k + 1}"
+            )
             break
         # output space mapping: correct the L0 targets by the dear model's miss, through the
         # secant estimate of how the dear outputs follow the L0 targets; start from what L0
@@ -305,7 +349,7 @@ def refine_document(doc: Document, model: str, *, seed: int | None = None, progr
         ev = problem.evaluate_physical(theta, t, h)
         z_l0 = np.log(np.concatenate([ev.S_per_N, ev.R_N]))
         z, step_kind = mapping.next_targets(z_l0, np.concatenate([lS, lR]))
-        s, r = np.exp(z[:len(s)]), np.exp(z[len(s):])
+        s, r = np.exp(z[: len(s)]), np.exp(z[len(s) :])
 
     final_doc = replace(doc, mechanics=model)
     sol = _SolverFacts.from_result(inner, evaluations)
@@ -313,30 +357,45 @@ def refine_document(doc: Document, model: str, *, seed: int | None = None, progr
         pe_rung, pe_rule = print_error_rung(doc, model)
     else:
         pe_rung, pe_rule = print_error_mechanics, "asked for by the caller"
-    result = verify_design(final_doc, problem, best.theta, best.t, best.h, sol,
-                           seed=inner.seed, max_evaluations=inner.max_evaluations,
-                           mechanics=model, t_start=t_start,
-                           print_error_mechanics=pe_rung, print_error_rule=pe_rule)
+    result = verify_design(
+        final_doc,
+        problem,
+        best.theta,
+        best.t,
+        best.h,
+        sol,
+        seed=inner.seed,
+        max_evaluations=inner.max_evaluations,
+        mechanics=model,
+        t_start=t_start,
+        print_error_mechanics=pe_rung,
+        print_error_rule=pe_rule,
+    )
     if result.status != "met":
-        worst_row = max(result.targets, key=lambda row: max(abs(row["sensitivity_error_rel"]),
-                                                            abs(row["range_error_rel"])))
-        which = ("S" if abs(worst_row["sensitivity_error_rel"]) >= abs(worst_row["range_error_rel"])
-                 else "R")
+        worst_row = max(
+            result.targets, key=lambda row: max(abs(row["sensitivity_error_rel"]), abs(row["range_error_rel"]))
+        )
+        which = "S" if abs(worst_row["sensitivity_error_rel"]) >= abs(worst_row["range_error_rel"]) else "R"
         err = worst_row["sensitivity_error_rel" if which == "S" else "range_error_rel"]
         if all(row["within_tolerance"] for row in result.targets):
-            pass                                    # a constraint binds: verify_design named it
+            pass  # a constraint binds: verify_design named it
         else:
             result.binding = f"layer {worst_row['layer']} {which} ({model} model)"
-            result.reasons.insert(0, f"after {len(history)} refinement iterations the {model} model "
-                                     f"misses layer {worst_row['layer']} {which} by {100 * err:+.2f} % "
-                                     f"(tolerance {100 * tol:g} %): {stopped}")
+            result.reasons.insert(
+                0,
+                f"after {len(history)} refinement iterations the {model} model "
+                f"misses layer {worst_row['layer']} {which} by {100 * err:+.2f} % "
+                f"(tolerance {100 * tol:g} %): {stopped}",
+            )
     refinement = {
-        "inner_model": "spring", "model": model,
+        "inner_model": "spring",
+        "model": model,
         "method": "output space mapping: L0 targets corrected by the dear model's log miss (plain, or "
-                  "through a Broyden secant estimate of d dear / d L0 target), L0 re-matched locally",
+        "through a Broyden secant estimate of d dear / d L0 target), L0 re-matched locally",
         "iterations": history,
         "best_iteration": 1 + min(range(len(history)), key=lambda i: history[i]["max_abs_log_error"]),
-        "stopped": stopped, "max_iterations": max_iterations,
+        "stopped": stopped,
+        "max_iterations": max_iterations,
         "l0_evaluations_total": evaluations,
     }
     result.elapsed_s = time.perf_counter() - t_start
@@ -359,8 +418,15 @@ class _SolverFacts:
     def from_result(cls, res: DesignResult, evaluations: int) -> _SolverFacts:
         s = res.solver
         local = "slsqp" if "SLSQP" in s["method"] else "cobyla"
-        return cls(s["matched"], evaluations, local, s["starts_used"], s["preference_before"],
-                   s["preference_after"], s["runs_ended"])
+        return cls(
+            s["matched"],
+            evaluations,
+            local,
+            s["starts_used"],
+            s["preference_before"],
+            s["preference_after"],
+            s["runs_ended"],
+        )
 
 
 __all__ = ["refine_document", "print_error_rung", "RefinedResult", "REFINE_MODELS", "MAX_ITERATIONS"]

@@ -34,9 +34,9 @@ from mst_cli.model.mechanics.spring import layer_displacement_mm
 if TYPE_CHECKING:
     from mst_cli.design.problem import DesignProblem
 
-GRID = (13, 25, 25)          # table points along theta, t, h (normalised, uniform in u)
-PASSES = 8                   # at most; the passes stop when no layer changes its cell
-FIELD_GRID = 512             # gaps on which |B| is tabulated for the inversion
+GRID = (13, 25, 25)  # table points along theta, t, h (normalised, uniform in u)
+PASSES = 8  # at most; the passes stop when no layer changes its cell
+FIELD_GRID = 512  # gaps on which |B| is tabulated for the inversion
 
 
 def grid_within(max_cells: float, grid: tuple[int, int, int] = GRID) -> tuple[int, int, int]:
@@ -74,7 +74,7 @@ def _edge_gaps_mm(problem: DesignProblem, gap0_mm: float) -> np.ndarray | None:
     """Gap at F = 0, R*_1, ..., R*_n that makes |B| follow the S targets (None: out of reach)."""
     R = np.concatenate([[0.0], problem.R_target])
     rise = np.concatenate([[0.0], np.cumsum(problem.S_target * np.diff(R))])
-    gaps = np.linspace(gap0_mm, 1e-3 * gap0_mm, FIELD_GRID)      # closing: |B| should rise
+    gaps = np.linspace(gap0_mm, 1e-3 * gap0_mm, FIELD_GRID)  # closing: |B| should rise
     B = problem.field_T(gaps)
     rising = np.concatenate([[True], np.diff(B) > 0.0])
     stop = int(np.argmin(rising)) if not rising.all() else len(B)
@@ -85,8 +85,7 @@ def _edge_gaps_mm(problem: DesignProblem, gap0_mm: float) -> np.ndarray | None:
     return np.interp(want, B, gaps)
 
 
-def seed_start(problem: DesignProblem, slack: float,
-               table: CellTable | None = None) -> tuple[np.ndarray | None, int]:
+def seed_start(problem: DesignProblem, slack: float, table: CellTable | None = None) -> tuple[np.ndarray | None, int]:
     """(normalised start (3n,) built layer by layer, candidate stacks evaluated for it; the
     table's cells not counted). The start is None when the targets give the decomposition
     nothing to work with: lock targets not increasing, a field rise the magnet cannot give, no
@@ -99,7 +98,7 @@ def seed_start(problem: DesignProblem, slack: float,
         return None, 0
     n = problem.n
     F = np.concatenate([[0.0], R_target])
-    d_at = [table.displacement_mm(f) for f in F]                 # every cell at every edge force
+    d_at = [table.displacement_mm(f) for f in F]  # every cell at every edge force
     increment = [d_at[i + 1] - d_at[i] for i in range(n)]
     log_R = np.log(np.maximum(table.R, TINY))
     # first guess: each layer's lock force alone; the passes then add the field's demands
@@ -110,7 +109,7 @@ def seed_start(problem: DesignProblem, slack: float,
         gaps = _edge_gaps_mm(problem, float(problem.gap0_mm(table.h_mm[chosen].sum())))
         if gaps is None:
             break
-        stack_increment = -np.diff(gaps)                         # D_i - D_(i-1), i = 1..n
+        stack_increment = -np.diff(gaps)  # D_i - D_(i-1), i = 1..n
         for j in range(n - 1, -1, -1):
             above = sum(increment[j][chosen[m]] for m in range(j + 1, n))
             below = sum((F[j + 1] - F[j]) / table.k_locked[chosen[m]] for m in range(j))

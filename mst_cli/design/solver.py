@@ -51,20 +51,20 @@ if TYPE_CHECKING:
 
     from numpy.typing import ArrayLike
 
-INITIAL_STEP = 0.1           # fraction of every (normalised) variable's range
-MATCH_FRACTION = 0.05        # phase 1 ends when every |error| <= this x tolerance
-BAND_FRACTION = 0.5          # phase 2 keeps every |error| <= this x tolerance
-ROUNDING_SAFETY = 1e-3       # constraint slack (nozzles / log units) so that the rounded
-                             # design written to design.yaml still satisfies every rule
-SCREEN_PER_DIM = 400         # screening batch size per design variable
-N_STARTS = 24                # starting points kept from the screening
-FD_STEP = 1e-6               # central-difference step in normalised variables
-FEASIBILITY_TOL = 1e-9       # SLSQP lands on active constraints to ~1e-13; far inside the
-                             # ROUNDING_SAFETY slack, so such points count as feasible
-NEWTON_STEPS = 8             # Gauss-Newton steps of a match before SLSQP takes over
-NEWTON_ACTIVE_PASSES = 4     # times a step's set of held constraints may grow
-NEWTON_BACKTRACK = (1.0, 0.5, 0.25, 0.125)   # step fractions tried, in one batch
-MAX_TIME_S = 120.0           # safety net only; normal runs stop on evaluation counts
+INITIAL_STEP = 0.1  # fraction of every (normalised) variable's range
+MATCH_FRACTION = 0.05  # phase 1 ends when every |error| <= this x tolerance
+BAND_FRACTION = 0.5  # phase 2 keeps every |error| <= this x tolerance
+ROUNDING_SAFETY = 1e-3  # constraint slack (nozzles / log units) so that the rounded
+# design written to design.yaml still satisfies every rule
+SCREEN_PER_DIM = 400  # screening batch size per design variable
+N_STARTS = 24  # starting points kept from the screening
+FD_STEP = 1e-6  # central-difference step in normalised variables
+FEASIBILITY_TOL = 1e-9  # SLSQP lands on active constraints to ~1e-13; far inside the
+# ROUNDING_SAFETY slack, so such points count as feasible
+NEWTON_STEPS = 8  # Gauss-Newton steps of a match before SLSQP takes over
+NEWTON_ACTIVE_PASSES = 4  # times a step's set of held constraints may grow
+NEWTON_BACKTRACK = (1.0, 0.5, 0.25, 0.125)  # step fractions tried, in one batch
+MAX_TIME_S = 120.0  # safety net only; normal runs stop on evaluation counts
 LOCAL_METHODS = ("slsqp", "cobyla")
 
 
@@ -94,15 +94,15 @@ class Tracker:
 
 @dataclass
 class SolveResult:
-    u: np.ndarray                    # best point (normalised)
-    matched: bool                    # phase 1 reached MATCH_FRACTION x tolerance
-    evaluations: int                 # candidate designs through the kernels (preference: 3 each)
+    u: np.ndarray  # best point (normalised)
+    matched: bool  # phase 1 reached MATCH_FRACTION x tolerance
+    evaluations: int  # candidate designs through the kernels (preference: 3 each)
     starts_used: int
     preference_before: float | None  # preference (design.objective) at the phase-1 point
     preference_after: float | None
     local: str = "slsqp"
-    stops: list[str] = field(default_factory=list)   # how each nlopt run ended
-    u_matched: np.ndarray | None = None              # the phase-1 point the preference started from
+    stops: list[str] = field(default_factory=list)  # how each nlopt run ended
+    u_matched: np.ndarray | None = None  # the phase-1 point the preference started from
 
 
 class _Budget:
@@ -131,6 +131,7 @@ def _nlopt_failures() -> tuple:
     """nlopt's generic failure: Python's RuntimeError up to nlopt 2.10, its own
     ``nlopt.runtime_error`` (not a RuntimeError) from 2.11 on."""
     import nlopt
+
     return tuple(e for e in (getattr(nlopt, "runtime_error", None),) if isinstance(e, type))
 
 
@@ -173,8 +174,8 @@ class _Phase:
         g = np.where(np.isfinite(g), g, 1e6)
         self.f, self.g = float(score[0]), g[0]
         if want_grad:
-            self.df = (score[1:dim + 1] - score[dim + 1:]) / (2 * FD_STEP)
-            self.dg = ((g[1:dim + 1] - g[dim + 1:]) / (2 * FD_STEP)).T
+            self.df = (score[1 : dim + 1] - score[dim + 1 :]) / (2 * FD_STEP)
+            self.dg = ((g[1 : dim + 1] - g[dim + 1 :]) / (2 * FD_STEP)).T
         self.key = key
         self.tracker.offer(u, self.f, float(np.sum(np.maximum(self.g, 0.0))))
         self.budget.spend(cost * len(U), self.phase, err)
@@ -212,15 +213,16 @@ class _Phase:
         try:
             opt.optimize(np.clip(np.asarray(x0, float), 0.0, 1.0))
             code = opt.last_optimize_result()
-            stops.append({1: "success", 2: "stopval", 3: "ftol", 4: "xtol", 5: "maxeval",
-                          6: "maxtime"}.get(code, str(code)))
+            stops.append(
+                {1: "success", 2: "stopval", 3: "ftol", 4: "xtol", 5: "maxeval", 6: "maxtime"}.get(code, str(code))
+            )
         except _Stop as stop:
             stops.append(stop.reason)
         except nlopt.ForcedStop:
             stops.append("forced stop")
         except nlopt.RoundoffLimited:
             stops.append("roundoff-limited")
-        except (RuntimeError, *NLOPT_FAILURES):   # nlopt's generic failure (SLSQP line search)
+        except (RuntimeError, *NLOPT_FAILURES):  # nlopt's generic failure (SLSQP line search)
             stops.append("nlopt failure")
 
 
@@ -253,8 +255,11 @@ class _Matcher:
         return ev.objective, _safe_constraints(ev), 1, float(_max_err(ev)[0])
 
     def goal(self, f, g, err):
-        return (bool(np.all(g <= FEASIBILITY_TOL)) and math.log1p(err) <= self.match_log
-                and math.log1p(-err) >= -self.match_log)
+        return (
+            bool(np.all(g <= FEASIBILITY_TOL))
+            and math.log1p(err) <= self.match_log
+            and math.log1p(-err) >= -self.match_log
+        )
 
     def matched_at(self, u) -> bool:
         return self.matched(self.problem.evaluate(u))
@@ -262,12 +267,10 @@ class _Matcher:
     def matched(self, e) -> bool:
         """Every constraint (with the rounding slack) and every target within MATCH_FRACTION x
         tolerance, of one evaluated point."""
-        return bool(np.all(_safe_constraints(e) <= FEASIBILITY_TOL)
-                    and np.max(np.abs(e.log_err)) <= self.match_log)
+        return bool(np.all(_safe_constraints(e) <= FEASIBILITY_TOL) and np.max(np.abs(e.log_err)) <= self.match_log)
 
 
-def newton_match(problem: DesignProblem, u0: np.ndarray, tracker: Tracker, budget: _Budget,
-                 phase: str) -> bool:
+def newton_match(problem: DesignProblem, u0: np.ndarray, tracker: Tracker, budget: _Budget, phase: str) -> bool:
     """Pull the 2n outputs onto their targets by Gauss-Newton; True when the match goal is met.
 
     Matching is an underdetermined least-squares problem: 2n log errors in 3n unknowns, zero
@@ -298,8 +301,8 @@ def newton_match(problem: DesignProblem, u0: np.ndarray, tracker: Tracker, budge
             return True
         if not (np.all(np.isfinite(r)) and np.all(np.isfinite(g))):
             return False
-        J = ((r[1:dim + 1] - r[dim + 1:]) / (2 * FD_STEP)).T              # (2n, dim)
-        G = ((g[1:dim + 1] - g[dim + 1:]) / (2 * FD_STEP)).T              # (m, dim)
+        J = ((r[1 : dim + 1] - r[dim + 1 :]) / (2 * FD_STEP)).T  # (2n, dim)
+        G = ((g[1 : dim + 1] - g[dim + 1 :]) / (2 * FD_STEP)).T  # (m, dim)
         rows, rhs = [J], [-r[0]]
         held_g = np.zeros(len(g[0]), bool)
         held_u = np.zeros(dim, bool)
@@ -310,8 +313,7 @@ def newton_match(problem: DesignProblem, u0: np.ndarray, tracker: Tracker, budge
             if not (new_g.any() or new_u.any()):
                 break
             rows += [G[new_g], np.eye(dim)[new_u]]
-            rhs += [-g[0][new_g],
-                    np.where(u + du < 0.0, -u, 1.0 - u)[new_u]]
+            rhs += [-g[0][new_g], np.where(u + du < 0.0, -u, 1.0 - u)[new_u]]
             held_g |= new_g
             held_u |= new_u
         trials = np.clip(u + np.asarray(NEWTON_BACKTRACK)[:, None] * du, 0.0, 1.0)
@@ -371,8 +373,14 @@ def _match(problem, rng, budget, local, stops):
     return best.u, False, starts_used
 
 
-def prefer(problem: DesignProblem, u_matched: np.ndarray, budget: _Budget, local: str, stops: list,
-           weights: ArrayLike | None = None) -> tuple[np.ndarray, float, float]:
+def prefer(
+    problem: DesignProblem,
+    u_matched: np.ndarray,
+    budget: _Budget,
+    local: str,
+    stops: list,
+    weights: ArrayLike | None = None,
+) -> tuple[np.ndarray, float, float]:
     """Phases 2-4 from a matched point: the design that meets the targets and minimises the
     preference (:meth:`DesignProblem.preference` with ``weights``, default design.objective).
     Returns (u, preference before, preference after)."""
@@ -395,8 +403,7 @@ def prefer(problem: DesignProblem, u_matched: np.ndarray, budget: _Budget, local
         tracker = Tracker()
         tracker.offer(u0, pref0, 0.0)
         if budget.left > 3 * per_iter:
-            phase = _Phase(problem, pref_batch, problem.n_constraints + 4 * problem.n, tracker, budget,
-                           "preference")
+            phase = _Phase(problem, pref_batch, problem.n_constraints + 4 * problem.n, tracker, budget, "preference")
             phase.run(u0, local, min(iters, budget.left // (3 * per_iter)), step, stops)
         return tracker.u
 
@@ -427,20 +434,35 @@ def prefer(problem: DesignProblem, u_matched: np.ndarray, budget: _Budget, local
     return final, before, after
 
 
-def _matched(problem: DesignProblem, seed: int, max_evaluations: int, progress, local: str,
-             max_time_s: float):
+def _matched(problem: DesignProblem, seed: int, max_evaluations: int, progress, local: str, max_time_s: float):
     """Screening and phase 1 under a fresh budget: (SolveResult of the match, that budget)."""
     if local not in LOCAL_METHODS:
         raise ValueError(f"local method {local!r}: choose from {', '.join(LOCAL_METHODS)}")
     budget = _Budget(max_evaluations, progress, max_time_s)
     stops: list[str] = []
     u, matched, starts_used = _match(problem, np.random.default_rng(seed), budget, local, stops)
-    return SolveResult(u=u, matched=matched, evaluations=budget.used, starts_used=starts_used,
-                       preference_before=None, preference_after=None, local=local, stops=stops), budget
+    return SolveResult(
+        u=u,
+        matched=matched,
+        evaluations=budget.used,
+        starts_used=starts_used,
+        preference_before=None,
+        preference_after=None,
+        local=local,
+        stops=stops,
+    ), budget
 
 
-def solve(problem: DesignProblem, *, seed: int = 0, max_evaluations: int = 20000, progress=None,
-          local: str = "slsqp", max_time_s: float = MAX_TIME_S, weights=None) -> SolveResult:
+def solve(
+    problem: DesignProblem,
+    *,
+    seed: int = 0,
+    max_evaluations: int = 20000,
+    progress=None,
+    local: str = "slsqp",
+    max_time_s: float = MAX_TIME_S,
+    weights=None,
+) -> SolveResult:
     """Find normalised variables meeting the targets, then minimise the preference (one budget)."""
     result, budget = _matched(problem, seed, max_evaluations, progress, local, max_time_s)
     if result.matched:
@@ -448,7 +470,8 @@ def solve(problem: DesignProblem, *, seed: int = 0, max_evaluations: int = 20000
     if not result.matched or budget.left <= 3 * _per_iter(problem, local):
         return result
     result.u, result.preference_before, result.preference_after = prefer(
-        problem, result.u, budget, local, result.stops, weights)
+        problem, result.u, budget, local, result.stops, weights
+    )
     result.evaluations = budget.used
     return result
 
@@ -474,7 +497,8 @@ def pareto_weights(count: int) -> np.ndarray:
 
 # --------------------------------------------------------------------------- many weightings at once
 _EVALUATION_FIELDS = tuple(f.name for f in fields(Evaluation))
-RECENT_EVALUATIONS = 64      # per run: the points SLSQP asks for again (a stalled line search)
+RECENT_EVALUATIONS = 64  # per run: the points SLSQP asks for again (a stalled line search)
+
 
 class _SharedEvaluations:
     """Local runs of several weightings in lockstep, their evaluations batched into one kernel call.
@@ -532,7 +556,7 @@ class _SharedEvaluations:
         def body(i, job):
             try:
                 out[i] = job(_BatchedProblem(self, i))
-            except Exception as exc:        # handed to the caller below
+            except Exception as exc:  # handed to the caller below
                 errors.append(exc)
             return _DONE
 
@@ -554,7 +578,7 @@ class _SharedEvaluations:
         return out
 
 
-_DONE = object()     # what a finished run hands back instead of points
+_DONE = object()  # what a finished run hands back instead of points
 
 
 class _BatchedProblem:
@@ -587,9 +611,16 @@ class _BatchedProblem:
         return self.evaluate_terms(u)[0]
 
 
-def prefer_many(problem: DesignProblem, starts: list[np.ndarray], weightings: list[ArrayLike], *,
-                max_evaluations: int, local: str = "slsqp", max_time_s: float = MAX_TIME_S,
-                stops: list | None = None) -> list[tuple[np.ndarray, int]]:
+def prefer_many(
+    problem: DesignProblem,
+    starts: list[np.ndarray],
+    weightings: list[ArrayLike],
+    *,
+    max_evaluations: int,
+    local: str = "slsqp",
+    max_time_s: float = MAX_TIME_S,
+    stops: list | None = None,
+) -> list[tuple[np.ndarray, int]]:
     """Phases 2-4 (:func:`prefer`) for every (start, weighting) pair, each with a fresh
     ``max_evaluations`` budget, their kernel calls batched across the weightings.
     Returns (u, evaluations) per pair, in order."""
@@ -600,6 +631,7 @@ def prefer_many(problem: DesignProblem, starts: list[np.ndarray], weightings: li
             budget = _Budget(max_evaluations, None, max_time_s)
             u, _, _ = prefer(batched, starts[k], budget, local, run_stops[k], weightings[k])
             return u, budget.used
+
         return run
 
     out = _SharedEvaluations(problem).run([job(k) for k in range(len(starts))])

@@ -16,8 +16,13 @@ from pathlib import Path
 
 from mst_cli.errors import InputError
 
-_KINDS = ((stat.S_ISFIFO, "a FIFO (named pipe)"), (stat.S_ISCHR, "a character device"),
-          (stat.S_ISBLK, "a block device"), (stat.S_ISSOCK, "a socket"), (stat.S_ISDIR, "a folder"))
+_KINDS = (
+    (stat.S_ISFIFO, "a FIFO (named pipe)"),
+    (stat.S_ISCHR, "a character device"),
+    (stat.S_ISBLK, "a block device"),
+    (stat.S_ISSOCK, "a socket"),
+    (stat.S_ISDIR, "a folder"),
+)
 
 
 def _kind(mode: int) -> str:
@@ -33,8 +38,9 @@ def _reason(exc: BaseException) -> str:
     return getattr(exc, "strerror", None) or str(exc)
 
 
-def read_input(path: str | Path, limit: int, *, field: str = "(file)", what: str = "file",
-               too_large: str = "") -> bytes:
+def read_input(
+    path: str | Path, limit: int, *, field: str = "(file)", what: str = "file", too_large: str = ""
+) -> bytes:
     """The bytes of the regular file ``path`` (at most ``limit``).
 
     InputError naming ``field`` and the path when it does not exist, is not a regular file,
@@ -45,21 +51,28 @@ def read_input(path: str | Path, limit: int, *, field: str = "(file)", what: str
         _refuse_special(os.stat(path).st_mode, field, path, what)
         fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_CLOEXEC", 0))
         with os.fdopen(fd, "rb") as fh:
-            _refuse_special(os.fstat(fd).st_mode, field, path, what)   # replaced since the stat
+            _refuse_special(os.fstat(fd).st_mode, field, path, what)  # replaced since the stat
             data = fh.read(limit + 1)
     except FileNotFoundError:
         raise InputError(field, str(path), "file not found") from None
     except InputError:
         raise
-    except (OSError, ValueError) as exc:     # ValueError: a NUL in the path
+    except (OSError, ValueError) as exc:  # ValueError: a NUL in the path
         raise InputError(field, str(path), f"cannot be read ({_reason(exc)})") from None
     if len(data) > limit:
         raise InputError(field, str(path), f"is larger than {limit} bytes{too_large}")
     return data
 
 
-def read_input_text(path: str | Path, limit: int, *, field: str = "(file)", what: str = "text file",
-                    too_large: str = "", encoding: str = "utf-8") -> str:
+def read_input_text(
+    path: str | Path,
+    limit: int,
+    *,
+    field: str = "(file)",
+    what: str = "text file",
+    too_large: str = "",
+    encoding: str = "utf-8",
+) -> str:
     """:func:`read_input` decoded (InputError when it is not text in ``encoding``)."""
     data = read_input(path, limit, field=field, what=what, too_large=too_large)
     try:

@@ -34,7 +34,7 @@ import yaml
 
 STAGING_PREFIX = ".mst-staging-"
 STALE_AFTER_S = 15 * 60
-_LIVE: set[Path] = set()                  # staging folders of this process still in use
+_LIVE: set[Path] = set()  # staging folders of this process still in use
 _SIGNALS = tuple(getattr(signal, name) for name in ("SIGTERM", "SIGHUP") if hasattr(signal, name))
 
 
@@ -100,14 +100,14 @@ def _pid_alive(pid: int) -> bool:
     except ProcessLookupError:
         return False
     except PermissionError:
-        return True                       # someone else's live process
+        return True  # someone else's live process
     except (OverflowError, OSError):
         return False
     return True
 
 
 def _staging_pid(name: str) -> int | None:
-    head, sep, _ = name[len(STAGING_PREFIX):].partition("-")
+    head, sep, _ = name[len(STAGING_PREFIX) :].partition("-")
     return int(head) if sep and head.isdigit() and len(head) < 12 else None
 
 
@@ -161,12 +161,12 @@ class Staging:
             raise
         _LIVE.add(self.tmp)
         self.names: list[str] = []
-        self.removals: list[str] = []   # old files of out_dir this run replaces by nothing
+        self.removals: list[str] = []  # old files of out_dir this run replaces by nothing
 
     def path(self, name: str) -> Path:
         """Where to write ``name`` for now (inside the staging folder)."""
         self.names.append(name)
-        (self.tmp / name).parent.mkdir(parents=True, exist_ok=True)   # a name may hold a subfolder
+        (self.tmp / name).parent.mkdir(parents=True, exist_ok=True)  # a name may hold a subfolder
         return self.tmp / name
 
     def write_text(self, name: str, text: str) -> None:
@@ -218,11 +218,11 @@ class Staging:
         self._remove_created()
 
     def _remove_created(self) -> None:
-        for p in reversed(self._created):     # innermost first; only if nothing else is in it
+        for p in reversed(self._created):  # innermost first; only if nothing else is in it
             try:
                 p.rmdir()
             except OSError as exc:
-                if exc.errno not in (errno.ENOENT, errno.ENAMETOOLONG):   # never made: go on
+                if exc.errno not in (errno.ENOENT, errno.ENAMETOOLONG):  # never made: go on
                     break
 
 

@@ -24,26 +24,38 @@ def report_dict(doc, geometry: SensorGeometry, resp: Response, extra: dict | Non
     layers = []
     for i, cell in enumerate(geometry.layers):
         reg = next(r for r in resp.regimes if r.layer == i + 1)
-        layers.append({
-            "layer": i + 1,
-            "theta_deg": cell.theta_deg, "t_mm": cell.t_mm, "h_mm": cell.h_mm, "b_mm": cell.b_mm,
-            "pad_half_width_mm": cell.p_mm, "wall_length_mm": cell.wall_length_mm,
-            "cavity_height_mm": cell.cavity_height_mm, "d_lock_mm": cell.d_lock_mm,
-            "k_N_per_mm": reg.k_layer_N_per_mm, "lock_force_N": reg.force_to_N,
-            "locks_in_regime": reg.index,
-        })
+        layers.append(
+            {
+                "layer": i + 1,
+                "theta_deg": cell.theta_deg,
+                "t_mm": cell.t_mm,
+                "h_mm": cell.h_mm,
+                "b_mm": cell.b_mm,
+                "pad_half_width_mm": cell.p_mm,
+                "wall_length_mm": cell.wall_length_mm,
+                "cavity_height_mm": cell.cavity_height_mm,
+                "d_lock_mm": cell.d_lock_mm,
+                "k_N_per_mm": reg.k_layer_N_per_mm,
+                "lock_force_N": reg.force_to_N,
+                "locks_in_regime": reg.index,
+            }
+        )
     regimes = []
     for r in resp.regimes:
-        regimes.append({
-            "regime": r.index, "locking_layer": r.layer,
-            "force_from_N": r.force_from_N, "force_to_N": r.force_to_N,
-            "k_effective_N_per_mm": r.k_effective_N_per_mm,
-            "sensitivity_secant_per_N": r.sensitivity_secant_per_N,
-            "sensitivity_local_min_per_N": r.sensitivity_min_per_N,
-            "sensitivity_local_max_per_N": r.sensitivity_max_per_N,
-            "force_resolution_N": r.force_resolution_N,
-            "force_resolution_worst_N": r.force_resolution_worst_N,
-        })
+        regimes.append(
+            {
+                "regime": r.index,
+                "locking_layer": r.layer,
+                "force_from_N": r.force_from_N,
+                "force_to_N": r.force_to_N,
+                "k_effective_N_per_mm": r.k_effective_N_per_mm,
+                "sensitivity_secant_per_N": r.sensitivity_secant_per_N,
+                "sensitivity_local_min_per_N": r.sensitivity_min_per_N,
+                "sensitivity_local_max_per_N": r.sensitivity_max_per_N,
+                "force_resolution_N": r.force_resolution_N,
+                "force_resolution_worst_N": r.force_resolution_worst_N,
+            }
+        )
     out = {
         "schema_version": SCHEMA_VERSION,
         "name": doc.name,
@@ -53,15 +65,20 @@ def report_dict(doc, geometry: SensorGeometry, resp: Response, extra: dict | Non
         "regimes": regimes,
         "range_N": resp.max_force_N,
         "out_of_range_above_N": resp.max_force_N,
-        "magnet": {"diameter_mm": geometry.magnet.diameter_mm, "thickness_mm": geometry.magnet.thickness_mm,
-                   "grade": geometry.magnet.grade, "remanence_T": resp.remanence_T},
+        "magnet": {
+            "diameter_mm": geometry.magnet.diameter_mm,
+            "thickness_mm": geometry.magnet.thickness_mm,
+            "grade": geometry.magnet.grade,
+            "remanence_T": resp.remanence_T,
+        },
         "gap0_mm": resp.gap0_mm,
         "gap_min_mm": resp.gap_min_mm,
         "B0_mT": resp.B0_T * 1e3,
         "B_full_load_mT": resp.B_full_T * 1e3,
         "dB_rel_full_load": resp.B_full_T / resp.B0_T - 1.0,
         "magnetometer": {
-            "model": "MLX90393", "board": geometry.board.key,
+            "model": "MLX90393",
+            "board": geometry.board.key,
             "gain_sel": setting.gain_sel if setting else None,
             "res": setting.res if setting else None,
             "z_uT_per_lsb": setting.z_uT_per_lsb if setting else None,
@@ -73,12 +90,15 @@ def report_dict(doc, geometry: SensorGeometry, resp: Response, extra: dict | Non
         },
         "geometry": {
             "total_height_mm": geometry.total_height_mm,
-            "base_length_mm": geometry.base_length_mm, "base_width_mm": geometry.base_width_mm,
-            "z_hall_mm": geometry.z_hall_mm, "z_magnet_bottom_mm": geometry.z_magnet_bottom_mm,
+            "base_length_mm": geometry.base_length_mm,
+            "base_width_mm": geometry.base_width_mm,
+            "z_hall_mm": geometry.z_hall_mm,
+            "z_magnet_bottom_mm": geometry.z_magnet_bottom_mm,
             "print_height_mm": geometry.depth_mm,
             "magnet_pause_after_layer": geometry.pause_after_layer,
             "magnet_pause_height_mm": geometry.pause_height_mm,
-            "chip_offset_mm": list(geometry.chip_offset_mm), "magnet_tilt_deg": geometry.magnet_tilt_deg,
+            "chip_offset_mm": list(geometry.chip_offset_mm),
+            "magnet_tilt_deg": geometry.magnet_tilt_deg,
         },
         "height_budget": geometry.height_budget_mm(),
         "warnings": list(resp.warnings),
@@ -92,8 +112,7 @@ def _undefined_reasons(resp: Response) -> dict:
     """Why a quantity of this response has no value (key -> sentence)."""
     reasons = {}
     if resp.chip_setting is None or not math.isfinite(resp.field_resolution_T):
-        why = ("undefined: the field saturates the MLX90393 at full load, so no gain setting "
-               "resolves it (see warnings)")
+        why = "undefined: the field saturates the MLX90393 at full load, so no gain setting resolves it (see warnings)"
         reasons.update(force_resolution_N=why, force_resolution_worst_N=why, field_resolution_uT=why)
     return reasons
 
@@ -110,13 +129,12 @@ def nulls_with_reasons(data: Any, reasons: dict | None = None) -> Any:
                 out[f"{key}_reason"] = reasons.get(key, "undefined: not a finite number for this design")
             else:
                 out[key] = nulls_with_reasons(value, reasons)
-        for key, value in data.items():           # a None the code set on purpose: say why too
+        for key, value in data.items():  # a None the code set on purpose: say why too
             if value is None and key in reasons and f"{key}_reason" not in out:
                 out[f"{key}_reason"] = reasons[key]
         return out
     if isinstance(data, (list, tuple)):
-        return [None if isinstance(v, float) and not math.isfinite(v) else nulls_with_reasons(v, reasons)
-                for v in data]
+        return [None if isinstance(v, float) and not math.isfinite(v) else nulls_with_reasons(v, reasons) for v in data]
     return data
 
 
@@ -126,12 +144,12 @@ def response_csv(resp: Response) -> str:
 
     buf = io.StringIO()
     buf.write("force_N,displacement_mm,gap_mm,Bx_mT,By_mT,Bz_mT,B_abs_mT,dB_rel,in_range,Bz_code_lsb\n")
-    data = np.column_stack([resp.force_N, resp.displacement_mm, resp.gap_mm, resp.B_T * 1e3,
-                            resp.B_abs_T * 1e3, resp.dB_rel])
+    data = np.column_stack(
+        [resp.force_N, resp.displacement_mm, resp.gap_mm, resp.B_T * 1e3, resp.B_abs_T * 1e3, resp.dB_rel]
+    )
     # what the chip would output along z at the chosen GAIN_SEL/RES (empty when saturated)
     setting = resp.chip_setting
-    codes = (quantise_lsb(resp.B_T[:, 2], setting.z_uT_per_lsb) if setting is not None
-             else [""] * len(data))
+    codes = quantise_lsb(resp.B_T[:, 2], setting.z_uT_per_lsb) if setting is not None else [""] * len(data)
     for row, ok, code in zip(data, resp.in_range, codes):
         buf.write(",".join(f"{v:.9g}" for v in row) + f",{int(ok)},{code}\n")
     return buf.getvalue()
@@ -140,35 +158,41 @@ def response_csv(resp: Response) -> str:
 def height_budget_line(geometry: SensorGeometry) -> str:
     """One line: the part's height split into layers and housing, and the gap's split."""
     b = geometry.height_budget_mm()
-    return (f"height {b['total_height_mm']:.2f} mm = layers {b['layers_mm']:.2f} + housing "
-            f"{b['housing_overhead_mm']:.2f} (base {b['base_mm']:.2f}, plates {b['plates_mm']:.2f}, "
-            f"cap {b['cap_mm']:.2f}); gap {b['gap0_mm']:.2f} mm = chip side {b['gap_chip_side_mm']:.2f} "
-            f"(board parts {b['board_headroom_mm']:.2f} mm tall) + stack {b['gap_stack_mm']:.2f} "
-            f"+ magnet side {b['gap_magnet_side_mm']:.2f}")
+    return (
+        f"height {b['total_height_mm']:.2f} mm = layers {b['layers_mm']:.2f} + housing "
+        f"{b['housing_overhead_mm']:.2f} (base {b['base_mm']:.2f}, plates {b['plates_mm']:.2f}, "
+        f"cap {b['cap_mm']:.2f}); gap {b['gap0_mm']:.2f} mm = chip side {b['gap_chip_side_mm']:.2f} "
+        f"(board parts {b['board_headroom_mm']:.2f} mm tall) + stack {b['gap_stack_mm']:.2f} "
+        f"+ magnet side {b['gap_magnet_side_mm']:.2f}"
+    )
 
 
 def terminal_table(doc, geometry: SensorGeometry, resp: Response) -> str:
     """The short table ``mst simulate`` prints."""
     targets = {i + 1: la for i, la in enumerate(doc.layers)}
-    lines = [f"{doc.name}: {len(geometry.layers)} layers, mechanics={resp.mechanics}, "
-             f"field={resp.field_model}",
-             f"{'regime':>6} {'layer':>5} {'theta':>6} {'t':>5} {'h':>5} {'k':>7} "
-             f"{'band [N]':>15} {'S [1/N]':>8} {'S min..max':>15} {'dF [mN]':>8}",
-             f"{'':>6} {'':>5} {'[deg]':>6} {'[mm]':>5} {'[mm]':>5} {'[N/mm]':>7}"]
+    lines = [
+        f"{doc.name}: {len(geometry.layers)} layers, mechanics={resp.mechanics}, field={resp.field_model}",
+        f"{'regime':>6} {'layer':>5} {'theta':>6} {'t':>5} {'h':>5} {'k':>7} "
+        f"{'band [N]':>15} {'S [1/N]':>8} {'S min..max':>15} {'dF [mN]':>8}",
+        f"{'':>6} {'':>5} {'[deg]':>6} {'[mm]':>5} {'[mm]':>5} {'[N/mm]':>7}",
+    ]
     for r in resp.regimes:
         c = geometry.layers[r.layer - 1]
         lines.append(
             f"{r.index:>6} {r.layer:>5} {c.theta_deg:>6.1f} {c.t_mm:>5.2f} {c.h_mm:>5.2f} "
             f"{r.k_layer_N_per_mm:>7.3f} {r.force_from_N:>7.3f}-{r.force_to_N:<7.3f} "
             f"{r.sensitivity_secant_per_N:>8.4f} {r.sensitivity_min_per_N:>7.4f}..{r.sensitivity_max_per_N:<6.4f} "
-            + (f"{r.force_resolution_N * 1e3:>8.2f}" if math.isfinite(r.force_resolution_N) else f"{'-':>8}"))
+            + (f"{r.force_resolution_N * 1e3:>8.2f}" if math.isfinite(r.force_resolution_N) else f"{'-':>8}")
+        )
         t = targets.get(r.index)
         if t is not None and t.has_targets:
-            lines[-1] += (f"   target S {t.target_sensitivity_per_N:g}, R {t.target_range_N:g}")
+            lines[-1] += f"   target S {t.target_sensitivity_per_N:g}, R {t.target_range_N:g}"
     s = resp.chip_setting
     chip = f"GAIN_SEL {s.gain_sel}, RES {s.res} ({s.z_uT_per_lsb} uT/LSB z)" if s else "SATURATED"
-    lines.append(f"gap {resp.gap0_mm:.2f} -> {resp.gap_min_mm:.2f} mm, B0 {resp.B0_T * 1e3:.3f} mT, "
-                 f"B full load {resp.B_full_T * 1e3:.3f} mT, Br {resp.remanence_T:g} T; chip {chip}")
+    lines.append(
+        f"gap {resp.gap0_mm:.2f} -> {resp.gap_min_mm:.2f} mm, B0 {resp.B0_T * 1e3:.3f} mT, "
+        f"B full load {resp.B_full_T * 1e3:.3f} mT, Br {resp.remanence_T:g} T; chip {chip}"
+    )
     lines.append(f"range ends at {resp.max_force_N:.3f} N (all layers locked; beyond is out of range)")
     lines.append(height_budget_line(geometry))
     for w in resp.warnings:
@@ -197,8 +221,13 @@ def plot_response(resp: Response, path, title: str = "") -> None:
 
     edges = [0.0] + list(locks)
     for i in range(len(locks)):
-        ax2.axvspan(edges[i], edges[i + 1], color=f"C{i}", alpha=0.12,
-                    label=f"regime {i + 1}: S={resp.regimes[i].sensitivity_secant_per_N:.3g}/N")
+        ax2.axvspan(
+            edges[i],
+            edges[i + 1],
+            color=f"C{i}",
+            alpha=0.12,
+            label=f"regime {i + 1}: S={resp.regimes[i].sensitivity_secant_per_N:.3g}/N",
+        )
     ax2.plot(resp.force_N[inr], resp.dB_rel[inr], color="k")
     ax2.plot(resp.force_N[~inr], resp.dB_rel[~inr], color="k", ls=":")
     ax2.set_xlabel("force F [N]")

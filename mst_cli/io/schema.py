@@ -47,7 +47,7 @@ MECHANICS_MODELS = ("spring", "frame", "continuum")
 
 
 # --------------------------------------------------------------------------- field rules
-RULE_KEYS = ("lo", "hi", "lo_open", "hi_open", "choices", "nullable", "unit")   # spec() metadata a Rule reads
+RULE_KEYS = ("lo", "hi", "lo_open", "hi_open", "choices", "nullable", "unit")  # spec() metadata a Rule reads
 
 
 def default_of(f) -> Any:
@@ -69,7 +69,7 @@ def adopt(owner: type, name: str, **changes: Any) -> Any:
 class Rule:
     """What one key accepts: a kind and optional bounds (open or closed) or choices."""
 
-    kind: str                       # "float", "int", "str", "bool", "pair", "bounds", "weights"
+    kind: str  # "float", "int", "str", "bool", "pair", "bounds", "weights"
     lo: float | None = None
     hi: float | None = None
     lo_open: bool = False
@@ -88,15 +88,23 @@ class Rule:
     def describe(self) -> str:
         unit = f" {self.unit}" if self.unit else ""
         if self.kind == "weights":
-            return (f"must be a mapping of weights >= {self.lo:g} (at least one > 0) with keys from "
-                    f"{', '.join(self.choices)}")
+            return (
+                f"must be a mapping of weights >= {self.lo:g} (at least one > 0) with keys from "
+                f"{', '.join(self.choices)}"
+            )
         if self.kind == "bounds":
-            return (f"must be [low, high] with {self.lo:g} <= low < high {'<' if self.hi_open else '<='} "
-                    f"{self.hi:g}{unit}")
+            return (
+                f"must be [low, high] with {self.lo:g} <= low < high {'<' if self.hi_open else '<='} {self.hi:g}{unit}"
+            )
         if self.choices:
             return "one of " + ", ".join(map(str, self.choices))
-        kind = {"float": "a number", "int": "an integer", "str": "a string", "bool": "true or false",
-                "pair": "a list of two numbers"}[self.kind]
+        kind = {
+            "float": "a number",
+            "int": "an integer",
+            "str": "a string",
+            "bool": "true or false",
+            "pair": "a list of two numbers",
+        }[self.kind]
         parts = []
         if self.lo is not None:
             parts.append(f"{'>' if self.lo_open else '>='} {self.lo:g}")
@@ -173,15 +181,18 @@ class Rule:
             if self.choices:
                 return ("one of " if len(self.choices) > 1 else "") + choices
             return {"str": "any text", "bool": "true or false"}[self.kind]
-        lo, hi = _number_text(self.lo), _number_text(self.hi)       # every number is bounded both ways
+        lo, hi = _number_text(self.lo), _number_text(self.hi)  # every number is bounded both ways
         below, above = ("<" if self.lo_open else "≤"), ("<" if self.hi_open else "≤")
         if self.kind == "weights":
             return f"weights {lo} {below} w {above} {hi} (at least one > 0) for any of {choices}"
         if self.kind == "bounds":
             return f"[low, high], {lo} {below} low < high {above} {hi}"
         span = f"{lo} {below} {'each' if self.kind == 'pair' else 'value'} {above} {hi}"
-        return ({"pair": "two numbers, ", "int": "integer, "}.get(self.kind, "") + span
-                + (", or null" if self.nullable else ""))
+        return (
+            {"pair": "two numbers, ", "int": "integer, "}.get(self.kind, "")
+            + span
+            + (", or null" if self.nullable else "")
+        )
 
 
 def _number_text(value) -> str:
@@ -201,8 +212,9 @@ class CellFamily:
     contact_allowance_mm: float = adopt(geo.HexCell, "contact_allowance_mm")
 
     def cell(self, theta_deg: float, t_mm: float, h_mm: float) -> geo.HexCell:
-        return geo.HexCell(float(theta_deg), float(t_mm), float(h_mm), self.width_mm, self.depth_mm,
-                           self.contact_allowance_mm)
+        return geo.HexCell(
+            float(theta_deg), float(t_mm), float(h_mm), self.width_mm, self.depth_mm, self.contact_allowance_mm
+        )
 
 
 @dataclass(frozen=True)
@@ -210,8 +222,14 @@ class MaterialSection:
     """The ``material`` section: :class:`Material`'s fields with its defaults, bounded here."""
 
     name: str = adopt(Material, "name", meaning="name of the printed material")
-    youngs_modulus_MPa: float = adopt(Material, "youngs_modulus_MPa", lo=1e-3, hi=1e5, unit="MPa",
-                                      meaning="small-strain Young's modulus (NinjaTek NinjaFlex 85A data sheet)")
+    youngs_modulus_MPa: float = adopt(
+        Material,
+        "youngs_modulus_MPa",
+        lo=1e-3,
+        hi=1e5,
+        unit="MPa",
+        meaning="small-strain Young's modulus (NinjaTek NinjaFlex 85A data sheet)",
+    )
     poisson_ratio: float = adopt(Material, "poisson_ratio", lo=0.0, hi=0.5, hi_open=True, meaning="Poisson's ratio ν")
 
 
@@ -225,13 +243,19 @@ class MagnetSection:
     diameter_mm: float = adopt(geo.Magnet, "diameter_mm")
     thickness_mm: float = adopt(geo.Magnet, "thickness_mm")
     grade: str = adopt(geo.Magnet, "grade")
-    remanence_T: float | None = spec(None, lo=0.01, hi=2.0, unit="T", nullable=True,
-                                     meaning=f"Br; null means the grade's mid value "
-                                             f"({_GRADE}: {grade_remanence_T(_GRADE):.2f} T)")
+    remanence_T: float | None = spec(
+        None,
+        lo=0.01,
+        hi=2.0,
+        unit="T",
+        nullable=True,
+        meaning=f"Br; null means the grade's mid value ({_GRADE}: {grade_remanence_T(_GRADE):.2f} T)",
+    )
 
     def magnet(self) -> geo.Magnet:
-        return geo.Magnet(self.diameter_mm, self.thickness_mm, self.remanence_T or grade_remanence_T(self.grade),
-                          self.grade)
+        return geo.Magnet(
+            self.diameter_mm, self.thickness_mm, self.remanence_T or grade_remanence_T(self.grade), self.grade
+        )
 
 
 @dataclass(frozen=True)
@@ -239,10 +263,18 @@ class MagnetometerSection:
     """The ``magnetometer`` section: the chip, its board and where it sits."""
 
     model: str = spec("MLX90393", choices=("MLX90393",), meaning="the magnetometer chip")
-    board: str = spec(DEFAULT_BOARD, choices=tuple(BOARDS),
-                      meaning="carrier board (docs/design.md §8): its tallest part sets the housing's headroom")
-    noise_uT_rms: float = spec(DEFAULT_NOISE_uT, lo=0.0, hi=1000.0, unit="uT",
-                               meaning="RMS field noise; the force resolution uses the larger of this and one LSB")
+    board: str = spec(
+        DEFAULT_BOARD,
+        choices=tuple(BOARDS),
+        meaning="carrier board (docs/design.md §8): its tallest part sets the housing's headroom",
+    )
+    noise_uT_rms: float = spec(
+        DEFAULT_NOISE_uT,
+        lo=0.0,
+        hi=1000.0,
+        unit="uT",
+        meaning="RMS field noise; the force resolution uses the larger of this and one LSB",
+    )
     chip_offset_mm: tuple[float, float] = adopt(geo.SensorGeometry, "chip_offset_mm")
     magnet_tilt_deg: float = adopt(geo.SensorGeometry, "magnet_tilt_deg")
 
@@ -251,20 +283,32 @@ class MagnetometerSection:
 class ModelSection:
     """The ``model`` section: which models answer."""
 
-    mechanics: str = spec("spring", choices=MECHANICS_MODELS,
-                          meaning="mechanics of a layer: `spring` (L0), `frame` (L1), `continuum` (L2)")
-    field: str = spec("auto", choices=("auto",) + FIELD_MODELS,
-                      meaning="magnet field model; `auto` is the cheapest exact one: `axial` on the axis, "
-                              "`cylinder` off it (`dipole` only when asked)")
+    mechanics: str = spec(
+        "spring",
+        choices=MECHANICS_MODELS,
+        meaning="mechanics of a layer: `spring` (L0), `frame` (L1), `continuum` (L2)",
+    )
+    field: str = spec(
+        "auto",
+        choices=("auto",) + FIELD_MODELS,
+        meaning="magnet field model; `auto` is the cheapest exact one: `axial` on the axis, "
+        "`cylinder` off it (`dipole` only when asked)",
+    )
     # relative accuracy of layer stiffness and lock force against the continuum reference: the
     # tool picks the cheapest mechanics rung whose measured median errors meet it (mst_cli.model.ladder)
     accuracy_rel: float | None = spec(
-        None, lo=1e-4, hi=1.0, hi_open=True, nullable=True, omit_default=True,
+        None,
+        lo=1e-4,
+        hi=1.0,
+        hi_open=True,
+        nullable=True,
+        omit_default=True,
         meaning="requested relative accuracy of the layer stiffness and of the lock force against the "
-                "`continuum` reference (e.g. 0.05 for 5 %): `mst simulate` uses the cheapest mechanics rung "
-                "whose measured median errors (`mst bench`) in both meet it, `mst design` refines with that rung "
-                "(`spring`: no refinement), and both print which rung was picked. An explicit `--mechanics` / "
-                "`--refine` flag wins; `mechanics` is then ignored")
+        "`continuum` reference (e.g. 0.05 for 5 %): `mst simulate` uses the cheapest mechanics rung "
+        "whose measured median errors (`mst bench`) in both meet it, `mst design` refines with that rung "
+        "(`spring`: no refinement), and both print which rung was picked. An explicit `--mechanics` / "
+        "`--refine` flag wins; `mechanics` is then ignored",
+    )
 
 
 @dataclass(frozen=True)
@@ -278,51 +322,86 @@ class DesignOptions:
 
     tolerance_rel: float = spec(0.02, lo=1e-4, hi=0.5, meaning="relative tolerance on every S_i and R_i")
     theta_deg_bounds: tuple[float, float] = spec(
-        VERIFIED_BOX["theta_deg"], kind="bounds", lo=1.0, hi=89.0, unit="deg",
+        VERIFIED_BOX["theta_deg"],
+        kind="bounds",
+        lo=1.0,
+        hi=89.0,
+        unit="deg",
         meaning="bounds of θ (default: the box the mechanics are fitted and verified on; the part prints on "
-                "its side, so θ sets no overhang)")
-    t_mm_bounds: tuple[float, float] = spec(VERIFIED_BOX["t_mm"], kind="bounds", lo=0.01, hi=100.0, unit="mm",
-                                            meaning="bounds of t (the default starts at one nozzle line)")
-    h_mm_bounds: tuple[float, float] = spec(VERIFIED_BOX["h_mm"], kind="bounds", lo=0.01, hi=100.0, unit="mm",
-                                            meaning="bounds of h")
-    max_height_mm: float | None = spec(None, lo=1.0, hi=1000.0, unit="mm", nullable=True,
-                                       meaning="optional limit on the printed sensor's total height")
+        "its side, so θ sets no overhang)",
+    )
+    t_mm_bounds: tuple[float, float] = spec(
+        VERIFIED_BOX["t_mm"],
+        kind="bounds",
+        lo=0.01,
+        hi=100.0,
+        unit="mm",
+        meaning="bounds of t (the default starts at one nozzle line)",
+    )
+    h_mm_bounds: tuple[float, float] = spec(
+        VERIFIED_BOX["h_mm"], kind="bounds", lo=0.01, hi=100.0, unit="mm", meaning="bounds of h"
+    )
+    max_height_mm: float | None = spec(
+        None, lo=1.0, hi=1000.0, unit="mm", nullable=True, meaning="optional limit on the printed sensor's total height"
+    )
     lock_margin_rel: float = spec(0.1, lo=0.0, hi=1.0, meaning="R_(i+1) ≥ (1 + margin) R_i")
     saturation_margin_rel: float = spec(0.1, lo=0.0, hi=0.9, meaning="chip field ≤ (1 − margin) × 50 mT")
     seed: int = spec(0, lo=SEED_RANGE[0], hi=SEED_RANGE[1], meaning="random seed of the multi-start")
     max_evaluations: int = spec(20000, lo=10, hi=10_000_000, meaning="cap on forward evaluations")
     # weights of the preference among designs that meet the targets (mst_cli.design.problem)
     objective: dict[str, float] = spec(
-        default_factory=lambda: dict(DEFAULT_OBJECTIVE), kind="weights", choices=OBJECTIVE_TERMS, lo=0.0, hi=1e3,
+        default_factory=lambda: dict(DEFAULT_OBJECTIVE),
+        kind="weights",
+        choices=OBJECTIVE_TERMS,
+        lo=0.0,
+        hi=1e3,
         meaning="weights of the preference among the designs that meet every target (any subset of the keys; "
-                "the others keep their default): `height` prices ln(total part height), `force_resolution` "
-                "ln(worst noise-limited force resolution σ_B / (B0 min S_i)), `print_robustness` the RMS relative "
-                "change of every S_i and R_i with every wall printed ± `printer.wall_tolerance_mm`. "
-                "`mst design --pareto N` maps the whole trade")
+        "the others keep their default): `height` prices ln(total part height), `force_resolution` "
+        "ln(worst noise-limited force resolution σ_B / (B0 min S_i)), `print_robustness` the RMS relative "
+        "change of every S_i and R_i with every wall printed ± `printer.wall_tolerance_mm`. "
+        "`mst design --pareto N` maps the whole trade",
+    )
     max_print_deviation_rel: float | None = spec(
-        None, lo=1e-3, hi=0.95, nullable=True,
+        None,
+        lo=1e-3,
+        hi=0.95,
+        nullable=True,
         meaning="optional limit on the worst relative change of any S_i or R_i when every wall is printed "
-                "± `printer.wall_tolerance_mm`: a constraint, not a weight. When no design meets it, `mst design` "
-                "exits 1 and names the lowest part height at which one does (or says that none does)")
+        "± `printer.wall_tolerance_mm`: a constraint, not a weight. When no design meets it, `mst design` "
+        "exits 1 and names the lowest part height at which one does (or says that none does)",
+    )
 
 
 @dataclass(frozen=True)
 class LayerEntry:
     """One entry of ``layers``: the geometry (a design), the targets (a spec) or both."""
 
-    theta_deg: float | None = spec(None, lo=0.1, hi=90.0, hi_open=True, unit="deg", omit_default=True,
-                                   meaning="strut wall angle from horizontal")
-    t_mm: float | None = spec(None, lo=0.01, hi=100.0, unit="mm", omit_default=True,
-                              meaning="wall (and pad) thickness t")
+    theta_deg: float | None = spec(
+        None, lo=0.1, hi=90.0, hi_open=True, unit="deg", omit_default=True, meaning="strut wall angle from horizontal"
+    )
+    t_mm: float | None = spec(
+        None, lo=0.01, hi=100.0, unit="mm", omit_default=True, meaning="wall (and pad) thickness t"
+    )
     h_mm: float | None = spec(None, lo=0.01, hi=100.0, unit="mm", omit_default=True, meaning="layer height h (outer)")
     target_sensitivity_per_N: float | None = spec(
-        None, lo=1e-6, hi=1e3, unit="1/N", omit_default=True,
-        meaning="spec: secant sensitivity S_i of regime i, (ΔB/B0 over the band) / band width")
+        None,
+        lo=1e-6,
+        hi=1e3,
+        unit="1/N",
+        omit_default=True,
+        meaning="spec: secant sensitivity S_i of regime i, (ΔB/B0 over the band) / band width",
+    )
     target_range_N: float | None = spec(
-        None, lo=1e-3, hi=1e4, unit="N", omit_default=True,
-        meaning="spec: force R_i at which regime i ends (cumulative: regimes are 0–R_1, R_1–R_2, …)")
-    weight: float = spec(1.0, lo=1e-3, hi=1e3, omit_default=True,
-                         meaning="spec: weight of this layer's targets in the objective")
+        None,
+        lo=1e-3,
+        hi=1e4,
+        unit="N",
+        omit_default=True,
+        meaning="spec: force R_i at which regime i ends (cumulative: regimes are 0–R_1, R_1–R_2, …)",
+    )
+    weight: float = spec(
+        1.0, lo=1e-3, hi=1e3, omit_default=True, meaning="spec: weight of this layer's targets in the objective"
+    )
 
     @property
     def has_geometry(self) -> bool:
@@ -344,8 +423,9 @@ SECTION_TYPES: dict[str, type] = {
     "model": ModelSection,
     "design": DesignOptions,
 }
-SECTIONS: dict[str, dict[str, Rule]] = {name: {f.name: Rule.of(f) for f in fields(cls)}
-                                        for name, cls in SECTION_TYPES.items()}
+SECTIONS: dict[str, dict[str, Rule]] = {
+    name: {f.name: Rule.of(f) for f in fields(cls)} for name, cls in SECTION_TYPES.items()
+}
 LAYER_RULES: dict[str, Rule] = {f.name: Rule.of(f) for f in fields(LayerEntry)}
 DEFAULT_DESIGN = {f.name: default_of(f) for f in fields(DesignOptions)}
 
@@ -353,13 +433,12 @@ DEFAULT_DESIGN = {f.name: default_of(f) for f in fields(DesignOptions)}
 # refused with that reason rather than silently built differently).
 REMOVED_KEYS: dict[str, str] = {
     "family.struts_per_chevron": "removed in mst 0.2: the cell is one continuous web through the "
-                                 "whole depth (the part prints on its side); delete the key",
-    "family.strut_width_mm": "removed in mst 0.2: the web runs the whole depth_mm; delete the key "
-                             "and set depth_mm",
+    "whole depth (the part prints on its side); delete the key",
+    "family.strut_width_mm": "removed in mst 0.2: the web runs the whole depth_mm; delete the key and set depth_mm",
     "housing.pocket_chamfer_mm": "removed in mst 0.2: the pocket is open upwards in the print until "
-                                 "the magnet pause; delete the key",
+    "the magnet pause; delete the key",
     "housing.cable_exit_width_mm": "removed in mst 0.2: cables leave through the slot's open end "
-                                   "and the connector windows; delete the key",
+    "and the connector windows; delete the key",
 }
 
 GEOMETRY_KEYS = ("theta_deg", "t_mm", "h_mm")
@@ -384,21 +463,25 @@ class Document:
     housing: geo.Housing
     printer: geo.Printer
     mechanics: str
-    field_model: str            # "auto" or one of FIELD_MODELS
+    field_model: str  # "auto" or one of FIELD_MODELS
     design: dict
     source: str = "<memory>"
-    accuracy_rel: float | None = None   # model.accuracy_rel: requested accuracy of k and R
+    accuracy_rel: float | None = None  # model.accuracy_rel: requested accuracy of k and R
 
     def section(self, name: str) -> Any:
         """The values of the file section ``name``, as an object with its keys as attributes."""
         if name == "magnetometer":
-            return MagnetometerSection(board=self.board.key, noise_uT_rms=self.noise_uT_rms,
-                                       chip_offset_mm=tuple(self.chip_offset_mm), magnet_tilt_deg=self.magnet_tilt_deg)
+            return MagnetometerSection(
+                board=self.board.key,
+                noise_uT_rms=self.noise_uT_rms,
+                chip_offset_mm=tuple(self.chip_offset_mm),
+                magnet_tilt_deg=self.magnet_tilt_deg,
+            )
         if name == "model":
             return ModelSection(mechanics=self.mechanics, field=self.field_model, accuracy_rel=self.accuracy_rel)
         if name == "design":
             return DesignOptions(**self.design)
-        return getattr(self, name)      # family, material, magnet, housing, printer: kept as the file has them
+        return getattr(self, name)  # family, material, magnet, housing, printer: kept as the file has them
 
     @property
     def is_design(self) -> bool:
@@ -413,24 +496,30 @@ class Document:
         if cells is None:
             self.require_geometry()
             cells = [self.family.cell(la.theta_deg, la.t_mm, la.h_mm) for la in self.layers]
-        return geo.SensorGeometry(tuple(cells), self.magnet, self.board, self.housing,
-                                  self.chip_offset_mm, self.magnet_tilt_deg, self.printer)
+        return geo.SensorGeometry(
+            tuple(cells), self.magnet, self.board, self.housing, self.chip_offset_mm, self.magnet_tilt_deg, self.printer
+        )
 
     def require_geometry(self) -> None:
         for i, layer in enumerate(self.layers):
             for key in GEOMETRY_KEYS:
                 if getattr(layer, key) is None:
-                    raise InputError(f"layers[{i}].{key}", None,
-                                     "a design needs theta_deg, t_mm and h_mm for every layer "
-                                     "(this looks like a spec: run 'mst design' on it)")
+                    raise InputError(
+                        f"layers[{i}].{key}",
+                        None,
+                        "a design needs theta_deg, t_mm and h_mm for every layer "
+                        "(this looks like a spec: run 'mst design' on it)",
+                    )
 
     def require_targets(self) -> None:
         for i, layer in enumerate(self.layers):
             for key in TARGET_KEYS:
                 if getattr(layer, key) is None:
-                    raise InputError(f"layers[{i}].{key}", None,
-                                     "a spec needs target_sensitivity_per_N and target_range_N "
-                                     "for every layer")
+                    raise InputError(
+                        f"layers[{i}].{key}",
+                        None,
+                        "a spec needs target_sensitivity_per_N and target_range_N for every layer",
+                    )
 
     def with_layers(self, layers) -> Document:
         return replace(self, layers=tuple(layers))
@@ -470,17 +559,28 @@ def _design_options(given: dict) -> dict:
 def parse_document(raw: Any, source: str = "<memory>") -> Document:
     """Validate a parsed YAML mapping and build a :class:`Document`."""
     if not isinstance(raw, dict):
-        raise InputError("(file)", type(raw).__name__ if raw is not None else None,
-                         "must be a YAML mapping with at least a 'layers' list")
+        raise InputError(
+            "(file)",
+            type(raw).__name__ if raw is not None else None,
+            "must be a YAML mapping with at least a 'layers' list",
+        )
     for key in raw:
         if key not in TOP_KEYS:
             raise InputError(str(key), raw[key], "unknown top-level key; allowed: " + ", ".join(TOP_KEYS))
     name = raw.get("name", Path(source).stem if source != "<memory>" else "sensor")
     name = Rule("str").check("name", name)
-    if (not name or any(c in name for c in "/\\") or name.startswith(".")
-            or any(ord(c) < 32 or ord(c) == 127 for c in name)):
-        raise InputError("name", name, "must be a non-empty file-name-safe string (no '/', '\\', "
-                                       "control characters or NUL; not starting with '.')")
+    if (
+        not name
+        or any(c in name for c in "/\\")
+        or name.startswith(".")
+        or any(ord(c) < 32 or ord(c) == 127 for c in name)
+    ):
+        raise InputError(
+            "name",
+            name,
+            "must be a non-empty file-name-safe string (no '/', '\\', "
+            "control characters or NUL; not starting with '.')",
+        )
 
     # the sections in file order, each from its declaration: keys not given take its defaults
     family = CellFamily(**_section(raw, "family"))
@@ -495,22 +595,29 @@ def parse_document(raw: Any, source: str = "<memory>") -> Document:
 
     # The housing rules (printable depth, pocket and slot inside the body) do not depend on the
     # layers' theta, t, h: check them on any cell of the family, before any design work.
-    probe = geo.SensorGeometry((family.cell(45.0, 1.0, 3.0),), magnet, board, housing, meter.chip_offset_mm,
-                               0.0, printer)
+    probe = geo.SensorGeometry(
+        (family.cell(45.0, 1.0, 3.0),), magnet, board, housing, meter.chip_offset_mm, 0.0, printer
+    )
     for field_name, value, allowed in probe.housing_violations():
         raise InputError(field_name, value, allowed)
 
     layers_raw = raw.get("layers")
     if not isinstance(layers_raw, list) or not 1 <= len(layers_raw) <= MAX_LAYERS:
-        raise InputError("layers", layers_raw if not isinstance(layers_raw, list) else f"{len(layers_raw)} layers",
-                         f"must be a list of 1 to {MAX_LAYERS} layers (bottom to top): each adds at least 2 mm "
-                         "of height and moves the magnet away from the chip")
+        raise InputError(
+            "layers",
+            layers_raw if not isinstance(layers_raw, list) else f"{len(layers_raw)} layers",
+            f"must be a list of 1 to {MAX_LAYERS} layers (bottom to top): each adds at least 2 mm "
+            "of height and moves the magnet away from the chip",
+        )
     layers = []
     for i, entry in enumerate(layers_raw):
         path = f"layers[{i}]"
         if not isinstance(entry, dict):
-            raise InputError(path, entry, "must be a mapping with theta_deg, t_mm, h_mm "
-                                          "and/or target_sensitivity_per_N, target_range_N")
+            raise InputError(
+                path,
+                entry,
+                "must be a mapping with theta_deg, t_mm, h_mm and/or target_sensitivity_per_N, target_range_N",
+            )
         values = {}
         for key, value in entry.items():
             if key not in LAYER_RULES:
@@ -519,17 +626,32 @@ def parse_document(raw: Any, source: str = "<memory>") -> Document:
         layer = LayerEntry(**values)
         if not (layer.has_geometry or layer.has_targets):
             missing = [k for k in GEOMETRY_KEYS + TARGET_KEYS if getattr(layer, k) is None]
-            raise InputError(f"{path}.{missing[0]}", None,
-                             "each layer needs theta_deg, t_mm, h_mm (a design) or "
-                             "target_sensitivity_per_N, target_range_N (a spec)")
+            raise InputError(
+                f"{path}.{missing[0]}",
+                None,
+                "each layer needs theta_deg, t_mm, h_mm (a design) or "
+                "target_sensitivity_per_N, target_range_N (a spec)",
+            )
         layers.append(layer)
 
     return Document(
-        name=name, layers=tuple(layers), family=family, material=material, magnet=magnet,
-        board=board, noise_uT_rms=meter.noise_uT_rms, chip_offset_mm=meter.chip_offset_mm,
-        magnet_tilt_deg=meter.magnet_tilt_deg, housing=housing, printer=printer,
-        mechanics=model.mechanics, field_model=model.field,
-        design=design, source=source, accuracy_rel=model.accuracy_rel)
+        name=name,
+        layers=tuple(layers),
+        family=family,
+        material=material,
+        magnet=magnet,
+        board=board,
+        noise_uT_rms=meter.noise_uT_rms,
+        chip_offset_mm=meter.chip_offset_mm,
+        magnet_tilt_deg=meter.magnet_tilt_deg,
+        housing=housing,
+        printer=printer,
+        mechanics=model.mechanics,
+        field_model=model.field,
+        design=design,
+        source=source,
+        accuracy_rel=model.accuracy_rel,
+    )
 
 
 def load_document(path: str | Path) -> Document:
@@ -543,8 +665,9 @@ def load_document(path: str | Path) -> Document:
     try:
         raw = load_text(text)
     except YAMLRefused as exc:
-        raise InputError(exc.path, exc.value, (f"line {exc.line}: " if exc.line is not None else "")
-                         + exc.reason) from None
+        raise InputError(
+            exc.path, exc.value, (f"line {exc.line}: " if exc.line is not None else "") + exc.reason
+        ) from None
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         where = f" at line {mark.line + 1}" if mark is not None else ""
@@ -587,19 +710,23 @@ def design_geometry(doc: Document) -> geo.SensorGeometry:
     """The sensor of a design document whose cells are all valid; InputError on any broken rule."""
     geometry = doc.geometry()
     for i, v in geometry.violations(doc.printer):
-        raise InputError(f"layers[{i}]", {"theta_deg": geometry.layers[i].theta_deg,
-                                          "t_mm": geometry.layers[i].t_mm,
-                                          "h_mm": geometry.layers[i].h_mm},
-                         f"invalid cell ({v.rule}): {v.message}")
+        raise InputError(
+            f"layers[{i}]",
+            {
+                "theta_deg": geometry.layers[i].theta_deg,
+                "t_mm": geometry.layers[i].t_mm,
+                "h_mm": geometry.layers[i].h_mm,
+            },
+            f"invalid cell ({v.rule}): {v.message}",
+        )
     return geometry
-
 
 
 # --------------------------------------------------------------------------- docs/file-format.md
 def _default_markdown(f, rule: Rule) -> str:
     value = default_of(f)
     if value is None:
-        return "null" if rule.nullable else "—"        # — : no default (a layer gives a group or none)
+        return "null" if rule.nullable else "—"  # — : no default (a layer gives a group or none)
     if isinstance(value, str):
         return f"`{value}`"
     if isinstance(value, dict):
@@ -615,8 +742,13 @@ def field_table_markdown(section: str) -> str:
     rows = ["| key | allowed | unit | default | meaning |", "|---|---|---|---|---|"]
     for f in fields(declared):
         rule = Rule.of(f)
-        cells = (f"`{prefix}.{f.name}`", rule.allowed_markdown(), rule.unit or "–", _default_markdown(f, rule),
-                 f.metadata["meaning"])
+        cells = (
+            f"`{prefix}.{f.name}`",
+            rule.allowed_markdown(),
+            rule.unit or "–",
+            _default_markdown(f, rule),
+            f.metadata["meaning"],
+        )
         rows.append("| " + " | ".join(c.replace("|", "\\|") for c in cells) + " |")
     return "\n".join(rows)
 
@@ -630,7 +762,7 @@ def with_field_tables(text: str) -> str:
     return FIELD_TABLE.sub(lambda m: m.group(1) + field_table_markdown(m.group(2)) + "\n" + m.group(3), text)
 
 
-if __name__ == "__main__":     # rewrite the field tables of the files named (docs/file-format.md)
+if __name__ == "__main__":  # rewrite the field tables of the files named (docs/file-format.md)
     import sys
 
     for doc_path in map(Path, sys.argv[1:]):

@@ -30,12 +30,21 @@ import time
 
 NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
 UNIT = r"(?:uT(?:esla)?|µT(?:esla)?|μT(?:esla)?|microtesla|mT|mG|G|gauss)"
-UNIT_SCALE_uT = {"ut": 1.0, "utesla": 1.0, "µt": 1.0, "µtesla": 1.0, "μt": 1.0, "μtesla": 1.0,
-                 "microtesla": 1.0, "mt": 1000.0, "mg": 0.1, "g": 100.0, "gauss": 100.0}
-LABELLED = re.compile(rf"(?<![A-Za-z])(?:B|mag)?\s*([XYZ])\s*[:=]\s*({NUMBER})\s*({UNIT})?(?![A-Za-z])",
-                      re.IGNORECASE)
-BARE = re.compile(rf"^\s*({NUMBER})\s*[,;\s]\s*({NUMBER})\s*[,;\s]\s*({NUMBER})\s*({UNIT})?\s*$",
-                  re.IGNORECASE)
+UNIT_SCALE_uT = {
+    "ut": 1.0,
+    "utesla": 1.0,
+    "µt": 1.0,
+    "µtesla": 1.0,
+    "μt": 1.0,
+    "μtesla": 1.0,
+    "microtesla": 1.0,
+    "mt": 1000.0,
+    "mg": 0.1,
+    "g": 100.0,
+    "gauss": 100.0,
+}
+LABELLED = re.compile(rf"(?<![A-Za-z])(?:B|mag)?\s*([XYZ])\s*[:=]\s*({NUMBER})\s*({UNIT})?(?![A-Za-z])", re.IGNORECASE)
+BARE = re.compile(rf"^\s*({NUMBER})\s*[,;\s]\s*({NUMBER})\s*[,;\s]\s*({NUMBER})\s*({UNIT})?\s*$", re.IGNORECASE)
 TRAILING_UNIT = re.compile(rf"({UNIT})\s*$", re.IGNORECASE)
 
 
@@ -118,6 +127,7 @@ class LineSource:
         self._fd = None
         try:
             import termios  # noqa: F401
+
             posix = True
         except ImportError:
             posix = False
@@ -129,17 +139,18 @@ class LineSource:
             except BaseException:
                 os.close(self._fd)
                 raise
-        else:                              # pragma: no cover - Windows
+        else:  # pragma: no cover - Windows
             try:
                 import serial
             except ImportError:
-                raise OSError(0, "reading a serial port on this platform needs pyserial "
-                                 "(pip install pyserial)", port) from None
+                raise OSError(
+                    0, "reading a serial port on this platform needs pyserial (pip install pyserial)", port
+                ) from None
             self._serial = serial.Serial(port, baud, timeout=0.2)
 
     def _read(self, wait_s: float) -> bytes | None:
         """Up to 4096 bytes; b"" if nothing arrived within wait_s; None at end of stream."""
-        if self._serial is not None:       # pragma: no cover - Windows
+        if self._serial is not None:  # pragma: no cover - Windows
             data = self._serial.read(4096)
             return data
         ready, _, _ = select.select([self._fd], [], [], wait_s)
@@ -150,7 +161,7 @@ class LineSource:
         except BlockingIOError:
             return b""
         except OSError as exc:
-            if exc.errno == 5:             # EIO: the other end of a (pseudo-)terminal closed
+            if exc.errno == 5:  # EIO: the other end of a (pseudo-)terminal closed
                 return None
             raise
         return data if data else None
@@ -170,7 +181,7 @@ class LineSource:
                     yield raw_line.decode("utf-8", errors="replace").rstrip("\r")
             elif self.timeout_s is not None and time.monotonic() - last > self.timeout_s:
                 break
-            if len(buf) > 1 << 16:         # no newline in 64 KB: not a line protocol
+            if len(buf) > 1 << 16:  # no newline in 64 KB: not a line protocol
                 buf = b""
         if buf.strip():
             yield buf.decode("utf-8", errors="replace").rstrip("\r")
@@ -179,7 +190,7 @@ class LineSource:
         if self._fd is not None:
             os.close(self._fd)
             self._fd = None
-        if self._serial is not None:       # pragma: no cover - Windows
+        if self._serial is not None:  # pragma: no cover - Windows
             self._serial.close()
             self._serial = None
 
@@ -190,8 +201,17 @@ def _set_raw(fd: int, baud: int) -> None:
 
     attrs = termios.tcgetattr(fd)
     iflag, oflag, cflag, lflag, ispeed, ospeed, cc = attrs
-    iflag &= ~(termios.IGNBRK | termios.BRKINT | termios.PARMRK | termios.ISTRIP | termios.INLCR
-               | termios.IGNCR | termios.ICRNL | termios.IXON | termios.IXOFF)
+    iflag &= ~(
+        termios.IGNBRK
+        | termios.BRKINT
+        | termios.PARMRK
+        | termios.ISTRIP
+        | termios.INLCR
+        | termios.IGNCR
+        | termios.ICRNL
+        | termios.IXON
+        | termios.IXOFF
+    )
     oflag &= ~termios.OPOST
     lflag &= ~(termios.ECHO | termios.ECHONL | termios.ICANON | termios.ISIG | termios.IEXTEN)
     cflag &= ~(termios.CSIZE | termios.PARENB | termios.CSTOPB)

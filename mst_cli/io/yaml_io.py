@@ -59,7 +59,7 @@ class StrictLoader(yaml.SafeLoader):
 
     def __init__(self, stream):
         super().__init__(stream)
-        self._expanded = 0                  # nodes so far, every alias counted as its whole value
+        self._expanded = 0  # nodes so far, every alias counted as its whole value
         self._depth = 0
         self._anchor_sizes: dict[str, int] = {}
         self._open_anchors: set[str] = set()
@@ -68,16 +68,23 @@ class StrictLoader(yaml.SafeLoader):
         self._expanded += n
         if self._expanded > MAX_NODES:
             what = f"*{event.anchor}" if isinstance(event, yaml.AliasEvent) else f"{MAX_NODES}+ values"
-            raise YAMLRefused("(file)", _line(event), what,
-                              f"more than {MAX_NODES} values (aliases expanded): a design file "
-                              "holds a few dozen")
+            raise YAMLRefused(
+                "(file)",
+                _line(event),
+                what,
+                f"more than {MAX_NODES} values (aliases expanded): a design file holds a few dozen",
+            )
 
     def compose_node(self, parent: yaml.Node | None, index: int | yaml.Node | None) -> yaml.Node | None:
         event = self.peek_event()
         if isinstance(event, yaml.AliasEvent):
             if event.anchor in self._open_anchors:
-                raise YAMLRefused("(file)", _line(event), f"*{event.anchor}",
-                                  "an alias inside the value it names (recursive): write the value out")
+                raise YAMLRefused(
+                    "(file)",
+                    _line(event),
+                    f"*{event.anchor}",
+                    "an alias inside the value it names (recursive): write the value out",
+                )
             self._count(self._anchor_sizes.get(event.anchor, 1), event)
             return super().compose_node(parent, index)
         self._count(1, event)
@@ -87,8 +94,9 @@ class StrictLoader(yaml.SafeLoader):
             self._open_anchors.add(anchor)
         self._depth += 1
         if self._depth > MAX_DEPTH:
-            raise YAMLRefused("(file)", _line(event), f"{MAX_DEPTH}+ levels",
-                              f"nested too deeply: at most {MAX_DEPTH} levels")
+            raise YAMLRefused(
+                "(file)", _line(event), f"{MAX_DEPTH}+ levels", f"nested too deeply: at most {MAX_DEPTH} levels"
+            )
         try:
             node = super().compose_node(parent, index)
         finally:
@@ -121,19 +129,19 @@ def check_keys(node, path: str = "") -> None:
             seen: dict[tuple, int | None] = {}
             for key, value in node.value:
                 if not isinstance(key, yaml.ScalarNode):
-                    raise YAMLRefused(path or "(file)", _line(key), "a list or mapping as key",
-                                      "keys must be plain names")
+                    raise YAMLRefused(
+                        path or "(file)", _line(key), "a list or mapping as key", "keys must be plain names"
+                    )
                 name = _key_text(key)
                 sub = f"{path}.{name}" if path else name
                 if key.tag == "tag:yaml.org,2002:merge":
-                    raise YAMLRefused(sub, _line(key), "<<", "merge keys are not accepted: write "
-                                                             "the keys out")
+                    raise YAMLRefused(sub, _line(key), "<<", "merge keys are not accepted: write the keys out")
                 ident = (key.tag, key.value)
                 if ident in seen:
                     shown = value.value if isinstance(value, yaml.ScalarNode) else "..."
-                    raise YAMLRefused(sub, _line(key), shown,
-                                      f"duplicate key, first given at line {seen[ident]}: "
-                                      "give each key once")
+                    raise YAMLRefused(
+                        sub, _line(key), shown, f"duplicate key, first given at line {seen[ident]}: give each key once"
+                    )
                 seen[ident] = _line(key)
                 stack.append((value, sub))
         elif isinstance(node, yaml.SequenceNode):
@@ -153,4 +161,3 @@ def load_text(text: str) -> Any:
         return loader.construct_document(node)
     finally:
         loader.dispose()
-

@@ -47,8 +47,10 @@ def settings_table() -> tuple[ChipSetting, ...]:
     """Every GAIN_SEL x RES setting, finest z resolution first."""
     text = resources.files("mst_cli.model").joinpath("data/mlx90393.csv").read_text()
     rows = [r for r in csv.DictReader(line for line in text.splitlines() if not line.startswith("#"))]
-    table = [ChipSetting(int(r["gain_sel"]), int(r["res"]), float(r["xy_uT_per_lsb"]),
-                         float(r["z_uT_per_lsb"])) for r in rows]
+    table = [
+        ChipSetting(int(r["gain_sel"]), int(r["res"]), float(r["xy_uT_per_lsb"]), float(r["z_uT_per_lsb"]))
+        for r in rows
+    ]
     return tuple(sorted(table, key=lambda s: (s.z_uT_per_lsb, s.xy_uT_per_lsb)))
 
 

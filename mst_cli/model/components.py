@@ -29,14 +29,14 @@ class Board:
 
     key: str
     name: str
-    length_mm: float           # along x (the cell width direction)
-    width_mm: float            # along y
+    length_mm: float  # along x (the cell width direction)
+    width_mm: float  # along y
     thickness_mm: float
-    chip_x_mm: float           # chip centre from the board's lower-left corner
+    chip_x_mm: float  # chip centre from the board's lower-left corner
     chip_y_mm: float
     holes_xy_mm: tuple[tuple[float, float], ...] = ()
     hole_diameter_mm: float = 2.5
-    chip_size_mm: float = 3.0       # QFN-16, 3 x 3 x 1 mm, Hall plates at its centre
+    chip_size_mm: float = 3.0  # QFN-16, 3 x 3 x 1 mm, Hall plates at its centre
     chip_height_mm: float = 1.0
     connectors: tuple[Connector, ...] = ()
 
@@ -44,7 +44,6 @@ class Board:
     def headroom_mm(self) -> float:
         """Height of the tallest part on the board's top face (the chip or a connector)."""
         return max([self.chip_height_mm] + [c.height_mm for c in self.connectors])
-
 
 
 # NdFeB remanence Br (T), typical range per grade; the tool uses the mid value.
@@ -79,30 +78,51 @@ _JST_SH_H_MM, _JST_SH_W_MM, _JST_SH_D_MM = 2.95, 6.0, 4.25
 
 def _edge_sockets(length_mm: float, width_mm: float) -> tuple[Connector, Connector]:
     y0, y1 = 0.5 * (width_mm - _JST_SH_W_MM), 0.5 * (width_mm + _JST_SH_W_MM)
-    return (Connector(0.0, _JST_SH_D_MM, y0, y1, _JST_SH_H_MM, "-x"),
-            Connector(length_mm - _JST_SH_D_MM, length_mm, y0, y1, _JST_SH_H_MM, "+x"))
+    return (
+        Connector(0.0, _JST_SH_D_MM, y0, y1, _JST_SH_H_MM, "-x"),
+        Connector(length_mm - _JST_SH_D_MM, length_mm, y0, y1, _JST_SH_H_MM, "+x"),
+    )
 
 
 BOARDS: dict[str, Board] = {
     "adafruit-4022": Board(
-        key="adafruit-4022", name="Adafruit 4022 MLX90393 (STEMMA QT)",
-        length_mm=25.4, width_mm=17.78, thickness_mm=1.6, chip_x_mm=12.6, chip_y_mm=8.3,
+        key="adafruit-4022",
+        name="Adafruit 4022 MLX90393 (STEMMA QT)",
+        length_mm=25.4,
+        width_mm=17.78,
+        thickness_mm=1.6,
+        chip_x_mm=12.6,
+        chip_y_mm=8.3,
         holes_xy_mm=((2.54, 2.54), (22.86, 2.54), (2.54, 15.24), (22.86, 15.24)),
         connectors=_edge_sockets(25.4, 17.78),
     ),
     "adafruit-4022-original": Board(
-        key="adafruit-4022-original", name="Adafruit 4022 MLX90393 (original)",
-        length_mm=22.86, width_mm=19.05, thickness_mm=1.6,
-        chip_x_mm=11.43, chip_y_mm=9.525,
+        key="adafruit-4022-original",
+        name="Adafruit 4022 MLX90393 (original)",
+        length_mm=22.86,
+        width_mm=19.05,
+        thickness_mm=1.6,
+        chip_x_mm=11.43,
+        chip_y_mm=9.525,
     ),
     "sparkfun-14571": Board(
-        key="sparkfun-14571", name="SparkFun SEN-14571 MLX90393 (Qwiic)",
-        length_mm=25.4, width_mm=25.4, thickness_mm=1.6, chip_x_mm=12.7, chip_y_mm=12.7,
+        key="sparkfun-14571",
+        name="SparkFun SEN-14571 MLX90393 (Qwiic)",
+        length_mm=25.4,
+        width_mm=25.4,
+        thickness_mm=1.6,
+        chip_x_mm=12.7,
+        chip_y_mm=12.7,
         connectors=_edge_sockets(25.4, 25.4),
     ),
     "bare-qfn": Board(
-        key="bare-qfn", name="bare MLX90393 QFN-16 on a 10 x 10 mm custom board",
-        length_mm=10.0, width_mm=10.0, thickness_mm=1.0, chip_x_mm=5.0, chip_y_mm=5.0,
+        key="bare-qfn",
+        name="bare MLX90393 QFN-16 on a 10 x 10 mm custom board",
+        length_mm=10.0,
+        width_mm=10.0,
+        thickness_mm=1.0,
+        chip_x_mm=5.0,
+        chip_y_mm=5.0,
     ),
 }
 

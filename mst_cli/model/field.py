@@ -33,22 +33,22 @@ FIELD_MODELS = ("dipole", "axial", "cylinder")
 def axial_Bz_T(z_mm: ArrayLike, radius_mm: float, thickness_mm: float, remanence_T: float) -> np.ndarray:
     """Exact B_z on the axis at distance z_mm (>= 0) below the pole face."""
     z = np.asarray(z_mm, dtype=float)
-    R2 = radius_mm ** 2
+    R2 = radius_mm**2
     zL = z + thickness_mm
-    return 0.5 * remanence_T * (zL / np.sqrt(R2 + zL ** 2) - z / np.sqrt(R2 + z ** 2))
+    return 0.5 * remanence_T * (zL / np.sqrt(R2 + zL**2) - z / np.sqrt(R2 + z**2))
 
 
-def axial_dBz_dz_T_per_mm(z_mm: ArrayLike, radius_mm: float, thickness_mm: float,
-                          remanence_T: float) -> np.ndarray:
+def axial_dBz_dz_T_per_mm(z_mm: ArrayLike, radius_mm: float, thickness_mm: float, remanence_T: float) -> np.ndarray:
     """d B_z / d z of :func:`axial_Bz_T` (negative: the field falls with distance)."""
     z = np.asarray(z_mm, dtype=float)
-    R2 = radius_mm ** 2
+    R2 = radius_mm**2
     zL = z + thickness_mm
-    return 0.5 * remanence_T * (R2 / (R2 + zL ** 2) ** 1.5 - R2 / (R2 + z ** 2) ** 1.5)
+    return 0.5 * remanence_T * (R2 / (R2 + zL**2) ** 1.5 - R2 / (R2 + z**2) ** 1.5)
 
 
-def dipole_B_T(r_mm: ArrayLike, radius_mm: float, thickness_mm: float, remanence_T: float,
-               axis: ArrayLike = (0.0, 0.0, 1.0)) -> np.ndarray:
+def dipole_B_T(
+    r_mm: ArrayLike, radius_mm: float, thickness_mm: float, remanence_T: float, axis: ArrayLike = (0.0, 0.0, 1.0)
+) -> np.ndarray:
     """Point-dipole field at positions ``r_mm`` (..., 3) relative to the magnet centre.
 
     B = mu0/(4 pi r^3) [3 (m.r^) r^ - m] with m = Br V / mu0, so mu0 m = Br V: the magnet's
@@ -56,16 +56,17 @@ def dipole_B_T(r_mm: ArrayLike, radius_mm: float, thickness_mm: float, remanence
     """
     r = np.asarray(r_mm, dtype=float)
     axis = np.asarray(axis, dtype=float)
-    volume = np.pi * radius_mm ** 2 * thickness_mm
-    moment = remanence_T * volume * axis                       # mu0 * m, T mm^3
+    volume = np.pi * radius_mm**2 * thickness_mm
+    moment = remanence_T * volume * axis  # mu0 * m, T mm^3
     dist = np.linalg.norm(r, axis=-1, keepdims=True)
     unit = r / dist
     m_dot = np.sum(unit * moment, axis=-1, keepdims=True)
-    return (3.0 * m_dot * unit - moment) / (4.0 * np.pi * dist ** 3)
+    return (3.0 * m_dot * unit - moment) / (4.0 * np.pi * dist**3)
 
 
-def cylinder_B_T(r_mm: ArrayLike, diameter_mm: float, thickness_mm: float, remanence_T: float,
-                 tilt_deg: float = 0.0) -> np.ndarray:
+def cylinder_B_T(
+    r_mm: ArrayLike, diameter_mm: float, thickness_mm: float, remanence_T: float, tilt_deg: float = 0.0
+) -> np.ndarray:
     """Exact field of the cylinder at positions ``r_mm`` (..., 3) relative to its centre.
 
     The magnet is tilted by ``tilt_deg`` about the y axis. magpylib works in metres.
@@ -76,8 +77,13 @@ def cylinder_B_T(r_mm: ArrayLike, diameter_mm: float, thickness_mm: float, reman
     r = np.atleast_2d(np.asarray(r_mm, dtype=float))
     orientation = Rotation.from_euler("y", tilt_deg, degrees=True) if tilt_deg else None
     B = magpy.func.cylinder_field(
-        field="B", observers=r * 1e-3, dimensions=(diameter_mm * 1e-3, thickness_mm * 1e-3),
-        polarizations=(0.0, 0.0, remanence_T), orientations=orientation, squeeze=False)
+        field="B",
+        observers=r * 1e-3,
+        dimensions=(diameter_mm * 1e-3, thickness_mm * 1e-3),
+        polarizations=(0.0, 0.0, remanence_T),
+        orientations=orientation,
+        squeeze=False,
+    )
     return np.reshape(B, np.shape(r))
 
 
@@ -91,8 +97,9 @@ def choose_field_model(offset_mm=(0.0, 0.0), tilt_deg=0.0, requested: str | None
     return "axial" if on_axis else "cylinder"
 
 
-def field_at_chip_T(gap_mm: ArrayLike, magnet: Magnet, model: str, offset_mm: tuple[float, float] = (0.0, 0.0),
-                    tilt_deg: float = 0.0) -> np.ndarray:
+def field_at_chip_T(
+    gap_mm: ArrayLike, magnet: Magnet, model: str, offset_mm: tuple[float, float] = (0.0, 0.0), tilt_deg: float = 0.0
+) -> np.ndarray:
     """Field vector (..., 3) at the Hall plates for every magnet-face-to-chip gap (mm).
 
     ``offset_mm`` is the chip's (x, y) position relative to the magnet axis; ``tilt_deg`` tilts
@@ -106,8 +113,9 @@ def field_at_chip_T(gap_mm: ArrayLike, magnet: Magnet, model: str, offset_mm: tu
         Bz = axial_Bz_T(gap, magnet.radius_mm, magnet.thickness_mm, magnet.remanence_T)
         return np.stack([np.zeros_like(Bz), np.zeros_like(Bz), Bz], axis=-1)
     # chip position relative to the magnet's centre
-    r = np.stack(np.broadcast_arrays(np.full_like(gap, offset_mm[0]), np.full_like(gap, offset_mm[1]),
-                                     -(gap + half)), axis=-1)
+    r = np.stack(
+        np.broadcast_arrays(np.full_like(gap, offset_mm[0]), np.full_like(gap, offset_mm[1]), -(gap + half)), axis=-1
+    )
     if model == "dipole":
         tilt = np.radians(tilt_deg)
         axis = (np.sin(tilt), 0.0, np.cos(tilt))

@@ -11,9 +11,21 @@ from typing import Any
 SEED_RANGE = (0, 2**32 - 1)
 
 
-def spec(default: Any = MISSING, *, meaning: str, unit: str = "", lo: float | None = None, hi: float | None = None,
-         lo_open: bool = False, hi_open: bool = False, choices: Iterable[Any] = (), nullable: bool = False,
-         kind: str | None = None, omit_default: bool = False, default_factory: Any = MISSING) -> Any:
+def spec(
+    default: Any = MISSING,
+    *,
+    meaning: str,
+    unit: str = "",
+    lo: float | None = None,
+    hi: float | None = None,
+    lo_open: bool = False,
+    hi_open: bool = False,
+    choices: Iterable[Any] = (),
+    nullable: bool = False,
+    kind: str | None = None,
+    omit_default: bool = False,
+    default_factory: Any = MISSING,
+) -> Any:
     """A dataclass field that design files may set: its default, plus metadata saying what a file
     may give (unit, bounds or choices, whether null is allowed, a one-line meaning).
 
@@ -24,6 +36,16 @@ def spec(default: Any = MISSING, *, meaning: str, unit: str = "", lo: float | No
     ("pair", "bounds", "weights"); ``omit_default`` leaves the key out of a written file while it
     holds its default.
     """
-    meta = {"meaning": meaning, "unit": unit, "lo": lo, "hi": hi, "lo_open": lo_open, "hi_open": hi_open,
-            "choices": tuple(choices), "nullable": nullable, "kind": kind, "omit_default": omit_default}
+    meta = {
+        "meaning": meaning,
+        "unit": unit,
+        "lo": lo,
+        "hi": hi,
+        "lo_open": lo_open,
+        "hi_open": hi_open,
+        "choices": tuple(choices),
+        "nullable": nullable,
+        "kind": kind,
+        "omit_default": omit_default,
+    }
     return field(default=default, default_factory=default_factory, metadata=meta)

@@ -103,9 +103,16 @@ def profile_area_mm2(theta_rad: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike, wid
 CELL_RULES = ("wall", "cavity_gap", "lock_stroke", "pad_width")
 
 
-def cell_margins_mm(theta_rad: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike, width_mm: ArrayLike,
-                    contact_allowance_mm: ArrayLike, min_wall_mm: ArrayLike, min_gap_mm: ArrayLike,
-                    nozzle_mm: ArrayLike) -> np.ndarray:
+def cell_margins_mm(
+    theta_rad: ArrayLike,
+    t_mm: ArrayLike,
+    h_mm: ArrayLike,
+    width_mm: ArrayLike,
+    contact_allowance_mm: ArrayLike,
+    min_wall_mm: ArrayLike,
+    min_gap_mm: ArrayLike,
+    nozzle_mm: ArrayLike,
+) -> np.ndarray:
     """Signed margins (mm, >= 0 satisfied) of every cell rule, stacked on a last axis.
 
     Shape (..., len(CELL_RULES)), order :data:`CELL_RULES`. :meth:`HexCell.margins` reads this
@@ -128,8 +135,15 @@ def unloaded_gap_mm(sum_h_mm: ArrayLike, n_layers: int, housing: Housing, board:
     clearance -> cover -> layers with plates between them -> pocket floor -> magnet face.
     :class:`SensorGeometry` reads this too.
     """
-    return (board.headroom_mm - 0.5 * board.chip_height_mm + housing.chip_clearance_mm + housing.cover_mm
-            + sum_h_mm + (n_layers - 1) * housing.plate_mm + housing.pocket_floor_mm)
+    return (
+        board.headroom_mm
+        - 0.5 * board.chip_height_mm
+        + housing.chip_clearance_mm
+        + housing.cover_mm
+        + sum_h_mm
+        + (n_layers - 1) * housing.plate_mm
+        + housing.pocket_floor_mm
+    )
 
 
 # --------------------------------------------------------------------------- objects
@@ -151,20 +165,38 @@ class Printer:
     min_gap_mm: float = spec(0.4, lo=0.01, hi=10.0, unit="mm", meaning="narrowest printable gap")
     # how this printer and filament miss the drawing (docs/design.md section 10): the design is
     # made for the part as printed, the export draws the nominal part
-    wall_offset_mm: float = spec(0.0, lo=-0.3, hi=0.4, unit="mm",
-                                 meaning="systematic wall error: every wall prints this much thicker than drawn "
-                                         "(`mst calibrate`'s wall_offset_mm). `mst design` draws the walls so that "
-                                         "the walls as printed meet the targets; `export` draws the drawn walls")
-    wall_tolerance_mm: float = spec(0.05, lo=0.001, hi=0.5, unit="mm",
-                                    meaning="± scatter of the printed walls around drawn + offset (one print to "
-                                            "the next): `mst design` reports the worst and RMS change of every "
-                                            "S_i and R_i over it")
-    modulus_factor: float = spec(1.0, lo=0.2, hi=5.0,
-                                 meaning="printed modulus / `material.youngs_modulus_MPa` (`mst calibrate`'s "
-                                         "modulus_factor)")
-    gap_offset_mm: float = spec(0.0, lo=-3.0, hi=5.0, unit="mm",
-                                meaning="magnet–chip gap as built minus as drawn (`mst calibrate`'s gap_offset_mm: "
-                                        "cover, pocket floor, board seating); the model adds it, `export` does not")
+    wall_offset_mm: float = spec(
+        0.0,
+        lo=-0.3,
+        hi=0.4,
+        unit="mm",
+        meaning="systematic wall error: every wall prints this much thicker than drawn "
+        "(`mst calibrate`'s wall_offset_mm). `mst design` draws the walls so that "
+        "the walls as printed meet the targets; `export` draws the drawn walls",
+    )
+    wall_tolerance_mm: float = spec(
+        0.05,
+        lo=0.001,
+        hi=0.5,
+        unit="mm",
+        meaning="± scatter of the printed walls around drawn + offset (one print to "
+        "the next): `mst design` reports the worst and RMS change of every "
+        "S_i and R_i over it",
+    )
+    modulus_factor: float = spec(
+        1.0,
+        lo=0.2,
+        hi=5.0,
+        meaning="printed modulus / `material.youngs_modulus_MPa` (`mst calibrate`'s modulus_factor)",
+    )
+    gap_offset_mm: float = spec(
+        0.0,
+        lo=-3.0,
+        hi=5.0,
+        unit="mm",
+        meaning="magnet–chip gap as built minus as drawn (`mst calibrate`'s gap_offset_mm: "
+        "cover, pocket floor, board seating); the model adds it, `export` does not",
+    )
 
 
 def printer_violations(printer: Printer, housing: Housing, contact_allowance_mm: float) -> list[tuple[str, float, str]]:
@@ -175,15 +207,25 @@ def printer_violations(printer: Printer, housing: Housing, contact_allowance_mm:
     out = []
     hi = 0.5 * (printer.min_gap_mm - contact_allowance_mm)
     if not -printer.min_wall_mm < printer.wall_offset_mm < hi:
-        out.append(("printer.wall_offset_mm", printer.wall_offset_mm,
-                    f"must lie between -{printer.min_wall_mm:g} mm (printer.min_wall_mm: a wall of one line "
-                    f"would print to nothing) and {hi:g} mm ((printer.min_gap_mm - family.contact_allowance_mm)/2: "
-                    "the narrowest cavity would print closed), both excluded"))
+        out.append(
+            (
+                "printer.wall_offset_mm",
+                printer.wall_offset_mm,
+                f"must lie between -{printer.min_wall_mm:g} mm (printer.min_wall_mm: a wall of one line "
+                f"would print to nothing) and {hi:g} mm ((printer.min_gap_mm - family.contact_allowance_mm)/2: "
+                "the narrowest cavity would print closed), both excluded",
+            )
+        )
     lo = -(housing.chip_clearance_mm + housing.pocket_floor_mm + housing.cover_mm - 0.02)
     if printer.gap_offset_mm < lo:
-        out.append(("printer.gap_offset_mm", printer.gap_offset_mm,
-                    f"must be >= {lo:g} mm for this housing: the gap cannot close by more than "
-                    "housing.chip_clearance_mm + pocket_floor_mm + cover_mm (less 0.01 mm each)"))
+        out.append(
+            (
+                "printer.gap_offset_mm",
+                printer.gap_offset_mm,
+                f"must be >= {lo:g} mm for this housing: the gap cannot close by more than "
+                "housing.chip_clearance_mm + pocket_floor_mm + cover_mm (less 0.01 mm each)",
+            )
+        )
     return out
 
 
@@ -210,14 +252,24 @@ class HexCell:
     h_mm: float
     # the family constants (the file's `family` section)
     width_mm: float = spec(30.0, lo=1.0, hi=500.0, unit="mm", meaning="W, across the chevrons (x)")
-    depth_mm: float = spec(20.0, lo=1.0, hi=500.0, unit="mm",
-                           meaning="D, along the chevrons (y): every layer is one continuous web this deep, and "
-                                   "the part prints lying on its side, so D is also its printed height: a whole "
-                                   "number of `printer.layer_height_mm`")
-    contact_allowance_mm: float = spec(0.1, lo=0.0, hi=10.0, unit="mm",
-                                       meaning="clear gap left between the two printed pads when they touch "
-                                               "(the roughness of their layer lines); with rigid pads a layer "
-                                               "locks by h − 2t − a at the latest")
+    depth_mm: float = spec(
+        20.0,
+        lo=1.0,
+        hi=500.0,
+        unit="mm",
+        meaning="D, along the chevrons (y): every layer is one continuous web this deep, and "
+        "the part prints lying on its side, so D is also its printed height: a whole "
+        "number of `printer.layer_height_mm`",
+    )
+    contact_allowance_mm: float = spec(
+        0.1,
+        lo=0.0,
+        hi=10.0,
+        unit="mm",
+        meaning="clear gap left between the two printed pads when they touch "
+        "(the roughness of their layer lines); with rigid pads a layer "
+        "locks by h − 2t − a at the latest",
+    )
 
     # -- derived quantities (all read the kernels above)
     @property
@@ -283,11 +335,15 @@ class HexCell:
         A wall shorter than it is thick has no such stretch: its centre line's midpoint, twice."""
         outer, inner = self.outer_profile_xz(), self.inner_profile_xz()
         out = []
-        for name, (k0, k1) in (("lower right", (0, 1)), ("upper right", (1, 2)),
-                               ("upper left", (3, 4)), ("lower left", (4, 5))):
+        for name, (k0, k1) in (
+            ("lower right", (0, 1)),
+            ("upper right", (1, 2)),
+            ("upper left", (3, 4)),
+            ("lower left", (4, 5)),
+        ):
             o0, o1, i0, i1 = (np.asarray(v, dtype=float) for v in (outer[k0], outer[k1], inner[k0], inner[k1]))
             u = (o1 - o0) / np.hypot(*(o1 - o0))
-            m0 = 0.5 * (o0 + i0)                       # on the centre line: midway between parallel faces
+            m0 = 0.5 * (o0 + i0)  # on the centre line: midway between parallel faces
             s_lo = max(float((o0 - m0) @ u), float((i0 - m0) @ u))
             s_hi = min(float((o1 - m0) @ u), float((i1 - m0) @ u))
             mid, half = 0.5 * (s_lo + s_hi), max(0.0, 0.5 * keep * (s_hi - s_lo))
@@ -304,17 +360,28 @@ class HexCell:
 
         The margins come from :func:`cell_margins_mm` (one source of truth with the design loop).
         """
-        margins = cell_margins_mm(self.theta_rad, self.t_mm, self.h_mm, self.width_mm,
-                                  self.contact_allowance_mm, printer.min_wall_mm, printer.min_gap_mm,
-                                  printer.nozzle_mm)
+        margins = cell_margins_mm(
+            self.theta_rad,
+            self.t_mm,
+            self.h_mm,
+            self.width_mm,
+            self.contact_allowance_mm,
+            printer.min_wall_mm,
+            printer.min_gap_mm,
+            printer.nozzle_mm,
+        )
         messages = {
             "wall": f"wall t = {self.t_mm:g} mm is thinner than the printable minimum {printer.min_wall_mm:g} mm",
             "cavity_gap": f"cavity h - 2t = {self.cavity_height_mm:g} mm is below the printable gap "
-                          f"{printer.min_gap_mm:g} mm",
-            "lock_stroke": (f"cavity h - 2t = {self.cavity_height_mm:g} mm leaves no stroke after the "
-                            f"{self.contact_allowance_mm:g} mm contact allowance"),
-            "pad_width": (f"inner pad half-width {self.p_inner_mm:g} mm is below one nozzle "
-                          f"({printer.nozzle_mm:g} mm): theta too small for this h and W"),
+            f"{printer.min_gap_mm:g} mm",
+            "lock_stroke": (
+                f"cavity h - 2t = {self.cavity_height_mm:g} mm leaves no stroke after the "
+                f"{self.contact_allowance_mm:g} mm contact allowance"
+            ),
+            "pad_width": (
+                f"inner pad half-width {self.p_inner_mm:g} mm is below one nozzle "
+                f"({printer.nozzle_mm:g} mm): theta too small for this h and W"
+            ),
         }
         return [Violation(name, float(m), messages[name]) for name, m in zip(CELL_RULES, margins)]
 
@@ -325,7 +392,7 @@ class Magnet:
 
     diameter_mm: float = spec(6.0, lo=0.1, hi=100.0, unit="mm", meaning="diameter of the disc")
     thickness_mm: float = spec(2.0, lo=0.1, hi=100.0, unit="mm", meaning="thickness of the disc, along its axis")
-    remanence_T: float = 1.3            # Br; the file's key (null: the grade's value) is declared in io.schema
+    remanence_T: float = 1.3  # Br; the file's key (null: the grade's value) is declared in io.schema
     grade: str = spec("N42", choices=tuple(MAGNET_GRADES_T), meaning="NdFeB grade: sets Br when `remanence_T` is null")
 
     @property
@@ -334,7 +401,7 @@ class Magnet:
 
     @property
     def volume_mm3(self) -> float:
-        return math.pi * self.radius_mm ** 2 * self.thickness_mm
+        return math.pi * self.radius_mm**2 * self.thickness_mm
 
 
 @dataclass(frozen=True)
@@ -354,23 +421,41 @@ class Housing:
     """
 
     # clearances may be zero; walls and floors are at least 0.01 mm
-    base_floor_mm: float = spec(0.8, lo=0.01, hi=100.0, unit="mm",
-                                meaning="material under the board (two extrusion lines)")
+    base_floor_mm: float = spec(
+        0.8, lo=0.01, hi=100.0, unit="mm", meaning="material under the board (two extrusion lines)"
+    )
     board_clearance_mm: float = spec(0.2, lo=0.0, hi=100.0, unit="mm", meaning="all round the board in its slot")
-    chip_clearance_mm: float = spec(0.3, lo=0.0, hi=100.0, unit="mm",
-                                    meaning="air between the board's tallest part (chip or connector) and the cover")
-    cover_mm: float = spec(0.8, lo=0.01, hi=100.0, unit="mm",
-                           meaning="solid cover between that air and layer 1 (two lines)")
-    side_wall_mm: float = spec(1.2, lo=0.01, hi=100.0, unit="mm",
-                               meaning="thinnest wall beside and under the board slot and above the pocket's roof")
+    chip_clearance_mm: float = spec(
+        0.3,
+        lo=0.0,
+        hi=100.0,
+        unit="mm",
+        meaning="air between the board's tallest part (chip or connector) and the cover",
+    )
+    cover_mm: float = spec(
+        0.8, lo=0.01, hi=100.0, unit="mm", meaning="solid cover between that air and layer 1 (two lines)"
+    )
+    side_wall_mm: float = spec(
+        1.2,
+        lo=0.01,
+        hi=100.0,
+        unit="mm",
+        meaning="thinnest wall beside and under the board slot and above the pocket's roof",
+    )
     plate_mm: float = spec(0.8, lo=0.01, hi=100.0, unit="mm", meaning="solid plate between two layers (two lines)")
-    pocket_floor_mm: float = spec(0.4, lo=0.01, hi=100.0, unit="mm",
-                                  meaning="material between the top layer's pad and the magnet (one line; the pad "
-                                          "under it is at least one more)")
-    pocket_clearance_mm: float = spec(0.1, lo=0.0, hi=100.0, unit="mm",
-                                      meaning="radial and axial clearance around the magnet")
-    cap_top_mm: float = spec(0.8, lo=0.01, hi=100.0, unit="mm",
-                             meaning="material above the magnet (printed after the pause)")
+    pocket_floor_mm: float = spec(
+        0.4,
+        lo=0.01,
+        hi=100.0,
+        unit="mm",
+        meaning="material between the top layer's pad and the magnet (one line; the pad under it is at least one more)",
+    )
+    pocket_clearance_mm: float = spec(
+        0.1, lo=0.0, hi=100.0, unit="mm", meaning="radial and axial clearance around the magnet"
+    )
+    cap_top_mm: float = spec(
+        0.8, lo=0.01, hi=100.0, unit="mm", meaning="material above the magnet (printed after the pause)"
+    )
 
 
 def snap_to_layers_mm(height_mm: float, layer_height_mm: float, mode: str) -> float:
@@ -400,11 +485,20 @@ class SensorGeometry:
     board: Board | None = None
     housing: Housing = Housing()
     chip_offset_mm: tuple[float, float] = spec(
-        (0.0, 0.0), kind="pair", lo=-100.0, hi=100.0, unit="mm",
-        meaning="chip centre relative to the magnet axis (x, y); non-zero selects the `cylinder` field model")
+        (0.0, 0.0),
+        kind="pair",
+        lo=-100.0,
+        hi=100.0,
+        unit="mm",
+        meaning="chip centre relative to the magnet axis (x, y); non-zero selects the `cylinder` field model",
+    )
     magnet_tilt_deg: float = spec(
-        0.0, lo=-45.0, hi=45.0, unit="deg",
-        meaning="tilt of the magnet axis about y; non-zero selects the `cylinder` field model")
+        0.0,
+        lo=-45.0,
+        hi=45.0,
+        unit="deg",
+        meaning="tilt of the magnet axis about y; non-zero selects the `cylinder` field model",
+    )
     printer: Printer = Printer()
 
     def __post_init__(self):
@@ -624,8 +718,7 @@ class SensorGeometry:
         x0, x1 = self.slot_x_mm
         y_top = 0.5 * D
         slot = (x1 - x0) * (y_top - self.slot_floor_y_mm) * self.slot_height_mm
-        windows = sum(abs(x_out - x_in) * (y_top - yf) * (z1 - z0)
-                      for x_in, x_out, yf, z0, z1 in self.cable_windows)
+        windows = sum(abs(x_out - x_in) * (y_top - yf) * (z1 - z0) for x_in, x_out, yf, z0, z1 in self.cable_windows)
         return L * D * self.z_base_top_mm - slot - windows
 
     @property
@@ -636,20 +729,19 @@ class SensorGeometry:
     @property
     def cap_volume_mm3(self) -> float:
         """Cap (W x D, from the stack top to the total height) minus the magnet pocket."""
-        return (self.width_mm * self.depth_mm * (self.total_height_mm - self.z_stack_top_mm)
-                - self.pocket_volume_mm3)
+        return self.width_mm * self.depth_mm * (self.total_height_mm - self.z_stack_top_mm) - self.pocket_volume_mm3
 
     @property
     def body_volume_mm3(self) -> float:
         """Volume of the one printed TPU body: analytic sum of its parts."""
-        return (self.base_volume_mm3 + sum(c.volume_mm3 for c in self.layers)
-                + self.plates_volume_mm3 + self.cap_volume_mm3)
+        return (
+            self.base_volume_mm3 + sum(c.volume_mm3 for c in self.layers) + self.plates_volume_mm3 + self.cap_volume_mm3
+        )
 
     @property
     def gap0_mm(self) -> float:
         """Unloaded distance from the magnet's lower pole face to the Hall plates."""
-        return float(unloaded_gap_mm(sum(c.h_mm for c in self.layers), len(self.layers),
-                                     self.housing, self.board))
+        return float(unloaded_gap_mm(sum(c.h_mm for c in self.layers), len(self.layers), self.housing, self.board))
 
     def height_budget_mm(self) -> dict:
         """Where the part's height and the magnet-chip gap go (mm): the housing overhead is
@@ -686,33 +778,59 @@ class SensorGeometry:
         h, D, lh = self.housing, self.depth_mm, self.layer_height_mm
         out = printer_violations(self.printer, h, self.layers[0].contact_allowance_mm)
         if abs(D / lh - round(D / lh)) > 1e-6:
-            out.append(("family.depth_mm", D, f"must be a whole number of print layers "
-                                              f"(printer.layer_height_mm = {lh:g}): D is the printed height"))
+            out.append(
+                (
+                    "family.depth_mm",
+                    D,
+                    f"must be a whole number of print layers "
+                    f"(printer.layer_height_mm = {lh:g}): D is the printed height",
+                )
+            )
         room_x = 0.5 * self.width_mm - h.side_wall_mm
         if self.pocket_radius_mm > room_x:
-            out.append(("magnet.diameter_mm", self.magnet.diameter_mm,
-                        f"the pocket radius {self.pocket_radius_mm:g} mm (with clearance) must be <= "
-                        f"{room_x:g} mm: width_mm/2 minus housing.side_wall_mm"))
+            out.append(
+                (
+                    "magnet.diameter_mm",
+                    self.magnet.diameter_mm,
+                    f"the pocket radius {self.pocket_radius_mm:g} mm (with clearance) must be <= "
+                    f"{room_x:g} mm: width_mm/2 minus housing.side_wall_mm",
+                )
+            )
         floor_room = self.slot_floor_y_mm + 0.5 * D
         if floor_room < h.side_wall_mm - 1e-9:
-            out.append(("family.depth_mm", D,
-                        f"the board {self.board.key} hangs {self.board.chip_y_mm:g} mm below its chip: "
-                        f"its slot floor needs depth_mm >= "
-                        f"{2 * (self.board.chip_y_mm - self.chip_offset_mm[1] + h.side_wall_mm):g} mm "
-                        f"(housing.side_wall_mm under it), or another board"))
-        low = min((w[2] for w in self.cable_windows), default=None)      # the lowest window floor
+            out.append(
+                (
+                    "family.depth_mm",
+                    D,
+                    f"the board {self.board.key} hangs {self.board.chip_y_mm:g} mm below its chip: "
+                    f"its slot floor needs depth_mm >= "
+                    f"{2 * (self.board.chip_y_mm - self.chip_offset_mm[1] + h.side_wall_mm):g} mm "
+                    f"(housing.side_wall_mm under it), or another board",
+                )
+            )
+        low = min((w[2] for w in self.cable_windows), default=None)  # the lowest window floor
         if low is not None and low + 0.5 * D < h.side_wall_mm - 1e-9:
             most = h.board_clearance_mm - (h.side_wall_mm - (low + 0.5 * D))
-            out.append(("housing.board_clearance_mm", h.board_clearance_mm,
-                        f"the cable windows reach {low:g} mm, through the body's -y face: "
-                        f"housing.side_wall_mm must stay under them (here a clearance of at most "
-                        f"about {max(most, 0.0):.3g} mm), or a deeper family.depth_mm"))
+            out.append(
+                (
+                    "housing.board_clearance_mm",
+                    h.board_clearance_mm,
+                    f"the cable windows reach {low:g} mm, through the body's -y face: "
+                    f"housing.side_wall_mm must stay under them (here a clearance of at most "
+                    f"about {max(most, 0.0):.3g} mm), or a deeper family.depth_mm",
+                )
+            )
         roof_room = 0.5 * D - self.pocket_roof_apex_y_mm
         if roof_room < h.side_wall_mm - 1e-9:
-            out.append(("family.depth_mm", D,
-                        f"the magnet pocket's roof needs depth_mm >= "
-                        f"{2 * (self.pocket_roof_apex_y_mm + h.side_wall_mm):g} mm "
-                        "(housing.side_wall_mm above its apex)"))
+            out.append(
+                (
+                    "family.depth_mm",
+                    D,
+                    f"the magnet pocket's roof needs depth_mm >= "
+                    f"{2 * (self.pocket_roof_apex_y_mm + h.side_wall_mm):g} mm "
+                    "(housing.side_wall_mm above its apex)",
+                )
+            )
         return out
 
     # -- print frame

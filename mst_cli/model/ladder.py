@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-LADDER = ("spring-textbook", "spring", "frame", "continuum")          # cheapest first; continuum is the reference
+LADDER = ("spring-textbook", "spring", "frame", "continuum")  # cheapest first; continuum is the reference
 # what a user can pick: "spring-textbook" is L0 without its fitted correction, a bench row only
 USER_LADDER = ("spring", "frame", "continuum")
 ERRORS_FILE = Path(__file__).resolve().parent / "data" / "ladder_errors.json"
@@ -38,8 +38,7 @@ def rung_errors(model: str, errors: dict) -> dict:
     if model == LADDER[-1]:
         return {"k": 0.0, "lock_force": 0.0}
     entry = errors["models"][model]
-    return {"k": float(entry["median_abs_err_k"]),
-            "lock_force": float(entry.get("median_abs_err_lock_force", np.inf))}
+    return {"k": float(entry["median_abs_err_k"]), "lock_force": float(entry.get("median_abs_err_lock_force", np.inf))}
 
 
 def cheapest_model_for(accuracy_rel: float, errors: dict | None = None) -> tuple[str, dict]:
@@ -66,7 +65,7 @@ class MechanicsChoice:
     """The rung to use and, when it came from accuracy_rel, the line that says why."""
 
     mechanics: str
-    source: str                     # "flag", "accuracy_rel" or "file"
+    source: str  # "flag", "accuracy_rel" or "file"
     measured_err_k_rel: float | None = None
     measured_err_lock_force_rel: float | None = None
     requested_rel: float | None = None
@@ -75,13 +74,16 @@ class MechanicsChoice:
         """One line for the user, or None when nothing was picked on their behalf."""
         if self.source != "accuracy_rel":
             return None
-        return (f"mechanics: {self.mechanics} (measured median error against continuum: stiffness "
-                f"{100 * self.measured_err_k_rel:.3g} %, lock force {100 * self.measured_err_lock_force_rel:.3g} %; "
-                f"requested <= {100 * self.requested_rel:.3g} %)")
+        return (
+            f"mechanics: {self.mechanics} (measured median error against continuum: stiffness "
+            f"{100 * self.measured_err_k_rel:.3g} %, lock force {100 * self.measured_err_lock_force_rel:.3g} %; "
+            f"requested <= {100 * self.requested_rel:.3g} %)"
+        )
 
 
-def choose_mechanics(explicit: str | None, accuracy_rel: float | None, file_mechanics: str,
-                     errors: dict | None = None) -> MechanicsChoice:
+def choose_mechanics(
+    explicit: str | None, accuracy_rel: float | None, file_mechanics: str, errors: dict | None = None
+) -> MechanicsChoice:
     """The mechanics rung to run.
 
     Parameters

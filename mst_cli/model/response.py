@@ -22,19 +22,23 @@ from mst_cli.model.stack import Stack, series_displacement_mm
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
 
-GAP_STEP_MM = 1e-4   # central-difference step for d|B|/d gap with the non-closed-form models
+GAP_STEP_MM = 1e-4  # central-difference step for d|B|/d gap with the non-closed-form models
 
 
 def field_magnitude_T(gap_mm: ArrayLike, geometry: SensorGeometry, model: str) -> np.ndarray:
     """|B| at the chip for an array of gaps (the quantity the sensor reads)."""
-    B = fld.field_at_chip_T(gap_mm, geometry.magnet, model, geometry.chip_offset_mm,
-                            geometry.magnet_tilt_deg)
+    B = fld.field_at_chip_T(gap_mm, geometry.magnet, model, geometry.chip_offset_mm, geometry.magnet_tilt_deg)
     return np.linalg.norm(B, axis=-1)
 
 
-def regime_kernel(k_N_per_mm: ArrayLike, d_lock_mm: ArrayLike, k_locked_N_per_mm: ArrayLike, gap0_mm: ArrayLike,
-                  field_T: Callable[[np.ndarray], np.ndarray],
-                  lock_force_N: ArrayLike | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def regime_kernel(
+    k_N_per_mm: ArrayLike,
+    d_lock_mm: ArrayLike,
+    k_locked_N_per_mm: ArrayLike,
+    gap0_mm: ArrayLike,
+    field_T: Callable[[np.ndarray], np.ndarray],
+    lock_force_N: ArrayLike | None = None,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Lock forces and secant sensitivities of many L0 stacks at once.
 
     Parameters
@@ -67,17 +71,17 @@ def regime_kernel(k_N_per_mm: ArrayLike, d_lock_mm: ArrayLike, k_locked_N_per_mm
 class Regime:
     """One force band between two successive lock forces."""
 
-    index: int                      # regime number from 1
-    layer: int                      # index (from 1, bottom to top) of the layer that locks at its end
+    index: int  # regime number from 1
+    layer: int  # index (from 1, bottom to top) of the layer that locks at its end
     force_from_N: float
     force_to_N: float
     k_layer_N_per_mm: float
     d_lock_layer_mm: float
-    k_effective_N_per_mm: float     # 1 / stack compliance inside the band
+    k_effective_N_per_mm: float  # 1 / stack compliance inside the band
     sensitivity_secant_per_N: float
     sensitivity_min_per_N: float
     sensitivity_max_per_N: float
-    force_resolution_N: float       # field resolution / (B0 * S secant)
+    force_resolution_N: float  # field resolution / (B0 * S secant)
     force_resolution_worst_N: float  # field resolution / (B0 * S min)
 
 
@@ -90,15 +94,15 @@ class Response:
     force_N: np.ndarray
     displacement_mm: np.ndarray
     gap_mm: np.ndarray
-    B_T: np.ndarray                 # (m, 3) field vector at the chip
+    B_T: np.ndarray  # (m, 3) field vector at the chip
     B_abs_T: np.ndarray
-    dB_rel: np.ndarray              # (|B| - B0) / B0
-    in_range: np.ndarray            # False past the last lock
+    dB_rel: np.ndarray  # (|B| - B0) / B0
+    in_range: np.ndarray  # False past the last lock
     regimes: list[Regime]
     B0_T: float
-    B_full_T: float                 # at the last lock force
+    B_full_T: float  # at the last lock force
     gap0_mm: float
-    gap_min_mm: float               # at the last lock force
+    gap_min_mm: float  # at the last lock force
     remanence_T: float
     chip_setting: mlx.ChipSetting | None
     saturated: bool
@@ -115,9 +119,15 @@ class Response:
         return self.regimes[-1].force_to_N
 
 
-def simulate(geometry: SensorGeometry, material, mechanics: str = "spring",
-             field_model: str | None = None, noise_uT_rms: float = mlx.DEFAULT_NOISE_uT,
-             points_per_regime: int = 200, overload: float = 0.25) -> Response:
+def simulate(
+    geometry: SensorGeometry,
+    material,
+    mechanics: str = "spring",
+    field_model: str | None = None,
+    noise_uT_rms: float = mlx.DEFAULT_NOISE_uT,
+    points_per_regime: int = 200,
+    overload: float = 0.25,
+) -> Response:
     """Curves and per-regime figures of one design.
 
     The force axis runs from 0 to (1 + overload) x the last lock force; points past the last
@@ -138,8 +148,7 @@ def simulate(geometry: SensorGeometry, material, mechanics: str = "spring",
     d = stack.displacement_mm(F)
     gap0 = geometry.gap0_mm
     gap = gap0 - d
-    Bvec = fld.field_at_chip_T(gap, geometry.magnet, model, geometry.chip_offset_mm,
-                               geometry.magnet_tilt_deg)
+    Bvec = fld.field_at_chip_T(gap, geometry.magnet, model, geometry.chip_offset_mm, geometry.magnet_tilt_deg)
     Babs = np.linalg.norm(Bvec, axis=-1)
     B0 = float(Babs[0])
     rel = Babs / B0 - 1.0
@@ -152,7 +161,7 @@ def simulate(geometry: SensorGeometry, material, mechanics: str = "spring",
     lo_b, hi_b = edges[band], np.append(edges, np.inf)[band + 1]
     width = np.where(np.isfinite(hi_b), hi_b - lo_b, F_last)
     F_inside = np.clip(F, lo_b + 1e-9 * width, hi_b - 1e-9 * width)
-    compliance = stack.local_compliance_mm_per_N(F_inside)     # one lookup for all samples: O(n) in layers
+    compliance = stack.local_compliance_mm_per_N(F_inside)  # one lookup for all samples: O(n) in layers
     slope = -dB_dgap * compliance / B0
 
     # secant sensitivities from the stack itself, so they hold for every mechanics rung
@@ -178,7 +187,7 @@ def simulate(geometry: SensorGeometry, material, mechanics: str = "spring",
 
     regimes = []
     order = stack.lock_order
-    mid_compliance = stack.local_compliance_mm_per_N(0.5 * (edges[:-1] + edges[1:]))   # one lookup, not n
+    mid_compliance = stack.local_compliance_mm_per_N(0.5 * (edges[:-1] + edges[1:]))  # one lookup, not n
     # slope extremes of every band in one pass: F ascends, so each band's samples are one run,
     # [starts[i], starts[i + 1]); band n is the overload past the last lock, never empty
     starts = np.minimum(np.searchsorted(band, np.arange(n + 1)), len(band) - 1)
@@ -189,30 +198,58 @@ def simulate(geometry: SensorGeometry, material, mechanics: str = "spring",
         lo, hi = edges[i], edges[i + 1]
         s_lo, s_hi = (S[i], S[i]) if degenerate[i] or not present[i] else (slope_min[i], slope_max[i])
         j = int(order[i])
-        regimes.append(Regime(
-            index=i + 1, layer=j + 1, force_from_N=float(lo), force_to_N=float(hi),
-            k_layer_N_per_mm=float(k[j]), d_lock_layer_mm=float(dl[j]),
-            k_effective_N_per_mm=1.0 / float(mid_compliance[i]),
-            sensitivity_secant_per_N=float(S[i]),
-            sensitivity_min_per_N=float(s_lo), sensitivity_max_per_N=float(s_hi),
-            force_resolution_N=res_T / (B0 * float(S[i])),
-            force_resolution_worst_N=res_T / (B0 * float(s_lo)),
-        ))
+        regimes.append(
+            Regime(
+                index=i + 1,
+                layer=j + 1,
+                force_from_N=float(lo),
+                force_to_N=float(hi),
+                k_layer_N_per_mm=float(k[j]),
+                d_lock_layer_mm=float(dl[j]),
+                k_effective_N_per_mm=1.0 / float(mid_compliance[i]),
+                sensitivity_secant_per_N=float(S[i]),
+                sensitivity_min_per_N=float(s_lo),
+                sensitivity_max_per_N=float(s_hi),
+                force_resolution_N=res_T / (B0 * float(S[i])),
+                force_resolution_worst_N=res_T / (B0 * float(s_lo)),
+            )
+        )
 
     warnings = []
     for i in np.flatnonzero(degenerate):
-        warnings.append(f"layers {', '.join(str(int(j) + 1) for j in order[i - 1:i + 1])} lock at the "
-                        f"same force {edges[i + 1]:.4g} N: regime {i + 1} has zero width (its S is "
-                        f"the local slope there)")
+        warnings.append(
+            f"layers {', '.join(str(int(j) + 1) for j in order[i - 1 : i + 1])} lock at the "
+            f"same force {edges[i + 1]:.4g} N: regime {i + 1} has zero width (its S is "
+            f"the local slope there)"
+        )
     if list(order) != list(range(n)):
-        warnings.append("layers do not lock bottom-to-top in file order: lock order is "
-                        + ", ".join(str(j + 1) for j in order))
+        warnings.append(
+            "layers do not lock bottom-to-top in file order: lock order is " + ", ".join(str(j + 1) for j in order)
+        )
     if saturated:
-        warnings.append(f"field at full load {B_full * 1e3:.1f} mT exceeds the MLX90393's range "
-                        f"({mlx.SATURATION_T * 1e3:.0f} mT saturation): move the magnet away")
+        warnings.append(
+            f"field at full load {B_full * 1e3:.1f} mT exceeds the MLX90393's range "
+            f"({mlx.SATURATION_T * 1e3:.0f} mT saturation): move the magnet away"
+        )
     return Response(
-        mechanics=mechanics, field_model=model, force_N=F, displacement_mm=d, gap_mm=gap,
-        B_T=Bvec, B_abs_T=Babs, dB_rel=rel, in_range=F <= F_last * (1 + 1e-12), regimes=regimes,
-        B0_T=B0, B_full_T=B_full, gap0_mm=gap0, gap_min_mm=float(gap_edges[-1]),
-        remanence_T=geometry.magnet.remanence_T, chip_setting=setting, saturated=saturated,
-        field_resolution_T=res_T, noise_uT_rms=noise_uT_rms, warnings=warnings)
+        mechanics=mechanics,
+        field_model=model,
+        force_N=F,
+        displacement_mm=d,
+        gap_mm=gap,
+        B_T=Bvec,
+        B_abs_T=Babs,
+        dB_rel=rel,
+        in_range=F <= F_last * (1 + 1e-12),
+        regimes=regimes,
+        B0_T=B0,
+        B_full_T=B_full,
+        gap0_mm=gap0,
+        gap_min_mm=float(gap_edges[-1]),
+        remanence_T=geometry.magnet.remanence_T,
+        chip_setting=setting,
+        saturated=saturated,
+        field_resolution_T=res_T,
+        noise_uT_rms=noise_uT_rms,
+        warnings=warnings,
+    )

@@ -24,8 +24,13 @@ if TYPE_CHECKING:
     from numpy.typing import ArrayLike
 
 
-def series_displacement_mm(force_N: ArrayLike, k_N_per_mm: ArrayLike, d_lock_mm: ArrayLike,
-                           k_locked_N_per_mm: ArrayLike, lock_force_N: ArrayLike | None = None) -> np.ndarray:
+def series_displacement_mm(
+    force_N: ArrayLike,
+    k_N_per_mm: ArrayLike,
+    d_lock_mm: ArrayLike,
+    k_locked_N_per_mm: ArrayLike,
+    lock_force_N: ArrayLike | None = None,
+) -> np.ndarray:
     """Stack compression of L0 layers in series, vectorised over designs.
 
     ``k``, ``d_lock``, ``k_locked`` and ``lock_force_N`` (None: R = k d_lock, bilinear) have
@@ -36,8 +41,9 @@ def series_displacement_mm(force_N: ArrayLike, k_N_per_mm: ArrayLike, d_lock_mm:
     dl = np.asarray(d_lock_mm, dtype=float)
     R = k * dl if lock_force_N is None else np.asarray(lock_force_N, dtype=float)
     F = np.asarray(force_N, dtype=float)[..., :, None]
-    d_layer = layer_displacement_mm(F, k[..., None, :], dl[..., None, :], R[..., None, :],
-                                    np.asarray(k_locked_N_per_mm, dtype=float)[..., None, :])
+    d_layer = layer_displacement_mm(
+        F, k[..., None, :], dl[..., None, :], R[..., None, :], np.asarray(k_locked_N_per_mm, dtype=float)[..., None, :]
+    )
     return d_layer.sum(axis=-1)
 
 
@@ -74,8 +80,9 @@ class Stack:
     def knots_N(self) -> np.ndarray:
         """0 and every layer's knots up to the last lock, ascending and unique."""
         F_end = self.last_lock_force_N
-        ks = np.sort(np.asarray([0.0, F_end] + [f for law in self.layers for f in law.knots_N if f < F_end],
-                                dtype=float))
+        ks = np.sort(
+            np.asarray([0.0, F_end] + [f for law in self.layers for f in law.knots_N if f < F_end], dtype=float)
+        )
         # np.unique's own dedupe, without the numpy.ma import it costs (7 ms of a 0.2 s command)
         return ks[np.concatenate(([True], ks[1:] != ks[:-1]))]
 

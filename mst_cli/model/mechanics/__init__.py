@@ -33,8 +33,7 @@ if TYPE_CHECKING:
 MODELS = ("spring", "frame", "continuum")  # cheapest first
 
 
-def layer_law(cell: HexCell, material: Material,
-              model: str = "spring") -> LinearLockingLayer | TabulatedLockingLayer:
+def layer_law(cell: HexCell, material: Material, model: str = "spring") -> LinearLockingLayer | TabulatedLockingLayer:
     """The force-displacement law of one layer with the named mechanics model.
 
     ``frame`` and ``continuum`` laws are cached per (cell, material): both are frozen.
@@ -42,37 +41,44 @@ def layer_law(cell: HexCell, material: Material,
     return _plane_strain_law(cell, in_web(cell, material), model)
 
 
-def _plane_strain_law(cell: HexCell, material: Material,
-                      model: str) -> LinearLockingLayer | TabulatedLockingLayer:
+def _plane_strain_law(cell: HexCell, material: Material, model: str) -> LinearLockingLayer | TabulatedLockingLayer:
     if model == "spring":
         from mst_cli.model.mechanics.spring import spring_layer
+
         return spring_layer(cell, material)
     if model == "frame":
         from mst_cli.model.mechanics.frame import frame_layer
+
         return frame_layer(cell, material)
     if model == "continuum":
         from mst_cli.model.mechanics.continuum import continuum_layer
+
         return continuum_layer(cell, material)
     raise ValueError(f"unknown mechanics model {model!r}; choose from {', '.join(MODELS)}")
 
 
-def layer_laws(cells, material: Material,
-               model: str = "spring") -> tuple[LinearLockingLayer | TabulatedLockingLayer, ...]:
+def layer_laws(
+    cells, material: Material, model: str = "spring"
+) -> tuple[LinearLockingLayer | TabulatedLockingLayer, ...]:
     """:func:`layer_law` of every cell of a stack; the spring rung's in one kernel call."""
     if model == "spring":
         from mst_cli.model.mechanics.spring import spring_layers
+
         return spring_layers(cells, material, modulus_MPa=[in_web(c, material).youngs_modulus_MPa for c in cells])
     return tuple(layer_law(c, material, model) for c in cells)
 
 
-def uncached_layer_law(cell: HexCell, material: Material,
-                       model: str = "spring") -> LinearLockingLayer | TabulatedLockingLayer:
+def uncached_layer_law(
+    cell: HexCell, material: Material, model: str = "spring"
+) -> LinearLockingLayer | TabulatedLockingLayer:
     """The rung's plane-strain law without the per-cell caches (for timing and for the fits,
     which compare plane-strain rungs)."""
     if model == "frame":
         from mst_cli.model.mechanics.frame import frame_layer
+
         return frame_layer.__wrapped__(cell, material)
     if model == "continuum":
         from mst_cli.model.mechanics.continuum import continuum_layer
+
         return continuum_layer.__wrapped__(cell, material)
     return _plane_strain_law(cell, material, model)

@@ -68,10 +68,10 @@ if TYPE_CHECKING:
 DEFAULT_N_THICK = 3
 DEFAULT_N_LENGTH = 12
 DEFAULT_LEVELS = 4
-REFINE_RADIUS_IN_T = 0.5    # first refinement radius around a corner, in wall thicknesses
-PAD_LENGTH_IN_T = 4.0       # length of pad kept next to the wall root, in wall thicknesses
-WEDGE_ASPECT = 1.5          # tip wedge: column width over local element height
-WEDGE_APEX_FRACTION = 0.1   # tip wedge: the last column spans the last 10 % of its length
+REFINE_RADIUS_IN_T = 0.5  # first refinement radius around a corner, in wall thicknesses
+PAD_LENGTH_IN_T = 4.0  # length of pad kept next to the wall root, in wall thicknesses
+WEDGE_ASPECT = 1.5  # tip wedge: column width over local element height
+WEDGE_APEX_FRACTION = 0.1  # tip wedge: the last column spans the last 10 % of its length
 # Contact is searched up to this multiple of the rigid-pad stroke h - 2t - allowance (the
 # elastic pads under stiff walls meet up to ~5 % late; beyond this the solve is an error).
 D_MAX_OVER_NOMINAL = 1.5
@@ -102,8 +102,12 @@ def _map_quad(corners, xi, eta):
     """Bilinear map of the (xi, eta) grid onto the quad corners (00, 10, 11, 01)."""
     c00, c10, c11, c01 = (np.asarray(c, dtype=float) for c in corners)
     X, E = np.meshgrid(xi, eta, indexing="ij")
-    pts = ((1 - X) * (1 - E))[..., None] * c00 + (X * (1 - E))[..., None] * c10 \
-        + (X * E)[..., None] * c11 + ((1 - X) * E)[..., None] * c01
+    pts = (
+        ((1 - X) * (1 - E))[..., None] * c00
+        + (X * (1 - E))[..., None] * c10
+        + (X * E)[..., None] * c11
+        + ((1 - X) * E)[..., None] * c01
+    )
     return pts  # (len(xi), len(eta), 2)
 
 
@@ -118,8 +122,9 @@ def _wedge_columns(n_thick: int, wedge_over_t: float) -> np.ndarray:
     return 1.0 - np.array(one_minus[:-1] + [0.0])
 
 
-def quarter_profile_mesh(cell: geo.HexCell, n_thick: int = DEFAULT_N_THICK,
-                         n_length: int = DEFAULT_N_LENGTH) -> tuple[np.ndarray, np.ndarray, float]:
+def quarter_profile_mesh(
+    cell: geo.HexCell, n_thick: int = DEFAULT_N_THICK, n_length: int = DEFAULT_N_LENGTH
+) -> tuple[np.ndarray, np.ndarray, float]:
     """Triangle mesh of the quarter profile (bottom pad's right part + lower right wall).
 
     Built from the cell's own polygons in three structured blocks:
@@ -139,11 +144,11 @@ def quarter_profile_mesh(cell: geo.HexCell, n_thick: int = DEFAULT_N_THICK,
     """
     outer = cell.outer_profile_xz()
     inner = cell.inner_profile_xz()
-    A, B = np.asarray(outer[0], float), np.asarray(outer[1], float)   # (p, 0), (W/2, h/2)
-    D, C = np.asarray(inner[0], float), np.asarray(inner[1], float)   # (a, t), (c, h/2)
+    A, B = np.asarray(outer[0], float), np.asarray(outer[1], float)  # (p, 0), (W/2, h/2)
+    D, C = np.asarray(inner[0], float), np.asarray(inner[1], float)  # (a, t), (c, h/2)
     t = cell.t_mm
     u_wall = (B - A) / np.hypot(*(B - A))
-    Bp = A + float((C - A) @ u_wall) * u_wall                            # B'
+    Bp = A + float((C - A) @ u_wall) * u_wall  # B'
     x_cut = max(0.0, D[0] - PAD_LENGTH_IN_T * t)
     n_pad = max(2, int(math.ceil(n_length * 0.5)))
     across = np.linspace(0, 1, n_thick + 1)
@@ -151,8 +156,11 @@ def quarter_profile_mesh(cell: geo.HexCell, n_thick: int = DEFAULT_N_THICK,
     pad = _map_quad(((x_cut, 0.0), A, D, (x_cut, t)), _graded(n_pad, False), across)
     xi = _wedge_columns(n_thick, float(np.hypot(*(B - Bp))) / t)
     X, E = np.meshgrid(xi, across, indexing="ij")
-    wedge = (Bp[None, None, :] + X[..., None] * (B - Bp)[None, None, :]
-             + (E * (1.0 - X))[..., None] * (C - Bp)[None, None, :])
+    wedge = (
+        Bp[None, None, :]
+        + X[..., None] * (B - Bp)[None, None, :]
+        + (E * (1.0 - X))[..., None] * (C - Bp)[None, None, :]
+    )
     blocks, tris, offset = [], [], 0
     for grid in (pad, wall, wedge):
         ni, nj = grid.shape[:2]
@@ -180,8 +188,9 @@ def quarter_profile_mesh(cell: geo.HexCell, n_thick: int = DEFAULT_N_THICK,
     return pts.T.copy(), tri, x_cut
 
 
-def refined_quarter_mesh(cell: geo.HexCell, n_thick: int = DEFAULT_N_THICK,
-                         n_length: int = DEFAULT_N_LENGTH, levels: int = DEFAULT_LEVELS) -> tuple[MeshTri, float]:
+def refined_quarter_mesh(
+    cell: geo.HexCell, n_thick: int = DEFAULT_N_THICK, n_length: int = DEFAULT_N_LENGTH, levels: int = DEFAULT_LEVELS
+) -> tuple[MeshTri, float]:
     """:func:`quarter_profile_mesh` with ``levels`` rounds of refinement at the corners.
 
     Round i refines (red-green) the triangles whose centroid lies within 0.5 t / 2^i of the
@@ -189,13 +198,13 @@ def refined_quarter_mesh(cell: geo.HexCell, n_thick: int = DEFAULT_N_THICK,
     (skfem MeshTri, x_cut_mm).
     """
     from skfem import MeshTri
+
     pts, tri, x_cut = quarter_profile_mesh(cell, n_thick, n_length)
     mesh = MeshTri(pts, tri)
-    corners = np.array([cell.inner_profile_xz()[1], cell.outer_profile_xz()[0],
-                        cell.inner_profile_xz()[0]])
+    corners = np.array([cell.inner_profile_xz()[1], cell.outer_profile_xz()[0], cell.inner_profile_xz()[0]])
     for i in range(levels):
         mid = mesh.p[:, mesh.t].mean(axis=1)
-        r = REFINE_RADIUS_IN_T * cell.t_mm * 0.5 ** i
+        r = REFINE_RADIUS_IN_T * cell.t_mm * 0.5**i
         dist = np.hypot(mid[0][None, :] - corners[:, :1], mid[1][None, :] - corners[:, 1:])
         marked = np.flatnonzero((dist < r).any(axis=0))
         if marked.size:
@@ -232,20 +241,21 @@ class _Assembler:
     """
 
     def __init__(self, basis):
-        dofs = basis.element_dofs                       # (n_loc, n_el)
+        dofs = basis.element_dofs  # (n_loc, n_el)
         n_loc, n_el = dofs.shape
-        grads = np.array([basis.basis[i][0].grad for i in range(n_loc)])   # (n_loc, 2, 2, n_el, n_q)
+        grads = np.array([basis.basis[i][0].grad for i in range(n_loc)])  # (n_loc, 2, 2, n_el, n_q)
         n_q = grads.shape[-1]
         # B[e, q, k, i]: component k = (c, j) of the gradient d u_c / d X_j of local function i
         self.B = np.ascontiguousarray(grads.reshape(n_loc, 4, n_el, n_q).transpose(2, 3, 1, 0))
         Bw = self.B * basis.dx[:, :, None, None]
         # (n_el, n_loc, n_q * 4): weighted B^T, quadrature points and components as one axis
         self.BwT = np.ascontiguousarray(Bw.transpose(0, 3, 1, 2).reshape(n_el, n_loc, 4 * n_q))
-        self.dofs = np.ascontiguousarray(dofs.T)         # (n_el, n_loc)
+        self.dofs = np.ascontiguousarray(dofs.T)  # (n_el, n_loc)
         self.N = basis.N
         # CSR pattern of K (scipy merges the duplicate entries in C), and where element entry
         # (e, i, j) goes in its data: the rank of its key row * N + col among the pattern's keys
         from scipy.sparse import coo_matrix
+
         rows = np.broadcast_to(self.dofs[:, :, None], (n_el, n_loc, n_loc)).ravel()
         cols = np.broadcast_to(self.dofs[:, None, :], (n_el, n_loc, n_loc)).ravel()
         pattern = coo_matrix((np.ones(rows.size), (rows, cols)), shape=(self.N, self.N)).tocsr()
@@ -256,7 +266,7 @@ class _Assembler:
 
     def residual(self, u, mu, lam):
         """r = int P : grad v; also returns what the tangent at u needs (F^-T, ln J)."""
-        grad_u = np.einsum("eqki,ei->keq", self.B, u[self.dofs])          # (4, n_el, n_q)
+        grad_u = np.einsum("eqki,ei->keq", self.B, u[self.dofs])  # (4, n_el, n_q)
         Fm = grad_u.reshape(2, 2, *grad_u.shape[1:]) + np.eye(2)[:, :, None, None]
         if np.any(Fm[0, 0] * Fm[1, 1] - Fm[0, 1] * Fm[1, 0] <= 0):
             raise FloatingPointError("inverted element")
@@ -273,16 +283,16 @@ class _Assembler:
         """K = int grad v : A : grad du, A = dP/dF = mu I - (lam ln J - mu) F^-T (x) F^-T
         (transposed pairing) + lam F^-T (x) F^-T, as CSR on the fixed pattern."""
         from scipy.sparse import csr_matrix
+
         FiT, lnJ = state
-        Fi = FiT.transpose(2, 3, 0, 1)                                       # (n_el, n_q, 2, 2)
+        Fi = FiT.transpose(2, 3, 0, 1)  # (n_el, n_q, 2, 2)
         n_el, n_q = lnJ.shape
         f = Fi.reshape(n_el, n_q, 4)
         # A[(a, b), (m, n)] = mu d_am d_bn - (lam ln J - mu) FiT_an FiT_mb + lam FiT_ab FiT_mn
         swap = np.einsum("eqan,eqmb->eqabmn", Fi, Fi).reshape(n_el, n_q, 4, 4)
-        A = (lam * f[..., :, None] * f[..., None, :] - (lam * lnJ - mu)[..., None, None] * swap
-             + mu * np.eye(4))
-        AB = (A @ self.B).reshape(n_el, 4 * n_q, -1)                         # (n_el, n_q * 4, n_loc)
-        K_el = self.BwT @ AB                                                 # (n_el, n_loc, n_loc)
+        A = lam * f[..., :, None] * f[..., None, :] - (lam * lnJ - mu)[..., None, None] * swap + mu * np.eye(4)
+        AB = (A @ self.B).reshape(n_el, 4 * n_q, -1)  # (n_el, n_q * 4, n_loc)
+        K_el = self.BwT @ AB  # (n_el, n_loc, n_loc)
         data = np.bincount(self.scatter, weights=K_el.ravel(), minlength=self.nnz)
         return csr_matrix((data, self.indices, self.indptr), shape=(self.N, self.N))
 
@@ -303,22 +313,23 @@ def _assembler(basis) -> _Assembler:
 class ContinuumResult:
     """Force-displacement of one layer from the FE solve, up to its lock."""
 
-    displacement_mm: np.ndarray      # layer compression d at every converged step
-    force_N: np.ndarray              # layer force F at those steps
-    k_linear_N_per_mm: float         # small-strain (linear) stiffness, by-product
-    d_contact_mm: float              # the lock: where the tangent reaches LOCK_STIFFNESS_FACTOR x k (last sample)
-    contact_at: str                  # what closed there: "pad" (the pads meet) or "wall" (a wall pinched)
+    displacement_mm: np.ndarray  # layer compression d at every converged step
+    force_N: np.ndarray  # layer force F at those steps
+    k_linear_N_per_mm: float  # small-strain (linear) stiffness, by-product
+    d_contact_mm: float  # the lock: where the tangent reaches LOCK_STIFFNESS_FACTOR x k (last sample)
+    contact_at: str  # what closed there: "pad" (the pads meet) or "wall" (a wall pinched)
     newton_iterations: int
     n_dofs: int
-    reaction_balance: float          # |force across the mirror plane - support reaction| / force
-    mesh_scale: float                # k on the refined mesh / k on the path's mesh
-    lock_stiffness_ratio: float = math.nan   # tangent / k just past the lock (>= LOCK_STIFFNESS_FACTOR)
+    reaction_balance: float  # |force across the mirror plane - support reaction| / force
+    mesh_scale: float  # k on the refined mesh / k on the path's mesh
+    lock_stiffness_ratio: float = math.nan  # tangent / k just past the lock (>= LOCK_STIFFNESS_FACTOR)
     contact_points: np.ndarray | None = None  # surface points in contact at each sample
 
 
 class _Problem:
     def __init__(self, cell, material, n_thick, n_length, levels):
         from skfem import Basis, ElementTriP2, ElementVector
+
         self.cell = cell
         self.mesh, x_cut = refined_quarter_mesh(cell, n_thick, n_length, levels)
         self.basis = Basis(self.mesh, ElementVector(ElementTriP2()), intorder=4)
@@ -326,7 +337,7 @@ class _Problem:
         b = self.basis
         h2 = 0.5 * cell.h_mm
         tol = 1e-9 * max(cell.width_mm, cell.h_mm)
-        xy = b.doflocs                     # (2, ndofs): location of every dof
+        xy = b.doflocs  # (2, ndofs): location of every dof
         is_x = np.zeros(b.N, bool)
         is_x[b.nodal_dofs[0]] = True
         is_x[b.facet_dofs[0]] = True
@@ -338,11 +349,11 @@ class _Problem:
         self.support_z = np.flatnonzero((on_bottom | on_cut) & ~is_x)
         self.dirichlet = np.union1d(self.fixed_zero, self.tip_z)
         self.free = np.setdiff1d(np.arange(b.N), self.dirichlet)
-        self._blocks = {}             # free_block's cache: pinned set -> (free, gather, CSC pattern)
+        self._blocks = {}  # free_block's cache: pinned set -> (free, gather, CSC pattern)
         self.x_cut = x_cut
         self._contact_sets(cell, xy, is_x, tol, on_bottom, on_tip)
         self.h2 = h2
-        self.depth_factor = 2.0 * cell.b_mm   # F = 2 b f: two chevrons of a web b wide
+        self.depth_factor = 2.0 * cell.b_mm  # F = 2 b f: two chevrons of a web b wide
 
     def _contact_sets(self, cell, xy, is_x, tol, on_bottom, on_tip):
         """The z-dofs of every surface that can close, each with its side and offset.
@@ -378,8 +389,8 @@ class _Problem:
         wall_out = np.flatnonzero(on_segment(px, pz, bx, bz) & z_dof)
         self.inner_z = np.concatenate([self.pad_z, wall_in])
         z = xy[1]
-        rest_in = 2.0 * (h2 - z[self.inner_z])              # gap to the mirror image at rest
-        rest_out = z[wall_out]                              # gap to the plate at rest
+        rest_in = 2.0 * (h2 - z[self.inner_z])  # gap to the mirror image at rest
+        rest_out = z[wall_out]  # gap to the plate at rest
         # clear gap at touch: the allowance between the pads (parallel faces), none where faces
         # close at an angle (zipping from a vertex)
         touch_in = np.where(np.arange(self.inner_z.size) < self.pad_z.size, a, 0.0)
@@ -411,6 +422,7 @@ class _Problem:
         with the mirror plane, the active outer contacts held on the plate."""
         from scipy.sparse import csc_matrix
         from scipy.sparse.linalg import spsolve
+
         asm = _assembler(self.basis)
         if active is None:
             active = np.zeros(self.contact_dofs.size, bool)
@@ -424,7 +436,7 @@ class _Problem:
         v[free] = spsolve(csc_matrix((K.data[pos], indices, indptr), shape=(free.size, free.size)), -(K @ v)[free])
         f = K @ v
         inner = active.copy()
-        inner[self.n_inner:] = False
+        inner[self.n_inner :] = False
         return float(-(f[self.tip_z].sum() + f[self.contact_dofs[inner]].sum()) * self.depth_factor)
 
     def pad_margin(self, u, d):
@@ -440,6 +452,7 @@ class _Problem:
         block = self._blocks.get(key)
         if block is None:
             from scipy.sparse import csr_matrix
+
             free = np.setdiff1d(self.free, pinned_extra)
             asm = _assembler(self.basis)
             # number K's entries 1..nnz (exact in floats), cut the block, read the numbers back
@@ -465,6 +478,7 @@ class _Problem:
         """:meth:`solve_step`, also returning the residual at the solution (for :meth:`force`)."""
         from scipy.sparse import csc_matrix
         from scipy.sparse.linalg import spsolve
+
         asm = _assembler(self.basis)
         dofs, sign = self.contact_dofs, self.contact_sign
         eligible = np.ones(dofs.size, bool)
@@ -513,7 +527,7 @@ class _Problem:
             else:
                 raise FloatingPointError("every damped Newton update inverts an element")
             u = u_try
-            if it > 1:     # let the set follow the iterate (semi-smooth Newton)
+            if it > 1:  # let the set follow the iterate (semi-smooth Newton)
                 active = active | (eligible & (sign * (u[dofs] - obstacle) > tol))
         raise FloatingPointError("Newton did not converge")
 
@@ -524,7 +538,7 @@ class _Problem:
         if r is None:
             r, _ = self.assemble(u, need_K=False)
         inner = active.copy()
-        inner[self.n_inner:] = False
+        inner[self.n_inner :] = False
         outer = active.copy()
         outer[: self.n_inner] = False
         f_mirror = -(r[self.tip_z].sum() + r[self.contact_dofs[inner]].sum())
@@ -534,10 +548,16 @@ class _Problem:
         return f_mirror * self.depth_factor, balance
 
 
-def solve_continuum(cell: geo.HexCell, material, n_thick: int = DEFAULT_N_THICK,
-                    n_length: int = DEFAULT_N_LENGTH, levels: int = DEFAULT_LEVELS,
-                    first_step_frac: float = 0.125,
-                    max_steps: int = 200, path_levels: int = 0) -> ContinuumResult:
+def solve_continuum(
+    cell: geo.HexCell,
+    material,
+    n_thick: int = DEFAULT_N_THICK,
+    n_length: int = DEFAULT_N_LENGTH,
+    levels: int = DEFAULT_LEVELS,
+    first_step_frac: float = 0.125,
+    max_steps: int = 200,
+    path_levels: int = 0,
+) -> ContinuumResult:
     """Nonlinear force-displacement of one layer through closure, up to its lock.
 
     Displacement control with adaptive steps: a step that fails to converge is halved, a step
@@ -555,8 +575,9 @@ def solve_continuum(cell: geo.HexCell, material, n_thick: int = DEFAULT_N_THICK,
     ContinuumError      when the path cannot be followed (steps stalled below 1e-7 of the
                         stroke, no contact up to D_MAX_OVER_NOMINAL times it)
     """
-    bad = [v for v in cell.violations() if v.rule in ("pad_width", "lock_stroke")] \
-        + ([] if cell.p_mm > 0 and cell.h_mm > 2 * cell.t_mm else [None])
+    bad = [v for v in cell.violations() if v.rule in ("pad_width", "lock_stroke")] + (
+        [] if cell.p_mm > 0 and cell.h_mm > 2 * cell.t_mm else [None]
+    )
     if bad:
         why = bad[0].message if bad[0] is not None else "h <= 2t or p <= 0"
         raise ValueError(f"continuum model needs a meshable cell: {why}")
@@ -571,16 +592,27 @@ def solve_continuum(cell: geo.HexCell, material, n_thick: int = DEFAULT_N_THICK,
     k_path = linear_k(prob) if levels != path_levels else k_lin
     mesh_scale = k_lin / k_path
     try:
-        path, ratio_after = follow_to_lock(prob, k_path, StepControl(first_step_rel=first_step_frac,
-                                                                      max_steps=max_steps))
+        path, ratio_after = follow_to_lock(
+            prob, k_path, StepControl(first_step_rel=first_step_frac, max_steps=max_steps)
+        )
     except PathError as exc:
         raise ContinuumError(f"continuum solve: {exc} for {cell}") from None
     F = np.array([0.0] + [F * mesh_scale for F, _, _ in path.observations])
     balance = path.observations[-1][1]
     contacts = np.array([0] + [n for _, _, n in path.observations])
-    return ContinuumResult(np.array([0.0] + path.d_mm), F, k_lin, float(path.d_mm[-1]), path.event_at,
-                           path.iterations, int(fine.basis.N), float(balance), float(mesh_scale), float(ratio_after),
-                           contacts)
+    return ContinuumResult(
+        np.array([0.0] + path.d_mm),
+        F,
+        k_lin,
+        float(path.d_mm[-1]),
+        path.event_at,
+        path.iterations,
+        int(fine.basis.N),
+        float(balance),
+        float(mesh_scale),
+        float(ratio_after),
+        contacts,
+    )
 
 
 def follow_to_lock(prob, k_ref_N_per_mm: float, steps: StepControl | None = None) -> tuple:
@@ -593,7 +625,7 @@ def follow_to_lock(prob, k_ref_N_per_mm: float, steps: StepControl | None = None
     tangent / k just past the lock (nan when that step does not converge)). Raises PathError.
     """
     cell = prob.cell
-    d_nom = cell.h_mm - 2 * cell.t_mm - cell.contact_allowance_mm     # pads meet here if rigid
+    d_nom = cell.h_mm - 2 * cell.t_mm - cell.contact_allowance_mm  # pads meet here if rigid
 
     def solve(state, d, depth=0):
         try:
@@ -610,15 +642,24 @@ def follow_to_lock(prob, k_ref_N_per_mm: float, steps: StepControl | None = None
 
     def margin(state, d):
         # a face pinched between the plate and its mirror, or the pads meeting
-        return LOCK_STIFFNESS_FACTOR - prob.tangent_k(state[0], state[1], d) / k_ref_N_per_mm, \
-            _lock_label(prob, state[1])
+        return LOCK_STIFFNESS_FACTOR - prob.tangent_k(state[0], state[1], d) / k_ref_N_per_mm, _lock_label(
+            prob, state[1]
+        )
 
     def observe(state, d):
         F, balance = prob.force(*state[:3])
         return F, balance, int(state[1].sum())
 
-    path = follow_to_event(solve, margin, observe, (np.zeros(prob.basis.N), None, None, 0.0), d_nom,
-                           D_MAX_OVER_NOMINAL * d_nom, steps or StepControl(), LOCK_TOLERANCES)
+    path = follow_to_event(
+        solve,
+        margin,
+        observe,
+        (np.zeros(prob.basis.N), None, None, 0.0),
+        d_nom,
+        D_MAX_OVER_NOMINAL * d_nom,
+        steps or StepControl(),
+        LOCK_TOLERANCES,
+    )
     d_after = path.d_mm[-1] + LOCK_TOLERANCES.event_width_rel * d_nom * 10
     try:
         after, _ = solve(path.state, d_after)
@@ -633,8 +674,13 @@ def _lock_label(prob, active) -> str:
     return "pad" if active is not None and active[: prob.pad_z.size].any() else "wall"
 
 
-def linear_stiffness_N_per_mm(cell: geo.HexCell, material, n_thick: int = DEFAULT_N_THICK,
-                              n_length: int = DEFAULT_N_LENGTH, levels: int = DEFAULT_LEVELS) -> float:
+def linear_stiffness_N_per_mm(
+    cell: geo.HexCell,
+    material,
+    n_thick: int = DEFAULT_N_THICK,
+    n_length: int = DEFAULT_N_LENGTH,
+    levels: int = DEFAULT_LEVELS,
+) -> float:
     """Small-strain layer stiffness k (N/mm) of the L2 model alone (one linear solve)."""
     return linear_k(_Problem(cell, material, n_thick, n_length, levels))
 
@@ -643,6 +689,7 @@ def linear_k(problem) -> float:
     """Small-strain stiffness of a built problem: one linear solve with the tangent at u = 0."""
     from scipy.sparse import csc_matrix
     from scipy.sparse.linalg import splu
+
     _, K0 = problem.assemble(np.zeros(problem.basis.N))
     ul = np.zeros(problem.basis.N)
     ul[problem.tip_z] = -0.5

@@ -59,12 +59,58 @@ import numpy as np
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
 
-TERMS = ["x", "x^2", "x^3", "x*s", "x^2*s", "x*s^2", "x^2*s^2", "x*s^3", "x^3*s",
-         "ly", "ly*s", "ly*s^2", "ly^2", "ly^2*s", "y", "y*s"]
-LOCK_TERMS = ["1", "x", "s", "x^2", "x*s", "s^2", "x^3", "x^2*s", "x*s^2", "s^3",
-              "y", "y*s", "y^2", "y*x", "sigma", "sigma*x", "sigma*s", "sigma^2", "sigma*y",
-              "e", "e*s", "e*x", "e^2", "e*sigma", "w", "w*s", "w*x", "w^2", "w*sigma",
-              "r", "r*s", "r*sigma"]
+TERMS = [
+    "x",
+    "x^2",
+    "x^3",
+    "x*s",
+    "x^2*s",
+    "x*s^2",
+    "x^2*s^2",
+    "x*s^3",
+    "x^3*s",
+    "ly",
+    "ly*s",
+    "ly*s^2",
+    "ly^2",
+    "ly^2*s",
+    "y",
+    "y*s",
+]
+LOCK_TERMS = [
+    "1",
+    "x",
+    "s",
+    "x^2",
+    "x*s",
+    "s^2",
+    "x^3",
+    "x^2*s",
+    "x*s^2",
+    "s^3",
+    "y",
+    "y*s",
+    "y^2",
+    "y*x",
+    "sigma",
+    "sigma*x",
+    "sigma*s",
+    "sigma^2",
+    "sigma*y",
+    "e",
+    "e*s",
+    "e*x",
+    "e^2",
+    "e*sigma",
+    "w",
+    "w*s",
+    "w*x",
+    "w^2",
+    "w*sigma",
+    "r",
+    "r*s",
+    "r*sigma",
+]
 DATA = Path(__file__).resolve().parent.parent / "data" / "l0_correction.json"
 
 # The printable box every rung is fitted and measured on, and the default design bounds
@@ -95,9 +141,27 @@ def design_matrix(t_over_L: ArrayLike, theta_rad: ArrayLike) -> np.ndarray:
     s = th - np.pi / 4
     y = _y(x, th)
     ly = -np.log1p(-y)
-    return np.stack(np.broadcast_arrays(
-        x, x ** 2, x ** 3, x * s, x ** 2 * s, x * s ** 2, x ** 2 * s ** 2, x * s ** 3, x ** 3 * s,
-        ly, ly * s, ly * s ** 2, ly ** 2, ly ** 2 * s, y, y * s), axis=-1)
+    return np.stack(
+        np.broadcast_arrays(
+            x,
+            x**2,
+            x**3,
+            x * s,
+            x**2 * s,
+            x * s**2,
+            x**2 * s**2,
+            x * s**3,
+            x**3 * s,
+            ly,
+            ly * s,
+            ly * s**2,
+            ly**2,
+            ly**2 * s,
+            y,
+            y * s,
+        ),
+        axis=-1,
+    )
 
 
 def lock_design_matrix(t_over_L: ArrayLike, theta_rad: ArrayLike, sigma: ArrayLike) -> np.ndarray:
@@ -110,11 +174,43 @@ def lock_design_matrix(t_over_L: ArrayLike, theta_rad: ArrayLike, sigma: ArrayLi
     e = np.exp(-2.0 * x / np.maximum(sig, 1e-12))
     w = _face_beyond_wedge(x, y)
     r = allowance_over_t(x, th, sig)
-    return np.stack(np.broadcast_arrays(
-        np.ones_like(x), x, s, x ** 2, x * s, s ** 2, x ** 3, x ** 2 * s, x * s ** 2, s ** 3,
-        y, y * s, y ** 2, y * x, sig, sig * x, sig * s, sig ** 2, sig * y,
-        e, e * s, e * x, e ** 2, e * sig, w, w * s, w * x, w ** 2, w * sig,
-        r, r * s, r * sig), axis=-1)
+    return np.stack(
+        np.broadcast_arrays(
+            np.ones_like(x),
+            x,
+            s,
+            x**2,
+            x * s,
+            s**2,
+            x**3,
+            x**2 * s,
+            x * s**2,
+            s**3,
+            y,
+            y * s,
+            y**2,
+            y * x,
+            sig,
+            sig * x,
+            sig * s,
+            sig**2,
+            sig * y,
+            e,
+            e * s,
+            e * x,
+            e**2,
+            e * sig,
+            w,
+            w * s,
+            w * x,
+            w**2,
+            w * sig,
+            r,
+            r * s,
+            r * sig,
+        ),
+        axis=-1,
+    )
 
 
 def allowance_over_t(t_over_L: ArrayLike, theta_rad: ArrayLike, sigma: ArrayLike) -> np.ndarray:
@@ -226,8 +322,10 @@ def lock_factors(t_over_L: ArrayLike, theta_rad: ArrayLike, sigma: ArrayLike) ->
     """(:func:`lock_force_factor`, :func:`lock_stroke_factor`) from one design matrix: what
     the design loop's L0 kernel needs per call, at half the cost of the two calls."""
     force, stroke = _lock_ratios(("lock_force", "lock_stroke"), t_over_L, theta_rad, sigma)
-    return (np.minimum(force, _fit()["lock_force"]["ratio_range"][1]),
-            np.minimum(stroke, _fit()["lock_stroke"]["ratio_range"][1]))
+    return (
+        np.minimum(force, _fit()["lock_force"]["ratio_range"][1]),
+        np.minimum(stroke, _fit()["lock_stroke"]["ratio_range"][1]),
+    )
 
 
 def lock_force_factor(t_over_L: ArrayLike, theta_rad: ArrayLike, sigma: ArrayLike) -> np.ndarray:
@@ -238,16 +336,14 @@ def lock_force_factor(t_over_L: ArrayLike, theta_rad: ArrayLike, sigma: ArrayLik
     corners no cell reaches (a small t/L at a shallow theta has a small sigma), where the
     polynomial would climb past 100.
     """
-    return np.minimum(_lock_ratio("lock_force", t_over_L, theta_rad, sigma),
-                      _fit()["lock_force"]["ratio_range"][1])
+    return np.minimum(_lock_ratio("lock_force", t_over_L, theta_rad, sigma), _fit()["lock_force"]["ratio_range"][1])
 
 
 def lock_stroke_factor(t_over_L: ArrayLike, theta_rad: ArrayLike, sigma: ArrayLike) -> np.ndarray:
     """d_lock,L2 / (h - 2t - a) predicted by the fit, at most the largest ratio L2 gave on
     the fitted cells (a few per cent above 1: the pads are elastic and, under stiff walls,
     meet a little after the rigid-pad stroke)."""
-    return np.minimum(_lock_ratio("lock_stroke", t_over_L, theta_rad, sigma),
-                      _fit()["lock_stroke"]["ratio_range"][1])
+    return np.minimum(_lock_ratio("lock_stroke", t_over_L, theta_rad, sigma), _fit()["lock_stroke"]["ratio_range"][1])
 
 
 def stiffness_factor(t_over_L: ArrayLike, theta_rad: ArrayLike) -> np.ndarray:
@@ -275,15 +371,14 @@ def expected_error_rel(t_over_L: ArrayLike, theta_rad: ArrayLike, t_mm: ArrayLik
     table = _fit()["out_of_sample"]["expected_error"]
     x_edges = np.asarray(table["t_over_L_edges"], dtype=float)
     th_edges = np.radians(np.asarray(table["theta_deg_edges"], dtype=float))
-    err = np.asarray(table["median_abs_err_lock_force"], dtype=float)      # (n_x, n_theta)
-    i = np.clip(np.searchsorted(x_edges, np.asarray(t_over_L, dtype=float), side="right") - 1,
-                0, err.shape[0] - 1)
-    j = np.clip(np.searchsorted(th_edges, np.asarray(theta_rad, dtype=float), side="right") - 1,
-                0, err.shape[1] - 1)
+    err = np.asarray(table["median_abs_err_lock_force"], dtype=float)  # (n_x, n_theta)
+    i = np.clip(np.searchsorted(x_edges, np.asarray(t_over_L, dtype=float), side="right") - 1, 0, err.shape[0] - 1)
+    j = np.clip(np.searchsorted(th_edges, np.asarray(theta_rad, dtype=float), side="right") - 1, 0, err.shape[1] - 1)
     out = err[i, j]
     thin = table.get("thin")
     if t_mm is None or thin is None:
         return out
-    in_thin = ((np.asarray(t_mm, dtype=float) < thin["t_mm_max"])
-               & (np.asarray(theta_rad, dtype=float) < np.radians(thin["theta_deg_max"])))
+    in_thin = (np.asarray(t_mm, dtype=float) < thin["t_mm_max"]) & (
+        np.asarray(theta_rad, dtype=float) < np.radians(thin["theta_deg_max"])
+    )
     return np.where(in_thin, thin["median_abs_err_lock_force"], out)

@@ -46,7 +46,7 @@ def design_matrix(theta_rad: ArrayLike, y: ArrayLike) -> np.ndarray:
     is a mix of the wall's thickness and the layer's height, weighted by the wall angle."""
     s = np.asarray(theta_rad, dtype=float) - np.pi / 4
     inv_y = 1.0 / np.maximum(np.asarray(y, dtype=float), Y_MIN)
-    return np.stack(np.broadcast_arrays(np.ones_like(s), s, s ** 2, inv_y, s * inv_y, s ** 2 * inv_y), axis=-1)
+    return np.stack(np.broadcast_arrays(np.ones_like(s), s, s**2, inv_y, s * inv_y, s**2 * inv_y), axis=-1)
 
 
 @functools.lru_cache(maxsize=1)
@@ -55,8 +55,14 @@ def _coefficients() -> np.ndarray:
     return np.asarray(json.loads(DATA.read_text())["coefficients"], dtype=float)
 
 
-def finite_depth_factor(theta_rad: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike, depth_mm: ArrayLike,
-                        nu: ArrayLike, coefficients: ArrayLike | None = None) -> np.ndarray:
+def finite_depth_factor(
+    theta_rad: ArrayLike,
+    t_mm: ArrayLike,
+    h_mm: ArrayLike,
+    depth_mm: ArrayLike,
+    nu: ArrayLike,
+    coefficients: ArrayLike | None = None,
+) -> np.ndarray:
     """k of the web D deep with free faces over k of plane strain (dimensionless, in (1 - nu^2, 1]).
 
     Parameters
@@ -74,8 +80,14 @@ def finite_depth_factor(theta_rad: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike, 
     return 1.0 - 2.0 * np.asarray(nu, dtype=float) ** 2 * ell / np.asarray(depth_mm, dtype=float)
 
 
-def web_modulus_MPa(theta_rad: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike, depth_mm: ArrayLike,
-                    youngs_modulus_MPa: ArrayLike, nu: ArrayLike) -> np.ndarray:
+def web_modulus_MPa(
+    theta_rad: ArrayLike,
+    t_mm: ArrayLike,
+    h_mm: ArrayLike,
+    depth_mm: ArrayLike,
+    youngs_modulus_MPa: ArrayLike,
+    nu: ArrayLike,
+) -> np.ndarray:
     """The modulus a plane-strain rung takes so that its layer is as stiff as the web D deep.
 
     Every rung's force is linear in E at fixed nu, so scaling E by :func:`finite_depth_factor`
@@ -86,6 +98,9 @@ def web_modulus_MPa(theta_rad: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike, dept
 def in_web(cell: HexCell, material: Material) -> Material:
     """The material with which a plane-strain rung gives the layer of ``cell`` as printed, D deep
     with free faces (:func:`web_modulus_MPa`; same name and nu)."""
-    E = float(web_modulus_MPa(cell.theta_rad, cell.t_mm, cell.h_mm, cell.b_mm,
-                              material.youngs_modulus_MPa, material.poisson_ratio))
+    E = float(
+        web_modulus_MPa(
+            cell.theta_rad, cell.t_mm, cell.h_mm, cell.b_mm, material.youngs_modulus_MPa, material.poisson_ratio
+        )
+    )
     return replace(material, youngs_modulus_MPa=E)

@@ -85,7 +85,7 @@ def monotone_envelope(d_mm: ArrayLike, F_N: ArrayLike) -> tuple[np.ndarray, np.n
         if Fi > keep_F[-1] and di > keep_d[-1]:
             keep_d.append(di)
             keep_F.append(Fi)
-    if keep_d[-1] < d[-1]:              # snapped: contact reached at the peak force
+    if keep_d[-1] < d[-1]:  # snapped: contact reached at the peak force
         keep_d.append(d[-1])
         keep_F.append(keep_F[-1] * (1.0 + 1e-9) + 1e-300)
     return np.array(keep_d), np.array(keep_F)
@@ -101,9 +101,9 @@ class TabulatedLockingLayer:
 
     d_samples_mm: tuple[float, ...]
     F_samples_N: tuple[float, ...]
-    k_N_per_mm: float                 # small-load stiffness (the linear solve)
+    k_N_per_mm: float  # small-load stiffness (the linear solve)
     k_locked_N_per_mm: float
-    snap_through: bool = False        # F(d) had a falling branch before contact
+    snap_through: bool = False  # F(d) had a falling branch before contact
 
     @classmethod
     def from_curve(cls, d_mm, F_N, k_linear_N_per_mm, k_locked_N_per_mm, snap_through=None):
@@ -112,8 +112,7 @@ class TabulatedLockingLayer:
         if not (np.all(np.diff(d) > 0) and np.all(np.diff(F) > 0) and d[0] == 0 and F[0] == 0):
             raise ValueError("a tabulated layer law needs a strictly increasing curve from (0, 0)")
         snap = bool(snap_through) if snap_through is not None else False
-        return cls(tuple(map(float, d)), tuple(map(float, F)), float(k_linear_N_per_mm),
-                   float(k_locked_N_per_mm), snap)
+        return cls(tuple(map(float, d)), tuple(map(float, F)), float(k_linear_N_per_mm), float(k_locked_N_per_mm), snap)
 
     @property
     def d_lock_mm(self) -> float:
@@ -164,7 +163,7 @@ def _element_forces(X, U, l0, beta0, EA, EI, phi, need_K=True):
     e3[:, 2] = 1.0
     e6 = np.zeros((len(c), 6))
     e6[:, 5] = 1.0
-    B = np.stack([r, -z / ln[:, None] + e3, -z / ln[:, None] + e6], axis=1)      # (n, 3, 6)
+    B = np.stack([r, -z / ln[:, None] + e3, -z / ln[:, None] + e6], axis=1)  # (n, 3, 6)
     fl = np.stack([N, M1, M2], axis=1)
     f = np.einsum("nij,ni->nj", B, fl)
     if not need_K:
@@ -175,7 +174,7 @@ def _element_forces(X, U, l0, beta0, EA, EI, phi, need_K=True):
     Kl[:, 1, 2] = Kl[:, 2, 1] = k12
     K = np.einsum("nki,nkl,nlj->nij", B, Kl, B)
     K += (N / ln)[:, None, None] * np.einsum("ni,nj->nij", z, z)
-    K += ((M1 + M2) / ln ** 2)[:, None, None] * (np.einsum("ni,nj->nij", r, z) + np.einsum("ni,nj->nij", z, r))
+    K += ((M1 + M2) / ln**2)[:, None, None] * (np.einsum("ni,nj->nij", r, z) + np.einsum("ni,nj->nij", z, r))
     return f, K
 
 
@@ -187,7 +186,7 @@ class FrameResult:
     force_N: np.ndarray
     k_linear_N_per_mm: float
     d_contact_mm: float
-    contact_at: str                  # "pad" or "wall"
+    contact_at: str  # "pad" or "wall"
     newton_iterations: int
     snap_through: bool
 
@@ -197,25 +196,25 @@ class _Wall:
         th = cell.theta_rad
         t, b = cell.t_mm, cell.b_mm
         outer, inner = cell.outer_profile_xz(), cell.inner_profile_xz()
-        tip = 0.5 * (np.asarray(outer[1]) + np.asarray(inner[1]))    # centre of the tip section
+        tip = 0.5 * (np.asarray(outer[1]) + np.asarray(inner[1]))  # centre of the tip section
         L = cell.wall_length_mm
         self.u_dir = np.array([math.cos(th), math.sin(th)])
-        self.n0 = np.array([-math.sin(th), math.cos(th)])            # towards the cavity
+        self.n0 = np.array([-math.sin(th), math.cos(th)])  # towards the cavity
         s = np.linspace(0.0, L, n_el + 1)
         self.X = tip[None, :] - (L - s)[:, None] * self.u_dir[None, :]
         self.l0 = np.full(n_el, L / n_el)
         self.beta0 = np.full(n_el, th)
         E, nu = material.youngs_modulus_MPa, material.poisson_ratio
         G = E / (2.0 * (1.0 + nu))
-        E_ps = plane_strain_modulus_MPa(E, nu)          # a web b = D wide: plane strain
-        self.EA, self.EI = E_ps * b * t, E_ps * b * t ** 3 / 12.0
-        self.phi = 12.0 * self.EI / (SHEAR_COEFFICIENT_RECT * G * b * t * self.l0 ** 2)
+        E_ps = plane_strain_modulus_MPa(E, nu)  # a web b = D wide: plane strain
+        self.EA, self.EI = E_ps * b * t, E_ps * b * t**3 / 12.0
+        self.phi = 12.0 * self.EI / (SHEAR_COEFFICIENT_RECT * G * b * t * self.l0**2)
         self.n_nodes = n_el + 1
         ndof = 3 * self.n_nodes
         self.tip_w = ndof - 2
         fixed = [0, 1, 2, ndof - 2, ndof - 1]
         self.free = np.setdiff1d(np.arange(ndof), fixed)
-        self.dofs = (3 * np.arange(n_el)[:, None] + np.arange(6)[None, :])   # (n, 6)
+        self.dofs = 3 * np.arange(n_el)[:, None] + np.arange(6)[None, :]  # (n, 6)
         self.half_t = 0.5 * t
         self.h2 = 0.5 * cell.h_mm
         self.ndof = ndof
@@ -252,8 +251,13 @@ class _Wall:
         raise FloatingPointError("Newton did not converge")
 
 
-def solve_frame(cell: geo.HexCell, material, n_elements: int = DEFAULT_N_ELEMENTS,
-                first_step_frac: float = 0.125, max_steps: int = 400) -> FrameResult:
+def solve_frame(
+    cell: geo.HexCell,
+    material,
+    n_elements: int = DEFAULT_N_ELEMENTS,
+    first_step_frac: float = 0.125,
+    max_steps: int = 400,
+) -> FrameResult:
     """Nonlinear force-displacement of one layer up to contact onset (see module docstring).
 
     The path is followed by :func:`mst_cli.model.mechanics.path.follow_to_event` (its default
@@ -265,10 +269,12 @@ def solve_frame(cell: geo.HexCell, material, n_elements: int = DEFAULT_N_ELEMENT
     FrameError     when the path cannot be followed (steps stalled, a failed solve near contact)
     """
     if not (cell.p_mm > 0 and cell.cavity_height_mm > cell.contact_allowance_mm):
-        raise ValueError(f"frame model needs a cell with p > 0 and h - 2t > the contact allowance "
-                         f"(theta={cell.theta_deg:g} deg, t={cell.t_mm:g} mm, h={cell.h_mm:g} mm)")
+        raise ValueError(
+            f"frame model needs a cell with p > 0 and h - 2t > the contact allowance "
+            f"(theta={cell.theta_deg:g} deg, t={cell.t_mm:g} mm, h={cell.h_mm:g} mm)"
+        )
     wall = _Wall(cell, material, n_elements)
-    factor = 2.0                      # two chevrons in parallel
+    factor = 2.0  # two chevrons in parallel
     allowance = cell.contact_allowance_mm
     u = np.zeros(wall.ndof)
 
@@ -297,26 +303,37 @@ def solve_frame(cell: geo.HexCell, material, n_elements: int = DEFAULT_N_ELEMENT
     # the rigid pads meet at d_nom: a cap just past it ends every path in contact
     d_cap = d_nom * (1.0 + 1e-9) + 1e-12
     try:
-        path = follow_to_event(wall.solve_step, margin, force, u, d_nom, d_cap,
-                               StepControl(first_step_rel=first_step_frac, max_steps=max_steps))
+        path = follow_to_event(
+            wall.solve_step,
+            margin,
+            force,
+            u,
+            d_nom,
+            d_cap,
+            StepControl(first_step_rel=first_step_frac, max_steps=max_steps),
+        )
     except PathError as exc:
         raise FrameError(f"frame solve: {exc} for {cell}") from None
     F = np.array([0.0] + path.observations)
     snap = bool(np.any(np.diff(F) <= 0))
-    return FrameResult(np.array([0.0] + path.d_mm), F, k_lin, float(path.d_mm[-1]), path.event_at,
-                       path.iterations, snap)
+    return FrameResult(
+        np.array([0.0] + path.d_mm), F, k_lin, float(path.d_mm[-1]), path.event_at, path.iterations, snap
+    )
 
 
-def locked_tabulated_law(cell: geo.HexCell, material, d_mm, F_N, k_linear_N_per_mm,
-                         snap_through: bool = False) -> TabulatedLockingLayer:
+def locked_tabulated_law(
+    cell: geo.HexCell, material, d_mm, F_N, k_linear_N_per_mm, snap_through: bool = False
+) -> TabulatedLockingLayer:
     """The law of a path sampled up to contact (rungs L1 and L2): its force-controlled envelope,
     then the locked branch, the walls' last tangent in parallel with the closed cavity's
     contact column (L0's :func:`~mst_cli.model.mechanics.spring.contact_stiffness_N_per_mm`)."""
     d, F = monotone_envelope(d_mm, F_N)
     k_walls = max((F[-1] - F[-2]) / (d[-1] - d[-2]), 0.0)
-    k_locked = k_walls + float(contact_stiffness_N_per_mm(
-        cell.theta_rad, cell.t_mm, cell.width_mm, cell.b_mm, material.youngs_modulus_MPa,
-        material.poisson_ratio))
+    k_locked = k_walls + float(
+        contact_stiffness_N_per_mm(
+            cell.theta_rad, cell.t_mm, cell.width_mm, cell.b_mm, material.youngs_modulus_MPa, material.poisson_ratio
+        )
+    )
     return TabulatedLockingLayer.from_curve(d, F, k_linear_N_per_mm, k_locked, snap_through)
 
 
@@ -324,9 +341,11 @@ def locked_tabulated_law(cell: geo.HexCell, material, d_mm, F_N, k_linear_N_per_
 def frame_layer(cell: geo.HexCell, material) -> TabulatedLockingLayer:
     """The L1 law of one cell: the frame curve up to contact, then the locked branch (walls + contact column)."""
     from mst_cli.model.mechanics.correction import stiffness_factor
+
     res = solve_frame(cell, material)
     # the beam clamps the wall at the pad mid-plane and the tip; the finite joints' effect is
     # the same fitted factor as L0's (a function of t/L and theta only), applied to the forces
     joint = float(stiffness_factor(cell.t_mm / cell.wall_length_mm, cell.theta_rad))
-    return locked_tabulated_law(cell, material, res.displacement_mm, res.force_N * joint,
-                                res.k_linear_N_per_mm * joint, res.snap_through)
+    return locked_tabulated_law(
+        cell, material, res.displacement_mm, res.force_N * joint, res.k_linear_N_per_mm * joint, res.snap_through
+    )

@@ -65,12 +65,12 @@ class PathTolerances:
 class StepControl:
     """Adaptive displacement steps of :func:`follow_to_event`."""
 
-    first_step_rel: float = 0.125    # first step, fraction of d_ref
+    first_step_rel: float = 0.125  # first step, fraction of d_ref
     grow_at_most_iterations: int = 3  # a step converged in at most this many: next x grow
     hold_at_most_iterations: int = 6  # ... in at most this many: next the same; else x shrink
     grow: float = 1.5
-    shrink: float = 0.5               # also the factor of a failed step
-    max_steps: int = 400              # converged or failed steps before the event, at most
+    shrink: float = 0.5  # also the factor of a failed step
+    max_steps: int = 400  # converged or failed steps before the event, at most
 
 
 @dataclass
@@ -79,16 +79,22 @@ class PathResult:
 
     d_mm: list[float]
     observations: list[Any]
-    event_at: str                    # the margin's label at the event
-    iterations: int                  # sum of the solves' iteration counts
-    state: Any = field(repr=False)   # the state at the event
+    event_at: str  # the margin's label at the event
+    iterations: int  # sum of the solves' iteration counts
+    state: Any = field(repr=False)  # the state at the event
 
 
-def follow_to_event(solve: Callable, margin: Callable, observe: Callable, state0, d_ref_mm: float,
-                    d_max_mm: float, steps: StepControl = StepControl(),
-                    tol: PathTolerances = PathTolerances(),
-                    failures: tuple[type[BaseException], ...] = (FloatingPointError, np.linalg.LinAlgError)
-                    ) -> PathResult:
+def follow_to_event(
+    solve: Callable,
+    margin: Callable,
+    observe: Callable,
+    state0,
+    d_ref_mm: float,
+    d_max_mm: float,
+    steps: StepControl = StepControl(),
+    tol: PathTolerances = PathTolerances(),
+    failures: tuple[type[BaseException], ...] = (FloatingPointError, np.linalg.LinAlgError),
+) -> PathResult:
     """Follow the equilibrium path from ``state0`` at d = 0 until ``margin`` reaches 0.
 
     ``d_max_mm`` caps the compression; reaching it without the event is a :class:`PathError`
@@ -113,8 +119,9 @@ def follow_to_event(solve: Callable, margin: Callable, observe: Callable, state0
         total_it += it
         m_new, where = margin(state_new, d_try)
         if m_new <= 0.0:
-            state_ev, d_ev, where, it = _locate_event(solve, margin, d_ref_mm, tol, failures, d, m_prev, state,
-                                                      d_try, m_new, state_new, where)
+            state_ev, d_ev, where, it = _locate_event(
+                solve, margin, d_ref_mm, tol, failures, d, m_prev, state, d_try, m_new, state_new, where
+            )
             ds.append(d_ev)
             obs.append(observe(state_ev, d_ev))
             return PathResult(ds, obs, where, total_it + it, state_ev)

@@ -69,9 +69,17 @@ def plane_strain_modulus_MPa(E_MPa: ArrayLike, nu: ArrayLike) -> np.ndarray:
     return E_MPa / (1.0 - nu * nu)
 
 
-def wall_compliance_mm_per_N(theta_rad: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike, b_mm: ArrayLike,
-                             E_MPa: ArrayLike, nu: ArrayLike, bending: bool = True, shear: bool = True,
-                             axial: bool = True) -> np.ndarray:
+def wall_compliance_mm_per_N(
+    theta_rad: ArrayLike,
+    t_mm: ArrayLike,
+    h_mm: ArrayLike,
+    b_mm: ArrayLike,
+    E_MPa: ArrayLike,
+    nu: ArrayLike,
+    bending: bool = True,
+    shear: bool = True,
+    axial: bool = True,
+) -> np.ndarray:
     """Vertical compliance of one clamped-guided inclined wall (a web b wide), mm/N.
 
     Plane strain: bending and axial terms with E' = E / (1 - nu^2), shear with G.
@@ -80,14 +88,14 @@ def wall_compliance_mm_per_N(theta_rad: ArrayLike, t_mm: ArrayLike, h_mm: ArrayL
     """
     L = geo.wall_centreline_length_mm(theta_rad, t_mm, h_mm)
     area = b_mm * t_mm
-    inertia = b_mm * t_mm ** 3 / 12.0
+    inertia = b_mm * t_mm**3 / 12.0
     E_ps = plane_strain_modulus_MPa(E_MPa, nu)
     G = E_MPa / (2.0 * (1.0 + nu))
     cos2 = np.cos(theta_rad) ** 2
     sin2 = np.sin(theta_rad) ** 2
     c = np.zeros(np.broadcast(theta_rad, t_mm, h_mm, b_mm, E_MPa, nu).shape)
     if bending:
-        c = c + cos2 * L ** 3 / (12.0 * E_ps * inertia)
+        c = c + cos2 * L**3 / (12.0 * E_ps * inertia)
     if shear:
         c = c + cos2 * L / (SHEAR_COEFFICIENT_RECT * G * area)
     if axial:
@@ -95,16 +103,18 @@ def wall_compliance_mm_per_N(theta_rad: ArrayLike, t_mm: ArrayLike, h_mm: ArrayL
     return c
 
 
-def layer_stiffness_N_per_mm(theta_rad: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike, b_mm: ArrayLike,
-                             E_MPa: ArrayLike, nu: ArrayLike) -> np.ndarray:
+def layer_stiffness_N_per_mm(
+    theta_rad: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike, b_mm: ArrayLike, E_MPa: ArrayLike, nu: ArrayLike
+) -> np.ndarray:
     """Small-load stiffness k of a whole layer (a web of width b: 2 chevrons of 2 walls each)."""
     c_wall = wall_compliance_mm_per_N(theta_rad, t_mm, h_mm, b_mm, E_MPa, nu)
     # chevron = 2 walls in series (2 c); the layer = 2 chevrons in parallel
     return 2.0 / (2.0 * c_wall)
 
 
-def pad_compression_modulus_MPa(E_MPa: ArrayLike, nu: ArrayLike, half_width_mm: ArrayLike,
-                                thickness_mm: ArrayLike) -> np.ndarray:
+def pad_compression_modulus_MPa(
+    E_MPa: ArrayLike, nu: ArrayLike, half_width_mm: ArrayLike, thickness_mm: ArrayLike
+) -> np.ndarray:
     """Apparent compression modulus of a layer bonded to rigid plates on both faces, in plane
     strain (long along y), half-width a, thickness H:
 
@@ -125,8 +135,9 @@ def pad_compression_modulus_MPa(E_MPa: ArrayLike, nu: ArrayLike, half_width_mm: 
     return E_ps + (M - E_ps) * (1.0 - np.tanh(x) / x)
 
 
-def contact_stiffness_N_per_mm(theta_rad: ArrayLike, t_mm: ArrayLike, width_mm: ArrayLike, b_mm: ArrayLike,
-                               E_MPa: ArrayLike, nu: ArrayLike = 0.0) -> np.ndarray:
+def contact_stiffness_N_per_mm(
+    theta_rad: ArrayLike, t_mm: ArrayLike, width_mm: ArrayLike, b_mm: ArrayLike, E_MPa: ArrayLike, nu: ArrayLike = 0.0
+) -> np.ndarray:
     """Stiffness of the closed cavity's contact column: 2t of solid TPU over the contact width.
 
     Which modulus: the closed pads (t each, bonded to the rigid plates on their outer faces)
@@ -144,8 +155,13 @@ def contact_stiffness_N_per_mm(theta_rad: ArrayLike, t_mm: ArrayLike, width_mm: 
     return E_c * b_mm * 2.0 * half / (2.0 * t_mm)
 
 
-def layer_displacement_mm(force_N: ArrayLike, k_N_per_mm: ArrayLike, d_lock_mm: ArrayLike, lock_force_N: ArrayLike,
-                          k_locked_N_per_mm: ArrayLike) -> np.ndarray:
+def layer_displacement_mm(
+    force_N: ArrayLike,
+    k_N_per_mm: ArrayLike,
+    d_lock_mm: ArrayLike,
+    lock_force_N: ArrayLike,
+    k_locked_N_per_mm: ArrayLike,
+) -> np.ndarray:
     """Compression of L0 layers at force F, vectorised (all arguments broadcast).
 
     Slope k up to the knee F1 = KNEE_FRACTION * R, straight on to (d_lock, R), then k_locked.
@@ -187,13 +203,22 @@ class LinearLockingLayer:
         return (KNEE_FRACTION * R, R)
 
     def displacement_mm(self, force_N: ArrayLike) -> np.ndarray:
-        return layer_displacement_mm(force_N, self.k_N_per_mm, self.d_lock_mm, self.lock_force_N,
-                                     self.k_locked_N_per_mm)
+        return layer_displacement_mm(
+            force_N, self.k_N_per_mm, self.d_lock_mm, self.lock_force_N, self.k_locked_N_per_mm
+        )
 
 
-def spring_arrays(theta_rad: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike, b_mm: ArrayLike, width_mm: ArrayLike,
-                  contact_allowance_mm: ArrayLike, E_MPa: ArrayLike, nu: ArrayLike,
-                  corrected: bool = True) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def spring_arrays(
+    theta_rad: ArrayLike,
+    t_mm: ArrayLike,
+    h_mm: ArrayLike,
+    b_mm: ArrayLike,
+    width_mm: ArrayLike,
+    contact_allowance_mm: ArrayLike,
+    E_MPa: ArrayLike,
+    nu: ArrayLike,
+    corrected: bool = True,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """(k, d_lock, R, k_locked) for many layers at once: the design loop's entry point.
 
     ``corrected`` (default) applies the fits against rung L2
@@ -208,6 +233,7 @@ def spring_arrays(theta_rad: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike, b_mm: 
     R = k * d_lock
     if corrected:
         from mst_cli.model.mechanics import correction
+
         L = geo.wall_centreline_length_mm(theta_rad, t_mm, h_mm)
         t_over_L = t_mm / L
         sigma = correction.stroke_ratio(d_lock, L, theta_rad)
@@ -215,13 +241,14 @@ def spring_arrays(theta_rad: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike, b_mm: 
         force_factor, stroke_factor = correction.lock_factors(t_over_L, theta_rad, sigma)
         R = k * d_lock * force_factor
         d_lock = d_lock * stroke_factor
-        R = np.minimum(R, k * d_lock)           # walls only soften before the lock
+        R = np.minimum(R, k * d_lock)  # walls only soften before the lock
     k_locked = k + contact_stiffness_N_per_mm(theta_rad, t_mm, width_mm, b_mm, E_MPa, nu)
     return k, d_lock, R, k_locked
 
 
-def spring_layers(cells, material, corrected: bool = True,
-                  modulus_MPa: ArrayLike | None = None) -> tuple[LinearLockingLayer, ...]:
+def spring_layers(
+    cells, material, corrected: bool = True, modulus_MPa: ArrayLike | None = None
+) -> tuple[LinearLockingLayer, ...]:
     """The L0 laws of a stack's cells from one kernel call (a layer's law does not depend on
     the batch it is computed in: the same numbers as the design loop's batches). ``modulus_MPa``:
     one modulus per cell instead of the material's (the web's finite depth,
@@ -230,8 +257,9 @@ def spring_layers(cells, material, corrected: bool = True,
     columns = [np.array([getattr(c, name) for c in cells], dtype=float) for name in fields]
     E = material.youngs_modulus_MPa if modulus_MPa is None else np.asarray(modulus_MPa, dtype=float)
     k, d_lock, R, k_locked = spring_arrays(*columns, E, material.poisson_ratio, corrected)
-    return tuple(LinearLockingLayer(float(a), float(b), float(c), float(d))
-                 for a, b, c, d in zip(k, d_lock, k_locked, R))
+    return tuple(
+        LinearLockingLayer(float(a), float(b), float(c), float(d)) for a, b, c, d in zip(k, d_lock, k_locked, R)
+    )
 
 
 def spring_layer(cell: geo.HexCell, material, corrected: bool = True) -> LinearLockingLayer:
