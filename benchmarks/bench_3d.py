@@ -27,11 +27,11 @@ import argparse
 import time
 
 import continuum_3d as C3
-import numpy as np
 
 from mst_cli.model.geometry import HexCell
 from mst_cli.model.material import Material
 from mst_cli.model.mechanics import continuum as L2
+from mst_cli.model.mechanics.depth import finite_depth_factor
 
 CELLS = [
     ("shallow", HexCell(14, 0.40, 1.87)),
@@ -108,21 +108,17 @@ def main() -> None:
             f"| {p['R']:.4g} | {h['R']:.4g} | {f['R']:.4g} | {f['R'] / p['R']:.4f} | {f['R'] / h['R']:.4f} "
             f"| {f['d_lock'] / p['d_lock']:.4f} | {conv} |"
         )
-    if len(rows) >= 2:
-        # the free faces' softening of k, 1 - k free/held, fitted by the forms a candidate
-        # correction could take (least squares over the cells run)
-        deficit = np.array([1.0 - r["free"]["k"] / r["held"]["k"] for _, _, r in rows])
-        t_D = np.array([c.t_mm / c.b_mm for _, c, _ in rows])
-        h_D = np.array([c.h_mm / c.b_mm for _, c, _ in rows])
-        print("\nfree faces' softening of k, 1 - k free/held: " + ", ".join(f"{d:.4f}" for d in deficit))
-        for label, cols in (("c t/D", [t_D]), ("c h/D", [h_D]), ("a t/D + b h/D", [t_D, h_D])):
-            X = np.stack(cols, axis=1)
-            coef = np.linalg.lstsq(X, deficit, rcond=None)[0]
-            miss = X @ coef - deficit
-            print(
-                f"  fit {label}: coefficients {', '.join(f'{c:.4f}' for c in coef)}; "
-                f"largest miss {np.abs(miss).max():.4f}"
-            )
+    # the adopted finite-depth correction (mst_cli.model.mechanics.depth, fitted by
+    # benchmarks/fit_depth_correction.py on other cells) against the free faces' effect alone
+    print("\nthe rungs' finite-depth factor phi against free/held (k and R): misses in %")
+    for name, cell, res in rows:
+        phi = float(finite_depth_factor(cell.theta_rad, cell.t_mm, cell.h_mm, cell.b_mm, material.poisson_ratio))
+        f, h = res["free"], res["held"]
+        print(
+            f"  {name}: phi {phi:.4f}; k {100 * (phi / (f['k'] / h['k']) - 1):+.2f} %, "
+            f"R {100 * (phi / (f['R'] / h['R']) - 1):+.2f} % (uncorrected: k {100 * (h['k'] / f['k'] - 1):+.2f} %, "
+            f"R {100 * (h['R'] / f['R'] - 1):+.2f} %)"
+        )
     if any("inplane" in r for _, _, r in rows):
         print("\nlinear k on the 3 x 12 in-plane mesh (coarse depth grading)\n")
         print("| cell | k 2D | k 3D held | k 3D free | free/2D | free/held |")

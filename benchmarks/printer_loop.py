@@ -4,8 +4,8 @@ A synthetic printer the design never sees prints every wall 0.06 mm thicker and 
 softer. Print 1 is `mst design` of the reference spec; its load test (60 samples, 2 uT RMS
 noise, rounded to the chip's LSB) goes through `mst calibrate`, then `mst design
 --calibration`; print 2 is the written design printed by the same synthetic printer. The print
-is made by editing design.yaml by hand and simulating it (tests/test_printer_loop.py asserts the
-same loop).
+is made by editing design.yaml by hand and simulating it (tests/test_printer_loop.py runs the
+same loop with this module's printer and asserts it).
 
 Run:  .venv/bin/python benchmarks/printer_loop.py [--seed 11]
 """
@@ -39,14 +39,30 @@ def mst(*args):
     return done.stdout
 
 
-def printed(design_yaml):
+def print_of(design_yaml, wall_mm: float = WALL_MM, modulus: float = MODULUS):
+    """What the synthetic printer makes of a written design.yaml: its drawn walls + wall_mm, its
+    material's modulus x modulus, the real magnet (the grade's) in the drawn housing; edited by
+    hand and simulated, not through the printer code under test."""
     raw = yaml.safe_load(Path(design_yaml).read_text())
-    raw["material"]["youngs_modulus_MPa"] *= MODULUS
+    raw["material"]["youngs_modulus_MPa"] *= modulus
     for layer in raw["layers"]:
-        layer["t_mm"] += WALL_MM
+        layer["t_mm"] += wall_mm
     raw["magnet"]["remanence_T"] = None
     doc = parse_document(raw)
     return simulate(doc.geometry(), doc.material, noise_uT_rms=NOISE_uT)
+
+
+def write_load_test(resp, path, rng, samples: int = 60) -> None:
+    """A load test of a print: the model's field + chip noise, rounded to the chip's LSB."""
+    F = np.sort(rng.uniform(0.0, resp.max_force_N, samples))
+    B = np.stack([np.interp(F, resp.force_N, resp.B_T[:, i]) for i in range(3)], -1)
+    B = B + rng.normal(0.0, NOISE_uT * 1e-6, B.shape)
+    s = resp.chip_setting
+    lsb = (s.xy_uT_per_lsb, s.xy_uT_per_lsb, s.z_uT_per_lsb)
+    rows = ["force_N,Bx_uT,By_uT,Bz_uT"]
+    for f, b in zip(F, B):
+        rows.append(f"{f:.4f}," + ",".join(f"{mlx.quantise_lsb(b[i], lsb[i]) * lsb[i]:.4f}" for i in range(3)))
+    Path(path).write_text("\n".join(rows) + "\n")
 
 
 def misses(resp, doc):
@@ -67,22 +83,12 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         d = Path(tmp)
         mst("design", SPEC, "--out", d / "print1", "--no-plot", "-q")
-        p1 = printed(d / "print1" / "design.yaml")
-        rng = np.random.default_rng(args.seed)
-        F = np.sort(rng.uniform(0.0, p1.max_force_N, 60))
-        B = np.stack([np.interp(F, p1.force_N, p1.B_T[:, i]) for i in range(3)], -1)
-        B = B + rng.normal(0.0, NOISE_uT * 1e-6, B.shape)
-        s = p1.chip_setting
-        lsb = (s.xy_uT_per_lsb, s.xy_uT_per_lsb, s.z_uT_per_lsb)
-        rows = ["force_N,Bx_uT,By_uT,Bz_uT"] + [
-            f"{f:.4f}," + ",".join(f"{mlx.quantise_lsb(b[i], lsb[i]) * lsb[i]:.4f}" for i in range(3))
-            for f, b in zip(F, B)
-        ]
-        (d / "loadtest.csv").write_text("\n".join(rows) + "\n")
+        p1 = print_of(d / "print1" / "design.yaml")
+        write_load_test(p1, d / "loadtest.csv", np.random.default_rng(args.seed))
         mst("calibrate", d / "print1" / "design.yaml", d / "loadtest.csv", "--out", d / "cal", "--no-plot")
         cal = json.loads((d / "cal" / "calibration.json").read_text())
         mst("design", SPEC, "--calibration", d / "cal" / "calibration.json", "--out", d / "print2", "--no-plot", "-q")
-        p2 = printed(d / "print2" / "design.yaml")
+        p2 = print_of(d / "print2" / "design.yaml")
         for name, resp in (("print 1", p1), ("print 2", p2)):
             dS, dR = misses(resp, doc)
             print(

@@ -11,6 +11,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from mst_cli.design.problem import DesignProblem
+from mst_cli.io.schema import load_document
 from mst_cli.model import mechanics
 from mst_cli.model.geometry import HexCell
 from mst_cli.model.material import Material
@@ -68,7 +70,17 @@ def test_every_rung_scales_its_force_by_the_factor(model):
 
 
 def test_the_design_loop_uses_the_same_web_as_the_forward_model():
-    cells = (HexCell(15, 0.45, 1.9), HexCell(30, 0.8, 2.6))
-    batch = mechanics.layer_laws(cells, MAT)
-    for cell, law in zip(cells, batch):
-        assert law.k_N_per_mm == mechanics.layer_law(cell, MAT).k_N_per_mm
+    """The optimiser's batched kernel (DesignProblem.layer_laws) and the forward model's law of
+    the same cell (mechanics.layer_law) carry the same finite-depth factor: same k, R, d_lock."""
+    doc = load_document(Path(__file__).resolve().parents[1] / "configs" / "mohammadi2021.yaml")
+    problem = DesignProblem(doc)
+    theta, t, h = np.array([15.0, 30.0, 55.0]), np.array([0.45, 0.8, 1.6]), np.array([1.9, 2.6, 5.0])
+    k, d_lock, R, _ = problem.layer_laws(theta, t, h)
+    for i in range(3):
+        law = mechanics.layer_law(doc.family.cell(theta[i], t[i], h[i]), doc.material)
+        assert k[i] == pytest.approx(law.k_N_per_mm, rel=1e-12)
+        assert R[i] == pytest.approx(law.lock_force_N, rel=1e-12)
+        assert d_lock[i] == pytest.approx(law.d_lock_mm, rel=1e-12)
+    # and that factor is really applied (the plane-strain law is stiffer)
+    plane = mechanics.uncached_layer_law(doc.family.cell(theta[0], t[0], h[0]), doc.material, "spring")
+    assert k[0] < plane.k_N_per_mm * (1 - 1e-3)

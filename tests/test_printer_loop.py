@@ -4,11 +4,13 @@ reported and limited, and the loop from a first print's load test to a second pr
 The synthetic printer prints every wall 0.06 mm thicker than drawn and the TPU 15 % softer than
 its data sheet; the design never sees those numbers. A print of a written design.yaml is built
 by editing the file's keys by hand (walls + 0.06 mm, modulus x 0.85, the grade's magnet, the
-drawn housing) and simulating it with the forward model, not through the code under test.
+drawn housing) and simulating it with the forward model, not through the code under test
+(benchmarks/printer_loop.py holds that printer; its main prints the loop's figures).
 """
 
 import json
 import math
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -18,13 +20,13 @@ from click.testing import CliRunner
 
 from mst_cli.cli.app import main
 from mst_cli.io.schema import load_document, parse_document
-from mst_cli.model import chip as mlx
 from mst_cli.model.response import simulate
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+from printer_loop import MODULUS, WALL_MM, print_of, write_load_test
 
 ROOT = Path(__file__).resolve().parents[1]
 SPEC = ROOT / "configs" / "mohammadi2021.yaml"
-PRINTER_WALL_MM, PRINTER_MODULUS = 0.06, 0.85  # the synthetic printer, hidden from the design
-NOISE_uT = 2.0
 
 
 def run(args):
@@ -48,18 +50,6 @@ def targets(path=SPEC):
     )
 
 
-def print_of(design_yaml, wall_mm=PRINTER_WALL_MM, modulus=PRINTER_MODULUS):
-    """What the synthetic printer makes of a written design.yaml: its drawn walls + wall_mm, its
-    material's modulus x modulus, the real magnet (the grade's) in the drawn housing."""
-    raw = yaml.safe_load(Path(design_yaml).read_text())
-    raw["material"]["youngs_modulus_MPa"] *= modulus
-    for layer in raw["layers"]:
-        layer["t_mm"] += wall_mm
-    raw["magnet"]["remanence_T"] = None
-    doc = parse_document(raw)
-    return simulate(doc.geometry(), doc.material, noise_uT_rms=NOISE_uT)
-
-
 def as_the_file_says(design_yaml, extra_wall_mm=0.0, mechanics="spring"):
     """A written design as its own printer section says it prints, by hand."""
     raw = yaml.safe_load(Path(design_yaml).read_text())
@@ -72,19 +62,6 @@ def as_the_file_says(design_yaml, extra_wall_mm=0.0, mechanics="spring"):
     return simulate(doc.geometry(), doc.material, mechanics=mechanics)
 
 
-def load_test_csv(resp, path, rng, samples=60):
-    """A load test of a print: the model's field + chip noise, rounded to the chip's LSB."""
-    F = np.sort(rng.uniform(0.0, resp.max_force_N, samples))
-    B = np.stack([np.interp(F, resp.force_N, resp.B_T[:, i]) for i in range(3)], -1)
-    B = B + rng.normal(0.0, NOISE_uT * 1e-6, B.shape)
-    s = resp.chip_setting
-    lsb = (s.xy_uT_per_lsb, s.xy_uT_per_lsb, s.z_uT_per_lsb)
-    rows = ["force_N,Bx_uT,By_uT,Bz_uT"]
-    for f, b in zip(F, B):
-        rows.append(f"{f:.4f}," + ",".join(f"{mlx.quantise_lsb(b[i], lsb[i]) * lsb[i]:.4f}" for i in range(3)))
-    Path(path).write_text("\n".join(rows) + "\n")
-
-
 @pytest.fixture(scope="module")
 def loop(tmp_path_factory):
     """Print 1 from the spec, its load test, mst calibrate, then design 2 with --calibration."""
@@ -92,7 +69,7 @@ def loop(tmp_path_factory):
     first = run(["design", SPEC, "--out", d / "print1", "--no-plot", "-q"])
     assert first.exit_code == 0, first.output
     print1 = print_of(d / "print1" / "design.yaml")
-    load_test_csv(print1, d / "loadtest.csv", np.random.default_rng(11))
+    write_load_test(print1, d / "loadtest.csv", np.random.default_rng(11))
     cal = run(["calibrate", d / "print1" / "design.yaml", d / "loadtest.csv", "--out", d / "cal", "--no-plot"])
     assert cal.exit_code == 0, cal.output
     second = run(["design", SPEC, "--calibration", d / "cal" / "calibration.json", "--out", d / "print2", "--no-plot"])
@@ -118,8 +95,8 @@ def test_the_second_design_says_what_it_took_and_draws_thinner_walls(loop):
     assert f"± {rec['wall_offset_mm']['std']:.4f} mm" in out  # with its uncertainty
     doc2 = load_document(loop["dir"] / "print2" / "design.yaml")
     assert doc2.printer.wall_offset_mm == pytest.approx(rec["wall_offset_mm"]["value"], abs=1e-12)
-    assert doc2.printer.wall_offset_mm == pytest.approx(PRINTER_WALL_MM, abs=0.005)
-    assert doc2.printer.modulus_factor == pytest.approx(PRINTER_MODULUS, abs=0.02)
+    assert doc2.printer.wall_offset_mm == pytest.approx(WALL_MM, abs=0.005)
+    assert doc2.printer.modulus_factor == pytest.approx(MODULUS, abs=0.02)
     report = json.loads((loop["dir"] / "print2" / "report.json").read_text())["design"]
     assert set(report["calibration"]["taken"]) == {
         "printer.wall_offset_mm",

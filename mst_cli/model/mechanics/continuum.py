@@ -69,6 +69,7 @@ DEFAULT_N_THICK = 3
 DEFAULT_N_LENGTH = 12
 DEFAULT_LEVELS = 4
 REFINE_RADIUS_IN_T = 0.5  # first refinement radius around a corner, in wall thicknesses
+CORNERS = ("tip", "outer_root", "inner_root")  # the singular corners the default mesh refines at
 PAD_LENGTH_IN_T = 4.0  # length of pad kept next to the wall root, in wall thicknesses
 WEDGE_ASPECT = 1.5  # tip wedge: column width over local element height
 WEDGE_APEX_FRACTION = 0.1  # tip wedge: the last column spans the last 10 % of its length
@@ -189,22 +190,32 @@ def quarter_profile_mesh(
 
 
 def refined_quarter_mesh(
-    cell: geo.HexCell, n_thick: int = DEFAULT_N_THICK, n_length: int = DEFAULT_N_LENGTH, levels: int = DEFAULT_LEVELS
+    cell: geo.HexCell,
+    n_thick: int = DEFAULT_N_THICK,
+    n_length: int = DEFAULT_N_LENGTH,
+    levels: int = DEFAULT_LEVELS,
+    corners: tuple[str, ...] = CORNERS,
+    radius_in_t: float = REFINE_RADIUS_IN_T,
 ) -> tuple[MeshTri, float]:
     """:func:`quarter_profile_mesh` with ``levels`` rounds of refinement at the corners.
 
-    Round i refines (red-green) the triangles whose centroid lies within 0.5 t / 2^i of the
-    cavity's tip vertex, the outer wall-root corner or the inner wall-root corner. Returns
-    (skfem MeshTri, x_cut_mm).
+    Round i refines (red-green) the triangles whose centroid lies within radius_in_t t / 2^i of
+    the named ``corners`` (CORNERS: the cavity's tip vertex, the outer wall-root corner, the
+    inner wall-root corner). Returns (skfem MeshTri, x_cut_mm).
     """
     from skfem import MeshTri
 
     pts, tri, x_cut = quarter_profile_mesh(cell, n_thick, n_length)
     mesh = MeshTri(pts, tri)
-    corners = np.array([cell.inner_profile_xz()[1], cell.outer_profile_xz()[0], cell.inner_profile_xz()[0]])
+    where = {
+        "tip": cell.inner_profile_xz()[1],
+        "outer_root": cell.outer_profile_xz()[0],
+        "inner_root": cell.inner_profile_xz()[0],
+    }
+    corners = np.array([where[name] for name in corners])
     for i in range(levels):
         mid = mesh.p[:, mesh.t].mean(axis=1)
-        r = REFINE_RADIUS_IN_T * cell.t_mm * 0.5**i
+        r = radius_in_t * cell.t_mm * 0.5**i
         dist = np.hypot(mid[0][None, :] - corners[:, :1], mid[1][None, :] - corners[:, 1:])
         marked = np.flatnonzero((dist < r).any(axis=0))
         if marked.size:
@@ -327,11 +338,11 @@ class ContinuumResult:
 
 
 class _Problem:
-    def __init__(self, cell, material, n_thick, n_length, levels):
+    def __init__(self, cell, material, n_thick, n_length, levels, corners=CORNERS, radius_in_t=REFINE_RADIUS_IN_T):
         from skfem import Basis, ElementTriP2, ElementVector
 
         self.cell = cell
-        self.mesh, x_cut = refined_quarter_mesh(cell, n_thick, n_length, levels)
+        self.mesh, x_cut = refined_quarter_mesh(cell, n_thick, n_length, levels, corners, radius_in_t)
         self.basis = Basis(self.mesh, ElementVector(ElementTriP2()), intorder=4)
         self.mu, self.lam = _lame_3d(material.youngs_modulus_MPa, material.poisson_ratio)
         b = self.basis
@@ -557,6 +568,8 @@ def solve_continuum(
     first_step_frac: float = 0.125,
     max_steps: int = 200,
     path_levels: int = 0,
+    path_corners: tuple[str, ...] = CORNERS,
+    path_radius_in_t: float = REFINE_RADIUS_IN_T,
 ) -> ContinuumResult:
     """Nonlinear force-displacement of one layer through closure, up to its lock.
 
@@ -567,7 +580,9 @@ def solve_continuum(
 
     ``path_levels``: corner refinement rounds of the path's own mesh (default 0; its forces
     are scaled by the linear stiffness ratio to the ``levels`` mesh). A convergence study
-    knob: benchmarks/sweep_lock.py and docs/design.md section 4 give what it changes.
+    knob: benchmarks/sweep_lock.py and docs/design.md section 4 give what it changes;
+    ``path_corners`` and ``path_radius_in_t`` say where it refines (benchmarks/steep_lock.py
+    refines at the inner wall root alone, where a steep wall's contact front runs).
 
     Raises
     ------
@@ -588,7 +603,11 @@ def solve_continuum(
     # elements at the cavity's near-crack tip invert long before contact. Its forces are
     # scaled by k_fine / k_coarse, the ratio of the two meshes' linear stiffnesses (the
     # corner singularity's mesh error; the benchmark's convergence study records it).
-    prob = _Problem(cell, material, n_thick, n_length, path_levels) if levels != path_levels else fine
+    prob = (
+        _Problem(cell, material, n_thick, n_length, path_levels, path_corners, path_radius_in_t)
+        if levels != path_levels
+        else fine
+    )
     k_path = linear_k(prob) if levels != path_levels else k_lin
     mesh_scale = k_lin / k_path
     try:

@@ -1,0 +1,106 @@
+"""Why steep walls' lock force is not mesh-converged to 1 %, and what it costs L0 (issue 20).
+
+Three measurements behind docs/design.md section 4 ("Steep walls", "L0 against L2 over the box"):
+
+1. F(d) of steep cells on three meshes, at fractions of the lock stroke: the meshes agree until
+   the last tenth of the stroke, where the inner wall face zips shut and the tangent climbs;
+2. the same cells with the path's own mesh refined around the inner wall root alone (where the
+   contact front runs), on two meshes;
+3. L0 (spring) against L2 on cells drawn uniformly in the printable box: the median lock-force
+   miss, per band of theta, and one steep slender cell's F / (k d) along its path (the ramp).
+
+Run:  .venv/bin/python benchmarks/steep_lock.py [--uniform 200 --seed 7]     # ~5 min
+"""
+
+from __future__ import annotations
+
+import argparse
+
+import numpy as np
+
+from mst_cli.bench.ladder_bench import sample_cells
+from mst_cli.model.geometry import HexCell
+from mst_cli.model.material import Material
+from mst_cli.model.mechanics import uncached_layer_law
+from mst_cli.model.mechanics.continuum import continuum_layer, solve_continuum
+
+STEEP = [(60, 0.6, 4.0), (70, 1.5, 6.0)]
+MESHES = [(3, 12), (4, 16), (6, 24)]
+FRACTIONS = (0.1, 0.3, 0.5, 0.7, 0.85, 0.95, 1.0)
+RAMP_CELL = (61.3, 0.57, 5.25)
+
+
+def curves_on_meshes(mat) -> None:
+    print("1. F(d) on each mesh / F on the 6 x 24 mesh - 1, at fractions of the lock stroke")
+    for cell in STEEP:
+        res = {m: solve_continuum(HexCell(*cell), mat, n_thick=m[0], n_length=m[1]) for m in MESHES}
+        ref = res[MESHES[-1]]
+        strokes = ", ".join(f"{r.d_contact_mm:.4f}" for r in res.values())
+        print(f"{cell}: lock stroke {strokes} mm; R {', '.join(f'{r.force_N[-1]:.3f}' for r in res.values())} N")
+        for frac in FRACTIONS:
+            d = frac * ref.d_contact_mm * (1 - 1e-9)
+            F_ref = np.interp(d, ref.displacement_mm, ref.force_N)
+            dev = " ".join(
+                f"{a}x{b} {100 * (np.interp(d, r.displacement_mm, r.force_N) / F_ref - 1):+6.2f} %"
+                for (a, b), r in res.items()
+            )
+            print(f"  {frac:4.2f} of the stroke: F = {F_ref:8.3f} N; {dev}")
+
+
+def inner_root_refined(mat) -> None:
+    print("\n2. the path's mesh refined twice within 2 t of the inner wall root (R, N)")
+    for cell in STEEP:
+        row = []
+        for a, b in MESHES[:2]:
+            try:
+                r = solve_continuum(
+                    HexCell(*cell),
+                    mat,
+                    n_thick=a,
+                    n_length=b,
+                    path_levels=2,
+                    path_corners=("inner_root",),
+                    path_radius_in_t=2.0,
+                )
+                row.append(f"{a}x{b} {r.force_N[-1]:.3f}")
+            except Exception as exc:  # a stalled path is the finding, not a crash
+                row.append(f"{a}x{b} stalled ({type(exc).__name__})")
+        print(f"{cell}: " + ", ".join(row))
+
+
+def l0_uniform(mat, n: int, seed: int) -> None:
+    cells = sample_cells(n, seed)
+    rows = []
+    for c in cells:
+        ref, l0 = continuum_layer(c, mat), uncached_layer_law(c, mat, "spring")
+        rows.append((c.theta_deg, abs(l0.lock_force_N / ref.lock_force_N - 1)))
+    theta, err = np.array(rows).T
+    print(f"\n3. L0 lock force against L2 on {n} uniform cells (seed {seed}): median miss {100 * np.median(err):.2f} %")
+    for lo, hi in ((5, 30), (30, 50), (50, 55), (55, 75)):
+        sel = (theta >= lo) & (theta < hi)
+        print(f"  theta {lo}-{hi} deg: {sel.sum()} cells, median {100 * np.median(err[sel]):.2f} %")
+    sel = theta < 50
+    print(f"  below 50 deg: {sel.sum()} cells, median {100 * np.median(err[sel]):.2f} %")
+    r = solve_continuum(HexCell(*RAMP_CELL), mat)
+    l0 = uncached_layer_law(HexCell(*RAMP_CELL), mat, "spring")
+    d, F = r.displacement_mm[1:], r.force_N[1:]
+    ramp = " ".join(f"{f:.2f}" for f in F / (r.k_linear_N_per_mm * d))
+    print(
+        f"  {RAMP_CELL}: L2 d_lock {r.d_contact_mm:.3f} mm, R {F[-1]:.2f} N; L0 d_lock {l0.d_lock_mm:.3f} mm, "
+        f"R {l0.lock_force_N:.2f} N\n  F / (k d) along the L2 path: {ramp}"
+    )
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--uniform", type=int, default=200, help="cells drawn for part 3")
+    ap.add_argument("--seed", type=int, default=7)
+    args = ap.parse_args()
+    mat = Material()
+    curves_on_meshes(mat)
+    inner_root_refined(mat)
+    l0_uniform(mat, args.uniform, args.seed)
+
+
+if __name__ == "__main__":
+    main()
