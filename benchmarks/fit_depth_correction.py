@@ -18,7 +18,8 @@ The ratio measured is k 3D free / k 3D held on the same 3D mesh (benchmarks/cont
 y = 0 a symmetry plane, y = D/2 free or held): the held model's exact answer is plane strain,
 so the tetrahedra's own discretisation cancels.
 
-Run:  .venv/bin/python benchmarks/fit_depth_correction.py          # ~130 cells, ~10 min
+Run:  .venv/bin/python benchmarks/fit_depth_correction.py          # 88 3D cells, ~5 min
+      .venv/bin/python benchmarks/fit_depth_correction.py --factors-only   # the factor on designs
       .venv/bin/python benchmarks/fit_depth_correction.py --limit 8 --no-write
 """
 
@@ -28,6 +29,7 @@ import argparse
 import itertools
 import json
 import time
+from pathlib import Path
 
 import continuum_3d as C3
 import numpy as np
@@ -61,13 +63,31 @@ def free_over_held(cell, material, n_thick=2, n_length=8) -> float:
     return k_free / k_held
 
 
+def example_factors() -> None:
+    """The stored factor on the reference design's layers and on thick steep cells."""
+    from mst_cli import api
+
+    doc = api.design(Path(__file__).resolve().parents[1] / "configs" / "mohammadi2021.yaml").document
+    cells = [
+        (f"reference design layer {i + 1}", la.theta_deg, la.t_mm, la.h_mm, doc.family.depth_mm)
+        for i, la in enumerate(doc.layers)
+    ]
+    cells += [("thick steep", 72, 2.0, 7.0, SHAPE_DEPTH_MM), ("thick steep", 60, 3.0, 8.0, SHAPE_DEPTH_MM)]
+    for name, theta, t, h, D in cells:
+        phi = float(depth.finite_depth_factor(np.radians(theta), t, h, D, Material().poisson_ratio))
+        print(f"{name}: theta {theta:.2f} deg, t {t:.3f} mm, h {h:.3f} mm, D {D:g} mm: factor {phi:.4f}")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--limit", type=int, default=0, help="only the first N shape cells (a quick look)")
     ap.add_argument("--no-write", action="store_true", help="do not write the data file")
+    ap.add_argument("--factors-only", action="store_true", help="only the stored factor on example designs")
     args = ap.parse_args()
     material = Material()
     nu = material.poisson_ratio
+    if args.factors_only:
+        return example_factors()
 
     print("1. l does not depend on D: the boundary-layer width l = (1 - k free/held) D / (2 nu^2)")
     print(f"{'theta':>6} {'t':>5} {'h':>5} {'l at D 12':>10} {'l at D 20':>10} {'change':>7}")

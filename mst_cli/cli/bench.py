@@ -6,7 +6,7 @@ from pathlib import Path
 
 import click
 
-from mst_cli.cli.common import no_plot_option, seed_type
+from mst_cli.cli.common import no_plot_option, out_dir_option, seed_type
 
 
 @click.command()
@@ -18,13 +18,7 @@ from mst_cli.cli.common import no_plot_option, seed_type
     help="Number of seeded valid designs across the bounds.",
 )
 @click.option("--seed", type=seed_type(), default=0, show_default=True, help="Random seed of the sample.")
-@click.option(
-    "--out",
-    "out_dir",
-    type=click.Path(file_okay=False, path_type=Path),
-    default=None,
-    help="Output folder [default: ./mst-out/bench/].",
-)
+@out_dir_option("./mst-out/bench/")
 @click.option("--quick", is_flag=True, help="Skip the L2 mesh-convergence study.")
 @no_plot_option("bench.png", "about 0.5 s of matplotlib import and render", has_json=False)
 def bench(samples: int, seed: int, out_dir: Path | None, quick: bool, no_plot: bool) -> None:

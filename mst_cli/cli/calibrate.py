@@ -12,7 +12,14 @@ from pathlib import Path
 import click
 
 from mst_cli import api
-from mst_cli.cli.common import EXIT_TARGETS, default_out_dir, handles_input_errors, no_plot_option, one_line
+from mst_cli.cli.common import (
+    EXIT_TARGETS,
+    default_out_dir,
+    handles_input_errors,
+    no_plot_option,
+    one_line,
+    out_dir_option,
+)
 
 MECHANICS = ["spring", "frame", "continuum"]
 BAUD_RATES = (1200, 2400, 4800, 9600, 19200, 38400, 57600, 115200, 230400, 460800, 921600)
@@ -26,13 +33,7 @@ def _fail_fit(reason: str, what: str = "calibration failed") -> None:
 @click.command()
 @click.argument("design_file", type=click.Path(dir_okay=False, path_type=Path))
 @click.argument("load_test", type=click.Path(dir_okay=False, path_type=Path))
-@click.option(
-    "--out",
-    "out_dir",
-    type=click.Path(file_okay=False, path_type=Path),
-    default=None,
-    help="Output folder [default: ./mst-out/<name>-calibration/].",
-)
+@out_dir_option("./mst-out/<name>-calibration/")
 @click.option(
     "--mechanics",
     type=click.Choice(MECHANICS),

@@ -161,6 +161,17 @@ def default_out_dir(name: str) -> Path:
     return Path("mst-out") / name
 
 
+def out_dir_option(default_text: str = "./mst-out/<name>/") -> Callable[[_F], _F]:
+    """The ``--out`` folder option every writing command takes (``out_dir``, None: the default)."""
+    return click.option(
+        "--out",
+        "out_dir",
+        type=click.Path(file_okay=False, path_type=Path),
+        default=None,
+        help=f"Output folder [default: {default_text}].",
+    )
+
+
 def no_plot_option(picture: str, cost: str, has_json: bool = True) -> Callable[[_F], _F]:
     """``--no-plot`` with one meaning on every command that draws: ``picture`` is not drawn,
     matplotlib is never imported, and an old ``picture`` in the output folder is removed with

@@ -10,7 +10,14 @@ from pathlib import Path
 
 import click
 
-from mst_cli.cli.common import default_out_dir, handles_input_errors, no_plot_option, seed_type, write_simulation
+from mst_cli.cli.common import (
+    default_out_dir,
+    handles_input_errors,
+    no_plot_option,
+    out_dir_option,
+    seed_type,
+    write_simulation,
+)
 
 
 class _Progress:
@@ -50,13 +57,7 @@ class _Progress:
 
 @click.command()
 @click.argument("spec_file", type=click.Path(dir_okay=False, path_type=Path))
-@click.option(
-    "--out",
-    "out_dir",
-    type=click.Path(file_okay=False, path_type=Path),
-    default=None,
-    help="Output folder [default: ./mst-out/<name>/].",
-)
+@out_dir_option()
 @click.option(
     "--seed",
     type=seed_type(),

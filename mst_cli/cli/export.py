@@ -14,7 +14,7 @@ from pathlib import Path
 import click
 
 from mst_cli import api
-from mst_cli.cli.common import EXIT_TARGETS, default_out_dir, handles_input_errors
+from mst_cli.cli.common import EXIT_TARGETS, default_out_dir, handles_input_errors, out_dir_option
 
 DEFAULT_STL_TOLERANCE_MM = 0.01  # cad.exporting's (not imported here: app.py loads this module cheaply)
 
@@ -30,13 +30,7 @@ def _progress(t0: float, message: str) -> None:
     "--step", "want_step", is_flag=True, help="Write sensor.step: assembly of the body, the magnet and the board."
 )
 @click.option("--3mf", "want_3mf", is_flag=True, help="Write sensor.3mf (the body, mm).")
-@click.option(
-    "--out",
-    "out_dir",
-    type=click.Path(file_okay=False, path_type=Path),
-    default=None,
-    help="Output folder [default: ./mst-out/<name>/].",
-)
+@out_dir_option()
 @click.option(
     "--stl-tolerance",
     "stl_tolerance_mm",

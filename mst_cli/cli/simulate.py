@@ -7,18 +7,12 @@ from pathlib import Path
 
 import click
 
-from mst_cli.cli.common import default_out_dir, handles_input_errors, no_plot_option, write_simulation
+from mst_cli.cli.common import default_out_dir, handles_input_errors, no_plot_option, out_dir_option, write_simulation
 
 
 @click.command()
 @click.argument("design_file", type=click.Path(dir_okay=False, path_type=Path))
-@click.option(
-    "--out",
-    "out_dir",
-    type=click.Path(file_okay=False, path_type=Path),
-    default=None,
-    help="Output folder [default: ./mst-out/<name>/].",
-)
+@out_dir_option()
 @click.option(
     "--field-model",
     type=click.Choice(["auto", "dipole", "axial", "cylinder"]),

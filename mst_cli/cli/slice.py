@@ -14,7 +14,7 @@ from pathlib import Path
 import click
 
 from mst_cli import api
-from mst_cli.cli.common import EXIT_FAULT, EXIT_TARGETS, handles_input_errors, no_plot_option, one_line
+from mst_cli.cli.common import EXIT_FAULT, EXIT_TARGETS, handles_input_errors, no_plot_option, one_line, out_dir_option
 
 DEFAULT_MAX_SPAN_MM = 5.0
 
@@ -29,13 +29,7 @@ DEFAULT_MAX_SPAN_MM = 5.0
     help="PrusaSlicer config (.ini) [default: the TPU 85A profile shipped with mst, "
     "mst_cli/cad/data/tpu85a-0.4mm.ini].",
 )
-@click.option(
-    "--out",
-    "out_dir",
-    type=click.Path(file_okay=False, path_type=Path),
-    default=None,
-    help="Output folder [default: PATH].",
-)
+@out_dir_option("PATH")
 @click.option(
     "--max-span",
     "max_span_mm",
