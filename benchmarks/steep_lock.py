@@ -7,9 +7,13 @@ Three measurements behind docs/design.md section 4 ("Steep walls", "L0 against L
 2. the same cells with the path's own mesh refined around the inner wall root alone (where the
    contact front runs), on two meshes;
 3. L0 (spring) against L2 on cells drawn uniformly in the printable box: the median lock-force
-   miss, per band of theta, and one steep slender cell's F / (k d) along its path (the ramp).
+   miss, per band of theta, and one steep slender cell's F / (k d) along its path (the ramp);
+4. where the mesh error sits: the same cells refined only across the wall (n_thick) or only
+   along it (n_length, which is where a contact front would run), the raw path force beside the
+   k-scaled one; then the lock taken at the ramp's foot (tangent = 1 k instead of 5 k) and the
+   path mesh graded at both wall roots.
 
-Run:  .venv/bin/python benchmarks/steep_lock.py [--uniform 200 --seed 7]     # ~5 min
+Run:  .venv/bin/python benchmarks/steep_lock.py [--uniform 200 --seed 7] [--parts 1,2,3,4]   # ~8 min
 """
 
 from __future__ import annotations
@@ -21,7 +25,7 @@ import numpy as np
 from mst_cli.bench.ladder_bench import sample_cells
 from mst_cli.model.geometry import HexCell
 from mst_cli.model.material import Material
-from mst_cli.model.mechanics import uncached_layer_law
+from mst_cli.model.mechanics import continuum, uncached_layer_law
 from mst_cli.model.mechanics.continuum import continuum_layer, solve_continuum
 
 STEEP = [(60, 0.6, 4.0), (70, 1.5, 6.0)]
@@ -91,15 +95,53 @@ def l0_uniform(mat, n: int, seed: int) -> None:
     )
 
 
+ACROSS_ALONG = [(3, 12), (3, 24), (3, 48), (6, 12), (12, 12)]
+
+
+def _lock_row(cell, mat, mesh, **kw) -> str:
+    try:
+        r = solve_continuum(HexCell(*cell), mat, n_thick=mesh[0], n_length=mesh[1], **kw)
+    except Exception as exc:  # a stalled path is the finding, not a crash
+        return f"{mesh[0]}x{mesh[1]} stalled ({type(exc).__name__})"
+    return f"{mesh[0]}x{mesh[1]} R {r.force_N[-1]:.3f} (path {r.force_N[-1] / r.mesh_scale:.3f}) d {r.d_contact_mm:.4f}"
+
+
+def across_or_along(mat) -> None:
+    print("\n4. R (N) refined across the wall (n_thick) or along it (n_length); 'path': before the k scaling")
+    for cell in STEEP:
+        print(f"{cell}:")
+        for mesh in ACROSS_ALONG:
+            print(f"  {_lock_row(cell, mat, mesh)}")
+    saved = continuum.LOCK_STIFFNESS_FACTOR
+    try:
+        continuum.LOCK_STIFFNESS_FACTOR = 1.0
+        print("  the lock at the ramp's foot (tangent = 1 k):")
+        for cell in STEEP:
+            print(f"  {cell}: " + "; ".join(_lock_row(cell, mat, m) for m in ((3, 12), (6, 12), (12, 12))))
+    finally:
+        continuum.LOCK_STIFFNESS_FACTOR = saved
+    print("  the path mesh graded twice within 1 t of both wall roots (not the tip):")
+    roots = dict(path_levels=2, path_corners=("outer_root", "inner_root"), path_radius_in_t=1.0)
+    for cell in STEEP:
+        print(f"  {cell}: " + "; ".join(_lock_row(cell, mat, m, **roots) for m in MESHES[:2]))
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--uniform", type=int, default=200, help="cells drawn for part 3")
     ap.add_argument("--seed", type=int, default=7)
+    ap.add_argument("--parts", default="1,2,3,4", help="which parts to run, comma-separated")
     args = ap.parse_args()
+    parts = {int(p) for p in args.parts.split(",")}
     mat = Material()
-    curves_on_meshes(mat)
-    inner_root_refined(mat)
-    l0_uniform(mat, args.uniform, args.seed)
+    if 1 in parts:
+        curves_on_meshes(mat)
+    if 2 in parts:
+        inner_root_refined(mat)
+    if 3 in parts:
+        l0_uniform(mat, args.uniform, args.seed)
+    if 4 in parts:
+        across_or_along(mat)
 
 
 if __name__ == "__main__":
