@@ -20,13 +20,11 @@ import json
 import math
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 from mst_cli.calibrate.fit import PARAMETERS
 from mst_cli.errors import InputError
-
-if TYPE_CHECKING:
-    from mst_cli.io.schema import Document
+from mst_cli.io.schema import SECTIONS, Document, load_document
+from mst_cli.model.geometry import printer_violations
 
 OPTION = "--calibration"
 CONSTANTS_KEY = "design_constants"  # calibration.json: what the fitted factors multiply
@@ -177,9 +175,6 @@ def read_calibration(path: str | Path, doc: Document) -> PrinterCalibration:
 def apply_calibration(doc: Document, cal: PrinterCalibration) -> Document:
     """``doc`` with the taken values in its ``printer`` section and magnet (each checked against
     its key's declared bounds: InputError naming the key and ``--calibration``)."""
-    from mst_cli.io.schema import SECTIONS
-    from mst_cli.model.geometry import printer_violations
-
     printer, magnet = {}, {}
     for t in cal.taken:
         section, key = t.key.split(".")
@@ -195,4 +190,23 @@ def apply_calibration(doc: Document, cal: PrinterCalibration) -> Document:
     return out
 
 
-__all__ = ["read_calibration", "apply_calibration", "design_constants", "PrinterCalibration", "Taken"]
+def load_with_calibration(
+    spec_file: str | Path, calibration: str | Path | None
+) -> tuple[Document, PrinterCalibration | None]:
+    """A spec or design file with an earlier print's calibration applied (``mst design
+    --calibration``), and that calibration (None without one: the file as it is)."""
+    doc = load_document(spec_file)
+    if calibration is None:
+        return doc, None
+    cal = read_calibration(calibration, doc)
+    return apply_calibration(doc, cal), cal
+
+
+__all__ = [
+    "read_calibration",
+    "apply_calibration",
+    "design_constants",
+    "PrinterCalibration",
+    "Taken",
+    "load_with_calibration",
+]
