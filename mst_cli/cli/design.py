@@ -16,6 +16,7 @@ from mst_cli.cli.common import default_out_dir, handles_input_errors, no_plot_op
 from mst_cli.cli.design_output import print_design_choices, print_design_summary, write_design_files
 from mst_cli.cli.progress import DesignProgress
 from mst_cli.errors import InputError
+from mst_cli.io.outputs import check_out_dir
 
 if TYPE_CHECKING:
     from mst_cli.design.document import DesignResult
@@ -88,7 +89,6 @@ def design(
 ) -> None:
     # deferred: `mst --help` loads every command module; these load the model (0.1 s)
     from mst_cli.calibrate.record import load_with_calibration
-    from mst_cli.io.outputs import check_out_dir
 
     doc, cal = load_with_calibration(spec_file, calibration)
     out = out_dir or default_out_dir(doc.name)

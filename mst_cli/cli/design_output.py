@@ -21,9 +21,10 @@ if TYPE_CHECKING:
 
 def print_design_choices(choice: MechanicsChoice, cal: PrinterCalibration | None) -> None:
     """The mechanics rung picked (and that the L0 design is refined with it), the calibration taken."""
-    if choice.message():
+    message = choice.message()
+    if message:
         refined = "" if choice.mechanics == "spring" else f": L0 design refined with {choice.mechanics}"
-        click.echo(choice.message() + refined)
+        click.echo(message + refined)
     if cal is not None:
         click.echo("\n".join(cal.lines()))
 

@@ -10,6 +10,7 @@ import click
 
 from mst_cli import api
 from mst_cli.cli.common import default_out_dir, handles_input_errors, no_plot_option, out_dir_option
+from mst_cli.io.outputs import check_out_dir
 
 if TYPE_CHECKING:
     from mst_cli.io.schema import Document
@@ -56,7 +57,6 @@ def simulate(
     """
     # deferred: `mst --help` loads every command module; these load the model (0.1 s)
     from mst_cli.calibrate.fit import PRINTER_NOMINAL
-    from mst_cli.io.outputs import check_out_dir
     from mst_cli.io.report import terminal_table, write_simulation
     from mst_cli.io.schema import load_design_document
     from mst_cli.model.ladder import choose_mechanics
@@ -77,9 +77,9 @@ def simulate(
         click.echo(f"wrote {out}/report.json, response.csv" + (", response.png" if plot else ""))
 
 
-def _say_model_choices(doc: Document, mechanics_message: str) -> None:
+def _say_model_choices(doc: Document, mechanics_message: str | None) -> None:
     """The mechanics rung picked for the file, and the print parameters that differ from nominal."""
-    from mst_cli.calibrate.fit import PRINTER_NOMINAL  # deferred: as above
+    from mst_cli.calibrate.fit import PRINTER_NOMINAL  # deferred: as simulate's
 
     if mechanics_message:
         click.echo(mechanics_message)
