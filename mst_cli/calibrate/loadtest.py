@@ -146,8 +146,7 @@ def parse_readings(
     """
     if (gain_sel is None) != (res is None):
         raise InputError("--gain-sel/--res", f"{gain_sel}/{res}", "give both GAIN_SEL and RES, or neither")
-    flag_setting = setting_of(gain_sel, res) if gain_sel is not None else None
-
+    flag_setting = setting_of(gain_sel, res) if gain_sel is not None and res is not None else None
     numbered = [
         (i + 1, line) for i, line in enumerate(text.splitlines()) if line.strip() and not line.lstrip().startswith("#")
     ]
@@ -160,6 +159,41 @@ def parse_readings(
     delim = _delimiter(numbered[0][1])
     parsed = list(csv.reader([line for _, line in numbered], delimiter=delim))
     header = [h.strip() for h in parsed[0]]
+    raw, cols = _field_columns(source, header, need_force)
+    data_rows = parsed[1:]
+    if len(data_rows) > MAX_ROWS:
+        raise InputError(source, f"{len(data_rows)} rows", f"at most {MAX_ROWS} rows")
+    idx = {c: header.index(c) for c in header}
+    settings = (
+        _RowSettings(source, idx, flag_setting, one_setting) if all(c in header for c in SETTING_COLUMNS) else None
+    )
+    B = np.empty((len(data_rows), 3))
+    with_force = need_force or FORCE_COLUMN in header  # a readings file may carry the reference
+    F = np.empty(len(data_rows)) if with_force else None
+    sat = np.zeros(len(data_rows), dtype=bool)
+    rows, lines = [], []
+    for r, (row, (line, _)) in enumerate(zip(data_rows, numbered[1:])):
+        if len(row) != len(header):
+            raise InputError(
+                f"{source} line {line}", delim.join(row), f"has {len(row)} fields, the header {len(header)}"
+            )
+        row = [c.strip() for c in row]
+        setting = settings.of_row(line, row) if settings is not None else flag_setting
+        values = [_number(source, line, c, row[idx[c]]) for c in cols]
+        B[r], sat[r] = field_of(values, raw, setting, f"{source} line {line}")
+        if F is not None:
+            F[r] = _number(source, line, FORCE_COLUMN, row[idx[FORCE_COLUMN]])
+        rows.append(row)
+        lines.append(line)
+    one = flag_setting if settings is None or flag_setting is not None else settings.the_one(rows)
+    return Readings(
+        source=source, header=header, rows=rows, lines=lines, B_T=B, saturated=sat, force_N=F, raw=raw, setting=one
+    )
+
+
+def _field_columns(source: str, header: list[str], need_force: bool) -> tuple[bool, tuple[str, ...]]:
+    """(raw, the field columns) of a header: microtesla or raw codes; InputError for a repeated
+    column, a missing force column (``need_force``) or field columns, or a unit that is not ours."""
     if len(set(header)) != len(header):
         dup = next(h for h in header if header.count(h) > 1)
         raise InputError(f"{source} header", dup, "a column name appears twice")
@@ -169,76 +203,59 @@ def parse_readings(
             f"{source} header", ",".join(header), f"missing column {FORCE_COLUMN} (the load cell's force in newtons)"
         )
     if all(c in header for c in UT_COLUMNS):
-        raw, cols = False, UT_COLUMNS
-    elif all(c in header for c in CODE_COLUMNS):
-        raw, cols = True, CODE_COLUMNS
-    else:
-        _wrong_unit_field(source, header)
-        missing = [c for c in UT_COLUMNS if c not in header]
-        raise InputError(
-            f"{source} header",
-            ",".join(header),
-            f"missing column(s) {', '.join(missing)} (or the raw codes "
-            f"{', '.join(CODE_COLUMNS)} with --gain-sel/--res)",
-        )
-    data_rows = parsed[1:]
-    if len(data_rows) > MAX_ROWS:
-        raise InputError(source, f"{len(data_rows)} rows", f"at most {MAX_ROWS} rows")
-    idx = {c: header.index(c) for c in header}
-    has_setting_cols = all(c in header for c in SETTING_COLUMNS)
-
-    B = np.empty((len(data_rows), 3))
-    with_force = need_force or FORCE_COLUMN in header  # a readings file may carry the reference
-    F = np.empty(len(data_rows)) if with_force else None
-    sat = np.zeros(len(data_rows), dtype=bool)
-    rows, lines = [], []
-    first_setting = None
-    for r, (row, (line, _)) in enumerate(zip(data_rows, numbered[1:])):
-        if len(row) != len(header):
-            raise InputError(
-                f"{source} line {line}", delim.join(row), f"has {len(row)} fields, the header {len(header)}"
-            )
-        row = [c.strip() for c in row]
-        setting = flag_setting
-        if has_setting_cols:
-            g = _number(source, line, "gain_sel", row[idx["gain_sel"]])
-            s = _number(source, line, "res", row[idx["res"]])
-            if g != int(g) or s != int(s) or not (0 <= g <= 7 and 0 <= s <= 3):
-                raise InputError(
-                    f"{source} line {line} gain_sel/res",
-                    f"{row[idx['gain_sel']]}/{row[idx['res']]}",
-                    "GAIN_SEL must be an integer 0-7 and RES 0-3",
-                )
-            row_setting = setting_of(int(g), int(s))
-            if flag_setting is not None and row_setting != flag_setting:
-                raise InputError(
-                    f"{source} line {line} gain_sel/res",
-                    f"{int(g)}/{int(s)}",
-                    f"differs from --gain-sel {flag_setting.gain_sel} --res {flag_setting.res}: "
-                    "the readings come from another chip setting",
-                )
-            if one_setting and first_setting is not None and row_setting != first_setting:
-                raise InputError(
-                    f"{source} line {line} gain_sel/res",
-                    f"{int(g)}/{int(s)}",
-                    f"a load test must come from one chip setting (earlier rows: "
-                    f"{first_setting.gain_sel}/{first_setting.res})",
-                )
-            setting = row_setting
-            first_setting = first_setting or row_setting
-        values = [_number(source, line, c, row[idx[c]]) for c in cols]
-        B[r], sat[r] = field_of(values, raw, setting, f"{source} line {line}")
-        if with_force:
-            F[r] = _number(source, line, FORCE_COLUMN, row[idx[FORCE_COLUMN]])
-        rows.append(row)
-        lines.append(line)
-    one = flag_setting
-    if one is None and has_setting_cols:
-        settings = {(float(row[idx["gain_sel"]]), float(row[idx["res"]])) for row in rows}
-        one = first_setting if len(settings) == 1 else None
-    return Readings(
-        source=source, header=header, rows=rows, lines=lines, B_T=B, saturated=sat, force_N=F, raw=raw, setting=one
+        return False, UT_COLUMNS
+    if all(c in header for c in CODE_COLUMNS):
+        return True, CODE_COLUMNS
+    _wrong_unit_field(source, header)
+    missing = [c for c in UT_COLUMNS if c not in header]
+    raise InputError(
+        f"{source} header",
+        ",".join(header),
+        f"missing column(s) {', '.join(missing)} (or the raw codes {', '.join(CODE_COLUMNS)} with --gain-sel/--res)",
     )
+
+
+class _RowSettings:
+    """The chip setting of each row of a file with gain_sel and res columns, checked against
+    --gain-sel/--res and (``one_setting``) against the first row's."""
+
+    def __init__(self, source: str, idx: dict[str, int], flag_setting: mlx.ChipSetting | None, one_setting: bool):
+        self.source, self.idx = source, idx
+        self.flag_setting, self.one_setting = flag_setting, one_setting
+        self.first: mlx.ChipSetting | None = None
+
+    def of_row(self, line: int, row: list[str]) -> mlx.ChipSetting:
+        source, idx = self.source, self.idx
+        g = _number(source, line, "gain_sel", row[idx["gain_sel"]])
+        s = _number(source, line, "res", row[idx["res"]])
+        if g != int(g) or s != int(s) or not (0 <= g <= 7 and 0 <= s <= 3):
+            raise InputError(
+                f"{source} line {line} gain_sel/res",
+                f"{row[idx['gain_sel']]}/{row[idx['res']]}",
+                "GAIN_SEL must be an integer 0-7 and RES 0-3",
+            )
+        row_setting = setting_of(int(g), int(s))
+        flag = self.flag_setting
+        if flag is not None and row_setting != flag:
+            raise InputError(
+                f"{source} line {line} gain_sel/res",
+                f"{int(g)}/{int(s)}",
+                f"differs from --gain-sel {flag.gain_sel} --res {flag.res}: "
+                "the readings come from another chip setting",
+            )
+        if self.one_setting and self.first is not None and row_setting != self.first:
+            raise InputError(
+                f"{source} line {line} gain_sel/res",
+                f"{int(g)}/{int(s)}",
+                f"a load test must come from one chip setting (earlier rows: {self.first.gain_sel}/{self.first.res})",
+            )
+        self.first = self.first or row_setting
+        return row_setting
+
+    def the_one(self, rows: list[list[str]]) -> mlx.ChipSetting | None:
+        """The setting of every row when they share one, else None."""
+        settings = {(float(row[self.idx["gain_sel"]]), float(row[self.idx["res"]])) for row in rows}
+        return self.first if len(settings) == 1 else None
 
 
 def field_of(
