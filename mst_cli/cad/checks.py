@@ -36,6 +36,7 @@ from mst_cli.cad.measure import LAYER_GRID_TOL_MM, Measurements, measure
 from mst_cli.cad.mesh_io import Mesh, binary_stl_triangles, weld
 from mst_cli.errors import InputError
 from mst_cli.io.files import read_input
+from mst_cli.io.outputs import finite_or_none
 
 # Planar features are exact in the B-rep; the STL stores float32 coordinates, which resolve
 # ~2e-6 mm at 20 mm from the origin. Dimensions measured on planar faces must agree to this.
@@ -134,7 +135,7 @@ def load_mesh(path: Path) -> Mesh:
 
 
 def _load_with_trimesh(path: Path, data: bytes) -> tuple[np.ndarray, np.ndarray]:
-    import trimesh  # heavy (pulls scipy.spatial): only for files that are not binary STL
+    import trimesh  # deferred: heavy (pulls scipy.spatial), only for files that are not binary STL
 
     try:
         with np.errstate(all="ignore"):
@@ -429,7 +430,6 @@ def run_checks(mesh, manifest: Manifest | dict, nozzle_mm: float | None = None) 
 
 def results_dict(checks: list[Check], stl_path: str) -> dict:
     """JSON form (``mst check --json``); a value that could not be measured (NaN) is null."""
-    from mst_cli.io.outputs import finite_or_none
 
     failed = [c.name for c in checks if not c.passed and not c.info]
     return finite_or_none(

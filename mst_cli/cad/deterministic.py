@@ -173,7 +173,7 @@ def step_bytes(assembly) -> bytes:
     the path and the errno reason, as for every other writer (OCCT's own file writer only
     says "Failed to write STEP file").
     """
-    from build123d import export_step
+    from build123d import export_step  # deferred: build123d takes seconds to import, only --step needs it
 
     buf = io.BytesIO()
     export_step(assembly, buf, timestamp=STEP_TIMESTAMP)  # RuntimeError if OCCT fails

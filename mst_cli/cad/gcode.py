@@ -381,7 +381,7 @@ class SpanReport:
 def rasterise(segments: np.ndarray, origin_xy, shape, px_per_mm: float) -> np.ndarray:
     """Boolean image (rows: y, cols: x) of the segments drawn as lines of their own width
     with round ends; pixel (r, c) covers [x0 + c/res, x0 + (c+1)/res) x [y0 + r/res, ...)."""
-    from PIL import Image, ImageDraw
+    from PIL import Image, ImageDraw  # deferred: PIL (via matplotlib) only for the span raster
 
     img = Image.new("1", (int(shape[1]), int(shape[0])), 0)
     draw = ImageDraw.Draw(img)

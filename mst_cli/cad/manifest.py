@@ -25,11 +25,14 @@ from dataclasses import MISSING, dataclass, field, fields
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+import numpy as np
+
 from mst_cli import __version__
 from mst_cli.errors import InputError
+from mst_cli.io.files import read_input_text
+from mst_cli.io.schema import Document, design_geometry, parse_document
 
-if TYPE_CHECKING:  # annotations only: reading export.json needs no geometry model (but for its design)
-    from mst_cli.io.schema import Document
+if TYPE_CHECKING:
     from mst_cli.model.geometry import Printer, SensorGeometry
 
 MANIFEST_NAME = "export.json"
@@ -383,8 +386,6 @@ class Manifest:
         InputError names the first field that is missing, of the wrong type or nesting, out of
         range (``export.json.layers[2].t_mm``), or a rotation that is not one."""
         manifest = _parse(cls, data, "export.json")
-        import numpy as np
-
         rotation = np.asarray(manifest.print.rotation, dtype=float)
         if not (np.allclose(rotation @ rotation.T, np.eye(3), atol=1e-6) and np.linalg.det(rotation) > 0):
             raise InputError(
@@ -489,8 +490,6 @@ def _design_document(data, path: str) -> Document:
     """export.json's ``design``: the design document the body was built from, with the
     design-file rules (every cell printable and working); an InputError names the field inside
     it (``export.json.design.layers[1].t_mm``)."""
-    from mst_cli.io.schema import design_geometry, parse_document
-
     if not isinstance(data, dict):
         raise InputError(
             path,
@@ -510,8 +509,6 @@ def _design_document(data, path: str) -> Document:
 def load_manifest(path: Path, kind: type = Manifest) -> Manifest | SliceManifest:
     """export.json, validated field by field (``kind.from_dict``: :class:`Manifest` for ``mst
     check``, :class:`SliceManifest` for ``mst slice``)."""
-    from mst_cli.io.files import read_input_text
-
     text = read_input_text(
         path, MAX_MANIFEST_BYTES, field="export.json", what="JSON file", too_large=": rewrite it with 'mst export'"
     )

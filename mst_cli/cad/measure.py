@@ -33,7 +33,7 @@ _RAY_OFFSET_MM = (0.0123, 0.0071)
 # --------------------------------------------------------------------------- primitives
 def to_manifold(mesh: Mesh) -> tuple[manifold3d.Manifold, str]:
     """manifold3d view of the mesh and its status name ("NoError" when it is a manifold)."""
-    import manifold3d as mf
+    import manifold3d as mf  # deferred: manifold3d's native library, only when a mesh is measured
 
     m = mf.Manifold(
         mf.Mesh(

@@ -61,7 +61,7 @@ def tessellate(
     vertices : (n, 3) float64 array, mm
     triangles : (m, 3) int64 array of vertex indices, counter-clockwise seen from outside
     """
-    from OCP.BRepMesh import BRepMesh_IncrementalMesh
+    from OCP.BRepMesh import BRepMesh_IncrementalMesh  # deferred: the CAD kernel (--step only)
 
     # Mesh here rather than in build123d's Shape.mesh, which asks for a *relative* deflection:
     # --stl-tolerance and the pocket's volume tolerance in export.json are absolute (mm).
@@ -81,6 +81,7 @@ def _keep_corner_order(solid, triangles: np.ndarray) -> None:
     oriented triangle, but STL and 3MF store the corner order, so exports of a design would
     change bytes without changing shape. Rolled in place, face by face as build123d lists them.
     """
+    # deferred: the CAD kernel (--step only)
     from OCP.BRep import BRep_Tool
     from OCP.TopAbs import TopAbs_REVERSED
     from OCP.TopLoc import TopLoc_Location
@@ -92,7 +93,7 @@ def _keep_corner_order(solid, triangles: np.ndarray) -> None:
 
 
 def _trimesh(vertices: np.ndarray, triangles: np.ndarray):
-    import trimesh
+    import trimesh  # deferred: heavy (pulls scipy.spatial)
 
     # process=False: trimesh must not reorder, weld or drop anything behind our back
     return trimesh.Trimesh(vertices=vertices, faces=triangles, process=False)

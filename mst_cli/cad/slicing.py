@@ -22,6 +22,8 @@ from mst_cli.cad import slicer as S
 from mst_cli.cad.checks import Check, ExportFiles, resolve_export
 from mst_cli.cad.manifest import SliceManifest, load_manifest
 from mst_cli.cad.print_check import cavity_gaps, check_free_span, check_pause, check_support, walls_as_sliced
+from mst_cli.cad.print_plot import plot_print
+from mst_cli.cad.sliced_model import predict
 from mst_cli.errors import InputError
 from mst_cli.io.outputs import finite_or_none, staged
 
@@ -71,8 +73,6 @@ class SliceResult:
             st.write_text(GCODE_FILE, self.gcode_text)
             st.write_json(REPORT_FILE, self.report)
             if plot:
-                from mst_cli.cad.print_plot import plot_print
-
                 plot_print(
                     st.path(PLOT_FILE),
                     self.triangles,
@@ -297,8 +297,6 @@ def _predicted(design, layers) -> dict | str:
         return "not given: export.json has no design (an older export: run 'mst export' again)"
     if len(layers) != len(design.layers) or any(r["sliced_t_mm"] is None for r in layers):
         return "not given: export.json's wall lines do not cover every layer of its design"
-    from mst_cli.cad.sliced_model import predict
-
     return predict(design, [r["sliced_t_mm"] for r in layers])
 
 

@@ -25,6 +25,7 @@ from mst_cli.calibrate.calibration_json import (
 )
 from mst_cli.calibrate.header import HEADER_FILE, c_header
 from mst_cli.calibrate.loadtest import MAX_ROWS, Readings, check_load_test, parse_readings, read_text
+from mst_cli.calibrate.plot import plot_calibration
 from mst_cli.calibrate.record import design_constants
 from mst_cli.calibrate.tables import lookup_csv, residuals_csv
 from mst_cli.errors import InputError
@@ -110,8 +111,6 @@ class Calibration:
             if not plot:
                 st.remove(PLOT_FILE)
             else:
-                from mst_cli.calibrate.plot import plot_calibration
-
                 plot_calibration(
                     st.path(PLOT_FILE),
                     self.load_test.force_N,

@@ -23,7 +23,9 @@ from pathlib import Path
 
 from mst_cli.calibrate.fit import PARAMETERS
 from mst_cli.errors import InputError
+from mst_cli.io.files import read_input_text
 from mst_cli.io.schema import SECTIONS, Document, load_document
+from mst_cli.io.yaml_io import MAX_INPUT_BYTES
 from mst_cli.model.geometry import printer_violations
 
 OPTION = "--calibration"
@@ -123,8 +125,6 @@ def read_calibration(path: str | Path, doc: Document) -> PrinterCalibration:
     to a remanence (Br_calibrated x factor). InputError (``--calibration``) when the file is
     missing or unreadable, not JSON, not a calibration record, or fitted on another material.
     """
-    from mst_cli.io.files import read_input_text
-    from mst_cli.io.yaml_io import MAX_INPUT_BYTES
 
     text = read_input_text(
         path, MAX_INPUT_BYTES, field=OPTION, what="calibration.json", too_large=": a calibration.json is a few kB"

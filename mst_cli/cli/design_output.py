@@ -93,9 +93,8 @@ def print_design_summary(
     """The design table, the front's table (if mapped) and the files written, on stdout."""
     click.echo(result.table())
     if front:
-        from mst_cli.design.pareto import (
-            front_table,  # deferred: loads the model (0.1 s); `mst --help` loads this module
-        )
+        # deferred: loads the model (0.1 s); `mst --help` loads this module
+        from mst_cli.design.pareto import front_table
 
         click.echo(front_table(front))
     elif pareto_count is not None:

@@ -126,7 +126,7 @@ class LineSource:
         self._serial = None
         self._fd = None
         try:
-            import termios  # noqa: F401
+            import termios  # noqa: F401  # deferred: POSIX only (the test of the platform)
 
             posix = True
         except ImportError:
@@ -141,7 +141,7 @@ class LineSource:
                 raise
         else:  # pragma: no cover - Windows
             try:
-                import serial
+                import serial  # deferred: pyserial, an optional dependency (Windows only)
             except ImportError:
                 raise OSError(
                     0, "reading a serial port on this platform needs pyserial (pip install pyserial)", port
@@ -197,7 +197,7 @@ class LineSource:
 
 def _set_raw(fd: int, baud: int) -> None:
     """8N1, no echo, no line editing, no flow control, at ``baud``."""
-    import termios
+    import termios  # deferred: POSIX only (never reached elsewhere)
 
     attrs = termios.tcgetattr(fd)
     iflag, oflag, cflag, lflag, ispeed, ospeed, cc = attrs
