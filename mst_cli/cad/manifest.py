@@ -23,7 +23,7 @@ from __future__ import annotations
 import json
 from dataclasses import MISSING, dataclass, field, fields
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any, TypeVar, overload
 
 import numpy as np
 
@@ -506,7 +506,14 @@ def _design_document(data, path: str) -> Document:
     return doc
 
 
-def load_manifest(path: Path, kind: type = Manifest) -> Manifest | SliceManifest:
+_Kind = TypeVar("_Kind", Manifest, SliceManifest)
+
+
+@overload
+def load_manifest(path: Path) -> Manifest: ...
+@overload
+def load_manifest(path: Path, kind: type[_Kind]) -> _Kind: ...
+def load_manifest(path: Path, kind: Any = Manifest) -> Any:
     """export.json, validated field by field (``kind.from_dict``: :class:`Manifest` for ``mst
     check``, :class:`SliceManifest` for ``mst slice``)."""
     text = read_input_text(

@@ -17,6 +17,8 @@ Pure: G-code and manifest in, Checks out (no slicer, no files).
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from mst_cli.cad.checks import Check
@@ -114,11 +116,9 @@ def check_free_span(spans: SpanReport, joined: SpanReport, max_span_mm: float, s
     """The longest free span (``joined``: with travel moves joined) against ``max_span_mm``."""
     s = spans.longest
     too_long = s is not None and s.length_mm > max_span_mm
-    note = (
-        (f"free span {s.length_mm:.1f} mm > {max_span_mm:g} mm (layer {s.layer}, z = {s.z_mm:.2f} mm, {s.type})")
-        if too_long
-        else ""
-    )
+    note = ""
+    if s is not None and too_long:
+        note = f"free span {s.length_mm:.1f} mm > {max_span_mm:g} mm (layer {s.layer}, z = {s.z_mm:.2f} mm, {s.type})"
     return Check(
         "free_span",
         not too_long,
@@ -170,7 +170,7 @@ def cavity_gaps(g: GCode, manifest: SliceManifest, shift: Shift, z_shift: float)
     rows = []
     for c in lines:
         layer = g.layer_at(c.z_mm + z_shift)
-        row = {
+        row: dict[str, Any] = {
             "layer": c.layer,
             "x_mm": c.x_mm,
             "z_mm": c.z_mm,

@@ -15,8 +15,8 @@ from mst_cli.errors import InputError
 from mst_cli.io.schema import Document, design_geometry
 
 
-def _change(new: float, old: float) -> float | None:
-    return (new - old) / old if old else None
+def _change(new: float | None, old: float | None) -> float | None:
+    return (new - old) / old if new is not None and old else None
 
 
 def predict(doc: Document, sliced_t_mm: list[float]) -> dict:

@@ -40,6 +40,8 @@ def fmt_duration(seconds: float | None) -> str:
 
 
 def _number(text: str | None, default: float) -> float:
+    if text is None:
+        return default
     try:
         return float(text)
     except (TypeError, ValueError):

@@ -113,7 +113,7 @@ class Calibration:
             else:
                 plot_calibration(
                     st.path(PLOT_FILE),
-                    self.load_test.force_N,
+                    self.load_test.load_N,
                     self.load_test.B_abs_T,
                     self.design_curve,
                     self.calibrated_curve,
@@ -127,7 +127,7 @@ class Calibration:
         r, fit, lt = self.record, self.fit, self.load_test
         lines = [
             f"{self.design.name}: calibrated from {self.load_test_name} ({len(lt)} samples, "
-            f"{lt.force_N.min():.3g}-{lt.force_N.max():.4g} N), mechanics={self.mechanics}",
+            f"{lt.load_N.min():.3g}-{lt.load_N.max():.4g} N), mechanics={self.mechanics}",
             f"{'parameter':<18} {'design':>8} {'fitted':>10} {'+-1 sigma':>10}  identifiable",
         ]
         for n, p in cal.PARAMETERS.items():
@@ -194,16 +194,16 @@ def calibrate(
     imap, setting = fitted.imap, fitted.setting
     header, header_reason = _header(fitted, f"{Path(design_file).name} and {Path(load_test_file).name}")
     F_fit, _, flag_fit = imap.force(lt.B_abs_T, lt.saturated)
-    in_sample = force_errors(F_fit, lt.force_N, fitted.cal_resp.max_force_N)
+    in_sample = force_errors(F_fit, lt.load_N, fitted.cal_resp.max_force_N)
     try:
         F_design, _, _ = cal.InverseMap.from_response(fitted.design_resp).force(lt.B_abs_T)
-        design_errors = force_errors(F_design, lt.force_N, fitted.cal_resp.max_force_N)
+        design_errors = force_errors(F_design, lt.load_N, fitted.cal_resp.max_force_N)
     except cal.CalibrationFailed:
         design_errors = {}
     yaml_text = YAML_PREAMBLE + yaml.safe_dump(fitted.calibrated_dict, sort_keys=False, default_flow_style=None)
     files = _RecordFiles(str(design_file), str(load_test_file), sha256_text(yaml_text), table_size, header_reason)
     record = _record(doc, fitted, files, {"calibrated": in_sample, "design": design_errors}, header is not None)
-    F_grid = np.linspace(0.0, max(float(lt.force_N.max()), fitted.cal_resp.max_force_N), 400)
+    F_grid = np.linspace(0.0, max(float(lt.load_N.max()), fitted.cal_resp.max_force_N), 400)
     design_resp, fit = fitted.design_resp, fitted.fit
     return Calibration(
         design=doc,
@@ -262,7 +262,7 @@ def _fit(
     t0 = time.monotonic()
     if progress is not None and len(lt) >= PROGRESS_FROM_SAMPLES:  # say what the next seconds are
         progress(f"fitting {len(lt)} samples of {load_test_name} (seconds; a load test holds at most {MAX_ROWS} rows)")
-    fit = cal.fit_parameters(doc, lt.force_N, lt.B_abs_T, sigma, names, mechanics)
+    fit = cal.fit_parameters(doc, lt.load_N, lt.B_abs_T, sigma, names, mechanics)
     try:
         cal_doc, edits = cal.apply_parameters(doc, fit.values, name=f"{doc.name}-calibrated", mechanics=mechanics)
         cal_dict = document_to_dict(cal_doc)
@@ -276,7 +276,7 @@ def _fit(
     except InputError as exc:  # the fitted values break a file rule
         raise cal.CalibrationFailed(f"the calibrated design would not load ({exc})") from None
     fit_s = time.monotonic() - t0
-    imap.calibrated_to_N = min(float(lt.force_N.max()), float(imap.force_N[-1]))
+    imap.calibrated_to_N = min(float(lt.load_N.max()), float(imap.force_N[-1]))
     setting = lt.setting or cal_resp.chip_setting
     if setting is not None:
         imap.field_resolution_T = max(imap.field_resolution_T, field_resolution_T(setting, doc.noise_uT_rms))
@@ -327,7 +327,7 @@ def _record(
             "space_mapping_iterations": fit.iterations,
         },
         samples=len(lt),
-        force_range_N=[float(lt.force_N.min()), float(lt.force_N.max())],
+        force_range_N=[float(lt.load_N.min()), float(lt.load_N.max())],
         fitted_quantity="|B| at the chip (sqrt(Bx^2 + By^2 + Bz^2))",
         chip_setting=_setting_record(fitted.setting, lt),
         noise_sigma_uT=fitted.sigma_T * 1e6,

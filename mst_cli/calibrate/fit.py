@@ -339,7 +339,7 @@ def _global_start(model, force_N, B_abs_T, sigma_T, names, bounds) -> dict:
     grid_names = [n for n in MECHANICAL if n in names]
     inner = tuple(n for n in names if n not in MECHANICAL)
     axes = {"modulus_factor": GRID_MODULUS, "wall_offset_mm": GRID_WALL_MM}
-    nodes = [{}]
+    nodes: list[dict[str, float]] = [{}]
     for n in grid_names:
         lo, hi = bounds[n]
         vals = np.unique(np.clip(axes[n], lo, hi))
@@ -355,11 +355,12 @@ def _global_start(model, force_N, B_abs_T, sigma_T, names, bounds) -> dict:
             cost = 0.5 * np.sum(((model.field_abs_T(force_N, start) - B_abs_T) / sigma_T) ** 2)
         scored.append((float(cost), values))
     scored.sort(key=lambda cv: cv[0])
-    best = None
+    best: tuple[float, dict] | None = None
     for _, values in scored[:3]:
         res, vals, _ = _solve(model, force_N, B_abs_T, sigma_T, tuple(names), values, bounds, max_nfev=100)
         if best is None or res.cost < best[0]:
             best = (res.cost, vals)
+    assert best is not None  # scored holds every grid node (at least one)
     return full_values(best[1])
 
 
@@ -823,7 +824,7 @@ class InverseMap:
 
 def inverse_map(
     doc, mechanics: str = "spring", field_model: str | None = None, points_per_regime: int = 600
-) -> tuple[InverseMap, object]:
+) -> tuple[InverseMap, Response]:
     """The inverse map of a design document, and the response it came from."""
     resp = run_simulation(
         doc.geometry(),

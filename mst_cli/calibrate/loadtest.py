@@ -74,6 +74,14 @@ class Readings:
     def __len__(self) -> int:
         return len(self.rows)
 
+    @property
+    def load_N(self) -> np.ndarray:
+        """(n,) the load cell's force in N: ``force_N`` of a file that has one (a load test, read
+        with ``need_force``); ValueError for readings without it."""
+        if self.force_N is None:
+            raise ValueError(f"{self.source} has no {FORCE_COLUMN} column")
+        return self.force_N
+
 
 def setting_of(gain_sel: int, res: int) -> mlx.ChipSetting:
     for s in mlx.settings_table():
@@ -90,7 +98,7 @@ def read_text(path: str | Path, what: str = "CSV file") -> str:
 
 def _delimiter(header_line: str) -> str:
     counts = {d: header_line.count(d) for d in (",", ";", "\t")}
-    best = max(counts, key=counts.get)
+    best = max(counts, key=lambda d: counts[d])
     return best if counts[best] else ","
 
 
@@ -294,8 +302,8 @@ def field_of(
         if setting is not None:
             ranges = (setting.xy_range_T, setting.xy_range_T, setting.z_range_T)
             lsbs = (setting.xy_uT_per_lsb, setting.xy_uT_per_lsb, setting.z_uT_per_lsb)
-            for c, v, rng, lsb in zip(cols, values, ranges, lsbs):
-                if abs(v) * 1e-6 > rng + 1.5e-6 * lsb:
+            for c, v, rng, lsb_uT in zip(cols, values, ranges, lsbs):
+                if abs(v) * 1e-6 > rng + 1.5e-6 * lsb_uT:
                     raise InputError(
                         f"{where} {c}",
                         v,
@@ -303,7 +311,7 @@ def field_of(
                         f"{setting.gain_sel}, RES {setting.res}: the readings come from "
                         "another chip setting",
                     )
-                if abs(v) * 1e-6 >= rng - 1.5e-6 * lsb:
+                if abs(v) * 1e-6 >= rng - 1.5e-6 * lsb_uT:
                     saturated = True
     # compared in microtesla, as read: 50000 uT x 1e-6 is 0.049999999999999996 T, below 50 mT
     if np.any(np.abs(B_uT) >= mlx.SATURATION_T * 1e6):
@@ -325,7 +333,7 @@ def check_load_test(
             f"needs at least {need} samples to fit {n_parameters} parameter(s) "
             f"({min_per_parameter} per parameter, {min_points} at least)",
         )
-    distinct = len(np.unique(np.round(lt.force_N, 9)))
+    distinct = len(np.unique(np.round(lt.load_N, 9)))
     if distinct < n_parameters + 2:
         raise InputError(
             f"{lt.source} {FORCE_COLUMN}",
@@ -341,7 +349,7 @@ def check_load_test(
             "its limit, so the field is unknown; remove saturated rows or use a coarser "
             "GAIN_SEL/RES",
         )
-    F = lt.force_N
+    F = lt.load_N
     lo_tol = 0.02 * design_range_N
     if F.min() < -lo_tol:
         i = int(np.argmin(F))

@@ -20,6 +20,7 @@ import json
 import math
 from dataclasses import dataclass, field, replace
 from pathlib import Path
+from typing import Any, NoReturn
 
 from mst_cli.calibrate.fit import PARAMETERS
 from mst_cli.errors import InputError
@@ -96,13 +97,12 @@ class PrinterCalibration:
         }
 
 
-def _refuse(path, why: str):
+def _refuse(path: str | Path, why: str) -> NoReturn:
     raise InputError(OPTION, str(path), why)
 
 
-def _number(path, where: str, value, *, positive: bool = False, nullable: bool = False) -> float | None:
-    if value is None and nullable:
-        return None
+def _number(path: str | Path, where: str, value: Any, *, positive: bool = False) -> float:
+    """``value`` as a (``positive``) finite number, else InputError naming ``where``."""
     if (
         isinstance(value, bool)
         or not isinstance(value, (int, float))
@@ -165,7 +165,8 @@ def read_calibration(path: str | Path, doc: Document) -> PrinterCalibration:
             out.not_used[name] = "held by the calibration" + (f" ({why})" if isinstance(why, str) else "")
             continue
         value = _number(path, f"parameters.{name}.value", entry.get("value"))
-        std = _number(path, f"parameters.{name}.std", entry.get("std"), nullable=True)
+        std_given = entry.get("std")
+        std = None if std_given is None else _number(path, f"parameters.{name}.std", std_given)
         scale = {"modulus_factor": E_cal / doc.material.youngs_modulus_MPa, "remanence_factor": Br_cal}.get(name, 1.0)
         unit = "T" if name == "remanence_factor" else par.unit
         out.taken.append(Taken(name, TARGET_KEY[name], value * scale, None if std is None else std * scale, unit))
@@ -175,7 +176,8 @@ def read_calibration(path: str | Path, doc: Document) -> PrinterCalibration:
 def apply_calibration(doc: Document, cal: PrinterCalibration) -> Document:
     """``doc`` with the taken values in its ``printer`` section and magnet (each checked against
     its key's declared bounds: InputError naming the key and ``--calibration``)."""
-    printer, magnet = {}, {}
+    printer: dict[str, Any] = {}
+    magnet: dict[str, Any] = {}
     for t in cal.taken:
         section, key = t.key.split(".")
         rule = SECTIONS[section][key]

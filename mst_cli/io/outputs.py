@@ -118,7 +118,7 @@ def remove_stale_staging(out_dir: Path, now: float | None = None) -> list[Path]:
     folder is older than STALE_AFTER_S (a pid may be reused). Folders in use are never touched.
     """
     now = time.time() if now is None else now
-    removed = []
+    removed: list[Path] = []
     try:
         entries = list(os.scandir(out_dir))
     except OSError:

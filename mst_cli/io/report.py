@@ -132,7 +132,7 @@ def _geometry_section(geometry: SensorGeometry) -> dict:
 
 def _undefined_reasons(resp: Response) -> dict:
     """Why a quantity of this response has no value (key -> sentence)."""
-    reasons = {}
+    reasons: dict[str, str] = {}
     if resp.chip_setting is None or not math.isfinite(resp.field_resolution_T):
         why = "undefined: the field saturates the MLX90393 at full load, so no gain setting resolves it (see warnings)"
         reasons.update(force_resolution_N=why, force_resolution_worst_N=why, field_resolution_uT=why)
@@ -144,7 +144,7 @@ def nulls_with_reasons(data: Any, reasons: dict | None = None) -> Any:
     key beside it saying why (JSON has no NaN; report.json never holds one)."""
     reasons = reasons or {}
     if isinstance(data, dict):
-        out = {}
+        out: dict[str, Any] = {}
         for key, value in data.items():
             if isinstance(value, float) and not math.isfinite(value):
                 out[key] = None

@@ -7,7 +7,7 @@ it. Each rule is read from a dataclass field declared with :func:`mst_cli.model.
 from __future__ import annotations
 
 import math
-from dataclasses import MISSING, dataclass
+from dataclasses import MISSING, dataclass, fields
 from typing import Any
 
 from mst_cli.errors import InputError
@@ -25,7 +25,7 @@ def adopt(owner: type, name: str, **changes: Any) -> Any:
     """Field ``name`` of the dataclass ``owner`` exposed under the same key by a section class:
     its default and metadata as declared there, with ``changes`` on top (bounds and meaning for
     a class that declares none, such as Material; a different default)."""
-    f = owner.__dataclass_fields__[name]
+    f = next(f for f in fields(owner) if f.name == name)
     meta = {**f.metadata, **changes}
     default = meta.pop("default", f.default)
     return spec(default, **meta)

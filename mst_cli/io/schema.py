@@ -254,6 +254,12 @@ class LayerEntry:
     )
 
     @property
+    def drawn(self) -> tuple[float, float, float]:
+        """(theta_deg, t_mm, h_mm) of a design's layer (one that :attr:`has_geometry`)."""
+        assert self.theta_deg is not None and self.t_mm is not None and self.h_mm is not None, "not a design's layer"
+        return self.theta_deg, self.t_mm, self.h_mm
+
+    @property
     def has_geometry(self) -> bool:
         return None not in (self.theta_deg, self.t_mm, self.h_mm)
 
@@ -324,7 +330,7 @@ class Document:
             return MagnetometerSection(
                 board=self.board.key,
                 noise_uT_rms=self.noise_uT_rms,
-                chip_offset_mm=tuple(self.chip_offset_mm),
+                chip_offset_mm=(self.chip_offset_mm[0], self.chip_offset_mm[1]),
                 magnet_tilt_deg=self.magnet_tilt_deg,
             )
         if name == "model":
@@ -345,7 +351,7 @@ class Document:
         """The sensor geometry of this document (or of ``cells`` with the same constants)."""
         if cells is None:
             self.require_geometry()
-            cells = [self.family.cell(la.theta_deg, la.t_mm, la.h_mm) for la in self.layers]
+            cells = [self.family.cell(*la.drawn) for la in self.layers]
         return geo.SensorGeometry(
             tuple(cells), self.magnet, self.board, self.housing, self.chip_offset_mm, self.magnet_tilt_deg, self.printer
         )
@@ -547,7 +553,7 @@ def document_to_dict(doc: Document, layers=None) -> dict:
     """Serialise a document back to the file format (all sections but ``design``, explicit values;
     mst_cli.design.document.design_dict adds a spec's ``design`` section)."""
     layers = doc.layers if layers is None else layers
-    out = {"name": doc.name}
+    out: dict[str, Any] = {"name": doc.name}
     for name, declared in SECTION_TYPES.items():
         if name != "design":
             out[name] = section_to_dict(declared, doc.section(name))

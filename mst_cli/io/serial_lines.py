@@ -53,7 +53,7 @@ def parse_line(line: str, raw: bool = False) -> tuple[float, float, float] | Non
     line = line.strip()
     if not line:
         return None
-    found = {}
+    found: dict[str, tuple[str, str]] = {}
     for label, number, unit in LABELLED.findall(line):
         found.setdefault(label.lower(), (number, unit))
     if set(found) == {"x", "y", "z"}:
@@ -153,11 +153,13 @@ class LineSource:
         if self._serial is not None:  # pragma: no cover - Windows
             data = self._serial.read(4096)
             return data
-        ready, _, _ = select.select([self._fd], [], [], wait_s)
+        fd = self._fd
+        assert fd is not None  # open (set in __init__ unless pyserial reads the port)
+        ready, _, _ = select.select([fd], [], [], wait_s)
         if not ready:
             return b""
         try:
-            data = os.read(self._fd, 4096)
+            data = os.read(fd, 4096)
         except BlockingIOError:
             return b""
         except OSError as exc:
