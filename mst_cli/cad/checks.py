@@ -28,6 +28,7 @@ import io
 import math
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -414,7 +415,7 @@ CHECKS = (
 )
 
 
-def run_checks(mesh, manifest: Manifest | dict, nozzle_mm: float | None = None) -> list[Check]:
+def run_checks(mesh: Mesh | Any, manifest: Manifest | dict, nozzle_mm: float | None = None) -> list[Check]:
     """Every check of :data:`CHECKS`, in order. Pure: reads only its arguments.
 
     ``mesh`` is the STL as written (print orientation); ``manifest`` the loaded export.json

@@ -13,8 +13,12 @@ import itertools
 import re
 import zipfile
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from build123d import Compound
 
 # Fixed STEP header time stamp and 3MF zip member date: output depends only on the input.
 STEP_TIMESTAMP = "2000-01-01T00:00:00"
@@ -158,12 +162,12 @@ def _renumber_nauo(data: bytes) -> bytes:
     return _NAUO.sub(one, data)
 
 
-def write_step(assembly, path: Path) -> None:
+def write_step(assembly: Compound, path: Path) -> None:
     """Write :func:`step_bytes` of the assembly to ``path``."""
     Path(path).write_bytes(step_bytes(assembly))
 
 
-def step_bytes(assembly) -> bytes:
+def step_bytes(assembly: Compound) -> bytes:
     """STEP AP214 file of the named assembly, deterministic.
 
     The header gets a fixed time stamp, and the ids of the assembly-usage records -- which

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import math
 import re
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -80,7 +81,7 @@ class GCode:
                 return layer
         return None
 
-    def type_volume_mm3(self, types) -> float:
+    def type_volume_mm3(self, types: Iterable[str]) -> float:
         """Volume of filament pushed by extrusions of the given feature types, mm3."""
         diameter = _float_or(self.config.get("filament_diameter", "").split(",")[0], FILAMENT_DIAMETER_MM)
         area = math.pi * diameter**2 / 4
@@ -129,7 +130,7 @@ def parse_duration_s(text: str) -> float | None:
     return float(sum(int(n) * scale[u] for n, u in parts))
 
 
-def pause_commands(config: dict[str, str], extra=()) -> set[str]:
+def pause_commands(config: dict[str, str], extra: Iterable[str] = ()) -> set[str]:
     """The commands (first word, upper case) that pause the print under this config."""
     commands = {DEFAULT_PAUSE_GCODE}
     text = config.get("pause_print_gcode")
@@ -378,7 +379,9 @@ class SpanReport:
     per_layer: list[Span]  # one per analysed layer (layers 2..), in order
 
 
-def rasterise(segments: np.ndarray, origin_xy, shape, px_per_mm: float) -> np.ndarray:
+def rasterise(
+    segments: np.ndarray, origin_xy: Sequence[float] | np.ndarray, shape: tuple[int, int], px_per_mm: float
+) -> np.ndarray:
     """Boolean image (rows: y, cols: x) of the segments drawn as lines of their own width
     with round ends; pixel (r, c) covers [x0 + c/res, x0 + (c+1)/res) x [y0 + r/res, ...)."""
     from PIL import Image, ImageDraw  # deferred: PIL (via matplotlib) only for the span raster
@@ -580,7 +583,9 @@ class Across:
     offset_mm: tuple[float, float] | None
 
 
-def material_across(segments: np.ndarray, start_xy, end_xy, stations: int, core_mm: float) -> list[Across]:
+def material_across(
+    segments: np.ndarray, start_xy: tuple[float, float], end_xy: tuple[float, float], stations: int, core_mm: float
+) -> list[Across]:
     """At ``stations`` points evenly along the centre line start -> end (one at its midpoint
     when the two coincide), the wall along the line perpendicular to it: the merged extrusion
     strokes (each its own width, round ends) that reach into its core, within ``core_mm`` of

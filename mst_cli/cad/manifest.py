@@ -381,7 +381,7 @@ class Manifest:
     design: Document | None = _optional("design")  # exports before issue 21 lack it
 
     @classmethod
-    def from_dict(cls, data) -> Manifest:
+    def from_dict(cls, data: Any) -> Manifest:
         """The manifest of a parsed export.json (or of :func:`export_manifest`'s dict): an
         InputError names the first field that is missing, of the wrong type or nesting, out of
         range (``export.json.layers[2].t_mm``), or a rotation that is not one."""
@@ -420,7 +420,7 @@ class SliceManifest:
     design: Document | None = _optional("design")
 
     @classmethod
-    def from_dict(cls, data) -> SliceManifest:
+    def from_dict(cls, data: Any) -> SliceManifest:
         return _parse(cls, data, "export.json")
 
 

@@ -11,7 +11,7 @@ here for the callers that write all the mesh files from one module.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -165,7 +165,7 @@ class Mesh:
     faces: np.ndarray  # (m, 3) int64
 
     @classmethod
-    def of(cls, mesh) -> Mesh:
+    def of(cls, mesh: Any) -> Mesh:
         """A Mesh of anything with ``vertices`` and ``faces`` (a trimesh.Trimesh, say)."""
         return cls(np.asarray(mesh.vertices, dtype=float), np.asarray(mesh.faces, dtype=np.int64))
 

@@ -108,13 +108,14 @@ class CalibrationFailed(RuntimeError):
     """The fit itself failed (not the input's form): the message says why."""
 
 
-def parameter_bounds(doc) -> dict[str, tuple[float, float]]:
+def parameter_bounds(doc: Document) -> dict[str, tuple[float, float]]:
     """Physical bounds of each parameter for this design: every perturbed cell keeps a wall and
     a lock stroke, the gap stays open at full stroke, E and Br stay inside the file format."""
     a = doc.family.contact_allowance_mm
-    t = np.array([la.t_mm for la in doc.layers])
-    h = np.array([la.h_mm for la in doc.layers])
-    th = np.radians([la.theta_deg for la in doc.layers])
+    theta, t_mm, h_mm = zip(*(la.drawn for la in doc.layers))
+    t = np.array(t_mm)
+    h = np.array(h_mm)
+    th = np.radians(theta)
     p = 0.5 * doc.family.width_mm - 0.5 * h / np.tan(th)  # outer pad half-width
     wall_lo = max(-0.5, float(np.max(MIN_STROKE_MM - t)))
     wall_hi = min(
@@ -136,7 +137,7 @@ def parameter_bounds(doc) -> dict[str, tuple[float, float]]:
 PRINTER_NOMINAL = {"wall_offset_mm": 0.0, "modulus_factor": 1.0, "gap_offset_mm": 0.0}
 
 
-def printer_values(doc) -> dict:
+def printer_values(doc: Document) -> dict:
     """The print parameters (:data:`PARAMETERS`' names) a document's ``printer`` section declares:
     what its printer is known to do to the drawing (the remanence is the magnet's own key)."""
     pr = doc.printer
@@ -686,7 +687,7 @@ def _rules_for(doc: Document, layers) -> Printer:
     )
 
 
-def with_walls(doc: Document, t_mm) -> Document:
+def with_walls(doc: Document, t_mm: Sequence[float]) -> Document:
     """The design ``doc`` with layer i's wall thickness set to ``t_mm[i]`` (e.g. the width the
     slicer lays down), everything else as it is, so :func:`mst_cli.api.simulate` predicts the
     part those walls make with the model and printer corrections the design itself is simulated
@@ -798,7 +799,7 @@ class InverseMap:
         return codes, F, self.regime_of(np.minimum(F, self.edges_N[-1] * (1 - 1e-12))), res
 
     @classmethod
-    def from_response(cls, resp) -> InverseMap:
+    def from_response(cls, resp: Response) -> InverseMap:
         """From a :class:`~mst_cli.model.response.Response` (the same model ``mst simulate`` runs)."""
         keep = resp.in_range
         F = resp.force_N[keep]
@@ -823,7 +824,7 @@ class InverseMap:
 
 
 def inverse_map(
-    doc, mechanics: str = "spring", field_model: str | None = None, points_per_regime: int = 600
+    doc: Document, mechanics: str = "spring", field_model: str | None = None, points_per_regime: int = 600
 ) -> tuple[InverseMap, Response]:
     """The inverse map of a design document, and the response it came from."""
     resp = run_simulation(

@@ -25,7 +25,7 @@ if TYPE_CHECKING:
 SCHEMA_VERSION = 1
 
 
-def report_dict(doc, geometry: SensorGeometry, resp: Response, extra: dict | None = None) -> dict:
+def report_dict(doc: Document, geometry: SensorGeometry, resp: Response, extra: dict | None = None) -> dict:
     """Machine-readable report of one simulated design."""
     out = {
         "schema_version": SCHEMA_VERSION,
@@ -187,7 +187,7 @@ def height_budget_line(geometry: SensorGeometry) -> str:
     )
 
 
-def terminal_table(doc, geometry: SensorGeometry, resp: Response) -> str:
+def terminal_table(doc: Document, geometry: SensorGeometry, resp: Response) -> str:
     """The short table ``mst simulate`` prints."""
     targets = {i + 1: la for i, la in enumerate(doc.layers)}
     lines = [
@@ -220,7 +220,7 @@ def terminal_table(doc, geometry: SensorGeometry, resp: Response) -> str:
     return "\n".join(lines)
 
 
-def plot_response(resp: Response, path, title: str = "") -> None:
+def plot_response(resp: Response, path: str | Path, title: str = "") -> None:
     """F-d with the lock points, and dB/B0-F with the regimes shaded."""
     # Figure without pyplot: no GUI backend machinery, and Figure.savefig renders with Agg
     from matplotlib.figure import Figure  # deferred: matplotlib is 0.45 s; --no-plot never imports it

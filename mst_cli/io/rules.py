@@ -7,7 +7,8 @@ it. Each rule is read from a dataclass field declared with :func:`mst_cli.model.
 from __future__ import annotations
 
 import math
-from dataclasses import MISSING, dataclass, fields
+from collections.abc import Sequence
+from dataclasses import MISSING, Field, dataclass, fields
 from typing import Any
 
 from mst_cli.errors import InputError
@@ -16,7 +17,7 @@ from mst_cli.model.fields import spec
 RULE_KEYS = ("lo", "hi", "lo_open", "hi_open", "choices", "nullable", "unit")  # spec() metadata a Rule reads
 
 
-def default_of(f) -> Any:
+def default_of(f: Field) -> Any:
     """The declared default of a dataclass field (MISSING when it has none)."""
     return f.default_factory() if f.default_factory is not MISSING else f.default
 
@@ -45,7 +46,7 @@ class Rule:
     unit: str = ""
 
     @classmethod
-    def of(cls, f) -> Rule:
+    def of(cls, f: Field) -> Rule:
         """The rule a :func:`spec` field declares; its kind is the annotation's unless given
         (``float | None`` is a float: whether null is allowed is ``nullable``'s to say)."""
         kind = f.metadata["kind"] or str(f.type).split(" | ")[0]
@@ -121,10 +122,12 @@ class Rule:
             raise InputError(path, value, self.describe())
         return out
 
-    def ordered(self, path: str, pair) -> tuple[float, float]:
+    def ordered(self, path: str, pair: Sequence[float]) -> tuple[float, float]:
         """A "bounds" pair: low < high, both inside the rule's bounds."""
         a, b = pair
-        if not (self.lo <= a < b and (b < self.hi if self.hi_open else b <= self.hi)):
+        lo, hi = self.lo, self.hi
+        assert lo is not None and hi is not None  # a "bounds" rule declares both
+        if not (lo <= a < b and (b < hi if self.hi_open else b <= hi)):
             raise InputError(path, list(pair), self.describe())
         return (a, b)
 

@@ -18,6 +18,7 @@ defaults, :func:`document_to_dict` and the tables of docs/file-format.md
 from __future__ import annotations
 
 import sys
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, fields, replace
 from pathlib import Path
 from typing import Any
@@ -347,7 +348,7 @@ class Document:
     def is_spec(self) -> bool:
         return all(layer.has_targets for layer in self.layers)
 
-    def geometry(self, cells=None) -> geo.SensorGeometry:
+    def geometry(self, cells: Sequence[geo.HexCell] | None = None) -> geo.SensorGeometry:
         """The sensor geometry of this document (or of ``cells`` with the same constants)."""
         if cells is None:
             self.require_geometry()
@@ -377,7 +378,7 @@ class Document:
                         "a spec needs target_sensitivity_per_N and target_range_N for every layer",
                     )
 
-    def with_layers(self, layers) -> Document:
+    def with_layers(self, layers: Iterable[LayerEntry]) -> Document:
         return replace(self, layers=tuple(layers))
 
 
@@ -536,7 +537,7 @@ def load_document(path: str | Path) -> Document:
     return parse_document(raw, source=str(path))
 
 
-def section_to_dict(declared: type, values) -> dict:
+def section_to_dict(declared: type, values: Any) -> dict:
     """The keys ``declared`` (a section or layer dataclass) declares, read from ``values`` (any
     object with those attributes), as a file writes them: pairs as lists; a key declared
     ``omit_default`` is left out while it holds its default."""
@@ -549,7 +550,7 @@ def section_to_dict(declared: type, values) -> dict:
     return out
 
 
-def document_to_dict(doc: Document, layers=None) -> dict:
+def document_to_dict(doc: Document, layers: Sequence[LayerEntry] | None = None) -> dict:
     """Serialise a document back to the file format (all sections but ``design``, explicit values;
     mst_cli.design.document.design_dict adds a spec's ``design`` section)."""
     layers = doc.layers if layers is None else layers
