@@ -7,7 +7,7 @@ from typing import TYPE_CHECKING
 
 from build123d import Compound, Solid
 
-from mst_cli.cad import parts, shapes
+from mst_cli.cad import mesh_io, parts, shapes
 from mst_cli.cad.shapes import check_fits as check_fits  # re-exported: the callers check first
 from mst_cli.model.geometry import SensorGeometry
 
@@ -67,8 +67,6 @@ def build_sensor(geometry: SensorGeometry) -> SensorCAD:
 def print_mesh(geometry: SensorGeometry, body: Solid, tolerance_mm: float) -> tuple[np.ndarray, np.ndarray]:
     """(vertices, triangles) of the body as it lies on the bed (the STL/3MF frame): the
     tessellation, closed and outward-oriented, turned into the print frame."""
-    from mst_cli.cad import mesh_io
-
     vertices, triangles = mesh_io.tessellate(body, tolerance_mm)
     if not mesh_io.is_closed_oriented(vertices, triangles):
         raise RuntimeError("the tessellated body is not closed: please report this design")

@@ -28,6 +28,7 @@ import io
 import math
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -36,6 +37,7 @@ from mst_cli.cad.measure import LAYER_GRID_TOL_MM, Measurements, measure
 from mst_cli.cad.mesh_io import Mesh, binary_stl_triangles, weld
 from mst_cli.errors import InputError
 from mst_cli.io.files import read_input
+from mst_cli.io.outputs import finite_or_none
 
 # Planar features are exact in the B-rep; the STL stores float32 coordinates, which resolve
 # ~2e-6 mm at 20 mm from the origin. Dimensions measured on planar faces must agree to this.
@@ -134,7 +136,7 @@ def load_mesh(path: Path) -> Mesh:
 
 
 def _load_with_trimesh(path: Path, data: bytes) -> tuple[np.ndarray, np.ndarray]:
-    import trimesh  # heavy (pulls scipy.spatial): only for files that are not binary STL
+    import trimesh  # deferred: heavy (pulls scipy.spatial), only for files that are not binary STL
 
     try:
         with np.errstate(all="ignore"):
@@ -413,7 +415,7 @@ CHECKS = (
 )
 
 
-def run_checks(mesh, manifest: Manifest | dict, nozzle_mm: float | None = None) -> list[Check]:
+def run_checks(mesh: Mesh | Any, manifest: Manifest | dict, nozzle_mm: float | None = None) -> list[Check]:
     """Every check of :data:`CHECKS`, in order. Pure: reads only its arguments.
 
     ``mesh`` is the STL as written (print orientation); ``manifest`` the loaded export.json
@@ -429,7 +431,6 @@ def run_checks(mesh, manifest: Manifest | dict, nozzle_mm: float | None = None) 
 
 def results_dict(checks: list[Check], stl_path: str) -> dict:
     """JSON form (``mst check --json``); a value that could not be measured (NaN) is null."""
-    from mst_cli.io.outputs import finite_or_none
 
     failed = [c.name for c in checks if not c.passed and not c.info]
     return finite_or_none(

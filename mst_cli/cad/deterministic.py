@@ -13,8 +13,12 @@ import itertools
 import re
 import zipfile
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from build123d import Compound
 
 # Fixed STEP header time stamp and 3MF zip member date: output depends only on the input.
 STEP_TIMESTAMP = "2000-01-01T00:00:00"
@@ -67,12 +71,47 @@ def three_mf_bytes(
     line writes the profile's pause_print_gcode (``;PAUSE_PRINT``, ``M117 <message>``, then
     e.g. M601) between that layer's last move and the next layer's first.
     """
+    content_types = _CONTENT_TYPES
+    if pause_after_z_mm is not None:  # every part of the package needs a content type
+        content_types = content_types.replace(
+            "</Types>", '<Default Extension="xml" ContentType="application/xml"/></Types>'
+        )
+    members = [
+        ("[Content_Types].xml", content_types),
+        ("_rels/.rels", _RELS),
+        ("3D/3dmodel.model", _model_xml(vertices, triangles, name)),
+    ]
+    if pause_after_z_mm is not None:
+        members.append((PRUSA_CUSTOM_GCODE_MEMBER, prusa_pause_xml(pause_after_z_mm, layer_height_mm, pause_message)))
+    return _zip_bytes(members)
+
+
+_CONTENT_TYPES = (
+    '<?xml version="1.0" encoding="UTF-8"?>\n'
+    '<Types xmlns="http://schemas.openxmlformats.org/package/2006/content-types">'
+    '<Default Extension="rels" '
+    'ContentType="application/vnd.openxmlformats-package.relationships+xml"/>'
+    '<Default Extension="model" '
+    'ContentType="application/vnd.ms-package.3dmanufacturing-3dmodel+xml"/>'
+    "</Types>\n"
+)
+_RELS = (
+    '<?xml version="1.0" encoding="UTF-8"?>\n'
+    '<Relationships xmlns="http://schemas.openxmlformats.org/package/2006/relationships">'
+    '<Relationship Target="/3D/3dmodel.model" Id="rel0" '
+    'Type="http://schemas.microsoft.com/3dmanufacturing/2013/01/3dmodel"/>'
+    "</Relationships>\n"
+)
+
+
+def _model_xml(vertices: np.ndarray, triangles: np.ndarray, name: str) -> str:
+    """The 3MF model part: one mesh object (vertices (n, 3) mm, triangles (m, 3) indices)."""
     vert_xml = "".join(
         f'<vertex x="{_xml_number(x)}" y="{_xml_number(y)}" z="{_xml_number(z)}"/>' for x, y, z in vertices
     )
     tri_xml = "".join(f'<triangle v1="{a}" v2="{b}" v3="{c}"/>' for a, b, c in triangles)
     safe = _xml_escape(name)
-    model = (
+    return (
         '<?xml version="1.0" encoding="UTF-8"?>\n'
         '<model unit="millimeter" xml:lang="en-US" '
         'xmlns="http://schemas.microsoft.com/3dmanufacturing/core/2015/02">\n'
@@ -82,29 +121,10 @@ def three_mf_bytes(
         f"<triangles>{tri_xml}</triangles></mesh></object>\n"
         '</resources>\n<build><item objectid="1"/></build>\n</model>\n'
     )
-    content_types = (
-        '<?xml version="1.0" encoding="UTF-8"?>\n'
-        '<Types xmlns="http://schemas.openxmlformats.org/package/2006/content-types">'
-        '<Default Extension="rels" '
-        'ContentType="application/vnd.openxmlformats-package.relationships+xml"/>'
-        '<Default Extension="model" '
-        'ContentType="application/vnd.ms-package.3dmanufacturing-3dmodel+xml"/>'
-        "</Types>\n"
-    )
-    rels = (
-        '<?xml version="1.0" encoding="UTF-8"?>\n'
-        '<Relationships xmlns="http://schemas.openxmlformats.org/package/2006/relationships">'
-        '<Relationship Target="/3D/3dmodel.model" Id="rel0" '
-        'Type="http://schemas.microsoft.com/3dmanufacturing/2013/01/3dmodel"/>'
-        "</Relationships>\n"
-    )
-    if pause_after_z_mm is not None:  # every part of the package needs a content type
-        content_types = content_types.replace(
-            "</Types>", '<Default Extension="xml" ContentType="application/xml"/></Types>'
-        )
-    members = [("[Content_Types].xml", content_types), ("_rels/.rels", rels), ("3D/3dmodel.model", model)]
-    if pause_after_z_mm is not None:
-        members.append((PRUSA_CUSTOM_GCODE_MEMBER, prusa_pause_xml(pause_after_z_mm, layer_height_mm, pause_message)))
+
+
+def _zip_bytes(members: list[tuple[str, str]]) -> bytes:
+    """A deflated zip of ``members`` (name, text) with fixed dates and modes: the same bytes every run."""
     buf = io.BytesIO()
     with zipfile.ZipFile(buf, "w", compression=zipfile.ZIP_DEFLATED) as zf:
         for member, text in members:
@@ -142,12 +162,12 @@ def _renumber_nauo(data: bytes) -> bytes:
     return _NAUO.sub(one, data)
 
 
-def write_step(assembly, path: Path) -> None:
+def write_step(assembly: Compound, path: Path) -> None:
     """Write :func:`step_bytes` of the assembly to ``path``."""
     Path(path).write_bytes(step_bytes(assembly))
 
 
-def step_bytes(assembly) -> bytes:
+def step_bytes(assembly: Compound) -> bytes:
     """STEP AP214 file of the named assembly, deterministic.
 
     The header gets a fixed time stamp, and the ids of the assembly-usage records -- which
@@ -157,7 +177,7 @@ def step_bytes(assembly) -> bytes:
     the path and the errno reason, as for every other writer (OCCT's own file writer only
     says "Failed to write STEP file").
     """
-    from build123d import export_step
+    from build123d import export_step  # deferred: build123d takes seconds to import, only --step needs it
 
     buf = io.BytesIO()
     export_step(assembly, buf, timestamp=STEP_TIMESTAMP)  # RuntimeError if OCCT fails

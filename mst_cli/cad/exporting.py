@@ -12,6 +12,7 @@ from pathlib import Path
 
 from mst_cli.cad import mesh_io
 from mst_cli.cad.manifest import MANIFEST_NAME, STL_TOLERANCE_MM, export_manifest
+from mst_cli.cad.mesh_body import print_mesh
 from mst_cli.cad.shapes import check_fits
 from mst_cli.errors import InputError
 from mst_cli.io.outputs import staged
@@ -48,8 +49,6 @@ def write_export(
     names = (["sensor.stl"] if stl else []) + (["sensor.step"] if step else []) + (["sensor.3mf"] if three_mf else [])
     with staged(out) as st:
         if stl or three_mf:
-            from mst_cli.cad.mesh_body import print_mesh
-
             vertices, triangles = print_mesh(geometry, stl_tolerance_mm)
             say(
                 f"meshed the body (base, layers, plates, cap; pocket and slot cut): "
@@ -71,7 +70,7 @@ def write_export(
                 )
                 say("wrote sensor.3mf")
         if step:
-            from mst_cli.cad.assembly import build_sensor  # build123d: seconds to import
+            from mst_cli.cad.assembly import build_sensor  # deferred: build123d takes seconds, only --step needs it
 
             say("building the CAD body: base, layers, plates, cap (one fuse)")
             cad = build_sensor(geometry)

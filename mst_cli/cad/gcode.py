@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import math
 import re
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -80,7 +81,7 @@ class GCode:
                 return layer
         return None
 
-    def type_volume_mm3(self, types) -> float:
+    def type_volume_mm3(self, types: Iterable[str]) -> float:
         """Volume of filament pushed by extrusions of the given feature types, mm3."""
         diameter = _float_or(self.config.get("filament_diameter", "").split(",")[0], FILAMENT_DIAMETER_MM)
         area = math.pi * diameter**2 / 4
@@ -129,7 +130,7 @@ def parse_duration_s(text: str) -> float | None:
     return float(sum(int(n) * scale[u] for n, u in parts))
 
 
-def pause_commands(config: dict[str, str], extra=()) -> set[str]:
+def pause_commands(config: dict[str, str], extra: Iterable[str] = ()) -> set[str]:
     """The commands (first word, upper case) that pause the print under this config."""
     commands = {DEFAULT_PAUSE_GCODE}
     text = config.get("pause_print_gcode")
@@ -180,142 +181,181 @@ def parse_gcode(text: str, pause_gcode: str | None = None) -> GCode:
     """
     lines = text.splitlines()
     config = _footer_config(lines)
-    if pause_gcode is not None:
-        config_for_pause = {"pause_print_gcode": pause_gcode}
-    else:
-        config_for_pause = config
-    pause_words = pause_commands(config_for_pause) - _NOT_PAUSE
-
-    x = y = z = 0.0
-    e = 0.0
-    abs_xyz = True
-    abs_e = True
-    width = 0.45
-    ftype = ""
-    path = 0
-    last_was_extrusion = False
-
-    layers_raw: list[dict] = []
-    cur: dict | None = None
-    pending_z = None
-    pending_h = None
-    pauses: list[Pause] = []
-    time_s = fil_mm = fil_cm3 = fil_g = None
-
-    def _pause_here(lineno: int, command: str) -> Pause:
-        started = cur is not None and bool(cur["seg"])
-        done = len(layers_raw) - 1 if cur is not None else 0
-        return Pause(lineno, command, done, 0.0, started)
-
-    def new_layer():
-        nonlocal cur
-        cur = {"z": pending_z, "h": pending_h, "seg": [], "type": [], "e": [], "path": []}
-        layers_raw.append(cur)
-
+    config_for_pause = {"pause_print_gcode": pause_gcode} if pause_gcode is not None else config
+    reader = _GCodeReader(pause_commands(config_for_pause) - _NOT_PAUSE)
     for lineno, raw in enumerate(lines, start=1):
         line = raw.strip()
         if not line:
             continue
         if line[0] == ";":
-            c = line[1:]
-            if c.startswith("LAYER_CHANGE"):
-                pending_z = pending_h = None
-                new_layer()
-                last_was_extrusion = False
-                path += 1
-            elif c.startswith("Z:") and cur is not None and cur["z"] is None:
-                cur["z"] = _float_or(c[2:], None)
-            elif c.startswith("HEIGHT:") and cur is not None and cur["h"] is None:
-                cur["h"] = _float_or(c[7:], None)
-            elif c.startswith("TYPE:"):
-                ftype = c[5:].strip()
-            elif c.startswith("WIDTH:"):
-                width = _float_or(c[6:], width)
-            elif c.startswith("PAUSE_PRINT"):
-                pauses.append(_pause_here(lineno, ";PAUSE_PRINT"))
-            elif c.startswith(" estimated printing time (normal mode)"):
-                time_s = parse_duration_s(c.split("=", 1)[1])
-            elif c.startswith(" filament used [mm]"):
-                fil_mm = _float_or(c.split("=", 1)[1].split(",")[0], None)
-            elif c.startswith(" filament used [cm3]"):
-                fil_cm3 = _float_or(c.split("=", 1)[1].split(",")[0], None)
-            elif c.startswith(" total filament used [g]"):
-                fil_g = _float_or(c.split("=", 1)[1], None)
-            elif c.startswith(" filament used [g]") and fil_g is None:
-                fil_g = _float_or(c.split("=", 1)[1].split(",")[0], None)
+            reader.comment(lineno, line[1:])
             continue
         code = line.split(";", 1)[0].strip()
-        if not code:
-            continue
+        if code:
+            reader.command(lineno, code)
+    layers = _layers(reader.layers_raw)
+    for pause in reader.pauses:
+        pause.z_mm = layers[pause.after_layer - 1].z_mm if pause.after_layer >= 1 else 0.0
+    footer = reader.footer
+    return GCode(layers, reader.pauses, footer.time_s, footer.fil_mm, footer.fil_cm3, footer.fil_g, config)
+
+
+@dataclass
+class _RawLayer:
+    """A layer as read: its ``;Z:`` and ``;HEIGHT:`` (None until given) and its extrusions."""
+
+    z: float | None = None
+    h: float | None = None
+    seg: list[tuple[float, float, float, float, float]] = field(default_factory=list)
+    type: list[str] = field(default_factory=list)
+    e: list[float] = field(default_factory=list)
+    path: list[int] = field(default_factory=list)
+
+
+@dataclass
+class _Footer:
+    """The print time and filament PrusaSlicer states in its closing comments."""
+
+    time_s: float | None = None
+    fil_mm: float | None = None
+    fil_cm3: float | None = None
+    fil_g: float | None = None
+
+    def read(self, c: str) -> None:
+        """Take the value of one comment (``c``: the text after ';') if it states one."""
+        if c.startswith(" estimated printing time (normal mode)"):
+            self.time_s = parse_duration_s(c.split("=", 1)[1])
+        elif c.startswith(" filament used [mm]"):
+            self.fil_mm = _float_or(c.split("=", 1)[1].split(",")[0], None)
+        elif c.startswith(" filament used [cm3]"):
+            self.fil_cm3 = _float_or(c.split("=", 1)[1].split(",")[0], None)
+        elif c.startswith(" total filament used [g]"):
+            self.fil_g = _float_or(c.split("=", 1)[1], None)
+        elif c.startswith(" filament used [g]") and self.fil_g is None:
+            self.fil_g = _float_or(c.split("=", 1)[1].split(",")[0], None)
+
+
+def _words(code: str, head: str) -> dict[str, float]:
+    """The letter -> number words of a G-code command after its head (``X1.5 E.2`` -> X, E)."""
+    return {k.upper(): float(v) for k, v in _WORD.findall(code[len(head) :])}
+
+
+class _GCodeReader:
+    """The state of the print head line by line: position, E, modes, the layer being printed."""
+
+    def __init__(self, pause_words: set[str]):
+        self.pause_words = pause_words
+        self.x = self.y = self.z = 0.0
+        self.e = 0.0
+        self.abs_xyz = True
+        self.abs_e = True
+        self.width = 0.45
+        self.ftype = ""
+        self.path = 0
+        self.last_was_extrusion = False
+        self.layers_raw: list[_RawLayer] = []
+        self.cur: _RawLayer | None = None
+        self.pauses: list[Pause] = []
+        self.footer = _Footer()
+
+    def _pause_here(self, lineno: int, command: str) -> Pause:
+        started = self.cur is not None and bool(self.cur.seg)
+        done = len(self.layers_raw) - 1 if self.cur is not None else 0
+        return Pause(lineno, command, done, 0.0, started)
+
+    def comment(self, lineno: int, c: str) -> None:
+        """One comment line (``c``: the text after ';')."""
+        cur = self.cur
+        if c.startswith("LAYER_CHANGE"):
+            self.cur = _RawLayer()
+            self.layers_raw.append(self.cur)
+            self.last_was_extrusion = False
+            self.path += 1
+        elif c.startswith("Z:") and cur is not None and cur.z is None:
+            cur.z = _float_or(c[2:], None)
+        elif c.startswith("HEIGHT:") and cur is not None and cur.h is None:
+            cur.h = _float_or(c[7:], None)
+        elif c.startswith("TYPE:"):
+            self.ftype = c[5:].strip()
+        elif c.startswith("WIDTH:"):
+            self.width = _float_or(c[6:], self.width)
+        elif c.startswith("PAUSE_PRINT"):
+            self.pauses.append(self._pause_here(lineno, ";PAUSE_PRINT"))
+        else:
+            self.footer.read(c)
+
+    def command(self, lineno: int, code: str) -> None:
+        """One G-code command (comment stripped)."""
         head = code.split(None, 1)[0].upper()
         if head in ("G1", "G0"):
-            words = dict((k.upper(), float(v)) for k, v in _WORD.findall(code[len(head) :]))
-            nx, ny, nz = x, y, z
-            if "X" in words:
-                nx = words["X"] if abs_xyz else x + words["X"]
-            if "Y" in words:
-                ny = words["Y"] if abs_xyz else y + words["Y"]
-            if "Z" in words:
-                nz = words["Z"] if abs_xyz else z + words["Z"]
-            de = 0.0
-            if "E" in words:
-                de = words["E"] - e if abs_e else words["E"]
-                e = words["E"] if abs_e else e + words["E"]
-            moved_xy = nx != x or ny != y
-            if moved_xy and de > 0 and cur is not None:
-                if not last_was_extrusion:
-                    path += 1
-                cur["seg"].append((x, y, nx, ny, width))
-                cur["type"].append(ftype)
-                cur["e"].append(de)
-                cur["path"].append(path)
-                last_was_extrusion = True
-            elif moved_xy:
-                last_was_extrusion = False
-            x, y, z = nx, ny, nz
-        elif head == "G90":
-            abs_xyz = abs_e = True
-        elif head == "G91":
-            abs_xyz = abs_e = False
-        elif head == "M82":
-            abs_e = True
-        elif head == "M83":
-            abs_e = False
+            self._move(_words(code, head))
+        elif head in ("G90", "G91"):
+            self.abs_xyz = self.abs_e = head == "G90"
+        elif head in ("M82", "M83"):
+            self.abs_e = head == "M82"
         elif head == "G92":
-            words = dict((k.upper(), float(v)) for k, v in _WORD.findall(code[len(head) :]))
-            e = words.get("E", e if words else 0.0)
-            x = words.get("X", x)
-            y = words.get("Y", y)
-            z = words.get("Z", z)
-        if head in pause_words:
-            recent = pauses[-1] if pauses else None
+            words = _words(code, head)
+            self.e = words.get("E", self.e if words else 0.0)
+            self.x = words.get("X", self.x)
+            self.y = words.get("Y", self.y)
+            self.z = words.get("Z", self.z)
+        if head in self.pause_words:
+            recent = self.pauses[-1] if self.pauses else None
             if recent is not None and recent.command == ";PAUSE_PRINT" and lineno - recent.line <= 10:
                 recent.command = head  # the command PrusaSlicer wrote for it
             else:
-                pauses.append(_pause_here(lineno, head))
-            last_was_extrusion = False
+                self.pauses.append(self._pause_here(lineno, head))
+            self.last_was_extrusion = False
 
+    def _axis(self, words: dict[str, float], key: str, now: float) -> float:
+        if key not in words:
+            return now
+        return words[key] if self.abs_xyz else now + words[key]
+
+    def _move(self, words: dict[str, float]) -> None:
+        """G0/G1: the new position; an extrusion segment when E increases and X/Y change."""
+        x, y = self.x, self.y
+        nx, ny, nz = self._axis(words, "X", x), self._axis(words, "Y", y), self._axis(words, "Z", self.z)
+        de = 0.0
+        if "E" in words:
+            de = words["E"] - self.e if self.abs_e else words["E"]
+            self.e = words["E"] if self.abs_e else self.e + words["E"]
+        moved_xy = nx != x or ny != y
+        cur = self.cur
+        if moved_xy and de > 0 and cur is not None:
+            if not self.last_was_extrusion:
+                self.path += 1
+            cur.seg.append((x, y, nx, ny, self.width))
+            cur.type.append(self.ftype)
+            cur.e.append(de)
+            cur.path.append(self.path)
+            self.last_was_extrusion = True
+        elif moved_xy:
+            self.last_was_extrusion = False
+        self.x, self.y, self.z = nx, ny, nz
+
+
+def _layers(layers_raw: list[_RawLayer]) -> list[Layer]:
+    """The layers read, numbered from 1, a missing ``;Z:``/``;HEIGHT:`` taken from the other."""
     layers: list[Layer] = []
     prev_z = 0.0
     for i, raw in enumerate(layers_raw, start=1):
-        zt = raw["z"] if raw["z"] is not None else prev_z + (raw["h"] or 0.0)
-        h = raw["h"] if raw["h"] is not None else zt - prev_z
-        seg = np.array(raw["seg"], dtype=float).reshape(-1, 5)
+        zt = raw.z if raw.z is not None else prev_z + (raw.h or 0.0)
+        h = raw.h if raw.h is not None else zt - prev_z
+        seg = np.array(raw.seg, dtype=float).reshape(-1, 5)
         layers.append(
             Layer(
                 i,
                 float(zt),
                 float(h),
                 seg,
-                np.array(raw["type"], dtype=object),
-                np.array(raw["e"], dtype=float),
-                np.array(raw["path"], dtype=np.int64),
+                np.array(raw.type, dtype=object),
+                np.array(raw.e, dtype=float),
+                np.array(raw.path, dtype=np.int64),
             )
         )
         prev_z = zt
-    for p in pauses:
-        p.z_mm = layers[p.after_layer - 1].z_mm if p.after_layer >= 1 else 0.0
-    return GCode(layers, pauses, time_s, fil_mm, fil_cm3, fil_g, config)
+    return layers
 
 
 # --------------------------------------------------------------------------- free spans
@@ -339,10 +379,12 @@ class SpanReport:
     per_layer: list[Span]  # one per analysed layer (layers 2..), in order
 
 
-def rasterise(segments: np.ndarray, origin_xy, shape, px_per_mm: float) -> np.ndarray:
+def rasterise(
+    segments: np.ndarray, origin_xy: Sequence[float] | np.ndarray, shape: tuple[int, int], px_per_mm: float
+) -> np.ndarray:
     """Boolean image (rows: y, cols: x) of the segments drawn as lines of their own width
     with round ends; pixel (r, c) covers [x0 + c/res, x0 + (c+1)/res) x [y0 + r/res, ...)."""
-    from PIL import Image, ImageDraw
+    from PIL import Image, ImageDraw  # deferred: PIL (via matplotlib) only for the span raster
 
     img = Image.new("1", (int(shape[1]), int(shape[0])), 0)
     draw = ImageDraw.Draw(img)
@@ -397,56 +439,68 @@ def free_spans(
         segs = layer.segments[keep]
         if len(segs) == 0:
             continue
-        types = layer.types[keep]
-        paths = layer.paths[keep]
         xy, ds, si = _samples(segs, step)
-        bsegs = below.segments[below.of_part()]
-        if len(bsegs):
-            margin = float(bsegs[:, 4].max()) + 2.0 / px_per_mm
-            lo = np.minimum(bsegs[:, [0, 1]].min(0), bsegs[:, [2, 3]].min(0)) - margin
-            hi = np.maximum(bsegs[:, [0, 1]].max(0), bsegs[:, [2, 3]].max(0)) + margin
-            shape = (int(math.ceil((hi[1] - lo[1]) * px_per_mm)) + 1, int(math.ceil((hi[0] - lo[0]) * px_per_mm)) + 1)
-            mask = rasterise(bsegs, lo, shape, px_per_mm)
-            col = np.floor((xy[:, 0] - lo[0]) * px_per_mm).astype(np.int64)
-            row = np.floor((xy[:, 1] - lo[1]) * px_per_mm).astype(np.int64)
-            inside = (col >= 0) & (col < shape[1]) & (row >= 0) & (row < shape[0])
-            supported = np.zeros(len(xy), dtype=bool)
-            supported[inside] = mask[row[inside], col[inside]]
-        else:
-            supported = np.zeros(len(xy), dtype=bool)
-        free = ~supported
-        pid = paths[si] if join_moves else si
-        same_path_prev = np.r_[False, pid[1:] == pid[:-1]]
-        prev_free = np.r_[False, free[:-1]]
-        start = free & ~(prev_free & same_path_prev)
-        if not free.any():
-            per_layer.append(
-                Span(layer.index, layer.z_mm, 0.0, math.nan, math.nan, (math.nan, math.nan), (math.nan, math.nan), "")
-            )
-            continue
-        run_id = np.cumsum(start) - 1
-        lengths = np.bincount(run_id[free], weights=ds[free])
-        best = int(np.argmax(lengths))
-        idx = np.flatnonzero(free & (run_id == best))
-        a, b = idx[0], idx[-1]
-        # the run's ends: half a piece beyond the first and last sample
-        pa = xy[a] - (xy[min(a + 1, b)] - xy[a]) * 0.5 if b > a else xy[a]
-        pb = xy[b] + (xy[b] - xy[max(b - 1, a)]) * 0.5 if b > a else xy[b]
-        mid = xy[idx[len(idx) // 2]]
-        per_layer.append(
-            Span(
-                layer.index,
-                layer.z_mm,
-                float(lengths[best]),
-                float(mid[0]),
-                float(mid[1]),
-                (float(pa[0]), float(pa[1])),
-                (float(pb[0]), float(pb[1])),
-                str(types[si[a]]),
-            )
-        )
+        free = ~_supported(below, xy, px_per_mm)
+        pid = layer.paths[keep][si] if join_moves else si
+        per_layer.append(_longest_run(layer, layer.types[keep], xy, ds, si, free, pid))
     longest = max(per_layer, key=lambda s: s.length_mm) if per_layer else None
     return SpanReport(longest, per_layer)
+
+
+def _supported(below: Layer, xy: np.ndarray, px_per_mm: float) -> np.ndarray:
+    """(n,) True where a point ``xy`` (n, 2) has material of the layer ``below`` under it (its
+    part's extrusions rasterised at their own width, ``px_per_mm``)."""
+    bsegs = below.segments[below.of_part()]
+    supported = np.zeros(len(xy), dtype=bool)
+    if not len(bsegs):
+        return supported
+    margin = float(bsegs[:, 4].max()) + 2.0 / px_per_mm
+    lo = np.minimum(bsegs[:, [0, 1]].min(0), bsegs[:, [2, 3]].min(0)) - margin
+    hi = np.maximum(bsegs[:, [0, 1]].max(0), bsegs[:, [2, 3]].max(0)) + margin
+    shape = (int(math.ceil((hi[1] - lo[1]) * px_per_mm)) + 1, int(math.ceil((hi[0] - lo[0]) * px_per_mm)) + 1)
+    mask = rasterise(bsegs, lo, shape, px_per_mm)
+    col = np.floor((xy[:, 0] - lo[0]) * px_per_mm).astype(np.int64)
+    row = np.floor((xy[:, 1] - lo[1]) * px_per_mm).astype(np.int64)
+    inside = (col >= 0) & (col < shape[1]) & (row >= 0) & (row < shape[0])
+    supported[inside] = mask[row[inside], col[inside]]
+    return supported
+
+
+def _longest_run(
+    layer: Layer,
+    types: np.ndarray,
+    xy: np.ndarray,
+    ds: np.ndarray,
+    si: np.ndarray,
+    free: np.ndarray,
+    pid: np.ndarray,
+) -> Span:
+    """The longest run of ``free`` samples (``xy`` (n, 2), each ``ds`` long, of segment ``si``)
+    that stays on one ``pid`` (a move, or a path); a zero Span when nothing is free."""
+    if not free.any():
+        return Span(layer.index, layer.z_mm, 0.0, math.nan, math.nan, (math.nan, math.nan), (math.nan, math.nan), "")
+    same_path_prev = np.r_[False, pid[1:] == pid[:-1]]
+    prev_free = np.r_[False, free[:-1]]
+    start = free & ~(prev_free & same_path_prev)
+    run_id = np.cumsum(start) - 1
+    lengths = np.bincount(run_id[free], weights=ds[free])
+    best = int(np.argmax(lengths))
+    idx = np.flatnonzero(free & (run_id == best))
+    a, b = idx[0], idx[-1]
+    # the run's ends: half a piece beyond the first and last sample
+    pa = xy[a] - (xy[min(a + 1, b)] - xy[a]) * 0.5 if b > a else xy[a]
+    pb = xy[b] + (xy[b] - xy[max(b - 1, a)]) * 0.5 if b > a else xy[b]
+    mid = xy[idx[len(idx) // 2]]
+    return Span(
+        layer.index,
+        layer.z_mm,
+        float(lengths[best]),
+        float(mid[0]),
+        float(mid[1]),
+        (float(pa[0]), float(pa[1])),
+        (float(pb[0]), float(pb[1])),
+        str(types[si[a]]),
+    )
 
 
 # --------------------------------------------------------------------------- gaps on a line
@@ -529,7 +583,9 @@ class Across:
     offset_mm: tuple[float, float] | None
 
 
-def material_across(segments: np.ndarray, start_xy, end_xy, stations: int, core_mm: float) -> list[Across]:
+def material_across(
+    segments: np.ndarray, start_xy: tuple[float, float], end_xy: tuple[float, float], stations: int, core_mm: float
+) -> list[Across]:
     """At ``stations`` points evenly along the centre line start -> end (one at its midpoint
     when the two coincide), the wall along the line perpendicular to it: the merged extrusion
     strokes (each its own width, round ends) that reach into its core, within ``core_mm`` of

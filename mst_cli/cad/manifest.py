@@ -23,13 +23,16 @@ from __future__ import annotations
 import json
 from dataclasses import MISSING, dataclass, field, fields
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any, TypeVar, overload
+
+import numpy as np
 
 from mst_cli import __version__
 from mst_cli.errors import InputError
+from mst_cli.io.files import read_input_text
+from mst_cli.io.schema import Document, design_geometry, parse_document
 
-if TYPE_CHECKING:  # annotations only: reading export.json needs no geometry model (but for its design)
-    from mst_cli.io.schema import Document
+if TYPE_CHECKING:
     from mst_cli.model.geometry import Printer, SensorGeometry
 
 MANIFEST_NAME = "export.json"
@@ -105,14 +108,8 @@ def export_manifest(
 ) -> dict:
     """The expected dimensions of the exported body (see module docstring); ``design`` (the
     design document as its file holds it) lets ``mst slice`` simulate the walls as sliced."""
-    g, h = geometry, geometry.housing
-    bbox_min, bbox_max = g.body_bbox_mm
-    x0, x1 = g.slot_x_mm
+    g = geometry
     cells = g.layers
-    # A mesh with chord deviation <= delta misses at most delta x (curved area) of the pocket;
-    # float32 STL coordinates add ~1e-7 relative per vertex.
-    volume_tol = stl_tolerance_mm * g.pocket_curved_area_mm2 + 1e-5 * g.body_volume_mm3
-    z_pocket_mid = g.z_magnet_bottom_mm + 0.5 * g.pocket_depth_mm
     return {
         "format": MANIFEST_FORMAT,
         "mst_version": __version__,
@@ -121,55 +118,9 @@ def export_manifest(
         "units": "mm, deg",
         "stl_tolerance_mm": stl_tolerance_mm,
         "print": print_section(g),
-        "body": {
-            "volume_mm3": g.body_volume_mm3,
-            "volume_tolerance_mm3": volume_tol,
-            "volume_parts_mm3": {
-                "base": g.base_volume_mm3,
-                "layers": [c.volume_mm3 for c in cells],
-                "plates": g.plates_volume_mm3,
-                "cap": g.cap_volume_mm3,
-            },
-            "bbox_min_mm": list(bbox_min),
-            "bbox_max_mm": list(bbox_max),
-            "bodies": 1,
-            "internal_voids": 1,  # the closed magnet pocket
-        },
-        "magnet_pocket": {
-            "radius_mm": g.pocket_radius_mm,
-            "depth_mm": g.pocket_depth_mm,
-            "top_y_mm": g.pocket_top_y_mm,
-            "roof_apex_y_mm": g.pocket_roof_apex_y_mm,
-            "roof_rise_mm": g.pocket_roof_rise_mm,
-            "floor_z_mm": g.z_magnet_bottom_mm,
-            "section_z_mm": z_pocket_mid,
-            "section_area_mm2": g.pocket_section_area_mm2(z_pocket_mid),
-            "volume_mm3": g.pocket_volume_mm3,
-            "curved_area_mm2": g.pocket_curved_area_mm2,
-            "magnet_diameter_mm": g.magnet.diameter_mm,
-            "magnet_thickness_mm": g.magnet.thickness_mm,
-        },
-        "board_slot": {
-            "board": g.board.key,
-            "x0_mm": x0,
-            "x1_mm": x1,
-            "floor_y_mm": g.slot_floor_y_mm,
-            "open_face": "+y",
-            "floor_z_mm": g.z_board_bottom_mm,
-            "top_z_mm": g.z_cover_bottom_mm,
-            "height_mm": g.slot_height_mm,
-            "headroom_mm": g.board.headroom_mm,
-            "cable_windows": [
-                {"x_inner_mm": a, "x_outer_mm": b, "floor_y_mm": yf, "z0_mm": z0, "z1_mm": z1}
-                for a, b, yf, z0, z1 in g.cable_windows
-            ],
-            "board_thickness_mm": g.board.thickness_mm,
-            "chip_height_mm": g.board.chip_height_mm,
-            "chip_xy_mm": list(g.chip_xy_printed_mm),
-            "chip_xy_nominal_mm": list(g.chip_offset_mm),
-            "hall_z_mm": g.z_hall_mm,
-            "cover_mm": h.cover_mm,
-        },
+        "body": _body_section(g, stl_tolerance_mm),
+        "magnet_pocket": _pocket_section(g),
+        "board_slot": _slot_section(g),
         "gap0_mm": g.gap0_mm,
         "base_top_z_mm": g.z_base_top_mm,
         "layers": [
@@ -196,6 +147,74 @@ def export_manifest(
             "cavity_gap_mm": min(c.cavity_height_mm for c in cells),
         },
         **({"design": design} if design is not None else {}),
+    }
+
+
+def _body_section(g: SensorGeometry, stl_tolerance_mm: float) -> dict:
+    """export.json's body: volume (with the tolerance a mesh of ``stl_tolerance_mm`` allows), its
+    parts and the bounding box."""
+    bbox_min, bbox_max = g.body_bbox_mm
+    # A mesh with chord deviation <= delta misses at most delta x (curved area) of the pocket;
+    # float32 STL coordinates add ~1e-7 relative per vertex.
+    volume_tol = stl_tolerance_mm * g.pocket_curved_area_mm2 + 1e-5 * g.body_volume_mm3
+    return {
+        "volume_mm3": g.body_volume_mm3,
+        "volume_tolerance_mm3": volume_tol,
+        "volume_parts_mm3": {
+            "base": g.base_volume_mm3,
+            "layers": [c.volume_mm3 for c in g.layers],
+            "plates": g.plates_volume_mm3,
+            "cap": g.cap_volume_mm3,
+        },
+        "bbox_min_mm": list(bbox_min),
+        "bbox_max_mm": list(bbox_max),
+        "bodies": 1,
+        "internal_voids": 1,  # the closed magnet pocket
+    }
+
+
+def _pocket_section(g: SensorGeometry) -> dict:
+    """export.json's magnet_pocket: its size, roof and a section through its middle."""
+    z_pocket_mid = g.z_magnet_bottom_mm + 0.5 * g.pocket_depth_mm
+    return {
+        "radius_mm": g.pocket_radius_mm,
+        "depth_mm": g.pocket_depth_mm,
+        "top_y_mm": g.pocket_top_y_mm,
+        "roof_apex_y_mm": g.pocket_roof_apex_y_mm,
+        "roof_rise_mm": g.pocket_roof_rise_mm,
+        "floor_z_mm": g.z_magnet_bottom_mm,
+        "section_z_mm": z_pocket_mid,
+        "section_area_mm2": g.pocket_section_area_mm2(z_pocket_mid),
+        "volume_mm3": g.pocket_volume_mm3,
+        "curved_area_mm2": g.pocket_curved_area_mm2,
+        "magnet_diameter_mm": g.magnet.diameter_mm,
+        "magnet_thickness_mm": g.magnet.thickness_mm,
+    }
+
+
+def _slot_section(g: SensorGeometry) -> dict:
+    """export.json's board_slot: where the board slides in, its cable windows and the chip."""
+    x0, x1 = g.slot_x_mm
+    return {
+        "board": g.board.key,
+        "x0_mm": x0,
+        "x1_mm": x1,
+        "floor_y_mm": g.slot_floor_y_mm,
+        "open_face": "+y",
+        "floor_z_mm": g.z_board_bottom_mm,
+        "top_z_mm": g.z_cover_bottom_mm,
+        "height_mm": g.slot_height_mm,
+        "headroom_mm": g.board.headroom_mm,
+        "cable_windows": [
+            {"x_inner_mm": a, "x_outer_mm": b, "floor_y_mm": yf, "z0_mm": z0, "z1_mm": z1}
+            for a, b, yf, z0, z1 in g.cable_windows
+        ],
+        "board_thickness_mm": g.board.thickness_mm,
+        "chip_height_mm": g.board.chip_height_mm,
+        "chip_xy_mm": list(g.chip_xy_printed_mm),
+        "chip_xy_nominal_mm": list(g.chip_offset_mm),
+        "hall_z_mm": g.z_hall_mm,
+        "cover_mm": g.housing.cover_mm,
     }
 
 
@@ -362,13 +381,11 @@ class Manifest:
     design: Document | None = _optional("design")  # exports before issue 21 lack it
 
     @classmethod
-    def from_dict(cls, data) -> Manifest:
+    def from_dict(cls, data: Any) -> Manifest:
         """The manifest of a parsed export.json (or of :func:`export_manifest`'s dict): an
         InputError names the first field that is missing, of the wrong type or nesting, out of
         range (``export.json.layers[2].t_mm``), or a rotation that is not one."""
         manifest = _parse(cls, data, "export.json")
-        import numpy as np
-
         rotation = np.asarray(manifest.print.rotation, dtype=float)
         if not (np.allclose(rotation @ rotation.T, np.eye(3), atol=1e-6) and np.linalg.det(rotation) > 0):
             raise InputError(
@@ -403,7 +420,7 @@ class SliceManifest:
     design: Document | None = _optional("design")
 
     @classmethod
-    def from_dict(cls, data) -> SliceManifest:
+    def from_dict(cls, data: Any) -> SliceManifest:
         return _parse(cls, data, "export.json")
 
 
@@ -473,8 +490,6 @@ def _design_document(data, path: str) -> Document:
     """export.json's ``design``: the design document the body was built from, with the
     design-file rules (every cell printable and working); an InputError names the field inside
     it (``export.json.design.layers[1].t_mm``)."""
-    from mst_cli.io.schema import design_geometry, parse_document
-
     if not isinstance(data, dict):
         raise InputError(
             path,
@@ -491,11 +506,16 @@ def _design_document(data, path: str) -> Document:
     return doc
 
 
-def load_manifest(path: Path, kind: type = Manifest) -> Manifest | SliceManifest:
+_Kind = TypeVar("_Kind", Manifest, SliceManifest)
+
+
+@overload
+def load_manifest(path: Path) -> Manifest: ...
+@overload
+def load_manifest(path: Path, kind: type[_Kind]) -> _Kind: ...
+def load_manifest(path: Path, kind: Any = Manifest) -> Any:
     """export.json, validated field by field (``kind.from_dict``: :class:`Manifest` for ``mst
     check``, :class:`SliceManifest` for ``mst slice``)."""
-    from mst_cli.io.files import read_input_text
-
     text = read_input_text(
         path, MAX_MANIFEST_BYTES, field="export.json", what="JSON file", too_large=": rewrite it with 'mst export'"
     )

@@ -11,8 +11,9 @@ is not found measures NaN.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -33,7 +34,7 @@ _RAY_OFFSET_MM = (0.0123, 0.0071)
 # --------------------------------------------------------------------------- primitives
 def to_manifold(mesh: Mesh) -> tuple[manifold3d.Manifold, str]:
     """manifold3d view of the mesh and its status name ("NoError" when it is a manifold)."""
-    import manifold3d as mf
+    import manifold3d as mf  # deferred: manifold3d's native library, only when a mesh is measured
 
     m = mf.Manifold(
         mf.Mesh(
@@ -44,7 +45,9 @@ def to_manifold(mesh: Mesh) -> tuple[manifold3d.Manifold, str]:
     return m, m.status().name
 
 
-def crossings(manifold, origin, direction, length_mm: float) -> list[tuple[float, bool]]:
+def crossings(
+    manifold: manifold3d.Manifold, origin: Sequence[float], direction: Sequence[float], length_mm: float
+) -> list[tuple[float, bool]]:
     """Surface crossings along a ray: (distance from origin in mm, entering the solid?).
 
     A hit on a face whose outward normal opposes the ray enters the solid. Hits that repeat
@@ -64,7 +67,9 @@ def crossings(manifold, origin, direction, length_mm: float) -> list[tuple[float
     return out
 
 
-def air_gaps(manifold, origin, direction, length_mm: float) -> list[tuple[float, float]]:
+def air_gaps(
+    manifold: manifold3d.Manifold, origin: Sequence[float], direction: Sequence[float], length_mm: float
+) -> list[tuple[float, float]]:
     """Closed air intervals (start, end) along a ray that starts and ends outside the body:
     each runs from leaving the solid to entering it again (distances in mm)."""
     gaps, left = [], None
@@ -77,19 +82,21 @@ def air_gaps(manifold, origin, direction, length_mm: float) -> list[tuple[float,
     return gaps
 
 
-def vertical_gaps(manifold, x: float, y: float, z_top: float, z_bottom: float = 0.0) -> list[tuple[float, float]]:
+def vertical_gaps(
+    manifold: manifold3d.Manifold, x: float, y: float, z_top: float, z_bottom: float = 0.0
+) -> list[tuple[float, float]]:
     """Air intervals (z_low, z_high) in mm along the vertical line through (x, y), for a body
     between z_bottom and z_top."""
     start = z_bottom - 1.0
     return [(start + a, start + b) for a, b in air_gaps(manifold, (x, y, start), (0, 0, 1), z_top - z_bottom + 2.0)]
 
 
-def section_boxes(manifold, z_mm: float) -> list[tuple[float, float, float, float]]:
+def section_boxes(manifold: manifold3d.Manifold, z_mm: float) -> list[tuple[float, float, float, float]]:
     """Bounds (x0, y0, x1, y1) of every connected region of the horizontal section at z."""
     return [tuple(part.bounds()) for part in manifold.slice(z_mm).decompose()]
 
 
-def section_hole_area(manifold, z_mm: float, x: float, y: float) -> float:
+def section_hole_area(manifold: manifold3d.Manifold, z_mm: float, x: float, y: float) -> float:
     """Area (mm^2) of the smallest hole of the horizontal section at z that encloses (x, y)."""
     best = math.inf
     for ring in manifold.slice(z_mm).to_polygons():
@@ -118,7 +125,7 @@ def vertex_components(n_vertices: int, edges: np.ndarray) -> np.ndarray:
         label = new
 
 
-def shells(mesh) -> tuple[int, int, list[float]]:
+def shells(mesh: Mesh | Any) -> tuple[int, int, list[float]]:
     """(bodies, internal voids, signed shell volumes): a closed shell of negative volume is a
     cavity inside another shell.
 
@@ -198,7 +205,7 @@ class Measurements:
     flat_heights_mm: np.ndarray
 
 
-def measure(mesh, manifest: Manifest) -> Measurements:
+def measure(mesh: Mesh | Any, manifest: Manifest) -> Measurements:
     """Measure ``mesh`` (the STL as written, print orientation) where ``manifest`` puts each
     feature. Reads only its arguments; ``mesh`` may be a trimesh.Trimesh or a
     :class:`~mst_cli.cad.mesh_io.Mesh`."""

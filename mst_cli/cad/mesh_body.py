@@ -59,7 +59,7 @@ def circle_segments(radius_mm: float, tolerance_mm: float) -> int:
 
 
 def _manifold(shape, tolerance_mm: float):
-    import manifold3d as mf
+    import manifold3d as mf  # deferred: manifold3d's native library, only when a body is meshed
 
     if isinstance(shape, shapes.Box):
         lo, hi = np.asarray(shape.lo, float), np.asarray(shape.hi, float)
@@ -83,7 +83,7 @@ def _ccw(loop, ccw: bool) -> np.ndarray:
 def _prism(shape: shapes.Prism):
     """A prism as an exact mesh: the profile's own coordinates at both ends (no rounding, so
     faces that touch another shape's fuse with it), caps triangulated by manifold3d."""
-    import manifold3d as mf
+    import manifold3d as mf  # deferred: manifold3d's native library, only when a body is meshed
 
     loops = [_ccw(shape.outer, True)] + [_ccw(h, False) for h in shape.holes]
     profile = np.concatenate(loops)
@@ -109,7 +109,7 @@ def _prism(shape: shapes.Prism):
 
 def body_manifold(geometry: SensorGeometry, tolerance_mm: float) -> manifold3d.Manifold:
     """The body as one manifold3d solid: the keep shapes fused, the cuts and the pocket cut."""
-    import manifold3d as mf
+    import manifold3d as mf  # deferred: manifold3d's native library, only when a body is meshed
 
     plan = shapes.body_plan(geometry)
     keep = mf.Manifold.batch_boolean([_manifold(s, tolerance_mm) for s in plan.keep], mf.OpType.Add)

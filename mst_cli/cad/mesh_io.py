@@ -11,7 +11,7 @@ here for the callers that write all the mesh files from one module.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -61,7 +61,7 @@ def tessellate(
     vertices : (n, 3) float64 array, mm
     triangles : (m, 3) int64 array of vertex indices, counter-clockwise seen from outside
     """
-    from OCP.BRepMesh import BRepMesh_IncrementalMesh
+    from OCP.BRepMesh import BRepMesh_IncrementalMesh  # deferred: the CAD kernel (--step only)
 
     # Mesh here rather than in build123d's Shape.mesh, which asks for a *relative* deflection:
     # --stl-tolerance and the pocket's volume tolerance in export.json are absolute (mm).
@@ -81,6 +81,7 @@ def _keep_corner_order(solid, triangles: np.ndarray) -> None:
     oriented triangle, but STL and 3MF store the corner order, so exports of a design would
     change bytes without changing shape. Rolled in place, face by face as build123d lists them.
     """
+    # deferred: the CAD kernel (--step only)
     from OCP.BRep import BRep_Tool
     from OCP.TopAbs import TopAbs_REVERSED
     from OCP.TopLoc import TopLoc_Location
@@ -92,7 +93,7 @@ def _keep_corner_order(solid, triangles: np.ndarray) -> None:
 
 
 def _trimesh(vertices: np.ndarray, triangles: np.ndarray):
-    import trimesh
+    import trimesh  # deferred: heavy (pulls scipy.spatial)
 
     # process=False: trimesh must not reorder, weld or drop anything behind our back
     return trimesh.Trimesh(vertices=vertices, faces=triangles, process=False)
@@ -164,7 +165,7 @@ class Mesh:
     faces: np.ndarray  # (m, 3) int64
 
     @classmethod
-    def of(cls, mesh) -> Mesh:
+    def of(cls, mesh: Any) -> Mesh:
         """A Mesh of anything with ``vertices`` and ``faces`` (a trimesh.Trimesh, say)."""
         return cls(np.asarray(mesh.vertices, dtype=float), np.asarray(mesh.faces, dtype=np.int64))
 

@@ -9,6 +9,8 @@ operation (:func:`mst_cli.cad.assembly.build_body`).
 
 from __future__ import annotations
 
+from collections.abc import Iterable
+
 from build123d import Face, Location, Solid, Wire
 
 from mst_cli.cad import shapes
@@ -36,7 +38,7 @@ def layer_web(cell: HexCell, z_bottom_mm: float) -> Solid:
     return solid(shapes.layer_web(cell, z_bottom_mm))
 
 
-def fused(pieces) -> Solid:
+def fused(pieces: Iterable[shapes.Box | shapes.Prism | shapes.Cylinder]) -> Solid:
     """The union of shapes as one solid (one boolean)."""
     first, *rest = (solid(s) for s in pieces)
     return first.fuse(*rest).clean()

@@ -17,11 +17,13 @@ Pure: G-code and manifest in, Checks out (no slicer, no files).
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from mst_cli.cad.checks import Check
 from mst_cli.cad.gcode import SUPPORT_TYPES, GCode, Pause, Span, SpanReport, gap_at, material_across
-from mst_cli.cad.manifest import SliceManifest
+from mst_cli.cad.manifest import SliceManifest, WallLine
 
 Shift = tuple[float, float]  # G-code = print frame + shift (x, y), mm
 
@@ -114,11 +116,9 @@ def check_free_span(spans: SpanReport, joined: SpanReport, max_span_mm: float, s
     """The longest free span (``joined``: with travel moves joined) against ``max_span_mm``."""
     s = spans.longest
     too_long = s is not None and s.length_mm > max_span_mm
-    note = (
-        (f"free span {s.length_mm:.1f} mm > {max_span_mm:g} mm (layer {s.layer}, z = {s.z_mm:.2f} mm, {s.type})")
-        if too_long
-        else ""
-    )
+    note = ""
+    if s is not None and too_long:
+        note = f"free span {s.length_mm:.1f} mm > {max_span_mm:g} mm (layer {s.layer}, z = {s.z_mm:.2f} mm, {s.type})"
     return Check(
         "free_span",
         not too_long,
@@ -170,7 +170,7 @@ def cavity_gaps(g: GCode, manifest: SliceManifest, shift: Shift, z_shift: float)
     rows = []
     for c in lines:
         layer = g.layer_at(c.z_mm + z_shift)
-        row = {
+        row: dict[str, Any] = {
             "layer": c.layer,
             "x_mm": c.x_mm,
             "z_mm": c.z_mm,
@@ -231,46 +231,8 @@ def walls_as_sliced(g: GCode, manifest: SliceManifest, shift: Shift, z_shift: fl
         )
     walls: dict[int, list[dict]] = {}
     for w in lines:
-        samples = []
-        for layer in g.layers:
-            if not w.z_low_mm < layer.z_mm - z_shift <= w.z_high_mm + 1e-6:
-                continue
-            samples += material_across(
-                layer.segments[layer.of_part()],
-                (w.x0_mm + shift[0], w.y0_mm + shift[1]),
-                (w.x1_mm + shift[0], w.y1_mm + shift[1]),
-                WALL_STATIONS,
-                max(0.5 * w.t_mm - WALL_FACE_MARGIN_MM, 0.25 * w.t_mm),
-            )
-        width = np.array([a.width_mm for a in samples])
-        n_lines = np.array([a.n_lines for a in samples], dtype=int)
-        row = {"wall": w.wall, "designed_t_mm": w.t_mm, "samples": len(samples)}
-        if samples:
-            row.update(
-                sliced_t_mm=round(float(np.median(width)), 4),
-                sliced_t_min_mm=round(float(width.min()), 4),
-                sliced_t_max_mm=round(float(width.max()), 4),
-                n_lines=int(np.bincount(n_lines).argmax()),
-                missing=int((width == 0).sum()),
-            )
-        else:
-            row.update(sliced_t_mm=None, sliced_t_min_mm=None, sliced_t_max_mm=None, n_lines=None, missing=0)
-        walls.setdefault(w.layer, []).append(row)
-    rows = []
-    for layer, ws in sorted(walls.items()):
-        sliced = [r["sliced_t_mm"] for r in ws]
-        t = round(float(np.mean(sliced)), 4) if None not in sliced else None
-        designed = float(np.mean([r["designed_t_mm"] for r in ws]))
-        rows.append(
-            {
-                "layer": layer,
-                "designed_t_mm": designed,
-                "sliced_t_mm": t,
-                "difference_mm": round(t - designed, 4) if t is not None else None,
-                "n_lines": sorted({r["n_lines"] for r in ws if r["n_lines"] is not None}),
-                "walls": ws,
-            }
-        )
+        walls.setdefault(w.layer, []).append(_wall_row(g, w, shift, z_shift))
+    rows = [_layer_row(layer, ws) for layer, ws in sorted(walls.items())]
     sliced_text = ", ".join("-" if r["sliced_t_mm"] is None else f"{r['sliced_t_mm']:.3f}" for r in rows)
     designed_text = ", ".join(f"{r['designed_t_mm']:.3f}" for r in rows)
     return Check(
@@ -282,3 +244,47 @@ def walls_as_sliced(g: GCode, manifest: SliceManifest, shift: Shift, z_shift: fl
         info=True,
         values={"layers": rows},
     )
+
+
+def _wall_row(g: GCode, w: WallLine, shift: Shift, z_shift: float) -> dict:
+    """One wall as sliced: the material across its centre line in every print layer of its z range."""
+    samples = []
+    for layer in g.layers:
+        if not w.z_low_mm < layer.z_mm - z_shift <= w.z_high_mm + 1e-6:
+            continue
+        samples += material_across(
+            layer.segments[layer.of_part()],
+            (w.x0_mm + shift[0], w.y0_mm + shift[1]),
+            (w.x1_mm + shift[0], w.y1_mm + shift[1]),
+            WALL_STATIONS,
+            max(0.5 * w.t_mm - WALL_FACE_MARGIN_MM, 0.25 * w.t_mm),
+        )
+    width = np.array([a.width_mm for a in samples])
+    n_lines = np.array([a.n_lines for a in samples], dtype=int)
+    row = {"wall": w.wall, "designed_t_mm": w.t_mm, "samples": len(samples)}
+    if samples:
+        row.update(
+            sliced_t_mm=round(float(np.median(width)), 4),
+            sliced_t_min_mm=round(float(width.min()), 4),
+            sliced_t_max_mm=round(float(width.max()), 4),
+            n_lines=int(np.bincount(n_lines).argmax()),
+            missing=int((width == 0).sum()),
+        )
+    else:
+        row.update(sliced_t_mm=None, sliced_t_min_mm=None, sliced_t_max_mm=None, n_lines=None, missing=0)
+    return row
+
+
+def _layer_row(layer: int, ws: list[dict]) -> dict:
+    """One stack layer: the mean of its walls as designed and as sliced (None if one is missing)."""
+    sliced = [r["sliced_t_mm"] for r in ws]
+    t = round(float(np.mean(sliced)), 4) if None not in sliced else None
+    designed = float(np.mean([r["designed_t_mm"] for r in ws]))
+    return {
+        "layer": layer,
+        "designed_t_mm": designed,
+        "sliced_t_mm": t,
+        "difference_mm": round(t - designed, 4) if t is not None else None,
+        "n_lines": sorted({r["n_lines"] for r in ws if r["n_lines"] is not None}),
+        "walls": ws,
+    }

@@ -6,10 +6,15 @@ from __future__ import annotations
 
 import contextlib
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from mst_cli.cad.gcode import GCode, SpanReport
+from mst_cli.cad.gcode import GCode, Layer, Span, SpanReport
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
 
 COLOURS = {
     "External perimeter": "#d62728",
@@ -37,15 +42,27 @@ def plot_print(
 ) -> None:
     """Draw print.png at ``path``: ``triangles`` (n, 3, 3) in the print frame, moved by
     ``shift_xyz`` onto the bed; the G-code's layers and its free spans."""
-    import matplotlib
+    import matplotlib  # deferred: matplotlib is 0.45 s; only a picture needs it
 
     matplotlib.use("Agg")
-    from matplotlib.collections import LineCollection
-    from matplotlib.figure import Figure
-    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+    from matplotlib.figure import Figure  # deferred: as matplotlib
 
-    tri = triangles + np.asarray(shift_xyz)
     fig = Figure(figsize=(16, 5.6), dpi=110)
+    _draw_on_bed(fig, triangles + np.asarray(shift_xyz), bed_xy, title)
+    for k, (layer, what) in enumerate(_layer_panels(g, spans)):
+        ax2 = fig.add_subplot(1, 3, 2 + k)
+        if layer is None:
+            ax2.axis("off")
+            continue
+        _draw_layer(ax2, layer, what, spans.longest)
+    fig.tight_layout()
+    fig.savefig(path)
+
+
+def _draw_on_bed(fig: Figure, tri: np.ndarray, bed_xy: tuple[float, float], title: str) -> None:
+    """The first panel: the mesh ``tri`` (n, 3, 3, bed frame, mm), shaded, on its patch of bed."""
+    from mpl_toolkits.mplot3d.art3d import Poly3DCollection  # deferred: as matplotlib
+
     ax = fig.add_subplot(1, 3, 1, projection="3d")
     coll = Poly3DCollection(tri, facecolor="#5fa8d3", edgecolor="none", alpha=1.0)
     # simple shading by the normal's z component
@@ -69,42 +86,45 @@ def plot_print(
     ax.set_zlabel("z (mm)")
     ax.set_title(f"{title}\nas it sits on the bed (bed centre {bed_xy[0]:g}, {bed_xy[1]:g} mm)", fontsize=9)
 
+
+def _layer_panels(g: GCode, spans: SpanReport) -> list[tuple[Layer | None, str]]:
+    """The two layers drawn: the middle one, and the one with the longest free span (if another)."""
     layers = [lay for lay in g.layers if len(lay.segments)]
     mid = layers[len(layers) // 2] if layers else None
     worst = spans.longest
     worst_layer = next((lay for lay in g.layers if worst is not None and lay.index == worst.layer), None)
-    panels = [(mid, "mid layer")]
-    if worst_layer is not None and worst_layer is not mid and worst.length_mm > 0:
+    panels: list[tuple[Layer | None, str]] = [(mid, "mid layer")]
+    if worst is not None and worst_layer is not None and worst_layer is not mid and worst.length_mm > 0:
         panels.append((worst_layer, "longest free span"))
     else:
         panels.append((None, ""))
-    for k, (layer, what) in enumerate(panels):
-        ax2 = fig.add_subplot(1, 3, 2 + k)
-        if layer is None:
-            ax2.axis("off")
-            continue
-        seen = set()
-        for t in sorted(set(layer.types.tolist())):
-            sel = layer.types == t
-            segs = layer.segments[sel]
-            lc = LineCollection(
-                segs[:, :4].reshape(-1, 2, 2),
-                colors=COLOURS.get(t, "k"),
-                linewidths=1.2,
-                label=t if t not in seen else None,
-            )
-            seen.add(t)
-            ax2.add_collection(lc)
-        if worst is not None and worst.layer == layer.index and worst.length_mm > 0:
-            (xa, ya), (xb, yb) = worst.start_xy_mm, worst.end_xy_mm
-            ax2.plot([xa, xb], [ya, yb], color="k", lw=3, alpha=0.5, label=f"free span {worst.length_mm:.1f} mm")
-        part = layer.segments[layer.of_part()] if layer.of_part().any() else layer.segments
-        ax2.set_xlim(part[:, [0, 2]].min() - 1, part[:, [0, 2]].max() + 1)
-        ax2.set_ylim(part[:, [1, 3]].min() - 1, part[:, [1, 3]].max() + 1)
-        ax2.set_aspect("equal")
-        ax2.set_xlabel("bed x (mm)")
-        ax2.set_ylabel("bed y (mm)")
-        ax2.set_title(f"{what}: layer {layer.index}, z = {layer.z_mm:.2f} mm (G-code paths)", fontsize=9)
-        ax2.legend(fontsize=6, loc="upper right")
-    fig.tight_layout()
-    fig.savefig(path)
+    return panels
+
+
+def _draw_layer(ax2: Axes, layer: Layer, what: str, worst: Span | None) -> None:
+    """One layer's G-code paths, coloured by feature type, and the longest free span if on it."""
+    from matplotlib.collections import LineCollection  # deferred: as matplotlib
+
+    seen = set()
+    for t in sorted(set(layer.types.tolist())):
+        sel = layer.types == t
+        segs = layer.segments[sel]
+        lc = LineCollection(
+            segs[:, :4].reshape(-1, 2, 2),
+            colors=COLOURS.get(t, "k"),
+            linewidths=1.2,
+            label=t if t not in seen else None,
+        )
+        seen.add(t)
+        ax2.add_collection(lc)
+    if worst is not None and worst.layer == layer.index and worst.length_mm > 0:
+        (xa, ya), (xb, yb) = worst.start_xy_mm, worst.end_xy_mm
+        ax2.plot([xa, xb], [ya, yb], color="k", lw=3, alpha=0.5, label=f"free span {worst.length_mm:.1f} mm")
+    part = layer.segments[layer.of_part()] if layer.of_part().any() else layer.segments
+    ax2.set_xlim(part[:, [0, 2]].min() - 1, part[:, [0, 2]].max() + 1)
+    ax2.set_ylim(part[:, [1, 3]].min() - 1, part[:, [1, 3]].max() + 1)
+    ax2.set_aspect("equal")
+    ax2.set_xlabel("bed x (mm)")
+    ax2.set_ylabel("bed y (mm)")
+    ax2.set_title(f"{what}: layer {layer.index}, z = {layer.z_mm:.2f} mm (G-code paths)", fontsize=9)
+    ax2.legend(fontsize=6, loc="upper right")

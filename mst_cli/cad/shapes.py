@@ -167,7 +167,7 @@ class BodyPlan:
 def body_plan(geometry: SensorGeometry) -> BodyPlan:
     """The shapes of the one printed TPU body, after :func:`check_fits`."""
     check_fits(geometry)
-    keep = [base_block(geometry)]
+    keep: list[Box | Prism] = [base_block(geometry)]
     keep += [layer_web(cell, z_bottom) for cell, z_bottom in zip(geometry.layers, geometry.layer_bottoms_mm)]
     keep += plates(geometry)
     keep.append(cap_block(geometry))

@@ -10,21 +10,19 @@ with the design-file rules before anything is sliced (:mod:`mst_cli.cad.manifest
 
 from __future__ import annotations
 
+from mst_cli.calibrate.fit import simulate_as_printed, with_walls
 from mst_cli.errors import InputError
-from mst_cli.io.schema import Document
+from mst_cli.io.schema import Document, design_geometry
 
 
-def _change(new: float, old: float) -> float | None:
-    return (new - old) / old if old else None
+def _change(new: float | None, old: float | None) -> float | None:
+    return (new - old) / old if new is not None and old else None
 
 
 def predict(doc: Document, sliced_t_mm: list[float]) -> dict:
     """S_i and R_i of ``doc`` as designed and with layer i's wall ``sliced_t_mm[i]`` (a row per
     regime, relative changes), or ``{"error": why}`` when the sliced walls make no sensor the
     model can run (a wall missing, a cavity closed)."""
-    from mst_cli.calibrate.fit import simulate_as_printed, with_walls
-    from mst_cli.io.schema import design_geometry
-
     designed = simulate_as_printed(doc)
     if min(sliced_t_mm) <= 0:
         return {"error": "a wall is missing from the G-code (sliced width 0): nothing to simulate"}

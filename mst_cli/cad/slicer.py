@@ -14,13 +14,16 @@ import shutil
 import subprocess
 import tempfile
 import time
+import zipfile
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
 
 import numpy as np
 
+from mst_cli.cad.deterministic import PRUSA_CUSTOM_GCODE_MEMBER, PRUSA_PAUSE_PRINT_TYPE
 from mst_cli.errors import InputError
+from mst_cli.io.files import read_input_text
 
 EXECUTABLES = ("prusa-slicer", "PrusaSlicer", "prusa-slicer-console")
 ENV_EXECUTABLE = "MST_PRUSA_SLICER"
@@ -139,8 +142,6 @@ def parse_ini(text: str, where: str = "profile") -> dict[str, str]:
 
 def check_profile(path: Path, exe: str) -> dict[str, str]:
     """The settings of a PrusaSlicer FFF config, or InputError (exit 2) with the reason."""
-    from mst_cli.io.files import read_input_text
-
     path = Path(path)
     if not path.exists():
         raise InputError("--profile", str(path), "no such file (a PrusaSlicer .ini config)")
@@ -275,8 +276,6 @@ def read_stl(path: Path) -> np.ndarray:
 
 def read_3mf(path: Path) -> np.ndarray:
     """(m, 3, 3) triangle corners of the meshes of a 3MF package (build transforms ignored)."""
-    import zipfile
-
     tris = []
     with zipfile.ZipFile(path) as zf:
         for name in zf.namelist():
@@ -296,10 +295,6 @@ def read_3mf(path: Path) -> np.ndarray:
 
 def has_prusa_pause(path: Path) -> bool:
     """True when a 3MF carries PrusaSlicer per-height custom G-code with a pause."""
-    import zipfile
-
-    from mst_cli.cad.deterministic import PRUSA_CUSTOM_GCODE_MEMBER, PRUSA_PAUSE_PRINT_TYPE
-
     try:
         with zipfile.ZipFile(path) as zf:
             text = zf.read(PRUSA_CUSTOM_GCODE_MEMBER).decode("utf-8")

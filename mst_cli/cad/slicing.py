@@ -19,9 +19,11 @@ import numpy as np
 
 from mst_cli.cad import gcode as G
 from mst_cli.cad import slicer as S
-from mst_cli.cad.checks import Check, resolve_export
+from mst_cli.cad.checks import Check, ExportFiles, resolve_export
 from mst_cli.cad.manifest import SliceManifest, load_manifest
 from mst_cli.cad.print_check import cavity_gaps, check_free_span, check_pause, check_support, walls_as_sliced
+from mst_cli.cad.print_plot import plot_print
+from mst_cli.cad.sliced_model import predict
 from mst_cli.errors import InputError
 from mst_cli.io.outputs import finite_or_none, staged
 
@@ -38,6 +40,8 @@ def fmt_duration(seconds: float | None) -> str:
 
 
 def _number(text: str | None, default: float) -> float:
+    if text is None:
+        return default
     try:
         return float(text)
     except (TypeError, ValueError):
@@ -71,8 +75,6 @@ class SliceResult:
             st.write_text(GCODE_FILE, self.gcode_text)
             st.write_json(REPORT_FILE, self.report)
             if plot:
-                from mst_cli.cad.print_plot import plot_print
-
                 plot_print(
                     st.path(PLOT_FILE),
                     self.triangles,
@@ -105,37 +107,115 @@ def slice_export(
     say = progress or (lambda message: None)
     if not 0 < max_span_mm <= 1000:
         raise InputError("--max-span", max_span_mm, "must be a length from 0 to 1000 mm")
-    exe = S.find_prusa_slicer()
-    profile = Path(profile) if profile is not None else S.bundled_profile()
-    settings = S.check_profile(profile, exe)
-    files = resolve_export(path, need_stl=False)
-    manifest = load_manifest(files.manifest, SliceManifest)  # before any slicing: exit 2 naming the key
-    scripts = S.post_process_scripts(settings)
-    if scripts and note is not None:
-        note(
-            f"the profile's post_process runs {', '.join(map(repr, scripts))} on each G-code "
-            "(your script; what is measured is its output)"
-        )
-    model = files.three_mf or files.stl
-    triangles = S.read_stl(files.stl) if files.stl is not None else S.read_3mf(files.three_mf)
-    if len(triangles) == 0:
-        raise InputError("PATH", str(model), "holds no triangles: run 'mst export' again")
-    version = S.slicer_version(exe)
-    say(f"{version} at {exe}; profile {profile}")
-    carries_pause = bool(files.three_mf is not None and S.has_prusa_pause(files.three_mf))
-    if files.three_mf is not None and not carries_pause:
-        say(f"note: {files.three_mf.name} carries no PrusaSlicer pause (an older export)")
+    job = _SliceJob.prepare(path, profile, note, say)
+    sliced = _slice_twice(job, say)
+    g = sliced.gcode
+    spans = G.free_spans(g)
+    joined = G.free_spans(g, join_moves=True)
+    say("measured the free spans")
+    layer_h = _number(job.settings.get("layer_height"), g.layers[min(1, len(g.layers) - 1)].height_mm)
+    if not (isinstance(layer_h, float) and math.isfinite(layer_h) and layer_h > 0):
+        raise S.SlicerError(f"prusa-slicer wrote G-code with a layer height of {layer_h} mm")
+    checks = [
+        check_free_span(spans, joined, max_span_mm, job.shift_xy),
+        check_pause(g.pauses, job.manifest, layer_h),
+        check_support(sliced.with_support),
+        cavity_gaps(g, job.manifest, job.shift_xy, job.z_shift),
+        walls_as_sliced(g, job.manifest, job.shift_xy, job.z_shift),
+    ]
+    report = _report(job, sliced, checks, layer_h, say)
+    shift = (job.shift_xy[0], job.shift_xy[1], job.z_shift)
+    return SliceResult(
+        finite_or_none(report), sliced.text, checks, job.files.folder, job.triangles, job.centre, shift, g, spans
+    )
 
-    centre = S.bed_centre(settings)
-    lo, hi = triangles.reshape(-1, 3).min(0), triangles.reshape(-1, 3).max(0)
-    shift = (centre[0] - (lo[0] + hi[0]) / 2, centre[1] - (lo[1] + hi[1]) / 2)
-    z_shift = -float(lo[2]) + 0.0  # + 0.0: a part already on the bed shifts by 0.0, not -0.0
+
+@dataclass
+class _SliceJob:
+    """What is sliced, checked before any slicing: PrusaSlicer, the profile, the export, its mesh
+    and where the mesh goes on the bed (G-code = print frame + shift)."""
+
+    exe: str
+    profile: Path
+    settings: dict[str, str]
+    files: ExportFiles
+    manifest: SliceManifest
+    scripts: list[str]
+    model: Path
+    triangles: np.ndarray  # (n, 3, 3) print frame, mm
+    version: str
+    carries_pause: bool
+    centre: tuple[float, float]
+
+    @classmethod
+    def prepare(
+        cls,
+        path: str | Path,
+        profile: str | Path | None,
+        note: Callable[[str], None] | None,
+        say: Callable[[str], None],
+    ) -> _SliceJob:
+        exe = S.find_prusa_slicer()
+        profile = Path(profile) if profile is not None else S.bundled_profile()
+        settings = S.check_profile(profile, exe)
+        files = resolve_export(path, need_stl=False)
+        manifest = load_manifest(files.manifest, SliceManifest)  # before any slicing: exit 2 naming the key
+        scripts = S.post_process_scripts(settings)
+        if scripts and note is not None:
+            note(
+                f"the profile's post_process runs {', '.join(map(repr, scripts))} on each G-code "
+                "(your script; what is measured is its output)"
+            )
+        model = files.three_mf or files.stl
+        assert model is not None  # resolve_export found one of them
+        triangles = S.read_stl(files.stl) if files.stl is not None else S.read_3mf(model)
+        if len(triangles) == 0:
+            raise InputError("PATH", str(model), "holds no triangles: run 'mst export' again")
+        version = S.slicer_version(exe)
+        say(f"{version} at {exe}; profile {profile}")
+        carries_pause = bool(files.three_mf is not None and S.has_prusa_pause(files.three_mf))
+        if files.three_mf is not None and not carries_pause:
+            say(f"note: {files.three_mf.name} carries no PrusaSlicer pause (an older export)")
+        centre = S.bed_centre(settings)
+        return cls(exe, profile, settings, files, manifest, scripts, model, triangles, version, carries_pause, centre)
+
+    @property
+    def lo(self) -> np.ndarray:
+        return self.triangles.reshape(-1, 3).min(0)
+
+    @property
+    def hi(self) -> np.ndarray:
+        return self.triangles.reshape(-1, 3).max(0)
+
+    @property
+    def shift_xy(self) -> tuple[float, float]:
+        """G-code x, y minus print frame x, y: the part centred on the bed."""
+        lo, hi, centre = self.lo, self.hi, self.centre
+        return (centre[0] - (lo[0] + hi[0]) / 2, centre[1] - (lo[1] + hi[1]) / 2)
+
+    @property
+    def z_shift(self) -> float:
+        return -float(self.lo[2]) + 0.0  # + 0.0: a part already on the bed shifts by 0.0, not -0.0
+
+
+@dataclass
+class _Sliced:
+    """The G-code as the profile slices it (text and parsed), the one with automatic support on
+    and the seconds the first slicing took."""
+
+    text: str
+    gcode: G.GCode
+    with_support: G.GCode
+    seconds: float
+
+
+def _slice_twice(job: _SliceJob, say: Callable[[str], None]) -> _Sliced:
+    """PrusaSlicer as the profile says, then with automatic support on (to prove none is made)."""
     with tempfile.TemporaryDirectory(prefix="mst-slice-") as tmp:
-        run1 = S.slice_model(exe, model, profile, Path(tmp) / GCODE_FILE, centre)
-        say(f"sliced {model.name} in {run1.seconds:.2f} s")
-        run2 = S.slice_model(
-            exe, model, profile, Path(tmp) / "support.gcode", centre, ("--support-material", "--support-material-auto")
-        )
+        run1 = S.slice_model(job.exe, job.model, job.profile, Path(tmp) / GCODE_FILE, job.centre)
+        say(f"sliced {job.model.name} in {run1.seconds:.2f} s")
+        auto_support = ("--support-material", "--support-material-auto")
+        run2 = S.slice_model(job.exe, job.model, job.profile, Path(tmp) / "support.gcode", job.centre, auto_support)
         say(f"sliced again with automatic support in {run2.seconds:.2f} s")
         gtext = S.read_gcode(run1.gcode_path)
         g = G.parse_gcode(gtext)
@@ -143,48 +223,49 @@ def slice_export(
     say(f"read {len(g.layers)} layers")
     if not any(lay.of_part().any() for lay in g.layers):
         raise S.SlicerError("prusa-slicer wrote G-code without one extrusion of the part")
-    spans = G.free_spans(g)
-    joined = G.free_spans(g, join_moves=True)
-    say("measured the free spans")
+    return _Sliced(gtext, g, gs, run1.seconds)
 
-    layer_h = _number(settings.get("layer_height"), g.layers[min(1, len(g.layers) - 1)].height_mm)
-    if not (isinstance(layer_h, float) and math.isfinite(layer_h) and layer_h > 0):
-        raise S.SlicerError(f"prusa-slicer wrote G-code with a layer height of {layer_h} mm")
-    checks = [
-        check_free_span(spans, joined, max_span_mm, shift),
-        check_pause(g.pauses, manifest, layer_h),
-        check_support(gs),
-        cavity_gaps(g, manifest, shift, z_shift),
-        walls_as_sliced(g, manifest, shift, z_shift),
-    ]
-    span_check, pause_check, support_check, gaps, walls = checks
-    walls_report = {"layers": walls.values["layers"], "predicted": _predicted(manifest.design, walls.values["layers"])}
-    if isinstance(walls_report["predicted"], dict):
-        say("simulated the walls as sliced")
-    pause_report = dict(
-        pause_check.values,
-        pause_print_gcode=g.config.get("pause_print_gcode", settings.get("pause_print_gcode")),
-        model_carries_pause=carries_pause,
-    )
-    # the frame: G-code = print frame + shift; check it with the extents of the part's paths
+
+def _frame_residual(job: _SliceJob, g: G.GCode) -> list[float]:
+    """How far the part's paths sit inside the shifted mesh's box (x lo, y lo, x hi, y hi), mm:
+    a check of the frame (G-code = print frame + shift)."""
+    lo, hi, shift = job.lo, job.hi, job.shift_xy
     part = np.concatenate([lay.segments[lay.of_part()] for lay in g.layers])
     gmin = np.minimum(part[:, [0, 1]].min(0), part[:, [2, 3]].min(0))
     gmax = np.maximum(part[:, [0, 1]].max(0), part[:, [2, 3]].max(0))
-    residual = [
+    return [
         float(gmin[0] - (lo[0] + shift[0])),
         float(gmin[1] - (lo[1] + shift[1])),
         float((hi[0] + shift[0]) - gmax[0]),
         float((hi[1] + shift[1]) - gmax[1]),
     ]
+
+
+def _report(job: _SliceJob, sliced: _Sliced, checks: list[Check], layer_h: float, say: Callable[[str], None]) -> dict:
+    """slice.json's content (non-finite numbers not yet replaced)."""
+    g = sliced.gcode
+    span_check, pause_check, support_check, gaps, walls = checks
+    walls_report = {
+        "layers": walls.values["layers"],
+        "predicted": _predicted(job.manifest.design, walls.values["layers"]),
+    }
+    if isinstance(walls_report["predicted"], dict):
+        say("simulated the walls as sliced")
+    pause_report = dict(
+        pause_check.values,
+        pause_print_gcode=g.config.get("pause_print_gcode", job.settings.get("pause_print_gcode")),
+        model_carries_pause=job.carries_pause,
+    )
+    shift = job.shift_xy
     failed = [c for c in checks if not c.passed and not c.info]
-    report = {
+    return {
         "format": 1,
-        "name": manifest.name,
-        "slicer": version,
-        "profile": str(profile),
-        "post_process": scripts,
-        "model_sliced": model.name,
-        "slice_time_s": round(run1.seconds, 3),
+        "name": job.manifest.name,
+        "slicer": job.version,
+        "profile": str(job.profile),
+        "post_process": job.scripts,
+        "model_sliced": job.model.name,
+        "slice_time_s": round(sliced.seconds, 3),
         "print_time_s": g.print_time_s,
         "print_time": fmt_duration(g.print_time_s),
         "filament_mm": g.filament_mm,
@@ -196,9 +277,9 @@ def slice_export(
         "height_mm": round(g.layers[-1].z_mm, 4),
         "frame": {
             "gcode_minus_print_xy_mm": [round(shift[0], 4), round(shift[1], 4)],
-            "gcode_minus_print_z_mm": round(z_shift, 4),
-            "bed_centre_mm": list(centre),
-            "path_inset_from_bbox_mm": [round(r, 3) for r in residual],
+            "gcode_minus_print_z_mm": round(job.z_shift, 4),
+            "bed_centre_mm": list(job.centre),
+            "path_inset_from_bbox_mm": [round(r, 3) for r in _frame_residual(job, g)],
         },
         "free_span": span_check.values,
         "pause": pause_report,
@@ -208,9 +289,6 @@ def slice_export(
         "failed": [c.name for c in failed],
         "reasons": [c.note for c in failed],
     }
-    return SliceResult(
-        finite_or_none(report), gtext, checks, files.folder, triangles, centre, (shift[0], shift[1], z_shift), g, spans
-    )
 
 
 def _predicted(design, layers) -> dict | str:
@@ -221,8 +299,6 @@ def _predicted(design, layers) -> dict | str:
         return "not given: export.json has no design (an older export: run 'mst export' again)"
     if len(layers) != len(design.layers) or any(r["sliced_t_mm"] is None for r in layers):
         return "not given: export.json's wall lines do not cover every layer of its design"
-    from mst_cli.cad.sliced_model import predict
-
     return predict(design, [r["sliced_t_mm"] for r in layers])
 
 

@@ -25,6 +25,7 @@ from mst_cli.calibrate.calibration_json import (
 )
 from mst_cli.calibrate.header import HEADER_FILE, c_header
 from mst_cli.calibrate.loadtest import MAX_ROWS, Readings, check_load_test, parse_readings, read_text
+from mst_cli.calibrate.plot import plot_calibration
 from mst_cli.calibrate.record import design_constants
 from mst_cli.calibrate.tables import lookup_csv, residuals_csv
 from mst_cli.errors import InputError
@@ -110,11 +111,9 @@ class Calibration:
             if not plot:
                 st.remove(PLOT_FILE)
             else:
-                from mst_cli.calibrate.plot import plot_calibration
-
                 plot_calibration(
                     st.path(PLOT_FILE),
-                    self.load_test.force_N,
+                    self.load_test.load_N,
                     self.load_test.B_abs_T,
                     self.design_curve,
                     self.calibrated_curve,
@@ -128,7 +127,7 @@ class Calibration:
         r, fit, lt = self.record, self.fit, self.load_test
         lines = [
             f"{self.design.name}: calibrated from {self.load_test_name} ({len(lt)} samples, "
-            f"{lt.force_N.min():.3g}-{lt.force_N.max():.4g} N), mechanics={self.mechanics}",
+            f"{lt.load_N.min():.3g}-{lt.load_N.max():.4g} N), mechanics={self.mechanics}",
             f"{'parameter':<18} {'design':>8} {'fitted':>10} {'+-1 sigma':>10}  identifiable",
         ]
         for n, p in cal.PARAMETERS.items():
@@ -188,87 +187,27 @@ def calibrate(
     ``load_test_file``. InputError for a bad load test; CalibrationFailed (with why) when the
     fit fails or its values would make a design that does not load. ``progress`` gets a line
     before a long fit."""
-    names = tuple(params)
     lt = parse_readings(
         read_text(load_test_file), str(load_test_file), need_force=True, gain_sel=gain_sel, res=res, one_setting=True
     )
-    design_resp = simulate(doc.geometry(), doc.material, mechanics=mechanics, noise_uT_rms=doc.noise_uT_rms)
-    check_load_test(lt, len(names), design_resp.max_force_N, cal.MIN_POINTS_PER_PARAMETER, cal.MIN_POINTS)
-    sigma = cal.field_sigma_T(doc.noise_uT_rms, lt.setting or design_resp.chip_setting)
-    t0 = time.monotonic()
-    if progress is not None and len(lt) >= PROGRESS_FROM_SAMPLES:  # say what the next seconds are
-        progress(
-            f"fitting {len(lt)} samples of {Path(load_test_file).name} "
-            f"(seconds; a load test holds at most {MAX_ROWS} rows)"
-        )
-    fit = cal.fit_parameters(doc, lt.force_N, lt.B_abs_T, sigma, names, mechanics)
-    try:
-        cal_doc, edits = cal.apply_parameters(doc, fit.values, name=f"{doc.name}-calibrated", mechanics=mechanics)
-        cal_dict = document_to_dict(cal_doc)
-        parse_document(cal_dict, source=CALIBRATED_YAML)  # it loads as written
-        bad = cal_doc.geometry().violations(cal_doc.printer)
-        if bad:
-            raise cal.CalibrationFailed(
-                f"the calibrated cell of layer {bad[0][0] + 1} breaks {bad[0][1].rule}: {bad[0][1].message}"
-            )
-        imap, cal_resp = cal.inverse_map(cal_doc, mechanics)
-    except InputError as exc:  # the fitted values break a file rule
-        raise cal.CalibrationFailed(f"the calibrated design would not load ({exc})") from None
-    fit_s = time.monotonic() - t0
-
-    imap.calibrated_to_N = min(float(lt.force_N.max()), float(imap.force_N[-1]))
-    setting = lt.setting or cal_resp.chip_setting
-    if setting is not None:
-        imap.field_resolution_T = max(imap.field_resolution_T, field_resolution_T(setting, doc.noise_uT_rms))
-    header, header_reason = None, None
-    if setting is None:
-        header_reason = "the calibrated field saturates the MLX90393 at full load: no setting to tabulate"
-    else:
-        try:
-            header = c_header(
-                imap,
-                setting,
-                cal_doc.name,
-                f"{Path(design_file).name} and {Path(load_test_file).name}",
-                cal.LIMITATIONS,
-            )
-        except cal.CalibrationFailed as exc:
-            header_reason = str(exc)
-
+    fitted = _fit(doc, lt, Path(load_test_file).name, mechanics, tuple(params), progress)
+    imap, setting = fitted.imap, fitted.setting
+    header, header_reason = _header(fitted, f"{Path(design_file).name} and {Path(load_test_file).name}")
     F_fit, _, flag_fit = imap.force(lt.B_abs_T, lt.saturated)
-    in_sample = force_errors(F_fit, lt.force_N, cal_resp.max_force_N)
+    in_sample = force_errors(F_fit, lt.load_N, fitted.cal_resp.max_force_N)
     try:
-        F_design, _, _ = cal.InverseMap.from_response(design_resp).force(lt.B_abs_T)
-        design_errors = force_errors(F_design, lt.force_N, cal_resp.max_force_N)
+        F_design, _, _ = cal.InverseMap.from_response(fitted.design_resp).force(lt.B_abs_T)
+        design_errors = force_errors(F_design, lt.load_N, fitted.cal_resp.max_force_N)
     except cal.CalibrationFailed:
         design_errors = {}
-    yaml_text = YAML_PREAMBLE + yaml.safe_dump(cal_dict, sort_keys=False, default_flow_style=None)
-    record = _record(
-        doc,
-        design_file,
-        load_test_file,
-        mechanics,
-        names,
-        lt,
-        fit,
-        sigma,
-        setting,
-        design_resp,
-        cal_resp,
-        imap,
-        edits,
-        table_size,
-        header,
-        header_reason,
-        in_sample,
-        design_errors,
-        sha256_text(yaml_text),
-        fit_s,
-    )
-    F_grid = np.linspace(0.0, max(float(lt.force_N.max()), cal_resp.max_force_N), 400)
+    yaml_text = YAML_PREAMBLE + yaml.safe_dump(fitted.calibrated_dict, sort_keys=False, default_flow_style=None)
+    files = _RecordFiles(str(design_file), str(load_test_file), sha256_text(yaml_text), table_size, header_reason)
+    record = _record(doc, fitted, files, {"calibrated": in_sample, "design": design_errors}, header is not None)
+    F_grid = np.linspace(0.0, max(float(lt.load_N.max()), fitted.cal_resp.max_force_N), 400)
+    design_resp, fit = fitted.design_resp, fitted.fit
     return Calibration(
         design=doc,
-        calibrated=cal_doc,
+        calibrated=fitted.calibrated,
         mechanics=mechanics,
         load_test=lt,
         load_test_name=Path(load_test_file).name,
@@ -286,28 +225,134 @@ def calibrate(
     )
 
 
+@dataclass
+class _Fitted:
+    """A fit and what it made: the models before and after it, the calibrated design and its
+    inverse map, and the chip setting the tables are for (None: the field saturates)."""
+
+    lt: Readings
+    mechanics: str
+    names: tuple[str, ...]
+    sigma_T: float
+    fit: cal.FitResult
+    seconds: float
+    design_resp: Response
+    calibrated: Document
+    calibrated_dict: dict
+    edits: list[str]
+    imap: cal.InverseMap
+    cal_resp: Response
+    setting: ChipSetting | None
+
+
+def _fit(
+    doc: Document,
+    lt: Readings,
+    load_test_name: str,
+    mechanics: str,
+    names: tuple[str, ...],
+    progress: Callable[[str], None] | None,
+) -> _Fitted:
+    """The fit of ``names`` to the load test, its calibrated design (checked to load) and the
+    calibrated inverse map; CalibrationFailed when the fitted values make a design that does not
+    load."""
+    design_resp = simulate(doc.geometry(), doc.material, mechanics=mechanics, noise_uT_rms=doc.noise_uT_rms)
+    check_load_test(lt, len(names), design_resp.max_force_N, cal.MIN_POINTS_PER_PARAMETER, cal.MIN_POINTS)
+    sigma = cal.field_sigma_T(doc.noise_uT_rms, lt.setting or design_resp.chip_setting)
+    t0 = time.monotonic()
+    if progress is not None and len(lt) >= PROGRESS_FROM_SAMPLES:  # say what the next seconds are
+        progress(f"fitting {len(lt)} samples of {load_test_name} (seconds; a load test holds at most {MAX_ROWS} rows)")
+    fit = cal.fit_parameters(doc, lt.load_N, lt.B_abs_T, sigma, names, mechanics)
+    try:
+        cal_doc, edits = cal.apply_parameters(doc, fit.values, name=f"{doc.name}-calibrated", mechanics=mechanics)
+        cal_dict = document_to_dict(cal_doc)
+        parse_document(cal_dict, source=CALIBRATED_YAML)  # it loads as written
+        bad = cal_doc.geometry().violations(cal_doc.printer)
+        if bad:
+            raise cal.CalibrationFailed(
+                f"the calibrated cell of layer {bad[0][0] + 1} breaks {bad[0][1].rule}: {bad[0][1].message}"
+            )
+        imap, cal_resp = cal.inverse_map(cal_doc, mechanics)
+    except InputError as exc:  # the fitted values break a file rule
+        raise cal.CalibrationFailed(f"the calibrated design would not load ({exc})") from None
+    fit_s = time.monotonic() - t0
+    imap.calibrated_to_N = min(float(lt.load_N.max()), float(imap.force_N[-1]))
+    setting = lt.setting or cal_resp.chip_setting
+    if setting is not None:
+        imap.field_resolution_T = max(imap.field_resolution_T, field_resolution_T(setting, doc.noise_uT_rms))
+    return _Fitted(
+        lt, mechanics, names, sigma, fit, fit_s, design_resp, cal_doc, cal_dict, edits, imap, cal_resp, setting
+    )
+
+
+def _header(fitted: _Fitted, source: str) -> tuple[str | None, str | None]:
+    """(the C header, None) or (None, why there is none)."""
+    if fitted.setting is None:
+        return None, "the calibrated field saturates the MLX90393 at full load: no setting to tabulate"
+    try:
+        header = c_header(fitted.imap, fitted.setting, fitted.calibrated.name, source, cal.LIMITATIONS)
+    except cal.CalibrationFailed as exc:
+        return None, str(exc)
+    return header, None
+
+
+@dataclass
+class _RecordFiles:
+    """The files a record names: the inputs, the calibrated YAML's hash and the tables written."""
+
+    design_file: str
+    load_test_file: str
+    yaml_sha256: str
+    table_size: int
+    header_reason: str | None
+
+
 def _record(
-    doc,
-    design_file,
-    load_test_file,
-    mechanics,
-    names,
-    lt,
-    fit,
-    sigma,
-    setting,
-    design_resp,
-    cal_resp,
-    imap,
-    edits,
-    table_size,
-    header,
-    header_reason,
-    in_sample,
-    design_errors,
-    yaml_sha256,
-    fit_s,
+    doc: Document, fitted: _Fitted, files: _RecordFiles, force_errors_in_sample: dict, has_header: bool
 ) -> CalibrationRecord:
+    """calibration.json's content."""
+    fit, lt, imap = fitted.fit, fitted.lt, fitted.imap
+    design_resp, cal_resp = fitted.design_resp, fitted.cal_resp
+    design_regimes, cal_regimes = regime_rows(design_resp), regime_rows(cal_resp)
+    return CalibrationRecord(
+        schema_version=SCHEMA_VERSION,
+        design=files.design_file,
+        load_test=files.load_test_file,
+        design_constants=design_constants(doc),
+        calibrated_yaml=CALIBRATED_YAML,
+        calibrated_yaml_sha256=files.yaml_sha256,
+        models={
+            "mechanics": fitted.mechanics,
+            "field": fit.model.field_model,
+            "space_mapping_iterations": fit.iterations,
+        },
+        samples=len(lt),
+        force_range_N=[float(lt.load_N.min()), float(lt.load_N.max())],
+        fitted_quantity="|B| at the chip (sqrt(Bx^2 + By^2 + Bz^2))",
+        chip_setting=_setting_record(fitted.setting, lt),
+        noise_sigma_uT=fitted.sigma_T * 1e6,
+        parameters=_parameter_entries(fit, fitted.names),
+        identifiability=_identifiability(fit),
+        residuals={
+            "rms_uT": fit.residual_rms_T * 1e6,
+            "max_abs_uT": float(np.abs(fit.residual_T).max() * 1e6),
+            "chi2_reduced": fit.chi2_reduced,
+        },
+        force_errors_in_sample=force_errors_in_sample,
+        regimes=[{"regime": d["regime"], "design": d, "calibrated": c} for d, c in zip(design_regimes, cal_regimes)],
+        range_N={"design": design_resp.max_force_N, "calibrated": cal_resp.max_force_N},
+        calibrated_to_N=imap.calibrated_to_N,
+        edits=fitted.edits,
+        lookup_table=_lookup_table(imap, files, has_header),
+        limitations=list(cal.LIMITATIONS),
+        mst_version=__version__,
+        curve_check=CalibrationRecord.curve_points(imap),
+        fit={"evaluations": fit.evaluations, "seconds": fitted.seconds, "message": fit.message},
+    )
+
+
+def _parameter_entries(fit: cal.FitResult, names: tuple[str, ...]) -> dict:
+    """calibration.json's parameters: every parameter's value, uncertainty and why it was held."""
     parameters = {}
     for n, p in cal.PARAMETERS.items():
         entry = {
@@ -326,66 +371,49 @@ def _record(
         elif n not in names:
             entry["held_because"] = "not requested (--params): held at the design's value"
         parameters[n] = entry
-    setting_record = None
-    if setting is not None:
-        setting_record = {
-            "gain_sel": setting.gain_sel,
-            "res": setting.res,
-            "z_uT_per_lsb": setting.z_uT_per_lsb,
-            "xy_uT_per_lsb": setting.xy_uT_per_lsb,
-            "source": "the load test"
-            if lt.setting is not None
-            else "the finest setting that holds the calibrated field (the load test gave uT)",
-        }
-    design_regimes, cal_regimes = regime_rows(design_resp), regime_rows(cal_resp)
-    return CalibrationRecord(
-        schema_version=SCHEMA_VERSION,
-        design=str(design_file),
-        load_test=str(load_test_file),
-        design_constants=design_constants(doc),
-        calibrated_yaml=CALIBRATED_YAML,
-        calibrated_yaml_sha256=yaml_sha256,
-        models={"mechanics": mechanics, "field": fit.model.field_model, "space_mapping_iterations": fit.iterations},
-        samples=len(lt),
-        force_range_N=[float(lt.force_N.min()), float(lt.force_N.max())],
-        fitted_quantity="|B| at the chip (sqrt(Bx^2 + By^2 + Bz^2))",
-        chip_setting=setting_record,
-        noise_sigma_uT=sigma * 1e6,
-        parameters=parameters,
-        identifiability={
-            "rule": f"a parameter is identifiable when the data fix it to within {cal.IDENTIFIABLE_STD:.3g} of "
-            "its typical deviation (1 sigma); the worst one that is not is held at the design's "
-            "value and the fit repeated",
-            "fitted": list(fit.names),
-            "held": fit.held,
-            "singular_values": fit.singular_values,
-            "correlation": {"parameters": list(fit.names), "matrix": fit.correlation},
-            "first_pass": fit.first_pass,
-        },
-        residuals={
-            "rms_uT": fit.residual_rms_T * 1e6,
-            "max_abs_uT": float(np.abs(fit.residual_T).max() * 1e6),
-            "chi2_reduced": fit.chi2_reduced,
-        },
-        force_errors_in_sample={"calibrated": in_sample, "design": design_errors},
-        regimes=[{"regime": d["regime"], "design": d, "calibrated": c} for d, c in zip(design_regimes, cal_regimes)],
-        range_N={"design": design_resp.max_force_N, "calibrated": cal_resp.max_force_N},
-        calibrated_to_N=imap.calibrated_to_N,
-        edits=edits,
-        lookup_table={
-            "csv": "lookup.csv",
-            "entries": table_size,
-            "notes": "|B| -> force on the calibrated loading curve from no load to the last "
-            "lock, strictly increasing; readings beyond its ends by more than "
-            "out_of_range_tolerance_uT are out of range (never extrapolated); "
-            "calibrated = 0 marks entries above the load test's largest force "
-            "(the fitted model, unchecked by a sample); see limitations",
-            "c_header": HEADER_FILE if header else None,
-            **({"c_header_reason": header_reason} if header_reason else {}),
-            "out_of_range_tolerance_uT": imap.tolerance_T * 1e6,
-        },
-        limitations=list(cal.LIMITATIONS),
-        mst_version=__version__,
-        curve_check=CalibrationRecord.curve_points(imap),
-        fit={"evaluations": fit.evaluations, "seconds": fit_s, "message": fit.message},
-    )
+    return parameters
+
+
+def _setting_record(setting: ChipSetting | None, lt: Readings) -> dict | None:
+    """calibration.json's chip_setting: the one the tables are for, and where it came from."""
+    if setting is None:
+        return None
+    return {
+        "gain_sel": setting.gain_sel,
+        "res": setting.res,
+        "z_uT_per_lsb": setting.z_uT_per_lsb,
+        "xy_uT_per_lsb": setting.xy_uT_per_lsb,
+        "source": "the load test"
+        if lt.setting is not None
+        else "the finest setting that holds the calibrated field (the load test gave uT)",
+    }
+
+
+def _identifiability(fit: cal.FitResult) -> dict:
+    """calibration.json's identifiability: the rule, what was fitted and held, and why."""
+    return {
+        "rule": f"a parameter is identifiable when the data fix it to within {cal.IDENTIFIABLE_STD:.3g} of "
+        "its typical deviation (1 sigma); the worst one that is not is held at the design's "
+        "value and the fit repeated",
+        "fitted": list(fit.names),
+        "held": fit.held,
+        "singular_values": fit.singular_values,
+        "correlation": {"parameters": list(fit.names), "matrix": fit.correlation},
+        "first_pass": fit.first_pass,
+    }
+
+
+def _lookup_table(imap: cal.InverseMap, files: _RecordFiles, has_header: bool) -> dict:
+    """calibration.json's lookup_table: what lookup.csv (and the C header) hold."""
+    return {
+        "csv": "lookup.csv",
+        "entries": files.table_size,
+        "notes": "|B| -> force on the calibrated loading curve from no load to the last "
+        "lock, strictly increasing; readings beyond its ends by more than "
+        "out_of_range_tolerance_uT are out of range (never extrapolated); "
+        "calibrated = 0 marks entries above the load test's largest force "
+        "(the fitted model, unchecked by a sample); see limitations",
+        "c_header": HEADER_FILE if has_header else None,
+        **({"c_header_reason": files.header_reason} if files.header_reason else {}),
+        "out_of_range_tolerance_uT": imap.tolerance_T * 1e6,
+    }

@@ -77,7 +77,8 @@ class CalibrationRecord:
         not a mapping."""
         if not isinstance(data, dict):
             raise ValueError(f"{CALIBRATION_JSON} is not a mapping")
-        return cls(**{f.name: data.get(f.name) for f in fields(cls)})
+        values: dict[str, Any] = {f.name: data.get(f.name) for f in fields(cls)}
+        return cls(**values)
 
     @staticmethod
     def curve_points(imap: InverseMap) -> dict:
@@ -91,15 +92,19 @@ class CalibrationRecord:
     def calibrated_top_N(self) -> float | None:
         """The load test's largest force, when the record holds a usable one."""
         top = self.calibrated_to_N
-        ok = isinstance(top, (int, float)) and not isinstance(top, bool) and math.isfinite(top) and top > 0
-        return float(top) if ok else None
+        if isinstance(top, (int, float)) and not isinstance(top, bool) and math.isfinite(top) and top > 0:
+            return float(top)
+        return None
 
     def curve_changed(self, imap: InverseMap) -> str | None:
         """A warning when the model no longer gives the curve this record holds (None: it does,
         or the record holds no usable curve)."""
+        check = self.curve_check
+        if not isinstance(check, dict):  # a record without a usable curve
+            return None
         try:
-            F = np.asarray(self.curve_check["force_N"], dtype=float)
-            B = np.asarray(self.curve_check["B_abs_uT"], dtype=float) * 1e-6
+            F = np.asarray(check["force_N"], dtype=np.float64)
+            B = np.asarray(check["B_abs_uT"], dtype=np.float64) * 1e-6
         except (TypeError, KeyError, ValueError):
             return None
         now = np.interp(F, imap.force_N, imap.B_abs_T)

@@ -44,23 +44,25 @@ Pure: no file or terminal I/O.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from mst_cli.io.schema import Document, LayerEntry
 from mst_cli.model import chip as mlx
 from mst_cli.model import field as fld
-from mst_cli.model.geometry import LENGTH_FLOOR_MM
+from mst_cli.model import geometry as geo
+from mst_cli.model.geometry import LENGTH_FLOOR_MM, HexCell, Housing, Printer
+from mst_cli.model.ladder import choose_mechanics
 from mst_cli.model.mechanics import layer_law
+from mst_cli.model.response import Response
+from mst_cli.model.response import simulate as run_simulation
 from mst_cli.model.stack import Stack
 
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
-
-    from mst_cli.io.schema import Document
-    from mst_cli.model.geometry import HexCell, Printer
-    from mst_cli.model.response import Response
 
 # --------------------------------------------------------------------------- parameters
 
@@ -106,13 +108,14 @@ class CalibrationFailed(RuntimeError):
     """The fit itself failed (not the input's form): the message says why."""
 
 
-def parameter_bounds(doc) -> dict[str, tuple[float, float]]:
+def parameter_bounds(doc: Document) -> dict[str, tuple[float, float]]:
     """Physical bounds of each parameter for this design: every perturbed cell keeps a wall and
     a lock stroke, the gap stays open at full stroke, E and Br stay inside the file format."""
     a = doc.family.contact_allowance_mm
-    t = np.array([la.t_mm for la in doc.layers])
-    h = np.array([la.h_mm for la in doc.layers])
-    th = np.radians([la.theta_deg for la in doc.layers])
+    theta, t_mm, h_mm = zip(*(la.drawn for la in doc.layers))
+    t = np.array(t_mm)
+    h = np.array(h_mm)
+    th = np.radians(theta)
     p = 0.5 * doc.family.width_mm - 0.5 * h / np.tan(th)  # outer pad half-width
     wall_lo = max(-0.5, float(np.max(MIN_STROKE_MM - t)))
     wall_hi = min(
@@ -134,7 +137,7 @@ def parameter_bounds(doc) -> dict[str, tuple[float, float]]:
 PRINTER_NOMINAL = {"wall_offset_mm": 0.0, "modulus_factor": 1.0, "gap_offset_mm": 0.0}
 
 
-def printer_values(doc) -> dict:
+def printer_values(doc: Document) -> dict:
     """The print parameters (:data:`PARAMETERS`' names) a document's ``printer`` section declares:
     what its printer is known to do to the drawing (the remanence is the magnet's own key)."""
     pr = doc.printer
@@ -159,13 +162,10 @@ def simulate_as_printed(doc: Document, mechanics: str | None = None, field_model
     """The forward model of a valid design as ``mst simulate`` runs it (:func:`mst_cli.api.simulate`):
     the part as printed (:func:`as_printed`), the mechanics rung the file's accuracy asks for
     (else its ``model.mechanics``), the file's field model unless one is given."""
-    from mst_cli.model.ladder import choose_mechanics
-    from mst_cli.model.response import simulate as run
-
     field_choice = field_model or doc.field_model
     choice = choose_mechanics(mechanics, doc.accuracy_rel, doc.mechanics)
     printed = as_printed(doc)
-    return run(
+    return run_simulation(
         printed.geometry(),
         printed.material,
         mechanics=choice.mechanics,
@@ -288,7 +288,7 @@ class FitResult:
 
 
 def _solve(model: ForwardModel, force_N, B_abs_T, sigma_T, names, start: dict, bounds: dict, max_nfev: int = 400):
-    from scipy.optimize import least_squares
+    from scipy.optimize import least_squares  # deferred: scipy.optimize is 0.2 s, only a fit needs it
 
     P = [PARAMETERS[n] for n in names]
     x0 = np.array([(start[n] - p.nominal) / p.scale for n, p in zip(names, P)])
@@ -340,7 +340,7 @@ def _global_start(model, force_N, B_abs_T, sigma_T, names, bounds) -> dict:
     grid_names = [n for n in MECHANICAL if n in names]
     inner = tuple(n for n in names if n not in MECHANICAL)
     axes = {"modulus_factor": GRID_MODULUS, "wall_offset_mm": GRID_WALL_MM}
-    nodes = [{}]
+    nodes: list[dict[str, float]] = [{}]
     for n in grid_names:
         lo, hi = bounds[n]
         vals = np.unique(np.clip(axes[n], lo, hi))
@@ -356,11 +356,12 @@ def _global_start(model, force_N, B_abs_T, sigma_T, names, bounds) -> dict:
             cost = 0.5 * np.sum(((model.field_abs_T(force_N, start) - B_abs_T) / sigma_T) ** 2)
         scored.append((float(cost), values))
     scored.sort(key=lambda cv: cv[0])
-    best = None
+    best: tuple[float, dict] | None = None
     for _, values in scored[:3]:
         res, vals, _ = _solve(model, force_N, B_abs_T, sigma_T, tuple(names), values, bounds, max_nfev=100)
         if best is None or res.cost < best[0]:
             best = (res.cost, vals)
+    assert best is not None  # scored holds every grid node (at least one)
     return full_values(best[1])
 
 
@@ -384,11 +385,11 @@ def _uncertainty(jac, chi2_red):
 
 
 def fit_parameters(
-    doc,
-    force_N,
-    B_abs_T,
+    doc: Document,
+    force_N: ArrayLike,
+    B_abs_T: ArrayLike,
     sigma_T: float,
-    names=DEFAULT_PARAMETERS,
+    names: Sequence[str] = DEFAULT_PARAMETERS,
     mechanics: str = "spring",
     field_model: str | None = None,
 ) -> FitResult:
@@ -409,6 +410,40 @@ def fit_parameters(
     span_T = float(np.ptp(B_abs_T))
     if span_T <= 0:
         raise CalibrationFailed("the field does not change over the load test: nothing to fit")
+    _require_response(force_N, B_abs_T)
+    start = _global_start(model, force_N, B_abs_T, sigma_T, names, bounds)
+    fit = _fit_identifiable(model, force_N, B_abs_T, sigma_T, names, start, bounds)
+    values, free, std = fit.values, fit.free, fit.std
+    for name in fit.at_bound:
+        if name in free:
+            raise CalibrationFailed(
+                f"{name} ended on its physical bound ({values[name]:.4g}, allowed "
+                f"{bounds[name][0]:.4g}..{bounds[name][1]:.4g}): the design file does not describe "
+                "the sensor of this load test"
+            )
+    residual = B_abs_T - model.field_abs_T(force_N, values)
+    _require_close(residual, span_T)
+    return FitResult(
+        names=tuple(free),
+        values=full_values(values),
+        std={nm: float(sd * PARAMETERS[nm].scale) for nm, sd in zip(free, std)},
+        identifiable={nm: bool(sd <= IDENTIFIABLE_STD) for nm, sd in zip(free, std)},
+        held=fit.held,
+        correlation=[[float(c) for c in row] for row in np.atleast_2d(fit.corr)],
+        singular_values=[float(v) for v in fit.singular_values],
+        first_pass=fit.first_pass,
+        residual_T=residual,
+        sigma_T=float(sigma_T),
+        chi2_reduced=fit.chi2_red,
+        evaluations=model.evaluations,
+        iterations=fit.iterations,
+        message=str(fit.res.message),
+        model=model,
+    )
+
+
+def _require_response(force_N: np.ndarray, B_abs_T: np.ndarray) -> None:
+    """CalibrationFailed unless |B| rises with the force beyond what noise alone would give."""
     rho = float(np.corrcoef(force_N, B_abs_T)[0, 1]) if np.ptp(force_N) > 0 else 0.0
     # with no relation at all, |rho| of n samples stays below ~3/sqrt(n - 2) (3 sigma)
     noise_rho = NO_RELATION_SIGMA / math.sqrt(max(len(force_N) - 2, 1))
@@ -426,57 +461,9 @@ def fit_parameters(
             "test does not belong to this sensor (or its columns are swapped)"
         )
 
-    start = _global_start(model, force_N, B_abs_T, sigma_T, names, bounds)
-    free = list(names)
-    held: dict[str, str] = {}
-    first_pass: dict = {}
-    iterations = 0
-    while True:
-        model.correction = None
-        model.update_correction(start["wall_offset_mm"])
-        values = start
-        for iterations in range(1, MAX_SPACE_MAPPING_ITERATIONS + 1):  # noqa: B007 (reported)
-            res, values, at_bound = _solve(model, force_N, B_abs_T, sigma_T, tuple(free), values, bounds)
-            if model.mechanics == "spring" or model.correction is None:
-                break
-            if abs(values["wall_offset_mm"] - model.correction.wall_offset_mm) < 1e-4:
-                break
-            model.update_correction(values["wall_offset_mm"])
-        if res.status <= 0:
-            raise CalibrationFailed(f"the least-squares fit did not converge ({res.message})")
-        n, p = len(force_N), len(free)
-        chi2_red = float(2.0 * res.cost / max(n - p, 1))
-        s, std, corr = _uncertainty(res.jac, chi2_red)
-        if not first_pass:
-            first_pass = {
-                "parameters": list(free),
-                "std_in_typical_deviations": [float(v) for v in std],
-                "singular_values": [float(v) for v in s],
-                "correlation": [
-                    [None if not math.isfinite(c) else float(c) for c in row] for row in np.atleast_2d(corr)
-                ],
-            }
-        worst = int(np.argmax(std))
-        if std[worst] > IDENTIFIABLE_STD and len(free) > 1:
-            name = free.pop(worst)
-            held[name] = (
-                f"not identifiable from this load test: the data fix it only to "
-                f"+-{std[worst]:.3g} x its typical deviation ({PARAMETERS[name].scale:g}"
-                f"{' ' + PARAMETERS[name].unit if PARAMETERS[name].unit else ''}); held at the "
-                f"design's value"
-            )
-            start = full_values({k: v for k, v in values.items() if k in free})
-            continue
-        break
 
-    for name in at_bound:
-        if name in free:
-            raise CalibrationFailed(
-                f"{name} ended on its physical bound ({values[name]:.4g}, allowed "
-                f"{bounds[name][0]:.4g}..{bounds[name][1]:.4g}): the design file does not describe "
-                "the sensor of this load test"
-            )
-    residual = B_abs_T - model.field_abs_T(force_N, values)
+def _require_close(residual: np.ndarray, span_T: float) -> None:
+    """CalibrationFailed when the fitted model misses the data by more than FAIL_RESIDUAL_REL."""
     rms = float(np.sqrt(np.mean(residual**2)))
     if rms > FAIL_RESIDUAL_REL * span_T:
         raise CalibrationFailed(
@@ -485,23 +472,100 @@ def fit_parameters(
             f"{100 * FAIL_RESIDUAL_REL:g} %): the design file does not describe this sensor, or the "
             "load test mixes loading and unloading, off-axis or slipping loads"
         )
-    std_named = {nm: float(sd * PARAMETERS[nm].scale) for nm, sd in zip(free, std)}
-    return FitResult(
-        names=tuple(free),
-        values=full_values(values),
-        std=std_named,
-        identifiable={nm: bool(sd <= IDENTIFIABLE_STD) for nm, sd in zip(free, std)},
-        held=held,
-        correlation=[[float(c) for c in row] for row in np.atleast_2d(corr)],
-        singular_values=[float(v) for v in s],
-        first_pass=first_pass,
-        residual_T=residual,
-        sigma_T=float(sigma_T),
-        chi2_reduced=chi2_red,
-        evaluations=model.evaluations,
-        iterations=iterations,
-        message=str(res.message),
-        model=model,
+
+
+@dataclass
+class _Fit:
+    """The last least-squares fit: its parameters (``free``) and what the data tell of them."""
+
+    res: Any  # scipy's OptimizeResult
+    values: dict
+    at_bound: list
+    free: list[str]
+    held: dict[str, str]
+    first_pass: dict
+    iterations: int
+    singular_values: np.ndarray
+    std: np.ndarray  # in typical deviations, per free parameter
+    corr: np.ndarray
+    chi2_red: float
+
+
+def _fit_identifiable(
+    model: ForwardModel,
+    force_N: np.ndarray,
+    B_abs_T: np.ndarray,
+    sigma_T: float,
+    names: tuple[str, ...],
+    start: dict,
+    bounds: dict,
+) -> _Fit:
+    """Fit ``names``; while the worst-fixed one is not identifiable (IDENTIFIABLE_STD), hold it
+    at the design's value and fit the rest again."""
+    free = list(names)
+    held: dict[str, str] = {}
+    first_pass: dict = {}
+    while True:
+        res, values, at_bound, iterations = _space_mapping(model, force_N, B_abs_T, sigma_T, free, start, bounds)
+        if res.status <= 0:
+            raise CalibrationFailed(f"the least-squares fit did not converge ({res.message})")
+        n, p = len(force_N), len(free)
+        chi2_red = float(2.0 * res.cost / max(n - p, 1))
+        s, std, corr = _uncertainty(res.jac, chi2_red)
+        if not first_pass:
+            first_pass = _first_pass(free, s, std, corr)
+        worst = int(np.argmax(std))
+        if std[worst] > IDENTIFIABLE_STD and len(free) > 1:
+            name = free.pop(worst)
+            held[name] = _not_identifiable(name, float(std[worst]))
+            start = full_values({k: v for k, v in values.items() if k in free})
+            continue
+        return _Fit(res, values, at_bound, free, held, first_pass, iterations, s, std, corr, chi2_red)
+
+
+def _space_mapping(
+    model: ForwardModel,
+    force_N: np.ndarray,
+    B_abs_T: np.ndarray,
+    sigma_T: float,
+    free: list[str],
+    start: dict,
+    bounds: dict,
+) -> tuple[Any, dict, list, int]:
+    """(least-squares result, values, parameters at a bound, iterations): fitted on spring with the
+    dear model's correction re-taken at the fitted wall offset until it stops moving."""
+    model.correction = None
+    model.update_correction(start["wall_offset_mm"])
+    values = start
+    iterations = 0
+    for iterations in range(1, MAX_SPACE_MAPPING_ITERATIONS + 1):  # noqa: B007 (reported)
+        res, values, at_bound = _solve(model, force_N, B_abs_T, sigma_T, tuple(free), values, bounds)
+        if model.mechanics == "spring" or model.correction is None:
+            break
+        if abs(values["wall_offset_mm"] - model.correction.wall_offset_mm) < 1e-4:
+            break
+        model.update_correction(values["wall_offset_mm"])
+    return res, values, at_bound, iterations
+
+
+def _first_pass(free: list[str], s: np.ndarray, std: np.ndarray, corr: np.ndarray) -> dict:
+    """calibration.json's first_pass: how well the data fix every requested parameter."""
+    return {
+        "parameters": list(free),
+        "std_in_typical_deviations": [float(v) for v in std],
+        "singular_values": [float(v) for v in s],
+        "correlation": [[None if not math.isfinite(c) else float(c) for c in row] for row in np.atleast_2d(corr)],
+    }
+
+
+def _not_identifiable(name: str, std: float) -> str:
+    """Why ``name`` is held: the data fix it only to +-``std`` typical deviations."""
+    unit = PARAMETERS[name].unit
+    return (
+        f"not identifiable from this load test: the data fix it only to "
+        f"+-{std:.3g} x its typical deviation ({PARAMETERS[name].scale:g}"
+        f"{' ' + unit if unit else ''}); held at the "
+        f"design's value"
     )
 
 
@@ -520,10 +584,8 @@ def apply_parameters(
                            housing.pocket_floor_mm, then housing.cover_mm)
     * remanence_factor  -> magnet.remanence_T
     """
-    from mst_cli.io.schema import LayerEntry
-
     v = full_values(values)
-    edits = []
+    edits: list[str] = []
     material = replace(doc.material, youngs_modulus_MPa=doc.material.youngs_modulus_MPa * v["modulus_factor"])
     if v["modulus_factor"] != 1.0:
         edits.append(
@@ -536,9 +598,28 @@ def apply_parameters(
     magnet = replace(doc.magnet, remanence_T=doc.magnet.remanence_T * v["remanence_factor"])
     if v["remanence_factor"] != 1.0:
         edits.append(f"magnet.remanence_T {doc.magnet.remanence_T:g} -> {magnet.remanence_T:.6g}")
+    housing = _housing_with_gap(doc, v["gap_offset_mm"], edits)
+    printer = _printer_as_printed(doc, layers, edits)
+    out = replace(
+        doc,
+        name=name or doc.name,
+        layers=layers,
+        material=material,
+        magnet=magnet,
+        housing=housing,
+        printer=printer,
+        mechanics=mechanics or doc.mechanics,
+        accuracy_rel=None,
+    )
+    assert all(isinstance(la, LayerEntry) for la in out.layers)
+    return out, edits
 
+
+def _housing_with_gap(doc: Document, gap_offset_mm: float, edits: list[str]) -> Housing:
+    """``doc``'s housing with the gap offset taken from housing.chip_clearance_mm (what remains
+    below zero from housing.pocket_floor_mm, then housing.cover_mm); the edit appended."""
     hs = doc.housing
-    left = v["gap_offset_mm"]
+    left = gap_offset_mm
     new = {}
     clearance = hs.chip_clearance_mm + left
     if clearance >= 0:
@@ -552,18 +633,22 @@ def apply_parameters(
             left -= take
         if left < -1e-12:
             raise CalibrationFailed(
-                f"gap_offset_mm {v['gap_offset_mm']:.4g} cannot be written into "
+                f"gap_offset_mm {gap_offset_mm:.4g} cannot be written into "
                 "the housing keys (it would need negative clearances)"
             )
     new = {k: round(val, 9) for k, val in new.items()}
-    housing = replace(hs, **new)
-    if v["gap_offset_mm"]:
+    if gap_offset_mm:
         edits.append(
             "housing."
             + ", housing.".join(f"{k} {getattr(hs, k):g} -> {val:.6g}" for k, val in new.items())
-            + f" (gap offset {v['gap_offset_mm']:+.4g} mm)"
+            + f" (gap offset {gap_offset_mm:+.4g} mm)"
         )
+    return replace(hs, **new)
 
+
+def _printer_as_printed(doc: Document, layers: tuple, edits: list[str]) -> Printer:
+    """``doc``'s printer with its deviations spent and its rules lowered for the as-printed cells;
+    the edits appended."""
     pr = doc.printer
     # the values are the print's own (the fit models the drawn walls and the material's E), so
     # the printer's declared deviations are spent: left in, a simulation would apply them twice
@@ -581,26 +666,12 @@ def apply_parameters(
                 f"printer.{key} {getattr(pr, key):g} -> {getattr(printer, key):g} (the as-printed "
                 "cells are thinner than the printing rules: this file models the print, do not print it)"
             )
-    out = replace(
-        doc,
-        name=name or doc.name,
-        layers=layers,
-        material=material,
-        magnet=magnet,
-        housing=housing,
-        printer=printer,
-        mechanics=mechanics or doc.mechanics,
-        accuracy_rel=None,
-    )
-    assert all(isinstance(la, LayerEntry) for la in out.layers)
-    return out, edits
+    return printer
 
 
 def _rules_for(doc: Document, layers) -> Printer:
     """``doc``'s printer with its printing rules (min_wall_mm, min_gap_mm, nozzle_mm) lowered
     where the cells of ``layers`` break them: a file that models a print, not one to print."""
-    from mst_cli.model import geometry as geo
-
     pr = doc.printer
     t_min = min(la.t_mm for la in layers)
     cav_min = min(la.h_mm - 2 * la.t_mm for la in layers)
@@ -616,7 +687,7 @@ def _rules_for(doc: Document, layers) -> Printer:
     )
 
 
-def with_walls(doc: Document, t_mm) -> Document:
+def with_walls(doc: Document, t_mm: Sequence[float]) -> Document:
     """The design ``doc`` with layer i's wall thickness set to ``t_mm[i]`` (e.g. the width the
     slicer lays down), everything else as it is, so :func:`mst_cli.api.simulate` predicts the
     part those walls make with the model and printer corrections the design itself is simulated
@@ -728,7 +799,7 @@ class InverseMap:
         return codes, F, self.regime_of(np.minimum(F, self.edges_N[-1] * (1 - 1e-12))), res
 
     @classmethod
-    def from_response(cls, resp) -> InverseMap:
+    def from_response(cls, resp: Response) -> InverseMap:
         """From a :class:`~mst_cli.model.response.Response` (the same model ``mst simulate`` runs)."""
         keep = resp.in_range
         F = resp.force_N[keep]
@@ -753,12 +824,10 @@ class InverseMap:
 
 
 def inverse_map(
-    doc, mechanics: str = "spring", field_model: str | None = None, points_per_regime: int = 600
-) -> tuple[InverseMap, object]:
+    doc: Document, mechanics: str = "spring", field_model: str | None = None, points_per_regime: int = 600
+) -> tuple[InverseMap, Response]:
     """The inverse map of a design document, and the response it came from."""
-    from mst_cli.model.response import simulate
-
-    resp = simulate(
+    resp = run_simulation(
         doc.geometry(),
         doc.material,
         mechanics=mechanics,

@@ -74,6 +74,14 @@ class Readings:
     def __len__(self) -> int:
         return len(self.rows)
 
+    @property
+    def load_N(self) -> np.ndarray:
+        """(n,) the load cell's force in N: ``force_N`` of a file that has one (a load test, read
+        with ``need_force``); ValueError for readings without it."""
+        if self.force_N is None:
+            raise ValueError(f"{self.source} has no {FORCE_COLUMN} column")
+        return self.force_N
+
 
 def setting_of(gain_sel: int, res: int) -> mlx.ChipSetting:
     for s in mlx.settings_table():
@@ -90,7 +98,7 @@ def read_text(path: str | Path, what: str = "CSV file") -> str:
 
 def _delimiter(header_line: str) -> str:
     counts = {d: header_line.count(d) for d in (",", ";", "\t")}
-    best = max(counts, key=counts.get)
+    best = max(counts, key=lambda d: counts[d])
     return best if counts[best] else ","
 
 
@@ -146,8 +154,7 @@ def parse_readings(
     """
     if (gain_sel is None) != (res is None):
         raise InputError("--gain-sel/--res", f"{gain_sel}/{res}", "give both GAIN_SEL and RES, or neither")
-    flag_setting = setting_of(gain_sel, res) if gain_sel is not None else None
-
+    flag_setting = setting_of(gain_sel, res) if gain_sel is not None and res is not None else None
     numbered = [
         (i + 1, line) for i, line in enumerate(text.splitlines()) if line.strip() and not line.lstrip().startswith("#")
     ]
@@ -160,6 +167,41 @@ def parse_readings(
     delim = _delimiter(numbered[0][1])
     parsed = list(csv.reader([line for _, line in numbered], delimiter=delim))
     header = [h.strip() for h in parsed[0]]
+    raw, cols = _field_columns(source, header, need_force)
+    data_rows = parsed[1:]
+    if len(data_rows) > MAX_ROWS:
+        raise InputError(source, f"{len(data_rows)} rows", f"at most {MAX_ROWS} rows")
+    idx = {c: header.index(c) for c in header}
+    settings = (
+        _RowSettings(source, idx, flag_setting, one_setting) if all(c in header for c in SETTING_COLUMNS) else None
+    )
+    B = np.empty((len(data_rows), 3))
+    with_force = need_force or FORCE_COLUMN in header  # a readings file may carry the reference
+    F = np.empty(len(data_rows)) if with_force else None
+    sat = np.zeros(len(data_rows), dtype=bool)
+    rows, lines = [], []
+    for r, (row, (line, _)) in enumerate(zip(data_rows, numbered[1:])):
+        if len(row) != len(header):
+            raise InputError(
+                f"{source} line {line}", delim.join(row), f"has {len(row)} fields, the header {len(header)}"
+            )
+        row = [c.strip() for c in row]
+        setting = settings.of_row(line, row) if settings is not None else flag_setting
+        values = [_number(source, line, c, row[idx[c]]) for c in cols]
+        B[r], sat[r] = field_of(values, raw, setting, f"{source} line {line}")
+        if F is not None:
+            F[r] = _number(source, line, FORCE_COLUMN, row[idx[FORCE_COLUMN]])
+        rows.append(row)
+        lines.append(line)
+    one = flag_setting if settings is None or flag_setting is not None else settings.the_one(rows)
+    return Readings(
+        source=source, header=header, rows=rows, lines=lines, B_T=B, saturated=sat, force_N=F, raw=raw, setting=one
+    )
+
+
+def _field_columns(source: str, header: list[str], need_force: bool) -> tuple[bool, tuple[str, ...]]:
+    """(raw, the field columns) of a header: microtesla or raw codes; InputError for a repeated
+    column, a missing force column (``need_force``) or field columns, or a unit that is not ours."""
     if len(set(header)) != len(header):
         dup = next(h for h in header if header.count(h) > 1)
         raise InputError(f"{source} header", dup, "a column name appears twice")
@@ -169,76 +211,59 @@ def parse_readings(
             f"{source} header", ",".join(header), f"missing column {FORCE_COLUMN} (the load cell's force in newtons)"
         )
     if all(c in header for c in UT_COLUMNS):
-        raw, cols = False, UT_COLUMNS
-    elif all(c in header for c in CODE_COLUMNS):
-        raw, cols = True, CODE_COLUMNS
-    else:
-        _wrong_unit_field(source, header)
-        missing = [c for c in UT_COLUMNS if c not in header]
-        raise InputError(
-            f"{source} header",
-            ",".join(header),
-            f"missing column(s) {', '.join(missing)} (or the raw codes "
-            f"{', '.join(CODE_COLUMNS)} with --gain-sel/--res)",
-        )
-    data_rows = parsed[1:]
-    if len(data_rows) > MAX_ROWS:
-        raise InputError(source, f"{len(data_rows)} rows", f"at most {MAX_ROWS} rows")
-    idx = {c: header.index(c) for c in header}
-    has_setting_cols = all(c in header for c in SETTING_COLUMNS)
-
-    B = np.empty((len(data_rows), 3))
-    with_force = need_force or FORCE_COLUMN in header  # a readings file may carry the reference
-    F = np.empty(len(data_rows)) if with_force else None
-    sat = np.zeros(len(data_rows), dtype=bool)
-    rows, lines = [], []
-    first_setting = None
-    for r, (row, (line, _)) in enumerate(zip(data_rows, numbered[1:])):
-        if len(row) != len(header):
-            raise InputError(
-                f"{source} line {line}", delim.join(row), f"has {len(row)} fields, the header {len(header)}"
-            )
-        row = [c.strip() for c in row]
-        setting = flag_setting
-        if has_setting_cols:
-            g = _number(source, line, "gain_sel", row[idx["gain_sel"]])
-            s = _number(source, line, "res", row[idx["res"]])
-            if g != int(g) or s != int(s) or not (0 <= g <= 7 and 0 <= s <= 3):
-                raise InputError(
-                    f"{source} line {line} gain_sel/res",
-                    f"{row[idx['gain_sel']]}/{row[idx['res']]}",
-                    "GAIN_SEL must be an integer 0-7 and RES 0-3",
-                )
-            row_setting = setting_of(int(g), int(s))
-            if flag_setting is not None and row_setting != flag_setting:
-                raise InputError(
-                    f"{source} line {line} gain_sel/res",
-                    f"{int(g)}/{int(s)}",
-                    f"differs from --gain-sel {flag_setting.gain_sel} --res {flag_setting.res}: "
-                    "the readings come from another chip setting",
-                )
-            if one_setting and first_setting is not None and row_setting != first_setting:
-                raise InputError(
-                    f"{source} line {line} gain_sel/res",
-                    f"{int(g)}/{int(s)}",
-                    f"a load test must come from one chip setting (earlier rows: "
-                    f"{first_setting.gain_sel}/{first_setting.res})",
-                )
-            setting = row_setting
-            first_setting = first_setting or row_setting
-        values = [_number(source, line, c, row[idx[c]]) for c in cols]
-        B[r], sat[r] = field_of(values, raw, setting, f"{source} line {line}")
-        if with_force:
-            F[r] = _number(source, line, FORCE_COLUMN, row[idx[FORCE_COLUMN]])
-        rows.append(row)
-        lines.append(line)
-    one = flag_setting
-    if one is None and has_setting_cols:
-        settings = {(float(row[idx["gain_sel"]]), float(row[idx["res"]])) for row in rows}
-        one = first_setting if len(settings) == 1 else None
-    return Readings(
-        source=source, header=header, rows=rows, lines=lines, B_T=B, saturated=sat, force_N=F, raw=raw, setting=one
+        return False, UT_COLUMNS
+    if all(c in header for c in CODE_COLUMNS):
+        return True, CODE_COLUMNS
+    _wrong_unit_field(source, header)
+    missing = [c for c in UT_COLUMNS if c not in header]
+    raise InputError(
+        f"{source} header",
+        ",".join(header),
+        f"missing column(s) {', '.join(missing)} (or the raw codes {', '.join(CODE_COLUMNS)} with --gain-sel/--res)",
     )
+
+
+class _RowSettings:
+    """The chip setting of each row of a file with gain_sel and res columns, checked against
+    --gain-sel/--res and (``one_setting``) against the first row's."""
+
+    def __init__(self, source: str, idx: dict[str, int], flag_setting: mlx.ChipSetting | None, one_setting: bool):
+        self.source, self.idx = source, idx
+        self.flag_setting, self.one_setting = flag_setting, one_setting
+        self.first: mlx.ChipSetting | None = None
+
+    def of_row(self, line: int, row: list[str]) -> mlx.ChipSetting:
+        source, idx = self.source, self.idx
+        g = _number(source, line, "gain_sel", row[idx["gain_sel"]])
+        s = _number(source, line, "res", row[idx["res"]])
+        if g != int(g) or s != int(s) or not (0 <= g <= 7 and 0 <= s <= 3):
+            raise InputError(
+                f"{source} line {line} gain_sel/res",
+                f"{row[idx['gain_sel']]}/{row[idx['res']]}",
+                "GAIN_SEL must be an integer 0-7 and RES 0-3",
+            )
+        row_setting = setting_of(int(g), int(s))
+        flag = self.flag_setting
+        if flag is not None and row_setting != flag:
+            raise InputError(
+                f"{source} line {line} gain_sel/res",
+                f"{int(g)}/{int(s)}",
+                f"differs from --gain-sel {flag.gain_sel} --res {flag.res}: "
+                "the readings come from another chip setting",
+            )
+        if self.one_setting and self.first is not None and row_setting != self.first:
+            raise InputError(
+                f"{source} line {line} gain_sel/res",
+                f"{int(g)}/{int(s)}",
+                f"a load test must come from one chip setting (earlier rows: {self.first.gain_sel}/{self.first.res})",
+            )
+        self.first = self.first or row_setting
+        return row_setting
+
+    def the_one(self, rows: list[list[str]]) -> mlx.ChipSetting | None:
+        """The setting of every row when they share one, else None."""
+        settings = {(float(row[self.idx["gain_sel"]]), float(row[self.idx["res"]])) for row in rows}
+        return self.first if len(settings) == 1 else None
 
 
 def field_of(
@@ -277,8 +302,8 @@ def field_of(
         if setting is not None:
             ranges = (setting.xy_range_T, setting.xy_range_T, setting.z_range_T)
             lsbs = (setting.xy_uT_per_lsb, setting.xy_uT_per_lsb, setting.z_uT_per_lsb)
-            for c, v, rng, lsb in zip(cols, values, ranges, lsbs):
-                if abs(v) * 1e-6 > rng + 1.5e-6 * lsb:
+            for c, v, rng, lsb_uT in zip(cols, values, ranges, lsbs):
+                if abs(v) * 1e-6 > rng + 1.5e-6 * lsb_uT:
                     raise InputError(
                         f"{where} {c}",
                         v,
@@ -286,7 +311,7 @@ def field_of(
                         f"{setting.gain_sel}, RES {setting.res}: the readings come from "
                         "another chip setting",
                     )
-                if abs(v) * 1e-6 >= rng - 1.5e-6 * lsb:
+                if abs(v) * 1e-6 >= rng - 1.5e-6 * lsb_uT:
                     saturated = True
     # compared in microtesla, as read: 50000 uT x 1e-6 is 0.049999999999999996 T, below 50 mT
     if np.any(np.abs(B_uT) >= mlx.SATURATION_T * 1e6):
@@ -308,7 +333,7 @@ def check_load_test(
             f"needs at least {need} samples to fit {n_parameters} parameter(s) "
             f"({min_per_parameter} per parameter, {min_points} at least)",
         )
-    distinct = len(np.unique(np.round(lt.force_N, 9)))
+    distinct = len(np.unique(np.round(lt.load_N, 9)))
     if distinct < n_parameters + 2:
         raise InputError(
             f"{lt.source} {FORCE_COLUMN}",
@@ -324,7 +349,7 @@ def check_load_test(
             "its limit, so the field is unknown; remove saturated rows or use a coarser "
             "GAIN_SEL/RES",
         )
-    F = lt.force_N
+    F = lt.load_N
     lo_tol = 0.02 * design_range_N
     if F.min() < -lo_tol:
         i = int(np.argmin(F))

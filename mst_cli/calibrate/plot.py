@@ -20,7 +20,7 @@ def plot_calibration(
     title: str,
 ) -> None:
     """Measured |B| against force with the design's and the calibrated curves; residuals."""
-    from matplotlib.figure import Figure
+    from matplotlib.figure import Figure  # deferred: matplotlib is 0.45 s; --no-plot never imports it
 
     fig = Figure(figsize=(10, 4.2))
     ax1, ax2 = fig.subplots(1, 2)

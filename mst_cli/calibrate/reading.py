@@ -128,7 +128,7 @@ class ForceReader:
         top = record.calibrated_top_N() if record else None
         if top is not None:
             imap.calibrated_to_N = min(top, float(imap.force_N[-1]))
-        if note is None:
+        if note is None and record is not None:  # no note: the record beside matches
             note = record.curve_changed(imap)
         return cls(doc, imap, note, record)
 

@@ -20,13 +20,14 @@ import json
 import math
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import Any, NoReturn
 
 from mst_cli.calibrate.fit import PARAMETERS
 from mst_cli.errors import InputError
-
-if TYPE_CHECKING:
-    from mst_cli.io.schema import Document
+from mst_cli.io.files import read_input_text
+from mst_cli.io.schema import SECTIONS, Document, load_document
+from mst_cli.io.yaml_io import MAX_INPUT_BYTES
+from mst_cli.model.geometry import printer_violations
 
 OPTION = "--calibration"
 CONSTANTS_KEY = "design_constants"  # calibration.json: what the fitted factors multiply
@@ -96,13 +97,12 @@ class PrinterCalibration:
         }
 
 
-def _refuse(path, why: str):
+def _refuse(path: str | Path, why: str) -> NoReturn:
     raise InputError(OPTION, str(path), why)
 
 
-def _number(path, where: str, value, *, positive: bool = False, nullable: bool = False) -> float | None:
-    if value is None and nullable:
-        return None
+def _number(path: str | Path, where: str, value: Any, *, positive: bool = False) -> float:
+    """``value`` as a (``positive``) finite number, else InputError naming ``where``."""
     if (
         isinstance(value, bool)
         or not isinstance(value, (int, float))
@@ -125,8 +125,6 @@ def read_calibration(path: str | Path, doc: Document) -> PrinterCalibration:
     to a remanence (Br_calibrated x factor). InputError (``--calibration``) when the file is
     missing or unreadable, not JSON, not a calibration record, or fitted on another material.
     """
-    from mst_cli.io.files import read_input_text
-    from mst_cli.io.yaml_io import MAX_INPUT_BYTES
 
     text = read_input_text(
         path, MAX_INPUT_BYTES, field=OPTION, what="calibration.json", too_large=": a calibration.json is a few kB"
@@ -167,7 +165,8 @@ def read_calibration(path: str | Path, doc: Document) -> PrinterCalibration:
             out.not_used[name] = "held by the calibration" + (f" ({why})" if isinstance(why, str) else "")
             continue
         value = _number(path, f"parameters.{name}.value", entry.get("value"))
-        std = _number(path, f"parameters.{name}.std", entry.get("std"), nullable=True)
+        std_given = entry.get("std")
+        std = None if std_given is None else _number(path, f"parameters.{name}.std", std_given)
         scale = {"modulus_factor": E_cal / doc.material.youngs_modulus_MPa, "remanence_factor": Br_cal}.get(name, 1.0)
         unit = "T" if name == "remanence_factor" else par.unit
         out.taken.append(Taken(name, TARGET_KEY[name], value * scale, None if std is None else std * scale, unit))
@@ -177,10 +176,8 @@ def read_calibration(path: str | Path, doc: Document) -> PrinterCalibration:
 def apply_calibration(doc: Document, cal: PrinterCalibration) -> Document:
     """``doc`` with the taken values in its ``printer`` section and magnet (each checked against
     its key's declared bounds: InputError naming the key and ``--calibration``)."""
-    from mst_cli.io.schema import SECTIONS
-    from mst_cli.model.geometry import printer_violations
-
-    printer, magnet = {}, {}
+    printer: dict[str, Any] = {}
+    magnet: dict[str, Any] = {}
     for t in cal.taken:
         section, key = t.key.split(".")
         rule = SECTIONS[section][key]
@@ -195,4 +192,23 @@ def apply_calibration(doc: Document, cal: PrinterCalibration) -> Document:
     return out
 
 
-__all__ = ["read_calibration", "apply_calibration", "design_constants", "PrinterCalibration", "Taken"]
+def load_with_calibration(
+    spec_file: str | Path, calibration: str | Path | None
+) -> tuple[Document, PrinterCalibration | None]:
+    """A spec or design file with an earlier print's calibration applied (``mst design
+    --calibration``), and that calibration (None without one: the file as it is)."""
+    doc = load_document(spec_file)
+    if calibration is None:
+        return doc, None
+    cal = read_calibration(calibration, doc)
+    return apply_calibration(doc, cal), cal
+
+
+__all__ = [
+    "read_calibration",
+    "apply_calibration",
+    "design_constants",
+    "PrinterCalibration",
+    "Taken",
+    "load_with_calibration",
+]

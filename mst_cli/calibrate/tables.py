@@ -41,32 +41,34 @@ def lookup_csv(imap: InverseMap, setting: ChipSetting | None, n: int) -> str:
         + ("Bz_code_lsb," if code_col else "")
         + "force_N,force_mN,regime,force_resolution_N,calibrated\n"
     )
-    codes = quantise_lsb(Bz, setting.z_uT_per_lsb) if code_col else None
+    codes = quantise_lsb(Bz, setting.z_uT_per_lsb) if setting is not None else None
     for i in range(len(B)):
         buf.write(
             f"{B[i] * 1e6:.6f},{Bz[i] * 1e6:.6f},"
-            + (f"{int(codes[i])}," if code_col else "")
+            + (f"{int(codes[i])}," if codes is not None else "")
             + f"{F[i]:.9g},{F[i] * 1e3:.6g},{int(regime[i])},{res[i]:.6g},{int(F[i] <= top * (1 + 1e-9))}\n"
         )
     return buf.getvalue()
 
 
-def residuals_csv(lt: Readings, fit: FitResult, F_fit: np.ndarray, flag_fit: Sequence[str]) -> str:
+def residuals_csv(lt: Readings, fit: FitResult, F_fit: np.ndarray, flag_fit: Sequence[str] | np.ndarray) -> str:
     """Every load-test sample: measured and fitted |B|, their difference, and the force the
     calibrated inverse map reads from the measured field (empty when flagged)."""
     buf = io.StringIO()
     buf.write("line,force_N,B_abs_measured_uT,B_abs_model_uT,residual_uT,force_model_N,flag\n")
-    B_model = fit.model.field_abs_T(lt.force_N, fit.values)
+    B_model = fit.model.field_abs_T(lt.load_N, fit.values)
     for i in range(len(lt)):
         f = "" if not math.isfinite(F_fit[i]) else f"{F_fit[i]:.9g}"
         buf.write(
-            f"{lt.lines[i]},{lt.force_N[i]:.9g},{lt.B_abs_T[i] * 1e6:.6f},{B_model[i] * 1e6:.6f},"
+            f"{lt.lines[i]},{lt.load_N[i]:.9g},{lt.B_abs_T[i] * 1e6:.6f},{B_model[i] * 1e6:.6f},"
             f"{fit.residual_T[i] * 1e6:.6f},{f},{flag_fit[i]}\n"
         )
     return buf.getvalue()
 
 
-def forces_csv(rd: Readings, F: np.ndarray, regime: np.ndarray, flag: Sequence[str], res: np.ndarray) -> str:
+def forces_csv(
+    rd: Readings, F: np.ndarray, regime: np.ndarray, flag: Sequence[str] | np.ndarray, res: np.ndarray
+) -> str:
     """The readings file's columns as written (its force_N renamed force_N_reference) and
     FORCES_COLUMNS; a flagged reading's force, regime and resolution are empty."""
     header = ["force_N_reference" if h == "force_N" else h for h in rd.header]

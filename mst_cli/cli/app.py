@@ -24,35 +24,35 @@ def load_command(name: str) -> click.Command | None:
 
     Plain import statements, not importlib strings, so tests/test_architecture.py sees them."""
     if name == "simulate":
-        from mst_cli.cli.simulate import simulate
+        from mst_cli.cli.simulate import simulate  # deferred: only the command run is loaded
 
         return simulate
     if name == "design":
-        from mst_cli.cli.design import design
+        from mst_cli.cli.design import design  # deferred: only the command run is loaded
 
         return design
     if name == "export":
-        from mst_cli.cli.export import export
+        from mst_cli.cli.export import export  # deferred: only the command run is loaded
 
         return export
     if name == "check":
-        from mst_cli.cli.export import check
+        from mst_cli.cli.export import check  # deferred: only the command run is loaded
 
         return check
     if name == "bench":
-        from mst_cli.cli.bench import bench
+        from mst_cli.cli.bench import bench  # deferred: only the command run is loaded
 
         return bench
     if name == "slice":
-        from mst_cli.cli.slice import slice_
+        from mst_cli.cli.slice import slice_  # deferred: only the command run is loaded
 
         return slice_
     if name == "calibrate":
-        from mst_cli.cli.calibrate import calibrate
+        from mst_cli.cli.calibrate import calibrate  # deferred: only the command run is loaded
 
         return calibrate
     if name == "read":
-        from mst_cli.cli.calibrate import read
+        from mst_cli.cli.read import read  # deferred: only the command run is loaded
 
         return read
     return None

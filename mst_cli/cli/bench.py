@@ -6,7 +6,8 @@ from pathlib import Path
 
 import click
 
-from mst_cli.cli.common import no_plot_option, out_dir_option, seed_type
+from mst_cli.cli.common import default_out_dir, no_plot_option, out_dir_option, seed_type
+from mst_cli.io.outputs import staged
 
 
 @click.command()
@@ -25,9 +26,7 @@ def bench(samples: int, seed: int, out_dir: Path | None, quick: bool, no_plot: b
     """Measure every mechanics rung (spring, frame) and field model against the reference
     (continuum FE; magpylib) and write bench.md, bench.json and bench.png (error vs time;
     not with --no-plot)."""
-    from mst_cli.bench.ladder_bench import bench_markdown, plot_bench, run_bench
-    from mst_cli.cli.common import default_out_dir
-    from mst_cli.io.outputs import staged
+    from mst_cli.bench.ladder_bench import bench_markdown, plot_bench, run_bench  # deferred: the model ladder, 0.1 s
 
     result = run_bench(samples=samples, seed=seed, quick=quick)
     out = out_dir or default_out_dir("bench")

@@ -1,13 +1,14 @@
-"""``mst calibrate`` (fit a printed sensor to its load test) and ``mst read`` (readings -> forces).
+"""``mst calibrate``: fit a printed sensor to its load test.
 
-Options only: the calibration and its files are :mod:`mst_cli.calibrate.calibration`, the
-reading :mod:`mst_cli.calibrate.reading` (through :mod:`mst_cli.api`, as a script would call them).
+Options only: the calibration and its files are :mod:`mst_cli.calibrate.calibration` (through
+:mod:`mst_cli.api`, as a script would call it).
 """
 
 from __future__ import annotations
 
 import sys
 from pathlib import Path
+from typing import NoReturn
 
 import click
 
@@ -22,10 +23,9 @@ from mst_cli.cli.common import (
 )
 
 MECHANICS = ["spring", "frame", "continuum"]
-BAUD_RATES = (1200, 2400, 4800, 9600, 19200, 38400, 57600, 115200, 230400, 460800, 921600)
 
 
-def _fail_fit(reason: str, what: str = "calibration failed") -> None:
+def fail_fit(reason: str, what: str = "calibration failed") -> NoReturn:
     click.echo(one_line(f"mst: {what}: {reason}; nothing was written"), err=True)
     sys.exit(EXIT_TARGETS)
 
@@ -105,127 +105,10 @@ def calibrate(
             progress=lambda line: click.echo(f"mst calibrate: {line}", err=True),
         )
     except api.CalibrationFailed as exc:
-        _fail_fit(str(exc))
+        fail_fit(str(exc))
     click.echo(result.summary())
     click.echo(
         f"wrote {out}/{', '.join(result.file_names)}"
         + ("" if no_plot else ", calibration.png")
         + (f" (no C header: {result.header_reason})" if result.header_reason else "")
     )
-
-
-@click.command("read")
-@click.argument("model_file", type=click.Path(dir_okay=False, path_type=Path))
-@click.argument("readings", required=False, type=click.Path(dir_okay=False, path_type=Path))
-@click.option(
-    "--serial",
-    "port",
-    default=None,
-    metavar="PORT",
-    help="Read a live stream from this serial port (one sample per line) instead of a file.",
-)
-@click.option(
-    "--baud",
-    type=click.Choice([str(b) for b in BAUD_RATES]),
-    default="115200",
-    show_default=True,
-    help="Baud rate of --serial.",
-)
-@click.option(
-    "--count",
-    type=click.IntRange(min=1),
-    default=None,
-    help="Stop --serial after this many samples [default: until the port closes or Ctrl-C].",
-)
-@click.option(
-    "--timeout",
-    "timeout_s",
-    type=click.FloatRange(min=0.0, min_open=True),
-    default=None,
-    help="Stop --serial after this many seconds without a byte.",
-)
-@click.option("--raw", is_flag=True, help="--serial lines carry raw codes (needs --gain-sel/--res).")
-@click.option("--gain-sel", type=click.IntRange(0, 7), default=None, help="GAIN_SEL of raw codes.")
-@click.option("--res", type=click.IntRange(0, 3), default=None, help="RES of raw codes.")
-@click.option(
-    "--mechanics",
-    type=click.Choice(MECHANICS),
-    default=None,
-    help="Layer mechanics [default: the model file's model.mechanics].",
-)
-@click.option(
-    "--out",
-    "out_dir",
-    type=click.Path(file_okay=False, path_type=Path),
-    default=None,
-    help="Output folder of forces.csv [default: ./mst-out/<name>-read/; with --serial only when given].",
-)
-@handles_input_errors
-def read(
-    model_file: Path,
-    readings: Path | None,
-    port: str | None,
-    baud: str,
-    count: int | None,
-    timeout_s: float | None,
-    raw: bool,
-    gain_sel: int | None,
-    res: int | None,
-    mechanics: str | None,
-    out_dir: Path | None,
-) -> None:
-    """Turn MLX90393 readings into forces with MODEL_FILE (a calibrated.yaml).
-
-    READINGS is a CSV with Bx_uT,By_uT,Bz_uT (or Bx_code_lsb,By_code_lsb,Bz_code_lsb with
-    --gain-sel/--res); forces.csv gets the input columns plus force_N, regime, flag and
-    force_resolution_N. With --serial PORT the lines of an Arduino MLX90393 sketch
-    ("X: 12.3 \\tY: -4.5 \\tZ: 321.0 uTesla", "12.3,-4.5,321.0", ...) are shown live
-    (and written to forces.csv with --out).
-
-    Flags: above_calibrated (the model's force above the load test's largest force),
-    below_range, above_range (past the last lock) and saturated (force left empty: never
-    extrapolated).
-    """
-    if (readings is None) == (port is None):
-        raise click.UsageError("give READINGS.csv or --serial PORT (one of them)")
-    if raw and port is None:
-        raise click.UsageError("--raw is for --serial lines (a CSV says raw by its column names)")
-    doc = api.load_design(model_file)
-    out = out_dir if (out_dir is not None or port is not None) else default_out_dir(f"{doc.name}-read")
-    warn = lambda note: click.echo(f"mst read: warning: {note}", err=True)  # noqa: E731
-    try:
-        if readings is not None:
-            result = api.read(
-                doc,
-                readings,
-                out=out,
-                model_file=model_file,
-                mechanics=mechanics,
-                gain_sel=gain_sel,
-                res=res,
-                warn=warn,
-            )
-            click.echo(result.summary())
-            click.echo(f"wrote {out}/forces.csv")
-            return
-        stream = api.read_serial(
-            doc,
-            port,
-            out=out,
-            model_file=model_file,
-            baud=int(baud),
-            count=count,
-            timeout_s=timeout_s,
-            raw=raw,
-            mechanics=mechanics,
-            gain_sel=gain_sel,
-            res=res,
-            warn=warn,
-            status=lambda line: click.echo(line, err=True),
-            show=click.echo,
-        )
-    except api.CalibrationFailed as exc:
-        _fail_fit(str(exc), "no inverse map")
-    click.echo(f"{len(stream.samples)} samples, {stream.skipped} lines skipped (not a sample)", err=True)
-    if out is not None:
-        click.echo(f"wrote {out}/forces.csv", err=True)

@@ -10,19 +10,17 @@ from __future__ import annotations
 
 import errno
 import functools
-import os
 import sys
 from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, ParamSpec, TypeVar
+from typing import Any, NoReturn, ParamSpec, TypeVar
 
 import click
 
-if TYPE_CHECKING:
-    from mst_cli.io.outputs import Staging
-    from mst_cli.io.schema import Document
-    from mst_cli.model.geometry import SensorGeometry
-    from mst_cli.model.response import Response
+from mst_cli.errors import InputError
+from mst_cli.io.files import is_machine_fault, os_error_text
+from mst_cli.io.outputs import Interrupted
+from mst_cli.model.fields import SEED_RANGE
 
 _P = ParamSpec("_P")
 _R = TypeVar("_R")
@@ -31,48 +29,23 @@ _F = TypeVar("_F", bound=Callable[..., Any])
 EXIT_TARGETS, EXIT_INPUT = 1, 2  # success is a normal return (0)
 EXIT_FAULT = 1  # the machine failed (full disk, I/O error): not the input's fault
 
-# errno values that are the machine's fault rather than a bad path: exit 1, not 2
-MACHINE_FAULTS = frozenset(
-    getattr(errno, name)
-    for name in (
-        "ENOSPC",
-        "EDQUOT",
-        "EIO",
-        "ENOMEM",
-        "EMFILE",
-        "ENFILE",
-        "EFBIG",
-        "EAGAIN",
-        "EBUSY",
-        "ETXTBSY",
-        "ESTALE",
-        "ENOLCK",
-        "EREMOTEIO",
-        "ENOBUFS",
-        "EINTR",
-    )
-    if hasattr(errno, name)
-)
-
 
 def one_line(text: str) -> str:
     """``text`` with every control character escaped: what goes to stderr is always one line."""
     return "".join(c if c.isprintable() or c == " " else repr(c)[1:-1] for c in str(text))
 
 
-def fail_input(message: str) -> None:
+def fail_input(message: str) -> NoReturn:
     click.echo(one_line(f"mst: invalid input: {message}"), err=True)
     sys.exit(EXIT_INPUT)
 
 
-def os_error_line(exc: OSError) -> tuple[str, int]:
-    """(one line naming the path and the errno reason, exit code) of a file-system error."""
-    code = EXIT_FAULT if exc.errno in MACHINE_FAULTS else EXIT_INPUT
-    name = errno.errorcode.get(exc.errno, "") if exc.errno is not None else ""
-    reason = exc.strerror or (os.strerror(exc.errno) if exc.errno else str(exc))
-    paths = " -> ".join(str(p) for p in (exc.filename, exc.filename2) if p is not None) or "(unknown path)"
-    kind = "system error" if code == EXIT_FAULT else "invalid path"
-    return one_line(f"mst: {kind}: {paths}: {reason}" + (f" ({name})" if name else "")), code
+def exit_for_os_error(exc: OSError) -> NoReturn:
+    """One line naming the path and the errno reason on stderr; exit 2 (a bad path) or 1 (a
+    machine fault such as a full disk)."""
+    machine = is_machine_fault(exc)
+    click.echo(one_line(f"mst: {'system error' if machine else 'invalid path'}: {os_error_text(exc)}"), err=True)
+    sys.exit(EXIT_FAULT if machine else EXIT_INPUT)
 
 
 def handles_input_errors(func: Callable[_P, _R]) -> Callable[_P, _R]:
@@ -82,9 +55,7 @@ def handles_input_errors(func: Callable[_P, _R]) -> Callable[_P, _R]:
     command without this decorator."""
 
     @functools.wraps(func)
-    def wrapper(*args, **kwargs):
-        from mst_cli.errors import InputError
-
+    def wrapper(*args: _P.args, **kwargs: _P.kwargs) -> _R:
         try:
             return func(*args, **kwargs)
         except InputError as exc:
@@ -92,9 +63,7 @@ def handles_input_errors(func: Callable[_P, _R]) -> Callable[_P, _R]:
         except OSError as exc:
             if exc.errno == errno.EPIPE:
                 raise  # click closes stdout quietly
-            line, code = os_error_line(exc)
-            click.echo(line, err=True)
-            sys.exit(code)
+            exit_for_os_error(exc)
 
     return wrapper
 
@@ -115,9 +84,6 @@ class MstGroup(click.Group):
     ) -> Any:
         if not standalone_mode:
             return super().main(args, prog_name, complete_var, standalone_mode=False, **extra)
-        from mst_cli.errors import InputError
-        from mst_cli.io.outputs import Interrupted
-
         try:
             rv = super().main(args, prog_name or "mst", complete_var, standalone_mode=False, **extra)
         except click.exceptions.NoArgsIsHelpError as exc:
@@ -139,9 +105,7 @@ class MstGroup(click.Group):
         except InputError as exc:
             fail_input(str(exc))
         except OSError as exc:
-            line, code = os_error_line(exc)
-            click.echo(line, err=True)
-            sys.exit(code)
+            exit_for_os_error(exc)
         except ValueError as exc:
             if "null byte" not in str(exc):  # only os's refusal of a NUL in a path (in-process
                 raise  # callers; argv cannot hold one)
@@ -152,8 +116,6 @@ class MstGroup(click.Group):
 
 def seed_type() -> click.IntRange:
     """The click type of every --seed option: the range design.seed has in a spec file."""
-    from mst_cli.model.fields import SEED_RANGE
-
     return click.IntRange(*SEED_RANGE)
 
 
@@ -185,36 +147,3 @@ def no_plot_option(picture: str, cost: str, has_json: bool = True) -> Callable[[
         help=f"Draw no {picture} and import no matplotlib ({cost}). An old {picture} "
         f"in the output folder is removed, never left beside newer results.{implied}",
     )
-
-
-def write_simulation(
-    doc: Document,
-    geometry: SensorGeometry,
-    resp: Response,
-    out_dir: Path,
-    extra_files: dict[str, Any] | None = None,
-    extra_report: dict | None = None,
-    more: Callable[[Staging], None] | None = None,
-    plot: bool = True,
-) -> dict:
-    """report.json, response.csv, response.png (+ extra YAML files, + whatever ``more(staging)``
-    writes) into out_dir, atomically; returns the report written (what ``--json`` prints).
-    ``plot=False``: no response.png (any old one is removed) and matplotlib is not imported."""
-    from mst_cli.io.outputs import staged
-    from mst_cli.io.report import report_dict, response_csv
-
-    with staged(out_dir) as st:
-        for name, data in (extra_files or {}).items():
-            st.write_yaml(name, data)
-        report = report_dict(doc, geometry, resp, extra_report)
-        st.write_json("report.json", report)
-        st.write_text("response.csv", response_csv(resp))
-        if plot:
-            from mst_cli.io.report import plot_response
-
-            plot_response(resp, st.path("response.png"), title=doc.name)
-        if more is not None:
-            more(st)
-        if not plot:
-            st.remove("response.png")
-    return report

@@ -10,11 +10,16 @@ import json
 import sys
 import time
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import click
 
 from mst_cli import api
 from mst_cli.cli.common import EXIT_TARGETS, default_out_dir, handles_input_errors, out_dir_option
+from mst_cli.io.outputs import check_out_dir
+
+if TYPE_CHECKING:
+    from mst_cli.model.geometry import SensorGeometry
 
 DEFAULT_STL_TOLERANCE_MM = 0.01  # cad.exporting's (not imported here: app.py loads this module cheaply)
 
@@ -55,8 +60,7 @@ def export(
     3MF carries PrusaSlicer's pause for the magnet; the terminal and export.json give its
     layer and height. STEP is the assembly in the sensor frame (z up the stack).
     """
-    from mst_cli.cad.exporting import check_stl_tolerance, write_export
-    from mst_cli.io.outputs import check_out_dir
+    from mst_cli.cad.exporting import check_stl_tolerance, write_export  # deferred: loads the CAD layer (0.1 s)
 
     check_stl_tolerance(stl_tolerance_mm)  # one bound, shared with mst check
     if not (want_stl or want_step or want_3mf):
@@ -80,6 +84,18 @@ def export(
         design_yaml=designed.design_yaml_dict() if designed is not None else None,
         progress=lambda message: _progress(t0, message),
     )
+    _print_export_summary(geometry, out, names, want_3mf)
+    if designed is not None and designed.exit_code:
+        click.echo(
+            f"mst export: targets not met ({designed.binding}: {designed.reasons[0]}); "
+            "the body of the nearest design was written",
+            err=True,
+        )
+        sys.exit(designed.exit_code)
+
+
+def _print_export_summary(geometry: SensorGeometry, out: Path, names: list[str], want_3mf: bool) -> None:
+    """The body's size, how it prints, where the magnet pause is and the files written."""
     if geometry.magnet_tilt_deg:
         click.echo(
             f"note: magnet_tilt_deg = {geometry.magnet_tilt_deg:g} is an assembly error "
@@ -96,13 +112,6 @@ def export(
         "to drop the magnet into its pocket" + (" (the 3MF carries the pause)" if want_3mf else "")
     )
     click.echo(f"wrote {out}/{', '.join(names)}")
-    if designed is not None and designed.exit_code:
-        click.echo(
-            f"mst export: targets not met ({designed.binding}: {designed.reasons[0]}); "
-            "the body of the nearest design was written",
-            err=True,
-        )
-        sys.exit(designed.exit_code)
 
 
 @click.command("check")
@@ -122,7 +131,7 @@ def check(path: Path, as_json: bool, nozzle_mm: float | None) -> None:
     Prints a table of named checks, measured on the mesh against the design's own expected
     values in export.json. Exit 1 naming the failed checks, 2 for unreadable input.
     """
-    from mst_cli.cad.checks import resolve_export, results_dict, results_table
+    from mst_cli.cad.checks import resolve_export, results_dict, results_table  # deferred: as export's
 
     results = api.check(path, nozzle_mm=nozzle_mm)
     stl = resolve_export(path).stl

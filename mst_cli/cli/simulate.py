@@ -4,10 +4,16 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import click
 
-from mst_cli.cli.common import default_out_dir, handles_input_errors, no_plot_option, out_dir_option, write_simulation
+from mst_cli import api
+from mst_cli.cli.common import default_out_dir, handles_input_errors, no_plot_option, out_dir_option
+from mst_cli.io.outputs import check_out_dir
+
+if TYPE_CHECKING:
+    from mst_cli.io.schema import Document
 
 
 @click.command()
@@ -49,48 +55,39 @@ def simulate(
     modulus x printer.modulus_factor, gap + printer.gap_offset_mm (a design made with
     mst design --calibration carries them; they are 0, 1, 0 by default).
     """
-    from mst_cli.io.outputs import check_out_dir
-    from mst_cli.io.report import terminal_table
+    # deferred: `mst --help` loads every command module; these load the model (0.1 s)
+    from mst_cli.calibrate.fit import PRINTER_NOMINAL
+    from mst_cli.io.report import terminal_table, write_simulation
     from mst_cli.io.schema import load_design_document
     from mst_cli.model.ladder import choose_mechanics
-    from mst_cli.model.response import simulate as run
 
     doc, geometry = load_design_document(design_file)
     out = out_dir or default_out_dir(doc.name)
     check_out_dir(out)  # a bad output path is refused before any work
-    field_choice = field_model or doc.field_model
-    choice = choose_mechanics(mechanics, doc.accuracy_rel, doc.mechanics)
-    if choice.message() and not as_json:
-        click.echo(choice.message())
-    from mst_cli.calibrate.fit import PRINTER_NOMINAL, as_printed
-
-    printed = as_printed(doc)
-    pr = doc.printer
-    deviations = {key: getattr(pr, key) for key in PRINTER_NOMINAL if getattr(pr, key) != PRINTER_NOMINAL[key]}
-    if deviations and not as_json:
-        click.echo(
-            "as printed: "
-            + ", ".join(f"printer.{k} = {v:g}" for k, v in deviations.items())
-            + " (the walls drawn are the file's t_mm)"
-        )
-    resp = run(
-        printed.geometry(),
-        printed.material,
-        mechanics=choice.mechanics,
-        field_model=None if field_choice == "auto" else field_choice,
-        noise_uT_rms=doc.noise_uT_rms,
-    )
+    if not as_json:
+        _say_model_choices(doc, choose_mechanics(mechanics, doc.accuracy_rel, doc.mechanics).message())
+    resp = api.simulate(doc, mechanics=mechanics, field_model=field_model)
     plot = not (no_plot or as_json)
-    report = write_simulation(
-        doc,
-        geometry,
-        resp,
-        out,
-        plot=plot,
-        extra_report={"as_printed": {f"printer.{k}": getattr(pr, k) for k in PRINTER_NOMINAL}},
-    )
+    as_printed = {f"printer.{k}": getattr(doc.printer, k) for k in PRINTER_NOMINAL}
+    report = write_simulation(doc, geometry, resp, out, plot=plot, extra_report={"as_printed": as_printed})
     if as_json:
         click.echo(json.dumps(report, indent=2, allow_nan=False))
     else:
         click.echo(terminal_table(doc, geometry, resp))
         click.echo(f"wrote {out}/report.json, response.csv" + (", response.png" if plot else ""))
+
+
+def _say_model_choices(doc: Document, mechanics_message: str | None) -> None:
+    """The mechanics rung picked for the file, and the print parameters that differ from nominal."""
+    from mst_cli.calibrate.fit import PRINTER_NOMINAL  # deferred: as simulate's
+
+    if mechanics_message:
+        click.echo(mechanics_message)
+    pr = doc.printer
+    deviations = {key: getattr(pr, key) for key in PRINTER_NOMINAL if getattr(pr, key) != PRINTER_NOMINAL[key]}
+    if deviations:
+        click.echo(
+            "as printed: "
+            + ", ".join(f"printer.{k} = {v:g}" for k, v in deviations.items())
+            + " (the walls drawn are the file's t_mm)"
+        )

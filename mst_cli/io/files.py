@@ -10,6 +10,7 @@ non-blocking, so nothing can hang between the two. At most ``limit`` + 1 bytes a
 
 from __future__ import annotations
 
+import errno
 import os
 import stat
 from pathlib import Path
@@ -23,6 +24,43 @@ _KINDS = (
     (stat.S_ISSOCK, "a socket"),
     (stat.S_ISDIR, "a folder"),
 )
+
+
+# errno values that are the machine's fault (full disk, I/O error) rather than a bad path
+MACHINE_FAULTS = frozenset(
+    getattr(errno, name)
+    for name in (
+        "ENOSPC",
+        "EDQUOT",
+        "EIO",
+        "ENOMEM",
+        "EMFILE",
+        "ENFILE",
+        "EFBIG",
+        "EAGAIN",
+        "EBUSY",
+        "ETXTBSY",
+        "ESTALE",
+        "ENOLCK",
+        "EREMOTEIO",
+        "ENOBUFS",
+        "EINTR",
+    )
+    if hasattr(errno, name)
+)
+
+
+def is_machine_fault(exc: OSError) -> bool:
+    """True when a file-system error is the machine's fault (:data:`MACHINE_FAULTS`), not the path's."""
+    return exc.errno in MACHINE_FAULTS
+
+
+def os_error_text(exc: OSError) -> str:
+    """The paths of a file-system error, its errno reason and the errno's name, in one phrase."""
+    name = errno.errorcode.get(exc.errno, "") if exc.errno is not None else ""
+    reason = exc.strerror or (os.strerror(exc.errno) if exc.errno else str(exc))
+    paths = " -> ".join(str(p) for p in (exc.filename, exc.filename2) if p is not None) or "(unknown path)"
+    return f"{paths}: {reason}" + (f" ({name})" if name else "")
 
 
 def _kind(mode: int) -> str:

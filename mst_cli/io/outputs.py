@@ -50,7 +50,7 @@ class Interrupted(SystemExit):
         return signal.Signals(self.signum).name
 
 
-def dumps_json(data, **kwargs) -> str:
+def dumps_json(data: Any, **kwargs: Any) -> str:
     """``json.dumps`` that refuses NaN and infinities (ValueError) instead of writing them."""
     return json.dumps(data, allow_nan=False, **kwargs)
 
@@ -118,7 +118,7 @@ def remove_stale_staging(out_dir: Path, now: float | None = None) -> list[Path]:
     folder is older than STALE_AFTER_S (a pid may be reused). Folders in use are never touched.
     """
     now = time.time() if now is None else now
-    removed = []
+    removed: list[Path] = []
     try:
         entries = list(os.scandir(out_dir))
     except OSError:
@@ -185,10 +185,10 @@ class Staging:
                 exc.filename, exc.filename2 = str(self.out_dir / name), None
             raise
 
-    def write_json(self, name: str, data) -> None:
+    def write_json(self, name: str, data: Any) -> None:
         self.write_text(name, dumps_json(data, indent=2, sort_keys=False) + "\n")
 
-    def write_yaml(self, name: str, data) -> None:
+    def write_yaml(self, name: str, data: Any) -> None:
         self.write_text(name, yaml.safe_dump(data, sort_keys=False, default_flow_style=None))
 
     def remove(self, name: str) -> None:

@@ -8,19 +8,57 @@ from __future__ import annotations
 
 import io
 import math
-from typing import Any
+from collections.abc import Callable
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from mst_cli.io.outputs import Staging, staged
+from mst_cli.model.chip import quantise_lsb
 from mst_cli.model.geometry import SensorGeometry
-from mst_cli.model.response import Response
+from mst_cli.model.response import Regime, Response
+
+if TYPE_CHECKING:
+    from mst_cli.io.schema import Document
 
 SCHEMA_VERSION = 1
 
 
-def report_dict(doc, geometry: SensorGeometry, resp: Response, extra: dict | None = None) -> dict:
+def report_dict(doc: Document, geometry: SensorGeometry, resp: Response, extra: dict | None = None) -> dict:
     """Machine-readable report of one simulated design."""
-    setting = resp.chip_setting
+    out = {
+        "schema_version": SCHEMA_VERSION,
+        "name": doc.name,
+        "source": doc.source,
+        "models": {"mechanics": resp.mechanics, "field": resp.field_model},
+        "layers": _layer_rows(geometry, resp),
+        "regimes": [_regime_row(r) for r in resp.regimes],
+        "range_N": resp.max_force_N,
+        "out_of_range_above_N": resp.max_force_N,
+        "magnet": {
+            "diameter_mm": geometry.magnet.diameter_mm,
+            "thickness_mm": geometry.magnet.thickness_mm,
+            "grade": geometry.magnet.grade,
+            "remanence_T": resp.remanence_T,
+        },
+        "gap0_mm": resp.gap0_mm,
+        "gap_min_mm": resp.gap_min_mm,
+        "B0_mT": resp.B0_T * 1e3,
+        "B_full_load_mT": resp.B_full_T * 1e3,
+        "dB_rel_full_load": resp.B_full_T / resp.B0_T - 1.0,
+        "magnetometer": _magnetometer_section(geometry, resp),
+        "geometry": _geometry_section(geometry),
+        "height_budget": geometry.height_budget_mm(),
+        "warnings": list(resp.warnings),
+    }
+    if extra:
+        out.update(extra)
+    return nulls_with_reasons(out, _undefined_reasons(resp))
+
+
+def _layer_rows(geometry: SensorGeometry, resp: Response) -> list[dict]:
+    """report.json's layers: each cell as drawn and the regime it locks in."""
     layers = []
     for i, cell in enumerate(geometry.layers):
         reg = next(r for r in resp.regimes if r.layer == i + 1)
@@ -40,77 +78,61 @@ def report_dict(doc, geometry: SensorGeometry, resp: Response, extra: dict | Non
                 "locks_in_regime": reg.index,
             }
         )
-    regimes = []
-    for r in resp.regimes:
-        regimes.append(
-            {
-                "regime": r.index,
-                "locking_layer": r.layer,
-                "force_from_N": r.force_from_N,
-                "force_to_N": r.force_to_N,
-                "k_effective_N_per_mm": r.k_effective_N_per_mm,
-                "sensitivity_secant_per_N": r.sensitivity_secant_per_N,
-                "sensitivity_local_min_per_N": r.sensitivity_min_per_N,
-                "sensitivity_local_max_per_N": r.sensitivity_max_per_N,
-                "force_resolution_N": r.force_resolution_N,
-                "force_resolution_worst_N": r.force_resolution_worst_N,
-            }
-        )
-    out = {
-        "schema_version": SCHEMA_VERSION,
-        "name": doc.name,
-        "source": doc.source,
-        "models": {"mechanics": resp.mechanics, "field": resp.field_model},
-        "layers": layers,
-        "regimes": regimes,
-        "range_N": resp.max_force_N,
-        "out_of_range_above_N": resp.max_force_N,
-        "magnet": {
-            "diameter_mm": geometry.magnet.diameter_mm,
-            "thickness_mm": geometry.magnet.thickness_mm,
-            "grade": geometry.magnet.grade,
-            "remanence_T": resp.remanence_T,
-        },
-        "gap0_mm": resp.gap0_mm,
-        "gap_min_mm": resp.gap_min_mm,
-        "B0_mT": resp.B0_T * 1e3,
-        "B_full_load_mT": resp.B_full_T * 1e3,
-        "dB_rel_full_load": resp.B_full_T / resp.B0_T - 1.0,
-        "magnetometer": {
-            "model": "MLX90393",
-            "board": geometry.board.key,
-            "gain_sel": setting.gain_sel if setting else None,
-            "res": setting.res if setting else None,
-            "z_uT_per_lsb": setting.z_uT_per_lsb if setting else None,
-            "xy_uT_per_lsb": setting.xy_uT_per_lsb if setting else None,
-            "z_range_mT": setting.z_range_T * 1e3 if setting else None,
-            "noise_uT_rms": resp.noise_uT_rms,
-            "field_resolution_uT": resp.field_resolution_T * 1e6 if setting else None,
-            "saturated": resp.saturated,
-        },
-        "geometry": {
-            "total_height_mm": geometry.total_height_mm,
-            "base_length_mm": geometry.base_length_mm,
-            "base_width_mm": geometry.base_width_mm,
-            "z_hall_mm": geometry.z_hall_mm,
-            "z_magnet_bottom_mm": geometry.z_magnet_bottom_mm,
-            "print_height_mm": geometry.depth_mm,
-            "magnet_pause_after_layer": geometry.pause_after_layer,
-            "magnet_pause_height_mm": geometry.pause_height_mm,
-            "chip_offset_mm": list(geometry.chip_offset_mm),
-            "magnet_tilt_deg": geometry.magnet_tilt_deg,
-        },
-        "height_budget": geometry.height_budget_mm(),
-        "warnings": list(resp.warnings),
+    return layers
+
+
+def _regime_row(r: Regime) -> dict:
+    """report.json's row of one regime: its band, stiffness, sensitivity and resolution."""
+    return {
+        "regime": r.index,
+        "locking_layer": r.layer,
+        "force_from_N": r.force_from_N,
+        "force_to_N": r.force_to_N,
+        "k_effective_N_per_mm": r.k_effective_N_per_mm,
+        "sensitivity_secant_per_N": r.sensitivity_secant_per_N,
+        "sensitivity_local_min_per_N": r.sensitivity_min_per_N,
+        "sensitivity_local_max_per_N": r.sensitivity_max_per_N,
+        "force_resolution_N": r.force_resolution_N,
+        "force_resolution_worst_N": r.force_resolution_worst_N,
     }
-    if extra:
-        out.update(extra)
-    return nulls_with_reasons(out, _undefined_reasons(resp))
+
+
+def _magnetometer_section(geometry: SensorGeometry, resp: Response) -> dict:
+    """report.json's magnetometer: the chip setting chosen (None where saturated)."""
+    setting = resp.chip_setting
+    return {
+        "model": "MLX90393",
+        "board": geometry.board.key,
+        "gain_sel": setting.gain_sel if setting else None,
+        "res": setting.res if setting else None,
+        "z_uT_per_lsb": setting.z_uT_per_lsb if setting else None,
+        "xy_uT_per_lsb": setting.xy_uT_per_lsb if setting else None,
+        "z_range_mT": setting.z_range_T * 1e3 if setting else None,
+        "noise_uT_rms": resp.noise_uT_rms,
+        "field_resolution_uT": resp.field_resolution_T * 1e6 if setting else None,
+        "saturated": resp.saturated,
+    }
+
+
+def _geometry_section(geometry: SensorGeometry) -> dict:
+    """report.json's geometry: the part's overall sizes and the magnet pause."""
+    return {
+        "total_height_mm": geometry.total_height_mm,
+        "base_length_mm": geometry.base_length_mm,
+        "base_width_mm": geometry.base_width_mm,
+        "z_hall_mm": geometry.z_hall_mm,
+        "z_magnet_bottom_mm": geometry.z_magnet_bottom_mm,
+        "print_height_mm": geometry.depth_mm,
+        "magnet_pause_after_layer": geometry.pause_after_layer,
+        "magnet_pause_height_mm": geometry.pause_height_mm,
+        "chip_offset_mm": list(geometry.chip_offset_mm),
+        "magnet_tilt_deg": geometry.magnet_tilt_deg,
+    }
 
 
 def _undefined_reasons(resp: Response) -> dict:
     """Why a quantity of this response has no value (key -> sentence)."""
-    reasons = {}
+    reasons: dict[str, str] = {}
     if resp.chip_setting is None or not math.isfinite(resp.field_resolution_T):
         why = "undefined: the field saturates the MLX90393 at full load, so no gain setting resolves it (see warnings)"
         reasons.update(force_resolution_N=why, force_resolution_worst_N=why, field_resolution_uT=why)
@@ -122,7 +144,7 @@ def nulls_with_reasons(data: Any, reasons: dict | None = None) -> Any:
     key beside it saying why (JSON has no NaN; report.json never holds one)."""
     reasons = reasons or {}
     if isinstance(data, dict):
-        out = {}
+        out: dict[str, Any] = {}
         for key, value in data.items():
             if isinstance(value, float) and not math.isfinite(value):
                 out[key] = None
@@ -140,8 +162,6 @@ def nulls_with_reasons(data: Any, reasons: dict | None = None) -> Any:
 
 def response_csv(resp: Response) -> str:
     """One row per force sample; units in the header."""
-    from mst_cli.model.chip import quantise_lsb
-
     buf = io.StringIO()
     buf.write("force_N,displacement_mm,gap_mm,Bx_mT,By_mT,Bz_mT,B_abs_mT,dB_rel,in_range,Bz_code_lsb\n")
     data = np.column_stack(
@@ -167,7 +187,7 @@ def height_budget_line(geometry: SensorGeometry) -> str:
     )
 
 
-def terminal_table(doc, geometry: SensorGeometry, resp: Response) -> str:
+def terminal_table(doc: Document, geometry: SensorGeometry, resp: Response) -> str:
     """The short table ``mst simulate`` prints."""
     targets = {i + 1: la for i, la in enumerate(doc.layers)}
     lines = [
@@ -200,10 +220,10 @@ def terminal_table(doc, geometry: SensorGeometry, resp: Response) -> str:
     return "\n".join(lines)
 
 
-def plot_response(resp: Response, path, title: str = "") -> None:
+def plot_response(resp: Response, path: str | Path, title: str = "") -> None:
     """F-d with the lock points, and dB/B0-F with the regimes shaded."""
     # Figure without pyplot: no GUI backend machinery, and Figure.savefig renders with Agg
-    from matplotlib.figure import Figure
+    from matplotlib.figure import Figure  # deferred: matplotlib is 0.45 s; --no-plot never imports it
 
     fig = Figure(figsize=(10, 4.2))
     ax1, ax2 = fig.subplots(1, 2)
@@ -236,3 +256,31 @@ def plot_response(resp: Response, path, title: str = "") -> None:
     ax2.grid(alpha=0.3)
     fig.suptitle(title or f"mechanics={resp.mechanics}, field={resp.field_model}")
     fig.savefig(path, dpi=110, format="png")
+
+
+def write_simulation(
+    doc: Document,
+    geometry: SensorGeometry,
+    resp: Response,
+    out_dir: Path,
+    extra_files: dict[str, Any] | None = None,
+    extra_report: dict | None = None,
+    more: Callable[[Staging], None] | None = None,
+    plot: bool = True,
+) -> dict:
+    """report.json, response.csv, response.png (+ extra YAML files, + whatever ``more(staging)``
+    writes) into out_dir, atomically; returns the report written (what ``--json`` prints).
+    ``plot=False``: no response.png (any old one is removed) and matplotlib is not imported."""
+    with staged(out_dir) as st:
+        for name, data in (extra_files or {}).items():
+            st.write_yaml(name, data)
+        report = report_dict(doc, geometry, resp, extra_report)
+        st.write_json("report.json", report)
+        st.write_text("response.csv", response_csv(resp))
+        if plot:
+            plot_response(resp, st.path("response.png"), title=doc.name)
+        if more is not None:
+            more(st)
+        if not plot:
+            st.remove("response.png")
+    return report

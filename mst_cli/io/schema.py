@@ -17,15 +17,19 @@ defaults, :func:`document_to_dict` and the tables of docs/file-format.md
 
 from __future__ import annotations
 
-import math
-import re
-from dataclasses import MISSING, dataclass, fields, replace
+import sys
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass, fields, replace
 from pathlib import Path
 from typing import Any
 
 import yaml
 
 from mst_cli.errors import InputError
+from mst_cli.io import field_tables
+from mst_cli.io.files import read_input_text
+from mst_cli.io.rules import Rule, adopt, default_of
+from mst_cli.io.yaml_io import MAX_INPUT_BYTES, YAMLRefused, load_text
 from mst_cli.model import geometry as geo
 from mst_cli.model.chip import DEFAULT_NOISE_uT
 from mst_cli.model.components import BOARDS, DEFAULT_BOARD, grade_remanence_T
@@ -44,159 +48,6 @@ DEFAULT_OBJECTIVE = dict.fromkeys(OBJECTIVE_TERMS, 1.0)
 # part is over 33 mm tall and its worst force resolution coarser than 0.4 N with the default magnet.
 MAX_LAYERS = 12
 MECHANICS_MODELS = ("spring", "frame", "continuum")
-
-
-# --------------------------------------------------------------------------- field rules
-RULE_KEYS = ("lo", "hi", "lo_open", "hi_open", "choices", "nullable", "unit")  # spec() metadata a Rule reads
-
-
-def default_of(f) -> Any:
-    """The declared default of a dataclass field (MISSING when it has none)."""
-    return f.default_factory() if f.default_factory is not MISSING else f.default
-
-
-def adopt(owner: type, name: str, **changes: Any) -> Any:
-    """Field ``name`` of the dataclass ``owner`` exposed under the same key by a section class:
-    its default and metadata as declared there, with ``changes`` on top (bounds and meaning for
-    a class that declares none, such as Material; a different default)."""
-    f = owner.__dataclass_fields__[name]
-    meta = {**f.metadata, **changes}
-    default = meta.pop("default", f.default)
-    return spec(default, **meta)
-
-
-@dataclass(frozen=True)
-class Rule:
-    """What one key accepts: a kind and optional bounds (open or closed) or choices."""
-
-    kind: str  # "float", "int", "str", "bool", "pair", "bounds", "weights"
-    lo: float | None = None
-    hi: float | None = None
-    lo_open: bool = False
-    hi_open: bool = False
-    choices: tuple = ()
-    nullable: bool = False
-    unit: str = ""
-
-    @classmethod
-    def of(cls, f) -> Rule:
-        """The rule a :func:`spec` field declares; its kind is the annotation's unless given
-        (``float | None`` is a float: whether null is allowed is ``nullable``'s to say)."""
-        kind = f.metadata["kind"] or str(f.type).split(" | ")[0]
-        return cls(kind, **{k: f.metadata[k] for k in RULE_KEYS})
-
-    def describe(self) -> str:
-        unit = f" {self.unit}" if self.unit else ""
-        if self.kind == "weights":
-            return (
-                f"must be a mapping of weights >= {self.lo:g} (at least one > 0) with keys from "
-                f"{', '.join(self.choices)}"
-            )
-        if self.kind == "bounds":
-            return (
-                f"must be [low, high] with {self.lo:g} <= low < high {'<' if self.hi_open else '<='} {self.hi:g}{unit}"
-            )
-        if self.choices:
-            return "one of " + ", ".join(map(str, self.choices))
-        kind = {
-            "float": "a number",
-            "int": "an integer",
-            "str": "a string",
-            "bool": "true or false",
-            "pair": "a list of two numbers",
-        }[self.kind]
-        parts = []
-        if self.lo is not None:
-            parts.append(f"{'>' if self.lo_open else '>='} {self.lo:g}")
-        if self.hi is not None:
-            parts.append(f"{'<' if self.hi_open else '<='} {self.hi:g}")
-        null = " (or null)" if self.nullable else ""
-        return f"must be {kind}{' ' + ' and '.join(parts) if parts else ''}{unit}{null}"
-
-    def check(self, path: str, value: Any) -> Any:
-        """The value as the rule reads it (float, int, str, bool, a pair, a weights dict), or an
-        InputError naming ``path``, the value and what is allowed."""
-        if value is None:
-            if self.nullable:
-                return None
-            raise InputError(path, value, self.describe())
-        if self.kind == "weights":
-            return self._weights(path, value)
-        if self.kind in ("pair", "bounds"):
-            if not isinstance(value, (list, tuple)) or len(value) != 2:
-                raise InputError(path, value, self.describe())
-            # a [low, high] pair's bounds are checked by ordered() once its section is read
-            return tuple(self._number(f"{path}[{i}]", v, bounded=self.kind == "pair") for i, v in enumerate(value))
-        if self.kind == "str":
-            if not isinstance(value, str) or (self.choices and value not in self.choices):
-                raise InputError(path, value, self.describe())
-            return value
-        if self.kind == "bool":
-            if not isinstance(value, bool):
-                raise InputError(path, value, self.describe())
-            return value
-        if self.kind == "int":
-            if isinstance(value, bool) or not isinstance(value, int):
-                raise InputError(path, value, self.describe())
-            return int(self._bounded(path, value))
-        return self._number(path, value)
-
-    def _weights(self, path: str, value: Any) -> dict:
-        """A non-empty {term: weight} of known terms, not all zero."""
-        if not isinstance(value, dict) or not value:
-            raise InputError(path, value, self.describe())
-        out = {}
-        weight = Rule("float", lo=self.lo, hi=self.hi)
-        for key, w in value.items():
-            if key not in self.choices:
-                raise InputError(f"{path}.{key}", w, "unknown term; allowed: " + ", ".join(self.choices))
-            out[key] = weight.check(f"{path}.{key}", w)
-        if not any(out.values()):
-            raise InputError(path, value, self.describe())
-        return out
-
-    def ordered(self, path: str, pair) -> tuple[float, float]:
-        """A "bounds" pair: low < high, both inside the rule's bounds."""
-        a, b = pair
-        if not (self.lo <= a < b and (b < self.hi if self.hi_open else b <= self.hi)):
-            raise InputError(path, list(pair), self.describe())
-        return (a, b)
-
-    def _number(self, path, value, bounded=True):
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-            raise InputError(path, value, self.describe())
-        return float(self._bounded(path, value) if bounded else value)
-
-    def _bounded(self, path, value):
-        if self.lo is not None and (value <= self.lo if self.lo_open else value < self.lo):
-            raise InputError(path, value, self.describe())
-        if self.hi is not None and (value >= self.hi if self.hi_open else value > self.hi):
-            raise InputError(path, value, self.describe())
-        return value
-
-    def allowed_markdown(self) -> str:
-        """What the key accepts, as the tables of docs/file-format.md write it."""
-        choices = ", ".join(f"`{c}`" for c in self.choices)
-        if self.kind in ("str", "bool"):
-            if self.choices:
-                return ("one of " if len(self.choices) > 1 else "") + choices
-            return {"str": "any text", "bool": "true or false"}[self.kind]
-        lo, hi = _number_text(self.lo), _number_text(self.hi)  # every number is bounded both ways
-        below, above = ("<" if self.lo_open else "≤"), ("<" if self.hi_open else "≤")
-        if self.kind == "weights":
-            return f"weights {lo} {below} w {above} {hi} (at least one > 0) for any of {choices}"
-        if self.kind == "bounds":
-            return f"[low, high], {lo} {below} low < high {above} {hi}"
-        span = f"{lo} {below} {'each' if self.kind == 'pair' else 'value'} {above} {hi}"
-        return (
-            {"pair": "two numbers, ", "int": "integer, "}.get(self.kind, "")
-            + span
-            + (", or null" if self.nullable else "")
-        )
-
-
-def _number_text(value) -> str:
-    return str(value) if isinstance(value, int) else f"{value:g}"
 
 
 # --------------------------------------------------------------------------- the sections
@@ -404,6 +255,12 @@ class LayerEntry:
     )
 
     @property
+    def drawn(self) -> tuple[float, float, float]:
+        """(theta_deg, t_mm, h_mm) of a design's layer (one that :attr:`has_geometry`)."""
+        assert self.theta_deg is not None and self.t_mm is not None and self.h_mm is not None, "not a design's layer"
+        return self.theta_deg, self.t_mm, self.h_mm
+
+    @property
     def has_geometry(self) -> bool:
         return None not in (self.theta_deg, self.t_mm, self.h_mm)
 
@@ -474,7 +331,7 @@ class Document:
             return MagnetometerSection(
                 board=self.board.key,
                 noise_uT_rms=self.noise_uT_rms,
-                chip_offset_mm=tuple(self.chip_offset_mm),
+                chip_offset_mm=(self.chip_offset_mm[0], self.chip_offset_mm[1]),
                 magnet_tilt_deg=self.magnet_tilt_deg,
             )
         if name == "model":
@@ -491,11 +348,11 @@ class Document:
     def is_spec(self) -> bool:
         return all(layer.has_targets for layer in self.layers)
 
-    def geometry(self, cells=None) -> geo.SensorGeometry:
+    def geometry(self, cells: Sequence[geo.HexCell] | None = None) -> geo.SensorGeometry:
         """The sensor geometry of this document (or of ``cells`` with the same constants)."""
         if cells is None:
             self.require_geometry()
-            cells = [self.family.cell(la.theta_deg, la.t_mm, la.h_mm) for la in self.layers]
+            cells = [self.family.cell(*la.drawn) for la in self.layers]
         return geo.SensorGeometry(
             tuple(cells), self.magnet, self.board, self.housing, self.chip_offset_mm, self.magnet_tilt_deg, self.printer
         )
@@ -521,7 +378,7 @@ class Document:
                         "a spec needs target_sensitivity_per_N and target_range_N for every layer",
                     )
 
-    def with_layers(self, layers) -> Document:
+    def with_layers(self, layers: Iterable[LayerEntry]) -> Document:
         return replace(self, layers=tuple(layers))
 
 
@@ -567,20 +424,7 @@ def parse_document(raw: Any, source: str = "<memory>") -> Document:
     for key in raw:
         if key not in TOP_KEYS:
             raise InputError(str(key), raw[key], "unknown top-level key; allowed: " + ", ".join(TOP_KEYS))
-    name = raw.get("name", Path(source).stem if source != "<memory>" else "sensor")
-    name = Rule("str").check("name", name)
-    if (
-        not name
-        or any(c in name for c in "/\\")
-        or name.startswith(".")
-        or any(ord(c) < 32 or ord(c) == 127 for c in name)
-    ):
-        raise InputError(
-            "name",
-            name,
-            "must be a non-empty file-name-safe string (no '/', '\\', "
-            "control characters or NUL; not starting with '.')",
-        )
+    name = _file_name(raw.get("name", Path(source).stem if source != "<memory>" else "sensor"))
 
     # the sections in file order, each from its declaration: keys not given take its defaults
     family = CellFamily(**_section(raw, "family"))
@@ -601,42 +445,9 @@ def parse_document(raw: Any, source: str = "<memory>") -> Document:
     for field_name, value, allowed in probe.housing_violations():
         raise InputError(field_name, value, allowed)
 
-    layers_raw = raw.get("layers")
-    if not isinstance(layers_raw, list) or not 1 <= len(layers_raw) <= MAX_LAYERS:
-        raise InputError(
-            "layers",
-            layers_raw if not isinstance(layers_raw, list) else f"{len(layers_raw)} layers",
-            f"must be a list of 1 to {MAX_LAYERS} layers (bottom to top): each adds at least 2 mm "
-            "of height and moves the magnet away from the chip",
-        )
-    layers = []
-    for i, entry in enumerate(layers_raw):
-        path = f"layers[{i}]"
-        if not isinstance(entry, dict):
-            raise InputError(
-                path,
-                entry,
-                "must be a mapping with theta_deg, t_mm, h_mm and/or target_sensitivity_per_N, target_range_N",
-            )
-        values = {}
-        for key, value in entry.items():
-            if key not in LAYER_RULES:
-                raise InputError(f"{path}.{key}", value, "unknown key; allowed: " + ", ".join(LAYER_RULES))
-            values[key] = LAYER_RULES[key].check(f"{path}.{key}", value)
-        layer = LayerEntry(**values)
-        if not (layer.has_geometry or layer.has_targets):
-            missing = [k for k in GEOMETRY_KEYS + TARGET_KEYS if getattr(layer, k) is None]
-            raise InputError(
-                f"{path}.{missing[0]}",
-                None,
-                "each layer needs theta_deg, t_mm, h_mm (a design) or "
-                "target_sensitivity_per_N, target_range_N (a spec)",
-            )
-        layers.append(layer)
-
     return Document(
         name=name,
-        layers=tuple(layers),
+        layers=_layers(raw.get("layers")),
         family=family,
         material=material,
         magnet=magnet,
@@ -654,11 +465,62 @@ def parse_document(raw: Any, source: str = "<memory>") -> Document:
     )
 
 
+def _file_name(value: Any) -> str:
+    """The document's ``name``: a string that is safe as a file name (output folders use it)."""
+    name = Rule("str").check("name", value)
+    if (
+        not name
+        or any(c in name for c in "/\\")
+        or name.startswith(".")
+        or any(ord(c) < 32 or ord(c) == 127 for c in name)
+    ):
+        raise InputError(
+            "name",
+            name,
+            "must be a non-empty file-name-safe string (no '/', '\\', "
+            "control characters or NUL; not starting with '.')",
+        )
+    return name
+
+
+def _layers(layers_raw: Any) -> tuple[LayerEntry, ...]:
+    """The ``layers`` list: 1 to MAX_LAYERS entries, each a design's or a spec's (or both)."""
+    if not isinstance(layers_raw, list) or not 1 <= len(layers_raw) <= MAX_LAYERS:
+        raise InputError(
+            "layers",
+            layers_raw if not isinstance(layers_raw, list) else f"{len(layers_raw)} layers",
+            f"must be a list of 1 to {MAX_LAYERS} layers (bottom to top): each adds at least 2 mm "
+            "of height and moves the magnet away from the chip",
+        )
+    return tuple(_layer(f"layers[{i}]", entry) for i, entry in enumerate(layers_raw))
+
+
+def _layer(path: str, entry: Any) -> LayerEntry:
+    """One entry of ``layers``: theta_deg, t_mm, h_mm and/or the targets, each checked."""
+    if not isinstance(entry, dict):
+        raise InputError(
+            path,
+            entry,
+            "must be a mapping with theta_deg, t_mm, h_mm and/or target_sensitivity_per_N, target_range_N",
+        )
+    values = {}
+    for key, value in entry.items():
+        if key not in LAYER_RULES:
+            raise InputError(f"{path}.{key}", value, "unknown key; allowed: " + ", ".join(LAYER_RULES))
+        values[key] = LAYER_RULES[key].check(f"{path}.{key}", value)
+    layer = LayerEntry(**values)
+    if not (layer.has_geometry or layer.has_targets):
+        missing = [k for k in GEOMETRY_KEYS + TARGET_KEYS if getattr(layer, k) is None]
+        raise InputError(
+            f"{path}.{missing[0]}",
+            None,
+            "each layer needs theta_deg, t_mm, h_mm (a design) or target_sensitivity_per_N, target_range_N (a spec)",
+        )
+    return layer
+
+
 def load_document(path: str | Path) -> Document:
     """Read and validate a design or spec file."""
-    from mst_cli.io.files import read_input_text
-    from mst_cli.io.yaml_io import MAX_INPUT_BYTES, YAMLRefused, load_text
-
     path = Path(path)
     # a regular file only (a FIFO would block), at most MAX_INPUT_BYTES + 1 bytes read
     text = read_input_text(path, MAX_INPUT_BYTES, what="YAML file", too_large=": a design file is a few KB")
@@ -675,7 +537,7 @@ def load_document(path: str | Path) -> Document:
     return parse_document(raw, source=str(path))
 
 
-def section_to_dict(declared: type, values) -> dict:
+def section_to_dict(declared: type, values: Any) -> dict:
     """The keys ``declared`` (a section or layer dataclass) declares, read from ``values`` (any
     object with those attributes), as a file writes them: pairs as lists; a key declared
     ``omit_default`` is left out while it holds its default."""
@@ -688,11 +550,11 @@ def section_to_dict(declared: type, values) -> dict:
     return out
 
 
-def document_to_dict(doc: Document, layers=None) -> dict:
+def document_to_dict(doc: Document, layers: Sequence[LayerEntry] | None = None) -> dict:
     """Serialise a document back to the file format (all sections but ``design``, explicit values;
     mst_cli.design.document.design_dict adds a spec's ``design`` section)."""
     layers = doc.layers if layers is None else layers
-    out = {"name": doc.name}
+    out: dict[str, Any] = {"name": doc.name}
     for name, declared in SECTION_TYPES.items():
         if name != "design":
             out[name] = section_to_dict(declared, doc.section(name))
@@ -723,47 +585,20 @@ def design_geometry(doc: Document) -> geo.SensorGeometry:
 
 
 # --------------------------------------------------------------------------- docs/file-format.md
-def _default_markdown(f, rule: Rule) -> str:
-    value = default_of(f)
-    if value is None:
-        return "null" if rule.nullable else "—"  # — : no default (a layer gives a group or none)
-    if isinstance(value, str):
-        return f"`{value}`"
-    if isinstance(value, dict):
-        return "`{" + ", ".join(f"{k}: {_number_text(v)}" for k, v in value.items()) + "}`"
-    if isinstance(value, tuple):
-        return "[" + ", ".join(map(_number_text, value)) + "]"
-    return _number_text(value)
+FIELD_TABLE = field_tables.FIELD_TABLE
 
 
 def field_table_markdown(section: str) -> str:
     """The table of one section (or ``layers``) in docs/file-format.md, from the declarations."""
     declared, prefix = (LayerEntry, "layers[i]") if section == "layers" else (SECTION_TYPES[section], section)
-    rows = ["| key | allowed | unit | default | meaning |", "|---|---|---|---|---|"]
-    for f in fields(declared):
-        rule = Rule.of(f)
-        cells = (
-            f"`{prefix}.{f.name}`",
-            rule.allowed_markdown(),
-            rule.unit or "–",
-            _default_markdown(f, rule),
-            f.metadata["meaning"],
-        )
-        rows.append("| " + " | ".join(c.replace("|", "\\|") for c in cells) + " |")
-    return "\n".join(rows)
-
-
-FIELD_TABLE = re.compile(r"(<!-- fields:(\w+) -->\n).*?(<!-- /fields -->)", re.S)
+    return field_tables.table_markdown(declared, prefix)
 
 
 def with_field_tables(text: str) -> str:
     """``text`` (docs/file-format.md) with every table between ``<!-- fields:SECTION -->`` and
     ``<!-- /fields -->`` regenerated: ``python -m mst_cli.io.schema docs/file-format.md``."""
-    return FIELD_TABLE.sub(lambda m: m.group(1) + field_table_markdown(m.group(2)) + "\n" + m.group(3), text)
+    return field_tables.with_tables(text, field_table_markdown)
 
 
 if __name__ == "__main__":  # rewrite the field tables of the files named (docs/file-format.md)
-    import sys
-
-    for doc_path in map(Path, sys.argv[1:]):
-        doc_path.write_text(with_field_tables(doc_path.read_text()))
+    field_tables.rewrite(sys.argv[1:], field_table_markdown)

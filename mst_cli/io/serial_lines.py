@@ -53,7 +53,7 @@ def parse_line(line: str, raw: bool = False) -> tuple[float, float, float] | Non
     line = line.strip()
     if not line:
         return None
-    found = {}
+    found: dict[str, tuple[str, str]] = {}
     for label, number, unit in LABELLED.findall(line):
         found.setdefault(label.lower(), (number, unit))
     if set(found) == {"x", "y", "z"}:
@@ -126,7 +126,7 @@ class LineSource:
         self._serial = None
         self._fd = None
         try:
-            import termios  # noqa: F401
+            import termios  # noqa: F401  # deferred: POSIX only (the test of the platform)
 
             posix = True
         except ImportError:
@@ -141,7 +141,7 @@ class LineSource:
                 raise
         else:  # pragma: no cover - Windows
             try:
-                import serial
+                import serial  # deferred: pyserial, an optional dependency (Windows only)
             except ImportError:
                 raise OSError(
                     0, "reading a serial port on this platform needs pyserial (pip install pyserial)", port
@@ -153,11 +153,13 @@ class LineSource:
         if self._serial is not None:  # pragma: no cover - Windows
             data = self._serial.read(4096)
             return data
-        ready, _, _ = select.select([self._fd], [], [], wait_s)
+        fd = self._fd
+        assert fd is not None  # open (set in __init__ unless pyserial reads the port)
+        ready, _, _ = select.select([fd], [], [], wait_s)
         if not ready:
             return b""
         try:
-            data = os.read(self._fd, 4096)
+            data = os.read(fd, 4096)
         except BlockingIOError:
             return b""
         except OSError as exc:
@@ -197,7 +199,7 @@ class LineSource:
 
 def _set_raw(fd: int, baud: int) -> None:
     """8N1, no echo, no line editing, no flow control, at ``baud``."""
-    import termios
+    import termios  # deferred: POSIX only (never reached elsewhere)
 
     attrs = termios.tcgetattr(fd)
     iflag, oflag, cflag, lflag, ispeed, ospeed, cc = attrs

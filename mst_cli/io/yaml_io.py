@@ -120,7 +120,7 @@ def _key_text(node) -> str:
     return node.value if isinstance(node.value, str) else str(node.value)
 
 
-def check_keys(node, path: str = "") -> None:
+def check_keys(node: yaml.Node, path: str = "") -> None:
     """Refuse duplicate, merge and non-scalar keys anywhere below ``node`` (a composed node)."""
     stack = [(node, path)]
     while stack:

@@ -1,0 +1,52 @@
+"""The long help texts of the ``mst`` commands (click prints them with ``--help``), kept apart
+from the options so that each command module reads as its options and its few calls."""
+
+DESIGN = """Find theta, t, h of every layer so that the sensor meets SPEC_FILE's targets.
+
+Per layer the spec gives a target sensitivity S (dB/B0 per newton, secant over the
+regime) and the force R at which that layer locks (the regime's end). Three variables
+per layer meet two targets; the spare freedom picks, among the designs that meet them,
+the one that minimises the spec's design.objective: a weighted sum of total height,
+worst force resolution and print robustness (how much S and R change when every wall is
+printed printer.wall_tolerance_mm off, default 0.05 mm; reported per layer, with the worst
+change beside the RMS). --pareto N maps the trade. The walls are designed as printed
+(printer.wall_offset_mm, printer.modulus_factor; --calibration takes them from an earlier
+print) and design.yaml draws them as drawn. Every achieved number comes from re-running
+the forward model on the written design as printed.
+
+Writes design.yaml (loadable by mst simulate and mst export), report.json,
+response.csv and response.png (not with --no-plot or --json).
+
+With --refine frame|continuum (or model.accuracy_rel asking for a dearer rung, or
+model.mechanics: frame|continuum) the fast L0 optimum is polished for that model and the
+targets are judged by it; report.json's refinement section lists the iterations.
+
+\b
+Exit codes:
+  0  every target within the tolerance (design.tolerance_rel, default 2 %)
+  1  physically unreachable: the nearest design is written and the binding
+     target or constraint is named (field change the magnet cannot give,
+     forces outside what printable walls reach, S rising with force, ...)
+  2  invalid or self-contradictory spec (e.g. ranges that do not increase)
+"""
+
+DESIGN_REFINE = (
+    "Polish the L0 optimum with a dearer mechanics model (output space mapping: "
+    "L0 targets corrected by the dear model's miss, L0 re-solved, repeated); every "
+    "achieved number then comes from that model [default: model.accuracy_rel's "
+    "pick, else model.mechanics if not spring, else no refinement]."
+)
+
+DESIGN_PARETO = (
+    "Also map the trade among designs that meet the targets: up to N non-dominated "
+    "designs over total height, worst force resolution and print robustness, "
+    "written to pareto.csv (one design per row, units in the header) and "
+    "pareto.png, the chosen one (design.objective's weights) marked."
+)
+
+DESIGN_CALIBRATION = (
+    "Design for the printer as an earlier print measured it: take the wall offset, modulus "
+    "factor, gap offset and remanence that mst calibrate fitted on a print of any design "
+    "(same printer and filament) into printer.* and magnet.remanence_T; parameters the "
+    "calibration held are not used, and named."
+)
