@@ -39,7 +39,8 @@ the tangent stiffness reaches LOCK_STIFFNESS_FACTOR x k: a wall pinched between 
 its mirror, or the pads meeting (docs/design.md section 4). With rigid pads that is at most
 d = h - 2t - allowance; the pads are elastic, so they meet up to a few per cent later.
 
-scikit-fem is imported inside the functions, never at module import (``mst`` stays fast).
+This module loads only when L2 is asked for (``mechanics`` defers it), so scipy is imported at its
+top; scikit-fem, the slowest import, loads only when a mesh is built.
 """
 
 from __future__ import annotations
@@ -51,6 +52,8 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
+from scipy.sparse import coo_matrix, csc_matrix, csr_matrix
+from scipy.sparse.linalg import splu, spsolve
 
 from mst_cli.model import geometry as geo
 from mst_cli.model.mechanics.frame import TabulatedLockingLayer, locked_tabulated_law
@@ -162,8 +165,20 @@ def quarter_profile_mesh(
         + X[..., None] * (B - Bp)[None, None, :]
         + (E * (1.0 - X))[..., None] * (C - Bp)[None, None, :]
     )
+    pts, tri = _stitch_blocks((pad, wall, wedge), max(cell.h_mm, 1.0))
+    return pts.T.copy(), tri, x_cut
+
+
+def _stitch_blocks(grids, length_scale_mm: float) -> tuple[np.ndarray, np.ndarray]:
+    """Triangulate structured point grids (ni, nj, 2) and merge the nodes they share.
+
+    Each grid quad becomes two triangles; nodes closer than 1e-9 ``length_scale_mm`` are one
+    node (the blocks' common lines, the wedge's apex); triangles that collapse onto a merged
+    node are dropped and every triangle is made counter-clockwise. Returns (points (N, 2),
+    triangles (3, M)).
+    """
     blocks, tris, offset = [], [], 0
-    for grid in (pad, wall, wedge):
+    for grid in grids:
         ni, nj = grid.shape[:2]
         idx = offset + np.arange(ni * nj).reshape(ni, nj)
         a, b = idx[:-1, :-1].ravel(), idx[1:, :-1].ravel()
@@ -175,7 +190,7 @@ def quarter_profile_mesh(
     pts = np.concatenate(blocks)
     tri = np.concatenate(tris, axis=1)
     # merge the nodes shared by the blocks (the wall-root line, the line B'C, the apex B)
-    key = np.round(pts / max(cell.h_mm, 1.0) * 1e9).astype(np.int64)
+    key = np.round(pts / length_scale_mm * 1e9).astype(np.int64)
     _, first, inverse = np.unique(key, axis=0, return_index=True, return_inverse=True)
     pts = pts[first]
     tri = inverse.ravel()[tri]
@@ -186,7 +201,7 @@ def quarter_profile_mesh(
     area2 = (p1[:, 0] - p0[:, 0]) * (p2[:, 1] - p0[:, 1]) - (p1[:, 1] - p0[:, 1]) * (p2[:, 0] - p0[:, 0])
     flip = area2 < 0
     tri[1, flip], tri[2, flip] = tri[2, flip], tri[1, flip].copy()
-    return pts.T.copy(), tri, x_cut
+    return pts, tri
 
 
 def refined_quarter_mesh(
@@ -203,7 +218,7 @@ def refined_quarter_mesh(
     the named ``corners`` (CORNERS: the cavity's tip vertex, the outer wall-root corner, the
     inner wall-root corner). Returns (skfem MeshTri, x_cut_mm).
     """
-    from skfem import MeshTri
+    from skfem import MeshTri  # deferred: scikit-fem (0.2 s) loads only when a mesh is built
 
     pts, tri, x_cut = quarter_profile_mesh(cell, n_thick, n_length)
     mesh = MeshTri(pts, tri)
@@ -212,11 +227,11 @@ def refined_quarter_mesh(
         "outer_root": cell.outer_profile_xz()[0],
         "inner_root": cell.inner_profile_xz()[0],
     }
-    corners = np.array([where[name] for name in corners])
+    at = np.array([where[name] for name in corners])  # (n, 2) corner positions, mm
     for i in range(levels):
         mid = mesh.p[:, mesh.t].mean(axis=1)
         r = radius_in_t * cell.t_mm * 0.5**i
-        dist = np.hypot(mid[0][None, :] - corners[:, :1], mid[1][None, :] - corners[:, 1:])
+        dist = np.hypot(mid[0][None, :] - at[:, :1], mid[1][None, :] - at[:, 1:])
         marked = np.flatnonzero((dist < r).any(axis=0))
         if marked.size:
             mesh = mesh.refined(marked)
@@ -265,7 +280,6 @@ class _Assembler:
         self.N = basis.N
         # CSR pattern of K (scipy merges the duplicate entries in C), and where element entry
         # (e, i, j) goes in its data: the rank of its key row * N + col among the pattern's keys
-        from scipy.sparse import coo_matrix
 
         rows = np.broadcast_to(self.dofs[:, :, None], (n_el, n_loc, n_loc)).ravel()
         cols = np.broadcast_to(self.dofs[:, None, :], (n_el, n_loc, n_loc)).ravel()
@@ -293,7 +307,6 @@ class _Assembler:
     def tangent(self, state, mu, lam):
         """K = int grad v : A : grad du, A = dP/dF = mu I - (lam ln J - mu) F^-T (x) F^-T
         (transposed pairing) + lam F^-T (x) F^-T, as CSR on the fixed pattern."""
-        from scipy.sparse import csr_matrix
 
         FiT, lnJ = state
         Fi = FiT.transpose(2, 3, 0, 1)  # (n_el, n_q, 2, 2)
@@ -339,7 +352,7 @@ class ContinuumResult:
 
 class _Problem:
     def __init__(self, cell, material, n_thick, n_length, levels, corners=CORNERS, radius_in_t=REFINE_RADIUS_IN_T):
-        from skfem import Basis, ElementTriP2, ElementVector
+        from skfem import Basis, ElementTriP2, ElementVector  # deferred: scikit-fem, as in refined_quarter_mesh
 
         self.cell = cell
         self.mesh, x_cut = refined_quarter_mesh(cell, n_thick, n_length, levels, corners, radius_in_t)
@@ -431,8 +444,6 @@ class _Problem:
         """Tangent stiffness dF/dd (N/mm) of the converged state (u, active) at compression d:
         one linear solve with the state's tangent, the tip and the active inner contacts moving
         with the mirror plane, the active outer contacts held on the plate."""
-        from scipy.sparse import csc_matrix
-        from scipy.sparse.linalg import spsolve
 
         asm = _assembler(self.basis)
         if active is None:
@@ -462,8 +473,6 @@ class _Problem:
         key = np.asarray(pinned_extra, dtype=np.int64).tobytes()
         block = self._blocks.get(key)
         if block is None:
-            from scipy.sparse import csr_matrix
-
             free = np.setdiff1d(self.free, pinned_extra)
             asm = _assembler(self.basis)
             # number K's entries 1..nnz (exact in floats), cut the block, read the numbers back
@@ -487,8 +496,6 @@ class _Problem:
 
     def _newton(self, u, d, active=None, max_iter=30, rtol=1e-8, pads=False):
         """:meth:`solve_step`, also returning the residual at the solution (for :meth:`force`)."""
-        from scipy.sparse import csc_matrix
-        from scipy.sparse.linalg import spsolve
 
         asm = _assembler(self.basis)
         dofs, sign = self.contact_dofs, self.contact_sign
@@ -590,13 +597,7 @@ def solve_continuum(
     ContinuumError      when the path cannot be followed (steps stalled below 1e-7 of the
                         stroke, no contact up to D_MAX_OVER_NOMINAL times it)
     """
-    bad = [v for v in cell.violations() if v.rule in ("pad_width", "lock_stroke")] + (
-        [] if cell.p_mm > 0 and cell.h_mm > 2 * cell.t_mm else [None]
-    )
-    if bad:
-        why = bad[0].message if bad[0] is not None else "h <= 2t or p <= 0"
-        raise ValueError(f"continuum model needs a meshable cell: {why}")
-
+    _require_meshable(cell)
     fine = _Problem(cell, material, n_thick, n_length, levels)
     k_lin = linear_k(fine)
     # The nonlinear path runs on the mesh without corner refinement: on the refined one the
@@ -616,21 +617,32 @@ def solve_continuum(
         )
     except PathError as exc:
         raise ContinuumError(f"continuum solve: {exc} for {cell}") from None
-    F = np.array([0.0] + [F * mesh_scale for F, _, _ in path.observations])
-    balance = path.observations[-1][1]
-    contacts = np.array([0] + [n for _, _, n in path.observations])
+    return _result(path, k_lin, mesh_scale, ratio_after, int(fine.basis.N))
+
+
+def _require_meshable(cell: geo.HexCell) -> None:
+    """Raise ValueError for a cell whose quarter profile cannot be meshed."""
+    bad = [v for v in cell.violations() if v.rule in ("pad_width", "lock_stroke")]
+    if bad:
+        raise ValueError(f"continuum model needs a meshable cell: {bad[0].message}")
+    if not (cell.p_mm > 0 and cell.h_mm > 2 * cell.t_mm):
+        raise ValueError("continuum model needs a meshable cell: h <= 2t or p <= 0")
+
+
+def _result(path, k_lin: float, mesh_scale: float, ratio_after: float, n_dofs: int) -> ContinuumResult:
+    """The path's samples as a ContinuumResult, forces scaled to the refined mesh."""
     return ContinuumResult(
         np.array([0.0] + path.d_mm),
-        F,
+        np.array([0.0] + [F * mesh_scale for F, _, _ in path.observations]),
         k_lin,
         float(path.d_mm[-1]),
         path.event_at,
         path.iterations,
-        int(fine.basis.N),
-        float(balance),
+        n_dofs,
+        float(path.observations[-1][1]),
         float(mesh_scale),
         float(ratio_after),
-        contacts,
+        np.array([0] + [n for _, _, n in path.observations]),
     )
 
 
@@ -706,8 +718,6 @@ def linear_stiffness_N_per_mm(
 
 def linear_k(problem) -> float:
     """Small-strain stiffness of a built problem: one linear solve with the tangent at u = 0."""
-    from scipy.sparse import csc_matrix
-    from scipy.sparse.linalg import splu
 
     _, K0 = problem.assemble(np.zeros(problem.basis.N))
     ul = np.zeros(problem.basis.N)
