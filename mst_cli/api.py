@@ -228,16 +228,8 @@ def designed(path: str | Path, progress: Callable[[str], None] | None = None) ->
 
     result = design_document(doc)
     geometry = result.geometry
-    for i, v in geometry.violations(result.document.printer):
-        raise InputError(
-            f"layers[{i}]",
-            {
-                "theta_deg": geometry.layers[i].theta_deg,
-                "t_mm": geometry.layers[i].t_mm,
-                "h_mm": geometry.layers[i].h_mm,
-            },
-            f"the designed cell is invalid ({v.rule}): {v.message}",
-        )
+    for v in geometry.violations(result.document.printer):
+        raise v.input_error("the designed cell is invalid")
     if progress is not None:
         progress(f"designed: targets {result.status}")
     return result.document, result

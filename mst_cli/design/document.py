@@ -370,8 +370,8 @@ def verify_design(
             }
         )
     checks = {}
-    for i, v in geometry.violations(doc.printer):
-        checks[f"layer {i + 1} {v.rule}"] = f"layer {i + 1}: {v.message}"
+    for v in geometry.violations(doc.printer):
+        checks[f"layer {v.layer + 1} {v.rule}"] = f"layer {v.layer + 1}: {v.message}"
     for i in range(1, n):
         if R[i] < (1 + problem.lock_margin_rel) * R[i - 1]:
             checks[f"lock order {i}-{i + 1}"] = (
