@@ -236,12 +236,22 @@ def run_bench(samples: int = 24, seed: int = 0, quick: bool = False, material=No
     return result
 
 
-def _pct(x):
+def _pct(x: float | None) -> str:
     return "n/a" if x is None else f"{100 * x:.1f} %"
 
 
 def bench_markdown(result: dict) -> str:
     """The table a person reads (bench.md)."""
+    lines = _rung_table(result) + _field_table(result["field"])
+    if "mesh_convergence" in result:
+        lines += _mesh_lines(result["mesh_convergence"])
+    lines += band_lines(result["rows"])
+    lines += _worst_lines(result["rows"])
+    return "\n".join(lines) + "\n"
+
+
+def _rung_table(result: dict) -> list[str]:
+    """The heading and the rungs' table: time per layer, speed-up, errors against L2."""
     m = result["models"]
     t_ref = m["continuum"]["time_per_layer_s"]
     b = result["bounds"]
@@ -274,8 +284,12 @@ def bench_markdown(result: dict) -> str:
         f"| L0 corrected, vectorised (design loop) | {tv * 1e6:.3f} µs | {t_ref / tv:,.0f}x | same | same | same | 0 |"
     )
     lines.append(f"| L2 continuum (reference) | {t_ref * 1e3:.0f} ms | 1x | — | — | — | {m['continuum']['failures']} |")
-    f = result["field"]
-    lines += [
+    return lines
+
+
+def _field_table(f: dict) -> list[str]:
+    """The field models against magpylib's exact cylinder."""
+    lines = [
         "",
         f"Field models against magpylib's exact cylinder, on the axis, gaps "
         f"{f['gaps_mm'][0]:g}–{f['gaps_mm'][-1]:g} mm (max |error|, time per point):",
@@ -286,29 +300,38 @@ def bench_markdown(result: dict) -> str:
     for mname in ("dipole", "axial"):
         lines.append(f"| {mname} | {_pct(f['max_abs_error'][mname])} | {f['time_per_point_s'][mname] * 1e6:.2f} µs |")
     lines.append(f"| cylinder (magpylib) | reference | {f['time_per_point_s']['cylinder'] * 1e6:.2f} µs |")
-    if "mesh_convergence" in result:
-        lines += [
-            "",
-            "L2 mesh convergence (small-strain k relative to the finest mesh; "
-            "mesh = elements across t, along the wall, corner refinement rounds):",
-            "",
-        ]
-        for r in result["mesh_convergence"]:
-            parts = ", ".join(f"{tuple(mm)}: {100 * e:+.2f} %" for mm, e in zip(r["meshes"], r["rel_to_finest"]))
-            lines.append(f"- theta {r['theta_deg']:g}, t {r['t_mm']:g}, h {r['h_mm']:g}: {parts}")
-    lines += band_lines(result["rows"])
+    return lines
+
+
+def _mesh_lines(convergence: list[dict]) -> list[str]:
+    """L2's stiffness on each mesh relative to the finest, per cell."""
+    lines = [
+        "",
+        "L2 mesh convergence (small-strain k relative to the finest mesh; "
+        "mesh = elements across t, along the wall, corner refinement rounds):",
+        "",
+    ]
+    for r in convergence:
+        parts = ", ".join(f"{tuple(mm)}: {100 * e:+.2f} %" for mm, e in zip(r["meshes"], r["rel_to_finest"]))
+        lines.append(f"- theta {r['theta_deg']:g}, t {r['t_mm']:g}, h {r['h_mm']:g}: {parts}")
+    return lines
+
+
+def _worst_lines(rows: list[dict]) -> list[str]:
+    """The three cells with the largest L1 lock-force error, and L0's and L1's errors there."""
     worst = sorted(
-        (r for r in result["rows"] if "err_k" in r.get("frame", {})), key=lambda r: -abs(r["frame"]["err_lock_force"])
+        (r for r in rows if "err_k" in r.get("frame", {})), key=lambda r: -abs(r["frame"]["err_lock_force"])
     )[:3]
-    if worst:
-        lines += ["", "Where the cheap rungs fail most (largest L1 lock-force error):", ""]
-        for r in worst:
-            lines.append(
-                f"- theta {r['theta_deg']:g}, t {r['t_mm']:g}, h {r['h_mm']:g} (t/L {r['t_over_L']:.2f}): "
-                f"L0 k {_pct(r['spring']['err_k'])}, R {_pct(r['spring']['err_lock_force'])}; "
-                f"L1 k {_pct(r['frame']['err_k'])}, R {_pct(r['frame']['err_lock_force'])}"
-            )
-    return "\n".join(lines) + "\n"
+    if not worst:
+        return []
+    lines = ["", "Where the cheap rungs fail most (largest L1 lock-force error):", ""]
+    for r in worst:
+        lines.append(
+            f"- theta {r['theta_deg']:g}, t {r['t_mm']:g}, h {r['h_mm']:g} (t/L {r['t_over_L']:.2f}): "
+            f"L0 k {_pct(r['spring']['err_k'])}, R {_pct(r['spring']['err_lock_force'])}; "
+            f"L1 k {_pct(r['frame']['err_k'])}, R {_pct(r['frame']['err_lock_force'])}"
+        )
+    return lines
 
 
 BANDS = {

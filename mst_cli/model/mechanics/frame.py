@@ -51,6 +51,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from mst_cli.model import geometry as geo
+from mst_cli.model.material import Material
 from mst_cli.model.mechanics.path import PathError, StepControl, follow_to_event
 from mst_cli.model.mechanics.spring import (
     SHEAR_COEFFICIENT_RECT,
@@ -268,29 +269,13 @@ def solve_frame(
     ValueError     for a cell without a cavity stroke (h - 2t <= allowance) or with p <= 0
     FrameError     when the path cannot be followed (steps stalled, a failed solve near contact)
     """
-    if not (cell.p_mm > 0 and cell.cavity_height_mm > cell.contact_allowance_mm):
-        raise ValueError(
-            f"frame model needs a cell with p > 0 and h - 2t > the contact allowance "
-            f"(theta={cell.theta_deg:g} deg, t={cell.t_mm:g} mm, h={cell.h_mm:g} mm)"
-        )
+    _require_stroke(cell)
     wall = _Wall(cell, material, n_elements)
     factor = 2.0  # two chevrons in parallel
     allowance = cell.contact_allowance_mm
     u = np.zeros(wall.ndof)
-
-    # small-load stiffness: the tangent at u = 0, tip moved by -1/2 per unit layer compression
-    f0, K0 = wall.assemble(u)
-    free = wall.free
-    ul = np.zeros_like(u)
-    ul[wall.tip_w] = -0.5
-    ul[free] = np.linalg.solve(K0[np.ix_(free, free)], -K0[free, wall.tip_w] * ul[wall.tip_w])
-    k_lin = float(-(K0 @ ul)[wall.tip_w] * factor)
-
-    # the lock stroke: L2's (its stiffness knee, where a wall is pinched or the pads meet),
-    # through L0's fit of it (module docstring); "pad" when that is the rigid pads' stroke
-    d_pads = cell.cavity_height_mm - allowance
-    d_lock = min(spring_layer(cell, material).d_lock_mm, d_pads)
-    closes = "pad" if d_lock >= d_pads else "wall"
+    k_lin = _small_load_stiffness(wall) * factor
+    d_lock, closes = _lock_stroke(cell, material)
 
     def margin(u, d):
         return d_lock - d, closes
@@ -319,6 +304,36 @@ def solve_frame(
     return FrameResult(
         np.array([0.0] + path.d_mm), F, k_lin, float(path.d_mm[-1]), path.event_at, path.iterations, snap
     )
+
+
+def _require_stroke(cell: geo.HexCell) -> None:
+    """ValueError for a cell the frame cannot follow: no pad (p <= 0) or no stroke."""
+    if not (cell.p_mm > 0 and cell.cavity_height_mm > cell.contact_allowance_mm):
+        raise ValueError(
+            f"frame model needs a cell with p > 0 and h - 2t > the contact allowance "
+            f"(theta={cell.theta_deg:g} deg, t={cell.t_mm:g} mm, h={cell.h_mm:g} mm)"
+        )
+
+
+def _small_load_stiffness(wall: _Wall) -> float:
+    """One wall's small-load stiffness (N/mm of layer compression): the tangent at u = 0, tip
+    moved by -1/2 per unit layer compression."""
+    u = np.zeros(wall.ndof)
+    f0, K0 = wall.assemble(u)
+    free = wall.free
+    ul = np.zeros_like(u)
+    ul[wall.tip_w] = -0.5
+    ul[free] = np.linalg.solve(K0[np.ix_(free, free)], -K0[free, wall.tip_w] * ul[wall.tip_w])
+    return float(-(K0 @ ul)[wall.tip_w])
+
+
+def _lock_stroke(cell: geo.HexCell, material: Material) -> tuple[float, str]:
+    """(d_lock mm, what closes): L2's lock stroke (its stiffness knee, where a wall is pinched or
+    the pads meet), through L0's fit of it (module docstring); "pad" when that is the rigid
+    pads' stroke."""
+    d_pads = cell.cavity_height_mm - cell.contact_allowance_mm
+    d_lock = min(spring_layer(cell, material).d_lock_mm, d_pads)
+    return d_lock, "pad" if d_lock >= d_pads else "wall"
 
 
 def locked_tabulated_law(
