@@ -16,13 +16,16 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from mst_cli.model import field as fld
 from mst_cli.model.geometry import HexCell, Magnet
+from mst_cli.model.material import Material
+from mst_cli.model.mechanics import uncached_layer_law
+from mst_cli.model.mechanics.continuum import linear_stiffness_N_per_mm
 from mst_cli.model.mechanics.correction import VERIFIED_BOX
+from mst_cli.model.mechanics.spring import spring_arrays, spring_layer
 
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
-
-    from mst_cli.model.material import Material
 
 # The printable box (mechanics.correction.VERIFIED_BOX, also the default design bounds): every
 # rung is fitted and measured on it.
@@ -48,9 +51,6 @@ def sample_cells(
 
 
 def _law(model, cell, material):
-    from mst_cli.model.mechanics import uncached_layer_law
-    from mst_cli.model.mechanics.spring import spring_layer
-
     if model in ("spring-textbook", "spring"):
         return spring_layer(cell, material, corrected=model == "spring")
     return uncached_layer_law(cell, material, model)
@@ -71,8 +71,6 @@ def time_per_layer_s(model, cells, material, repeat: int = 1) -> float:
 
 def spring_vectorised_time_per_layer_s(cells, material, repeat: int = 20) -> float:
     """Per-layer time of L0 as the design loop calls it: spring_arrays over all cells at once."""
-    from mst_cli.model.mechanics.spring import spring_arrays
-
     # the family constants too come from the cells (HexCell's declared defaults), not literals
     arrays = [
         np.array([getattr(c, k) for c in cells])
@@ -141,8 +139,6 @@ def summarise(rows: Sequence[dict], model: str) -> dict:
 
 def field_errors(gaps_mm: ArrayLike, magnet: Magnet | None = None) -> dict[str, list[float]]:
     """Relative error of |B| on the axis of the dipole and axial models against magpylib."""
-    from mst_cli.model import field as fld
-
     magnet = Magnet() if magnet is None else magnet
     g = np.asarray(gaps_mm, dtype=float)
     exact = np.linalg.norm(fld.field_at_chip_T(g, magnet, "cylinder"), axis=-1)
@@ -155,8 +151,6 @@ def field_errors(gaps_mm: ArrayLike, magnet: Magnet | None = None) -> dict[str, 
 
 def field_times_s(gaps_mm: ArrayLike, magnet: Magnet | None = None, repeat: int = 20) -> dict[str, float]:
     """Per-point time of each field model on the gap array, s."""
-    from mst_cli.model import field as fld
-
     magnet = Magnet() if magnet is None else magnet
     g = np.asarray(gaps_mm, dtype=float)
     out = {}
@@ -177,8 +171,6 @@ def mesh_convergence(
     meshes: Sequence[tuple[int, int, int]] = ((2, 8, 2), (3, 12, 4), (4, 16, 5), (6, 24, 6)),
 ) -> list[dict]:
     """L2 small-strain k on successively finer meshes (n_thick, n_length, corner levels)."""
-    from mst_cli.model.mechanics.continuum import linear_stiffness_N_per_mm
-
     out = []
     for c in cells:
         ks = [linear_stiffness_N_per_mm(c, material, *m) for m in meshes]
@@ -197,8 +189,6 @@ def mesh_convergence(
 
 def run_bench(samples: int = 24, seed: int = 0, quick: bool = False, material=None) -> dict:
     """Measure every rung and field model; returns the JSON-ready result."""
-    from mst_cli.model.material import Material
-
     material = material or Material()
     cells = sample_cells(samples, seed)
     rows = compare_mechanics(cells, material)
@@ -381,10 +371,10 @@ def band_lines(rows) -> list[str]:
 def plot_bench(result: dict, path) -> None:
     """Log-log median and p90 |error| against time per layer, one point per rung: stiffness
     on the left, lock force on the right."""
-    import matplotlib
+    import matplotlib  # deferred: about 0.5 s of import, for --plot only
 
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # deferred: as above, after the backend is chosen
 
     fig, axes = plt.subplots(1, 2, figsize=(10, 4), sharey=True)
     m = result["models"]

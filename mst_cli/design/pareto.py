@@ -280,7 +280,7 @@ def plot_pareto(front: list[ParetoDesign], path, title: str = "") -> None:
     """Two views of the front against part height: print robustness (the trade a short part
     pays) and worst force resolution; the chosen design ringed, every design numbered as in
     pareto.csv."""
-    from matplotlib.figure import Figure
+    from matplotlib.figure import Figure  # deferred: matplotlib loads only for pareto.png
 
     M = np.array([p.metrics for p in front])
     x = M[:, 0]

@@ -34,8 +34,20 @@ import numpy as np
 from mst_cli.calibrate.fit import as_printed
 from mst_cli.design.document import ROUND_DECIMALS, DesignResult, _layer_outputs, design_document, verify_design
 from mst_cli.design.problem import DesignProblem
+from mst_cli.design.solver import (
+    FEASIBILITY_TOL,
+    MAX_TIME_S,
+    ROUNDING_SAFETY,
+    Tracker,
+    _Budget,
+    _Matcher,
+    _nlopt_failures,
+    _Phase,
+    _Stop,
+)
 from mst_cli.errors import InputError
 from mst_cli.io.schema import Document
+from mst_cli.model.ladder import USER_LADDER, choose_mechanics, load_ladder_errors, rung_errors
 from mst_cli.model.response import simulate
 
 REFINE_MODELS = ("frame", "continuum")
@@ -154,8 +166,6 @@ def _local_match(problem: DesignProblem, theta, t, h, maxeval: int = LOCAL_MAX_E
     Returns the rounded (theta, t, h), the candidate designs evaluated and whether every L0
     output is within the tolerance of the (corrected) targets.
     """
-    from mst_cli.design.solver import FEASIBILITY_TOL, MAX_TIME_S, ROUNDING_SAFETY, Tracker, _Budget, _Matcher, _Phase
-
     u0 = np.clip(problem.to_unit(theta, t, h), 0.0, 1.0)
     lo, hi = np.maximum(u0 - LOCAL_TRUST, 0.0), np.minimum(u0 + LOCAL_TRUST, 1.0)
     matcher = _Matcher(problem)
@@ -190,9 +200,7 @@ def _run_local(phase, local: str, u0, lo, hi, maxeval: int, step: float) -> bool
     """One nlopt run of ``phase``'s callbacks in the box [lo, hi]; the phase's tracker keeps
     the best point whatever way the run ends. True when nlopt ended on its own stopping rules
     or the goal (False: a failure, roundoff or the budget)."""
-    import nlopt
-
-    from mst_cli.design.solver import _nlopt_failures, _Stop
+    import nlopt  # deferred: the optimiser loads when a design is searched, not at start-up
 
     opt = nlopt.opt(nlopt.LD_SLSQP if local == "slsqp" else nlopt.LN_COBYLA, phase.problem.dim)
     opt.set_lower_bounds(lo)
@@ -223,8 +231,6 @@ def print_error_rung(doc: Document, model: str, errors: dict | None = None) -> t
     stiffness and 1.5 % in lock force, ``ladder_errors.json``) are small beside the 10-50 % changes
     it measures; the dear rung there costs 2 solves per layer for a second digit.
     """
-    from mst_cli.model.ladder import USER_LADDER, choose_mechanics, load_ladder_errors, rung_errors
-
     errors = load_ladder_errors() if errors is None else errors
     if doc.accuracy_rel is None:
         err = rung_errors("spring", errors)

@@ -130,7 +130,7 @@ class _Budget:
 def _nlopt_failures() -> tuple:
     """nlopt's generic failure: Python's RuntimeError up to nlopt 2.10, its own
     ``nlopt.runtime_error`` (not a RuntimeError) from 2.11 on."""
-    import nlopt
+    import nlopt  # deferred: the optimiser loads when a design is searched, not at start-up
 
     return tuple(e for e in (getattr(nlopt, "runtime_error", None),) if isinstance(e, type))
 
@@ -195,7 +195,7 @@ class _Phase:
             grad[:] = self.dg
 
     def run(self, x0, local: str, maxeval: int, step: float, stops: list):
-        import nlopt
+        import nlopt  # deferred: the optimiser loads when a design is searched, not at start-up
 
         NLOPT_FAILURES = _nlopt_failures()
         dim = self.problem.dim
@@ -547,7 +547,7 @@ class _SharedEvaluations:
         """Each job called with its own batched view of the problem; their results in order.
         A job's Exception is raised once every other job has finished; anything else (an
         interrupt) at once."""
-        from greenlet import getcurrent, greenlet
+        from greenlet import getcurrent, greenlet  # deferred: only the batched polish of many weightings runs them
 
         out: list = [None] * len(jobs)
         errors: list[Exception] = []

@@ -52,6 +52,7 @@ import numpy as np
 
 from mst_cli.model import geometry as geo
 from mst_cli.model.material import Material
+from mst_cli.model.mechanics.correction import stiffness_factor
 from mst_cli.model.mechanics.path import PathError, StepControl, follow_to_event
 from mst_cli.model.mechanics.spring import (
     SHEAR_COEFFICIENT_RECT,
@@ -355,8 +356,6 @@ def locked_tabulated_law(
 @functools.lru_cache(maxsize=4096)
 def frame_layer(cell: geo.HexCell, material) -> TabulatedLockingLayer:
     """The L1 law of one cell: the frame curve up to contact, then the locked branch (walls + contact column)."""
-    from mst_cli.model.mechanics.correction import stiffness_factor
-
     res = solve_frame(cell, material)
     # the beam clamps the wall at the pad mid-plane and the tip; the finite joints' effect is
     # the same fitted factor as L0's (a function of t/L and theta only), applied to the forces
