@@ -15,12 +15,13 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from dataclasses import fields, replace
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, cast
 
 from mst_cli.errors import InputError
 
 if TYPE_CHECKING:
     from mst_cli.cad.checks import Check
+    from mst_cli.cad.manifest import Manifest
     from mst_cli.cad.slicing import SliceResult
     from mst_cli.calibrate.calibration import Calibration
     from mst_cli.calibrate.reading import ForceReadings, SerialSamples
@@ -320,7 +321,8 @@ def check(path: str | Path, *, nozzle_mm: float | None = None) -> list[Check]:
     # both inputs are validated before anything is measured: every field the checks read (type,
     # nesting, finite and sane size) and every STL coordinate (finite, within a metre). Past
     # this point a KeyError or TypeError is a bug in a check, not bad input.
-    manifest = load_manifest(found.manifest)
+    manifest = cast("Manifest", load_manifest(found.manifest))  # kind=Manifest by default
+    assert found.stl is not None  # resolve_export found one (need_stl)
     return run_checks(load_mesh(found.stl), manifest, nozzle_mm)
 
 
@@ -485,7 +487,7 @@ def _reader(
         model_file = design
     if (gain_sel is None) != (res is None):
         raise InputError("--gain-sel/--res", f"{gain_sel}/{res}", "give both GAIN_SEL and RES, or neither")
-    setting = setting_of(gain_sel, res) if gain_sel is not None else None
+    setting = setting_of(gain_sel, res) if gain_sel is not None and res is not None else None
     if raw and setting is None:
         raise InputError("--gain-sel/--res", None, "--raw codes need the chip setting: give --gain-sel and --res")
     _check_out(out)

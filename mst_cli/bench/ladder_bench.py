@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Iterable, Sequence
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -41,7 +41,7 @@ def sample_cells(
     experiments and for topping up sparse corners of the box in the L0 fit."""
     bounds = {**BOUNDS, **(bounds or {})}
     rng = np.random.default_rng(seed)
-    out = []
+    out: list[HexCell] = []
     while len(out) < n:
         th, t, h = (rng.uniform(*bounds[k]) for k in ("theta_deg", "t_mm", "h_mm"))
         c = HexCell(round(float(th), 3), round(float(t), 3), round(float(h), 3))
@@ -72,14 +72,16 @@ def time_per_layer_s(model, cells, material, repeat: int = 1) -> float:
 def spring_vectorised_time_per_layer_s(cells, material, repeat: int = 20) -> float:
     """Per-layer time of L0 as the design loop calls it: spring_arrays over all cells at once."""
     # the family constants too come from the cells (HexCell's declared defaults), not literals
-    arrays = [
+    theta, t, h, b, width, allowance = (
         np.array([getattr(c, k) for c in cells])
         for k in ("theta_rad", "t_mm", "h_mm", "b_mm", "width_mm", "contact_allowance_mm")
-    ]
+    )
     best = np.inf
     for _ in range(repeat):
         t0 = time.perf_counter()
-        spring_arrays(*arrays, material.youngs_modulus_MPa, material.poisson_ratio, corrected=True)
+        spring_arrays(
+            theta, t, h, b, width, allowance, material.youngs_modulus_MPa, material.poisson_ratio, corrected=True
+        )
         best = min(best, time.perf_counter() - t0)
     return best / len(cells)
 
@@ -96,7 +98,12 @@ def compare_mechanics(
     """
     rows = []
     for c in cells:
-        row = {"theta_deg": c.theta_deg, "t_mm": c.t_mm, "h_mm": c.h_mm, "t_over_L": c.t_mm / c.wall_length_mm}
+        row: dict[str, Any] = {
+            "theta_deg": c.theta_deg,
+            "t_mm": c.t_mm,
+            "h_mm": c.h_mm,
+            "t_over_L": c.t_mm / c.wall_length_mm,
+        }
         try:
             ref = _law(reference, c, material)
             row[reference] = {
@@ -110,7 +117,11 @@ def compare_mechanics(
         for m in models:
             try:
                 law = _law(m, c, material)
-                entry = {"k_N_per_mm": law.k_N_per_mm, "d_lock_mm": law.d_lock_mm, "lock_force_N": law.lock_force_N}
+                entry: dict[str, Any] = {
+                    "k_N_per_mm": law.k_N_per_mm,
+                    "d_lock_mm": law.d_lock_mm,
+                    "lock_force_N": law.lock_force_N,
+                }
                 if ref is not None:
                     entry["err_k"] = law.k_N_per_mm / ref.k_N_per_mm - 1.0
                     entry["err_d_lock"] = law.d_lock_mm / ref.d_lock_mm - 1.0
@@ -124,7 +135,7 @@ def compare_mechanics(
 
 def summarise(rows: Sequence[dict], model: str) -> dict:
     """Median and 90th-percentile |error| of one model over the rows where both solved."""
-    out = {"failures": 0}
+    out: dict[str, Any] = {"failures": 0}
     for key in ("err_k", "err_d_lock", "err_lock_force"):
         vals = np.array([abs(r[model][key]) for r in rows if key in r.get(model, {})])
         out[key] = {

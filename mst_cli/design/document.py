@@ -29,6 +29,7 @@ import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
+from typing import Protocol
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -36,7 +37,7 @@ from numpy.typing import ArrayLike
 from mst_cli.calibrate.fit import as_printed
 from mst_cli.design import explain
 from mst_cli.design.problem import DesignProblem
-from mst_cli.design.solver import SolveResult, solve
+from mst_cli.design.solver import solve
 from mst_cli.errors import InputError
 from mst_cli.io.report import height_budget_line
 from mst_cli.io.schema import Document, LayerEntry, document_to_dict
@@ -48,6 +49,26 @@ EXIT_MET, EXIT_NOT_MET = 0, 1
 SAME_RUNG_RULE = "the rung that judges the design"  # print error's rung when the caller names none
 WARN_PRINT_DEVIATION_REL = 0.25  # above this worst change a design without a limit says so
 PRINT_DEVIATION_CHECK = "print deviation"  # the check design.max_print_deviation_rel fails
+
+
+class SolverFacts(Protocol):
+    """What :func:`verify_design` reports of the search that found a design: a
+    :class:`~mst_cli.design.solver.SolveResult`, or the facts a refinement gathers of its own."""
+
+    @property
+    def matched(self) -> bool: ...
+    @property
+    def evaluations(self) -> int: ...
+    @property
+    def local(self) -> str: ...
+    @property
+    def starts_used(self) -> int: ...
+    @property
+    def preference_before(self) -> float | None: ...
+    @property
+    def preference_after(self) -> float | None: ...
+    @property
+    def stops(self) -> list | dict: ...
 
 
 @dataclass
@@ -321,7 +342,7 @@ def verify_design(
     theta: ArrayLike,
     t: ArrayLike,
     h: ArrayLike,
-    sol: SolveResult,
+    sol: SolverFacts,
     *,
     seed: int,
     max_evaluations: int,
@@ -382,7 +403,7 @@ def _why_not_met(
     cells: tuple[np.ndarray, np.ndarray, np.ndarray],
     achieved: tuple[np.ndarray, np.ndarray],
     checks: dict[str, str],
-    sol: SolveResult,
+    sol: SolverFacts,
     max_evaluations: int,
 ) -> tuple[str | None, list[str]]:
     """(binding, reasons) of a design that misses: :func:`explain.diagnose`, and the budget when
@@ -562,7 +583,7 @@ def _objective(doc: Document, geometry: geo.SensorGeometry, resp: Response, prin
     }
 
 
-def _solver_info(sol: SolveResult) -> dict:
+def _solver_info(sol: SolverFacts) -> dict:
     """report.json's ``solver``: the method, whether it matched, the starts and the preference."""
     return {
         "method": "layer-by-layer start + Gauss-Newton match, nlopt "

@@ -175,7 +175,8 @@ class _Front:
         max_evaluations: int,
         local: str,
     ):
-        self.doc, self.sol, self.points = doc, sol, points
+        assert sol.u_matched is not None  # the caller's match succeeded
+        self.doc, self.u_matched, self.points = doc, sol.u_matched, points
         self.seed, self.max_evaluations, self.local = seed, max_evaluations, local
         self.problem = DesignProblem(doc)
         # what a front design reports of the solver: the shared match and its own polish
@@ -187,7 +188,7 @@ class _Front:
         once the front holds ``count`` designs."""
         polished = prefer_many(
             self.problem,
-            [self.sol.u_matched] * len(wave),
+            [self.u_matched] * len(wave),
             list(wave),
             max_evaluations=self.max_evaluations,
             local=self.local,
@@ -222,7 +223,7 @@ class _Front:
             max_evaluations=self.max_evaluations,
             mechanics="spring",
         )
-        return ParetoDesign(res, tuple(float(x) for x in w)) if res.status == "met" else None
+        return ParetoDesign(res, (float(w[0]), float(w[1]), float(w[2]))) if res.status == "met" else None
 
 
 # --------------------------------------------------------------------------- output

@@ -59,7 +59,7 @@ from __future__ import annotations
 import inspect
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, cast
 
 import numpy as np
 
@@ -74,6 +74,8 @@ from mst_cli.model.response import field_magnitude_T, regime_kernel
 
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
+
+    from mst_cli.model.arrays import Floats
 
 # headroom choose_setting keeps between the largest field and a setting's range (one source)
 CHIP_HEADROOM = inspect.signature(mlx.choose_setting).parameters["margin"].default
@@ -216,7 +218,7 @@ class DesignProblem:
         gap = np.asarray(gap_mm, dtype=float)  # magpylib takes a flat list of observers
         return field_magnitude_T(gap.ravel(), self.probe, self.field_model).reshape(gap.shape)
 
-    def gap0_mm(self, sum_h_mm: ArrayLike) -> np.ndarray:
+    def gap0_mm(self, sum_h_mm: Floats) -> Floats:
         """Unloaded magnet-to-chip gap, as built, of stacks whose layer heights add up to ``sum_h_mm``."""
         return geo.unloaded_gap_mm(sum_h_mm, self.n, self.probe.housing, self.probe.board) + self.gap_offset_mm
 
@@ -269,17 +271,20 @@ class DesignProblem:
             t = np.maximum(t + self.wall_offset_mm, geo.LENGTH_FLOOR_MM)
         theta_rad = np.radians(theta)
         E = web_modulus_MPa(theta_rad, t, h, fam.depth_mm, self.E_MPa, self.nu)  # as mechanics.layer_laws
-        laws = spring_arrays(theta_rad, t, h, fam.depth_mm, fam.width_mm, fam.contact_allowance_mm, E, self.nu)
+        laws: tuple[np.ndarray, ...] = spring_arrays(
+            theta_rad, t, h, fam.depth_mm, fam.width_mm, fam.contact_allowance_mm, E, self.nu
+        )
         if inverse is not None:
             laws = tuple(a[inverse] for a in laws)
-        return tuple(a.reshape(cells.shape[:-1]) for a in laws)
+        k, d_lock, R, k_locked = (a.reshape(cells.shape[:-1]) for a in laws)
+        return k, d_lock, R, k_locked
 
     def responses(
         self, theta_deg: np.ndarray, t_mm: np.ndarray, h_mm: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """(R_N per layer, S_per_N per regime, B_full_T, gap0_mm, B0_T) of candidate stacks."""
         k, d_lock, R, k_locked = self.layer_laws(theta_deg, t_mm, h_mm)
-        gap0 = self.gap0_mm(h_mm.sum(axis=-1))
+        gap0 = cast(np.ndarray, self.gap0_mm(h_mm.sum(axis=-1)))  # candidates' sums: an array
         _, S, _, B = regime_kernel(k, d_lock, k_locked, gap0, self.field_T, R)
         return R, S, B[..., -1], gap0, B[..., 0]
 
@@ -291,7 +296,9 @@ class DesignProblem:
         the two print-shifted stacks through the kernels in one call: each candidate's numbers
         are, to the bit, those of the two calls (the kernels give a stack the same bits in any
         batch)."""
-        return self._evaluate_physical(*self.to_physical(u), True)
+        ev, shifts = self._evaluate_physical(*self.to_physical(u), True)
+        assert shifts is not None  # asked for
+        return ev, shifts
 
     def _evaluate_physical(self, theta_deg, t_mm, h_mm, with_shifts: bool) -> tuple[Evaluation, np.ndarray | None]:
         theta_deg, t_mm, h_mm = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in (theta_deg, t_mm, h_mm)))

@@ -39,7 +39,7 @@ import math
 import time
 from collections import OrderedDict
 from dataclasses import dataclass, field, fields
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -422,7 +422,7 @@ def prefer(
     elif not polished_matched and budget.left > per_iter:
         phase = _Phase(problem, m.batch, problem.n_constraints, rematch, budget, "re-match", m.goal)
         phase.run(polished, local, min(iters, budget.left // per_iter), 0.02 * INITIAL_STEP, stops)
-    final = rematch.u if m.matched_at(rematch.u) else u_matched
+    final = rematch.u if rematch.u is not None and m.matched_at(rematch.u) else u_matched
 
     # -- phase 4: the preference once more, inside the narrow band
     e, after = pref_at(final)
@@ -514,7 +514,7 @@ class _SharedEvaluations:
 
     def __init__(self, problem: DesignProblem):
         self.problem = problem
-        self.caller = None
+        self.caller: Any = None  # the greenlet that serves the batch
 
     def ask(self, job: int, u: np.ndarray) -> tuple[Evaluation, np.ndarray]:
         """Evaluation and preference terms of ``u`` (one point (dim,) or a batch (k, dim)),

@@ -24,7 +24,7 @@ from mst_cli.model.printer import Printer
 from mst_cli.model.violation import Violation
 
 
-def unloaded_gap_mm(sum_h_mm: Floats, n_layers: int, housing: Housing, board: Board) -> np.ndarray:
+def unloaded_gap_mm(sum_h_mm: Floats, n_layers: int, housing: Housing, board: Board) -> Floats:
     """Magnet pole face to Hall plates with no load, for arrays of total layer height.
 
     Hall plates at the package centre -> chip top -> the board's taller parts (headroom) -> air
@@ -168,7 +168,8 @@ class SensorGeometry:
 
     layers: tuple[HexCell, ...]
     magnet: Magnet = Magnet()
-    board: Board | None = None
+    # None (the default) is the default board, which __post_init__ puts here: a Board after
+    board: Board = None  # type: ignore[assignment]
     housing: Housing = Housing()
     chip_offset_mm: tuple[float, float] = spec(
         (0.0, 0.0),

@@ -70,7 +70,7 @@ def wall_centreline_length_mm(theta_rad: Floats, t_mm: Floats, h_mm: Floats) -> 
     return np.maximum(0.5 * (h_mm - t_mm) / np.sin(theta_rad), LENGTH_FLOOR_MM)
 
 
-def cavity_height_mm(t_mm: Floats, h_mm: Floats) -> np.ndarray:
+def cavity_height_mm(t_mm: Floats, h_mm: Floats) -> Floats:
     """Clear height of the cavity at the centre, h - 2t (negative for an invalid cell)."""
     return h_mm - 2.0 * t_mm
 
@@ -239,7 +239,7 @@ class HexCell:
 
     def violations(self, printer: Printer = DEFAULT_PRINTER) -> list[Violation]:
         """Every broken validity rule (empty when the cell is printable and works)."""
-        return [v for v in self.margins(printer) if v.margin_mm < 0.0]
+        return [v for v in self.margins(printer) if v.margin_mm is not None and v.margin_mm < 0.0]
 
     def margins(self, printer: Printer = DEFAULT_PRINTER) -> list[Violation]:
         """Signed margin of every rule in mm (>= 0 satisfied); used as optimiser constraints.

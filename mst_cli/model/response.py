@@ -225,7 +225,7 @@ def _secant_sensitivities(
         # zero-width band: the secant's limit is the local slope at that force
         dB = (field_T(gap_edges[i] + GAP_STEP_MM) - field_T(gap_edges[i] - GAP_STEP_MM)) / (2 * GAP_STEP_MM)
         # squeeze: the cylinder model gives shape (1,) for one gap, which S[i] cannot hold
-        S[i] = -float(np.squeeze(dB)) * stack.band_start_compliance_mm_per_N(i) / B0
+        S[i] = -float(np.squeeze(dB)) * stack.band_start_compliance_mm_per_N(int(i)) / B0
     return S, degenerate, B_edges
 
 
@@ -242,7 +242,7 @@ def _regimes(
     res_T, B0 = resolution
     edges, order, laws = stack.regime_bounds_N, stack.lock_order, stack.layers
     n = len(edges) - 1
-    mid_compliance = stack.local_compliance_mm_per_N(0.5 * (edges[:-1] + edges[1:]))  # one lookup, not n
+    mid_compliance = np.asarray(stack.local_compliance_mm_per_N(0.5 * (edges[:-1] + edges[1:])))  # one lookup, not n
     # slope extremes of every band in one pass: F ascends, so each band's samples are one run,
     # [starts[i], starts[i + 1]); band n is the overload past the last lock, never empty
     starts = np.minimum(np.searchsorted(band, np.arange(n + 1)), len(band) - 1)
