@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Iterable, Sequence
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -56,7 +57,7 @@ def _law(model, cell, material):
     return uncached_layer_law(cell, material, model)
 
 
-def time_per_layer_s(model, cells, material, repeat: int = 1) -> float:
+def time_per_layer_s(model: str, cells: Iterable[HexCell], material: Material, repeat: int = 1) -> float:
     """Median wall-clock time of one layer law (no caches), s."""
     times = []
     for c in cells:
@@ -69,7 +70,7 @@ def time_per_layer_s(model, cells, material, repeat: int = 1) -> float:
     return float(np.median(times))
 
 
-def spring_vectorised_time_per_layer_s(cells, material, repeat: int = 20) -> float:
+def spring_vectorised_time_per_layer_s(cells: Sequence[HexCell], material: Material, repeat: int = 20) -> float:
     """Per-layer time of L0 as the design loop calls it: spring_arrays over all cells at once."""
     # the family constants too come from the cells (HexCell's declared defaults), not literals
     theta, t, h, b, width, allowance = (
@@ -198,7 +199,7 @@ def mesh_convergence(
     return out
 
 
-def run_bench(samples: int = 24, seed: int = 0, quick: bool = False, material=None) -> dict:
+def run_bench(samples: int = 24, seed: int = 0, quick: bool = False, material: Material | None = None) -> dict:
     """Measure every rung and field model; returns the JSON-ready result."""
     material = material or Material()
     cells = sample_cells(samples, seed)
@@ -359,7 +360,7 @@ def band_summary(rows: Sequence[dict], model: str) -> dict[str, dict]:
     return out
 
 
-def band_lines(rows) -> list[str]:
+def band_lines(rows: Sequence[dict]) -> list[str]:
     """Markdown: the bench's errors per band of t/L and theta (the per-band out-of-sample
     table on 210 cells is in mst_cli/model/data/l0_correction.json, benchmarks/fit_l0_correction.py)."""
     lines = [
@@ -379,7 +380,7 @@ def band_lines(rows) -> list[str]:
     return lines
 
 
-def plot_bench(result: dict, path) -> None:
+def plot_bench(result: dict, path: str | Path) -> None:
     """Log-log median and p90 |error| against time per layer, one point per rung: stiffness
     on the left, lock force on the right."""
     import matplotlib  # deferred: about 0.5 s of import, for --plot only

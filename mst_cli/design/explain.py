@@ -274,7 +274,7 @@ def _worst_miss(
     return reasons
 
 
-def active_constraints(problem: DesignProblem, u) -> list[str]:
+def active_constraints(problem: DesignProblem, u: ArrayLike) -> list[str]:
     """Constraints and variable bounds that are (nearly) active at normalised point u."""
     e = problem.evaluate(np.asarray(u, float))
     names = problem.constraint_names()

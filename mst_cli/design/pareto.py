@@ -32,6 +32,7 @@ from mst_cli.io.schema import OBJECTIVE_TERMS, Document
 
 if TYPE_CHECKING:
     from collections.abc import Callable
+    from pathlib import Path
 
 # Two designs are the same point of the front when they differ by less than one print layer
 # in height, 2 % in force resolution and 1 percentage point in print robustness: differences a
@@ -277,7 +278,7 @@ def pareto_csv(front: list[ParetoDesign]) -> str:
     return "\n".join([",".join(header)] + [",".join(str(x) for x in r) for r in rows]) + "\n"
 
 
-def plot_pareto(front: list[ParetoDesign], path, title: str = "") -> None:
+def plot_pareto(front: list[ParetoDesign], path: str | Path, title: str = "") -> None:
     """Two views of the front against part height: print robustness (the trade a short part
     pays) and worst force resolution; the chosen design ringed, every design numbered as in
     pareto.csv."""

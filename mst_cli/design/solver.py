@@ -77,7 +77,7 @@ class Tracker:
     violation: float = math.inf
     feasible: bool = False
 
-    def offer(self, u, score: float, violation: float) -> bool:
+    def offer(self, u: np.ndarray, score: float, violation: float) -> bool:
         feasible = violation <= FEASIBILITY_TOL
         if self.u is None:
             better = True
@@ -458,10 +458,10 @@ def solve(
     *,
     seed: int = 0,
     max_evaluations: int = 20000,
-    progress=None,
+    progress: Callable | None = None,
     local: str = "slsqp",
     max_time_s: float = MAX_TIME_S,
-    weights=None,
+    weights: ArrayLike | None = None,
 ) -> SolveResult:
     """Find normalised variables meeting the targets, then minimise the preference (one budget)."""
     result, budget = _matched(problem, seed, max_evaluations, progress, local, max_time_s)

@@ -87,7 +87,9 @@ def cylinder_B_T(
     return np.reshape(B, np.shape(r))
 
 
-def choose_field_model(offset_mm=(0.0, 0.0), tilt_deg=0.0, requested: str | None = None) -> str:
+def choose_field_model(
+    offset_mm: tuple[float, float] = (0.0, 0.0), tilt_deg: float = 0.0, requested: str | None = None
+) -> str:
     """The cheapest exact model for the scene, unless the user asked for one."""
     if requested is not None:
         if requested not in FIELD_MODELS:

@@ -20,6 +20,7 @@ rungs with each other), stay plane strain.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
 from mst_cli.model.mechanics.depth import in_web
@@ -57,7 +58,7 @@ def _plane_strain_law(cell: HexCell, material: Material, model: str) -> LinearLo
 
 
 def layer_laws(
-    cells, material: Material, model: str = "spring"
+    cells: Sequence[HexCell], material: Material, model: str = "spring"
 ) -> tuple[LinearLockingLayer | TabulatedLockingLayer, ...]:
     """:func:`layer_law` of every cell of a stack; the spring rung's in one kernel call."""
     if model == "spring":

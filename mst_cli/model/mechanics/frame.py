@@ -108,7 +108,14 @@ class TabulatedLockingLayer:
     snap_through: bool = False  # F(d) had a falling branch before contact
 
     @classmethod
-    def from_curve(cls, d_mm, F_N, k_linear_N_per_mm, k_locked_N_per_mm, snap_through=None):
+    def from_curve(
+        cls,
+        d_mm: ArrayLike,
+        F_N: ArrayLike,
+        k_linear_N_per_mm: float,
+        k_locked_N_per_mm: float,
+        snap_through: bool | None = None,
+    ) -> TabulatedLockingLayer:
         d = np.asarray(d_mm, dtype=float)
         F = np.asarray(F_N, dtype=float)
         if not (np.all(np.diff(d) > 0) and np.all(np.diff(F) > 0) and d[0] == 0 and F[0] == 0):
@@ -255,7 +262,7 @@ class _Wall:
 
 def solve_frame(
     cell: geo.HexCell,
-    material,
+    material: Material,
     n_elements: int = DEFAULT_N_ELEMENTS,
     first_step_frac: float = 0.125,
     max_steps: int = 400,
@@ -338,7 +345,12 @@ def _lock_stroke(cell: geo.HexCell, material: Material) -> tuple[float, str]:
 
 
 def locked_tabulated_law(
-    cell: geo.HexCell, material, d_mm, F_N, k_linear_N_per_mm, snap_through: bool = False
+    cell: geo.HexCell,
+    material: Material,
+    d_mm: ArrayLike,
+    F_N: ArrayLike,
+    k_linear_N_per_mm: float,
+    snap_through: bool = False,
 ) -> TabulatedLockingLayer:
     """The law of a path sampled up to contact (rungs L1 and L2): its force-controlled envelope,
     then the locked branch, the walls' last tangent in parallel with the closed cavity's
@@ -354,7 +366,7 @@ def locked_tabulated_law(
 
 
 @functools.lru_cache(maxsize=4096)
-def frame_layer(cell: geo.HexCell, material) -> TabulatedLockingLayer:
+def frame_layer(cell: geo.HexCell, material: Material) -> TabulatedLockingLayer:
     """The L1 law of one cell: the frame curve up to contact, then the locked branch (walls + contact column)."""
     res = solve_frame(cell, material)
     # the beam clamps the wall at the pad mid-plane and the tip; the finite joints' effect is

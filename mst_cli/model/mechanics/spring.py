@@ -46,9 +46,12 @@ import numpy as np
 from mst_cli.model import geometry as geo
 
 if TYPE_CHECKING:
+    from collections.abc import Sequence
+
     from numpy.typing import ArrayLike
 
     from mst_cli.model.arrays import Floats
+    from mst_cli.model.material import Material
 
 SHEAR_COEFFICIENT_RECT = 5.0 / 6.0  # Timoshenko shear coefficient of a rectangular section
 # Where the softened pre-lock curve bends, as a fraction of the lock force. Chosen against the
@@ -248,7 +251,7 @@ def spring_arrays(
 
 
 def spring_layers(
-    cells, material, corrected: bool = True, modulus_MPa: ArrayLike | None = None
+    cells: Sequence[geo.HexCell], material: Material, corrected: bool = True, modulus_MPa: ArrayLike | None = None
 ) -> tuple[LinearLockingLayer, ...]:
     """The L0 laws of a stack's cells from one kernel call (a layer's law does not depend on
     the batch it is computed in: the same numbers as the design loop's batches). ``modulus_MPa``:
@@ -264,6 +267,6 @@ def spring_layers(
     )
 
 
-def spring_layer(cell: geo.HexCell, material, corrected: bool = True) -> LinearLockingLayer:
+def spring_layer(cell: geo.HexCell, material: Material, corrected: bool = True) -> LinearLockingLayer:
     """The L0 law of one concrete cell (``corrected=False``: textbook beam theory only)."""
     return spring_layers((cell,), material, corrected)[0]
