@@ -13,12 +13,10 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, replace
 
-import numpy as np
-from numpy.typing import ArrayLike
-
 from mst_cli.model.arrays import Floats
 from mst_cli.model.cell import HexCell
 from mst_cli.model.components import MAGNET_GRADES_T, Board, default_board
+from mst_cli.model.expected_body import ExpectedBody
 from mst_cli.model.fields import spec
 from mst_cli.model.printer import Printer
 from mst_cli.model.violation import Violation
@@ -155,7 +153,7 @@ def snap_to_layers_mm(height_mm: float, layer_height_mm: float, mode: str) -> fl
 
 
 @dataclass(frozen=True)
-class SensorGeometry:
+class SensorGeometry(ExpectedBody):
     """The whole stacked sensor: base + layers (bottom to top) separated by plates + cap.
 
     Sensor frame (used everywhere but the printed mesh): z up the stack from the base's
@@ -370,62 +368,6 @@ class SensorGeometry:
         return self.z_magnet_top_mm + self.housing.pocket_clearance_mm + self.housing.cap_top_mm
 
     @property
-    def body_bbox_mm(self) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
-        """Bounding box (min, max) of the body in the sensor frame: base or cells, whichever
-        is wider."""
-        x = 0.5 * max(self.base_length_mm, self.width_mm)
-        y = 0.5 * self.depth_mm
-        return (-x, -y, 0.0), (x, y, self.total_height_mm)
-
-    def pocket_section_area_mm2(self, z_mm: float) -> float:
-        """Area of the pocket in the x-y plane at height z (inside the pocket's z range): the
-        lower half disc, the straight-sided part up to the pocket top and the strip of the
-        45 deg roof, which reaches its apex at the pocket's mid height."""
-        r, d = self.pocket_radius_mm, self.pocket_depth_mm
-        roof = self.pocket_roof_rise_mm * max(1.0 - abs(z_mm - (self.z_magnet_bottom_mm + 0.5 * d)) / (0.5 * d), 0.0)
-        return 0.5 * math.pi * r * r + 2 * r * (self.pocket_top_y_mm + roof)
-
-    @property
-    def pocket_volume_mm3(self) -> float:
-        """The U-shaped pocket (its x-y section times the depth) plus the roof: a triangular
-        prism of base ``pocket_depth`` and height ``pocket_roof_rise_mm``, 2 r long."""
-        r, d = self.pocket_radius_mm, self.pocket_depth_mm
-        return (0.5 * math.pi * r * r + 2 * r * self.pocket_top_y_mm) * d + r * d * self.pocket_roof_rise_mm
-
-    @property
-    def pocket_curved_area_mm2(self) -> float:
-        """Curved surface of the pocket (the half cylinder): a mesh of chord deflection delta
-        changes the pocket volume by at most delta times this area."""
-        return math.pi * self.pocket_radius_mm * self.pocket_depth_mm
-
-    @property
-    def base_volume_mm3(self) -> float:
-        """Base block minus the board slot and the cable windows (open through the +y face)."""
-        L, D = self.base_length_mm, self.depth_mm
-        x0, x1 = self.slot_x_mm
-        y_top = 0.5 * D
-        slot = (x1 - x0) * (y_top - self.slot_floor_y_mm) * self.slot_height_mm
-        windows = sum(abs(x_out - x_in) * (y_top - yf) * (z1 - z0) for x_in, x_out, yf, z0, z1 in self.cable_windows)
-        return L * D * self.z_base_top_mm - slot - windows
-
-    @property
-    def plates_volume_mm3(self) -> float:
-        """Solid plates between layers, each W x D x plate thickness."""
-        return (len(self.layers) - 1) * self.width_mm * self.depth_mm * self.housing.plate_mm
-
-    @property
-    def cap_volume_mm3(self) -> float:
-        """Cap (W x D, from the stack top to the total height) minus the magnet pocket."""
-        return self.width_mm * self.depth_mm * (self.total_height_mm - self.z_stack_top_mm) - self.pocket_volume_mm3
-
-    @property
-    def body_volume_mm3(self) -> float:
-        """Volume of the one printed TPU body: analytic sum of its parts."""
-        return (
-            self.base_volume_mm3 + sum(c.volume_mm3 for c in self.layers) + self.plates_volume_mm3 + self.cap_volume_mm3
-        )
-
-    @property
     def gap0_mm(self) -> float:
         """Unloaded distance from the magnet's lower pole face to the Hall plates."""
         return float(unloaded_gap_mm(sum(c.h_mm for c in self.layers), len(self.layers), self.housing, self.board))
@@ -529,9 +471,3 @@ class SensorGeometry:
                 )
             )
         return out
-
-    # -- print frame
-    def to_print_frame(self, points_mm: ArrayLike) -> np.ndarray:
-        """Sensor-frame points (..., 3) to the print frame: (x, -z, y + D/2)."""
-        p = np.asarray(points_mm, dtype=float)
-        return np.stack([p[..., 0], -p[..., 2], p[..., 1] + 0.5 * self.depth_mm], axis=-1)

@@ -29,6 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from mst_cli.model.arrays import Floats
+from mst_cli.model.expected_body import ExpectedCell
 from mst_cli.model.fields import spec
 from mst_cli.model.printer import Printer
 from mst_cli.model.violation import Violation
@@ -125,7 +126,7 @@ def cell_margins_mm(
 
 
 @dataclass(frozen=True)
-class HexCell:
+class HexCell(ExpectedCell):
     """One collapsible layer of the "hex" family (docs/design.md section 3).
 
     Parameters are the design variables theta (deg), t (mm), h (mm) and the family constants.
@@ -188,18 +189,8 @@ class HexCell:
         return float(lock_stroke_mm(self.t_mm, self.h_mm, self.contact_allowance_mm))
 
     @property
-    def wall_horizontal_width_mm(self) -> float:
-        """Width of an inclined wall in a horizontal section of the sensor: t / sin(theta)."""
-        return self.t_mm / math.sin(self.theta_rad)
-
-    @property
     def profile_area_mm2(self) -> float:
         return float(profile_area_mm2(self.theta_rad, self.t_mm, self.h_mm, self.width_mm))
-
-    @property
-    def volume_mm3(self) -> float:
-        """Material volume of the layer: profile area x web width D."""
-        return self.profile_area_mm2 * self.b_mm
 
     def outer_profile_xz(self) -> list[tuple[float, float]]:
         """Outer hexagon, counter-clockwise from the bottom-right pad corner (mm)."""
@@ -212,30 +203,6 @@ class HexCell:
         a = self.p_inner_mm
         c = float(inner_tip_half_width_mm(self.theta_rad, t, self.width_mm))
         return [(a, t), (c, 0.5 * h), (a, h - t), (-a, h - t), (-c, 0.5 * h), (-a, t)]
-
-    def wall_centrelines_xz(self, keep: float = 0.5) -> list[tuple[str, tuple[float, float], tuple[float, float]]]:
-        """The four inclined walls as (name, start, end) of the middle ``keep`` of each wall's
-        centre line where both its faces are free (cavity inside, air outside), so a line across
-        the wall there crosses the wall alone, not the pad, plate or tip it joins (mm).
-
-        A wall shorter than it is thick has no such stretch: its centre line's midpoint, twice."""
-        outer, inner = self.outer_profile_xz(), self.inner_profile_xz()
-        out = []
-        for name, (k0, k1) in (
-            ("lower right", (0, 1)),
-            ("upper right", (1, 2)),
-            ("upper left", (3, 4)),
-            ("lower left", (4, 5)),
-        ):
-            o0, o1, i0, i1 = (np.asarray(v, dtype=float) for v in (outer[k0], outer[k1], inner[k0], inner[k1]))
-            u = (o1 - o0) / np.hypot(*(o1 - o0))
-            m0 = 0.5 * (o0 + i0)  # on the centre line: midway between parallel faces
-            s_lo = max(float((o0 - m0) @ u), float((i0 - m0) @ u))
-            s_hi = min(float((o1 - m0) @ u), float((i1 - m0) @ u))
-            mid, half = 0.5 * (s_lo + s_hi), max(0.0, 0.5 * keep * (s_hi - s_lo))
-            a, b = m0 + (mid - half) * u, m0 + (mid + half) * u
-            out.append((name, (float(a[0]), float(a[1])), (float(b[0]), float(b[1]))))
-        return out
 
     def violations(self, printer: Printer = DEFAULT_PRINTER) -> list[Violation]:
         """Every broken validity rule (empty when the cell is printable and works)."""
