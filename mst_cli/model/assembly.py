@@ -12,14 +12,17 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
 
-from mst_cli.model.arrays import Floats
 from mst_cli.model.cell import HexCell
 from mst_cli.model.components import MAGNET_GRADES_T, Board, default_board
 from mst_cli.model.expected_body import ExpectedBody
 from mst_cli.model.fields import spec
 from mst_cli.model.printer import Printer
 from mst_cli.model.violation import Violation
+
+if TYPE_CHECKING:
+    from mst_cli.model.arrays import Floats  # annotations only: not loaded at run time
 
 
 def unloaded_gap_mm(sum_h_mm: Floats, n_layers: int, housing: Housing, board: Board) -> Floats:

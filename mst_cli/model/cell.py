@@ -25,14 +25,17 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from mst_cli.model.arrays import Floats
 from mst_cli.model.expected_body import ExpectedCell
 from mst_cli.model.fields import spec
 from mst_cli.model.printer import Printer
 from mst_cli.model.violation import Violation
+
+if TYPE_CHECKING:
+    from mst_cli.model.arrays import Floats  # annotations only: not loaded at run time
 
 # Lengths are floored at this value inside the kernels so that every point of the design
 # bounds -- valid or not -- gives finite numbers; the validity checks report the violation.

@@ -12,15 +12,13 @@ cad/assembly.py, cli/export.py and the tests) change with them.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
-
-    from mst_cli.model.assembly import Housing
-    from mst_cli.model.cell import HexCell
 
 
 class _Cell(Protocol):
@@ -39,13 +37,23 @@ class _Cell(Protocol):
     def inner_profile_xz(self) -> list[tuple[float, float]]: ...
 
 
+class _Layer(Protocol):
+    @property
+    def volume_mm3(self) -> float: ...
+
+
+class _Housing(Protocol):
+    @property
+    def plate_mm(self) -> float: ...
+
+
 class _Assembly(Protocol):
     """What :class:`ExpectedBody` reads of a sensor."""
 
     @property
-    def layers(self) -> tuple[HexCell, ...]: ...
+    def layers(self) -> Sequence[_Layer]: ...
     @property
-    def housing(self) -> Housing: ...
+    def housing(self) -> _Housing: ...
     @property
     def width_mm(self) -> float: ...
     @property
