@@ -13,13 +13,15 @@ design solver or the CAD kernel.
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
+from dataclasses import fields, replace
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, cast
 
 from mst_cli.errors import InputError
 
 if TYPE_CHECKING:
     from mst_cli.cad.checks import Check
+    from mst_cli.cad.manifest import Manifest
     from mst_cli.cad.slicing import SliceResult
     from mst_cli.calibrate.calibration import Calibration
     from mst_cli.calibrate.reading import ForceReadings, SerialSamples
@@ -50,10 +52,12 @@ def __getattr__(name: str):
     # the verbs' own error classes (CalibrationFailed: a fit failed; SlicerError: PrusaSlicer
     # misbehaved), without importing their modules before they are asked for
     if name == "CalibrationFailed":
+        # deferred: a verb loads its layer when called ('import mst_cli' stays light)
         from mst_cli.calibrate.fit import CalibrationFailed
 
         return CalibrationFailed
     if name == "SlicerError":
+        # deferred: a verb loads its layer when called ('import mst_cli' stays light)
         from mst_cli.cad.slicer import SlicerError
 
         return SlicerError
@@ -79,6 +83,7 @@ def load(path: str | Path) -> Document:
     Document
         ``.is_design`` / ``.is_spec`` say which; ``.geometry()`` builds a design's sensor.
     """
+    # deferred: a verb loads its layer when called ('import mst_cli' stays light)
     from mst_cli.io.schema import load_document
 
     return load_document(path)
@@ -87,6 +92,7 @@ def load(path: str | Path) -> Document:
 def load_design(path: str | Path | Document) -> Document:
     """A design file whose every cell is printable and works (InputError naming the first layer
     that breaks a rule); a Document is checked the same way and returned."""
+    # deferred: a verb loads its layer when called ('import mst_cli' stays light)
     from mst_cli.io.schema import design_geometry, load_design_document
 
     if isinstance(path, (str, Path)):
@@ -119,6 +125,7 @@ def simulate(
         The part as printed, as the command models it: walls + printer.wall_offset_mm, modulus
         x printer.modulus_factor, gap + printer.gap_offset_mm.
     """
+    # deferred: a verb loads its layer when called ('import mst_cli' stays light)
     from mst_cli.calibrate.fit import simulate_as_printed
     from mst_cli.model.mechanics import MODELS
 
@@ -162,14 +169,14 @@ def design(
         ``.status`` ("met" / "not met", ``.binding`` and ``.reasons`` say why), ``.targets``
         (per layer target against achieved), ``.table()``, ``.design_yaml_dict()``.
     """
-    from dataclasses import replace
-
+    # deferred: a verb loads its layer when called ('import mst_cli' stays light)
     from mst_cli.design import design_document
     from mst_cli.model.ladder import choose_mechanics
 
     _one_of("--refine", refine, ("frame", "continuum"))
     doc = load(spec) if isinstance(spec, (str, Path)) else spec
     if calibration is not None:
+        # deferred: a verb loads its layer when called ('import mst_cli' stays light)
         from mst_cli.calibrate.record import apply_calibration, read_calibration
 
         doc = apply_calibration(doc, read_calibration(calibration, doc))
@@ -178,6 +185,7 @@ def design(
         return design_document(
             replace(doc, mechanics="spring"), seed=seed, max_evaluations=max_evaluations, progress=progress
         )
+    # deferred: a verb loads its layer when called ('import mst_cli' stays light)
     from mst_cli.design.refine import refine_document
 
     return refine_document(doc, choice.mechanics, seed=seed, max_evaluations=max_evaluations, progress=progress)
@@ -201,8 +209,7 @@ def pareto(
         designs, each with ``.height_mm``, ``.worst_force_resolution_N``,
         ``.print_robustness_rms`` and its ``.result``.
     """
-    from dataclasses import replace
-
+    # deferred: a verb loads its layer when called ('import mst_cli' stays light)
     from mst_cli.design.pareto import pareto_front
 
     if not 2 <= count <= 60:
@@ -224,20 +231,13 @@ def designed(path: str | Path, progress: Callable[[str], None] | None = None) ->
         doc.require_geometry()  # names the first missing key
     if progress is not None:
         progress(f"{path} is a spec: designing theta, t, h first (as 'mst design' does)")
+    # deferred: a verb loads its layer when called ('import mst_cli' stays light)
     from mst_cli.design import design_document
 
     result = design_document(doc)
     geometry = result.geometry
-    for i, v in geometry.violations(result.document.printer):
-        raise InputError(
-            f"layers[{i}]",
-            {
-                "theta_deg": geometry.layers[i].theta_deg,
-                "t_mm": geometry.layers[i].t_mm,
-                "h_mm": geometry.layers[i].h_mm,
-            },
-            f"the designed cell is invalid ({v.rule}): {v.message}",
-        )
+    for v in geometry.violations(result.document.printer):
+        raise v.input_error("the designed cell is invalid")
     if progress is not None:
         progress(f"designed: targets {result.status}")
     return result.document, result
@@ -270,6 +270,7 @@ def export(
     list of Path
         The files written, export.json last.
     """
+    # deferred: a verb loads its layer when called ('import mst_cli' stays light)
     from mst_cli.cad.exporting import check_stl_tolerance, write_export
 
     check_stl_tolerance(stl_tolerance_mm)
@@ -307,8 +308,7 @@ def check(path: str | Path, *, nozzle_mm: float | None = None) -> list[Check]:
         One per check, in report order: ``.name``, ``.passed``, ``.measured`` and
         ``.expected`` (text with units), ``.note``, ``.values`` (numbers, units in the keys).
     """
-    from dataclasses import fields
-
+    # deferred: a verb loads its layer when called ('import mst_cli' stays light)
     from mst_cli.cad.checks import load_mesh, resolve_export, run_checks
     from mst_cli.cad.manifest import load_manifest
     from mst_cli.model.geometry import Printer
@@ -321,7 +321,8 @@ def check(path: str | Path, *, nozzle_mm: float | None = None) -> list[Check]:
     # both inputs are validated before anything is measured: every field the checks read (type,
     # nesting, finite and sane size) and every STL coordinate (finite, within a metre). Past
     # this point a KeyError or TypeError is a bug in a check, not bad input.
-    manifest = load_manifest(found.manifest)
+    manifest = cast("Manifest", load_manifest(found.manifest))  # kind=Manifest by default
+    assert found.stl is not None  # resolve_export found one (need_stl)
     return run_checks(load_mesh(found.stl), manifest, nozzle_mm)
 
 
@@ -356,6 +357,7 @@ def slice(
         the pause found against the one asked for, support, cavity gaps mm), ``.checks``,
         ``.failed`` (names of the broken limits), ``.summary()``.
     """
+    # deferred: a verb loads its layer when called ('import mst_cli' stays light)
     from mst_cli.cad.slicing import slice_export
 
     result = slice_export(path, profile, max_span_mm, progress, note)
@@ -365,6 +367,7 @@ def slice(
 
 def parse_params(text: str) -> tuple[str, ...]:
     """The parameter names of ``--params`` ("modulus_factor,gap_offset_mm")."""
+    # deferred: a verb loads its layer when called ('import mst_cli' stays light)
     from mst_cli.calibrate.calibration import parse_params as parse
 
     return parse(text)
@@ -389,57 +392,35 @@ def calibrate(
     Parameters
     ----------
     design : str, Path or Document
-        The design file the sensor was printed from (or its loaded Document; then
-        ``design_file`` names it in calibration.json).
+        The design file the sensor was printed from (a Document: ``design_file`` names it).
     load_test : str or Path
-        CSV with force_N and Bx_uT, By_uT, Bz_uT (or Bx_code_lsb, By_code_lsb, Bz_code_lsb with
-        ``gain_sel`` and ``res``): one row per sample, force in N, field in uT or raw LSB.
+        CSV, one row per sample: force_N (N) and Bx_uT, By_uT, Bz_uT (uT), or Bx_code_lsb,
+        By_code_lsb, Bz_code_lsb (raw LSB, with ``gain_sel`` and ``res``).
     out : str or Path, optional
-        Folder to write calibrated.yaml, calibration.json, residuals.csv, lookup.csv and
-        force_table.h into (atomically); nothing is written when None.
-    plot : bool
-        Also draw calibration.png into ``out`` (imports matplotlib).
+        Folder for calibrated.yaml, calibration.json, residuals.csv, lookup.csv, force_table.h
+        and (``plot``) calibration.png, written atomically [default: none written].
     mechanics : {"spring", "frame", "continuum"}
         Layer mechanics of the fit; frame and continuum by space mapping on spring.
     params : sequence of str or str, optional
-        Parameters to fit (names of :data:`mst_cli.calibrate.fit.PARAMETERS`, or "a,b")
-        [default: all four].
-    gain_sel, res : int, optional
-        The MLX90393 setting the load test was read at (0-7, 0-3).
-    table_size : int
-        Entries of lookup.csv (16-4096).
+        Parameters to fit (of :data:`mst_cli.calibrate.fit.PARAMETERS`, or "a,b") [default: all four].
+    gain_sel, res, table_size : int, optional
+        The MLX90393 setting the load test was read at (0-7, 0-3); entries of lookup.csv (16-4096).
 
     Returns
     -------
     Calibration
-        ``.fit.values`` (fitted parameters, units in their names) and ``.fit.std`` (1 sigma),
-        ``.calibrated`` (the design as printed), ``.inverse_map`` (|B| in T -> force in N),
-        ``.record`` (calibration.json), ``.summary()``.
-
-    Raises
-    ------
-    InputError
-        A bad file or option. CalibrationFailed: the fit failed (the message says why).
+        ``.fit.values`` (units in the names) and ``.fit.std`` (1 sigma), ``.calibrated`` (the
+        design as printed), ``.inverse_map`` (|B| T -> force N), ``.record`` (calibration.json),
+        ``.summary()``. Raises InputError (bad file or option) or CalibrationFailed (why).
     """
-    from mst_cli.calibrate.calibration import calibrate as run
-    from mst_cli.calibrate.fit import DEFAULT_PARAMETERS
-    from mst_cli.io.outputs import check_out_dir
-    from mst_cli.model.mechanics import MODELS
+    from mst_cli.calibrate.calibration import calibrate as run_calibration  # deferred: loads its layer when called
 
-    _one_of("--mechanics", mechanics, MODELS)
-    if params is None:
-        params = DEFAULT_PARAMETERS
-    else:  # the rules of --params: known names, each once
-        params = parse_params(params if isinstance(params, str) else ",".join(params))
-    if not 16 <= table_size <= 4096:
-        raise InputError("--table-size", table_size, "must be an integer from 16 to 4096")
-    design_file = design_file or (design if isinstance(design, (str, Path)) else design.name)
+    params = _checked_fit_options(mechanics, params, table_size)
     doc = load_design(design)
-    if out is not None:
-        check_out_dir(Path(out))  # a bad output path is refused before any work
-    result = run(
+    _check_out(out)  # a bad output path is refused before any work
+    result = run_calibration(
         doc,
-        design_file,
+        design_file or (design if isinstance(design, (str, Path)) else design.name),
         load_test,
         mechanics=mechanics,
         params=params,
@@ -453,6 +434,32 @@ def calibrate(
     return result
 
 
+def _check_out(out: str | Path | None) -> None:
+    """InputError when ``out`` (unless None) cannot be an output folder."""
+    # deferred: a verb loads its layer when called ('import mst_cli' stays light)
+    from mst_cli.io.outputs import check_out_dir
+
+    if out is not None:
+        check_out_dir(Path(out))
+
+
+def _checked_fit_options(mechanics: str, params: Sequence[str] | str | None, table_size: int) -> tuple[str, ...]:
+    """The parameter names to fit, after the rules of --mechanics, --params (known names, each
+    once) and --table-size."""
+    # deferred: a verb loads its layer when called ('import mst_cli' stays light)
+    from mst_cli.calibrate.fit import DEFAULT_PARAMETERS
+    from mst_cli.model.mechanics import MODELS
+
+    _one_of("--mechanics", mechanics, MODELS)
+    if params is None:
+        names = DEFAULT_PARAMETERS
+    else:
+        names = parse_params(params if isinstance(params, str) else ",".join(params))
+    if not 16 <= table_size <= 4096:
+        raise InputError("--table-size", table_size, "must be an integer from 16 to 4096")
+    return names
+
+
 def _reader(
     design: str | Path | Document,
     model_file: str | Path | None,
@@ -464,9 +471,9 @@ def _reader(
     out: str | Path | None,
     warn: Callable[[str], None] | None,
 ):
+    # deferred: a verb loads its layer when called ('import mst_cli' stays light)
     from mst_cli.calibrate.loadtest import parse_readings, read_text, setting_of
     from mst_cli.calibrate.reading import ForceReader
-    from mst_cli.io.outputs import check_out_dir
     from mst_cli.model.ladder import choose_mechanics
     from mst_cli.model.mechanics import MODELS
 
@@ -480,11 +487,10 @@ def _reader(
         model_file = design
     if (gain_sel is None) != (res is None):
         raise InputError("--gain-sel/--res", f"{gain_sel}/{res}", "give both GAIN_SEL and RES, or neither")
-    setting = setting_of(gain_sel, res) if gain_sel is not None else None
+    setting = setting_of(gain_sel, res) if gain_sel is not None and res is not None else None
     if raw and setting is None:
         raise InputError("--gain-sel/--res", None, "--raw codes need the chip setting: give --gain-sel and --res")
-    if out is not None:
-        check_out_dir(Path(out))
+    _check_out(out)
     choice = choose_mechanics(mechanics, doc.accuracy_rel, doc.mechanics)
     rd = None
     if readings is not None:
@@ -532,6 +538,7 @@ def read(
         ``.flag`` (n,) one of ok, above_calibrated, below_range, above_range, saturated;
         ``.force_resolution_N`` (n,); ``.summary()``, ``.csv()``.
     """
+    # deferred: a verb loads its layer when called ('import mst_cli' stays light)
     from mst_cli.io.outputs import staged
 
     reader, rd, _ = _reader(model, model_file, mechanics, gain_sel, res, False, readings, out, warn)
@@ -563,6 +570,7 @@ def read_serial(
     ``show``; stops when the port closes, after ``count`` samples, ``timeout_s`` seconds of
     silence or Ctrl-C; ``status`` gets a line when reading starts. ``out``: forces.csv of every
     sample (time s, the three values, force N, regime, flag, resolution N)."""
+    # deferred: a verb loads its layer when called ('import mst_cli' stays light)
     from mst_cli.io.outputs import staged
 
     reader, _, setting = _reader(model, model_file, mechanics, gain_sel, res, raw, None, out, warn)

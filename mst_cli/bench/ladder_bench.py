@@ -12,17 +12,21 @@ from __future__ import annotations
 
 import time
 from collections.abc import Iterable, Sequence
-from typing import TYPE_CHECKING
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from mst_cli.model import field as fld
 from mst_cli.model.geometry import HexCell, Magnet
+from mst_cli.model.material import Material
+from mst_cli.model.mechanics import uncached_layer_law
+from mst_cli.model.mechanics.continuum import linear_stiffness_N_per_mm
 from mst_cli.model.mechanics.correction import VERIFIED_BOX
+from mst_cli.model.mechanics.spring import spring_arrays, spring_layer
 
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
-
-    from mst_cli.model.material import Material
 
 # The printable box (mechanics.correction.VERIFIED_BOX, also the default design bounds): every
 # rung is fitted and measured on it.
@@ -38,7 +42,7 @@ def sample_cells(
     experiments and for topping up sparse corners of the box in the L0 fit."""
     bounds = {**BOUNDS, **(bounds or {})}
     rng = np.random.default_rng(seed)
-    out = []
+    out: list[HexCell] = []
     while len(out) < n:
         th, t, h = (rng.uniform(*bounds[k]) for k in ("theta_deg", "t_mm", "h_mm"))
         c = HexCell(round(float(th), 3), round(float(t), 3), round(float(h), 3))
@@ -48,15 +52,12 @@ def sample_cells(
 
 
 def _law(model, cell, material):
-    from mst_cli.model.mechanics import uncached_layer_law
-    from mst_cli.model.mechanics.spring import spring_layer
-
     if model in ("spring-textbook", "spring"):
         return spring_layer(cell, material, corrected=model == "spring")
     return uncached_layer_law(cell, material, model)
 
 
-def time_per_layer_s(model, cells, material, repeat: int = 1) -> float:
+def time_per_layer_s(model: str, cells: Iterable[HexCell], material: Material, repeat: int = 1) -> float:
     """Median wall-clock time of one layer law (no caches), s."""
     times = []
     for c in cells:
@@ -69,19 +70,19 @@ def time_per_layer_s(model, cells, material, repeat: int = 1) -> float:
     return float(np.median(times))
 
 
-def spring_vectorised_time_per_layer_s(cells, material, repeat: int = 20) -> float:
+def spring_vectorised_time_per_layer_s(cells: Sequence[HexCell], material: Material, repeat: int = 20) -> float:
     """Per-layer time of L0 as the design loop calls it: spring_arrays over all cells at once."""
-    from mst_cli.model.mechanics.spring import spring_arrays
-
     # the family constants too come from the cells (HexCell's declared defaults), not literals
-    arrays = [
+    theta, t, h, b, width, allowance = (
         np.array([getattr(c, k) for c in cells])
         for k in ("theta_rad", "t_mm", "h_mm", "b_mm", "width_mm", "contact_allowance_mm")
-    ]
+    )
     best = np.inf
     for _ in range(repeat):
         t0 = time.perf_counter()
-        spring_arrays(*arrays, material.youngs_modulus_MPa, material.poisson_ratio, corrected=True)
+        spring_arrays(
+            theta, t, h, b, width, allowance, material.youngs_modulus_MPa, material.poisson_ratio, corrected=True
+        )
         best = min(best, time.perf_counter() - t0)
     return best / len(cells)
 
@@ -98,7 +99,12 @@ def compare_mechanics(
     """
     rows = []
     for c in cells:
-        row = {"theta_deg": c.theta_deg, "t_mm": c.t_mm, "h_mm": c.h_mm, "t_over_L": c.t_mm / c.wall_length_mm}
+        row: dict[str, Any] = {
+            "theta_deg": c.theta_deg,
+            "t_mm": c.t_mm,
+            "h_mm": c.h_mm,
+            "t_over_L": c.t_mm / c.wall_length_mm,
+        }
         try:
             ref = _law(reference, c, material)
             row[reference] = {
@@ -112,7 +118,11 @@ def compare_mechanics(
         for m in models:
             try:
                 law = _law(m, c, material)
-                entry = {"k_N_per_mm": law.k_N_per_mm, "d_lock_mm": law.d_lock_mm, "lock_force_N": law.lock_force_N}
+                entry: dict[str, Any] = {
+                    "k_N_per_mm": law.k_N_per_mm,
+                    "d_lock_mm": law.d_lock_mm,
+                    "lock_force_N": law.lock_force_N,
+                }
                 if ref is not None:
                     entry["err_k"] = law.k_N_per_mm / ref.k_N_per_mm - 1.0
                     entry["err_d_lock"] = law.d_lock_mm / ref.d_lock_mm - 1.0
@@ -126,7 +136,7 @@ def compare_mechanics(
 
 def summarise(rows: Sequence[dict], model: str) -> dict:
     """Median and 90th-percentile |error| of one model over the rows where both solved."""
-    out = {"failures": 0}
+    out: dict[str, Any] = {"failures": 0}
     for key in ("err_k", "err_d_lock", "err_lock_force"):
         vals = np.array([abs(r[model][key]) for r in rows if key in r.get(model, {})])
         out[key] = {
@@ -141,8 +151,6 @@ def summarise(rows: Sequence[dict], model: str) -> dict:
 
 def field_errors(gaps_mm: ArrayLike, magnet: Magnet | None = None) -> dict[str, list[float]]:
     """Relative error of |B| on the axis of the dipole and axial models against magpylib."""
-    from mst_cli.model import field as fld
-
     magnet = Magnet() if magnet is None else magnet
     g = np.asarray(gaps_mm, dtype=float)
     exact = np.linalg.norm(fld.field_at_chip_T(g, magnet, "cylinder"), axis=-1)
@@ -155,8 +163,6 @@ def field_errors(gaps_mm: ArrayLike, magnet: Magnet | None = None) -> dict[str, 
 
 def field_times_s(gaps_mm: ArrayLike, magnet: Magnet | None = None, repeat: int = 20) -> dict[str, float]:
     """Per-point time of each field model on the gap array, s."""
-    from mst_cli.model import field as fld
-
     magnet = Magnet() if magnet is None else magnet
     g = np.asarray(gaps_mm, dtype=float)
     out = {}
@@ -177,8 +183,6 @@ def mesh_convergence(
     meshes: Sequence[tuple[int, int, int]] = ((2, 8, 2), (3, 12, 4), (4, 16, 5), (6, 24, 6)),
 ) -> list[dict]:
     """L2 small-strain k on successively finer meshes (n_thick, n_length, corner levels)."""
-    from mst_cli.model.mechanics.continuum import linear_stiffness_N_per_mm
-
     out = []
     for c in cells:
         ks = [linear_stiffness_N_per_mm(c, material, *m) for m in meshes]
@@ -195,10 +199,8 @@ def mesh_convergence(
     return out
 
 
-def run_bench(samples: int = 24, seed: int = 0, quick: bool = False, material=None) -> dict:
+def run_bench(samples: int = 24, seed: int = 0, quick: bool = False, material: Material | None = None) -> dict:
     """Measure every rung and field model; returns the JSON-ready result."""
-    from mst_cli.model.material import Material
-
     material = material or Material()
     cells = sample_cells(samples, seed)
     rows = compare_mechanics(cells, material)
@@ -236,12 +238,22 @@ def run_bench(samples: int = 24, seed: int = 0, quick: bool = False, material=No
     return result
 
 
-def _pct(x):
+def _pct(x: float | None) -> str:
     return "n/a" if x is None else f"{100 * x:.1f} %"
 
 
 def bench_markdown(result: dict) -> str:
     """The table a person reads (bench.md)."""
+    lines = _rung_table(result) + _field_table(result["field"])
+    if "mesh_convergence" in result:
+        lines += _mesh_lines(result["mesh_convergence"])
+    lines += band_lines(result["rows"])
+    lines += _worst_lines(result["rows"])
+    return "\n".join(lines) + "\n"
+
+
+def _rung_table(result: dict) -> list[str]:
+    """The heading and the rungs' table: time per layer, speed-up, errors against L2."""
     m = result["models"]
     t_ref = m["continuum"]["time_per_layer_s"]
     b = result["bounds"]
@@ -274,8 +286,12 @@ def bench_markdown(result: dict) -> str:
         f"| L0 corrected, vectorised (design loop) | {tv * 1e6:.3f} µs | {t_ref / tv:,.0f}x | same | same | same | 0 |"
     )
     lines.append(f"| L2 continuum (reference) | {t_ref * 1e3:.0f} ms | 1x | — | — | — | {m['continuum']['failures']} |")
-    f = result["field"]
-    lines += [
+    return lines
+
+
+def _field_table(f: dict) -> list[str]:
+    """The field models against magpylib's exact cylinder."""
+    lines = [
         "",
         f"Field models against magpylib's exact cylinder, on the axis, gaps "
         f"{f['gaps_mm'][0]:g}–{f['gaps_mm'][-1]:g} mm (max |error|, time per point):",
@@ -286,29 +302,38 @@ def bench_markdown(result: dict) -> str:
     for mname in ("dipole", "axial"):
         lines.append(f"| {mname} | {_pct(f['max_abs_error'][mname])} | {f['time_per_point_s'][mname] * 1e6:.2f} µs |")
     lines.append(f"| cylinder (magpylib) | reference | {f['time_per_point_s']['cylinder'] * 1e6:.2f} µs |")
-    if "mesh_convergence" in result:
-        lines += [
-            "",
-            "L2 mesh convergence (small-strain k relative to the finest mesh; "
-            "mesh = elements across t, along the wall, corner refinement rounds):",
-            "",
-        ]
-        for r in result["mesh_convergence"]:
-            parts = ", ".join(f"{tuple(mm)}: {100 * e:+.2f} %" for mm, e in zip(r["meshes"], r["rel_to_finest"]))
-            lines.append(f"- theta {r['theta_deg']:g}, t {r['t_mm']:g}, h {r['h_mm']:g}: {parts}")
-    lines += band_lines(result["rows"])
+    return lines
+
+
+def _mesh_lines(convergence: list[dict]) -> list[str]:
+    """L2's stiffness on each mesh relative to the finest, per cell."""
+    lines = [
+        "",
+        "L2 mesh convergence (small-strain k relative to the finest mesh; "
+        "mesh = elements across t, along the wall, corner refinement rounds):",
+        "",
+    ]
+    for r in convergence:
+        parts = ", ".join(f"{tuple(mm)}: {100 * e:+.2f} %" for mm, e in zip(r["meshes"], r["rel_to_finest"]))
+        lines.append(f"- theta {r['theta_deg']:g}, t {r['t_mm']:g}, h {r['h_mm']:g}: {parts}")
+    return lines
+
+
+def _worst_lines(rows: list[dict]) -> list[str]:
+    """The three cells with the largest L1 lock-force error, and L0's and L1's errors there."""
     worst = sorted(
-        (r for r in result["rows"] if "err_k" in r.get("frame", {})), key=lambda r: -abs(r["frame"]["err_lock_force"])
+        (r for r in rows if "err_k" in r.get("frame", {})), key=lambda r: -abs(r["frame"]["err_lock_force"])
     )[:3]
-    if worst:
-        lines += ["", "Where the cheap rungs fail most (largest L1 lock-force error):", ""]
-        for r in worst:
-            lines.append(
-                f"- theta {r['theta_deg']:g}, t {r['t_mm']:g}, h {r['h_mm']:g} (t/L {r['t_over_L']:.2f}): "
-                f"L0 k {_pct(r['spring']['err_k'])}, R {_pct(r['spring']['err_lock_force'])}; "
-                f"L1 k {_pct(r['frame']['err_k'])}, R {_pct(r['frame']['err_lock_force'])}"
-            )
-    return "\n".join(lines) + "\n"
+    if not worst:
+        return []
+    lines = ["", "Where the cheap rungs fail most (largest L1 lock-force error):", ""]
+    for r in worst:
+        lines.append(
+            f"- theta {r['theta_deg']:g}, t {r['t_mm']:g}, h {r['h_mm']:g} (t/L {r['t_over_L']:.2f}): "
+            f"L0 k {_pct(r['spring']['err_k'])}, R {_pct(r['spring']['err_lock_force'])}; "
+            f"L1 k {_pct(r['frame']['err_k'])}, R {_pct(r['frame']['err_lock_force'])}"
+        )
+    return lines
 
 
 BANDS = {
@@ -335,7 +360,7 @@ def band_summary(rows: Sequence[dict], model: str) -> dict[str, dict]:
     return out
 
 
-def band_lines(rows) -> list[str]:
+def band_lines(rows: Sequence[dict]) -> list[str]:
     """Markdown: the bench's errors per band of t/L and theta (the per-band out-of-sample
     table on 210 cells is in mst_cli/model/data/l0_correction.json, benchmarks/fit_l0_correction.py)."""
     lines = [
@@ -355,13 +380,13 @@ def band_lines(rows) -> list[str]:
     return lines
 
 
-def plot_bench(result: dict, path) -> None:
+def plot_bench(result: dict, path: str | Path) -> None:
     """Log-log median and p90 |error| against time per layer, one point per rung: stiffness
     on the left, lock force on the right."""
-    import matplotlib
+    import matplotlib  # deferred: about 0.5 s of import, for --plot only
 
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # deferred: as above, after the backend is chosen
 
     fig, axes = plt.subplots(1, 2, figsize=(10, 4), sharey=True)
     m = result["models"]

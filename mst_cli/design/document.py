@@ -27,12 +27,17 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
+from typing import Protocol
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from mst_cli.calibrate.fit import as_printed
+from mst_cli.design import explain
 from mst_cli.design.problem import DesignProblem
+from mst_cli.design.solver import solve
 from mst_cli.errors import InputError
 from mst_cli.io.report import height_budget_line
 from mst_cli.io.schema import Document, LayerEntry, document_to_dict
@@ -44,6 +49,26 @@ EXIT_MET, EXIT_NOT_MET = 0, 1
 SAME_RUNG_RULE = "the rung that judges the design"  # print error's rung when the caller names none
 WARN_PRINT_DEVIATION_REL = 0.25  # above this worst change a design without a limit says so
 PRINT_DEVIATION_CHECK = "print deviation"  # the check design.max_print_deviation_rel fails
+
+
+class SolverFacts(Protocol):
+    """What :func:`verify_design` reports of the search that found a design: a
+    :class:`~mst_cli.design.solver.SolveResult`, or the facts a refinement gathers of its own."""
+
+    @property
+    def matched(self) -> bool: ...
+    @property
+    def evaluations(self) -> int: ...
+    @property
+    def local(self) -> str: ...
+    @property
+    def starts_used(self) -> int: ...
+    @property
+    def preference_before(self) -> float | None: ...
+    @property
+    def preference_after(self) -> float | None: ...
+    @property
+    def stops(self) -> list | dict: ...
 
 
 @dataclass
@@ -118,6 +143,13 @@ class DesignResult:
                 f"{100 * row['range_error_rel']:>+6.2f} | "
                 f"{100 * pl['dS_rel_worst']:>13.1f} {100 * pl['dR_rel_worst']:>6.1f}{ok}"
             )
+        lines += self._table_footer()
+        return "\n".join(lines)
+
+    def _table_footer(self) -> list[str]:
+        """The lines under the table: field and gap, height, print sensitivity, the verdict."""
+        tol = self.document.design["tolerance_rel"]
+        lines: list[str] = []
         resp, g = self.response, self.geometry
         lines.append(
             f"gap {resp.gap0_mm:.2f} -> {resp.gap_min_mm:.2f} mm, B0 {resp.B0_T * 1e3:.3f} mT, "
@@ -155,7 +187,7 @@ class DesignResult:
             lines += [f"  - {r}" for r in self.reasons]
         for w in self.warnings:
             lines.append(f"warning: {w}")
-        return "\n".join(lines)
+        return lines
 
 
 def design_dict(doc: Document) -> dict:
@@ -183,7 +215,7 @@ def design_document(
     doc: Document,
     *,
     seed: int | None = None,
-    progress=None,
+    progress: Callable | None = None,
     max_evaluations: int | None = None,
     local: str = "slsqp",
     solution: list | None = None,
@@ -214,21 +246,8 @@ def design_document(
     InputError
         Not a spec, or a spec that contradicts itself (exit code 2).
     """
-    from mst_cli.design import explain
-    from mst_cli.design.solver import solve
-
     t_start = time.perf_counter()
-    doc.require_targets()
-    if doc.mechanics != "spring":
-        raise InputError(
-            "model.mechanics",
-            doc.mechanics,
-            "design_document optimises with the L0 'spring' model: set model.mechanics: "
-            "spring, or refine for a dearer rung (mst design --refine frame|continuum, "
-            "mst_cli.design.refine.refine_document)",
-        )
-    problem = DesignProblem(doc)
-    explain.check_contradictions(problem)
+    problem = _spec_problem(doc)
     seed = int(doc.design["seed"] if seed is None else seed)
     max_evaluations = int(doc.design["max_evaluations"] if max_evaluations is None else max_evaluations)
 
@@ -253,6 +272,23 @@ def design_document(
     return result
 
 
+def _spec_problem(doc: Document) -> DesignProblem:
+    """The L0 design problem of the spec ``doc``; InputError when it is not a spec for the spring
+    rung or contradicts itself."""
+    doc.require_targets()
+    if doc.mechanics != "spring":
+        raise InputError(
+            "model.mechanics",
+            doc.mechanics,
+            "design_document optimises with the L0 'spring' model: set model.mechanics: "
+            "spring, or refine for a dearer rung (mst design --refine frame|continuum, "
+            "mst_cli.design.refine.refine_document)",
+        )
+    problem = DesignProblem(doc)
+    explain.check_contradictions(problem)
+    return problem
+
+
 HEIGHT_ONLY = {"height": 1.0, "force_resolution": 0.0, "print_robustness": 0.0}
 ROBUSTNESS_ONLY = {"height": 0.0, "force_resolution": 0.0, "print_robustness": 1.0}
 
@@ -266,8 +302,6 @@ def _name_lowest_height(doc: Document, result: DesignResult, **run) -> None:
     misses too, the most robust design the search finds (no limit, robustness the only
     preference) says how close any height comes.
     """
-    from dataclasses import replace
-
     limit = doc.design["max_print_deviation_rel"]
 
     def variant(**design):
@@ -305,10 +339,10 @@ def _name_lowest_height(doc: Document, result: DesignResult, **run) -> None:
 def verify_design(
     doc: Document,
     problem: DesignProblem,
-    theta,
-    t,
-    h,
-    sol,
+    theta: ArrayLike,
+    t: ArrayLike,
+    h: ArrayLike,
+    sol: SolverFacts,
     *,
     seed: int,
     max_evaluations: int,
@@ -325,33 +359,100 @@ def verify_design(
     solver's result (its ``matched``, ``evaluations``, ... are reported). The print-error
     sensitivity is measured with ``print_error_mechanics`` [default: ``mechanics``], nominal and
     shifted designs alike, and reported with that rung and ``print_error_rule`` (why it).
+    theta (deg), t and h (mm) have one entry per layer.
     """
-    from mst_cli.design import explain
-
     t_start = time.perf_counter() if t_start is None else t_start
     theta, t, h = (np.asarray(a, dtype=float) for a in (theta, t, h))
-    u_written = problem.to_unit(theta, t, h)
+    designed = _with_cells(doc, theta, t, h)
+    geometry = designed.geometry()  # as drawn: what export draws
+    run = _PrintedRuns(designed, None if doc.field_model == "auto" else doc.field_model, doc.noise_uT_rms)
+    resp = run(0.0, mechanics)
+
+    S, R = _layer_outputs(resp, problem.n)
+    targets = _target_rows(problem, theta, t, h, S, R)
+    checks = _constraint_checks(problem, geometry, doc.printer, resp, R)
+    pe_mechanics = mechanics if print_error_mechanics is None else print_error_mechanics
+    nominal = (S, R) if pe_mechanics == mechanics else _layer_outputs(run(0.0, pe_mechanics), problem.n)
+    rung = (pe_mechanics, print_error_rule or SAME_RUNG_RULE)
+    print_error = _print_error(run, nominal, problem, float(doc.printer.wall_tolerance_mm), rung)
+    checks.update(_deviation_check(print_error))
+    met = all(row["within_tolerance"] for row in targets) and not checks
+    binding, reasons = (None, []) if met else _why_not_met(problem, (theta, t, h), (S, R), checks, sol, max_evaluations)
+    return DesignResult(
+        document=designed,
+        geometry=geometry,
+        response=resp,
+        status="met" if met else "not met",
+        binding=binding,
+        reasons=reasons,
+        targets=targets,
+        checks=checks,
+        print_error=print_error,
+        seed=seed,
+        evaluations=sol.evaluations,
+        max_evaluations=max_evaluations,
+        solver=_solver_info(sol),
+        elapsed_s=time.perf_counter() - t_start,
+        warnings=_warnings(resp, print_error),
+        objective=_objective(doc, geometry, resp, print_error),
+    )
+
+
+def _why_not_met(
+    problem: DesignProblem,
+    cells: tuple[np.ndarray, np.ndarray, np.ndarray],
+    achieved: tuple[np.ndarray, np.ndarray],
+    checks: dict[str, str],
+    sol: SolverFacts,
+    max_evaluations: int,
+) -> tuple[str | None, list[str]]:
+    """(binding, reasons) of a design that misses: :func:`explain.diagnose`, and the budget when
+    the solver spent it unmatched."""
+    binding, reasons = explain.diagnose(problem, problem.to_unit(*cells), *achieved, checks)
+    if not sol.matched and sol.evaluations >= max_evaluations:
+        reasons.append(
+            f"the evaluation budget ({max_evaluations}) was spent before the targets were "
+            "met: raise design.max_evaluations (or --max-evaluations) to search further"
+        )
+    return binding, reasons
+
+
+def _with_cells(doc: Document, theta: np.ndarray, t: np.ndarray, h: np.ndarray) -> Document:
+    """The spec ``doc`` with every layer's theta (deg), t, h (mm) written in, targets kept."""
     layers = [
         LayerEntry(float(a), float(b), float(c), la.target_sensitivity_per_N, la.target_range_N, la.weight)
         for a, b, c, la in zip(theta, t, h, doc.layers)
     ]
-    designed = doc.with_layers(layers)
-    geometry = designed.geometry()  # as drawn: what export draws
-    field_model = None if doc.field_model == "auto" else doc.field_model
+    return doc.with_layers(layers)
 
-    def simulate_printed(extra_wall_mm: float, rung: str) -> Response:
-        printed = as_printed(designed, extra_wall_mm)  # as the printer makes it
+
+@dataclass(frozen=True)
+class _PrintedRuns:
+    """The forward model of a design as the printer makes it, every wall ``extra_wall_mm``
+    thicker still, with the mechanics rung ``rung``: ``run(extra_wall_mm, rung)``."""
+
+    designed: Document
+    field_model: str | None
+    noise_uT_rms: float
+
+    def __call__(self, extra_wall_mm: float, rung: str) -> Response:
+        printed = as_printed(self.designed, extra_wall_mm)  # as the printer makes it
         return simulate(
-            printed.geometry(), printed.material, mechanics=rung, field_model=field_model, noise_uT_rms=doc.noise_uT_rms
+            printed.geometry(),
+            printed.material,
+            mechanics=rung,
+            field_model=self.field_model,
+            noise_uT_rms=self.noise_uT_rms,
         )
 
-    resp = simulate_printed(0.0, mechanics)
 
-    # -- verification on the forward model
-    n, tol = problem.n, problem.tolerance_rel
-    S, R = _layer_outputs(resp, n)
+def _target_rows(
+    problem: DesignProblem, theta: np.ndarray, t: np.ndarray, h: np.ndarray, S: np.ndarray, R: np.ndarray
+) -> list[dict]:
+    """report.json's ``targets``: per layer the cell, the target and achieved S_i, R_i, the errors."""
+    tol = problem.tolerance_rel
     targets = []
-    for i in range(n):
+    for i in range(problem.n):
         eS = S[i] / problem.S_target[i] - 1.0
         eR = R[i] / problem.R_target[i] - 1.0
         targets.append(
@@ -369,10 +470,18 @@ def verify_design(
                 "within_tolerance": bool(abs(eS) <= tol and abs(eR) <= tol),
             }
         )
+    return targets
+
+
+def _constraint_checks(
+    problem: DesignProblem, geometry: geo.SensorGeometry, printer: geo.Printer, resp: Response, R: np.ndarray
+) -> dict[str, str]:
+    """The broken constraints (name -> sentence): cell rules, lock order, chip saturation, height."""
     checks = {}
-    for i, v in geometry.violations(doc.printer):
-        checks[f"layer {i + 1} {v.rule}"] = f"layer {i + 1}: {v.message}"
-    for i in range(1, n):
+    for v in geometry.violations(printer):
+        layer = 1 + (v.layer or 0)
+        checks[f"layer {layer} {v.rule}"] = f"layer {layer}: {v.message}"
+    for i in range(1, problem.n):
         if R[i] < (1 + problem.lock_margin_rel) * R[i - 1]:
             checks[f"lock order {i}-{i + 1}"] = (
                 f"layer {i + 1} locks at {R[i]:.4g} N, less than {1 + problem.lock_margin_rel:g} x "
@@ -388,21 +497,27 @@ def verify_design(
             f"total height {geometry.total_height_mm:.2f} mm exceeds "
             f"design.max_height_mm = {problem.max_height_mm:g} mm"
         )
-    # -- print-error sensitivity, re-measured with a forward model (one rung for all three runs:
-    # a ratio of two rungs would mix the model gap into the print sensitivity)
-    pe_mechanics = mechanics if print_error_mechanics is None else print_error_mechanics
-    if pe_mechanics == mechanics:
-        S_pe, R_pe = S, R
-    else:
-        S_pe, R_pe = _layer_outputs(simulate_printed(0.0, pe_mechanics), n)
+    return checks
+
+
+def _print_error(
+    run: _PrintedRuns,
+    nominal: tuple[np.ndarray, np.ndarray],
+    problem: DesignProblem,
+    tol_mm: float,
+    rung: tuple[str, str],
+) -> dict:
+    """report.json's ``print_error_sensitivity``: the relative change of every S_i and R_i
+    (against ``nominal``) with every wall ``tol_mm`` thicker and thinner, by the mechanics
+    ``rung`` = (name, why it). One rung for the nominal and both shifted runs: a ratio of two
+    rungs would mix the model gap into the print sensitivity."""
+    S_pe, R_pe = nominal
+    mechanics, rule = rung
+    shifted = {key: _layer_outputs(run(sign * tol_mm, mechanics), problem.n) for sign, key in _SHIFTS}
     pe_layers = []
-    shifted = {}
-    tol_mm = float(doc.printer.wall_tolerance_mm)
-    for sign, key in ((1.0, "plus"), (-1.0, "minus")):
-        shifted[key] = _layer_outputs(simulate_printed(sign * tol_mm, pe_mechanics), n)
     logs = []
-    for i in range(n):
-        row = {"layer": i + 1}
+    for i in range(problem.n):
+        row: dict = {"layer": i + 1}
         for key in ("plus", "minus"):
             S2, R2 = shifted[key]
             row[f"dS_rel_t_{key}"] = float(S2[i] / S_pe[i] - 1.0)
@@ -412,7 +527,7 @@ def verify_design(
         row["dR_rel_worst"] = max(abs(row["dR_rel_t_plus"]), abs(row["dR_rel_t_minus"]))
         pe_layers.append(row)
     worst = max(max(row["dS_rel_worst"], row["dR_rel_worst"]) for row in pe_layers)
-    print_error = {
+    return {
         "print_error_t_mm": tol_mm,
         "meaning": "relative change of S_i and R_i when every wall is printed printer.wall_tolerance_mm "
         "thicker (plus) or thinner (minus) than expected; its RMS is the print_robustness term of "
@@ -421,33 +536,44 @@ def verify_design(
         "rms_log_change": float(np.sqrt(np.mean(np.square(logs)))),
         "worst_change_rel": float(worst),
         "max_print_deviation_rel": problem.max_print_deviation_rel,
-        "mechanics": pe_mechanics,
-        "mechanics_rule": print_error_rule or SAME_RUNG_RULE,
+        "mechanics": mechanics,
+        "mechanics_rule": rule,
         "layers": pe_layers,
     }
-    limit = problem.max_print_deviation_rel
-    if limit is not None and worst > limit:
-        checks[PRINT_DEVIATION_CHECK] = (
-            f"a wall {tol_mm:g} mm off changes some S_i or R_i by {100 * worst:.1f} %, more than "
-            f"design.max_print_deviation_rel = {100 * limit:g} %"
-        )
-    met = all(row["within_tolerance"] for row in targets) and not checks
-    binding, reasons = (None, []) if met else explain.diagnose(problem, u_written, S, R, checks)
-    if not met and not sol.matched and sol.evaluations >= max_evaluations:
-        reasons.append(
-            f"the evaluation budget ({max_evaluations}) was spent before the targets were "
-            "met: raise design.max_evaluations (or --max-evaluations) to search further"
-        )
+
+
+_SHIFTS = ((1.0, "plus"), (-1.0, "minus"))  # every wall thicker, then thinner
+
+
+def _deviation_check(print_error: dict) -> dict[str, str]:
+    """The print-deviation check that fails when the worst change passes its limit (or none)."""
+    limit, worst = print_error["max_print_deviation_rel"], print_error["worst_change_rel"]
+    if limit is None or worst <= limit:
+        return {}
+    return {
+        PRINT_DEVIATION_CHECK: f"a wall {print_error['print_error_t_mm']:g} mm off changes some S_i or R_i by "
+        f"{100 * worst:.1f} %, more than design.max_print_deviation_rel = {100 * limit:g} %"
+    }
+
+
+def _warnings(resp: Response, print_error: dict) -> list[str]:
+    """The forward model's warnings, and one when the print sensitivity is high and unlimited."""
     warnings = list(resp.warnings)
-    if limit is None and worst > WARN_PRINT_DEVIATION_REL:
+    worst, tol_mm = print_error["worst_change_rel"], print_error["print_error_t_mm"]
+    if print_error["max_print_deviation_rel"] is None and worst > WARN_PRINT_DEVIATION_REL:
         warnings.append(
             f"a wall {tol_mm:g} mm off its expected thickness changes some S_i or R_i by up to "
             f"{100 * worst:.0f} %: calibrate a first print and design again with --calibration "
             "(README: From a first print to a second), or trade height for robustness (mst design --pareto 12, "
             "design.max_print_deviation_rel)"
         )
+    return warnings
+
+
+def _objective(doc: Document, geometry: geo.SensorGeometry, resp: Response, print_error: dict) -> dict:
+    """report.json's ``objective``: design.objective's weights and the three terms' values."""
     weights = doc.design.get("objective") or {}
-    objective = {
+    return {
         "weights": dict(weights),
         "meaning": "among the designs that meet every target, the one with the lowest weighted sum of "
         "ln(total_height_mm), ln(worst_force_resolution_N) and print_robustness_rms",
@@ -455,7 +581,11 @@ def verify_design(
         "worst_force_resolution_N": max(r.force_resolution_N for r in resp.regimes),
         "print_robustness_rms": print_error["rms_log_change"],
     }
-    solver_info = {
+
+
+def _solver_info(sol: SolverFacts) -> dict:
+    """report.json's ``solver``: the method, whether it matched, the starts and the preference."""
+    return {
         "method": "layer-by-layer start + Gauss-Newton match, nlopt "
         f"{'LD' if sol.local == 'slsqp' else 'LN'}_{sol.local.upper()} preference polish and "
         "re-match (seeded multi-start if the start fails)",
@@ -465,24 +595,6 @@ def verify_design(
         "preference_after": sol.preference_after,
         "runs_ended": sol.stops,
     }
-    return DesignResult(
-        document=designed,
-        geometry=geometry,
-        response=resp,
-        status="met" if met else "not met",
-        binding=binding,
-        reasons=reasons,
-        targets=targets,
-        checks=checks,
-        print_error=print_error,
-        seed=seed,
-        evaluations=sol.evaluations,
-        max_evaluations=max_evaluations,
-        solver=solver_info,
-        elapsed_s=time.perf_counter() - t_start,
-        warnings=warnings,
-        objective=objective,
-    )
 
 
 __all__ = ["DesignResult", "design_document", "design_dict", "verify_design", "DesignProblem"]

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -27,6 +28,9 @@ from mst_cli.design.problem import DesignProblem
 from mst_cli.errors import InputError
 from mst_cli.model import geometry as geo
 from mst_cli.model.mechanics.spring import contact_stiffness_N_per_mm
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
 
 GRID_POINTS = 41  # per variable, for the printable lock-force range
 ACTIVE_TOL = 0.02  # a scaled constraint within this of zero counts as binding
@@ -156,12 +160,26 @@ def limits(problem: DesignProblem) -> Limits:
     )
 
 
-def diagnose(problem: DesignProblem, u, achieved_S, achieved_R, checks: dict) -> tuple[str, list[str]]:
+def diagnose(
+    problem: DesignProblem, u: ArrayLike, achieved_S: ArrayLike, achieved_R: ArrayLike, checks: dict[str, str]
+) -> tuple[str, list[str]]:
     """(binding, reasons) for a design that misses: the first reason is the one that binds.
 
-    ``achieved_S``/``achieved_R`` come from the forward model on the written design; ``checks``
-    maps a failed constraint name to its message (from the verification).
+    ``u`` is the written design's normalised point; ``achieved_S`` (1/N) and ``achieved_R`` (N),
+    one per layer, come from the forward model on it; ``checks`` maps a failed constraint name
+    to its message (from the verification).
     """
+    reasons = _beyond_limits(problem) + _rising_sensitivities(problem, achieved_S)
+    reasons += _worst_miss(problem, u, achieved_S, achieved_R)
+    for name, message in checks.items():
+        reasons.append((name, message))
+    if not reasons:  # nothing failed: the caller should not have asked
+        return "", []
+    return reasons[0][0], [r for _, r in reasons]
+
+
+def _beyond_limits(problem: DesignProblem) -> list[tuple[str, str]]:
+    """(name, reason) of every target the magnet's field or the printable layers cannot reach."""
     lim = limits(problem)
     reasons: list[tuple[str, str]] = []
     n, tol = problem.n, problem.tolerance_rel
@@ -205,6 +223,14 @@ def diagnose(problem: DesignProblem, u, achieved_S, achieved_R, checks: dict) ->
                 ),
             )
         )
+    return reasons
+
+
+def _rising_sensitivities(problem: DesignProblem, achieved_S: ArrayLike) -> list[tuple[str, str]]:
+    """(name, reason) of every target S_i that does not fall from the regime below."""
+    achieved_S = np.asarray(achieved_S, float)
+    reasons = []
+    n = problem.n
     for i in range(1, n):
         if problem.S_target[i] >= problem.S_target[i - 1]:
             reasons.append(
@@ -220,7 +246,16 @@ def diagnose(problem: DesignProblem, u, achieved_S, achieved_R, checks: dict) ->
                 )
             )
 
-    # the output that misses most, and what holds the nearest design back
+    return reasons
+
+
+def _worst_miss(
+    problem: DesignProblem, u: ArrayLike, achieved_S: ArrayLike, achieved_R: ArrayLike
+) -> list[tuple[str, str]]:
+    """(name, reason) of the output that misses most, when it misses, and what holds the nearest
+    design back (the active constraints and bounds)."""
+    n, tol = problem.n, problem.tolerance_rel
+    reasons = []
     targets = np.concatenate([problem.S_target, problem.R_target])
     achieved = np.concatenate([np.asarray(achieved_S, float), np.asarray(achieved_R, float)])
     err = achieved / targets - 1.0
@@ -236,14 +271,10 @@ def diagnose(problem: DesignProblem, u, achieved_S, achieved_R, checks: dict) ->
         miss += "; held back by: " + ", ".join(active)
     if abs(err[j]) > tol:
         reasons.append((names[j], miss))
-    for name, message in checks.items():
-        reasons.append((name, message))
-    if not reasons:  # nothing failed: the caller should not have asked
-        return "", []
-    return reasons[0][0], [r for _, r in reasons]
+    return reasons
 
 
-def active_constraints(problem: DesignProblem, u) -> list[str]:
+def active_constraints(problem: DesignProblem, u: ArrayLike) -> list[str]:
     """Constraints and variable bounds that are (nearly) active at normalised point u."""
     e = problem.evaluate(np.asarray(u, float))
     names = problem.constraint_names()

@@ -27,10 +27,12 @@ import numpy as np
 
 from mst_cli.design.document import ROUND_DECIMALS, DesignResult, design_document, verify_design
 from mst_cli.design.problem import DesignProblem
+from mst_cli.design.solver import SolveResult, pareto_weights, prefer_many
 from mst_cli.io.schema import OBJECTIVE_TERMS, Document
 
 if TYPE_CHECKING:
     from collections.abc import Callable
+    from pathlib import Path
 
 # Two designs are the same point of the front when they differ by less than one print layer
 # in height, 2 % in force resolution and 1 percentage point in print robustness: differences a
@@ -129,8 +131,6 @@ def pareto_front(
     (:func:`mst_cli.design.solver.prefer_many`). Designs are then judged in the weightings'
     order, as one at a time would be, until the front holds ``count`` designs.
     """
-    from mst_cli.design.solver import pareto_weights, prefer_many
-
     solution: list = []
     chosen = design_document(
         doc, seed=seed, progress=progress, max_evaluations=max_evaluations, local=local, solution=solution
@@ -141,45 +141,90 @@ def pareto_front(
     sol = solution[0]
     if sol.u_matched is None:
         return chosen, points
-    problem = DesignProblem(doc)
-    seed = int(doc.design["seed"] if seed is None else seed)
-    max_evaluations = int(doc.design["max_evaluations"] if max_evaluations is None else max_evaluations)
-    # what a front design reports of the solver: the shared match and its own polish
-    front_sol = replace(sol, preference_before=None, preference_after=None, stops=[])
-
-    def front_of(pts):
-        mask = non_dominated(np.array([p.metrics for p in pts]))
-        return [p for p, keep in zip(pts, mask) if keep or p.chosen]
-
-    judged: set[bytes] = set()  # designs (as written) already judged: the same verdict again
+    front = _Front(
+        doc,
+        sol,
+        points,
+        seed=int(doc.design["seed"] if seed is None else seed),
+        max_evaluations=int(doc.design["max_evaluations"] if max_evaluations is None else max_evaluations),
+        local=local,
+    )
     for wave in _waves(pareto_weights(MAX_WEIGHTINGS_PER_POINT * count), WAVE_PER_POINT * count):
+        if front.add_wave(wave, count):
+            break
+    return chosen, _spread(_front_of(points), count)
+
+
+def _front_of(points: list[ParetoDesign]) -> list[ParetoDesign]:
+    """The non-dominated designs of ``points``, and the chosen one whatever it is."""
+    mask = non_dominated(np.array([p.metrics for p in points]))
+    return [p for p, keep in zip(points, mask) if keep or p.chosen]
+
+
+class _Front:
+    """The designs of a front as they are found: each weighting's polish from the chosen
+    design's matched point, judged by the forward model, kept when it meets the targets and is
+    not the same point as one already kept."""
+
+    def __init__(
+        self,
+        doc: Document,
+        sol: SolveResult,
+        points: list[ParetoDesign],
+        *,
+        seed: int,
+        max_evaluations: int,
+        local: str,
+    ):
+        assert sol.u_matched is not None  # the caller's match succeeded
+        self.doc, self.u_matched, self.points = doc, sol.u_matched, points
+        self.seed, self.max_evaluations, self.local = seed, max_evaluations, local
+        self.problem = DesignProblem(doc)
+        # what a front design reports of the solver: the shared match and its own polish
+        self.front_sol = replace(sol, preference_before=None, preference_after=None, stops=[])
+        self.judged: set[bytes] = set()  # designs (as written) already judged: the same verdict again
+
+    def add_wave(self, wave: np.ndarray, count: int) -> bool:
+        """Polish the weightings of ``wave`` together and judge each design in their order; True
+        once the front holds ``count`` designs."""
         polished = prefer_many(
-            problem,
-            [sol.u_matched] * len(wave),
+            self.problem,
+            [self.u_matched] * len(wave),
             list(wave),
-            max_evaluations=max_evaluations,
-            local=local,
-            stops=front_sol.stops,
+            max_evaluations=self.max_evaluations,
+            local=self.local,
+            stops=self.front_sol.stops,
         )
         for w, (u, used) in zip(wave, polished):
-            front_sol.evaluations += used
-            theta, t, h = (np.round(a, ROUND_DECIMALS) for a in problem.to_physical(u))
-            key = np.concatenate([theta, t, h]).tobytes()
-            if key in judged:  # many weightings polish to one design: met or not, it is a repeat
+            self.front_sol.evaluations += used
+            cand = self._judge(w, u)
+            if cand is None or any(_same_point(cand.metrics, p.metrics) for p in self.points):
                 continue
-            judged.add(key)
-            res = verify_design(
-                doc, problem, theta, t, h, front_sol, seed=seed, max_evaluations=max_evaluations, mechanics="spring"
-            )
-            if res.status != "met":
-                continue
-            cand = ParetoDesign(res, tuple(float(x) for x in w))
-            if any(_same_point(cand.metrics, p.metrics) for p in points):
-                continue
-            points.append(cand)
-            if len(front_of(points)) >= count:
-                return chosen, _spread(front_of(points), count)
-    return chosen, _spread(front_of(points), count)
+            self.points.append(cand)
+            if len(_front_of(self.points)) >= count:
+                return True
+        return False
+
+    def _judge(self, w: np.ndarray, u: np.ndarray) -> ParetoDesign | None:
+        """The design of weighting ``w`` polished to ``u``, when it meets the targets and was not
+        judged before (many weightings polish to one design: met or not, it is a repeat)."""
+        theta, t, h = (np.round(a, ROUND_DECIMALS) for a in self.problem.to_physical(u))
+        key = np.concatenate([theta, t, h]).tobytes()
+        if key in self.judged:
+            return None
+        self.judged.add(key)
+        res = verify_design(
+            self.doc,
+            self.problem,
+            theta,
+            t,
+            h,
+            self.front_sol,
+            seed=self.seed,
+            max_evaluations=self.max_evaluations,
+            mechanics="spring",
+        )
+        return ParetoDesign(res, (float(w[0]), float(w[1]), float(w[2]))) if res.status == "met" else None
 
 
 # --------------------------------------------------------------------------- output
@@ -233,11 +278,11 @@ def pareto_csv(front: list[ParetoDesign]) -> str:
     return "\n".join([",".join(header)] + [",".join(str(x) for x in r) for r in rows]) + "\n"
 
 
-def plot_pareto(front: list[ParetoDesign], path, title: str = "") -> None:
+def plot_pareto(front: list[ParetoDesign], path: str | Path, title: str = "") -> None:
     """Two views of the front against part height: print robustness (the trade a short part
     pays) and worst force resolution; the chosen design ringed, every design numbered as in
     pareto.csv."""
-    from matplotlib.figure import Figure
+    from matplotlib.figure import Figure  # deferred: matplotlib loads only for pareto.png
 
     M = np.array([p.metrics for p in front])
     x = M[:, 0]

@@ -59,7 +59,7 @@ from __future__ import annotations
 import inspect
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, cast
 
 import numpy as np
 
@@ -74,6 +74,9 @@ from mst_cli.model.response import field_magnitude_T, regime_kernel
 
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
+
+    from mst_cli.io.schema import Document
+    from mst_cli.model.arrays import Floats
 
 # headroom choose_setting keeps between the largest field and a setting's range (one source)
 CHIP_HEADROOM = inspect.signature(mlx.choose_setting).parameters["margin"].default
@@ -135,7 +138,7 @@ class DesignProblem:
         A spec: every layer has ``target_sensitivity_per_N`` and ``target_range_N``.
     """
 
-    def __init__(self, doc):
+    def __init__(self, doc: Document):
         doc.require_targets()
         self.doc = doc
         self.n = len(doc.layers)
@@ -216,7 +219,7 @@ class DesignProblem:
         gap = np.asarray(gap_mm, dtype=float)  # magpylib takes a flat list of observers
         return field_magnitude_T(gap.ravel(), self.probe, self.field_model).reshape(gap.shape)
 
-    def gap0_mm(self, sum_h_mm: ArrayLike) -> np.ndarray:
+    def gap0_mm(self, sum_h_mm: Floats) -> Floats:
         """Unloaded magnet-to-chip gap, as built, of stacks whose layer heights add up to ``sum_h_mm``."""
         return geo.unloaded_gap_mm(sum_h_mm, self.n, self.probe.housing, self.probe.board) + self.gap_offset_mm
 
@@ -269,29 +272,34 @@ class DesignProblem:
             t = np.maximum(t + self.wall_offset_mm, geo.LENGTH_FLOOR_MM)
         theta_rad = np.radians(theta)
         E = web_modulus_MPa(theta_rad, t, h, fam.depth_mm, self.E_MPa, self.nu)  # as mechanics.layer_laws
-        laws = spring_arrays(theta_rad, t, h, fam.depth_mm, fam.width_mm, fam.contact_allowance_mm, E, self.nu)
+        laws: tuple[np.ndarray, ...] = spring_arrays(
+            theta_rad, t, h, fam.depth_mm, fam.width_mm, fam.contact_allowance_mm, E, self.nu
+        )
         if inverse is not None:
             laws = tuple(a[inverse] for a in laws)
-        return tuple(a.reshape(cells.shape[:-1]) for a in laws)
+        k, d_lock, R, k_locked = (a.reshape(cells.shape[:-1]) for a in laws)
+        return k, d_lock, R, k_locked
 
     def responses(
         self, theta_deg: np.ndarray, t_mm: np.ndarray, h_mm: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """(R_N per layer, S_per_N per regime, B_full_T, gap0_mm, B0_T) of candidate stacks."""
         k, d_lock, R, k_locked = self.layer_laws(theta_deg, t_mm, h_mm)
-        gap0 = self.gap0_mm(h_mm.sum(axis=-1))
+        gap0 = cast(np.ndarray, self.gap0_mm(h_mm.sum(axis=-1)))  # candidates' sums: an array
         _, S, _, B = regime_kernel(k, d_lock, k_locked, gap0, self.field_T, R)
         return R, S, B[..., -1], gap0, B[..., 0]
 
-    def evaluate_physical(self, theta_deg, t_mm, h_mm) -> Evaluation:
+    def evaluate_physical(self, theta_deg: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike) -> Evaluation:
         return self._evaluate_physical(theta_deg, t_mm, h_mm, False)[0]
 
-    def evaluate_with_shifts(self, u) -> tuple[Evaluation, np.ndarray]:
+    def evaluate_with_shifts(self, u: np.ndarray) -> tuple[Evaluation, np.ndarray]:
         """(:meth:`evaluate`, :meth:`print_shift_log` of the same candidates), the nominal and
         the two print-shifted stacks through the kernels in one call: each candidate's numbers
         are, to the bit, those of the two calls (the kernels give a stack the same bits in any
         batch)."""
-        return self._evaluate_physical(*self.to_physical(u), True)
+        ev, shifts = self._evaluate_physical(*self.to_physical(u), True)
+        assert shifts is not None  # asked for
+        return ev, shifts
 
     def _evaluate_physical(self, theta_deg, t_mm, h_mm, with_shifts: bool) -> tuple[Evaluation, np.ndarray | None]:
         theta_deg, t_mm, h_mm = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in (theta_deg, t_mm, h_mm)))
@@ -331,15 +339,24 @@ class DesignProblem:
             theta_deg, t_mm, h_mm, R, S, B_full, B0, gap0, height, margins, log_err, constraints, objective
         ), shifts
 
-    def evaluate(self, u) -> Evaluation:
+    def evaluate(self, u: np.ndarray) -> Evaluation:
         return self.evaluate_physical(*self.to_physical(u))
 
     # ----------------------------------------------------------------- preference
-    def print_deviation_constraints(self, theta_deg, t_mm, h_mm, S, R, shifts=None) -> np.ndarray:
+    def print_deviation_constraints(
+        self,
+        theta_deg: np.ndarray,
+        t_mm: np.ndarray,
+        h_mm: np.ndarray,
+        S: np.ndarray,
+        R: np.ndarray,
+        shifts: np.ndarray | None = None,
+    ) -> np.ndarray:
         """(..., 8n) g <= 0 when every output's change at t +- tolerance lies within
         +- design.max_print_deviation_rel: ln(1 - m) <= ln(out'/out) <= ln(1 + m), per sign and output.
         ``shifts``: the candidates' :meth:`print_shift_log`, when the caller has it."""
         m = self.max_print_deviation_rel
+        assert m is not None  # only a spec with design.max_print_deviation_rel has these rows
         d = self.print_shift_log(theta_deg, t_mm, h_mm, nominal=(S, R)) if shifts is None else shifts  # (2, ..., 2n)
         g = np.concatenate([d - math.log1p(m), math.log1p(-m) - d], axis=-1)  # (2, ..., 4n)
         return np.moveaxis(g, 0, -2).reshape(g.shape[1:-1] + (-1,))
@@ -403,7 +420,7 @@ class DesignProblem:
         w = self.objective_weights if weights is None else np.asarray(weights, dtype=float)
         return (self.objective_terms(ev) if terms is None else terms) @ w
 
-    def evaluate_terms(self, u) -> tuple[Evaluation, np.ndarray]:
+    def evaluate_terms(self, u: np.ndarray) -> tuple[Evaluation, np.ndarray]:
         """(:meth:`evaluate`, :meth:`objective_terms`) of candidates, the print-shifted stacks of
         the robustness term in the same kernel call (:meth:`evaluate_with_shifts`)."""
         ev, shifts = self.evaluate_with_shifts(u)

@@ -25,18 +25,33 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
+from typing import Any
 
 import numpy as np
 
 from mst_cli.calibrate.fit import as_printed
 from mst_cli.design.document import ROUND_DECIMALS, DesignResult, _layer_outputs, design_document, verify_design
 from mst_cli.design.problem import DesignProblem
+from mst_cli.design.solver import (
+    FEASIBILITY_TOL,
+    MAX_TIME_S,
+    ROUNDING_SAFETY,
+    Tracker,
+    _Budget,
+    _Matcher,
+    _nlopt_failures,
+    _Phase,
+    _Stop,
+)
 from mst_cli.errors import InputError
 from mst_cli.io.schema import Document
+from mst_cli.model.ladder import USER_LADDER, choose_mechanics, load_ladder_errors, rung_errors
 from mst_cli.model.response import simulate
 
 REFINE_MODELS = ("frame", "continuum")
+ASKED = "asked for by the caller"  # why the print error's rung is the one named
 MAX_ITERATIONS = 6
 STOP_FRACTION = 0.5  # iterate until the dear model is within this x tolerance (margin)
 LOCAL_STEP = 0.02  # initial step of the COBYLA fallback (unit variables)
@@ -114,6 +129,11 @@ class _Iterate:
     h: np.ndarray
     max_log_err: float
 
+    @property
+    def cells(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(theta deg, t mm, h mm), one entry per layer."""
+        return self.theta, self.t, self.h
+
 
 def _dear_errors(designed: Document, model: str, S_t, R_t):
     """(S, R) of the dear model on a design as printed and the log errors against the real targets."""
@@ -146,8 +166,6 @@ def _local_match(problem: DesignProblem, theta, t, h, maxeval: int = LOCAL_MAX_E
     Returns the rounded (theta, t, h), the candidate designs evaluated and whether every L0
     output is within the tolerance of the (corrected) targets.
     """
-    from mst_cli.design.solver import FEASIBILITY_TOL, MAX_TIME_S, ROUNDING_SAFETY, Tracker, _Budget, _Matcher, _Phase
-
     u0 = np.clip(problem.to_unit(theta, t, h), 0.0, 1.0)
     lo, hi = np.maximum(u0 - LOCAL_TRUST, 0.0), np.minimum(u0 + LOCAL_TRUST, 1.0)
     matcher = _Matcher(problem)
@@ -182,9 +200,7 @@ def _run_local(phase, local: str, u0, lo, hi, maxeval: int, step: float) -> bool
     """One nlopt run of ``phase``'s callbacks in the box [lo, hi]; the phase's tracker keeps
     the best point whatever way the run ends. True when nlopt ended on its own stopping rules
     or the goal (False: a failure, roundoff or the budget)."""
-    import nlopt
-
-    from mst_cli.design.solver import _nlopt_failures, _Stop
+    import nlopt  # deferred: the optimiser loads when a design is searched, not at start-up
 
     opt = nlopt.opt(nlopt.LD_SLSQP if local == "slsqp" else nlopt.LN_COBYLA, phase.problem.dim)
     opt.set_lower_bounds(lo)
@@ -215,8 +231,6 @@ def print_error_rung(doc: Document, model: str, errors: dict | None = None) -> t
     stiffness and 1.5 % in lock force, ``ladder_errors.json``) are small beside the 10-50 % changes
     it measures; the dear rung there costs 2 solves per layer for a second digit.
     """
-    from mst_cli.model.ladder import USER_LADDER, choose_mechanics, load_ladder_errors, rung_errors
-
     errors = load_ladder_errors() if errors is None else errors
     if doc.accuracy_rel is None:
         err = rung_errors("spring", errors)
@@ -238,7 +252,7 @@ def refine_document(
     model: str,
     *,
     seed: int | None = None,
-    progress=None,
+    progress: Callable | None = None,
     max_evaluations: int | None = None,
     max_iterations: int = MAX_ITERATIONS,
     print_error_mechanics: str | None = None,
@@ -271,135 +285,170 @@ def refine_document(
         raise InputError("--refine", model, "one of " + ", ".join(REFINE_MODELS))
     t_start = time.perf_counter()
     doc.require_targets()
-    tol = float(doc.design["tolerance_rel"])
-    S_t = np.array([la.target_sensitivity_per_N for la in doc.layers], dtype=float)
-    R_t = np.array([la.target_range_N for la in doc.layers], dtype=float)
-    inner_doc = replace(doc, mechanics="spring")
-    s, r = S_t.copy(), R_t.copy()
-    history, best, evaluations = [], None, 0
-    mapping = _SecantMapping(2 * len(S_t))
-    problem = DesignProblem(inner_doc)  # the L0 problem of the real targets (explains a miss)
-    stopped = f"iteration cap ({max_iterations}) reached"
-    step_kind = "none (the spec's targets)"
-    for k in range(max_iterations):
-        layers = [
-            replace(la, target_sensitivity_per_N=float(a), target_range_N=float(b))
-            for la, a, b in zip(doc.layers, s, r)
-        ]
-        if k == 0:
-            # the plain L0 design of the real targets (global search, preference)
-            inner = design_document(
-                inner_doc.with_layers(layers),
-                seed=seed,
-                progress=progress,
-                max_evaluations=max_evaluations,
-                name_height=False,
-            )
-            evaluations += inner.evaluations
-            theta, t, h = (
-                np.array([getattr(la, key) for la in inner.document.layers]) for key in ("theta_deg", "t_mm", "h_mm")
-            )
-            inner_status = inner.status
-        else:
-            # warm start: a local L0 match of the corrected targets from the previous design,
-            # so the spare freedom (the preference) does not jump to another branch
-            problem_k = DesignProblem(inner_doc.with_layers(layers))
-            theta, t, h, n_eval, inner_met = _local_match(problem_k, theta, t, h)
-            evaluations += n_eval
-            inner_status = "met" if inner_met else "not met"
-        S, R, lS, lR = _dear_errors(
-            inner_doc.with_layers(
-                [
-                    replace(la, theta_deg=float(a), t_mm=float(b), h_mm=float(c))
-                    for la, a, b, c in zip(doc.layers, theta, t, h)
-                ]
-            ),
-            model,
-            S_t,
-            R_t,
-        )
-        worst = float(max(np.abs(lS).max(), np.abs(lR).max()))
-        rel = np.concatenate([S / S_t - 1.0, R / R_t - 1.0])
-        history.append(
-            {
-                "iteration": k + 1,
-                "max_abs_log_error": worst,
-                "max_abs_error_rel": float(np.abs(rel).max()),
-                "inner_status": inner_status,
-                "l0_targets_update": step_kind,
-                "l0_targets_sensitivity_per_N": s.tolist(),
-                "l0_targets_range_N": r.tolist(),
-                "theta_deg": theta.tolist(),
-                "t_mm": t.tolist(),
-                "h_mm": h.tolist(),
-            }
-        )
-        if best is None or worst < best.max_log_err:
-            best = _Iterate(theta, t, h, worst)
-        if np.all(np.abs(rel) <= STOP_FRACTION * tol):
-            stopped = (
-                f"{model} model meets every target within {100 * STOP_FRACTION * tol:g} % "
-                f"(half the tolerance) at iteration {k + 1}"
-            )
-            break
-        # output space mapping: correct the L0 targets by the dear model's miss, through the
-        # secant estimate of how the dear outputs follow the L0 targets; start from what L0
-        # gives at x_k, not what it was asked for (the same when the local match met them, and
-        # a consistent secant pair when it could not)
-        ev = problem.evaluate_physical(theta, t, h)
-        z_l0 = np.log(np.concatenate([ev.S_per_N, ev.R_N]))
-        z, step_kind = mapping.next_targets(z_l0, np.concatenate([lS, lR]))
-        s, r = np.exp(z[: len(s)]), np.exp(z[len(s) :])
-
-    final_doc = replace(doc, mechanics=model)
-    sol = _SolverFacts.from_result(inner, evaluations)
-    if print_error_mechanics is None:
-        pe_rung, pe_rule = print_error_rung(doc, model)
-    else:
-        pe_rung, pe_rule = print_error_mechanics, "asked for by the caller"
+    run = _Refinement(doc, model)
+    run.iterate(max_iterations, seed=seed, progress=progress, max_evaluations=max_evaluations)
+    pe_rung, pe_rule = print_error_rung(doc, model) if print_error_mechanics is None else (print_error_mechanics, ASKED)
+    first, best = run.first, run.best
+    assert first is not None and best is not None  # max_iterations >= 1: the L0 design ran
     result = verify_design(
-        final_doc,
-        problem,
-        best.theta,
-        best.t,
-        best.h,
-        sol,
-        seed=inner.seed,
-        max_evaluations=inner.max_evaluations,
+        replace(doc, mechanics=model),
+        run.problem,
+        *best.cells,
+        _SolverFacts.from_result(first, run.evaluations),
+        seed=first.seed,
+        max_evaluations=first.max_evaluations,
         mechanics=model,
         t_start=t_start,
         print_error_mechanics=pe_rung,
         print_error_rule=pe_rule,
     )
     if result.status != "met":
-        worst_row = max(
-            result.targets, key=lambda row: max(abs(row["sensitivity_error_rel"]), abs(row["range_error_rel"]))
-        )
-        which = "S" if abs(worst_row["sensitivity_error_rel"]) >= abs(worst_row["range_error_rel"]) else "R"
-        err = worst_row["sensitivity_error_rel" if which == "S" else "range_error_rel"]
-        if all(row["within_tolerance"] for row in result.targets):
-            pass  # a constraint binds: verify_design named it
-        else:
-            result.binding = f"layer {worst_row['layer']} {which} ({model} model)"
-            result.reasons.insert(
-                0,
-                f"after {len(history)} refinement iterations the {model} model "
-                f"misses layer {worst_row['layer']} {which} by {100 * err:+.2f} % "
-                f"(tolerance {100 * tol:g} %): {stopped}",
-            )
-    refinement = {
-        "inner_model": "spring",
-        "model": model,
-        "method": "output space mapping: L0 targets corrected by the dear model's log miss (plain, or "
-        "through a Broyden secant estimate of d dear / d L0 target), L0 re-matched locally",
-        "iterations": history,
-        "best_iteration": 1 + min(range(len(history)), key=lambda i: history[i]["max_abs_log_error"]),
-        "stopped": stopped,
-        "max_iterations": max_iterations,
-        "l0_evaluations_total": evaluations,
-    }
+        _name_the_miss(result, model, len(run.history), run.stopped)
     result.elapsed_s = time.perf_counter() - t_start
-    return RefinedResult(**vars(result), refinement=refinement)
+    return RefinedResult(**vars(result), refinement=run.record(max_iterations))
+
+
+def _name_the_miss(result: DesignResult, model: str, iterations: int, stopped: str) -> None:
+    """Make the worst-missed target of the dear ``model`` the binding reason of ``result`` (unless
+    every target is met and a constraint binds: verify_design named it)."""
+    if all(row["within_tolerance"] for row in result.targets):
+        return
+    tol = float(result.document.design["tolerance_rel"])
+    worst_row = max(result.targets, key=lambda row: max(abs(row["sensitivity_error_rel"]), abs(row["range_error_rel"])))
+    which = "S" if abs(worst_row["sensitivity_error_rel"]) >= abs(worst_row["range_error_rel"]) else "R"
+    err = worst_row["sensitivity_error_rel" if which == "S" else "range_error_rel"]
+    result.binding = f"layer {worst_row['layer']} {which} ({model} model)"
+    result.reasons.insert(
+        0,
+        f"after {iterations} refinement iterations the {model} model "
+        f"misses layer {worst_row['layer']} {which} by {100 * err:+.2f} % "
+        f"(tolerance {100 * tol:g} %): {stopped}",
+    )
+
+
+class _Refinement:
+    """One output-space-mapping refinement of the spec ``doc`` for the dear ``model``: the L0
+    targets (s, r) it asks for, the dear model's verdict on each iterate, the best one."""
+
+    def __init__(self, doc: Document, model: str):
+        self.doc, self.model = doc, model
+        self.tol = float(doc.design["tolerance_rel"])
+        self.S_t = np.array([la.target_sensitivity_per_N for la in doc.layers], dtype=float)
+        self.R_t = np.array([la.target_range_N for la in doc.layers], dtype=float)
+        self.inner_doc = replace(doc, mechanics="spring")
+        self.problem = DesignProblem(self.inner_doc)  # the L0 problem of the real targets (explains a miss)
+        self.mapping = _SecantMapping(2 * len(self.S_t))
+        self.history: list[dict] = []
+        self.best: _Iterate | None = None
+        self.first: DesignResult | None = None  # the plain L0 design (iteration 1)
+        self.evaluations = 0
+        self.stopped = ""
+
+    def iterate(self, max_iterations: int, **design: Any) -> None:
+        """Up to ``max_iterations`` L0 designs, each judged by the dear model, until it meets every
+        target within STOP_FRACTION x the tolerance; ``design``: design_document's options."""
+        self.stopped = f"iteration cap ({max_iterations}) reached"
+        s, r = self.S_t.copy(), self.R_t.copy()
+        step_kind = "none (the spec's targets)"
+        cells: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+        for k in range(max_iterations):
+            cells, inner_status = self._l0_design(k, s, r, cells, design)
+            S, R, lS, lR = _dear_errors(self._with_cells(*cells), self.model, self.S_t, self.R_t)
+            worst = float(max(np.abs(lS).max(), np.abs(lR).max()))
+            rel = np.concatenate([S / self.S_t - 1.0, R / self.R_t - 1.0])
+            self.history.append(_history_row(k, worst, rel, inner_status, step_kind, (s, r), cells))
+            if self.best is None or worst < self.best.max_log_err:
+                self.best = _Iterate(*cells, worst)
+            if np.all(np.abs(rel) <= STOP_FRACTION * self.tol):
+                self.stopped = (
+                    f"{self.model} model meets every target within {100 * STOP_FRACTION * self.tol:g} % "
+                    f"(half the tolerance) at iteration {k + 1}"
+                )
+                return
+            # output space mapping: correct the L0 targets by the dear model's miss, through the
+            # secant estimate of how the dear outputs follow the L0 targets; start from what L0
+            # gives at x_k, not what it was asked for (the same when the local match met them, and
+            # a consistent secant pair when it could not)
+            ev = self.problem.evaluate_physical(*cells)
+            z_l0 = np.log(np.concatenate([ev.S_per_N, ev.R_N]))
+            z, step_kind = self.mapping.next_targets(z_l0, np.concatenate([lS, lR]))
+            s, r = np.exp(z[: len(s)]), np.exp(z[len(s) :])
+
+    def _l0_design(
+        self,
+        k: int,
+        s: np.ndarray,
+        r: np.ndarray,
+        cells: tuple[np.ndarray, np.ndarray, np.ndarray] | None,
+        design: dict,
+    ) -> tuple[tuple[np.ndarray, np.ndarray, np.ndarray], str]:
+        """The L0 design (theta, t, h) of the targets (s, r) and whether L0 met them: at k = 0 the
+        plain design of the real targets (global search, preference), then a local L0 match
+        from the previous ``cells``, so the spare freedom (the preference) does not jump to
+        another branch."""
+        layers = [
+            replace(la, target_sensitivity_per_N=float(a), target_range_N=float(b))
+            for la, a, b in zip(self.doc.layers, s, r)
+        ]
+        if k == 0 or cells is None:
+            inner = design_document(self.inner_doc.with_layers(layers), name_height=False, **design)
+            self.first = inner
+            self.evaluations += inner.evaluations
+            theta, t, h = (
+                np.array([getattr(la, key) for la in inner.document.layers]) for key in ("theta_deg", "t_mm", "h_mm")
+            )
+            return (theta, t, h), inner.status
+        theta, t, h, n_eval, inner_met = _local_match(DesignProblem(self.inner_doc.with_layers(layers)), *cells)
+        self.evaluations += n_eval
+        return (theta, t, h), "met" if inner_met else "not met"
+
+    def _with_cells(self, theta: np.ndarray, t: np.ndarray, h: np.ndarray) -> Document:
+        return self.inner_doc.with_layers(
+            [
+                replace(la, theta_deg=float(a), t_mm=float(b), h_mm=float(c))
+                for la, a, b, c in zip(self.doc.layers, theta, t, h)
+            ]
+        )
+
+    def record(self, max_iterations: int) -> dict:
+        """report.json's ``refinement``: the method and every iteration."""
+        history = self.history
+        return {
+            "inner_model": "spring",
+            "model": self.model,
+            "method": "output space mapping: L0 targets corrected by the dear model's log miss (plain, or "
+            "through a Broyden secant estimate of d dear / d L0 target), L0 re-matched locally",
+            "iterations": history,
+            "best_iteration": 1 + min(range(len(history)), key=lambda i: history[i]["max_abs_log_error"]),
+            "stopped": self.stopped,
+            "max_iterations": max_iterations,
+            "l0_evaluations_total": self.evaluations,
+        }
+
+
+def _history_row(
+    k: int,
+    worst: float,
+    rel: np.ndarray,
+    inner_status: str,
+    step_kind: str,
+    targets: tuple[np.ndarray, np.ndarray],
+    cells: tuple[np.ndarray, np.ndarray, np.ndarray],
+) -> dict:
+    """One iteration of report.json's ``refinement.iterations``."""
+    (s, r), (theta, t, h) = targets, cells
+    return {
+        "iteration": k + 1,
+        "max_abs_log_error": worst,
+        "max_abs_error_rel": float(np.abs(rel).max()),
+        "inner_status": inner_status,
+        "l0_targets_update": step_kind,
+        "l0_targets_sensitivity_per_N": s.tolist(),
+        "l0_targets_range_N": r.tolist(),
+        "theta_deg": theta.tolist(),
+        "t_mm": t.tolist(),
+        "h_mm": h.tolist(),
+    }
 
 
 @dataclass

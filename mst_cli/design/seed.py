@@ -43,7 +43,8 @@ def grid_within(max_cells: float, grid: tuple[int, int, int] = GRID) -> tuple[in
     """``grid`` shrunk evenly along every axis (at least 3 points each) to hold at most
     ``max_cells`` cells: a small evaluation budget gets a coarser table, not none."""
     scale = min(1.0, (max(max_cells, 27.0) / float(np.prod(grid))) ** (1.0 / 3.0))
-    return tuple(max(3, int(k * scale)) for k in grid)
+    a, b, c = (max(3, int(k * scale)) for k in grid)
+    return a, b, c
 
 
 def table_units(grid: tuple[int, int, int] = GRID) -> np.ndarray:

@@ -39,7 +39,7 @@ import math
 import time
 from collections import OrderedDict
 from dataclasses import dataclass, field, fields
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -77,7 +77,7 @@ class Tracker:
     violation: float = math.inf
     feasible: bool = False
 
-    def offer(self, u, score: float, violation: float) -> bool:
+    def offer(self, u: np.ndarray, score: float, violation: float) -> bool:
         feasible = violation <= FEASIBILITY_TOL
         if self.u is None:
             better = True
@@ -130,7 +130,7 @@ class _Budget:
 def _nlopt_failures() -> tuple:
     """nlopt's generic failure: Python's RuntimeError up to nlopt 2.10, its own
     ``nlopt.runtime_error`` (not a RuntimeError) from 2.11 on."""
-    import nlopt
+    import nlopt  # deferred: the optimiser loads when a design is searched, not at start-up
 
     return tuple(e for e in (getattr(nlopt, "runtime_error", None),) if isinstance(e, type))
 
@@ -195,7 +195,7 @@ class _Phase:
             grad[:] = self.dg
 
     def run(self, x0, local: str, maxeval: int, step: float, stops: list):
-        import nlopt
+        import nlopt  # deferred: the optimiser loads when a design is searched, not at start-up
 
         NLOPT_FAILURES = _nlopt_failures()
         dim = self.problem.dim
@@ -422,7 +422,7 @@ def prefer(
     elif not polished_matched and budget.left > per_iter:
         phase = _Phase(problem, m.batch, problem.n_constraints, rematch, budget, "re-match", m.goal)
         phase.run(polished, local, min(iters, budget.left // per_iter), 0.02 * INITIAL_STEP, stops)
-    final = rematch.u if m.matched_at(rematch.u) else u_matched
+    final = rematch.u if rematch.u is not None and m.matched_at(rematch.u) else u_matched
 
     # -- phase 4: the preference once more, inside the narrow band
     e, after = pref_at(final)
@@ -458,10 +458,10 @@ def solve(
     *,
     seed: int = 0,
     max_evaluations: int = 20000,
-    progress=None,
+    progress: Callable | None = None,
     local: str = "slsqp",
     max_time_s: float = MAX_TIME_S,
-    weights=None,
+    weights: ArrayLike | None = None,
 ) -> SolveResult:
     """Find normalised variables meeting the targets, then minimise the preference (one budget)."""
     result, budget = _matched(problem, seed, max_evaluations, progress, local, max_time_s)
@@ -514,7 +514,7 @@ class _SharedEvaluations:
 
     def __init__(self, problem: DesignProblem):
         self.problem = problem
-        self.caller = None
+        self.caller: Any = None  # the greenlet that serves the batch
 
     def ask(self, job: int, u: np.ndarray) -> tuple[Evaluation, np.ndarray]:
         """Evaluation and preference terms of ``u`` (one point (dim,) or a batch (k, dim)),
@@ -547,7 +547,7 @@ class _SharedEvaluations:
         """Each job called with its own batched view of the problem; their results in order.
         A job's Exception is raised once every other job has finished; anything else (an
         interrupt) at once."""
-        from greenlet import getcurrent, greenlet
+        from greenlet import getcurrent, greenlet  # deferred: only the batched polish of many weightings runs them
 
         out: list = [None] * len(jobs)
         errors: list[Exception] = []

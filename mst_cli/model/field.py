@@ -71,8 +71,8 @@ def cylinder_B_T(
 
     The magnet is tilted by ``tilt_deg`` about the y axis. magpylib works in metres.
     """
-    import magpylib as magpy
-    from scipy.spatial.transform import Rotation
+    import magpylib as magpy  # deferred: the exact model's library (and scipy) load only when it is used
+    from scipy.spatial.transform import Rotation  # deferred: as above
 
     r = np.atleast_2d(np.asarray(r_mm, dtype=float))
     orientation = Rotation.from_euler("y", tilt_deg, degrees=True) if tilt_deg else None
@@ -87,7 +87,9 @@ def cylinder_B_T(
     return np.reshape(B, np.shape(r))
 
 
-def choose_field_model(offset_mm=(0.0, 0.0), tilt_deg=0.0, requested: str | None = None) -> str:
+def choose_field_model(
+    offset_mm: tuple[float, float] = (0.0, 0.0), tilt_deg: float = 0.0, requested: str | None = None
+) -> str:
     """The cheapest exact model for the scene, unless the user asked for one."""
     if requested is not None:
         if requested not in FIELD_MODELS:

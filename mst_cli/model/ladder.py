@@ -74,10 +74,12 @@ class MechanicsChoice:
         """One line for the user, or None when nothing was picked on their behalf."""
         if self.source != "accuracy_rel":
             return None
+        err_k, err_R, asked = self.measured_err_k_rel, self.measured_err_lock_force_rel, self.requested_rel
+        # a pick by accuracy_rel always records the measured errors and the request
+        assert err_k is not None and err_R is not None and asked is not None
         return (
             f"mechanics: {self.mechanics} (measured median error against continuum: stiffness "
-            f"{100 * self.measured_err_k_rel:.3g} %, lock force {100 * self.measured_err_lock_force_rel:.3g} %; "
-            f"requested <= {100 * self.requested_rel:.3g} %)"
+            f"{100 * err_k:.3g} %, lock force {100 * err_R:.3g} %; requested <= {100 * asked:.3g} %)"
         )
 
 

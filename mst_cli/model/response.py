@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from functools import partial
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -16,6 +17,7 @@ import numpy as np
 from mst_cli.model import chip as mlx
 from mst_cli.model import field as fld
 from mst_cli.model.geometry import SensorGeometry
+from mst_cli.model.material import Material
 from mst_cli.model.mechanics import layer_laws
 from mst_cli.model.stack import Stack, series_displacement_mm
 
@@ -121,7 +123,7 @@ class Response:
 
 def simulate(
     geometry: SensorGeometry,
-    material,
+    material: Material,
     mechanics: str = "spring",
     field_model: str | None = None,
     noise_uT_rms: float = mlx.DEFAULT_NOISE_uT,
@@ -132,105 +134,30 @@ def simulate(
 
     The force axis runs from 0 to (1 + overload) x the last lock force; points past the last
     lock are flagged ``in_range = False`` (the sensor's range has ended there, the model only
-    shows the stiff locked branch).
+    shows the stiff locked branch). ``mechanics`` names the rung of the layers' laws,
+    ``field_model`` the magnet's [default: chosen from the chip offset and tilt], and
+    ``noise_uT_rms`` the chip's field noise (uT) that sets the force resolution.
     """
     model = fld.choose_field_model(geometry.chip_offset_mm, geometry.magnet_tilt_deg, field_model)
-    laws = layer_laws(geometry.layers, material, mechanics)
-    stack = Stack(laws)
+    stack = Stack(layer_laws(geometry.layers, material, mechanics))
     edges = stack.regime_bounds_N
-    n = len(laws)
-
-    # force grid: uniform inside each regime, the edges included exactly, then the overload
-    pieces = [np.linspace(edges[i], edges[i + 1], points_per_regime, endpoint=False) for i in range(n)]
+    F = _force_grid(edges, points_per_regime, overload)
     F_last = edges[-1]
-    pieces.append(np.linspace(F_last, F_last * (1.0 + overload), max(points_per_regime // 4, 2)))
-    F = np.concatenate(pieces)
     d = stack.displacement_mm(F)
     gap0 = geometry.gap0_mm
     gap = gap0 - d
     Bvec = fld.field_at_chip_T(gap, geometry.magnet, model, geometry.chip_offset_mm, geometry.magnet_tilt_deg)
     Babs = np.linalg.norm(Bvec, axis=-1)
     B0 = float(Babs[0])
-    rel = Babs / B0 - 1.0
-
-    # local slope d(dB/B0)/dF = (1/B0) d|B|/dgap * dgap/dF, with dgap/dF = -compliance
-    field_T = lambda g: field_magnitude_T(g, geometry, model)  # noqa: E731
-    dB_dgap = (field_T(gap + GAP_STEP_MM) - field_T(gap - GAP_STEP_MM)) / (2 * GAP_STEP_MM)
-    # compliance is one-sided at the lock forces: evaluate it just inside each point's band
-    band = np.clip(np.searchsorted(edges, F, side="right") - 1, 0, n)
-    lo_b, hi_b = edges[band], np.append(edges, np.inf)[band + 1]
-    width = np.where(np.isfinite(hi_b), hi_b - lo_b, F_last)
-    F_inside = np.clip(F, lo_b + 1e-9 * width, hi_b - 1e-9 * width)
-    compliance = stack.local_compliance_mm_per_N(F_inside)  # one lookup for all samples: O(n) in layers
-    slope = -dB_dgap * compliance / B0
-
-    # secant sensitivities from the stack itself, so they hold for every mechanics rung
-    # (regime_kernel gives the same numbers for L0 layers; the design loop uses it)
-    k = np.array([law.k_N_per_mm for law in laws])
-    dl = np.array([law.d_lock_mm for law in laws])
+    field_T = partial(field_magnitude_T, geometry=geometry, model=model)  # |B| (T) of gaps (mm)
+    slope, band = _local_slope(stack, F, gap, field_T, B0)
     gap_edges = gap0 - stack.displacement_mm(edges)
-    B_edges = field_T(gap_edges)
-    widths = np.diff(edges)
-    degenerate = widths <= 1e-9 * edges[-1]
-    S = np.diff(B_edges / B_edges[0] - 1.0) / np.where(degenerate, 1.0, widths)
-    for i in np.flatnonzero(degenerate):
-        # zero-width band: the secant's limit is the local slope at that force
-        dB = (field_T(gap_edges[i] + GAP_STEP_MM) - field_T(gap_edges[i] - GAP_STEP_MM)) / (2 * GAP_STEP_MM)
-        # squeeze: the cylinder model gives shape (1,) for one gap, which S[i] cannot hold
-        S[i] = -float(np.squeeze(dB)) * stack.band_start_compliance_mm_per_N(i) / B0
-
+    S, degenerate, B_edges = _secant_sensitivities(stack, gap_edges, field_T, B0)
     B_full = float(B_edges[-1])
     Bmax_vec = np.abs(Bvec[F <= F_last + 1e-12]).max(axis=0)
     setting = mlx.choose_setting(max(Bmax_vec[0], Bmax_vec[1]), Bmax_vec[2])
     saturated = setting is None or B_full >= mlx.SATURATION_T
     res_T = mlx.field_resolution_T(setting, noise_uT_rms) if setting else float("nan")
-
-    regimes = []
-    order = stack.lock_order
-    mid_compliance = stack.local_compliance_mm_per_N(0.5 * (edges[:-1] + edges[1:]))  # one lookup, not n
-    # slope extremes of every band in one pass: F ascends, so each band's samples are one run,
-    # [starts[i], starts[i + 1]); band n is the overload past the last lock, never empty
-    starts = np.minimum(np.searchsorted(band, np.arange(n + 1)), len(band) - 1)
-    present = np.diff(starts) > 0
-    slope_min = np.minimum.reduceat(slope, starts)
-    slope_max = np.maximum.reduceat(slope, starts)
-    for i in range(n):
-        lo, hi = edges[i], edges[i + 1]
-        s_lo, s_hi = (S[i], S[i]) if degenerate[i] or not present[i] else (slope_min[i], slope_max[i])
-        j = int(order[i])
-        regimes.append(
-            Regime(
-                index=i + 1,
-                layer=j + 1,
-                force_from_N=float(lo),
-                force_to_N=float(hi),
-                k_layer_N_per_mm=float(k[j]),
-                d_lock_layer_mm=float(dl[j]),
-                k_effective_N_per_mm=1.0 / float(mid_compliance[i]),
-                sensitivity_secant_per_N=float(S[i]),
-                sensitivity_min_per_N=float(s_lo),
-                sensitivity_max_per_N=float(s_hi),
-                force_resolution_N=res_T / (B0 * float(S[i])),
-                force_resolution_worst_N=res_T / (B0 * float(s_lo)),
-            )
-        )
-
-    warnings = []
-    for i in np.flatnonzero(degenerate):
-        warnings.append(
-            f"layers {', '.join(str(int(j) + 1) for j in order[i - 1 : i + 1])} lock at the "
-            f"same force {edges[i + 1]:.4g} N: regime {i + 1} has zero width (its S is "
-            f"the local slope there)"
-        )
-    if list(order) != list(range(n)):
-        warnings.append(
-            "layers do not lock bottom-to-top in file order: lock order is " + ", ".join(str(j + 1) for j in order)
-        )
-    if saturated:
-        warnings.append(
-            f"field at full load {B_full * 1e3:.1f} mT exceeds the MLX90393's range "
-            f"({mlx.SATURATION_T * 1e3:.0f} mT saturation): move the magnet away"
-        )
     return Response(
         mechanics=mechanics,
         field_model=model,
@@ -239,9 +166,9 @@ def simulate(
         gap_mm=gap,
         B_T=Bvec,
         B_abs_T=Babs,
-        dB_rel=rel,
+        dB_rel=Babs / B0 - 1.0,
         in_range=F <= F_last * (1 + 1e-12),
-        regimes=regimes,
+        regimes=_regimes(stack, S, degenerate, (slope, band), (res_T, B0)),
         B0_T=B0,
         B_full_T=B_full,
         gap0_mm=gap0,
@@ -251,5 +178,117 @@ def simulate(
         saturated=saturated,
         field_resolution_T=res_T,
         noise_uT_rms=noise_uT_rms,
-        warnings=warnings,
+        warnings=_warnings(stack, degenerate, B_full if saturated else None),
     )
+
+
+def _force_grid(edges: np.ndarray, points_per_regime: int, overload: float) -> np.ndarray:
+    """Forces (N): uniform inside each regime, the edges included exactly, then the overload."""
+    n = len(edges) - 1
+    pieces = [np.linspace(edges[i], edges[i + 1], points_per_regime, endpoint=False) for i in range(n)]
+    F_last = edges[-1]
+    pieces.append(np.linspace(F_last, F_last * (1.0 + overload), max(points_per_regime // 4, 2)))
+    return np.concatenate(pieces)
+
+
+def _local_slope(
+    stack: Stack, F: np.ndarray, gap: np.ndarray, field_T: Callable[[np.ndarray], np.ndarray], B0: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """(slope, band) at every force: d(dB/B0)/dF (1/N) = (1/B0) d|B|/dgap * dgap/dF, with dgap/dF
+    = -compliance, and the index of the band each force lies in (n: past the last lock)."""
+    edges = stack.regime_bounds_N
+    n = len(edges) - 1
+    dB_dgap = (field_T(gap + GAP_STEP_MM) - field_T(gap - GAP_STEP_MM)) / (2 * GAP_STEP_MM)
+    # compliance is one-sided at the lock forces: evaluate it just inside each point's band
+    band = np.clip(np.searchsorted(edges, F, side="right") - 1, 0, n)
+    lo_b, hi_b = edges[band], np.append(edges, np.inf)[band + 1]
+    width = np.where(np.isfinite(hi_b), hi_b - lo_b, edges[-1])
+    F_inside = np.clip(F, lo_b + 1e-9 * width, hi_b - 1e-9 * width)
+    compliance = stack.local_compliance_mm_per_N(F_inside)  # one lookup for all samples: O(n) in layers
+    return -dB_dgap * compliance / B0, band
+
+
+def _secant_sensitivities(
+    stack: Stack, gap_edges: np.ndarray, field_T: Callable[[np.ndarray], np.ndarray], B0: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(S per regime in 1/N, which regimes have zero width, |B| in T at the regime edges), with
+    ``B0`` the unloaded |B| (T) of the curve.
+
+    From the stack itself, so they hold for every mechanics rung (regime_kernel gives the same
+    numbers for L0 layers; the design loop uses it)."""
+    edges = stack.regime_bounds_N
+    B_edges = field_T(gap_edges)
+    widths = np.diff(edges)
+    degenerate = widths <= 1e-9 * edges[-1]
+    S = np.diff(B_edges / B_edges[0] - 1.0) / np.where(degenerate, 1.0, widths)
+    for i in np.flatnonzero(degenerate):
+        # zero-width band: the secant's limit is the local slope at that force
+        dB = (field_T(gap_edges[i] + GAP_STEP_MM) - field_T(gap_edges[i] - GAP_STEP_MM)) / (2 * GAP_STEP_MM)
+        # squeeze: the cylinder model gives shape (1,) for one gap, which S[i] cannot hold
+        S[i] = -float(np.squeeze(dB)) * stack.band_start_compliance_mm_per_N(int(i)) / B0
+    return S, degenerate, B_edges
+
+
+def _regimes(
+    stack: Stack,
+    S: np.ndarray,
+    degenerate: np.ndarray,
+    slopes: tuple[np.ndarray, np.ndarray],
+    resolution: tuple[float, float],
+) -> list[Regime]:
+    """Every force band's figures; ``slopes`` = (local slope, band of each force sample),
+    ``resolution`` = (the chip's field resolution, B0), both in T."""
+    slope, band = slopes
+    res_T, B0 = resolution
+    edges, order, laws = stack.regime_bounds_N, stack.lock_order, stack.layers
+    n = len(edges) - 1
+    mid_compliance = np.asarray(stack.local_compliance_mm_per_N(0.5 * (edges[:-1] + edges[1:])))  # one lookup, not n
+    # slope extremes of every band in one pass: F ascends, so each band's samples are one run,
+    # [starts[i], starts[i + 1]); band n is the overload past the last lock, never empty
+    starts = np.minimum(np.searchsorted(band, np.arange(n + 1)), len(band) - 1)
+    present = np.diff(starts) > 0
+    slope_min = np.minimum.reduceat(slope, starts)
+    slope_max = np.maximum.reduceat(slope, starts)
+    regimes = []
+    for i in range(n):
+        s_lo, s_hi = (S[i], S[i]) if degenerate[i] or not present[i] else (slope_min[i], slope_max[i])
+        j = int(order[i])
+        regimes.append(
+            Regime(
+                index=i + 1,
+                layer=j + 1,
+                force_from_N=float(edges[i]),
+                force_to_N=float(edges[i + 1]),
+                k_layer_N_per_mm=float(laws[j].k_N_per_mm),
+                d_lock_layer_mm=float(laws[j].d_lock_mm),
+                k_effective_N_per_mm=1.0 / float(mid_compliance[i]),
+                sensitivity_secant_per_N=float(S[i]),
+                sensitivity_min_per_N=float(s_lo),
+                sensitivity_max_per_N=float(s_hi),
+                force_resolution_N=res_T / (B0 * float(S[i])),
+                force_resolution_worst_N=res_T / (B0 * float(s_lo)),
+            )
+        )
+    return regimes
+
+
+def _warnings(stack: Stack, degenerate: np.ndarray, saturated_at_T: float | None) -> list[str]:
+    """Zero-width regimes, a lock order other than the file's, a saturated chip (|B| in T)."""
+    edges, order = stack.regime_bounds_N, stack.lock_order
+    warnings = []
+    for i in np.flatnonzero(degenerate):
+        warnings.append(
+            f"layers {', '.join(str(int(j) + 1) for j in order[i - 1 : i + 1])} lock at the "
+            f"same force {edges[i + 1]:.4g} N: regime {i + 1} has zero width (its S is "
+            f"the local slope there)"
+        )
+    if list(order) != list(range(len(order))):
+        warnings.append(
+            "layers do not lock bottom-to-top in file order: lock order is " + ", ".join(str(j + 1) for j in order)
+        )
+    if saturated_at_T is not None:
+        warnings.append(
+            f"field at full load {saturated_at_T * 1e3:.1f} mT exceeds the MLX90393's range "
+            f"({mlx.SATURATION_T * 1e3:.0f} mT saturation): move the magnet away"
+        )
+    return warnings

@@ -20,9 +20,11 @@ rungs with each other), stay plane strain.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
 from mst_cli.model.mechanics.depth import in_web
+from mst_cli.model.mechanics.spring import spring_layer, spring_layers
 
 if TYPE_CHECKING:
     from mst_cli.model.geometry import HexCell
@@ -43,27 +45,23 @@ def layer_law(cell: HexCell, material: Material, model: str = "spring") -> Linea
 
 def _plane_strain_law(cell: HexCell, material: Material, model: str) -> LinearLockingLayer | TabulatedLockingLayer:
     if model == "spring":
-        from mst_cli.model.mechanics.spring import spring_layer
-
         return spring_layer(cell, material)
     if model == "frame":
-        from mst_cli.model.mechanics.frame import frame_layer
+        from mst_cli.model.mechanics.frame import frame_layer  # deferred: a dear rung loads when asked for
 
         return frame_layer(cell, material)
     if model == "continuum":
-        from mst_cli.model.mechanics.continuum import continuum_layer
+        from mst_cli.model.mechanics.continuum import continuum_layer  # deferred: L2 (scikit-fem) loads when asked
 
         return continuum_layer(cell, material)
     raise ValueError(f"unknown mechanics model {model!r}; choose from {', '.join(MODELS)}")
 
 
 def layer_laws(
-    cells, material: Material, model: str = "spring"
+    cells: Sequence[HexCell], material: Material, model: str = "spring"
 ) -> tuple[LinearLockingLayer | TabulatedLockingLayer, ...]:
     """:func:`layer_law` of every cell of a stack; the spring rung's in one kernel call."""
     if model == "spring":
-        from mst_cli.model.mechanics.spring import spring_layers
-
         return spring_layers(cells, material, modulus_MPa=[in_web(c, material).youngs_modulus_MPa for c in cells])
     return tuple(layer_law(c, material, model) for c in cells)
 
@@ -74,11 +72,11 @@ def uncached_layer_law(
     """The rung's plane-strain law without the per-cell caches (for timing and for the fits,
     which compare plane-strain rungs)."""
     if model == "frame":
-        from mst_cli.model.mechanics.frame import frame_layer
+        from mst_cli.model.mechanics.frame import frame_layer  # deferred: a dear rung loads when asked for
 
         return frame_layer.__wrapped__(cell, material)
     if model == "continuum":
-        from mst_cli.model.mechanics.continuum import continuum_layer
+        from mst_cli.model.mechanics.continuum import continuum_layer  # deferred: L2 (scikit-fem) loads when asked
 
         return continuum_layer.__wrapped__(cell, material)
     return _plane_strain_law(cell, material, model)

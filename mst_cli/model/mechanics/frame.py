@@ -51,6 +51,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from mst_cli.model import geometry as geo
+from mst_cli.model.material import Material
+from mst_cli.model.mechanics.correction import stiffness_factor
 from mst_cli.model.mechanics.path import PathError, StepControl, follow_to_event
 from mst_cli.model.mechanics.spring import (
     SHEAR_COEFFICIENT_RECT,
@@ -106,7 +108,14 @@ class TabulatedLockingLayer:
     snap_through: bool = False  # F(d) had a falling branch before contact
 
     @classmethod
-    def from_curve(cls, d_mm, F_N, k_linear_N_per_mm, k_locked_N_per_mm, snap_through=None):
+    def from_curve(
+        cls,
+        d_mm: ArrayLike,
+        F_N: ArrayLike,
+        k_linear_N_per_mm: float,
+        k_locked_N_per_mm: float,
+        snap_through: bool | None = None,
+    ) -> TabulatedLockingLayer:
         d = np.asarray(d_mm, dtype=float)
         F = np.asarray(F_N, dtype=float)
         if not (np.all(np.diff(d) > 0) and np.all(np.diff(F) > 0) and d[0] == 0 and F[0] == 0):
@@ -253,7 +262,7 @@ class _Wall:
 
 def solve_frame(
     cell: geo.HexCell,
-    material,
+    material: Material,
     n_elements: int = DEFAULT_N_ELEMENTS,
     first_step_frac: float = 0.125,
     max_steps: int = 400,
@@ -268,29 +277,13 @@ def solve_frame(
     ValueError     for a cell without a cavity stroke (h - 2t <= allowance) or with p <= 0
     FrameError     when the path cannot be followed (steps stalled, a failed solve near contact)
     """
-    if not (cell.p_mm > 0 and cell.cavity_height_mm > cell.contact_allowance_mm):
-        raise ValueError(
-            f"frame model needs a cell with p > 0 and h - 2t > the contact allowance "
-            f"(theta={cell.theta_deg:g} deg, t={cell.t_mm:g} mm, h={cell.h_mm:g} mm)"
-        )
+    _require_stroke(cell)
     wall = _Wall(cell, material, n_elements)
     factor = 2.0  # two chevrons in parallel
     allowance = cell.contact_allowance_mm
     u = np.zeros(wall.ndof)
-
-    # small-load stiffness: the tangent at u = 0, tip moved by -1/2 per unit layer compression
-    f0, K0 = wall.assemble(u)
-    free = wall.free
-    ul = np.zeros_like(u)
-    ul[wall.tip_w] = -0.5
-    ul[free] = np.linalg.solve(K0[np.ix_(free, free)], -K0[free, wall.tip_w] * ul[wall.tip_w])
-    k_lin = float(-(K0 @ ul)[wall.tip_w] * factor)
-
-    # the lock stroke: L2's (its stiffness knee, where a wall is pinched or the pads meet),
-    # through L0's fit of it (module docstring); "pad" when that is the rigid pads' stroke
-    d_pads = cell.cavity_height_mm - allowance
-    d_lock = min(spring_layer(cell, material).d_lock_mm, d_pads)
-    closes = "pad" if d_lock >= d_pads else "wall"
+    k_lin = _small_load_stiffness(wall) * factor
+    d_lock, closes = _lock_stroke(cell, material)
 
     def margin(u, d):
         return d_lock - d, closes
@@ -321,8 +314,43 @@ def solve_frame(
     )
 
 
+def _require_stroke(cell: geo.HexCell) -> None:
+    """ValueError for a cell the frame cannot follow: no pad (p <= 0) or no stroke."""
+    if not (cell.p_mm > 0 and cell.cavity_height_mm > cell.contact_allowance_mm):
+        raise ValueError(
+            f"frame model needs a cell with p > 0 and h - 2t > the contact allowance "
+            f"(theta={cell.theta_deg:g} deg, t={cell.t_mm:g} mm, h={cell.h_mm:g} mm)"
+        )
+
+
+def _small_load_stiffness(wall: _Wall) -> float:
+    """One wall's small-load stiffness (N/mm of layer compression): the tangent at u = 0, tip
+    moved by -1/2 per unit layer compression."""
+    u = np.zeros(wall.ndof)
+    f0, K0 = wall.assemble(u)
+    free = wall.free
+    ul = np.zeros_like(u)
+    ul[wall.tip_w] = -0.5
+    ul[free] = np.linalg.solve(K0[np.ix_(free, free)], -K0[free, wall.tip_w] * ul[wall.tip_w])
+    return float(-(K0 @ ul)[wall.tip_w])
+
+
+def _lock_stroke(cell: geo.HexCell, material: Material) -> tuple[float, str]:
+    """(d_lock mm, what closes): L2's lock stroke (its stiffness knee, where a wall is pinched or
+    the pads meet), through L0's fit of it (module docstring); "pad" when that is the rigid
+    pads' stroke."""
+    d_pads = cell.cavity_height_mm - cell.contact_allowance_mm
+    d_lock = min(spring_layer(cell, material).d_lock_mm, d_pads)
+    return d_lock, "pad" if d_lock >= d_pads else "wall"
+
+
 def locked_tabulated_law(
-    cell: geo.HexCell, material, d_mm, F_N, k_linear_N_per_mm, snap_through: bool = False
+    cell: geo.HexCell,
+    material: Material,
+    d_mm: ArrayLike,
+    F_N: ArrayLike,
+    k_linear_N_per_mm: float,
+    snap_through: bool = False,
 ) -> TabulatedLockingLayer:
     """The law of a path sampled up to contact (rungs L1 and L2): its force-controlled envelope,
     then the locked branch, the walls' last tangent in parallel with the closed cavity's
@@ -338,10 +366,8 @@ def locked_tabulated_law(
 
 
 @functools.lru_cache(maxsize=4096)
-def frame_layer(cell: geo.HexCell, material) -> TabulatedLockingLayer:
+def frame_layer(cell: geo.HexCell, material: Material) -> TabulatedLockingLayer:
     """The L1 law of one cell: the frame curve up to contact, then the locked branch (walls + contact column)."""
-    from mst_cli.model.mechanics.correction import stiffness_factor
-
     res = solve_frame(cell, material)
     # the beam clamps the wall at the pad mid-plane and the tip; the finite joints' effect is
     # the same fitted factor as L0's (a function of t/L and theta only), applied to the forces

@@ -88,7 +88,7 @@ def follow_to_event(
     solve: Callable,
     margin: Callable,
     observe: Callable,
-    state0,
+    state0: Any,
     d_ref_mm: float,
     d_max_mm: float,
     steps: StepControl = StepControl(),

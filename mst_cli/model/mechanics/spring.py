@@ -46,7 +46,12 @@ import numpy as np
 from mst_cli.model import geometry as geo
 
 if TYPE_CHECKING:
+    from collections.abc import Sequence
+
     from numpy.typing import ArrayLike
+
+    from mst_cli.model.arrays import Floats
+    from mst_cli.model.material import Material
 
 SHEAR_COEFFICIENT_RECT = 5.0 / 6.0  # Timoshenko shear coefficient of a rectangular section
 # Where the softened pre-lock curve bends, as a fraction of the lock force. Chosen against the
@@ -56,7 +61,7 @@ SHEAR_COEFFICIENT_RECT = 5.0 / 6.0  # Timoshenko shear coefficient of a rectangu
 KNEE_FRACTION = 0.4
 
 
-def plane_strain_modulus_MPa(E_MPa: ArrayLike, nu: ArrayLike) -> np.ndarray:
+def plane_strain_modulus_MPa(E_MPa: Floats, nu: Floats) -> Floats:
     """E' = E / (1 - nu^2): the bending and axial modulus of a web much wider than thick.
 
     The web runs the whole depth D (20 mm) while its walls are 0.4-3 mm thick, so a wall's
@@ -70,12 +75,12 @@ def plane_strain_modulus_MPa(E_MPa: ArrayLike, nu: ArrayLike) -> np.ndarray:
 
 
 def wall_compliance_mm_per_N(
-    theta_rad: ArrayLike,
-    t_mm: ArrayLike,
-    h_mm: ArrayLike,
-    b_mm: ArrayLike,
-    E_MPa: ArrayLike,
-    nu: ArrayLike,
+    theta_rad: Floats,
+    t_mm: Floats,
+    h_mm: Floats,
+    b_mm: Floats,
+    E_MPa: Floats,
+    nu: Floats,
     bending: bool = True,
     shear: bool = True,
     axial: bool = True,
@@ -104,7 +109,7 @@ def wall_compliance_mm_per_N(
 
 
 def layer_stiffness_N_per_mm(
-    theta_rad: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike, b_mm: ArrayLike, E_MPa: ArrayLike, nu: ArrayLike
+    theta_rad: Floats, t_mm: Floats, h_mm: Floats, b_mm: Floats, E_MPa: Floats, nu: Floats
 ) -> np.ndarray:
     """Small-load stiffness k of a whole layer (a web of width b: 2 chevrons of 2 walls each)."""
     c_wall = wall_compliance_mm_per_N(theta_rad, t_mm, h_mm, b_mm, E_MPa, nu)
@@ -112,9 +117,7 @@ def layer_stiffness_N_per_mm(
     return 2.0 / (2.0 * c_wall)
 
 
-def pad_compression_modulus_MPa(
-    E_MPa: ArrayLike, nu: ArrayLike, half_width_mm: ArrayLike, thickness_mm: ArrayLike
-) -> np.ndarray:
+def pad_compression_modulus_MPa(E_MPa: Floats, nu: Floats, half_width_mm: Floats, thickness_mm: Floats) -> np.ndarray:
     """Apparent compression modulus of a layer bonded to rigid plates on both faces, in plane
     strain (long along y), half-width a, thickness H:
 
@@ -136,7 +139,7 @@ def pad_compression_modulus_MPa(
 
 
 def contact_stiffness_N_per_mm(
-    theta_rad: ArrayLike, t_mm: ArrayLike, width_mm: ArrayLike, b_mm: ArrayLike, E_MPa: ArrayLike, nu: ArrayLike = 0.0
+    theta_rad: Floats, t_mm: Floats, width_mm: Floats, b_mm: Floats, E_MPa: Floats, nu: Floats = 0.0
 ) -> np.ndarray:
     """Stiffness of the closed cavity's contact column: 2t of solid TPU over the contact width.
 
@@ -156,11 +159,11 @@ def contact_stiffness_N_per_mm(
 
 
 def layer_displacement_mm(
-    force_N: ArrayLike,
-    k_N_per_mm: ArrayLike,
-    d_lock_mm: ArrayLike,
-    lock_force_N: ArrayLike,
-    k_locked_N_per_mm: ArrayLike,
+    force_N: Floats,
+    k_N_per_mm: Floats,
+    d_lock_mm: Floats,
+    lock_force_N: Floats,
+    k_locked_N_per_mm: Floats,
 ) -> np.ndarray:
     """Compression of L0 layers at force F, vectorised (all arguments broadcast).
 
@@ -189,7 +192,8 @@ class LinearLockingLayer:
     k_N_per_mm: float
     d_lock_mm: float
     k_locked_N_per_mm: float
-    lock_force_N: float | None = None
+    # None means the bilinear law; __post_init__ sets it to k d_lock, so it is a float after
+    lock_force_N: float = None  # type: ignore[assignment]
 
     def __post_init__(self):
         if self.lock_force_N is None:
@@ -202,21 +206,21 @@ class LinearLockingLayer:
             return (R,)
         return (KNEE_FRACTION * R, R)
 
-    def displacement_mm(self, force_N: ArrayLike) -> np.ndarray:
+    def displacement_mm(self, force_N: Floats) -> np.ndarray:
         return layer_displacement_mm(
             force_N, self.k_N_per_mm, self.d_lock_mm, self.lock_force_N, self.k_locked_N_per_mm
         )
 
 
 def spring_arrays(
-    theta_rad: ArrayLike,
-    t_mm: ArrayLike,
-    h_mm: ArrayLike,
-    b_mm: ArrayLike,
-    width_mm: ArrayLike,
-    contact_allowance_mm: ArrayLike,
-    E_MPa: ArrayLike,
-    nu: ArrayLike,
+    theta_rad: Floats,
+    t_mm: Floats,
+    h_mm: Floats,
+    b_mm: Floats,
+    width_mm: Floats,
+    contact_allowance_mm: Floats,
+    E_MPa: Floats,
+    nu: Floats,
     corrected: bool = True,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """(k, d_lock, R, k_locked) for many layers at once: the design loop's entry point.
@@ -247,7 +251,7 @@ def spring_arrays(
 
 
 def spring_layers(
-    cells, material, corrected: bool = True, modulus_MPa: ArrayLike | None = None
+    cells: Sequence[geo.HexCell], material: Material, corrected: bool = True, modulus_MPa: ArrayLike | None = None
 ) -> tuple[LinearLockingLayer, ...]:
     """The L0 laws of a stack's cells from one kernel call (a layer's law does not depend on
     the batch it is computed in: the same numbers as the design loop's batches). ``modulus_MPa``:
@@ -256,12 +260,13 @@ def spring_layers(
     fields = ("theta_rad", "t_mm", "h_mm", "b_mm", "width_mm", "contact_allowance_mm")
     columns = [np.array([getattr(c, name) for c in cells], dtype=float) for name in fields]
     E = material.youngs_modulus_MPa if modulus_MPa is None else np.asarray(modulus_MPa, dtype=float)
-    k, d_lock, R, k_locked = spring_arrays(*columns, E, material.poisson_ratio, corrected)
+    # mypy cannot count *columns (six arrays) against the positional parameters
+    k, d_lock, R, k_locked = spring_arrays(*columns, E, material.poisson_ratio, corrected)  # type: ignore[arg-type, call-arg]
     return tuple(
         LinearLockingLayer(float(a), float(b), float(c), float(d)) for a, b, c, d in zip(k, d_lock, k_locked, R)
     )
 
 
-def spring_layer(cell: geo.HexCell, material, corrected: bool = True) -> LinearLockingLayer:
+def spring_layer(cell: geo.HexCell, material: Material, corrected: bool = True) -> LinearLockingLayer:
     """The L0 law of one concrete cell (``corrected=False``: textbook beam theory only)."""
     return spring_layers((cell,), material, corrected)[0]
