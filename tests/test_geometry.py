@@ -150,9 +150,9 @@ def test_housing_rules_name_the_field():
     ok = SensorGeometry(tuple(CELLS[:3]))
     assert ok.housing_violations() == []
     odd = SensorGeometry((HexCell(30, 1.0, 3.0, depth_mm=20.1),))
-    assert [f for f, _, _ in odd.housing_violations()] == ["family.depth_mm"]
+    assert [v.field for v in odd.housing_violations()] == ["family.depth_mm"]
     big = SensorGeometry((HexCell(30, 1.0, 3.0),), board=BOARDS["sparkfun-14571"])
-    assert "family.depth_mm" in [f for f, _, _ in big.housing_violations()]
+    assert "family.depth_mm" in [v.field for v in big.housing_violations()]
     assert (
         SensorGeometry((HexCell(30, 1.0, 3.0, depth_mm=30.0),), board=BOARDS["sparkfun-14571"]).housing_violations()
         == []
@@ -165,6 +165,6 @@ def test_the_geometry_judges_walls_by_its_own_printer():
     cell = HexCell(30, 0.5, 3.0)
     coarse = Printer(nozzle_mm=0.6, min_wall_mm=0.6, min_gap_mm=0.6)
     g = SensorGeometry((cell,), printer=coarse)
-    assert [v.rule for _, v in g.violations()] == ["wall"]
+    assert [v.rule for v in g.violations()] == ["wall"]
     assert g.violations(Printer()) == []
     assert SensorGeometry((cell,)).violations() == []

@@ -14,7 +14,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from mst_cli.errors import InputError
 from mst_cli.model.geometry import HexCell, SensorGeometry
 
 # Cutting tools that end on an outer face of the part are extended past it by this much, so
@@ -68,8 +67,8 @@ def check_fits(geometry: SensorGeometry) -> None:
     """Raise :class:`InputError` for the first broken housing rule (the pocket and the slot
     must fit inside the body, the depth must be whole print layers): see
     :meth:`SensorGeometry.housing_violations`. The cell rules are checked by the caller."""
-    for field, value, allowed in geometry.housing_violations():
-        raise InputError(field, value, allowed)
+    for v in geometry.housing_violations():
+        raise v.input_error()
 
 
 def _xz_to_prism_profile(points_xz) -> tuple[tuple[float, float], ...]:

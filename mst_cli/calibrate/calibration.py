@@ -270,7 +270,7 @@ def _fit(
         bad = cal_doc.geometry().violations(cal_doc.printer)
         if bad:
             raise cal.CalibrationFailed(
-                f"the calibrated cell of layer {bad[0][0] + 1} breaks {bad[0][1].rule}: {bad[0][1].message}"
+                f"the calibrated cell of layer {(bad[0].layer or 0) + 1} breaks {bad[0].rule}: {bad[0].message}"
             )
         imap, cal_resp = cal.inverse_map(cal_doc, mechanics)
     except InputError as exc:  # the fitted values break a file rule

@@ -187,8 +187,8 @@ def apply_calibration(doc: Document, cal: PrinterCalibration) -> Document:
             raise InputError(f"{t.key} (from {OPTION} {cal.path})", t.value, exc.allowed) from None
         (printer if section == "printer" else magnet)[key] = t.value
     out = replace(doc, printer=replace(doc.printer, **printer), magnet=replace(doc.magnet, **magnet))
-    for key, value, allowed in printer_violations(out.printer, out.housing, out.family.contact_allowance_mm):
-        raise InputError(f"{key} (from {OPTION} {cal.path})", value, allowed)
+    for v in printer_violations(out.printer, out.housing, out.family.contact_allowance_mm):
+        raise InputError(f"{v.field} (from {OPTION} {cal.path})", v.value, v.allowed)
     return out
 
 

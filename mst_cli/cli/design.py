@@ -13,7 +13,7 @@ import click
 from mst_cli import api
 from mst_cli.cli import help_texts
 from mst_cli.cli.common import default_out_dir, handles_input_errors, no_plot_option, out_dir_option, seed_type
-from mst_cli.cli.design_output import print_design_choices, print_design_summary, write_design_files
+from mst_cli.cli.design_output import print_design_choices, print_design_summary
 from mst_cli.cli.progress import DesignProgress
 from mst_cli.errors import InputError
 from mst_cli.io.outputs import check_out_dir
@@ -89,6 +89,7 @@ def design(
 ) -> None:
     # deferred: `mst --help` loads every command module; these load the model (0.1 s)
     from mst_cli.calibrate.record import load_with_calibration
+    from mst_cli.design.files import write_design_files
 
     doc, cal = load_with_calibration(spec_file, calibration)
     out = out_dir or default_out_dir(doc.name)

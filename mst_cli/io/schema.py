@@ -442,8 +442,8 @@ def parse_document(raw: Any, source: str = "<memory>") -> Document:
     probe = geo.SensorGeometry(
         (family.cell(45.0, 1.0, 3.0),), magnet, board, housing, meter.chip_offset_mm, 0.0, printer
     )
-    for field_name, value, allowed in probe.housing_violations():
-        raise InputError(field_name, value, allowed)
+    for v in probe.housing_violations():
+        raise v.input_error()
 
     return Document(
         name=name,
@@ -571,16 +571,8 @@ def load_design_document(path: str | Path) -> tuple[Document, geo.SensorGeometry
 def design_geometry(doc: Document) -> geo.SensorGeometry:
     """The sensor of a design document whose cells are all valid; InputError on any broken rule."""
     geometry = doc.geometry()
-    for i, v in geometry.violations(doc.printer):
-        raise InputError(
-            f"layers[{i}]",
-            {
-                "theta_deg": geometry.layers[i].theta_deg,
-                "t_mm": geometry.layers[i].t_mm,
-                "h_mm": geometry.layers[i].h_mm,
-            },
-            f"invalid cell ({v.rule}): {v.message}",
-        )
+    for v in geometry.violations(doc.printer):
+        raise v.input_error("invalid cell")
     return geometry
 
 

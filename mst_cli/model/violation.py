@@ -11,7 +11,6 @@ in a sensor, ``field`` and ``value`` what the user would change, and :meth:`inpu
 
 from __future__ import annotations
 
-from collections.abc import Iterator
 from dataclasses import dataclass
 from dataclasses import field as dataclass_field
 from typing import Any
@@ -64,14 +63,3 @@ class Violation:
         cell"``) prefixes a cell rule's message as ``context (rule): message``."""
         allowed = self.message if context is None else f"{context} ({self.rule}): {self.message}"
         return InputError(self.field if self.field is not None else self.rule, self.value, allowed)
-
-    def __iter__(self) -> Iterator[Any]:
-        # the two tuple shapes these rules had before they were one type, for callers that still
-        # unpack them: a layer's cell rule as (layer, violation), an assembly rule as
-        # (field, value, allowed). New code reads the attributes.
-        if self.layer is not None:
-            return iter((self.layer, self))
-        return iter((self.field, self.value, self.message))
-
-    def __getitem__(self, index: int) -> Any:
-        return tuple(self)[index]

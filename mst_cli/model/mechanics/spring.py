@@ -44,6 +44,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from mst_cli.model import geometry as geo
+from mst_cli.model.mechanics import correction
 
 if TYPE_CHECKING:
     from collections.abc import Sequence
@@ -236,8 +237,6 @@ def spring_arrays(
     d_lock = geo.lock_stroke_mm(t_mm, h_mm, contact_allowance_mm)
     R = k * d_lock
     if corrected:
-        from mst_cli.model.mechanics import correction
-
         L = geo.wall_centreline_length_mm(theta_rad, t_mm, h_mm)
         t_over_L = t_mm / L
         sigma = correction.stroke_ratio(d_lock, L, theta_rad)
