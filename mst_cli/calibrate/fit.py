@@ -201,7 +201,7 @@ class _Correction:
 class ForwardModel:
     """|B| (and the field vector) at the chip for given forces and parameter values."""
 
-    def __init__(self, doc, mechanics: str = "spring", field_model: str | None = None):
+    def __init__(self, doc: Document, mechanics: str = "spring", field_model: str | None = None):
         doc.require_geometry()
         self.doc = doc
         self.geometry = doc.geometry()
@@ -217,7 +217,8 @@ class ForwardModel:
 
     def cells(self, wall_offset_mm: float) -> tuple[HexCell, ...]:
         fam = self.doc.family
-        return tuple(fam.cell(la.theta_deg, la.t_mm + wall_offset_mm, la.h_mm) for la in self.doc.layers)
+        drawn = [la.drawn for la in self.doc.layers]
+        return tuple(fam.cell(theta, t + wall_offset_mm, h) for theta, t, h in drawn)
 
     def stack(self, wall_offset_mm: float, mechanics: str = "spring") -> Stack:
         key = (mechanics, round(float(wall_offset_mm), 12))

@@ -34,7 +34,7 @@ class YAMLRefused(yaml.YAMLError):
     """A structure the file format does not allow: ``path`` (dotted key path), ``line`` (from 1),
     ``value`` (short text) and ``reason``."""
 
-    def __init__(self, path: str, line: int | None, value, reason: str):
+    def __init__(self, path: str, line: int | None, value: object, reason: str):
         self.path, self.line, self.value, self.reason = path, line, value, reason
         where = f"line {line}: " if line is not None else ""
         super().__init__(f"{path} = {value!r}: {where}{reason}")
@@ -57,7 +57,7 @@ class StrictLoader(yaml.SafeLoader):
     """``yaml.SafeLoader`` without merge keys, duplicate keys or recursive aliases, and with caps
     on the number of nodes (aliases expanded) and on the nesting depth."""
 
-    def __init__(self, stream):
+    def __init__(self, stream: str | bytes) -> None:
         super().__init__(stream)
         self._expanded = 0  # nodes so far, every alias counted as its whole value
         self._depth = 0

@@ -62,6 +62,8 @@ from mst_cli.model.mechanics.path import PathError, PathTolerances, StepControl,
 if TYPE_CHECKING:
     from skfem import MeshTri
 
+    from mst_cli.model.material import Material
+
 # Default mesh: elements across the wall thickness and along the wall (the pad gets the same
 # number across and a graded number along), then DEFAULT_LEVELS rounds of local refinement
 # around the three singular corners (the cavity's tip vertex, a near-crack of angle
@@ -568,7 +570,7 @@ class _Problem:
 
 def solve_continuum(
     cell: geo.HexCell,
-    material,
+    material: Material,
     n_thick: int = DEFAULT_N_THICK,
     n_length: int = DEFAULT_N_LENGTH,
     levels: int = DEFAULT_LEVELS,
@@ -646,7 +648,7 @@ def _result(path, k_lin: float, mesh_scale: float, ratio_after: float, n_dofs: i
     )
 
 
-def follow_to_lock(prob, k_ref_N_per_mm: float, steps: StepControl | None = None) -> tuple:
+def follow_to_lock(prob: _Problem, k_ref_N_per_mm: float, steps: StepControl | None = None) -> tuple:
     """Follow a built problem's load path from rest to its lock (the tangent stiffness reaching
     LOCK_STIFFNESS_FACTOR x ``k_ref_N_per_mm``), then one short step on into the locked branch.
 
@@ -707,7 +709,7 @@ def _lock_label(prob, active) -> str:
 
 def linear_stiffness_N_per_mm(
     cell: geo.HexCell,
-    material,
+    material: Material,
     n_thick: int = DEFAULT_N_THICK,
     n_length: int = DEFAULT_N_LENGTH,
     levels: int = DEFAULT_LEVELS,
@@ -716,7 +718,7 @@ def linear_stiffness_N_per_mm(
     return linear_k(_Problem(cell, material, n_thick, n_length, levels))
 
 
-def linear_k(problem) -> float:
+def linear_k(problem: _Problem) -> float:
     """Small-strain stiffness of a built problem: one linear solve with the tangent at u = 0."""
 
     _, K0 = problem.assemble(np.zeros(problem.basis.N))
@@ -735,7 +737,7 @@ def linear_k(problem) -> float:
 
 
 @functools.lru_cache(maxsize=256)
-def continuum_layer(cell: geo.HexCell, material) -> TabulatedLockingLayer:
+def continuum_layer(cell: geo.HexCell, material: Material) -> TabulatedLockingLayer:
     """The L2 law of one cell: the FE curve up to its lock, then the locked branch (walls + contact column)."""
     res = solve_continuum(cell, material)
     return locked_tabulated_law(cell, material, res.displacement_mm, res.force_N, res.k_linear_N_per_mm)
