@@ -87,6 +87,9 @@ D_MAX_OVER_NOMINAL = 1.5
 # few micrometres, so the lock force hardly depends on the factor; the gradual stiffening of
 # faces zipping shut before that (up to ~2.5 k) stays part of the pre-lock curve.
 LOCK_STIFFNESS_FACTOR = 5.0
+# Newton's active set: after this many changes of the set within one solve, a contact point
+# released once and back in contact stays held (:meth:`_Problem._newton`)
+SET_CHANGES_BEFORE_HOLDING = 4
 # the tangent jumps at the lock, so the event is bisected, to 1e-5 of the stroke
 LOCK_TOLERANCES = PathTolerances(event_gap_rel=0.0, event_width_rel=1e-5, max_event_iterations=40, bisect=True)
 
@@ -483,7 +486,7 @@ class _Problem:
             block = self._blocks[key] = (free, sub.data.astype(np.int64) - 1, sub.indices, sub.indptr)
         return block
 
-    def solve_step(self, u, d, active=None, max_iter=30, rtol=1e-8, pads=False):
+    def solve_step(self, u, d, active=None, max_iter=60, rtol=1e-8, pads=False):
         """Newton at compression d from the state u, with frictionless contact of every face
         that can close (:meth:`_contact_sets`) as an active set updated inside the iterations
         (penetrating points are pinned to their obstacle, points whose contact force would
@@ -496,7 +499,7 @@ class _Problem:
         u, it, active, _ = self._newton(u, d, active, max_iter, rtol, pads)
         return u, it, active
 
-    def _newton(self, u, d, active=None, max_iter=30, rtol=1e-8, pads=False):
+    def _newton(self, u, d, active=None, max_iter=60, rtol=1e-8, pads=False):
         """:meth:`solve_step`, also returning the residual at the solution (for :meth:`force`)."""
 
         asm = _assembler(self.basis)
@@ -509,6 +512,9 @@ class _Problem:
         obstacle = self.obstacle(d)
         tol = 1e-9 * self.cell.h_mm
         scale = None
+        checks = 0  # converged passes that changed the set
+        released = np.zeros(dofs.size, bool)  # points released in this solve
+        held = np.zeros(dofs.size, bool)  # points back in contact after a release: kept held
         r, kin = asm.residual(u, self.mu, self.lam)
         for it in range(1, max_iter + 1):
             contact = dofs[active]
@@ -520,9 +526,17 @@ class _Problem:
             jump = target - u[pinned]
             if it > 1 and np.linalg.norm(r[free]) <= rtol * scale and not np.any(np.abs(jump) > tol):
                 penetrating = eligible & ~active & (sign * (u[dofs] - obstacle) > tol)
-                pulling = active & (sign * r[dofs] > 0.0)
+                if checks >= SET_CHANGES_BEFORE_HOLDING:
+                    # Grazing points at the edge of a contact zone can pull when held and
+                    # penetrate when free, and the set then cycles until max_iter: after a few
+                    # changes of the set, a point that is back in contact after a release
+                    # stays held (a small nodal pull at the edge of the zone).
+                    held |= active & released
+                pulling = active & (sign * r[dofs] > 0.0) & ~held
                 if not penetrating.any() and not pulling.any():
                     return u, it - 1, active, r
+                checks += 1
+                released |= pulling
                 active = (active | penetrating) & ~pulling
                 continue
             # the tangent only where a correction is solved (not at the converged point)
