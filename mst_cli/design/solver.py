@@ -38,7 +38,7 @@ from __future__ import annotations
 import math
 import time
 from collections import OrderedDict
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -236,10 +236,14 @@ def _iters_per_start(problem, local):
 
 
 def _safe_constraints(ev):
+    if isinstance(ev, _Rows):  # the batched polish's rows: computed once per round
+        return ev.safe_constraints
     return ev.constraints + ROUNDING_SAFETY
 
 
 def _max_err(ev):
+    if isinstance(ev, _Rows):
+        return ev.max_err
     return np.max(np.abs(ev.rel_err), axis=-1)
 
 
@@ -496,7 +500,6 @@ def pareto_weights(count: int) -> np.ndarray:
 
 
 # --------------------------------------------------------------------------- many weightings at once
-_EVALUATION_FIELDS = tuple(f.name for f in fields(Evaluation))
 RECENT_EVALUATIONS = 64  # per run: the points SLSQP asks for again (a stalled line search)
 
 
@@ -528,20 +531,15 @@ class _SharedEvaluations:
         ev, shifts = problem.evaluate_with_shifts(U)
         # ln height and ln force resolution are elementwise or row-wise: one call for the batch
         terms = problem.objective_terms(ev, np.zeros(len(U)))
-        columns = [getattr(ev, name) for name in _EVALUATION_FIELDS]
-        results = {}
+        rows_of: dict[int, int | slice] = {}
         start = 0
         for j in jobs:
             flat = pending[j].ndim == 1
-            rows = start if flat else slice(start, start + len(pending[j]))
+            rows_of[j] = start if flat else slice(start, start + len(pending[j]))
             start += 1 if flat else len(pending[j])
-            ev_j = Evaluation(*(c[rows] for c in columns))
-            # the RMS over the job's own rows, laid out as a call of its own would (a reduction
-            # over two axes sums in an order that depends on the array's shape)
-            terms_j = terms[rows].copy()
-            terms_j[..., -1] = robustness_of_shifts(np.ascontiguousarray(shifts[:, rows]))
-            results[j] = (ev_j, terms_j)
-        return results
+        terms[:, -1] = _robustness_by_job(shifts, rows_of)
+        batch = _BatchRows(ev)
+        return {j: (_Rows(batch, rows), terms[rows]) for j, rows in rows_of.items()}
 
     def run(self, jobs: list[Callable[[DesignProblem], object]]) -> list:
         """Each job called with its own batched view of the problem; their results in order.
@@ -579,6 +577,59 @@ class _SharedEvaluations:
 
 
 _DONE = object()  # what a finished run hands back instead of points
+
+
+def _robustness_by_job(shifts: np.ndarray, rows_of: dict[int, int | slice]) -> np.ndarray:
+    """Print robustness of every row of ``shifts`` (2, N, 2n), each job's rows reduced as a call
+    of its own would reduce them: a reduction over two axes sums in an order that depends on
+    the array's shape, so the jobs whose requests have one shape (one point, or k points) are
+    stacked along a new leading axis, which leaves every row's order of summation as it was."""
+    out = np.empty(shifts.shape[1])
+    points = [rows for rows in rows_of.values() if isinstance(rows, int)]
+    blocks: dict[int, list[np.ndarray]] = {}
+    for rows in rows_of.values():
+        if isinstance(rows, slice):
+            blocks.setdefault(rows.stop - rows.start, []).append(np.arange(rows.start, rows.stop))
+    groups = [(np.array(points, dtype=np.intp), 0)] if points else []
+    groups += [(np.concatenate(members), k) for k, members in blocks.items()]
+    for index, k in groups:
+        d = shifts[:, index].reshape((2, -1, k, shifts.shape[-1]) if k else (2, -1, shifts.shape[-1]))
+        d = np.ascontiguousarray(np.moveaxis(d, 1, 0))  # (jobs, 2, [k,] 2n): each job's own layout
+        out[index] = robustness_of_shifts(d, first=1).reshape(-1)
+    return out
+
+
+class _BatchRows:
+    """One round's evaluation and what every run derives from it, computed once for the batch
+    (elementwise and row-wise: a row gets the bits a call of its own would give)."""
+
+    def __init__(self, ev: Evaluation):
+        self.ev = ev
+        self.safe_constraints = _safe_constraints(ev)
+        self.max_err = _max_err(ev)
+
+
+class _Rows(Evaluation):
+    """A run's rows of a :class:`_BatchRows`: the :class:`Evaluation` of its own points, each
+    field sliced out when it is first read (a run reads a few of them)."""
+
+    def __init__(self, batch: _BatchRows, rows: int | slice):  # the fields come lazily
+        self._batch, self._rows = batch, rows
+
+    def __getattr__(self, name: str):
+        if name.startswith("_"):
+            raise AttributeError(name)
+        value = getattr(self._batch.ev, name)[self._rows]
+        setattr(self, name, value)
+        return value
+
+    @property
+    def safe_constraints(self) -> np.ndarray:
+        return self._batch.safe_constraints[self._rows]
+
+    @property
+    def max_err(self) -> np.ndarray:
+        return self._batch.max_err[self._rows]
 
 
 class _BatchedProblem:
