@@ -143,6 +143,27 @@ class _Stop(Exception):
         self.reason = reason
 
 
+_STENCILS: dict[int, np.ndarray] = {}
+
+
+def _stencil(dim: int) -> np.ndarray:
+    """(2 dim + 1, dim): 0, then +FD_STEP e_i, then -FD_STEP e_i (u - h and u + (-h) are the same
+    number); one per dimension, made once."""
+    got = _STENCILS.get(dim)
+    if got is None:
+        eye = np.eye(dim) * FD_STEP
+        got = _STENCILS[dim] = np.concatenate([np.zeros((1, dim)), eye, -eye])
+    return got
+
+
+def _finite(a: np.ndarray, fill: float) -> np.ndarray:
+    """``a`` with every non-finite entry ``fill``; ``a`` itself when all are finite (a finite
+    sum says so in one reduction; one that overflows takes the full path, as a NaN does)."""
+    if math.isfinite(np.add.reduce(a, axis=None)):
+        return a
+    return np.where(np.isfinite(a), a, fill)
+
+
 class _Phase:
     """One local nlopt run on a batched score/constraint function.
 
@@ -165,19 +186,19 @@ class _Phase:
             raise _Stop("evaluation budget spent")
         dim = u.size
         if want_grad:
-            eye = np.eye(dim) * FD_STEP
-            U = np.concatenate([u[None], u + eye, u - eye])
+            U = u + _stencil(dim)  # u, u + FD_STEP e_i, u - FD_STEP e_i
+            U[0] = u
         else:
             U = u[None]
         score, g, cost, err = self.batch(U)
-        score = np.where(np.isfinite(score), score, 1e30)
-        g = np.where(np.isfinite(g), g, 1e6)
+        score, g = _finite(score, 1e30), _finite(g, 1e6)
         self.f, self.g = float(score[0]), g[0]
         if want_grad:
             self.df = (score[1 : dim + 1] - score[dim + 1 :]) / (2 * FD_STEP)
             self.dg = ((g[1 : dim + 1] - g[dim + 1 :]) / (2 * FD_STEP)).T
         self.key = key
-        self.tracker.offer(u, self.f, float(np.sum(np.maximum(self.g, 0.0))))
+        # np.sum's reduction without its wrapper (a 1-d sum: the same bits)
+        self.tracker.offer(u, self.f, float(np.add.reduce(np.maximum(self.g, 0.0), axis=None)))
         self.budget.spend(cost * len(U), self.phase, err)
         if self.goal is not None and self.goal(self.f, self.g, err):
             raise _Stop("goal reached")
