@@ -419,8 +419,12 @@ class DesignProblem:
     ) -> np.ndarray:
         """Weighted sum of :meth:`objective_terms` (lower is better): what phase 2 minimises;
         ``terms``: those of ``ev``, when the caller has them (:meth:`evaluate_terms`)."""
+        return self.weighted_terms(self.objective_terms(ev) if terms is None else terms, weights)
+
+    def weighted_terms(self, terms: np.ndarray, weights: ArrayLike | None = None) -> np.ndarray:
+        """The weighted sum of given :meth:`objective_terms` (``weights`` default design.objective)."""
         w = self.objective_weights if weights is None else np.asarray(weights, dtype=float)
-        return (self.objective_terms(ev) if terms is None else terms) @ w
+        return terms @ w
 
     def evaluate_terms(self, u: np.ndarray) -> tuple[Evaluation, np.ndarray]:
         """(:meth:`evaluate`, :meth:`objective_terms`) of candidates, the print-shifted stacks of

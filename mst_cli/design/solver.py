@@ -39,7 +39,7 @@ import math
 import time
 from collections import OrderedDict
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 
@@ -164,6 +164,41 @@ def _finite(a: np.ndarray, fill: float) -> np.ndarray:
     return np.where(np.isfinite(a), a, fill)
 
 
+def _point_of(score: np.ndarray, g: np.ndarray, dim: int) -> tuple:
+    """(f, g, df, dg, violation) of a callback's batch: the nominal point's score and
+    constraints (non-finite ones replaced), their central differences when ``dim`` (a stencil
+    of 2 dim + 1 points), and the point's constraint violation (np.sum's reduction without its
+    wrapper: a 1-d sum, the same bits)."""
+    score, g = _finite(score, 1e30), _finite(g, 1e6)
+    df = dg = None
+    if dim:
+        df = (score[1 : dim + 1] - score[dim + 1 :]) / (2 * FD_STEP)
+        dg = ((g[1 : dim + 1] - g[dim + 1 :]) / (2 * FD_STEP)).T
+    return float(score[0]), g[0], df, dg, float(np.add.reduce(np.maximum(g[0], 0.0), axis=None))
+
+
+class _PreferenceBatch:
+    """The preference phases' batch function: (preference, g, cost per point, worst error) of
+    points U, g the constraints with the rounding slack, then every log error within +- band
+    (two smooth constraints per output: |x| has no derivative where the error is 0)."""
+
+    cost = 3  # kernel stacks per point: the nominal walls and both print shifts
+
+    def __init__(self, problem, weights, band: float):
+        self.problem, self.weights, self.band = problem, weights, band
+
+    def __call__(self, U):
+        ev, terms = self.problem.evaluate_terms(U)
+        g = preference_constraints(_safe_constraints(ev), ev.log_err, self.band)
+        return self.problem.preference(ev, self.weights, terms), g, self.cost, float(_max_err(ev)[0])
+
+
+def preference_constraints(safe: np.ndarray, log_err: np.ndarray, band) -> np.ndarray:
+    """The preference phases' constraints: ``safe`` (with the rounding slack), then
+    log_err - band and -log_err - band (``band`` a number, or one per row as (k, 1))."""
+    return np.concatenate([safe, log_err - band, -log_err - band], axis=-1)
+
+
 class _Phase:
     """One local nlopt run on a batched score/constraint function.
 
@@ -190,15 +225,17 @@ class _Phase:
             U[0] = u
         else:
             U = u[None]
-        score, g, cost, err = self.batch(U)
-        score, g = _finite(score, 1e30), _finite(g, 1e6)
-        self.f, self.g = float(score[0]), g[0]
+        shared = getattr(self.problem, "preference_point", None)
+        if shared is not None and isinstance(self.batch, _PreferenceBatch):  # one round computes every run's
+            self.f, self.g, df, dg, violation, err = shared(U, self.batch.weights, self.batch.band)
+            cost = _PreferenceBatch.cost
+        else:
+            score, g, cost, err = self.batch(U)
+            self.f, self.g, df, dg, violation = _point_of(score, g, dim if want_grad else 0)
         if want_grad:
-            self.df = (score[1 : dim + 1] - score[dim + 1 :]) / (2 * FD_STEP)
-            self.dg = ((g[1 : dim + 1] - g[dim + 1 :]) / (2 * FD_STEP)).T
+            self.df, self.dg = df, dg
         self.key = key
-        # np.sum's reduction without its wrapper (a 1-d sum: the same bits)
-        self.tracker.offer(u, self.f, float(np.add.reduce(np.maximum(self.g, 0.0), axis=None)))
+        self.tracker.offer(u, self.f, violation)
         self.budget.spend(cost * len(U), self.phase, err)
         if self.goal is not None and self.goal(self.f, self.g, err):
             raise _Stop("goal reached")
@@ -419,12 +456,7 @@ def prefer(
         return ev, float(problem.preference(ev, weights, terms))
 
     def polish_run(u0, pref0, band, step):
-        def pref_batch(U):
-            ev, terms = problem.evaluate_terms(U)
-            # two smooth constraints per output (|x| has no derivative where the error is 0)
-            g = np.concatenate([_safe_constraints(ev), ev.log_err - band, -ev.log_err - band], axis=-1)
-            return problem.preference(ev, weights, terms), g, 3, float(_max_err(ev)[0])
-
+        pref_batch = _PreferenceBatch(problem, weights, band)
         tracker = Tracker()
         tracker.offer(u0, pref0, 0.0)
         if budget.left > 3 * per_iter:
@@ -540,27 +572,33 @@ class _SharedEvaluations:
         self.problem = problem
         self.caller: Any = None  # the greenlet that serves the batch
 
-    def ask(self, job: int, u: np.ndarray) -> tuple[Evaluation, np.ndarray]:
+    def ask(self, job: int, u):
         """Evaluation and preference terms of ``u`` (one point (dim,) or a batch (k, dim)),
-        each row's bits as :meth:`DesignProblem.evaluate` alone gives them."""
+        each row's bits as :meth:`DesignProblem.evaluate` alone gives them; for a
+        :class:`_PointAsk`, what :func:`_point_rows` gives."""
         return self.caller.switch(u)
 
-    def _serve(self, pending: dict[int, np.ndarray]) -> dict[int, tuple]:
+    def _serve(self, pending: dict[int, Any]) -> dict[int, tuple]:
         jobs = sorted(pending)
         problem = self.problem
-        U = np.concatenate([pending[j].reshape(-1, problem.dim) for j in jobs])
+        asked = {j: pending[j].U if isinstance(pending[j], _PointAsk) else pending[j] for j in jobs}
+        U = np.concatenate([asked[j].reshape(-1, problem.dim) for j in jobs])
         ev, shifts = problem.evaluate_with_shifts(U)
         # ln height and ln force resolution are elementwise or row-wise: one call for the batch
         terms = problem.objective_terms(ev, np.zeros(len(U)))
         rows_of: dict[int, int | slice] = {}
         start = 0
         for j in jobs:
-            flat = pending[j].ndim == 1
-            rows_of[j] = start if flat else slice(start, start + len(pending[j]))
-            start += 1 if flat else len(pending[j])
+            flat = asked[j].ndim == 1
+            rows_of[j] = start if flat else slice(start, start + len(asked[j]))
+            start += 1 if flat else len(asked[j])
         terms[:, -1] = _robustness_by_job(shifts, rows_of)
         batch = _BatchRows(ev)
-        return {j: (_Rows(batch, rows), terms[rows]) for j, rows in rows_of.items()}
+        points = {j: (rows_of.pop(j), pending[j]) for j in jobs if isinstance(pending[j], _PointAsk)}
+        out = {j: (_Rows(batch, rows), terms[rows]) for j, rows in rows_of.items()}
+        if points:
+            out.update(_point_rows(problem, batch, terms, points))
+        return out
 
     def run(self, jobs: list[Callable[[DesignProblem], object]]) -> list:
         """Each job called with its own batched view of the problem; their results in order.
@@ -598,6 +636,39 @@ class _SharedEvaluations:
 
 
 _DONE = object()  # what a finished run hands back instead of points
+
+
+class _PointAsk(NamedTuple):
+    """A preference phase's request: the callback's points U (its point, or the point and its
+    central-difference stencil), the run's weights and its band."""
+
+    U: np.ndarray
+    weights: Any
+    band: float
+
+
+def _point_rows(problem: DesignProblem, batch: _BatchRows, terms: np.ndarray, asks: dict) -> dict[int, tuple]:
+    """(f, g, df, dg, violation, worst error) of every preference request of a round, ``asks``
+    {job: (its rows, its _PointAsk)}: the constraints, the non-finite guard and the violations
+    computed once for all of them (elementwise and row-wise), each run's numbers to the bit those
+    of :class:`_PreferenceBatch` and :func:`_point_of` on its own rows."""
+    sizes = [rows.stop - rows.start for rows, _ in asks.values()]
+    index = np.concatenate([np.arange(rows.start, rows.stop) for rows, _ in asks.values()])
+    bands = np.repeat([a.band for _, a in asks.values()], sizes)[:, None]
+    g = _finite(preference_constraints(batch.safe_constraints[index], batch.ev.log_err[index], bands), 1e6)
+    # the preference run by run: a matrix product's bits depend on its shape
+    score = _finite(np.concatenate([problem.weighted_terms(terms[r], a.weights) for r, a in asks.values()]), 1e30)
+    first = np.cumsum([0] + sizes[:-1])
+    violation = np.add.reduce(np.maximum(g[first], 0.0), axis=-1)  # row by row: a 1-d sum's bits
+    dim, out = problem.dim, {}
+    for i, (j, (rows, _)) in enumerate(asks.items()):
+        o, k = int(first[i]), sizes[i]
+        df = dg = None
+        if k > 1:  # u and its stencil
+            df = (score[o + 1 : o + dim + 1] - score[o + dim + 1 : o + k]) / (2 * FD_STEP)
+            dg = ((g[o + 1 : o + dim + 1] - g[o + dim + 1 : o + k]) / (2 * FD_STEP)).T
+        out[j] = (float(score[o]), g[o], df, dg, float(violation[i]), float(batch.max_err[rows.start]))
+    return out
 
 
 def _robustness_by_job(shifts: np.ndarray, rows_of: dict[int, int | slice]) -> np.ndarray:
@@ -668,10 +739,17 @@ class _BatchedProblem:
         requests gets its rows again without a round (the same bits: the kernels are exact
         functions of the point)."""
         u = np.asarray(u, dtype=float)
-        key = (u.shape, u.tobytes())
+        return self._recall((u.shape, u.tobytes()), u)
+
+    def preference_point(self, U: np.ndarray, weights, band: float) -> tuple:
+        """What :class:`_Phase` needs of a preference callback's points ``U``, from the shared
+        round (:func:`_point_rows`), or again without one when recently asked."""
+        return self._recall(("point", U.shape, U.tobytes(), band), _PointAsk(U, weights, band))
+
+    def _recall(self, key: tuple, request):
         got = self._recent.get(key)
         if got is None:
-            got = self._shared.ask(self._job, u)
+            got = self._shared.ask(self._job, request)
             self._recent[key] = got
             if len(self._recent) > RECENT_EVALUATIONS:
                 self._recent.popitem(last=False)
