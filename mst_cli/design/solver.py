@@ -649,26 +649,38 @@ class _PointAsk(NamedTuple):
 
 def _point_rows(problem: DesignProblem, batch: _BatchRows, terms: np.ndarray, asks: dict) -> dict[int, tuple]:
     """(f, g, df, dg, violation, worst error) of every preference request of a round, ``asks``
-    {job: (its rows, its _PointAsk)}: the constraints, the non-finite guard and the violations
-    computed once for all of them (elementwise and row-wise), each run's numbers to the bit those
-    of :class:`_PreferenceBatch` and :func:`_point_of` on its own rows."""
-    sizes = [rows.stop - rows.start for rows, _ in asks.values()]
-    index = np.concatenate([np.arange(rows.start, rows.stop) for rows, _ in asks.values()])
+    {job: (its rows, its _PointAsk)}: the constraints, the non-finite guard, the central
+    differences and the violations computed once for all of them (elementwise and row-wise),
+    each run's numbers to the bit those of :class:`_PreferenceBatch` and :func:`_point_of` on
+    its own rows."""
+    starts = np.array([rows.start for rows, _ in asks.values()])
+    sizes = np.array([rows.stop - rows.start for rows, _ in asks.values()])
+    index = _block_rows(starts, sizes)
     bands = np.repeat([a.band for _, a in asks.values()], sizes)[:, None]
     g = _finite(preference_constraints(batch.safe_constraints[index], batch.ev.log_err[index], bands), 1e6)
     # the preference run by run: a matrix product's bits depend on its shape
     score = _finite(np.concatenate([problem.weighted_terms(terms[r], a.weights) for r, a in asks.values()]), 1e30)
-    first = np.cumsum([0] + sizes[:-1])
+    first = np.cumsum(sizes) - sizes
     violation = np.add.reduce(np.maximum(g[first], 0.0), axis=-1)  # row by row: a 1-d sum's bits
-    dim, out = problem.dim, {}
-    for i, (j, (rows, _)) in enumerate(asks.items()):
-        o, k = int(first[i]), sizes[i]
-        df = dg = None
-        if k > 1:  # u and its stencil
-            df = (score[o + 1 : o + dim + 1] - score[o + dim + 1 : o + k]) / (2 * FD_STEP)
-            dg = ((g[o + 1 : o + dim + 1] - g[o + dim + 1 : o + k]) / (2 * FD_STEP)).T
-        out[j] = (float(score[o]), g[o], df, dg, float(violation[i]), float(batch.max_err[rows.start]))
-    return out
+    dim = problem.dim
+    with_grad = sizes > 1  # u and its stencil of 2 dim points
+    plus = _block_rows(first[with_grad] + 1, np.full(int(with_grad.sum()), dim))
+    df = ((score[plus] - score[plus + dim]) / (2 * FD_STEP)).reshape(-1, dim)
+    dg = ((g[plus] - g[plus + dim]) / (2 * FD_STEP)).reshape(-1, dim, g.shape[-1])
+    grad_of = np.cumsum(with_grad) - 1
+    rows = zip(
+        asks, score[first].tolist(), first, violation.tolist(), batch.max_err[starts].tolist(), with_grad, grad_of
+    )
+    return {
+        j: (f, g[o], df[c] if grad else None, dg[c].T if grad else None, v, err) for j, f, o, v, err, grad, c in rows
+    }
+
+
+def _block_rows(starts: np.ndarray, sizes: np.ndarray) -> np.ndarray:
+    """The row indices of consecutive blocks (start, size), one after the other."""
+    if len(sizes) and np.all(sizes == sizes[0]):
+        return (starts[:, None] + np.arange(sizes[0])).ravel()
+    return np.concatenate([np.arange(a, a + k) for a, k in zip(starts, sizes)] or [np.zeros(0, np.intp)])
 
 
 def _robustness_by_job(shifts: np.ndarray, rows_of: dict[int, int | slice]) -> np.ndarray:
@@ -678,12 +690,12 @@ def _robustness_by_job(shifts: np.ndarray, rows_of: dict[int, int | slice]) -> n
     stacked along a new leading axis, which leaves every row's order of summation as it was."""
     out = np.empty(shifts.shape[1])
     points = [rows for rows in rows_of.values() if isinstance(rows, int)]
-    blocks: dict[int, list[np.ndarray]] = {}
+    blocks: dict[int, list[int]] = {}
     for rows in rows_of.values():
         if isinstance(rows, slice):
-            blocks.setdefault(rows.stop - rows.start, []).append(np.arange(rows.start, rows.stop))
+            blocks.setdefault(rows.stop - rows.start, []).append(rows.start)
     groups = [(np.array(points, dtype=np.intp), 0)] if points else []
-    groups += [(np.concatenate(members), k) for k, members in blocks.items()]
+    groups += [(_block_rows(np.array(starts), np.full(len(starts), k)), k) for k, starts in blocks.items()]
     for index, k in groups:
         d = shifts[:, index].reshape((2, -1, k, shifts.shape[-1]) if k else (2, -1, shifts.shape[-1]))
         d = np.ascontiguousarray(np.moveaxis(d, 1, 0))  # (jobs, 2, [k,] 2n): each job's own layout
