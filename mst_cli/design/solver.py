@@ -212,6 +212,8 @@ class _Phase:
         self.problem, self.batch, self.m = problem, batch, m
         self.tracker, self.budget, self.phase, self.goal = tracker, budget, phase, goal
         self.key = None
+        # a batched run's preference callbacks: one round computes every run's (_point_rows)
+        self.shared = getattr(problem, "preference_point", None) if isinstance(batch, _PreferenceBatch) else None
 
     def _compute(self, u, want_grad):
         key = (u.tobytes(), want_grad)
@@ -225,9 +227,8 @@ class _Phase:
             U[0] = u
         else:
             U = u[None]
-        shared = getattr(self.problem, "preference_point", None)
-        if shared is not None and isinstance(self.batch, _PreferenceBatch):  # one round computes every run's
-            self.f, self.g, df, dg, violation, err = shared(U, self.batch.weights, self.batch.band)
+        if self.shared is not None:
+            self.f, self.g, df, dg, violation, err = self.shared(U, self.batch.weights, self.batch.band)
             cost = _PreferenceBatch.cost
         else:
             score, g, cost, err = self.batch(U)
@@ -678,9 +679,8 @@ def _point_rows(problem: DesignProblem, batch: _BatchRows, terms: np.ndarray, as
 
 def _block_rows(starts: np.ndarray, sizes: np.ndarray) -> np.ndarray:
     """The row indices of consecutive blocks (start, size), one after the other."""
-    if len(sizes) and np.all(sizes == sizes[0]):
-        return (starts[:, None] + np.arange(sizes[0])).ravel()
-    return np.concatenate([np.arange(a, a + k) for a, k in zip(starts, sizes)] or [np.zeros(0, np.intp)])
+    offsets = np.cumsum(sizes) - sizes  # where each block begins in the result
+    return np.arange(int(np.add.reduce(sizes))) + np.repeat(starts - offsets, sizes)
 
 
 def _robustness_by_job(shifts: np.ndarray, rows_of: dict[int, int | slice]) -> np.ndarray:
