@@ -124,9 +124,11 @@ class Evaluation:
         return np.expm1(self.log_err)
 
 
-def robustness_of_shifts(d: np.ndarray) -> np.ndarray:
-    """RMS over both signs and all outputs of :meth:`DesignProblem.print_shift_log`'s (2, ..., 2n)."""
-    return np.sqrt(np.mean(d**2, axis=(0, -1)))
+def robustness_of_shifts(d: np.ndarray, first: int = 0) -> np.ndarray:
+    """RMS over both signs and all outputs of :meth:`DesignProblem.print_shift_log`'s (2, ..., 2n);
+    ``first``: the axis of the signs (1: a stack of such arrays along a leading axis).
+    np.mean's own arithmetic (a sum, then a division by the count) without its wrapper's cost."""
+    return np.sqrt(np.add.reduce(d**2, axis=(first, -1)) / (d.shape[first] * d.shape[-1]))
 
 
 class DesignProblem:
@@ -256,7 +258,32 @@ class DesignProblem:
         instead of quadratic. The kernel gives a cell the same bits in any batch
         (tests/test_spring.py), so this changes no number.
         """
-        fam = self.family
+        shape, (theta, t, h), inverse = self._distinct_cells(theta_deg, t_mm, h_mm)
+        laws = self._cell_laws(theta, t, h)
+        if inverse is not None:
+            laws = tuple(a[inverse] for a in laws)
+        k, d_lock, R, k_locked = (a.reshape(shape) for a in laws)
+        return k, d_lock, R, k_locked
+
+    def shifted_layer_laws(
+        self, theta_deg: np.ndarray, t_mm: np.ndarray, h_mm: np.ndarray, dt_mm: float
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """:meth:`layer_laws` of the cells with walls t, t + dt and t - dt (each floored at
+        geo.LENGTH_FLOOR_MM), stacked on a new first axis of 3: the distinct drawn cells are
+        found once (in a third of the cells) and every one computed at the three thicknesses.
+        A cell's law has the same bits in any batch, so these are layer_laws' numbers."""
+        shape, (theta, t, h), inverse = self._distinct_cells(theta_deg, t_mm, h_mm)
+        floor = geo.LENGTH_FLOOR_MM
+        t3 = np.concatenate([t, np.maximum(t + dt_mm, floor), np.maximum(t + -dt_mm, floor)])
+        laws = self._cell_laws(np.tile(theta, 3), t3, np.tile(h, 3))
+        distinct = np.arange(len(t)) if inverse is None else inverse
+        index = np.arange(3)[:, None] * len(t) + distinct  # (3, cells)
+        k, d_lock, R, k_locked = (a[index].reshape((3,) + shape) for a in laws)
+        return k, d_lock, R, k_locked
+
+    def _distinct_cells(self, theta_deg, t_mm, h_mm) -> tuple[tuple, tuple, np.ndarray | None]:
+        """(the cells' shape, their distinct (theta, t, h) as contiguous columns, the index of
+        every cell among them, or None when they were not sorted out: fewer than DEDUPE_MIN_CELLS)."""
         cells = np.stack(np.broadcast_arrays(theta_deg, t_mm, h_mm), axis=-1)
         flat = cells.reshape(-1, 3)
         inverse = None
@@ -268,23 +295,28 @@ class DesignProblem:
             inverse[order] = np.cumsum(first) - 1
             flat = ordered[first]
         theta, t, h = np.ascontiguousarray(flat.T)  # contiguous columns: numpy's vector loops
+        return cells.shape[:-1], (theta, t, h), inverse
+
+    def _cell_laws(self, theta: np.ndarray, t: np.ndarray, h: np.ndarray) -> tuple[np.ndarray, ...]:
+        """(k, d_lock, R, k_locked) of cells given as 1-d columns, the walls as drawn."""
+        fam = self.family
         if self.wall_offset_mm:
             t = np.maximum(t + self.wall_offset_mm, geo.LENGTH_FLOOR_MM)
         theta_rad = np.radians(theta)
         E = web_modulus_MPa(theta_rad, t, h, fam.depth_mm, self.E_MPa, self.nu)  # as mechanics.layer_laws
-        laws: tuple[np.ndarray, ...] = spring_arrays(
-            theta_rad, t, h, fam.depth_mm, fam.width_mm, fam.contact_allowance_mm, E, self.nu
-        )
-        if inverse is not None:
-            laws = tuple(a[inverse] for a in laws)
-        k, d_lock, R, k_locked = (a.reshape(cells.shape[:-1]) for a in laws)
-        return k, d_lock, R, k_locked
+        return spring_arrays(theta_rad, t, h, fam.depth_mm, fam.width_mm, fam.contact_allowance_mm, E, self.nu)
 
     def responses(
         self, theta_deg: np.ndarray, t_mm: np.ndarray, h_mm: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """(R_N per layer, S_per_N per regime, B_full_T, gap0_mm, B0_T) of candidate stacks."""
-        k, d_lock, R, k_locked = self.layer_laws(theta_deg, t_mm, h_mm)
+        return self._responses_of(self.layer_laws(theta_deg, t_mm, h_mm), h_mm)
+
+    def _responses_of(
+        self, laws: tuple, h_mm: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """:meth:`responses` of stacks whose layer laws are known."""
+        k, d_lock, R, k_locked = laws
         gap0 = cast(np.ndarray, self.gap0_mm(h_mm.sum(axis=-1)))  # candidates' sums: an array
         _, S, _, B = regime_kernel(k, d_lock, k_locked, gap0, self.field_T, R)
         return R, S, B[..., -1], gap0, B[..., 0]
@@ -306,13 +338,9 @@ class DesignProblem:
         pr = self.printer
         shifts = None
         if with_shifts:  # nominal, thicker, thinner walls (print_shift_log's steps)
-            dt = self.wall_tolerance_mm
-            T = np.broadcast_to(theta_deg, (3,) + theta_deg.shape)
+            laws = self.shifted_layer_laws(theta_deg, t_mm, h_mm, self.wall_tolerance_mm)
             H = np.broadcast_to(h_mm, (3,) + h_mm.shape)
-            t3 = np.stack(
-                [t_mm, np.maximum(t_mm + dt, geo.LENGTH_FLOOR_MM), np.maximum(t_mm + -dt, geo.LENGTH_FLOOR_MM)]
-            )
-            R3, S3, B_full3, gap03, B03 = self.responses(T, t3, H)
+            R3, S3, B_full3, gap03, B03 = self._responses_of(laws, H)
             R, S, B_full, gap0, B0 = R3[0], S3[0], B_full3[0], gap03[0], B03[0]
             base = np.log(np.maximum(np.concatenate([S, R], axis=-1), TINY))
             shifts = np.log(np.maximum(np.concatenate([S3[1:], R3[1:]], axis=-1), TINY)) - base[None]
@@ -417,8 +445,12 @@ class DesignProblem:
     ) -> np.ndarray:
         """Weighted sum of :meth:`objective_terms` (lower is better): what phase 2 minimises;
         ``terms``: those of ``ev``, when the caller has them (:meth:`evaluate_terms`)."""
+        return self.weighted_terms(self.objective_terms(ev) if terms is None else terms, weights)
+
+    def weighted_terms(self, terms: np.ndarray, weights: ArrayLike | None = None) -> np.ndarray:
+        """The weighted sum of given :meth:`objective_terms` (``weights`` default design.objective)."""
         w = self.objective_weights if weights is None else np.asarray(weights, dtype=float)
-        return (self.objective_terms(ev) if terms is None else terms) @ w
+        return terms @ w
 
     def evaluate_terms(self, u: np.ndarray) -> tuple[Evaluation, np.ndarray]:
         """(:meth:`evaluate`, :meth:`objective_terms`) of candidates, the print-shifted stacks of

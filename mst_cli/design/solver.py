@@ -38,8 +38,8 @@ from __future__ import annotations
 import math
 import time
 from collections import OrderedDict
-from dataclasses import dataclass, field, fields
-from typing import TYPE_CHECKING, Any
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 
@@ -143,6 +143,62 @@ class _Stop(Exception):
         self.reason = reason
 
 
+_STENCILS: dict[int, np.ndarray] = {}
+
+
+def _stencil(dim: int) -> np.ndarray:
+    """(2 dim + 1, dim): 0, then +FD_STEP e_i, then -FD_STEP e_i (u - h and u + (-h) are the same
+    number); one per dimension, made once."""
+    got = _STENCILS.get(dim)
+    if got is None:
+        eye = np.eye(dim) * FD_STEP
+        got = _STENCILS[dim] = np.concatenate([np.zeros((1, dim)), eye, -eye])
+    return got
+
+
+def _finite(a: np.ndarray, fill: float) -> np.ndarray:
+    """``a`` with every non-finite entry ``fill``; ``a`` itself when all are finite (a finite
+    sum says so in one reduction; one that overflows takes the full path, as a NaN does)."""
+    if math.isfinite(np.add.reduce(a, axis=None)):
+        return a
+    return np.where(np.isfinite(a), a, fill)
+
+
+def _point_of(score: np.ndarray, g: np.ndarray, dim: int) -> tuple:
+    """(f, g, df, dg, violation) of a callback's batch: the nominal point's score and
+    constraints (non-finite ones replaced), their central differences when ``dim`` (a stencil
+    of 2 dim + 1 points), and the point's constraint violation (np.sum's reduction without its
+    wrapper: a 1-d sum, the same bits)."""
+    score, g = _finite(score, 1e30), _finite(g, 1e6)
+    df = dg = None
+    if dim:
+        df = (score[1 : dim + 1] - score[dim + 1 :]) / (2 * FD_STEP)
+        dg = ((g[1 : dim + 1] - g[dim + 1 :]) / (2 * FD_STEP)).T
+    return float(score[0]), g[0], df, dg, float(np.add.reduce(np.maximum(g[0], 0.0), axis=None))
+
+
+class _PreferenceBatch:
+    """The preference phases' batch function: (preference, g, cost per point, worst error) of
+    points U, g the constraints with the rounding slack, then every log error within +- band
+    (two smooth constraints per output: |x| has no derivative where the error is 0)."""
+
+    cost = 3  # kernel stacks per point: the nominal walls and both print shifts
+
+    def __init__(self, problem, weights, band: float):
+        self.problem, self.weights, self.band = problem, weights, band
+
+    def __call__(self, U):
+        ev, terms = self.problem.evaluate_terms(U)
+        g = preference_constraints(_safe_constraints(ev), ev.log_err, self.band)
+        return self.problem.preference(ev, self.weights, terms), g, self.cost, float(_max_err(ev)[0])
+
+
+def preference_constraints(safe: np.ndarray, log_err: np.ndarray, band) -> np.ndarray:
+    """The preference phases' constraints: ``safe`` (with the rounding slack), then
+    log_err - band and -log_err - band (``band`` a number, or one per row as (k, 1))."""
+    return np.concatenate([safe, log_err - band, -log_err - band], axis=-1)
+
+
 class _Phase:
     """One local nlopt run on a batched score/constraint function.
 
@@ -156,6 +212,8 @@ class _Phase:
         self.problem, self.batch, self.m = problem, batch, m
         self.tracker, self.budget, self.phase, self.goal = tracker, budget, phase, goal
         self.key = None
+        # a batched run's preference callbacks: one round computes every run's (_point_rows)
+        self.shared = getattr(problem, "preference_point", None) if isinstance(batch, _PreferenceBatch) else None
 
     def _compute(self, u, want_grad):
         key = (u.tobytes(), want_grad)
@@ -165,19 +223,20 @@ class _Phase:
             raise _Stop("evaluation budget spent")
         dim = u.size
         if want_grad:
-            eye = np.eye(dim) * FD_STEP
-            U = np.concatenate([u[None], u + eye, u - eye])
+            U = u + _stencil(dim)  # u, u + FD_STEP e_i, u - FD_STEP e_i
+            U[0] = u
         else:
             U = u[None]
-        score, g, cost, err = self.batch(U)
-        score = np.where(np.isfinite(score), score, 1e30)
-        g = np.where(np.isfinite(g), g, 1e6)
-        self.f, self.g = float(score[0]), g[0]
+        if self.shared is not None:
+            self.f, self.g, df, dg, violation, err = self.shared(U, self.batch.weights, self.batch.band)
+            cost = _PreferenceBatch.cost
+        else:
+            score, g, cost, err = self.batch(U)
+            self.f, self.g, df, dg, violation = _point_of(score, g, dim if want_grad else 0)
         if want_grad:
-            self.df = (score[1 : dim + 1] - score[dim + 1 :]) / (2 * FD_STEP)
-            self.dg = ((g[1 : dim + 1] - g[dim + 1 :]) / (2 * FD_STEP)).T
+            self.df, self.dg = df, dg
         self.key = key
-        self.tracker.offer(u, self.f, float(np.sum(np.maximum(self.g, 0.0))))
+        self.tracker.offer(u, self.f, violation)
         self.budget.spend(cost * len(U), self.phase, err)
         if self.goal is not None and self.goal(self.f, self.g, err):
             raise _Stop("goal reached")
@@ -236,10 +295,14 @@ def _iters_per_start(problem, local):
 
 
 def _safe_constraints(ev):
+    if isinstance(ev, _Rows):  # the batched polish's rows: computed once per round
+        return ev.safe_constraints
     return ev.constraints + ROUNDING_SAFETY
 
 
 def _max_err(ev):
+    if isinstance(ev, _Rows):
+        return ev.max_err
     return np.max(np.abs(ev.rel_err), axis=-1)
 
 
@@ -394,12 +457,7 @@ def prefer(
         return ev, float(problem.preference(ev, weights, terms))
 
     def polish_run(u0, pref0, band, step):
-        def pref_batch(U):
-            ev, terms = problem.evaluate_terms(U)
-            # two smooth constraints per output (|x| has no derivative where the error is 0)
-            g = np.concatenate([_safe_constraints(ev), ev.log_err - band, -ev.log_err - band], axis=-1)
-            return problem.preference(ev, weights, terms), g, 3, float(_max_err(ev)[0])
-
+        pref_batch = _PreferenceBatch(problem, weights, band)
         tracker = Tracker()
         tracker.offer(u0, pref0, 0.0)
         if budget.left > 3 * per_iter:
@@ -496,7 +554,6 @@ def pareto_weights(count: int) -> np.ndarray:
 
 
 # --------------------------------------------------------------------------- many weightings at once
-_EVALUATION_FIELDS = tuple(f.name for f in fields(Evaluation))
 RECENT_EVALUATIONS = 64  # per run: the points SLSQP asks for again (a stalled line search)
 
 
@@ -516,32 +573,33 @@ class _SharedEvaluations:
         self.problem = problem
         self.caller: Any = None  # the greenlet that serves the batch
 
-    def ask(self, job: int, u: np.ndarray) -> tuple[Evaluation, np.ndarray]:
+    def ask(self, job: int, u):
         """Evaluation and preference terms of ``u`` (one point (dim,) or a batch (k, dim)),
-        each row's bits as :meth:`DesignProblem.evaluate` alone gives them."""
+        each row's bits as :meth:`DesignProblem.evaluate` alone gives them; for a
+        :class:`_PointAsk`, what :func:`_point_rows` gives."""
         return self.caller.switch(u)
 
-    def _serve(self, pending: dict[int, np.ndarray]) -> dict[int, tuple]:
+    def _serve(self, pending: dict[int, Any]) -> dict[int, tuple]:
         jobs = sorted(pending)
         problem = self.problem
-        U = np.concatenate([pending[j].reshape(-1, problem.dim) for j in jobs])
+        asked = {j: pending[j].U if isinstance(pending[j], _PointAsk) else pending[j] for j in jobs}
+        U = np.concatenate([asked[j].reshape(-1, problem.dim) for j in jobs])
         ev, shifts = problem.evaluate_with_shifts(U)
         # ln height and ln force resolution are elementwise or row-wise: one call for the batch
         terms = problem.objective_terms(ev, np.zeros(len(U)))
-        columns = [getattr(ev, name) for name in _EVALUATION_FIELDS]
-        results = {}
+        rows_of: dict[int, int | slice] = {}
         start = 0
         for j in jobs:
-            flat = pending[j].ndim == 1
-            rows = start if flat else slice(start, start + len(pending[j]))
-            start += 1 if flat else len(pending[j])
-            ev_j = Evaluation(*(c[rows] for c in columns))
-            # the RMS over the job's own rows, laid out as a call of its own would (a reduction
-            # over two axes sums in an order that depends on the array's shape)
-            terms_j = terms[rows].copy()
-            terms_j[..., -1] = robustness_of_shifts(np.ascontiguousarray(shifts[:, rows]))
-            results[j] = (ev_j, terms_j)
-        return results
+            flat = asked[j].ndim == 1
+            rows_of[j] = start if flat else slice(start, start + len(asked[j]))
+            start += 1 if flat else len(asked[j])
+        terms[:, -1] = _robustness_by_job(shifts, rows_of)
+        batch = _BatchRows(ev)
+        points = {j: (rows_of.pop(j), pending[j]) for j in jobs if isinstance(pending[j], _PointAsk)}
+        out = {j: (_Rows(batch, rows), terms[rows]) for j, rows in rows_of.items()}
+        if points:
+            out.update(_point_rows(problem, batch, terms, points))
+        return out
 
     def run(self, jobs: list[Callable[[DesignProblem], object]]) -> list:
         """Each job called with its own batched view of the problem; their results in order.
@@ -581,6 +639,103 @@ class _SharedEvaluations:
 _DONE = object()  # what a finished run hands back instead of points
 
 
+class _PointAsk(NamedTuple):
+    """A preference phase's request: the callback's points U (its point, or the point and its
+    central-difference stencil), the run's weights and its band."""
+
+    U: np.ndarray
+    weights: Any
+    band: float
+
+
+def _point_rows(problem: DesignProblem, batch: _BatchRows, terms: np.ndarray, asks: dict) -> dict[int, tuple]:
+    """(f, g, df, dg, violation, worst error) of every preference request of a round, ``asks``
+    {job: (its rows, its _PointAsk)}: the constraints, the non-finite guard, the central
+    differences and the violations computed once for all of them (elementwise and row-wise),
+    each run's numbers to the bit those of :class:`_PreferenceBatch` and :func:`_point_of` on
+    its own rows."""
+    starts = np.array([rows.start for rows, _ in asks.values()])
+    sizes = np.array([rows.stop - rows.start for rows, _ in asks.values()])
+    index = _block_rows(starts, sizes)
+    bands = np.repeat([a.band for _, a in asks.values()], sizes)[:, None]
+    g = _finite(preference_constraints(batch.safe_constraints[index], batch.ev.log_err[index], bands), 1e6)
+    # the preference run by run: a matrix product's bits depend on its shape
+    score = _finite(np.concatenate([problem.weighted_terms(terms[r], a.weights) for r, a in asks.values()]), 1e30)
+    first = np.cumsum(sizes) - sizes
+    violation = np.add.reduce(np.maximum(g[first], 0.0), axis=-1)  # row by row: a 1-d sum's bits
+    dim = problem.dim
+    with_grad = sizes > 1  # u and its stencil of 2 dim points
+    plus = _block_rows(first[with_grad] + 1, np.full(int(with_grad.sum()), dim))
+    df = ((score[plus] - score[plus + dim]) / (2 * FD_STEP)).reshape(-1, dim)
+    dg = ((g[plus] - g[plus + dim]) / (2 * FD_STEP)).reshape(-1, dim, g.shape[-1])
+    grad_of = np.cumsum(with_grad) - 1
+    rows = zip(
+        asks, score[first].tolist(), first, violation.tolist(), batch.max_err[starts].tolist(), with_grad, grad_of
+    )
+    return {
+        j: (f, g[o], df[c] if grad else None, dg[c].T if grad else None, v, err) for j, f, o, v, err, grad, c in rows
+    }
+
+
+def _block_rows(starts: np.ndarray, sizes: np.ndarray) -> np.ndarray:
+    """The row indices of consecutive blocks (start, size), one after the other."""
+    offsets = np.cumsum(sizes) - sizes  # where each block begins in the result
+    return np.arange(int(np.add.reduce(sizes))) + np.repeat(starts - offsets, sizes)
+
+
+def _robustness_by_job(shifts: np.ndarray, rows_of: dict[int, int | slice]) -> np.ndarray:
+    """Print robustness of every row of ``shifts`` (2, N, 2n), each job's rows reduced as a call
+    of its own would reduce them: a reduction over two axes sums in an order that depends on
+    the array's shape, so the jobs whose requests have one shape (one point, or k points) are
+    stacked along a new leading axis, which leaves every row's order of summation as it was."""
+    out = np.empty(shifts.shape[1])
+    points = [rows for rows in rows_of.values() if isinstance(rows, int)]
+    blocks: dict[int, list[int]] = {}
+    for rows in rows_of.values():
+        if isinstance(rows, slice):
+            blocks.setdefault(rows.stop - rows.start, []).append(rows.start)
+    groups = [(np.array(points, dtype=np.intp), 0)] if points else []
+    groups += [(_block_rows(np.array(starts), np.full(len(starts), k)), k) for k, starts in blocks.items()]
+    for index, k in groups:
+        d = shifts[:, index].reshape((2, -1, k, shifts.shape[-1]) if k else (2, -1, shifts.shape[-1]))
+        d = np.ascontiguousarray(np.moveaxis(d, 1, 0))  # (jobs, 2, [k,] 2n): each job's own layout
+        out[index] = robustness_of_shifts(d, first=1).reshape(-1)
+    return out
+
+
+class _BatchRows:
+    """One round's evaluation and what every run derives from it, computed once for the batch
+    (elementwise and row-wise: a row gets the bits a call of its own would give)."""
+
+    def __init__(self, ev: Evaluation):
+        self.ev = ev
+        self.safe_constraints = _safe_constraints(ev)
+        self.max_err = _max_err(ev)
+
+
+class _Rows(Evaluation):
+    """A run's rows of a :class:`_BatchRows`: the :class:`Evaluation` of its own points, each
+    field sliced out when it is first read (a run reads a few of them)."""
+
+    def __init__(self, batch: _BatchRows, rows: int | slice):  # the fields come lazily
+        self._batch, self._rows = batch, rows
+
+    def __getattr__(self, name: str):
+        if name.startswith("_"):
+            raise AttributeError(name)
+        value = getattr(self._batch.ev, name)[self._rows]
+        setattr(self, name, value)
+        return value
+
+    @property
+    def safe_constraints(self) -> np.ndarray:
+        return self._batch.safe_constraints[self._rows]
+
+    @property
+    def max_err(self) -> np.ndarray:
+        return self._batch.max_err[self._rows]
+
+
 class _BatchedProblem:
     """A :class:`DesignProblem` whose evaluations go through :class:`_SharedEvaluations`."""
 
@@ -596,10 +751,17 @@ class _BatchedProblem:
         requests gets its rows again without a round (the same bits: the kernels are exact
         functions of the point)."""
         u = np.asarray(u, dtype=float)
-        key = (u.shape, u.tobytes())
+        return self._recall((u.shape, u.tobytes()), u)
+
+    def preference_point(self, U: np.ndarray, weights, band: float) -> tuple:
+        """What :class:`_Phase` needs of a preference callback's points ``U``, from the shared
+        round (:func:`_point_rows`), or again without one when recently asked."""
+        return self._recall(("point", U.shape, U.tobytes(), band), _PointAsk(U, weights, band))
+
+    def _recall(self, key: tuple, request):
         got = self._recent.get(key)
         if got is None:
-            got = self._shared.ask(self._job, u)
+            got = self._shared.ask(self._job, request)
             self._recent[key] = got
             if len(self._recent) > RECENT_EVALUATIONS:
                 self._recent.popitem(last=False)
