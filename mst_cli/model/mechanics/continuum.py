@@ -355,6 +355,36 @@ class ContinuumResult:
     contact_points: np.ndarray | None = None  # surface points in contact at each sample
 
 
+class _ActiveSet:
+    """The contact set's update at a converged Newton pass (frictionless, unilateral).
+
+    A point past its obstacle joins the set; a held point whose reaction pulls leaves it.
+    Grazing points at the edge of a contact zone can pull when held and penetrate when free,
+    and the set then cycles for ever (a steep wall's outer face peeling off the plate did, on a
+    root-graded mesh): after SET_CHANGES_BEFORE_HOLDING changes within one solve, a point back
+    in contact after a release stays held (a small nodal pull at the zone's edge).
+    """
+
+    def __init__(self, eligible: np.ndarray, tol_mm: float):
+        self.eligible, self.tol_mm = eligible, tol_mm
+        self.changes = 0
+        self.released = np.zeros(eligible.size, bool)
+        self.held = np.zeros(eligible.size, bool)
+
+    def update(self, active: np.ndarray, overlap_mm: np.ndarray, pull: np.ndarray) -> np.ndarray | None:
+        """The next set from the signed overlap with each obstacle (> 0: penetrating) and the
+        signed reaction (> 0: pulling); None when the set is consistent and stays."""
+        penetrating = self.eligible & ~active & (overlap_mm > self.tol_mm)
+        if self.changes >= SET_CHANGES_BEFORE_HOLDING:
+            self.held |= active & self.released
+        pulling = active & (pull > 0.0) & ~self.held
+        if not penetrating.any() and not pulling.any():
+            return None
+        self.changes += 1
+        self.released |= pulling
+        return (active | penetrating) & ~pulling
+
+
 class _Problem:
     def __init__(self, cell, material, n_thick, n_length, levels, corners=CORNERS, radius_in_t=REFINE_RADIUS_IN_T):
         from skfem import Basis, ElementTriP2, ElementVector  # deferred: scikit-fem, as in refined_quarter_mesh
@@ -512,9 +542,7 @@ class _Problem:
         obstacle = self.obstacle(d)
         tol = 1e-9 * self.cell.h_mm
         scale = None
-        checks = 0  # converged passes that changed the set
-        released = np.zeros(dofs.size, bool)  # points released in this solve
-        held = np.zeros(dofs.size, bool)  # points back in contact after a release: kept held
+        contact_set = _ActiveSet(eligible, tol)
         r, kin = asm.residual(u, self.mu, self.lam)
         for it in range(1, max_iter + 1):
             contact = dofs[active]
@@ -525,19 +553,10 @@ class _Problem:
             scale = max(reaction, 1e-12 * self.mu * self.cell.t_mm) if scale is None else max(scale, reaction)
             jump = target - u[pinned]
             if it > 1 and np.linalg.norm(r[free]) <= rtol * scale and not np.any(np.abs(jump) > tol):
-                penetrating = eligible & ~active & (sign * (u[dofs] - obstacle) > tol)
-                if checks >= SET_CHANGES_BEFORE_HOLDING:
-                    # Grazing points at the edge of a contact zone can pull when held and
-                    # penetrate when free, and the set then cycles until max_iter: after a few
-                    # changes of the set, a point that is back in contact after a release
-                    # stays held (a small nodal pull at the edge of the zone).
-                    held |= active & released
-                pulling = active & (sign * r[dofs] > 0.0) & ~held
-                if not penetrating.any() and not pulling.any():
+                updated = contact_set.update(active, sign * (u[dofs] - obstacle), sign * r[dofs])
+                if updated is None:
                     return u, it - 1, active, r
-                checks += 1
-                released |= pulling
-                active = (active | penetrating) & ~pulling
+                active = updated
                 continue
             # the tangent only where a correction is solved (not at the converged point)
             K = asm.tangent(kin, self.mu, self.lam)
