@@ -19,6 +19,7 @@ Run:  .venv/bin/python benchmarks/steep_lock.py [--uniform 200 --seed 7] [--part
 from __future__ import annotations
 
 import argparse
+import time
 
 import numpy as np
 
@@ -99,11 +100,16 @@ ACROSS_ALONG = [(3, 12), (3, 24), (3, 48), (6, 12), (12, 12)]
 
 
 def _lock_row(cell, mat, mesh, **kw) -> str:
+    t0 = time.perf_counter()
     try:
         r = solve_continuum(HexCell(*cell), mat, n_thick=mesh[0], n_length=mesh[1], **kw)
     except Exception as exc:  # a stalled path is the finding, not a crash
-        return f"{mesh[0]}x{mesh[1]} stalled ({type(exc).__name__})"
-    return f"{mesh[0]}x{mesh[1]} R {r.force_N[-1]:.3f} (path {r.force_N[-1] / r.mesh_scale:.3f}) d {r.d_contact_mm:.4f}"
+        return f"{mesh[0]}x{mesh[1]} stalled ({type(exc).__name__}, {time.perf_counter() - t0:.1f} s)"
+    seconds = time.perf_counter() - t0
+    return (
+        f"{mesh[0]}x{mesh[1]} R {r.force_N[-1]:.3f} (path {r.force_N[-1] / r.mesh_scale:.3f}) "
+        f"d {r.d_contact_mm:.4f} ({seconds:.1f} s)"
+    )
 
 
 def across_or_along(mat) -> None:
