@@ -274,7 +274,7 @@ class DesignProblem:
         A cell's law has the same bits in any batch, so these are layer_laws' numbers."""
         shape, (theta, t, h), inverse = self._distinct_cells(theta_deg, t_mm, h_mm)
         floor = geo.LENGTH_FLOOR_MM
-        t3 = np.concatenate([t, np.maximum(t + dt_mm, floor), np.maximum(t + -dt_mm, floor)])
+        t3 = np.concatenate([t, np.maximum(t + dt_mm, floor), np.maximum(t - dt_mm, floor)])
         laws = self._cell_laws(np.tile(theta, 3), t3, np.tile(h, 3))
         distinct = np.arange(len(t)) if inverse is None else inverse
         index = np.arange(3)[:, None] * len(t) + distinct  # (3, cells)
