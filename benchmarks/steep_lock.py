@@ -11,9 +11,11 @@ Three measurements behind docs/design.md section 4 ("Steep walls", "L0 against L
 4. where the mesh error sits: the same cells refined only across the wall (n_thick) or only
    along it (n_length, which is where a contact front would run), the raw path force beside the
    k-scaled one; then the lock taken at the ramp's foot (tangent = 1 k instead of 5 k) and the
-   path mesh graded at both wall roots.
+   path mesh graded at both wall roots;
+5. whether grading converges: mid cells (30 and 45 deg) with the path mesh graded 0, 1 and 2
+   rounds within 1 t of both wall roots, on the default 3 x 12 base and on 6 x 24.
 
-Run:  .venv/bin/python benchmarks/steep_lock.py [--uniform 200 --seed 7] [--parts 1,2,3,4]   # ~8 min
+Run:  .venv/bin/python benchmarks/steep_lock.py [--uniform 200 --seed 7] [--parts 1,2,3,4,5]   # ~15 min
 """
 
 from __future__ import annotations
@@ -108,7 +110,7 @@ def _lock_row(cell, mat, mesh, **kw) -> str:
     seconds = time.perf_counter() - t0
     return (
         f"{mesh[0]}x{mesh[1]} R {r.force_N[-1]:.3f} (path {r.force_N[-1] / r.mesh_scale:.3f}) "
-        f"d {r.d_contact_mm:.4f} ({seconds:.1f} s)"
+        f"d {r.d_contact_mm:.4f} ({len(r.displacement_mm) - 1} steps, {seconds:.1f} s)"
     )
 
 
@@ -132,11 +134,24 @@ def across_or_along(mat) -> None:
         print(f"  {cell}: " + "; ".join(_lock_row(cell, mat, m, **roots) for m in MESHES[:2]))
 
 
+MID = [(30, 0.8, 3.0), (45, 1.0, 4.0)]
+
+
+def grading_rounds(mat) -> None:
+    print("\n5. R (N) with the path mesh graded 0, 1, 2 rounds within 1 t of both wall roots")
+    for cell in MID:
+        print(f"{cell}:")
+        for mesh in ((3, 12), (6, 24)):
+            for levels in (0, 1, 2):
+                kw = dict(path_levels=levels, path_corners=("outer_root", "inner_root"), path_radius_in_t=1.0)
+                print(f"  rounds {levels}: {_lock_row(cell, mat, mesh, max_steps=400, **kw)}")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--uniform", type=int, default=200, help="cells drawn for part 3")
     ap.add_argument("--seed", type=int, default=7)
-    ap.add_argument("--parts", default="1,2,3,4", help="which parts to run, comma-separated")
+    ap.add_argument("--parts", default="1,2,3,4,5", help="which parts to run, comma-separated")
     args = ap.parse_args()
     parts = {int(p) for p in args.parts.split(",")}
     mat = Material()
@@ -148,6 +163,8 @@ def main() -> None:
         l0_uniform(mat, args.uniform, args.seed)
     if 4 in parts:
         across_or_along(mat)
+    if 5 in parts:
+        grading_rounds(mat)
 
 
 if __name__ == "__main__":
