@@ -28,6 +28,7 @@ if TYPE_CHECKING:
     from mst_cli.design.document import DesignResult
     from mst_cli.design.pareto import ParetoDesign
     from mst_cli.io.schema import Document
+    from mst_cli.model.offcentre import OffCentreResponse, OffsetMap
     from mst_cli.model.response import Response
 
 __all__ = [
@@ -35,6 +36,8 @@ __all__ = [
     "load",
     "load_design",
     "simulate",
+    "simulate_offcentre",
+    "offset_map",
     "design",
     "pareto",
     "designed",
@@ -132,6 +135,68 @@ def simulate(
     _one_of("--mechanics", mechanics, MODELS)
     _one_of("--field-model", field_model, ("auto", "dipole", "axial", "cylinder"))
     return simulate_as_printed(load_design(design), mechanics, field_model)
+
+
+def simulate_offcentre(
+    design: str | Path | Document,
+    offset_mm: tuple[float, float],
+    *,
+    mechanics: str | None = None,
+    field_model: str | None = None,
+) -> OffCentreResponse:
+    """A force pressed at ``offset_mm`` = (x0, y0) on the top face (``mst simulate --load-offset-mm``).
+
+    The part as printed, the mechanics rung as :func:`simulate` picks it, every layer tilting
+    with rigid plates (:mod:`mst_cli.model.offcentre`). Returns ``.force_N`` (m,), ``.B_T``
+    (m, 3) at the chip, ``.magnet_tilt_deg`` (m, 2), ``.force_read_axial_N`` (what the centred
+    model reads from that |B|), ``.read_error_N``, ``.side_lock_N`` (n, 2) and ``.axial`` (the
+    centred :class:`Response`). InputError for an offset off the top face.
+    """
+    from mst_cli.model.offcentre import simulate_offcentre as run  # deferred: as simulate's
+
+    geometry, material, mech, field_choice = _printed_scene(design, mechanics, field_model)
+    _on_top_face(geometry, offset_mm)
+    return run(geometry, material, offset_mm, mech, field_choice)
+
+
+def offset_map(
+    design: str | Path | Document, *, mechanics: str | None = None, field_model: str | None = None
+) -> OffsetMap:
+    """The axial reading's relative force error over 80 % of the top face, at 25, 50 and 75 %
+    of every regime's force band (``mst simulate --offset-map``)."""
+    from mst_cli.model.offcentre import offset_map as run  # deferred: as simulate's
+
+    geometry, material, mech, field_choice = _printed_scene(design, mechanics, field_model)
+    return run(geometry, material, mech, field_choice)
+
+
+def _printed_scene(design, mechanics, field_model):
+    """(geometry as printed, material as printed, mechanics rung, field model or None for auto)."""
+    from mst_cli.calibrate.fit import as_printed  # deferred: as simulate's
+    from mst_cli.model.ladder import choose_mechanics
+    from mst_cli.model.mechanics import MODELS
+
+    _one_of("--mechanics", mechanics, MODELS)
+    _one_of("--field-model", field_model, ("auto", "dipole", "axial", "cylinder"))
+    doc = load_design(design)
+    printed = as_printed(doc)
+    choice = field_model or doc.field_model
+    if choice == "dipole":
+        raise InputError("--field-model", choice, "must be exact off the axis: axial, cylinder or auto")
+    mech = choose_mechanics(mechanics, doc.accuracy_rel, doc.mechanics).mechanics
+    return printed.geometry(), printed.material, mech, None if choice == "auto" else choice
+
+
+def _on_top_face(geometry, offset_mm) -> None:
+    """InputError unless (x0, y0) lies on the top face, |x0| <= W/2 and |y0| <= D/2."""
+    half_w, half_d = 0.5 * geometry.width_mm, 0.5 * geometry.depth_mm
+    x0, y0 = offset_mm
+    if not (abs(x0) <= half_w and abs(y0) <= half_d):
+        raise InputError(
+            "--load-offset-mm",
+            f"{x0:g},{y0:g}",
+            f"must lie on the top face: |x| <= {half_w:g} mm, |y| <= {half_d:g} mm",
+        )
 
 
 def design(

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -36,6 +37,21 @@ if TYPE_CHECKING:
 @click.option(
     "--json", "as_json", is_flag=True, help="Print report.json to stdout instead of the table (implies --no-plot)."
 )
+@click.option(
+    "--load-offset-mm",
+    "load_offset",
+    metavar="X,Y",
+    default=None,
+    help="Press off the axis, at X,Y mm on the top face (x across the width, y along the depth): "
+    "adds offcentre.csv/.png and report.json's off_centre (each layer's lock on each side, the "
+    "magnet's tilt, and how far a reading taken as axial is off).",
+)
+@click.option(
+    "--offset-map",
+    is_flag=True,
+    help="Add offset_map.csv/.png: the axial reading's force error over 80 %% of the top face at "
+    "25, 50, 75 %% of every regime (about 5 s).",
+)
 @no_plot_option("response.png", "about 2/3 of a run: 0.45 s of matplotlib import and render")
 @handles_input_errors
 def simulate(
@@ -44,6 +60,8 @@ def simulate(
     field_model: str | None,
     mechanics: str | None,
     as_json: bool,
+    load_offset: str | None,
+    offset_map: bool,
     no_plot: bool,
 ) -> None:
     """Predict force-displacement and field-force curves of DESIGN_FILE.
@@ -57,6 +75,7 @@ def simulate(
     """
     # deferred: `mst --help` loads every command module; these load the model (0.1 s)
     from mst_cli.calibrate.fit import PRINTER_NOMINAL
+    from mst_cli.io.offcentre_files import offcentre_lines, offcentre_summary, write_offcentre
     from mst_cli.io.report import terminal_table, write_simulation
     from mst_cli.io.schema import load_design_document
     from mst_cli.model.ladder import choose_mechanics
@@ -68,13 +87,42 @@ def simulate(
         _say_model_choices(doc, choose_mechanics(mechanics, doc.accuracy_rel, doc.mechanics).message())
     resp = api.simulate(doc, mechanics=mechanics, field_model=field_model)
     plot = not (no_plot or as_json)
-    as_printed = {f"printer.{k}": getattr(doc.printer, k) for k in PRINTER_NOMINAL}
-    report = write_simulation(doc, geometry, resp, out, plot=plot, extra_report={"as_printed": as_printed})
+    extra: dict = {"as_printed": {f"printer.{k}": getattr(doc.printer, k) for k in PRINTER_NOMINAL}}
+    off = (
+        api.simulate_offcentre(doc, _offset(load_offset), mechanics=mechanics, field_model=field_model)
+        if load_offset
+        else None
+    )
+    omap = api.offset_map(doc, mechanics=mechanics, field_model=field_model) if offset_map else None
+    if off is not None:
+        extra["off_centre"] = offcentre_summary(off)
+    report = write_simulation(
+        doc, geometry, resp, out, plot=plot, extra_report=extra, more=lambda st: write_offcentre(st, off, omap, plot)
+    )
     if as_json:
         click.echo(json.dumps(report, indent=2, allow_nan=False))
-    else:
-        click.echo(terminal_table(doc, geometry, resp))
-        click.echo(f"wrote {out}/report.json, response.csv" + (", response.png" if plot else ""))
+        return
+    click.echo(terminal_table(doc, geometry, resp))
+    if off is not None:
+        click.echo("\n".join(offcentre_lines(off)))
+    names = ["report.json", "response.csv"] + (["response.png"] if plot else [])
+    for stem, present in (("offcentre", off), ("offset_map", omap)):
+        names += [f"{stem}.csv"] + ([f"{stem}.png"] if plot else []) if present is not None else []
+    click.echo(f"wrote {out}/" + ", ".join(names))
+
+
+def _offset(text: str) -> tuple[float, float]:
+    """'X,Y' in mm as two finite floats (InputError otherwise)."""
+    from mst_cli.errors import InputError  # deferred: as simulate's
+
+    parts = text.split(",")
+    try:
+        x, y = (float(p) for p in parts)
+    except ValueError:
+        raise InputError("--load-offset-mm", text, "must be two numbers X,Y in mm, e.g. 5,0") from None
+    if not all(map(math.isfinite, (x, y))):
+        raise InputError("--load-offset-mm", text, "must be two finite numbers X,Y in mm")
+    return x, y
 
 
 def _say_model_choices(doc: Document, mechanics_message: str | None) -> None:

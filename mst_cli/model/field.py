@@ -87,6 +87,28 @@ def cylinder_B_T(
     return np.reshape(B, np.shape(r))
 
 
+def cylinder_pose_B_T(
+    r_mm: ArrayLike, diameter_mm: float, thickness_mm: float, remanence_T: float, rotvec_rad: ArrayLike
+) -> np.ndarray:
+    """Exact field of the cylinder at positions ``r_mm`` (m, 3) relative to its centre, the magnet
+    turned by the rotation vectors ``rotvec_rad`` (m, 3) (axis times angle, about its centre):
+    one pose per position, for a magnet that tilts as the load moves (:mod:`mst_cli.model.offcentre`)."""
+    import magpylib as magpy  # deferred: as cylinder_B_T
+    from scipy.spatial.transform import Rotation  # deferred: as above
+
+    r = np.atleast_2d(np.asarray(r_mm, dtype=float))
+    rot = Rotation.from_rotvec(np.array(np.broadcast_to(np.asarray(rotvec_rad, dtype=float), r.shape)))
+    B = magpy.func.cylinder_field(
+        field="B",
+        observers=r * 1e-3,
+        dimensions=(diameter_mm * 1e-3, thickness_mm * 1e-3),
+        polarizations=(0.0, 0.0, remanence_T),
+        orientations=rot,
+        squeeze=False,
+    )
+    return np.reshape(B, r.shape)
+
+
 def choose_field_model(
     offset_mm: tuple[float, float] = (0.0, 0.0), tilt_deg: float = 0.0, requested: str | None = None
 ) -> str:

@@ -1,0 +1,217 @@
+"""A touch off the axis: the stack's compression and tilt, the magnet's pose, the field on all
+three axes, and the force a reading taken as axial would give (issue 24, first part).
+
+Each layer answers the load at (x0, y0) with a compression and two tilts
+(:mod:`mst_cli.model.mechanics.tilt`, plates rigid). Small rotations add: layer j turns
+everything above it by (phi_y, phi_x) about a pivot at its mid-height (a layer symmetric about
+its mid-plane turns about its centre under a pure moment), so the magnet's centre moves down by
+sum d_j and sideways by sum phi_j (z_magnet - z_mid,j), toward the load, and the magnet turns
+by the summed tilts. The field at the chip is the exact cylinder field of the magnet in that
+pose (magpylib). The sensor read as axial inverts the centred model's |B|(F): the difference
+from the true force is what an uncorrected reading gets wrong.
+
+Pure: no I/O.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from mst_cli.model import field as fld
+from mst_cli.model.geometry import SensorGeometry
+from mst_cli.model.material import Material
+from mst_cli.model.mechanics import layer_laws
+from mst_cli.model.mechanics.tilt import LayerTilt, PiecewiseForce, chevron_lever_mm, solve_layer_tilt
+from mst_cli.model.response import Response
+from mst_cli.model.response import simulate as simulate_axial
+
+SIDE_LOCK_BISECTIONS = 50  # halvings of the force bracket of a side's lock (to ~1e-15 of it)
+
+
+@dataclass
+class OffCentreResponse:
+    """The sensor under a force at ``offset_mm``; arrays over the force samples (m,)."""
+
+    offset_mm: tuple[float, float]
+    mechanics: str
+    force_N: np.ndarray  # (m,)
+    layer_d_mm: np.ndarray  # (m, n) compression of each layer at the axis
+    layer_tilt_rad: np.ndarray  # (m, n, 2) each layer's (phi_y, phi_x)
+    magnet_shift_mm: np.ndarray  # (m, 3) the magnet centre's displacement (z down is negative)
+    magnet_tilt_deg: np.ndarray  # (m, 2) the load-driven turn of the magnet axis toward +x and toward +y
+    B_T: np.ndarray  # (m, 3) at the chip
+    B_abs_T: np.ndarray  # (m,)
+    force_read_axial_N: np.ndarray  # (m,) the force the centred model gives this |B|; nan beyond
+    side_lock_N: np.ndarray  # (n, 2): force at which each layer's -x / +x side first locks
+    axial: Response  # the centred model of the same sensor
+
+    @property
+    def read_error_N(self) -> np.ndarray:
+        """Force read as axial minus the true force (N)."""
+        return self.force_read_axial_N - self.force_N
+
+
+def layer_levers_mm(geometry: SensorGeometry) -> list[float]:
+    """x_c of every layer's chevrons (mm)."""
+    return [chevron_lever_mm(math.radians(c.theta_deg), c.t_mm, c.p_mm) for c in geometry.layers]
+
+
+def simulate_offcentre(
+    geometry: SensorGeometry,
+    material: Material,
+    offset_mm: tuple[float, float],
+    mechanics: str = "spring",
+    field_model: str | None = None,
+    points_per_regime: int = 100,
+    overload: float = 0.25,
+) -> OffCentreResponse:
+    """The response to a force pressed at ``offset_mm`` = (x0, y0) on the top face, over the
+    centred model's force grid (0 to 1 + ``overload`` times the last lock). Raises TiltError
+    when a layer's equilibrium is not found."""
+    axial = simulate_axial(
+        geometry, material, mechanics, field_model, points_per_regime=points_per_regime, overload=overload
+    )
+    laws = [PiecewiseForce.from_law(law) for law in layer_laws(geometry.layers, material, mechanics)]
+    levers = layer_levers_mm(geometry)
+    F = axial.force_N
+    d, tilt = _stack_path(laws, levers, geometry.depth_mm, F, offset_mm)
+    shift, rotvec = magnet_pose(geometry, d, tilt)
+    B = _field(geometry, shift, rotvec)
+    B_abs = np.linalg.norm(B, axis=-1)
+    read = _read_as_axial(axial, B_abs)
+    side_lock = np.array(
+        [
+            [_side_lock_N(law, lever, geometry.depth_mm, offset_mm, side) for side in (0, 1)]
+            for law, lever in zip(laws, levers)
+        ]
+    )
+    return OffCentreResponse(
+        offset_mm=(float(offset_mm[0]), float(offset_mm[1])),
+        mechanics=mechanics,
+        force_N=F,
+        layer_d_mm=d,
+        layer_tilt_rad=tilt,
+        magnet_shift_mm=shift,
+        magnet_tilt_deg=np.degrees(np.stack([rotvec[:, 1], -rotvec[:, 0]], axis=-1)),
+        B_T=B,
+        B_abs_T=B_abs,
+        force_read_axial_N=read,
+        side_lock_N=side_lock,
+        axial=axial,
+    )
+
+
+def _stack_path(laws, levers, depth_mm, F, offset_mm) -> tuple[np.ndarray, np.ndarray]:
+    """(d (m, n), (phi_y, phi_x) (m, n, 2)) of every layer along the force samples, each
+    solve started from the previous force's answer."""
+    m, n = len(F), len(laws)
+    d = np.zeros((m, n))
+    tilt = np.zeros((m, n, 2))
+    for j, (law, lever) in enumerate(zip(laws, levers)):
+        guess = None
+        for i, f in enumerate(F):
+            if f == 0.0:
+                continue
+            lt = solve_layer_tilt(law, float(f), offset_mm, lever, depth_mm, guess)
+            guess = (lt.d_mm, lt.phi_y_rad, lt.phi_x_rad)
+            d[i, j], tilt[i, j] = lt.d_mm, (lt.phi_y_rad, lt.phi_x_rad)
+    return d, tilt
+
+
+def magnet_pose(geometry: SensorGeometry, d_mm: np.ndarray, tilt_rad: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(the magnet centre's displacement (m, 3) in mm, its rotation vector (m, 3) in rad) from
+    every layer's compression (m, n) and tilts (m, n, 2), small rotations added."""
+    z_centre = geometry.z_magnet_bottom_mm + 0.5 * geometry.magnet.thickness_mm
+    z_mid = np.array([b + 0.5 * c.h_mm for b, c in zip(geometry.layer_bottoms_mm, geometry.layers)])
+    arm = z_centre - z_mid  # (n,) height of the magnet centre over each layer's pivot
+    shift = np.stack(
+        [tilt_rad[..., 0] @ arm, tilt_rad[..., 1] @ arm, -d_mm.sum(axis=-1)],
+        axis=-1,
+    )
+    # phi_y turns +z toward +x (a right-handed turn about y); phi_x lowers +y, a turn of -phi_x about x
+    rotvec = np.stack([-tilt_rad[..., 1].sum(axis=-1), tilt_rad[..., 0].sum(axis=-1), np.zeros(len(d_mm))], axis=-1)
+    return shift, rotvec
+
+
+def _field(geometry: SensorGeometry, shift_mm: np.ndarray, rotvec_rad: np.ndarray) -> np.ndarray:
+    """The field at the chip (m, 3) for the magnet displaced and turned (its own tilt about y
+    added to the load's turn)."""
+    half = 0.5 * geometry.magnet.thickness_mm
+    cx, cy = geometry.chip_offset_mm
+    r = np.stack(
+        [cx - shift_mm[:, 0], cy - shift_mm[:, 1], -(geometry.gap0_mm + half) - shift_mm[:, 2]],
+        axis=-1,
+    )
+    rot = rotvec_rad + np.array([0.0, math.radians(geometry.magnet_tilt_deg), 0.0])
+    mag = geometry.magnet
+    return fld.cylinder_pose_B_T(r, mag.diameter_mm, mag.thickness_mm, mag.remanence_T, rot)
+
+
+def _read_as_axial(axial: Response, B_abs_T: np.ndarray) -> np.ndarray:
+    """The centred model's force at each |B| (its |B|(F) rises with F); nan outside its curve."""
+    B_ax, F_ax = axial.B_abs_T, axial.force_N
+    read = np.interp(B_abs_T, B_ax, F_ax)
+    return np.where((B_abs_T < B_ax[0] * (1 - 1e-12)) | (B_abs_T > B_ax[-1]), np.nan, read)
+
+
+def _side_lock_N(law: PiecewiseForce, lever: float, depth_mm: float, offset_mm, side: int) -> float:
+    """The force at which the layer's side (0: -x, 1: +x) first reaches its lock compression
+    somewhere along the depth (bisection on the force)."""
+    d_lock = float(law.d_knots_mm[-1])
+
+    def reached(f: float) -> bool:
+        lt: LayerTilt = solve_layer_tilt(law, f, offset_mm, lever, depth_mm)
+        return lt.side_max_mm[side] >= d_lock
+
+    lo, hi = 0.0, float(law.F_knots_N[-1])
+    while not reached(hi):
+        lo, hi = hi, 2.0 * hi
+        if hi > 1e3 * law.F_knots_N[-1]:
+            return math.nan  # this side never locks (it lifts off)
+    for _ in range(SIDE_LOCK_BISECTIONS):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (lo, mid) if reached(mid) else (mid, hi)
+    return hi
+
+
+@dataclass
+class OffsetMap:
+    """The axial reading's relative force error over the top face, at a few forces per regime."""
+
+    x_mm: np.ndarray  # (nx,)
+    y_mm: np.ndarray  # (ny,)
+    force_N: np.ndarray  # (nf,) ascending
+    regime: np.ndarray  # (nf,) the regime (from 1) each force lies in
+    error_rel: np.ndarray  # (nf, ny, nx): (force read as axial - force) / force; nan off the curve
+
+
+def offset_map(
+    geometry: SensorGeometry,
+    material: Material,
+    mechanics: str = "spring",
+    field_model: str | None = None,
+    grid: tuple[int, int] = (9, 7),
+    region_frac: float = 0.8,
+    fractions: tuple[float, ...] = (0.25, 0.5, 0.75),
+) -> OffsetMap:
+    """:class:`OffsetMap` over a ``grid`` (nx, ny) spanning ``region_frac`` of the top face
+    (W x D), at ``fractions`` of every regime's force band."""
+    axial = simulate_axial(geometry, material, mechanics, field_model, points_per_regime=50)
+    edges = np.concatenate([[0.0], np.asarray(axial.lock_forces_N)])
+    F = np.array([lo + f * (hi - lo) for lo, hi in zip(edges[:-1], edges[1:]) for f in fractions])
+    regime = np.repeat(np.arange(1, len(edges)), len(fractions))
+    laws = [PiecewiseForce.from_law(law) for law in layer_laws(geometry.layers, material, mechanics)]
+    levers = layer_levers_mm(geometry)
+    xs = np.linspace(-1.0, 1.0, grid[0]) * 0.5 * region_frac * geometry.width_mm
+    ys = np.linspace(-1.0, 1.0, grid[1]) * 0.5 * region_frac * geometry.depth_mm
+    err = np.full((len(F), len(ys), len(xs)), np.nan)
+    for iy, y in enumerate(ys):
+        for ix, x in enumerate(xs):
+            d, tilt = _stack_path(laws, levers, geometry.depth_mm, F, (float(x), float(y)))
+            shift, rotvec = magnet_pose(geometry, d, tilt)
+            B_abs = np.linalg.norm(_field(geometry, shift, rotvec), axis=-1)
+            err[:, iy, ix] = _read_as_axial(axial, B_abs) / F - 1.0
+    return OffsetMap(xs, ys, F, regime, err)
