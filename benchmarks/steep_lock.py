@@ -13,7 +13,8 @@ Three measurements behind docs/design.md section 4 ("Steep walls", "L0 against L
    k-scaled one; then the lock taken at the ramp's foot (tangent = 1 k instead of 5 k) and the
    path mesh graded at both wall roots;
 5. whether grading converges: mid cells (30 and 45 deg) with the path mesh graded 0, 1 and 2
-   rounds within 1 t of both wall roots, on the default 3 x 12 base and on 6 x 24.
+   rounds within 1 t of both wall roots, on the default 3 x 12 base and on 6 x 24; then the
+   45 deg cell graded at one root at a time (which corner keeps the lock force moving).
 
 Run:  .venv/bin/python benchmarks/steep_lock.py [--uniform 200 --seed 7] [--parts 1,2,3,4,5]   # ~15 min
 """
@@ -145,6 +146,11 @@ def grading_rounds(mat) -> None:
             for levels in (0, 1, 2):
                 kw = dict(path_levels=levels, path_corners=("outer_root", "inner_root"), path_radius_in_t=1.0)
                 print(f"  rounds {levels}: {_lock_row(cell, mat, mesh, max_steps=400, **kw)}")
+    print("  one root at a time (3 x 12 base, 1, 2, 3 rounds within 1 t):")
+    for corner in ("inner_root", "outer_root"):
+        for levels in (1, 2, 3):
+            kw = dict(path_levels=levels, path_corners=(corner,), path_radius_in_t=1.0)
+            print(f"  {MID[1]} {corner} rounds {levels}: {_lock_row(MID[1], mat, (3, 12), max_steps=400, **kw)}")
 
 
 def main() -> None:

@@ -50,7 +50,7 @@ if TYPE_CHECKING:
     "--offset-map",
     is_flag=True,
     help="Add offset_map.csv/.png: the axial reading's force error over 80 % of the top face at "
-    "25, 50, 75 % of every regime (about 5 s).",
+    "25, 50, 75 % of every regime (about 10 s).",
 )
 @no_plot_option("response.png", "about 2/3 of a run: 0.45 s of matplotlib import and render")
 @handles_input_errors

@@ -61,15 +61,24 @@ def offcentre_summary(r: OffCentreResponse) -> dict:
             {
                 "layer": j + 1,
                 "lock_force_axial_N": float(R),
-                "lock_force_minus_x_side_N": float(s[0]),
-                "lock_force_plus_x_side_N": float(s[1]),
+                "lock_force_minus_x_side_N": _finite(sides[0]),
+                "lock_force_plus_x_side_N": _finite(sides[1]),
             }
-            for j, (R, s) in enumerate(zip(r.axial.lock_forces_N, r.side_lock_N))
+            for j, (R, sides) in enumerate(zip(r.axial.lock_forces_N, r.side_lock_N))
         ],
+        "side_lock_null_means": "the pads never close at that end: the plates pivot on the other side's pads",
         "regimes": regimes,
         "magnet_tilt_at_last_lock_deg": [float(v) for v in r.magnet_tilt_deg[in_range][-1]],
         "magnet_shift_at_last_lock_mm": [float(v) for v in r.magnet_shift_mm[in_range][-1]],
     }
+
+
+def _finite(v: float) -> float | None:
+    return float(v) if np.isfinite(v) else None
+
+
+def _side(v: float | None) -> str:
+    return "never (the plates pivot on the other side)" if v is None else f"{v:.4g} N"
 
 
 def offcentre_lines(r: OffCentreResponse) -> list[str]:
@@ -79,8 +88,8 @@ def offcentre_lines(r: OffCentreResponse) -> list[str]:
     lines = [f"load at x = {x0:g} mm, y = {y0:g} mm (rigid-plate tilt model, {r.mechanics} layers):"]
     for lay in s["layers"]:
         lines.append(
-            f"  layer {lay['layer']}: locks at {lay['lock_force_axial_N']:.4g} N centred; here its -x side at "
-            f"{lay['lock_force_minus_x_side_N']:.4g} N, its +x side at {lay['lock_force_plus_x_side_N']:.4g} N"
+            f"  layer {lay['layer']}: locks at {lay['lock_force_axial_N']:.4g} N centred; here its -x side "
+            f"{_side(lay['lock_force_minus_x_side_N'])}, its +x side {_side(lay['lock_force_plus_x_side_N'])}"
         )
     for reg in s["regimes"]:
         e = reg["worst_read_error_rel"]
@@ -90,7 +99,7 @@ def offcentre_lines(r: OffCentreResponse) -> list[str]:
             else f"{100 * e:+.1f} % ({reg['worst_read_error_N']:+.3g} N at {reg['at_force_N']:.3g} N)"
         )
         lines.append(f"  regime {reg['regime']}: a reading taken as axial is off by up to {said}")
-    tx, ty = s["magnet_tilt_at_last_lock_deg"]
+    tx, ty = (round(v, 2) + 0.0 for v in s["magnet_tilt_at_last_lock_deg"])  # no "-0.00"
     lines.append(f"  the magnet tilts {tx:.2f} deg toward +x and {ty:.2f} deg toward +y at the last lock")
     return lines
 

@@ -24,7 +24,8 @@ from mst_cli.model import field as fld
 from mst_cli.model.geometry import SensorGeometry
 from mst_cli.model.material import Material
 from mst_cli.model.mechanics import layer_laws
-from mst_cli.model.mechanics.tilt import LayerTilt, PiecewiseForce, chevron_lever_mm, solve_layer_tilt
+from mst_cli.model.mechanics.depth import in_web
+from mst_cli.model.mechanics.tilt import LayerTiltLaw, solve_layer_tilt
 from mst_cli.model.response import Response
 from mst_cli.model.response import simulate as simulate_axial
 
@@ -54,9 +55,13 @@ class OffCentreResponse:
         return self.force_read_axial_N - self.force_N
 
 
-def layer_levers_mm(geometry: SensorGeometry) -> list[float]:
-    """x_c of every layer's chevrons (mm)."""
-    return [chevron_lever_mm(math.radians(c.theta_deg), c.t_mm, c.p_mm) for c in geometry.layers]
+def tilt_laws(geometry: SensorGeometry, material: Material, mechanics: str) -> list[LayerTiltLaw]:
+    """Every layer as the tilt rung sees it, from the named rung's laws."""
+    laws = layer_laws(geometry.layers, material, mechanics)
+    return [
+        LayerTiltLaw.from_layer(law, c, in_web(c, material).youngs_modulus_MPa, material.poisson_ratio)
+        for law, c in zip(laws, geometry.layers)
+    ]
 
 
 def simulate_offcentre(
@@ -74,20 +79,14 @@ def simulate_offcentre(
     axial = simulate_axial(
         geometry, material, mechanics, field_model, points_per_regime=points_per_regime, overload=overload
     )
-    laws = [PiecewiseForce.from_law(law) for law in layer_laws(geometry.layers, material, mechanics)]
-    levers = layer_levers_mm(geometry)
+    layers = tilt_laws(geometry, material, mechanics)
     F = axial.force_N
-    d, tilt = _stack_path(laws, levers, geometry.depth_mm, F, offset_mm)
+    d, tilt = _stack_path(layers, F, offset_mm)
     shift, rotvec = magnet_pose(geometry, d, tilt)
     B = _field(geometry, shift, rotvec)
     B_abs = np.linalg.norm(B, axis=-1)
     read = _read_as_axial(axial, B_abs)
-    side_lock = np.array(
-        [
-            [_side_lock_N(law, lever, geometry.depth_mm, offset_mm, side) for side in (0, 1)]
-            for law, lever in zip(laws, levers)
-        ]
-    )
+    side_lock = np.array([[_side_lock_N(layer, offset_mm, side) for side in (0, 1)] for layer in layers])
     return OffCentreResponse(
         offset_mm=(float(offset_mm[0]), float(offset_mm[1])),
         mechanics=mechanics,
@@ -104,18 +103,18 @@ def simulate_offcentre(
     )
 
 
-def _stack_path(laws, levers, depth_mm, F, offset_mm) -> tuple[np.ndarray, np.ndarray]:
+def _stack_path(layers: list[LayerTiltLaw], F, offset_mm) -> tuple[np.ndarray, np.ndarray]:
     """(d (m, n), (phi_y, phi_x) (m, n, 2)) of every layer along the force samples, each
     solve started from the previous force's answer."""
-    m, n = len(F), len(laws)
+    m, n = len(F), len(layers)
     d = np.zeros((m, n))
     tilt = np.zeros((m, n, 2))
-    for j, (law, lever) in enumerate(zip(laws, levers)):
+    for j, layer in enumerate(layers):
         guess = None
         for i, f in enumerate(F):
             if f == 0.0:
                 continue
-            lt = solve_layer_tilt(law, float(f), offset_mm, lever, depth_mm, guess)
+            lt = solve_layer_tilt(layer, float(f), offset_mm, guess)
             guess = (lt.d_mm, lt.phi_y_rad, lt.phi_x_rad)
             d[i, j], tilt[i, j] = lt.d_mm, (lt.phi_y_rad, lt.phi_x_rad)
     return d, tilt
@@ -157,19 +156,17 @@ def _read_as_axial(axial: Response, B_abs_T: np.ndarray) -> np.ndarray:
     return np.where((B_abs_T < B_ax[0] * (1 - 1e-12)) | (B_abs_T > B_ax[-1]), np.nan, read)
 
 
-def _side_lock_N(law: PiecewiseForce, lever: float, depth_mm: float, offset_mm, side: int) -> float:
-    """The force at which the layer's side (0: -x, 1: +x) first reaches its lock compression
-    somewhere along the depth (bisection on the force)."""
-    d_lock = float(law.d_knots_mm[-1])
+def _side_lock_N(layer: LayerTiltLaw, offset_mm, side: int) -> float:
+    """The force at which the layer's pads first touch at their end on one side (0: -x, 1: +x):
+    where that side locks (bisection on the force)."""
 
     def reached(f: float) -> bool:
-        lt: LayerTilt = solve_layer_tilt(law, f, offset_mm, lever, depth_mm)
-        return lt.side_max_mm[side] >= d_lock
+        return solve_layer_tilt(layer, f, offset_mm).pads_touch[side]
 
-    lo, hi = 0.0, float(law.F_knots_N[-1])
+    lo, hi = 0.0, layer.lock_force_N
     while not reached(hi):
         lo, hi = hi, 2.0 * hi
-        if hi > 1e3 * law.F_knots_N[-1]:
+        if hi > 1e3 * layer.lock_force_N:
             return math.nan  # this side never locks (it lifts off)
     for _ in range(SIDE_LOCK_BISECTIONS):
         mid = 0.5 * (lo + hi)
@@ -203,14 +200,13 @@ def offset_map(
     edges = np.concatenate([[0.0], np.asarray(axial.lock_forces_N)])
     F = np.array([lo + f * (hi - lo) for lo, hi in zip(edges[:-1], edges[1:]) for f in fractions])
     regime = np.repeat(np.arange(1, len(edges)), len(fractions))
-    laws = [PiecewiseForce.from_law(law) for law in layer_laws(geometry.layers, material, mechanics)]
-    levers = layer_levers_mm(geometry)
+    layers = tilt_laws(geometry, material, mechanics)
     xs = np.linspace(-1.0, 1.0, grid[0]) * 0.5 * region_frac * geometry.width_mm
     ys = np.linspace(-1.0, 1.0, grid[1]) * 0.5 * region_frac * geometry.depth_mm
     err = np.full((len(F), len(ys), len(xs)), np.nan)
     for iy, y in enumerate(ys):
         for ix, x in enumerate(xs):
-            d, tilt = _stack_path(laws, levers, geometry.depth_mm, F, (float(x), float(y)))
+            d, tilt = _stack_path(layers, F, (float(x), float(y)))
             shift, rotvec = magnet_pose(geometry, d, tilt)
             B_abs = np.linalg.norm(_field(geometry, shift, rotvec), axis=-1)
             err[:, iy, ix] = _read_as_axial(axial, B_abs) / F - 1.0

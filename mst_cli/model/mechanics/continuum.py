@@ -487,14 +487,20 @@ class _Problem:
         K = asm.tangent(kin, self.mu, self.lam)
         contact = self.contact_dofs[active]
         free, pos, indices, indptr = self.free_block(np.sort(contact))
-        v = np.zeros(self.basis.N)
-        v[self.tip_z] = -0.5
+        v = self.pinned_rate()
         v[contact] = self.obstacle_rate[active]
         v[free] = spsolve(csc_matrix((K.data[pos], indices, indptr), shape=(free.size, free.size)), -(K @ v)[free])
         f = K @ v
         inner = active.copy()
         inner[self.n_inner :] = False
         return float(-(f[self.tip_z].sum() + f[self.contact_dofs[inner]].sum()) * self.depth_factor)
+
+    def pinned_rate(self) -> np.ndarray:
+        """du/dd on the held dofs: the tip face moves by -1/2 per mm of compression, the bonded
+        face stays (a tilted problem moves it too: mst_cli.model.mechanics.continuum_tilt)."""
+        v = np.zeros(self.basis.N)
+        v[self.tip_z] = -0.5
+        return v
 
     def pad_margin(self, u, d):
         """Smallest clear gap between the inner pads, less the allowance (mm; <= 0: they meet)."""
@@ -681,7 +687,12 @@ def _result(path, k_lin: float, mesh_scale: float, ratio_after: float, n_dofs: i
     )
 
 
-def follow_to_lock(prob: _Problem, k_ref_N_per_mm: float, steps: StepControl | None = None) -> tuple:
+def follow_to_lock(
+    prob: _Problem,
+    k_ref_N_per_mm: float,
+    steps: StepControl | None = None,
+    d_max_over_nominal: float = D_MAX_OVER_NOMINAL,
+) -> tuple:
     """Follow a built problem's load path from rest to its lock (the tangent stiffness reaching
     LOCK_STIFFNESS_FACTOR x ``k_ref_N_per_mm``), then one short step on into the locked branch.
 
@@ -722,7 +733,7 @@ def follow_to_lock(prob: _Problem, k_ref_N_per_mm: float, steps: StepControl | N
         observe,
         (np.zeros(prob.basis.N), None, None, 0.0),
         d_nom,
-        D_MAX_OVER_NOMINAL * d_nom,
+        d_max_over_nominal * d_nom,
         steps or StepControl(),
         LOCK_TOLERANCES,
     )

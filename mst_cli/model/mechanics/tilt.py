@@ -5,36 +5,54 @@ depth D, the origin on the magnet axis) reaches every layer as the same force an
 moments, M_y = F x0 and M_x = F y0 (a vertical force's moment about a horizontal axis does not
 depend on the axis's height; small rotations, no P-delta). Each layer answers independently.
 
-The layer's web is two chevrons, one on each side, each running the whole depth D. With rigid
-plates the top plate's motion relative to the bottom one is a compression d at the axis and two
-small rotations, so a chevron's line of wall roots at x = +-x_c is compressed by
+The layer's web is two chevrons, one on each side, each running the whole depth D, and between
+them the pads, which meet when the layer locks. With rigid plates the top plate's motion
+relative to the bottom one is a compression d at the axis and two small rotations, so the plates
+close by d + phi_y x + phi_x y at (x, y), and
 
-    delta(y) = d + phi_y x_c sign + phi_x y ,     y in [-D/2, D/2],
+* each chevron's walls, on a line x = +-x_c, carry per mm of depth half the walls' law at that
+  closure, W(delta) / (2 D): the layer law of any rung (:mod:`mst_cli.model.mechanics`) up to
+  its lock, the walls' own stiffness beyond (the law's locked stiffness less the pads' column);
+* the pads, the rectangle |x| <= a (the inner pad's half width), |y| <= D/2, touch where the
+  closure passes the lock stroke d_lock and press there with the pads' column stiffness spread
+  over their area (:mod:`mst_cli.model.mechanics.contact_patch`).
 
-and carries, per mm of depth, half the layer's law at that compression, F_layer(delta) / (2 D):
-the layer law of any rung (:mod:`mst_cli.model.mechanics`) is the force of the whole web at a
-uniform compression. Equilibrium of force and both moments fixes (d, phi_y, phi_x).
+At a uniform closure that is the layer law exactly: W(d) + k_pads (d - d_lock)+. Tilted, the pads
+touch first at the loaded end x = +-a: L2 under tilted plates locks there (to 0.1 % of the
+stroke, benchmarks/check_tilt_rung.py), not at the chevron's lever. Equilibrium of force and both
+moments fixes (d, phi_y, phi_x).
 
-Every layer law is piecewise linear in d, so the integrals over the depth are exact sums over
-the pieces the line delta(y) crosses, and Newton's tangent is exact too. Beyond the last knot
-the law goes on with its locked stiffness; in tension (delta < 0, a side lifting off, only for
-loads outside the chevrons) with its small-load stiffness k: the web is bonded to both plates.
+Every law is piecewise linear in d, so the integrals over the depth are exact sums over the
+pieces the line delta(y) crosses, the pads' are exact polygon moments, and Newton's tangent is
+exact too. In tension (delta < 0, a side lifting off, only for loads outside the chevrons) the
+walls go on with their small-load stiffness k: the web is bonded to both plates.
 
-x_c is the midpoint of the wall's two roots on the pad (the outer root at x = p and the inner
-one t tan(theta/2) further in): where the wall hands its force to the pad.
+x_c is where the chevron's force sits under a tilt: not at its wall roots (the midpoint x_r of
+the outer root at x = p and the inner one t tan(theta/2) further in) but between them and the
+tip W/2, because turning the pad turns the wall's root too and the wall answers with a
+deflection along its run. L2 measures it at small strain (two linear solves,
+:func:`mst_cli.model.mechanics.continuum_tilt.linear_tilt_lever_mm`); the rung uses a fit of
+a = (x_c - x_r) / (W/2 - x_r) in theta, t/L and t/(h - t) (benchmarks/fit_tilt_lever.py,
+mst_cli/model/data/tilt_lever.json, with its out-of-sample error).
 
-Pure numpy, no I/O. At (x0, y0) = (0, 0) it is the axial model exactly (phi = 0, F_layer(d) = F).
+Pure numpy, no I/O. At (x0, y0) = (0, 0) it is the axial model exactly (phi = 0).
 """
 
 from __future__ import annotations
 
+import functools
+import json
 import math
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
+from mst_cli.model.mechanics.contact_patch import pressed_patch
+
 NEWTON_TOL_REL = 1e-12  # force and moment residuals, relative to F (and F times the lever)
 NEWTON_MAX_ITER = 60
+LEVER_DATA = Path(__file__).resolve().parent.parent / "data" / "tilt_lever.json"
 
 
 class TiltError(RuntimeError):
@@ -50,13 +68,6 @@ class PiecewiseForce:
     F_knots_N: np.ndarray
     k_tension_N_per_mm: float
     k_after_N_per_mm: float
-
-    @classmethod
-    def from_law(cls, law) -> PiecewiseForce:
-        """From a layer law (``knots_N``, ``displacement_mm``, ``k_N_per_mm``, ``k_locked_N_per_mm``)."""
-        F = np.concatenate([[0.0], np.asarray(law.knots_N, dtype=float)])
-        d = np.asarray(law.displacement_mm(F), dtype=float)
-        return cls(d, F, float(law.k_N_per_mm), float(law.k_locked_N_per_mm))
 
     @property
     def slopes_N_per_mm(self) -> np.ndarray:
@@ -96,27 +107,84 @@ def depth_moments(law: PiecewiseForce, a_mm: float, s: float, half_depth_mm: flo
 
 
 @dataclass(frozen=True)
+class LayerTiltLaw:
+    """One layer as the tilt rung sees it (module docstring): walls on two lines, pads between."""
+
+    walls: PiecewiseForce  # the web's walls at a uniform closure (N against mm)
+    lever_mm: float  # x_c of the chevrons' lines
+    depth_mm: float  # D
+    pad_half_width_mm: float  # a
+    pad_gap_mm: float  # the lock stroke: the pads touch past it
+    pad_stiffness_N_per_mm: float  # the closed pads' column, over their whole area
+
+    @classmethod
+    def from_layer(cls, law, cell, modulus_MPa: float, poisson_ratio: float) -> LayerTiltLaw:
+        """From a layer law of any rung and its cell; ``modulus_MPa`` the one the law was made
+        with (the web's, :func:`mst_cli.model.mechanics.depth.in_web`) for the pads' column."""
+        from mst_cli.model.mechanics.spring import contact_stiffness_N_per_mm  # deferred: no cycle at import
+
+        theta = math.radians(cell.theta_deg)
+        k_pads = float(
+            contact_stiffness_N_per_mm(theta, cell.t_mm, cell.width_mm, cell.b_mm, modulus_MPa, poisson_ratio)
+        )
+        F = np.concatenate([[0.0], np.asarray(law.knots_N, dtype=float)])
+        d = np.asarray(law.displacement_mm(F), dtype=float)
+        k_walls_after = max(float(law.k_locked_N_per_mm) - k_pads, 0.0)
+        walls = PiecewiseForce(d, F, float(law.k_N_per_mm), k_walls_after)
+        a = max(cell.p_mm - cell.t_mm * math.tan(0.5 * theta), 0.0)
+        lever = chevron_lever_mm(theta, cell.t_mm, cell.h_mm, cell.width_mm)
+        return cls(walls, lever, cell.depth_mm, a, float(law.d_lock_mm), k_pads)
+
+    @property
+    def lock_force_N(self) -> float:
+        return float(self.walls.F_knots_N[-1])
+
+
+@dataclass(frozen=True)
 class LayerTilt:
     """One layer's answer to an off-centre load: compression at the axis and rotations."""
 
     d_mm: float  # compression at x = y = 0
-    phi_y_rad: float  # rotation about y: the +x side compresses by phi_y x more
-    phi_x_rad: float  # rotation about x: the +y side compresses by phi_x y more
-    side_min_mm: tuple[float, float]  # least compression along the -x and +x chevrons
-    side_max_mm: tuple[float, float]  # most compression along them
+    phi_y_rad: float  # rotation about y: the +x side closes by phi_y x more
+    phi_x_rad: float  # rotation about x: the +y side closes by phi_x y more
+    pad_end_mm: tuple[float, float]  # the largest closure at the pads' -x and +x ends
+    pads_touch: tuple[bool, bool]  # whether the pads touch at those ends
 
 
-def chevron_lever_mm(theta_rad: float, t_mm: float, pad_half_width_mm: float) -> float:
-    """x_c: the midpoint of the wall's outer root (x = p) and inner root (p - t tan(theta/2))."""
+def root_midpoint_mm(theta_rad: float, t_mm: float, pad_half_width_mm: float) -> float:
+    """x_r: the midpoint of the wall's outer root (x = p) and inner root (p - t tan(theta/2))."""
     return pad_half_width_mm - 0.5 * t_mm * math.tan(0.5 * theta_rad)
 
 
+def lever_features(theta_rad: float, t_mm: float, h_mm: float, width_mm: float) -> list[float]:
+    """The lever fit's terms: polynomial in s = theta - pi/4, x = t/L, y = t/(h - t), and
+    z = t / (t + a) with a the inner pad's half width (a short pad turns with its wall)."""
+    s = theta_rad - 0.25 * math.pi
+    x = t_mm / (0.5 * (h_mm - t_mm) / math.sin(theta_rad))
+    y = t_mm / (h_mm - t_mm)
+    a = max(0.5 * width_mm - 0.5 * h_mm / math.tan(theta_rad) - t_mm * math.tan(0.5 * theta_rad), 0.0)
+    z = t_mm / (t_mm + a)
+    return [1.0, s, s * s, s**3, x, x * s, x * x, y, y * s, z, z * s, z * z, z * x]
+
+
+@functools.lru_cache(maxsize=1)
+def _lever_coef() -> tuple[float, ...]:
+    return tuple(json.loads(LEVER_DATA.read_text())["coef"])
+
+
+def chevron_lever_mm(theta_rad: float, t_mm: float, h_mm: float, width_mm: float) -> float:
+    """x_c: where a chevron's force sits when the plates tilt (mm from the axis), from the fit
+    to L2 (module docstring)."""
+    p = 0.5 * width_mm - 0.5 * h_mm / math.tan(theta_rad)
+    x_r = root_midpoint_mm(theta_rad, t_mm, p)
+    a = float(np.dot(_lever_coef(), lever_features(theta_rad, t_mm, h_mm, width_mm)))
+    return x_r + a * (0.5 * width_mm - x_r)
+
+
 def solve_layer_tilt(
-    law: PiecewiseForce,
+    layer: LayerTiltLaw,
     force_N: float,
     offset_mm: tuple[float, float],
-    lever_mm: float,
-    depth_mm: float,
     guess: tuple[float, float, float] | None = None,
 ) -> LayerTilt:
     """(d, phi_y, phi_x) of one layer carrying ``force_N`` pressed at ``offset_mm`` = (x0, y0).
@@ -124,59 +192,60 @@ def solve_layer_tilt(
     Newton on the three equilibrium equations with the exact tangent, from ``guess`` (the
     previous force's answer on a curve) or the axial solution. Raises TiltError."""
     x0, y0 = offset_mm
-    half = 0.5 * depth_mm
-    scale = 1.0 / (2.0 * depth_mm)  # each chevron carries half the web per mm of depth
     target = np.array([force_N, force_N * x0, force_N * y0])
-    u = np.array(guess if guess is not None else (_axial_guess(law, force_N), 0.0, 0.0), dtype=float)
-    norm = np.array([1.0, lever_mm, half]) * max(abs(force_N), 1e-12)
+    u = np.array(guess if guess is not None else (_axial_guess(layer, force_N), 0.0, 0.0), dtype=float)
+    norm = np.array([1.0, layer.lever_mm, 0.5 * layer.depth_mm]) * max(abs(force_N), 1e-12)
     r_norm = math.inf
     for _ in range(NEWTON_MAX_ITER):
-        r, K = _residual(law, u, target, lever_mm, half, scale)
+        r, K = _residual(layer, u, target)
         r_norm = float(np.max(np.abs(r) / norm))
         if r_norm <= NEWTON_TOL_REL:
-            return _layer_tilt(u, lever_mm, half)
+            return _layer_tilt(layer, u)
         du = np.linalg.solve(K, -r)
-        # damped: a full step across a stiff locked knot can overshoot into a flip-flop
+        # damped: a full step across a stiff knot (the pads touching) can overshoot into a flip-flop
         for alpha in (1.0, 0.5, 0.25, 0.125, 0.0625, 0.03125):
-            r_try, _ = _residual(law, u + alpha * du, target, lever_mm, half, scale)
+            r_try, _ = _residual(layer, u + alpha * du, target)
             if float(np.max(np.abs(r_try) / norm)) < r_norm:
                 break
         u = u + alpha * du
     raise TiltError(f"no equilibrium for {force_N:.4g} N at ({x0:g}, {y0:g}) mm (residual {r_norm:.2g} of the load)")
 
 
-def _axial_guess(law: PiecewiseForce, force_N: float) -> float:
-    return (
-        float(np.interp(force_N, law.F_knots_N, law.d_knots_mm))
-        if force_N <= law.F_knots_N[-1]
-        else float(law.d_knots_mm[-1] + (force_N - law.F_knots_N[-1]) / law.k_after_N_per_mm)
-    )
+def _axial_guess(layer: LayerTiltLaw, force_N: float) -> float:
+    """The centred closure at this force (walls and pads together)."""
+    w = layer.walls
+    if force_N <= w.F_knots_N[-1]:
+        return float(np.interp(force_N, w.F_knots_N, w.d_knots_mm))
+    k_locked = w.k_after_N_per_mm + layer.pad_stiffness_N_per_mm
+    return float(w.d_knots_mm[-1] + (force_N - w.F_knots_N[-1]) / max(k_locked, 1e-300))
 
 
-def _residual(law, u, target, lever, half, scale):
+def _residual(layer: LayerTiltLaw, u: np.ndarray, target: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Equilibrium residual (force, M_y, M_x) and its Jacobian in (d, phi_y, phi_x)."""
     d, phi_y, phi_x = u
+    half = 0.5 * layer.depth_mm
+    scale = 1.0 / (2.0 * layer.depth_mm)  # each chevron carries half the walls per mm of depth
     r = -target.astype(float)
     K = np.zeros((3, 3))
     for sign in (-1.0, 1.0):
-        x = sign * lever
-        (I0, I1), J = depth_moments(law, d + phi_y * x, phi_x, half)
+        x = sign * layer.lever_mm
+        (I0, I1), J = depth_moments(layer.walls, d + phi_y * x, phi_x, half)
         r += scale * np.array([I0, x * I0, I1])
         # d(a)/d(d, phi_y, phi_x) = (1, x, 0); d(s)/d(...) = (0, 0, 1)
         dI0 = np.array([J[0, 0], x * J[0, 0], J[0, 1]])
         dI1 = np.array([J[1, 0], x * J[1, 0], J[1, 1]])
         K += scale * np.stack([dI0, x * dI0, dI1])
+    a = layer.pad_half_width_mm
+    if a > 0.0 and layer.pad_stiffness_N_per_mm > 0.0:
+        kappa = layer.pad_stiffness_N_per_mm / (4.0 * a * half)
+        f_pad, J_pad = pressed_patch(a, half, d - layer.pad_gap_mm, phi_y, phi_x)
+        r += kappa * f_pad
+        K += kappa * J_pad
     return r, K
 
 
-def _layer_tilt(u, lever, half) -> LayerTilt:
+def _layer_tilt(layer: LayerTiltLaw, u: np.ndarray) -> LayerTilt:
     d, phi_y, phi_x = (float(v) for v in u)
-    sides = [d + phi_y * sign * lever for sign in (-1.0, 1.0)]
-    spread = abs(phi_x) * half
-    return LayerTilt(
-        d,
-        phi_y,
-        phi_x,
-        (sides[0] - spread, sides[1] - spread),
-        (sides[0] + spread, sides[1] + spread),
-    )
+    a, spread = layer.pad_half_width_mm, abs(phi_x) * 0.5 * layer.depth_mm
+    ends = (d - phi_y * a + spread, d + phi_y * a + spread)
+    return LayerTilt(d, phi_y, phi_x, ends, (ends[0] > layer.pad_gap_mm, ends[1] > layer.pad_gap_mm))

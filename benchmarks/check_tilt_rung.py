@@ -1,0 +1,115 @@
+"""The tilt rung against L2 under tilted plates, out of sample (issue 24).
+
+For cells drawn uniformly in the printable box (pads longer than 4 t, so the quarter model's pad
+cut lies away from the axis), L2 follows one chevron through its lock with the plates closing by d
+at the axis and tilting by phi = tau d (mst_cli.model.mechanics.continuum_tilt): the loaded
+chevron with +tau, the other with -tau. The tilt rung says, per chevron:
+
+* before the pads touch, the chevron is the untilted layer at the closure d (1 + tau x_c), x_c its
+  fitted lever (checked against L2's own untilted curve, so that only the tilt's assumptions are
+  tested, not L0's fits);
+* the pads touch first at their loaded end: the loaded chevron locks at d = d_lock / (1 + tau a).
+
+Printed: per cell, the largest deviation of the two chevrons' forces before the loaded side
+locks, and the loaded side's lock stroke against the rung's; then medians and maxima, and the
+same with the lever at the wall roots' midpoint (the rung before its lever was fitted).
+
+Run:  .venv/bin/python benchmarks/check_tilt_rung.py [--cells 24 --seed 21 --tau 0.03]   # ~1 min
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import time
+
+import numpy as np
+
+from mst_cli.bench.ladder_bench import sample_cells
+from mst_cli.model.material import Material
+from mst_cli.model.mechanics.continuum import PAD_LENGTH_IN_T, solve_continuum
+from mst_cli.model.mechanics.continuum_tilt import solve_tilted_chevron
+from mst_cli.model.mechanics.tilt import chevron_lever_mm, root_midpoint_mm
+
+
+def pad_half_width_mm(c) -> float:
+    return c.p_mm - c.t_mm * math.tan(0.5 * math.radians(c.theta_deg))
+
+
+def cells_with_long_pads(n: int, seed: int):
+    out, s = [], seed
+    while len(out) < n:
+        out += [c for c in sample_cells(n, s) if pad_half_width_mm(c) > PAD_LENGTH_IN_T * c.t_mm]
+        s += 1000
+    return out[:n]
+
+
+def check_cell(c, mat, tau: float) -> dict:
+    """Pre-lock deviation of both chevrons and the loaded side's lock stroke error, for the fitted
+    lever and for the roots' midpoint."""
+    base = solve_continuum(c, mat)
+    d0, F0 = base.displacement_mm, base.force_N / base.mesh_scale  # the path's own mesh, unscaled
+    a = pad_half_width_mm(c)
+    theta = math.radians(c.theta_deg)
+    levers = {
+        "fit": chevron_lever_mm(theta, c.t_mm, c.h_mm, c.width_mm),
+        "roots": root_midpoint_mm(theta, c.t_mm, c.p_mm),
+    }
+    loaded, other = solve_tilted_chevron(c, mat, tau), solve_tilted_chevron(c, mat, -tau)
+    d_on = base.d_contact_mm / (1.0 + tau * a)  # the rung: the pads touch at x = +a
+    row = {"cell": c, "lock_rel": loaded.d_contact_mm / d_on - 1.0, "contact_at": loaded.contact_at}
+    for name, x_c in levers.items():
+        worst, half = 0.0, 0.0
+        for res, sign in ((loaded, 1.0), (other, -1.0)):
+            d, F = res.displacement_mm, res.force_N
+            keep = (d > 0) & (d < d_on * (1 - 1e-6)) & (d * (1 + sign * tau * x_c) < d0[-1])
+            pred = np.interp(d[keep] * (1 + sign * tau * x_c), d0, F0)
+            worst = max(worst, float(np.max(np.abs(F[keep] / pred - 1.0), initial=0.0)))
+            # halfway to the loaded side's lock: the walls' response before the zipping ramp
+            d_half = 0.5 * min(d_on, d0[-1] / (1 + max(sign * tau * x_c, 0.0)))
+            F_half = np.interp(d_half, d, F)
+            half = max(half, abs(F_half / np.interp(d_half * (1 + sign * tau * x_c), d0, F0) - 1.0))
+        row[name], row[name + "_half"] = worst, half
+    return row
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--cells", type=int, default=24)
+    ap.add_argument("--seed", type=int, default=21)
+    ap.add_argument("--tau", type=float, default=0.03, help="tilt per mm of closure, rad/mm")
+    args = ap.parse_args()
+    mat = Material()
+    t0 = time.perf_counter()
+    rows = [check_cell(c, mat, args.tau) for c in cells_with_long_pads(args.cells, args.seed)]
+    print(f"tau = {args.tau} rad/mm; {len(rows)} cells; {time.perf_counter() - t0:.0f} s of L2")
+    print(
+        "| theta [deg] | t [mm] | h [mm] | L2 lock | fitted lever: halfway / worst before the lock "
+        "| roots' midpoint: halfway / worst | lock stroke vs pads touching at +a |"
+    )
+    print("|---|---|---|---|---|---|---|")
+    for r in rows:
+        c = r["cell"]
+        print(
+            f"| {c.theta_deg:.1f} | {c.t_mm:.2f} | {c.h_mm:.2f} | {r['contact_at']} "
+            f"| {100 * r['fit_half']:.2f} / {100 * r['fit']:.2f} % "
+            f"| {100 * r['roots_half']:.2f} / {100 * r['roots']:.2f} % | {100 * r['lock_rel']:+.2f} % |"
+        )
+    shallow = np.array([r["cell"].theta_deg <= 40.0 for r in rows])
+    for key, name in (
+        ("fit_half", "halfway, fitted lever"),
+        ("fit", "worst before the lock, fitted lever"),
+        ("roots_half", "halfway, roots' midpoint"),
+        ("roots", "worst before the lock, roots' midpoint"),
+        ("lock_rel", "lock stroke"),
+    ):
+        e = np.abs([r[key] for r in rows])
+        print(
+            f"{name}: median {100 * np.median(e):.2f} %, max {100 * e.max():.2f} %; "
+            f"theta <= 40 deg ({shallow.sum()}): median {100 * np.median(e[shallow]):.2f} %, "
+            f"max {100 * e[shallow].max():.2f} %"
+        )
+
+
+if __name__ == "__main__":
+    main()
