@@ -146,11 +146,11 @@ def grading_rounds(mat) -> None:
             for levels in (0, 1, 2):
                 kw = dict(path_levels=levels, path_corners=("outer_root", "inner_root"), path_radius_in_t=1.0)
                 print(f"  rounds {levels}: {_lock_row(cell, mat, mesh, max_steps=400, **kw)}")
-    print("  one root at a time (3 x 12 base, 1, 2, 3 rounds within 1 t):")
-    for corner in ("inner_root", "outer_root"):
-        for levels in (1, 2, 3):
+    print("  one root at a time (3 x 12 base, 1, 2, 3 rounds within 1 t; the outer root to 5):")
+    for corner, rounds in (("inner_root", (1, 2, 3)), ("outer_root", (1, 2, 3, 4, 5))):
+        for levels in rounds:
             kw = dict(path_levels=levels, path_corners=(corner,), path_radius_in_t=1.0)
-            print(f"  {MID[1]} {corner} rounds {levels}: {_lock_row(MID[1], mat, (3, 12), max_steps=400, **kw)}")
+            print(f"  {MID[1]} {corner} rounds {levels}: {_lock_row(MID[1], mat, (3, 12), max_steps=2000, **kw)}")
 
 
 def main() -> None:
