@@ -20,57 +20,12 @@ Run:  .venv/bin/python benchmarks/check_tilt_rung.py [--cells 24 --seed 21 --tau
 from __future__ import annotations
 
 import argparse
-import math
 import time
 
 import numpy as np
 
-from mst_cli.bench.ladder_bench import sample_cells
+from mst_cli.bench.tilt_bench import cells_with_long_pads, check_tilt_cell
 from mst_cli.model.material import Material
-from mst_cli.model.mechanics.continuum import PAD_LENGTH_IN_T, solve_continuum
-from mst_cli.model.mechanics.continuum_tilt import solve_tilted_chevron
-from mst_cli.model.mechanics.tilt import chevron_lever_mm, root_midpoint_mm
-
-
-def pad_half_width_mm(c) -> float:
-    return c.p_mm - c.t_mm * math.tan(0.5 * math.radians(c.theta_deg))
-
-
-def cells_with_long_pads(n: int, seed: int):
-    out, s = [], seed
-    while len(out) < n:
-        out += [c for c in sample_cells(n, s) if pad_half_width_mm(c) > PAD_LENGTH_IN_T * c.t_mm]
-        s += 1000
-    return out[:n]
-
-
-def check_cell(c, mat, tau: float) -> dict:
-    """Pre-lock deviation of both chevrons and the loaded side's lock stroke error, for the fitted
-    lever and for the roots' midpoint."""
-    base = solve_continuum(c, mat)
-    d0, F0 = base.displacement_mm, base.force_N / base.mesh_scale  # the path's own mesh, unscaled
-    a = pad_half_width_mm(c)
-    theta = math.radians(c.theta_deg)
-    levers = {
-        "fit": chevron_lever_mm(theta, c.t_mm, c.h_mm, c.width_mm),
-        "roots": root_midpoint_mm(theta, c.t_mm, c.p_mm),
-    }
-    loaded, other = solve_tilted_chevron(c, mat, tau), solve_tilted_chevron(c, mat, -tau)
-    d_on = base.d_contact_mm / (1.0 + tau * a)  # the rung: the pads touch at x = +a
-    row = {"cell": c, "lock_rel": loaded.d_contact_mm / d_on - 1.0, "contact_at": loaded.contact_at}
-    for name, x_c in levers.items():
-        worst, half = 0.0, 0.0
-        for res, sign in ((loaded, 1.0), (other, -1.0)):
-            d, F = res.displacement_mm, res.force_N
-            keep = (d > 0) & (d < d_on * (1 - 1e-6)) & (d * (1 + sign * tau * x_c) < d0[-1])
-            pred = np.interp(d[keep] * (1 + sign * tau * x_c), d0, F0)
-            worst = max(worst, float(np.max(np.abs(F[keep] / pred - 1.0), initial=0.0)))
-            # halfway to the loaded side's lock: the walls' response before the zipping ramp
-            d_half = 0.5 * min(d_on, d0[-1] / (1 + max(sign * tau * x_c, 0.0)))
-            F_half = np.interp(d_half, d, F)
-            half = max(half, abs(F_half / np.interp(d_half * (1 + sign * tau * x_c), d0, F0) - 1.0))
-        row[name], row[name + "_half"] = worst, half
-    return row
 
 
 def main() -> None:
@@ -81,7 +36,7 @@ def main() -> None:
     args = ap.parse_args()
     mat = Material()
     t0 = time.perf_counter()
-    rows = [check_cell(c, mat, args.tau) for c in cells_with_long_pads(args.cells, args.seed)]
+    rows = [check_tilt_cell(c, mat, args.tau) for c in cells_with_long_pads(args.cells, args.seed)]
     print(f"tau = {args.tau} rad/mm; {len(rows)} cells; {time.perf_counter() - t0:.0f} s of L2")
     print(
         "| theta [deg] | t [mm] | h [mm] | L2 lock | fitted lever: halfway / worst before the lock "

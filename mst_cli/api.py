@@ -12,6 +12,7 @@ design solver or the CAD kernel.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Sequence
 from dataclasses import fields, replace
 from pathlib import Path
@@ -579,6 +580,8 @@ def read(
     gain_sel: int | None = None,
     res: int | None = None,
     warn: Callable[[str], None] | None = None,
+    estimate_offset: bool = False,
+    max_offset_sigma_mm: float = 1.0,
 ) -> ForceReadings:
     """MLX90393 readings to forces with a calibrated model (``mst read READINGS.csv``).
 
@@ -595,6 +598,11 @@ def read(
     warn : callable, optional
         Gets a sentence when the model has no matching calibration.json beside it, or when the
         model no longer gives the curve recorded at calibration.
+    estimate_offset : bool
+        Estimate where each reading was pressed from Bx, By, Bz (the tilt rung's inverse) and
+        correct its force; ``.offset`` holds x, y and their 1-sigma, and a reading whose offset
+        is less certain than ``max_offset_sigma_mm`` keeps the centred force, flagged
+        not_identifiable (about 0.1 s a reading).
 
     Returns
     -------
@@ -606,8 +614,16 @@ def read(
     # deferred: a verb loads its layer when called ('import mst_cli' stays light)
     from mst_cli.io.outputs import staged
 
+    if not (max_offset_sigma_mm > 0 and math.isfinite(max_offset_sigma_mm)):
+        raise InputError("--max-offset-sigma-mm", max_offset_sigma_mm, "must be a positive number of mm")
     reader, rd, _ = _reader(model, model_file, mechanics, gain_sel, res, False, readings, out, warn)
-    result = reader.read(rd)
+    offsets = None
+    if estimate_offset:
+        from mst_cli.model.ladder import choose_mechanics  # deferred: as _reader's
+
+        mech = choose_mechanics(mechanics, reader.document.accuracy_rel, reader.document.mechanics).mechanics
+        offsets = reader.offset_estimator(mech, max_offset_sigma_mm)
+    result = reader.read(rd, offsets)
     if out is not None:
         with staged(Path(out)) as st:
             st.write_text("forces.csv", result.csv())

@@ -238,3 +238,52 @@ def test_tilted_L2_follows_the_rung_on_a_thin_shallow_cell():
     d_half = 0.5 * d_on
     F_half = np.interp(d_half, res.displacement_mm, res.force_N)
     assert F_half == pytest.approx(np.interp(d_half * (1 + tau * lever()), d0, F0), rel=0.02)
+
+
+def test_read_estimates_the_offset_and_corrects_the_force(tmp_path):
+    # noise-free readings of the design's own tilt rung, pressed at (6, 3) mm: the estimate must
+    # give back the press and the force; the centred reading is far off
+    from mst_cli.model.offcentre import pose_field_T, tilt_laws
+
+    doc, _ = load_design_document(FORWARD)
+    geo, mat = doc.geometry(), doc.material
+    F = np.array([4.0, 8.0, 15.0, 25.0, 40.0])
+    B = pose_field_T(geo, tilt_laws(geo, mat, "spring"), F, (6.0, 3.0))
+    csv = tmp_path / "readings.csv"
+    csv.write_text(
+        "Bx_uT,By_uT,Bz_uT,force_N\n"
+        + "".join(f"{b[0] * 1e6:.6f},{b[1] * 1e6:.6f},{b[2] * 1e6:.6f},{f}\n" for b, f in zip(B, F))
+    )
+    out = tmp_path / "out"
+    res = run(["read", FORWARD, csv, "--out", out, "--estimate-offset"])
+    assert res.exit_code == 0, res.output
+    assert "offset: estimated on" in res.output
+    import csv as csvmod
+
+    rows = list(csvmod.DictReader((out / "forces.csv").open()))
+    ok = [r for r in rows if r["offset_flag"] == "ok"]
+    assert len(ok) >= 4
+    for r in ok:
+        f_true = float(r["force_N_reference"])
+        assert float(r["force_N"]) == pytest.approx(f_true, rel=2e-3)
+        assert float(r["x_mm"]) == pytest.approx(6.0, abs=0.02) and float(r["y_mm"]) == pytest.approx(3.0, abs=0.02)
+    centred = [abs(float(r["force_centred_N"]) / float(r["force_N_reference"]) - 1) for r in rows]
+    assert max(centred) > 0.1  # what the correction is for
+
+
+@pytest.mark.parametrize(
+    "args, says",
+    [(["--serial", "/dev/null"], "--estimate-offset"), (["--max-offset-sigma-mm", "-1"], "max-offset-sigma")],
+)
+def test_read_refuses_bad_offset_options(tmp_path, args, says):
+    csv = tmp_path / "r.csv"
+    csv.write_text("Bx_uT,By_uT,Bz_uT\n0,0,3400\n")
+    cmd = (
+        ["read", FORWARD]
+        + ([] if "--serial" in args else [csv])
+        + ["--out", tmp_path / "o", "--estimate-offset"]
+        + args
+    )
+    res = run(cmd)
+    assert res.exit_code == 2 and says in res.output
+    assert len(res.output.strip().splitlines()) == 1

@@ -235,6 +235,10 @@ def run_bench(samples: int = 24, seed: int = 0, quick: bool = False, material: M
     }
     if not quick:
         result["mesh_convergence"] = mesh_convergence(cells[:3], material)
+        # deferred: tilt_bench imports this module (sample_cells)
+        from mst_cli.bench.tilt_bench import TILT_CELLS, long_padded, tilt_rows
+
+        result["tilt"] = tilt_rows(long_padded(cells)[:TILT_CELLS], material)
     return result
 
 
@@ -249,6 +253,10 @@ def bench_markdown(result: dict) -> str:
         lines += _mesh_lines(result["mesh_convergence"])
     lines += band_lines(result["rows"])
     lines += _worst_lines(result["rows"])
+    if "tilt" in result:
+        from mst_cli.bench.tilt_bench import tilt_lines  # deferred: as run_bench's
+
+        lines += tilt_lines(result["tilt"])
     return "\n".join(lines) + "\n"
 
 

@@ -18,6 +18,7 @@ from mst_cli.calibrate import fit as cal
 from mst_cli.calibrate.accuracy import ERROR_FROM_RANGE, force_errors
 from mst_cli.calibrate.calibration_json import CalibrationRecord, record_beside
 from mst_cli.calibrate.loadtest import Readings, field_of
+from mst_cli.calibrate.offset_reading import OffsetEstimator, OffsetReadings, offset_columns
 from mst_cli.calibrate.tables import FORCES_COLUMNS, cell, forces_csv
 from mst_cli.io.schema import Document
 from mst_cli.io.serial_lines import LineSource, SampleParser
@@ -37,10 +38,16 @@ class ForceReadings:
     regime: np.ndarray
     flag: np.ndarray
     force_resolution_N: np.ndarray
+    offset: OffsetReadings | None = None  # with --estimate-offset: force_N is the corrected one ...
+    force_centred_N: np.ndarray | None = None  # ... and this the centred model's
 
     def csv(self) -> str:
-        """forces.csv: the input columns and the force, regime, flag and resolution of each row."""
-        return forces_csv(self.readings, self.force_N, self.regime, self.flag, self.force_resolution_N)
+        """forces.csv: the input columns and the force, regime, flag and resolution of each row
+        (with an offset estimate: force_N corrected, then the centred force and the offset)."""
+        text = forces_csv(self.readings, self.force_N, self.regime, self.flag, self.force_resolution_N)
+        if self.offset is None or self.force_centred_N is None:
+            return text
+        return offset_columns(text, self.offset, self.force_centred_N)
 
     def errors(self) -> dict | None:
         """Force errors against the file's own force_N column (None without one)."""
@@ -62,6 +69,8 @@ class ForceReadings:
             )
             + (f"; forces {np.nanmin(F):.4g}-{np.nanmax(F):.4g} N" if ok.any() else "")
         ]
+        if self.offset is not None:
+            lines.append(self.offset.summary())
         err = self.errors()
         if err is not None and "median_rel" in err:
             lines.append(
@@ -132,10 +141,30 @@ class ForceReader:
             note = record.curve_changed(imap)
         return cls(doc, imap, note, record)
 
-    def read(self, rd: Readings) -> ForceReadings:
+    def read(self, rd: Readings, offsets: OffsetEstimator | None = None) -> ForceReadings:
+        """The forces of ``rd``; with ``offsets``, each in-range reading's force corrected for
+        where it was pressed (:mod:`~mst_cli.calibrate.offset_reading`)."""
         F, regime, flag = self.inverse_map.force(rd.B_abs_T, rd.saturated)
         res = self.inverse_map.local_resolution_N(np.where(np.isfinite(F), F, 0.0))
-        return ForceReadings(self.document.name, rd, F, regime, flag, res)
+        if offsets is None:
+            return ForceReadings(self.document.name, rd, F, regime, flag, res)
+        est = offsets.estimate_all(rd.B_T, np.where(flag == "ok", F, np.nan))
+        corrected = np.where(est.flag == "ok", est.force_N, F)
+        regime = np.where(np.isfinite(corrected), self.inverse_map.regime_of(corrected), regime)
+        return ForceReadings(self.document.name, rd, corrected, regime, flag, res, est, F)
+
+    def offset_estimator(self, mechanics: str, max_sigma_mm: float) -> OffsetEstimator:
+        """The offset estimator of this model: its geometry and material, the reader's field
+        resolution as the noise, up to the last lock."""
+        doc = self.document
+        return OffsetEstimator(
+            doc.geometry(),
+            doc.material,
+            mechanics,
+            self.inverse_map.field_resolution_T,
+            float(self.inverse_map.force_N[-1]),
+            max_sigma_mm,
+        )
 
     def stream(
         self,

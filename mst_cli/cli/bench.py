@@ -20,12 +20,12 @@ from mst_cli.io.outputs import staged
 )
 @click.option("--seed", type=seed_type(), default=0, show_default=True, help="Random seed of the sample.")
 @out_dir_option("./mst-out/bench/")
-@click.option("--quick", is_flag=True, help="Skip the L2 mesh-convergence study.")
+@click.option("--quick", is_flag=True, help="Skip the L2 mesh-convergence study and the tilt rung's check.")
 @no_plot_option("bench.png", "about 0.5 s of matplotlib import and render", has_json=False)
 def bench(samples: int, seed: int, out_dir: Path | None, quick: bool, no_plot: bool) -> None:
     """Measure every mechanics rung (spring, frame) and field model against the reference
-    (continuum FE; magpylib) and write bench.md, bench.json and bench.png (error vs time;
-    not with --no-plot)."""
+    (continuum FE; magpylib), and the off-centre tilt rung against L2 under tilted plates, and
+    write bench.md, bench.json and bench.png (error vs time; not with --no-plot)."""
     from mst_cli.bench.ladder_bench import bench_markdown, plot_bench, run_bench  # deferred: the model ladder, 0.1 s
 
     result = run_bench(samples=samples, seed=seed, quick=quick)

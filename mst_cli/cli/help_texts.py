@@ -50,3 +50,10 @@ DESIGN_CALIBRATION = (
     "(same printer and filament) into printer.* and magnet.remanence_T; parameters the "
     "calibration held are not used, and named."
 )
+
+READ_ESTIMATE_OFFSET = (
+    "Estimate where each reading was pressed from Bx, By, Bz and correct its force (the tilt "
+    "model's inverse; files only, about 0.1 s a reading): forces.csv adds force_centred_N, x_mm, "
+    "y_mm, their 1-sigma and offset_flag."
+)
+READ_MAX_OFFSET_SIGMA = "An offset less certain than this (1-sigma, mm) is not identifiable: the centred force is kept."

@@ -12,6 +12,7 @@ from typing import Any
 import click
 
 from mst_cli import api
+from mst_cli.cli import help_texts
 from mst_cli.cli.calibrate import MECHANICS, fail_fit
 from mst_cli.cli.common import default_out_dir, handles_input_errors
 
@@ -64,6 +65,10 @@ BAUD_RATES = (1200, 2400, 4800, 9600, 19200, 38400, 57600, 115200, 230400, 46080
     default=None,
     help="Output folder of forces.csv [default: ./mst-out/<name>-read/; with --serial only when given].",
 )
+@click.option("--estimate-offset", is_flag=True, help=help_texts.READ_ESTIMATE_OFFSET)
+@click.option(
+    "--max-offset-sigma-mm", type=float, default=1.0, show_default=True, help=help_texts.READ_MAX_OFFSET_SIGMA
+)
 @handles_input_errors
 def read(
     model_file: Path,
@@ -77,6 +82,8 @@ def read(
     res: int | None,
     mechanics: str | None,
     out_dir: Path | None,
+    estimate_offset: bool,
+    max_offset_sigma_mm: float,
 ) -> None:
     """Turn MLX90393 readings into forces with MODEL_FILE (a calibrated.yaml).
 
@@ -90,10 +97,7 @@ def read(
     below_range, above_range (past the last lock) and saturated (force left empty: never
     extrapolated).
     """
-    if (readings is None) == (port is None):
-        raise click.UsageError("give READINGS.csv or --serial PORT (one of them)")
-    if raw and port is None:
-        raise click.UsageError("--raw is for --serial lines (a CSV says raw by its column names)")
+    _check_sources(readings, port, raw, estimate_offset)
     doc = api.load_design(model_file)
     out = out_dir if (out_dir is not None or port is not None) else default_out_dir(f"{doc.name}-read")
     options: dict[str, Any] = {
@@ -105,7 +109,14 @@ def read(
     }
     try:
         if readings is not None:
-            result = api.read(doc, readings, out=out, **options)
+            result = api.read(
+                doc,
+                readings,
+                out=out,
+                estimate_offset=estimate_offset,
+                max_offset_sigma_mm=max_offset_sigma_mm,
+                **options,
+            )
             click.echo(result.summary())
             click.echo(f"wrote {out}/forces.csv")
             return
@@ -118,6 +129,16 @@ def read(
     click.echo(f"{len(stream.samples)} samples, {stream.skipped} lines skipped (not a sample)", err=True)
     if out is not None:
         click.echo(f"wrote {out}/forces.csv", err=True)
+
+
+def _check_sources(readings: Path | None, port: str | None, raw: bool, estimate_offset: bool) -> None:
+    """A usage error for options that do not go together."""
+    if (readings is None) == (port is None):
+        raise click.UsageError("give READINGS.csv or --serial PORT (one of them)")
+    if raw and port is None:
+        raise click.UsageError("--raw is for --serial lines (a CSV says raw by its column names)")
+    if estimate_offset and port is not None:
+        raise click.UsageError("--estimate-offset reads files, not --serial streams (yet)")
 
 
 def _warn(note: str) -> None:

@@ -81,9 +81,9 @@ def simulate_offcentre(
     )
     layers = tilt_laws(geometry, material, mechanics)
     F = axial.force_N
-    d, tilt = _stack_path(layers, F, offset_mm)
+    d, tilt = stack_path(layers, F, offset_mm)
     shift, rotvec = magnet_pose(geometry, d, tilt)
-    B = _field(geometry, shift, rotvec)
+    B = magnet_field_T(geometry, shift, rotvec)
     B_abs = np.linalg.norm(B, axis=-1)
     read = _read_as_axial(axial, B_abs)
     side_lock = np.array([[_side_lock_N(layer, offset_mm, side) for side in (0, 1)] for layer in layers])
@@ -103,14 +103,17 @@ def simulate_offcentre(
     )
 
 
-def _stack_path(layers: list[LayerTiltLaw], F, offset_mm) -> tuple[np.ndarray, np.ndarray]:
+def stack_path(
+    layers: list[LayerTiltLaw], F, offset_mm, start: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray]:
     """(d (m, n), (phi_y, phi_x) (m, n, 2)) of every layer along the force samples, each
-    solve started from the previous force's answer."""
+    solve started from the previous force's answer (the first from ``start`` (n, 3), when given,
+    else from the centred answer)."""
     m, n = len(F), len(layers)
     d = np.zeros((m, n))
     tilt = np.zeros((m, n, 2))
     for j, layer in enumerate(layers):
-        guess = None
+        guess = None if start is None else tuple(start[j])
         for i, f in enumerate(F):
             if f == 0.0:
                 continue
@@ -118,6 +121,16 @@ def _stack_path(layers: list[LayerTiltLaw], F, offset_mm) -> tuple[np.ndarray, n
             guess = (lt.d_mm, lt.phi_y_rad, lt.phi_x_rad)
             d[i, j], tilt[i, j] = lt.d_mm, (lt.phi_y_rad, lt.phi_x_rad)
     return d, tilt
+
+
+def pose_field_T(
+    geometry: SensorGeometry, layers: list[LayerTiltLaw], force_N: np.ndarray, offset_mm: tuple[float, float]
+) -> np.ndarray:
+    """The field at the chip (m, 3) in T for forces ``force_N`` (m,) ascending, pressed at
+    ``offset_mm``: the stack's tilts, the magnet's pose, the exact field."""
+    d, tilt = stack_path(layers, np.asarray(force_N, dtype=float), offset_mm)
+    shift, rotvec = magnet_pose(geometry, d, tilt)
+    return magnet_field_T(geometry, shift, rotvec)
 
 
 def magnet_pose(geometry: SensorGeometry, d_mm: np.ndarray, tilt_rad: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -135,7 +148,7 @@ def magnet_pose(geometry: SensorGeometry, d_mm: np.ndarray, tilt_rad: np.ndarray
     return shift, rotvec
 
 
-def _field(geometry: SensorGeometry, shift_mm: np.ndarray, rotvec_rad: np.ndarray) -> np.ndarray:
+def magnet_field_T(geometry: SensorGeometry, shift_mm: np.ndarray, rotvec_rad: np.ndarray) -> np.ndarray:
     """The field at the chip (m, 3) for the magnet displaced and turned (its own tilt about y
     added to the load's turn)."""
     half = 0.5 * geometry.magnet.thickness_mm
@@ -206,8 +219,8 @@ def offset_map(
     err = np.full((len(F), len(ys), len(xs)), np.nan)
     for iy, y in enumerate(ys):
         for ix, x in enumerate(xs):
-            d, tilt = _stack_path(layers, F, (float(x), float(y)))
+            d, tilt = stack_path(layers, F, (float(x), float(y)))
             shift, rotvec = magnet_pose(geometry, d, tilt)
-            B_abs = np.linalg.norm(_field(geometry, shift, rotvec), axis=-1)
+            B_abs = np.linalg.norm(magnet_field_T(geometry, shift, rotvec), axis=-1)
             err[:, iy, ix] = _read_as_axial(axial, B_abs) / F - 1.0
     return OffsetMap(xs, ys, F, regime, err)

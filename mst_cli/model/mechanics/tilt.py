@@ -69,7 +69,7 @@ class PiecewiseForce:
     k_tension_N_per_mm: float
     k_after_N_per_mm: float
 
-    @property
+    @functools.cached_property
     def slopes_N_per_mm(self) -> np.ndarray:
         """Slope below 0, on every piece between knots, and past the last one."""
         inner = np.diff(self.F_knots_N) / np.diff(self.d_knots_mm)
@@ -195,19 +195,22 @@ def solve_layer_tilt(
     target = np.array([force_N, force_N * x0, force_N * y0])
     u = np.array(guess if guess is not None else (_axial_guess(layer, force_N), 0.0, 0.0), dtype=float)
     norm = np.array([1.0, layer.lever_mm, 0.5 * layer.depth_mm]) * max(abs(force_N), 1e-12)
-    r_norm = math.inf
+    r, K = _residual(layer, u, target)
+    r_norm = float(np.max(np.abs(r) / norm))
     for _ in range(NEWTON_MAX_ITER):
-        r, K = _residual(layer, u, target)
-        r_norm = float(np.max(np.abs(r) / norm))
         if r_norm <= NEWTON_TOL_REL:
             return _layer_tilt(layer, u)
         du = np.linalg.solve(K, -r)
-        # damped: a full step across a stiff knot (the pads touching) can overshoot into a flip-flop
+        # damped: a full step across a stiff knot (the pads touching) can overshoot into a flip-flop;
+        # the accepted trial's residual and tangent are the next iteration's
         for alpha in (1.0, 0.5, 0.25, 0.125, 0.0625, 0.03125):
-            r_try, _ = _residual(layer, u + alpha * du, target)
-            if float(np.max(np.abs(r_try) / norm)) < r_norm:
+            r_try, K_try = _residual(layer, u + alpha * du, target)
+            norm_try = float(np.max(np.abs(r_try) / norm))
+            if norm_try < r_norm:
                 break
-        u = u + alpha * du
+        u, r, K, r_norm = u + alpha * du, r_try, K_try, norm_try
+    if r_norm <= NEWTON_TOL_REL:
+        return _layer_tilt(layer, u)
     raise TiltError(f"no equilibrium for {force_N:.4g} N at ({x0:g}, {y0:g}) mm (residual {r_norm:.2g} of the load)")
 
 
