@@ -28,6 +28,7 @@ from mst_cli.calibrate.loadtest import MAX_ROWS, Readings, check_load_test, pars
 from mst_cli.calibrate.plot import plot_calibration
 from mst_cli.calibrate.record import design_constants
 from mst_cli.calibrate.tables import lookup_csv, residuals_csv
+from mst_cli.calibrate.tilt_fit import fit_lever_factor
 from mst_cli.errors import InputError
 from mst_cli.io.outputs import staged
 from mst_cli.io.schema import Document, document_to_dict, parse_document
@@ -35,6 +36,7 @@ from mst_cli.model.chip import ChipSetting, field_resolution_T
 from mst_cli.model.response import Response, simulate
 
 PLOT_FILE = "calibration.png"
+MIN_CENTRED_ROWS = 8  # a load test with presses off the axis still needs this many on it
 PROGRESS_FROM_SAMPLES = 10_000  # a load test this long gets a progress line (40 000 samples: 2-3 s)
 YAML_PREAMBLE = (
     "# The design as printed: mst calibrate fitted it to a load test (calibration.json beside it).\n"
@@ -168,6 +170,14 @@ class Calibration:
         s = self.header_setting
         if s is not None:
             lines.append(f"table for GAIN_SEL {s.gain_sel}, RES {s.res} ({s.z_uT_per_lsb} uT/LSB on Z)")
+        if r.tilt is not None:
+            t = r.tilt
+            lines.append(
+                f"tilt, from {t['rows']} rows at {len(t['presses_mm'])} presses off the axis: lever factor "
+                f"{t['lever_factor']:.4f} +- {t['std']:.2g}"
+                + (" (AT ITS BOUND)" if t["at_bound"] else "")
+                + f"; field residual {t['rms_residual_uT']:.3g} uT RMS ({t['rms_residual_at_factor_1_uT']:.3g} at 1)"
+            )
         return "\n".join(lines)
 
 
@@ -187,8 +197,16 @@ def calibrate(
     ``load_test_file``. InputError for a bad load test; CalibrationFailed (with why) when the
     fit fails or its values would make a design that does not load. ``progress`` gets a line
     before a long fit."""
-    lt = parse_readings(
-        read_text(load_test_file), str(load_test_file), need_force=True, gain_sel=gain_sel, res=res, one_setting=True
+    lt, presses = _split_presses(
+        parse_readings(
+            read_text(load_test_file),
+            str(load_test_file),
+            need_force=True,
+            gain_sel=gain_sel,
+            res=res,
+            one_setting=True,
+        ),
+        doc,
     )
     fitted = _fit(doc, lt, Path(load_test_file).name, mechanics, tuple(params), progress)
     imap, setting = fitted.imap, fitted.setting
@@ -203,6 +221,8 @@ def calibrate(
     yaml_text = YAML_PREAMBLE + yaml.safe_dump(fitted.calibrated_dict, sort_keys=False, default_flow_style=None)
     files = _RecordFiles(str(design_file), str(load_test_file), sha256_text(yaml_text), table_size, header_reason)
     record = _record(doc, fitted, files, {"calibrated": in_sample, "design": design_errors}, header is not None)
+    if presses is not None:
+        record.tilt = fit_lever_factor(fitted.calibrated, mechanics, presses, fitted.fit.sigma_T)
     F_grid = np.linspace(0.0, max(float(lt.load_N.max()), fitted.cal_resp.max_force_N), 400)
     design_resp, fit = fitted.design_resp, fitted.fit
     return Calibration(
@@ -223,6 +243,33 @@ def calibrate(
         design_curve=(design_resp.force_N[design_resp.in_range], design_resp.B_abs_T[design_resp.in_range]),
         calibrated_curve=(F_grid, fit.model.field_abs_T(F_grid, fit.values)),
     )
+
+
+def _split_presses(lt: Readings, doc: Document) -> tuple[Readings, Readings | None]:
+    """(the centred rows, the rows pressed off the axis or None) of a load test; without x_mm,
+    y_mm columns every row is centred. InputError for too few centred rows or a press off the
+    top face."""
+    if lt.offset_mm is None:
+        return lt, None
+    centred = np.all(lt.offset_mm == 0.0, axis=1)
+    if centred.sum() < MIN_CENTRED_ROWS:
+        raise InputError(
+            f"{lt.source} x_mm, y_mm",
+            f"{int(centred.sum())} rows at 0, 0",
+            f"need at least {MIN_CENTRED_ROWS} rows pressed on the axis (x_mm = y_mm = 0): they calibrate the sensor, "
+            "the others its tilt",
+        )
+    geometry = doc.geometry()
+    half = np.array([0.5 * geometry.width_mm, 0.5 * geometry.depth_mm])
+    outside = np.flatnonzero(np.any(np.abs(lt.offset_mm) > half, axis=1))
+    if outside.size:
+        i = int(outside[0])
+        raise InputError(
+            f"{lt.source} line {lt.lines[i]} x_mm, y_mm",
+            f"{lt.offset_mm[i, 0]:g}, {lt.offset_mm[i, 1]:g}",
+            f"must lie on the top face: |x| <= {half[0]:g} mm, |y| <= {half[1]:g} mm",
+        )
+    return lt.subset(centred), (lt.subset(~centred) if (~centred).any() else None)
 
 
 @dataclass

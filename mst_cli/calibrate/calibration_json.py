@@ -66,6 +66,8 @@ class CalibrationRecord:
     # has changed since (the file's keys alone would then mean another curve)
     curve_check: dict | None
     fit: dict
+    # presses at known offsets (x_mm, y_mm columns): the tilt rung's fitted lever factor
+    tilt: dict | None = None
 
     def to_json(self) -> dict[str, Any]:
         """The file's JSON-ready mapping (non-finite numbers are null: JSON holds no NaN)."""
@@ -88,6 +90,18 @@ class CalibrationRecord:
             "force_N": [float(f) for f in F],
             "B_abs_uT": [float(b) * 1e6 for b in np.interp(F, imap.force_N, imap.B_abs_T)],
         }
+
+    def lever_factor(self) -> float:
+        """The tilt rung's lever factor fitted from presses at known offsets (1 without any).
+        InputError when the file holds something else there."""
+        if self.tilt is None:
+            return 1.0
+        value = self.tilt.get("lever_factor") if isinstance(self.tilt, dict) else self.tilt
+        if isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value) and value > 0:
+            return float(value)
+        from mst_cli.errors import InputError  # deferred: no error machinery for a well-formed file
+
+        raise InputError(f"{CALIBRATION_JSON} tilt.lever_factor", value, "must be a positive number")
 
     def calibrated_top_N(self) -> float | None:
         """The load test's largest force, when the record holds a usable one."""

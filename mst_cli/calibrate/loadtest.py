@@ -36,6 +36,7 @@ FORCE_COLUMN = "force_N"
 UT_COLUMNS = ("Bx_uT", "By_uT", "Bz_uT")
 CODE_COLUMNS = ("Bx_code_lsb", "By_code_lsb", "Bz_code_lsb")
 SETTING_COLUMNS = ("gain_sel", "res")
+OFFSET_COLUMNS = ("x_mm", "y_mm")  # where a load-test row was pressed (optional, both or neither)
 # a column that looks like a force or a field in another unit: refused with the conversion
 FORCE_LIKE = re.compile(r"^(force|load|f|weight|mass)(_.*|\s*\[.*\]|\s*\(.*\))?$", re.IGNORECASE)
 FIELD_LIKE = re.compile(r"^(b|mag)_?[xyz](_.+|\s*\[.*\]|\s*\(.*\))$", re.IGNORECASE)
@@ -65,6 +66,23 @@ class Readings:
     force_N: np.ndarray | None  # the load cell's force (load tests; readings with a force_N column)
     raw: bool  # the file held raw codes
     setting: mlx.ChipSetting | None  # the one chip setting of every row, when known
+    offset_mm: np.ndarray | None = None  # (n, 2) where each row was pressed (x_mm, y_mm columns)
+
+    def subset(self, keep: np.ndarray) -> Readings:
+        """The rows where ``keep`` (a boolean mask) holds, as a Readings of their own."""
+        idx = np.flatnonzero(keep)
+        return Readings(
+            source=self.source,
+            header=self.header,
+            rows=[self.rows[i] for i in idx],
+            lines=[self.lines[i] for i in idx],
+            B_T=self.B_T[idx],
+            saturated=self.saturated[idx],
+            force_N=None if self.force_N is None else self.force_N[idx],
+            raw=self.raw,
+            setting=self.setting,
+            offset_mm=None if self.offset_mm is None else self.offset_mm[idx],
+        )
 
     @functools.cached_property
     def B_abs_T(self) -> np.ndarray:
@@ -176,6 +194,8 @@ def parse_readings(
         _RowSettings(source, idx, flag_setting, one_setting) if all(c in header for c in SETTING_COLUMNS) else None
     )
     B = np.empty((len(data_rows), 3))
+    offsets = _offset_columns(source, header)
+    off = np.empty((len(data_rows), 2)) if offsets else None
     with_force = need_force or FORCE_COLUMN in header  # a readings file may carry the reference
     F = np.empty(len(data_rows)) if with_force else None
     sat = np.zeros(len(data_rows), dtype=bool)
@@ -191,12 +211,36 @@ def parse_readings(
         B[r], sat[r] = field_of(values, raw, setting, f"{source} line {line}")
         if F is not None:
             F[r] = _number(source, line, FORCE_COLUMN, row[idx[FORCE_COLUMN]])
+        if off is not None:
+            off[r] = [_number(source, line, c, row[idx[c]]) for c in OFFSET_COLUMNS]
         rows.append(row)
         lines.append(line)
     one = flag_setting if settings is None or flag_setting is not None else settings.the_one(rows)
     return Readings(
-        source=source, header=header, rows=rows, lines=lines, B_T=B, saturated=sat, force_N=F, raw=raw, setting=one
+        source=source,
+        header=header,
+        rows=rows,
+        lines=lines,
+        B_T=B,
+        saturated=sat,
+        force_N=F,
+        raw=raw,
+        setting=one,
+        offset_mm=off,
     )
+
+
+def _offset_columns(source: str, header: list[str]) -> bool:
+    """Whether the file says where each row was pressed: both x_mm and y_mm, or neither."""
+    present = [c in header for c in OFFSET_COLUMNS]
+    if any(present) and not all(present):
+        missing = OFFSET_COLUMNS[present.index(False)]
+        raise InputError(
+            f"{source} header",
+            ",".join(header),
+            f"has {OFFSET_COLUMNS[present.index(True)]} without {missing}: give both or neither",
+        )
+    return all(present)
 
 
 def _field_columns(source: str, header: list[str], need_force: bool) -> tuple[bool, tuple[str, ...]]:

@@ -67,9 +67,10 @@ class OffsetEstimator:
         field_sigma_T: float,
         force_max_N: float,
         max_sigma_mm: float = DEFAULT_MAX_SIGMA_MM,
+        lever_factor: float = 1.0,
     ):
         self.geometry = geometry
-        self.layers = tilt_laws(geometry, material, mechanics)
+        self.layers = tilt_laws(geometry, material, mechanics, lever_factor)
         self.sigma_T = float(field_sigma_T)
         self.force_max_N = float(force_max_N)
         self.max_sigma_mm = float(max_sigma_mm)

@@ -155,7 +155,8 @@ class ForceReader:
 
     def offset_estimator(self, mechanics: str, max_sigma_mm: float) -> OffsetEstimator:
         """The offset estimator of this model: its geometry and material, the reader's field
-        resolution as the noise, up to the last lock."""
+        resolution as the noise, up to the last lock, and the lever factor its calibration fitted
+        from presses at known offsets (1 without one)."""
         doc = self.document
         return OffsetEstimator(
             doc.geometry(),
@@ -164,6 +165,7 @@ class ForceReader:
             self.inverse_map.field_resolution_T,
             float(self.inverse_map.force_N[-1]),
             max_sigma_mm,
+            self.record.lever_factor() if self.record is not None else 1.0,
         )
 
     def stream(

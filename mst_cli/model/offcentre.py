@@ -55,11 +55,16 @@ class OffCentreResponse:
         return self.force_read_axial_N - self.force_N
 
 
-def tilt_laws(geometry: SensorGeometry, material: Material, mechanics: str) -> list[LayerTiltLaw]:
-    """Every layer as the tilt rung sees it, from the named rung's laws."""
+def tilt_laws(
+    geometry: SensorGeometry, material: Material, mechanics: str, lever_factor: float = 1.0
+) -> list[LayerTiltLaw]:
+    """Every layer as the tilt rung sees it, from the named rung's laws; ``lever_factor`` scales
+    every lever (1: the rung's own; a calibration's fitted value otherwise)."""
     laws = layer_laws(geometry.layers, material, mechanics)
     return [
-        LayerTiltLaw.from_layer(law, c, in_web(c, material).youngs_modulus_MPa, material.poisson_ratio)
+        LayerTiltLaw.from_layer(
+            law, c, in_web(c, material).youngs_modulus_MPa, material.poisson_ratio
+        ).with_lever_factor(lever_factor)
         for law, c in zip(laws, geometry.layers)
     ]
 

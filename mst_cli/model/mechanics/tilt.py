@@ -43,7 +43,7 @@ from __future__ import annotations
 import functools
 import json
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -138,6 +138,11 @@ class LayerTiltLaw:
     @property
     def lock_force_N(self) -> float:
         return float(self.walls.F_knots_N[-1])
+
+    def with_lever_factor(self, factor: float) -> LayerTiltLaw:
+        """The same layer with its levers (the chevrons' x_c and the pads' half width) scaled: what
+        a load test at known offsets calibrates (``mst calibrate`` with x_mm, y_mm columns)."""
+        return replace(self, lever_mm=self.lever_mm * factor, pad_half_width_mm=self.pad_half_width_mm * factor)
 
 
 @dataclass(frozen=True)
