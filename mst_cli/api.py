@@ -161,14 +161,19 @@ def simulate_offcentre(
 
 
 def offset_map(
-    design: str | Path | Document, *, mechanics: str | None = None, field_model: str | None = None
+    design: str | Path | Document,
+    *,
+    mechanics: str | None = None,
+    field_model: str | None = None,
+    region_mm: tuple[float, float] | None = None,
 ) -> OffsetMap:
-    """The axial reading's relative force error over 80 % of the top face, at 25, 50 and 75 %
-    of every regime's force band (``mst simulate --offset-map``)."""
+    """The axial reading's relative force error over 80 % of the top face (or +-``region_mm``,
+    half extents in mm), at 25, 50 and 75 % of every regime's force band (``mst simulate
+    --offset-map``)."""
     from mst_cli.model.offcentre import offset_map as run  # deferred: as simulate's
 
     geometry, material, mech, field_choice = _printed_scene(design, mechanics, field_model)
-    return run(geometry, material, mech, field_choice)
+    return run(geometry, material, mech, field_choice, region_mm=region_mm)
 
 
 def _printed_scene(design, mechanics, field_model):
@@ -248,13 +253,25 @@ def design(
         doc = apply_calibration(doc, read_calibration(calibration, doc))
     choice = choose_mechanics(refine, doc.accuracy_rel, doc.mechanics)
     if choice.mechanics == "spring":
-        return design_document(
+        result = design_document(
             replace(doc, mechanics="spring"), seed=seed, max_evaluations=max_evaluations, progress=progress
         )
-    # deferred: a verb loads its layer when called ('import mst_cli' stays light)
-    from mst_cli.design.refine import refine_document
+    else:
+        # deferred: a verb loads its layer when called ('import mst_cli' stays light)
+        from mst_cli.design.refine import refine_document
 
-    return refine_document(doc, choice.mechanics, seed=seed, max_evaluations=max_evaluations, progress=progress)
+        result = refine_document(doc, choice.mechanics, seed=seed, max_evaluations=max_evaluations, progress=progress)
+    return _with_offcentre_figure(result, doc.design.get("offcentre_region_mm"))
+
+
+def _with_offcentre_figure(result: DesignResult, region: Sequence[float] | None) -> DesignResult:
+    """``result`` with design.offcentre_region_mm's figure filled in (when the spec sets one)."""
+    if region is not None:
+        from mst_cli.model.offcentre import worst_read_errors  # deferred: as simulate's
+
+        omap = offset_map(result.document, mechanics=result.response.mechanics, region_mm=(region[0], region[1]))
+        result.off_centre = worst_read_errors(omap) | {"mechanics": result.response.mechanics}
+    return result
 
 
 def pareto(

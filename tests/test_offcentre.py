@@ -287,3 +287,38 @@ def test_read_refuses_bad_offset_options(tmp_path, args, says):
     res = run(cmd)
     assert res.exit_code == 2 and says in res.output
     assert len(res.output.strip().splitlines()) == 1
+
+
+def test_design_reports_the_off_centre_error_over_its_region(tmp_path):
+    import yaml
+
+    spec = yaml.safe_load((ROOT / "configs" / "mohammadi2021.yaml").read_text())
+    spec.setdefault("design", {})["offcentre_region_mm"] = [5, 3]
+    (tmp_path / "spec.yaml").write_text(yaml.safe_dump(spec))
+    res = run(["design", tmp_path / "spec.yaml", "--out", tmp_path / "out", "--no-plot"])
+    assert res.exit_code == 0, res.output
+    oc = json.loads((tmp_path / "out" / "report.json").read_text())["design"]["off_centre"]
+    assert oc["region_mm"] == [5.0, 3.0] and len(oc["regimes"]) == 3
+    # the map is mirror-symmetric (chip on the axis): a worst corner has a mirrored twin
+    for r in oc["regimes"]:
+        assert abs(r["at_mm"][0]) == 5.0 and abs(r["at_mm"][1]) in (0.0, 3.0)
+    assert "off centre: a touch within +-5 x +-3 mm" in res.output
+    # a region of one point, the axis, is the centred reading: no error but the read-back's
+    # linear interpolation on the centred curve's samples (400 a regime: under 1e-5)
+    spec["design"]["offcentre_region_mm"] = [0, 0]
+    (tmp_path / "spec0.yaml").write_text(yaml.safe_dump(spec))
+    res = run(["design", tmp_path / "spec0.yaml", "--out", tmp_path / "out0", "--no-plot"])
+    assert res.exit_code == 0, res.output
+    oc0 = json.loads((tmp_path / "out0" / "report.json").read_text())["design"]["off_centre"]
+    assert oc0["worst_read_error_rel"] <= 1e-5
+
+
+def test_a_negative_region_is_refused_in_one_line(tmp_path):
+    import yaml
+
+    spec = yaml.safe_load((ROOT / "configs" / "mohammadi2021.yaml").read_text())
+    spec.setdefault("design", {})["offcentre_region_mm"] = [-1, 3]
+    (tmp_path / "spec.yaml").write_text(yaml.safe_dump(spec))
+    res = run(["design", tmp_path / "spec.yaml", "--out", tmp_path / "out", "--no-plot"])
+    assert res.exit_code == 2 and "design.offcentre_region_mm" in res.output
+    assert len(res.output.strip().splitlines()) == 1

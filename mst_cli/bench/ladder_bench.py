@@ -17,40 +17,21 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from mst_cli.bench.sampling import BOUNDS, sample_cells
+from mst_cli.bench.tilt_bench import TILT_CELLS, long_padded, tilt_lines, tilt_rows
 from mst_cli.model import field as fld
 from mst_cli.model.geometry import HexCell, Magnet
 from mst_cli.model.material import Material
 from mst_cli.model.mechanics import uncached_layer_law
 from mst_cli.model.mechanics.continuum import linear_stiffness_N_per_mm
-from mst_cli.model.mechanics.correction import VERIFIED_BOX
 from mst_cli.model.mechanics.spring import spring_arrays, spring_layer
 
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
 
+
 # The printable box (mechanics.correction.VERIFIED_BOX, also the default design bounds): every
 # rung is fitted and measured on it.
-BOUNDS = VERIFIED_BOX
-
-
-def sample_cells(
-    n: int, seed: int = 0, max_t_over_L: float = np.inf, bounds: dict | None = None, min_t_over_L: float = 0.0
-) -> list[HexCell]:
-    """n valid cells drawn uniformly in (theta, t, h) inside ``bounds`` (default BOUNDS) by
-    rejection sampling: HexCell.violations() empty -- the only filter by default. The t/L
-    window [min_t_over_L, max_t_over_L] (default: none) and narrower ``bounds`` are for
-    experiments and for topping up sparse corners of the box in the L0 fit."""
-    bounds = {**BOUNDS, **(bounds or {})}
-    rng = np.random.default_rng(seed)
-    out: list[HexCell] = []
-    while len(out) < n:
-        th, t, h = (rng.uniform(*bounds[k]) for k in ("theta_deg", "t_mm", "h_mm"))
-        c = HexCell(round(float(th), 3), round(float(t), 3), round(float(h), 3))
-        if not c.violations() and min_t_over_L <= c.t_mm / c.wall_length_mm <= max_t_over_L:
-            out.append(c)
-    return out
-
-
 def _law(model, cell, material):
     if model in ("spring-textbook", "spring"):
         return spring_layer(cell, material, corrected=model == "spring")
@@ -235,9 +216,6 @@ def run_bench(samples: int = 24, seed: int = 0, quick: bool = False, material: M
     }
     if not quick:
         result["mesh_convergence"] = mesh_convergence(cells[:3], material)
-        # deferred: tilt_bench imports this module (sample_cells)
-        from mst_cli.bench.tilt_bench import TILT_CELLS, long_padded, tilt_rows
-
         result["tilt"] = tilt_rows(long_padded(cells)[:TILT_CELLS], material)
     return result
 
@@ -254,8 +232,6 @@ def bench_markdown(result: dict) -> str:
     lines += band_lines(result["rows"])
     lines += _worst_lines(result["rows"])
     if "tilt" in result:
-        from mst_cli.bench.tilt_bench import tilt_lines  # deferred: as run_bench's
-
         lines += tilt_lines(result["tilt"])
     return "\n".join(lines) + "\n"
 

@@ -197,17 +197,7 @@ def calibrate(
     ``load_test_file``. InputError for a bad load test; CalibrationFailed (with why) when the
     fit fails or its values would make a design that does not load. ``progress`` gets a line
     before a long fit."""
-    lt, presses = _split_presses(
-        parse_readings(
-            read_text(load_test_file),
-            str(load_test_file),
-            need_force=True,
-            gain_sel=gain_sel,
-            res=res,
-            one_setting=True,
-        ),
-        doc,
-    )
+    lt, presses = _split_presses(_read_load_test(load_test_file, gain_sel, res), doc)
     fitted = _fit(doc, lt, Path(load_test_file).name, mechanics, tuple(params), progress)
     imap, setting = fitted.imap, fitted.setting
     header, header_reason = _header(fitted, f"{Path(design_file).name} and {Path(load_test_file).name}")
@@ -243,6 +233,12 @@ def calibrate(
         design_curve=(design_resp.force_N[design_resp.in_range], design_resp.B_abs_T[design_resp.in_range]),
         calibrated_curve=(F_grid, fit.model.field_abs_T(F_grid, fit.values)),
     )
+
+
+def _read_load_test(load_test_file: str | Path, gain_sel: int | None, res: int | None) -> Readings:
+    """The load test's rows, every one from one chip setting."""
+    text = read_text(load_test_file)
+    return parse_readings(text, str(load_test_file), need_force=True, gain_sel=gain_sel, res=res, one_setting=True)
 
 
 def _split_presses(lt: Readings, doc: Document) -> tuple[Readings, Readings | None]:

@@ -173,22 +173,8 @@ def parse_readings(
     if (gain_sel is None) != (res is None):
         raise InputError("--gain-sel/--res", f"{gain_sel}/{res}", "give both GAIN_SEL and RES, or neither")
     flag_setting = setting_of(gain_sel, res) if gain_sel is not None and res is not None else None
-    numbered = [
-        (i + 1, line) for i, line in enumerate(text.splitlines()) if line.strip() and not line.lstrip().startswith("#")
-    ]
-    if not numbered:
-        raise InputError(
-            source,
-            "(empty)",
-            "has no header row: expected columns " + (f"{FORCE_COLUMN}," if need_force else "") + ",".join(UT_COLUMNS),
-        )
-    delim = _delimiter(numbered[0][1])
-    parsed = list(csv.reader([line for _, line in numbered], delimiter=delim))
-    header = [h.strip() for h in parsed[0]]
+    numbered, delim, header, data_rows = _table(text, source, need_force)
     raw, cols = _field_columns(source, header, need_force)
-    data_rows = parsed[1:]
-    if len(data_rows) > MAX_ROWS:
-        raise InputError(source, f"{len(data_rows)} rows", f"at most {MAX_ROWS} rows")
     idx = {c: header.index(c) for c in header}
     settings = (
         _RowSettings(source, idx, flag_setting, one_setting) if all(c in header for c in SETTING_COLUMNS) else None
@@ -228,6 +214,26 @@ def parse_readings(
         setting=one,
         offset_mm=off,
     )
+
+
+def _table(text: str, source: str, need_force: bool) -> tuple[list[tuple[int, str]], str, list[str], list[list[str]]]:
+    """(the numbered lines that are not comments or blank, the delimiter, the header, the data
+    rows split) of a CSV text; InputError without a header or with too many rows."""
+    numbered = [
+        (i + 1, line) for i, line in enumerate(text.splitlines()) if line.strip() and not line.lstrip().startswith("#")
+    ]
+    if not numbered:
+        raise InputError(
+            source,
+            "(empty)",
+            "has no header row: expected columns " + (f"{FORCE_COLUMN}," if need_force else "") + ",".join(UT_COLUMNS),
+        )
+    delim = _delimiter(numbered[0][1])
+    parsed = list(csv.reader([line for _, line in numbered], delimiter=delim))
+    data_rows = parsed[1:]
+    if len(data_rows) > MAX_ROWS:
+        raise InputError(source, f"{len(data_rows)} rows", f"at most {MAX_ROWS} rows")
+    return numbered, delim, [h.strip() for h in parsed[0]], data_rows
 
 
 def _offset_columns(source: str, header: list[str]) -> bool:

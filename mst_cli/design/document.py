@@ -91,6 +91,7 @@ class DesignResult:
     elapsed_s: float = 0.0
     warnings: list[str] = field(default_factory=list)
     objective: dict = field(default_factory=dict)  # design.objective's weights and terms
+    off_centre: dict | None = None  # design.offcentre_region_mm's figure (api.design fills it)
 
     @property
     def exit_code(self) -> int:
@@ -118,6 +119,7 @@ class DesignResult:
                 "max_evaluations": self.max_evaluations,
                 "solver": self.solver,
             }
+            | ({"off_centre": self.off_centre} if self.off_centre is not None else {})
         }
 
     def table(self) -> str:
@@ -185,6 +187,14 @@ class DesignResult:
         else:
             lines.append(f"NOT MET -- binding: {self.binding}")
             lines += [f"  - {r}" for r in self.reasons]
+        if self.off_centre is not None:
+            oc = self.off_centre
+            x, y = oc["region_mm"]
+            lines.append(
+                f"off centre: a touch within +-{x:g} x +-{y:g} mm read as axial is off by "
+                + ", ".join(f"{100 * abs(r['worst_read_error_rel']):.1f} %" for r in oc["regimes"])
+                + " at worst in the regimes (design.offcentre_region_mm; mst read --estimate-offset corrects it)"
+            )
         for w in self.warnings:
             lines.append(f"warning: {w}")
         return lines

@@ -221,6 +221,17 @@ class DesignOptions:
         "± `printer.wall_tolerance_mm`: a constraint, not a weight. When no design meets it, `mst design` "
         "exits 1 and names the lowest part height at which one does (or says that none does)",
     )
+    offcentre_region_mm: tuple[float, float] | None = spec(
+        None,
+        kind="pair",
+        lo=0.0,
+        hi=100.0,
+        unit="mm",
+        nullable=True,
+        meaning="optional half extents (x, y) of the part of the top face a touch may land on: `mst design` then "
+        "reports, per regime, the worst error of a force read as axial over that region (the tilt rung, "
+        "docs/design.md section 4.2; about 10 s). A reported figure, not a constraint",
+    )
 
 
 @dataclass(frozen=True)

@@ -211,16 +211,20 @@ def offset_map(
     grid: tuple[int, int] = (9, 7),
     region_frac: float = 0.8,
     fractions: tuple[float, ...] = (0.25, 0.5, 0.75),
+    region_mm: tuple[float, float] | None = None,
 ) -> OffsetMap:
     """:class:`OffsetMap` over a ``grid`` (nx, ny) spanning ``region_frac`` of the top face
-    (W x D), at ``fractions`` of every regime's force band."""
-    axial = simulate_axial(geometry, material, mechanics, field_model, points_per_regime=50)
+    (W x D), or +-``region_mm`` (half extents) when given, at ``fractions`` of every regime's
+    force band."""
+    # dense: the map reads each force back by interpolating this curve (its error falls like 1/n^2)
+    axial = simulate_axial(geometry, material, mechanics, field_model, points_per_regime=400)
     edges = np.concatenate([[0.0], np.asarray(axial.lock_forces_N)])
     F = np.array([lo + f * (hi - lo) for lo, hi in zip(edges[:-1], edges[1:]) for f in fractions])
     regime = np.repeat(np.arange(1, len(edges)), len(fractions))
     layers = tilt_laws(geometry, material, mechanics)
-    xs = np.linspace(-1.0, 1.0, grid[0]) * 0.5 * region_frac * geometry.width_mm
-    ys = np.linspace(-1.0, 1.0, grid[1]) * 0.5 * region_frac * geometry.depth_mm
+    half = region_mm or (0.5 * region_frac * geometry.width_mm, 0.5 * region_frac * geometry.depth_mm)
+    xs = np.linspace(-1.0, 1.0, grid[0]) * half[0]
+    ys = np.linspace(-1.0, 1.0, grid[1]) * half[1]
     err = np.full((len(F), len(ys), len(xs)), np.nan)
     for iy, y in enumerate(ys):
         for ix, x in enumerate(xs):
@@ -229,3 +233,24 @@ def offset_map(
             B_abs = np.linalg.norm(magnet_field_T(geometry, shift, rotvec), axis=-1)
             err[:, iy, ix] = _read_as_axial(axial, B_abs) / F - 1.0
     return OffsetMap(xs, ys, F, regime, err)
+
+
+def worst_read_errors(m: OffsetMap) -> dict:
+    """Per regime, the largest |error| of a force read as axial over the map, and where."""
+    regimes: list[dict] = []
+    for reg in np.unique(m.regime):
+        err = np.abs(m.error_rel[m.regime == reg])  # (forces, ny, nx)
+        k, iy, ix = np.unravel_index(int(np.nanargmax(err)), err.shape)
+        regimes.append(
+            {
+                "regime": int(reg),
+                "worst_read_error_rel": float(m.error_rel[m.regime == reg][k, iy, ix]),
+                "at_mm": [float(m.x_mm[ix]), float(m.y_mm[iy])],
+                "at_force_N": float(m.force_N[m.regime == reg][k]),
+            }
+        )
+    return {
+        "region_mm": [float(m.x_mm.max()), float(m.y_mm.max())],
+        "regimes": regimes,
+        "worst_read_error_rel": max(abs(float(r["worst_read_error_rel"])) for r in regimes),
+    }
