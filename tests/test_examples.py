@@ -92,3 +92,18 @@ def test_the_ladder_rungs_agree_on_one_cell(tmp_path):
         # the cheap rungs are fitted to the continuum's stiffness and share the cell's lock stroke
         assert k == pytest.approx(k2, rel=0.02) and d == pytest.approx(d2, rel=0.02)
         assert F == pytest.approx(F2, rel=0.15)
+
+
+def test_an_off_centre_press_mirrors_and_reads_back(tmp_path):
+    out = run_example("offcentre_touch.py", tmp_path)
+    presses = re.findall(rf"press \(({NUMBER}), ({NUMBER})\) mm at {NUMBER} N: Bx ({NUMBER}) uT, By ({NUMBER}) uT", out)
+    (x1, _, bx1, by1), (x2, _, bx2, by2), (_, y3, bx3, by3) = [tuple(map(float, p)) for p in presses]
+    # mirror symmetry: a press at -x turns Bx over and leaves By; a press along y has no Bx
+    assert x2 == -x1 and bx2 == pytest.approx(-bx1, abs=0.01) and abs(by1) < 0.01 and abs(bx3) < 0.01 and by3 > 0
+    line = rf"true\s+({NUMBER}) N: centred\s+({NUMBER}) N, corrected\s+({NUMBER}) N at \(({NUMBER}), ({NUMBER})\) mm ok"
+    back = re.findall(line, out)
+    assert len(back) >= 5
+    for F_true, _, F, x, y in (tuple(map(float, b)) for b in back):
+        # noise-free readings of the same model: the press and the force come back
+        assert F == pytest.approx(F_true, rel=2e-3, abs=0.01) and (x, y) == pytest.approx((6.0, 3.0), abs=0.02)
+    assert max(abs(float(c) / float(t) - 1) for t, c, *_ in back) > 0.2  # what a centred reading misses
