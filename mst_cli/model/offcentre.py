@@ -1,5 +1,5 @@
 """A touch off the axis: the stack's compression and tilt, the magnet's pose, the field on all
-three axes, and the force a reading taken as axial would give (issue 24, first part).
+three axes, and the force a reading taken as axial would give (issue 24).
 
 Each layer answers the load at (x0, y0) with a compression and two tilts
 (:mod:`mst_cli.model.mechanics.tilt`, plates rigid). Small rotations add: layer j turns

@@ -18,9 +18,11 @@ close by d + phi_y x + phi_x y at (x, y), and
   over their area (:mod:`mst_cli.model.mechanics.contact_patch`).
 
 At a uniform closure that is the layer law exactly: W(d) + k_pads (d - d_lock)+. Tilted, the pads
-touch first at the loaded end x = +-a: L2 under tilted plates locks there (to 0.1 % of the
-stroke, benchmarks/check_tilt_rung.py), not at the chevron's lever. Equilibrium of force and both
-moments fixes (d, phi_y, phi_x).
+touch first at the loaded end x = +-a, not at the chevron's lever: L2 under tilted plates locks
+there on a thin shallow cell to 0.1 % of the stroke (tests/test_offcentre.py); over the box its
+loaded side's lock stroke is a median 3.4 % from it (benchmarks/check_tilt_rung.py, where a wall
+pinches first or a thick pad's contact spreads). Equilibrium of force and both moments fixes
+(d, phi_y, phi_x).
 
 Every law is piecewise linear in d, so the integrals over the depth are exact sums over the
 pieces the line delta(y) crosses, the pads' are exact polygon moments, and Newton's tangent is
@@ -32,10 +34,11 @@ the outer root at x = p and the inner one t tan(theta/2) further in) but between
 tip W/2, because turning the pad turns the wall's root too and the wall answers with a
 deflection along its run. L2 measures it at small strain (two linear solves,
 :func:`mst_cli.model.mechanics.continuum_tilt.linear_tilt_lever_mm`); the rung uses a fit of
-a = (x_c - x_r) / (W/2 - x_r) in theta, t/L and t/(h - t) (benchmarks/fit_tilt_lever.py,
+a = (x_c - x_r) / (W/2 - x_r) in theta, t/L, t/(h - t) and t/(t + a) (benchmarks/fit_tilt_lever.py,
 mst_cli/model/data/tilt_lever.json, with its out-of-sample error).
 
-Pure numpy, no I/O. At (x0, y0) = (0, 0) it is the axial model exactly (phi = 0).
+Pure numpy; the lever's coefficients load once from the package data. At (x0, y0) = (0, 0) it is
+the axial model exactly (phi = 0).
 """
 
 from __future__ import annotations
