@@ -76,7 +76,6 @@ class OffsetEstimator:
         self.max_sigma_mm = float(max_sigma_mm)
         self.half_face_mm = np.array([0.5 * geometry.width_mm, 0.5 * geometry.depth_mm])
         self._start: np.ndarray | None = None  # the layers' last (d, phi_y, phi_x)
-        self.iterations = 0  # Gauss-Newton iterations so far (all readings)
 
     def field_T(self, p: np.ndarray) -> np.ndarray:
         """The model's field (3,) at p = (force N, x0 mm, y0 mm); each layer's solve starts from
@@ -110,7 +109,6 @@ class OffsetEstimator:
             # converged when the step moves the model's field by a thousandth of the noise
             done = float(np.linalg.norm(J @ (p_new - p))) <= 1e-3 * self.sigma_T
             p = p_new
-            self.iterations += 1
             if done:
                 break
         J = self._jacobian(p, self.field_T(p))

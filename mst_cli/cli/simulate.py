@@ -95,7 +95,7 @@ def simulate(
     )
     omap = api.offset_map(doc, mechanics=mechanics, field_model=field_model) if offset_map else None
     if off is not None:
-        extra["off_centre"] = offcentre_summary(off)
+        extra["off_centre"] = offcentre_summary(off)  # the report's and the terminal's
     report = write_simulation(
         doc, geometry, resp, out, plot=plot, extra_report=extra, more=lambda st: write_offcentre(st, off, omap, plot)
     )
@@ -104,7 +104,7 @@ def simulate(
         return
     click.echo(terminal_table(doc, geometry, resp))
     if off is not None:
-        click.echo("\n".join(offcentre_lines(off)))
+        click.echo("\n".join(offcentre_lines(extra["off_centre"])))
     names = ["report.json", "response.csv"] + (["response.png"] if plot else [])
     for stem, present in (("offcentre", off), ("offset_map", omap)):
         names += [f"{stem}.csv"] + ([f"{stem}.png"] if plot else []) if present is not None else []

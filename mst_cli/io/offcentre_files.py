@@ -81,11 +81,10 @@ def _side(v: float | None) -> str:
     return "never (the plates pivot on the other side)" if v is None else f"{v:.4g} N"
 
 
-def offcentre_lines(r: OffCentreResponse) -> list[str]:
-    """The terminal's account of the off-centre load."""
-    s = offcentre_summary(r)
-    x0, y0 = r.offset_mm
-    lines = [f"load at x = {x0:g} mm, y = {y0:g} mm (rigid-plate tilt model, {r.mechanics} layers):"]
+def offcentre_lines(s: dict) -> list[str]:
+    """The terminal's account of the off-centre load, from its :func:`offcentre_summary`."""
+    x0, y0 = s["load_offset_mm"]
+    lines = [f"load at x = {x0:g} mm, y = {y0:g} mm (rigid-plate tilt model, {s['mechanics']} layers):"]
     for lay in s["layers"]:
         lines.append(
             f"  layer {lay['layer']}: locks at {lay['lock_force_axial_N']:.4g} N centred; here its -x side "

@@ -71,20 +71,11 @@ def cylinder_B_T(
 
     The magnet is tilted by ``tilt_deg`` about the y axis. magpylib works in metres.
     """
-    import magpylib as magpy  # deferred: the exact model's library (and scipy) load only when it is used
-    from scipy.spatial.transform import Rotation  # deferred: as above
+    from scipy.spatial.transform import Rotation  # deferred: the exact model's libraries load only when used
 
     r = np.atleast_2d(np.asarray(r_mm, dtype=float))
     orientation = Rotation.from_euler("y", tilt_deg, degrees=True) if tilt_deg else None
-    B = magpy.func.cylinder_field(
-        field="B",
-        observers=r * 1e-3,
-        dimensions=(diameter_mm * 1e-3, thickness_mm * 1e-3),
-        polarizations=(0.0, 0.0, remanence_T),
-        orientations=orientation,
-        squeeze=False,
-    )
-    return np.reshape(B, np.shape(r))
+    return np.reshape(_magpylib_cylinder_T(r, diameter_mm, thickness_mm, remanence_T, orientation), np.shape(r))
 
 
 def cylinder_pose_B_T(
@@ -93,20 +84,26 @@ def cylinder_pose_B_T(
     """Exact field of the cylinder at positions ``r_mm`` (m, 3) relative to its centre, the magnet
     turned by the rotation vectors ``rotvec_rad`` (m, 3) (axis times angle, about its centre):
     one pose per position, for a magnet that tilts as the load moves (:mod:`mst_cli.model.offcentre`)."""
-    import magpylib as magpy  # deferred: as cylinder_B_T
-    from scipy.spatial.transform import Rotation  # deferred: as above
+    from scipy.spatial.transform import Rotation  # deferred: as cylinder_B_T
 
     r = np.atleast_2d(np.asarray(r_mm, dtype=float))
     rot = Rotation.from_rotvec(np.array(np.broadcast_to(np.asarray(rotvec_rad, dtype=float), r.shape)))
-    B = magpy.func.cylinder_field(
+    return np.reshape(_magpylib_cylinder_T(r, diameter_mm, thickness_mm, remanence_T, rot), r.shape)
+
+
+def _magpylib_cylinder_T(r_mm: np.ndarray, diameter_mm: float, thickness_mm: float, remanence_T: float, orientation):
+    """magpylib's cylinder field at ``r_mm`` (n, 3), magnetised along its own axis, in the given
+    orientation (None: upright). magpylib works in metres."""
+    import magpylib as magpy  # deferred: as cylinder_B_T
+
+    return magpy.func.cylinder_field(
         field="B",
-        observers=r * 1e-3,
+        observers=r_mm * 1e-3,
         dimensions=(diameter_mm * 1e-3, thickness_mm * 1e-3),
         polarizations=(0.0, 0.0, remanence_T),
-        orientations=rot,
+        orientations=orientation,
         squeeze=False,
     )
-    return np.reshape(B, r.shape)
 
 
 def choose_field_model(

@@ -228,9 +228,7 @@ def offset_map(
     err = np.full((len(F), len(ys), len(xs)), np.nan)
     for iy, y in enumerate(ys):
         for ix, x in enumerate(xs):
-            d, tilt = stack_path(layers, F, (float(x), float(y)))
-            shift, rotvec = magnet_pose(geometry, d, tilt)
-            B_abs = np.linalg.norm(magnet_field_T(geometry, shift, rotvec), axis=-1)
+            B_abs = np.linalg.norm(pose_field_T(geometry, layers, F, (float(x), float(y))), axis=-1)
             err[:, iy, ix] = _read_as_axial(axial, B_abs) / F - 1.0
     return OffsetMap(xs, ys, F, regime, err)
 

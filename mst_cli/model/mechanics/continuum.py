@@ -403,6 +403,8 @@ class _Problem:
         on_bottom = np.abs(xy[1]) < tol
         on_cut = np.abs(xy[0] - x_cut) < tol
         on_tip = np.abs(xy[1] - h2) < tol
+        # the masks the tilted problem (continuum_tilt) reuses: x dofs, bonded face, the pad's cut
+        self.is_x, self.on_bottom, self.on_cut = is_x, on_bottom, on_cut
         self.fixed_zero = np.flatnonzero(on_bottom | (on_cut & is_x))
         self.tip_z = np.flatnonzero(on_tip & ~is_x & ~on_bottom)
         self.support_z = np.flatnonzero((on_bottom | on_cut) & ~is_x)

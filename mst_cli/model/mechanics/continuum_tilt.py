@@ -35,16 +35,9 @@ from mst_cli.model.mechanics.path import PathError, StepControl
 
 
 def _dof_sets(prob: _Problem) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """(is_x (N,), on the bonded bottom face (N,), on the pad's cut above it (N,), dof x, z)."""
-    b = prob.basis
-    xy = b.doflocs
-    is_x = np.zeros(b.N, bool)
-    is_x[b.nodal_dofs[0]] = True
-    is_x[b.facet_dofs[0]] = True
-    tol = 1e-9 * max(prob.cell.width_mm, prob.cell.h_mm)
-    bottom = np.abs(xy[1]) < tol
-    cut = (np.abs(xy[0] - prob.x_cut) < tol) & ~bottom
-    return is_x, bottom, cut, xy
+    """(is_x (N,), on the bonded bottom face (N,), on the pad's cut above it (N,), dof x, z):
+    the problem's own masks."""
+    return prob.is_x, prob.on_bottom, prob.on_cut & ~prob.on_bottom, prob.basis.doflocs
 
 
 class _TiltedProblem(_Problem):
