@@ -11,8 +11,10 @@ chevron with +tau, the other with -tau. The tilt rung says, per chevron:
 * the pads touch first at their loaded end: the loaded chevron locks at d = d_lock / (1 + tau a).
 
 Printed: per cell, the largest deviation of the two chevrons' forces before the loaded side
-locks, and the loaded side's lock stroke against the rung's; then medians and maxima, and the
-same with the lever at the wall roots' midpoint (the rung before its lever was fitted).
+locks, and the loaded side's lock stroke against the rung's; the other chevron from there on
+through its own lock (its quarter's pads, from the cut x_cut = a - 4 t to a, touch first at the
+cut) and its lock stroke; then medians and maxima, and the same with the lever at the wall
+roots' midpoint (the rung before its lever was fitted).
 
 Run:  .venv/bin/python benchmarks/check_tilt_rung.py [--cells 24 --seed 21 --tau 0.03]   # ~1 min
 """
@@ -40,15 +42,17 @@ def main() -> None:
     print(f"tau = {args.tau} rad/mm; {len(rows)} cells; {time.perf_counter() - t0:.0f} s of L2")
     print(
         "| theta [deg] | t [mm] | h [mm] | L2 lock | fitted lever: halfway / worst before the lock "
-        "| roots' midpoint: halfway / worst | lock stroke vs pads touching at +a |"
+        "| roots' midpoint: halfway / worst | lock stroke vs pads touching at +a "
+        "| other side through its lock: worst / its lock stroke |"
     )
-    print("|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|")
     for r in rows:
         c = r["cell"]
         print(
             f"| {c.theta_deg:.1f} | {c.t_mm:.2f} | {c.h_mm:.2f} | {r['contact_at']} "
             f"| {100 * r['fit_half']:.2f} / {100 * r['fit']:.2f} % "
-            f"| {100 * r['roots_half']:.2f} / {100 * r['roots']:.2f} % | {100 * r['lock_rel']:+.2f} % |"
+            f"| {100 * r['roots_half']:.2f} / {100 * r['roots']:.2f} % | {100 * r['lock_rel']:+.2f} % "
+            f"| {100 * r['fit_far']:.2f} % / {100 * r['far_lock_rel']:+.2f} % |"
         )
     shallow = np.array([r["cell"].theta_deg <= 40.0 for r in rows])
     for key, name in (
@@ -57,6 +61,8 @@ def main() -> None:
         ("roots_half", "halfway, roots' midpoint"),
         ("roots", "worst before the lock, roots' midpoint"),
         ("lock_rel", "lock stroke"),
+        ("fit_far", "other side, from the loaded lock through its own, fitted lever"),
+        ("far_lock_rel", "other side's lock stroke (pads touching at the cut)"),
     ):
         e = np.abs([r[key] for r in rows])
         print(
