@@ -14,9 +14,12 @@ Three measurements behind docs/design.md section 4 ("Steep walls", "L0 against L
    path mesh graded at both wall roots;
 5. whether grading converges: mid cells (30 and 45 deg) with the path mesh graded 0, 1 and 2
    rounds within 1 t of both wall roots, on the default 3 x 12 base and on 6 x 24; then the
-   45 deg cell graded at one root at a time (which corner keeps the lock force moving).
+   45 deg cell graded at one root at a time (which corner keeps the lock force moving);
+6. what keeps it moving: the outer root graded 0-4 rounds with the plate's contact a penalty
+   (no active set to churn), the smallest principal stretch at the lock and where, and the
+   largest drop of the force along the path (a crease snapping in).
 
-Run:  .venv/bin/python benchmarks/steep_lock.py [--uniform 200 --seed 7] [--parts 1,2,3,4,5]   # ~15 min
+Run:  .venv/bin/python benchmarks/steep_lock.py [--uniform 200 --seed 7] [--parts 1,2,3,4,5,6]   # ~17 min
 """
 
 from __future__ import annotations
@@ -31,6 +34,7 @@ from mst_cli.model.geometry import HexCell
 from mst_cli.model.material import Material
 from mst_cli.model.mechanics import continuum, uncached_layer_law
 from mst_cli.model.mechanics.continuum import continuum_layer, solve_continuum
+from mst_cli.model.mechanics.path import PathError, StepControl
 
 STEEP = [(60, 0.6, 4.0), (70, 1.5, 6.0)]
 MESHES = [(3, 12), (4, 16), (6, 24)]
@@ -153,11 +157,56 @@ def grading_rounds(mat) -> None:
             print(f"  {MID[1]} {corner} rounds {levels}: {_lock_row(MID[1], mat, (3, 12), max_steps=2000, **kw)}")
 
 
+CREASE_CELLS = [(45, 1.0, 4.0), (60, 0.6, 4.0)]
+PENALTY_PER_MM = 1e4  # the plate's penalty: within 0.01 % of the active set's R (tests/test_continuum.py)
+
+
+def _min_stretch(prob, u) -> tuple[float, np.ndarray]:
+    """The smallest principal stretch over the quadrature points, and where (the element's centroid)."""
+    asm = continuum._Assembler(prob.basis)
+    grad = np.einsum("eqki,ei->keq", asm.B, u[asm.dofs])
+    Fm = grad.reshape(2, 2, *grad.shape[1:]) + np.eye(2)[:, :, None, None]
+    c11, c22 = Fm[0, 0] ** 2 + Fm[1, 0] ** 2, Fm[0, 1] ** 2 + Fm[1, 1] ** 2
+    c12 = Fm[0, 0] * Fm[0, 1] + Fm[1, 0] * Fm[1, 1]
+    lam_min = np.sqrt(0.5 * (c11 + c22) - np.sqrt(0.25 * (c11 - c22) ** 2 + c12**2))
+    e = np.unravel_index(np.argmin(lam_min), lam_min.shape)[0]
+    return float(lam_min.min()), prob.mesh.p[:, prob.mesh.t[:, e]].mean(axis=1)
+
+
+def crease_at_outer_root(mat) -> None:
+    print(
+        f"\n6. the outer root graded 0-4 rounds within 1 t (3 x 12 base), the plate's contact a penalty "
+        f"({PENALTY_PER_MM:g} mu per mm): R, the smallest principal stretch at the lock and the largest "
+        "force drop along the path"
+    )
+    for cell in CREASE_CELLS:
+        c = HexCell(*cell)
+        print(f"{cell}: outer root at x = {c.outer_profile_xz()[0][0]:.3f} mm")
+        k_fine = continuum.linear_k(continuum._Problem(c, mat, 3, 12, continuum.DEFAULT_LEVELS))
+        for levels in range(5):
+            t0 = time.perf_counter()
+            prob = continuum._Problem(c, mat, 3, 12, levels, ("outer_root",), 1.0, PENALTY_PER_MM)
+            k_path = continuum.linear_k(prob)
+            try:
+                path, _ = continuum.follow_to_lock(prob, k_path, StepControl(max_steps=2000))
+            except PathError as exc:
+                print(f"  rounds {levels}: {exc} ({time.perf_counter() - t0:.1f} s)")
+                continue
+            F = np.array([o[0] for o in path.observations])
+            drop = float(np.max(np.maximum.accumulate(F) - F) / F.max())
+            stretch, at = _min_stretch(prob, path.state[0])
+            seconds = time.perf_counter() - t0
+            print(
+                f"  rounds {levels}: R {F[-1] * k_fine / k_path:.3f} N, {len(F)} steps, {seconds:.1f} s; "
+                f"smallest stretch {stretch:.3f} at ({at[0]:.3f}, {at[1]:.3f}) mm; largest drop {100 * drop:.1f} %"
+            )
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--uniform", type=int, default=200, help="cells drawn for part 3")
     ap.add_argument("--seed", type=int, default=7)
-    ap.add_argument("--parts", default="1,2,3,4,5", help="which parts to run, comma-separated")
+    ap.add_argument("--parts", default="1,2,3,4,5,6", help="which parts to run, comma-separated")
     args = ap.parse_args()
     parts = {int(p) for p in args.parts.split(",")}
     mat = Material()
@@ -171,6 +220,8 @@ def main() -> None:
         across_or_along(mat)
     if 5 in parts:
         grading_rounds(mat)
+    if 6 in parts:
+        crease_at_outer_root(mat)
 
 
 if __name__ == "__main__":

@@ -309,3 +309,19 @@ def test_a_peeling_contact_zone_does_not_cycle_the_active_set():
     pull = np.clip(sign[active] * r[dofs[active]], 0.0, None).sum()
     F_per_depth = prob.force(u, active, r)[0] / prob.depth_factor
     assert 0.0 < pull <= 0.01 * F_per_depth
+
+
+def test_the_plate_as_a_penalty_converges_to_the_active_set():
+    # Two treatments of the outer face's contact with the plate: the active set (exact for a
+    # frictionless plane) and a penalty, whose overlap, and so its error, falls like 1/stiffness.
+    # On a 45 deg cell whose outer face lies down on the plate before the lock, the penalty's
+    # lock force approaches the active set's as the stiffness grows tenfold, and the path stays
+    # in equilibrium with the plate's push counted among the supports.
+    cell = HexCell(45, 1.0, 4.0)
+    exact = L2.solve_continuum(cell, MAT).force_N[-1]
+    soft, stiff = (L2.solve_continuum(cell, MAT, plate_penalty_per_mm=k) for k in (1e3, 1e4))
+    err_soft, err_stiff = abs(soft.force_N[-1] / exact - 1), abs(stiff.force_N[-1] / exact - 1)
+    assert err_stiff < 1e-3 and err_stiff < 0.5 * err_soft
+    assert stiff.reaction_balance < 1e-6
+    prob = L2._Problem(cell, MAT, 3, 12, 0, plate_penalty_per_mm=1e4)
+    assert prob.plate.dofs.size > 0 and prob.contact_dofs.size == prob.n_inner  # the plate left the set

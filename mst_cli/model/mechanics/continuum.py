@@ -326,10 +326,47 @@ class _Assembler:
         return csr_matrix((data, self.indices, self.indptr), shape=(self.N, self.N))
 
 
+class _PlatePenalty:
+    """An assembler with the outer wall face's contact with the plate as a penalty.
+
+    The plate pushes a point of the outer face that has gone below it (u_z < -z) back with a
+    force kappa (overlap), kappa = ``per_mm`` mu L (L the point's share of the face's length,
+    mm): a pressure mu ``per_mm`` per mm of overlap. Unlike the active set, the contact force
+    is continuous in u, so Newton does not churn where many small elements touch one after the
+    other (the root-graded meshes of docs/design.md section 4, "Steep walls"); the answer is
+    the active set's as ``per_mm`` grows (tests/test_continuum.py). Only where the plate stays
+    put (the centred problem).
+    """
+
+    def __init__(self, base: _Assembler, dofs: np.ndarray, obstacle_mm: np.ndarray, kappa: np.ndarray):
+        self.base, self.dofs, self.obstacle_mm, self.kappa = base, dofs, obstacle_mm, kappa
+        self.N, self.nnz, self.indices, self.indptr = base.N, base.nnz, base.indices, base.indptr
+        # where each dof's diagonal entry sits in the CSR pattern
+        starts = base.indptr[dofs]
+        self.diag_pos = np.array(
+            [a + np.searchsorted(base.indices[a : base.indptr[i + 1]], i) for a, i in zip(starts, dofs)]
+        )
+
+    def overlap_mm(self, u: np.ndarray) -> np.ndarray:
+        return np.maximum(self.obstacle_mm - u[self.dofs], 0.0)
+
+    def residual(self, u, mu, lam):
+        r, state = self.base.residual(u, mu, lam)
+        pen = self.overlap_mm(u)
+        r[self.dofs] -= self.kappa * pen  # the plate pushes up
+        return r, (state, pen > 0.0)
+
+    def tangent(self, state, mu, lam):
+        inner, touching = state
+        K = self.base.tangent(inner, mu, lam)
+        K.data[self.diag_pos[touching]] += self.kappa[touching]
+        return K
+
+
 _ASSEMBLERS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
-def _assembler(basis) -> _Assembler:
+def _assembler(basis) -> _Assembler | _PlatePenalty:
     """The assembler of a basis, built on first use (kept as long as the basis lives)."""
     asm = _ASSEMBLERS.get(basis)
     if asm is None:
@@ -386,7 +423,17 @@ class _ActiveSet:
 
 
 class _Problem:
-    def __init__(self, cell, material, n_thick, n_length, levels, corners=CORNERS, radius_in_t=REFINE_RADIUS_IN_T):
+    def __init__(
+        self,
+        cell,
+        material,
+        n_thick,
+        n_length,
+        levels,
+        corners=CORNERS,
+        radius_in_t=REFINE_RADIUS_IN_T,
+        plate_penalty_per_mm=None,
+    ):
         from skfem import Basis, ElementTriP2, ElementVector  # deferred: scikit-fem, as in refined_quarter_mesh
 
         self.cell = cell
@@ -415,6 +462,25 @@ class _Problem:
         self._contact_sets(cell, xy, is_x, tol, on_bottom, on_tip)
         self.h2 = h2
         self.depth_factor = 2.0 * cell.b_mm  # F = 2 b f: two chevrons of a web b wide
+        self.plate = None if plate_penalty_per_mm is None else self._plate_as_penalty(plate_penalty_per_mm)
+
+    def _plate_as_penalty(self, per_mm):
+        """Take the outer face's contact out of the active set and into a penalty (_PlatePenalty)."""
+        n = self.n_inner
+        dofs, obstacle = self.contact_dofs[n:], self.obstacle_u0[n:]
+        self.contact_dofs, self.contact_sign = self.contact_dofs[:n], self.contact_sign[:n]
+        self.obstacle_u0, self.obstacle_rate = self.obstacle_u0[:n], self.obstacle_rate[:n]
+        # each point's share of the face's length: half the distance between its neighbours
+        xy = self.basis.doflocs[:, dofs]
+        along = np.hypot(xy[0] - xy[0].min(), xy[1] - xy[1].min())
+        order = np.argsort(along)
+        sorted_share = np.gradient(along[order])
+        sorted_share[[0, -1]] *= 0.5
+        share = np.empty(dofs.size)
+        share[order] = sorted_share
+        plate = _PlatePenalty(_Assembler(self.basis), dofs, obstacle, per_mm * self.mu * share)
+        _ASSEMBLERS[self.basis] = plate
+        return plate
 
     def _contact_sets(self, cell, xy, is_x, tol, on_bottom, on_tip):
         """The z-dofs of every surface that can close, each with its side and offset.
@@ -605,6 +671,8 @@ class _Problem:
         f_mirror = -(r[self.tip_z].sum() + r[self.contact_dofs[inner]].sum())
         support = np.setdiff1d(self.support_z, self.contact_dofs[active])
         f_support = r[support].sum() + r[self.contact_dofs[outer]].sum()
+        if self.plate is not None:  # the plate's push on the outer face, a penalty
+            f_support += float(np.sum(self.plate.kappa * self.plate.overlap_mm(u)))
         balance = abs(f_mirror - f_support) / max(abs(f_mirror), 1e-300)
         return f_mirror * self.depth_factor, balance
 
@@ -620,6 +688,7 @@ def solve_continuum(
     path_levels: int = 0,
     path_corners: tuple[str, ...] = CORNERS,
     path_radius_in_t: float = REFINE_RADIUS_IN_T,
+    plate_penalty_per_mm: float | None = None,
 ) -> ContinuumResult:
     """Nonlinear force-displacement of one layer through closure, up to its lock.
 
@@ -633,6 +702,9 @@ def solve_continuum(
     knob: benchmarks/sweep_lock.py and docs/design.md section 4 give what it changes;
     ``path_corners`` and ``path_radius_in_t`` say where it refines (benchmarks/steep_lock.py
     refines at the inner wall root alone, where a steep wall's contact front runs).
+    ``plate_penalty_per_mm``: the outer face's contact with the plate as a penalty of that
+    stiffness (pressure per mm of overlap, in units of the shear modulus; :class:`_PlatePenalty`)
+    instead of the active set: a study knob for root-graded path meshes.
 
     Raises
     ------
@@ -647,12 +719,13 @@ def solve_continuum(
     # elements at the cavity's near-crack tip invert long before contact. Its forces are
     # scaled by k_fine / k_coarse, the ratio of the two meshes' linear stiffnesses (the
     # corner singularity's mesh error; the benchmark's convergence study records it).
+    own_path_mesh = levels != path_levels or plate_penalty_per_mm is not None
     prob = (
-        _Problem(cell, material, n_thick, n_length, path_levels, path_corners, path_radius_in_t)
-        if levels != path_levels
+        _Problem(cell, material, n_thick, n_length, path_levels, path_corners, path_radius_in_t, plate_penalty_per_mm)
+        if own_path_mesh
         else fine
     )
-    k_path = linear_k(prob) if levels != path_levels else k_lin
+    k_path = linear_k(prob) if own_path_mesh else k_lin
     mesh_scale = k_lin / k_path
     try:
         path, ratio_after = follow_to_lock(
