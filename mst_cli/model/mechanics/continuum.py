@@ -423,6 +423,8 @@ class _ActiveSet:
 
 
 class _Problem:
+    plate: _PlatePenalty | None = None  # the plate's contact as a penalty, when asked for
+
     def __init__(
         self,
         cell,
