@@ -194,7 +194,7 @@ def crease_at_outer_root(mat) -> None:
                 continue
             F = np.array([o[0] for o in path.observations])
             drop = float(np.max(np.maximum.accumulate(F) - F) / F.max())
-            stretch, at = _min_stretch(prob, path.state[0])
+            stretch, at = _min_stretch(prob, path.state.u)
             seconds = time.perf_counter() - t0
             print(
                 f"  rounds {levels}: R {F[-1] * k_fine / k_path:.3f} N, {len(F)} steps, {seconds:.1f} s; "

@@ -48,7 +48,7 @@ from __future__ import annotations
 import functools
 import math
 import weakref
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -57,7 +57,7 @@ from scipy.sparse.linalg import splu, spsolve
 
 from mst_cli.model import geometry as geo
 from mst_cli.model.mechanics.frame import TabulatedLockingLayer, locked_tabulated_law
-from mst_cli.model.mechanics.path import PathError, PathTolerances, StepControl, follow_to_event
+from mst_cli.model.mechanics.path import LAW_CHORD_TOL_REL, PathError, PathTolerances, StepControl, follow_to_event
 
 if TYPE_CHECKING:
     from skfem import MeshTri
@@ -549,6 +549,11 @@ class _Problem:
         """Tangent stiffness dF/dd (N/mm) of the converged state (u, active) at compression d:
         one linear solve with the state's tangent, the tip and the active inner contacts moving
         with the mirror plane, the active outer contacts held on the plate."""
+        return self.rate(u, active, d)[1]
+
+    def rate(self, u, active, d):
+        """(du/dd (N,), dF/dd in N/mm) of the converged state (u, active) at compression d
+        (:meth:`tangent_k`); du/dd is the path's tangent, the next step's predictor."""
 
         asm = _assembler(self.basis)
         if active is None:
@@ -563,7 +568,7 @@ class _Problem:
         f = K @ v
         inner = active.copy()
         inner[self.n_inner :] = False
-        return float(-(f[self.tip_z].sum() + f[self.contact_dofs[inner]].sum()) * self.depth_factor)
+        return v, float(-(f[self.tip_z].sum() + f[self.contact_dofs[inner]].sum()) * self.depth_factor)
 
     def pinned_rate(self) -> np.ndarray:
         """du/dd on the held dofs: the tip face moves by -1/2 per mm of compression, the bonded
@@ -764,6 +769,61 @@ def _result(path, k_lin: float, mesh_scale: float, ratio_after: float, n_dofs: i
     )
 
 
+@dataclass(frozen=True)
+class _PathPoint:
+    """A converged point of the load path: what a solve restarts from, and what the lock test,
+    the next step's predictor and the chord's error estimate read."""
+
+    u: np.ndarray  # displacements (N,), mm
+    active: np.ndarray | None  # contact points held on their obstacles
+    residual: np.ndarray | None  # at u (None at rest)
+    d_mm: float
+    du_dd: np.ndarray  # the path's tangent
+    k_t_N_per_mm: float  # dF/dd
+    force: tuple[float, float]  # (F in N, equilibrium imbalance)
+
+
+class _LockPath:
+    """The callbacks :func:`~mst_cli.model.mechanics.path.follow_to_event` drives for one problem."""
+
+    def __init__(self, prob, k_ref_N_per_mm: float):
+        self.prob, self.k_ref = prob, k_ref_N_per_mm
+
+    def point(self, u, active, r, d) -> _PathPoint:
+        v, k_t = self.prob.rate(u, active, d)
+        return _PathPoint(u, active, r, d, v, k_t, self.prob.force(u, active, r) if r is not None else (0.0, 0.0))
+
+    def solve(self, at: _PathPoint, d: float, depth: int = 0) -> tuple[_PathPoint, int]:
+        prob = self.prob
+        try:
+            try:  # from the path's tangent: first order in the step, Newton starts close
+                u, it, active, r = prob._newton(at.u + (d - at.d_mm) * at.du_dd, d, at.active, pads=True)
+            except FloatingPointError:  # that start inverts an element or does not converge
+                u, it, active, r = prob._newton(at.u, d, at.active, pads=True)
+        except FloatingPointError:
+            # sub-step from the given point (the event search starts each trial from the
+            # bracket's near end, which can be a long step away where a wall is pinched)
+            if depth >= 3 or at.residual is None:
+                raise
+            mid, it0 = self.solve(at, 0.5 * (at.d_mm + d), depth + 1)
+            end, it1 = self.solve(mid, d, depth + 1)
+            return end, it0 + it1
+        return self.point(u, active, r, d), it
+
+    def margin(self, at: _PathPoint, d: float) -> tuple[float, str]:
+        # a face pinched between the plate and its mirror, or the pads meeting
+        return LOCK_STIFFNESS_FACTOR - at.k_t_N_per_mm / self.k_ref, _lock_label(self.prob, at.active)
+
+    @staticmethod
+    def chord(at: _PathPoint, d: float, new: _PathPoint, d_new: float) -> float:
+        # a quadratic between the two points bows off their chord by (d_new - d) |k_new - k| / 8
+        return (d_new - d) * abs(new.k_t_N_per_mm - at.k_t_N_per_mm) / 8.0 / max(abs(new.force[0]), 1e-300)
+
+    @staticmethod
+    def observe(at: _PathPoint, d: float) -> tuple[float, float, int]:
+        return at.force[0], at.force[1], int(at.active.sum()) if at.active is not None else 0
+
+
 def follow_to_lock(
     prob: _Problem,
     k_ref_N_per_mm: float,
@@ -773,51 +833,28 @@ def follow_to_lock(
     """Follow a built problem's load path from rest to its lock (the tangent stiffness reaching
     LOCK_STIFFNESS_FACTOR x ``k_ref_N_per_mm``), then one short step on into the locked branch.
 
-    Works on any problem with L2's interface (``_newton``, ``tangent_k``, ``force``; the 3D
-    check in benchmarks/ reuses it). Returns (the :class:`~mst_cli.model.mechanics.path.PathResult`,
-    whose observations are (F in N, equilibrium imbalance, contact points in contact), and the
-    tangent / k just past the lock (nan when that step does not converge)). Raises PathError.
+    Works on any problem with L2's interface (``_newton``, ``rate``, ``force``; the 3D check in
+    benchmarks/ reuses it). Steps are kept only while the chord between two points stays within
+    ``steps.chord_tol_rel`` (LAW_CHORD_TOL_REL unless given) of the curve. Returns (the
+    :class:`~mst_cli.model.mechanics.path.PathResult`, whose observations are (F in N,
+    equilibrium imbalance, contact points in contact) and whose state is the lock's
+    :class:`_PathPoint`, and the tangent / k just past the lock (nan when that step does not
+    converge)). Raises PathError.
     """
     cell = prob.cell
     d_nom = cell.h_mm - 2 * cell.t_mm - cell.contact_allowance_mm  # pads meet here if rigid
-
-    def solve(state, d, depth=0):
-        try:
-            u, it, active, r = prob._newton(state[0], d, state[1], pads=True)
-        except FloatingPointError:
-            # sub-step from the given state (the event search starts each trial from the
-            # bracket's near end, which can be a long step away where a wall is pinched)
-            if depth >= 3 or state[2] is None:
-                raise
-            mid, it0 = solve(state, 0.5 * (state[3] + d), depth + 1)
-            end, it1 = solve(mid, d, depth + 1)
-            return end, it0 + it1
-        return (u, active, r, d), it
-
-    def margin(state, d):
-        # a face pinched between the plate and its mirror, or the pads meeting
-        return LOCK_STIFFNESS_FACTOR - prob.tangent_k(state[0], state[1], d) / k_ref_N_per_mm, _lock_label(
-            prob, state[1]
-        )
-
-    def observe(state, d):
-        F, balance = prob.force(*state[:3])
-        return F, balance, int(state[1].sum())
-
+    steps = steps or StepControl()
+    if steps.chord_tol_rel is None:
+        steps = replace(steps, chord_tol_rel=LAW_CHORD_TOL_REL)
+    lp = _LockPath(prob, k_ref_N_per_mm)
+    rest = lp.point(np.zeros(prob.basis.N), None, None, 0.0)
     path = follow_to_event(
-        solve,
-        margin,
-        observe,
-        (np.zeros(prob.basis.N), None, None, 0.0),
-        d_nom,
-        d_max_over_nominal * d_nom,
-        steps or StepControl(),
-        LOCK_TOLERANCES,
+        lp.solve, lp.margin, lp.observe, rest, d_nom, d_max_over_nominal * d_nom, steps, LOCK_TOLERANCES, chord=lp.chord
     )
     d_after = path.d_mm[-1] + LOCK_TOLERANCES.event_width_rel * d_nom * 10
     try:
-        after, _ = solve(path.state, d_after)
-        ratio_after = prob.tangent_k(after[0], after[1], d_after) / k_ref_N_per_mm
+        after, _ = lp.solve(path.state, d_after)
+        ratio_after = after.k_t_N_per_mm / k_ref_N_per_mm
     except FloatingPointError:
         ratio_after = math.nan
     return path, ratio_after

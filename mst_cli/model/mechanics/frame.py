@@ -53,7 +53,7 @@ import numpy as np
 from mst_cli.model import geometry as geo
 from mst_cli.model.material import Material
 from mst_cli.model.mechanics.correction import stiffness_factor
-from mst_cli.model.mechanics.path import PathError, StepControl, follow_to_event
+from mst_cli.model.mechanics.path import LAW_CHORD_TOL_REL, PathError, StepControl, follow_to_event
 from mst_cli.model.mechanics.spring import (
     SHEAR_COEFFICIENT_RECT,
     contact_stiffness_N_per_mm,
@@ -292,6 +292,12 @@ def solve_frame(
         f, _ = wall.assemble(u, need_K=False)
         return -f[wall.tip_w] * factor
 
+    def chord(u0, d0, u1, d1):
+        # as L2's: a quadratic between two points bows off their
+        # chord by (d1 - d0) |k1 - k0| / 8
+        k0, k1 = _tangent_stiffness(wall, u0), _tangent_stiffness(wall, u1)
+        return (d1 - d0) * factor * abs(k1 - k0) / 8.0 / max(abs(force(u1, d1)), 1e-300)
+
     d_nom = cell.cavity_height_mm - allowance
     # the rigid pads meet at d_nom: a cap just past it ends every path in contact
     d_cap = d_nom * (1.0 + 1e-9) + 1e-12
@@ -303,7 +309,8 @@ def solve_frame(
             u,
             d_nom,
             d_cap,
-            StepControl(first_step_rel=first_step_frac, max_steps=max_steps),
+            StepControl(first_step_rel=first_step_frac, max_steps=max_steps, chord_tol_rel=LAW_CHORD_TOL_REL),
+            chord=chord,
         )
     except PathError as exc:
         raise FrameError(f"frame solve: {exc} for {cell}") from None
@@ -324,9 +331,13 @@ def _require_stroke(cell: geo.HexCell) -> None:
 
 
 def _small_load_stiffness(wall: _Wall) -> float:
-    """One wall's small-load stiffness (N/mm of layer compression): the tangent at u = 0, tip
-    moved by -1/2 per unit layer compression."""
-    u = np.zeros(wall.ndof)
+    """One wall's small-load stiffness (N/mm of layer compression): the tangent at u = 0."""
+    return _tangent_stiffness(wall, np.zeros(wall.ndof))
+
+
+def _tangent_stiffness(wall: _Wall, u: np.ndarray) -> float:
+    """One wall's tangent stiffness dF/dd (N/mm of layer compression) at the converged state u:
+    the tip moved by -1/2 per unit layer compression."""
     f0, K0 = wall.assemble(u)
     free = wall.free
     ul = np.zeros_like(u)

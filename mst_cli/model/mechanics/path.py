@@ -61,6 +61,12 @@ class PathTolerances:
     bisect: bool = False
 
 
+# The laws of the rungs that follow a path (L1, L2) join its samples by straight lines: a step
+# is kept only while that line bows off the curve by at most this share of the force
+# (docs/design.md section 4, "The law between its knots")
+LAW_CHORD_TOL_REL = 2e-3
+
+
 @dataclass(frozen=True)
 class StepControl:
     """Adaptive displacement steps of :func:`follow_to_event`."""
@@ -70,7 +76,11 @@ class StepControl:
     hold_at_most_iterations: int = 6  # ... in at most this many: next the same; else x shrink
     grow: float = 1.5
     shrink: float = 0.5  # also the factor of a failed step
-    max_steps: int = 400  # converged or failed steps before the event, at most
+    max_steps: int = 400  # converged, failed or rejected steps before the event, at most
+    # with a ``chord`` callback: the largest error of the straight line between two accepted
+    # points (the tabulated law between its knots), relative to the force at the step's end; a
+    # step over it is rejected, and the next is sized to about 0.8 of it
+    chord_tol_rel: float | None = None
 
 
 @dataclass
@@ -94,12 +104,15 @@ def follow_to_event(
     steps: StepControl = StepControl(),
     tol: PathTolerances = PathTolerances(),
     failures: tuple[type[BaseException], ...] = (FloatingPointError, np.linalg.LinAlgError),
+    chord: Callable | None = None,
 ) -> PathResult:
     """Follow the equilibrium path from ``state0`` at d = 0 until ``margin`` reaches 0.
 
     ``d_max_mm`` caps the compression; reaching it without the event is a :class:`PathError`
     (a cap just past a stroke where the event is certain, as L1's rigid pads, never raises).
-    See the module docstring for ``solve``, ``margin`` and ``observe``.
+    See the module docstring for ``solve``, ``margin`` and ``observe``. ``chord(state, d,
+    state_new, d_new)``, optional: the estimated largest error of the chord between two
+    converged points, relative to the force, which ``steps.chord_tol_rel`` bounds.
     """
     d, step, total_it = 0.0, steps.first_step_rel * d_ref_mm, 0
     state = state0
@@ -118,6 +131,10 @@ def follow_to_event(
             continue
         total_it += it
         m_new, where = margin(state_new, d_try)
+        err = chord(state, d, state_new, d_try) if chord is not None and m_new > 0.0 else 0.0
+        if steps.chord_tol_rel and err > steps.chord_tol_rel and step > 1e3 * tol.min_step_rel * d_ref_mm:
+            step *= max(steps.shrink, 0.8 * (steps.chord_tol_rel / err) ** 0.5)  # error ~ step^2
+            continue
         if m_new <= 0.0:
             state_ev, d_ev, where, it = _locate_event(
                 solve, margin, d_ref_mm, tol, failures, d, m_prev, state, d_try, m_new, state_new, where
@@ -128,11 +145,19 @@ def follow_to_event(
         ds.append(d_try)
         obs.append(observe(state_new, d_try))
         state, d, m_prev = state_new, d_try, m_new
-        if it <= steps.grow_at_most_iterations:
-            step *= steps.grow
-        elif it > steps.hold_at_most_iterations:
-            step *= steps.shrink
+        step *= _step_factor(steps, it, err)
     raise PathError(f"no event within {steps.max_steps} steps (d = {d:.4g} mm)")
+
+
+def _step_factor(steps: StepControl, iterations: int, chord_err: float) -> float:
+    """The next step over this one: by Newton's iterations, and no longer than keeps the chord
+    within about 0.8 of its tolerance."""
+    factor = steps.grow if iterations <= steps.grow_at_most_iterations else 1.0
+    if iterations > steps.hold_at_most_iterations:
+        factor = steps.shrink
+    if steps.chord_tol_rel and chord_err > 0.0:
+        factor = min(factor, max(steps.shrink, 0.8 * (steps.chord_tol_rel / chord_err) ** 0.5))
+    return factor
 
 
 def _locate_event(solve, margin, d_ref_mm, tol, failures, lo, m_lo, s_lo, hi, m_hi, s_hi, where_hi):
