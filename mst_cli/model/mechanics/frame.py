@@ -292,12 +292,6 @@ def solve_frame(
         f, _ = wall.assemble(u, need_K=False)
         return -f[wall.tip_w] * factor
 
-    def chord(u0, d0, u1, d1):
-        # as L2's: a quadratic between two points bows off their
-        # chord by (d1 - d0) |k1 - k0| / 8
-        k0, k1 = _tangent_stiffness(wall, u0), _tangent_stiffness(wall, u1)
-        return (d1 - d0) * factor * abs(k1 - k0) / 8.0 / max(abs(force(u1, d1)), 1e-300)
-
     d_nom = cell.cavity_height_mm - allowance
     # the rigid pads meet at d_nom: a cap just past it ends every path in contact
     d_cap = d_nom * (1.0 + 1e-9) + 1e-12
@@ -310,7 +304,7 @@ def solve_frame(
             d_nom,
             d_cap,
             StepControl(first_step_rel=first_step_frac, max_steps=max_steps, chord_tol_rel=LAW_CHORD_TOL_REL),
-            chord=chord,
+            chord=_chord_estimate(wall, factor),
         )
     except PathError as exc:
         raise FrameError(f"frame solve: {exc} for {cell}") from None
@@ -319,6 +313,21 @@ def solve_frame(
     return FrameResult(
         np.array([0.0] + path.d_mm), F, k_lin, float(path.d_mm[-1]), path.event_at, path.iterations, snap
     )
+
+
+def _chord_estimate(wall: _Wall, factor: float):
+    """The path driver's ``chord`` callback (as L2's): a quadratic between two converged points
+    bows off their chord by (d1 - d0) |k1 - k0| / 8, relative to the force at d1."""
+    last: list = [None, 0.0]  # the last point measured to, and its tangent (the next step's start)
+
+    def chord(u0, d0, u1, d1):
+        k0 = last[1] if u0 is last[0] else _tangent_stiffness(wall, u0)
+        k1 = _tangent_stiffness(wall, u1)
+        last[:] = [u1, k1]
+        f, _ = wall.assemble(u1, need_K=False)
+        return (d1 - d0) * abs(k1 - k0) / 8.0 / max(abs(f[wall.tip_w]), 1e-300)
+
+    return chord
 
 
 def _require_stroke(cell: geo.HexCell) -> None:
