@@ -545,15 +545,11 @@ class _Problem:
         """Where each contact dof's u_z meets its obstacle at compression d (mm)."""
         return self.obstacle_u0 + self.obstacle_rate * d
 
-    def tangent_k(self, u, active, d, need_K=None):
-        """Tangent stiffness dF/dd (N/mm) of the converged state (u, active) at compression d:
-        one linear solve with the state's tangent, the tip and the active inner contacts moving
-        with the mirror plane, the active outer contacts held on the plate."""
-        return self.rate(u, active, d)[1]
-
     def rate(self, u, active, d):
-        """(du/dd (N,), dF/dd in N/mm) of the converged state (u, active) at compression d
-        (:meth:`tangent_k`); du/dd is the path's tangent, the next step's predictor."""
+        """(du/dd (N,), dF/dd in N/mm) of the converged state (u, active) at compression d: one
+        linear solve with the state's tangent, the tip and the active inner contacts moving with
+        the mirror plane, the active outer contacts held on the plate. dF/dd is the lock's test,
+        du/dd the path's tangent (the next step's predictor)."""
 
         asm = _assembler(self.basis)
         if active is None:

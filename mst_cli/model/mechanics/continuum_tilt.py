@@ -77,7 +77,7 @@ def solve_tilted_chevron(
     (d the compression at the axis; forces as a whole web of such chevrons, plane strain, on the
     path's own mesh: compare with ``solve_continuum(...).force_N / mesh_scale``)."""
     prob = _TiltedProblem(cell, material, tilt_rad_per_mm, n_thick, n_length)
-    k0 = prob.tangent_k(np.zeros(prob.basis.N), None, 0.0)
+    k0 = prob.rate(np.zeros(prob.basis.N), None, 0.0)[1]
     # the side that closes less reaches its stroke later: at most where its pads' least-closed
     # point (the cut, or the pad's end) has closed by the untilted stroke
     least = min(1.0 + tilt_rad_per_mm * prob.x_cut, 1.0 + tilt_rad_per_mm * cell.p_mm)

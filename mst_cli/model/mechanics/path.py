@@ -132,6 +132,8 @@ def follow_to_event(
         total_it += it
         m_new, where = margin(state_new, d_try)
         err = chord(state, d, state_new, d_try) if chord is not None and m_new > 0.0 else 0.0
+        # a step under 1e-4 of the stroke is kept whatever its chord: there the curve has a kink
+        # (a contact point engaging), which no shorter step straightens
         if steps.chord_tol_rel and err > steps.chord_tol_rel and step > 1e3 * tol.min_step_rel * d_ref_mm:
             step *= max(steps.shrink, 0.8 * (steps.chord_tol_rel / err) ** 0.5)  # error ~ step^2
             continue
