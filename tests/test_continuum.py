@@ -120,16 +120,32 @@ def test_tangent_is_the_derivative_of_the_residual_at_a_large_strain():
     assert abs(K - K.T).max() <= 1e-12 * abs(K).max()  # hyperelastic: symmetric
 
 
-def test_free_block_is_the_sliced_tangent():
-    from scipy.sparse import csc_matrix
+def test_free_block_is_the_sliced_tangent_and_solves_it():
+    """The block is K cut to the free dofs (in its banded order), and its banded solves, the
+    Cholesky of a stable state and the LU of an indefinite one, agree with SuperLU on it."""
+    from scipy.sparse.linalg import spsolve
 
     prob = L2._Problem(HexCell(40, 0.8, 3.0), MAT, L2.DEFAULT_N_THICK, L2.DEFAULT_N_LENGTH, 0)
     _, K = prob.assemble(np.zeros(prob.basis.N))
+    rng = np.random.default_rng(3)
     for pinned in ((), prob.inner_z[:3]):
-        free, pos, indices, indptr = prob.free_block(pinned)
-        assert np.array_equal(free, np.setdiff1d(prob.free, pinned))
-        block = csc_matrix((K.data[pos], indices, indptr), shape=(free.size, free.size))
-        assert abs(block - K[free][:, free]).max() == 0.0
+        block = prob.free_block(pinned)
+        free = block.free
+        assert np.array_equal(np.sort(free), np.setdiff1d(prob.free, pinned))
+        assert abs(block.csc(K) - K[free][:, free]).max() == 0.0
+        assert block.half_band < free.size // 10  # banded: the point of the order
+        rhs = rng.standard_normal(free.size)
+        ref = spsolve(block.csc(K), rhs)
+        assert np.abs(block.solve(K, rhs) - ref).max() <= 1e-10 * np.abs(ref).max()
+    # K shifted so that every diagonal entry is negative (not positive definite): the Cholesky
+    # fails at its first pivot, the LU answers
+    shifted = K.copy()
+    on_diagonal = K.indices == np.repeat(np.arange(K.shape[0]), np.diff(K.indptr))
+    shifted.data[on_diagonal] -= 2.0 * np.abs(K.data).max()
+    assert shifted.diagonal().max() < 0.0
+    rhs = rng.standard_normal(free.size)
+    ref = spsolve(block.csc(shifted), rhs)
+    assert np.abs(block.solve(shifted, rhs) - ref).max() <= 1e-10 * np.abs(ref).max()
 
 
 def test_cantilever_tip_deflection_is_plane_strain_timoshenko():

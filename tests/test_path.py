@@ -104,3 +104,48 @@ def test_a_failed_solve_while_locating_the_event_is_an_error():
 
     with pytest.raises(PathError, match="locating the event"):
         follow_to_event(solve, lambda s, d: (0.4 - d, "pad"), _force, 0.0, 1.0, 2.0, StepControl(first_step_rel=0.3))
+
+
+def _jump_at(d_e):
+    # a margin that jumps at d_e (a tangent stiffness as a contact engages: L2's lock)
+    return lambda s, d: (1.0, "wall") if d < d_e else (-1.0, "pad")
+
+
+JUMP_TOL = PathTolerances(event_gap_rel=0.0, event_width_rel=1e-5, max_event_iterations=40, bisect=True)
+
+
+@pytest.mark.parametrize("curvature", [-20.0, -1.0, 1.0, 20.0])
+def test_a_guessed_jump_is_located_to_the_width(curvature):
+    """A guess of the jump as a gap's linear prediction makes it, off by curvature x (d_e - d_lo)^2
+    (a Newton step on a smooth gap), locates it to the bracket tolerance, with the label of the
+    side past the jump: a guess short of the jump (the gap closing slower than its tangent says)
+    in a third of bisection's trials, one past it in no more than bisection's and two."""
+    d_e = 0.61803
+    solve_b, bisected = _exact()
+    follow_to_event(solve_b, _jump_at(d_e), _force, 0.0, 1.0, 2.0, tol=JUMP_TOL)
+    solve_g, guessed = _exact()
+    path = follow_to_event(
+        solve_g,
+        _jump_at(d_e),
+        _force,
+        0.0,
+        1.0,
+        2.0,
+        tol=JUMP_TOL,
+        guess=lambda s, lo, hi: d_e + curvature * (d_e - lo) ** 2,
+    )
+    assert abs(path.d_mm[-1] - d_e) <= JUMP_TOL.event_width_rel
+    assert path.event_at == "pad"
+    trials_b = len(bisected) - len(path.d_mm)  # the steps up to the bracket are shared
+    trials_g = len(guessed) - len(path.d_mm)
+    assert trials_b >= 15  # log2(bracket / 1e-5)
+    assert trials_g <= (trials_b / 3 if curvature < 0 else trials_b + 2)
+
+
+def test_a_guess_outside_the_bracket_is_ignored():
+    d_e = 0.61803
+    solve_b, bisected = _exact()
+    follow_to_event(solve_b, _jump_at(d_e), _force, 0.0, 1.0, 2.0, tol=JUMP_TOL)
+    solve_g, guessed = _exact()
+    path = follow_to_event(solve_g, _jump_at(d_e), _force, 0.0, 1.0, 2.0, tol=JUMP_TOL, guess=lambda s, lo, hi: 5.0)
+    assert guessed == bisected and abs(path.d_mm[-1] - d_e) <= JUMP_TOL.event_width_rel
