@@ -14,7 +14,8 @@ Each mode is then run once more, in a fresh interpreter of its own (cold caches,
 command), with counters on:
 
 * dear-rung law requests (``layer_law(cell, material, frame|continuum)``) and the laws actually
-  solved (the rung's per-cell cache misses; requests when the rung has no cache);
+  solved (the rung's per-cell cache misses, in this process or by a worker: since 0.11 a
+  stack's missing continuum laws are solved side by side, mst_cli/model/mechanics/law_cache.py);
 * DesignProblem._evaluate_physical calls (every evaluation goes through it, with or without the
   print-shifted stacks: one call is one batched kernel call; in an older checkout
   evaluate_physical, whose print-shifted stacks went through kernel calls of their own, not
@@ -89,29 +90,19 @@ def count_run(spec: Path, flags: list[str]) -> dict:
         return original(self, theta_deg, t_mm, h_mm, *more)
 
     setattr(DesignProblem, name, counted)
-    requests = {"frame": 0, "continuum": 0}
-    for module, name in ((frame, "frame_layer"), (continuum, "continuum_layer")):
-        inner = getattr(module, name)
-        rung = name.split("_")[0]
-
-        def wrapper(cell, material, _inner=inner, _rung=rung):
-            requests[_rung] += 1
-            return _inner(cell, material)
-
-        wrapper.__wrapped__ = getattr(inner, "__wrapped__", inner)
-        wrapper.inner = inner
-        setattr(module, name, wrapper)  # layer_law imports it from the module per call
-
     with tempfile.TemporaryDirectory() as tmp:
         t0 = time.perf_counter()
         with contextlib.suppress(SystemExit):  # the command's exit code: not a count
             main(["design", str(spec), *flags, "--out", f"{tmp}/o", "-q"], standalone_mode=False)
         elapsed = time.perf_counter() - t0
-    solved = {}
-    for module, name in ((frame, "frame_layer"), (continuum, "continuum_layer")):
-        inner = getattr(module, name).inner
-        rung = name.split("_")[0]
-        solved[rung] = inner.cache_info().misses if hasattr(inner, "cache_info") else requests[rung]
+    # both rungs memoise their laws (an lru_cache before 0.11): requests are hits + misses,
+    # and a miss is a law solved (in this process or by a worker)
+    info = {
+        rung: getattr(module, f"{rung}_layer").cache_info()
+        for rung, module in (("frame", frame), ("continuum", continuum))
+    }
+    requests = {rung: i.hits + i.misses for rung, i in info.items()}
+    solved = {rung: i.misses for rung, i in info.items()}
     return {**calls, "law_requests": requests, "laws_solved": solved, "in_process_s": elapsed}
 
 

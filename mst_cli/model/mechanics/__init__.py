@@ -60,9 +60,14 @@ def _plane_strain_law(cell: HexCell, material: Material, model: str) -> LinearLo
 def layer_laws(
     cells: Sequence[HexCell], material: Material, model: str = "spring"
 ) -> tuple[LinearLockingLayer | TabulatedLockingLayer, ...]:
-    """:func:`layer_law` of every cell of a stack; the spring rung's in one kernel call."""
+    """:func:`layer_law` of every cell of a stack; the spring rung's in one kernel call, the
+    continuum rung's missing laws in parallel (:mod:`mst_cli.model.mechanics.law_cache`)."""
     if model == "spring":
         return spring_layers(cells, material, modulus_MPa=[in_web(c, material).youngs_modulus_MPa for c in cells])
+    if model == "continuum":  # half a second a law: the missing ones side by side, a process per core
+        from mst_cli.model.mechanics.continuum import continuum_layer  # deferred: L2 (scikit-fem) loads when asked
+
+        continuum_layer.solve_many((c, in_web(c, material)) for c in cells)
     return tuple(layer_law(c, material, model) for c in cells)
 
 

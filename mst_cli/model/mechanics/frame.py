@@ -43,7 +43,6 @@ path itself is followed by :mod:`mst_cli.model.mechanics.path`, L2's driver too.
 
 from __future__ import annotations
 
-import functools
 import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
@@ -53,6 +52,7 @@ import numpy as np
 from mst_cli.model import geometry as geo
 from mst_cli.model.material import Material
 from mst_cli.model.mechanics.correction import stiffness_factor
+from mst_cli.model.mechanics.law_cache import law_cache
 from mst_cli.model.mechanics.path import LAW_CHORD_TOL_REL, PathError, StepControl, follow_to_event
 from mst_cli.model.mechanics.spring import (
     SHEAR_COEFFICIENT_RECT,
@@ -385,7 +385,7 @@ def locked_tabulated_law(
     return TabulatedLockingLayer.from_curve(d, F, k_linear_N_per_mm, k_locked, snap_through)
 
 
-@functools.lru_cache(maxsize=4096)
+@law_cache(maxsize=4096)
 def frame_layer(cell: geo.HexCell, material: Material) -> TabulatedLockingLayer:
     """The L1 law of one cell: the frame curve up to contact, then the locked branch (walls + contact column)."""
     res = solve_frame(cell, material)
