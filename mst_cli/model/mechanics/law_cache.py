@@ -95,9 +95,16 @@ class LawCache:
         n_workers = min(len(todo), workers())
         if n_workers < 2 or not _can_fork():
             return  # the caller's own requests solve them in turn
+        from threadpoolctl import threadpool_limits  # deferred: only where workers are forked
+
         _TASKS[:] = [(self._solve, key) for key in todo]
         try:
-            with multiprocessing.get_context("fork").Pool(n_workers) as pool:
+            # one BLAS thread in each worker (they inherit the limit): OpenBLAS's idle threads
+            # spin, and two workers' pools on two cores made a stack's laws 80 times slower
+            with (
+                threadpool_limits(limits=1, user_api="blas"),
+                multiprocessing.get_context("fork").Pool(n_workers) as pool,
+            ):
                 laws = pool.map(_solve_task, range(len(todo)), chunksize=1)
         finally:
             _TASKS.clear()
