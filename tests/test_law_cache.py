@@ -6,11 +6,10 @@ import threading
 import numpy as np
 import pytest
 
-from mst_cli.errors import InputError
 from mst_cli.model import geometry as geo
 from mst_cli.model.material import Material
 from mst_cli.model.mechanics import continuum
-from mst_cli.model.mechanics.law_cache import LawCache, workers
+from mst_cli.model.mechanics.law_cache import LawCache
 
 FORKS = sys.platform.startswith("linux") and threading.active_count() == 1
 needs_fork = pytest.mark.skipif(not FORKS, reason="side-by-side solves fork, on Linux only")
@@ -67,10 +66,3 @@ def test_the_memo_keeps_the_newest(monkeypatch):
     assert cache.cache_info().hits == 2
     cache.cache_clear()
     assert cache.cache_info() == (0, 0, 2, 0)
-
-
-@pytest.mark.parametrize("text", ["0", "-1", "two", "1.5"])
-def test_a_bad_worker_count_names_the_variable(monkeypatch, text):
-    monkeypatch.setenv("MST_WORKERS", text)
-    with pytest.raises(InputError, match="MST_WORKERS"):
-        workers()

@@ -161,21 +161,27 @@ def test_bad_objective_key_is_refused(tmp_path):
 
 
 # --------------------------------------------------------------------------- shared work
-def test_batched_polishes_are_the_one_at_a_time_polishes():
-    """prefer_many runs every weighting's own local run, only its kernel calls batched: each
-    ends where prefer alone ends, to the bit."""
+@pytest.mark.parametrize("workers", ["1", "2"])
+def test_batched_polishes_are_the_one_at_a_time_polishes(monkeypatch, workers):
+    """prefer_many runs every weighting's own local run, only its kernel calls batched (in one
+    process, or dealt to two forked workers): each ends where prefer alone ends, to the bit,
+    with the same stop reasons in the weightings' order."""
     from mst_cli.design.problem import DesignProblem
     from mst_cli.design.solver import _Budget, _matched, prefer, prefer_many
 
+    monkeypatch.setenv("MST_WORKERS", workers)
     problem = DesignProblem(load_document(ROOT / "configs" / "mohammadi2021.yaml"))
     sol, _ = _matched(problem, 0, 20000, None, "slsqp", 120.0)
     weights = list(pareto_weights(6))
-    batched = prefer_many(problem, [sol.u] * len(weights), weights, max_evaluations=20000)
+    stops: list = []
+    batched = prefer_many(problem, [sol.u] * len(weights), weights, max_evaluations=20000, stops=stops)
+    stops_alone: list = []
     for w, (u, used) in zip(weights, batched):
         budget = _Budget(20000, None, 120.0)
-        alone, _, _ = prefer(problem, sol.u, budget, "slsqp", [], w)
+        alone, _, _ = prefer(problem, sol.u, budget, "slsqp", stops_alone, w)
         assert np.array_equal(u, alone) and used == budget.used
         assert used > 0
+    assert stops == stops_alone
 
 
 def test_batched_polish_hands_back_an_error():

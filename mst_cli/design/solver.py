@@ -45,6 +45,7 @@ import numpy as np
 
 from mst_cli.design import seed
 from mst_cli.design.problem import DesignProblem, Evaluation, robustness_of_shifts
+from mst_cli.parallel import fork_map, workers
 
 if TYPE_CHECKING:
     from collections.abc import Callable
@@ -785,19 +786,49 @@ def prefer_many(
 ) -> list[tuple[np.ndarray, int]]:
     """Phases 2-4 (:func:`prefer`) for every (start, weighting) pair, each with a fresh
     ``max_evaluations`` budget, their kernel calls batched across the weightings.
-    Returns (u, evaluations) per pair, in order."""
-    run_stops: list[list[str]] = [[] for _ in starts]
+    Returns (u, evaluations) per pair, in order.
 
-    def job(k):
-        def run(batched):
-            budget = _Budget(max_evaluations, None, max_time_s)
-            u, _, _ = prefer(batched, starts[k], budget, local, run_stops[k], weightings[k])
-            return u, budget.used
-
-        return run
-
-    out = _SharedEvaluations(problem).run([job(k) for k in range(len(starts))])
+    With more than one core the pairs are dealt round-robin to forked workers
+    (:func:`mst_cli.parallel.fork_map`), each batching its share: a pair's polish is the same
+    to the bit in any batch (:class:`_SharedEvaluations`), so the answer is too."""
+    n = len(starts)
+    n_hands = max(1, min(n, workers()))
+    hands = [list(range(i, n, n_hands)) for i in range(n_hands)]
+    dealt = fork_map(
+        lambda hand: _prefer_hand(problem, starts, weightings, hand, max_evaluations, local, max_time_s), hands
+    )
+    if dealt is None:
+        hands = [list(range(n))]
+        dealt = [_prefer_hand(problem, starts, weightings, hands[0], max_evaluations, local, max_time_s)]
+    out: list = [None] * n
+    run_stops: list[list[str]] = [[] for _ in range(n)]
+    for hand, (results, hand_stops) in zip(hands, dealt):
+        for k, result, s in zip(hand, results, hand_stops):
+            out[k], run_stops[k] = result, s
     if stops is not None:
         for s in run_stops:
             stops.extend(s)
     return out
+
+
+def _prefer_hand(
+    problem: DesignProblem,
+    starts: list[np.ndarray],
+    weightings: list[ArrayLike],
+    hand: list[int],
+    max_evaluations: int,
+    local: str,
+    max_time_s: float,
+) -> tuple[list, list[list[str]]]:
+    """:func:`prefer_many` on the pairs numbered ``hand``, batched: ([(u, evaluations)], [stops])."""
+    run_stops: list[list[str]] = [[] for _ in hand]
+
+    def job(k, i):
+        def run(batched):
+            budget = _Budget(max_evaluations, None, max_time_s)
+            u, _, _ = prefer(batched, starts[k], budget, local, run_stops[i], weightings[k])
+            return u, budget.used
+
+        return run
+
+    return _SharedEvaluations(problem).run([job(k, i) for i, k in enumerate(hand)]), run_stops

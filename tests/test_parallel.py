@@ -1,0 +1,67 @@
+"""Side-by-side work in forked workers (mst_cli/parallel.py)."""
+
+import os
+import sys
+import threading
+from concurrent.futures.process import BrokenProcessPool
+
+import pytest
+
+from mst_cli.errors import InputError
+from mst_cli.parallel import fork_map, workers
+
+FORKS = sys.platform.startswith("linux") and threading.active_count() == 1
+needs_fork = pytest.mark.skipif(not FORKS, reason="side-by-side work forks, on Linux only")
+
+
+def _pid_and_square(x):
+    if x < 0:
+        raise ValueError(f"no square of {x}")
+    return os.getpid(), x * x
+
+
+@needs_fork
+def test_results_come_back_in_order_from_other_processes(monkeypatch):
+    monkeypatch.setenv("MST_WORKERS", "2")
+    out = fork_map(_pid_and_square, list(range(7)))
+    assert [sq for _, sq in out] == [x * x for x in range(7)]
+    assert os.getpid() not in {pid for pid, _ in out}
+
+
+@needs_fork
+def test_a_closure_runs_as_it_is_without_pickling(monkeypatch):
+    monkeypatch.setenv("MST_WORKERS", "2")
+    local = {"offset": 10}  # a lambda over a local: forked, never pickled
+    assert fork_map(lambda x: x + local["offset"], [1, 2, 3]) == [11, 12, 13]
+
+
+@needs_fork
+def test_an_exception_in_a_worker_is_raised_here(monkeypatch):
+    monkeypatch.setenv("MST_WORKERS", "2")
+    with pytest.raises(ValueError, match="no square of -3"):
+        fork_map(_pid_and_square, [1, -3, 2])
+
+
+@needs_fork
+def test_a_worker_that_dies_is_an_error_not_a_wait(monkeypatch):
+    monkeypatch.setenv("MST_WORKERS", "2")
+    with pytest.raises(BrokenProcessPool):
+        fork_map(lambda x: os._exit(3) if x == 1 else x, [0, 1, 2])
+
+
+@pytest.mark.parametrize("setting, items", [("1", [1, 2, 3]), ("4", [1])])
+def test_one_worker_or_one_item_is_left_to_the_caller(monkeypatch, setting, items):
+    monkeypatch.setenv("MST_WORKERS", setting)
+    assert fork_map(_pid_and_square, items) is None
+
+
+def test_the_default_is_the_usable_cores(monkeypatch):
+    monkeypatch.delenv("MST_WORKERS", raising=False)
+    assert workers() == len(os.sched_getaffinity(0))
+
+
+@pytest.mark.parametrize("text", ["0", "-1", "two", "1.5"])
+def test_a_bad_worker_count_names_the_variable(monkeypatch, text):
+    monkeypatch.setenv("MST_WORKERS", text)
+    with pytest.raises(InputError, match="MST_WORKERS"):
+        workers()
