@@ -12,12 +12,10 @@ either way (the callers' tests compare them bit for bit).
 
 from __future__ import annotations
 
-import multiprocessing
 import os
 import sys
 import threading
 from collections.abc import Callable, Sequence
-from concurrent.futures import ProcessPoolExecutor
 from typing import Any
 
 from mst_cli.errors import InputError
@@ -54,6 +52,9 @@ def fork_map(function: Callable[[Any], Any], items: Sequence[Any]) -> list | Non
     n_workers = min(len(items), workers())
     if n_workers < 2 or not can_fork():
         return None
+    import multiprocessing  # deferred: only where workers are forked (with the next, 20 ms of every start)
+    from concurrent.futures import ProcessPoolExecutor  # deferred: as multiprocessing
+
     from threadpoolctl import threadpool_limits  # deferred: only where workers are forked
 
     _TASK[:] = [function]
