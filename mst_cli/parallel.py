@@ -13,6 +13,7 @@ either way (the callers' tests compare them bit for bit).
 from __future__ import annotations
 
 import os
+import signal
 import sys
 import threading
 from collections.abc import Callable, Sequence
@@ -41,6 +42,13 @@ def can_fork() -> bool:
     return sys.platform.startswith("linux") and threading.active_count() == 1
 
 
+def _worker() -> None:
+    """A worker's first act: Ctrl-C (SIGINT to the terminal's process group) ends it at once and
+    quietly, idle or busy, whatever handler it inherited (mst's reports the interrupt); this
+    process, which got the same signal, reports it once."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def _call(item: Any) -> Any:
     return _TASK[0](item)
 
@@ -63,10 +71,11 @@ def fork_map(function: Callable[[Any], Any], items: Sequence[Any]) -> list | Non
         # and two workers' pools on two cores made a stack's L2 laws 80 times slower
         # (a process pool, not multiprocessing.Pool: a worker that dies raises BrokenProcessPool
         # here instead of leaving its task waiting for ever)
-        with (
-            threadpool_limits(limits=1, user_api="blas"),
-            ProcessPoolExecutor(n_workers, mp_context=multiprocessing.get_context("fork")) as pool,
-        ):
-            return list(pool.map(_call, items))
+        with threadpool_limits(limits=1, user_api="blas"):
+            pool = ProcessPoolExecutor(n_workers, mp_context=multiprocessing.get_context("fork"), initializer=_worker)
+            try:
+                return list(pool.map(_call, items))
+            finally:  # interrupted or failed: start nothing more (what runs ends with its worker)
+                pool.shutdown(wait=True, cancel_futures=True)
     finally:
         _TASK.clear()

@@ -65,3 +65,37 @@ def test_a_bad_worker_count_names_the_variable(monkeypatch, text):
     monkeypatch.setenv("MST_WORKERS", text)
     with pytest.raises(InputError, match="MST_WORKERS"):
         workers()
+
+
+@needs_fork
+def test_ctrl_c_ends_the_workers_with_their_parent(tmp_path):
+    """SIGINT to the process group (a terminal's Ctrl-C) mid-work: the workers end at once and
+    quietly, the parent reports the interrupt, and no process of the group is left."""
+    import signal
+    import subprocess
+    import time
+
+    script = (
+        "import time\nfrom mst_cli.parallel import fork_map\nprint('ready', flush=True)\n"
+        "fork_map(lambda x: x == 1 or print('working', flush=True) or time.sleep(60), [1, 2])\n"
+    )
+    proc = subprocess.Popen(
+        [sys.executable, "-c", script],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,
+        env={**os.environ, "MST_WORKERS": "2"},
+    )
+    assert proc.stdout.readline().strip() == "ready"
+    assert proc.stdout.readline().strip() == "working"  # one worker inside its task, one idle
+    time.sleep(0.2)
+    t0 = time.monotonic()
+    os.killpg(proc.pid, signal.SIGINT)
+    _, err = proc.communicate(timeout=30)
+    assert time.monotonic() - t0 < 10  # not the tasks' 60 s
+    assert proc.returncode != 0 and "KeyboardInterrupt" in err
+    assert err.count("Traceback") == 1  # the parent's alone
+    time.sleep(0.2)
+    with pytest.raises(ProcessLookupError):
+        os.killpg(proc.pid, 0)
