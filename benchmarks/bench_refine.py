@@ -95,14 +95,15 @@ def count_run(spec: Path, flags: list[str]) -> dict:
         with contextlib.suppress(SystemExit):  # the command's exit code: not a count
             main(["design", str(spec), *flags, "--out", f"{tmp}/o", "-q"], standalone_mode=False)
         elapsed = time.perf_counter() - t0
-    # both rungs memoise their laws (an lru_cache before 0.11): requests are hits + misses,
-    # and a miss is a law solved (in this process or by a worker)
-    info = {
-        rung: getattr(module, f"{rung}_layer").cache_info()
-        for rung, module in (("frame", frame), ("continuum", continuum))
+    # both rungs memoise their laws (an lru_cache before 0.11): a miss is a law solved (in this
+    # process or by a worker), and the requests are the hits and misses less the laws a worker
+    # solved (each counted again as a hit when asked for)
+    caches = {"frame": frame.frame_layer, "continuum": continuum.continuum_layer}
+    solved = {rung: c.cache_info().misses for rung, c in caches.items()}
+    requests = {
+        rung: c.cache_info().hits + c.cache_info().misses - getattr(c, "solved_in_workers", 0)
+        for rung, c in caches.items()
     }
-    requests = {rung: i.hits + i.misses for rung, i in info.items()}
-    solved = {rung: i.misses for rung, i in info.items()}
     return {**calls, "law_requests": requests, "laws_solved": solved, "in_process_s": elapsed}
 
 

@@ -64,7 +64,7 @@ def layer_laws(
     continuum rung's missing laws in parallel (:mod:`mst_cli.model.mechanics.law_cache`)."""
     if model == "spring":
         return spring_layers(cells, material, modulus_MPa=[in_web(c, material).youngs_modulus_MPa for c in cells])
-    if model == "continuum":  # half a second a law: the missing ones side by side, a process per core
+    if model == "continuum":  # a third of a second a law: the missing ones side by side
         from mst_cli.model.mechanics.continuum import continuum_layer  # deferred: L2 (scikit-fem) loads when asked
 
         continuum_layer.solve_many((c, in_web(c, material)) for c in cells)

@@ -20,7 +20,9 @@ converged step the next is 1.5x as long when Newton needed few iterations, the s
 few more, half after many. A step that ends at or past the event brackets it between the last
 two converged points; the event is then found by regula falsi on m(d), each trial solved from
 the bracket's near (converged, pre-event) end, its guess held a fraction ``event_clamp_rel``
-of the bracket inside it so the bracket always shrinks. The located point is the last sample.
+of the bracket inside it so the bracket always shrinks (or by bisection, for a margin that
+jumps), and, where the model offers a ``guess`` of the event (L2: the next contact point's
+touch), by trials at that guess first. The located point is the last sample.
 
 Tolerances (:class:`PathTolerances`) are relative to the model's stroke scale d_ref (the pads'
 nominal stroke h - 2t - allowance). Before this module L1 and L2 each had their own loop, and
