@@ -10,6 +10,8 @@ import pytest
 from mst_cli.errors import InputError
 from mst_cli.parallel import fork_map, workers
 
+WORKERS_ALLOWED = "a whole number of worker processes >= 1 (1: work in turn)"
+
 FORKS = sys.platform.startswith("linux") and threading.active_count() == 1
 needs_fork = pytest.mark.skipif(not FORKS, reason="side-by-side work forks, on Linux only")
 
@@ -99,3 +101,18 @@ def test_ctrl_c_ends_the_workers_with_their_parent(tmp_path):
     time.sleep(0.2)
     with pytest.raises(ProcessLookupError):
         os.killpg(proc.pid, 0)
+
+
+def test_a_bad_worker_count_is_one_line_and_exit_2_from_the_command(tmp_path, monkeypatch):
+    from pathlib import Path
+
+    from click.testing import CliRunner
+
+    from mst_cli.cli.app import main
+
+    monkeypatch.setenv("MST_WORKERS", "zero")
+    spec = Path(__file__).resolve().parents[1] / "configs" / "mohammadi2021.yaml"
+    r = CliRunner().invoke(main, ["design", str(spec), "--pareto", "3", "--out", str(tmp_path / "o"), "-q"])
+    assert r.exit_code == 2
+    assert r.output.strip().splitlines() == ["mst: invalid input: MST_WORKERS = 'zero': " + WORKERS_ALLOWED]
+    assert not (tmp_path / "o").exists()
