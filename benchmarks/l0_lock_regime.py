@@ -14,7 +14,8 @@ pads meet or earlier, where a wall is pinched between the plate and its mirror; 
 lock-stroke fit predicts q = d_lock / (h - 2t - a), so h = w ln(1 + exp(-(ln q + 0.03) / w)),
 a smooth hinge that is non-zero where the walls close early (q < 0.97), times 1, t/L, theta
 - 45 deg, the stroke ratio, h, (t/L)^2 and (theta - 45 deg)^2, enter the fit unscaled.
-Printed per set: median / 90th percentile / max of |R_L0 / R_L2 - 1| (%).
+Printed per set: median / 90th percentile / max of |R_L0 / R_L2 - 1| (%); then, for the
+shipped terms, the median per L2 lock regime on the uniform sets, and L0's lock stroke error.
 """
 
 from __future__ import annotations
@@ -31,7 +32,7 @@ from mst_cli.model import geometry as geo
 from mst_cli.model.material import Material
 from mst_cli.model.mechanics import correction
 from mst_cli.model.mechanics.continuum import solve_continuum
-from mst_cli.model.mechanics.spring import layer_stiffness_N_per_mm
+from mst_cli.model.mechanics.spring import layer_stiffness_N_per_mm, spring_layer
 from mst_cli.parallel import fork_map
 
 MAT = Material()
@@ -97,6 +98,19 @@ def main() -> None:
             cols.append(f"{np.median(err):.2f} / {np.percentile(err, 90):.1f} / {err.max():.0f}")
         name = "shipped terms, refitted" if not hinge_w else f"+ wall-pinch hinge, w {hinge_w:g}"
         print(f"| {name} | " + " | ".join(cols) + " |")
+    print("\nshipped L0 (mst_cli's own spring law), median |error| against L2:")
+    for set_name, (cells, rows) in sets.items():
+        if "uniform" not in set_name:
+            continue
+        laws = [spring_layer(c, MAT) for c in cells]
+        eR = np.array([abs(law.lock_force_N / r["R"] - 1) for law, r in zip(laws, rows)])
+        ed = np.array([abs(law.d_lock_mm / r["d_lock"] - 1) for law, r in zip(laws, rows)])
+        regime = np.array([r["at"] for r in rows])
+        parts = [
+            f"{at} locks {100 * np.median(eR[regime == at]):.2f} % ({int(np.sum(regime == at))})"
+            for at in ("wall", "pad")
+        ]
+        print(f"- {set_name}: lock force, " + ", ".join(parts) + f"; lock stroke {100 * np.median(ed):.2f} %")
 
 
 if __name__ == "__main__":

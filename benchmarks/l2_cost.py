@@ -13,6 +13,9 @@ PYTHONPATH, and the two alternate for --rounds rounds, so load on the shared mac
 2. Per stack, the reference design's three layers (configs/mohammadi2021-forward.yaml) through
    ``layer_laws`` in a fresh process, cold caches: in turn (MST_WORKERS=1) and side by side
    (the default: a forked worker per core; a baseline before 0.11 solves in turn either way).
+3. One linear solve of a path mesh's tangent block (the first cell's, at rest, in this tree):
+   the banded solve L2 uses since 0.11 against SciPy's SuperLU (spsolve, its own column
+   ordering every call, as before), median of 200, and their largest relative difference.
 """
 
 from __future__ import annotations
@@ -55,6 +58,34 @@ def child_stack() -> float:
     t0 = time.perf_counter()
     layer_laws(geometry.layers, doc.material, "continuum")
     return time.perf_counter() - t0
+
+
+def block_solve_times(samples: int, seed: int) -> tuple[int, float, float, float]:
+    """(unknowns, banded ms, spsolve ms, max relative difference) on the first cell's path mesh."""
+    import numpy as np
+    from scipy.sparse.linalg import spsolve
+
+    from mst_cli.bench.sampling import sample_cells
+    from mst_cli.model.material import Material
+    from mst_cli.model.mechanics import continuum
+
+    cell = sample_cells(samples, seed)[0]
+    prob = continuum._Problem(cell, Material(), continuum.DEFAULT_N_THICK, continuum.DEFAULT_N_LENGTH, 0)
+    _, K = prob.assemble(np.zeros(prob.basis.N))
+    block = prob.free_block()
+    rhs = np.random.default_rng(0).standard_normal(block.free.size)
+
+    def median_ms(solve) -> float:
+        times = []
+        for _ in range(200):
+            t0 = time.perf_counter()
+            solve()
+            times.append(time.perf_counter() - t0)
+        return 1e3 * statistics.median(times)
+
+    banded, superlu = block.solve(K, rhs), spsolve(block.csc(K), rhs)
+    diff = float(np.abs(banded - superlu).max() / np.abs(superlu).max())
+    return block.free.size, median_ms(lambda: block.solve(K, rhs)), median_ms(lambda: spsolve(block.csc(K), rhs)), diff
 
 
 def run(tree: Path, what: list[str], workers: str | None = None):
@@ -105,6 +136,9 @@ def main() -> None:
     print("| run | s |\n|---|---|")
     for name, times in stacks.items():
         print(f"| {name} | {statistics.median(times):.2f} |")
+    n, banded_ms, superlu_ms, diff = block_solve_times(args.samples, args.seed)
+    print(f"\none tangent block ({n} unknowns): banded {banded_ms:.2f} ms, SuperLU {superlu_ms:.2f} ms (median of 200)")
+    print(f"largest relative difference between the two: {diff:.1e}")
 
 
 if __name__ == "__main__":

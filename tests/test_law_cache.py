@@ -1,8 +1,5 @@
 """The dear rungs' law memo and its side-by-side solves (mst_cli/model/mechanics/law_cache.py)."""
 
-import sys
-import threading
-
 import numpy as np
 import pytest
 
@@ -10,9 +7,9 @@ from mst_cli.model import geometry as geo
 from mst_cli.model.material import Material
 from mst_cli.model.mechanics import continuum
 from mst_cli.model.mechanics.law_cache import LawCache
+from mst_cli.parallel import can_fork
 
-FORKS = sys.platform.startswith("linux") and threading.active_count() == 1
-needs_fork = pytest.mark.skipif(not FORKS, reason="side-by-side solves fork, on Linux only")
+needs_fork = pytest.mark.skipif(not can_fork(), reason="side-by-side solves fork, on Linux only")
 
 
 def _square(cell, material):

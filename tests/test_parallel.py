@@ -2,18 +2,16 @@
 
 import os
 import sys
-import threading
 from concurrent.futures.process import BrokenProcessPool
 
 import pytest
 
 from mst_cli.errors import InputError
-from mst_cli.parallel import fork_map, workers
+from mst_cli.parallel import can_fork, fork_map, workers
 
 WORKERS_ALLOWED = "a whole number of worker processes >= 1 (1: work in turn)"
 
-FORKS = sys.platform.startswith("linux") and threading.active_count() == 1
-needs_fork = pytest.mark.skipif(not FORKS, reason="side-by-side work forks, on Linux only")
+needs_fork = pytest.mark.skipif(not can_fork(), reason="side-by-side work forks, on Linux only")
 
 
 def _pid_and_square(x):
@@ -55,11 +53,6 @@ def test_a_worker_that_dies_is_an_error_not_a_wait(monkeypatch):
 def test_one_worker_or_one_item_is_left_to_the_caller(monkeypatch, setting, items):
     monkeypatch.setenv("MST_WORKERS", setting)
     assert fork_map(_pid_and_square, items) is None
-
-
-def test_the_default_is_the_usable_cores(monkeypatch):
-    monkeypatch.delenv("MST_WORKERS", raising=False)
-    assert workers() == len(os.sched_getaffinity(0))
 
 
 @pytest.mark.parametrize("text", ["0", "-1", "two", "1.5"])

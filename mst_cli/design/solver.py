@@ -794,12 +794,14 @@ def prefer_many(
     n = len(starts)
     n_hands = max(1, min(n, workers()))
     hands = [list(range(i, n, n_hands)) for i in range(n_hands)]
-    dealt = fork_map(
-        lambda hand: _prefer_hand(problem, starts, weightings, hand, max_evaluations, local, max_time_s), hands
-    )
-    if dealt is None:
+
+    def polish(hand: list[int]) -> tuple[list, list[list[str]]]:
+        return _prefer_hand(problem, starts, weightings, hand, max_evaluations, local, max_time_s)
+
+    dealt = fork_map(polish, hands)
+    if dealt is None:  # one worker, or no fork here: all of them in this process
         hands = [list(range(n))]
-        dealt = [_prefer_hand(problem, starts, weightings, hands[0], max_evaluations, local, max_time_s)]
+        dealt = [polish(hands[0])]
     out: list = [None] * n
     run_stops: list[list[str]] = [[] for _ in range(n)]
     for hand, (results, hand_stops) in zip(hands, dealt):

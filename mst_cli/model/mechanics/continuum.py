@@ -402,8 +402,9 @@ class _FreeBlock:
     one solve); :meth:`solve`: LAPACK's banded Cholesky (dpbsv), or its banded LU with partial
     pivoting (dgbsv) where the block is not positive definite. The tangent of a hyperelastic
     body is symmetric, and positive definite wherever the displacement-controlled path is
-    stable. On a 571-dof path mesh a solve took 0.5 ms against SuperLU's 1.6 ms with its
-    column ordering, which it redid on every solve (the pattern is fixed; same answers to 4e-13).
+    stable. On a 571-dof path mesh a solve takes 0.5 ms against SuperLU's 1.2 ms with its own
+    column ordering, which it redid on every solve though the pattern is fixed (same answers to
+    3e-13; benchmarks/l2_cost.py, part 3).
     """
 
     def __init__(self, asm: _Assembler | _PlatePenalty, free: np.ndarray):
@@ -945,8 +946,9 @@ def linear_k(problem: _Problem) -> float:
     _, K0 = problem.assemble(np.zeros(problem.basis.N))
     ul = np.zeros(problem.basis.N)
     ul[problem.tip_z] = -0.5
-    block = problem.free_block()
-    f, K_ff = block.free, block.csc(K0)
+    # cut directly: a one-off solve needs no cached banded block (free_block is the path's)
+    f = problem.free
+    K_ff = K0[f][:, f].tocsc()
     # at rest K_ff is linear elasticity held on the bonded face: symmetric positive definite,
     # so SuperLU's symmetric mode (an A + A^T ordering, no pivoting) is safe, and on the fine
     # meshes up to 2x faster than the general LU
