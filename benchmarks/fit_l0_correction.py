@@ -148,8 +148,10 @@ def fit(cells, ref, mat):
     L = np.array([c.wall_length_mm for c in cells])
     sigma = correction.stroke_ratio(d0, L, th)
     A_lock = sigma[:, None] * correction.lock_design_matrix(x, th, sigma)
-    coef_R, stats_R = _lstsq(A_lock, np.log(R2 / (k0c * d0)))
     coef_d, stats_d = _lstsq(A_lock, np.log(d2 / d0))
+    # the lock force with the wall-pinch hinge on the stroke fit's own ln q (correction.HINGE_TERMS)
+    A_hinge = correction.hinge_design_matrix(x, th, sigma, A_lock @ coef_d)
+    coef_R, stats_R = _lstsq(np.hstack([A_lock, A_hinge]), np.log(R2 / (k0c * d0)))
     y = x / (2 * np.sin(th))
     t = np.array([c.t_mm for c in cells])
     a = cells[0].contact_allowance_mm
@@ -316,7 +318,15 @@ def main():
             "e = exp(-2x/sigma), w = 1 - x/(1 - y) floored smoothly at 0, "
             "r = allowance/t = (1 - sigma/2)/y - 1), sigma = d_lock / (L sin theta)",
             "terms": correction.LOCK_TERMS,
-            "coefficients": [float(c) for c in coef_R],
+            "coefficients": [float(c) for c in coef_R[: len(correction.LOCK_TERMS)]],
+            "hinge": {
+                "model": "+ sum_j c_j * hinge_terms_j, p = width ln(1 + exp(-(ln q + offset) / width)), "
+                "ln q = the lock_stroke fit's ln(d_lock,L2 / (h - 2t - allowance))",
+                "width": correction.HINGE_WIDTH,
+                "offset": correction.HINGE_OFFSET,
+                "terms": correction.HINGE_TERMS,
+                "coefficients": [float(c) for c in coef_R[len(correction.LOCK_TERMS) :]],
+            },
             **stats_R,
         },
         "lock_stroke": {

@@ -1,6 +1,7 @@
-"""L0's lock force against L2 on fresh uniform cells, and what a wall-pinch term would buy.
+"""L0's lock force against L2 on fresh uniform cells, with and without the wall-pinch hinge.
 
-Issue 20; prints a table, changes nothing.
+Issue 20; prints a table, changes nothing. 0.12 ships the hinge at w = 0.01
+(mst_cli.model.mechanics.correction.HINGE_TERMS); the first row is 0.11's lock fit.
 
     python benchmarks/l0_lock_regime.py [--fresh 300] [--fresh-seed 3] [--cache FILE]
 
@@ -9,13 +10,14 @@ is verified on 270 cells of seed 2, of which 150 are uniform in the printable bo
 top up shallow, stubby and thin cells. This script solves L2 on those cells, on the fit's own
 620 (seed 1) and on ``--fresh`` more uniform cells (``--fresh-seed``, never fitted), about
 4 minutes on two cores (``--cache FILE`` keeps the solves), then refits the lock force as the
-shipped script does, and again with terms for the lock's regime. L2 locks either where the
+fit script does, without the hinge (0.11) and with it at two widths. L2 locks either where the
 pads meet or earlier, where a wall is pinched between the plate and its mirror; L0's own
 lock-stroke fit predicts q = d_lock / (h - 2t - a), so h = w ln(1 + exp(-(ln q + 0.03) / w)),
 a smooth hinge that is non-zero where the walls close early (q < 0.97), times 1, t/L, theta
 - 45 deg, the stroke ratio, h, (t/L)^2 and (theta - 45 deg)^2, enter the fit unscaled.
 Printed per set: median / 90th percentile / max of |R_L0 / R_L2 - 1| (%); then, for the
-shipped terms, the median per L2 lock regime on the uniform sets, and L0's lock stroke error.
+shipped L0 (the package's own spring law, as a design uses it), the median overall and per L2
+lock regime on the uniform sets, and L0's lock stroke error.
 """
 
 from __future__ import annotations
@@ -61,9 +63,7 @@ def features(cells, coef_k, coef_d, hinge_w):
     sig = correction.stroke_ratio(d0, np.array([c.wall_length_mm for c in cells]), th)
     A = sig[:, None] * correction.lock_design_matrix(x, th, sig)
     if hinge_w:
-        s = th - np.pi / 4
-        h = hinge_w * np.logaddexp(0.0, -(A @ coef_d + 0.03) / hinge_w)
-        A = np.hstack([A, np.stack([h, h * x, h * s, h * sig, h * h, h * x * x, h * s * s], -1)])
+        A = np.hstack([A, correction.hinge_design_matrix(x, th, sig, A @ coef_d, width=hinge_w)])
     return A, k0c * d0
 
 
@@ -96,7 +96,8 @@ def main() -> None:
             A, base = features(cells, coef_k, coef_d, hinge_w)
             err = 100 * np.abs(base * np.exp(A @ coef) / np.array([r["R"] for r in rows]) - 1)
             cols.append(f"{np.median(err):.2f} / {np.percentile(err, 90):.1f} / {err.max():.0f}")
-        name = "shipped terms, refitted" if not hinge_w else f"+ wall-pinch hinge, w {hinge_w:g}"
+        name = "0.11's terms (no hinge), refitted" if not hinge_w else f"+ wall-pinch hinge, w {hinge_w:g}"
+        name += " (shipped)" if hinge_w == correction.HINGE_WIDTH else ""
         print(f"| {name} | " + " | ".join(cols) + " |")
     print("\nshipped L0 (mst_cli's own spring law), median |error| against L2:")
     for set_name, (cells, rows) in sets.items():
@@ -110,7 +111,11 @@ def main() -> None:
             f"{at} locks {100 * np.median(eR[regime == at]):.2f} % ({int(np.sum(regime == at))})"
             for at in ("wall", "pad")
         ]
-        print(f"- {set_name}: lock force, " + ", ".join(parts) + f"; lock stroke {100 * np.median(ed):.2f} %")
+        print(
+            f"- {set_name}: lock force {100 * np.median(eR):.2f} %: "
+            + ", ".join(parts)
+            + f"; lock stroke {100 * np.median(ed):.2f} %"
+        )
 
 
 if __name__ == "__main__":

@@ -215,6 +215,29 @@ def test_lock_corrections_vanish_with_the_stroke():
     assert np.all(correction.lock_force_factor(x, theta, 1.0) < 1.0)
 
 
+def test_wall_pinch_hinge_is_off_at_full_stroke_and_on_where_walls_close_early():
+    # p = 0 where the stroke fit says the pads meet at the rigid stroke (ln q = 0), and grows like
+    # -ln q - offset once the walls close early (q well under 1 - offset)
+    ln_q = np.array([0.0, -0.2, -0.4])
+    p = correction.hinge_design_matrix(0.2, 1.0, 0.5, ln_q)[:, 0]
+    assert p[0] == 0.0
+    off, w = correction.HINGE_OFFSET, correction.HINGE_WIDTH
+    expected = -ln_q[1:] - off - w * math.log1p(math.exp(-off / w))
+    assert p[1:] == pytest.approx(expected, abs=1e-9)
+
+
+def test_spring_lock_force_is_smooth_where_the_hinge_switches_on():
+    # t 0.6, h 4: L0 predicts the walls close early (q < 0.97) below theta ~ 44 deg; across the
+    # switch R(theta) must stay smooth as the issue 20 criterion asks of L2: no point off its
+    # neighbours' mean by more than 0.5 %
+    theta = np.arange(38.0, 50.01, 0.25)
+    laws = [spring_layer(HexCell(th, 0.6, 4.0), Material()) for th in theta]
+    q = np.array([law.d_lock_mm for law in laws]) / (4.0 - 2 * 0.6 - HexCell(40, 0.6, 4.0).contact_allowance_mm)
+    assert q.min() < 0.965 and q.max() > 0.975  # the sweep crosses the switch (q = 0.97)
+    R = np.array([law.lock_force_N for law in laws])
+    assert np.max(np.abs(R[1:-1] / (0.5 * (R[:-2] + R[2:])) - 1)) < 0.005
+
+
 def test_stiffness_correction_vanishes_for_slender_walls():
     # every term of the joint fit vanishes with x = t/L: beam theory is exact for slender walls
     theta = np.radians(np.linspace(5, 75, 15))

@@ -37,7 +37,10 @@ w = 1 - t / L_in (smoothly floored at 0) is the part of the inner face that can 
 At given (x, theta), sigma = 2 (1 - y (1 + a/t)) also carries the allowance over the wall
 thickness, r = a/t, which decides where a shallow cavity's thin tip counts as closed; terms
 r, r s, r sigma (r recovered from x, theta, sigma) carry it for the thin walls (t 0.4-0.6 mm,
-r 0.17-0.25) where compact designs live, sampled apart in the fit (its thin band).
+r 0.17-0.25) where compact designs live, sampled apart in the fit (its thin band). The lock
+force adds a smooth hinge on the lock-stroke fit's own q = d_lock / (h - 2t - a) (HINGE_TERMS):
+where a wall is pinched before the pads meet (q below ~0.97) L2's lock force follows other
+terms; over uniform cells it took the fit's out-of-sample median from 3.5 % to 2.6 %.
 
 Fitted for nu = 0.45 and a 0.1 mm contact allowance, plane strain (the web of b = D), against
 the plane-strain L2 (``fitted_on`` in the data file), over the printable box (theta 5-75 deg,
@@ -111,6 +114,17 @@ LOCK_TERMS = [
     "r*s",
     "r*sigma",
 ]
+# The wall-pinch hinge of the lock-force fit: L2 locks either where the pads meet or earlier,
+# where a wall is pinched between the plate and its mirror, and the two regimes' lock forces
+# follow different shapes. The lock-stroke fit predicts which (its q = d_lock / (h - 2t - a)
+# falls below ~0.97 where the walls close early), so the hinge p = HINGE_WIDTH ln(1 +
+# exp(-(ln q + HINGE_OFFSET) / HINGE_WIDTH)), less its value at q = 1 so that it vanishes with
+# the stroke, about zero where the pads meet and -ln q - 0.03 once a wall closes first, times
+# these shape terms, is added to ln(R / (k d_lock)) (not times sigma). The width is the
+# smallest of 0.01-0.05 that held out best (benchmarks/l0_lock_regime.py).
+HINGE_TERMS = ["p", "p*x", "p*s", "p*sigma", "p^2", "p*x^2", "p*s^2"]
+HINGE_WIDTH = 0.01
+HINGE_OFFSET = 0.03
 DATA = Path(__file__).resolve().parent.parent / "data" / "l0_correction.json"
 
 # The printable box every rung is fitted and measured on, and the default design bounds
@@ -213,6 +227,25 @@ def lock_design_matrix(t_over_L: ArrayLike, theta_rad: ArrayLike, sigma: ArrayLi
     )
 
 
+def hinge_design_matrix(
+    t_over_L: ArrayLike,
+    theta_rad: ArrayLike,
+    sigma: ArrayLike,
+    ln_stroke_ratio: ArrayLike,
+    width: float = HINGE_WIDTH,
+    offset: float = HINGE_OFFSET,
+) -> np.ndarray:
+    """The wall-pinch hinge's terms (HINGE_TERMS) on a last axis, from ln q = ln(d_lock / (h -
+    2t - a)) as the lock-stroke fit predicts it. Smooth (C-infinity) in every input; p is taken
+    from its value at q = 1, so that like every lock term it vanishes with the stroke."""
+    x = np.asarray(t_over_L, dtype=float)
+    s = np.asarray(theta_rad, dtype=float) - np.pi / 4
+    sig = np.asarray(sigma, dtype=float)
+    ln_q = np.asarray(ln_stroke_ratio, dtype=float)
+    p = width * (np.logaddexp(0.0, -(ln_q + offset) / width) - np.logaddexp(0.0, -offset / width))
+    return np.stack(np.broadcast_arrays(p, p * x, p * s, p * sig, p * p, p * x * x, p * s * s), axis=-1)
+
+
 def allowance_over_t(t_over_L: ArrayLike, theta_rad: ArrayLike, sigma: ArrayLike) -> np.ndarray:
     """r = allowance / t of the cell with this (t/L, theta, sigma): sigma = 2 (1 - y (1 + r)),
     so r = (1 - sigma / 2) / y - 1, held in [0, R_MAX] (and finite as y -> 0). At the thinnest
@@ -237,14 +270,17 @@ def _fit() -> dict:
     return json.loads(DATA.read_text())
 
 
-@functools.lru_cache(maxsize=4)
+@functools.lru_cache(maxsize=8)
 def _coef(key: str | None = None) -> np.ndarray:
     return np.array(coefficients(key))
 
 
-@functools.lru_cache(maxsize=4)
+@functools.lru_cache(maxsize=8)
 def coefficients(key: str | None = None) -> tuple[float, ...]:
-    """Stored coefficients: of the stiffness fit (None), "lock_force" or "lock_stroke"."""
+    """Stored coefficients: of the stiffness fit (None), "lock_force", "lock_stroke" or
+    "lock_force_hinge" (the wall-pinch hinge's; empty in a file fitted without it)."""
+    if key == "lock_force_hinge":
+        return tuple(map(float, _fit()["lock_force"].get("hinge", {}).get("coefficients", ())))
     return tuple(map(float, _fit()["coefficients"] if key is None else _fit()[key]["coefficients"]))
 
 
@@ -307,11 +343,18 @@ def _lock_ratios(keys, t_over_L, theta_rad, sigma):
     """exp(sigma g(x, theta, sigma')) for each fit in ``keys``, one design matrix for all: the
     leading sigma is the cell's own (held in [0, the largest fitted]), so the ratio tends to 1
     with the stroke; the terms g are taken at the nearest fitted cell, (x, theta) in the box and
-    sigma' = :func:`_on_cells`."""
+    sigma' = :func:`_on_cells`. The lock force adds the wall-pinch hinge on the lock-stroke
+    fit's own ln q (HINGE_TERMS)."""
     sig = np.clip(np.asarray(sigma, dtype=float), 0.0, _fit()["fitted_on"]["stroke_ratio_range"][1])
     x, theta = _clipped(t_over_L, theta_rad)
     terms = lock_design_matrix(x, theta, _on_cells(x, theta, sig))
-    return [np.exp(sig * _weighted_sum(terms, _coef(key))) for key in keys]
+    hinge = _coef("lock_force_hinge") if "lock_force" in keys else ()
+    ln = {key: sig * _weighted_sum(terms, _coef(key)) for key in (*keys, *(("lock_stroke",) if len(hinge) else ()))}
+    if len(hinge):
+        shape = _fit()["lock_force"]["hinge"]  # the width and offset the file was fitted with
+        p = hinge_design_matrix(x, theta, sig, ln["lock_stroke"], shape["width"], shape["offset"])
+        ln["lock_force"] = ln["lock_force"] + _weighted_sum(p, hinge)
+    return [np.exp(ln[key]) for key in keys]
 
 
 def _lock_ratio(key, t_over_L, theta_rad, sigma):
