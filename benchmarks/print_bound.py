@@ -3,9 +3,10 @@ scaling of the webs' stiffness, and the physical terms it is made of.
 
 Prints markdown tables, changes nothing. From the repository root:
 
-    PYTHONPATH=. MST_WORKERS=1 python benchmarks/print_bound.py [--quick] [--height 20] [--spec FILE]
+    MST_WORKERS=1 .venv/bin/python benchmarks/print_bound.py [--quick] [--height 20] [--spec FILE]
 
-About 4 minutes on one core (231 s) (``--quick``: m 1, 6, 12, s_min 0 and 0.05, 1 % bisection: 80 s).
+About 4-6 minutes on one core (359 s on a loaded machine) (``--quick``: m 1, 6, 12, s_min 0 and
+0.05, 1 % bisection: 80 s).
 Every "lowest" is the best the shipped local solver (seed 0) finds: an upper bound on the true
 minimum, and the lowest-height column is not always monotone in the scale bound for that reason.
 
@@ -30,14 +31,13 @@ thicker or thinner (:func:`mst_cli.design.document.verify_design`, forward model
    pads' contact stiffness -- and the magnet gap (gap0 depends on the layer heights only,
    :func:`mst_cli.model.geometry.unloaded_gap_mm`: measured as the change of gap0 itself).
 
-Measured on configs/mohammadi2021.yaml (STEMMA board, housing 11.35 mm of the height): one scale
-for every web bottoms out at 32.4 % (m = 12; at m = 16 no design of <= 20 mm meets the targets,
-at m = 24 none at all: the stiff layers reach theta = 75 deg, t = 3 mm). The worst output is
-always S_1 with thinner walls, and it is the walls' stiffness (section + length + L2 fits, 28-39
-points) that moves it; the stroke adds 1.6-1.8 points, the magnet gap nothing. A free scale per
-layer reaches 23.4 % at 20.00 mm, but only with a layer-1 web 0.16 mm deep (s = 0.008); with webs
->= 0.2 / 0.5 / 1 / 2 mm: 23.8 / 26.4 / 27.2 / 31.1 %. ``--spec configs/mohammadi2021-compact.yaml``
-(bare chip board, housing 8.80 mm): one scale m = 12 gives 24.6 % at 20.00 mm.
+Measured on configs/mohammadi2021.yaml (STEMMA board, housing 11.35 mm of the height) with 0.12's
+L0: today's full-depth webs reach 45.7 % at 20.00 mm; one scale for every web bottoms out near
+33 % (32.8 % at m = 6, 34.1 % at m = 12; at m = 16 no design of <= 20 mm meets the targets, at
+m = 24 none at all: the stiff layers reach theta = 75 deg). The worst output is always a
+sensitivity with thinner walls, and it is the walls' stiffness (section + length + L2 fits, 24-32
+points) that moves it; the stroke adds 1.6-8.5 points, the magnet gap nothing. A free scale per
+layer reaches 20.7-23.8 % with webs 0.2-0.5 mm deep, 26.8 % with webs >= 1 mm, 31.1 % >= 2 mm.
 """
 
 from __future__ import annotations

@@ -242,7 +242,8 @@ def hinge_design_matrix(
     s = np.asarray(theta_rad, dtype=float) - np.pi / 4
     sig = np.asarray(sigma, dtype=float)
     ln_q = np.asarray(ln_stroke_ratio, dtype=float)
-    p = width * (np.logaddexp(0.0, -(ln_q + offset) / width) - np.logaddexp(0.0, -offset / width))
+    with np.errstate(invalid="ignore"):  # a NaN probe stays NaN, as through every other term
+        p = width * (np.logaddexp(0.0, -(ln_q + offset) / width) - np.logaddexp(0.0, -offset / width))
     return np.stack(np.broadcast_arrays(p, p * x, p * s, p * sig, p * p, p * x * x, p * s * s), axis=-1)
 
 
