@@ -5,6 +5,7 @@ axial reference below uses E' = E / (1 - nu^2) (shear G = E / 2 (1 + nu) unchang
 """
 
 import math
+import warnings
 
 import numpy as np
 import pytest
@@ -224,6 +225,21 @@ def test_wall_pinch_hinge_is_off_at_full_stroke_and_on_where_walls_close_early()
     off, w = correction.HINGE_OFFSET, correction.HINGE_WIDTH
     expected = -ln_q[1:] - off - w * math.log1p(math.exp(-off / w))
     assert p[1:] == pytest.approx(expected, abs=1e-9)
+
+
+def test_hinge_sum_is_the_hinge_matrix_times_its_coefficients():
+    # the design loop's lean sum and the fit's design matrix are one model
+    rng = np.random.default_rng(5)
+    x, th, sig = rng.uniform(0.05, 1.5, 200), rng.uniform(0.1, 1.3, 200), rng.uniform(0.2, 1.8, 200)
+    ln_q = rng.uniform(-0.3, 0.05, 200)
+    coef = rng.normal(size=len(correction.HINGE_TERMS))
+    w, off = correction.HINGE_WIDTH, correction.HINGE_OFFSET
+    lean = correction.hinge_sum(x, th, sig, ln_q, coef, w, off)
+    assert lean == pytest.approx(correction.hinge_design_matrix(x, th, sig, ln_q, w, off) @ coef, rel=1e-12, abs=1e-14)
+    # a NaN probe stays NaN, silently (the optimiser's non-finite guard handles it)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert np.isnan(correction.hinge_sum(x[:1], th[:1], sig[:1], np.array([np.nan]), coef, w, off)).all()
 
 
 def test_spring_lock_force_is_smooth_where_the_hinge_switches_on():
