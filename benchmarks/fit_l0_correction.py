@@ -320,8 +320,8 @@ def main():
             "terms": correction.LOCK_TERMS,
             "coefficients": [float(c) for c in coef_R[: len(correction.LOCK_TERMS)]],
             "hinge": {
-                "model": "+ sum_j c_j * hinge_terms_j, p = width ln(1 + exp(-(ln q + offset) / width)), "
-                "ln q = the lock_stroke fit's ln(d_lock,L2 / (h - 2t - allowance))",
+                "model": "+ sum_j c_j * hinge_terms_j, p = width ln(1 + exp(-(ln q + offset) / width)) less its "
+                "value at ln q = 0, ln q = the lock_stroke fit's ln(d_lock,L2 / (h - 2t - allowance))",
                 "width": correction.HINGE_WIDTH,
                 "offset": correction.HINGE_OFFSET,
                 "terms": correction.HINGE_TERMS,
