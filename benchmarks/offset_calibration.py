@@ -11,9 +11,12 @@ the lever factor and the noise stand between them); then readings at --presses o
 points are read three ways: the centred reading, `mst read --estimate-offset` with the rung's
 own levers (lever factor 1), and with the calibrated one. Printed, one row per reader and
 noise: the fitted lever factor, the force errors of the three readings (median / max, on the
-readings each one gives a force for), how many calibrated readings are within 5 %.
+readings each one gives a force for), how many calibrated readings are within 5 %; with
+--worst N, the N calibrated readings furthest off, where they were pressed and where the reader
+put the press.
 
-Run:  .venv/bin/python benchmarks/offset_calibration.py [--noise-uT 2,0.5 --readers spring,continuum]   # ~2 min
+Run:  .venv/bin/python benchmarks/offset_calibration.py [--noise-uT 2,0.5 --readers spring,continuum] [--worst 5]
+      (about 2 min)
 """
 
 from __future__ import annotations
@@ -90,12 +93,26 @@ def one_case(args, reader: str, noise_uT: float) -> str:
         (d / "cal" / "calibration.json").write_text(json.dumps(rec))
         untilted = api.read(calibrated, d / "readings.csv", estimate_offset=True, mechanics=reader)
     e_cal = errors(tilted.force_N, F_true)
-    return (
+    row = (
         f"| {reader} | {noise_uT:g} | {tilt['lever_factor']:.4f} +- {tilt['std']:.1g} | {tilt['rms_residual_uT']:.3g} "
         f"| {stats(errors(tilted.force_centred_N, F_true))} | {stats(errors(untilted.force_N, F_true))} "
         f"| {stats(e_cal)} | {100 * np.percentile(e_cal, 90):.1f} % | {int(np.sum(e_cal <= 0.05))} of {e_cal.size} "
         f"| {int(np.sum(tilted.offset.flag == 'ok'))} |"
     )
+    return row + worst_readings(readings, tilted, args.worst)
+
+
+def worst_readings(readings, read, n: int) -> str:
+    """The ``n`` calibrated readings furthest from the truth: where pressed, what was read."""
+    F, F_true = np.asarray(read.force_N, float), np.array([r[0] for r in readings])
+    err = F / F_true - 1.0
+    lines = [
+        f"\n  - {F_true[i]:.2f} N pressed at ({readings[i][1]:.1f}, {readings[i][2]:.1f}) mm: read {F[i]:.2f} N "
+        f"({100 * err[i]:+.1f} %), press estimated at ({read.offset.x_mm[i]:.2f}, {read.offset.y_mm[i]:.2f}) mm, "
+        f"flag {read.offset.flag[i]}"
+        for i in np.argsort(-np.nan_to_num(np.abs(err), nan=np.inf))[:n]
+    ]
+    return "".join(lines)
 
 
 def main() -> None:
@@ -107,6 +124,7 @@ def main() -> None:
     ap.add_argument("--centred", type=int, default=40)
     ap.add_argument("--readers", default="spring,continuum", help="rungs mst calibrate fits and mst read reads with")
     ap.add_argument("--noise-uT", default="2,0.5", help="chip noise per axis (uT rms), comma-separated")
+    ap.add_argument("--worst", type=int, default=0, help="list the N worst calibrated readings under each row")
     args = ap.parse_args()
     t0 = time.perf_counter()
     print(
