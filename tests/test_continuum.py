@@ -364,3 +364,33 @@ def test_the_law_between_its_knots_follows_a_finely_sampled_path(cell):
     dev = np.interp(d, law.displacement_mm, law.force_N) / np.interp(d, d_fine, F_fine) - 1
     assert np.abs(dev).max() < 5e-3
     assert law.force_N[-1] == pytest.approx(F_fine[-1], rel=1e-3)  # the same lock either way
+
+
+def test_root_fillet_mesh_is_conforming_and_adds_the_fillet():
+    # root_fillet_mm (benchmarks/fillet_study.py): the fillet's block tiles its polygon, shares
+    # the wall's face nodes (every edge in at most two triangles, no hanging node: the boundary
+    # is one closed loop), its base is bonded and its arc joins the plate's contact set
+    for cell, r in ((HexCell(14, 0.4, 1.87), 0.05), (HexCell(60, 0.6, 4.0), 0.2)):
+        p, t, _ = L2.quarter_profile_mesh(cell, root_fillet_mm=r)
+        p0, t0, _ = L2.quarter_profile_mesh(cell)
+        a, b, c = p[:, t[0]], p[:, t[1]], p[:, t[2]]
+        area2 = (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
+        assert (area2 > 0).all()
+        a, b, c = p0[:, t0[0]], p0[:, t0[1]], p0[:, t0[2]]
+        area0 = 0.5 * ((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])).sum()
+        f = L2.root_fillet(cell, r)
+        exact = r * f.tangent_mm - 0.5 * r * r * (np.pi - f.theta_rad)  # kite A T1 O T2 less the sector
+        assert 0.5 * area2.sum() - area0 == pytest.approx(exact, rel=0.05)  # the arc is a polygon
+        edges, counts = np.unique(
+            np.sort(np.concatenate([t[[0, 1]], t[[1, 2]], t[[2, 0]]], axis=1), axis=0), axis=1, return_counts=True
+        )
+        assert counts.max() == 2
+        boundary = edges[:, counts == 1]
+        assert np.all(np.bincount(boundary.ravel())[np.unique(boundary)] == 2)  # a simple loop
+        prob = L2._Problem(cell, MAT, 3, 12, 1, root_fillet_mm=r)
+        arc = prob._fillet_arc_dofs(prob.basis.doflocs, 1e-9)
+        assert arc.size > 0 and np.isin(arc, prob.contact_dofs).all()
+        dist = np.hypot(*(prob.basis.doflocs[:, arc] - f.O[:, None]))
+        assert dist.max() == pytest.approx(r, rel=1e-9) and dist.min() > 0.95 * r
+        xy = prob.basis.doflocs[:, prob.fixed_zero]
+        assert np.isclose(xy[0], f.T1[0]).any()  # the fillet's base, out to T1, is bonded

@@ -133,8 +133,117 @@ def _wedge_columns(n_thick: int, wedge_over_t: float) -> np.ndarray:
     return 1.0 - np.array(one_minus[:-1] + [0.0])
 
 
+@dataclass(frozen=True)
+class RootFillet:
+    """The printed fillet at the outer wall root A = (p, 0) (``root_fillet_mm`` r > 0).
+
+    The extruded bead fills the air wedge of angle theta between the outer face and the plate
+    below it: the region bounded by the plate from A to T1 = (p + r cot(theta/2), 0), the arc of
+    radius r about O = T1 + (0, r), tangent to the plate at T1 and to the face at
+    T2 = A + r cot(theta/2) (cos theta, sin theta), and the face back to A.
+    """
+
+    r_mm: float
+    theta_rad: float
+    A: np.ndarray
+    T1: np.ndarray
+    T2: np.ndarray
+    O: np.ndarray
+
+    @property
+    def tangent_mm(self) -> float:
+        """|A T1| = |A T2| = r cot(theta / 2)."""
+        return self.r_mm / math.tan(0.5 * self.theta_rad)
+
+    def arc(self, fractions: np.ndarray) -> np.ndarray:
+        """Points (n, 2) of the arc at ``fractions`` of its sweep from T2 (0) to T1 (1)."""
+        phi = 0.5 * math.pi + self.theta_rad + np.asarray(fractions) * (math.pi - self.theta_rad)
+        return self.O[None, :] + self.r_mm * np.stack([np.cos(phi), np.sin(phi)], axis=1)
+
+
+def root_fillet(cell: geo.HexCell, r_mm: float) -> RootFillet:
+    """The fillet of radius ``r_mm`` at the outer wall root; ValueError when T2 passes B'."""
+    outer, inner = cell.outer_profile_xz(), cell.inner_profile_xz()
+    A, B, C = np.asarray(outer[0], float), np.asarray(outer[1], float), np.asarray(inner[1], float)
+    u = (B - A) / np.hypot(*(B - A))
+    theta = math.atan2(u[1], u[0])
+    L = r_mm / math.tan(0.5 * theta)
+    if not 0.0 < L < float((C - A) @ u):
+        raise ValueError(f"root fillet r = {r_mm} mm does not fit the outer face of {cell}")
+    T2 = A + L * u
+    O = T2 + r_mm * np.array([u[1], -u[0]])
+    return RootFillet(r_mm, theta, A, np.array([O[0], 0.0]), T2, O)
+
+
+def _fillet_columns(xi_wall: np.ndarray, fillet: RootFillet, face_mm: float, size_mm: float) -> tuple[np.ndarray, int]:
+    """The wall block's columns along the outer face with the fillet's edge A-T2 in n_f uniform
+    steps of at most ``size_mm`` (at least 3), the default columns beyond it (those at least half a
+    step past T2). Returns (xi, n_f): column n_f is T2."""
+    L = fillet.tangent_mm
+    n_f = max(3, int(math.ceil(L / size_mm)))
+    xi_f = np.linspace(0.0, L / face_mm, n_f + 1)
+    keep = xi_wall > xi_f[-1] + 0.5 * (xi_f[1] - xi_f[0])
+    return np.concatenate([xi_f, xi_wall[keep]]), n_f
+
+
+def _fillet_block(face: np.ndarray, fillet: RootFillet) -> tuple[np.ndarray, np.ndarray]:
+    """Triangulate the fillet: its edge on the face is ``face`` (n_f + 1, 2), the wall block's own
+    nodes from A to T2; the plate edge A-T1 mirrors them about the bisector; the arc gets steps of
+    at most the face's; interior points on the chords across the bisector. Delaunay triangulation
+    of that set covers the triangle A T1 T2; the triangles with all three corners on the arc (the
+    air inside the arc) are dropped. Checked: every face and plate step is an edge, the area is
+    the polygon's. Returns (points (n, 2), triangles (3, m))."""
+    from scipy.spatial import Delaunay
+
+    A, L, r, th = fillet.A, fillet.tangent_mm, fillet.r_mm, fillet.theta_rad
+    n_f = face.shape[0] - 1
+    h = L / n_f
+    s = np.linspace(0.0, L, n_f + 1)
+    base = np.stack([A[0] + s, np.zeros_like(s)], axis=1)
+    base[-1] = fillet.T1
+    n_arc = max(6, int(math.ceil(2.0 * r * (math.pi - th) / h)))
+    arc = fillet.arc(np.linspace(0.0, 1.0, n_arc + 1))[1:-1]
+    inner = []
+    for i in range(1, n_f + 1):
+        n_c = int(round(float(np.hypot(*(face[i] - base[i]))) / h))
+        for f in np.arange(1, n_c) / max(n_c, 1):
+            q = (1 - f) * face[i] + f * base[i]
+            if np.hypot(*(q - fillet.O)) > r + 0.4 * h:
+                inner.append(q)
+    pts = np.concatenate([face, base[1:], arc, np.reshape(inner, (-1, 2))])
+    on_arc = np.zeros(len(pts), bool)
+    on_arc[[n_f, 2 * n_f]] = True  # T2, T1
+    on_arc[2 * n_f + 1 : 2 * n_f + 1 + len(arc)] = True
+    tri = Delaunay(pts).simplices
+    p0, p1, p2 = pts[tri[:, 0]], pts[tri[:, 1]], pts[tri[:, 2]]
+    area = 0.5 * np.abs((p1[:, 0] - p0[:, 0]) * (p2[:, 1] - p0[:, 1]) - (p1[:, 1] - p0[:, 1]) * (p2[:, 0] - p0[:, 0]))
+    tri = tri[~on_arc[tri].all(axis=1) & (area > 1e-12 * L * L)]
+    _check_fillet_block(pts, tri, n_f, fillet, np.concatenate([[fillet.T2], arc, [fillet.T1]]))
+    return pts, np.ascontiguousarray(tri.T)
+
+
+def _polygon_area(xy: np.ndarray) -> float:
+    x, z = xy[:, 0], xy[:, 1]
+    return 0.5 * abs(float(np.dot(x, np.roll(z, -1)) - np.dot(z, np.roll(x, -1))))
+
+
+def _check_fillet_block(pts, tri, n_f: int, fillet: RootFillet, arc: np.ndarray) -> None:
+    """Raise ValueError unless the fillet's triangles tile its polygon and keep the face's and
+    the plate's steps as edges (so that the block is conforming with the wall and the pad)."""
+    p0, p1, p2 = pts[tri[:, 0]], pts[tri[:, 1]], pts[tri[:, 2]]
+    area = 0.5 * np.abs((p1[:, 0] - p0[:, 0]) * (p2[:, 1] - p0[:, 1]) - (p1[:, 1] - p0[:, 1]) * (p2[:, 0] - p0[:, 0]))
+    polygon = _polygon_area(np.concatenate([[fillet.A], arc[::-1]]))  # A, T1, arc ..., T2
+    edges = {tuple(sorted(e)) for t in tri for e in ((t[0], t[1]), (t[1], t[2]), (t[2], t[0]))}
+    face_steps = [(i, i + 1) for i in range(n_f)]
+    base_ids = [0] + list(range(n_f + 1, 2 * n_f + 1))
+    base_steps = [tuple(sorted(e)) for e in zip(base_ids[:-1], base_ids[1:])]
+    missing = [e for e in face_steps + base_steps if e not in edges]
+    if missing or abs(area.sum() - polygon) > 1e-9 * polygon:
+        raise ValueError(f"root fillet mesh: {len(missing)} missing edges, area {area.sum():.6g} of {polygon:.6g}")
+
+
 def quarter_profile_mesh(
-    cell: geo.HexCell, n_thick: int = DEFAULT_N_THICK, n_length: int = DEFAULT_N_LENGTH
+    cell: geo.HexCell, n_thick: int = DEFAULT_N_THICK, n_length: int = DEFAULT_N_LENGTH, root_fillet_mm: float = 0.0
 ) -> tuple[np.ndarray, np.ndarray, float]:
     """Triangle mesh of the quarter profile (bottom pad's right part + lower right wall).
 
@@ -151,6 +260,11 @@ def quarter_profile_mesh(
       the n_thick elements across the tip face B C, t / sin(theta) long, and at theta = 5 deg
       left the small-strain k 35 % off its converged value.)
 
+    ``root_fillet_mm`` r > 0 (a study knob, benchmarks/fillet_study.py) adds the printed fillet
+    that fills the air wedge between the outer face and the plate at A (:func:`root_fillet`): the
+    wall block gets uniform columns along the face from A to the tangent point T2 (the fillet's
+    edge reuses them) and the fillet is triangulated on its own (:func:`_fillet_block`).
+
     Returns (points (2, N), triangles (3, M), x_cut_mm).
     """
     outer = cell.outer_profile_xz()
@@ -163,7 +277,11 @@ def quarter_profile_mesh(
     x_cut = max(0.0, D[0] - PAD_LENGTH_IN_T * t)
     n_pad = max(2, int(math.ceil(n_length * 0.5)))
     across = np.linspace(0, 1, n_thick + 1)
-    wall = _map_quad((A, Bp, C, D), _graded(n_length, True), across)
+    xi_wall = _graded(n_length, True)
+    fillet = root_fillet(cell, root_fillet_mm) if root_fillet_mm > 0 else None
+    if fillet is not None:
+        xi_wall, n_f = _fillet_columns(xi_wall, fillet, float(np.hypot(*(Bp - A))), t / n_thick)
+    wall = _map_quad((A, Bp, C, D), xi_wall, across)
     pad = _map_quad(((x_cut, 0.0), A, D, (x_cut, t)), _graded(n_pad, False), across)
     xi = _wedge_columns(n_thick, float(np.hypot(*(B - Bp))) / t)
     X, E = np.meshgrid(xi, across, indexing="ij")
@@ -172,12 +290,16 @@ def quarter_profile_mesh(
         + X[..., None] * (B - Bp)[None, None, :]
         + (E * (1.0 - X))[..., None] * (C - Bp)[None, None, :]
     )
-    pts, tri = _stitch_blocks((pad, wall, wedge), max(cell.h_mm, 1.0))
+    extra = None if fillet is None else _fillet_block(wall[: n_f + 1, 0], fillet)
+    pts, tri = _stitch_blocks((pad, wall, wedge), max(cell.h_mm, 1.0), extra)
     return pts.T.copy(), tri, x_cut
 
 
-def _stitch_blocks(grids, length_scale_mm: float) -> tuple[np.ndarray, np.ndarray]:
+def _stitch_blocks(grids, length_scale_mm: float, extra=None) -> tuple[np.ndarray, np.ndarray]:
     """Triangulate structured point grids (ni, nj, 2) and merge the nodes they share.
+
+    ``extra``: an already triangulated block (points (n, 2), triangles (3, m)) merged after the
+    grids (the root fillet's).
 
     Each grid quad becomes two triangles; nodes closer than 1e-9 ``length_scale_mm`` are one
     node (the blocks' common lines, the wedge's apex); triangles that collapse onto a merged
@@ -194,6 +316,9 @@ def _stitch_blocks(grids, length_scale_mm: float) -> tuple[np.ndarray, np.ndarra
         tris.append(np.stack([a, c, d]))
         blocks.append(grid.reshape(-1, 2))
         offset += ni * nj
+    if extra is not None:
+        blocks.append(extra[0])
+        tris.append(extra[1] + offset)
     pts = np.concatenate(blocks)
     tri = np.concatenate(tris, axis=1)
     # merge the nodes shared by the blocks (the wall-root line, the line B'C, the apex B)
@@ -218,23 +343,29 @@ def refined_quarter_mesh(
     levels: int = DEFAULT_LEVELS,
     corners: tuple[str, ...] = CORNERS,
     radius_in_t: float = REFINE_RADIUS_IN_T,
+    root_fillet_mm: float = 0.0,
 ) -> tuple[MeshTri, float]:
     """:func:`quarter_profile_mesh` with ``levels`` rounds of refinement at the corners.
 
     Round i refines (red-green) the triangles whose centroid lies within radius_in_t t / 2^i of
     the named ``corners`` (CORNERS: the cavity's tip vertex, the outer wall-root corner, the
-    inner wall-root corner). Returns (skfem MeshTri, x_cut_mm).
+    inner wall-root corner; with a root fillet, "outer_root" is A and the fillet's tangent points
+    T1 and T2). Returns (skfem MeshTri, x_cut_mm).
     """
     from skfem import MeshTri  # deferred: scikit-fem (0.2 s) loads only when a mesh is built
 
-    pts, tri, x_cut = quarter_profile_mesh(cell, n_thick, n_length)
+    pts, tri, x_cut = quarter_profile_mesh(cell, n_thick, n_length, root_fillet_mm)
     mesh = MeshTri(pts, tri)
+    outer_root = [cell.outer_profile_xz()[0]]
+    if root_fillet_mm > 0:
+        fillet = root_fillet(cell, root_fillet_mm)
+        outer_root += [tuple(fillet.T1), tuple(fillet.T2)]
     where = {
-        "tip": cell.inner_profile_xz()[1],
-        "outer_root": cell.outer_profile_xz()[0],
-        "inner_root": cell.inner_profile_xz()[0],
+        "tip": [cell.inner_profile_xz()[1]],
+        "outer_root": outer_root,
+        "inner_root": [cell.inner_profile_xz()[0]],
     }
-    at = np.array([where[name] for name in corners])  # (n, 2) corner positions, mm
+    at = np.array([p for name in corners for p in where[name]])  # (n, 2) corner positions, mm
     for i in range(levels):
         mid = mesh.p[:, mesh.t].mean(axis=1)
         r = radius_in_t * cell.t_mm * 0.5**i
@@ -472,6 +603,7 @@ class _ActiveSet:
 
 class _Problem:
     plate: _PlatePenalty | None = None  # the plate's contact as a penalty, when asked for
+    root_fillet_mm: float = 0.0  # the outer root's fillet radius (quarter_profile_mesh)
 
     def __init__(
         self,
@@ -483,11 +615,13 @@ class _Problem:
         corners=CORNERS,
         radius_in_t=REFINE_RADIUS_IN_T,
         plate_penalty_per_mm=None,
+        root_fillet_mm=0.0,
     ):
         from skfem import Basis, ElementTriP2, ElementVector  # deferred: scikit-fem, as in refined_quarter_mesh
 
         self.cell = cell
-        self.mesh, x_cut = refined_quarter_mesh(cell, n_thick, n_length, levels, corners, radius_in_t)
+        self.root_fillet_mm = root_fillet_mm
+        self.mesh, x_cut = refined_quarter_mesh(cell, n_thick, n_length, levels, corners, radius_in_t, root_fillet_mm)
         self.basis = Basis(self.mesh, ElementVector(ElementTriP2()), intorder=4)
         self.mu, self.lam = _lame_3d(material.youngs_modulus_MPa, material.poisson_ratio)
         b = self.basis
@@ -537,7 +671,8 @@ class _Problem:
 
         * inner faces (the inner pad face z = t and the inner wall face) against their mirror
           images across the moving mid-plane: z + u_z <= h/2 - d/2 - g_c/2 (sign +1);
-        * the outer wall face against the plate below it, z = 0: z + u_z >= g_c (sign -1).
+        * the outer wall face against the plate below it, z = 0: z + u_z >= g_c (sign -1); with
+          a root fillet, the face from T2 up and the fillet's arc (:meth:`_fillet_arc_dofs`).
 
         g_c is the clear gap at which two printed faces touch: the contact allowance (the
         roughness and elephant's foot of two printed faces, section 4 of docs/design.md), but
@@ -563,7 +698,12 @@ class _Problem:
         on_pad_face = (np.abs(xy[1] - t) < tol) & (xy[0] <= ax + tol)
         self.pad_z = np.flatnonzero(on_pad_face & z_dof)
         wall_in = np.flatnonzero(on_segment(ax, az, cx, cz) & ~on_pad_face & z_dof)
-        wall_out = np.flatnonzero(on_segment(px, pz, bx, bz) & z_dof)
+        if self.root_fillet_mm > 0:  # the face from T2 up, then the fillet's arc
+            T2 = root_fillet(cell, self.root_fillet_mm).T2
+            wall_out = np.flatnonzero(on_segment(T2[0], T2[1], bx, bz) & z_dof)
+            wall_out = np.concatenate([wall_out, np.setdiff1d(self._fillet_arc_dofs(xy, tol), wall_out)])
+        else:
+            wall_out = np.flatnonzero(on_segment(px, pz, bx, bz) & z_dof)
         self.inner_z = np.concatenate([self.pad_z, wall_in])
         z = xy[1]
         rest_in = 2.0 * (h2 - z[self.inner_z])  # gap to the mirror image at rest
@@ -577,6 +717,21 @@ class _Problem:
         # obstacle position in u_z at d = 0, and its rate with d (the mirror plane moves by -d/2)
         self.obstacle_u0 = np.concatenate([0.5 * (rest_in - touch_in), -rest_out])
         self.obstacle_rate = np.concatenate([np.full(self.inner_z.size, -0.5), np.zeros(wall_out.size)])
+
+    def _fillet_arc_dofs(self, xy, tol) -> np.ndarray:
+        """The z-dofs on the root fillet's arc: on the mesh's boundary, inside the triangle
+        A T1 T2 and off the plate (the fillet's face edge A-T2 is inside the solid)."""
+        f = root_fillet(self.cell, self.root_fillet_mm)
+        b, mesh = self.basis, self.mesh
+        facets = mesh.boundary_facets()
+        dofs = np.unique(np.concatenate([b.nodal_dofs[1][mesh.facets[:, facets]].ravel(), b.facet_dofs[1][facets]]))
+        rel = xy[:, dofs] - f.A[:, None]
+        u = (f.T2 - f.A) / f.tangent_mm
+        along_face = u[0] * rel[0] + u[1] * rel[1]  # the triangle: z > 0, below the face, before T1 T2
+        below_face = u[0] * rel[1] - u[1] * rel[0]
+        n = np.array([math.cos(0.5 * f.theta_rad), math.sin(0.5 * f.theta_rad)])  # the bisector
+        inside = (rel[1] > tol) & (below_face < tol) & (n[0] * rel[0] + n[1] * rel[1] <= float(n @ (f.T1 - f.A)) + tol)
+        return dofs[inside & (along_face > -tol)]
 
     # residual and tangent -------------------------------------------------------
     def assemble(self, u, need_K=True):
@@ -737,6 +892,7 @@ def solve_continuum(
     path_corners: tuple[str, ...] = CORNERS,
     path_radius_in_t: float = REFINE_RADIUS_IN_T,
     plate_penalty_per_mm: float | None = None,
+    root_fillet_mm: float = 0.0,
 ) -> ContinuumResult:
     """Nonlinear force-displacement of one layer through closure, up to its lock.
 
@@ -753,6 +909,8 @@ def solve_continuum(
     ``plate_penalty_per_mm``: the outer face's contact with the plate as a penalty of that
     stiffness (pressure per mm of overlap, in units of the shear modulus; :class:`_PlatePenalty`)
     instead of the active set: a study knob for root-graded path meshes.
+    ``root_fillet_mm``: the printed fillet at the outer wall root (:class:`RootFillet`; 0, the
+    default, is the sharp corner), on both meshes: a study knob (benchmarks/fillet_study.py).
 
     Raises
     ------
@@ -761,7 +919,7 @@ def solve_continuum(
                         stroke, no contact up to D_MAX_OVER_NOMINAL times it)
     """
     _require_meshable(cell)
-    fine = _Problem(cell, material, n_thick, n_length, levels)
+    fine = _Problem(cell, material, n_thick, n_length, levels, root_fillet_mm=root_fillet_mm)
     k_lin = linear_k(fine)
     # The nonlinear path runs on the mesh without corner refinement: on the refined one the
     # elements at the cavity's near-crack tip invert long before contact. Its forces are
@@ -769,7 +927,17 @@ def solve_continuum(
     # corner singularity's mesh error; the benchmark's convergence study records it).
     own_path_mesh = levels != path_levels or plate_penalty_per_mm is not None
     prob = (
-        _Problem(cell, material, n_thick, n_length, path_levels, path_corners, path_radius_in_t, plate_penalty_per_mm)
+        _Problem(
+            cell,
+            material,
+            n_thick,
+            n_length,
+            path_levels,
+            path_corners,
+            path_radius_in_t,
+            plate_penalty_per_mm,
+            root_fillet_mm,
+        )
         if own_path_mesh
         else fine
     )
