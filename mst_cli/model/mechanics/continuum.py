@@ -909,8 +909,7 @@ def solve_continuum(
     ``plate_penalty_per_mm``: the outer face's contact with the plate as a penalty of that
     stiffness (pressure per mm of overlap, in units of the shear modulus; :class:`_PlatePenalty`)
     instead of the active set: a study knob for root-graded path meshes.
-    ``root_fillet_mm``: the printed fillet at the outer wall root (:class:`RootFillet`; 0, the
-    default, is the sharp corner), on both meshes: a study knob (benchmarks/fillet_study.py).
+    ``root_fillet_mm``: the outer root's printed fillet (:class:`RootFillet`; 0 the sharp corner), a study knob.
 
     Raises
     ------
@@ -919,7 +918,8 @@ def solve_continuum(
                         stroke, no contact up to D_MAX_OVER_NOMINAL times it)
     """
     _require_meshable(cell)
-    fine = _Problem(cell, material, n_thick, n_length, levels, root_fillet_mm=root_fillet_mm)
+    mesh = (cell, material, n_thick, n_length)
+    fine = _Problem(*mesh, levels, root_fillet_mm=root_fillet_mm)
     k_lin = linear_k(fine)
     # The nonlinear path runs on the mesh without corner refinement: on the refined one the
     # elements at the cavity's near-crack tip invert long before contact. Its forces are
@@ -927,17 +927,7 @@ def solve_continuum(
     # corner singularity's mesh error; the benchmark's convergence study records it).
     own_path_mesh = levels != path_levels or plate_penalty_per_mm is not None
     prob = (
-        _Problem(
-            cell,
-            material,
-            n_thick,
-            n_length,
-            path_levels,
-            path_corners,
-            path_radius_in_t,
-            plate_penalty_per_mm,
-            root_fillet_mm,
-        )
+        _Problem(*mesh, path_levels, path_corners, path_radius_in_t, plate_penalty_per_mm, root_fillet_mm)
         if own_path_mesh
         else fine
     )
