@@ -193,7 +193,7 @@ def _fillet_block(face: np.ndarray, fillet: RootFillet) -> tuple[np.ndarray, np.
     of that set covers the triangle A T1 T2; the triangles with all three corners on the arc (the
     air inside the arc) are dropped. Checked: every face and plate step is an edge, the area is
     the polygon's. Returns (points (n, 2), triangles (3, m))."""
-    from scipy.spatial import Delaunay
+    from scipy.spatial import Delaunay  # deferred: only the root-fillet study triangulates a free block
 
     A, L, r, th = fillet.A, fillet.tangent_mm, fillet.r_mm, fillet.theta_rad
     n_f = face.shape[0] - 1
