@@ -215,11 +215,16 @@ def _fillet_block(face: np.ndarray, fillet: RootFillet) -> tuple[np.ndarray, np.
     on_arc[[n_f, 2 * n_f]] = True  # T2, T1
     on_arc[2 * n_f + 1 : 2 * n_f + 1 + len(arc)] = True
     tri = Delaunay(pts).simplices
-    p0, p1, p2 = pts[tri[:, 0]], pts[tri[:, 1]], pts[tri[:, 2]]
-    area = 0.5 * np.abs((p1[:, 0] - p0[:, 0]) * (p2[:, 1] - p0[:, 1]) - (p1[:, 1] - p0[:, 1]) * (p2[:, 0] - p0[:, 0]))
+    area = _triangle_areas(pts, tri)
     tri = tri[~on_arc[tri].all(axis=1) & (area > 1e-12 * L * L)]
     _check_fillet_block(pts, tri, n_f, fillet, np.concatenate([[fillet.T2], arc, [fillet.T1]]))
     return pts, np.ascontiguousarray(tri.T)
+
+
+def _triangle_areas(pts: np.ndarray, tri: np.ndarray) -> np.ndarray:
+    """Areas of the triangles ``tri`` (m, 3) of the points ``pts`` (n, 2)."""
+    p0, p1, p2 = pts[tri[:, 0]], pts[tri[:, 1]], pts[tri[:, 2]]
+    return 0.5 * np.abs((p1[:, 0] - p0[:, 0]) * (p2[:, 1] - p0[:, 1]) - (p1[:, 1] - p0[:, 1]) * (p2[:, 0] - p0[:, 0]))
 
 
 def _polygon_area(xy: np.ndarray) -> float:
@@ -230,8 +235,7 @@ def _polygon_area(xy: np.ndarray) -> float:
 def _check_fillet_block(pts, tri, n_f: int, fillet: RootFillet, arc: np.ndarray) -> None:
     """Raise ValueError unless the fillet's triangles tile its polygon and keep the face's and
     the plate's steps as edges (so that the block is conforming with the wall and the pad)."""
-    p0, p1, p2 = pts[tri[:, 0]], pts[tri[:, 1]], pts[tri[:, 2]]
-    area = 0.5 * np.abs((p1[:, 0] - p0[:, 0]) * (p2[:, 1] - p0[:, 1]) - (p1[:, 1] - p0[:, 1]) * (p2[:, 0] - p0[:, 0]))
+    area = _triangle_areas(pts, tri)
     polygon = _polygon_area(np.concatenate([[fillet.A], arc[::-1]]))  # A, T1, arc ..., T2
     edges = {tuple(sorted(e)) for t in tri for e in ((t[0], t[1]), (t[1], t[2]), (t[2], t[0]))}
     face_steps = [(i, i + 1) for i in range(n_f)]
