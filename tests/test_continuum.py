@@ -388,7 +388,7 @@ def test_root_fillet_mesh_is_conforming_and_adds_the_fillet():
         boundary = edges[:, counts == 1]
         assert np.all(np.bincount(boundary.ravel())[np.unique(boundary)] == 2)  # a simple loop
         prob = L2._Problem(cell, MAT, 3, 12, 1, root_fillet_mm=r)
-        arc = prob._fillet_arc_dofs(prob.basis.doflocs, 1e-9)
+        arc = prob._fillet_arc_dofs(prob.fillet, prob.basis.doflocs, 1e-9)
         assert arc.size > 0 and np.isin(arc, prob.contact_dofs).all()
         dist = np.hypot(*(prob.basis.doflocs[:, arc] - f.O[:, None]))
         assert dist.max() == pytest.approx(r, rel=1e-9) and dist.min() > 0.95 * r

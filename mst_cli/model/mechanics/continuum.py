@@ -607,7 +607,7 @@ class _ActiveSet:
 
 class _Problem:
     plate: _PlatePenalty | None = None  # the plate's contact as a penalty, when asked for
-    root_fillet_mm: float = 0.0  # the outer root's fillet radius (quarter_profile_mesh)
+    fillet: RootFillet | None = None  # the outer root's printed fillet (quarter_profile_mesh), if any
 
     def __init__(
         self,
@@ -624,7 +624,7 @@ class _Problem:
         from skfem import Basis, ElementTriP2, ElementVector  # deferred: scikit-fem, as in refined_quarter_mesh
 
         self.cell = cell
-        self.root_fillet_mm = root_fillet_mm
+        self.fillet = root_fillet(cell, root_fillet_mm) if root_fillet_mm > 0 else None
         self.mesh, x_cut = refined_quarter_mesh(cell, n_thick, n_length, levels, corners, radius_in_t, root_fillet_mm)
         self.basis = Basis(self.mesh, ElementVector(ElementTriP2()), intorder=4)
         self.mu, self.lam = _lame_3d(material.youngs_modulus_MPa, material.poisson_ratio)
@@ -702,10 +702,11 @@ class _Problem:
         on_pad_face = (np.abs(xy[1] - t) < tol) & (xy[0] <= ax + tol)
         self.pad_z = np.flatnonzero(on_pad_face & z_dof)
         wall_in = np.flatnonzero(on_segment(ax, az, cx, cz) & ~on_pad_face & z_dof)
-        if self.root_fillet_mm > 0:  # the face from T2 up, then the fillet's arc
-            T2 = root_fillet(cell, self.root_fillet_mm).T2
+        if self.fillet is not None:  # the face from T2 up, then the fillet's arc
+            T2 = self.fillet.T2
             wall_out = np.flatnonzero(on_segment(T2[0], T2[1], bx, bz) & z_dof)
-            wall_out = np.concatenate([wall_out, np.setdiff1d(self._fillet_arc_dofs(xy, tol), wall_out)])
+            arc = self._fillet_arc_dofs(self.fillet, xy, tol)
+            wall_out = np.concatenate([wall_out, np.setdiff1d(arc, wall_out)])
         else:
             wall_out = np.flatnonzero(on_segment(px, pz, bx, bz) & z_dof)
         self.inner_z = np.concatenate([self.pad_z, wall_in])
@@ -722,10 +723,9 @@ class _Problem:
         self.obstacle_u0 = np.concatenate([0.5 * (rest_in - touch_in), -rest_out])
         self.obstacle_rate = np.concatenate([np.full(self.inner_z.size, -0.5), np.zeros(wall_out.size)])
 
-    def _fillet_arc_dofs(self, xy, tol) -> np.ndarray:
-        """The z-dofs on the root fillet's arc: on the mesh's boundary, inside the triangle
+    def _fillet_arc_dofs(self, f: RootFillet, xy, tol) -> np.ndarray:
+        """The z-dofs on the root fillet ``f``'s arc: on the mesh's boundary, inside the triangle
         A T1 T2 and off the plate (the fillet's face edge A-T2 is inside the solid)."""
-        f = root_fillet(self.cell, self.root_fillet_mm)
         b, mesh = self.basis, self.mesh
         facets = mesh.boundary_facets()
         dofs = np.unique(np.concatenate([b.nodal_dofs[1][mesh.facets[:, facets]].ravel(), b.facet_dofs[1][facets]]))
