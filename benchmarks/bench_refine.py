@@ -10,8 +10,8 @@ at most 4x the plain design. ``--baseline DIR`` adds the two refine commands run
 on PYTHONPATH (a copy of another version of the ``mst_cli`` package), in the same interleaved
 loop, so a before/after comparison shares the machine's load.
 
-Each mode is then run once more, in a fresh interpreter of its own (cold caches, like the
-command), with counters on:
+Each mode is then run --repeats times more (interleaved), each in a fresh interpreter of its
+own (cold caches, like the command), with counters on:
 
 * dear-rung law requests (``layer_law(cell, material, frame|continuum)``) and the laws actually
   solved (the rung's per-cell cache misses, in this process or by a worker: since 0.11 a
@@ -19,7 +19,10 @@ command), with counters on:
 * DesignProblem._evaluate_physical calls (every evaluation goes through it, with or without the
   print-shifted stacks: one call is one batched kernel call; in an older checkout
   evaluate_physical, whose print-shifted stacks went through kernel calls of their own, not
-  counted) and the candidate designs they held.
+  counted) and the candidate designs they held;
+* where the time goes (medians; issue 25: the loop should spend it in the dear solves): the
+  command's in-process time without plots, the part inside the dear laws' side-by-side solves
+  (``LawCache.solve_many``) and L2's import (scipy, scikit-fem), done before the run.
 """
 
 from __future__ import annotations
@@ -46,6 +49,7 @@ MODES = (
     ("--refine continuum", ["--refine", "continuum"]),
 )
 GOAL_RATIO = 4.0  # --refine continuum / plain design
+TIMES = ("in_process_s", "dear_solves_s", "l2_import_s")  # what a counted run times
 
 
 def _env(pythonpath: Path | None) -> dict | None:
@@ -77,7 +81,24 @@ def count_run(spec: Path, flags: list[str]) -> dict:
 
     from mst_cli.cli.app import main
     from mst_cli.design.problem import DesignProblem
-    from mst_cli.model.mechanics import continuum, frame
+
+    t_import = time.perf_counter()
+    from mst_cli.model.mechanics import continuum, frame  # L2's import (scipy, the law cache)
+
+    import_s = time.perf_counter() - t_import
+    import skfem  # noqa: F401  (the workers import it first: not the loop's time)
+
+    from mst_cli.model.mechanics.law_cache import LawCache
+
+    dear = {"s": 0.0}
+    solve_many = LawCache.solve_many
+
+    def timed_solve_many(self, pairs):  # a stack's missing laws, side by side: the dear solves
+        t = time.perf_counter()
+        solve_many(self, pairs)
+        dear["s"] += time.perf_counter() - t
+
+    LawCache.solve_many = timed_solve_many
 
     calls = {"evaluate_calls": 0, "evaluate_points": 0}
     # an older checkout (--baseline) has no _evaluate_physical: its evaluate_physical then
@@ -93,7 +114,7 @@ def count_run(spec: Path, flags: list[str]) -> dict:
     with tempfile.TemporaryDirectory() as tmp:
         t0 = time.perf_counter()
         with contextlib.suppress(SystemExit):  # the command's exit code: not a count
-            main(["design", str(spec), *flags, "--out", f"{tmp}/o", "-q"], standalone_mode=False)
+            main(["design", str(spec), *flags, "--out", f"{tmp}/o", "-q", "--no-plot"], standalone_mode=False)
         elapsed = time.perf_counter() - t0
     # both rungs memoise their laws (an lru_cache before 0.11): a miss is a law solved (in this
     # process or by a worker), and the requests are the hits and misses less the laws a worker
@@ -104,21 +125,34 @@ def count_run(spec: Path, flags: list[str]) -> dict:
         rung: c.cache_info().hits + c.cache_info().misses - getattr(c, "solved_in_workers", 0)
         for rung, c in caches.items()
     }
-    return {**calls, "law_requests": requests, "laws_solved": solved, "in_process_s": elapsed}
+    return {
+        **calls,
+        "law_requests": requests,
+        "laws_solved": solved,
+        "in_process_s": elapsed,
+        "dear_solves_s": dear["s"],
+        "l2_import_s": import_s,
+    }
 
 
-def counts(spec: Path, modes) -> dict[str, dict]:
-    out = {}
-    for label, flags, path in modes:
-        r = subprocess.run(
-            [sys.executable, __file__, "--count", json.dumps(flags), "--spec", str(spec)],
-            capture_output=True,
-            text=True,
-            check=True,
-            env=_env(path),
-        )
-        out[label] = json.loads(r.stdout.strip().splitlines()[-1])
-    return out
+def counts(spec: Path, modes, repeats: int) -> dict[str, dict]:
+    """Each mode's counted run, ``repeats`` times interleaved: the counts of the first (they do
+    not change), the median of each time."""
+    runs: dict[str, list[dict]] = {label: [] for label, _, _ in modes}
+    for _ in range(repeats):
+        for label, flags, path in modes:
+            r = subprocess.run(
+                [sys.executable, __file__, "--count", json.dumps(flags), "--spec", str(spec)],
+                capture_output=True,
+                text=True,
+                check=True,
+                env=_env(path),
+            )
+            runs[label].append(json.loads(r.stdout.strip().splitlines()[-1]))
+    return {
+        label: {**rs[0], **{k: statistics.median(r[k] for r in rs) for k in TIMES if k in rs[0]}}
+        for label, rs in runs.items()
+    }
 
 
 def main() -> None:
@@ -142,7 +176,7 @@ def main() -> None:
     if args.baseline is not None:
         modes += [(f"{label} (baseline)", flags, args.baseline.resolve()) for label, flags in MODES[1:]]
     times = command_times(args.spec, args.repeats, modes)
-    n = counts(args.spec, modes)
+    n = counts(args.spec, modes, args.repeats)
     plain = statistics.median(times[MODES[0][0]])
     print(
         f"spec {args.spec.name}, {args.repeats} runs per command (interleaved), one run of this script"
@@ -164,11 +198,26 @@ def main() -> None:
             f"{statistics.median(ts) / plain:>8.2f} {solved:>16d} {req:>12d} "
             f"{c['evaluate_calls']:>14d} {c['evaluate_points']:>9d}"
         )
+    print_where_the_time_goes(n)
     ratio = statistics.median(times[MODES[-1][0]]) / plain
     print(
         f"goal: --refine continuum <= {GOAL_RATIO:g}x the plain design: {ratio:.2f}x "
         f"({'met' if ratio <= GOAL_RATIO else 'NOT met'})"
     )
+
+
+def print_where_the_time_goes(n: dict[str, dict]) -> None:
+    """The counted runs' split of the command's own time (in-process, after its imports, without
+    the plots): inside the dear laws' side-by-side solves (LawCache.solve_many) and around them."""
+    print("\nwhere the time goes (counted runs, medians; in-process, no plots, L2's import done before it):")
+    for label, c in n.items():
+        if "dear_solves_s" not in c or not c["laws_solved"].get("continuum"):
+            continue
+        total, dear = c["in_process_s"], c["dear_solves_s"]
+        print(
+            f"  {label}: {total:.2f} s, of which dear solves {dear:.2f} s ({100 * dear / total:.0f} %), "
+            f"around them {total - dear:.2f} s; importing L2 (scipy, scikit-fem) {c['l2_import_s']:.2f} s more"
+        )
 
 
 if __name__ == "__main__":
