@@ -394,18 +394,3 @@ def test_root_fillet_mesh_is_conforming_and_adds_the_fillet():
         assert dist.max() == pytest.approx(r, rel=1e-9) and dist.min() > 0.95 * r
         xy = prob.basis.doflocs[:, prob.fixed_zero]
         assert np.isclose(xy[0], f.T1[0]).any()  # the fillet's base, out to T1, is bonded
-
-
-def test_the_law_from_its_two_halves_is_solve_continuum_at_its_defaults():
-    """continuum_layer solves a law as two independent halves (the path, the fine mesh's k) so a
-    stack's can run side by side; they must be solve_continuum's default solve, to the bit."""
-    cell, material = HexCell(theta_deg=30.0, t_mm=0.6, h_mm=3.0), Material()
-    res = solve_continuum(cell, material)
-    law = L2.continuum_layer.__wrapped__(cell, material)
-    part, (k_lin, n_dofs) = (piece(cell, material) for piece in L2.LAW_PIECES)
-    assert k_lin == res.k_linear_N_per_mm and n_dofs == res.n_dofs
-    assert np.array_equal(part.path.d_mm, res.displacement_mm[1:])
-    forces = np.array([F for F, _, _ in part.path.observations]) * (k_lin / part.k_path_N_per_mm)
-    assert np.array_equal(forces, res.force_N[1:])
-    assert law.k_N_per_mm == res.k_linear_N_per_mm
-    assert part.path.state is None  # what a worker hands back carries no solver state

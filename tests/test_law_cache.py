@@ -25,8 +25,8 @@ def test_continuum_laws_solved_side_by_side_equal_those_solved_in_turn(monkeypat
     cells = [geo.HexCell(theta_deg=th, t_mm=0.45, h_mm=2.4) for th in (14.0, 22.0, 30.0)]
     material = Material()
     monkeypatch.setenv("MST_WORKERS", "2")
-    parallel = LawCache(continuum.continuum_layer.__wrapped__, 8, continuum.LAW_PIECES, continuum._law_of)
-    parallel.solve_many((c, material) for c in cells)  # six tasks: each law's path and its fine k
+    parallel = LawCache(continuum.continuum_layer.__wrapped__, 8)
+    parallel.solve_many((c, material) for c in cells)
     assert parallel.solved_in_workers == 3 and parallel.cache_info().misses == 3
     serial = LawCache(continuum.continuum_layer.__wrapped__, 8)
     for c in cells:
@@ -35,29 +35,6 @@ def test_continuum_laws_solved_side_by_side_equal_those_solved_in_turn(monkeypat
         assert np.array_equal(a.knots_N, b.knots_N)
         assert np.array_equal(a.displacement_mm(a.knots_N), b.displacement_mm(b.knots_N))
     assert parallel.cache_info().hits == 3 and serial.cache_info().misses == 3
-
-
-def _root(cell, material):
-    return cell**0.5
-
-
-def _pair(cell, material, pieces):
-    return (cell, material, pieces)
-
-
-@needs_fork
-def test_a_law_in_pieces_is_combined_from_its_own_pieces(monkeypatch):
-    """Pieces go out piece by piece (every law's first piece, then every law's second): each
-    law must still get its own two, in the pieces' order, even for a single missing law."""
-    monkeypatch.setenv("MST_WORKERS", "2")
-    cache = LawCache(lambda c, m: _pair(c, m, (_square(c, m), _root(c, m))), 8, (_square, _root), _pair)
-    cache.solve_many([(4, "m"), (9, "m"), (16, "m")])
-    assert cache.solved_in_workers == 3
-    for c in (4, 9, 16):
-        assert cache(c, "m") == (c, "m", ((c * c, "m"), c**0.5)) == cache.__wrapped__(c, "m")
-    one = LawCache(cache.__wrapped__, 8, (_square, _root), _pair)
-    one.solve_many([(25, "m")])  # one law, two pieces: still side by side
-    assert one.solved_in_workers == 1 and one(25, "m") == (25, "m", ((625, "m"), 5.0))
 
 
 @needs_fork

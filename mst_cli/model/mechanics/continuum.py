@@ -59,14 +59,7 @@ from scipy.sparse.linalg import splu
 from mst_cli.model import geometry as geo
 from mst_cli.model.mechanics.frame import TabulatedLockingLayer, locked_tabulated_law
 from mst_cli.model.mechanics.law_cache import law_cache
-from mst_cli.model.mechanics.path import (
-    LAW_CHORD_TOL_REL,
-    PathError,
-    PathResult,
-    PathTolerances,
-    StepControl,
-    follow_to_event,
-)
+from mst_cli.model.mechanics.path import LAW_CHORD_TOL_REL, PathError, PathTolerances, StepControl, follow_to_event
 
 if TYPE_CHECKING:
     from skfem import MeshTri
@@ -100,7 +93,6 @@ LOCK_STIFFNESS_FACTOR = 5.0
 # released once and back in contact stays held (:meth:`_Problem._newton`)
 SET_CHANGES_BEFORE_HOLDING = 4
 # the tangent jumps at the lock, so the event is bisected, to 1e-5 of the stroke
-DEFAULT_STEPS = StepControl(first_step_rel=0.125, max_steps=200)  # the path's first step: 1/8 of the stroke
 LOCK_TOLERANCES = PathTolerances(event_gap_rel=0.0, event_width_rel=1e-5, max_event_iterations=40, bisect=True)
 
 
@@ -898,8 +890,8 @@ def solve_continuum(
     n_thick: int = DEFAULT_N_THICK,
     n_length: int = DEFAULT_N_LENGTH,
     levels: int = DEFAULT_LEVELS,
-    first_step_frac: float = DEFAULT_STEPS.first_step_rel,
-    max_steps: int = DEFAULT_STEPS.max_steps,
+    first_step_frac: float = 0.125,
+    max_steps: int = 200,
     path_levels: int = 0,
     path_corners: tuple[str, ...] = CORNERS,
     path_radius_in_t: float = REFINE_RADIUS_IN_T,
@@ -930,73 +922,28 @@ def solve_continuum(
                         stroke, no contact up to D_MAX_OVER_NOMINAL times it)
     """
     _require_meshable(cell)
-    k_lin, n_dofs = fine_stiffness(cell, material, n_thick, n_length, levels, root_fillet_mm)
-    steps = StepControl(first_step_rel=first_step_frac, max_steps=max_steps)
-    if levels == path_levels and plate_penalty_per_mm is None:
-        # the path runs on the fine mesh itself (a study setting): its k is the fine one
-        fine = _Problem(cell, material, n_thick, n_length, levels, root_fillet_mm=root_fillet_mm)
-        part = _follow(cell, fine, k_lin, steps)
-    else:
-        path_mesh = (path_levels, path_corners, path_radius_in_t, plate_penalty_per_mm, root_fillet_mm)
-        part = lock_path(cell, material, n_thick, n_length, *path_mesh, steps=steps)
-    return _result(part, k_lin, n_dofs)
-
-
-def fine_stiffness(
-    cell: geo.HexCell,
-    material: Material,
-    n_thick: int = DEFAULT_N_THICK,
-    n_length: int = DEFAULT_N_LENGTH,
-    levels: int = DEFAULT_LEVELS,
-    root_fillet_mm: float = 0.0,
-) -> tuple[float, int]:
-    """One half of an L2 law: the small-strain k (N/mm) on the corner-refined mesh and its dofs.
-
-    Independent of the load path (:func:`lock_path`), so a stack's laws solve the two halves
-    side by side (:data:`LAW_PIECES`)."""
-    _require_meshable(cell)
-    fine = _Problem(cell, material, n_thick, n_length, levels, root_fillet_mm=root_fillet_mm)
-    return linear_k(fine), int(fine.basis.N)
-
-
-def lock_path(
-    cell: geo.HexCell,
-    material: Material,
-    n_thick: int = DEFAULT_N_THICK,
-    n_length: int = DEFAULT_N_LENGTH,
-    path_levels: int = 0,
-    path_corners: tuple[str, ...] = CORNERS,
-    path_radius_in_t: float = REFINE_RADIUS_IN_T,
-    plate_penalty_per_mm: float | None = None,
-    root_fillet_mm: float = 0.0,
-    steps: StepControl = DEFAULT_STEPS,
-) -> _PathPart:
-    """The other half of an L2 law: the load path to the lock on the path's own mesh (by default
-    without corner refinement: on the refined one the elements at the cavity's near-crack tip
-    invert long before contact), with that mesh's k, which scales its forces to the fine
-    mesh's. The arguments are :func:`solve_continuum`'s."""
-    _require_meshable(cell)
-    mesh = (cell, material, n_thick, n_length, path_levels, path_corners, path_radius_in_t)
-    return _follow(cell, _Problem(*mesh, plate_penalty_per_mm, root_fillet_mm), None, steps)
-
-
-@dataclass(frozen=True)
-class _PathPart:
-    """What a law needs of its load path (small and picklable: a worker hands it back)."""
-
-    path: PathResult  # without its end state
-    k_path_N_per_mm: float  # the path mesh's small-strain k
-    ratio_after: float  # tangent / k just past the lock
-
-
-def _follow(cell: geo.HexCell, prob: _Problem, k_path: float | None, steps: StepControl) -> _PathPart:
-    """The path of a built problem to its lock; ``k_path``: its small-strain k (None: solve it)."""
-    k_path = linear_k(prob) if k_path is None else k_path
+    mesh = (cell, material, n_thick, n_length)
+    fine = _Problem(*mesh, levels, root_fillet_mm=root_fillet_mm)
+    k_lin = linear_k(fine)
+    # The nonlinear path runs on the mesh without corner refinement: on the refined one the
+    # elements at the cavity's near-crack tip invert long before contact. Its forces are
+    # scaled by k_fine / k_coarse, the ratio of the two meshes' linear stiffnesses (the
+    # corner singularity's mesh error; the benchmark's convergence study records it).
+    own_path_mesh = levels != path_levels or plate_penalty_per_mm is not None
+    prob = (
+        _Problem(*mesh, path_levels, path_corners, path_radius_in_t, plate_penalty_per_mm, root_fillet_mm)
+        if own_path_mesh
+        else fine
+    )
+    k_path = linear_k(prob) if own_path_mesh else k_lin
+    mesh_scale = k_lin / k_path
     try:
-        path, ratio_after = follow_to_lock(prob, k_path, steps)
+        path, ratio_after = follow_to_lock(
+            prob, k_path, StepControl(first_step_rel=first_step_frac, max_steps=max_steps)
+        )
     except PathError as exc:
         raise ContinuumError(f"continuum solve: {exc} for {cell}") from None
-    return _PathPart(replace(path, state=None), k_path, ratio_after)
+    return _result(path, k_lin, mesh_scale, ratio_after, int(fine.basis.N))
 
 
 def _require_meshable(cell: geo.HexCell) -> None:
@@ -1008,10 +955,8 @@ def _require_meshable(cell: geo.HexCell) -> None:
         raise ValueError("continuum model needs a meshable cell: h <= 2t or p <= 0")
 
 
-def _result(part: _PathPart, k_lin: float, n_dofs: int) -> ContinuumResult:
-    """The path's samples as a ContinuumResult, forces scaled to the refined mesh by the ratio
-    of the two meshes' small-strain k (the corner singularity's mesh error)."""
-    path, mesh_scale, ratio_after = part.path, k_lin / part.k_path_N_per_mm, part.ratio_after
+def _result(path, k_lin: float, mesh_scale: float, ratio_after: float, n_dofs: int) -> ContinuumResult:
+    """The path's samples as a ContinuumResult, forces scaled to the refined mesh."""
     return ContinuumResult(
         np.array([0.0] + path.d_mm),
         np.array([0.0] + [F * mesh_scale for F, _, _ in path.observations]),
@@ -1176,20 +1121,8 @@ def linear_k(problem: _Problem) -> float:
     return float(-(K0 @ ul)[problem.tip_z].sum() * problem.depth_factor)
 
 
-def _law_of(cell: geo.HexCell, material: Material, pieces: tuple) -> TabulatedLockingLayer:
-    """The L2 law of a cell from its two halves (:data:`LAW_PIECES`, in that order)."""
-    part, (k_lin, n_dofs) = pieces
-    res = _result(part, k_lin, n_dofs)
-    return locked_tabulated_law(cell, material, res.displacement_mm, res.force_N, res.k_linear_N_per_mm)
-
-
-# An L2 law's two independent halves, the longer first: a stack's missing laws solve them side
-# by side, longest first (LawCache.solve_many), which balances three laws on two cores
-LAW_PIECES = (lock_path, fine_stiffness)
-
-
-@law_cache(maxsize=256, pieces=LAW_PIECES, combine=_law_of)
+@law_cache(maxsize=256)
 def continuum_layer(cell: geo.HexCell, material: Material) -> TabulatedLockingLayer:
-    """The L2 law of one cell: the FE curve up to its lock, then the locked branch (walls + contact
-    column); :func:`solve_continuum` at its defaults, solved as its two halves."""
-    return _law_of(cell, material, tuple(piece(cell, material) for piece in LAW_PIECES))
+    """The L2 law of one cell: the FE curve up to its lock, then the locked branch (walls + contact column)."""
+    res = solve_continuum(cell, material)
+    return locked_tabulated_law(cell, material, res.displacement_mm, res.force_N, res.k_linear_N_per_mm)

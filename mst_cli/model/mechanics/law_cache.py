@@ -6,9 +6,6 @@ but one that can be filled from outside). A stack asks for all its layers' laws 
 (:func:`mst_cli.model.mechanics.layer_laws`). An L2 law takes a third of a second, and the
 layers are independent, so :meth:`LawCache.solve_many` solves those not yet known side by side
 (:func:`mst_cli.parallel.fork_map`: a forked worker per core; ``MST_WORKERS=1`` in turn).
-A law made of independent pieces (L2's load path and its fine mesh's k) goes out as its
-pieces, the longest first: three laws on two cores then finish in about half their summed
-time, not in two laws' time.
 """
 
 from __future__ import annotations
@@ -34,14 +31,9 @@ class LawCache:
 
     __wrapped__: Callable  # the uncached law (set by update_wrapper)
 
-    def __init__(
-        self, solve: Callable, maxsize: int, pieces: tuple[Callable, ...] = (), combine: Callable | None = None
-    ):
+    def __init__(self, solve: Callable, maxsize: int):
         functools.update_wrapper(self, solve)
         self._solve, self.maxsize = solve, maxsize
-        # a law that is independent pieces: piece(cell, material) each (picklable: module-level),
-        # combine(cell, material, pieces) the law; solve(cell, material) must equal that
-        self.pieces, self.combine = pieces, combine
         self._laws: OrderedDict = OrderedDict()
         self.hits = self.misses = 0
         self.solved_in_workers = 0  # of the misses: laws a worker solved (each then a hit when asked for)
@@ -67,13 +59,7 @@ class LawCache:
         """Solve the laws of the (cell, material) ``pairs`` not yet known, side by side when two
         or more are missing and there is more than one worker; a failure is raised as in turn."""
         todo = [key for key in dict.fromkeys(pairs) if key not in self._laws]
-        if not self.pieces:
-            laws = fork_map(self._solve_pair, todo)
-        else:  # every law's pieces as tasks, piece by piece: the longest (first) ones start first
-            assert self.combine is not None
-            done = fork_map(_solve_piece, [(piece, key) for piece in self.pieces for key in todo])
-            n = len(todo)
-            laws = None if done is None else [self.combine(*key, tuple(done[i::n])) for i, key in enumerate(todo)]
+        laws = fork_map(self._solve_pair, todo)
         if laws is None:
             return  # the caller's own requests solve them in turn
         for key, law in zip(todo, laws):
@@ -91,14 +77,6 @@ class LawCache:
         self.hits = self.misses = self.solved_in_workers = 0
 
 
-def _solve_piece(task: tuple[Callable, tuple[Any, Any]]) -> Any:
-    piece, key = task
-    return piece(*key)
-
-
-def law_cache(
-    maxsize: int, pieces: tuple[Callable, ...] = (), combine: Callable | None = None
-) -> Callable[[Callable], LawCache]:
-    """Decorator: ``@law_cache(maxsize=256)`` over a rung's ``law(cell, material)``; ``pieces``
-    and ``combine``: the law as independent pieces (:class:`LawCache`)."""
-    return lambda solve: LawCache(solve, maxsize, pieces, combine)
+def law_cache(maxsize: int) -> Callable[[Callable], LawCache]:
+    """Decorator: ``@law_cache(maxsize=256)`` over a rung's ``law(cell, material)``."""
+    return lambda solve: LawCache(solve, maxsize)
