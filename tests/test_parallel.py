@@ -7,7 +7,7 @@ from concurrent.futures.process import BrokenProcessPool
 import pytest
 
 from mst_cli.errors import InputError
-from mst_cli.parallel import can_fork, fork_map, workers
+from mst_cli.parallel import can_fork, fork_map, one_blas_thread, workers
 
 WORKERS_ALLOWED = "a whole number of worker processes >= 1 (1: work in turn)"
 
@@ -109,3 +109,30 @@ def test_a_bad_worker_count_is_one_line_and_exit_2_from_the_command(tmp_path, mo
     assert r.exit_code == 2
     assert r.output.strip().splitlines() == ["mst: invalid input: MST_WORKERS = 'zero': " + WORKERS_ALLOWED]
     assert not (tmp_path / "o").exists()
+
+
+def _blas_threads() -> list[int]:
+    from threadpoolctl import threadpool_info
+
+    return [lib["num_threads"] for lib in threadpool_info() if lib["user_api"] == "blas"]
+
+
+def test_one_blas_thread_holds_blas_to_one_thread_inside_the_block_only():
+    before = _blas_threads()
+    assert before, "numpy's BLAS is not visible to threadpoolctl"
+    with one_blas_thread():
+        assert _blas_threads() == [1] * len(before)
+    assert _blas_threads() == before
+
+
+@pytest.mark.skipif(not can_fork(), reason="fork_map forks on Linux only")
+def test_a_worker_runs_one_blas_thread_and_the_block_leaves_it_so(monkeypatch):
+    monkeypatch.setenv("MST_WORKERS", "2")
+    seen = fork_map(_threads_in_block, [0, 1])
+    assert seen == [([1] * len(_blas_threads()),) * 2] * 2
+
+
+def _threads_in_block(_):
+    outside = _blas_threads()
+    with one_blas_thread():
+        return (outside, _blas_threads())

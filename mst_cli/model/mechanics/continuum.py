@@ -60,6 +60,7 @@ from mst_cli.model import geometry as geo
 from mst_cli.model.mechanics.frame import TabulatedLockingLayer, locked_tabulated_law
 from mst_cli.model.mechanics.law_cache import law_cache
 from mst_cli.model.mechanics.path import LAW_CHORD_TOL_REL, PathError, PathTolerances, StepControl, follow_to_event
+from mst_cli.parallel import one_blas_thread
 
 if TYPE_CHECKING:
     from skfem import MeshTri
@@ -1064,6 +1065,16 @@ def follow_to_lock(
     if steps.chord_tol_rel is None:
         steps = replace(steps, chord_tol_rel=LAW_CHORD_TOL_REL)
     lp = _LockPath(prob, k_ref_N_per_mm)
+    # the path's linear algebra is a few hundred banded solves of 500-1200 unknowns (half-band
+    # ~43), where OpenBLAS's threads cost more than they give: one thread makes an in-process
+    # law about an eighth faster on two cores (benchmarks/l2_cost.py, parts 1 and 2), and
+    # makes it the law fork_map's one-thread workers solve
+    with one_blas_thread():
+        return _follow_path(prob, lp, d_nom, steps, d_max_over_nominal)
+
+
+def _follow_path(prob, lp: _LockPath, d_nom: float, steps: StepControl, d_max_over_nominal: float) -> tuple:
+    """:func:`follow_to_lock`'s path, its callbacks ``lp``, ``d_nom`` the rigid-pad stroke."""
     rest = lp.point(np.zeros(prob.basis.N), None, None, 0.0)
     path = follow_to_event(
         lp.solve,
@@ -1080,7 +1091,7 @@ def follow_to_lock(
     d_after = path.d_mm[-1] + LOCK_TOLERANCES.event_width_rel * d_nom * 10
     try:
         after, _ = lp.solve(path.state, d_after)
-        ratio_after = after.k_t_N_per_mm / k_ref_N_per_mm
+        ratio_after = after.k_t_N_per_mm / lp.k_ref
     except FloatingPointError:
         ratio_after = math.nan
     return path, ratio_after
