@@ -11,8 +11,9 @@ PYTHONPATH, and the two alternate for --rounds rounds, so load on the shared mac
    how far this tree's laws sit from the baseline's: the lock force R and compression d_lock
    (relative), and how many cells name another face as what closed (pad or wall).
 2. Per stack, the reference design's three layers (configs/mohammadi2021-forward.yaml) through
-   ``layer_laws`` in a fresh process, cold caches: in turn (MST_WORKERS=1) and side by side
-   (the default: a forked worker per core; a baseline before 0.11 solves in turn either way).
+   ``layer_laws`` in a fresh process, cold caches (L2's import included), each tree: in turn
+   (MST_WORKERS=1) and side by side (the default: a forked worker per core; a baseline before
+   0.11 solves in turn either way).
 3. One linear solve of a path mesh's tangent block (the first cell's, at rest, in this tree):
    the banded solve L2 uses since 0.11 against SciPy's SuperLU (spsolve, its own column
    ordering every call, as before), median of 200, and their largest relative difference.
@@ -113,13 +114,12 @@ def main() -> None:
         ap.error("--baseline DIR is required")
     trees = {"this tree": ROOT, "baseline": args.baseline.resolve()}
     laws: dict[str, list] = {name: [] for name in trees}
-    stacks: dict[str, list[float]] = {"this tree, in turn": [], "this tree, side by side": [], "baseline": []}
+    stacks: dict[str, list[float]] = {f"{name}, {how}": [] for name in trees for how in ("in turn", "side by side")}
     for _ in range(args.rounds):
         for name, tree in trees.items():
             laws[name].append(run(tree, [str(args.samples), str(args.seed)]))
-        stacks["this tree, in turn"].append(run(ROOT, ["stack"], workers="1"))
-        stacks["this tree, side by side"].append(run(ROOT, ["stack"]))
-        stacks["baseline"].append(run(args.baseline.resolve(), ["stack"]))
+            stacks[f"{name}, in turn"].append(run(tree, ["stack"], workers="1"))
+            stacks[f"{name}, side by side"].append(run(tree, ["stack"]))
     new, old = laws["this tree"][0], laws["baseline"][0]
     best = {name: [min(r[i]["s"] for r in runs) for i in range(args.samples)] for name, runs in laws.items()}
     dR = sorted(abs(a["R"] / b["R"] - 1.0) for a, b in zip(new, old))
