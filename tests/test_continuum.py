@@ -394,3 +394,29 @@ def test_root_fillet_mesh_is_conforming_and_adds_the_fillet():
         assert dist.max() == pytest.approx(r, rel=1e-9) and dist.min() > 0.95 * r
         xy = prob.basis.doflocs[:, prob.fixed_zero]
         assert np.isclose(xy[0], f.T1[0]).any()  # the fillet's base, out to T1, is bonded
+
+
+def test_smallest_stretch_of_a_homogeneous_deformation_is_its_smallest_principal_stretch():
+    """F = R(phi) diag(1 + a, 1 + b) everywhere: the principal stretches are 1 + a and 1 + b
+    whatever the rotation, so the smallest is min(1 + a, 1 + b) at every quadrature point."""
+    prob = L2._Problem(HexCell(40, 0.8, 3.0), MAT, L2.DEFAULT_N_THICK, L2.DEFAULT_N_LENGTH, 0)
+    xy = prob.basis.doflocs
+    is_z = ~prob.is_x
+    for a, b, phi in ((-0.3, 0.1, 0.0), (0.2, -0.45, 0.7), (0.0, 0.0, 1.2)):
+        c, s = np.cos(phi), np.sin(phi)
+        F = np.array([[c, -s], [s, c]]) @ np.diag([1 + a, 1 + b])
+        moved = F @ xy - xy  # the displacement of each dof's location
+        u = np.where(prob.is_x, moved[0], 0.0) + np.where(is_z, moved[1], 0.0)
+        assert L2.smallest_stretch(prob, u) == pytest.approx(min(1 + a, 1 + b), rel=1e-12)
+
+
+def test_a_steep_thin_wall_is_flagged_past_the_crease_onset_and_a_shallow_one_is_not():
+    """The reference design's top and bottom layers as printed (benchmarks/design_crease.py):
+    grading the roots moves the top one's R by 3.6 % and the bottom one's by 0.2 %; the marker
+    L2's law carries tells them apart by the stretch at which a neo-Hookean face creases."""
+    from mst_cli.model.mechanics.depth import in_web
+    from mst_cli.model.mechanics.frame import CREASE_ONSET_STRETCH
+
+    steep, shallow = HexCell(48.0, 0.402, 1.737), HexCell(11.55, 0.401, 1.588)
+    assert L2.continuum_layer(steep, in_web(steep, MAT)).min_stretch_at_lock < CREASE_ONSET_STRETCH
+    assert L2.continuum_layer(shallow, in_web(shallow, MAT)).min_stretch_at_lock > CREASE_ONSET_STRETCH

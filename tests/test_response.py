@@ -99,3 +99,19 @@ def test_a_magnet_too_close_saturates_the_chip_and_says_so():
     r = simulate(close, MAT)
     assert r.B_full_T > 0.05 and r.saturated and r.chip_setting is None
     assert any("saturation" in w for w in r.warnings)
+
+
+def test_a_layer_squeezed_past_the_crease_onset_is_named_in_the_warnings():
+    """Only a tabulated (L2) law whose stretch at the lock is below the onset gets a line, naming
+    its layer and its R; L0's laws carry no marker and get none."""
+    from mst_cli.model.mechanics.frame import CREASE_ONSET_STRETCH, TabulatedLockingLayer
+    from mst_cli.model.response import _crease_warnings
+    from mst_cli.model.stack import Stack
+
+    def law(R, stretch):
+        return TabulatedLockingLayer.from_curve([0.0, 1.0], [0.0, R], R, 50 * R, False, stretch)
+
+    l0 = layer_law(HexCell(20.0, 0.6, 2.5), Material(), "spring")
+    stack = Stack((l0, law(4.0, CREASE_ONSET_STRETCH + 0.01), law(16.0, 0.59), law(30.0, None)))
+    (line,) = _crease_warnings(stack)
+    assert line.startswith("layer 3: ") and "stretch of 0.59" in line and "R_3 = 16 N" in line

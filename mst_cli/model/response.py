@@ -19,6 +19,7 @@ from mst_cli.model import field as fld
 from mst_cli.model.geometry import SensorGeometry
 from mst_cli.model.material import Material
 from mst_cli.model.mechanics import layer_laws
+from mst_cli.model.mechanics.frame import CREASE_ONSET_STRETCH
 from mst_cli.model.stack import Stack, series_displacement_mm
 
 if TYPE_CHECKING:
@@ -291,4 +292,19 @@ def _warnings(stack: Stack, degenerate: np.ndarray, saturated_at_T: float | None
             f"field at full load {saturated_at_T * 1e3:.1f} mT exceeds the MLX90393's range "
             f"({mlx.SATURATION_T * 1e3:.0f} mT saturation): move the magnet away"
         )
+    return warnings + _crease_warnings(stack)
+
+
+def _crease_warnings(stack: Stack) -> list[str]:
+    """One line per continuum-rung layer whose wall is squeezed past the crease onset at its lock."""
+    warnings = []
+    for i, law in enumerate(stack.layers, start=1):
+        stretch = getattr(law, "min_stretch_at_lock", None)  # L2's laws carry it
+        if stretch is not None and stretch < CREASE_ONSET_STRETCH:
+            warnings.append(
+                f"layer {i}: its wall is squeezed to a stretch of {stretch:.2f} at the lock, past the "
+                f"{CREASE_ONSET_STRETCH:g} at which its outer root creases; the continuum model cannot form "
+                f"the crease, so R_{i} = {law.lock_force_N:.4g} N is an upper bound, a few per cent high "
+                "(README: Models)"
+            )
     return warnings

@@ -528,6 +528,7 @@ class ContinuumResult:
     mesh_scale: float  # k on the refined mesh / k on the path's mesh
     lock_stiffness_ratio: float = math.nan  # tangent / k just past the lock (>= LOCK_STIFFNESS_FACTOR)
     contact_points: np.ndarray | None = None  # surface points in contact at each sample
+    min_stretch_at_lock: float = math.nan  # smallest principal stretch on the path's mesh at the lock
 
 
 class _FreeBlock:
@@ -944,7 +945,23 @@ def solve_continuum(
         )
     except PathError as exc:
         raise ContinuumError(f"continuum solve: {exc} for {cell}") from None
-    return _result(path, k_lin, mesh_scale, ratio_after, int(fine.basis.N))
+    return replace(
+        _result(path, k_lin, mesh_scale, ratio_after, int(fine.basis.N)),
+        min_stretch_at_lock=smallest_stretch(prob, path.state.u),
+    )
+
+
+def smallest_stretch(prob: _Problem, u: np.ndarray) -> float:
+    """The smallest principal stretch over every quadrature point of the state ``u``: where it
+    falls below CREASE_ONSET_STRETCH (:mod:`~mst_cli.model.mechanics.frame`), a compressed free
+    face creases."""
+    asm = _assembler(prob.basis)
+    asm = asm.base if isinstance(asm, _PlatePenalty) else asm
+    grad = np.einsum("eqki,ei->keq", asm.B, u[asm.dofs])
+    Fm = grad.reshape(2, 2, *grad.shape[1:]) + np.eye(2)[:, :, None, None]
+    c11, c22 = Fm[0, 0] ** 2 + Fm[1, 0] ** 2, Fm[0, 1] ** 2 + Fm[1, 1] ** 2  # C = F^T F
+    c12 = Fm[0, 0] * Fm[0, 1] + Fm[1, 0] * Fm[1, 1]
+    return float(np.sqrt(0.5 * (c11 + c22) - np.sqrt(0.25 * (c11 - c22) ** 2 + c12**2)).min())
 
 
 def _require_meshable(cell: geo.HexCell) -> None:
@@ -1136,4 +1153,6 @@ def linear_k(problem: _Problem) -> float:
 def continuum_layer(cell: geo.HexCell, material: Material) -> TabulatedLockingLayer:
     """The L2 law of one cell: the FE curve up to its lock, then the locked branch (walls + contact column)."""
     res = solve_continuum(cell, material)
-    return locked_tabulated_law(cell, material, res.displacement_mm, res.force_N, res.k_linear_N_per_mm)
+    return locked_tabulated_law(
+        cell, material, res.displacement_mm, res.force_N, res.k_linear_N_per_mm, False, res.min_stretch_at_lock
+    )

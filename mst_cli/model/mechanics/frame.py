@@ -93,6 +93,13 @@ def monotone_envelope(d_mm: ArrayLike, F_N: ArrayLike) -> tuple[np.ndarray, np.n
     return np.array(keep_d), np.array(keep_F)
 
 
+# A plane-strain neo-Hookean half-space's free face creases at a compressive stretch of about
+# 0.65 (Hong, Zhao and Suo, Appl. Phys. Lett. 95, 111901 (2009)). A steep wall's outer root is
+# squeezed past it before the lock; L2's default mesh cannot form the crease, so there its lock
+# force is an upper bound by a few per cent (docs/design.md section 4; benchmarks/design_crease.py)
+CREASE_ONSET_STRETCH = 0.65
+
+
 @dataclass(frozen=True)
 class TabulatedLockingLayer:
     """Layer law from a sampled curve: linear between samples up to the lock, then locked.
@@ -106,6 +113,9 @@ class TabulatedLockingLayer:
     k_N_per_mm: float  # small-load stiffness (the linear solve)
     k_locked_N_per_mm: float
     snap_through: bool = False  # F(d) had a falling branch before contact
+    # L2 only: the smallest principal stretch anywhere in the wall at the lock (None: not
+    # computed); below CREASE_ONSET_STRETCH the wall's outer root creases (docs/design.md section 4)
+    min_stretch_at_lock: float | None = None
 
     @classmethod
     def from_curve(
@@ -115,13 +125,16 @@ class TabulatedLockingLayer:
         k_linear_N_per_mm: float,
         k_locked_N_per_mm: float,
         snap_through: bool | None = None,
+        min_stretch_at_lock: float | None = None,
     ) -> TabulatedLockingLayer:
         d = np.asarray(d_mm, dtype=float)
         F = np.asarray(F_N, dtype=float)
         if not (np.all(np.diff(d) > 0) and np.all(np.diff(F) > 0) and d[0] == 0 and F[0] == 0):
             raise ValueError("a tabulated layer law needs a strictly increasing curve from (0, 0)")
         snap = bool(snap_through) if snap_through is not None else False
-        return cls(tuple(map(float, d)), tuple(map(float, F)), float(k_linear_N_per_mm), float(k_locked_N_per_mm), snap)
+        stretch = None if min_stretch_at_lock is None else float(min_stretch_at_lock)
+        k, k_locked = float(k_linear_N_per_mm), float(k_locked_N_per_mm)
+        return cls(tuple(map(float, d)), tuple(map(float, F)), k, k_locked, snap, stretch)
 
     @property
     def d_lock_mm(self) -> float:
@@ -371,10 +384,12 @@ def locked_tabulated_law(
     F_N: ArrayLike,
     k_linear_N_per_mm: float,
     snap_through: bool = False,
+    min_stretch_at_lock: float | None = None,
 ) -> TabulatedLockingLayer:
     """The law of a path sampled up to contact (rungs L1 and L2): its force-controlled envelope,
     then the locked branch, the walls' last tangent in parallel with the closed cavity's
-    contact column (L0's :func:`~mst_cli.model.mechanics.spring.contact_stiffness_N_per_mm`)."""
+    contact column (L0's :func:`~mst_cli.model.mechanics.spring.contact_stiffness_N_per_mm`);
+    ``min_stretch_at_lock``: L2's crease marker (:class:`TabulatedLockingLayer`)."""
     d, F = monotone_envelope(d_mm, F_N)
     k_walls = max((F[-1] - F[-2]) / (d[-1] - d[-2]), 0.0)
     k_locked = k_walls + float(
@@ -382,7 +397,7 @@ def locked_tabulated_law(
             cell.theta_rad, cell.t_mm, cell.width_mm, cell.b_mm, material.youngs_modulus_MPa, material.poisson_ratio
         )
     )
-    return TabulatedLockingLayer.from_curve(d, F, k_linear_N_per_mm, k_locked, snap_through)
+    return TabulatedLockingLayer.from_curve(d, F, k_linear_N_per_mm, k_locked, snap_through, min_stretch_at_lock)
 
 
 @law_cache(maxsize=4096)
