@@ -25,27 +25,15 @@ import argparse
 import time
 from pathlib import Path
 
-import numpy as np
-
 from mst_cli.api import design
 from mst_cli.calibrate.fit import as_printed
 from mst_cli.model.mechanics import continuum
 from mst_cli.model.mechanics.depth import in_web
+from mst_cli.model.mechanics.frame import CREASE_ONSET_STRETCH
 from mst_cli.model.mechanics.path import StepControl
 
 ROOT = Path(__file__).resolve().parents[1]
 SPECS = ("configs/mohammadi2021.yaml", "configs/mohammadi2021-compact.yaml")
-CREASE_ONSET_STRETCH = 0.65  # Hong, Zhao and Suo (2009), plane strain, neo-Hookean
-
-
-def smallest_stretch(prob, u: np.ndarray) -> float:
-    """The smallest principal stretch over every quadrature point of the state u."""
-    asm = continuum._Assembler(prob.basis)
-    grad = np.einsum("eqki,ei->keq", asm.B, u[asm.dofs])
-    Fm = grad.reshape(2, 2, *grad.shape[1:]) + np.eye(2)[:, :, None, None]
-    c11, c22 = Fm[0, 0] ** 2 + Fm[1, 0] ** 2, Fm[0, 1] ** 2 + Fm[1, 1] ** 2
-    c12 = Fm[0, 0] * Fm[0, 1] + Fm[1, 0] * Fm[1, 1]
-    return float(np.sqrt(0.5 * (c11 + c22) - np.sqrt(0.25 * (c11 - c22) ** 2 + c12**2)).min())
 
 
 def lock_on(cell, material, k_fine: float, levels: int) -> tuple[float, float, float]:
@@ -57,7 +45,7 @@ def lock_on(cell, material, k_fine: float, levels: int) -> tuple[float, float, f
     k_path = continuum.linear_k(prob)
     path, _ = continuum.follow_to_lock(prob, k_path, StepControl(max_steps=2000))
     R = path.observations[-1][0] * k_fine / k_path
-    return R, smallest_stretch(prob, path.state.u), time.perf_counter() - t0
+    return R, continuum.smallest_stretch(prob, path.state.u), time.perf_counter() - t0
 
 
 def layer_rows(spec: str, rounds: int) -> None:
