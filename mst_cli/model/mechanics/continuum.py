@@ -945,10 +945,7 @@ def solve_continuum(
         )
     except PathError as exc:
         raise ContinuumError(f"continuum solve: {exc} for {cell}") from None
-    return replace(
-        _result(path, k_lin, mesh_scale, ratio_after, int(fine.basis.N)),
-        min_stretch_at_lock=smallest_stretch(prob, path.state.u),
-    )
+    return _result(prob, path, k_lin, mesh_scale, ratio_after, int(fine.basis.N))
 
 
 def smallest_stretch(prob: _Problem, u: np.ndarray) -> float:
@@ -973,8 +970,8 @@ def _require_meshable(cell: geo.HexCell) -> None:
         raise ValueError("continuum model needs a meshable cell: h <= 2t or p <= 0")
 
 
-def _result(path, k_lin: float, mesh_scale: float, ratio_after: float, n_dofs: int) -> ContinuumResult:
-    """The path's samples as a ContinuumResult, forces scaled to the refined mesh."""
+def _result(prob, path, k_lin: float, mesh_scale: float, ratio_after: float, n_dofs: int) -> ContinuumResult:
+    """The path's samples on ``prob``'s mesh as a ContinuumResult, forces scaled to the refined mesh."""
     return ContinuumResult(
         np.array([0.0] + path.d_mm),
         np.array([0.0] + [F * mesh_scale for F, _, _ in path.observations]),
@@ -987,6 +984,7 @@ def _result(path, k_lin: float, mesh_scale: float, ratio_after: float, n_dofs: i
         float(mesh_scale),
         float(ratio_after),
         np.array([0] + [n for _, _, n in path.observations]),
+        smallest_stretch(prob, path.state.u),
     )
 
 

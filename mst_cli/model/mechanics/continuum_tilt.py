@@ -85,7 +85,7 @@ def solve_tilted_chevron(
         path, ratio_after = follow_to_lock(prob, k0, StepControl(), D_MAX_OVER_NOMINAL / max(least, 0.05))
     except PathError as exc:
         raise ContinuumError(f"tilted continuum solve: {exc} for {cell}") from None
-    return _result(path, k0, 1.0, ratio_after, int(prob.basis.N))
+    return _result(prob, path, k0, 1.0, ratio_after, int(prob.basis.N))
 
 
 def linear_tilt_lever_mm(
