@@ -27,9 +27,9 @@ from pathlib import Path
 
 from mst_cli.api import design
 from mst_cli.calibrate.fit import as_printed
+from mst_cli.model.material import CREASE_ONSET_STRETCH
 from mst_cli.model.mechanics import continuum
 from mst_cli.model.mechanics.depth import in_web
-from mst_cli.model.mechanics.frame import CREASE_ONSET_STRETCH
 from mst_cli.model.mechanics.path import StepControl
 
 ROOT = Path(__file__).resolve().parents[1]

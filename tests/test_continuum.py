@@ -414,8 +414,8 @@ def test_a_steep_thin_wall_is_flagged_past_the_crease_onset_and_a_shallow_one_is
     """The reference design's top and bottom layers as printed (benchmarks/design_crease.py):
     grading the roots moves the top one's R by 3.6 % and the bottom one's by 0.2 %; the marker
     L2's law carries tells them apart by the stretch at which a neo-Hookean face creases."""
+    from mst_cli.model.material import CREASE_ONSET_STRETCH
     from mst_cli.model.mechanics.depth import in_web
-    from mst_cli.model.mechanics.frame import CREASE_ONSET_STRETCH
 
     steep, shallow = HexCell(48.0, 0.402, 1.737), HexCell(11.55, 0.401, 1.588)
     assert L2.continuum_layer(steep, in_web(steep, MAT)).min_stretch_at_lock < CREASE_ONSET_STRETCH

@@ -104,7 +104,8 @@ def test_a_magnet_too_close_saturates_the_chip_and_says_so():
 def test_a_layer_squeezed_past_the_crease_onset_is_named_in_the_warnings():
     """Only a tabulated (L2) law whose stretch at the lock is below the onset gets a line, naming
     its layer and its R; L0's laws carry no marker and get none."""
-    from mst_cli.model.mechanics.frame import CREASE_ONSET_STRETCH, TabulatedLockingLayer
+    from mst_cli.model.material import CREASE_ONSET_STRETCH
+    from mst_cli.model.mechanics.frame import TabulatedLockingLayer
     from mst_cli.model.response import _crease_warnings
     from mst_cli.model.stack import Stack
 

@@ -17,9 +17,8 @@ import numpy as np
 from mst_cli.model import chip as mlx
 from mst_cli.model import field as fld
 from mst_cli.model.geometry import SensorGeometry
-from mst_cli.model.material import Material
+from mst_cli.model.material import CREASE_ONSET_STRETCH, Material
 from mst_cli.model.mechanics import layer_laws
-from mst_cli.model.mechanics.frame import CREASE_ONSET_STRETCH
 from mst_cli.model.stack import Stack, series_displacement_mm
 
 if TYPE_CHECKING:

@@ -950,7 +950,7 @@ def solve_continuum(
 
 def smallest_stretch(prob: _Problem, u: np.ndarray) -> float:
     """The smallest principal stretch over every quadrature point of the state ``u``: where it
-    falls below CREASE_ONSET_STRETCH (:mod:`~mst_cli.model.mechanics.frame`), a compressed free
+    falls below CREASE_ONSET_STRETCH (:mod:`~mst_cli.model.material`), a compressed free
     face creases."""
     asm = _assembler(prob.basis)
     asm = asm.base if isinstance(asm, _PlatePenalty) else asm

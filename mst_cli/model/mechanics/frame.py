@@ -93,13 +93,6 @@ def monotone_envelope(d_mm: ArrayLike, F_N: ArrayLike) -> tuple[np.ndarray, np.n
     return np.array(keep_d), np.array(keep_F)
 
 
-# A plane-strain neo-Hookean half-space's free face creases at a compressive stretch of about
-# 0.65 (Hong, Zhao and Suo, Appl. Phys. Lett. 95, 111901 (2009)). A steep wall's outer root is
-# squeezed past it before the lock; L2's default mesh cannot form the crease, so there its lock
-# force is an upper bound by a few per cent (docs/design.md section 4; benchmarks/design_crease.py)
-CREASE_ONSET_STRETCH = 0.65
-
-
 @dataclass(frozen=True)
 class TabulatedLockingLayer:
     """Layer law from a sampled curve: linear between samples up to the lock, then locked.
@@ -114,7 +107,7 @@ class TabulatedLockingLayer:
     k_locked_N_per_mm: float
     snap_through: bool = False  # F(d) had a falling branch before contact
     # L2 only: the smallest principal stretch anywhere in the wall at the lock (None: not
-    # computed); below CREASE_ONSET_STRETCH the wall's outer root creases (docs/design.md section 4)
+    # computed); below material.CREASE_ONSET_STRETCH the wall's outer root creases (docs/design.md §4)
     min_stretch_at_lock: float | None = None
 
     @classmethod
