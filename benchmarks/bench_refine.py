@@ -22,7 +22,8 @@ own (cold caches, like the command), with counters on:
   counted) and the candidate designs they held;
 * where the time goes (medians; issue 25: the loop should spend it in the dear solves): the
   command's in-process time without plots, the part inside the dear laws' side-by-side solves
-  (``LawCache.solve_many``) and L2's import (scipy, scikit-fem), done before the run.
+  (``LawCache.solve_many``; scikit-fem, which each worker imports, inside it) and L2's import
+  (scipy), done before the run.
 """
 
 from __future__ import annotations
@@ -86,7 +87,6 @@ def count_run(spec: Path, flags: list[str]) -> dict:
     from mst_cli.model.mechanics import continuum, frame  # L2's import (scipy, the law cache)
 
     import_s = time.perf_counter() - t_import
-    import skfem  # noqa: F401  (the workers import it first: not the loop's time)
 
     from mst_cli.model.mechanics.law_cache import LawCache
 
@@ -216,7 +216,7 @@ def print_where_the_time_goes(n: dict[str, dict]) -> None:
         total, dear = c["in_process_s"], c["dear_solves_s"]
         print(
             f"  {label}: {total:.2f} s, of which dear solves {dear:.2f} s ({100 * dear / total:.0f} %), "
-            f"around them {total - dear:.2f} s; importing L2 (scipy, scikit-fem) {c['l2_import_s']:.2f} s more"
+            f"around them {total - dear:.2f} s; importing L2 (scipy) {c['l2_import_s']:.2f} s more"
         )
 
 

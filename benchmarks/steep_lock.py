@@ -163,12 +163,7 @@ PENALTY_PER_MM = 1e4  # the plate's penalty: within 0.01 % of the active set's R
 
 def _min_stretch(prob, u) -> tuple[float, np.ndarray]:
     """The smallest principal stretch over the quadrature points, and where (the element's centroid)."""
-    asm = continuum._Assembler(prob.basis)
-    grad = np.einsum("eqki,ei->keq", asm.B, u[asm.dofs])
-    Fm = grad.reshape(2, 2, *grad.shape[1:]) + np.eye(2)[:, :, None, None]
-    c11, c22 = Fm[0, 0] ** 2 + Fm[1, 0] ** 2, Fm[0, 1] ** 2 + Fm[1, 1] ** 2
-    c12 = Fm[0, 0] * Fm[0, 1] + Fm[1, 0] * Fm[1, 1]
-    lam_min = np.sqrt(0.5 * (c11 + c22) - np.sqrt(0.25 * (c11 - c22) ** 2 + c12**2))
+    lam_min = continuum.smallest_stretches(prob, u)
     e = np.unravel_index(np.argmin(lam_min), lam_min.shape)[0]
     return float(lam_min.min()), prob.mesh.p[:, prob.mesh.t[:, e]].mean(axis=1)
 

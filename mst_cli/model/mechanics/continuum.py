@@ -948,17 +948,21 @@ def solve_continuum(
     return _result(prob, path, k_lin, mesh_scale, ratio_after, int(fine.basis.N))
 
 
-def smallest_stretch(prob: _Problem, u: np.ndarray) -> float:
-    """The smallest principal stretch over every quadrature point of the state ``u``: where it
-    falls below CREASE_ONSET_STRETCH (:mod:`~mst_cli.model.material`), a compressed free
-    face creases."""
+def smallest_stretches(prob: _Problem, u: np.ndarray) -> np.ndarray:
+    """The smallest principal stretch at every quadrature point (n_el, n_q) of the state ``u``."""
     asm = _assembler(prob.basis)
     asm = asm.base if isinstance(asm, _PlatePenalty) else asm
     grad = np.einsum("eqki,ei->keq", asm.B, u[asm.dofs])
     Fm = grad.reshape(2, 2, *grad.shape[1:]) + np.eye(2)[:, :, None, None]
     c11, c22 = Fm[0, 0] ** 2 + Fm[1, 0] ** 2, Fm[0, 1] ** 2 + Fm[1, 1] ** 2  # C = F^T F
     c12 = Fm[0, 0] * Fm[0, 1] + Fm[1, 0] * Fm[1, 1]
-    return float(np.sqrt(0.5 * (c11 + c22) - np.sqrt(0.25 * (c11 - c22) ** 2 + c12**2)).min())
+    return np.sqrt(0.5 * (c11 + c22) - np.sqrt(0.25 * (c11 - c22) ** 2 + c12**2))
+
+
+def smallest_stretch(prob: _Problem, u: np.ndarray) -> float:
+    """The smallest principal stretch anywhere in the state ``u``: where it falls below
+    CREASE_ONSET_STRETCH (:mod:`~mst_cli.model.material`), a compressed free face creases."""
+    return float(smallest_stretches(prob, u).min())
 
 
 def _require_meshable(cell: geo.HexCell) -> None:
