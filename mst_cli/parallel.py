@@ -58,7 +58,8 @@ _IN_WORKER: list[bool] = []  # [True] in a forked worker, whose BLAS already run
 def one_blas_thread() -> Iterator[None]:
     """BLAS limited to one thread inside the block, for many small solves whose threads cost more
     than they give. A no-op in a :func:`fork_map` worker, which runs with one already (setting
-    it again there made a three-layer stack's L2 laws 0.1 s slower, 0.59 against 0.48 s)."""
+    it again there made a three-layer stack's L2 laws 0.1 s slower, 0.59 against 0.48 s in an
+    ad hoc paired loop of fresh processes)."""
     if _IN_WORKER:
         yield
         return
