@@ -610,7 +610,6 @@ class _ActiveSet:
 class _Problem:
     plate: _PlatePenalty | None = None  # the plate's contact as a penalty, when asked for
     fillet: RootFillet | None = None  # the outer root's printed fillet (quarter_profile_mesh), if any
-    _converged: tuple | None = None  # Newton's last converged (u, kinematics): the next rate's tangent
 
     def __init__(
         self,
@@ -764,7 +763,7 @@ class _Problem:
         asm = _assembler(self.basis)
         if active is None:
             active = np.zeros(self.contact_dofs.size, bool)
-        kin = self._kinematics_at(asm, u)
+        _, kin = asm.residual(u, self.mu, self.lam)
         K = asm.tangent(kin, self.mu, self.lam)
         contact = self.contact_dofs[active]
         block = self.free_block(np.sort(contact))
@@ -776,14 +775,6 @@ class _Problem:
         inner = active.copy()
         inner[self.n_inner :] = False
         return v, float(-(f[self.tip_z].sum() + f[self.contact_dofs[inner]].sum()) * self.depth_factor)
-
-    def _kinematics_at(self, asm, u):
-        """What the tangent at u needs: Newton's last converged state's, when u is that state
-        (every path point's rate is taken right after its solve), else a residual pass."""
-        last = self._converged
-        if last is not None and np.array_equal(last[0], u):
-            return last[1]
-        return asm.residual(u, self.mu, self.lam)[1]
 
     def pinned_rate(self) -> np.ndarray:
         """du/dd on the held dofs: the tip face moves by -1/2 per mm of compression, the bonded
@@ -847,7 +838,6 @@ class _Problem:
             if it > 1 and np.linalg.norm(r[free]) <= rtol * scale and not np.any(np.abs(jump) > tol):
                 updated = contact_set.update(active, sign * (u[dofs] - obstacle), sign * r[dofs])
                 if updated is None:
-                    self._converged = (u.copy(), kin)
                     return u, it - 1, active, r
                 active = updated
                 continue
