@@ -46,8 +46,11 @@ def can_fork() -> bool:
 def _worker() -> None:
     """A worker's first act: Ctrl-C (SIGINT to the terminal's process group) ends it at once and
     quietly, idle or busy, whatever handler it inherited (mst's reports the interrupt); this
-    process, which got the same signal, reports it once."""
-    signal.signal(signal.SIGINT, signal.SIG_DFL)
+    process, which got the same signal, reports it once. Where this process ignores SIGINT (a
+    shell starts background jobs so), the worker ignores it too: a signal its parent survives
+    must not kill the parent's work."""
+    if signal.getsignal(signal.SIGINT) != signal.SIG_IGN:
+        signal.signal(signal.SIGINT, signal.SIG_DFL)
     _IN_WORKER[:] = [True]
 
 

@@ -70,8 +70,11 @@ def test_ctrl_c_ends_the_workers_with_their_parent(tmp_path):
     import subprocess
     import time
 
+    # Python's own Ctrl-C handler, as at a terminal: a test run started in the background
+    # inherits SIGINT ignored, and Python then installs none
     script = (
-        "import time\nfrom mst_cli.parallel import fork_map\nprint('ready', flush=True)\n"
+        "import signal, time\nsignal.signal(signal.SIGINT, signal.default_int_handler)\n"
+        "from mst_cli.parallel import fork_map\nprint('ready', flush=True)\n"
         "fork_map(lambda x: x == 1 or print('working', flush=True) or time.sleep(60), [1, 2])\n"
     )
     proc = subprocess.Popen(
@@ -94,6 +97,36 @@ def test_ctrl_c_ends_the_workers_with_their_parent(tmp_path):
     time.sleep(0.2)
     with pytest.raises(ProcessLookupError):
         os.killpg(proc.pid, 0)
+
+
+@needs_fork
+def test_a_sigint_the_parent_ignores_leaves_its_workers_working():
+    """A process that ignores SIGINT (a shell's background job) keeps its workers through one:
+    the group's signal ends nothing, and every item comes back."""
+    import signal
+    import subprocess
+    import time
+
+    script = (
+        "import os, signal, time\nsignal.signal(signal.SIGINT, signal.SIG_IGN)\n"
+        "from mst_cli.parallel import fork_map\nprint('ready', flush=True)\n"  # one write a line: two workers
+        "print(fork_map(lambda x: os.write(1, b'working\\n') and time.sleep(1) or 10 * x, [1, 2]), flush=True)\n"
+    )
+    proc = subprocess.Popen(
+        [sys.executable, "-c", script],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,
+        env={**os.environ, "MST_WORKERS": "2"},
+    )
+    assert proc.stdout.readline().strip() == "ready"
+    assert proc.stdout.readline().strip() == "working"
+    time.sleep(0.1)
+    os.killpg(proc.pid, signal.SIGINT)
+    out, err = proc.communicate(timeout=30)
+    assert proc.returncode == 0, err
+    assert out.strip().splitlines()[-1] == "[10, 20]"
 
 
 def test_a_bad_worker_count_is_one_line_and_exit_2_from_the_command(tmp_path, monkeypatch):
