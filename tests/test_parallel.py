@@ -62,12 +62,25 @@ def test_a_bad_worker_count_names_the_variable(monkeypatch, text):
         workers()
 
 
+def _start_group(script: str):
+    """``python -c script`` with two workers, leading a process group of its own."""
+    import subprocess
+
+    return subprocess.Popen(
+        [sys.executable, "-c", script],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,
+        env={**os.environ, "MST_WORKERS": "2"},
+    )
+
+
 @needs_fork
 def test_ctrl_c_ends_the_workers_with_their_parent(tmp_path):
     """SIGINT to the process group (a terminal's Ctrl-C) mid-work: the workers end at once and
     quietly, the parent reports the interrupt, and no process of the group is left."""
     import signal
-    import subprocess
     import time
 
     # Python's own Ctrl-C handler, as at a terminal: a test run started in the background
@@ -77,14 +90,7 @@ def test_ctrl_c_ends_the_workers_with_their_parent(tmp_path):
         "from mst_cli.parallel import fork_map\nprint('ready', flush=True)\n"
         "fork_map(lambda x: x == 1 or print('working', flush=True) or time.sleep(60), [1, 2])\n"
     )
-    proc = subprocess.Popen(
-        [sys.executable, "-c", script],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-        start_new_session=True,
-        env={**os.environ, "MST_WORKERS": "2"},
-    )
+    proc = _start_group(script)
     assert proc.stdout.readline().strip() == "ready"
     assert proc.stdout.readline().strip() == "working"  # one worker inside its task, one idle
     time.sleep(0.2)
@@ -104,7 +110,6 @@ def test_a_sigint_the_parent_ignores_leaves_its_workers_working():
     """A process that ignores SIGINT (a shell's background job) keeps its workers through one:
     the group's signal ends nothing, and every item comes back."""
     import signal
-    import subprocess
     import time
 
     script = (
@@ -112,14 +117,7 @@ def test_a_sigint_the_parent_ignores_leaves_its_workers_working():
         "from mst_cli.parallel import fork_map\nprint('ready', flush=True)\n"  # one write a line: two workers
         "print(fork_map(lambda x: os.write(1, b'working\\n') and time.sleep(1) or 10 * x, [1, 2]), flush=True)\n"
     )
-    proc = subprocess.Popen(
-        [sys.executable, "-c", script],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-        start_new_session=True,
-        env={**os.environ, "MST_WORKERS": "2"},
-    )
+    proc = _start_group(script)
     assert proc.stdout.readline().strip() == "ready"
     assert proc.stdout.readline().strip() == "working"
     time.sleep(0.1)
