@@ -617,9 +617,10 @@ def read(
         model no longer gives the curve recorded at calibration.
     estimate_offset : bool
         Estimate where each reading was pressed from Bx, By, Bz (the tilt rung's inverse) and
-        correct its force; ``.offset`` holds x, y and their 1-sigma, and a reading whose offset
-        is less certain than ``max_offset_sigma_mm`` keeps the centred force, flagged
-        not_identifiable (about 0.1 s a reading).
+        correct its force; ``.offset`` holds x, y and their 1-sigma, and a reading whose press
+        the data cannot tell keeps the centred force, flagged (``.offset.flag``):
+        not_identifiable (offset less certain than ``max_offset_sigma_mm``), ambiguous (two
+        presses give it) or no_fit (none does); about 0.3 s a reading.
 
     Returns
     -------

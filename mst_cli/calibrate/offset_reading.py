@@ -2,12 +2,14 @@
 
 A press at (x0, y0) tilts the stack and moves the magnet sideways (:mod:`mst_cli.model.offcentre`),
 so one reading (Bx, By, Bz) holds three numbers for three unknowns: the force and the two
-offsets. :class:`OffsetEstimator` finds them by Gauss-Newton on the model's field, each reading
-started from the centred model's force and the previous reading's offset (a stream of presses
-moves little between samples). The chip's field noise sigma gives their covariance,
-sigma^2 (J^T J)^-1; a reading whose offset's 1-sigma exceeds a bound is *not identifiable*
-(under a light press the stack hardly tilts, so Bx and By say nothing): it keeps the centred
-model's force and is flagged.
+offsets. :class:`OffsetEstimator` finds them by damped Gauss-Newton on the model's field, each
+reading started from the centred model's force at the previous reading's offset (a stream of
+presses moves little between samples) and at the centre. The chip's field noise sigma gives
+their covariance, sigma^2 (J^T J)^-1. A reading keeps the centred model's force, flagged, when
+the data cannot tell the press: its offset's 1-sigma exceeds a bound (*not identifiable*: under
+a light press the stack hardly tilts, so Bx and By say nothing), the two starts end on different
+roots (*ambiguous*: late in the stack the field folds over, so distant presses give the same
+reading), or neither fits the reading (*no fit*).
 
 This is the rung's own inverse: it corrects what the tilt rung predicts, and is as good as
 that rung (docs/design.md section 4.2).
@@ -17,6 +19,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -28,6 +31,33 @@ DEFAULT_MAX_SIGMA_MM = 1.0  # an offset less certain than this is not identifiab
 GAUSS_NEWTON_ITERATIONS = 30
 STEP_FORCE_REL = 1e-5  # finite-difference steps: of the largest force ...
 STEP_OFFSET_MM = 1e-3  # ... and in mm
+MAX_HALVINGS = 6  # a Gauss-Newton step is halved at most this often before the solve stops
+FIT_SIGMAS = 3.0  # a solve that ends further off the reading than this many noise sigmas found no root
+CENTRE_ITERATIONS = 10  # the second start's Gauss-Newton steps, at most
+SAME_START_MM = 0.5  # a previous press nearer the centre than this: one start (the centre) is enough
+
+
+@dataclass(frozen=True)
+class OffsetEstimate:
+    """One reading's solve: force N, offset mm, their 1-sigma, and its flag (ok, not_identifiable,
+    ambiguous, no_fit); NaN values where the flag says the solve is not to be used."""
+
+    force_N: float
+    x_mm: float
+    y_mm: float
+    sigma_force_N: float
+    sigma_x_mm: float
+    sigma_y_mm: float
+    flag: str
+
+    @classmethod
+    def without(cls, flag: str) -> OffsetEstimate:
+        nan = math.nan
+        return cls(nan, nan, nan, nan, nan, nan, flag)
+
+    def values(self) -> tuple[float, ...]:
+        """(force, x, y, sigma_x, sigma_y, sigma_force): OffsetReadings' column order."""
+        return self.force_N, self.x_mm, self.y_mm, self.sigma_x_mm, self.sigma_y_mm, self.sigma_force_N
 
 
 @dataclass
@@ -40,19 +70,23 @@ class OffsetReadings:
     sigma_x_mm: np.ndarray
     sigma_y_mm: np.ndarray
     sigma_force_N: np.ndarray
-    flag: np.ndarray  # "ok", "not_identifiable", or "" (the reading itself is flagged)
+    flag: np.ndarray  # OffsetEstimate's flag, or "" (the reading itself is flagged)
 
     def summary(self) -> str:
         ok = self.flag == "ok"
-        n_un = int(np.sum(self.flag == "not_identifiable"))
+        kept = ", ".join(
+            f"{int(np.sum(self.flag == f))} {f.replace('_', ' ')}"
+            for f in ("not_identifiable", "ambiguous", "no_fit")
+            if f == "not_identifiable" or np.any(self.flag == f)
+        )
         if not ok.any():
-            return f"offset: identifiable on no reading ({n_un} not identifiable: the centred force kept)"
+            return f"offset: identifiable on no reading ({kept}: the centred force kept)"
         x, y = self.x_mm[ok], self.y_mm[ok]
         return (
             f"offset: estimated on {int(ok.sum())} readings (median 1-sigma "
             f"{np.median(self.sigma_x_mm[ok]):.2g} mm in x, {np.median(self.sigma_y_mm[ok]):.2g} mm in y; "
             f"x {x.min():.3g}..{x.max():.3g} mm, y {y.min():.3g}..{y.max():.3g} mm); "
-            f"{n_un} not identifiable (the centred force kept)"
+            f"{kept} (the centred force kept)"
         )
 
 
@@ -96,32 +130,72 @@ class OffsetEstimator:
             cols.append((self.field_T(q) - B0) / steps[k])
         return np.stack(cols, axis=1)
 
-    def estimate(self, B_T: np.ndarray, force_guess_N: float, offset_guess_mm=(0.0, 0.0)) -> tuple:
-        """(force, x, y, sigma_x, sigma_y, sigma_force, identifiable) of one reading (T)."""
-        p = np.array([force_guess_N, *offset_guess_mm], dtype=float)
+    def _sigmas(self, J: np.ndarray) -> np.ndarray:
+        """1-sigma of (force, x0, y0) from the chip's noise and the Jacobian J there: sigma^2 (J^T J)^-1."""
+        try:
+            return np.sqrt(np.maximum(np.diag(self.sigma_T**2 * np.linalg.inv(J.T @ J)), 0.0))
+        except np.linalg.LinAlgError:
+            return np.full(3, math.inf)
+
+    def _solve_from(self, B_T: np.ndarray, p0: np.ndarray, iterations: int = GAUSS_NEWTON_ITERATIONS) -> _Solve:
+        """Damped, projected Gauss-Newton from ``p0`` inside the face and the force range.
+
+        A coordinate at its bound whose step points out of the box is held there; each step is
+        cut to the box, then halved (up to MAX_HALVINGS times) until it lowers the misfit. A
+        plain step clipped to the box overshoots where the field flattens late in the stack and
+        pins the force at the range's end, far from the root."""
         lo = np.array([0.0, -self.half_face_mm[0], -self.half_face_mm[1]])
         hi = np.array([self.force_max_N, self.half_face_mm[0], self.half_face_mm[1]])
-        for _ in range(GAUSS_NEWTON_ITERATIONS):
-            B0 = self.field_T(p)
+        p = np.clip(p0, lo, hi)
+        B0 = self.field_T(p)
+        misfit = float(np.linalg.norm(B_T - B0))
+        for _ in range(iterations):
             J = self._jacobian(p, B0)
-            dp, *_ = np.linalg.lstsq(J, B_T - B0, rcond=None)
-            p_new = np.clip(p + dp, lo, hi)
-            # converged when the step moves the model's field by a thousandth of the noise
-            done = float(np.linalg.norm(J @ (p_new - p))) <= 1e-3 * self.sigma_T
-            p = p_new
-            if done:
-                break
-        J = self._jacobian(p, self.field_T(p))
-        try:
-            cov = self.sigma_T**2 * np.linalg.inv(J.T @ J)
-            sig = np.sqrt(np.maximum(np.diag(cov), 0.0))
-        except np.linalg.LinAlgError:
-            sig = np.full(3, math.inf)
+            dp = _box_direction(J, B_T - B0, p, lo, hi)
+            # converged when the step would move the model's field by a thousandth of the noise
+            if float(np.linalg.norm(J @ dp)) <= 1e-3 * self.sigma_T:
+                p = np.clip(p + dp, lo, hi)
+                return _Solve(p, float(np.linalg.norm(B_T - self.field_T(p))), J, True)
+            dp *= _fraction_inside(p, dp, lo, hi)
+            for halving in range(MAX_HALVINGS + 1):
+                p_new = np.clip(p + 0.5**halving * dp, lo, hi)
+                B_new = self.field_T(p_new)
+                misfit_new = float(np.linalg.norm(B_T - B_new))
+                if misfit_new < misfit:
+                    break
+            else:
+                return _Solve(p, misfit, J, False)  # no step lowers the misfit: stuck, no root near
+            p, B0, misfit = p_new, B_new, misfit_new
+        return _Solve(p, misfit, J, False)
+
+    def estimate(self, B_T: np.ndarray, force_guess_N: float, offset_guess_mm=(0.0, 0.0)) -> OffsetEstimate:
+        """One reading (T), solved from the previous press (``offset_guess_mm``) and from the centre.
+
+        Three field axes and three unknowns: a root fits the reading exactly, whatever the noise,
+        so a solve that ends more than FIT_SIGMAS noise sigmas off found no root (flag
+        ``no_fit``). Late in the stack the field can fold over, and two roots further apart than
+        their 2-sigma fit the same reading (flag ``ambiguous``): the data cannot tell the press,
+        so neither root's force is trusted. A single root whose offset is less certain than the
+        bound is ``not_identifiable``. Only ``ok`` carries the solved force."""
+        solves = [self._solve_from(B_T, np.array([force_guess_N, *offset_guess_mm], dtype=float))]
+        if math.hypot(*offset_guess_mm) > SAME_START_MM:  # the centre, at the force found (or guessed)
+            force_N = solves[0].p[0] if solves[0].converged else force_guess_N
+            solves.append(self._solve_from(B_T, np.array([force_N, 0.0, 0.0]), CENTRE_ITERATIONS))
+        roots = [(s.p, self._sigmas(s.J)) for s in solves if s.converged and s.misfit_T <= FIT_SIGMAS * self.sigma_T]
+        if not roots:
+            return OffsetEstimate.without("no_fit")
+        (p, sig), others = roots[0], roots[1:]
+        for q, sig_q in others:
+            if np.any(np.abs(p - q) > 2.0 * np.hypot(sig, sig_q)):
+                return OffsetEstimate.without("ambiguous")
         ok = bool(np.all(np.isfinite(sig)) and max(sig[1], sig[2]) <= self.max_sigma_mm)
-        return float(p[0]), float(p[1]), float(p[2]), float(sig[1]), float(sig[2]), float(sig[0]), ok
+        F, x, y = (float(v) for v in p)
+        sF, sx, sy = (float(v) for v in sig)
+        return OffsetEstimate(F, x, y, sF, sx, sy, "ok" if ok else "not_identifiable")
 
     def estimate_all(self, B_T: np.ndarray, force_axial_N: np.ndarray) -> OffsetReadings:
-        """Every reading with a finite centred force (the others stay flagged as they are)."""
+        """Every reading with a finite centred force (the others stay flagged as they are); a
+        reading not ``ok`` keeps its centred force."""
         n = len(force_axial_N)
         out = {k: np.full(n, np.nan) for k in ("F", "x", "y", "sx", "sy", "sF")}
         flag = np.full(n, "", dtype=object)
@@ -129,16 +203,46 @@ class OffsetEstimator:
         for i in range(n):
             if not np.isfinite(force_axial_N[i]):
                 continue
-            F, x, y, sx, sy, sF, ok = self.estimate(B_T[i], float(force_axial_N[i]), guess)
-            if ok:
-                guess = (x, y)
-                for k, v in zip(("F", "x", "y", "sx", "sy", "sF"), (F, x, y, sx, sy, sF)):
+            e = self.estimate(B_T[i], float(force_axial_N[i]), guess)
+            flag[i] = e.flag
+            if e.flag == "ok":
+                guess = (e.x_mm, e.y_mm)
+                for k, v in zip(("F", "x", "y", "sx", "sy", "sF"), e.values()):
                     out[k][i] = v
-                flag[i] = "ok"
             else:
                 out["F"][i] = force_axial_N[i]
-                flag[i] = "not_identifiable"
         return OffsetReadings(out["F"], out["x"], out["y"], out["sx"], out["sy"], out["sF"], flag)
+
+
+class _Solve(NamedTuple):
+    """Where one Gauss-Newton solve ended: the point, its field's misfit (T), the Jacobian there
+    (at the last step's start when it converged, a thousandth of the noise away) and whether it
+    converged (a root, when the misfit is within the noise)."""
+
+    p: np.ndarray
+    misfit_T: float
+    J: np.ndarray
+    converged: bool
+
+
+def _box_direction(J: np.ndarray, r: np.ndarray, p: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """The least-squares step of J dp = r with every coordinate held that sits on a bound its
+    step would cross."""
+    dp = np.linalg.lstsq(J, r, rcond=None)[0]
+    held = ((p <= lo) & (dp < 0.0)) | ((p >= hi) & (dp > 0.0))
+    if held.any():
+        dp = np.zeros_like(p)
+        if not held.all():
+            dp[~held] = np.linalg.lstsq(J[:, ~held], r, rcond=None)[0]
+    return dp
+
+
+def _fraction_inside(p: np.ndarray, dp: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> float:
+    """The largest share (at most 1) of the step dp from p that stays inside [lo, hi]."""
+    room = np.where(dp > 0.0, hi - p, np.where(dp < 0.0, lo - p, np.inf))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        share = np.where(dp != 0.0, room / dp, np.inf)
+    return float(min(1.0, share.min()))
 
 
 def offset_columns(forces_csv_text: str, est: OffsetReadings, centred_force_N: np.ndarray) -> str:

@@ -53,7 +53,8 @@ DESIGN_CALIBRATION = (
 
 READ_ESTIMATE_OFFSET = (
     "Estimate where each reading was pressed from Bx, By, Bz and correct its force (the tilt "
-    "model's inverse; files only, about 0.1 s a reading): forces.csv adds force_centred_N, x_mm, "
-    "y_mm, their 1-sigma and offset_flag."
+    "model's inverse; files only, about 0.3 s a reading): forces.csv adds force_centred_N, x_mm, "
+    "y_mm, their 1-sigma and offset_flag (ok; or not_identifiable, ambiguous, no_fit: the centred "
+    "force kept)."
 )
 READ_MAX_OFFSET_SIGMA = "An offset less certain than this (1-sigma, mm) is not identifiable: the centred force is kept."
