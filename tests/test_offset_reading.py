@@ -64,6 +64,7 @@ def test_a_field_that_folds_over_is_ambiguous():
     e = est.estimate(folded(np.array([20.0, 2.5, 1.0])), 18.0, (2.0, 1.0))
     assert e.flag == "ambiguous"
     assert np.isnan(e.force_N) and np.isnan(e.x_mm)
+    assert e.next_start_mm == pytest.approx((2.5, 1.0), abs=1e-6)  # a stream follows the previous press's root
     # near the fold's far side only one root is within reach of the one start: no doubt raised
     one = est.estimate(folded(np.array([20.0, 2.5, 1.0])), 18.0, (0.3, 0.0))
     assert one.flag == "ok" and one.x_mm == pytest.approx(-1.5, abs=1e-6)

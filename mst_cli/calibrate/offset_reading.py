@@ -40,7 +40,8 @@ SAME_START_MM = 0.5  # a previous press nearer the centre than this: one start (
 @dataclass(frozen=True)
 class OffsetEstimate:
     """One reading's solve: force N, offset mm, their 1-sigma, and its flag (ok, not_identifiable,
-    ambiguous, no_fit); NaN values where the flag says the solve is not to be used."""
+    ambiguous, no_fit); NaN values where the flag says the solve is not to be used. The next
+    reading of a stream starts from ``next_start_mm`` (None: from where this one started)."""
 
     force_N: float
     x_mm: float
@@ -49,11 +50,12 @@ class OffsetEstimate:
     sigma_x_mm: float
     sigma_y_mm: float
     flag: str
+    next_start_mm: tuple[float, float] | None = None
 
     @classmethod
-    def without(cls, flag: str) -> OffsetEstimate:
+    def without(cls, flag: str, next_start_mm: tuple[float, float] | None = None) -> OffsetEstimate:
         nan = math.nan
-        return cls(nan, nan, nan, nan, nan, nan, flag)
+        return cls(nan, nan, nan, nan, nan, nan, flag, next_start_mm)
 
     def values(self) -> tuple[float, ...]:
         """(force, x, y, sigma_x, sigma_y, sigma_force): OffsetReadings' column order."""
@@ -186,12 +188,12 @@ class OffsetEstimator:
             return OffsetEstimate.without("no_fit")
         (p, sig), others = roots[0], roots[1:]
         for q, sig_q in others:
-            if np.any(np.abs(p - q) > 2.0 * np.hypot(sig, sig_q)):
-                return OffsetEstimate.without("ambiguous")
+            if np.any(np.abs(p - q) > 2.0 * np.hypot(sig, sig_q)):  # the stream follows its own root on
+                return OffsetEstimate.without("ambiguous", (float(p[1]), float(p[2])))
         ok = bool(np.all(np.isfinite(sig)) and max(sig[1], sig[2]) <= self.max_sigma_mm)
         F, x, y = (float(v) for v in p)
         sF, sx, sy = (float(v) for v in sig)
-        return OffsetEstimate(F, x, y, sF, sx, sy, "ok" if ok else "not_identifiable")
+        return OffsetEstimate(F, x, y, sF, sx, sy, *(("ok", (x, y)) if ok else ("not_identifiable", None)))
 
     def estimate_all(self, B_T: np.ndarray, force_axial_N: np.ndarray) -> OffsetReadings:
         """Every reading with a finite centred force (the others stay flagged as they are); a
@@ -205,8 +207,8 @@ class OffsetEstimator:
                 continue
             e = self.estimate(B_T[i], float(force_axial_N[i]), guess)
             flag[i] = e.flag
+            guess = e.next_start_mm or guess
             if e.flag == "ok":
-                guess = (e.x_mm, e.y_mm)
                 for k, v in zip(("F", "x", "y", "sx", "sy", "sF"), e.values()):
                     out[k][i] = v
             else:
