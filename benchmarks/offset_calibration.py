@@ -11,7 +11,9 @@ the lever factor and the noise stand between them); then readings at --presses o
 points are read three ways: the centred reading, `mst read --estimate-offset` with the rung's
 own levers (lever factor 1), and with the calibrated one. Printed, one row per reader and
 noise: the fitted lever factor, the force errors of the three readings (median / max, on the
-readings each one gives a force for), how many calibrated readings are within 5 %; with
+readings each one gives a force for; a flagged reading keeps its centred force), how many
+calibrated readings are within 5 %, how many the reader calls identifiable, and how many of
+those are more than 5 % off (a wrong force the flag does not warn of); with
 --worst N, the N calibrated readings furthest off, where they were pressed and where the reader
 put the press.
 
@@ -97,9 +99,15 @@ def one_case(args, reader: str, noise_uT: float) -> str:
         f"| {reader} | {noise_uT:g} | {tilt['lever_factor']:.4f} +- {tilt['std']:.1g} | {tilt['rms_residual_uT']:.3g} "
         f"| {stats(errors(tilted.force_centred_N, F_true))} | {stats(errors(untilted.force_N, F_true))} "
         f"| {stats(e_cal)} | {100 * np.percentile(e_cal, 90):.1f} % | {int(np.sum(e_cal <= 0.05))} of {e_cal.size} "
-        f"| {int(np.sum(tilted.offset.flag == 'ok'))} |"
+        f"| {int(np.sum(tilted.offset.flag == 'ok'))} | {silent_misses(tilted, F_true)} |"
     )
     return row + worst_readings(readings, tilted, args.worst)
+
+
+def silent_misses(read, F_true: np.ndarray) -> int:
+    """Readings whose offset the reader calls identifiable ("ok") but whose force is > 5 % off."""
+    ok = read.offset.flag == "ok"
+    return int(np.sum(ok & (np.abs(np.asarray(read.force_N, float) / F_true - 1.0) > 0.05)))
 
 
 def worst_readings(readings, read, n: int) -> str:
@@ -133,9 +141,10 @@ def main() -> None:
     )
     print(
         "| reader | noise [uT] | fitted lever factor | field residual [uT RMS] | centred reading "
-        "| offset estimate, rung's levers | calibrated tilt | 90th pct | within 5 % | identifiable |"
+        "| offset estimate, rung's levers | calibrated tilt | 90th pct | within 5 % | identifiable "
+        "| identifiable, > 5 % off |"
     )
-    print("|---|---|---|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
     for reader in args.readers.split(","):
         for noise in (float(n) for n in args.noise_uT.split(",")):
             print(one_case(args, reader, noise), flush=True)
