@@ -18,7 +18,7 @@ those are more than 5 % off (a wrong force the flag does not warn of); with
 put the press.
 
 Run:  .venv/bin/python benchmarks/offset_calibration.py [--noise-uT 2,0.5 --readers spring,continuum] [--worst 5]
-      (about 2 min)
+      (about 4 min)
 """
 
 from __future__ import annotations

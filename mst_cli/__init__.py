@@ -7,7 +7,7 @@ subpackage to its name in the package whenever it is imported, so only ``api.des
 ``api.calibrate`` name the verbs reliably.
 """
 
-__version__ = "0.14.0"
+__version__ = "0.15.0"
 
 from mst_cli import api  # after __version__, which the api's modules read
 from mst_cli.api import (
