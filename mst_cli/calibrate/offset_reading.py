@@ -188,7 +188,7 @@ class OffsetEstimator:
             return OffsetEstimate.without("no_fit")
         (p, sig), others = roots[0], roots[1:]
         for q, sig_q in others:
-            if np.any(np.abs(p - q) > 2.0 * np.hypot(sig, sig_q)):  # the stream follows its own root on
+            if np.any(np.abs(p - q) > 2.0 * np.hypot(sig, sig_q)):  # the stream's next start: its own root
                 return OffsetEstimate.without("ambiguous", (float(p[1]), float(p[2])))
         ok = bool(np.all(np.isfinite(sig)) and max(sig[1], sig[2]) <= self.max_sigma_mm)
         F, x, y = (float(v) for v in p)
@@ -249,7 +249,8 @@ def _fraction_inside(p: np.ndarray, dp: np.ndarray, lo: np.ndarray, hi: np.ndarr
 
 def offset_columns(forces_csv_text: str, est: OffsetReadings, centred_force_N: np.ndarray) -> str:
     """forces.csv with the offset's columns appended: the centred model's force, x and y with
-    their 1-sigma (mm), and offset_flag (ok, not_identifiable, or empty for a flagged reading)."""
+    their 1-sigma (mm), and offset_flag (ok; not_identifiable, ambiguous or no_fit, whose force is
+    the centred one; empty for a reading flagged itself)."""
     lines = forces_csv_text.splitlines()
     out = [lines[0] + ",force_centred_N,x_mm,y_mm,sigma_x_mm,sigma_y_mm,offset_flag"]
     for i, line in enumerate(lines[1:]):
