@@ -57,10 +57,6 @@ class OffsetEstimate:
         nan = math.nan
         return cls(nan, nan, nan, nan, nan, nan, flag, next_start_mm)
 
-    def values(self) -> tuple[float, ...]:
-        """(force, x, y, sigma_x, sigma_y, sigma_force): OffsetReadings' column order."""
-        return self.force_N, self.x_mm, self.y_mm, self.sigma_x_mm, self.sigma_y_mm, self.sigma_force_N
-
 
 @dataclass
 class OffsetReadings:
@@ -198,22 +194,27 @@ class OffsetEstimator:
     def estimate_all(self, B_T: np.ndarray, force_axial_N: np.ndarray) -> OffsetReadings:
         """Every reading with a finite centred force (the others stay flagged as they are); a
         reading not ``ok`` keeps its centred force."""
-        n = len(force_axial_N)
-        out = {k: np.full(n, np.nan) for k in ("F", "x", "y", "sx", "sy", "sF")}
-        flag = np.full(n, "", dtype=object)
-        guess = (0.0, 0.0)
-        for i in range(n):
-            if not np.isfinite(force_axial_N[i]):
-                continue
-            e = self.estimate(B_T[i], float(force_axial_N[i]), guess)
-            flag[i] = e.flag
+        estimates, guess = [], (0.0, 0.0)
+        for B, F in zip(B_T, force_axial_N):
+            e = self.estimate(B, float(F), guess) if np.isfinite(F) else OffsetEstimate.without("")
             guess = e.next_start_mm or guess
-            if e.flag == "ok":
-                for k, v in zip(("F", "x", "y", "sx", "sy", "sF"), e.values()):
-                    out[k][i] = v
-            else:
-                out["F"][i] = force_axial_N[i]
-        return OffsetReadings(out["F"], out["x"], out["y"], out["sx"], out["sy"], out["sF"], flag)
+            estimates.append(e)
+
+        flag = np.array([e.flag for e in estimates], dtype=object)
+        ok = flag == "ok"
+
+        def column(name: str) -> np.ndarray:  # the solve's values where it is to be used, else NaN
+            return np.where(ok, np.array([getattr(e, name) for e in estimates], dtype=float), np.nan)
+
+        return OffsetReadings(
+            np.where(ok, column("force_N"), force_axial_N),
+            column("x_mm"),
+            column("y_mm"),
+            column("sigma_x_mm"),
+            column("sigma_y_mm"),
+            column("sigma_force_N"),
+            flag,
+        )
 
 
 class _Solve(NamedTuple):
