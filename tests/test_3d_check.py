@@ -1,4 +1,4 @@
-"""The 3D kernel of the plane-strain check (benchmarks/continuum_3d.py, issue 20 part 4):
+"""The 3D kernel of the plane-strain check (tools/continuum_3d.py, issue 20 part 4):
 a patch test, the tangent against central differences, and the two limits of a thin slice
 (free faces: plane stress; held faces: plane strain, the 2D rung)."""
 
@@ -12,7 +12,7 @@ from mst_cli.model.geometry import HexCell
 from mst_cli.model.material import Material
 from mst_cli.model.mechanics import continuum as L2
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tools"))
 import continuum_3d as C3
 
 pytestmark = pytest.mark.slow

@@ -165,6 +165,8 @@ def test_documentation_lives_in_the_repository():
         *PACKAGE.rglob("*.py"),
         *(ROOT / "docs").rglob("*.md"),
         *(ROOT / "benchmarks").rglob("*.py"),
+        *(ROOT / "studies").rglob("*.py"),
+        *(ROOT / "tools").rglob("*.py"),
         *(ROOT / "configs").rglob("*.yaml"),
         ROOT / "README.md",
     ]:

@@ -350,7 +350,7 @@ def test_the_law_between_its_knots_follows_a_finely_sampled_path(cell):
     # chord bows off the curve by at most LAW_CHORD_TOL_REL. Against the same problem followed in
     # steps of 1 % of the stroke (the chord not controlled), the law is within 0.5 % from 15 % of
     # the lock stroke on (0.9, without the chord control, was several per cent off on the steep
-    # cell's zipping ramp: benchmarks/law_sampling.py measures both trees over 48 cells).
+    # cell's zipping ramp: studies/law_sampling.py measures both trees over 48 cells).
     from mst_cli.model.mechanics.path import StepControl
 
     law = L2.solve_continuum(cell, MAT)
@@ -367,7 +367,7 @@ def test_the_law_between_its_knots_follows_a_finely_sampled_path(cell):
 
 
 def test_root_fillet_mesh_is_conforming_and_adds_the_fillet():
-    # root_fillet_mm (benchmarks/fillet_study.py): the fillet's block tiles its polygon, shares
+    # root_fillet_mm (studies/fillet_study.py): the fillet's block tiles its polygon, shares
     # the wall's face nodes (every edge in at most two triangles, no hanging node: the boundary
     # is one closed loop), its base is bonded and its arc joins the plate's contact set
     for cell, r in ((HexCell(14, 0.4, 1.87), 0.05), (HexCell(60, 0.6, 4.0), 0.2)):
@@ -411,7 +411,7 @@ def test_smallest_stretch_of_a_homogeneous_deformation_is_its_smallest_principal
 
 
 def test_a_steep_thin_wall_is_flagged_past_the_crease_onset_and_a_shallow_one_is_not():
-    """The reference design's top and bottom layers as printed (benchmarks/design_crease.py):
+    """The reference design's top and bottom layers as printed (studies/design_crease.py):
     grading the roots moves the top one's R by 3.6 % and the bottom one's by 0.2 %; the marker
     L2's law carries tells them apart by the stretch at which a neo-Hookean face creases."""
     from mst_cli.model.material import CREASE_ONSET_STRETCH

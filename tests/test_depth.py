@@ -1,5 +1,5 @@
 """The web's finite depth (mst_cli.model.mechanics.depth): the plane-strain rungs corrected for the
-free faces at y = +-D/2, checked against the 3D model of benchmarks/continuum_3d.py on cells the
+free faces at y = +-D/2, checked against the 3D model of tools/continuum_3d.py on cells the
 fit never saw, and against its physical limits."""
 
 from __future__ import annotations
@@ -18,7 +18,7 @@ from mst_cli.model.geometry import HexCell
 from mst_cli.model.material import Material
 from mst_cli.model.mechanics.depth import finite_depth_factor, in_web
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tools"))
 import continuum_3d as C3
 
 MAT = Material()

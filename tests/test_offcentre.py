@@ -225,7 +225,7 @@ def test_tilted_L2_at_zero_tilt_is_the_centred_L2():
 def test_tilted_L2_follows_the_rung_on_a_thin_shallow_cell():
     # the loaded chevron (tilt +0.03 rad per mm of closure): before the pads touch it is the
     # untilted layer at the closure of its lever line, and its pads touch at their end x = a
-    # (benchmarks/check_tilt_rung.py measures this over the box)
+    # (studies/check_tilt_rung.py measures this over the box)
     from mst_cli.model.mechanics.continuum import solve_continuum
     from mst_cli.model.mechanics.continuum_tilt import solve_tilted_chevron
 

@@ -5,7 +5,7 @@ The synthetic printer prints every wall 0.06 mm thicker than drawn and the TPU 1
 its data sheet; the design never sees those numbers. A print of a written design.yaml is built
 by editing the file's keys by hand (walls + 0.06 mm, modulus x 0.85, the grade's magnet, the
 drawn housing) and simulating it with the forward model, not through the code under test
-(benchmarks/printer_loop.py holds that printer; its main prints the loop's figures).
+(studies/printer_loop.py holds that printer; its main prints the loop's figures).
 """
 
 import json
@@ -22,7 +22,7 @@ from mst_cli.cli.app import main
 from mst_cli.io.schema import load_document, parse_document
 from mst_cli.model.response import simulate
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "studies"))
 from printer_loop import MODULUS, WALL_MM, print_of, write_load_test
 
 ROOT = Path(__file__).resolve().parents[1]

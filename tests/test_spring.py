@@ -290,7 +290,7 @@ def test_fitted_box_is_the_printable_box():
 
 
 def test_corrected_spring_meets_l2_across_the_box_out_of_sample():
-    # the stored verification (benchmarks/fit_l0_correction.py): L0 corrected against L2 on
+    # the stored verification (tools/fit_l0_correction.py): L0 corrected against L2 on
     # cells it was not fitted on, every band of t/L and theta
     oos = correction._fit()["out_of_sample"]
     assert oos["seed"] != correction._fit()["fitted_on"]["seed"]

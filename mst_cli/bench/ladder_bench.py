@@ -346,7 +346,7 @@ def band_summary(rows: Sequence[dict], model: str) -> dict[str, dict]:
 
 def band_lines(rows: Sequence[dict]) -> list[str]:
     """Markdown: the bench's errors per band of t/L and theta (the per-band out-of-sample
-    table on 210 cells is in mst_cli/model/data/l0_correction.json, benchmarks/fit_l0_correction.py)."""
+    table on 210 cells is in mst_cli/model/data/l0_correction.json, tools/fit_l0_correction.py)."""
     lines = [
         "",
         "Median |error| per band of this sample (k / lock force; n cells):",

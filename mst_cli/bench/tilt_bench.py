@@ -1,4 +1,4 @@
-"""The tilt rung against L2 under tilted plates (``mst bench`` and benchmarks/check_tilt_rung.py).
+"""The tilt rung against L2 under tilted plates (``mst bench`` and studies/check_tilt_rung.py).
 
 For one cell, L2 follows a chevron through its lock with the plates closing by d at the axis and
 tilting by phi = tau d (:mod:`mst_cli.model.mechanics.continuum_tilt`), the loaded chevron with

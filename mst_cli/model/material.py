@@ -7,7 +7,7 @@ from dataclasses import dataclass
 # A plane-strain neo-Hookean half-space's free face creases at a compressive stretch of about
 # 0.65 (Hong, Zhao and Suo, Appl. Phys. Lett. 95, 111901 (2009)). A steep wall's outer root is
 # squeezed past it before the lock; L2's default mesh cannot form the crease, so there its lock
-# force is an upper bound by a few per cent (docs/design.md section 4; benchmarks/design_crease.py)
+# force is an upper bound by a few per cent (docs/design.md section 4; studies/design_crease.py)
 CREASE_ONSET_STRETCH = 0.65
 
 

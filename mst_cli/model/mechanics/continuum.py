@@ -265,7 +265,7 @@ def quarter_profile_mesh(
       the n_thick elements across the tip face B C, t / sin(theta) long, and at theta = 5 deg
       left the small-strain k 35 % off its converged value.)
 
-    ``root_fillet_mm`` r > 0 (a study knob, benchmarks/fillet_study.py) adds the printed fillet
+    ``root_fillet_mm`` r > 0 (a study knob, studies/fillet_study.py) adds the printed fillet
     that fills the air wedge between the outer face and the plate at A (:func:`root_fillet`): the
     wall block gets uniform columns along the face from A to the tangent point T2 (the fillet's
     edge reuses them) and the fillet is triangulated on its own (:func:`_fillet_block`).
@@ -909,8 +909,8 @@ def solve_continuum(
 
     ``path_levels``: corner refinement rounds of the path's own mesh (default 0; its forces
     are scaled by the linear stiffness ratio to the ``levels`` mesh). A convergence study
-    knob: benchmarks/sweep_lock.py and docs/design.md section 4 give what it changes;
-    ``path_corners`` and ``path_radius_in_t`` say where it refines (benchmarks/steep_lock.py
+    knob: studies/sweep_lock.py and docs/design.md section 4 give what it changes;
+    ``path_corners`` and ``path_radius_in_t`` say where it refines (studies/steep_lock.py
     refines at the inner wall root alone, where a steep wall's contact front runs).
     ``plate_penalty_per_mm``: the outer face's contact with the plate as a penalty of that
     stiffness (pressure per mm of overlap, in units of the shear modulus; :class:`_PlatePenalty`)

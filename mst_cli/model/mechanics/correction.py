@@ -4,7 +4,7 @@ Beam theory clamps each wall at the pad's mid-plane and at the chevron's tip; th
 profile's joints are finite blocks with a near-crack at the cavity's tip vertex, so thick or
 shallow walls (large t/L, small theta) are stiffer or softer than the beam says. The ratio
 k_L2 / k_L0 depends only on theta and t/L (and nu: both are plane strain and scale with E b;
-see benchmarks/fit_l0_correction.py, which fits and stores the coefficients in
+see tools/fit_l0_correction.py, which fits and stores the coefficients in
 mst_cli/model/data/l0_correction.json):
 
     ln(k_L2 / k_L0) = sum_i c_i f_i(x, s, y),   x = t/L, s = theta - pi/4,
@@ -122,7 +122,7 @@ LOCK_TERMS = [
 # exp(-(ln q + HINGE_OFFSET) / HINGE_WIDTH)), less its value at q = 1 so that it vanishes with
 # the stroke, about zero where the pads meet and -ln q - 0.03 once a wall closes first, times
 # these shape terms, is added to ln(R / (k d_lock)) (not times sigma). The width is the
-# smallest of 0.01-0.05 that held out best (benchmarks/l0_lock_regime.py).
+# smallest of 0.01-0.05 that held out best (studies/l0_lock_regime.py).
 HINGE_TERMS = ["p", "p*x", "p*s", "p*sigma", "p^2", "p*x^2", "p*s^2"]
 HINGE_WIDTH = 0.01
 HINGE_OFFSET = 0.03
@@ -305,7 +305,7 @@ def coefficients(key: str | None = None) -> tuple[float, ...]:
 
 
 def clear_caches() -> None:
-    """Forget the stored fit (after benchmarks/fit_l0_correction.py rewrote the file)."""
+    """Forget the stored fit (after tools/fit_l0_correction.py rewrote the file)."""
     for f in (_fit, _coef, coefficients):
         f.cache_clear()
 

@@ -8,10 +8,10 @@ softer by
     k_3D / k_2D = 1 - 2 nu^2 l / D,       l = t * lam(theta, y),   y = t / (h - t),
 
 l independent of D, and proportional to t at a fixed profile shape (both measured on a 3D
-model, benchmarks/fit_depth_correction.py, docs/design.md section 4.1). lam is a mix of t and h - t with
+model, tools/fit_depth_correction.py, docs/design.md section 4.1). lam is a mix of t and h - t with
 quadratic weights in theta - 45 deg, fitted there and stored in mst_cli/model/data/depth_correction.json. The
 lock force moves with k (3D against plane strain along the path to the lock: R within 1.5 % of
-k's ratio on the four path cells of benchmarks/bench_3d.py), and the lock stroke does not
+k's ratio on the four path cells of studies/bench_3d.py), and the lock stroke does not
 (< 0.25 %), so the correction scales a layer's force at every compression, on every rung.
 
 Pure and vectorised.

@@ -29,7 +29,7 @@ The layer law (:func:`frame_layer`) multiplies the beam forces by the joint fact
 beam's rigid clamps at the pad mid-plane and the tip are what that factor corrects.
 :func:`solve_frame` itself returns the pure beam solution. Joint models of L1's own,
 rigid end zones from the joint geometry, were measured against L2 on the 150 cells of the
-earlier fit, theta 15-60 deg, t/L <= 0.6 (benchmarks/model_choices.py, plane strain): median
+earlier fit, theta 15-60 deg, t/L <= 0.6 (studies/model_choices.py, plane strain): median
 |error| in k 23.7 % with none (beam theory), 11.9 % with half the geometric overlaps rigid,
 61 % with all of them (L0's fitted factor then: 1.7 %; over the printable box now 1.0 %,
 ``mst bench``). The near-crack at the cavity's tip

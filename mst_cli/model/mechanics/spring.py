@@ -56,7 +56,7 @@ if TYPE_CHECKING:
 
 SHEAR_COEFFICIENT_RECT = 5.0 / 6.0  # Timoshenko shear coefficient of a rectangular section
 # Where the softened pre-lock curve bends, as a fraction of the lock force. Chosen against the
-# L2 curves of 12 bench cells (seed 0, benchmarks/model_choices.py, plane strain): the largest
+# L2 curves of 12 bench cells (seed 0, studies/model_choices.py, plane strain): the largest
 # displacement error of the two-piece curve, in units of d_lock, has median 4.9 % at 0.4
 # (6.7 % at 0.3, 5.5 % at 0.5, 10.8 % at 0.7).
 KNEE_FRACTION = 0.4

@@ -20,7 +20,7 @@ close by d + phi_y x + phi_x y at (x, y), and
 At a uniform closure that is the layer law exactly: W(d) + k_pads (d - d_lock)+. Tilted, the pads
 touch first at the loaded end x = +-a, not at the chevron's lever: L2 under tilted plates locks
 there on a thin shallow cell to 0.1 % of the stroke (tests/test_offcentre.py); over the box its
-loaded side's lock stroke is a median 3.4 % from it (benchmarks/check_tilt_rung.py, where a wall
+loaded side's lock stroke is a median 3.4 % from it (studies/check_tilt_rung.py, where a wall
 pinches first or a thick pad's contact spreads). Equilibrium of force and both moments fixes
 (d, phi_y, phi_x).
 
@@ -34,7 +34,7 @@ the outer root at x = p and the inner one t tan(theta/2) further in) but between
 tip W/2, because turning the pad turns the wall's root too and the wall answers with a
 deflection along its run. L2 measures it at small strain (two linear solves,
 :func:`mst_cli.model.mechanics.continuum_tilt.linear_tilt_lever_mm`); the rung uses a fit of
-a = (x_c - x_r) / (W/2 - x_r) in theta, t/L, t/(h - t) and t/(t + a) (benchmarks/fit_tilt_lever.py,
+a = (x_c - x_r) / (W/2 - x_r) in theta, t/L, t/(h - t) and t/(t + a) (tools/fit_tilt_lever.py,
 mst_cli/model/data/tilt_lever.json, with its out-of-sample error).
 
 Pure numpy; the lever's coefficients load once from the package data. At (x0, y0) = (0, 0) it is

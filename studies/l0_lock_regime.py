@@ -3,9 +3,9 @@
 Issue 20; prints a table, changes nothing. 0.12 ships the hinge at w = 0.01
 (mst_cli.model.mechanics.correction.HINGE_TERMS); the first row is 0.11's lock fit.
 
-    python benchmarks/l0_lock_regime.py [--fresh 300] [--fresh-seed 3] [--cache FILE]
+    python studies/l0_lock_regime.py [--fresh 300] [--fresh-seed 3] [--cache FILE]
 
-The shipped lock fit (benchmarks/fit_l0_correction.py, mst_cli/model/data/l0_correction.json)
+The shipped lock fit (tools/fit_l0_correction.py, mst_cli/model/data/l0_correction.json)
 is verified on 270 cells of seed 2, of which 150 are uniform in the printable box and the rest
 top up shallow, stubby and thin cells. This script solves L2 on those cells, on the fit's own
 620 (seed 1) and on ``--fresh`` more uniform cells (``--fresh-seed``, never fitted), about
@@ -24,9 +24,12 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 from pathlib import Path
 
 import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tools"))  # the L0 fit
 from fit_l0_correction import fit, fit_cells
 
 from mst_cli.bench.sampling import sample_cells

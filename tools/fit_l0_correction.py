@@ -33,9 +33,9 @@ correction.expected_error_rel reads. The same numbers on the fitted cells go und
 The L2 lock is its stiffness knee (docs/design.md section 4): a wall pinched between the plate
 and its mirror, or the pads meeting. Before 0.6 it was read at the inner-face mesh node next
 to an excluded tip wedge, and d_lock and R formed a sawtooth in theta (15 % at t 0.401,
-h 1.829 mm, theta 14.5-14.8 deg); benchmarks/sweep_lock.py shows the new one is smooth.
+h 1.829 mm, theta 14.5-14.8 deg); studies/sweep_lock.py shows the new one is smooth.
 
-Run:  .venv/bin/python benchmarks/fit_l0_correction.py
+Run:  .venv/bin/python tools/fit_l0_correction.py
       [--samples 300 --shallow-samples 60 --stubby-samples 60 --thin-samples 200 --seed 1]
       [--verify-samples 150 --verify-shallow 30 --verify-stubby 30 --verify-thin 60 --verify-seed 2]
       [--l2-cache FILE]   (L2 results per cell, read and extended: refits without re-solving)
@@ -300,7 +300,7 @@ def main():
     ref = l2_results(cells, mat, args.l2_cache)
     (coef_k, stats_k), (coef_R, stats_R), (coef_d, stats_d), box = fit(cells, ref, mat)
     command = (
-        f".venv/bin/python benchmarks/fit_l0_correction.py --samples {args.samples} "
+        f".venv/bin/python tools/fit_l0_correction.py --samples {args.samples} "
         f"--shallow-samples {args.shallow_samples} --stubby-samples {args.stubby_samples} "
         f"--thin-samples {args.thin_samples} "
         f"--seed {args.seed} --verify-samples {args.verify_samples} --verify-shallow "

@@ -1,6 +1,6 @@
 """How much of the shipped designs' lock forces rides on the crease (issue 20). Prints a table; asserts nothing.
 
-    python benchmarks/design_crease.py [--rounds 2] [--specs configs/mohammadi2021.yaml,...]
+    python studies/design_crease.py [--rounds 2] [--specs configs/mohammadi2021.yaml,...]
 
 docs/design.md section 4 ("Steep walls") shows that a steep wall's L2 lock force is not
 mesh-converged: graded at its outer root, the wall's outer face creases (its smallest principal

@@ -14,7 +14,7 @@ Printed per press and overall: the centred reading's force error, the corrected 
 readings whose offset is identifiable (1-sigma under 1 mm), how many are, and how often the
 true offset lies within 2 sigma of the estimate.
 
-Run:  .venv/bin/python benchmarks/offset_reading.py [--offsets 5 --seed 3 --per-regime 4]   # ~1 min
+Run:  .venv/bin/python studies/offset_reading.py [--offsets 5 --seed 3 --per-regime 4]   # ~1 min
 """
 
 from __future__ import annotations

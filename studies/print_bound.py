@@ -3,7 +3,7 @@ scaling of the webs' stiffness, and the physical terms it is made of.
 
 Prints markdown tables, changes nothing. From the repository root:
 
-    MST_WORKERS=1 .venv/bin/python benchmarks/print_bound.py [--quick] [--height 20] [--spec FILE]
+    MST_WORKERS=1 .venv/bin/python studies/print_bound.py [--quick] [--height 20] [--spec FILE]
 
 About 4-6 minutes on one core (359 s on a loaded machine) (``--quick``: m 1, 6, 12, s_min 0 and
 0.05, 1 % bisection: 80 s).

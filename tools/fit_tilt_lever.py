@@ -16,7 +16,7 @@ least squares over valid cells drawn uniformly in the printable box
 (mst_cli.bench.ladder_bench.sample_cells). Printed: median and max |error| of x_eff out of
 sample for the fit, split by pad length, and for the roots' midpoint alone.
 
-Run:  .venv/bin/python benchmarks/fit_tilt_lever.py [--samples 200 --seed 11 --verify 100 --verify-seed 12]
+Run:  .venv/bin/python tools/fit_tilt_lever.py [--samples 200 --seed 11 --verify 100 --verify-seed 12]
 """
 
 from __future__ import annotations
@@ -93,7 +93,7 @@ def main() -> None:
         json.dumps(
             {
                 "about": "tilt rung lever: a = (x_eff - x_c) / (W/2 - x_c) = coef . lever_features(theta, t, h); "
-                "benchmarks/fit_tilt_lever.py",
+                "tools/fit_tilt_lever.py",
                 "coef": [float(c) for c in coef],
                 "samples": args.samples,
                 "seed": args.seed,

@@ -6,10 +6,10 @@ stiffness jump just past the lock, then the largest deviation of a point from th
 two neighbours (for a smooth R(x) that is R'' dx^2 / (2 R): the curvature, halved with every
 halving of the step). ``--mesh`` also solves each cell on two finer meshes.
 
-Run:  .venv/bin/python benchmarks/sweep_lock.py                       # the three sweeps
-      .venv/bin/python benchmarks/sweep_lock.py --mesh                # + mesh convergence
-      .venv/bin/python benchmarks/sweep_lock.py --factors             # + R against the lock factor
-      .venv/bin/python benchmarks/sweep_lock.py --sweep theta=12:16:0.25 --cell 0,0.40,1.87
+Run:  .venv/bin/python studies/sweep_lock.py                       # the three sweeps
+      .venv/bin/python studies/sweep_lock.py --mesh                # + mesh convergence
+      .venv/bin/python studies/sweep_lock.py --factors             # + R against the lock factor
+      .venv/bin/python studies/sweep_lock.py --sweep theta=12:16:0.25 --cell 0,0.40,1.87
 """
 
 from __future__ import annotations

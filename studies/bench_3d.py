@@ -9,7 +9,7 @@ without corner refinement, n_thick x n_length elements):
   discretisation does (a little softer than the extruded P2 triangles);
 * 3D free: y = 0 a symmetry plane, the face y = D/2 free -- the web as printed.
 
-(benchmarks/continuum_3d.py has the model; tests/test_3d_check.py verifies its kernel.) k is
+(tools/continuum_3d.py has the model; tests/test_3d_check.py verifies its kernel.) k is
 the small-load stiffness, R the force at the lock and d_lock its compression (the lock: the
 tangent stiffness reaches 5 k, as in L2). "free/2D" is the ratio asked for; "free/held" is the
 free faces' effect alone (same mesh, same elements). The depth grading is checked by repeating
@@ -17,15 +17,18 @@ the free run on a finer one (8 layers, the one at the face t/4 thick, against 6 
 --inplane adds the linear k of all three models on the finer in-plane mesh 3 x 12 (L2's default
 before corner refinement) to show the ratios do not depend on it.
 
-Run:  .venv/bin/python benchmarks/bench_3d.py                 # 4 cells, ~15 min on one core
-      .venv/bin/python benchmarks/bench_3d.py --cells 0 1 --no-fine
+Run:  .venv/bin/python studies/bench_3d.py                 # 4 cells, ~15 min on one core
+      .venv/bin/python studies/bench_3d.py --cells 0 1 --no-fine
 """
 
 from __future__ import annotations
 
 import argparse
+import sys
 import time
+from pathlib import Path
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tools"))  # the 3D kernel
 import continuum_3d as C3
 
 from mst_cli.model.geometry import HexCell
@@ -109,7 +112,7 @@ def main() -> None:
             f"| {f['d_lock'] / p['d_lock']:.4f} | {conv} |"
         )
     # the adopted finite-depth correction (mst_cli.model.mechanics.depth, fitted by
-    # benchmarks/fit_depth_correction.py on other cells) against the free faces' effect alone
+    # tools/fit_depth_correction.py on other cells) against the free faces' effect alone
     print("\nthe rungs' finite-depth factor phi against free/held (k and R): misses in %")
     for name, cell, res in rows:
         phi = float(finite_depth_factor(cell.theta_rad, cell.t_mm, cell.h_mm, cell.b_mm, material.poisson_ratio))

@@ -17,7 +17,7 @@ those are more than 5 % off (a wrong force the flag does not warn of); with
 --worst N, the N calibrated readings furthest off, where they were pressed and where the reader
 put the press.
 
-Run:  .venv/bin/python benchmarks/offset_calibration.py [--noise-uT 2,0.5 --readers spring,continuum] [--worst 5]
+Run:  .venv/bin/python studies/offset_calibration.py [--noise-uT 2,0.5 --readers spring,continuum] [--worst 5]
       (about 4 min)
 """
 

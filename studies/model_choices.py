@@ -11,7 +11,7 @@
    overlap, and at the root the distance from the pad mid-plane to where the inner face leaves
    the pad -- and the full overlaps.
 
-Run:  .venv/bin/python benchmarks/model_choices.py [--knee-cells 12] [--joint-cells 150]
+Run:  .venv/bin/python studies/model_choices.py [--knee-cells 12] [--joint-cells 150]
 """
 
 from __future__ import annotations

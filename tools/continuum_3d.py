@@ -1,6 +1,6 @@
 """A 3D check of rung L2's plane strain (issue 20, part 4): the quarter profile extruded through
 the web's depth, with faces free at y = +-D/2. A benchmark kernel, not part of the package
-(imported by benchmarks/bench_3d.py and tests/test_3d_check.py).
+(imported by studies/bench_3d.py and tests/test_3d_check.py).
 
 Model. The plane-strain rung (mst_cli/model/mechanics/continuum.py) meshes a quarter of the
 profile (x >= 0, z <= h/2) with P2 triangles. Here that triangle mesh (without corner

@@ -19,7 +19,7 @@ Three measurements behind docs/design.md section 4 ("Steep walls", "L0 against L
    (no active set to churn), the smallest principal stretch at the lock and where, and the
    largest drop of the force along the path (a crease snapping in).
 
-Run:  .venv/bin/python benchmarks/steep_lock.py [--uniform 200 --seed 7] [--parts 1,2,3,4,5,6]   # ~17 min
+Run:  .venv/bin/python studies/steep_lock.py [--uniform 200 --seed 7] [--parts 1,2,3,4,5,6]   # ~17 min
 """
 
 from __future__ import annotations

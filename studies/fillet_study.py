@@ -12,7 +12,7 @@ b. the 45 and 60 deg cells with the path mesh graded 0-2 rounds within 1 t of th
    0.1 and 0.2 mm: R, load steps, seconds, the smallest principal stretch at the lock and where
    (steep_lock.py part 6), the largest force drop along the path. A stalled path is reported.
 
-Run:  MST_WORKERS=1 .venv/bin/python benchmarks/fillet_study.py [--parts a,b] [--rounds 2]
+Run:  MST_WORKERS=1 .venv/bin/python studies/fillet_study.py [--parts a,b] [--rounds 2]
           [--radii-b 0.1,0.2] [--cells-b 45,steep]
       Part a: about 2.5 min (16 solves, 3-30 s each). Part b: round 2 took 74-99 s on three of its
       four paths and 697 s on the 60 deg cell at r = 0.1; a third round (--rounds 3) on the 45 deg

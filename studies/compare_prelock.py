@@ -6,7 +6,7 @@ stiffness knee (docs/design.md section 4). Before any face touches, the two solv
 equations; this script shows where contact starts and how far 0.6's F sits above 0.5's at
 0.5's own samples up to 0.5's lock. It reads 0.5's module from git, so it runs in a clone.
 
-Run:  .venv/bin/python benchmarks/compare_prelock.py [--rev f00ed9a]
+Run:  .venv/bin/python studies/compare_prelock.py [--rev f00ed9a]
 """
 
 from __future__ import annotations

@@ -14,13 +14,13 @@ a mix of t and h - t with quadratic weights in theta - 45 deg (mst_cli.model.mec
 on the even cells of a grid over the printable box and judged
 on the odd ones (held out).
 
-The ratio measured is k 3D free / k 3D held on the same 3D mesh (benchmarks/continuum_3d.py,
+The ratio measured is k 3D free / k 3D held on the same 3D mesh (tools/continuum_3d.py,
 y = 0 a symmetry plane, y = D/2 free or held): the held model's exact answer is plane strain,
 so the tetrahedra's own discretisation cancels.
 
-Run:  .venv/bin/python benchmarks/fit_depth_correction.py          # 88 3D cells, ~5 min
-      .venv/bin/python benchmarks/fit_depth_correction.py --factors-only   # the factor on designs
-      .venv/bin/python benchmarks/fit_depth_correction.py --limit 8 --no-write
+Run:  .venv/bin/python tools/fit_depth_correction.py          # 88 3D cells, ~5 min
+      .venv/bin/python tools/fit_depth_correction.py --factors-only   # the factor on designs
+      .venv/bin/python tools/fit_depth_correction.py --limit 8 --no-write
 """
 
 from __future__ import annotations
@@ -129,7 +129,7 @@ def main() -> None:
     )
     if not args.no_write and not args.limit:
         out = {
-            "command": ".venv/bin/python benchmarks/fit_depth_correction.py",
+            "command": ".venv/bin/python tools/fit_depth_correction.py",
             "terms": list(depth.TERMS),
             "coefficients": [float(c) for c in coef],
             "fitted_on": {

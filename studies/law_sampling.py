@@ -8,9 +8,9 @@ their samples per law.
 
 Run on another tree (e.g. 0.9, before the chord control) with that tree first on the path:
     git archive 7fc3056 | tar -x -C /tmp/v09
-    PYTHONPATH=/tmp/v09 .venv/bin/python benchmarks/law_sampling.py
+    PYTHONPATH=/tmp/v09 .venv/bin/python studies/law_sampling.py
 
-Run:  .venv/bin/python benchmarks/law_sampling.py [--samples 48 --seed 0]   # ~3 min
+Run:  .venv/bin/python studies/law_sampling.py [--samples 48 --seed 0]   # ~3 min
 """
 
 from __future__ import annotations

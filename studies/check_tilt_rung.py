@@ -16,7 +16,7 @@ through its own lock (its quarter's pads, from the cut x_cut = a - 4 t to a, tou
 cut) and its lock stroke; then medians and maxima, and the same with the lever at the wall
 roots' midpoint (the rung before its lever was fitted).
 
-Run:  .venv/bin/python benchmarks/check_tilt_rung.py [--cells 24 --seed 21 --tau 0.03]   # ~1 min
+Run:  .venv/bin/python studies/check_tilt_rung.py [--cells 24 --seed 21 --tau 0.03]   # ~1 min
 """
 
 from __future__ import annotations

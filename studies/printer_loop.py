@@ -7,7 +7,7 @@ noise, rounded to the chip's LSB) goes through `mst calibrate`, then `mst design
 is made by editing design.yaml by hand and simulating it (tests/test_printer_loop.py runs the
 same loop with this module's printer and asserts it).
 
-Run:  .venv/bin/python benchmarks/printer_loop.py [--seed 11]
+Run:  .venv/bin/python studies/printer_loop.py [--seed 11]
 """
 
 from __future__ import annotations
