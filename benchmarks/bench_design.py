@@ -56,8 +56,9 @@ def cli_times(repeats: int) -> list[float]:
 
 def random_specs(n_layers: int, count: int, seed: int):
     from mst_cli.design.problem import DesignProblem
-    from mst_cli.io.schema import LayerEntry, load_document
     from mst_cli.model.response import simulate
+    from mst_cli.sensor.document import load_document
+    from mst_cli.sensor.sections import LayerEntry
 
     base = load_document(SPEC)
     probe_doc = base.with_layers(
@@ -83,8 +84,8 @@ def random_specs(n_layers: int, count: int, seed: int):
 
 def recheck(result) -> bool:
     """Forward model on design.yaml as a user would load it, against the spec's targets."""
-    from mst_cli.io.schema import parse_document
     from mst_cli.model.response import simulate
+    from mst_cli.sensor.document import parse_document
 
     doc = parse_document(yaml.safe_load(yaml.safe_dump(result.design_yaml_dict(), sort_keys=False)))
     geometry = doc.geometry()
@@ -141,7 +142,8 @@ def targets_of(docs) -> list[list[tuple[float, float]]]:
 
 
 def docs_from(targets) -> list:
-    from mst_cli.io.schema import LayerEntry, load_document
+    from mst_cli.sensor.document import load_document
+    from mst_cli.sensor.sections import LayerEntry
 
     base = load_document(SPEC)
     return [base.with_layers([LayerEntry(target_sensitivity_per_N=s, target_range_N=r) for s, r in t]) for t in targets]
@@ -177,7 +179,7 @@ def main():
         return
 
     from mst_cli.design import design_document
-    from mst_cli.io.schema import load_document
+    from mst_cli.sensor.document import load_document
 
     cli = cli_times(args.repeats)
     doc = load_document(SPEC)

@@ -29,7 +29,7 @@ STAGES = {
     "mesh path (--stl --3mf)": """
 import manifold3d
 mark("import manifold3d")
-from mst_cli.io.schema import load_design_document
+from mst_cli.sensor.document import load_design_document
 from mst_cli.cad import mesh_io, mesh_body
 doc, g = load_design_document({design!r})
 mark("load the design")
@@ -41,7 +41,7 @@ mark("STL + 3MF bytes")
     "CAD path (--step)": """
 import build123d
 mark("import build123d")
-from mst_cli.io.schema import load_design_document
+from mst_cli.sensor.document import load_design_document
 from mst_cli.cad.assembly import build_sensor
 from mst_cli.cad import mesh_io
 doc, g = load_design_document({design!r})

@@ -44,7 +44,7 @@ SPEC = ROOT / "configs" / "mohammadi2021.yaml"
 BASELINE_LAYERS = 3
 FIRST_LOCK_N = 0.5  # the softest layer of the shortest stacks locks at or above this
 RUN_UNCAPPED = (
-    "import sys\nimport mst_cli.io.schema as schema\n"
+    "import sys\nimport mst_cli.sensor.document as schema\n"
     "schema.MAX_LAYERS = max(schema.MAX_LAYERS, 12)   # this process only\n"
     "from mst_cli.cli.app import main\nsys.argv[0] = 'mst'\nmain()\n"
 )
@@ -61,8 +61,9 @@ def synthetic_layers(n: int) -> list[tuple[float, float, float]]:
 
 def build(n: int):
     """(spec document, geometry, response) for n layers; the spec's targets are the design's S, R."""
-    from mst_cli.io.schema import LayerEntry, load_document
     from mst_cli.model.response import simulate
+    from mst_cli.sensor.document import load_document
+    from mst_cli.sensor.sections import LayerEntry
 
     base = load_document(SPEC)
     cells = tuple(base.family.cell(*layer) for layer in synthetic_layers(n))
@@ -124,11 +125,11 @@ def command_times(argvs: dict, repeats: int) -> dict:
 def shortest_stacks(counts):
     """Per count: (geometry, response) of the shortest printable stack that locks in file order
     with the design's lock margin (greedy: each layer the shortest cell that locks late enough)."""
-    from mst_cli.io.schema import load_document
-    from mst_cli.model import geometry as geo
+    from mst_cli.model.cell import cell_margins_mm, wall_centreline_length_mm
     from mst_cli.model.mechanics import correction
     from mst_cli.model.mechanics.spring import spring_arrays
     from mst_cli.model.response import simulate
+    from mst_cli.sensor.document import load_document
 
     base = load_document(SPEC)
     fam, pr, mat = base.family, base.printer, base.material
@@ -138,12 +139,10 @@ def shortest_stacks(counts):
     )
     h = 2.0 * t + cav
     ok = (
-        geo.cell_margins_mm(
-            th, t, h, fam.width_mm, fam.contact_allowance_mm, pr.min_wall_mm, pr.min_gap_mm, pr.nozzle_mm
-        )
+        cell_margins_mm(th, t, h, fam.width_mm, fam.contact_allowance_mm, pr.min_wall_mm, pr.min_gap_mm, pr.nozzle_mm)
         >= 0
     ).all(-1)
-    ok &= (h <= 8.0) & (t / geo.wall_centreline_length_mm(th, t, h) <= correction.fitted_t_over_L_max())
+    ok &= (h <= 8.0) & (t / wall_centreline_length_mm(th, t, h) <= correction.fitted_t_over_L_max())
     th, t, h = th[ok], t[ok], h[ok]
     R = spring_arrays(
         th, t, h, fam.depth_mm, fam.width_mm, fam.contact_allowance_mm, mat.youngs_modulus_MPa, mat.poisson_ratio

@@ -102,7 +102,7 @@ def main() -> None:
         print(json.dumps(fronts(docs_from(json.load(sys.stdin)), int(args.worker))))
         return
 
-    from mst_cli.io.schema import load_document
+    from mst_cli.sensor.document import load_document
 
     docs = [load_document(SPEC)] + random_specs(3, args.specs, seed=2500)
     names = ["reference"] + [f"random-{k:02d}" for k in range(args.specs)]

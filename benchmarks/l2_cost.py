@@ -51,8 +51,8 @@ def child_laws(samples: int, seed: int) -> list[dict]:
 
 
 def child_stack() -> float:
-    from mst_cli.io.schema import load_document
     from mst_cli.model.mechanics import layer_laws
+    from mst_cli.sensor.document import load_document
 
     doc = load_document(FORWARD)
     geometry = doc.geometry()

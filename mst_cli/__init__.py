@@ -4,12 +4,11 @@ The command line's verbs are functions in :mod:`mst_cli.api` (``from mst_cli imp
 mst``). The package re-exports those whose names are not also its subpackages: ``design`` and
 ``calibrate`` are (:mod:`mst_cli.design`, :mod:`mst_cli.calibrate`), and Python binds a
 subpackage to its name in the package whenever it is imported, so only ``api.design`` and
-``api.calibrate`` name the verbs reliably.
+``api.calibrate`` name the verbs reliably. ``mst_cli.__version__`` is the installed version
+(:mod:`mst_cli.version`). The package sits at the api's layer: nothing below imports it.
 """
 
-__version__ = "0.15.0"
-
-from mst_cli import api  # after __version__, which the api's modules read
+from mst_cli import api
 from mst_cli.api import (
     InputError,
     check,
@@ -23,6 +22,16 @@ from mst_cli.api import (
     simulate,
     slice,
 )
+
+
+def __getattr__(name: str) -> str:
+    # the version on demand: reading the package metadata costs start-up time no verb needs
+    if name == "__version__":
+        from mst_cli.version import __version__  # deferred: importlib.metadata, a few ms
+
+        return __version__
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
 
 __all__ = [
     "api",

@@ -28,9 +28,9 @@ if TYPE_CHECKING:
     from mst_cli.calibrate.reading import ForceReadings, SerialSamples
     from mst_cli.design.document import DesignResult
     from mst_cli.design.pareto import ParetoDesign
-    from mst_cli.io.schema import Document
     from mst_cli.model.offcentre import OffCentreResponse, OffsetMap
     from mst_cli.model.response import Response
+    from mst_cli.sensor.document import Document
 
 __all__ = [
     "InputError",
@@ -57,7 +57,7 @@ def __getattr__(name: str):
     # misbehaved), without importing their modules before they are asked for
     if name == "CalibrationFailed":
         # deferred: a verb loads its layer when called ('import mst_cli' stays light)
-        from mst_cli.calibrate.fit import CalibrationFailed
+        from mst_cli.errors import CalibrationFailed
 
         return CalibrationFailed
     if name == "SlicerError":
@@ -88,7 +88,7 @@ def load(path: str | Path) -> Document:
         ``.is_design`` / ``.is_spec`` say which; ``.geometry()`` builds a design's sensor.
     """
     # deferred: a verb loads its layer when called ('import mst_cli' stays light)
-    from mst_cli.io.schema import load_document
+    from mst_cli.sensor.document import load_document
 
     return load_document(path)
 
@@ -97,7 +97,7 @@ def load_design(path: str | Path | Document) -> Document:
     """A design file whose every cell is printable and works (InputError naming the first layer
     that breaks a rule); a Document is checked the same way and returned."""
     # deferred: a verb loads its layer when called ('import mst_cli' stays light)
-    from mst_cli.io.schema import design_geometry, load_design_document
+    from mst_cli.sensor.document import design_geometry, load_design_document
 
     if isinstance(path, (str, Path)):
         return load_design_document(path)[0]
@@ -130,8 +130,8 @@ def simulate(
         x printer.modulus_factor, gap + printer.gap_offset_mm.
     """
     # deferred: a verb loads its layer when called ('import mst_cli' stays light)
-    from mst_cli.calibrate.fit import simulate_as_printed
     from mst_cli.model.mechanics import MODELS
+    from mst_cli.sensor.as_printed import simulate_as_printed
 
     _one_of("--mechanics", mechanics, MODELS)
     _one_of("--field-model", field_model, ("auto", "dipole", "axial", "cylinder"))
@@ -178,9 +178,10 @@ def offset_map(
 
 def _printed_scene(design, mechanics, field_model):
     """(geometry as printed, material as printed, mechanics rung, field model or None for auto)."""
-    from mst_cli.calibrate.fit import as_printed  # deferred: as simulate's
+    # deferred: as simulate's
     from mst_cli.model.ladder import choose_mechanics
     from mst_cli.model.mechanics import MODELS
+    from mst_cli.sensor.as_printed import as_printed
 
     _one_of("--mechanics", mechanics, MODELS)
     _one_of("--field-model", field_model, ("auto", "dipole", "axial", "cylinder"))
@@ -248,7 +249,7 @@ def design(
     doc = load(spec) if isinstance(spec, (str, Path)) else spec
     if calibration is not None:
         # deferred: a verb loads its layer when called ('import mst_cli' stays light)
-        from mst_cli.calibrate.record import apply_calibration, read_calibration
+        from mst_cli.calibrate.calibration_json import apply_calibration, read_calibration
 
         doc = apply_calibration(doc, read_calibration(calibration, doc))
     choice = choose_mechanics(refine, doc.accuracy_rel, doc.mechanics)
@@ -394,7 +395,7 @@ def check(path: str | Path, *, nozzle_mm: float | None = None) -> list[Check]:
     # deferred: a verb loads its layer when called ('import mst_cli' stays light)
     from mst_cli.cad.checks import load_mesh, resolve_export, run_checks
     from mst_cli.cad.manifest import load_manifest
-    from mst_cli.model.geometry import Printer
+    from mst_cli.model.printer import Printer
 
     if nozzle_mm is not None:  # one bound: printer.nozzle_mm's in a design file
         lo, hi = next((f.metadata["lo"], f.metadata["hi"]) for f in fields(Printer) if f.name == "nozzle_mm")
@@ -485,7 +486,7 @@ def calibrate(
     mechanics : {"spring", "frame", "continuum"}
         Layer mechanics of the fit; frame and continuum by space mapping on spring.
     params : sequence of str or str, optional
-        Parameters to fit (of :data:`mst_cli.calibrate.fit.PARAMETERS`, or "a,b") [default: all four].
+        Parameters to fit (of :data:`mst_cli.sensor.as_printed.PARAMETERS`, or "a,b") [default: all four].
     gain_sel, res, table_size : int, optional
         The MLX90393 setting the load test was read at (0-7, 0-3); entries of lookup.csv (16-4096).
 

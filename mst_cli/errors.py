@@ -25,3 +25,7 @@ class InputError(ValueError):
         self.field, self.value, self.allowed = field, value, allowed
         field = str(field) if len(str(field)) <= MAX_SHOWN_CHARS else _shown(str(field))
         super().__init__(f"{field} = {_shown(value)}: {allowed}")
+
+
+class CalibrationFailed(RuntimeError):
+    """The fit itself failed (not the input's form): the message says why."""

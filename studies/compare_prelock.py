@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from mst_cli.model.geometry import HexCell
+from mst_cli.model.cell import HexCell
 from mst_cli.model.material import Material
 from mst_cli.model.mechanics import continuum as L2
 

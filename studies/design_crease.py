@@ -31,11 +31,11 @@ from pathlib import Path
 import numpy as np
 
 from mst_cli.api import design
-from mst_cli.calibrate.fit import as_printed
 from mst_cli.model.material import CREASE_ONSET_STRETCH
 from mst_cli.model.mechanics import continuum
 from mst_cli.model.mechanics.depth import in_web
 from mst_cli.model.mechanics.path import StepControl
+from mst_cli.sensor.as_printed import as_printed
 
 ROOT = Path(__file__).resolve().parents[1]
 SPECS = ("configs/mohammadi2021.yaml", "configs/mohammadi2021-compact.yaml")

@@ -27,7 +27,7 @@ import time
 import numpy as np
 from steep_lock import _min_stretch
 
-from mst_cli.model.geometry import HexCell
+from mst_cli.model.cell import HexCell
 from mst_cli.model.material import Material
 from mst_cli.model.mechanics import continuum
 from mst_cli.model.mechanics.path import PathError, StepControl

@@ -33,7 +33,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tools"))  # the L0
 from fit_l0_correction import fit, fit_cells
 
 from mst_cli.bench.sampling import sample_cells
-from mst_cli.model import geometry as geo
+from mst_cli.model.cell import lock_stroke_mm
 from mst_cli.model.material import Material
 from mst_cli.model.mechanics import correction
 from mst_cli.model.mechanics.continuum import solve_continuum
@@ -62,7 +62,7 @@ def features(cells, coef_k, coef_d, hinge_w):
     E, nu = MAT.youngs_modulus_MPa, MAT.poisson_ratio
     k0 = np.array([float(layer_stiffness_N_per_mm(c.theta_rad, c.t_mm, c.h_mm, c.b_mm, E, nu)) for c in cells])
     k0c = k0 * np.exp(correction.design_matrix(x, th) @ coef_k)
-    d0 = np.array([float(geo.lock_stroke_mm(c.t_mm, c.h_mm, c.contact_allowance_mm)) for c in cells])
+    d0 = np.array([float(lock_stroke_mm(c.t_mm, c.h_mm, c.contact_allowance_mm)) for c in cells])
     sig = correction.stroke_ratio(d0, np.array([c.wall_length_mm for c in cells]), th)
     A = sig[:, None] * correction.lock_design_matrix(x, th, sig)
     if hinge_w:

@@ -25,10 +25,10 @@ from pathlib import Path
 
 import numpy as np
 
-from mst_cli.calibrate import fit as cal
+from mst_cli.calibrate.inverse_map import inverse_map
 from mst_cli.calibrate.offset_reading import OffsetEstimator
-from mst_cli.io.schema import load_design_document
 from mst_cli.model.offcentre import pose_field_T, tilt_laws
+from mst_cli.sensor.document import load_design_document
 
 DESIGN = Path(__file__).resolve().parents[1] / "configs" / "mohammadi2021-forward.yaml"
 NOISE_T = 2e-6
@@ -45,7 +45,7 @@ def main() -> None:
     args = ap.parse_args()
     doc, _ = load_design_document(DESIGN)
     geo, mat = doc.geometry(), doc.material
-    imap, resp = cal.inverse_map(doc, "spring")
+    imap, resp = inverse_map(doc, "spring")
     truth = tilt_laws(geo, mat, args.truth)
     est = OffsetEstimator(geo, mat, "spring", imap.field_resolution_T, float(imap.force_N[-1]))
     rng = np.random.default_rng(args.seed)

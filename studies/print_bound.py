@@ -29,7 +29,7 @@ thicker or thinner (:func:`mst_cli.design.document.verify_design`, forward model
    length L = (h - t) / (2 sin theta), the lock stroke h - 2t - a, the L2-fitted joint and lock
    factors (functions of t/L and the stroke ratio), the web's finite-depth factor, the locked
    pads' contact stiffness -- and the magnet gap (gap0 depends on the layer heights only,
-   :func:`mst_cli.model.geometry.unloaded_gap_mm`: measured as the change of gap0 itself).
+   :func:`mst_cli.model.assembly.unloaded_gap_mm`: measured as the change of gap0 itself).
 
 Measured on configs/mohammadi2021.yaml (STEMMA board, housing 11.35 mm of the height) with 0.12's
 L0: today's full-depth webs reach 45.7 % at 20.00 mm; one scale for every web bottoms out near
@@ -50,16 +50,16 @@ from functools import partial
 import numpy as np
 
 from mst_cli import api
-from mst_cli.calibrate.fit import as_printed
 from mst_cli.design.document import design_document
 from mst_cli.design.problem import DesignProblem
 from mst_cli.design.solver import solve
-from mst_cli.io.schema import OBJECTIVE_TERMS
-from mst_cli.model import geometry as geo
+from mst_cli.model.cell import lock_stroke_mm, wall_centreline_length_mm
 from mst_cli.model.mechanics import correction
 from mst_cli.model.mechanics.depth import web_modulus_MPa
 from mst_cli.model.mechanics.spring import contact_stiffness_N_per_mm, layer_stiffness_N_per_mm
 from mst_cli.model.response import field_magnitude_T, regime_kernel, simulate
+from mst_cli.sensor.as_printed import as_printed
+from mst_cli.sensor.sections import OBJECTIVE_TERMS
 
 TERMS = ("section", "length", "stroke", "fits", "web", "contact")
 HEIGHT_ONLY = np.array([1.0 if term == "height" else 0.0 for term in OBJECTIVE_TERMS])
@@ -74,10 +74,10 @@ def term_laws(cells: dict, E: float, nu: float, t: dict) -> tuple:
     E_web = web_modulus_MPa(th, t["web"], h, b, E, nu)
     # L = (h' - t_section) / (2 sin theta) with h' = h - t_length + t_section: the length term's t
     k = layer_stiffness_N_per_mm(th, t["section"], h - t["length"] + t["section"], b, E_web, nu)
-    d_geo = geo.lock_stroke_mm(t["stroke"], h, a)
-    L_fit = geo.wall_centreline_length_mm(th, t["fits"], h)
+    d_geo = lock_stroke_mm(t["stroke"], h, a)
+    L_fit = wall_centreline_length_mm(th, t["fits"], h)
     x = t["fits"] / L_fit
-    sigma = correction.stroke_ratio(geo.lock_stroke_mm(t["fits"], h, a), L_fit, th)
+    sigma = correction.stroke_ratio(lock_stroke_mm(t["fits"], h, a), L_fit, th)
     k = k * correction.stiffness_factor(x, th)
     force_factor, stroke_factor = correction.lock_factors(x, th, sigma)
     d_lock = d_geo * stroke_factor

@@ -22,9 +22,9 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from mst_cli.io.schema import load_document, parse_document
 from mst_cli.model import chip as mlx
 from mst_cli.model.response import simulate
+from mst_cli.sensor.document import load_document, parse_document
 
 ROOT = Path(__file__).resolve().parents[1]
 SPEC = ROOT / "configs" / "mohammadi2021.yaml"

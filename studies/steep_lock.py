@@ -30,7 +30,7 @@ import time
 import numpy as np
 
 from mst_cli.bench.ladder_bench import sample_cells
-from mst_cli.model.geometry import HexCell
+from mst_cli.model.cell import HexCell
 from mst_cli.model.material import Material
 from mst_cli.model.mechanics import continuum, uncached_layer_law
 from mst_cli.model.mechanics.continuum import continuum_layer, solve_continuum

@@ -18,7 +18,7 @@ import argparse
 
 import numpy as np
 
-from mst_cli.model.geometry import HexCell
+from mst_cli.model.cell import HexCell
 from mst_cli.model.material import Material
 from mst_cli.model.mechanics import continuum
 from mst_cli.model.mechanics.continuum import solve_continuum

@@ -2,8 +2,9 @@
 
 import numpy as np
 
+from mst_cli.model.assembly import SensorGeometry
+from mst_cli.model.cell import HexCell
 from mst_cli.model.components import BOARDS
-from mst_cli.model.geometry import HexCell, SensorGeometry
 
 
 def random_valid_geometries(n, seed, max_offset_mm):

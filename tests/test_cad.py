@@ -20,9 +20,10 @@ from build123d import Edge, import_step
 from mst_cli.cad import mesh_io, parts
 from mst_cli.cad.assembly import build_body, build_sensor
 from mst_cli.errors import InputError
-from mst_cli.io.schema import load_design_document
+from mst_cli.model.assembly import Housing, SensorGeometry
+from mst_cli.model.cell import HexCell
 from mst_cli.model.components import BOARDS
-from mst_cli.model.geometry import HexCell, Housing, SensorGeometry
+from mst_cli.sensor.document import load_design_document
 
 ROOT = Path(__file__).resolve().parents[1]
 FORWARD = ROOT / "configs" / "mohammadi2021-forward.yaml"
@@ -136,7 +137,7 @@ def test_every_board_gives_the_model_gap_and_an_open_slot(key):
 # --------------------------------------------------------------------------- magnet pocket
 @pytest.mark.parametrize("diameter_mm", [4.0, 6.0, 8.0])
 def test_pocket_is_a_u_with_a_45_degree_roof(diameter_mm):
-    from mst_cli.model.geometry import Magnet
+    from mst_cli.model.assembly import Magnet
 
     g = SensorGeometry((HexCell(30, 0.8, 2.4),), magnet=Magnet(diameter_mm, 2.0))
     r, d = 0.5 * diameter_mm + 0.1, 2.1

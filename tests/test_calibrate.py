@@ -24,13 +24,14 @@ import yaml
 from click.testing import CliRunner
 
 from mst_cli.calibrate import fit as cal
+from mst_cli.calibrate.inverse_map import inverse_map
 from mst_cli.cli.app import main
-from mst_cli.io.schema import load_document, parse_document
 from mst_cli.io.serial_lines import SampleParser, parse_line
 from mst_cli.model import chip as mlx
+from mst_cli.model.assembly import Housing
 from mst_cli.model.components import grade_remanence_T
-from mst_cli.model.geometry import Housing
 from mst_cli.model.response import simulate
+from mst_cli.sensor.document import load_document, parse_document
 
 ROOT = Path(__file__).resolve().parents[1]
 DESIGN = ROOT / "configs" / "mohammadi2021-forward.yaml"
@@ -334,7 +335,7 @@ def test_lookup_table_and_c_header(loadtest, tmp_path):
     assert [int(g[0]) for g in got] == [1, 0, 0, 0, 2, 3]  # below, ok, ok, ok (either sign), above, saturated
     lsb = setting["z_uT_per_lsb"] * 1e-6
     doc = load_document(out / "calibrated.yaml")
-    imap, _ = cal.inverse_map(doc)
+    imap, _ = inverse_map(doc)
     for code, g in zip(probe[1:4], got[1:4]):
         F_py = float(np.interp(abs(code) * lsb, np.abs(imap.Bz_T), imap.force_N))
         assert abs(int(g[1]) * 1e-3 - F_py) < 0.01, (code, g, F_py)  # 10 mN, under the resolution
@@ -346,7 +347,7 @@ def test_read_flags_instead_of_extrapolating(loadtest, tmp_path):
     rep = loadtest["report"]
     s = rep["chip_setting"]
     doc = load_document(loadtest["out"] / "calibrated.yaml")
-    imap, _ = cal.inverse_map(doc)
+    imap, _ = inverse_map(doc)
     B0, B1 = imap.B_abs_T[0] * 1e6, imap.B_abs_T[-1] * 1e6
     mid = 0.5 * (B0 + B1)
     path = tmp_path / "r.csv"
@@ -401,7 +402,7 @@ def test_serial_stream_from_a_pseudo_terminal(loadtest, tmp_path):
     """A pty stands in for the board: an Adafruit-style banner, samples in four formats, a
     line that is no sample; the stream ends when the 'board' hangs up."""
     doc = load_document(loadtest["out"] / "calibrated.yaml")
-    imap, _ = cal.inverse_map(doc)
+    imap, _ = inverse_map(doc)
     B0, B1 = imap.B_abs_T[0] * 1e6, imap.B_abs_T[-1] * 1e6
     Bm = 0.5 * (B0 + B1)
     F_expected = float(np.interp(Bm * 1e-6, imap.B_abs_T, imap.force_N))

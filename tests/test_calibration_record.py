@@ -17,9 +17,11 @@ from mst_cli.calibrate import fit as cal
 from mst_cli.calibrate.accuracy import force_errors
 from mst_cli.calibrate.calibration_json import CalibrationRecord, record_beside
 from mst_cli.calibrate.header import c_header
+from mst_cli.calibrate.inverse_map import inverse_map
 from mst_cli.calibrate.loadtest import setting_of as loadtest_setting_of
 from mst_cli.calibrate.tables import cell, quoted
-from mst_cli.io.schema import load_document
+from mst_cli.sensor.as_printed import PARAMETERS
+from mst_cli.sensor.document import load_document
 
 
 @pytest.fixture(scope="module")
@@ -36,7 +38,7 @@ def load_test():
 @pytest.mark.parametrize("mechanics", ["spring", "frame"])
 def test_the_fit_counts_its_space_mapping_iterations(load_test, mechanics):
     doc, F, B = load_test
-    fit = cal.fit_parameters(doc, F, B, 2e-6, tuple(cal.PARAMETERS), mechanics)
+    fit = cal.fit_parameters(doc, F, B, 2e-6, tuple(PARAMETERS), mechanics)
     if mechanics == "spring":  # the fitted rung itself: one solve, no mapping
         assert fit.iterations == 1
         return
@@ -66,7 +68,7 @@ def test_csv_cells_quote_as_rfc_4180():
 @pytest.fixture(scope="module")
 def calibrated_map():
     """The design's inverse map at GAIN_SEL 7, RES 0, calibrated to 30 N."""
-    imap, _ = cal.inverse_map(load_document(DESIGN))
+    imap, _ = inverse_map(load_document(DESIGN))
     imap.calibrated_to_N = 30.0
     return imap, loadtest_setting_of(7, 0)
 

@@ -15,7 +15,7 @@ import trimesh
 from mst_cli.cad import checks, measure, mesh_io
 from mst_cli.cad.assembly import build_sensor, print_mesh
 from mst_cli.cad.manifest import Manifest, export_manifest, load_manifest
-from mst_cli.io.schema import load_design_document
+from mst_cli.sensor.document import load_design_document
 
 ROOT = Path(__file__).resolve().parents[1]
 FORWARD = ROOT / "configs" / "mohammadi2021-forward.yaml"
@@ -213,7 +213,7 @@ def _random_geometries(n, seed=11):
 def test_random_valid_designs_pass_every_check(g):
     """Seeded designs inside the bounds, random board and chip offset: the measurements find
     each layer's walls, cavity, the pocket and the off-centre slot where the design puts them."""
-    from mst_cli.model.geometry import Printer
+    from mst_cli.model.printer import Printer
 
     vertices, triangles = print_mesh(g, build_sensor(g).body, 0.02)
     manifest = export_manifest("random", g, Printer(), 0.02, ["sensor.stl"])

@@ -4,7 +4,7 @@ test, cantilever), equilibrium, beam-theory limit."""
 import numpy as np
 import pytest
 
-from mst_cli.model.geometry import HexCell
+from mst_cli.model.cell import HexCell
 from mst_cli.model.material import Material
 from mst_cli.model.mechanics import continuum as L2
 from mst_cli.model.mechanics import layer_law

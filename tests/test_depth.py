@@ -12,11 +12,11 @@ import numpy as np
 import pytest
 
 from mst_cli.design.problem import DesignProblem
-from mst_cli.io.schema import load_document
 from mst_cli.model import mechanics
-from mst_cli.model.geometry import HexCell
+from mst_cli.model.cell import HexCell
 from mst_cli.model.material import Material
 from mst_cli.model.mechanics.depth import finite_depth_factor, in_web
+from mst_cli.sensor.document import load_document
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tools"))
 import continuum_3d as C3

@@ -18,15 +18,17 @@ from mst_cli.design import design_document
 from mst_cli.design.explain import limits
 from mst_cli.design.problem import DesignProblem
 from mst_cli.errors import InputError
-from mst_cli.io.schema import DEFAULT_DESIGN, load_document, parse_document
-from mst_cli.model import geometry as geo
+from mst_cli.model.cell import HexCell, cell_margins_mm
 from mst_cli.model.mechanics.correction import VERIFIED_BOX
+from mst_cli.model.printer import Printer
 from mst_cli.model.response import simulate
+from mst_cli.sensor.document import load_document, parse_document
+from mst_cli.sensor.sections import DEFAULT_DESIGN
 
 ROOT = Path(__file__).resolve().parents[1]
 SPEC = ROOT / "configs" / "fingertip.yaml"  # met by the printable cell
 PAPER = ROOT / "configs" / "mohammadi2021.yaml"  # the paper's own targets
-PRINT_ERROR_T_MM = geo.Printer().wall_tolerance_mm  # the default printer's wall tolerance
+PRINT_ERROR_T_MM = Printer().wall_tolerance_mm  # the default printer's wall tolerance
 
 
 def spec_doc(targets, **design):
@@ -166,10 +168,10 @@ def test_unit_variables_map_onto_the_bounds_and_back():
 
 def test_cell_margins_kernel_against_hand_geometry():
     """theta 45, t 1, h 4, W 30: p = 15 - 2/tan45 = 13; inner pad = 13 - tan(22.5 deg)."""
-    m = geo.cell_margins_mm(math.radians(45), 1.0, 4.0, 30.0, 0.1, 0.4, 0.4, 0.4)
+    m = cell_margins_mm(math.radians(45), 1.0, 4.0, 30.0, 0.1, 0.4, 0.4, 0.4)
     expect = [0.6, 2.0 - 0.4, 2.0 - 0.1, 13 - math.tan(math.radians(22.5)) - 0.4]
     assert m == pytest.approx(expect, abs=1e-12)
-    cell = geo.HexCell(45, 1.0, 4.0)
+    cell = HexCell(45, 1.0, 4.0)
     assert [v.margin_mm for v in cell.margins()] == pytest.approx(expect, abs=1e-12)
 
 

@@ -30,10 +30,11 @@ def test_first_command_runs_a_bundled_example():
 
 
 def test_file_format_tables_are_generated_from_the_declarations():
-    """docs/file-format.md's field tables are what mst_cli.io.schema generates from the one
-    declaration of each key: they cannot drift (python -m mst_cli.io.schema docs/file-format.md
+    """docs/file-format.md's field tables are what mst_cli.sensor.document generates from the one
+    declaration of each key: they cannot drift (python -m mst_cli.sensor.document docs/file-format.md
     rewrites them after a change)."""
-    from mst_cli.io.schema import FIELD_TABLE, SECTION_TYPES, field_table_markdown, with_field_tables
+    from mst_cli.sensor.document import FIELD_TABLE, field_table_markdown, with_field_tables
+    from mst_cli.sensor.sections import SECTION_TYPES
 
     text = (ROOT / "docs" / "file-format.md").read_text()
     blocks = {m.group(2): m.group(0) for m in FIELD_TABLE.finditer(text)}
@@ -45,7 +46,7 @@ def test_file_format_tables_are_generated_from_the_declarations():
 
 
 def test_the_layer_count_in_the_docs_is_the_schema_cap():
-    from mst_cli.io.schema import MAX_LAYERS
+    from mst_cli.sensor.sections import MAX_LAYERS
 
     text = (ROOT / "docs" / "file-format.md").read_text()
     assert f"## `layers` (required, 1 to {MAX_LAYERS} entries," in text

@@ -10,7 +10,7 @@ import yaml
 from click.testing import CliRunner
 
 from mst_cli.cli.app import main
-from mst_cli.io.schema import load_document
+from mst_cli.sensor.document import load_document
 
 ROOT = Path(__file__).resolve().parents[1]
 FORWARD = ROOT / "configs" / "mohammadi2021-forward.yaml"

@@ -5,8 +5,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from mst_cli.model import field as fld
-from mst_cli.model.geometry import HexCell, Magnet, SensorGeometry
+from mst_cli.model import magnet_field as fld
+from mst_cli.model.assembly import Magnet, SensorGeometry
+from mst_cli.model.cell import HexCell
 from mst_cli.model.material import Material
 from mst_cli.model.mechanics import layer_law
 from mst_cli.model.mechanics.continuum import solve_continuum

@@ -4,8 +4,8 @@ import magpylib as magpy
 import numpy as np
 import pytest
 
-from mst_cli.model.field import axial_Bz_T, axial_dBz_dz_T_per_mm, choose_field_model, field_at_chip_T
-from mst_cli.model.geometry import Magnet
+from mst_cli.model.assembly import Magnet
+from mst_cli.model.magnet_field import axial_Bz_T, axial_dBz_dz_T_per_mm, choose_field_model, field_at_chip_T
 
 MAG = Magnet(6.0, 2.0, 1.3)
 

@@ -5,7 +5,9 @@ import math
 import numpy as np
 import pytest
 
-from mst_cli.model.geometry import HexCell, Printer, SensorGeometry
+from mst_cli.model.assembly import SensorGeometry
+from mst_cli.model.cell import HexCell
+from mst_cli.model.printer import Printer
 
 
 def shoelace(poly):
@@ -106,7 +108,7 @@ def test_print_frame_is_a_rotation_that_puts_the_minus_y_face_on_the_bed():
 @pytest.mark.parametrize("layer_mm", [0.1, 0.15, 0.2, 0.3])
 @pytest.mark.parametrize("diameter_mm", [3.0, 5.0, 6.0, 8.0])
 def test_pause_is_a_layer_boundary_with_the_magnet_wholly_below_it(layer_mm, diameter_mm):
-    from mst_cli.model.geometry import Magnet
+    from mst_cli.model.assembly import Magnet
 
     g = SensorGeometry(tuple(CELLS[:2]), magnet=Magnet(diameter_mm, 2.0), printer=Printer(layer_height_mm=layer_mm))
     n = g.pause_height_mm / layer_mm
@@ -121,7 +123,7 @@ def test_pause_is_a_layer_boundary_with_the_magnet_wholly_below_it(layer_mm, dia
 
 
 def test_snapping_rounds_to_the_layer_grid_as_asked():
-    from mst_cli.model.geometry import snap_to_layers_mm
+    from mst_cli.model.assembly import snap_to_layers_mm
 
     assert snap_to_layers_mm(1.7, 0.2, "down") == pytest.approx(1.6)
     assert snap_to_layers_mm(1.7, 0.2, "up") == pytest.approx(1.8)

@@ -31,10 +31,11 @@ from click.testing import CliRunner
 from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
-from mst_cli import __version__
 from mst_cli.cli.app import main
 from mst_cli.io.outputs import STAGING_PREFIX, Staging, staged
-from mst_cli.io.schema import LAYER_RULES, SECTIONS, TOP_KEYS, load_document
+from mst_cli.sensor.document import load_document
+from mst_cli.sensor.sections import LAYER_RULES, SECTIONS, TOP_KEYS
+from mst_cli.version import __version__
 
 ROOT = Path(__file__).resolve().parents[1]
 FORWARD = ROOT / "configs" / "mohammadi2021-forward.yaml"
@@ -418,7 +419,7 @@ STAGE_AND_SLEEP = textwrap.dedent("""
 
 SIMULATE_SLOW_PLOT = textwrap.dedent("""
     import sys, time
-    import mst_cli.io.report as report
+    import mst_cli.simulation.report as report
     plot = report.plot_response
     def slow(*a, **k):
         plot(*a, **k)
@@ -1016,8 +1017,8 @@ def refused_line(p: subprocess.CompletedProcess, code: int = 2) -> str:
 @pytest.fixture(scope="module")
 def loadtest_files(tmp_path_factory):
     """A small valid load test and readings file of the forward design (its own model + noise)."""
-    from mst_cli.io.schema import load_document
     from mst_cli.model.response import simulate
+    from mst_cli.sensor.document import load_document
 
     doc = load_document(FORWARD)
     resp = simulate(doc.geometry(), doc.material, noise_uT_rms=doc.noise_uT_rms)
@@ -1334,7 +1335,7 @@ def test_the_finest_stl_tolerance_export_writes_is_one_check_accepts(tmp_path):
 
 
 def test_check_nozzle_has_the_design_files_range(exported):
-    from mst_cli.io.schema import SECTIONS
+    from mst_cli.sensor.sections import SECTIONS
 
     rule = SECTIONS["printer"]["nozzle_mm"]
     for value in (rule.lo, rule.hi):
@@ -1345,7 +1346,7 @@ def test_check_nozzle_has_the_design_files_range(exported):
 
 def test_every_seed_option_has_the_spec_files_range():
     from mst_cli.cli.app import load_command
-    from mst_cli.io.schema import SECTIONS
+    from mst_cli.sensor.sections import SECTIONS
 
     rule = SECTIONS["design"]["seed"]
     for name in ("design", "bench"):
@@ -1597,7 +1598,7 @@ def test_property_readings_from_the_column_rules_keep_the_contract(forward_respo
         assert r.exit_code in (0, 2), r.stderr
         if r.exit_code == 0:
             flags = [row.rsplit(",", 2)[-2] for row in (folder / "o" / "forces.csv").read_text().splitlines()[1:]]
-            from mst_cli.calibrate.fit import FLAGS
+            from mst_cli.calibrate.inverse_map import FLAGS
 
             assert set(flags) <= set(FLAGS), flags
 
@@ -1622,7 +1623,7 @@ def manifest_paths(kind=None, prefix=""):
 
 def forward_design_dict() -> dict:
     """The reference design as export.json's ``design`` holds it."""
-    from mst_cli.io.schema import document_to_dict, load_document
+    from mst_cli.sensor.document import document_to_dict, load_document
 
     return document_to_dict(load_document(FORWARD))
 
@@ -1824,7 +1825,7 @@ def test_property_what_export_writes_check_and_slice_accept(raw, tolerance):
     from mst_cli.cad.assembly import check_fits
     from mst_cli.cad.manifest import STL_TOLERANCE_MM, Manifest, SliceManifest, export_manifest
     from mst_cli.errors import InputError
-    from mst_cli.io.schema import parse_document
+    from mst_cli.sensor.document import parse_document
 
     lo, hi = STL_TOLERANCE_MM
     assume(lo <= tolerance <= hi)  # what 'mst export --stl-tolerance' accepts

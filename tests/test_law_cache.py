@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from mst_cli.model import geometry as geo
+from mst_cli.model.cell import HexCell
 from mst_cli.model.material import Material
 from mst_cli.model.mechanics import continuum
 from mst_cli.model.mechanics.law_cache import LawCache
@@ -22,7 +22,7 @@ def _square(cell, material):
 def test_continuum_laws_solved_side_by_side_equal_those_solved_in_turn(monkeypatch):
     """Three cells of a stack: the laws two workers return are bit for bit the ones this
     process solves, and each is then served from the memo."""
-    cells = [geo.HexCell(theta_deg=th, t_mm=0.45, h_mm=2.4) for th in (14.0, 22.0, 30.0)]
+    cells = [HexCell(theta_deg=th, t_mm=0.45, h_mm=2.4) for th in (14.0, 22.0, 30.0)]
     material = Material()
     monkeypatch.setenv("MST_WORKERS", "2")
     parallel = LawCache(continuum.continuum_layer.__wrapped__, 8)

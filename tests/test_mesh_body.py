@@ -20,8 +20,8 @@ import trimesh
 from mst_cli.cad import checks, mesh_body, mesh_io, shapes
 from mst_cli.cad.assembly import build_body, print_mesh
 from mst_cli.cad.manifest import export_manifest
-from mst_cli.io.schema import load_design_document
-from mst_cli.model.geometry import Printer
+from mst_cli.model.printer import Printer
+from mst_cli.sensor.document import load_design_document
 
 ROOT = Path(__file__).resolve().parents[1]
 FORWARD = ROOT / "configs" / "mohammadi2021-forward.yaml"

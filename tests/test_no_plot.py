@@ -94,8 +94,8 @@ def test_design_json_and_no_plot_write_no_picture(tmp_path):
 
 def _load_test_csv(path: Path) -> None:
     """A noise-free load test of the design itself (force_N, Bx_uT, By_uT, Bz_uT)."""
-    from mst_cli.io.schema import load_design_document
     from mst_cli.model.response import simulate
+    from mst_cli.sensor.document import load_design_document
 
     doc, geometry = load_design_document(FORWARD)
     resp = simulate(geometry, doc.material, noise_uT_rms=doc.noise_uT_rms)

@@ -13,8 +13,8 @@ import pytest
 from click.testing import CliRunner
 
 from mst_cli.cli.app import main
-from mst_cli.io.schema import load_design_document
 from mst_cli.model.offcentre import pose_field_T, tilt_laws
+from mst_cli.sensor.document import load_design_document
 
 ROOT = Path(__file__).resolve().parents[1]
 FORWARD = ROOT / "configs" / "mohammadi2021-forward.yaml"

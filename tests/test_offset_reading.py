@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 
 from mst_cli.calibrate.offset_reading import OffsetEstimator
-from mst_cli.io.schema import load_design_document
 from mst_cli.model.offcentre import pose_field_T, tilt_laws
+from mst_cli.sensor.document import load_design_document
 
 FORWARD = Path(__file__).resolve().parents[1] / "configs" / "mohammadi2021-forward.yaml"
 SCALE_T = 1e-5  # the closed-form fields: 10 uT per N and per unit of their offset term

@@ -11,8 +11,8 @@ from click.testing import CliRunner
 from mst_cli.cli.app import main
 from mst_cli.design.pareto import non_dominated
 from mst_cli.design.solver import pareto_weights
-from mst_cli.io.schema import load_document
 from mst_cli.model.response import simulate
+from mst_cli.sensor.document import load_document
 
 ROOT = Path(__file__).resolve().parents[1]
 SPEC = ROOT / "configs" / "fingertip.yaml"

@@ -35,7 +35,7 @@ MEASURED = {}
 # --------------------------------------------------------------------------- the designs
 def _config_designs():
     """(id, loader) of every configs/*.yaml that is a design (theta/t/h on every layer)."""
-    from mst_cli.io.schema import load_document
+    from mst_cli.sensor.document import load_document
 
     out = []
     for path in sorted((ROOT / "configs").glob("*.yaml")):
@@ -45,7 +45,7 @@ def _config_designs():
 
 
 def _load_config(path):
-    from mst_cli.io.schema import load_design_document
+    from mst_cli.sensor.document import load_design_document
 
     doc, g = load_design_document(path)
     return doc.name, g, doc.printer
@@ -55,7 +55,7 @@ def _designed_spec():
     """The design `mst design` / `mst export` make from the reference spec (targets met or
     not, a valid buildable design)."""
     from mst_cli.design import design_document
-    from mst_cli.io.schema import load_document
+    from mst_cli.sensor.document import load_document
 
     result = design_document(load_document(ROOT / "configs" / "mohammadi2021.yaml"))
     g = result.geometry
@@ -66,7 +66,7 @@ def _designed_spec():
 def _random(k):
     import sampling
 
-    from mst_cli.model.geometry import Printer
+    from mst_cli.model.printer import Printer
 
     g = sampling.random_valid_geometries(RANDOM_N, seed=RANDOM_SEED, max_offset_mm=2.0)[k]
     return f"random-{k:02d}", g, Printer()

@@ -19,8 +19,8 @@ import yaml
 from click.testing import CliRunner
 
 from mst_cli.cli.app import main
-from mst_cli.io.schema import load_document, parse_document
 from mst_cli.model.response import simulate
+from mst_cli.sensor.document import load_document, parse_document
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "studies"))
 from printer_loop import MODULUS, WALL_MM, print_of, write_load_test

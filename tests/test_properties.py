@@ -6,12 +6,13 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from mst_cli.io.schema import DEFAULT_DESIGN
-from mst_cli.model.geometry import HexCell, SensorGeometry
+from mst_cli.model.assembly import SensorGeometry
+from mst_cli.model.cell import HexCell
 from mst_cli.model.material import Material
 from mst_cli.model.mechanics.spring import spring_arrays
 from mst_cli.model.response import simulate
 from mst_cli.model.stack import series_displacement_mm
+from mst_cli.sensor.sections import DEFAULT_DESIGN
 
 TH = DEFAULT_DESIGN["theta_deg_bounds"]
 T = DEFAULT_DESIGN["t_mm_bounds"]

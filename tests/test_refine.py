@@ -17,9 +17,9 @@ import yaml
 from click.testing import CliRunner
 
 from mst_cli.cli.app import main
-from mst_cli.io.schema import load_document
 from mst_cli.model.ladder import ERRORS_FILE, choose_mechanics
 from mst_cli.model.response import simulate
+from mst_cli.sensor.document import load_document
 
 ROOT = Path(__file__).resolve().parents[1]
 SPEC = ROOT / "configs" / "fingertip.yaml"  # met by the printable cell
@@ -118,7 +118,7 @@ def test_refine_not_met_exits_1_naming_the_worst_target(tmp_path):
 def test_refine_reports_the_rung_that_measured_the_print_error(tmp_path):
     # no model.accuracy_rel: the cheap corrected rung L0 measures the print sensitivity, and the
     # report and the terminal say so; the numbers are L0's own ratios at t +- 0.05 mm
-    from mst_cli.model.geometry import Printer
+    from mst_cli.model.printer import Printer
 
     PRINT_ERROR_T_MM = Printer().wall_tolerance_mm  # the default printer's
     out = tmp_path / "out"
@@ -156,7 +156,7 @@ def test_print_error_rung_follows_accuracy_rel():
 
 
 def test_print_error_on_the_dear_rung_when_asked():
-    from mst_cli.model.geometry import Printer
+    from mst_cli.model.printer import Printer
 
     PRINT_ERROR_T_MM = Printer().wall_tolerance_mm  # the default printer's
     from mst_cli.design.refine import refine_document

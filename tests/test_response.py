@@ -3,8 +3,9 @@
 import numpy as np
 import pytest
 
-from mst_cli.model.field import axial_Bz_T, axial_dBz_dz_T_per_mm
-from mst_cli.model.geometry import HexCell, SensorGeometry
+from mst_cli.model.assembly import SensorGeometry
+from mst_cli.model.cell import HexCell
+from mst_cli.model.magnet_field import axial_Bz_T, axial_dBz_dz_T_per_mm
 from mst_cli.model.material import Material
 from mst_cli.model.mechanics import layer_law
 from mst_cli.model.response import field_magnitude_T, regime_kernel, simulate
@@ -93,7 +94,7 @@ def test_field_model_choice_is_reported_and_dipole_reads_high():
 def test_a_magnet_too_close_saturates_the_chip_and_says_so():
     from dataclasses import replace
 
-    from mst_cli.model.geometry import Housing
+    from mst_cli.model.assembly import Housing
 
     close = replace(REF, layers=(HexCell(30, 0.4, 1.2),), housing=Housing(cover_mm=0.2, pocket_floor_mm=0.2))
     r = simulate(close, MAT)

@@ -1,6 +1,6 @@
 """Every input field is declared once (issue 12): the validation rules, the defaults,
 document_to_dict and the tables of docs/file-format.md (tests/test_docs.py) are all read from
-the dataclass fields made with ``spec`` (mst_cli.io.schema, mst_cli.model.geometry). These tests
+the dataclass fields made with ``spec`` (mst_cli.sensor.document, mst_cli.model.cell). These tests
 sweep every declared field: its rule is the one parsing enforces, its default is what a file
 without it gets, it survives a write and a read, and each of its bounds refuses the value just
 outside it, naming the field."""
@@ -11,20 +11,10 @@ from dataclasses import fields
 import pytest
 
 from mst_cli.errors import InputError
-from mst_cli.io.schema import (
-    LAYER_RULES,
-    SECTION_TYPES,
-    SECTIONS,
-    CellFamily,
-    LayerEntry,
-    Rule,
-    default_of,
-    document_to_dict,
-    parse_document,
-    section_to_dict,
-)
-from mst_cli.model import geometry as geo
+from mst_cli.model.cell import HexCell
 from mst_cli.model.components import grade_remanence_T
+from mst_cli.sensor.document import Rule, default_of, document_to_dict, parse_document, section_to_dict
+from mst_cli.sensor.sections import LAYER_RULES, SECTION_TYPES, SECTIONS, CellFamily, LayerEntry
 
 LAYER = {"theta_deg": 25.0, "t_mm": 0.6, "h_mm": 2.0}
 NUMERIC = ("float", "int", "pair", "bounds", "weights")
@@ -97,7 +87,7 @@ def test_every_field_is_declared_whole_and_its_rule_is_the_one_parsing_uses(sect
 
 
 def test_the_family_constants_are_the_cells_own():
-    assert CellFamily().cell(30.0, 1.0, 3.0) == geo.HexCell(30.0, 1.0, 3.0)
+    assert CellFamily().cell(30.0, 1.0, 3.0) == HexCell(30.0, 1.0, 3.0)
 
 
 # --------------------------------------------------------------------------- defaults and round trip

@@ -8,9 +8,10 @@ import pytest
 
 from mst_cli.design import seed, solver
 from mst_cli.design.problem import DesignProblem
-from mst_cli.io.schema import LayerEntry, load_document
 from mst_cli.model.mechanics.depth import web_modulus_MPa
 from mst_cli.model.mechanics.spring import spring_arrays
+from mst_cli.sensor.document import load_document
+from mst_cli.sensor.sections import LayerEntry
 
 ROOT = Path(__file__).resolve().parents[1]
 SPEC = ROOT / "configs" / "fingertip.yaml"

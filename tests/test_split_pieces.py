@@ -12,17 +12,17 @@ import pytest
 
 from mst_cli.cad.gcode import parse_gcode
 from mst_cli.calibrate.loadtest import parse_readings
-from mst_cli.io.schema import load_document
+from mst_cli.sensor.document import load_document
 
 ROOT = Path(__file__).resolve().parents[1]
 
 
 def test_the_field_tables_are_rewritten_by_the_schema_module(tmp_path):
-    # io/schema.py binds the generator (io/field_tables.py) to its sections: the documented
+    # sensor/document.py binds the generator (io/field_tables.py) to its sections: the documented
     # command still regenerates docs/file-format.md's tables, to the same text
     copy = tmp_path / "file-format.md"
     copy.write_text((ROOT / "docs" / "file-format.md").read_text())
-    subprocess.run([sys.executable, "-m", "mst_cli.io.schema", str(copy)], check=True, cwd=ROOT)
+    subprocess.run([sys.executable, "-m", "mst_cli.sensor.document", str(copy)], check=True, cwd=ROOT)
     assert copy.read_text() == (ROOT / "docs" / "file-format.md").read_text()
 
 

@@ -10,7 +10,7 @@ import warnings
 import numpy as np
 import pytest
 
-from mst_cli.model.geometry import HexCell
+from mst_cli.model.cell import HexCell
 from mst_cli.model.material import Material
 from mst_cli.model.mechanics import correction, layer_law
 from mst_cli.model.mechanics.spring import (

@@ -15,7 +15,7 @@ import math
 import numpy as np
 import pytest
 
-from mst_cli.model.geometry import HexCell
+from mst_cli.model.cell import HexCell
 from mst_cli.model.material import Material
 from mst_cli.model.mechanics import continuum as L2
 from mst_cli.model.mechanics.frame import _element_forces, _Wall, solve_frame

@@ -1,20 +1,14 @@
-"""One shape for a broken rule (model/violation.py), and the geometry split into the cell and the
-assembly behind one ``geometry`` module (issue 23)."""
+"""One shape for a broken rule (model/violation.py), for the cell and the assembly alike (issue 23)."""
 
 from __future__ import annotations
 
 import pytest
 
 from mst_cli.errors import InputError
-from mst_cli.model import assembly, cell, geometry
-from mst_cli.model.geometry import HexCell, Housing, Printer, SensorGeometry, Violation, printer_violations
-
-
-def test_geometry_reexports_the_cell_and_the_assembly():
-    assert geometry.HexCell is cell.HexCell
-    assert geometry.SensorGeometry is assembly.SensorGeometry
-    for name in geometry.__all__:
-        assert hasattr(geometry, name), name
+from mst_cli.model.assembly import Housing, SensorGeometry, printer_violations
+from mst_cli.model.cell import HexCell
+from mst_cli.model.printer import Printer
+from mst_cli.model.violation import Violation
 
 
 def _thin_wall_sensor() -> SensorGeometry:

@@ -17,10 +17,10 @@ from mst_cli.cad import gcode as G
 from mst_cli.cad.manifest import Manifest, SliceManifest, export_manifest
 from mst_cli.cad.print_check import walls_as_sliced
 from mst_cli.cad.sliced_model import predict
-from mst_cli.calibrate.fit import with_walls
 from mst_cli.errors import InputError
-from mst_cli.io.schema import document_to_dict
-from mst_cli.model.geometry import HexCell
+from mst_cli.model.cell import HexCell
+from mst_cli.sensor.as_printed import with_walls
+from mst_cli.sensor.document import document_to_dict
 
 ANGLE = math.radians(30.0)
 U = np.array([math.cos(ANGLE), math.sin(ANGLE)])  # the wall's direction

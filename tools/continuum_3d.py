@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from mst_cli.model import geometry as geo
+from mst_cli.model.cell import HexCell
 from mst_cli.model.mechanics import continuum as L2
 from mst_cli.model.mechanics.path import PathError
 
@@ -154,7 +154,7 @@ class Problem3D(L2._Problem):
 
     def __init__(
         self,
-        cell: geo.HexCell,
+        cell: HexCell,
         material,
         y_mm,
         n_thick: int = 2,
@@ -232,7 +232,7 @@ def solve_to_lock(prob) -> dict:
     }
 
 
-def depth_grading(cell: geo.HexCell, fine: bool) -> np.ndarray:
+def depth_grading(cell: HexCell, fine: bool) -> np.ndarray:
     """The depth layers of the benchmark: y in [0, D/2], graded to the free face; coarse:
     6 layers, the one at the face t/2 thick; fine: 8 layers, t/4 at the face."""
     half = 0.5 * cell.b_mm

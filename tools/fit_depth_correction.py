@@ -34,7 +34,7 @@ from pathlib import Path
 import continuum_3d as C3
 import numpy as np
 
-from mst_cli.model.geometry import HexCell
+from mst_cli.model.cell import HexCell
 from mst_cli.model.material import Material
 from mst_cli.model.mechanics import continuum as L2
 from mst_cli.model.mechanics import depth

@@ -51,11 +51,11 @@ from pathlib import Path
 import numpy as np
 
 from mst_cli.bench.ladder_bench import BOUNDS, sample_cells
-from mst_cli.model import geometry as geo
-from mst_cli.model.geometry import Printer
+from mst_cli.model.cell import HexCell, lock_stroke_mm
 from mst_cli.model.material import Material
 from mst_cli.model.mechanics import correction, uncached_layer_law
 from mst_cli.model.mechanics.spring import layer_stiffness_N_per_mm, spring_layer
+from mst_cli.model.printer import Printer
 
 # the bands of the report and of correction.expected_error_rel; a cell past the outer edges
 # (none in the box) counts in the outermost band
@@ -142,7 +142,7 @@ def fit(cells, ref, mat):
     coef_k, stats_k = _lstsq(A_k, np.log(k2 / k0))
     # lock point of L2 against the corrected L0 (k0 times the stiffness factor just fitted)
     k0c = k0 * np.exp(A_k @ coef_k)
-    d0 = np.array([float(geo.lock_stroke_mm(c.t_mm, c.h_mm, c.contact_allowance_mm)) for c in cells])
+    d0 = np.array([float(lock_stroke_mm(c.t_mm, c.h_mm, c.contact_allowance_mm)) for c in cells])
     R2 = np.array([r["R"] for r in ref])
     d2 = np.array([r["d_lock"] for r in ref])
     L = np.array([c.wall_length_mm for c in cells])
@@ -361,7 +361,7 @@ def main():
     vref = l2_results(vcells, mat, args.l2_cache)
     table, expected = band_table(vcells, rung_errors(vcells, ref=vref, mat=mat))
     out["in_sample"] = {"cells": len(cells), "bands": in_table}
-    xcells = [geo.HexCell(*c) for c in EXAMPLE_CELLS]
+    xcells = [HexCell(*c) for c in EXAMPLE_CELLS]
     xerr = rung_errors(xcells, l2_results(xcells, mat, args.l2_cache), mat)["spring"]
     out["out_of_sample"] = {
         "cells": len(vcells),

@@ -19,8 +19,9 @@ import numpy as np
 
 from mst_cli.bench.sampling import BOUNDS, sample_cells
 from mst_cli.bench.tilt_bench import TILT_CELLS, long_padded, tilt_lines, tilt_rows
-from mst_cli.model import field as fld
-from mst_cli.model.geometry import HexCell, Magnet
+from mst_cli.model import magnet_field as fld
+from mst_cli.model.assembly import Magnet
+from mst_cli.model.cell import HexCell
 from mst_cli.model.material import Material
 from mst_cli.model.mechanics import uncached_layer_law
 from mst_cli.model.mechanics.continuum import linear_stiffness_N_per_mm

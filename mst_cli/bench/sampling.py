@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from mst_cli.model.geometry import HexCell
+from mst_cli.model.cell import HexCell
 from mst_cli.model.mechanics.correction import VERIFIED_BOX
 
 BOUNDS = VERIFIED_BOX

@@ -17,7 +17,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from mst_cli.bench.sampling import sample_cells
-from mst_cli.model.geometry import HexCell
+from mst_cli.model.cell import HexCell
 from mst_cli.model.material import Material
 from mst_cli.model.mechanics.continuum import PAD_LENGTH_IN_T, solve_continuum
 from mst_cli.model.mechanics.continuum_tilt import linear_tilt_lever_mm, solve_tilted_chevron

@@ -9,7 +9,7 @@ from build123d import Compound, Solid
 
 from mst_cli.cad import mesh_io, parts, shapes
 from mst_cli.cad.shapes import check_fits as check_fits  # re-exported: the callers check first
-from mst_cli.model.geometry import SensorGeometry
+from mst_cli.model.assembly import SensorGeometry
 
 if TYPE_CHECKING:
     import numpy as np

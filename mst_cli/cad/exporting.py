@@ -16,8 +16,8 @@ from mst_cli.cad.mesh_body import print_mesh
 from mst_cli.cad.shapes import check_fits
 from mst_cli.errors import InputError
 from mst_cli.io.outputs import staged
-from mst_cli.io.schema import Document, document_to_dict
-from mst_cli.model.geometry import SensorGeometry
+from mst_cli.model.assembly import SensorGeometry
+from mst_cli.sensor.document import Document, document_to_dict
 
 DEFAULT_STL_TOLERANCE_MM = 0.01
 

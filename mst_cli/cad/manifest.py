@@ -27,13 +27,14 @@ from typing import TYPE_CHECKING, Any, TypeVar, overload
 
 import numpy as np
 
-from mst_cli import __version__
 from mst_cli.errors import InputError
 from mst_cli.io.files import read_input_text
-from mst_cli.io.schema import Document, design_geometry, parse_document
+from mst_cli.sensor.document import Document, design_geometry, parse_document
+from mst_cli.version import __version__
 
 if TYPE_CHECKING:
-    from mst_cli.model.geometry import Printer, SensorGeometry
+    from mst_cli.model.assembly import SensorGeometry
+    from mst_cli.model.printer import Printer
 
 MANIFEST_NAME = "export.json"
 MANIFEST_FORMAT = 2

@@ -22,7 +22,7 @@ import numpy as np
 
 from mst_cli.cad import mesh_io, shapes
 from mst_cli.cad.mesh_io import ANGULAR_TOLERANCE_RAD
-from mst_cli.model.geometry import SensorGeometry
+from mst_cli.model.assembly import SensorGeometry
 
 if TYPE_CHECKING:
     import manifold3d

@@ -14,7 +14,8 @@ from collections.abc import Iterable
 from build123d import Face, Location, Solid, Wire
 
 from mst_cli.cad import shapes
-from mst_cli.model.geometry import HexCell, SensorGeometry
+from mst_cli.model.assembly import SensorGeometry
+from mst_cli.model.cell import HexCell
 
 
 def solid(shape: shapes.Box | shapes.Prism | shapes.Cylinder) -> Solid:

@@ -1,6 +1,6 @@
 """The printed body as plain shapes: boxes, prisms and cylinders, read from the one geometry object.
 
-This is the one place that turns :class:`mst_cli.model.geometry.SensorGeometry` into solids.
+This is the one place that turns :class:`mst_cli.model.assembly.SensorGeometry` into solids.
 It imports no CAD or mesh library: :mod:`mst_cli.cad.parts` makes B-rep solids of these shapes
 with build123d (the STEP assembly), :mod:`mst_cli.cad.mesh_body` makes meshes of the same
 shapes with manifold3d (the STL and the 3MF). Both fuse the ``keep`` shapes of
@@ -14,7 +14,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from mst_cli.model.geometry import HexCell, SensorGeometry
+from mst_cli.model.assembly import SensorGeometry
+from mst_cli.model.cell import HexCell
 
 # Cutting tools that end on an outer face of the part are extended past it by this much, so
 # the boolean never has to resolve two coplanar faces (the result is the same solid).

@@ -1,7 +1,7 @@
 """What the walls as sliced do to the sensor: the design export.json carries, simulated with the
 wall thicknesses the G-code lays down in place of the drawn ones, beside the design itself.
 
-Both runs are :func:`mst_cli.calibrate.fit.simulate_as_printed` (what ``mst simulate`` runs: the
+Both runs are :func:`mst_cli.sensor.as_printed.simulate_as_printed` (what ``mst simulate`` runs: the
 file's mechanics and field model, the printer section's corrections), so the only difference between
 the two columns is each layer's wall thickness t. The thickness comes from
 :func:`mst_cli.cad.print_check.walls_as_sliced`; the design (export.json's ``design``) is read
@@ -10,9 +10,9 @@ with the design-file rules before anything is sliced (:mod:`mst_cli.cad.manifest
 
 from __future__ import annotations
 
-from mst_cli.calibrate.fit import simulate_as_printed, with_walls
 from mst_cli.errors import InputError
-from mst_cli.io.schema import Document, design_geometry
+from mst_cli.sensor.as_printed import simulate_as_printed, with_walls
+from mst_cli.sensor.document import Document, design_geometry
 
 
 def _change(new: float | None, old: float | None) -> float | None:

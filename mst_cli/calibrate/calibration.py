@@ -13,7 +13,6 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from mst_cli import __version__
 from mst_cli.calibrate import fit as cal
 from mst_cli.calibrate.accuracy import force_errors
 from mst_cli.calibrate.calibration_json import (
@@ -21,19 +20,22 @@ from mst_cli.calibrate.calibration_json import (
     CALIBRATION_JSON,
     SCHEMA_VERSION,
     CalibrationRecord,
+    design_constants,
     sha256_text,
 )
 from mst_cli.calibrate.header import HEADER_FILE, c_header
+from mst_cli.calibrate.inverse_map import InverseMap, field_sigma_T, inverse_map
 from mst_cli.calibrate.loadtest import MAX_ROWS, Readings, check_load_test, parse_readings, read_text
 from mst_cli.calibrate.plot import plot_calibration
-from mst_cli.calibrate.record import design_constants
 from mst_cli.calibrate.tables import lookup_csv, residuals_csv
 from mst_cli.calibrate.tilt_fit import fit_lever_factor
-from mst_cli.errors import InputError
+from mst_cli.errors import CalibrationFailed, InputError
 from mst_cli.io.outputs import staged
-from mst_cli.io.schema import Document, document_to_dict, parse_document
 from mst_cli.model.chip import ChipSetting, field_resolution_T
 from mst_cli.model.response import Response, simulate
+from mst_cli.sensor.as_printed import PARAMETERS, apply_parameters
+from mst_cli.sensor.document import Document, document_to_dict, parse_document
+from mst_cli.version import __version__
 
 PLOT_FILE = "calibration.png"
 MIN_CENTRED_ROWS = 8  # a load test with presses off the axis still needs this many on it
@@ -48,10 +50,10 @@ def parse_params(text: str) -> tuple[str, ...]:
     """The parameter names of ``--params`` ("a,b"): InputError for none, an unknown or a repeated one."""
     names = [n.strip() for n in text.split(",") if n.strip()]
     if not names:
-        raise InputError("--params", text, "one or more of " + ", ".join(cal.PARAMETERS))
+        raise InputError("--params", text, "one or more of " + ", ".join(PARAMETERS))
     for n in names:
-        if n not in cal.PARAMETERS:
-            raise InputError("--params", n, "unknown parameter; allowed: " + ", ".join(cal.PARAMETERS))
+        if n not in PARAMETERS:
+            raise InputError("--params", n, "unknown parameter; allowed: " + ", ".join(PARAMETERS))
     if len(set(names)) != len(names):
         raise InputError("--params", text, "a parameter is named twice")
     return tuple(names)
@@ -83,7 +85,7 @@ class Calibration:
     load_test: Readings
     load_test_name: str
     fit: cal.FitResult
-    inverse_map: cal.InverseMap  # the calibrated model's reading -> force map
+    inverse_map: InverseMap  # the calibrated model's reading -> force map
     record: CalibrationRecord  # calibration.json
     calibrated_yaml: str
     lookup_csv: str
@@ -132,7 +134,7 @@ class Calibration:
             f"{lt.load_N.min():.3g}-{lt.load_N.max():.4g} N), mechanics={self.mechanics}",
             f"{'parameter':<18} {'design':>8} {'fitted':>10} {'+-1 sigma':>10}  identifiable",
         ]
-        for n, p in cal.PARAMETERS.items():
+        for n, p in PARAMETERS.items():
             unit = f" {p.unit}" if p.unit else ""
             if n in fit.names:
                 ident = "yes" if fit.identifiable[n] else "NO: the data barely fix it (the last one left)"
@@ -204,9 +206,9 @@ def calibrate(
     F_fit, _, flag_fit = imap.force(lt.B_abs_T, lt.saturated)
     in_sample = force_errors(F_fit, lt.load_N, fitted.cal_resp.max_force_N)
     try:
-        F_design, _, _ = cal.InverseMap.from_response(fitted.design_resp).force(lt.B_abs_T)
+        F_design, _, _ = InverseMap.from_response(fitted.design_resp).force(lt.B_abs_T)
         design_errors = force_errors(F_design, lt.load_N, fitted.cal_resp.max_force_N)
-    except cal.CalibrationFailed:
+    except CalibrationFailed:
         design_errors = {}
     yaml_text = YAML_PREAMBLE + yaml.safe_dump(fitted.calibrated_dict, sort_keys=False, default_flow_style=None)
     files = _RecordFiles(str(design_file), str(load_test_file), sha256_text(yaml_text), table_size, header_reason)
@@ -283,7 +285,7 @@ class _Fitted:
     calibrated: Document
     calibrated_dict: dict
     edits: list[str]
-    imap: cal.InverseMap
+    imap: InverseMap
     cal_resp: Response
     setting: ChipSetting | None
 
@@ -301,23 +303,23 @@ def _fit(
     load."""
     design_resp = simulate(doc.geometry(), doc.material, mechanics=mechanics, noise_uT_rms=doc.noise_uT_rms)
     check_load_test(lt, len(names), design_resp.max_force_N, cal.MIN_POINTS_PER_PARAMETER, cal.MIN_POINTS)
-    sigma = cal.field_sigma_T(doc.noise_uT_rms, lt.setting or design_resp.chip_setting)
+    sigma = field_sigma_T(doc.noise_uT_rms, lt.setting or design_resp.chip_setting)
     t0 = time.monotonic()
     if progress is not None and len(lt) >= PROGRESS_FROM_SAMPLES:  # say what the next seconds are
         progress(f"fitting {len(lt)} samples of {load_test_name} (seconds; a load test holds at most {MAX_ROWS} rows)")
     fit = cal.fit_parameters(doc, lt.load_N, lt.B_abs_T, sigma, names, mechanics)
     try:
-        cal_doc, edits = cal.apply_parameters(doc, fit.values, name=f"{doc.name}-calibrated", mechanics=mechanics)
+        cal_doc, edits = apply_parameters(doc, fit.values, name=f"{doc.name}-calibrated", mechanics=mechanics)
         cal_dict = document_to_dict(cal_doc)
         parse_document(cal_dict, source=CALIBRATED_YAML)  # it loads as written
         bad = cal_doc.geometry().violations(cal_doc.printer)
         if bad:
-            raise cal.CalibrationFailed(
+            raise CalibrationFailed(
                 f"the calibrated cell of layer {(bad[0].layer or 0) + 1} breaks {bad[0].rule}: {bad[0].message}"
             )
-        imap, cal_resp = cal.inverse_map(cal_doc, mechanics)
+        imap, cal_resp = inverse_map(cal_doc, mechanics)
     except InputError as exc:  # the fitted values break a file rule
-        raise cal.CalibrationFailed(f"the calibrated design would not load ({exc})") from None
+        raise CalibrationFailed(f"the calibrated design would not load ({exc})") from None
     fit_s = time.monotonic() - t0
     imap.calibrated_to_N = min(float(lt.load_N.max()), float(imap.force_N[-1]))
     setting = lt.setting or cal_resp.chip_setting
@@ -334,7 +336,7 @@ def _header(fitted: _Fitted, source: str) -> tuple[str | None, str | None]:
         return None, "the calibrated field saturates the MLX90393 at full load: no setting to tabulate"
     try:
         header = c_header(fitted.imap, fitted.setting, fitted.calibrated.name, source, cal.LIMITATIONS)
-    except cal.CalibrationFailed as exc:
+    except CalibrationFailed as exc:
         return None, str(exc)
     return header, None
 
@@ -397,7 +399,7 @@ def _record(
 def _parameter_entries(fit: cal.FitResult, names: tuple[str, ...]) -> dict:
     """calibration.json's parameters: every parameter's value, uncertainty and why it was held."""
     parameters = {}
-    for n, p in cal.PARAMETERS.items():
+    for n, p in PARAMETERS.items():
         entry = {
             "value": fit.values[n],
             "std": fit.std.get(n),
@@ -446,7 +448,7 @@ def _identifiability(fit: cal.FitResult) -> dict:
     }
 
 
-def _lookup_table(imap: cal.InverseMap, files: _RecordFiles, has_header: bool) -> dict:
+def _lookup_table(imap: InverseMap, files: _RecordFiles, has_header: bool) -> dict:
     """calibration.json's lookup_table: what lookup.csv (and the C header) hold."""
     return {
         "csv": "lookup.csv",

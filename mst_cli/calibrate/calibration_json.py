@@ -1,11 +1,26 @@
 """``calibration.json``: what ``mst calibrate`` fitted, how well, and what ``mst read`` needs to
 trust a calibrated.yaml (its hash, the load test's largest force, a few points of the curve).
-(``mst design --calibration`` reads the fitted printer back strictly: :mod:`.record`.)
+``mst design --calibration`` reads the fitted printer back strictly (:func:`read_calibration`).
 
 :class:`CalibrationRecord` is the file, one field a key in the file's order (units in the
 keys); the nested sections stay JSON mappings. :meth:`~CalibrationRecord.from_json` reads a
 record back leniently: it sits beside a model file a user may have edited, so anything
 missing or malformed is None and only costs ``mst read`` its warning, never the reading.
+
+What one print taught about its printer, read back for the next design (issue 21).
+
+``mst calibrate`` fits a print's wall offset, modulus factor, gap offset and remanence factor to
+its load test and writes them to calibration.json. The fit models the walls as drawn and the
+material's data-sheet modulus (:class:`~mst_cli.calibrate.fit.ForwardModel` reads neither the
+design's ``printer`` deviations nor anything else of the print), so the fitted values describe
+the printer and filament themselves, whatever design was printed. :func:`read_calibration`
+reads them back and :func:`apply_calibration` writes them into a spec's ``printer`` section
+(and the magnet's remanence), so ``mst design --calibration`` designs the next print for the
+printer as it is. A parameter the calibration held (not identifiable from that load test, or
+not requested) is not used and is named.
+
+Bad input (a file that is missing, not JSON, not a calibration record, or fitted on another
+material) raises :class:`~mst_cli.errors.InputError` naming ``--calibration``: exit 2, one line.
 """
 
 from __future__ import annotations
@@ -13,16 +28,21 @@ from __future__ import annotations
 import hashlib
 import json
 import math
-from dataclasses import asdict, dataclass, fields
+from dataclasses import asdict, dataclass, field, fields, replace
 from pathlib import Path
-from typing import Any
+from typing import Any, NoReturn
 
 import numpy as np
 
-from mst_cli.calibrate.fit import InverseMap
+from mst_cli.calibrate.inverse_map import InverseMap
+from mst_cli.errors import InputError
 from mst_cli.io.files import read_input_text
 from mst_cli.io.outputs import finite_or_none
 from mst_cli.io.yaml_io import MAX_INPUT_BYTES
+from mst_cli.model.assembly import printer_violations
+from mst_cli.sensor.as_printed import PARAMETERS
+from mst_cli.sensor.document import Document, load_document
+from mst_cli.sensor.sections import SECTIONS
 
 CALIBRATION_JSON = "calibration.json"
 CALIBRATED_YAML = "calibrated.yaml"
@@ -150,3 +170,188 @@ def record_beside(model_file: Path) -> tuple[str | None, CalibrationRecord | Non
             f"{CALIBRATION_JSON} beside {Path(model_file).name} belongs to another file: forces may not be calibrated"
         ), None
     return None, record
+
+
+OPTION = "--calibration"
+CONSTANTS_KEY = "design_constants"  # calibration.json: what the fitted factors multiply
+# where each fitted parameter goes in the next spec
+TARGET_KEY = {
+    "wall_offset_mm": "printer.wall_offset_mm",
+    "modulus_factor": "printer.modulus_factor",
+    "gap_offset_mm": "printer.gap_offset_mm",
+    "remanence_factor": "magnet.remanence_T",
+}
+
+
+def design_constants(doc: Document) -> dict:
+    """The calibrated design's constants the fitted factors are relative to (calibration.json
+    keeps them, so that another design can use the factors): material and remanence."""
+    return {
+        "material_name": doc.material.name,
+        "youngs_modulus_MPa": doc.material.youngs_modulus_MPa,
+        "remanence_T": doc.magnet.remanence_T,
+    }
+
+
+@dataclass(frozen=True)
+class Taken:
+    """One parameter taken from the calibration, in the next spec's own key and unit."""
+
+    parameter: str  # PARAMETERS name
+    key: str  # the spec key it is written to
+    value: float
+    std: float | None  # 1 sigma, same unit
+    unit: str
+
+
+@dataclass
+class PrinterCalibration:
+    """The parameters of one calibration.json as a next spec uses them."""
+
+    path: str
+    calibrated_design: str
+    taken: list[Taken] = field(default_factory=list)
+    not_used: dict[str, str] = field(default_factory=dict)  # parameter -> why
+
+    def lines(self) -> list[str]:
+        """What was taken, with what uncertainty, and what was not: as ``mst design`` prints it."""
+
+        def one(t: Taken) -> str:
+            value = f"{t.value:+.4f}" if t.unit == "mm" else f"{t.value:.4f}"
+            std = f" ± {t.std:.4f}" if t.std is not None else ""
+            return f"{t.key} {value}{std}{' ' + t.unit if t.unit else ''}"
+
+        out = [
+            f"calibration {self.path} (a print of {self.calibrated_design}): "
+            + ("; ".join(one(t) for t in self.taken) if self.taken else "nothing identifiable to take")
+        ]
+        out += [f"calibration: {name} not used: {why}" for name, why in self.not_used.items()]
+        return out
+
+    def report(self) -> dict:
+        """report.json's ``calibration`` block."""
+        return {
+            "file": self.path,
+            "calibrated_design": self.calibrated_design,
+            "taken": {
+                t.key: {"parameter": t.parameter, "value": t.value, "std": t.std, "unit": t.unit} for t in self.taken
+            },
+            "not_used": dict(self.not_used),
+        }
+
+
+def _refuse(path: str | Path, why: str) -> NoReturn:
+    raise InputError(OPTION, str(path), why)
+
+
+def _number(path: str | Path, where: str, value: Any, *, positive: bool = False) -> float:
+    """``value`` as a (``positive``) finite number, else InputError naming ``where``."""
+    if (
+        isinstance(value, bool)
+        or not isinstance(value, (int, float))
+        or not math.isfinite(value)
+        or (positive and value <= 0)
+    ):
+        _refuse(
+            path,
+            f"{where} = {value!r} is not a {'positive ' if positive else ''}finite number: "
+            "give the calibration.json mst calibrate wrote",
+        )
+    return float(value)
+
+
+def read_calibration(path: str | Path, doc: Document) -> PrinterCalibration:
+    """Read calibration.json at ``path`` for the spec ``doc``: the values in ``doc``'s terms.
+
+    The wall and gap offsets are the print's own (mm beyond the drawing); the modulus factor
+    is converted to ``doc``'s modulus (E_calibrated x factor / E_doc) and the remanence factor
+    to a remanence (Br_calibrated x factor). InputError (``--calibration``) when the file is
+    missing or unreadable, not JSON, not a calibration record, or fitted on another material.
+    """
+
+    text = read_input_text(
+        path, MAX_INPUT_BYTES, field=OPTION, what="calibration.json", too_large=": a calibration.json is a few kB"
+    )
+    try:
+        record = json.loads(text)
+    except ValueError:
+        _refuse(path, "is not JSON: give the calibration.json mst calibrate wrote")
+    if not isinstance(record, dict) or not isinstance(record.get("parameters"), dict):
+        _refuse(path, "has no 'parameters' mapping: give the calibration.json mst calibrate wrote")
+    constants = record.get(CONSTANTS_KEY)
+    if not isinstance(constants, dict):
+        _refuse(
+            path,
+            f"has no '{CONSTANTS_KEY}' (written by an mst calibrate before 0.7): run mst calibrate on that print again",
+        )
+    material = constants.get("material_name")
+    if not isinstance(material, str):
+        _refuse(path, f"{CONSTANTS_KEY}.material_name is missing: give the calibration.json mst calibrate wrote")
+    if material != doc.material.name:
+        _refuse(
+            path,
+            f"was fitted on a print of material '{material}', this spec prints '{doc.material.name}' "
+            "(material.name): calibrate a print of the same printer and filament",
+        )
+    E_cal = _number(path, f"{CONSTANTS_KEY}.youngs_modulus_MPa", constants.get("youngs_modulus_MPa"), positive=True)
+    Br_cal = _number(path, f"{CONSTANTS_KEY}.remanence_T", constants.get("remanence_T"), positive=True)
+
+    out = PrinterCalibration(path=str(path), calibrated_design=str(record.get("design", "?")))
+    for name, par in PARAMETERS.items():
+        entry = record["parameters"].get(name)
+        if not isinstance(entry, dict) or not isinstance(entry.get("fitted"), bool):
+            _refuse(
+                path, f"parameters.{name} is missing or has no 'fitted': give the calibration.json mst calibrate wrote"
+            )
+        if not entry["fitted"]:
+            why = entry.get("held_because")
+            out.not_used[name] = "held by the calibration" + (f" ({why})" if isinstance(why, str) else "")
+            continue
+        value = _number(path, f"parameters.{name}.value", entry.get("value"))
+        std_given = entry.get("std")
+        std = None if std_given is None else _number(path, f"parameters.{name}.std", std_given)
+        scale = {"modulus_factor": E_cal / doc.material.youngs_modulus_MPa, "remanence_factor": Br_cal}.get(name, 1.0)
+        unit = "T" if name == "remanence_factor" else par.unit
+        out.taken.append(Taken(name, TARGET_KEY[name], value * scale, None if std is None else std * scale, unit))
+    return out
+
+
+def apply_calibration(doc: Document, cal: PrinterCalibration) -> Document:
+    """``doc`` with the taken values in its ``printer`` section and magnet (each checked against
+    its key's declared bounds: InputError naming the key and ``--calibration``)."""
+    printer: dict[str, Any] = {}
+    magnet: dict[str, Any] = {}
+    for t in cal.taken:
+        section, key = t.key.split(".")
+        rule = SECTIONS[section][key]
+        try:
+            rule.check(t.key, t.value)
+        except InputError as exc:
+            raise InputError(f"{t.key} (from {OPTION} {cal.path})", t.value, exc.allowed) from None
+        (printer if section == "printer" else magnet)[key] = t.value
+    out = replace(doc, printer=replace(doc.printer, **printer), magnet=replace(doc.magnet, **magnet))
+    for v in printer_violations(out.printer, out.housing, out.family.contact_allowance_mm):
+        raise InputError(f"{v.field} (from {OPTION} {cal.path})", v.value, v.allowed)
+    return out
+
+
+def load_with_calibration(
+    spec_file: str | Path, calibration: str | Path | None
+) -> tuple[Document, PrinterCalibration | None]:
+    """A spec or design file with an earlier print's calibration applied (``mst design
+    --calibration``), and that calibration (None without one: the file as it is)."""
+    doc = load_document(spec_file)
+    if calibration is None:
+        return doc, None
+    cal = read_calibration(calibration, doc)
+    return apply_calibration(doc, cal), cal
+
+
+__all__ = [
+    "read_calibration",
+    "apply_calibration",
+    "design_constants",
+    "PrinterCalibration",
+    "Taken",
+    "load_with_calibration",
+]

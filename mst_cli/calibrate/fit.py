@@ -18,8 +18,8 @@ Parameters (:data:`PARAMETERS`), each with the scale of a typical print or assem
 * ``remanence_factor`` the magnet's remanence / the design's (the field is linear in it).
 
 Forward prediction: :class:`ForwardModel` builds the perturbed cells with the family's own
-:meth:`~mst_cli.io.schema.CellFamily.cell`, their layer laws (:func:`mst_cli.model.mechanics.layer_law`)
-and the stack, then the field at the chip (:func:`mst_cli.model.field.field_at_chip_T`). The cheap
+:meth:`~mst_cli.sensor.sections.CellFamily.cell`, their layer laws (:func:`mst_cli.model.mechanics.layer_law`)
+and the stack, then the field at the chip (:func:`mst_cli.model.magnet_field.field_at_chip_T`). The cheap
 ``spring`` rung is evaluated directly (a fraction of a millisecond per load test); a dearer rung
 (``frame``, ``continuum``) by output space mapping: the fit runs on the spring stack plus the
 dearer rung's displacement difference at the current wall offset, which is re-evaluated until
@@ -45,54 +45,25 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from mst_cli.io.schema import Document, LayerEntry
-from mst_cli.model import chip as mlx
-from mst_cli.model import field as fld
-from mst_cli.model import geometry as geo
-from mst_cli.model.geometry import LENGTH_FLOOR_MM, HexCell, Housing, Printer
-from mst_cli.model.ladder import choose_mechanics
+from mst_cli.model import magnet_field as fld
+from mst_cli.model.cell import LENGTH_FLOOR_MM, HexCell
 from mst_cli.model.mechanics import layer_law
-from mst_cli.model.response import Response
-from mst_cli.model.response import simulate as run_simulation
 from mst_cli.model.stack import Stack
+from mst_cli.sensor.document import Document
 
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
+from mst_cli.errors import CalibrationFailed
+from mst_cli.sensor.as_printed import PARAMETERS, full_values
 
 # --------------------------------------------------------------------------- parameters
 
 
-@dataclass(frozen=True)
-class Parameter:
-    name: str
-    unit: str
-    nominal: float
-    scale: float  # a typical print/assembly deviation: the fit's unit of this parameter
-    description: str
-
-
-PARAMETERS: dict[str, Parameter] = {
-    p.name: p
-    for p in (
-        Parameter(
-            "modulus_factor",
-            "",
-            1.0,
-            0.10,
-            "effective Young's modulus / the design's (scales every layer's k, R, k_locked)",
-        ),
-        Parameter(
-            "wall_offset_mm", "mm", 0.0, 0.05, "added to every layer's wall thickness t (changes k, R and d_lock)"
-        ),
-        Parameter("gap_offset_mm", "mm", 0.0, 0.30, "added to the unloaded magnet-to-chip gap"),
-        Parameter("remanence_factor", "", 1.0, 0.05, "magnet remanence / the design's"),
-    )
-}
 DEFAULT_PARAMETERS = tuple(PARAMETERS)
 
 IDENTIFIABLE_STD = 1.0 / 3.0  # std / typical deviation below which a parameter counts as fixed by the data
@@ -102,10 +73,6 @@ FAIL_RESIDUAL_REL = 0.05  # fit failed: residual RMS above this fraction of the 
 NO_RELATION_SIGMA = 3.0  # |B| unrelated to force: |correlation| within this many sigma of 0
 MIN_STROKE_MM = 0.05  # a perturbed cell keeps at least this lock stroke and wall
 MAX_SPACE_MAPPING_ITERATIONS = 6
-
-
-class CalibrationFailed(RuntimeError):
-    """The fit itself failed (not the input's form): the message says why."""
 
 
 def parameter_bounds(doc: Document) -> dict[str, tuple[float, float]]:
@@ -131,52 +98,6 @@ def parameter_bounds(doc: Document) -> dict[str, tuple[float, float]]:
         "gap_offset_mm": (max(gap_lo, -3.0), 5.0),
         "remanence_factor": (max(0.2, 0.01 / Br), min(1.6, 2.0 / Br)),
     }
-
-
-# the printer keys that say how a print misses its drawing, at "no miss" (model.geometry.Printer)
-PRINTER_NOMINAL = {"wall_offset_mm": 0.0, "modulus_factor": 1.0, "gap_offset_mm": 0.0}
-
-
-def printer_values(doc: Document) -> dict:
-    """The print parameters (:data:`PARAMETERS`' names) a document's ``printer`` section declares:
-    what its printer is known to do to the drawing (the remanence is the magnet's own key)."""
-    pr = doc.printer
-    return {
-        "modulus_factor": pr.modulus_factor,
-        "wall_offset_mm": pr.wall_offset_mm,
-        "gap_offset_mm": pr.gap_offset_mm,
-        "remanence_factor": 1.0,
-    }
-
-
-def as_printed(doc: Document, extra_wall_mm: float = 0.0) -> Document:
-    """The design ``doc`` as its printer makes it (walls + offset + ``extra_wall_mm``, modulus and
-    gap as the ``printer`` section says), through :func:`apply_parameters`: the one path from a
-    drawing to the part whose physics is simulated, for design and calibration alike."""
-    values = printer_values(doc)  # within bounds: geometry.printer_violations at parse time
-    values["wall_offset_mm"] += extra_wall_mm
-    return apply_parameters(doc, values)[0]
-
-
-def simulate_as_printed(doc: Document, mechanics: str | None = None, field_model: str | None = None) -> Response:
-    """The forward model of a valid design as ``mst simulate`` runs it (:func:`mst_cli.api.simulate`):
-    the part as printed (:func:`as_printed`), the mechanics rung the file's accuracy asks for
-    (else its ``model.mechanics``), the file's field model unless one is given."""
-    field_choice = field_model or doc.field_model
-    choice = choose_mechanics(mechanics, doc.accuracy_rel, doc.mechanics)
-    printed = as_printed(doc)
-    return run_simulation(
-        printed.geometry(),
-        printed.material,
-        mechanics=choice.mechanics,
-        field_model=None if field_choice == "auto" else field_choice,
-        noise_uT_rms=doc.noise_uT_rms,
-    )
-
-
-def full_values(values: dict) -> dict:
-    """Every parameter: the given values, the others at their nominal (design) values."""
-    return {n: float(values.get(n, p.nominal)) for n, p in PARAMETERS.items()}
 
 
 # --------------------------------------------------------------------------- forward model
@@ -571,278 +492,9 @@ def _not_identifiable(name: str, std: float) -> str:
 
 
 # --------------------------------------------------------------------------- calibrated design
-def apply_parameters(
-    doc: Document, values: dict, name: str | None = None, mechanics: str | None = None
-) -> tuple[Document, list[str]]:
-    """The design document with the fitted values written into its own keys, and a list of the
-    edits made (each a sentence). Loadable by ``mst simulate`` (same rules, same model).
-
-    * modulus_factor    -> material.youngs_modulus_MPa
-    * wall_offset_mm    -> every layers[i].t_mm (and printer.min_wall_mm / min_gap_mm / nozzle_mm
-                           lowered when a thinner wall or cavity would break their rules: this
-                           file models the sensor as printed, it is not a file to print)
-    * gap_offset_mm     -> housing.chip_clearance_mm (what remains below zero from
-                           housing.pocket_floor_mm, then housing.cover_mm)
-    * remanence_factor  -> magnet.remanence_T
-    """
-    v = full_values(values)
-    edits: list[str] = []
-    material = replace(doc.material, youngs_modulus_MPa=doc.material.youngs_modulus_MPa * v["modulus_factor"])
-    if v["modulus_factor"] != 1.0:
-        edits.append(
-            f"material.youngs_modulus_MPa {doc.material.youngs_modulus_MPa:g} -> {material.youngs_modulus_MPa:.6g}"
-        )
-    dt = v["wall_offset_mm"]
-    layers = tuple(replace(la, t_mm=round(la.t_mm + dt, 9)) if la.t_mm is not None else la for la in doc.layers)
-    if dt:
-        edits.append(f"layers[*].t_mm {dt:+.4g} mm")
-    magnet = replace(doc.magnet, remanence_T=doc.magnet.remanence_T * v["remanence_factor"])
-    if v["remanence_factor"] != 1.0:
-        edits.append(f"magnet.remanence_T {doc.magnet.remanence_T:g} -> {magnet.remanence_T:.6g}")
-    housing = _housing_with_gap(doc, v["gap_offset_mm"], edits)
-    printer = _printer_as_printed(doc, layers, edits)
-    out = replace(
-        doc,
-        name=name or doc.name,
-        layers=layers,
-        material=material,
-        magnet=magnet,
-        housing=housing,
-        printer=printer,
-        mechanics=mechanics or doc.mechanics,
-        accuracy_rel=None,
-    )
-    assert all(isinstance(la, LayerEntry) for la in out.layers)
-    return out, edits
-
-
-def _housing_with_gap(doc: Document, gap_offset_mm: float, edits: list[str]) -> Housing:
-    """``doc``'s housing with the gap offset taken from housing.chip_clearance_mm (what remains
-    below zero from housing.pocket_floor_mm, then housing.cover_mm); the edit appended."""
-    hs = doc.housing
-    left = gap_offset_mm
-    new = {}
-    clearance = hs.chip_clearance_mm + left
-    if clearance >= 0:
-        new["chip_clearance_mm"] = clearance
-    else:
-        new["chip_clearance_mm"] = 0.0
-        left = clearance
-        for key in ("pocket_floor_mm", "cover_mm"):
-            take = max(left, -(getattr(hs, key) - 0.01))
-            new[key] = getattr(hs, key) + take
-            left -= take
-        if left < -1e-12:
-            raise CalibrationFailed(
-                f"gap_offset_mm {gap_offset_mm:.4g} cannot be written into "
-                "the housing keys (it would need negative clearances)"
-            )
-    new = {k: round(val, 9) for k, val in new.items()}
-    if gap_offset_mm:
-        edits.append(
-            "housing."
-            + ", housing.".join(f"{k} {getattr(hs, k):g} -> {val:.6g}" for k, val in new.items())
-            + f" (gap offset {gap_offset_mm:+.4g} mm)"
-        )
-    return replace(hs, **new)
-
-
-def _printer_as_printed(doc: Document, layers: tuple, edits: list[str]) -> Printer:
-    """``doc``'s printer with its deviations spent and its rules lowered for the as-printed cells;
-    the edits appended."""
-    pr = doc.printer
-    # the values are the print's own (the fit models the drawn walls and the material's E), so
-    # the printer's declared deviations are spent: left in, a simulation would apply them twice
-    printer = replace(_rules_for(doc, layers), **PRINTER_NOMINAL)
-    spent = [
-        f"printer.{key} {getattr(pr, key):g} -> {value:g}"
-        for key, value in PRINTER_NOMINAL.items()
-        if getattr(pr, key) != value
-    ]
-    if spent:
-        edits.append(", ".join(spent) + " (the values above are the print's)")
-    for key in ("min_wall_mm", "min_gap_mm", "nozzle_mm"):
-        if getattr(printer, key) != getattr(pr, key):
-            edits.append(
-                f"printer.{key} {getattr(pr, key):g} -> {getattr(printer, key):g} (the as-printed "
-                "cells are thinner than the printing rules: this file models the print, do not print it)"
-            )
-    return printer
-
-
-def _rules_for(doc: Document, layers) -> Printer:
-    """``doc``'s printer with its printing rules (min_wall_mm, min_gap_mm, nozzle_mm) lowered
-    where the cells of ``layers`` break them: a file that models a print, not one to print."""
-    pr = doc.printer
-    t_min = min(la.t_mm for la in layers)
-    cav_min = min(la.h_mm - 2 * la.t_mm for la in layers)
-    pad_min = min(
-        float(geo.inner_pad_half_width_mm(math.radians(la.theta_deg), la.t_mm, la.h_mm, doc.family.width_mm))
-        for la in layers
-    )
-    return replace(
-        pr,
-        min_wall_mm=min(pr.min_wall_mm, round(math.floor(t_min * 1e4) / 1e4, 4)),
-        min_gap_mm=min(pr.min_gap_mm, round(math.floor(cav_min * 1e4) / 1e4, 4)),
-        nozzle_mm=min(pr.nozzle_mm, max(0.05, round(math.floor(pad_min * 1e4) / 1e4, 4))),
-    )
-
-
-def with_walls(doc: Document, t_mm: Sequence[float]) -> Document:
-    """The design ``doc`` with layer i's wall thickness set to ``t_mm[i]`` (e.g. the width the
-    slicer lays down), everything else as it is, so :func:`mst_cli.api.simulate` predicts the
-    part those walls make with the model and printer corrections the design itself is simulated
-    with. Printing rules the new walls break are lowered (this models a print, not a drawing)."""
-    if len(t_mm) != len(doc.layers):
-        raise ValueError(f"{len(t_mm)} wall thicknesses for {len(doc.layers)} layers")
-    layers = tuple(replace(la, t_mm=round(float(t), 9)) for la, t in zip(doc.layers, t_mm))
-    return replace(doc, layers=layers, printer=_rules_for(doc, layers))
 
 
 # --------------------------------------------------------------------------- inverse map
-FLAGS = ("ok", "above_calibrated", "below_range", "above_range", "saturated")
-# above_calibrated: inside the model's range but above the largest force of the load test (the
-# force is given: the fitted physics carries it there, but no sample checked it)
-END_TOLERANCE_SIGMA = 3.0  # readings within this many field resolutions of an end are clamped to it
-
-
-@dataclass
-class InverseMap:
-    """Monotone |B| -> force on one model's in-range branch (no load to the last lock)."""
-
-    force_N: np.ndarray  # ascending, 0 .. last lock force
-    B_abs_T: np.ndarray  # strictly ascending
-    Bz_T: np.ndarray  # the z component at the same forces (signed)
-    edges_N: np.ndarray  # regime edges 0, R_1, ..., R_n
-    field_resolution_T: float  # noise or LSB, the larger
-    chip_setting: mlx.ChipSetting | None
-    calibrated_to_N: float | None = None  # the load test's largest force (None: not calibrated)
-
-    @property
-    def n_regimes(self) -> int:
-        return len(self.edges_N) - 1
-
-    @property
-    def tolerance_T(self) -> float:
-        return END_TOLERANCE_SIGMA * self.field_resolution_T
-
-    def regime_of(self, force_N: ArrayLike) -> np.ndarray:
-        F = np.asarray(force_N, dtype=float)
-        return np.clip(np.searchsorted(self.edges_N, F, side="right"), 1, self.n_regimes)
-
-    def local_resolution_N(self, force_N: ArrayLike | None = None) -> np.ndarray:
-        """Force resolution at each grid point (or at given forces): field resolution over the
-        smaller of the two neighbouring secant slopes d|B|/dF (the worse side)."""
-        dB = np.diff(self.B_abs_T) / np.maximum(np.diff(self.force_N), 1e-300)
-        left = np.concatenate([[dB[0]], dB])
-        right = np.concatenate([dB, [dB[-1]]])
-        res = self.field_resolution_T / np.minimum(left, right)
-        if force_N is None:
-            return res
-        return np.interp(np.asarray(force_N, dtype=float), self.force_N, res)
-
-    def force(
-        self, B_abs_T: ArrayLike, saturated: ArrayLike | None = None
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(force_N with NaN where flagged, regime (0 where flagged), flag strings)."""
-        B = np.asarray(B_abs_T, dtype=float)
-        F = np.interp(B, self.B_abs_T, self.force_N)
-        flag = np.full(B.shape, "ok", dtype=object)
-        tol = self.tolerance_T
-        if self.calibrated_to_N is not None:
-            B_cal = float(np.interp(self.calibrated_to_N, self.force_N, self.B_abs_T))
-            flag[B > B_cal + tol] = "above_calibrated"
-        flag[B < self.B_abs_T[0] - tol] = "below_range"
-        flag[B > self.B_abs_T[-1] + tol] = "above_range"
-        if saturated is not None:
-            flag[np.asarray(saturated, dtype=bool)] = "saturated"
-        bad = (flag != "ok") & (flag != "above_calibrated")
-        F = np.where(bad, np.nan, F)
-        regime = np.where(bad, 0, self.regime_of(np.where(bad, 0.0, F)))
-        return F, regime, flag
-
-    def table(self, n: int = 256) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """n entries evenly spaced in |B| from no load to the last lock: (|B|, Bz, F, regime,
-        resolution)."""
-        B = np.linspace(self.B_abs_T[0], self.B_abs_T[-1], n)
-        F = np.interp(B, self.B_abs_T, self.force_N)
-        F[0], F[-1] = self.force_N[0], self.force_N[-1]
-        Bz = np.interp(F, self.force_N, self.Bz_T)
-        return B, Bz, F, self.regime_of(np.minimum(F, self.edges_N[-1] * (1 - 1e-12))), self.local_resolution_N(F)
-
-    def z_code_table(
-        self, setting: mlx.ChipSetting, n_max: int = 256
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """Entries evenly spaced in |Z code| at ``setting``, from no load to the last lock:
-        (codes, force_N, regime, resolution_N). CalibrationFailed if |Bz| is not monotone in
-        force (an off-axis chip far from the axis): no Z-only table can then exist."""
-        Bz = np.abs(self.Bz_T)
-        if not np.all(np.diff(Bz) > 0):
-            raise CalibrationFailed(
-                "|Bz| is not strictly increasing with force on this model: a "
-                "table indexed by the Z code alone cannot exist"
-            )
-        lsb = setting.z_uT_per_lsb * 1e-6
-        c0 = int(math.ceil(Bz[0] / lsb))
-        c1 = int(math.floor(Bz[-1] / lsb))
-        if c1 - c0 < 2:
-            raise CalibrationFailed(
-                f"the field changes by only {c1 - c0} LSB over the whole range at "
-                f"GAIN_SEL {setting.gain_sel}, RES {setting.res}"
-            )
-        codes = np.unique(np.rint(np.linspace(c0, c1, min(n_max, c1 - c0 + 1))).astype(np.int64))
-        F = np.interp(codes * lsb, Bz, self.force_N)
-        # resolution in force of one field resolution at the chip's z setting
-        dBz = np.gradient(Bz, self.force_N)
-        res_T = max(self.field_resolution_T, lsb)
-        res = res_T / np.maximum(np.interp(F, self.force_N, dBz), 1e-300)
-        res = np.maximum(res, self.local_resolution_N(F) * res_T / self.field_resolution_T)
-        return codes, F, self.regime_of(np.minimum(F, self.edges_N[-1] * (1 - 1e-12))), res
-
-    @classmethod
-    def from_response(cls, resp: Response) -> InverseMap:
-        """From a :class:`~mst_cli.model.response.Response` (the same model ``mst simulate`` runs)."""
-        keep = resp.in_range
-        F = resp.force_N[keep]
-        B = resp.B_abs_T[keep]
-        Bz = resp.B_T[keep, 2]
-        # zero-width regimes and repeated edges: keep the first of equal forces
-        F, idx = np.unique(F, return_index=True)
-        B, Bz = B[idx], Bz[idx]
-        if not np.all(np.diff(B) > 0):
-            raise CalibrationFailed(
-                "|B| is not strictly increasing with force on this model: no monotone map from reading to force exists"
-            )
-        edges = np.array([0.0] + [r.force_to_N for r in resp.regimes])
-        return cls(
-            F,
-            B,
-            Bz,
-            edges,
-            float(resp.field_resolution_T) if math.isfinite(resp.field_resolution_T) else 1e-6 * resp.noise_uT_rms,
-            resp.chip_setting,
-        )
-
-
-def inverse_map(
-    doc: Document, mechanics: str = "spring", field_model: str | None = None, points_per_regime: int = 600
-) -> tuple[InverseMap, Response]:
-    """The inverse map of a design document, and the response it came from."""
-    resp = run_simulation(
-        doc.geometry(),
-        doc.material,
-        mechanics=mechanics,
-        field_model=None if field_model in (None, "auto") else field_model,
-        noise_uT_rms=doc.noise_uT_rms,
-        points_per_regime=points_per_regime,
-    )
-    return InverseMap.from_response(resp), resp
-
-
-def field_sigma_T(noise_uT_rms: float, setting: mlx.ChipSetting | None) -> float:
-    """Per-sample standard deviation of a |B| reading: chip noise and LSB rounding."""
-    lsb = setting.z_uT_per_lsb if setting is not None else 0.0
-    return 1e-6 * math.sqrt(noise_uT_rms**2 + lsb**2 / 12.0) if (noise_uT_rms or lsb) else 1e-6
 
 
 LIMITATIONS = (

@@ -3,7 +3,7 @@ microcontroller that reads the MLX90393 and has no room for the model.
 
 The C text is a template in package data (``data/force_table.h.in``, ``string.Template``
 placeholders) so it reads as C; this module computes what fills it from an
-:class:`~mst_cli.calibrate.fit.InverseMap`.
+:class:`~mst_cli.calibrate.inverse_map.InverseMap`.
 """
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ from string import Template
 
 import numpy as np
 
-from mst_cli.calibrate.fit import InverseMap
+from mst_cli.calibrate.inverse_map import InverseMap
 from mst_cli.model.chip import CODE_RANGE_LSB, SATURATION_T, ChipSetting
 
 HEADER_FILE = "force_table.h"

@@ -23,7 +23,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from mst_cli.model.geometry import SensorGeometry
+from mst_cli.model.assembly import SensorGeometry
 from mst_cli.model.material import Material
 from mst_cli.model.offcentre import magnet_field_T, magnet_pose, stack_path, tilt_laws
 

@@ -14,15 +14,15 @@ from pathlib import Path
 
 import numpy as np
 
-from mst_cli.calibrate import fit as cal
 from mst_cli.calibrate.accuracy import ERROR_FROM_RANGE, force_errors
 from mst_cli.calibrate.calibration_json import CalibrationRecord, record_beside
+from mst_cli.calibrate.inverse_map import FLAGS, InverseMap, inverse_map
 from mst_cli.calibrate.loadtest import Readings, field_of
 from mst_cli.calibrate.offset_reading import OffsetEstimator, OffsetReadings, offset_columns
 from mst_cli.calibrate.tables import FORCES_COLUMNS, cell, forces_csv
-from mst_cli.io.schema import Document
 from mst_cli.io.serial_lines import LineSource, SampleParser
 from mst_cli.model.chip import ChipSetting, field_resolution_T
+from mst_cli.sensor.document import Document
 
 FORCES_FILE = "forces.csv"
 
@@ -30,7 +30,7 @@ FORCES_FILE = "forces.csv"
 @dataclass
 class ForceReadings:
     """The forces of a readings file: force_N (NaN where flagged), regime (0 where flagged),
-    flag (:data:`~mst_cli.calibrate.fit.FLAGS`) and force_resolution_N, one per reading."""
+    flag (:data:`~mst_cli.calibrate.inverse_map.FLAGS`) and force_resolution_N, one per reading."""
 
     name: str
     readings: Readings
@@ -58,7 +58,7 @@ class ForceReadings:
 
     def summary(self) -> str:
         F, flag = self.force_N, self.flag
-        counts = {k: int(np.sum(flag == k)) for k in cal.FLAGS}
+        counts = {k: int(np.sum(flag == k)) for k in FLAGS}
         ok = np.isfinite(F)
         lines = [
             f"{self.name}: {len(self.readings)} readings: {counts['ok']} in range"
@@ -95,7 +95,7 @@ class SerialSamples:
     samples: list[tuple[float, tuple[float, float, float], float, int, str]] = field(default_factory=list)
     skipped: int = 0
 
-    def csv(self, imap: cal.InverseMap) -> str:
+    def csv(self, imap: InverseMap) -> str:
         cols = ("Bx_code_lsb", "By_code_lsb", "Bz_code_lsb") if self.raw else ("Bx_uT", "By_uT", "Bz_uT")
         buf = io.StringIO()
         buf.write(",".join(("time_s",) + cols + FORCES_COLUMNS) + "\n")
@@ -118,7 +118,7 @@ class ForceReader:
     and the model still gives the recorded curve)."""
 
     document: Document
-    inverse_map: cal.InverseMap
+    inverse_map: InverseMap
     warning: str | None
     record: CalibrationRecord | None
 
@@ -129,7 +129,7 @@ class ForceReader:
         """The reader of ``doc`` (loaded from ``model_file``) with ``mechanics``; ``setting`` is
         the chip's (else the one the model chooses): its LSB bounds the field resolution.
         CalibrationFailed when the model has no monotone map."""
-        imap, resp = cal.inverse_map(doc, mechanics)
+        imap, resp = inverse_map(doc, mechanics)
         chip = setting or resp.chip_setting
         if chip is not None:
             imap.field_resolution_T = max(imap.field_resolution_T, field_resolution_T(chip, doc.noise_uT_rms))

@@ -11,7 +11,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from mst_cli.calibrate.fit import FitResult, InverseMap
+from mst_cli.calibrate.fit import FitResult
+from mst_cli.calibrate.inverse_map import InverseMap
 from mst_cli.calibrate.loadtest import Readings
 from mst_cli.model.chip import ChipSetting, quantise_lsb
 

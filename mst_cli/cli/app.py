@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import click
 
-from mst_cli import __version__
 from mst_cli.cli.common import MstGroup
 
 # the order of `mst --help` (the README's: the workflow)
@@ -69,7 +68,7 @@ class LazyMstGroup(MstGroup):
 
 
 @click.group(cls=LazyMstGroup, context_settings={"help_option_names": ["-h", "--help"]})
-@click.version_option(__version__, prog_name="mst")
+@click.version_option(package_name="mst", prog_name="mst")  # read from the metadata when asked
 def main() -> None:
     """Design multi-sensitivity soft tactile (MST) sensors.
 

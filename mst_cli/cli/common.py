@@ -20,7 +20,7 @@ import click
 from mst_cli.errors import InputError
 from mst_cli.io.files import is_machine_fault, os_error_text
 from mst_cli.io.outputs import Interrupted
-from mst_cli.model.fields import SEED_RANGE
+from mst_cli.model.file_keys import SEED_RANGE
 
 _P = ParamSpec("_P")
 _R = TypeVar("_R")

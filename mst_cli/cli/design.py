@@ -21,8 +21,8 @@ from mst_cli.io.outputs import check_out_dir
 if TYPE_CHECKING:
     from mst_cli.design.document import DesignResult
     from mst_cli.design.pareto import ParetoDesign
-    from mst_cli.io.schema import Document
     from mst_cli.model.ladder import MechanicsChoice
+    from mst_cli.sensor.document import Document
 
 
 @click.command(help=help_texts.DESIGN)
@@ -88,7 +88,7 @@ def design(
     no_plot: bool,
 ) -> None:
     # deferred: `mst --help` loads every command module; these load the model (0.1 s)
-    from mst_cli.calibrate.record import load_with_calibration
+    from mst_cli.calibrate.calibration_json import load_with_calibration
     from mst_cli.design.files import write_design_files
 
     doc, cal = load_with_calibration(spec_file, calibration)

@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING
 import click
 
 if TYPE_CHECKING:
-    from mst_cli.calibrate.record import PrinterCalibration
+    from mst_cli.calibrate.calibration_json import PrinterCalibration
     from mst_cli.design.document import DesignResult
     from mst_cli.design.pareto import ParetoDesign
     from mst_cli.model.ladder import MechanicsChoice

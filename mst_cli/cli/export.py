@@ -19,7 +19,7 @@ from mst_cli.cli.common import EXIT_TARGETS, default_out_dir, handles_input_erro
 from mst_cli.io.outputs import check_out_dir
 
 if TYPE_CHECKING:
-    from mst_cli.model.geometry import SensorGeometry
+    from mst_cli.model.assembly import SensorGeometry
 
 DEFAULT_STL_TOLERANCE_MM = 0.01  # cad.exporting's (not imported here: app.py loads this module cheaply)
 

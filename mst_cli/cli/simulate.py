@@ -14,7 +14,7 @@ from mst_cli.cli.common import default_out_dir, handles_input_errors, no_plot_op
 from mst_cli.io.outputs import check_out_dir
 
 if TYPE_CHECKING:
-    from mst_cli.io.schema import Document
+    from mst_cli.sensor.document import Document
 
 
 @click.command()
@@ -74,11 +74,11 @@ def simulate(
     mst design --calibration carries them; they are 0, 1, 0 by default).
     """
     # deferred: `mst --help` loads every command module; these load the model (0.1 s)
-    from mst_cli.calibrate.fit import PRINTER_NOMINAL
-    from mst_cli.io.offcentre_files import offcentre_lines, offcentre_summary, write_offcentre
-    from mst_cli.io.report import terminal_table, write_simulation
-    from mst_cli.io.schema import load_design_document
     from mst_cli.model.ladder import choose_mechanics
+    from mst_cli.sensor.as_printed import PRINTER_NOMINAL  # deferred: as simulate's
+    from mst_cli.sensor.document import load_design_document
+    from mst_cli.simulation.offcentre_files import offcentre_lines, offcentre_summary, write_offcentre
+    from mst_cli.simulation.report import terminal_table, write_simulation
 
     doc, geometry = load_design_document(design_file)
     out = out_dir or default_out_dir(doc.name)
@@ -127,7 +127,7 @@ def _offset(text: str) -> tuple[float, float]:
 
 def _say_model_choices(doc: Document, mechanics_message: str | None) -> None:
     """The mechanics rung picked for the file, and the print parameters that differ from nominal."""
-    from mst_cli.calibrate.fit import PRINTER_NOMINAL  # deferred: as simulate's
+    from mst_cli.sensor.as_printed import PRINTER_NOMINAL  # deferred: as simulate's
 
     if mechanics_message:
         click.echo(mechanics_message)

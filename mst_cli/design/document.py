@@ -13,7 +13,7 @@
 
 The design is judged as printed: the written design.yaml keeps the walls as drawn (what
 ``mst export`` draws) and its ``printer`` section says how they print; every simulation here
-runs :func:`mst_cli.calibrate.fit.as_printed` of it (walls + printer.wall_offset_mm, modulus x
+runs :func:`mst_cli.sensor.as_printed.as_printed` of it (walls + printer.wall_offset_mm, modulus x
 printer.modulus_factor, gap + printer.gap_offset_mm).
 
 The print-error sensitivity (the robustness term of the preference, :mod:`.problem`) is re-measured the same
@@ -34,15 +34,17 @@ from typing import Protocol
 import numpy as np
 from numpy.typing import ArrayLike
 
-from mst_cli.calibrate.fit import as_printed
 from mst_cli.design import explain
 from mst_cli.design.problem import DesignProblem
 from mst_cli.design.solver import solve
 from mst_cli.errors import InputError
-from mst_cli.io.report import height_budget_line
-from mst_cli.io.schema import Document, LayerEntry, document_to_dict
-from mst_cli.model import geometry as geo
+from mst_cli.model.assembly import SensorGeometry
+from mst_cli.model.printer import Printer
 from mst_cli.model.response import Response, simulate
+from mst_cli.sensor.as_printed import as_printed
+from mst_cli.sensor.document import Document, document_to_dict
+from mst_cli.sensor.sections import LayerEntry
+from mst_cli.simulation.report import height_budget_line
 
 ROUND_DECIMALS = 4
 EXIT_MET, EXIT_NOT_MET = 0, 1
@@ -76,7 +78,7 @@ class DesignResult:
     """A designed document, its forward-model response and the diagnostics."""
 
     document: Document
-    geometry: geo.SensorGeometry
+    geometry: SensorGeometry
     response: Response
     status: str  # "met" or "not met"
     binding: str | None  # what binds when not met
@@ -484,7 +486,7 @@ def _target_rows(
 
 
 def _constraint_checks(
-    problem: DesignProblem, geometry: geo.SensorGeometry, printer: geo.Printer, resp: Response, R: np.ndarray
+    problem: DesignProblem, geometry: SensorGeometry, printer: Printer, resp: Response, R: np.ndarray
 ) -> dict[str, str]:
     """The broken constraints (name -> sentence): cell rules, lock order, chip saturation, height."""
     checks = {}
@@ -580,7 +582,7 @@ def _warnings(resp: Response, print_error: dict) -> list[str]:
     return warnings
 
 
-def _objective(doc: Document, geometry: geo.SensorGeometry, resp: Response, print_error: dict) -> dict:
+def _objective(doc: Document, geometry: SensorGeometry, resp: Response, print_error: dict) -> dict:
     """report.json's ``objective``: design.objective's weights and the three terms' values."""
     weights = doc.design.get("objective") or {}
     return {

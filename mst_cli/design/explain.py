@@ -26,7 +26,7 @@ import numpy as np
 
 from mst_cli.design.problem import DesignProblem
 from mst_cli.errors import InputError
-from mst_cli.model import geometry as geo
+from mst_cli.model.cell import cell_margins_mm
 from mst_cli.model.mechanics.spring import contact_stiffness_N_per_mm
 
 if TYPE_CHECKING:
@@ -137,7 +137,7 @@ def limits(problem: DesignProblem) -> Limits:
 
     axes = [np.linspace(problem.lo[j], problem.hi[j], GRID_POINTS) for j in range(3)]
     th, t, h = (a.ravel() for a in np.meshgrid(*axes, indexing="ij"))
-    margins = geo.cell_margins_mm(
+    margins = cell_margins_mm(
         np.radians(th), t, h, fam.width_mm, fam.contact_allowance_mm, pr.min_wall_mm, pr.min_gap_mm, pr.nozzle_mm
     )
     ok = np.all(margins >= 0.0, axis=-1)

@@ -7,10 +7,10 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from mst_cli.design.pareto import pareto_csv, plot_pareto
-from mst_cli.io.report import write_simulation
+from mst_cli.simulation.report import write_simulation
 
 if TYPE_CHECKING:
-    from mst_cli.calibrate.record import PrinterCalibration
+    from mst_cli.calibrate.calibration_json import PrinterCalibration
     from mst_cli.design.document import DesignResult
     from mst_cli.design.pareto import ParetoDesign
     from mst_cli.io.outputs import Staging

@@ -28,7 +28,8 @@ import numpy as np
 from mst_cli.design.document import ROUND_DECIMALS, DesignResult, design_document, verify_design
 from mst_cli.design.problem import DesignProblem
 from mst_cli.design.solver import SolveResult, pareto_weights, prefer_many
-from mst_cli.io.schema import OBJECTIVE_TERMS, Document
+from mst_cli.sensor.document import Document
+from mst_cli.sensor.sections import OBJECTIVE_TERMS
 
 if TYPE_CHECKING:
     from collections.abc import Callable

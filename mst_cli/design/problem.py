@@ -16,7 +16,7 @@ Match objective (phase 1)
     of a 0.03 1/N target weigh as much as a 2 % miss of a 0.26 1/N one.
 
 Constraints (g <= 0 is satisfied; every g is scaled to order one)
-    * cell rules of :func:`~mst_cli.model.geometry.cell_margins_mm` for every layer, in nozzles;
+    * cell rules of :func:`~mst_cli.model.cell.cell_margins_mm` for every layer, in nozzles;
     * wall slenderness t/L at most the largest t/L L0's corrections were fitted on
       (:func:`~mst_cli.model.mechanics.correction.fitted_t_over_L_max`);
     * lock order with margin: R_(i+1) >= (1 + lock_margin_rel) R_i, so regime i ends when layer
@@ -63,20 +63,21 @@ from typing import TYPE_CHECKING, cast
 
 import numpy as np
 
-from mst_cli.io.schema import DEFAULT_OBJECTIVE, OBJECTIVE_TERMS
 from mst_cli.model import chip as mlx
-from mst_cli.model import geometry as geo
-from mst_cli.model.field import axial_Bz_T, choose_field_model
+from mst_cli.model.assembly import unloaded_gap_mm
+from mst_cli.model.cell import CELL_RULES, LENGTH_FLOOR_MM, cell_margins_mm, wall_centreline_length_mm
+from mst_cli.model.magnet_field import axial_Bz_T, choose_field_model
 from mst_cli.model.mechanics import correction
 from mst_cli.model.mechanics.depth import web_modulus_MPa
 from mst_cli.model.mechanics.spring import spring_arrays
 from mst_cli.model.response import field_magnitude_T, regime_kernel
+from mst_cli.sensor.sections import DEFAULT_OBJECTIVE, OBJECTIVE_TERMS
 
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
 
-    from mst_cli.io.schema import Document
     from mst_cli.model.arrays import Floats
+    from mst_cli.sensor.document import Document
 
 # headroom choose_setting keeps between the largest field and a setting's range (one source)
 CHIP_HEADROOM = inspect.signature(mlx.choose_setting).parameters["margin"].default
@@ -136,7 +137,7 @@ class DesignProblem:
 
     Parameters
     ----------
-    doc : mst_cli.io.schema.Document
+    doc : mst_cli.sensor.document.Document
         A spec: every layer has ``target_sensitivity_per_N`` and ``target_range_N``.
     """
 
@@ -179,7 +180,7 @@ class DesignProblem:
         # (the design loop otherwise drifts there: it is where k and R grow fastest)
         self.t_over_L_max = correction.fitted_t_over_L_max()
         self.n_constraints = (
-            self.n * len(geo.CELL_RULES)
+            self.n * len(CELL_RULES)
             + self.n
             + (self.n - 1)
             + 1
@@ -223,7 +224,7 @@ class DesignProblem:
 
     def gap0_mm(self, sum_h_mm: Floats) -> Floats:
         """Unloaded magnet-to-chip gap, as built, of stacks whose layer heights add up to ``sum_h_mm``."""
-        return geo.unloaded_gap_mm(sum_h_mm, self.n, self.probe.housing, self.probe.board) + self.gap_offset_mm
+        return unloaded_gap_mm(sum_h_mm, self.n, self.probe.housing, self.probe.board) + self.gap_offset_mm
 
     def layer_constraints(self, theta_deg: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike) -> np.ndarray:
         """The rules each layer meets on its own, (..., len(CELL_RULES) + 1), g <= 0 satisfied:
@@ -236,11 +237,11 @@ class DesignProblem:
         """(cell margins in mm (..., len(CELL_RULES)), t/L constraint (...)) of cells."""
         fam, pr = self.family, self.printer
         theta = np.radians(theta_deg)
-        margins = geo.cell_margins_mm(
+        margins = cell_margins_mm(
             theta, t_mm, h_mm, fam.width_mm, fam.contact_allowance_mm, pr.min_wall_mm, pr.min_gap_mm, pr.nozzle_mm
         )
-        t_printed = np.maximum(np.asarray(t_mm) + self.wall_offset_mm, geo.LENGTH_FLOOR_MM)
-        t_over_L = t_printed / geo.wall_centreline_length_mm(theta, t_printed, h_mm)
+        t_printed = np.maximum(np.asarray(t_mm) + self.wall_offset_mm, LENGTH_FLOOR_MM)
+        t_over_L = t_printed / wall_centreline_length_mm(theta, t_printed, h_mm)
         return margins, t_over_L / self.t_over_L_max - 1.0
 
     def layer_laws(
@@ -269,11 +270,11 @@ class DesignProblem:
         self, theta_deg: np.ndarray, t_mm: np.ndarray, h_mm: np.ndarray, dt_mm: float
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """:meth:`layer_laws` of the cells with walls t, t + dt and t - dt (each floored at
-        geo.LENGTH_FLOOR_MM), stacked on a new first axis of 3: the distinct drawn cells are
+        LENGTH_FLOOR_MM), stacked on a new first axis of 3: the distinct drawn cells are
         found once (in a third of the cells) and every one computed at the three thicknesses.
         A cell's law has the same bits in any batch, so these are layer_laws' numbers."""
         shape, (theta, t, h), inverse = self._distinct_cells(theta_deg, t_mm, h_mm)
-        floor = geo.LENGTH_FLOOR_MM
+        floor = LENGTH_FLOOR_MM
         t3 = np.concatenate([t, np.maximum(t + dt_mm, floor), np.maximum(t - dt_mm, floor)])
         laws = self._cell_laws(np.tile(theta, 3), t3, np.tile(h, 3))
         distinct = np.arange(len(t)) if inverse is None else inverse
@@ -301,7 +302,7 @@ class DesignProblem:
         """(k, d_lock, R, k_locked) of cells given as 1-d columns, the walls as drawn."""
         fam = self.family
         if self.wall_offset_mm:
-            t = np.maximum(t + self.wall_offset_mm, geo.LENGTH_FLOOR_MM)
+            t = np.maximum(t + self.wall_offset_mm, LENGTH_FLOOR_MM)
         theta_rad = np.radians(theta)
         E = web_modulus_MPa(theta_rad, t, h, fam.depth_mm, self.E_MPa, self.nu)  # as mechanics.layer_laws
         return spring_arrays(theta_rad, t, h, fam.depth_mm, fam.width_mm, fam.contact_allowance_mm, E, self.nu)
@@ -409,7 +410,7 @@ class DesignProblem:
         shifts = np.array(steps).reshape((len(steps),) + (1,) * t_mm.ndim)
         T = np.broadcast_to(theta_deg, (len(steps),) + theta_deg.shape)
         H = np.broadcast_to(h_mm, (len(steps),) + h_mm.shape)
-        R, S, _, _, _ = self.responses(T, np.maximum(t_mm + shifts, geo.LENGTH_FLOOR_MM), H)
+        R, S, _, _, _ = self.responses(T, np.maximum(t_mm + shifts, LENGTH_FLOOR_MM), H)
         out = np.log(np.maximum(np.concatenate([S, R], axis=-1), TINY))
         if nominal is None:
             return out[1:] - out[:1]
@@ -461,7 +462,7 @@ class DesignProblem:
     # ----------------------------------------------------------------- reporting helpers
     def constraint_names(self) -> list[str]:
         """A readable name for every entry of ``Evaluation.constraints``."""
-        names = [f"layer {i + 1} {rule}" for i in range(self.n) for rule in geo.CELL_RULES]
+        names = [f"layer {i + 1} {rule}" for i in range(self.n) for rule in CELL_RULES]
         names += [
             f"layer {i + 1} wall t/L <= {self.t_over_L_max:.2f} (the range L0 is fitted on)" for i in range(self.n)
         ]

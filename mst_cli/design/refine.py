@@ -31,7 +31,6 @@ from typing import Any
 
 import numpy as np
 
-from mst_cli.calibrate.fit import as_printed
 from mst_cli.design.document import ROUND_DECIMALS, DesignResult, _layer_outputs, design_document, verify_design
 from mst_cli.design.problem import DesignProblem
 from mst_cli.design.solver import (
@@ -46,9 +45,10 @@ from mst_cli.design.solver import (
     _Stop,
 )
 from mst_cli.errors import InputError
-from mst_cli.io.schema import Document
 from mst_cli.model.ladder import USER_LADDER, choose_mechanics, load_ladder_errors, rung_errors
 from mst_cli.model.response import simulate
+from mst_cli.sensor.as_printed import as_printed
+from mst_cli.sensor.document import Document
 
 REFINE_MODELS = ("frame", "continuum")
 ASKED = "asked for by the caller"  # why the print error's rung is the one named

@@ -1,6 +1,6 @@
 """The key tables of docs/file-format.md, generated from the declarations of the keys (each a
-dataclass field made with :func:`mst_cli.model.fields.spec`), so the docs cannot drift from the
-code. :mod:`mst_cli.io.schema` binds them to its sections: ``python -m mst_cli.io.schema
+dataclass field made with :func:`mst_cli.model.file_keys.spec`), so the docs cannot drift from the
+code. :mod:`mst_cli.sensor.document` binds them to its sections: ``python -m mst_cli.sensor.document
 docs/file-format.md`` rewrites the tables in place.
 """
 

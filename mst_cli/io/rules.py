@@ -1,7 +1,7 @@
 """The rule of one key of a design or spec file: what it accepts (kind, bounds or choices, null)
 and the one-line InputError naming the field, the value and what is allowed when a value breaks
-it. Each rule is read from a dataclass field declared with :func:`mst_cli.model.fields.spec`
-(:meth:`Rule.of`); :mod:`mst_cli.io.schema` builds the document from them.
+it. Each rule is read from a dataclass field declared with :func:`mst_cli.model.file_keys.spec`
+(:meth:`Rule.of`); :mod:`mst_cli.sensor.document` builds the document from them.
 """
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ from dataclasses import MISSING, Field, dataclass, fields
 from typing import Any
 
 from mst_cli.errors import InputError
-from mst_cli.model.fields import spec
+from mst_cli.model.file_keys import spec
 
 RULE_KEYS = ("lo", "hi", "lo_open", "hi_open", "choices", "nullable", "unit")  # spec() metadata a Rule reads
 

@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING
 from mst_cli.model.cell import HexCell
 from mst_cli.model.components import MAGNET_GRADES_T, Board, default_board
 from mst_cli.model.expected_body import ExpectedBody
-from mst_cli.model.fields import spec
+from mst_cli.model.file_keys import spec
 from mst_cli.model.printer import Printer
 from mst_cli.model.violation import Violation
 

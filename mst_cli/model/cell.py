@@ -30,7 +30,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from mst_cli.model.expected_body import ExpectedCell
-from mst_cli.model.fields import spec
+from mst_cli.model.file_keys import spec
 from mst_cli.model.printer import Printer
 from mst_cli.model.violation import Violation
 

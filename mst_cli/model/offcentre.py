@@ -20,8 +20,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mst_cli.model import field as fld
-from mst_cli.model.geometry import SensorGeometry
+from mst_cli.model import magnet_field as fld
+from mst_cli.model.assembly import SensorGeometry
 from mst_cli.model.material import Material
 from mst_cli.model.mechanics import layer_laws
 from mst_cli.model.mechanics.depth import in_web

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from mst_cli.model.fields import spec
+from mst_cli.model.file_keys import spec
 
 
 @dataclass(frozen=True)
@@ -16,7 +16,7 @@ class Printer:
     wall_offset_mm, modulus_factor, gap_offset_mm: the systematic difference between the part
     as drawn and as printed (what ``mst calibrate`` fits on an earlier print); geometry and
     export stay nominal, the forward model of a document applies them
-    (:func:`mst_cli.calibrate.fit.as_printed`). wall_tolerance_mm: the scatter left after that.
+    (:func:`mst_cli.sensor.as_printed.as_printed`). wall_tolerance_mm: the scatter left after that.
     """
 
     nozzle_mm: float = spec(0.4, lo=0.05, hi=5.0, unit="mm", meaning="nozzle diameter")

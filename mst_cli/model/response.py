@@ -15,8 +15,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from mst_cli.model import chip as mlx
-from mst_cli.model import field as fld
-from mst_cli.model.geometry import SensorGeometry
+from mst_cli.model import magnet_field as fld
+from mst_cli.model.assembly import SensorGeometry
 from mst_cli.model.material import CREASE_ONSET_STRETCH, Material
 from mst_cli.model.mechanics import layer_laws
 from mst_cli.model.stack import Stack, series_displacement_mm

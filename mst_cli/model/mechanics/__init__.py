@@ -1,6 +1,6 @@
 """Layer mechanics: a ladder of models of one collapsible layer (docs/design.md section 4).
 
-Every model turns a :class:`~mst_cli.model.geometry.HexCell` and a material into a *layer law*,
+Every model turns a :class:`~mst_cli.model.cell.HexCell` and a material into a *layer law*,
 an object with
 
 * ``displacement_mm(force_N)``: compression for forces >= 0, vectorised, monotone, and
@@ -27,7 +27,7 @@ from mst_cli.model.mechanics.depth import in_web
 from mst_cli.model.mechanics.spring import spring_layer, spring_layers
 
 if TYPE_CHECKING:
-    from mst_cli.model.geometry import HexCell
+    from mst_cli.model.cell import HexCell
     from mst_cli.model.material import Material
     from mst_cli.model.mechanics.frame import TabulatedLockingLayer
     from mst_cli.model.mechanics.spring import LinearLockingLayer

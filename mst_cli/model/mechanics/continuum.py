@@ -2,7 +2,7 @@
 
 The reference model of the ladder (docs/design.md section 4). The layer's profile (x across the
 width, z up; one continuous web through the depth D along y) is meshed from the
-:class:`~mst_cli.model.geometry.HexCell` polygons, with quadratic triangles (P2: linear
+:class:`~mst_cli.model.cell.HexCell` polygons, with quadratic triangles (P2: linear
 triangles lock in bending at nu = 0.45), and loaded by displacement control with a compressible
 Neo-Hookean material through closure, up to the lock.
 
@@ -56,7 +56,7 @@ from scipy.sparse import coo_matrix, csc_matrix, csr_matrix
 from scipy.sparse.csgraph import reverse_cuthill_mckee
 from scipy.sparse.linalg import splu
 
-from mst_cli.model import geometry as geo
+from mst_cli.model.cell import HexCell
 from mst_cli.model.mechanics.frame import TabulatedLockingLayer, locked_tabulated_law
 from mst_cli.model.mechanics.law_cache import law_cache
 from mst_cli.model.mechanics.path import LAW_CHORD_TOL_REL, PathError, PathTolerances, StepControl, follow_to_event
@@ -162,7 +162,7 @@ class RootFillet:
         return self.O[None, :] + self.r_mm * np.stack([np.cos(phi), np.sin(phi)], axis=1)
 
 
-def root_fillet(cell: geo.HexCell, r_mm: float) -> RootFillet:
+def root_fillet(cell: HexCell, r_mm: float) -> RootFillet:
     """The fillet of radius ``r_mm`` at the outer wall root; ValueError when T2 passes B'."""
     outer, inner = cell.outer_profile_xz(), cell.inner_profile_xz()
     A, B, C = np.asarray(outer[0], float), np.asarray(outer[1], float), np.asarray(inner[1], float)
@@ -248,7 +248,7 @@ def _check_fillet_block(pts, tri, n_f: int, fillet: RootFillet, arc: np.ndarray)
 
 
 def quarter_profile_mesh(
-    cell: geo.HexCell, n_thick: int = DEFAULT_N_THICK, n_length: int = DEFAULT_N_LENGTH, root_fillet_mm: float = 0.0
+    cell: HexCell, n_thick: int = DEFAULT_N_THICK, n_length: int = DEFAULT_N_LENGTH, root_fillet_mm: float = 0.0
 ) -> tuple[np.ndarray, np.ndarray, float]:
     """Triangle mesh of the quarter profile (bottom pad's right part + lower right wall).
 
@@ -342,7 +342,7 @@ def _stitch_blocks(grids, length_scale_mm: float, extra=None) -> tuple[np.ndarra
 
 
 def refined_quarter_mesh(
-    cell: geo.HexCell,
+    cell: HexCell,
     n_thick: int = DEFAULT_N_THICK,
     n_length: int = DEFAULT_N_LENGTH,
     levels: int = DEFAULT_LEVELS,
@@ -887,7 +887,7 @@ class _Problem:
 
 
 def solve_continuum(
-    cell: geo.HexCell,
+    cell: HexCell,
     material: Material,
     n_thick: int = DEFAULT_N_THICK,
     n_length: int = DEFAULT_N_LENGTH,
@@ -965,7 +965,7 @@ def smallest_stretch(prob: _Problem, u: np.ndarray) -> float:
     return float(smallest_stretches(prob, u).min())
 
 
-def _require_meshable(cell: geo.HexCell) -> None:
+def _require_meshable(cell: HexCell) -> None:
     """Raise ValueError for a cell whose quarter profile cannot be meshed."""
     bad = [v for v in cell.violations() if v.rule in ("pad_width", "lock_stroke")]
     if bad:
@@ -1122,7 +1122,7 @@ def _lock_label(prob, active) -> str:
 
 
 def linear_stiffness_N_per_mm(
-    cell: geo.HexCell,
+    cell: HexCell,
     material: Material,
     n_thick: int = DEFAULT_N_THICK,
     n_length: int = DEFAULT_N_LENGTH,
@@ -1152,7 +1152,7 @@ def linear_k(problem: _Problem) -> float:
 
 
 @law_cache(maxsize=256)
-def continuum_layer(cell: geo.HexCell, material: Material) -> TabulatedLockingLayer:
+def continuum_layer(cell: HexCell, material: Material) -> TabulatedLockingLayer:
     """The L2 law of one cell: the FE curve up to its lock, then the locked branch (walls + contact column)."""
     res = solve_continuum(cell, material)
     return locked_tabulated_law(

@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.sparse.linalg import spsolve
 
-from mst_cli.model import geometry as geo
+from mst_cli.model.cell import HexCell
 from mst_cli.model.material import Material
 from mst_cli.model.mechanics.continuum import (
     D_MAX_OVER_NOMINAL,
@@ -67,7 +67,7 @@ class _TiltedProblem(_Problem):
 
 
 def solve_tilted_chevron(
-    cell: geo.HexCell,
+    cell: HexCell,
     material: Material,
     tilt_rad_per_mm: float,
     n_thick: int = DEFAULT_N_THICK,
@@ -89,7 +89,7 @@ def solve_tilted_chevron(
 
 
 def linear_tilt_lever_mm(
-    cell: geo.HexCell,
+    cell: HexCell,
     material: Material,
     n_thick: int = DEFAULT_N_THICK,
     n_length: int = DEFAULT_N_LENGTH,

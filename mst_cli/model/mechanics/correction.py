@@ -129,7 +129,7 @@ HINGE_OFFSET = 0.03
 DATA = Path(__file__).resolve().parent.parent / "data" / "l0_correction.json"
 
 # The printable box every rung is fitted and measured on, and the default design bounds
-# (mst_cli.io.schema reads it; so do mst_cli.bench.ladder_bench and the fit): walls from one nozzle line to
+# (mst_cli.sensor.document reads it; so do mst_cli.bench.ladder_bench and the fit): walls from one nozzle line to
 # 3 mm, from 5 deg (shallow) to 75 deg (steep), 1.2-8 mm layers; the cell rules
 # (HexCell.violations) cut out what does not print or has no stroke. Inside it t/L reaches 1.7
 # (walls shorter than they are thick). Below 5 deg a 30 mm cell's pads vanish for most h (the

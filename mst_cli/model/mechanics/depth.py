@@ -30,7 +30,7 @@ import numpy as np
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
 
-    from mst_cli.model.geometry import HexCell
+    from mst_cli.model.cell import HexCell
     from mst_cli.model.material import Material
 
 TERMS = ("1", "s", "s^2", "1/y", "s/y", "s^2/y")

@@ -49,7 +49,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from mst_cli.model import geometry as geo
+from mst_cli.model.cell import HexCell
 from mst_cli.model.material import Material
 from mst_cli.model.mechanics.correction import stiffness_factor
 from mst_cli.model.mechanics.law_cache import law_cache
@@ -207,7 +207,7 @@ class FrameResult:
 
 
 class _Wall:
-    def __init__(self, cell: geo.HexCell, material, n_el: int):
+    def __init__(self, cell: HexCell, material, n_el: int):
         th = cell.theta_rad
         t, b = cell.t_mm, cell.b_mm
         outer, inner = cell.outer_profile_xz(), cell.inner_profile_xz()
@@ -267,7 +267,7 @@ class _Wall:
 
 
 def solve_frame(
-    cell: geo.HexCell,
+    cell: HexCell,
     material: Material,
     n_elements: int = DEFAULT_N_ELEMENTS,
     first_step_frac: float = 0.125,
@@ -336,7 +336,7 @@ def _chord_estimate(wall: _Wall, factor: float):
     return chord
 
 
-def _require_stroke(cell: geo.HexCell) -> None:
+def _require_stroke(cell: HexCell) -> None:
     """ValueError for a cell the frame cannot follow: no pad (p <= 0) or no stroke."""
     if not (cell.p_mm > 0 and cell.cavity_height_mm > cell.contact_allowance_mm):
         raise ValueError(
@@ -361,7 +361,7 @@ def _tangent_stiffness(wall: _Wall, u: np.ndarray) -> float:
     return float(-(K0 @ ul)[wall.tip_w])
 
 
-def _lock_stroke(cell: geo.HexCell, material: Material) -> tuple[float, str]:
+def _lock_stroke(cell: HexCell, material: Material) -> tuple[float, str]:
     """(d_lock mm, what closes): L2's lock stroke (its stiffness knee, where a wall is pinched or
     the pads meet), through L0's fit of it (module docstring); "pad" when that is the rigid
     pads' stroke."""
@@ -371,7 +371,7 @@ def _lock_stroke(cell: geo.HexCell, material: Material) -> tuple[float, str]:
 
 
 def locked_tabulated_law(
-    cell: geo.HexCell,
+    cell: HexCell,
     material: Material,
     d_mm: ArrayLike,
     F_N: ArrayLike,
@@ -394,7 +394,7 @@ def locked_tabulated_law(
 
 
 @law_cache(maxsize=4096)
-def frame_layer(cell: geo.HexCell, material: Material) -> TabulatedLockingLayer:
+def frame_layer(cell: HexCell, material: Material) -> TabulatedLockingLayer:
     """The L1 law of one cell: the frame curve up to contact, then the locked branch (walls + contact column)."""
     res = solve_frame(cell, material)
     # the beam clamps the wall at the pad mid-plane and the tip; the finite joints' effect is

@@ -1,7 +1,7 @@
 """Rung L0 ``spring``: closed-form reduced beam model of one hex layer.
 
 The layer's profile is one continuous web through the whole depth D (the part prints on its
-side; :class:`~mst_cli.model.geometry.HexCell`, b = D, default 20 mm). Its walls are 0.4-3 mm thick
+side; :class:`~mst_cli.model.cell.HexCell`, b = D, default 20 mm). Its walls are 0.4-3 mm thick
 and 1-8 mm long, so they bend in plane strain: a section cannot contract along y, and bending
 and stretching see E' = E / (1 - nu^2) (1.25 E at nu = 0.45) instead of E; shear sees G.
 
@@ -43,7 +43,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from mst_cli.model import geometry as geo
+from mst_cli.model.cell import HexCell, inner_tip_half_width_mm, lock_stroke_mm, wall_centreline_length_mm
 from mst_cli.model.mechanics import correction
 
 if TYPE_CHECKING:
@@ -92,7 +92,7 @@ def wall_compliance_mm_per_N(
     The switches drop terms for the textbook-limit tests (slender wall: bending only;
     theta -> 90 deg: axial only).
     """
-    L = geo.wall_centreline_length_mm(theta_rad, t_mm, h_mm)
+    L = wall_centreline_length_mm(theta_rad, t_mm, h_mm)
     area = b_mm * t_mm
     inertia = b_mm * t_mm**3 / 12.0
     E_ps = plane_strain_modulus_MPa(E_MPa, nu)
@@ -154,7 +154,7 @@ def contact_stiffness_N_per_mm(
     2.5-3.5 E for the cells in the design bounds). ``nu`` = 0 (the default, kept for callers that
     want a bound) gives E b w / 2t, a lower bound for every nu >= 0.
     """
-    half = np.maximum(geo.inner_tip_half_width_mm(theta_rad, t_mm, width_mm), 0.5 * t_mm)
+    half = np.maximum(inner_tip_half_width_mm(theta_rad, t_mm, width_mm), 0.5 * t_mm)
     E_c = pad_compression_modulus_MPa(E_MPa, nu, half, 2.0 * t_mm)
     return E_c * b_mm * 2.0 * half / (2.0 * t_mm)
 
@@ -234,10 +234,10 @@ def spring_arrays(
     where the pads meet.
     """
     k = layer_stiffness_N_per_mm(theta_rad, t_mm, h_mm, b_mm, E_MPa, nu)
-    d_lock = geo.lock_stroke_mm(t_mm, h_mm, contact_allowance_mm)
+    d_lock = lock_stroke_mm(t_mm, h_mm, contact_allowance_mm)
     R = k * d_lock
     if corrected:
-        L = geo.wall_centreline_length_mm(theta_rad, t_mm, h_mm)
+        L = wall_centreline_length_mm(theta_rad, t_mm, h_mm)
         t_over_L = t_mm / L
         sigma = correction.stroke_ratio(d_lock, L, theta_rad)
         k = k * correction.stiffness_factor(t_over_L, theta_rad)
@@ -250,7 +250,7 @@ def spring_arrays(
 
 
 def spring_layers(
-    cells: Sequence[geo.HexCell], material: Material, corrected: bool = True, modulus_MPa: ArrayLike | None = None
+    cells: Sequence[HexCell], material: Material, corrected: bool = True, modulus_MPa: ArrayLike | None = None
 ) -> tuple[LinearLockingLayer, ...]:
     """The L0 laws of a stack's cells from one kernel call (a layer's law does not depend on
     the batch it is computed in: the same numbers as the design loop's batches). ``modulus_MPa``:
@@ -266,6 +266,6 @@ def spring_layers(
     )
 
 
-def spring_layer(cell: geo.HexCell, material: Material, corrected: bool = True) -> LinearLockingLayer:
+def spring_layer(cell: HexCell, material: Material, corrected: bool = True) -> LinearLockingLayer:
     """The L0 law of one concrete cell (``corrected=False``: textbook beam theory only)."""
     return spring_layers((cell,), material, corrected)[0]

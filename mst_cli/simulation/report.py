@@ -15,12 +15,12 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from mst_cli.io.outputs import Staging, staged
+from mst_cli.model.assembly import SensorGeometry
 from mst_cli.model.chip import quantise_lsb
-from mst_cli.model.geometry import SensorGeometry
 from mst_cli.model.response import Regime, Response
 
 if TYPE_CHECKING:
-    from mst_cli.io.schema import Document
+    from mst_cli.sensor.document import Document
 
 SCHEMA_VERSION = 1
 

@@ -25,7 +25,7 @@ import numpy as np
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
 
-    from mst_cli.model.geometry import Magnet
+    from mst_cli.model.assembly import Magnet
 
 FIELD_MODELS = ("dipole", "axial", "cylinder")
 

@@ -29,7 +29,7 @@ def spec(
     """A dataclass field that design files may set: its default, plus metadata saying what a file
     may give (unit, bounds or choices, whether null is allowed, a one-line meaning).
 
-    This is the one declaration of an input field: :mod:`mst_cli.io.schema` derives the
+    This is the one declaration of an input field: :mod:`mst_cli.sensor.document` derives the
     validation rule, the default, the serialisation and the table in docs/file-format.md from it.
     It lives in model/, not io/, because the model's own dataclasses carry the defaults and
     model/ may not import io/. ``kind`` is needed only where the annotation does not say it
