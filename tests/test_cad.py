@@ -19,6 +19,14 @@ from build123d import Edge, import_step
 
 from mst_cli.cad import mesh_io, parts
 from mst_cli.cad.assembly import build_body, build_sensor
+from mst_cli.cad.expected_body import (
+    base_volume_mm3,
+    body_bbox_mm,
+    body_volume_mm3,
+    cap_volume_mm3,
+    plates_volume_mm3,
+    pocket_curved_area_mm2,
+)
 from mst_cli.errors import InputError
 from mst_cli.model.assembly import Housing, SensorGeometry
 from mst_cli.model.cell import HexCell
@@ -86,7 +94,7 @@ def test_reference_volume_golden(reference):
     cap = 30 * 20 * 3.3 - pocket
     expected = base + layers + plates + cap
     assert cad.body.volume == pytest.approx(expected, rel=1e-9)
-    assert g.body_volume_mm3 == pytest.approx(expected, rel=1e-12)
+    assert body_volume_mm3(g) == pytest.approx(expected, rel=1e-12)
     assert cad.body.is_valid
 
 
@@ -117,7 +125,7 @@ def test_every_board_gives_the_model_gap_and_an_open_slot(key):
     g = SensorGeometry(cells, board=BOARDS[key], chip_offset_mm=offset)
     assert g.housing_violations() == []
     body = build_body(g)
-    assert body.is_valid and body.volume == pytest.approx(g.body_volume_mm3, rel=1e-9)
+    assert body.is_valid and body.volume == pytest.approx(body_volume_mm3(g), rel=1e-9)
     pocket_floor = air_gaps_z(body, *RAY_XY, g.total_height_mm)[-1][0]
     cx, cy = g.chip_xy_printed_mm
     assert abs(cy - offset[1]) <= 0.5 * g.layer_height_mm + 1e-9
@@ -176,16 +184,16 @@ def test_random_valid_designs_build_watertight_bodies(g):
     v = body.volume
     # analytic envelope: more than the solid blocks without the layers' struts, less than the
     # bounding box; and the exact analytic sum of the parts
-    (x0, y0, z0), (x1, y1, z1) = g.body_bbox_mm
-    floor = g.base_volume_mm3 + g.plates_volume_mm3 + g.cap_volume_mm3
+    (x0, y0, z0), (x1, y1, z1) = body_bbox_mm(g)
+    floor = base_volume_mm3(g) + plates_volume_mm3(g) + cap_volume_mm3(g)
     assert floor < v < (x1 - x0) * (y1 - y0) * (z1 - z0)
-    assert v == pytest.approx(g.body_volume_mm3, rel=1e-9)
+    assert v == pytest.approx(body_volume_mm3(g), rel=1e-9)
     vertices, triangles = mesh_io.tessellate(body, 0.02)
     assert mesh_io.is_closed_oriented(vertices, triangles)
     mesh = trimesh.Trimesh(vertices, triangles, process=False)
     assert mesh.is_watertight and mesh.is_volume
     # chord deviation 0.02 mm only affects the pocket: volume within delta x curved area
-    assert abs(mesh.volume - v) <= 0.02 * g.pocket_curved_area_mm2 + 1e-9 * v
+    assert abs(mesh.volume - v) <= 0.02 * pocket_curved_area_mm2(g) + 1e-9 * v
 
 
 # --------------------------------------------------------------------------- files
@@ -224,7 +232,7 @@ def test_stl_and_3mf_hold_the_same_closed_mesh(reference):
     assert stl == mesh_io.stl_bytes(*mesh_io.tessellate(cad.body, 0.01))
     mesh = trimesh.load(io.BytesIO(stl), file_type="stl")
     assert mesh.is_watertight and mesh.is_volume
-    assert abs(mesh.volume - g.body_volume_mm3) <= 0.01 * g.pocket_curved_area_mm2 + 1e-5 * mesh.volume
+    assert abs(mesh.volume - body_volume_mm3(g)) <= 0.01 * pocket_curved_area_mm2(g) + 1e-5 * mesh.volume
     # 3MF: parse the XML independently and compare the enclosed volume (divergence theorem)
     with zipfile.ZipFile(io.BytesIO(mesh_io.three_mf_bytes(vertices, triangles, "ref"))) as zf:
         assert {"[Content_Types].xml", "_rels/.rels", "3D/3dmodel.model"} <= set(zf.namelist())

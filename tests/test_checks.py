@@ -14,6 +14,7 @@ import trimesh
 
 from mst_cli.cad import checks, measure, mesh_io
 from mst_cli.cad.assembly import build_sensor, print_mesh
+from mst_cli.cad.expected_body import pocket_curved_area_mm2, pocket_volume_mm3
 from mst_cli.cad.manifest import Manifest, export_manifest, load_manifest
 from mst_cli.sensor.document import load_design_document
 
@@ -74,7 +75,7 @@ def test_reference_body_passes_every_check(exported):
     # the void shell is the magnet pocket, minus at most delta x curved area
     r = 3.1
     void = res["magnet_pocket"].values["volume_mm3"]
-    assert g.pocket_volume_mm3 - 0.01 * g.pocket_curved_area_mm2 <= void <= g.pocket_volume_mm3 + 1e-3
+    assert pocket_volume_mm3(g) - 0.01 * pocket_curved_area_mm2(g) <= void <= pocket_volume_mm3(g) + 1e-3
     # its section at mid-depth: half disc + straight sides to y = 3.2 + the roof up to its apex
     area = res["magnet_pocket"].values["section_area_mm2"]
     assert math.pi * r * r / 2 - 0.01 * math.pi * r <= area - 2 * r * (3.2 + 1.2) <= math.pi * r * r / 2 + 1e-6

@@ -5,6 +5,7 @@ import math
 import numpy as np
 import pytest
 
+from mst_cli.cad.expected_body import body_bbox_mm, cell_volume_mm3, to_print_frame
 from mst_cli.model.assembly import SensorGeometry
 from mst_cli.model.cell import HexCell
 from mst_cli.model.printer import Printer
@@ -29,7 +30,7 @@ CELLS = [
 def test_profile_area_equals_shoelace_of_the_two_polygons(cell):
     area = shoelace(cell.outer_profile_xz()) - shoelace(cell.inner_profile_xz())
     assert cell.profile_area_mm2 == pytest.approx(area, rel=1e-12)
-    assert cell.volume_mm3 == pytest.approx(area * cell.depth_mm)
+    assert cell_volume_mm3(cell) == pytest.approx(area * cell.depth_mm)
 
 
 @pytest.mark.parametrize("cell", CELLS)
@@ -91,9 +92,9 @@ def test_stack_heights_and_gap_follow_from_the_parts():
 # --------------------------------------------------------------------------- print frame
 def test_print_frame_is_a_rotation_that_puts_the_minus_y_face_on_the_bed():
     g = SensorGeometry(tuple(CELLS[:3]))
-    lo, hi = g.body_bbox_mm
+    lo, hi = body_bbox_mm(g)
     corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
-    p = g.to_print_frame(corners)
+    p = to_print_frame(g, corners)
     # distances are kept and the frame keeps its handedness: a proper rotation plus a shift
     a, b, c = p[1] - p[0], p[2] - p[0], p[4] - p[0]
     A, B, C = corners[1] - corners[0], corners[2] - corners[0], corners[4] - corners[0]
@@ -101,7 +102,7 @@ def test_print_frame_is_a_rotation_that_puts_the_minus_y_face_on_the_bed():
     assert np.linalg.norm(p[7] - p[0]) == pytest.approx(np.linalg.norm(corners[7] - corners[0]))
     # the -y face lies on the bed and the print is D high; the stack axis runs along -y
     assert p[:, 2].min() == pytest.approx(0.0) and p[:, 2].max() == pytest.approx(g.depth_mm)
-    top = g.to_print_frame([0.0, 0.0, g.total_height_mm])
+    top = to_print_frame(g, [0.0, 0.0, g.total_height_mm])
     assert top[1] == pytest.approx(-g.total_height_mm) and top[2] == pytest.approx(0.5 * g.depth_mm)
 
 

@@ -19,6 +19,7 @@ import trimesh
 
 from mst_cli.cad import checks, mesh_body, mesh_io, shapes
 from mst_cli.cad.assembly import build_body, print_mesh
+from mst_cli.cad.expected_body import body_bbox_mm, body_volume_mm3
 from mst_cli.cad.manifest import export_manifest
 from mst_cli.model.printer import Printer
 from mst_cli.sensor.document import load_design_document
@@ -59,12 +60,12 @@ def test_mesh_and_brep_bodies_agree(g):
     body = build_body(g)
     volume = signed_volume(vertices, triangles)
     assert volume - polygon_surplus_mm3(g, TOL_MM) == pytest.approx(body.volume, rel=1e-6)
-    assert volume - polygon_surplus_mm3(g, TOL_MM) == pytest.approx(g.body_volume_mm3, rel=1e-6)
+    assert volume - polygon_surplus_mm3(g, TOL_MM) == pytest.approx(body_volume_mm3(g), rel=1e-6)
     bb = body.bounding_box()
     assert vertices.min(axis=0) == pytest.approx([bb.min.X, bb.min.Y, bb.min.Z], abs=1e-9)
     assert vertices.max(axis=0) == pytest.approx([bb.max.X, bb.max.Y, bb.max.Z], abs=1e-9)
-    assert vertices.min(axis=0) == pytest.approx(g.body_bbox_mm[0], abs=1e-9)
-    assert vertices.max(axis=0) == pytest.approx(g.body_bbox_mm[1], abs=1e-9)
+    assert vertices.min(axis=0) == pytest.approx(body_bbox_mm(g)[0], abs=1e-9)
+    assert vertices.max(axis=0) == pytest.approx(body_bbox_mm(g)[1], abs=1e-9)
 
 
 def check_results(vertices, triangles, manifest):

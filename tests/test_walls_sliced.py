@@ -14,6 +14,7 @@ import pytest
 
 from mst_cli import api
 from mst_cli.cad import gcode as G
+from mst_cli.cad.expected_body import wall_centrelines_xz
 from mst_cli.cad.manifest import Manifest, SliceManifest, export_manifest
 from mst_cli.cad.print_check import walls_as_sliced
 from mst_cli.cad.sliced_model import predict
@@ -99,7 +100,7 @@ def test_wall_centre_lines_lie_midway_between_the_faces_on_the_free_stretch(thet
     cell = HexCell(theta, t, h)
     outer, inner = np.array(cell.outer_profile_xz()), np.array(cell.inner_profile_xz())
     edges = {"lower right": (0, 1), "upper right": (1, 2), "upper left": (3, 4), "lower left": (4, 5)}
-    walls = cell.wall_centrelines_xz()
+    walls = wall_centrelines_xz(cell)
     assert [w[0] for w in walls] == list(edges)
     for name, a, b in walls:
         k0, k1 = edges[name]

@@ -8,6 +8,7 @@ from typing import TYPE_CHECKING
 from build123d import Compound, Solid
 
 from mst_cli.cad import mesh_io, parts, shapes
+from mst_cli.cad.expected_body import to_print_frame
 from mst_cli.cad.shapes import check_fits as check_fits  # re-exported: the callers check first
 from mst_cli.model.assembly import SensorGeometry
 
@@ -70,4 +71,4 @@ def print_mesh(geometry: SensorGeometry, body: Solid, tolerance_mm: float) -> tu
     vertices, triangles = mesh_io.tessellate(body, tolerance_mm)
     if not mesh_io.is_closed_oriented(vertices, triangles):
         raise RuntimeError("the tessellated body is not closed: please report this design")
-    return geometry.to_print_frame(vertices), triangles  # a rotation: winding is kept
+    return to_print_frame(geometry, vertices), triangles  # a rotation: winding is kept

@@ -27,6 +27,20 @@ from typing import TYPE_CHECKING, Any, TypeVar, overload
 
 import numpy as np
 
+from mst_cli.cad.expected_body import (
+    base_volume_mm3,
+    body_bbox_mm,
+    body_volume_mm3,
+    cap_volume_mm3,
+    cell_volume_mm3,
+    plates_volume_mm3,
+    pocket_curved_area_mm2,
+    pocket_section_area_mm2,
+    pocket_volume_mm3,
+    to_print_frame,
+    wall_centrelines_xz,
+    wall_horizontal_width_mm,
+)
 from mst_cli.errors import InputError
 from mst_cli.io.files import read_input_text
 from mst_cli.sensor.document import Document, design_geometry, parse_document
@@ -43,8 +57,8 @@ MANIFEST_FORMAT = 2
 def print_section(g: SensorGeometry) -> dict:
     """How the part lies on the bed, where the print pauses, and the designed cavity gaps and
     wall centre lines in the print frame (what ``mst slice`` compares with the G-code)."""
-    lo, hi = g.body_bbox_mm
-    corners = g.to_print_frame([lo, hi])
+    lo, hi = body_bbox_mm(g)
+    corners = to_print_frame(g, [lo, hi])
     lh = g.layer_height_mm
     # measure the cavities a quarter of the depth up, mid-layer (away from pocket and slot)
     z_measure = round((round(0.25 * g.depth_mm / lh) + 0.5) * lh, 9)
@@ -65,7 +79,7 @@ def print_section(g: SensorGeometry) -> dict:
     # the middle of its free stretch, measured over the print layers above the first
     wall_lines = []
     for i, (cell, zb) in enumerate(zip(g.layers, g.layer_bottoms_mm)):
-        for name, (xa, za), (xb, zb_) in cell.wall_centrelines_xz():
+        for name, (xa, za), (xb, zb_) in wall_centrelines_xz(cell):
             wall_lines.append(
                 {
                     "layer": i + 1,
@@ -133,7 +147,7 @@ def export_manifest(
                 "web_depth_mm": c.b_mm,
                 "width_mm": c.width_mm,
                 "cavity_height_mm": c.cavity_height_mm,
-                "wall_horizontal_width_mm": c.wall_horizontal_width_mm,
+                "wall_horizontal_width_mm": wall_horizontal_width_mm(c),
             }
             for c, zb in zip(cells, g.layer_bottoms_mm)
         ],
@@ -154,18 +168,18 @@ def export_manifest(
 def _body_section(g: SensorGeometry, stl_tolerance_mm: float) -> dict:
     """export.json's body: volume (with the tolerance a mesh of ``stl_tolerance_mm`` allows), its
     parts and the bounding box."""
-    bbox_min, bbox_max = g.body_bbox_mm
+    bbox_min, bbox_max = body_bbox_mm(g)
     # A mesh with chord deviation <= delta misses at most delta x (curved area) of the pocket;
     # float32 STL coordinates add ~1e-7 relative per vertex.
-    volume_tol = stl_tolerance_mm * g.pocket_curved_area_mm2 + 1e-5 * g.body_volume_mm3
+    volume_tol = stl_tolerance_mm * pocket_curved_area_mm2(g) + 1e-5 * body_volume_mm3(g)
     return {
-        "volume_mm3": g.body_volume_mm3,
+        "volume_mm3": body_volume_mm3(g),
         "volume_tolerance_mm3": volume_tol,
         "volume_parts_mm3": {
-            "base": g.base_volume_mm3,
-            "layers": [c.volume_mm3 for c in g.layers],
-            "plates": g.plates_volume_mm3,
-            "cap": g.cap_volume_mm3,
+            "base": base_volume_mm3(g),
+            "layers": [cell_volume_mm3(c) for c in g.layers],
+            "plates": plates_volume_mm3(g),
+            "cap": cap_volume_mm3(g),
         },
         "bbox_min_mm": list(bbox_min),
         "bbox_max_mm": list(bbox_max),
@@ -185,9 +199,9 @@ def _pocket_section(g: SensorGeometry) -> dict:
         "roof_rise_mm": g.pocket_roof_rise_mm,
         "floor_z_mm": g.z_magnet_bottom_mm,
         "section_z_mm": z_pocket_mid,
-        "section_area_mm2": g.pocket_section_area_mm2(z_pocket_mid),
-        "volume_mm3": g.pocket_volume_mm3,
-        "curved_area_mm2": g.pocket_curved_area_mm2,
+        "section_area_mm2": pocket_section_area_mm2(g, z_pocket_mid),
+        "volume_mm3": pocket_volume_mm3(g),
+        "curved_area_mm2": pocket_curved_area_mm2(g),
         "magnet_diameter_mm": g.magnet.diameter_mm,
         "magnet_thickness_mm": g.magnet.thickness_mm,
     }

@@ -21,6 +21,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from mst_cli.cad import mesh_io, shapes
+from mst_cli.cad.expected_body import to_print_frame
 from mst_cli.cad.mesh_io import ANGULAR_TOLERANCE_RAD
 from mst_cli.model.assembly import SensorGeometry
 
@@ -150,4 +151,4 @@ def body_mesh(geometry: SensorGeometry, tolerance_mm: float) -> tuple[np.ndarray
 def print_mesh(geometry: SensorGeometry, tolerance_mm: float) -> tuple[np.ndarray, np.ndarray]:
     """(vertices, triangles) of the body as it lies on the bed (the STL/3MF frame)."""
     vertices, triangles = body_mesh(geometry, tolerance_mm)
-    return geometry.to_print_frame(vertices), triangles  # a rotation: winding is kept
+    return to_print_frame(geometry, vertices), triangles  # a rotation: winding is kept

@@ -96,6 +96,8 @@ def export(
 
 def _print_export_summary(geometry: SensorGeometry, out: Path, names: list[str], want_3mf: bool) -> None:
     """The body's size, how it prints, where the magnet pause is and the files written."""
+    from mst_cli.cad.expected_body import body_volume_mm3  # deferred: app.py loads this module cheaply
+
     if geometry.magnet_tilt_deg:
         click.echo(
             f"note: magnet_tilt_deg = {geometry.magnet_tilt_deg:g} is an assembly error "
@@ -103,7 +105,7 @@ def _print_export_summary(geometry: SensorGeometry, out: Path, names: list[str],
             err=True,
         )
     click.echo(
-        f"body volume {geometry.body_volume_mm3:.1f} mm3, sensor height {geometry.total_height_mm:.2f} mm; "
+        f"body volume {body_volume_mm3(geometry):.1f} mm3, sensor height {geometry.total_height_mm:.2f} mm; "
         f"prints on its side, {geometry.depth_mm:g} mm high in "
         f"{int(round(geometry.depth_mm / geometry.layer_height_mm))} layers of {geometry.layer_height_mm:g} mm"
     )

@@ -16,7 +16,6 @@ from typing import TYPE_CHECKING
 
 from mst_cli.model.cell import HexCell
 from mst_cli.model.components import MAGNET_GRADES_T, Board, default_board
-from mst_cli.model.expected_body import ExpectedBody
 from mst_cli.model.file_keys import spec
 from mst_cli.model.printer import Printer
 from mst_cli.model.violation import Violation
@@ -156,7 +155,7 @@ def snap_to_layers_mm(height_mm: float, layer_height_mm: float, mode: str) -> fl
 
 
 @dataclass(frozen=True)
-class SensorGeometry(ExpectedBody):
+class SensorGeometry:
     """The whole stacked sensor: base + layers (bottom to top) separated by plates + cap.
 
     Sensor frame (used everywhere but the printed mesh): z up the stack from the base's

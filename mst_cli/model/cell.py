@@ -29,7 +29,6 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from mst_cli.model.expected_body import ExpectedCell
 from mst_cli.model.file_keys import spec
 from mst_cli.model.printer import Printer
 from mst_cli.model.violation import Violation
@@ -129,7 +128,7 @@ def cell_margins_mm(
 
 
 @dataclass(frozen=True)
-class HexCell(ExpectedCell):
+class HexCell:
     """One collapsible layer of the "hex" family (docs/design.md section 3).
 
     Parameters are the design variables theta (deg), t (mm), h (mm) and the family constants.
