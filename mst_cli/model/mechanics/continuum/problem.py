@@ -7,7 +7,6 @@ import math
 from typing import TYPE_CHECKING
 
 import numpy as np
-from scipy.sparse import csr_matrix
 
 from mst_cli.model.mechanics.continuum.algebra import ActiveSet, FreeBlock
 from mst_cli.model.mechanics.continuum.assembly import Assembler, PlatePenalty, assembler_of, lame_3d, set_assembler
@@ -71,7 +70,7 @@ class ContactProblem:
         self.support_z = np.flatnonzero((on_bottom | on_cut) & ~is_x)
         self.dirichlet = np.union1d(self.fixed_zero, self.tip_z)
         self.free = np.setdiff1d(np.arange(b.N), self.dirichlet)
-        self._blocks = {}  # free_block's cache: pinned set -> (free, gather, CSC pattern)
+        self._blocks: dict[bytes, FreeBlock] = {}  # free_block's cache, per pinned set
         self.x_cut = x_cut
         self._contact_sets(cell, xy, is_x, tol, on_bottom, on_tip)
         self.h2 = h2
@@ -164,7 +163,7 @@ class ContactProblem:
         return dofs[inside & (along_face > -tol)]
 
     # residual and tangent -------------------------------------------------------
-    def assemble(self, u, need_K=True) -> tuple[np.ndarray, csr_matrix | None]:
+    def assemble(self, u, need_K=True) -> tuple:
         """Residual r (N,) and, with ``need_K``, the tangent K (CSR) at the displacement u.
 
         Works on any object with ``basis``, ``mu`` and ``lam`` (the tests reuse it on their own
