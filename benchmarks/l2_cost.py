@@ -71,7 +71,7 @@ def block_solve_times(samples: int, seed: int) -> tuple[int, float, float, float
     from mst_cli.model.mechanics import continuum
 
     cell = sample_cells(samples, seed)[0]
-    prob = continuum._Problem(cell, Material(), continuum.DEFAULT_N_THICK, continuum.DEFAULT_N_LENGTH, 0)
+    prob = continuum.ContactProblem(cell, Material(), continuum.MeshOptions(levels=0))
     _, K = prob.assemble(np.zeros(prob.basis.N))
     block = prob.free_block()
     rhs = np.random.default_rng(0).standard_normal(block.free.size)

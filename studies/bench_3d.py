@@ -3,7 +3,7 @@
 A measurement, not a rung. For each cell, on the same in-plane mesh (the L2 quarter profile
 without corner refinement, n_thick x n_length elements):
 
-* 2D: the plane-strain rung itself (continuum._Problem, levels = 0), its path to the lock;
+* 2D: the plane-strain rung itself (continuum.ContactProblem, levels = 0), its path to the lock;
 * 3D held: the profile extruded over y in [0, D/2] with u_y = 0 on both y = 0 and y = D/2 -- the
   continuum answer is plane strain again, so this column measures only what the tetrahedral
   discretisation does (a little softer than the extruded P2 triangles);

@@ -65,7 +65,7 @@ def main():
     for cell_args in CELLS:
         cell = HexCell(*cell_args)
         ro = old.solve_continuum(cell, mat)
-        prob = L2._Problem(cell, mat, L2.DEFAULT_N_THICK, L2.DEFAULT_N_LENGTH, 0)
+        prob = L2.ContactProblem(cell, mat, L2.MeshOptions(levels=0))
         u, active = np.zeros(prob.basis.N), None
         first, worst_free, last = None, 0.0, 0.0
         for d, F_old in zip(ro.displacement_mm[1:], ro.force_N[1:]):

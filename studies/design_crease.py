@@ -72,7 +72,8 @@ def lock_on(cell, material, k_fine: float, levels: int) -> tuple[float, float, f
     rounds within 1 t of both wall roots."""
     t0 = time.perf_counter()
     corners = ("outer_root", "inner_root") if levels else continuum.CORNERS
-    prob = continuum._Problem(cell, material, 3, 12, levels, corners, 1.0)
+    mesh = continuum.MeshOptions(levels=levels, corners=corners, radius_in_t=1.0)
+    prob = continuum.ContactProblem(cell, material, mesh)
     k_path = continuum.linear_k(prob)
     path, _ = continuum.follow_to_lock(prob, k_path, StepControl(max_steps=2000))
     R = path.observations[-1][0] * k_fine / k_path
@@ -86,7 +87,7 @@ def layer_rows(spec: str, rounds: int) -> None:
     print(f"\n{spec}: {len(doc.layers)} layers, as printed")
     for i, cell in enumerate(doc.geometry().layers, start=1):
         material = in_web(cell, doc.material)
-        k_fine = continuum.linear_k(continuum._Problem(cell, material, 3, 12, continuum.DEFAULT_LEVELS))
+        k_fine = continuum.linear_k(continuum.ContactProblem(cell, material))
         rows = [lock_on(cell, material, k_fine, levels) for levels in range(rounds + 1)]
         R0 = rows[0][0]
         moved = max(abs(R / R0 - 1.0) for R, *_ in rows)

@@ -3,7 +3,7 @@
 docs/design.md section 4 ("Mesh") traces the steep cells' unconverged lock force to a crease at
 the outer wall root A, where the sharp bonded corner is singular. A print has no sharp corner
 there: the bead fills the air wedge between the outer face and the plate with a fillet of radius
-about half the extrusion width. ``root_fillet_mm`` (continuum.RootFillet) meshes it. Two parts:
+about half the extrusion width. ``MeshOptions(root_fillet_mm=r)`` (continuum.RootFillet) meshes it. Two parts:
 
 a. k and the lock force R of a shallow, a mid, a 45 deg and a steep cell on the default mesh, for
    fillet radii 0, 0.05, 0.1, 0.2 mm (what shipping a fillet would move);
@@ -45,7 +45,8 @@ def default_mesh(mat) -> None:
         for r in RADII:
             t0 = time.perf_counter()
             try:
-                res = continuum.solve_continuum(HexCell(*cell), mat, root_fillet_mm=r)
+                study = continuum.StudyOptions(continuum.MeshOptions(root_fillet_mm=r))
+                res = continuum.solve_continuum(HexCell(*cell), mat, study)
             except (continuum.ContinuumError, ValueError) as exc:
                 print(f"| {name} {cell} | {r} | stalled: {exc} ({time.perf_counter() - t0:.1f} s) |")
                 continue
@@ -62,7 +63,8 @@ def default_mesh(mat) -> None:
 
 def _graded_row(cell, mat, r: float, rounds: int, k_fine: float) -> str:
     t0 = time.perf_counter()
-    prob = continuum._Problem(cell, mat, 3, 12, rounds, ("outer_root",), 1.0, root_fillet_mm=r)
+    mesh = continuum.MeshOptions(levels=rounds, corners=("outer_root",), radius_in_t=1.0, root_fillet_mm=r)
+    prob = continuum.ContactProblem(cell, mat, mesh)
     k_path = continuum.linear_k(prob)
     try:
         path, _ = continuum.follow_to_lock(prob, k_path, StepControl(first_step_rel=0.125, max_steps=2000))
@@ -88,7 +90,7 @@ def graded_outer_root(mat, radii: tuple[float, ...], rounds: int, cells: tuple[s
         print("| r mm | rounds | path dofs | R N | d_lock mm | steps | s | smallest stretch at (x, z) | largest drop |")
         print("|---|---|---|---|---|---|---|---|---|")
         for r in radii:
-            fine = continuum._Problem(cell, mat, 3, 12, continuum.DEFAULT_LEVELS, root_fillet_mm=r)
+            fine = continuum.ContactProblem(cell, mat, continuum.MeshOptions(root_fillet_mm=r))
             k_fine = continuum.linear_k(fine)
             for n in range(rounds + 1):
                 print(_graded_row(cell, mat, r, n, k_fine), flush=True)

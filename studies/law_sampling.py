@@ -54,7 +54,7 @@ def main() -> None:
         t0 = time.perf_counter()
         n_l1.append(len(solve_frame(c, mat).displacement_mm))
         t_l1.append(time.perf_counter() - t0)
-        prob = L2._Problem(c, mat, L2.DEFAULT_N_THICK, L2.DEFAULT_N_LENGTH, 0)
+        prob = L2.ContactProblem(c, mat, L2.MeshOptions(levels=0))
         path, _ = L2.follow_to_lock(prob, L2.linear_k(prob), fine_steps())
         d = np.array([0.0] + list(path.d_mm))
         F = np.array([0.0] + [o[0] for o in path.observations]) * law.mesh_scale

@@ -42,10 +42,15 @@ FRACTIONS = (0.1, 0.3, 0.5, 0.7, 0.85, 0.95, 1.0)
 RAMP_CELL = (61.3, 0.57, 5.25)
 
 
+def _study(mesh: tuple[int, int], **kw) -> continuum.StudyOptions:
+    """The study's options: ``mesh`` (elements across the wall, along it), ``kw`` the rest."""
+    return continuum.StudyOptions(continuum.MeshOptions(n_thick=mesh[0], n_length=mesh[1]), **kw)
+
+
 def curves_on_meshes(mat) -> None:
     print("1. F(d) on each mesh / F on the 6 x 24 mesh - 1, at fractions of the lock stroke")
     for cell in STEEP:
-        res = {m: solve_continuum(HexCell(*cell), mat, n_thick=m[0], n_length=m[1]) for m in MESHES}
+        res = {m: solve_continuum(HexCell(*cell), mat, _study(m)) for m in MESHES}
         ref = res[MESHES[-1]]
         strokes = ", ".join(f"{r.d_contact_mm:.4f}" for r in res.values())
         print(f"{cell}: lock stroke {strokes} mm; R {', '.join(f'{r.force_N[-1]:.3f}' for r in res.values())} N")
@@ -65,15 +70,8 @@ def inner_root_refined(mat) -> None:
         row = []
         for a, b in MESHES[:2]:
             try:
-                r = solve_continuum(
-                    HexCell(*cell),
-                    mat,
-                    n_thick=a,
-                    n_length=b,
-                    path_levels=2,
-                    path_corners=("inner_root",),
-                    path_radius_in_t=2.0,
-                )
+                study = _study((a, b), path_levels=2, path_corners=("inner_root",), path_radius_in_t=2.0)
+                r = solve_continuum(HexCell(*cell), mat, study)
                 row.append(f"{a}x{b} {r.force_N[-1]:.3f}")
             except Exception as exc:  # a stalled path is the finding, not a crash
                 row.append(f"{a}x{b} stalled ({type(exc).__name__})")
@@ -109,7 +107,7 @@ ACROSS_ALONG = [(3, 12), (3, 24), (3, 48), (6, 12), (12, 12)]
 def _lock_row(cell, mat, mesh, **kw) -> str:
     t0 = time.perf_counter()
     try:
-        r = solve_continuum(HexCell(*cell), mat, n_thick=mesh[0], n_length=mesh[1], **kw)
+        r = solve_continuum(HexCell(*cell), mat, _study(mesh, **kw))
     except Exception as exc:  # a stalled path is the finding, not a crash
         return f"{mesh[0]}x{mesh[1]} stalled ({type(exc).__name__}, {time.perf_counter() - t0:.1f} s)"
     seconds = time.perf_counter() - t0
@@ -125,14 +123,10 @@ def across_or_along(mat) -> None:
         print(f"{cell}:")
         for mesh in ACROSS_ALONG:
             print(f"  {_lock_row(cell, mat, mesh)}")
-    saved = continuum.LOCK_STIFFNESS_FACTOR
-    try:
-        continuum.LOCK_STIFFNESS_FACTOR = 1.0
-        print("  the lock at the ramp's foot (tangent = 1 k):")
-        for cell in STEEP:
-            print(f"  {cell}: " + "; ".join(_lock_row(cell, mat, m) for m in ((3, 12), (6, 12), (12, 12))))
-    finally:
-        continuum.LOCK_STIFFNESS_FACTOR = saved
+    print("  the lock at the ramp's foot (tangent = 1 k):")
+    for cell in STEEP:
+        rows = (_lock_row(cell, mat, m, lock_stiffness_factor=1.0) for m in ((3, 12), (6, 12), (12, 12)))
+        print(f"  {cell}: " + "; ".join(rows))
     print("  the path mesh graded twice within 1 t of both wall roots (not the tip):")
     roots = dict(path_levels=2, path_corners=("outer_root", "inner_root"), path_radius_in_t=1.0)
     for cell in STEEP:
@@ -177,10 +171,11 @@ def crease_at_outer_root(mat) -> None:
     for cell in CREASE_CELLS:
         c = HexCell(*cell)
         print(f"{cell}: outer root at x = {c.outer_profile_xz()[0][0]:.3f} mm")
-        k_fine = continuum.linear_k(continuum._Problem(c, mat, 3, 12, continuum.DEFAULT_LEVELS))
+        k_fine = continuum.linear_k(continuum.ContactProblem(c, mat))
         for levels in range(5):
             t0 = time.perf_counter()
-            prob = continuum._Problem(c, mat, 3, 12, levels, ("outer_root",), 1.0, PENALTY_PER_MM)
+            mesh = continuum.MeshOptions(levels=levels, corners=("outer_root",), radius_in_t=1.0)
+            prob = continuum.ContactProblem(c, mat, mesh, PENALTY_PER_MM)
             k_path = continuum.linear_k(prob)
             try:
                 path, _ = continuum.follow_to_lock(prob, k_path, StepControl(max_steps=2000))

@@ -62,11 +62,15 @@ def run_sweep(var, start, stop, step, theta, t, h, mat) -> float:
     return float(dev.max())
 
 
+def _mesh_study(n_thick: int, n_length: int) -> continuum.StudyOptions:
+    return continuum.StudyOptions(continuum.MeshOptions(n_thick=n_thick, n_length=n_length))
+
+
 def run_mesh(mat):
     print("\nmesh convergence of the lock force (R on each mesh / R on the finest - 1)")
     print(f"{'cell (theta, t, h)':>22} " + " ".join(f"{f'{a}x{b}':>9}" for a, b in MESHES))
     for cell in MESH_CELLS:
-        R = [solve_continuum(HexCell(*cell), mat, n_thick=a, n_length=b).force_N[-1] for a, b in MESHES]
+        R = [solve_continuum(HexCell(*cell), mat, _mesh_study(a, b)).force_N[-1] for a, b in MESHES]
         print(f"{str(cell):>22} " + " ".join(f"{100 * (r / R[-1] - 1):+8.2f}%" for r in R))
 
 
@@ -76,16 +80,12 @@ FACTOR_CELLS = [(14, 0.4, 1.87), (33, 1.0, 2.8), (60, 0.6, 4.0), (45, 2.5, 6.5),
 def run_factors(mat, factors=(3.0, 5.0, 10.0)):
     print("\nlock force against the lock's stiffness factor (tangent / k at the lock)")
     print(f"{'cell (theta, t, h)':>22} " + " ".join(f"{f'x{f:g}':>10}" for f in factors) + "   spread")
-    default = continuum.LOCK_STIFFNESS_FACTOR
-    try:
-        for cell in FACTOR_CELLS:
-            R = []
-            for f in factors:
-                continuum.LOCK_STIFFNESS_FACTOR = f
-                R.append(solve_continuum(HexCell(*cell), mat).force_N[-1])
-            print(f"{str(cell):>22} " + " ".join(f"{r:10.4f}" for r in R) + f"   {100 * (max(R) / min(R) - 1):.2f} %")
-    finally:
-        continuum.LOCK_STIFFNESS_FACTOR = default
+    for cell in FACTOR_CELLS:
+        R = [
+            solve_continuum(HexCell(*cell), mat, continuum.StudyOptions(lock_stiffness_factor=f)).force_N[-1]
+            for f in factors
+        ]
+        print(f"{str(cell):>22} " + " ".join(f"{r:10.4f}" for r in R) + f"   {100 * (max(R) / min(R) - 1):.2f} %")
 
 
 def main():

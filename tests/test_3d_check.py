@@ -11,6 +11,7 @@ import pytest
 from mst_cli.model.cell import HexCell
 from mst_cli.model.material import Material
 from mst_cli.model.mechanics import continuum as L2
+from mst_cli.model.mechanics.continuum.assembly import assembler_of, lame_3d
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tools"))
 import continuum_3d as C3
@@ -19,7 +20,7 @@ pytestmark = pytest.mark.slow
 
 MAT = Material()
 E, NU = MAT.youngs_modulus_MPa, MAT.poisson_ratio
-MU, LAM = L2._lame_3d(E, NU)
+MU, LAM = lame_3d(E, NU)
 MID = HexCell(33, 1.0, 2.8)
 
 
@@ -104,7 +105,7 @@ def test_material_at_rest_is_3d_hooke_and_tangent_matches_central_differences_at
     # the assembled tangent against central differences of the residual, on a slab of the
     # cell's mesh deformed to large strain (compression, shear and a twist through the depth)
     prob = C3.Problem3D(MID, MAT, C3.graded_depth(2.0, 2, 0.5))
-    asm = L2._assembler(prob.basis)
+    asm = assembler_of(prob.basis)
     X = prob.basis.doflocs
     comp = np.zeros(prob.basis.N, int)
     for c in range(3):
@@ -131,7 +132,7 @@ def test_thin_slice_with_held_faces_is_the_2d_plane_strain_rung():
     # u_y = 0 on both faces: the continuum answer is plane strain at any depth. The tetrahedra's
     # space holds the extruded P2 field but is richer, so the 3D k is lower by a discretisation
     # term that vanishes like the slice's depth squared; at s = t / 1000 it is below 1e-5.
-    p2 = L2._Problem(MID, MAT, 2, 8, 0)
+    p2 = L2.ContactProblem(MID, MAT, L2.MeshOptions(2, 8, 0))
     k2 = L2.linear_k(p2) / p2.depth_factor
     gaps = []
     for s in (1e-2, 1e-3):
@@ -150,7 +151,7 @@ def test_thin_slice_with_free_faces_tends_to_plane_stress():
     s = 0.01
     over = []
     for n_thick, n_length in ((3, 12), (6, 24)):
-        ps = L2._Problem(MID, C3.plane_stress_material(MAT), n_thick, n_length, 0)
+        ps = L2.ContactProblem(MID, C3.plane_stress_material(MAT), L2.MeshOptions(n_thick, n_length, 0))
         k_ps = L2.linear_k(ps) / ps.depth_factor
         k3 = _k_per_mm(C3.Problem3D(MID, MAT, [0.0, s], n_thick, n_length, y_sym=False), s)
         over.append(k3 / k_ps - 1.0)
@@ -158,5 +159,5 @@ def test_thin_slice_with_free_faces_tends_to_plane_stress():
     # error ~ element size: the Richardson extrapolation lands on plane stress
     assert abs(2.0 * over[1] - over[0]) < 3e-3
     # and the slice is far from plane strain (about 20 % softer here)
-    pe = L2._Problem(MID, MAT, 6, 24, 0)
+    pe = L2.ContactProblem(MID, MAT, L2.MeshOptions(6, 24, 0))
     assert k3 < 0.9 * L2.linear_k(pe) / pe.depth_factor

@@ -8,7 +8,8 @@ from mst_cli.model.cell import HexCell
 from mst_cli.model.material import Material
 from mst_cli.model.mechanics import continuum as L2
 from mst_cli.model.mechanics import layer_law
-from mst_cli.model.mechanics.continuum import _kinematics, _lame_3d, linear_stiffness_N_per_mm, solve_continuum
+from mst_cli.model.mechanics.continuum import linear_stiffness_N_per_mm, solve_continuum
+from mst_cli.model.mechanics.continuum.assembly import kinematics, lame_3d
 from mst_cli.model.mechanics.spring import spring_layer
 
 pytestmark = pytest.mark.slow  # every test here runs L2 or its kernel
@@ -21,9 +22,9 @@ E_PS = E / (1 - NU**2)  # plane-strain modulus
 
 
 def test_tangent_at_rest_is_plane_strain_elasticity():
-    mu, lam = _lame_3d(E, NU)
+    mu, lam = lame_3d(E, NU)
     I = np.eye(2)[:, :, None]
-    P, _, _ = _kinematics(I + 0.0, mu, lam)
+    P, _, _ = kinematics(I + 0.0, mu, lam)
     assert np.allclose(P, 0.0)
     # d P / d F at rest, by central differences, against Hooke's law in plane strain
     # (eps_yy = 0): C_1111 = E (1 - nu) / ((1 + nu)(1 - 2 nu)), C_1122 = E nu / ((1 + nu)(1 - 2 nu)),
@@ -37,7 +38,7 @@ def test_tangent_at_rest_is_plane_strain_elasticity():
         for l in range(2):
             dF = np.zeros((2, 2, 1))
             dF[k, l] = eps
-            C[:, :, k, l] = (_kinematics(I + dF, mu, lam)[0] - _kinematics(I - dF, mu, lam)[0])[..., 0] / (2 * eps)
+            C[:, :, k, l] = (kinematics(I + dF, mu, lam)[0] - kinematics(I - dF, mu, lam)[0])[..., 0] / (2 * eps)
     assert C[0, 0, 0, 0] == pytest.approx(c11, rel=1e-6) and C[1, 1, 1, 1] == pytest.approx(c11, rel=1e-6)
     assert C[0, 0, 1, 1] == pytest.approx(c12, rel=1e-6) and C[1, 1, 0, 0] == pytest.approx(c12, rel=1e-6)
     for ij in ((0, 1, 0, 1), (0, 1, 1, 0), (1, 0, 0, 1), (1, 0, 1, 0)):
@@ -45,14 +46,14 @@ def test_tangent_at_rest_is_plane_strain_elasticity():
 
 
 def test_uniaxial_small_stretch_has_the_plane_strain_modulus():
-    mu, lam = _lame_3d(E, NU)
+    mu, lam = lame_3d(E, NU)
     # find F22 with P22 = 0 for F11 = 1 + eps by bisection; then P11 / eps -> E / (1 - nu^2)
     eps = 1e-6
     lo, hi = 1 - 1e-5, 1.0
     for _ in range(80):
         mid = 0.5 * (lo + hi)
         F = np.array([[1 + eps, 0], [0, mid]])[:, :, None]
-        P = _kinematics(F, mu, lam)[0]
+        P = kinematics(F, mu, lam)[0]
         lo, hi = (mid, hi) if P[1, 1, 0] < 0 else (lo, mid)
     assert P[0, 0, 0] / eps == pytest.approx(E_PS, rel=1e-4)
     # and the lateral strain is the plane-strain Poisson ratio nu / (1 - nu)
@@ -60,7 +61,7 @@ def test_uniaxial_small_stretch_has_the_plane_strain_modulus():
 
 
 class _Block:
-    """The L2 kernel (:meth:`_Problem.assemble`, the Neo-Hookean residual and tangent) on a
+    """The L2 kernel (:meth:`ContactProblem.assemble`, the Neo-Hookean residual and tangent) on a
     rectangle [0, Lx] x [0, Lz] of P2 triangles; small-strain solves with the tangent at rest."""
 
     def __init__(self, Lx, Lz, nx, nz):
@@ -68,14 +69,14 @@ class _Block:
 
         mesh = MeshTri.init_tensor(np.linspace(0, Lx, nx + 1), np.linspace(0, Lz, nz + 1))
         self.basis = Basis(mesh, ElementVector(ElementTriP2()), intorder=4)
-        self.mu, self.lam = _lame_3d(E, NU)
+        self.mu, self.lam = lame_3d(E, NU)
         self.xy = self.basis.doflocs
         self.is_x = np.zeros(self.basis.N, bool)
         self.is_x[self.basis.nodal_dofs[0]] = True
         self.is_x[self.basis.facet_dofs[0]] = True
 
     def assemble(self, u, need_K=True):
-        return L2._Problem.assemble(self, u, need_K)
+        return L2.ContactProblem.assemble(self, u, need_K)
 
     def linear(self, prescribed: dict):
         """Solve K u = 0 with u[dof] = value for the prescribed dofs; returns u and K u."""
@@ -125,7 +126,7 @@ def test_free_block_is_the_sliced_tangent_and_solves_it():
     Cholesky of a stable state and the LU of an indefinite one, agree with SuperLU on it."""
     from scipy.sparse.linalg import spsolve
 
-    prob = L2._Problem(HexCell(40, 0.8, 3.0), MAT, L2.DEFAULT_N_THICK, L2.DEFAULT_N_LENGTH, 0)
+    prob = L2.ContactProblem(HexCell(40, 0.8, 3.0), MAT, L2.MeshOptions(levels=0))
     _, K = prob.assemble(np.zeros(prob.basis.N))
     rng = np.random.default_rng(3)
     for pinned in ((), prob.inner_z[:3]):
@@ -185,7 +186,7 @@ def test_equilibrium_reaction_equals_applied(reference_run):
 
 
 def test_small_load_agrees_with_linear_solve():
-    res = solve_continuum(HexCell(40, 0.8, 3.0), MAT, first_step_frac=1e-4, levels=0)
+    res = solve_continuum(HexCell(40, 0.8, 3.0), MAT, L2.StudyOptions(L2.MeshOptions(levels=0), first_step_frac=1e-4))
     assert res.force_N[1] / res.displacement_mm[1] == pytest.approx(res.k_linear_N_per_mm, rel=2e-3)
 
 
@@ -224,7 +225,7 @@ def test_default_mesh_is_converged_at_the_box_corners(cell):
     # block of its own; stubby steep walls are shorter than thick. The default mesh's k is
     # within 2 % of one with 4x the elements across and 2x along, 2 more corner refinements
     k = linear_stiffness_N_per_mm(cell, MAT)
-    k_fine = linear_stiffness_N_per_mm(cell, MAT, 6, 24, 6)
+    k_fine = linear_stiffness_N_per_mm(cell, MAT, L2.MeshOptions(6, 24, 6))
     assert k == pytest.approx(k_fine, rel=0.02)
 
 
@@ -277,7 +278,7 @@ def test_contact_forces_push_and_no_face_penetrates():
     # down on the mirror plane, every active outer point up on the plate, and no point lies
     # beyond its obstacle
     cell = HexCell(33, 1.0, 2.8)
-    prob = L2._Problem(cell, MAT, L2.DEFAULT_N_THICK, L2.DEFAULT_N_LENGTH, 0)
+    prob = L2.ContactProblem(cell, MAT, L2.MeshOptions(levels=0))
     u, active = np.zeros(prob.basis.N), None
     for d in np.linspace(0.05, 0.7, 14):
         u, _, active, r = prob._newton(u, d, active, pads=True)
@@ -291,7 +292,7 @@ def test_before_any_contact_the_path_is_the_contact_free_one():
     # contact only adds constraints once a face reaches its obstacle: below that the solve is
     # the same equations (the force at small compression is the linear stiffness)
     cell = HexCell(33, 1.0, 2.8)
-    prob = L2._Problem(cell, MAT, L2.DEFAULT_N_THICK, L2.DEFAULT_N_LENGTH, 0)
+    prob = L2.ContactProblem(cell, MAT, L2.MeshOptions(levels=0))
     u, _, active, r = prob._newton(np.zeros(prob.basis.N), 1e-4, None, pads=True)
     F, _ = prob.force(u, active, r)
     assert F / 1e-4 == pytest.approx(L2.linear_k(prob), rel=1e-3)
@@ -302,7 +303,7 @@ def test_before_any_contact_the_path_is_the_contact_free_one():
 def test_lock_force_is_mesh_converged(cell):
     # twice the elements across the wall and along it: the lock force moves less than 1 %
     R = solve_continuum(cell, MAT).force_N[-1]
-    R_fine = solve_continuum(cell, MAT, n_thick=6, n_length=24).force_N[-1]
+    R_fine = solve_continuum(cell, MAT, L2.StudyOptions(L2.MeshOptions(n_thick=6, n_length=24))).force_N[-1]
     assert R == pytest.approx(R_fine, rel=0.01)
 
 
@@ -315,7 +316,8 @@ def test_a_peeling_contact_zone_does_not_cycle_the_active_set():
     # points' pull is under the 1 % the lock force is converged to, as a share of the force the
     # layer carries (here one grazing node of the peeling zone pulls about as much as its
     # neighbour pushes).
-    prob = L2._Problem(HexCell(70, 1.5, 6.0), MAT, 3, 12, 2, ("outer_root", "inner_root"), 1.0)
+    mesh = L2.MeshOptions(levels=2, corners=("outer_root", "inner_root"), radius_in_t=1.0)
+    prob = L2.ContactProblem(HexCell(70, 1.5, 6.0), MAT, mesh)
     u, active = np.zeros(prob.basis.N), None
     for d in np.arange(0.05, 2.46, 0.05):
         u, _, active, r = prob._newton(u, d, active, pads=True)
@@ -336,11 +338,11 @@ def test_the_plate_as_a_penalty_converges_to_the_active_set():
     # counted among the supports.
     cell = HexCell(33, 1.0, 2.8)
     exact = L2.solve_continuum(cell, MAT).force_N[-1]
-    runs = [L2.solve_continuum(cell, MAT, plate_penalty_per_mm=k) for k in (1e2, 1e3, 1e4)]
+    runs = [L2.solve_continuum(cell, MAT, L2.StudyOptions(plate_penalty_per_mm=k)) for k in (1e2, 1e3, 1e4)]
     err = [abs(r.force_N[-1] / exact - 1) for r in runs]
     assert err[0] > err[1] > err[2] and err[2] < 5e-4 and err[0] > 1e-3
     assert runs[-1].reaction_balance < 1e-6
-    prob = L2._Problem(cell, MAT, 3, 12, 0, plate_penalty_per_mm=1e4)
+    prob = L2.ContactProblem(cell, MAT, L2.MeshOptions(levels=0), plate_penalty_per_mm=1e4)
     assert prob.plate.dofs.size > 0 and prob.contact_dofs.size == prob.n_inner  # the plate left the set
 
 
@@ -354,7 +356,7 @@ def test_the_law_between_its_knots_follows_a_finely_sampled_path(cell):
     from mst_cli.model.mechanics.path import StepControl
 
     law = L2.solve_continuum(cell, MAT)
-    prob = L2._Problem(cell, MAT, L2.DEFAULT_N_THICK, L2.DEFAULT_N_LENGTH, 0)
+    prob = L2.ContactProblem(cell, MAT, L2.MeshOptions(levels=0))
     fine, _ = L2.follow_to_lock(
         prob, L2.linear_k(prob), StepControl(first_step_rel=0.01, grow=1.0, max_steps=3000, chord_tol_rel=1.0)
     )
@@ -387,7 +389,7 @@ def test_root_fillet_mesh_is_conforming_and_adds_the_fillet():
         assert counts.max() == 2
         boundary = edges[:, counts == 1]
         assert np.all(np.bincount(boundary.ravel())[np.unique(boundary)] == 2)  # a simple loop
-        prob = L2._Problem(cell, MAT, 3, 12, 1, root_fillet_mm=r)
+        prob = L2.ContactProblem(cell, MAT, L2.MeshOptions(levels=1, root_fillet_mm=r))
         arc = prob._fillet_arc_dofs(prob.fillet, prob.basis.doflocs, 1e-9)
         assert arc.size > 0 and np.isin(arc, prob.contact_dofs).all()
         dist = np.hypot(*(prob.basis.doflocs[:, arc] - f.O[:, None]))
@@ -399,7 +401,7 @@ def test_root_fillet_mesh_is_conforming_and_adds_the_fillet():
 def test_smallest_stretch_of_a_homogeneous_deformation_is_its_smallest_principal_stretch():
     """F = R(phi) diag(1 + a, 1 + b) everywhere: the principal stretches are 1 + a and 1 + b
     whatever the rotation, so the smallest is min(1 + a, 1 + b) at every quadrature point."""
-    prob = L2._Problem(HexCell(40, 0.8, 3.0), MAT, L2.DEFAULT_N_THICK, L2.DEFAULT_N_LENGTH, 0)
+    prob = L2.ContactProblem(HexCell(40, 0.8, 3.0), MAT, L2.MeshOptions(levels=0))
     xy = prob.basis.doflocs
     is_z = ~prob.is_x
     for a, b, phi in ((-0.3, 0.1, 0.0), (0.2, -0.45, 0.7), (0.0, 0.0, 1.2)):

@@ -18,6 +18,7 @@ import pytest
 from mst_cli.model.cell import HexCell
 from mst_cli.model.material import Material
 from mst_cli.model.mechanics import continuum as L2
+from mst_cli.model.mechanics.continuum.assembly import lame_3d
 from mst_cli.model.mechanics.frame import _element_forces, _Wall, solve_frame
 
 MAT = Material()
@@ -94,7 +95,7 @@ def _mirrored_half_chevron(cell, levels):
     """The quarter mesh plus its mirror image across z = h/2, nodes on the plane merged."""
     from skfem import MeshTri
 
-    mesh, x_cut = L2.refined_quarter_mesh(cell, levels=levels)
+    mesh, x_cut = L2.refined_quarter_mesh(cell, L2.MeshOptions(levels=levels))
     p, t = mesh.p, mesh.t
     h = cell.h_mm
     on_plane = np.abs(p[1] - 0.5 * h) < 1e-9 * h
@@ -115,7 +116,7 @@ class HalfChevronContinuum:
 
         mesh, x_cut = _mirrored_half_chevron(cell, levels)
         self.basis = Basis(mesh, ElementVector(ElementTriP2()), intorder=4)
-        self.mu, self.lam = L2._lame_3d(MAT.youngs_modulus_MPa, MAT.poisson_ratio)
+        self.mu, self.lam = lame_3d(MAT.youngs_modulus_MPa, MAT.poisson_ratio)
         xy = self.basis.doflocs
         tol = 1e-9 * cell.h_mm
         is_x = np.zeros(self.basis.N, bool)
@@ -132,7 +133,7 @@ class HalfChevronContinuum:
         self.is_x = is_x
 
     def assemble(self, u, need_K=True):
-        return L2._Problem.assemble(self, u, need_K)  # the L2 kernel, on this mesh
+        return L2.ContactProblem.assemble(self, u, need_K)  # the L2 kernel, on this mesh
 
     def linear(self, d):
         """Small-strain solution for a top-plate motion d: one solve with the tangent at rest."""

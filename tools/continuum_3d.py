@@ -2,7 +2,7 @@
 the web's depth, with faces free at y = +-D/2. A benchmark kernel, not part of the package
 (imported by studies/bench_3d.py and tests/test_3d_check.py).
 
-Model. The plane-strain rung (mst_cli/model/mechanics/continuum.py) meshes a quarter of the
+Model. The plane-strain rung (mst_cli/model/mechanics/continuum/) meshes a quarter of the
 profile (x >= 0, z <= h/2) with P2 triangles. Here that triangle mesh (without corner
 refinement, ``levels=0``) is extruded along y from the symmetry plane y = 0 (u_y = 0) to the
 free face y = D/2, in prism layers graded toward the free face (its boundary layer is where 3D
@@ -14,7 +14,7 @@ Everything else is the 2D rung's, applied through the depth: bottom z = 0 bonded
 cut u_x = 0, tip face z = h/2 at u_z = -d/2 (free in x and y), the same contact surfaces (their
 z-dofs at every y, the same obstacles), full 3D compressible Neo-Hookean
 P = mu F + (lam ln J - mu) F^-T with its tangent. :class:`Problem3D` subclasses the 2D
-``_Problem`` and registers a 3D assembler for its basis, so the Newton/active-set solve, the
+``ContactProblem`` and registers a 3D assembler for its basis, so the Newton/active-set solve, the
 tangent stiffness, the force and the lock search are the 2D rung's own code, unchanged.
 
 Force: the model carries half the depth (y in [0, D/2]) of one chevron's half profile, so the
@@ -27,6 +27,7 @@ import numpy as np
 
 from mst_cli.model.cell import HexCell
 from mst_cli.model.mechanics import continuum as L2
+from mst_cli.model.mechanics.continuum.assembly import lame_3d, set_assembler
 from mst_cli.model.mechanics.path import PathError
 
 
@@ -90,7 +91,7 @@ def kinematics(Fm, mu, lam):
 
 
 class Assembler:
-    """The 2D rung's vectorised assembler (continuum._Assembler) for any dimension: gradients,
+    """The 2D rung's vectorised assembler (continuum.assembly.Assembler) for any dimension: gradients,
     weights and the CSR pattern are the reference mesh's, computed once."""
 
     def __init__(self, basis):
@@ -144,7 +145,7 @@ class Assembler:
 
 
 # --------------------------------------------------------------------------- problem
-class Problem3D(L2._Problem):
+class Problem3D(L2.ContactProblem):
     """The quarter profile extruded over y in ``y_mm`` (increasing from 0).
 
     ``y_sym``: u_y = 0 on y = 0 (the web's mid-plane); ``y_held_far``: u_y = 0 on the far face
@@ -171,8 +172,8 @@ class Problem3D(L2._Problem):
         y_mm = np.asarray(y_mm, float)
         self.mesh = MeshTet(*extrude(pts2, tri2, y_mm))
         self.basis = Basis(self.mesh, ElementVector(ElementTetP2()), intorder=intorder)
-        L2._ASSEMBLERS[self.basis] = Assembler(self.basis)
-        self.mu, self.lam = L2._lame_3d(material.youngs_modulus_MPa, material.poisson_ratio)
+        set_assembler(self.basis, Assembler(self.basis))
+        self.mu, self.lam = lame_3d(material.youngs_modulus_MPa, material.poisson_ratio)
         b = self.basis
         h2 = 0.5 * cell.h_mm
         tol = 1e-9 * max(cell.width_mm, cell.h_mm, float(y_mm[-1]))
@@ -206,7 +207,7 @@ class Problem3D(L2._Problem):
 
 def problem_2d(cell, material, n_thick: int = 2, n_length: int = 8):
     """The plane-strain rung's problem on the same in-plane mesh (no corner refinement)."""
-    return L2._Problem(cell, material, n_thick, n_length, 0)
+    return L2.ContactProblem(cell, material, L2.MeshOptions(n_thick, n_length, 0))
 
 
 # --------------------------------------------------------------------------- path to the lock

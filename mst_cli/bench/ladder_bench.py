@@ -24,7 +24,7 @@ from mst_cli.model.assembly import Magnet
 from mst_cli.model.cell import HexCell
 from mst_cli.model.material import Material
 from mst_cli.model.mechanics import uncached_layer_law
-from mst_cli.model.mechanics.continuum import linear_stiffness_N_per_mm
+from mst_cli.model.mechanics.continuum import MeshOptions, linear_stiffness_N_per_mm
 from mst_cli.model.mechanics.spring import spring_arrays, spring_layer
 
 if TYPE_CHECKING:
@@ -167,7 +167,7 @@ def mesh_convergence(
     """L2 small-strain k on successively finer meshes (n_thick, n_length, corner levels)."""
     out = []
     for c in cells:
-        ks = [linear_stiffness_N_per_mm(c, material, *m) for m in meshes]
+        ks = [linear_stiffness_N_per_mm(c, material, MeshOptions(*m)) for m in meshes]
         out.append(
             {
                 "theta_deg": c.theta_deg,

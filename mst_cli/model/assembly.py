@@ -78,7 +78,7 @@ class Magnet:
 
     diameter_mm: float = spec(6.0, lo=0.1, hi=100.0, unit="mm", meaning="diameter of the disc")
     thickness_mm: float = spec(2.0, lo=0.1, hi=100.0, unit="mm", meaning="thickness of the disc, along its axis")
-    remanence_T: float = 1.3  # Br; the file's key (null: the grade's value) is declared in io.schema
+    remanence_T: float = 1.3  # Br; the file's key (null: the grade's value) is declared in sensor.sections
     grade: str = spec("N42", choices=tuple(MAGNET_GRADES_T), meaning="NdFeB grade: sets Br when `remanence_T` is null")
 
     @property

@@ -25,26 +25,27 @@ from mst_cli.model.mechanics.continuum import (
     DEFAULT_LEVELS,
     DEFAULT_N_LENGTH,
     DEFAULT_N_THICK,
+    ContactProblem,
     ContinuumError,
     ContinuumResult,
-    _Problem,
-    _result,
+    MeshOptions,
+    continuum_result,
     follow_to_lock,
 )
 from mst_cli.model.mechanics.path import PathError, StepControl
 
 
-def _dof_sets(prob: _Problem) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def _dof_sets(prob: ContactProblem) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """(is_x (N,), on the bonded bottom face (N,), on the pad's cut above it (N,), dof x, z):
     the problem's own masks."""
     return prob.is_x, prob.on_bottom, prob.on_cut & ~prob.on_bottom, prob.basis.doflocs
 
 
-class _TiltedProblem(_Problem):
+class _TiltedProblem(ContactProblem):
     """The quarter problem with its bonded face and plate turned by phi/2 = tilt d / 2."""
 
     def __init__(self, cell, material, tilt_rad_per_mm: float, n_thick: int, n_length: int, levels: int = 0):
-        super().__init__(cell, material, n_thick, n_length, levels)
+        super().__init__(cell, material, MeshOptions(n_thick, n_length, levels))
         if self.x_cut <= 0.0:
             raise ValueError("tilted L2 needs a pad longer than PAD_LENGTH_IN_T t (its cut away from the axis)")
         is_x, bottom, cut, xy = _dof_sets(self)
@@ -85,7 +86,7 @@ def solve_tilted_chevron(
         path, ratio_after = follow_to_lock(prob, k0, StepControl(), D_MAX_OVER_NOMINAL / max(least, 0.05))
     except PathError as exc:
         raise ContinuumError(f"tilted continuum solve: {exc} for {cell}") from None
-    return _result(prob, path, k0, 1.0, ratio_after, int(prob.basis.N))
+    return continuum_result(prob, path, k0, 1.0, ratio_after, int(prob.basis.N))
 
 
 def linear_tilt_lever_mm(
@@ -106,7 +107,7 @@ def linear_tilt_lever_mm(
     compression at one line x_c, the second force is x_c times the first: the ratio is the
     lever the tilt rung (:mod:`mst_cli.model.mechanics.tilt`) uses.
     """
-    prob = _Problem(cell, material, n_thick, n_length, levels)
+    prob = ContactProblem(cell, material, MeshOptions(n_thick, n_length, levels))
     _, K0 = prob.assemble(np.zeros(prob.basis.N))
     is_x, bottom, cut, xy = _dof_sets(prob)
     u_comp = np.zeros(prob.basis.N)
