@@ -7,7 +7,7 @@ On the reference export (configs/mohammadi2021-forward.yaml, `mst export --stl -
 * PrusaSlicer's own slice time (as `mst slice` runs it: the profile as given, then again
   with automatic support on, which `mst slice` uses to prove no support is needed);
 * parsing its G-code (:func:`mst_cli.cad.gcode.parse_gcode`);
-* the free-span analysis (:func:`mst_cli.cad.gcode.free_spans`, per move and with joined moves);
+* the free-span analysis (:func:`mst_cli.cad.layer_measure.free_spans`, per move and with joined moves);
 * the wall time of the whole `mst slice` command, interpreter start included (with and
   without drawing print.png);
 
@@ -80,6 +80,7 @@ def main() -> None:
     n = max(1, args.repeats)
 
     from mst_cli.cad import gcode as G
+    from mst_cli.cad import layer_measure as M
     from mst_cli.cad import slicer as S
 
     exe = S.find_prusa_slicer()
@@ -107,8 +108,8 @@ def main() -> None:
         )
         text = run.gcode_path.read_text()
         t_parse, g = timed(lambda: G.parse_gcode(text), n)
-        t_span, spans = timed(lambda: G.free_spans(g), n)
-        t_joined, _ = timed(lambda: G.free_spans(g, join_moves=True), n)
+        t_span, spans = timed(lambda: M.free_spans(g), n)
+        t_joined, _ = timed(lambda: M.free_spans(g, join_moves=True), n)
         moves = sum(len(lay.segments) for lay in g.layers)
         t_cli, _ = timed(
             lambda: subprocess.run(
@@ -136,7 +137,7 @@ def main() -> None:
 
     syn = synthetic_gcode()
     t_sparse, gs = timed(lambda: G.parse_gcode(syn), n)
-    t_sspan, _ = timed(lambda: G.free_spans(gs), n)
+    t_sspan, _ = timed(lambda: M.free_spans(gs), n)
     smoves = sum(len(lay.segments) for lay in gs.layers)
     row("synthetic 100 layers: parse G-code [s]", t_sparse, note=f"{len(gs.layers)} layers, {smoves} moves")
     row("synthetic 100 layers: free spans [s]", t_sspan)

@@ -493,6 +493,60 @@ def test_interrupted_simulate_keeps_the_earlier_complete_output(tmp_path, sig):
     assert {p.name: p.read_bytes() for p in out.iterdir()} == before
 
 
+def _sigint_once_mapped(p: subprocess.Popen, library: str, delay_s: float) -> bool:
+    """SIGINT to ``p`` ``delay_s`` after its process maps ``library`` (an extension module being
+    imported); False when it ended or 60 s passed first."""
+    start = time.monotonic()
+    while time.monotonic() - start < 60 and p.poll() is None:
+        try:
+            mapped = library in Path(f"/proc/{p.pid}/maps").read_text()
+        except OSError:
+            return False
+        if mapped:
+            time.sleep(delay_s)
+            p.send_signal(signal.SIGINT)
+            return True
+        time.sleep(0.002)
+    return False
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not Path("/proc/self/maps").exists(), reason="watches /proc/PID/maps (Linux)")
+@pytest.mark.parametrize("delay_s", [0.0, 0.3])
+def test_ctrl_c_during_the_cad_kernels_import_is_the_one_interrupt_line(tmp_path, delay_s):
+    # OCP (build123d's kernel) turns a KeyboardInterrupt inside its initialisation into
+    # "ImportError: initialization failed": the signal lands while its library is being loaded
+    out = tmp_path / "print"
+    p = subprocess.Popen(
+        [
+            PYTHON,
+            "-c",
+            "import sys; from mst_cli.cli.app import main; main(sys.argv[1:], prog_name='mst')",
+            "export",
+            str(FORWARD),
+            "--step",
+            "--out",
+            str(out),
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        preexec_fn=default_dispositions,
+    )
+    try:
+        sent = _sigint_once_mapped(p, "OCP", delay_s)
+        _, err = p.communicate(timeout=120)
+    finally:
+        if p.poll() is None:
+            p.kill()
+    assert sent, "the export ended before it loaded OCP"
+    assert p.returncode == 130, err
+    # progress lines may come first (stderr); then the one line, and no traceback
+    assert err.strip().splitlines()[-1] == "mst: interrupted (SIGINT): nothing half-written was left", err
+    assert "Traceback" not in err and "ImportError" not in err, err
+    assert not out.exists()
+
+
 STAGE_AND_WAIT = textwrap.dedent("""
     import sys
     from pathlib import Path

@@ -22,6 +22,7 @@ from click.testing import CliRunner
 
 import mst_cli
 from mst_cli.cad import gcode as G
+from mst_cli.cad import layer_measure as M
 from mst_cli.cad import mesh_io
 from mst_cli.cli.app import main
 
@@ -72,7 +73,7 @@ def test_bridge_between_two_pillars_spans_its_gap():
     pillars = [("Solid infill", hatch(0, 3, 0, 4.05) + hatch(3 + L, 6 + L, 0, 4.05))]
     deck = [("Bridge infill", [(W / 2, y, 6 + L - W / 2, y) for y in (0.225, 1.125, 2.025)])]
     g = G.parse_gcode(gcode_text([pillars, pillars, deck]))
-    r = G.free_spans(g)
+    r = M.free_spans(g)
     assert r.longest.layer == 3 and r.longest.type == "Bridge infill"
     assert abs(r.longest.length_mm - L) < W
     assert abs(r.longest.x_mm - (3 + L / 2)) < 0.1
@@ -81,10 +82,10 @@ def test_bridge_between_two_pillars_spans_its_gap():
 
 def test_45_degree_overhang_is_supported_and_a_flatter_one_is_not():
     stair45 = [[("External perimeter", [(0.2 * k, 0, 0.2 * k, 10)])] for k in range(10)]
-    r = G.free_spans(G.parse_gcode(gcode_text(stair45)))
+    r = M.free_spans(G.parse_gcode(gcode_text(stair45)))
     assert r.longest.length_mm < 0.06  # at most one sample at a line end
     stair = [[("External perimeter", [(0.35 * k, 0, 0.35 * k, 10)])] for k in range(10)]
-    r = G.free_spans(G.parse_gcode(gcode_text(stair)))
+    r = M.free_spans(G.parse_gcode(gcode_text(stair)))
     assert abs(r.longest.length_mm - 10.0) < 0.06  # 0.35 mm > half a line: all in the air
 
 
@@ -92,7 +93,7 @@ def test_cantilever_overhang_length():
     C = 4.0
     block = [("Solid infill", hatch(0, 5, 0, 4.05))]
     arm = [("Overhang perimeter", [(W / 2, 2.025, 5 + C - W / 2, 2.025)])]
-    r = G.free_spans(G.parse_gcode(gcode_text([block, block, arm])))
+    r = M.free_spans(G.parse_gcode(gcode_text([block, block, arm])))
     assert abs(r.longest.length_mm - (C - W / 2)) < 0.1
     assert r.longest.x_mm > 5
 
@@ -105,8 +106,8 @@ def test_joined_moves_count_a_strand_that_turns_a_corner():
         "; filament", ";TYPE:Overhang perimeter\nG1 X0.5 Y0.5\nG1 X6.5 Y0.5 E0.2\nG1 X6.5 Y4.5 E0.2\n; filament", 1
     )
     g = G.parse_gcode(text)
-    assert abs(G.free_spans(g).longest.length_mm - 5.5) < 0.1
-    assert abs(G.free_spans(g, join_moves=True).longest.length_mm - 9.5) < 0.1
+    assert abs(M.free_spans(g).longest.length_mm - 5.5) < 0.1
+    assert abs(M.free_spans(g, join_moves=True).longest.length_mm - 9.5) < 0.1
 
 
 def test_parser_absolute_and_relative_extrusion_pause_and_footer():
@@ -188,10 +189,10 @@ def test_gaps_along_a_line():
         np.ones(2),
         np.arange(2),
     )
-    (gap,) = G.gaps_along_line(layer, "x", 5.0)
+    (gap,) = M.gaps_along_line(layer, "x", 5.0)
     assert gap == pytest.approx((0.225, 1.75))
     # near a round end the stroke is thinner: at x = 10.1 the first wall spans +-sqrt(.225^2-.1^2)
-    (gap,) = G.gaps_along_line(layer, "x", 10.1)
+    (gap,) = M.gaps_along_line(layer, "x", 10.1)
     assert gap[0] == pytest.approx(np.sqrt(0.225**2 - 0.1**2))
     # a diagonal stroke crossing the line x = 0: half-width 0.225 / cos(45) along y
     diag = G.Layer(
@@ -203,10 +204,10 @@ def test_gaps_along_a_line():
         np.ones(2),
         np.arange(2),
     )
-    (gap,) = G.gaps_along_line(diag, "x", 0.0)
+    (gap,) = M.gaps_along_line(diag, "x", 0.0)
     assert gap == pytest.approx((0.225 * np.sqrt(2), 3 - 0.225))
-    assert G.gap_at(layer, "x", 5.0, 0.2, 1.8) == pytest.approx((0.225, 1.75))
-    assert G.gaps_along_line(layer, "y", 1.0) == []  # the line runs between the walls
+    assert M.gap_at(layer, "x", 5.0, 0.2, 1.8) == pytest.approx((0.225, 1.75))
+    assert M.gaps_along_line(layer, "y", 1.0) == []  # the line runs between the walls
 
 
 # --------------------------------------------------------------------------- the 3MF pause

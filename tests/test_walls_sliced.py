@@ -14,6 +14,7 @@ import pytest
 
 from mst_cli import api
 from mst_cli.cad import gcode as G
+from mst_cli.cad import layer_measure as M
 from mst_cli.cad.expected_body import wall_centrelines_xz
 from mst_cli.cad.manifest import Manifest, SliceManifest, export_manifest
 from mst_cli.cad.print_check import walls_as_sliced
@@ -47,18 +48,18 @@ def wall_ends(origin=(2.0, 1.0), half_mm=0.5):
 
 def test_one_line_across_a_wall_is_its_width():
     a, b = wall_ends()
-    (one,) = G.material_across(lines_along([0.0], [0.41]), a, b, 1, 0.15)
+    (one,) = M.material_across(lines_along([0.0], [0.41]), a, b, 1, 0.15)
     assert one.width_mm == pytest.approx(0.41) and one.n_lines == 1
 
 
 def test_overlapping_perimeters_count_their_outer_edges_not_their_summed_widths():
     # two 0.45 mm lines 0.40 mm apart (overlapping 0.05 mm): the wall is 0.85 mm, not 0.90
     a, b = wall_ends()
-    res = G.material_across(lines_along([-0.2, 0.2], [0.45, 0.45]), a, b, 5, 0.35)
+    res = M.material_across(lines_along([-0.2, 0.2], [0.45, 0.45]), a, b, 5, 0.35)
     assert [r.width_mm for r in res] == pytest.approx([0.85] * 5)
     assert {r.n_lines for r in res} == {2}
     # three lines, the middle one a narrower gap fill overlapping both: outer edges 1.2 mm apart
-    res = G.material_across(lines_along([-0.375, 0.0, 0.375], [0.45, 0.32, 0.45]), a, b, 3, 0.55)
+    res = M.material_across(lines_along([-0.375, 0.0, 0.375], [0.45, 0.32, 0.45]), a, b, 3, 0.55)
     assert [r.width_mm for r in res] == pytest.approx([1.2] * 3) and {r.n_lines for r in res} == {3}
 
 
@@ -66,13 +67,13 @@ def test_material_beyond_air_is_not_the_wall_and_a_missing_wall_is_zero():
     a, b = wall_ends()
     # the wall (0.4 mm on the centre line) and a plate line 0.1 mm of air away from it
     segs = lines_along([0.0, 0.2 + 0.1 + 0.225], [0.4, 0.45])
-    (r,) = G.material_across(segs, a, b, 1, 0.15)
+    (r,) = M.material_across(segs, a, b, 1, 0.15)
     assert r.width_mm == pytest.approx(0.4) and r.n_lines == 1
     # a wall laid off the centre line by 0.1 mm is still the wall, at its own width
-    (r,) = G.material_across(lines_along([0.1], [0.4]), a, b, 1, 0.15)
+    (r,) = M.material_across(lines_along([0.1], [0.4]), a, b, 1, 0.15)
     assert r.width_mm == pytest.approx(0.4) and r.offset_mm == pytest.approx((-0.1, 0.3))
     # nothing reaches into the core: the wall is missing from the G-code
-    (r,) = G.material_across(lines_along([1.0], [0.4]), a, b, 1, 0.15)
+    (r,) = M.material_across(lines_along([1.0], [0.4]), a, b, 1, 0.15)
     assert (r.width_mm, r.n_lines, r.offset_mm) == (0.0, 0, None)
 
 
@@ -81,7 +82,7 @@ def test_voids_inside_a_thick_wall_stay_inside_it():
     a, b = wall_ends()
     offsets = [-1.275, -0.85, 0.0, 1.275, 0.85]
     widths = [0.45, 0.45, 1.0, 0.45, 0.45]  # infill -0.5..0.5, voids 0.5..0.625 and mirrored
-    (r,) = G.material_across(lines_along(offsets, widths), a, b, 1, 1.45)
+    (r,) = M.material_across(lines_along(offsets, widths), a, b, 1, 1.45)
     assert r.width_mm == pytest.approx(3.0) and r.n_lines == 5
 
 
@@ -91,7 +92,7 @@ def test_a_line_crossing_the_wall_obliquely_covers_its_width_over_the_cosine():
     d = np.array([math.cos(ANGLE + math.radians(60)), math.sin(ANGLE + math.radians(60))])
     o = np.array([2.0, 1.0])
     segs = np.array([[*(o - 2 * d), *(o + 2 * d), 0.45]])
-    (r,) = G.material_across(segs, a, b, 1, 0.3)
+    (r,) = M.material_across(segs, a, b, 1, 0.3)
     assert r.width_mm == pytest.approx(0.45 / math.cos(math.radians(60)))
 
 

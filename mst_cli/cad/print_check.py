@@ -22,7 +22,8 @@ from typing import Any
 import numpy as np
 
 from mst_cli.cad.checks import Check
-from mst_cli.cad.gcode import SUPPORT_TYPES, GCode, Pause, Span, SpanReport, gap_at, material_across
+from mst_cli.cad.gcode import SUPPORT_TYPES, GCode, Pause
+from mst_cli.cad.layer_measure import Span, SpanReport, gap_at, material_across
 from mst_cli.cad.manifest import SliceManifest, WallLine
 
 Shift = tuple[float, float]  # G-code = print frame + shift (x, y), mm
@@ -217,7 +218,7 @@ def walls_as_sliced(g: GCode, manifest: SliceManifest, shift: Shift, z_shift: fl
 
     A wall's sliced width is the median, over :data:`WALL_STATIONS` lines across it in every
     print layer of its z range, of the run of extrusion that holds its centre line
-    (:func:`~mst_cli.cad.gcode.material_across`); a layer's is the mean of its walls'."""
+    (:func:`~mst_cli.cad.layer_measure.material_across`); a layer's is the mean of its walls'."""
     lines = manifest.print.wall_lines
     if not lines:
         return Check(

@@ -10,7 +10,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from mst_cli.cad.gcode import GCode, Layer, Span, SpanReport
+from mst_cli.cad.gcode import GCode, Layer
+from mst_cli.cad.layer_measure import Span, SpanReport
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes

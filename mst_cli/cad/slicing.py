@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from mst_cli.cad import gcode as G
+from mst_cli.cad import layer_measure as M
 from mst_cli.cad import slicer as S
 from mst_cli.cad.checks import Check, ExportFiles, resolve_export
 from mst_cli.cad.manifest import SliceManifest, load_manifest
@@ -60,7 +61,7 @@ class SliceResult:
     bed_centre_mm: tuple[float, float]
     shift_xyz_mm: tuple[float, float, float]  # G-code = print frame + shift
     gcode: G.GCode
-    spans: G.SpanReport
+    spans: M.SpanReport
     written: tuple[str, ...] = ()  # the files :meth:`write` wrote
 
     @property
@@ -110,8 +111,8 @@ def slice_export(
     job = _SliceJob.prepare(path, profile, note, say)
     sliced = _slice_twice(job, say)
     g = sliced.gcode
-    spans = G.free_spans(g)
-    joined = G.free_spans(g, join_moves=True)
+    spans = M.free_spans(g)
+    joined = M.free_spans(g, join_moves=True)
     say("measured the free spans")
     layer_h = _number(job.settings.get("layer_height"), g.layers[min(1, len(g.layers) - 1)].height_mm)
     if not (isinstance(layer_h, float) and math.isfinite(layer_h) and layer_h > 0):

@@ -133,8 +133,8 @@ def _number(source, line, column, text) -> float:
 def _wrong_unit_force(source, header):
     for name in header:
         if name != FORCE_COLUMN and FORCE_LIKE.match(name):
-            unit = re.split(r"[_\[\(\s]", name, maxsplit=1)[1:] or [""]
-            unit = unit[0].strip("[]() ").lower()
+            after_name = re.split(r"[_\[\(\s]", name, maxsplit=1)[1:] or [""]
+            unit = after_name[0].strip("[]() ").lower()
             how = FORCE_CONVERSIONS.get(unit)
             hint = f" (convert: {how})" if how else ""
             raise InputError(

@@ -10,7 +10,9 @@ from __future__ import annotations
 
 import errno
 import functools
+import signal
 import sys
+import threading
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any, NoReturn, ParamSpec, TypeVar
@@ -68,6 +70,26 @@ def handles_input_errors(func: Callable[_P, _R]) -> Callable[_P, _R]:
     return wrapper
 
 
+class _SigintSeen:
+    """Python's own SIGINT handler (KeyboardInterrupt), which also notes that a SIGINT came. Only
+    installed over the default handler: a SIGINT inherited as ignored (nohup) stays ignored."""
+
+    def __init__(self) -> None:
+        self.seen = False
+
+    def __call__(self, signum: int, frame: Any) -> None:
+        self.seen = True
+        signal.default_int_handler(signum, frame)
+
+    @classmethod
+    def install(cls) -> _SigintSeen:
+        handler = cls()
+        in_main_thread = threading.current_thread() is threading.main_thread()  # signal.signal's rule
+        if in_main_thread and signal.getsignal(signal.SIGINT) is signal.default_int_handler:
+            signal.signal(signal.SIGINT, handler)
+        return handler
+
+
 class MstGroup(click.Group):
     """click's group with the tool's one-line error contract: usage errors (unknown option, bad
     value, missing argument, a folder where a file belongs) are one line ``mst: usage error: ...``
@@ -84,8 +106,16 @@ class MstGroup(click.Group):
     ) -> Any:
         if not standalone_mode:
             return super().main(args, prog_name, complete_var, standalone_mode=False, **extra)
+        sigint = _SigintSeen.install()
         try:
             rv = super().main(args, prog_name or "mst", complete_var, standalone_mode=False, **extra)
+        except ImportError:
+            if not sigint.seen:
+                raise
+            # a Ctrl-C inside an extension module's initialisation (OCP, under build123d) comes
+            # back as "ImportError: initialization failed": it is the interrupt all the same
+            click.echo("mst: interrupted (SIGINT): nothing half-written was left", err=True)
+            sys.exit(130)
         except click.exceptions.NoArgsIsHelpError as exc:
             exc.show()  # bare 'mst': the help, as click prints it
             sys.exit(exc.exit_code)

@@ -75,7 +75,8 @@ class StrictLoader(yaml.SafeLoader):
                 f"more than {MAX_NODES} values (aliases expanded): a design file holds a few dozen",
             )
 
-    def compose_node(self, parent: yaml.Node | None, index: int | yaml.Node | None) -> yaml.Node | None:
+    # index: PyYAML passes a sequence position or a mapping's key node (its stubs say int only)
+    def compose_node(self, parent: yaml.Node | None, index: Any) -> yaml.Node | None:
         event = self.peek_event()
         if isinstance(event, yaml.AliasEvent):
             if event.anchor in self._open_anchors:
@@ -85,7 +86,7 @@ class StrictLoader(yaml.SafeLoader):
                     f"*{event.anchor}",
                     "an alias inside the value it names (recursive): write the value out",
                 )
-            self._count(self._anchor_sizes.get(event.anchor, 1), event)
+            self._count(self._anchor_sizes.get(event.anchor or "", 1), event)  # an alias always names one
             return super().compose_node(parent, index)
         self._count(1, event)
         anchor = getattr(event, "anchor", None)
@@ -106,7 +107,8 @@ class StrictLoader(yaml.SafeLoader):
             self._anchor_sizes[anchor] = self._expanded - before
         return node
 
-    def construct_yaml_int(self, node: yaml.ScalarNode) -> int | HugeNumber:
+    # a deliberate widening: an over-long integer becomes the HugeNumber every rule refuses
+    def construct_yaml_int(self, node: yaml.ScalarNode) -> int | HugeNumber:  # type: ignore[override]
         text = self.construct_scalar(node)
         if len(text) > MAX_INT_CHARS:
             return HugeNumber(text)

@@ -36,6 +36,14 @@ class ContactProblem:
     check (tools/continuum_3d.py) and the tilted problem (continuum_tilt) build or subclass it.
     """
 
+    # the contact surfaces, set by _contact_sets: dof, side (+1 inner, -1 outer), the obstacle's
+    # offset at d = 0 and its rate in d; the first n_inner are the inner faces
+    contact_dofs: np.ndarray
+    contact_sign: np.ndarray
+    obstacle_u0: np.ndarray
+    obstacle_rate: np.ndarray
+    n_inner: int
+
     plate: PlatePenalty | None = None  # the plate's contact as a penalty, when asked for
     fillet: RootFillet | None = None  # the outer root's printed fillet (quarter_profile_mesh), if any
 
