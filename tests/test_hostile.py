@@ -30,6 +30,7 @@ import yaml
 from click.testing import CliRunner
 from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
+from slicer_support import need_slicer
 
 from mst_cli.cli.app import main
 from mst_cli.io.outputs import STAGING_PREFIX, Staging, staged
@@ -1124,6 +1125,7 @@ def test_a_fifo_is_refused_naming_the_path_without_blocking(tmp_path, loadtest_f
         os.mkfifo(folder / "export.json")
         args, name, out = ["check", folder], "export.json", None
     else:
+        need_slicer()  # mst slice looks for PrusaSlicer before it reads the profile
         args, name, out = ["slice", exported, "--profile", fifo(tmp_path, "p.ini")], "p.ini", None
     p = mst_process(args + (["--out", out] if out else []), timeout=60)
     line = refused_line(p)
