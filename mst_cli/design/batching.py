@@ -69,7 +69,8 @@ class _SharedEvaluations:
         terms[:, -1] = _robustness_by_job(shifts, rows_of)
         batch = _BatchRows(ev)
         points = {j: (rows_of.pop(j), pending[j]) for j in jobs if isinstance(pending[j], _PointAsk)}
-        out = {j: (_Rows(batch, rows), terms[rows]) for j, rows in rows_of.items()}
+        # a job's (Evaluation rows, preference terms), or a preference request's PointValues
+        out: dict[int, tuple] = {j: (_Rows(batch, rows), terms[rows]) for j, rows in rows_of.items()}
         if points:
             out.update(_point_rows(problem, batch, terms, points))
         return out

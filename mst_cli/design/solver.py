@@ -95,7 +95,7 @@ class Search:
     local: str = "slsqp"
     stops: list[str] = field(default_factory=list)
 
-    def run(self, phase: Phase, x0: np.ndarray, maxeval: int, step: float) -> None:
+    def run(self, phase: Phase, x0, maxeval: int, step: float) -> None:
         """One local run of ``phase`` from ``x0`` with this search's method."""
         self.stops.append(phase.run(x0, LocalRun(self.local, maxeval, step)))
 
