@@ -2,7 +2,7 @@
 
 Two places in mst do several pieces of independent, deterministic work whose results are
 small: a stack's missing L2 laws (half a second each, :mod:`mst_cli.model.mechanics.law_cache`)
-and the Pareto front's weightings (:func:`mst_cli.design.solver.prefer_many`). :func:`fork_map`
+and the Pareto front's weightings (:func:`mst_cli.design.batching.prefer_many`). :func:`fork_map`
 runs them in worker processes forked from this one, so a worker starts with everything
 already imported and costs milliseconds; each result comes back pickled. Where fork is not
 the platform's safe default (not Linux, or another thread running here) or ``MST_WORKERS=1``,

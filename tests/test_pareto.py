@@ -166,27 +166,29 @@ def test_batched_polishes_are_the_one_at_a_time_polishes(monkeypatch, workers):
     """prefer_many runs every weighting's own local run, only its kernel calls batched (in one
     process, or dealt to two forked workers): each ends where prefer alone ends, to the bit,
     with the same stop reasons in the weightings' order."""
+    from mst_cli.design.batching import prefer_many
+    from mst_cli.design.phase import Budget
     from mst_cli.design.problem import DesignProblem
-    from mst_cli.design.solver import _Budget, _matched, prefer, prefer_many
+    from mst_cli.design.solver import Search, _matched, prefer
 
     monkeypatch.setenv("MST_WORKERS", workers)
     problem = DesignProblem(load_document(ROOT / "configs" / "mohammadi2021.yaml"))
-    sol, _ = _matched(problem, 0, 20000, None, "slsqp", 120.0)
+    sol = _matched(problem, 0, Search(Budget(20000, None, 120.0)))
     weights = list(pareto_weights(6))
     stops: list = []
     batched = prefer_many(problem, [sol.u] * len(weights), weights, max_evaluations=20000, stops=stops)
     stops_alone: list = []
     for w, (u, used) in zip(weights, batched):
-        budget = _Budget(20000, None, 120.0)
-        alone, _, _ = prefer(problem, sol.u, budget, "slsqp", stops_alone, w)
+        budget = Budget(20000, None, 120.0)
+        alone, _, _ = prefer(problem, sol.u, Search(budget, "slsqp", stops_alone), w)
         assert np.array_equal(u, alone) and used == budget.used
         assert used > 0
     assert stops == stops_alone
 
 
 def test_batched_polish_hands_back_an_error():
+    from mst_cli.design.batching import _SharedEvaluations
     from mst_cli.design.problem import DesignProblem
-    from mst_cli.design.solver import _SharedEvaluations
 
     problem = DesignProblem(load_document(ROOT / "configs" / "mohammadi2021.yaml"))
 
@@ -206,8 +208,8 @@ def test_batched_polish_hands_back_an_error():
 def test_an_interrupt_inside_a_batched_polish_stops_it_at_once():
     """A KeyboardInterrupt (or mst's Interrupted) in one run ends them all at once; only an
     Exception waits for the other runs."""
+    from mst_cli.design.batching import _SharedEvaluations
     from mst_cli.design.problem import DesignProblem
-    from mst_cli.design.solver import _SharedEvaluations
 
     problem = DesignProblem(load_document(ROOT / "configs" / "mohammadi2021.yaml"))
     finished = []
@@ -270,7 +272,7 @@ def test_one_kernel_call_for_nominal_and_shifted_stacks_gives_the_same_bits(tmp_
 
 
 def test_no_runs_no_wait():
+    from mst_cli.design.batching import _SharedEvaluations
     from mst_cli.design.problem import DesignProblem
-    from mst_cli.design.solver import _SharedEvaluations
 
     assert _SharedEvaluations(DesignProblem(load_document(SPEC))).run([]) == []

@@ -71,7 +71,7 @@ def test_gauss_newton_converges_in_a_few_steps_near_a_solution(n_layers):
     u_true, problem = table_design(n_layers, rng)
     u0 = np.clip(u_true + rng.uniform(-0.02, 0.02, u_true.size), 0.0, 1.0)
     tracker = solver.Tracker()
-    budget = solver._Budget(10**6, None, 60.0)
+    budget = solver.Budget(10**6, None, 60.0)
     assert solver.newton_match(problem, u0, tracker, budget, "match")
     per_step = 2 * problem.dim + 1 + len(solver.NEWTON_BACKTRACK)
     assert budget.used <= 4 * per_step

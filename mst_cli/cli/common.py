@@ -1,5 +1,4 @@
-"""What every ``mst`` command shares: exit codes, the one-line error contract, the group class
-and the design-file loader.
+"""What every ``mst`` command shares: exit codes, the one-line error contract, the group class.
 
 Exit codes (docs/design.md section 5): 0 success, 1 targets not met / checks failed, 2 invalid
 input (one line naming the field, the value and what is allowed). Command modules import from
@@ -10,15 +9,14 @@ from __future__ import annotations
 
 import errno
 import functools
-import signal
 import sys
-import threading
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any, NoReturn, ParamSpec, TypeVar
 
 import click
 
+from mst_cli.cli.sigint import SigintSeen
 from mst_cli.errors import InputError
 from mst_cli.io.files import is_machine_fault, os_error_text
 from mst_cli.io.outputs import Interrupted
@@ -70,26 +68,6 @@ def handles_input_errors(func: Callable[_P, _R]) -> Callable[_P, _R]:
     return wrapper
 
 
-class _SigintSeen:
-    """Python's own SIGINT handler (KeyboardInterrupt), which also notes that a SIGINT came. Only
-    installed over the default handler: a SIGINT inherited as ignored (nohup) stays ignored."""
-
-    def __init__(self) -> None:
-        self.seen = False
-
-    def __call__(self, signum: int, frame: Any) -> None:
-        self.seen = True
-        signal.default_int_handler(signum, frame)
-
-    @classmethod
-    def install(cls) -> _SigintSeen:
-        handler = cls()
-        in_main_thread = threading.current_thread() is threading.main_thread()  # signal.signal's rule
-        if in_main_thread and signal.getsignal(signal.SIGINT) is signal.default_int_handler:
-            signal.signal(signal.SIGINT, handler)
-        return handler
-
-
 class MstGroup(click.Group):
     """click's group with the tool's one-line error contract: usage errors (unknown option, bad
     value, missing argument, a folder where a file belongs) are one line ``mst: usage error: ...``
@@ -106,16 +84,9 @@ class MstGroup(click.Group):
     ) -> Any:
         if not standalone_mode:
             return super().main(args, prog_name, complete_var, standalone_mode=False, **extra)
-        sigint = _SigintSeen.install()
         try:
-            rv = super().main(args, prog_name or "mst", complete_var, standalone_mode=False, **extra)
-        except ImportError:
-            if not sigint.seen:
-                raise
-            # a Ctrl-C inside an extension module's initialisation (OCP, under build123d) comes
-            # back as "ImportError: initialization failed": it is the interrupt all the same
-            click.echo("mst: interrupted (SIGINT): nothing half-written was left", err=True)
-            sys.exit(130)
+            with SigintSeen.installed():  # an extension import a Ctrl-C broke is the interrupt too
+                rv = super().main(args, prog_name or "mst", complete_var, standalone_mode=False, **extra)
         except click.exceptions.NoArgsIsHelpError as exc:
             exc.show()  # bare 'mst': the help, as click prints it
             sys.exit(exc.exit_code)
@@ -126,7 +97,7 @@ class MstGroup(click.Group):
         except click.ClickException as exc:
             click.echo(one_line(f"mst: {exc.format_message()}"), err=True)
             sys.exit(exc.exit_code)
-        except click.Abort:  # Ctrl-C (SIGINT) or end of input at a prompt
+        except (click.Abort, KeyboardInterrupt):  # Ctrl-C (SIGINT) or end of input at a prompt
             click.echo("mst: interrupted (SIGINT): nothing half-written was left", err=True)
             sys.exit(130)
         except Interrupted as exc:

@@ -25,9 +25,10 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from mst_cli.design.batching import prefer_many
 from mst_cli.design.document import ROUND_DECIMALS, DesignResult, design_document, verify_design
 from mst_cli.design.problem import DesignProblem
-from mst_cli.design.solver import SolveResult, pareto_weights, prefer_many
+from mst_cli.design.solver import SolveResult, pareto_weights
 from mst_cli.sensor.document import Document
 from mst_cli.sensor.sections import OBJECTIVE_TERMS
 
@@ -129,7 +130,7 @@ def pareto_front(
     The work is shared: the screening and the match run once (the chosen design's solve), and
     every weighting starts its polish from that matched point; the weightings are polished
     together, each in its own local run, with their kernel calls batched into one
-    (:func:`mst_cli.design.solver.prefer_many`). Designs are then judged in the weightings'
+    (:func:`mst_cli.design.batching.prefer_many`). Designs are then judged in the weightings'
     order, as one at a time would be, until the front holds ``count`` designs.
     """
     solution: list = []

@@ -84,6 +84,8 @@ CHIP_HEADROOM = inspect.signature(mlx.choose_setting).parameters["margin"].defau
 TINY = 1e-300  # floor of anything a log is taken of (a collapsed output, not a crash)
 VIOLATION_PENALTY = 10.0  # merit per unit of constraint violation (g is scaled to order one)
 DEDUPE_MIN_CELLS = 64  # below this many cells, sorting out repeats costs more than it saves
+ROUNDING_SAFETY = 1e-3  # constraint slack (nozzles / log units) so that the rounded
+# design written to design.yaml still satisfies every rule
 
 
 @dataclass
@@ -123,6 +125,16 @@ class Evaluation:
     def rel_err(self) -> np.ndarray:
         """Relative errors out/target - 1, same layout as ``log_err``."""
         return np.expm1(self.log_err)
+
+    @property
+    def safe_constraints(self) -> np.ndarray:
+        """The constraints tightened by ROUNDING_SAFETY: what the search holds <= 0."""
+        return self.constraints + ROUNDING_SAFETY
+
+    @property
+    def max_err(self) -> np.ndarray:
+        """Worst |relative error| of each candidate."""
+        return np.max(np.abs(self.rel_err), axis=-1)
 
 
 def robustness_of_shifts(d: np.ndarray, first: int = 0) -> np.ndarray:

@@ -32,18 +32,9 @@ from typing import Any
 import numpy as np
 
 from mst_cli.design.document import ROUND_DECIMALS, DesignResult, _layer_outputs, design_document, verify_design
+from mst_cli.design.phase import CONVERGED, FEASIBILITY_TOL, MAX_TIME_S, Budget, LocalRun, Phase, Tracker
 from mst_cli.design.problem import DesignProblem
-from mst_cli.design.solver import (
-    FEASIBILITY_TOL,
-    MAX_TIME_S,
-    ROUNDING_SAFETY,
-    Tracker,
-    _Budget,
-    _Matcher,
-    _nlopt_failures,
-    _Phase,
-    _Stop,
-)
+from mst_cli.design.solver import _Matcher
 from mst_cli.errors import InputError
 from mst_cli.model.ladder import USER_LADDER, choose_mechanics, load_ladder_errors, rung_errors
 from mst_cli.model.response import simulate
@@ -155,8 +146,8 @@ def _local_match(problem: DesignProblem, theta, t, h, maxeval: int = LOCAL_MAX_E
     the solver's rounding slack), on the normalised variables.
 
     nlopt LD_SLSQP inside a box of +-LOCAL_TRUST around the start (so the spare freedom stays
-    on the previous design's branch), with the solver's batched machinery
-    (:class:`~mst_cli.design.solver._Phase`): objective and every constraint of a point come
+    on the previous design's branch), run by the solver's phase runner
+    (:class:`~mst_cli.design.phase.Phase`): objective and every constraint of a point come
     from one evaluation (the mconstraint callback fills them all; the last point is cached),
     and a point with its central-difference gradient is one batched kernel call of 2 dim + 1
     candidates. Should SLSQP fail (line search, roundoff) or end on no feasible point, LN_COBYLA
@@ -169,7 +160,7 @@ def _local_match(problem: DesignProblem, theta, t, h, maxeval: int = LOCAL_MAX_E
     u0 = np.clip(problem.to_unit(theta, t, h), 0.0, 1.0)
     lo, hi = np.maximum(u0 - LOCAL_TRUST, 0.0), np.minimum(u0 + LOCAL_TRUST, 1.0)
     matcher = _Matcher(problem)
-    budget = _Budget(maxeval, None, MAX_TIME_S)
+    budget = Budget(maxeval, None, MAX_TIME_S)
     best = Tracker()
 
     max_rel = -math.expm1(-LOCAL_MATCH_LOG)  # |rel| below this keeps |log| below LOCAL_MATCH_LOG
@@ -179,16 +170,15 @@ def _local_match(problem: DesignProblem, theta, t, h, maxeval: int = LOCAL_MAX_E
 
     def matched(u):
         ev = problem.evaluate(u)
-        return bool(
-            np.all(ev.constraints + ROUNDING_SAFETY <= FEASIBILITY_TOL)
-            and np.max(np.abs(ev.log_err)) <= LOCAL_MATCH_LOG
-        )
+        return bool(np.all(ev.safe_constraints <= FEASIBILITY_TOL) and np.max(np.abs(ev.log_err)) <= LOCAL_MATCH_LOG)
 
-    phase = _Phase(problem, matcher.batch, problem.n_constraints, best, budget, "refine match", goal)
-    converged = _run_local(phase, "slsqp", u0, lo, hi, budget.left // (2 * problem.dim + 1), LOCAL_STEP)
+    def run(local: str, x0, maxeval: int) -> bool:
+        phase = Phase(matcher, best, budget, "refine match", goal)
+        return _converged(phase, x0, LocalRun(local, maxeval, LOCAL_STEP, lo, hi))
+
+    converged = run("slsqp", u0, budget.left // (2 * problem.dim + 1))
     if not matched(best.u) and not (converged and best.feasible) and budget.left > 0:
-        phase = _Phase(problem, matcher.batch, problem.n_constraints, best, budget, "refine match", goal)
-        _run_local(phase, "cobyla", best.u, lo, hi, min(budget.left, LOCAL_FALLBACK_EVALUATIONS), LOCAL_STEP)
+        run("cobyla", best.u, min(budget.left, LOCAL_FALLBACK_EVALUATIONS))
     u = u0 if best.u is None or not best.feasible else best.u
     theta2, t2, h2 = (np.round(a, ROUND_DECIMALS) for a in problem.to_physical(u))
     ev = problem.evaluate_physical(theta2, t2, h2)
@@ -196,29 +186,14 @@ def _local_match(problem: DesignProblem, theta, t, h, maxeval: int = LOCAL_MAX_E
     return theta2, t2, h2, budget.used, met
 
 
-def _run_local(phase, local: str, u0, lo, hi, maxeval: int, step: float) -> bool:
-    """One nlopt run of ``phase``'s callbacks in the box [lo, hi]; the phase's tracker keeps
-    the best point whatever way the run ends. True when nlopt ended on its own stopping rules
-    or the goal (False: a failure, roundoff or the budget)."""
-    import nlopt  # deferred: the optimiser loads when a design is searched, not at start-up
-
-    opt = nlopt.opt(nlopt.LD_SLSQP if local == "slsqp" else nlopt.LN_COBYLA, phase.problem.dim)
-    opt.set_lower_bounds(lo)
-    opt.set_upper_bounds(hi)
-    opt.set_min_objective(phase.objective)
-    opt.add_inequality_mconstraint(phase.constraints, np.zeros(phase.m))
-    opt.set_initial_step(np.full(phase.problem.dim, step))
-    opt.set_maxeval(max(int(maxeval), 1))
-    opt.set_maxtime(phase.budget.time_left())
-    opt.set_xtol_rel(1e-10)
-    opt.set_ftol_abs(1e-16)
+def _converged(phase: Phase, x0, settings: LocalRun) -> bool:
+    """One run of ``phase``; True when nlopt ended on its own stopping rules or the goal
+    (False: a failure, roundoff or the budget). The phase's tracker keeps the best point
+    whatever way the run ends."""
     try:
-        opt.optimize(np.clip(u0, lo, hi))
-    except _Stop as stop:
-        return stop.reason == "goal reached"
-    except (nlopt.ForcedStop, nlopt.RoundoffLimited, ValueError, RuntimeError, *_nlopt_failures()):
-        return False  # the tracker holds the best point seen
-    return opt.last_optimize_result() != nlopt.MAXEVAL_REACHED
+        return phase.run(x0, settings) in CONVERGED
+    except ValueError:  # nlopt's invalid arguments (a start it refuses): this loop has always
+        return False  # ended such a run like a failure, keeping the best point seen
 
 
 def print_error_rung(doc: Document, model: str, errors: dict | None = None) -> tuple[str, str]:
