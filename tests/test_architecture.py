@@ -181,3 +181,15 @@ def test_every_data_file_ships_with_the_package():
     globs = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]["package-data"]["mst_cli"]
     data = [p.relative_to(PACKAGE).as_posix() for p in PACKAGE.rglob("data/*") if p.is_file()]
     assert data and [d for d in data if not any(fnmatch.fnmatch(d, g) for g in globs)] == []
+
+
+def test_the_command_line_goes_through_the_api_only():
+    # issue 37: the CLI imports mst_cli.api, mst_cli.errors and its own modules, nothing else of
+    # the package (lazy and type-only imports included); the package root is how 'from mst_cli
+    # import api' reads
+    allowed = ("mst_cli", "mst_cli.api", "mst_cli.errors")
+    graph = import_graph()
+    cli = [m for m in graph if m == "mst_cli.cli" or m.startswith("mst_cli.cli.")]
+    assert len(cli) > 5
+    bad = {m: sorted(t for t in graph[m] if t not in allowed and not t.startswith("mst_cli.cli")) for m in cli}
+    assert {m: t for m, t in bad.items() if t} == {}

@@ -50,3 +50,15 @@ def test_the_layer_count_in_the_docs_is_the_schema_cap():
 
     text = (ROOT / "docs" / "file-format.md").read_text()
     assert f"## `layers` (required, 1 to {MAX_LAYERS} entries," in text
+
+
+def test_mst_help_lists_every_command():
+    # the summary block of `mst --help` (cli/app.py's docstring) names every registered command
+    from click.testing import CliRunner
+
+    from mst_cli.cli.app import COMMANDS, load_command, main
+
+    text = CliRunner().invoke(main, ["--help"]).output
+    summary = text.split("Exit codes")[0]
+    assert all(load_command(name) is not None for name in COMMANDS)
+    assert [name for name in COMMANDS if f"mst {name} " not in summary] == []

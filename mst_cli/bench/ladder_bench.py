@@ -19,6 +19,7 @@ import numpy as np
 
 from mst_cli.bench.sampling import BOUNDS, sample_cells
 from mst_cli.bench.tilt_bench import TILT_CELLS, long_padded, tilt_lines, tilt_rows
+from mst_cli.io.outputs import staged
 from mst_cli.model import magnet_field as fld
 from mst_cli.model.assembly import Magnet
 from mst_cli.model.cell import HexCell
@@ -405,3 +406,23 @@ def _stored_errors(entry: dict) -> dict:
     else:  # the reference itself
         out["median_abs_err_lock_force"] = out["median_abs_err_d_lock"] = 0.0
     return out
+
+
+class BenchResult(dict):
+    """:func:`mst_cli.api.bench`'s answer: bench.json's content (a dict) with bench.md's table."""
+
+    def markdown(self) -> str:
+        """bench.md: the table a person reads (:func:`bench_markdown`)."""
+        return bench_markdown(self)
+
+    def write(self, out: Path, plot: bool = True) -> list[str]:
+        """bench.json, bench.md and (``plot``) bench.png into ``out``, atomically; without ``plot``
+        an old bench.png is removed. The names written."""
+        with staged(out) as st:
+            st.write_json("bench.json", dict(self))
+            st.write_text("bench.md", self.markdown())
+            if plot:
+                plot_bench(self, st.path("bench.png"))
+            else:
+                st.remove("bench.png")
+        return ["bench.md", "bench.json"] + (["bench.png"] if plot else [])

@@ -451,3 +451,25 @@ def results_table(checks: list[Check]) -> str:
             lines.append("  ".join("-" * w for w in widths))
     notes = [f"  {c.name}: {c.note}" for c in checks if c.note]
     return "\n".join(lines + ["notes:"] + notes)
+
+
+class CheckResults(list[Check]):
+    """:func:`mst_cli.api.check`'s answer: the checks in report order (a list) and the mesh they
+    measured, with the two forms ``mst check`` prints."""
+
+    def __init__(self, checks: list[Check], stl: Path):
+        super().__init__(checks)
+        self.stl = stl
+
+    @property
+    def failed(self) -> list[str]:
+        """Names of the checks that failed (an info check never fails)."""
+        return [c.name for c in self if not c.passed and not c.info]
+
+    def to_dict(self) -> dict:
+        """``mst check --json``'s form (:func:`results_dict`)."""
+        return results_dict(self, str(self.stl))
+
+    def table(self) -> str:
+        """``mst check``'s terminal table (:func:`results_table`)."""
+        return results_table(self)

@@ -9,8 +9,10 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from mst_cli.cad import mesh_io
+from mst_cli.cad.expected_body import body_volume_mm3
 from mst_cli.cad.manifest import MANIFEST_NAME, STL_TOLERANCE_MM, export_manifest
 from mst_cli.cad.mesh_body import print_mesh
 from mst_cli.cad.shapes import check_fits
@@ -18,6 +20,9 @@ from mst_cli.errors import InputError
 from mst_cli.io.outputs import staged
 from mst_cli.model.assembly import SensorGeometry
 from mst_cli.sensor.document import Document, document_to_dict
+
+if TYPE_CHECKING:
+    from mst_cli.design.document import DesignResult
 
 DEFAULT_STL_TOLERANCE_MM = 0.01
 
@@ -85,3 +90,38 @@ def write_export(
             export_manifest(doc.name, geometry, doc.printer, stl_tolerance_mm, names, design=document_to_dict(doc)),
         )
     return names + [MANIFEST_NAME]
+
+
+class ExportedFiles(list[Path]):
+    """:func:`mst_cli.api.export`'s answer: the files written (a list, export.json last), the
+    sensor they hold and, for a spec, the design it became."""
+
+    def __init__(self, paths: list[Path], geometry: SensorGeometry, designed: DesignResult | None = None):
+        super().__init__(paths)
+        self.geometry = geometry
+        self.designed = designed
+
+    def tilt_note(self) -> str | None:
+        """A note when the design carries a magnet tilt (an assembly error the body does not build)."""
+        tilt = self.geometry.magnet_tilt_deg
+        if not tilt:
+            return None
+        return (
+            f"note: magnet_tilt_deg = {tilt:g} is an assembly error "
+            "in the forward model; the pocket is built on the axis"
+        )
+
+    def summary(self, three_mf: bool) -> str:
+        """The body's size, how it prints, where the magnet pause is and the files written."""
+        g = self.geometry
+        out = self[0].parent if self else Path(".")
+        return "\n".join(
+            [
+                f"body volume {body_volume_mm3(g):.1f} mm3, sensor height {g.total_height_mm:.2f} mm; "
+                f"prints on its side, {g.depth_mm:g} mm high in "
+                f"{int(round(g.depth_mm / g.layer_height_mm))} layers of {g.layer_height_mm:g} mm",
+                f"pause after layer {g.pause_after_layer} (z = {g.pause_height_mm:.2f} mm) "
+                "to drop the magnet into its pocket" + (" (the 3MF carries the pause)" if three_mf else ""),
+                f"wrote {out}/{', '.join(p.name for p in self)}",
+            ]
+        )

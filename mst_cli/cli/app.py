@@ -1,4 +1,4 @@
-"""The ``mst`` command group. Thin: it parses options, calls the library, writes files.
+"""The ``mst`` command group. Thin: it parses options, calls :mod:`mst_cli.api`, prints.
 
 Every command lives in its own module of this package and imports only
 :mod:`mst_cli.cli.common` from here; this module imports the commands (one direction), and
@@ -79,8 +79,11 @@ def main() -> None:
     \b
     mst simulate DESIGN.yaml   forward model: curves, S_i, R_i, field, chip settings
     mst design SPEC.yaml       inverse design from target S_i and R_i to theta, t, h
-    mst export DESIGN.yaml     printable STL / STEP of the stacked assembly
+    mst export DESIGN.yaml     printable STL / 3MF / STEP of the stacked assembly
     mst check PATH             geometry checks of what export wrote
+    mst slice PATH             slice the export with PrusaSlicer and judge the print
+    mst calibrate DESIGN CSV   fit the print parameters to a load test
+    mst read MODEL CSV         MLX90393 readings (or --serial PORT) to forces
     mst bench                  measured speed/accuracy table of the models
 
     Exit codes: 0 success, 1 targets not met or checks failed, 2 invalid input.

@@ -16,11 +16,9 @@ from typing import Any, NoReturn, ParamSpec, TypeVar
 
 import click
 
+from mst_cli import api
 from mst_cli.cli.sigint import SigintSeen
 from mst_cli.errors import InputError
-from mst_cli.io.files import is_machine_fault, os_error_text
-from mst_cli.io.outputs import Interrupted
-from mst_cli.model.file_keys import SEED_RANGE
 
 _P = ParamSpec("_P")
 _R = TypeVar("_R")
@@ -43,8 +41,8 @@ def fail_input(message: str) -> NoReturn:
 def exit_for_os_error(exc: OSError) -> NoReturn:
     """One line naming the path and the errno reason on stderr; exit 2 (a bad path) or 1 (a
     machine fault such as a full disk)."""
-    machine = is_machine_fault(exc)
-    click.echo(one_line(f"mst: {'system error' if machine else 'invalid path'}: {os_error_text(exc)}"), err=True)
+    machine = api.is_machine_fault(exc)
+    click.echo(one_line(f"mst: {'system error' if machine else 'invalid path'}: {api.os_error_text(exc)}"), err=True)
     sys.exit(EXIT_FAULT if machine else EXIT_INPUT)
 
 
@@ -100,7 +98,7 @@ class MstGroup(click.Group):
         except (click.Abort, KeyboardInterrupt):  # Ctrl-C (SIGINT) or end of input at a prompt
             click.echo("mst: interrupted (SIGINT): nothing half-written was left", err=True)
             sys.exit(130)
-        except Interrupted as exc:
+        except api.Interrupted as exc:
             click.echo(f"mst: interrupted ({exc.name}): nothing half-written was left", err=True)
             sys.exit(exc.code)
         except InputError as exc:
@@ -117,7 +115,7 @@ class MstGroup(click.Group):
 
 def seed_type() -> click.IntRange:
     """The click type of every --seed option: the range design.seed has in a spec file."""
-    return click.IntRange(*SEED_RANGE)
+    return click.IntRange(*api.SEED_RANGE)
 
 
 def default_out_dir(name: str) -> Path:

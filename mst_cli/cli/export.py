@@ -10,18 +10,13 @@ import json
 import sys
 import time
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 import click
 
 from mst_cli import api
-from mst_cli.cli.common import EXIT_TARGETS, default_out_dir, handles_input_errors, out_dir_option
-from mst_cli.io.outputs import check_out_dir
+from mst_cli.cli.common import EXIT_TARGETS, handles_input_errors, out_dir_option
 
-if TYPE_CHECKING:
-    from mst_cli.model.assembly import SensorGeometry
-
-DEFAULT_STL_TOLERANCE_MM = 0.01  # cad.exporting's (not imported here: app.py loads this module cheaply)
+DEFAULT_STL_TOLERANCE_MM = 0.01  # cad.exporting's (the command line imports only the api)
 
 
 def _progress(t0: float, message: str) -> None:
@@ -60,31 +55,23 @@ def export(
     3MF carries PrusaSlicer's pause for the magnet; the terminal and export.json give its
     layer and height. STEP is the assembly in the sensor frame (z up the stack).
     """
-    from mst_cli.cad.exporting import check_stl_tolerance, write_export  # deferred: loads the CAD layer (0.1 s)
-
-    check_stl_tolerance(stl_tolerance_mm)  # one bound, shared with mst check
     if not (want_stl or want_step or want_3mf):
         want_stl = want_step = True
-    if out_dir is not None:
-        check_out_dir(out_dir)  # a bad output path is refused before any work
     t0 = time.perf_counter()
-    doc, designed = api.designed(path, progress=lambda message: _progress(t0, message))
-    geometry = designed.geometry if designed is not None else doc.geometry()
-    check_out_dir(out_dir or default_out_dir(doc.name))
-    _progress(t0, f"loaded {path} ({len(geometry.layers)} layers)")
-    out = out_dir or default_out_dir(doc.name)
-    names = write_export(
-        doc,
-        geometry,
-        out,
+    files = api.export(
+        path,
+        out_dir,
         stl=want_stl,
         step=want_step,
         three_mf=want_3mf,
         stl_tolerance_mm=stl_tolerance_mm,
-        design_yaml=designed.design_yaml_dict() if designed is not None else None,
         progress=lambda message: _progress(t0, message),
     )
-    _print_export_summary(geometry, out, names, want_3mf)
+    note = files.tilt_note()
+    if note:
+        click.echo(note, err=True)
+    click.echo(files.summary(want_3mf))
+    designed = files.designed
     if designed is not None and designed.exit_code:
         click.echo(
             f"mst export: targets not met ({designed.binding}: {designed.reasons[0]}); "
@@ -92,28 +79,6 @@ def export(
             err=True,
         )
         sys.exit(designed.exit_code)
-
-
-def _print_export_summary(geometry: SensorGeometry, out: Path, names: list[str], want_3mf: bool) -> None:
-    """The body's size, how it prints, where the magnet pause is and the files written."""
-    from mst_cli.cad.expected_body import body_volume_mm3  # deferred: app.py loads this module cheaply
-
-    if geometry.magnet_tilt_deg:
-        click.echo(
-            f"note: magnet_tilt_deg = {geometry.magnet_tilt_deg:g} is an assembly error "
-            "in the forward model; the pocket is built on the axis",
-            err=True,
-        )
-    click.echo(
-        f"body volume {body_volume_mm3(geometry):.1f} mm3, sensor height {geometry.total_height_mm:.2f} mm; "
-        f"prints on its side, {geometry.depth_mm:g} mm high in "
-        f"{int(round(geometry.depth_mm / geometry.layer_height_mm))} layers of {geometry.layer_height_mm:g} mm"
-    )
-    click.echo(
-        f"pause after layer {geometry.pause_after_layer} (z = {geometry.pause_height_mm:.2f} mm) "
-        "to drop the magnet into its pocket" + (" (the 3MF carries the pause)" if want_3mf else "")
-    )
-    click.echo(f"wrote {out}/{', '.join(names)}")
 
 
 @click.command("check")
@@ -133,15 +98,11 @@ def check(path: Path, as_json: bool, nozzle_mm: float | None) -> None:
     Prints a table of named checks, measured on the mesh against the design's own expected
     values in export.json. Exit 1 naming the failed checks, 2 for unreadable input.
     """
-    from mst_cli.cad.checks import resolve_export, results_dict, results_table  # deferred: as export's
-
     results = api.check(path, nozzle_mm=nozzle_mm)
-    stl = resolve_export(path).stl
-    summary = results_dict(results, str(stl))
     if as_json:
-        click.echo(json.dumps(summary, indent=2, allow_nan=False))
+        click.echo(json.dumps(results.to_dict(), indent=2, allow_nan=False))
     else:
-        click.echo(results_table(results))
-    if summary["failed"]:
-        click.echo(f"mst check: failed: {', '.join(summary['failed'])}", err=True)
+        click.echo(results.table())
+    if results.failed:
+        click.echo(f"mst check: failed: {', '.join(results.failed)}", err=True)
         sys.exit(EXIT_TARGETS)

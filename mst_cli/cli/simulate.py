@@ -5,16 +5,12 @@ from __future__ import annotations
 import json
 import math
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 import click
 
 from mst_cli import api
 from mst_cli.cli.common import default_out_dir, handles_input_errors, no_plot_option, out_dir_option
-from mst_cli.io.outputs import check_out_dir
-
-if TYPE_CHECKING:
-    from mst_cli.sensor.document import Document
+from mst_cli.errors import InputError
 
 
 @click.command()
@@ -73,48 +69,28 @@ def simulate(
     modulus x printer.modulus_factor, gap + printer.gap_offset_mm (a design made with
     mst design --calibration carries them; they are 0, 1, 0 by default).
     """
-    # deferred: `mst --help` loads every command module; these load the model (0.1 s)
-    from mst_cli.model.ladder import choose_mechanics
-    from mst_cli.sensor.as_printed import PRINTER_NOMINAL  # deferred: as simulate's
-    from mst_cli.sensor.document import load_design_document
-    from mst_cli.simulation.offcentre_files import offcentre_lines, offcentre_summary, write_offcentre
-    from mst_cli.simulation.report import terminal_table, write_simulation
-
-    doc, geometry = load_design_document(design_file)
+    doc = api.load_design(design_file)
     out = out_dir or default_out_dir(doc.name)
-    check_out_dir(out)  # a bad output path is refused before any work
-    if not as_json:
-        _say_model_choices(doc, choose_mechanics(mechanics, doc.accuracy_rel, doc.mechanics).message())
-    resp = api.simulate(doc, mechanics=mechanics, field_model=field_model)
     plot = not (no_plot or as_json)
-    extra: dict = {"as_printed": {f"printer.{k}": getattr(doc.printer, k) for k in PRINTER_NOMINAL}}
-    off = (
-        api.simulate_offcentre(doc, _offset(load_offset), mechanics=mechanics, field_model=field_model)
-        if load_offset
-        else None
-    )
-    omap = api.offset_map(doc, mechanics=mechanics, field_model=field_model) if offset_map else None
-    if off is not None:
-        extra["off_centre"] = offcentre_summary(off)  # the report's and the terminal's
-    report = write_simulation(
-        doc, geometry, resp, out, plot=plot, extra_report=extra, more=lambda st: write_offcentre(st, off, omap, plot)
+    run = api.run_simulate(
+        doc,
+        mechanics=mechanics,
+        field_model=field_model,
+        load_offset_mm=_offset(load_offset) if load_offset else None,
+        offset_map=offset_map,
+        out=out,
+        plot=plot,
+        note=None if as_json else click.echo,
     )
     if as_json:
-        click.echo(json.dumps(report, indent=2, allow_nan=False))
+        click.echo(json.dumps(run.report, indent=2, allow_nan=False))
         return
-    click.echo(terminal_table(doc, geometry, resp))
-    if off is not None:
-        click.echo("\n".join(offcentre_lines(extra["off_centre"])))
-    names = ["report.json", "response.csv"] + (["response.png"] if plot else [])
-    for stem, present in (("offcentre", off), ("offset_map", omap)):
-        names += [f"{stem}.csv"] + ([f"{stem}.png"] if plot else []) if present is not None else []
-    click.echo(f"wrote {out}/" + ", ".join(names))
+    click.echo(run.table())
+    click.echo(f"wrote {out}/" + ", ".join(run.file_names(plot)))
 
 
 def _offset(text: str) -> tuple[float, float]:
     """'X,Y' in mm as two finite floats (InputError otherwise)."""
-    from mst_cli.errors import InputError  # deferred: as simulate's
-
     parts = text.split(",")
     try:
         x, y = (float(p) for p in parts)
@@ -123,19 +99,3 @@ def _offset(text: str) -> tuple[float, float]:
     if not all(map(math.isfinite, (x, y))):
         raise InputError("--load-offset-mm", text, "must be two finite numbers X,Y in mm")
     return x, y
-
-
-def _say_model_choices(doc: Document, mechanics_message: str | None) -> None:
-    """The mechanics rung picked for the file, and the print parameters that differ from nominal."""
-    from mst_cli.sensor.as_printed import PRINTER_NOMINAL  # deferred: as simulate's
-
-    if mechanics_message:
-        click.echo(mechanics_message)
-    pr = doc.printer
-    deviations = {key: getattr(pr, key) for key in PRINTER_NOMINAL if getattr(pr, key) != PRINTER_NOMINAL[key]}
-    if deviations:
-        click.echo(
-            "as printed: "
-            + ", ".join(f"printer.{k} = {v:g}" for k, v in deviations.items())
-            + " (the walls drawn are the file's t_mm)"
-        )
