@@ -260,8 +260,9 @@ def run_simulate(
     doc, geometry = _design_and_geometry(design)
     _check_out(out)  # a bad output path is refused before any work
     run = Simulation(doc, geometry, choose_mechanics(mechanics, doc.accuracy_rel, doc.mechanics))
-    for line in run.model_lines() if note is not None else []:
-        note(line)
+    if note is not None:
+        for line in run.model_lines():
+            note(line)
     run.response = simulate_as_printed(doc, mechanics, field_model)
     if load_offset_mm is not None:
         run.off_centre = _offcentre(doc, load_offset_mm, mechanics, field_model)
@@ -556,8 +557,9 @@ def run_design(
         raise InputError("--pareto-designs", True, "needs --pareto N")
     choice = design_choice(doc, refine, None if any_rung else pareto)
     run = DesignRun(doc, choice, cal, pareto)
-    for line in run.choice_lines() if note is not None else []:
-        note(line)
+    if note is not None:
+        for line in run.choice_lines():
+            note(line)
     run.solve(seed, max_evaluations, progress)
     if out is not None:
         run.write(Path(out), pareto_designs, plot)
