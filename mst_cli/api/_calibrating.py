@@ -1,0 +1,237 @@
+"""From a printed sensor: ``mst calibrate`` and ``mst read``.
+
+Part of the api's one door, :mod:`mst_cli.api`."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from mst_cli.api._common import _check_out, _one_of, load_design
+from mst_cli.errors import InputError
+from mst_cli.io.files import is_machine_fault as is_machine_fault
+from mst_cli.io.files import os_error_text as os_error_text
+from mst_cli.io.outputs import Interrupted as Interrupted
+from mst_cli.io.outputs import staged
+from mst_cli.model.file_keys import SEED_RANGE as SEED_RANGE
+from mst_cli.model.ladder import choose_mechanics
+from mst_cli.model.mechanics import MODELS
+from mst_cli.sensor.document import Document
+
+if TYPE_CHECKING:
+    from mst_cli.calibrate.calibration import Calibration
+    from mst_cli.calibrate.reading import ForceReadings, SerialSamples
+
+
+def parse_params(text: str) -> tuple[str, ...]:
+    """The parameter names of ``--params`` ("modulus_factor,gap_offset_mm")."""
+    from mst_cli.calibrate.calibration import parse_params as parse  # deferred: scipy.optimize, 330 ms measured
+
+    return parse(text)
+
+
+def calibrate(
+    design: str | Path | Document,
+    load_test: str | Path,
+    *,
+    out: str | Path | None = None,
+    plot: bool = False,
+    design_file: str | Path | None = None,
+    mechanics: str = "spring",
+    params: Sequence[str] | str | None = None,
+    gain_sel: int | None = None,
+    res: int | None = None,
+    table_size: int = 256,
+    progress: Callable[[str], None] | None = None,
+) -> Calibration:
+    """Fit a design's print parameters to a load test of the printed sensor (``mst calibrate``).
+
+    Parameters
+    ----------
+    design : str, Path or Document
+        The design file the sensor was printed from (a Document: ``design_file`` names it).
+    load_test : str or Path
+        CSV, one row per sample: force_N (N) and Bx_uT, By_uT, Bz_uT (uT), or Bx_code_lsb,
+        By_code_lsb, Bz_code_lsb (raw LSB, with ``gain_sel`` and ``res``).
+    out : str or Path, optional
+        Folder for calibrated.yaml, calibration.json, residuals.csv, lookup.csv, force_table.h
+        and (``plot``) calibration.png, written atomically [default: none written].
+    mechanics : {"spring", "frame", "continuum"}
+        Layer mechanics of the fit; frame and continuum by space mapping on spring.
+    params : sequence of str or str, optional
+        Parameters to fit (of :data:`mst_cli.sensor.as_printed.PARAMETERS`, or "a,b") [default: all four].
+    gain_sel, res, table_size : int, optional
+        The MLX90393 setting the load test was read at (0-7, 0-3); entries of lookup.csv (16-4096).
+
+    Returns
+    -------
+    Calibration
+        ``.fit.values`` (units in the names) and ``.fit.std`` (1 sigma), ``.calibrated`` (the
+        design as printed), ``.inverse_map`` (|B| T -> force N), ``.record`` (calibration.json),
+        ``.summary()``. Raises InputError (bad file or option) or CalibrationFailed (why).
+    """
+    from mst_cli.calibrate.calibration import calibrate as run_calibration  # deferred: scipy.optimize, 330 ms measured
+
+    params = _checked_fit_options(mechanics, params, table_size)
+    doc = load_design(design)
+    _check_out(out)  # a bad output path is refused before any work
+    result = run_calibration(
+        doc,
+        design_file or (design if isinstance(design, (str, Path)) else design.name),
+        load_test,
+        mechanics=mechanics,
+        params=params,
+        gain_sel=gain_sel,
+        res=res,
+        table_size=table_size,
+        progress=progress,
+    )
+    if out is not None:
+        result.write(Path(out), plot=plot)
+    return result
+
+
+def _checked_fit_options(mechanics: str, params: Sequence[str] | str | None, table_size: int) -> tuple[str, ...]:
+    """The parameter names to fit, after the rules of --mechanics, --params (known names, each
+    once) and --table-size."""
+    from mst_cli.calibrate.fit import DEFAULT_PARAMETERS  # deferred: the calibrate layer, 5 ms measured
+
+    _one_of("--mechanics", mechanics, MODELS)
+    if params is None:
+        names = DEFAULT_PARAMETERS
+    else:
+        names = parse_params(params if isinstance(params, str) else ",".join(params))
+    if not 16 <= table_size <= 4096:
+        raise InputError("--table-size", table_size, "must be an integer from 16 to 4096")
+    return names
+
+
+def _reader(
+    design: str | Path | Document,
+    model_file: str | Path | None,
+    mechanics: str | None,
+    gain_sel: int | None,
+    res: int | None,
+    raw: bool,
+    readings: str | Path | None,
+    out: str | Path | None,
+    warn: Callable[[str], None] | None,
+):
+    # deferred: the calibrate layer, 30 ms measured (mst simulate does not pay it)
+    from mst_cli.calibrate.loadtest import parse_readings, read_text, setting_of
+    from mst_cli.calibrate.reading import ForceReader
+
+    _one_of("--mechanics", mechanics, MODELS)
+    doc = load_design(design)
+    if model_file is None:
+        if not isinstance(design, (str, Path)):
+            raise InputError(
+                "model_file", None, "name the file the Document was loaded from (its calibration.json stands beside it)"
+            )
+        model_file = design
+    if (gain_sel is None) != (res is None):
+        raise InputError("--gain-sel/--res", f"{gain_sel}/{res}", "give both GAIN_SEL and RES, or neither")
+    setting = setting_of(gain_sel, res) if gain_sel is not None and res is not None else None
+    if raw and setting is None:
+        raise InputError("--gain-sel/--res", None, "--raw codes need the chip setting: give --gain-sel and --res")
+    _check_out(out)
+    choice = choose_mechanics(mechanics, doc.accuracy_rel, doc.mechanics)
+    rd = None
+    if readings is not None:
+        rd = parse_readings(read_text(readings), str(readings), need_force=False, gain_sel=gain_sel, res=res)
+        if len(rd) == 0:
+            raise InputError(str(readings), "(no rows)", "has a header but no readings")
+        setting = setting or rd.setting
+    reader = ForceReader.open(doc, model_file, choice.mechanics, setting)
+    if reader.warning and warn is not None:
+        warn(reader.warning)
+    return reader, rd, setting
+
+
+def read(
+    model: str | Path | Document,
+    readings: str | Path,
+    *,
+    out: str | Path | None = None,
+    model_file: str | Path | None = None,
+    mechanics: str | None = None,
+    gain_sel: int | None = None,
+    res: int | None = None,
+    warn: Callable[[str], None] | None = None,
+    estimate_offset: bool = False,
+    max_offset_sigma_mm: float = 1.0,
+) -> ForceReadings:
+    """MLX90393 readings to forces with a calibrated model (``mst read READINGS.csv``).
+
+    Parameters
+    ----------
+    model : str, Path or Document
+        calibrated.yaml (or any design file: then forces are the design's, not the print's, and
+        ``warn`` is told so).
+    readings : str or Path
+        CSV with Bx_uT, By_uT, Bz_uT (or raw codes with ``gain_sel``/``res``); a force_N column
+        is kept as the reference the summary compares with.
+    out : str or Path, optional
+        Folder to write forces.csv into.
+    warn : callable, optional
+        Gets a sentence when the model has no matching calibration.json beside it, or when the
+        model no longer gives the curve recorded at calibration.
+    estimate_offset : bool
+        Estimate where each reading was pressed from Bx, By, Bz (the tilt rung's inverse) and
+        correct its force; ``.offset`` holds x, y and their 1-sigma, and a reading whose press
+        the data cannot tell keeps the centred force, flagged (``.offset.flag``):
+        not_identifiable (offset less certain than ``max_offset_sigma_mm``), ambiguous (two
+        presses give it) or no_fit (none does); about 0.3 s a reading.
+
+    Returns
+    -------
+    ForceReadings
+        ``.force_N`` (n,) in N, NaN where flagged (never extrapolated); ``.regime`` (n,),
+        ``.flag`` (n,) one of ok, above_calibrated, below_range, above_range, saturated;
+        ``.force_resolution_N`` (n,); ``.summary()``, ``.csv()``.
+    """
+    if not (max_offset_sigma_mm > 0 and math.isfinite(max_offset_sigma_mm)):
+        raise InputError("--max-offset-sigma-mm", max_offset_sigma_mm, "must be a positive number of mm")
+    reader, rd, _ = _reader(model, model_file, mechanics, gain_sel, res, False, readings, out, warn)
+    offsets = None
+    if estimate_offset:
+        mech = choose_mechanics(mechanics, reader.document.accuracy_rel, reader.document.mechanics).mechanics
+        offsets = reader.offset_estimator(mech, max_offset_sigma_mm)
+    result = reader.read(rd, offsets)
+    if out is not None:
+        with staged(Path(out)) as st:
+            st.write_text("forces.csv", result.csv())
+    return result
+
+
+def read_serial(
+    model: str | Path | Document,
+    port: str,
+    *,
+    out: str | Path | None = None,
+    model_file: str | Path | None = None,
+    baud: int = 115200,
+    count: int | None = None,
+    timeout_s: float | None = None,
+    raw: bool = False,
+    mechanics: str | None = None,
+    gain_sel: int | None = None,
+    res: int | None = None,
+    warn: Callable[[str], None] | None = None,
+    status: Callable[[str], None] | None = None,
+    show: Callable[[str], None] = print,
+) -> SerialSamples:
+    """A live MLX90393 stream to forces (``mst read --serial PORT``): one line per sample goes to
+    ``show``; stops when the port closes, after ``count`` samples, ``timeout_s`` seconds of
+    silence or Ctrl-C; ``status`` gets a line when reading starts. ``out``: forces.csv of every
+    sample (time s, the three values, force N, regime, flag, resolution N)."""
+    reader, _, setting = _reader(model, model_file, mechanics, gain_sel, res, raw, None, out, warn)
+    if status is not None:
+        status(f"{reader.document.name}: reading {port} at {baud} baud (Ctrl-C to stop)")
+    samples = reader.stream(port, baud, count, timeout_s, raw, setting, show)
+    if out is not None:
+        with staged(Path(out)) as st:
+            st.write_text("forces.csv", samples.csv(reader.inverse_map))
+    return samples
