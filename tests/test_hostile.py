@@ -1840,3 +1840,25 @@ def test_property_what_export_writes_check_and_slice_accept(raw, tolerance):
     manifest = json.loads(json.dumps(export_manifest(doc.name, geometry, doc.printer, tolerance, ["sensor.stl"])))
     Manifest.from_dict(manifest)  # mst check reads it
     SliceManifest.from_dict(manifest)  # mst slice reads it
+
+
+# =========================================================================== issue 40: round three
+# Each section below is one class of issue 40; each test failed (a traceback, exit 0 with nan
+# written, a script run without consent) on the tree before its fix.
+
+
+# ----------------------------------------------------------------- 18. a huge cell
+@pytest.mark.parametrize("cmd", ["calibrate", "read"])
+@pytest.mark.parametrize("size", [200_000, 20_000])
+def test_a_huge_cell_in_an_extra_column_is_one_line_naming_file_line_and_column(tmp_path, loadtest_files, cmd, size):
+    src = loadtest_files["lt" if cmd == "calibrate" else "readings"]
+    lines = src.read_text().splitlines()
+    lines[0] += ",note"
+    lines[1:] = [line + ",ok" for line in lines[1:]]
+    lines[3] = lines[3][: -len(",ok")] + "," + "x" * size
+    f = tmp_path / "big-cell.csv"
+    f.write_text("\n".join(lines) + "\n")
+    r = run([cmd, FORWARD, f, "--out", tmp_path / "o"] + (["--no-plot"] if cmd == "calibrate" else []))
+    line = refused(r, f"{f} line 4 column 'note'")
+    assert f"{size} characters" in line and "at most 10000 characters" in line, line
+    assert not (tmp_path / "o").exists()

@@ -8,7 +8,8 @@ Format (docs: README, "From a load test to a force stream"):
   libraries report it), or as the chip's raw output codes ``Bx_code_lsb,By_code_lsb,Bz_code_lsb``
   with its GAIN_SEL and RES given (options, or ``gain_sel,res`` columns);
 * a load test also has ``force_N`` (newtons; any other force unit is refused, not guessed);
-* extra columns are ignored (and kept in ``mst read``'s output).
+* extra columns are ignored (and kept in ``mst read``'s output);
+* a cell holds at most MAX_CELL_CHARS characters (:mod:`mst_cli.io.csv_table`).
 
 Every problem raises :class:`~mst_cli.errors.InputError` naming the file, the line and the
 column: the CLI turns it into one line and exit code 2.
@@ -16,7 +17,6 @@ column: the CLI turns it into one line and exit code 2.
 
 from __future__ import annotations
 
-import csv
 import functools
 import math
 import re
@@ -27,6 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from mst_cli.errors import InputError
+from mst_cli.io.csv_table import csv_rows
 from mst_cli.io.files import read_input_text
 from mst_cli.model import chip as mlx
 
@@ -229,7 +230,7 @@ def _table(text: str, source: str, need_force: bool) -> tuple[list[tuple[int, st
             "has no header row: expected columns " + (f"{FORCE_COLUMN}," if need_force else "") + ",".join(UT_COLUMNS),
         )
     delim = _delimiter(numbered[0][1])
-    parsed = list(csv.reader([line for _, line in numbered], delimiter=delim))
+    parsed = csv_rows(numbered, delim, source)
     data_rows = parsed[1:]
     if len(data_rows) > MAX_ROWS:
         raise InputError(source, f"{len(data_rows)} rows", f"at most {MAX_ROWS} rows")
