@@ -1862,3 +1862,48 @@ def test_a_huge_cell_in_an_extra_column_is_one_line_naming_file_line_and_column(
     line = refused(r, f"{f} line 4 column 'note'")
     assert f"{size} characters" in line and "at most 10000 characters" in line, line
     assert not (tmp_path / "o").exists()
+
+
+# ----------------------------------------------------------------- 19. extra columns copied into forces.csv
+def with_column(src: Path, dest: Path, name: str, value: str, row: int = 3) -> Path:
+    """``src`` with a column ``name``: 1.5 in every row, ``value`` in data row ``row`` (from 1)."""
+    lines = src.read_text().splitlines()
+    lines[0] += f",{name}"
+    lines[1:] = [line + (f",{value}" if i == row else ",1.5") for i, line in enumerate(lines[1:], start=1)]
+    dest.write_text("\n".join(lines) + "\n")
+    return dest
+
+
+@pytest.mark.parametrize("name", ["T_C", "time_s", "cycle", "note"])
+@pytest.mark.parametrize("value", ["nan", "inf", "-Infinity", "1e400"])
+def test_read_refuses_a_non_finite_number_in_an_extra_column(tmp_path, loadtest_files, name, value):
+    f = with_column(loadtest_files["readings"], tmp_path / "r.csv", name, value)
+    line = refused(run(["read", FORWARD, f, "--out", tmp_path / "o"]), f"{f} line 4 {name}")
+    assert "finite" in line, line
+    assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.parametrize("name", ["T_C", "time_s", "cycle"])
+def test_an_extra_column_with_a_meaning_must_hold_numbers(tmp_path, loadtest_files, name):
+    f = with_column(loadtest_files["readings"], tmp_path / "r.csv", name, "warm")
+    line = refused(run(["read", FORWARD, f, "--out", tmp_path / "o"]), f"{f} line 4 {name}")
+    assert "must be a number" in line, line
+
+
+def test_extra_columns_are_copied_checked_and_quoted(tmp_path, loadtest_files):
+    f = with_column(loadtest_files["readings"], tmp_path / "r.csv", "note", '"pressed, twice"')
+    f = with_column(f, tmp_path / "r2.csv", "T_C", "23.5")
+    r = run(["read", FORWARD, f, "--out", tmp_path / "o"])
+    assert r.exit_code == 0, r.stderr
+    text = (tmp_path / "o" / "forces.csv").read_text()
+    assert "nan" not in text.lower() and "inf" not in text.lower()
+    import csv
+
+    rows = list(csv.DictReader(text.splitlines()))
+    assert rows[2]["note"] == "pressed, twice" and rows[2]["T_C"] == "23.5" and rows[0]["T_C"] == "1.5"
+
+
+def test_a_load_test_refuses_nan_in_an_extra_column_too(tmp_path, loadtest_files):
+    f = with_column(loadtest_files["lt"], tmp_path / "lt.csv", "T_C", "nan")
+    refused(run(["calibrate", FORWARD, f, "--out", tmp_path / "o", "--no-plot"]), f"{f} line 4 T_C")
+    assert not (tmp_path / "o").exists()

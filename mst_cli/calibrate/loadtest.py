@@ -8,7 +8,9 @@ Format (docs: README, "From a load test to a force stream"):
   libraries report it), or as the chip's raw output codes ``Bx_code_lsb,By_code_lsb,Bz_code_lsb``
   with its GAIN_SEL and RES given (options, or ``gain_sel,res`` columns);
 * a load test also has ``force_N`` (newtons; any other force unit is refused, not guessed);
-* extra columns are ignored (and kept in ``mst read``'s output);
+* extra columns are kept in ``mst read``'s output, so each is checked as it is read: a cell of
+  ``time_s``, ``cycle`` or ``T_C`` (EXTRA_NUMBER_COLUMNS) must be a finite number, a cell of
+  any other extra column that reads as a number must be a finite one (no ``nan``, ``inf``);
 * a cell holds at most MAX_CELL_CHARS characters (:mod:`mst_cli.io.csv_table`).
 
 Every problem raises :class:`~mst_cli.errors.InputError` naming the file, the line and the
@@ -38,6 +40,8 @@ UT_COLUMNS = ("Bx_uT", "By_uT", "Bz_uT")
 CODE_COLUMNS = ("Bx_code_lsb", "By_code_lsb", "Bz_code_lsb")
 SETTING_COLUMNS = ("gain_sel", "res")
 OFFSET_COLUMNS = ("x_mm", "y_mm")  # where a load-test row was pressed (optional, both or neither)
+# extra columns with a meaning (time, load cycle, temperature): numbers, checked where they are read
+EXTRA_NUMBER_COLUMNS = ("time_s", "cycle", "T_C")
 # a column that looks like a force or a field in another unit: refused with the conversion
 FORCE_LIKE = re.compile(r"^(force|load|f|weight|mass)(_.*|\s*\[.*\]|\s*\(.*\))?$", re.IGNORECASE)
 FIELD_LIKE = re.compile(r"^(b|mag)_?[xyz](_.+|\s*\[.*\]|\s*\(.*\))$", re.IGNORECASE)
@@ -131,6 +135,25 @@ def _number(source, line, column, text) -> float:
     return v
 
 
+def _extra_cell(source, line, column, text) -> None:
+    """A cell of a column the reading does not use, copied as written into ``mst read``'s
+    forces.csv: one of EXTRA_NUMBER_COLUMNS must be a finite number; any other may be text, but
+    not a number that is not finite."""
+    if column in EXTRA_NUMBER_COLUMNS:
+        _number(source, line, column, text)
+        return
+    try:
+        v = float(text)
+    except ValueError:
+        return
+    if not math.isfinite(v):
+        raise InputError(
+            f"{source} line {line} {column}",
+            text,
+            "must be a finite number or text (an extra column is copied into forces.csv)",
+        )
+
+
 def _wrong_unit_force(source, header):
     for name in header:
         if name != FORCE_COLUMN and FORCE_LIKE.match(name):
@@ -186,6 +209,9 @@ def parse_readings(
     with_force = need_force or FORCE_COLUMN in header  # a readings file may carry the reference
     F = np.empty(len(data_rows)) if with_force else None
     sat = np.zeros(len(data_rows), dtype=bool)
+    used = set(cols) | ({FORCE_COLUMN} if with_force else set())
+    used |= set(SETTING_COLUMNS if settings is not None else ()) | set(OFFSET_COLUMNS if offsets else ())
+    extras = [c for c in header if c not in used]
     rows, lines = [], []
     for r, (row, (line, _)) in enumerate(zip(data_rows, numbered[1:])):
         if len(row) != len(header):
@@ -200,6 +226,8 @@ def parse_readings(
             F[r] = _number(source, line, FORCE_COLUMN, row[idx[FORCE_COLUMN]])
         if off is not None:
             off[r] = [_number(source, line, c, row[idx[c]]) for c in OFFSET_COLUMNS]
+        for c in extras:
+            _extra_cell(source, line, c, row[idx[c]])
         rows.append(row)
         lines.append(line)
     one = flag_setting if settings is None or flag_setting is not None else settings.the_one(rows)
