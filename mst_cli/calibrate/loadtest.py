@@ -135,6 +135,19 @@ def _number(source, line, column, text) -> float:
     return v
 
 
+def _check_extra_columns(
+    source: str, header: list[str], rows: list[list[str]], lines: list[int], used: tuple[str, ...]
+) -> None:
+    """Every cell of the extra columns (those the reading does not use, besides ``used``: the
+    force and the offsets, and ``mst read`` copies them into forces.csv), checked by
+    :func:`_extra_cell`, row by row."""
+    extras = [c for c in header if c not in {*used, FORCE_COLUMN, *OFFSET_COLUMNS}]
+    at = [header.index(c) for c in extras]
+    for row, line in zip(rows, lines):
+        for c, j in zip(extras, at):
+            _extra_cell(source, line, c, row[j])
+
+
 def _extra_cell(source, line, column, text) -> None:
     """A cell of a column the reading does not use, copied as written into ``mst read``'s
     forces.csv: one of EXTRA_NUMBER_COLUMNS must be a finite number; any other may be text, but
@@ -209,9 +222,6 @@ def parse_readings(
     with_force = need_force or FORCE_COLUMN in header  # a readings file may carry the reference
     F = np.empty(len(data_rows)) if with_force else None
     sat = np.zeros(len(data_rows), dtype=bool)
-    used = set(cols) | ({FORCE_COLUMN} if with_force else set())
-    used |= set(SETTING_COLUMNS if settings is not None else ()) | set(OFFSET_COLUMNS if offsets else ())
-    extras = [c for c in header if c not in used]
     rows, lines = [], []
     for r, (row, (line, _)) in enumerate(zip(data_rows, numbered[1:])):
         if len(row) != len(header):
@@ -226,10 +236,9 @@ def parse_readings(
             F[r] = _number(source, line, FORCE_COLUMN, row[idx[FORCE_COLUMN]])
         if off is not None:
             off[r] = [_number(source, line, c, row[idx[c]]) for c in OFFSET_COLUMNS]
-        for c in extras:
-            _extra_cell(source, line, c, row[idx[c]])
         rows.append(row)
         lines.append(line)
+    _check_extra_columns(source, header, rows, lines, (*cols, *(SETTING_COLUMNS if settings is not None else ())))
     one = flag_setting if settings is None or flag_setting is not None else settings.the_one(rows)
     return Readings(
         source=source,
