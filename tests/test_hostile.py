@@ -1381,23 +1381,49 @@ def test_a_noise_only_load_test_is_named_as_no_relation(tmp_path, loadtest_files
 
 
 # ----------------------------------------------------------------- 15. a profile's post-processing
-def test_a_profiles_post_process_script_is_named_in_one_line(exported, tmp_path, fake_slicer):
-    fake_slicer(good_gcode(exported))
+def post_process_profile(tmp_path, value: str) -> Path:
     profile = tmp_path / "pp.ini"
-    profile.write_text(
-        BUNDLED_PROFILE.read_text().replace("post_process = \n", "post_process = /usr/local/bin/strip-moves --fast\n")
-    )
+    profile.write_text(BUNDLED_PROFILE.read_text().replace("post_process = \n", f"post_process = {value}\n"))
+    return profile
+
+
+def test_a_profiles_post_process_script_runs_only_with_consent_and_is_named_in_one_line(
+    exported, tmp_path, fake_slicer
+):
+    fake = fake_slicer(good_gcode(exported))
+    profile = post_process_profile(tmp_path, "/usr/local/bin/strip-moves --fast")
     folder = slice_export(exported, tmp_path / "s")
-    r = run(["slice", folder, "--no-plot", "--json", "--profile", profile])
+    before = {p.name for p in folder.iterdir()}
+    r = run(["slice", folder, "--no-plot", "--json", "--profile", profile])  # issue 40: no consent, no run
+    line = refused(r, "--profile")
+    assert "'/usr/local/bin/strip-moves --fast'" in line and "--allow-post-process" in line, line
+    assert fake.calls == 0 and {p.name for p in folder.iterdir()} == before
+    r = run(["slice", folder, "--no-plot", "--json", "--profile", profile, "--allow-post-process"])
     assert r.exit_code == 0, r.stderr
     notes = [s for s in r.stderr.splitlines() if s.startswith("mst slice: note")]
     assert notes == [
         "mst slice: note: the profile's post_process runs '/usr/local/bin/strip-moves --fast' on "
         "each G-code (your script; what is measured is its output)"
     ], notes
-    assert json.loads(r.stdout)["post_process"] == ["/usr/local/bin/strip-moves --fast"]
+    report = json.loads(r.stdout)
+    assert report["post_process"] == report["post_process_run"] == ["/usr/local/bin/strip-moves --fast"]
     r = run(["slice", folder, "--no-plot"])  # the bundled profile runs nothing
     assert r.exit_code == 0 and "mst slice: note" not in r.stderr
+    assert json.loads((folder / "slice.json").read_text())["post_process_run"] == []
+
+
+def test_api_slice_refuses_post_process_scripts_by_default(exported, tmp_path, fake_slicer):
+    from mst_cli import api
+    from mst_cli.errors import InputError
+
+    fake = fake_slicer(good_gcode(exported))
+    profile = post_process_profile(tmp_path, "a.sh\\nb.sh --x")
+    folder = slice_export(exported, tmp_path / "s")
+    with pytest.raises(InputError, match="'a.sh', 'b.sh --x'"):
+        api.slice(folder, profile=profile)
+    assert fake.calls == 0 and not (folder / "slice.json").exists()
+    result = api.slice(folder, profile=profile, allow_post_process=True)
+    assert result.report["post_process_run"] == ["a.sh", "b.sh --x"]
 
 
 # ----------------------------------------------------------------- 16. a long load test
