@@ -1933,3 +1933,67 @@ def test_a_load_test_refuses_nan_in_an_extra_column_too(tmp_path, loadtest_files
     f = with_column(loadtest_files["lt"], tmp_path / "lt.csv", "T_C", "nan")
     refused(run(["calibrate", FORWARD, f, "--out", tmp_path / "o", "--no-plot"]), f"{f} line 4 T_C")
     assert not (tmp_path / "o").exists()
+
+
+# ----------------------------------------------------------------- 20. no nan or inf in any output
+NON_FINITE_CELL = re.compile(r"(?:^|[,;\t])\s*[-+]?(?:nan|inf|infinity)\s*(?=$|[,;\t])", re.IGNORECASE | re.MULTILINE)
+
+
+def assert_no_non_finite(folder: Path) -> None:
+    """No CSV cell and no JSON number in ``folder`` is nan or inf."""
+    for p in Path(folder).rglob("*"):
+        if p.suffix == ".csv":
+            bad = NON_FINITE_CELL.search(p.read_text())
+            assert bad is None, (p.name, bad.group(0))
+        elif p.suffix == ".json":
+            load_json_strict(p)
+
+
+def face_half_mm() -> tuple[float, float]:
+    g = load_document(FORWARD).geometry()
+    return g.width_mm / 2, g.depth_mm / 2
+
+
+def test_the_faces_corner_writes_an_empty_flagged_axial_reading_not_nan(tmp_path):
+    out = tmp_path / "o"
+    r = run(["simulate", FORWARD, "--load-offset-mm", "15,10", "--out", out, "--no-plot"])
+    assert r.exit_code == 0, r.stderr
+    assert_no_non_finite(out)
+    import csv
+
+    rows = list(csv.DictReader((out / "offcentre.csv").read_text().splitlines()))
+    empty = [row for row in rows if row["force_read_axial_N"] == ""]
+    assert empty and all(row["read_error_N"] == "" and row["axial_reading_flag"] != "ok" for row in empty)
+    assert {row["axial_reading_flag"] for row in empty} == {"below_no_load"}
+    assert all(row["axial_reading_flag"] == "ok" for row in rows if row["force_read_axial_N"] != "")
+    assert f"{len(empty)} of {len(rows)} force samples have no axial reading" in r.stdout, r.stdout
+    report = load_json_strict(out / "report.json")
+    assert report["off_centre"]["axial_reading"]["below_no_load"] == len(empty)
+
+
+def test_the_offset_map_writes_empty_flagged_cells_not_nan(tmp_path, monkeypatch):
+    import mst_cli.model.offcentre as O
+
+    half = face_half_mm()
+    real = O.offset_map
+    monkeypatch.setattr(O, "offset_map", lambda *a, **k: real(*a, **dict(k, region_mm=half, grid=(3, 3))))
+    out = tmp_path / "o"
+    r = run(["simulate", FORWARD, "--offset-map", "--out", out, "--no-plot"])
+    assert r.exit_code == 0, r.stderr
+    assert_no_non_finite(out)
+    rows = (out / "offset_map.csv").read_text().splitlines()
+    assert rows[0].endswith(",read_error_rel,axial_reading_flag")
+    assert any(row.endswith(",,below_no_load") for row in rows[1:])
+
+
+@pytest.mark.slow
+@settings(max_examples=12, **PROPERTY)
+@given(fx=st.sampled_from([-1.0, -0.5, 0.0, 0.5, 0.9, 1.0]), fy=st.floats(-1.0, 1.0))
+def test_property_no_output_holds_nan_or_inf_for_any_offset_on_the_face(fx, fy):
+    hw, hd = face_half_mm()
+    with tempfile.TemporaryDirectory() as d:
+        out = Path(d) / "o"
+        r = run(["simulate", FORWARD, "--load-offset-mm", f"{fx * hw!r},{fy * hd!r}", "--out", out, "--no-plot"])
+        event(f"exit {r.exit_code}")
+        assert r.exit_code == 0, r.stderr
+        assert_no_non_finite(out)
