@@ -1530,6 +1530,26 @@ HOSTILE_CELLS = [
 WRONG_UNIT_COLUMNS = ["force_kN", "load_g", "Bz_mT", "bx_gauss", "F", "time_s", "note"]
 
 
+EXTRA_COLUMNS = ["T_C", "cycle", "branch", "x_mm", "gain_sel", ""]
+
+
+def any_cell():
+    """A cell of any content (no line break: a line is a row) and any length, up to and past the bound
+    on a cell (mst_cli.io.csv_table.MAX_CELL_CHARS) and past the csv module's own field limit."""
+    from mst_cli.io.csv_table import MAX_CELL_CHARS
+
+    text = st.text(
+        st.characters(blacklist_categories=("Cs",), blacklist_characters="\n\r\x0b\x0c\x1c\x1d\x1e\x85\u2028\u2029"),
+        max_size=12,
+    )
+    long = st.builds(
+        lambda ch, n: ch * n,
+        st.sampled_from(["x", "9", '"', ",", " "]),
+        st.sampled_from([MAX_CELL_CHARS, MAX_CELL_CHARS + 1, 131_073, 200_000]),
+    )
+    return st.one_of(text, long)
+
+
 @st.composite
 def reading_files(draw, need_force: bool, resp, setting):
     """A load test (``need_force``) or readings CSV drawn from the column rules of
@@ -1545,7 +1565,7 @@ def reading_files(draw, need_force: bool, resp, setting):
     with_setting = draw(st.booleans())
     if with_setting:
         cols += list(lt.SETTING_COLUMNS)
-    cols += draw(st.lists(st.sampled_from(WRONG_UNIT_COLUMNS), max_size=1))
+    cols += draw(st.lists(st.sampled_from(WRONG_UNIT_COLUMNS + EXTRA_COLUMNS), max_size=2, unique=True))
     if draw(st.integers(0, 5)) == 0:
         cols = draw(st.permutations(cols))
     n = draw(st.sampled_from([0, 1, 5, 13, 40]))
@@ -1567,11 +1587,19 @@ def reading_files(draw, need_force: bool, resp, setting):
         else:
             cells.update({c: f"{v:.3f}" for c, v in zip(lt.UT_COLUMNS, b)})
         rows.append([cells.get(c, "x") for c in cols])
+    known = {lt.FORCE_COLUMN, *lt.SETTING_COLUMNS, *lt.UT_COLUMNS, *lt.CODE_COLUMNS}
+    for c in cols:  # an extra column holds values of one type, drawn once per column
+        if c not in known:
+            kind = draw(st.sampled_from(["number", "integer", "text", "bool", "empty"]))
+            value = {"number": "23.5", "integer": "7", "text": "warm", "bool": "true", "empty": ""}[kind]
+            j = cols.index(c)
+            for row in rows:
+                row[j] = value
     edges = [str(v) for v in (limit - 1, limit, -limit, 25000, 50000, -50000, 49999.999, 1e9)]
     for _ in range(draw(st.integers(0, 3))):
         if rows:
             i, j = draw(st.integers(0, len(rows) - 1)), draw(st.integers(0, len(cols) - 1))
-            rows[i][j] = draw(st.sampled_from(HOSTILE_CELLS + edges))
+            rows[i][j] = draw(st.one_of(st.sampled_from(HOSTILE_CELLS + edges), any_cell()))
     if rows and draw(st.integers(0, 6)) == 0:
         rows[draw(st.integers(0, len(rows) - 1))].pop()  # a short row
     delim = draw(st.sampled_from([",", ",", ";", "\t"]))
@@ -1610,6 +1638,7 @@ def test_property_load_tests_from_the_column_rules_keep_the_contract(forward_res
     text = data.draw(reading_files(True, resp, resp.chip_setting))
     with run_on_csv("calibrate", text, "--no-plot") as (folder, r, dt, caught):
         contract(r, dt, caught, folder, CAL_OUTPUTS, CAL_OUTPUTS - {"force_table.h"}, 20.0)
+        assert_no_non_finite(folder / "o")
         if r.exit_code == 1:
             assert r.stderr.count("\n") == 1 and r.stderr.startswith("mst: calibration failed"), r.stderr
 
@@ -1621,6 +1650,7 @@ def test_property_readings_from_the_column_rules_keep_the_contract(forward_respo
     text = data.draw(reading_files(False, resp, resp.chip_setting))
     with run_on_csv("read", text) as (folder, r, dt, caught):
         contract(r, dt, caught, folder, {"forces.csv"}, {"forces.csv"}, 10.0, chatter=("mst read: warning",))
+        assert_no_non_finite(folder / "o")
         assert r.exit_code in (0, 2), r.stderr
         if r.exit_code == 0:
             flags = [row.rsplit(",", 2)[-2] for row in (folder / "o" / "forces.csv").read_text().splitlines()[1:]]
@@ -1997,3 +2027,37 @@ def test_property_no_output_holds_nan_or_inf_for_any_offset_on_the_face(fx, fy):
         event(f"exit {r.exit_code}")
         assert r.exit_code == 0, r.stderr
         assert_no_non_finite(out)
+
+
+# ----------------------------------------------------------------- profiles with any post_process value
+LINE_BREAKS = "\n\r\x0b\x0c\x1c\x1d\x1e\x85\u2028\u2029"
+
+
+@settings(max_examples=40, **PROPERTY)
+@given(
+    value=st.one_of(
+        st.text(st.characters(blacklist_categories=("Cs",), blacklist_characters=LINE_BREAKS), max_size=40),
+        st.lists(st.sampled_from(["", " ", "a.sh", "/bin/rm -rf x", "'q'", "x;y"]), max_size=4).map("\\n".join),
+    ),
+    consent=st.booleans(),
+)
+def test_property_profiles_with_any_post_process_value_keep_the_contract(exported, fake_slicer, value, consent):
+    from mst_cli.cad.slicer import parse_ini, post_process_scripts
+
+    fake = fake_slicer(good_gcode(exported))
+    with tempfile.TemporaryDirectory() as d:
+        profile = post_process_profile(Path(d), value)
+        scripts = post_process_scripts(parse_ini(profile.read_text()))
+        folder = slice_export(exported, Path(d) / "c")
+        r, dt, caught = invoke(
+            ["slice", folder, "--no-plot", "--profile", profile] + (["--allow-post-process"] if consent else [])
+        )
+        event(f"exit {r.exit_code}, {len(scripts)} scripts, consent {consent}")
+        outputs = {"sensor.gcode", "slice.json"}
+        contract(r, dt, caught, folder, outputs, outputs, 20.0, chatter=("[", "mst slice: note"))
+        if scripts and not consent:
+            line = refused(r, "--profile")
+            assert "--allow-post-process" in line and fake.calls == 0
+        else:
+            assert r.exit_code == 0, r.stderr
+            assert json.loads((folder / "slice.json").read_text())["post_process_run"] == scripts
