@@ -1437,23 +1437,49 @@ def test_a_noise_only_load_test_is_named_as_no_relation(tmp_path, loadtest_files
 
 
 # ----------------------------------------------------------------- 15. a profile's post-processing
-def test_a_profiles_post_process_script_is_named_in_one_line(exported, tmp_path, fake_slicer):
-    fake_slicer(good_gcode(exported))
+def post_process_profile(tmp_path, value: str) -> Path:
     profile = tmp_path / "pp.ini"
-    profile.write_text(
-        BUNDLED_PROFILE.read_text().replace("post_process = \n", "post_process = /usr/local/bin/strip-moves --fast\n")
-    )
+    profile.write_text(BUNDLED_PROFILE.read_text().replace("post_process = \n", f"post_process = {value}\n"))
+    return profile
+
+
+def test_a_profiles_post_process_script_runs_only_with_consent_and_is_named_in_one_line(
+    exported, tmp_path, fake_slicer
+):
+    fake = fake_slicer(good_gcode(exported))
+    profile = post_process_profile(tmp_path, "/usr/local/bin/strip-moves --fast")
     folder = slice_export(exported, tmp_path / "s")
-    r = run(["slice", folder, "--no-plot", "--json", "--profile", profile])
+    before = {p.name for p in folder.iterdir()}
+    r = run(["slice", folder, "--no-plot", "--json", "--profile", profile])  # issue 40: no consent, no run
+    line = refused(r, "--profile")
+    assert "'/usr/local/bin/strip-moves --fast'" in line and "--allow-post-process" in line, line
+    assert fake.calls == 0 and {p.name for p in folder.iterdir()} == before
+    r = run(["slice", folder, "--no-plot", "--json", "--profile", profile, "--allow-post-process"])
     assert r.exit_code == 0, r.stderr
     notes = [s for s in r.stderr.splitlines() if s.startswith("mst slice: note")]
     assert notes == [
         "mst slice: note: the profile's post_process runs '/usr/local/bin/strip-moves --fast' on "
         "each G-code (your script; what is measured is its output)"
     ], notes
-    assert json.loads(r.stdout)["post_process"] == ["/usr/local/bin/strip-moves --fast"]
+    report = json.loads(r.stdout)
+    assert report["post_process"] == report["post_process_run"] == ["/usr/local/bin/strip-moves --fast"]
     r = run(["slice", folder, "--no-plot"])  # the bundled profile runs nothing
     assert r.exit_code == 0 and "mst slice: note" not in r.stderr
+    assert json.loads((folder / "slice.json").read_text())["post_process_run"] == []
+
+
+def test_api_slice_refuses_post_process_scripts_by_default(exported, tmp_path, fake_slicer):
+    from mst_cli import api
+    from mst_cli.errors import InputError
+
+    fake = fake_slicer(good_gcode(exported))
+    profile = post_process_profile(tmp_path, "a.sh\\nb.sh --x")
+    folder = slice_export(exported, tmp_path / "s")
+    with pytest.raises(InputError, match="'a.sh', 'b.sh --x'"):
+        api.slice(folder, profile=profile)
+    assert fake.calls == 0 and not (folder / "slice.json").exists()
+    result = api.slice(folder, profile=profile, allow_post_process=True)
+    assert result.report["post_process_run"] == ["a.sh", "b.sh --x"]
 
 
 # ----------------------------------------------------------------- 16. a long load test
@@ -1560,6 +1586,26 @@ HOSTILE_CELLS = [
 WRONG_UNIT_COLUMNS = ["force_kN", "load_g", "Bz_mT", "bx_gauss", "F", "time_s", "note"]
 
 
+EXTRA_COLUMNS = ["T_C", "cycle", "branch", "x_mm", "gain_sel", ""]
+
+
+def any_cell():
+    """A cell of any content (no line break: a line is a row) and any length, up to and past the bound
+    on a cell (mst_cli.io.csv_table.MAX_CELL_CHARS) and past the csv module's own field limit."""
+    from mst_cli.io.csv_table import MAX_CELL_CHARS
+
+    text = st.text(
+        st.characters(blacklist_categories=("Cs",), blacklist_characters="\n\r\x0b\x0c\x1c\x1d\x1e\x85\u2028\u2029"),
+        max_size=12,
+    )
+    long = st.builds(
+        lambda ch, n: ch * n,
+        st.sampled_from(["x", "9", '"', ",", " "]),
+        st.sampled_from([MAX_CELL_CHARS, MAX_CELL_CHARS + 1, 131_073, 200_000]),
+    )
+    return st.one_of(text, long)
+
+
 @st.composite
 def reading_files(draw, need_force: bool, resp, setting):
     """A load test (``need_force``) or readings CSV drawn from the column rules of
@@ -1575,7 +1621,7 @@ def reading_files(draw, need_force: bool, resp, setting):
     with_setting = draw(st.booleans())
     if with_setting:
         cols += list(lt.SETTING_COLUMNS)
-    cols += draw(st.lists(st.sampled_from(WRONG_UNIT_COLUMNS), max_size=1))
+    cols += draw(st.lists(st.sampled_from(WRONG_UNIT_COLUMNS + EXTRA_COLUMNS), max_size=2, unique=True))
     if draw(st.integers(0, 5)) == 0:
         cols = draw(st.permutations(cols))
     n = draw(st.sampled_from([0, 1, 5, 13, 40]))
@@ -1597,11 +1643,19 @@ def reading_files(draw, need_force: bool, resp, setting):
         else:
             cells.update({c: f"{v:.3f}" for c, v in zip(lt.UT_COLUMNS, b)})
         rows.append([cells.get(c, "x") for c in cols])
+    known = {lt.FORCE_COLUMN, *lt.SETTING_COLUMNS, *lt.UT_COLUMNS, *lt.CODE_COLUMNS}
+    for c in cols:  # an extra column holds values of one type, drawn once per column
+        if c not in known:
+            kind = draw(st.sampled_from(["number", "integer", "text", "bool", "empty"]))
+            value = {"number": "23.5", "integer": "7", "text": "warm", "bool": "true", "empty": ""}[kind]
+            j = cols.index(c)
+            for row in rows:
+                row[j] = value
     edges = [str(v) for v in (limit - 1, limit, -limit, 25000, 50000, -50000, 49999.999, 1e9)]
     for _ in range(draw(st.integers(0, 3))):
         if rows:
             i, j = draw(st.integers(0, len(rows) - 1)), draw(st.integers(0, len(cols) - 1))
-            rows[i][j] = draw(st.sampled_from(HOSTILE_CELLS + edges))
+            rows[i][j] = draw(st.one_of(st.sampled_from(HOSTILE_CELLS + edges), any_cell()))
     if rows and draw(st.integers(0, 6)) == 0:
         rows[draw(st.integers(0, len(rows) - 1))].pop()  # a short row
     delim = draw(st.sampled_from([",", ",", ";", "\t"]))
@@ -1640,6 +1694,7 @@ def test_property_load_tests_from_the_column_rules_keep_the_contract(forward_res
     text = data.draw(reading_files(True, resp, resp.chip_setting))
     with run_on_csv("calibrate", text, "--no-plot") as (folder, r, dt, caught):
         contract(r, dt, caught, folder, CAL_OUTPUTS, CAL_OUTPUTS - {"force_table.h"}, 20.0)
+        assert_no_non_finite(folder / "o")
         if r.exit_code == 1:
             assert r.stderr.count("\n") == 1 and r.stderr.startswith("mst: calibration failed"), r.stderr
 
@@ -1651,6 +1706,7 @@ def test_property_readings_from_the_column_rules_keep_the_contract(forward_respo
     text = data.draw(reading_files(False, resp, resp.chip_setting))
     with run_on_csv("read", text) as (folder, r, dt, caught):
         contract(r, dt, caught, folder, {"forces.csv"}, {"forces.csv"}, 10.0, chatter=("mst read: warning",))
+        assert_no_non_finite(folder / "o")
         assert r.exit_code in (0, 2), r.stderr
         if r.exit_code == 0:
             flags = [row.rsplit(",", 2)[-2] for row in (folder / "o" / "forces.csv").read_text().splitlines()[1:]]
@@ -1896,3 +1952,168 @@ def test_property_what_export_writes_check_and_slice_accept(raw, tolerance):
     manifest = json.loads(json.dumps(export_manifest(doc.name, geometry, doc.printer, tolerance, ["sensor.stl"])))
     Manifest.from_dict(manifest)  # mst check reads it
     SliceManifest.from_dict(manifest)  # mst slice reads it
+
+
+# =========================================================================== issue 40: round three
+# Each section below is one class of issue 40; each test failed (a traceback, exit 0 with nan
+# written, a script run without consent) on the tree before its fix.
+
+
+# ----------------------------------------------------------------- 18. a huge cell
+@pytest.mark.parametrize("cmd", ["calibrate", "read"])
+@pytest.mark.parametrize("size", [200_000, 20_000])
+def test_a_huge_cell_in_an_extra_column_is_one_line_naming_file_line_and_column(tmp_path, loadtest_files, cmd, size):
+    src = loadtest_files["lt" if cmd == "calibrate" else "readings"]
+    lines = src.read_text().splitlines()
+    lines[0] += ",note"
+    lines[1:] = [line + ",ok" for line in lines[1:]]
+    lines[3] = lines[3][: -len(",ok")] + "," + "x" * size
+    f = tmp_path / "big-cell.csv"
+    f.write_text("\n".join(lines) + "\n")
+    r = run([cmd, FORWARD, f, "--out", tmp_path / "o"] + (["--no-plot"] if cmd == "calibrate" else []))
+    line = refused(r, f"{f} line 4 column 'note'")
+    assert f"{size} characters" in line and "at most 10000 characters" in line, line
+    assert not (tmp_path / "o").exists()
+
+
+# ----------------------------------------------------------------- 19. extra columns copied into forces.csv
+def with_column(src: Path, dest: Path, name: str, value: str, row: int = 3) -> Path:
+    """``src`` with a column ``name``: 1.5 in every row, ``value`` in data row ``row`` (from 1)."""
+    lines = src.read_text().splitlines()
+    lines[0] += f",{name}"
+    lines[1:] = [line + (f",{value}" if i == row else ",1.5") for i, line in enumerate(lines[1:], start=1)]
+    dest.write_text("\n".join(lines) + "\n")
+    return dest
+
+
+@pytest.mark.parametrize("name", ["T_C", "time_s", "cycle", "note"])
+@pytest.mark.parametrize("value", ["nan", "inf", "-Infinity", "1e400"])
+def test_read_refuses_a_non_finite_number_in_an_extra_column(tmp_path, loadtest_files, name, value):
+    f = with_column(loadtest_files["readings"], tmp_path / "r.csv", name, value)
+    line = refused(run(["read", FORWARD, f, "--out", tmp_path / "o"]), f"{f} line 4 {name}")
+    assert "finite" in line, line
+    assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.parametrize("name", ["T_C", "time_s", "cycle"])
+def test_an_extra_column_with_a_meaning_must_hold_numbers(tmp_path, loadtest_files, name):
+    f = with_column(loadtest_files["readings"], tmp_path / "r.csv", name, "warm")
+    line = refused(run(["read", FORWARD, f, "--out", tmp_path / "o"]), f"{f} line 4 {name}")
+    assert "must be a number" in line, line
+
+
+def test_extra_columns_are_copied_checked_and_quoted(tmp_path, loadtest_files):
+    f = with_column(loadtest_files["readings"], tmp_path / "r.csv", "note", '"pressed, twice"')
+    f = with_column(f, tmp_path / "r2.csv", "T_C", "23.5")
+    r = run(["read", FORWARD, f, "--out", tmp_path / "o"])
+    assert r.exit_code == 0, r.stderr
+    text = (tmp_path / "o" / "forces.csv").read_text()
+    assert "nan" not in text.lower() and "inf" not in text.lower()
+    import csv
+
+    rows = list(csv.DictReader(text.splitlines()))
+    assert rows[2]["note"] == "pressed, twice" and rows[2]["T_C"] == "23.5" and rows[0]["T_C"] == "1.5"
+
+
+def test_a_load_test_refuses_nan_in_an_extra_column_too(tmp_path, loadtest_files):
+    f = with_column(loadtest_files["lt"], tmp_path / "lt.csv", "T_C", "nan")
+    refused(run(["calibrate", FORWARD, f, "--out", tmp_path / "o", "--no-plot"]), f"{f} line 4 T_C")
+    assert not (tmp_path / "o").exists()
+
+
+# ----------------------------------------------------------------- 20. no nan or inf in any output
+NON_FINITE_CELL = re.compile(r"(?:^|[,;\t])\s*[-+]?(?:nan|inf|infinity)\s*(?=$|[,;\t])", re.IGNORECASE | re.MULTILINE)
+
+
+def assert_no_non_finite(folder: Path) -> None:
+    """No CSV cell and no JSON number in ``folder`` is nan or inf."""
+    for p in Path(folder).rglob("*"):
+        if p.suffix == ".csv":
+            bad = NON_FINITE_CELL.search(p.read_text())
+            assert bad is None, (p.name, bad.group(0))
+        elif p.suffix == ".json":
+            load_json_strict(p)
+
+
+def face_half_mm() -> tuple[float, float]:
+    g = load_document(FORWARD).geometry()
+    return g.width_mm / 2, g.depth_mm / 2
+
+
+def test_the_faces_corner_writes_an_empty_flagged_axial_reading_not_nan(tmp_path):
+    out = tmp_path / "o"
+    r = run(["simulate", FORWARD, "--load-offset-mm", "15,10", "--out", out, "--no-plot"])
+    assert r.exit_code == 0, r.stderr
+    assert_no_non_finite(out)
+    import csv
+
+    rows = list(csv.DictReader((out / "offcentre.csv").read_text().splitlines()))
+    empty = [row for row in rows if row["force_read_axial_N"] == ""]
+    assert empty and all(row["read_error_N"] == "" and row["axial_reading_flag"] != "ok" for row in empty)
+    assert {row["axial_reading_flag"] for row in empty} == {"below_no_load"}
+    assert all(row["axial_reading_flag"] == "ok" for row in rows if row["force_read_axial_N"] != "")
+    assert f"{len(empty)} of {len(rows)} force samples have no axial reading" in r.stdout, r.stdout
+    report = load_json_strict(out / "report.json")
+    assert report["off_centre"]["axial_reading"]["below_no_load"] == len(empty)
+
+
+def test_the_offset_map_writes_empty_flagged_cells_not_nan(tmp_path, monkeypatch):
+    import mst_cli.model.offcentre as O
+
+    half = face_half_mm()
+    real = O.offset_map
+    monkeypatch.setattr(O, "offset_map", lambda *a, **k: real(*a, **dict(k, region_mm=half, grid=(3, 3))))
+    out = tmp_path / "o"
+    r = run(["simulate", FORWARD, "--offset-map", "--out", out, "--no-plot"])
+    assert r.exit_code == 0, r.stderr
+    assert_no_non_finite(out)
+    rows = (out / "offset_map.csv").read_text().splitlines()
+    assert rows[0].endswith(",read_error_rel,axial_reading_flag")
+    assert any(row.endswith(",,below_no_load") for row in rows[1:])
+
+
+@pytest.mark.slow
+@settings(max_examples=12, **PROPERTY)
+@given(fx=st.sampled_from([-1.0, -0.5, 0.0, 0.5, 0.9, 1.0]), fy=st.floats(-1.0, 1.0))
+def test_property_no_output_holds_nan_or_inf_for_any_offset_on_the_face(fx, fy):
+    hw, hd = face_half_mm()
+    with tempfile.TemporaryDirectory() as d:
+        out = Path(d) / "o"
+        r = run(["simulate", FORWARD, "--load-offset-mm", f"{fx * hw!r},{fy * hd!r}", "--out", out, "--no-plot"])
+        event(f"exit {r.exit_code}")
+        assert r.exit_code == 0, r.stderr
+        assert_no_non_finite(out)
+
+
+# ----------------------------------------------------------------- profiles with any post_process value
+LINE_BREAKS = "\n\r\x0b\x0c\x1c\x1d\x1e\x85\u2028\u2029"
+
+
+@settings(max_examples=40, **PROPERTY)
+@given(
+    value=st.one_of(
+        st.text(st.characters(blacklist_categories=("Cs",), blacklist_characters=LINE_BREAKS), max_size=40),
+        st.lists(st.sampled_from(["", " ", "a.sh", "/bin/rm -rf x", "'q'", "x;y"]), max_size=4).map("\\n".join),
+    ),
+    consent=st.booleans(),
+)
+def test_property_profiles_with_any_post_process_value_keep_the_contract(exported, fake_slicer, value, consent):
+    from mst_cli.cad.slicer import parse_ini, post_process_scripts
+
+    fake = fake_slicer(good_gcode(exported))
+    with tempfile.TemporaryDirectory() as d:
+        profile = post_process_profile(Path(d), value)
+        scripts = post_process_scripts(parse_ini(profile.read_text()))
+        folder = slice_export(exported, Path(d) / "c")
+        r, dt, caught = invoke(
+            ["slice", folder, "--no-plot", "--profile", profile] + (["--allow-post-process"] if consent else [])
+        )
+        event(f"exit {r.exit_code}, {len(scripts)} scripts, consent {consent}")
+        outputs = {"sensor.gcode", "slice.json"}
+        contract(r, dt, caught, folder, outputs, outputs, 20.0, chatter=("[", "mst slice: note"))
+        if scripts and not consent:
+            line = refused(r, "--profile")
+            assert "--allow-post-process" in line and fake.calls == 0
+        else:
+            assert r.exit_code == 0, r.stderr
+            assert json.loads((folder / "slice.json").read_text())["post_process_run"] == scripts

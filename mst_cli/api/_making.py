@@ -154,6 +154,7 @@ def slice(
     plot: bool = False,
     progress: Callable[[str], None] | None = None,
     note: Callable[[str], None] | None = None,
+    allow_post_process: bool = False,
 ) -> SliceResult:
     """Slice an export with PrusaSlicer and judge whether it prints (``mst slice``; the
     command's name, so it shadows the builtin ``slice`` inside this module, which never uses it).
@@ -168,6 +169,9 @@ def slice(
         Folder for sensor.gcode, slice.json and (``plot``) print.png [default: ``path``].
     max_span_mm : float
         Longest free span allowed (extrusion with nothing under it), mm.
+    allow_post_process : bool
+        Let PrusaSlicer run the scripts the profile's ``post_process`` names [default: False:
+        such a profile is refused (InputError) before anything is sliced or written].
 
     Returns
     -------
@@ -178,6 +182,6 @@ def slice(
     """
     from mst_cli.cad.slicing import slice_export  # deferred: the CAD layer and subprocess, 50 ms measured
 
-    result = slice_export(path, profile, max_span_mm, progress, note)
+    result = slice_export(path, profile, max_span_mm, progress, note, allow_post_process)
     result.write(Path(out) if out is not None else None, plot=plot)
     return result

@@ -100,15 +100,17 @@ def slice_export(
     max_span_mm: float = DEFAULT_MAX_SPAN_MM,
     progress: Callable[[str], None] | None = None,
     note: Callable[[str], None] | None = None,
+    allow_post_process: bool = False,
 ) -> SliceResult:
     """Slice the export at ``path`` (its folder, or a mesh in it) with ``profile`` (default: the
-    bundled TPU 85A one) and judge it. InputError for bad input (checked before slicing),
-    SlicerError when PrusaSlicer misbehaves. ``progress`` gets a line per step, ``note`` the
-    profile's post_process scripts."""
+    bundled TPU 85A one) and judge it. InputError for bad input (checked before slicing), and for
+    a profile whose post_process names scripts unless ``allow_post_process`` (PrusaSlicer would
+    run them); SlicerError when PrusaSlicer misbehaves. ``progress`` gets a line per step,
+    ``note`` the profile's post_process scripts when they run."""
     say = progress or (lambda message: None)
     if not 0 < max_span_mm <= 1000:
         raise InputError("--max-span", max_span_mm, "must be a length from 0 to 1000 mm")
-    job = _SliceJob.prepare(path, profile, note, say)
+    job = _SliceJob.prepare(path, profile, note, say, allow_post_process)
     sliced = _slice_twice(job, say)
     g = sliced.gcode
     spans = M.free_spans(g)
@@ -155,6 +157,7 @@ class _SliceJob:
         profile: str | Path | None,
         note: Callable[[str], None] | None,
         say: Callable[[str], None],
+        allow_post_process: bool = False,
     ) -> _SliceJob:
         exe = S.find_prusa_slicer()
         profile = Path(profile) if profile is not None else S.bundled_profile()
@@ -162,6 +165,13 @@ class _SliceJob:
         files = resolve_export(path, need_stl=False)
         manifest = load_manifest(files.manifest, SliceManifest)  # before any slicing: exit 2 naming the key
         scripts = S.post_process_scripts(settings)
+        if scripts and not allow_post_process:  # a profile's scripts run only with the user's consent
+            raise InputError(
+                "--profile",
+                str(profile),
+                f"its post_process would make PrusaSlicer run {', '.join(map(repr, scripts))} on the "
+                "G-code: give --allow-post-process to run the profile's scripts, or remove them from it",
+            )
         if scripts and note is not None:
             note(
                 f"the profile's post_process runs {', '.join(map(repr, scripts))} on each G-code "
@@ -265,6 +275,7 @@ def _report(job: _SliceJob, sliced: _Sliced, checks: list[Check], layer_h: float
         "slicer": job.version,
         "profile": str(job.profile),
         "post_process": job.scripts,
+        "post_process_run": job.scripts,  # what ran: they run only with consent (else refused before)
         "model_sliced": job.model.name,
         "slice_time_s": round(sliced.seconds, 3),
         "print_time_s": g.print_time_s,

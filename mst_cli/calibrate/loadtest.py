@@ -8,7 +8,10 @@ Format (docs: README, "From a load test to a force stream"):
   libraries report it), or as the chip's raw output codes ``Bx_code_lsb,By_code_lsb,Bz_code_lsb``
   with its GAIN_SEL and RES given (options, or ``gain_sel,res`` columns);
 * a load test also has ``force_N`` (newtons; any other force unit is refused, not guessed);
-* extra columns are ignored (and kept in ``mst read``'s output).
+* extra columns are kept in ``mst read``'s output, so each is checked as it is read: a cell of
+  ``time_s``, ``cycle`` or ``T_C`` (EXTRA_NUMBER_COLUMNS) must be a finite number, a cell of
+  any other extra column that reads as a number must be a finite one (no ``nan``, ``inf``);
+* a cell holds at most MAX_CELL_CHARS characters (:mod:`mst_cli.io.csv_table`).
 
 Every problem raises :class:`~mst_cli.errors.InputError` naming the file, the line and the
 column: the CLI turns it into one line and exit code 2.
@@ -16,7 +19,6 @@ column: the CLI turns it into one line and exit code 2.
 
 from __future__ import annotations
 
-import csv
 import functools
 import math
 import re
@@ -27,6 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from mst_cli.errors import InputError
+from mst_cli.io.csv_table import csv_rows
 from mst_cli.io.files import read_input_text
 from mst_cli.model import chip as mlx
 
@@ -37,6 +40,8 @@ UT_COLUMNS = ("Bx_uT", "By_uT", "Bz_uT")
 CODE_COLUMNS = ("Bx_code_lsb", "By_code_lsb", "Bz_code_lsb")
 SETTING_COLUMNS = ("gain_sel", "res")
 OFFSET_COLUMNS = ("x_mm", "y_mm")  # where a load-test row was pressed (optional, both or neither)
+# extra columns with a meaning (time, load cycle, temperature): numbers, checked where they are read
+EXTRA_NUMBER_COLUMNS = ("time_s", "cycle", "T_C")
 # a column that looks like a force or a field in another unit: refused with the conversion
 FORCE_LIKE = re.compile(r"^(force|load|f|weight|mass)(_.*|\s*\[.*\]|\s*\(.*\))?$", re.IGNORECASE)
 FIELD_LIKE = re.compile(r"^(b|mag)_?[xyz](_.+|\s*\[.*\]|\s*\(.*\))$", re.IGNORECASE)
@@ -130,6 +135,38 @@ def _number(source, line, column, text) -> float:
     return v
 
 
+def _check_extra_columns(
+    source: str, header: list[str], rows: list[list[str]], lines: list[int], used: tuple[str, ...]
+) -> None:
+    """Every cell of the extra columns (those the reading does not use, besides ``used``: the
+    force and the offsets, and ``mst read`` copies them into forces.csv), checked by
+    :func:`_extra_cell`, row by row."""
+    extras = [c for c in header if c not in {*used, FORCE_COLUMN, *OFFSET_COLUMNS}]
+    at = [header.index(c) for c in extras]
+    for row, line in zip(rows, lines):
+        for c, j in zip(extras, at):
+            _extra_cell(source, line, c, row[j])
+
+
+def _extra_cell(source, line, column, text) -> None:
+    """A cell of a column the reading does not use, copied as written into ``mst read``'s
+    forces.csv: one of EXTRA_NUMBER_COLUMNS must be a finite number; any other may be text, but
+    not a number that is not finite."""
+    if column in EXTRA_NUMBER_COLUMNS:
+        _number(source, line, column, text)
+        return
+    try:
+        v = float(text)
+    except ValueError:
+        return
+    if not math.isfinite(v):
+        raise InputError(
+            f"{source} line {line} {column}",
+            text,
+            "must be a finite number or text (an extra column is copied into forces.csv)",
+        )
+
+
 def _wrong_unit_force(source, header):
     for name in header:
         if name != FORCE_COLUMN and FORCE_LIKE.match(name):
@@ -201,6 +238,7 @@ def parse_readings(
             off[r] = [_number(source, line, c, row[idx[c]]) for c in OFFSET_COLUMNS]
         rows.append(row)
         lines.append(line)
+    _check_extra_columns(source, header, rows, lines, (*cols, *(SETTING_COLUMNS if settings is not None else ())))
     one = flag_setting if settings is None or flag_setting is not None else settings.the_one(rows)
     return Readings(
         source=source,
@@ -229,7 +267,7 @@ def _table(text: str, source: str, need_force: bool) -> tuple[list[tuple[int, st
             "has no header row: expected columns " + (f"{FORCE_COLUMN}," if need_force else "") + ",".join(UT_COLUMNS),
         )
     delim = _delimiter(numbered[0][1])
-    parsed = list(csv.reader([line for _, line in numbered], delimiter=delim))
+    parsed = csv_rows(numbered, delim, source)
     data_rows = parsed[1:]
     if len(data_rows) > MAX_ROWS:
         raise InputError(source, f"{len(data_rows)} rows", f"at most {MAX_ROWS} rows")

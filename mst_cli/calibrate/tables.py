@@ -74,7 +74,7 @@ def forces_csv(
     FORCES_COLUMNS; a flagged reading's force, regime and resolution are empty."""
     header = ["force_N_reference" if h == "force_N" else h for h in rd.header]
     buf = io.StringIO()
-    buf.write(",".join(header + list(FORCES_COLUMNS)) + "\n")
+    buf.write(",".join([quoted(h) for h in header] + list(FORCES_COLUMNS)) + "\n")
     for i, row in enumerate(rd.rows):
         ok = bool(np.isfinite(F[i]))
         buf.write(

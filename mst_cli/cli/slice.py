@@ -39,10 +39,22 @@ DEFAULT_MAX_SPAN_MM = 5.0
     help="Longest free span allowed (extrusion with nothing under it), mm.",
 )
 @click.option("--json", "as_json", is_flag=True, help="Print slice.json instead of the summary.")
+@click.option(
+    "--allow-post-process",
+    "allow_post_process",
+    is_flag=True,
+    help="Let PrusaSlicer run the scripts the profile's post_process names (without it such a profile is refused).",
+)
 @no_plot_option("print.png", "about 0.8 s: matplotlib and a 3D view of the part", has_json=True)
 @handles_input_errors
 def slice_(
-    path: Path, profile: Path | None, out_dir: Path | None, max_span_mm: float, as_json: bool, no_plot: bool
+    path: Path,
+    profile: Path | None,
+    out_dir: Path | None,
+    max_span_mm: float,
+    as_json: bool,
+    no_plot: bool,
+    allow_post_process: bool = False,
 ) -> None:
     """Slice the body 'mst export' wrote (PATH: its folder) with PrusaSlicer and judge it.
 
@@ -54,8 +66,9 @@ def slice_(
     broken limit (free span over --max-span, pause missing or misplaced, support needed);
     exit 2 when PrusaSlicer is not installed, the profile is not a PrusaSlicer config or
     export.json is malformed (checked before slicing, with mst check's rules); exit 1 when
-    PrusaSlicer misbehaves (no G-code, an empty or truncated one). A profile's post_process
-    scripts run as PrusaSlicer runs them; one line names them.
+    PrusaSlicer misbehaves (no G-code, an empty or truncated one). A profile whose post_process
+    names scripts is refused (exit 2, naming them) unless --allow-post-process; with it they
+    run as PrusaSlicer runs them, one line names them and slice.json lists them (post_process_run).
     """
     t0 = time.perf_counter()
 
@@ -72,6 +85,7 @@ def slice_(
             plot=plot,
             progress=progress,
             note=lambda line: click.echo(one_line(f"mst slice: note: {line}"), err=True),
+            allow_post_process=allow_post_process,
         )
     except api.SlicerError as exc:
         click.echo(one_line(f"mst slice: {exc}; nothing was written"), err=True)

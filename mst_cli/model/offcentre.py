@@ -46,6 +46,7 @@ class OffCentreResponse:
     B_T: np.ndarray  # (m, 3) at the chip
     B_abs_T: np.ndarray  # (m,)
     force_read_axial_N: np.ndarray  # (m,) the force the centred model gives this |B|; nan beyond
+    axial_reading_flag: np.ndarray  # (m,) AXIAL_READING_FLAGS: why force_read_axial_N is nan (ok: it is not)
     side_lock_N: np.ndarray  # (n, 2): force at which each layer's -x / +x side first locks
     axial: Response  # the centred model of the same sensor
 
@@ -103,6 +104,7 @@ def simulate_offcentre(
         B_T=B,
         B_abs_T=B_abs,
         force_read_axial_N=read,
+        axial_reading_flag=axial_reading_flags(axial, B_abs),
         side_lock_N=side_lock,
         axial=axial,
     )
@@ -167,6 +169,20 @@ def magnet_field_T(geometry: SensorGeometry, shift_mm: np.ndarray, rotvec_rad: n
     return fld.cylinder_pose_B_T(r, mag.diameter_mm, mag.thickness_mm, mag.remanence_T, rot)
 
 
+AXIAL_READING_FLAGS = ("ok", "below_no_load", "above_range")  # why a force read as axial is missing
+
+
+def axial_reading_flags(axial: Response, B_abs_T: np.ndarray) -> np.ndarray:
+    """Per |B|: ok (the centred model reads it), below_no_load (|B| under the centred model's
+    no-load |B|: a tilt can take the field below B0) or above_range (beyond its curve's end): where
+    :func:`_read_as_axial` gives nan."""
+    B_ax = axial.B_abs_T
+    flags = np.full(np.shape(B_abs_T), "ok", dtype=object)
+    flags[B_abs_T < B_ax[0] * (1 - 1e-12)] = "below_no_load"
+    flags[B_abs_T > B_ax[-1]] = "above_range"
+    return flags
+
+
 def _read_as_axial(axial: Response, B_abs_T: np.ndarray) -> np.ndarray:
     """The centred model's force at each |B| (its |B|(F) rises with F); nan outside its curve."""
     B_ax, F_ax = axial.B_abs_T, axial.force_N
@@ -201,6 +217,7 @@ class OffsetMap:
     force_N: np.ndarray  # (nf,) ascending
     regime: np.ndarray  # (nf,) the regime (from 1) each force lies in
     error_rel: np.ndarray  # (nf, ny, nx): (force read as axial - force) / force; nan off the curve
+    flag: np.ndarray  # (nf, ny, nx): AXIAL_READING_FLAGS, why error_rel is nan (ok: it is not)
 
 
 def offset_map(
@@ -226,11 +243,13 @@ def offset_map(
     xs = np.linspace(-1.0, 1.0, grid[0]) * half[0]
     ys = np.linspace(-1.0, 1.0, grid[1]) * half[1]
     err = np.full((len(F), len(ys), len(xs)), np.nan)
+    flag = np.full(err.shape, "ok", dtype=object)
     for iy, y in enumerate(ys):
         for ix, x in enumerate(xs):
             B_abs = np.linalg.norm(pose_field_T(geometry, layers, F, (float(x), float(y))), axis=-1)
             err[:, iy, ix] = _read_as_axial(axial, B_abs) / F - 1.0
-    return OffsetMap(xs, ys, F, regime, err)
+            flag[:, iy, ix] = axial_reading_flags(axial, B_abs)
+    return OffsetMap(xs, ys, F, regime, err, flag)
 
 
 def worst_read_errors(m: OffsetMap) -> dict:

@@ -17,19 +17,30 @@ if TYPE_CHECKING:
 
 OFFCENTRE_COLUMNS = (
     "force_N,Bx_mT,By_mT,Bz_mT,B_abs_mT,magnet_tilt_x_deg,magnet_tilt_y_deg,"
-    "magnet_shift_x_mm,magnet_shift_y_mm,magnet_shift_z_mm,force_read_axial_N,read_error_N,in_range"
+    "magnet_shift_x_mm,magnet_shift_y_mm,magnet_shift_z_mm,force_read_axial_N,read_error_N,in_range,"
+    "axial_reading_flag"
 )
+NO_AXIAL_READING = {
+    "below_no_load": "|B| below the centred model's no-load |B|",
+    "above_range": "|B| beyond the end of the centred model's curve",
+}
+
+
+def _cell(v: float) -> str:
+    """A number's cell; empty where it has no value (nan, inf): the row's flag says why."""
+    return f"{v:.9g}" if np.isfinite(v) else ""
 
 
 def offcentre_csv(r: OffCentreResponse) -> str:
-    """One row per force sample (field in mT, tilts toward +x and +y in degrees)."""
+    """One row per force sample (field in mT, tilts toward +x and +y in degrees); the force read
+    as axial and its error are empty where the centred model has no answer (axial_reading_flag)."""
     buf = io.StringIO()
     buf.write(OFFCENTRE_COLUMNS + "\n")
     B = r.B_T * 1e3
     for i, F in enumerate(r.force_N):
         row = [F, *B[i], r.B_abs_T[i] * 1e3, *r.magnet_tilt_deg[i], *r.magnet_shift_mm[i]]
         row += [r.force_read_axial_N[i], r.read_error_N[i]]
-        buf.write(",".join(f"{v:.9g}" for v in row) + f",{int(r.axial.in_range[i])}\n")
+        buf.write(",".join(map(_cell, row)) + f",{int(r.axial.in_range[i])},{r.axial_reading_flag[i]}\n")
     return buf.getvalue()
 
 
@@ -53,6 +64,7 @@ def offcentre_summary(r: OffCentreResponse) -> dict:
             }
         )
     in_range = r.axial.in_range
+    flags = [str(f) for f in r.axial_reading_flag]
     return {
         "load_offset_mm": list(r.offset_mm),
         "mechanics": r.mechanics,
@@ -68,6 +80,7 @@ def offcentre_summary(r: OffCentreResponse) -> dict:
         ],
         "side_lock_null_means": "the pads never close at that end: the plates pivot on the other side's pads",
         "regimes": regimes,
+        "axial_reading": {k: flags.count(k) for k in ("ok", *NO_AXIAL_READING)},
         "magnet_tilt_at_last_lock_deg": [float(v) for v in r.magnet_tilt_deg[in_range][-1]],
         "magnet_shift_at_last_lock_mm": [float(v) for v in r.magnet_shift_mm[in_range][-1]],
     }
@@ -98,19 +111,28 @@ def offcentre_lines(s: dict) -> list[str]:
             else f"{100 * e:+.1f} % ({reg['worst_read_error_N']:+.3g} N at {reg['at_force_N']:.3g} N)"
         )
         lines.append(f"  regime {reg['regime']}: a reading taken as axial is off by up to {said}")
+    counts = s["axial_reading"]
+    for flag, why in NO_AXIAL_READING.items():
+        if counts[flag]:
+            lines.append(
+                f"  {counts[flag]} of {sum(counts.values())} force samples have no axial reading ({why}): "
+                f"offcentre.csv leaves their force_read_axial_N and read_error_N empty, axial_reading_flag {flag}"
+            )
     tx, ty = (round(v, 2) + 0.0 for v in s["magnet_tilt_at_last_lock_deg"])  # no "-0.00"
     lines.append(f"  the magnet tilts {tx:.2f} deg toward +x and {ty:.2f} deg toward +y at the last lock")
     return lines
 
 
 def offset_map_csv(m: OffsetMap) -> str:
-    """One row per (force, x, y): the axial reading's relative error."""
+    """One row per (force, x, y): the axial reading's relative error (empty where the centred
+    model has no answer: axial_reading_flag says why)."""
     buf = io.StringIO()
-    buf.write("force_N,regime,x_mm,y_mm,read_error_rel\n")
+    buf.write("force_N,regime,x_mm,y_mm,read_error_rel,axial_reading_flag\n")
     for k, F in enumerate(m.force_N):
         for iy, y in enumerate(m.y_mm):
             for ix, x in enumerate(m.x_mm):
-                buf.write(f"{F:.9g},{m.regime[k]},{x:.6g},{y:.6g},{m.error_rel[k, iy, ix]:.9g}\n")
+                cells = f"{F:.9g},{m.regime[k]},{x:.6g},{y:.6g},{_cell(m.error_rel[k, iy, ix])}"
+                buf.write(f"{cells},{m.flag[k, iy, ix]}\n")
     return buf.getvalue()
 
 
