@@ -236,8 +236,8 @@ def _check_time(t: np.ndarray, first_row: int) -> None:
 
 
 def _checked_branch(F: np.ndarray, branch: Sequence[str], band: float, first_row: int) -> np.ndarray:
-    """The user's branch column, checked: a loading run never falls back from its running
-    maximum by more than the dead band, an unloading run never rises from its running minimum by
+    """The user's branch column, checked: a loading run (from the row before it) never falls
+    back from its running maximum by more than the dead band, an unloading run never rises from its running minimum by
     more, a hold run stays within twice the band (its first row may still be on the ramp)."""
     label = np.array([str(b).strip().lower() for b in branch], dtype=object)
     if len(label) != len(F):
@@ -247,7 +247,7 @@ def _checked_branch(F: np.ndarray, branch: Sequence[str], band: float, first_row
         if label[i] not in LABELS:
             raise InputError(f"branch[{i + first_row}]", branch[i], "one of loading, unloading, hold")
         if i > 0 and label[i] != label[i - 1]:
-            start = i
+            start = i - 1  # a run starts from the row before it (the turning point, or the hold's level)
         run = F[start : i + 1]
         if label[i] == LOADING and run.max() - F[i] > band:
             why = f"the force falls to {F[i]:.4g} N from {run.max():.4g} N on a loading run"
