@@ -1,12 +1,15 @@
 """Bought components: the board and connector types and their catalogue (magnet grades,
 magnetometer boards).
 
-Facts only, each with its source. Nothing here computes physics.
+Facts only, each with its source; the one law here is the remanence's linear, reversible
+temperature dependence its coefficient is quoted for (:func:`remanence_at_T`).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+
+import numpy as np
 
 
 @dataclass(frozen=True)
@@ -63,6 +66,36 @@ MAGNET_GRADES_T: dict[str, tuple[float, float]] = {
 def grade_remanence_T(grade: str) -> float:
     lo, hi = MAGNET_GRADES_T[grade]
     return round(0.5 * (lo + hi), 4)
+
+
+# Reversible temperature coefficient of the remanence, alpha(Br) in %/K, per grade (20..100 degC).
+# Source: sintered NdFeB manufacturers' grade datasheets, which give -0.12 %/degC for the
+# standard (no suffix) N35..N52 grades (e.g. Arnold Magnetic Technologies' N-grade sheets and
+# K&J Magnetics' "Temperature and Neodymium Magnets" grade table; the MMPA 0100-00 standard
+# lists -0.11..-0.13 %/degC for the family). Typical values: measure the batch when it matters.
+MAGNET_REMANENCE_COEFF_PCT_PER_K: dict[str, float] = dict.fromkeys(MAGNET_GRADES_T, -0.12)
+NDFEB_REMANENCE_COEFF_PCT_PER_K = -0.12  # a remanence given as a number (no grade): the family's
+REFERENCE_TEMPERATURE_C = 20.0  # datasheets state Br at room temperature, 20 degC
+
+
+def remanence_at_T(
+    grade_or_Br: str | float,
+    T_C: float | np.ndarray,
+    T_ref_C: float = REFERENCE_TEMPERATURE_C,
+    coeff_pct_per_K: float | None = None,
+) -> float | np.ndarray:
+    """Remanence (T) at ``T_C``: Br(T_ref) (1 + alpha (T - T_ref)), with Br(T_ref) a grade's mid
+    value or the number given and alpha the grade's reversible coefficient (or ``coeff_pct_per_K``;
+    NdFeB's for a bare number). The reversible, linear part only: above the grade's maximum
+    working temperature (80 degC for the plain N grades) the loss is partly irreversible."""
+    if isinstance(grade_or_Br, str):
+        Br = grade_remanence_T(grade_or_Br)
+        alpha = MAGNET_REMANENCE_COEFF_PCT_PER_K[grade_or_Br] if coeff_pct_per_K is None else coeff_pct_per_K
+    else:
+        Br = float(grade_or_Br)
+        alpha = NDFEB_REMANENCE_COEFF_PCT_PER_K if coeff_pct_per_K is None else coeff_pct_per_K
+    out = Br * (1.0 + 0.01 * alpha * (np.asarray(T_C, dtype=float) - T_ref_C))
+    return float(out) if np.ndim(out) == 0 else out
 
 
 # Carrier boards of the MLX90393. Dimensions read off the boards' published design files
