@@ -45,8 +45,16 @@ from mst_cli.model.cell import HexCell
 from mst_cli.model.material import Material
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from continuum_3d import extrude, graded_depth  # noqa: E402  the 3D check's prism split
+from continuum_3d import extrude, graded_depth  # the 3D check's prism split
 
+# the five cells of docs/design.md section 4.4, inside the printable box (mst_cli/bench/sampling.py)
+CHECK_CELLS = {
+    "shallow": HexCell(15, 0.8, 2.4),
+    "mid": HexCell(33, 1.0, 2.8),
+    "steep": HexCell(60, 1.0, 4.0),
+    "stubby": HexCell(40, 2.0, 5.0),
+    "thin": HexCell(30, 0.45, 3.0),
+}
 SPACING_IN_T = 0.2  # lattice spacing, in wall thicknesses
 LEVELS = 3  # rounds of refinement at the corners
 

@@ -81,6 +81,7 @@ from mst_cli.model.mechanics.continuum import (
     MeshOptions,
     follow_to_lock,
     linear_k,
+    linear_stiffness_N_per_mm,
 )
 
 PATH_MESH = MeshOptions(
@@ -231,8 +232,9 @@ class LateralPath:
 
     ``d_mm`` the compressions; ``k_z`` the normal tangent dF/dd; ``k_x_free`` / ``k_x_stuck`` and
     ``k_y_free`` / ``k_y_stuck`` the lateral tangents with frictionless / stuck contacts (N/mm,
-    the whole layer, scaled by ``mesh_scale``: the production mesh's small-load k_x over the
-    path mesh's); ``d_lock_mm`` L2's lock on the path mesh.
+    the whole layer, infinitely deep for y); every column computed on the path mesh and scaled
+    by its own direction's production-mesh small-load value over the path mesh's (``mesh_scale``
+    is k_x's); ``d_lock_mm`` L2's lock on the path mesh.
     """
 
     d_mm: np.ndarray
@@ -274,21 +276,25 @@ def lateral_path(
     limits. One lock search and one compression path on the path mesh, one small-load solve on
     the production mesh for the scale."""
     prob = ContactProblem(cell, material, PATH_MESH)
-    path, _ = follow_to_lock(prob, linear_k(prob))
+    k_z0_path = linear_k(prob)
+    path, _ = follow_to_lock(prob, k_z0_path)
     d_lock = float(path.d_mm[-1])
     d = np.array(fractions, float) * d_lock
     states = _compressed_states(prob, d)
-    kx0_path = lateral_tangent_x_N_per_mm(prob)
-    scale = lateral_stiffness_x_N_per_mm(cell, material) / kx0_path
+    scale = {  # each direction's production-mesh small-load value over the path mesh's
+        "z": linear_stiffness_N_per_mm(cell, material) / k_z0_path,
+        "x": lateral_stiffness_x_N_per_mm(cell, material) / lateral_tangent_x_N_per_mm(prob),
+        "y": lateral_stiffness_y_N_per_mm(cell, material) / lateral_tangent_y_N_per_mm(prob, material),
+    }
     cols: dict[str, list[float]] = {k: [] for k in ("z", "xf", "xs", "yf", "ys")}
     for u, active, k_z in states:
-        cols["z"].append(k_z)
-        cols["xf"].append(scale * lateral_tangent_x_N_per_mm(prob, u, active))
-        cols["xs"].append(scale * lateral_tangent_x_N_per_mm(prob, u, active, stuck=True))
-        cols["yf"].append(lateral_tangent_y_N_per_mm(prob, material, active))
-        cols["ys"].append(lateral_tangent_y_N_per_mm(prob, material, active, stuck=True))
+        cols["z"].append(scale["z"] * k_z)
+        cols["xf"].append(scale["x"] * lateral_tangent_x_N_per_mm(prob, u, active))
+        cols["xs"].append(scale["x"] * lateral_tangent_x_N_per_mm(prob, u, active, stuck=True))
+        cols["yf"].append(scale["y"] * lateral_tangent_y_N_per_mm(prob, material, active))
+        cols["ys"].append(scale["y"] * lateral_tangent_y_N_per_mm(prob, material, active, stuck=True))
     arr = {k: np.array(v) for k, v in cols.items()}
-    return LateralPath(d, arr["z"], arr["xf"], arr["xs"], arr["yf"], arr["ys"], d_lock, float(scale))
+    return LateralPath(d, arr["z"], arr["xf"], arr["xs"], arr["yf"], arr["ys"], d_lock, float(scale["x"]))
 
 
 __all__ = [
