@@ -1,0 +1,117 @@
+"""Rung L0 of the lateral stiffness: closed forms for k_x (across the width) and k_y (along the
+depth) of one layer at small load, fitted to L2 (:mod:`~mst_cli.model.mechanics.continuum_lateral`,
+docs/design.md section 4.4).
+
+Both start from one inclined wall of the chevron, from its root on the pad to the mid-plane,
+centre-line length L = (h - t) / (2 sin theta), and the odd (antisymmetric) lateral motion:
+
+* across the width the wall's tip moves u_x / 2 and is free in z and in rotation (a cantilever
+  loaded at its tip): transverse stiffness k_t = 1 / (L^3 / (3 E' I) + L / (kappa G A)), axial
+  k_a = E' A / L (plane strain, E' = E / (1 - nu^2), per mm of depth: A = t, I = t^3 / 12); free
+  in z, the tip's stiffness along x is k_t k_a / (k_t cos^2 theta + k_a sin^2 theta), and the
+  layer's k_x is that times the depth b (two chevrons, each two walls in series);
+* along the depth, antiplane shear through a strip t thick and L long: G t / L per mm, the layer
+  k_y = b G t / L (the same count);
+
+then each times a fitted factor exp(sum c_i term_i(t/L, theta)) (:data:`TERMS`, coefficients in
+model/data/lateral_fit.json, written by tools/fit_lateral.py from L2 on a seeded sample of
+valid cells and verified on another). The depth's L2 is an infinitely deep web; a web D deep
+loses stiffness at its free faces y = +-D/2, the factor :func:`depth_end_factor` fitted to the
+3D check (tools/lateral_check.py). Across the width the layer is plane strain, as the normal
+stiffness (section 4.1 of docs/design.md).
+"""
+
+from __future__ import annotations
+
+import json
+from functools import cache
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from mst_cli.model.cell import HexCell, wall_centreline_length_mm
+from mst_cli.model.material import Material
+from mst_cli.model.mechanics.spring import SHEAR_COEFFICIENT_RECT, plane_strain_modulus_MPa
+
+if TYPE_CHECKING:
+    from mst_cli.model.arrays import Floats
+
+DATA = Path(__file__).resolve().parent.parent / "data" / "lateral_fit.json"
+TERMS = ("1", "x", "th", "x^2", "x*th", "th^2")  # x = t / L, th = theta in radians
+
+
+def beam_k_x_N_per_mm(
+    theta_rad: Floats, t_mm: Floats, h_mm: Floats, b_mm: Floats, E_MPa: Floats, nu: Floats
+) -> np.ndarray:
+    """The walls-as-beams k_x of a layer a web b deep (module docstring), N/mm."""
+    L = wall_centreline_length_mm(theta_rad, t_mm, h_mm)
+    E_ps = plane_strain_modulus_MPa(E_MPa, nu)
+    G = np.asarray(E_MPa) / (2.0 * (1.0 + np.asarray(nu)))
+    k_t = 1.0 / (L**3 / (3.0 * E_ps * t_mm**3 / 12.0) + L / (SHEAR_COEFFICIENT_RECT * G * t_mm))
+    k_a = E_ps * t_mm / L
+    c2, s2 = np.cos(theta_rad) ** 2, np.sin(theta_rad) ** 2
+    return np.asarray(b_mm * k_t * k_a / (k_t * c2 + k_a * s2))
+
+
+def beam_k_y_N_per_mm(theta_rad: Floats, t_mm: Floats, h_mm: Floats, b_mm: Floats, G_MPa: Floats) -> np.ndarray:
+    """The walls-as-strips k_y = b G t / L of an infinitely deep web (module docstring), N/mm."""
+    return np.asarray(b_mm * G_MPa * t_mm / wall_centreline_length_mm(theta_rad, t_mm, h_mm))
+
+
+def design_matrix(t_over_L: Floats, theta_rad: Floats) -> np.ndarray:
+    """The fitted factors' terms (:data:`TERMS`) at each (t/L, theta): shape (..., len(TERMS))."""
+    x, th = np.broadcast_arrays(np.asarray(t_over_L, float), np.asarray(theta_rad, float))
+    return np.stack([np.ones_like(x), x, th, x * x, x * th, th * th], axis=-1)
+
+
+@cache
+def _fit() -> dict:
+    return json.loads(DATA.read_text())
+
+
+def clear_caches() -> None:
+    """Forget the coefficients read (tools/fit_lateral.py rewrites the file)."""
+    _fit.cache_clear()
+
+
+def lateral_factors(t_over_L: Floats, theta_rad: Floats) -> tuple[np.ndarray, np.ndarray]:
+    """(L2 / beam for k_x, L2 / strip for k_y) from the fitted coefficients."""
+    A = design_matrix(t_over_L, theta_rad)
+    fit = _fit()
+    return np.exp(A @ np.array(fit["x"]["coef"])), np.exp(A @ np.array(fit["y"]["coef"]))
+
+
+def depth_end_factor(t_mm: Floats, wall_length_mm: Floats, depth_mm: Floats) -> np.ndarray:
+    """k_y of a web D deep over that of an infinitely deep one: 1 - c (L + t) / D (c fitted to
+    the 3D check, floored at 0.5 for webs not much deeper than their walls are long)."""
+    c = float(_fit()["depth_end"]["c"])
+    return np.maximum(1.0 - c * (np.asarray(wall_length_mm) + t_mm) / depth_mm, 0.5)
+
+
+def lateral_stiffness_arrays(
+    theta_rad: Floats, t_mm: Floats, h_mm: Floats, depth_mm: Floats, E_MPa: Floats, nu: Floats
+) -> tuple[np.ndarray, np.ndarray]:
+    """(k_x, k_y) in N/mm at small load, vectorised over cells (module docstring)."""
+    L = wall_centreline_length_mm(theta_rad, t_mm, h_mm)
+    g_x, g_y = lateral_factors(np.asarray(t_mm) / L, theta_rad)
+    G = np.asarray(E_MPa) / (2.0 * (1.0 + np.asarray(nu)))
+    k_x = g_x * beam_k_x_N_per_mm(theta_rad, t_mm, h_mm, depth_mm, E_MPa, nu)
+    k_y = g_y * beam_k_y_N_per_mm(theta_rad, t_mm, h_mm, depth_mm, G) * depth_end_factor(t_mm, L, depth_mm)
+    return k_x, k_y
+
+
+def lateral_stiffness_N_per_mm(cell: HexCell, material: Material, depth_mm: float | None = None) -> tuple[float, float]:
+    """Small-load (k_x, k_y) in N/mm of one layer, a web ``depth_mm`` deep (the cell's D unless
+    given): k_x across the width, k_y along the depth (module docstring)."""
+    D = cell.depth_mm if depth_mm is None else depth_mm
+    k_x, k_y = lateral_stiffness_arrays(
+        cell.theta_rad, cell.t_mm, cell.h_mm, D, material.youngs_modulus_MPa, material.poisson_ratio
+    )
+    return float(k_x), float(k_y)
+
+
+def expected_error_rel() -> dict[str, float]:
+    """The fit's out-of-sample errors against L2 (max relative, per direction), as stored."""
+    fit = _fit()
+    return {k: float(fit["out_of_sample"][k]["max_rel"]) for k in ("x", "y")}
