@@ -91,7 +91,7 @@ def _mask_text(text: str) -> str:
     return text
 
 
-def _digest(path: Path, work: Path) -> str:
+def _digest(path: Path, work: Path, root: Path = ROOT) -> str:
     suffix = path.suffix.lower()
     if suffix == ".png":
         from PIL import Image  # deferred: only PNGs need it
@@ -105,7 +105,8 @@ def _digest(path: Path, work: Path) -> str:
     raw = path.read_bytes()
     if suffix in (".stl",) and not raw[:5].lower().startswith(b"solid"):
         return hashlib.sha256(raw[80:]).hexdigest()  # binary STL: the 80-byte header names the writer
-    text = raw.decode("utf-8", errors="replace").replace(str(work), "<work>")
+    # the output folder and the tree the inputs came from (a report names its design file)
+    text = raw.decode("utf-8", errors="replace").replace(str(work), "<work>").replace(str(root), "<root>")
     if suffix == ".json":
         with contextlib.suppress(json.JSONDecodeError):  # a JSON file is compared masked, else as text
             volatile = SLICER_KEY if path.name == "slice.json" else VOLATILE_KEY
@@ -123,10 +124,10 @@ def snapshot(out: Path) -> dict:
     # this tree's package, whatever the environment has installed
     mst = [sys.executable, "-c", "import sys; from mst_cli.cli.app import main; sys.argv[0] = 'mst'; main()"]
     env = {**os.environ, "PYTHONPATH": str(ROOT), "MPLBACKEND": "Agg"}
-    record: dict = {"commands": {}, "files": {}}
+    record: dict = {"root": str(ROOT), "commands": {}, "files": {}}
     for name, cmd in _commands(mst, work):
         done = subprocess.run(cmd, capture_output=True, text=True, cwd=work, env=env)
-        stdout = done.stdout.replace(str(work), "<work>")
+        stdout = done.stdout.replace(str(work), "<work>").replace(str(ROOT), "<root>")
         record["commands"][name] = {"rc": done.returncode}
         (out / f"{name}.stdout").write_text(stdout)
         (out / f"{name}.stderr").write_text(done.stderr)
@@ -146,9 +147,16 @@ def _stdout_digest(name: str, stdout: str) -> str:
 
 
 def _load(folder: Path) -> dict:
+    """A snapshot's record, its digests taken again with this version's masks (the outputs stay
+    in ``folder/work``), so two snapshots compare alike whatever version of this script took them."""
     record = json.loads((folder / "snapshot.json").read_text())
+    root, work = Path(record.get("root", "/work/main")), folder / "work"
+    if work.is_dir():
+        files = sorted(p for p in work.rglob("*") if p.is_file())
+        record["files"] = {str(p.relative_to(work)): _digest(p, work, root) for p in files}
     for name, entry in record["commands"].items():
-        entry["stdout"] = _stdout_digest(name, (folder / f"{name}.stdout").read_text())
+        stdout = (folder / f"{name}.stdout").read_text().replace(str(root), "<root>")
+        entry["stdout"] = _stdout_digest(name, stdout)
         entry.pop("stdout_sha256", None)
     return record
 
