@@ -2058,11 +2058,11 @@ def test_the_faces_corner_writes_an_empty_flagged_axial_reading_not_nan(tmp_path
 
 
 def test_the_offset_map_writes_empty_flagged_cells_not_nan(tmp_path, monkeypatch):
-    import mst_cli.model.offcentre as O
+    import mst_cli.api._simulating as S  # where the verb calls the kernel
 
     half = face_half_mm()
-    real = O.offset_map
-    monkeypatch.setattr(O, "offset_map", lambda *a, **k: real(*a, **dict(k, region_mm=half, grid=(3, 3))))
+    real = S.run_offset_map
+    monkeypatch.setattr(S, "run_offset_map", lambda *a, **k: real(*a, **dict(k, region_mm=half, grid=(3, 3))))
     out = tmp_path / "o"
     r = run(["simulate", FORWARD, "--offset-map", "--out", out, "--no-plot"])
     assert r.exit_code == 0, r.stderr
