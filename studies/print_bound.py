@@ -12,7 +12,7 @@ minimum, and the lowest-height column is not always monotone in the scale bound 
 
 "Worst print deviation" is report.json's ``print_error_sensitivity.worst_change_rel``: the largest
 |relative change| of any S_i or R_i when every wall is printer.wall_tolerance_mm (0.05 mm)
-thicker or thinner (:func:`mst_cli.design.document.verify_design`, forward model L0).
+thicker or thinner (:func:`mst_cli.design.verify.verify_design`, forward model L0).
 
 1. **One scale for every web** (a web of depth 20/m mm, or a modulus E/m: k and R of every layer
    scale by 1/m). As issue 21 emulated it: the full-depth part designed for S_i/m and R_i m.

@@ -18,8 +18,8 @@ from mst_cli.sensor.document import Document
 
 if TYPE_CHECKING:
     from mst_cli.calibrate.calibration_json import PrinterCalibration
-    from mst_cli.design.document import DesignResult
     from mst_cli.design.pareto import ParetoDesign
+    from mst_cli.design.result import DesignResult
     from mst_cli.design.run import DesignRun
 
 

@@ -24,7 +24,7 @@ if TYPE_CHECKING:
     from mst_cli.cad.exporting import ExportedFiles
     from mst_cli.cad.manifest import Manifest
     from mst_cli.cad.slicing import SliceResult
-    from mst_cli.design.document import DesignResult
+    from mst_cli.design.result import DesignResult
 
 
 def export(

@@ -22,7 +22,7 @@ from mst_cli.model.assembly import SensorGeometry
 from mst_cli.sensor.document import Document, document_to_dict
 
 if TYPE_CHECKING:
-    from mst_cli.design.document import DesignResult
+    from mst_cli.design.result import DesignResult
 
 DEFAULT_STL_TOLERANCE_MM = 0.01
 

@@ -8,6 +8,8 @@ multi-start fallback), :mod:`.batching` (many weightings' polishes, their kernel
 match), :mod:`.pareto` (the trade-off front), :mod:`.explain` (why a spec cannot be met).
 """
 
-from mst_cli.design.document import DesignResult, design_document, verify_design
+from mst_cli.design.document import design_document
+from mst_cli.design.result import DesignResult
+from mst_cli.design.verify import verify_design
 
 __all__ = ["DesignResult", "design_document", "verify_design"]

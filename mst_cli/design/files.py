@@ -11,8 +11,8 @@ from mst_cli.simulation.report import write_simulation
 
 if TYPE_CHECKING:
     from mst_cli.calibrate.calibration_json import PrinterCalibration
-    from mst_cli.design.document import DesignResult
     from mst_cli.design.pareto import ParetoDesign
+    from mst_cli.design.result import DesignResult
     from mst_cli.io.outputs import Staging
 
 

@@ -26,9 +26,11 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from mst_cli.design.batching import prefer_many
-from mst_cli.design.document import ROUND_DECIMALS, DesignResult, design_document, verify_design
+from mst_cli.design.document import design_document
 from mst_cli.design.problem import DesignProblem
+from mst_cli.design.result import ROUND_DECIMALS, DesignResult
 from mst_cli.design.solver import SolveResult, pareto_weights
+from mst_cli.design.verify import verify_design
 from mst_cli.sensor.document import Document
 from mst_cli.sensor.sections import OBJECTIVE_TERMS
 

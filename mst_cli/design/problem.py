@@ -51,7 +51,7 @@ Preference among the designs that meet the targets (phase 2, ``design.objective`
       width drifts with the filament and the flow calibration, the same way for every wall of
       one print): the RMS over the 2n outputs and both signs of ln(out(t +- tol) / out(t));
       reported per layer, beside the worst relative change of any output (the verification,
-      :func:`mst_cli.design.document.verify_design`, measures both on the forward model).
+      :func:`mst_cli.design.verify.verify_design`, measures both on the forward model).
 """
 
 from __future__ import annotations

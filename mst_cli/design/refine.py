@@ -31,10 +31,12 @@ from typing import Any
 
 import numpy as np
 
-from mst_cli.design.document import ROUND_DECIMALS, DesignResult, _layer_outputs, design_document, verify_design
+from mst_cli.design.document import design_document
 from mst_cli.design.phase import CONVERGED, FEASIBILITY_TOL, MAX_TIME_S, Budget, LocalRun, Phase, Tracker
 from mst_cli.design.problem import DesignProblem
+from mst_cli.design.result import ROUND_DECIMALS, DesignResult, _layer_outputs
 from mst_cli.design.solver import _Matcher
+from mst_cli.design.verify import verify_design
 from mst_cli.errors import InputError
 from mst_cli.model.ladder import USER_LADDER, choose_mechanics, load_ladder_errors, rung_errors
 from mst_cli.model.response import simulate

@@ -9,10 +9,11 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from mst_cli.design.document import DesignResult, design_document
+from mst_cli.design.document import design_document
 from mst_cli.design.files import write_design_files
 from mst_cli.design.pareto import ParetoDesign, front_table, pareto_front
 from mst_cli.design.refine import refine_document
+from mst_cli.design.result import DesignResult
 from mst_cli.errors import InputError
 from mst_cli.model.ladder import MechanicsChoice, choose_mechanics
 from mst_cli.model.offcentre import offset_map, worst_read_errors

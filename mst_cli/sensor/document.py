@@ -301,7 +301,7 @@ def section_to_dict(declared: type, values: Any) -> dict:
 
 def document_to_dict(doc: Document, layers: Sequence[LayerEntry] | None = None) -> dict:
     """Serialise a document back to the file format (all sections but ``design``, explicit values;
-    mst_cli.design.document.design_dict adds a spec's ``design`` section)."""
+    mst_cli.design.result.design_dict adds a spec's ``design`` section)."""
     layers = doc.layers if layers is None else layers
     out: dict[str, Any] = {"name": doc.name}
     for name, declared in SECTION_TYPES.items():
