@@ -22,14 +22,13 @@ from mst_cli.api import (
     simulate,
     slice,
 )
+from mst_cli.version import package_version
 
 
 def __getattr__(name: str) -> str:
     # the version on demand: reading the package metadata costs start-up time no verb needs
     if name == "__version__":
-        from mst_cli.version import __version__  # deferred: importlib.metadata, a few ms
-
-        return __version__
+        return package_version()
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 

@@ -194,3 +194,110 @@ def test_the_command_line_goes_through_the_api_only():
     assert len(cli) > 5
     bad = {m: sorted(t for t in graph[m] if t not in allowed and not t.startswith("mst_cli.cli")) for m in cli}
     assert {m: t for m, t in bad.items() if t} == {}
+
+
+# Libraries worth deferring, and why: each costs start-up time that most commands never need.
+HEAVY_LIBRARIES = {
+    "build123d": "the CAD kernel (OCP): seconds, --step only",
+    "OCP": "the CAD kernel itself",
+    "skfem": "scikit-fem, 0.2 s: the continuum rung and its checks",
+    "matplotlib": "0.45 s: pictures only",
+    "mpl_toolkits": "matplotlib's 3D axes",
+    "PIL": "Pillow (via matplotlib): rasterising a sliced layer",
+    "scipy": "scipy.optimize / sparse / spatial: fits, dear rungs, meshes",
+    "nlopt": "the optimiser: a design search only",
+    "magpylib": "the exact cylinder field: off the axis only",
+    "trimesh": "mesh file formats other than binary STL",
+    "manifold3d": "the mesh kernel's native library: meshing and measuring a body",
+    "greenlet": "the batched polish of many weightings",
+    "multiprocessing": "20 ms of process machinery: only where workers are forked",
+    "concurrent": "as multiprocessing",
+    "threadpoolctl": "BLAS introspection: only where a dear rung solves",
+    "importlib.metadata": "10 ms (the email package): only a file that names the version",
+    "serial": "pyserial, optional: mst read --serial",
+    "fcntl": "POSIX only",
+    "termios": "POSIX only",
+}
+# The door loads only the layer of the verb that runs (mst simulate does not pay for the design
+# search, the CAD layer or the calibration); the command group loads only the command run.
+LAYER_DEFERRALS = {
+    "mst_cli.api": ("mst_cli.design", "mst_cli.cad", "mst_cli.calibrate", "mst_cli.bench"),
+    "mst_cli.cli.app": ("mst_cli.cli",),
+}
+
+
+def _heavy(name: str) -> bool:
+    return any(name == lib or name.startswith(lib + ".") for lib in HEAVY_LIBRARIES)
+
+
+def _eager_imports(module: str) -> set[str]:
+    """What importing ``module`` runs at its top (TYPE_CHECKING blocks aside): dotted names."""
+    path, is_package = MODULES[module]
+    found: set[str] = set()
+
+    def visit(body):
+        for node in body:
+            if isinstance(node, ast.Import):
+                found.update(a.name for a in node.names)
+            elif isinstance(node, ast.ImportFrom):
+                found.add(_absolute(node.module or "", module, is_package, node.level))
+            elif isinstance(node, ast.If) and not (isinstance(node.test, ast.Name) and node.test.id == "TYPE_CHECKING"):
+                visit(node.body)
+                visit(node.orelse)
+            elif isinstance(node, ast.Try):
+                visit(node.body)
+
+    visit(ast.parse(path.read_text()).body)
+    return found
+
+
+def _loads_heavy_library(module: str, seen: set[str] | None = None) -> bool:
+    """Whether importing ``module`` loads a heavy library at some module's top."""
+    seen = set() if seen is None else seen
+    seen.add(module)
+    for name in _eager_imports(module):
+        if _heavy(name):
+            return True
+        target = _nearest_module(name) if name.startswith("mst_cli") else None
+        if target and target not in seen and _loads_heavy_library(target, seen):
+            return True
+    return False
+
+
+def _deferred_imports():
+    """(module, line, imported name) of every import inside a function of the package."""
+    for module, (path, is_package) in sorted(MODULES.items()):
+        tree = ast.parse(path.read_text())
+        for fn in (n for n in ast.walk(tree) if isinstance(n, (ast.FunctionDef, ast.AsyncFunctionDef))):
+            for node in ast.walk(fn):
+                if isinstance(node, ast.Import):
+                    yield from ((module, node.lineno, a.name) for a in node.names)
+                elif isinstance(node, ast.ImportFrom):
+                    yield module, node.lineno, _absolute(node.module or "", module, is_package, node.level)
+
+
+def _deferral_allowed(module: str, name: str) -> bool:
+    if _heavy(name):
+        return True
+    if not name.startswith("mst_cli"):
+        return False
+    door = next((d for d in LAYER_DEFERRALS if module == d or module.startswith(d + ".")), None)
+    if door and any(name == layer or name.startswith(layer + ".") for layer in LAYER_DEFERRALS[door]):
+        return True
+    target = _nearest_module(name)
+    return target is not None and _loads_heavy_library(target)
+
+
+def test_deferred_imports_are_only_for_heavy_libraries():
+    # an import inside a function is for a heavy library (HEAVY_LIBRARIES), for a module of the
+    # package that loads one at its top, or the door's choice of the one layer a verb needs
+    wrong = [f"{m}:{line} {name}" for m, line, name in _deferred_imports() if not _deferral_allowed(m, name)]
+    assert wrong == []
+
+
+def test_the_deferral_rule_refuses_a_light_module():
+    assert _deferral_allowed("mst_cli.model.response", "scipy.optimize")
+    assert _deferral_allowed("mst_cli.api._designing", "mst_cli.design.run")
+    assert not _deferral_allowed("mst_cli.model.response", "json")
+    assert not _deferral_allowed("mst_cli.model.mechanics.tilt", "mst_cli.model.cell")
+    assert not _deferral_allowed("mst_cli.calibrate.fit", "mst_cli.design.run")

@@ -36,7 +36,7 @@ from mst_cli.cli.app import main
 from mst_cli.io.outputs import STAGING_PREFIX, Staging, staged
 from mst_cli.sensor.document import load_document
 from mst_cli.sensor.sections import LAYER_RULES, SECTIONS, TOP_KEYS
-from mst_cli.version import __version__
+from mst_cli.version import package_version
 
 ROOT = Path(__file__).resolve().parents[1]
 FORWARD = ROOT / "configs" / "mohammadi2021-forward.yaml"
@@ -788,7 +788,7 @@ def test_help_and_version_still_work():
     r = run(["simulate", "--help"])
     assert r.exit_code == 0 and "DESIGN_FILE" in r.stdout
     r = run(["--version"])
-    assert r.exit_code == 0 and __version__ in r.stdout
+    assert r.exit_code == 0 and package_version() in r.stdout
 
 
 def test_usage_error_from_the_installed_command():

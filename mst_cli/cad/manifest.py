@@ -44,7 +44,7 @@ from mst_cli.cad.expected_body import (
 from mst_cli.errors import InputError
 from mst_cli.io.files import read_input_text
 from mst_cli.sensor.document import Document, design_geometry, parse_document
-from mst_cli.version import __version__
+from mst_cli.version import package_version
 
 if TYPE_CHECKING:
     from mst_cli.model.assembly import SensorGeometry
@@ -127,7 +127,7 @@ def export_manifest(
     cells = g.layers
     return {
         "format": MANIFEST_FORMAT,
-        "mst_version": __version__,
+        "mst_version": package_version(),
         "name": name,
         "files": list(files),
         "units": "mm, deg",

@@ -35,7 +35,7 @@ from mst_cli.model.chip import ChipSetting, field_resolution_T
 from mst_cli.model.response import Response, simulate
 from mst_cli.sensor.as_printed import PARAMETERS, apply_parameters
 from mst_cli.sensor.document import Document, document_to_dict, parse_document
-from mst_cli.version import __version__
+from mst_cli.version import package_version
 
 PLOT_FILE = "calibration.png"
 MIN_CENTRED_ROWS = 8  # a load test with presses off the axis still needs this many on it
@@ -390,7 +390,7 @@ def _record(
         edits=fitted.edits,
         lookup_table=_lookup_table(imap, files, has_header),
         limitations=list(cal.LIMITATIONS),
-        mst_version=__version__,
+        mst_version=package_version(),
         curve_check=CalibrationRecord.curve_points(imap),
         fit={"evaluations": fit.evaluations, "seconds": fitted.seconds, "message": fit.message},
     )

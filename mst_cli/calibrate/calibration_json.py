@@ -119,8 +119,6 @@ class CalibrationRecord:
         value = self.tilt.get("lever_factor") if isinstance(self.tilt, dict) else self.tilt
         if isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value) and value > 0:
             return float(value)
-        from mst_cli.errors import InputError  # deferred: no error machinery for a well-formed file
-
         raise InputError(f"{CALIBRATION_JSON} tilt.lever_factor", value, "must be a positive number")
 
     def calibrated_top_N(self) -> float | None:

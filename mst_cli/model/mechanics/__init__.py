@@ -24,6 +24,7 @@ from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
 from mst_cli.model.mechanics.depth import in_web
+from mst_cli.model.mechanics.frame import frame_layer  # numpy only: 6 ms, not worth a deferral
 from mst_cli.model.mechanics.spring import spring_layer, spring_layers
 
 if TYPE_CHECKING:
@@ -47,8 +48,6 @@ def _plane_strain_law(cell: HexCell, material: Material, model: str) -> LinearLo
     if model == "spring":
         return spring_layer(cell, material)
     if model == "frame":
-        from mst_cli.model.mechanics.frame import frame_layer  # deferred: a dear rung loads when asked for
-
         return frame_layer(cell, material)
     if model == "continuum":
         from mst_cli.model.mechanics.continuum import continuum_layer  # deferred: L2 (scikit-fem) loads when asked
@@ -77,8 +76,6 @@ def uncached_layer_law(
     """The rung's plane-strain law without the per-cell caches (for timing and for the fits,
     which compare plane-strain rungs)."""
     if model == "frame":
-        from mst_cli.model.mechanics.frame import frame_layer  # deferred: a dear rung loads when asked for
-
         return frame_layer.__wrapped__(cell, material)
     if model == "continuum":
         from mst_cli.model.mechanics.continuum import continuum_layer  # deferred: L2 (scikit-fem) loads when asked

@@ -52,6 +52,7 @@ from pathlib import Path
 import numpy as np
 
 from mst_cli.model.mechanics.contact_patch import pressed_patch
+from mst_cli.model.mechanics.spring import contact_stiffness_N_per_mm
 
 NEWTON_TOL_REL = 1e-12  # force and moment residuals, relative to F (and F times the lever)
 NEWTON_MAX_ITER = 60
@@ -124,8 +125,6 @@ class LayerTiltLaw:
     def from_layer(cls, law, cell, modulus_MPa: float, poisson_ratio: float) -> LayerTiltLaw:
         """From a layer law of any rung and its cell; ``modulus_MPa`` the one the law was made
         with (the web's, :func:`mst_cli.model.mechanics.depth.in_web`) for the pads' column."""
-        from mst_cli.model.mechanics.spring import contact_stiffness_N_per_mm  # deferred: no cycle at import
-
         theta = math.radians(cell.theta_deg)
         k_pads = float(
             contact_stiffness_N_per_mm(theta, cell.t_mm, cell.width_mm, cell.b_mm, modulus_MPa, poisson_ratio)
