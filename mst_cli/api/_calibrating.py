@@ -120,7 +120,7 @@ def _reader(
     warn: Callable[[str], None] | None,
 ):
     # deferred: the calibrate layer, 30 ms measured (mst simulate does not pay it)
-    from mst_cli.calibrate.loadtest import parse_readings, read_text, setting_of
+    from mst_cli.calibrate.loadtest import check_field_unit, parse_readings, read_text, setting_of
     from mst_cli.calibrate.reading import ForceReader
 
     _one_of("--mechanics", mechanics, MODELS)
@@ -145,6 +145,8 @@ def _reader(
             raise InputError(str(readings), "(no rows)", "has a header but no readings")
         setting = setting or rd.setting
     reader = ForceReader.open(doc, model_file, choice.mechanics, setting)
+    if rd is not None:
+        check_field_unit(rd, float(reader.inverse_map.B_abs_T[0]), float(reader.inverse_map.B_abs_T[-1]))
     if reader.warning and warn is not None:
         warn(reader.warning)
     return reader, rd, setting

@@ -25,7 +25,15 @@ from mst_cli.calibrate.calibration_json import (
 )
 from mst_cli.calibrate.header import HEADER_FILE, c_header
 from mst_cli.calibrate.inverse_map import InverseMap, field_sigma_T, inverse_map
-from mst_cli.calibrate.loadtest import MAX_ROWS, Readings, check_load_test, parse_readings, read_text
+from mst_cli.calibrate.loadtest import (
+    MAX_ROWS,
+    Readings,
+    check_field_unit,
+    check_load_test,
+    parse_readings,
+    read_text,
+    unknown_columns,
+)
 from mst_cli.calibrate.plot import plot_calibration
 from mst_cli.calibrate.tables import lookup_csv, residuals_csv
 from mst_cli.calibrate.tilt_fit import fit_lever_factor
@@ -180,6 +188,9 @@ class Calibration:
                 + (" (AT ITS BOUND)" if t["at_bound"] else "")
                 + f"; field residual {t['rms_residual_uT']:.3g} uT RMS ({t['rms_residual_at_factor_1_uT']:.3g} at 1)"
             )
+        unknown = unknown_columns(self.load_test)
+        if unknown:
+            lines.append(f"note: column(s) {', '.join(unknown)} of {self.load_test_name} not used by the calibration")
         return "\n".join(lines)
 
 
@@ -302,6 +313,7 @@ def _fit(
     calibrated inverse map; CalibrationFailed when the fitted values make a design that does not
     load."""
     design_resp = simulate(doc.geometry(), doc.material, mechanics=mechanics, noise_uT_rms=doc.noise_uT_rms)
+    check_field_unit(lt, float(design_resp.B_abs_T[0]), float(design_resp.B_abs_T[design_resp.in_range][-1]))
     check_load_test(lt, len(names), design_resp.max_force_N, cal.MIN_POINTS_PER_PARAMETER, cal.MIN_POINTS)
     sigma = field_sigma_T(doc.noise_uT_rms, lt.setting or design_resp.chip_setting)
     t0 = time.monotonic()

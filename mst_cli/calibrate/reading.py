@@ -17,7 +17,7 @@ import numpy as np
 from mst_cli.calibrate.accuracy import ERROR_FROM_RANGE, force_errors
 from mst_cli.calibrate.calibration_json import CalibrationRecord, record_beside
 from mst_cli.calibrate.inverse_map import FLAGS, InverseMap, inverse_map
-from mst_cli.calibrate.loadtest import Readings, field_of
+from mst_cli.calibrate.loadtest import Readings, field_of, unknown_columns
 from mst_cli.calibrate.offset_reading import OffsetEstimator, OffsetReadings, offset_columns
 from mst_cli.calibrate.tables import FORCES_COLUMNS, cell, forces_csv
 from mst_cli.io.serial_lines import LineSource, SampleParser
@@ -71,6 +71,9 @@ class ForceReadings:
         ]
         if self.offset is not None:
             lines.append(self.offset.summary())
+        unknown = unknown_columns(self.readings)
+        if unknown:
+            lines.append(f"note: column(s) {', '.join(unknown)} not read by mst (copied into {FORCES_FILE} as written)")
         err = self.errors()
         if err is not None and "median_rel" in err:
             lines.append(

@@ -1,0 +1,87 @@
+"""Issue 38, wired in: load tests as rigs write them (time_s, cycle, branch, T_C), and the
+defects the issue lists. The synthetic rig is studies/rig_loadtest.py (spring rung)."""
+
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from mst_cli.cli.app import main
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "studies"))
+from rig_loadtest import Rig, forward_curve, rig_loadtest
+
+ROOT = Path(__file__).resolve().parents[1]
+DESIGN = ROOT / "configs" / "mohammadi2021-forward.yaml"
+CURVE = forward_curve()
+RIG_COLUMNS = ("force_N", "Bx_uT", "By_uT", "Bz_uT", "time_s", "cycle", "branch", "T_C")
+
+
+def run(args):
+    return CliRunner().invoke(main, [str(a) for a in args])
+
+
+def write_csv(path, rows, cols=RIG_COLUMNS, edit=None):
+    lines = [",".join(cols)]
+    for i in range(len(rows["force_N"])):
+        cells = {c: str(rows[c][i]) for c in cols if c in rows}
+        if edit is not None:
+            edit(i, cells)
+        lines.append(",".join(cells.get(c, "") for c in cols))
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+@pytest.fixture(scope="module")
+def rig_rows():
+    return rig_loadtest(Rig(cycles=3, hysteresis_pct=0.0, seed=1), CURVE)[0]
+
+
+def one_line_exit_2(r, *parts):
+    assert r.exit_code == 2, r.output
+    assert r.stderr.count("\n") == 1, r.stderr
+    for p in parts:
+        assert p in r.stderr, r.stderr
+
+
+@pytest.mark.parametrize(
+    "column, row, value, said",
+    [
+        ("branch", 5, "rising", "one of loading, unloading, hold"),
+        ("T_C", 7, "130", "-40..125"),
+        ("T_C", 7, "-41", "-40..125"),
+        ("time_s", 9, "3.5", "never decrease"),
+        ("cycle", 4, "1.5", "whole number"),
+    ],
+)
+@pytest.mark.parametrize("command", ["calibrate", "read"])
+def test_rig_columns_refuse_bad_values_in_one_line(tmp_path, rig_rows, column, row, value, said, command):
+    def edit(i, cells):
+        if i == row:
+            cells[column] = value
+
+    f = write_csv(tmp_path / "lt.csv", rig_rows, edit=edit)
+    r = run([command, DESIGN, f, "--out", tmp_path / "o"] + (["--no-plot"] if command == "calibrate" else []))
+    one_line_exit_2(r, f"line {row + 2} {column}", said)
+    assert not (tmp_path / "o").exists()
+
+
+def test_unknown_columns_are_named_in_one_note(tmp_path, rig_rows):
+    rows = dict(rig_rows, operator=["ann"] * len(rig_rows["force_N"]), humidity=["40"] * len(rig_rows["force_N"]))
+    f = write_csv(tmp_path / "lt.csv", rows, cols=(*RIG_COLUMNS, "operator", "humidity"))
+    r = run(["calibrate", DESIGN, f, "--out", tmp_path / "o", "--no-plot"])
+    assert r.exit_code == 0, r.output
+    notes = [line for line in r.stdout.splitlines() if line.startswith("note:")]
+    assert notes == ["note: column(s) operator, humidity of lt.csv not used by the calibration"]
+    r = run(["read", DESIGN, f, "--out", tmp_path / "r"])
+    assert "note: column(s) operator, humidity not read by mst" in r.stdout
+
+
+@pytest.mark.parametrize("command", ["calibrate", "read"])
+def test_millitesla_under_microtesla_columns_gets_a_unit_hint(tmp_path, rig_rows, command):
+    rows = {**rig_rows, **{c: np.asarray(rig_rows[c]) / 1000 for c in ("Bx_uT", "By_uT", "Bz_uT")}}
+    f = write_csv(tmp_path / "lt.csv", rows)
+    r = run([command, DESIGN, f, "--out", tmp_path / "o"] + (["--no-plot"] if command == "calibrate" else []))
+    one_line_exit_2(r, "Bx_uT,By_uT,Bz_uT", "in mT?", "x 1000")
