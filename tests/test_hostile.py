@@ -1978,10 +1978,12 @@ def test_a_huge_cell_in_an_extra_column_is_one_line_naming_file_line_and_column(
 
 # ----------------------------------------------------------------- 19. extra columns copied into forces.csv
 def with_column(src: Path, dest: Path, name: str, value: str, row: int = 3) -> Path:
-    """``src`` with a column ``name``: 1.5 in every row, ``value`` in data row ``row`` (from 1)."""
+    """``src`` with a column ``name``: 1.5 in every row (1 in a cycle column: a whole number),
+    ``value`` in data row ``row`` (from 1)."""
     lines = src.read_text().splitlines()
     lines[0] += f",{name}"
-    lines[1:] = [line + (f",{value}" if i == row else ",1.5") for i, line in enumerate(lines[1:], start=1)]
+    filler = "1" if name == "cycle" else "1.5"
+    lines[1:] = [line + (f",{value}" if i == row else f",{filler}") for i, line in enumerate(lines[1:], start=1)]
     dest.write_text("\n".join(lines) + "\n")
     return dest
 

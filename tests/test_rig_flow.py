@@ -85,3 +85,35 @@ def test_millitesla_under_microtesla_columns_gets_a_unit_hint(tmp_path, rig_rows
     f = write_csv(tmp_path / "lt.csv", rows)
     r = run([command, DESIGN, f, "--out", tmp_path / "o"] + (["--no-plot"] if command == "calibrate" else []))
     one_line_exit_2(r, "Bx_uT,By_uT,Bz_uT", "in mT?", "x 1000")
+
+
+@pytest.fixture(scope="module")
+def partial_calibration(tmp_path_factory):
+    """A calibration from cycles to 60 % of full scale (no hysteresis), and a stream to full scale."""
+    d = tmp_path_factory.mktemp("partial")
+    rows, _ = rig_loadtest(Rig(cycles=3, turn_fraction=(0.6, 0.6, 0.6), hysteresis_pct=0.0, seed=3), CURVE)
+    r = run(["calibrate", DESIGN, write_csv(d / "lt.csv", rows), "--out", d / "cal", "--no-plot"])
+    assert r.exit_code == 0, r.output
+    stream, _ = rig_loadtest(Rig(cycles=1, hysteresis_pct=0.0, seed=4), CURVE)
+    return d, r.stdout, write_csv(d / "stream.csv", stream), stream
+
+
+def test_regime_1_appears_in_every_summary(partial_calibration):
+    d, calibrate_out, stream_csv, _ = partial_calibration
+    r = run(["read", d / "cal" / "calibrated.yaml", stream_csv, "--out", d / "r"])
+    for out in (calibrate_out, r.stdout):
+        line = next(x for x in out.splitlines() if x.strip().startswith("regime 1 ("))
+        assert "median" in line, out  # the light-touch band is quoted, from a tenth of its own top
+        lo = float(line.split("F >= ")[1].split(" N")[0])
+        assert lo == pytest.approx(0.1 * CURVE.lock_forces_N[0], rel=0.06)
+
+
+def test_every_flag_is_counted_in_the_errors(partial_calibration):
+    from mst_cli import api
+
+    d, _, stream_csv, stream = partial_calibration
+    got = api.read(d / "cal" / "calibrated.yaml", stream_csv)
+    err = got.errors()
+    used = stream["force_N"] >= 0.1 * stream["force_N"].max()
+    assert (got.flag[used] == "above_calibrated").sum() > 10  # read past the load test's largest force
+    assert err["flagged"] == int(np.sum(used & (got.flag != "ok")))

@@ -14,7 +14,7 @@ import numpy as np
 import yaml
 
 from mst_cli.calibrate import fit as cal
-from mst_cli.calibrate.accuracy import force_errors
+from mst_cli.calibrate.accuracy import force_errors, force_errors_by_regime, regime_error_lines
 from mst_cli.calibrate.calibration_json import (
     CALIBRATED_YAML,
     CALIBRATION_JSON,
@@ -177,6 +177,7 @@ class Calibration:
                 f"{100 * in_sample['p95_rel']:.3g} %), {design_part}"
                 + (f", {design_errors['flagged']} out of the design's range" if design_errors.get("flagged") else "")
             )
+        lines += regime_error_lines(in_sample.get("by_regime", []))
         s = self.header_setting
         if s is not None:
             lines.append(f"table for GAIN_SEL {s.gain_sel}, RES {s.res} ({s.z_uT_per_lsb} uT/LSB on Z)")
@@ -215,7 +216,8 @@ def calibrate(
     imap, setting = fitted.imap, fitted.setting
     header, header_reason = _header(fitted, f"{Path(design_file).name} and {Path(load_test_file).name}")
     F_fit, _, flag_fit = imap.force(lt.B_abs_T, lt.saturated)
-    in_sample = force_errors(F_fit, lt.load_N, fitted.cal_resp.max_force_N)
+    in_sample = force_errors(F_fit, lt.load_N, fitted.cal_resp.max_force_N, flag_fit)
+    in_sample["by_regime"] = force_errors_by_regime(F_fit, lt.load_N, imap.edges_N, flag_fit)
     try:
         F_design, _, _ = InverseMap.from_response(fitted.design_resp).force(lt.B_abs_T)
         design_errors = force_errors(F_design, lt.load_N, fitted.cal_resp.max_force_N)

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from mst_cli.calibrate.accuracy import ERROR_FROM_RANGE, force_errors
+from mst_cli.calibrate.accuracy import ERROR_FROM_RANGE, force_errors, force_errors_by_regime, regime_error_lines
 from mst_cli.calibrate.calibration_json import CalibrationRecord, record_beside
 from mst_cli.calibrate.inverse_map import FLAGS, InverseMap, inverse_map
 from mst_cli.calibrate.loadtest import Readings, field_of, unknown_columns
@@ -40,6 +40,7 @@ class ForceReadings:
     force_resolution_N: np.ndarray
     offset: OffsetReadings | None = None  # with --estimate-offset: force_N is the corrected one ...
     force_centred_N: np.ndarray | None = None  # ... and this the centred model's
+    edges_N: np.ndarray = field(default_factory=lambda: np.zeros(1))  # the model's regime edges (errors per regime)
 
     def csv(self) -> str:
         """forces.csv: the input columns and the force, regime, flag and resolution of each row
@@ -54,7 +55,9 @@ class ForceReadings:
         ref = self.readings.force_N
         if ref is None or not len(ref) or float(np.max(ref)) <= 0:
             return None
-        return force_errors(self.force_N, ref, float(np.max(ref)))  # the same readings for any model
+        err = force_errors(self.force_N, ref, float(np.max(ref)), self.flag)  # the same readings for any model
+        err["by_regime"] = force_errors_by_regime(self.force_N, ref, self.edges_N, self.flag)
+        return err
 
     def summary(self) -> str:
         F, flag = self.force_N, self.flag
@@ -86,6 +89,8 @@ class ForceReadings:
             lines.append(
                 f"against force_N_reference: all {err['readings']} readings >= {ERROR_FROM_RANGE:g} x range are flagged"
             )
+        if err is not None:
+            lines += regime_error_lines(err["by_regime"])
         return "\n".join(lines)
 
 
@@ -150,11 +155,13 @@ class ForceReader:
         F, regime, flag = self.inverse_map.force(rd.B_abs_T, rd.saturated)
         res = self.inverse_map.local_resolution_N(np.where(np.isfinite(F), F, 0.0))
         if offsets is None:
-            return ForceReadings(self.document.name, rd, F, regime, flag, res)
+            return ForceReadings(self.document.name, rd, F, regime, flag, res, edges_N=self.inverse_map.edges_N)
         est = offsets.estimate_all(rd.B_T, np.where(flag == "ok", F, np.nan))
         corrected = np.where(est.flag == "ok", est.force_N, F)
         regime = np.where(np.isfinite(corrected), self.inverse_map.regime_of(corrected), regime)
-        return ForceReadings(self.document.name, rd, corrected, regime, flag, res, est, F)
+        return ForceReadings(
+            self.document.name, rd, corrected, regime, flag, res, est, F, edges_N=self.inverse_map.edges_N
+        )
 
     def offset_estimator(self, mechanics: str, max_sigma_mm: float) -> OffsetEstimator:
         """The offset estimator of this model: its geometry and material, the reader's field
