@@ -117,3 +117,11 @@ def test_every_flag_is_counted_in_the_errors(partial_calibration):
     used = stream["force_N"] >= 0.1 * stream["force_N"].max()
     assert (got.flag[used] == "above_calibrated").sum() > 10  # read past the load test's largest force
     assert err["flagged"] == int(np.sum(used & (got.flag != "ok")))
+
+
+@pytest.mark.parametrize("command, first", [("calibrate", "DESIGN_FILE"), ("read", "MODEL_FILE")])
+def test_swapped_arguments_are_named_in_one_line(tmp_path, rig_rows, command, first):
+    f = write_csv(tmp_path / "lt.csv", rig_rows)
+    r = run([command, f, DESIGN, "--out", tmp_path / "o"])
+    one_line_exit_2(r, f"{first} = ", "the arguments are swapped", f"mst {command} ")
+    assert not (tmp_path / "o").exists()

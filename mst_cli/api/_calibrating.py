@@ -32,6 +32,42 @@ def parse_params(text: str) -> tuple[str, ...]:
     return parse(text)
 
 
+_CSV_HEADER_WORDS = ("force_N", "Bx_uT", "Bx_code_lsb")
+
+
+def _looks_like_readings(path: Path) -> bool:
+    """The first line of ``path`` (a regular file) that is not blank or a comment is a readings
+    CSV's header: it names force_N, Bx_uT or Bx_code_lsb."""
+    try:
+        if not path.is_file():
+            return False
+        with path.open("rb") as fh:
+            head = fh.read(4096).decode("utf-8-sig", errors="replace")
+    except OSError:
+        return False
+    for line in head.splitlines():
+        if line.strip() and not line.lstrip().startswith("#"):
+            cells = {c.strip().strip('"') for c in line.replace(";", ",").replace("\t", ",").split(",")}
+            return any(w in cells for w in _CSV_HEADER_WORDS)
+    return False
+
+
+def check_argument_order(design: str | Path | Document, data: str | Path | None, verb: str) -> None:
+    """InputError in one line when the design argument is the readings CSV (the two arguments
+    swapped): ``mst calibrate loadtest.csv design.yaml``."""
+    if isinstance(design, Document) or not _looks_like_readings(Path(design)):
+        return
+    second = "LOAD_TEST.csv" if verb == "calibrate" else "READINGS.csv"
+    swapped = data is not None and not _looks_like_readings(Path(data))
+    raise InputError(
+        "DESIGN_FILE" if verb == "calibrate" else "MODEL_FILE",
+        str(design),
+        "is a CSV of readings, not a design"
+        + (f" ({data} is the design?): the arguments are swapped" if swapped else "")
+        + f"; the order is mst {verb} {'DESIGN' if verb == 'calibrate' else 'MODEL'}.yaml {second}",
+    )
+
+
 def calibrate(
     design: str | Path | Document,
     load_test: str | Path,
@@ -75,6 +111,7 @@ def calibrate(
     from mst_cli.calibrate.calibration import calibrate as run_calibration  # deferred: scipy.optimize, 330 ms measured
 
     params = _checked_fit_options(mechanics, params, table_size)
+    check_argument_order(design, load_test, "calibrate")
     doc = load_design(design)
     _check_out(out)  # a bad output path is refused before any work
     result = run_calibration(
@@ -124,6 +161,7 @@ def _reader(
     from mst_cli.calibrate.reading import ForceReader
 
     _one_of("--mechanics", mechanics, MODELS)
+    check_argument_order(design, readings, "read")
     doc = load_design(design)
     if model_file is None:
         if not isinstance(design, (str, Path)):

@@ -88,6 +88,7 @@ def calibrate(
     written then.
     """
     names = api.parse_params(params)  # --params is refused before the design is read
+    api.check_argument_order(design_file, load_test, "calibrate")
     doc = api.load_design(design_file)
     out = out_dir or default_out_dir(f"{doc.name}-calibration")
     try:

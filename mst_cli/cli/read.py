@@ -98,6 +98,7 @@ def read(
     extrapolated).
     """
     _check_sources(readings, port, raw, estimate_offset)
+    api.check_argument_order(model_file, readings, "read")
     doc = api.load_design(model_file)
     out = out_dir if (out_dir is not None or port is not None) else default_out_dir(f"{doc.name}-read")
     options: dict[str, Any] = {
