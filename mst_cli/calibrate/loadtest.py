@@ -154,6 +154,7 @@ def _check_extra_columns(
     for row, line in zip(rows, lines):
         for c, j in zip(extras, at):
             _extra_cell(source, line, c, row[j])
+    _check_time_order(source, header, rows, lines)
 
 
 def _extra_cell(source, line, column, text) -> None:
@@ -294,7 +295,6 @@ def parse_readings(
         rows.append(row)
         lines.append(line)
     _check_extra_columns(source, header, rows, lines, (*cols, *(SETTING_COLUMNS if settings is not None else ())))
-    _check_time_order(source, header, rows, lines)
     one = flag_setting if settings is None or flag_setting is not None else settings.the_one(rows)
     return Readings(
         source=source,
