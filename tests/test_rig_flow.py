@@ -125,3 +125,55 @@ def test_swapped_arguments_are_named_in_one_line(tmp_path, rig_rows, command, fi
     r = run([command, f, DESIGN, "--out", tmp_path / "o"])
     one_line_exit_2(r, f"{first} = ", "the arguments are swapped", f"mst {command} ")
     assert not (tmp_path / "o").exists()
+
+
+# ----------------------------------------------------------------- calibrating a rig's load test
+TRUTH = {"modulus_factor": 0.9, "wall_offset_mm": 0.04, "gap_offset_mm": 0.2}
+WITHIN = {"modulus_factor": 0.02 * 0.9, "wall_offset_mm": 0.01, "gap_offset_mm": 0.05}
+
+
+@pytest.fixture(scope="module")
+def rig_calibration(tmp_path_factory):
+    """The done-when rig: three cycles, hysteresis 6 % of the turning force, cycle 1 8 % stiffer,
+    2 uT noise, LSB rounding (spring-rung truth)."""
+    from mst_cli import api
+
+    d = tmp_path_factory.mktemp("rig")
+    rows, truth = rig_loadtest(Rig(cycles=3, hysteresis_pct=6.0, first_cycle_pct=8.0, seed=1), CURVE)
+    f = write_csv(d / "lt.csv", rows)
+    return api.calibrate(DESIGN, f, out=d / "cal", plot=True), truth, d
+
+
+def test_a_rig_load_test_is_fitted_on_its_loading_branch_within_two_sigma(rig_calibration):
+    result, _, _ = rig_calibration
+    for name, value in TRUTH.items():
+        got, sd = result.fit.values[name], result.fit.std[name]
+        assert abs(got - value) < 2 * sd and abs(got - value) < WITHIN[name], (name, got, sd)
+    assert len(result.load_test) == 80  # loading rows of cycles 2 and 3 (cycle 1 is 8 % stiffer)
+
+
+def test_hysteresis_first_cycle_and_unloading_model_are_reported(rig_calibration):
+    import json
+
+    from rig_loadtest import truth_hysteresis_pct
+
+    result, truth, d = rig_calibration
+    h = json.loads((d / "cal" / "calibration.json").read_text())["hysteresis"]
+    assert h["rows"] == {"loading": 121, "unloading": 120, "hold": 0} and h["rows_in_fit"] == 80
+    for r in h["by_regime"]:  # within 1 point (of the band) of the truth; the stiff last regime's noise: 1.5
+        pct, _ = truth_hysteresis_pct(truth, r["force_from_N"], r["force_to_N"])
+        assert abs(r["max_pct_of_band"] - pct) < (1.5 if r["regime"] == 3 else 1.0), (r, pct)
+    assert h["first_cycle"]["differs"] and h["first_cycle"]["left_out_of_fit"]
+    assert abs(h["first_cycle"]["stiffer_pct"] - 8.0) < 1.0
+    assert h["unloading_model"]["a"] > 0 and (d / "cal" / "calibration.png").stat().st_size > 10_000
+    assert "hysteresis regime 1" in result.summary()
+
+
+def test_the_calibration_that_ignores_branches_is_worse(rig_calibration):
+    from mst_cli import api
+
+    result, _, d = rig_calibration
+    before = api.calibrate(DESIGN, d / "lt.csv", use_branches=False)
+    miss = abs(before.fit.values["modulus_factor"] - TRUTH["modulus_factor"])
+    assert miss > 2 * WITHIN["modulus_factor"] and before.record.fit_quality["warning"] is not None
+    assert result.record.fit_quality["warning"] is None

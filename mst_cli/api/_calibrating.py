@@ -7,7 +7,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from mst_cli.api._common import _check_out, _one_of, load_design
 from mst_cli.errors import InputError
@@ -81,6 +81,7 @@ def calibrate(
     res: int | None = None,
     table_size: int = 256,
     progress: Callable[[str], None] | None = None,
+    use_branches: bool = True,
 ) -> Calibration:
     """Fit a design's print parameters to a load test of the printed sensor (``mst calibrate``).
 
@@ -98,8 +99,9 @@ def calibrate(
         Layer mechanics of the fit; frame and continuum by space mapping on spring.
     params : sequence of str or str, optional
         Parameters to fit (of :data:`mst_cli.sensor.as_printed.PARAMETERS`, or "a,b") [default: all four].
-    gain_sel, res, table_size : int, optional
-        The MLX90393 setting the load test was read at (0-7, 0-3); entries of lookup.csv (16-4096).
+    gain_sel, res, table_size, use_branches : int, int, int, bool, optional
+        The MLX90393 setting the load test was read at (0-7, 0-3); entries of lookup.csv
+        (16-4096); fit the loading rows (True) or every row as loading.
 
     Returns
     -------
@@ -114,16 +116,10 @@ def calibrate(
     check_argument_order(design, load_test, "calibrate")
     doc = load_design(design)
     _check_out(out)  # a bad output path is refused before any work
+    name = design_file or (design if isinstance(design, (str, Path)) else design.name)
+    options: dict[str, Any] = {"gain_sel": gain_sel, "res": res, "table_size": table_size, "progress": progress}
     result = run_calibration(
-        doc,
-        design_file or (design if isinstance(design, (str, Path)) else design.name),
-        load_test,
-        mechanics=mechanics,
-        params=params,
-        gain_sel=gain_sel,
-        res=res,
-        table_size=table_size,
-        progress=progress,
+        doc, name, load_test, mechanics=mechanics, params=params, use_branches=use_branches, **options
     )
     if out is not None:
         result.write(Path(out), plot=plot)
