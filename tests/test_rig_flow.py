@@ -177,3 +177,60 @@ def test_the_calibration_that_ignores_branches_is_worse(rig_calibration):
     miss = abs(before.fit.values["modulus_factor"] - TRUTH["modulus_factor"])
     assert miss > 2 * WITHIN["modulus_factor"] and before.record.fit_quality["warning"] is not None
     assert result.record.fit_quality["warning"] is None
+
+
+# ----------------------------------------------------------------- reading a rig's stream
+def held_out_stream(seed=11, **rig):
+    return rig_loadtest(Rig(cycles=2, hysteresis_pct=6.0, seed=seed, **rig), CURVE)
+
+
+def branch_errors(got, rows, branch):
+    F_true = rows["force_N"]
+    use = (rows["branch"] == branch) & (F_true >= 0.1 * CURVE.full_scale_N)
+    rel = np.abs(got.force_N[use] - F_true[use]) / F_true[use]
+    return float(np.median(rel)), float(np.percentile(rel, 95))
+
+
+def test_read_follows_the_branch_within_1_percent_median_and_3_at_p95(rig_calibration, tmp_path):
+    from mst_cli import api
+
+    _, _, d = rig_calibration
+    rows, _ = held_out_stream()
+    got = api.read(d / "cal" / "calibrated.yaml", write_csv(tmp_path / "s.csv", rows), out=tmp_path / "r")
+    assert np.mean(got.branches.branch == rows["branch"]) > 0.95
+    for branch in ("loading", "unloading"):
+        median, p95 = branch_errors(got, rows, branch)
+        assert median <= 0.01 and p95 <= 0.03, (branch, median, p95)
+    text = (tmp_path / "r" / "forces.csv").read_text().splitlines()
+    assert text[0].endswith(",branch,force_uncertainty_N") and ",branch_reference," in text[0]
+
+
+def test_a_no_load_reading_reads_zero(rig_calibration, tmp_path):
+    from mst_cli import api
+
+    result, _, d = rig_calibration
+    B0_uT = result.inverse_map.B_abs_T[0] * 1e6
+    res_uT = result.inverse_map.field_resolution_T * 1e6
+    below = [B0_uT - 4 * res_uT, B0_uT - 2 * res_uT, B0_uT, B0_uT - 30 * res_uT]
+    f = tmp_path / "r.csv"
+    f.write_text("Bx_uT,By_uT,Bz_uT\n" + "".join(f"0,0,{b:.4f}\n" for b in below))
+    got = api.read(d / "cal" / "calibrated.yaml", f)
+    assert np.all(np.abs(got.force_N[:3]) < 1e-3) and list(got.flag) == ["ok", "ok", "ok", "below_range"]
+
+
+def test_tare_re_zeroes_a_shifted_chip(rig_calibration, tmp_path):
+    from mst_cli import api
+
+    _, _, d = rig_calibration
+    rows, _ = held_out_stream(seed=12)
+    rows = {**rows, "Bz_uT": np.asarray(rows["Bz_uT"]) - 40.0}  # the chip 40 uT low on z
+    rows = {k: np.concatenate([np.asarray(v)[:1].repeat(5), np.asarray(v)]) for k, v in rows.items()}
+    f = write_csv(tmp_path / "s.csv", rows)
+    plain = api.read(d / "cal" / "calibrated.yaml", f)
+    assert np.all(plain.flag[:5] == "below_range")
+    tared = api.read(d / "cal" / "calibrated.yaml", f, tare=5)
+    assert np.all(np.abs(tared.force_N[:5]) < 0.05) and abs(tared.tare_shift_uT + 40.0) < 3.0
+    median, _ = branch_errors(tared, rows, "loading")
+    assert median < 0.01
+    r = run(["read", d / "cal" / "calibrated.yaml", f, "--tare", "10000", "--out", tmp_path / "o"])
+    one_line_exit_2(r, "--tare = 10000", "no load")

@@ -198,6 +198,7 @@ def read(
     warn: Callable[[str], None] | None = None,
     estimate_offset: bool = False,
     max_offset_sigma_mm: float = 1.0,
+    tare: int = 0,
 ) -> ForceReadings:
     """MLX90393 readings to forces with a calibrated model (``mst read READINGS.csv``).
 
@@ -220,6 +221,8 @@ def read(
         the data cannot tell keeps the centred force, flagged (``.offset.flag``):
         not_identifiable (offset less certain than ``max_offset_sigma_mm``), ambiguous (two
         presses give it) or no_fit (none does); about 0.3 s a reading.
+    tare : int
+        Take the first ``tare`` readings as no load and re-zero the unloaded field on them.
 
     Returns
     -------
@@ -235,7 +238,9 @@ def read(
     if estimate_offset:
         mech = choose_mechanics(mechanics, reader.document.accuracy_rel, reader.document.mechanics).mechanics
         offsets = reader.offset_estimator(mech, max_offset_sigma_mm)
-    result = reader.read(rd, offsets)
+    if isinstance(tare, bool) or not isinstance(tare, int) or tare < 0:
+        raise InputError("--tare", tare, "a whole number of readings at no load (0: no tare)")
+    result = reader.read(rd, offsets, tare)
     if out is not None:
         with staged(Path(out)) as st:
             st.write_text("forces.csv", result.csv())
