@@ -234,3 +234,13 @@ def test_tare_re_zeroes_a_shifted_chip(rig_calibration, tmp_path):
     assert median < 0.01
     r = run(["read", d / "cal" / "calibrated.yaml", f, "--tare", "10000", "--out", tmp_path / "o"])
     one_line_exit_2(r, "--tare = 10000", "no load")
+
+
+def test_a_drifting_chip_gets_the_warning_and_inflated_sigmas(tmp_path):
+    from mst_cli import api
+
+    rows, _ = rig_loadtest(Rig(cycles=3, hysteresis_pct=6.0, drift_uT_per_s=0.3, seed=6), CURVE)
+    got = api.calibrate(DESIGN, write_csv(tmp_path / "lt.csv", rows))
+    q = got.record.fit_quality
+    assert q["warning"] is not None and q["cause"] == "drift" and q["sigma_inflation"] > 1.4
+    assert got.fit.chi2_reduced == pytest.approx(q["chi2_nu"], rel=0.05)  # the fit's sigmas carry it, once
