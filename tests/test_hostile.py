@@ -1586,7 +1586,7 @@ HOSTILE_CELLS = [
 WRONG_UNIT_COLUMNS = ["force_kN", "load_g", "Bz_mT", "bx_gauss", "F", "time_s", "note"]
 
 
-EXTRA_COLUMNS = ["T_C", "cycle", "branch", "x_mm", "gain_sel", ""]
+EXTRA_COLUMNS = ["T_C", "cycle", "branch", "time_s", "x_mm", "gain_sel", ""]
 
 
 def any_cell():
@@ -1646,11 +1646,16 @@ def reading_files(draw, need_force: bool, resp, setting):
     known = {lt.FORCE_COLUMN, *lt.SETTING_COLUMNS, *lt.UT_COLUMNS, *lt.CODE_COLUMNS}
     for c in cols:  # an extra column holds values of one type, drawn once per column
         if c not in known:
-            kind = draw(st.sampled_from(["number", "integer", "text", "bool", "empty"]))
-            value = {"number": "23.5", "integer": "7", "text": "warm", "bool": "true", "empty": ""}[kind]
+            # a rig's columns (issue 38) too: branch labels, a chip too hot or too cold, times that run back
+            kinds = ["number", "integer", "text", "bool", "empty", "label", "hot", "cold", "descending", "ascending"]
+            kind = draw(st.sampled_from(kinds))
+            values = {"number": "23.5", "integer": "7", "text": "warm", "bool": "true", "empty": ""}
+            values.update({"label": draw(st.sampled_from(["loading", "unloading", "hold", "Hold"])), "hot": "125.5"})
+            values.update({"cold": "-40.5"})
             j = cols.index(c)
-            for row in rows:
-                row[j] = value
+            for i, row in enumerate(rows):
+                ordered = {"descending": str(len(rows) - i), "ascending": str(0.5 * i)}
+                row[j] = ordered.get(kind, values.get(kind, ""))
     edges = [str(v) for v in (limit - 1, limit, -limit, 25000, 50000, -50000, 49999.999, 1e9)]
     for _ in range(draw(st.integers(0, 3))):
         if rows:
@@ -1978,10 +1983,12 @@ def test_a_huge_cell_in_an_extra_column_is_one_line_naming_file_line_and_column(
 
 # ----------------------------------------------------------------- 19. extra columns copied into forces.csv
 def with_column(src: Path, dest: Path, name: str, value: str, row: int = 3) -> Path:
-    """``src`` with a column ``name``: 1.5 in every row, ``value`` in data row ``row`` (from 1)."""
+    """``src`` with a column ``name``: 1.5 in every row (1 in a cycle column: a whole number),
+    ``value`` in data row ``row`` (from 1)."""
     lines = src.read_text().splitlines()
     lines[0] += f",{name}"
-    lines[1:] = [line + (f",{value}" if i == row else ",1.5") for i, line in enumerate(lines[1:], start=1)]
+    filler = "1" if name == "cycle" else "1.5"
+    lines[1:] = [line + (f",{value}" if i == row else f",{filler}") for i, line in enumerate(lines[1:], start=1)]
     dest.write_text("\n".join(lines) + "\n")
     return dest
 

@@ -14,7 +14,7 @@ imports it when called, with the reason and the cost measured (``python -X impor
 
 from __future__ import annotations
 
-from mst_cli.api._calibrating import calibrate, parse_params, read, read_serial
+from mst_cli.api._calibrating import calibrate, check_argument_order, parse_params, read, read_serial
 from mst_cli.api._common import load, load_design
 from mst_cli.api._designing import design, designed, pareto, run_design
 from mst_cli.api._making import check, export, slice
@@ -44,6 +44,7 @@ __all__ = [
     "slice",
     "parse_params",
     "calibrate",
+    "check_argument_order",
     "read",
     "read_serial",
     "bench",

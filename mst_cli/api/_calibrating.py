@@ -7,7 +7,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from mst_cli.api._common import _check_out, _one_of, load_design
 from mst_cli.errors import InputError
@@ -32,6 +32,42 @@ def parse_params(text: str) -> tuple[str, ...]:
     return parse(text)
 
 
+_CSV_HEADER_WORDS = ("force_N", "Bx_uT", "Bx_code_lsb")
+
+
+def _looks_like_readings(path: Path) -> bool:
+    """The first line of ``path`` (a regular file) that is not blank or a comment is a readings
+    CSV's header: it names force_N, Bx_uT or Bx_code_lsb."""
+    try:
+        if not path.is_file():
+            return False
+        with path.open("rb") as fh:
+            head = fh.read(4096).decode("utf-8-sig", errors="replace")
+    except OSError:
+        return False
+    for line in head.splitlines():
+        if line.strip() and not line.lstrip().startswith("#"):
+            cells = {c.strip().strip('"') for c in line.replace(";", ",").replace("\t", ",").split(",")}
+            return any(w in cells for w in _CSV_HEADER_WORDS)
+    return False
+
+
+def check_argument_order(design: str | Path | Document, data: str | Path | None, verb: str) -> None:
+    """InputError in one line when the design argument is the readings CSV (the two arguments
+    swapped): ``mst calibrate loadtest.csv design.yaml``."""
+    if isinstance(design, Document) or not _looks_like_readings(Path(design)):
+        return
+    second = "LOAD_TEST.csv" if verb == "calibrate" else "READINGS.csv"
+    swapped = data is not None and not _looks_like_readings(Path(data))
+    raise InputError(
+        "DESIGN_FILE" if verb == "calibrate" else "MODEL_FILE",
+        str(design),
+        "is a CSV of readings, not a design"
+        + (f" ({data} is the design?): the arguments are swapped" if swapped else "")
+        + f"; the order is mst {verb} {'DESIGN' if verb == 'calibrate' else 'MODEL'}.yaml {second}",
+    )
+
+
 def calibrate(
     design: str | Path | Document,
     load_test: str | Path,
@@ -45,6 +81,7 @@ def calibrate(
     res: int | None = None,
     table_size: int = 256,
     progress: Callable[[str], None] | None = None,
+    use_branches: bool = True,
 ) -> Calibration:
     """Fit a design's print parameters to a load test of the printed sensor (``mst calibrate``).
 
@@ -62,8 +99,9 @@ def calibrate(
         Layer mechanics of the fit; frame and continuum by space mapping on spring.
     params : sequence of str or str, optional
         Parameters to fit (of :data:`mst_cli.sensor.as_printed.PARAMETERS`, or "a,b") [default: all four].
-    gain_sel, res, table_size : int, optional
-        The MLX90393 setting the load test was read at (0-7, 0-3); entries of lookup.csv (16-4096).
+    gain_sel, res, table_size, use_branches : int, int, int, bool, optional
+        The MLX90393 setting the load test was read at (0-7, 0-3); entries of lookup.csv
+        (16-4096); fit the loading rows (True) or every row as loading.
 
     Returns
     -------
@@ -75,18 +113,13 @@ def calibrate(
     from mst_cli.calibrate.calibration import calibrate as run_calibration  # deferred: scipy.optimize, 330 ms measured
 
     params = _checked_fit_options(mechanics, params, table_size)
+    check_argument_order(design, load_test, "calibrate")
     doc = load_design(design)
     _check_out(out)  # a bad output path is refused before any work
+    name = design_file or (design if isinstance(design, (str, Path)) else design.name)
+    options: dict[str, Any] = {"gain_sel": gain_sel, "res": res, "table_size": table_size, "progress": progress}
     result = run_calibration(
-        doc,
-        design_file or (design if isinstance(design, (str, Path)) else design.name),
-        load_test,
-        mechanics=mechanics,
-        params=params,
-        gain_sel=gain_sel,
-        res=res,
-        table_size=table_size,
-        progress=progress,
+        doc, name, load_test, mechanics=mechanics, params=params, use_branches=use_branches, **options
     )
     if out is not None:
         result.write(Path(out), plot=plot)
@@ -120,10 +153,11 @@ def _reader(
     warn: Callable[[str], None] | None,
 ):
     # deferred: the calibrate layer, 30 ms measured (mst simulate does not pay it)
-    from mst_cli.calibrate.loadtest import parse_readings, read_text, setting_of
+    from mst_cli.calibrate.loadtest import check_field_unit, parse_readings, read_text, setting_of
     from mst_cli.calibrate.reading import ForceReader
 
     _one_of("--mechanics", mechanics, MODELS)
+    check_argument_order(design, readings, "read")
     doc = load_design(design)
     if model_file is None:
         if not isinstance(design, (str, Path)):
@@ -145,6 +179,8 @@ def _reader(
             raise InputError(str(readings), "(no rows)", "has a header but no readings")
         setting = setting or rd.setting
     reader = ForceReader.open(doc, model_file, choice.mechanics, setting)
+    if rd is not None:
+        check_field_unit(rd, float(reader.inverse_map.B_abs_T[0]), float(reader.inverse_map.B_abs_T[-1]))
     if reader.warning and warn is not None:
         warn(reader.warning)
     return reader, rd, setting
@@ -162,6 +198,7 @@ def read(
     warn: Callable[[str], None] | None = None,
     estimate_offset: bool = False,
     max_offset_sigma_mm: float = 1.0,
+    tare: int = 0,
 ) -> ForceReadings:
     """MLX90393 readings to forces with a calibrated model (``mst read READINGS.csv``).
 
@@ -184,6 +221,8 @@ def read(
         the data cannot tell keeps the centred force, flagged (``.offset.flag``):
         not_identifiable (offset less certain than ``max_offset_sigma_mm``), ambiguous (two
         presses give it) or no_fit (none does); about 0.3 s a reading.
+    tare : int
+        Take the first ``tare`` readings as no load and re-zero the unloaded field on them.
 
     Returns
     -------
@@ -199,7 +238,9 @@ def read(
     if estimate_offset:
         mech = choose_mechanics(mechanics, reader.document.accuracy_rel, reader.document.mechanics).mechanics
         offsets = reader.offset_estimator(mech, max_offset_sigma_mm)
-    result = reader.read(rd, offsets)
+    if isinstance(tare, bool) or not isinstance(tare, int) or tare < 0:
+        raise InputError("--tare", tare, "a whole number of readings at no load (0: no tare)")
+    result = reader.read(rd, offsets, tare)
     if out is not None:
         with staged(Path(out)) as st:
             st.write_text("forces.csv", result.csv())

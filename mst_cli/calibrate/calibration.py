@@ -5,6 +5,7 @@ them atomically (all or none)."""
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -14,7 +15,7 @@ import numpy as np
 import yaml
 
 from mst_cli.calibrate import fit as cal
-from mst_cli.calibrate.accuracy import force_errors
+from mst_cli.calibrate.accuracy import force_errors, force_errors_by_regime, regime_error_lines
 from mst_cli.calibrate.calibration_json import (
     CALIBRATED_YAML,
     CALIBRATION_JSON,
@@ -23,10 +24,20 @@ from mst_cli.calibrate.calibration_json import (
     design_constants,
     sha256_text,
 )
+from mst_cli.calibrate.fit_quality import fit_quality
 from mst_cli.calibrate.header import HEADER_FILE, c_header
 from mst_cli.calibrate.inverse_map import InverseMap, field_sigma_T, inverse_map
-from mst_cli.calibrate.loadtest import MAX_ROWS, Readings, check_load_test, parse_readings, read_text
+from mst_cli.calibrate.loadtest import (
+    MAX_ROWS,
+    Readings,
+    check_field_unit,
+    check_load_test,
+    parse_readings,
+    read_text,
+    unknown_columns,
+)
 from mst_cli.calibrate.plot import plot_calibration
+from mst_cli.calibrate.rig_calibration import RigAnalysis, analyse, describe
 from mst_cli.calibrate.tables import lookup_csv, residuals_csv
 from mst_cli.calibrate.tilt_fit import fit_lever_factor
 from mst_cli.errors import CalibrationFailed, InputError
@@ -95,6 +106,13 @@ class Calibration:
     header_setting: ChipSetting | None
     design_curve: tuple[np.ndarray, np.ndarray]  # (force N, |B| T) of the design
     calibrated_curve: tuple[np.ndarray, np.ndarray]
+    rig: RigAnalysis | None = None  # the branches of every centred row (load_test: the rows fitted)
+
+    @property
+    def warnings(self) -> list[str]:
+        """Sentences for the terminal: the fit misses the load test beyond its noise."""
+        q = self.record.fit_quality
+        return [q["warning"]] if q and q.get("warning") else []
 
     @property
     def file_names(self) -> list[str]:
@@ -115,15 +133,17 @@ class Calibration:
             if not plot:
                 st.remove(PLOT_FILE)
             else:
+                rows = self.rig.readings if self.rig is not None else self.load_test
                 plot_calibration(
                     st.path(PLOT_FILE),
-                    self.load_test.load_N,
-                    self.load_test.B_abs_T,
+                    rows.load_N,
+                    rows.B_abs_T,
                     self.design_curve,
                     self.calibrated_curve,
-                    self.fit.residual_T,
+                    rows.B_abs_T - self.fit.model.field_abs_T(rows.load_N, self.fit.values),
                     self.fit.sigma_T,
                     f"{self.design.name}: load test against the design and the calibrated model",
+                    None if self.rig is None else self.rig.branches.label,
                 )
 
     def summary(self) -> str:
@@ -156,19 +176,7 @@ class Calibration:
                 f"{d['regime']:>6} {d['force_to_N']:>9.3f} {c['force_to_N']:>9.3f} "
                 f"{d['sensitivity_secant_per_N']:>9.4f} {c['sensitivity_secant_per_N']:>9.4f} {dF}"
             )
-        in_sample, design_errors = r.force_errors_in_sample["calibrated"], r.force_errors_in_sample["design"]
-        if "median_rel" in in_sample:
-            design_part = (
-                f"design {100 * design_errors['median_rel']:.3g} %"
-                if "median_rel" in design_errors
-                else "design: all flagged"
-            )
-            lines.append(
-                f"forces of the load test from its own readings (F >= {in_sample['from_force_N']:.3g} N): "
-                f"median error calibrated {100 * in_sample['median_rel']:.3g} % (95th pct "
-                f"{100 * in_sample['p95_rel']:.3g} %), {design_part}"
-                + (f", {design_errors['flagged']} out of the design's range" if design_errors.get("flagged") else "")
-            )
+        lines += _error_lines(r.force_errors_in_sample)
         s = self.header_setting
         if s is not None:
             lines.append(f"table for GAIN_SEL {s.gain_sel}, RES {s.res} ({s.z_uT_per_lsb} uT/LSB on Z)")
@@ -180,7 +188,32 @@ class Calibration:
                 + (" (AT ITS BOUND)" if t["at_bound"] else "")
                 + f"; field residual {t['rms_residual_uT']:.3g} uT RMS ({t['rms_residual_at_factor_1_uT']:.3g} at 1)"
             )
+        if self.rig is not None and (len(self.rig.readings) > len(lt) or not self.rig.use_branches):
+            lines += self.rig.summary_lines()
+        lines += [f"warning: {w}" for w in self.warnings]
+        unknown = unknown_columns(self.load_test)
+        if unknown:
+            lines.append(f"note: column(s) {', '.join(unknown)} of {self.load_test_name} not used by the calibration")
         return "\n".join(lines)
+
+
+def _error_lines(errors: dict) -> list[str]:
+    """The summary's lines on the load test's forces read back: overall, then per regime."""
+    in_sample, design_errors = errors["calibrated"], errors["design"]
+    lines = []
+    if "median_rel" in in_sample:
+        design_part = (
+            f"design {100 * design_errors['median_rel']:.3g} %"
+            if "median_rel" in design_errors
+            else "design: all flagged"
+        )
+        lines.append(
+            f"forces of the load test from its own readings (F >= {in_sample['from_force_N']:.3g} N): "
+            f"median error calibrated {100 * in_sample['median_rel']:.3g} % (95th pct "
+            f"{100 * in_sample['p95_rel']:.3g} %), {design_part}"
+            + (f", {design_errors['flagged']} out of the design's range" if design_errors.get("flagged") else "")
+        )
+    return lines + regime_error_lines(in_sample.get("by_regime", []))
 
 
 def calibrate(
@@ -194,27 +227,26 @@ def calibrate(
     res: int | None = None,
     table_size: int = 256,
     progress: Callable[[str], None] | None = None,
+    use_branches: bool = True,
 ) -> Calibration:
     """Fit ``doc`` (loaded from ``design_file``, which the record names) to the load test in
-    ``load_test_file``. InputError for a bad load test; CalibrationFailed (with why) when the
-    fit fails or its values would make a design that does not load. ``progress`` gets a line
-    before a long fit."""
-    lt, presses = _split_presses(_read_load_test(load_test_file, gain_sel, res), doc)
+    ``load_test_file``: to its loading rows (:mod:`~mst_cli.calibrate.rig_calibration`;
+    ``use_branches=False``: every row as loading). InputError for a bad load test;
+    CalibrationFailed (with why) when the fit fails or its values would make a design that does
+    not load. ``progress`` gets a line before a long fit."""
+    lt_all, presses = _split_presses(_read_load_test(load_test_file, gain_sel, res), doc)
+    rig = analyse(lt_all, max(cal.MIN_POINTS, cal.MIN_POINTS_PER_PARAMETER * len(params)), use_branches)
+    lt = lt_all.subset(rig.fit_rows)
     fitted = _fit(doc, lt, Path(load_test_file).name, mechanics, tuple(params), progress)
     imap, setting = fitted.imap, fitted.setting
     header, header_reason = _header(fitted, f"{Path(design_file).name} and {Path(load_test_file).name}")
-    F_fit, _, flag_fit = imap.force(lt.B_abs_T, lt.saturated)
-    in_sample = force_errors(F_fit, lt.load_N, fitted.cal_resp.max_force_N)
-    try:
-        F_design, _, _ = InverseMap.from_response(fitted.design_resp).force(lt.B_abs_T)
-        design_errors = force_errors(F_design, lt.load_N, fitted.cal_resp.max_force_N)
-    except CalibrationFailed:
-        design_errors = {}
+    F_fit, flag_fit, errors = _in_sample_errors(fitted)
     yaml_text = YAML_PREAMBLE + yaml.safe_dump(fitted.calibrated_dict, sort_keys=False, default_flow_style=None)
     files = _RecordFiles(str(design_file), str(load_test_file), sha256_text(yaml_text), table_size, header_reason)
-    record = _record(doc, fitted, files, {"calibrated": in_sample, "design": design_errors}, header is not None)
+    record = _record(doc, fitted, files, errors, header is not None)
     if presses is not None:
         record.tilt = fit_lever_factor(fitted.calibrated, mechanics, presses, fitted.fit.sigma_T)
+    _rig_sections(record, rig, fitted)
     F_grid = np.linspace(0.0, max(float(lt.load_N.max()), fitted.cal_resp.max_force_N), 400)
     design_resp, fit = fitted.design_resp, fitted.fit
     return Calibration(
@@ -234,7 +266,50 @@ def calibrate(
         header_setting=setting,
         design_curve=(design_resp.force_N[design_resp.in_range], design_resp.B_abs_T[design_resp.in_range]),
         calibrated_curve=(F_grid, fit.model.field_abs_T(F_grid, fit.values)),
+        rig=rig,
     )
+
+
+def _in_sample_errors(fitted: _Fitted) -> tuple[np.ndarray, np.ndarray, dict]:
+    """(the calibrated model's force of each fitted row, its flag, the force errors of the
+    calibrated and the design's model against the load cell: calibration.json's
+    force_errors_in_sample)."""
+    lt, imap = fitted.lt, fitted.imap
+    F_fit, _, flag_fit = imap.force(lt.B_abs_T, lt.saturated)
+    in_sample = force_errors(F_fit, lt.load_N, fitted.cal_resp.max_force_N, flag_fit)
+    in_sample["by_regime"] = force_errors_by_regime(F_fit, lt.load_N, imap.edges_N, flag_fit)
+    try:
+        F_design, _, _ = InverseMap.from_response(fitted.design_resp).force(lt.B_abs_T)
+        design_errors = force_errors(F_design, lt.load_N, fitted.cal_resp.max_force_N)
+    except CalibrationFailed:
+        design_errors = {}
+    return F_fit, flag_fit, {"calibrated": in_sample, "design": design_errors}
+
+
+def _rig_sections(record: CalibrationRecord, rig: RigAnalysis, fitted: _Fitted) -> None:
+    """calibration.json's hysteresis and fit_quality sections: the branches after the fit, and
+    the fit's normalised residuals judged (the sigmas are the fit's, already x sqrt(chi2_nu)
+    when it exceeds 1: not inflated twice)."""
+    imap, fit = fitted.imap, fitted.fit
+    describe(rig, imap.edges_N, lambda B: np.interp(B, imap.B_abs_T, imap.force_N))
+    record.hysteresis = rig.record()
+    rows = rig.fit_rows
+    q = fit_quality(fit.residual_T / fit.sigma_T, len(fit.names), rig.branches.label[rows], rig.time_s[rows])
+    record.fit_quality = {
+        "chi2_nu": q.chi2_nu,
+        "runs": q.runs,
+        "runs_expected": q.runs_expected,
+        "runs_z": q.runs_z,
+        "lag1_autocorrelation": q.lag1,
+        "branch_t": q.branch_t,
+        "trend_t": q.trend_t,
+        "structured": q.structured,
+        "cause": q.cause,
+        "warning": q.warning,
+        "sigma_inflation": math.sqrt(q.chi2_nu) if q.chi2_nu > 1 else 1.0,
+        "rule": "warning when chi2_nu > 2 and the runs test's z < -3; every parameter sigma is the fit's, "
+        "x sqrt(chi2_nu) when chi2_nu > 1, and identifiability is judged on it",
+    }
 
 
 def _read_load_test(load_test_file: str | Path, gain_sel: int | None, res: int | None) -> Readings:
@@ -302,6 +377,7 @@ def _fit(
     calibrated inverse map; CalibrationFailed when the fitted values make a design that does not
     load."""
     design_resp = simulate(doc.geometry(), doc.material, mechanics=mechanics, noise_uT_rms=doc.noise_uT_rms)
+    check_field_unit(lt, float(design_resp.B_abs_T[0]), float(design_resp.B_abs_T[design_resp.in_range][-1]))
     check_load_test(lt, len(names), design_resp.max_force_N, cal.MIN_POINTS_PER_PARAMETER, cal.MIN_POINTS)
     sigma = field_sigma_T(doc.noise_uT_rms, lt.setting or design_resp.chip_setting)
     t0 = time.monotonic()

@@ -88,6 +88,10 @@ class CalibrationRecord:
     fit: dict
     # presses at known offsets (x_mm, y_mm columns): the tilt rung's fitted lever factor
     tilt: dict | None = None
+    # a rig's load test (issue 38): branches, hysteresis per regime, the unloading model, first
+    # cycle, creep; and whether the fit's misfit is noise (fit_quality)
+    hysteresis: dict | None = None
+    fit_quality: dict | None = None
 
     def to_json(self) -> dict[str, Any]:
         """The file's JSON-ready mapping (non-finite numbers are null: JSON holds no NaN)."""

@@ -11,6 +11,10 @@ Format (docs: README, "From a load test to a force stream"):
 * extra columns are kept in ``mst read``'s output, so each is checked as it is read: a cell of
   ``time_s``, ``cycle`` or ``T_C`` (EXTRA_NUMBER_COLUMNS) must be a finite number, a cell of
   any other extra column that reads as a number must be a finite one (no ``nan``, ``inf``);
+* a rig's columns (issue 38): ``time_s`` never decreases (else row order is time order),
+  ``cycle`` is a whole number, ``branch`` one of loading/unloading/hold, ``T_C`` the chip's
+  temperature within the MLX90393's operating range (-40..125 degC); any other column is named
+  by :func:`unknown_columns` (the commands print one note);
 * a cell holds at most MAX_CELL_CHARS characters (:mod:`mst_cli.io.csv_table`).
 
 Every problem raises :class:`~mst_cli.errors.InputError` naming the file, the line and the
@@ -42,6 +46,10 @@ SETTING_COLUMNS = ("gain_sel", "res")
 OFFSET_COLUMNS = ("x_mm", "y_mm")  # where a load-test row was pressed (optional, both or neither)
 # extra columns with a meaning (time, load cycle, temperature): numbers, checked where they are read
 EXTRA_NUMBER_COLUMNS = ("time_s", "cycle", "T_C")
+BRANCH_COLUMN = "branch"  # the rig's own loading / unloading / hold label of a row (issue 38)
+BRANCH_VALUES = ("loading", "unloading", "hold")
+RIG_COLUMNS = (*EXTRA_NUMBER_COLUMNS, BRANCH_COLUMN)
+T_C_RANGE = (-40.0, 125.0)  # the MLX90393's operating temperature range, degC
 # a column that looks like a force or a field in another unit: refused with the conversion
 FORCE_LIKE = re.compile(r"^(force|load|f|weight|mass)(_.*|\s*\[.*\]|\s*\(.*\))?$", re.IGNORECASE)
 FIELD_LIKE = re.compile(r"^(b|mag)_?[xyz](_.+|\s*\[.*\]|\s*\(.*\))$", re.IGNORECASE)
@@ -146,6 +154,7 @@ def _check_extra_columns(
     for row, line in zip(rows, lines):
         for c, j in zip(extras, at):
             _extra_cell(source, line, c, row[j])
+    _check_time_order(source, header, rows, lines)
 
 
 def _extra_cell(source, line, column, text) -> None:
@@ -153,7 +162,11 @@ def _extra_cell(source, line, column, text) -> None:
     forces.csv: one of EXTRA_NUMBER_COLUMNS must be a finite number; any other may be text, but
     not a number that is not finite."""
     if column in EXTRA_NUMBER_COLUMNS:
-        _number(source, line, column, text)
+        _rig_number(source, line, column, _number(source, line, column, text))
+        return
+    if column == BRANCH_COLUMN:
+        if text.strip().lower() not in BRANCH_VALUES:
+            raise InputError(f"{source} line {line} {column}", text, "one of " + ", ".join(BRANCH_VALUES))
         return
     try:
         v = float(text)
@@ -165,6 +178,49 @@ def _extra_cell(source, line, column, text) -> None:
             text,
             "must be a finite number or text (an extra column is copied into forces.csv)",
         )
+
+
+def _rig_number(source, line, column, v: float) -> None:
+    """A cycle is a whole number; T_C (the chip's temperature) lies in the MLX90393's operating range."""
+    if column == "cycle" and v != round(v):
+        raise InputError(f"{source} line {line} {column}", v, "a whole number (the load cycle)")
+    lo, hi = T_C_RANGE
+    if column == "T_C" and not lo <= v <= hi:
+        raise InputError(
+            f"{source} line {line} {column}", v, f"the chip's temperature in degC, within the MLX90393's {lo:g}..{hi:g}"
+        )
+
+
+def _check_time_order(source: str, header: list[str], rows: list[list[str]], lines: list[int]) -> None:
+    """time_s never decreases from row to row (rows are in time order)."""
+    if "time_s" not in header:
+        return
+    j = header.index("time_s")
+    before = -math.inf
+    for row, line in zip(rows, lines):
+        t = float(row[j])
+        if t < before:
+            raise InputError(
+                f"{source} line {line} time_s", row[j], f"times that never decrease (the row before has {before:g})"
+            )
+        before = t
+
+
+def unknown_columns(rd: Readings) -> list[str]:
+    """The columns of ``rd`` no part of mst reads (copied into forces.csv by mst read, no more)."""
+    known = {FORCE_COLUMN, *UT_COLUMNS, *CODE_COLUMNS, *SETTING_COLUMNS, *OFFSET_COLUMNS, *RIG_COLUMNS}
+    return [c for c in rd.header if c not in known]
+
+
+def rig_column(rd: Readings, column: str) -> np.ndarray | None:
+    """The values of a rig column (time_s, cycle, T_C as floats; branch as lower-case labels),
+    None when the file has no such column."""
+    if column not in rd.header:
+        return None
+    j = rd.header.index(column)
+    if column == BRANCH_COLUMN:
+        return np.array([row[j].strip().lower() for row in rd.rows], dtype=object)
+    return np.array([float(row[j]) for row in rd.rows], dtype=float)
 
 
 def _wrong_unit_force(source, header):
@@ -405,6 +461,23 @@ def field_of(
     if np.any(np.abs(B_uT) >= mlx.SATURATION_T * 1e6):
         saturated = True
     return B_uT * 1e-6, bool(saturated)
+
+
+def check_field_unit(rd: Readings, B_unloaded_T: float, B_full_T: float) -> None:
+    """Field columns in microtesla that hold millitesla: every |B| is under 1 % of the design's
+    unloaded field, yet 1000 x it lies within a factor of 3 of the design's field range. Raw
+    codes carry no unit to mistake."""
+    if rd.raw or not len(rd) or not (B_unloaded_T > 0):
+        return
+    top = float(np.max(rd.B_abs_T))
+    if 0 < top < 0.01 * B_unloaded_T and B_unloaded_T / 3 <= 1000 * top <= 3 * B_full_T:
+        i = int(np.argmax(rd.B_abs_T))
+        raise InputError(
+            f"{rd.source} line {rd.lines[i]} {','.join(UT_COLUMNS)}",
+            ",".join(rd.rows[i][rd.header.index(c)] for c in UT_COLUMNS),
+            f"|B| up to {top * 1e6:.4g} uT, yet the design's field at the chip is {B_unloaded_T * 1e6:.4g}-"
+            f"{B_full_T * 1e6:.4g} uT: are the values in mT? The columns must be microtesla (convert: x 1000)",
+        )
 
 
 def check_load_test(

@@ -14,11 +14,12 @@ from pathlib import Path
 
 import numpy as np
 
-from mst_cli.calibrate.accuracy import ERROR_FROM_RANGE, force_errors
+from mst_cli.calibrate.accuracy import ERROR_FROM_RANGE, force_errors, force_errors_by_regime, regime_error_lines
 from mst_cli.calibrate.calibration_json import CalibrationRecord, record_beside
 from mst_cli.calibrate.inverse_map import FLAGS, InverseMap, inverse_map
-from mst_cli.calibrate.loadtest import Readings, field_of
+from mst_cli.calibrate.loadtest import Readings, field_of, rig_column, unknown_columns
 from mst_cli.calibrate.offset_reading import OffsetEstimator, OffsetReadings, offset_columns
+from mst_cli.calibrate.rig_reading import BranchForces, follow_branches, no_load_rows, tare_shift_T, unloading_model_of
 from mst_cli.calibrate.tables import FORCES_COLUMNS, cell, forces_csv
 from mst_cli.io.serial_lines import LineSource, SampleParser
 from mst_cli.model.chip import ChipSetting, field_resolution_T
@@ -40,11 +41,16 @@ class ForceReadings:
     force_resolution_N: np.ndarray
     offset: OffsetReadings | None = None  # with --estimate-offset: force_N is the corrected one ...
     force_centred_N: np.ndarray | None = None  # ... and this the centred model's
+    edges_N: np.ndarray = field(default_factory=lambda: np.zeros(1))  # the model's regime edges (errors per regime)
+    branches: BranchForces | None = None  # the branch of each reading and its force's uncertainty
+    tare_shift_uT: float | None = None  # --tare: |B| shift that re-zeroed the unloaded field
 
     def csv(self) -> str:
         """forces.csv: the input columns and the force, regime, flag and resolution of each row
         (with an offset estimate: force_N corrected, then the centred force and the offset)."""
         text = forces_csv(self.readings, self.force_N, self.regime, self.flag, self.force_resolution_N)
+        if self.branches is not None and self.branches.model_used:  # a calibration with an unloading model
+            text = _branch_columns(text, self.branches)
         if self.offset is None or self.force_centred_N is None:
             return text
         return offset_columns(text, self.offset, self.force_centred_N)
@@ -54,7 +60,9 @@ class ForceReadings:
         ref = self.readings.force_N
         if ref is None or not len(ref) or float(np.max(ref)) <= 0:
             return None
-        return force_errors(self.force_N, ref, float(np.max(ref)))  # the same readings for any model
+        err = force_errors(self.force_N, ref, float(np.max(ref)), self.flag)  # the same readings for any model
+        err["by_regime"] = force_errors_by_regime(self.force_N, ref, self.edges_N, self.flag)
+        return err
 
     def summary(self) -> str:
         F, flag = self.force_N, self.flag
@@ -71,6 +79,17 @@ class ForceReadings:
         ]
         if self.offset is not None:
             lines.append(self.offset.summary())
+        if self.tare_shift_uT is not None:
+            lines.append(f"tare: no load re-zeroed by {self.tare_shift_uT:+.3g} uT of |B|")
+        if self.branches is not None and np.any(self.branches.branch == "unloading"):
+            n = {k: int(np.sum(self.branches.branch == k)) for k in ("loading", "unloading", "hold")}
+            lines.append(
+                f"branches: {n['loading']} loading, {n['unloading']} unloading, {n['hold']} hold readings"
+                + ("" if self.branches.model_used else " (no unloading model in the calibration: read as loading)")
+            )
+        unknown = unknown_columns(self.readings)
+        if unknown:
+            lines.append(f"note: column(s) {', '.join(unknown)} not read by mst (copied into {FORCES_FILE} as written)")
         err = self.errors()
         if err is not None and "median_rel" in err:
             lines.append(
@@ -83,7 +102,20 @@ class ForceReadings:
             lines.append(
                 f"against force_N_reference: all {err['readings']} readings >= {ERROR_FROM_RANGE:g} x range are flagged"
             )
+        if err is not None:
+            lines += regime_error_lines(err["by_regime"])
         return "\n".join(lines)
+
+
+def _branch_columns(forces_csv_text: str, bf: BranchForces) -> str:
+    """forces.csv with the branch each reading was read on and its force's 1-sigma uncertainty
+    (resolution, the unloading model's residual, the hysteresis a hold leaves open)."""
+    lines = forces_csv_text.splitlines()
+    out = [lines[0] + ",branch,force_uncertainty_N"]
+    for i, line in enumerate(lines[1:]):
+        u = bf.uncertainty_N[i]
+        out.append(f"{line},{bf.branch[i]}," + (f"{u:.6g}" if np.isfinite(u) else ""))
+    return "\n".join(out) + "\n"
 
 
 @dataclass
@@ -141,17 +173,30 @@ class ForceReader:
             note = record.curve_changed(imap)
         return cls(doc, imap, note, record)
 
-    def read(self, rd: Readings, offsets: OffsetEstimator | None = None) -> ForceReadings:
+    def read(self, rd: Readings, offsets: OffsetEstimator | None = None, tare: int = 0) -> ForceReadings:
         """The forces of ``rd``; with ``offsets``, each in-range reading's force corrected for
-        where it was pressed (:mod:`~mst_cli.calibrate.offset_reading`)."""
-        F, regime, flag = self.inverse_map.force(rd.B_abs_T, rd.saturated)
-        res = self.inverse_map.local_resolution_N(np.where(np.isfinite(F), F, 0.0))
+        where it was pressed (:mod:`~mst_cli.calibrate.offset_reading`); else each on its branch
+        (:mod:`~mst_cli.calibrate.rig_reading`). ``tare``: the first readings at no load."""
+        imap = self.inverse_map
+        shift = tare_shift_T(rd.B_abs_T, tare, float(imap.B_abs_T[0]), rd.source) if tare else 0.0
+        B = rd.B_abs_T - shift
+        F, regime, flag = imap.force(B, rd.saturated)
+        zero = no_load_rows(B, flag, float(imap.B_abs_T[0]), imap.field_resolution_T)
+        F[zero], regime[zero], flag[zero] = 0.0, 1, "ok"
+        res = imap.local_resolution_N(np.where(np.isfinite(F), F, 0.0))
         if offsets is None:
-            return ForceReadings(self.document.name, rd, F, regime, flag, res)
+            model = unloading_model_of(self.record.hysteresis) if self.record is not None else None
+            bf = follow_branches(F, res, model, rig_column(rd, "time_s"))
+            regime = np.where(np.isfinite(bf.force_N), imap.regime_of(np.nan_to_num(bf.force_N)), regime)
+            out = ForceReadings(self.document.name, rd, bf.force_N, regime, flag, res, edges_N=imap.edges_N)
+            out.branches, out.tare_shift_uT = bf, (shift * 1e6 if tare else None)
+            return out
         est = offsets.estimate_all(rd.B_T, np.where(flag == "ok", F, np.nan))
         corrected = np.where(est.flag == "ok", est.force_N, F)
         regime = np.where(np.isfinite(corrected), self.inverse_map.regime_of(corrected), regime)
-        return ForceReadings(self.document.name, rd, corrected, regime, flag, res, est, F)
+        return ForceReadings(
+            self.document.name, rd, corrected, regime, flag, res, est, F, edges_N=self.inverse_map.edges_N
+        )
 
     def offset_estimator(self, mechanics: str, max_sigma_mm: float) -> OffsetEstimator:
         """The offset estimator of this model: its geometry and material, the reader's field

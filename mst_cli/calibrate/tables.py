@@ -72,7 +72,8 @@ def forces_csv(
 ) -> str:
     """The readings file's columns as written (its force_N renamed force_N_reference) and
     FORCES_COLUMNS; a flagged reading's force, regime and resolution are empty."""
-    header = ["force_N_reference" if h == "force_N" else h for h in rd.header]
+    renamed = {"force_N": "force_N_reference", "branch": "branch_reference"}  # mst read writes its own
+    header = [renamed.get(h, h) for h in rd.header]
     buf = io.StringIO()
     buf.write(",".join([quoted(h) for h in header] + list(FORCES_COLUMNS)) + "\n")
     for i, row in enumerate(rd.rows):

@@ -63,6 +63,12 @@ def fail_fit(reason: str, what: str = "calibration failed") -> NoReturn:
     show_default=True,
     help="Entries of the lookup table (CSV and C header).",
 )
+@click.option(
+    "--ignore-branches",
+    is_flag=True,
+    help="Fit every row as loading (default: the loading rows; unloading, holds and a first cycle "
+    "that differs are described in calibration.json's hysteresis section, not fitted).",
+)
 @no_plot_option("calibration.png", "about 40 % of a run: 0.45 s of matplotlib import and render", has_json=False)
 @handles_input_errors
 def calibrate(
@@ -74,6 +80,7 @@ def calibrate(
     gain_sel: int | None,
     res: int | None,
     table_size: int,
+    ignore_branches: bool,
     no_plot: bool,
 ) -> None:
     """Fit DESIGN_FILE's print parameters to a LOAD_TEST of the printed sensor.
@@ -88,6 +95,7 @@ def calibrate(
     written then.
     """
     names = api.parse_params(params)  # --params is refused before the design is read
+    api.check_argument_order(design_file, load_test, "calibrate")
     doc = api.load_design(design_file)
     out = out_dir or default_out_dir(f"{doc.name}-calibration")
     try:
@@ -103,9 +111,12 @@ def calibrate(
             res=res,
             table_size=table_size,
             progress=lambda line: click.echo(f"mst calibrate: {line}", err=True),
+            use_branches=not ignore_branches,
         )
     except api.CalibrationFailed as exc:
         fail_fit(str(exc))
+    for warning in result.warnings:
+        click.echo(one_line(f"mst calibrate: warning: {warning}"), err=True)
     click.echo(result.summary())
     click.echo(
         f"wrote {out}/{', '.join(result.file_names)}"

@@ -58,3 +58,7 @@ READ_ESTIMATE_OFFSET = (
     "force kept)."
 )
 READ_MAX_OFFSET_SIGMA = "An offset less certain than this (1-sigma, mm) is not identifiable: the centred force is kept."
+READ_TARE = (
+    "Take the first N readings as no load and re-zero the unloaded field on them (a reading within "
+    "the noise of no load reads 0 N)."
+)

@@ -69,6 +69,7 @@ BAUD_RATES = (1200, 2400, 4800, 9600, 19200, 38400, 57600, 115200, 230400, 46080
 @click.option(
     "--max-offset-sigma-mm", type=float, default=1.0, show_default=True, help=help_texts.READ_MAX_OFFSET_SIGMA
 )
+@click.option("--tare", type=click.IntRange(min=0), default=0, show_default=True, help=help_texts.READ_TARE)
 @handles_input_errors
 def read(
     model_file: Path,
@@ -84,6 +85,7 @@ def read(
     out_dir: Path | None,
     estimate_offset: bool,
     max_offset_sigma_mm: float,
+    tare: int,
 ) -> None:
     """Turn MLX90393 readings into forces with MODEL_FILE (a calibrated.yaml).
 
@@ -98,15 +100,11 @@ def read(
     extrapolated).
     """
     _check_sources(readings, port, raw, estimate_offset)
+    api.check_argument_order(model_file, readings, "read")
     doc = api.load_design(model_file)
     out = out_dir if (out_dir is not None or port is not None) else default_out_dir(f"{doc.name}-read")
-    options: dict[str, Any] = {
-        "model_file": model_file,
-        "mechanics": mechanics,
-        "gain_sel": gain_sel,
-        "res": res,
-        "warn": _warn,
-    }
+    options: dict[str, Any] = {"model_file": model_file, "mechanics": mechanics, "gain_sel": gain_sel, "res": res}
+    options["warn"] = _warn
     try:
         if readings is not None:
             result = api.read(
@@ -115,6 +113,7 @@ def read(
                 out=out,
                 estimate_offset=estimate_offset,
                 max_offset_sigma_mm=max_offset_sigma_mm,
+                tare=tare,
                 **options,
             )
             click.echo(result.summary())

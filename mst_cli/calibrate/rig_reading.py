@@ -1,0 +1,94 @@
+"""``mst read`` on a rig's stream (issue 38): tare, no load, and the branch of each reading.
+
+* tare (``--tare N``): the first N readings are taken at no load; their mean |B| replaces the
+  calibration's unloaded field (every |B| shifted by the difference: the chip's offset and the
+  magnet's placement move the whole curve, not its shape);
+* no load: a reading below the unloaded field by less than :data:`NO_LOAD_SIGMAS` field
+  resolutions (the chip's noise between presses) reads 0 N, flagged ok; only a reading further
+  below is below_range;
+* the branch: the loading-branch force of each reading (the inverse map) is followed in time
+  order; a reversal counts once the force moves back by more than the dead band of the stream's
+  own noise (:func:`~mst_cli.calibrate.branches.find_branches`); an unloading reading means the
+  force the calibration's unloading model gives from the loading force and the last turning
+  force (:class:`~mst_cli.calibrate.hysteresis.UnloadingModel`); a hold keeps the loading force;
+* the uncertainty of each force: the local force resolution, the unloading model's residual on
+  unloading rows, and half the hysteresis the reader cannot resolve on hold rows (the sensor may
+  sit anywhere between its loading and unloading curves there).
+
+Pure: no file or terminal I/O.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from mst_cli.calibrate.branches import HOLD, LOADING, UNLOADING, find_branches
+from mst_cli.calibrate.hysteresis import UnloadingModel
+from mst_cli.errors import InputError
+
+NO_LOAD_SIGMAS = 6.0  # a reading this many field resolutions below no load is below_range; closer, 0 N
+MIN_BRANCH_ROWS = 5  # fewer in-range readings: no branch is followed (every reading loading)
+
+
+def unloading_model_of(hysteresis: object) -> UnloadingModel | None:
+    """The unloading model of calibration.json's hysteresis section (None when it holds none
+    or something malformed: the reader then reads every sample on the loading branch)."""
+    if not isinstance(hysteresis, dict) or not isinstance(hysteresis.get("unloading_model"), dict):
+        return None
+    m = hysteresis["unloading_model"]
+    values = [m.get(k) for k in ("a", "b", "residual_rms_N")]
+    if not all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in values):
+        return None
+    return UnloadingModel(float(values[0]), float(values[1]), float(values[2]), int(m.get("rows") or 0))
+
+
+def tare_shift_T(B_abs_T: np.ndarray, tare: int, B_unloaded_T: float, source: str) -> float:
+    """The |B| shift that puts the mean of the first ``tare`` readings on the unloaded field."""
+    if not 1 <= tare <= len(B_abs_T):
+        raise InputError("--tare", tare, f"a number of readings at no load, 1..{len(B_abs_T)} (the rows of {source})")
+    return float(np.mean(B_abs_T[:tare]) - B_unloaded_T)
+
+
+def no_load_rows(B_abs_T: np.ndarray, flag: np.ndarray, B_unloaded_T: float, resolution_T: float) -> np.ndarray:
+    """below_range readings within NO_LOAD_SIGMAS field resolutions of no load."""
+    return (flag == "below_range") & (B_abs_T >= B_unloaded_T - NO_LOAD_SIGMAS * resolution_T)
+
+
+@dataclass
+class BranchForces:
+    force_N: np.ndarray
+    branch: np.ndarray  # loading / unloading / hold ("" where flagged)
+    uncertainty_N: np.ndarray
+    model_used: bool = False  # unloading readings read with the calibration's unloading model
+
+
+def follow_branches(
+    F_load_N: np.ndarray, resolution_N: np.ndarray, model: UnloadingModel | None, time_s: np.ndarray | None = None
+) -> BranchForces:
+    """Each reading on its branch (module doc): ``F_load_N`` the loading-branch force (NaN where
+    flagged), ``resolution_N`` the local force resolution of each."""
+    n = len(F_load_N)
+    ok = np.isfinite(F_load_N)
+    F = F_load_N.copy()
+    branch = np.full(n, "", dtype=object)
+    unc = np.where(ok, resolution_N, np.nan)
+    branch[ok] = LOADING
+    if ok.sum() < MIN_BRANCH_ROWS:
+        return BranchForces(F, branch, unc)
+    idx = np.flatnonzero(ok)
+    b = find_branches(F_load_N[idx], None if time_s is None else time_s[idx])
+    branch[idx] = b.label
+    if model is None:
+        return BranchForces(F, branch, unc)
+    turn = b.turn_force_N
+    un = (b.label == UNLOADING) & np.isfinite(turn) & (turn > 0)
+    F[idx[un]] = model.unloading_force_N(F_load_N[idx[un]], turn[un])
+    unc[idx[un]] = np.hypot(unc[idx[un]], model.residual_rms_N)
+    hold = b.label == HOLD
+    if hold.any():
+        top = np.maximum.accumulate(F_load_N[idx])[hold]
+        unc[idx[hold]] = np.hypot(unc[idx[hold]], 0.5 * model.h_N(F_load_N[idx[hold]], top))
+    return BranchForces(F, branch, unc, True)
