@@ -27,7 +27,7 @@ import numpy as np
 
 from mst_cli.model.cell import HexCell
 from mst_cli.model.mechanics import continuum as L2
-from mst_cli.model.mechanics.continuum.assembly import lame_3d, set_assembler
+from mst_cli.model.mechanics.continuum.assembly import csr_scatter, lame_3d, set_assembler
 from mst_cli.model.mechanics.path import PathError
 
 
@@ -95,7 +95,6 @@ class Assembler:
     weights and the CSR pattern are the reference mesh's, computed once."""
 
     def __init__(self, basis):
-        from scipy.sparse import coo_matrix
 
         dofs = basis.element_dofs
         n_loc, n_el = dofs.shape
@@ -107,13 +106,7 @@ class Assembler:
         self.BwT = np.ascontiguousarray(Bw.transpose(0, 3, 1, 2).reshape(n_el, n_loc, dim * dim * n_q))
         self.dofs = np.ascontiguousarray(dofs.T)
         self.N = basis.N
-        rows = np.broadcast_to(self.dofs[:, :, None], (n_el, n_loc, n_loc)).ravel()
-        cols = np.broadcast_to(self.dofs[:, None, :], (n_el, n_loc, n_loc)).ravel()
-        pattern = coo_matrix((np.ones(rows.size), (rows, cols)), shape=(self.N, self.N)).tocsr()
-        pattern.sort_indices()
-        self.indices, self.indptr, self.nnz = pattern.indices, pattern.indptr, pattern.nnz
-        keys = np.repeat(np.arange(self.N, dtype=np.int64), np.diff(self.indptr)) * self.N + self.indices
-        self.scatter = np.searchsorted(keys, rows.astype(np.int64) * self.N + cols)
+        self.indices, self.indptr, self.nnz, self.scatter = csr_scatter(self.dofs, self.N)
 
     def residual(self, u, mu, lam):
         dim = self.dim

@@ -26,6 +26,20 @@ def kinematics(Fm: np.ndarray, mu: float, lam: float) -> tuple[np.ndarray, np.nd
     return P, Finv_T, lnJ
 
 
+def csr_scatter(dofs: np.ndarray, n_dofs: int) -> tuple[np.ndarray, np.ndarray, int, np.ndarray]:
+    """The CSR pattern of a stiffness matrix over elements with ``dofs`` (n_el, n_loc): its
+    (indices, indptr, nnz), and where element entry (e, i, j) goes in its data (the rank of its
+    key row * N + col among the pattern's keys). scipy merges the duplicate entries in C."""
+    n_el, n_loc = dofs.shape
+    rows = np.broadcast_to(dofs[:, :, None], (n_el, n_loc, n_loc)).ravel()
+    cols = np.broadcast_to(dofs[:, None, :], (n_el, n_loc, n_loc)).ravel()
+    pattern = coo_matrix((np.ones(rows.size), (rows, cols)), shape=(n_dofs, n_dofs)).tocsr()
+    pattern.sort_indices()
+    keys = np.repeat(np.arange(n_dofs, dtype=np.int64), np.diff(pattern.indptr)) * n_dofs + pattern.indices
+    scatter = np.searchsorted(keys, rows.astype(np.int64) * n_dofs + cols)
+    return pattern.indices, pattern.indptr, pattern.nnz, scatter
+
+
 class Assembler:
     """Residual and tangent of the Neo-Hookean forms on one P2 vector basis, vectorised.
 
@@ -48,16 +62,7 @@ class Assembler:
         self.BwT = np.ascontiguousarray(Bw.transpose(0, 3, 1, 2).reshape(n_el, n_loc, 4 * n_q))
         self.dofs = np.ascontiguousarray(dofs.T)  # (n_el, n_loc)
         self.N = basis.N
-        # CSR pattern of K (scipy merges the duplicate entries in C), and where element entry
-        # (e, i, j) goes in its data: the rank of its key row * N + col among the pattern's keys
-
-        rows = np.broadcast_to(self.dofs[:, :, None], (n_el, n_loc, n_loc)).ravel()
-        cols = np.broadcast_to(self.dofs[:, None, :], (n_el, n_loc, n_loc)).ravel()
-        pattern = coo_matrix((np.ones(rows.size), (rows, cols)), shape=(self.N, self.N)).tocsr()
-        pattern.sort_indices()
-        self.indices, self.indptr, self.nnz = pattern.indices, pattern.indptr, pattern.nnz
-        keys = np.repeat(np.arange(self.N, dtype=np.int64), np.diff(self.indptr)) * self.N + self.indices
-        self.scatter = np.searchsorted(keys, rows.astype(np.int64) * self.N + cols)
+        self.indices, self.indptr, self.nnz, self.scatter = csr_scatter(self.dofs, self.N)
 
     def residual(self, u, mu, lam) -> tuple[np.ndarray, tuple]:
         """r = int P : grad v; also returns what the tangent at u needs (F^-T, ln J)."""
