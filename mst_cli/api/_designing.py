@@ -214,9 +214,31 @@ def _calibrated(doc: Document, calibration: str | Path | None) -> tuple[Document
 
 
 def designed(path: str | Path, progress: Callable[[str], None] | None = None) -> tuple[Document, DesignResult | None]:
-    """A design file as it is, or a spec designed first (as ``mst export SPEC`` does): the
-    design's Document and, for a spec, the DesignResult it came from. InputError when a cell
-    breaks a rule."""
+    """A design file as it is, or a spec designed first (as ``mst export SPEC`` does).
+
+    Parameters
+    ----------
+    path : str or Path
+        A design file (every layer's theta_deg, t_mm, h_mm) or a spec file (targets).
+    progress : callable(str), optional
+        Gets a line before a spec is designed and one with the targets' status after.
+
+    Returns
+    -------
+    (Document, DesignResult or None)
+        The design's Document and, for a spec, the DesignResult it came from (None for a design).
+
+    Raises
+    ------
+    InputError
+        For a file that is neither, or a cell that breaks a rule (naming the layer and the key).
+
+    Examples
+    --------
+    >>> doc, result = mst.designed("configs/mohammadi2021-forward.yaml")  # doctest: +SKIP
+    >>> result is None  # a design file: nothing was designed  # doctest: +SKIP
+    True
+    """
     doc = load(path)
     if doc.is_design:
         return load_design(path), None
