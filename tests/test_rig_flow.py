@@ -244,3 +244,45 @@ def test_a_drifting_chip_gets_the_warning_and_inflated_sigmas(tmp_path):
     q = got.record.fit_quality
     assert q["warning"] is not None and q["cause"] == "drift" and q["sigma_inflation"] > 1.4
     assert got.fit.chi2_reduced == pytest.approx(q["chi2_nu"], rel=0.05)  # the fit's sigmas carry it, once
+
+
+# ----------------------------------------------------------------- one chip setting (issue 38)
+def test_a_load_test_at_another_chip_setting_says_so_in_every_output(tmp_path):
+    """Codes read at GAIN_SEL 0 / RES 0 while mst simulate recommends GAIN_SEL 7 / RES 0: the
+    tables are for 0/0, and the terminal, calibration.json and force_table.h say why."""
+    import json
+
+    from mst_cli.calibrate.loadtest import setting_of
+    from mst_cli.model import chip as mlx
+
+    rows, _ = rig_loadtest(Rig(cycles=2, hysteresis_pct=0.0, seed=21), CURVE)
+    s = setting_of(0, 0)
+    codes = {
+        f"{a}_code_lsb": mlx.quantise_lsb(1e-6 * np.asarray(rows[f"{a}_uT"]), lsb)
+        for a, lsb in (("Bx", s.xy_uT_per_lsb), ("By", s.xy_uT_per_lsb), ("Bz", s.z_uT_per_lsb))
+    }
+    cols = ("force_N", "Bx_code_lsb", "By_code_lsb", "Bz_code_lsb")
+    f = write_csv(tmp_path / "lt.csv", {**rows, **codes}, cols=cols)
+    r = run(["calibrate", DESIGN, f, "--out", tmp_path / "o", "--no-plot", "--gain-sel", 0, "--res", 0])
+    assert r.exit_code == 0, r.output
+    r_sim = run(["simulate", DESIGN, "--out", tmp_path / "sim", "--no-plot"])
+    assert "chip GAIN_SEL 7, RES 0" in r_sim.stdout  # what mst simulate recommends
+    assert "chip setting GAIN_SEL 0, RES 0: the load test's" in r.stdout
+    assert "not the GAIN_SEL 7, RES 0 mst simulate recommends" in r.stdout
+    rec = json.loads((tmp_path / "o" / "calibration.json").read_text())["chip_setting"]
+    assert (rec["gain_sel"], rec["res"], rec["source"]) == (0, 0, "the load test")
+    assert rec["design_recommended"] == {"gain_sel": 7, "res": 0} and rec["same_as_recommended"] is False
+    header = (tmp_path / "o" / "force_table.h").read_text()
+    assert "#define MST_GAIN_SEL 0" in header and "GAIN_SEL 7, RES 0 mst simulate" in " ".join(
+        line.strip(" *") for line in header.splitlines()
+    )
+
+
+def test_a_load_test_in_uT_gets_the_setting_mst_simulate_recommends(tmp_path, rig_rows):
+    import json
+
+    r = run(["calibrate", DESIGN, write_csv(tmp_path / "lt.csv", rig_rows), "--out", tmp_path / "o", "--no-plot"])
+    assert r.exit_code == 0, r.output
+    rec = json.loads((tmp_path / "o" / "calibration.json").read_text())["chip_setting"]
+    assert (rec["gain_sel"], rec["res"]) == (7, 0) and rec["same_as_recommended"] is True
+    assert "chip setting GAIN_SEL 7, RES 0: the one mst simulate recommends" in r.stdout

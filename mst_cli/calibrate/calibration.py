@@ -24,6 +24,7 @@ from mst_cli.calibrate.calibration_json import (
     design_constants,
     sha256_text,
 )
+from mst_cli.calibrate.chip_choice import ChipChoice, choose_setting_for
 from mst_cli.calibrate.fit_quality import fit_quality
 from mst_cli.calibrate.header import HEADER_FILE, c_header
 from mst_cli.calibrate.inverse_map import InverseMap, field_sigma_T, inverse_map
@@ -107,6 +108,7 @@ class Calibration:
     design_curve: tuple[np.ndarray, np.ndarray]  # (force N, |B| T) of the design
     calibrated_curve: tuple[np.ndarray, np.ndarray]
     rig: RigAnalysis | None = None  # the branches of every centred row (load_test: the rows fitted)
+    chip: ChipChoice | None = None  # the one chip setting (header_setting) and why
 
     @property
     def warnings(self) -> list[str]:
@@ -180,6 +182,8 @@ class Calibration:
         s = self.header_setting
         if s is not None:
             lines.append(f"table for GAIN_SEL {s.gain_sel}, RES {s.res} ({s.z_uT_per_lsb} uT/LSB on Z)")
+        if self.chip is not None:
+            lines.append(self.chip.line())
         if r.tilt is not None:
             t = r.tilt
             lines.append(
@@ -267,6 +271,7 @@ def calibrate(
         design_curve=(design_resp.force_N[design_resp.in_range], design_resp.B_abs_T[design_resp.in_range]),
         calibrated_curve=(F_grid, fit.model.field_abs_T(F_grid, fit.values)),
         rig=rig,
+        chip=fitted.chip,
     )
 
 
@@ -362,7 +367,11 @@ class _Fitted:
     edits: list[str]
     imap: InverseMap
     cal_resp: Response
-    setting: ChipSetting | None
+    chip: ChipChoice
+
+    @property
+    def setting(self) -> ChipSetting | None:
+        return self.chip.setting
 
 
 def _fit(
@@ -398,12 +407,11 @@ def _fit(
         raise CalibrationFailed(f"the calibrated design would not load ({exc})") from None
     fit_s = time.monotonic() - t0
     imap.calibrated_to_N = min(float(lt.load_N.max()), float(imap.force_N[-1]))
-    setting = lt.setting or cal_resp.chip_setting
+    chip = choose_setting_for(design_resp, cal_resp, lt)
+    setting = chip.setting
     if setting is not None:
         imap.field_resolution_T = max(imap.field_resolution_T, field_resolution_T(setting, doc.noise_uT_rms))
-    return _Fitted(
-        lt, mechanics, names, sigma, fit, fit_s, design_resp, cal_doc, cal_dict, edits, imap, cal_resp, setting
-    )
+    return _Fitted(lt, mechanics, names, sigma, fit, fit_s, design_resp, cal_doc, cal_dict, edits, imap, cal_resp, chip)
 
 
 def _header(fitted: _Fitted, source: str) -> tuple[str | None, str | None]:
@@ -411,7 +419,9 @@ def _header(fitted: _Fitted, source: str) -> tuple[str | None, str | None]:
     if fitted.setting is None:
         return None, "the calibrated field saturates the MLX90393 at full load: no setting to tabulate"
     try:
-        header = c_header(fitted.imap, fitted.setting, fitted.calibrated.name, source, cal.LIMITATIONS)
+        header = c_header(
+            fitted.imap, fitted.setting, fitted.calibrated.name, source, cal.LIMITATIONS, fitted.chip.header_note()
+        )
     except CalibrationFailed as exc:
         return None, str(exc)
     return header, None
@@ -450,7 +460,7 @@ def _record(
         samples=len(lt),
         force_range_N=[float(lt.load_N.min()), float(lt.load_N.max())],
         fitted_quantity="|B| at the chip (sqrt(Bx^2 + By^2 + Bz^2))",
-        chip_setting=_setting_record(fitted.setting, lt),
+        chip_setting=fitted.chip.record(),
         noise_sigma_uT=fitted.sigma_T * 1e6,
         parameters=_parameter_entries(fit, fitted.names),
         identifiability=_identifiability(fit),
@@ -493,21 +503,6 @@ def _parameter_entries(fit: cal.FitResult, names: tuple[str, ...]) -> dict:
             entry["held_because"] = "not requested (--params): held at the design's value"
         parameters[n] = entry
     return parameters
-
-
-def _setting_record(setting: ChipSetting | None, lt: Readings) -> dict | None:
-    """calibration.json's chip_setting: the one the tables are for, and where it came from."""
-    if setting is None:
-        return None
-    return {
-        "gain_sel": setting.gain_sel,
-        "res": setting.res,
-        "z_uT_per_lsb": setting.z_uT_per_lsb,
-        "xy_uT_per_lsb": setting.xy_uT_per_lsb,
-        "source": "the load test"
-        if lt.setting is not None
-        else "the finest setting that holds the calibrated field (the load test gave uT)",
-    }
 
 
 def _identifiability(fit: cal.FitResult) -> dict:
