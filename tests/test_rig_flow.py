@@ -286,3 +286,48 @@ def test_a_load_test_in_uT_gets_the_setting_mst_simulate_recommends(tmp_path, ri
     rec = json.loads((tmp_path / "o" / "calibration.json").read_text())["chip_setting"]
     assert (rec["gain_sel"], rec["res"]) == (7, 0) and rec["same_as_recommended"] is True
     assert "chip setting GAIN_SEL 7, RES 0: the one mst simulate recommends" in r.stdout
+
+
+# ----------------------------------------------------------------- the rung of the calibration (issue 38)
+SPEC = ROOT / "configs" / "mohammadi2021.yaml"
+
+
+def percent_apart(line):
+    return float(line.split("up to ")[1].split(" %")[0])
+
+
+def test_read_warns_in_one_line_on_another_rung_than_the_calibration(rig_calibration, tmp_path):
+    from mst_cli.calibrate.rung_check import rung_difference
+    from mst_cli.sensor.document import load_document
+
+    _, _, d = rig_calibration
+    rows, _ = held_out_stream(seed=13)
+    f = write_csv(tmp_path / "s.csv", rows)
+    same = run(["read", d / "cal" / "calibrated.yaml", f, "--out", tmp_path / "a"])
+    assert same.exit_code == 0 and same.stderr == "", same.stderr
+    other = run(["read", d / "cal" / "calibrated.yaml", f, "--out", tmp_path / "b", "--mechanics", "continuum"])
+    assert other.exit_code == 0, other.output
+    assert other.stderr.count("\n") == 1 and other.stderr.startswith("mst read: warning: "), other.stderr
+    assert "fitted with the spring rung and mst read uses continuum" in other.stderr
+    assert "model code changed" not in other.stderr  # the rung, not the code, moved the curve
+    # the number quoted: the continuum law reads forces a few % from the spring law on this design
+    rel, _ = rung_difference(load_document(d / "cal" / "calibrated.yaml"), "spring", "continuum", CURVE.full_scale_N)
+    assert percent_apart(other.stderr) == pytest.approx(100 * rel, rel=0.05) and 1.0 < 100 * rel < 10.0
+
+
+def test_design_warns_in_one_line_on_another_rung_than_the_calibration(rig_calibration, tmp_path):
+    import json
+    import shutil
+
+    _, _, d = rig_calibration
+    same = run(["design", SPEC, "--calibration", d / "cal" / "calibration.json", "--out", tmp_path / "p", "-q"])
+    assert same.exit_code == 0 and "warning" not in same.stderr, same.output
+    cal = tmp_path / "cal"
+    shutil.copytree(d / "cal", cal)
+    record = json.loads((cal / "calibration.json").read_text())
+    record["models"]["mechanics"] = "continuum"  # as if calibrated with --mechanics continuum
+    (cal / "calibration.json").write_text(json.dumps(record))
+    other = run(["design", SPEC, "--calibration", cal / "calibration.json", "--out", tmp_path / "q", "-q"])
+    lines = [line for line in other.stderr.splitlines() if "warning" in line]
+    assert len(lines) == 1 and lines[0].startswith("mst design: warning: the calibration was fitted with the continuum")
+    assert "mst design uses spring" in lines[0] and 1.0 < percent_apart(lines[0]) < 10.0

@@ -20,6 +20,7 @@ from mst_cli.calibrate.inverse_map import FLAGS, InverseMap, inverse_map
 from mst_cli.calibrate.loadtest import Readings, field_of, rig_column, unknown_columns
 from mst_cli.calibrate.offset_reading import OffsetEstimator, OffsetReadings, offset_columns
 from mst_cli.calibrate.rig_reading import BranchForces, follow_branches, no_load_rows, tare_shift_T, unloading_model_of
+from mst_cli.calibrate.rung_check import read_rung_warning
 from mst_cli.calibrate.tables import FORCES_COLUMNS, cell, forces_csv
 from mst_cli.io.serial_lines import LineSource, SampleParser
 from mst_cli.model.chip import ChipSetting, field_resolution_T
@@ -170,7 +171,7 @@ class ForceReader:
         if top is not None:
             imap.calibrated_to_N = min(top, float(imap.force_N[-1]))
         if note is None and record is not None:  # no note: the record beside matches
-            note = record.curve_changed(imap)
+            note = read_rung_warning(record, mechanics, doc) or record.curve_changed(imap)
         return cls(doc, imap, note, record)
 
     def read(self, rd: Readings, offsets: OffsetEstimator | None = None, tare: int = 0) -> ForceReadings:
