@@ -331,3 +331,57 @@ def test_design_warns_in_one_line_on_another_rung_than_the_calibration(rig_calib
     lines = [line for line in other.stderr.splitlines() if "warning" in line]
     assert len(lines) == 1 and lines[0].startswith("mst design: warning: the calibration was fitted with the continuum")
     assert "mst design uses spring" in lines[0] and 1.0 < percent_apart(lines[0]) < 10.0
+
+
+# ----------------------------------------------------------------- temperature (issue 38)
+TEMPS = (20.0, 30.0, 40.0)
+BETA = -0.008  # the rig's stated test coefficient of the TPU's modulus, 1/K
+
+
+def temperature_errors(got, rows, T):
+    """Median |F - F_true| / F_true at T of the readings from a tenth of full scale that have a
+    force (at 40 degC the softer sensor locks at m(T) x the 20 degC lock force: beyond, above_range)."""
+    F = rows["force_N"]
+    use = (rows["T_C"] == T) & (F >= 0.1 * CURVE.full_scale_N) & np.isfinite(got.force_N)
+    return float(np.median(np.abs(got.force_N[use] - F[use]) / F[use])), int(use.sum())
+
+
+@pytest.fixture(scope="module")
+def warm_calibration(tmp_path_factory):
+    from mst_cli import api
+
+    d = tmp_path_factory.mktemp("warm")
+    rows, _ = rig_loadtest(Rig(cycles=3, T_C=TEMPS, hysteresis_pct=6.0, seed=1), CURVE)
+    return api.calibrate(DESIGN, write_csv(d / "lt.csv", rows), out=d / "cal"), d
+
+
+def test_the_modulus_temperature_coefficient_is_fitted_from_T_C(warm_calibration):
+    import json
+
+    result, d = warm_calibration
+    t = json.loads((d / "cal" / "calibration.json").read_text())["temperature"]
+    assert t["fitted"] and t["load_test_T_C"] == [20.0, 40.0] and t["remanence_coeff_pct_per_K"] == -0.12
+    assert abs(t["modulus_temp_coeff_per_K"] - BETA) < max(3 * t["sigma_per_K"], 2e-4), t
+    for name, value in TRUTH.items():  # the print, referred to 20 degC
+        assert abs(result.fit.values[name] - value) < WITHIN[name], (name, result.fit.values[name])
+    assert "modulus_temp_coeff_per_K -0.8" in result.summary()
+
+
+def test_one_temperature_holds_the_coefficient_at_0_and_says_so(rig_calibration):
+    t = rig_calibration[0].record.temperature
+    assert t["fitted"] is False and t["modulus_temp_coeff_per_K"] == 0.0 and "one temperature" in t["why"]
+
+
+def test_read_corrects_with_T_C_within_1_5_percent_and_is_over_5_off_without(warm_calibration, tmp_path):
+    from mst_cli import api
+
+    _, d = warm_calibration
+    rows, _ = rig_loadtest(Rig(cycles=3, T_C=TEMPS, hysteresis_pct=6.0, seed=11), CURVE)
+    got = api.read(d / "cal" / "calibrated.yaml", write_csv(tmp_path / "s.csv", rows))
+    plain_csv = write_csv(tmp_path / "p.csv", rows, cols=tuple(c for c in RIG_COLUMNS if c != "T_C"))
+    plain = api.read(d / "cal" / "calibrated.yaml", plain_csv)
+    for T in TEMPS:
+        median, n = temperature_errors(got, rows, T)
+        assert median < 0.015 and n > 40, (T, median, n)
+    assert temperature_errors(plain, rows, 40.0)[0] > 0.05  # the weaker magnet and the softer TPU, uncorrected
+

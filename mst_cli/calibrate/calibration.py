@@ -40,6 +40,12 @@ from mst_cli.calibrate.loadtest import (
 from mst_cli.calibrate.plot import plot_calibration
 from mst_cli.calibrate.rig_calibration import RigAnalysis, analyse, describe
 from mst_cli.calibrate.tables import lookup_csv, residuals_csv
+from mst_cli.calibrate.temperature_fit import (
+    TemperatureCalibration,
+    calibrate_temperature,
+    referred,
+    remanence_coeff_of,
+)
 from mst_cli.calibrate.tilt_fit import fit_lever_factor
 from mst_cli.errors import CalibrationFailed, InputError
 from mst_cli.io.outputs import staged
@@ -50,6 +56,7 @@ from mst_cli.sensor.document import Document, document_to_dict, parse_document
 from mst_cli.version import package_version
 
 PLOT_FILE = "calibration.png"
+TEMPERATURE_ROUNDS = 4  # modulus coefficient and elastic fit in turn (the two correlate through the modulus)
 MIN_CENTRED_ROWS = 8  # a load test with presses off the axis still needs this many on it
 PROGRESS_FROM_SAMPLES = 10_000  # a load test this long gets a progress line (40 000 samples: 2-3 s)
 YAML_PREAMBLE = (
@@ -109,6 +116,7 @@ class Calibration:
     calibrated_curve: tuple[np.ndarray, np.ndarray]
     rig: RigAnalysis | None = None  # the branches of every centred row (load_test: the rows fitted)
     chip: ChipChoice | None = None  # the one chip setting (header_setting) and why
+    temperature: TemperatureCalibration | None = None  # a load test with T_C: the modulus coefficient
 
     @property
     def warnings(self) -> list[str]:
@@ -184,6 +192,8 @@ class Calibration:
             lines.append(f"table for GAIN_SEL {s.gain_sel}, RES {s.res} ({s.z_uT_per_lsb} uT/LSB on Z)")
         if self.chip is not None:
             lines.append(self.chip.line())
+        if self.temperature is not None:
+            lines.append(self.temperature.line())
         if r.tilt is not None:
             t = r.tilt
             lines.append(
@@ -240,8 +250,10 @@ def calibrate(
     not load. ``progress`` gets a line before a long fit."""
     lt_all, presses = _split_presses(_read_load_test(load_test_file, gain_sel, res), doc)
     rig = analyse(lt_all, max(cal.MIN_POINTS, cal.MIN_POINTS_PER_PARAMETER * len(params)), use_branches)
-    lt = lt_all.subset(rig.fit_rows)
-    fitted = _fit(doc, lt, Path(load_test_file).name, mechanics, tuple(params), progress)
+    fitted, temperature = _fit_in_temperature(
+        doc, lt_all.subset(rig.fit_rows), Path(load_test_file).name, mechanics, tuple(params), progress
+    )
+    lt = fitted.lt  # the rows fitted (referred to 20 degC when the load test has T_C)
     imap, setting = fitted.imap, fitted.setting
     header, header_reason = _header(fitted, f"{Path(design_file).name} and {Path(load_test_file).name}")
     F_fit, flag_fit, errors = _in_sample_errors(fitted)
@@ -251,6 +263,7 @@ def calibrate(
     if presses is not None:
         record.tilt = fit_lever_factor(fitted.calibrated, mechanics, presses, fitted.fit.sigma_T)
     _rig_sections(record, rig, fitted)
+    record.temperature = temperature.record() if temperature is not None else None
     F_grid = np.linspace(0.0, max(float(lt.load_N.max()), fitted.cal_resp.max_force_N), 400)
     design_resp, fit = fitted.design_resp, fitted.fit
     return Calibration(
@@ -272,7 +285,31 @@ def calibrate(
         calibrated_curve=(F_grid, fit.model.field_abs_T(F_grid, fit.values)),
         rig=rig,
         chip=fitted.chip,
+        temperature=temperature,
     )
+
+
+def _fit_in_temperature(
+    doc: Document,
+    lt: Readings,
+    load_test_name: str,
+    mechanics: str,
+    names: tuple[str, ...],
+    progress: Callable[[str], None] | None,
+) -> tuple[_Fitted, TemperatureCalibration | None]:
+    """The fit on the rows referred to 20 degC (:mod:`~mst_cli.calibrate.temperature_fit`; as they
+    are without T_C) and, when the load test's temperatures fix the modulus coefficient, the fit
+    again with it."""
+    alpha = remanence_coeff_of(doc)
+    fitted = _fit(doc, referred(lt, alpha, 0.0), load_test_name, mechanics, names, progress)
+    temperature = None
+    for _ in range(TEMPERATURE_ROUNDS):  # the coefficient and the elastic fit, in turn
+        temperature = calibrate_temperature(doc, lt, fitted.fit.values, fitted.fit.model.field_abs_T, fitted.sigma_T)
+        if temperature is None or not temperature.fitted:
+            break
+        beta = temperature.modulus_coeff_per_K
+        fitted = _fit(doc, referred(lt, alpha, beta), load_test_name, mechanics, names, progress)
+    return fitted, temperature
 
 
 def _in_sample_errors(fitted: _Fitted) -> tuple[np.ndarray, np.ndarray, dict]:

@@ -92,6 +92,8 @@ class CalibrationRecord:
     # cycle, creep; and whether the fit's misfit is noise (fit_quality)
     hysteresis: dict | None = None
     fit_quality: dict | None = None
+    # a load test with T_C (issue 38): the modulus temperature coefficient, fitted or held
+    temperature: dict | None = None
 
     def to_json(self) -> dict[str, Any]:
         """The file's JSON-ready mapping (non-finite numbers are null: JSON holds no NaN)."""
