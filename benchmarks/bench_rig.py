@@ -15,7 +15,16 @@ held-out stream of two further cycles (another seed).
 
 Tables: the fitted parameters against the truth (value +- 1 sigma), the hysteresis per regime
 against the truth, and the held-out stream's force errors per branch and per regime (readings
-from a tenth of each regime's top; median and 95th percentile of |F - F_true| / F_true).
+from a tenth of each regime's top; median and 95th percentile of |F - F_true| / F_true); then
+print 2: ``mst design configs/mohammadi2021.yaml --calibration`` of the "after" calibration,
+printed by the truth's printer (walls +0.04 mm, modulus x0.9, gap +0.2 mm, the grade's magnet),
+its S and R per layer against the spec's targets.
+
+    python benchmarks/bench_rig.py --temperature [--seed 1]
+
+The rig at 20, 30 and 40 degC (one cycle each, remanence at the grade's -0.12 %/K, the TPU's
+modulus at the stated test coefficient -0.8 %/K): the fitted modulus_temp_coeff_per_K, and the
+held-out stream's median force error per temperature read with T_C and without it.
 """
 
 from __future__ import annotations
@@ -36,11 +45,13 @@ from rig_loadtest import PRINT, Rig, forward_curve, rig_loadtest, truth_hysteres
 from mst_cli import api  # noqa: E402
 
 DESIGN = ROOT / "configs" / "mohammadi2021-forward.yaml"
+SPEC = ROOT / "configs" / "mohammadi2021.yaml"
+TEMPS = (20.0, 30.0, 40.0)
 COLUMNS = ("force_N", "Bx_uT", "By_uT", "Bz_uT", "time_s", "cycle", "branch", "T_C")
 
 
-def write_csv(path: Path, rows: dict) -> Path:
-    lines = [",".join(COLUMNS)] + [",".join(str(rows[c][i]) for c in COLUMNS) for i in range(len(rows["force_N"]))]
+def write_csv(path: Path, rows: dict, columns: tuple[str, ...] = COLUMNS) -> Path:
+    lines = [",".join(columns)] + [",".join(str(rows[c][i]) for c in columns) for i in range(len(rows["force_N"]))]
     path.write_text("\n".join(lines) + "\n")
     return path
 
@@ -53,12 +64,63 @@ def errors(F: np.ndarray, F_true: np.ndarray, use: np.ndarray) -> str:
     return f"{np.median(rel):8.2f} {np.percentile(rel, 95):8.2f} {int(use.sum()):>5}"
 
 
+def print2(cal_dir: Path, out: Path) -> list[str]:
+    """Print 2 designed with the calibration, printed by the truth's printer: S and R per layer
+    against the spec's targets (lines of a table)."""
+    from mst_cli.model.response import simulate
+    from mst_cli.sensor.as_printed import apply_parameters
+    from mst_cli.sensor.document import load_document
+
+    api.run_design(SPEC, calibration=cal_dir / "calibration.json", out=out, plot=False)
+    doc = load_document(out / "design.yaml")
+    Br = load_document(DESIGN).magnet.remanence_T
+    truth, _ = apply_parameters(doc, {**PRINT, "remanence_factor": Br / doc.magnet.remanence_T})
+    resp = simulate(truth.geometry(), truth.material, mechanics="spring")
+    spec = load_document(SPEC)
+    lines = [f"{'print 2, layer':<16} {'S target':>9} {'S':>9} {'%':>6} {'R target':>9} {'R':>9} {'%':>6}"]
+    for r in sorted(resp.regimes, key=lambda r: r.layer):
+        la = spec.layers[r.layer - 1]
+        S, R = r.sensitivity_secant_per_N, r.force_to_N
+        tS, tR = la.target_sensitivity_per_N, la.target_range_N
+        lines.append(
+            f"{r.layer:<16} {tS:9.4f} {S:9.4f} {100 * (S / tS - 1):+6.2f} {tR:9.3f} {R:9.3f} {100 * (R / tR - 1):+6.2f}"
+        )
+    return lines
+
+
+def temperature(seed: int) -> None:
+    """The --temperature table (module doc)."""
+    curve = forward_curve()
+    rows, _ = rig_loadtest(Rig(cycles=3, T_C=TEMPS, hysteresis_pct=6.0, seed=seed), curve)
+    stream, _ = rig_loadtest(Rig(cycles=3, T_C=TEMPS, hysteresis_pct=6.0, seed=seed + 10), curve)
+    no_T = tuple(c for c in COLUMNS if c != "T_C")
+    with tempfile.TemporaryDirectory() as d:
+        cal = api.calibrate(DESIGN, write_csv(Path(d) / "lt.csv", rows), out=Path(d) / "cal")
+        got = api.read(Path(d) / "cal" / "calibrated.yaml", write_csv(Path(d) / "s.csv", stream))
+        plain = api.read(Path(d) / "cal" / "calibrated.yaml", write_csv(Path(d) / "p.csv", stream, no_T))
+    t = cal.record.temperature or {}
+    print(f"seed {seed}; {cal.temperature.line() if cal.temperature else 'no temperature'}")
+    print(f"truth: modulus_temp_coeff_per_K -0.8 %/K; fitted {100 * t.get('modulus_temp_coeff_per_K', 0):+.3f} %/K")
+    print(f"\n{'held-out, T degC, branch':<26} {'with T_C: median %':>18} {'without':>8} {'n':>4} {'above_range':>11}")
+    F = stream["force_N"]
+    for T in TEMPS:
+        for b in ("loading", "unloading", "both"):
+            use = (stream["T_C"] == T) & (F >= 0.1 * curve.full_scale_N) & ((stream["branch"] == b) | (b == "both"))
+            ok = use & np.isfinite(got.force_N)  # the same readings for both readers
+            cells = [np.median(np.abs(r.force_N[ok] - F[ok]) / F[ok]) * 100 for r in (got, plain)]
+            n_above = int(np.sum(use & (got.flag == "above_range")))
+            print(f"{f'{T:g} {b}':<26} {cells[0]:18.2f} {cells[1]:8.2f} {int(ok.sum()):>4} {n_above:>11}")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--mechanics", default="spring", help="the truth's rung (continuum: ~1 s more)")
     ap.add_argument("--fit-mechanics", default="spring", help="the calibration's and the reader's rung")
+    ap.add_argument("--temperature", action="store_true", help="the table at 20, 30 and 40 degC instead")
     args = ap.parse_args()
+    if args.temperature:
+        return temperature(args.seed)
     curve = forward_curve(args.mechanics)
     rows, truth = rig_loadtest(Rig(cycles=3, hysteresis_pct=6.0, first_cycle_pct=8.0, seed=args.seed), curve)
     stream, _ = rig_loadtest(Rig(cycles=2, hysteresis_pct=6.0, seed=args.seed + 10), curve)
@@ -70,6 +132,7 @@ def main() -> None:
             fit = args.fit_mechanics
             cal = api.calibrate(DESIGN, lt, out=Path(d) / name, use_branches=use_branches, mechanics=fit)
             runs[name] = (cal, api.read(Path(d) / name / "calibrated.yaml", st, mechanics=fit))
+        print2_lines = print2(Path(d) / "after", Path(d) / "print2")
     print(f"truth rung: {args.mechanics}; calibration rung: {args.fit_mechanics}; seed {args.seed}")
     print(f"\n{'parameter':<18} {'truth':>8} {'before':>18} {'after':>18}")
     for p, v in {**PRINT, "remanence_factor": 1.0}.items():
@@ -99,6 +162,9 @@ def main() -> None:
     for label, use in groups.items():
         cells = [errors(runs[n][1].force_N, F_true, use) for n in runs]
         print(f"{label:<34} {cells[0]:>29}   {cells[1]:>28}")
+
+    print()
+    print("\n".join(print2_lines))
 
 
 if __name__ == "__main__":

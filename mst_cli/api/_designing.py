@@ -159,6 +159,7 @@ def run_design(
     plot: bool = True,
     progress: Callable | None = None,
     note: Callable[[str], None] | None = None,
+    warn: Callable[[str], None] | None = None,
 ) -> DesignRun:
     """The whole ``mst design`` run: spec loaded, calibrated and its rung chosen once; solved; written.
 
@@ -171,6 +172,8 @@ def run_design(
         unless ``any_rung``) and write each as pareto/design-NN.yaml.
     note : callable(str), optional
         Gets the rung picked and the calibration taken, before the solver starts.
+    warn : callable(str), optional
+        Gets one line when the design's rung is not the calibration's (and how far apart they are).
 
     Returns
     -------
@@ -194,6 +197,7 @@ def run_design(
         raise InputError("--pareto-designs", True, "needs --pareto N")
     choice = design_choice(doc, refine, None if any_rung else pareto)
     run = DesignRun(doc, choice, cal, pareto)
+    _other_rung(cal, choice.mechanics, warn)
     if note is not None:
         for line in run.choice_lines():
             note(line)
@@ -211,6 +215,23 @@ def _calibrated(doc: Document, calibration: str | Path | None) -> tuple[Document
 
     cal = read_calibration(calibration, doc)
     return apply_calibration(doc, cal), cal
+
+
+def _other_rung(cal: PrinterCalibration | None, mechanics: str, warn: Callable[[str], None] | None) -> None:
+    """``warn`` one line when ``mechanics`` is not the calibration's rung, with how far apart the
+    two read forces on the calibrated design (calibrated.yaml beside calibration.json, when it loads)."""
+    if cal is None or warn is None or cal.mechanics is None or cal.mechanics == mechanics:
+        return
+    from mst_cli.calibrate.calibration_json import CALIBRATED_YAML  # deferred: the calibrate layer
+    from mst_cli.calibrate.rung_check import rung_warning  # deferred: the calibrate layer
+
+    try:
+        calibrated: Document | None = load_design(Path(cal.path).with_name(CALIBRATED_YAML))
+    except InputError:
+        calibrated = None
+    line = rung_warning(cal.mechanics, mechanics, calibrated, cal.calibrated_to_N, "mst design")
+    if line is not None:
+        warn(line)
 
 
 def designed(path: str | Path, progress: Callable[[str], None] | None = None) -> tuple[Document, DesignResult | None]:

@@ -24,6 +24,7 @@ from mst_cli.calibrate.calibration_json import (
     design_constants,
     sha256_text,
 )
+from mst_cli.calibrate.chip_choice import ChipChoice, choose_setting_for
 from mst_cli.calibrate.fit_quality import fit_quality
 from mst_cli.calibrate.header import HEADER_FILE, c_header
 from mst_cli.calibrate.inverse_map import InverseMap, field_sigma_T, inverse_map
@@ -39,6 +40,12 @@ from mst_cli.calibrate.loadtest import (
 from mst_cli.calibrate.plot import plot_calibration
 from mst_cli.calibrate.rig_calibration import RigAnalysis, analyse, describe
 from mst_cli.calibrate.tables import lookup_csv, residuals_csv
+from mst_cli.calibrate.temperature_fit import (
+    TemperatureCalibration,
+    calibrate_temperature,
+    referred,
+    remanence_coeff_of,
+)
 from mst_cli.calibrate.tilt_fit import fit_lever_factor
 from mst_cli.errors import CalibrationFailed, InputError
 from mst_cli.io.outputs import staged
@@ -49,6 +56,7 @@ from mst_cli.sensor.document import Document, document_to_dict, parse_document
 from mst_cli.version import package_version
 
 PLOT_FILE = "calibration.png"
+TEMPERATURE_ROUNDS = 4  # modulus coefficient and elastic fit in turn (the two correlate through the modulus)
 MIN_CENTRED_ROWS = 8  # a load test with presses off the axis still needs this many on it
 PROGRESS_FROM_SAMPLES = 10_000  # a load test this long gets a progress line (40 000 samples: 2-3 s)
 YAML_PREAMBLE = (
@@ -107,6 +115,8 @@ class Calibration:
     design_curve: tuple[np.ndarray, np.ndarray]  # (force N, |B| T) of the design
     calibrated_curve: tuple[np.ndarray, np.ndarray]
     rig: RigAnalysis | None = None  # the branches of every centred row (load_test: the rows fitted)
+    chip: ChipChoice | None = None  # the one chip setting (header_setting) and why
+    temperature: TemperatureCalibration | None = None  # a load test with T_C: the modulus coefficient
 
     @property
     def warnings(self) -> list[str]:
@@ -180,6 +190,10 @@ class Calibration:
         s = self.header_setting
         if s is not None:
             lines.append(f"table for GAIN_SEL {s.gain_sel}, RES {s.res} ({s.z_uT_per_lsb} uT/LSB on Z)")
+        if self.chip is not None:
+            lines.append(self.chip.line())
+        if self.temperature is not None:
+            lines.append(self.temperature.line())
         if r.tilt is not None:
             t = r.tilt
             lines.append(
@@ -236,8 +250,10 @@ def calibrate(
     not load. ``progress`` gets a line before a long fit."""
     lt_all, presses = _split_presses(_read_load_test(load_test_file, gain_sel, res), doc)
     rig = analyse(lt_all, max(cal.MIN_POINTS, cal.MIN_POINTS_PER_PARAMETER * len(params)), use_branches)
-    lt = lt_all.subset(rig.fit_rows)
-    fitted = _fit(doc, lt, Path(load_test_file).name, mechanics, tuple(params), progress)
+    fitted, temperature = _fit_in_temperature(
+        doc, lt_all.subset(rig.fit_rows), Path(load_test_file).name, mechanics, tuple(params), progress
+    )
+    lt = fitted.lt  # the rows fitted (referred to 20 degC when the load test has T_C)
     imap, setting = fitted.imap, fitted.setting
     header, header_reason = _header(fitted, f"{Path(design_file).name} and {Path(load_test_file).name}")
     F_fit, flag_fit, errors = _in_sample_errors(fitted)
@@ -247,6 +263,7 @@ def calibrate(
     if presses is not None:
         record.tilt = fit_lever_factor(fitted.calibrated, mechanics, presses, fitted.fit.sigma_T)
     _rig_sections(record, rig, fitted)
+    record.temperature = temperature.record() if temperature is not None else None
     F_grid = np.linspace(0.0, max(float(lt.load_N.max()), fitted.cal_resp.max_force_N), 400)
     design_resp, fit = fitted.design_resp, fitted.fit
     return Calibration(
@@ -267,7 +284,32 @@ def calibrate(
         design_curve=(design_resp.force_N[design_resp.in_range], design_resp.B_abs_T[design_resp.in_range]),
         calibrated_curve=(F_grid, fit.model.field_abs_T(F_grid, fit.values)),
         rig=rig,
+        chip=fitted.chip,
+        temperature=temperature,
     )
+
+
+def _fit_in_temperature(
+    doc: Document,
+    lt: Readings,
+    load_test_name: str,
+    mechanics: str,
+    names: tuple[str, ...],
+    progress: Callable[[str], None] | None,
+) -> tuple[_Fitted, TemperatureCalibration | None]:
+    """The fit on the rows referred to 20 degC (:mod:`~mst_cli.calibrate.temperature_fit`; as they
+    are without T_C) and, when the load test's temperatures fix the modulus coefficient, the fit
+    again with it."""
+    alpha = remanence_coeff_of(doc)
+    fitted = _fit(doc, referred(lt, alpha, 0.0), load_test_name, mechanics, names, progress)
+    temperature = None
+    for _ in range(TEMPERATURE_ROUNDS):  # the coefficient and the elastic fit, in turn
+        temperature = calibrate_temperature(doc, lt, fitted.fit.values, fitted.fit.model.field_abs_T, fitted.sigma_T)
+        if temperature is None or not temperature.fitted:
+            break
+        beta = temperature.modulus_coeff_per_K
+        fitted = _fit(doc, referred(lt, alpha, beta), load_test_name, mechanics, names, progress)
+    return fitted, temperature
 
 
 def _in_sample_errors(fitted: _Fitted) -> tuple[np.ndarray, np.ndarray, dict]:
@@ -362,7 +404,11 @@ class _Fitted:
     edits: list[str]
     imap: InverseMap
     cal_resp: Response
-    setting: ChipSetting | None
+    chip: ChipChoice
+
+    @property
+    def setting(self) -> ChipSetting | None:
+        return self.chip.setting
 
 
 def _fit(
@@ -398,12 +444,11 @@ def _fit(
         raise CalibrationFailed(f"the calibrated design would not load ({exc})") from None
     fit_s = time.monotonic() - t0
     imap.calibrated_to_N = min(float(lt.load_N.max()), float(imap.force_N[-1]))
-    setting = lt.setting or cal_resp.chip_setting
+    chip = choose_setting_for(design_resp, cal_resp, lt)
+    setting = chip.setting
     if setting is not None:
         imap.field_resolution_T = max(imap.field_resolution_T, field_resolution_T(setting, doc.noise_uT_rms))
-    return _Fitted(
-        lt, mechanics, names, sigma, fit, fit_s, design_resp, cal_doc, cal_dict, edits, imap, cal_resp, setting
-    )
+    return _Fitted(lt, mechanics, names, sigma, fit, fit_s, design_resp, cal_doc, cal_dict, edits, imap, cal_resp, chip)
 
 
 def _header(fitted: _Fitted, source: str) -> tuple[str | None, str | None]:
@@ -411,7 +456,9 @@ def _header(fitted: _Fitted, source: str) -> tuple[str | None, str | None]:
     if fitted.setting is None:
         return None, "the calibrated field saturates the MLX90393 at full load: no setting to tabulate"
     try:
-        header = c_header(fitted.imap, fitted.setting, fitted.calibrated.name, source, cal.LIMITATIONS)
+        header = c_header(
+            fitted.imap, fitted.setting, fitted.calibrated.name, source, cal.LIMITATIONS, fitted.chip.header_note()
+        )
     except CalibrationFailed as exc:
         return None, str(exc)
     return header, None
@@ -450,7 +497,7 @@ def _record(
         samples=len(lt),
         force_range_N=[float(lt.load_N.min()), float(lt.load_N.max())],
         fitted_quantity="|B| at the chip (sqrt(Bx^2 + By^2 + Bz^2))",
-        chip_setting=_setting_record(fitted.setting, lt),
+        chip_setting=fitted.chip.record(),
         noise_sigma_uT=fitted.sigma_T * 1e6,
         parameters=_parameter_entries(fit, fitted.names),
         identifiability=_identifiability(fit),
@@ -493,21 +540,6 @@ def _parameter_entries(fit: cal.FitResult, names: tuple[str, ...]) -> dict:
             entry["held_because"] = "not requested (--params): held at the design's value"
         parameters[n] = entry
     return parameters
-
-
-def _setting_record(setting: ChipSetting | None, lt: Readings) -> dict | None:
-    """calibration.json's chip_setting: the one the tables are for, and where it came from."""
-    if setting is None:
-        return None
-    return {
-        "gain_sel": setting.gain_sel,
-        "res": setting.res,
-        "z_uT_per_lsb": setting.z_uT_per_lsb,
-        "xy_uT_per_lsb": setting.xy_uT_per_lsb,
-        "source": "the load test"
-        if lt.setting is not None
-        else "the finest setting that holds the calibrated field (the load test gave uT)",
-    }
 
 
 def _identifiability(fit: cal.FitResult) -> dict:

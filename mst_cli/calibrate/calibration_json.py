@@ -92,6 +92,8 @@ class CalibrationRecord:
     # cycle, creep; and whether the fit's misfit is noise (fit_quality)
     hysteresis: dict | None = None
     fit_quality: dict | None = None
+    # a load test with T_C (issue 38): the modulus temperature coefficient, fitted or held
+    temperature: dict | None = None
 
     def to_json(self) -> dict[str, Any]:
         """The file's JSON-ready mapping (non-finite numbers are null: JSON holds no NaN)."""
@@ -214,6 +216,8 @@ class PrinterCalibration:
     calibrated_design: str
     taken: list[Taken] = field(default_factory=list)
     not_used: dict[str, str] = field(default_factory=dict)  # parameter -> why
+    mechanics: str | None = None  # the rung of the fit (models.mechanics), when the record names one
+    calibrated_to_N: float | None = None  # the load test's largest force, when the record holds one
 
     def lines(self) -> list[str]:
         """What was taken, with what uncertainty, and what was not: as ``mst design`` prints it."""
@@ -298,7 +302,7 @@ def read_calibration(path: str | Path, doc: Document) -> PrinterCalibration:
     E_cal = _number(path, f"{CONSTANTS_KEY}.youngs_modulus_MPa", constants.get("youngs_modulus_MPa"), positive=True)
     Br_cal = _number(path, f"{CONSTANTS_KEY}.remanence_T", constants.get("remanence_T"), positive=True)
 
-    out = PrinterCalibration(path=str(path), calibrated_design=str(record.get("design", "?")))
+    out = _fit_context(record, PrinterCalibration(path=str(path), calibrated_design=str(record.get("design", "?"))))
     for name, par in PARAMETERS.items():
         entry = record["parameters"].get(name)
         if not isinstance(entry, dict) or not isinstance(entry.get("fitted"), bool):
@@ -315,6 +319,17 @@ def read_calibration(path: str | Path, doc: Document) -> PrinterCalibration:
         scale = {"modulus_factor": E_cal / doc.material.youngs_modulus_MPa, "remanence_factor": Br_cal}.get(name, 1.0)
         unit = "T" if name == "remanence_factor" else par.unit
         out.taken.append(Taken(name, TARGET_KEY[name], value * scale, None if std is None else std * scale, unit))
+    return out
+
+
+def _fit_context(record: dict, out: PrinterCalibration) -> PrinterCalibration:
+    """``out`` with the record's rung and calibrated range, where it names usable ones."""
+    models = record.get("models")
+    rung = models.get("mechanics") if isinstance(models, dict) else None
+    out.mechanics = rung if isinstance(rung, str) else None
+    top = record.get("calibrated_to_N")
+    if isinstance(top, (int, float)) and not isinstance(top, bool) and math.isfinite(top) and top > 0:
+        out.calibrated_to_N = float(top)
     return out
 
 

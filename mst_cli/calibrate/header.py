@@ -9,6 +9,7 @@ placeholders) so it reads as C; this module computes what fills it from an
 from __future__ import annotations
 
 import math
+import textwrap
 from collections.abc import Callable, Iterable, Sequence
 from importlib import resources
 from string import Template
@@ -35,10 +36,18 @@ def c_array(ctype: str, cname: str, values: Iterable, fmt: Callable[[float], str
     return f"static const {ctype} {cname}[MST_TABLE_LEN] = {{\n" + ",\n".join(lines) + "\n};\n"
 
 
-def c_header(imap: InverseMap, setting: ChipSetting, name: str, sources: str, limitations: Sequence[str]) -> str:
+def c_header(
+    imap: InverseMap,
+    setting: ChipSetting,
+    name: str,
+    sources: str,
+    limitations: Sequence[str],
+    setting_note: str = "",
+) -> str:
     """The header for ``setting``: |Z code| -> force in mN with the regime and resolution of each
-    entry, and a lookup function that flags out-of-range and saturated codes. CalibrationFailed
-    (from :meth:`InverseMap.z_code_table`) when no Z-only table exists."""
+    entry, and a lookup function that flags out-of-range and saturated codes; ``setting_note``
+    (which setting and why, :mod:`~mst_cli.calibrate.chip_choice`) goes into its comment.
+    CalibrationFailed (from :meth:`InverseMap.z_code_table`) when no Z-only table exists."""
     codes, F, regime, res = imap.z_code_table(setting)
     lsb_T = setting.z_uT_per_lsb * 1e-6
     top_N = imap.calibrated_to_N if imap.calibrated_to_N is not None else float(imap.force_N[-1])
@@ -50,6 +59,7 @@ def c_header(imap: InverseMap, setting: ChipSetting, name: str, sources: str, li
         res=setting.res,
         z_uT_per_lsb=setting.z_uT_per_lsb,
         z_uT_per_lsb_c=c_float(setting.z_uT_per_lsb, 6),
+        setting_note="".join(f"\n * {line}" for line in textwrap.wrap(setting_note, 92)),
         limitations="\n".join(f" *   - {line}" for line in limitations),
         table_len=len(codes),
         tolerance_lsb=max(1, int(math.ceil(imap.tolerance_T / lsb_T))),

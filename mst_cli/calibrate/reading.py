@@ -20,7 +20,9 @@ from mst_cli.calibrate.inverse_map import FLAGS, InverseMap, inverse_map
 from mst_cli.calibrate.loadtest import Readings, field_of, rig_column, unknown_columns
 from mst_cli.calibrate.offset_reading import OffsetEstimator, OffsetReadings, offset_columns
 from mst_cli.calibrate.rig_reading import BranchForces, follow_branches, no_load_rows, tare_shift_T, unloading_model_of
+from mst_cli.calibrate.rung_check import read_rung_warning
 from mst_cli.calibrate.tables import FORCES_COLUMNS, cell, forces_csv
+from mst_cli.calibrate.temperature_fit import field_at_reference
 from mst_cli.io.serial_lines import LineSource, SampleParser
 from mst_cli.model.chip import ChipSetting, field_resolution_T
 from mst_cli.sensor.document import Document
@@ -170,7 +172,7 @@ class ForceReader:
         if top is not None:
             imap.calibrated_to_N = min(top, float(imap.force_N[-1]))
         if note is None and record is not None:  # no note: the record beside matches
-            note = record.curve_changed(imap)
+            note = read_rung_warning(record, mechanics, doc) or record.curve_changed(imap)
         return cls(doc, imap, note, record)
 
     def read(self, rd: Readings, offsets: OffsetEstimator | None = None, tare: int = 0) -> ForceReadings:
@@ -179,8 +181,9 @@ class ForceReader:
         (:mod:`~mst_cli.calibrate.rig_reading`). ``tare``: the first readings at no load."""
         imap = self.inverse_map
         shift = tare_shift_T(rd.B_abs_T, tare, float(imap.B_abs_T[0]), rd.source) if tare else 0.0
-        B = rd.B_abs_T - shift
+        B, m = field_at_reference(rd.B_abs_T - shift, rd, self.document, self.record)  # a T_C column: at 20 degC
         F, regime, flag = imap.force(B, rd.saturated)
+        F = F * m
         zero = no_load_rows(B, flag, float(imap.B_abs_T[0]), imap.field_resolution_T)
         F[zero], regime[zero], flag[zero] = 0.0, 1, "ok"
         res = imap.local_resolution_N(np.where(np.isfinite(F), F, 0.0))

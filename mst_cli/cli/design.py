@@ -96,6 +96,7 @@ def design(
             plot=plot,
             progress=progress,
             note=click.echo if talk else None,
+            warn=lambda line: click.echo(f"mst design: warning: {line}", err=True),
         )
     finally:
         progress.close()

@@ -68,11 +68,10 @@ def grade_remanence_T(grade: str) -> float:
     return round(0.5 * (lo + hi), 4)
 
 
-# Reversible temperature coefficient of the remanence, alpha(Br) in %/K, per grade (20..100 degC).
-# Source: sintered NdFeB manufacturers' grade datasheets, which give -0.12 %/degC for the
-# standard (no suffix) N35..N52 grades (e.g. Arnold Magnetic Technologies' N-grade sheets and
-# K&J Magnetics' "Temperature and Neodymium Magnets" grade table; the MMPA 0100-00 standard
-# lists -0.11..-0.13 %/degC for the family). Typical values: measure the batch when it matters.
+# Reversible temperature coefficient of the remanence, alpha(Br) in %/K, per grade (20..100 degC):
+# -0.12 %/K, typical of sintered NdFeB N-grades (the standard, no-suffix N35..N52), the figure
+# magnet makers' grade datasheets and temperature tables give for the family. Not checked here
+# against one named sheet: a typical value, measure the batch when it matters.
 MAGNET_REMANENCE_COEFF_PCT_PER_K: dict[str, float] = dict.fromkeys(MAGNET_GRADES_T, -0.12)
 NDFEB_REMANENCE_COEFF_PCT_PER_K = -0.12  # a remanence given as a number (no grade): the family's
 REFERENCE_TEMPERATURE_C = 20.0  # datasheets state Br at room temperature, 20 degC
