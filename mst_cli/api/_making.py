@@ -179,6 +179,22 @@ def slice(
         ``.report`` (slice.json: print time s, filament g, layers, the longest free span mm,
         the pause found against the one asked for, support, cavity gaps mm), ``.checks``,
         ``.failed`` (names of the broken limits), ``.summary()``.
+
+    Raises
+    ------
+    InputError
+        For an export folder that fails ``mst check``'s rules, a profile that is not a regular
+        readable file, or one whose ``post_process`` names scripts without ``allow_post_process``.
+    SlicerError
+        When PrusaSlicer is missing, fails, or writes nothing or truncated G-code (a machine
+        fault, exit 1 from the command).
+
+    Examples
+    --------
+    >>> mst.export("configs/mohammadi2021-forward.yaml", "print", three_mf=True)  # doctest: +SKIP
+    >>> result = mst.slice("print", max_span_mm=2.0)  # doctest: +SKIP
+    >>> result.failed  # doctest: +SKIP
+    []
     """
     from mst_cli.cad.slicing import slice_export  # deferred: the CAD layer and subprocess, 50 ms measured
 
