@@ -8,6 +8,7 @@ estimator's spread is the bound), and the direction of the readings no load expl
 null space of the Jacobian).
 """
 
+import json
 from pathlib import Path
 
 import numpy as np
@@ -85,3 +86,59 @@ def test_a_reading_no_load_explains_is_flagged(stack):
     r = ShearReader(stack, TWO_CHIPS).read((clean + 10 * 1e-6 * u)[None, :], 1e-6)
     assert r.chi2[0] > CHI2_FLAG[1] and r.flag[0] == "no_fit"
     assert ShearReader(stack, TWO_CHIPS).read(clean[None, :], 1e-6).flag[0] == "ok"
+
+
+def two_chip_file(tmp_path, positions: str) -> Path:
+    text = FORWARD.read_text().replace("  noise_uT_rms: 2.0\n", f"  noise_uT_rms: 2.0\n  positions_mm: {positions}\n")
+    path = tmp_path / "two.yaml"
+    path.write_text(text)
+    return path
+
+
+def run(args):
+    from click.testing import CliRunner
+
+    from mst_cli.cli.app import main
+
+    return CliRunner().invoke(main, [str(a) for a in args])
+
+
+@pytest.mark.parametrize(
+    "positions, says",
+    [
+        ("[[1, 0], [10, 6]]", "chip_offset_mm"),
+        ("[[0, 0], [1, 1]]", ">= 3 mm from chip 0"),
+        ("[[0, 0], [150, 0]]", "<= 100"),
+        ("[[0, 0], [5, 0], [0, 5], [-5, 0], [0, -5]]", "1 to 4"),
+    ],
+)
+def test_a_bad_chip_layout_is_refused_in_one_line(tmp_path, positions, says):
+    res = run(["simulate", two_chip_file(tmp_path, positions), "--out", tmp_path / "o", "--no-plot"])
+    assert res.exit_code == 2
+    assert len(res.output.strip().splitlines()) == 1 and "positions_mm" in res.output and says in res.output
+
+
+def test_simulate_states_what_the_chips_tell_apart(tmp_path):
+    out = tmp_path / "o"
+    res = run(
+        [
+            "simulate",
+            two_chip_file(tmp_path, "[[0, 0], [10, 6]]"),
+            "--out",
+            out,
+            "--no-plot",
+            "--shear-ratio",
+            "0.2,0.1",
+        ]
+    )
+    assert res.exit_code == 0, res.output
+    b = json.loads((out / "report.json").read_text())["shear_bound"]
+    assert b["chips_mm"] == [[0.0, 0.0], [10.0, 6.0]] and len(b["estimates"]) == 5
+    assert b["region_mm"] == [pytest.approx(9.0), pytest.approx(6.0)]  # 60 % of the 30 x 20 mm face
+    lo, hi = (next(r for r in b["noise"] if r["noise_uT"] == n) for n in (0.5, 2.0))
+    for name in b["estimates"]:  # the bound is linear in the noise
+        assert hi[f"{name}_crb_median"] == pytest.approx(4 * lo[f"{name}_crb_median"], rel=1e-9)
+    assert "can tell apart" in res.output
+    one = run(["simulate", FORWARD, "--out", tmp_path / "p", "--no-plot", "--shear-ratio", "0,0"])
+    b1 = json.loads((tmp_path / "p" / "report.json").read_text())["shear_bound"]
+    assert b1["estimates"] == ["force_N", "shear_x_N", "shear_y_N"] and "a second chip tells position" in one.output

@@ -15,8 +15,9 @@ from mst_cli.io.files import is_machine_fault as is_machine_fault
 from mst_cli.io.files import os_error_text as os_error_text
 from mst_cli.io.outputs import Interrupted as Interrupted
 from mst_cli.model.file_keys import SEED_RANGE as SEED_RANGE
-from mst_cli.model.general_load import SHEAR_RATIO_MAX
+from mst_cli.model.general_load import SHEAR_RATIO_MAX, loaded_stack
 from mst_cli.model.ladder import choose_mechanics
+from mst_cli.model.load_bound import layout_bound
 from mst_cli.model.mechanics import MODELS
 from mst_cli.model.offcentre import OffCentreResponse, OffsetMap
 from mst_cli.model.offcentre import offset_map as run_offset_map
@@ -138,10 +139,10 @@ def run_simulate(
         for line in run.model_lines():
             note(line)
     run.response = simulate_as_printed(doc, mechanics, field_model)
-    if load_offset_mm is not None:
-        run.off_centre = _offcentre(doc, load_offset_mm, mechanics, field_model, shear_ratio)
-    if offset_map:
-        run.offset_map = _offset_map(doc, mechanics, field_model, None)
+    models = (mechanics, field_model)
+    run.off_centre = None if load_offset_mm is None else _offcentre(doc, load_offset_mm, *models, shear_ratio)
+    run.shear_bound = None if shear_ratio is None else _shear_bound(doc, *models, shear_ratio)
+    run.offset_map = _offset_map(doc, *models, None) if offset_map else None
     if out is not None:
         run.write(Path(out), plot)
     return run
@@ -202,6 +203,21 @@ def simulate_offcentre(
     if shear_ratio is not None:
         check_shear_ratio(shear_ratio)
     return _offcentre(load_design(design), offset_mm, mechanics, field_model, shear_ratio)
+
+
+BOUND_NOISES_uT = (0.5, 2.0)  # the noises the shear bound is stated at (and the file's own)
+BOUND_FORCES = (0.25, 0.5, 0.75)  # of the range
+
+
+def _shear_bound(doc: Document, mechanics: str | None, field_model: str | None, shear_ratio) -> dict:
+    """report.json's shear_bound: each estimate's 1-sigma CRB for the file's chips (one: a centred
+    press's Fz, Fx, Fy; more: all five over the middle 60 % of the face)."""
+    scene = printed_scene(doc, mechanics, field_model)
+    stack = loaded_stack(scene.geometry, scene.material, scene.mechanics)
+    top = max(t.lock_force_N for t in stack.tilt)
+    bound = layout_bound(stack, doc.chips_mm, [f * top for f in BOUND_FORCES], shear_ratio)
+    noises = sorted({*BOUND_NOISES_uT, float(doc.noise_uT_rms)} - {0.0})
+    return {**bound.summary(noises), "mechanics": scene.mechanics, "region_frac": 0.6}
 
 
 def _press(load_offset_mm, shear_ratio):

@@ -29,6 +29,7 @@ At Fx = Fy = 0 it is the off-centre press (:mod:`mst_cli.model.offcentre`) exact
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -98,12 +99,21 @@ def _l0_law(tilt: LayerTiltLaw, cell, material: Material) -> LayerLateralLaw:
     return lateral_law(tilt, *(lambda d, k=k: np.where(d < lock, k, np.inf) for k in k0))
 
 
-def _l2_law(tilt: LayerTiltLaw, cell, material: Material) -> LayerLateralLaw:
-    """L2: the lateral path's tangents, frictionless before the lock, stuck past it."""
+L2_FRACTIONS = (0.0, 0.25, 0.5, 0.75, 0.95, 1.05)  # of the lock stroke where L2's lateral tangents are solved
+
+
+@functools.lru_cache(maxsize=32)
+def _l2_path(cell, material: Material):
+    """L2's lateral path of one cell (seconds each: kept for the process)."""
     from mst_cli.model.mechanics.continuum_lateral import lateral_path  # deferred: L2 loads when asked
 
-    fractions = (0.0, 0.25, 0.5, 0.75, 0.95, 1.05)
-    p = lateral_path(cell, material, fractions)
+    return lateral_path(cell, material, L2_FRACTIONS)
+
+
+def _l2_law(tilt: LayerTiltLaw, cell, material: Material) -> LayerLateralLaw:
+    """L2: the lateral path's tangents, frictionless before the lock, stuck past it."""
+    fractions = L2_FRACTIONS
+    p = _l2_path(cell, material)
     end = float(depth_end_factor(cell.t_mm, cell.wall_length_mm, cell.depth_mm))
     lock = tilt.pad_gap_mm
     f = np.array(fractions[:-1])
