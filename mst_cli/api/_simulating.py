@@ -4,6 +4,7 @@ Part of the api's one door, :mod:`mst_cli.api`."""
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -14,7 +15,9 @@ from mst_cli.io.files import is_machine_fault as is_machine_fault
 from mst_cli.io.files import os_error_text as os_error_text
 from mst_cli.io.outputs import Interrupted as Interrupted
 from mst_cli.model.file_keys import SEED_RANGE as SEED_RANGE
+from mst_cli.model.general_load import SHEAR_RATIO_MAX, loaded_stack
 from mst_cli.model.ladder import choose_mechanics
+from mst_cli.model.load_bound import layout_bound
 from mst_cli.model.mechanics import MODELS
 from mst_cli.model.offcentre import OffCentreResponse, OffsetMap
 from mst_cli.model.offcentre import offset_map as run_offset_map
@@ -93,6 +96,7 @@ def run_simulate(
     out: str | Path | None = None,
     plot: bool = True,
     note: Callable[[str], None] | None = None,
+    shear_ratio: tuple[float, float] | None = None,
 ) -> Simulation:
     """The whole ``mst simulate`` run: the response, the off-centre press and the offset map asked
     for, written together (report.json's ``off_centre`` included).
@@ -101,21 +105,20 @@ def run_simulate(
     ----------
     design, mechanics, field_model
         As :func:`simulate`.
-    load_offset_mm : (float, float), optional
-        Press at (x, y) mm on the top face as well (:func:`simulate_offcentre`).
+    load_offset_mm, shear_ratio : (float, float), optional
+        Press at (x, y) mm on the top face as well (:func:`simulate_offcentre`), with a tangential
+        force (Fx, Fy) = shear_ratio x the normal force, each |ratio| <= 1 (centred without x, y).
     offset_map : bool
         Map the axial reading's error over the top face as well (:func:`offset_map`, ~10 s).
     out : str or Path, optional
-        Folder for report.json, response.csv/png and offcentre/offset_map .csv/.png [default:
-        nothing written].
+        Folder for report.json, response, offcentre, offset_map .csv/.png [default: none written].
     note : callable(str), optional
-        Gets the rung picked and the print parameters that differ from nominal, before the work.
+        Gets the rung picked and the print parameters that differ from nominal.
 
     Returns
     -------
     Simulation
-        ``.response``, ``.off_centre``, ``.offset_map`` (None unless asked for), ``.report`` (the
-        report written), ``.table()`` (the terminal's), ``.file_names(plot)``.
+        ``.response``, ``.off_centre``, ``.offset_map`` (None unless asked), ``.report``, ``.table()``.
 
     Raises
     ------
@@ -124,22 +127,22 @@ def run_simulate(
 
     Examples
     --------
-    >>> run = mst.run_simulate("configs/mohammadi2021-forward.yaml", load_offset_mm=(5, 0), out="o")  # doctest: +SKIP
-    >>> print(run.table())  # doctest: +SKIP
+    >>> print(mst.run_simulate("configs/mohammadi2021-forward.yaml", load_offset_mm=(5, 0)).table())  # doctest: +SKIP
     """
     _one_of("--mechanics", mechanics, MODELS)
     _one_of("--field-model", field_model, FIELD_MODELS)
     doc, geometry = _design_and_geometry(design)
     _check_out(out)  # a bad output path is refused before any work
+    load_offset_mm = _press(load_offset_mm, shear_ratio)
     run = Simulation(doc, geometry, choose_mechanics(mechanics, doc.accuracy_rel, doc.mechanics))
     if note is not None:
         for line in run.model_lines():
             note(line)
     run.response = simulate_as_printed(doc, mechanics, field_model)
-    if load_offset_mm is not None:
-        run.off_centre = _offcentre(doc, load_offset_mm, mechanics, field_model)
-    if offset_map:
-        run.offset_map = _offset_map(doc, mechanics, field_model, None)
+    models = (mechanics, field_model)
+    run.off_centre = None if load_offset_mm is None else _offcentre(doc, load_offset_mm, *models, shear_ratio)
+    run.shear_bound = None if shear_ratio is None else _shear_bound(doc, *models, shear_ratio)
+    run.offset_map = _offset_map(doc, *models, None) if offset_map else None
     if out is not None:
         run.write(Path(out), plot)
     return run
@@ -153,6 +156,7 @@ def simulate_offcentre(
     field_model: str | None = None,
     out: str | Path | None = None,
     plot: bool = True,
+    shear_ratio: tuple[float, float] | None = None,
 ) -> OffCentreResponse:
     """A force pressed at ``offset_mm`` = (x0, y0) on the top face (``mst simulate --load-offset-mm``).
 
@@ -165,6 +169,8 @@ def simulate_offcentre(
         As :func:`simulate` (the dipole is refused: it is not exact off the axis).
     offset_mm : (float, float)
         Where the force presses, mm: x across the width, y along the depth.
+    shear_ratio : (float, float), optional
+        Tangential force (Fx, Fy) = ratio x the normal force, each |ratio| <= 1 [default: none].
     out : str or Path, optional
         Folder for what the command writes: report.json (with ``off_centre``), response.csv,
         offcentre.csv and (``plot``) their pictures [default: nothing written].
@@ -187,19 +193,64 @@ def simulate_offcentre(
     """
     if out is not None:
         run = run_simulate(
-            design, mechanics=mechanics, field_model=field_model, load_offset_mm=offset_mm, out=out, plot=plot
-        )
+            design, mechanics=mechanics, field_model=field_model, load_offset_mm=offset_mm, out=out, plot=plot,
+            shear_ratio=shear_ratio,
+        )  # fmt: skip
         assert run.off_centre is not None  # asked for
         return run.off_centre
     _one_of("--mechanics", mechanics, MODELS)
     _one_of("--field-model", field_model, FIELD_MODELS)
-    return _offcentre(load_design(design), offset_mm, mechanics, field_model)
+    if shear_ratio is not None:
+        check_shear_ratio(shear_ratio)
+    return _offcentre(load_design(design), offset_mm, mechanics, field_model, shear_ratio)
 
 
-def _offcentre(doc: Document, offset_mm, mechanics: str | None, field_model: str | None) -> OffCentreResponse:
+BOUND_NOISES_uT = (0.5, 2.0)  # the noises the shear bound is stated at (and the file's own)
+BOUND_FORCES = (0.25, 0.5, 0.75)  # of the range
+
+
+def _shear_bound(doc: Document, mechanics: str | None, field_model: str | None, shear_ratio) -> dict:
+    """report.json's shear_bound: each estimate's 1-sigma CRB for the file's chips (one: a centred
+    press's Fz, Fx, Fy; more: all five over the middle 60 % of the face)."""
+    scene = printed_scene(doc, mechanics, field_model)
+    stack = loaded_stack(scene.geometry, scene.material, scene.mechanics)
+    top = max(t.lock_force_N for t in stack.tilt)
+    bound = layout_bound(stack, doc.chips_mm, [f * top for f in BOUND_FORCES], shear_ratio)
+    noises = sorted({*BOUND_NOISES_uT, float(doc.noise_uT_rms)} - {0.0})
+    return {**bound.summary(noises), "mechanics": scene.mechanics, "region_frac": 0.6}
+
+
+def _press(load_offset_mm, shear_ratio):
+    """The off-centre press asked for: at the axis when only a shear ratio is given (checked)."""
+    if shear_ratio is None:
+        return load_offset_mm
+    check_shear_ratio(shear_ratio)
+    return load_offset_mm or (0.0, 0.0)
+
+
+def check_shear_ratio(ratio: tuple[float, float]) -> None:
+    """InputError unless both tangential ratios are finite and within the model's friction cone."""
+    if not all(math.isfinite(r) and abs(r) <= SHEAR_RATIO_MAX for r in ratio):
+        raise InputError(
+            "--shear-ratio",
+            ",".join(f"{r:g}" for r in ratio),
+            f"must be two ratios RX,RY of the tangential to the normal force, each |r| <= {SHEAR_RATIO_MAX:g}",
+        )
+
+
+def _offcentre(
+    doc: Document, offset_mm, mechanics: str | None, field_model: str | None, shear_ratio=None
+) -> OffCentreResponse:
     scene = printed_scene(doc, mechanics, field_model)
     check_on_top_face(scene.geometry, offset_mm)
-    return run_offcentre(scene.geometry, scene.material, offset_mm, scene.mechanics, scene.field_model)
+    return run_offcentre(
+        scene.geometry,
+        scene.material,
+        offset_mm,
+        scene.mechanics,
+        scene.field_model,
+        shear_ratio=shear_ratio or (0.0, 0.0),
+    )
 
 
 def offset_map(

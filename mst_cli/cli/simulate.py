@@ -43,6 +43,14 @@ from mst_cli.errors import InputError
     "magnet's tilt, and how far a reading taken as axial is off).",
 )
 @click.option(
+    "--shear-ratio",
+    "shear_ratio",
+    metavar="RX,RY",
+    default=None,
+    help="Push along the face as well: a tangential force Fx = RX x F, Fy = RY x F along the "
+    "curve (each |R| <= 1), at the axis or at --load-offset-mm; offcentre.csv gets its Fx_N, Fy_N.",
+)
+@click.option(
     "--offset-map",
     is_flag=True,
     help="Add offset_map.csv/.png: the axial reading's force error over 80 % of the top face at "
@@ -57,6 +65,7 @@ def simulate(
     mechanics: str | None,
     as_json: bool,
     load_offset: str | None,
+    shear_ratio: str | None,
     offset_map: bool,
     no_plot: bool,
 ) -> None:
@@ -76,7 +85,8 @@ def simulate(
         doc,
         mechanics=mechanics,
         field_model=field_model,
-        load_offset_mm=_offset(load_offset) if load_offset else None,
+        load_offset_mm=_pair(load_offset, "--load-offset-mm", "X,Y in mm, e.g. 5,0") if load_offset else None,
+        shear_ratio=_pair(shear_ratio, "--shear-ratio", "RX,RY, e.g. 0.3,0") if shear_ratio else None,
         offset_map=offset_map,
         out=out,
         plot=plot,
@@ -89,13 +99,13 @@ def simulate(
     click.echo(f"wrote {out}/" + ", ".join(run.file_names(plot)))
 
 
-def _offset(text: str) -> tuple[float, float]:
-    """'X,Y' in mm as two finite floats (InputError otherwise)."""
+def _pair(text: str, option: str, form: str) -> tuple[float, float]:
+    """'A,B' as two finite floats (InputError naming ``option`` otherwise)."""
     parts = text.split(",")
     try:
         x, y = (float(p) for p in parts)
     except ValueError:
-        raise InputError("--load-offset-mm", text, "must be two numbers X,Y in mm, e.g. 5,0") from None
+        raise InputError(option, text, f"must be two numbers {form}") from None
     if not all(map(math.isfinite, (x, y))):
-        raise InputError("--load-offset-mm", text, "must be two finite numbers X,Y in mm")
+        raise InputError(option, text, f"must be two finite numbers {form}")
     return x, y

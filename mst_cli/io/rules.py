@@ -15,6 +15,7 @@ from mst_cli.errors import InputError
 from mst_cli.model.file_keys import spec
 
 RULE_KEYS = ("lo", "hi", "lo_open", "hi_open", "choices", "nullable", "unit")  # spec() metadata a Rule reads
+MAX_PAIRS = 4  # a "pairs" key's longest list
 
 
 def default_of(f: Field) -> Any:
@@ -36,7 +37,7 @@ def adopt(owner: type, name: str, **changes: Any) -> Any:
 class Rule:
     """What one key accepts: a kind and optional bounds (open or closed) or choices."""
 
-    kind: str  # "float", "int", "str", "bool", "pair", "bounds", "weights"
+    kind: str  # "float", "int", "str", "bool", "pair", "pairs", "bounds", "weights"
     lo: float | None = None
     hi: float | None = None
     lo_open: bool = False
@@ -65,6 +66,10 @@ class Rule:
             )
         if self.choices:
             return "one of " + ", ".join(map(str, self.choices))
+        if self.kind == "pairs":
+            return f"must be a list of 1 to {MAX_PAIRS} [x, y] pairs, each number {self.lo:g} to {self.hi:g}{unit}" + (
+                " (or null)" if self.nullable else ""
+            )
         kind = {
             "float": "a number",
             "int": "an integer",
@@ -89,6 +94,10 @@ class Rule:
             raise InputError(path, value, self.describe())
         if self.kind == "weights":
             return self._weights(path, value)
+        if self.kind == "pairs":
+            if not isinstance(value, (list, tuple)) or not 1 <= len(value) <= MAX_PAIRS:
+                raise InputError(path, value, self.describe())
+            return tuple(Rule("pair", self.lo, self.hi).check(f"{path}[{i}]", v) for i, v in enumerate(value))
         if self.kind in ("pair", "bounds"):
             if not isinstance(value, (list, tuple)) or len(value) != 2:
                 raise InputError(path, value, self.describe())
@@ -156,9 +165,11 @@ class Rule:
             return f"weights {lo} {below} w {above} {hi} (at least one > 0) for any of {choices}"
         if self.kind == "bounds":
             return f"[low, high], {lo} {below} low < high {above} {hi}"
-        span = f"{lo} {below} {'each' if self.kind == 'pair' else 'value'} {above} {hi}"
+        span = f"{lo} {below} {'value' if self.kind in ('float', 'int') else 'each'} {above} {hi}"
         return (
-            {"pair": "two numbers, ", "int": "integer, "}.get(self.kind, "")
+            {"pair": "two numbers, ", "int": "integer, ", "pairs": f"1 to {MAX_PAIRS} [x, y] pairs, "}.get(
+                self.kind, ""
+            )
             + span
             + (", or null" if self.nullable else "")
         )

@@ -20,14 +20,28 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mst_cli.model import magnet_field as fld
 from mst_cli.model.assembly import SensorGeometry
+from mst_cli.model.general_load import loaded_stack
 from mst_cli.model.material import Material
-from mst_cli.model.mechanics import layer_laws
-from mst_cli.model.mechanics.depth import in_web
 from mst_cli.model.mechanics.tilt import LayerTiltLaw, solve_layer_tilt
 from mst_cli.model.response import Response
 from mst_cli.model.response import simulate as simulate_axial
+from mst_cli.model.stack_pose import magnet_field_T, magnet_pose, pose_field_T, stack_path, tilt_laws
+
+__all__ = [  # the pose and path helpers live in stack_pose; their old home still names them
+    "AXIAL_READING_FLAGS",
+    "OffCentreResponse",
+    "OffsetMap",
+    "axial_reading_flags",
+    "magnet_field_T",
+    "magnet_pose",
+    "offset_map",
+    "pose_field_T",
+    "simulate_offcentre",
+    "stack_path",
+    "tilt_laws",
+    "worst_read_errors",
+]
 
 SIDE_LOCK_BISECTIONS = 50  # halvings of the force bracket of a side's lock (to ~1e-15 of it)
 
@@ -49,25 +63,23 @@ class OffCentreResponse:
     axial_reading_flag: np.ndarray  # (m,) AXIAL_READING_FLAGS: why force_read_axial_N is nan (ok: it is not)
     side_lock_N: np.ndarray  # (n, 2): force at which each layer's -x / +x side first locks
     axial: Response  # the centred model of the same sensor
+    shear_ratio: tuple[float, float] = (0.0, 0.0)  # (Fx, Fy) / Fz along the curve
+    layer_slide_mm: np.ndarray | None = None  # (m, n, 2) each layer's lateral slide (None: no shear)
+
+    @property
+    def force_x_N(self) -> np.ndarray:
+        """The tangential force along x at each sample (N)."""
+        return self.shear_ratio[0] * self.force_N
+
+    @property
+    def force_y_N(self) -> np.ndarray:
+        """The tangential force along y at each sample (N)."""
+        return self.shear_ratio[1] * self.force_N
 
     @property
     def read_error_N(self) -> np.ndarray:
         """Force read as axial minus the true force (N)."""
         return self.force_read_axial_N - self.force_N
-
-
-def tilt_laws(
-    geometry: SensorGeometry, material: Material, mechanics: str, lever_factor: float = 1.0
-) -> list[LayerTiltLaw]:
-    """Every layer as the tilt rung sees it, from the named rung's laws; ``lever_factor`` scales
-    every lever (1: the rung's own; a calibration's fitted value otherwise)."""
-    laws = layer_laws(geometry.layers, material, mechanics)
-    return [
-        LayerTiltLaw.from_layer(
-            law, c, in_web(c, material).youngs_modulus_MPa, material.poisson_ratio
-        ).with_lever_factor(lever_factor)
-        for law, c in zip(laws, geometry.layers)
-    ]
 
 
 def simulate_offcentre(
@@ -78,21 +90,31 @@ def simulate_offcentre(
     field_model: str | None = None,
     points_per_regime: int = 100,
     overload: float = 0.25,
+    shear_ratio: tuple[float, float] = (0.0, 0.0),
 ) -> OffCentreResponse:
     """The response to a force pressed at ``offset_mm`` = (x0, y0) on the top face, over the
-    centred model's force grid (0 to 1 + ``overload`` times the last lock). Raises TiltError
-    when a layer's equilibrium is not found."""
+    centred model's force grid (0 to 1 + ``overload`` times the last lock), with a tangential
+    force ``shear_ratio`` = (Fx, Fy) / Fz along it (:mod:`mst_cli.model.general_load`). Raises
+    TiltError when a layer's equilibrium is not found."""
     axial = simulate_axial(
         geometry, material, mechanics, field_model, points_per_regime=points_per_regime, overload=overload
     )
-    layers = tilt_laws(geometry, material, mechanics)
     F = axial.force_N
-    d, tilt = stack_path(layers, F, offset_mm)
-    shift, rotvec = magnet_pose(geometry, d, tilt)
+    slide = None
+    if shear_ratio[0] == 0.0 and shear_ratio[1] == 0.0:
+        layers = tilt_laws(geometry, material, mechanics)
+        offsets = np.broadcast_to(np.asarray(offset_mm, dtype=float), (len(layers), 2))
+    else:
+        stack = loaded_stack(geometry, material, mechanics)
+        layers, offsets = stack.tilt, stack.layer_offsets_mm(offset_mm, shear_ratio)
+        slide = stack.slides_mm(F, shear_ratio)
+    d, tilt = stack_path(layers, F, offsets)
+    shift, rotvec = magnet_pose(geometry, d, tilt, slide)
     B = magnet_field_T(geometry, shift, rotvec)
     B_abs = np.linalg.norm(B, axis=-1)
-    read = _read_as_axial(axial, B_abs)
-    side_lock = np.array([[_side_lock_N(layer, offset_mm, side) for side in (0, 1)] for layer in layers])
+    side_lock = np.array(
+        [[_side_lock_N(layer, tuple(off), side) for side in (0, 1)] for layer, off in zip(layers, offsets)]
+    )
     return OffCentreResponse(
         offset_mm=(float(offset_mm[0]), float(offset_mm[1])),
         mechanics=mechanics,
@@ -103,70 +125,13 @@ def simulate_offcentre(
         magnet_tilt_deg=np.degrees(np.stack([rotvec[:, 1], -rotvec[:, 0]], axis=-1)),
         B_T=B,
         B_abs_T=B_abs,
-        force_read_axial_N=read,
+        force_read_axial_N=_read_as_axial(axial, B_abs),
         axial_reading_flag=axial_reading_flags(axial, B_abs),
         side_lock_N=side_lock,
         axial=axial,
+        shear_ratio=(float(shear_ratio[0]), float(shear_ratio[1])),
+        layer_slide_mm=slide,
     )
-
-
-def stack_path(
-    layers: list[LayerTiltLaw], F, offset_mm, start: np.ndarray | None = None
-) -> tuple[np.ndarray, np.ndarray]:
-    """(d (m, n), (phi_y, phi_x) (m, n, 2)) of every layer along the force samples, each
-    solve started from the previous force's answer (the first from ``start`` (n, 3), when given,
-    else from the centred answer)."""
-    m, n = len(F), len(layers)
-    d = np.zeros((m, n))
-    tilt = np.zeros((m, n, 2))
-    for j, layer in enumerate(layers):
-        guess = None if start is None else tuple(start[j])
-        for i, f in enumerate(F):
-            if f == 0.0:
-                continue
-            lt = solve_layer_tilt(layer, float(f), offset_mm, guess)
-            guess = (lt.d_mm, lt.phi_y_rad, lt.phi_x_rad)
-            d[i, j], tilt[i, j] = lt.d_mm, (lt.phi_y_rad, lt.phi_x_rad)
-    return d, tilt
-
-
-def pose_field_T(
-    geometry: SensorGeometry, layers: list[LayerTiltLaw], force_N: np.ndarray, offset_mm: tuple[float, float]
-) -> np.ndarray:
-    """The field at the chip (m, 3) in T for forces ``force_N`` (m,) ascending, pressed at
-    ``offset_mm``: the stack's tilts, the magnet's pose, the exact field."""
-    d, tilt = stack_path(layers, np.asarray(force_N, dtype=float), offset_mm)
-    shift, rotvec = magnet_pose(geometry, d, tilt)
-    return magnet_field_T(geometry, shift, rotvec)
-
-
-def magnet_pose(geometry: SensorGeometry, d_mm: np.ndarray, tilt_rad: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(the magnet centre's displacement (m, 3) in mm, its rotation vector (m, 3) in rad) from
-    every layer's compression (m, n) and tilts (m, n, 2), small rotations added."""
-    z_centre = geometry.z_magnet_bottom_mm + 0.5 * geometry.magnet.thickness_mm
-    z_mid = np.array([b + 0.5 * c.h_mm for b, c in zip(geometry.layer_bottoms_mm, geometry.layers)])
-    arm = z_centre - z_mid  # (n,) height of the magnet centre over each layer's pivot
-    shift = np.stack(
-        [tilt_rad[..., 0] @ arm, tilt_rad[..., 1] @ arm, -d_mm.sum(axis=-1)],
-        axis=-1,
-    )
-    # phi_y turns +z toward +x (a right-handed turn about y); phi_x lowers +y, a turn of -phi_x about x
-    rotvec = np.stack([-tilt_rad[..., 1].sum(axis=-1), tilt_rad[..., 0].sum(axis=-1), np.zeros(len(d_mm))], axis=-1)
-    return shift, rotvec
-
-
-def magnet_field_T(geometry: SensorGeometry, shift_mm: np.ndarray, rotvec_rad: np.ndarray) -> np.ndarray:
-    """The field at the chip (m, 3) for the magnet displaced and turned (its own tilt about y
-    added to the load's turn)."""
-    half = 0.5 * geometry.magnet.thickness_mm
-    cx, cy = geometry.chip_offset_mm
-    r = np.stack(
-        [cx - shift_mm[:, 0], cy - shift_mm[:, 1], -(geometry.gap0_mm + half) - shift_mm[:, 2]],
-        axis=-1,
-    )
-    rot = rotvec_rad + np.array([0.0, math.radians(geometry.magnet_tilt_deg), 0.0])
-    mag = geometry.magnet
-    return fld.cylinder_pose_B_T(r, mag.diameter_mm, mag.thickness_mm, mag.remanence_T, rot)
 
 
 AXIAL_READING_FLAGS = ("ok", "below_no_load", "above_range")  # why a force read as axial is missing

@@ -75,6 +75,13 @@ class Document:
     design: dict
     source: str = "<memory>"
     accuracy_rel: float | None = None  # model.accuracy_rel: requested accuracy of k and R
+    chip_positions_mm: tuple[tuple[float, float], ...] | None = None  # magnetometer.positions_mm
+
+    @property
+    def chips_mm(self) -> list[tuple[float, float]]:
+        """Every chip's (x, y): magnetometer.positions_mm, else the one chip at chip_offset_mm."""
+        chips = self.chip_positions_mm or (self.chip_offset_mm,)
+        return [(float(x), float(y)) for x, y in chips]
 
     def section(self, name: str) -> Any:
         """The values of the file section ``name``, as an object with its keys as attributes."""
@@ -84,6 +91,7 @@ class Document:
                 noise_uT_rms=self.noise_uT_rms,
                 chip_offset_mm=(self.chip_offset_mm[0], self.chip_offset_mm[1]),
                 magnet_tilt_deg=self.magnet_tilt_deg,
+                positions_mm=self.chip_positions_mm,
             )
         if name == "model":
             return ModelSection(mechanics=self.mechanics, field=self.field_model, accuracy_rel=self.accuracy_rel)
@@ -211,6 +219,7 @@ def parse_document(raw: Any, source: str = "<memory>") -> Document:
         design=design,
         source=source,
         accuracy_rel=model.accuracy_rel,
+        chip_positions_mm=meter.positions_mm,
     )
 
 
@@ -295,7 +304,9 @@ def section_to_dict(declared: type, values: Any) -> dict:
         value = getattr(values, f.name)
         if f.metadata["omit_default"] and value == default_of(f):
             continue
-        out[f.name] = list(value) if isinstance(value, (tuple, list)) else value
+        out[f.name] = (
+            [list(v) if isinstance(v, tuple) else v for v in value] if isinstance(value, (tuple, list)) else value
+        )
     return out
 
 

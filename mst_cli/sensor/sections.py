@@ -10,8 +10,10 @@ one :class:`~mst_cli.sensor.document.Document`.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, fields
 
+from mst_cli.errors import InputError
 from mst_cli.io.rules import Rule, adopt, default_of
 from mst_cli.model.assembly import Housing, Magnet, SensorGeometry
 from mst_cli.model.cell import HexCell
@@ -26,6 +28,27 @@ from mst_cli.model.printer import Printer
 # the terms of design.objective (mst_cli.design.problem reads the same tuple)
 OBJECTIVE_TERMS = ("height", "force_resolution", "print_robustness")
 DEFAULT_OBJECTIVE = dict.fromkeys(OBJECTIVE_TERMS, 1.0)
+
+MIN_CHIP_SPACING_MM = 3.0  # an MLX90393's QFN package is 3 mm square
+
+
+def check_chip_positions(positions, chip_offset_mm) -> None:
+    """InputError unless the chips start at chip_offset_mm and no two overlap."""
+    if positions is None:
+        return
+    if tuple(positions[0]) != tuple(chip_offset_mm):
+        raise InputError(
+            "magnetometer.positions_mm[0]",
+            list(positions[0]),
+            f"must be the chip at magnetometer.chip_offset_mm {list(chip_offset_mm)}",
+        )
+    for i, a in enumerate(positions):
+        for j, b in enumerate(positions[:i]):
+            if math.dist(a, b) < MIN_CHIP_SPACING_MM:
+                raise InputError(
+                    f"magnetometer.positions_mm[{i}]", list(a), f"must be >= {MIN_CHIP_SPACING_MM:g} mm from chip {j}"
+                )
+
 
 # 12 printable cells still lock bottom to top below the chip's saturation and the design loop
 # meets 12-layer targets (benchmarks/bench_layers.py); each layer adds at least 2 mm of height
@@ -113,6 +136,22 @@ class MagnetometerSection:
     )
     chip_offset_mm: tuple[float, float] = adopt(SensorGeometry, "chip_offset_mm")
     magnet_tilt_deg: float = adopt(SensorGeometry, "magnet_tilt_deg")
+    positions_mm: tuple[tuple[float, float], ...] | None = spec(
+        None,
+        kind="pairs",
+        lo=-100.0,
+        hi=100.0,
+        unit="mm",
+        nullable=True,
+        omit_default=True,
+        meaning="every chip's centre (x, y) relative to the magnet axis when more than one MLX90393 "
+        "reads the magnet, the first at chip_offset_mm, centres at least "
+        f"{MIN_CHIP_SPACING_MM:g} mm apart (null: one chip, at chip_offset_mm); two chips tell shear "
+        "from position (docs/design.md 4.5). The housing's slot is cut for the first only",
+    )
+
+    def __post_init__(self):
+        check_chip_positions(self.positions_mm, self.chip_offset_mm)
 
 
 @dataclass(frozen=True)

@@ -16,7 +16,7 @@ if TYPE_CHECKING:
     from mst_cli.model.offcentre import OffCentreResponse, OffsetMap
 
 OFFCENTRE_COLUMNS = (
-    "force_N,Bx_mT,By_mT,Bz_mT,B_abs_mT,magnet_tilt_x_deg,magnet_tilt_y_deg,"
+    "force_N,Fx_N,Fy_N,Bx_mT,By_mT,Bz_mT,B_abs_mT,magnet_tilt_x_deg,magnet_tilt_y_deg,"
     "magnet_shift_x_mm,magnet_shift_y_mm,magnet_shift_z_mm,force_read_axial_N,read_error_N,in_range,"
     "axial_reading_flag"
 )
@@ -32,13 +32,22 @@ def _cell(v: float) -> str:
 
 
 def offcentre_csv(r: OffCentreResponse) -> str:
-    """One row per force sample (field in mT, tilts toward +x and +y in degrees); the force read
+    """One row per force sample (the normal force force_N and the tangential Fx_N, Fy_N; field in
+    mT, tilts toward +x and +y in degrees); the force read
     as axial and its error are empty where the centred model has no answer (axial_reading_flag)."""
     buf = io.StringIO()
     buf.write(OFFCENTRE_COLUMNS + "\n")
     B = r.B_T * 1e3
     for i, F in enumerate(r.force_N):
-        row = [F, *B[i], r.B_abs_T[i] * 1e3, *r.magnet_tilt_deg[i], *r.magnet_shift_mm[i]]
+        row = [
+            F,
+            r.force_x_N[i],
+            r.force_y_N[i],
+            *B[i],
+            r.B_abs_T[i] * 1e3,
+            *r.magnet_tilt_deg[i],
+            *r.magnet_shift_mm[i],
+        ]
         row += [r.force_read_axial_N[i], r.read_error_N[i]]
         buf.write(",".join(map(_cell, row)) + f",{int(r.axial.in_range[i])},{r.axial_reading_flag[i]}\n")
     return buf.getvalue()
@@ -67,8 +76,12 @@ def offcentre_summary(r: OffCentreResponse) -> dict:
     flags = [str(f) for f in r.axial_reading_flag]
     return {
         "load_offset_mm": list(r.offset_mm),
+        "shear_ratio": list(r.shear_ratio),
         "mechanics": r.mechanics,
         "tilt_model": "rigid plates; each chevron a depth-long line of the layer law (mst_cli.model.mechanics.tilt)",
+        "shear_model": "the tangential force at the top face adds its moment about every layer's pivot; each "
+        "layer's plates slide with its lateral compliance along a press growing from zero "
+        "(mst_cli.model.general_load)",
         "layers": [
             {
                 "layer": j + 1,
@@ -97,7 +110,9 @@ def _side(v: float | None) -> str:
 def offcentre_lines(s: dict) -> list[str]:
     """The terminal's account of the off-centre load, from its :func:`offcentre_summary`."""
     x0, y0 = s["load_offset_mm"]
-    lines = [f"load at x = {x0:g} mm, y = {y0:g} mm (rigid-plate tilt model, {s['mechanics']} layers):"]
+    rx, ry = s["shear_ratio"]
+    shear = f", tangential Fx = {rx:g} F, Fy = {ry:g} F" if rx or ry else ""
+    lines = [f"load at x = {x0:g} mm, y = {y0:g} mm{shear} (rigid-plate tilt model, {s['mechanics']} layers):"]
     for lay in s["layers"]:
         lines.append(
             f"  layer {lay['layer']}: locks at {lay['lock_force_axial_N']:.4g} N centred; here its -x side "
@@ -120,6 +135,29 @@ def offcentre_lines(s: dict) -> list[str]:
             )
     tx, ty = (round(v, 2) + 0.0 for v in s["magnet_tilt_at_last_lock_deg"])  # no "-0.00"
     lines.append(f"  the magnet tilts {tx:.2f} deg toward +x and {ty:.2f} deg toward +y at the last lock")
+    return lines
+
+
+def shear_bound_lines(s: dict) -> list[str]:
+    """The terminal's account of report.json's shear_bound: each estimate's 1-sigma CRB."""
+    chips = " and ".join(f"({x:g}, {y:g})" for x, y in s["chips_mm"])
+    where = (
+        "centred presses"
+        if len(s["chips_mm"]) == 1
+        else f"presses over +-{s['region_mm'][0]:g} x +-{s['region_mm'][1]:g} mm"
+    )
+    lines = [
+        f"what the chip{'s' if len(s['chips_mm']) > 1 else ''} at {chips} mm can tell apart ({where}, "
+        f"at {', '.join(f'{f:.3g}' for f in s['force_N'])} N), median (worst) 1-sigma Cramer-Rao bound:"
+    ]
+    for row in s["noise"]:
+        cells = []
+        for name in s["estimates"]:
+            what, unit = name.rsplit("_", 1)
+            cells.append(f"{what} {row[name + '_crb_median']:.3g} ({row[name + '_crb_worst']:.3g}) {unit}")
+        lines.append(f"  {row['noise_uT']:g} uT: " + ", ".join(cells))
+    if len(s["chips_mm"]) == 1:
+        lines.append("  one chip: 3 numbers, so Fz, Fx, Fy of a press taken as centred (a second chip tells position)")
     return lines
 
 

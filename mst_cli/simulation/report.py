@@ -17,7 +17,9 @@ import numpy as np
 from mst_cli.io.outputs import Staging, staged
 from mst_cli.model.assembly import SensorGeometry
 from mst_cli.model.chip import quantise_lsb
+from mst_cli.model.general_load import small_load_lateral_N_per_mm
 from mst_cli.model.response import Regime, Response
+from mst_cli.sensor.as_printed import as_printed
 
 if TYPE_CHECKING:
     from mst_cli.sensor.document import Document
@@ -32,7 +34,7 @@ def report_dict(doc: Document, geometry: SensorGeometry, resp: Response, extra: 
         "name": doc.name,
         "source": doc.source,
         "models": {"mechanics": resp.mechanics, "field": resp.field_model},
-        "layers": _layer_rows(geometry, resp),
+        "layers": _layer_rows(geometry, resp, _lateral_stiffness(doc, resp.mechanics)),
         "regimes": [_regime_row(r) for r in resp.regimes],
         "range_N": resp.max_force_N,
         "out_of_range_above_N": resp.max_force_N,
@@ -57,8 +59,15 @@ def report_dict(doc: Document, geometry: SensorGeometry, resp: Response, extra: 
     return nulls_with_reasons(out, _undefined_reasons(resp))
 
 
-def _layer_rows(geometry: SensorGeometry, resp: Response) -> list[dict]:
-    """report.json's layers: each cell as drawn and the regime it locks in."""
+def _lateral_stiffness(doc: Document, mechanics: str) -> list[tuple[float, float]]:
+    """Every layer's small-load (k_x, k_y) as printed, from the rung ``mst simulate`` uses: L0's
+    closed forms for the spring and frame rungs, L2 for the continuum (docs/design.md 4.4)."""
+    printed = as_printed(doc)
+    return [small_load_lateral_N_per_mm(c, printed.material, mechanics) for c in printed.geometry().layers]
+
+
+def _layer_rows(geometry: SensorGeometry, resp: Response, lateral: list[tuple[float, float]]) -> list[dict]:
+    """report.json's layers: each cell as drawn, the regime it locks in, its lateral stiffness."""
     layers = []
     for i, cell in enumerate(geometry.layers):
         reg = next(r for r in resp.regimes if r.layer == i + 1)
@@ -76,6 +85,8 @@ def _layer_rows(geometry: SensorGeometry, resp: Response) -> list[dict]:
                 "k_N_per_mm": reg.k_layer_N_per_mm,
                 "lock_force_N": reg.force_to_N,
                 "locks_in_regime": reg.index,
+                "lateral_stiffness_x_N_per_mm": lateral[i][0],
+                "lateral_stiffness_y_N_per_mm": lateral[i][1],
             }
         )
     return layers

@@ -16,7 +16,7 @@ from mst_cli.model.offcentre import OffCentreResponse, OffsetMap
 from mst_cli.model.response import Response
 from mst_cli.sensor.as_printed import PRINTER_NOMINAL, as_printed
 from mst_cli.sensor.document import Document
-from mst_cli.simulation.offcentre_files import offcentre_lines, offcentre_summary, write_offcentre
+from mst_cli.simulation.offcentre_files import offcentre_lines, offcentre_summary, shear_bound_lines, write_offcentre
 from mst_cli.simulation.report import terminal_table, write_simulation
 
 
@@ -63,6 +63,7 @@ class Simulation:
     response: Response | None = None
     off_centre: OffCentreResponse | None = None
     offset_map: OffsetMap | None = None
+    shear_bound: dict | None = None  # report.json's shear_bound (LayoutBound.summary), with --shear-ratio
     report: dict | None = field(default=None, repr=False)  # report.json, once written
 
     def model_lines(self) -> list[str]:
@@ -92,6 +93,8 @@ class Simulation:
         summary = self.off_centre_summary()
         if summary is not None:
             extra["off_centre"] = summary
+        if self.shear_bound is not None:
+            extra["shear_bound"] = self.shear_bound
         self.report = write_simulation(
             self.document,
             self.geometry,
@@ -110,6 +113,8 @@ class Simulation:
         summary = self.off_centre_summary()
         if summary is not None:
             lines += offcentre_lines(summary)
+        if self.shear_bound is not None:
+            lines += shear_bound_lines(self.shear_bound)
         return "\n".join(lines)
 
     def file_names(self, plot: bool = True) -> list[str]:

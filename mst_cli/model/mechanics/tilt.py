@@ -223,11 +223,16 @@ def solve_layer_tilt(
 
 def _axial_guess(layer: LayerTiltLaw, force_N: float) -> float:
     """The centred closure at this force (walls and pads together)."""
+    return float(centred_compression_mm(layer, force_N))
+
+
+def centred_compression_mm(layer: LayerTiltLaw, force_N) -> np.ndarray:
+    """The layer's closure under a centred force (walls and pads together), over an array of forces."""
     w = layer.walls
-    if force_N <= w.F_knots_N[-1]:
-        return float(np.interp(force_N, w.F_knots_N, w.d_knots_mm))
-    k_locked = w.k_after_N_per_mm + layer.pad_stiffness_N_per_mm
-    return float(w.d_knots_mm[-1] + (force_N - w.F_knots_N[-1]) / max(k_locked, 1e-300))
+    F = np.asarray(force_N, dtype=float)
+    k_locked = max(w.k_after_N_per_mm + layer.pad_stiffness_N_per_mm, 1e-300)
+    past = w.d_knots_mm[-1] + (F - w.F_knots_N[-1]) / k_locked
+    return np.where(F <= w.F_knots_N[-1], np.interp(F, w.F_knots_N, w.d_knots_mm), past)
 
 
 def _residual(layer: LayerTiltLaw, u: np.ndarray, target: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

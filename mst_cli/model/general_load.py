@@ -1,0 +1,192 @@
+"""The stack under a general load (issue 39): a force (Fx, Fy, Fz) pressed at (x0, y0) on the
+top face, and the field it gives at one chip or more.
+
+The load model and what it assumes:
+
+* Every layer carries the whole force and the moments of the load above it. About layer j's
+  pivot (its mid-plane, z_j) the normal force Fz at (x0, y0) gives the tilt rung's moments
+  (Fz x0, Fz y0) (:mod:`mst_cli.model.mechanics.tilt`); the tangential force, applied at the
+  top face's height z_top, adds (Fx h_j, Fy h_j) with h_j = z_top - z_j (a push toward +x
+  closes the +x side, as a press at +x does). So layer j answers as the tilt rung under Fz
+  pressed at (x0 + Fx h_j / Fz, y0 + Fy h_j / Fz): a compression at the axis and two tilts.
+  Small rotations, no P-delta; the tangential force does not compress a layer (its part is odd
+  about the mid-plane, L2's decoupling, :mod:`mst_cli.model.mechanics.continuum_lateral`).
+* The plates translate: each layer's top plate slides over its bottom one by (Fx c_x, Fy c_y),
+  the layers in series. The press grows along a ray from zero (Fx : Fy : Fz fixed, inside a
+  friction cone), so a layer's slide is the integral of dF_t / k_t along its compression path:
+  c(Fz) = (1 / Fz) int_0^Fz dF / k(d(F)), d(F) the layer's centred compression (the tilt's
+  change of it ignored). k from the rung: ``spring`` and ``frame`` take L0's small-load closed
+  forms (:mod:`mst_cli.model.mechanics.lateral`) up to the layer's lock and no further slide
+  past it (the pads pressed together stick: L2's stuck tangent past the lock is 8 to 40 times
+  its free one, docs/design.md section 4.4); ``continuum`` takes L2's lateral tangents along
+  its compression path (:func:`~mst_cli.model.mechanics.continuum_lateral.lateral_path`),
+  frictionless before the lock and stuck past it, k_y times L0's free-face factor.
+* The magnet's pose adds the tilts' turns and shifts and the slides
+  (:func:`mst_cli.model.stack_pose.magnet_pose`); its exact field at each chip follows.
+
+At Fx = Fy = 0 it is the off-centre press (:mod:`mst_cli.model.offcentre`) exactly. Pure: no I/O.
+"""
+
+from __future__ import annotations
+
+import functools
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from mst_cli.model.assembly import SensorGeometry
+from mst_cli.model.material import Material
+from mst_cli.model.mechanics.lateral import depth_end_factor, lateral_stiffness_N_per_mm
+from mst_cli.model.mechanics.tilt import LayerTiltLaw, centred_compression_mm
+from mst_cli.model.stack_pose import layer_pivots_mm, magnet_field_T, magnet_pose, stack_path, tilt_laws
+
+SHEAR_RATIO_MAX = 1.0  # |Fx / Fz|, |Fy / Fz| the model takes (a friction cone of TPU on skin or TPU)
+COMPLIANCE_SAMPLES = 4001  # force samples of a layer's mean lateral compliance, 0 to FORCE_SPAN x its lock
+FORCE_SPAN = 20.0  # beyond it the compliance integral goes on with its last integrand
+
+
+@dataclass(frozen=True)
+class LayerLateralLaw:
+    """One layer's slide under a tangential force growing with the normal one: U(F) = int_0^F
+    dF' / k(d(F')), the slide at normal force F per unit of the ratio F_t / F (mm), sampled on
+    ``force_N``; the mean compliance c(F) = U(F) / F."""
+
+    force_N: np.ndarray  # (k,) from 0
+    integral_x_mm: np.ndarray  # (k,) U_x(F), mm per unit of Fx / Fz
+    integral_y_mm: np.ndarray  # (k,)
+
+    def compliance_mm_per_N(self, force_N) -> tuple[np.ndarray, np.ndarray]:
+        """(c_x, c_y) at normal forces ``force_N``: the slide per newton of tangential force."""
+        F = np.asarray(force_N, dtype=float)
+        out = []
+        for U in (self.integral_x_mm, self.integral_y_mm):
+            tail = (U[-1] - U[-2]) / (self.force_N[-1] - self.force_N[-2])  # 1/k past the samples
+            u = np.where(F <= self.force_N[-1], np.interp(F, self.force_N, U), U[-1] + tail * (F - self.force_N[-1]))
+            small = F <= self.force_N[1]
+            first = (U[1] - U[0]) / self.force_N[1]  # c(0) = 1 / k(0)
+            out.append(np.where(small, first, u / np.where(small, 1.0, F)))
+        return out[0], out[1]
+
+
+def lateral_law(tilt: LayerTiltLaw, k_x, k_y) -> LayerLateralLaw:
+    """The layer's :class:`LayerLateralLaw` from its tangent stiffnesses ``k_x(d)``, ``k_y(d)``
+    (callables of the compression, N/mm; inf: no slide) along its centred compression."""
+    F = np.linspace(0.0, FORCE_SPAN * tilt.lock_force_N, COMPLIANCE_SAMPLES)
+    d = centred_compression_mm(tilt, F)
+    mid_d = 0.5 * (d[1:] + d[:-1])
+    dF = np.diff(F)
+    integrals = [np.concatenate([[0.0], np.cumsum(dF / k(mid_d))]) for k in (k_x, k_y)]
+    return LayerLateralLaw(F, integrals[0], integrals[1])
+
+
+def small_load_lateral_N_per_mm(cell, material: Material, mechanics: str) -> tuple[float, float]:
+    """(k_x, k_y) at small load from the rung ``mst simulate`` uses: L0's closed forms for the
+    spring and frame rungs, L2's solves (k_y with L0's free-face factor) for the continuum."""
+    if mechanics != "continuum":
+        return lateral_stiffness_N_per_mm(cell, material)
+    from mst_cli.model.mechanics import continuum_lateral as l2  # deferred: L2 (scikit-fem) loads when asked
+
+    L = cell.wall_length_mm
+    k_y = l2.lateral_stiffness_y_N_per_mm(cell, material) * float(depth_end_factor(cell.t_mm, L, cell.depth_mm))
+    return l2.lateral_stiffness_x_N_per_mm(cell, material), k_y
+
+
+def _l0_law(tilt: LayerTiltLaw, cell, material: Material) -> LayerLateralLaw:
+    """L0: the small-load k up to the lock, stuck (no slide) past it."""
+    k0 = lateral_stiffness_N_per_mm(cell, material)
+    lock = tilt.pad_gap_mm
+    return lateral_law(tilt, *(lambda d, k=k: np.where(d < lock, k, np.inf) for k in k0))
+
+
+L2_FRACTIONS = (0.0, 0.25, 0.5, 0.75, 0.95, 1.05)  # of the lock stroke where L2's lateral tangents are solved
+
+
+@functools.lru_cache(maxsize=32)
+def _l2_path(cell, material: Material):
+    """L2's lateral path of one cell (seconds each: kept for the process)."""
+    from mst_cli.model.mechanics.continuum_lateral import lateral_path  # deferred: L2 loads when asked
+
+    return lateral_path(cell, material, L2_FRACTIONS)
+
+
+def _l2_law(tilt: LayerTiltLaw, cell, material: Material) -> LayerLateralLaw:
+    """L2: the lateral path's tangents, frictionless before the lock, stuck past it."""
+    fractions = L2_FRACTIONS
+    p = _l2_path(cell, material)
+    end = float(depth_end_factor(cell.t_mm, cell.wall_length_mm, cell.depth_mm))
+    lock = tilt.pad_gap_mm
+    f = np.array(fractions[:-1])
+
+    def tangent(free, stuck, scale=1.0):
+        return lambda d: scale * np.where(d < lock, np.interp(d / lock, f, free[:-1]), stuck[-1])
+
+    return lateral_law(
+        tilt,
+        tangent(p.k_x_free_N_per_mm, p.k_x_stuck_N_per_mm),
+        tangent(p.k_y_free_N_per_mm, p.k_y_stuck_N_per_mm, end),
+    )
+
+
+@dataclass(frozen=True)
+class LoadedStack:
+    """What the general load's forward model needs, built once per design and rung."""
+
+    geometry: SensorGeometry
+    mechanics: str
+    tilt: list[LayerTiltLaw]
+    lateral: list[LayerLateralLaw]
+    lever_mm: np.ndarray  # (n,) the top face's height over each layer's pivot
+
+    def layer_offsets_mm(self, offset_mm, ratio) -> np.ndarray:
+        """(n, 2): where each layer sees Fz pressed, the tangential force's moment included;
+        ``ratio`` = (Fx / Fz, Fy / Fz)."""
+        return np.asarray(offset_mm, dtype=float)[None, :] + np.outer(self.lever_mm, np.asarray(ratio, dtype=float))
+
+    def slides_mm(self, force_N, ratio) -> np.ndarray:
+        """(m, n, 2): every layer's slide at normal forces ``force_N`` (m,) and tangential
+        ``ratio`` x the normal force."""
+        F = np.asarray(force_N, dtype=float)
+        out = np.zeros((len(F), len(self.lateral), 2))
+        for j, law in enumerate(self.lateral):
+            cx, cy = law.compliance_mm_per_N(F)
+            out[:, j, 0], out[:, j, 1] = ratio[0] * F * cx, ratio[1] * F * cy
+        return out
+
+
+def loaded_stack(
+    geometry: SensorGeometry, material: Material, mechanics: str = "spring", lever_factor: float = 1.0
+) -> LoadedStack:
+    """The tilt laws and lateral laws of every layer on the named rung."""
+    tilts = tilt_laws(geometry, material, mechanics, lever_factor)
+    build = _l2_law if mechanics == "continuum" else _l0_law
+    lateral = [build(t, c, material) for t, c in zip(tilts, geometry.layers)]
+    lever = geometry.total_height_mm - layer_pivots_mm(geometry)
+    return LoadedStack(geometry, mechanics, tilts, lateral, lever)
+
+
+def load_path(
+    stack: LoadedStack, force_N: np.ndarray, offset_mm, ratio=(0.0, 0.0)
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(d (m, n), tilts (m, n, 2), slides (m, n, 2)) along normal forces ``force_N`` (m,)
+    ascending, pressed at ``offset_mm`` with the tangential force ``ratio`` x the normal one."""
+    F = np.asarray(force_N, dtype=float)
+    d, tilt = stack_path(stack.tilt, F, stack.layer_offsets_mm(offset_mm, ratio))
+    return d, tilt, stack.slides_mm(F, ratio)
+
+
+def field_T(
+    stack: LoadedStack,
+    force_N: float,
+    shear_N: tuple[float, float],
+    offset_mm: tuple[float, float],
+    chips_mm: Sequence[tuple[float, float]] | None = None,
+) -> np.ndarray:
+    """The field (k, 3) in T at each of the chips ``chips_mm`` (the geometry's one chip unless
+    given) under the normal force ``force_N`` (> 0) and tangential ``shear_N`` = (Fx, Fy)
+    pressed at ``offset_mm``. Raises TiltError when a layer's equilibrium is not found."""
+    ratio = (shear_N[0] / force_N, shear_N[1] / force_N)
+    d, tilt, slide = load_path(stack, np.array([force_N]), offset_mm, ratio)
+    shift, rotvec = magnet_pose(stack.geometry, d, tilt, slide)
+    chips = [stack.geometry.chip_offset_mm] if chips_mm is None else chips_mm
+    return np.concatenate([magnet_field_T(stack.geometry, shift, rotvec, (c[0], c[1])) for c in chips])

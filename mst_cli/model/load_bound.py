@@ -1,0 +1,134 @@
+"""What the chips can tell apart: the field's Jacobian in the load's unknowns and the
+Cramer-Rao bound of any unbiased estimate of them (issue 39).
+
+The unknowns are the normal force Fz, the tangential force (Fx, Fy) and where the force presses
+(x, y) (:data:`UNKNOWNS`); the data are the three axes of every chip, each with Gaussian noise
+of the same sigma. The Fisher information is J^T J / sigma^2 (J the field's Jacobian), so the
+1-sigma bound of estimate i is sigma_CRB,i = sigma sqrt((J^T J)^-1_ii): no unbiased estimator
+does better at that noise. One chip gives three numbers: three unknowns at most (the centred
+press's Fz, Fx, Fy); two chips give six, enough for all five.
+
+Pure: no I/O.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from mst_cli.model.general_load import LoadedStack, field_T
+
+UNKNOWNS = ("force_N", "shear_x_N", "shear_y_N", "x_mm", "y_mm")
+CENTRED = (0, 1, 2)  # the unknowns of a centred press: Fz, Fx, Fy
+ALL = (0, 1, 2, 3, 4)
+FORCE_STEP_REL = 1e-4  # finite-difference steps: of the normal force (floored at FORCE_STEP_MIN_N)
+FORCE_STEP_MIN_N = 1e-3
+POSITION_STEP_MM = 1e-3
+
+
+def fields_T(stack: LoadedStack, theta, chips_mm: Sequence[tuple[float, float]]) -> np.ndarray:
+    """The chips' fields (3 k,) in T at the load ``theta`` = (Fz, Fx, Fy, x, y)."""
+    Fz, Fx, Fy, x, y = (float(v) for v in theta)
+    return field_T(stack, Fz, (Fx, Fy), (x, y), chips_mm).ravel()
+
+
+def steps(theta) -> np.ndarray:
+    """The finite-difference step of every unknown at ``theta`` (N for forces, mm for positions)."""
+    h_F = max(FORCE_STEP_REL * abs(float(theta[0])), FORCE_STEP_MIN_N)
+    return np.array([h_F, h_F, h_F, POSITION_STEP_MM, POSITION_STEP_MM])
+
+
+def field_jacobian(
+    stack: LoadedStack,
+    theta,
+    chips_mm: Sequence[tuple[float, float]],
+    free: Sequence[int] = ALL,
+    at: np.ndarray | None = None,
+) -> np.ndarray:
+    """dB/dtheta (3 k, len(free)) in T per N or per mm, by differences: central, or forward from
+    ``at`` (the fields at ``theta``, already known)."""
+    theta = np.asarray(theta, dtype=float)
+    h = steps(theta)
+    cols = []
+    for i in free:
+        e = np.zeros(5)
+        e[i] = h[i]
+        if at is None:
+            cols.append((fields_T(stack, theta + e, chips_mm) - fields_T(stack, theta - e, chips_mm)) / (2 * h[i]))
+        else:
+            cols.append((fields_T(stack, theta + e, chips_mm) - at) / h[i])
+    return np.stack(cols, axis=-1)
+
+
+def crb_sigma(J: np.ndarray, noise_T: float) -> np.ndarray:
+    """The 1-sigma Cramer-Rao bound of every unknown of ``J``'s columns at a noise ``noise_T``
+    per axis (inf where the chips cannot tell that unknown from the others)."""
+    info = J.T @ J
+    try:
+        cov = np.linalg.inv(info)
+    except np.linalg.LinAlgError:
+        return np.full(J.shape[1], np.inf)
+    d = np.diag(cov)
+    if np.linalg.cond(info) > 1e14 or np.any(d <= 0):
+        return np.full(J.shape[1], np.inf)
+    return noise_T * np.sqrt(d)
+
+
+@dataclass
+class LayoutBound:
+    """The 1-sigma bounds of a chip layout over presses on a grid of the top face."""
+
+    chips_mm: list[tuple[float, float]]
+    free: tuple[int, ...]  # which of UNKNOWNS are estimated
+    x_mm: np.ndarray  # (nx,)
+    y_mm: np.ndarray  # (ny,)
+    force_N: np.ndarray  # (nf,)
+    shear_ratio: tuple[float, float]
+    sigma_per_T: np.ndarray  # (nf, ny, nx, len(free)): the bound at a noise of 1 T (it scales with the noise)
+
+    def summary(self, noise_uT: Sequence[float]) -> dict:
+        """report.json's account: per noise, each estimate's median and worst 1-sigma bound."""
+        out: dict = {
+            "chips_mm": [list(c) for c in self.chips_mm],
+            "estimates": [UNKNOWNS[i] for i in self.free],
+            "region_mm": [float(self.x_mm.max()), float(self.y_mm.max())],
+            "force_N": [float(f) for f in self.force_N],
+            "shear_ratio": list(self.shear_ratio),
+            "noise": [],
+        }
+        for n in noise_uT:
+            s = self.sigma_per_T * n * 1e-6
+            row: dict = {"noise_uT": float(n)}
+            for k, i in enumerate(self.free):
+                row[f"{UNKNOWNS[i]}_crb_median"] = float(np.median(s[..., k]))
+                row[f"{UNKNOWNS[i]}_crb_worst"] = float(np.max(s[..., k]))
+            out["noise"].append(row)
+        return out
+
+
+def layout_bound(
+    stack: LoadedStack,
+    chips_mm: Sequence[tuple[float, float]],
+    force_N: Sequence[float],
+    shear_ratio: tuple[float, float] = (0.0, 0.0),
+    region_frac: float = 0.6,
+    grid: tuple[int, int] = (5, 5),
+) -> LayoutBound:
+    """The bounds over a ``grid`` of presses spanning ``region_frac`` of the top face (centred
+    presses only, Fz Fx Fy, for one chip; all five unknowns for two chips or more)."""
+    g = stack.geometry
+    free = CENTRED if len(chips_mm) == 1 else ALL
+    xs = np.linspace(-1.0, 1.0, grid[0]) * 0.5 * region_frac * g.width_mm
+    ys = np.linspace(-1.0, 1.0, grid[1]) * 0.5 * region_frac * g.depth_mm
+    if free == CENTRED:
+        xs, ys = np.zeros(1), np.zeros(1)
+    F = np.asarray(force_N, dtype=float)
+    sigma = np.zeros((len(F), len(ys), len(xs), len(free)))
+    for k, f in enumerate(F):
+        for iy, y in enumerate(ys):
+            for ix, x in enumerate(xs):
+                theta = (f, shear_ratio[0] * f, shear_ratio[1] * f, x, y)
+                sigma[k, iy, ix] = crb_sigma(field_jacobian(stack, theta, chips_mm, free), 1.0)
+    return LayoutBound([(float(c[0]), float(c[1])) for c in chips_mm], free, xs, ys, F, shear_ratio, sigma)
