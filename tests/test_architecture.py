@@ -273,7 +273,10 @@ def _deferred_imports():
                 if isinstance(node, ast.Import):
                     yield from ((module, node.lineno, a.name) for a in node.names)
                 elif isinstance(node, ast.ImportFrom):
-                    yield module, node.lineno, _absolute(node.module or "", module, is_package, node.level)
+                    base = _absolute(node.module or "", module, is_package, node.level)
+                    # 'from package import submodule' imports the submodule
+                    for a in node.names:
+                        yield module, node.lineno, f"{base}.{a.name}" if f"{base}.{a.name}" in MODULES else base
 
 
 def _deferral_allowed(module: str, name: str) -> bool:
