@@ -150,6 +150,11 @@ def _reader(
     return reader, rd, setting
 
 
+# what ``mst read --estimate`` can add to the force; a new estimate is one entry here and one
+# branch in :func:`_estimator`
+ESTIMATES = ("none", "offset")
+
+
 def read(
     model: str | Path | Document,
     readings: str | Path,
@@ -160,7 +165,9 @@ def read(
     gain_sel: int | None = None,
     res: int | None = None,
     warn: Callable[[str], None] | None = None,
+    estimate: str = "none",
     estimate_offset: bool = False,
+    polish: bool = False,
     max_offset_sigma_mm: float = 1.0,
 ) -> ForceReadings:
     """MLX90393 readings to forces with a calibrated model (``mst read READINGS.csv``).
@@ -178,12 +185,18 @@ def read(
     warn : callable, optional
         Gets a sentence when the model has no matching calibration.json beside it, or when the
         model no longer gives the curve recorded at calibration.
+    estimate : {"none", "offset"}
+        "offset": estimate where each reading was pressed from Bx, By, Bz (the tilt rung's
+        inverse, from the model's table: inverse_table.npz beside the model, built on first use
+        and then written to ``out``) and correct its force; ``.offset`` holds x, y and their
+        Cramer-Rao 1-sigma, and a reading whose press the data cannot tell keeps the centred
+        force, flagged (``.offset.flag``): not_identifiable (offset less certain than
+        ``max_offset_sigma_mm``), ambiguous (two presses give it: every root of the table is
+        found) or no_fit (none does); thousands of readings a second.
     estimate_offset : bool
-        Estimate where each reading was pressed from Bx, By, Bz (the tilt rung's inverse) and
-        correct its force; ``.offset`` holds x, y and their 1-sigma, and a reading whose press
-        the data cannot tell keeps the centred force, flagged (``.offset.flag``):
-        not_identifiable (offset less certain than ``max_offset_sigma_mm``), ambiguous (two
-        presses give it) or no_fit (none does); about 0.3 s a reading.
+        The same as ``estimate="offset"``.
+    polish : bool
+        Polish each table root by the model's exact Gauss-Newton (about 0.1 s a reading).
 
     Returns
     -------
@@ -192,18 +205,41 @@ def read(
         ``.flag`` (n,) one of ok, above_calibrated, below_range, above_range, saturated;
         ``.force_resolution_N`` (n,); ``.summary()``, ``.csv()``.
     """
-    if not (max_offset_sigma_mm > 0 and math.isfinite(max_offset_sigma_mm)):
-        raise InputError("--max-offset-sigma-mm", max_offset_sigma_mm, "must be a positive number of mm")
+    estimate = _checked_estimate("offset" if estimate_offset else estimate, max_offset_sigma_mm)
     reader, rd, _ = _reader(model, model_file, mechanics, gain_sel, res, False, readings, out, warn)
-    offsets = None
-    if estimate_offset:
-        mech = choose_mechanics(mechanics, reader.document.accuracy_rel, reader.document.mechanics).mechanics
-        offsets = reader.offset_estimator(mech, max_offset_sigma_mm)
+    offsets, built = _estimator(reader, estimate, mechanics, model_file or model, max_offset_sigma_mm, polish, warn)
     result = reader.read(rd, offsets)
     if out is not None:
         with staged(Path(out)) as st:
             st.write_text("forces.csv", result.csv())
+            if built is not None:
+                built.save(st.path(built.file_name))
     return result
+
+
+def _checked_estimate(estimate: str, max_offset_sigma_mm: float) -> str:
+    _one_of("--estimate", estimate, ESTIMATES)
+    if not (max_offset_sigma_mm > 0 and math.isfinite(max_offset_sigma_mm)):
+        raise InputError("--max-offset-sigma-mm", max_offset_sigma_mm, "must be a positive number of mm")
+    return estimate
+
+
+def _estimator(reader, estimate: str, mechanics: str | None, model_file, max_sigma_mm: float, polish: bool, warn):
+    """(the reader of ``estimate``, or None; the table it built, to be written, or None).
+    InputError when the layout cannot identify the estimate anywhere in its range."""
+    from mst_cli.calibrate.table_reader import offset_table_reader  # deferred: the calibrate layer, as _reader
+
+    if estimate == "none":
+        return None, None
+    if not isinstance(model_file, (str, Path)):
+        raise InputError("model_file", None, "name the model file: its offset table stands beside it")
+    doc = reader.document
+    mech = choose_mechanics(mechanics, doc.accuracy_rel, doc.mechanics).mechanics
+    lever = reader.record.lever_factor() if reader.record is not None else 1.0
+    offsets, note = offset_table_reader(doc, reader.inverse_map, lever, Path(model_file), mech, max_sigma_mm, polish)
+    if note is not None and warn is not None:
+        warn(note)
+    return offsets, (offsets.table if note is not None else None)
 
 
 def read_serial(
@@ -222,16 +258,24 @@ def read_serial(
     warn: Callable[[str], None] | None = None,
     status: Callable[[str], None] | None = None,
     show: Callable[[str], None] = print,
+    estimate: str = "none",
+    max_offset_sigma_mm: float = 1.0,
 ) -> SerialSamples:
     """A live MLX90393 stream to forces (``mst read --serial PORT``): one line per sample goes to
     ``show``; stops when the port closes, after ``count`` samples, ``timeout_s`` seconds of
     silence or Ctrl-C; ``status`` gets a line when reading starts. ``out``: forces.csv of every
-    sample (time s, the three values, force N, regime, flag, resolution N)."""
+    sample (time s, the three values, force N, regime, flag, resolution N; with an ``estimate``,
+    its columns as :func:`read` writes them). ``estimate``: as :func:`read`'s, live (the table;
+    the table is built before the port is opened when none stands beside the model)."""
+    _checked_estimate(estimate, max_offset_sigma_mm)
     reader, _, setting = _reader(model, model_file, mechanics, gain_sel, res, raw, None, out, warn)
+    offsets, built = _estimator(reader, estimate, mechanics, model_file or model, max_offset_sigma_mm, False, warn)
     if status is not None:
         status(f"{reader.document.name}: reading {port} at {baud} baud (Ctrl-C to stop)")
-    samples = reader.stream(port, baud, count, timeout_s, raw, setting, show)
+    samples = reader.stream(port, baud, count, timeout_s, raw, setting, show, offsets)
     if out is not None:
         with staged(Path(out)) as st:
             st.write_text("forces.csv", samples.csv(reader.inverse_map))
+            if built is not None:
+                built.save(st.path(built.file_name))
     return samples
