@@ -45,6 +45,7 @@ def calibrate(
     res: int | None = None,
     table_size: int = 256,
     progress: Callable[[str], None] | None = None,
+    offset_table: bool = False,
 ) -> Calibration:
     """Fit a design's print parameters to a load test of the printed sensor (``mst calibrate``).
 
@@ -64,6 +65,9 @@ def calibrate(
         Parameters to fit (of :data:`mst_cli.sensor.as_printed.PARAMETERS`, or "a,b") [default: all four].
     gain_sel, res, table_size : int, optional
         The MLX90393 setting the load test was read at (0-7, 0-3); entries of lookup.csv (16-4096).
+    offset_table : bool
+        Also write inverse_table.npz (what ``read(estimate="offset")`` reads; a minute or two)
+        and offset_table.h (its coarse table in C) into ``out``.
 
     Returns
     -------
@@ -90,7 +94,40 @@ def calibrate(
     )
     if out is not None:
         result.write(Path(out), plot=plot)
+        if offset_table:
+            _write_offset_tables(Path(out), result, progress)
     return result
+
+
+def _write_offset_tables(out: Path, result: Calibration, progress: Callable[[str], None] | None) -> None:
+    """inverse_table.npz beside the calibrated.yaml just written (current: hashed with it and its
+    calibration.json) and, with a chip setting, offset_table.h from its every other node."""
+    # deferred: the calibrate layer, as calibrate's
+    from mst_cli.calibrate.calibration_json import CALIBRATED_YAML
+    from mst_cli.calibrate.offset_header import OFFSET_HEADER_FILE, offset_header
+    from mst_cli.calibrate.reading import ForceReader
+    from mst_cli.calibrate.table_reader import tables_for
+
+    model = out / CALIBRATED_YAML
+    doc = load_design(model)
+    mech = choose_mechanics(None, doc.accuracy_rel, doc.mechanics).mechanics
+    reader = ForceReader.open(doc, model, mech, result.header_setting)
+    if progress is not None:
+        progress("building the offset table (inverse_table.npz: the tilt rung at every node)")
+    lever = reader.record.lever_factor() if reader.record is not None else 1.0
+    table, coarse = tables_for(model, doc, reader.inverse_map, lever, mech)
+    with staged(out) as st:
+        table.save(st.path(table.file_name))
+        if result.header_setting is not None:
+            text = offset_header(
+                coarse,
+                reader.inverse_map,
+                result.header_setting,
+                doc.name,
+                f"{CALIBRATED_YAML} ({mech}, lever factor {lever:.4g})",
+                ["what the tilt rung leaves out (docs/design.md section 4.2); the table's own error between nodes"],
+            )
+            st.write_text(OFFSET_HEADER_FILE, text)
 
 
 def _checked_fit_options(mechanics: str, params: Sequence[str] | str | None, table_size: int) -> tuple[str, ...]:

@@ -123,6 +123,13 @@ class InverseTable:
             self._corners = C.reshape(-1, 2, 2, 2, 3)
         return self._corners
 
+    def every_other(self) -> InverseTable:
+        """Every second node on each axis (the ends kept where a count is odd: the default grid's
+        nodes give the coarse grid's)."""
+        g = self.grid
+        grid = TableGrid(g.force_N[::2], g.x_mm[::2], g.y_mm[::2])
+        return InverseTable(grid, np.ascontiguousarray(self.B_T[::2, ::2, ::2]), self.source_hash)
+
     def save(self, path: Path) -> None:
         with open(path, "wb") as fh:
             np.savez(fh, **self.arrays())

@@ -28,7 +28,7 @@ from mst_cli.calibrate.inverse_table import (
     crb_sigmas,
     source_hash,
 )
-from mst_cli.calibrate.offset_reading import OffsetEstimator, OffsetReadings
+from mst_cli.calibrate.offset_reading import DEFAULT_MAX_SIGMA_MM, OffsetEstimator, OffsetReadings
 from mst_cli.errors import InputError
 from mst_cli.sensor.document import Document
 
@@ -156,3 +156,14 @@ def best_offset_sigma_mm(table: InverseTable, sigma_T: float) -> float:
     sig = crb_sigmas(J[1:].reshape(-1, 3, 3), 1e6 * sigma_T)
     worst = np.fmax(sig[:, 1], sig[:, 2])
     return float(np.min(worst)) if len(worst) else float("inf")
+
+
+def tables_for(
+    model_file: Path, doc: Document, imap: InverseMap, lever: float, mechanics: str
+) -> tuple[InverseTable, OffsetTableReader]:
+    """What ``mst calibrate --offset-table`` writes for the model in ``model_file``: its table
+    (the default grid, current beside it) and the reader of every other node of it (the C
+    header's coarse table: the default's 33 x 31 x 21 nodes give 17 x 16 x 11), at the inverse
+    map's noise and the default bound on the offset's 1-sigma."""
+    table = build_beside(model_file, doc, mechanics, lever, float(imap.force_N[-1]))
+    return table, OffsetTableReader(table.every_other(), imap.field_resolution_T, DEFAULT_MAX_SIGMA_MM)

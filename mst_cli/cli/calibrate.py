@@ -63,6 +63,11 @@ def fail_fit(reason: str, what: str = "calibration failed") -> NoReturn:
     show_default=True,
     help="Entries of the lookup table (CSV and C header).",
 )
+@click.option(
+    "--offset-table",
+    is_flag=True,
+    help="Also write inverse_table.npz (what mst read --estimate offset reads; a minute or two) and offset_table.h.",
+)
 @no_plot_option("calibration.png", "about 40 % of a run: 0.45 s of matplotlib import and render", has_json=False)
 @handles_input_errors
 def calibrate(
@@ -74,6 +79,7 @@ def calibrate(
     gain_sel: int | None,
     res: int | None,
     table_size: int,
+    offset_table: bool,
     no_plot: bool,
 ) -> None:
     """Fit DESIGN_FILE's print parameters to a LOAD_TEST of the printed sensor.
@@ -102,6 +108,7 @@ def calibrate(
             gain_sel=gain_sel,
             res=res,
             table_size=table_size,
+            offset_table=offset_table,
             progress=lambda line: click.echo(f"mst calibrate: {line}", err=True),
         )
     except api.CalibrationFailed as exc:
@@ -110,5 +117,7 @@ def calibrate(
     click.echo(
         f"wrote {out}/{', '.join(result.file_names)}"
         + ("" if no_plot else ", calibration.png")
+        + (", inverse_table.npz, offset_table.h" if offset_table and result.header_setting is not None else "")
+        + (", inverse_table.npz" if offset_table and result.header_setting is None else "")
         + (f" (no C header: {result.header_reason})" if result.header_reason else "")
     )
