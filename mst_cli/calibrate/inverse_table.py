@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import hashlib
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import Any
 
@@ -44,6 +44,7 @@ OUTSIDE = 0.5  # a cell's Newton may leave it by this share of the cell before i
 INSIDE_TOL = 1e-3  # ... and a solve ends in its cell within this share of it
 RIDGE = 1e-9  # the Newton system's ridge, relative to its trace (a flat direction stays put)
 CHUNK = 256  # readings per census block (cells x CHUNK booleans at a time)
+BLOCK = 4096  # readings per estimate (their candidate cells' corners at a time)
 
 # (forces, mm between offsets): the default grid, 1 mm over the face and the range in 32 steps
 # (docs/design.md section 4.2 says what it costs in accuracy against the exact solve: the
@@ -101,6 +102,8 @@ class InverseTable:
     B_T: np.ndarray
     source_hash: str
     _corners: np.ndarray | None = field(default=None, repr=False, compare=False)
+    _boxes: tuple[np.ndarray, np.ndarray] | None = field(default=None, repr=False, compare=False)
+    _centre: tuple[np.ndarray, np.ndarray] | None = field(default=None, repr=False, compare=False)
 
     file_name = TABLE_FILE
 
@@ -122,6 +125,25 @@ class InverseTable:
                         C[:, :, :, a, b, c] = B[a : nF + a, b : nx + b, c : ny + c]
             self._corners = C.reshape(-1, 2, 2, 2, 3)
         return self._corners
+
+    def boxes_uT(self) -> tuple[np.ndarray, np.ndarray]:
+        """Each cell's field box over its eight corners: (lo, hi), each (n_cells, 3) in uT."""
+        if self._boxes is None:
+            C = self.corners_uT().reshape(-1, 8, 3)
+            self._boxes = C.min(axis=1), C.max(axis=1)
+        return self._boxes
+
+    def centre_steps(self) -> tuple[np.ndarray, np.ndarray]:
+        """Each cell's field at its centre (n_cells, 3) uT and the matrix (n_cells, 3, 3) of its
+        first Newton step from there, dt = M (b - v): the ridged (J^T J + ridge)^-1 J^T."""
+        if self._centre is None:
+            C = self.corners_uT()
+            v, J = _trilinear(C, np.full((len(C), 3), 0.5))
+            A = np.einsum("pki,pkj->pij", J, J)
+            A += (RIDGE * (A[:, 0, 0] + A[:, 1, 1] + A[:, 2, 2]) + 1e-30)[:, None, None] * np.eye(3)
+            M = np.stack([_solve3(A, J[:, k, :]) for k in range(3)], axis=2)  # column k: A^-1 J^T e_k
+            self._centre = v, np.nan_to_num(M)
+        return self._centre
 
     def every_other(self) -> InverseTable:
         """Every second node on each axis (the ends kept where a count is odd: the default grid's
@@ -159,8 +181,13 @@ class InverseTable:
         return table if table.B_T.shape == (*grid.shape, 3) else None
 
     def estimate(self, B_T: np.ndarray, sigma_T: float, max_sigma_mm: float) -> TableEstimates:
-        """Every reading (n, 3) in T, with the chip's noise ``sigma_T`` per axis."""
-        return estimate_many(self, np.atleast_2d(np.asarray(B_T, dtype=float)), sigma_T, max_sigma_mm)
+        """Every reading (n, 3) in T, with the chip's noise ``sigma_T`` per axis, BLOCK readings
+        at a time (a reading has up to a few hundred candidate cells)."""
+        B = np.atleast_2d(np.asarray(B_T, dtype=float))
+        parts = [estimate_many(self, B[i : i + BLOCK], sigma_T, max_sigma_mm) for i in range(0, len(B), BLOCK)]
+        if len(parts) == 1:
+            return parts[0]
+        return TableEstimates(*(np.concatenate([getattr(p, f.name) for p in parts]) for f in fields(TableEstimates)))
 
 
 def source_hash(model_text: str, calibration_text: str | None, mechanics: str, grid: TableGrid) -> str:
@@ -198,29 +225,25 @@ def build_table(
     return InverseTable(grid, np.ascontiguousarray(B), source)
 
 
-def _cell_boxes(table: InverseTable) -> tuple[np.ndarray, np.ndarray]:
-    """Each cell's field box over its eight corners: (lo, hi), each (n_cells, 3) in uT."""
-    C = table.corners_uT().reshape(-1, 8, 3)
-    return C.min(axis=1), C.max(axis=1)
-
-
 def census(table: InverseTable, B_uT: np.ndarray, margin_uT: float) -> tuple[np.ndarray, np.ndarray]:
     """(reading index, cell index) of every cell whose corners' box, widened by ``margin_uT``,
-    holds the reading (uT)."""
-    lo, hi = _cell_boxes(table)
+    holds the reading (uT). Readings go in blocks of CHUNK by ascending Bz, each block against
+    the cells whose Bz box meets the block's Bz span."""
+    lo, hi = table.boxes_uT()
     lo, hi = lo - margin_uT, hi + margin_uT
-    order = np.argsort(lo[:, 2], kind="stable")  # cells by their lowest Bz: a reading's cells are a prefix
-    lo, hi = lo[order], hi[order]
+    by_z = np.argsort(B_uT[:, 2], kind="stable")
     reads, cells = [], []
     for start in range(0, len(B_uT), CHUNK):
-        b = B_uT[start : start + CHUNK]
-        end = int(np.searchsorted(lo[:, 2], b[:, 2].max(), side="right"))
-        inside = (b[:, None, 2] <= hi[None, :end, 2]) & (b[:, None, 2] >= lo[None, :end, 2])
+        rows = by_z[start : start + CHUNK]
+        b = B_uT[rows]
+        near = np.flatnonzero((lo[:, 2] <= b[-1, 2]) & (hi[:, 2] >= b[0, 2]))
+        l, h = lo[near], hi[near]
+        inside = (b[:, None, 2] >= l[None, :, 2]) & (b[:, None, 2] <= h[None, :, 2])
         for axis in (0, 1):
-            inside &= (b[:, None, axis] >= lo[None, :end, axis]) & (b[:, None, axis] <= hi[None, :end, axis])
+            inside &= (b[:, None, axis] >= l[None, :, axis]) & (b[:, None, axis] <= h[None, :, axis])
         r, c = np.nonzero(inside)
-        reads.append(r + start)
-        cells.append(order[c])
+        reads.append(rows[r])
+        cells.append(near[c])
     return np.concatenate(reads), np.concatenate(cells)
 
 
@@ -267,13 +290,14 @@ def _normal(J: np.ndarray, r: np.ndarray, held: np.ndarray) -> np.ndarray:
     return np.nan_to_num(_solve3(A, np.einsum("pki,pk->pi", Jh, r)))
 
 
-def _newton(C: np.ndarray, b: np.ndarray, lo_t: np.ndarray, hi_t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """NEWTON_STEPS projected steps from each cell's centre: (t (P, 3), still in play (P,)). A
-    solve pinned on its clip bound (OUTSIDE its cell, not the table's edge) from PRUNE_AFTER steps
-    on has no root in its cell (a neighbour's census has it) and is dropped from the work."""
-    t = np.full((len(C), 3), 0.5)
+def _newton(
+    C: np.ndarray, b: np.ndarray, t: np.ndarray, lo_t: np.ndarray, hi_t: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Newton steps 2 to NEWTON_STEPS from t (the first step's end): (t (P, 3), still in play
+    (P,)). A solve pinned on its clip bound (OUTSIDE its cell, not the table's edge) from
+    PRUNE_AFTER steps on has no root in its cell (a neighbour's census has it) and is dropped."""
     live = np.arange(len(C))
-    for step in range(NEWTON_STEPS):
+    for step in range(1, NEWTON_STEPS):
         val, J = _trilinear(C[live], t[live])
         r = b[live] - val
         tl, lo, hi = t[live], lo_t[live], hi_t[live]
@@ -284,32 +308,40 @@ def _newton(C: np.ndarray, b: np.ndarray, lo_t: np.ndarray, hi_t: np.ndarray) ->
             dt[some] = _normal(J[some], r[some], held[some])
         t[live] = np.clip(tl + dt, lo, hi)
         if step + 1 >= PRUNE_AFTER:
-            out = np.any(((t[live] <= lo) & (lo < 0.0)) | ((t[live] >= hi) & (hi > 1.0)), axis=1)
-            live = live[~out]
+            live = live[~_pinned_outside(t[live], lo, hi)]
     kept = np.zeros(len(C), dtype=bool)
     kept[live] = True
     return t, kept
 
 
+def _pinned_outside(t: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    return np.any(((t <= lo) & (lo < 0.0)) | ((t >= hi) & (hi > 1.0)), axis=1)
+
+
 def solve_cells(
     table: InverseTable, b_uT: np.ndarray, cell: np.ndarray
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Each (reading, cell) pair's trilinear solve: (p (P, 3) force N / x0 mm / y0 mm, misfit uT,
-    in-cell (P,), the field Jacobian dB/dp (P, 3, 3) in uT per unit of p). A coordinate may leave
-    its cell by OUTSIDE, except at the table's edge, where it is held on the edge."""
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Each (reading, cell) pair's trilinear solve, for the pairs still in play after the first
+    Newton step (from the cell's centre, by its precomputed matrix): (their indices among the
+    pairs, p (K, 3) force N / x0 mm / y0 mm, misfit uT, in-cell (K,), the field Jacobian dB/dp
+    (K, 3, 3) in uT per unit of p). A coordinate may leave its cell by OUTSIDE, except at the
+    table's edge, where it is held on the edge."""
     shape = tuple(n - 1 for n in table.grid.shape)
-    idx = np.unravel_index(cell, shape)
-    C = table.corners_uT()[cell]
-    edge_lo = np.stack([idx[a] == 0 for a in range(3)], axis=1)
-    edge_hi = np.stack([idx[a] == shape[a] - 1 for a in range(3)], axis=1)
-    t, kept = _newton(C, b_uT, np.where(edge_lo, 0.0, -OUTSIDE), np.where(edge_hi, 1.0, 1.0 + OUTSIDE))
+    idx = np.stack(np.unravel_index(cell, shape), axis=1)
+    lo_t = np.where(idx == 0, 0.0, -OUTSIDE)
+    hi_t = np.where(idx == np.array(shape) - 1, 1.0, 1.0 + OUTSIDE)
+    v, M = table.centre_steps()
+    t = np.clip(0.5 + np.einsum("pij,pj->pi", M[cell], b_uT - v[cell]), lo_t, hi_t)
+    play = np.flatnonzero(~_pinned_outside(t, lo_t, hi_t)) if PRUNE_AFTER <= 1 else np.arange(len(cell))
+    idx, C, b = idx[play], table.corners_uT()[cell[play]], b_uT[play]
+    t, kept = _newton(C, b, t[play], lo_t[play], hi_t[play])
     val, J = _trilinear(C, t)
-    misfit = np.where(kept, np.linalg.norm(b_uT - val, axis=1), np.inf)
+    misfit = np.where(kept, np.linalg.norm(b - val, axis=1), np.inf)
     inside = np.all((t >= -INSIDE_TOL) & (t <= 1.0 + INSIDE_TOL), axis=1)
     nodes = (table.grid.force_N, table.grid.x_mm, table.grid.y_mm)
-    width = np.stack([nodes[a][idx[a] + 1] - nodes[a][idx[a]] for a in range(3)], axis=1)
-    p = np.stack([nodes[a][idx[a]] for a in range(3)], axis=1) + t * width
-    return p, misfit, inside, J / width[:, None, :]
+    width = np.stack([nodes[a][idx[:, a] + 1] - nodes[a][idx[:, a]] for a in range(3)], axis=1)
+    p = np.stack([nodes[a][idx[:, a]] for a in range(3)], axis=1) + t * width
+    return play, p, misfit, inside, J / width[:, None, :]
 
 
 def crb_sigmas(J: np.ndarray, sigma: float) -> np.ndarray:
@@ -338,7 +370,8 @@ def estimate_many(table: InverseTable, B_T: np.ndarray, sigma_T: float, max_sigm
     sigma_uT = 1e6 * sigma_T
     B_uT = 1e6 * B_T
     read, cell = census(table, B_uT, FIT_SIGMAS * sigma_uT)
-    p, misfit, inside, J = solve_cells(table, B_uT[read], cell)
+    play, p, misfit, inside, J = solve_cells(table, B_uT[read], cell)
+    read = read[play]
     root = inside & (misfit <= FIT_SIGMAS * sigma_uT)
     read, p, misfit, J = read[root], p[root], misfit[root], J[root]
     sig = crb_sigmas(J, sigma_uT)
