@@ -7,7 +7,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from mst_cli.api._common import _check_out, _one_of, load_design
 from mst_cli.errors import InputError
@@ -57,8 +57,9 @@ def calibrate(
         CSV, one row per sample: force_N (N) and Bx_uT, By_uT, Bz_uT (uT), or Bx_code_lsb,
         By_code_lsb, Bz_code_lsb (raw LSB, with ``gain_sel`` and ``res``).
     out : str or Path, optional
-        Folder for calibrated.yaml, calibration.json, residuals.csv, lookup.csv, force_table.h
-        and (``plot``) calibration.png, written atomically [default: none written].
+        Folder for calibrated.yaml, calibration.json, residuals.csv, lookup.csv, force_table.h,
+        (``plot``) calibration.png and (``offset_table``) inverse_table.npz, which
+        ``read(estimate="offset")`` reads, and offset_table.h, written atomically [default: none].
     mechanics : {"spring", "frame", "continuum"}
         Layer mechanics of the fit; frame and continuum by space mapping on spring.
     params : sequence of str or str, optional
@@ -66,8 +67,7 @@ def calibrate(
     gain_sel, res, table_size : int, optional
         The MLX90393 setting the load test was read at (0-7, 0-3); entries of lookup.csv (16-4096).
     offset_table : bool
-        Also write inverse_table.npz (what ``read(estimate="offset")`` reads; a minute or two)
-        and offset_table.h (its coarse table in C) into ``out``.
+        Write the offset tables into ``out`` too (a minute or two).
 
     Returns
     -------
@@ -81,17 +81,9 @@ def calibrate(
     params = _checked_fit_options(mechanics, params, table_size)
     doc = load_design(design)
     _check_out(out)  # a bad output path is refused before any work
-    result = run_calibration(
-        doc,
-        design_file or (design if isinstance(design, (str, Path)) else design.name),
-        load_test,
-        mechanics=mechanics,
-        params=params,
-        gain_sel=gain_sel,
-        res=res,
-        table_size=table_size,
-        progress=progress,
-    )
+    name = design_file or (design if isinstance(design, (str, Path)) else design.name)
+    fit: dict[str, Any] = dict(mechanics=mechanics, params=params, gain_sel=gain_sel, res=res, table_size=table_size)
+    result = run_calibration(doc, name, load_test, progress=progress, **fit)
     if out is not None:
         result.write(Path(out), plot=plot)
         if offset_table:
