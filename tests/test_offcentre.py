@@ -244,11 +244,21 @@ def test_tilted_L2_follows_the_rung_on_a_thin_shallow_cell():
 
 
 def test_read_estimates_the_offset_and_corrects_the_force(tmp_path):
-    # noise-free readings of the design's own tilt rung, pressed at (6, 3) mm: the estimate must
-    # give back the press and the force; the centred reading is far off
+    # noise-free readings of the design's own tilt rung, pressed at (6, 3) mm: the estimate,
+    # polished by the exact solve from a coarse table's root, must give back the press and the
+    # force; the centred reading is far off
+    import shutil
+
+    from mst_cli.calibrate.inverse_map import inverse_map
+    from mst_cli.calibrate.inverse_table import TABLE_FILE
+    from mst_cli.calibrate.table_reader import build_beside
     from mst_cli.model.offcentre import pose_field_T, tilt_laws
 
     doc, _ = load_design_document(FORWARD)
+    model = tmp_path / "model.yaml"
+    shutil.copy(FORWARD, model)
+    top = float(inverse_map(doc, "spring")[0].force_N[-1])
+    build_beside(model, doc, "spring", 1.0, top, (17, 3.0)).save(tmp_path / TABLE_FILE)
     geo, mat = doc.geometry(), doc.material
     F = np.array([4.0, 8.0, 15.0, 25.0, 40.0])
     B = pose_field_T(geo, tilt_laws(geo, mat, "spring"), F, (6.0, 3.0))
@@ -258,7 +268,7 @@ def test_read_estimates_the_offset_and_corrects_the_force(tmp_path):
         + "".join(f"{b[0] * 1e6:.6f},{b[1] * 1e6:.6f},{b[2] * 1e6:.6f},{f}\n" for b, f in zip(B, F))
     )
     out = tmp_path / "out"
-    res = run(["read", FORWARD, csv, "--out", out, "--estimate-offset"])
+    res = run(["read", model, csv, "--out", out, "--estimate-offset", "--polish"])
     assert res.exit_code == 0, res.output
     assert "offset: estimated on" in res.output
     import csv as csvmod
@@ -276,7 +286,7 @@ def test_read_estimates_the_offset_and_corrects_the_force(tmp_path):
 
 @pytest.mark.parametrize(
     "args, says",
-    [(["--serial", "/dev/null"], "--estimate-offset"), (["--max-offset-sigma-mm", "-1"], "max-offset-sigma")],
+    [(["--serial", "/dev/null", "--polish"], "--polish"), (["--max-offset-sigma-mm", "-1"], "max-offset-sigma")],
 )
 def test_read_refuses_bad_offset_options(tmp_path, args, says):
     csv = tmp_path / "r.csv"

@@ -64,15 +64,40 @@ def test_the_fit_gives_the_printed_lever_factor_back(calibrated):
     assert "lever factor" in output
 
 
+def coarse_table_beside(model: Path) -> None:
+    """A coarse offset table (17 forces, 3 mm) beside ``model``, with its calibration's lever."""
+    from mst_cli.calibrate.calibration_json import record_beside
+    from mst_cli.calibrate.inverse_map import inverse_map
+    from mst_cli.calibrate.inverse_table import TABLE_FILE
+    from mst_cli.calibrate.table_reader import build_beside
+
+    doc, _ = load_design_document(model)
+    top = float(inverse_map(doc, "spring")[0].force_N[-1])
+    lever = record_beside(model)[1].lever_factor()
+    build_beside(model, doc, "spring", lever, top, (17, 3.0)).save(model.parent / TABLE_FILE)
+
+
 def test_read_uses_the_calibrated_lever_factor(calibrated):
     d, _ = calibrated
+    coarse_table_beside(d / "cal" / "calibrated.yaml")
     write(
         d / "readings.csv",
         [(r[0], *r[3:]) for r in rows_at([(-7.0, 4.0)], np.array([10.0, 20.0, 35.0]))],
         "force_N,Bx_uT,By_uT,Bz_uT",
     )
-    res = run(["read", d / "cal" / "calibrated.yaml", d / "readings.csv", "--out", d / "read", "--estimate-offset"])
+    res = run(
+        [
+            "read",
+            d / "cal" / "calibrated.yaml",
+            d / "readings.csv",
+            "--out",
+            d / "read",
+            "--estimate-offset",
+            "--polish",
+        ]
+    )
     assert res.exit_code == 0, res.output
+    assert "stale" not in res.output and "missing" not in res.output  # the table beside was current
     import csv
 
     rows = [r for r in csv.DictReader((d / "read" / "forces.csv").open()) if r["offset_flag"] == "ok"]
@@ -100,3 +125,29 @@ def test_calibrate_refuses_bad_presses_in_one_line(tmp_path, rows, header, says)
     assert res.exit_code == 2, res.output
     assert says in res.output and len(res.output.strip().splitlines()) == 1
     assert not (tmp_path / "cal").exists() or not any((tmp_path / "cal").iterdir())
+
+
+@pytest.mark.slow
+def test_calibrate_writes_a_current_offset_table_and_its_c_header(calibrated, tmp_path):
+    d, _ = calibrated
+    res = run(["calibrate", FORWARD, d / "loadtest.csv", "--out", tmp_path / "cal", "--no-plot", "--offset-table"])
+    assert res.exit_code == 0, res.output
+    assert (tmp_path / "cal" / "inverse_table.npz").is_file() and (tmp_path / "cal" / "offset_table.h").is_file()
+    write(
+        tmp_path / "r.csv",
+        [(r[0], *r[3:]) for r in rows_at([(-7.0, 4.0)], np.array([20.0]))],
+        "force_N,Bx_uT,By_uT,Bz_uT",
+    )
+    res = run(
+        [
+            "read",
+            tmp_path / "cal" / "calibrated.yaml",
+            tmp_path / "r.csv",
+            "--out",
+            tmp_path / "o",
+            "--estimate",
+            "offset",
+        ]
+    )
+    assert res.exit_code == 0 and "stale" not in res.output and "missing" not in res.output, res.output
+    assert not (tmp_path / "o" / "inverse_table.npz").exists()  # read built none

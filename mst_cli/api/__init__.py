@@ -14,6 +14,7 @@ imports it when called, with the reason and the cost measured (``python -X impor
 
 from __future__ import annotations
 
+from mst_cli.api._calibrating import ESTIMATES as ESTIMATES
 from mst_cli.api._calibrating import calibrate, check_argument_order, parse_params, read, read_serial
 from mst_cli.api._common import load, load_design
 from mst_cli.api._designing import design, designed, pareto, run_design
@@ -50,7 +51,8 @@ __all__ = [
     "bench",
 ]
 # also here for the command line, which imports nothing else of the package: Interrupted (a
-# signal ended a run), SEED_RANGE (--seed's bounds), is_machine_fault and os_error_text
+# signal ended a run), SEED_RANGE (--seed's bounds), ESTIMATES (--estimate's choices),
+# is_machine_fault and os_error_text
 
 
 def __getattr__(name: str):

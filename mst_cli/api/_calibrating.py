@@ -82,6 +82,7 @@ def calibrate(
     table_size: int = 256,
     progress: Callable[[str], None] | None = None,
     use_branches: bool = True,
+    offset_table: bool = False,
 ) -> Calibration:
     """Fit a design's print parameters to a load test of the printed sensor (``mst calibrate``).
 
@@ -93,8 +94,9 @@ def calibrate(
         CSV, one row per sample: force_N (N) and Bx_uT, By_uT, Bz_uT (uT), or Bx_code_lsb,
         By_code_lsb, Bz_code_lsb (raw LSB, with ``gain_sel`` and ``res``).
     out : str or Path, optional
-        Folder for calibrated.yaml, calibration.json, residuals.csv, lookup.csv, force_table.h
-        and (``plot``) calibration.png, written atomically [default: none written].
+        Folder for calibrated.yaml, calibration.json, residuals.csv, lookup.csv, force_table.h,
+        (``plot``) calibration.png and (``offset_table``) inverse_table.npz, which
+        ``read(estimate="offset")`` reads, and offset_table.h, written atomically [default: none].
     mechanics : {"spring", "frame", "continuum"}
         Layer mechanics of the fit; frame and continuum by space mapping on spring.
     params : sequence of str or str, optional
@@ -102,6 +104,8 @@ def calibrate(
     gain_sel, res, table_size, use_branches : int, int, int, bool, optional
         The MLX90393 setting the load test was read at (0-7, 0-3); entries of lookup.csv
         (16-4096); fit the loading rows (True) or every row as loading.
+    offset_table : bool
+        Write the offset tables into ``out`` too (a minute or two).
 
     Returns
     -------
@@ -123,7 +127,40 @@ def calibrate(
     )
     if out is not None:
         result.write(Path(out), plot=plot)
+        if offset_table:
+            _write_offset_tables(Path(out), result, progress)
     return result
+
+
+def _write_offset_tables(out: Path, result: Calibration, progress: Callable[[str], None] | None) -> None:
+    """inverse_table.npz beside the calibrated.yaml just written (current: hashed with it and its
+    calibration.json) and, with a chip setting, offset_table.h from its every other node."""
+    # deferred: the calibrate layer, as calibrate's
+    from mst_cli.calibrate.calibration_json import CALIBRATED_YAML
+    from mst_cli.calibrate.offset_header import OFFSET_HEADER_FILE, offset_header
+    from mst_cli.calibrate.reading import ForceReader
+    from mst_cli.calibrate.table_reader import tables_for
+
+    model = out / CALIBRATED_YAML
+    doc = load_design(model)
+    mech = choose_mechanics(None, doc.accuracy_rel, doc.mechanics).mechanics
+    reader = ForceReader.open(doc, model, mech, result.header_setting)
+    if progress is not None:
+        progress("building the offset table (inverse_table.npz: the tilt rung at every node)")
+    lever = reader.record.lever_factor() if reader.record is not None else 1.0
+    table, coarse = tables_for(model, doc, reader.inverse_map, lever, mech)
+    with staged(out) as st:
+        table.save(st.path(table.file_name))
+        if result.header_setting is not None:
+            text = offset_header(
+                coarse,
+                reader.inverse_map,
+                result.header_setting,
+                doc.name,
+                f"{CALIBRATED_YAML} ({mech}, lever factor {lever:.4g})",
+                ["what the tilt rung leaves out (docs/design.md section 4.2); the table's own error between nodes"],
+            )
+            st.write_text(OFFSET_HEADER_FILE, text)
 
 
 def _checked_fit_options(mechanics: str, params: Sequence[str] | str | None, table_size: int) -> tuple[str, ...]:
@@ -186,6 +223,11 @@ def _reader(
     return reader, rd, setting
 
 
+# what ``mst read --estimate`` can add to the force; a new estimate is one entry here and one
+# branch in :func:`_estimator`
+ESTIMATES = ("none", "offset")
+
+
 def read(
     model: str | Path | Document,
     readings: str | Path,
@@ -196,7 +238,9 @@ def read(
     gain_sel: int | None = None,
     res: int | None = None,
     warn: Callable[[str], None] | None = None,
+    estimate: str = "none",
     estimate_offset: bool = False,
+    polish: bool = False,
     max_offset_sigma_mm: float = 1.0,
     tare: int = 0,
 ) -> ForceReadings:
@@ -215,12 +259,18 @@ def read(
     warn : callable, optional
         Gets a sentence when the model has no matching calibration.json beside it, or when the
         model no longer gives the curve recorded at calibration.
+    estimate : {"none", "offset"}
+        "offset": estimate where each reading was pressed from Bx, By, Bz (the tilt rung's
+        inverse, from the model's table: inverse_table.npz beside the model, built on first use
+        and then written to ``out``) and correct its force; ``.offset`` holds x, y and their
+        Cramer-Rao 1-sigma, and a reading whose press the data cannot tell keeps the centred
+        force, flagged (``.offset.flag``): not_identifiable (offset less certain than
+        ``max_offset_sigma_mm``), ambiguous (two presses give it: every root of the table is
+        found) or no_fit (none does); thousands of readings a second.
     estimate_offset : bool
-        Estimate where each reading was pressed from Bx, By, Bz (the tilt rung's inverse) and
-        correct its force; ``.offset`` holds x, y and their 1-sigma, and a reading whose press
-        the data cannot tell keeps the centred force, flagged (``.offset.flag``):
-        not_identifiable (offset less certain than ``max_offset_sigma_mm``), ambiguous (two
-        presses give it) or no_fit (none does); about 0.3 s a reading.
+        The same as ``estimate="offset"``.
+    polish : bool
+        Polish each table root by the model's exact Gauss-Newton (about 0.1 s a reading).
     tare : int
         Take the first ``tare`` readings as no load and re-zero the unloaded field on them.
 
@@ -231,20 +281,43 @@ def read(
         ``.flag`` (n,) one of ok, above_calibrated, below_range, above_range, saturated;
         ``.force_resolution_N`` (n,); ``.summary()``, ``.csv()``.
     """
-    if not (max_offset_sigma_mm > 0 and math.isfinite(max_offset_sigma_mm)):
-        raise InputError("--max-offset-sigma-mm", max_offset_sigma_mm, "must be a positive number of mm")
+    estimate = _checked_estimate("offset" if estimate_offset else estimate, max_offset_sigma_mm)
     reader, rd, _ = _reader(model, model_file, mechanics, gain_sel, res, False, readings, out, warn)
-    offsets = None
-    if estimate_offset:
-        mech = choose_mechanics(mechanics, reader.document.accuracy_rel, reader.document.mechanics).mechanics
-        offsets = reader.offset_estimator(mech, max_offset_sigma_mm)
+    offsets, built = _estimator(reader, estimate, mechanics, model_file or model, max_offset_sigma_mm, polish, warn)
     if isinstance(tare, bool) or not isinstance(tare, int) or tare < 0:
         raise InputError("--tare", tare, "a whole number of readings at no load (0: no tare)")
     result = reader.read(rd, offsets, tare)
     if out is not None:
         with staged(Path(out)) as st:
             st.write_text("forces.csv", result.csv())
+            if built is not None:
+                built.save(st.path(built.file_name))
     return result
+
+
+def _checked_estimate(estimate: str, max_offset_sigma_mm: float) -> str:
+    _one_of("--estimate", estimate, ESTIMATES)
+    if not (max_offset_sigma_mm > 0 and math.isfinite(max_offset_sigma_mm)):
+        raise InputError("--max-offset-sigma-mm", max_offset_sigma_mm, "must be a positive number of mm")
+    return estimate
+
+
+def _estimator(reader, estimate: str, mechanics: str | None, model_file, max_sigma_mm: float, polish: bool, warn):
+    """(the reader of ``estimate``, or None; the table it built, to be written, or None).
+    InputError when the layout cannot identify the estimate anywhere in its range."""
+    from mst_cli.calibrate.table_reader import offset_table_reader  # deferred: the calibrate layer, as _reader
+
+    if estimate == "none":
+        return None, None
+    if not isinstance(model_file, (str, Path)):
+        raise InputError("model_file", None, "name the model file: its offset table stands beside it")
+    doc = reader.document
+    mech = choose_mechanics(mechanics, doc.accuracy_rel, doc.mechanics).mechanics
+    lever = reader.record.lever_factor() if reader.record is not None else 1.0
+    offsets, note = offset_table_reader(doc, reader.inverse_map, lever, Path(model_file), mech, max_sigma_mm, polish)
+    if note is not None and warn is not None:
+        warn(note)
+    return offsets, (offsets.table if note is not None else None)
 
 
 def read_serial(
@@ -263,16 +336,24 @@ def read_serial(
     warn: Callable[[str], None] | None = None,
     status: Callable[[str], None] | None = None,
     show: Callable[[str], None] = print,
+    estimate: str = "none",
+    max_offset_sigma_mm: float = 1.0,
 ) -> SerialSamples:
     """A live MLX90393 stream to forces (``mst read --serial PORT``): one line per sample goes to
     ``show``; stops when the port closes, after ``count`` samples, ``timeout_s`` seconds of
     silence or Ctrl-C; ``status`` gets a line when reading starts. ``out``: forces.csv of every
-    sample (time s, the three values, force N, regime, flag, resolution N)."""
+    sample (time s, the three values, force N, regime, flag, resolution N; with an ``estimate``,
+    its columns as :func:`read` writes them). ``estimate``: as :func:`read`'s, live (the table;
+    the table is built before the port is opened when none stands beside the model)."""
+    _checked_estimate(estimate, max_offset_sigma_mm)
     reader, _, setting = _reader(model, model_file, mechanics, gain_sel, res, raw, None, out, warn)
+    offsets, built = _estimator(reader, estimate, mechanics, model_file or model, max_offset_sigma_mm, False, warn)
     if status is not None:
         status(f"{reader.document.name}: reading {port} at {baud} baud (Ctrl-C to stop)")
-    samples = reader.stream(port, baud, count, timeout_s, raw, setting, show)
+    samples = reader.stream(port, baud, count, timeout_s, raw, setting, show, offsets)
     if out is not None:
         with staged(Path(out)) as st:
             st.write_text("forces.csv", samples.csv(reader.inverse_map))
+            if built is not None:
+                built.save(st.path(built.file_name))
     return samples

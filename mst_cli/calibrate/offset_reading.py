@@ -70,6 +70,12 @@ class OffsetReadings:
     sigma_force_N: np.ndarray
     flag: np.ndarray  # OffsetEstimate's flag, or "" (the reading itself is flagged)
 
+    @classmethod
+    def concat(cls, parts: list[OffsetReadings]) -> OffsetReadings:
+        """The readings of ``parts`` one after the other (a stream's samples)."""
+        names = ("force_N", "x_mm", "y_mm", "sigma_x_mm", "sigma_y_mm", "sigma_force_N", "flag")
+        return cls(*(np.concatenate([getattr(p, n) for p in parts]) for n in names))
+
     def summary(self) -> str:
         ok = self.flag == "ok"
         kept = ", ".join(
@@ -248,14 +254,25 @@ def _fraction_inside(p: np.ndarray, dp: np.ndarray, lo: np.ndarray, hi: np.ndarr
     return float(min(1.0, share.min()))
 
 
+OFFSET_COLUMNS = ("force_centred_N", "x_mm", "y_mm", "force_N_sigma", "x_mm_sigma", "y_mm_sigma", "offset_flag")
+
+
 def offset_columns(forces_csv_text: str, est: OffsetReadings, centred_force_N: np.ndarray) -> str:
-    """forces.csv with the offset's columns appended: the centred model's force, x and y with
-    their 1-sigma (mm), and offset_flag (ok; not_identifiable, ambiguous or no_fit, whose force is
-    the centred one; empty for a reading flagged itself)."""
+    """forces.csv with the offset's columns appended: the centred model's force, x and y (mm),
+    the 1-sigma of the force, x and y (the Cramer-Rao bound at the estimate, from the chip's
+    noise), and offset_flag (ok; not_identifiable, ambiguous or no_fit, whose force is the
+    centred one; empty for a reading flagged itself)."""
     lines = forces_csv_text.splitlines()
-    out = [lines[0] + ",force_centred_N,x_mm,y_mm,sigma_x_mm,sigma_y_mm,offset_flag"]
+    out = [lines[0] + "," + ",".join(OFFSET_COLUMNS)]
     for i, line in enumerate(lines[1:]):
-        vals = [centred_force_N[i], est.x_mm[i], est.y_mm[i], est.sigma_x_mm[i], est.sigma_y_mm[i]]
+        vals = [
+            centred_force_N[i],
+            est.x_mm[i],
+            est.y_mm[i],
+            est.sigma_force_N[i],
+            est.sigma_x_mm[i],
+            est.sigma_y_mm[i],
+        ]
         cells = ["" if not np.isfinite(v) else f"{v:.6g}" for v in vals]
         out.append(line + "," + ",".join(cells) + "," + str(est.flag[i]))
     return "\n".join(out) + "\n"

@@ -21,6 +21,7 @@ from mst_cli.calibrate.loadtest import Readings, field_of, rig_column, unknown_c
 from mst_cli.calibrate.offset_reading import OffsetEstimator, OffsetReadings, offset_columns
 from mst_cli.calibrate.rig_reading import BranchForces, follow_branches, no_load_rows, tare_shift_T, unloading_model_of
 from mst_cli.calibrate.rung_check import read_rung_warning
+from mst_cli.calibrate.table_reader import OffsetTableReader
 from mst_cli.calibrate.tables import FORCES_COLUMNS, cell, forces_csv
 from mst_cli.calibrate.temperature_fit import field_at_reference
 from mst_cli.io.serial_lines import LineSource, SampleParser
@@ -128,6 +129,7 @@ class SerialSamples:
     raw: bool
     samples: list[tuple[float, tuple[float, float, float], float, int, str]] = field(default_factory=list)
     skipped: int = 0
+    offsets: list[tuple[float, OffsetReadings]] = field(default_factory=list)  # (centred force, estimate) each
 
     def csv(self, imap: InverseMap) -> str:
         cols = ("Bx_code_lsb", "By_code_lsb", "Bz_code_lsb") if self.raw else ("Bx_uT", "By_uT", "Bz_uT")
@@ -143,7 +145,10 @@ class SerialSamples:
                 )
                 + "\n"
             )
-        return buf.getvalue()
+        if not self.offsets:
+            return buf.getvalue()
+        est = OffsetReadings.concat([o for _, o in self.offsets])
+        return offset_columns(buf.getvalue(), est, np.array([f for f, _ in self.offsets]))
 
 
 @dataclass
@@ -175,7 +180,9 @@ class ForceReader:
             note = read_rung_warning(record, mechanics, doc) or record.curve_changed(imap)
         return cls(doc, imap, note, record)
 
-    def read(self, rd: Readings, offsets: OffsetEstimator | None = None, tare: int = 0) -> ForceReadings:
+    def read(
+        self, rd: Readings, offsets: OffsetEstimator | OffsetTableReader | None = None, tare: int = 0
+    ) -> ForceReadings:
         """The forces of ``rd``; with ``offsets``, each in-range reading's force corrected for
         where it was pressed (:mod:`~mst_cli.calibrate.offset_reading`); else each on its branch
         (:mod:`~mst_cli.calibrate.rig_reading`). ``tare``: the first readings at no load."""
@@ -225,9 +232,11 @@ class ForceReader:
         raw: bool,
         setting: ChipSetting | None,
         show: Callable[[str], None],
+        offsets: OffsetTableReader | None = None,
     ) -> SerialSamples:
         """Read ``port`` until it closes, ``count`` samples, ``timeout_s`` of silence or Ctrl-C,
-        showing each sample's force through ``show``."""
+        showing each sample's force through ``show`` (with ``offsets``: corrected, and where it
+        was pressed)."""
         src = LineSource(port, baud, timeout_s)
         out = SerialSamples(raw)
         parser = SampleParser(raw)
@@ -241,10 +250,14 @@ class ForceReader:
                 Babs = float(np.linalg.norm(B))
                 F, regime, flag = self.inverse_map.force(np.array([Babs]), np.array([sat]))
                 f, r, fl = float(F[0]), int(regime[0]), str(flag[0])
+                where = ""
+                if offsets is not None:
+                    f, r, where = self._offset_sample(offsets, out, B, f, r, fl)
                 out.samples.append((time.monotonic() - t0, values, f, r, fl))
                 shown = f"F = {f:8.3f} N  regime {r}" if math.isfinite(f) else f"F = {'-':>8}    "
                 if fl != "ok":
                     shown += f"  {fl}"
+                shown += where
                 show(f"{len(out.samples):6d}  {shown}  |B| {Babs * 1e3:.4f} mT")
                 if count is not None and len(out.samples) >= count:
                     break
@@ -254,3 +267,16 @@ class ForceReader:
             src.close()
             out.skipped = parser.skipped
         return out
+
+    def _offset_sample(
+        self, offsets: OffsetTableReader, out: SerialSamples, B: np.ndarray, f: float, r: int, fl: str
+    ) -> tuple[float, int, str]:
+        """One stream sample's offset estimate, kept in ``out``: (the corrected force, its
+        regime, what the terminal line adds)."""
+        est = offsets.estimate_all(B[None, :], np.array([f if fl == "ok" else math.nan]))
+        out.offsets.append((f, est))
+        if est.flag[0] != "ok":
+            return f, r, f"  {est.flag[0]}" if est.flag[0] else ""
+        F = float(est.force_N[0])
+        where = f"  at ({est.x_mm[0]:.2f}, {est.y_mm[0]:.2f}) mm +- ({est.sigma_x_mm[0]:.2f}, {est.sigma_y_mm[0]:.2f})"
+        return F, int(self.inverse_map.regime_of(F)), where

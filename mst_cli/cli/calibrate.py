@@ -69,6 +69,11 @@ def fail_fit(reason: str, what: str = "calibration failed") -> NoReturn:
     help="Fit every row as loading (default: the loading rows; unloading, holds and a first cycle "
     "that differs are described in calibration.json's hysteresis section, not fitted).",
 )
+@click.option(
+    "--offset-table",
+    is_flag=True,
+    help="Also write inverse_table.npz (what mst read --estimate offset reads; a minute or two) and offset_table.h.",
+)
 @no_plot_option("calibration.png", "about 40 % of a run: 0.45 s of matplotlib import and render", has_json=False)
 @handles_input_errors
 def calibrate(
@@ -81,6 +86,7 @@ def calibrate(
     res: int | None,
     table_size: int,
     ignore_branches: bool,
+    offset_table: bool,
     no_plot: bool,
 ) -> None:
     """Fit DESIGN_FILE's print parameters to a LOAD_TEST of the printed sensor.
@@ -110,6 +116,7 @@ def calibrate(
             gain_sel=gain_sel,
             res=res,
             table_size=table_size,
+            offset_table=offset_table,
             progress=lambda line: click.echo(f"mst calibrate: {line}", err=True),
             use_branches=not ignore_branches,
         )
@@ -121,5 +128,7 @@ def calibrate(
     click.echo(
         f"wrote {out}/{', '.join(result.file_names)}"
         + ("" if no_plot else ", calibration.png")
+        + (", inverse_table.npz, offset_table.h" if offset_table and result.header_setting is not None else "")
+        + (", inverse_table.npz" if offset_table and result.header_setting is None else "")
         + (f" (no C header: {result.header_reason})" if result.header_reason else "")
     )

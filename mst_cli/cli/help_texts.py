@@ -51,12 +51,15 @@ DESIGN_CALIBRATION = (
     "calibration held are not used, and named."
 )
 
-READ_ESTIMATE_OFFSET = (
-    "Estimate where each reading was pressed from Bx, By, Bz and correct its force (the tilt "
-    "model's inverse; files only, about 0.3 s a reading): forces.csv adds force_centred_N, x_mm, "
-    "y_mm, their 1-sigma and offset_flag (ok; or not_identifiable, ambiguous, no_fit: the centred "
-    "force kept)."
+READ_ESTIMATE = (
+    "What to estimate beside the force. offset: where each reading was pressed, from Bx, By, Bz, and "
+    "its force corrected (the tilt model's inverse, from the model's table inverse_table.npz: built "
+    "on first use, thousands of readings a second; --serial too): forces.csv adds force_centred_N, "
+    "x_mm, y_mm, force_N_sigma, x_mm_sigma, y_mm_sigma (Cramer-Rao 1-sigma) and offset_flag (ok; or "
+    "not_identifiable, ambiguous, no_fit: the centred force kept)."
 )
+READ_ESTIMATE_OFFSET = "The same as --estimate offset."
+READ_POLISH = "Polish each estimate by the model's exact solve (about 0.1 s a reading: files, not streams)."
 READ_MAX_OFFSET_SIGMA = "An offset less certain than this (1-sigma, mm) is not identifiable: the centred force is kept."
 READ_TARE = (
     "Take the first N readings as no load and re-zero the unloaded field on them (a reading within "

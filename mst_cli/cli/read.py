@@ -65,7 +65,11 @@ BAUD_RATES = (1200, 2400, 4800, 9600, 19200, 38400, 57600, 115200, 230400, 46080
     default=None,
     help="Output folder of forces.csv [default: ./mst-out/<name>-read/; with --serial only when given].",
 )
+@click.option(
+    "--estimate", type=click.Choice(api.ESTIMATES), default="none", show_default=True, help=help_texts.READ_ESTIMATE
+)
 @click.option("--estimate-offset", is_flag=True, help=help_texts.READ_ESTIMATE_OFFSET)
+@click.option("--polish", is_flag=True, help=help_texts.READ_POLISH)
 @click.option(
     "--max-offset-sigma-mm", type=float, default=1.0, show_default=True, help=help_texts.READ_MAX_OFFSET_SIGMA
 )
@@ -83,7 +87,9 @@ def read(
     res: int | None,
     mechanics: str | None,
     out_dir: Path | None,
+    estimate: str,
     estimate_offset: bool,
+    polish: bool,
     max_offset_sigma_mm: float,
     tare: int,
 ) -> None:
@@ -97,25 +103,18 @@ def read(
 
     Flags: above_calibrated (the model's force above the load test's largest force),
     below_range, above_range (past the last lock) and saturated (force left empty: never
-    extrapolated).
+    extrapolated). --estimate offset adds where each reading was pressed.
     """
-    _check_sources(readings, port, raw, estimate_offset)
+    estimate = "offset" if estimate_offset else estimate
+    _check_sources(readings, port, raw, polish)
     api.check_argument_order(model_file, readings, "read")
     doc = api.load_design(model_file)
     out = out_dir if (out_dir is not None or port is not None) else default_out_dir(f"{doc.name}-read")
-    options: dict[str, Any] = {"model_file": model_file, "mechanics": mechanics, "gain_sel": gain_sel, "res": res}
-    options["warn"] = _warn
+    options: dict[str, Any] = dict(model_file=model_file, mechanics=mechanics, gain_sel=gain_sel, res=res, warn=_warn)
+    options.update(estimate=estimate, max_offset_sigma_mm=max_offset_sigma_mm)
     try:
         if readings is not None:
-            result = api.read(
-                doc,
-                readings,
-                out=out,
-                estimate_offset=estimate_offset,
-                max_offset_sigma_mm=max_offset_sigma_mm,
-                tare=tare,
-                **options,
-            )
+            result = api.read(doc, readings, out=out, polish=polish, tare=tare, **options)
             click.echo(result.summary())
             click.echo(f"wrote {out}/forces.csv")
             return
@@ -130,14 +129,14 @@ def read(
         click.echo(f"wrote {out}/forces.csv", err=True)
 
 
-def _check_sources(readings: Path | None, port: str | None, raw: bool, estimate_offset: bool) -> None:
+def _check_sources(readings: Path | None, port: str | None, raw: bool, polish: bool) -> None:
     """A usage error for options that do not go together."""
     if (readings is None) == (port is None):
         raise click.UsageError("give READINGS.csv or --serial PORT (one of them)")
     if raw and port is None:
         raise click.UsageError("--raw is for --serial lines (a CSV says raw by its column names)")
-    if estimate_offset and port is not None:
-        raise click.UsageError("--estimate-offset reads files, not --serial streams (yet)")
+    if polish and port is not None:
+        raise click.UsageError("--polish reads files, not --serial streams (about 0.1 s a reading)")
 
 
 def _warn(note: str) -> None:

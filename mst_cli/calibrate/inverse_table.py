@@ -1,0 +1,398 @@
+"""The offset reader's table (``mst read --estimate offset``): the tilt rung's field tabulated
+once per model over the loads the reader supports, and inverted by a census of every cell.
+
+The field (Bx, By, Bz) is tabulated on a grid of nodes in force (0 to the last lock), x0 (the
+face's width) and y0 (its depth), each offset a :func:`~mst_cli.model.offcentre.pose_field_T`
+path up the forces; between nodes it is trilinear. A trilinear cell's field is a convex
+combination of its eight corners', so it lies in their bounding box: a reading that a press in
+the cell explains to within k noise sigmas lies inside that box widened by k sigma. The census
+takes every such cell (a vectorised test over all cells and readings), solves the cell's
+trilinear field for the reading by Newton inside the cell (every candidate of every reading at
+once) and keeps each solve that ends in its cell within k sigma of the reading: every root of
+the table, found by construction, not by where a start fell. The flags are the exact reader's
+(:mod:`~mst_cli.calibrate.offset_reading`): ``no_fit`` without a root, ``ambiguous`` when two
+roots lie further apart than twice their combined 1-sigma, ``not_identifiable`` when the best
+root's offset 1-sigma is over the bound, else ``ok``. Each root's 1-sigma is the Cramer-Rao bound
+of the reading there, sqrt(diag((J^T J / sigma^2)^-1)), J the table's field Jacobian
+dB/d(F, x0, y0).
+
+The arithmetic is written so that the C header (:mod:`~mst_cli.calibrate.offset_header`) can do
+the same steps in float: a fixed number of Newton steps on a 3 x 3 system solved by Cramer's rule.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import math
+from dataclasses import dataclass, field, fields
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from mst_cli.model.assembly import SensorGeometry
+from mst_cli.model.material import Material
+from mst_cli.model.offcentre import pose_field_T, tilt_laws
+from mst_cli.parallel import fork_map
+
+TABLE_FILE = "inverse_table.npz"
+TABLE_FORMAT = 1  # bumped when the table's contents change meaning: an older file is rebuilt
+FIT_SIGMAS = 3.0  # a cell whose best point is further off the reading than this found no root
+NEWTON_STEPS = 8  # Newton steps inside a cell (trilinear: quadratic convergence from its centre)
+PRUNE_AFTER = 1  # ... from which on a solve pinned outside its cell is dropped
+OUTSIDE = 0.5  # a cell's Newton may leave it by this share of the cell before it is clipped ...
+INSIDE_TOL = 1e-3  # ... and a solve ends in its cell within this share of it
+RIDGE = 1e-9  # the Newton system's ridge, relative to its trace (a flat direction stays put)
+CHUNK = 256  # readings per census block (cells x CHUNK booleans at a time)
+BLOCK = 4096  # readings per estimate (their candidate cells' corners at a time)
+
+# (forces, mm between offsets): the default grid, 1 mm over the face and the range in 32 steps
+# (docs/design.md section 4.2 says what it costs in accuracy against the exact solve: the
+# offsets' spacing rules it, 97 forces at 2 mm do no better than 49); a coarse one for a
+# microcontroller's flash
+GRID_DEFAULT = (33, 1.0)
+GRID_COARSE = (17, 2.0)
+
+
+@dataclass(frozen=True)
+class TableGrid:
+    """Nodes of the table: force N, x0 mm and y0 mm, each ascending."""
+
+    force_N: np.ndarray
+    x_mm: np.ndarray
+    y_mm: np.ndarray
+
+    @classmethod
+    def over(cls, geometry: SensorGeometry, force_max_N: float, n_force: int, step_mm: float) -> TableGrid:
+        """``n_force`` forces from 0 to ``force_max_N``; x0 and y0 over the whole face, about
+        ``step_mm`` apart (the face's edges are nodes)."""
+        hw, hd = 0.5 * geometry.width_mm, 0.5 * geometry.depth_mm
+        nx = max(2, int(math.ceil(2 * hw / step_mm)) + 1)
+        ny = max(2, int(math.ceil(2 * hd / step_mm)) + 1)
+        return cls(np.linspace(0.0, force_max_N, n_force), np.linspace(-hw, hw, nx), np.linspace(-hd, hd, ny))
+
+    @property
+    def shape(self) -> tuple[int, int, int]:
+        return len(self.force_N), len(self.x_mm), len(self.y_mm)
+
+
+@dataclass
+class TableEstimates:
+    """Per reading: force N, x0 and y0 mm (NaN unless ``ok``), their Cramer-Rao 1-sigma, the flag
+    (ok, not_identifiable, ambiguous, no_fit) and how many roots the census found (solves that
+    ended in their cell: a root on the face between two cells counts in each)."""
+
+    force_N: np.ndarray
+    x_mm: np.ndarray
+    y_mm: np.ndarray
+    sigma_force_N: np.ndarray
+    sigma_x_mm: np.ndarray
+    sigma_y_mm: np.ndarray
+    flag: np.ndarray
+    roots: np.ndarray
+    best: np.ndarray  # (n, 3) the best root (NaN without one), whatever the flag: where a polish starts
+
+
+@dataclass
+class InverseTable:
+    """The tabulated field of one model (T, shape (n_F, n_x, n_y, 3)) and what it was built from
+    (``source_hash``: the model file, its calibration.json, the mechanics and the grid)."""
+
+    grid: TableGrid
+    B_T: np.ndarray
+    source_hash: str
+    _corners: np.ndarray | None = field(default=None, repr=False, compare=False)
+    _boxes: tuple[np.ndarray, np.ndarray] | None = field(default=None, repr=False, compare=False)
+    _centre: tuple[np.ndarray, np.ndarray] | None = field(default=None, repr=False, compare=False)
+
+    file_name = TABLE_FILE
+
+    @property
+    def size_bytes_float32(self) -> int:
+        """The field and the nodes as 4-byte floats (what the C header holds)."""
+        return 4 * (self.B_T.size + sum(self.grid.shape))
+
+    def corners_uT(self) -> np.ndarray:
+        """Every cell's eight corners (n_cells, 2, 2, 2, 3) in uT, cells in C order of their lowest
+        corner (computed once)."""
+        if self._corners is None:
+            B = self.B_T * 1e6
+            nF, nx, ny = (n - 1 for n in self.grid.shape)
+            C = np.empty((nF, nx, ny, 2, 2, 2, 3))
+            for a in (0, 1):
+                for b in (0, 1):
+                    for c in (0, 1):
+                        C[:, :, :, a, b, c] = B[a : nF + a, b : nx + b, c : ny + c]
+            self._corners = C.reshape(-1, 2, 2, 2, 3)
+        return self._corners
+
+    def boxes_uT(self) -> tuple[np.ndarray, np.ndarray]:
+        """Each cell's field box over its eight corners: (lo, hi), each (n_cells, 3) in uT."""
+        if self._boxes is None:
+            C = self.corners_uT().reshape(-1, 8, 3)
+            self._boxes = C.min(axis=1), C.max(axis=1)
+        return self._boxes
+
+    def centre_steps(self) -> tuple[np.ndarray, np.ndarray]:
+        """Each cell's field at its centre (n_cells, 3) uT and the matrix (n_cells, 3, 3) of its
+        first Newton step from there, dt = M (b - v): the ridged (J^T J + ridge)^-1 J^T."""
+        if self._centre is None:
+            C = self.corners_uT()
+            v, J = _trilinear(C, np.full((len(C), 3), 0.5))
+            A = np.einsum("pki,pkj->pij", J, J)
+            A += (RIDGE * (A[:, 0, 0] + A[:, 1, 1] + A[:, 2, 2]) + 1e-30)[:, None, None] * np.eye(3)
+            M = np.stack([_solve3(A, J[:, k, :]) for k in range(3)], axis=2)  # column k: A^-1 J^T e_k
+            self._centre = v, np.nan_to_num(M)
+        return self._centre
+
+    def every_other(self) -> InverseTable:
+        """Every second node on each axis (the ends kept where a count is odd: the default grid's
+        nodes give the coarse grid's)."""
+        g = self.grid
+        grid = TableGrid(g.force_N[::2], g.x_mm[::2], g.y_mm[::2])
+        return InverseTable(grid, np.ascontiguousarray(self.B_T[::2, ::2, ::2]), self.source_hash)
+
+    def save(self, path: Path) -> None:
+        with open(path, "wb") as fh:
+            np.savez(fh, **self.arrays())
+
+    def arrays(self) -> dict[str, Any]:
+        g = self.grid
+        return {
+            "format": np.array(TABLE_FORMAT),
+            "source_hash": np.array(self.source_hash),
+            "force_N": g.force_N,
+            "x_mm": g.x_mm,
+            "y_mm": g.y_mm,
+            "B_T": self.B_T,
+        }
+
+    @classmethod
+    def load(cls, path: Path) -> InverseTable | None:
+        """The table in ``path``; None when it is missing, unreadable or of another format."""
+        try:
+            with np.load(path, allow_pickle=False) as z:
+                if int(z["format"]) != TABLE_FORMAT:
+                    return None
+                grid = TableGrid(z["force_N"], z["x_mm"], z["y_mm"])
+                table = cls(grid, z["B_T"], str(z["source_hash"]))
+        except (OSError, ValueError, KeyError):
+            return None
+        return table if table.B_T.shape == (*grid.shape, 3) else None
+
+    def estimate(self, B_T: np.ndarray, sigma_T: float, max_sigma_mm: float) -> TableEstimates:
+        """Every reading (n, 3) in T, with the chip's noise ``sigma_T`` per axis, BLOCK readings
+        at a time (a reading has up to a few hundred candidate cells)."""
+        B = np.atleast_2d(np.asarray(B_T, dtype=float))
+        parts = [estimate_many(self, B[i : i + BLOCK], sigma_T, max_sigma_mm) for i in range(0, len(B), BLOCK)]
+        if len(parts) == 1:
+            return parts[0]
+        return TableEstimates(*(np.concatenate([getattr(p, f.name) for p in parts]) for f in fields(TableEstimates)))
+
+
+def source_hash(model_text: str, calibration_text: str | None, mechanics: str, grid: TableGrid) -> str:
+    """What a table depends on, hashed: a table whose hash differs is stale."""
+    h = hashlib.sha256()
+    for part in (str(TABLE_FORMAT), model_text, calibration_text or "", mechanics):
+        h.update(part.encode("utf-8"))
+        h.update(b"\0")
+    for nodes in (grid.force_N, grid.x_mm, grid.y_mm):
+        h.update(np.ascontiguousarray(nodes, dtype=float).tobytes())
+    return h.hexdigest()
+
+
+def build_table(
+    geometry: SensorGeometry,
+    material: Material,
+    mechanics: str,
+    grid: TableGrid,
+    lever_factor: float = 1.0,
+    source: str = "",
+) -> InverseTable:
+    """The tilt rung's field at every node: one force path per offset (in worker processes where
+    the platform forks; the same numbers either way)."""
+    laws = tilt_laws(geometry, material, mechanics, lever_factor)
+    offsets = [(float(x), float(y)) for x in grid.x_mm for y in grid.y_mm]
+
+    def path(offset: tuple[float, float]) -> np.ndarray:
+        return pose_field_T(geometry, laws, grid.force_N, offset)
+
+    paths = fork_map(path, offsets)
+    if paths is None:
+        paths = [path(o) for o in offsets]
+    nF, nx, ny = grid.shape
+    B = np.stack(paths).reshape(nx, ny, nF, 3).transpose(2, 0, 1, 3)
+    return InverseTable(grid, np.ascontiguousarray(B), source)
+
+
+def census(table: InverseTable, B_uT: np.ndarray, margin_uT: float) -> tuple[np.ndarray, np.ndarray]:
+    """(reading index, cell index) of every cell whose corners' box, widened by ``margin_uT``,
+    holds the reading (uT). Readings go in blocks of CHUNK by ascending Bz, each block against
+    the cells whose Bz box meets the block's Bz span."""
+    lo, hi = table.boxes_uT()
+    lo, hi = lo - margin_uT, hi + margin_uT
+    by_z = np.argsort(B_uT[:, 2], kind="stable")
+    reads, cells = [], []
+    for start in range(0, len(B_uT), CHUNK):
+        rows = by_z[start : start + CHUNK]
+        b = B_uT[rows]
+        near = np.flatnonzero((lo[:, 2] <= b[-1, 2]) & (hi[:, 2] >= b[0, 2]))
+        l, h = lo[near], hi[near]
+        inside = (b[:, None, 2] >= l[None, :, 2]) & (b[:, None, 2] <= h[None, :, 2])
+        for axis in (0, 1):
+            inside &= (b[:, None, axis] >= l[None, :, axis]) & (b[:, None, axis] <= h[None, :, axis])
+        r, c = np.nonzero(inside)
+        reads.append(rows[r])
+        cells.append(near[c])
+    return np.concatenate(reads), np.concatenate(cells)
+
+
+def _bilinear(X: np.ndarray, u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """X (P, 2, 2, 3) at (u, v) (P, 1) each."""
+    x0 = X[:, 0, 0] + (X[:, 0, 1] - X[:, 0, 0]) * v
+    x1 = X[:, 1, 0] + (X[:, 1, 1] - X[:, 1, 0]) * v
+    return x0 + (x1 - x0) * u
+
+
+def _trilinear(C: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The trilinear field (P, 3) of cells with corners C (P, 2, 2, 2, 3) at cell coordinates t
+    (P, 3), and its Jacobian (P, 3, 3) in those coordinates."""
+    t0, t1, t2 = t[:, 0:1], t[:, 1:2], t[:, 2:3]
+    lower, upper = _bilinear(C[:, 0], t1, t2), _bilinear(C[:, 1], t1, t2)
+    d1 = _bilinear(C[:, :, 1] - C[:, :, 0], t0, t2)
+    d2 = _bilinear(C[:, :, :, 1] - C[:, :, :, 0], t0, t1)
+    return lower + (upper - lower) * t0, np.stack([upper - lower, d1, d2], axis=2)
+
+
+def _solve3(A: np.ndarray, g: np.ndarray) -> np.ndarray:
+    """x of A x = g for many symmetric 3 x 3 systems (P, 3, 3) by Cramer's rule (as the C header
+    does); inf or NaN where A is singular."""
+    a, b, c = A[:, 0, 0], A[:, 0, 1], A[:, 0, 2]
+    d, e, f = A[:, 1, 1], A[:, 1, 2], A[:, 2, 2]
+    c00, c01, c02 = d * f - e * e, c * e - b * f, b * e - c * d
+    c11, c12, c22 = a * f - c * c, b * c - a * e, a * d - b * b
+    det = a * c00 + b * c01 + c * c02
+    g0, g1, g2 = g[:, 0], g[:, 1], g[:, 2]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return (
+            np.stack(
+                [c00 * g0 + c01 * g1 + c02 * g2, c01 * g0 + c11 * g1 + c12 * g2, c02 * g0 + c12 * g1 + c22 * g2], axis=1
+            )
+            / det[:, None]
+        )
+
+
+def _normal(J: np.ndarray, r: np.ndarray, held: np.ndarray) -> np.ndarray:
+    """The ridged Gauss-Newton step of J dt = r, with the ``held`` coordinates' columns left out."""
+    Jh = J * ~held[:, None, :]
+    A = np.einsum("pki,pkj->pij", Jh, Jh)
+    A += (RIDGE * (A[:, 0, 0] + A[:, 1, 1] + A[:, 2, 2]) + 1e-30)[:, None, None] * np.eye(3)
+    return np.nan_to_num(_solve3(A, np.einsum("pki,pk->pi", Jh, r)))
+
+
+def _newton(
+    C: np.ndarray, b: np.ndarray, t: np.ndarray, lo_t: np.ndarray, hi_t: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Newton steps 2 to NEWTON_STEPS from t (the first step's end): (t (P, 3), still in play
+    (P,)). A solve pinned on its clip bound (OUTSIDE its cell, not the table's edge) from
+    PRUNE_AFTER steps on has no root in its cell (a neighbour's census has it) and is dropped."""
+    live = np.arange(len(C))
+    for step in range(1, NEWTON_STEPS):
+        val, J = _trilinear(C[live], t[live])
+        r = b[live] - val
+        tl, lo, hi = t[live], lo_t[live], hi_t[live]
+        dt = _normal(J, r, np.zeros_like(tl, dtype=bool))
+        held = ((tl <= lo) & (dt < 0.0)) | ((tl >= hi) & (dt > 0.0))
+        some = held.any(axis=1)
+        if some.any():
+            dt[some] = _normal(J[some], r[some], held[some])
+        t[live] = np.clip(tl + dt, lo, hi)
+        if step + 1 >= PRUNE_AFTER:
+            live = live[~_pinned_outside(t[live], lo, hi)]
+    kept = np.zeros(len(C), dtype=bool)
+    kept[live] = True
+    return t, kept
+
+
+def _pinned_outside(t: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    return np.any(((t <= lo) & (lo < 0.0)) | ((t >= hi) & (hi > 1.0)), axis=1)
+
+
+def solve_cells(
+    table: InverseTable, b_uT: np.ndarray, cell: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Each (reading, cell) pair's trilinear solve, for the pairs still in play after the first
+    Newton step (from the cell's centre, by its precomputed matrix): (their indices among the
+    pairs, p (K, 3) force N / x0 mm / y0 mm, misfit uT, in-cell (K,), the field Jacobian dB/dp
+    (K, 3, 3) in uT per unit of p). A coordinate may leave its cell by OUTSIDE, except at the
+    table's edge, where it is held on the edge."""
+    shape = tuple(n - 1 for n in table.grid.shape)
+    idx = np.stack(np.unravel_index(cell, shape), axis=1)
+    lo_t = np.where(idx == 0, 0.0, -OUTSIDE)
+    hi_t = np.where(idx == np.array(shape) - 1, 1.0, 1.0 + OUTSIDE)
+    v, M = table.centre_steps()
+    t = np.clip(0.5 + np.einsum("pij,pj->pi", M[cell], b_uT - v[cell]), lo_t, hi_t)
+    play = np.flatnonzero(~_pinned_outside(t, lo_t, hi_t)) if PRUNE_AFTER <= 1 else np.arange(len(cell))
+    idx, C, b = idx[play], table.corners_uT()[cell[play]], b_uT[play]
+    t, kept = _newton(C, b, t[play], lo_t[play], hi_t[play])
+    val, J = _trilinear(C, t)
+    misfit = np.where(kept, np.linalg.norm(b - val, axis=1), np.inf)
+    inside = np.all((t >= -INSIDE_TOL) & (t <= 1.0 + INSIDE_TOL), axis=1)
+    nodes = (table.grid.force_N, table.grid.x_mm, table.grid.y_mm)
+    width = np.stack([nodes[a][idx[:, a] + 1] - nodes[a][idx[:, a]] for a in range(3)], axis=1)
+    p = np.stack([nodes[a][idx[:, a]] for a in range(3)], axis=1) + t * width
+    return play, p, misfit, inside, J / width[:, None, :]
+
+
+def crb_sigmas(J: np.ndarray, sigma: float) -> np.ndarray:
+    """The Cramer-Rao 1-sigma of (F, x0, y0), sqrt(diag((J^T J / sigma^2)^-1)), for Jacobians
+    (P, 3, 3) in field units per unit of p and the noise ``sigma`` per axis in the same field
+    units; inf where J^T J is singular."""
+    A = np.einsum("pki,pkj->pij", J, J) / sigma**2
+    cov = _solve3_matrix(A)
+    return np.sqrt(np.where(np.isfinite(cov) & (cov > 0), cov, np.inf))
+
+
+def _solve3_matrix(A: np.ndarray) -> np.ndarray:
+    """diag(A^-1) for symmetric 3 x 3 matrices (P, 3, 3); inf where singular or not positive."""
+    c0 = A[:, 1, 1] * A[:, 2, 2] - A[:, 1, 2] ** 2
+    c1 = A[:, 0, 0] * A[:, 2, 2] - A[:, 0, 2] ** 2
+    c2 = A[:, 0, 0] * A[:, 1, 1] - A[:, 0, 1] ** 2
+    det = np.linalg.det(A)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        out = np.stack([c0, c1, c2], axis=1) / det[:, None]
+    return np.where((det > 0)[:, None], out, np.inf)
+
+
+def estimate_many(table: InverseTable, B_T: np.ndarray, sigma_T: float, max_sigma_mm: float) -> TableEstimates:
+    """The census and its flags for readings B_T (n, 3) in T (see the module's docstring)."""
+    n = len(B_T)
+    sigma_uT = 1e6 * sigma_T
+    B_uT = 1e6 * B_T
+    read, cell = census(table, B_uT, FIT_SIGMAS * sigma_uT)
+    play, p, misfit, inside, J = solve_cells(table, B_uT[read], cell)
+    read = read[play]
+    root = inside & (misfit <= FIT_SIGMAS * sigma_uT)
+    read, p, misfit, J = read[root], p[root], misfit[root], J[root]
+    sig = crb_sigmas(J, sigma_uT)
+    roots = np.bincount(read, minlength=n)
+    # the best root of each reading: the least misfit (ties: the first found)
+    order = np.lexsort((misfit, read))
+    first = order[np.searchsorted(read[order], np.arange(n))[roots > 0]]
+    best_of = np.full(n, -1)
+    best_of[read[first]] = first
+    b = best_of[read]
+    far = np.any(np.abs(p - p[b]) > 2.0 * np.hypot(sig, sig[b]), axis=1)
+    ambiguous = np.bincount(read, weights=far, minlength=n) > 0
+    has = best_of >= 0
+    pb = np.full((n, 3), np.nan)
+    sb = np.full((n, 3), np.nan)
+    pb[has], sb[has] = p[best_of[has]], sig[best_of[has]]
+    flag = np.full(n, "no_fit", dtype=object)
+    flag[has] = "ok"
+    flag[has & (np.fmax(sb[:, 1], sb[:, 2]) > max_sigma_mm)] = "not_identifiable"
+    flag[ambiguous] = "ambiguous"
+    ok = flag == "ok"
+    v = np.where(ok[:, None], pb, np.nan)
+    s = np.where(ok[:, None], sb, np.nan)
+    return TableEstimates(v[:, 0], v[:, 1], v[:, 2], s[:, 0], s[:, 1], s[:, 2], flag, roots, pb)

@@ -1,0 +1,169 @@
+"""``mst read --estimate offset`` at stream speed: the offset reader on the model's
+:class:`~mst_cli.calibrate.inverse_table.InverseTable`, polished by the exact solve where asked.
+
+The table is built once per calibrated model (``mst calibrate --offset-table`` writes
+``inverse_table.npz`` beside calibrated.yaml); one that is missing or stale (its hash is not
+the model file's, its calibration.json's, the mechanics' and the grid's) is built on first use
+and handed back to be written with the readings' results.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from mst_cli.calibrate.calibration_json import CALIBRATION_JSON
+from mst_cli.calibrate.inverse_map import InverseMap
+from mst_cli.calibrate.inverse_table import (
+    FIT_SIGMAS,
+    GRID_DEFAULT,
+    TABLE_FILE,
+    InverseTable,
+    TableEstimates,
+    TableGrid,
+    build_table,
+    crb_sigmas,
+    source_hash,
+)
+from mst_cli.calibrate.offset_reading import DEFAULT_MAX_SIGMA_MM, OffsetEstimator, OffsetReadings
+from mst_cli.errors import InputError
+from mst_cli.sensor.document import Document
+
+
+@dataclass
+class OffsetTableReader:
+    """(force, x0, y0) of readings from a table, with the chip's noise ``sigma_T``; ``exact``
+    (the model's Gauss-Newton) polishes each root the census found when given."""
+
+    table: InverseTable
+    sigma_T: float
+    max_sigma_mm: float
+    exact: OffsetEstimator | None = None
+
+    def estimate_table(self, B_T: np.ndarray) -> TableEstimates:
+        """The census's estimates of readings (n, 3) in T, polished when ``exact`` is set."""
+        est = self.table.estimate(B_T, self.sigma_T, self.max_sigma_mm)
+        if self.exact is not None:
+            self._polish(B_T, est)
+        return est
+
+    def _polish(self, B_T: np.ndarray, est: TableEstimates) -> None:
+        """The exact solve from each reading's best root; its root, its Cramer-Rao sigmas and its
+        identifiability replace the table's (the census's ambiguity stands)."""
+        assert self.exact is not None
+        for i in np.flatnonzero(np.isin(est.flag, ("ok", "not_identifiable"))):
+            s = self.exact._solve_from(B_T[i], est.best[i].copy())
+            if not (s.converged and s.misfit_T <= FIT_SIGMAS * self.sigma_T):
+                continue  # the table's root stands (the exact solve stalled on the box)
+            sig = self.exact._sigmas(s.J)
+            est.best[i] = s.p
+            ok = bool(np.all(np.isfinite(sig)) and max(sig[1], sig[2]) <= self.max_sigma_mm)
+            est.flag[i] = "ok" if ok else "not_identifiable"
+            values = (*s.p, *sig) if ok else (np.nan,) * 6
+            est.force_N[i], est.x_mm[i], est.y_mm[i] = values[:3]
+            est.sigma_force_N[i], est.sigma_x_mm[i], est.sigma_y_mm[i] = values[3:]
+
+    def estimate_all(self, B_T: np.ndarray, force_axial_N: np.ndarray) -> OffsetReadings:
+        """Every reading with a finite centred force (the others keep their own flag, and "" here);
+        a reading not ``ok`` keeps its centred force."""
+        n = len(B_T)
+        use = np.isfinite(force_axial_N)
+        cols = np.full((6, n), np.nan)
+        flag = np.full(n, "", dtype=object)
+        if use.any():
+            est = self.estimate_table(np.asarray(B_T, dtype=float)[use])
+            cols[:, use] = [est.force_N, est.x_mm, est.y_mm, est.sigma_x_mm, est.sigma_y_mm, est.sigma_force_N]
+            flag[use] = est.flag
+        ok = flag == "ok"
+        F = np.where(ok, cols[0], force_axial_N)
+        return OffsetReadings(F, cols[1], cols[2], cols[3], cols[4], cols[5], flag)
+
+
+def table_hash(model_file: Path, mechanics: str, grid: TableGrid) -> str:
+    """The hash a current table of ``grid`` beside ``model_file`` carries."""
+    beside = model_file.parent / CALIBRATION_JSON
+    cal = beside.read_text(encoding="utf-8") if beside.is_file() else None
+    return source_hash(model_file.read_text(encoding="utf-8"), cal, mechanics, grid)
+
+
+def build_beside(
+    model_file: Path,
+    doc: Document,
+    mechanics: str,
+    lever_factor: float,
+    force_max_N: float,
+    grid: tuple[int, float] = GRID_DEFAULT,
+) -> InverseTable:
+    """The table of ``grid`` (forces, mm between offsets) for the model in ``model_file``, hashed
+    as current beside it."""
+    g = TableGrid.over(doc.geometry(), force_max_N, *grid)
+    return build_table(doc.geometry(), doc.material, mechanics, g, lever_factor, table_hash(model_file, mechanics, g))
+
+
+def table_beside(
+    model_file: Path, doc: Document, mechanics: str, lever_factor: float, force_max_N: float
+) -> tuple[InverseTable, str | None]:
+    """The table beside ``model_file`` when it is current (of any grid: the one its maker
+    chose), else one of the default grid built now and a note saying so (the caller writes it
+    with its results)."""
+    path = model_file.parent / TABLE_FILE
+    table = InverseTable.load(path)
+    if table is not None and table.source_hash == table_hash(model_file, mechanics, table.grid):
+        return table, None
+    t0 = time.perf_counter()
+    table = build_beside(model_file, doc, mechanics, lever_factor, force_max_N)
+    why = "is stale" if path.exists() else "is missing"
+    note = (
+        f"{path} {why}: built the offset table in {time.perf_counter() - t0:.0f} s and wrote it with the "
+        f"results (mst calibrate --offset-table writes it beside the model; so does copying it there)"
+    )
+    return table, note
+
+
+def offset_table_reader(
+    doc: Document, imap: InverseMap, lever: float, model_file: Path, mechanics: str, max_sigma_mm: float, polish: bool
+) -> tuple[OffsetTableReader, str | None]:
+    """The table reader of the model ``doc`` in ``model_file`` (noise: the inverse map's field
+    resolution; range: to the last lock; ``lever``: its calibration's factor), and the note of
+    :func:`table_beside`. InputError when no press of the table is identifiable at that noise."""
+    force_max_N = float(imap.force_N[-1])
+    table, note = table_beside(model_file, doc, mechanics, lever, force_max_N)
+    sigma_T = imap.field_resolution_T
+    best = best_offset_sigma_mm(table, sigma_T)
+    if not best <= max_sigma_mm:
+        raise InputError(
+            "--estimate offset",
+            doc.name,
+            f"this layout cannot tell where a press was: the offset's 1-sigma is at best {best:.3g} mm "
+            f"at {1e6 * sigma_T:.3g} uT noise, over the --max-offset-sigma-mm bound {max_sigma_mm:g} mm",
+        )
+    exact = None
+    if polish:
+        exact = OffsetEstimator(doc.geometry(), doc.material, mechanics, sigma_T, force_max_N, max_sigma_mm, lever)
+    return OffsetTableReader(table, sigma_T, max_sigma_mm, exact), note
+
+
+def best_offset_sigma_mm(table: InverseTable, sigma_T: float) -> float:
+    """The least Cramer-Rao 1-sigma of the offset (the worse of x0 and y0) over the table's nodes,
+    from the table's field differences (inf: nowhere identifiable)."""
+    g, B = table.grid, 1e6 * table.B_T
+    J = np.stack(
+        [np.gradient(B, g.force_N, axis=0), np.gradient(B, g.x_mm, axis=1), np.gradient(B, g.y_mm, axis=2)], -1
+    )
+    sig = crb_sigmas(J[1:].reshape(-1, 3, 3), 1e6 * sigma_T)
+    worst = np.fmax(sig[:, 1], sig[:, 2])
+    return float(np.min(worst)) if len(worst) else float("inf")
+
+
+def tables_for(
+    model_file: Path, doc: Document, imap: InverseMap, lever: float, mechanics: str
+) -> tuple[InverseTable, OffsetTableReader]:
+    """What ``mst calibrate --offset-table`` writes for the model in ``model_file``: its table
+    (the default grid, current beside it) and the reader of every other node of it (the C
+    header's coarse table: the default's 33 x 31 x 21 nodes give 17 x 16 x 11), at the inverse
+    map's noise and the default bound on the offset's 1-sigma."""
+    table = build_beside(model_file, doc, mechanics, lever, float(imap.force_N[-1]))
+    return table, OffsetTableReader(table.every_other(), imap.field_resolution_T, DEFAULT_MAX_SIGMA_MM)

@@ -1,0 +1,103 @@
+"""offset_table.h against the Python reader: the header compiled with the system C compiler reads
+10,000 raw code triples (the bundled design's coarse table, presses drawn over the force range
+and the face, 2 uT of noise, plus readings below the range and saturated ones) as
+`mst read --estimate offset` does on the same table.
+
+The criterion: the same flag on >= 99 % of the readings, and the force within 1 % of full scale
+(the last lock's force) on >= 99 % of those both call ok (float against double: a reading on a
+flag's edge, or with two roots of equal misfit, may go either way).
+"""
+
+import os
+import shutil
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.interpolate import RegularGridInterpolator
+
+from mst_cli.calibrate.inverse_map import inverse_map
+from mst_cli.calibrate.inverse_table import GRID_COARSE, TableGrid, build_table
+from mst_cli.calibrate.offset_header import C_FLAGS, offset_header, read_codes
+from mst_cli.calibrate.table_reader import OffsetTableReader
+from mst_cli.model.chip import CODE_RANGE_LSB
+from mst_cli.sensor.document import load_design_document
+
+FORWARD = Path(__file__).resolve().parents[1] / "configs" / "mohammadi2021-forward.yaml"
+N_READINGS = 10_000
+DRIVER = r"""
+#include <stdio.h>
+#include "offset_table.h"
+int main(void)
+{
+    long x, y, z;
+    while (scanf("%ld %ld %ld", &x, &y, &z) == 3) {
+        struct mst_offset e = {0};
+        int flag = mst_offset_from_codes((int32_t)x, (int32_t)y, (int32_t)z, &e);
+        printf("%d %.9g %.9g %.9g %.9g %.9g %.9g\n", flag, e.force_N, e.x_mm, e.y_mm,
+               e.sigma_force_N, e.sigma_x_mm, e.sigma_y_mm);
+    }
+    return 0;
+}
+"""
+
+
+def c_compiler() -> str:
+    cc = shutil.which("cc") or shutil.which("gcc")
+    if cc is None:
+        if os.environ.get("CI") == "true":
+            pytest.fail("no C compiler (cc or gcc) on the CI image: .ci/run installs gcc")
+        pytest.skip("no C compiler (cc or gcc) found: the header's C cannot be checked here")
+    return cc
+
+
+def codes_of(table, imap, setting, rng) -> np.ndarray:
+    """Raw codes: presses over the range and the face with 2 uT noise, readings below the range
+    and saturated ones."""
+    g = table.grid
+    n = N_READINGS - 200
+    p = np.column_stack(
+        [rng.uniform(0.0, 1.05 * g.force_N[-1], n), rng.uniform(*g.x_mm[[0, -1]], n), rng.uniform(*g.y_mm[[0, -1]], n)]
+    )
+    p[:, 0] = np.minimum(p[:, 0], g.force_N[-1])
+    B_uT = RegularGridInterpolator((g.force_N, g.x_mm, g.y_mm), 1e6 * table.B_T)(p) + rng.normal(0.0, 2.0, (n, 3))
+    lsb = np.array([setting.xy_uT_per_lsb, setting.xy_uT_per_lsb, setting.z_uT_per_lsb])
+    codes = np.rint(B_uT / lsb).astype(np.int64)
+    low = np.rint(rng.uniform(0.0, 0.8 * imap.B_abs_T[0] * 1e6, (100, 3)) / np.sqrt(3) / lsb)
+    sat = np.tile([0, 0, CODE_RANGE_LSB[setting.res] - 1], (100, 1))  # a code at the chip's end
+    return np.vstack([codes, low, sat]).astype(np.int64)
+
+
+@pytest.mark.slow
+def test_the_compiled_header_reads_codes_as_the_python_reader_does(tmp_path):
+    cc = c_compiler()
+    doc, _ = load_design_document(FORWARD)
+    imap, resp = inverse_map(doc, "spring")
+    setting = resp.chip_setting
+    assert setting is not None
+    top = float(imap.force_N[-1])
+    grid = TableGrid.over(doc.geometry(), top, *GRID_COARSE)
+    reader = OffsetTableReader(build_table(doc.geometry(), doc.material, "spring", grid), imap.field_resolution_T, 1.0)
+    (tmp_path / "offset_table.h").write_text(offset_header(reader, imap, setting, doc.name, "the test", ["a test"]))
+    (tmp_path / "driver.c").write_text(DRIVER)
+    exe = tmp_path / "driver"
+    subprocess.run([cc, "-std=c99", "-O2", "-Wall", "-Werror", "-o", exe, tmp_path / "driver.c", "-lm"], check=True)
+
+    codes = codes_of(reader.table, imap, setting, np.random.default_rng(7))
+    run = subprocess.run(
+        [exe], input="".join(f"{x} {y} {z}\n" for x, y, z in codes), capture_output=True, text=True, check=True
+    )
+    c_out = np.array([[float(v) for v in line.split()] for line in run.stdout.splitlines()])
+    c_flag = np.array([C_FLAGS[int(f)] for f in c_out[:, 0]])
+    py_flag, py_values = read_codes(reader, imap, setting, codes)
+
+    assert len(c_flag) == len(codes) == N_READINGS
+    same = np.mean(c_flag == py_flag)
+    both = (c_flag == "ok") & (py_flag == "ok")
+    close = np.mean(np.abs(c_out[both, 1] - py_values[both, 0]) <= 0.01 * top)
+    print(f"same flag on {100 * same:.2f} %, force within 1 % of full scale on {100 * close:.2f} % of {both.sum()}")
+    assert same >= 0.99, f"the same flag on {100 * same:.2f} %"
+    assert both.sum() >= 1000 and close >= 0.99, f"force within 1 % of full scale on {100 * close:.2f} %"
+    for f in ("ok", "not_identifiable", "below_range", "saturated"):
+        assert np.any(py_flag == f)  # every kind of reading was asked

@@ -1,0 +1,192 @@
+"""The offset reader's table (`mst read --estimate offset`): its census of roots, its Cramer-Rao
+sigmas and the command around it.
+
+On fields given in closed form the roots are known by algebra: a field linear in (F, x0, y0) is
+trilinear exactly, so the table gives its root and the analytic covariance sigma^2 (A^T A)^-1; a
+field that folds over has two roots, and the census finds both wherever they are (no start to
+fall on one side); a field blind to x0 leaves x0 unidentifiable. On the bundled design's own
+tilt rung, readings at the table's nodes come back exactly (trilinear interpolation is exact at
+its nodes), and the exact solve polishes a reading between them to the truth.
+"""
+
+import os
+import pty
+import shutil
+import tty
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from mst_cli import api
+from mst_cli.calibrate.inverse_map import inverse_map
+from mst_cli.calibrate.inverse_table import TABLE_FILE, InverseTable, TableGrid, source_hash
+from mst_cli.calibrate.table_reader import build_beside, table_beside, table_hash
+from mst_cli.cli.app import main
+from mst_cli.model.offcentre import pose_field_T, tilt_laws
+from mst_cli.sensor.document import load_design_document
+
+FORWARD = Path(__file__).resolve().parents[1] / "configs" / "mohammadi2021-forward.yaml"
+SIGMA_T = 1e-6
+GRID = TableGrid(np.linspace(0.0, 50.0, 11), np.linspace(-10.0, 10.0, 11), np.linspace(-10.0, 10.0, 9))
+
+
+def table_of(field) -> InverseTable:
+    """The table of a closed-form field (T) of p = (F N, x mm, y mm) on GRID."""
+    P = np.stack(np.meshgrid(GRID.force_N, GRID.x_mm, GRID.y_mm, indexing="ij"), axis=-1)
+    return InverseTable(GRID, np.apply_along_axis(field, -1, P), "closed form")
+
+
+A = 1e-5 * np.array([[1.0, 0.2, 0.0], [0.1, 2.0, 0.3], [0.0, 0.5, 1.5]])  # T per (N, mm, mm)
+
+
+def linear(p):
+    return A @ p + np.array([0.0, 0.0, 3e-3])
+
+
+def folded(p):
+    return 1e-5 * np.array([p[0], (p[1] - 0.5) ** 2, p[2]])
+
+
+def blind(p):
+    return 1e-5 * np.array([p[0], p[0], p[2]])
+
+
+def test_a_linear_field_gives_its_root_and_the_analytic_cramer_rao_bound():
+    truth = np.array([[23.0, 3.3, -4.1], [1.5, -9.1, 7.7], [49.0, 0.1, 0.3]])  # off the nodes
+    est = table_of(linear).estimate(np.array([linear(p) for p in truth]), SIGMA_T, 5.0)
+    assert list(est.flag) == ["ok"] * 3 and list(est.roots) == [1, 1, 1]
+    np.testing.assert_allclose(np.column_stack([est.force_N, est.x_mm, est.y_mm]), truth, atol=1e-9)
+    crb = SIGMA_T * np.sqrt(np.diag(np.linalg.inv(A.T @ A)))
+    for got in np.column_stack([est.sigma_force_N, est.sigma_x_mm, est.sigma_y_mm]):
+        np.testing.assert_allclose(got, crb, rtol=1e-9)
+
+
+def test_a_field_that_folds_over_is_ambiguous_by_construction():
+    # (x - 0.5)^2 = 4 at x = 2.5 and x = -1.5: both roots are found, whatever came before (the
+    # table is trilinear between its 2 mm nodes: each root lies within the parabola's chord error)
+    est = table_of(folded).estimate(folded(np.array([21.0, 2.5, 1.1]))[None], SIGMA_T, 5.0)
+    assert est.flag[0] == "ambiguous" and est.roots[0] == 2
+    assert np.isnan(est.force_N[0])
+    # (x - 0.5)^2 = 110.25 at x = -10 (the face's edge) and x = 11 (off it): one press
+    edge = table_of(folded).estimate(1e-5 * np.array([[21.0, 110.25, 1.1]]), SIGMA_T, 5.0)
+    assert edge.flag[0] == "ok" and edge.roots[0] == 1
+    assert (edge.force_N[0], edge.x_mm[0], edge.y_mm[0]) == pytest.approx((21.0, -10.0, 1.1), abs=1e-9)
+
+
+def test_a_field_blind_to_the_offset_leaves_it_unidentifiable_and_a_field_off_the_table_unfit():
+    est = table_of(blind).estimate(np.array([blind(np.array([21.0, 3.1, 1.1])), [1e-5, 2e-4, 0.0]]), SIGMA_T, 5.0)
+    assert list(est.flag) == ["not_identifiable", "no_fit"]
+    assert est.roots[1] == 0
+
+
+@pytest.fixture(scope="module")
+def design():
+    doc, _ = load_design_document(FORWARD)
+    imap, _ = inverse_map(doc, "spring")
+    return doc, imap
+
+
+@pytest.fixture(scope="module")
+def coarse_model(tmp_path_factory, design):
+    """A copy of the forward design with a coarse table (17 forces, 3 mm) beside it."""
+    doc, imap = design
+    model = tmp_path_factory.mktemp("coarse") / "model.yaml"
+    shutil.copy(FORWARD, model)
+    build_beside(model, doc, "spring", 1.0, float(imap.force_N[-1]), (17, 3.0)).save(model.parent / TABLE_FILE)
+    return model
+
+
+def test_readings_at_the_tables_nodes_come_back_exactly(coarse_model, design):
+    doc, imap = design
+    table, note = table_beside(coarse_model, doc, "spring", 1.0, float(imap.force_N[-1]))
+    assert note is None  # current: not rebuilt
+    g = table.grid
+    i, j, k = np.array([4, 8, 12, 15]), np.array([7, 3, 9, 2]), np.array([5, 6, 2, 3])
+    est = table.estimate(table.B_T[i, j, k], 2e-6, 1.0)
+    ok = est.flag == "ok"
+    assert ok.sum() >= 3
+    truth = np.column_stack([g.force_N[i], g.x_mm[j], g.y_mm[k]])
+    np.testing.assert_allclose(np.column_stack([est.force_N, est.x_mm, est.y_mm])[ok], truth[ok], atol=1e-7)
+
+
+def test_a_table_is_stale_once_its_model_or_calibration_changes(coarse_model, tmp_path):
+    table = InverseTable.load(coarse_model.parent / TABLE_FILE)
+    assert table is not None and table.source_hash == table_hash(coarse_model, "spring", table.grid)
+    assert table.source_hash != table_hash(coarse_model, "frame", table.grid)
+    text = coarse_model.read_text()
+    assert source_hash(text, "{}", "spring", table.grid) != table.source_hash  # a calibration.json beside
+    assert source_hash(text + "\n# edited\n", None, "spring", table.grid) != table.source_hash
+
+
+def run(args):
+    return CliRunner().invoke(main, [str(a) for a in args])
+
+
+def readings_csv(path: Path, B: np.ndarray, F: np.ndarray) -> Path:
+    path.write_text(
+        "Bx_uT,By_uT,Bz_uT,force_N\n"
+        + "".join(f"{b[0] * 1e6:.6f},{b[1] * 1e6:.6f},{b[2] * 1e6:.6f},{f}\n" for b, f in zip(B, F))
+    )
+    return path
+
+
+def test_read_estimates_the_offset_with_its_sigmas_and_polishes_to_the_truth(coarse_model, design, tmp_path):
+    doc, _ = design
+    geo, mat = doc.geometry(), doc.material
+    F = np.array([8.0, 15.0, 40.0])
+    csv = readings_csv(tmp_path / "r.csv", pose_field_T(geo, tilt_laws(geo, mat, "spring"), F, (6.0, 3.0)), F)
+    res = run(["read", coarse_model, csv, "--out", tmp_path / "o", "--estimate", "offset", "--polish"])
+    assert res.exit_code == 0, res.output
+    assert not (tmp_path / "o" / TABLE_FILE).exists()  # the table beside the model was current
+    import csv as csvmod
+
+    rows = list(csvmod.DictReader((tmp_path / "o" / "forces.csv").open()))
+    assert [r["offset_flag"] for r in rows] == ["ok"] * 3
+    for r, f in zip(rows, F):
+        assert float(r["force_N"]) == pytest.approx(f, rel=1e-6)
+        assert (float(r["x_mm"]), float(r["y_mm"])) == pytest.approx((6.0, 3.0), abs=1e-4)
+        assert all(float(r[c]) > 0 for c in ("force_N_sigma", "x_mm_sigma", "y_mm_sigma"))
+
+
+@pytest.mark.parametrize(
+    "header, args, says",
+    [
+        ("Bz_uT,force_N", ["--estimate", "offset"], "Bx_uT"),
+        ("Bx_uT,By_uT,Bz_uT", ["--estimate", "shear"], "--estimate"),
+        ("Bx_uT,By_uT,Bz_uT", ["--estimate", "offset", "--max-offset-sigma-mm", "1e-6"], "cannot tell"),
+    ],
+)
+def test_read_refuses_what_it_cannot_estimate_in_one_line_and_writes_nothing(
+    coarse_model, tmp_path, header, args, says
+):
+    csv = tmp_path / "r.csv"
+    csv.write_text(header + "\n" + ",".join(["10"] * (header.count(",") + 1)) + "\n")
+    res = run(["read", coarse_model, csv, "--out", tmp_path / "o", *args])
+    assert res.exit_code == 2 and says in res.output, res.output
+    errors = [line for line in res.output.splitlines() if not line.startswith("mst read: warning:")]
+    assert len(errors) == 1  # (the model has no calibration.json beside it: warned)
+    assert not (tmp_path / "o").exists()
+
+
+def test_a_serial_stream_is_estimated_live(coarse_model, design, tmp_path):
+    doc, _ = design
+    geo, mat = doc.geometry(), doc.material
+    F = np.array([8.0, 15.0, 40.0])
+    B = pose_field_T(geo, tilt_laws(geo, mat, "spring"), F, (6.0, 3.0)) * 1e6
+    master, slave = pty.openpty()
+    tty.setraw(slave)
+    for b in B:
+        os.write(master, f"{b[0]:.4f},{b[1]:.4f},{b[2]:.4f}\r\n".encode())
+    shown: list[str] = []
+    try:
+        got = api.read_serial(
+            coarse_model, os.ttyname(slave), count=3, estimate="offset", out=tmp_path / "o", show=shown.append
+        )
+    finally:
+        os.close(master)
+        os.close(slave)
+    assert len(got.samples) == 3 and all("at (" in line for line in shown)
+    x = [float(line.split(",")[-6]) for line in (tmp_path / "o" / "forces.csv").read_text().splitlines()[1:]]
+    assert x == pytest.approx([6.0] * 3, abs=0.5)  # the coarse table's 3 mm cells, unpolished
