@@ -73,3 +73,19 @@ def test_simulate_models_the_part_as_printed():
     a, b = api.simulate(offset), api.simulate(drawn)
     assert [r.force_to_N for r in a.regimes] == pytest.approx([r.force_to_N for r in b.regimes], rel=1e-9)
     assert [r.force_to_N for r in a.regimes] != pytest.approx([r.force_to_N for r in api.simulate(doc).regimes])
+
+
+def test_every_verb_is_documented_numpy_style():
+    # issue 37: units and shapes under Parameters, Returns, Raises and Examples
+    import inspect
+
+    missing = {}
+    for name in api.__all__:
+        obj = getattr(api, name)
+        if isinstance(obj, type) or not callable(obj):
+            continue
+        doc = inspect.getdoc(obj) or ""
+        absent = [s for s in ("Parameters", "Returns", "Raises", "Examples") if f"{s}\n---" not in doc]
+        if absent:
+            missing[name] = absent
+    assert missing == {}

@@ -26,7 +26,28 @@ if TYPE_CHECKING:
 
 
 def parse_params(text: str) -> tuple[str, ...]:
-    """The parameter names of ``--params`` ("modulus_factor,gap_offset_mm")."""
+    """The parameter names of ``--params``.
+
+    Parameters
+    ----------
+    text : str
+        Comma-separated names of :data:`mst_cli.sensor.as_printed.PARAMETERS`.
+
+    Returns
+    -------
+    tuple of str
+        The names, in the order given.
+
+    Raises
+    ------
+    InputError
+        For none, an unknown or a repeated name.
+
+    Examples
+    --------
+    >>> mst.parse_params("modulus_factor,gap_offset_mm")  # doctest: +SKIP
+    ('modulus_factor', 'gap_offset_mm')
+    """
     from mst_cli.calibrate.calibration import parse_params as parse  # deferred: scipy.optimize, 330 ms measured
 
     return parse(text)
@@ -53,8 +74,30 @@ def _looks_like_readings(path: Path) -> bool:
 
 
 def check_argument_order(design: str | Path | Document, data: str | Path | None, verb: str) -> None:
-    """InputError in one line when the design argument is the readings CSV (the two arguments
-    swapped): ``mst calibrate loadtest.csv design.yaml``."""
+    """Refuse a design argument that is a CSV of readings (the two arguments swapped).
+
+    Parameters
+    ----------
+    design, data : str, Path or Document; str, Path or None
+        The design (or model) argument and the CSV argument, as given.
+    verb : {"calibrate", "read"}
+        The command, for the order the message states.
+
+    Returns
+    -------
+    None
+
+    Raises
+    ------
+    InputError
+        One line naming the file, and that the arguments are swapped when they are.
+
+    Examples
+    --------
+    >>> mst.check_argument_order("loadtest.csv", "design.yaml", "calibrate")  # doctest: +SKIP
+    Traceback (most recent call last):
+    InputError: DESIGN_FILE = 'loadtest.csv': is a CSV of readings, not a design ...
+    """
     if isinstance(design, Document) or not _looks_like_readings(Path(design)):
         return
     second = "LOAD_TEST.csv" if verb == "calibrate" else "READINGS.csv"
@@ -88,31 +131,29 @@ def calibrate(
 
     Parameters
     ----------
-    design : str, Path or Document
-        The design file the sensor was printed from (a Document: ``design_file`` names it).
-    load_test : str or Path
-        CSV, one row per sample: force_N (N) and Bx_uT, By_uT, Bz_uT (uT), or Bx_code_lsb,
-        By_code_lsb, Bz_code_lsb (raw LSB, with ``gain_sel`` and ``res``).
+    design, load_test : str, Path or Document; str or Path
+        The design the sensor was printed from (a Document: ``design_file`` names it); a CSV of
+        force_N (N) and Bx_uT, By_uT, Bz_uT (uT) or raw codes (with ``gain_sel``, ``res``).
     out : str or Path, optional
-        Folder for calibrated.yaml, calibration.json, residuals.csv, lookup.csv, force_table.h,
-        (``plot``) calibration.png and (``offset_table``) inverse_table.npz, which
-        ``read(estimate="offset")`` reads, and offset_table.h, written atomically [default: none].
-    mechanics : {"spring", "frame", "continuum"}
-        Layer mechanics of the fit; frame and continuum by space mapping on spring.
-    params : sequence of str or str, optional
-        Parameters to fit (of :data:`mst_cli.sensor.as_printed.PARAMETERS`, or "a,b") [default: all four].
+        Folder for the command's files (``offset_table``: also inverse_table.npz, offset_table.h).
+    mechanics, params : str; sequence of str or "a,b", optional
+        The fit's rung (frame, continuum by space mapping on spring); the parameters fitted.
     gain_sel, res, table_size, use_branches : int, int, int, bool, optional
-        The MLX90393 setting the load test was read at (0-7, 0-3); entries of lookup.csv
-        (16-4096); fit the loading rows (True) or every row as loading.
-    offset_table : bool
-        Write the offset tables into ``out`` too (a minute or two).
+        Raw codes' chip setting; lookup.csv's entries; fit the loading rows (or every row).
 
     Returns
     -------
     Calibration
-        ``.fit.values`` (units in the names) and ``.fit.std`` (1 sigma), ``.calibrated`` (the
-        design as printed), ``.inverse_map`` (|B| T -> force N), ``.record`` (calibration.json),
-        ``.summary()``. Raises InputError (bad file or option) or CalibrationFailed (why).
+        ``.fit.values``, ``.fit.std``, ``.calibrated``, ``.inverse_map``, ``.record``, ``.summary()``.
+
+    Raises
+    ------
+    InputError, CalibrationFailed
+        A bad file or option (naming it); a fit that failed (saying why).
+
+    Examples
+    --------
+    >>> cal = mst.calibrate("configs/mohammadi2021-forward.yaml", "loadtest.csv", out="cal")  # doctest: +SKIP
     """
     from mst_cli.calibrate.calibration import calibrate as run_calibration  # deferred: scipy.optimize, 330 ms measured
 
@@ -252,40 +293,35 @@ def read(
         calibrated.yaml (or any design file: then forces are the design's, not the print's, and
         ``warn`` is told so).
     readings : str or Path
-        CSV with Bx_uT, By_uT, Bz_uT (or raw codes with ``gain_sel``/``res``); a force_N column
-        is kept as the reference the summary compares with.
+        CSV with Bx_uT, By_uT, Bz_uT (or raw codes with ``gain_sel``/``res``); force_N, the
+        reference; time_s, cycle, branch, T_C read too.
     out : str or Path, optional
-        Folder to write forces.csv into.
+        Folder to write forces.csv into (and a table ``estimate`` built).
     warn : callable, optional
-        Gets a sentence when the model has no matching calibration.json beside it, or when the
-        model no longer gives the curve recorded at calibration.
-    estimate : {"none", "offset"}
-        "offset": estimate where each reading was pressed from Bx, By, Bz (the tilt rung's
-        inverse, from the model's table: inverse_table.npz beside the model, built on first use
-        and then written to ``out``) and correct its force; ``.offset`` holds x, y and their
-        Cramer-Rao 1-sigma, and a reading whose press the data cannot tell keeps the centred
-        force, flagged (``.offset.flag``): not_identifiable (offset less certain than
-        ``max_offset_sigma_mm``), ambiguous (two presses give it: every root of the table is
-        found) or no_fit (none does); thousands of readings a second.
-    estimate_offset : bool
-        The same as ``estimate="offset"``.
-    polish : bool
-        Polish each table root by the model's exact Gauss-Newton (about 0.1 s a reading).
-    tare : int
-        Take the first ``tare`` readings as no load and re-zero the unloaded field on them.
+        Gets a sentence when the model does not match calibration.json beside it (docs/calibration.md).
+    estimate, estimate_offset, polish, tare : {"none", "offset"}, bool, bool, int
+        "offset" (or ``estimate_offset``): each press's x, y (Cramer-Rao 1-sigma) from the
+        model's table, its force corrected, flagged not_identifiable, ambiguous or no_fit
+        (docs/design.md 4.2); ``polish`` by the exact solve; ``tare``: readings at no load.
 
     Returns
     -------
     ForceReadings
-        ``.force_N`` (n,) in N, NaN where flagged (never extrapolated); ``.regime`` (n,),
-        ``.flag`` (n,) one of ok, above_calibrated, below_range, above_range, saturated;
-        ``.force_resolution_N`` (n,); ``.summary()``, ``.csv()``.
+        ``.force_N`` (n,) N, NaN where flagged (never extrapolated); ``.regime``, ``.flag`` (ok,
+        above_calibrated, below_range, above_range, saturated); ``.summary()``, ``.csv()``.
+
+    Raises
+    ------
+    InputError
+        A bad file or option, naming it; an estimate the layout cannot identify anywhere.
+
+    Examples
+    --------
+    >>> forces = mst.read("cal/calibrated.yaml", "readings.csv", estimate="offset", out="o")  # doctest: +SKIP
     """
-    estimate = _checked_estimate("offset" if estimate_offset else estimate, max_offset_sigma_mm)
+    estimate = _checked_estimate("offset" if estimate_offset else estimate, max_offset_sigma_mm, tare)
     reader, rd, _ = _reader(model, model_file, mechanics, gain_sel, res, False, readings, out, warn)
     offsets, built = _estimator(reader, estimate, mechanics, model_file or model, max_offset_sigma_mm, polish, warn)
-    if isinstance(tare, bool) or not isinstance(tare, int) or tare < 0:
-        raise InputError("--tare", tare, "a whole number of readings at no load (0: no tare)")
     result = reader.read(rd, offsets, tare)
     if out is not None:
         with staged(Path(out)) as st:
@@ -295,8 +331,10 @@ def read(
     return result
 
 
-def _checked_estimate(estimate: str, max_offset_sigma_mm: float) -> str:
+def _checked_estimate(estimate: str, max_offset_sigma_mm: float, tare: int = 0) -> str:
     _one_of("--estimate", estimate, ESTIMATES)
+    if isinstance(tare, bool) or not isinstance(tare, int) or tare < 0:
+        raise InputError("--tare", tare, "a whole number of readings at no load (0: no tare)")
     if not (max_offset_sigma_mm > 0 and math.isfinite(max_offset_sigma_mm)):
         raise InputError("--max-offset-sigma-mm", max_offset_sigma_mm, "must be a positive number of mm")
     return estimate
@@ -339,12 +377,35 @@ def read_serial(
     estimate: str = "none",
     max_offset_sigma_mm: float = 1.0,
 ) -> SerialSamples:
-    """A live MLX90393 stream to forces (``mst read --serial PORT``): one line per sample goes to
-    ``show``; stops when the port closes, after ``count`` samples, ``timeout_s`` seconds of
-    silence or Ctrl-C; ``status`` gets a line when reading starts. ``out``: forces.csv of every
-    sample (time s, the three values, force N, regime, flag, resolution N; with an ``estimate``,
-    its columns as :func:`read` writes them). ``estimate``: as :func:`read`'s, live (the table;
-    the table is built before the port is opened when none stands beside the model)."""
+    """A live MLX90393 stream to forces (``mst read --serial PORT``).
+
+    Parameters
+    ----------
+    model, port : str, Path or Document; str
+        The calibrated model (as :func:`read`'s); the serial port (one sample per line).
+    out : str or Path, optional
+        Folder for forces.csv of every sample (time s, the three values, force N, regime, flag,
+        resolution N; an ``estimate``'s columns as :func:`read` writes them).
+    baud, count, timeout_s, raw : int, int, float, bool
+        Stop when the port closes, after ``count`` samples, ``timeout_s`` of silence or Ctrl-C.
+    estimate : {"none", "offset"}
+        As :func:`read`'s, live from the model's table; ``show`` gets each sample's line and
+        ``status`` a line when reading starts.
+
+    Returns
+    -------
+    SerialSamples
+        ``.samples`` and ``.skipped`` (lines that were not a sample).
+
+    Raises
+    ------
+    InputError
+        A bad option or a port that cannot be opened, naming it.
+
+    Examples
+    --------
+    >>> mst.read_serial("cal/calibrated.yaml", "/dev/ttyACM0", count=100)  # doctest: +SKIP
+    """
     _checked_estimate(estimate, max_offset_sigma_mm)
     reader, _, setting = _reader(model, model_file, mechanics, gain_sel, res, raw, None, out, warn)
     offsets, built = _estimator(reader, estimate, mechanics, model_file or model, max_offset_sigma_mm, False, warn)
