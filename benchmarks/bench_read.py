@@ -39,7 +39,7 @@ from mst_cli.calibrate.inverse_table import GRID_DEFAULT, InverseTable, TableGri
 from mst_cli.calibrate.offset_header import offset_header
 from mst_cli.calibrate.offset_reading import OffsetEstimator
 from mst_cli.calibrate.table_reader import OffsetTableReader, table_hash
-from mst_cli.model.offcentre import pose_field_T, tilt_laws
+from mst_cli.model.stack_pose import pose_field_T, tilt_laws
 from mst_cli.sensor.document import load_design_document
 
 ROOT = Path(__file__).resolve().parents[1]

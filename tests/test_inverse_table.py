@@ -24,7 +24,7 @@ from mst_cli.calibrate.inverse_map import inverse_map
 from mst_cli.calibrate.inverse_table import TABLE_FILE, InverseTable, TableGrid, source_hash
 from mst_cli.calibrate.table_reader import build_beside, table_beside, table_hash
 from mst_cli.cli.app import main
-from mst_cli.model.offcentre import pose_field_T, tilt_laws
+from mst_cli.model.stack_pose import pose_field_T, tilt_laws
 from mst_cli.sensor.document import load_design_document
 
 FORWARD = Path(__file__).resolve().parents[1] / "configs" / "mohammadi2021-forward.yaml"

@@ -23,6 +23,23 @@ HEADER_FILE = "force_table.h"
 TEMPLATE = "force_table.h.in"
 
 
+def fill_template(
+    template_name: str, setting: ChipSetting, name: str, sources: str, limitations: Sequence[str], **fields: object
+) -> str:
+    """A C header template of ``calibrate/data/`` filled in: the fields every header carries
+    (the design's name, its sources, the chip setting, the model's limitations), then ``fields``."""
+    text = resources.files(__package__).joinpath("data", template_name).read_text(encoding="utf-8")
+    return Template(text).substitute(
+        name=name,
+        sources=sources,
+        gain_sel=setting.gain_sel,
+        res=setting.res,
+        z_uT_per_lsb=setting.z_uT_per_lsb,
+        limitations="\n".join(f" *   - {line}" for line in limitations),
+        **fields,
+    )
+
+
 def c_float(value: float, digits: int = 4) -> str:
     """A C float literal (always with a point or an exponent before the f suffix)."""
     text = f"{value:.{digits}g}"
@@ -51,16 +68,14 @@ def c_header(
     codes, F, regime, res = imap.z_code_table(setting)
     lsb_T = setting.z_uT_per_lsb * 1e-6
     top_N = imap.calibrated_to_N if imap.calibrated_to_N is not None else float(imap.force_N[-1])
-    template = Template(resources.files(__package__).joinpath("data", TEMPLATE).read_text(encoding="utf-8"))
-    return template.substitute(
-        name=name,
-        sources=sources,
-        gain_sel=setting.gain_sel,
-        res=setting.res,
-        z_uT_per_lsb=setting.z_uT_per_lsb,
+    return fill_template(
+        TEMPLATE,
+        setting,
+        name,
+        sources,
+        limitations,
         z_uT_per_lsb_c=c_float(setting.z_uT_per_lsb, 6),
         setting_note="".join(f"\n * {line}" for line in textwrap.wrap(setting_note, 92)),
-        limitations="\n".join(f" *   - {line}" for line in limitations),
         table_len=len(codes),
         tolerance_lsb=max(1, int(math.ceil(imap.tolerance_T / lsb_T))),
         saturated_lsb=min(CODE_RANGE_LSB[setting.res] - 1, int(SATURATION_T / lsb_T)),

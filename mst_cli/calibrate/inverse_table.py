@@ -2,7 +2,7 @@
 once per model over the loads the reader supports, and inverted by a census of every cell.
 
 The field (Bx, By, Bz) is tabulated on a grid of nodes in force (0 to the last lock), x0 (the
-face's width) and y0 (its depth), each offset a :func:`~mst_cli.model.offcentre.pose_field_T`
+face's width) and y0 (its depth), each offset a :func:`~mst_cli.model.stack_pose.pose_field_T`
 path up the forces; between nodes it is trilinear. A trilinear cell's field is a convex
 combination of its eight corners', so it lies in their bounding box: a reading that a press in
 the cell explains to within k noise sigmas lies inside that box widened by k sigma. The census
@@ -32,7 +32,7 @@ import numpy as np
 
 from mst_cli.model.assembly import SensorGeometry
 from mst_cli.model.material import Material
-from mst_cli.model.offcentre import pose_field_T, tilt_laws
+from mst_cli.model.stack_pose import pose_field_T, tilt_laws
 from mst_cli.parallel import fork_map
 
 TABLE_FILE = "inverse_table.npz"

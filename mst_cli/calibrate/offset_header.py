@@ -12,13 +12,11 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from importlib import resources
-from string import Template
 
 import numpy as np
 
 from mst_cli.calibrate import inverse_table as it
-from mst_cli.calibrate.header import c_float
+from mst_cli.calibrate.header import c_float, fill_template
 from mst_cli.calibrate.inverse_map import InverseMap
 from mst_cli.calibrate.table_reader import OffsetTableReader
 from mst_cli.model.chip import CODE_RANGE_LSB, SATURATION_T, ChipSetting
@@ -66,19 +64,17 @@ def offset_header(
     table = reader.table
     below, above, calibrated = range_bounds_uT(imap)
     nf, nx, ny = table.grid.shape
-    template = Template(resources.files(__package__).joinpath("data", TEMPLATE).read_text(encoding="utf-8"))
-    return template.substitute(
-        name=name,
-        sources=sources,
-        gain_sel=setting.gain_sel,
-        res=setting.res,
+    return fill_template(
+        TEMPLATE,
+        setting,
+        name,
+        sources,
+        limitations,
         xy_uT_per_lsb=setting.xy_uT_per_lsb,
-        z_uT_per_lsb=setting.z_uT_per_lsb,
         xy_uT_per_lsb_c=c_float(setting.xy_uT_per_lsb, 8),
         z_uT_per_lsb_c=c_float(setting.z_uT_per_lsb, 8),
         saturated_lsb=min(CODE_RANGE_LSB[setting.res] - 1, int(SATURATION_T * 1e6 / setting.z_uT_per_lsb)),
         table_bytes=table.size_bytes_float32,
-        limitations="\n".join(f" *   - {line}" for line in limitations),
         nf=nf,
         nx=nx,
         ny=ny,

@@ -25,7 +25,7 @@ import numpy as np
 
 from mst_cli.model.assembly import SensorGeometry
 from mst_cli.model.material import Material
-from mst_cli.model.offcentre import magnet_field_T, magnet_pose, stack_path, tilt_laws
+from mst_cli.model.stack_pose import magnet_field_T, magnet_pose, stack_path, tilt_laws
 
 DEFAULT_MAX_SIGMA_MM = 1.0  # an offset less certain than this is not identifiable
 GAUSS_NEWTON_ITERATIONS = 30

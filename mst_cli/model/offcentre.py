@@ -28,21 +28,6 @@ from mst_cli.model.response import Response
 from mst_cli.model.response import simulate as simulate_axial
 from mst_cli.model.stack_pose import magnet_field_T, magnet_pose, pose_field_T, stack_path, tilt_laws
 
-__all__ = [  # the pose and path helpers live in stack_pose; their old home still names them
-    "AXIAL_READING_FLAGS",
-    "OffCentreResponse",
-    "OffsetMap",
-    "axial_reading_flags",
-    "magnet_field_T",
-    "magnet_pose",
-    "offset_map",
-    "pose_field_T",
-    "simulate_offcentre",
-    "stack_path",
-    "tilt_laws",
-    "worst_read_errors",
-]
-
 SIDE_LOCK_BISECTIONS = 50  # halvings of the force bracket of a side's lock (to ~1e-15 of it)
 
 
