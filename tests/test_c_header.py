@@ -58,10 +58,10 @@ def codes_of(table, imap, setting, rng) -> np.ndarray:
     g = table.grid
     n = N_READINGS - 200
     p = np.column_stack(
-        [rng.uniform(0.0, 1.05 * g.force_N[-1], n), rng.uniform(*g.x_mm[[0, -1]], n), rng.uniform(*g.y_mm[[0, -1]], n)]
+        [rng.uniform(0.0, 1.05 * g.force_N[-1], n), rng.uniform(*g.u[[0, -1]], n), rng.uniform(*g.v[[0, -1]], n)]
     )
     p[:, 0] = np.minimum(p[:, 0], g.force_N[-1])
-    B_uT = RegularGridInterpolator((g.force_N, g.x_mm, g.y_mm), 1e6 * table.B_T)(p) + rng.normal(0.0, 2.0, (n, 3))
+    B_uT = RegularGridInterpolator((g.force_N, g.u, g.v), 1e6 * table.B_T)(p) + rng.normal(0.0, 2.0, (n, 3))
     lsb = np.array([setting.xy_uT_per_lsb, setting.xy_uT_per_lsb, setting.z_uT_per_lsb])
     codes = np.rint(B_uT / lsb).astype(np.int64)
     low = np.rint(rng.uniform(0.0, 0.8 * imap.B_abs_T[0] * 1e6, (100, 3)) / np.sqrt(3) / lsb)

@@ -34,7 +34,7 @@ GRID = TableGrid(np.linspace(0.0, 50.0, 11), np.linspace(-10.0, 10.0, 11), np.li
 
 def table_of(field) -> InverseTable:
     """The table of a closed-form field (T) of p = (F N, x mm, y mm) on GRID."""
-    P = np.stack(np.meshgrid(GRID.force_N, GRID.x_mm, GRID.y_mm, indexing="ij"), axis=-1)
+    P = np.stack(np.meshgrid(GRID.force_N, GRID.u, GRID.v, indexing="ij"), axis=-1)
     return InverseTable(GRID, np.apply_along_axis(field, -1, P), "closed form")
 
 
@@ -107,7 +107,7 @@ def test_readings_at_the_tables_nodes_come_back_exactly(coarse_model, design):
     est = table.estimate(table.B_T[i, j, k], 2e-6, 1.0)
     ok = est.flag == "ok"
     assert ok.sum() >= 3
-    truth = np.column_stack([g.force_N[i], g.x_mm[j], g.y_mm[k]])
+    truth = np.column_stack([g.force_N[i], g.u[j], g.v[k]])
     np.testing.assert_allclose(np.column_stack([est.force_N, est.x_mm, est.y_mm])[ok], truth[ok], atol=1e-7)
 
 

@@ -266,7 +266,7 @@ def _reader(
 
 # what ``mst read --estimate`` can add to the force; a new estimate is one entry here and one
 # branch in :func:`_estimator`
-ESTIMATES = ("none", "offset")
+ESTIMATES = ("none", "offset", "shear")
 
 
 def read(
@@ -299,10 +299,12 @@ def read(
         Folder to write forces.csv into (and a table ``estimate`` built).
     warn : callable, optional
         Gets a sentence when the model does not match calibration.json beside it (docs/calibration.md).
-    estimate, estimate_offset, polish, tare : {"none", "offset"}, bool, bool, int
+    estimate, estimate_offset, polish, tare : {"none", "offset", "shear"}, bool, bool, int
         "offset" (or ``estimate_offset``): each press's x, y (Cramer-Rao 1-sigma) from the
         model's table, its force corrected, flagged not_identifiable, ambiguous or no_fit
-        (docs/design.md 4.2); ``polish`` by the exact solve; ``tare``: readings at no load.
+        (docs/design.md 4.2); "shear": the tangential force (Fx, Fy) of a press taken as
+        centred, from the model's shear table (4.5); ``polish`` by the exact solve; ``tare``:
+        readings at no load.
 
     Returns
     -------
@@ -343,7 +345,8 @@ def _checked_estimate(estimate: str, max_offset_sigma_mm: float, tare: int = 0) 
 def _estimator(reader, estimate: str, mechanics: str | None, model_file, max_sigma_mm: float, polish: bool, warn):
     """(the reader of ``estimate``, or None; the table it built, to be written, or None).
     InputError when the layout cannot identify the estimate anywhere in its range."""
-    from mst_cli.calibrate.table_reader import offset_table_reader  # deferred: the calibrate layer, as _reader
+    # deferred: the calibrate layer, as _reader
+    from mst_cli.calibrate.table_reader import offset_table_reader, shear_table_reader
 
     if estimate == "none":
         return None, None
@@ -352,7 +355,10 @@ def _estimator(reader, estimate: str, mechanics: str | None, model_file, max_sig
     doc = reader.document
     mech = choose_mechanics(mechanics, doc.accuracy_rel, doc.mechanics).mechanics
     lever = reader.record.lever_factor() if reader.record is not None else 1.0
-    offsets, note = offset_table_reader(doc, reader.inverse_map, lever, Path(model_file), mech, max_sigma_mm, polish)
+    if estimate == "shear":
+        offsets, note = shear_table_reader(doc, reader.inverse_map, lever, Path(model_file), mech, polish)
+    else:
+        offsets, note = offset_table_reader(doc, reader.inverse_map, lever, Path(model_file), mech, max_sigma_mm, polish)
     if note is not None and warn is not None:
         warn(note)
     return offsets, (offsets.table if note is not None else None)
@@ -388,7 +394,7 @@ def read_serial(
         resolution N; an ``estimate``'s columns as :func:`read` writes them).
     baud, count, timeout_s, raw : int, int, float, bool
         Stop when the port closes, after ``count`` samples, ``timeout_s`` of silence or Ctrl-C.
-    estimate : {"none", "offset"}
+    estimate : {"none", "offset", "shear"}
         As :func:`read`'s, live from the model's table; ``show`` gets each sample's line and
         ``status`` a line when reading starts.
 

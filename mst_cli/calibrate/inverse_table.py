@@ -1,9 +1,18 @@
-"""The offset reader's table (``mst read --estimate offset``): the tilt rung's field tabulated
-once per model over the loads the reader supports, and inverted by a census of every cell.
+"""The one-chip readers' tables (``mst read --estimate offset`` and ``--estimate shear``): the
+model's field tabulated once per model over the loads the reader supports, and inverted by a
+census of every cell.
 
-The field (Bx, By, Bz) is tabulated on a grid of nodes in force (0 to the last lock), x0 (the
-face's width) and y0 (its depth), each offset a :func:`~mst_cli.model.stack_pose.pose_field_T`
-path up the forces; between nodes it is trilinear. A trilinear cell's field is a convex
+The field (Bx, By, Bz) is tabulated on a grid of nodes in the normal force (0 to the last lock)
+and two more coordinates (u, v), one force path up the forces per (u, v) node; between nodes it
+is trilinear. The table's ``kind`` says what (u, v) are:
+
+* ``offset``: where a press without shear was pressed, x0 over the face's width and y0 over its
+  depth (mm), each a :func:`~mst_cli.model.stack_pose.pose_field_T` path;
+* ``shear``: the tangential force's ratios to the normal one, Fx / Fz and Fy / Fz, of a centred
+  press (a friction cone: a box in the ratios), each a
+  :func:`~mst_cli.model.general_load.load_path` path; an estimate is given as (Fz, Fx, Fy) =
+  (F, u F, v F), its Jacobian carried over by the chain rule before the bound is taken.
+ A trilinear cell's field is a convex
 combination of its eight corners', so it lies in their bounding box: a reading that a press in
 the cell explains to within k noise sigmas lies inside that box widened by k sigma. The census
 takes every such cell (a vectorised test over all cells and readings), solves the cell's
@@ -31,12 +40,14 @@ from typing import Any
 import numpy as np
 
 from mst_cli.model.assembly import SensorGeometry
+from mst_cli.model.general_load import load_path, loaded_stack
 from mst_cli.model.material import Material
-from mst_cli.model.stack_pose import pose_field_T, tilt_laws
+from mst_cli.model.stack_pose import magnet_field_T, magnet_pose, pose_field_T, tilt_laws
 from mst_cli.parallel import fork_map
 
-TABLE_FILE = "inverse_table.npz"
-TABLE_FORMAT = 1  # bumped when the table's contents change meaning: an older file is rebuilt
+TABLE_FILE = "inverse_table.npz"  # the offset table's file beside the model ...
+SHEAR_TABLE_FILE = "shear_table.npz"  # ... and the shear table's
+TABLE_FORMAT = 2  # bumped when the table's contents change meaning: an older file is rebuilt
 FIT_SIGMAS = 3.0  # a cell whose best point is further off the reading than this found no root
 NEWTON_STEPS = 8  # Newton steps inside a cell (trilinear: quadratic convergence from its centre)
 PRUNE_AFTER = 1  # ... from which on a solve pinned outside its cell is dropped
@@ -52,45 +63,83 @@ BLOCK = 4096  # readings per estimate (their candidate cells' corners at a time)
 # microcontroller's flash
 GRID_DEFAULT = (33, 1.0)
 GRID_COARSE = (17, 2.0)
+KINDS = ("offset", "shear")
+# the shear table's friction cone |Fx / Fz|, |Fy / Fz| <= SHEAR_TABLE_RATIO (a reading beyond it is
+# no_fit: TPU on TPU or skin slips near 0.5 to 1) and its (forces, ratio step); the census's cost
+# grows with the nodes (docs/design.md section 4.5)
+SHEAR_TABLE_RATIO = 0.5
+SHEAR_GRID_DEFAULT = (33, 0.05)
 
 
 @dataclass(frozen=True)
 class TableGrid:
-    """Nodes of the table: force N, x0 mm and y0 mm, each ascending."""
+    """Nodes of the table: the normal force N and the coordinates u, v, each ascending (``kind``
+    offset: the press's x0 and y0, mm; shear: the ratios Fx / Fz and Fy / Fz)."""
 
     force_N: np.ndarray
-    x_mm: np.ndarray
-    y_mm: np.ndarray
+    u: np.ndarray
+    v: np.ndarray
+    kind: str = "offset"
 
     @classmethod
     def over(cls, geometry: SensorGeometry, force_max_N: float, n_force: int, step_mm: float) -> TableGrid:
-        """``n_force`` forces from 0 to ``force_max_N``; x0 and y0 over the whole face, about
-        ``step_mm`` apart (the face's edges are nodes)."""
+        """An offset grid: ``n_force`` forces from 0 to ``force_max_N``; x0 and y0 over the whole
+        face, about ``step_mm`` apart (the face's edges are nodes)."""
         hw, hd = 0.5 * geometry.width_mm, 0.5 * geometry.depth_mm
         nx = max(2, int(math.ceil(2 * hw / step_mm)) + 1)
         ny = max(2, int(math.ceil(2 * hd / step_mm)) + 1)
         return cls(np.linspace(0.0, force_max_N, n_force), np.linspace(-hw, hw, nx), np.linspace(-hd, hd, ny))
 
+    @classmethod
+    def cone(cls, force_max_N: float, n_force: int, ratio_max: float, step: float) -> TableGrid:
+        """A shear grid: ``n_force`` forces from 0 to ``force_max_N``; each ratio from
+        -``ratio_max`` to ``ratio_max``, about ``step`` apart (0 a node)."""
+        half = max(1, int(math.ceil(ratio_max / step)))
+        ratios = np.linspace(-ratio_max, ratio_max, 2 * half + 1)
+        return cls(np.linspace(0.0, force_max_N, n_force), ratios, ratios.copy(), "shear")
+
     @property
     def shape(self) -> tuple[int, int, int]:
-        return len(self.force_N), len(self.x_mm), len(self.y_mm)
+        return len(self.force_N), len(self.u), len(self.v)
 
 
 @dataclass
 class TableEstimates:
-    """Per reading: force N, x0 and y0 mm (NaN unless ``ok``), their Cramer-Rao 1-sigma, the flag
-    (ok, not_identifiable, ambiguous, no_fit) and how many roots the census found (solves that
-    ended in their cell: a root on the face between two cells counts in each)."""
+    """Per reading: the estimate p (n, 3) (offset: force N, x0 mm, y0 mm; shear: Fz, Fx, Fy N;
+    NaN unless ``ok``), its Cramer-Rao 1-sigma (n, 3), the flag (ok, not_identifiable, ambiguous,
+    no_fit) and how many roots the census found (solves that ended in their cell: a root on the
+    face between two cells counts in each)."""
 
-    force_N: np.ndarray
-    x_mm: np.ndarray
-    y_mm: np.ndarray
-    sigma_force_N: np.ndarray
-    sigma_x_mm: np.ndarray
-    sigma_y_mm: np.ndarray
+    p: np.ndarray
+    sigma: np.ndarray
     flag: np.ndarray
     roots: np.ndarray
-    best: np.ndarray  # (n, 3) the best root (NaN without one), whatever the flag: where a polish starts
+    best: np.ndarray  # (n, 3) the best root as p (NaN without one), whatever the flag: where a polish starts
+
+    # the offset table's names of p's and sigma's columns (views: writing one writes p)
+    @property
+    def force_N(self) -> np.ndarray:
+        return self.p[:, 0]
+
+    @property
+    def x_mm(self) -> np.ndarray:
+        return self.p[:, 1]
+
+    @property
+    def y_mm(self) -> np.ndarray:
+        return self.p[:, 2]
+
+    @property
+    def sigma_force_N(self) -> np.ndarray:
+        return self.sigma[:, 0]
+
+    @property
+    def sigma_x_mm(self) -> np.ndarray:
+        return self.sigma[:, 1]
+
+    @property
+    def sigma_y_mm(self) -> np.ndarray:
+        return self.sigma[:, 2]
 
 
 @dataclass
@@ -105,7 +154,9 @@ class InverseTable:
     _boxes: tuple[np.ndarray, np.ndarray] | None = field(default=None, repr=False, compare=False)
     _centre: tuple[np.ndarray, np.ndarray] | None = field(default=None, repr=False, compare=False)
 
-    file_name = TABLE_FILE
+    @property
+    def file_name(self) -> str:
+        return SHEAR_TABLE_FILE if self.grid.kind == "shear" else TABLE_FILE
 
     @property
     def size_bytes_float32(self) -> int:
@@ -149,7 +200,7 @@ class InverseTable:
         """Every second node on each axis (the ends kept where a count is odd: the default grid's
         nodes give the coarse grid's)."""
         g = self.grid
-        grid = TableGrid(g.force_N[::2], g.x_mm[::2], g.y_mm[::2])
+        grid = TableGrid(g.force_N[::2], g.u[::2], g.v[::2], g.kind)
         return InverseTable(grid, np.ascontiguousarray(self.B_T[::2, ::2, ::2]), self.source_hash)
 
     def save(self, path: Path) -> None:
@@ -160,10 +211,11 @@ class InverseTable:
         g = self.grid
         return {
             "format": np.array(TABLE_FORMAT),
+            "kind": np.array(g.kind),
             "source_hash": np.array(self.source_hash),
             "force_N": g.force_N,
-            "x_mm": g.x_mm,
-            "y_mm": g.y_mm,
+            "u": g.u,
+            "v": g.v,
             "B_T": self.B_T,
         }
 
@@ -174,11 +226,11 @@ class InverseTable:
             with np.load(path, allow_pickle=False) as z:
                 if int(z["format"]) != TABLE_FORMAT:
                     return None
-                grid = TableGrid(z["force_N"], z["x_mm"], z["y_mm"])
+                grid = TableGrid(z["force_N"], z["u"], z["v"], str(z["kind"]))
                 table = cls(grid, z["B_T"], str(z["source_hash"]))
         except (OSError, ValueError, KeyError):
             return None
-        return table if table.B_T.shape == (*grid.shape, 3) else None
+        return table if table.B_T.shape == (*grid.shape, 3) and grid.kind in KINDS else None
 
     def estimate(self, B_T: np.ndarray, sigma_T: float, max_sigma_mm: float) -> TableEstimates:
         """Every reading (n, 3) in T, with the chip's noise ``sigma_T`` per axis, BLOCK readings
@@ -196,7 +248,8 @@ def source_hash(model_text: str, calibration_text: str | None, mechanics: str, g
     for part in (str(TABLE_FORMAT), model_text, calibration_text or "", mechanics):
         h.update(part.encode("utf-8"))
         h.update(b"\0")
-    for nodes in (grid.force_N, grid.x_mm, grid.y_mm):
+    h.update(grid.kind.encode("utf-8"))
+    for nodes in (grid.force_N, grid.u, grid.v):
         h.update(np.ascontiguousarray(nodes, dtype=float).tobytes())
     return h.hexdigest()
 
@@ -209,19 +262,28 @@ def build_table(
     lever_factor: float = 1.0,
     source: str = "",
 ) -> InverseTable:
-    """The tilt rung's field at every node: one force path per offset (in worker processes where
-    the platform forks; the same numbers either way)."""
-    laws = tilt_laws(geometry, material, mechanics, lever_factor)
-    offsets = [(float(x), float(y)) for x in grid.x_mm for y in grid.y_mm]
+    """The model's field at every node: one force path per (u, v) node (in worker processes
+    where the platform forks; the same numbers either way). ``offset``: the tilt rung's; ``shear``:
+    the general load's, pressed at the centre."""
+    nodes = [(float(u), float(v)) for u in grid.u for v in grid.v]
+    if grid.kind == "shear":
+        stack = loaded_stack(geometry, material, mechanics, lever_factor)
 
-    def path(offset: tuple[float, float]) -> np.ndarray:
-        return pose_field_T(geometry, laws, grid.force_N, offset)
+        def path(ratio: tuple[float, float]) -> np.ndarray:
+            d, tilt, slide = load_path(stack, grid.force_N, (0.0, 0.0), ratio)
+            return magnet_field_T(geometry, *magnet_pose(geometry, d, tilt, slide))
 
-    paths = fork_map(path, offsets)
+    else:
+        laws = tilt_laws(geometry, material, mechanics, lever_factor)
+
+        def path(offset: tuple[float, float]) -> np.ndarray:
+            return pose_field_T(geometry, laws, grid.force_N, offset)
+
+    paths = fork_map(path, nodes)
     if paths is None:
-        paths = [path(o) for o in offsets]
-    nF, nx, ny = grid.shape
-    B = np.stack(paths).reshape(nx, ny, nF, 3).transpose(2, 0, 1, 3)
+        paths = [path(o) for o in nodes]
+    nF, nu, nv = grid.shape
+    B = np.stack(paths).reshape(nu, nv, nF, 3).transpose(2, 0, 1, 3)
     return InverseTable(grid, np.ascontiguousarray(B), source)
 
 
@@ -338,7 +400,7 @@ def solve_cells(
     val, J = _trilinear(C, t)
     misfit = np.where(kept, np.linalg.norm(b - val, axis=1), np.inf)
     inside = np.all((t >= -INSIDE_TOL) & (t <= 1.0 + INSIDE_TOL), axis=1)
-    nodes = (table.grid.force_N, table.grid.x_mm, table.grid.y_mm)
+    nodes = (table.grid.force_N, table.grid.u, table.grid.v)
     width = np.stack([nodes[a][idx[:, a] + 1] - nodes[a][idx[:, a]] for a in range(3)], axis=1)
     p = np.stack([nodes[a][idx[:, a]] for a in range(3)], axis=1) + t * width
     return play, p, misfit, inside, J / width[:, None, :]
@@ -364,8 +426,23 @@ def _solve3_matrix(A: np.ndarray) -> np.ndarray:
     return np.where((det > 0)[:, None], out, np.inf)
 
 
+def to_output(kind: str, p: np.ndarray, J: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The roots p (K, 3) and field Jacobians J (K, 3, 3) in the estimate's coordinates: the
+    offset table's are its own; the shear table's (F, u, v) become (Fz, Fx, Fy) = (F, u F, v F),
+    dB/dq = dB/dp dp/dq with dp/dq the inverse of [[1, 0, 0], [u, F, 0], [v, 0, F]]."""
+    if kind != "shear":
+        return p, J
+    F = np.maximum(p[:, 0], 1e-12)  # a press of no force has no shear (its ratio is any)
+    q = np.column_stack([p[:, 0], p[:, 1] * p[:, 0], p[:, 2] * p[:, 0]])
+    Jq = np.empty_like(J)
+    Jq[:, :, 1], Jq[:, :, 2] = J[:, :, 1] / F[:, None], J[:, :, 2] / F[:, None]
+    Jq[:, :, 0] = J[:, :, 0] - (p[:, 1] / F)[:, None] * J[:, :, 1] - (p[:, 2] / F)[:, None] * J[:, :, 2]
+    return q, Jq
+
+
 def estimate_many(table: InverseTable, B_T: np.ndarray, sigma_T: float, max_sigma_mm: float) -> TableEstimates:
-    """The census and its flags for readings B_T (n, 3) in T (see the module's docstring)."""
+    """The census and its flags for readings B_T (n, 3) in T (see the module's docstring); the
+    offset's bound ``max_sigma_mm`` on x0 and y0 (the shear table has none: its sigmas say)."""
     n = len(B_T)
     sigma_uT = 1e6 * sigma_T
     B_uT = 1e6 * B_T
@@ -373,7 +450,8 @@ def estimate_many(table: InverseTable, B_T: np.ndarray, sigma_T: float, max_sigm
     play, p, misfit, inside, J = solve_cells(table, B_uT[read], cell)
     read = read[play]
     root = inside & (misfit <= FIT_SIGMAS * sigma_uT)
-    read, p, misfit, J = read[root], p[root], misfit[root], J[root]
+    read, misfit = read[root], misfit[root]
+    p, J = to_output(table.grid.kind, p[root], J[root])
     sig = crb_sigmas(J, sigma_uT)
     roots = np.bincount(read, minlength=n)
     # the best root of each reading: the least misfit (ties: the first found)
@@ -390,9 +468,8 @@ def estimate_many(table: InverseTable, B_T: np.ndarray, sigma_T: float, max_sigm
     pb[has], sb[has] = p[best_of[has]], sig[best_of[has]]
     flag = np.full(n, "no_fit", dtype=object)
     flag[has] = "ok"
-    flag[has & (np.fmax(sb[:, 1], sb[:, 2]) > max_sigma_mm)] = "not_identifiable"
+    if table.grid.kind == "offset":
+        flag[has & (np.fmax(sb[:, 1], sb[:, 2]) > max_sigma_mm)] = "not_identifiable"
     flag[ambiguous] = "ambiguous"
     ok = flag == "ok"
-    v = np.where(ok[:, None], pb, np.nan)
-    s = np.where(ok[:, None], sb, np.nan)
-    return TableEstimates(v[:, 0], v[:, 1], v[:, 2], s[:, 0], s[:, 1], s[:, 2], flag, roots, pb)
+    return TableEstimates(np.where(ok[:, None], pb, np.nan), np.where(ok[:, None], sb, np.nan), flag, roots, pb)

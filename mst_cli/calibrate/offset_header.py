@@ -90,8 +90,8 @@ def offset_header(
         inside_tol=c_float(it.INSIDE_TOL),
         ridge=c_float(it.RIDGE),
         force_nodes=_c_floats("mst_force_N_nodes", table.grid.force_N),
-        x_nodes=_c_floats("mst_x_nodes", table.grid.x_mm),
-        y_nodes=_c_floats("mst_y_nodes", table.grid.y_mm),
+        x_nodes=_c_floats("mst_x_nodes", table.grid.u),
+        y_nodes=_c_floats("mst_y_nodes", table.grid.v),
         field=_c_floats("mst_B_uT", 1e6 * table.B_T, per_line=6),
     )
 

@@ -76,6 +76,18 @@ class OffsetReadings:
         names = ("force_N", "x_mm", "y_mm", "sigma_x_mm", "sigma_y_mm", "sigma_force_N", "flag")
         return cls(*(np.concatenate([getattr(p, n) for p in parts]) for n in names))
 
+    def append_columns(self, forces_csv_text: str, centred_force_N: np.ndarray) -> str:
+        """forces.csv with the offset's columns (:func:`offset_columns`)."""
+        return offset_columns(forces_csv_text, self, centred_force_N)
+
+    def terminal(self, i: int) -> str:
+        """What a live line adds for reading ``i`` (its flag where not ok)."""
+        if self.flag[i] != "ok":
+            return f"  {self.flag[i]}" if self.flag[i] else ""
+        return (
+            f"  at ({self.x_mm[i]:.2f}, {self.y_mm[i]:.2f}) mm +- ({self.sigma_x_mm[i]:.2f}, {self.sigma_y_mm[i]:.2f})"
+        )
+
     def summary(self) -> str:
         ok = self.flag == "ok"
         kept = ", ".join(

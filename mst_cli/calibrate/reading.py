@@ -17,11 +17,12 @@ import numpy as np
 from mst_cli.calibrate.accuracy import ERROR_FROM_RANGE, force_errors, force_errors_by_regime, regime_error_lines
 from mst_cli.calibrate.calibration_json import CalibrationRecord, record_beside
 from mst_cli.calibrate.inverse_map import FLAGS, InverseMap, inverse_map
+from mst_cli.calibrate.load_readings import LoadReadings
 from mst_cli.calibrate.loadtest import Readings, field_of, rig_column, unknown_columns
-from mst_cli.calibrate.offset_reading import OffsetEstimator, OffsetReadings, offset_columns
+from mst_cli.calibrate.offset_reading import OffsetEstimator, OffsetReadings
 from mst_cli.calibrate.rig_reading import BranchForces, follow_branches, no_load_rows, tare_shift_T, unloading_model_of
 from mst_cli.calibrate.rung_check import read_rung_warning
-from mst_cli.calibrate.table_reader import OffsetTableReader
+from mst_cli.calibrate.table_reader import OffsetTableReader, ShearTableReader
 from mst_cli.calibrate.tables import FORCES_COLUMNS, cell, forces_csv
 from mst_cli.calibrate.temperature_fit import field_at_reference
 from mst_cli.io.serial_lines import LineSource, SampleParser
@@ -42,7 +43,7 @@ class ForceReadings:
     regime: np.ndarray
     flag: np.ndarray
     force_resolution_N: np.ndarray
-    offset: OffsetReadings | None = None  # with --estimate-offset: force_N is the corrected one ...
+    offset: OffsetReadings | LoadReadings | None = None  # with --estimate: force_N is the estimate's ...
     force_centred_N: np.ndarray | None = None  # ... and this the centred model's
     edges_N: np.ndarray = field(default_factory=lambda: np.zeros(1))  # the model's regime edges (errors per regime)
     branches: BranchForces | None = None  # the branch of each reading and its force's uncertainty
@@ -50,13 +51,13 @@ class ForceReadings:
 
     def csv(self) -> str:
         """forces.csv: the input columns and the force, regime, flag and resolution of each row
-        (with an offset estimate: force_N corrected, then the centred force and the offset)."""
+        (with an estimate: force_N the estimate's, then the centred force and the estimate's columns)."""
         text = forces_csv(self.readings, self.force_N, self.regime, self.flag, self.force_resolution_N)
         if self.branches is not None and self.branches.model_used:  # a calibration with an unloading model
             text = _branch_columns(text, self.branches)
         if self.offset is None or self.force_centred_N is None:
             return text
-        return offset_columns(text, self.offset, self.force_centred_N)
+        return self.offset.append_columns(text, self.force_centred_N)
 
     def errors(self) -> dict | None:
         """Force errors against the file's own force_N column (None without one)."""
@@ -129,7 +130,9 @@ class SerialSamples:
     raw: bool
     samples: list[tuple[float, tuple[float, float, float], float, int, str]] = field(default_factory=list)
     skipped: int = 0
-    offsets: list[tuple[float, OffsetReadings]] = field(default_factory=list)  # (centred force, estimate) each
+    offsets: list[tuple[float, OffsetReadings | LoadReadings]] = field(
+        default_factory=list
+    )  # (centred force, estimate) each
 
     def csv(self, imap: InverseMap) -> str:
         cols = ("Bx_code_lsb", "By_code_lsb", "Bz_code_lsb") if self.raw else ("Bx_uT", "By_uT", "Bz_uT")
@@ -147,8 +150,9 @@ class SerialSamples:
             )
         if not self.offsets:
             return buf.getvalue()
-        est = OffsetReadings.concat([o for _, o in self.offsets])
-        return offset_columns(buf.getvalue(), est, np.array([f for f, _ in self.offsets]))
+        kind = type(self.offsets[0][1])
+        est = kind.concat([o for _, o in self.offsets])  # type: ignore[arg-type]
+        return est.append_columns(buf.getvalue(), np.array([f for f, _ in self.offsets]))
 
 
 @dataclass
@@ -181,7 +185,7 @@ class ForceReader:
         return cls(doc, imap, note, record)
 
     def read(
-        self, rd: Readings, offsets: OffsetEstimator | OffsetTableReader | None = None, tare: int = 0
+        self, rd: Readings, offsets: OffsetEstimator | OffsetTableReader | ShearTableReader | None = None, tare: int = 0
     ) -> ForceReadings:
         """The forces of ``rd``; with ``offsets``, each in-range reading's force corrected for
         where it was pressed (:mod:`~mst_cli.calibrate.offset_reading`); else each on its branch
@@ -232,7 +236,7 @@ class ForceReader:
         raw: bool,
         setting: ChipSetting | None,
         show: Callable[[str], None],
-        offsets: OffsetTableReader | None = None,
+        offsets: OffsetTableReader | ShearTableReader | None = None,
     ) -> SerialSamples:
         """Read ``port`` until it closes, ``count`` samples, ``timeout_s`` of silence or Ctrl-C,
         showing each sample's force through ``show`` (with ``offsets``: corrected, and where it
@@ -269,14 +273,19 @@ class ForceReader:
         return out
 
     def _offset_sample(
-        self, offsets: OffsetTableReader, out: SerialSamples, B: np.ndarray, f: float, r: int, fl: str
+        self,
+        offsets: OffsetTableReader | ShearTableReader,
+        out: SerialSamples,
+        B: np.ndarray,
+        f: float,
+        r: int,
+        fl: str,
     ) -> tuple[float, int, str]:
-        """One stream sample's offset estimate, kept in ``out``: (the corrected force, its
-        regime, what the terminal line adds)."""
+        """One stream sample's estimate, kept in ``out``: (the force, its regime, what the terminal
+        line adds)."""
         est = offsets.estimate_all(B[None, :], np.array([f if fl == "ok" else math.nan]))
         out.offsets.append((f, est))
         if est.flag[0] != "ok":
-            return f, r, f"  {est.flag[0]}" if est.flag[0] else ""
+            return f, r, est.terminal(0)
         F = float(est.force_N[0])
-        where = f"  at ({est.x_mm[0]:.2f}, {est.y_mm[0]:.2f}) mm +- ({est.sigma_x_mm[0]:.2f}, {est.sigma_y_mm[0]:.2f})"
-        return F, int(self.inverse_map.regime_of(F)), where
+        return F, int(self.inverse_map.regime_of(F)), est.terminal(0)

@@ -1,10 +1,11 @@
-"""``mst read --estimate offset`` at stream speed: the offset reader on the model's
-:class:`~mst_cli.calibrate.inverse_table.InverseTable`, polished by the exact solve where asked.
+"""``mst read --estimate offset`` and ``--estimate shear`` (one chip) at stream speed: the
+readers on the model's :class:`~mst_cli.calibrate.inverse_table.InverseTable` of that kind,
+polished by the exact solve where asked.
 
-The table is built once per calibrated model (``mst calibrate --offset-table`` writes
-``inverse_table.npz`` beside calibrated.yaml); one that is missing or stale (its hash is not
-the model file's, its calibration.json's, the mechanics' and the grid's) is built on first use
-and handed back to be written with the readings' results.
+The tables are built once per calibrated model (``mst calibrate --offset-table`` writes
+``inverse_table.npz`` and ``shear_table.npz`` beside calibrated.yaml); one that is missing or
+stale (its hash is not the model file's, its calibration.json's, the mechanics' and the grid's)
+is built on first use and handed back to be written with the readings' results.
 """
 
 from __future__ import annotations
@@ -20,6 +21,9 @@ from mst_cli.calibrate.inverse_map import InverseMap
 from mst_cli.calibrate.inverse_table import (
     FIT_SIGMAS,
     GRID_DEFAULT,
+    SHEAR_GRID_DEFAULT,
+    SHEAR_TABLE_FILE,
+    SHEAR_TABLE_RATIO,
     TABLE_FILE,
     InverseTable,
     TableEstimates,
@@ -28,8 +32,11 @@ from mst_cli.calibrate.inverse_table import (
     crb_sigmas,
     source_hash,
 )
+from mst_cli.calibrate.load_readings import LoadReadings, from_estimates
 from mst_cli.calibrate.offset_reading import DEFAULT_MAX_SIGMA_MM, OffsetEstimator, OffsetReadings
+from mst_cli.calibrate.shear_reading import CHI2_FLAG, ShearReader
 from mst_cli.errors import InputError
+from mst_cli.model.general_load import loaded_stack
 from mst_cli.sensor.document import Document
 
 
@@ -82,11 +89,54 @@ class OffsetTableReader:
         return OffsetReadings(F, cols[1], cols[2], cols[3], cols[4], cols[5], flag)
 
 
+@dataclass
+class ShearTableReader:
+    """(Fz, Fx, Fy) of centred presses from the shear table, with the chip's noise ``sigma_T``;
+    ``exact`` (the general load's Gauss-Newton, :class:`ShearReader`) polishes each reading's best
+    root when given."""
+
+    table: InverseTable
+    sigma_T: float
+    exact: ShearReader | None = None
+
+    def estimate_all(self, B_T: np.ndarray, force_axial_N: np.ndarray) -> LoadReadings:
+        """Every reading with a finite centred force (the others keep their own flag, and "" here);
+        a reading not ``ok`` keeps its centred force."""
+        use = np.isfinite(force_axial_N)
+        B = np.asarray(B_T, dtype=float)[use]
+        est = self.table.estimate(B, self.sigma_T, np.inf)
+        if self.exact is not None:
+            self._polish(B, est)
+        zeros = np.zeros((len(B), 2))
+        five = np.column_stack([est.p, np.where(est.flag[:, None] == "ok", zeros, np.nan)])
+        sig = np.column_stack([est.sigma, np.full((len(B), 2), np.nan)])
+        return from_estimates(five, sig, est.flag, np.asarray(force_axial_N, dtype=float), "centred")
+
+    def _polish(self, B_T: np.ndarray, est: TableEstimates) -> None:
+        """The exact fit from each ok reading's root; it replaces the table's where it stays within
+        the noise (the census's flags stand)."""
+        assert self.exact is not None
+        for i in np.flatnonzero(est.flag == "ok"):
+            theta = np.array([*est.best[i], 0.0, 0.0])
+            p, sig, chi2, _ = self.exact._fit(B_T[i], self.sigma_T, theta)
+            if chi2 <= CHI2_FLAG[0]:
+                est.p[i], est.sigma[i] = p[:3], sig
+
+
 def table_hash(model_file: Path, mechanics: str, grid: TableGrid) -> str:
     """The hash a current table of ``grid`` beside ``model_file`` carries."""
     beside = model_file.parent / CALIBRATION_JSON
     cal = beside.read_text(encoding="utf-8") if beside.is_file() else None
     return source_hash(model_file.read_text(encoding="utf-8"), cal, mechanics, grid)
+
+
+def grid_of(kind: str, doc: Document, force_max_N: float, grid: tuple[int, float] | None = None) -> TableGrid:
+    """The table grid of ``kind`` (offset: forces, mm between offsets; shear: forces, the step of
+    the ratios up to SHEAR_TABLE_RATIO; the default when ``grid`` is None)."""
+    if kind == "shear":
+        n, step = grid or SHEAR_GRID_DEFAULT
+        return TableGrid.cone(force_max_N, n, SHEAR_TABLE_RATIO, step)
+    return TableGrid.over(doc.geometry(), force_max_N, *(grid or GRID_DEFAULT))
 
 
 def build_beside(
@@ -95,29 +145,34 @@ def build_beside(
     mechanics: str,
     lever_factor: float,
     force_max_N: float,
-    grid: tuple[int, float] = GRID_DEFAULT,
+    grid: tuple[int, float] | None = None,
+    kind: str = "offset",
 ) -> InverseTable:
-    """The table of ``grid`` (forces, mm between offsets) for the model in ``model_file``, hashed
-    as current beside it."""
-    g = TableGrid.over(doc.geometry(), force_max_N, *grid)
+    """The table of ``kind`` and ``grid`` (:func:`grid_of`) for the model in ``model_file``,
+    hashed as current beside it."""
+    g = grid_of(kind, doc, force_max_N, grid)
     return build_table(doc.geometry(), doc.material, mechanics, g, lever_factor, table_hash(model_file, mechanics, g))
 
 
 def table_beside(
-    model_file: Path, doc: Document, mechanics: str, lever_factor: float, force_max_N: float
+    model_file: Path, doc: Document, mechanics: str, lever_factor: float, force_max_N: float, kind: str = "offset"
 ) -> tuple[InverseTable, str | None]:
-    """The table beside ``model_file`` when it is current (of any grid: the one its maker
-    chose), else one of the default grid built now and a note saying so (the caller writes it
-    with its results)."""
-    path = model_file.parent / TABLE_FILE
+    """The table of ``kind`` beside ``model_file`` when it is current (of any grid: the one its
+    maker chose), else one of the default grid built now and a note saying so (the caller writes
+    it with its results)."""
+    path = model_file.parent / (SHEAR_TABLE_FILE if kind == "shear" else TABLE_FILE)
     table = InverseTable.load(path)
-    if table is not None and table.source_hash == table_hash(model_file, mechanics, table.grid):
+    if (
+        table is not None
+        and table.grid.kind == kind
+        and table.source_hash == table_hash(model_file, mechanics, table.grid)
+    ):
         return table, None
     t0 = time.perf_counter()
-    table = build_beside(model_file, doc, mechanics, lever_factor, force_max_N)
+    table = build_beside(model_file, doc, mechanics, lever_factor, force_max_N, kind=kind)
     why = "is stale" if path.exists() else "is missing"
     note = (
-        f"{path} {why}: built the offset table in {time.perf_counter() - t0:.0f} s and wrote it with the "
+        f"{path} {why}: built the {kind} table in {time.perf_counter() - t0:.0f} s and wrote it with the "
         f"results (mst calibrate --offset-table writes it beside the model; so does copying it there)"
     )
     return table, note
@@ -150,12 +205,23 @@ def best_offset_sigma_mm(table: InverseTable, sigma_T: float) -> float:
     """The least Cramer-Rao 1-sigma of the offset (the worse of x0 and y0) over the table's nodes,
     from the table's field differences (inf: nowhere identifiable)."""
     g, B = table.grid, 1e6 * table.B_T
-    J = np.stack(
-        [np.gradient(B, g.force_N, axis=0), np.gradient(B, g.x_mm, axis=1), np.gradient(B, g.y_mm, axis=2)], -1
-    )
+    J = np.stack([np.gradient(B, g.force_N, axis=0), np.gradient(B, g.u, axis=1), np.gradient(B, g.v, axis=2)], -1)
     sig = crb_sigmas(J[1:].reshape(-1, 3, 3), 1e6 * sigma_T)
     worst = np.fmax(sig[:, 1], sig[:, 2])
     return float(np.min(worst)) if len(worst) else float("inf")
+
+
+def shear_table_reader(
+    doc: Document, imap: InverseMap, lever: float, model_file: Path, mechanics: str, polish: bool
+) -> tuple[ShearTableReader, str | None]:
+    """The shear table reader of the model ``doc`` in ``model_file`` (noise: the inverse map's
+    field resolution; range: to the last lock; ``lever``: its calibration's factor), and the note
+    of :func:`table_beside`."""
+    table, note = table_beside(model_file, doc, mechanics, lever, float(imap.force_N[-1]), "shear")
+    exact = None
+    if polish:
+        exact = ShearReader(loaded_stack(doc.geometry(), doc.material, mechanics, lever))
+    return ShearTableReader(table, imap.field_resolution_T, exact), note
 
 
 def tables_for(

@@ -56,7 +56,10 @@ READ_ESTIMATE = (
     "its force corrected (the tilt model's inverse, from the model's table inverse_table.npz: built "
     "on first use, thousands of readings a second; --serial too): forces.csv adds force_centred_N, "
     "x_mm, y_mm, force_N_sigma, x_mm_sigma, y_mm_sigma (Cramer-Rao 1-sigma) and offset_flag (ok; or "
-    "not_identifiable, ambiguous, no_fit: the centred force kept)."
+    "not_identifiable, ambiguous, no_fit: the centred force kept). shear: the tangential force of a "
+    "press taken as centred (one chip: three numbers, three unknowns Fz, Fx, Fy; table shear_table.npz, "
+    "friction cone |Fx|, |Fy| <= 0.5 Fz): forces.csv adds force_centred_N, shear_x_N, shear_y_N, x_mm, "
+    "y_mm (0: assumed), their *_sigma, assumption (centred) and estimate_flag (ok; or ambiguous, no_fit)."
 )
 READ_ESTIMATE_OFFSET = "The same as --estimate offset."
 READ_POLISH = "Polish each estimate by the model's exact solve (about 0.1 s a reading: files, not streams)."

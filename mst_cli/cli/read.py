@@ -103,7 +103,8 @@ def read(
 
     Flags: above_calibrated (the model's force above the load test's largest force),
     below_range, above_range (past the last lock) and saturated (force left empty: never
-    extrapolated). --estimate offset adds where each reading was pressed.
+    extrapolated). --estimate offset adds where each reading was pressed, --estimate
+    shear the tangential force (Fx, Fy) of a centred press.
     """
     estimate = "offset" if estimate_offset else estimate
     _check_sources(readings, port, raw, polish)
