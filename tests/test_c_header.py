@@ -1,11 +1,12 @@
-"""offset_table.h against the Python reader: the header compiled with the system C compiler reads
-10,000 raw code triples (the bundled design's coarse table, presses drawn over the force range
-and the face, 2 uT of noise, plus readings below the range and saturated ones) as
-`mst read --estimate offset` does on the same table.
+"""offset_table.h and shear_table.h against the Python reader: each header compiled with the
+system C compiler reads 10,000 raw code triples (the bundled design's coarse table, loads drawn
+over the force range and the face or the friction cone, 2 uT of noise, plus readings below the
+range and saturated ones) as `mst read --estimate offset` (`shear`) does on the same table.
 
-The criterion: the same flag on >= 99 % of the readings, and the force within 1 % of full scale
-(the last lock's force) on >= 99 % of those both call ok (float against double: a reading on a
-flag's edge, or with two roots of equal misfit, may go either way).
+The criterion: the same flag on >= 99 % of the readings, and the force (with shear: the normal
+and both tangential forces) within 1 % of full scale (the last lock's force) on >= 99 % of those
+both call ok (float against double: a reading on a flag's edge, or with two roots of equal
+misfit, may go either way).
 """
 
 import os
@@ -18,9 +19,9 @@ import pytest
 from scipy.interpolate import RegularGridInterpolator
 
 from mst_cli.calibrate.inverse_map import inverse_map
-from mst_cli.calibrate.inverse_table import GRID_COARSE, TableGrid, build_table
+from mst_cli.calibrate.inverse_table import GRID_COARSE, SHEAR_GRID_DEFAULT, SHEAR_TABLE_RATIO, TableGrid, build_table
 from mst_cli.calibrate.offset_header import C_FLAGS, offset_header, read_codes
-from mst_cli.calibrate.table_reader import OffsetTableReader
+from mst_cli.calibrate.table_reader import OffsetTableReader, ShearTableReader
 from mst_cli.model.chip import CODE_RANGE_LSB
 from mst_cli.sensor.document import load_design_document
 
@@ -41,6 +42,24 @@ int main(void)
     return 0;
 }
 """
+SHEAR_DRIVER = r"""
+#include <stdio.h>
+#include "offset_table.h"
+#include "shear_table.h"
+int main(void)
+{
+    long x, y, z;
+    while (scanf("%ld %ld %ld", &x, &y, &z) == 3) {
+        struct mst_shear e = {0};
+        int flag = mst_shear_from_codes((int32_t)x, (int32_t)y, (int32_t)z, &e);
+        printf("%d %.9g %.9g %.9g %.9g %.9g %.9g\n", flag, e.force_N, e.shear_x_N, e.shear_y_N,
+               e.sigma_force_N, e.sigma_shear_x_N, e.sigma_shear_y_N);
+    }
+    return 0;
+}
+"""
+# both headers in one program (the shear driver includes the offset header too: no name clashes)
+DRIVERS = {"offset": DRIVER, "shear": SHEAR_DRIVER}
 
 
 def c_compiler() -> str:
@@ -69,18 +88,29 @@ def codes_of(table, imap, setting, rng) -> np.ndarray:
     return np.vstack([codes, low, sat]).astype(np.int64)
 
 
+def reader_of(kind, doc, imap):
+    top = float(imap.force_N[-1])
+    if kind == "shear":
+        grid = TableGrid.cone(top, GRID_COARSE[0], SHEAR_TABLE_RATIO, 2 * SHEAR_GRID_DEFAULT[1])
+        return ShearTableReader(build_table(doc.geometry(), doc.material, "spring", grid), imap.field_resolution_T)
+    grid = TableGrid.over(doc.geometry(), top, *GRID_COARSE)
+    return OffsetTableReader(build_table(doc.geometry(), doc.material, "spring", grid), imap.field_resolution_T, 1.0)
+
+
 @pytest.mark.slow
-def test_the_compiled_header_reads_codes_as_the_python_reader_does(tmp_path):
+@pytest.mark.parametrize("kind", ["offset", "shear"])
+def test_the_compiled_header_reads_codes_as_the_python_reader_does(tmp_path, kind):
     cc = c_compiler()
     doc, _ = load_design_document(FORWARD)
     imap, resp = inverse_map(doc, "spring")
     setting = resp.chip_setting
     assert setting is not None
     top = float(imap.force_N[-1])
-    grid = TableGrid.over(doc.geometry(), top, *GRID_COARSE)
-    reader = OffsetTableReader(build_table(doc.geometry(), doc.material, "spring", grid), imap.field_resolution_T, 1.0)
-    (tmp_path / "offset_table.h").write_text(offset_header(reader, imap, setting, doc.name, "the test", ["a test"]))
-    (tmp_path / "driver.c").write_text(DRIVER)
+    readers = {k: reader_of(k, doc, imap) for k in ("offset", kind)}
+    for k, r in readers.items():
+        (tmp_path / f"{k}_table.h").write_text(offset_header(r, imap, setting, doc.name, "the test", ["a test"]))
+    reader = readers[kind]
+    (tmp_path / "driver.c").write_text(DRIVERS[kind])
     exe = tmp_path / "driver"
     subprocess.run([cc, "-std=c99", "-O2", "-Wall", "-Werror", "-o", exe, tmp_path / "driver.c", "-lm"], check=True)
 
@@ -95,9 +125,13 @@ def test_the_compiled_header_reads_codes_as_the_python_reader_does(tmp_path):
     assert len(c_flag) == len(codes) == N_READINGS
     same = np.mean(c_flag == py_flag)
     both = (c_flag == "ok") & (py_flag == "ok")
-    close = np.mean(np.abs(c_out[both, 1] - py_values[both, 0]) <= 0.01 * top)
-    print(f"same flag on {100 * same:.2f} %, force within 1 % of full scale on {100 * close:.2f} % of {both.sum()}")
+    forces = [0, 1, 2] if kind == "shear" else [0]
+    close = np.mean(
+        np.all(np.abs(c_out[both][:, [1 + k for k in forces]] - py_values[both][:, forces]) <= 0.01 * top, 1)
+    )
+    print(f"{kind}: same flag on {100 * same:.2f} %, within 1 % of full scale on {100 * close:.2f} % of {both.sum()}")
     assert same >= 0.99, f"the same flag on {100 * same:.2f} %"
-    assert both.sum() >= 1000 and close >= 0.99, f"force within 1 % of full scale on {100 * close:.2f} %"
-    for f in ("ok", "not_identifiable", "below_range", "saturated"):
+    assert both.sum() >= 1000 and close >= 0.99, f"within 1 % of full scale on {100 * close:.2f} %"
+    asked = ("ok", "not_identifiable", "below_range", "saturated") if kind == "offset" else ("ok", "below_range")
+    for f in (*asked, "saturated"):
         assert np.any(py_flag == f)  # every kind of reading was asked

@@ -128,11 +128,13 @@ def test_calibrate_refuses_bad_presses_in_one_line(tmp_path, rows, header, says)
 
 
 @pytest.mark.slow
-def test_calibrate_writes_a_current_offset_table_and_its_c_header(calibrated, tmp_path):
+def test_calibrate_writes_current_offset_and_shear_tables_and_their_c_headers(calibrated, tmp_path):
     d, _ = calibrated
-    res = run(["calibrate", FORWARD, d / "loadtest.csv", "--out", tmp_path / "cal", "--no-plot", "--offset-table"])
+    args = ["--out", tmp_path / "cal", "--no-plot", "--offset-table", "--shear-table"]
+    res = run(["calibrate", FORWARD, d / "loadtest.csv", *args])
     assert res.exit_code == 0, res.output
-    assert (tmp_path / "cal" / "inverse_table.npz").is_file() and (tmp_path / "cal" / "offset_table.h").is_file()
+    for name in ("inverse_table.npz", "offset_table.h", "shear_table.npz", "shear_table.h"):
+        assert (tmp_path / "cal" / name).is_file() and name in res.output
     write(
         tmp_path / "r.csv",
         [(r[0], *r[3:]) for r in rows_at([(-7.0, 4.0)], np.array([20.0]))],
@@ -151,3 +153,16 @@ def test_calibrate_writes_a_current_offset_table_and_its_c_header(calibrated, tm
     )
     assert res.exit_code == 0 and "stale" not in res.output and "missing" not in res.output, res.output
     assert not (tmp_path / "o" / "inverse_table.npz").exists()  # read built none
+    res = run(
+        [
+            "read",
+            tmp_path / "cal" / "calibrated.yaml",
+            tmp_path / "r.csv",
+            "--out",
+            tmp_path / "s",
+            "--estimate",
+            "shear",
+        ]
+    )
+    assert res.exit_code == 0 and "stale" not in res.output and "missing" not in res.output, res.output
+    assert not (tmp_path / "s" / "shear_table.npz").exists()

@@ -126,6 +126,7 @@ def calibrate(
     progress: Callable[[str], None] | None = None,
     use_branches: bool = True,
     offset_table: bool = False,
+    shear_table: bool = False,
 ) -> Calibration:
     """Fit a design's print parameters to a load test of the printed sensor (``mst calibrate``).
 
@@ -135,7 +136,8 @@ def calibrate(
         The design the sensor was printed from (a Document: ``design_file`` names it); a CSV of
         force_N (N) and Bx_uT, By_uT, Bz_uT (uT) or raw codes (with ``gain_sel``, ``res``).
     out : str or Path, optional
-        Folder for the command's files (``offset_table``: also inverse_table.npz, offset_table.h).
+        Folder for the command's files (``offset_table``: also inverse_table.npz, offset_table.h;
+        ``shear_table``: shear_table.npz, shear_table.h).
     mechanics, params : str; sequence of str or "a,b", optional
         The fit's rung (frame, continuum by space mapping on spring); the parameters fitted.
     gain_sel, res, table_size, use_branches : int, int, int, bool, optional
@@ -168,17 +170,27 @@ def calibrate(
     )
     if out is not None:
         result.write(Path(out), plot=plot)
-        if offset_table:
-            _write_offset_tables(Path(out), result, progress)
+        kinds = [k for k, asked in (("offset", offset_table), ("shear", shear_table)) if asked]
+        if kinds:
+            _write_tables(Path(out), result, kinds, progress)
     return result
 
 
-def _write_offset_tables(out: Path, result: Calibration, progress: Callable[[str], None] | None) -> None:
-    """inverse_table.npz beside the calibrated.yaml just written (current: hashed with it and its
-    calibration.json) and, with a chip setting, offset_table.h from its every other node."""
+# what each table's C header says it cannot know
+TABLE_LIMITS = {
+    "offset": "what the tilt rung leaves out (docs/design.md section 4.2); the table's own error between nodes",
+    "shear": "what the general-load model leaves out (docs/design.md sections 4.4, 4.5: the press taken as "
+    "centred, friction cone |Fx|, |Fy| <= 0.5 Fz); the table's own error between nodes",
+}
+
+
+def _write_tables(out: Path, result: Calibration, kinds: Sequence[str], progress: Callable[[str], None] | None) -> None:
+    """The tables of ``kinds`` beside the calibrated.yaml just written (inverse_table.npz,
+    shear_table.npz: current, hashed with it and its calibration.json) and, with a chip setting,
+    their C headers from every other node."""
     # deferred: the calibrate layer, as calibrate's
     from mst_cli.calibrate.calibration_json import CALIBRATED_YAML
-    from mst_cli.calibrate.offset_header import OFFSET_HEADER_FILE, offset_header
+    from mst_cli.calibrate.offset_header import KIND_TEXT, offset_header
     from mst_cli.calibrate.reading import ForceReader
     from mst_cli.calibrate.table_reader import tables_for
 
@@ -186,22 +198,19 @@ def _write_offset_tables(out: Path, result: Calibration, progress: Callable[[str
     doc = load_design(model)
     mech = choose_mechanics(None, doc.accuracy_rel, doc.mechanics).mechanics
     reader = ForceReader.open(doc, model, mech, result.header_setting)
-    if progress is not None:
-        progress("building the offset table (inverse_table.npz: the tilt rung at every node)")
     lever = reader.record.lever_factor() if reader.record is not None else 1.0
-    table, coarse = tables_for(model, doc, reader.inverse_map, lever, mech)
-    with staged(out) as st:
-        table.save(st.path(table.file_name))
-        if result.header_setting is not None:
-            text = offset_header(
-                coarse,
-                reader.inverse_map,
-                result.header_setting,
-                doc.name,
-                f"{CALIBRATED_YAML} ({mech}, lever factor {lever:.4g})",
-                ["what the tilt rung leaves out (docs/design.md section 4.2); the table's own error between nodes"],
-            )
-            st.write_text(OFFSET_HEADER_FILE, text)
+    for kind in kinds:
+        if progress is not None:
+            progress(f"building the {kind} table (the model at every node)")
+        table, coarse = tables_for(model, doc, reader.inverse_map, lever, mech, kind)
+        with staged(out) as st:
+            table.save(st.path(table.file_name))
+            if result.header_setting is not None:
+                sources = f"{CALIBRATED_YAML} ({mech}, lever factor {lever:.4g})"
+                text = offset_header(
+                    coarse, reader.inverse_map, result.header_setting, doc.name, sources, [TABLE_LIMITS[kind]]
+                )
+                st.write_text(str(KIND_TEXT[kind]["file"]), text)
 
 
 def _checked_fit_options(mechanics: str, params: Sequence[str] | str | None, table_size: int) -> tuple[str, ...]:
@@ -358,7 +367,9 @@ def _estimator(reader, estimate: str, mechanics: str | None, model_file, max_sig
     if estimate == "shear":
         offsets, note = shear_table_reader(doc, reader.inverse_map, lever, Path(model_file), mech, polish)
     else:
-        offsets, note = offset_table_reader(doc, reader.inverse_map, lever, Path(model_file), mech, max_sigma_mm, polish)
+        offsets, note = offset_table_reader(
+            doc, reader.inverse_map, lever, Path(model_file), mech, max_sigma_mm, polish
+        )
     if note is not None and warn is not None:
         warn(note)
     return offsets, (offsets.table if note is not None else None)

@@ -1,11 +1,14 @@
-"""``offset_table.h``: the offset reader's table and census as a C99 header (float, no dynamic
-memory), for a microcontroller that reads the MLX90393's three axes: raw codes -> force, press
-position, their Cramer-Rao 1-sigma and the reader's flag.
+"""``offset_table.h`` and ``shear_table.h``: a one-chip table reader and its census as a C99
+header (float, no dynamic memory), for a microcontroller that reads the MLX90393's three axes:
+raw codes -> the three estimates of the table's kind (offset: force, press x, y; shear: Fz, Fx,
+Fy of a centred press), their Cramer-Rao 1-sigma and the reader's flag.
 
-The C text is a template in package data (``data/offset_table.h.in``); this module fills it from
-an :class:`~mst_cli.calibrate.inverse_table.InverseTable` and the model's
+The C text is one template in package data (``data/table_reader.h.in``), its names prefixed per
+kind (``mst_offset_*``/``MST_OFF_*``, ``mst_shear_*``/``MST_SHR_*``: both headers can be included
+in one program); this module fills it from an
+:class:`~mst_cli.calibrate.inverse_table.InverseTable` and the model's
 :class:`~mst_cli.calibrate.inverse_map.InverseMap` (the range flags), and gives the Python side
-of the same reading (:func:`read_codes`), which the header's test compares with the compiled C.
+of the same reading (:func:`read_codes`), which the headers' test compares with the compiled C.
 """
 
 from __future__ import annotations
@@ -18,12 +21,50 @@ import numpy as np
 from mst_cli.calibrate import inverse_table as it
 from mst_cli.calibrate.header import c_float, fill_template
 from mst_cli.calibrate.inverse_map import InverseMap
-from mst_cli.calibrate.table_reader import OffsetTableReader
+from mst_cli.calibrate.load_readings import LoadReadings
+from mst_cli.calibrate.table_reader import OffsetTableReader, ShearTableReader
 from mst_cli.model.chip import CODE_RANGE_LSB, SATURATION_T, ChipSetting
 
 OFFSET_HEADER_FILE = "offset_table.h"
-TEMPLATE = "offset_table.h.in"
-# the header's flags, in the order of its enum mst_offset_flag
+SHEAR_HEADER_FILE = "shear_table.h"
+TEMPLATE = "table_reader.h.in"
+# what differs between the kinds: names, what is estimated, the verdict after the census
+KIND_TEXT = {
+    "offset": {
+        "file": OFFSET_HEADER_FILE,
+        "what": "force and press position",
+        "returns": "The force (N) and press (mm)",
+        "option": "--offset-table",
+        "P": "MST_OFF",
+        "p": "mst_off",
+        "p_long": "mst_offset",
+        "guard": "MST_OFFSET_TABLE_H",
+        "fields": "force_N, x_mm, y_mm, sigma_force_N, sigma_x_mm, sigma_y_mm",
+        "nodes_about": "force N, press x0 mm, press y0 mm",
+        "model_lines": " * the tilt model's field (Bx, By, Bz) tabulated at MST_OFF_NF forces x MST_OFF_NU x\n"
+        " * MST_OFF_NV press positions,",
+        "verdict": "return (best_s[1] > MST_OFF_MAX_SIGMA_MM || best_s[2] > MST_OFF_MAX_SIGMA_MM) ? "
+        "MST_OFF_NOT_IDENTIFIABLE : MST_OFF_OK;",
+        "ratio_nodes": 0,
+    },
+    "shear": {
+        "file": SHEAR_HEADER_FILE,
+        "what": "normal and tangential force of a centred press",
+        "returns": "The normal and tangential force (N)",
+        "option": "--shear-table",
+        "P": "MST_SHR",
+        "p": "mst_shr",
+        "p_long": "mst_shear",
+        "guard": "MST_SHEAR_TABLE_H",
+        "fields": "force_N, shear_x_N, shear_y_N, sigma_force_N, sigma_shear_x_N, sigma_shear_y_N",
+        "nodes_about": "normal force N, Fx / Fz, Fy / Fz (a friction cone)",
+        "model_lines": " * the general-load model's field (Bx, By, Bz) of a centred press tabulated at\n"
+        " * MST_SHR_NF normal forces x MST_SHR_NU x MST_SHR_NV ratios of the tangential force to it\n"
+        " * (Fx / Fz, Fy / Fz),",
+        "verdict": "return MST_SHR_OK; /* no bound on the sigmas: they say how well */",
+        "ratio_nodes": 1,
+    },
+}
 C_FLAGS = (
     "ok",
     "not_identifiable",
@@ -53,23 +94,35 @@ def range_bounds_uT(imap: InverseMap) -> tuple[float, float, float]:
 
 
 def offset_header(
-    reader: OffsetTableReader,
+    reader: OffsetTableReader | ShearTableReader,
     imap: InverseMap,
     setting: ChipSetting,
     name: str,
     sources: str,
     limitations: Sequence[str],
 ) -> str:
-    """The header of ``reader``'s table at ``setting``."""
+    """The header of ``reader``'s table (offset_table.h or shear_table.h, by its kind) at
+    ``setting``."""
     table = reader.table
+    kind = KIND_TEXT[table.grid.kind]
     below, above, calibrated = range_bounds_uT(imap)
     nf, nx, ny = table.grid.shape
+    p = kind["p"]
+    f = str(kind["fields"]).split(", ")
+    assign = (
+        f"out->{f[0]} = p[0]; out->{f[1]} = p[1]; out->{f[2]} = p[2];\n"
+        f"        out->{f[3]} = s[0]; out->{f[4]} = s[1]; out->{f[5]} = s[2];"
+    )
+    max_sigma_mm = getattr(reader, "max_sigma_mm", math.inf)
     return fill_template(
         TEMPLATE,
         setting,
         name,
         sources,
         limitations,
+        **kind,
+        kind=table.grid.kind,
+        assign=assign,
         xy_uT_per_lsb=setting.xy_uT_per_lsb,
         xy_uT_per_lsb_c=c_float(setting.xy_uT_per_lsb, 8),
         z_uT_per_lsb_c=c_float(setting.z_uT_per_lsb, 8),
@@ -80,7 +133,7 @@ def offset_header(
         ny=ny,
         sigma_uT=c_float(1e6 * reader.sigma_T, 8),
         fit_sigmas=c_float(it.FIT_SIGMAS),
-        max_sigma_mm=c_float(reader.max_sigma_mm, 8),
+        max_sigma_mm=c_float(min(max_sigma_mm, 1e30), 8),
         babs_below_uT=c_float(below, 9),
         babs_above_uT=c_float(above, 9),
         babs_calibrated_uT=c_float(calibrated, 9),
@@ -89,19 +142,20 @@ def offset_header(
         outside=c_float(it.OUTSIDE),
         inside_tol=c_float(it.INSIDE_TOL),
         ridge=c_float(it.RIDGE),
-        force_nodes=_c_floats("mst_force_N_nodes", table.grid.force_N),
-        x_nodes=_c_floats("mst_x_nodes", table.grid.u),
-        y_nodes=_c_floats("mst_y_nodes", table.grid.v),
-        field=_c_floats("mst_B_uT", 1e6 * table.B_T, per_line=6),
+        force_nodes=_c_floats(f"{p}_force_N_nodes", table.grid.force_N),
+        x_nodes=_c_floats(f"{p}_u_nodes", table.grid.u),
+        y_nodes=_c_floats(f"{p}_v_nodes", table.grid.v),
+        field=_c_floats(f"{p}_B_uT", 1e6 * table.B_T, per_line=6),
     )
 
 
 def read_codes(
-    reader: OffsetTableReader, imap: InverseMap, setting: ChipSetting, codes: np.ndarray
+    reader: OffsetTableReader | ShearTableReader, imap: InverseMap, setting: ChipSetting, codes: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
-    """What ``mst read --estimate offset`` gives raw codes (n, 3) at ``setting`` on this table:
-    (flag (n,) of :data:`C_FLAGS`, (n, 6) force N, x0, y0 mm and their 1-sigma, NaN unless ok).
-    The range flags are the inverse map's, on |B| (saturated: a code at the chip's end)."""
+    """What ``mst read --estimate offset`` (``shear``) gives raw codes (n, 3) at ``setting`` on
+    this table: (flag (n,) of :data:`C_FLAGS`, (n, 6) the three estimates and their 1-sigma, NaN
+    unless ok: force N, x0, y0 mm; or Fz, Fx, Fy N). The range flags are the inverse map's, on
+    |B| (saturated: a code at the chip's end)."""
     codes = np.asarray(codes, dtype=np.int64)
     lsb = np.array([setting.xy_uT_per_lsb, setting.xy_uT_per_lsb, setting.z_uT_per_lsb])
     B_T = codes * lsb * 1e-6
@@ -111,5 +165,8 @@ def read_codes(
     est = reader.estimate_all(B_T, np.where(flag == "ok", F, np.nan))
     flag = np.where(flag == "ok", est.flag, flag)
     ok = flag == "ok"
-    values = np.column_stack([est.force_N, est.x_mm, est.y_mm, est.sigma_force_N, est.sigma_x_mm, est.sigma_y_mm])
+    if isinstance(est, LoadReadings):
+        values = np.column_stack([est.force_N, est.shear_x_N, est.shear_y_N, est.sigma[:, :3]])
+    else:
+        values = np.column_stack([est.force_N, est.x_mm, est.y_mm, est.sigma_force_N, est.sigma_x_mm, est.sigma_y_mm])
     return flag, np.where(ok[:, None], values, np.nan)

@@ -74,6 +74,11 @@ def fail_fit(reason: str, what: str = "calibration failed") -> NoReturn:
     is_flag=True,
     help="Also write inverse_table.npz (what mst read --estimate offset reads; a minute or two) and offset_table.h.",
 )
+@click.option(
+    "--shear-table",
+    is_flag=True,
+    help="Also write shear_table.npz (what mst read --estimate shear reads; about 15 s) and shear_table.h.",
+)
 @no_plot_option("calibration.png", "about 40 % of a run: 0.45 s of matplotlib import and render", has_json=False)
 @handles_input_errors
 def calibrate(
@@ -87,6 +92,7 @@ def calibrate(
     table_size: int,
     ignore_branches: bool,
     offset_table: bool,
+    shear_table: bool,
     no_plot: bool,
 ) -> None:
     """Fit DESIGN_FILE's print parameters to a LOAD_TEST of the printed sensor.
@@ -117,6 +123,7 @@ def calibrate(
             res=res,
             table_size=table_size,
             offset_table=offset_table,
+            shear_table=shear_table,
             progress=lambda line: click.echo(f"mst calibrate: {line}", err=True),
             use_branches=not ignore_branches,
         )
@@ -128,7 +135,12 @@ def calibrate(
     click.echo(
         f"wrote {out}/{', '.join(result.file_names)}"
         + ("" if no_plot else ", calibration.png")
-        + (", inverse_table.npz, offset_table.h" if offset_table and result.header_setting is not None else "")
-        + (", inverse_table.npz" if offset_table and result.header_setting is None else "")
+        + _table_files(offset_table, shear_table, result.header_setting is not None)
         + (f" (no C header: {result.header_reason})" if result.header_reason else "")
     )
+
+
+def _table_files(offset_table: bool, shear_table: bool, header: bool) -> str:
+    """The table files written beside the calibration (a C header each with a chip setting)."""
+    kinds = [(k, h) for k, h, asked in (("inverse", "offset", offset_table), ("shear", "shear", shear_table)) if asked]
+    return "".join(f", {k}_table.npz" + (f", {h}_table.h" if header else "") for k, h in kinds)
