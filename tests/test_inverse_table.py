@@ -154,7 +154,8 @@ def test_read_estimates_the_offset_with_its_sigmas_and_polishes_to_the_truth(coa
     "header, args, says",
     [
         ("Bz_uT,force_N", ["--estimate", "offset"], "Bx_uT"),
-        ("Bx_uT,By_uT,Bz_uT", ["--estimate", "shear"], "--estimate"),
+        ("Bz_uT,force_N", ["--estimate", "shear"], "Bx_uT"),
+        ("Bx_uT,By_uT,Bz_uT", ["--estimate", "tilt"], "--estimate"),
         ("Bx_uT,By_uT,Bz_uT", ["--estimate", "offset", "--max-offset-sigma-mm", "1e-6"], "cannot tell"),
     ],
 )

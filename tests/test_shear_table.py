@@ -9,15 +9,21 @@ Jacobian (:mod:`~mst_cli.model.load_bound`), the mirror symmetry y -> -y of a ce
 """
 
 import csv
+import os
+import pty
+import shutil
+import tty
 from pathlib import Path
 
 import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from mst_cli.calibrate.inverse_table import SHEAR_TABLE_RATIO, InverseTable, TableGrid, build_table
+from mst_cli import api
+from mst_cli.calibrate.inverse_map import inverse_map
+from mst_cli.calibrate.inverse_table import SHEAR_TABLE_FILE, SHEAR_TABLE_RATIO, InverseTable, TableGrid, build_table
 from mst_cli.calibrate.load_readings import LOAD_COLUMNS
-from mst_cli.calibrate.table_reader import ShearTableReader
+from mst_cli.calibrate.table_reader import ShearTableReader, build_beside
 from mst_cli.cli.app import main
 from mst_cli.model.general_load import field_T, loaded_stack
 from mst_cli.model.load_bound import CENTRED, crb_sigma, field_jacobian
@@ -150,3 +156,49 @@ def test_mst_read_estimate_shear_writes_the_shear_columns(tmp_path, model):
         assert row["assumption"] == "centred" and row["estimate_flag"] == "ok"
         assert float(row["force_N"]) == pytest.approx(load[0], rel=0.01)
         assert float(row["shear_x_N"]) == pytest.approx(load[1], abs=0.05 * np.hypot(*load[1:]) + 0.05)
+
+
+@pytest.fixture(scope="module")
+def coarse_model(tmp_path_factory):
+    """A copy of the forward design with the test's coarse shear table beside it."""
+    doc, _ = load_design_document(FORWARD)
+    imap, _ = inverse_map(doc, "spring")
+    model = tmp_path_factory.mktemp("coarse") / "model.yaml"
+    shutil.copy(FORWARD, model)
+    table = build_beside(model, doc, "spring", 1.0, float(imap.force_N[-1]), GRID_SMALL, kind="shear")
+    table.save(model.parent / SHEAR_TABLE_FILE)
+    return model
+
+
+def test_polish_brings_a_reading_between_nodes_to_the_truth(coarse_model, model, tmp_path):
+    stack, _, top = model
+    L = np.array([[0.3 * top, 0.07 * top, -0.04 * top], [0.6 * top, -0.1 * top, 0.13 * top]])
+    B = 1e6 * fields(stack, L)
+    path = tmp_path / "r.csv"
+    path.write_text("Bx_uT,By_uT,Bz_uT\n" + "".join(f"{b[0]:.7f},{b[1]:.7f},{b[2]:.7f}\n" for b in B))
+    got = api.read(coarse_model, path, estimate="shear", polish=True)
+    assert got.offset is not None and list(got.offset.flag) == ["ok", "ok"]
+    est = np.column_stack([got.force_N, got.offset.shear_x_N, got.offset.shear_y_N])
+    np.testing.assert_allclose(est, L, atol=2e-3)  # the exact fit, from 1e-7 T rounding of the file
+
+
+def test_a_serial_stream_is_estimated_live_with_shear(coarse_model, model, tmp_path):
+    stack, _, top = model
+    L = np.array([[0.4 * top, 0.1 * top, 0.0]] * 3)
+    B = 1e6 * fields(stack, L)
+    master, slave = pty.openpty()
+    tty.setraw(slave)
+    for b in B:
+        os.write(master, f"{b[0]:.4f},{b[1]:.4f},{b[2]:.4f}\r\n".encode())
+    shown: list[str] = []
+    try:
+        got = api.read_serial(
+            coarse_model, os.ttyname(slave), count=3, estimate="shear", out=tmp_path / "o", show=shown.append
+        )
+    finally:
+        os.close(master)
+        os.close(slave)
+    assert len(got.samples) == 3 and all("Ft (" in line for line in shown)
+    rows = list(csv.DictReader((tmp_path / "o" / "forces.csv").open()))
+    assert [r["assumption"] for r in rows] == ["centred"] * 3
+    assert [float(r["shear_x_N"]) for r in rows] == pytest.approx([0.1 * top] * 3, rel=0.03)
