@@ -135,9 +135,8 @@ def calibrate(
     design, load_test : str, Path or Document; str or Path
         The design the sensor was printed from (a Document: ``design_file`` names it); a CSV of
         force_N (N) and Bx_uT, By_uT, Bz_uT (uT) or raw codes (with ``gain_sel``, ``res``).
-    out : str or Path, optional
-        Folder for the command's files (``offset_table``: also inverse_table.npz, offset_table.h;
-        ``shear_table``: shear_table.npz, shear_table.h).
+    out, offset_table, shear_table : str or Path; bool; bool
+        The files' folder, with inverse_table.npz, offset_table.h; shear_table.npz, shear_table.h.
     mechanics, params : str; sequence of str or "a,b", optional
         The fit's rung (frame, continuum by space mapping on spring); the parameters fitted.
     gain_sel, res, table_size, use_branches : int, int, int, bool, optional
@@ -165,14 +164,12 @@ def calibrate(
     _check_out(out)  # a bad output path is refused before any work
     name = design_file or (design if isinstance(design, (str, Path)) else design.name)
     options: dict[str, Any] = {"gain_sel": gain_sel, "res": res, "table_size": table_size, "progress": progress}
-    result = run_calibration(
-        doc, name, load_test, mechanics=mechanics, params=params, use_branches=use_branches, **options
-    )
+    options.update(mechanics=mechanics, params=params, use_branches=use_branches)
+    result = run_calibration(doc, name, load_test, **options)
     if out is not None:
         result.write(Path(out), plot=plot)
         kinds = [k for k, asked in (("offset", offset_table), ("shear", shear_table)) if asked]
-        if kinds:
-            _write_tables(Path(out), result, kinds, progress)
+        _write_tables(Path(out), result, kinds, progress)
     return result
 
 
@@ -309,11 +306,9 @@ def read(
     warn : callable, optional
         Gets a sentence when the model does not match calibration.json beside it (docs/calibration.md).
     estimate, estimate_offset, polish, tare : {"none", "offset", "shear"}, bool, bool, int
-        "offset" (or ``estimate_offset``): each press's x, y (Cramer-Rao 1-sigma) from the
-        model's table, its force corrected, flagged not_identifiable, ambiguous or no_fit
-        (docs/design.md 4.2); "shear": the tangential force (Fx, Fy) of a press taken as
-        centred, from the model's shear table (4.5); ``polish`` by the exact solve; ``tare``:
-        readings at no load.
+        "offset" (or ``estimate_offset``): x, y, the force corrected (docs/design.md 4.2);
+        "shear": Fx, Fy of a press taken as centred (4.5); from the model's tables, with 1-sigma
+        and flags; ``polish`` by the exact solve; ``tare``: readings at no load.
 
     Returns
     -------
@@ -355,7 +350,12 @@ def _estimator(reader, estimate: str, mechanics: str | None, model_file, max_sig
     """(the reader of ``estimate``, or None; the table it built, to be written, or None).
     InputError when the layout cannot identify the estimate anywhere in its range."""
     # deferred: the calibrate layer, as _reader
-    from mst_cli.calibrate.table_reader import offset_table_reader, shear_table_reader
+    from mst_cli.calibrate.table_reader import (
+        OffsetTableReader,
+        ShearTableReader,
+        offset_table_reader,
+        shear_table_reader,
+    )
 
     if estimate == "none":
         return None, None
@@ -364,6 +364,7 @@ def _estimator(reader, estimate: str, mechanics: str | None, model_file, max_sig
     doc = reader.document
     mech = choose_mechanics(mechanics, doc.accuracy_rel, doc.mechanics).mechanics
     lever = reader.record.lever_factor() if reader.record is not None else 1.0
+    offsets: OffsetTableReader | ShearTableReader
     if estimate == "shear":
         offsets, note = shear_table_reader(doc, reader.inverse_map, lever, Path(model_file), mech, polish)
     else:

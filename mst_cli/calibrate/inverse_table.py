@@ -269,15 +269,15 @@ def build_table(
     if grid.kind == "shear":
         stack = loaded_stack(geometry, material, mechanics, lever_factor)
 
-        def path(ratio: tuple[float, float]) -> np.ndarray:
-            d, tilt, slide = load_path(stack, grid.force_N, (0.0, 0.0), ratio)
+        def path(node: tuple[float, float]) -> np.ndarray:  # node: (Fx / Fz, Fy / Fz)
+            d, tilt, slide = load_path(stack, grid.force_N, (0.0, 0.0), node)
             return magnet_field_T(geometry, *magnet_pose(geometry, d, tilt, slide))
 
     else:
         laws = tilt_laws(geometry, material, mechanics, lever_factor)
 
-        def path(offset: tuple[float, float]) -> np.ndarray:
-            return pose_field_T(geometry, laws, grid.force_N, offset)
+        def path(node: tuple[float, float]) -> np.ndarray:  # node: (x0, y0) mm
+            return pose_field_T(geometry, laws, grid.force_N, node)
 
     paths = fork_map(path, nodes)
     if paths is None:

@@ -56,8 +56,10 @@ class LoadReadings:
     @classmethod
     def concat(cls, parts: list[LoadReadings]) -> LoadReadings:
         """The readings of ``parts`` one after the other (a stream's samples)."""
-        names = [f.name for f in fields(cls) if f.name != "assumption"]
-        return cls(*(np.concatenate([getattr(p, n) for p in parts]) for n in names), parts[0].assumption)
+        arrays = {
+            f.name: np.concatenate([getattr(p, f.name) for p in parts]) for f in fields(cls) if f.name != "assumption"
+        }
+        return cls(**arrays, assumption=parts[0].assumption)
 
     def summary(self) -> str:
         ok = self.flag == "ok"

@@ -150,8 +150,12 @@ class SerialSamples:
             )
         if not self.offsets:
             return buf.getvalue()
-        kind = type(self.offsets[0][1])
-        est = kind.concat([o for _, o in self.offsets])  # type: ignore[arg-type]
+        parts = [o for _, o in self.offsets]
+        est = (
+            LoadReadings.concat([p for p in parts if isinstance(p, LoadReadings)])
+            if isinstance(parts[0], LoadReadings)
+            else OffsetReadings.concat([p for p in parts if isinstance(p, OffsetReadings)])
+        )
         return est.append_columns(buf.getvalue(), np.array([f for f, _ in self.offsets]))
 
 
