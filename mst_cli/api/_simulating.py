@@ -17,7 +17,7 @@ from mst_cli.io.outputs import Interrupted as Interrupted
 from mst_cli.model.file_keys import SEED_RANGE as SEED_RANGE
 from mst_cli.model.general_load import SHEAR_RATIO_MAX, loaded_stack
 from mst_cli.model.ladder import choose_mechanics
-from mst_cli.model.load_bound import layout_bound
+from mst_cli.model.load_bound import bound_report
 from mst_cli.model.mechanics import MODELS
 from mst_cli.model.offcentre import OffCentreResponse, OffsetMap
 from mst_cli.model.offcentre import offset_map as run_offset_map
@@ -205,19 +205,12 @@ def simulate_offcentre(
     return _offcentre(load_design(design), offset_mm, mechanics, field_model, shear_ratio)
 
 
-BOUND_NOISES_uT = (0.5, 2.0)  # the noises the shear bound is stated at (and the file's own)
-BOUND_FORCES = (0.25, 0.5, 0.75)  # of the range
-
-
 def _shear_bound(doc: Document, mechanics: str | None, field_model: str | None, shear_ratio) -> dict:
     """report.json's shear_bound: each estimate's 1-sigma CRB for the file's chips (one: a centred
     press's Fz, Fx, Fy; more: all five over the middle 60 % of the face)."""
     scene = printed_scene(doc, mechanics, field_model)
     stack = loaded_stack(scene.geometry, scene.material, scene.mechanics)
-    top = max(t.lock_force_N for t in stack.tilt)
-    bound = layout_bound(stack, doc.chips_mm, [f * top for f in BOUND_FORCES], shear_ratio)
-    noises = sorted({*BOUND_NOISES_uT, float(doc.noise_uT_rms)} - {0.0})
-    return {**bound.summary(noises), "mechanics": scene.mechanics, "region_frac": 0.6}
+    return bound_report(stack, doc.chips_mm, shear_ratio, doc.noise_uT_rms)
 
 
 def _press(load_offset_mm, shear_ratio):

@@ -9,6 +9,7 @@ from typing import Protocol
 import numpy as np
 
 from mst_cli.model.assembly import SensorGeometry
+from mst_cli.model.load_bound import shear_bound_lines
 from mst_cli.model.response import Response
 from mst_cli.sensor.document import Document, document_to_dict
 from mst_cli.simulation.report import height_budget_line
@@ -65,6 +66,7 @@ class DesignResult:
     warnings: list[str] = field(default_factory=list)
     objective: dict = field(default_factory=dict)  # design.objective's weights and terms
     off_centre: dict | None = None  # design.offcentre_region_mm's figure (api.design fills it)
+    shear_bound: dict | None = None  # two chips or more: what the layout tells apart (api.design fills it)
 
     @property
     def exit_code(self) -> int:
@@ -93,6 +95,7 @@ class DesignResult:
                 "solver": self.solver,
             }
             | ({"off_centre": self.off_centre} if self.off_centre is not None else {})
+            | ({"shear_bound": self.shear_bound} if self.shear_bound is not None else {})
         }
 
     def table(self) -> str:
@@ -168,6 +171,8 @@ class DesignResult:
                 + ", ".join(f"{100 * abs(r['worst_read_error_rel']):.1f} %" for r in oc["regimes"])
                 + " at worst in the regimes (design.offcentre_region_mm; mst read --estimate-offset corrects it)"
             )
+        if self.shear_bound is not None:
+            lines += shear_bound_lines(self.shear_bound)
         for w in self.warnings:
             lines.append(f"warning: {w}")
         return lines

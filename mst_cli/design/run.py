@@ -15,7 +15,9 @@ from mst_cli.design.pareto import ParetoDesign, front_table, pareto_front
 from mst_cli.design.refine import refine_document
 from mst_cli.design.result import DesignResult
 from mst_cli.errors import InputError
+from mst_cli.model.general_load import loaded_stack
 from mst_cli.model.ladder import MechanicsChoice, choose_mechanics
+from mst_cli.model.load_bound import DESIGN_SHEAR_RATIO, bound_report
 from mst_cli.model.offcentre import offset_map, worst_read_errors
 from mst_cli.sensor.document import Document
 from mst_cli.simulation.run import printed_scene
@@ -80,7 +82,7 @@ class DesignRun:
             result = refine_document(
                 self.spec, self.choice.mechanics, seed=seed, max_evaluations=max_evaluations, progress=progress
             )
-        self.result = with_offcentre_figure(result, self.spec.design.get("offcentre_region_mm"))
+        self.result = with_shear_bound(with_offcentre_figure(result, self.spec.design.get("offcentre_region_mm")))
         return self.result
 
     def write(self, out: Path, pareto_designs: bool = False, plot: bool = True) -> dict:
@@ -120,4 +122,17 @@ def with_offcentre_figure(result: DesignResult, region: Sequence[float] | None) 
             scene.geometry, scene.material, scene.mechanics, scene.field_model, region_mm=(region[0], region[1])
         )
         result.off_centre = worst_read_errors(omap) | {"mechanics": mech}
+    return result
+
+
+def with_shear_bound(result: DesignResult) -> DesignResult:
+    """``result`` with what its chips tell apart when the spec places two or more
+    (magnetometer.positions_mm): each estimate's 1-sigma Cramer-Rao bound over the middle 60 %
+    of the face at Fx = 0.2 Fz, Fy = 0.1 Fz (one chip has the centred bound of mst simulate
+    --shear-ratio, not repeated here)."""
+    doc = result.document
+    if len(doc.chips_mm) > 1:
+        scene = printed_scene(doc, result.response.mechanics, None)
+        stack = loaded_stack(scene.geometry, scene.material, scene.mechanics)
+        result.shear_bound = bound_report(stack, doc.chips_mm, DESIGN_SHEAR_RATIO, doc.noise_uT_rms)
     return result

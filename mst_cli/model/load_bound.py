@@ -132,3 +132,41 @@ def layout_bound(
                 theta = (f, shear_ratio[0] * f, shear_ratio[1] * f, x, y)
                 sigma[k, iy, ix] = crb_sigma(field_jacobian(stack, theta, chips_mm, free), 1.0)
     return LayoutBound([(float(c[0]), float(c[1])) for c in chips_mm], free, xs, ys, F, shear_ratio, sigma)
+
+
+BOUND_NOISES_uT = (0.5, 2.0)  # the noises a layout's bound is stated at (with the design's own)
+BOUND_FORCES = (0.25, 0.5, 0.75)  # of the range (the last lock)
+DESIGN_SHEAR_RATIO = (0.2, 0.1)  # the tangential load `mst design` states a two-chip layout's bound at
+
+
+def bound_report(stack: LoadedStack, chips_mm, shear_ratio: tuple[float, float], noise_uT: float) -> dict:
+    """report.json's ``shear_bound``: :func:`layout_bound` at 25/50/75 % of the range over the
+    middle 60 % of the face, stated at BOUND_NOISES_uT and ``noise_uT``."""
+    top = max(t.lock_force_N for t in stack.tilt)
+    bound = layout_bound(stack, chips_mm, [f * top for f in BOUND_FORCES], shear_ratio)
+    noises = sorted({*BOUND_NOISES_uT, float(noise_uT)} - {0.0})
+    return {**bound.summary(noises), "mechanics": stack.mechanics, "region_frac": 0.6}
+
+
+def shear_bound_lines(s: dict) -> list[str]:
+    """The terminal's account of report.json's shear_bound: each estimate's 1-sigma CRB."""
+    chips = " and ".join(f"({x:g}, {y:g})" for x, y in s["chips_mm"])
+    where = (
+        "centred presses"
+        if len(s["chips_mm"]) == 1
+        else f"presses over +-{s['region_mm'][0]:g} x +-{s['region_mm'][1]:g} mm"
+    )
+    lines = [
+        f"what the chip{'s' if len(s['chips_mm']) > 1 else ''} at {chips} mm can tell apart ({where}, "
+        f"at {', '.join(f'{f:.3g}' for f in s['force_N'])} N, Fx/Fz {s['shear_ratio'][0]:g}, Fy/Fz "
+        f"{s['shear_ratio'][1]:g}), median (worst) 1-sigma Cramer-Rao bound:"
+    ]
+    for row in s["noise"]:
+        cells = []
+        for name in s["estimates"]:
+            what, unit = name.rsplit("_", 1)
+            cells.append(f"{what} {row[name + '_crb_median']:.3g} ({row[name + '_crb_worst']:.3g}) {unit}")
+        lines.append(f"  {row['noise_uT']:g} uT: " + ", ".join(cells))
+    if len(s["chips_mm"]) == 1:
+        lines.append("  one chip: 3 numbers, so Fz, Fx, Fy of a press taken as centred (a second chip tells position)")
+    return lines

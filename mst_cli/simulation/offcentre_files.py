@@ -138,29 +138,6 @@ def offcentre_lines(s: dict) -> list[str]:
     return lines
 
 
-def shear_bound_lines(s: dict) -> list[str]:
-    """The terminal's account of report.json's shear_bound: each estimate's 1-sigma CRB."""
-    chips = " and ".join(f"({x:g}, {y:g})" for x, y in s["chips_mm"])
-    where = (
-        "centred presses"
-        if len(s["chips_mm"]) == 1
-        else f"presses over +-{s['region_mm'][0]:g} x +-{s['region_mm'][1]:g} mm"
-    )
-    lines = [
-        f"what the chip{'s' if len(s['chips_mm']) > 1 else ''} at {chips} mm can tell apart ({where}, "
-        f"at {', '.join(f'{f:.3g}' for f in s['force_N'])} N), median (worst) 1-sigma Cramer-Rao bound:"
-    ]
-    for row in s["noise"]:
-        cells = []
-        for name in s["estimates"]:
-            what, unit = name.rsplit("_", 1)
-            cells.append(f"{what} {row[name + '_crb_median']:.3g} ({row[name + '_crb_worst']:.3g}) {unit}")
-        lines.append(f"  {row['noise_uT']:g} uT: " + ", ".join(cells))
-    if len(s["chips_mm"]) == 1:
-        lines.append("  one chip: 3 numbers, so Fz, Fx, Fy of a press taken as centred (a second chip tells position)")
-    return lines
-
-
 def offset_map_csv(m: OffsetMap) -> str:
     """One row per (force, x, y): the axial reading's relative error (empty where the centred
     model has no answer: axial_reading_flag says why)."""

@@ -11,12 +11,13 @@ from pathlib import Path
 from mst_cli.errors import InputError
 from mst_cli.model.assembly import SensorGeometry
 from mst_cli.model.ladder import MechanicsChoice, choose_mechanics
+from mst_cli.model.load_bound import shear_bound_lines
 from mst_cli.model.material import Material
 from mst_cli.model.offcentre import OffCentreResponse, OffsetMap
 from mst_cli.model.response import Response
 from mst_cli.sensor.as_printed import PRINTER_NOMINAL, as_printed
 from mst_cli.sensor.document import Document
-from mst_cli.simulation.offcentre_files import offcentre_lines, offcentre_summary, shear_bound_lines, write_offcentre
+from mst_cli.simulation.offcentre_files import offcentre_lines, offcentre_summary, write_offcentre
 from mst_cli.simulation.report import terminal_table, write_simulation
 
 
