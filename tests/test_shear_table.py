@@ -202,3 +202,23 @@ def test_a_serial_stream_is_estimated_live_with_shear(coarse_model, model, tmp_p
     rows = list(csv.DictReader((tmp_path / "o" / "forces.csv").open()))
     assert [r["assumption"] for r in rows] == ["centred"] * 3
     assert [float(r["shear_x_N"]) for r in rows] == pytest.approx([0.1 * top] * 3, rel=0.03)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("beside", ["garbage", "an offset table"])
+def test_a_shear_table_file_that_is_not_one_is_rebuilt_and_said(tmp_path, beside):
+    model = tmp_path / "model.yaml"
+    shutil.copy(FORWARD, model)
+    target = tmp_path / SHEAR_TABLE_FILE
+    if beside == "garbage":
+        target.write_bytes(b"\x00not a table")
+    else:  # the right hash for its grid, the wrong kind
+        doc, _ = load_design_document(FORWARD)
+        build_beside(model, doc, "spring", 1.0, 40.0, (5, 10.0)).save(target)
+    path = tmp_path / "r.csv"
+    path.write_text("Bx_uT,By_uT,Bz_uT\n0,0,4000\n")
+    notes: list[str] = []
+    got = api.read(model, path, estimate="shear", out=tmp_path / "o", warn=notes.append)
+    assert any("is stale" in n and "--shear-table" in n for n in notes), notes
+    assert got.offset is not None and got.offset.flag[0] == "ok"
+    assert InverseTable.load(tmp_path / "o" / SHEAR_TABLE_FILE).grid.kind == "shear"

@@ -173,7 +173,7 @@ def table_beside(
     why = "is stale" if path.exists() else "is missing"
     note = (
         f"{path} {why}: built the {kind} table in {time.perf_counter() - t0:.0f} s and wrote it with the "
-        f"results (mst calibrate --offset-table writes it beside the model; so does copying it there)"
+        f"results (mst calibrate --{kind}-table writes it beside the model; so does copying it there)"
     )
     return table, note
 
