@@ -235,8 +235,10 @@ def _reader(
     readings: str | Path | None,
     out: str | Path | None,
     warn: Callable[[str], None] | None,
+    estimate: str = "none",
 ):
     # deferred: the calibrate layer, 30 ms measured (mst simulate does not pay it)
+    from mst_cli.calibrate.chip_columns import check_chips_match
     from mst_cli.calibrate.loadtest import check_field_unit, parse_readings, read_text, setting_of
     from mst_cli.calibrate.reading import ForceReader
 
@@ -261,6 +263,7 @@ def _reader(
         rd = parse_readings(read_text(readings), str(readings), need_force=False, gain_sel=gain_sel, res=res)
         if len(rd) == 0:
             raise InputError(str(readings), "(no rows)", "has a header but no readings")
+        check_chips_match(str(readings), rd.chips, len(doc.chips_mm), estimate)
         setting = setting or rd.setting
     reader = ForceReader.open(doc, model_file, choice.mechanics, setting)
     if rd is not None:
@@ -326,7 +329,7 @@ def read(
     >>> forces = mst.read("cal/calibrated.yaml", "readings.csv", estimate="offset", out="o")  # doctest: +SKIP
     """
     estimate = _checked_estimate("offset" if estimate_offset else estimate, max_offset_sigma_mm, tare)
-    reader, rd, _ = _reader(model, model_file, mechanics, gain_sel, res, False, readings, out, warn)
+    reader, rd, _ = _reader(model, model_file, mechanics, gain_sel, res, False, readings, out, warn, estimate)
     offsets, built = _estimator(reader, estimate, mechanics, model_file or model, max_offset_sigma_mm, polish, warn)
     result = reader.read(rd, offsets, tare)
     if out is not None:
@@ -365,6 +368,10 @@ def _estimator(reader, estimate: str, mechanics: str | None, model_file, max_sig
     mech = choose_mechanics(mechanics, doc.accuracy_rel, doc.mechanics).mechanics
     lever = reader.record.lever_factor() if reader.record is not None else 1.0
     offsets: OffsetTableReader | ShearTableReader
+    if estimate == "shear" and len(doc.chips_mm) > 1:
+        raise InputError(
+            "--estimate shear", f"{len(doc.chips_mm)} chips", "two-chip estimates land with the next commit"
+        )
     if estimate == "shear":
         offsets, note = shear_table_reader(doc, reader.inverse_map, lever, Path(model_file), mech, polish)
     else:

@@ -32,6 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
+from mst_cli.calibrate.chip_columns import extra_chip_columns, is_chip_column
 from mst_cli.errors import InputError
 from mst_cli.io.csv_table import csv_rows
 from mst_cli.io.files import read_input_text
@@ -80,6 +81,12 @@ class Readings:
     raw: bool  # the file held raw codes
     setting: mlx.ChipSetting | None  # the one chip setting of every row, when known
     offset_mm: np.ndarray | None = None  # (n, 2) where each row was pressed (x_mm, y_mm columns)
+    B_chips_T: np.ndarray | None = None  # (n, k, 3) every chip's field, chip 1 first (files of k >= 2 chips)
+
+    @property
+    def chips(self) -> int:
+        """How many chips' fields the file holds."""
+        return 1 if self.B_chips_T is None else self.B_chips_T.shape[1]
 
     def subset(self, keep: np.ndarray) -> Readings:
         """The rows where ``keep`` (a boolean mask) holds, as a Readings of their own."""
@@ -95,6 +102,7 @@ class Readings:
             raw=self.raw,
             setting=self.setting,
             offset_mm=None if self.offset_mm is None else self.offset_mm[idx],
+            B_chips_T=None if self.B_chips_T is None else self.B_chips_T[idx],
         )
 
     @functools.cached_property
@@ -209,7 +217,7 @@ def _check_time_order(source: str, header: list[str], rows: list[list[str]], lin
 def unknown_columns(rd: Readings) -> list[str]:
     """The columns of ``rd`` no part of mst reads (copied into forces.csv by mst read, no more)."""
     known = {FORCE_COLUMN, *UT_COLUMNS, *CODE_COLUMNS, *SETTING_COLUMNS, *OFFSET_COLUMNS, *RIG_COLUMNS}
-    return [c for c in rd.header if c not in known]
+    return [c for c in rd.header if c not in known and not is_chip_column(c)]
 
 
 def rig_column(rd: Readings, column: str) -> np.ndarray | None:
@@ -268,6 +276,7 @@ def parse_readings(
     flag_setting = setting_of(gain_sel, res) if gain_sel is not None and res is not None else None
     numbered, delim, header, data_rows = _table(text, source, need_force)
     raw, cols = _field_columns(source, header, need_force)
+    others = extra_chip_columns(source, header, raw)
     idx = {c: header.index(c) for c in header}
     settings = (
         _RowSettings(source, idx, flag_setting, one_setting) if all(c in header for c in SETTING_COLUMNS) else None
@@ -278,6 +287,7 @@ def parse_readings(
     with_force = need_force or FORCE_COLUMN in header  # a readings file may carry the reference
     F = np.empty(len(data_rows)) if with_force else None
     sat = np.zeros(len(data_rows), dtype=bool)
+    B_chips = np.empty((len(data_rows), 1 + len(others), 3)) if others else None
     rows, lines = [], []
     for r, (row, (line, _)) in enumerate(zip(data_rows, numbered[1:])):
         if len(row) != len(header):
@@ -288,13 +298,20 @@ def parse_readings(
         setting = settings.of_row(line, row) if settings is not None else flag_setting
         values = [_number(source, line, c, row[idx[c]]) for c in cols]
         B[r], sat[r] = field_of(values, raw, setting, f"{source} line {line}")
+        if B_chips is not None:
+            B_chips[r, 0] = B[r]
+            for k, names in enumerate(others, start=1):
+                chip = [_number(source, line, c, row[idx[c]]) for c in names]
+                B_chips[r, k], saturated = field_of(chip, raw, setting, f"{source} line {line}", names)
+                sat[r] |= saturated
         if F is not None:
             F[r] = _number(source, line, FORCE_COLUMN, row[idx[FORCE_COLUMN]])
         if off is not None:
             off[r] = [_number(source, line, c, row[idx[c]]) for c in OFFSET_COLUMNS]
         rows.append(row)
         lines.append(line)
-    _check_extra_columns(source, header, rows, lines, (*cols, *(SETTING_COLUMNS if settings is not None else ())))
+    used = (*cols, *(c for names in others for c in names), *(SETTING_COLUMNS if settings is not None else ()))
+    _check_extra_columns(source, header, rows, lines, used)
     one = flag_setting if settings is None or flag_setting is not None else settings.the_one(rows)
     return Readings(
         source=source,
@@ -307,6 +324,7 @@ def parse_readings(
         raw=raw,
         setting=one,
         offset_mm=off,
+        B_chips_T=B_chips,
     )
 
 
@@ -411,13 +429,17 @@ class _RowSettings:
 
 
 def field_of(
-    values: Sequence[float], raw: bool, setting: mlx.ChipSetting | None, where: str
+    values: Sequence[float],
+    raw: bool,
+    setting: mlx.ChipSetting | None,
+    where: str,
+    columns: Sequence[str] | None = None,
 ) -> tuple[np.ndarray, bool]:
     """(field vector in T, saturated) of one sample: x, y, z in microtesla, or raw codes.
 
     InputError when the sample cannot come from ``setting`` (a code or a field beyond what the
     chip outputs there), or raw codes arrive without a setting."""
-    cols = CODE_COLUMNS if raw else UT_COLUMNS
+    cols = columns or (CODE_COLUMNS if raw else UT_COLUMNS)
     if raw:
         if setting is None:
             raise InputError(
