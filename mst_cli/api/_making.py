@@ -9,7 +9,7 @@ from dataclasses import fields
 from pathlib import Path
 from typing import TYPE_CHECKING, cast
 
-from mst_cli.api._common import _check_out, load_design
+from mst_cli.api._common import _check_out, load, load_design
 from mst_cli.api._designing import designed
 from mst_cli.errors import InputError
 from mst_cli.io.files import is_machine_fault as is_machine_fault
@@ -69,6 +69,8 @@ def export(
 
     check_stl_tolerance(stl_tolerance_mm)  # one bound, shared with check
     _check_out(out)  # a bad output path is refused before any work
+    if isinstance(design, (str, Path)):
+        _refuse_unhoused_chips(load(design))  # before a spec is designed
     doc, result = _to_export(design, progress)
     geometry = result.geometry if result is not None else doc.geometry()
     _check_out(folder := Path(out) if out is not None else Path("mst-out") / doc.name)
@@ -87,6 +89,16 @@ def export(
         progress=progress,
     )
     return ExportedFiles([folder / n for n in names], geometry, result)
+
+
+def _refuse_unhoused_chips(doc: Document) -> None:
+    """InputError (magnetometer.positions_mm) when the chips' boards cannot lie side by side in
+    the base; the rule reads no layer, so a probe cell stands in for a spec's."""
+    if doc.chip_positions_mm:
+        from mst_cli.model.board_slots import slot_violations
+
+        for v in slot_violations(doc.geometry([doc.family.cell(45.0, 1.0, 3.0)])):
+            raise v.input_error()
 
 
 def _to_export(design, progress):
