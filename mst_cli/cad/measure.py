@@ -276,8 +276,8 @@ def _measure_pocket(manifold, manifest: Manifest, axis_gaps, void_shell_volumes)
 
 def _measure_slot(manifold, manifest: Manifest, index: int = 0) -> SlotSize:
     """The slot of chip ``index``: the air under its chip, its floor along the depth, its width
-    across (below the windows, the slots' air gaps in x order: this slot's is its rank among
-    them) and its windows' floors."""
+    across (below the windows: the one air gap, or with several slots the one around this
+    chip, so that a filled slot does not hide the others) and its windows' floors."""
     slots, bbox_max = manifest.slots, manifest.body.bbox_max_mm
     slot = slots[index]
     x_far, y_far = bbox_max[0] + 1.0, bbox_max[1] + 1.0
@@ -296,8 +296,8 @@ def _measure_slot(manifold, manifest: Manifest, index: int = 0) -> SlotSize:
     windows = slot.cable_windows
     y_across = 0.5 * (slot.floor_y_mm + min([w.floor_y_mm for w in windows], default=slot.floor_y_mm + 2.0))
     x_gaps = [(a - x_far, b - x_far) for a, b in air_gaps(manifold, (-x_far, y_across, z_s), (1, 0, 0), 2 * x_far)]
-    rank = sorted(s.x0_mm for s in slots).index(slot.x0_mm)
-    x0, x1 = x_gaps[rank] if len(x_gaps) == len(slots) else (math.nan, math.nan)
+    found = x_gaps if len(slots) == 1 else [g for g in x_gaps if g[0] < cx < g[1]]
+    x0, x1 = found[0] if len(found) == 1 else (math.nan, math.nan)
     return SlotSize(
         floor_z_mm=floor_z,
         top_z_mm=top_z,
