@@ -15,6 +15,7 @@ from mst_cli.errors import InputError
 from mst_cli.io.files import is_machine_fault as is_machine_fault
 from mst_cli.io.files import os_error_text as os_error_text
 from mst_cli.io.outputs import Interrupted as Interrupted
+from mst_cli.model.board_slots import slot_violations
 from mst_cli.model.file_keys import SEED_RANGE as SEED_RANGE
 from mst_cli.model.printer import Printer
 from mst_cli.sensor.document import Document
@@ -69,8 +70,6 @@ def export(
 
     check_stl_tolerance(stl_tolerance_mm)  # one bound, shared with check
     _check_out(out)  # a bad output path is refused before any work
-    if isinstance(design, (str, Path)):
-        _refuse_unhoused_chips(load(design))  # before a spec is designed
     doc, result = _to_export(design, progress)
     geometry = result.geometry if result is not None else doc.geometry()
     _check_out(folder := Path(out) if out is not None else Path("mst-out") / doc.name)
@@ -95,8 +94,6 @@ def _refuse_unhoused_chips(doc: Document) -> None:
     """InputError (magnetometer.positions_mm) when the chips' boards cannot lie side by side in
     the base; the rule reads no layer, so a probe cell stands in for a spec's."""
     if doc.chip_positions_mm:
-        from mst_cli.model.board_slots import slot_violations
-
         for v in slot_violations(doc.geometry([doc.family.cell(45.0, 1.0, 3.0)])):
             raise v.input_error()
 
@@ -106,6 +103,7 @@ def _to_export(design, progress):
     from mst_cli.design import DesignResult  # deferred: the design layer, 25 ms measured
 
     if isinstance(design, (str, Path)):
+        _refuse_unhoused_chips(load(design))  # before a spec is designed
         return designed(design, progress)
     if isinstance(design, DesignResult):
         return design.document, design

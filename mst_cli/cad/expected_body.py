@@ -12,6 +12,7 @@ them what the body made of those dimensions should measure. Their readers are ``
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -96,7 +97,7 @@ def pocket_curved_area_mm2(geometry: SensorGeometry) -> float:
     return math.pi * geometry.pocket_radius_mm * geometry.pocket_depth_mm
 
 
-def overlap_volume_mm3(boxes: list[tuple[tuple[float, ...], tuple[float, ...]]]) -> float:
+def overlap_volume_mm3(boxes: Sequence[tuple[Sequence[float], Sequence[float]]]) -> float:
     """Volume that axis-aligned boxes (lo, hi) cover more than once, counted once per extra
     cover: their summed volumes minus this is the volume of their union. Exact on the grid of
     the boxes' own coordinates; 0.0 when no two overlap (boxes that only touch do not)."""

@@ -239,7 +239,7 @@ def _slots_sections(g: SensorGeometry) -> dict:
     """``board_slot`` (the first chip's, as a one-chip export has it) and, with more than one
     chip, ``board_slots``: every chip's, in the order of magnetometer.positions_mm."""
     n = len(g.board_slots)
-    out = {"board_slot": _slot_section(g)}
+    out: dict[str, dict | list[dict]] = {"board_slot": _slot_section(g)}
     if n > 1:
         out["board_slots"] = [_slot_section(g, i) for i in range(n)]
     return out

@@ -269,7 +269,7 @@ class SensorGeometry:
         return self.z_cover_bottom_mm - self.z_board_bottom_mm
 
     @property
-    def cable_windows(self) -> tuple[board_slots.Window, ...]:
+    def cable_windows(self) -> tuple[tuple[float, float, float, float, float], ...]:
         """Windows through the base's side walls for the first board's connector cables, as
         (x_inner, x_outer, y_floor, z0, z1): from the slot wall out through the base's x face (or
         into the next slot), from a floor just below the connector (snapped down to the layer
@@ -417,9 +417,7 @@ class SensorGeometry:
 
     def housing_violations(self) -> list[Violation]:
         """Broken housing rules (``Violation.of_field``: field, value, what is allowed): what the
-        body needs to be one printable solid with a closed pocket and a slot that holds the board.
-        Several chips' slots side by side are judged on export only
-        (:func:`mst_cli.model.board_slots.slot_violations`): the reading side models any layout."""
+        body needs to be one printable solid with a closed pocket and a slot that holds the board."""
         h, D, lh = self.housing, self.depth_mm, self.layer_height_mm
         out = printer_violations(self.printer, h, self.layers[0].contact_allowance_mm)
         if abs(D / lh - round(D / lh)) > 1e-6:

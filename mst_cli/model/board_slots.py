@@ -16,17 +16,51 @@ daisy chain; the boards need different addresses) and the outermost sockets reac
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import Protocol
 
+from mst_cli.model.components import Board
 from mst_cli.model.violation import Violation
-
-if TYPE_CHECKING:
-    from mst_cli.model.assembly import SensorGeometry
 
 POSITIONS_FIELD = "magnetometer.positions_mm"
 
 # (x_inner, x_outer, y_floor, z0, z1), mm: from the slot wall to the base face or the next slot
 Window = tuple[float, float, float, float, float]
+
+
+class _Housing(Protocol):
+    @property
+    def board_clearance_mm(self) -> float: ...
+
+    @property
+    def side_wall_mm(self) -> float: ...
+
+
+class SensorGeometry(Protocol):
+    """What the slots read of :class:`mst_cli.model.assembly.SensorGeometry` (which imports
+    this module: a Protocol, not an import, keeps the two out of a cycle)."""
+
+    @property
+    def board(self) -> Board: ...
+
+    @property
+    def housing(self) -> _Housing: ...
+
+    @property
+    def width_mm(self) -> float: ...
+
+    @property
+    def base_length_mm(self) -> float: ...
+
+    @property
+    def z_board_top_mm(self) -> float: ...
+
+    @property
+    def z_cover_bottom_mm(self) -> float: ...
+
+    @property
+    def chips_xy_mm(self) -> tuple[tuple[float, float], ...]: ...
+
+    def snapped_y_mm(self, y_mm: float, mode: str) -> float: ...
 
 
 @dataclass(frozen=True)
@@ -86,13 +120,14 @@ def layout(g: SensorGeometry) -> tuple[BoardSlot, ...]:
             x_out = _window_end_mm(x_in, con.facing, others, L2)
             windows.append((x_in, x_out, y_floor, g.z_board_top_mm, g.z_cover_bottom_mm))
         printed = (origin[0] + bd.chip_x_mm, origin[1] + bd.chip_y_mm)
-        out.append(BoardSlot(tuple(chip), origin, printed, (x0, x1), floor, tuple(windows)))
+        out.append(BoardSlot((chip[0], chip[1]), origin, printed, (x0, x1), floor, tuple(windows)))
     return tuple(out)
 
 
 def slot_violations(g: SensorGeometry) -> list[Violation]:
     """Broken rules of several chips' slots: every board on the first one's floor, and a side
-    wall between any two slots. One chip breaks neither."""
+    wall between any two slots. One chip breaks neither. Judged on export only (not at load,
+    as the other housing rules are): the reading side models chips anywhere."""
     chips = g.chips_xy_mm
     if len(chips) < 2:
         return []
