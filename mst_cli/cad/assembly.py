@@ -55,13 +55,23 @@ class SensorCAD:
         return Compound(children=[body, magnet, self.board], label=name)
 
 
-def build_sensor(geometry: SensorGeometry) -> SensorCAD:
-    """Build the body, the magnet and the board of ``geometry`` in the sensor frame."""
-    body = build_body(geometry)
-    pcb, chip, *sockets = parts.board_solids(geometry)
-    children = [Compound([pcb], label="pcb"), Compound([chip], label="MLX90393")]
+def _board_compound(geometry: SensorGeometry, chip: int, label: str) -> Compound:
+    pcb, chip_solid, *sockets = parts.board_solids(geometry, chip)
+    children = [Compound([pcb], label="pcb"), Compound([chip_solid], label="MLX90393")]
     children += [Compound([s], label=f"connector_{i + 1}") for i, s in enumerate(sockets)]
-    board = Compound(children=children, label=f"board_{geometry.board.key}")
+    return Compound(children=children, label=label)
+
+
+def build_sensor(geometry: SensorGeometry) -> SensorCAD:
+    """Build the body, the magnet and the board of ``geometry`` in the sensor frame (with more
+    than one chip, ``board`` holds one board per chip)."""
+    body = build_body(geometry)
+    label = f"board_{geometry.board.key}"
+    n = len(geometry.board_slots)
+    if n == 1:
+        board = _board_compound(geometry, 0, label)
+    else:
+        board = Compound(children=[_board_compound(geometry, i, f"{label}_chip_{i}") for i in range(n)], label="boards")
     return SensorCAD(body=body, magnet=parts.magnet_solid(geometry), board=board)
 
 

@@ -294,47 +294,69 @@ def check_magnet_pocket(m: Measurements, x: Manifest) -> Check:
     )
 
 
-def check_board_slot(m: Measurements, x: Manifest) -> Check:
-    """Slot floor height, width and floor along the depth, and the cable windows' floors."""
-    got, slot = m.slot, x.board_slot
-    meas = {
-        "floor_z_mm": got.floor_z_mm,
-        "top_z_mm": got.top_z_mm,
-        "floor_y_mm": got.floor_y_mm,
-        "x0_mm": got.x0_mm,
-        "x1_mm": got.x1_mm,
-    }
-    want = {k: getattr(slot, k) for k in meas}
+def _slot_values(got, slot, prefix: str) -> tuple[dict, dict]:
+    """(measured, designed) of one slot: floor height, width, floor along the depth and its
+    windows' floors, keyed ``{prefix}x0_mm`` and so on."""
+    keys = ("floor_z_mm", "top_z_mm", "floor_y_mm", "x0_mm", "x1_mm")
+    meas = {prefix + k: getattr(got, k) for k in keys}
+    want = {prefix + k: getattr(slot, k) for k in keys}
     for j, (window, floor_y) in enumerate(zip(slot.cable_windows, got.window_floor_y_mm)):
-        meas[f"window_{j + 1}_floor_y_mm"] = floor_y
-        want[f"window_{j + 1}_floor_y_mm"] = window.floor_y_mm
+        meas[f"{prefix}window_{j + 1}_floor_y_mm"] = floor_y
+        want[f"{prefix}window_{j + 1}_floor_y_mm"] = window.floor_y_mm
+    return meas, want
+
+
+def _slot_text(size, n_windows: int) -> str:
+    return (
+        f"{size.x1_mm - size.x0_mm:.3f} wide, floor y {size.floor_y_mm:.3f}, "
+        f"z {size.floor_z_mm:.3f}..{size.top_z_mm:.3f}, {n_windows} windows"
+    )
+
+
+def check_board_slot(m: Measurements, x: Manifest) -> Check:
+    """Every chip's slot: floor height, width and floor along the depth, and the cable windows'
+    floors. The first chip's keys are unprefixed (as a one-chip export has them), chip k's
+    (from 2) start ``chip_k_``."""
+    meas, want, got_text, want_text = {}, {}, [], []
+    for k, (got, slot) in enumerate(zip(m.slots, x.slots)):
+        prefix, label = (f"chip_{k + 1}_", f"chip {k + 1}: ") if k else ("", "")
+        mk, wk = _slot_values(got, slot, prefix)
+        meas.update(mk)
+        want.update(wk)
+        got_text.append(label + _slot_text(got, len(slot.cable_windows)))
+        want_text.append(label + _slot_text(slot, len(slot.cable_windows)))
     bad = [k for k in meas if not abs(meas[k] - want[k]) <= PLANAR_TOL_MM]
-    n = len(slot.cable_windows)
+    n = len(x.slots)
+    slides = f"board {x.board_slot.board} slides in" if n == 1 else f"{n} boards slide in side by side"
     return Check(
         "board_slot",
         not bad,
-        f"{got.x1_mm - got.x0_mm:.3f} wide, floor y {got.floor_y_mm:.3f}, "
-        f"z {got.floor_z_mm:.3f}..{got.top_z_mm:.3f}, {n} windows",
-        f"{slot.x1_mm - slot.x0_mm:.3f} wide, floor y {slot.floor_y_mm:.3f}, z "
-        f"{slot.floor_z_mm:.3f}..{slot.top_z_mm:.3f}, {n} windows",
-        ("mismatch: " + ", ".join(bad))
-        if bad
-        else f"board {slot.board} slides in through the face on top in the print (+y)",
+        "; ".join(got_text),
+        "; ".join(want_text),
+        ("mismatch: " + ", ".join(bad)) if bad else f"{slides} through the face on top in the print (+y)",
         values=meas,
     )
 
 
 def check_magnet_chip_gap(m: Measurements, x: Manifest) -> Check:
-    """The forward model's unloaded gap, rebuilt from the measured pocket and slot floors."""
-    slot = x.board_slot
-    gap = m.pocket.floor_z_mm - (m.slot.floor_z_mm + slot.board_thickness_mm + 0.5 * slot.chip_height_mm)
+    """The forward model's unloaded gap, rebuilt from the measured pocket and slot floors, under
+    every chip (chip k's, from 2, keyed ``chip_k_measured_mm``)."""
+    gaps = [
+        m.pocket.floor_z_mm - (got.floor_z_mm + slot.board_thickness_mm + 0.5 * slot.chip_height_mm)
+        for got, slot in zip(m.slots, x.slots)
+    ]
+    values = {(f"chip_{k + 1}_" if k else "") + "measured_mm": gap for k, gap in enumerate(gaps)}
+    bad = [k + 1 for k, gap in enumerate(gaps) if not abs(gap - x.gap0_mm) <= PLANAR_TOL_MM]
+    note = "pocket floor - (slot floor + board + chip/2)"
+    if len(gaps) > 1:
+        note += f", under each of {len(gaps)} chips" + (f"; off under chip {', '.join(map(str, bad))}" if bad else "")
     return Check(
         "magnet_chip_gap",
-        abs(gap - x.gap0_mm) <= PLANAR_TOL_MM,
-        f"{gap:.4f} mm",
+        not bad,
+        ", ".join(f"{gap:.4f}" for gap in gaps) + " mm",
         f"{x.gap0_mm:.4f} mm (forward model gap0)",
-        "pocket floor - (slot floor + board + chip/2)",
-        values={"measured_mm": gap},
+        note,
+        values=values,
     )
 
 

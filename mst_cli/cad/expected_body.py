@@ -12,6 +12,7 @@ them what the body made of those dimensions should measure. Their readers are ``
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -96,15 +97,38 @@ def pocket_curved_area_mm2(geometry: SensorGeometry) -> float:
     return math.pi * geometry.pocket_radius_mm * geometry.pocket_depth_mm
 
 
+def overlap_volume_mm3(boxes: Sequence[tuple[Sequence[float], Sequence[float]]]) -> float:
+    """Volume that axis-aligned boxes (lo, hi) cover more than once, counted once per extra
+    cover: their summed volumes minus this is the volume of their union. Exact on the grid of
+    the boxes' own coordinates; 0.0 when no two overlap (boxes that only touch do not)."""
+    if len(boxes) < 2:
+        return 0.0
+    lo, hi = np.asarray([b[0] for b in boxes]), np.asarray([b[1] for b in boxes])
+    grids = [np.unique(np.concatenate([lo[:, k], hi[:, k]])) for k in range(3)]
+    centres = np.meshgrid(*[0.5 * (g[1:] + g[:-1]) for g in grids], indexing="ij")
+    cells = np.einsum("i,j,k->ijk", *[np.diff(g) for g in grids])
+    count = sum(
+        np.all([(lo[b, k] < centres[k]) & (centres[k] < hi[b, k]) for k in range(3)], axis=0) for b in range(len(boxes))
+    )
+    return float(np.sum(cells * np.maximum(count - 1, 0)))
+
+
 def base_volume_mm3(geometry: SensorGeometry) -> float:
-    """Base block minus the board slot and the cable windows (open through the +y face)."""
+    """Base block minus the board slots and the cable windows (open through the +y face); the
+    windows between two slots overlap, and their union is removed once."""
     g = geometry
     L, D = g.base_length_mm, g.depth_mm
-    x0, x1 = g.slot_x_mm
     y_top = 0.5 * D
-    slot = (x1 - x0) * (y_top - g.slot_floor_y_mm) * g.slot_height_mm
-    windows = sum(abs(x_out - x_in) * (y_top - yf) * (z1 - z0) for x_in, x_out, yf, z0, z1 in g.cable_windows)
-    return L * D * g.z_base_top_mm - slot - windows
+    z0, z1 = g.z_board_bottom_mm, g.z_cover_bottom_mm
+    boxes = []
+    for s in g.board_slots:
+        boxes.append(((s.x_mm[0], s.floor_y_mm, z0), (s.x_mm[1], y_top, z1)))
+        boxes += [((min(a, b), yf, wz0), (max(a, b), y_top, wz1)) for a, b, yf, wz0, wz1 in s.windows]
+    slot = sum((s.x_mm[1] - s.x_mm[0]) * (y_top - s.floor_y_mm) * g.slot_height_mm for s in g.board_slots)
+    windows = sum(
+        abs(x_out - x_in) * (y_top - yf) * (wz1 - wz0) for s in g.board_slots for x_in, x_out, yf, wz0, wz1 in s.windows
+    )
+    return L * D * g.z_base_top_mm - slot - windows + overlap_volume_mm3(boxes)
 
 
 def plates_volume_mm3(geometry: SensorGeometry) -> float:

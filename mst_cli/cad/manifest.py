@@ -135,7 +135,7 @@ def export_manifest(
         "print": print_section(g),
         "body": _body_section(g, stl_tolerance_mm),
         "magnet_pocket": _pocket_section(g),
-        "board_slot": _slot_section(g),
+        **_slots_sections(g),
         "gap0_mm": g.gap0_mm,
         "base_top_z_mm": g.z_base_top_mm,
         "layers": [
@@ -207,14 +207,16 @@ def _pocket_section(g: SensorGeometry) -> dict:
     }
 
 
-def _slot_section(g: SensorGeometry) -> dict:
-    """export.json's board_slot: where the board slides in, its cable windows and the chip."""
-    x0, x1 = g.slot_x_mm
+def _slot_section(g: SensorGeometry, chip: int = 0) -> dict:
+    """export.json's board_slot (and each entry of board_slots): where chip ``chip``'s board
+    slides in, its cable windows and the chip."""
+    slot = g.board_slots[chip]
+    x0, x1 = slot.x_mm
     return {
         "board": g.board.key,
         "x0_mm": x0,
         "x1_mm": x1,
-        "floor_y_mm": g.slot_floor_y_mm,
+        "floor_y_mm": slot.floor_y_mm,
         "open_face": "+y",
         "floor_z_mm": g.z_board_bottom_mm,
         "top_z_mm": g.z_cover_bottom_mm,
@@ -222,15 +224,25 @@ def _slot_section(g: SensorGeometry) -> dict:
         "headroom_mm": g.board.headroom_mm,
         "cable_windows": [
             {"x_inner_mm": a, "x_outer_mm": b, "floor_y_mm": yf, "z0_mm": z0, "z1_mm": z1}
-            for a, b, yf, z0, z1 in g.cable_windows
+            for a, b, yf, z0, z1 in slot.windows
         ],
         "board_thickness_mm": g.board.thickness_mm,
         "chip_height_mm": g.board.chip_height_mm,
-        "chip_xy_mm": list(g.chip_xy_printed_mm),
-        "chip_xy_nominal_mm": list(g.chip_offset_mm),
+        "chip_xy_mm": list(slot.chip_xy_printed_mm),
+        "chip_xy_nominal_mm": list(slot.chip_xy_mm),
         "hall_z_mm": g.z_hall_mm,
         "cover_mm": g.housing.cover_mm,
     }
+
+
+def _slots_sections(g: SensorGeometry) -> dict:
+    """``board_slot`` (the first chip's, as a one-chip export has it) and, with more than one
+    chip, ``board_slots``: every chip's, in the order of magnetometer.positions_mm."""
+    n = len(g.board_slots)
+    out: dict[str, dict | list[dict]] = {"board_slot": _slot_section(g)}
+    if n > 1:
+        out["board_slots"] = [_slot_section(g, i) for i in range(n)]
+    return out
 
 
 # --------------------------------------------------------------------------- reading
@@ -393,7 +405,13 @@ class Manifest:
     magnet_pocket: Pocket = _kind(Pocket)
     board_slot: Slot = _kind(Slot)
     printer: PrinterLimits = _kind(PrinterLimits)
+    board_slots: tuple[Slot, ...] = _optional(ListOf(Slot), ())  # one-chip exports lack it
     design: Document | None = _optional("design")  # exports before issue 21 lack it
+
+    @property
+    def slots(self) -> tuple[Slot, ...]:
+        """Every chip's board slot: ``board_slots``, else the one ``board_slot``."""
+        return self.board_slots or (self.board_slot,)
 
     @classmethod
     def from_dict(cls, data: Any) -> Manifest:

@@ -198,11 +198,16 @@ class Measurements:
     bbox_max_mm: np.ndarray
     layers: tuple[LayerSection, ...]
     pocket: PocketSize
-    slot: SlotSize
+    slots: tuple[SlotSize, ...]  # every chip's board slot, in the manifest's order
     # print orientation: down-facing faces off the bed, and heights of the horizontal faces
     down_inclination_deg: np.ndarray
     down_area_mm2: np.ndarray
     flat_heights_mm: np.ndarray
+
+    @property
+    def slot(self) -> SlotSize:
+        """The first chip's slot (the only one of a one-chip sensor)."""
+        return self.slots[0]
 
 
 def measure(mesh: Mesh | Any, manifest: Manifest) -> Measurements:
@@ -230,7 +235,7 @@ def measure(mesh: Mesh | Any, manifest: Manifest) -> Measurements:
         bbox_max_mm=bbox_max,
         layers=tuple(_measure_layer(manifold, layer, axis_gaps) for layer in manifest.layers),
         pocket=_measure_pocket(manifold, manifest, axis_gaps, shell_volumes if voids else []),
-        slot=_measure_slot(manifold, manifest),
+        slots=tuple(_measure_slot(manifold, manifest, i) for i in range(len(manifest.slots))),
         down_inclination_deg=down_incl,
         down_area_mm2=down_area,
         flat_heights_mm=flat_heights,
@@ -269,8 +274,12 @@ def _measure_pocket(manifold, manifest: Manifest, axis_gaps, void_shell_volumes)
     )
 
 
-def _measure_slot(manifold, manifest: Manifest) -> SlotSize:
-    slot, bbox_max = manifest.board_slot, manifest.body.bbox_max_mm
+def _measure_slot(manifold, manifest: Manifest, index: int = 0) -> SlotSize:
+    """The slot of chip ``index``: the air under its chip, its floor along the depth, its width
+    across (below the windows: the one air gap, or with several slots the one around this
+    chip, so that a filled slot does not hide the others) and its windows' floors."""
+    slots, bbox_max = manifest.slots, manifest.body.bbox_max_mm
+    slot = slots[index]
     x_far, y_far = bbox_max[0] + 1.0, bbox_max[1] + 1.0
     cx, cy = slot.chip_xy_mm
     chip_gaps = vertical_gaps(manifold, cx + _RAY_OFFSET_MM[0], cy + _RAY_OFFSET_MM[1], bbox_max[2])
@@ -283,11 +292,12 @@ def _measure_slot(manifold, manifest: Manifest) -> SlotSize:
         leave = [s for s, entering in hits if not entering]
         return leave[0] - y_far if leave else math.nan
 
-    # across the slot below the windows: the one closed air gap is the slot's width
+    # across the slots below the windows: one closed air gap per slot is each one's width
     windows = slot.cable_windows
     y_across = 0.5 * (slot.floor_y_mm + min([w.floor_y_mm for w in windows], default=slot.floor_y_mm + 2.0))
     x_gaps = [(a - x_far, b - x_far) for a, b in air_gaps(manifold, (-x_far, y_across, z_s), (1, 0, 0), 2 * x_far)]
-    x0, x1 = x_gaps[0] if len(x_gaps) == 1 else (math.nan, math.nan)
+    found = x_gaps if len(slots) == 1 else [g for g in x_gaps if g[0] < cx < g[1]]
+    x0, x1 = found[0] if len(found) == 1 else (math.nan, math.nan)
     return SlotSize(
         floor_z_mm=floor_z,
         top_z_mm=top_z,

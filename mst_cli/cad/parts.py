@@ -55,6 +55,6 @@ def magnet_solid(geometry: SensorGeometry) -> Solid:
     return solid(shapes.magnet(geometry))
 
 
-def board_solids(geometry: SensorGeometry) -> list[Solid]:
-    """The carrier board, the QFN package on it and its connectors."""
-    return [solid(s) for s in shapes.board(geometry)]
+def board_solids(geometry: SensorGeometry, chip: int = 0) -> list[Solid]:
+    """The carrier board of chip ``chip``, the QFN package on it and its connectors."""
+    return [solid(s) for s in shapes.board(geometry, chip)]

@@ -15,6 +15,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from mst_cli.model.assembly import SensorGeometry
+from mst_cli.model.board_slots import slot_violations
 from mst_cli.model.cell import HexCell
 
 # Cutting tools that end on an outer face of the part are extended past it by this much, so
@@ -65,10 +66,11 @@ def box(x0: float, x1: float, y0: float, y1: float, z0: float, z1: float) -> Box
 
 
 def check_fits(geometry: SensorGeometry) -> None:
-    """Raise :class:`InputError` for the first broken housing rule (the pocket and the slot
-    must fit inside the body, the depth must be whole print layers): see
-    :meth:`SensorGeometry.housing_violations`. The cell rules are checked by the caller."""
-    for v in geometry.housing_violations():
+    """Raise :class:`InputError` for the first broken housing rule (the pocket and the slots
+    must fit inside the body, the depth must be whole print layers, several chips' slots side
+    by side on one floor): see :meth:`SensorGeometry.housing_violations` and
+    :func:`~mst_cli.model.board_slots.slot_violations`. The cell rules are checked by the caller."""
+    for v in geometry.housing_violations() + slot_violations(geometry):
         raise v.input_error()
 
 
@@ -135,22 +137,28 @@ def base_block(geometry: SensorGeometry) -> Box:
 
 
 def base_cuts(geometry: SensorGeometry) -> list[Box]:
-    """Board slot and cable windows, as cutting tools.
+    """Board slots and cable windows, as cutting tools: one slot per chip, its windows after it.
 
-    The slot (board outline + clearance, from the base floor to the cover's underside) runs
-    from its floor at ``slot_floor_y_mm`` out through the +y face, the face on top in the
-    print: the board slides in along -y until it rests on the floor, which puts the chip
-    under the magnet axis. Each connector's cable leaves through a window in the side wall
-    beside it, open through the same face; so nothing in the base is bridged.
+    A slot (board outline + clearance, from the base floor to the cover's underside) runs
+    from its floor at ``floor_y_mm`` out through the +y face, the face on top in the print:
+    the board slides in along -y until it rests on the floor, which puts its chip where the
+    design has it. Each connector's cable leaves through a window in the side wall beside it,
+    open through the same face, out to the base's x face or into the next chip's slot (the two
+    facing windows of neighbouring slots are one box, cut once); so nothing in the base is
+    bridged. See :mod:`mst_cli.model.board_slots`.
     """
-    x0, x1 = geometry.slot_x_mm
     y_out = 0.5 * geometry.depth_mm + OVERCUT_MM
     z0, z1 = geometry.z_board_bottom_mm, geometry.z_cover_bottom_mm
-    cuts = [box(x0, x1, geometry.slot_floor_y_mm, y_out, z0, z1)]
-    for x_in, x_out, y_floor, wz0, wz1 in geometry.cable_windows:
-        # from just inside the slot (already empty) to past the outer face
-        a, b = (x_out - OVERCUT_MM, x_in + OVERCUT_MM) if x_out < x_in else (x_in - OVERCUT_MM, x_out + OVERCUT_MM)
-        cuts.append(box(a, b, y_floor, y_out, wz0, wz1))
+    cuts: list[Box] = []
+    for slot in geometry.board_slots:
+        x0, x1 = slot.x_mm
+        cuts.append(box(x0, x1, slot.floor_y_mm, y_out, z0, z1))
+        for x_in, x_out, y_floor, wz0, wz1 in slot.windows:
+            # from just inside the slot (already empty) to past the outer face or into the next slot
+            a, b = (x_out - OVERCUT_MM, x_in + OVERCUT_MM) if x_out < x_in else (x_in - OVERCUT_MM, x_out + OVERCUT_MM)
+            window = box(a, b, y_floor, y_out, wz0, wz1)
+            if window not in cuts:
+                cuts.append(window)
     return cuts
 
 
@@ -180,15 +188,15 @@ def magnet(geometry: SensorGeometry) -> Cylinder:
     return Cylinder(m.radius_mm, (0.0, 0.0, geometry.z_magnet_bottom_mm), m.thickness_mm)
 
 
-def board(geometry: SensorGeometry) -> list[Box]:
-    """The carrier board on the slot floor, the QFN package on it (Hall plates at the package
-    centre, where the forward model puts the field point) and its connectors."""
-    bd = geometry.board
-    bx, by = geometry.board_origin_xy_mm
+def board(geometry: SensorGeometry, chip: int = 0) -> list[Box]:
+    """The carrier board of chip ``chip`` on its slot floor, the QFN package on it (Hall plates
+    at the package centre, where the forward model puts the field point) and its connectors."""
+    bd, slot = geometry.board, geometry.board_slots[chip]
+    bx, by = slot.board_origin_xy_mm
     zb, zt = geometry.z_board_bottom_mm, geometry.z_board_top_mm
     pcb = box(bx, bx + bd.length_mm, by, by + bd.width_mm, zb, zt)
-    cx, cy = geometry.chip_xy_printed_mm
+    cx, cy = slot.chip_xy_printed_mm
     s2 = 0.5 * bd.chip_size_mm
-    chip = box(cx - s2, cx + s2, cy - s2, cy + s2, zt, geometry.z_chip_top_mm)
+    chip_box = box(cx - s2, cx + s2, cy - s2, cy + s2, zt, geometry.z_chip_top_mm)
     sockets = [box(bx + c.x0_mm, bx + c.x1_mm, by + c.y0_mm, by + c.y1_mm, zt, zt + c.height_mm) for c in bd.connectors]
-    return [pcb, chip] + sockets
+    return [pcb, chip_box] + sockets

@@ -14,6 +14,7 @@ import math
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
+from mst_cli.model import board_slots
 from mst_cli.model.cell import HexCell
 from mst_cli.model.components import MAGNET_GRADES_T, Board, default_board
 from mst_cli.model.file_keys import spec
@@ -187,6 +188,9 @@ class SensorGeometry:
         meaning="tilt of the magnet axis about y; non-zero selects the `cylinder` field model",
     )
     printer: Printer = Printer()
+    # every chip's (x, y) when more than one reads the magnet (magnetometer.positions_mm, the
+    # first at chip_offset_mm); None: one chip, at chip_offset_mm
+    chip_positions_mm: tuple[tuple[float, float], ...] | None = None
 
     def __post_init__(self):
         if self.board is None:
@@ -210,48 +214,54 @@ class SensorGeometry:
         """Height above the bed, in the print, of the sensor-frame coordinate y."""
         return y_mm + 0.5 * self.depth_mm
 
-    def _snapped_y_mm(self, y_mm: float, mode: str) -> float:
+    def snapped_y_mm(self, y_mm: float, mode: str) -> float:
+        """The sensor-frame y whose print height is snapped to the layer grid (``mode`` as in
+        :func:`snap_to_layers_mm`)."""
         return snap_to_layers_mm(self.print_height_mm(y_mm), self.layer_height_mm, mode) - 0.5 * self.depth_mm
 
     @property
     def base_length_mm(self) -> float:
         """Base size along x, centred on the magnet axis: the cell width, or wider when the
-        board slot (which need not be centred: the chip is) needs side walls around it."""
-        x0, x1 = self.slot_x_mm
-        need = 2 * (max(-x0, x1) + self.housing.side_wall_mm)
-        return max(self.width_mm, need)
+        board slots (which need not be centred: the chips are) need side walls around them."""
+        return board_slots.base_length_mm(self)
 
     @property
     def base_width_mm(self) -> float:
         """Base size along y: the depth D, like every other part (the body is one prism)."""
         return self.depth_mm
 
-    # -- board slot
+    # -- board slots: one per chip (mst_cli.model.board_slots); the first chip's as properties
+    @property
+    def chips_xy_mm(self) -> tuple[tuple[float, float], ...]:
+        """Every chip's nominal (x, y): ``chip_positions_mm``, else the one at chip_offset_mm."""
+        return tuple(self.chip_positions_mm) if self.chip_positions_mm else (self.chip_offset_mm,)
+
+    @property
+    def board_slots(self) -> tuple[board_slots.BoardSlot, ...]:
+        """Every chip's board slot and cable windows, in the order of the chips."""
+        return board_slots.layout(self)
+
     @property
     def slot_floor_y_mm(self) -> float:
         """y of the slot floor the board rests on: where the chip puts the board's lower edge,
         snapped to the nearest layer boundary (an up-facing face prints on one)."""
-        nominal = self.chip_offset_mm[1] - self.board.chip_y_mm
-        return self._snapped_y_mm(nominal, "nearest")
+        return board_slots.chip_floor_y_mm(self, self.chip_offset_mm)
 
     @property
     def board_origin_xy_mm(self) -> tuple[float, float]:
         """Board's lower-left corner as printed: x from the chip offset, y on the slot floor."""
-        return (self.chip_offset_mm[0] - self.board.chip_x_mm, self.slot_floor_y_mm)
+        return self.board_slots[0].board_origin_xy_mm
 
     @property
     def chip_xy_printed_mm(self) -> tuple[float, float]:
         """Where the chip sits in the printed housing (y differs from the nominal chip offset
         by the floor's snap to the layer grid, at most half a layer)."""
-        bx, by = self.board_origin_xy_mm
-        return (bx + self.board.chip_x_mm, by + self.board.chip_y_mm)
+        return self.board_slots[0].chip_xy_printed_mm
 
     @property
     def slot_x_mm(self) -> tuple[float, float]:
         """Board slot (x0, x1): the board outline plus the clearance on both sides."""
-        bx = self.board_origin_xy_mm[0]
-        c = self.housing.board_clearance_mm
-        return (bx - c, bx + self.board.length_mm + c)
+        return board_slots.chip_slot_x_mm(self, self.chip_offset_mm)
 
     @property
     def slot_height_mm(self) -> float:
@@ -260,19 +270,11 @@ class SensorGeometry:
 
     @property
     def cable_windows(self) -> tuple[tuple[float, float, float, float, float], ...]:
-        """Windows through the base's side walls for the connectors' cables, as
-        (x_inner, x_outer, y_floor, z0, z1): from the slot wall out through the base's x face,
-        from a floor just below the connector (snapped down to the layer grid) up through the
-        face on top in the print, over the slot's height above the board."""
-        x0, x1 = self.slot_x_mm
-        L2 = 0.5 * self.base_length_mm
-        c = self.housing.board_clearance_mm
-        out = []
-        for con in self.board.connectors:
-            y_floor = self._snapped_y_mm(self.slot_floor_y_mm + con.y0_mm - c, "down")
-            x_in, x_out = (x0, -L2) if con.facing == "-x" else (x1, L2)
-            out.append((x_in, x_out, y_floor, self.z_board_top_mm, self.z_cover_bottom_mm))
-        return tuple(out)
+        """Windows through the base's side walls for the first board's connector cables, as
+        (x_inner, x_outer, y_floor, z0, z1): from the slot wall out through the base's x face (or
+        into the next slot), from a floor just below the connector (snapped down to the layer
+        grid) up through the face on top in the print, over the slot's height above the board."""
+        return self.board_slots[0].windows
 
     # -- base
     @property
@@ -340,7 +342,7 @@ class SensorGeometry:
         """y where the pocket's straight sides end (it is a U open towards +y: a half disc
         below y = 0, straight sides above): the pocket radius, snapped up to the layer grid,
         so the magnet is wholly below the layer printed after the pause."""
-        return self._snapped_y_mm(self.pocket_radius_mm, "up")
+        return self.snapped_y_mm(self.pocket_radius_mm, "up")
 
     @property
     def pocket_roof_rise_mm(self) -> float:

@@ -113,7 +113,14 @@ class Document:
             self.require_geometry()
             cells = [self.family.cell(*la.drawn) for la in self.layers]
         return SensorGeometry(
-            tuple(cells), self.magnet, self.board, self.housing, self.chip_offset_mm, self.magnet_tilt_deg, self.printer
+            tuple(cells),
+            self.magnet,
+            self.board,
+            self.housing,
+            self.chip_offset_mm,
+            self.magnet_tilt_deg,
+            self.printer,
+            self.chip_positions_mm,
         )
 
     def require_geometry(self) -> None:
@@ -196,9 +203,11 @@ def parse_document(raw: Any, source: str = "<memory>") -> Document:
     model = ModelSection(**_section(raw, "model"))
     design = _design_options(_section(raw, "design"))
 
-    # The housing rules (printable depth, pocket and slot inside the body) do not depend on the
+    # The housing rules (printable depth, pocket and slots inside the body) do not depend on the
     # layers' theta, t, h: check them on any cell of the family, before any design work.
-    probe = SensorGeometry((family.cell(45.0, 1.0, 3.0),), magnet, board, housing, meter.chip_offset_mm, 0.0, printer)
+    probe = SensorGeometry(
+        (family.cell(45.0, 1.0, 3.0),), magnet, board, housing, meter.chip_offset_mm, 0.0, printer, meter.positions_mm
+    )
     for v in probe.housing_violations():
         raise v.input_error()
 

@@ -1,0 +1,226 @@
+"""Two chips in one body (issue 39): `mst export` cuts a board slot for each chip of
+magnetometer.positions_mm, `mst check` verifies each, and a layout whose boards cannot lie
+side by side is refused.
+
+The reference is configs/mohammadi2021-forward.yaml (Adafruit 4022 board, default housing,
+D = 20 mm, 0.2 mm layers) with its chips at x = -14 and +13.8 mm, y = 0. Numbers worked by
+hand from the board (25.4 x 17.78 x 1.6 mm, chip at (12.6, 8.3) from its corner, JST SH
+sockets 2.95 mm tall, 6 mm along the short edges) and the housing defaults (clearance 0.2,
+base floor 0.8, chip clearance 0.3, side wall 1.2 mm):
+
+* slot z: 0.8 (base floor) .. 0.8 + 1.6 + 2.95 + 0.3 = 5.65 mm;
+* slot floor: the chip's y 0 less 8.3 is print height 1.7 mm, snapped to the nearest layer
+  (halves up) 1.8 mm: y = -8.2 mm; the slot runs from there to the top face y = 10;
+* chip 1's slot x: -14 - 12.6 - 0.2 = -26.8 .. -26.6 + 25.4 + 0.2 = -1.0; chip 2's:
+  13.8 - 12.8 = 1.0 .. 13.8 + 13.0 = 26.8 (2 mm of wall between, 1.2 needed); both reach
+  26.8 mm from the axis, so the base is 2 (26.8 + 1.2) = 56 mm long with one chip or two;
+* windows: z 2.4 (board top) .. 5.65; floor y: -8.2 + 5.89 - 0.2 = -2.51, print height 7.49
+  snapped down 7.4: y = -2.6.
+
+One chip (at -14): its +x window runs from -1.0 out to the face at 28. Two chips: that span
+is the 2 mm link window, chip 2's slot and its own 1.2 mm window to the face; the body loses
+chip 2's slot less the part of it the one-chip window had already removed:
+25.8 x (18.2 x 4.85 - 12.6 x 3.25) = 1220.856 mm^3.
+"""
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+import trimesh
+from click.testing import CliRunner
+
+from mst_cli.cad.expected_body import overlap_volume_mm3
+from mst_cli.cli.app import main
+
+ROOT = Path(__file__).resolve().parents[1]
+FORWARD = ROOT / "configs" / "mohammadi2021-forward.yaml"
+SPEC = ROOT / "configs" / "fingertip.yaml"
+DEPTH_MM = 20.0
+CHIPS = [(-14.0, 0.0), (13.8, 0.0)]
+SLOTS_X_MM = [(-26.8, -1.0), (1.0, 26.8)]
+SLOT_Z_MM = (0.8, 5.65)
+SLOT_FLOOR_Y_MM = -8.2
+WINDOW_FLOOR_Y_MM = -2.6
+EXTRA_SLOT_MM3 = 25.8 * (18.2 * 4.85 - 12.6 * 3.25)
+STL_VOLUME_TOL_MM3 = 0.05  # float32 vertices (~4e-6 mm at 30 mm) over ~6000 mm^2 of surface
+
+
+def run(args):
+    return CliRunner().invoke(main, [str(a) for a in args])
+
+
+def with_chips(source: Path, folder: Path, chips, name="two.yaml") -> Path:
+    """``source`` with its chip at chips[0] and, for more than one, magnetometer.positions_mm."""
+    lines = f"  chip_offset_mm: {list(chips[0])}\n"
+    if len(chips) > 1:
+        lines += f"  positions_mm: {[list(c) for c in chips]}\n"
+    text = source.read_text().replace("  board: adafruit-4022\n", "  board: adafruit-4022\n" + lines)
+    path = folder / name
+    path.write_text(text)
+    return path
+
+
+def exported(folder: Path, chips) -> Path:
+    out = folder / f"out{len(chips)}"
+    r = run(["export", with_chips(FORWARD, folder, chips, f"chips{len(chips)}.yaml"), "--stl", "--out", out])
+    assert r.exit_code == 0, r.output + r.stderr
+    return out
+
+
+@pytest.fixture(scope="module")
+def exports(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("two_chips")
+    return exported(folder, CHIPS[:1]), exported(folder, CHIPS)
+
+
+def sensor_mesh(out: Path) -> trimesh.Trimesh:
+    """The STL in the sensor frame: print (x, y, z) = (x, -z, y + D/2) undone."""
+    mesh = trimesh.load(out / "sensor.stl")
+    to_sensor = np.array([[1, 0, 0, 0], [0, 0, 1, -0.5 * DEPTH_MM], [0, -1, 0, 0], [0, 0, 0, 1]], dtype=float)
+    return mesh.apply_transform(to_sensor)
+
+
+def ray_hits(mesh: trimesh.Trimesh, origin, direction) -> np.ndarray:
+    """Distances along a ray (unit ``direction``) of its crossings with the mesh's triangles,
+    sorted, repeats (a ray through a shared edge) merged: Moller-Trumbore in numpy, so that the
+    measurement shares nothing with mst's own (manifold3d) ray casts."""
+    o, d = np.asarray(origin, dtype=float), np.asarray(direction, dtype=float)
+    tri = np.asarray(mesh.triangles, dtype=float)
+    e1, e2 = tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]
+    p = np.cross(d, e2)
+    det = np.einsum("ij,ij->i", e1, p)
+    ok = np.abs(det) > 1e-12
+    inv = np.where(ok, 1.0 / np.where(ok, det, 1.0), 0.0)
+    t = o - tri[:, 0]
+    u = np.einsum("ij,ij->i", t, p) * inv
+    q = np.cross(t, e1)
+    v = (q @ d) * inv
+    s = np.einsum("ij,ij->i", e2, q) * inv
+    hit = ok & (u >= 0) & (v >= 0) & (u + v <= 1) & (s > 0)
+    return np.unique(np.round(s[hit], 6))
+
+
+def air_along(mesh: trimesh.Trimesh, origin, direction) -> list[tuple[float, float]]:
+    """Air intervals (start, end) in mm along a ray from outside the body, in the ray's own
+    coordinate (origin + s * direction): each from leaving the solid to entering it again."""
+    s = ray_hits(mesh, origin, direction)
+    assert len(s) % 2 == 0, s  # in and out of a closed body
+    return [(float(a), float(b)) for a, b in zip(s[1:-1:2], s[2::2])]
+
+
+def test_each_chip_has_an_empty_slot_of_the_board_outline(exports):
+    mesh = sensor_mesh(exports[1])
+    far = 40.0
+    # across x inside the board's thickness (z 0.8..2.4, below every window), just above the floor
+    across = air_along(mesh, (-far, SLOT_FLOOR_Y_MM + 0.3071, 1.6123), (1, 0, 0))
+    assert np.allclose([(a - far, b - far) for a, b in across], SLOTS_X_MM, atol=1e-4)
+    for x, y in CHIPS:
+        # up the stack under each chip: the slot is the lowest air, base floor to cover
+        lowest = air_along(mesh, (x + 0.0123, y + 0.0071, -1.0), (0, 0, 1))[0]
+        assert np.allclose(np.array(lowest) - 1.0, SLOT_Z_MM, atol=1e-4)
+        # up the depth through the slot: solid below the floor, air from it out of the top face
+        hits = ray_hits(mesh, (x + 0.0123, -15.0, 3.0123), (0, 1, 0)) - 15.0
+        assert np.allclose(hits, [-DEPTH_MM / 2, SLOT_FLOOR_Y_MM], atol=1e-4)
+    # the wall between the slots: the link window (air from the board top to the cover) above
+    # the windows' floor, solid up to the base top below it
+    above = air_along(mesh, (0.0123, WINDOW_FLOOR_Y_MM + 0.3071, -1.0), (0, 0, 1))[0]
+    assert np.allclose(np.array(above) - 1.0, (2.4, SLOT_Z_MM[1]), atol=1e-4)
+    below = air_along(mesh, (0.0123, WINDOW_FLOOR_Y_MM - 0.3071, -1.0), (0, 0, 1))[0]
+    assert below[0] - 1.0 > 6.45 - 1e-4  # the first air is a layer's cavity, above the base
+
+
+def test_the_two_chip_body_is_one_volume_lighter_by_the_second_slot(exports):
+    one, two = (sensor_mesh(out) for out in exports)
+    assert two.is_watertight and two.is_volume
+    assert len(two.split(only_watertight=False)) == 2  # the body and its closed magnet pocket
+    assert np.allclose(one.bounds, two.bounds, atol=1e-5)  # both slots reach 26.8 mm: base 56 mm
+    assert two.bounds[1][0] - two.bounds[0][0] == pytest.approx(56.0, abs=1e-5)
+    assert one.volume - two.volume == pytest.approx(EXTRA_SLOT_MM3, abs=STL_VOLUME_TOL_MM3)
+
+
+def test_export_json_lists_every_slot_and_a_one_chip_export_keeps_its_keys(exports):
+    one = json.loads((exports[0] / "export.json").read_text())
+    two = json.loads((exports[1] / "export.json").read_text())
+    assert "board_slots" not in one
+    assert two["board_slot"] == two["board_slots"][0]
+    assert (one["board_slot"]["x0_mm"], one["board_slot"]["x1_mm"]) == pytest.approx(SLOTS_X_MM[0], abs=1e-9)
+    slots = two["board_slots"]
+    assert np.allclose([(s["x0_mm"], s["x1_mm"]) for s in slots], SLOTS_X_MM, atol=1e-9)
+    assert [s["chip_xy_nominal_mm"] for s in slots] == [list(c) for c in CHIPS]
+    assert [s["floor_y_mm"] for s in slots] == pytest.approx([SLOT_FLOOR_Y_MM] * 2, abs=1e-9)
+    # chip 1's +x window now ends at chip 2's slot, and chip 2's -x window is the same span
+    spans = [[(w["x_inner_mm"], w["x_outer_mm"]) for w in s["cable_windows"]] for s in slots]
+    assert np.allclose(spans, [[(-26.8, -28.0), (-1.0, 1.0)], [(1.0, -1.0), (26.8, 28.0)]], atol=1e-9)
+    assert np.allclose([w["floor_y_mm"] for s in slots for w in s["cable_windows"]], WINDOW_FLOOR_Y_MM, atol=1e-9)
+
+
+def check_json(out: Path) -> dict:
+    r = run(["check", out, "--json"])
+    return json.loads(r.stdout)
+
+
+def test_check_passes_with_two_chips_and_names_the_slot_that_is_filled(exports, tmp_path):
+    report = check_json(exports[1])
+    assert report["passed"], report["failed"]
+    checks = {c["name"]: c for c in report["checks"]}
+    slot = checks["board_slot"]["values"]
+    assert slot["chip_2_x0_mm"] == pytest.approx(SLOTS_X_MM[1][0], abs=1e-4)
+    assert slot["chip_2_floor_y_mm"] == pytest.approx(SLOT_FLOOR_Y_MM, abs=1e-4)
+    gap = checks["magnet_chip_gap"]["values"]
+    assert gap["chip_2_measured_mm"] == pytest.approx(gap["measured_mm"], abs=1e-4)
+
+    # fill chip 2's slot: its checks fail by name
+    import manifold3d as mf
+
+    bad = tmp_path / "filled"
+    bad.mkdir()
+    (bad / "export.json").write_text((exports[1] / "export.json").read_text())
+    mesh = trimesh.load(exports[1] / "sensor.stl")
+    body = mf.Manifold(
+        mf.Mesh(
+            vert_properties=np.ascontiguousarray(mesh.vertices, np.float32),
+            tri_verts=np.ascontiguousarray(mesh.faces, np.uint32),
+        )
+    )
+    # the sensor-frame box x 0.95..26.9, y -8.4..1.2 (past chip 2; both on the layer grid), z
+    # 0.7..5.75 (past the slot's floor and cover; the link window from x -1 to 1 stays open), in
+    # the print frame (x, -z, y + D/2)
+    fill = mf.Manifold.cube((25.95, 5.05, 9.6)).translate((0.95, -5.75, -8.4 + 0.5 * DEPTH_MM))
+    filled = (body + fill).to_mesh()
+    trimesh.Trimesh(filled.vert_properties[:, :3], filled.tri_verts).export(bad / "sensor.stl")
+    report = check_json(bad)
+    assert report["failed"] == ["volume", "board_slot", "magnet_chip_gap"]
+    checks = {c["name"]: c for c in report["checks"]}
+    mismatched = checks["board_slot"]["note"].removeprefix("mismatch: ").split(", ")
+    assert mismatched and all(k.startswith("chip_2_") for k in mismatched), mismatched
+    assert "off under chip 2" in checks["magnet_chip_gap"]["note"]
+
+
+@pytest.mark.parametrize(
+    "chips, says",
+    [
+        ([(-14.0, 0.0), (12.0, 0.0)], "leave 0.2 mm between them: chips must be at least 27 mm apart along x"),
+        ([(-14.0, 0.0), (13.8, 2.0)], "chip 1's board would rest on a slot floor at y = -6.2 mm"),
+    ],
+)
+def test_boards_that_cannot_lie_side_by_side_are_refused_and_nothing_written(tmp_path, chips, says):
+    for source in (FORWARD, SPEC):  # a spec is refused before it is designed
+        out = tmp_path / f"out_{source.stem}"
+        r = run(["export", with_chips(source, tmp_path, chips), "--stl", "--out", out])
+        assert r.exit_code == 2, (r.output, r.stderr)
+        line = r.stderr.strip()
+        assert "\n" not in line and line.startswith("mst: invalid input: magnetometer.positions_mm = "), line
+        assert says in line
+        assert not out.exists()
+    # the reading side models any layout: simulate still takes it
+    r = run(["simulate", with_chips(FORWARD, tmp_path, chips), "--out", tmp_path / "sim", "--no-plot"])
+    assert r.exit_code == 0, r.stderr
+
+
+def test_overlap_of_boxes_counts_what_two_cover():
+    unit = ((0.0, 0.0, 0.0), (1.0, 2.0, 3.0))
+    assert overlap_volume_mm3([unit, unit]) == pytest.approx(6.0)
+    assert overlap_volume_mm3([unit, ((1.0, 0.0, 0.0), (2.0, 2.0, 3.0))]) == 0.0  # touching
+    assert overlap_volume_mm3([unit, ((0.5, 1.0, 1.0), (4.0, 4.0, 4.0))]) == pytest.approx(0.5 * 1.0 * 2.0)
