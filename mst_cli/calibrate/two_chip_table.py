@@ -275,6 +275,15 @@ class TwoChipEstimates:
     flag: np.ndarray
     fits: np.ndarray
 
+    @classmethod
+    def of(
+        cls, theta: np.ndarray, sigma: np.ndarray, chi2: np.ndarray, flag: np.ndarray, fits: np.ndarray
+    ) -> TwoChipEstimates:
+        """From the estimates (n, 5) and their 1-sigma (n, 5) in the order of UNKNOWNS."""
+        columns = {name: theta[:, i] for i, name in enumerate(UNKNOWNS)}
+        columns.update({"sigma_" + name: sigma[:, i] for i, name in enumerate(UNKNOWNS)})
+        return cls(**columns, chi2=chi2, flag=flag, fits=fits)
+
     @property
     def theta(self) -> np.ndarray:
         """(n, 5) the estimates in the order of :data:`~mst_cli.model.load_bound.UNKNOWNS`."""
@@ -452,7 +461,7 @@ class TwoChipReader:
         ambiguous = np.bincount(owner, weights=rival, minlength=n) > 0
         t, s, c = theta[best], sigma[best], chi2[best]
         flag = np.where(c <= self.chi2_limit, np.where(ambiguous, "ambiguous", "ok"), "no_fit").astype(object)
-        return TwoChipEstimates(*t.T, *s.T, c, flag, fits)
+        return TwoChipEstimates.of(t, s, c, flag, fits)
 
     def polish(self, B_T: np.ndarray, estimates: TwoChipEstimates) -> TwoChipEstimates:
         """The estimates put through the exact reader's fit (:class:`ShearReader`), one reading at
@@ -464,7 +473,7 @@ class TwoChipReader:
         for i in range(len(B)):
             theta[i], sigma[i], chi2[i], _ = exact._fit(B[i], self.noise_T, self.clip(theta[i : i + 1])[0])
         flag = np.where(chi2 <= self.chi2_limit, np.where(estimates.flag == "ambiguous", "ambiguous", "ok"), "no_fit")
-        return TwoChipEstimates(*theta.T, *sigma.T, chi2, flag.astype(object), estimates.fits)
+        return TwoChipEstimates.of(theta, sigma, chi2, flag.astype(object), estimates.fits)
 
 
 def _distinct(theta: np.ndarray, chi2: np.ndarray, sigma: np.ndarray) -> np.ndarray:
