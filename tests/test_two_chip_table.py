@@ -145,3 +145,14 @@ def test_mirrored_readings_give_mirrored_loads(stack, reader):
     b = TwoChipReader(stack, mirrored_chips, NOISE_T, model=model).estimate(noisy * field_flip)
     assert np.all(np.abs(b.theta - a.theta * load_flip) <= 0.01 * a.sigma)
     assert list(a.flag) == list(b.flag)
+
+
+def test_the_polish_is_the_exact_readers_fit_from_the_fast_one(stack, reader):
+    theta = loads(stack, np.random.default_rng(8), 3)
+    B = exact_fields(stack, theta) + np.random.default_rng(9).normal(0.0, NOISE_T, (3, 6))
+    fast = reader.estimate(B)
+    polished = reader.polish(B, fast)
+    # the fast fit is the exact model's minimum already: the exact fit stays there
+    assert np.all(polished.chi2 <= fast.chi2 + 1e-3)
+    assert np.all(np.abs(polished.theta - fast.theta) <= 0.05 * fast.sigma)
+    np.testing.assert_allclose(polished.sigma, fast.sigma, rtol=1e-2)
