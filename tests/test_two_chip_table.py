@@ -92,10 +92,12 @@ def test_the_vectorised_model_is_the_exact_field(stack, reader):
 
 def test_noise_free_readings_give_the_load_back(stack, reader):
     theta = loads(stack, np.random.default_rng(3), 20)
-    est = reader.estimate(exact_fields(stack, theta).reshape(20, 2, 3))
-    assert not np.any(est.flag == "no_fit") and np.all(est.chi2 < 1e-2)
-    # within a hundredth of the noise's spread of every unknown
-    assert np.all(np.abs(est.theta - theta) < 0.01 * est.sigma), np.abs(est.theta - theta) / est.sigma
+    B = exact_fields(stack, theta).reshape(20, 2, 3)
+    for every_start in (True, False):
+        est = reader.estimate(B, every_start)
+        assert not np.any(est.flag == "no_fit") and np.all(est.chi2 < 1e-2)
+        # within a hundredth of the noise's spread of every unknown
+        assert np.all(np.abs(est.theta - theta) < 0.01 * est.sigma), np.abs(est.theta - theta) / est.sigma
 
 
 def test_noisy_readings_meet_the_targets_and_the_bound(stack, reader):

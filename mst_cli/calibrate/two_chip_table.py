@@ -33,6 +33,7 @@ Pure: no I/O.
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
 from collections.abc import Callable, Sequence
@@ -81,12 +82,21 @@ class LayerTable:
             for nodes, v in ((self.force_N, force_N), (self.x_mm, np.abs(ox_mm)), (self.y_mm, np.abs(oy_mm)))
         ]
         (i, u), (j, v), (k, w) = parts
-        S = self.state
-        out = np.zeros((len(i), 3))
-        for a, wa in ((0, 1.0 - u), (1, u)):
-            for b, wb in ((0, 1.0 - v), (1, v)):
-                for c, wc in ((0, 1.0 - w), (1, w)):
-                    out += (wa * wb * wc)[:, None] * S[i + a, j + b, k + c]
+        _, nx, ny, _ = self.state.shape
+        flat = self.state.reshape(-1, 3)
+        base = (i * nx + j) * ny + k
+        u, v, w = u[:, None], v[:, None], w[:, None]
+
+        def along_y(at: np.ndarray) -> np.ndarray:
+            low, high = flat[at], flat[at + 1]
+            return low + w * (high - low)
+
+        def along_x(at: np.ndarray) -> np.ndarray:
+            low, high = along_y(at), along_y(at + ny)
+            return low + v * (high - low)
+
+        low, high = along_x(base), along_x(base + nx * ny)
+        out = low + u * (high - low)
         out[:, 1] *= np.where(ox_mm < 0.0, -1.0, 1.0)
         out[:, 2] *= np.where(oy_mm < 0.0, -1.0, 1.0)
         return out
@@ -428,13 +438,35 @@ class TwoChipReader:
         out[:, 1:, 3:] = START_FRACTION * np.array(spots[1:])[None, :, :]
         return out
 
-    def estimate(self, B_T: np.ndarray) -> TwoChipEstimates:
-        """The estimates from readings ``B_T`` (n, k, 3) or (n, 3 k) in T."""
+    def estimate(self, B_T: np.ndarray, every_start: bool = True) -> TwoChipEstimates:
+        """The estimates from readings ``B_T`` (n, k, 3) or (n, 3 k) in T. ``every_start`` False:
+        the centred start alone, the other four only where its fit is ``no_fit`` (the exact
+        reader's way: about twice as fast, but a second fit within the noise, ``ambiguous``, is
+        looked for only there)."""
         B = np.asarray(B_T, dtype=float).reshape(len(B_T), -1)
-        n, S = len(B), 5
-        theta = self.starts(B).reshape(n * S, 5)
+        starts = self.starts(B)
+        if every_start:
+            return self._estimate_from(B, starts)
+        out = self._estimate_from(B, starts[:, :1])
+        again = np.flatnonzero(out.flag == "no_fit")
+        if len(again):
+            more = self._estimate_from(B[again], starts[again])
+            for name in (f.name for f in dataclasses.fields(TwoChipEstimates)):
+                getattr(out, name)[again] = getattr(more, name)
+        return out
+
+    def _estimate_from(self, B: np.ndarray, starts: np.ndarray) -> TwoChipEstimates:
+        """The readings ``B`` (n, 3 k) fitted from ``starts`` (n, S, 5): every start on the tables,
+        each reading's distinct fits on the exact states, the verdict."""
+        n, S = starts.shape[:2]
         theta, chi2, J = fit_many(
-            self.table, np.repeat(B, S, axis=0), theta, self.noise_T, self.clip, MAX_ITER, TABLE_STEP_TOL
+            self.table,
+            np.repeat(B, S, axis=0),
+            starts.reshape(n * S, 5),
+            self.noise_T,
+            self.clip,
+            MAX_ITER,
+            TABLE_STEP_TOL,
         )
         keep = _distinct(theta.reshape(n, S, 5), chi2.reshape(n, S), crb_sigma_many(J, self.noise_T).reshape(n, S, 5))
         owner, slot = np.nonzero(keep)
@@ -442,8 +474,7 @@ class TwoChipReader:
         cand, c_chi2, c_J = fit_many(
             self.exact, B[owner], cand, self.noise_T, self.clip, EXACT_ITER, jacobian=self.model.jacobian_T
         )
-        c_sigma = crb_sigma_many(c_J, self.noise_T)
-        return self._verdict(n, owner, cand, c_chi2, c_sigma)
+        return self._verdict(n, owner, cand, c_chi2, crb_sigma_many(c_J, self.noise_T))
 
     def _verdict(
         self, n: int, owner: np.ndarray, theta: np.ndarray, chi2: np.ndarray, sigma: np.ndarray
