@@ -9,13 +9,16 @@ lever_j (Fx, Fy) / Fz), so each layer's state (d, phi_y, phi_x) is tabulated onc
 (F, |ox|, |oy|) nodes, the offsets past the face by lever_j x the largest shear ratio supported
 (the cell is mirror symmetric in x and y: d is even in both offsets, phi_y odd in ox, phi_x odd
 in oy, so a quadrant of nodes holds it all). Read trilinearly the tables are a guess, not the
-answer: past the lock the pads' pressed patch bends the states between nodes, and at 1 mm
-spacing the field is still a median 1.2 uT off (max 13 uT) on the bundled sensor, more than the
-chip noise. From that guess a few steps of the same Newton, vectorised
-(:mod:`mst_cli.model.mechanics.tilt_batch`), give the exact states; the slides (a compliance law
-per layer), the magnet's pose and its exact cylinder field are cheap and exact already. The
-Jacobian moves the states along their own tangent (the implicit function theorem on the
-equilibrium: no solve per difference).
+answer: past the lock the pads' pressed patch bends the states between the offsets' nodes, and
+on the bundled sensor (mohammadi2021-forward, spring, chips (0, 0) and (10, 6) mm, 200 random
+loads over the tables' range) the trilinear field is a median 4 uT off (max 49 uT) at the default
+nodes (2 mm, 33 forces) and still 1.2 uT (max 13 uT) at 1 mm and 65 forces, more than the chip
+noise. From that guess a few steps of the same Newton, vectorised
+(:mod:`mst_cli.model.mechanics.tilt_batch`), give the exact states: the field then within 1e-9 T
+of the exact one (benchmarks/bench_two_chip.py). The slides (a compliance law per layer), the
+magnet's pose and its exact cylinder field are cheap and exact already. The Jacobian moves the
+states along their own tangent (the implicit function theorem on the equilibrium: no solve per
+difference).
 
 The fit is the exact reader's, vectorised: Levenberg-damped Gauss-Newton on the chi^2 of the
 readings weighted by the chip noise, every step clipped to the model's domain (Fz in (0, the
@@ -381,7 +384,10 @@ class TwoChipReader:
     """The fast estimator of all five unknowns from two chips or more: the tabulated model
     (:class:`TwoChipModel`), fitted from every start on the tables alone, then each reading's
     distinct fits (at most MAX_FITS) made exact (the tables' states put through ``newton_steps``
-    of the tilt rung's Newton) by a few more steps on the exact states."""
+    of the tilt rung's Newton) by a few more steps on the exact states. ``model``: tables built
+    already (then ``stack`` and ``ratio_max`` are its); the tables depend on the stack and the
+    shear ratio only, so readers of other chip layouts may share them,
+    ``TwoChipModel(stack, chips_mm, other.model.tables, other.model.ratio_max)``."""
 
     def __init__(
         self,
@@ -405,7 +411,8 @@ class TwoChipReader:
         self._start_B = np.linalg.norm(self.exact(centred)[0][:, :3], axis=1)  # |B| at the first chip
 
     def table(self, theta: np.ndarray, near: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-        """(the chips' fields (m, 3 k), the layers' states) on the tables' states."""
+        """(the chips' fields (m, 3 k), the layers' states) on the tables' states (``near``, the
+        :data:`Model` signature's, unused: the tables need no start)."""
         states = self.model.states(theta)
         return self.model.fields_of(theta, states), states
 
