@@ -270,9 +270,10 @@ def crb_sigma_many(J_T: np.ndarray, noise_T: float) -> np.ndarray:
 
 @dataclass
 class TwoChipEstimates:
-    """Per reading: the five unknowns (NaN where the fit failed outright), their Cramer-Rao
-    1-sigma at the fit, the fit's chi^2 and flag (:data:`FLAGS`), and how many distinct fits
-    the starts found."""
+    """Per reading: the five unknowns at the best fit whatever its flag (a caller blanks what it
+    does not trust), their Cramer-Rao 1-sigma there (inf where the chips cannot tell one apart),
+    the fit's chi^2 and flag (:data:`FLAGS`), and how many distinct fits went on to the exact
+    states."""
 
     force_N: np.ndarray
     shear_x_N: np.ndarray
