@@ -1,0 +1,154 @@
+"""Speed and accuracy of the fast two-chip reader of all five unknowns (Fz, Fx, Fy, x, y),
+mst_cli/calibrate/two_chip_table.py, against the exact one (mst_cli/calibrate/shear_reading.py).
+Prints markdown tables; asserts nothing.
+
+    python benchmarks/bench_two_chip.py [--readings 2000 --repeats 5 --presses 200 --seed 39]
+
+On the bundled sensor as printed (configs/mohammadi2021-forward.yaml, --mechanics spring), chips
+at (0, 0) and (10, 6) mm (studies/shear_roundtrip.py's default layout), one core (MST_WORKERS=1):
+
+* the layer tables' build time;
+* the vectorised model's field against the exact one (general_load.field_T) on --presses random
+  loads over the tables' whole range (Fz to 1.5 x the last lock, shear ratio to 0.5, the whole
+  face): the trilinear tables alone and made exact by the batched Newton;
+* readings per second: the fast reader on --readings readings (median of --repeats), the exact
+  reader on 10;
+* at 0.5 and 2 uT, on --presses presses as studies/shear_roundtrip.py draws them (Fz 5 to 100 %
+  of the last lock, shear up to 0.3, the middle 60 % of the face), the truth from field_T: the
+  median errors, and per unknown the median |error| / sigma_CRB / 0.6745 (1 for an efficient
+  Gaussian estimate) and the mean-square efficiency sum(sigma_CRB^2) / sum(error^2), the bound
+  from the exact model's Jacobian at the truth; the flags.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import time
+from pathlib import Path
+
+os.environ.setdefault("MST_WORKERS", "1")  # one core: the table build too
+
+import numpy as np
+
+from mst_cli.calibrate.shear_reading import ShearReader
+from mst_cli.calibrate.two_chip_table import NEWTON_STEPS, TwoChipReader
+from mst_cli.model.general_load import field_T, loaded_stack
+from mst_cli.model.load_bound import UNKNOWNS, crb_sigma, field_jacobian
+from mst_cli.sensor.as_printed import as_printed
+from mst_cli.sensor.document import load_design_document
+
+DESIGN = Path(__file__).resolve().parents[1] / "configs" / "mohammadi2021-forward.yaml"
+CHIPS = [(0.0, 0.0), (10.0, 6.0)]
+NOISES_uT = (0.5, 2.0)
+
+
+def draw(rng, n: int, top_N: float, ratio: float, half_mm) -> np.ndarray:
+    """(n, 5) loads: Fz uniform over ``top_N`` x (0.05, 1), the shear up to ``ratio`` of it in a
+    uniform direction, the press uniform over +-``half_mm``."""
+    Fz = rng.uniform(0.05, 1.0, n) * top_N
+    r = ratio * np.sqrt(rng.uniform(0.0, 1.0, n))
+    a = rng.uniform(0.0, 2 * np.pi, n)
+    xy = rng.uniform(-1.0, 1.0, (n, 2)) * np.asarray(half_mm)
+    return np.column_stack([Fz, r * Fz * np.cos(a), r * Fz * np.sin(a), xy])
+
+
+def exact(stack, theta) -> np.ndarray:
+    return np.array([field_T(stack, t[0], (t[1], t[2]), (t[3], t[4]), CHIPS).ravel() for t in theta])
+
+
+def model_error(reader, stack, rng, n: int) -> None:
+    g, model = stack.geometry, reader.model
+    theta = draw(rng, n, model.force_max_N, model.ratio_max, (0.5 * g.width_mm, 0.5 * g.depth_mm))
+    truth = exact(stack, theta)
+    print(f"\nThe vectorised model's field against field_T, {n} loads over the tables' range (uT):")
+    print("| states | median of max over axes | 99th percentile | max |")
+    print("|---|---|---|---|")
+    for name, steps in (("tables, trilinear", 0), (f"tables + batched Newton (<= {NEWTON_STEPS} steps)", NEWTON_STEPS)):
+        e = np.max(np.abs(model.fields_T(theta, steps) - truth), axis=1) * 1e6
+        print(f"| {name} | {np.median(e):.3g} | {np.percentile(e, 99):.3g} | {e.max():.3g} |")
+
+
+def speed(reader, stack, rng, n: int, repeats: int, top_N: float, half_mm) -> None:
+    theta = draw(rng, n, top_N, 0.3, half_mm)
+    noise = reader.noise_T
+    B = reader.exact(theta)[0] + rng.normal(0.0, noise, (n, 6))  # the model's own fields (field_T's to 1e-9 T)
+    times = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        reader.estimate(B)
+        times.append(time.perf_counter() - t0)
+    fast = n / float(np.median(times))
+    times = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        reader.estimate(B, every_start=False)
+        times.append(time.perf_counter() - t0)
+    centred = n / float(np.median(times))
+    slow_reader = ShearReader(stack, CHIPS)
+    t0 = time.perf_counter()
+    slow_reader.read(B[:10], noise)
+    slow = 10 / (time.perf_counter() - t0)
+    t0 = time.perf_counter()
+    reader.polish(B[:10], reader.estimate(B[:10]))
+    polish = 10 / (time.perf_counter() - t0)
+    print("\nReadings per second, one core (0.5 uT readings):")
+    print("| reader | readings | readings/s |")
+    print("|---|---|---|")
+    print(f"| fast (two_chip_table), median of {repeats} | {n} | {fast:.0f} |")
+    print(f"| fast, the centred start first (the others where no_fit) | {n} | {centred:.0f} |")
+    print(f"| exact (ShearReader) | 10 | {slow:.2f} |")
+    print(f"| fast then polished by the exact fit | 10 | {polish:.2f} |")
+
+
+def accuracy(reader, stack, rng, n: int, top_N: float, half_mm) -> None:
+    theta = draw(rng, n, top_N, 0.3, half_mm)
+    clean = exact(stack, theta)
+    crb1 = np.array([crb_sigma(field_jacobian(stack, t, CHIPS), 1.0) for t in theta])
+    print(f"\nRound trips, {n} presses (shear <= 0.3, middle 60 % of the face), truth field_T:")
+    print("| noise uT | Fz err | pos err mm | " + " | ".join(f"{u} med/CRB, MSE eff" for u in UNKNOWNS) + " | flags |")
+    print("|---" * (4 + len(UNKNOWNS)) + "|")
+    for noise_uT in NOISES_uT:
+        noise = noise_uT * 1e-6
+        r = TwoChipReader(stack, CHIPS, noise, model=reader.model)
+        est = r.estimate(clean + rng.normal(0.0, noise, clean.shape))
+        err = est.theta - theta
+        crb = crb1 * noise
+        med = np.median(np.abs(err) / crb, axis=0) / 0.6745
+        eff = np.sum(crb**2, axis=0) / np.sum(err**2, axis=0)
+        flags = ", ".join(f"{f} {c}" for f, c in zip(*np.unique(est.flag, return_counts=True)))
+        cells = " | ".join(f"{m:.2f}, {e:.2f}" for m, e in zip(med, eff))
+        print(
+            f"| {noise_uT:g} | {100 * np.median(np.abs(err[:, 0]) / theta[:, 0]):.2f} % "
+            f"| {np.median(np.hypot(err[:, 3], err[:, 4])):.3f} | {cells} | {flags} |"
+        )
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--readings", type=int, default=2000)
+    ap.add_argument("--repeats", type=int, default=5)
+    ap.add_argument("--presses", type=int, default=200)
+    ap.add_argument("--seed", type=int, default=39)
+    ap.add_argument("--mechanics", default="spring", choices=("spring", "frame", "continuum"))
+    args = ap.parse_args()
+    doc, _ = load_design_document(DESIGN)
+    printed = as_printed(doc)
+    stack = loaded_stack(printed.geometry(), printed.material, args.mechanics)
+    g = stack.geometry
+    top = max(t.lock_force_N for t in stack.tilt)
+    half = (0.3 * g.width_mm, 0.3 * g.depth_mm)
+    rng = np.random.default_rng(args.seed)
+    t0 = time.perf_counter()
+    reader = TwoChipReader(stack, CHIPS, NOISES_uT[0] * 1e-6)
+    build = time.perf_counter() - t0
+    shape = [t.state.shape[:3] for t in reader.model.tables]
+    print(f"{DESIGN.name} as printed, {args.mechanics}, chips {CHIPS} mm, range {top:.1f} N (last lock)")
+    print(f"\nTables built in {build:.1f} s on one core; nodes (F, |ox|, |oy|) per layer: {shape}")
+    model_error(reader, stack, rng, args.presses)
+    speed(reader, stack, rng, args.readings, args.repeats, top, half)
+    accuracy(reader, stack, rng, args.presses, top, half)
+
+
+if __name__ == "__main__":
+    main()
