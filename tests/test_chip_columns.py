@@ -91,3 +91,38 @@ def test_a_two_chip_model_reads_its_first_chips_force_without_an_estimate(tmp_pa
     fa = (tmp_path / "a" / "forces.csv").read_text().splitlines()[1].split(",")
     fb = (tmp_path / "b" / "forces.csv").read_text().splitlines()[1].split(",")
     assert fa[6:] == fb[3:]  # the force, regime, flag, resolution: chip 1's
+
+
+@pytest.mark.slow
+def test_mst_read_estimates_all_five_from_two_chips(tmp_path):
+    """Readings of the two-chip model's own general load (noise-free, written to 1e-4 uT): every
+    unknown comes back, the assumption is none, and each carries its 1-sigma."""
+    from mst_cli.model.general_load import field_T, loaded_stack
+    from mst_cli.sensor.document import load_design_document
+
+    model = two_chip_model(tmp_path)
+    doc, geo = load_design_document(model)
+    stack = loaded_stack(geo, doc.material, "spring")
+    loads = [(12.0, 2.0, -1.0, 3.0, -2.0), (30.0, -4.0, 3.0, -5.0, 2.5), (45.0, 6.0, 5.0, 1.0, 1.0)]
+    rows = []
+    for F, fx, fy, x, y in loads:
+        B = 1e6 * field_T(stack, F, (fx, fy), (x, y), doc.chips_mm).ravel()
+        rows.append(",".join(f"{b:.4f}" for b in B))
+    csv_path = tmp_path / "r.csv"
+    csv_path.write_text("Bx_uT,By_uT,Bz_uT,Bx2_uT,By2_uT,Bz2_uT\n" + "\n".join(rows) + "\n")
+    res = run(["read", model, csv_path, "--estimate", "shear", "--out", tmp_path / "o"])
+    assert res.exit_code == 0, res.output
+    import csv
+
+    got = list(csv.DictReader((tmp_path / "o" / "forces.csv").open()))
+    for row, (F, fx, fy, x, y) in zip(got, loads):
+        assert row["assumption"] == "none" and row["estimate_flag"] == "ok"
+        assert float(row["force_N"]) == pytest.approx(F, rel=2e-3)
+        assert (float(row["shear_x_N"]), float(row["shear_y_N"])) == pytest.approx((fx, fy), abs=0.02)
+        assert (float(row["x_mm"]), float(row["y_mm"])) == pytest.approx((x, y), abs=0.02)
+        assert all(float(row[c]) > 0 for c in ("x_mm_sigma", "y_mm_sigma", "shear_x_N_sigma"))
+
+
+def test_a_two_chip_shear_estimate_is_refused_on_a_serial_stream(tmp_path):
+    res = run(["read", two_chip_model(tmp_path), "--serial", tmp_path / "nope", "--estimate", "shear"])
+    assert res.exit_code == 2 and "one chip's three values" in res.output, res.output

@@ -349,15 +349,17 @@ def _checked_estimate(estimate: str, max_offset_sigma_mm: float, tare: int = 0) 
     return estimate
 
 
-def _estimator(reader, estimate: str, mechanics: str | None, model_file, max_sigma_mm: float, polish: bool, warn):
+def _estimator(reader, estimate: str, mechanics: str | None, model_file, max_sigma_mm: float, polish, warn):
     """(the reader of ``estimate``, or None; the table it built, to be written, or None).
-    InputError when the layout cannot identify the estimate anywhere in its range."""
+    ``polish`` None: a live stream (one chip's values a line). InputError when the layout cannot
+    identify the estimate anywhere in its range, or a stream cannot carry it."""
     # deferred: the calibrate layer, as _reader
     from mst_cli.calibrate.table_reader import (
         OffsetTableReader,
         ShearTableReader,
         offset_table_reader,
         shear_table_reader,
+        two_chip_reader,
     )
 
     if estimate == "none":
@@ -369,14 +371,18 @@ def _estimator(reader, estimate: str, mechanics: str | None, model_file, max_sig
     lever = reader.record.lever_factor() if reader.record is not None else 1.0
     offsets: OffsetTableReader | ShearTableReader
     if estimate == "shear" and len(doc.chips_mm) > 1:
-        raise InputError(
-            "--estimate shear", f"{len(doc.chips_mm)} chips", "two-chip estimates land with the next commit"
-        )
+        if polish is None:
+            raise InputError(
+                "--serial --estimate shear",
+                f"{len(doc.chips_mm)} chips",
+                "a serial line carries one chip's three values: read the chips' file (Bx2_uT, ...) instead",
+            )
+        return two_chip_reader(doc, reader.inverse_map, lever, mech, polish), None
     if estimate == "shear":
-        offsets, note = shear_table_reader(doc, reader.inverse_map, lever, Path(model_file), mech, polish)
+        offsets, note = shear_table_reader(doc, reader.inverse_map, lever, Path(model_file), mech, bool(polish))
     else:
         offsets, note = offset_table_reader(
-            doc, reader.inverse_map, lever, Path(model_file), mech, max_sigma_mm, polish
+            doc, reader.inverse_map, lever, Path(model_file), mech, max_sigma_mm, bool(polish)
         )
     if note is not None and warn is not None:
         warn(note)
@@ -433,7 +439,7 @@ def read_serial(
     """
     _checked_estimate(estimate, max_offset_sigma_mm)
     reader, _, setting = _reader(model, model_file, mechanics, gain_sel, res, raw, None, out, warn)
-    offsets, built = _estimator(reader, estimate, mechanics, model_file or model, max_offset_sigma_mm, False, warn)
+    offsets, built = _estimator(reader, estimate, mechanics, model_file or model, max_offset_sigma_mm, None, warn)
     if status is not None:
         status(f"{reader.document.name}: reading {port} at {baud} baud (Ctrl-C to stop)")
     samples = reader.stream(port, baud, count, timeout_s, raw, setting, show, offsets)

@@ -299,11 +299,9 @@ def parse_readings(
         values = [_number(source, line, c, row[idx[c]]) for c in cols]
         B[r], sat[r] = field_of(values, raw, setting, f"{source} line {line}")
         if B_chips is not None:
+            B_chips[r], chips_saturated = _chip_fields(source, line, row, idx, others, raw, setting)
             B_chips[r, 0] = B[r]
-            for k, names in enumerate(others, start=1):
-                chip = [_number(source, line, c, row[idx[c]]) for c in names]
-                B_chips[r, k], saturated = field_of(chip, raw, setting, f"{source} line {line}", names)
-                sat[r] |= saturated
+            sat[r] |= chips_saturated
         if F is not None:
             F[r] = _number(source, line, FORCE_COLUMN, row[idx[FORCE_COLUMN]])
         if off is not None:
@@ -313,19 +311,20 @@ def parse_readings(
     used = (*cols, *(c for names in others for c in names), *(SETTING_COLUMNS if settings is not None else ()))
     _check_extra_columns(source, header, rows, lines, used)
     one = flag_setting if settings is None or flag_setting is not None else settings.the_one(rows)
-    return Readings(
-        source=source,
-        header=header,
-        rows=rows,
-        lines=lines,
-        B_T=B,
-        saturated=sat,
-        force_N=F,
-        raw=raw,
-        setting=one,
-        offset_mm=off,
-        B_chips_T=B_chips,
-    )
+    return Readings(source, header, rows, lines, B, sat, F, raw, one, off, B_chips)  # the fields' order
+
+
+def _chip_fields(
+    source: str, line: int, row: list[str], idx: dict[str, int], others: list[tuple[str, str, str]], raw: bool, setting
+) -> tuple[np.ndarray, bool]:
+    """(every chip's field (k, 3) in T, chip 1's left to the caller; whether one is saturated) of
+    a row, from the columns ``others`` of chips 2.."""
+    out, saturated = np.zeros((1 + len(others), 3)), False
+    for k, names in enumerate(others, start=1):
+        values = [_number(source, line, c, row[idx[c]]) for c in names]
+        out[k], sat = field_of(values, raw, setting, f"{source} line {line}", names)
+        saturated |= sat
+    return out, saturated
 
 
 def _table(text: str, source: str, need_force: bool) -> tuple[list[tuple[int, str]], str, list[str], list[list[str]]]:

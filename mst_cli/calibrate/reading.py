@@ -22,7 +22,7 @@ from mst_cli.calibrate.loadtest import Readings, field_of, rig_column, unknown_c
 from mst_cli.calibrate.offset_reading import OffsetEstimator, OffsetReadings
 from mst_cli.calibrate.rig_reading import BranchForces, follow_branches, no_load_rows, tare_shift_T, unloading_model_of
 from mst_cli.calibrate.rung_check import read_rung_warning
-from mst_cli.calibrate.table_reader import OffsetTableReader, ShearTableReader
+from mst_cli.calibrate.table_reader import OffsetTableReader, ShearTableReader, TwoChipLoadReader
 from mst_cli.calibrate.tables import FORCES_COLUMNS, cell, forces_csv
 from mst_cli.calibrate.temperature_fit import field_at_reference
 from mst_cli.io.serial_lines import LineSource, SampleParser
@@ -189,7 +189,10 @@ class ForceReader:
         return cls(doc, imap, note, record)
 
     def read(
-        self, rd: Readings, offsets: OffsetEstimator | OffsetTableReader | ShearTableReader | None = None, tare: int = 0
+        self,
+        rd: Readings,
+        offsets: OffsetEstimator | OffsetTableReader | ShearTableReader | TwoChipLoadReader | None = None,
+        tare: int = 0,
     ) -> ForceReadings:
         """The forces of ``rd``; with ``offsets``, each in-range reading's force corrected for
         where it was pressed (:mod:`~mst_cli.calibrate.offset_reading`); else each on its branch
@@ -209,7 +212,9 @@ class ForceReader:
             out = ForceReadings(self.document.name, rd, bf.force_N, regime, flag, res, edges_N=imap.edges_N)
             out.branches, out.tare_shift_uT = bf, (shift * 1e6 if tare else None)
             return out
-        est = offsets.estimate_all(rd.B_T, np.where(flag == "ok", F, np.nan))
+        chips = getattr(offsets, "chips", 1)  # a two-chip reader takes every chip's field
+        B_est = rd.B_T if chips == 1 or rd.B_chips_T is None else rd.B_chips_T
+        est = offsets.estimate_all(B_est, np.where(flag == "ok", F, np.nan))
         corrected = np.where(est.flag == "ok", est.force_N, F)
         regime = np.where(np.isfinite(corrected), self.inverse_map.regime_of(corrected), regime)
         return ForceReadings(

@@ -35,6 +35,7 @@ from mst_cli.calibrate.inverse_table import (
 from mst_cli.calibrate.load_readings import LoadReadings, from_estimates
 from mst_cli.calibrate.offset_reading import DEFAULT_MAX_SIGMA_MM, OffsetEstimator, OffsetReadings
 from mst_cli.calibrate.shear_reading import CHI2_FLAG, ShearReader
+from mst_cli.calibrate.two_chip_table import TwoChipReader
 from mst_cli.errors import InputError
 from mst_cli.model.general_load import loaded_stack
 from mst_cli.sensor.document import Document
@@ -49,6 +50,7 @@ class OffsetTableReader:
     sigma_T: float
     max_sigma_mm: float
     exact: OffsetEstimator | None = None
+    chips = 1  # the readings it takes: chip 1's
 
     def estimate_table(self, B_T: np.ndarray) -> TableEstimates:
         """The census's estimates of readings (n, 3) in T, polished when ``exact`` is set."""
@@ -98,6 +100,7 @@ class ShearTableReader:
     table: InverseTable
     sigma_T: float
     exact: ShearReader | None = None
+    chips = 1  # the readings it takes: chip 1's
 
     def estimate_all(self, B_T: np.ndarray, force_axial_N: np.ndarray) -> LoadReadings:
         """Every reading with a finite centred force (the others keep their own flag, and "" here);
@@ -121,6 +124,36 @@ class ShearTableReader:
             p, sig, chi2, _ = self.exact._fit(B_T[i], self.sigma_T, theta)
             if chi2 <= CHI2_FLAG[0]:
                 est.p[i], est.sigma[i] = p[:3], sig
+
+
+@dataclass
+class TwoChipLoadReader:
+    """All five unknowns (Fz, Fx, Fy, x, y) of readings of every chip (the fast two-chip reader,
+    :mod:`~mst_cli.calibrate.two_chip_table`), polished by the exact fit when ``polish``."""
+
+    reader: TwoChipReader
+    polish: bool = False
+
+    @property
+    def chips(self) -> int:
+        return len(self.reader.model.chips_mm)
+
+    def estimate_all(self, B_T: np.ndarray, force_axial_N: np.ndarray) -> LoadReadings:
+        """Readings (n, k, 3) in T with a finite centred force (from chip 1; the others keep their
+        own flag, and "" here); a reading not ``ok`` keeps its centred force."""
+        use = np.isfinite(force_axial_N)
+        B = np.asarray(B_T, dtype=float)[use]
+        est = self.reader.estimate(B)
+        if self.polish and len(B):
+            est = self.reader.polish(B, est)
+        return from_estimates(est.theta, est.sigma, est.flag, np.asarray(force_axial_N, dtype=float), "none")
+
+
+def two_chip_reader(doc: Document, imap: InverseMap, lever: float, mechanics: str, polish: bool) -> TwoChipLoadReader:
+    """The two-chip reader of the model ``doc`` (its chips, the inverse map's field resolution as
+    the noise, ``lever``: its calibration's factor): its tables are built now, a few seconds."""
+    stack = loaded_stack(doc.geometry(), doc.material, mechanics, lever)
+    return TwoChipLoadReader(TwoChipReader(stack, doc.chips_mm, imap.field_resolution_T), polish)
 
 
 def table_hash(model_file: Path, mechanics: str, grid: TableGrid) -> str:
