@@ -2,7 +2,7 @@
 mst_cli/calibrate/two_chip_table.py, against the exact one (mst_cli/calibrate/shear_reading.py).
 Prints markdown tables; asserts nothing.
 
-    python benchmarks/bench_two_chip.py [--readings 2000 --repeats 5 --presses 200 --seed 39]
+    python benchmarks/bench_two_chip.py [--readings 2000 --repeats 5 --presses 200 --seed 39 --chips "0,0;10,6"]
 
 On the bundled sensor as printed (configs/mohammadi2021-forward.yaml, --mechanics spring), chips
 at (0, 0) and (10, 6) mm (studies/shear_roundtrip.py's default layout), one core (MST_WORKERS=1):
@@ -131,7 +131,9 @@ def main() -> None:
     ap.add_argument("--presses", type=int, default=200)
     ap.add_argument("--seed", type=int, default=39)
     ap.add_argument("--mechanics", default="spring", choices=("spring", "frame", "continuum"))
+    ap.add_argument("--chips", default="0,0;10,6", help="the chips' x,y in mm, ';' between chips")
     args = ap.parse_args()
+    CHIPS[:] = [tuple(float(v) for v in c.split(",")) for c in args.chips.split(";")]  # every function's layout
     doc, _ = load_design_document(DESIGN)
     printed = as_printed(doc)
     stack = loaded_stack(printed.geometry(), printed.material, args.mechanics)
