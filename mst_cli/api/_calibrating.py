@@ -185,6 +185,8 @@ def _write_tables(out: Path, result: Calibration, kinds: Sequence[str], progress
     """The tables of ``kinds`` beside the calibrated.yaml just written (inverse_table.npz,
     shear_table.npz: current, hashed with it and its calibration.json) and, with a chip setting,
     their C headers from every other node."""
+    if not kinds:
+        return
     # deferred: the calibrate layer, as calibrate's
     from mst_cli.calibrate.calibration_json import CALIBRATED_YAML
     from mst_cli.calibrate.offset_header import KIND_TEXT, offset_header

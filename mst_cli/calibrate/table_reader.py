@@ -1,9 +1,10 @@
-"""``mst read --estimate offset`` and ``--estimate shear`` (one chip) at stream speed: the
-readers on the model's :class:`~mst_cli.calibrate.inverse_table.InverseTable` of that kind,
-polished by the exact solve where asked.
+"""``mst read --estimate offset`` and ``--estimate shear`` at stream speed: the one-chip readers
+on the model's :class:`~mst_cli.calibrate.inverse_table.InverseTable` of that kind, and the
+two-chip reader of all five unknowns (:mod:`~mst_cli.calibrate.two_chip_table`), each polished
+by the exact solve where asked.
 
 The tables are built once per calibrated model (``mst calibrate --offset-table`` writes
-``inverse_table.npz`` and ``shear_table.npz`` beside calibrated.yaml); one that is missing or
+``inverse_table.npz``, ``--shear-table`` ``shear_table.npz`` beside calibrated.yaml); one that is missing or
 stale (its hash is not the model file's, its calibration.json's, the mechanics' and the grid's)
 is built on first use and handed back to be written with the readings' results.
 """
