@@ -36,8 +36,8 @@ import numpy as np
 from mst_cli import api
 from mst_cli.calibrate.inverse_map import inverse_map
 from mst_cli.calibrate.inverse_table import GRID_DEFAULT, InverseTable, TableGrid, build_table
-from mst_cli.calibrate.offset_header import offset_header
 from mst_cli.calibrate.offset_reading import OffsetEstimator
+from mst_cli.calibrate.table_header import table_header
 from mst_cli.calibrate.table_reader import OffsetTableReader, table_hash
 from mst_cli.model.stack_pose import pose_field_T, tilt_laws
 from mst_cli.sensor.document import load_design_document
@@ -155,7 +155,7 @@ def efficiency(reader, exact, P, B, repeats, exact_repeats, rng):
 def c_header(doc, imap, resp, reader, B, rng):
     cc = shutil.which("cc") or shutil.which("gcc")
     coarse = OffsetTableReader(reader.table.every_other(), 2e-6, 1.0)
-    text = offset_header(coarse, imap, resp.chip_setting, doc.name, "bench_read", ["a benchmark"])
+    text = table_header(coarse, imap, resp.chip_setting, doc.name, "bench_read", ["a benchmark"])
     s = resp.chip_setting
     print(f"offset_table.h: coarse table {coarse.table.grid.shape} nodes, {coarse.table.size_bytes_float32} bytes")
     print(f"  (the default table {reader.table.grid.shape}: {reader.table.size_bytes_float32} bytes as floats)")

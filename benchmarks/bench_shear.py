@@ -39,8 +39,8 @@ from scipy.interpolate import RegularGridInterpolator
 from mst_cli import api
 from mst_cli.calibrate.inverse_map import inverse_map
 from mst_cli.calibrate.inverse_table import SHEAR_GRID_DEFAULT, SHEAR_TABLE_RATIO, InverseTable, TableGrid, build_table
-from mst_cli.calibrate.offset_header import offset_header
 from mst_cli.calibrate.shear_reading import ShearReader
+from mst_cli.calibrate.table_header import table_header
 from mst_cli.calibrate.table_reader import ShearTableReader, table_hash
 from mst_cli.model.general_load import field_T, loaded_stack
 from mst_cli.model.load_bound import CENTRED, crb_sigma, field_jacobian
@@ -171,7 +171,7 @@ def score(p: np.ndarray, L: np.ndarray, s: np.ndarray) -> str:
 def c_header(doc, imap, resp, table: InverseTable, B: np.ndarray, rng) -> None:
     cc = shutil.which("cc") or shutil.which("gcc")
     coarse = ShearTableReader(table.every_other(), 0.5e-6)
-    text = offset_header(coarse, imap, resp.chip_setting, doc.name, "bench_shear", ["a benchmark"])
+    text = table_header(coarse, imap, resp.chip_setting, doc.name, "bench_shear", ["a benchmark"])
     print(f"shear_table.h: coarse table {coarse.table.grid.shape} nodes, {len(text)} bytes of C")
     if cc is None:
         print("no C compiler: the header's time per reading is not measured")

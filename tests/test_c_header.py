@@ -20,7 +20,7 @@ from scipy.interpolate import RegularGridInterpolator
 
 from mst_cli.calibrate.inverse_map import inverse_map
 from mst_cli.calibrate.inverse_table import GRID_COARSE, SHEAR_GRID_DEFAULT, SHEAR_TABLE_RATIO, TableGrid, build_table
-from mst_cli.calibrate.offset_header import C_FLAGS, offset_header, read_codes
+from mst_cli.calibrate.table_header import C_FLAGS, read_codes, table_header
 from mst_cli.calibrate.table_reader import OffsetTableReader, ShearTableReader
 from mst_cli.model.chip import CODE_RANGE_LSB
 from mst_cli.sensor.document import load_design_document
@@ -108,7 +108,7 @@ def test_the_compiled_header_reads_codes_as_the_python_reader_does(tmp_path, kin
     top = float(imap.force_N[-1])
     readers = {k: reader_of(k, doc, imap) for k in ("offset", kind)}
     for k, r in readers.items():
-        (tmp_path / f"{k}_table.h").write_text(offset_header(r, imap, setting, doc.name, "the test", ["a test"]))
+        (tmp_path / f"{k}_table.h").write_text(table_header(r, imap, setting, doc.name, "the test", ["a test"]))
     reader = readers[kind]
     (tmp_path / "driver.c").write_text(DRIVERS[kind])
     exe = tmp_path / "driver"

@@ -189,8 +189,8 @@ def _write_tables(out: Path, result: Calibration, kinds: Sequence[str], progress
         return
     # deferred: the calibrate layer, as calibrate's
     from mst_cli.calibrate.calibration_json import CALIBRATED_YAML
-    from mst_cli.calibrate.offset_header import KIND_TEXT, offset_header
     from mst_cli.calibrate.reading import ForceReader
+    from mst_cli.calibrate.table_header import KIND_TEXT, table_header
     from mst_cli.calibrate.table_reader import tables_for
 
     model = out / CALIBRATED_YAML
@@ -206,7 +206,7 @@ def _write_tables(out: Path, result: Calibration, kinds: Sequence[str], progress
             table.save(st.path(table.file_name))
             if result.header_setting is not None:
                 sources = f"{CALIBRATED_YAML} ({mech}, lever factor {lever:.4g})"
-                text = offset_header(
+                text = table_header(
                     coarse, reader.inverse_map, result.header_setting, doc.name, sources, [TABLE_LIMITS[kind]]
                 )
                 st.write_text(str(KIND_TEXT[kind]["file"]), text)

@@ -25,7 +25,7 @@ root's offset 1-sigma is over the bound, else ``ok``. Each root's 1-sigma is the
 of the reading there, sqrt(diag((J^T J / sigma^2)^-1)), J the table's field Jacobian
 dB/d(F, x0, y0).
 
-The arithmetic is written so that the C header (:mod:`~mst_cli.calibrate.offset_header`) can do
+The arithmetic is written so that the C header (:mod:`~mst_cli.calibrate.table_header`) can do
 the same steps in float: a fixed number of Newton steps on a 3 x 3 system solved by Cramer's rule.
 """
 

@@ -93,7 +93,7 @@ def range_bounds_uT(imap: InverseMap) -> tuple[float, float, float]:
     return 1e6 * (imap.B_abs_T[0] - tol), 1e6 * (imap.B_abs_T[-1] + tol), min(1e30, 1e6 * (top + tol))
 
 
-def offset_header(
+def table_header(
     reader: OffsetTableReader | ShearTableReader,
     imap: InverseMap,
     setting: ChipSetting,
