@@ -202,7 +202,8 @@ def test_check_passes_with_two_chips_and_names_the_slot_that_is_filled(exports, 
     "chips, says",
     [
         ([(-14.0, 0.0), (12.0, 0.0)], "leave 0.2 mm between them: chips must be at least 27 mm apart along x"),
-        ([(-14.0, 0.0), (13.8, 2.0)], "chip 1's board would rest on a slot floor at y = -6.2 mm"),
+        # -1 - 8.3 is print height 0.7, snapped to 0.8: under the 1.2 mm wall the one-chip rule keeps
+        ([(-14.0, 0.0), (13.8, -1.0)], "chip 1's board slot and cable windows reach y = -9.2 mm, 0.8 mm above"),
     ],
 )
 def test_boards_that_cannot_lie_side_by_side_are_refused_and_nothing_written(tmp_path, chips, says):

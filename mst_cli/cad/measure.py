@@ -292,10 +292,14 @@ def _measure_slot(manifold, manifest: Manifest, index: int = 0) -> SlotSize:
         leave = [s for s, entering in hits if not entering]
         return leave[0] - y_far if leave else math.nan
 
-    # across the slots below the windows: one closed air gap per slot is each one's width
+    # across the slots below the windows: one closed air gap per slot is each one's width. With
+    # several slots also below the windows in z (in the board's thickness): a link window may reach
+    # below this slot's floor when the next slot's floor is lower
     windows = slot.cable_windows
-    y_across = 0.5 * (slot.floor_y_mm + min([w.floor_y_mm for w in windows], default=slot.floor_y_mm + 2.0))
-    x_gaps = [(a - x_far, b - x_far) for a, b in air_gaps(manifold, (-x_far, y_across, z_s), (1, 0, 0), 2 * x_far)]
+    above = [w.floor_y_mm for w in windows if w.floor_y_mm > slot.floor_y_mm]
+    y_across = 0.5 * (slot.floor_y_mm + min(above, default=slot.floor_y_mm + 2.0))
+    z_across = z_s if len(slots) == 1 else slot.floor_z_mm + 0.5 * slot.board_thickness_mm
+    x_gaps = [(a - x_far, b - x_far) for a, b in air_gaps(manifold, (-x_far, y_across, z_across), (1, 0, 0), 2 * x_far)]
     found = x_gaps if len(slots) == 1 else [g for g in x_gaps if g[0] < cx < g[1]]
     x0, x1 = found[0] if len(found) == 1 else (math.nan, math.nan)
     return SlotSize(

@@ -12,6 +12,7 @@ Shapes are in the sensor frame (z up the stack, the magnet axis along z through 
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 from mst_cli.model.assembly import SensorGeometry
@@ -149,14 +150,20 @@ def base_cuts(geometry: SensorGeometry) -> list[Box]:
     """
     y_out = 0.5 * geometry.depth_mm + OVERCUT_MM
     z0, z1 = geometry.z_board_bottom_mm, geometry.z_cover_bottom_mm
+    floor_at = {x: slot.floor_y_mm for slot in geometry.board_slots for x in slot.x_mm}  # slot wall x -> its floor
+
+    def past(x_end: float, y_floor: float) -> float:
+        """How far a window cuts past its end ``x_end``: into the air beyond (the outside, or a
+        slot empty above this floor), not into a slot's solid under a higher floor."""
+        return OVERCUT_MM if y_floor >= floor_at.get(x_end, -math.inf) - 1e-9 else 0.0
+
     cuts: list[Box] = []
     for slot in geometry.board_slots:
         x0, x1 = slot.x_mm
         cuts.append(box(x0, x1, slot.floor_y_mm, y_out, z0, z1))
         for x_in, x_out, y_floor, wz0, wz1 in slot.windows:
-            # from just inside the slot (already empty) to past the outer face or into the next slot
-            a, b = (x_out - OVERCUT_MM, x_in + OVERCUT_MM) if x_out < x_in else (x_in - OVERCUT_MM, x_out + OVERCUT_MM)
-            window = box(a, b, y_floor, y_out, wz0, wz1)
+            lo, hi = sorted((x_in, x_out))
+            window = box(lo - past(lo, y_floor), hi + past(hi, y_floor), y_floor, y_out, wz0, wz1)
             if window not in cuts:
                 cuts.append(window)
     return cuts

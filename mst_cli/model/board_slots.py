@@ -1,16 +1,19 @@
 """One board slot per chip: where each carrier board sits in the base and where its cables leave.
 
 Every chip of ``magnetometer.positions_mm`` (else the one at ``chip_offset_mm``) gets the slot
-the single chip always had, shifted to that chip: the board outline plus the clearance, from a
-floor under the board (snapped to the print layer grid) out through the face on top in the
-print (+y), so each board slides in along -y. Slots therefore lie side by side along x, all on
-one floor: their chips' y must put every board on the first chip's floor, and a side wall at
-least ``housing.side_wall_mm`` thick must stand between two slots.
+the single chip always had, shifted to that chip: the board outline plus the clearance, from its
+own floor under the board (snapped to the print layer grid) out through the face on top in the
+print (+y), so each board slides in along -y. Slots lie side by side along x, a side wall at
+least ``housing.side_wall_mm`` thick between two; their floors may differ (chips at different
+y), each keeping the one-chip rule's side wall under it.
 
 Each connector's cable window runs from its slot's side wall towards the side it faces, out
 through the base's x face -- or, when another slot lies that way, into that slot: the windows
 between two neighbouring slots join them, so one short cable links the facing sockets (an I2C
 daisy chain; the boards need different addresses) and the outermost sockets reach the faces.
+Two facing windows span the same wall, so the link is one box from the lower of their two
+floors: the union of both sockets' own windows, which clears both plugs, opens through the top
+face like every cut (nothing bridged) and is no deeper than a window the rules already allow.
 """
 
 from __future__ import annotations
@@ -47,6 +50,9 @@ class SensorGeometry(Protocol):
 
     @property
     def width_mm(self) -> float: ...
+
+    @property
+    def depth_mm(self) -> float: ...
 
     @property
     def base_length_mm(self) -> float: ...
@@ -103,49 +109,73 @@ def _window_end_mm(x_in: float, facing: str, walls: list[tuple[float, float]], h
     return min([x0 for x0, _ in walls if x0 >= x_in], default=half_mm)
 
 
-def layout(g: SensorGeometry) -> tuple[BoardSlot, ...]:
-    """Every chip's :class:`BoardSlot`, in the order of the chips."""
-    bd, c = g.board, g.housing.board_clearance_mm
-    L2 = 0.5 * g.base_length_mm
-    walls = [chip_slot_x_mm(g, chip) for chip in g.chips_xy_mm]
+def _own_windows(g: SensorGeometry, chip: tuple[float, float], walls: list[tuple[float, float]]) -> list[Window]:
+    """The windows of the chip's own sockets: each from a floor just below its socket (snapped
+    down to the layer grid) to the base's face or the nearest other slot's wall."""
+    bd, c, L2 = g.board, g.housing.board_clearance_mm, 0.5 * g.base_length_mm
+    x0, x1 = chip_slot_x_mm(g, chip)
+    floor = chip_floor_y_mm(g, chip)
+    others = [w for w in walls if w != (x0, x1)]
     out = []
-    for chip, (x0, x1) in zip(g.chips_xy_mm, walls):
+    for con in bd.connectors:
+        y_floor = g.snapped_y_mm(floor + con.y0_mm - c, "down")
+        x_in = x0 if con.facing == "-x" else x1
+        x_out = _window_end_mm(x_in, con.facing, others, L2)
+        out.append((x_in, x_out, y_floor, g.z_board_top_mm, g.z_cover_bottom_mm))
+    return out
+
+
+def layout(g: SensorGeometry) -> tuple[BoardSlot, ...]:
+    """Every chip's :class:`BoardSlot`, in the order of the chips. A window between two slots
+    takes the lower of the two facing windows' floors (their union, one box)."""
+    bd = g.board
+    walls = [chip_slot_x_mm(g, chip) for chip in g.chips_xy_mm]
+    own = [_own_windows(g, chip, walls) for chip in g.chips_xy_mm]
+    lowest: dict[tuple[float, float], float] = {}  # a window's span (low x, high x) -> its floor
+    for w in (w for ws in own for w in ws):
+        span = (min(w[0], w[1]), max(w[0], w[1]))
+        lowest[span] = min(lowest.get(span, w[2]), w[2])
+    out = []
+    for chip, x_mm, windows in zip(g.chips_xy_mm, walls, own):
         floor = chip_floor_y_mm(g, chip)
         origin = (chip[0] - bd.chip_x_mm, floor)
-        others = [w for w in walls if w != (x0, x1)]
-        windows = []
-        for con in bd.connectors:
-            y_floor = g.snapped_y_mm(floor + con.y0_mm - c, "down")
-            x_in = x0 if con.facing == "-x" else x1
-            x_out = _window_end_mm(x_in, con.facing, others, L2)
-            windows.append((x_in, x_out, y_floor, g.z_board_top_mm, g.z_cover_bottom_mm))
         printed = (origin[0] + bd.chip_x_mm, origin[1] + bd.chip_y_mm)
-        out.append(BoardSlot((chip[0], chip[1]), origin, printed, (x0, x1), floor, tuple(windows)))
+        joined = tuple((a, b, lowest[(min(a, b), max(a, b))], z0, z1) for a, b, _, z0, z1 in windows)
+        out.append(BoardSlot((chip[0], chip[1]), origin, printed, x_mm, floor, joined))
     return tuple(out)
 
 
+def _floor_violation(g: SensorGeometry, i: int, slot: BoardSlot, value: list) -> Violation | None:
+    """Chip ``i``'s slot or windows reaching into the side wall under the body (the -y face):
+    the one-chip rule (``housing_violations``) for a chip after the first."""
+    h, half = g.housing, 0.5 * g.depth_mm
+    low = min([slot.floor_y_mm] + [w[2] for w in slot.windows])
+    if low + half >= h.side_wall_mm - 1e-9:
+        return None
+    least = slot.chip_xy_mm[1] + h.side_wall_mm - (low + half)  # raised by what the wall lacks
+    return Violation.of_field(
+        POSITIONS_FIELD,
+        value,
+        f"chip {i}'s board slot and cable windows reach y = {low:g} mm, {low + half:.3g} mm above the body's -y face: "
+        f"housing.side_wall_mm ({h.side_wall_mm:g} mm) must stay under them; chip {i}'s y must be about "
+        f"{least:.3g} mm or more",
+    )
+
+
 def slot_violations(g: SensorGeometry) -> list[Violation]:
-    """Broken rules of several chips' slots: every board on the first one's floor, and a side
-    wall between any two slots. One chip breaks neither. Judged on export only (not at load,
-    as the other housing rules are): the reading side models chips anywhere."""
+    """Broken rules of several chips' slots: a side wall under every slot (the first chip's is
+    judged by ``housing_violations``) and between any two slots. One chip breaks neither.
+    Judged on export only (not at load, as the other housing rules are): the reading side
+    models chips anywhere."""
     chips = g.chips_xy_mm
     if len(chips) < 2:
         return []
     value = [list(p) for p in chips]
     h, bd = g.housing, g.board
-    floor0 = chip_floor_y_mm(g, chips[0])
-    for i, chip in enumerate(chips[1:], start=1):
-        floor = chip_floor_y_mm(g, chip)
-        if abs(floor - floor0) > 1e-9:
-            return [
-                Violation.of_field(
-                    POSITIONS_FIELD,
-                    value,
-                    f"chip {i}'s board would rest on a slot floor at y = {floor:g} mm, chip 0's at {floor0:g} mm: "
-                    "every chip's y must put its board on chip 0's floor (the same print layer), "
-                    "the boards sliding in side by side through the +y face",
-                )
-            ]
+    for i, slot in enumerate(layout(g)[1:], start=1):
+        v = _floor_violation(g, i, slot, value)
+        if v is not None:
+            return [v]
     walls = sorted((chip_slot_x_mm(g, chip), i) for i, chip in enumerate(chips))
     for ((_, a1), i), ((b0, _), j) in zip(walls, walls[1:]):
         if b0 - a1 < h.side_wall_mm - 1e-9:
