@@ -1,6 +1,6 @@
 """Two chips in one body (issue 39): `mst export` cuts a board slot for each chip of
 magnetometer.positions_mm, `mst check` verifies each, and a layout whose boards cannot lie
-side by side is refused.
+side by side is refused. Chips at different y each get their own slot floor (the second half).
 
 The reference is configs/mohammadi2021-forward.yaml (Adafruit 4022 board, default housing,
 D = 20 mm, 0.2 mm layers) with its chips at x = -14 and +13.8 mm, y = 0. Numbers worked by
@@ -171,26 +171,10 @@ def test_check_passes_with_two_chips_and_names_the_slot_that_is_filled(exports, 
     gap = checks["magnet_chip_gap"]["values"]
     assert gap["chip_2_measured_mm"] == pytest.approx(gap["measured_mm"], abs=1e-4)
 
-    # fill chip 2's slot: its checks fail by name
-    import manifold3d as mf
-
-    bad = tmp_path / "filled"
-    bad.mkdir()
-    (bad / "export.json").write_text((exports[1] / "export.json").read_text())
-    mesh = trimesh.load(exports[1] / "sensor.stl")
-    body = mf.Manifold(
-        mf.Mesh(
-            vert_properties=np.ascontiguousarray(mesh.vertices, np.float32),
-            tri_verts=np.ascontiguousarray(mesh.faces, np.uint32),
-        )
-    )
-    # the sensor-frame box x 0.95..26.9, y -8.4..1.2 (past chip 2; both on the layer grid), z
-    # 0.7..5.75 (past the slot's floor and cover; the link window from x -1 to 1 stays open), in
-    # the print frame (x, -z, y + D/2)
-    fill = mf.Manifold.cube((25.95, 5.05, 9.6)).translate((0.95, -5.75, -8.4 + 0.5 * DEPTH_MM))
-    filled = (body + fill).to_mesh()
-    trimesh.Trimesh(filled.vert_properties[:, :3], filled.tri_verts).export(bad / "sensor.stl")
-    report = check_json(bad)
+    # fill chip 2's slot: its checks fail by name. The box x 0.95..26.9, y -8.4..1.2 (past chip
+    # 2; both on the layer grid), z 0.7..5.75 (past the slot's floor and cover; the link window
+    # from x -1 to 1 stays open)
+    report = check_json(filled(exports[1], tmp_path, ((0.95, -8.4, 0.7), (26.9, 1.2, 5.75))))
     assert report["failed"] == ["volume", "board_slot", "magnet_chip_gap"]
     checks = {c["name"]: c for c in report["checks"]}
     mismatched = checks["board_slot"]["note"].removeprefix("mismatch: ").split(", ")
@@ -225,3 +209,111 @@ def test_overlap_of_boxes_counts_what_two_cover():
     assert overlap_volume_mm3([unit, unit]) == pytest.approx(6.0)
     assert overlap_volume_mm3([unit, ((1.0, 0.0, 0.0), (2.0, 2.0, 3.0))]) == 0.0  # touching
     assert overlap_volume_mm3([unit, ((0.5, 1.0, 1.0), (4.0, 4.0, 4.0))]) == pytest.approx(0.5 * 1.0 * 2.0)
+
+
+# Chips at different y (docs/printing.md "Two or more chips"): each board on its own floor.
+# Chip 1 at (-14, -0.4): -0.4 - 8.3 is print height 1.3, snapped (halves up) to 1.4: floor
+# y -8.6; its windows -8.6 + 5.89 - 0.2 = -2.91, print 7.09 down to 7.0: y -3.0. Chip 2 at
+# (13.8, 0.5): 0.5 - 8.3 is print height 2.2 (on the grid): floor y -7.8; its windows -2.11,
+# print 7.89 down to 7.8: y -2.2. The link window between them takes the lower floor, -3.0.
+# Against chip 1 alone (its +x window from -1 to the face at 28, floor -3.0): over chip 2's
+# slot (x 1..26.8) the body loses 25.8 x (17.8 x 4.85 - 13 x 3.25); beyond it (x 26.8..28) chip
+# 2's own window starts 0.8 mm higher than chip 1's did, so the body keeps 1.2 x 0.8 x 3.25.
+STEP_CHIPS = [(-14.0, -0.4), (13.8, 0.5)]
+STEP_FLOORS_Y_MM = [-8.6, -7.8]
+STEP_WINDOW_FLOORS_Y_MM = [[-3.0, -3.0], [-3.0, -2.2]]  # chip 1's -x and link; chip 2's link and +x
+STEP_EXTRA_MM3 = 25.8 * (17.8 * 4.85 - 13.0 * 3.25) - 1.2 * 0.8 * 3.25
+
+
+@pytest.fixture(scope="module")
+def step_exports(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("two_floors")
+    return exported(folder, STEP_CHIPS[:1]), exported(folder, STEP_CHIPS)
+
+
+def test_chips_at_different_y_each_have_a_slot_on_their_own_floor(step_exports):
+    mesh = sensor_mesh(step_exports[1])
+    far = 40.0
+    for (x, y), floor in zip(STEP_CHIPS, STEP_FLOORS_Y_MM):
+        # up the depth through each slot: solid from the -y face up to its own floor
+        hits = ray_hits(mesh, (x + 0.0123, -15.0, 3.0123), (0, 1, 0)) - 15.0
+        assert np.allclose(hits, [-DEPTH_MM / 2, floor], atol=1e-4)
+        lowest = air_along(mesh, (x + 0.0123, y + 0.0071, -1.0), (0, 0, 1))[0]
+        assert np.allclose(np.array(lowest) - 1.0, SLOT_Z_MM, atol=1e-4)
+    # across, in the board's thickness: between the floors only chip 1's slot is open
+    between = air_along(mesh, (-far, -8.2071, 1.6123), (1, 0, 0))
+    assert np.allclose([(a - far, b - far) for a, b in between], SLOTS_X_MM[:1], atol=1e-4)
+    above = air_along(mesh, (-far, -7.5071, 1.6123), (1, 0, 0))
+    assert np.allclose([(a - far, b - far) for a, b in above], SLOTS_X_MM, atol=1e-4)
+    # the windows' floors, up the depth at the windows' height: -x face, link, +x face
+    for x, floor in [(-27.4, -3.0), (0.0, -3.0), (27.4, -2.2)]:
+        hits = ray_hits(mesh, (x + 0.0123, -15.0, 4.0123), (0, 1, 0)) - 15.0
+        assert np.allclose(hits, [-DEPTH_MM / 2, floor], atol=1e-4), x
+
+
+def test_the_stepped_body_is_one_volume_lighter_by_the_hand_worked_slot(step_exports):
+    one, two = (sensor_mesh(out) for out in step_exports)
+    assert two.is_watertight and two.is_volume
+    assert len(two.split(only_watertight=False)) == 2  # the body and its closed magnet pocket
+    assert np.allclose(one.bounds, two.bounds, atol=1e-5)
+    assert one.volume - two.volume == pytest.approx(STEP_EXTRA_MM3, abs=STL_VOLUME_TOL_MM3)
+    slots = json.loads((step_exports[1] / "export.json").read_text())["board_slots"]
+    assert [s["floor_y_mm"] for s in slots] == pytest.approx(STEP_FLOORS_Y_MM, abs=1e-9)
+    floors = [[w["floor_y_mm"] for w in s["cable_windows"]] for s in slots]
+    assert np.allclose(floors, STEP_WINDOW_FLOORS_Y_MM, atol=1e-9)
+
+
+def filled(out: Path, folder: Path, box_mm) -> Path:
+    """A copy of the export with the sensor-frame box ((x0, y0, z0), (x1, y1, z1)) made solid."""
+    import manifold3d as mf
+
+    bad = folder / "filled"
+    bad.mkdir()
+    (bad / "export.json").write_text((out / "export.json").read_text())
+    mesh = trimesh.load(out / "sensor.stl")
+    body = mf.Manifold(
+        mf.Mesh(
+            vert_properties=np.ascontiguousarray(mesh.vertices, np.float32),
+            tri_verts=np.ascontiguousarray(mesh.faces, np.uint32),
+        )
+    )
+    (x0, y0, z0), (x1, y1, z1) = box_mm  # to the print frame (x, -z, y + D/2)
+    fill = mf.Manifold.cube((x1 - x0, z1 - z0, y1 - y0)).translate((x0, -z1, y0 + 0.5 * DEPTH_MM))
+    solid = (body + fill).to_mesh()
+    trimesh.Trimesh(solid.vert_properties[:, :3], solid.tri_verts).export(bad / "sensor.stl")
+    return bad
+
+
+def test_check_passes_on_the_stepped_layout_and_names_chip_2_when_its_slot_is_filled(step_exports, tmp_path):
+    report = check_json(step_exports[1])
+    assert report["passed"], report["failed"]
+    slot = {c["name"]: c for c in report["checks"]}["board_slot"]["values"]
+    assert [slot["floor_y_mm"], slot["chip_2_floor_y_mm"]] == pytest.approx(STEP_FLOORS_Y_MM, abs=1e-4)
+    assert slot["chip_2_window_2_floor_y_mm"] == pytest.approx(-2.2, abs=1e-4)
+    # chip 2's slot from under its floor to past its chip, on the layer grid; the link stays open
+    report = check_json(filled(step_exports[1], tmp_path, ((0.95, -8.0, 0.7), (26.9, 1.6, 5.75))))
+    assert report["failed"] == ["volume", "board_slot", "magnet_chip_gap"]
+    checks = {c["name"]: c for c in report["checks"]}
+    mismatched = checks["board_slot"]["note"].removeprefix("mismatch: ").split(", ")
+    assert mismatched and all(k.startswith("chip_2_") for k in mismatched), mismatched
+    assert "off under chip 2" in checks["magnet_chip_gap"]["note"]
+
+
+def test_a_link_window_below_the_next_floor_stops_at_that_slot_wall(tmp_path):
+    """D = 40: chip 1 at (-14, -10) has its floor at y -18.2 and windows at -12.6; chip 2 at
+    (13.8, 8) its floor at -0.2. The link window (floor -12.6) ends at chip 2's slot wall x 1.0:
+    below chip 2's floor that wall is solid, so the cut must not run on into it."""
+    text = with_chips(FORWARD, tmp_path, [(-14.0, -10.0), (13.8, 8.0)]).read_text()
+    deep = tmp_path / "deep.yaml"
+    deep.write_text(text.replace("  depth_mm: 20\n", "  depth_mm: 40\n"))
+    out = tmp_path / "deep"
+    r = run(["export", deep, "--stl", "--out", out])
+    assert r.exit_code == 0, r.output + r.stderr
+    mesh = trimesh.load(out / "sensor.stl")
+    mesh.apply_transform(np.array([[1, 0, 0, 0], [0, 0, 1, -20.0], [0, -1, 0, 0], [0, 0, 0, 1]], dtype=float))
+    assert mesh.is_watertight and len(mesh.split(only_watertight=False)) == 2
+    # across at y -5 (between the link's floor and chip 2's), window height: air from the -x
+    # face through chip 1's slot and the link to x 1.0, then solid to the +x face
+    assert np.allclose(ray_hits(mesh, (-40.0, -5.0071, 4.0123), (1, 0, 0)) - 40.0, [1.0, 28.0], atol=1e-4)
+    report = check_json(out)
+    assert report["passed"], report["failed"]
