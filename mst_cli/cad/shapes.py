@@ -69,7 +69,7 @@ def box(x0: float, x1: float, y0: float, y1: float, z0: float, z1: float) -> Box
 def check_fits(geometry: SensorGeometry) -> None:
     """Raise :class:`InputError` for the first broken housing rule (the pocket and the slots
     must fit inside the body, the depth must be whole print layers, several chips' slots side
-    by side on one floor): see :meth:`SensorGeometry.housing_violations` and
+    by side, a wall under and between them): see :meth:`SensorGeometry.housing_violations` and
     :func:`~mst_cli.model.board_slots.slot_violations`. The cell rules are checked by the caller."""
     for v in geometry.housing_violations() + slot_violations(geometry):
         raise v.input_error()

@@ -147,8 +147,8 @@ class MagnetometerSection:
         meaning="every chip's centre (x, y) relative to the magnet axis when more than one MLX90393 "
         "reads the magnet, the first at chip_offset_mm, centres at least "
         f"{MIN_CHIP_SPACING_MM:g} mm apart (null: one chip, at chip_offset_mm); two chips tell shear "
-        "from position (docs/design.md 4.5). The housing cuts a board slot for each, side by side along x on "
-        "one floor (docs/printing.md)",
+        "from position (docs/design.md 4.5). The housing cuts a board slot for each, side by side along x, "
+        "each on its own floor (docs/printing.md)",
     )
 
     def __post_init__(self):
