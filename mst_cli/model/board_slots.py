@@ -145,14 +145,15 @@ def layout(g: SensorGeometry) -> tuple[BoardSlot, ...]:
     return tuple(out)
 
 
-def _floor_violation(g: SensorGeometry, i: int, slot: BoardSlot, value: list) -> Violation | None:
-    """Chip ``i``'s slot or windows reaching into the side wall under the body (the -y face):
-    the one-chip rule (``housing_violations``) for a chip after the first."""
-    h, half = g.housing, 0.5 * g.depth_mm
-    low = min([slot.floor_y_mm] + [w[2] for w in slot.windows])
+def _floor_violation(g: SensorGeometry, i: int, walls: list[tuple[float, float]], value: list) -> Violation | None:
+    """Chip ``i``'s slot or own windows reaching into the side wall under the body (the -y face):
+    the one-chip rule (``housing_violations``) for a chip after the first. A link window takes
+    one of its two sockets' own floors, so judging every chip's own windows covers it."""
+    h, half, chip = g.housing, 0.5 * g.depth_mm, g.chips_xy_mm[i]
+    low = min([chip_floor_y_mm(g, chip)] + [w[2] for w in _own_windows(g, chip, walls)])
     if low + half >= h.side_wall_mm - 1e-9:
         return None
-    least = slot.chip_xy_mm[1] + h.side_wall_mm - (low + half)  # raised by what the wall lacks
+    least = chip[1] + h.side_wall_mm - (low + half)  # raised by what the wall lacks
     return Violation.of_field(
         POSITIONS_FIELD,
         value,
@@ -172,8 +173,9 @@ def slot_violations(g: SensorGeometry) -> list[Violation]:
         return []
     value = [list(p) for p in chips]
     h, bd = g.housing, g.board
-    for i, slot in enumerate(layout(g)[1:], start=1):
-        v = _floor_violation(g, i, slot, value)
+    walls_x = [chip_slot_x_mm(g, chip) for chip in chips]
+    for i in range(1, len(chips)):
+        v = _floor_violation(g, i, walls_x, value)
         if v is not None:
             return [v]
     walls = sorted((chip_slot_x_mm(g, chip), i) for i, chip in enumerate(chips))
