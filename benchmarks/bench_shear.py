@@ -25,14 +25,15 @@ from __future__ import annotations
 import argparse
 import os
 import shutil
-import subprocess
 import sys
 import tempfile
 import time
 from pathlib import Path
 
 os.environ.setdefault("MST_WORKERS", "1")  # one core: the table build too
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # the C driver, shared with the test
 
+import c_drivers
 import numpy as np
 from scipy.interpolate import RegularGridInterpolator
 
@@ -181,17 +182,10 @@ def c_header(doc, imap, resp, table: InverseTable, B: np.ndarray, rng) -> None:
     n = 5000
     codes = np.rint(B[:n] * 1e6 / lsb).astype(int)  # the readings as the chip's codes
     with tempfile.TemporaryDirectory() as tmp:
-        d = Path(tmp)
-        (d / "shear_table.h").write_text(text)
-        src = (ROOT / "tests" / "test_c_header.py").read_text().split('SHEAR_DRIVER = r"""')[1].split('"""')[0]
-        (d / "driver.c").write_text(src.replace('#include "offset_table.h"\n', ""))
-        subprocess.run([cc, "-std=c99", "-O2", "-o", d / "driver", d / "driver.c", "-lm"], check=True)
-        size = subprocess.run(["size", d / "driver"], capture_output=True, text=True).stdout.strip().splitlines()
-        t0 = time.perf_counter()
-        feed = "".join(f"{x} {y} {z}\n" for x, y, z in codes)
-        subprocess.run([d / "driver"], input=feed, capture_output=True, text=True, check=True)
-        dt = time.perf_counter() - t0
-    print(f"  compiled driver (size): {size[-1] if size else '?'}")
+        exe = c_drivers.build(cc, Path(tmp), {"shear_table.h": text}, "shear")
+        size = c_drivers.size_line(exe)
+        _, dt = c_drivers.run(exe, codes)
+    print(f"  compiled driver (size): {size}")
     print(f"  {1e6 * dt / n:.0f} us per reading on this host ({n} readings, process start included)")
 
 

@@ -11,9 +11,9 @@ misfit, may go either way).
 
 import os
 import shutil
-import subprocess
 from pathlib import Path
 
+import c_drivers
 import numpy as np
 import pytest
 from scipy.interpolate import RegularGridInterpolator
@@ -27,39 +27,6 @@ from mst_cli.sensor.document import load_design_document
 
 FORWARD = Path(__file__).resolve().parents[1] / "configs" / "mohammadi2021-forward.yaml"
 N_READINGS = 10_000
-DRIVER = r"""
-#include <stdio.h>
-#include "offset_table.h"
-int main(void)
-{
-    long x, y, z;
-    while (scanf("%ld %ld %ld", &x, &y, &z) == 3) {
-        struct mst_offset e = {0};
-        int flag = mst_offset_from_codes((int32_t)x, (int32_t)y, (int32_t)z, &e);
-        printf("%d %.9g %.9g %.9g %.9g %.9g %.9g\n", flag, e.force_N, e.x_mm, e.y_mm,
-               e.sigma_force_N, e.sigma_x_mm, e.sigma_y_mm);
-    }
-    return 0;
-}
-"""
-SHEAR_DRIVER = r"""
-#include <stdio.h>
-#include "offset_table.h"
-#include "shear_table.h"
-int main(void)
-{
-    long x, y, z;
-    while (scanf("%ld %ld %ld", &x, &y, &z) == 3) {
-        struct mst_shear e = {0};
-        int flag = mst_shear_from_codes((int32_t)x, (int32_t)y, (int32_t)z, &e);
-        printf("%d %.9g %.9g %.9g %.9g %.9g %.9g\n", flag, e.force_N, e.shear_x_N, e.shear_y_N,
-               e.sigma_force_N, e.sigma_shear_x_N, e.sigma_shear_y_N);
-    }
-    return 0;
-}
-"""
-# both headers in one program (the shear driver includes the offset header too: no name clashes)
-DRIVERS = {"offset": DRIVER, "shear": SHEAR_DRIVER}
 
 
 def c_compiler() -> str:
@@ -107,18 +74,14 @@ def test_the_compiled_header_reads_codes_as_the_python_reader_does(tmp_path, kin
     assert setting is not None
     top = float(imap.force_N[-1])
     readers = {k: reader_of(k, doc, imap) for k in ("offset", kind)}
-    for k, r in readers.items():
-        (tmp_path / f"{k}_table.h").write_text(table_header(r, imap, setting, doc.name, "the test", ["a test"]))
+    headers = {
+        f"{k}_table.h": table_header(r, imap, setting, doc.name, "the test", ["a test"]) for k, r in readers.items()
+    }
     reader = readers[kind]
-    (tmp_path / "driver.c").write_text(DRIVERS[kind])
-    exe = tmp_path / "driver"
-    subprocess.run([cc, "-std=c99", "-O2", "-Wall", "-Werror", "-o", exe, tmp_path / "driver.c", "-lm"], check=True)
+    exe = c_drivers.build(cc, tmp_path, headers, kind)  # the shear driver includes both headers: no clash
 
     codes = codes_of(reader.table, imap, setting, np.random.default_rng(7))
-    run = subprocess.run(
-        [exe], input="".join(f"{x} {y} {z}\n" for x, y, z in codes), capture_output=True, text=True, check=True
-    )
-    c_out = np.array([[float(v) for v in line.split()] for line in run.stdout.splitlines()])
+    c_out, _ = c_drivers.run(exe, codes)
     c_flag = np.array([C_FLAGS[int(f)] for f in c_out[:, 0]])
     py_flag, py_values = read_codes(reader, imap, setting, codes)
 
