@@ -9,17 +9,14 @@ tilt rung, readings at the table's nodes come back exactly (trilinear interpolat
 its nodes), and the exact solve polishes a reading between them to the truth.
 """
 
-import os
-import pty
 import shutil
-import tty
 from pathlib import Path
 
 import numpy as np
 import pytest
 from click.testing import CliRunner
+from serial_support import read_fed_stream
 
-from mst_cli import api
 from mst_cli.calibrate.inverse_map import inverse_map
 from mst_cli.calibrate.inverse_table import TABLE_FILE, InverseTable, TableGrid, source_hash
 from mst_cli.calibrate.table_reader import build_beside, table_beside, table_hash
@@ -176,18 +173,7 @@ def test_a_serial_stream_is_estimated_live(coarse_model, design, tmp_path):
     geo, mat = doc.geometry(), doc.material
     F = np.array([8.0, 15.0, 40.0])
     B = pose_field_T(geo, tilt_laws(geo, mat, "spring"), F, (6.0, 3.0)) * 1e6
-    master, slave = pty.openpty()
-    tty.setraw(slave)
-    for b in B:
-        os.write(master, f"{b[0]:.4f},{b[1]:.4f},{b[2]:.4f}\r\n".encode())
-    shown: list[str] = []
-    try:
-        got = api.read_serial(
-            coarse_model, os.ttyname(slave), count=3, estimate="offset", out=tmp_path / "o", show=shown.append
-        )
-    finally:
-        os.close(master)
-        os.close(slave)
+    got, shown = read_fed_stream(coarse_model, B, estimate="offset", out=tmp_path / "o")
     assert len(got.samples) == 3 and all("at (" in line for line in shown)
     x = [float(line.split(",")[-6]) for line in (tmp_path / "o" / "forces.csv").read_text().splitlines()[1:]]
     assert x == pytest.approx([6.0] * 3, abs=0.5)  # the coarse table's 3 mm cells, unpolished

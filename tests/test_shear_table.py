@@ -9,15 +9,13 @@ Jacobian (:mod:`~mst_cli.model.load_bound`), the mirror symmetry y -> -y of a ce
 """
 
 import csv
-import os
-import pty
 import shutil
-import tty
 from pathlib import Path
 
 import numpy as np
 import pytest
 from click.testing import CliRunner
+from serial_support import read_fed_stream
 
 from mst_cli import api
 from mst_cli.calibrate.inverse_map import inverse_map
@@ -186,18 +184,7 @@ def test_a_serial_stream_is_estimated_live_with_shear(coarse_model, model, tmp_p
     stack, _, top = model
     L = np.array([[0.4 * top, 0.1 * top, 0.0]] * 3)
     B = 1e6 * fields(stack, L)
-    master, slave = pty.openpty()
-    tty.setraw(slave)
-    for b in B:
-        os.write(master, f"{b[0]:.4f},{b[1]:.4f},{b[2]:.4f}\r\n".encode())
-    shown: list[str] = []
-    try:
-        got = api.read_serial(
-            coarse_model, os.ttyname(slave), count=3, estimate="shear", out=tmp_path / "o", show=shown.append
-        )
-    finally:
-        os.close(master)
-        os.close(slave)
+    got, shown = read_fed_stream(coarse_model, B, estimate="shear", out=tmp_path / "o")
     assert len(got.samples) == 3 and all("Ft (" in line for line in shown)
     rows = list(csv.DictReader((tmp_path / "o" / "forces.csv").open()))
     assert [r["assumption"] for r in rows] == ["centred"] * 3
