@@ -59,6 +59,7 @@ def test_reference_body_passes_every_check(exported):
         "cavity_gap",
         "magnet_pocket",
         "board_slot",
+        "footprint",
         "magnet_chip_gap",
         "overhang",
         "layer_grid",

@@ -133,7 +133,7 @@ def test_simulate_states_what_the_chips_tell_apart(tmp_path):
     )
     assert res.exit_code == 0, res.output
     b = json.loads((out / "report.json").read_text())["shear_bound"]
-    assert b["chips_mm"] == [[0.0, 0.0], [10.0, 6.0]] and len(b["estimates"]) == 5
+    assert b["chips_mm"] == [[-7.0, 0.0], [7.0, 6.0]] and len(b["estimates"]) == 5
     assert b["region_mm"] == [pytest.approx(9.0), pytest.approx(6.0)]  # 60 % of the 30 x 20 mm face
     lo, hi = (next(r for r in b["noise"] if r["noise_uT"] == n) for n in (0.5, 2.0))
     for name in b["estimates"]:  # the bound is linear in the noise
@@ -149,12 +149,15 @@ def test_design_states_what_a_two_chip_layout_tells_apart(tmp_path):
     spec = (ROOT / "configs" / "mohammadi2021.yaml").read_text()
     two = tmp_path / "two.yaml"
     two.write_text(
-        spec.replace("  board: adafruit-4022\n", "  board: adafruit-4022\n  positions_mm: [[0, 0], [10, 6]]\n")
+        spec.replace(  # two bare boards that fit the 30 mm face side by side (the footprint is the spec's)
+            "  board: adafruit-4022\n",
+            "  board: bare-qfn\n  chip_offset_mm: [-7, 0]\n  positions_mm: [[-7, 0], [7, 6]]\n",
+        )
     )
     res = run(["design", two, "--out", tmp_path / "o", "--no-plot"])
     assert res.exit_code == 0, res.output
     b = json.loads((tmp_path / "o" / "report.json").read_text())["design"]["shear_bound"]
-    assert b["chips_mm"] == [[0.0, 0.0], [10.0, 6.0]] and len(b["estimates"]) == 5 and b["shear_ratio"] == [0.2, 0.1]
+    assert b["chips_mm"] == [[-7.0, 0.0], [7.0, 6.0]] and len(b["estimates"]) == 5 and b["shear_ratio"] == [0.2, 0.1]
     lo, hi = (next(r for r in b["noise"] if r["noise_uT"] == n) for n in (0.5, 2.0))
     for name in b["estimates"]:  # the bound is linear in the noise
         assert hi[f"{name}_crb_median"] == pytest.approx(4 * lo[f"{name}_crb_median"], rel=1e-9)

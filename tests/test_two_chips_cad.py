@@ -13,7 +13,8 @@ base floor 0.8, chip clearance 0.3, side wall 1.2 mm):
   (halves up) 1.8 mm: y = -8.2 mm; the slot runs from there to the top face y = 10;
 * chip 1's slot x: -14 - 12.6 - 0.2 = -26.8 .. -26.6 + 25.4 + 0.2 = -1.0; chip 2's:
   13.8 - 12.8 = 1.0 .. 13.8 + 13.0 = 26.8 (2 mm of wall between, 1.2 needed); both reach
-  26.8 mm from the axis, so the base is 2 (26.8 + 1.2) = 56 mm long with one chip or two;
+  26.8 mm from the axis, so they need a face 2 (26.8 + 1.2) = 56 mm wide: the reference's
+  family.width_mm is set to 56 (the footprint is the spec's; a narrower face is refused);
 * windows: z 2.4 (board top) .. 5.65; floor y: -8.2 + 5.89 - 0.2 = -2.51, print height 7.49
   snapped down 7.4: y = -2.6.
 
@@ -38,6 +39,7 @@ ROOT = Path(__file__).resolve().parents[1]
 FORWARD = ROOT / "configs" / "mohammadi2021-forward.yaml"
 SPEC = ROOT / "configs" / "fingertip.yaml"
 DEPTH_MM = 20.0
+FACE_WIDTH_MM = 56.0  # 2 (26.8 + 1.2): both slots with a side wall outside them
 CHIPS = [(-14.0, 0.0), (13.8, 0.0)]
 SLOTS_X_MM = [(-26.8, -1.0), (1.0, 26.8)]
 SLOT_Z_MM = (0.8, 5.65)
@@ -57,6 +59,7 @@ def with_chips(source: Path, folder: Path, chips, name="two.yaml") -> Path:
     if len(chips) > 1:
         lines += f"  positions_mm: {[list(c) for c in chips]}\n"
     text = source.read_text().replace("  board: adafruit-4022\n", "  board: adafruit-4022\n" + lines)
+    text = text.replace("  width_mm: 30\n", f"  width_mm: {FACE_WIDTH_MM:g}\n")
     path = folder / name
     path.write_text(text)
     return path

@@ -13,6 +13,7 @@ from mst_cli.io.files import is_machine_fault as is_machine_fault
 from mst_cli.io.files import os_error_text as os_error_text
 from mst_cli.io.outputs import Interrupted as Interrupted
 from mst_cli.io.outputs import check_out_dir
+from mst_cli.model.board_slots import slot_violations
 from mst_cli.model.file_keys import SEED_RANGE as SEED_RANGE
 from mst_cli.sensor.document import Document, design_geometry, load_design_document, load_document
 
@@ -94,3 +95,11 @@ def _design_and_geometry(design):
     if isinstance(design, (str, Path)):
         return load_design_document(design)
     return design, design_geometry(design)
+
+
+def refuse_unhoused_chips(doc: Document) -> None:
+    """InputError (the chips' field) when a chip's board slot does not fit the face or the boards
+    cannot lie side by side in the base: ``mst design`` and ``mst export`` refuse it before any
+    work. The rule reads no layer, so a probe cell stands in for a spec's."""
+    for v in slot_violations(doc.geometry([doc.family.cell(45.0, 1.0, 3.0)])):
+        raise v.input_error()

@@ -8,7 +8,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from mst_cli.api._common import _check_out, _one_of, load, load_design
+from mst_cli.api._common import _check_out, _one_of, load, load_design, refuse_unhoused_chips
 from mst_cli.errors import InputError
 from mst_cli.io.files import is_machine_fault as is_machine_fault
 from mst_cli.io.files import os_error_text as os_error_text
@@ -192,6 +192,7 @@ def run_design(
     from mst_cli.design.run import DesignRun, design_choice  # deferred: the design layer, 25 ms measured
 
     doc, cal = _calibrated(load(spec) if isinstance(spec, (str, Path)) else spec, calibration)
+    refuse_unhoused_chips(doc)  # the footprint is the spec's: a layout needing a wider body is refused
     _check_out(out)  # a bad output path: refused before any work
     if pareto_designs and pareto is None:
         raise InputError("--pareto-designs", True, "needs --pareto N")

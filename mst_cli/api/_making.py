@@ -9,13 +9,12 @@ from dataclasses import fields
 from pathlib import Path
 from typing import TYPE_CHECKING, cast
 
-from mst_cli.api._common import _check_out, load, load_design
+from mst_cli.api._common import _check_out, load, load_design, refuse_unhoused_chips
 from mst_cli.api._designing import designed
 from mst_cli.errors import InputError
 from mst_cli.io.files import is_machine_fault as is_machine_fault
 from mst_cli.io.files import os_error_text as os_error_text
 from mst_cli.io.outputs import Interrupted as Interrupted
-from mst_cli.model.board_slots import slot_violations
 from mst_cli.model.file_keys import SEED_RANGE as SEED_RANGE
 from mst_cli.model.printer import Printer
 from mst_cli.sensor.document import Document
@@ -90,20 +89,12 @@ def export(
     return ExportedFiles([folder / n for n in names], geometry, result)
 
 
-def _refuse_unhoused_chips(doc: Document) -> None:
-    """InputError (magnetometer.positions_mm) when the chips' boards cannot lie side by side in
-    the base; the rule reads no layer, so a probe cell stands in for a spec's."""
-    if doc.chip_positions_mm:
-        for v in slot_violations(doc.geometry([doc.family.cell(45.0, 1.0, 3.0)])):
-            raise v.input_error()
-
-
 def _to_export(design, progress):
     """(the design's Document, the DesignResult a spec became or None)."""
     from mst_cli.design import DesignResult  # deferred: the design layer, 25 ms measured
 
     if isinstance(design, (str, Path)):
-        _refuse_unhoused_chips(load(design))  # before a spec is designed
+        refuse_unhoused_chips(load(design))  # before a spec is designed
         return designed(design, progress)
     if isinstance(design, DesignResult):
         return design.document, design

@@ -12,7 +12,8 @@ function that compares those measurements with the design's own values in the ty
 * ``wall_thickness``, ``web_depth``, ``cavity_gap`` against the nozzle and the minimum
   printable gap, measured in sections through each layer's walls and along rays through its
   cavity;
-* ``magnet_pocket``, ``board_slot`` and ``magnet_chip_gap`` (the unloaded distance the forward
+* ``magnet_pocket``, ``board_slot``, ``footprint`` (the body is the face, every slot inside it) and
+  ``magnet_chip_gap`` (the unloaded distance the forward
   model uses, rebuilt from the measured pocket floor and slot floor);
 * print orientation: ``overhang`` (every down-facing face at least 45 deg from horizontal, so
   nothing needs support or a bridge), ``layer_grid`` (every horizontal face on a boundary of
@@ -338,6 +339,33 @@ def check_board_slot(m: Measurements, x: Manifest) -> Check:
     )
 
 
+def check_footprint(m: Measurements, x: Manifest) -> Check:
+    """The body is the face (W wide along x, as the spec says) and every board slot, with the
+    design's side wall outside it, lies within it: a layout that needed a wider body fails here
+    (exports before 0.18 widened the base instead), naming the slot."""
+    width = next((layer.width_mm for layer in x.layers if layer.width_mm is not None), None)
+    if width is None and x.design is not None:
+        width = x.design.family.width_mm
+    span = float(m.bbox_max_mm[0] - m.bbox_min_mm[0])
+    if width is None:
+        return Check("footprint", True, f"body {span:.4g} mm along x", "face width not in export.json", info=True)
+    wall = x.design.housing.side_wall_mm if x.design is not None else 0.0
+    half, tol = 0.5 * width, PLANAR_TOL_MM
+    bad = [] if abs(span - width) <= tol else [f"the body is {span:.4g} mm wide, not the face's {width:g} mm"]
+    for k, got in enumerate(m.slots):
+        if got.x0_mm - wall < -half - tol or got.x1_mm + wall > half + tol:
+            bad.append(f"chip {k + 1}'s slot x {got.x0_mm:.4g}..{got.x1_mm:.4g} mm leaves less than {wall:g} mm of wall")
+    slots = ", ".join(f"{got.x0_mm:.3f}..{got.x1_mm:.3f}" for got in m.slots)
+    return Check(
+        "footprint",
+        not bad,
+        f"body {span:.4g} mm along x; slots x {slots} mm",
+        f"body {width:g} mm (the face); slots within |x| <= {half - wall:g} mm",
+        "; ".join(bad) if bad else "every board slot lies inside the face, a side wall outside it",
+        values={"body_width_mm": span, "face_width_mm": width, "side_wall_mm": wall},
+    )
+
+
 def check_magnet_chip_gap(m: Measurements, x: Manifest) -> Check:
     """The forward model's unloaded gap, rebuilt from the measured pocket and slot floors, under
     every chip (chip k's, from 2, keyed ``chip_k_measured_mm``)."""
@@ -430,6 +458,7 @@ CHECKS = (
     check_cavity_gap,
     check_magnet_pocket,
     check_board_slot,
+    check_footprint,
     check_magnet_chip_gap,
     check_overhang,
     check_layer_grid,

@@ -350,6 +350,7 @@ class Layer:
     theta_deg: float = _kind("num")
     web_depth_mm: float = _kind("pos")
     cavity_height_mm: float = _kind("num")
+    width_mm: float | None = _optional("pos")  # the face's width W; exports before 0.18 may lack it
 
 
 @dataclass(frozen=True)

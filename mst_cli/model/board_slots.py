@@ -95,10 +95,58 @@ def chip_floor_y_mm(g: SensorGeometry, chip_xy_mm: tuple[float, float]) -> float
 
 
 def base_length_mm(g: SensorGeometry) -> float:
-    """Base size along x, centred on the magnet axis: the cell width, or wider when the slots
-    (which need not be centred) need side walls around them."""
-    reach = max(max(-x0, x1) for x0, x1 in (chip_slot_x_mm(g, c) for c in g.chips_xy_mm))
-    return max(g.width_mm, 2 * (reach + g.housing.side_wall_mm))
+    """Base size along x: the face's width. The footprint (width x depth) is the spec's; a chip
+    layout that would need a wider body is refused (:func:`face_violations`), never widened."""
+    return g.width_mm
+
+
+def _chip_field(g: SensorGeometry) -> tuple[str, object]:
+    """The field that sets the chips, and its value: positions_mm, else the one chip_offset_mm."""
+    if len(g.chips_xy_mm) > 1:
+        return POSITIONS_FIELD, [list(p) for p in g.chips_xy_mm]
+    return "magnetometer.chip_offset_mm", list(g.chips_xy_mm[0])
+
+
+def chip_off_face_violations(g: SensorGeometry) -> list[Violation]:
+    """A chip whose centre lies off the face (|x| > W/2 or |y| > D/2): no part can hold it, and
+    no field model of this part describes it. Judged at load, for every command."""
+    half_w, half_d = 0.5 * g.width_mm, 0.5 * g.depth_mm
+    field, value = _chip_field(g)
+    for i, (x, y) in enumerate(g.chips_xy_mm):
+        if abs(x) > half_w + 1e-9 or abs(y) > half_d + 1e-9:
+            return [
+                Violation.of_field(
+                    field,
+                    value,
+                    f"chip {i} at ({x:g}, {y:g}) mm lies off the face: every chip must lie within "
+                    f"|x| <= {half_w:g} mm and |y| <= {half_d:g} mm (family.width_mm {g.width_mm:g} x "
+                    f"family.depth_mm {g.depth_mm:g}, centred on the magnet axis)",
+                )
+            ]
+    return []
+
+
+def face_violations(g: SensorGeometry) -> list[Violation]:
+    """A board slot that, with ``housing.side_wall_mm`` outside it, reaches past the face's width:
+    the layout would need a wider body than the spec's, which is the user's to choose. Judged at
+    design and at export (the reading side models any chip on the face)."""
+    half, wall = 0.5 * g.width_mm, g.housing.side_wall_mm
+    field, value = _chip_field(g)
+    for i, chip in enumerate(g.chips_xy_mm):
+        x0, x1 = chip_slot_x_mm(g, chip)
+        if x0 - wall < -half - 1e-9 or x1 + wall > half + 1e-9:
+            need = 2 * (max(-x0, x1) + wall)
+            return [
+                Violation.of_field(
+                    field,
+                    value,
+                    f"chip {i}'s board slot spans x = {x0:.4g}..{x1:.4g} mm (board {g.board.key} "
+                    f"{g.board.length_mm:g} mm long): with housing.side_wall_mm it needs a face {need:.4g} mm wide, "
+                    f"but family.width_mm is {g.width_mm:g} mm (the footprint is the spec's): move the chip, "
+                    "take a shorter board, or widen the face",
+                )
+            ]
+    return []
 
 
 def _window_end_mm(x_in: float, facing: str, walls: list[tuple[float, float]], half_mm: float) -> float:
@@ -164,13 +212,15 @@ def _floor_violation(g: SensorGeometry, i: int, walls: list[tuple[float, float]]
 
 
 def slot_violations(g: SensorGeometry) -> list[Violation]:
-    """Broken rules of several chips' slots: a side wall under every slot (the first chip's is
-    judged by ``housing_violations``) and between any two slots. One chip breaks neither.
-    Judged on export only (not at load, as the other housing rules are): the reading side
-    models chips anywhere."""
+    """Broken rules of the chips' slots: every slot inside the face (:func:`face_violations`), and
+    for several chips a side wall under every slot (the first chip's is judged by
+    ``housing_violations``) and between any two slots.
+    Judged at design and at export (not at load, as the other housing rules are): the reading
+    side models any chip on the face, housed or not."""
     chips = g.chips_xy_mm
-    if len(chips) < 2:
-        return []
+    off_face = face_violations(g)
+    if off_face or len(chips) < 2:
+        return off_face
     value = [list(p) for p in chips]
     h, bd = g.housing, g.board
     walls_x = [chip_slot_x_mm(g, chip) for chip in chips]
