@@ -64,6 +64,7 @@ def test_reference_body_passes_every_check(exported):
         "overhang",
         "layer_grid",
         "magnet_pause",
+        "load_path",
     }
     # measured on the mesh, equal to the design's own numbers
     assert res["wall_thickness"].values["per_layer_mm"] == pytest.approx([0.6, 1.0, 1.4], abs=1e-4)

@@ -101,7 +101,7 @@ def _to_export(design, progress):
     return load_design(design), None
 
 
-def check(path: str | Path, *, nozzle_mm: float | None = None) -> CheckResults:
+def check(path: str | Path, *, nozzle_mm: float | None = None, load_path_max: float | None = None) -> CheckResults:
     """Measure an exported mesh against its export.json (``mst check``).
 
     Parameters
@@ -110,6 +110,9 @@ def check(path: str | Path, *, nozzle_mm: float | None = None) -> CheckResults:
         The folder ``export`` wrote, or the .stl in it.
     nozzle_mm : float, optional
         Nozzle diameter for the wall checks [default: the design's printer.nozzle_mm].
+    load_path_max : float, optional
+        Fail when the share of the magnet's motion outside the layers (cap, plates, cover) exceeds
+        this in any regime, 0 to 1 [default: reported only].
 
     Returns
     -------
@@ -137,13 +140,15 @@ def check(path: str | Path, *, nozzle_mm: float | None = None) -> CheckResults:
         lo, hi = next((f.metadata["lo"], f.metadata["hi"]) for f in fields(Printer) if f.name == "nozzle_mm")
         if not lo <= nozzle_mm <= hi:
             raise InputError("--nozzle", nozzle_mm, f"must be a nozzle diameter from {lo:g} to {hi:g} mm")
+    if load_path_max is not None and not 0.0 <= load_path_max <= 1.0:
+        raise InputError("--load-path-max", load_path_max, "must be a share from 0 to 1")
     found = resolve_export(path)
     # both inputs are validated before anything is measured: every field the checks read (type,
     # nesting, finite and sane size) and every STL coordinate (finite, within a metre). Past
     # this point a KeyError or TypeError is a bug in a check, not bad input.
     manifest = cast("Manifest", load_manifest(found.manifest))  # kind=Manifest by default
     assert found.stl is not None  # resolve_export found one (need_stl)
-    return CheckResults(run_checks(load_mesh(found.stl), manifest, nozzle_mm), found.stl)
+    return CheckResults(run_checks(load_mesh(found.stl), manifest, nozzle_mm, load_path_max), found.stl)
 
 
 def slice(

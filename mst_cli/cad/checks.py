@@ -18,7 +18,9 @@ function that compares those measurements with the design's own values in the ty
 * print orientation: ``overhang`` (every down-facing face at least 45 deg from horizontal, so
   nothing needs support or a bridge), ``layer_grid`` (every horizontal face on a boundary of
   the print layers, so the slicer prints it where it was designed) and ``magnet_pause`` (the
-  magnet goes in whole before the layer after the pause, which starts the pocket's roof).
+  magnet goes in whole before the layer after the pause, which starts the pocket's roof);
+* ``load_path``: each member's share of the magnet's motion under a centred press, from the
+  design (:mod:`mst_cli.model.load_path`); a bound only when one is given.
 
 The manifest validated itself on load, so a KeyError or TypeError in here is a bug.
 """
@@ -366,6 +368,41 @@ def check_footprint(m: Measurements, x: Manifest) -> Check:
     )
 
 
+def check_load_path(m: Measurements, x: Manifest, share_max: float | None = None) -> Check:
+    """Where a centred press's motion of the magnet goes (docs/design.md 4.6): the layers (L0)
+    against the cap, plates and cover in closed form, from the design in export.json. Fails when
+    the share outside the layers in some regime exceeds ``share_max`` (``--load-path-max``),
+    naming the member; without it, reported only."""
+    if x.design is None:
+        return Check("load_path", True, "no design in export.json", "the design's members", info=True)
+    from mst_cli.model.load_path import dominant_member, load_path_report  # deferred: the layer laws
+    from mst_cli.model.mechanics import layer_laws
+    from mst_cli.model.stack import Stack
+
+    doc = x.design
+    g = doc.geometry()
+    report = load_path_report(g, doc.material, Stack(layer_laws(g.layers, doc.material, "spring")))
+    rows = report["regimes"]
+    worst = max(rows, key=lambda r: r["outside_layers"])
+    name, share = dominant_member(worst)
+    got = ", ".join(f"{100 * r['outside_layers']:.0f} %" for r in rows)
+    bad = share_max is not None and worst["outside_layers"] > share_max
+    note = (
+        f"regime {worst['regime']}: {100 * worst['outside_layers']:.0f} % of the magnet's motion is outside the layers, "
+        f"{100 * share:.0f} % in the {name} ({report['cap_mm_per_N']:.3g} mm/N cap; clamped bound "
+        f"{100 * worst['outside_layers_clamped']:.0f} %)"
+    )
+    return Check(
+        "load_path",
+        not bad,
+        f"outside the layers per regime: {got}",
+        "report only" if share_max is None else f"<= {100 * share_max:.0f} % in every regime (--load-path-max)",
+        ("the " + name + " is too soft: " + note) if bad else note,
+        info=share_max is None,
+        values={"outside_layers": [r["outside_layers"] for r in rows], "dominant_member": name},
+    )
+
+
 def check_magnet_chip_gap(m: Measurements, x: Manifest) -> Check:
     """The forward model's unloaded gap, rebuilt from the measured pocket and slot floors, under
     every chip (chip k's, from 2, keyed ``chip_k_measured_mm``)."""
@@ -463,21 +500,26 @@ CHECKS = (
     check_overhang,
     check_layer_grid,
     check_magnet_pause,
+    check_load_path,
 )
 
 
-def run_checks(mesh: Mesh | Any, manifest: Manifest | dict, nozzle_mm: float | None = None) -> list[Check]:
+def run_checks(
+    mesh: Mesh | Any, manifest: Manifest | dict, nozzle_mm: float | None = None, load_path_max: float | None = None
+) -> list[Check]:
     """Every check of :data:`CHECKS`, in order. Pure: reads only its arguments.
 
     ``mesh`` is the STL as written (print orientation); ``manifest`` the loaded export.json
     (a dict, as :func:`~mst_cli.cad.manifest.export_manifest` returns it, is validated first);
-    ``nozzle_mm`` overrides the design's nozzle for the wall check."""
+    ``nozzle_mm`` overrides the design's nozzle for the wall check; ``load_path_max`` bounds the
+    share of the magnet's motion outside the layers (:func:`check_load_path`)."""
     if not isinstance(manifest, Manifest):
         manifest = Manifest.from_dict(manifest)
     if nozzle_mm is not None:
         manifest = replace(manifest, printer=replace(manifest.printer, nozzle_mm=float(nozzle_mm)))
     measured = measure(mesh, manifest)
-    return [check(measured, manifest) for check in CHECKS]
+    bounds = {check_load_path: {"share_max": load_path_max}}
+    return [check(measured, manifest, **bounds.get(check, {})) for check in CHECKS]
 
 
 def results_dict(checks: list[Check], stl_path: str) -> dict:

@@ -91,14 +91,22 @@ def export(
     default=None,
     help="Nozzle diameter for the wall checks, mm [default: the design's printer.nozzle_mm].",
 )
+@click.option(
+    "--load-path-max",
+    type=float,
+    default=None,
+    help="Fail the load_path check when more than this share (0-1) of the magnet's motion under a "
+    "centred press lies outside the layers (cap, plates, cover) in any regime, naming the member "
+    "[default: reported only]. docs/design.md 4.6.",
+)
 @handles_input_errors
-def check(path: Path, as_json: bool, nozzle_mm: float | None) -> None:
+def check(path: Path, as_json: bool, nozzle_mm: float | None, load_path_max: float | None) -> None:
     """Check the body that 'mst export' wrote (PATH: its folder, or the STL in it).
 
     Prints a table of named checks, measured on the mesh against the design's own expected
     values in export.json. Exit 1 naming the failed checks, 2 for unreadable input.
     """
-    results = api.check(path, nozzle_mm=nozzle_mm)
+    results = api.check(path, nozzle_mm=nozzle_mm, load_path_max=load_path_max)
     if as_json:
         click.echo(json.dumps(results.to_dict(), indent=2, allow_nan=False))
     else:

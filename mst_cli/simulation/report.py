@@ -18,7 +18,10 @@ from mst_cli.io.outputs import Staging, staged
 from mst_cli.model.assembly import SensorGeometry
 from mst_cli.model.chip import quantise_lsb
 from mst_cli.model.general_load import small_load_lateral_N_per_mm
+from mst_cli.model.load_path import load_path_report
+from mst_cli.model.mechanics import layer_laws
 from mst_cli.model.response import Regime, Response
+from mst_cli.model.stack import Stack
 from mst_cli.sensor.as_printed import as_printed
 
 if TYPE_CHECKING:
@@ -52,11 +55,19 @@ def report_dict(doc: Document, geometry: SensorGeometry, resp: Response, extra: 
         "magnetometer": _magnetometer_section(geometry, resp),
         "geometry": _geometry_section(geometry),
         "height_budget": geometry.height_budget_mm(),
+        "load_path": _load_path(doc, geometry, resp),
         "warnings": list(resp.warnings),
     }
     if extra:
         out.update(extra)
     return nulls_with_reasons(out, _undefined_reasons(resp))
+
+
+def _load_path(doc: Document, geometry: SensorGeometry, resp: Response) -> dict:
+    """Where the magnet's motion goes, per regime: the layers of this response's rung, and the
+    cap, plates and cover in closed form (docs/design.md 4.6)."""
+    stack = Stack(layer_laws(geometry.layers, doc.material, resp.mechanics))
+    return load_path_report(geometry, doc.material, stack)
 
 
 def _lateral_stiffness(doc: Document, mechanics: str) -> list[tuple[float, float]]:

@@ -1,0 +1,181 @@
+"""The part's load path (issue 44): the cap's, plates' and cover's compliance in closed form
+(mst_cli.model.load_path), checked against an independent beam solver and the analytic limits,
+reported per regime in report.json and bounded by `mst check --load-path-max`."""
+
+import json
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+import mst_cli as mst
+from mst_cli.cli.app import main
+from mst_cli.model import load_path as lp
+from mst_cli.model.material import Material
+from mst_cli.model.mechanics import layer_laws
+from mst_cli.model.stack import Stack
+
+ROOT = Path(__file__).resolve().parents[1]
+FORWARD = ROOT / "configs" / "mohammadi2021-forward.yaml"
+
+
+def hermite_beam_mm(span, EI, loads, support, n=800):
+    """Independent check: Euler-Bernoulli beam of n cubic Hermite elements (exact nodal values
+    for nodal loads), deflection at every node under nodal point loads [(x, P)]."""
+    h, N = span / n, n + 1
+    K = np.zeros((2 * N, 2 * N))
+    ke = EI / h**3 * np.array(
+        [[12, 6 * h, -12, 6 * h], [6 * h, 4 * h * h, -6 * h, 2 * h * h], [-12, -6 * h, 12, -6 * h], [6 * h, 2 * h * h, -6 * h, 4 * h * h]]
+    )
+    for e in range(n):
+        idx = [2 * e, 2 * e + 1, 2 * e + 2, 2 * e + 3]
+        K[np.ix_(idx, idx)] += ke
+    f = np.zeros(2 * N)
+    for x, P in loads:
+        f[2 * int(round(x / h))] += P
+    fixed = {0, 2 * n} | ({1, 2 * n + 1} if support == "clamped" else set())
+    free = [i for i in range(2 * N) if i not in fixed]
+    w = np.zeros(2 * N)
+    w[free] = np.linalg.solve(K[np.ix_(free, free)], f[free])
+    return w[0::2]
+
+
+@pytest.mark.parametrize("support", lp.SUPPORTS)
+def test_strip_load_bending_matches_an_independent_beam(support):
+    span, EI, c, n = 25.0, 1000.0, 6.0, 1000
+    xs = np.linspace(0.0, span, n + 1)
+    h = span / n
+    inside = np.abs(xs - 0.5 * span) <= 0.5 * c + 1e-9
+    edge = np.isclose(np.abs(xs - 0.5 * span), 0.5 * c)
+    loads = [(x, (0.5 if e else 1.0) * h / c) for x, i, e in zip(xs, inside, edge) if i]  # trapezoid rule, total 1 N
+    w = hermite_beam_mm(span, EI, loads, support, n)
+    assert lp.strip_bending_mm_per_N(span, c, EI, support) == pytest.approx(w[n // 2], rel=1e-5)
+
+
+def test_a_point_load_gives_the_textbook_centre_deflections():
+    """F L^3/(48 EI) simply supported, F L^3/(192 EI) clamped; the strip's limit c -> 0 agrees."""
+    L, EI = 24.8, 350.0
+    assert lp.strip_bending_mm_per_N(L, 0.0, EI, "simple") == pytest.approx(L**3 / (48 * EI), rel=1e-12)
+    assert lp.strip_bending_mm_per_N(L, 0.0, EI, "clamped") == pytest.approx(L**3 / (192 * EI), rel=1e-12)
+    for support in lp.SUPPORTS:
+        assert lp.strip_bending_mm_per_N(L, 1e-4, EI, support) == pytest.approx(
+            lp.strip_bending_mm_per_N(L, 0.0, EI, support), rel=1e-6
+        )
+    assert lp.strip_shear_mm_per_N(L, 0.0, 100.0) == pytest.approx(L / 400.0, rel=1e-12)  # F L/(4 kGA)
+
+
+@pytest.mark.parametrize("support", lp.SUPPORTS)
+def test_two_wall_loads_on_a_plate_match_an_independent_beam(support):
+    span, EI, e, n = 25.0, 500.0, 3.0, 1000
+    w = hermite_beam_mm(span, EI, [(e, 0.5), (span - e, 0.5)], support, n)
+    assert lp.two_load_mm_per_N(span, e, EI, 1e30, support) == pytest.approx(w[int(round(e * n / span))], rel=1e-6)
+    assert lp.two_load_mm_per_N(span, 0.0, EI, 1.0, support) == 0.0  # walls over walls: no bending
+
+
+def test_a_section_with_a_hole_and_an_insert_follows_parallel_axes():
+    b, T, E, G = 20.0, 4.0, 15.0, 4.0
+    EI, kGA = lp.section_EI_kGA(b, T, E, G)
+    assert EI == pytest.approx(E * b * T**3 / 12) and kGA == pytest.approx(5 / 6 * G * b * T)
+    EI_h, _ = lp.section_EI_kGA(b, T, E, G, 6.0, (1.0, 3.0))  # a centred hole: I less the hole's own
+    assert EI_h == pytest.approx(E * (b * T**3 / 12 - 6.0 * 2.0**3 / 12))
+    same = lp.Insert("TPU", E, 0.45, 1.0, 3.0)
+    assert lp.section_EI_kGA(b, T, E, 2 * E / 2.0, insert=same)[0] == pytest.approx(EI)
+    # a bonded two-material bar: the transformed section (E1 over 0..1, E2 over 1..2, b = 1)
+    E2 = 4 * E
+    EI_2, _ = lp.section_EI_kGA(1.0, 2.0, E, G, insert=lp.Insert("x", E2, 0.3, 1.0, 1.0))
+    zc = (E * 0.5 + E2 * 1.5) / (E + E2)
+    assert EI_2 == pytest.approx(E * (1 / 12 + (0.5 - zc) ** 2) + E2 * (1 / 12 + (1.5 - zc) ** 2))
+
+
+def stack_of(doc):
+    g = doc.geometry()
+    return g, Stack(layer_laws(g.layers, doc.material, "spring"))
+
+
+def test_rigid_members_reproduce_the_layer_model_exactly():
+    """With the members rigid (or infinitely stiff) the whole motion is the layers', and each
+    regime's compliance is the stack's own (L0 unchanged)."""
+    doc = mst.load(FORWARD)
+    g, stack = stack_of(doc)
+    stiff = lp.members(g, Material("rigid", 1e15, 0.45))
+    assert stiff.total_mm_per_N < 1e-12
+    for rigid in (lp.Members.rigid(n_plates=2), stiff):
+        for row in lp.motion_shares(stack, rigid):
+            mid = 0.5 * sum(row["force_N"])
+            assert row["outside_layers"] == pytest.approx(0.0, abs=1e-9)
+            assert row["compliance_mm_per_N"] == pytest.approx(stack.local_compliance_mm_per_N(mid), rel=1e-6)
+            assert sum(row["shares"].values()) == pytest.approx(1.0, rel=1e-12)
+
+
+def test_the_cap_is_the_beam_across_the_top_layers_wall_heads():
+    """The bundled forward design's cap: the top pad (1.4) + pocket floor, pocket and cap top
+    (0.4 + 2.1 + 0.8 = 3.3) over 2 x the wall heads' mid x, less the pocket: the closed form by hand."""
+    doc = mst.load(FORWARD)
+    g, _ = stack_of(doc)
+    top, m = g.layers[-1], doc.material
+    E, G = m.youngs_modulus_MPa / (1 - m.poisson_ratio**2), m.shear_modulus_MPa
+    T = top.t_mm + 3.3
+    L = top.p_mm + top.p_inner_mm
+    EI, kGA = lp.section_EI_kGA(20.0, T, E, G, 6.2, (1.8, 3.9))
+    want = lp.strip_bending_mm_per_N(L, 6.0, EI, "simple") + (L - 3.0) / (4 * kGA)
+    assert lp.members(g, m).cap_mm_per_N == pytest.approx(want, rel=1e-12)
+    assert g.total_height_mm - g.z_stack_top_mm == pytest.approx(3.3)
+    # the cap is softer than the top layer: 1/0.146 = 6.9 N/mm (issue 44's beam estimate: about 8)
+    assert 5.0 < 1.0 / lp.members(g, m).cap_mm_per_N < 9.0
+
+
+def test_a_thicker_cap_is_stiffer_and_a_stiff_insert_stiffer_still():
+    doc = mst.load(FORWARD)
+    g, _ = stack_of(doc)
+    base = lp.members(g, doc.material).cap_mm_per_N
+    thick = replace(g, housing=replace(g.housing, cap_top_mm=4.0))
+    assert lp.members(thick, doc.material).cap_mm_per_N < base
+    steel = lp.Insert("steel", 200e3 / (1 - 0.09), 0.3, 1.0, g.layers[-1].t_mm + 0.4 + 2.1 + 0.1)
+    g1 = replace(g, housing=replace(g.housing, cap_top_mm=1.8))
+    assert lp.members(g1, doc.material, insert=steel).cap_mm_per_N < 0.01 * base
+
+
+def run(args):
+    return CliRunner().invoke(main, [str(a) for a in args])
+
+
+def test_report_states_each_members_share_per_regime(tmp_path):
+    res = run(["simulate", FORWARD, "--out", tmp_path / "s", "--no-plot"])
+    assert res.exit_code == 0, res.output
+    path = json.loads((tmp_path / "s" / "report.json").read_text())["load_path"]
+    assert len(path["regimes"]) == 3 and path["patch_mm"] == lp.FINGERTIP_PATCH_MM
+    for row in path["regimes"]:
+        shares = row["shares"]
+        assert set(shares) == {"layer_1", "layer_2", "layer_3", "cap", "plates", "housing"}
+        assert sum(shares.values()) == pytest.approx(1.0, rel=1e-9)
+        assert row["outside_layers"] == pytest.approx(shares["cap"] + shares["plates"] + shares["housing"])
+        assert row["outside_layers_clamped"] < row["outside_layers"]  # clamped supports: the stiff bound
+    outside = [r["outside_layers"] for r in path["regimes"]]
+    assert outside == sorted(outside)  # the locked layers give less and less, the cap the same
+
+
+def export_with_cap(tmp_path, cap_top_mm):
+    text = FORWARD.read_text() + f"housing:\n  cap_top_mm: {cap_top_mm}\n"
+    spec = tmp_path / f"cap{cap_top_mm}.yaml"
+    spec.write_text(text)
+    out = tmp_path / f"out{cap_top_mm}"
+    res = run(["export", spec, "--stl", "--out", out])
+    assert res.exit_code == 0, res.output
+    return out
+
+
+def test_check_fails_a_thin_cap_naming_it_and_passes_a_thick_one(tmp_path):
+    """Bound 0.85: the bundled 0.8 mm cap top leaves 93 % of regime 3's motion outside the
+    layers (91 % in the cap); an 8 mm cap top 60 %."""
+    thin, thick = export_with_cap(tmp_path, 0.8), export_with_cap(tmp_path, 8.0)
+    res = run(["check", thin, "--load-path-max", "0.85"])
+    assert res.exit_code == 1
+    assert "load_path: the cap is too soft: regime 3: 93 % of the magnet's motion is outside the layers" in res.output
+    res = run(["check", thick, "--load-path-max", "0.85"])
+    assert res.exit_code == 0, res.output
+    res = run(["check", thin])  # without a bound: reported, never failed
+    assert res.exit_code == 0 and "load_path        info" in res.output
+    res = run(["check", thin, "--load-path-max", "2"])
+    assert res.exit_code == 2 and res.output.strip() == "mst: invalid input: --load-path-max = 2.0: must be a share from 0 to 1"
