@@ -119,10 +119,11 @@ def candidates(rule: Rule, default) -> list:
     if rule.kind == "str":
         return ["another name"]
     mid, lo, hi = inside(rule), rule.lo, rule.hi
+    near = mid + 0.05 * (hi - mid)  # a chip on the 30 mm face (one off it is refused at load)
     if rule.kind == "pair":
-        return [[mid, lo], [hi, mid]]
+        return [[mid, lo], [hi, mid], [near, mid]]
     if rule.kind == "pairs":  # chips: the first at the default chip_offset_mm
-        return [[[0.0, 0.0], [hi, mid]]]
+        return [[[0.0, 0.0], [hi, mid]], [[0.0, 0.0], [near, mid]]]
     if rule.kind == "bounds":
         return [[lo + 0.25 * (hi - lo), mid]]
     if rule.kind == "int":
