@@ -3,6 +3,7 @@
 import numpy as np
 
 from mst_cli.model.assembly import SensorGeometry
+from mst_cli.model.board_slots import slot_violations
 from mst_cli.model.cell import HexCell
 from mst_cli.model.components import BOARDS
 
@@ -25,7 +26,7 @@ def random_valid_geometries(n, seed, max_offset_mm):
         board = BOARDS[sorted(BOARDS)[int(rng.integers(len(BOARDS)))]]
         offset = tuple(float(v) for v in rng.uniform(-max_offset_mm, max_offset_mm, size=2))
         g = SensorGeometry(cells, board=board, chip_offset_mm=offset)
-        if g.housing_violations():
+        if g.housing_violations() or slot_violations(g):  # buildable: its board slot inside the face
             continue
         out.append(g)
     return out

@@ -148,7 +148,8 @@ class MagnetometerSection:
         "reads the magnet, the first at chip_offset_mm, centres at least "
         f"{MIN_CHIP_SPACING_MM:g} mm apart (null: one chip, at chip_offset_mm); two chips tell shear "
         "from position (docs/design.md 4.5). The housing cuts a board slot for each, side by side along x, "
-        "each on its own floor (docs/printing.md)",
+        "each on its own floor, each with a side wall inside the face: a layout that needs a wider body than "
+        "`family.width_mm` is refused by design and export, a chip off the face by every command (docs/printing.md)",
     )
 
     def __post_init__(self):
