@@ -244,6 +244,7 @@ def load_path_report(geometry, material, stack, patch_mm: float = FINGERTIP_PATC
         "cap_clamped_mm_per_N": clamped.cap_mm_per_N,
         "regimes": regimes,
         "outside_layers_max": max(r["outside_layers"] for r in regimes),
+        "patch_dependence": patch_dependence(geometry, material, stack),
         "not_modelled": "the cover tipping where the cable windows cut its side walls (3D)",
     }
 
@@ -252,3 +253,23 @@ def dominant_member(row: dict) -> tuple[str, float]:
     """The member outside the layers with the largest share in a regime row of :func:`motion_shares`."""
     name = max(("cap", "plates", "housing"), key=lambda k: row["shares"][k])
     return name, row["shares"][name]
+
+
+def patch_dependence(geometry, material, stack) -> list[dict]:
+    """How the response depends on the press's contact patch: the cap's compliance and the share
+    outside the layers in the first and last regimes, for a fingertip's half, itself, twice it
+    and the whole face."""
+    rows = []
+    for patch in (0.5 * FINGERTIP_PATCH_MM, FINGERTIP_PATCH_MM, 2.0 * FINGERTIP_PATCH_MM, geometry.width_mm):
+        parts = members(geometry, material, patch)
+        shares = motion_shares(stack, parts)
+        rows.append(
+            {
+                "patch_mm": patch,
+                "cap_mm_per_N": parts.cap_mm_per_N,
+                "compliance_first_regime_mm_per_N": shares[0]["compliance_mm_per_N"],
+                "outside_layers_first_regime": shares[0]["outside_layers"],
+                "outside_layers_last_regime": shares[-1]["outside_layers"],
+            }
+        )
+    return rows

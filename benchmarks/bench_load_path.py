@@ -1,0 +1,56 @@
+"""Load-path options (issue 44, docs/design.md 4.6): how much of the magnet's motion under a
+centred fingertip press lies outside the layers, for the bundled forward design as exported and
+with a thicker cap or a stiff plate bonded over the magnet, by the closed form of
+:mod:`mst_cli.model.load_path` (simply supported wall heads, then clamped: the stiff bound).
+
+    python benchmarks/bench_load_path.py [--design configs/mohammadi2021-forward.yaml]
+
+Not a speed benchmark: the table of numbers docs/design.md 4.6 quotes. An insert's modulus is
+taken in plane strain, E/(1 - nu^2): steel 200 GPa, nu 0.3; PETG 2.1 GPa, nu 0.38.
+"""
+
+from __future__ import annotations
+
+import argparse
+from dataclasses import replace
+from pathlib import Path
+
+import mst_cli as mst
+from mst_cli.model import load_path as lp
+from mst_cli.model.mechanics import layer_laws
+from mst_cli.model.stack import Stack
+
+ROOT = Path(__file__).resolve().parents[1]
+INSERTS = (("PETG plate", 2100.0, 0.38, 1.0), ("PETG plate", 2100.0, 0.38, 2.0), ("steel plate", 200e3, 0.3, 0.5), ("steel plate", 200e3, 0.3, 1.0))
+
+
+def row(label, g, material, stack, insert=None) -> str:
+    cells = [f"| {label} | {1.0 / lp.members(g, material, insert=insert).cap_mm_per_N:.1f}"]
+    for support in lp.SUPPORTS:
+        shares = lp.motion_shares(stack, lp.members(g, material, support=support, insert=insert))
+        cells.append(" / ".join(f"{100 * r['outside_layers']:.0f}" for r in shares))
+    return " | ".join(cells) + f" | {g.total_height_mm:.1f} |"
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--design", default=str(ROOT / "configs" / "mohammadi2021-forward.yaml"))
+    args = ap.parse_args()
+    doc = mst.load(args.design)
+    g, m = doc.geometry(), doc.material
+    stack = Stack(layer_laws(g.layers, m, "spring"))
+    print(f"{doc.name}: outside the layers, regimes 1..{len(g.layers)}, %")
+    print("| option | cap N/mm | simple | clamped | part height mm |\n|---|---|---|---|---|")
+    print(row(f"as exported (cap top {g.housing.cap_top_mm:g} mm)", g, m, stack))
+    for cap_top in (2.0, 4.0, 8.0):
+        print(row(f"cap top {cap_top:g} mm", replace(g, housing=replace(g.housing, cap_top_mm=cap_top)), m, stack))
+    # the plate lies on the pocket: above the pad, the pocket floor and the pocket (magnet + clearance)
+    z = g.layers[-1].t_mm + g.housing.pocket_floor_mm + g.pocket_depth_mm
+    for name, E, nu, t in INSERTS:
+        gi = replace(g, housing=replace(g.housing, cap_top_mm=g.housing.cap_top_mm + t))
+        insert = lp.Insert(name, E / (1.0 - nu**2), nu, t, z)
+        print(row(f"{name} {t:g} mm over the magnet", gi, m, stack, insert))
+
+
+if __name__ == "__main__":
+    main()
