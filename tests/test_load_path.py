@@ -179,3 +179,18 @@ def test_check_fails_a_thin_cap_naming_it_and_passes_a_thick_one(tmp_path):
     assert res.exit_code == 0 and "load_path        info" in res.output
     res = run(["check", thin, "--load-path-max", "2"])
     assert res.exit_code == 2 and res.output.strip() == "mst: invalid input: --load-path-max = 2.0: must be a share from 0 to 1"
+
+
+def test_a_wider_press_bends_the_cap_less():
+    doc = mst.load(FORWARD)
+    g, stack = stack_of(doc)
+    rows = lp.patch_dependence(g, doc.material, stack)
+    assert [r["patch_mm"] for r in rows] == [3.0, 6.0, 12.0, 30.0]
+    caps = [r["cap_mm_per_N"] for r in rows]
+    assert caps == sorted(caps, reverse=True)
+    # the whole face clipped to the span is the uniform load: 5 F L^3/(384 EI) simply supported
+    top, m = g.layers[-1], doc.material
+    E = m.youngs_modulus_MPa / (1 - m.poisson_ratio**2)
+    L = top.p_mm + top.p_inner_mm
+    EI, kGA = lp.section_EI_kGA(20.0, top.t_mm + 3.3, E, m.shear_modulus_MPa, 6.2, (top.t_mm + 0.4, top.t_mm + 2.5))
+    assert caps[-1] == pytest.approx(5 * L**3 / (384 * EI) + L / (8 * kGA), rel=1e-9)
