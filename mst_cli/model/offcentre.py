@@ -50,6 +50,7 @@ class OffCentreResponse:
     axial: Response  # the centred model of the same sensor
     shear_ratio: tuple[float, float] = (0.0, 0.0)  # (Fx, Fy) / Fz along the curve
     layer_slide_mm: np.ndarray | None = None  # (m, n, 2) each layer's lateral slide (None: no shear)
+    rotation_flag: np.ndarray | None = None  # (m,) ROTATION_FLAGS: where the model stops (set by simulate_offcentre)
 
     @property
     def force_x_N(self) -> np.ndarray:
@@ -100,7 +101,7 @@ def simulate_offcentre(
     side_lock = np.array(
         [[_side_lock_N(layer, tuple(off), side) for side in (0, 1)] for layer, off in zip(layers, offsets)]
     )
-    return OffCentreResponse(
+    out = OffCentreResponse(
         offset_mm=(float(offset_mm[0]), float(offset_mm[1])),
         mechanics=mechanics,
         force_N=F,
@@ -117,9 +118,33 @@ def simulate_offcentre(
         shear_ratio=(float(shear_ratio[0]), float(shear_ratio[1])),
         layer_slide_mm=slide,
     )
+    out.rotation_flag = rotation_flags(out, geometry.layers)
+    return out
 
 
 AXIAL_READING_FLAGS = ("ok", "below_no_load", "above_range")  # why a force read as axial is missing
+
+# Where the general-load model stops (issue 44): its rotations add as small ones (sin a = a within
+# 0.5 %, cos a = 1 within 1.5 % up to 10 deg), and a layer cannot turn so far that its pads pass
+# through each other (its centred compression plus its tilt times the pad's half width past the
+# cavity's height h - 2t). A sample past either is flagged; its numbers are not a prediction.
+SMALL_ROTATION_DEG = 10.0
+ROTATION_FLAGS = ("ok", "past_small_rotations", "past_closure")
+
+
+def rotation_flags(r: OffCentreResponse, cells) -> np.ndarray:
+    """(m,) ROTATION_FLAGS of each force sample: past_closure where some layer's pads would
+    interpenetrate, else past_small_rotations where the magnet or a layer turns over
+    SMALL_ROTATION_DEG, else ok. ``cells`` are the layers' HexCells, bottom to top."""
+    tilt = np.abs(r.layer_tilt_rad)  # (m, n, 2)
+    p = np.array([c.p_mm for c in cells])
+    cavity = np.array([c.cavity_height_mm for c in cells])
+    edge = r.layer_d_mm + tilt.max(axis=-1) * p  # the deepest pad edge's closure, mm
+    closed = (edge > cavity + 1e-9).any(axis=-1)
+    turned = (np.degrees(tilt.max(axis=(-1, -2))) > SMALL_ROTATION_DEG) | (
+        np.abs(r.magnet_tilt_deg).max(axis=-1) > SMALL_ROTATION_DEG
+    )
+    return np.where(closed, "past_closure", np.where(turned, "past_small_rotations", "ok"))
 
 
 def axial_reading_flags(axial: Response, B_abs_T: np.ndarray) -> np.ndarray:

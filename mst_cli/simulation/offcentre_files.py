@@ -18,7 +18,7 @@ if TYPE_CHECKING:
 OFFCENTRE_COLUMNS = (
     "force_N,Fx_N,Fy_N,Bx_mT,By_mT,Bz_mT,B_abs_mT,magnet_tilt_x_deg,magnet_tilt_y_deg,"
     "magnet_shift_x_mm,magnet_shift_y_mm,magnet_shift_z_mm,force_read_axial_N,read_error_N,in_range,"
-    "axial_reading_flag"
+    "axial_reading_flag,rotation_flag"
 )
 NO_AXIAL_READING = {
     "below_no_load": "|B| below the centred model's no-load |B|",
@@ -34,7 +34,9 @@ def _cell(v: float) -> str:
 def offcentre_csv(r: OffCentreResponse) -> str:
     """One row per force sample (the normal force force_N and the tangential Fx_N, Fy_N; field in
     mT, tilts toward +x and +y in degrees); the force read
-    as axial and its error are empty where the centred model has no answer (axial_reading_flag)."""
+    as axial and its error are empty where the centred model has no answer (axial_reading_flag);
+    rotation_flag (:func:`~mst_cli.model.offcentre.rotation_flags`) says where the model stops."""
+    rotation = _rotation(r)
     buf = io.StringIO()
     buf.write(OFFCENTRE_COLUMNS + "\n")
     B = r.B_T * 1e3
@@ -49,7 +51,8 @@ def offcentre_csv(r: OffCentreResponse) -> str:
             *r.magnet_shift_mm[i],
         ]
         row += [r.force_read_axial_N[i], r.read_error_N[i]]
-        buf.write(",".join(map(_cell, row)) + f",{int(r.axial.in_range[i])},{r.axial_reading_flag[i]}\n")
+        flags = f",{int(r.axial.in_range[i])},{r.axial_reading_flag[i]},{rotation[i]}\n"
+        buf.write(",".join(map(_cell, row)) + flags)
     return buf.getvalue()
 
 
@@ -94,8 +97,29 @@ def offcentre_summary(r: OffCentreResponse) -> dict:
         "side_lock_null_means": "the pads never close at that end: the plates pivot on the other side's pads",
         "regimes": regimes,
         "axial_reading": {k: flags.count(k) for k in ("ok", *NO_AXIAL_READING)},
+        "rotation": _rotation_summary(r),
         "magnet_tilt_at_last_lock_deg": [float(v) for v in r.magnet_tilt_deg[in_range][-1]],
         "magnet_shift_at_last_lock_mm": [float(v) for v in r.magnet_shift_mm[in_range][-1]],
+    }
+
+
+def _rotation(r: OffCentreResponse) -> np.ndarray:
+    return r.rotation_flag if r.rotation_flag is not None else np.full(len(r.force_N), "ok")
+
+
+def _rotation_summary(r: OffCentreResponse) -> dict:
+    """Where the model stops: how many samples leave small rotations or pass a layer's closure,
+    and the first force at which one does (null: none in the curve)."""
+    from mst_cli.model.offcentre import SMALL_ROTATION_DEG  # deferred: the model layer
+
+    flags = _rotation(r)
+    past = flags != "ok"
+    return {
+        "small_rotation_limit_deg": SMALL_ROTATION_DEG,
+        "past_small_rotations": int((flags == "past_small_rotations").sum()),
+        "past_closure": int((flags == "past_closure").sum()),
+        "samples": len(flags),
+        "first_force_N": float(r.force_N[past][0]) if past.any() else None,
     }
 
 
@@ -133,6 +157,14 @@ def offcentre_lines(s: dict) -> list[str]:
                 f"  {counts[flag]} of {sum(counts.values())} force samples have no axial reading ({why}): "
                 f"offcentre.csv leaves their force_read_axial_N and read_error_N empty, axial_reading_flag {flag}"
             )
+    rot = s["rotation"]
+    if rot["past_small_rotations"] + rot["past_closure"]:
+        lines.append(
+            f"  the model stops from {rot['first_force_N']:.3g} N: {rot['past_small_rotations']} of {rot['samples']} "
+            f"force samples turn past {rot['small_rotation_limit_deg']:g} deg (small rotations) and "
+            f"{rot['past_closure']} turn a layer past its closure; offcentre.csv flags them (rotation_flag), "
+            "their tilts and fields are not predictions"
+        )
     tx, ty = (round(v, 2) + 0.0 for v in s["magnet_tilt_at_last_lock_deg"])  # no "-0.00"
     lines.append(f"  the magnet tilts {tx:.2f} deg toward +x and {ty:.2f} deg toward +y at the last lock")
     return lines
