@@ -12,7 +12,7 @@ from mst_cli.model.assembly import SensorGeometry
 from mst_cli.model.load_bound import shear_bound_lines
 from mst_cli.model.response import Response
 from mst_cli.sensor.document import Document, document_to_dict
-from mst_cli.simulation.report import height_budget_line
+from mst_cli.simulation.report import height_budget_line, load_path_line
 
 ROUND_DECIMALS = 4
 
@@ -135,6 +135,7 @@ class DesignResult:
             f"{1e3 * max(r.force_resolution_N for r in resp.regimes):.1f} mN"
         )
         lines.append(height_budget_line(g))
+        lines.append(load_path_line(self.document, g, resp))
         pe = self.print_error
         limit = pe.get("max_print_deviation_rel")
         lines.append(

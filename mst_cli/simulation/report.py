@@ -18,7 +18,7 @@ from mst_cli.io.outputs import Staging, staged
 from mst_cli.model.assembly import SensorGeometry
 from mst_cli.model.chip import quantise_lsb
 from mst_cli.model.general_load import small_load_lateral_N_per_mm
-from mst_cli.model.load_path import load_path_report
+from mst_cli.model.load_path import dominant_member, load_path_report
 from mst_cli.model.mechanics import layer_laws
 from mst_cli.model.response import Regime, Response
 from mst_cli.model.stack import Stack
@@ -68,6 +68,18 @@ def _load_path(doc: Document, geometry: SensorGeometry, resp: Response) -> dict:
     cap, plates and cover in closed form (docs/design.md 4.6)."""
     stack = Stack(layer_laws(geometry.layers, doc.material, resp.mechanics))
     return load_path_report(geometry, doc.material, stack)
+
+
+def load_path_line(doc: Document, geometry: SensorGeometry, resp: Response) -> str:
+    """One terminal line: the share of a centred press's motion outside the layers, per regime."""
+    lp = _load_path(doc, geometry, resp)
+    shares = " / ".join(f"{100 * r['outside_layers']:.0f}" for r in lp["regimes"])
+    member, _ = dominant_member(max(lp["regimes"], key=lambda r: r["outside_layers"]))
+    return (
+        f"load path: {shares} % of the magnet's motion per regime is outside the layers, mostly the {member} "
+        f"(cap {lp['cap_mm_per_N']:.3g} mm/N under a {lp['patch_mm']:g} mm press), which the layer model leaves out "
+        "(docs/design.md 4.6)"
+    )
 
 
 def _lateral_stiffness(doc: Document, mechanics: str) -> list[tuple[float, float]]:
@@ -237,6 +249,7 @@ def terminal_table(doc: Document, geometry: SensorGeometry, resp: Response) -> s
     )
     lines.append(f"range ends at {resp.max_force_N:.3f} N (all layers locked; beyond is out of range)")
     lines.append(height_budget_line(geometry))
+    lines.append(load_path_line(doc, geometry, resp))
     for w in resp.warnings:
         lines.append(f"warning: {w}")
     return "\n".join(lines)
