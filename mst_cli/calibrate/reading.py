@@ -17,9 +17,9 @@ import numpy as np
 from mst_cli.calibrate.accuracy import ERROR_FROM_RANGE, force_errors, force_errors_by_regime, regime_error_lines
 from mst_cli.calibrate.calibration_json import CalibrationRecord, record_beside
 from mst_cli.calibrate.inverse_map import FLAGS, InverseMap, inverse_map
-from mst_cli.calibrate.load_readings import LoadReadings
+from mst_cli.calibrate.load_readings import LOAD_COLUMNS, LoadReadings
 from mst_cli.calibrate.loadtest import Readings, field_of, rig_column, unknown_columns
-from mst_cli.calibrate.offset_reading import OffsetEstimator, OffsetReadings
+from mst_cli.calibrate.offset_reading import OFFSET_COLUMNS, OffsetEstimator, OffsetReadings
 from mst_cli.calibrate.rig_reading import BranchForces, follow_branches, no_load_rows, tare_shift_T, unloading_model_of
 from mst_cli.calibrate.rung_check import read_rung_warning
 from mst_cli.calibrate.table_reader import OffsetTableReader, ShearTableReader, TwoChipLoadReader
@@ -30,6 +30,8 @@ from mst_cli.model.chip import ChipSetting, field_resolution_T
 from mst_cli.sensor.document import Document
 
 FORCES_FILE = "forces.csv"
+BRANCH_COLUMNS = ("branch", "force_uncertainty_N")
+WRITTEN = (*BRANCH_COLUMNS, *OFFSET_COLUMNS, *LOAD_COLUMNS)  # columns forces.csv may add after FORCES_COLUMNS
 
 
 @dataclass
@@ -52,7 +54,7 @@ class ForceReadings:
     def csv(self) -> str:
         """forces.csv: the input columns and the force, regime, flag and resolution of each row
         (with an estimate: force_N the estimate's, then the centred force and the estimate's columns)."""
-        text = forces_csv(self.readings, self.force_N, self.regime, self.flag, self.force_resolution_N)
+        text = forces_csv(self.readings, self.force_N, self.regime, self.flag, self.force_resolution_N, WRITTEN)
         if self.branches is not None and self.branches.model_used:  # a calibration with an unloading model
             text = _branch_columns(text, self.branches)
         if self.offset is None or self.force_centred_N is None:
@@ -143,7 +145,7 @@ def _branch_columns(forces_csv_text: str, bf: BranchForces) -> str:
     """forces.csv with the branch each reading was read on and its force's 1-sigma uncertainty
     (resolution, the unloading model's residual, the hysteresis a hold leaves open)."""
     lines = forces_csv_text.splitlines()
-    out = [lines[0] + ",branch,force_uncertainty_N"]
+    out = [lines[0] + "," + ",".join(BRANCH_COLUMNS)]
     for i, line in enumerate(lines[1:]):
         u = bf.uncertainty_N[i]
         out.append(f"{line},{bf.branch[i]}," + (f"{u:.6g}" if np.isfinite(u) else ""))
