@@ -240,8 +240,8 @@ class InverseTable:
         parsed without pickles, every array of its kind, shape and finite values checked."""
         try:
             data = read_input(path, MAX_TABLE_BYTES, field=str(path), what="table")
-        except InputError as exc:
-            return None, exc.allowed
+        except InputError as exc:  # "file not found", "is a FIFO (named pipe), not a table: give ..."
+            return None, exc.allowed.removeprefix("is ").split(": give")[0]
         try:
             arrays = _npz_arrays(data)
         except _PARSE_ERRORS as exc:
