@@ -254,7 +254,9 @@ class InverseTable:
     def estimate(self, B_T: np.ndarray, sigma_T: float, max_sigma_mm: float) -> TableEstimates:
         """Every reading (n, 3) in T, with the chip's noise ``sigma_T`` per axis, BLOCK readings
         at a time (a reading has up to a few hundred candidate cells)."""
-        B = np.atleast_2d(np.asarray(B_T, dtype=float))
+        B = np.asarray(B_T, dtype=float).reshape(-1, 3)
+        if not len(B):  # every reading flagged before the estimate
+            return TableEstimates(np.empty((0, 3)), np.empty((0, 3)), np.empty(0, dtype=object), np.empty(0, int), np.empty((0, 3)))
         parts = [estimate_many(self, B[i : i + BLOCK], sigma_T, max_sigma_mm) for i in range(0, len(B), BLOCK)]
         if len(parts) == 1:
             return parts[0]

@@ -147,6 +147,8 @@ class TwoChipLoadReader:
         own flag, and "" here); a reading not ``ok`` keeps its centred force."""
         use = np.isfinite(force_axial_N)
         B = np.asarray(B_T, dtype=float)[use]
+        if not len(B):  # every reading flagged before the estimate
+            return from_estimates(np.empty((0, 5)), np.empty((0, 5)), np.empty(0, dtype=object), force_axial_N, "none")
         est = self.reader.estimate(B)
         if self.polish and len(B):
             est = self.reader.polish(B, est)
