@@ -87,7 +87,9 @@ def field_rows_uT(resp, F: np.ndarray, rng, noise_uT: float = 2.0) -> np.ndarray
 
 def csv_text(header: str, *columns) -> str:
     rows = zip(*columns)
-    return header + "\n" + "".join(",".join(f"{v:.6g}" if not isinstance(v, str) else v for v in r) + "\n" for r in rows)
+    return (
+        header + "\n" + "".join(",".join(f"{v:.6g}" if not isinstance(v, str) else v for v in r) + "\n" for r in rows)
+    )
 
 
 @pytest.fixture(scope="module")
@@ -176,7 +178,9 @@ TABLE_CASES = [
 
 @pytest.mark.parametrize("kind", ["shear", "offset"])
 @pytest.mark.parametrize("case", TABLE_CASES)
-def test_a_table_beside_the_model_that_is_not_good_is_rebuilt_and_named(tmp_path, good_tables, design, small_grids, case, kind):
+def test_a_table_beside_the_model_that_is_not_good_is_rebuilt_and_named(
+    tmp_path, good_tables, design, small_grids, case, kind
+):
     src, data = good_tables
     model = tmp_path / "model.yaml"
     shutil.copy(src, model)
@@ -195,7 +199,9 @@ def test_a_zero_byte_table_is_not_reported_as_an_interrupt(tmp_path, files, smal
     cal = tmp_path / "cal"
     shutil.copytree(files["cal"], cal)
     (cal / SHEAR_TABLE_FILE).write_bytes(b"")
-    r = run(["read", cal / "calibrated.yaml", files["dir"] / "readings.csv", "--estimate", "shear", "--out", tmp_path / "o"])
+    r = run(
+        ["read", cal / "calibrated.yaml", files["dir"] / "readings.csv", "--estimate", "shear", "--out", tmp_path / "o"]
+    )
     assert r.exit_code == 0, (r.exit_code, r.stderr)
     assert "interrupted" not in r.stderr and f"{cal / SHEAR_TABLE_FILE} is not a table" in r.stderr, r.stderr
 
@@ -212,7 +218,15 @@ def test_a_fifo_or_folder_in_the_tables_place_is_passed_over_without_blocking(tm
         "import sys; import mst_cli.calibrate.table_reader as t; t.SHEAR_GRID_DEFAULT = (5, 0.25); "
         "from mst_cli.cli.app import main; sys.exit(main())"
     )
-    args = ["read", cal / "calibrated.yaml", files["dir"] / "readings.csv", "--estimate", "shear", "--out", tmp_path / "o"]
+    args = [
+        "read",
+        cal / "calibrated.yaml",
+        files["dir"] / "readings.csv",
+        "--estimate",
+        "shear",
+        "--out",
+        tmp_path / "o",
+    ]
     p = subprocess.run([sys.executable, "-c", script, *map(str, args)], capture_output=True, text=True, timeout=300)
     assert p.returncode == 0, p.stderr
     kind = "a FIFO (named pipe)" if special == "fifo" else "a folder"
@@ -228,7 +242,9 @@ def test_a_table_that_cannot_be_rebuilt_is_one_line_naming_the_file(tmp_path, fi
         raise ValueError("the model gives no field here")
 
     monkeypatch.setattr(table_reader, "build_table", fails)
-    r = run(["read", cal / "calibrated.yaml", files["dir"] / "readings.csv", "--estimate", "shear", "--out", tmp_path / "o"])
+    r = run(
+        ["read", cal / "calibrated.yaml", files["dir"] / "readings.csv", "--estimate", "shear", "--out", tmp_path / "o"]
+    )
     assert r.exit_code not in (0, 1, 130) and r.exception is None or isinstance(r.exception, SystemExit)
     lines = r.stderr.strip().splitlines()
     assert str(cal / SHEAR_TABLE_FILE) in lines[-1] and "cannot be rebuilt" in lines[-1], lines
@@ -335,8 +351,12 @@ def readers(design, files):
     top = float(reader.inverse_map.force_N[-1])
     sigma = reader.inverse_map.field_resolution_T
     geometry = doc.geometry()
-    shear = table_reader.build_table(geometry, doc.material, "spring", table_reader.grid_of("shear", doc, top, SMALL_SHEAR))
-    offset = table_reader.build_table(geometry, doc.material, "spring", table_reader.grid_of("offset", doc, top, SMALL_OFFSET))
+    shear = table_reader.build_table(
+        geometry, doc.material, "spring", table_reader.grid_of("shear", doc, top, SMALL_SHEAR)
+    )
+    offset = table_reader.build_table(
+        geometry, doc.material, "spring", table_reader.grid_of("offset", doc, top, SMALL_OFFSET)
+    )
     two, _ = load_design_document(FORWARD)
     stack = loaded_stack(two.geometry(), two.material, "spring")
     return {
@@ -413,7 +433,9 @@ def test_a_chip_column_is_matched_as_written(tmp_path, files):
     B = files["B_uT"]
     path = tmp_path / "r.csv"
     path.write_text(csv_text("Bx_uT,By_uT,Bz_uT,Bx02_uT,By02_uT,Bz02_uT", *B.T, *B.T))
-    line = refused(run(["read", files["cal"] / "calibrated.yaml", path, "--out", tmp_path / "o"]), "r.csv column 'Bx02_uT'")
+    line = refused(
+        run(["read", files["cal"] / "calibrated.yaml", path, "--out", tmp_path / "o"]), "r.csv column 'Bx02_uT'"
+    )
     assert "Bx2_uT" in line
 
 
@@ -452,7 +474,9 @@ def test_an_input_column_named_like_an_output_column_is_written_once(tmp_path, f
 
 
 # ----------------------------------------------------------------- 6. force units
-@pytest.mark.parametrize("unit, newtons", [("kgf", 9.80665), ("lbf", 4.4482216152605), ("g", 0.00980665), ("mN", 0.001)])
+@pytest.mark.parametrize(
+    "unit, newtons", [("kgf", 9.80665), ("lbf", 4.4482216152605), ("g", 0.00980665), ("mN", 0.001)]
+)
 def test_a_load_test_in_a_known_other_force_unit_is_named(tmp_path, files, unit, newtons):
     path = tmp_path / "lt.csv"
     path.write_text(csv_text("force_N,Bx_uT,By_uT,Bz_uT", files["F"] / newtons, *files["B_uT"].T))

@@ -26,9 +26,9 @@ from mst_cli.calibrate.calibration_json import (
 )
 from mst_cli.calibrate.chip_choice import ChipChoice, choose_setting_for
 from mst_cli.calibrate.fit_quality import fit_quality
+from mst_cli.calibrate.force_unit import check_force_unit
 from mst_cli.calibrate.header import HEADER_FILE, c_header
 from mst_cli.calibrate.inverse_map import InverseMap, field_sigma_T, inverse_map
-from mst_cli.calibrate.force_unit import check_force_unit
 from mst_cli.calibrate.loadtest import (
     MAX_ROWS,
     Readings,

@@ -37,7 +37,9 @@ def extra_chip_columns(source: str, header: list[str], raw: bool) -> list[tuple[
         axis, chip, unit = m.group(1), int(m.group(2)), m.group(3)
         if not 2 <= chip <= MAX_CHIPS or m.group(2) != str(chip):  # Bx02_uT is not Bx2_uT: names match exactly
             raise InputError(
-                f"{source} column {name!r}", name, f"chips are numbered 2 to {MAX_CHIPS} after chip 1's Bx_uT, as written in Bx2_uT (no leading zero)"
+                f"{source} column {name!r}",
+                name,
+                f"chips are numbered 2 to {MAX_CHIPS} after chip 1's Bx_uT, as written in Bx2_uT (no leading zero)",
             )
         if (unit == "code_lsb") != raw:
             first = "raw codes" if raw else "uT"

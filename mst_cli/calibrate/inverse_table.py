@@ -256,7 +256,9 @@ class InverseTable:
         at a time (a reading has up to a few hundred candidate cells)."""
         B = np.asarray(B_T, dtype=float).reshape(-1, 3)
         if not len(B):  # every reading flagged before the estimate
-            return TableEstimates(np.empty((0, 3)), np.empty((0, 3)), np.empty(0, dtype=object), np.empty(0, int), np.empty((0, 3)))
+            return TableEstimates(
+                np.empty((0, 3)), np.empty((0, 3)), np.empty(0, dtype=object), np.empty(0, int), np.empty((0, 3))
+            )
         parts = [estimate_many(self, B[i : i + BLOCK], sigma_T, max_sigma_mm) for i in range(0, len(B), BLOCK)]
         if len(parts) == 1:
             return parts[0]
@@ -298,7 +300,7 @@ def _checked_table(cls: type[InverseTable], z: dict[str, np.ndarray]) -> Inverse
         if a.ndim != 1 or a.dtype.kind != "f" or len(a) < 2 or not np.all(np.isfinite(a)) or np.any(np.diff(a) <= 0):
             raise ValueError(f"its {key} nodes are not at least 2 ascending finite numbers")
         nodes.append(a.astype(float))
-    grid = TableGrid(*nodes, kind)
+    grid = TableGrid(nodes[0], nodes[1], nodes[2], kind)
     B = z["B_T"]
     if B.dtype.kind != "f" or B.shape != (*grid.shape, 3):
         raise ValueError(f"its field B_T is not numbers of shape {(*grid.shape, 3)}")

@@ -218,7 +218,9 @@ def _check_time_order(source: str, header: list[str], rows: list[list[str]], lin
             )
         if 0 < t - before < MIN_TIME_STEP_S:
             raise InputError(
-                f"{source} line {line} time_s", row[j], f"a step of 0 or at least {MIN_TIME_STEP_S:g} s from the row before"
+                f"{source} line {line} time_s",
+                row[j],
+                f"a step of 0 or at least {MIN_TIME_STEP_S:g} s from the row before",
             )
         before = t
 

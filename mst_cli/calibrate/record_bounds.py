@@ -111,4 +111,3 @@ def unloading_loop(a: float, b: float) -> None:
             f"h = F_turn x (1 - x) (a + b x) reaches {worst:.3g} x the load: the loop is never wider than the "
             "load (|(1 - x) (a + b x)| <= 1 for 0 <= x <= 1)",
         )
-

@@ -20,7 +20,6 @@ Pure: no file or terminal I/O.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np

@@ -210,7 +210,11 @@ def table_beside(
     named. CalibrationFailed naming the file when no table can be built."""
     path = model_file.parent / (SHEAR_TABLE_FILE if kind == "shear" else TABLE_FILE)
     table, why = InverseTable.read(path)
-    if table is not None and table.grid.kind == kind and table.source_hash == table_hash(model_file, mechanics, table.grid):
+    if (
+        table is not None
+        and table.grid.kind == kind
+        and table.source_hash == table_hash(model_file, mechanics, table.grid)
+    ):
         return table, None
     passed = None if why == "file not found" else f"{path} is {why or 'stale'}"
     key = table_hash(model_file, mechanics, grid_of(kind, doc, force_max_N))
@@ -223,7 +227,9 @@ def table_beside(
     try:
         table = build_beside(model_file, doc, mechanics, lever_factor, force_max_N, kind=kind)
     except (CalibrationFailed, ValueError, FloatingPointError) as exc:
-        raise CalibrationFailed(f"{passed or f'{path} is missing'} and the {kind} table cannot be rebuilt: {exc}") from None
+        raise CalibrationFailed(
+            f"{passed or f'{path} is missing'} and the {kind} table cannot be rebuilt: {exc}"
+        ) from None
     stored, not_kept = keep(f"{kind}-{key}.npz", table.dump)
     where = f"kept it in {stored} for the next call" if stored else f"could not keep it for the next call: {not_kept}"
     note = (
