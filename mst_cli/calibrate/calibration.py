@@ -26,6 +26,7 @@ from mst_cli.calibrate.calibration_json import (
 )
 from mst_cli.calibrate.chip_choice import ChipChoice, choose_setting_for
 from mst_cli.calibrate.fit_quality import fit_quality
+from mst_cli.calibrate.force_unit import check_force_unit
 from mst_cli.calibrate.header import HEADER_FILE, c_header
 from mst_cli.calibrate.inverse_map import InverseMap, field_sigma_T, inverse_map
 from mst_cli.calibrate.loadtest import (
@@ -424,6 +425,7 @@ def _fit(
     load."""
     design_resp = simulate(doc.geometry(), doc.material, mechanics=mechanics, noise_uT_rms=doc.noise_uT_rms)
     check_field_unit(lt, float(design_resp.B_abs_T[0]), float(design_resp.B_abs_T[design_resp.in_range][-1]))
+    check_force_unit(lt, design_resp.B_abs_T[design_resp.in_range], design_resp.force_N[design_resp.in_range])
     check_load_test(lt, len(names), design_resp.max_force_N, cal.MIN_POINTS_PER_PARAMETER, cal.MIN_POINTS)
     sigma = field_sigma_T(doc.noise_uT_rms, lt.setting or design_resp.chip_setting)
     t0 = time.monotonic()

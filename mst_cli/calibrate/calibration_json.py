@@ -35,6 +35,7 @@ from typing import Any, NoReturn
 import numpy as np
 
 from mst_cli.calibrate.inverse_map import InverseMap
+from mst_cli.calibrate.record_bounds import checked
 from mst_cli.errors import InputError
 from mst_cli.io.files import read_input_text
 from mst_cli.io.outputs import finite_or_none
@@ -122,10 +123,9 @@ class CalibrationRecord:
         InputError when the file holds something else there."""
         if self.tilt is None:
             return 1.0
-        value = self.tilt.get("lever_factor") if isinstance(self.tilt, dict) else self.tilt
-        if isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value) and value > 0:
-            return float(value)
-        raise InputError(f"{CALIBRATION_JSON} tilt.lever_factor", value, "must be a positive number")
+        tilt = self.tilt if isinstance(self.tilt, dict) else {"lever_factor": self.tilt}
+        value = checked(tilt, "tilt", "lever_factor")  # InputError beyond the fit's bounds
+        return 1.0 if value is None else value
 
     def calibrated_top_N(self) -> float | None:
         """The load test's largest force, when the record holds a usable one."""
@@ -143,8 +143,10 @@ class CalibrationRecord:
         try:
             F = np.asarray(check["force_N"], dtype=np.float64)
             B = np.asarray(check["B_abs_uT"], dtype=np.float64) * 1e-6
-        except (TypeError, KeyError, ValueError):
+        except (TypeError, KeyError, ValueError, OverflowError):
             return None
+        if F.ndim != 1 or F.shape != B.shape or not (np.all(np.isfinite(F)) and np.all(np.isfinite(B))):
+            return None  # not a curve: nothing to compare
         now = np.interp(F, imap.force_N, imap.B_abs_T)
         worst = float(np.max(np.abs(now - B))) if len(F) else 0.0
         if worst > imap.field_resolution_T:
@@ -163,7 +165,7 @@ def record_beside(model_file: Path) -> tuple[str | None, CalibrationRecord | Non
     try:  # regular files only: a FIFO in their place must not block
         data = json.loads(read_input_text(sidecar, MAX_INPUT_BYTES, field=CALIBRATION_JSON))
         text = read_input_text(model_file, MAX_INPUT_BYTES)
-    except ValueError:  # InputError (unreadable, not a file) and bad JSON
+    except (ValueError, RecursionError):  # InputError (unreadable, not a file), bad or too deep JSON
         return (
             f"{Path(model_file).name} has no {CALIBRATION_JSON} beside it: forces come from the "
             "design as drawn, not as printed (run mst calibrate; expect errors of tens of percent)"
@@ -280,7 +282,7 @@ def read_calibration(path: str | Path, doc: Document) -> PrinterCalibration:
     )
     try:
         record = json.loads(text)
-    except ValueError:
+    except (ValueError, RecursionError):  # RecursionError: brackets nested too deep
         _refuse(path, "is not JSON: give the calibration.json mst calibrate wrote")
     if not isinstance(record, dict) or not isinstance(record.get("parameters"), dict):
         _refuse(path, "has no 'parameters' mapping: give the calibration.json mst calibrate wrote")

@@ -12,7 +12,7 @@ import re
 from mst_cli.errors import InputError
 
 MAX_CHIPS = 4  # as magnetometer.positions_mm allows
-CHIP_COLUMN = re.compile(r"^B([xyz])([0-9]+)_(uT|code_lsb)$")
+CHIP_COLUMN = re.compile(r"^B([xyz])([0-9]+)_(uT|code_lsb)$")  # matched, then its number checked as written
 
 
 def chip_column_names(chip: int, raw: bool) -> tuple[str, str, str]:
@@ -35,9 +35,11 @@ def extra_chip_columns(source: str, header: list[str], raw: bool) -> list[tuple[
         if m is None:
             continue
         axis, chip, unit = m.group(1), int(m.group(2)), m.group(3)
-        if not 2 <= chip <= MAX_CHIPS:
+        if not 2 <= chip <= MAX_CHIPS or m.group(2) != str(chip):  # Bx02_uT is not Bx2_uT: names match exactly
             raise InputError(
-                f"{source} column {name!r}", name, f"chips are numbered 2 to {MAX_CHIPS} after chip 1's Bx_uT"
+                f"{source} column {name!r}",
+                name,
+                f"chips are numbered 2 to {MAX_CHIPS} after chip 1's Bx_uT, as written in Bx2_uT (no leading zero)",
             )
         if (unit == "code_lsb") != raw:
             first = "raw codes" if raw else "uT"

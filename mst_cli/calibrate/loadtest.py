@@ -51,6 +51,9 @@ BRANCH_COLUMN = "branch"  # the rig's own loading / unloading / hold label of a 
 BRANCH_VALUES = ("loading", "unloading", "hold")
 RIG_COLUMNS = (*EXTRA_NUMBER_COLUMNS, BRANCH_COLUMN)
 T_C_RANGE = (-40.0, 125.0)  # the MLX90393's operating temperature range, degC
+MAX_CYCLE = 1_000_000  # load cycles of one test (a cycle is seconds: a million is weeks of rig time)
+MAX_TIME_S = 1e9  # 30 years
+MIN_TIME_STEP_S = 1e-6  # finer than any logger stamps (the chip gives at most about 717 samples a second)
 # a column that looks like a force or a field in another unit: refused with the conversion
 FORCE_LIKE = re.compile(r"^(force|load|f|weight|mass)(_.*|\s*\[.*\]|\s*\(.*\))?$", re.IGNORECASE)
 FIELD_LIKE = re.compile(r"^(b|mag)_?[xyz](_.+|\s*\[.*\]|\s*\(.*\))$", re.IGNORECASE)
@@ -190,8 +193,10 @@ def _extra_cell(source, line, column, text) -> None:
 
 def _rig_number(source, line, column, v: float) -> None:
     """A cycle is a whole number; T_C (the chip's temperature) lies in the MLX90393's operating range."""
-    if column == "cycle" and v != round(v):
-        raise InputError(f"{source} line {line} {column}", v, "a whole number (the load cycle)")
+    if column == "cycle" and (v != round(v) or not 0 <= v <= MAX_CYCLE):
+        raise InputError(f"{source} line {line} {column}", v, f"a whole number 0..{MAX_CYCLE} (the load cycle)")
+    if column == "time_s" and not abs(v) <= MAX_TIME_S:
+        raise InputError(f"{source} line {line} {column}", v, f"seconds within +-{MAX_TIME_S:g}")
     lo, hi = T_C_RANGE
     if column == "T_C" and not lo <= v <= hi:
         raise InputError(
@@ -210,6 +215,12 @@ def _check_time_order(source: str, header: list[str], rows: list[list[str]], lin
         if t < before:
             raise InputError(
                 f"{source} line {line} time_s", row[j], f"times that never decrease (the row before has {before:g})"
+            )
+        if 0 < t - before < MIN_TIME_STEP_S:
+            raise InputError(
+                f"{source} line {line} time_s",
+                row[j],
+                f"a step of 0 or at least {MIN_TIME_STEP_S:g} s from the row before",
             )
         before = t
 

@@ -9,7 +9,7 @@ import io
 import math
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from pathlib import Path
 
 import numpy as np
@@ -17,9 +17,9 @@ import numpy as np
 from mst_cli.calibrate.accuracy import ERROR_FROM_RANGE, force_errors, force_errors_by_regime, regime_error_lines
 from mst_cli.calibrate.calibration_json import CalibrationRecord, record_beside
 from mst_cli.calibrate.inverse_map import FLAGS, InverseMap, inverse_map
-from mst_cli.calibrate.load_readings import LoadReadings
+from mst_cli.calibrate.load_readings import LOAD_COLUMNS, LoadReadings
 from mst_cli.calibrate.loadtest import Readings, field_of, rig_column, unknown_columns
-from mst_cli.calibrate.offset_reading import OffsetEstimator, OffsetReadings
+from mst_cli.calibrate.offset_reading import OFFSET_COLUMNS, OffsetEstimator, OffsetReadings
 from mst_cli.calibrate.rig_reading import BranchForces, follow_branches, no_load_rows, tare_shift_T, unloading_model_of
 from mst_cli.calibrate.rung_check import read_rung_warning
 from mst_cli.calibrate.table_reader import OffsetTableReader, ShearTableReader, TwoChipLoadReader
@@ -30,6 +30,8 @@ from mst_cli.model.chip import ChipSetting, field_resolution_T
 from mst_cli.sensor.document import Document
 
 FORCES_FILE = "forces.csv"
+BRANCH_COLUMNS = ("branch", "force_uncertainty_N")
+WRITTEN = (*BRANCH_COLUMNS, *OFFSET_COLUMNS, *LOAD_COLUMNS)  # columns forces.csv may add after FORCES_COLUMNS
 
 
 @dataclass
@@ -52,7 +54,7 @@ class ForceReadings:
     def csv(self) -> str:
         """forces.csv: the input columns and the force, regime, flag and resolution of each row
         (with an estimate: force_N the estimate's, then the centred force and the estimate's columns)."""
-        text = forces_csv(self.readings, self.force_N, self.regime, self.flag, self.force_resolution_N)
+        text = forces_csv(self.readings, self.force_N, self.regime, self.flag, self.force_resolution_N, WRITTEN)
         if self.branches is not None and self.branches.model_used:  # a calibration with an unloading model
             text = _branch_columns(text, self.branches)
         if self.offset is None or self.force_centred_N is None:
@@ -111,11 +113,39 @@ class ForceReadings:
         return "\n".join(lines)
 
 
+def flag_impossible(F: np.ndarray, flag: np.ndarray, top_N: np.ndarray | float) -> None:
+    """No force a sensor cannot give is ``ok`` (issue 46): an ok force below 0 N is flagged
+    below_range, one above ``top_N`` (the last lock's) or not finite above_range, its force
+    emptied (in place)."""
+    ok = flag == "ok"
+    low = ok & (F < 0.0)
+    high = ok & ~(F <= top_N * (1.0 + 1e-9)) & ~low  # NaN and inf too
+    flag[low], flag[high] = "below_range", "above_range"
+    F[low | high] = np.nan
+
+
+def estimates_impossible(est: OffsetReadings | LoadReadings, centred_N: np.ndarray, top_N: np.ndarray) -> None:
+    """An ``ok`` estimate whose force lies outside [0, ``top_N``] or whose values are not finite
+    is no_fit (in place): it keeps the centred force and has no values."""
+    names = [f.name for f in fields(est) if f.name not in ("flag", "assumption") and not f.name.startswith("sigma")]
+    values = np.column_stack([getattr(est, n) for n in names])
+    F = est.force_N
+    bad = (est.flag == "ok") & ~(np.all(np.isfinite(values), axis=1) & (F >= 0.0) & (F <= top_N * (1.0 + 1e-9)))
+    if not bad.any():
+        return
+    est.flag[bad] = "no_fit"
+    for f in fields(est):
+        a = getattr(est, f.name)
+        if isinstance(a, np.ndarray) and a.dtype.kind == "f":
+            a[bad] = np.nan
+    F[bad] = centred_N[bad]
+
+
 def _branch_columns(forces_csv_text: str, bf: BranchForces) -> str:
     """forces.csv with the branch each reading was read on and its force's 1-sigma uncertainty
     (resolution, the unloading model's residual, the hysteresis a hold leaves open)."""
     lines = forces_csv_text.splitlines()
-    out = [lines[0] + ",branch,force_uncertainty_N"]
+    out = [lines[0] + "," + ",".join(BRANCH_COLUMNS)]
     for i, line in enumerate(lines[1:]):
         u = bf.uncertainty_N[i]
         out.append(f"{line},{bf.branch[i]}," + (f"{u:.6g}" if np.isfinite(u) else ""))
@@ -204,10 +234,14 @@ class ForceReader:
         F = F * m
         zero = no_load_rows(B, flag, float(imap.B_abs_T[0]), imap.field_resolution_T)
         F[zero], regime[zero], flag[zero] = 0.0, 1, "ok"
+        top = float(imap.force_N[-1]) * np.maximum(m, 1.0)  # the last lock's force at each T
+        flag_impossible(F, flag, top)
         res = imap.local_resolution_N(np.where(np.isfinite(F), F, 0.0))
         if offsets is None:
             model = unloading_model_of(self.record.hysteresis) if self.record is not None else None
             bf = follow_branches(F, res, model, rig_column(rd, "time_s"))
+            flag_impossible(bf.force_N, flag, top)
+            bf.uncertainty_N[flag != "ok"] = np.nan
             regime = np.where(np.isfinite(bf.force_N), imap.regime_of(np.nan_to_num(bf.force_N)), regime)
             out = ForceReadings(self.document.name, rd, bf.force_N, regime, flag, res, edges_N=imap.edges_N)
             out.branches, out.tare_shift_uT = bf, (shift * 1e6 if tare else None)
@@ -215,6 +249,7 @@ class ForceReader:
         chips = getattr(offsets, "chips", 1)  # a two-chip reader takes every chip's field
         B_est = rd.B_T if chips == 1 or rd.B_chips_T is None else rd.B_chips_T
         est = offsets.estimate_all(B_est, np.where(flag == "ok", F, np.nan))
+        estimates_impossible(est, F, top)
         corrected = np.where(est.flag == "ok", est.force_N, F)
         regime = np.where(np.isfinite(corrected), self.inverse_map.regime_of(corrected), regime)
         return ForceReadings(
@@ -293,6 +328,7 @@ class ForceReader:
         """One stream sample's estimate, kept in ``out``: (the force, its regime, what the terminal
         line adds)."""
         est = offsets.estimate_all(B[None, :], np.array([f if fl == "ok" else math.nan]))
+        estimates_impossible(est, np.array([f]), np.array([float(self.inverse_map.force_N[-1])]))
         out.offsets.append((f, est))
         if est.flag[0] != "ok":
             return f, r, est.terminal(0)

@@ -234,8 +234,11 @@ def describe(analysis: RigAnalysis, edges_N: np.ndarray, force_of_field_N) -> No
         a, z = hold
         if a == 0:
             continue
+        held_N = float(np.mean(lt.load_N[a:z]))
+        if not held_N > b.dead_band_N:  # a hold at no load: creep as a share of ~0 N is no number
+            continue
         try:
-            c = hy.creep(t, reading_N, hold, held_force_N=float(np.mean(lt.load_N[a:z])))
+            c = hy.creep(t, reading_N, hold, held_force_N=held_N)
         except CalibrationFailed:
             continue
         analysis.creep.append((hold, c))

@@ -20,13 +20,13 @@ Pure: no file or terminal I/O.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from mst_cli.calibrate.branches import HOLD, LOADING, UNLOADING, find_branches
 from mst_cli.calibrate.hysteresis import UnloadingModel
+from mst_cli.calibrate.record_bounds import checked, unloading_loop
 from mst_cli.errors import InputError
 
 NO_LOAD_SIGMAS = 6.0  # a reading this many field resolutions below no load is below_range; closer, 0 N
@@ -34,15 +34,17 @@ MIN_BRANCH_ROWS = 5  # fewer in-range readings: no branch is followed (every rea
 
 
 def unloading_model_of(hysteresis: object) -> UnloadingModel | None:
-    """The unloading model of calibration.json's hysteresis section (None when it holds none
-    or something malformed: the reader then reads every sample on the loading branch)."""
+    """The unloading model of calibration.json's hysteresis section (None when it holds none:
+    the reader then reads every sample on the loading branch). InputError naming the key when a
+    term is not a number inside its physical bound (:mod:`~mst_cli.calibrate.record_bounds`)."""
     if not isinstance(hysteresis, dict) or not isinstance(hysteresis.get("unloading_model"), dict):
         return None
-    m = hysteresis["unloading_model"]
-    values = [m.get(k) for k in ("a", "b", "residual_rms_N")]
-    if not all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in values):
+    m, path = hysteresis["unloading_model"], "hysteresis.unloading_model"
+    a, b, residual = (checked(m, path, k) for k in ("a", "b", "residual_rms_N"))
+    if a is None or b is None or residual is None:
         return None
-    return UnloadingModel(float(values[0]), float(values[1]), float(values[2]), int(m.get("rows") or 0))
+    unloading_loop(a, b)
+    return UnloadingModel(a, b, residual, int(checked(m, path, "rows") or 0))
 
 
 def tare_shift_T(B_abs_T: np.ndarray, tare: int, B_unloaded_T: float, source: str) -> float:

@@ -37,7 +37,10 @@ from mst_cli.calibrate.load_readings import LoadReadings, from_estimates
 from mst_cli.calibrate.offset_reading import DEFAULT_MAX_SIGMA_MM, OffsetEstimator, OffsetReadings
 from mst_cli.calibrate.shear_reading import CHI2_FLAG, ShearReader
 from mst_cli.calibrate.two_chip_table import TwoChipReader
-from mst_cli.errors import InputError
+from mst_cli.errors import CalibrationFailed, InputError
+from mst_cli.io.cache import cached_path, keep, touch
+from mst_cli.io.files import read_input_text
+from mst_cli.io.yaml_io import MAX_INPUT_BYTES
 from mst_cli.model.general_load import loaded_stack
 from mst_cli.sensor.document import Document
 
@@ -144,6 +147,8 @@ class TwoChipLoadReader:
         own flag, and "" here); a reading not ``ok`` keeps its centred force."""
         use = np.isfinite(force_axial_N)
         B = np.asarray(B_T, dtype=float)[use]
+        if not len(B):  # every reading flagged before the estimate
+            return from_estimates(np.empty((0, 5)), np.empty((0, 5)), np.empty(0, dtype=object), force_axial_N, "none")
         est = self.reader.estimate(B)
         if self.polish and len(B):
             est = self.reader.polish(B, est)
@@ -159,9 +164,15 @@ def two_chip_reader(doc: Document, imap: InverseMap, lever: float, mechanics: st
 
 def table_hash(model_file: Path, mechanics: str, grid: TableGrid) -> str:
     """The hash a current table of ``grid`` beside ``model_file`` carries."""
-    beside = model_file.parent / CALIBRATION_JSON
-    cal = beside.read_text(encoding="utf-8") if beside.is_file() else None
-    return source_hash(model_file.read_text(encoding="utf-8"), cal, mechanics, grid)
+    return source_hash(_text(model_file) or "", _text(model_file.parent / CALIBRATION_JSON), mechanics, grid)
+
+
+def _text(path: Path) -> str | None:
+    """A file's text read as every input file is (None: none to read there)."""
+    try:
+        return read_input_text(path, MAX_INPUT_BYTES, field=str(path))
+    except InputError:
+        return None
 
 
 def grid_of(kind: str, doc: Document, force_max_N: float, grid: tuple[int, float] | None = None) -> TableGrid:
@@ -191,23 +202,39 @@ def build_beside(
 def table_beside(
     model_file: Path, doc: Document, mechanics: str, lever_factor: float, force_max_N: float, kind: str = "offset"
 ) -> tuple[InverseTable, str | None]:
-    """The table of ``kind`` beside ``model_file`` when it is current (of any grid: the one its
-    maker chose), else one of the default grid built now and a note saying so (the caller writes
-    it with its results)."""
+    """The table of ``kind`` of the model in ``model_file``: the one beside it when it is current
+    (of any grid: the one its maker chose), else the one an earlier call kept in the cache (of the
+    default grid, found by its hash), else one built now and kept there for the next call; and a
+    note saying what was built or passed over (None: a table beside it was current). Every file
+    is read through :meth:`InverseTable.read`: one that is not a good table is passed over and
+    named. CalibrationFailed naming the file when no table can be built."""
     path = model_file.parent / (SHEAR_TABLE_FILE if kind == "shear" else TABLE_FILE)
-    table = InverseTable.load(path)
+    table, why = InverseTable.read(path)
     if (
         table is not None
         and table.grid.kind == kind
         and table.source_hash == table_hash(model_file, mechanics, table.grid)
     ):
         return table, None
+    passed = None if why == "file not found" else f"{path} is {why or 'stale'}"
+    key = table_hash(model_file, mechanics, grid_of(kind, doc, force_max_N))
+    kept = cached_path(f"{kind}-{key}.npz")
+    found = InverseTable.read(kept)[0] if kept is not None else None
+    if found is not None and found.grid.kind == kind and found.source_hash == key:
+        touch(kept)  # type: ignore[arg-type]  # found: kept is a path
+        return found, None if passed is None else f"{passed}: used the {kind} table kept in {kept}"
     t0 = time.perf_counter()
-    table = build_beside(model_file, doc, mechanics, lever_factor, force_max_N, kind=kind)
-    why = "is stale" if path.exists() else "is missing"
+    try:
+        table = build_beside(model_file, doc, mechanics, lever_factor, force_max_N, kind=kind)
+    except (CalibrationFailed, ValueError, FloatingPointError) as exc:
+        raise CalibrationFailed(
+            f"{passed or f'{path} is missing'} and the {kind} table cannot be rebuilt: {exc}"
+        ) from None
+    stored, not_kept = keep(f"{kind}-{key}.npz", table.dump)
+    where = f"kept it in {stored} for the next call" if stored else f"could not keep it for the next call: {not_kept}"
     note = (
-        f"{path} {why}: built the {kind} table in {time.perf_counter() - t0:.0f} s and wrote it with the "
-        f"results (mst calibrate --{kind}-table writes it beside the model; so does copying it there)"
+        f"{passed or f'{path} is missing'}: built the {kind} table in {time.perf_counter() - t0:.0f} s, {where} "
+        f"and wrote it with the results (mst calibrate --{kind}-table writes it beside the model)"
     )
     return table, note
 

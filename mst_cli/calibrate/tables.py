@@ -67,13 +67,35 @@ def residuals_csv(lt: Readings, fit: FitResult, F_fit: np.ndarray, flag_fit: Seq
     return buf.getvalue()
 
 
+def reference_names(header: Sequence[str], written: Sequence[str]) -> list[str]:
+    """``header`` with every name that mst read writes itself (``written``) renamed
+    ``<name>_reference`` (force_N_reference: the load cell's; x_mm_reference: where it was
+    pressed), so that no name appears twice in forces.csv."""
+    taken = {*header, *written}
+    out = []
+    for h in header:
+        if h in written:
+            new = f"{h}_reference"
+            while new in taken:  # the file has that name too
+                new += "_"
+            taken.add(new)
+            h = new
+        out.append(h)
+    return out
+
+
 def forces_csv(
-    rd: Readings, F: np.ndarray, regime: np.ndarray, flag: Sequence[str] | np.ndarray, res: np.ndarray
+    rd: Readings,
+    F: np.ndarray,
+    regime: np.ndarray,
+    flag: Sequence[str] | np.ndarray,
+    res: np.ndarray,
+    appended: Sequence[str] = (),
 ) -> str:
-    """The readings file's columns as written (its force_N renamed force_N_reference) and
-    FORCES_COLUMNS; a flagged reading's force, regime and resolution are empty."""
-    renamed = {"force_N": "force_N_reference", "branch": "branch_reference"}  # mst read writes its own
-    header = [renamed.get(h, h) for h in rd.header]
+    """The readings file's columns as written (a name among FORCES_COLUMNS or ``appended``, the
+    columns the caller adds, renamed :func:`reference_names`) and FORCES_COLUMNS; a flagged
+    reading's force, regime and resolution are empty."""
+    header = reference_names(rd.header, (*FORCES_COLUMNS, *appended))
     buf = io.StringIO()
     buf.write(",".join([quoted(h) for h in header] + list(FORCES_COLUMNS)) + "\n")
     for i, row in enumerate(rd.rows):

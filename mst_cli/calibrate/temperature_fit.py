@@ -26,6 +26,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from mst_cli.calibrate.loadtest import Readings, rig_column
+from mst_cli.calibrate.record_bounds import checked
 from mst_cli.calibrate.temperature import fit_modulus_coeff, modulus_scale, remanence_scale
 from mst_cli.errors import CalibrationFailed
 from mst_cli.model.components import (
@@ -122,10 +123,8 @@ def reading_scales(rd: Readings, doc: Document, temperature: object) -> tuple[np
     T = rig_column(rd, T_COLUMN)
     if T is None:
         return None
-    beta = temperature.get(KEY) if isinstance(temperature, dict) else None
-    if not isinstance(beta, (int, float)) or isinstance(beta, bool) or not math.isfinite(beta):
-        beta = 0.0
-    return remanence_scale(T, remanence_coeff_of(doc)), modulus_scale(T, float(beta))
+    beta = checked(temperature, "temperature", KEY) or 0.0  # InputError beyond its physical bound
+    return remanence_scale(T, remanence_coeff_of(doc)), modulus_scale(T, beta)
 
 
 def field_at_reference(

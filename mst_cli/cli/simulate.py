@@ -85,8 +85,10 @@ def simulate(
         doc,
         mechanics=mechanics,
         field_model=field_model,
-        load_offset_mm=_pair(load_offset, "--load-offset-mm", "X,Y in mm, e.g. 5,0") if load_offset else None,
-        shear_ratio=_pair(shear_ratio, "--shear-ratio", "RX,RY, e.g. 0.3,0") if shear_ratio else None,
+        load_offset_mm=_pair(load_offset, "--load-offset-mm", "X,Y in mm, e.g. 5,0")
+        if load_offset is not None
+        else None,
+        shear_ratio=_pair(shear_ratio, "--shear-ratio", "RX,RY, e.g. 0.3,0") if shear_ratio is not None else None,
         offset_map=offset_map,
         out=out,
         plot=plot,

@@ -1,0 +1,113 @@
+"""The physical bounds of the fitted values ``mst read`` takes from a calibration.json (issue 46).
+
+calibration.json sits beside the model, where a user may edit it. A value the reader applies
+to every reading is checked where it is read, against the bound the physics sets, and refused
+in one line naming its key (:class:`~mst_cli.errors.InputError`, exit 2): a missing or null
+key is read as absent (the reader's default), anything else must be a number inside its bound.
+
+The table :data:`BOUNDS` holds one :class:`Bound` per key (a new fitted key is one more row);
+:func:`unloading_loop` checks the unloading model's two terms together:
+
+* ``temperature.modulus_temp_coeff_per_K`` (beta): the modulus scale m(T) = 1 + beta (T - 20)
+  multiplies every force read at T. It must stay at least :data:`MIN_MODULUS_SCALE` over the
+  MLX90393's operating range, -40 to 125 degC (datasheet; the range ``T_C`` is read in): a
+  negative scale reads a press as a pull, and an elastomer that loses nine tenths of its
+  stiffness over that range has left its rubbery plateau. Hence
+  -(1 - 0.1) / 105 <= beta <= (1 - 0.1) / 60 per K (about -0.86 to +1.5 %/K);
+* ``hysteresis.unloading_model`` (:class:`~mst_cli.calibrate.hysteresis.UnloadingModel`):
+  h = F_turn x (1 - x) (a + b x) is what unloading takes off the loading force. The loop is
+  never wider than the load itself, |h| <= F_load over the whole loop (0 <= x <= 1), so an
+  unloading force lies between 0 and twice the loading force: |(1 - x) (a + b x)| <= 1;
+  ``residual_rms_N`` is a spread (finite, >= 0, at most MAX_FORCE_N), ``rows`` a count
+  (0 to the load test's MAX_ROWS);
+* ``tilt.lever_factor``: inside the bounds the fit searches (LEVER_FACTOR_BOUNDS).
+
+Pure: no file or terminal I/O.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+from mst_cli.calibrate.loadtest import MAX_ROWS, T_C_RANGE
+from mst_cli.calibrate.tilt_fit import LEVER_FACTOR_BOUNDS
+from mst_cli.errors import InputError
+from mst_cli.model.components import REFERENCE_TEMPERATURE_C
+
+CALIBRATION_JSON = "calibration.json"
+MIN_MODULUS_SCALE = 0.1  # the least m(T) over the chip's range (module docstring)
+MAX_FORCE_N = 1e4  # a force spread no fingertip sensor reads (a kilonewton is a press, not a touch)
+_BETA_LO = -(1.0 - MIN_MODULUS_SCALE) / (T_C_RANGE[1] - REFERENCE_TEMPERATURE_C)
+_BETA_HI = (1.0 - MIN_MODULUS_SCALE) / (REFERENCE_TEMPERATURE_C - T_C_RANGE[0])
+
+
+@dataclass(frozen=True)
+class Bound:
+    """What one key of calibration.json accepts: a number in [lo, hi] (``integer``: a whole one)."""
+
+    key: str  # dotted path in calibration.json
+    lo: float
+    hi: float
+    unit: str
+    why: str
+    integer: bool = False
+
+    def allowed(self) -> str:
+        kind = "a whole number" if self.integer else "a number"
+        return f"must be {kind} from {self.lo:.4g} to {self.hi:.4g}{' ' + self.unit if self.unit else ''}: {self.why}"
+
+    def check(self, value: Any) -> float:
+        number = isinstance(value, (int, float)) and not isinstance(value, bool)
+        if not number or not math.isfinite(value) or not self.lo <= value <= self.hi:
+            raise InputError(f"{CALIBRATION_JSON} {self.key}", value, self.allowed())
+        if self.integer and value != int(value):
+            raise InputError(f"{CALIBRATION_JSON} {self.key}", value, self.allowed())
+        return float(value)
+
+
+BOUNDS: dict[str, Bound] = {
+    b.key: b
+    for b in (
+        Bound(
+            "temperature.modulus_temp_coeff_per_K",
+            _BETA_LO,
+            _BETA_HI,
+            "1/K",
+            f"the modulus scale 1 + beta (T - {REFERENCE_TEMPERATURE_C:g}) stays >= {MIN_MODULUS_SCALE:g} over the "
+            f"MLX90393's {T_C_RANGE[0]:g}..{T_C_RANGE[1]:g} degC",
+        ),
+        Bound("hysteresis.unloading_model.a", -1.0, 1.0, "", "the loop is never wider than the load"),
+        Bound("hysteresis.unloading_model.b", -8.0, 8.0, "", "the loop is never wider than the load"),
+        Bound("hysteresis.unloading_model.residual_rms_N", 0.0, MAX_FORCE_N, "N", "a spread of forces"),
+        Bound("hysteresis.unloading_model.rows", 0, MAX_ROWS, "", "a count of load-test rows", integer=True),
+        Bound("tilt.lever_factor", *LEVER_FACTOR_BOUNDS, "", "the range the tilt fit searches"),
+    )
+}
+
+
+def checked(section: object, path: str, name: str) -> float | None:
+    """The value of ``name`` in ``section``, the mapping at the dotted ``path`` of calibration.json
+    (its key ``path.name`` a row of BOUNDS): None when missing or null (or ``section`` is not a
+    mapping), else checked against its bound (InputError naming the key)."""
+    value = section.get(name) if isinstance(section, dict) else None
+    return None if value is None else BOUNDS[f"{path}.{name}"].check(value)
+
+
+def unloading_loop(a: float, b: float) -> None:
+    """|(1 - x) (a + b x)| <= 1 over 0 <= x <= 1 (its extremes: the ends and the vertex), else
+    InputError naming the model's two terms."""
+    g = [a, 0.0]  # x = 0 and x = 1
+    if b != 0.0:
+        x = (b - a) / (2.0 * b)
+        if 0.0 < x < 1.0:
+            g.append((1.0 - x) * (a + b * x))
+    worst = max(abs(v) for v in g)
+    if worst > 1.0 + 1e-12:
+        raise InputError(
+            f"{CALIBRATION_JSON} hysteresis.unloading_model.a, b",
+            [a, b],
+            f"h = F_turn x (1 - x) (a + b x) reaches {worst:.3g} x the load: the loop is never wider than the "
+            "load (|(1 - x) (a + b x)| <= 1 for 0 <= x <= 1)",
+        )
