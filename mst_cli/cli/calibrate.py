@@ -70,6 +70,15 @@ def fail_fit(reason: str, what: str = "calibration failed") -> NoReturn:
     "that differs are described in calibration.json's hysteresis section, not fitted).",
 )
 @click.option(
+    "--missing-force",
+    type=float,
+    default=None,
+    metavar="SENTINEL",
+    help="A logger's mark for a row without a force (e.g. -1; nan for empty and nan cells only): such rows "
+    "are skipped and counted in one line, never fitted (their field still times the lag). Without it they are "
+    "refused.",
+)
+@click.option(
     "--offset-table",
     is_flag=True,
     help="Also write inverse_table.npz (what mst read --estimate offset reads; a minute or two) and offset_table.h.",
@@ -91,6 +100,7 @@ def calibrate(
     res: int | None,
     table_size: int,
     ignore_branches: bool,
+    missing_force: float | None,
     offset_table: bool,
     shear_table: bool,
     no_plot: bool,
@@ -126,6 +136,7 @@ def calibrate(
             shear_table=shear_table,
             progress=lambda line: click.echo(f"mst calibrate: {line}", err=True),
             use_branches=not ignore_branches,
+            missing_force=missing_force,
         )
     except api.CalibrationFailed as exc:
         fail_fit(str(exc))
