@@ -32,7 +32,7 @@ from mst_cli.calibrate.branches import HOLD, LOADING, UNLOADING, Branches, find_
 from mst_cli.calibrate.loadtest import Readings, rig_column
 from mst_cli.calibrate.softening import Softening, fit_softening
 from mst_cli.calibrate.time_alignment import Alignment
-from mst_cli.calibrate.zero_drift import ZeroLaw, fit_zero, remove_zero
+from mst_cli.calibrate.zero_drift import ZeroLaw, fit_zero, remove_zero, rest_runs
 from mst_cli.errors import CalibrationFailed, InputError
 
 MIN_LOADING_SPAN = 0.5  # loading rows must span this fraction of the force span, else holds are fitted too
@@ -211,10 +211,14 @@ def _cycle_hint(lt: Readings) -> list[int] | None:
 def _rests(lt: Readings, b: Branches) -> tuple[Branches, np.ndarray]:
     """(the branches without holds near zero force, the rows at rest): a hold below
     REST_FORCE_REL of the largest force (a load cell clipped at 0 between presses) is no hold (no
-    creep); its rows and every row within the dead band of 0 are the zero's."""
+    creep); its rows and every run of rows within the dead band of 0 lasting MIN_REST_S (with
+    time_s) are the zero's."""
     F = lt.load_N
     top = float(np.max(F)) if len(F) else 0.0
-    rest = F <= b.dead_band_N
+    rest = np.zeros(len(F), bool)
+    t = rig_column(lt, "time_s")
+    for a, z in rest_runs(t, F <= b.dead_band_N) if t is not None else ():
+        rest[a:z] = True
     label, kept = b.label.copy(), []
     for a, z in b.holds:
         if float(np.mean(F[a:z])) <= REST_FORCE_REL * top:

@@ -37,6 +37,7 @@ MIN_FORCE_REL = 0.05  # rows compared from this fraction of the full scale
 REPORT_X = (0.1, 0.5, 0.9)
 X_GRID = np.linspace(0.1, 0.9, 17)
 MIN_ROWS = 20
+MIN_PRESSES = 4  # the law's four coefficients need three presses against the last (fewer: hysteresis.first_cycle)
 
 
 @dataclass(frozen=True)
@@ -105,14 +106,14 @@ def _model(p, x, k, K):
 
 
 def fit_softening(B_abs_T, force_N, label, cycle) -> Softening | None:
-    """The law from the loading rows of every press against the last's (None: fewer than three
-    presses, or too few rows)."""
+    """The law from the loading rows of every press against the last's (None: fewer than
+    MIN_PRESSES presses, or too few rows)."""
     B, F = np.asarray(B_abs_T, float), np.asarray(force_N, float)
     lab, cyc = np.asarray(label, dtype=object), np.asarray(cycle, int)
     load = lab == LOADING
     K = int(cyc[load].max(initial=0))
     ref = load & (cyc == K)
-    if K < 3 or ref.sum() < 12:
+    if K < MIN_PRESSES or ref.sum() < 12:
         return None
     full = float(F[ref].max())
     rows = load & (cyc < K) & (F > MIN_FORCE_REL * full)
@@ -121,7 +122,8 @@ def fit_softening(B_abs_T, force_N, label, cycle) -> Softening | None:
     F_ref = force_at_field_N(B[ref], F[ref], B[rows])
     ok = F_ref > MIN_FORCE_REL * full
     x, k, d = F_ref[ok] / full, cyc[rows][ok].astype(float), F[rows][ok] / F_ref[ok] - 1
-    fit = least_squares(lambda p: _model(p, x, k, K) - d, x0=[math.log(0.3), -2.0, 0.0, 1.0], method="lm")
+    bounds = ([-10.0, -20.0, -20.0, 0.0], [3.0, 20.0, 20.0, 6.0])
+    fit = least_squares(lambda p: _model(p, x, k, K) - d, x0=[math.log(0.3), -2.0, 0.0, 1.0], bounds=bounds)
     r = fit.fun
     dof = max(len(d) - 4, 1)
     try:
@@ -129,6 +131,8 @@ def fit_softening(B_abs_T, force_N, label, cycle) -> Softening | None:
     except np.linalg.LinAlgError:
         return None
     coef = tuple(float(v) for v in fit.x)
+    if not np.all(np.isfinite(cov)):
+        return None
     law = Softening(coef, cov, K, 1, 1, int(len(d)), float(100 * np.sqrt(np.mean(r**2))))  # type: ignore[arg-type]
     first = next((j for j in range(1, K + 1) if np.max(law.over_last(X_GRID, j)) * 100 <= SETTLED_PCT), K)
     settle = next((j for j in range(1, 1000) if np.max(law.extra(X_GRID, j)) * 100 <= SETTLED_PCT), 1000)

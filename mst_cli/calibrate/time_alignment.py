@@ -15,7 +15,8 @@ whatever the loop's shape, so hysteresis and softening move the rates' correlati
 the levels' correlation has a flat top. Its sigma: the spread of the lag over
 :data:`LAG_BLOCKS` equal blocks of the test, / sqrt(blocks).
 
-A row with a force is fitted against the field interpolated at its time minus the lag (the field
+A lag within :data:`LAG_SIGNIFICANCE` sigma of 0 is not applied (the test cannot tell it from
+none: a rig sampled once a second gives +-0.4 s). A row with a force is fitted against the field interpolated at its time minus the lag (the field
 is on every row); a row without a force is never fitted. A time step longer than
 :data:`MAX_GAP_S` (or 5 median steps) is a gap: nothing is interpolated across it.
 
@@ -40,6 +41,7 @@ RATE_SMOOTH_S = 0.1  # the rates are smoothed over this window (the field's nois
 LAG_BLOCKS = 5
 MAX_GAP_S = 0.25
 GAP_STEPS = 5.0
+LAG_SIGNIFICANCE = 2.0
 NO_TIME_NOTE = (
     "no time_s: the lag between the force and the field is neither measured nor removed (a lag of "
     "0.2 s reads as a loop of several % of full scale); log time_s with every row"
@@ -57,13 +59,14 @@ class Alignment:
     rows_in_gaps: int  # rows with a force whose shifted time falls in a gap of the field
     gaps: int  # time steps longer than the gap limit
     note: str | None = None
+    applied: bool = True
 
     def record(self) -> dict:
         """calibration.json's ``time_alignment``."""
         return {
             "lag_s": self.lag_s,
             "lag_sigma_s": self.sigma_s,
-            "applied": self.lag_s is not None,
+            "applied": self.lag_s is not None and self.applied,
             "rule": "the force of a row is fitted against the field at its time minus lag_s (the lag that "
             f"best lines up the rates of force and |B|, sigma from {LAG_BLOCKS} blocks of the test)",
             "rows": self.rows,
@@ -76,8 +79,9 @@ class Alignment:
     def line(self) -> str:
         """The summary's line."""
         skipped = f"; {self.rows_without_force} of {self.rows} rows without a force skipped, never fitted"
-        if self.lag_s is None:
-            return f"force lag: not measured ({self.note}){skipped if self.rows_without_force else ''}"
+        if self.lag_s is None or not self.applied:
+            why = f"not measured ({self.note})" if self.lag_s is None else str(self.note)
+            return f"force lag: {why}{skipped if self.rows_without_force else ''}"
         return (
             f"force lag: the force is {1e3 * self.lag_s:.0f} +- {1e3 * (self.sigma_s or math.nan):.0f} ms behind "
             f"the field, removed{skipped if self.rows_without_force else ''}"
@@ -168,9 +172,12 @@ def align(lt: Readings) -> tuple[Readings, Alignment]:
     gap = _max_gap(t)
     gaps = int(np.sum(np.diff(t) > gap))
     lag, sigma = estimate_lag(t, lt.B_abs_T, F)
-    if lag is None:
+    if lag is None or sigma is None:
         note = "too few rows with a force to measure the lag"
         return lt.subset(has), Alignment(None, None, len(lt), n_missing, 0, gaps, note)
+    if abs(lag) <= LAG_SIGNIFICANCE * sigma:
+        note = f"{1e3 * lag:.0f} +- {1e3 * sigma:.0f} ms, within {LAG_SIGNIFICANCE:g} sigma of 0: not applied"
+        return lt.subset(has), Alignment(lag, sigma, len(lt), n_missing, 0, gaps, note, applied=False)
     q = t[has] - lag
     ok = _bracketed(t, q, gap)
     B = np.stack([np.interp(q, t, lt.B_T[:, i]) for i in range(3)], -1)
