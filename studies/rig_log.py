@@ -6,7 +6,7 @@ its own field (0 turns it off) and a stated truth:
 
 * timing: rows every ``dt_s`` (50 Hz: a 0.1 s pause is five rows); each press rests
   ``rest_s`` at no load, loads linearly in time to its turning force in ``ramp_s``, may hold it
-  (``hold_cycles``, ``hold_s``), unloads in ``ramp_s``; a gap of ``turn_gap_s`` (no rows at all)
+  (``hold_cycles``, ``hold_s``, at ``hold_fraction`` of the full scale), unloads in ``ramp_s``; a gap of ``turn_gap_s`` (no rows at all)
   falls at every turn to unloading;
 * the force stream lags the field by ``lag_s``: a row's force is the true force ``lag_s``
   earlier; the load cell adds ``force_noise_N`` and clips at 0 N (an unloaded cell reads 0,
@@ -22,9 +22,9 @@ its own field (0 turns it off) and a stated truth:
   monotone cubic (PCHIP) through ``loop_pct`` at x = 0, 0.25, 0.5, 0.75, 1 (% of F_turn:
   -3 near no load, -0.4..+2 mid-range, 0 at the turn), plus ``open_after_hold_pct`` exp(-(1 - x)
   / 0.3) after a hold (a loop still open at the turn);
-* softening: press k is stiffer by A(x) k^-q (force at a deflection x (1 + A k^-q)), A through
-  ``softening_pct`` at x = 0.1, 0.5, 0.9 (log-linear between, flat beyond), q =
-  ``softening_decay``; the settled sensor (k -> infinity) is the printed truth;
+* softening: press k is stiffer by A(x) k^-q (force at a deflection x (1 + A k^-q), x the settled
+  sensor's force at that deflection / the full scale), A through
+  ``softening_pct`` at x = 0.1, 0.5, 0.9 (log A quadratic in x), q = ``softening_decay``; the settled sensor (k -> infinity) is the printed truth;
 * creep under a hold: the deflection of F_turn (1 + c log10(max(t - t_peak, 0.1 s) / 1 s)),
   c = ``creep_pct_per_decade`` / 100.
 
@@ -56,6 +56,8 @@ class RigLog:
     rest_s: float = 3.0
     ramp_s: float = 4.0
     hold_cycles: tuple[int, ...] = (4, 8)
+    hold_fraction: float = 0.8  # a press with a hold turns at this fraction of the full scale (the
+    # calibrated map ends at the last lock: creep above it would read as the full scale)
     hold_s: float = 5.0
     turn_gap_s: float = 1.1
     lag_s: float = 0.2
@@ -95,11 +97,13 @@ def loop_h(rig: RigLog, x, after_hold) -> np.ndarray:
 
 
 def softening_A(rig: RigLog, x) -> np.ndarray:
-    """A(x): the extra stiffness of press 1 over the settled sensor at load fraction x."""
+    """A(x): the extra stiffness of press 1 over the settled sensor at load fraction x (log A
+    quadratic through the three measured points, x held within 0..1)."""
     pct = np.asarray(rig.softening_pct, float)
     if not np.any(pct > 0):
         return np.zeros_like(np.asarray(x, float))
-    return np.exp(np.interp(np.asarray(x, float), SOFTENING_X, np.log(0.01 * pct)))
+    coef = np.polyfit(SOFTENING_X, np.log(0.01 * pct), 2)
+    return np.exp(np.polyval(coef, np.clip(np.asarray(x, float), 0.0, 1.0)))
 
 
 def stiffness(rig: RigLog, x, press) -> np.ndarray:
@@ -112,7 +116,8 @@ def _schedule(rig: RigLog, F_fs: float) -> list[tuple[str, float, float, float, 
     fractions = rig.turn_fraction or (1.0,) * rig.cycles
     seg, t = [], 0.0
     for i in range(rig.cycles):
-        k, F_turn = rig.first_cycle + i, fractions[i] * F_fs
+        k = rig.first_cycle + i
+        F_turn = (rig.hold_fraction if k in rig.hold_cycles and not rig.turn_fraction else fractions[i]) * F_fs
         seg.append(("rest", t, t + rig.rest_s, 0.0, 0.0, k))
         seg.append(("loading", t + rig.rest_s, t + rig.rest_s + rig.ramp_s, 0.0, F_turn, k))
         t += rig.rest_s + rig.ramp_s
@@ -175,7 +180,9 @@ def rig_log(rig: RigLog, curve: Curve | None = None) -> tuple[dict[str, np.ndarr
     hold = kind == "hold"
     c = 0.01 * rig.creep_pct_per_decade
     F_load[hold] = F[hold] * (1 + c * np.log10(np.maximum(into_hold[hold], 0.1)))
-    Fe = F_load / stiffness(rig, F_load / F_fs, press)
+    Fe = F_load.copy()
+    for _ in range(20):  # the settled sensor's force at the deflection: F_load = Fe (1 + A(Fe / F_fs) k^-q)
+        Fe = F_load / stiffness(rig, Fe / F_fs, press)
     B = curve.field_T(Fe)
     span_T = float(curve.field_abs_T(F_fs) - curve.field_abs_T(0.0))
     first_up = next(s[2] for s in seg if s[0] == "unloading")

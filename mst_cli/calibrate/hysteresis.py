@@ -46,6 +46,7 @@ HYSTERESIS_DEGREE = 2  # polynomial of the loading-minus-unloading force against
 FIRST_CYCLE_Z = 5.0  # cycle 1 differs when its relative stiffness is this many sigma from 0
 FIRST_CYCLE_MIN_FORCE_REL = 0.1  # ... compared on rows above this fraction of the full scale
 UNLOADING_DEGREE = 3  # the unloading model's polynomial in the force fraction
+CREEP_FROM_S = 0.2  # creep is fitted from this long into a hold (the ramp's stop, the force's lag before it)
 
 
 def force_at_field_N(
@@ -289,13 +290,13 @@ def creep(
 ) -> Creep:
     """Creep over the hold rows [hold[0], hold[1]): ordinary least squares of the reading
     against log10(t - t_start) (t_start: the row before the hold, the one that reached the
-    force). ``reading`` is a force (N), or |B| (T) when ``field_slope_T_per_N`` (d|B|/dF at the
+    force), from CREEP_FROM_S into the hold. ``reading`` is a force (N), or |B| (T) when ``field_slope_T_per_N`` (d|B|/dF at the
     held force) is given. The held force defaults to the fit's value at t - t_start = 1 s."""
     a, b = hold
     t = np.asarray(time_s, float)
     y = np.asarray(reading, float)[a:b]
     t0 = float(t[a - 1]) if t_start_s is None and a > 0 else float(t_start_s if t_start_s is not None else t[a])
-    keep = t[a:b] > t0
+    keep = t[a:b] - t0 >= min(CREEP_FROM_S, 0.5 * float(t[b - 1] - t0))  # the ramp's stop is no creep
     L, y = np.log10(t[a:b][keep] - t0), y[keep]
     if len(y) < 3 or np.ptp(L) <= 0:
         raise CalibrationFailed("a hold needs 3 rows spread in time to measure creep")
