@@ -6,8 +6,8 @@ its own field (0 turns it off) and a stated truth:
 
 * timing: rows every ``dt_s`` (50 Hz: a 0.1 s pause is five rows); each press rests
   ``rest_s`` at no load, loads linearly in time to its turning force in ``ramp_s``, may hold it
-  (``hold_cycles``, ``hold_s``, at ``hold_fraction`` of the full scale), unloads in ``ramp_s``; a gap of ``turn_gap_s`` (no rows at all)
-  falls at every turn to unloading;
+  (``hold_cycles``, ``hold_s``, at ``hold_fraction`` of the full scale), unloads in
+  ``ramp_s``; a gap of ``turn_gap_s`` (no rows at all) falls at every turn to unloading;
 * the force stream lags the field by ``lag_s``: a row's force is the true force ``lag_s``
   earlier; the load cell adds ``force_noise_N`` and clips at 0 N (an unloaded cell reads 0,
   never below); only a fraction ``force_present`` of the rows carry a force (random rows), the
@@ -24,7 +24,8 @@ its own field (0 turns it off) and a stated truth:
   / 0.3) after a hold (a loop still open at the turn);
 * softening: press k is stiffer by A(x) k^-q (force at a deflection x (1 + A k^-q), x the settled
   sensor's force at that deflection / the full scale), A through
-  ``softening_pct`` at x = 0.1, 0.5, 0.9 (log A quadratic in x), q = ``softening_decay``; the settled sensor (k -> infinity) is the printed truth;
+  ``softening_pct`` at x = 0.1, 0.5, 0.9 (log A quadratic in x), q = ``softening_decay``; the
+  settled sensor (k -> infinity) is the printed truth;
 * creep under a hold: the deflection of F_turn (1 + c log10(max(t - t_peak, 0.1 s) / 1 s)),
   c = ``creep_pct_per_decade`` / 100.
 
@@ -38,10 +39,10 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from rig_loadtest import Curve, forward_curve
 from scipy.interpolate import PchipInterpolator
 
 from mst_cli.model import chip as mlx
-from rig_loadtest import Curve, forward_curve
 
 LOOP_X = (0.0, 0.25, 0.5, 0.75, 1.0)
 SOFTENING_X = (0.1, 0.5, 0.9)
@@ -225,7 +226,10 @@ def main() -> None:
     print(f"{n} rows over {rows['time_s'][-1]:.1f} s, force on {np.isfinite(rows['force_N']).mean():.0%} of them")
     print(f"|B| span {truth.span_uT:.0f} uT; full scale {truth.curve.full_scale_N:.2f} N")
     for k in (1, 2, 10):
-        print(f"press {k}: extra stiffness at 10/50/90 % FS", np.round(100 * (stiffness(truth.rig, SOFTENING_X, k) - 1), 1))
+        print(
+            f"press {k}: extra stiffness at 10/50/90 % FS",
+            np.round(100 * (stiffness(truth.rig, SOFTENING_X, k) - 1), 1),
+        )
 
 
 if __name__ == "__main__":

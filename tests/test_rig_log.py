@@ -15,8 +15,8 @@ from mst_cli.calibrate.branches import find_branches
 from mst_cli.cli.app import main
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "studies"))
-from rig_log import SOFTENING_X, RigLog, all_off, loop_h, rig_log, stiffness, write_log
 from rig_loadtest import forward_curve
+from rig_log import SOFTENING_X, RigLog, all_off, loop_h, rig_log, stiffness, write_log
 
 ROOT = Path(__file__).resolve().parents[1]
 DESIGN = ROOT / "configs" / "mohammadi2021-forward.yaml"
@@ -45,7 +45,11 @@ def test_no_lag_is_not_applied_and_without_time_the_cost_is_said(tmp_path):
     rows, _ = rig_log(all_off(cycles=4, lag_s=0.2, **QUIET), CURVE)
     f = tmp_path / "no_time.csv"
     cols = ("force_N", "Bx_uT", "By_uT", "Bz_uT")
-    f.write_text("\n".join([",".join(cols)] + [",".join(f"{rows[c][i]:.6g}" for c in cols) for i in range(0, len(rows["time_s"]), 10)]))
+    f.write_text(
+        "\n".join(
+            [",".join(cols)] + [",".join(f"{rows[c][i]:.6g}" for c in cols) for i in range(0, len(rows["time_s"]), 10)]
+        )
+    )
     got = api.calibrate(DESIGN, f)
     assert "no time_s: the lag between the force and the field is neither measured nor removed" in got.summary()
 
@@ -54,7 +58,9 @@ def run(args):
     return CliRunner().invoke(main, [str(a) for a in args])
 
 
-@pytest.mark.parametrize("mark, said", [("-1", "--missing-force -1 skips them"), ("nan", "--missing-force"), ("", "--missing-force")])
+@pytest.mark.parametrize(
+    "mark, said", [("-1", "--missing-force -1 skips them"), ("nan", "--missing-force"), ("", "--missing-force")]
+)
 def test_rows_without_a_force_are_refused_in_one_line(tmp_path, mark, said):
     rows, _ = rig_log(all_off(cycles=2, force_present=0.5, **QUIET), CURVE)
     f = tmp_path / "lt.csv"
@@ -131,8 +137,8 @@ def test_softening_is_fitted_against_load_and_press_and_unsettled_presses_left_o
         key = f"{round(100 * x)}_pct_fs"
         assert abs(s["first_press_stiffer_pct"][key] - want) < 0.15 * want, (x, s)  # a smooth law on a kinked truth
     assert abs(s["decay_q"] - 1.5) < 0.2
-    over_last = [np.max(stiffness(rig, np.linspace(0.1, 0.9, 17), k) / stiffness(rig, np.linspace(0.1, 0.9, 17), 10)) - 1
-                 for k in range(1, 11)]  # fmt: skip
+    x = np.linspace(0.1, 0.9, 17)
+    over_last = [np.max(stiffness(rig, x, k) / stiffness(rig, x, 10)) - 1 for k in range(1, 11)]
     assert s["presses_left_out"] + 1 == next(k for k in range(1, 11) if 100 * over_last[k - 1] <= 2.0)
     assert abs(cal.fit.values["modulus_factor"] - 0.9) < 0.02 * 0.9
 

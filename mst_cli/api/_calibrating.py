@@ -143,8 +143,7 @@ def calibrate(
     gain_sel, res, table_size, use_branches : int, int, int, bool, optional
         Raw codes' chip setting; lookup.csv's entries; fit the loading rows (or every row).
     missing_force : float, optional
-        A logger's mark for a row without a force (-1; NaN: empty and nan cells only): such rows
-        are skipped and counted, never fitted. Without it such a row is refused.
+        A logger's mark for a row without a force (-1; NaN: empty, nan cells): skipped, counted.
 
     Returns
     -------
@@ -320,8 +319,7 @@ def read(
         "shear": Fx, Fy of a press taken as centred (4.5); from the model's tables, with 1-sigma
         and flags; ``polish`` by the exact solve; ``tare``: readings at no load.
     track_zero : bool
-        Re-zero at every rest of the stream (|B| flat near the unloaded field for 0.5 s), with the
-        calibration's recovery after each unloading and its drift (``mst read --track-zero``).
+        Re-zero at every rest, with the calibration's recovery and drift (``--track-zero``).
 
     Returns
     -------

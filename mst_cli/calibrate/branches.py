@@ -15,8 +15,9 @@ Conventions (the synthetic rig of studies/rig_loadtest.py writes its rows the sa
 * the row at a minimum (a valley) is the last *unloading* row of its cycle; the next cycle
   starts after it (cycle numbers from 1);
 * a hold is a run of at least ``min_hold_rows`` rows (and ``min_hold_s`` seconds, default
-  :data:`MIN_HOLD_S`, when times are given) whose force stays within one dead band; its rows are labelled ``hold``; a turning
-  point inside a hold is its first row (the row that reached the held force, labelled with the
+  :data:`MIN_HOLD_S`, when times are given) whose force stays within one dead band; its rows
+  are labelled ``hold``; a turning point inside a hold is its first row (the row that reached
+  the held force, labelled with the
   branch before), the hold's rows follow it;
 * ``turn_force_N[i]`` is the force at the last turning point strictly before row ``i`` (NaN
   before the first): for an unloading row, the peak it unloads from.

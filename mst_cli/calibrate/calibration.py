@@ -29,15 +29,16 @@ from mst_cli.calibrate.fit_quality import fit_quality
 from mst_cli.calibrate.header import HEADER_FILE, c_header
 from mst_cli.calibrate.inverse_map import InverseMap, field_sigma_T, inverse_map
 from mst_cli.calibrate.loadtest import (
+    FORCE_COLUMN,
     MAX_ROWS,
     Readings,
     check_field_unit,
-    check_force_sentinel,
     check_load_test,
     parse_readings,
     read_text,
     unknown_columns,
 )
+from mst_cli.calibrate.missing_force import check_force_sentinel
 from mst_cli.calibrate.plot import plot_calibration
 from mst_cli.calibrate.rig_calibration import RigAnalysis, analyse, describe
 from mst_cli.calibrate.tables import lookup_csv, residuals_csv
@@ -252,11 +253,10 @@ def calibrate(
     ``load_test_file``: to its loading rows (:mod:`~mst_cli.calibrate.rig_calibration`;
     ``use_branches=False``: every row as loading). InputError for a bad load test;
     CalibrationFailed (with why) when the fit fails or its values would make a design that does
-    not load. ``progress`` gets a line before a long fit. ``missing_force``: the logger's mark
-    for a row without a force (NaN: empty and nan cells); such rows are skipped and counted.
-    The force is fitted against the field at its own time (:mod:`~mst_cli.calibrate.time_alignment`)."""
+    not load. ``progress`` gets a line before a long fit. ``missing_force``: a logger's mark for
+    a row without a force (skipped, counted; :mod:`~mst_cli.calibrate.time_alignment`)."""
     read = _read_load_test(load_test_file, gain_sel, res, missing_force)
-    check_force_sentinel(read)
+    check_force_sentinel(read.source, read.lines, read.force_N, FORCE_COLUMN)
     aligned, alignment = align(read) if use_branches else (read.subset(np.isfinite(read.load_N)), None)
     lt_all, presses = _split_presses(aligned, doc)
     rig = analyse(lt_all, max(cal.MIN_POINTS, cal.MIN_POINTS_PER_PARAMETER * len(params)), use_branches, alignment)

@@ -290,8 +290,9 @@ def creep(
 ) -> Creep:
     """Creep over the hold rows [hold[0], hold[1]): ordinary least squares of the reading
     against log10(t - t_start) (t_start: the row before the hold, the one that reached the
-    force), from CREEP_FROM_S into the hold. ``reading`` is a force (N), or |B| (T) when ``field_slope_T_per_N`` (d|B|/dF at the
-    held force) is given. The held force defaults to the fit's value at t - t_start = 1 s."""
+    force), from CREEP_FROM_S into the hold. ``reading`` is a force (N), or |B| (T) when
+    ``field_slope_T_per_N`` (d|B|/dF at the held force) is given. The held force defaults to the
+    fit's value at t - t_start = 1 s."""
     a, b = hold
     t = np.asarray(time_s, float)
     y = np.asarray(reading, float)[a:b]

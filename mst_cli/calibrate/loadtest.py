@@ -33,6 +33,7 @@ from pathlib import Path
 import numpy as np
 
 from mst_cli.calibrate.chip_columns import extra_chip_columns, is_chip_column
+from mst_cli.calibrate.missing_force import check_force_sentinel, is_missing
 from mst_cli.errors import InputError
 from mst_cli.io.csv_table import csv_rows
 from mst_cli.io.files import read_input_text
@@ -54,8 +55,6 @@ T_C_RANGE = (-40.0, 125.0)  # the MLX90393's operating temperature range, degC
 # a column that looks like a force or a field in another unit: refused with the conversion
 FORCE_LIKE = re.compile(r"^(force|load|f|weight|mass)(_.*|\s*\[.*\]|\s*\(.*\))?$", re.IGNORECASE)
 FIELD_LIKE = re.compile(r"^(b|mag)_?[xyz](_.+|\s*\[.*\]|\s*\(.*\))$", re.IGNORECASE)
-MISSING_CELLS = ("", "nan", "na", "n/a", "none", "null")  # a logger's row without a force
-SENTINEL_SHARE = 0.05  # this share of rows at one negative force is a logger's sentinel, not a reversed cell
 FORCE_CONVERSIONS = {
     "kn": "x 1000",
     "mn": "x 0.001",
@@ -151,30 +150,6 @@ def _number(source, line, column, text) -> float:
     if not math.isfinite(v):
         raise InputError(f"{source} line {line} {column}", text, "must be a finite number")
     return v
-
-
-def force_cell(source: str, line: int, text: str, missing: float | None) -> float:
-    """A force cell: a finite number, or NaN for a row without a force (an empty or ``nan`` cell,
-    or the sentinel ``missing``) when ``missing`` is given (issue 47: loggers write the force on
-    some rows only); without it such a cell is refused, naming the option."""
-    cell = text.strip()
-    if missing is not None:
-        if cell.lower() in MISSING_CELLS:
-            return math.nan
-        try:
-            v = float(cell)
-        except ValueError:
-            v = math.inf
-        if v == missing:
-            return math.nan
-    elif cell.lower() in MISSING_CELLS:
-        raise InputError(
-            f"{source} line {line} {FORCE_COLUMN}",
-            text,
-            "a number: a row without a force (empty, nan, or a sentinel such as -1) is skipped only with "
-            "--missing-force -1 (the sentinel; nan for empty and nan cells only)",
-        )
-    return _number(source, line, FORCE_COLUMN, cell)
 
 
 def _check_extra_columns(
@@ -298,7 +273,7 @@ def parse_readings(
     checked against ``gain_sel,res`` columns when both are given). ``one_setting``: every row
     must come from one setting (a load test: its table is for one setting). ``missing_force``:
     the logger's sentinel for a row without a force (NaN: only empty and ``nan`` cells); such
-    rows get a NaN force (:func:`force_cell`), without it they are refused.
+    rows get a NaN force (:mod:`~mst_cli.calibrate.missing_force`), without it they are refused.
     """
     if (gain_sel is None) != (res is None):
         raise InputError("--gain-sel/--res", f"{gain_sel}/{res}", "give both GAIN_SEL and RES, or neither")
@@ -332,7 +307,9 @@ def parse_readings(
             B_chips[r, 0] = B[r]
             sat[r] |= chips_saturated
         if F is not None:
-            F[r] = force_cell(source, line, row[idx[FORCE_COLUMN]], missing_force)
+            cell = row[idx[FORCE_COLUMN]]
+            missing = is_missing(f"{source} line {line} {FORCE_COLUMN}", cell, missing_force)
+            F[r] = math.nan if missing else _number(source, line, FORCE_COLUMN, cell)
         if off is not None:
             off[r] = [_number(source, line, c, row[idx[c]]) for c in OFFSET_COLUMNS]
         rows.append(row)
@@ -530,23 +507,6 @@ def check_field_unit(rd: Readings, B_unloaded_T: float, B_full_T: float) -> None
         )
 
 
-def check_force_sentinel(lt: Readings) -> None:
-    """A load test whose lowest force, negative, fills SENTINEL_SHARE of its rows: a logger's
-    mark for a row without a force (-1), refused in one line naming --missing-force."""
-    F = lt.force_N
-    if F is None or not len(F) or not np.nanmin(F) < 0:
-        return
-    i = int(np.nanargmin(F))
-    count = int(np.sum(F == F[i]))
-    if count >= SENTINEL_SHARE * len(F):
-        raise InputError(
-            f"{lt.source} line {lt.lines[i]} {FORCE_COLUMN}",
-            float(F[i]),
-            f"{count} rows hold this one negative force: a logger's mark for a row without a force? "
-            f"--missing-force {F[i]:g} skips them (and counts them)",
-        )
-
-
 def check_load_test(
     lt: Readings, n_parameters: int, design_range_N: float, min_per_parameter: int, min_points: int
 ) -> None:
@@ -580,7 +540,7 @@ def check_load_test(
     F = lt.load_N
     lo_tol = 0.02 * design_range_N
     if F.min() < -lo_tol:
-        check_force_sentinel(lt)
+        check_force_sentinel(lt.source, lt.lines, F, FORCE_COLUMN)
         i = int(np.argmin(F))
         raise InputError(
             f"{lt.source} line {lt.lines[i]} {FORCE_COLUMN}",

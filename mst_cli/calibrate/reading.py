@@ -199,8 +199,10 @@ class ForceReader:
         where it was pressed (:mod:`~mst_cli.calibrate.offset_reading`); else each on its branch
         (:mod:`~mst_cli.calibrate.rig_reading`). ``tare``: the first readings at no load."""
         imap = self.inverse_map
-        zero = self.record.zero if self.record is not None else None
-        shift = zero_shift_T(rd.B_abs_T, rig_column(rd, "time_s"), imap.B_abs_T, tare, track_zero, zero, rd.source)
+        zero_record = self.record.zero if self.record is not None else None
+        shift = zero_shift_T(
+            rd.B_abs_T, rig_column(rd, "time_s"), imap.B_abs_T, tare, track_zero, zero_record, rd.source
+        )
         B, m = field_at_reference(rd.B_abs_T - shift, rd, self.document, self.record)  # a T_C column: at 20 degC
         F, regime, flag = imap.force(B, rd.saturated)
         F = F * m

@@ -256,9 +256,8 @@ def analyse(lt: Readings, min_rows: int, use_branches: bool = True, alignment: A
         except CalibrationFailed:
             fc = None
         soft = fit_softening(lt.B_abs_T, lt.load_N, np.where(rest, "", b.label), b.cycle) if use_branches else None
-    extra = {"rest": rest, "alignment": alignment, "zero": zero, "softening": soft}
     if not use_branches:
-        return RigAnalysis(lt, b, np.ones(len(lt), bool), False, fc, notes, **extra)
+        return RigAnalysis(lt, b, np.ones(len(lt), bool), False, fc, notes, rest=rest, alignment=alignment)
     if soft is not None:
         keep = b.cycle >= soft.first_settled
     else:
@@ -272,7 +271,7 @@ def analyse(lt: Readings, min_rows: int, use_branches: bool = True, alignment: A
     if rows.sum() < min_rows:
         rows = np.ones(len(lt), bool)
         notes.append("too few loading and hold rows for the fit: every row fitted as loading")
-    return RigAnalysis(lt, b, rows, True, fc, notes, **extra)
+    return RigAnalysis(lt, b, rows, True, fc, notes, rest=rest, alignment=alignment, zero=zero, softening=soft)
 
 
 def describe(analysis: RigAnalysis, edges_N: np.ndarray, force_of_field_N) -> None:

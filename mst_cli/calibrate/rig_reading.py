@@ -11,8 +11,9 @@
   below is below_range;
 * the branch: the loading-branch force of each reading (the inverse map) is followed in time
   order, counted in local force resolutions (:func:`in_resolutions`); a reversal counts once it
-  moves back by more than the dead band of the stream's own noise (:func:`~mst_cli.calibrate.branches.find_branches`); an unloading reading means the
-  force the calibration's unloading model gives from the loading force and the last turning
+  moves back by more than the dead band of the stream's own noise
+  (:func:`~mst_cli.calibrate.branches.find_branches`); an unloading reading means the force the
+  calibration's unloading model gives from the loading force and the last turning
   force (:class:`~mst_cli.calibrate.hysteresis.UnloadingModel`); a hold keeps the loading force;
 * the uncertainty of each force: the local force resolution, the unloading model's residual on
   unloading rows, and half the hysteresis the reader cannot resolve on hold rows (the sensor may

@@ -73,9 +73,7 @@ class Softening:
             "x = force / full scale, each press against the last at matched |B|",
             "first_press_stiffer_pct": {f"{round(100 * x)}_pct_fs": 100 * float(self.extra(x, 1)) for x in REPORT_X},
             "first_press_sigma_pct": {f"{round(100 * x)}_pct_fs": 100 * self._first_press_sigma(x) for x in REPORT_X},
-            "second_over_last_pct": {
-                f"{round(100 * x)}_pct_fs": 100 * float(self.over_last(x, 2)) for x in REPORT_X
-            },
+            "second_over_last_pct": {f"{round(100 * x)}_pct_fs": 100 * float(self.over_last(x, 2)) for x in REPORT_X},
             "decay_q": self.coef[3],
             "decay_q_sigma": float(math.sqrt(max(self.cov[3, 3], 0.0))),
             "coefficients": list(self.coef[:3]),

@@ -16,8 +16,9 @@ the levels' correlation has a flat top. Its sigma: the spread of the lag over
 :data:`LAG_BLOCKS` equal blocks of the test, / sqrt(blocks).
 
 A lag within :data:`LAG_SIGNIFICANCE` sigma of 0 is not applied (the test cannot tell it from
-none: a rig sampled once a second gives +-0.4 s). A row with a force is fitted against the field interpolated at its time minus the lag (the field
-is on every row); a row without a force is never fitted. A time step longer than
+none: a rig sampled once a second gives +-0.4 s). A row with a force is fitted against the
+field interpolated at its time minus the lag (the field is on every row); a row without a force
+is never fitted. A time step longer than
 :data:`MAX_GAP_S` (or 5 median steps) is a gap: nothing is interpolated across it.
 
 Without ``time_s`` nothing is shifted: the row order gives no seconds, so a lag reads as

@@ -79,7 +79,7 @@ class ZeroLaw:
 
     def record(self) -> dict:
         """calibration.json's ``zero``."""
-        uT = (lambda v: None if v is None else 1e6 * v)  # noqa: E731
+        uT = lambda v: None if v is None else 1e6 * v  # noqa: E731
         return {
             "law": "|B|_rest = B0 + drift (t - t0) + [after a press] (offset + recovery log10(dt / "
             f"{REF_S:g} s)), dt since the force reached 0 (rows before {SETTLE_S:g} s left out); removed "
@@ -179,14 +179,13 @@ def fit_zero(time_s, B_abs_T, force_N, band_N: float) -> ZeroLaw | None:
     cov = float(np.sum(r**2) / (len(y) - A.shape[1])) * np.linalg.pinv(A.T @ A)
     got = {k: (float(coef[i]), float(math.sqrt(max(cov[i, i], 0.0)))) for i, k in enumerate(cols)}
 
-    def value(k):
-        return got[k] if k in got else (None, None)
-
+    none: tuple[float | None, float | None] = (None, None)
     loaded = ~at_rest
     span = float(np.percentile(B[loaded], 99.5) - coef[0]) if loaded.any() else 0.0
+    drift, drift_sigma = got.get("drift", (0.0, 0.0))
     return ZeroLaw(
-        got["B0"][0], t0, *value("drift"), *value("offset_first"), *value("offset"), *value("recovery"),
-        span_T=abs(span), rests=len(runs), rows=int(rest_fit.sum()),
+        got["B0"][0], t0, drift, drift_sigma, *got.get("offset_first", none), *got.get("offset", none),
+        *got.get("recovery", none), span_T=abs(span), rests=len(runs), rows=int(rest_fit.sum()),
     )  # fmt: skip
 
 
@@ -207,11 +206,12 @@ def zero_law_of(record: object) -> ZeroLaw | None:
         return None
     keys = ("rested_zero_uT", "drift_uT_per_min", "offset_after_unloading_uT", "recovery_uT_per_decade")
     values = [record.get(k) for k in keys]
-    if not all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in values):
+    numbers = [float(v) for v in values if isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)]
+    if len(numbers) < len(keys):
         return None
     first = record.get("offset_after_first_press_uT")
     first_T = 1e-6 * first if isinstance(first, (int, float)) and math.isfinite(first) else None
-    B0, drift, offset, recovery = (float(v) for v in values)
+    B0, drift, offset, recovery = numbers
     return ZeroLaw(
         1e-6 * B0, 0.0, drift / 60e6, 0.0, first_T, None, 1e-6 * offset, None, 1e-6 * recovery, None,
         1e-6 * float(record.get("span_uT") or 0.0), int(record.get("rests") or 0), 0,

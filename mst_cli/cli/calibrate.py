@@ -13,6 +13,7 @@ from typing import NoReturn
 import click
 
 from mst_cli import api
+from mst_cli.cli import help_texts
 from mst_cli.cli.common import (
     EXIT_TARGETS,
     default_out_dir,
@@ -69,15 +70,7 @@ def fail_fit(reason: str, what: str = "calibration failed") -> NoReturn:
     help="Fit every row as loading (default: the loading rows; unloading, holds and a first cycle "
     "that differs are described in calibration.json's hysteresis section, not fitted).",
 )
-@click.option(
-    "--missing-force",
-    type=float,
-    default=None,
-    metavar="SENTINEL",
-    help="A logger's mark for a row without a force (e.g. -1; nan for empty and nan cells only): such rows "
-    "are skipped and counted in one line, never fitted (their field still times the lag). Without it they are "
-    "refused.",
-)
+@click.option("--missing-force", type=float, metavar="SENTINEL", help=help_texts.CALIBRATE_MISSING_FORCE)
 @click.option(
     "--offset-table",
     is_flag=True,

@@ -74,12 +74,7 @@ BAUD_RATES = (1200, 2400, 4800, 9600, 19200, 38400, 57600, 115200, 230400, 46080
     "--max-offset-sigma-mm", type=float, default=1.0, show_default=True, help=help_texts.READ_MAX_OFFSET_SIGMA
 )
 @click.option("--tare", type=click.IntRange(min=0), default=0, show_default=True, help=help_texts.READ_TARE)
-@click.option(
-    "--track-zero",
-    is_flag=True,
-    help="Re-zero at every rest of the stream (|B| flat within 2 noise sigmas for 0.5 s, within 10 % of the span "
-    "of the unloaded field), with the calibration's recovery after each unloading and its drift between rests.",
-)
+@click.option("--track-zero", is_flag=True, help=help_texts.READ_TRACK_ZERO)
 @handles_input_errors
 def read(
     model_file: Path,
