@@ -161,9 +161,8 @@ def real(seed: int) -> None:
         print(f"{name:<34} {want:9.4g} {got if got is not None else float('nan'):11.4g} +- {sd or float('nan'):6.2g}")
     h = r.hysteresis or {}
     for c in h.get("creep", []):
-        print(
-            f"{'creep % / decade':<34} {rig.creep_pct_per_decade:9.4g} {c['pct_per_decade']:11.4g} +- {c['sigma_pct']:6.2g}"
-        )
+        want = rig.creep_pct_per_decade
+        print(f"{'creep % / decade':<34} {want:9.4g} {c['pct_per_decade']:11.4g} +- {c['sigma_pct']:6.2g}")
     u = h.get("unloading_model") or {}
     print(f"unloading model unexplained: {u.get('residual_pct_of_full_scale', float('nan')):.2f} % of full scale")
     print(f"presses left out {s.get('presses_left_out')}, presses to settle {s.get('presses_to_settle')}")
