@@ -303,7 +303,7 @@ def unloading(**terms):
         (temperature("1"), "temperature.modulus_temp_coeff_per_K"),
         (unloading(a=50), "hysteresis.unloading_model.a"),
         (unloading(a=-1e300), "hysteresis.unloading_model.a"),
-        (unloading(a=0.9, b=3.0), "hysteresis.unloading_model.a, b"),
+        (unloading(a=0.9, b=3.0), "hysteresis.unloading_model.coefficients"),
         (unloading(rows="ten"), "hysteresis.unloading_model.rows"),
         (unloading(rows=1e20), "hysteresis.unloading_model.rows"),
     ],
@@ -320,17 +320,21 @@ def test_fitted_values_out_of_their_physical_bounds_are_refused_naming_the_key(t
 
 
 def test_the_bounds_keep_the_modulus_scale_positive_over_the_chips_range():
-    """m(T) = 1 + beta (T - 20) at the bounds is 0.1 at the range's ends (MLX90393: -40..125 degC)."""
+    """m(T) = 1 + beta (T - 20) at the bounds is 0.1 at the range's ends (MLX90393: -40..125 degC); an
+    unloading reading means a force between none and the turn's, to within 5 % of it."""
     from mst_cli.calibrate.record_bounds import BOUNDS, MIN_MODULUS_SCALE, unloading_loop
 
     b = BOUNDS["temperature.modulus_temp_coeff_per_K"]
     assert float(modulus_scale(125.0, b.lo)) == pytest.approx(MIN_MODULUS_SCALE, abs=1e-12)
     assert float(modulus_scale(-40.0, b.hi)) == pytest.approx(MIN_MODULUS_SCALE, abs=1e-12)
-    unloading_loop(1.0, 0.0)  # h = F_load (1 - x): the widest loop, unloading force x F_load >= 0
-    unloading_loop(0.0, 4.0)  # (1 - x) 4 x peaks at exactly 1 at x = 1/2
-    for a, b_ in ((1.01, 0.0), (0.0, 4.1), (-1.01, 0.0)):
-        with pytest.raises(InputError):
-            unloading_loop(a, b_)
+    # h = F_turn x (1 - x), mst 0.17's widest loop (a = 1, b = 0): an unloading reading means x^2 F_turn
+    unloading_loop([0.0, 1.0, -1.0])
+    unloading_loop([-0.04])  # a loop of -4 %: x + 0.04 <= 1.05
+    unloading_loop([0.0], after_hold=0.06)  # x - 0.06 x^4 stays in [0, 1]
+    # past the margin: at x = 0 (-0.06), at x = 1 (1.06, 1.06 with the hold), inside (3x^2 - 2x = -1/3 at x = 1/3)
+    for coefficients, hold in (([0.06], 0.0), ([-0.06], 0.0), ([0.0], -0.06), ([0.0, 3.0, -3.0], 0.0)):
+        with pytest.raises(InputError, match="between no force and the turn's"):
+            unloading_loop(coefficients, after_hold=hold)
 
 
 def test_brackets_nested_200000_deep_are_no_traceback(tmp_path, files):

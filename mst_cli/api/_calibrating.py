@@ -127,6 +127,7 @@ def calibrate(
     use_branches: bool = True,
     offset_table: bool = False,
     shear_table: bool = False,
+    missing_force: float | None = None,
 ) -> Calibration:
     """Fit a design's print parameters to a load test of the printed sensor (``mst calibrate``).
 
@@ -141,6 +142,8 @@ def calibrate(
         The fit's rung (frame, continuum by space mapping on spring); the parameters fitted.
     gain_sel, res, table_size, use_branches : int, int, int, bool, optional
         Raw codes' chip setting; lookup.csv's entries; fit the loading rows (or every row).
+    missing_force : float, optional
+        A logger's mark for a row without a force (-1; NaN: empty, nan cells): skipped, counted.
 
     Returns
     -------
@@ -164,7 +167,7 @@ def calibrate(
     _check_out(out)  # a bad output path is refused before any work
     name = design_file or (design if isinstance(design, (str, Path)) else design.name)
     options: dict[str, Any] = {"gain_sel": gain_sel, "res": res, "table_size": table_size, "progress": progress}
-    options.update(mechanics=mechanics, params=params, use_branches=use_branches)
+    options.update(mechanics=mechanics, params=params, use_branches=use_branches, missing_force=missing_force)
     result = run_calibration(doc, name, load_test, **options)
     if out is not None:
         result.write(Path(out), plot=plot)
@@ -295,6 +298,7 @@ def read(
     polish: bool = False,
     max_offset_sigma_mm: float = 1.0,
     tare: int = 0,
+    track_zero: bool = False,
 ) -> ForceReadings:
     """MLX90393 readings to forces with a calibrated model (``mst read READINGS.csv``).
 
@@ -314,6 +318,8 @@ def read(
         "offset" (or ``estimate_offset``): x, y, the force corrected (docs/design.md 4.2);
         "shear": Fx, Fy of a press taken as centred (4.5); from the model's tables, with 1-sigma
         and flags; ``polish`` by the exact solve; ``tare``: readings at no load.
+    track_zero : bool
+        Re-zero at every rest, with the calibration's recovery and drift (``--track-zero``).
 
     Returns
     -------
@@ -333,7 +339,7 @@ def read(
     estimate = _checked_estimate("offset" if estimate_offset else estimate, max_offset_sigma_mm, tare)
     reader, rd, _ = _reader(model, model_file, mechanics, gain_sel, res, False, readings, out, warn, estimate)
     offsets, built = _estimator(reader, estimate, mechanics, model_file or model, max_offset_sigma_mm, polish, warn)
-    result = reader.read(rd, offsets, tare)
+    result = reader.read(rd, offsets, tare, track_zero)
     if out is not None:
         with staged(Path(out)) as st:
             st.write_text("forces.csv", result.csv())

@@ -14,9 +14,10 @@ Conventions (the synthetic rig of studies/rig_loadtest.py writes its rows the sa
 * the row at a maximum (a peak) is the last *loading* row; the unloading starts after it;
 * the row at a minimum (a valley) is the last *unloading* row of its cycle; the next cycle
   starts after it (cycle numbers from 1);
-* a hold is a run of at least ``min_hold_rows`` rows (and ``min_hold_s`` seconds, when times are
-  given) whose force stays within one dead band; its rows are labelled ``hold``; a turning
-  point inside a hold is its first row (the row that reached the held force, labelled with the
+* a hold is a run of at least ``min_hold_rows`` rows (and ``min_hold_s`` seconds, default
+  :data:`MIN_HOLD_S`, when times are given) whose force stays within one dead band; its rows
+  are labelled ``hold``; a turning point inside a hold is its first row (the row that reached
+  the held force, labelled with the
   branch before), the hold's rows follow it;
 * ``turn_force_N[i]`` is the force at the last turning point strictly before row ``i`` (NaN
   before the first): for an unloading row, the peak it unloads from.
@@ -42,6 +43,7 @@ LABELS = (LOADING, UNLOADING, HOLD)
 DEAD_BAND_SIGMAS = 8.0  # a reversal is a move back by more than this many force-noise sigmas
 DEAD_BAND_FLOOR_REL = 0.002  # ... and by more than this fraction of the force span
 MIN_HOLD_ROWS = 5
+MIN_HOLD_S = 1.0  # with times, a hold lasts at least this long (a 0.1 s pause of five 50 Hz rows is no hold)
 MAD_TO_SIGMA = 1.4826  # sigma of a normal variable / its median absolute deviation
 
 
@@ -188,7 +190,7 @@ def find_branches(
     branch: Sequence[str] | None = None,
     cycle: Sequence[int] | None = None,
     min_hold_rows: int = MIN_HOLD_ROWS,
-    min_hold_s: float = 0.0,
+    min_hold_s: float = MIN_HOLD_S,
     first_row: int = 0,
 ) -> Branches:
     """The branches, turning points, cycles and holds of a load test (see the module doc).

@@ -30,6 +30,7 @@ from mst_cli.calibrate.force_unit import check_force_unit
 from mst_cli.calibrate.header import HEADER_FILE, c_header
 from mst_cli.calibrate.inverse_map import InverseMap, field_sigma_T, inverse_map
 from mst_cli.calibrate.loadtest import (
+    FORCE_COLUMN,
     MAX_ROWS,
     Readings,
     check_field_unit,
@@ -38,6 +39,7 @@ from mst_cli.calibrate.loadtest import (
     read_text,
     unknown_columns,
 )
+from mst_cli.calibrate.missing_force import check_force_sentinel
 from mst_cli.calibrate.plot import plot_calibration
 from mst_cli.calibrate.rig_calibration import RigAnalysis, analyse, describe
 from mst_cli.calibrate.tables import lookup_csv, residuals_csv
@@ -48,6 +50,7 @@ from mst_cli.calibrate.temperature_fit import (
     remanence_coeff_of,
 )
 from mst_cli.calibrate.tilt_fit import fit_lever_factor
+from mst_cli.calibrate.time_alignment import align
 from mst_cli.errors import CalibrationFailed, InputError
 from mst_cli.io.outputs import staged
 from mst_cli.model.chip import ChipSetting, field_resolution_T
@@ -205,6 +208,8 @@ class Calibration:
             )
         if self.rig is not None and (len(self.rig.readings) > len(lt) or not self.rig.use_branches):
             lines += self.rig.summary_lines()
+        if self.rig is not None:
+            lines += self.rig.rig_lines()
         lines += [f"warning: {w}" for w in self.warnings]
         unknown = unknown_columns(self.load_test)
         if unknown:
@@ -243,16 +248,21 @@ def calibrate(
     table_size: int = 256,
     progress: Callable[[str], None] | None = None,
     use_branches: bool = True,
+    missing_force: float | None = None,
 ) -> Calibration:
     """Fit ``doc`` (loaded from ``design_file``, which the record names) to the load test in
     ``load_test_file``: to its loading rows (:mod:`~mst_cli.calibrate.rig_calibration`;
     ``use_branches=False``: every row as loading). InputError for a bad load test;
     CalibrationFailed (with why) when the fit fails or its values would make a design that does
-    not load. ``progress`` gets a line before a long fit."""
-    lt_all, presses = _split_presses(_read_load_test(load_test_file, gain_sel, res), doc)
-    rig = analyse(lt_all, max(cal.MIN_POINTS, cal.MIN_POINTS_PER_PARAMETER * len(params)), use_branches)
+    not load. ``progress`` gets a line before a long fit. ``missing_force``: a logger's mark for
+    a row without a force (skipped, counted; :mod:`~mst_cli.calibrate.time_alignment`)."""
+    read = _read_load_test(load_test_file, gain_sel, res, missing_force)
+    check_force_sentinel(read.source, read.lines, read.force_N, FORCE_COLUMN)
+    aligned, alignment = align(read) if use_branches else (read.subset(np.isfinite(read.load_N)), None)
+    lt_all, presses = _split_presses(aligned, doc)
+    rig = analyse(lt_all, max(cal.MIN_POINTS, cal.MIN_POINTS_PER_PARAMETER * len(params)), use_branches, alignment)
     fitted, temperature = _fit_in_temperature(
-        doc, lt_all.subset(rig.fit_rows), Path(load_test_file).name, mechanics, tuple(params), progress
+        doc, rig.readings.subset(rig.fit_rows), Path(load_test_file).name, mechanics, tuple(params), progress
     )
     lt = fitted.lt  # the rows fitted (referred to 20 degC when the load test has T_C)
     imap, setting = fitted.imap, fitted.setting
@@ -336,6 +346,8 @@ def _rig_sections(record: CalibrationRecord, rig: RigAnalysis, fitted: _Fitted) 
     imap, fit = fitted.imap, fitted.fit
     describe(rig, imap.edges_N, lambda B: np.interp(B, imap.B_abs_T, imap.force_N))
     record.hysteresis = rig.record()
+    for key, value in rig.rig_records().items():
+        setattr(record, key, value)
     rows = rig.fit_rows
     q = fit_quality(fit.residual_T / fit.sigma_T, len(fit.names), rig.branches.label[rows], rig.time_s[rows])
     record.fit_quality = {
@@ -355,10 +367,15 @@ def _rig_sections(record: CalibrationRecord, rig: RigAnalysis, fitted: _Fitted) 
     }
 
 
-def _read_load_test(load_test_file: str | Path, gain_sel: int | None, res: int | None) -> Readings:
-    """The load test's rows, every one from one chip setting."""
+def _read_load_test(
+    load_test_file: str | Path, gain_sel: int | None, res: int | None, missing_force: float | None = None
+) -> Readings:
+    """The load test's rows, every one from one chip setting (rows without a force: NaN)."""
     text = read_text(load_test_file)
-    return parse_readings(text, str(load_test_file), need_force=True, gain_sel=gain_sel, res=res, one_setting=True)
+    return parse_readings(
+        text, str(load_test_file), need_force=True, gain_sel=gain_sel, res=res, one_setting=True,
+        missing_force=missing_force,
+    )  # fmt: skip
 
 
 def _split_presses(lt: Readings, doc: Document) -> tuple[Readings, Readings | None]:

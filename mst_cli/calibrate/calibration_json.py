@@ -95,6 +95,11 @@ class CalibrationRecord:
     fit_quality: dict | None = None
     # a load test with T_C (issue 38): the modulus temperature coefficient, fitted or held
     temperature: dict | None = None
+    # a rig's log (issue 47): the force's lag behind the field and the rows without a force, the
+    # zero's drift and recovery after each unloading, the first presses' softening; each with sigma
+    time_alignment: dict | None = None
+    zero: dict | None = None
+    softening: dict | None = None
 
     def to_json(self) -> dict[str, Any]:
         """The file's JSON-ready mapping (non-finite numbers are null: JSON holds no NaN)."""

@@ -14,13 +14,14 @@ straight piece, a noise of sigma_F / sqrt(neighbours)).
   half a bin, the quadratic follows it with the noise of a few parameters);
 * :func:`fit_unloading`: the unloading branch relative to the loading one,
   F_unload(B) = F_load(B) - h(F_load, F_turn), with F_turn the force at the turning point the
-  unloading started from and h = F_turn x (1 - x) (a + b x), x = F_load / F_turn. The form:
-  the branches meet at the turning point (the unloading starts on the loading curve: h = 0 at
-  x = 1) and at no load (the elastomer recovers; a lasting offset is drift, not hysteresis:
-  h = 0 at x = 0); the loop scales with its excursion (Masing's rule: h / F_turn depends on
-  x only), so a reader that knows the branch and the last turning force uses one curve for
-  every cycle; the cubic's two coefficients let the loop lean to either end. Linear in (a, b):
-  ordinary least squares;
+  unloading started from and h = F_turn (c0 + c1 x + c2 x^2 + c3 x^3), x = F_load / F_turn,
+  plus e x^4 on an unloading that follows a hold (issue 47). The form: the loop scales with
+  its excursion (Masing's rule: h / F_turn depends on x only), so a reader that knows the
+  branch and the last turning force uses one curve for every cycle; a real loop may have either
+  sign along the force (about -3 % of full scale near no load, -0.4..+2 % mid-range on a
+  printed TPU sensor) and stay open at no load and, after a hold (the sensor crept at the
+  turn), at the turn: so no end is forced to close. Linear in the coefficients: ordinary least
+  squares, each with its sigma;
 * :func:`first_cycle`: cycle 1's loading against the later cycles' at matched |B|, as a
   relative stiffness p (F_1 = (1 + p) F_later), with its z score against the scatter;
   :func:`rows_without_first_cycle` drops cycle 1 when it differs;
@@ -44,6 +45,8 @@ NEIGHBOURS = 12  # loading rows in the local linear fit of force against |B|
 HYSTERESIS_DEGREE = 2  # polynomial of the loading-minus-unloading force against the load, per regime
 FIRST_CYCLE_Z = 5.0  # cycle 1 differs when its relative stiffness is this many sigma from 0
 FIRST_CYCLE_MIN_FORCE_REL = 0.1  # ... compared on rows above this fraction of the full scale
+UNLOADING_DEGREE = 3  # the unloading model's polynomial in the force fraction
+CREEP_FROM_S = 0.2  # creep is fitted from this long into a hold (the ramp's stop, the force's lag before it)
 
 
 def force_at_field_N(
@@ -140,21 +143,50 @@ def measure_hysteresis(
 
 @dataclass(frozen=True)
 class UnloadingModel:
-    """h(F_load, F_turn) = F_turn x (1 - x) (a + b x), x = F_load / F_turn (module doc)."""
+    """h(F_load, F_turn) = F_turn (c0 + c1 x + c2 x^2 + c3 x^3 [+ e x^4 after a hold]),
+    x = F_load / F_turn (module doc); ``sigma``: each coefficient's 1 sigma."""
 
-    a: float
-    b: float
+    coefficients: tuple[float, ...]
     residual_rms_N: float
     samples: int
+    sigma: tuple[float, ...] = ()
+    after_hold: float = 0.0
+    after_hold_sigma: float | None = None
 
-    def h_N(self, F_load_N, F_turn_N) -> np.ndarray:
+    def h_N(self, F_load_N, F_turn_N, after_hold=False) -> np.ndarray:
         F_turn = np.asarray(F_turn_N, dtype=float)
         x = np.clip(np.asarray(F_load_N, dtype=float) / F_turn, 0.0, 1.0)
-        return F_turn * x * (1 - x) * (self.a + self.b * x)
+        poly = np.polynomial.polynomial.polyval(x, np.asarray(self.coefficients, float))
+        return F_turn * (poly + np.where(after_hold, self.after_hold * x**4, 0.0))
 
-    def unloading_force_N(self, F_load_N, F_turn_N) -> np.ndarray:
+    def unloading_force_N(self, F_load_N, F_turn_N, after_hold=False) -> np.ndarray:
         """The force an unloading reading means, from the loading branch's force at its |B|."""
-        return np.asarray(F_load_N, dtype=float) - self.h_N(F_load_N, F_turn_N)
+        return np.asarray(F_load_N, dtype=float) - self.h_N(F_load_N, F_turn_N, after_hold)
+
+    def record(self, full_scale_N: float) -> dict:
+        """calibration.json's ``unloading_model``."""
+        return {
+            "form": "F_unloading = F_loading - F_turn (c0 + c1 x + c2 x^2 + c3 x^3 + after_hold x^4 when the "
+            "unloading follows a hold), x = F_loading / F_turn",
+            "coefficients": list(self.coefficients),
+            "sigma": list(self.sigma),
+            "after_hold": self.after_hold,
+            "after_hold_sigma": self.after_hold_sigma,
+            "residual_rms_N": self.residual_rms_N,
+            "residual_pct_of_full_scale": 100 * self.residual_rms_N / full_scale_N if full_scale_N > 0 else None,
+            "rows": self.samples,
+        }
+
+
+def rows_after_holds(label: np.ndarray, holds: Sequence[tuple[int, int]]) -> np.ndarray:
+    """The unloading rows that follow a hold (up to the next row on another branch)."""
+    out = np.zeros(len(label), bool)
+    for _, z in holds:
+        j = z
+        while j < len(label) and label[j] == UNLOADING:
+            out[j] = True
+            j += 1
+    return out
 
 
 def fit_unloading(
@@ -163,22 +195,36 @@ def fit_unloading(
     label: Sequence[str] | np.ndarray,
     turn_force_N: Sequence[float] | np.ndarray,
     mask: np.ndarray | None = None,
+    after_hold: np.ndarray | None = None,
 ) -> UnloadingModel:
-    """Least-squares (a, b) of the unloading model from the unloading rows, each against the
-    loading rows' force at its |B|; the residual RMS is of force (N)."""
+    """Least-squares coefficients of the unloading model (each with its sigma) from the unloading
+    rows, each against the loading rows' force at its |B|; the after-hold term only when some
+    unloading rows follow a hold. The residual RMS is of force (N): what the model leaves
+    unexplained."""
     B, F, lab = np.asarray(B_abs_T, float), np.asarray(force_N, float), np.asarray(label, dtype=object)
     load, unload = _masks(lab, mask)
     Ft = np.asarray(turn_force_N, float)[unload]
     F_load = force_at_field_N(B[load], F[load], B[unload])
     ok = np.isfinite(Ft) & (Ft > 0)
-    if ok.sum() < 3:
-        raise CalibrationFailed("fewer than 3 unloading rows after a turning point: no unloading model")
+    held = (np.zeros(len(lab), bool) if after_hold is None else np.asarray(after_hold, bool))[unload][ok]
+    if ok.sum() < UNLOADING_DEGREE + 4:
+        raise CalibrationFailed("too few unloading rows after a turning point: no unloading model")
     x = np.clip(F_load[ok] / Ft[ok], 0.0, 1.0)
-    A = np.stack([Ft[ok] * x * (1 - x), Ft[ok] * x**2 * (1 - x)], -1)
+    cols = [Ft[ok] * x**j for j in range(UNLOADING_DEGREE + 1)]
+    with_hold = int(held.sum()) >= 3
+    if with_hold:
+        cols.append(np.where(held, Ft[ok] * x**4, 0.0))
+    A = np.stack(cols, -1)
     d = F_load[ok] - F[unload][ok]
     coef, *_ = np.linalg.lstsq(A, d, rcond=None)
     r = d - A @ coef
-    return UnloadingModel(float(coef[0]), float(coef[1]), float(np.sqrt(np.mean(r**2))), int(ok.sum()))
+    cov = float(np.sum(r**2) / max(len(d) - A.shape[1], 1)) * np.linalg.pinv(A.T @ A)
+    sd = np.sqrt(np.maximum(np.diag(cov), 0.0))
+    n = UNLOADING_DEGREE + 1
+    return UnloadingModel(
+        tuple(float(c) for c in coef[:n]), float(np.sqrt(np.mean(r**2))), int(ok.sum()),
+        tuple(float(v) for v in sd[:n]), float(coef[n]) if with_hold else 0.0, float(sd[n]) if with_hold else None,
+    )  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -244,13 +290,14 @@ def creep(
 ) -> Creep:
     """Creep over the hold rows [hold[0], hold[1]): ordinary least squares of the reading
     against log10(t - t_start) (t_start: the row before the hold, the one that reached the
-    force). ``reading`` is a force (N), or |B| (T) when ``field_slope_T_per_N`` (d|B|/dF at the
-    held force) is given. The held force defaults to the fit's value at t - t_start = 1 s."""
+    force), from CREEP_FROM_S into the hold. ``reading`` is a force (N), or |B| (T) when
+    ``field_slope_T_per_N`` (d|B|/dF at the held force) is given. The held force defaults to the
+    fit's value at t - t_start = 1 s."""
     a, b = hold
     t = np.asarray(time_s, float)
     y = np.asarray(reading, float)[a:b]
     t0 = float(t[a - 1]) if t_start_s is None and a > 0 else float(t_start_s if t_start_s is not None else t[a])
-    keep = t[a:b] > t0
+    keep = t[a:b] - t0 >= min(CREEP_FROM_S, 0.5 * float(t[b - 1] - t0))  # the ramp's stop is no creep
     L, y = np.log10(t[a:b][keep] - t0), y[keep]
     if len(y) < 3 or np.ptp(L) <= 0:
         raise CalibrationFailed("a hold needs 3 rows spread in time to measure creep")

@@ -33,6 +33,7 @@ from pathlib import Path
 import numpy as np
 
 from mst_cli.calibrate.chip_columns import extra_chip_columns, is_chip_column
+from mst_cli.calibrate.missing_force import check_force_sentinel, is_missing
 from mst_cli.errors import InputError
 from mst_cli.io.csv_table import csv_rows
 from mst_cli.io.files import read_input_text
@@ -275,12 +276,15 @@ def parse_readings(
     gain_sel: int | None = None,
     res: int | None = None,
     one_setting: bool = False,
+    missing_force: float | None = None,
 ) -> Readings:
     """Parse and validate a load test (``need_force``) or a readings file.
 
     ``gain_sel``/``res``: the chip setting the readings were taken at (needed for raw codes;
     checked against ``gain_sel,res`` columns when both are given). ``one_setting``: every row
-    must come from one setting (a load test: its table is for one setting).
+    must come from one setting (a load test: its table is for one setting). ``missing_force``:
+    the logger's sentinel for a row without a force (NaN: only empty and ``nan`` cells); such
+    rows get a NaN force (:mod:`~mst_cli.calibrate.missing_force`), without it they are refused.
     """
     if (gain_sel is None) != (res is None):
         raise InputError("--gain-sel/--res", f"{gain_sel}/{res}", "give both GAIN_SEL and RES, or neither")
@@ -314,7 +318,9 @@ def parse_readings(
             B_chips[r, 0] = B[r]
             sat[r] |= chips_saturated
         if F is not None:
-            F[r] = _number(source, line, FORCE_COLUMN, row[idx[FORCE_COLUMN]])
+            cell = row[idx[FORCE_COLUMN]]
+            missing = is_missing(f"{source} line {line} {FORCE_COLUMN}", cell, missing_force)
+            F[r] = math.nan if missing else _number(source, line, FORCE_COLUMN, cell)
         if off is not None:
             off[r] = [_number(source, line, c, row[idx[c]]) for c in OFFSET_COLUMNS]
         rows.append(row)
@@ -545,6 +551,7 @@ def check_load_test(
     F = lt.load_N
     lo_tol = 0.02 * design_range_N
     if F.min() < -lo_tol:
+        check_force_sentinel(lt.source, lt.lines, F, FORCE_COLUMN)
         i = int(np.argmin(F))
         raise InputError(
             f"{lt.source} line {lt.lines[i]} {FORCE_COLUMN}",

@@ -20,7 +20,7 @@ from mst_cli.calibrate.inverse_map import FLAGS, InverseMap, inverse_map
 from mst_cli.calibrate.load_readings import LOAD_COLUMNS, LoadReadings
 from mst_cli.calibrate.loadtest import Readings, field_of, rig_column, unknown_columns
 from mst_cli.calibrate.offset_reading import OFFSET_COLUMNS, OffsetEstimator, OffsetReadings
-from mst_cli.calibrate.rig_reading import BranchForces, follow_branches, no_load_rows, tare_shift_T, unloading_model_of
+from mst_cli.calibrate.rig_reading import BranchForces, follow_branches, no_load_rows, unloading_model_of, zero_shift_T
 from mst_cli.calibrate.rung_check import read_rung_warning
 from mst_cli.calibrate.table_reader import OffsetTableReader, ShearTableReader, TwoChipLoadReader
 from mst_cli.calibrate.tables import FORCES_COLUMNS, cell, forces_csv
@@ -223,12 +223,16 @@ class ForceReader:
         rd: Readings,
         offsets: OffsetEstimator | OffsetTableReader | ShearTableReader | TwoChipLoadReader | None = None,
         tare: int = 0,
+        track_zero: bool = False,
     ) -> ForceReadings:
         """The forces of ``rd``; with ``offsets``, each in-range reading's force corrected for
         where it was pressed (:mod:`~mst_cli.calibrate.offset_reading`); else each on its branch
         (:mod:`~mst_cli.calibrate.rig_reading`). ``tare``: the first readings at no load."""
         imap = self.inverse_map
-        shift = tare_shift_T(rd.B_abs_T, tare, float(imap.B_abs_T[0]), rd.source) if tare else 0.0
+        zero_record = self.record.zero if self.record is not None else None
+        shift = zero_shift_T(
+            rd.B_abs_T, rig_column(rd, "time_s"), imap.B_abs_T, tare, track_zero, zero_record, rd.source
+        )
         B, m = field_at_reference(rd.B_abs_T - shift, rd, self.document, self.record)  # a T_C column: at 20 degC
         F, regime, flag = imap.force(B, rd.saturated)
         F = F * m
@@ -244,7 +248,7 @@ class ForceReader:
             bf.uncertainty_N[flag != "ok"] = np.nan
             regime = np.where(np.isfinite(bf.force_N), imap.regime_of(np.nan_to_num(bf.force_N)), regime)
             out = ForceReadings(self.document.name, rd, bf.force_N, regime, flag, res, edges_N=imap.edges_N)
-            out.branches, out.tare_shift_uT = bf, (shift * 1e6 if tare else None)
+            out.branches, out.tare_shift_uT = bf, (float(np.mean(shift)) * 1e6 if tare or track_zero else None)
             return out
         chips = getattr(offsets, "chips", 1)  # a two-chip reader takes every chip's field
         B_est = rd.B_T if chips == 1 or rd.B_chips_T is None else rd.B_chips_T

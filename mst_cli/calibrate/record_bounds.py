@@ -6,7 +6,7 @@ in one line naming its key (:class:`~mst_cli.errors.InputError`, exit 2): a miss
 key is read as absent (the reader's default), anything else must be a number inside its bound.
 
 The table :data:`BOUNDS` holds one :class:`Bound` per key (a new fitted key is one more row);
-:func:`unloading_loop` checks the unloading model's two terms together:
+:func:`unloading_loop` checks the unloading model's terms together:
 
 * ``temperature.modulus_temp_coeff_per_K`` (beta): the modulus scale m(T) = 1 + beta (T - 20)
   multiplies every force read at T. It must stay at least :data:`MIN_MODULUS_SCALE` over the
@@ -15,9 +15,12 @@ The table :data:`BOUNDS` holds one :class:`Bound` per key (a new fitted key is o
   stiffness over that range has left its rubbery plateau. Hence
   -(1 - 0.1) / 105 <= beta <= (1 - 0.1) / 60 per K (about -0.86 to +1.5 %/K);
 * ``hysteresis.unloading_model`` (:class:`~mst_cli.calibrate.hysteresis.UnloadingModel`):
-  h = F_turn x (1 - x) (a + b x) is what unloading takes off the loading force. The loop is
-  never wider than the load itself, |h| <= F_load over the whole loop (0 <= x <= 1), so an
-  unloading force lies between 0 and twice the loading force: |(1 - x) (a + b x)| <= 1;
+  h = F_turn (c0 + c1 x + c2 x^2 + c3 x^3 [+ after_hold x^4]), x = F_load / F_turn, is what
+  unloading takes off the loading force (mst 0.17 wrote h = F_turn x (1 - x) (a + b x), read as
+  that polynomial). The loop may take either sign and stay open at its ends, but it is never
+  wider than the press that made it: an unloading reading means a force F_load - h between none
+  and F_turn, to within LOOP_MARGIN of F_turn (the fit's noise at the loop's ends), with and
+  without the hold's term (:func:`unloading_loop`); each coefficient within +-MAX_LOOP_TERM;
   ``residual_rms_N`` is a spread (finite, >= 0, at most MAX_FORCE_N), ``rows`` a count
   (0 to the load test's MAX_ROWS);
 * ``tilt.lever_factor``: inside the bounds the fit searches (LEVER_FACTOR_BOUNDS).
@@ -31,6 +34,8 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
+import numpy as np
+
 from mst_cli.calibrate.loadtest import MAX_ROWS, T_C_RANGE
 from mst_cli.calibrate.tilt_fit import LEVER_FACTOR_BOUNDS
 from mst_cli.errors import InputError
@@ -38,6 +43,8 @@ from mst_cli.model.components import REFERENCE_TEMPERATURE_C
 
 CALIBRATION_JSON = "calibration.json"
 MIN_MODULUS_SCALE = 0.1  # the least m(T) over the chip's range (module docstring)
+LOOP_MARGIN = 0.05  # of F_turn: a fitted loop's ends within the rig's noise (measured loops are <= 3 % FS)
+MAX_LOOP_TERM = 100.0  # a polynomial term of the loop; |h| <= F_turn bounds their sum (unloading_loop)
 MAX_FORCE_N = 1e4  # a force spread no fingertip sensor reads (a kilonewton is a press, not a touch)
 _BETA_LO = -(1.0 - MIN_MODULUS_SCALE) / (T_C_RANGE[1] - REFERENCE_TEMPERATURE_C)
 _BETA_HI = (1.0 - MIN_MODULUS_SCALE) / (REFERENCE_TEMPERATURE_C - T_C_RANGE[0])
@@ -80,6 +87,8 @@ BOUNDS: dict[str, Bound] = {
         ),
         Bound("hysteresis.unloading_model.a", -1.0, 1.0, "", "the loop is never wider than the load"),
         Bound("hysteresis.unloading_model.b", -8.0, 8.0, "", "the loop is never wider than the load"),
+        Bound("hysteresis.unloading_model.coefficients", -MAX_LOOP_TERM, MAX_LOOP_TERM, "", "a term of the loop"),
+        Bound("hysteresis.unloading_model.after_hold", -MAX_LOOP_TERM, MAX_LOOP_TERM, "", "a term of the loop"),
         Bound("hysteresis.unloading_model.residual_rms_N", 0.0, MAX_FORCE_N, "N", "a spread of forces"),
         Bound("hysteresis.unloading_model.rows", 0, MAX_ROWS, "", "a count of load-test rows", integer=True),
         Bound("tilt.lever_factor", *LEVER_FACTOR_BOUNDS, "", "the range the tilt fit searches"),
@@ -95,19 +104,38 @@ def checked(section: object, path: str, name: str) -> float | None:
     return None if value is None else BOUNDS[f"{path}.{name}"].check(value)
 
 
-def unloading_loop(a: float, b: float) -> None:
-    """|(1 - x) (a + b x)| <= 1 over 0 <= x <= 1 (its extremes: the ends and the vertex), else
-    InputError naming the model's two terms."""
-    g = [a, 0.0]  # x = 0 and x = 1
-    if b != 0.0:
-        x = (b - a) / (2.0 * b)
-        if 0.0 < x < 1.0:
-            g.append((1.0 - x) * (a + b * x))
-    worst = max(abs(v) for v in g)
-    if worst > 1.0 + 1e-12:
+def checked_list(section: object, path: str, name: str, most: int = 8) -> list[float] | None:
+    """Like :func:`checked` for a list of numbers (at most ``most`` of them), each within the
+    bound of ``path.name``: None when missing or null, InputError naming the key otherwise."""
+    value = section.get(name) if isinstance(section, dict) else None
+    if value is None:
+        return None
+    bound = BOUNDS[f"{path}.{name}"]
+    if not isinstance(value, list) or not 1 <= len(value) <= most:
+        raise InputError(f"{CALIBRATION_JSON} {bound.key}", value, f"must be a list of 1 to {most} numbers")
+    return [bound.check(v) for v in value]
+
+
+def unloading_loop(coefficients: list[float], after_hold: float = 0.0) -> None:
+    """The unloading force F_load - h stays within [-LOOP_MARGIN, 1 + LOOP_MARGIN] F_turn over
+    0 <= F_load <= F_turn, with and without the hold's term, else InputError naming the model's
+    terms. The extremes of x - c(x) are at the ends and at the real roots of its derivative
+    inside (0, 1), so the check is exact."""
+    lo, hi = 0.0, 0.0
+    for hold in (0.0, after_hold):
+        c = np.zeros(max(len(coefficients), 5))
+        c[: len(coefficients)] = coefficients
+        c[4] += hold
+        c[1] -= 1.0  # h / F_turn - x: minus the unloading force over F_turn
+        poly = -np.polynomial.Polynomial(c)
+        roots = poly.deriv().roots()
+        inside = roots.real[(np.abs(roots.imag) < 1e-7) & (roots.real > 0.0) & (roots.real < 1.0)]
+        values = poly(np.concatenate(([0.0, 1.0], inside)))
+        lo, hi = min(lo, float(values.min())), max(hi, float(values.max()))
+    if lo < -LOOP_MARGIN or hi > 1.0 + LOOP_MARGIN:
         raise InputError(
-            f"{CALIBRATION_JSON} hysteresis.unloading_model.a, b",
-            [a, b],
-            f"h = F_turn x (1 - x) (a + b x) reaches {worst:.3g} x the load: the loop is never wider than the "
-            "load (|(1 - x) (a + b x)| <= 1 for 0 <= x <= 1)",
+            f"{CALIBRATION_JSON} hysteresis.unloading_model.coefficients",
+            [*coefficients, after_hold],
+            f"an unloading reading would mean {lo:.3g} to {hi:.3g} x the turn's force: it lies between no force and "
+            f"the turn's, to within {LOOP_MARGIN:g} of it",
         )

@@ -30,9 +30,13 @@ import numpy as np
 from mst_cli.calibrate import hysteresis as hy
 from mst_cli.calibrate.branches import HOLD, LOADING, UNLOADING, Branches, find_branches
 from mst_cli.calibrate.loadtest import Readings, rig_column
+from mst_cli.calibrate.softening import Softening, fit_softening
+from mst_cli.calibrate.time_alignment import Alignment
+from mst_cli.calibrate.zero_drift import ZeroLaw, fit_zero, remove_zero, rest_runs
 from mst_cli.errors import CalibrationFailed, InputError
 
 MIN_LOADING_SPAN = 0.5  # loading rows must span this fraction of the force span, else holds are fitted too
+REST_FORCE_REL = 0.05  # a hold below this fraction of the largest force is a rest: no creep, the zero's rows
 
 
 @dataclass
@@ -48,6 +52,10 @@ class RigAnalysis:
     hysteresis: list[hy.RegimeHysteresis] = field(default_factory=list)
     unloading: hy.UnloadingModel | None = None
     creep: list[tuple[tuple[int, int], hy.Creep]] = field(default_factory=list)
+    rest: np.ndarray | None = None  # bool: rows at rest (force clipped or near 0 between presses)
+    alignment: Alignment | None = None
+    zero: ZeroLaw | None = None
+    softening: Softening | None = None
 
     @property
     def full_scale_N(self) -> float:
@@ -60,7 +68,21 @@ class RigAnalysis:
         return np.arange(len(self.readings), dtype=float) if t is None else t
 
     def counts(self) -> dict[str, int]:
-        return {k: int(np.sum(self.branches.label == k)) for k in (LOADING, UNLOADING, HOLD)}
+        rest = self.rest if self.rest is not None else np.zeros(len(self.readings), bool)
+        out = {k: int(np.sum((self.branches.label == k) & ~rest)) for k in (LOADING, UNLOADING, HOLD)}
+        return {**out, "rest": int(rest.sum())} if rest.any() else out
+
+    def rig_records(self) -> dict:
+        """calibration.json's time_alignment, zero and softening (None where not measured)."""
+        return {
+            "time_alignment": None if self.alignment is None else self.alignment.record(),
+            "zero": None if self.zero is None else self.zero.record(),
+            "softening": None if self.softening is None else self.softening.record(),
+        }
+
+    def rig_lines(self) -> list[str]:
+        """The summary's lines on the lag, the zero and the softening (one each, when measured)."""
+        return [x.line() for x in (self.alignment, self.zero, self.softening) if x is not None]
 
     def record(self) -> dict:
         """calibration.json's ``hysteresis`` section (units in the keys)."""
@@ -87,22 +109,14 @@ class RigAnalysis:
                 }
                 for i, r in enumerate(self.hysteresis)
             ],
-            "unloading_model": None
-            if self.unloading is None
-            else {
-                "form": "F_unloading = F_loading - F_turn x (1 - x) (a + b x), x = F_loading / F_turn",
-                "a": self.unloading.a,
-                "b": self.unloading.b,
-                "residual_rms_N": self.unloading.residual_rms_N,
-                "rows": self.unloading.samples,
-            },
+            "unloading_model": None if self.unloading is None else self.unloading.record(self.full_scale_N),
             "first_cycle": None
             if fc is None
             else {
                 "stiffer_pct": fc.difference_pct,
                 "sigma_pct": fc.sigma_pct,
                 "differs": fc.differs,
-                "left_out_of_fit": bool(fc.differs and self.use_branches),
+                "left_out_of_fit": bool(self.use_branches and fc.differs and self.softening is None),
             },
             "creep": [
                 {
@@ -120,7 +134,9 @@ class RigAnalysis:
         """The lines ``mst calibrate`` prints about the branches."""
         n = self.counts()
         lines = [
-            f"branches: {n[LOADING]} loading, {n[UNLOADING]} unloading, {n[HOLD]} hold rows in "
+            f"branches: {n[LOADING]} loading, {n[UNLOADING]} unloading, {n[HOLD]} hold"
+            + (f", {n['rest']} rest (force at 0: the zero's rows, no hold)" if "rest" in n else "")
+            + " rows in "
             f"{int(self.branches.cycle.max()) if len(self.readings) else 0} cycle(s); fitted to "
             + (f"{int(self.fit_rows.sum())} loading rows" if self.use_branches else "every row as loading")
         ]
@@ -134,10 +150,13 @@ class RigAnalysis:
         if self.unloading is not None:
             u = self.unloading
             lines.append(
-                f"  unloading model a {u.a:.4g}, b {u.b:.4g} (residual {u.residual_rms_N:.3g} N RMS, {u.samples} rows)"
+                f"  unloading model h/F_turn = {' '.join(f'{c:+.4f}x^{j}' for j, c in enumerate(u.coefficients))}"
+                + (f", {u.after_hold:+.4f}x^4 after a hold" if u.after_hold else "")
+                + f"; unexplained {u.residual_rms_N:.3g} N RMS ({100 * u.residual_rms_N / self.full_scale_N:.2f} % "
+                f"of full scale, {u.samples} rows)"
             )
         fc = self.first_cycle
-        if fc is not None and fc.differs:
+        if fc is not None and fc.differs and self.softening is None:
             lines.append(
                 f"  first cycle {fc.difference_pct:+.1f} % stiff (+- {fc.sigma_pct:.2g} %): "
                 + ("left out of the fit" if self.use_branches else "kept (branches ignored)")
@@ -189,20 +208,61 @@ def _cycle_hint(lt: Readings) -> list[int] | None:
     return None if c is None else [int(v) for v in c]
 
 
-def analyse(lt: Readings, min_rows: int, use_branches: bool = True) -> RigAnalysis:
-    """The branches and the rows the fit uses (module doc); ``min_rows``: what the fit needs."""
-    b = branches_of(lt)
+def _rests(lt: Readings, b: Branches) -> tuple[Branches, np.ndarray]:
+    """(the branches without holds near zero force, the rows at rest): a hold below
+    REST_FORCE_REL of the largest force (a load cell clipped at 0 between presses) is no hold (no
+    creep); its rows and every run of rows within the dead band of 0 lasting MIN_REST_S (with
+    time_s) are the zero's."""
+    F = lt.load_N
+    top = float(np.max(F)) if len(F) else 0.0
+    rest = np.zeros(len(F), bool)
+    t = rig_column(lt, "time_s")
+    for a, z in rest_runs(t, F <= b.dead_band_N) if t is not None else ():
+        rest[a:z] = True
+    label, kept = b.label.copy(), []
+    for a, z in b.holds:
+        if float(np.mean(F[a:z])) <= REST_FORCE_REL * top:
+            rest[a:z] = True
+            label[a:z] = label[a - 1] if a > 0 and label[a - 1] != HOLD else LOADING
+        else:
+            kept.append((a, z))
+    return replace(b, label=label, holds=tuple(kept)), rest
+
+
+def _zero(lt: Readings, b: Branches, notes: list[str]) -> tuple[Readings, ZeroLaw | None]:
+    """The rows with the zero's baseline removed, and its law (module zero_drift)."""
+    t = rig_column(lt, "time_s")
+    if t is None:
+        notes.append("no time_s: the zero's drift and recovery are not tracked")
+        return lt, None
+    law = fit_zero(t, lt.B_abs_T, lt.load_N, b.dead_band_N)
+    if law is None:
+        return lt, None
+    return remove_zero(lt, law, t, b.dead_band_N), law
+
+
+def analyse(lt: Readings, min_rows: int, use_branches: bool = True, alignment: Alignment | None = None) -> RigAnalysis:
+    """The branches and the rows the fit uses (module doc); ``min_rows``: what the fit needs.
+    The zero's law is removed from the rows first (:mod:`~mst_cli.calibrate.zero_drift`); with
+    three presses or more, the softening law decides which presses are fitted
+    (:mod:`~mst_cli.calibrate.softening`), else a first cycle that differs is left out."""
+    b, rest = _rests(lt, branches_of(lt))
     notes: list[str] = []
-    fc = None
+    lt, zero = _zero(lt, b, notes) if use_branches else (lt, None)
+    fc, soft = None, None
     if int(b.cycle.max(initial=1)) > 1:
         try:
             fc = hy.first_cycle(lt.B_abs_T, lt.load_N, b.label, b.cycle)
         except CalibrationFailed:
             fc = None
+        soft = fit_softening(lt.B_abs_T, lt.load_N, np.where(rest, "", b.label), b.cycle) if use_branches else None
     if not use_branches:
-        return RigAnalysis(lt, b, np.ones(len(lt), bool), False, fc, notes)
-    keep = hy.rows_without_first_cycle(b.cycle, fc) if fc is not None else np.ones(len(lt), bool)
-    rows = keep & (b.label == LOADING)
+        return RigAnalysis(lt, b, np.ones(len(lt), bool), False, fc, notes, rest=rest, alignment=alignment)
+    if soft is not None:
+        keep = b.cycle >= soft.first_settled
+    else:
+        keep = hy.rows_without_first_cycle(b.cycle, fc) if fc is not None else np.ones(len(lt), bool)
+    rows = keep & (b.label == LOADING) & ~rest
     F = lt.load_N
     span = float(np.ptp(F)) if len(F) else 0.0
     if rows.sum() < min_rows or (span > 0 and (np.ptp(F[rows]) if rows.any() else 0.0) < MIN_LOADING_SPAN * span):
@@ -211,7 +271,7 @@ def analyse(lt: Readings, min_rows: int, use_branches: bool = True) -> RigAnalys
     if rows.sum() < min_rows:
         rows = np.ones(len(lt), bool)
         notes.append("too few loading and hold rows for the fit: every row fitted as loading")
-    return RigAnalysis(lt, b, rows, True, fc, notes)
+    return RigAnalysis(lt, b, rows, True, fc, notes, rest=rest, alignment=alignment, zero=zero, softening=soft)
 
 
 def describe(analysis: RigAnalysis, edges_N: np.ndarray, force_of_field_N) -> None:
@@ -219,13 +279,18 @@ def describe(analysis: RigAnalysis, edges_N: np.ndarray, force_of_field_N) -> No
     model and creep under each hold (the reading as force: ``force_of_field_N(|B|)``)."""
     lt, b = analysis.readings, analysis.branches
     mask = analysis.fit_rows | (b.label != LOADING)
-    if analysis.first_cycle is not None and analysis.first_cycle.differs:
+    if analysis.rest is not None:
+        mask &= ~analysis.rest
+    if analysis.softening is not None:
+        mask &= b.cycle >= analysis.softening.first_settled
+    elif analysis.first_cycle is not None and analysis.first_cycle.differs:
         mask &= b.cycle != 1
     n_load, n_unload = int(np.sum(mask & (b.label == LOADING))), int(np.sum(mask & (b.label == UNLOADING)))
     if n_load >= 2 and n_unload >= 1:
         analysis.hysteresis = hy.measure_hysteresis(lt.B_abs_T, lt.load_N, b.label, [float(e) for e in edges_N], mask)
         try:
-            analysis.unloading = hy.fit_unloading(lt.B_abs_T, lt.load_N, b.label, b.turn_force_N, mask)
+            after_hold = hy.rows_after_holds(b.label, b.holds)
+            analysis.unloading = hy.fit_unloading(lt.B_abs_T, lt.load_N, b.label, b.turn_force_N, mask, after_hold)
         except CalibrationFailed as exc:
             analysis.notes.append(f"no unloading model: {exc}")
     t = analysis.time_s

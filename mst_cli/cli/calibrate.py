@@ -13,6 +13,7 @@ from typing import NoReturn
 import click
 
 from mst_cli import api
+from mst_cli.cli import help_texts
 from mst_cli.cli.common import (
     EXIT_TARGETS,
     default_out_dir,
@@ -69,6 +70,7 @@ def fail_fit(reason: str, what: str = "calibration failed") -> NoReturn:
     help="Fit every row as loading (default: the loading rows; unloading, holds and a first cycle "
     "that differs are described in calibration.json's hysteresis section, not fitted).",
 )
+@click.option("--missing-force", type=float, metavar="SENTINEL", help=help_texts.CALIBRATE_MISSING_FORCE)
 @click.option(
     "--offset-table",
     is_flag=True,
@@ -91,6 +93,7 @@ def calibrate(
     res: int | None,
     table_size: int,
     ignore_branches: bool,
+    missing_force: float | None,
     offset_table: bool,
     shear_table: bool,
     no_plot: bool,
@@ -126,6 +129,7 @@ def calibrate(
             shear_table=shear_table,
             progress=lambda line: click.echo(f"mst calibrate: {line}", err=True),
             use_branches=not ignore_branches,
+            missing_force=missing_force,
         )
     except api.CalibrationFailed as exc:
         fail_fit(str(exc))

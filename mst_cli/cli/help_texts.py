@@ -64,6 +64,15 @@ READ_ESTIMATE = (
 READ_ESTIMATE_OFFSET = "The same as --estimate offset."
 READ_POLISH = "Polish each estimate by the model's exact solve (about 0.1 s a reading: files, not streams)."
 READ_MAX_OFFSET_SIGMA = "An offset less certain than this (1-sigma, mm) is not identifiable: the centred force is kept."
+READ_TRACK_ZERO = (
+    "Re-zero at every rest of the stream (|B| flat within 2 noise sigmas for 0.5 s, within 10 % of the span of "
+    "the unloaded field), with the calibration's recovery after each unloading and its drift between rests."
+)
+CALIBRATE_MISSING_FORCE = (
+    "A logger's mark for a row without a force (e.g. -1; nan for empty and nan cells only): such rows are "
+    "skipped and counted in one line, never fitted (their field still times the lag). Without it they are "
+    "refused."
+)
 READ_TARE = (
     "Take the first N readings as no load and re-zero the unloaded field on them (a reading within "
     "the noise of no load reads 0 N)."

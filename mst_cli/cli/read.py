@@ -74,6 +74,7 @@ BAUD_RATES = (1200, 2400, 4800, 9600, 19200, 38400, 57600, 115200, 230400, 46080
     "--max-offset-sigma-mm", type=float, default=1.0, show_default=True, help=help_texts.READ_MAX_OFFSET_SIGMA
 )
 @click.option("--tare", type=click.IntRange(min=0), default=0, show_default=True, help=help_texts.READ_TARE)
+@click.option("--track-zero", is_flag=True, help=help_texts.READ_TRACK_ZERO)
 @handles_input_errors
 def read(
     model_file: Path,
@@ -92,6 +93,7 @@ def read(
     polish: bool,
     max_offset_sigma_mm: float,
     tare: int,
+    track_zero: bool,
 ) -> None:
     """Turn MLX90393 readings into forces with MODEL_FILE (a calibrated.yaml).
 
@@ -115,7 +117,7 @@ def read(
     options.update(estimate=estimate, max_offset_sigma_mm=max_offset_sigma_mm)
     try:
         if readings is not None:
-            result = api.read(doc, readings, out=out, polish=polish, tare=tare, **options)
+            result = api.read(doc, readings, out=out, polish=polish, tare=tare, track_zero=track_zero, **options)
             click.echo(result.summary())
             click.echo(f"wrote {out}/forces.csv")
             return
