@@ -26,8 +26,17 @@ def hermite_beam_mm(span, EI, loads, support, n=800):
     for nodal loads), deflection at every node under nodal point loads [(x, P)]."""
     h, N = span / n, n + 1
     K = np.zeros((2 * N, 2 * N))
-    ke = EI / h**3 * np.array(
-        [[12, 6 * h, -12, 6 * h], [6 * h, 4 * h * h, -6 * h, 2 * h * h], [-12, -6 * h, 12, -6 * h], [6 * h, 2 * h * h, -6 * h, 4 * h * h]]
+    ke = (
+        EI
+        / h**3
+        * np.array(
+            [
+                [12, 6 * h, -12, 6 * h],
+                [6 * h, 4 * h * h, -6 * h, 2 * h * h],
+                [-12, -6 * h, 12, -6 * h],
+                [6 * h, 2 * h * h, -6 * h, 4 * h * h],
+            ]
+        )
     )
     for e in range(n):
         idx = [2 * e, 2 * e + 1, 2 * e + 2, 2 * e + 3]
@@ -178,7 +187,10 @@ def test_check_fails_a_thin_cap_naming_it_and_passes_a_thick_one(tmp_path):
     res = run(["check", thin])  # without a bound: reported, never failed
     assert res.exit_code == 0 and "load_path        info" in res.output
     res = run(["check", thin, "--load-path-max", "2"])
-    assert res.exit_code == 2 and res.output.strip() == "mst: invalid input: --load-path-max = 2.0: must be a share from 0 to 1"
+    assert (
+        res.exit_code == 2
+        and res.output.strip() == "mst: invalid input: --load-path-max = 2.0: must be a share from 0 to 1"
+    )
 
 
 def test_a_wider_press_bends_the_cap_less():
