@@ -18,6 +18,7 @@ from mst_cli.model.file_keys import SEED_RANGE as SEED_RANGE
 from mst_cli.model.general_load import SHEAR_RATIO_MAX, loaded_stack
 from mst_cli.model.ladder import choose_mechanics
 from mst_cli.model.load_bound import bound_report
+from mst_cli.model.load_path import FINGERTIP_PATCH_MM
 from mst_cli.model.mechanics import MODELS
 from mst_cli.model.offcentre import OffCentreResponse, OffsetMap
 from mst_cli.model.offcentre import offset_map as run_offset_map
@@ -97,6 +98,7 @@ def run_simulate(
     plot: bool = True,
     note: Callable[[str], None] | None = None,
     shear_ratio: tuple[float, float] | None = None,
+    press_width_mm: float | None = None,
 ) -> Simulation:
     """The whole ``mst simulate`` run: the response, the off-centre press and the offset map asked
     for, written together (report.json's ``off_centre`` included).
@@ -114,6 +116,9 @@ def run_simulate(
         Folder for report.json, response, offcentre, offset_map .csv/.png [default: none written].
     note : callable(str), optional
         Gets the rung picked and the print parameters that differ from nominal.
+    press_width_mm : float, optional
+        The press's contact patch, a centred strip this wide across the depth (0 < w <= the face's
+        width), for report.json's load_path [default: 6 mm, a fingertip].
 
     Returns
     -------
@@ -135,6 +140,7 @@ def run_simulate(
     _check_out(out)  # a bad output path is refused before any work
     load_offset_mm = _press(load_offset_mm, shear_ratio)
     run = Simulation(doc, geometry, choose_mechanics(mechanics, doc.accuracy_rel, doc.mechanics))
+    run.press_width_mm = _press_width(press_width_mm, geometry.width_mm)
     if note is not None:
         for line in run.model_lines():
             note(line)
@@ -219,6 +225,15 @@ def _press(load_offset_mm, shear_ratio):
         return load_offset_mm
     check_shear_ratio(shear_ratio)
     return load_offset_mm or (0.0, 0.0)
+
+
+def _press_width(width_mm: float | None, face_mm: float) -> float:
+    """The press's contact width, or InputError naming --press-width-mm."""
+    if width_mm is None:
+        return FINGERTIP_PATCH_MM
+    if not 0.0 < width_mm <= face_mm:  # nan fails too
+        raise InputError("--press-width-mm", width_mm, f"must be a width above 0 and up to the face's {face_mm:g} mm")
+    return float(width_mm)
 
 
 def check_shear_ratio(ratio: tuple[float, float]) -> None:
