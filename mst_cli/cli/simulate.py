@@ -11,6 +11,7 @@ import click
 from mst_cli import api
 from mst_cli.cli.common import default_out_dir, handles_input_errors, no_plot_option, out_dir_option
 from mst_cli.errors import InputError
+from mst_cli.model.load_path import FINGERTIP_PATCH_MM
 
 
 @click.command()
@@ -54,10 +55,11 @@ from mst_cli.errors import InputError
     "--press-width-mm",
     "press_width_mm",
     type=float,
-    default=None,
+    default=FINGERTIP_PATCH_MM,
     help="Width of the press's contact patch, a centred strip across the depth, mm (0 < W <= the face's "
-    "width) [default: 6, a fingertip]: sets how much the cap bends in report.json's load_path "
+    "width), a fingertip by default: sets how much the cap bends in report.json's load_path "
     "(docs/design.md 4.6).",
+    show_default=True,
 )
 @click.option(
     "--offset-map",
@@ -75,7 +77,7 @@ def simulate(
     as_json: bool,
     load_offset: str | None,
     shear_ratio: str | None,
-    press_width_mm: float | None,
+    press_width_mm: float,
     offset_map: bool,
     no_plot: bool,
 ) -> None:

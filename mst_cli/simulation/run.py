@@ -62,12 +62,19 @@ class Simulation:
     document: Document
     geometry: SensorGeometry  # as drawn (the report's geometry section)
     choice: MechanicsChoice
+    press_width_mm: float = FINGERTIP_PATCH_MM  # the press's contact patch (report.json's load_path)
     response: Response | None = None
     off_centre: OffCentreResponse | None = None
     offset_map: OffsetMap | None = None
     shear_bound: dict | None = None  # report.json's shear_bound (LayoutBound.summary), with --shear-ratio
-    press_width_mm: float = FINGERTIP_PATCH_MM  # the press's contact patch (report.json's load_path)
     report: dict | None = field(default=None, repr=False)  # report.json, once written
+
+    def __post_init__(self):
+        face = self.geometry.width_mm
+        if not 0.0 < self.press_width_mm <= face:  # nan fails too: refused before any work
+            raise InputError(
+                "--press-width-mm", self.press_width_mm, f"must be a width above 0 and up to the face's {face:g} mm"
+            )
 
     def model_lines(self) -> list[str]:
         """The mechanics rung picked for the file, and the print parameters that differ from nominal."""
