@@ -21,7 +21,12 @@ from mst_cli.model.mechanics import layer_laws
 from mst_cli.model.stack import Stack
 
 ROOT = Path(__file__).resolve().parents[1]
-INSERTS = (("PETG plate", 2100.0, 0.38, 1.0), ("PETG plate", 2100.0, 0.38, 2.0), ("steel plate", 200e3, 0.3, 0.5), ("steel plate", 200e3, 0.3, 1.0))
+INSERTS = (
+    ("PETG plate", 2100.0, 0.38, 1.0),
+    ("PETG plate", 2100.0, 0.38, 2.0),
+    ("steel plate", 200e3, 0.3, 0.5),
+    ("steel plate", 200e3, 0.3, 1.0),
+)
 
 
 def row(label, g, material, stack, insert=None) -> str:

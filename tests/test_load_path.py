@@ -26,8 +26,17 @@ def hermite_beam_mm(span, EI, loads, support, n=800):
     for nodal loads), deflection at every node under nodal point loads [(x, P)]."""
     h, N = span / n, n + 1
     K = np.zeros((2 * N, 2 * N))
-    ke = EI / h**3 * np.array(
-        [[12, 6 * h, -12, 6 * h], [6 * h, 4 * h * h, -6 * h, 2 * h * h], [-12, -6 * h, 12, -6 * h], [6 * h, 2 * h * h, -6 * h, 4 * h * h]]
+    ke = (
+        EI
+        / h**3
+        * np.array(
+            [
+                [12, 6 * h, -12, 6 * h],
+                [6 * h, 4 * h * h, -6 * h, 2 * h * h],
+                [-12, -6 * h, 12, -6 * h],
+                [6 * h, 2 * h * h, -6 * h, 4 * h * h],
+            ]
+        )
     )
     for e in range(n):
         idx = [2 * e, 2 * e + 1, 2 * e + 2, 2 * e + 3]
@@ -178,7 +187,10 @@ def test_check_fails_a_thin_cap_naming_it_and_passes_a_thick_one(tmp_path):
     res = run(["check", thin])  # without a bound: reported, never failed
     assert res.exit_code == 0 and "load_path        info" in res.output
     res = run(["check", thin, "--load-path-max", "2"])
-    assert res.exit_code == 2 and res.output.strip() == "mst: invalid input: --load-path-max = 2.0: must be a share from 0 to 1"
+    assert (
+        res.exit_code == 2
+        and res.output.strip() == "mst: invalid input: --load-path-max = 2.0: must be a share from 0 to 1"
+    )
 
 
 def test_a_wider_press_bends_the_cap_less():
@@ -194,3 +206,18 @@ def test_a_wider_press_bends_the_cap_less():
     L = top.p_mm + top.p_inner_mm
     EI, kGA = lp.section_EI_kGA(20.0, top.t_mm + 3.3, E, m.shear_modulus_MPa, 6.2, (top.t_mm + 0.4, top.t_mm + 2.5))
     assert caps[-1] == pytest.approx(5 * L**3 / (384 * EI) + L / (8 * kGA), rel=1e-9)
+
+
+def test_the_press_width_is_an_input_and_a_bad_one_is_refused(tmp_path):
+    res = run(["simulate", FORWARD, "--press-width-mm", "12", "--out", tmp_path / "w", "--no-plot"])
+    assert res.exit_code == 0, res.output
+    path = json.loads((tmp_path / "w" / "report.json").read_text())["load_path"]
+    doc = mst.load(FORWARD)
+    assert path["patch_mm"] == 12.0
+    assert path["cap_mm_per_N"] == pytest.approx(lp.members(doc.geometry(), doc.material, 12.0).cap_mm_per_N, rel=1e-12)
+    assert "under a 12 mm press" in res.output
+    for bad in ("0", "31", "nan"):
+        res = run(["simulate", FORWARD, "--press-width-mm", bad, "--out", tmp_path / bad, "--no-plot"])
+        assert res.exit_code == 2 and not (tmp_path / bad).exists()
+        line = res.output.strip()
+        assert "\n" not in line and line.startswith("mst: invalid input: --press-width-mm = "), line

@@ -13,12 +13,12 @@ import pytest
 from click.testing import CliRunner
 
 from mst_cli.cli.app import main
+from mst_cli.model.assembly import SensorGeometry
 from mst_cli.model.cell import HexCell
+from mst_cli.model.material import Material
 from mst_cli.model.mechanics.tilt import NEWTON_FLOOR_REL, _residual, solve_layer_tilt
 from mst_cli.model.offcentre import SMALL_ROTATION_DEG
 from mst_cli.model.stack_pose import tilt_laws
-from mst_cli.model.assembly import SensorGeometry
-from mst_cli.model.material import Material
 
 ROOT = Path(__file__).resolve().parents[1]
 FORWARD = ROOT / "configs" / "mohammadi2021-forward.yaml"
@@ -34,7 +34,9 @@ def rows(path):
 
 
 def test_small_rotations_hold_on_the_bundled_design(tmp_path):
-    res = run(["simulate", FORWARD, "--load-offset-mm", "3,0", "--shear-ratio", "0.3,0", "--out", tmp_path, "--no-plot"])
+    res = run(
+        ["simulate", FORWARD, "--load-offset-mm", "3,0", "--shear-ratio", "0.3,0", "--out", tmp_path, "--no-plot"]
+    )
     assert res.exit_code == 0, res.output
     assert {r["rotation_flag"] for r in rows(tmp_path / "offcentre.csv")} == {"ok"}
     rot = json.loads((tmp_path / "report.json").read_text())["off_centre"]["rotation"]

@@ -97,9 +97,11 @@ def _design_and_geometry(design):
     return design, design_geometry(design)
 
 
-def refuse_unhoused_chips(doc: Document) -> None:
-    """InputError (the chips' field) when a chip's board slot does not fit the face or the boards
-    cannot lie side by side in the base: ``mst design`` and ``mst export`` refuse it before any
-    work. The rule reads no layer, so a probe cell stands in for a spec's."""
+def refuse_unhoused_chips(doc: Document) -> Document:
+    """``doc``, or InputError (the chips' field) when a chip's board slot does not fit the face
+    (the footprint is the spec's) or the boards cannot lie side by side in the base: ``mst design``
+    and ``mst export`` refuse it before any work. The rule reads no layer, so a probe cell stands
+    in for a spec's."""
     for v in slot_violations(doc.geometry([doc.family.cell(45.0, 1.0, 3.0)])):
         raise v.input_error()
+    return doc

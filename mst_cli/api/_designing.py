@@ -191,8 +191,7 @@ def run_design(
     """
     from mst_cli.design.run import DesignRun, design_choice  # deferred: the design layer, 25 ms measured
 
-    doc, cal = _calibrated(load(spec) if isinstance(spec, (str, Path)) else spec, calibration)
-    refuse_unhoused_chips(doc)  # the footprint is the spec's: a layout needing a wider body is refused
+    doc, cal = _calibrated(refuse_unhoused_chips(load(spec) if isinstance(spec, (str, Path)) else spec), calibration)
     _check_out(out)  # a bad output path: refused before any work
     if pareto_designs and pareto is None:
         raise InputError("--pareto-designs", True, "needs --pareto N")

@@ -18,6 +18,7 @@ from mst_cli.model.file_keys import SEED_RANGE as SEED_RANGE
 from mst_cli.model.general_load import SHEAR_RATIO_MAX, loaded_stack
 from mst_cli.model.ladder import choose_mechanics
 from mst_cli.model.load_bound import bound_report
+from mst_cli.model.load_path import FINGERTIP_PATCH_MM
 from mst_cli.model.mechanics import MODELS
 from mst_cli.model.offcentre import OffCentreResponse, OffsetMap
 from mst_cli.model.offcentre import offset_map as run_offset_map
@@ -78,8 +79,7 @@ def simulate(
     >>> [r.force_to_N for r in resp.regimes]  # doctest: +SKIP
     """
     if out is None:
-        _one_of("--mechanics", mechanics, MODELS)
-        _one_of("--field-model", field_model, FIELD_MODELS)
+        _check_models(mechanics, field_model)
         return simulate_as_printed(load_design(design), mechanics, field_model)
     run = run_simulate(design, mechanics=mechanics, field_model=field_model, out=out, plot=plot)
     assert run.response is not None  # run_simulate simulates
@@ -97,9 +97,10 @@ def run_simulate(
     plot: bool = True,
     note: Callable[[str], None] | None = None,
     shear_ratio: tuple[float, float] | None = None,
+    press_width_mm: float = FINGERTIP_PATCH_MM,
 ) -> Simulation:
     """The whole ``mst simulate`` run: the response, the off-centre press and the offset map asked
-    for, written together (report.json's ``off_centre`` included).
+    for, written together (report.json's ``off_centre`` and ``load_path`` included).
 
     Parameters
     ----------
@@ -107,13 +108,14 @@ def run_simulate(
         As :func:`simulate`.
     load_offset_mm, shear_ratio : (float, float), optional
         Press at (x, y) mm on the top face as well (:func:`simulate_offcentre`), with a tangential
-        force (Fx, Fy) = shear_ratio x the normal force, each |ratio| <= 1 (centred without x, y).
-    offset_map : bool
-        Map the axial reading's error over the top face as well (:func:`offset_map`, ~10 s).
-    out : str or Path, optional
-        Folder for report.json, response, offcentre, offset_map .csv/.png [default: none written].
+        force shear_ratio x the normal one, each |ratio| <= 1 (centred without x, y).
+    offset_map : bool; out : str or Path, optional
+        Map the axial reading's error over the top face as well (:func:`offset_map`, ~10 s); the
+        folder for report.json, response, offcentre, offset_map .csv/.png [default: none written].
     note : callable(str), optional
         Gets the rung picked and the print parameters that differ from nominal.
+    press_width_mm : float, optional
+        The press's width across the depth, 0 < w <= the face's, for ``load_path`` [default: 6 mm].
 
     Returns
     -------
@@ -129,15 +131,13 @@ def run_simulate(
     --------
     >>> print(mst.run_simulate("configs/mohammadi2021-forward.yaml", load_offset_mm=(5, 0)).table())  # doctest: +SKIP
     """
-    _one_of("--mechanics", mechanics, MODELS)
-    _one_of("--field-model", field_model, FIELD_MODELS)
+    _check_models(mechanics, field_model)
     doc, geometry = _design_and_geometry(design)
     _check_out(out)  # a bad output path is refused before any work
     load_offset_mm = _press(load_offset_mm, shear_ratio)
-    run = Simulation(doc, geometry, choose_mechanics(mechanics, doc.accuracy_rel, doc.mechanics))
+    run = Simulation(doc, geometry, choose_mechanics(mechanics, doc.accuracy_rel, doc.mechanics), press_width_mm)
     if note is not None:
-        for line in run.model_lines():
-            note(line)
+        list(map(note, run.model_lines()))
     run.response = simulate_as_printed(doc, mechanics, field_model)
     models = (mechanics, field_model)
     run.off_centre = None if load_offset_mm is None else _offcentre(doc, load_offset_mm, *models, shear_ratio)
@@ -219,6 +219,12 @@ def _press(load_offset_mm, shear_ratio):
         return load_offset_mm
     check_shear_ratio(shear_ratio)
     return load_offset_mm or (0.0, 0.0)
+
+
+def _check_models(mechanics: str | None, field_model: str | None) -> None:
+    """InputError naming --mechanics or --field-model when it is not one of the rungs or field models."""
+    _one_of("--mechanics", mechanics, MODELS)
+    _one_of("--field-model", field_model, FIELD_MODELS)
 
 
 def check_shear_ratio(ratio: tuple[float, float]) -> None:

@@ -41,6 +41,9 @@ from mst_cli.cad.mesh_io import Mesh, binary_stl_triangles, weld
 from mst_cli.errors import InputError
 from mst_cli.io.files import read_input
 from mst_cli.io.outputs import finite_or_none
+from mst_cli.model.load_path import dominant_member, load_path_report
+from mst_cli.model.mechanics import layer_laws
+from mst_cli.model.stack import Stack
 
 # Planar features are exact in the B-rep; the STL stores float32 coordinates, which resolve
 # ~2e-6 mm at 20 mm from the origin. Dimensions measured on planar faces must agree to this.
@@ -356,7 +359,9 @@ def check_footprint(m: Measurements, x: Manifest) -> Check:
     bad = [] if abs(span - width) <= tol else [f"the body is {span:.4g} mm wide, not the face's {width:g} mm"]
     for k, got in enumerate(m.slots):
         if got.x0_mm - wall < -half - tol or got.x1_mm + wall > half + tol:
-            bad.append(f"chip {k + 1}'s slot x {got.x0_mm:.4g}..{got.x1_mm:.4g} mm leaves less than {wall:g} mm of wall")
+            bad.append(
+                f"chip {k + 1}'s slot x {got.x0_mm:.4g}..{got.x1_mm:.4g} mm leaves less than {wall:g} mm of wall"
+            )
     slots = ", ".join(f"{got.x0_mm:.3f}..{got.x1_mm:.3f}" for got in m.slots)
     return Check(
         "footprint",
@@ -375,10 +380,6 @@ def check_load_path(m: Measurements, x: Manifest, share_max: float | None = None
     naming the member; without it, reported only."""
     if x.design is None:
         return Check("load_path", True, "no design in export.json", "the design's members", info=True)
-    from mst_cli.model.load_path import dominant_member, load_path_report  # deferred: the layer laws
-    from mst_cli.model.mechanics import layer_laws
-    from mst_cli.model.stack import Stack
-
     doc = x.design
     g = doc.geometry()
     report = load_path_report(g, doc.material, Stack(layer_laws(g.layers, doc.material, "spring")))
@@ -388,7 +389,8 @@ def check_load_path(m: Measurements, x: Manifest, share_max: float | None = None
     got = ", ".join(f"{100 * r['outside_layers']:.0f} %" for r in rows)
     bad = share_max is not None and worst["outside_layers"] > share_max
     note = (
-        f"regime {worst['regime']}: {100 * worst['outside_layers']:.0f} % of the magnet's motion is outside the layers, "
+        f"regime {worst['regime']}: {100 * worst['outside_layers']:.0f} % of the magnet's motion is outside "
+        "the layers, "
         f"{100 * share:.0f} % in the {name} ({report['cap_mm_per_N']:.3g} mm/N cap; clamped bound "
         f"{100 * worst['outside_layers_clamped']:.0f} %)"
     )
@@ -518,7 +520,7 @@ def run_checks(
     if nozzle_mm is not None:
         manifest = replace(manifest, printer=replace(manifest.printer, nozzle_mm=float(nozzle_mm)))
     measured = measure(mesh, manifest)
-    bounds = {check_load_path: {"share_max": load_path_max}}
+    bounds: dict[Any, dict] = {check_load_path: {"share_max": load_path_max}}
     return [check(measured, manifest, **bounds.get(check, {})) for check in CHECKS]
 
 

@@ -11,6 +11,7 @@ import click
 from mst_cli import api
 from mst_cli.cli.common import default_out_dir, handles_input_errors, no_plot_option, out_dir_option
 from mst_cli.errors import InputError
+from mst_cli.model.load_path import FINGERTIP_PATCH_MM
 
 
 @click.command()
@@ -51,6 +52,16 @@ from mst_cli.errors import InputError
     "curve (each |R| <= 1), at the axis or at --load-offset-mm; offcentre.csv gets its Fx_N, Fy_N.",
 )
 @click.option(
+    "--press-width-mm",
+    "press_width_mm",
+    type=float,
+    default=FINGERTIP_PATCH_MM,
+    help="Width of the press's contact patch, a centred strip across the depth, mm (0 < W <= the face's "
+    "width), a fingertip by default: sets how much the cap bends in report.json's load_path "
+    "(docs/design.md 4.6).",
+    show_default=True,
+)
+@click.option(
     "--offset-map",
     is_flag=True,
     help="Add offset_map.csv/.png: the axial reading's force error over 80 % of the top face at "
@@ -66,6 +77,7 @@ def simulate(
     as_json: bool,
     load_offset: str | None,
     shear_ratio: str | None,
+    press_width_mm: float,
     offset_map: bool,
     no_plot: bool,
 ) -> None:
@@ -93,6 +105,7 @@ def simulate(
         out=out,
         plot=plot,
         note=None if as_json else click.echo,
+        press_width_mm=press_width_mm,
     )
     if as_json:
         click.echo(json.dumps(run.report, indent=2, allow_nan=False))

@@ -419,9 +419,7 @@ class SensorGeometry:
         """Broken housing rules (``Violation.of_field``: field, value, what is allowed): what the
         body needs to be one printable solid with a closed pocket and a slot that holds the board."""
         h, D, lh = self.housing, self.depth_mm, self.layer_height_mm
-        out = board_slots.chip_off_face_violations(self) + printer_violations(
-            self.printer, h, self.layers[0].contact_allowance_mm
-        )
+        out = printer_violations(self.printer, h, self.layers[0].contact_allowance_mm)
         if abs(D / lh - round(D / lh)) > 1e-6:
             out.append(
                 Violation.of_field(
@@ -476,4 +474,4 @@ class SensorGeometry:
                     "(housing.side_wall_mm above its apex)",
                 )
             )
-        return out
+        return board_slots.chip_off_face_violations(self) + out  # a chip off the face first

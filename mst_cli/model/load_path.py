@@ -89,7 +89,15 @@ def _clamped_two_load(P: float, e: float, L: float, EI: float) -> float:
     return simple - M * e * (L - e) / (2.0 * EI)
 
 
-def section_EI_kGA(depth_mm, thickness_mm, E_prime_MPa, G_MPa, hole_width_mm=0.0, hole_z_mm=(0.0, 0.0), insert=None):
+def section_EI_kGA(
+    depth_mm: float,
+    thickness_mm: float,
+    E_prime_MPa: float,
+    G_MPa: float,
+    hole_width_mm: float = 0.0,
+    hole_z_mm: tuple[float, float] = (0.0, 0.0),
+    insert: Insert | None = None,
+) -> tuple[float, float]:
     """(E'I in N mm^2, kappa G A in N) of a rectangle ``depth_mm`` x ``thickness_mm`` less a hole
     ``hole_width_mm`` wide (along the depth) between heights ``hole_z_mm`` above its bottom, and
     with an optional bonded ``insert`` (:class:`Insert`, at its ``z_mm`` above the bottom, over

@@ -11,6 +11,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from mst_cli.model.offcentre import SMALL_ROTATION_DEG
+
 if TYPE_CHECKING:
     from mst_cli.io.outputs import Staging
     from mst_cli.model.offcentre import OffCentreResponse, OffsetMap
@@ -110,8 +112,6 @@ def _rotation(r: OffCentreResponse) -> np.ndarray:
 def _rotation_summary(r: OffCentreResponse) -> dict:
     """Where the model stops: how many samples leave small rotations or pass a layer's closure,
     and the first force at which one does (null: none in the curve)."""
-    from mst_cli.model.offcentre import SMALL_ROTATION_DEG  # deferred: the model layer
-
     flags = _rotation(r)
     past = flags != "ok"
     return {

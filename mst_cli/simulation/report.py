@@ -18,7 +18,7 @@ from mst_cli.io.outputs import Staging, staged
 from mst_cli.model.assembly import SensorGeometry
 from mst_cli.model.chip import quantise_lsb
 from mst_cli.model.general_load import small_load_lateral_N_per_mm
-from mst_cli.model.load_path import dominant_member, load_path_report
+from mst_cli.model.load_path import FINGERTIP_PATCH_MM, dominant_member, load_path_report
 from mst_cli.model.mechanics import layer_laws
 from mst_cli.model.response import Regime, Response
 from mst_cli.model.stack import Stack
@@ -55,7 +55,7 @@ def report_dict(doc: Document, geometry: SensorGeometry, resp: Response, extra: 
         "magnetometer": _magnetometer_section(geometry, resp),
         "geometry": _geometry_section(geometry),
         "height_budget": geometry.height_budget_mm(),
-        "load_path": _load_path(doc, geometry, resp),
+        "load_path": load_path_section(doc, geometry, resp),
         "warnings": list(resp.warnings),
     }
     if extra:
@@ -63,16 +63,20 @@ def report_dict(doc: Document, geometry: SensorGeometry, resp: Response, extra: 
     return nulls_with_reasons(out, _undefined_reasons(resp))
 
 
-def _load_path(doc: Document, geometry: SensorGeometry, resp: Response) -> dict:
-    """Where the magnet's motion goes, per regime: the layers of this response's rung, and the
-    cap, plates and cover in closed form (docs/design.md 4.6)."""
+def load_path_section(
+    doc: Document, geometry: SensorGeometry, resp: Response, patch_mm: float = FINGERTIP_PATCH_MM
+) -> dict:
+    """Where the magnet's motion goes under a centred press ``patch_mm`` wide, per regime: the
+    layers of this response's rung, and the cap, plates and cover in closed form (docs/design.md 4.6)."""
     stack = Stack(layer_laws(geometry.layers, doc.material, resp.mechanics))
-    return load_path_report(geometry, doc.material, stack)
+    return load_path_report(geometry, doc.material, stack, patch_mm)
 
 
-def load_path_line(doc: Document, geometry: SensorGeometry, resp: Response) -> str:
+def load_path_line(
+    doc: Document, geometry: SensorGeometry, resp: Response, patch_mm: float = FINGERTIP_PATCH_MM
+) -> str:
     """One terminal line: the share of a centred press's motion outside the layers, per regime."""
-    lp = _load_path(doc, geometry, resp)
+    lp = load_path_section(doc, geometry, resp, patch_mm)
     shares = " / ".join(f"{100 * r['outside_layers']:.0f}" for r in lp["regimes"])
     member, _ = dominant_member(max(lp["regimes"], key=lambda r: r["outside_layers"]))
     return (
@@ -221,8 +225,10 @@ def height_budget_line(geometry: SensorGeometry) -> str:
     )
 
 
-def terminal_table(doc: Document, geometry: SensorGeometry, resp: Response) -> str:
-    """The short table ``mst simulate`` prints."""
+def terminal_table(
+    doc: Document, geometry: SensorGeometry, resp: Response, patch_mm: float = FINGERTIP_PATCH_MM
+) -> str:
+    """The short table ``mst simulate`` prints (its load-path line for a press ``patch_mm`` wide)."""
     targets = {i + 1: la for i, la in enumerate(doc.layers)}
     lines = [
         f"{doc.name}: {len(geometry.layers)} layers, mechanics={resp.mechanics}, field={resp.field_model}",
@@ -249,7 +255,7 @@ def terminal_table(doc: Document, geometry: SensorGeometry, resp: Response) -> s
     )
     lines.append(f"range ends at {resp.max_force_N:.3f} N (all layers locked; beyond is out of range)")
     lines.append(height_budget_line(geometry))
-    lines.append(load_path_line(doc, geometry, resp))
+    lines.append(load_path_line(doc, geometry, resp, patch_mm))
     for w in resp.warnings:
         lines.append(f"warning: {w}")
     return "\n".join(lines)

@@ -12,13 +12,14 @@ from mst_cli.errors import InputError
 from mst_cli.model.assembly import SensorGeometry
 from mst_cli.model.ladder import MechanicsChoice, choose_mechanics
 from mst_cli.model.load_bound import shear_bound_lines
+from mst_cli.model.load_path import FINGERTIP_PATCH_MM
 from mst_cli.model.material import Material
 from mst_cli.model.offcentre import OffCentreResponse, OffsetMap
 from mst_cli.model.response import Response
 from mst_cli.sensor.as_printed import PRINTER_NOMINAL, as_printed
 from mst_cli.sensor.document import Document
 from mst_cli.simulation.offcentre_files import offcentre_lines, offcentre_summary, write_offcentre
-from mst_cli.simulation.report import terminal_table, write_simulation
+from mst_cli.simulation.report import load_path_section, terminal_table, write_simulation
 
 
 @dataclass(frozen=True)
@@ -61,11 +62,19 @@ class Simulation:
     document: Document
     geometry: SensorGeometry  # as drawn (the report's geometry section)
     choice: MechanicsChoice
+    press_width_mm: float = FINGERTIP_PATCH_MM  # the press's contact patch (report.json's load_path)
     response: Response | None = None
     off_centre: OffCentreResponse | None = None
     offset_map: OffsetMap | None = None
     shear_bound: dict | None = None  # report.json's shear_bound (LayoutBound.summary), with --shear-ratio
     report: dict | None = field(default=None, repr=False)  # report.json, once written
+
+    def __post_init__(self):
+        face = self.geometry.width_mm
+        if not 0.0 < self.press_width_mm <= face:  # nan fails too: refused before any work
+            raise InputError(
+                "--press-width-mm", self.press_width_mm, f"must be a width above 0 and up to the face's {face:g} mm"
+            )
 
     def model_lines(self) -> list[str]:
         """The mechanics rung picked for the file, and the print parameters that differ from nominal."""
@@ -96,6 +105,8 @@ class Simulation:
             extra["off_centre"] = summary
         if self.shear_bound is not None:
             extra["shear_bound"] = self.shear_bound
+        if self.press_width_mm != FINGERTIP_PATCH_MM:
+            extra["load_path"] = load_path_section(self.document, self.geometry, self.response, self.press_width_mm)
         self.report = write_simulation(
             self.document,
             self.geometry,
@@ -110,7 +121,7 @@ class Simulation:
     def table(self) -> str:
         """The terminal's per-regime table (and the off-centre lines)."""
         assert self.response is not None  # simulated before shown
-        lines = [terminal_table(self.document, self.geometry, self.response)]
+        lines = [terminal_table(self.document, self.geometry, self.response, self.press_width_mm)]
         summary = self.off_centre_summary()
         if summary is not None:
             lines += offcentre_lines(summary)
