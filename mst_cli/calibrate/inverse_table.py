@@ -265,6 +265,7 @@ class InverseTable:
         return TableEstimates(*(np.concatenate([getattr(p, f.name) for p in parts]) for f in fields(TableEstimates)))
 
 
+_NPY_HEADERS = {(1, 0): np.lib.format.read_array_header_1_0, (2, 0): np.lib.format.read_array_header_2_0}
 _TABLE_KEYS = ("format", "kind", "source_hash", "force_N", "u", "v", "B_T")
 MAX_TABLE_BYTES = 64_000_000  # a default table is 0.3 to 0.6 MB; the finest grid a few MB
 # what a file that is not an npz of plain arrays raises inside numpy and zipfile
@@ -280,6 +281,15 @@ def _npz_arrays(data: bytes) -> dict[str, np.ndarray]:
     missing = [k for k in _TABLE_KEYS if f"{k}.npy" not in names]
     if missing:
         raise KeyError(f"no {', '.join(missing)}")
+    with zipfile.ZipFile(io.BytesIO(data)) as zf:
+        for key in _TABLE_KEYS:  # each header's claim against its member's size, before numpy allocates it
+            with zf.open(f"{key}.npy") as fh:
+                header = _NPY_HEADERS.get(np.lib.format.read_magic(fh))
+                if header is None:
+                    raise ValueError(f"its {key} is an .npy of a version numpy's savez does not write")
+                shape, _, dtype = header(fh)  # at most 10,000 bytes of header
+            if dtype.hasobject or math.prod(shape) * dtype.itemsize > names[f"{key}.npy"]:
+                raise ValueError(f"its {key} claims {shape} {dtype} in {names[f'{key}.npy']} bytes")
     with np.load(io.BytesIO(data), allow_pickle=False) as z:
         return {k: np.asarray(z[k]) for k in _TABLE_KEYS}
 
