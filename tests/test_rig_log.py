@@ -195,3 +195,7 @@ def test_a_held_out_stream_reads_within_2_percent_median_and_5_at_p95(real_rig, 
     assert np.median(rel) <= 0.02 and np.percentile(rel, 95) <= 0.05, (np.median(rel), np.percentile(rel, 95))
     plain = api.read(d / "cal" / "calibrated.yaml", d / "stream.csv")  # the zero moved 117 uT: far off
     assert np.nanmedian(np.abs(plain.force_N[use] - truth.force_N[use]) / truth.force_N[use]) > 0.1
+    r = run(["read", d / "cal" / "calibrated.yaml", d / "stream.csv", "--track-zero", "--out", d / f"r_{branch}"])
+    assert r.exit_code == 0, r.output
+    cli = np.genfromtxt(d / f"r_{branch}" / "forces.csv", delimiter=",", names=True)["force_N"]
+    assert np.allclose(cli[use], got.force_N[use], rtol=1e-4, atol=1e-4)

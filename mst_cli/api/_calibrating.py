@@ -140,10 +140,9 @@ def calibrate(
         The files' folder, with inverse_table.npz, offset_table.h; shear_table.npz, shear_table.h.
     mechanics, params : str; sequence of str or "a,b", optional
         The fit's rung (frame, continuum by space mapping on spring); the parameters fitted.
-    gain_sel, res, table_size, use_branches : int, int, int, bool, optional
-        Raw codes' chip setting; lookup.csv's entries; fit the loading rows (or every row).
-    missing_force : float, optional
-        A logger's mark for a row without a force (-1; NaN: empty, nan cells): skipped, counted.
+    gain_sel, res, table_size, use_branches, missing_force : int, int, int, bool, float, optional
+        Raw codes' chip setting; lookup.csv's entries; fit the loading rows (or every row); a
+        logger's mark for a row without a force (-1; NaN: empty, nan cells): skipped, counted.
 
     Returns
     -------
@@ -170,10 +169,16 @@ def calibrate(
     options.update(mechanics=mechanics, params=params, use_branches=use_branches, missing_force=missing_force)
     result = run_calibration(doc, name, load_test, **options)
     if out is not None:
-        result.write(Path(out), plot=plot)
-        kinds = [k for k, asked in (("offset", offset_table), ("shear", shear_table)) if asked]
-        _write_tables(Path(out), result, kinds, progress)
+        _write_calibration(Path(out), result, plot, {"offset": offset_table, "shear": shear_table}, progress)
     return result
+
+
+def _write_calibration(
+    out: Path, result: Calibration, plot: bool, tables: dict[str, bool], progress: Callable[[str], None] | None
+) -> None:
+    """Every file of a calibration into ``out``, then the tables asked for."""
+    result.write(out, plot=plot)
+    _write_tables(out, result, [k for k, asked in tables.items() if asked], progress)
 
 
 # what each table's C header says it cannot know
@@ -304,22 +309,18 @@ def read(
 
     Parameters
     ----------
-    model : str, Path or Document
+    model, readings : str, Path or Document; str or Path
         calibrated.yaml (or any design file: then forces are the design's, not the print's, and
-        ``warn`` is told so).
-    readings : str or Path
-        CSV with Bx_uT, By_uT, Bz_uT (or raw codes with ``gain_sel``/``res``); force_N, the
-        reference; time_s, cycle, branch, T_C read too.
-    out : str or Path, optional
-        Folder to write forces.csv into (and a table ``estimate`` built).
-    warn : callable, optional
-        Gets a sentence when the model does not match calibration.json beside it (docs/calibration.md).
-    estimate, estimate_offset, polish, tare : {"none", "offset", "shear"}, bool, bool, int
+        ``warn`` is told so); a CSV with Bx_uT, By_uT, Bz_uT (or raw codes with ``gain_sel``/
+        ``res``); force_N, the reference; time_s, cycle, branch, T_C read too.
+    out, warn : str or Path; callable, optional
+        Folder to write forces.csv into (and a table ``estimate`` built); gets a sentence when the
+        model does not match calibration.json beside it (docs/calibration.md).
+    estimate, estimate_offset, polish, tare, track_zero : {"none", "offset", "shear"}, bool, bool, int, bool
         "offset" (or ``estimate_offset``): x, y, the force corrected (docs/design.md 4.2);
         "shear": Fx, Fy of a press taken as centred (4.5); from the model's tables, with 1-sigma
-        and flags; ``polish`` by the exact solve; ``tare``: readings at no load.
-    track_zero : bool
-        Re-zero at every rest, with the calibration's recovery and drift (``--track-zero``).
+        and flags; ``polish`` by the exact solve; ``tare``: readings at no load; ``track_zero``:
+        re-zero at every rest, with the calibration's recovery and drift (``--track-zero``).
 
     Returns
     -------

@@ -254,11 +254,9 @@ def calibrate(
     ``load_test_file``: to its loading rows (:mod:`~mst_cli.calibrate.rig_calibration`;
     ``use_branches=False``: every row as loading). InputError for a bad load test;
     CalibrationFailed (with why) when the fit fails or its values would make a design that does
-    not load. ``progress`` gets a line before a long fit. ``missing_force``: a logger's mark for
-    a row without a force (skipped, counted; :mod:`~mst_cli.calibrate.time_alignment`)."""
+    not load. ``progress`` gets a line before a long fit; ``missing_force``: a logger's mark."""
     read = _read_load_test(load_test_file, gain_sel, res, missing_force)
-    check_force_sentinel(read.source, read.lines, read.force_N, FORCE_COLUMN)
-    aligned, alignment = align(read) if use_branches else (read.subset(np.isfinite(read.load_N)), None)
+    aligned, alignment = align(read, measure=use_branches)  # the calibration that ignores branches: no lag
     lt_all, presses = _split_presses(aligned, doc)
     rig = analyse(lt_all, max(cal.MIN_POINTS, cal.MIN_POINTS_PER_PARAMETER * len(params)), use_branches, alignment)
     fitted, temperature = _fit_in_temperature(
@@ -370,12 +368,15 @@ def _rig_sections(record: CalibrationRecord, rig: RigAnalysis, fitted: _Fitted) 
 def _read_load_test(
     load_test_file: str | Path, gain_sel: int | None, res: int | None, missing_force: float | None = None
 ) -> Readings:
-    """The load test's rows, every one from one chip setting (rows without a force: NaN)."""
+    """The load test's rows, every one from one chip setting (rows without a force: NaN; a
+    sentinel given without ``missing_force`` refused)."""
     text = read_text(load_test_file)
-    return parse_readings(
+    lt = parse_readings(
         text, str(load_test_file), need_force=True, gain_sel=gain_sel, res=res, one_setting=True,
         missing_force=missing_force,
     )  # fmt: skip
+    check_force_sentinel(lt.source, lt.lines, lt.force_N, FORCE_COLUMN)
+    return lt
 
 
 def _split_presses(lt: Readings, doc: Document) -> tuple[Readings, Readings | None]:

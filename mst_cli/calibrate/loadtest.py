@@ -155,6 +155,12 @@ def _number(source, line, column, text) -> float:
     return v
 
 
+def _force(source: str, line: int, cell: str, missing_force: float | None) -> float:
+    """A force cell: a finite number, or NaN for a row without a force (:func:`is_missing`)."""
+    missing = is_missing(f"{source} line {line} {FORCE_COLUMN}", cell, missing_force)
+    return math.nan if missing else _number(source, line, FORCE_COLUMN, cell)
+
+
 def _check_extra_columns(
     source: str, header: list[str], rows: list[list[str]], lines: list[int], used: tuple[str, ...]
 ) -> None:
@@ -318,9 +324,7 @@ def parse_readings(
             B_chips[r, 0] = B[r]
             sat[r] |= chips_saturated
         if F is not None:
-            cell = row[idx[FORCE_COLUMN]]
-            missing = is_missing(f"{source} line {line} {FORCE_COLUMN}", cell, missing_force)
-            F[r] = math.nan if missing else _number(source, line, FORCE_COLUMN, cell)
+            F[r] = _force(source, line, row[idx[FORCE_COLUMN]], missing_force)
         if off is not None:
             off[r] = [_number(source, line, c, row[idx[c]]) for c in OFFSET_COLUMNS]
         rows.append(row)

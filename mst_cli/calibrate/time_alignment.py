@@ -161,11 +161,14 @@ def estimate_lag(time_s, B_abs_T, force_N) -> tuple[float | None, float | None]:
     return lag, sigma
 
 
-def align(lt: Readings) -> tuple[Readings, Alignment]:
+def align(lt: Readings, measure: bool = True) -> tuple[Readings, Alignment | None]:
     """(the rows with a force, each with the field at its time minus the lag; the alignment).
-    Without time_s: the rows with a force as they are, and the note."""
+    Without time_s: the rows with a force as they are, and the note; ``measure=False``: as
+    they are, no alignment."""
     F = lt.load_N
     has = np.isfinite(F)
+    if not measure:
+        return lt.subset(has), None
     t = rig_column(lt, "time_s")
     n_missing = int((~has).sum())
     if t is None:
