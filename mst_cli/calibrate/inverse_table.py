@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import hashlib
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import Any
@@ -71,6 +72,25 @@ SHEAR_TABLE_RATIO = 0.5
 SHEAR_GRID_DEFAULT = (33, 0.05)
 
 
+Edges = Sequence[float] | np.ndarray | None  # regime edges (N), or none
+
+
+def force_nodes(force_max_N: float, n_force: int, edges_N: Edges = None) -> np.ndarray:
+    """The table's force nodes from 0 to ``force_max_N``: without regime edges, ``n_force``
+    evenly spaced; with them (0, R_1, ..., the last lock), every edge a node and the same even
+    number of intervals in every regime's band, about ``n_force`` nodes in all. Each regime is
+    then resolved as finely as the next (a 0.5 N light-touch band gets as many cells as a 20 N
+    one, not a part of one), no cell straddles a lock (the layer laws' kinks), and every other
+    node (the C header's table) keeps the edges."""
+    inner = sorted(float(e) for e in (edges_N if edges_N is not None else ()) if 0.0 < e < force_max_N * (1 - 1e-9))
+    if not inner and edges_N is None:
+        return np.linspace(0.0, force_max_N, n_force)
+    edges = [0.0, *inner, float(force_max_N)]
+    per = max(2, 2 * ((n_force - 1) // (2 * (len(edges) - 1))))
+    bands = [np.linspace(lo, hi, per + 1)[:-1] for lo, hi in zip(edges[:-1], edges[1:])]
+    return np.concatenate([*bands, [float(force_max_N)]])
+
+
 @dataclass(frozen=True)
 class TableGrid:
     """Nodes of the table: the normal force N and the coordinates u, v, each ascending (``kind``
@@ -82,21 +102,24 @@ class TableGrid:
     kind: str = "offset"
 
     @classmethod
-    def over(cls, geometry: SensorGeometry, force_max_N: float, n_force: int, step_mm: float) -> TableGrid:
-        """An offset grid: ``n_force`` forces from 0 to ``force_max_N``; x0 and y0 over the whole
-        face, about ``step_mm`` apart (the face's edges are nodes)."""
+    def over(
+        cls, geometry: SensorGeometry, force_max_N: float, n_force: int, step_mm: float, edges_N: Edges = None
+    ) -> TableGrid:
+        """An offset grid: about ``n_force`` forces from 0 to ``force_max_N`` (:func:`force_nodes`);
+        x0 and y0 over the whole face, about ``step_mm`` apart (the face's edges are nodes)."""
         hw, hd = 0.5 * geometry.width_mm, 0.5 * geometry.depth_mm
         nx = max(2, int(math.ceil(2 * hw / step_mm)) + 1)
         ny = max(2, int(math.ceil(2 * hd / step_mm)) + 1)
-        return cls(np.linspace(0.0, force_max_N, n_force), np.linspace(-hw, hw, nx), np.linspace(-hd, hd, ny))
+        F = force_nodes(force_max_N, n_force, edges_N)
+        return cls(F, np.linspace(-hw, hw, nx), np.linspace(-hd, hd, ny))
 
     @classmethod
-    def cone(cls, force_max_N: float, n_force: int, ratio_max: float, step: float) -> TableGrid:
-        """A shear grid: ``n_force`` forces from 0 to ``force_max_N``; each ratio from
-        -``ratio_max`` to ``ratio_max``, about ``step`` apart (0 a node)."""
+    def cone(cls, force_max_N: float, n_force: int, ratio_max: float, step: float, edges_N: Edges = None) -> TableGrid:
+        """A shear grid: about ``n_force`` forces from 0 to ``force_max_N`` (:func:`force_nodes`);
+        each ratio from -``ratio_max`` to ``ratio_max``, about ``step`` apart (0 a node)."""
         half = max(1, int(math.ceil(ratio_max / step)))
         ratios = np.linspace(-ratio_max, ratio_max, 2 * half + 1)
-        return cls(np.linspace(0.0, force_max_N, n_force), ratios, ratios.copy(), "shear")
+        return cls(force_nodes(force_max_N, n_force, edges_N), ratios, ratios.copy(), "shear")
 
     @property
     def shape(self) -> tuple[int, int, int]:

@@ -56,6 +56,7 @@ from mst_cli.model.mechanics.spring import contact_stiffness_N_per_mm
 
 NEWTON_TOL_REL = 1e-12  # force and moment residuals, relative to F (and F times the lever)
 NEWTON_MAX_ITER = 60
+STALL_TOL_REL = 1e-9  # ... and where Newton stalls at round-off after NEWTON_MAX_ITER steps (a stiff knot)
 LEVER_DATA = Path(__file__).resolve().parent.parent / "data" / "tilt_lever.json"
 
 
@@ -216,7 +217,7 @@ def solve_layer_tilt(
             if norm_try < r_norm:
                 break
         u, r, K, r_norm = u + alpha * du, r_try, K_try, norm_try
-    if r_norm <= NEWTON_TOL_REL:
+    if r_norm <= STALL_TOL_REL:
         return _layer_tilt(layer, u)
     raise TiltError(f"no equilibrium for {force_N:.4g} N at ({x0:g}, {y0:g}) mm (residual {r_norm:.2g} of the load)")
 
