@@ -224,8 +224,8 @@ class InverseTable:
         return self._centre
 
     def slab_error_uT(self) -> np.ndarray:
-        """The table's own interpolation error per force slab (n_F - 1,), uT per axis (RMS over
-        the slab's nodes and the axes). A table of every other node of another knows it: what it
+        """The table's own interpolation error per force slab (n_F - 1,), uT per axis
+        (:func:`_miss_per_slab`). A table of every other node of another knows it: what it
         misses at the other's nodes. Any other table estimates it: trilinear interpolation errs
         as the square of the node spacing, so a quarter of what its table of every other node
         misses at its nodes. The census takes it as field noise of that slab, in quadrature with
@@ -358,14 +358,17 @@ def census(table: InverseTable, B_uT: np.ndarray, margin_uT: np.ndarray) -> tupl
 
 
 def _miss_per_slab(coarse: InverseTable, fine: InverseTable) -> np.ndarray:
-    """What ``coarse`` misses at ``fine``'s nodes (uT per axis), RMS over the fine nodes of each
-    coarse force slab (its ends included) and the axes."""
+    """What ``coarse`` misses at ``fine``'s nodes (uT), per coarse force slab: the worst axis at
+    each node, RMS over each force's (u, v) nodes, the worst force of the slab (its ends included).
+    Tested to cover as a 1-sigma claims (tests/test_light_touch.py: about 70 % of the normal
+    force's errors within it, 93 % within two)."""
     g, h = fine.grid, coarse.grid
     pts = np.stack(np.meshgrid(g.force_N, g.u, g.v, indexing="ij"), axis=-1)
-    per_node = np.mean((_interpolate(coarse, pts) - 1e6 * fine.B_T) ** 2, axis=(1, 2, 3))
+    miss = np.max(np.abs(_interpolate(coarse, pts) - 1e6 * fine.B_T), axis=3)  # the worst axis
+    per_node = np.sqrt(np.mean(miss**2, axis=(1, 2)))
     k = np.arange(len(h.force_N) - 1)
     within = (g.force_N[None, :] >= h.force_N[k, None]) & (g.force_N[None, :] <= h.force_N[k + 1, None])
-    return np.sqrt((within * per_node).sum(axis=1) / np.maximum(within.sum(axis=1), 1))
+    return np.max(within * per_node, axis=1)
 
 
 def _interpolate(table: InverseTable, pts: np.ndarray) -> np.ndarray:

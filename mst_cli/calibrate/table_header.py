@@ -74,10 +74,12 @@ C_FLAGS = (
     "above_range",
     "saturated",
     "above_calibrated",
+    "bad_code",
 )
 
 
 def _c_floats(cname: str, values: np.ndarray, per_line: int = 8) -> str:
+    """``static const float cname[n] = {...};`` (const: a Cortex-M keeps it in flash)."""
     vals = [c_float(float(v), 8) for v in np.ravel(values)]
     lines = ["    " + ", ".join(vals[i : i + per_line]) for i in range(0, len(vals), per_line)]
     return f"static const float {cname}[{len(vals)}] = {{\n" + ",\n".join(lines) + "\n};\n"
@@ -142,6 +144,8 @@ def table_header(
         outside=c_float(it.OUTSIDE),
         inside_tol=c_float(it.INSIDE_TOL),
         ridge=c_float(it.RIDGE),
+        code_range=CODE_RANGE_LSB[setting.res],
+        slab_sigma=_c_floats(f"{p}_slab_sigma_uT", np.hypot(1e6 * reader.sigma_T, table.slab_error_uT())),
         force_nodes=_c_floats(f"{p}_force_N_nodes", table.grid.force_N),
         x_nodes=_c_floats(f"{p}_u_nodes", table.grid.u),
         y_nodes=_c_floats(f"{p}_v_nodes", table.grid.v),
@@ -153,7 +157,8 @@ def read_codes(
     reader: OffsetTableReader | ShearTableReader, imap: InverseMap, setting: ChipSetting, codes: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
     """What ``mst read --estimate offset`` (``shear``) gives raw codes (n, 3) at ``setting`` on
-    this table: (flag (n,) of :data:`C_FLAGS`, (n, 6) the three estimates and their 1-sigma, NaN
+    this table: (flag (n,) of :data:`C_FLAGS`; ``bad_code`` for a code beyond the chip's range, such
+    as a 16-bit word not sign-extended, (n, 6) the three estimates and their 1-sigma, NaN
     unless ok: force N, x0, y0 mm; or Fz, Fx, Fy N). The range flags are the inverse map's, on
     |B| (saturated: a code at the chip's end)."""
     codes = np.asarray(codes, dtype=np.int64)
@@ -164,6 +169,7 @@ def read_codes(
     F, _, flag = imap.force(np.linalg.norm(B_T, axis=1), saturated)
     est = reader.estimate_all(B_T, np.where(flag == "ok", F, np.nan))
     flag = np.where(flag == "ok", est.flag, flag)
+    flag[np.any(np.abs(codes) > CODE_RANGE_LSB[setting.res], axis=1)] = "bad_code"  # not sign-extended
     ok = flag == "ok"
     if isinstance(est, LoadReadings):
         values = np.column_stack([est.force_N, est.shear_x_N, est.shear_y_N, est.sigma[:, :3]])
