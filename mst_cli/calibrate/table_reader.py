@@ -274,9 +274,9 @@ def tables_for(
 ) -> tuple[InverseTable, OffsetTableReader | ShearTableReader]:
     """What ``mst calibrate --offset-table`` (``--shear-table``) writes for the model in
     ``model_file``: its table of ``kind`` (the default grid, current beside it) and the reader of
-    every other node of it (the C header's coarse table: the offset's 33 x 31 x 21 nodes give
-    17 x 16 x 11, the shear's 33 x 21 x 21 give 17 x 11 x 11), at the inverse map's noise (and
-    the default bound on the offset's 1-sigma)."""
+    every other node of it (the C header's coarse table: with three regimes the offset's 25 x 31 x
+    21 nodes give 13 x 16 x 11, the shear's 25 x 21 x 21 give 13 x 11 x 11), at the inverse map's
+    noise (and the default bound on the offset's 1-sigma)."""
     table = build_beside(model_file, doc, mechanics, lever, float(imap.force_N[-1]), kind=kind, edges_N=imap.edges_N)
     if kind == "shear":
         return table, ShearTableReader(table.every_other(), imap.field_resolution_T)
