@@ -85,6 +85,18 @@ def _c_floats(cname: str, values: np.ndarray, per_line: int = 8) -> str:
     return f"static const float {cname}[{len(vals)}] = {{\n" + ",\n".join(lines) + "\n};\n"
 
 
+def _boxes(table: it.InverseTable, p: str) -> dict[str, str]:
+    """The C arrays of every cell's field box and every force slab's (lo, hi per axis, uT), from
+    the corners as the header stores them (float), so its census takes the cells Python's does."""
+    as_c = np.array([float(f"{v:.8g}") for v in np.ravel(1e6 * table.B_T)])  # what _c_floats writes
+    corners = as_c.astype(np.float32).astype(float).reshape(table.B_T.shape)
+    lo, hi = it.InverseTable(table.grid, corners * 1e-6, "").boxes_uT()
+    per_slab = (table.grid.shape[1] - 1) * (table.grid.shape[2] - 1)
+    slab_lo, slab_hi = lo.reshape(-1, per_slab, 3).min(axis=1), hi.reshape(-1, per_slab, 3).max(axis=1)
+    arrays = {"box_lo": lo, "box_hi": hi, "slab_lo": slab_lo, "slab_hi": slab_hi}
+    return {k: _c_floats(f"{p}_{k}_uT", v, per_line=6) for k, v in arrays.items()}
+
+
 def range_bounds_uT(imap: InverseMap) -> tuple[float, float, float]:
     """|B| (uT) below which a reading is below_range, above which above_range, and above which
     above_calibrated (1e30 without a load test's top): the inverse map's own bounds."""
@@ -129,7 +141,7 @@ def table_header(
         xy_uT_per_lsb_c=c_float(setting.xy_uT_per_lsb, 8),
         z_uT_per_lsb_c=c_float(setting.z_uT_per_lsb, 8),
         saturated_lsb=min(CODE_RANGE_LSB[setting.res] - 1, int(SATURATION_T * 1e6 / setting.z_uT_per_lsb)),
-        table_bytes=table.size_bytes_float32,
+        table_bytes=table.size_bytes_float32 + 4 * 6 * (nf - 1) * ((nx - 1) * (ny - 1) + 1),
         nf=nf,
         nx=nx,
         ny=ny,
@@ -146,6 +158,7 @@ def table_header(
         ridge=c_float(it.RIDGE),
         code_range=CODE_RANGE_LSB[setting.res],
         slab_sigma=_c_floats(f"{p}_slab_sigma_uT", np.hypot(1e6 * reader.sigma_T, table.slab_error_uT())),
+        **_boxes(table, p),
         force_nodes=_c_floats(f"{p}_force_N_nodes", table.grid.force_N),
         x_nodes=_c_floats(f"{p}_u_nodes", table.grid.u),
         y_nodes=_c_floats(f"{p}_v_nodes", table.grid.v),
