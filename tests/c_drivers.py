@@ -18,10 +18,14 @@ KINDS = {
 }
 
 
+# the warnings a firmware build may turn on: the headers compile clean under all of them
+STRICT = ("-Wall", "-Wextra", "-Wpedantic", "-Wshadow", "-Wconversion", "-Wdouble-promotion", "-Werror")
+
+
 def driver_source(kind: str, headers: list[str]) -> str:
     """The driver of ``kind``'s reader, including every header named in ``headers``."""
     name, fields = KINDS[kind]
-    printed = ", ".join(f"e.{f}" for f in fields.split(", "))
+    printed = ", ".join(f"(double)e.{f}" for f in fields.split(", "))
     includes = "".join(f'#include "{h}"\n' for h in headers)
     return (
         f"#include <stdio.h>\n{includes}int main(void)\n{{\n    long x, y, z;\n"
@@ -34,13 +38,13 @@ def driver_source(kind: str, headers: list[str]) -> str:
 
 
 def build(cc: str, folder: Path, headers: dict[str, str], kind: str) -> Path:
-    """The driver of ``kind`` compiled in ``folder`` (-Wall -Werror) with ``headers`` (file name:
+    """The driver of ``kind`` compiled in ``folder`` (:data:`STRICT`) with ``headers`` (file name:
     text) written beside it; its path."""
     for file, text in headers.items():
         (folder / file).write_text(text)
     (folder / "driver.c").write_text(driver_source(kind, list(headers)))
     exe = folder / "driver"
-    subprocess.run([cc, "-std=c99", "-O2", "-Wall", "-Werror", "-o", exe, folder / "driver.c", "-lm"], check=True)
+    subprocess.run([cc, "-std=c99", "-O2", *STRICT, "-o", exe, folder / "driver.c", "-lm"], check=True)
     return exe
 
 

@@ -23,7 +23,9 @@ the table, found by construction, not by where a start fell. The flags are the e
 roots lie further apart than twice their combined 1-sigma, ``not_identifiable`` when the best
 root's offset 1-sigma is over the bound, else ``ok``. Each root's 1-sigma is the Cramer-Rao bound
 of the reading there, sqrt(diag((J^T J / sigma^2)^-1)), J the table's field Jacobian
-dB/d(F, x0, y0).
+dB/d(F, x0, y0) and sigma the chip's noise and the table's own interpolation error in that force
+slab in quadrature (:meth:`InverseTable.slab_error_uT`; the same sigma widens the census and
+judges the misfit): the stated 1-sigma covers what the table adds.
 
 The arithmetic is written so that the C header (:mod:`~mst_cli.calibrate.table_header`) can do
 the same steps in float: a fixed number of Newton steps on a 3 x 3 system solved by Cramer's rule.
@@ -36,6 +38,7 @@ import io
 import math
 import zipfile
 import zlib
+from collections.abc import Sequence
 from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import Any, BinaryIO
@@ -76,6 +79,26 @@ SHEAR_TABLE_RATIO = 0.5
 SHEAR_GRID_DEFAULT = (33, 0.05)
 
 
+Edges = Sequence[float] | np.ndarray | None  # regime edges (N), or none
+
+
+def force_nodes(force_max_N: float, n_force: int, edges_N: Edges = None) -> np.ndarray:
+    """The table's force nodes from 0 to ``force_max_N``: without regime edges, ``n_force``
+    evenly spaced; with them (0, R_1, ..., the last lock), every edge a node and the same even
+    number of intervals in every regime's band (a multiple of 4), at most ``n_force`` nodes in
+    all. Each regime is then resolved as finely as the next (a 0.5 N light-touch band gets as
+    many cells as a 20 N one, not a part of one), no cell straddles a lock (the layer laws'
+    kinks), and every other node (the C header's table), and every other node of that (what
+    :meth:`InverseTable.slab_error_uT` compares with), keep the edges."""
+    inner = sorted(float(e) for e in (edges_N if edges_N is not None else ()) if 0.0 < e < force_max_N * (1 - 1e-9))
+    if not inner and edges_N is None:
+        return np.linspace(0.0, force_max_N, n_force)
+    edges = [0.0, *inner, float(force_max_N)]
+    per = max(4, 4 * ((n_force - 1) // (4 * (len(edges) - 1))))
+    bands = [np.linspace(lo, hi, per + 1)[:-1] for lo, hi in zip(edges[:-1], edges[1:])]
+    return np.concatenate([*bands, [float(force_max_N)]])
+
+
 @dataclass(frozen=True)
 class TableGrid:
     """Nodes of the table: the normal force N and the coordinates u, v, each ascending (``kind``
@@ -87,21 +110,24 @@ class TableGrid:
     kind: str = "offset"
 
     @classmethod
-    def over(cls, geometry: SensorGeometry, force_max_N: float, n_force: int, step_mm: float) -> TableGrid:
-        """An offset grid: ``n_force`` forces from 0 to ``force_max_N``; x0 and y0 over the whole
-        face, about ``step_mm`` apart (the face's edges are nodes)."""
+    def over(
+        cls, geometry: SensorGeometry, force_max_N: float, n_force: int, step_mm: float, edges_N: Edges = None
+    ) -> TableGrid:
+        """An offset grid: about ``n_force`` forces from 0 to ``force_max_N`` (:func:`force_nodes`);
+        x0 and y0 over the whole face, about ``step_mm`` apart (the face's edges are nodes)."""
         hw, hd = 0.5 * geometry.width_mm, 0.5 * geometry.depth_mm
         nx = max(2, int(math.ceil(2 * hw / step_mm)) + 1)
         ny = max(2, int(math.ceil(2 * hd / step_mm)) + 1)
-        return cls(np.linspace(0.0, force_max_N, n_force), np.linspace(-hw, hw, nx), np.linspace(-hd, hd, ny))
+        F = force_nodes(force_max_N, n_force, edges_N)
+        return cls(F, np.linspace(-hw, hw, nx), np.linspace(-hd, hd, ny))
 
     @classmethod
-    def cone(cls, force_max_N: float, n_force: int, ratio_max: float, step: float) -> TableGrid:
-        """A shear grid: ``n_force`` forces from 0 to ``force_max_N``; each ratio from
-        -``ratio_max`` to ``ratio_max``, about ``step`` apart (0 a node)."""
+    def cone(cls, force_max_N: float, n_force: int, ratio_max: float, step: float, edges_N: Edges = None) -> TableGrid:
+        """A shear grid: about ``n_force`` forces from 0 to ``force_max_N`` (:func:`force_nodes`);
+        each ratio from -``ratio_max`` to ``ratio_max``, about ``step`` apart (0 a node)."""
         half = max(1, int(math.ceil(ratio_max / step)))
         ratios = np.linspace(-ratio_max, ratio_max, 2 * half + 1)
-        return cls(np.linspace(0.0, force_max_N, n_force), ratios, ratios.copy(), "shear")
+        return cls(force_nodes(force_max_N, n_force, edges_N), ratios, ratios.copy(), "shear")
 
     @property
     def shape(self) -> tuple[int, int, int]:
@@ -158,6 +184,7 @@ class InverseTable:
     _corners: np.ndarray | None = field(default=None, repr=False, compare=False)
     _boxes: tuple[np.ndarray, np.ndarray] | None = field(default=None, repr=False, compare=False)
     _centre: tuple[np.ndarray, np.ndarray] | None = field(default=None, repr=False, compare=False)
+    _slab_error: np.ndarray | None = field(default=None, repr=False, compare=False)
 
     @property
     def file_name(self) -> str:
@@ -201,12 +228,32 @@ class InverseTable:
             self._centre = v, np.nan_to_num(M)
         return self._centre
 
+    def slab_error_uT(self) -> np.ndarray:
+        """The table's own interpolation error per force slab (n_F - 1,), uT per axis
+        (:func:`_miss_per_slab`). A table of every other node of another knows it: what it
+        misses at the other's nodes. Any other table estimates it: trilinear interpolation errs
+        as the square of the node spacing, so a quarter of what its table of every other node
+        misses at its nodes. The census takes it as field noise of that slab, in quadrature with
+        the chip's: a root within it counts, and the stated 1-sigma covers it (docs/design.md
+        section 4.5). 0 where an axis has fewer than 3 nodes."""
+        if self._slab_error is None:
+            g = self.grid
+            if min(g.shape) < 3:
+                self._slab_error = np.zeros(len(g.force_N) - 1)
+            else:
+                half = self.every_other()
+                own = np.searchsorted(half.grid.force_N, g.force_N[:-1], side="right") - 1
+                self._slab_error = 0.25 * half.slab_error_uT()[np.minimum(own, len(half.grid.force_N) - 2)]
+        return self._slab_error
+
     def every_other(self) -> InverseTable:
         """Every second node on each axis (the ends kept where a count is odd: the default grid's
         nodes give the coarse grid's)."""
         g = self.grid
         grid = TableGrid(g.force_N[::2], g.u[::2], g.v[::2], g.kind)
-        return InverseTable(grid, np.ascontiguousarray(self.B_T[::2, ::2, ::2]), self.source_hash)
+        half = InverseTable(grid, np.ascontiguousarray(self.B_T[::2, ::2, ::2]), self.source_hash)
+        half._slab_error = _miss_per_slab(half, self)
+        return half
 
     def save(self, path: Path) -> None:
         with open(path, "wb") as fh:
@@ -364,12 +411,13 @@ def build_table(
     return InverseTable(grid, np.ascontiguousarray(B), source)
 
 
-def census(table: InverseTable, B_uT: np.ndarray, margin_uT: float) -> tuple[np.ndarray, np.ndarray]:
-    """(reading index, cell index) of every cell whose corners' box, widened by ``margin_uT``,
-    holds the reading (uT). Readings go in blocks of CHUNK by ascending Bz, each block against
-    the cells whose Bz box meets the block's Bz span."""
+def census(table: InverseTable, B_uT: np.ndarray, margin_uT: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(reading index, cell index) of every cell whose corners' box, widened by ``margin_uT``
+    (per cell, or one for all), holds the reading (uT). Readings go in blocks of CHUNK by
+    ascending Bz, each block against the cells whose Bz box meets the block's Bz span."""
     lo, hi = table.boxes_uT()
-    lo, hi = lo - margin_uT, hi + margin_uT
+    m = np.broadcast_to(np.asarray(margin_uT, dtype=float), (len(lo),))[:, None]
+    lo, hi = lo - m, hi + m
     by_z = np.argsort(B_uT[:, 2], kind="stable")
     reads, cells = [], []
     for start in range(0, len(B_uT), CHUNK):
@@ -384,6 +432,43 @@ def census(table: InverseTable, B_uT: np.ndarray, margin_uT: float) -> tuple[np.
         reads.append(rows[r])
         cells.append(near[c])
     return np.concatenate(reads), np.concatenate(cells)
+
+
+def _miss_per_slab(coarse: InverseTable, fine: InverseTable) -> np.ndarray:
+    """What ``coarse`` misses at ``fine``'s nodes (uT), per coarse force slab: the worst axis at
+    each node, RMS over each force's (u, v) nodes, the worst force of the slab (its ends included).
+    Tested to cover as a 1-sigma claims (tests/test_light_touch.py: about 70 % of the normal
+    force's errors within it, 93 % within two)."""
+    g, h = fine.grid, coarse.grid
+    pts = np.stack(np.meshgrid(g.force_N, g.u, g.v, indexing="ij"), axis=-1)
+    miss = np.max(np.abs(_interpolate(coarse, pts) - 1e6 * fine.B_T), axis=3)  # the worst axis
+    per_node = np.sqrt(np.mean(miss**2, axis=(1, 2)))
+    k = np.arange(len(h.force_N) - 1)
+    within = (g.force_N[None, :] >= h.force_N[k, None]) & (g.force_N[None, :] <= h.force_N[k + 1, None])
+    return np.max(within * per_node, axis=1)
+
+
+def _interpolate(table: InverseTable, pts: np.ndarray) -> np.ndarray:
+    """The table's trilinear field (uT) at points (..., 3) of (F, u, v) inside its grid."""
+    g = table.grid
+    out = np.empty((*pts.shape[:-1], 3))
+    flat = pts.reshape(-1, 3)
+    nodes = (g.force_N, g.u, g.v)
+    idx = [np.clip(np.searchsorted(nodes[a], flat[:, a], side="right") - 1, 0, len(nodes[a]) - 2) for a in range(3)]
+    t = np.stack(
+        [(flat[:, a] - nodes[a][idx[a]]) / (nodes[a][idx[a] + 1] - nodes[a][idx[a]]) for a in range(3)], axis=1
+    )
+    cell = np.ravel_multi_index(tuple(idx), tuple(n - 1 for n in g.shape))
+    out.reshape(-1, 3)[:] = _trilinear(table.corners_uT()[cell], t)[0]
+    return out
+
+
+def cell_sigma_uT(table: InverseTable, sigma_uT: float, cell: np.ndarray) -> np.ndarray:
+    """The field noise each cell's solve is judged by (uT): the chip's ``sigma_uT`` and the
+    table's interpolation error in its force slab (:meth:`InverseTable.slab_error_uT`), in
+    quadrature."""
+    per_slab = (table.grid.shape[1] - 1) * (table.grid.shape[2] - 1)
+    return np.hypot(sigma_uT, table.slab_error_uT()[cell // per_slab])
 
 
 def _bilinear(X: np.ndarray, u: np.ndarray, v: np.ndarray) -> np.ndarray:
@@ -483,11 +568,12 @@ def solve_cells(
     return play, p, misfit, inside, J / width[:, None, :]
 
 
-def crb_sigmas(J: np.ndarray, sigma: float) -> np.ndarray:
+def crb_sigmas(J: np.ndarray, sigma: float | np.ndarray) -> np.ndarray:
     """The Cramer-Rao 1-sigma of (F, x0, y0), sqrt(diag((J^T J / sigma^2)^-1)), for Jacobians
     (P, 3, 3) in field units per unit of p and the noise ``sigma`` per axis in the same field
-    units; inf where J^T J is singular."""
-    A = np.einsum("pki,pkj->pij", J, J) / sigma**2
+    units (one, or (P,)); inf where J^T J is singular."""
+    s2 = np.reshape(np.asarray(sigma, dtype=float) ** 2, (-1, 1, 1))
+    A = np.einsum("pki,pkj->pij", J, J) / s2
     cov = _solve3_matrix(A)
     return np.sqrt(np.where(np.isfinite(cov) & (cov > 0), cov, np.inf))
 
@@ -523,13 +609,14 @@ def estimate_many(table: InverseTable, B_T: np.ndarray, sigma_T: float, max_sigm
     n = len(B_T)
     sigma_uT = 1e6 * sigma_T
     B_uT = 1e6 * B_T
-    read, cell = census(table, B_uT, FIT_SIGMAS * sigma_uT)
+    every = np.arange(np.prod([n - 1 for n in table.grid.shape]))
+    read, cell = census(table, B_uT, FIT_SIGMAS * cell_sigma_uT(table, sigma_uT, every))
     play, p, misfit, inside, J = solve_cells(table, B_uT[read], cell)
-    read = read[play]
-    root = inside & (misfit <= FIT_SIGMAS * sigma_uT)
+    read, noise = read[play], cell_sigma_uT(table, sigma_uT, cell[play])
+    root = inside & (misfit <= FIT_SIGMAS * noise)
     read, misfit = read[root], misfit[root]
     p, J = to_output(table.grid.kind, p[root], J[root])
-    sig = crb_sigmas(J, sigma_uT)
+    sig = crb_sigmas(J, noise[root])
     roots = np.bincount(read, minlength=n)
     # the best root of each reading: the least misfit (ties: the first found)
     order = np.lexsort((misfit, read))

@@ -74,13 +74,27 @@ C_FLAGS = (
     "above_range",
     "saturated",
     "above_calibrated",
+    "bad_code",
 )
 
 
 def _c_floats(cname: str, values: np.ndarray, per_line: int = 8) -> str:
+    """``static const float cname[n] = {...};`` (const: a Cortex-M keeps it in flash)."""
     vals = [c_float(float(v), 8) for v in np.ravel(values)]
     lines = ["    " + ", ".join(vals[i : i + per_line]) for i in range(0, len(vals), per_line)]
     return f"static const float {cname}[{len(vals)}] = {{\n" + ",\n".join(lines) + "\n};\n"
+
+
+def _boxes(table: it.InverseTable, p: str) -> dict[str, str]:
+    """The C arrays of every cell's field box and every force slab's (lo, hi per axis, uT), from
+    the corners as the header stores them (float), so its census takes the cells Python's does."""
+    as_c = np.array([float(f"{v:.8g}") for v in np.ravel(1e6 * table.B_T)])  # what _c_floats writes
+    corners = as_c.astype(np.float32).astype(float).reshape(table.B_T.shape)
+    lo, hi = it.InverseTable(table.grid, corners * 1e-6, "").boxes_uT()
+    per_slab = (table.grid.shape[1] - 1) * (table.grid.shape[2] - 1)
+    slab_lo, slab_hi = lo.reshape(-1, per_slab, 3).min(axis=1), hi.reshape(-1, per_slab, 3).max(axis=1)
+    arrays = {"box_lo": lo, "box_hi": hi, "slab_lo": slab_lo, "slab_hi": slab_hi}
+    return {k: _c_floats(f"{p}_{k}_uT", v, per_line=6) for k, v in arrays.items()}
 
 
 def range_bounds_uT(imap: InverseMap) -> tuple[float, float, float]:
@@ -127,7 +141,7 @@ def table_header(
         xy_uT_per_lsb_c=c_float(setting.xy_uT_per_lsb, 8),
         z_uT_per_lsb_c=c_float(setting.z_uT_per_lsb, 8),
         saturated_lsb=min(CODE_RANGE_LSB[setting.res] - 1, int(SATURATION_T * 1e6 / setting.z_uT_per_lsb)),
-        table_bytes=table.size_bytes_float32,
+        table_bytes=table.size_bytes_float32 + 4 * 6 * (nf - 1) * ((nx - 1) * (ny - 1) + 1),
         nf=nf,
         nx=nx,
         ny=ny,
@@ -142,6 +156,9 @@ def table_header(
         outside=c_float(it.OUTSIDE),
         inside_tol=c_float(it.INSIDE_TOL),
         ridge=c_float(it.RIDGE),
+        code_range=CODE_RANGE_LSB[setting.res],
+        slab_sigma=_c_floats(f"{p}_slab_sigma_uT", np.hypot(1e6 * reader.sigma_T, table.slab_error_uT())),
+        **_boxes(table, p),
         force_nodes=_c_floats(f"{p}_force_N_nodes", table.grid.force_N),
         x_nodes=_c_floats(f"{p}_u_nodes", table.grid.u),
         y_nodes=_c_floats(f"{p}_v_nodes", table.grid.v),
@@ -153,7 +170,8 @@ def read_codes(
     reader: OffsetTableReader | ShearTableReader, imap: InverseMap, setting: ChipSetting, codes: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
     """What ``mst read --estimate offset`` (``shear``) gives raw codes (n, 3) at ``setting`` on
-    this table: (flag (n,) of :data:`C_FLAGS`, (n, 6) the three estimates and their 1-sigma, NaN
+    this table: (flag (n,) of :data:`C_FLAGS`; ``bad_code`` for a code beyond the chip's range, such
+    as a 16-bit word not sign-extended, (n, 6) the three estimates and their 1-sigma, NaN
     unless ok: force N, x0, y0 mm; or Fz, Fx, Fy N). The range flags are the inverse map's, on
     |B| (saturated: a code at the chip's end)."""
     codes = np.asarray(codes, dtype=np.int64)
@@ -164,6 +182,7 @@ def read_codes(
     F, _, flag = imap.force(np.linalg.norm(B_T, axis=1), saturated)
     est = reader.estimate_all(B_T, np.where(flag == "ok", F, np.nan))
     flag = np.where(flag == "ok", est.flag, flag)
+    flag[np.any(np.abs(codes) > CODE_RANGE_LSB[setting.res], axis=1)] = "bad_code"  # not sign-extended
     ok = flag == "ok"
     if isinstance(est, LoadReadings):
         values = np.column_stack([est.force_N, est.shear_x_N, est.shear_y_N, est.sigma[:, :3]])

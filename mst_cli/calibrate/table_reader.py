@@ -26,6 +26,7 @@ from mst_cli.calibrate.inverse_table import (
     SHEAR_TABLE_FILE,
     SHEAR_TABLE_RATIO,
     TABLE_FILE,
+    Edges,
     InverseTable,
     TableEstimates,
     TableGrid,
@@ -175,13 +176,16 @@ def _text(path: Path) -> str | None:
         return None
 
 
-def grid_of(kind: str, doc: Document, force_max_N: float, grid: tuple[int, float] | None = None) -> TableGrid:
+def grid_of(
+    kind: str, doc: Document, force_max_N: float, grid: tuple[int, float] | None = None, edges_N: Edges = None
+) -> TableGrid:
     """The table grid of ``kind`` (offset: forces, mm between offsets; shear: forces, the step of
-    the ratios up to SHEAR_TABLE_RATIO; the default when ``grid`` is None)."""
+    the ratios up to SHEAR_TABLE_RATIO; the default when ``grid`` is None), its force nodes
+    following the regimes ``edges_N`` (the inverse map's) when given."""
     if kind == "shear":
         n, step = grid or SHEAR_GRID_DEFAULT
-        return TableGrid.cone(force_max_N, n, SHEAR_TABLE_RATIO, step)
-    return TableGrid.over(doc.geometry(), force_max_N, *(grid or GRID_DEFAULT))
+        return TableGrid.cone(force_max_N, n, SHEAR_TABLE_RATIO, step, edges_N)
+    return TableGrid.over(doc.geometry(), force_max_N, *(grid or GRID_DEFAULT), edges_N=edges_N)
 
 
 def build_beside(
@@ -192,15 +196,22 @@ def build_beside(
     force_max_N: float,
     grid: tuple[int, float] | None = None,
     kind: str = "offset",
+    edges_N: Edges = None,
 ) -> InverseTable:
-    """The table of ``kind`` and ``grid`` (:func:`grid_of`) for the model in ``model_file``,
-    hashed as current beside it."""
-    g = grid_of(kind, doc, force_max_N, grid)
+    """The table of ``kind`` and ``grid`` (:func:`grid_of`, its forces following the regimes
+    ``edges_N``) for the model in ``model_file``, hashed as current beside it."""
+    g = grid_of(kind, doc, force_max_N, grid, edges_N)
     return build_table(doc.geometry(), doc.material, mechanics, g, lever_factor, table_hash(model_file, mechanics, g))
 
 
 def table_beside(
-    model_file: Path, doc: Document, mechanics: str, lever_factor: float, force_max_N: float, kind: str = "offset"
+    model_file: Path,
+    doc: Document,
+    mechanics: str,
+    lever_factor: float,
+    force_max_N: float,
+    kind: str = "offset",
+    edges_N: Edges = None,
 ) -> tuple[InverseTable, str | None]:
     """The table of ``kind`` of the model in ``model_file``: the one beside it when it is current
     (of any grid: the one its maker chose), else the one an earlier call kept in the cache (of the
@@ -217,7 +228,7 @@ def table_beside(
     ):
         return table, None
     passed = None if why == "file not found" else f"{path} is {why or 'stale'}"
-    key = table_hash(model_file, mechanics, grid_of(kind, doc, force_max_N))
+    key = table_hash(model_file, mechanics, grid_of(kind, doc, force_max_N, edges_N=edges_N))
     kept = cached_path(f"{kind}-{key}.npz")
     found = InverseTable.read(kept)[0] if kept is not None else None
     if found is not None and found.grid.kind == kind and found.source_hash == key:
@@ -225,7 +236,7 @@ def table_beside(
         return found, None if passed is None else f"{passed}: used the {kind} table kept in {kept}"
     t0 = time.perf_counter()
     try:
-        table = build_beside(model_file, doc, mechanics, lever_factor, force_max_N, kind=kind)
+        table = build_beside(model_file, doc, mechanics, lever_factor, force_max_N, kind=kind, edges_N=edges_N)
     except (CalibrationFailed, ValueError, FloatingPointError) as exc:
         raise CalibrationFailed(
             f"{passed or f'{path} is missing'} and the {kind} table cannot be rebuilt: {exc}"
@@ -246,7 +257,7 @@ def offset_table_reader(
     resolution; range: to the last lock; ``lever``: its calibration's factor), and the note of
     :func:`table_beside`. InputError when no press of the table is identifiable at that noise."""
     force_max_N = float(imap.force_N[-1])
-    table, note = table_beside(model_file, doc, mechanics, lever, force_max_N)
+    table, note = table_beside(model_file, doc, mechanics, lever, force_max_N, edges_N=imap.edges_N)
     sigma_T = imap.field_resolution_T
     best = best_offset_sigma_mm(table, sigma_T)
     if not best <= max_sigma_mm:
@@ -278,7 +289,7 @@ def shear_table_reader(
     """The shear table reader of the model ``doc`` in ``model_file`` (noise: the inverse map's
     field resolution; range: to the last lock; ``lever``: its calibration's factor), and the note
     of :func:`table_beside`."""
-    table, note = table_beside(model_file, doc, mechanics, lever, float(imap.force_N[-1]), "shear")
+    table, note = table_beside(model_file, doc, mechanics, lever, float(imap.force_N[-1]), "shear", imap.edges_N)
     exact = None
     if polish:
         exact = ShearReader(loaded_stack(doc.geometry(), doc.material, mechanics, lever))
@@ -290,10 +301,10 @@ def tables_for(
 ) -> tuple[InverseTable, OffsetTableReader | ShearTableReader]:
     """What ``mst calibrate --offset-table`` (``--shear-table``) writes for the model in
     ``model_file``: its table of ``kind`` (the default grid, current beside it) and the reader of
-    every other node of it (the C header's coarse table: the offset's 33 x 31 x 21 nodes give
-    17 x 16 x 11, the shear's 33 x 21 x 21 give 17 x 11 x 11), at the inverse map's noise (and
-    the default bound on the offset's 1-sigma)."""
-    table = build_beside(model_file, doc, mechanics, lever, float(imap.force_N[-1]), kind=kind)
+    every other node of it (the C header's coarse table: with three regimes the offset's 25 x 31 x
+    21 nodes give 13 x 16 x 11, the shear's 25 x 21 x 21 give 13 x 11 x 11), at the inverse map's
+    noise (and the default bound on the offset's 1-sigma)."""
+    table = build_beside(model_file, doc, mechanics, lever, float(imap.force_N[-1]), kind=kind, edges_N=imap.edges_N)
     if kind == "shear":
         return table, ShearTableReader(table.every_other(), imap.field_resolution_T)
     return table, OffsetTableReader(table.every_other(), imap.field_resolution_T, DEFAULT_MAX_SIGMA_MM)

@@ -1,0 +1,145 @@
+"""What one estimate costs on a microcontroller: the one-chip headers (shear_table.h,
+offset_table.h) compiled with the distribution's gcc-arm-none-eabi for a Cortex-M4F and a
+Cortex-M0+ and run in QEMU (mps2-an386, microbit), instructions per reading counted by SysTick
+under -icount shift=0 (benchmarks/board/count.c). Prints markdown tables; asserts nothing.
+
+    python benchmarks/bench_board.py [--per-class 40] [--seed 45]
+
+On the bundled sensor (configs/mohammadi2021-forward.yaml, spring), the header-sized tables
+(regime-following force nodes; offset 2 mm, shear ratio step 0.1), readings in classes: rest
+(no load, 2 uT noise), light touch (the first regime's lower half), loaded (over the range),
+out of range (beyond the last lock). Per class: the median and worst instructions per reading,
+and the time at 64 MHz (M4F) or 48 MHz (M0+) taking one instruction a cycle (the M4F's FPU
+divides in 14 cycles, loads take 2: a lower bound within a factor of about 1.5; the M0+ has no
+FPU, its float arithmetic is the soft-float library's instructions, counted). Also the flash
+(text + data) and the deepest stack of the compiled program (-fstack-usage, the reader's frames).
+Needs arm-none-eabi-gcc, libnewlib-arm-none-eabi and qemu-system-arm.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+os.environ.setdefault("MST_WORKERS", "2")
+
+import numpy as np
+from scipy.interpolate import RegularGridInterpolator
+
+from mst_cli.calibrate.inverse_map import inverse_map
+from mst_cli.calibrate.inverse_table import build_table
+from mst_cli.calibrate.table_header import C_FLAGS, table_header
+from mst_cli.calibrate.table_reader import OffsetTableReader, ShearTableReader, grid_of
+from mst_cli.sensor.document import load_design_document
+
+ROOT = Path(__file__).resolve().parents[1]
+DESIGN = ROOT / "configs" / "mohammadi2021-forward.yaml"
+BOARD = Path(__file__).resolve().parent / "board"
+STRICT = "-Wall -Wextra -Wpedantic -Wshadow -Wconversion -Wdouble-promotion -Werror".split()
+TARGETS = {  # cpu: (gcc flags, QEMU machine, flash kB, RAM kB, MHz)
+    "Cortex-M4F": ("-mcpu=cortex-m4 -mthumb -mfloat-abi=hard -mfpu=fpv4-sp-d16".split(), "mps2-an386", 4096, 4096, 64),
+    "Cortex-M0+": ("-mcpu=cortex-m0plus -mthumb".split(), "microbit", 256, 16, 48),
+}
+CAL_INSNS = 200_000  # count.c's calibration loop
+STRUCTS = {"shear": "mst_shear", "offset": "mst_offset"}
+
+
+def readings(table, imap, rng, n: int) -> dict[str, np.ndarray]:
+    """Fields (uT) per class, from the table's own field (its nodes interpolated) and 2 uT noise."""
+    g = table.grid
+    at = RegularGridInterpolator((g.force_N, g.u, g.v), 1e6 * table.B_T)
+    top, first = g.force_N[-1], imap.edges_N[1]
+
+    def draw(lo, hi):
+        p = np.column_stack([rng.uniform(lo, hi, n), rng.uniform(*g.u[[0, -1]], n) * 0.6, rng.uniform(*g.v[[0, -1]], n) * 0.6])
+        return at(p) + rng.normal(0.0, 2.0, (n, 3))
+
+    beyond = at(np.column_stack([np.full(n, top), np.zeros(n), np.zeros(n)])) * rng.uniform(1.05, 1.3, (n, 1))
+    return {
+        "rest": at(np.zeros((n, 3))) + rng.normal(0.0, 2.0, (n, 3)),
+        "light touch": draw(0.02 * first, 0.5 * first),
+        "loaded": draw(0.05 * top, top),
+        "out of range": beyond,
+    }
+
+
+def build(folder: Path, header: str, kind: str, codes: np.ndarray, cpu: str) -> tuple[Path, str, int]:
+    """The counting program for ``cpu``: (its ELF, size's line, the deepest stack in bytes)."""
+    flags, _, flash, ram, _ = TARGETS[cpu]
+    (folder / "table.h").write_text(header)
+    rows = ",\n".join(f"    {{{x}, {y}, {z}}}" for x, y, z in codes)
+    (folder / "codes.h").write_text(
+        f"#define N_CODES {len(codes)}\n#define MST_STRUCT struct {STRUCTS[kind]}\n"
+        f"#define MST_FROM_CODES {STRUCTS[kind]}_from_codes\n"
+        f"static const int32_t codes[N_CODES][3] = {{\n{rows}\n}};\n"
+    )
+    cc = ["arm-none-eabi-gcc", "-std=c99", "-O2", "-ffreestanding", *flags]
+    subprocess.run([*cc, "-c", BOARD / "startup.c", "-o", folder / "s.o"], check=True)
+    subprocess.run([*cc, *STRICT, "-fstack-usage", "-I", folder, "-c", BOARD / "count.c", "-o", folder / "c.o"], check=True)
+    elf = folder / "count.elf"
+    link = ["-nostartfiles", "--specs=nano.specs", "--specs=nosys.specs", "-T", BOARD / "board.ld"]
+    mem = [f"-Wl,--defsym=FLASH_K={flash}", f"-Wl,--defsym=RAM_K={ram}"]
+    subprocess.run([*cc, *link, *mem, folder / "s.o", folder / "c.o", "-lm", "-o", elf], check=True)
+    size = subprocess.run(["arm-none-eabi-size", elf], capture_output=True, text=True).stdout.splitlines()[-1]
+    frames = [int(m) for m in re.findall(r"\t(\d+)\t", (folder / "c.su").read_text())]
+    return elf, size, sum(sorted(frames)[-3:])  # main, the solve and the step: the deepest chain
+
+
+def run(elf: Path, cpu: str) -> tuple[np.ndarray, np.ndarray]:
+    """(flags, instructions) per reading, from QEMU."""
+    machine = TARGETS[cpu][1]
+    out = subprocess.run(
+        ["qemu-system-arm", "-M", machine, "-nographic", "-monitor", "none", "-serial", "none",
+         "-semihosting-config", "enable=on,target=native", "-icount", "shift=0", "-kernel", elf],
+        capture_output=True, text=True, timeout=3600, check=True,
+    ).stderr.split()  # semihosting writes to QEMU's stderr
+    per_tick = CAL_INSNS / float(out[1])
+    vals = np.array(out[2:], dtype=float).reshape(-1, 2)
+    return vals[:, 0].astype(int), vals[:, 1] * per_tick
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--per-class", type=int, default=40)
+    ap.add_argument("--seed", type=int, default=45)
+    args = ap.parse_args()
+    if not all(shutil.which(t) for t in ("arm-none-eabi-gcc", "qemu-system-arm")):
+        sys.exit("needs arm-none-eabi-gcc and qemu-system-arm (apt: gcc-arm-none-eabi libnewlib-arm-none-eabi qemu-system-arm)")
+    rng = np.random.default_rng(args.seed)
+    doc, _ = load_design_document(DESIGN)
+    imap, resp = inverse_map(doc, "spring")
+    setting, top = resp.chip_setting, float(imap.force_N[-1])
+    lsb = np.array([setting.xy_uT_per_lsb, setting.xy_uT_per_lsb, setting.z_uT_per_lsb])
+    print("| header | CPU | class | flags | instructions median / worst | ms median / worst | flash | stack B |")
+    print("|---|---|---|---|---|---|---|---|")
+    for kind, grid in (("shear", (17, 0.1)), ("offset", (17, 2.0))):
+        table = build_table(doc.geometry(), doc.material, "spring", grid_of(kind, doc, top, grid, imap.edges_N))
+        reader = ShearTableReader(table, 2e-6) if kind == "shear" else OffsetTableReader(table, 2e-6, 1.0)
+        header = table_header(reader, imap, setting, doc.name, "bench_board", ["a benchmark"])
+        classes = readings(table, imap, rng, args.per_class)
+        codes = np.vstack([np.rint(b / lsb) for b in classes.values()]).astype(np.int64)
+        for cpu in TARGETS:
+            with tempfile.TemporaryDirectory() as tmp:
+                elf, size, stack = build(Path(tmp), header, kind, codes, cpu)
+                flags, insns = run(elf, cpu)
+            text, data = (int(v) for v in size.split()[:2])
+            mhz = TARGETS[cpu][4]
+            for k, name in enumerate(classes):
+                part = slice(k * args.per_class, (k + 1) * args.per_class)
+                f = ", ".join(f"{int(np.sum(flags[part] == i))} {C_FLAGS[i]}" for i in np.unique(flags[part]))
+                m, w = np.median(insns[part]), np.max(insns[part])
+                print(
+                    f"| {kind}_table.h {table.grid.shape} | {cpu} | {name} | {f} | {m:,.0f} / {w:,.0f} | "
+                    f"{m / mhz / 1e3:.2f} / {w / mhz / 1e3:.2f} | {(text + data) / 1024:.0f} kB | {stack} |"
+                )
+        sys.stdout.flush()
+
+
+if __name__ == "__main__":
+    main()
