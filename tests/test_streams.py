@@ -258,9 +258,77 @@ def test_one_recording_gives_the_same_forces_from_a_file_and_from_a_stream(forwa
     stream_text = (tmp_path / "stream" / "forces.csv").read_text()
     assert stream_text.splitlines()[0].startswith("time_s,")
     assert "\n".join(line.split(",", 1)[1] for line in stream_text.splitlines()) + "\n" == file_text
-    assert len(shown) == len(lines) - 10  # the tare's readings are not shown, the rest are
+    assert len(shown) == len(lines)  # every sample shown live (the tare's once they are all in)
     head = file_text.splitlines()[0].split(",")
     assert "branch" in head and "force_uncertainty_N" in head  # branch following with every estimate
     row = dict(zip(head, file_text.splitlines()[1 + 10].split(",")))
     assert (row["flag"], float(row["force_N"])) == ("ok", 0.0)  # 8 uT below no load: no load
     assert "unloading" in set(from_file.branches.branch)
+    if estimate != "none":
+        flags = [
+            dict(zip(head, line.split(","))).get("offset_flag" if estimate == "offset" else "estimate_flag")
+            for line in file_text.splitlines()[1:]
+        ]
+        assert flags.count("ok") >= 10, flags  # estimated rows, not only flagged ones
+
+
+# --------------------------------------------------------------------------- two chips, warm and live
+WARM_LOADS = [(12.0, 2.0, -1.0, 3.0, -2.0), (30.0, -4.0, 3.0, -5.0, 2.5), (45.0, 6.0, 5.0, 1.0, 1.0)]
+
+
+@pytest.fixture(scope="module")
+def two_chips(tmp_path_factory):
+    """(the calibrated two-chip copy, its reader, the two-chip estimator built once, the stack)."""
+    from mst_cli.calibrate.reading import ForceReader
+    from mst_cli.calibrate.table_reader import two_chip_reader
+    from mst_cli.model.general_load import loaded_stack
+
+    text = FORWARD.read_text().replace(
+        "  noise_uT_rms: 2.0\n", "  noise_uT_rms: 2.0\n  positions_mm: [[0, 0], [10, 6]]\n"
+    )
+    model = calibrated_copy(tmp_path_factory.mktemp("two"), text)
+    doc, geo = load_design_document(model)
+    reader = ForceReader.open(doc, model, "spring")
+    offsets = two_chip_reader(doc, reader.inverse_map, 1.0, "spring", False)
+    return model, reader, offsets, loaded_stack(geo, doc.material, "spring")
+
+
+def _warm_lines(two_chips):
+    """Each load of WARM_LOADS at 25, 30 and 40 degC, as six fields and T_C: B = r(T) B_20(L / m(T))."""
+    from mst_cli.model.general_load import field_T
+
+    model, reader, _, stack = two_chips
+    alpha = remanence_coeff_of(reader.document)
+    lines, truth = [], []
+    for T in (25.0, 30.0, 40.0):
+        r, m = float(remanence_scale(T, alpha)), float(modulus_scale(T, BETA_PER_K))
+        for F, fx, fy, x, y in WARM_LOADS:
+            B = r * 1e6 * field_T(stack, F / m, (fx / m, fy / m), (x, y), reader.document.chips_mm).ravel()
+            lines.append(",".join(f"{b:.4f}" for b in B) + f",{T:.1f}")
+            truth.append((F, fx, fy, x, y))
+    return lines, np.array(truth)
+
+
+@pytest.mark.slow
+def test_warm_two_chip_readings_are_ok_within_their_sigma_from_a_file_and_live(two_chips, tmp_path):
+    from mst_cli.calibrate.loadtest import parse_readings
+    from mst_cli.readout.live import LiveOptions, read_stream
+
+    model, reader, offsets, _ = two_chips
+    lines, truth = _warm_lines(two_chips)
+    header = "Bx_uT,By_uT,Bz_uT,Bx2_uT,By2_uT,Bz2_uT,T_C"
+    rd = parse_readings(header + "\n" + "\n".join(lines) + "\n", "warm.csv", need_force=False)
+    got = reader.read(rd, offsets)
+    est = got.offset
+    assert list(est.flag) == ["ok"] * len(lines), list(est.flag)
+    values = np.column_stack([got.force_N, est.shear_x_N, est.shear_y_N, est.x_mm, est.y_mm])
+    assert np.all(np.abs(values - truth) <= est.sigma), (values - truth) / est.sigma  # within the stated 1-sigma
+    # live: the same lines through a pseudo-terminal give the same forces.csv, time_s aside
+    feed = PtyFeed([(line + "\n").encode() for line in lines])
+    try:
+        live = read_stream(
+            reader, feed.port, LiveOptions(count=len(lines), timeout_s=5.0), None, lambda _: None, offsets
+        )
+    finally:
+        feed.close()
+    assert "\n".join(line.split(",", 1)[1] for line in live.csv().splitlines()) + "\n" == got.csv()

@@ -14,8 +14,8 @@ chip. Presets are named after the sketches that print them:
 A map of plain roles (``x,y,z,t``) is a group; roles with chip numbers (``x1,y1,z1,-,x2,y2,z2``)
 place each number once. A group on a line of more chips than the model has reads the first
 ones (five-chip boards read by a one-chip model read chip 1). Without ``--columns`` the line's
-count decides: 3 or 4 numbers per chip of the model (x y z, or x y z t), or a header line
-(``X,Y,Z,T``) said before the numbers.
+count decides: 3 or 4 numbers per chip of the model (x y z, or x y z t), or every chip's x y z
+then one t (a readings file's row), or a header line (``X,Y,Z,T``) said before the numbers.
 
 Pure: no I/O.
 """
@@ -106,11 +106,14 @@ def column_map(spec: str | None) -> ColumnMap | None:
 
 def default_map(n_numbers: int, chips: int) -> ColumnMap | None:
     """The map of a line of ``n_numbers`` bare numbers without ``--columns``: x y z, or x y z t,
-    per chip of the model; None for any other count (a header line or --columns says it)."""
+    per chip of the model, or every chip's x y z and then t; None for any other count (a header
+    line or --columns says it)."""
     if n_numbers == 3 * chips:
         return ColumnMap(group=PRESETS["xyz"])
     if n_numbers == 4 * chips:
         return ColumnMap(group=PRESETS["xyzt"])
+    if n_numbers == 3 * chips + 1:  # every chip's x y z, then one temperature (a readings file's row)
+        return ColumnMap(fixed=(*((k, a) for k in range(chips) for a in "xyz"), (0, "t")))
     return None
 
 

@@ -166,9 +166,9 @@ class SampleParser:
             if sample is not None:
                 self._axes = {}
                 return sample
-            if self._header(line) or self.chips != 1:
+            if self._header(line):
                 return None
-            return self._one_axis(line)
+            return self._one_axis(line) if self.chips == 1 else self._skip(line)
         except BadLine as exc:
             self._axes = {}
             self.bad += 1
