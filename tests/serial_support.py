@@ -17,15 +17,21 @@ from mst_cli import api
 
 class PtyFeed:
     """A pseudo-terminal whose master a thread feeds ``lines`` (bytes, each with its line end),
-    ``rate`` lines a second (None: at once). ``port`` is the slave's path; close() when read."""
+        ``rate`` lines a second (None: at once), from :meth:`start` (at once unless ``start`` is
+    False). ``port`` is the slave's path; close() when read."""
 
-    def __init__(self, lines: list[bytes], rate: float | None = None, batch: int = 20):
+    def __init__(self, lines: list[bytes], rate: float | None = None, batch: int = 20, start: bool = True):
         self.master, self.slave = pty.openpty()
         tty.setraw(self.slave)
         self.port = os.ttyname(self.slave)
         self.lines, self.rate, self.batch = lines, rate, batch
         self.received: bytes = b""  # what the reader sent (a sketch that prints when asked)
         self._thread = threading.Thread(target=self._feed, daemon=True)
+        if start:
+            self.start()
+
+    def start(self) -> None:
+        """Start feeding (a board that starts printing)."""
         self._thread.start()
 
     def _feed(self) -> None:
@@ -39,7 +45,8 @@ class PtyFeed:
             pass  # the reader closed the port first
 
     def close(self) -> None:
-        self._thread.join(timeout=10)
+        if self._thread.is_alive():
+            self._thread.join(timeout=10)
         os.close(self.master)
         os.close(self.slave)
 

@@ -152,12 +152,14 @@ class ForceReader:
         offsets: OffsetEstimator | OffsetTableReader | ShearTableReader | TwoChipLoadReader | None = None,
         tare: int = 0,
         tare_shift_uT: float | None = None,
+        estimated: OffsetReadings | LoadReadings | None = None,
     ) -> ForceReadings:
         """The forces of ``rd``, the one pipeline of files and streams: the tare (``tare``: the
         first readings at no load, or the shift ``tare_shift_uT`` a stream found), the temperature
         law (a T_C column), the centred force and no load; with ``offsets``, each in-range
         reading's force corrected for where (and how) it was pressed
-        (:mod:`~mst_cli.calibrate.offset_reading`); then each on its branch, with its
+        (:mod:`~mst_cli.calibrate.offset_reading`; ``estimated``: the estimates of these readings
+        made already, as a stream's batches made them); then each on its branch, with its
         uncertainty (:mod:`~mst_cli.calibrate.rig_reading`)."""
         imap = self.inverse_map
         r, m = self.temperature_scales(rd)
@@ -176,7 +178,9 @@ class ForceReader:
             chips = getattr(offsets, "chips", 1)  # a two-chip reader takes every chip's field
             B_est = rd.B_T if chips == 1 or rd.B_chips_T is None else rd.B_chips_T
             r_est = np.asarray(r, dtype=float).reshape((-1,) + (1,) * (B_est.ndim - 1))
-            est = offsets.estimate_all(B_est / r_est, np.where(flag == "ok", F_ref, np.nan)).scaled(m)
+            if estimated is None:  # each reading's own: a batch's estimates are its readings' one by one
+                estimated = offsets.estimate_all(B_est / r_est, np.where(flag == "ok", F_ref, np.nan)).scaled(m)
+            est = estimated
             ok = est.flag == "ok"
             F = np.where(ok, est.force_N, F)
             unc = np.where(ok & np.isfinite(est.force_sigma_N), est.force_sigma_N, res)

@@ -210,7 +210,7 @@ def read_stream(
         if warn is not None:
             warn(f"--tare {tare}: only {len(record)} samples came; tared on them")
         tare = len(record)
-    forces = reader.read(record.readings(), offsets, tare)
+    forces = reader.read(record.readings(), offsets, tare, estimated=live.estimates())
     return SerialSamples(record, forces, parser.skipped, parser.bad, parser.first_skipped, parser.first_bad)
 
 
@@ -242,6 +242,14 @@ class _Live:
     show: Callable[[str], None]
     shown: int = 0
     shift_uT: float | None = None
+    parts: list = field(default_factory=list)  # each batch's estimates, kept for the whole recording
+
+    def estimates(self):
+        """The estimates of every sample shown (None without an estimate): the batches' own, not
+        made twice (a reading's estimate is its own, whichever batch it came in)."""
+        if not self.parts:
+            return None
+        return type(self.parts[0]).concat(self.parts)
 
     def show_new(self, record: StreamRecord) -> None:
         n = len(record)
@@ -250,6 +258,8 @@ class _Live:
         if self.tare and self.shift_uT is None:
             self.shift_uT = self.reader.tare_shift_uT(record.readings(0, self.tare), self.tare)
         got = self.reader.read(record.readings(self.shown, n), self.offsets, tare_shift_uT=self.shift_uT)  # type: ignore[arg-type]
+        if got.offset is not None:
+            self.parts.append(got.offset)
         B_abs = np.linalg.norm(got.readings.B_T, axis=1)
         for i in range(n - self.shown):
             self.show(f"{self.shown + i + 1:6d}  {_terminal(got, i)}  |B| {B_abs[i] * 1e3:.4f} mT")
