@@ -408,32 +408,29 @@ def read_serial(
     columns: str | None = None,
     send: str | None = None,
 ) -> SerialSamples:
-    """A live MLX90393 stream to forces (``mst read --serial PORT``), through the pipeline of
-    :func:`read`: the same readings give the same forces.csv, with a ``time_s`` column first.
+    """A live MLX90393 stream to forces (``mst read --serial PORT``), through :func:`read`'s steps:
+    the same readings give the same forces.csv, with a ``time_s`` column first.
 
     Parameters
     ----------
     model, port : str, Path or Document; str
         The calibrated model (as :func:`read`'s); the serial port (one sample per line).
     out : str or Path, optional
-        Folder for forces.csv of every sample (time s, then :func:`read`'s columns).
+        Folder for forces.csv of every sample.
     baud, count, timeout_s, raw : int, int, float, bool
         Stop when the port closes, after ``count`` samples, ``timeout_s`` of silence or Ctrl-C.
     estimate, tare : {"none", "offset", "shear"}, int
-        As :func:`read`'s, live from the model's tables; ``show`` gets each sample's line and
-        ``status`` a line once the port is open.
-    columns : str, optional
-        Which number of a line is which (:mod:`mst_cli.io.line_columns`: a preset -- xyz, xyzt,
-        reskin, anyskin -- or roles such as ``t,x,y,z``) [default: by the line].
-    send : str, optional
-        Text sent when the port opens and after each line received (``\\n`` for a newline), for a
-        sketch that prints only when asked.
+        As :func:`read`'s; ``show`` gets each sample's line, ``status`` one once the port is open.
+    columns, send : str, optional
+        Which number of a line is which (a preset -- xyz, xyzt, reskin, anyskin -- or roles such
+        as ``t,x,y,z``: :mod:`mst_cli.io.line_columns`); text sent when the port opens and after
+        each line (backslash escapes read), for a sketch that prints only when asked.
 
     Returns
     -------
     SerialSamples
-        ``.samples``, ``.forces`` (the whole recording's :class:`ForceReadings`), ``.skipped``
-        (lines that were not a sample) and ``.bad`` (lines with numbers no chip gives).
+        ``.samples``, ``.forces`` (the recording's :class:`ForceReadings`), ``.skipped`` (no
+        sample) and ``.bad`` (numbers no chip gives) lines.
 
     Raises
     ------
@@ -444,15 +441,10 @@ def read_serial(
     --------
     >>> mst.read_serial("cal/calibrated.yaml", "/dev/ttyACM0", count=100)  # doctest: +SKIP
     """
-    from mst_cli.io.line_columns import column_map  # deferred: as _reader's
-    from mst_cli.readout.live import LiveOptions, read_stream
+    from mst_cli.readout.live import read_stream  # deferred: as _reader's
 
     estimate = _checked_estimate(estimate, max_offset_sigma_mm, tare)
-    if not isinstance(port, str) or not port.strip():
-        raise InputError("--serial", port, "a serial port's path, such as /dev/ttyACM0 or COM3")
-    if timeout_s is not None and not (math.isfinite(timeout_s) and timeout_s > 0):
-        raise InputError("--timeout", timeout_s, "a positive, finite number of seconds")
-    opts = LiveOptions(baud, count, timeout_s, raw, tare, column_map(columns), _request(send))
+    opts = _live_options(port, baud, count, timeout_s, raw, tare, columns, send)
     reader, _, setting = _reader(model, model_file, mechanics, gain_sel, res, raw, None, out, warn)
     offsets, built = _estimator(reader, estimate, mechanics, model_file or model, max_offset_sigma_mm, None, warn)
     samples = read_stream(reader, port, opts, setting, show, offsets, status, warn)
@@ -462,6 +454,18 @@ def read_serial(
             if built is not None:
                 built.save(st.path(built.file_name))
     return samples
+
+
+def _live_options(port, baud, count, timeout_s, raw, tare, columns, send):
+    """The stream's options, checked: a port's name, a finite positive timeout."""
+    from mst_cli.io.line_columns import column_map  # deferred: as _reader's
+    from mst_cli.readout.live import LiveOptions
+
+    if not isinstance(port, str) or not port.strip():
+        raise InputError("--serial", port, "a serial port's path, such as /dev/ttyACM0 or COM3")
+    if timeout_s is not None and not (math.isfinite(timeout_s) and timeout_s > 0):
+        raise InputError("--timeout", timeout_s, "a positive, finite number of seconds")
+    return LiveOptions(baud, count, timeout_s, raw, tare, column_map(columns), _request(send))
 
 
 def _request(send: str | None) -> bytes | None:

@@ -101,11 +101,10 @@ def read(
 
     READINGS is a CSV with Bx_uT,By_uT,Bz_uT (or Bx_code_lsb,By_code_lsb,Bz_code_lsb with
     --gain-sel/--res); forces.csv gets the input columns plus force_N, regime, flag and
-    force_resolution_N. With --serial PORT the lines of an MLX90393 sketch
-    ("X: 12.3 \\tY: -4.5 \\tZ: 321.0 uTesla", "magX[..] magY[..] magZ[..] temperature(C)[..]",
-    "12.3,-4.5,321.0,24.5", ReSkin's and AnySkin's tab-separated chips with --columns) are read
-    in batches and shown live, through the same steps as a file (tare, temperature, estimate,
-    branch); with --out forces.csv is the file's, with time_s first.
+    force_resolution_N. With --serial PORT an MLX90393 sketch's lines ("X: 12.3 \\tY: -4.5
+    \\tZ: 321.0 uTesla", SparkFun's "magX[..] ... temperature(C)[..]", "12.3,-4.5,321.0,24.5",
+    ReSkin/AnySkin chips with --columns) are read in batches and shown live, through the same
+    steps as a file; with --out forces.csv is the file's, with time_s first.
 
     Flags: above_calibrated (the model's force above the load test's largest force),
     below_range, above_range (past the last lock) and saturated (force left empty: never
@@ -126,25 +125,11 @@ def read(
             click.echo(f"wrote {out}/forces.csv")
             return
         assert port is not None  # one of the two, checked above
-        stream = api.read_serial(
-            doc,
-            port,
-            out=out,
-            baud=int(baud),
-            count=count,
-            timeout_s=timeout_s,
-            raw=raw,
-            tare=tare,
-            **options,
-            columns=columns,
-            send=send,
-            **_TERMINAL,
-        )
+        serial = dict(baud=int(baud), count=count, timeout_s=timeout_s, raw=raw, columns=columns, send=send)
+        stream = api.read_serial(doc, port, out=out, tare=tare, **serial, **options, **_TERMINAL)
     except api.CalibrationFailed as exc:
         fail_fit(str(exc), "no inverse map")
-    click.echo(stream.line(), err=True)
-    if stream.forces is not None:
-        click.echo(stream.forces.summary(), err=True)
+    click.echo(stream.line() + "\n" + stream.forces.summary(), err=True)
     if out is not None:
         click.echo(f"wrote {out}/forces.csv", err=True)
 

@@ -103,12 +103,11 @@ class StreamRecord:
 
 @dataclass
 class SerialSamples:
-    """What a stream gave: its record, the forces of the whole recording (None without a
-    sample), and the lines skipped (no sample) and bad (numbers no chip gives), one of each
-    quoted."""
+    """What a stream gave: its record, the forces of the whole recording, and the lines skipped
+    (no sample) and bad (numbers no chip gives), one of each quoted."""
 
     record: StreamRecord
-    forces: ForceReadings | None
+    forces: ForceReadings
     skipped: int
     bad: int
     first_skipped: str | None = None
@@ -120,7 +119,6 @@ class SerialSamples:
 
     def csv(self) -> str:
         """forces.csv: time_s, then what the same readings give from a file."""
-        assert self.forces is not None
         lines = self.forces.csv().splitlines()
         out = [f"{TIME_COLUMN},{lines[0]}"]
         out += [f"{t:.4f},{line}" for t, line in zip(self.record.times_s, lines[1:])]
@@ -170,27 +168,8 @@ def read_stream(
     record = StreamRecord(port, opts.raw, chips, setting)
     parser = SampleParser(opts.raw, opts.columns, chips)
     live = _Live(reader, offsets, opts.tare, show)
-    said: set[str] = set()
-    t0 = time.monotonic()
     try:
-        for batch in src.batches():
-            t = time.monotonic() - t0
-            for line in batch:
-                sample = parser.feed(line)
-                if sample is None:
-                    continue
-                try:
-                    record.add(sample, t)
-                except InputError as exc:
-                    parser.bad += 1
-                    parser.first_bad = parser.first_bad or (line.strip(), str(exc))
-                    continue
-                if opts.count is not None and len(record) >= opts.count:
-                    break
-            _say_once(parser, len(record), said, warn)
-            live.show_new(record)
-            if opts.count is not None and len(record) >= opts.count:
-                break
+        _read_batches(src, parser, record, live, opts.count, warn)
     except KeyboardInterrupt:
         pass
     finally:
@@ -210,8 +189,41 @@ def read_stream(
         if warn is not None:
             warn(f"--tare {tare}: only {len(record)} samples came; tared on them")
         tare = len(record)
-    forces = reader.read(record.readings(), offsets, tare, estimated=live.estimates())
+    made = live.estimates() if live.shown == len(record) else None  # Ctrl-C mid-batch: estimate afresh
+    forces = reader.read(record.readings(), offsets, tare, estimated=made)
     return SerialSamples(record, forces, parser.skipped, parser.bad, parser.first_skipped, parser.first_bad)
+
+
+def _read_batches(
+    src: LineSource,
+    parser: SampleParser,
+    record: StreamRecord,
+    live: _Live,
+    count: int | None,
+    warn: Callable[[str], None] | None,
+) -> None:
+    """Every batch of ``src`` into ``record`` (a sample no chip gives is a bad line), shown by
+    ``live``, until the port ends or ``count`` samples came."""
+    said: set[str] = set()
+    t0 = time.monotonic()
+    for batch in src.batches():
+        t = time.monotonic() - t0
+        for line in batch:
+            sample = parser.feed(line)
+            if sample is None:
+                continue
+            try:
+                record.add(sample, t)
+            except InputError as exc:
+                parser.bad += 1
+                parser.first_bad = parser.first_bad or (line.strip(), str(exc))
+                continue
+            if count is not None and len(record) >= count:
+                break
+        _say_once(parser, len(record), said, warn)
+        live.show_new(record)
+        if count is not None and len(record) >= count:
+            return
 
 
 def _say_once(parser: SampleParser, samples: int, said: set[str], warn: Callable[[str], None] | None) -> None:
