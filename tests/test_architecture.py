@@ -26,6 +26,7 @@ LAYERS = (
     ("mst_cli.io",),  # file plumbing: YAML, atomic outputs, serial lines, input rules
     ("mst_cli.sensor",),  # the domain: the sensor description, the part as printed
     ("mst_cli.design", "mst_cli.calibrate", "mst_cli.bench", "mst_cli.cad", "mst_cli.simulation"),
+    ("mst_cli.readout",),  # mst read's streams: lines to the calibration's reading pipeline
     ("mst_cli", "mst_cli.api"),  # the one door; the package re-exports its verbs
     ("mst_cli.cli",),
 )

@@ -26,7 +26,7 @@ from click.testing import CliRunner
 from mst_cli.calibrate import fit as cal
 from mst_cli.calibrate.inverse_map import inverse_map
 from mst_cli.cli.app import main
-from mst_cli.io.serial_lines import SampleParser, parse_line
+from mst_cli.io.serial_lines import BadLine, SampleParser, parse_line
 from mst_cli.model import chip as mlx
 from mst_cli.model.assembly import Housing
 from mst_cli.model.components import grade_remanence_T
@@ -464,17 +464,18 @@ def test_serial_stream_from_a_pseudo_terminal(loadtest, tmp_path):
 
 
 def test_serial_line_formats():
-    assert parse_line("X: 12.30 \tY: -4.50 \tZ: 321.00 uTesla ") == (12.3, -4.5, 321.0)
-    assert parse_line("X:12.3,Y:-4.5,Z:321.0") == (12.3, -4.5, 321.0)
-    assert parse_line("magX: 1 magY: 2 magZ: 3") == (1.0, 2.0, 3.0)
-    assert parse_line("Bx=1.5 By=-2 Bz=0.3 mT") == (1500.0, -2000.0, 300.0)
-    assert parse_line("12.3,-4.5,321.0") == (12.3, -4.5, 321.0)
-    assert parse_line("12.3;-4.5;321.0 uT") == (12.3, -4.5, 321.0)
-    assert parse_line("1 2 3 G") == (100.0, 200.0, 300.0)
-    assert parse_line("10 20 3000", raw=True) == (10.0, 20.0, 3000.0)
+    assert parse_line("X: 12.30 \tY: -4.50 \tZ: 321.00 uTesla ").values == (12.3, -4.5, 321.0)
+    assert parse_line("X:12.3,Y:-4.5,Z:321.0").values == (12.3, -4.5, 321.0)
+    assert parse_line("magX: 1 magY: 2 magZ: 3").values == (1.0, 2.0, 3.0)
+    assert parse_line("Bx=1.5 By=-2 Bz=0.3 mT").values == (1500.0, -2000.0, 300.0)
+    assert parse_line("12.3,-4.5,321.0").values == (12.3, -4.5, 321.0)
+    assert parse_line("12.3;-4.5;321.0 uT").values == (12.3, -4.5, 321.0)
+    assert parse_line("1 2 3 G").values == (100.0, 200.0, 300.0)
+    assert parse_line("10 20 3000", raw=True).values == (10.0, 20.0, 3000.0)
     for junk in ("", "Starting Adafruit MLX90393 Demo", "X: 1 Y: 2", "Unable to read XYZ data", "1,2", "a,b,c"):
         assert parse_line(junk) is None
-    assert parse_line("12.3,-4.5,321.0 uT", raw=True) is None  # raw codes carry no unit
+    with pytest.raises(BadLine):  # raw codes carry no unit: a sample's form, numbers no chip codes
+        parse_line("12.3,-4.5,321.0 uT", raw=True)
     # Adafruit_MLX90393's basicdemo prints readData one axis a line, then the event on one line
     p = SampleParser()
     got = [
@@ -491,7 +492,7 @@ def test_serial_line_formats():
             "Z: 3 uT",
         ]
     ]
-    assert [g for g in got if g] == [(12.3456, -4.5, 321.0), (12.35, -4.5, 321.0)]
+    assert [g.values for g in got if g] == [(12.3456, -4.5, 321.0), (12.35, -4.5, 321.0)]
     assert p.skipped == 4  # 3 banner lines, a Z without its X, Y
 
 

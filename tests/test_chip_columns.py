@@ -121,8 +121,3 @@ def test_mst_read_estimates_all_five_from_two_chips(tmp_path):
         assert (float(row["shear_x_N"]), float(row["shear_y_N"])) == pytest.approx((fx, fy), abs=0.02)
         assert (float(row["x_mm"]), float(row["y_mm"])) == pytest.approx((x, y), abs=0.02)
         assert all(float(row[c]) > 0 for c in ("x_mm_sigma", "y_mm_sigma", "shear_x_N_sigma"))
-
-
-def test_a_two_chip_shear_estimate_is_refused_on_a_serial_stream(tmp_path):
-    res = run(["read", two_chip_model(tmp_path), "--serial", tmp_path / "nope", "--estimate", "shear"])
-    assert res.exit_code == 2 and "one chip's three values" in res.output, res.output

@@ -22,7 +22,8 @@ from mst_cli.sensor.document import Document
 
 if TYPE_CHECKING:
     from mst_cli.calibrate.calibration import Calibration
-    from mst_cli.calibrate.reading import ForceReadings, SerialSamples
+    from mst_cli.calibrate.reading import ForceReadings
+    from mst_cli.readout.live import SerialSamples
 
 
 def parse_params(text: str) -> tuple[str, ...]:
@@ -360,8 +361,8 @@ def _checked_estimate(estimate: str, max_offset_sigma_mm: float, tare: int = 0) 
 
 def _estimator(reader, estimate: str, mechanics: str | None, model_file, max_sigma_mm: float, polish, warn):
     """(the reader of ``estimate``, or None; the table it built, to be written, or None).
-    ``polish`` None: a live stream (one chip's values a line). InputError when the layout cannot
-    identify the estimate anywhere in its range, or a stream cannot carry it."""
+    ``polish`` None: a live stream (never polished). InputError when the layout cannot identify
+    the estimate anywhere in its range."""
     # deferred: the calibrate layer, as _reader
     from mst_cli.calibrate.table_reader import (
         OffsetTableReader,
@@ -380,13 +381,7 @@ def _estimator(reader, estimate: str, mechanics: str | None, model_file, max_sig
     lever = reader.record.lever_factor() if reader.record is not None else 1.0
     offsets: OffsetTableReader | ShearTableReader
     if estimate == "shear" and len(doc.chips_mm) > 1:
-        if polish is None:
-            raise InputError(
-                "--serial --estimate shear",
-                f"{len(doc.chips_mm)} chips",
-                "a serial line carries one chip's three values: read the chips' file (Bx2_uT, ...) instead",
-            )
-        return two_chip_reader(doc, reader.inverse_map, lever, mech, polish), None
+        return two_chip_reader(doc, reader.inverse_map, lever, mech, bool(polish)), None
     if estimate == "shear":
         offsets, note = shear_table_reader(doc, reader.inverse_map, lever, Path(model_file), mech, bool(polish))
     else:
@@ -416,45 +411,75 @@ def read_serial(
     show: Callable[[str], None] = print,
     estimate: str = "none",
     max_offset_sigma_mm: float = 1.0,
+    tare: int = 0,
+    columns: str | None = None,
+    send: str | None = None,
 ) -> SerialSamples:
-    """A live MLX90393 stream to forces (``mst read --serial PORT``).
+    """A live MLX90393 stream to forces (``mst read --serial PORT``), through :func:`read`'s steps:
+    the same readings give the same forces.csv, with a ``time_s`` column first.
 
     Parameters
     ----------
     model, port : str, Path or Document; str
         The calibrated model (as :func:`read`'s); the serial port (one sample per line).
     out : str or Path, optional
-        Folder for forces.csv of every sample (time s, the three values, force N, regime, flag,
-        resolution N; an ``estimate``'s columns as :func:`read` writes them).
+        Folder for forces.csv of every sample.
     baud, count, timeout_s, raw : int, int, float, bool
         Stop when the port closes, after ``count`` samples, ``timeout_s`` of silence or Ctrl-C.
-    estimate : {"none", "offset", "shear"}
-        As :func:`read`'s, live from the model's table; ``show`` gets each sample's line and
-        ``status`` a line when reading starts.
+    estimate, tare : {"none", "offset", "shear"}, int
+        As :func:`read`'s; ``show`` gets each sample's line, ``status`` one once the port is open.
+    columns, send : str, optional
+        Which number of a line is which (a preset -- xyz, xyzt, reskin, anyskin -- or roles such
+        as ``t,x,y,z``: :mod:`mst_cli.io.line_columns`); text sent when the port opens and after
+        each line (backslash escapes read), for a sketch that prints only when asked.
 
     Returns
     -------
     SerialSamples
-        ``.samples`` and ``.skipped`` (lines that were not a sample).
+        ``.samples``, ``.forces`` (the recording's :class:`ForceReadings`), ``.skipped`` (no
+        sample) and ``.bad`` (numbers no chip gives) lines.
 
     Raises
     ------
     InputError
-        A bad option or a port that cannot be opened, naming it.
+        A bad option, a port that cannot be opened, or a stream that gave no sample, naming it.
 
     Examples
     --------
     >>> mst.read_serial("cal/calibrated.yaml", "/dev/ttyACM0", count=100)  # doctest: +SKIP
     """
-    _checked_estimate(estimate, max_offset_sigma_mm)
+    from mst_cli.readout.live import read_stream  # deferred: as _reader's
+
+    estimate = _checked_estimate(estimate, max_offset_sigma_mm, tare)
+    opts = _live_options(port, baud, count, timeout_s, raw, tare, columns, send)
     reader, _, setting = _reader(model, model_file, mechanics, gain_sel, res, raw, None, out, warn)
     offsets, built = _estimator(reader, estimate, mechanics, model_file or model, max_offset_sigma_mm, None, warn)
-    if status is not None:
-        status(f"{reader.document.name}: reading {port} at {baud} baud (Ctrl-C to stop)")
-    samples = reader.stream(port, baud, count, timeout_s, raw, setting, show, offsets)
+    samples = read_stream(reader, port, opts, setting, show, offsets, status, warn)
     if out is not None:
         with staged(Path(out)) as st:
-            st.write_text("forces.csv", samples.csv(reader.inverse_map))
+            st.write_text("forces.csv", samples.csv())
             if built is not None:
                 built.save(st.path(built.file_name))
     return samples
+
+
+def _live_options(port, baud, count, timeout_s, raw, tare, columns, send):
+    """The stream's options, checked: a port's name, a finite positive timeout."""
+    from mst_cli.io.line_columns import column_map  # deferred: as _reader's
+    from mst_cli.readout.live import LiveOptions
+
+    if not isinstance(port, str) or not port.strip():
+        raise InputError("--serial", port, "a serial port's path, such as /dev/ttyACM0 or COM3")
+    if timeout_s is not None and not (math.isfinite(timeout_s) and timeout_s > 0):
+        raise InputError("--timeout", timeout_s, "a positive, finite number of seconds")
+    return LiveOptions(baud, count, timeout_s, raw, tare, column_map(columns), _request(send))
+
+
+def _request(send: str | None) -> bytes | None:
+    """The bytes of ``--send`` (backslash escapes such as \\n read), None without one."""
+    if send is None:
+        return None
+    if not send:
+        raise InputError("--send", send, "a byte or a line to send for each sample (e.g. 'r' or 'read\\n')")
+    text = send.encode("latin-1", "backslashreplace").decode("unicode_escape")
+    return text.encode("utf-8")

@@ -13,7 +13,7 @@ Pure: no I/O.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, fields, replace
 
 import numpy as np
 
@@ -60,6 +60,21 @@ class LoadReadings:
             f.name: np.concatenate([getattr(p, f.name) for p in parts]) for f in fields(cls) if f.name != "assumption"
         }
         return cls(**arrays, assumption=parts[0].assumption)
+
+    @property
+    def force_sigma_N(self) -> np.ndarray:
+        return self.sigma[:, 0]
+
+    def scaled(self, modulus_scale: np.ndarray) -> LoadReadings:
+        """The estimates of a sensor whose modulus is ``modulus_scale`` (n,) times the
+        calibration's: every layer law is linear in E, so the three forces and their 1-sigma
+        scale by it, the position not (:mod:`~mst_cli.calibrate.temperature`)."""
+        m = np.asarray(modulus_scale, dtype=float)
+        sigma = self.sigma.copy()
+        sigma[:, :3] *= m[:, None]
+        return replace(
+            self, force_N=self.force_N * m, shear_x_N=self.shear_x_N * m, shear_y_N=self.shear_y_N * m, sigma=sigma
+        )
 
     def summary(self) -> str:
         ok = self.flag == "ok"

@@ -18,7 +18,7 @@ that rung (docs/design.md section 4.2).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import NamedTuple
 
 import numpy as np
@@ -75,6 +75,17 @@ class OffsetReadings:
         """The readings of ``parts`` one after the other (a stream's samples)."""
         names = ("force_N", "x_mm", "y_mm", "sigma_x_mm", "sigma_y_mm", "sigma_force_N", "flag")
         return cls(*(np.concatenate([getattr(p, n) for p in parts]) for n in names))
+
+    @property
+    def force_sigma_N(self) -> np.ndarray:
+        return self.sigma_force_N
+
+    def scaled(self, modulus_scale: np.ndarray) -> OffsetReadings:
+        """The estimates of a sensor whose modulus is ``modulus_scale`` (n,) times the
+        calibration's: every layer law is linear in E, so forces scale by it, offsets not
+        (:mod:`~mst_cli.calibrate.temperature`)."""
+        m = np.asarray(modulus_scale, dtype=float)
+        return replace(self, force_N=self.force_N * m, sigma_force_N=self.sigma_force_N * m)
 
     def append_columns(self, forces_csv_text: str, centred_force_N: np.ndarray) -> str:
         """forces.csv with the offset's columns (:func:`offset_columns`)."""

@@ -1,14 +1,10 @@
 """Readings to forces with a calibrated model (what ``mst read`` does): a :class:`ForceReader`
 is one model's inverse map, told whether a matching calibration.json stands beside the model
-file; it reads a file of readings (:meth:`~ForceReader.read`) or a live serial stream
-(:meth:`~ForceReader.stream`). Flagged readings have no force: never extrapolated."""
+file; :meth:`~ForceReader.read` is the one pipeline of a readings file and of a live stream's
+batches (:mod:`mst_cli.readout.live`). Flagged readings have no force: never extrapolated."""
 
 from __future__ import annotations
 
-import io
-import math
-import time
-from collections.abc import Callable
 from dataclasses import dataclass, field, fields
 from pathlib import Path
 
@@ -18,14 +14,20 @@ from mst_cli.calibrate.accuracy import ERROR_FROM_RANGE, force_errors, force_err
 from mst_cli.calibrate.calibration_json import CalibrationRecord, record_beside
 from mst_cli.calibrate.inverse_map import FLAGS, InverseMap, inverse_map
 from mst_cli.calibrate.load_readings import LOAD_COLUMNS, LoadReadings
-from mst_cli.calibrate.loadtest import Readings, field_of, rig_column, unknown_columns
+from mst_cli.calibrate.loadtest import Readings, rig_column, unknown_columns
 from mst_cli.calibrate.offset_reading import OFFSET_COLUMNS, OffsetEstimator, OffsetReadings
-from mst_cli.calibrate.rig_reading import BranchForces, follow_branches, no_load_rows, unloading_model_of, zero_shift_T
+from mst_cli.calibrate.rig_reading import (
+    BranchForces,
+    follow_branches,
+    no_load_rows,
+    tare_shift_T,
+    unloading_model_of,
+    zero_shift_T,
+)
 from mst_cli.calibrate.rung_check import read_rung_warning
 from mst_cli.calibrate.table_reader import OffsetTableReader, ShearTableReader, TwoChipLoadReader
-from mst_cli.calibrate.tables import FORCES_COLUMNS, cell, forces_csv
-from mst_cli.calibrate.temperature_fit import field_at_reference
-from mst_cli.io.serial_lines import LineSource, SampleParser
+from mst_cli.calibrate.tables import forces_csv
+from mst_cli.calibrate.temperature_fit import reading_scales
 from mst_cli.model.chip import ChipSetting, field_resolution_T
 from mst_cli.sensor.document import Document
 
@@ -153,43 +155,6 @@ def _branch_columns(forces_csv_text: str, bf: BranchForces) -> str:
 
 
 @dataclass
-class SerialSamples:
-    """Samples of a serial stream: (seconds since the start, the line's three values, force N,
-    regime, flag) each, and how many lines were not a sample."""
-
-    raw: bool
-    samples: list[tuple[float, tuple[float, float, float], float, int, str]] = field(default_factory=list)
-    skipped: int = 0
-    offsets: list[tuple[float, OffsetReadings | LoadReadings]] = field(
-        default_factory=list
-    )  # (centred force, estimate) each
-
-    def csv(self, imap: InverseMap) -> str:
-        cols = ("Bx_code_lsb", "By_code_lsb", "Bz_code_lsb") if self.raw else ("Bx_uT", "By_uT", "Bz_uT")
-        buf = io.StringIO()
-        buf.write(",".join(("time_s",) + cols + FORCES_COLUMNS) + "\n")
-        for t, values, f, r, fl in self.samples:
-            res_N = float(imap.local_resolution_N(f)) if math.isfinite(f) else None
-            buf.write(
-                ",".join(
-                    [f"{t:.4f}"]
-                    + [f"{v:.9g}" for v in values]
-                    + [cell(f), str(r) if math.isfinite(f) else "", fl, cell(res_N, ".6g")]
-                )
-                + "\n"
-            )
-        if not self.offsets:
-            return buf.getvalue()
-        parts = [o for _, o in self.offsets]
-        est = (
-            LoadReadings.concat([p for p in parts if isinstance(p, LoadReadings)])
-            if isinstance(parts[0], LoadReadings)
-            else OffsetReadings.concat([p for p in parts if isinstance(p, OffsetReadings)])
-        )
-        return est.append_columns(buf.getvalue(), np.array([f for f, _ in self.offsets]))
-
-
-@dataclass
 class ForceReader:
     """One model file's reading -> force map and the warning it comes with (None: calibrated,
     and the model still gives the recorded curve)."""
@@ -224,41 +189,70 @@ class ForceReader:
         offsets: OffsetEstimator | OffsetTableReader | ShearTableReader | TwoChipLoadReader | None = None,
         tare: int = 0,
         track_zero: bool = False,
+        tare_shift_uT: float | None = None,
+        estimated: OffsetReadings | LoadReadings | None = None,
     ) -> ForceReadings:
-        """The forces of ``rd``; with ``offsets``, each in-range reading's force corrected for
-        where it was pressed (:mod:`~mst_cli.calibrate.offset_reading`); else each on its branch
-        (:mod:`~mst_cli.calibrate.rig_reading`). ``tare``: the first readings at no load."""
+        """The forces of ``rd``, the one pipeline of files and streams: the tare (``tare``: the
+        first readings at no load, or the shift ``tare_shift_uT`` a stream found), the temperature
+        law (a T_C column), the centred force and no load; with ``offsets``, each in-range
+        reading's force corrected for where (and how) it was pressed
+        (:mod:`~mst_cli.calibrate.offset_reading`; ``estimated``: the estimates of these readings
+        made already, as a stream's batches made them); then each on its branch, with its
+        uncertainty (:mod:`~mst_cli.calibrate.rig_reading`)."""
         imap = self.inverse_map
-        zero_record = self.record.zero if self.record is not None else None
-        shift = zero_shift_T(
-            rd.B_abs_T, rig_column(rd, "time_s"), imap.B_abs_T, tare, track_zero, zero_record, rd.source
-        )
-        B, m = field_at_reference(rd.B_abs_T - shift, rd, self.document, self.record)  # a T_C column: at 20 degC
-        F, regime, flag = imap.force(B, rd.saturated)
-        F = F * m
+        r, m = self.temperature_scales(rd)
+        B_ref = rd.B_abs_T / r  # the field at 20 degC the inverse map looks up
+        if tare_shift_uT is not None:
+            shift: np.ndarray | float = 1e-6 * tare_shift_uT
+        else:
+            zero_record = self.record.zero if self.record is not None else None
+            time_s = rig_column(rd, "time_s")
+            shift = zero_shift_T(B_ref, time_s, imap.B_abs_T, tare, track_zero, zero_record, rd.source)
+        B = B_ref - shift  # re-zeroed
+        F_ref, regime, flag = imap.force(B, rd.saturated)
         zero = no_load_rows(B, flag, float(imap.B_abs_T[0]), imap.field_resolution_T)
-        F[zero], regime[zero], flag[zero] = 0.0, 1, "ok"
+        F_ref[zero], regime[zero], flag[zero] = 0.0, 1, "ok"
+        F = F_ref * m
         top = float(imap.force_N[-1]) * np.maximum(m, 1.0)  # the last lock's force at each T
         flag_impossible(F, flag, top)
+        F_ref = np.where(flag == "ok", F_ref, np.nan)
         res = imap.local_resolution_N(np.where(np.isfinite(F), F, 0.0))
-        if offsets is None:
-            model = unloading_model_of(self.record.hysteresis) if self.record is not None else None
-            bf = follow_branches(F, res, model, rig_column(rd, "time_s"))
-            flag_impossible(bf.force_N, flag, top)
-            bf.uncertainty_N[flag != "ok"] = np.nan
-            regime = np.where(np.isfinite(bf.force_N), imap.regime_of(np.nan_to_num(bf.force_N)), regime)
-            out = ForceReadings(self.document.name, rd, bf.force_N, regime, flag, res, edges_N=imap.edges_N)
-            out.branches, out.tare_shift_uT = bf, (float(np.mean(shift)) * 1e6 if tare or track_zero else None)
-            return out
-        chips = getattr(offsets, "chips", 1)  # a two-chip reader takes every chip's field
-        B_est = rd.B_T if chips == 1 or rd.B_chips_T is None else rd.B_chips_T
-        est = offsets.estimate_all(B_est, np.where(flag == "ok", F, np.nan))
-        estimates_impossible(est, F, top)
-        corrected = np.where(est.flag == "ok", est.force_N, F)
-        regime = np.where(np.isfinite(corrected), self.inverse_map.regime_of(corrected), regime)
-        return ForceReadings(
-            self.document.name, rd, corrected, regime, flag, res, est, F, edges_N=self.inverse_map.edges_N
-        )
+        est, unc = None, res
+        if offsets is not None:
+            chips = getattr(offsets, "chips", 1)  # a two-chip reader takes every chip's field
+            B_est = rd.B_T if chips == 1 or rd.B_chips_T is None else rd.B_chips_T
+            r_est = np.asarray(r, dtype=float).reshape((-1,) + (1,) * (B_est.ndim - 1))
+            if estimated is None:  # each reading's own: a batch's estimates are its readings' one by one
+                estimated = offsets.estimate_all(B_est / r_est, F_ref).scaled(m)
+            est = estimated
+            estimates_impossible(est, F, top)
+            ok = est.flag == "ok"
+            F = np.where(ok, est.force_N, F)
+            unc = np.where(ok & np.isfinite(est.force_sigma_N), est.force_sigma_N, res)
+        model = unloading_model_of(self.record.hysteresis) if self.record is not None else None
+        bf = follow_branches(F, unc, model, rig_column(rd, "time_s"))
+        flag_impossible(bf.force_N, flag, top)
+        bf.uncertainty_N[flag != "ok"] = np.nan
+        regime = np.where(np.isfinite(bf.force_N), imap.regime_of(np.nan_to_num(bf.force_N)), regime)
+        out = ForceReadings(self.document.name, rd, bf.force_N, regime, flag, res, edges_N=imap.edges_N)
+        zeroed = tare or track_zero or tare_shift_uT is not None
+        out.branches, out.tare_shift_uT = bf, (float(np.mean(shift)) * 1e6 if zeroed else None)
+        if est is not None:
+            out.offset, out.force_centred_N = est, F_ref * m
+        return out
+
+    def temperature_scales(self, rd: Readings) -> tuple[np.ndarray | float, np.ndarray]:
+        """(r(T), m(T)) of each reading of ``rd`` (1 without a T_C column): its field is divided
+        by r, its forces multiplied by m (:mod:`~mst_cli.calibrate.temperature_fit`)."""
+        scales = reading_scales(rd, self.document, getattr(self.record, "temperature", None))
+        return scales if scales is not None else (1.0, np.ones(len(rd)))
+
+    def tare_shift_uT(self, rd: Readings, tare: int) -> float:
+        """The |B| shift (uT, at 20 degC) that puts the mean of the first ``tare`` readings of
+        ``rd`` on the unloaded field."""
+        r, _ = self.temperature_scales(rd)
+        B_ref = rd.B_abs_T / r
+        return 1e6 * tare_shift_T(B_ref, tare, float(self.inverse_map.B_abs_T[0]), rd.source)
 
     def offset_estimator(self, mechanics: str, max_sigma_mm: float) -> OffsetEstimator:
         """The offset estimator of this model: its geometry and material, the reader's field
@@ -274,67 +268,3 @@ class ForceReader:
             max_sigma_mm,
             self.record.lever_factor() if self.record is not None else 1.0,
         )
-
-    def stream(
-        self,
-        port: str,
-        baud: int,
-        count: int | None,
-        timeout_s: float | None,
-        raw: bool,
-        setting: ChipSetting | None,
-        show: Callable[[str], None],
-        offsets: OffsetTableReader | ShearTableReader | None = None,
-    ) -> SerialSamples:
-        """Read ``port`` until it closes, ``count`` samples, ``timeout_s`` of silence or Ctrl-C,
-        showing each sample's force through ``show`` (with ``offsets``: corrected, and where it
-        was pressed)."""
-        src = LineSource(port, baud, timeout_s)
-        out = SerialSamples(raw)
-        parser = SampleParser(raw)
-        t0 = time.monotonic()
-        try:
-            for line in src:
-                values = parser.feed(line)
-                if values is None:
-                    continue
-                B, sat = field_of(values, raw, setting, f"{port} sample {len(out.samples) + 1}")
-                Babs = float(np.linalg.norm(B))
-                F, regime, flag = self.inverse_map.force(np.array([Babs]), np.array([sat]))
-                f, r, fl = float(F[0]), int(regime[0]), str(flag[0])
-                where = ""
-                if offsets is not None:
-                    f, r, where = self._offset_sample(offsets, out, B, f, r, fl)
-                out.samples.append((time.monotonic() - t0, values, f, r, fl))
-                shown = f"F = {f:8.3f} N  regime {r}" if math.isfinite(f) else f"F = {'-':>8}    "
-                if fl != "ok":
-                    shown += f"  {fl}"
-                shown += where
-                show(f"{len(out.samples):6d}  {shown}  |B| {Babs * 1e3:.4f} mT")
-                if count is not None and len(out.samples) >= count:
-                    break
-        except KeyboardInterrupt:
-            pass
-        finally:
-            src.close()
-            out.skipped = parser.skipped
-        return out
-
-    def _offset_sample(
-        self,
-        offsets: OffsetTableReader | ShearTableReader,
-        out: SerialSamples,
-        B: np.ndarray,
-        f: float,
-        r: int,
-        fl: str,
-    ) -> tuple[float, int, str]:
-        """One stream sample's estimate, kept in ``out``: (the force, its regime, what the terminal
-        line adds)."""
-        est = offsets.estimate_all(B[None, :], np.array([f if fl == "ok" else math.nan]))
-        estimates_impossible(est, np.array([f]), np.array([float(self.inverse_map.force_N[-1])]))
-        out.offsets.append((f, est))
-        if est.flag[0] != "ok":
-            return f, r, est.terminal(0)
-        F = float(est.force_N[0])
-        return F, int(self.inverse_map.regime_of(F)), est.terminal(0)

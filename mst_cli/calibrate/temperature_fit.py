@@ -125,14 +125,3 @@ def reading_scales(rd: Readings, doc: Document, temperature: object) -> tuple[np
         return None
     beta = checked(temperature, "temperature", KEY) or 0.0  # InputError beyond its physical bound
     return remanence_scale(T, remanence_coeff_of(doc)), modulus_scale(T, beta)
-
-
-def field_at_reference(
-    B_abs_T: np.ndarray, rd: Readings, doc: Document, record: object
-) -> tuple[np.ndarray, np.ndarray]:
-    """(|B| / r(T), m(T)) of each reading: the field the reader looks up at 20 degC and the factor
-    its force is then multiplied by (ones without a T_C column); ``record``: the calibration's."""
-    scales = reading_scales(rd, doc, getattr(record, "temperature", None))
-    if scales is None:
-        return B_abs_T, np.ones(len(B_abs_T))
-    return B_abs_T / scales[0], scales[1]

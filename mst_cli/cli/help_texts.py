@@ -59,7 +59,21 @@ READ_ESTIMATE = (
     "not_identifiable, ambiguous, no_fit: the centred force kept). shear: the tangential force of a "
     "press taken as centred (one chip: three numbers, three unknowns Fz, Fx, Fy; table shear_table.npz, "
     "friction cone |Fx|, |Fy| <= 0.5 Fz): forces.csv adds force_centred_N, shear_x_N, shear_y_N, x_mm, "
-    "y_mm (0: assumed), their *_sigma, assumption (centred) and estimate_flag (ok; or ambiguous, no_fit)."
+    "y_mm (0: assumed), their *_sigma, assumption (centred) and estimate_flag (ok; or ambiguous, no_fit). "
+    "With two chips or more (magnetometer.positions_mm) shear estimates all five, Fz, Fx, Fy, x, y "
+    "(assumption none), from a file or --serial."
+)
+READ_COLUMNS = (
+    "--serial: which number of a line is which. A preset -- xyz; xyzt (x y z and the chip's temperature "
+    "per chip: the MLX90393 library's examples, ReSkin's 5X_burst_stream; reskin is the same); txyz "
+    "(anyskin: temperature first, AnySkin's 5X_burst_stream) -- or roles such as t,x,y,z or "
+    "x1,y1,z1,-,x2,y2,z2 (- skips a number; numbered roles place chips). A group repeats per chip; a "
+    "line of more chips than the model reads the first. [default: by the line: labels (X: .. Y: .. "
+    "Z: ..), a header line X,Y,Z,T said before, or 3 or 4 numbers per chip of the model]"
+)
+READ_SEND = (
+    "--serial: send TEXT when the port opens and again after each line received (and after a second "
+    "of silence), for a sketch that prints only when asked; backslash escapes such as \\n are read."
 )
 READ_ESTIMATE_OFFSET = "The same as --estimate offset."
 READ_POLISH = "Polish each estimate by the model's exact solve (about 0.1 s a reading: files, not streams)."

@@ -45,11 +45,13 @@ BAUD_RATES = (1200, 2400, 4800, 9600, 19200, 38400, 57600, 115200, 230400, 46080
 @click.option(
     "--timeout",
     "timeout_s",
-    type=click.FloatRange(min=0.0, min_open=True),
+    type=float,
     default=None,
-    help="Stop --serial after this many seconds without a byte.",
+    help="Stop --serial after this many seconds without a byte (a positive, finite number).",
 )
 @click.option("--raw", is_flag=True, help="--serial lines carry raw codes (needs --gain-sel/--res).")
+@click.option("--columns", default=None, metavar="MAP", help=help_texts.READ_COLUMNS)
+@click.option("--send", default=None, metavar="TEXT", help=help_texts.READ_SEND)
 @click.option("--gain-sel", type=click.IntRange(0, 7), default=None, help="GAIN_SEL of raw codes.")
 @click.option("--res", type=click.IntRange(0, 3), default=None, help="RES of raw codes.")
 @click.option(
@@ -84,6 +86,8 @@ def read(
     count: int | None,
     timeout_s: float | None,
     raw: bool,
+    columns: str | None,
+    send: str | None,
     gain_sel: int | None,
     res: int | None,
     mechanics: str | None,
@@ -99,9 +103,10 @@ def read(
 
     READINGS is a CSV with Bx_uT,By_uT,Bz_uT (or Bx_code_lsb,By_code_lsb,Bz_code_lsb with
     --gain-sel/--res); forces.csv gets the input columns plus force_N, regime, flag and
-    force_resolution_N. With --serial PORT the lines of an Arduino MLX90393 sketch
-    ("X: 12.3 \\tY: -4.5 \\tZ: 321.0 uTesla", "12.3,-4.5,321.0", ...) are shown live
-    (and written to forces.csv with --out).
+    force_resolution_N. With --serial PORT an MLX90393 sketch's lines ("X: 12.3 \\tY: -4.5
+    \\tZ: 321.0 uTesla", SparkFun's "magX[..] ... temperature(C)[..]", "12.3,-4.5,321.0,24.5",
+    ReSkin/AnySkin chips with --columns) are read in batches and shown live, through the same
+    steps as a file; with --out forces.csv is the file's, with time_s first.
 
     Flags: above_calibrated (the model's force above the load test's largest force),
     below_range, above_range (past the last lock) and saturated (force left empty: never
@@ -109,7 +114,7 @@ def read(
     shear the tangential force (Fx, Fy) of a centred press.
     """
     estimate = "offset" if estimate_offset else estimate
-    _check_sources(readings, port, raw, polish)
+    _check_sources(readings, port, raw or columns is not None or send is not None, polish, track_zero)
     api.check_argument_order(model_file, readings, "read")
     doc = api.load_design(model_file)
     out = out_dir if (out_dir is not None or port is not None) else default_out_dir(f"{doc.name}-read")
@@ -122,24 +127,25 @@ def read(
             click.echo(f"wrote {out}/forces.csv")
             return
         assert port is not None  # one of the two, checked above
-        stream = api.read_serial(
-            doc, port, out=out, baud=int(baud), count=count, timeout_s=timeout_s, raw=raw, **options, **_TERMINAL
-        )
+        serial = dict(baud=int(baud), count=count, timeout_s=timeout_s, raw=raw, columns=columns, send=send)
+        stream = api.read_serial(doc, port, out=out, tare=tare, **serial, **options, **_TERMINAL)
     except api.CalibrationFailed as exc:
         fail_fit(str(exc), "no inverse map")
-    click.echo(f"{len(stream.samples)} samples, {stream.skipped} lines skipped (not a sample)", err=True)
+    click.echo(stream.line() + "\n" + stream.forces.summary(), err=True)
     if out is not None:
         click.echo(f"wrote {out}/forces.csv", err=True)
 
 
-def _check_sources(readings: Path | None, port: str | None, raw: bool, polish: bool) -> None:
-    """A usage error for options that do not go together."""
+def _check_sources(readings: Path | None, port: str | None, raw: bool, polish: bool, track_zero: bool) -> None:
+    """A usage error for options that do not go together (``raw``: an option of lines given)."""
     if (readings is None) == (port is None):
         raise click.UsageError("give READINGS.csv or --serial PORT (one of them)")
     if raw and port is None:
-        raise click.UsageError("--raw is for --serial lines (a CSV says raw by its column names)")
+        raise click.UsageError("--raw, --columns and --send are for --serial lines (a CSV names its columns)")
     if polish and port is not None:
         raise click.UsageError("--polish reads files, not --serial streams (about 0.1 s a reading)")
+    if track_zero and port is not None:
+        raise click.UsageError("--track-zero reads files (it finds the rests over the whole record); live, use --tare N")
 
 
 def _warn(note: str) -> None:

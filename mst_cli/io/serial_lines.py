@@ -1,20 +1,27 @@
-"""One sample per line from a serial port, as the common Arduino MLX90393 sketches print them.
+"""One sample per line from a serial port, as MLX90393 sketches print them.
 
-Accepted line formats (case-insensitive; anything else -- banners, "Unable to read XYZ data",
-blank lines -- is skipped and counted):
+Accepted lines (case-insensitive; anything else -- banners, status lines, "Unable to read XYZ
+data" -- is skipped and counted):
 
-* labelled: ``X: 12.3 \\tY: -4.5 \\tZ: 321.0 uTesla`` (Adafruit_MLX90393 ``basicdemo``, its
-  unified-sensor event),
+* labelled: ``X: 12.3 \\tY: -4.5 \\tZ: 321.0 uTesla`` (Adafruit_MLX90393's ``basicdemo``),
   ``X:12.3,Y:-4.5,Z:321.0`` (Arduino serial plotter), ``Bx=12.3 By=-4.5 Bz=321.0 uT``,
-  ``magX: ... magY: ... magZ: ...``: labels X/Y/Z, optionally prefixed B or mag, then ``:`` or ``=``;
+  ``magX[-0.45] magY[1.50] magZ[3072.19] temperature(C)[24.50]`` (SparkFun's example):
+  labels X/Y/Z, optionally prefixed B or mag, then ``:``, ``=`` or ``[``; a temperature label
+  (T, temp, temperature, optionally ``(C)``) gives the chip's temperature in degC;
 * one axis per line, X then Y then Z: ``X: 12.3456 uT`` / ``Y: -4.5000 uT`` / ``Z: 321.0000 uT``
   (the same sketch's ``readData`` print; :class:`SampleParser` joins the three lines);
-* three bare numbers: ``12.3,-4.5,321.0`` or ``12.3 -4.5 321.0`` (tabs, spaces, commas or
-  semicolons), x y z in that order;
+* bare numbers separated by tabs, spaces, commas or semicolons (``-0.45 1.50 3072.19 24.50``,
+  ReSkin's and AnySkin's tab-separated chips): which number is which is the column map's
+  (:mod:`~mst_cli.io.line_columns`: ``--columns``, a header line ``X,Y,Z,T`` said before, or
+  x y z [t] per chip by the count);
 * units: ``uT``, ``uTesla``, ``µT``, ``microtesla`` or none (microtesla); ``mT`` (x 1000),
   ``G``/``gauss`` (x 100), ``mG`` (x 0.1). A unit after a number applies to it; a single unit at
-  the end of the line applies to all three;
+  the end of the line applies to all;
 * raw codes (``mst read --raw``): the same layouts with integers, no unit.
+
+A line that has the form of a sample but numbers no chip gives (``1e999``, ``nan``, ``ovf``, a
+fraction where a raw code belongs, a temperature outside the chip's -40..125 degC) is *bad*:
+skipped and counted apart, never the end of the stream. Lines end in LF, CRLF or a bare CR.
 
 The port: on POSIX it is opened with ``os.open`` and set raw with ``termios`` at the given baud
 rate (a pseudo-terminal works the same way); no dependency. Elsewhere pyserial is used when it
@@ -23,12 +30,20 @@ is installed. A regular file or FIFO is read as it is (for replaying a captured 
 
 from __future__ import annotations
 
+import contextlib
+import errno
+import math
 import os
 import re
 import select
+import stat
 import time
+from collections.abc import Iterator
+from dataclasses import dataclass
 
-NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
+from mst_cli.io.line_columns import ColumnMap, default_map, header_map
+
+NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?|[-+]?(?:nan|inf(?:inity)?|ovf)"
 UNIT = r"(?:uT(?:esla)?|µT(?:esla)?|μT(?:esla)?|microtesla|mT|mG|G|gauss)"
 UNIT_SCALE_uT = {
     "ut": 1.0,
@@ -43,88 +58,172 @@ UNIT_SCALE_uT = {
     "g": 100.0,
     "gauss": 100.0,
 }
-LABELLED = re.compile(rf"(?<![A-Za-z])(?:B|mag)?\s*([XYZ])\s*[:=]\s*({NUMBER})\s*({UNIT})?(?![A-Za-z])", re.IGNORECASE)
-BARE = re.compile(rf"^\s*({NUMBER})\s*[,;\s]\s*({NUMBER})\s*[,;\s]\s*({NUMBER})\s*({UNIT})?\s*$", re.IGNORECASE)
+T_C_RANGE = (-40.0, 125.0)  # the MLX90393's operating range: a temperature outside is a bad line
+LABELLED = re.compile(
+    rf"(?<![A-Za-z])(?:B|mag)?\s*([XYZ])\s*(?:[:=]|\[)\s*({NUMBER})\s*\]?\s*({UNIT})?(?![A-Za-z])", re.IGNORECASE
+)
+TEMPERATURE = re.compile(
+    rf"(?<![A-Za-z])(?:temperature|temp|T)\s*(?:\(\s*[°]?C\s*\))?\s*(?:[:=]|\[)\s*({NUMBER})", re.IGNORECASE
+)
+BARE = re.compile(rf"^\s*(?:{NUMBER})(?:\s*[,;\s]\s*(?:{NUMBER}))*\s*[,;]?\s*({UNIT})?\s*$", re.IGNORECASE)
+BARE_NUMBER = re.compile(NUMBER, re.IGNORECASE)
 TRAILING_UNIT = re.compile(rf"({UNIT})\s*$", re.IGNORECASE)
+HEADER_SPLIT = re.compile(r"\s*[,;\t]\s*|\s+")
+LINE_END = re.compile(rb"\r\n|\r|\n")
+READ_BYTES = 1 << 16
 
 
-def parse_line(line: str, raw: bool = False) -> tuple[float, float, float] | None:
-    """(x, y, z) in microtesla (or raw codes with ``raw``) from one line, or None."""
+@dataclass(frozen=True)
+class LineSample:
+    """One sample of a line: ``values`` x, y, z of every chip (3 k; microtesla, or raw codes),
+    ``cells`` the same as written (as forces.csv echoes them), the chip's temperature (degC)
+    and its cell, None when the line has none."""
+
+    values: tuple[float, ...]
+    cells: tuple[str, ...]
+    T_C: float | None = None
+    T_cell: str | None = None
+
+
+class BadLine(ValueError):
+    """A line in a sample's form whose numbers no chip gives: the reason."""
+
+
+def parse_line(line: str, raw: bool = False, columns: ColumnMap | None = None, chips: int = 1) -> LineSample | None:
+    """The sample of one line (:class:`LineSample`), None when it is none; BadLine when it is
+    one whose numbers no chip gives."""
     line = line.strip()
     if not line:
         return None
     found: dict[str, tuple[str, str]] = {}
     for label, number, unit in LABELLED.findall(line):
         found.setdefault(label.lower(), (number, unit))
-    if set(found) == {"x", "y", "z"}:
+    if set(found) == {"x", "y", "z"} and chips == 1:
         trailing = TRAILING_UNIT.search(line)
         default = trailing.group(1) if trailing else ""
-        values = []
-        for axis in "xyz":
-            number, unit = found[axis]
-            values.append(_value(number, unit or default, raw))
-        return None if None in values else tuple(values)
+        values = [_value(found[a][0], found[a][1] or default, raw) for a in "xyz"]
+        t = TEMPERATURE.search(line)
+        return _sample(values, [found[a][0] for a in "xyz"], [found[a][1] or default for a in "xyz"], t and t.group(1))
     m = BARE.match(line)
-    if m:
-        values = [_value(n, m.group(4) or "", raw) for n in m.groups()[:3]]
-        return None if None in values else tuple(values)
-    return None
+    if m is None:
+        return None
+    numbers = BARE_NUMBER.findall(line[: m.start(1)] if m.group(1) else line)
+    where = (columns or default_map(len(numbers), chips) or ColumnMap(group=("x", "y", "z"))).place(len(numbers), chips)
+    if where is None:
+        return None
+    xyz, t_at = where
+    unit = m.group(1) or ""
+    values = [_value(numbers[i], unit, raw) for i in xyz]
+    return _sample(values, [numbers[i] for i in xyz], [unit] * len(xyz), None if t_at is None else numbers[t_at])
+
+
+def _sample(values: list[float], cells: list[str], units: list[str], t_cell: str | None) -> LineSample:
+    """The sample of parsed values, their cells as written (converted where a unit scaled them)
+    and the temperature's cell; BadLine for a temperature no chip reads."""
+    shown = [c if UNIT_SCALE_uT.get(u.lower(), 1.0) == 1.0 else f"{v:.9g}" for c, u, v in zip(cells, units, values)]
+    if t_cell is None:
+        return LineSample(tuple(values), tuple(shown))
+    T = float(t_cell)
+    lo, hi = T_C_RANGE
+    if not lo <= T <= hi:  # NaN fails too
+        raise BadLine(f"temperature {t_cell}: the chip reads {lo:g}..{hi:g} degC")
+    return LineSample(tuple(values), tuple(shown), T, t_cell)
+
+
+def _value(number: str, unit: str, raw: bool) -> float:
+    v = float(number)
+    if not math.isfinite(v):
+        raise BadLine(f"{number} is not a finite number")
+    if raw:
+        if unit or v != int(v):
+            raise BadLine(f"{number}{unit}: a raw code is an integer without a unit")
+        return v
+    v *= UNIT_SCALE_uT.get(unit.lower(), 1.0) if unit else 1.0
+    if not math.isfinite(v):
+        raise BadLine(f"{number} {unit} is not a finite field")
+    return v
 
 
 class SampleParser:
-    """Lines in, samples out: whole-sample lines as :func:`parse_line`, and samples printed one
-    axis per line (X, then Y, then Z) joined. ``skipped`` counts lines that are neither."""
+    """Lines in, samples out: whole-sample lines as :func:`parse_line` (a header line ``X,Y,Z,T``
+    sets the column map when ``columns`` is None), and samples printed one axis per line (X, then
+    Y, then Z) joined. ``skipped`` counts lines that are no sample (``first_skipped`` quotes
+    one), ``bad`` the lines in a sample's form with numbers no chip gives (``first_bad``)."""
 
-    def __init__(self, raw: bool = False):
-        self.raw = raw
-        self.skipped = 0
-        self._axes: dict[str, float] = {}
+    def __init__(self, raw: bool = False, columns: ColumnMap | None = None, chips: int = 1):
+        self.raw, self.columns, self.chips = raw, columns, chips
+        self.fixed_columns = columns is not None
+        self.skipped = self.bad = 0
+        self.first_skipped: str | None = None
+        self.first_bad: tuple[str, str] | None = None
+        self._axes: dict[str, tuple[float, str]] = {}
 
-    def feed(self, line: str) -> tuple[float, float, float] | None:
-        sample = parse_line(line, self.raw)
-        if sample is not None:
-            self._axes = {}
-            return sample
-        found = LABELLED.findall(line.strip())
-        axes = {label.lower() for label, _, _ in found}
-        if len(found) == 1 and len(axes) == 1:
-            label, number, unit = found[0]
-            axis = label.lower()
-            value = _value(number, unit, self.raw)
-            expected = "xyz"[len(self._axes)]
-            if value is None or axis != expected:
+    def feed(self, line: str) -> LineSample | None:
+        if not line.strip():
+            return None  # a blank line (a CRLF split across reads, an empty println): nothing to count
+        try:
+            sample = parse_line(line, self.raw, self.columns, self.chips)
+            if sample is not None:
                 self._axes = {}
-                if axis != "x" or value is None:
-                    self.skipped += 1
-                    return None
-            self._axes[axis] = value
-            if len(self._axes) == 3:
-                sample, self._axes = (self._axes["x"], self._axes["y"], self._axes["z"]), {}
                 return sample
+            if self._header(line):
+                return None
+            return self._one_axis(line) if self.chips == 1 else self._skip(line)
+        except BadLine as exc:
+            self._axes = {}
+            self.bad += 1
+            self.first_bad = self.first_bad or (line.strip(), str(exc))
             return None
+
+    def _header(self, line: str) -> bool:
+        """Whether ``line`` is a header line (names only); its map is kept unless --columns gave one."""
+        names = header_map(HEADER_SPLIT.split(line.strip()))
+        if names is None:
+            return False
+        if not self.fixed_columns:
+            self.columns = names
+        return True
+
+    def _one_axis(self, line: str) -> LineSample | None:
+        found = LABELLED.findall(line.strip())
+        if len(found) != 1:
+            return self._skip(line)
+        label, number, unit = found[0]
+        axis = label.lower()
+        value = _value(number, unit, self.raw)
+        if axis != "xyz"[len(self._axes)]:
+            self._axes = {}
+            if axis != "x":
+                return self._skip(line)
+        self._axes[axis] = (value, number if UNIT_SCALE_uT.get(unit.lower(), 1.0) == 1.0 else f"{value:.9g}")
+        if len(self._axes) < 3:
+            return None
+        got, self._axes = self._axes, {}
+        return LineSample(tuple(got[a][0] for a in "xyz"), tuple(got[a][1] for a in "xyz"))
+
+    def _skip(self, line: str) -> None:
         self._axes = {}
         self.skipped += 1
+        self.first_skipped = self.first_skipped or line.strip()
         return None
 
 
-def _value(number: str, unit: str, raw: bool):
-    v = float(number)
-    if raw:
-        return v if not unit and v == int(v) else None
-    return v * (UNIT_SCALE_uT.get(unit.lower(), 1.0) if unit else 1.0)
-
-
 class LineSource:
-    """Lines from a serial port (or a file / FIFO). Iterate; ``close()`` when done.
+    """Lines from a serial port (or a file / FIFO), in batches: :meth:`batches` yields every
+    complete line waiting at once. ``close()`` when done.
 
-    Iteration ends when the port closes (EOF or EIO, as a pseudo-terminal reports a closed
-    master) or when no byte arrives for ``timeout_s`` (None: wait for ever).
+    Reading ends when the port closes (EOF or EIO, as a pseudo-terminal reports a closed
+    master) or when no byte arrives for ``timeout_s`` (None: wait for ever). ``request``: bytes
+    written when the port opens, after every line received and after a second of silence (a
+    sketch that prints only when asked).
     """
 
-    def __init__(self, port: str, baud: int = 115200, timeout_s: float | None = None):
-        self.port, self.baud, self.timeout_s = port, baud, timeout_s
+    def __init__(self, port: str, baud: int = 115200, timeout_s: float | None = None, request: bytes | None = None):
+        self.port, self.baud, self.timeout_s, self.request = port, baud, timeout_s, request
         self._serial = None
         self._fd = None
+        self.is_tty = True
+        self.cut_off: str | None = None  # a last line without its end, from a port that closed mid-line
         try:
             import termios  # noqa: F401  # deferred: POSIX only (the test of the platform)
 
@@ -132,9 +231,13 @@ class LineSource:
         except ImportError:
             posix = False
         if posix:
-            self._fd = os.open(port, os.O_RDONLY | os.O_NOCTTY | os.O_NONBLOCK)
+            mode = os.O_RDWR if request else os.O_RDONLY
+            self._fd = os.open(port, mode | os.O_NOCTTY | os.O_NONBLOCK)
             try:
-                if os.isatty(self._fd):
+                if stat.S_ISDIR(os.fstat(self._fd).st_mode):
+                    raise IsADirectoryError(errno.EISDIR, os.strerror(errno.EISDIR), port)
+                self.is_tty = os.isatty(self._fd)
+                if self.is_tty:
                     _set_raw(self._fd, baud)
             except BaseException:
                 os.close(self._fd)
@@ -148,45 +251,72 @@ class LineSource:
                 ) from None
             self._serial = serial.Serial(port, baud, timeout=0.2)
 
-    def _read(self, wait_s: float) -> bytes | None:
-        """Up to 4096 bytes; b"" if nothing arrived within wait_s; None at end of stream."""
+    def _write(self, times: int = 1) -> None:
+        if not self.request or times <= 0:
+            return
         if self._serial is not None:  # pragma: no cover - Windows
-            data = self._serial.read(4096)
-            return data
+            self._serial.write(self.request * times)
+            return
+        assert self._fd is not None
+        with contextlib.suppress(BlockingIOError):  # the port's buffer is full: requests are waiting
+            os.write(self._fd, self.request * times)
+
+    def _read(self, wait_s: float) -> bytes | None:
+        """Every byte waiting (after up to wait_s for the first); b"" if none came; None at end."""
+        if self._serial is not None:  # pragma: no cover - Windows
+            return self._serial.read(max(1, self._serial.in_waiting))
         fd = self._fd
         assert fd is not None  # open (set in __init__ unless pyserial reads the port)
         ready, _, _ = select.select([fd], [], [], wait_s)
         if not ready:
             return b""
-        try:
-            data = os.read(fd, 4096)
-        except BlockingIOError:
-            return b""
-        except OSError as exc:
-            if exc.errno == 5:  # EIO: the other end of a (pseudo-)terminal closed
-                return None
-            raise
-        return data if data else None
+        chunks = []
+        while True:
+            try:
+                data = os.read(fd, READ_BYTES)
+            except BlockingIOError:
+                break
+            except OSError as exc:
+                if exc.errno != errno.EIO:  # EIO: the other end of a (pseudo-)terminal closed
+                    raise OSError(exc.errno, exc.strerror, self.port) from None
+                data = b""
+            if not data:
+                return b"".join(chunks) if chunks else None
+            chunks.append(data)
+            if len(data) < READ_BYTES:
+                break
+        return b"".join(chunks)
 
-    def __iter__(self):
+    def batches(self) -> Iterator[list[str]]:
+        """Lists of the complete lines that arrived together (LF, CRLF or a bare CR ends one)."""
         buf = b""
-        last = time.monotonic()
+        last = asked = time.monotonic()
+        self._write()
         while True:
             data = self._read(0.2)
             if data is None:
                 break
             if data:
                 last = time.monotonic()
-                buf += data
-                *complete, buf = buf.split(b"\n")
-                for raw_line in complete:
-                    yield raw_line.decode("utf-8", errors="replace").rstrip("\r")
+                *complete, buf = LINE_END.split(buf + data)
+                if complete:
+                    self._write(len(complete))
+                    yield [line.decode("utf-8", errors="replace") for line in complete]
             elif self.timeout_s is not None and time.monotonic() - last > self.timeout_s:
                 break
-            if len(buf) > 1 << 16:  # no newline in 64 KB: not a line protocol
+            elif self.request and time.monotonic() - max(last, asked) > 1.0:
+                asked = time.monotonic()
+                self._write()  # a request lost (or the sketch was not listening yet)
+            if len(buf) > READ_BYTES:  # no line end in 64 KB: not a line protocol
                 buf = b""
-        if buf.strip():
-            yield buf.decode("utf-8", errors="replace").rstrip("\r")
+        if buf.strip() and self.is_tty:  # a board stopped mid-line: its numbers are cut off
+            self.cut_off = buf.decode("utf-8", errors="replace")
+        elif buf.strip():  # a captured file's last line without its line end
+            yield [buf.decode("utf-8", errors="replace")]
+
+    def __iter__(self) -> Iterator[str]:
+        for batch in self.batches():
+            yield from batch
 
     def close(self) -> None:
         if self._fd is not None:
