@@ -51,7 +51,8 @@ class ForceReadings:
     force_centred_N: np.ndarray | None = None  # ... and this the centred model's
     edges_N: np.ndarray = field(default_factory=lambda: np.zeros(1))  # the model's regime edges (errors per regime)
     branches: BranchForces | None = None  # the branch of each reading and its force's uncertainty
-    tare_shift_uT: float | None = None  # --tare: |B| shift that re-zeroed the unloaded field
+    tare_shift_uT: float | None = None  # --tare: |B| shift that re-zeroed the unloaded field (--track-zero: mean)
+    zero_tracked: bool = False  # --track-zero: re-zeroed at every rest
 
     def csv(self) -> str:
         """forces.csv: the input columns and the force, regime, flag and resolution of each row
@@ -88,7 +89,8 @@ class ForceReadings:
         if self.offset is not None:
             lines.append(self.offset.summary())
         if self.tare_shift_uT is not None:
-            lines.append(f"tare: no load re-zeroed by {self.tare_shift_uT:+.3g} uT of |B|")
+            what, how = ("zero", "at every rest, by a mean of") if self.zero_tracked else ("tare", "by")
+            lines.append(f"{what}: no load re-zeroed {how} {self.tare_shift_uT:+.3g} uT of |B|")
         if self.branches is not None and np.any(self.branches.branch == "unloading"):
             n = {k: int(np.sum(self.branches.branch == k)) for k in ("loading", "unloading", "hold")}
             lines.append(
@@ -237,6 +239,7 @@ class ForceReader:
         out = ForceReadings(self.document.name, rd, bf.force_N, regime, flag, res, edges_N=imap.edges_N)
         zeroed = tare or track_zero or tare_shift_uT is not None
         out.branches, out.tare_shift_uT = bf, (float(np.mean(shift)) * 1e6 if zeroed else None)
+        out.zero_tracked = track_zero
         if est is not None:
             out.offset, out.force_centred_N = est, F_ref * m
         return out

@@ -61,6 +61,7 @@ class ZeroLaw:
     span_T: float
     rests: int
     rows: int
+    noise_T: float | None = None  # the rest rows' |B| scatter about the law: the chip's noise as logged
 
     def offset_at_T(self, since_s, first) -> np.ndarray:
         """o(dt) after a rest began (0 where ``since_s`` is NaN, and once recovered)."""
@@ -97,6 +98,7 @@ class ZeroLaw:
             "span_uT": 1e6 * self.span_T,
             "rests": self.rests,
             "rest_rows": self.rows,
+            "rest_noise_uT": uT(self.noise_T),
         }
 
     def line(self) -> str:
@@ -110,7 +112,7 @@ class ZeroLaw:
             f"unloading off by {pm(self.offset_T, self.offset_sigma)} (first press "
             f"{pm(self.offset_first_T, self.offset_first_sigma)}), recovering "
             f"{pm(self.recovery_T_per_decade, self.recovery_sigma, 1e6, 'uT')} a decade; removed before the fit "
-            f"({self.rests} rests)"
+            f"({self.rests} rests; |B| noise at rest {1e6 * (self.noise_T or math.nan):.2g} uT)"
         )
 
 
@@ -186,6 +188,7 @@ def fit_zero(time_s, B_abs_T, force_N, band_N: float) -> ZeroLaw | None:
     return ZeroLaw(
         got["B0"][0], t0, drift, drift_sigma, *got.get("offset_first", none), *got.get("offset", none),
         *got.get("recovery", none), span_T=abs(span), rests=len(runs), rows=int(rest_fit.sum()),
+        noise_T=float(np.sqrt(np.sum(r**2) / max(len(y) - A.shape[1], 1))),
     )  # fmt: skip
 
 
