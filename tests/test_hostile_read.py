@@ -299,6 +299,12 @@ def unloading(**terms):
     return lambda r: r["hysteresis"].__setitem__("unloading_model", model)
 
 
+def zero(**terms):
+    law = {"rested_zero_uT": 3000.0, "drift_uT_per_min": 1.0, "offset_after_unloading_uT": -20.0}
+    law.update({"recovery_uT_per_decade": 20.0, "span_uT": 500.0, "rests": 3, **terms})
+    return lambda r: r.__setitem__("zero", law)
+
+
 @pytest.mark.parametrize(
     "change, key",
     [
@@ -311,6 +317,11 @@ def unloading(**terms):
         (unloading(a=0.9, b=3.0), "hysteresis.unloading_model.coefficients"),
         (unloading(rows="ten"), "hysteresis.unloading_model.rows"),
         (unloading(rows=1e20), "hysteresis.unloading_model.rows"),
+        (unloading(coefficients=[0.0, "1"]), "hysteresis.unloading_model.coefficients"),
+        (unloading(coefficients=[0.0] * 100), "hysteresis.unloading_model.coefficients"),
+        (zero(span_uT="text"), "zero.span_uT"),
+        (zero(drift_uT_per_min=1e300), "zero.drift_uT_per_min"),
+        (zero(rests=2.5), "zero.rests"),
     ],
 )
 def test_fitted_values_out_of_their_physical_bounds_are_refused_naming_the_key(tmp_path, files, change, key):
@@ -320,7 +331,8 @@ def test_fitted_values_out_of_their_physical_bounds_are_refused_naming_the_key(t
     B = files["B_uT"][order]
     readings = tmp_path / "r.csv"
     readings.write_text(csv_text("Bx_uT,By_uT,Bz_uT,T_C,time_s", *B.T, np.full(2 * n, 125.0), np.arange(2.0 * n)))
-    refused(run(["read", model, readings, "--out", tmp_path / "o"]), f"calibration.json {key} =")
+    track = ["--track-zero"] if key.startswith("zero.") else []  # the zero's law is read to track the zero
+    refused(run(["read", model, readings, "--out", tmp_path / "o", *track]), f"calibration.json {key} =")
     assert not (tmp_path / "o").exists()
 
 

@@ -23,6 +23,8 @@ The table :data:`BOUNDS` holds one :class:`Bound` per key (a new fitted key is o
   without the hold's term (:func:`unloading_loop`); each coefficient within +-MAX_LOOP_TERM;
   ``residual_rms_N`` is a spread (finite, >= 0, at most MAX_FORCE_N), ``rows`` a count
   (0 to the load test's MAX_ROWS);
+* ``zero`` (:func:`~mst_cli.calibrate.zero_drift.zero_law_of`): fields within what the chip
+  reads (MAX_FIELD_UT), a drift within MAX_DRIFT_UT_PER_MIN, ``rests`` a count;
 * ``tilt.lever_factor``: inside the bounds the fit searches (LEVER_FACTOR_BOUNDS).
 
 Pure: no file or terminal I/O.
@@ -45,6 +47,9 @@ CALIBRATION_JSON = "calibration.json"
 MIN_MODULUS_SCALE = 0.1  # the least m(T) over the chip's range (module docstring)
 LOOP_MARGIN = 0.05  # of F_turn: a fitted loop's ends within the rig's noise (measured loops are <= 3 % FS)
 MAX_LOOP_TERM = 100.0  # a polynomial term of the loop; |h| <= F_turn bounds their sum (unloading_loop)
+# |B| at the MLX90393's widest setting, 50 mT on each axis (datasheet: GAIN_SEL 0, RES 3): sqrt(3) x 50 mT
+MAX_FIELD_UT = math.sqrt(3.0) * 50e3
+MAX_DRIFT_UT_PER_MIN = 600.0  # 40 x the worst drift measured at rest on a real rig (15 uT/min, issue 47)
 MAX_FORCE_N = 1e4  # a force spread no fingertip sensor reads (a kilonewton is a press, not a touch)
 _BETA_LO = -(1.0 - MIN_MODULUS_SCALE) / (T_C_RANGE[1] - REFERENCE_TEMPERATURE_C)
 _BETA_HI = (1.0 - MIN_MODULUS_SCALE) / (REFERENCE_TEMPERATURE_C - T_C_RANGE[0])
@@ -91,6 +96,13 @@ BOUNDS: dict[str, Bound] = {
         Bound("hysteresis.unloading_model.after_hold", -MAX_LOOP_TERM, MAX_LOOP_TERM, "", "a term of the loop"),
         Bound("hysteresis.unloading_model.residual_rms_N", 0.0, MAX_FORCE_N, "N", "a spread of forces"),
         Bound("hysteresis.unloading_model.rows", 0, MAX_ROWS, "", "a count of load-test rows", integer=True),
+        Bound("zero.rested_zero_uT", 0.0, MAX_FIELD_UT, "uT", "a |B| the MLX90393 can read"),
+        Bound("zero.drift_uT_per_min", -MAX_DRIFT_UT_PER_MIN, MAX_DRIFT_UT_PER_MIN, "uT/min", "a slow drift"),
+        Bound("zero.offset_after_unloading_uT", -MAX_FIELD_UT, MAX_FIELD_UT, "uT", "a |B| the MLX90393 can read"),
+        Bound("zero.offset_after_first_press_uT", -MAX_FIELD_UT, MAX_FIELD_UT, "uT", "a |B| the MLX90393 can read"),
+        Bound("zero.recovery_uT_per_decade", -MAX_FIELD_UT, MAX_FIELD_UT, "uT", "a |B| the MLX90393 can read"),
+        Bound("zero.span_uT", 0.0, MAX_FIELD_UT, "uT", "a |B| the MLX90393 can read"),
+        Bound("zero.rests", 0, MAX_ROWS, "", "a count of rests", integer=True),
         Bound("tilt.lever_factor", *LEVER_FACTOR_BOUNDS, "", "the range the tilt fit searches"),
     )
 }

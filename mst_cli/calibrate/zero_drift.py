@@ -35,6 +35,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from mst_cli.calibrate.loadtest import Readings
+from mst_cli.calibrate.record_bounds import checked
 
 MIN_REST_S = 0.5  # a rest lasts at least this long
 SETTLE_S = 0.5  # rows this soon after the force reached 0 are left out of the zero's fit
@@ -203,21 +204,21 @@ def remove_zero(lt: Readings, law: ZeroLaw, time_s: np.ndarray, band_N: float) -
 
 
 def zero_law_of(record: object) -> ZeroLaw | None:
-    """The law of calibration.json's ``zero`` (None when absent or malformed: the reader then
-    re-zeroes at each rest without the recovery and the drift)."""
+    """The law of calibration.json's ``zero`` (None when absent or a key is missing: the reader
+    then re-zeroes at each rest without the recovery and the drift). InputError naming the key
+    when a value is not a number inside its physical bound (:mod:`~mst_cli.calibrate.record_bounds`)."""
     if not isinstance(record, dict):
         return None
     keys = ("rested_zero_uT", "drift_uT_per_min", "offset_after_unloading_uT", "recovery_uT_per_decade")
-    values = [record.get(k) for k in keys]
-    numbers = [float(v) for v in values if isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)]
-    if len(numbers) < len(keys):
+    values = [checked(record, "zero", k) for k in keys]
+    if any(v is None for v in values):
         return None
-    first = record.get("offset_after_first_press_uT")
-    first_T = 1e-6 * first if isinstance(first, (int, float)) and math.isfinite(first) else None
-    B0, drift, offset, recovery = numbers
+    first = checked(record, "zero", "offset_after_first_press_uT")
+    B0, drift, offset, recovery = (float(v) for v in values)  # type: ignore[arg-type]  # None ruled out above
     return ZeroLaw(
-        1e-6 * B0, 0.0, drift / 60e6, 0.0, first_T, None, 1e-6 * offset, None, 1e-6 * recovery, None,
-        1e-6 * float(record.get("span_uT") or 0.0), int(record.get("rests") or 0), 0,
+        1e-6 * B0, 0.0, drift / 60e6, 0.0, None if first is None else 1e-6 * first, None, 1e-6 * offset, None,
+        1e-6 * recovery, None, 1e-6 * (checked(record, "zero", "span_uT") or 0.0),
+        int(checked(record, "zero", "rests") or 0), 0,
     )  # fmt: skip
 
 
