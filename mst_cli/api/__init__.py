@@ -26,6 +26,7 @@ from mst_cli.io.files import is_machine_fault as is_machine_fault
 from mst_cli.io.files import os_error_text as os_error_text
 from mst_cli.io.outputs import Interrupted as Interrupted
 from mst_cli.model.file_keys import SEED_RANGE as SEED_RANGE
+from mst_cli.model.load_path import FINGERTIP_PATCH_MM as FINGERTIP_PATCH_MM
 
 __all__ = [
     "InputError",
@@ -52,7 +53,7 @@ __all__ = [
 ]
 # also here for the command line, which imports nothing else of the package: Interrupted (a
 # signal ended a run), SEED_RANGE (--seed's bounds), ESTIMATES (--estimate's choices),
-# is_machine_fault and os_error_text
+# FINGERTIP_PATCH_MM (--press-width-mm's default), is_machine_fault and os_error_text
 
 
 def __getattr__(name: str):

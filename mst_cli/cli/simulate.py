@@ -11,7 +11,6 @@ import click
 from mst_cli import api
 from mst_cli.cli.common import default_out_dir, handles_input_errors, no_plot_option, out_dir_option
 from mst_cli.errors import InputError
-from mst_cli.model.load_path import FINGERTIP_PATCH_MM
 
 
 @click.command()
@@ -55,7 +54,7 @@ from mst_cli.model.load_path import FINGERTIP_PATCH_MM
     "--press-width-mm",
     "press_width_mm",
     type=float,
-    default=FINGERTIP_PATCH_MM,
+    default=api.FINGERTIP_PATCH_MM,
     help="Width of the press's contact patch, a centred strip across the depth, mm (0 < W <= the face's "
     "width), a fingertip by default: sets how much the cap bends in report.json's load_path "
     "(docs/design.md 4.6).",
