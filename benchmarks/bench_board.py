@@ -41,10 +41,16 @@ from mst_cli.sensor.document import load_design_document
 ROOT = Path(__file__).resolve().parents[1]
 DESIGN = ROOT / "configs" / "mohammadi2021-forward.yaml"
 BOARD = Path(__file__).resolve().parent / "board"
-STRICT = "-Wall -Wextra -Wpedantic -Wshadow -Wconversion -Wdouble-promotion -Werror".split()
+STRICT = ["-Wall", "-Wextra", "-Wpedantic", "-Wshadow", "-Wconversion", "-Wdouble-promotion", "-Werror"]
 TARGETS = {  # cpu: (gcc flags, QEMU machine, flash kB, RAM kB, MHz)
-    "Cortex-M4F": ("-mcpu=cortex-m4 -mthumb -mfloat-abi=hard -mfpu=fpv4-sp-d16".split(), "mps2-an386", 4096, 4096, 64),
-    "Cortex-M0+": ("-mcpu=cortex-m0plus -mthumb".split(), "microbit", 256, 16, 48),
+    "Cortex-M4F": (
+        ["-mcpu=cortex-m4", "-mthumb", "-mfloat-abi=hard", "-mfpu=fpv4-sp-d16"],
+        "mps2-an386",
+        4096,
+        4096,
+        64,
+    ),
+    "Cortex-M0+": (["-mcpu=cortex-m0plus", "-mthumb"], "microbit", 256, 16, 48),
 }
 CAL_INSNS = 200_000  # count.c's calibration loop
 STRUCTS = {"shear": "mst_shear", "offset": "mst_offset"}
@@ -57,7 +63,9 @@ def readings(table, imap, rng, n: int) -> dict[str, np.ndarray]:
     top, first = g.force_N[-1], imap.edges_N[1]
 
     def draw(lo, hi):
-        p = np.column_stack([rng.uniform(lo, hi, n), rng.uniform(*g.u[[0, -1]], n) * 0.6, rng.uniform(*g.v[[0, -1]], n) * 0.6])
+        p = np.column_stack(
+            [rng.uniform(lo, hi, n), rng.uniform(*g.u[[0, -1]], n) * 0.6, rng.uniform(*g.v[[0, -1]], n) * 0.6]
+        )
         return at(p) + rng.normal(0.0, 2.0, (n, 3))
 
     beyond = at(np.column_stack([np.full(n, top), np.zeros(n), np.zeros(n)])) * rng.uniform(1.05, 1.3, (n, 1))
@@ -81,7 +89,9 @@ def build(folder: Path, header: str, kind: str, codes: np.ndarray, cpu: str) -> 
     )
     cc = ["arm-none-eabi-gcc", "-std=c99", "-O2", "-ffreestanding", *flags]
     subprocess.run([*cc, "-c", BOARD / "startup.c", "-o", folder / "s.o"], check=True)
-    subprocess.run([*cc, *STRICT, "-fstack-usage", "-I", folder, "-c", BOARD / "count.c", "-o", folder / "c.o"], check=True)
+    subprocess.run(
+        [*cc, *STRICT, "-fstack-usage", "-I", folder, "-c", BOARD / "count.c", "-o", folder / "c.o"], check=True
+    )
     elf = folder / "count.elf"
     link = ["-nostartfiles", "--specs=nano.specs", "--specs=nosys.specs", "-T", BOARD / "board.ld"]
     mem = [f"-Wl,--defsym=FLASH_K={flash}", f"-Wl,--defsym=RAM_K={ram}"]
@@ -95,9 +105,26 @@ def run(elf: Path, cpu: str) -> tuple[np.ndarray, np.ndarray]:
     """(flags, instructions) per reading, from QEMU."""
     machine = TARGETS[cpu][1]
     out = subprocess.run(
-        ["qemu-system-arm", "-M", machine, "-nographic", "-monitor", "none", "-serial", "none",
-         "-semihosting-config", "enable=on,target=native", "-icount", "shift=0", "-kernel", elf],
-        capture_output=True, text=True, timeout=3600, check=True,
+        [
+            "qemu-system-arm",
+            "-M",
+            machine,
+            "-nographic",
+            "-monitor",
+            "none",
+            "-serial",
+            "none",
+            "-semihosting-config",
+            "enable=on,target=native",
+            "-icount",
+            "shift=0",
+            "-kernel",
+            elf,
+        ],
+        capture_output=True,
+        text=True,
+        timeout=3600,
+        check=True,
     ).stderr.split()  # semihosting writes to QEMU's stderr
     per_tick = CAL_INSNS / float(out[1])
     vals = np.array(out[2:], dtype=float).reshape(-1, 2)
@@ -110,7 +137,10 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=45)
     args = ap.parse_args()
     if not all(shutil.which(t) for t in ("arm-none-eabi-gcc", "qemu-system-arm")):
-        sys.exit("needs arm-none-eabi-gcc and qemu-system-arm (apt: gcc-arm-none-eabi libnewlib-arm-none-eabi qemu-system-arm)")
+        sys.exit(
+            "needs arm-none-eabi-gcc and qemu-system-arm "
+            "(apt: gcc-arm-none-eabi libnewlib-arm-none-eabi qemu-system-arm)"
+        )
     rng = np.random.default_rng(args.seed)
     doc, _ = load_design_document(DESIGN)
     imap, resp = inverse_map(doc, "spring")

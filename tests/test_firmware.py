@@ -71,7 +71,19 @@ def test_the_sketch_and_both_headers_compile_for_the_board_with_every_warning(he
         "    return mst_shear_from_codes(x, y, z, &s) + mst_offset_from_codes(x, y, z, &o);\n}\n"
     )
     for source in (SKETCH, tmp_path / "both.c"):
-        cmd = [cc, "-std=c99", "-O2", *CPUS[cpu], *c_drivers.STRICT, "-I", tmp_path, "-c", source, "-o", tmp_path / "x.o"]
+        cmd = [
+            cc,
+            "-std=c99",
+            "-O2",
+            *CPUS[cpu],
+            *c_drivers.STRICT,
+            "-I",
+            tmp_path,
+            "-c",
+            source,
+            "-o",
+            tmp_path / "x.o",
+        ]
         subprocess.run(cmd, check=True)
         nm = subprocess.run([cc.replace("gcc", "nm"), tmp_path / "x.o"], capture_output=True, text=True).stdout
         assert "__aeabi_ldiv" not in nm and "__aeabi_uldivmod" not in nm and "__divdi3" not in nm  # no 64-bit division

@@ -158,7 +158,7 @@ def table_header(
         ridge=c_float(it.RIDGE),
         code_range=CODE_RANGE_LSB[setting.res],
         slab_sigma=_c_floats(f"{p}_slab_sigma_uT", np.hypot(1e6 * reader.sigma_T, table.slab_error_uT())),
-        **_boxes(table, p),
+        **_boxes(table, str(p)),
         force_nodes=_c_floats(f"{p}_force_N_nodes", table.grid.force_N),
         x_nodes=_c_floats(f"{p}_u_nodes", table.grid.u),
         y_nodes=_c_floats(f"{p}_v_nodes", table.grid.v),
