@@ -336,11 +336,7 @@ def read(
     reader, rd, _ = _reader(model, model_file, mechanics, gain_sel, res, False, readings, out, warn, estimate)
     offsets, built = _estimator(reader, estimate, mechanics, model_file or model, max_offset_sigma_mm, polish, warn)
     result = reader.read(rd, offsets, tare)
-    if out is not None:
-        with staged(Path(out)) as st:
-            st.write_text("forces.csv", result.csv())
-            if built is not None:
-                built.save(st.path(built.file_name))
+    _write_forces(out, result.csv(), built)
     return result
 
 
@@ -420,9 +416,8 @@ def read_serial(
         Stop when the port closes, after ``count`` samples, ``timeout_s`` of silence or Ctrl-C;
         the rest as :func:`read`'s. ``show`` gets each sample's line, ``status`` one at the start.
     columns, send : str, optional
-        Which number of a line is which (a preset -- xyz, xyzt, reskin, anyskin -- or roles such
-        as ``t,x,y,z``: :mod:`mst_cli.io.line_columns`); text sent when the port opens and after
-        each line (backslash escapes read), for a sketch that prints only when asked.
+        Which number of a line is which (:mod:`mst_cli.io.line_columns`); text sent at the start
+        and after each line, for a sketch that prints only when asked.
 
     Returns
     -------
@@ -445,12 +440,18 @@ def read_serial(
     reader, _, setting = _reader(model, model_file, mechanics, gain_sel, res, raw, None, out, warn)
     offsets, built = _estimator(reader, estimate, mechanics, model_file or model, max_offset_sigma_mm, None, warn)
     samples = read_stream(reader, port, opts, setting, show, offsets, status, warn)
+    _write_forces(out, samples.csv(), built)
+    return samples
+
+
+def _write_forces(out: str | Path | None, forces_csv: str, built) -> None:
+    """forces.csv (and a table ``built`` on the way, to keep) into ``out``, atomically; nothing
+    without ``out``."""
     if out is not None:
         with staged(Path(out)) as st:
-            st.write_text("forces.csv", samples.csv())
+            st.write_text("forces.csv", forces_csv)
             if built is not None:
                 built.save(st.path(built.file_name))
-    return samples
 
 
 def _live_options(port, baud, count, timeout_s, raw, tare, columns, send):
