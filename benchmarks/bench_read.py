@@ -7,7 +7,7 @@ On the bundled sensor (configs/mohammadi2021-forward.yaml, spring, 2 uT chip noi
 
 * the table's build time and size (the default grid and the C header's coarse one);
 * readings per second on one core: `api.read` of a CSV (parse, centred force, forces.csv) with
-  --estimate none and offset, and the table's estimate alone;
+  --estimate none and offset, and the table's estimate alone (live rates: bench_live.py);
 * the error against the truth and against the exact solve (the two-start Gauss-Newton of
   mst_cli/calibrate/offset_reading.py) on presses at random points within 80 % of the face, 3
   forces per regime (the tilt rung's own field, so the truth is the reader's model: the table's
@@ -86,11 +86,7 @@ def speed(doc, reader, B, n, rng):
     reader.table.estimate(rows, reader.sigma_T, reader.max_sigma_mm)
     dt = time.perf_counter() - t0
     print(f"| the table's estimate alone | {n} | {dt:.2f} | {n / dt:.0f} |")
-    t0 = time.perf_counter()
-    for b in rows[:500]:
-        reader.estimate_all(b[None], np.array([1.0]))
-    dt = time.perf_counter() - t0
-    print(f"| one reading at a time (--serial) | 500 | {dt:.2f} | {500 / dt:.0f} |\n")
+    print("(--serial reads in batches: benchmarks/bench_live.py gives its rates beside the file's)\n")
 
 
 def accuracy(doc, imap, reader, exact, P, B, rng):

@@ -13,6 +13,7 @@ from mst_cli.api._common import _check_out, _one_of, load_design
 from mst_cli.errors import InputError
 from mst_cli.io.files import is_machine_fault as is_machine_fault
 from mst_cli.io.files import os_error_text as os_error_text
+from mst_cli.io.line_columns import column_map
 from mst_cli.io.outputs import Interrupted as Interrupted
 from mst_cli.io.outputs import staged
 from mst_cli.model.file_keys import SEED_RANGE as SEED_RANGE
@@ -342,11 +343,7 @@ def read(
     reader, rd, _ = _reader(model, model_file, mechanics, gain_sel, res, False, readings, out, warn, estimate)
     offsets, built = _estimator(reader, estimate, mechanics, model_file or model, max_offset_sigma_mm, polish, warn)
     result = reader.read(rd, offsets, tare, track_zero)
-    if out is not None:
-        with staged(Path(out)) as st:
-            st.write_text("forces.csv", result.csv())
-            if built is not None:
-                built.save(st.path(built.file_name))
+    _write_forces(out, result.csv(), built)
     return result
 
 
@@ -420,24 +417,19 @@ def read_serial(
 
     Parameters
     ----------
-    model, port : str, Path or Document; str
-        The calibrated model (as :func:`read`'s); the serial port (one sample per line).
-    out : str or Path, optional
-        Folder for forces.csv of every sample.
-    baud, count, timeout_s, raw : int, int, float, bool
-        Stop when the port closes, after ``count`` samples, ``timeout_s`` of silence or Ctrl-C.
-    estimate, tare : {"none", "offset", "shear"}, int
-        As :func:`read`'s; ``show`` gets each sample's line, ``status`` one once the port is open.
+    model, port, out : str, Path or Document; str; str or Path, optional
+        The calibrated model (as :func:`read`'s); the serial port; forces.csv's folder.
+    baud, count, timeout_s, raw, estimate, tare : int, int, float, bool, str, int
+        Stop when the port closes, after ``count`` samples, ``timeout_s`` of silence or Ctrl-C;
+        the rest as :func:`read`'s. ``show`` gets each sample's line, ``status`` one at the start.
     columns, send : str, optional
-        Which number of a line is which (a preset -- xyz, xyzt, reskin, anyskin -- or roles such
-        as ``t,x,y,z``: :mod:`mst_cli.io.line_columns`); text sent when the port opens and after
-        each line (backslash escapes read), for a sketch that prints only when asked.
+        Which number of a line is which (:mod:`mst_cli.io.line_columns`); text sent at the start
+        and after each line, for a sketch that prints only when asked.
 
     Returns
     -------
     SerialSamples
-        ``.samples``, ``.forces`` (the recording's :class:`ForceReadings`), ``.skipped`` (no
-        sample) and ``.bad`` (numbers no chip gives) lines.
+        ``.samples``, ``.forces`` (:class:`ForceReadings`), ``.skipped`` and ``.bad`` lines.
 
     Raises
     ------
@@ -455,18 +447,23 @@ def read_serial(
     reader, _, setting = _reader(model, model_file, mechanics, gain_sel, res, raw, None, out, warn)
     offsets, built = _estimator(reader, estimate, mechanics, model_file or model, max_offset_sigma_mm, None, warn)
     samples = read_stream(reader, port, opts, setting, show, offsets, status, warn)
+    _write_forces(out, samples.csv(), built)
+    return samples
+
+
+def _write_forces(out: str | Path | None, forces_csv: str, built) -> None:
+    """forces.csv (and a table ``built`` on the way, to keep) into ``out``, atomically; nothing
+    without ``out``."""
     if out is not None:
         with staged(Path(out)) as st:
-            st.write_text("forces.csv", samples.csv())
+            st.write_text("forces.csv", forces_csv)
             if built is not None:
                 built.save(st.path(built.file_name))
-    return samples
 
 
 def _live_options(port, baud, count, timeout_s, raw, tare, columns, send):
     """The stream's options, checked: a port's name, a finite positive timeout."""
-    from mst_cli.io.line_columns import column_map  # deferred: as _reader's
-    from mst_cli.readout.live import LiveOptions
+    from mst_cli.readout.live import LiveOptions  # deferred: the calibrate layer, as _reader's
 
     if not isinstance(port, str) or not port.strip():
         raise InputError("--serial", port, "a serial port's path, such as /dev/ttyACM0 or COM3")

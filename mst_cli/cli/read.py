@@ -108,10 +108,9 @@ def read(
     ReSkin/AnySkin chips with --columns) are read in batches and shown live, through the same
     steps as a file; with --out forces.csv is the file's, with time_s first.
 
-    Flags: above_calibrated (the model's force above the load test's largest force),
-    below_range, above_range (past the last lock) and saturated (force left empty: never
-    extrapolated). --estimate offset adds where each reading was pressed, --estimate
-    shear the tangential force (Fx, Fy) of a centred press.
+    Flags: above_calibrated (above the load test's largest force), below_range, above_range
+    (past the last lock), saturated (force left empty: never extrapolated). --estimate offset
+    adds where each reading was pressed, --estimate shear the tangential force (Fx, Fy).
     """
     estimate = "offset" if estimate_offset else estimate
     _check_sources(readings, port, raw or columns is not None or send is not None, polish, track_zero)
@@ -119,16 +118,15 @@ def read(
     doc = api.load_design(model_file)
     out = out_dir if (out_dir is not None or port is not None) else default_out_dir(f"{doc.name}-read")
     options: dict[str, Any] = dict(model_file=model_file, mechanics=mechanics, gain_sel=gain_sel, res=res, warn=_warn)
-    options.update(estimate=estimate, max_offset_sigma_mm=max_offset_sigma_mm)
+    options.update(estimate=estimate, max_offset_sigma_mm=max_offset_sigma_mm, tare=tare)
     try:
         if readings is not None:
-            result = api.read(doc, readings, out=out, polish=polish, tare=tare, track_zero=track_zero, **options)
-            click.echo(result.summary())
-            click.echo(f"wrote {out}/forces.csv")
+            result = api.read(doc, readings, out=out, polish=polish, track_zero=track_zero, **options)
+            click.echo(f"{result.summary()}\nwrote {out}/forces.csv")
             return
         assert port is not None  # one of the two, checked above
         serial = dict(baud=int(baud), count=count, timeout_s=timeout_s, raw=raw, columns=columns, send=send)
-        stream = api.read_serial(doc, port, out=out, tare=tare, **serial, **options, **_TERMINAL)
+        stream = api.read_serial(doc, port, out=out, **serial, **options, **_TERMINAL)  # type: ignore[arg-type]
     except api.CalibrationFailed as exc:
         fail_fit(str(exc), "no inverse map")
     click.echo(stream.line() + "\n" + stream.forces.summary(), err=True)

@@ -201,7 +201,7 @@ class SampleParser:
         got, self._axes = self._axes, {}
         return LineSample(tuple(got[a][0] for a in "xyz"), tuple(got[a][1] for a in "xyz"))
 
-    def _skip(self, line: str) -> None:
+    def _skip(self, line: str) -> LineSample | None:
         self._axes = {}
         self.skipped += 1
         self.first_skipped = self.first_skipped or line.strip()
@@ -270,7 +270,7 @@ class LineSource:
         ready, _, _ = select.select([fd], [], [], wait_s)
         if not ready:
             return b""
-        chunks = []
+        chunks: list[bytes] = []
         while True:
             try:
                 data = os.read(fd, READ_BYTES)
