@@ -34,10 +34,7 @@ the same steps in float: a fixed number of Newton steps on a 3 x 3 system solved
 from __future__ import annotations
 
 import hashlib
-import io
 import math
-import zipfile
-import zlib
 from collections.abc import Sequence
 from dataclasses import dataclass, field, fields
 from pathlib import Path
@@ -45,6 +42,7 @@ from typing import Any, BinaryIO
 
 import numpy as np
 
+from mst_cli.calibrate.table_file import MAX_TABLE_BYTES, PARSE_ERRORS, TABLE_KEYS, checked_arrays, npz_arrays
 from mst_cli.errors import InputError
 from mst_cli.io.files import read_input
 from mst_cli.model.assembly import SensorGeometry
@@ -290,13 +288,14 @@ class InverseTable:
         except InputError as exc:  # "file not found", "is a FIFO (named pipe), not a table: give ..."
             return None, exc.allowed.removeprefix("is ").split(": give")[0]
         try:
-            arrays = _npz_arrays(data)
-        except _PARSE_ERRORS as exc:
+            arrays = npz_arrays(data, TABLE_KEYS)
+        except PARSE_ERRORS as exc:
             return None, f"not a table ({type(exc).__name__}: {' '.join(str(exc).split())[:80]})"
         try:
-            return _checked_table(cls, arrays), ""
+            force_N, u, v, kind, B, source = checked_arrays(arrays, TABLE_FORMAT, KINDS)
         except ValueError as exc:
             return None, str(exc)
+        return cls(TableGrid(force_N, u, v, kind), B, source), ""
 
     def estimate(self, B_T: np.ndarray, sigma_T: float, max_sigma_mm: float) -> TableEstimates:
         """Every reading (n, 3) in T, with the chip's noise ``sigma_T`` per axis, BLOCK readings
@@ -310,60 +309,6 @@ class InverseTable:
         if len(parts) == 1:
             return parts[0]
         return TableEstimates(*(np.concatenate([getattr(p, f.name) for p in parts]) for f in fields(TableEstimates)))
-
-
-_NPY_HEADERS = {(1, 0): np.lib.format.read_array_header_1_0, (2, 0): np.lib.format.read_array_header_2_0}
-_TABLE_KEYS = ("format", "kind", "source_hash", "force_N", "u", "v", "B_T")
-MAX_TABLE_BYTES = 64_000_000  # a default table is 0.3 to 0.6 MB; the finest grid a few MB
-# what a file that is not an npz of plain arrays raises inside numpy and zipfile
-_PARSE_ERRORS = (OSError, ValueError, KeyError, TypeError, EOFError, MemoryError, zipfile.BadZipFile, zlib.error)
-
-
-def _npz_arrays(data: bytes) -> dict[str, np.ndarray]:
-    """The arrays of an npz file's bytes, its members' unpacked size bounded before any is read."""
-    with zipfile.ZipFile(io.BytesIO(data)) as zf:
-        names = {info.filename: info.file_size for info in zf.infolist()}
-    if sum(names.values()) > MAX_TABLE_BYTES:
-        raise ValueError(f"its arrays unpack to {sum(names.values())} bytes, over {MAX_TABLE_BYTES}")
-    missing = [k for k in _TABLE_KEYS if f"{k}.npy" not in names]
-    if missing:
-        raise KeyError(f"no {', '.join(missing)}")
-    with zipfile.ZipFile(io.BytesIO(data)) as zf:
-        for key in _TABLE_KEYS:  # each header's claim against its member's size, before numpy allocates it
-            with zf.open(f"{key}.npy") as fh:
-                header = _NPY_HEADERS.get(np.lib.format.read_magic(fh))
-                if header is None:
-                    raise ValueError(f"its {key} is an .npy of a version numpy's savez does not write")
-                shape, _, dtype = header(fh)  # at most 10,000 bytes of header
-            if dtype.hasobject or math.prod(shape) * dtype.itemsize > names[f"{key}.npy"]:
-                raise ValueError(f"its {key} claims {shape} {dtype} in {names[f'{key}.npy']} bytes")
-    with np.load(io.BytesIO(data), allow_pickle=False) as z:
-        return {k: np.asarray(z[k]) for k in _TABLE_KEYS}
-
-
-def _checked_table(cls: type[InverseTable], z: dict[str, np.ndarray]) -> InverseTable:
-    """The table of checked arrays; ValueError saying which is not what a table holds."""
-    if z["format"].shape != () or z["format"].dtype.kind not in "iu" or int(z["format"]) != TABLE_FORMAT:
-        raise ValueError(f"of another format than {TABLE_FORMAT}")
-    for key in ("kind", "source_hash"):
-        if z[key].shape != () or z[key].dtype.kind != "U":
-            raise ValueError(f"its {key} is not one text")
-    kind = str(z["kind"])
-    if kind not in KINDS:
-        raise ValueError(f"of kind {kind[:20]!r}, not one of {', '.join(KINDS)}")
-    nodes = []
-    for key in ("force_N", "u", "v"):
-        a = z[key]
-        if a.ndim != 1 or a.dtype.kind != "f" or len(a) < 2 or not np.all(np.isfinite(a)) or np.any(np.diff(a) <= 0):
-            raise ValueError(f"its {key} nodes are not at least 2 ascending finite numbers")
-        nodes.append(a.astype(float))
-    grid = TableGrid(nodes[0], nodes[1], nodes[2], kind)
-    B = z["B_T"]
-    if B.dtype.kind != "f" or B.shape != (*grid.shape, 3):
-        raise ValueError(f"its field B_T is not numbers of shape {(*grid.shape, 3)}")
-    if not np.all(np.isfinite(B)) or float(np.max(np.abs(B))) >= 1.0:
-        raise ValueError("its field B_T holds values that are not finite or beyond 1 T")
-    return cls(grid, np.ascontiguousarray(B, dtype=float), str(z["source_hash"]))
 
 
 def source_hash(model_text: str, calibration_text: str | None, mechanics: str, grid: TableGrid) -> str:

@@ -91,3 +91,7 @@ READ_TARE = (
     "Take the first N readings as no load and re-zero the unloaded field on them (a reading within "
     "the noise of no load reads 0 N)."
 )
+
+READ_SERIAL = "Read a live stream from this serial port (one sample per line) instead of a file."
+READ_COUNT = "Stop --serial after this many samples [default: until the port closes or Ctrl-C]."
+READ_TIMEOUT = "Stop --serial after this many seconds without a byte (a positive, finite number)."

@@ -22,13 +22,7 @@ BAUD_RATES = (1200, 2400, 4800, 9600, 19200, 38400, 57600, 115200, 230400, 46080
 @click.command("read")
 @click.argument("model_file", type=click.Path(dir_okay=False, path_type=Path))
 @click.argument("readings", required=False, type=click.Path(dir_okay=False, path_type=Path))
-@click.option(
-    "--serial",
-    "port",
-    default=None,
-    metavar="PORT",
-    help="Read a live stream from this serial port (one sample per line) instead of a file.",
-)
+@click.option("--serial", "port", default=None, metavar="PORT", help=help_texts.READ_SERIAL)
 @click.option(
     "--baud",
     type=click.Choice([str(b) for b in BAUD_RATES]),
@@ -36,19 +30,8 @@ BAUD_RATES = (1200, 2400, 4800, 9600, 19200, 38400, 57600, 115200, 230400, 46080
     show_default=True,
     help="Baud rate of --serial.",
 )
-@click.option(
-    "--count",
-    type=click.IntRange(min=1),
-    default=None,
-    help="Stop --serial after this many samples [default: until the port closes or Ctrl-C].",
-)
-@click.option(
-    "--timeout",
-    "timeout_s",
-    type=float,
-    default=None,
-    help="Stop --serial after this many seconds without a byte (a positive, finite number).",
-)
+@click.option("--count", type=click.IntRange(min=1), default=None, help=help_texts.READ_COUNT)
+@click.option("--timeout", "timeout_s", type=float, default=None, help=help_texts.READ_TIMEOUT)
 @click.option("--raw", is_flag=True, help="--serial lines carry raw codes (needs --gain-sel/--res).")
 @click.option("--columns", default=None, metavar="MAP", help=help_texts.READ_COLUMNS)
 @click.option("--send", default=None, metavar="TEXT", help=help_texts.READ_SEND)
@@ -143,7 +126,9 @@ def _check_sources(readings: Path | None, port: str | None, raw: bool, polish: b
     if polish and port is not None:
         raise click.UsageError("--polish reads files, not --serial streams (about 0.1 s a reading)")
     if track_zero and port is not None:
-        raise click.UsageError("--track-zero reads files (it finds the rests over the whole record); live, use --tare N")
+        raise click.UsageError(
+            "--track-zero reads files (it finds the rests over the whole record); live, use --tare N"
+        )
 
 
 def _warn(note: str) -> None:
