@@ -133,7 +133,7 @@ def test_simulate_states_what_the_chips_tell_apart(tmp_path):
     )
     assert res.exit_code == 0, res.output
     b = json.loads((out / "report.json").read_text())["shear_bound"]
-    assert b["chips_mm"] == [[-7.0, 0.0], [7.0, 6.0]] and len(b["estimates"]) == 5
+    assert b["chips_mm"] == [[0.0, 0.0], [10.0, 6.0]] and len(b["estimates"]) == 5
     assert b["region_mm"] == [pytest.approx(9.0), pytest.approx(6.0)]  # 60 % of the 30 x 20 mm face
     lo, hi = (next(r for r in b["noise"] if r["noise_uT"] == n) for n in (0.5, 2.0))
     for name in b["estimates"]:  # the bound is linear in the noise
