@@ -55,13 +55,15 @@ TABLE_FILE = "inverse_table.npz"  # the offset table's file beside the model ...
 SHEAR_TABLE_FILE = "shear_table.npz"  # ... and the shear table's
 TABLE_FORMAT = 2  # bumped when the table's contents change meaning: an older file is rebuilt
 FIT_SIGMAS = 3.0  # a cell whose best point is further off the reading than this found no root
-NEWTON_STEPS = 8  # Newton steps inside a cell (trilinear: quadratic convergence from its centre)
-PRUNE_AFTER = 1  # ... from which on a solve pinned outside its cell is dropped
-OUTSIDE = 0.5  # a cell's Newton may leave it by this share of the cell before it is clipped ...
-INSIDE_TOL = 1e-3  # ... and a solve ends in its cell within this share of it
-RIDGE = 1e-9  # the Newton system's ridge, relative to its trace (a flat direction stays put)
-CHUNK = 256  # readings per census block (cells x CHUNK booleans at a time)
-BLOCK = 4096  # readings per estimate (their candidate cells' corners at a time)
+# the direct inverse (the C header takes the same numbers): from each start, Gauss-Newton steps on
+# the table's trilinear field; the starts are every force start (force_starts) times every seed
+STEPS = 12  # steps at most from each start (most converge in 3 to 5)
+STEP_CELLS = 2.0  # a step moves each coordinate by at most this many of its cells
+CONVERGED = 1e-4  # a start whose step moved less than this share of a cell has converged: it stops
+BRANCHES = 2  # force starts at most (branches of the centred |B| against the force)
+SEEDS = ((0.0, 0.0), (0.5, 0.5), (-0.5, -0.5), (0.5, -0.5), (-0.5, 0.5))  # (u, v) starts: shares of the half ranges
+RIDGE = 1e-9  # the Gauss-Newton system's ridge, relative to its trace (a flat direction stays put)
+BLOCK = 4096  # readings per estimate (their starts' corners at a time)
 
 # (forces, mm between offsets): the default grid, 1 mm over the face and the range in 32 steps
 # (docs/design.md section 4.2 says what it costs in accuracy against the exact solve: the
@@ -180,8 +182,6 @@ class InverseTable:
     B_T: np.ndarray
     source_hash: str
     _corners: np.ndarray | None = field(default=None, repr=False, compare=False)
-    _boxes: tuple[np.ndarray, np.ndarray] | None = field(default=None, repr=False, compare=False)
-    _centre: tuple[np.ndarray, np.ndarray] | None = field(default=None, repr=False, compare=False)
     _slab_error: np.ndarray | None = field(default=None, repr=False, compare=False)
 
     @property
@@ -206,25 +206,6 @@ class InverseTable:
                         C[:, :, :, a, b, c] = B[a : nF + a, b : nx + b, c : ny + c]
             self._corners = C.reshape(-1, 2, 2, 2, 3)
         return self._corners
-
-    def boxes_uT(self) -> tuple[np.ndarray, np.ndarray]:
-        """Each cell's field box over its eight corners: (lo, hi), each (n_cells, 3) in uT."""
-        if self._boxes is None:
-            C = self.corners_uT().reshape(-1, 8, 3)
-            self._boxes = C.min(axis=1), C.max(axis=1)
-        return self._boxes
-
-    def centre_steps(self) -> tuple[np.ndarray, np.ndarray]:
-        """Each cell's field at its centre (n_cells, 3) uT and the matrix (n_cells, 3, 3) of its
-        first Newton step from there, dt = M (b - v): the ridged (J^T J + ridge)^-1 J^T."""
-        if self._centre is None:
-            C = self.corners_uT()
-            v, J = _trilinear(C, np.full((len(C), 3), 0.5))
-            A = np.einsum("pki,pkj->pij", J, J)
-            A += (RIDGE * (A[:, 0, 0] + A[:, 1, 1] + A[:, 2, 2]) + 1e-30)[:, None, None] * np.eye(3)
-            M = np.stack([_solve3(A, J[:, k, :]) for k in range(3)], axis=2)  # column k: A^-1 J^T e_k
-            self._centre = v, np.nan_to_num(M)
-        return self._centre
 
     def slab_error_uT(self) -> np.ndarray:
         """The table's own interpolation error per force slab (n_F - 1,), uT per axis
@@ -356,29 +337,6 @@ def build_table(
     return InverseTable(grid, np.ascontiguousarray(B), source)
 
 
-def census(table: InverseTable, B_uT: np.ndarray, margin_uT: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(reading index, cell index) of every cell whose corners' box, widened by ``margin_uT``
-    (per cell, or one for all), holds the reading (uT). Readings go in blocks of CHUNK by
-    ascending Bz, each block against the cells whose Bz box meets the block's Bz span."""
-    lo, hi = table.boxes_uT()
-    m = np.broadcast_to(np.asarray(margin_uT, dtype=float), (len(lo),))[:, None]
-    lo, hi = lo - m, hi + m
-    by_z = np.argsort(B_uT[:, 2], kind="stable")
-    reads, cells = [], []
-    for start in range(0, len(B_uT), CHUNK):
-        rows = by_z[start : start + CHUNK]
-        b = B_uT[rows]
-        near = np.flatnonzero((lo[:, 2] <= b[-1, 2]) & (hi[:, 2] >= b[0, 2]))
-        l, h = lo[near], hi[near]
-        inside = (b[:, None, 2] >= l[None, :, 2]) & (b[:, None, 2] <= h[None, :, 2])
-        for axis in (0, 1):
-            inside &= (b[:, None, axis] >= l[None, :, axis]) & (b[:, None, axis] <= h[None, :, axis])
-        r, c = np.nonzero(inside)
-        reads.append(rows[r])
-        cells.append(near[c])
-    return np.concatenate(reads), np.concatenate(cells)
-
-
 def _miss_per_slab(coarse: InverseTable, fine: InverseTable) -> np.ndarray:
     """What ``coarse`` misses at ``fine``'s nodes (uT), per coarse force slab: the worst axis at
     each node, RMS over each force's (u, v) nodes, the worst force of the slab (its ends included).
@@ -391,29 +349,6 @@ def _miss_per_slab(coarse: InverseTable, fine: InverseTable) -> np.ndarray:
     k = np.arange(len(h.force_N) - 1)
     within = (g.force_N[None, :] >= h.force_N[k, None]) & (g.force_N[None, :] <= h.force_N[k + 1, None])
     return np.max(within * per_node, axis=1)
-
-
-def _interpolate(table: InverseTable, pts: np.ndarray) -> np.ndarray:
-    """The table's trilinear field (uT) at points (..., 3) of (F, u, v) inside its grid."""
-    g = table.grid
-    out = np.empty((*pts.shape[:-1], 3))
-    flat = pts.reshape(-1, 3)
-    nodes = (g.force_N, g.u, g.v)
-    idx = [np.clip(np.searchsorted(nodes[a], flat[:, a], side="right") - 1, 0, len(nodes[a]) - 2) for a in range(3)]
-    t = np.stack(
-        [(flat[:, a] - nodes[a][idx[a]]) / (nodes[a][idx[a] + 1] - nodes[a][idx[a]]) for a in range(3)], axis=1
-    )
-    cell = np.ravel_multi_index(tuple(idx), tuple(n - 1 for n in g.shape))
-    out.reshape(-1, 3)[:] = _trilinear(table.corners_uT()[cell], t)[0]
-    return out
-
-
-def cell_sigma_uT(table: InverseTable, sigma_uT: float, cell: np.ndarray) -> np.ndarray:
-    """The field noise each cell's solve is judged by (uT): the chip's ``sigma_uT`` and the
-    table's interpolation error in its force slab (:meth:`InverseTable.slab_error_uT`), in
-    quadrature."""
-    per_slab = (table.grid.shape[1] - 1) * (table.grid.shape[2] - 1)
-    return np.hypot(sigma_uT, table.slab_error_uT()[cell // per_slab])
 
 
 def _bilinear(X: np.ndarray, u: np.ndarray, v: np.ndarray) -> np.ndarray:
@@ -452,65 +387,13 @@ def _solve3(A: np.ndarray, g: np.ndarray) -> np.ndarray:
 
 
 def _normal(J: np.ndarray, r: np.ndarray, held: np.ndarray) -> np.ndarray:
-    """The ridged Gauss-Newton step of J dt = r, with the ``held`` coordinates' columns left out."""
+    """The ridged Gauss-Newton step of J dt = r, with the ``held`` coordinates' columns left out
+    (0 where the system is singular)."""
     Jh = J * ~held[:, None, :]
     A = np.einsum("pki,pkj->pij", Jh, Jh)
     A += (RIDGE * (A[:, 0, 0] + A[:, 1, 1] + A[:, 2, 2]) + 1e-30)[:, None, None] * np.eye(3)
-    return np.nan_to_num(_solve3(A, np.einsum("pki,pk->pi", Jh, r)))
-
-
-def _newton(
-    C: np.ndarray, b: np.ndarray, t: np.ndarray, lo_t: np.ndarray, hi_t: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
-    """Newton steps 2 to NEWTON_STEPS from t (the first step's end): (t (P, 3), still in play
-    (P,)). A solve pinned on its clip bound (OUTSIDE its cell, not the table's edge) from
-    PRUNE_AFTER steps on has no root in its cell (a neighbour's census has it) and is dropped."""
-    live = np.arange(len(C))
-    for step in range(1, NEWTON_STEPS):
-        val, J = _trilinear(C[live], t[live])
-        r = b[live] - val
-        tl, lo, hi = t[live], lo_t[live], hi_t[live]
-        dt = _normal(J, r, np.zeros_like(tl, dtype=bool))
-        held = ((tl <= lo) & (dt < 0.0)) | ((tl >= hi) & (dt > 0.0))
-        some = held.any(axis=1)
-        if some.any():
-            dt[some] = _normal(J[some], r[some], held[some])
-        t[live] = np.clip(tl + dt, lo, hi)
-        if step + 1 >= PRUNE_AFTER:
-            live = live[~_pinned_outside(t[live], lo, hi)]
-    kept = np.zeros(len(C), dtype=bool)
-    kept[live] = True
-    return t, kept
-
-
-def _pinned_outside(t: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
-    return np.any(((t <= lo) & (lo < 0.0)) | ((t >= hi) & (hi > 1.0)), axis=1)
-
-
-def solve_cells(
-    table: InverseTable, b_uT: np.ndarray, cell: np.ndarray
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Each (reading, cell) pair's trilinear solve, for the pairs still in play after the first
-    Newton step (from the cell's centre, by its precomputed matrix): (their indices among the
-    pairs, p (K, 3) force N / x0 mm / y0 mm, misfit uT, in-cell (K,), the field Jacobian dB/dp
-    (K, 3, 3) in uT per unit of p). A coordinate may leave its cell by OUTSIDE, except at the
-    table's edge, where it is held on the edge."""
-    shape = tuple(n - 1 for n in table.grid.shape)
-    idx = np.stack(np.unravel_index(cell, shape), axis=1)
-    lo_t = np.where(idx == 0, 0.0, -OUTSIDE)
-    hi_t = np.where(idx == np.array(shape) - 1, 1.0, 1.0 + OUTSIDE)
-    v, M = table.centre_steps()
-    t = np.clip(0.5 + np.einsum("pij,pj->pi", M[cell], b_uT - v[cell]), lo_t, hi_t)
-    play = np.flatnonzero(~_pinned_outside(t, lo_t, hi_t)) if PRUNE_AFTER <= 1 else np.arange(len(cell))
-    idx, C, b = idx[play], table.corners_uT()[cell[play]], b_uT[play]
-    t, kept = _newton(C, b, t[play], lo_t[play], hi_t[play])
-    val, J = _trilinear(C, t)
-    misfit = np.where(kept, np.linalg.norm(b - val, axis=1), np.inf)
-    inside = np.all((t >= -INSIDE_TOL) & (t <= 1.0 + INSIDE_TOL), axis=1)
-    nodes = (table.grid.force_N, table.grid.u, table.grid.v)
-    width = np.stack([nodes[a][idx[:, a] + 1] - nodes[a][idx[:, a]] for a in range(3)], axis=1)
-    p = np.stack([nodes[a][idx[:, a]] for a in range(3)], axis=1) + t * width
-    return play, p, misfit, inside, J / width[:, None, :]
+    dt = _solve3(A, np.einsum("pki,pk->pi", Jh, r))
+    return np.where(np.isfinite(dt), dt, 0.0)  # 0 where singular (as the C header does)
 
 
 def crb_sigmas(J: np.ndarray, sigma: float | np.ndarray) -> np.ndarray:
@@ -548,33 +431,131 @@ def to_output(kind: str, p: np.ndarray, J: np.ndarray) -> tuple[np.ndarray, np.n
     return q, Jq
 
 
+def _locate(table: InverseTable, p: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The cell of points p (P, 3) (its flat index, clipped to the table), p's cell coordinates t
+    (P, 3), the cell's widths (P, 3) and its force slab (P,)."""
+    g = table.grid
+    nodes = (g.force_N, g.u, g.v)
+    idx = [np.clip(np.searchsorted(nodes[a], p[:, a], side="right") - 1, 0, len(nodes[a]) - 2) for a in range(3)]
+    w = np.stack([nodes[a][idx[a] + 1] - nodes[a][idx[a]] for a in range(3)], axis=1)
+    t = np.stack([(p[:, a] - nodes[a][idx[a]]) for a in range(3)], axis=1) / w
+    cell = np.ravel_multi_index(tuple(idx), tuple(n - 1 for n in g.shape))
+    return cell, t, w, idx[0]
+
+
+def _interpolate(table: InverseTable, pts: np.ndarray) -> np.ndarray:
+    """The table's trilinear field (uT) at points (..., 3) of (F, u, v) inside its grid."""
+    flat = pts.reshape(-1, 3)
+    cell, t, _, _ = _locate(table, flat)
+    return _trilinear(table.corners_uT()[cell], t)[0].reshape(*pts.shape[:-1], 3)
+
+
+def force_starts(table: InverseTable, babs_uT: np.ndarray) -> np.ndarray:
+    """The direct inverse's force starts (n, BRANCHES), NaN in a slot without one: where the
+    centred column's |B| (the node nearest u = v = 0) crosses each reading's |B| (the field's
+    size against the force is monotonic on each branch), lowest force first, interpolated in the
+    crossing's slab (a cell holds its lower end, the last both); without a crossing, the force
+    node of the nearest |B|."""
+    g = table.grid
+    col = np.linalg.norm(1e6 * table.B_T[:, np.argmin(np.abs(g.u)), np.argmin(np.abs(g.v))], axis=1)
+    lo, hi = col[:-1], col[1:]
+    b = babs_uT[:, None]
+    cross = ((lo <= b) & (b < hi)) | ((hi < b) & (b <= lo))
+    cross[:, -1] |= b[:, 0] == hi[-1]
+    span = np.where(hi != lo, hi - lo, 1.0)
+    F = g.force_N[:-1] + np.clip((b - lo) / span, 0.0, 1.0) * np.diff(g.force_N)
+    rank = np.cumsum(cross, axis=1) * cross
+    out = np.full((len(b), BRANCHES), np.nan)
+    for s in range(BRANCHES):
+        r, k = np.nonzero(rank == s + 1)
+        out[r, s] = F[r, k]
+    none = ~cross.any(axis=1)
+    out[none, 0] = g.force_N[np.argmin(np.abs(col[None, :] - b[none]), axis=1)]
+    return out
+
+
+def _gauss_newton(table: InverseTable, b: np.ndarray, p: np.ndarray) -> np.ndarray:
+    """Up to STEPS ridged Gauss-Newton steps on the table's trilinear field from starts p (P, 3)
+    to readings b (P, 3) uT, each step at most STEP_CELLS cells per coordinate and clamped to the
+    table's box (a coordinate on the box's face whose step would leave it is held); a start stops
+    once its step moves less than CONVERGED of a cell. The ends (P, 3)."""
+    g = table.grid
+    box_lo = np.array([g.force_N[0], g.u[0], g.v[0]])
+    box_hi = np.array([g.force_N[-1], g.u[-1], g.v[-1]])
+    C = table.corners_uT()
+    live = np.arange(len(p))
+    for _ in range(STEPS):
+        if not len(live):
+            break
+        q = p[live]
+        cell, t, w, _ = _locate(table, q)
+        val, J = _trilinear(C[cell], t)
+        r = b[live] - val
+        dt = _normal(J, r, np.zeros_like(q, dtype=bool))
+        held = ((q <= box_lo) & (dt < 0.0)) | ((q >= box_hi) & (dt > 0.0))
+        some = held.any(axis=1)
+        if some.any():
+            dt[some] = _normal(J[some], r[some], held[some])
+        new = np.clip(q + np.clip(dt, -STEP_CELLS, STEP_CELLS) * w, box_lo, box_hi)
+        moved = np.max(np.abs(new - q) / w, axis=1)
+        p[live] = new
+        live = live[moved >= CONVERGED]
+    return p
+
+
+def seed_uv(grid: TableGrid) -> np.ndarray:
+    """The (u, v) starts (len(SEEDS) * 2,): SEEDS as shares of the half ranges from the middle."""
+    mid = np.array([0.5 * (grid.u[0] + grid.u[-1]), 0.5 * (grid.v[0] + grid.v[-1])])
+    half = np.array([0.5 * (grid.u[-1] - grid.u[0]), 0.5 * (grid.v[-1] - grid.v[0])])
+    return (mid + np.array(SEEDS) * half).ravel()
+
+
+def solve_starts(table: InverseTable, B_uT: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The direct inverse of readings (n, 3) uT from every start (the force starts of
+    :func:`force_starts` times the SEEDS of (u, v)): (p (n, S, 3) in the table's coordinates, NaN
+    for an empty slot; misfit (n, S) uT, inf there; the field Jacobian dB/dp (n, S, 3, 3) in uT per
+    unit of p; the force slab of each end (n, S))."""
+    g = table.grid
+    n, S = len(B_uT), BRANCHES * len(SEEDS)
+    F0 = force_starts(table, np.linalg.norm(B_uT, axis=1))
+    uv = seed_uv(g).reshape(-1, 2)
+    p0 = np.concatenate([np.repeat(F0[:, :, None], len(SEEDS), axis=2)[..., None], np.broadcast_to(uv, (n, BRANCHES, len(SEEDS), 2))], axis=3).reshape(n, S, 3)
+    used = np.isfinite(p0[:, :, 0])
+    rows = np.flatnonzero(used.ravel())
+    b = np.repeat(B_uT, S, axis=0)[rows]
+    p = _gauss_newton(table, b, p0.reshape(-1, 3)[rows].copy())
+    cell, t, w, slab = _locate(table, p)
+    val, Jt = _trilinear(table.corners_uT()[cell], t)
+    P = np.full((n * S, 3), np.nan)
+    misfit = np.full(n * S, np.inf)
+    J = np.zeros((n * S, 3, 3))
+    slabs = np.zeros(n * S, dtype=int)
+    P[rows], misfit[rows], J[rows], slabs[rows] = p, np.linalg.norm(b - val, axis=1), Jt / w[:, None, :], slab
+    return P.reshape(n, S, 3), misfit.reshape(n, S), J.reshape(n, S, 3, 3), slabs.reshape(n, S)
+
+
 def estimate_many(table: InverseTable, B_T: np.ndarray, sigma_T: float, max_sigma_mm: float) -> TableEstimates:
-    """The census and its flags for readings B_T (n, 3) in T (see the module's docstring); the
-    offset's bound ``max_sigma_mm`` on x0 and y0 (the shear table has none: its sigmas say)."""
-    n = len(B_T)
-    sigma_uT = 1e6 * sigma_T
-    B_uT = 1e6 * B_T
-    every = np.arange(np.prod([n - 1 for n in table.grid.shape]))
-    read, cell = census(table, B_uT, FIT_SIGMAS * cell_sigma_uT(table, sigma_uT, every))
-    play, p, misfit, inside, J = solve_cells(table, B_uT[read], cell)
-    read, noise = read[play], cell_sigma_uT(table, sigma_uT, cell[play])
-    root = inside & (misfit <= FIT_SIGMAS * noise)
-    read, misfit = read[root], misfit[root]
-    p, J = to_output(table.grid.kind, p[root], J[root])
-    sig = crb_sigmas(J, noise[root])
-    roots = np.bincount(read, minlength=n)
-    # the best root of each reading: the least misfit (ties: the first found)
-    order = np.lexsort((misfit, read))
-    first = order[np.searchsorted(read[order], np.arange(n))[roots > 0]]
-    best_of = np.full(n, -1)
-    best_of[read[first]] = first
-    b = best_of[read]
-    far = np.any(np.abs(p - p[b]) > 2.0 * np.hypot(sig, sig[b]), axis=1)
-    ambiguous = np.bincount(read, weights=far, minlength=n) > 0
-    has = best_of >= 0
-    pb = np.full((n, 3), np.nan)
-    sb = np.full((n, 3), np.nan)
-    pb[has], sb[has] = p[best_of[has]], sig[best_of[has]]
+    """The direct inverse and its flags for readings B_T (n, 3) in T (see the module's
+    docstring); the offset's bound ``max_sigma_mm`` on x0 and y0 (the shear table has none: its
+    sigmas say)."""
+    n, S = len(B_T), BRANCHES * len(SEEDS)
+    p, misfit, J, slab = solve_starts(table, 1e6 * B_T)
+    noise = np.hypot(1e6 * sigma_T, table.slab_error_uT()[slab])
+    root = misfit <= FIT_SIGMAS * noise
+    q, Jq = to_output(table.grid.kind, np.nan_to_num(p.reshape(-1, 3)), J.reshape(-1, 3, 3))
+    q, sig = q.reshape(n, S, 3), crb_sigmas(Jq, noise.ravel()).reshape(n, S, 3)
+    # pairs of roots: far when they lie further apart than twice their combined 1-sigma on an axis
+    with np.errstate(invalid="ignore"):
+        far = np.any(np.abs(q[:, :, None] - q[:, None, :]) > 2.0 * np.hypot(sig[:, :, None], sig[:, None, :]), axis=3)
+    pair = root[:, :, None] & root[:, None, :]
+    ambiguous = np.any(far & pair, axis=(1, 2))
+    earlier = np.tril(np.ones((S, S), dtype=bool), -1)  # [s, r]: r before s
+    roots = np.sum(root & ~np.any(pair & ~far & earlier, axis=2), axis=1)
+    best = np.argmin(np.where(root, misfit, np.inf), axis=1)
+    has = root.any(axis=1)
+    i = np.arange(n)
+    pb = np.where(has[:, None], q[i, best], np.nan)
+    sb = np.where(has[:, None], sig[i, best], np.nan)
     flag = np.full(n, "no_fit", dtype=object)
     flag[has] = "ok"
     if table.grid.kind == "offset":
