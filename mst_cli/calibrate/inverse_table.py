@@ -56,12 +56,13 @@ SHEAR_TABLE_FILE = "shear_table.npz"  # ... and the shear table's
 TABLE_FORMAT = 2  # bumped when the table's contents change meaning: an older file is rebuilt
 FIT_SIGMAS = 3.0  # a cell whose best point is further off the reading than this found no root
 # the direct inverse (the C header takes the same numbers): from each start, Gauss-Newton steps on
-# the table's trilinear field; the starts are every force start (force_starts) times every seed
+# the table's trilinear field, from the nearest node of the force slabs the reading's |B| allows
+# (start_nodes) and from its end's mirror (mirror_start)
 STEPS = 12  # steps at most from each start (most converge in 3 to 5)
 STEP_CELLS = 2.0  # a step moves each coordinate by at most this many of its cells
 CONVERGED = 1e-4  # a start whose step moved less than this share of a cell has converged: it stops
-BRANCHES = 2  # force starts at most (branches of the centred |B| against the force)
-SEEDS = ((0.0, 0.0), (0.5, 0.5), (-0.5, -0.5), (0.5, -0.5), (-0.5, 0.5))  # (u, v) starts: shares of the half ranges
+SCAN = 256  # readings per scan for the start (their squared distances to every node at a time)
+HALVINGS = 3  # a step that does not lower the misfit is halved up to this many times
 RIDGE = 1e-9  # the Gauss-Newton system's ridge, relative to its trace (a flat direction stays put)
 BLOCK = 4096  # readings per estimate (their starts' corners at a time)
 
@@ -450,97 +451,139 @@ def _interpolate(table: InverseTable, pts: np.ndarray) -> np.ndarray:
     return _trilinear(table.corners_uT()[cell], t)[0].reshape(*pts.shape[:-1], 3)
 
 
-def force_starts(table: InverseTable, babs_uT: np.ndarray) -> np.ndarray:
-    """The direct inverse's force starts (n, BRANCHES), NaN in a slot without one: where the
-    centred column's |B| (the node nearest u = v = 0) crosses each reading's |B| (the field's
-    size against the force is monotonic on each branch), lowest force first, interpolated in the
-    crossing's slab (a cell holds its lower end, the last both); without a crossing, the force
-    node of the nearest |B|."""
+def slab_babs_uT(table: InverseTable) -> tuple[np.ndarray, np.ndarray]:
+    """Each force slab's |B| range over its nodes (both force ends, every (u, v)): (lo, hi), each
+    (n_F - 1,) uT. A trilinear field's size is at most its corners' largest."""
+    babs = np.linalg.norm(1e6 * table.B_T, axis=3).reshape(len(table.grid.force_N), -1)
+    lo, hi = babs.min(axis=1), babs.max(axis=1)
+    return np.minimum(lo[:-1], lo[1:]), np.maximum(hi[:-1], hi[1:])
+
+
+def start_nodes(table: InverseTable, B_uT: np.ndarray, noise_uT: np.ndarray) -> np.ndarray:
+    """The first start of each reading (n, 3) uT: the node nearest it (least squared distance,
+    the first in C order on a tie) among the nodes of every force slab whose |B| range, widened
+    by FIT_SIGMAS of the slab's noise ``noise_uT`` (n_F - 1,), holds the reading's |B| (a field
+    within that of the reading lies in no other slab: | |b| - |B| | <= |b - B|); NaN where no
+    slab holds it. SCAN readings at a time."""
     g = table.grid
-    col = np.linalg.norm(1e6 * table.B_T[:, np.argmin(np.abs(g.u)), np.argmin(np.abs(g.v))], axis=1)
-    lo, hi = col[:-1], col[1:]
-    b = babs_uT[:, None]
-    cross = ((lo <= b) & (b < hi)) | ((hi < b) & (b <= lo))
-    cross[:, -1] |= b[:, 0] == hi[-1]
-    span = np.where(hi != lo, hi - lo, 1.0)
-    F = g.force_N[:-1] + np.clip((b - lo) / span, 0.0, 1.0) * np.diff(g.force_N)
-    rank = np.cumsum(cross, axis=1) * cross
-    out = np.full((len(b), BRANCHES), np.nan)
-    for s in range(BRANCHES):
-        r, k = np.nonzero(rank == s + 1)
-        out[r, s] = F[r, k]
-    none = ~cross.any(axis=1)
-    out[none, 0] = g.force_N[np.argmin(np.abs(col[None, :] - b[none]), axis=1)]
+    lo, hi = slab_babs_uT(table)
+    margin = FIT_SIGMAS * noise_uT
+    nodes = np.stack(np.meshgrid(g.force_N, g.u, g.v, indexing="ij"), axis=-1).reshape(len(g.force_N), -1, 3)
+    field = 1e6 * table.B_T.reshape(len(g.force_N), -1, 3)
+    out = np.full((len(B_uT), 3), np.nan)
+    for i in range(0, len(B_uT), SCAN):
+        b = B_uT[i : i + SCAN]
+        babs = np.linalg.norm(b, axis=1)[:, None]
+        slab = (babs >= lo - margin) & (babs <= hi + margin)
+        take = np.zeros((len(b), len(g.force_N)), dtype=bool)
+        take[:, :-1] |= slab
+        take[:, 1:] |= slab
+        d = field[None] - b[:, None, None, :]
+        d2 = np.where(take[:, :, None], d[..., 0] ** 2 + d[..., 1] ** 2 + d[..., 2] ** 2, np.inf).reshape(len(b), -1)
+        best = np.argmin(d2, axis=1)
+        some = take.any(axis=1)
+        out[i : i + SCAN][some] = nodes.reshape(-1, 3)[best[some]]
     return out
+
+
+def _field(table: InverseTable, b: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """At points p (P, 3): the residual b - field (P, 3) uT, its square sum (P,), the field's
+    Jacobian in cell coordinates (P, 3, 3) and the cells' widths (P, 3)."""
+    cell, t, w, _ = _locate(table, p)
+    val, J = _trilinear(table.corners_uT()[cell], t)
+    r = b - val
+    return r, np.sum(r * r, axis=1), J, w
 
 
 def _gauss_newton(table: InverseTable, b: np.ndarray, p: np.ndarray) -> np.ndarray:
     """Up to STEPS ridged Gauss-Newton steps on the table's trilinear field from starts p (P, 3)
-    to readings b (P, 3) uT, each step at most STEP_CELLS cells per coordinate and clamped to the
-    table's box (a coordinate on the box's face whose step would leave it is held); a start stops
-    once its step moves less than CONVERGED of a cell. The ends (P, 3)."""
+    to readings b (P, 3) uT, each at most STEP_CELLS cells per coordinate and clamped to the
+    table's box (a coordinate on the box's face whose step would leave it is held), halved up to
+    HALVINGS times until the misfit falls; a start stops when no step lowers it or once its step
+    moves less than CONVERGED of a cell. The ends (P, 3)."""
     g = table.grid
     box_lo = np.array([g.force_N[0], g.u[0], g.v[0]])
     box_hi = np.array([g.force_N[-1], g.u[-1], g.v[-1]])
-    C = table.corners_uT()
+    r, m2, J, w = _field(table, b, p)
     live = np.arange(len(p))
     for _ in range(STEPS):
         if not len(live):
             break
         q = p[live]
-        cell, t, w, _ = _locate(table, q)
-        val, J = _trilinear(C[cell], t)
-        r = b[live] - val
-        dt = _normal(J, r, np.zeros_like(q, dtype=bool))
+        dt = _normal(J[live], r[live], np.zeros_like(q, dtype=bool))
         held = ((q <= box_lo) & (dt < 0.0)) | ((q >= box_hi) & (dt > 0.0))
         some = held.any(axis=1)
         if some.any():
-            dt[some] = _normal(J[some], r[some], held[some])
-        new = np.clip(q + np.clip(dt, -STEP_CELLS, STEP_CELLS) * w, box_lo, box_hi)
-        moved = np.max(np.abs(new - q) / w, axis=1)
-        p[live] = new
-        live = live[moved >= CONVERGED]
+            dt[some] = _normal(J[live][some], r[live][some], held[some])
+        dp = np.clip(dt, -STEP_CELLS, STEP_CELLS) * w[live]
+        pending, go = np.arange(len(live)), np.zeros(len(live), dtype=bool)
+        for h in range(HALVINGS + 1):
+            rows = live[pending]
+            new = np.clip(q[pending] + 0.5**h * dp[pending], box_lo, box_hi)
+            rn, m2n, Jn, wn = _field(table, b[rows], new)
+            better = m2n < m2[rows]
+            done = rows[better]
+            moved = np.max(np.abs(new[better] - q[pending[better]]) / w[done], axis=1)
+            p[done], r[done], m2[done], J[done], w[done] = new[better], rn[better], m2n[better], Jn[better], wn[better]
+            go[pending[better]] = moved >= CONVERGED
+            pending = pending[~better]
+            if not len(pending):
+                break
+        live = live[go]
     return p
 
 
-def seed_uv(grid: TableGrid) -> np.ndarray:
-    """The (u, v) starts (len(SEEDS) * 2,): SEEDS as shares of the half ranges from the middle."""
+def middle_uv(grid: TableGrid) -> tuple[np.ndarray, np.ndarray]:
+    """The middle of the table's (u, v) box (the first start's) and its mean node spacing."""
     mid = np.array([0.5 * (grid.u[0] + grid.u[-1]), 0.5 * (grid.v[0] + grid.v[-1])])
-    half = np.array([0.5 * (grid.u[-1] - grid.u[0]), 0.5 * (grid.v[-1] - grid.v[0])])
-    return (mid + np.array(SEEDS) * half).ravel()
+    return mid, np.array([(grid.u[-1] - grid.u[0]) / (len(grid.u) - 1), (grid.v[-1] - grid.v[0]) / (len(grid.v) - 1)])
 
 
-def solve_starts(table: InverseTable, B_uT: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """The direct inverse of readings (n, 3) uT from every start (the force starts of
-    :func:`force_starts` times the SEEDS of (u, v)): (p (n, S, 3) in the table's coordinates, NaN
-    for an empty slot; misfit (n, S) uT, inf there; the field Jacobian dB/dp (n, S, 3, 3) in uT per
-    unit of p; the force slab of each end (n, S))."""
-    g = table.grid
-    n, S = len(B_uT), BRANCHES * len(SEEDS)
-    F0 = force_starts(table, np.linalg.norm(B_uT, axis=1))
-    uv = seed_uv(g).reshape(-1, 2)
-    p0 = np.concatenate([np.repeat(F0[:, :, None], len(SEEDS), axis=2)[..., None], np.broadcast_to(uv, (n, BRANCHES, len(SEEDS), 2))], axis=3).reshape(n, S, 3)
-    used = np.isfinite(p0[:, :, 0])
-    rows = np.flatnonzero(used.ravel())
-    b = np.repeat(B_uT, S, axis=0)[rows]
-    p = _gauss_newton(table, b, p0.reshape(-1, 3)[rows].copy())
-    cell, t, w, slab = _locate(table, p)
+def mirror_start(grid: TableGrid, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The second start of each end p (P, 3): its (u, v) mirrored through the middle of the table
+    (a field symmetric about it, or folding over, has its other root there), and whether it is
+    taken (the end lies more than one mean node spacing from the middle)."""
+    mid, step = middle_uv(grid)
+    far = np.any(np.abs(p[:, 1:] - mid) > step, axis=1)
+    return np.column_stack([p[:, 0], 2.0 * mid - p[:, 1:]]), far
+
+
+def solve_starts(
+    table: InverseTable, B_uT: np.ndarray, noise_uT: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The direct inverse of readings (n, 3) uT from both starts: the nearest node
+    (:func:`start_nodes`, slot 0) and its end's mirror (:func:`mirror_start`, slot 1, where
+    taken): (p (n, 2, 3) in the table's coordinates, NaN for an empty slot; misfit (n, 2) uT, inf
+    there; the field Jacobian dB/dp (n, 2, 3, 3) in uT per unit of p; the force slab of each end
+    (n, 2))."""
+    n = len(B_uT)
+    P = np.full((n, 2, 3), np.nan)
+    P[:, 0] = start_nodes(table, B_uT, noise_uT)
+    first = np.flatnonzero(np.isfinite(P[:, 0, 0]))
+    P[first, 0] = ends = _gauss_newton(table, B_uT[first], P[first, 0].copy())
+    start, far = mirror_start(table.grid, ends)
+    second = first[far]
+    P[second, 1] = _gauss_newton(table, B_uT[second], start[far])
+    P = P.reshape(-1, 3)
+    rows = np.flatnonzero(np.isfinite(P[:, 0]))
+    cell, t, w, slab = _locate(table, P[rows])
     val, Jt = _trilinear(table.corners_uT()[cell], t)
-    P = np.full((n * S, 3), np.nan)
-    misfit = np.full(n * S, np.inf)
-    J = np.zeros((n * S, 3, 3))
-    slabs = np.zeros(n * S, dtype=int)
-    P[rows], misfit[rows], J[rows], slabs[rows] = p, np.linalg.norm(b - val, axis=1), Jt / w[:, None, :], slab
-    return P.reshape(n, S, 3), misfit.reshape(n, S), J.reshape(n, S, 3, 3), slabs.reshape(n, S)
+    misfit = np.full(2 * n, np.inf)
+    J = np.zeros((2 * n, 3, 3))
+    slabs = np.zeros(2 * n, dtype=int)
+    misfit[rows] = np.linalg.norm(np.repeat(B_uT, 2, axis=0)[rows] - val, axis=1)
+    J[rows], slabs[rows] = Jt / w[:, None, :], slab
+    return P.reshape(n, 2, 3), misfit.reshape(n, 2), J.reshape(n, 2, 3, 3), slabs.reshape(n, 2)
 
 
 def estimate_many(table: InverseTable, B_T: np.ndarray, sigma_T: float, max_sigma_mm: float) -> TableEstimates:
     """The direct inverse and its flags for readings B_T (n, 3) in T (see the module's
     docstring); the offset's bound ``max_sigma_mm`` on x0 and y0 (the shear table has none: its
     sigmas say)."""
-    n, S = len(B_T), BRANCHES * len(SEEDS)
-    p, misfit, J, slab = solve_starts(table, 1e6 * B_T)
-    noise = np.hypot(1e6 * sigma_T, table.slab_error_uT()[slab])
+    n, S = len(B_T), 2
+    slab_noise = np.hypot(1e6 * sigma_T, table.slab_error_uT())
+    p, misfit, J, slab = solve_starts(table, 1e6 * B_T, slab_noise)
+    noise = slab_noise[slab]
     root = misfit <= FIT_SIGMAS * noise
     q, Jq = to_output(table.grid.kind, np.nan_to_num(p.reshape(-1, 3)), J.reshape(-1, 3, 3))
     q, sig = q.reshape(n, S, 3), crb_sigmas(Jq, noise.ravel()).reshape(n, S, 3)

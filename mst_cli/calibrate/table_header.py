@@ -87,13 +87,13 @@ def _c_floats(cname: str, values: np.ndarray, per_line: int = 8) -> str:
 
 
 def start_arrays(table: it.InverseTable, p: str) -> dict[str, str]:
-    """The C arrays of the direct inverse's starts: the centred column's |B| per force (uT) and
-    the (u, v) seeds, as :func:`~mst_cli.calibrate.inverse_table.solve_starts` takes them."""
-    g = table.grid
-    col = np.linalg.norm(1e6 * table.B_T[:, np.argmin(np.abs(g.u)), np.argmin(np.abs(g.v))], axis=1)
+    """The C arrays of the direct inverse's starts: each force slab's |B| range (uT), the middle
+    of (u, v) and its mean node spacing, as :func:`~mst_cli.calibrate.inverse_table.solve_starts`
+    takes them."""
+    lo, hi = it.slab_babs_uT(table)
     return {
-        "start_babs": _c_floats(f"{p}_start_babs_uT", col),
-        "seeds": _c_floats(f"{p}_seeds", it.seed_uv(g), per_line=10),
+        "slab_babs": _c_floats(f"{p}_slab_babs_lo_uT", lo) + _c_floats(f"{p}_slab_babs_hi_uT", hi),
+        "middle": _c_floats(f"{p}_middle_uv", np.ravel(it.middle_uv(table.grid))),
     }
 
 
@@ -141,7 +141,7 @@ def table_header(
         xy_uT_per_lsb_c=c_float(setting.xy_uT_per_lsb, 8),
         z_uT_per_lsb_c=c_float(setting.z_uT_per_lsb, 8),
         saturated_lsb=min(CODE_RANGE_LSB[setting.res] - 1, int(SATURATION_T * 1e6 / setting.z_uT_per_lsb)),
-        table_bytes=table.size_bytes_float32 + 4 * (2 * nf - 1 + 2 * len(it.SEEDS)),
+        table_bytes=table.size_bytes_float32 + 4 * (3 * (nf - 1) + 4),
         nf=nf,
         nx=nx,
         ny=ny,
@@ -154,8 +154,7 @@ def table_header(
         steps=it.STEPS,
         step_cells=c_float(it.STEP_CELLS),
         converged=c_float(it.CONVERGED),
-        branches=it.BRANCHES,
-        nseeds=len(it.SEEDS),
+        halvings=it.HALVINGS,
         ridge=c_float(it.RIDGE),
         code_range=CODE_RANGE_LSB[setting.res],
         slab_sigma=_c_floats(f"{p}_slab_sigma_uT", np.hypot(1e6 * reader.sigma_T, table.slab_error_uT())),
