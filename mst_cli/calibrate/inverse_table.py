@@ -63,6 +63,7 @@ STEP_CELLS = 2.0  # a step moves each coordinate by at most this many of its cel
 CONVERGED = 1e-4  # a start whose step moved less than this share of a cell has converged: it stops
 SCAN = 256  # readings per scan for the start (their squared distances to every node at a time)
 HALVINGS = 3  # a step that does not lower the misfit is halved up to this many times
+PROBE = 1e-3  # the share of a step that says which cell it enters (its Jacobian is that cell's)
 RIDGE = 1e-9  # the Gauss-Newton system's ridge, relative to its trace (a flat direction stays put)
 BLOCK = 4096  # readings per estimate (their starts' corners at a time)
 
@@ -432,12 +433,16 @@ def to_output(kind: str, p: np.ndarray, J: np.ndarray) -> tuple[np.ndarray, np.n
     return q, Jq
 
 
-def _locate(table: InverseTable, p: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """The cell of points p (P, 3) (its flat index, clipped to the table), p's cell coordinates t
-    (P, 3), the cell's widths (P, 3) and its force slab (P,)."""
+def _locate(
+    table: InverseTable, p: np.ndarray, toward: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The cell of points p (P, 3) (its flat index, clipped to the table; of the points ``toward``
+    when given: the cell a step from p enters), p's coordinates t (P, 3) in it, the cell's widths
+    (P, 3) and its force slab (P,)."""
     g = table.grid
     nodes = (g.force_N, g.u, g.v)
-    idx = [np.clip(np.searchsorted(nodes[a], p[:, a], side="right") - 1, 0, len(nodes[a]) - 2) for a in range(3)]
+    at = p if toward is None else toward
+    idx = [np.clip(np.searchsorted(nodes[a], at[:, a], side="right") - 1, 0, len(nodes[a]) - 2) for a in range(3)]
     w = np.stack([nodes[a][idx[a] + 1] - nodes[a][idx[a]] for a in range(3)], axis=1)
     t = np.stack([(p[:, a] - nodes[a][idx[a]]) for a in range(3)], axis=1) / w
     cell = np.ravel_multi_index(tuple(idx), tuple(n - 1 for n in g.shape))
@@ -479,52 +484,67 @@ def start_nodes(table: InverseTable, B_uT: np.ndarray, noise_uT: np.ndarray) -> 
         take[:, :-1] |= slab
         take[:, 1:] |= slab
         d = field[None] - b[:, None, None, :]
-        d2 = np.where(take[:, :, None], d[..., 0] ** 2 + d[..., 1] ** 2 + d[..., 2] ** 2, np.inf).reshape(len(b), -1)
+        d2 = np.where(take[:, :, None], d[..., 2] ** 2 + d[..., 0] ** 2 + d[..., 1] ** 2, np.inf).reshape(len(b), -1)
         best = np.argmin(d2, axis=1)
         some = take.any(axis=1)
         out[i : i + SCAN][some] = nodes.reshape(-1, 3)[best[some]]
     return out
 
 
-def _field(table: InverseTable, b: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """At points p (P, 3): the residual b - field (P, 3) uT, its square sum (P,), the field's
-    Jacobian in cell coordinates (P, 3, 3) and the cells' widths (P, 3)."""
-    cell, t, w, _ = _locate(table, p)
+def _field(
+    table: InverseTable, b: np.ndarray, p: np.ndarray, toward: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """At points p (P, 3), in their cells (:func:`_locate`): the residual b - field (P, 3) uT, its
+    square sum (P,), the field's Jacobian in cell coordinates (P, 3, 3), the cells' widths (P, 3)
+    and the cells (P,)."""
+    cell, t, w, _ = _locate(table, p, toward)
     val, J = _trilinear(table.corners_uT()[cell], t)
     r = b - val
-    return r, np.sum(r * r, axis=1), J, w
+    return r, np.sum(r * r, axis=1), J, w, cell
+
+
+def _held_step(J: np.ndarray, r: np.ndarray, q: np.ndarray, box: tuple[np.ndarray, np.ndarray]) -> np.ndarray:
+    """The Gauss-Newton step (cell coordinates) from q (P, 3), a coordinate on the box's face
+    whose step would leave it held, at most STEP_CELLS cells per coordinate."""
+    dt = _normal(J, r, np.zeros_like(q, dtype=bool))
+    held = ((q <= box[0]) & (dt < 0.0)) | ((q >= box[1]) & (dt > 0.0))
+    some = held.any(axis=1)
+    if some.any():
+        dt[some] = _normal(J[some], r[some], held[some])
+    return np.clip(dt, -STEP_CELLS, STEP_CELLS)
 
 
 def _gauss_newton(table: InverseTable, b: np.ndarray, p: np.ndarray) -> np.ndarray:
     """Up to STEPS ridged Gauss-Newton steps on the table's trilinear field from starts p (P, 3)
-    to readings b (P, 3) uT, each at most STEP_CELLS cells per coordinate and clamped to the
-    table's box (a coordinate on the box's face whose step would leave it is held), halved up to
-    HALVINGS times until the misfit falls; a start stops when no step lowers it or once its step
-    moves less than CONVERGED of a cell. The ends (P, 3)."""
+    to readings b (P, 3) uT (:func:`_held_step`), each taken with the Jacobian of the cell it
+    enters (from a node or a face, the one whose side it goes to), clamped to the table's box and
+    halved up to HALVINGS times until the misfit falls; a start stops when no step lowers it or
+    once its step moves less than CONVERGED of a cell. The ends (P, 3)."""
     g = table.grid
-    box_lo = np.array([g.force_N[0], g.u[0], g.v[0]])
-    box_hi = np.array([g.force_N[-1], g.u[-1], g.v[-1]])
-    r, m2, J, w = _field(table, b, p)
+    box = (np.array([g.force_N[0], g.u[0], g.v[0]]), np.array([g.force_N[-1], g.u[-1], g.v[-1]]))
+    r, m2, J, w, cell = _field(table, b, p)
     live = np.arange(len(p))
     for _ in range(STEPS):
         if not len(live):
             break
         q = p[live]
-        dt = _normal(J[live], r[live], np.zeros_like(q, dtype=bool))
-        held = ((q <= box_lo) & (dt < 0.0)) | ((q >= box_hi) & (dt > 0.0))
-        some = held.any(axis=1)
-        if some.any():
-            dt[some] = _normal(J[live][some], r[live][some], held[some])
-        dp = np.clip(dt, -STEP_CELLS, STEP_CELLS) * w[live]
+        dt = _held_step(J[live], r[live], q, box)
+        _, _, Jp, wp, cp = _field(table, b[live], q, np.clip(q + PROBE * dt * w[live], *box))
+        turn = np.flatnonzero(cp != cell[live])
+        if len(turn):
+            J[live[turn]], w[live[turn]], cell[live[turn]] = Jp[turn], wp[turn], cp[turn]
+            dt[turn] = _held_step(Jp[turn], r[live[turn]], q[turn], box)
+        dp = dt * w[live]
         pending, go = np.arange(len(live)), np.zeros(len(live), dtype=bool)
         for h in range(HALVINGS + 1):
             rows = live[pending]
-            new = np.clip(q[pending] + 0.5**h * dp[pending], box_lo, box_hi)
-            rn, m2n, Jn, wn = _field(table, b[rows], new)
+            new = np.clip(q[pending] + 0.5**h * dp[pending], *box)
+            rn, m2n, Jn, wn, cn = _field(table, b[rows], new)
             better = m2n < m2[rows]
             done = rows[better]
             moved = np.max(np.abs(new[better] - q[pending[better]]) / w[done], axis=1)
             p[done], r[done], m2[done], J[done], w[done] = new[better], rn[better], m2n[better], Jn[better], wn[better]
+            cell[done] = cn[better]
             go[pending[better]] = moved >= CONVERGED
             pending = pending[~better]
             if not len(pending):

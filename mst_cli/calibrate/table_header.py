@@ -155,6 +155,7 @@ def table_header(
         step_cells=c_float(it.STEP_CELLS),
         converged=c_float(it.CONVERGED),
         halvings=it.HALVINGS,
+        probe=c_float(it.PROBE),
         ridge=c_float(it.RIDGE),
         code_range=CODE_RANGE_LSB[setting.res],
         slab_sigma=_c_floats(f"{p}_slab_sigma_uT", np.hypot(1e6 * reader.sigma_T, table.slab_error_uT())),
