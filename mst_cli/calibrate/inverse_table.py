@@ -58,9 +58,10 @@ FIT_SIGMAS = 3.0  # a cell whose best point is further off the reading than this
 # the direct inverse (the C header takes the same numbers): from each start, Gauss-Newton steps on
 # the table's trilinear field, from the nearest node of the force slabs the reading's |B| allows
 # (start_nodes) and from its end's mirror (mirror_start)
-STEPS = 12  # steps at most from each start (most converge in 3 to 5)
+STEPS = 10  # steps at most from each start (most converge in 2 to 5)
 STEP_CELLS = 2.0  # a step moves each coordinate by at most this many of its cells
-CONVERGED = 1e-4  # a start whose step moved less than this share of a cell has converged: it stops
+CONVERGED = 1e-4  # a start whose step moved less than this share of a cell has converged: it stops ...
+MIN_GAIN = 1e-3  # ... as does one whose step lowered the squared misfit by less than this share of it
 SCAN = 256  # readings per scan for the start (their squared distances to every node at a time)
 HALVINGS = 3  # a step that does not lower the misfit is halved up to this many times
 PROBE = 1e-3  # the share of a step that says which cell it enters (its Jacobian is that cell's)
@@ -469,7 +470,8 @@ def start_nodes(table: InverseTable, B_uT: np.ndarray, noise_uT: np.ndarray) -> 
     the first in C order on a tie) among the nodes of every force slab whose |B| range, widened
     by FIT_SIGMAS of the slab's noise ``noise_uT`` (n_F - 1,), holds the reading's |B| (a field
     within that of the reading lies in no other slab: | |b| - |B| | <= |b - B|); NaN where no
-    slab holds it. SCAN readings at a time."""
+    slab holds it; on the no-load face, where every (u, v) gives the same field, the middle of
+    (u, v). SCAN readings at a time."""
     g = table.grid
     lo, hi = slab_babs_uT(table)
     margin = FIT_SIGMAS * noise_uT
@@ -488,6 +490,7 @@ def start_nodes(table: InverseTable, B_uT: np.ndarray, noise_uT: np.ndarray) -> 
         best = np.argmin(d2, axis=1)
         some = take.any(axis=1)
         out[i : i + SCAN][some] = nodes.reshape(-1, 3)[best[some]]
+    out[out[:, 0] == g.force_N[0], 1:] = middle_uv(g)[0]  # no load: every (u, v) has its field
     return out
 
 
@@ -518,8 +521,9 @@ def _gauss_newton(table: InverseTable, b: np.ndarray, p: np.ndarray) -> np.ndarr
     """Up to STEPS ridged Gauss-Newton steps on the table's trilinear field from starts p (P, 3)
     to readings b (P, 3) uT (:func:`_held_step`), each taken with the Jacobian of the cell it
     enters (from a node or a face, the one whose side it goes to), clamped to the table's box and
-    halved up to HALVINGS times until the misfit falls; a start stops when no step lowers it or
-    once its step moves less than CONVERGED of a cell. The ends (P, 3)."""
+    halved up to HALVINGS times until the misfit falls; a start stops when no step lowers it,
+    once its step moves less than CONVERGED of a cell, or once it lowers the squared misfit by
+    less than MIN_GAIN of it. The ends (P, 3)."""
     g = table.grid
     box = (np.array([g.force_N[0], g.u[0], g.v[0]]), np.array([g.force_N[-1], g.u[-1], g.v[-1]]))
     r, m2, J, w, cell = _field(table, b, p)
@@ -542,10 +546,11 @@ def _gauss_newton(table: InverseTable, b: np.ndarray, p: np.ndarray) -> np.ndarr
             rn, m2n, Jn, wn, cn = _field(table, b[rows], new)
             better = m2n < m2[rows]
             done = rows[better]
+            gain = m2n[better] < (1.0 - MIN_GAIN) * m2[done]
             moved = np.max(np.abs(new[better] - q[pending[better]]) / w[done], axis=1)
             p[done], r[done], m2[done], J[done], w[done] = new[better], rn[better], m2n[better], Jn[better], wn[better]
             cell[done] = cn[better]
-            go[pending[better]] = moved >= CONVERGED
+            go[pending[better]] = (moved >= CONVERGED) & gain
             pending = pending[~better]
             if not len(pending):
                 break

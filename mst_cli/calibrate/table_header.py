@@ -154,6 +154,7 @@ def table_header(
         steps=it.STEPS,
         step_cells=c_float(it.STEP_CELLS),
         converged=c_float(it.CONVERGED),
+        min_gain=c_float(it.MIN_GAIN),
         halvings=it.HALVINGS,
         probe=c_float(it.PROBE),
         ridge=c_float(it.RIDGE),
