@@ -158,7 +158,10 @@ def test_the_sketch_sign_extends_the_chips_words(headers, tmp_path):
         "void board_print(const char *line) { puts(line); exit(0); }\n"
     )
     exe = tmp_path / "sketch"
-    subprocess.run([cc, "-std=c99", "-O2", *c_drivers.STRICT, "-I", tmp_path, SKETCH, tmp_path / "board.c", "-o", exe, "-lm"], check=True)
+    subprocess.run(
+        [cc, "-std=c99", "-O2", *c_drivers.STRICT, "-I", tmp_path, SKETCH, tmp_path / "board.c", "-o", exe, "-lm"],
+        check=True,
+    )
     line = subprocess.run([exe], capture_output=True, text=True, check=True).stdout.strip()
     flag, _ = read_codes(shear, imap, setting, np.array([codes]))
     assert line == f"{flag[0]} (codes -300 450 -200)"

@@ -43,6 +43,7 @@ from typing import Any, BinaryIO
 import numpy as np
 
 from mst_cli.calibrate.table_file import MAX_TABLE_BYTES, PARSE_ERRORS, TABLE_KEYS, checked_arrays, npz_arrays
+from mst_cli.calibrate.trilinear import crb_sigmas, normal_step, to_output, trilinear
 from mst_cli.errors import InputError
 from mst_cli.io.files import read_input
 from mst_cli.model.assembly import SensorGeometry
@@ -65,7 +66,6 @@ MIN_GAIN = 1e-3  # ... as does one whose step lowered the squared misfit by less
 SCAN = 256  # readings per scan for the start (their squared distances to every node at a time)
 HALVINGS = 3  # a step that does not lower the misfit is halved up to this many times
 PROBE = 1e-3  # the share of a step that says which cell it enters (its Jacobian is that cell's)
-RIDGE = 1e-9  # the Gauss-Newton system's ridge, relative to its trace (a flat direction stays put)
 BLOCK = 4096  # readings per estimate (their starts' corners at a time)
 
 # (forces, mm between offsets): the default grid, 1 mm over the face and the range in 32 steps
@@ -354,86 +354,6 @@ def _miss_per_slab(coarse: InverseTable, fine: InverseTable) -> np.ndarray:
     return np.max(within * per_node, axis=1)
 
 
-def _bilinear(X: np.ndarray, u: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """X (P, 2, 2, 3) at (u, v) (P, 1) each."""
-    x0 = X[:, 0, 0] + (X[:, 0, 1] - X[:, 0, 0]) * v
-    x1 = X[:, 1, 0] + (X[:, 1, 1] - X[:, 1, 0]) * v
-    return x0 + (x1 - x0) * u
-
-
-def _trilinear(C: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The trilinear field (P, 3) of cells with corners C (P, 2, 2, 2, 3) at cell coordinates t
-    (P, 3), and its Jacobian (P, 3, 3) in those coordinates."""
-    t0, t1, t2 = t[:, 0:1], t[:, 1:2], t[:, 2:3]
-    lower, upper = _bilinear(C[:, 0], t1, t2), _bilinear(C[:, 1], t1, t2)
-    d1 = _bilinear(C[:, :, 1] - C[:, :, 0], t0, t2)
-    d2 = _bilinear(C[:, :, :, 1] - C[:, :, :, 0], t0, t1)
-    return lower + (upper - lower) * t0, np.stack([upper - lower, d1, d2], axis=2)
-
-
-def _solve3(A: np.ndarray, g: np.ndarray) -> np.ndarray:
-    """x of A x = g for many symmetric 3 x 3 systems (P, 3, 3) by Cramer's rule (as the C header
-    does); inf or NaN where A is singular."""
-    a, b, c = A[:, 0, 0], A[:, 0, 1], A[:, 0, 2]
-    d, e, f = A[:, 1, 1], A[:, 1, 2], A[:, 2, 2]
-    c00, c01, c02 = d * f - e * e, c * e - b * f, b * e - c * d
-    c11, c12, c22 = a * f - c * c, b * c - a * e, a * d - b * b
-    det = a * c00 + b * c01 + c * c02
-    g0, g1, g2 = g[:, 0], g[:, 1], g[:, 2]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        return (
-            np.stack(
-                [c00 * g0 + c01 * g1 + c02 * g2, c01 * g0 + c11 * g1 + c12 * g2, c02 * g0 + c12 * g1 + c22 * g2], axis=1
-            )
-            / det[:, None]
-        )
-
-
-def _normal(J: np.ndarray, r: np.ndarray, held: np.ndarray) -> np.ndarray:
-    """The ridged Gauss-Newton step of J dt = r, with the ``held`` coordinates' columns left out
-    (0 where the system is singular)."""
-    Jh = J * ~held[:, None, :]
-    A = np.einsum("pki,pkj->pij", Jh, Jh)
-    A += (RIDGE * (A[:, 0, 0] + A[:, 1, 1] + A[:, 2, 2]) + 1e-30)[:, None, None] * np.eye(3)
-    dt = _solve3(A, np.einsum("pki,pk->pi", Jh, r))
-    return np.where(np.isfinite(dt), dt, 0.0)  # 0 where singular (as the C header does)
-
-
-def crb_sigmas(J: np.ndarray, sigma: float | np.ndarray) -> np.ndarray:
-    """The Cramer-Rao 1-sigma of (F, x0, y0), sqrt(diag((J^T J / sigma^2)^-1)), for Jacobians
-    (P, 3, 3) in field units per unit of p and the noise ``sigma`` per axis in the same field
-    units (one, or (P,)); inf where J^T J is singular."""
-    s2 = np.reshape(np.asarray(sigma, dtype=float) ** 2, (-1, 1, 1))
-    A = np.einsum("pki,pkj->pij", J, J) / s2
-    cov = _solve3_matrix(A)
-    return np.sqrt(np.where(np.isfinite(cov) & (cov > 0), cov, np.inf))
-
-
-def _solve3_matrix(A: np.ndarray) -> np.ndarray:
-    """diag(A^-1) for symmetric 3 x 3 matrices (P, 3, 3); inf where singular or not positive."""
-    c0 = A[:, 1, 1] * A[:, 2, 2] - A[:, 1, 2] ** 2
-    c1 = A[:, 0, 0] * A[:, 2, 2] - A[:, 0, 2] ** 2
-    c2 = A[:, 0, 0] * A[:, 1, 1] - A[:, 0, 1] ** 2
-    det = np.linalg.det(A)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        out = np.stack([c0, c1, c2], axis=1) / det[:, None]
-    return np.where((det > 0)[:, None], out, np.inf)
-
-
-def to_output(kind: str, p: np.ndarray, J: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The roots p (K, 3) and field Jacobians J (K, 3, 3) in the estimate's coordinates: the
-    offset table's are its own; the shear table's (F, u, v) become (Fz, Fx, Fy) = (F, u F, v F),
-    dB/dq = dB/dp dp/dq with dp/dq the inverse of [[1, 0, 0], [u, F, 0], [v, 0, F]]."""
-    if kind != "shear":
-        return p, J
-    F = np.maximum(p[:, 0], 1e-12)  # a press of no force has no shear (its ratio is any)
-    q = np.column_stack([p[:, 0], p[:, 1] * p[:, 0], p[:, 2] * p[:, 0]])
-    Jq = np.empty_like(J)
-    Jq[:, :, 1], Jq[:, :, 2] = J[:, :, 1] / F[:, None], J[:, :, 2] / F[:, None]
-    Jq[:, :, 0] = J[:, :, 0] - (p[:, 1] / F)[:, None] * J[:, :, 1] - (p[:, 2] / F)[:, None] * J[:, :, 2]
-    return q, Jq
-
-
 def _locate(
     table: InverseTable, p: np.ndarray, toward: np.ndarray | None = None
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -454,7 +374,7 @@ def _interpolate(table: InverseTable, pts: np.ndarray) -> np.ndarray:
     """The table's trilinear field (uT) at points (..., 3) of (F, u, v) inside its grid."""
     flat = pts.reshape(-1, 3)
     cell, t, _, _ = _locate(table, flat)
-    return _trilinear(table.corners_uT()[cell], t)[0].reshape(*pts.shape[:-1], 3)
+    return trilinear(table.corners_uT()[cell], t)[0].reshape(*pts.shape[:-1], 3)
 
 
 def slab_babs_uT(table: InverseTable) -> tuple[np.ndarray, np.ndarray]:
@@ -501,7 +421,7 @@ def _field(
     square sum (P,), the field's Jacobian in cell coordinates (P, 3, 3), the cells' widths (P, 3)
     and the cells (P,)."""
     cell, t, w, _ = _locate(table, p, toward)
-    val, J = _trilinear(table.corners_uT()[cell], t)
+    val, J = trilinear(table.corners_uT()[cell], t)
     r = b - val
     return r, np.sum(r * r, axis=1), J, w, cell
 
@@ -509,11 +429,11 @@ def _field(
 def _held_step(J: np.ndarray, r: np.ndarray, q: np.ndarray, box: tuple[np.ndarray, np.ndarray]) -> np.ndarray:
     """The Gauss-Newton step (cell coordinates) from q (P, 3), a coordinate on the box's face
     whose step would leave it held, at most STEP_CELLS cells per coordinate."""
-    dt = _normal(J, r, np.zeros_like(q, dtype=bool))
+    dt = normal_step(J, r, np.zeros_like(q, dtype=bool))
     held = ((q <= box[0]) & (dt < 0.0)) | ((q >= box[1]) & (dt > 0.0))
     some = held.any(axis=1)
     if some.any():
-        dt[some] = _normal(J[some], r[some], held[some])
+        dt[some] = normal_step(J[some], r[some], held[some])
     return np.clip(dt, -STEP_CELLS, STEP_CELLS)
 
 
@@ -592,7 +512,7 @@ def solve_starts(
     P = P.reshape(-1, 3)
     rows = np.flatnonzero(np.isfinite(P[:, 0]))
     cell, t, w, slab = _locate(table, P[rows])
-    val, Jt = _trilinear(table.corners_uT()[cell], t)
+    val, Jt = trilinear(table.corners_uT()[cell], t)
     misfit = np.full(2 * n, np.inf)
     J = np.zeros((2 * n, 3, 3))
     slabs = np.zeros(2 * n, dtype=int)

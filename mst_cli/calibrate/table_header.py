@@ -24,6 +24,7 @@ from mst_cli.calibrate.header import c_float, fill_template
 from mst_cli.calibrate.inverse_map import InverseMap
 from mst_cli.calibrate.load_readings import LoadReadings
 from mst_cli.calibrate.table_reader import OffsetTableReader, ShearTableReader
+from mst_cli.calibrate.trilinear import RIDGE
 from mst_cli.model.chip import CODE_RANGE_LSB, SATURATION_T, ChipSetting
 
 OFFSET_HEADER_FILE = "offset_table.h"
@@ -157,7 +158,7 @@ def table_header(
         min_gain=c_float(it.MIN_GAIN),
         halvings=it.HALVINGS,
         probe=c_float(it.PROBE),
-        ridge=c_float(it.RIDGE),
+        ridge=c_float(RIDGE),
         code_range=CODE_RANGE_LSB[setting.res],
         slab_sigma=_c_floats(f"{p}_slab_sigma_uT", np.hypot(1e6 * reader.sigma_T, table.slab_error_uT())),
         **start_arrays(table, str(p)),

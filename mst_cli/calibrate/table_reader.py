@@ -31,12 +31,12 @@ from mst_cli.calibrate.inverse_table import (
     TableEstimates,
     TableGrid,
     build_table,
-    crb_sigmas,
     source_hash,
 )
 from mst_cli.calibrate.load_readings import LoadReadings, from_estimates
 from mst_cli.calibrate.offset_reading import DEFAULT_MAX_SIGMA_MM, OffsetEstimator, OffsetReadings
 from mst_cli.calibrate.shear_reading import CHI2_FLAG, ShearReader
+from mst_cli.calibrate.trilinear import crb_sigmas
 from mst_cli.calibrate.two_chip_table import TwoChipReader
 from mst_cli.errors import CalibrationFailed, InputError
 from mst_cli.io.cache import cached_path, keep, touch
