@@ -63,7 +63,6 @@ STEPS = 10  # steps at most from each start (most converge in 2 to 5)
 STEP_CELLS = 2.0  # a step moves each coordinate by at most this many of its cells
 CONVERGED = 1e-4  # a start whose step moved less than this share of a cell has converged: it stops ...
 MIN_GAIN = 1e-3  # ... as does one whose step lowered the squared misfit by less than this share of it
-SCAN = 256  # readings per scan for the start (their squared distances to every node at a time)
 HALVINGS = 3  # a step that does not lower the misfit is halved up to this many times
 PROBE = 1e-3  # the share of a step that says which cell it enters (its Jacobian is that cell's)
 BLOCK = 4096  # readings per estimate (their starts' corners at a time)
@@ -391,25 +390,32 @@ def start_nodes(table: InverseTable, B_uT: np.ndarray, noise_uT: np.ndarray) -> 
     by FIT_SIGMAS of the slab's noise ``noise_uT`` (n_F - 1,), holds the reading's |B| (a field
     within that of the reading lies in no other slab: | |b| - |B| | <= |b - B|); NaN where no
     slab holds it; on the no-load face, where every (u, v) gives the same field, the middle of
-    (u, v). SCAN readings at a time."""
+    (u, v). Force node by force node, each against the readings it may hold (the distances by
+    a matrix product: C's float sums differ from them only in near-ties)."""
     g = table.grid
     lo, hi = slab_babs_uT(table)
     margin = FIT_SIGMAS * noise_uT
-    nodes = np.stack(np.meshgrid(g.force_N, g.u, g.v, indexing="ij"), axis=-1).reshape(len(g.force_N), -1, 3)
+    babs = np.linalg.norm(B_uT, axis=1)[:, None]
+    slab = (babs >= lo - margin) & (babs <= hi + margin)
+    take = np.zeros((len(B_uT), len(g.force_N)), dtype=bool)
+    take[:, :-1] |= slab
+    take[:, 1:] |= slab
     field = 1e6 * table.B_T.reshape(len(g.force_N), -1, 3)
-    out = np.full((len(B_uT), 3), np.nan)
-    for i in range(0, len(B_uT), SCAN):
-        b = B_uT[i : i + SCAN]
-        babs = np.linalg.norm(b, axis=1)[:, None]
-        slab = (babs >= lo - margin) & (babs <= hi + margin)
-        take = np.zeros((len(b), len(g.force_N)), dtype=bool)
-        take[:, :-1] |= slab
-        take[:, 1:] |= slab
-        d = field[None] - b[:, None, None, :]
-        d2 = np.where(take[:, :, None], d[..., 2] ** 2 + d[..., 0] ** 2 + d[..., 1] ** 2, np.inf).reshape(len(b), -1)
-        best = np.argmin(d2, axis=1)
-        some = take.any(axis=1)
-        out[i : i + SCAN][some] = nodes.reshape(-1, 3)[best[some]]
+    size2 = np.sum(field * field, axis=2)
+    best = np.full(len(B_uT), np.inf)
+    node = np.full(len(B_uT), -1)
+    for k in range(len(g.force_N)):
+        rows = np.flatnonzero(take[:, k])
+        if not len(rows):
+            continue
+        b = B_uT[rows]
+        d2 = size2[k][None, :] - 2.0 * (b @ field[k].T)  # the squared distance less |b|^2 (a product)
+        j = np.argmin(d2, axis=1)
+        near = d2[np.arange(len(rows)), j] + np.sum(b * b, axis=1)
+        better = near < best[rows]
+        best[rows[better]], node[rows[better]] = near[better], k * field.shape[1] + j[better]
+    nodes = np.stack(np.meshgrid(g.force_N, g.u, g.v, indexing="ij"), axis=-1).reshape(-1, 3)
+    out = np.where((node >= 0)[:, None], nodes[np.maximum(node, 0)], np.nan)
     out[out[:, 0] == g.force_N[0], 1:] = middle_uv(g)[0]  # no load: every (u, v) has its field
     return out
 
