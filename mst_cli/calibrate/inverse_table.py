@@ -1,6 +1,6 @@
 """The one-chip readers' tables (``mst read --estimate offset`` and ``--estimate shear``): the
-model's field tabulated once per model over the loads the reader supports, and inverted by a
-census of every cell.
+model's field tabulated once per model over the loads the reader supports, and inverted
+directly: a start from the field, then a bounded Gauss-Newton on the table.
 
 The field (Bx, By, Bz) is tabulated on a grid of nodes in the normal force (0 to the last lock)
 and two more coordinates (u, v), one force path up the forces per (u, v) node; between nodes it
@@ -12,23 +12,23 @@ is trilinear. The table's ``kind`` says what (u, v) are:
   press (a friction cone: a box in the ratios), each a
   :func:`~mst_cli.model.general_load.load_path` path; an estimate is given as (Fz, Fx, Fy) =
   (F, u F, v F), its Jacobian carried over by the chain rule before the bound is taken.
- A trilinear cell's field is a convex
-combination of its eight corners', so it lies in their bounding box: a reading that a press in
-the cell explains to within k noise sigmas lies inside that box widened by k sigma. The census
-takes every such cell (a vectorised test over all cells and readings), solves the cell's
-trilinear field for the reading by Newton inside the cell (every candidate of every reading at
-once) and keeps each solve that ends in its cell within k sigma of the reading: every root of
-the table, found by construction, not by where a start fell. The flags are the exact reader's
-(:mod:`~mst_cli.calibrate.offset_reading`): ``no_fit`` without a root, ``ambiguous`` when two
-roots lie further apart than twice their combined 1-sigma, ``not_identifiable`` when the best
-root's offset 1-sigma is over the bound, else ``ok``. Each root's 1-sigma is the Cramer-Rao bound
-of the reading there, sqrt(diag((J^T J / sigma^2)^-1)), J the table's field Jacobian
-dB/d(F, x0, y0) and sigma the chip's noise and the table's own interpolation error in that force
-slab in quadrature (:meth:`InverseTable.slab_error_uT`; the same sigma widens the census and
-judges the misfit): the stated 1-sigma covers what the table adds.
+
+The table is inverted directly (the same steps as the C header's, batched here over readings):
+the start is the node nearest the reading among the force slabs whose |B| range, widened by k
+noise sigmas, holds the reading's |B| (:func:`start_nodes`); from it a bounded Gauss-Newton on
+the trilinear field that never climbs (:func:`_gauss_newton`); a second start at that end's
+mirror through the middle of (u, v) (:func:`mirror_start`), where a field that folds over has
+its other root. An end within k sigma of the reading is a root. The flags are the exact
+reader's (:mod:`~mst_cli.calibrate.offset_reading`): ``no_fit`` without a root, ``ambiguous``
+when two roots lie further apart than twice their combined 1-sigma, ``not_identifiable`` when
+the best root's offset 1-sigma is over the bound, else ``ok``. Each root's 1-sigma is the
+Cramer-Rao bound of the reading there, sqrt(diag((J^T J / sigma^2)^-1)), J the table's field
+Jacobian dB/d(F, x0, y0) and sigma the chip's noise and the table's own interpolation error in
+that force slab in quadrature (:meth:`InverseTable.slab_error_uT`; the same sigma widens the
+start's slab test and judges the misfit): the stated 1-sigma covers what the table adds.
 
 The arithmetic is written so that the C header (:mod:`~mst_cli.calibrate.table_header`) can do
-the same steps in float: a fixed number of Newton steps on a 3 x 3 system solved by Cramer's rule.
+the same steps in float: at most STEPS Gauss-Newton steps on a 3 x 3 system solved by Cramer's rule.
 """
 
 from __future__ import annotations
@@ -75,7 +75,7 @@ GRID_DEFAULT = (33, 1.0)
 GRID_COARSE = (17, 2.0)
 KINDS = ("offset", "shear")
 # the shear table's friction cone |Fx / Fz|, |Fy / Fz| <= SHEAR_TABLE_RATIO (a reading beyond it is
-# no_fit: TPU on TPU or skin slips near 0.5 to 1) and its (forces, ratio step); the census's cost
+# no_fit: TPU on TPU or skin slips near 0.5 to 1) and its (forces, ratio step); the start's scan
 # grows with the nodes (docs/design.md section 4.5)
 SHEAR_TABLE_RATIO = 0.5
 SHEAR_GRID_DEFAULT = (33, 0.05)
@@ -140,8 +140,8 @@ class TableGrid:
 class TableEstimates:
     """Per reading: the estimate p (n, 3) (offset: force N, x0 mm, y0 mm; shear: Fz, Fx, Fy N;
     NaN unless ``ok``), its Cramer-Rao 1-sigma (n, 3), the flag (ok, not_identifiable, ambiguous,
-    no_fit) and how many roots the census found (solves that ended in their cell: a root on the
-    face between two cells counts in each)."""
+    no_fit) and how many distinct roots the direct inverse found (0 to 2: two ends within each
+    other's combined 2-sigma count once)."""
 
     p: np.ndarray
     sigma: np.ndarray
@@ -214,7 +214,7 @@ class InverseTable:
         (:func:`_miss_per_slab`). A table of every other node of another knows it: what it
         misses at the other's nodes. Any other table estimates it: trilinear interpolation errs
         as the square of the node spacing, so a quarter of what its table of every other node
-        misses at its nodes. The census takes it as field noise of that slab, in quadrature with
+        misses at its nodes. The direct inverse takes it as field noise of that slab, in quadrature with
         the chip's: a root within it counts, and the stated 1-sigma covers it (docs/design.md
         section 4.5). 0 where an axis has fewer than 3 nodes."""
         if self._slab_error is None:
