@@ -515,16 +515,16 @@ def solve_starts(
     start, far = mirror_start(table.grid, ends)
     second = first[far]
     P[second, 1] = _gauss_newton(table, B_uT[second], start[far])
-    P = P.reshape(-1, 3)
-    rows = np.flatnonzero(np.isfinite(P[:, 0]))
-    cell, t, w, slab = _locate(table, P[rows])
+    flat = P.reshape(-1, 3)
+    rows = np.flatnonzero(np.isfinite(flat[:, 0]))
+    cell, t, w, slab = _locate(table, flat[rows])
     val, Jt = trilinear(table.corners_uT()[cell], t)
     misfit = np.full(2 * n, np.inf)
     J = np.zeros((2 * n, 3, 3))
     slabs = np.zeros(2 * n, dtype=int)
     misfit[rows] = np.linalg.norm(np.repeat(B_uT, 2, axis=0)[rows] - val, axis=1)
     J[rows], slabs[rows] = Jt / w[:, None, :], slab
-    return P.reshape(n, 2, 3), misfit.reshape(n, 2), J.reshape(n, 2, 3, 3), slabs.reshape(n, 2)
+    return P, misfit.reshape(n, 2), J.reshape(n, 2, 3, 3), slabs.reshape(n, 2)
 
 
 def estimate_many(table: InverseTable, B_T: np.ndarray, sigma_T: float, max_sigma_mm: float) -> TableEstimates:
