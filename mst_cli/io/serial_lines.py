@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import contextlib
 import errno
+import functools
 import math
 import os
 import re
@@ -39,7 +40,7 @@ import select
 import stat
 import time
 from collections.abc import Iterator
-from dataclasses import dataclass
+from typing import NamedTuple
 
 from mst_cli.io.line_columns import ColumnMap, default_map, header_map
 
@@ -68,13 +69,16 @@ TEMPERATURE = re.compile(
 BARE = re.compile(rf"^\s*(?:{NUMBER})(?:\s*[,;\s]\s*(?:{NUMBER}))*\s*[,;]?\s*({UNIT})?\s*$", re.IGNORECASE)
 BARE_NUMBER = re.compile(NUMBER, re.IGNORECASE)
 TRAILING_UNIT = re.compile(rf"({UNIT})\s*$", re.IGNORECASE)
+PLAIN_NUMBER = r"[-+]?\d+(?:\.\d*)?"
+# digits and points, one separator throughout ("-0.45,1.50,3072.19", tab-separated chips): a bare line
+PLAIN = re.compile(rf"{PLAIN_NUMBER}(?:(?P<sep>[,;\t ]){PLAIN_NUMBER}(?:(?P=sep){PLAIN_NUMBER})*)?")
+AXIS_LETTER = re.compile(r"[XYZ]", re.IGNORECASE)  # a labelled line names an axis; a bare one has none
 HEADER_SPLIT = re.compile(r"\s*[,;\t]\s*|\s+")
 LINE_END = re.compile(rb"\r\n|\r|\n")
 READ_BYTES = 1 << 16
 
 
-@dataclass(frozen=True)
-class LineSample:
+class LineSample(NamedTuple):
     """One sample of a line: ``values`` x, y, z of every chip (3 k; microtesla, or raw codes),
     ``cells`` the same as written (as forces.csv echoes them), the chip's temperature (degC)
     and its cell, None when the line has none."""
@@ -95,32 +99,51 @@ def parse_line(line: str, raw: bool = False, columns: ColumnMap | None = None, c
     line = line.strip()
     if not line:
         return None
-    found: dict[str, tuple[str, str]] = {}
-    for label, number, unit in LABELLED.findall(line):
-        found.setdefault(label.lower(), (number, unit))
-    if set(found) == {"x", "y", "z"} and chips == 1:
-        trailing = TRAILING_UNIT.search(line)
-        default = trailing.group(1) if trailing else ""
-        values = [_value(found[a][0], found[a][1] or default, raw) for a in "xyz"]
-        t = TEMPERATURE.search(line)
-        return _sample(values, [found[a][0] for a in "xyz"], [found[a][1] or default for a in "xyz"], t and t.group(1))
+    plain = PLAIN.fullmatch(line)
+    if plain is not None:  # the commonest stream, read without the general forms' searches
+        return _bare(line.split(plain.group("sep")) if plain.group("sep") else [line], "", raw, columns, chips)
+    if chips == 1 and AXIS_LETTER.search(line) is not None:  # a labelled line names its axes
+        found: dict[str, tuple[str, str]] = {}
+        for label, number, unit in LABELLED.findall(line):
+            found.setdefault(label.lower(), (number, unit))
+        if set(found) == {"x", "y", "z"}:
+            trailing = TRAILING_UNIT.search(line)
+            default = trailing.group(1) if trailing else ""
+            values = [_value(found[a][0], found[a][1] or default, raw) for a in "xyz"]
+            t = TEMPERATURE.search(line)
+            units = [found[a][1] or default for a in "xyz"]
+            return _sample(values, [found[a][0] for a in "xyz"], units, t and t.group(1))
     m = BARE.match(line)
     if m is None:
         return None
     numbers = BARE_NUMBER.findall(line[: m.start(1)] if m.group(1) else line)
-    where = (columns or default_map(len(numbers), chips) or ColumnMap(group=("x", "y", "z"))).place(len(numbers), chips)
+    return _bare(numbers, m.group(1) or "", raw, columns, chips)
+
+
+def _bare(numbers: list[str], unit: str, raw: bool, columns: ColumnMap | None, chips: int) -> LineSample | None:
+    """The sample of a line of bare ``numbers`` (as written) in ``unit``, placed by ``columns``."""
+    where = _placement(columns, len(numbers), chips)
     if where is None:
         return None
     xyz, t_at = where
-    unit = m.group(1) or ""
     values = [_value(numbers[i], unit, raw) for i in xyz]
     return _sample(values, [numbers[i] for i in xyz], [unit] * len(xyz), None if t_at is None else numbers[t_at])
+
+
+@functools.lru_cache(maxsize=256)
+def _placement(columns: ColumnMap | None, n_numbers: int, chips: int) -> tuple[tuple[int, ...], int | None] | None:
+    """Where x, y, z (and t) sit among a bare line's ``n_numbers`` numbers (:meth:`ColumnMap.place`),
+    found once per map and count: a stream's lines share both."""
+    return (columns or default_map(n_numbers, chips) or ColumnMap(group=("x", "y", "z"))).place(n_numbers, chips)
 
 
 def _sample(values: list[float], cells: list[str], units: list[str], t_cell: str | None) -> LineSample:
     """The sample of parsed values, their cells as written (converted where a unit scaled them)
     and the temperature's cell; BadLine for a temperature no chip reads."""
-    shown = [c if UNIT_SCALE_uT.get(u.lower(), 1.0) == 1.0 else f"{v:.9g}" for c, u, v in zip(cells, units, values)]
+    if any(units):  # a scaled number is shown converted
+        shown = [c if UNIT_SCALE_uT.get(u.lower(), 1.0) == 1.0 else f"{v:.9g}" for c, u, v in zip(cells, units, values)]
+    else:
+        shown = cells
     if t_cell is None:
         return LineSample(tuple(values), tuple(shown))
     T = float(t_cell)
@@ -159,12 +182,13 @@ class SampleParser:
         self._axes: dict[str, tuple[float, str]] = {}
 
     def feed(self, line: str) -> LineSample | None:
-        if not line.strip():
+        if not line or line.isspace():
             return None  # a blank line (a CRLF split across reads, an empty println): nothing to count
         try:
             sample = parse_line(line, self.raw, self.columns, self.chips)
             if sample is not None:
-                self._axes = {}
+                if self._axes:
+                    self._axes = {}
                 return sample
             if self._header(line):
                 return None
