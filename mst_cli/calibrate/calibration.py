@@ -41,6 +41,7 @@ from mst_cli.calibrate.loadtest import (
 )
 from mst_cli.calibrate.missing_force import check_force_sentinel
 from mst_cli.calibrate.plot import plot_calibration
+from mst_cli.calibrate.reading import reading_resolution_T
 from mst_cli.calibrate.rig_calibration import RigAnalysis, analyse, describe
 from mst_cli.calibrate.tables import lookup_csv, residuals_csv
 from mst_cli.calibrate.temperature_fit import (
@@ -264,6 +265,8 @@ def calibrate(
     )
     lt = fitted.lt  # the rows fitted (referred to 20 degC when the load test has T_C)
     imap, setting = fitted.imap, fitted.setting
+    if rig.zero is not None and rig.zero.noise_T:  # the noise logged at rest: the readers' (as mst read's)
+        imap.field_resolution_T = reading_resolution_T(0.0, setting, doc.noise_uT_rms, 1e6 * rig.zero.noise_T)
     header, header_reason = _header(fitted, f"{Path(design_file).name} and {Path(load_test_file).name}")
     F_fit, flag_fit, errors = _in_sample_errors(fitted)
     yaml_text = YAML_PREAMBLE + yaml.safe_dump(fitted.calibrated_dict, sort_keys=False, default_flow_style=None)

@@ -35,9 +35,11 @@ import errno
 import functools
 import math
 import os
+import queue
 import re
 import select
 import stat
+import threading
 import time
 from collections.abc import Iterator
 from typing import NamedTuple
@@ -248,6 +250,7 @@ class LineSource:
         self._fd = None
         self.is_tty = True
         self.cut_off: str | None = None  # a last line without its end, from a port that closed mid-line
+        self._stopping = False  # set by :meth:`waiting`'s caller being done: the reading thread ends
         try:
             import termios  # noqa: F401  # deferred: POSIX only (the test of the platform)
 
@@ -316,7 +319,7 @@ class LineSource:
         buf = b""
         last = asked = time.monotonic()
         self._write()
-        while True:
+        while not self._stopping:
             data = self._read(0.2)
             if data is None:
                 break
@@ -333,10 +336,50 @@ class LineSource:
                 self._write()  # a request lost (or the sketch was not listening yet)
             if len(buf) > READ_BYTES:  # no line end in 64 KB: not a line protocol
                 buf = b""
+        if self._stopping:
+            return  # the reader is done: a line still arriving is not cut off
         if buf.strip() and self.is_tty:  # a board stopped mid-line: its numbers are cut off
             self.cut_off = buf.decode("utf-8", errors="replace")
         elif buf.strip():  # a captured file's last line without its line end
             yield [buf.decode("utf-8", errors="replace")]
+
+    def waiting(self) -> Iterator[list[tuple[float, list[str]]]]:
+        """Everything that arrived while the caller was busy: lists of (its arrival time on
+        ``time.monotonic``, the batch's lines). The port is read by a thread of its own, so it is
+        drained while a batch is estimated (a pseudo-terminal holds 4 kB, a board's USB buffer
+        little more: left unread, the board would wait and the batches stay small). close() the
+        iterator when done: the thread ends within 0.2 s. The port's errors are raised here."""
+        got: queue.SimpleQueue = queue.SimpleQueue()
+
+        def read() -> None:
+            try:
+                for batch in self.batches():
+                    got.put((time.monotonic(), batch))
+            except BaseException as exc:  # raised in the caller's thread
+                got.put(exc)
+            got.put(None)
+
+        thread = threading.Thread(target=read, name=f"read {self.port}", daemon=True)
+        thread.start()
+        try:
+            while True:
+                try:
+                    items = [got.get(timeout=0.2)]  # a timeout: Ctrl-C is seen while waiting
+                except queue.Empty:
+                    continue
+                while not got.empty():
+                    items.append(got.get_nowait())
+                for item in items:
+                    if isinstance(item, BaseException):
+                        raise item
+                batches = [item for item in items if item is not None]
+                if batches:
+                    yield batches
+                if None in items:
+                    return
+        finally:
+            self._stopping = True
+            thread.join()
 
     def __iter__(self) -> Iterator[str]:
         for batch in self.batches():

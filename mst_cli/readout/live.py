@@ -220,11 +220,13 @@ def read_stream(
     record = StreamRecord(port, opts.raw, chips, setting)
     parser = SampleParser(opts.raw, opts.columns, chips)
     live = _Live(reader, offsets, opts.tare, show)
+    arriving = src.waiting()
     try:
-        _read_batches(src, parser, record, live, opts.count, warn)
+        _read_batches(arriving, parser, record, live, opts.count, warn)
     except KeyboardInterrupt:
         pass
     finally:
+        arriving.close()  # the reading thread ends before the port closes
         src.close()
     if src.cut_off is not None:
         parser.bad += 1
@@ -247,27 +249,28 @@ def read_stream(
 
 
 def _read_batches(
-    src: LineSource,
+    arriving: Iterator[list[tuple[float, list[str]]]],
     parser: SampleParser,
     record: StreamRecord,
     live: _Live,
     count: int | None,
     warn: Callable[[str], None] | None,
 ) -> None:
-    """Every batch of ``src`` into ``record`` (a sample no chip gives is a bad line), shown by
-    ``live``, until the port ends or ``count`` samples came."""
+    """Every batch ``arriving`` (:meth:`LineSource.waiting`) into ``record`` (a sample no chip
+    gives is a bad line), all that waited shown by ``live`` at once, until the port ends or
+    ``count`` samples came."""
     said: set[str] = set()
     t0 = time.monotonic()
-    for batch in src.batches():
-        t = time.monotonic() - t0
-        lines = iter(batch)
-        while count is None or len(record) < count:  # again while bad samples fell short of count
-            samples, texts = _samples(parser, lines, None if count is None else count - len(record))
-            if not samples:
-                break
-            for i, exc in record.add_many(samples, t):
-                parser.bad += 1
-                parser.first_bad = parser.first_bad or (texts[i].strip(), str(exc))
+    for waited in arriving:
+        for t, batch in waited:
+            lines = iter(batch)
+            while count is None or len(record) < count:  # again while bad samples fell short of count
+                samples, texts = _samples(parser, lines, None if count is None else count - len(record))
+                if not samples:
+                    break
+                for i, exc in record.add_many(samples, t - t0):
+                    parser.bad += 1
+                    parser.first_bad = parser.first_bad or (texts[i].strip(), str(exc))
         _say_once(parser, len(record), said, warn)
         live.show_new(record)
         if count is not None and len(record) >= count:
