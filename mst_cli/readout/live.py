@@ -103,7 +103,7 @@ class StreamRecord:
         errors: list[tuple[int, InputError]] = []
         kept: list[int] = []
         for i, s in enumerate(samples):
-            where = f"{self.source} sample {len(self) + len(kept) + 1}"
+            where = f"{self.source} sample {len(self) + 1}"  # the cells of those kept are in already
             if self.with_T is not None and (s.T_C is not None) != self.with_T:
                 had = "had" if self.with_T else "had no"
                 errors.append((i, InputError(where, s.T_cell, f"the first sample's lines {had} T")))
