@@ -18,7 +18,8 @@ def _numbers(rng, k: int, raw: bool) -> list[str]:
     if raw:
         return [str(int(v)) for v in rng.integers(-40000, 40000, k)]
     digits = rng.integers(0, 5, k)
-    return [f"{v:.{d}f}" + ("." if d == 0 and rng.random() < 0.2 else "") for v, d in zip(rng.normal(0, 3e3, k), digits)]
+    values = rng.normal(0, 3e3, k)
+    return [f"{v:.{d}f}" + ("." if d == 0 and rng.random() < 0.2 else "") for v, d in zip(values, digits)]
 
 
 @pytest.mark.parametrize("raw", [False, True])
