@@ -17,7 +17,8 @@ chips at (0, 0) and (10, 6) mm with none and shear (all five; their tables take 
   (`mst_cli.readout.live.read_stream`, as `--serial` does):
   the rate it showed samples at, the lag of a sample behind its line's writing (median, and at
   the end), and how fast the lag grows from the first quarter to the end (ms per s of stream:
-  about 0 keeps up, rate / live rate - 1 is a backlog); "keeps up" when it grows by less than
+  about 0 keeps up, rate / live rate - 1 is a backlog, quoted when larger: one batch can hold the
+  whole stream); "keeps up" when it grows by less than
   50 ms a second and the samples are shown at 95 % of the rate at least;
 * live flat out: every line written as fast as the port takes it; readings a second.
 
@@ -180,7 +181,7 @@ class Row:
         f, est, got, median_lag, end_lag, growth, flat = np.median(np.array(self.runs), axis=0)
         share = f"{est:,.0f} ({100 * f / est:.0f} %)" if np.isfinite(est) else "-"
         keeps = growth < BACKLOG_S_PER_S and got >= 0.95 * rate
-        verdict = "keeps up" if keeps else f"backlog (+{1e3 * max(growth, 0.0):,.0f} ms/s)"
+        verdict = "keeps up" if keeps else f"backlog: lag +{1e3 * max(growth, rate / got - 1.0):,.0f} ms/s"
         return (
             f"| {self.name} | {len(self.lines)} | {f:,.0f} | {share} | {got:,.0f} | {got / f:.2f} | "
             f"{1e3 * median_lag:,.0f} / {1e3 * end_lag:,.0f} | {verdict} | {flat:,.0f} | {flat / rate:.2f} |"
