@@ -260,13 +260,9 @@ def calibrate(
     aligned, alignment = align(read, measure=use_branches)  # the calibration that ignores branches: no lag
     lt_all, presses = _split_presses(aligned, doc)
     rig = analyse(lt_all, max(cal.MIN_POINTS, cal.MIN_POINTS_PER_PARAMETER * len(params)), use_branches, alignment)
-    fitted, temperature = _fit_in_temperature(
-        doc, rig.readings.subset(rig.fit_rows), Path(load_test_file).name, mechanics, tuple(params), progress
-    )
+    fitted, temperature = _fit_in_temperature(doc, rig, Path(load_test_file).name, mechanics, tuple(params), progress)
     lt = fitted.lt  # the rows fitted (referred to 20 degC when the load test has T_C)
     imap, setting = fitted.imap, fitted.setting
-    if rig.zero is not None and rig.zero.noise_T:  # the noise logged at rest: the readers' (as mst read's)
-        imap.field_resolution_T = reading_resolution_T(0.0, setting, doc.noise_uT_rms, 1e6 * rig.zero.noise_T)
     header, header_reason = _header(fitted, f"{Path(design_file).name} and {Path(load_test_file).name}")
     F_fit, flag_fit, errors = _in_sample_errors(fitted)
     yaml_text = YAML_PREAMBLE + yaml.safe_dump(fitted.calibrated_dict, sort_keys=False, default_flow_style=None)
@@ -303,15 +299,17 @@ def calibrate(
 
 def _fit_in_temperature(
     doc: Document,
-    lt: Readings,
+    rig: RigAnalysis,
     load_test_name: str,
     mechanics: str,
     names: tuple[str, ...],
     progress: Callable[[str], None] | None,
 ) -> tuple[_Fitted, TemperatureCalibration | None]:
-    """The fit on the rows referred to 20 degC (:mod:`~mst_cli.calibrate.temperature_fit`; as they
-    are without T_C) and, when the load test's temperatures fix the modulus coefficient, the fit
-    again with it."""
+    """The fit on the rig's rows to fit, referred to 20 degC (:mod:`~mst_cli.calibrate.temperature_fit`;
+    as they are without T_C) and, when the load test's temperatures fix the modulus coefficient,
+    the fit again with it; its inverse map's resolution at the noise the rig logged at rest, when it
+    logged rests (the readers' noise, as mst read's: :func:`~mst_cli.calibrate.reading.reading_resolution_T`)."""
+    lt = rig.readings.subset(rig.fit_rows)
     alpha = remanence_coeff_of(doc)
     fitted = _fit(doc, referred(lt, alpha, 0.0), load_test_name, mechanics, names, progress)
     temperature = None
@@ -321,6 +319,9 @@ def _fit_in_temperature(
             break
         beta = temperature.modulus_coeff_per_K
         fitted = _fit(doc, referred(lt, alpha, beta), load_test_name, mechanics, names, progress)
+    if rig.zero is not None and rig.zero.noise_T:
+        noise_uT = 1e6 * rig.zero.noise_T
+        fitted.imap.field_resolution_T = reading_resolution_T(0.0, fitted.setting, doc.noise_uT_rms, noise_uT)
     return fitted, temperature
 
 

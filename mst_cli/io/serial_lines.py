@@ -41,7 +41,7 @@ import select
 import stat
 import threading
 import time
-from collections.abc import Iterator
+from collections.abc import Generator, Iterator
 from typing import NamedTuple
 
 from mst_cli.io.line_columns import ColumnMap, default_map, header_map
@@ -343,7 +343,7 @@ class LineSource:
         elif buf.strip():  # a captured file's last line without its line end
             yield [buf.decode("utf-8", errors="replace")]
 
-    def waiting(self) -> Iterator[list[tuple[float, list[str]]]]:
+    def waiting(self) -> Generator[list[tuple[float, list[str]]], None, None]:
         """Everything that arrived while the caller was busy: lists of (its arrival time on
         ``time.monotonic``, the batch's lines). The port is read by a thread of its own, so it is
         drained while a batch is estimated (a pseudo-terminal holds 4 kB, a board's USB buffer

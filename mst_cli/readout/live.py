@@ -43,7 +43,7 @@ class _Rows:
     as one array): a long session's fields without re-joining them at every batch."""
 
     def __init__(self, shape: tuple[int, ...], dtype: type):
-        self._a = np.empty((64, *shape), dtype=dtype)
+        self._a: np.ndarray = np.empty((64, *shape), dtype=dtype)
         self.n = 0
 
     def extend(self, block: np.ndarray) -> None:
@@ -99,7 +99,7 @@ class StreamRecord:
         values = np.array([s.values for s in samples], dtype=float).reshape(-1, 3)
         B, sat, beyond = fields_of(values, self.raw, self.setting)
         B, sat, beyond = B.reshape(-1, self.chips, 3), sat.reshape(-1, self.chips), beyond.reshape(-1, 3 * self.chips)
-        bad_rows = beyond.any(axis=1)
+        bad_rows = np.asarray(beyond.any(axis=1))
         errors: list[tuple[int, InputError]] = []
         kept: list[int] = []
         for i, s in enumerate(samples):
@@ -114,7 +114,7 @@ class StreamRecord:
                 kept.append(i)
                 self.cells.append([*s.cells, *([s.T_cell] if s.T_cell is not None else [])])
         self._B_T.extend(B[kept])
-        self._saturated.extend(sat[kept].any(axis=1))
+        self._saturated.extend(np.asarray(sat[kept].any(axis=1)))
         self.times_s.extend([t_s] * len(kept))
         return errors
 
