@@ -15,8 +15,9 @@ chips at (0, 0) and (10, 6) mm with none and shear (all five; their tables take 
 * live at --rate: the lines written to a pseudo-terminal at that rate (batches of 20 lines, on the
   clock, by a process of its own, as a board writes) and read by the live session
   (`mst_cli.readout.live.read_stream`, as `--serial` does):
-  the rate it showed samples at, the lag of a sample behind its line's writing (median, and at
-  the end), and how fast the lag grows from the first quarter to the end (ms per s of stream:
+  the rate it showed samples at (the first quarter aside: a session starts with a transient),
+  the lag of a sample behind its line's writing (median, and at the end), and how fast the lag
+  grows from the middle of the stream to its end (ms per s of stream:
   about 0 keeps up, rate / live rate - 1 is a backlog, quoted when larger: one batch can hold the
   whole stream); "keeps up" when it grows by less than
   50 ms a second and the samples are shown at 95 % of the rate at least;
@@ -157,11 +158,13 @@ def live(reader: ForceReader, lines: list[str], rate: float | None, offsets) -> 
             written = feed.written()[: len(shown)]
         finally:
             feed.close()
-    n = len(shown)
+    n, q = len(shown), len(shown) // 4
     lag = np.array(shown) - written
     end = float(np.mean(lag[-max(1, n // 20) :]))
-    growth = (end - float(np.median(lag[: max(1, n // 4)]))) / max(written[-1] - written[0], 1e-9)
-    return n / (shown[-1] - written[0]), float(np.median(lag)), end, growth
+    middle = float(np.median(lag[2 * q : 2 * q + max(1, n // 20)]))  # past the start's transient
+    growth = (end - middle) / max(written[-1] - written[2 * q], 1e-9)
+    steady = (n - 1 - q) / max(shown[-1] - shown[q], 1e-3)  # shown a second, the first quarter aside
+    return steady, float(np.median(lag)), end, growth
 
 
 class Row:
