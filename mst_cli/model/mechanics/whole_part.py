@@ -1,0 +1,208 @@
+"""The whole-part rung: the section of the part as exported, in plane strain, pressed over a
+centred strip (docs/design.md section 4.7).
+
+Rungs L0-L2 model the layers between rigid plates; :mod:`mst_cli.model.load_path` adds the
+cap, plates and cover as beams in closed form. This rung models them all at once: the section at
+mid-depth (:mod:`~mst_cli.model.mechanics.whole_part_mesh`, from the one geometry the CAD
+extrudes), P2 triangles, linear small-strain plane-strain elasticity (scikit-fem), each region
+its own material (TPU; the magnet N42-stiff or the pocket left empty; an insert in its own), the
+base's bottom face held, a uniform pressure over the centred strip ``patch_mm`` wide on the top
+face (the force per mm of depth 1/D, so every figure is per newton on the part D deep).
+
+Per regime the layers locked before it are taken as closed (their cavity filled), as the
+issue's independent model does; the contacts that bending closes elsewhere are not modelled
+(a linear solve: an upper bound on the compliance where a gap would close). The magnet's
+motion is the rigid-body least-squares fit of the displacement at the magnet's (or the empty
+pocket's floor's) nodes: drop, side motion and turn; the field change per newton at the chip is
+the drop times dB_z/dz on the axis at the unloaded gap (:mod:`mst_cli.model.magnet_field`).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from mst_cli.model.magnet_field import axial_dBz_dz_T_per_mm
+from mst_cli.model.mechanics.whole_part_mesh import TAGS, mesh_section, section_regions
+
+N42_MODULUS_MPA = 160e3  # sintered NdFeB, Young's modulus ~160 GPa (Arnold Magnetic Technologies datasheet)
+N42_POISSON = 0.24
+RIGID_FACTOR = 1e4  # the rigid-member control: cap, plates and base this much stiffer than TPU
+DEFAULT_SPACING_MM = 0.3  # lattice spacing of the production mesh (benchmarks/bench_whole_part.py)
+DEFAULT_LEVELS = 2  # rounds of refinement at the layers' corners
+MEMBER_TAGS = ("base", "plate", "cap")
+
+
+@dataclass(frozen=True)
+class PartOptions:
+    """How the section is built and pressed: the strip's width (mm), the mesh spacing (mm),
+    the magnet in its pocket or the pocket empty, the members' stiffness factor (1: as
+    printed; :data:`RIGID_FACTOR`: the rigid-member control), locked layers by index."""
+
+    patch_mm: float = 6.0
+    spacing_mm: float = DEFAULT_SPACING_MM
+    magnet: bool = True
+    member_factor: float = 1.0
+    locked: tuple[int, ...] = ()
+    insert: object = None
+    levels: int = DEFAULT_LEVELS
+
+
+@dataclass(frozen=True)
+class MagnetMotion:
+    """The magnet's rigid motion per newton of press: drop (mm/N, > 0 down), side (mm/N, +x),
+    turn (rad/N, about +y); the problem's size and its solve time."""
+
+    drop_mm_per_N: float
+    side_mm_per_N: float
+    turn_rad_per_N: float
+    dofs: int
+    seconds: float
+    extra: dict = field(default_factory=dict)
+
+
+def _moduli(material, options: PartOptions) -> tuple[np.ndarray, np.ndarray]:
+    """(E, nu) per tag (:data:`TAGS`)."""
+    E = {t: material.youngs_modulus_MPa for t in TAGS}
+    nu = {t: material.poisson_ratio for t in TAGS}
+    for t in MEMBER_TAGS:
+        E[t] *= options.member_factor
+    E["magnet"], nu["magnet"] = N42_MODULUS_MPA, N42_POISSON
+    if options.insert is not None:
+        # load_path.Insert keeps its modulus in plane strain; back to E for the plane-strain form
+        E["insert"] = options.insert.modulus_MPa * (1.0 - options.insert.poisson_ratio**2)
+        nu["insert"] = options.insert.poisson_ratio
+    return np.array([E[t] for t in TAGS]), np.array([nu[t] for t in TAGS])
+
+
+def press_points(geometry, patch_mm: float) -> np.ndarray:
+    """The press's edges on the top face, so that the mesh has nodes there."""
+    c = min(patch_mm, geometry.width_mm)
+    return np.array([[-0.5 * c, geometry.total_height_mm], [0.5 * c, geometry.total_height_mm]])
+
+
+def build_mesh(geometry, options: PartOptions):
+    """The section's MeshTri and each triangle's tag index: the lattice mesh, then
+    ``options.levels`` rounds of refinement within t / 2^i of each layer's corners (the cavity's
+    tips and the walls' roots, where the strain is singular, as in L2's own mesh)."""
+    from skfem import MeshTri  # deferred: scikit-fem loads when this rung is asked for
+
+    regions = section_regions(geometry, options.locked, options.magnet, options.insert)
+    p, t, _ = mesh_section(regions, options.spacing_mm, press_points(geometry, options.patch_mm))
+    mesh = MeshTri(p, t)
+    corners = np.concatenate([np.array(e) for r in regions if r.tag == "layer" for e in r.edges()])
+    radius = 0.5 * min(c.t_mm for c in geometry.layers)
+    for i in range(options.levels):
+        mid = mesh.p[:, mesh.t].mean(axis=1)
+        d2 = ((mid.T[:, None, :] - corners[None, :, :]) ** 2).sum(-1).min(axis=1)
+        marked = np.flatnonzero(d2 < (radius * 0.5**i) ** 2)
+        if marked.size:
+            mesh = mesh.refined(marked)
+    mid = mesh.p[:, mesh.t].mean(axis=1).T
+    tag = np.full(mesh.t.shape[1], -1)
+    for r in regions[::-1]:
+        tag[r.contains(mid)] = TAGS.index(r.tag)
+    return mesh, tag
+
+
+def _stiffness(basis, tag: np.ndarray, E: np.ndarray, nu: np.ndarray):
+    """Plane-strain linear elasticity with a modulus per triangle."""
+    from skfem import BilinearForm, asm
+    from skfem.helpers import ddot, sym_grad, trace
+
+    lam_e = E * nu / ((1.0 + nu) * (1.0 - 2.0 * nu))
+    mu_e = E / (2.0 * (1.0 + nu))
+    lam, mu = lam_e[tag][:, None], mu_e[tag][:, None]  # (elements, 1): constant over each
+
+    @BilinearForm
+    def elasticity(u, v, w):
+        eu, ev = sym_grad(u), sym_grad(v)
+        return 2.0 * mu * ddot(eu, ev) + lam * trace(eu) * trace(ev)
+
+    return asm(elasticity, basis)
+
+
+def _load(geometry, basis_mesh, element, patch_mm: float):
+    """The strip's pressure: 1/D N per mm of depth over |x| <= c/2 of the top face."""
+    from skfem import FacetBasis, LinearForm, asm
+
+    H, c = geometry.total_height_mm, min(patch_mm, geometry.width_mm)
+    tol = 1e-7
+    facets = basis_mesh.facets_satisfying(
+        lambda x: (np.abs(x[1] - H) < tol) & (np.abs(x[0]) <= 0.5 * c + tol), boundaries_only=True
+    )
+    fb = FacetBasis(basis_mesh, element, facets=facets)
+    q = 1.0 / (c * geometry.depth_mm)  # N/mm^2 on the strip, per mm of depth: F = 1 N on D
+
+    @LinearForm
+    def pressure(v, w):
+        return -q * v[1]
+
+    return asm(pressure, fb)
+
+
+def rigid_fit(xz: np.ndarray, u: np.ndarray) -> tuple[float, float, float]:
+    """(U_x, U_z, theta) of the least-squares rigid motion u ~ U + theta e_y x (x - c) of points
+    ``xz`` (n, 2) moved by ``u`` (n, 2); theta about +y in the (x, z) plane: u_x = -theta dz,
+    u_z = theta dx (counter-clockwise in x-z seen from -y positive)."""
+    c = xz.mean(axis=0)
+    d = xz - c
+    U = u.mean(axis=0)
+    du = u - U
+    theta = float((d[:, 0] * du[:, 1] - d[:, 1] * du[:, 0]).sum() / (d**2).sum())
+    return float(U[0]), float(U[1]), theta
+
+
+def press(geometry, material, options: PartOptions = PartOptions()) -> MagnetMotion:
+    """The magnet's rigid motion per newton under the centred strip (module docstring)."""
+    from skfem import Basis, ElementTriP2, ElementVector, condense, solve
+
+    t0 = time.perf_counter()
+    mesh, tag = build_mesh(geometry, options)
+    element = ElementVector(ElementTriP2())
+    basis = Basis(mesh, element)
+    E, nu = _moduli(material, options)
+    K = _stiffness(basis, tag, E, nu)
+    f = _load(geometry, mesh, element, options.patch_mm)
+    held = basis.get_dofs(lambda x: np.abs(x[1]) < 1e-7).all()
+    u = solve(*condense(K, f, D=held))
+    xz, uv = _magnet_points(geometry, basis, tag, u, options.magnet)
+    Ux, Uz, th = rigid_fit(xz, uv)
+    return MagnetMotion(-Uz, Ux, th, basis.N, time.perf_counter() - t0, {"elements": mesh.t.shape[1]})
+
+
+def _magnet_points(geometry, basis, tag: np.ndarray, u: np.ndarray, magnet: bool):
+    """(positions (n, 2), displacements (n, 2)) of the magnet's nodes, or of the empty pocket's
+    floor's (where the magnet rests)."""
+    ux, uz = u[basis.nodal_dofs[0]], u[basis.nodal_dofs[1]]
+    p = basis.mesh.p
+    if magnet:
+        nodes = np.unique(basis.mesh.t[:, tag == TAGS.index("magnet")])
+    else:
+        r, z0 = geometry.magnet.radius_mm, geometry.z_magnet_bottom_mm
+        nodes = np.flatnonzero((np.abs(p[1] - z0) < 1e-7) & (np.abs(p[0]) <= r + 1e-7))
+    return p[:, nodes].T, np.stack([ux[nodes], uz[nodes]], axis=1)
+
+
+def field_per_drop_uT_per_mm(geometry) -> float:
+    """|dB_z/dz| on the magnet's axis at the unloaded gap, uT per mm of drop."""
+    m = geometry.magnet
+    return 1e6 * abs(float(axial_dBz_dz_T_per_mm(geometry.gap0_mm, m.radius_mm, m.thickness_mm, m.remanence_T)))
+
+
+def regime_locked(stack) -> list[tuple[int, ...]]:
+    """Per regime, the layers locked before it (the stack's lock order)."""
+    order = [int(i) for i in stack.lock_order]
+    return [tuple(sorted(order[:r])) for r in range(len(order))]
+
+
+def regime_responses(geometry, material, stack, options: PartOptions = PartOptions()) -> list[dict]:
+    """Per regime: the magnet's motion and the field change per newton at the chip (uT/N)."""
+    per_mm = field_per_drop_uT_per_mm(geometry)
+    out = []
+    for r, locked in enumerate(regime_locked(stack)):
+        mo = press(geometry, material, PartOptions(**{**options.__dict__, "locked": locked}))
+        out.append({"regime": r + 1, "locked": locked, "motion": mo, "field_uT_per_N": per_mm * mo.drop_mm_per_N})
+    return out
