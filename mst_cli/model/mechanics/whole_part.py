@@ -24,6 +24,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from mst_cli.model.load_path import FINGERTIP_PATCH_MM
 from mst_cli.model.magnet_field import axial_dBz_dz_T_per_mm
 from mst_cli.model.mechanics.whole_part_mesh import TAGS, mesh_section, section_regions
 
@@ -31,19 +32,24 @@ N42_MODULUS_MPA = 160e3  # sintered NdFeB, Young's modulus ~160 GPa (Arnold Magn
 N42_POISSON = 0.24
 RIGID_FACTOR = 1e4  # the rigid-member control: cap, plates and base this much stiffer than TPU
 DEFAULT_SPACING_MM = 0.3  # lattice spacing of the production mesh (benchmarks/bench_whole_part.py)
-DEFAULT_LEVELS = 2  # rounds of refinement at the layers' corners
+DEFAULT_LEVELS = 3  # rounds of refinement at the layers' corners
 MEMBER_TAGS = ("base", "plate", "cap")
+# how the magnet sits: "resting" loose in its pocket as printed (0.1 mm clearance: it rides on
+# the pocket's floor and stiffens nothing; its motion the floor's under it), "bonded" glued in,
+# an N42 block filling the pocket (its motion its own)
+MAGNET_SEATS = ("resting", "bonded")
 
 
 @dataclass(frozen=True)
 class PartOptions:
-    """How the section is built and pressed: the strip's width (mm), the mesh spacing (mm),
-    the magnet in its pocket or the pocket empty, the members' stiffness factor (1: as
-    printed; :data:`RIGID_FACTOR`: the rigid-member control), locked layers by index."""
+    """How the section is built and pressed: the strip's width (mm), the mesh spacing (mm) and
+    corner refinements, the magnet (:data:`MAGNET_SEATS`), the members' stiffness factor (1: as
+    printed; :data:`RIGID_FACTOR`: the rigid-member control), locked layers by index, an insert
+    (:class:`~mst_cli.model.load_path.Insert`; None: the geometry's own, if it has one)."""
 
-    patch_mm: float = 6.0
+    patch_mm: float = FINGERTIP_PATCH_MM
     spacing_mm: float = DEFAULT_SPACING_MM
-    magnet: bool = True
+    magnet: str = "resting"
     member_factor: float = 1.0
     locked: tuple[int, ...] = ()
     insert: object = None
@@ -63,17 +69,23 @@ class MagnetMotion:
     extra: dict = field(default_factory=dict)
 
 
-def _moduli(material, options: PartOptions) -> tuple[np.ndarray, np.ndarray]:
+def part_insert(geometry, options: PartOptions):
+    """The insert pressed with: the options' own, else the geometry's (``geometry.insert``, the
+    one source of its size and place, once the spec declares it), else None."""
+    return options.insert if options.insert is not None else getattr(geometry, "insert", None)
+
+
+def _moduli(material, options: PartOptions, insert) -> tuple[np.ndarray, np.ndarray]:
     """(E, nu) per tag (:data:`TAGS`)."""
     E = {t: material.youngs_modulus_MPa for t in TAGS}
     nu = {t: material.poisson_ratio for t in TAGS}
     for t in MEMBER_TAGS:
         E[t] *= options.member_factor
     E["magnet"], nu["magnet"] = N42_MODULUS_MPA, N42_POISSON
-    if options.insert is not None:
+    if insert is not None:
         # load_path.Insert keeps its modulus in plane strain; back to E for the plane-strain form
-        E["insert"] = options.insert.modulus_MPa * (1.0 - options.insert.poisson_ratio**2)
-        nu["insert"] = options.insert.poisson_ratio
+        E["insert"] = insert.modulus_MPa * (1.0 - insert.poisson_ratio**2)
+        nu["insert"] = insert.poisson_ratio
     return np.array([E[t] for t in TAGS]), np.array([nu[t] for t in TAGS])
 
 
@@ -89,7 +101,9 @@ def build_mesh(geometry, options: PartOptions):
     tips and the walls' roots, where the strain is singular, as in L2's own mesh)."""
     from skfem import MeshTri  # deferred: scikit-fem loads when this rung is asked for
 
-    regions = section_regions(geometry, options.locked, options.magnet, options.insert)
+    if options.magnet not in MAGNET_SEATS:
+        raise ValueError(f"magnet must be one of {MAGNET_SEATS}, not {options.magnet!r}")
+    regions = section_regions(geometry, options.locked, options.magnet == "bonded", part_insert(geometry, options))
     p, t, _ = mesh_section(regions, options.spacing_mm, press_points(geometry, options.patch_mm))
     mesh = MeshTri(p, t)
     corners = np.concatenate([np.array(e) for r in regions if r.tag == "layer" for e in r.edges()])
@@ -163,19 +177,20 @@ def press(geometry, material, options: PartOptions = PartOptions()) -> MagnetMot
     mesh, tag = build_mesh(geometry, options)
     element = ElementVector(ElementTriP2())
     basis = Basis(mesh, element)
-    E, nu = _moduli(material, options)
+    E, nu = _moduli(material, options, part_insert(geometry, options))
     K = _stiffness(basis, tag, E, nu)
     f = _load(geometry, mesh, element, options.patch_mm)
     held = basis.get_dofs(lambda x: np.abs(x[1]) < 1e-7).all()
     u = solve(*condense(K, f, D=held))
-    xz, uv = _magnet_points(geometry, basis, tag, u, options.magnet)
+    xz, uv = _magnet_points(geometry, basis, tag, u, options.magnet == "bonded")
     Ux, Uz, th = rigid_fit(xz, uv)
     return MagnetMotion(-Uz, Ux, th, basis.N, time.perf_counter() - t0, {"elements": mesh.t.shape[1]})
 
 
 def _magnet_points(geometry, basis, tag: np.ndarray, u: np.ndarray, magnet: bool):
     """(positions (n, 2), displacements (n, 2)) of the magnet's nodes, or of the empty pocket's
-    floor's (where the magnet rests)."""
+    floor's under the magnet (where it rests; a rigid magnet on a floor that sags rides on its
+    edges, a few per cent of the floor's own bending from this fit)."""
     ux, uz = u[basis.nodal_dofs[0]], u[basis.nodal_dofs[1]]
     p = basis.mesh.p
     if magnet:
