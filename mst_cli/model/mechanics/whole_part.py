@@ -26,7 +26,7 @@ import numpy as np
 
 from mst_cli.model.load_path import FINGERTIP_PATCH_MM
 from mst_cli.model.magnet_field import axial_dBz_dz_T_per_mm
-from mst_cli.model.mechanics.whole_part_mesh import TAGS, mesh_section, section_regions
+from mst_cli.model.mechanics.whole_part_mesh import TAGS, Region, mesh_section, rect, section_regions
 
 N42_MODULUS_MPA = 160e3  # sintered NdFeB, Young's modulus ~160 GPa (Arnold Magnetic Technologies datasheet)
 N42_POISSON = 0.24
@@ -221,3 +221,39 @@ def regime_responses(geometry, material, stack, options: PartOptions = PartOptio
         mo = press(geometry, material, PartOptions(**{**options.__dict__, "locked": locked}))
         out.append({"regime": r + 1, "locked": locked, "motion": mo, "field_uT_per_N": per_mm * mo.drop_mm_per_N})
     return out
+
+
+def beam_on_two_supports_mm_per_N(
+    length_mm: float, thickness_mm: float, span_mm: float, depth_mm: float, material, patch_mm: float, spacing_mm: float
+) -> float:
+    """The check of the beam closed form (load_path's cap): a TPU rectangle ``length_mm`` x
+    ``thickness_mm`` in plane strain on two line supports ``span_mm`` apart on its underside
+    (held in z, one also in x), pressed by the centred strip; the deflection per newton (on
+    ``depth_mm``) of its centre line at mid-span."""
+    from skfem import Basis, ElementTriP2, ElementVector, MeshTri, condense, solve
+
+    w2, s2 = 0.5 * length_mm, 0.5 * span_mm
+    region = Region("cap", rect(-w2, w2, 0.0, thickness_mm))
+    extra = np.array([[-s2, 0.0], [s2, 0.0], [0.0, 0.5 * thickness_mm], [-0.5 * patch_mm, thickness_mm], [0.5 * patch_mm, thickness_mm]])
+    p, t, tag = mesh_section([region], spacing_mm, extra)
+    mesh = MeshTri(p, t)
+    element = ElementVector(ElementTriP2())
+    basis = Basis(mesh, element)
+    E = np.full(len(TAGS), material.youngs_modulus_MPa)
+    K = _stiffness(basis, tag, E, np.full(len(TAGS), material.poisson_ratio))
+    geometry_like = _Face(thickness_mm, length_mm, depth_mm)
+    f = _load(geometry_like, mesh, element, patch_mm)
+    at = lambda x, z: int(np.argmin((mesh.p[0] - x) ** 2 + (mesh.p[1] - z) ** 2))  # noqa: E731
+    left, right, centre = at(-s2, 0.0), at(s2, 0.0), at(0.0, 0.5 * thickness_mm)
+    held = np.array([basis.nodal_dofs[1][left], basis.nodal_dofs[1][right], basis.nodal_dofs[0][left]])
+    u = solve(*condense(K, f, D=held))
+    return -float(u[basis.nodal_dofs[1][centre]])
+
+
+@dataclass(frozen=True)
+class _Face:
+    """What :func:`_load` reads of a geometry: the top face's height, width and depth."""
+
+    total_height_mm: float
+    width_mm: float
+    depth_mm: float
