@@ -4,7 +4,8 @@ Per bundled config (configs/*.yaml) and regime, the field change per newton at t
 a centred 6 mm strip, the base's bottom face held, the layers locked before the regime closed:
 
 * ``part``: the whole-part rung (mst_cli/model/mechanics/whole_part.py; plane strain, the magnet
-  N42-stiff in its pocket);
+  resting loose on its pocket's floor, as printed); ``bonded``: the magnet glued in (an N42
+  block filling the pocket);
 * ``rigid``: the same section with the cap, plates and base 1e4 times stiffer (the control);
 * ``L2``: the layers alone between rigid plates, L2's small-strain k (plane strain; regime 1
   only, where no layer is closed), and the control's ratio to it;
@@ -27,6 +28,7 @@ import statistics
 from pathlib import Path
 
 import mst_cli as mst
+import mst_cli.api
 from mst_cli.model import load_path as lp
 from mst_cli.model.mechanics import layer_laws, uncached_layer_law
 from mst_cli.model.mechanics import whole_part as wp
@@ -45,6 +47,8 @@ def closed_form_mm_per_N(g, m, locked: tuple[int, ...], support: str) -> float:
 
 def config_rows(path: Path, spacing: float, times: list[float]) -> list[str]:
     doc = mst.load(path)
+    if not doc.is_design:  # a spec: its design (the default seed), as `mst design` gives it
+        doc = mst.api.design(doc, plot=False).document
     g, m = doc.geometry(), doc.material
     stack = Stack(layer_laws(g.layers, m, "spring"))
     per_mm = wp.field_per_drop_uT_per_mm(g)
@@ -54,12 +58,14 @@ def config_rows(path: Path, spacing: float, times: list[float]) -> list[str]:
     for r, locked in enumerate(wp.regime_locked(stack)):
         part = wp.press(g, m, wp.PartOptions(spacing_mm=spacing, locked=locked))
         rigid = wp.press(g, m, wp.PartOptions(spacing_mm=spacing, locked=locked, member_factor=wp.RIGID_FACTOR))
-        times += [part.seconds, rigid.seconds]
+        bonded = wp.press(g, m, wp.PartOptions(spacing_mm=spacing, locked=locked, magnet="bonded"))
+        times += [part.seconds, rigid.seconds, bonded.seconds]
         cf, cf_c = (closed_form_mm_per_N(g, m, locked, s) for s in lp.SUPPORTS)
         l2_cell = f"{per_mm * l2:.1f} ({rigid.drop_mm_per_N / l2 - 1:+.1%})" if not locked else ""
         mst_f = per_mm * mst_rows[r]["compliance_mm_per_N"]
         rows.append(
-            f"| {doc.name} | {r + 1} | {per_mm * part.drop_mm_per_N:.1f} | {per_mm * rigid.drop_mm_per_N:.1f} | "
+            f"| {doc.name} | {r + 1} | {per_mm * part.drop_mm_per_N:.1f} | {per_mm * bonded.drop_mm_per_N:.1f} | "
+            f"{per_mm * rigid.drop_mm_per_N:.1f} | "
             f"{l2_cell} | {per_mm * cf:.1f} ({per_mm * cf_c:.1f}) | {cf / part.drop_mm_per_N - 1:+.1%} | "
             f"{mst_f:.1f} | {part.dofs} |"
         )
@@ -83,8 +89,11 @@ def main() -> None:
     ap.add_argument("--no-convergence", action="store_true")
     args = ap.parse_args()
     print("field change per newton at the chip, uT/N (centred 6 mm strip)")
-    print("| design | regime | part | rigid members | L2 layers (rigid/L2 - 1) | L0+members simple (clamped) | L0+m/part - 1 | mst | dofs |")
-    print("|---|---|---|---|---|---|---|---|---|")
+    print(
+        "| design | regime | part | bonded | rigid members | L2 layers (rigid/L2 - 1) | "
+        "L0+members simple (clamped) | L0+m/part - 1 | mst | dofs |"
+    )
+    print("|---|---|---|---|---|---|---|---|---|---|")
     times: list[float] = []
     for path in args.configs:
         for line in config_rows(Path(path), args.spacing_mm, times):
