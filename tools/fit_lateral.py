@@ -35,6 +35,10 @@ from lateral_check import CHECK_CELLS, check_k_y_3d_N_per_mm
 FIT_SAMPLES = ((39, 120), (239, 100))  # (seed, cells) of the box's uniform samples
 FIT_CORNERS = ((1039, 4), (3039, 4))  # (seed, cells per corner)
 CHECK_SAMPLE, CHECK_CORNERS = (139, 24), (2139, 2)
+# the shallow thick corner where the two chevrons share a pad (p_i < 1.5 t): (seed, cells) to
+# fit and to check on, drawn in SHARED_PAD_BOX
+FIT_SHARED, CHECK_SHARED = (77, 8), (177, 8)
+SHARED_PAD_BOX = {"theta_deg": (5.0, 25.0), "t_mm": (1.5, 3.0), "h_mm": (4.5, 8.0)}
 CORNER_FRACTION = 0.2  # a corner's cells lie within this fraction of each range from it
 
 
@@ -61,13 +65,25 @@ def corner_cells(per_corner: int, seed: int, fraction: float = CORNER_FRACTION) 
     return out
 
 
+def shared_pad_cells(n: int, seed: int) -> list[HexCell]:
+    """n valid cells of SHARED_PAD_BOX whose inner pad is shorter than 1.5 t."""
+    rng = np.random.default_rng(seed)
+    out: list[HexCell] = []
+    while len(out) < n:
+        cell = HexCell(*(round(float(rng.uniform(*SHARED_PAD_BOX[k])), 3) for k in ("theta_deg", "t_mm", "h_mm")))
+        if not cell.violations() and cell.p_inner_mm < 1.5 * cell.t_mm:
+            out.append(cell)
+    return out
+
+
 def fit_cells() -> list[HexCell]:
     cells = [c for seed, n in FIT_SAMPLES for c in sample_cells(n, seed=seed)]
-    return cells + [c for seed, n in FIT_CORNERS for c in corner_cells(n, seed)]
+    return cells + [c for seed, n in FIT_CORNERS for c in corner_cells(n, seed)] + shared_pad_cells(*FIT_SHARED[::-1])
 
 
 def check_cells() -> list[HexCell]:
-    return sample_cells(CHECK_SAMPLE[1], seed=CHECK_SAMPLE[0]) + corner_cells(CHECK_CORNERS[1], CHECK_CORNERS[0])
+    corners = corner_cells(CHECK_CORNERS[1], CHECK_CORNERS[0])
+    return sample_cells(CHECK_SAMPLE[1], seed=CHECK_SAMPLE[0]) + corners + shared_pad_cells(*CHECK_SHARED[::-1])
 
 
 def _measure(cells, mat: Material) -> dict[str, np.ndarray]:
@@ -115,8 +131,9 @@ def main() -> None:
     mat = Material()
     fit, check = fit_cells(), check_cells()
     fit_set, check_set = _measure(fit, mat), _measure(check, mat)
-    out: dict = {"terms": list(lateral.TERMS), "fitted_on": {"samples": FIT_SAMPLES, "corners": FIT_CORNERS, "n": len(fit)}}
-    out["out_of_sample"] = {"sample": CHECK_SAMPLE, "corners": CHECK_CORNERS, "n": len(check)}
+    out: dict = {"terms": list(lateral.TERMS)}
+    out["fitted_on"] = {"samples": FIT_SAMPLES, "corners": FIT_CORNERS, "shared_pad": FIT_SHARED, "n": len(fit)}
+    out["out_of_sample"] = {"sample": CHECK_SAMPLE, "corners": CHECK_CORNERS, "shared_pad": CHECK_SHARED, "n": len(check)}
     for k in ("x", "y"):
         coef, *_ = np.linalg.lstsq(fit_set["A"], np.log(fit_set[k] / fit_set[f"beam_{k}"]), rcond=None)
         out[k] = {
@@ -126,6 +143,8 @@ def main() -> None:
         pred = np.exp(check_set["A"] @ coef) * check_set[f"beam_{k}"]
         out["out_of_sample"][k] = _errors(pred, check_set[k])
         print(k, "in sample", out[k]["in_sample"], "out of sample", out["out_of_sample"][k])
+        worst = np.argsort(-np.abs(pred / check_set[k] - 1.0))[:3]
+        print("  worst out of sample:", [(check[i].theta_deg, check[i].t_mm, check[i].h_mm) for i in worst])
     if args.no_3d:
         out["depth_end"] = json.loads(lateral.DATA.read_text())["depth_end"]
     else:

@@ -44,7 +44,7 @@ DATA = Path(__file__).resolve().parent.parent / "data" / "lateral_fit.json"
 # x = t / L, th = theta in radians, e = exp(-p_i / t) (p_i the inner pad's half width)
 TERMS = (
     "1", "x", "th", "x^2", "x*th", "th^2", "x^3", "x^2*th", "x*th^2", "th^3",
-    "1/th", "x/th", "e", "e*th", "e*x", "e^2", "e*x^2",
+    "1/th", "x/th", "e", "e*th", "e*x", "e^2", "e*x^2", "e^4", "e^4*x",
 )  # fmt: skip
 
 
@@ -74,7 +74,8 @@ def design_matrix(t_over_L: Floats, theta_rad: Floats, pad_over_t: Floats) -> np
     e = np.exp(-pad)
     one = np.ones_like(x)
     cubic = [one, x, th, x * x, x * th, th * th, x**3, x * x * th, x * th * th, th**3]
-    return np.stack(cubic + [1.0 / th, x / th, e, e * th, e * x, e * e, e * x * x], axis=-1)
+    e4 = e**4
+    return np.stack(cubic + [1.0 / th, x / th, e, e * th, e * x, e * e, e * x * x, e4, e4 * x], axis=-1)
 
 
 @cache

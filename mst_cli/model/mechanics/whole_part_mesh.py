@@ -78,24 +78,40 @@ def edge_distance(pts: np.ndarray, poly: np.ndarray) -> np.ndarray:
     return out
 
 
-def edge_points(poly: np.ndarray, spacing: float, knots: np.ndarray) -> np.ndarray:
-    """Points every ``spacing`` (or closer) along a closed polygon's edges, and graded (spacing
-    / 2, / 4, ... / 16) on both sides of every corner and of every ``knots`` point (n, 2: the
-    other regions' corners) that lies on an edge: the wedge where a wall meets a plate, or a
-    cavity's tip, is then resolved and Delaunay keeps to the edges."""
+def edge_points(poly: np.ndarray, spacing: float, segments: np.ndarray) -> np.ndarray:
+    """Points along a closed polygon's edges, its corners among them, ``spacing`` apart or
+    closer: at most 0.7 times the distance to the nearest of ``segments`` (k, 2, 2: every
+    region's edges) that is not collinear with the edge, and no closer than spacing / 16. A
+    narrow wedge (a shallow wall meeting its plate) or a cavity's tip is then resolved,
+    geometrically graded, and Delaunay keeps to the edges."""
     out = []
     for a, b in zip(poly, np.roll(poly, -1, axis=0)):
         ab = b - a
         length = float(np.hypot(*ab))
-        s_knot = (knots - a) @ ab / length**2
-        off = np.abs((knots - a) @ np.array([-ab[1], ab[0]])) / length
-        stops = np.concatenate([[0.0, 1.0], s_knot[(off < 1e-9) & (s_knot > 0.0) & (s_knot < 1.0)]])
-        n = max(1, int(np.ceil(length / spacing)))
-        near = spacing * 0.5 ** np.arange(1, 5) / length
-        s = np.concatenate([np.linspace(0.0, 1.0, n, endpoint=False), stops] + [stops + d for d in near] + [stops - d for d in near])
-        s = s[(s >= 0.0) & (s < 1.0)]
-        out.append(a + s[:, None] * ab)
+        normal = np.array([-ab[1], ab[0]]) / length
+        off = np.abs((segments - a) @ normal)  # (k, 2): both ends' distance to the edge's line
+        others = segments[~((off[:, 0] < 1e-9) & (off[:, 1] < 1e-9))]
+        s_list, s = [0.0], 0.0
+        while True:
+            d = _point_segments_distance(a + s * ab, others)
+            s += float(np.clip(0.7 * d, spacing / 16.0, spacing)) / length
+            if s > 1.0 - 0.3 * spacing / 16.0 / length:
+                break
+            s_list.append(s)
+        out.append(a + np.array(s_list)[:, None] * ab)
     return np.concatenate(out)
+
+
+def _point_segments_distance(p: np.ndarray, segments: np.ndarray) -> float:
+    a, b = segments[:, 0], segments[:, 1]
+    ab = b - a
+    t = np.clip(((p - a) * ab).sum(1) / np.maximum((ab * ab).sum(1), 1e-300), 0.0, 1.0)
+    return float(np.hypot(*(p - a - t[:, None] * ab).T).min()) if len(segments) else np.inf
+
+
+def polygon_segments(polys: list[np.ndarray]) -> np.ndarray:
+    """(k, 2, 2): every edge of the closed polygons."""
+    return np.concatenate([np.stack([p, np.roll(p, -1, axis=0)], axis=1) for p in polys])
 
 
 def section_regions(
@@ -221,8 +237,8 @@ def triangulate(regions: list[Region], spacing_mm: float, extra_points: np.ndarr
     far = np.ones(len(lattice), bool)
     for e in all_edges:
         far &= edge_distance(lattice, e) > 0.45 * spacing_mm
-    knots = np.concatenate(all_edges)
-    boundary = [edge_points(e, spacing_mm, knots) for e in all_edges]
+    segments = polygon_segments(all_edges)
+    boundary = [edge_points(e, spacing_mm, segments) for e in all_edges]
     parts = [lattice[far], *boundary] + ([extra_points] if extra_points is not None else [])
     pts = np.unique(np.round(np.concatenate(parts), 9), axis=0)
     tri = Delaunay(pts).simplices
