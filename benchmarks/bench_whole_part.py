@@ -76,7 +76,11 @@ def convergence(spacing: float) -> str:
     doc = mst.load(ROOT / "configs" / "mohammadi2021-forward.yaml")
     g, m = doc.geometry(), doc.material
     cells = []
-    for s, lv in ((2 * spacing, wp.DEFAULT_LEVELS - 1), (spacing, wp.DEFAULT_LEVELS), (0.5 * spacing, wp.DEFAULT_LEVELS + 1)):
+    for s, lv in (
+        (2 * spacing, wp.DEFAULT_LEVELS - 1),
+        (spacing, wp.DEFAULT_LEVELS),
+        (0.5 * spacing, wp.DEFAULT_LEVELS + 1),
+    ):
         mo = wp.press(g, m, wp.PartOptions(spacing_mm=s, levels=lv))
         cells.append(f"spacing {s:g} mm, {lv} levels: {mo.drop_mm_per_N:.5f} mm/N ({mo.dofs} dofs, {mo.seconds:.1f} s)")
     return "forward design, regime 1: " + "; ".join(cells)

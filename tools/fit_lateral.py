@@ -133,7 +133,12 @@ def main() -> None:
     fit_set, check_set = _measure(fit, mat), _measure(check, mat)
     out: dict = {"terms": list(lateral.TERMS)}
     out["fitted_on"] = {"samples": FIT_SAMPLES, "corners": FIT_CORNERS, "shared_pad": FIT_SHARED, "n": len(fit)}
-    out["out_of_sample"] = {"sample": CHECK_SAMPLE, "corners": CHECK_CORNERS, "shared_pad": CHECK_SHARED, "n": len(check)}
+    out["out_of_sample"] = {
+        "sample": CHECK_SAMPLE,
+        "corners": CHECK_CORNERS,
+        "shared_pad": CHECK_SHARED,
+        "n": len(check),
+    }
     for k in ("x", "y"):
         coef, *_ = np.linalg.lstsq(fit_set["A"], np.log(fit_set[k] / fit_set[f"beam_{k}"]), rcond=None)
         out[k] = {

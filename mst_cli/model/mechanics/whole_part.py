@@ -21,12 +21,16 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from mst_cli.model.load_path import FINGERTIP_PATCH_MM
+from mst_cli.model.load_path import FINGERTIP_PATCH_MM, Insert
 from mst_cli.model.magnet_field import axial_dBz_dz_T_per_mm
 from mst_cli.model.mechanics.whole_part_mesh import TAGS, Region, mesh_section, rect, section_regions
+
+if TYPE_CHECKING:
+    from skfem import MeshTri
 
 N42_MODULUS_MPA = 160e3  # sintered NdFeB, Young's modulus ~160 GPa (Arnold Magnetic Technologies datasheet)
 N42_POISSON = 0.24
@@ -52,7 +56,7 @@ class PartOptions:
     magnet: str = "resting"
     member_factor: float = 1.0
     locked: tuple[int, ...] = ()
-    insert: object = None
+    insert: Insert | None = None
     levels: int = DEFAULT_LEVELS
 
 
@@ -69,7 +73,7 @@ class MagnetMotion:
     extra: dict = field(default_factory=dict)
 
 
-def part_insert(geometry, options: PartOptions):
+def part_insert(geometry, options: PartOptions) -> Insert | None:
     """The insert pressed with: the options' own, else the geometry's (``geometry.insert``, the
     one source of its size and place, once the spec declares it), else None."""
     return options.insert if options.insert is not None else getattr(geometry, "insert", None)
@@ -95,17 +99,17 @@ def press_points(geometry, patch_mm: float) -> np.ndarray:
     return np.array([[-0.5 * c, geometry.total_height_mm], [0.5 * c, geometry.total_height_mm]])
 
 
-def build_mesh(geometry, options: PartOptions):
+def build_mesh(geometry, options: PartOptions) -> tuple[MeshTri, np.ndarray]:
     """The section's MeshTri and each triangle's tag index: the lattice mesh, then
     ``options.levels`` rounds of refinement within t / 2^i of each layer's corners (the cavity's
     tips and the walls' roots, where the strain is singular, as in L2's own mesh)."""
-    from skfem import MeshTri  # deferred: scikit-fem loads when this rung is asked for
+    from skfem import MeshTri as _MeshTri  # deferred: scikit-fem loads when this rung is asked for
 
     if options.magnet not in MAGNET_SEATS:
         raise ValueError(f"magnet must be one of {MAGNET_SEATS}, not {options.magnet!r}")
     regions = section_regions(geometry, options.locked, options.magnet == "bonded", part_insert(geometry, options))
     p, t, _ = mesh_section(regions, options.spacing_mm, press_points(geometry, options.patch_mm))
-    mesh = MeshTri(p, t)
+    mesh = _MeshTri(p, t)
     corners = np.concatenate([np.array(e) for r in regions if r.tag == "layer" for e in r.edges()])
     radius = 0.5 * min(c.t_mm for c in geometry.layers)
     for i in range(options.levels):
@@ -230,13 +234,22 @@ def beam_on_two_supports_mm_per_N(
     ``thickness_mm`` in plane strain on two line supports ``span_mm`` apart on its underside
     (held in z, one also in x), pressed by the centred strip; the deflection per newton (on
     ``depth_mm``) of its centre line at mid-span."""
-    from skfem import Basis, ElementTriP2, ElementVector, MeshTri, condense, solve
+    from skfem import Basis, ElementTriP2, ElementVector, condense, solve
+    from skfem import MeshTri as _MeshTri
 
     w2, s2 = 0.5 * length_mm, 0.5 * span_mm
     region = Region("cap", rect(-w2, w2, 0.0, thickness_mm))
-    extra = np.array([[-s2, 0.0], [s2, 0.0], [0.0, 0.5 * thickness_mm], [-0.5 * patch_mm, thickness_mm], [0.5 * patch_mm, thickness_mm]])
+    extra = np.array(
+        [
+            [-s2, 0.0],
+            [s2, 0.0],
+            [0.0, 0.5 * thickness_mm],
+            [-0.5 * patch_mm, thickness_mm],
+            [0.5 * patch_mm, thickness_mm],
+        ]
+    )
     p, t, tag = mesh_section([region], spacing_mm, extra)
-    mesh = MeshTri(p, t)
+    mesh = _MeshTri(p, t)
     element = ElementVector(ElementTriP2())
     basis = Basis(mesh, element)
     E = np.full(len(TAGS), material.youngs_modulus_MPa)

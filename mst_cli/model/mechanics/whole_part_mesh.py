@@ -129,7 +129,7 @@ def section_regions(
     cuts = []
     for slot in g.board_slots:
         if slot.floor_y_mm <= 0.0:  # the slot runs from its floor out through +y
-            cuts.append(rect(*slot.x_mm, g.z_board_bottom_mm, g.z_cover_bottom_mm))
+            cuts.append(rect(slot.x_mm[0], slot.x_mm[1], g.z_board_bottom_mm, g.z_cover_bottom_mm))
         for x_in, x_out, y_floor, z0, z1 in slot.windows:
             lo, hi = sorted((x_in, x_out))
             if windows and y_floor <= 0.0:
@@ -198,7 +198,9 @@ def section_area_mm2(regions: list[Region]) -> float:
     return sum(r.area_mm2 for r in regions)
 
 
-def mesh_section(regions: list[Region], spacing_mm: float, extra_points: np.ndarray | None = None):
+def mesh_section(
+    regions: list[Region], spacing_mm: float, extra_points: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(points (2, n), triangles (3, m), tag index per triangle (m,)) of the regions (module
     docstring); raises ValueError when the kept triangles miss the regions' area."""
     pts, tri, tag = triangulate(regions, spacing_mm, extra_points)
@@ -215,7 +217,9 @@ def triangle_areas(pts: np.ndarray, tri: np.ndarray) -> np.ndarray:
     return 0.5 * np.abs(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0])
 
 
-def triangulate(regions: list[Region], spacing_mm: float, extra_points: np.ndarray | None = None):
+def triangulate(
+    regions: list[Region], spacing_mm: float, extra_points: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(points (n, 2), kept triangles (m, 3), their tags): the lattice, the edges' points,
     Delaunay, the triangles whose centroid lies in a region."""
     all_edges = [e for r in regions for e in r.edges()]
