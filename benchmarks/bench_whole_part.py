@@ -45,7 +45,7 @@ def closed_form_mm_per_N(g, m, locked: tuple[int, ...], support: str) -> float:
     return layers + lp.members(g, m, support=support).total_mm_per_N
 
 
-def config_rows(path: Path, spacing: float, times: list[float]) -> list[str]:
+def config_rows(path: Path, spacing: float | None, times: list[float]) -> list[str]:
     doc = mst.load(path)
     if not doc.is_design:  # a spec: its design (the default seed), as `mst design` gives it
         doc = mst.api.design(doc, plot=False).document
@@ -72,9 +72,10 @@ def config_rows(path: Path, spacing: float, times: list[float]) -> list[str]:
     return rows
 
 
-def convergence(spacing: float) -> str:
+def convergence(spacing: float | None) -> str:
     doc = mst.load(ROOT / "configs" / "mohammadi2021-forward.yaml")
     g, m = doc.geometry(), doc.material
+    spacing = wp.default_spacing_mm(g) if spacing is None else spacing
     cells = []
     for s, lv in (
         (2 * spacing, wp.DEFAULT_LEVELS - 1),
@@ -89,7 +90,7 @@ def convergence(spacing: float) -> str:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--configs", nargs="*", default=sorted(str(p) for p in (ROOT / "configs").glob("*.yaml")))
-    ap.add_argument("--spacing-mm", type=float, default=wp.DEFAULT_SPACING_MM)
+    ap.add_argument("--spacing-mm", type=float, default=None, help="lattice spacing [default: the rung's own]")
     ap.add_argument("--no-convergence", action="store_true")
     args = ap.parse_args()
     print("field change per newton at the chip, uT/N (centred 6 mm strip)")

@@ -35,7 +35,9 @@ if TYPE_CHECKING:
 N42_MODULUS_MPA = 160e3  # sintered NdFeB, Young's modulus ~160 GPa (Arnold Magnetic Technologies datasheet)
 N42_POISSON = 0.24
 RIGID_FACTOR = 1e4  # the rigid-member control: cap, plates and base this much stiffer than TPU
-DEFAULT_SPACING_MM = 0.3  # lattice spacing of the production mesh (benchmarks/bench_whole_part.py)
+# lattice spacing of the production mesh (benchmarks/bench_whole_part.py): 0.3 mm, or half the
+# thinnest wall when that is finer (two P2 triangles across a wall)
+DEFAULT_SPACING_MM = 0.3
 DEFAULT_LEVELS = 3  # rounds of refinement at the layers' corners
 MEMBER_TAGS = ("base", "plate", "cap")
 # how the magnet sits: "resting" loose in its pocket as printed (0.1 mm clearance: it rides on
@@ -52,7 +54,7 @@ class PartOptions:
     (:class:`~mst_cli.model.load_path.Insert`; None: the geometry's own, if it has one)."""
 
     patch_mm: float = FINGERTIP_PATCH_MM
-    spacing_mm: float = DEFAULT_SPACING_MM
+    spacing_mm: float | None = None  # None: :func:`default_spacing_mm`
     magnet: str = "resting"
     member_factor: float = 1.0
     locked: tuple[int, ...] = ()
@@ -99,6 +101,11 @@ def press_points(geometry, patch_mm: float) -> np.ndarray:
     return np.array([[-0.5 * c, geometry.total_height_mm], [0.5 * c, geometry.total_height_mm]])
 
 
+def default_spacing_mm(geometry) -> float:
+    """The production mesh's lattice spacing: :data:`DEFAULT_SPACING_MM` or half the thinnest wall."""
+    return min(DEFAULT_SPACING_MM, 0.5 * min(c.t_mm for c in geometry.layers))
+
+
 def build_mesh(geometry, options: PartOptions) -> tuple[MeshTri, np.ndarray]:
     """The section's MeshTri and each triangle's tag index: the lattice mesh, then
     ``options.levels`` rounds of refinement within t / 2^i of each layer's corners (the cavity's
@@ -108,7 +115,8 @@ def build_mesh(geometry, options: PartOptions) -> tuple[MeshTri, np.ndarray]:
     if options.magnet not in MAGNET_SEATS:
         raise ValueError(f"magnet must be one of {MAGNET_SEATS}, not {options.magnet!r}")
     regions = section_regions(geometry, options.locked, options.magnet == "bonded", part_insert(geometry, options))
-    p, t, _ = mesh_section(regions, options.spacing_mm, press_points(geometry, options.patch_mm))
+    spacing = options.spacing_mm if options.spacing_mm is not None else default_spacing_mm(geometry)
+    p, t, _ = mesh_section(regions, spacing, press_points(geometry, options.patch_mm))
     mesh = _MeshTri(p, t)
     corners = np.concatenate([np.array(e) for r in regions if r.tag == "layer" for e in r.edges()])
     radius = 0.5 * min(c.t_mm for c in geometry.layers)
