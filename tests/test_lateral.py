@@ -100,10 +100,13 @@ CORNERS = corner_cells(1, seed=4039)  # one cell near each corner of the box nei
 def test_l0_within_3_percent_at_the_corners_of_the_box(cell):
     """Issue 44: L0's lateral stiffness within 3 % of L2 (which the independent whole-profile FE
     of tools/lateral_check.py matches to 0.2 %) near every corner of the verified box, the
-    shallow thin cells among them (k_y infinitely deep)."""
+    shallow thin cells among them (k_y infinitely deep). The one exception, stated in
+    docs/design.md 4.4: k_x of a shallow thick cell whose chevrons share a pad shorter than half
+    a wall thickness (the beam picture's limit), within 5 %."""
     k_x, k_y = lateral.lateral_stiffness_N_per_mm(cell, MAT)
     k_y_inf = k_y / float(lateral.depth_end_factor(cell.t_mm, cell.wall_length_mm, cell.depth_mm))
-    assert k_x == pytest.approx(CL.lateral_stiffness_x_N_per_mm(cell, MAT), rel=0.03)
+    shared_pad = cell.p_inner_mm < 0.5 * cell.t_mm
+    assert k_x == pytest.approx(CL.lateral_stiffness_x_N_per_mm(cell, MAT), rel=0.05 if shared_pad else 0.03)
     assert k_y_inf == pytest.approx(CL.lateral_stiffness_y_N_per_mm(cell, MAT), rel=0.03)
 
 
