@@ -48,13 +48,15 @@ MAGNET_SEATS = ("resting", "bonded")
 
 @dataclass(frozen=True)
 class PartOptions:
-    """How the section is built and pressed: the strip's width (mm), the mesh spacing (mm) and
-    corner refinements, the magnet (:data:`MAGNET_SEATS`), the members' stiffness factor (1: as
+    """How the section is built and pressed: the strip's width (mm), the mesh spacing (mm), its
+    offset and direction (down, or along +x), the corner refinements, the magnet (:data:`MAGNET_SEATS`), the members' stiffness factor (1: as
     printed; :data:`RIGID_FACTOR`: the rigid-member control), locked layers by index, an insert
     (:class:`~mst_cli.model.load_path.Insert`; None: the geometry's own, if it has one)."""
 
     patch_mm: float = FINGERTIP_PATCH_MM
     spacing_mm: float | None = None  # None: :func:`default_spacing_mm`
+    offset_mm: float = 0.0  # the strip's centre on the top face (x, mm): an off-centre press
+    tangential: bool = False  # the strip pulls along +x instead of pressing down
     magnet: str = "resting"
     member_factor: float = 1.0
     locked: tuple[int, ...] = ()
@@ -95,10 +97,11 @@ def _moduli(material, options: PartOptions, insert) -> tuple[np.ndarray, np.ndar
     return np.array([E[t] for t in TAGS]), np.array([nu[t] for t in TAGS])
 
 
-def press_points(geometry, patch_mm: float) -> np.ndarray:
+def press_points(geometry, patch_mm: float, offset_mm: float = 0.0) -> np.ndarray:
     """The press's edges on the top face, so that the mesh has nodes there."""
     c = min(patch_mm, geometry.width_mm)
-    return np.array([[-0.5 * c, geometry.total_height_mm], [0.5 * c, geometry.total_height_mm]])
+    x = np.clip([offset_mm - 0.5 * c, offset_mm + 0.5 * c], -0.5 * geometry.width_mm, 0.5 * geometry.width_mm)
+    return np.array([[x[0], geometry.total_height_mm], [x[1], geometry.total_height_mm]])
 
 
 def default_spacing_mm(geometry) -> float:
@@ -116,7 +119,7 @@ def build_mesh(geometry, options: PartOptions) -> tuple[MeshTri, np.ndarray]:
         raise ValueError(f"magnet must be one of {MAGNET_SEATS}, not {options.magnet!r}")
     regions = section_regions(geometry, options.locked, options.magnet == "bonded", part_insert(geometry, options))
     spacing = options.spacing_mm if options.spacing_mm is not None else default_spacing_mm(geometry)
-    p, t, _ = mesh_section(regions, spacing, press_points(geometry, options.patch_mm))
+    p, t, _ = mesh_section(regions, spacing, press_points(geometry, options.patch_mm, options.offset_mm))
     mesh = _MeshTri(p, t)
     corners = np.concatenate([np.array(e) for r in regions if r.tag == "layer" for e in r.edges()])
     radius = 0.5 * min(c.t_mm for c in geometry.layers)
@@ -150,23 +153,26 @@ def _stiffness(basis, tag: np.ndarray, E: np.ndarray, nu: np.ndarray):
     return asm(elasticity, basis)
 
 
-def _load(geometry, basis_mesh, element, patch_mm: float):
-    """The strip's pressure: 1/D N per mm of depth over |x| <= c/2 of the top face."""
+def _load(geometry, basis_mesh, element, patch_mm: float, offset_mm: float = 0.0, tangential: bool = False):
+    """The strip's traction: 1/D N per mm of depth over |x - offset| <= c/2 of the top face,
+    pressing down (or, ``tangential``, along +x)."""
     from skfem import FacetBasis, LinearForm, asm
 
     H, c = geometry.total_height_mm, min(patch_mm, geometry.width_mm)
     tol = 1e-7
     facets = basis_mesh.facets_satisfying(
-        lambda x: (np.abs(x[1] - H) < tol) & (np.abs(x[0]) <= 0.5 * c + tol), boundaries_only=True
+        lambda x: (np.abs(x[1] - H) < tol) & (np.abs(x[0] - offset_mm) <= 0.5 * c + tol), boundaries_only=True
     )
     fb = FacetBasis(basis_mesh, element, facets=facets)
     q = 1.0 / (c * geometry.depth_mm)  # N/mm^2 on the strip, per mm of depth: F = 1 N on D
+    component = 0 if tangential else 1
+    sign = 1.0 if tangential else -1.0
 
     @LinearForm
-    def pressure(v, w):
-        return -q * v[1]
+    def traction(v, w):
+        return sign * q * v[component]
 
-    return asm(pressure, fb)
+    return asm(traction, fb)
 
 
 def rigid_fit(xz: np.ndarray, u: np.ndarray) -> tuple[float, float, float]:
@@ -191,7 +197,7 @@ def press(geometry, material, options: PartOptions = PartOptions()) -> MagnetMot
     basis = Basis(mesh, element)
     E, nu = _moduli(material, options, part_insert(geometry, options))
     K = _stiffness(basis, tag, E, nu)
-    f = _load(geometry, mesh, element, options.patch_mm)
+    f = _load(geometry, mesh, element, options.patch_mm, options.offset_mm, options.tangential)
     held = basis.get_dofs(lambda x: np.abs(x[1]) < 1e-7).all()
     u = solve(*condense(K, f, D=held))
     xz, uv = _magnet_points(geometry, basis, tag, u, options.magnet == "bonded")
