@@ -98,7 +98,8 @@ def off_centre(spacing: float | None) -> list[str]:
         off = wp.press(g, m, wp.PartOptions(spacing_mm=spacing, offset_mm=3.0, member_factor=factor))
         tan = wp.press(g, m, wp.PartOptions(spacing_mm=spacing, tangential=True, member_factor=factor))
         rows.append(
-            f"| {label} | {1e3 * off.turn_rad_per_N / 3.0:.3f} | {tan.side_mm_per_N:.3f} | {1e3 * tan.turn_rad_per_N:.3f} |"
+            f"| {label} | {1e3 * off.turn_rad_per_N / 3.0:.3f} | {tan.side_mm_per_N:.3f} | "
+            f"{1e3 * tan.turn_rad_per_N:.3f} |"
         )
     return rows
 

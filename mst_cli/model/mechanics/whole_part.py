@@ -49,8 +49,9 @@ MAGNET_SEATS = ("resting", "bonded")
 @dataclass(frozen=True)
 class PartOptions:
     """How the section is built and pressed: the strip's width (mm), the mesh spacing (mm), its
-    offset and direction (down, or along +x), the corner refinements, the magnet (:data:`MAGNET_SEATS`), the members' stiffness factor (1: as
-    printed; :data:`RIGID_FACTOR`: the rigid-member control), locked layers by index, an insert
+    offset and direction (down, or along +x), the corner refinements, the magnet
+    (:data:`MAGNET_SEATS`), the members' stiffness factor (1: as printed; :data:`RIGID_FACTOR`:
+    the rigid-member control), locked layers by index, an insert
     (:class:`~mst_cli.model.load_path.Insert`; None: the geometry's own, if it has one)."""
 
     patch_mm: float = FINGERTIP_PATCH_MM
