@@ -139,6 +139,7 @@ def build_mesh(geometry, options: PartOptions) -> tuple[MeshTri, np.ndarray]:
 
 def _stiffness(basis, tag: np.ndarray, E: np.ndarray, nu: np.ndarray):
     """Plane-strain linear elasticity with a modulus per triangle."""
+    # deferred: scikit-fem loads when this rung is asked for
     from skfem import BilinearForm, asm
     from skfem.helpers import ddot, sym_grad, trace
 
@@ -157,6 +158,7 @@ def _stiffness(basis, tag: np.ndarray, E: np.ndarray, nu: np.ndarray):
 def _load(geometry, basis_mesh, element, patch_mm: float, offset_mm: float = 0.0, tangential: bool = False):
     """The strip's traction: 1/D N per mm of depth over |x - offset| <= c/2 of the top face,
     pressing down (or, ``tangential``, along +x)."""
+    # deferred: scikit-fem loads when this rung is asked for
     from skfem import FacetBasis, LinearForm, asm
 
     H, c = geometry.total_height_mm, min(patch_mm, geometry.width_mm)
@@ -190,6 +192,7 @@ def rigid_fit(xz: np.ndarray, u: np.ndarray) -> tuple[float, float, float]:
 
 def press(geometry, material, options: PartOptions = PartOptions()) -> MagnetMotion:
     """The magnet's rigid motion per newton under the centred strip (module docstring)."""
+    # deferred: scikit-fem loads when this rung is asked for
     from skfem import Basis, ElementTriP2, ElementVector, condense, solve
 
     t0 = time.perf_counter()
@@ -249,6 +252,7 @@ def beam_on_two_supports_mm_per_N(
     ``thickness_mm`` in plane strain on two line supports ``span_mm`` apart on its underside
     (held in z, one also in x), pressed by the centred strip; the deflection per newton (on
     ``depth_mm``) of its centre line at mid-span."""
+    # deferred: scikit-fem loads when this rung is asked for
     from skfem import Basis, ElementTriP2, ElementVector, condense, solve
     from skfem import MeshTri as _MeshTri
 
