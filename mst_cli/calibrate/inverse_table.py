@@ -63,6 +63,7 @@ STEPS = 10  # steps at most from each start (most converge in 2 to 5)
 STEP_CELLS = 2.0  # a step moves each coordinate by at most this many of its cells
 CONVERGED = 1e-4  # a start whose step moved less than this share of a cell has converged: it stops ...
 MIN_GAIN = 1e-3  # ... as does one whose step lowered the squared misfit by less than this share of it
+STOP_SIGMAS = 0.1  # ... and one whose step would change the field by less than this many noise sigmas
 HALVINGS = 3  # a step that does not lower the misfit is halved up to this many times
 PROBE = 1e-3  # the share of a step that says which cell it enters (its Jacobian is that cell's)
 BLOCK = 4096  # readings per estimate (their starts' corners at a time)
@@ -384,14 +385,32 @@ def slab_babs_uT(table: InverseTable) -> tuple[np.ndarray, np.ndarray]:
     return np.minimum(lo[:-1], lo[1:]), np.maximum(hi[:-1], hi[1:])
 
 
+START_LEVELS = 16383  # the start's integer field: |value| <= this, so that a difference fits 15 bits
+# and a squared distance (three squares) 32 unsigned bits: the C header's search is integer, cheap
+# on a Cortex-M0+ without an FPU, and Python's is the same integers (the same node, ties too)
+START_HEADROOM = 1.25  # the integer field spans this times the table's largest field component
+
+
+def start_quantum_uT(table: InverseTable) -> float:
+    """The start search's field unit (uT, a float32 value as the C header holds it): the table's
+    largest field component, with START_HEADROOM, over START_LEVELS."""
+    return float(np.float32(START_HEADROOM * 1e6 * np.max(np.abs(table.B_T)) / START_LEVELS))
+
+
+def start_field(B_uT: np.ndarray, quantum_uT: float) -> np.ndarray:
+    """Fields (..., 3) uT as the start search's integers (rounded half up, clamped to
+    +-START_LEVELS), in float64: exact, as every distance between them is."""
+    return np.clip(np.floor(B_uT / quantum_uT + 0.5), -START_LEVELS, START_LEVELS)
+
+
 def start_nodes(table: InverseTable, B_uT: np.ndarray, noise_uT: np.ndarray) -> np.ndarray:
-    """The first start of each reading (n, 3) uT: the node nearest it (least squared distance,
-    the first in C order on a tie) among the nodes of every force slab whose |B| range, widened
-    by FIT_SIGMAS of the slab's noise ``noise_uT`` (n_F - 1,), holds the reading's |B| (a field
-    within that of the reading lies in no other slab: | |b| - |B| | <= |b - B|); NaN where no
-    slab holds it; on the no-load face, where every (u, v) gives the same field, the middle of
-    (u, v). Force node by force node, each against the readings it may hold (the distances by
-    a matrix product: C's float sums differ from them only in near-ties)."""
+    """The first start of each reading (n, 3) uT: the node nearest it (least squared distance in
+    the integer units of :func:`start_field`, the first in C order on a tie) among the nodes of
+    every force slab whose |B| range, widened by FIT_SIGMAS of the slab's noise ``noise_uT``
+    (n_F - 1,), holds the reading's |B| (a field within that of the reading lies in no other
+    slab: | |b| - |B| | <= |b - B|); NaN where no slab holds it; on the no-load face, where every
+    (u, v) gives the same field, the middle of (u, v). Force node by force node, each against the
+    readings it may hold (the distances by a matrix product of integers held in float64: exact)."""
     g = table.grid
     lo, hi = slab_babs_uT(table)
     margin = FIT_SIGMAS * noise_uT
@@ -400,7 +419,9 @@ def start_nodes(table: InverseTable, B_uT: np.ndarray, noise_uT: np.ndarray) -> 
     take = np.zeros((len(B_uT), len(g.force_N)), dtype=bool)
     take[:, :-1] |= slab
     take[:, 1:] |= slab
-    field = 1e6 * table.B_T.reshape(len(g.force_N), -1, 3)
+    quantum = start_quantum_uT(table)
+    field = start_field(1e6 * table.B_T, quantum).reshape(len(g.force_N), -1, 3)
+    reading = start_field(B_uT, quantum)
     size2 = np.sum(field * field, axis=2)
     best = np.full(len(B_uT), np.inf)
     node = np.full(len(B_uT), -1)
@@ -408,7 +429,7 @@ def start_nodes(table: InverseTable, B_uT: np.ndarray, noise_uT: np.ndarray) -> 
         rows = np.flatnonzero(take[:, k])
         if not len(rows):
             continue
-        b = B_uT[rows]
+        b = reading[rows]
         d2 = size2[k][None, :] - 2.0 * (b @ field[k].T)  # the squared distance less |b|^2 (a product)
         j = np.argmin(d2, axis=1)
         near = d2[np.arange(len(rows)), j] + np.sum(b * b, axis=1)
@@ -443,16 +464,24 @@ def _held_step(J: np.ndarray, r: np.ndarray, q: np.ndarray, box: tuple[np.ndarra
     return np.clip(dt, -STEP_CELLS, STEP_CELLS)
 
 
-def _gauss_newton(table: InverseTable, b: np.ndarray, p: np.ndarray) -> np.ndarray:
+def _gauss_newton(
+    table: InverseTable, b: np.ndarray, p: np.ndarray, noise_uT: np.ndarray, joins: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray]:
     """Up to STEPS ridged Gauss-Newton steps on the table's trilinear field from starts p (P, 3)
     to readings b (P, 3) uT (:func:`_held_step`), each taken with the Jacobian of the cell it
     enters (from a node or a face, the one whose side it goes to), clamped to the table's box and
     halved up to HALVINGS times until the misfit falls; a start stops when no step lowers it,
-    once its step moves less than CONVERGED of a cell, or once it lowers the squared misfit by
-    less than MIN_GAIN of it. The ends (P, 3)."""
+    once its step would change the field by less than STOP_SIGMAS of the noise ``noise_uT`` of
+    its force slab (n_F - 1,) (then it is not tried: it would move the estimate by less than that
+    share of its 1-sigma), once it moves less than CONVERGED of a cell, or once it lowers the
+    squared misfit by less than MIN_GAIN of it. With ``joins`` (P, 3), another descent's
+    ends: a start stops once it lies within a cell of its end on every axis (it has joined that
+    root: it would only walk on to it). The ends (P, 3) and whether each joined."""
     g = table.grid
     box = (np.array([g.force_N[0], g.u[0], g.v[0]]), np.array([g.force_N[-1], g.u[-1], g.v[-1]]))
     r, m2, J, w, cell = _field(table, b, p)
+    cells_per_slab = (g.shape[1] - 1) * (g.shape[2] - 1)
+    joined = np.zeros(len(p), dtype=bool)
     live = np.arange(len(p))
     for _ in range(STEPS):
         if not len(live):
@@ -465,8 +494,13 @@ def _gauss_newton(table: InverseTable, b: np.ndarray, p: np.ndarray) -> np.ndarr
             J[live[turn]], w[live[turn]], cell[live[turn]] = Jp[turn], wp[turn], cp[turn]
             dt[turn] = _held_step(Jp[turn], r[live[turn]], q[turn], box)
         dp = dt * w[live]
-        pending, go = np.arange(len(live)), np.zeros(len(live), dtype=bool)
+        change = np.einsum("pij,pj->pi", J[live], dt)  # the field the step would change, uT
+        stop = (STOP_SIGMAS * noise_uT[cell[live] // cells_per_slab]) ** 2
+        pending = np.flatnonzero(np.sum(change * change, axis=1) >= stop)  # a smaller step is not tried
+        go, took = np.zeros(len(live), dtype=bool), np.zeros(len(live), dtype=bool)
         for h in range(HALVINGS + 1):
+            if not len(pending):
+                break
             rows = live[pending]
             new = np.clip(q[pending] + 0.5**h * dp[pending], *box)
             rn, m2n, Jn, wn, cn = _field(table, b[rows], new)
@@ -477,11 +511,14 @@ def _gauss_newton(table: InverseTable, b: np.ndarray, p: np.ndarray) -> np.ndarr
             p[done], r[done], m2[done], J[done], w[done] = new[better], rn[better], m2n[better], Jn[better], wn[better]
             cell[done] = cn[better]
             go[pending[better]] = (moved >= CONVERGED) & gain
+            took[pending[better]] = True
             pending = pending[~better]
-            if not len(pending):
-                break
+        if joins is not None:
+            near = took & np.all(np.abs(p[live, 1:] - joins[live, 1:]) <= w[live, 1:], axis=1)
+            joined[live[near]] = True
+            go &= ~near
         live = live[go]
-    return p
+    return p, joined
 
 
 def middle_uv(grid: TableGrid) -> tuple[np.ndarray, np.ndarray]:
@@ -511,10 +548,11 @@ def solve_starts(
     P = np.full((n, 2, 3), np.nan)
     P[:, 0] = start_nodes(table, B_uT, noise_uT)
     first = np.flatnonzero(np.isfinite(P[:, 0, 0]))
-    P[first, 0] = ends = _gauss_newton(table, B_uT[first], P[first, 0].copy())
+    P[first, 0] = ends = _gauss_newton(table, B_uT[first], P[first, 0].copy(), noise_uT)[0]
     start, far = mirror_start(table.grid, ends)
     second = first[far]
-    P[second, 1] = _gauss_newton(table, B_uT[second], start[far])
+    P[second, 1], joined = _gauss_newton(table, B_uT[second], start[far], noise_uT, ends[far])
+    P[second[joined], 1] = np.nan  # it joined the first root: no second
     flat = P.reshape(-1, 3)
     rows = np.flatnonzero(np.isfinite(flat[:, 0]))
     cell, t, w, slab = _locate(table, flat[rows])

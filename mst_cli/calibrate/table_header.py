@@ -92,7 +92,13 @@ def start_arrays(table: it.InverseTable, p: str) -> dict[str, str]:
     of (u, v) and its mean node spacing, as :func:`~mst_cli.calibrate.inverse_table.solve_starts`
     takes them."""
     lo, hi = it.slab_babs_uT(table)
+    quantum = it.start_quantum_uT(table)
+    ints = it.start_field(1e6 * table.B_T, quantum).astype(int).ravel()
+    rows = [", ".join(str(v) for v in ints[i : i + 12]) for i in range(0, len(ints), 12)]
     return {
+        "start_quantum_uT": c_float(quantum, 9),
+        "start_levels": it.START_LEVELS,
+        "start_field": f"static const int16_t {p}_B_start[{len(ints)}] = {{\n    " + ",\n    ".join(rows) + "\n};\n",
         "slab_babs": _c_floats(f"{p}_slab_babs_lo_uT", lo) + _c_floats(f"{p}_slab_babs_hi_uT", hi),
         "middle": _c_floats(f"{p}_middle_uv", np.ravel(it.middle_uv(table.grid))),
     }
@@ -142,7 +148,7 @@ def table_header(
         xy_uT_per_lsb_c=c_float(setting.xy_uT_per_lsb, 8),
         z_uT_per_lsb_c=c_float(setting.z_uT_per_lsb, 8),
         saturated_lsb=min(CODE_RANGE_LSB[setting.res] - 1, int(SATURATION_T * 1e6 / setting.z_uT_per_lsb)),
-        table_bytes=table.size_bytes_float32 + 4 * (3 * (nf - 1) + 4),
+        table_bytes=table.size_bytes_float32 + 4 * (3 * (nf - 1) + 4) + 2 * table.B_T.size,
         nf=nf,
         nx=nx,
         ny=ny,
@@ -157,6 +163,7 @@ def table_header(
         converged=c_float(it.CONVERGED),
         min_gain=c_float(it.MIN_GAIN),
         halvings=it.HALVINGS,
+        stop_sigmas=c_float(it.STOP_SIGMAS),
         probe=c_float(it.PROBE),
         ridge=c_float(RIDGE),
         code_range=CODE_RANGE_LSB[setting.res],
