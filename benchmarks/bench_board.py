@@ -154,6 +154,23 @@ def run(elf: Path, cpu: str) -> tuple[np.ndarray, np.ndarray]:
     return vals[:, 0].astype(int), vals[:, 1] * per_tick
 
 
+def two_chip_table(doc, top: float, edges, grids) -> str:
+    """What a two-chip header's table would hold: the fields at both chips (6 numbers) on every
+    node of the five coordinates (F, Fx / Fz, Fy / Fz, x0, y0), the shear table's force and ratio
+    nodes by the offset table's press positions, at ``grids`` ((shear grid, offset grid) pairs),
+    as int16 (the most compact that keeps the chip's resolution) and as float."""
+    rows = []
+    for name, (shear, offset) in grids.items():
+        s, o = grid_of("shear", doc, top, shear, edges).shape, grid_of("offset", doc, top, offset, edges).shape
+        nodes = s[0] * s[1] * s[2] * o[1] * o[2]
+        rows.append(
+            f"| {name} | {s[0]} x {s[1]} x {s[2]} x {o[1]} x {o[2]} | {nodes:,} | "
+            f"{6 * 2 * nodes / 2**20:.1f} MB | {6 * 4 * nodes / 2**20:.1f} MB |"
+        )
+    head = "| two-chip table | nodes (F, Fx/Fz, Fy/Fz, x0, y0) | count | int16 | float |\n|---|---|---|---|---|\n"
+    return head + "\n".join(rows)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--per-class", type=int, default=40)
@@ -192,6 +209,9 @@ def main() -> None:
                     f"{m / mhz / 1e3:.2f} / {w / mhz / 1e3:.2f} | {(text + data) / 1024:.0f} kB | {stack} |"
                 )
         sys.stdout.flush()
+    print()
+    grids = {"the headers' grids": ((17, 0.1), (17, 2.0)), "the default tables' grids": (None, None)}
+    print(two_chip_table(doc, top, imap.edges_N, grids))
 
 
 if __name__ == "__main__":
