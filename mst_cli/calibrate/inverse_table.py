@@ -59,7 +59,8 @@ FIT_SIGMAS = 3.0  # a cell whose best point is further off the reading than this
 # the direct inverse (the C header takes the same numbers): from each start, Gauss-Newton steps on
 # the table's trilinear field, from the nearest node of the force slabs the reading's |B| allows
 # (start_nodes) and from its end's mirror (mirror_start)
-STEPS = 10  # steps at most from each start (most converge in 2 to 5)
+STEPS = 10  # steps at most from the first start (most converge in 2 to 5) ...
+SECOND_STEPS = 6  # ... and from the second (a root near the mirror; a walk back to the first root is cut)
 STEP_CELLS = 2.0  # a step moves each coordinate by at most this many of its cells
 CONVERGED = 1e-4  # a start whose step moved less than this share of a cell has converged: it stops ...
 MIN_GAIN = 1e-3  # ... as does one whose step lowered the squared misfit by less than this share of it
@@ -465,9 +466,14 @@ def _held_step(J: np.ndarray, r: np.ndarray, q: np.ndarray, box: tuple[np.ndarra
 
 
 def _gauss_newton(
-    table: InverseTable, b: np.ndarray, p: np.ndarray, noise_uT: np.ndarray, joins: np.ndarray | None = None
+    table: InverseTable,
+    b: np.ndarray,
+    p: np.ndarray,
+    noise_uT: np.ndarray,
+    joins: np.ndarray | None = None,
+    steps: int = STEPS,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Up to STEPS ridged Gauss-Newton steps on the table's trilinear field from starts p (P, 3)
+    """Up to ``steps`` ridged Gauss-Newton steps on the table's trilinear field from starts p (P, 3)
     to readings b (P, 3) uT (:func:`_held_step`), each taken with the Jacobian of the cell it
     enters (from a node or a face, the one whose side it goes to), clamped to the table's box and
     halved up to HALVINGS times until the misfit falls; a start stops when no step lowers it,
@@ -483,7 +489,7 @@ def _gauss_newton(
     cells_per_slab = (g.shape[1] - 1) * (g.shape[2] - 1)
     joined = np.zeros(len(p), dtype=bool)
     live = np.arange(len(p))
-    for _ in range(STEPS):
+    for _ in range(steps):
         if not len(live):
             break
         q = p[live]
@@ -551,7 +557,7 @@ def solve_starts(
     P[first, 0] = ends = _gauss_newton(table, B_uT[first], P[first, 0].copy(), noise_uT)[0]
     start, far = mirror_start(table.grid, ends)
     second = first[far]
-    P[second, 1], joined = _gauss_newton(table, B_uT[second], start[far], noise_uT, ends[far])
+    P[second, 1], joined = _gauss_newton(table, B_uT[second], start[far], noise_uT, ends[far], SECOND_STEPS)
     P[second[joined], 1] = np.nan  # it joined the first root: no second
     flat = P.reshape(-1, 3)
     rows = np.flatnonzero(np.isfinite(flat[:, 0]))

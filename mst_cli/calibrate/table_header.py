@@ -159,6 +159,7 @@ def table_header(
         babs_above_uT=c_float(above, 9),
         babs_calibrated_uT=c_float(calibrated, 9),
         steps=it.STEPS,
+        second_steps=it.SECOND_STEPS,
         step_cells=c_float(it.STEP_CELLS),
         converged=c_float(it.CONVERGED),
         min_gain=c_float(it.MIN_GAIN),
