@@ -65,6 +65,7 @@ STEP_CELLS = 2.0  # a step moves each coordinate by at most this many of its cel
 CONVERGED = 1e-4  # a start whose step moved less than this share of a cell has converged: it stops ...
 MIN_GAIN = 1e-3  # ... as does one whose step lowered the squared misfit by less than this share of it
 STOP_SIGMAS = 0.1  # ... and one whose step would change the field by less than this many noise sigmas
+STOP_GAIN = 0.1  # ... and lower the squared misfit by less than this share of it (what is left is noise)
 HALVINGS = 3  # a step that does not lower the misfit is halved up to this many times
 PROBE = 1e-3  # the share of a step that says which cell it enters (its Jacobian is that cell's)
 BLOCK = 4096  # readings per estimate (their starts' corners at a time)
@@ -478,9 +479,10 @@ def _gauss_newton(
     enters (from a node or a face, the one whose side it goes to), clamped to the table's box and
     halved up to HALVINGS times until the misfit falls; a start stops when no step lowers it,
     once its step would change the field by less than STOP_SIGMAS of the noise ``noise_uT`` of
-    its force slab (n_F - 1,) (then it is not tried: it would move the estimate by less than that
-    share of its 1-sigma), once it moves less than CONVERGED of a cell, or once it lowers the
-    squared misfit by less than MIN_GAIN of it. With ``joins`` (P, 3), another descent's
+    its force slab (n_F - 1,) and lower the squared misfit by less than STOP_GAIN of it (then it
+    is not tried: the misfit left is noise, and the step would move each coordinate by less than
+    STOP_SIGMAS of its 1-sigma, by Cauchy-Schwarz), once it moves less than CONVERGED of a cell,
+    or once it lowers the squared misfit by less than MIN_GAIN of it. With ``joins`` (P, 3), another descent's
     ends: a start stops once it lies within a cell of its end on every axis (it has joined that
     root: it would only walk on to it). The ends (P, 3) and whether each joined."""
     g = table.grid
@@ -502,7 +504,8 @@ def _gauss_newton(
         dp = dt * w[live]
         change = np.einsum("pij,pj->pi", J[live], dt)  # the field the step would change, uT
         stop = (STOP_SIGMAS * noise_uT[cell[live] // cells_per_slab]) ** 2
-        pending = np.flatnonzero(np.sum(change * change, axis=1) >= stop)  # a smaller step is not tried
+        size = np.sum(change * change, axis=1)  # about the squared misfit it would take off
+        pending = np.flatnonzero((size >= stop) | (size >= STOP_GAIN * m2[live]))  # a smaller step is not tried
         go, took = np.zeros(len(live), dtype=bool), np.zeros(len(live), dtype=bool)
         for h in range(HALVINGS + 1):
             if not len(pending):

@@ -165,6 +165,7 @@ def table_header(
         min_gain=c_float(it.MIN_GAIN),
         halvings=it.HALVINGS,
         stop_sigmas=c_float(it.STOP_SIGMAS),
+        stop_gain=c_float(it.STOP_GAIN),
         probe=c_float(it.PROBE),
         ridge=c_float(RIDGE),
         code_range=CODE_RANGE_LSB[setting.res],
