@@ -42,6 +42,7 @@ from typing import Any, BinaryIO
 
 import numpy as np
 
+from mst_cli.calibrate.table_start import middle_uv, start_nodes
 from mst_cli.calibrate.table_file import MAX_TABLE_BYTES, PARSE_ERRORS, TABLE_KEYS, checked_arrays, npz_arrays
 from mst_cli.calibrate.trilinear import crb_sigmas, normal_step, to_output, trilinear
 from mst_cli.errors import InputError
@@ -379,70 +380,6 @@ def _interpolate(table: InverseTable, pts: np.ndarray) -> np.ndarray:
     return trilinear(table.corners_uT()[cell], t)[0].reshape(*pts.shape[:-1], 3)
 
 
-def slab_babs_uT(table: InverseTable) -> tuple[np.ndarray, np.ndarray]:
-    """Each force slab's |B| range over its nodes (both force ends, every (u, v)): (lo, hi), each
-    (n_F - 1,) uT. A trilinear field's size is at most its corners' largest."""
-    babs = np.linalg.norm(1e6 * table.B_T, axis=3).reshape(len(table.grid.force_N), -1)
-    lo, hi = babs.min(axis=1), babs.max(axis=1)
-    return np.minimum(lo[:-1], lo[1:]), np.maximum(hi[:-1], hi[1:])
-
-
-START_LEVELS = 16383  # the start's integer field: |value| <= this, so that a difference fits 15 bits
-# and a squared distance (three squares) 32 unsigned bits: the C header's search is integer, cheap
-# on a Cortex-M0+ without an FPU, and Python's is the same integers (the same node, ties too)
-START_HEADROOM = 1.25  # the integer field spans this times the table's largest field component
-
-
-def start_quantum_uT(table: InverseTable) -> float:
-    """The start search's field unit (uT, a float32 value as the C header holds it): the table's
-    largest field component, with START_HEADROOM, over START_LEVELS."""
-    return float(np.float32(START_HEADROOM * 1e6 * np.max(np.abs(table.B_T)) / START_LEVELS))
-
-
-def start_field(B_uT: np.ndarray, quantum_uT: float) -> np.ndarray:
-    """Fields (..., 3) uT as the start search's integers (rounded half up, clamped to
-    +-START_LEVELS), in float64: exact, as every distance between them is."""
-    return np.clip(np.floor(B_uT / quantum_uT + 0.5), -START_LEVELS, START_LEVELS)
-
-
-def start_nodes(table: InverseTable, B_uT: np.ndarray, noise_uT: np.ndarray) -> np.ndarray:
-    """The first start of each reading (n, 3) uT: the node nearest it (least squared distance in
-    the integer units of :func:`start_field`, the first in C order on a tie) among the nodes of
-    every force slab whose |B| range, widened by FIT_SIGMAS of the slab's noise ``noise_uT``
-    (n_F - 1,), holds the reading's |B| (a field within that of the reading lies in no other
-    slab: | |b| - |B| | <= |b - B|); NaN where no slab holds it; on the no-load face, where every
-    (u, v) gives the same field, the middle of (u, v). Force node by force node, each against the
-    readings it may hold (the distances by a matrix product of integers held in float64: exact)."""
-    g = table.grid
-    lo, hi = slab_babs_uT(table)
-    margin = FIT_SIGMAS * noise_uT
-    babs = np.linalg.norm(B_uT, axis=1)[:, None]
-    slab = (babs >= lo - margin) & (babs <= hi + margin)
-    take = np.zeros((len(B_uT), len(g.force_N)), dtype=bool)
-    take[:, :-1] |= slab
-    take[:, 1:] |= slab
-    quantum = start_quantum_uT(table)
-    field = start_field(1e6 * table.B_T, quantum).reshape(len(g.force_N), -1, 3)
-    reading = start_field(B_uT, quantum)
-    size2 = np.sum(field * field, axis=2)
-    best = np.full(len(B_uT), np.inf)
-    node = np.full(len(B_uT), -1)
-    for k in range(len(g.force_N)):
-        rows = np.flatnonzero(take[:, k])
-        if not len(rows):
-            continue
-        b = reading[rows]
-        d2 = size2[k][None, :] - 2.0 * (b @ field[k].T)  # the squared distance less |b|^2 (a product)
-        j = np.argmin(d2, axis=1)
-        near = d2[np.arange(len(rows)), j] + np.sum(b * b, axis=1)
-        better = near < best[rows]
-        best[rows[better]], node[rows[better]] = near[better], k * field.shape[1] + j[better]
-    nodes = np.stack(np.meshgrid(g.force_N, g.u, g.v, indexing="ij"), axis=-1).reshape(-1, 3)
-    out = np.where((node >= 0)[:, None], nodes[np.maximum(node, 0)], np.nan)
-    out[out[:, 0] == g.force_N[0], 1:] = middle_uv(g)[0]  # no load: every (u, v) has its field
-    return out
-
-
 def _field(
     table: InverseTable, b: np.ndarray, p: np.ndarray, toward: np.ndarray | None = None
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -464,6 +401,15 @@ def _held_step(J: np.ndarray, r: np.ndarray, q: np.ndarray, box: tuple[np.ndarra
     if some.any():
         dt[some] = normal_step(J[some], r[some], held[some])
     return np.clip(dt, -STEP_CELLS, STEP_CELLS)
+
+
+def _worth_trying(J: np.ndarray, dt: np.ndarray, m2: np.ndarray, noise_uT: np.ndarray) -> np.ndarray:
+    """Whether steps dt (P, 3) (cell coordinates) are tried: not when the field they would change
+    (J dt, uT) is under STOP_SIGMAS of the noise and its square, about the squared misfit they
+    would take off, under STOP_GAIN of the misfit m2 (P,) (what is left is noise)."""
+    change = np.einsum("pij,pj->pi", J, dt)
+    size = np.sum(change * change, axis=1)
+    return (size >= (STOP_SIGMAS * noise_uT) ** 2) | (size >= STOP_GAIN * m2)
 
 
 def _gauss_newton(
@@ -502,10 +448,7 @@ def _gauss_newton(
             J[live[turn]], w[live[turn]], cell[live[turn]] = Jp[turn], wp[turn], cp[turn]
             dt[turn] = _held_step(Jp[turn], r[live[turn]], q[turn], box)
         dp = dt * w[live]
-        change = np.einsum("pij,pj->pi", J[live], dt)  # the field the step would change, uT
-        stop = (STOP_SIGMAS * noise_uT[cell[live] // cells_per_slab]) ** 2
-        size = np.sum(change * change, axis=1)  # about the squared misfit it would take off
-        pending = np.flatnonzero((size >= stop) | (size >= STOP_GAIN * m2[live]))  # a smaller step is not tried
+        pending = np.flatnonzero(_worth_trying(J[live], dt, m2[live], noise_uT[cell[live] // cells_per_slab]))
         go, took = np.zeros(len(live), dtype=bool), np.zeros(len(live), dtype=bool)
         for h in range(HALVINGS + 1):
             if not len(pending):
@@ -530,12 +473,6 @@ def _gauss_newton(
     return p, joined
 
 
-def middle_uv(grid: TableGrid) -> tuple[np.ndarray, np.ndarray]:
-    """The middle of the table's (u, v) box (the first start's) and its mean node spacing."""
-    mid = np.array([0.5 * (grid.u[0] + grid.u[-1]), 0.5 * (grid.v[0] + grid.v[-1])])
-    return mid, np.array([(grid.u[-1] - grid.u[0]) / (len(grid.u) - 1), (grid.v[-1] - grid.v[0]) / (len(grid.v) - 1)])
-
-
 def mirror_start(grid: TableGrid, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The second start of each end p (P, 3): its (u, v) mirrored through the middle of the table
     (a field symmetric about it, or folding over, has its other root there), and whether it is
@@ -555,7 +492,7 @@ def solve_starts(
     (n, 2))."""
     n = len(B_uT)
     P = np.full((n, 2, 3), np.nan)
-    P[:, 0] = start_nodes(table, B_uT, noise_uT)
+    P[:, 0] = start_nodes(table, B_uT, FIT_SIGMAS * noise_uT)
     first = np.flatnonzero(np.isfinite(P[:, 0, 0]))
     P[first, 0] = ends = _gauss_newton(table, B_uT[first], P[first, 0].copy(), noise_uT)[0]
     start, far = mirror_start(table.grid, ends)

@@ -20,6 +20,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from mst_cli.calibrate import inverse_table as it
+from mst_cli.calibrate import table_start as ts
 from mst_cli.calibrate.header import c_float, fill_template
 from mst_cli.calibrate.inverse_map import InverseMap
 from mst_cli.calibrate.load_readings import LoadReadings
@@ -91,16 +92,16 @@ def start_arrays(table: it.InverseTable, p: str) -> dict[str, str]:
     """The C arrays of the direct inverse's starts: each force slab's |B| range (uT), the middle
     of (u, v) and its mean node spacing, as :func:`~mst_cli.calibrate.inverse_table.solve_starts`
     takes them."""
-    lo, hi = it.slab_babs_uT(table)
-    quantum = it.start_quantum_uT(table)
-    ints = it.start_field(1e6 * table.B_T, quantum).astype(int).ravel()
+    lo, hi = ts.slab_babs_uT(table)
+    quantum = ts.start_quantum_uT(table)
+    ints = ts.start_field(1e6 * table.B_T, quantum).astype(int).ravel()
     rows = [", ".join(str(v) for v in ints[i : i + 12]) for i in range(0, len(ints), 12)]
     return {
         "start_quantum_uT": c_float(quantum, 9),
-        "start_levels": it.START_LEVELS,
+        "start_levels": ts.START_LEVELS,
         "start_field": f"static const int16_t {p}_B_start[{len(ints)}] = {{\n    " + ",\n    ".join(rows) + "\n};\n",
         "slab_babs": _c_floats(f"{p}_slab_babs_lo_uT", lo) + _c_floats(f"{p}_slab_babs_hi_uT", hi),
-        "middle": _c_floats(f"{p}_middle_uv", np.ravel(it.middle_uv(table.grid))),
+        "middle": _c_floats(f"{p}_middle_uv", np.ravel(ts.middle_uv(table.grid))),
     }
 
 
