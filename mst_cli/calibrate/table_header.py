@@ -105,6 +105,21 @@ def start_arrays(table: it.InverseTable, p: str) -> dict[str, str]:
     }
 
 
+# the Gauss-Newton descents' constants, as Python's (inverse_table.py) takes them
+DESCENT: dict[str, object] = {
+    "steps": it.STEPS,
+    "second_steps": it.SECOND_STEPS,
+    "step_cells": c_float(it.STEP_CELLS),
+    "converged": c_float(it.CONVERGED),
+    "min_gain": c_float(it.MIN_GAIN),
+    "halvings": it.HALVINGS,
+    "stop_sigmas": c_float(it.STOP_SIGMAS),
+    "stop_gain": c_float(it.STOP_GAIN),
+    "probe": c_float(it.PROBE),
+    "ridge": c_float(RIDGE),
+}
+
+
 def range_bounds_uT(imap: InverseMap) -> tuple[float, float, float]:
     """|B| (uT) below which a reading is below_range, above which above_range, and above which
     above_calibrated (1e30 without a load test's top): the inverse map's own bounds."""
@@ -159,16 +174,7 @@ def table_header(
         babs_below_uT=c_float(below, 9),
         babs_above_uT=c_float(above, 9),
         babs_calibrated_uT=c_float(calibrated, 9),
-        steps=it.STEPS,
-        second_steps=it.SECOND_STEPS,
-        step_cells=c_float(it.STEP_CELLS),
-        converged=c_float(it.CONVERGED),
-        min_gain=c_float(it.MIN_GAIN),
-        halvings=it.HALVINGS,
-        stop_sigmas=c_float(it.STOP_SIGMAS),
-        stop_gain=c_float(it.STOP_GAIN),
-        probe=c_float(it.PROBE),
-        ridge=c_float(RIDGE),
+        **DESCENT,
         code_range=CODE_RANGE_LSB[setting.res],
         slab_sigma=_c_floats(f"{p}_slab_sigma_uT", np.hypot(1e6 * reader.sigma_T, table.slab_error_uT())),
         **start_arrays(table, str(p)),
