@@ -98,7 +98,7 @@ def start_arrays(table: it.InverseTable, p: str) -> dict[str, str]:
     rows = [", ".join(str(v) for v in ints[i : i + 12]) for i in range(0, len(ints), 12)]
     return {
         "start_quantum_uT": c_float(quantum, 9),
-        "start_levels": ts.START_LEVELS,
+        "start_levels": str(ts.START_LEVELS),
         "start_field": f"static const int16_t {p}_B_start[{len(ints)}] = {{\n    " + ",\n    ".join(rows) + "\n};\n",
         "slab_babs": _c_floats(f"{p}_slab_babs_lo_uT", lo) + _c_floats(f"{p}_slab_babs_hi_uT", hi),
         "middle": _c_floats(f"{p}_middle_uv", np.ravel(ts.middle_uv(table.grid))),
