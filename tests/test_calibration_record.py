@@ -159,7 +159,9 @@ def test_force_table_h_is_defined_once_in_a_program_of_two_files(calibrated_map,
     subprocess.run([gcc, *objs, "-o", exe], check=True)
     codes, F, regime, _ = imap.z_code_table(setting)
     i = len(codes) // 2
-    flag, force, reg = map(int, subprocess.run([exe, str(i)], check=True, capture_output=True, text=True).stdout.split())
+    flag, force, reg = map(
+        int, subprocess.run([exe, str(i)], check=True, capture_output=True, text=True).stdout.split()
+    )
     assert (flag, force, reg) == (0, round(F[i] * 1e3), regime[i])  # an entry's own force, exactly
 
 

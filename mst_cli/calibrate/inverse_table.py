@@ -42,8 +42,8 @@ from typing import Any, BinaryIO
 
 import numpy as np
 
-from mst_cli.calibrate.table_start import middle_uv, start_nodes
 from mst_cli.calibrate.table_file import MAX_TABLE_BYTES, PARSE_ERRORS, TABLE_KEYS, checked_arrays, npz_arrays
+from mst_cli.calibrate.table_start import middle_uv, start_nodes
 from mst_cli.calibrate.trilinear import crb_sigmas, normal_step, to_output, trilinear
 from mst_cli.errors import InputError
 from mst_cli.io.files import read_input

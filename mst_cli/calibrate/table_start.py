@@ -77,7 +77,6 @@ def start_nodes(table: InverseTable, B_uT: np.ndarray, margin_uT: np.ndarray) ->
     return out
 
 
-
 def middle_uv(grid: TableGrid) -> tuple[np.ndarray, np.ndarray]:
     """The middle of the table's (u, v) box (the first start's) and its mean node spacing."""
     mid = np.array([0.5 * (grid.u[0] + grid.u[-1]), 0.5 * (grid.v[0] + grid.v[-1])])
