@@ -5,15 +5,36 @@ allows, the distances in integers (an int16 copy of the field in the header), an
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 import numpy as np
 
-if TYPE_CHECKING:  # types only: inverse_table imports this module
-    from mst_cli.calibrate.inverse_table import InverseTable, TableGrid
+
+class GridLike(Protocol):
+    """The nodes of a table (:class:`~mst_cli.calibrate.inverse_table.TableGrid`)."""
+
+    @property
+    def force_N(self) -> np.ndarray: ...
+
+    @property
+    def u(self) -> np.ndarray: ...
+
+    @property
+    def v(self) -> np.ndarray: ...
 
 
-def slab_babs_uT(table: InverseTable) -> tuple[np.ndarray, np.ndarray]:
+class TableLike(Protocol):
+    """A table's nodes and field in T (:class:`~mst_cli.calibrate.inverse_table.InverseTable`,
+    which imports this module)."""
+
+    @property
+    def grid(self) -> GridLike: ...
+
+    @property
+    def B_T(self) -> np.ndarray: ...
+
+
+def slab_babs_uT(table: TableLike) -> tuple[np.ndarray, np.ndarray]:
     """Each force slab's |B| range over its nodes (both force ends, every (u, v)): (lo, hi), each
     (n_F - 1,) uT. A trilinear field's size is at most its corners' largest."""
     babs = np.linalg.norm(1e6 * table.B_T, axis=3).reshape(len(table.grid.force_N), -1)
@@ -27,7 +48,7 @@ START_LEVELS = 16383  # the start's integer field: |value| <= this, so that a di
 START_HEADROOM = 1.25  # the integer field spans this times the table's largest field component
 
 
-def start_quantum_uT(table: InverseTable) -> float:
+def start_quantum_uT(table: TableLike) -> float:
     """The start search's field unit (uT, a float32 value as the C header holds it): the table's
     largest field component, with START_HEADROOM, over START_LEVELS."""
     return float(np.float32(START_HEADROOM * 1e6 * np.max(np.abs(table.B_T)) / START_LEVELS))
@@ -39,7 +60,7 @@ def start_field(B_uT: np.ndarray, quantum_uT: float) -> np.ndarray:
     return np.clip(np.floor(B_uT / quantum_uT + 0.5), -START_LEVELS, START_LEVELS)
 
 
-def start_nodes(table: InverseTable, B_uT: np.ndarray, margin_uT: np.ndarray) -> np.ndarray:
+def start_nodes(table: TableLike, B_uT: np.ndarray, margin_uT: np.ndarray) -> np.ndarray:
     """The first start of each reading (n, 3) uT: the node nearest it (least squared distance in
     the integer units of :func:`start_field`, the first in C order on a tie) among the nodes of
     every force slab whose |B| range, widened by ``margin_uT`` (n_F - 1,: the root test's
@@ -77,7 +98,7 @@ def start_nodes(table: InverseTable, B_uT: np.ndarray, margin_uT: np.ndarray) ->
     return out
 
 
-def middle_uv(grid: TableGrid) -> tuple[np.ndarray, np.ndarray]:
+def middle_uv(grid: GridLike) -> tuple[np.ndarray, np.ndarray]:
     """The middle of the table's (u, v) box (the first start's) and its mean node spacing."""
     mid = np.array([0.5 * (grid.u[0] + grid.u[-1]), 0.5 * (grid.v[0] + grid.v[-1])])
     return mid, np.array([(grid.u[-1] - grid.u[0]) / (len(grid.u) - 1), (grid.v[-1] - grid.v[0]) / (len(grid.v) - 1)])
