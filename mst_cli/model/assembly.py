@@ -16,8 +16,9 @@ from typing import TYPE_CHECKING
 
 from mst_cli.model import board_slots
 from mst_cli.model.cell import HexCell
-from mst_cli.model.components import MAGNET_GRADES_T, Board, default_board
+from mst_cli.model.components import INSERT_MATERIALS, MAGNET_GRADES_T, NO_INSERT, Board, default_board
 from mst_cli.model.file_keys import spec
+from mst_cli.model.load_path import Insert
 from mst_cli.model.printer import Printer
 from mst_cli.model.violation import Violation
 
@@ -145,6 +146,55 @@ class Housing:
     )
 
 
+# The insert's default, chosen with benchmarks/bench_load_path.py (docs/design.md section 10): a
+# 2 mm PLA plate, which any printer that prints the body prints flat in minutes and the user drops
+# in at a pause, takes the share of the magnet's motion outside the layers of the bundled forward
+# design from 60/82/93 % to 9/23/45 % (regimes 1/2/3); a 1 mm steel shim reaches 4/11/25 % but
+# must be cut to size from sheet. `insert.material: steel` selects it.
+DEFAULT_INSERT_MATERIAL = "pla"
+DEFAULT_INSERT_THICKNESS_MM = 2.0
+
+
+@dataclass(frozen=True)
+class InsertPlate:
+    """The spec's ``insert`` section: a stiff plate in the cap over the magnet (docs/design.md
+    section 10), dropped into a closed slot at its own print pause. The slot is as wide and as
+    deep as the face allows with ``housing.side_wall_mm`` of TPU around it; through its
+    thickness it fits the plate exactly (the press then bears on the plate from the first
+    newton), along its width and height ``clearance_mm`` lets it drop in."""
+
+    material: str = spec(
+        DEFAULT_INSERT_MATERIAL,
+        choices=tuple(INSERT_MATERIALS) + (NO_INSERT,),
+        meaning="the plate: `pla` or `petg` (printed flat, 100 % infill) or `steel` (a shim cut to size); "
+        "`none`: no insert, the TPU cap spans the face alone",
+    )
+    thickness_mm: float = spec(
+        DEFAULT_INSERT_THICKNESS_MM, lo=0.1, hi=10.0, unit="mm", meaning="the plate's thickness (along the stack)"
+    )
+    clearance_mm: float = spec(
+        0.2,
+        lo=0.0,
+        hi=2.0,
+        unit="mm",
+        meaning="room around the plate in its slot across the face and above it in the print (none "
+        "through its thickness: printed TPU gives, so the plate is held)",
+    )
+
+    @property
+    def present(self) -> bool:
+        return self.material != NO_INSERT
+
+
+@dataclass(frozen=True)
+class PrintPause:
+    """A pause of the print: after the layer whose top is at ``z_mm`` (print height)."""
+
+    after_layer: int
+    z_mm: float
+    why: str
+
+
 def snap_to_layers_mm(height_mm: float, layer_height_mm: float, mode: str) -> float:
     """A print height snapped to the layer grid: mode "down", "up" or "nearest" (halves up).
     Heights within 1e-9 layers of a boundary count as on it (float noise)."""
@@ -191,6 +241,8 @@ class SensorGeometry:
     # every chip's (x, y) when more than one reads the magnet (magnetometer.positions_mm, the
     # first at chip_offset_mm); None: one chip, at chip_offset_mm
     chip_positions_mm: tuple[tuple[float, float], ...] | None = None
+    # the stiff plate in the cap (the file's `insert` section); None: none, the cap is TPU alone
+    insert_plate: InsertPlate | None = None
 
     def __post_init__(self):
         if self.board is None:
@@ -368,8 +420,77 @@ class SensorGeometry:
         return int(round(self.pause_height_mm / self.layer_height_mm))
 
     @property
+    def z_pocket_top_mm(self) -> float:
+        """The pocket's face above the magnet (the magnet, its axial clearance)."""
+        return self.z_magnet_top_mm + self.housing.pocket_clearance_mm
+
+    @property
+    def has_insert(self) -> bool:
+        return self.insert_plate is not None and self.insert_plate.present
+
+    @property
     def total_height_mm(self) -> float:
-        return self.z_magnet_top_mm + self.housing.pocket_clearance_mm + self.housing.cap_top_mm
+        """The top face: cap_top_mm over the pocket, or over the insert when there is one."""
+        top = self.insert_slot_box_mm[1][2] if self.has_insert else self.z_pocket_top_mm
+        return top + self.housing.cap_top_mm
+
+    # -- the insert: its slot and the plate, computed here once (CAD, closed form, FE read them)
+    @property
+    def insert_slot_roof_rise_mm(self) -> float:
+        """Rise of the 45 deg gable over the slot (half the plate's thickness, whole layers), as
+        :attr:`pocket_roof_rise_mm` is over the pocket."""
+        assert self.insert_plate is not None
+        return snap_to_layers_mm(0.5 * self.insert_plate.thickness_mm, self.layer_height_mm, "up")
+
+    @property
+    def insert_slot_box_mm(self) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
+        """(lo, hi) of the insert's slot, sensor frame, without its gable: across the face with
+        side_wall_mm left at each x face; from a floor on the layer grid side_wall_mm above the
+        -y face up to a layer boundary (the pause) that leaves side_wall_mm over the gable; along
+        z from cap_top_mm over the pocket, the plate's thickness."""
+        ip, h = self.insert_plate, self.housing
+        assert ip is not None and ip.present, "no insert"
+        a = 0.5 * self.width_mm - h.side_wall_mm
+        d2 = 0.5 * self.depth_mm
+        y0 = self.snapped_y_mm(-d2 + h.side_wall_mm, "up")
+        y1 = self.snapped_y_mm(d2 - h.side_wall_mm - self.insert_slot_roof_rise_mm, "down")
+        z0 = self.z_pocket_top_mm + h.cap_top_mm
+        return (-a, y0, z0), (a, y1, z0 + ip.thickness_mm)
+
+    @property
+    def insert_box_mm(self) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
+        """(lo, hi) of the plate as it sits, sensor frame: the slot less the clearance at each x
+        side and at the top (it rests on the slot's floor, fills the slot's thickness)."""
+        assert self.insert_plate is not None
+        (x0, y0, z0), (x1, y1, z1) = self.insert_slot_box_mm
+        c = self.insert_plate.clearance_mm
+        return (x0 + c, y0, z0), (x1 - c, y1 - c, z1)
+
+    @property
+    def insert(self) -> Insert | None:
+        """The plate as the closed form takes it (:class:`~mst_cli.model.load_path.Insert`: its
+        plane-strain modulus, its underside above the top pad's underside), or None."""
+        if not self.has_insert:
+            return None
+        assert self.insert_plate is not None
+        m = INSERT_MATERIALS[self.insert_plate.material]
+        (_, y0, z0), (_, y1, _) = self.insert_box_mm
+        z = self.layers[-1].t_mm + z0 - self.z_stack_top_mm
+        return Insert(m.name, m.plane_strain_modulus_MPa, m.poisson_ratio, self.insert_plate.thickness_mm, z, y1 - y0)
+
+    @property
+    def insert_pause(self) -> PrintPause | None:
+        """The pause that drops the plate in: at the top of its slot (a layer boundary)."""
+        if not self.has_insert:
+            return None
+        z = self.print_height_mm(self.insert_slot_box_mm[1][1])
+        return PrintPause(int(round(z / self.layer_height_mm)), z, "drop the insert plate into its slot")
+
+    @property
+    def pauses(self) -> tuple[PrintPause, ...]:
+        """Every pause of the print, lowest first: the magnet's, then the insert's when there is one."""
+        magnet = PrintPause(self.pause_after_layer, self.pause_height_mm, "drop the magnet into its pocket")
+        return (magnet,) if self.insert_pause is None else (magnet, self.insert_pause)
 
     @property
     def gap0_mm(self) -> float:
@@ -474,4 +595,23 @@ class SensorGeometry:
                     "(housing.side_wall_mm above its apex)",
                 )
             )
+        out += self._insert_violations()
         return board_slots.chip_off_face_violations(self) + out  # a chip off the face first
+
+    def _insert_violations(self) -> list[Violation]:
+        """The insert's slot must stand above the magnet's pause (its own pause comes later) and
+        leave a plate at least as wide as the pocket."""
+        if not self.has_insert:
+            return []
+        (x0, y0, _), (x1, y1, _) = self.insert_box_mm
+        if y1 - y0 < 2.0 * self.pocket_radius_mm or x1 - x0 < 2.0 * self.pocket_radius_mm:
+            return [
+                Violation.of_field(
+                    "insert.thickness_mm",
+                    self.insert_plate.thickness_mm if self.insert_plate else None,
+                    f"leaves a plate of {x1 - x0:.3g} x {y1 - y0:.3g} mm, smaller than the magnet's pocket "
+                    f"({2 * self.pocket_radius_mm:g} mm): a thinner plate, a smaller insert.clearance_mm or "
+                    "a deeper family.depth_mm",
+                )
+            ]
+        return []

@@ -108,8 +108,9 @@ def section_EI_kGA(
     shear = SHEAR_FACTOR * G_MPa * (b * T - hole_width_mm * max(hole_z_mm[1] - hole_z_mm[0], 0.0))
     if insert is not None:
         z0, z1 = insert.z_mm, insert.z_mm + insert.thickness_mm
-        strips.append((z0, z1, b * (insert.modulus_MPa - E_prime_MPa)))
-        shear += SHEAR_FACTOR * b * (z1 - z0) * (insert.shear_modulus_MPa - G_MPa)
+        bi = b if insert.depth_mm is None else min(insert.depth_mm, b)  # the plate's own depth
+        strips.append((z0, z1, bi * (insert.modulus_MPa - E_prime_MPa)))
+        shear += SHEAR_FACTOR * bi * (z1 - z0) * (insert.shear_modulus_MPa - G_MPa)
     EA = sum(w * (z1 - z0) for z0, z1, w in strips)
     zc = sum(w * (z1 - z0) * 0.5 * (z0 + z1) for z0, z1, w in strips) / EA
     EI = sum(w * ((z1 - z0) ** 3 / 12.0 + (z1 - z0) * (0.5 * (z0 + z1) - zc) ** 2) for z0, z1, w in strips)
@@ -125,6 +126,7 @@ class Insert:
     poisson_ratio: float
     thickness_mm: float
     z_mm: float = 0.0  # its underside above the cap beam's bottom (the top pad's underside)
+    depth_mm: float | None = None  # along the depth (y); None: the whole depth D
 
     @property
     def shear_modulus_MPa(self) -> float:
@@ -162,7 +164,8 @@ def members(
 ) -> Members:
     """The cap's, the plates' and the cover's compliance of ``geometry`` (a SensorGeometry) in
     ``material`` under a centred press ``patch_mm`` wide (module docstring); ``insert``, a stiff
-    plate in the cap (its own modulus, in plane strain as given)."""
+    plate in the cap (its own modulus, in plane strain as given), by default the geometry's own."""
+    insert = getattr(geometry, "insert", None) if insert is None else insert
     if support not in SUPPORTS:
         raise ValueError(f"support must be one of {SUPPORTS}")
     E = material.youngs_modulus_MPa / (1.0 - material.poisson_ratio**2)

@@ -30,7 +30,7 @@ from mst_cli.io import field_tables
 from mst_cli.io.files import read_input_text
 from mst_cli.io.rules import Rule, default_of
 from mst_cli.io.yaml_io import MAX_INPUT_BYTES, YAMLRefused, load_text
-from mst_cli.model.assembly import Housing, Magnet, SensorGeometry
+from mst_cli.model.assembly import Housing, InsertPlate, Magnet, SensorGeometry
 from mst_cli.model.cell import HexCell
 from mst_cli.model.components import BOARDS, Board
 from mst_cli.model.material import Material
@@ -76,6 +76,7 @@ class Document:
     source: str = "<memory>"
     accuracy_rel: float | None = None  # model.accuracy_rel: requested accuracy of k and R
     chip_positions_mm: tuple[tuple[float, float], ...] | None = None  # magnetometer.positions_mm
+    insert: InsertPlate = InsertPlate()  # the insert section (material none: no plate)
 
     @property
     def chips_mm(self) -> list[tuple[float, float]]:
@@ -97,7 +98,7 @@ class Document:
             return ModelSection(mechanics=self.mechanics, field=self.field_model, accuracy_rel=self.accuracy_rel)
         if name == "design":
             return DesignOptions(**self.design)
-        return getattr(self, name)  # family, material, magnet, housing, printer: kept as the file has them
+        return getattr(self, name)  # family, material, magnet, housing, insert, printer: as the file has them
 
     @property
     def is_design(self) -> bool:
@@ -121,6 +122,7 @@ class Document:
             self.magnet_tilt_deg,
             self.printer,
             self.chip_positions_mm,
+            self.insert if self.insert.present else None,
         )
 
     def require_geometry(self) -> None:
@@ -199,6 +201,7 @@ def parse_document(raw: Any, source: str = "<memory>") -> Document:
     meter = MagnetometerSection(**_section(raw, "magnetometer"))
     board = BOARDS[meter.board]
     housing = Housing(**_section(raw, "housing"))
+    insert = InsertPlate(**_section(raw, "insert"))
     printer = Printer(**_section(raw, "printer"))
     model = ModelSection(**_section(raw, "model"))
     design = _design_options(_section(raw, "design"))
@@ -206,7 +209,15 @@ def parse_document(raw: Any, source: str = "<memory>") -> Document:
     # The housing rules (printable depth, pocket and slots inside the body) do not depend on the
     # layers' theta, t, h: check them on any cell of the family, before any design work.
     probe = SensorGeometry(
-        (family.cell(45.0, 1.0, 3.0),), magnet, board, housing, meter.chip_offset_mm, 0.0, printer, meter.positions_mm
+        (family.cell(45.0, 1.0, 3.0),),
+        magnet,
+        board,
+        housing,
+        meter.chip_offset_mm,
+        0.0,
+        printer,
+        meter.positions_mm,
+        insert if insert.present else None,
     )
     for v in probe.housing_violations():
         raise v.input_error()
@@ -229,6 +240,7 @@ def parse_document(raw: Any, source: str = "<memory>") -> Document:
         source=source,
         accuracy_rel=model.accuracy_rel,
         chip_positions_mm=meter.positions_mm,
+        insert=insert,
     )
 
 

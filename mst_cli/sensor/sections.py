@@ -15,7 +15,7 @@ from dataclasses import dataclass, fields
 
 from mst_cli.errors import InputError
 from mst_cli.io.rules import Rule, adopt, default_of
-from mst_cli.model.assembly import Housing, Magnet, SensorGeometry
+from mst_cli.model.assembly import Housing, InsertPlate, Magnet, SensorGeometry
 from mst_cli.model.cell import HexCell
 from mst_cli.model.chip import DEFAULT_NOISE_uT
 from mst_cli.model.components import BOARDS, DEFAULT_BOARD, grade_remanence_T
@@ -313,6 +313,7 @@ SECTION_TYPES: dict[str, type] = {
     "magnet": MagnetSection,
     "magnetometer": MagnetometerSection,
     "housing": Housing,
+    "insert": InsertPlate,
     "printer": Printer,
     "model": ModelSection,
     "design": DesignOptions,
