@@ -137,10 +137,30 @@ def plates_volume_mm3(geometry: SensorGeometry) -> float:
     return (len(g.layers) - 1) * g.width_mm * g.depth_mm * g.housing.plate_mm
 
 
-def cap_volume_mm3(geometry: SensorGeometry) -> float:
-    """Cap (W x D, from the stack top to the total height) minus the magnet pocket."""
+def insert_slot_volume_mm3(geometry: SensorGeometry) -> float:
+    """The insert's slot: its box plus the gable over it, a triangular prism of base the plate's
+    thickness and height its rise, the slot's width long (0 without an insert)."""
     g = geometry
-    return g.width_mm * g.depth_mm * (g.total_height_mm - g.z_stack_top_mm) - pocket_volume_mm3(g)
+    if not g.has_insert:
+        return 0.0
+    (x0, y0, z0), (x1, y1, z1) = g.insert_slot_box_mm
+    return (x1 - x0) * (z1 - z0) * ((y1 - y0) + 0.5 * g.insert_slot_roof_rise_mm)
+
+
+def insert_volume_mm3(geometry: SensorGeometry) -> float:
+    """The insert plate's volume, its box (0 without an insert)."""
+    if not geometry.has_insert:
+        return 0.0
+    lo, hi = geometry.insert_box_mm
+    return float(np.prod(np.subtract(hi, lo)))
+
+
+def cap_volume_mm3(geometry: SensorGeometry) -> float:
+    """Cap (W x D, from the stack top to the total height) minus the magnet pocket and the
+    insert's slot."""
+    g = geometry
+    block = g.width_mm * g.depth_mm * (g.total_height_mm - g.z_stack_top_mm)
+    return block - pocket_volume_mm3(g) - insert_slot_volume_mm3(g)
 
 
 def body_volume_mm3(geometry: SensorGeometry) -> float:

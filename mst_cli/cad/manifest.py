@@ -41,6 +41,7 @@ from mst_cli.cad.expected_body import (
     wall_centrelines_xz,
     wall_horizontal_width_mm,
 )
+from mst_cli.cad.placed_parts import parts_section
 from mst_cli.errors import InputError
 from mst_cli.io.files import read_input_text
 from mst_cli.sensor.document import Document, design_geometry, parse_document
@@ -107,6 +108,8 @@ def print_section(g: SensorGeometry) -> dict:
             "z_mm": g.pause_height_mm,
             "why": "drop the magnet into its pocket",
         },
+        # every pause, lowest first (the magnet's is print.pause, kept for older readers)
+        "pauses": [{"after_layer": p.after_layer, "z_mm": p.z_mm, "why": p.why} for p in g.pauses],
         "magnet_top_z_mm": g.print_height_mm(g.magnet.radius_mm),
         "cavity_lines": cavity_lines,
         "wall_lines": wall_lines,
@@ -135,6 +138,7 @@ def export_manifest(
         "print": print_section(g),
         "body": _body_section(g, stl_tolerance_mm),
         "magnet_pocket": _pocket_section(g),
+        "parts": parts_section(g),
         **_slots_sections(g),
         "gap0_mm": g.gap0_mm,
         "base_top_z_mm": g.z_base_top_mm,
@@ -184,7 +188,7 @@ def _body_section(g: SensorGeometry, stl_tolerance_mm: float) -> dict:
         "bbox_min_mm": list(bbox_min),
         "bbox_max_mm": list(bbox_max),
         "bodies": 1,
-        "internal_voids": 1,  # the closed magnet pocket
+        "internal_voids": 1 + g.has_insert,  # the closed magnet pocket, and the insert's slot
     }
 
 

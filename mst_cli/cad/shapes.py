@@ -118,11 +118,32 @@ def magnet_pocket(geometry: SensorGeometry) -> list[Cylinder | Box | Prism]:
     y_top = geometry.pocket_top_y_mm
     disc = Cylinder(r, (0.0, 0.0, z0), d)
     sides = box(-r, r, 0.0, y_top, z0, z0 + d)
-    # gable: triangle in the y-z plane (base on y = y_top across the depth, apex at the
-    # ridge), swept along x over the pocket's width
-    tri = ((y_top, z0), (geometry.pocket_roof_apex_y_mm, z0 + 0.5 * d), (y_top, z0 + d))
-    roof = Prism("x", tri, (), -r, 2.0 * r)
-    return [disc, sides, roof]
+    return [disc, sides, gable(y_top, geometry.pocket_roof_apex_y_mm, z0, z0 + d, -r, r)]
+
+
+def gable(y_top: float, apex_y: float, z0: float, z1: float, x0: float, x1: float) -> Prism:
+    """A cavity's roof in the print: a triangle in the y-z plane (its base on y = y_top from z0 to
+    z1, its apex at apex_y over the middle) swept along x from x0 to x1. At 45 deg or steeper,
+    every layer over the cavity overhangs less than a layer height: nothing is bridged."""
+    tri = ((y_top, z0), (apex_y, 0.5 * (z0 + z1)), (y_top, z1))
+    return Prism("x", tri, (), x0, x1 - x0)
+
+
+def insert_slot(geometry: SensorGeometry) -> list[Box | Prism]:
+    """The closed slot the insert plate drops into at its pause (none without an insert): the
+    slot's box (:attr:`SensorGeometry.insert_slot_box_mm`, open upwards in the print until the
+    pause) and the 45 deg gable that closes it over the plate's thickness."""
+    if not geometry.has_insert:
+        return []
+    (x0, y0, z0), (x1, y1, z1) = geometry.insert_slot_box_mm
+    roof = gable(y1, y1 + geometry.insert_slot_roof_rise_mm, z0, z1, x0, x1)
+    return [box(x0, x1, y0, y1, z0, z1), roof]
+
+
+def insert_plate(geometry: SensorGeometry) -> Box:
+    """The insert plate as it sits in its slot (:attr:`SensorGeometry.insert_box_mm`)."""
+    lo, hi = geometry.insert_box_mm
+    return Box(lo, hi)
 
 
 def cap_block(geometry: SensorGeometry) -> Box:
@@ -172,11 +193,18 @@ def base_cuts(geometry: SensorGeometry) -> list[Box]:
 @dataclass(frozen=True)
 class BodyPlan:
     """The printed body: fuse ``keep`` (bottom to top), then cut ``cut`` (the base's slot and
-    windows) and the union of ``pocket`` (the magnet pocket's pieces)."""
+    windows), the union of ``pocket`` (the magnet pocket's pieces) and the union of
+    ``insert_slot`` (the insert's slot and roof; empty without an insert)."""
 
     keep: tuple[Box | Prism, ...]
     cut: tuple[Box, ...]
     pocket: tuple[Cylinder | Box | Prism, ...]
+    insert_slot: tuple[Box | Prism, ...] = ()
+
+    @property
+    def voids(self) -> int:
+        """Closed cavities of the body: the pocket, and the insert's slot when there is one."""
+        return 1 + bool(self.insert_slot)
 
 
 def body_plan(geometry: SensorGeometry) -> BodyPlan:
@@ -186,7 +214,9 @@ def body_plan(geometry: SensorGeometry) -> BodyPlan:
     keep += [layer_web(cell, z_bottom) for cell, z_bottom in zip(geometry.layers, geometry.layer_bottoms_mm)]
     keep += plates(geometry)
     keep.append(cap_block(geometry))
-    return BodyPlan(tuple(keep), tuple(base_cuts(geometry)), tuple(magnet_pocket(geometry)))
+    return BodyPlan(
+        tuple(keep), tuple(base_cuts(geometry)), tuple(magnet_pocket(geometry)), tuple(insert_slot(geometry))
+    )
 
 
 def magnet(geometry: SensorGeometry) -> Cylinder:

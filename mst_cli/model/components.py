@@ -63,6 +63,11 @@ MAGNET_GRADES_T: dict[str, tuple[float, float]] = {
 }
 
 
+# Sintered NdFeB's elastic constants, any grade: E 150-160 GPa, nu 0.24 (magnet makers' physical
+# property tables, e.g. Arnold Magnetic Technologies' NdFeB data: Young's modulus 160 GPa).
+NDFEB_ELASTIC = {"youngs_modulus_MPa": 160e3, "poisson_ratio": 0.24}
+
+
 def grade_remanence_T(grade: str) -> float:
     lo, hi = MAGNET_GRADES_T[grade]
     return round(0.5 * (lo + hi), 4)
