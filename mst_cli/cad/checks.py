@@ -485,6 +485,30 @@ def check_magnet_pause(m: Measurements, x: Manifest) -> Check:
     )
 
 
+def check_insert_slot(m: Measurements, x: Manifest) -> Check:
+    """The insert's slot where export.json declares it (width, floor, thickness, the gable's
+    ridge) and its pause at the slot's top, on the grid, above the plate (info without one)."""
+    part = x.insert
+    if part is None or part.sensor_slot_min_mm is None or part.sensor_slot_max_mm is None:
+        return Check("insert_slot", True, "no insert", "no insert", "", info=True)
+    lo, hi = np.asarray(part.sensor_slot_min_mm), np.array(part.sensor_slot_max_mm)
+    hi[1] += part.slot_roof_rise_mm or 0.0  # along y the ray ends at the ridge
+    got_lo, got_hi = np.asarray(m.insert_slot.lo_mm), np.asarray(m.insert_slot.hi_mm)
+    err = float(np.max(np.abs(np.concatenate([got_lo - lo, got_hi - hi]))))
+    pause, lh = part.placed_at_pause, x.print.layer_height_mm
+    z_top = part.sensor_slot_max_mm[1] + 0.5 * x.print.height_mm  # the slot's top, print height
+    pause_ok = not _off_grid(pause.z_mm, lh) and pause.after_layer == round(pause.z_mm / lh)
+    pause_ok &= abs(pause.z_mm - z_top) < 1e-6 and part.sensor_box_max_mm[1] + 0.5 * x.print.height_mm <= pause.z_mm
+    return Check(
+        "insert_slot",
+        bool(err <= PLANAR_TOL_MM and pause_ok),
+        f"{got_hi[0] - got_lo[0]:.3f} x {got_hi[2] - got_lo[2]:.3f} mm, floor y {got_lo[1]:.3f}, ridge y {got_hi[1]:.3f}",
+        f"{hi[0] - lo[0]:.3f} x {hi[2] - lo[2]:.3f} mm, floor y {lo[1]:.3f}, ridge y {hi[1]:.3f}; pause z {pause.z_mm:.2f}",
+        f"the plate drops in at the pause after layer {pause.after_layer} (z = {pause.z_mm:.2f} mm)",
+        values={"largest_error_mm": err, "pause_z_mm": pause.z_mm, "pause_ok": bool(pause_ok)},
+    )
+
+
 CHECKS = (
     check_watertight,
     check_is_volume,
@@ -502,6 +526,7 @@ CHECKS = (
     check_overhang,
     check_layer_grid,
     check_magnet_pause,
+    check_insert_slot,
     check_load_path,
 )
 

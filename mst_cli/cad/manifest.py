@@ -391,6 +391,20 @@ class Slot:
 
 
 @dataclass(frozen=True)
+class PlacedPart:
+    """An entry of ``parts``: a part that is not the TPU body, and (the insert) the slot the body
+    leaves for it, sensor frame."""
+
+    name: str = _kind("str")
+    sensor_box_min_mm: tuple[float, float, float] = _kind(("num", 3))
+    sensor_box_max_mm: tuple[float, float, float] = _kind(("num", 3))
+    placed_at_pause: Pause = _kind(Pause)
+    sensor_slot_min_mm: tuple[float, float, float] | None = _optional(("num", 3))
+    sensor_slot_max_mm: tuple[float, float, float] | None = _optional(("num", 3))
+    slot_roof_rise_mm: float | None = _optional("num")
+
+
+@dataclass(frozen=True)
 class PrinterLimits:
     nozzle_mm: float = _kind("pos")
     min_gap_mm: float = _kind("pos")
@@ -411,12 +425,18 @@ class Manifest:
     board_slot: Slot = _kind(Slot)
     printer: PrinterLimits = _kind(PrinterLimits)
     board_slots: tuple[Slot, ...] = _optional(ListOf(Slot), ())  # one-chip exports lack it
+    parts: tuple[PlacedPart, ...] = _optional(ListOf(PlacedPart), ())  # exports before issue 44 lack it
     design: Document | None = _optional("design")  # exports before issue 21 lack it
 
     @property
     def slots(self) -> tuple[Slot, ...]:
         """Every chip's board slot: ``board_slots``, else the one ``board_slot``."""
         return self.board_slots or (self.board_slot,)
+
+    @property
+    def insert(self) -> PlacedPart | None:
+        """The insert plate's entry of ``parts`` (None without one)."""
+        return next((p for p in self.parts if p.name == "insert" and p.sensor_slot_min_mm is not None), None)
 
     @classmethod
     def from_dict(cls, data: Any) -> Manifest:
@@ -440,6 +460,7 @@ class SlicePrint:
 
     layer_height_mm: float | None = _optional("pos")
     pause: Pause | None = _optional(Pause)
+    pauses: tuple[Pause, ...] = _optional(ListOf(Pause), ())  # exports before issue 44 give one pause
     cavity_lines: tuple[CavityLine, ...] = _optional(ListOf(CavityLine), ())
     wall_lines: tuple[WallLine, ...] = _optional(ListOf(WallLine), ())
 

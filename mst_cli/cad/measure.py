@@ -190,6 +190,38 @@ class SlotSize:
     window_floor_y_mm: tuple[float, ...]
 
 
+@dataclass(frozen=True)
+class InsertSlotSize:
+    """The insert's slot as the mesh leaves it, sensor frame (mm); NaN where it is not found."""
+
+    lo_mm: tuple[float, float, float]  # x across, y the floor (print height), z through the plate
+    hi_mm: tuple[float, float, float]  # y: the gable's ridge
+
+
+NO_SLOT = InsertSlotSize((math.nan,) * 3, (math.nan,) * 3)
+
+
+def _measure_insert_slot(manifold, manifest: Manifest) -> InsertSlotSize:
+    """Rays through the middle of the slot export.json declares: along z (its thickness), x
+    (its width) and y (its floor and its roof's ridge); each takes the air gap around the
+    declared middle."""
+    part = manifest.insert
+    if part is None or part.sensor_slot_min_mm is None or part.sensor_slot_max_mm is None:
+        return NO_SLOT
+    lo, hi = np.asarray(part.sensor_slot_min_mm), np.asarray(part.sensor_slot_max_mm)
+    mid = 0.5 * (lo + hi) + np.array([0.0123, 0.0123, 0.0])  # off the mesh's vertices
+    far = float(np.max(np.abs(manifest.body.bbox_max_mm))) + 1.0 + float(np.max(np.abs(manifest.body.bbox_min_mm)))
+    found = []
+    for axis in range(3):
+        origin = mid.copy()
+        origin[axis] = -far
+        direction = np.eye(3)[axis]
+        gaps = [(a - far, b - far) for a, b in air_gaps(manifold, origin, direction, 2.0 * far)]
+        around = [g for g in gaps if g[0] < mid[axis] < g[1]]
+        found.append(around[0] if len(around) == 1 else (math.nan, math.nan))
+    return InsertSlotSize(tuple(f[0] for f in found), tuple(f[1] for f in found))  # type: ignore[arg-type]
+
+
 @dataclass(frozen=True, eq=False)
 class Measurements:
     """Everything :mod:`mst_cli.cad.checks` compares, measured once on one mesh (mm, deg)."""
@@ -211,6 +243,7 @@ class Measurements:
     down_inclination_deg: np.ndarray
     down_area_mm2: np.ndarray
     flat_heights_mm: np.ndarray
+    insert_slot: InsertSlotSize = NO_SLOT
 
     @property
     def slot(self) -> SlotSize:
@@ -247,6 +280,7 @@ def measure(mesh: Mesh | Any, manifest: Manifest) -> Measurements:
         down_inclination_deg=down_incl,
         down_area_mm2=down_area,
         flat_heights_mm=flat_heights,
+        insert_slot=_measure_insert_slot(manifold, manifest),
     )
 
 
