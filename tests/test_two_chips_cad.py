@@ -137,7 +137,7 @@ def test_each_chip_has_an_empty_slot_of_the_board_outline(exports):
 def test_the_two_chip_body_is_one_volume_lighter_by_the_second_slot(exports):
     one, two = (sensor_mesh(out) for out in exports)
     assert two.is_watertight and two.is_volume
-    assert len(two.split(only_watertight=False)) == 2  # the body and its closed magnet pocket
+    assert len(two.split(only_watertight=False)) == 3  # the body, its magnet pocket and its insert's slot
     assert np.allclose(one.bounds, two.bounds, atol=1e-5)  # both slots reach 26.8 mm: base 56 mm
     assert two.bounds[1][0] - two.bounds[0][0] == pytest.approx(56.0, abs=1e-5)
     assert one.volume - two.volume == pytest.approx(EXTRA_SLOT_MM3, abs=STL_VOLUME_TOL_MM3)
@@ -257,7 +257,7 @@ def test_chips_at_different_y_each_have_a_slot_on_their_own_floor(step_exports):
 def test_the_stepped_body_is_one_volume_lighter_by_the_hand_worked_slot(step_exports):
     one, two = (sensor_mesh(out) for out in step_exports)
     assert two.is_watertight and two.is_volume
-    assert len(two.split(only_watertight=False)) == 2  # the body and its closed magnet pocket
+    assert len(two.split(only_watertight=False)) == 3  # the body, its magnet pocket and its insert's slot
     assert np.allclose(one.bounds, two.bounds, atol=1e-5)
     assert one.volume - two.volume == pytest.approx(STEP_EXTRA_MM3, abs=STL_VOLUME_TOL_MM3)
     slots = json.loads((step_exports[1] / "export.json").read_text())["board_slots"]
@@ -314,7 +314,7 @@ def test_a_link_window_below_the_next_floor_stops_at_that_slot_wall(tmp_path):
     assert r.exit_code == 0, r.output + r.stderr
     mesh = trimesh.load(out / "sensor.stl")
     mesh.apply_transform(np.array([[1, 0, 0, 0], [0, 0, 1, -20.0], [0, -1, 0, 0], [0, 0, 0, 1]], dtype=float))
-    assert mesh.is_watertight and len(mesh.split(only_watertight=False)) == 2
+    assert mesh.is_watertight and len(mesh.split(only_watertight=False)) == 3
     # across at y -5 (between the link's floor and chip 2's), window height: air from the -x
     # face through chip 1's slot and the link to x 1.0, then solid to the +x face
     assert np.allclose(ray_hits(mesh, (-40.0, -5.0071, 4.0123), (1, 0, 0)) - 40.0, [1.0, 28.0], atol=1e-4)
