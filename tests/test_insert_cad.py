@@ -1,0 +1,178 @@
+"""The insert plate (issue 44, docs/design.md section 10), one source of truth: the spec's
+``insert`` section, its box in SensorGeometry, the slot the meshed body leaves for it (measured
+with trimesh, an independent library), its pause in export.json and the 3MF, the closed form's
+default, and the STEP's named part."""
+
+import io
+import math
+import zipfile
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+import trimesh
+
+from mst_cli.cad import mesh_io
+from mst_cli.cad.expected_body import insert_slot_volume_mm3, insert_volume_mm3, to_print_frame
+from mst_cli.cad.manifest import export_manifest
+from mst_cli.cad.mesh_body import insert_mesh, print_mesh
+from mst_cli.errors import InputError
+from mst_cli.model import load_path as lp
+from mst_cli.model.assembly import InsertPlate
+from mst_cli.model.components import INSERT_MATERIALS
+from mst_cli.sensor.document import load_design_document, parse_document
+
+ROOT = Path(__file__).resolve().parents[1]
+FORWARD = ROOT / "configs" / "mohammadi2021-forward.yaml"
+
+
+@pytest.fixture(scope="module")
+def forward():
+    return load_design_document(FORWARD)
+
+
+def test_the_plate_box_is_the_face_less_the_walls_and_clearance(forward):
+    doc, g = forward
+    # the bundled design: 30 x 20 mm face, side walls 1.2 mm, the default 2 mm PLA plate with
+    # 0.2 mm clearance; its slot's top leaves 1.2 mm of wall over a 1 mm gable (half of 2 mm)
+    assert (g.width_mm, g.depth_mm, g.housing.side_wall_mm) == (30.0, 20.0, 1.2)
+    assert g.insert_plate == InsertPlate("pla", 2.0, 0.2)
+    (x0, y0, z0), (x1, y1, z1) = g.insert_box_mm
+    z_expected = g.z_stack_top_mm + 0.4 + 2.0 + 0.1 + 0.8  # pocket floor, magnet, clearance, wall
+    assert (x0, x1) == pytest.approx((-13.6, 13.6))
+    assert (y0, y1) == pytest.approx((-8.8, 7.6))  # floor 1.2 mm above the -y face, top 7.8 - 0.2
+    assert (z0, z1) == pytest.approx((z_expected, z_expected + 2.0))
+    assert insert_volume_mm3(g) == pytest.approx(27.2 * 16.4 * 2.0)
+    # the cap: 0.8 mm of TPU over the plate, so the part grows by the plate and one wall
+    bare = replace(g, insert_plate=None)
+    assert g.total_height_mm - bare.total_height_mm == pytest.approx(2.0 + 0.8)
+
+
+def test_the_slot_clears_the_plate_across_and_above_but_not_through(forward):
+    _, g = forward
+    slot, plate = np.asarray(g.insert_slot_box_mm), np.asarray(g.insert_box_mm)
+    c = g.insert_plate.clearance_mm
+    assert plate[0] - slot[0] == pytest.approx([c, 0.0, 0.0])  # rests on the slot's floor
+    assert slot[1] - plate[1] == pytest.approx([c, c, 0.0])  # fills the slot's thickness
+    # the slot's floor and top lie on the print layer grid (up-facing faces and the pause)
+    for y in (slot[0][1], slot[1][1]):
+        n = g.print_height_mm(y) / g.layer_height_mm
+        assert n == pytest.approx(round(n), abs=1e-9)
+
+
+def test_the_stl_leaves_the_slot_export_json_declares(forward):
+    """trimesh splits the written STL into its shells: the void around the declared plate is the
+    slot, box plus a 45 deg gable; its bounds in the STL's frame are export.json's slot box
+    (and the ridge), and its volume the analytic one."""
+    doc, g = forward
+    vertices, triangles = print_mesh(g, 0.01)
+    mesh = trimesh.load(io.BytesIO(mesh_io.stl_bytes(vertices, triangles)), file_type="stl")
+    part = next(p for p in export_manifest(doc.name, g, doc.printer, 0.01, [])["parts"] if p["name"] == "insert")
+    centre = 0.5 * (np.asarray(part["box_min_mm"]) + np.asarray(part["box_max_mm"]))
+    shells = [s for s in mesh.split(only_watertight=False) if np.all((s.bounds[0] <= centre) & (centre <= s.bounds[1]))]
+    slot = min(shells, key=lambda s: abs(s.volume))  # the innermost: the slot, not the body
+    assert slot.volume < 0 and abs(slot.volume) == pytest.approx(insert_slot_volume_mm3(g), rel=1e-6)
+    lo, hi = slot.bounds
+    rise = part["slot_roof_rise_mm"]
+    assert lo == pytest.approx(part["slot_min_mm"], abs=1e-5)
+    assert hi == pytest.approx(np.asarray(part["slot_max_mm"]) + [0.0, 0.0, rise], abs=1e-5)
+    # the plate sits inside the slot, in the STL's frame
+    assert np.all(np.asarray(part["box_min_mm"]) >= lo - 1e-5) and np.all(np.asarray(part["box_max_mm"]) <= hi + 1e-5)
+    # its material as the table gives it
+    pla = INSERT_MATERIALS["pla"]
+    assert part["material"]["youngs_modulus_MPa"] == pla.youngs_modulus_MPa
+    assert part["material"]["poisson_ratio"] == pla.poisson_ratio
+
+
+def test_insert_stl_is_the_plate_flat(forward):
+    _, g = forward
+    v, t = insert_mesh(g)
+    mesh = trimesh.Trimesh(v, t)
+    assert mesh.is_volume and mesh.volume == pytest.approx(insert_volume_mm3(g))
+    assert mesh.extents == pytest.approx([27.2, 16.4, 2.0])  # thickness up: it prints flat
+
+
+def test_two_pauses_in_export_json_and_the_3mf(forward):
+    doc, g = forward
+    pauses = export_manifest(doc.name, g, doc.printer, 0.01, [])["print"]["pauses"]
+    magnet, insert = pauses
+    assert magnet["z_mm"] == pytest.approx(g.pause_height_mm)
+    # the plate's slot top: half the depth + 7.8 mm; the plate's top is below it
+    assert insert["z_mm"] == pytest.approx(17.8) and insert["after_layer"] == 89
+    assert g.print_height_mm(g.insert_box_mm[1][1]) < insert["z_mm"]
+    v, t = print_mesh(g, 0.05)
+    data = mesh_io.three_mf_bytes(v, t, "x", pause_after_z_mm=[(p.z_mm, p.why) for p in g.pauses])
+    with zipfile.ZipFile(io.BytesIO(data)) as zf:
+        xml = zf.read(mesh_io.PRUSA_CUSTOM_GCODE_MEMBER).decode()
+    # each event at the top of the layer after its pause
+    assert xml.count('type="1"') == 2 and 'print_z="13.4"' in xml and 'print_z="18"' in xml
+
+
+def test_the_closed_form_takes_the_geometry_insert_by_default(forward):
+    doc, g = forward
+    m = doc.material
+    ins = g.insert
+    # the plate's underside above the top pad's underside: pad, pocket floor, pocket, the wall
+    assert ins.z_mm == pytest.approx(g.layers[-1].t_mm + 0.4 + 2.1 + 0.8)
+    assert ins.depth_mm == pytest.approx(16.4)
+    pla = INSERT_MATERIALS["pla"]
+    assert ins.modulus_MPa == pytest.approx(pla.youngs_modulus_MPa / (1 - pla.poisson_ratio**2))
+    assert lp.members(g, m) == lp.members(g, m, insert=ins)
+    bare = lp.members(replace(g, insert_plate=None), m)
+    assert lp.members(g, m).cap_mm_per_N < 0.1 * bare.cap_mm_per_N  # the plate carries the press
+
+
+def test_an_insert_over_the_whole_depth_bends_as_its_section_says():
+    """The plate's own depth enters its section: a plate over half the depth adds half the
+    bending stiffness of one over all of it (the TPU's share is the same)."""
+    E, G, D, T = 30.0, 10.0, 20.0, 4.0
+    full = lp.Insert("p", 3000.0, 0.3, 1.0, 1.0)
+    half = lp.Insert("p", 3000.0, 0.3, 1.0, 1.0, depth_mm=10.0)
+    tpu = lp.section_EI_kGA(D, T, E, G)[0]
+    ei_full, ei_half = lp.section_EI_kGA(D, T, E, G, insert=full)[0], lp.section_EI_kGA(D, T, E, G, insert=half)[0]
+    # stiff plate off-centre: not exactly half (the neutral axis moves), but between a third and a half
+    assert tpu < ei_half < ei_full and 0.3 < (ei_half - tpu) / (ei_full - tpu) < 0.55
+
+
+def test_the_insert_section_of_a_file():
+    base = {"layers": [{"theta_deg": 45, "t_mm": 1.0, "h_mm": 3.0}]}
+    doc = parse_document(base)
+    assert doc.insert == InsertPlate()  # the default: a 2 mm PLA plate
+    steel = parse_document({**base, "insert": {"material": "steel", "thickness_mm": 1.0}})
+    g = steel.geometry()
+    assert g.insert.modulus_MPa == pytest.approx(200e3 / (1 - 0.3**2))
+    none = parse_document({**base, "insert": {"material": "none"}}).geometry()
+    assert none.insert is None and not none.has_insert and len(none.pauses) == 1
+    assert math.isclose(g.total_height_mm - none.total_height_mm, 1.0 + 0.8)
+    with pytest.raises(InputError) as e:
+        parse_document({**base, "insert": {"material": "wood"}})
+    assert e.value.field == "insert.material"
+    with pytest.raises(InputError) as e:
+        parse_document({**base, "insert": {"thickness_mm": 0.0}})
+    assert e.value.field == "insert.thickness_mm"
+
+
+def test_the_bottom_is_one_flat_face_on_the_mount(forward):
+    """The part's underside (sensor z = 0, print y = 0) is one full rectangle, base length x
+    depth: nothing cuts it, so it sits flat on the mount."""
+    _, g = forward
+    v, t = print_mesh(g, 0.05)
+    mesh = trimesh.Trimesh(v, t)
+    on_bottom = (np.abs(mesh.triangles_center[:, 1]) < 1e-9) & (mesh.face_normals[:, 1] > 1 - 1e-9)
+    assert mesh.area_faces[on_bottom].sum() == pytest.approx(g.base_length_mm * g.depth_mm, rel=1e-12)
+
+
+def test_the_plate_must_stay_wider_than_the_pocket():
+    base = {"family": {"depth_mm": 8.0}, "layers": [{"theta_deg": 45, "t_mm": 1.0, "h_mm": 3.0}]}
+    with pytest.raises(InputError) as e:
+        parse_document({**base, "insert": {"thickness_mm": 4.0}, "magnet": {"diameter_mm": 3.0}})
+    assert e.value.field in ("insert.thickness_mm", "family.depth_mm")
+
+
+def test_print_frame_of_the_insert_is_the_stls(forward):
+    doc, g = forward
+    part = next(p for p in export_manifest(doc.name, g, doc.printer, 0.01, [])["parts"] if p["name"] == "insert")
+    corners = to_print_frame(g, g.insert_box_mm)
+    assert part["box_min_mm"] == pytest.approx(corners.min(axis=0).tolist())
+    assert part["box_max_mm"] == pytest.approx(corners.max(axis=0).tolist())
