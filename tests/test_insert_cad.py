@@ -176,3 +176,43 @@ def test_print_frame_of_the_insert_is_the_stls(forward):
     corners = to_print_frame(g, g.insert_box_mm)
     assert part["box_min_mm"] == pytest.approx(corners.min(axis=0).tolist())
     assert part["box_max_mm"] == pytest.approx(corners.max(axis=0).tolist())
+
+
+def test_the_side_walls_carry_the_cover_past_the_cable_windows(forward):
+    """A section through the windows still joins the cover to the base: beside the slot, in the
+    side wall, a column from the base's underside to the cover's top is solid everywhere but
+    at the window itself (trimesh's inside test on the body in the sensor frame). Before issue 44
+    the window ran out through the +y face, leaving the cover on a cantilever over the open slot."""
+    from mst_cli.cad.mesh_body import body_mesh
+
+    _, g = forward
+    vertices, triangles = body_mesh(g, 0.05)
+    tri = vertices[triangles]
+    slot = g.board_slots[0]
+    (_, _, y_floor, z0, z1), top = slot.windows[1], slot.window_tops_y_mm[1]
+    assert top is not None  # the bundled design's windows close under the cover
+    x_wall = 0.5 * (slot.x_mm[1] + 0.5 * g.width_mm)  # the +x side wall's middle
+    z = np.linspace(0.05, g.z_base_top_mm - 0.05, 60)
+    for y, solid in ((0.5 * g.depth_mm - 0.3, True), (0.5 * (y_floor + top), False), (y_floor - 0.5, True)):
+        inside = np.array([crossings_along_x(tri, (x_wall, y, zi)) % 2 == 1 for zi in z])
+        in_window = (z > z0) & (z < z1)
+        assert inside[~in_window].all()
+        assert inside[in_window].all() == solid  # the wall stands over the window, and under it
+
+
+def crossings_along_x(tri: np.ndarray, point) -> int:
+    """How many triangles a ray from ``point`` along +x crosses (Moller-Trumbore, numpy): odd
+    inside a closed mesh. The point is off every vertex and edge of this body (odd offsets)."""
+    p = np.asarray(point, dtype=float) + [0.0, 1.234e-4, 2.345e-4]
+    d = np.array([1.0, 0.0, 0.0])
+    e1, e2 = tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]
+    h = np.cross(d, e2)
+    a = np.einsum("ij,ij->i", e1, h)
+    ok = np.abs(a) > 1e-12
+    f = np.where(ok, 1.0 / np.where(ok, a, 1.0), 0.0)
+    s = p - tri[:, 0]
+    u = f * np.einsum("ij,ij->i", s, h)
+    q = np.cross(s, e1)
+    v = f * (q @ d)
+    t = f * np.einsum("ij,ij->i", e2, q)
+    return int(np.sum(ok & (u >= 0) & (v >= 0) & (u + v <= 1) & (t > 0)))

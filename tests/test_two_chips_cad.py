@@ -45,7 +45,11 @@ SLOTS_X_MM = [(-26.8, -1.0), (1.0, 26.8)]
 SLOT_Z_MM = (0.8, 5.65)
 SLOT_FLOOR_Y_MM = -8.2
 WINDOW_FLOOR_Y_MM = -2.6
-EXTRA_SLOT_MM3 = 25.8 * (18.2 * 4.85 - 12.6 * 3.25)
+# a window's section: 6.6 mm up the depth (the 6 mm socket, 0.2 mm clearance each side, on the
+# layer grid) x 3.25 mm high, and its gable: 3.25 mm wide, 1.8 mm rise (1.625 up to the grid)
+WINDOW_SECTION_MM2 = 6.6 * 3.25 + 0.5 * 3.25 * 1.8
+# the second slot, less the first chip's +x window over the same x (the one-chip body's)
+EXTRA_SLOT_MM3 = 25.8 * 18.2 * 4.85 - 25.8 * WINDOW_SECTION_MM2
 STL_VOLUME_TOL_MM3 = 0.05  # float32 vertices (~4e-6 mm at 30 mm) over ~6000 mm^2 of surface
 
 
@@ -225,7 +229,12 @@ def test_overlap_of_boxes_counts_what_two_cover():
 STEP_CHIPS = [(-14.0, -0.4), (13.8, 0.5)]
 STEP_FLOORS_Y_MM = [-8.6, -7.8]
 STEP_WINDOW_FLOORS_Y_MM = [[-3.0, -3.0], [-3.0, -2.2]]  # chip 1's -x and link; chip 2's link and +x
-STEP_EXTRA_MM3 = 25.8 * (17.8 * 4.85 - 13.0 * 3.25) - 1.2 * 0.8 * 3.25
+# two chips: the second slot, the link window (2 mm of wall, from the lower floor -3.0 to the
+# higher top 4.4: 7.4 mm) and chip 2's +x window (1.2 mm of wall); one chip: its +x window, 29 mm
+# from its slot to the face
+STEP_EXTRA_MM3 = (
+    25.8 * 17.8 * 4.85 + 2.0 * (7.4 * 3.25 + 0.5 * 3.25 * 1.8) + 1.2 * WINDOW_SECTION_MM2 - 29.0 * WINDOW_SECTION_MM2
+)
 
 
 @pytest.fixture(scope="module")
@@ -249,9 +258,11 @@ def test_chips_at_different_y_each_have_a_slot_on_their_own_floor(step_exports):
     above = air_along(mesh, (-far, -7.5071, 1.6123), (1, 0, 0))
     assert np.allclose([(a - far, b - far) for a, b in above], SLOTS_X_MM, atol=1e-4)
     # the windows' floors, up the depth at the windows' height: -x face, link, +x face
+    # and each window's top: a 45 deg gable over it, the side wall above it up to the +y face
     for x, floor in [(-27.4, -3.0), (0.0, -3.0), (27.4, -2.2)]:
         hits = ray_hits(mesh, (x + 0.0123, -15.0, 4.0123), (0, 1, 0)) - 15.0
-        assert np.allclose(hits, [-DEPTH_MM / 2, floor], atol=1e-4), x
+        assert len(hits) == 4 and hits[-1] == pytest.approx(DEPTH_MM / 2, abs=1e-4), x
+        assert np.allclose(hits[:2], [-DEPTH_MM / 2, floor], atol=1e-4), x
 
 
 def test_the_stepped_body_is_one_volume_lighter_by_the_hand_worked_slot(step_exports):

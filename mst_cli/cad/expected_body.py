@@ -17,6 +17,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from mst_cli.model.board_slots import window_roof_apex_y_mm
+
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
 
@@ -114,20 +116,27 @@ def overlap_volume_mm3(boxes: Sequence[tuple[Sequence[float], Sequence[float]]])
 
 
 def base_volume_mm3(geometry: SensorGeometry) -> float:
-    """Base block minus the board slots and the cable windows (open through the +y face); the
-    windows between two slots overlap, and their union is removed once."""
+    """Base block minus the board slots (open through the +y face) and the cable windows, each
+    a box from its floor to its top (or through the +y face) and a 45 deg gable over a closed
+    one; a window between two slots is one window, removed once."""
     g = geometry
     L, D = g.base_length_mm, g.depth_mm
     y_top = 0.5 * D
     z0, z1 = g.z_board_bottom_mm, g.z_cover_bottom_mm
-    boxes = []
-    for s in g.board_slots:
-        boxes.append(((s.x_mm[0], s.floor_y_mm, z0), (s.x_mm[1], y_top, z1)))
-        boxes += [((min(a, b), yf, wz0), (max(a, b), y_top, wz1)) for a, b, yf, wz0, wz1 in s.windows]
+    boxes = [((s.x_mm[0], s.floor_y_mm, z0), (s.x_mm[1], y_top, z1)) for s in g.board_slots]
     slot = sum((s.x_mm[1] - s.x_mm[0]) * (y_top - s.floor_y_mm) * g.slot_height_mm for s in g.board_slots)
-    windows = sum(
-        abs(x_out - x_in) * (y_top - yf) * (wz1 - wz0) for s in g.board_slots for x_in, x_out, yf, wz0, wz1 in s.windows
-    )
+    distinct = {
+        (min(a, b), max(a, b), yf, wz0, wz1, top)
+        for s in g.board_slots
+        for (a, b, yf, wz0, wz1), top in zip(s.windows, s.window_tops_y_mm)
+    }
+    windows = 0.0
+    for lo, hi, yf, wz0, wz1, top in sorted(distinct, key=str):
+        end = y_top if top is None else top
+        boxes.append(((lo, yf, wz0), (hi, end, wz1)))
+        windows += (hi - lo) * (end - yf) * (wz1 - wz0)
+        if top is not None:  # the gable: a triangle of base wz1 - wz0 and height its rise
+            windows += (hi - lo) * 0.5 * (wz1 - wz0) * (window_roof_apex_y_mm(g, top, wz0, wz1) - top)
     return L * D * g.z_base_top_mm - slot - windows + overlap_volume_mm3(boxes)
 
 

@@ -227,8 +227,17 @@ def _slot_section(g: SensorGeometry, chip: int = 0) -> dict:
         "height_mm": g.slot_height_mm,
         "headroom_mm": g.board.headroom_mm,
         "cable_windows": [
-            {"x_inner_mm": a, "x_outer_mm": b, "floor_y_mm": yf, "z0_mm": z0, "z1_mm": z1}
-            for a, b, yf, z0, z1 in slot.windows
+            {
+                "x_inner_mm": a,
+                "x_outer_mm": b,
+                "floor_y_mm": yf,
+                "z0_mm": z0,
+                "z1_mm": z1,
+                # its top under a 45 deg gable (the side wall over it carries the cover), or the +y face
+                "top_y_mm": 0.5 * g.depth_mm if top is None else top,
+                "open_through_top_face": top is None,
+            }
+            for (a, b, yf, z0, z1), top in zip(slot.windows, slot.window_tops_y_mm)
         ],
         "board_thickness_mm": g.board.thickness_mm,
         "chip_height_mm": g.board.chip_height_mm,

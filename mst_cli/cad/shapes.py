@@ -16,7 +16,7 @@ import math
 from dataclasses import dataclass
 
 from mst_cli.model.assembly import SensorGeometry
-from mst_cli.model.board_slots import slot_violations
+from mst_cli.model.board_slots import slot_violations, window_roof_apex_y_mm
 from mst_cli.model.cell import HexCell
 
 # Cutting tools that end on an outer face of the part are extended past it by this much, so
@@ -158,15 +158,17 @@ def base_block(geometry: SensorGeometry) -> Box:
     return box(-L2, L2, -d2, d2, 0.0, geometry.z_base_top_mm)
 
 
-def base_cuts(geometry: SensorGeometry) -> list[Box]:
+def base_cuts(geometry: SensorGeometry) -> list[Box | Prism]:
     """Board slots and cable windows, as cutting tools: one slot per chip, its windows after it.
 
     A slot (board outline + clearance, from the base floor to the cover's underside) runs
     from its floor at ``floor_y_mm`` out through the +y face, the face on top in the print:
     the board slides in along -y until it rests on the floor, which puts its chip where the
     design has it. Each connector's cable leaves through a window in the side wall beside it,
-    open through the same face, out to the base's x face or into the next chip's slot (the two
-    facing windows of neighbouring slots are one box, cut once); so nothing in the base is
+    out to the base's x face or into the next chip's slot (the two facing windows of
+    neighbouring slots are one box, cut once), from just below the socket to just above it
+    under a 45 deg gable, so the side wall carries the cover over the rest of the depth (open
+    through the +y face only where that wall would be too thin); nothing in the base is
     bridged. See :mod:`mst_cli.model.board_slots`.
     """
     y_out = 0.5 * geometry.depth_mm + OVERCUT_MM
@@ -178,15 +180,18 @@ def base_cuts(geometry: SensorGeometry) -> list[Box]:
         slot empty above this floor), not into a slot's solid under a higher floor."""
         return OVERCUT_MM if y_floor >= floor_at.get(x_end, -math.inf) - 1e-9 else 0.0
 
-    cuts: list[Box] = []
+    cuts: list[Box | Prism] = []
     for slot in geometry.board_slots:
         x0, x1 = slot.x_mm
         cuts.append(box(x0, x1, slot.floor_y_mm, y_out, z0, z1))
-        for x_in, x_out, y_floor, wz0, wz1 in slot.windows:
+        for (x_in, x_out, y_floor, wz0, wz1), top in zip(slot.windows, slot.window_tops_y_mm):
             lo, hi = sorted((x_in, x_out))
-            window = box(lo - past(lo, y_floor), hi + past(hi, y_floor), y_floor, y_out, wz0, wz1)
+            lo, hi = lo - past(lo, y_floor), hi + past(hi, y_floor)
+            window = box(lo, hi, y_floor, y_out if top is None else top, wz0, wz1)
             if window not in cuts:
                 cuts.append(window)
+                if top is not None:  # the wall stands over it, up to the +y face
+                    cuts.append(gable(top, window_roof_apex_y_mm(geometry, top, wz0, wz1), wz0, wz1, lo, hi))
     return cuts
 
 
@@ -197,7 +202,7 @@ class BodyPlan:
     ``insert_slot`` (the insert's slot and roof; empty without an insert)."""
 
     keep: tuple[Box | Prism, ...]
-    cut: tuple[Box, ...]
+    cut: tuple[Box | Prism, ...]
     pocket: tuple[Cylinder | Box | Prism, ...]
     insert_slot: tuple[Box | Prism, ...] = ()
 
