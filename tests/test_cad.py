@@ -98,6 +98,15 @@ def test_reference_volume_golden(reference):
     plates = 2 * 30 * 20 * 0.8
     r, d = 3.1, 2.1
     pocket = (math.pi * r**2 / 2 + 2 * r * 3.2) * d + r * d * 1.2  # roof rises 1.2 mm
+    # less two crush ribs at x = +-r/2: a triangle 0.8 mm wide, reaching 0.2 mm, from the round
+    # bottom -sqrt(r^2 - x^2) up to the pause at y = 3.2 (scipy's quadrature, independent)
+    from scipy.integrate import quad
+
+    def rib_height(x):
+        return 0.2 * max(0.0, 1.0 - abs(x - r / 2) / 0.4)
+
+    rib = quad(lambda x: rib_height(x) * (3.2 + math.sqrt(r * r - x * x)), r / 2 - 0.4, r / 2 + 0.4, points=[r / 2])[0]
+    pocket -= 2 * rib
     insert_slot = 27.6 * 2.0 * (16.6 + 0.5 * 1.0)  # box and a 1.0 mm gable
     cap = 30 * 20 * (3.3 + 0.8 + 2.0) - pocket - insert_slot
     expected = base + layers + plates + cap

@@ -201,10 +201,16 @@ def test_the_side_walls_carry_the_cover_past_the_cable_windows(forward):
 
 
 def crossings_along_x(tri: np.ndarray, point) -> int:
-    """How many triangles a ray from ``point`` along +x crosses (Moller-Trumbore, numpy): odd
-    inside a closed mesh. The point is off every vertex and edge of this body (odd offsets)."""
-    p = np.asarray(point, dtype=float) + [0.0, 1.234e-4, 2.345e-4]
-    d = np.array([1.0, 0.0, 0.0])
+    """How many triangles a ray from ``point`` along +x crosses: odd inside a closed mesh."""
+    return len(ray_hits(tri, point, (1.0, 0.0, 0.0)))
+
+
+def ray_hits(tri: np.ndarray, point, direction) -> np.ndarray:
+    """Distances along ``direction`` at which a ray from ``point`` crosses the triangles
+    (Moller-Trumbore, numpy), sorted. The point is nudged off every vertex and edge of these
+    bodies (odd offsets)."""
+    p = np.asarray(point, dtype=float) + np.array([3.21e-5, 1.234e-4, 2.345e-4]) * (1 - np.abs(direction))
+    d = np.asarray(direction, dtype=float)
     e1, e2 = tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]
     h = np.cross(d, e2)
     a = np.einsum("ij,ij->i", e1, h)
@@ -215,4 +221,29 @@ def crossings_along_x(tri: np.ndarray, point) -> int:
     q = np.cross(s, e1)
     v = f * (q @ d)
     t = f * np.einsum("ij,ij->i", e2, q)
-    return int(np.sum(ok & (u >= 0) & (v >= 0) & (u + v <= 1) & (t > 0)))
+    return np.sort(t[ok & (u >= 0) & (v >= 0) & (u + v <= 1) & (t > 0)])
+
+
+def test_crush_ribs_hold_the_magnet_by_their_interference(forward):
+    """Along the stack through a rib's ridge the pocket is the magnet's thickness less the
+    interference; beside the ribs, the magnet and its clearance (numpy rays on the mesh)."""
+    from mst_cli.cad.mesh_body import body_mesh
+    from mst_cli.model.assembly import MAGNET_RIB_INTERFERENCE_MM
+
+    _, g = forward
+    vertices, triangles = body_mesh(g, 0.01)
+    tri = vertices[triangles]
+    z0 = g.z_magnet_bottom_mm
+
+    def pocket_gap(x, y):
+        hits = ray_hits(tri, (x, y, -1.0), (0.0, 0.0, 1.0)) - 1.0
+        pairs = [(a, b) for a, b in zip(hits[1::2], hits[2::2]) if a < z0 + 1.0 < b]
+        assert len(pairs) == 1
+        return pairs[0]
+
+    for x in g.magnet_rib_x_mm:
+        lo, hi = pocket_gap(x, 1.0)
+        assert lo == pytest.approx(z0, abs=1e-4)
+        assert hi - lo == pytest.approx(g.magnet.thickness_mm - MAGNET_RIB_INTERFERENCE_MM, abs=1e-4)
+    lo, hi = pocket_gap(0.0, 1.0)  # between the ribs: the magnet plus the axial clearance
+    assert hi - lo == pytest.approx(g.magnet.thickness_mm + g.housing.pocket_clearance_mm, abs=1e-4)

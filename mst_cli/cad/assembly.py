@@ -21,7 +21,10 @@ def body_solids(geometry: SensorGeometry) -> tuple[list[Solid], list[Solid]]:
     (:func:`mst_cli.cad.shapes.body_plan`)."""
     plan = shapes.body_plan(geometry)
     keep = [parts.solid(s) for s in plan.keep]
-    cut = [parts.solid(s) for s in plan.cut] + [parts.fused(plan.pocket)]
+    pocket = parts.fused(plan.pocket)
+    if plan.pocket_ribs:  # the crush ribs stay standing in the pocket
+        pocket = pocket.cut(*(parts.solid(s) for s in plan.pocket_ribs))
+    cut = [parts.solid(s) for s in plan.cut] + [pocket]
     if plan.insert_slot:
         cut.append(parts.fused(plan.insert_slot))
     return keep, cut

@@ -87,10 +87,29 @@ def pocket_section_area_mm2(geometry: SensorGeometry, z_mm: float) -> float:
 
 def pocket_volume_mm3(geometry: SensorGeometry) -> float:
     """The U-shaped pocket (its x-y section times the depth) plus the roof: a triangular
-    prism of base ``pocket_depth`` and height ``pocket_roof_rise_mm``, 2 r long."""
+    prism of base ``pocket_depth`` and height ``pocket_roof_rise_mm``, 2 r long; less the crush
+    ribs (:func:`magnet_ribs_volume_mm3`)."""
     g = geometry
     r, d = g.pocket_radius_mm, g.pocket_depth_mm
-    return (0.5 * math.pi * r * r + 2 * r * g.pocket_top_y_mm) * d + r * d * g.pocket_roof_rise_mm
+    u = (0.5 * math.pi * r * r + 2 * r * g.pocket_top_y_mm) * d + r * d * g.pocket_roof_rise_mm
+    return u - magnet_ribs_volume_mm3(g)
+
+
+def magnet_ribs_volume_mm3(geometry: SensorGeometry) -> float:
+    """The crush ribs inside the pocket: each triangle's height h(x) (reach at its centre, 0 at
+    its base's ends) times the pocket's extent along y at x, from the round bottom
+    -sqrt(r^2 - x^2) to the pause y_top, integrated over x by Gauss-Legendre on each half (a
+    smooth integrand there: exact to rounding with 24 points)."""
+    g = geometry
+    r, w2, reach, y_top = g.pocket_radius_mm, 0.5 * g.magnet_rib_width_mm, g.magnet_rib_reach_mm, g.pocket_top_y_mm
+    s, wts = np.polynomial.legendre.leggauss(24)
+    total = 0.0
+    for xc in g.magnet_rib_x_mm:
+        for a, b in ((xc - w2, xc), (xc, xc + w2)):
+            x = 0.5 * (b - a) * s + 0.5 * (a + b)
+            h = reach * (1.0 - np.abs(x - xc) / w2)
+            total += 0.5 * (b - a) * float(np.sum(wts * h * (y_top + np.sqrt(r * r - x * x))))
+    return total
 
 
 def pocket_curved_area_mm2(geometry: SensorGeometry) -> float:

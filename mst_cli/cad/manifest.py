@@ -208,6 +208,14 @@ def _pocket_section(g: SensorGeometry) -> dict:
         "curved_area_mm2": pocket_curved_area_mm2(g),
         "magnet_diameter_mm": g.magnet.diameter_mm,
         "magnet_thickness_mm": g.magnet.thickness_mm,
+        # the crush ribs on the face over the magnet that hold it on its floor (model.assembly)
+        "crush_ribs": {
+            "x_mm": list(g.magnet_rib_x_mm),
+            "base_width_mm": g.magnet_rib_width_mm,
+            "reach_mm": g.magnet_rib_reach_mm,
+            "interference_mm": g.magnet_rib_reach_mm - g.housing.pocket_clearance_mm,
+            "y_mm": [-g.pocket_radius_mm, g.pocket_top_y_mm],
+        },
     }
 
 

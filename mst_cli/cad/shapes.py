@@ -121,6 +121,23 @@ def magnet_pocket(geometry: SensorGeometry) -> list[Cylinder | Box | Prism]:
     return [disc, sides, gable(y_top, geometry.pocket_roof_apex_y_mm, z0, z0 + d, -r, r)]
 
 
+def magnet_ribs(geometry: SensorGeometry) -> list[Prism]:
+    """The crush ribs left in the pocket on its face over the magnet (sensor +z): each a
+    triangle in the x-z plane (base two lines wide on that face, apex
+    :attr:`SensorGeometry.magnet_rib_reach_mm` towards the magnet) swept along y from below the
+    pocket's round bottom up to the pause, so the magnet slides down them; it meets the round
+    bottom, so no face of a rib hangs over air. Their base runs into the solid above the face
+    (a boolean with no coplanar faces)."""
+    z1 = geometry.z_magnet_bottom_mm + geometry.pocket_depth_mm
+    w2, reach, r = 0.5 * geometry.magnet_rib_width_mm, geometry.magnet_rib_reach_mm, geometry.pocket_radius_mm
+    y_top = geometry.pocket_top_y_mm
+    out = []
+    for x in geometry.magnet_rib_x_mm:
+        profile = ((z1 + OVERCUT_MM, x - w2), (z1, x - w2), (z1 - reach, x), (z1, x + w2), (z1 + OVERCUT_MM, x + w2))
+        out.append(Prism("y", profile, (), -r - OVERCUT_MM, y_top + r + OVERCUT_MM))
+    return out
+
+
 def gable(y_top: float, apex_y: float, z0: float, z1: float, x0: float, x1: float) -> Prism:
     """A cavity's roof in the print: a triangle in the y-z plane (its base on y = y_top from z0 to
     z1, its apex at apex_y over the middle) swept along x from x0 to x1. At 45 deg or steeper,
@@ -198,13 +215,15 @@ def base_cuts(geometry: SensorGeometry) -> list[Box | Prism]:
 @dataclass(frozen=True)
 class BodyPlan:
     """The printed body: fuse ``keep`` (bottom to top), then cut ``cut`` (the base's slot and
-    windows), the union of ``pocket`` (the magnet pocket's pieces) and the union of
-    ``insert_slot`` (the insert's slot and roof; empty without an insert)."""
+    windows), the union of ``pocket`` (the magnet pocket's pieces) less ``pocket_ribs`` (the
+    crush ribs that hold the magnet) and the union of ``insert_slot`` (the insert's slot and
+    roof; empty without an insert)."""
 
     keep: tuple[Box | Prism, ...]
     cut: tuple[Box | Prism, ...]
     pocket: tuple[Cylinder | Box | Prism, ...]
     insert_slot: tuple[Box | Prism, ...] = ()
+    pocket_ribs: tuple[Prism, ...] = ()  # left standing in the pocket: cut from its union first
 
     @property
     def voids(self) -> int:
@@ -220,7 +239,11 @@ def body_plan(geometry: SensorGeometry) -> BodyPlan:
     keep += plates(geometry)
     keep.append(cap_block(geometry))
     return BodyPlan(
-        tuple(keep), tuple(base_cuts(geometry)), tuple(magnet_pocket(geometry)), tuple(insert_slot(geometry))
+        tuple(keep),
+        tuple(base_cuts(geometry)),
+        tuple(magnet_pocket(geometry)),
+        tuple(insert_slot(geometry)),
+        tuple(magnet_ribs(geometry)),
     )
 
 

@@ -186,6 +186,17 @@ class InsertPlate:
         return self.material != NO_INSERT
 
 
+# Crush ribs hold the magnet in its pocket (issue 44: loose with 0.1 mm clearance, the cap closed
+# on it after a few newtons and what moved it changed). Two ribs on the pocket's face over the
+# magnet, along the print's build direction, so the magnet slides down them at the pause; each
+# reaches the clearance plus this interference into the pocket. 0.1 mm: the thickness tolerance of
+# a stock 2 mm NdFeB disc (+-0.05 to +-0.1 mm) plus a slit's shrink in print (about half a line
+# width's error, 0.05 mm), so the rib touches the magnet whatever the tolerances; squeezing 0.1 of
+# a 0.2 mm TPU rib two lines wide over 3 mm presses the magnet onto its floor with a few newtons,
+# which a finger overcomes to push it in.
+MAGNET_RIB_INTERFERENCE_MM = 0.1
+
+
 @dataclass(frozen=True)
 class PrintPause:
     """A pause of the print: after the layer whose top is at ``z_mm`` (print height)."""
@@ -388,6 +399,22 @@ class SensorGeometry:
     @property
     def z_magnet_top_mm(self) -> float:
         return self.z_magnet_bottom_mm + self.magnet.thickness_mm
+
+    @property
+    def magnet_rib_x_mm(self) -> tuple[float, float]:
+        """The crush ribs' centres across the pocket: half way out to its sides."""
+        return (-0.5 * self.pocket_radius_mm, 0.5 * self.pocket_radius_mm)
+
+    @property
+    def magnet_rib_width_mm(self) -> float:
+        """A crush rib's base across the pocket: two extrusion lines."""
+        return 2.0 * self.printer.nozzle_mm
+
+    @property
+    def magnet_rib_reach_mm(self) -> float:
+        """How far a crush rib reaches from the pocket's face over the magnet towards it: the
+        clearance plus the interference (MAGNET_RIB_INTERFERENCE_MM)."""
+        return self.housing.pocket_clearance_mm + MAGNET_RIB_INTERFERENCE_MM
 
     @property
     def pocket_top_y_mm(self) -> float:
