@@ -15,8 +15,9 @@ layers' compression plus each member's bending:
   at the same x the load goes straight down and the plate does not bend.
 * **cover** -- the base's cover bonded to layer 1's bottom pad: a beam across the board slot,
   loaded by layer 1's wall feet. It does not bend when the walls stand on the slot's side walls
-  (the slot is narrower than the wall feet); the cable windows' cut of the side walls under it
-  (a 3D tipping of the cover over the open slot) is not in this closed form.
+  (the slot is narrower than the wall feet). The side walls carry it over the whole depth but
+  at the cable windows, which end just above their sockets (docs/design.md section 10): the
+  cover spans a window's 6-7 mm along the depth with wall on both sides, no cantilever.
 
 Each beam is a plane-strain Timoshenko beam (E' = E/(1 - nu^2) in bending, G in shear, shear
 factor 5/6) with its supports either simply supported (the default: the wall heads turn with
@@ -256,7 +257,7 @@ def load_path_report(geometry, material, stack, patch_mm: float = FINGERTIP_PATC
         "regimes": regimes,
         "outside_layers_max": max(r["outside_layers"] for r in regimes),
         "patch_dependence": patch_dependence(geometry, material, stack),
-        "not_modelled": "the cover tipping where the cable windows cut its side walls (3D)",
+        "not_modelled": "the cover's bending along the depth over the cable windows (3D; walls on both sides)",
     }
 
 
