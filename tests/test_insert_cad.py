@@ -247,3 +247,24 @@ def test_crush_ribs_hold_the_magnet_by_their_interference(forward):
         assert hi - lo == pytest.approx(g.magnet.thickness_mm - MAGNET_RIB_INTERFERENCE_MM, abs=1e-4)
     lo, hi = pocket_gap(0.0, 1.0)  # between the ribs: the magnet plus the axial clearance
     assert hi - lo == pytest.approx(g.magnet.thickness_mm + g.housing.pocket_clearance_mm, abs=1e-4)
+
+
+def test_the_cover_bends_only_where_layer_1_lands_inside_the_slot():
+    """The closed form's cover member: layer 1's walls past the slot's edge stand on the base's
+    solid side walls (no bending); inside it, four-point bending of the cover and layer 1's pad
+    across the slot, P e^2 (3L - 4e) / (6 E'I) + P e / (kGA) with P = F/2."""
+    base = {"layers": [{"theta_deg": 20, "t_mm": 0.6, "h_mm": 3.0}]}
+    narrow = parse_document({**base, "magnetometer": {"board": "bare-qfn"}})
+    g, m = narrow.geometry(), narrow.material
+    assert 0.5 * (g.slot_x_mm[1] - g.slot_x_mm[0]) < lp.wall_head_x_mm(g.layers[0])
+    assert lp.members(g, m).cover_mm_per_N == 0.0
+    wide = parse_document(base)
+    g = wide.geometry()
+    L = g.slot_x_mm[1] - g.slot_x_mm[0]
+    e = 0.5 * L - lp.wall_head_x_mm(g.layers[0])
+    assert e > 0
+    E = m.youngs_modulus_MPa / (1 - m.poisson_ratio**2)
+    T = g.housing.cover_mm + g.layers[0].t_mm
+    EI, kGA = E * g.depth_mm * T**3 / 12, 5 / 6 * m.shear_modulus_MPa * g.depth_mm * T
+    expected = 0.5 * e**2 * (3 * L - 4 * e) / (6 * EI) + 0.5 * e / kGA
+    assert lp.members(g, m).cover_mm_per_N == pytest.approx(expected, rel=1e-12)

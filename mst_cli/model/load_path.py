@@ -15,7 +15,8 @@ layers' compression plus each member's bending:
   at the same x the load goes straight down and the plate does not bend.
 * **cover** -- the base's cover bonded to layer 1's bottom pad: a beam across the board slot,
   loaded by layer 1's wall feet. It does not bend when the walls stand on the slot's side walls
-  (the slot is narrower than the wall feet). The side walls carry it over the whole depth but
+  or beyond them on the solid base (the slot is narrower than the wall feet: no overhang, the
+  base under it is solid). The side walls carry it over the whole depth but
   at the cable windows, which end just above their sockets (docs/design.md section 10): the
   cover spans a window's 6-7 mm along the depth with wall on both sides, no cantilever.
 
@@ -189,7 +190,9 @@ def members(
     EI_c, kGA_c = section_EI_kGA(D, geometry.housing.cover_mm + first.t_mm, E, G)
     x0, x1 = geometry.board_slots[0].x_mm
     half_slot = 0.5 * (x1 - x0)  # the slot's half width: the cover's span over it
-    cover = two_load_mm_per_N(2.0 * half_slot, half_slot - wall_head_x_mm(first), EI_c, kGA_c, support)
+    inside = half_slot - wall_head_x_mm(first)  # how far inside the slot's edge layer 1's walls land
+    # walls past the slot's edge stand on the base's solid side walls: the cover does not bend
+    cover = two_load_mm_per_N(2.0 * half_slot, inside, EI_c, kGA_c, support) if inside > 0.0 else 0.0
     return Members(cap, tuple(plates), cover, patch_mm, support)
 
 
