@@ -119,10 +119,11 @@ def test_rigid_members_reproduce_the_layer_model_exactly():
 
 
 def test_the_cap_is_the_beam_across_the_top_layers_wall_heads():
-    """The bundled forward design's cap: the top pad (1.4) + pocket floor, pocket and cap top
-    (0.4 + 2.1 + 0.8 = 3.3) over 2 x the wall heads' mid x, less the pocket: the closed form by hand."""
+    """The bundled forward design's cap without its insert: the top pad (1.4) + pocket floor,
+    pocket and cap top (0.4 + 2.1 + 0.8 = 3.3) over 2 x the wall heads' mid x, less the pocket:
+    the closed form by hand."""
     doc = mst.load(FORWARD)
-    g, _ = stack_of(doc)
+    g = bare(stack_of(doc)[0])
     top, m = g.layers[-1], doc.material
     E, G = m.youngs_modulus_MPa / (1 - m.poisson_ratio**2), m.shear_modulus_MPa
     T = top.t_mm + 3.3
@@ -137,13 +138,18 @@ def test_the_cap_is_the_beam_across_the_top_layers_wall_heads():
 
 def test_a_thicker_cap_is_stiffer_and_a_stiff_insert_stiffer_still():
     doc = mst.load(FORWARD)
-    g, _ = stack_of(doc)
+    g = bare(stack_of(doc)[0])
     base = lp.members(g, doc.material).cap_mm_per_N
     thick = replace(g, housing=replace(g.housing, cap_top_mm=4.0))
     assert lp.members(thick, doc.material).cap_mm_per_N < base
     steel = lp.Insert("steel", 200e3 / (1 - 0.09), 0.3, 1.0, g.layers[-1].t_mm + 0.4 + 2.1 + 0.1)
     g1 = replace(g, housing=replace(g.housing, cap_top_mm=1.8))
     assert lp.members(g1, doc.material, insert=steel).cap_mm_per_N < 0.01 * base
+
+
+def bare(g):
+    """The geometry without its insert plate: the TPU cap alone (the state issue 44 measured)."""
+    return replace(g, insert_plate=None)
 
 
 def run(args):
@@ -166,7 +172,8 @@ def test_report_states_each_members_share_per_regime(tmp_path):
 
 
 def export_with_cap(tmp_path, cap_top_mm):
-    text = FORWARD.read_text() + f"housing:\n  cap_top_mm: {cap_top_mm}\n"
+    """The forward design with its cap top and no insert: the TPU cap alone."""
+    text = FORWARD.read_text() + f"housing:\n  cap_top_mm: {cap_top_mm}\ninsert:\n  material: none\n"
     spec = tmp_path / f"cap{cap_top_mm}.yaml"
     spec.write_text(text)
     out = tmp_path / f"out{cap_top_mm}"
@@ -196,6 +203,7 @@ def test_check_fails_a_thin_cap_naming_it_and_passes_a_thick_one(tmp_path):
 def test_a_wider_press_bends_the_cap_less():
     doc = mst.load(FORWARD)
     g, stack = stack_of(doc)
+    g = bare(g)
     rows = lp.patch_dependence(g, doc.material, stack)
     assert [r["patch_mm"] for r in rows] == [3.0, 6.0, 12.0, 30.0]
     caps = [r["cap_mm_per_N"] for r in rows]
