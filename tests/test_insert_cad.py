@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import trimesh
+from mesh_rays import triangle_hits
 
 from mst_cli.cad import mesh_io
 from mst_cli.cad.expected_body import insert_slot_volume_mm3, insert_volume_mm3, to_print_frame
@@ -206,22 +207,10 @@ def crossings_along_x(tri: np.ndarray, point) -> int:
 
 
 def ray_hits(tri: np.ndarray, point, direction) -> np.ndarray:
-    """Distances along ``direction`` at which a ray from ``point`` crosses the triangles
-    (Moller-Trumbore, numpy), sorted. The point is nudged off every vertex and edge of these
-    bodies (odd offsets)."""
-    p = np.asarray(point, dtype=float) + np.array([3.21e-5, 1.234e-4, 2.345e-4]) * (1 - np.abs(direction))
-    d = np.asarray(direction, dtype=float)
-    e1, e2 = tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]
-    h = np.cross(d, e2)
-    a = np.einsum("ij,ij->i", e1, h)
-    ok = np.abs(a) > 1e-12
-    f = np.where(ok, 1.0 / np.where(ok, a, 1.0), 0.0)
-    s = p - tri[:, 0]
-    u = f * np.einsum("ij,ij->i", s, h)
-    q = np.cross(s, e1)
-    v = f * (q @ d)
-    t = f * np.einsum("ij,ij->i", e2, q)
-    return np.sort(t[ok & (u >= 0) & (v >= 0) & (u + v <= 1) & (t > 0)])
+    """Crossings of a ray from ``point`` nudged off every vertex and edge of these bodies (odd
+    offsets across the ray) with the triangles (:func:`mesh_rays.triangle_hits`)."""
+    nudge = np.array([3.21e-5, 1.234e-4, 2.345e-4]) * (1 - np.abs(np.asarray(direction, dtype=float)))
+    return triangle_hits(tri, np.asarray(point, dtype=float) + nudge, direction)
 
 
 def test_crush_ribs_hold_the_magnet_by_their_interference(forward):

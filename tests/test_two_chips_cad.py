@@ -31,6 +31,7 @@ import numpy as np
 import pytest
 import trimesh
 from click.testing import CliRunner
+from mesh_rays import triangle_hits
 
 from mst_cli.cad.expected_body import overlap_volume_mm3
 from mst_cli.cli.app import main
@@ -90,23 +91,8 @@ def sensor_mesh(out: Path) -> trimesh.Trimesh:
 
 
 def ray_hits(mesh: trimesh.Trimesh, origin, direction) -> np.ndarray:
-    """Distances along a ray (unit ``direction``) of its crossings with the mesh's triangles,
-    sorted, repeats (a ray through a shared edge) merged: Moller-Trumbore in numpy, so that the
-    measurement shares nothing with mst's own (manifold3d) ray casts."""
-    o, d = np.asarray(origin, dtype=float), np.asarray(direction, dtype=float)
-    tri = np.asarray(mesh.triangles, dtype=float)
-    e1, e2 = tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]
-    p = np.cross(d, e2)
-    det = np.einsum("ij,ij->i", e1, p)
-    ok = np.abs(det) > 1e-12
-    inv = np.where(ok, 1.0 / np.where(ok, det, 1.0), 0.0)
-    t = o - tri[:, 0]
-    u = np.einsum("ij,ij->i", t, p) * inv
-    q = np.cross(t, e1)
-    v = (q @ d) * inv
-    s = np.einsum("ij,ij->i", e2, q) * inv
-    hit = ok & (u >= 0) & (v >= 0) & (u + v <= 1) & (s > 0)
-    return np.unique(np.round(s[hit], 6))
+    """Distances along a ray of its crossings with the mesh (:func:`mesh_rays.triangle_hits`)."""
+    return triangle_hits(np.asarray(mesh.triangles, dtype=float), origin, direction)
 
 
 def air_along(mesh: trimesh.Trimesh, origin, direction) -> list[tuple[float, float]]:
