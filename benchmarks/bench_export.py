@@ -35,8 +35,9 @@ doc, g = load_design_document({design!r})
 mark("load the design")
 v, f = mesh_body.print_mesh(g, 0.01)
 mark("build and mesh the body")
-mesh_io.stl_bytes(v, f); mesh_io.three_mf_bytes(v, f, doc.name, pause_after_z_mm=g.pause_height_mm)
-mark("STL + 3MF bytes")
+mesh_io.stl_bytes(v, f); mesh_io.three_mf_bytes(v, f, doc.name, pause_after_z_mm=[(p.z_mm, p.why) for p in g.pauses])
+mesh_io.stl_bytes(*mesh_body.insert_mesh(g)) if g.has_insert else None
+mark("STL + 3MF bytes (+ insert.stl)")
 """,
     "CAD path (--step)": """
 import build123d
