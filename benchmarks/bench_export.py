@@ -84,7 +84,8 @@ def main() -> None:
             "mst export --step": ([mst, "export", str(DESIGN), "--step", "--out", f"{tmp}/s{{i}}"], ""),
             "mst check": ([mst, "check", f"{tmp}/ref"], "<= 3"),
         }
-        times = round_robin(cmds, args.repeats)
+        # round_robin takes (argv, goal, env): every command in this environment
+        times = round_robin({name: (argv, goal, None) for name, (argv, goal) in cmds.items()}, args.repeats)
     med = {name: statistics.median(ts) for name, ts in times.items()}
     floor = next(iter(med.values()))
     print(
