@@ -54,10 +54,12 @@ def main() -> None:
     print(row(f"as designed (insert: {said})", g, m, stack))
     print(row(f"no insert (cap top {g.housing.cap_top_mm:g} mm)", bare, m, stack))
     for cap_top in (2.0, 4.0, 8.0):
-        print(row(f"no insert, cap top {cap_top:g} mm", replace(bare, housing=replace(g.housing, cap_top_mm=cap_top)), m, stack))
+        thick = replace(bare, housing=replace(g.housing, cap_top_mm=cap_top))
+        print(row(f"no insert, cap top {cap_top:g} mm", thick, m, stack))
     for material, t in INSERTS:
         gi = replace(g, insert_plate=InsertPlate(material, t))
         print(row(f"{INSERT_MATERIALS[material].name} {t:g} mm over the magnet", gi, m, stack))
+
 
 if __name__ == "__main__":
     main()

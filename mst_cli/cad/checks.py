@@ -502,11 +502,15 @@ def check_insert_slot(m: Measurements, x: Manifest) -> Check:
     return Check(
         "insert_slot",
         bool(err <= PLANAR_TOL_MM and pause_ok),
-        f"{got_hi[0] - got_lo[0]:.3f} x {got_hi[2] - got_lo[2]:.3f} mm, floor y {got_lo[1]:.3f}, ridge y {got_hi[1]:.3f}",
-        f"{hi[0] - lo[0]:.3f} x {hi[2] - lo[2]:.3f} mm, floor y {lo[1]:.3f}, ridge y {hi[1]:.3f}; pause z {pause.z_mm:.2f}",
+        _insert_slot_text(got_lo, got_hi),
+        _insert_slot_text(lo, hi) + f"; pause z {pause.z_mm:.2f}",
         f"the plate drops in at the pause after layer {pause.after_layer} (z = {pause.z_mm:.2f} mm)",
         values={"largest_error_mm": err, "pause_z_mm": pause.z_mm, "pause_ok": bool(pause_ok)},
     )
+
+
+def _insert_slot_text(lo: np.ndarray, hi: np.ndarray) -> str:
+    return f"{hi[0] - lo[0]:.3f} x {hi[2] - lo[2]:.3f} mm, floor y {lo[1]:.3f}, ridge y {hi[1]:.3f}"
 
 
 CHECKS = (

@@ -41,7 +41,7 @@ from mst_cli.cad.expected_body import (
     wall_centrelines_xz,
     wall_horizontal_width_mm,
 )
-from mst_cli.cad.placed_parts import parts_section
+from mst_cli.cad.placed_parts import crush_ribs_section, parts_section
 from mst_cli.errors import InputError
 from mst_cli.io.files import read_input_text
 from mst_cli.sensor.document import Document, design_geometry, parse_document
@@ -208,14 +208,7 @@ def _pocket_section(g: SensorGeometry) -> dict:
         "curved_area_mm2": pocket_curved_area_mm2(g),
         "magnet_diameter_mm": g.magnet.diameter_mm,
         "magnet_thickness_mm": g.magnet.thickness_mm,
-        # the crush ribs on the face over the magnet that hold it on its floor (model.assembly)
-        "crush_ribs": {
-            "x_mm": list(g.magnet_rib_x_mm),
-            "base_width_mm": g.magnet_rib_width_mm,
-            "reach_mm": g.magnet_rib_reach_mm,
-            "interference_mm": g.magnet_rib_reach_mm - g.housing.pocket_clearance_mm,
-            "y_mm": [-g.pocket_radius_mm, g.pocket_top_y_mm],
-        },
+        "crush_ribs": crush_ribs_section(g),
     }
 
 
@@ -235,16 +228,9 @@ def _slot_section(g: SensorGeometry, chip: int = 0) -> dict:
         "height_mm": g.slot_height_mm,
         "headroom_mm": g.board.headroom_mm,
         "cable_windows": [
-            {
-                "x_inner_mm": a,
-                "x_outer_mm": b,
-                "floor_y_mm": yf,
-                "z0_mm": z0,
-                "z1_mm": z1,
-                # its top under a 45 deg gable (the side wall over it carries the cover), or the +y face
-                "top_y_mm": 0.5 * g.depth_mm if top is None else top,
-                "open_through_top_face": top is None,
-            }
+            # top_y_mm: under a 45 deg gable (the side wall over it carries the cover), or the +y face
+            {"x_inner_mm": a, "x_outer_mm": b, "floor_y_mm": yf, "z0_mm": z0, "z1_mm": z1}
+            | {"top_y_mm": 0.5 * g.depth_mm if top is None else top, "open_through_top_face": top is None}
             for (a, b, yf, z0, z1), top in zip(slot.windows, slot.window_tops_y_mm)
         ],
         "board_thickness_mm": g.board.thickness_mm,

@@ -144,8 +144,10 @@ def shell_volumes_and_boxes(mesh: Mesh | Any) -> tuple[list[float], list[tuple[n
     tri = np.asarray(mesh.vertices)[faces]
     signed = np.einsum("ij,ij->i", tri[:, 0], np.cross(tri[:, 1], tri[:, 2])) / 6.0
     volumes = np.bincount(face_label, weights=signed).tolist()
-    boxes = [(tri[face_label == k].reshape(-1, 3).min(axis=0), tri[face_label == k].reshape(-1, 3).max(axis=0))
-             for k in range(len(volumes))]
+    boxes = [
+        (tri[face_label == k].reshape(-1, 3).min(axis=0), tri[face_label == k].reshape(-1, 3).max(axis=0))
+        for k in range(len(volumes))
+    ]
     return volumes, boxes
 
 

@@ -120,7 +120,8 @@ def body_manifold(geometry: SensorGeometry, tolerance_mm: float) -> manifold3d.M
         if pieces
     ]
     if plan.pocket_ribs:  # the crush ribs stay standing in the pocket
-        voids[0] = mf.Manifold.batch_boolean([voids[0], *(_manifold(s, tolerance_mm) for s in plan.pocket_ribs)], mf.OpType.Subtract)
+        ribs = [_manifold(s, tolerance_mm) for s in plan.pocket_ribs]
+        voids[0] = mf.Manifold.batch_boolean([voids[0], *ribs], mf.OpType.Subtract)
     body = mf.Manifold.batch_boolean(
         [keep, *(_manifold(s, tolerance_mm) for s in plan.cut), *voids], mf.OpType.Subtract
     )

@@ -75,3 +75,15 @@ def parts_section(g: SensorGeometry) -> list[dict]:
             }
         )
     return out
+
+
+def crush_ribs_section(g: SensorGeometry) -> dict:
+    """export.json's magnet_pocket.crush_ribs: the ribs on the pocket's face over the magnet that
+    hold it on its floor (:attr:`~mst_cli.model.assembly.SensorGeometry.magnet_rib_reach_mm`)."""
+    return {
+        "x_mm": list(g.magnet_rib_x_mm),
+        "base_width_mm": g.magnet_rib_width_mm,
+        "reach_mm": g.magnet_rib_reach_mm,
+        "interference_mm": g.magnet_rib_reach_mm - g.housing.pocket_clearance_mm,
+        "y_mm": [-g.pocket_radius_mm, g.pocket_top_y_mm],
+    }

@@ -71,9 +71,7 @@ def _pause_problem(pauses: list[Pause], expected: list[dict], layer_height_mm: f
     if len(pauses) != len(expected):
         return f"{len(pauses)} pauses in the G-code, export.json asks for {len(expected)}"
     ordered = sorted(pauses, key=lambda p: p.z_mm)
-    return next(
-        (why for p, e in zip(ordered, expected) if (why := _one_pause_problem(p, e, layer_height_mm))), None
-    )
+    return next((why for p, e in zip(ordered, expected) if (why := _one_pause_problem(p, e, layer_height_mm))), None)
 
 
 def check_pause(pauses: list[Pause], manifest: SliceManifest, layer_height_mm: float) -> Check:

@@ -16,8 +16,10 @@ from typing import TYPE_CHECKING
 
 from mst_cli.model import board_slots
 from mst_cli.model.cell import HexCell
-from mst_cli.model.components import INSERT_MATERIALS, MAGNET_GRADES_T, NO_INSERT, Board, default_board
+from mst_cli.model.components import INSERT_MATERIALS, MAGNET_GRADES_T, Board, default_board
 from mst_cli.model.file_keys import spec
+from mst_cli.model.insert_plate import InsertPlate as InsertPlate  # re-exported: the file's `insert` section
+from mst_cli.model.insert_plate import PrintPause, insert_violations
 from mst_cli.model.load_path import Insert
 from mst_cli.model.printer import Printer
 from mst_cli.model.violation import Violation
@@ -146,46 +148,6 @@ class Housing:
     )
 
 
-# The insert's default, chosen with benchmarks/bench_load_path.py (docs/design.md section 10): a
-# 2 mm PLA plate, which any printer that prints the body prints flat in minutes and the user drops
-# in at a pause, takes the share of the magnet's motion outside the layers of the bundled forward
-# design from 60/82/93 % to 9/23/45 % (regimes 1/2/3); a 1 mm steel shim reaches 4/11/25 % but
-# must be cut to size from sheet. `insert.material: steel` selects it.
-DEFAULT_INSERT_MATERIAL = "pla"
-DEFAULT_INSERT_THICKNESS_MM = 2.0
-
-
-@dataclass(frozen=True)
-class InsertPlate:
-    """The spec's ``insert`` section: a stiff plate in the cap over the magnet (docs/design.md
-    section 10), dropped into a closed slot at its own print pause. The slot is as wide and as
-    deep as the face allows with ``housing.side_wall_mm`` of TPU around it; through its
-    thickness it fits the plate exactly (the press then bears on the plate from the first
-    newton), along its width and height ``clearance_mm`` lets it drop in."""
-
-    material: str = spec(
-        DEFAULT_INSERT_MATERIAL,
-        choices=tuple(INSERT_MATERIALS) + (NO_INSERT,),
-        meaning="the plate: `pla` or `petg` (printed flat, 100 % infill) or `steel` (a shim cut to size); "
-        "`none`: no insert, the TPU cap spans the face alone",
-    )
-    thickness_mm: float = spec(
-        DEFAULT_INSERT_THICKNESS_MM, lo=0.1, hi=10.0, unit="mm", meaning="the plate's thickness (along the stack)"
-    )
-    clearance_mm: float = spec(
-        0.2,
-        lo=0.0,
-        hi=2.0,
-        unit="mm",
-        meaning="room around the plate in its slot across the face and above it in the print (none "
-        "through its thickness: printed TPU gives, so the plate is held)",
-    )
-
-    @property
-    def present(self) -> bool:
-        return self.material != NO_INSERT
-
-
 # Crush ribs hold the magnet in its pocket (issue 44: loose with 0.1 mm clearance, the cap closed
 # on it after a few newtons and what moved it changed). Two ribs on the pocket's face over the
 # magnet, along the print's build direction, so the magnet slides down them at the pause; each
@@ -195,15 +157,6 @@ class InsertPlate:
 # a 0.2 mm TPU rib two lines wide over 3 mm presses the magnet onto its floor with a few newtons,
 # which a finger overcomes to push it in.
 MAGNET_RIB_INTERFERENCE_MM = 0.1
-
-
-@dataclass(frozen=True)
-class PrintPause:
-    """A pause of the print: after the layer whose top is at ``z_mm`` (print height)."""
-
-    after_layer: int
-    z_mm: float
-    why: str
 
 
 def snap_to_layers_mm(height_mm: float, layer_height_mm: float, mode: str) -> float:
@@ -622,23 +575,5 @@ class SensorGeometry:
                     "(housing.side_wall_mm above its apex)",
                 )
             )
-        out += self._insert_violations()
+        out += insert_violations(self)
         return board_slots.chip_off_face_violations(self) + out  # a chip off the face first
-
-    def _insert_violations(self) -> list[Violation]:
-        """The insert's slot must stand above the magnet's pause (its own pause comes later) and
-        leave a plate at least as wide as the pocket."""
-        if not self.has_insert:
-            return []
-        (x0, y0, _), (x1, y1, _) = self.insert_box_mm
-        if y1 - y0 < 2.0 * self.pocket_radius_mm or x1 - x0 < 2.0 * self.pocket_radius_mm:
-            return [
-                Violation.of_field(
-                    "insert.thickness_mm",
-                    self.insert_plate.thickness_mm if self.insert_plate else None,
-                    f"leaves a plate of {x1 - x0:.3g} x {y1 - y0:.3g} mm, smaller than the magnet's pocket "
-                    f"({2 * self.pocket_radius_mm:g} mm): a thinner plate, a smaller insert.clearance_mm or "
-                    "a deeper family.depth_mm",
-                )
-            ]
-        return []
