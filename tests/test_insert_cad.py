@@ -257,3 +257,21 @@ def test_the_cover_bends_only_where_layer_1_lands_inside_the_slot():
     EI, kGA = E * g.depth_mm * T**3 / 12, 5 / 6 * m.shear_modulus_MPa * g.depth_mm * T
     expected = 0.5 * e**2 * (3 * L - 4 * e) / (6 * EI) + 0.5 * e / kGA
     assert lp.members(g, m).cover_mm_per_N == pytest.approx(expected, rel=1e-12)
+
+
+@pytest.mark.slow
+def test_the_step_carries_the_insert_as_its_own_named_solid(forward):
+    """The STEP assembly: the body, the magnet, the insert and the board, each named; the
+    insert's solid is the plate's box (OCCT's own volume and bounding box)."""
+    from mst_cli.cad.assembly import build_sensor
+
+    doc, g = forward
+    cad = build_sensor(g)
+    labels = [child.label for child in cad.assembly(doc.name).children]
+    assert labels[:3] == ["sensor_body", "magnet", "insert_pla"]
+    assert cad.insert.volume == pytest.approx(insert_volume_mm3(g), rel=1e-9)
+    bb = cad.insert.bounding_box()
+    lo, hi = g.insert_box_mm
+    assert (bb.min.X, bb.min.Y, bb.min.Z, bb.max.X, bb.max.Y, bb.max.Z) == pytest.approx([*lo, *hi], abs=1e-7)
+    step = mesh_io.step_bytes(cad.assembly(doc.name)).decode("latin-1")
+    assert "'insert_pla'" in step and "'sensor_body'" in step and "'magnet'" in step
