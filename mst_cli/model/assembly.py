@@ -354,9 +354,11 @@ class SensorGeometry:
         return self.z_magnet_bottom_mm + self.magnet.thickness_mm
 
     @property
-    def magnet_rib_x_mm(self) -> tuple[float, float]:
-        """The crush ribs' centres across the pocket: half way out to its sides."""
-        return (-0.5 * self.pocket_radius_mm, 0.5 * self.pocket_radius_mm)
+    def magnet_rib_x_mm(self) -> tuple[float, ...]:
+        """The crush ribs' centres across the pocket: half way out to its sides; none in a pocket
+        narrower than two ribs' bases (each must stand wholly on the pocket's face)."""
+        r = self.pocket_radius_mm
+        return (-0.5 * r, 0.5 * r) if r >= self.magnet_rib_width_mm else ()
 
     @property
     def magnet_rib_width_mm(self) -> float:
