@@ -74,8 +74,7 @@ def write_export(
                     ),
                 )
                 say("wrote sensor.3mf")
-        if geometry.has_insert and (stl or three_mf):
-            # the plate for a user who prints it (flat on the bed: its thickness up)
+        if geometry.has_insert and (stl or three_mf):  # the plate for a user who prints it, flat
             st.write_bytes("insert.stl", mesh_io.stl_bytes(*insert_mesh(geometry)))
             names.append("insert.stl")
             say("wrote insert.stl (the plate to print flat and drop in at its pause)")

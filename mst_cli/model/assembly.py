@@ -577,5 +577,4 @@ class SensorGeometry:
                     "(housing.side_wall_mm above its apex)",
                 )
             )
-        out += insert_violations(self)
-        return board_slots.chip_off_face_violations(self) + out  # a chip off the face first
+        return board_slots.chip_off_face_violations(self) + out + insert_violations(self)  # a chip off the face first

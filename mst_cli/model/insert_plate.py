@@ -6,14 +6,29 @@ once, by :class:`~mst_cli.model.assembly.SensorGeometry`, from these values.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 from mst_cli.model.components import INSERT_MATERIALS, NO_INSERT
 from mst_cli.model.file_keys import spec
 from mst_cli.model.violation import Violation
 
-if TYPE_CHECKING:
-    from mst_cli.model.assembly import SensorGeometry  # annotations only: assembly imports this module
+
+class _Geometry(Protocol):
+    """What the insert's rule reads of :class:`mst_cli.model.assembly.SensorGeometry` (which
+    imports this module: a Protocol, not an import, keeps the two out of a cycle)."""
+
+    @property
+    def insert_plate(self) -> InsertPlate | None: ...
+
+    @property
+    def has_insert(self) -> bool: ...
+
+    @property
+    def insert_box_mm(self) -> tuple[tuple[float, float, float], tuple[float, float, float]]: ...
+
+    @property
+    def pocket_radius_mm(self) -> float: ...
+
 
 # The insert's default, chosen with benchmarks/bench_load_path.py (docs/design.md section 10): a
 # 2 mm PLA plate, which any printer that prints the body prints flat in minutes and the user drops
@@ -64,7 +79,7 @@ class PrintPause:
     why: str
 
 
-def insert_violations(g: SensorGeometry) -> list[Violation]:
+def insert_violations(g: _Geometry) -> list[Violation]:
     """Broken rules of the insert of ``g`` (a SensorGeometry): the face must leave a plate at
     least as wide and as tall as the magnet's pocket."""
     if not g.has_insert:

@@ -206,22 +206,7 @@ def parse_document(raw: Any, source: str = "<memory>") -> Document:
     model = ModelSection(**_section(raw, "model"))
     design = _design_options(_section(raw, "design"))
 
-    # The housing rules (printable depth, pocket and slots inside the body) do not depend on the
-    # layers' theta, t, h: check them on any cell of the family, before any design work.
-    probe = SensorGeometry(
-        (family.cell(45.0, 1.0, 3.0),),
-        magnet,
-        board,
-        housing,
-        meter.chip_offset_mm,
-        0.0,
-        printer,
-        meter.positions_mm,
-        insert if insert.present else None,
-    )
-    for v in probe.housing_violations():
-        raise v.input_error()
-
+    _check_housing(family, magnet, board, housing, meter, printer, insert)
     return Document(
         name=name,
         layers=_layers(raw.get("layers")),
@@ -242,6 +227,33 @@ def parse_document(raw: Any, source: str = "<memory>") -> Document:
         chip_positions_mm=meter.positions_mm,
         insert=insert,
     )
+
+
+def _check_housing(
+    family: CellFamily,
+    magnet: Magnet,
+    board: Board,
+    housing: Housing,
+    meter: MagnetometerSection,
+    printer: Printer,
+    insert: InsertPlate,
+) -> None:
+    """The housing rules (printable depth, pocket and slots inside the body, the insert) do not
+    depend on the layers' theta, t, h: check them on any cell of the family, before any design
+    work; the first broken one is an InputError."""
+    probe = SensorGeometry(
+        (family.cell(45.0, 1.0, 3.0),),
+        magnet,
+        board,
+        housing,
+        meter.chip_offset_mm,
+        0.0,
+        printer,
+        meter.positions_mm,
+        insert if insert.present else None,
+    )
+    for v in probe.housing_violations():
+        raise v.input_error()
 
 
 def _file_name(value: Any) -> str:
