@@ -27,6 +27,7 @@ import numpy as np
 from mst_cli.design.problem import DesignProblem
 from mst_cli.errors import InputError
 from mst_cli.model.cell import cell_margins_mm
+from mst_cli.model.load_path import member_compliances
 from mst_cli.model.mechanics.spring import contact_stiffness_N_per_mm
 
 if TYPE_CHECKING:
@@ -169,13 +170,44 @@ def diagnose(
     one per layer, come from the forward model on it; ``checks`` maps a failed constraint name
     to its message (from the verification).
     """
-    reasons = _beyond_limits(problem) + _rising_sensitivities(problem, achieved_S)
+    reasons = _members_dominate(problem, u) + _beyond_limits(problem) + _rising_sensitivities(problem, achieved_S)
     reasons += _worst_miss(problem, u, achieved_S, achieved_R)
     for name, message in checks.items():
         reasons.append((name, message))
     if not reasons:  # nothing failed: the caller should not have asked
         return "", []
     return reasons[0][0], [r for _, r in reasons]
+
+
+def _members_dominate(problem: DesignProblem, u: ArrayLike) -> list[tuple[str, str]]:
+    """(name, reason) when the members outside the layers alone (cap, plates, housing's cover)
+    give a regime more field change per newton than its target, at the nearest design: no layer
+    can then bring S down (they only add compliance in series). The bound is the tangent at
+    the unloaded gap, below the secant (the field's gradient grows as the gap closes)."""
+    theta, t, h = problem.to_physical(u)
+    if problem.wall_offset_mm:
+        t = np.maximum(t + problem.wall_offset_mm, 1e-6)
+    cap, plates, cover = member_compliances(problem.members, np.radians(theta), t, h)
+    parts = {"cap": float(cap), "plates": float(np.sum(plates)), "housing": float(cover)}
+    gap0 = float(problem.gap0_mm(float(np.sum(h))))
+    step = 1e-4
+    B = problem.field_T(np.array([gap0 - step, gap0, gap0 + step]))
+    floor = float((B[0] - B[2]) / (2 * step * B[1])) * sum(parts.values())  # S (1/N) of the members alone
+    over = np.flatnonzero(floor > problem.S_target * (1 + problem.tolerance_rel))
+    if not len(over):
+        return []
+    i, name = int(over[-1]), max(parts, key=lambda k: parts[k])
+    return [
+        (
+            f"the {name} dominates",
+            (
+                f"the {name} is too soft: the members outside the layers alone give S >= {floor:.3g} 1/N "
+                f"({name} {parts[name]:.3g} mm/N), above the target S_{i + 1} = {problem.S_target[i]:g} 1/N, "
+                "which no layer can lower: a stiffer cap (an insert), plates or a cover supported all round "
+                "(docs/design.md 4.6)"
+            ),
+        )
+    ]
 
 
 def _beyond_limits(problem: DesignProblem) -> list[tuple[str, str]]:

@@ -244,7 +244,9 @@ def member_compliances(scene: MemberScene, theta_rad, t_mm, h_mm) -> tuple:
     below, above = head[..., :-1], head[..., 1:]
     plates = two_load_mm_per_N(2.0 * below, below - above, EI_p, kGA_p, s.support)
     EI_c, kGA_c = section_EI_kGA(D, s.cover_mm + t[..., 0], E, G)
-    cover = two_load_mm_per_N(2.0 * s.half_slot_mm, s.half_slot_mm - head[..., 0], EI_c, kGA_c, s.support)
+    # walls over the slot's solid side walls bear on them: no overhang (unlike a plate's edge)
+    on_slot = np.maximum(s.half_slot_mm - head[..., 0], 0.0)
+    cover = two_load_mm_per_N(2.0 * s.half_slot_mm, on_slot, EI_c, kGA_c, s.support)
     return cap, np.asarray(plates), cover
 
 

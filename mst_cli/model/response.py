@@ -17,6 +17,7 @@ import numpy as np
 from mst_cli.model import chip as mlx
 from mst_cli.model import magnet_field as fld
 from mst_cli.model.assembly import SensorGeometry
+from mst_cli.model.load_path import FINGERTIP_PATCH_MM, Members, members
 from mst_cli.model.material import CREASE_ONSET_STRETCH, Material
 from mst_cli.model.mechanics import layer_laws
 from mst_cli.model.stack import Stack, series_displacement_mm
@@ -40,8 +41,10 @@ def regime_kernel(
     gap0_mm: ArrayLike,
     field_T: Callable[[np.ndarray], np.ndarray],
     lock_force_N: ArrayLike | None = None,
+    members_mm_per_N: ArrayLike = 0.0,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Lock forces and secant sensitivities of many L0 stacks at once.
+    """Lock forces and secant sensitivities of many L0 stacks at once, the members that are not
+    layers (cap, plates, cover) in series as a linear spring.
 
     Parameters
     ----------
@@ -49,6 +52,7 @@ def regime_kernel(
     lock_force_N : array (..., n_layers), optional    [default k * d_lock, bilinear layers]
     gap0_mm : array (...)       unloaded magnet-to-chip gap
     field_T : callable          |B| (T) of an array of gaps (mm)
+    members_mm_per_N : array (...), optional    the members' compliance [default 0: rigid]
 
     Returns
     -------
@@ -61,7 +65,7 @@ def regime_kernel(
     R = k * np.asarray(d_lock_mm, dtype=float) if lock_force_N is None else np.asarray(lock_force_N, dtype=float)
     R_sorted = np.sort(R, axis=-1)
     F = np.concatenate([np.zeros(R_sorted.shape[:-1] + (1,)), R_sorted], axis=-1)
-    d = series_displacement_mm(F, k, d_lock_mm, k_locked_N_per_mm, R)
+    d = series_displacement_mm(F, k, d_lock_mm, k_locked_N_per_mm, R, members_mm_per_N)
     gap = np.asarray(gap0_mm, dtype=float)[..., None] - d
     B = field_T(gap)
     rel = B / B[..., :1] - 1.0
@@ -85,6 +89,7 @@ class Regime:
     sensitivity_max_per_N: float
     force_resolution_N: float  # field resolution / (B0 * S secant)
     force_resolution_worst_N: float  # field resolution / (B0 * S min)
+    sensitivity_layers_secant_per_N: float  # the layers' alone, between rigid plates (L0/L2 as verified)
 
 
 @dataclass
@@ -111,6 +116,10 @@ class Response:
     field_resolution_T: float
     noise_uT_rms: float
     warnings: list[str] = field(default_factory=list)
+    # the cap, plates and cover in series with the layers (Members.rigid: the layers alone)
+    members: Members = field(default_factory=Members.rigid)
+    displacement_layers_mm: np.ndarray | None = None  # the layers' compression alone
+    dB_rel_layers: np.ndarray | None = None  # the field change of the layers alone (rigid members)
 
     @property
     def lock_forces_N(self) -> list[float]:
@@ -129,8 +138,15 @@ def simulate(
     noise_uT_rms: float = mlx.DEFAULT_NOISE_uT,
     points_per_regime: int = 200,
     overload: float = 0.25,
+    whole_part: bool = True,
+    patch_mm: float = FINGERTIP_PATCH_MM,
 ) -> Response:
-    """Curves and per-regime figures of one design.
+    """Curves and per-regime figures of one design: by default of the whole part, the cap's,
+    the plates' and the cover's compliance (:func:`mst_cli.model.load_path.members`, a centred
+    press ``patch_mm`` wide) in series with the layers, docs/design.md 4.6. The layers' own
+    curve (rigid members, the ladder's verified rungs) rides along as ``displacement_layers_mm``,
+    ``dB_rel_layers`` and each regime's ``sensitivity_layers_secant_per_N``; ``whole_part=False``
+    makes it the response itself.
 
     The force axis runs from 0 to (1 + overload) x the last lock force; points past the last
     lock are flagged ``in_range = False`` (the sensor's range has ended there, the model only
@@ -139,7 +155,9 @@ def simulate(
     ``noise_uT_rms`` the chip's field noise (uT) that sets the force resolution.
     """
     model = fld.choose_field_model(geometry.chip_offset_mm, geometry.magnet_tilt_deg, field_model)
-    stack = Stack(layer_laws(geometry.layers, material, mechanics))
+    laws = layer_laws(geometry.layers, material, mechanics)
+    parts = members(geometry, material, patch_mm) if whole_part else Members.rigid(patch_mm, len(laws) - 1)
+    stack = Stack(laws, parts.total_mm_per_N)
     edges = stack.regime_bounds_N
     F = _force_grid(edges, points_per_regime, overload)
     F_last = edges[-1]
@@ -154,6 +172,7 @@ def simulate(
     gap_edges = gap0 - stack.displacement_mm(edges)
     S, degenerate, B_edges = _secant_sensitivities(stack, gap_edges, field_T, B0)
     B_full = float(B_edges[-1])
+    layers_only = _layers_only(stack, F, gap0, field_T, B0)
     Bmax_vec = np.abs(Bvec[F <= F_last + 1e-12]).max(axis=0)
     setting = mlx.choose_setting(max(Bmax_vec[0], Bmax_vec[1]), Bmax_vec[2])
     saturated = setting is None or B_full >= mlx.SATURATION_T
@@ -168,7 +187,7 @@ def simulate(
         B_abs_T=Babs,
         dB_rel=Babs / B0 - 1.0,
         in_range=F <= F_last * (1 + 1e-12),
-        regimes=_regimes(stack, S, degenerate, (slope, band), (res_T, B0)),
+        regimes=_regimes(stack, S, degenerate, (slope, band), (res_T, B0), layers_only[2]),
         B0_T=B0,
         B_full_T=B_full,
         gap0_mm=gap0,
@@ -179,7 +198,22 @@ def simulate(
         field_resolution_T=res_T,
         noise_uT_rms=noise_uT_rms,
         warnings=_warnings(stack, degenerate, B_full if saturated else None),
+        members=parts,
+        displacement_layers_mm=layers_only[0],
+        dB_rel_layers=layers_only[1],
     )
+
+
+def _layers_only(
+    stack: Stack, F: np.ndarray, gap0: float, field_T: Callable[[np.ndarray], np.ndarray], B0: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(compression, dB/B0 at the forces ``F``, secant S per regime) of the layers alone between
+    rigid plates: the curve the ladder verifies layer by layer (the same lock forces)."""
+    layers = stack.layers_only()
+    d = layers.displacement_mm(F)
+    gap_edges = gap0 - layers.displacement_mm(layers.regime_bounds_N)
+    S = _secant_sensitivities(layers, gap_edges, field_T, B0)[0]
+    return d, field_T(gap0 - d) / B0 - 1.0, S
 
 
 def _force_grid(edges: np.ndarray, points_per_regime: int, overload: float) -> np.ndarray:
@@ -235,9 +269,11 @@ def _regimes(
     degenerate: np.ndarray,
     slopes: tuple[np.ndarray, np.ndarray],
     resolution: tuple[float, float],
+    S_layers: np.ndarray,
 ) -> list[Regime]:
     """Every force band's figures; ``slopes`` = (local slope, band of each force sample),
-    ``resolution`` = (the chip's field resolution, B0), both in T."""
+    ``resolution`` = (the chip's field resolution, B0), both in T; ``S_layers`` the layers'
+    own secant sensitivities (rigid members)."""
     slope, band = slopes
     res_T, B0 = resolution
     edges, order, laws = stack.regime_bounds_N, stack.lock_order, stack.layers
@@ -267,6 +303,7 @@ def _regimes(
                 sensitivity_max_per_N=float(s_hi),
                 force_resolution_N=res_T / (B0 * float(S[i])),
                 force_resolution_worst_N=res_T / (B0 * float(s_lo)),
+                sensitivity_layers_secant_per_N=float(S_layers[i]),
             )
         )
     return regimes
