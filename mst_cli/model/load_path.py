@@ -331,11 +331,44 @@ def load_path_report(geometry, material, stack, patch_mm: float = FINGERTIP_PATC
         "plates_mm_per_N": list(simple.plates_mm_per_N),
         "housing_mm_per_N": simple.cover_mm_per_N,
         "cap_clamped_mm_per_N": clamped.cap_mm_per_N,
+        "members_simple_mm_per_N": _by_member(simple),
+        "members_clamped_mm_per_N": _by_member(clamped),
         "regimes": regimes,
         "outside_layers_max": max(r["outside_layers"] for r in regimes),
         "patch_dependence": patch_dependence(geometry, material, stack),
         "not_modelled": "the cover tipping where the cable windows cut its side walls (3D)",
     }
+
+
+# the accuracy an independent model of the part asks of the field change per newton: before the
+# first lock, after one, after two or more (issue 44; that model's own uncertainty on a closed layer)
+ACCURACY_BUDGET_REL = (0.05, 0.08, 0.20)
+
+
+def support_uncertainty(report: dict) -> list[dict]:
+    """Per regime of :func:`load_path_report`: the share of the part's compliance the members'
+    closed form leaves uncertain, between its simply supported and clamped wall heads
+    ((C_simple - C_clamped) / the part's compliance), against the regime's accuracy budget
+    (:data:`ACCURACY_BUDGET_REL`), with the member whose supports matter most. The tolerance on
+    the share outside the layers that ``mst check`` applies by default."""
+    simple, clamped = report["members_simple_mm_per_N"], report["members_clamped_mm_per_N"]
+    spread = {k: simple[k] - clamped[k] for k in simple}
+    rows = []
+    for i, row in enumerate(report["regimes"]):
+        total = row["compliance_mm_per_N"]
+        rows.append(
+            {
+                "regime": row["regime"],
+                "uncertain_share": sum(spread.values()) / total,
+                "budget": ACCURACY_BUDGET_REL[min(i, len(ACCURACY_BUDGET_REL) - 1)],
+                "member": max(spread, key=lambda k: spread[k]),
+            }
+        )
+    return rows
+
+
+def _by_member(parts: Members) -> dict:
+    return {"cap": parts.cap_mm_per_N, "plates": sum(parts.plates_mm_per_N), "housing": parts.cover_mm_per_N}
 
 
 def dominant_member(row: dict) -> tuple[str, float]:
