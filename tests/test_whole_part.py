@@ -27,38 +27,50 @@ def forward():
 
 @pytest.mark.parametrize("mechanics", ["spring", "frame"])
 def test_rigid_members_reproduce_the_layer_model_exactly(forward, mechanics):
-    """whole_part=False and members of zero compliance give the layers' curve to the bit, and the
-    whole part's response carries that same curve beside its own."""
+    """whole_part=False gives the layers' curve to the bit, a cap of zero compliance is the layer
+    itself, and the whole part's response carries the layers' curve beside its own."""
     doc, g = forward
     layers = simulate(g, doc.material, mechanics, whole_part=False)
     part = simulate(g, doc.material, mechanics)
     assert layers.members.total_mm_per_N == 0.0
     np.testing.assert_array_equal(layers.displacement_mm, layers.displacement_layers_mm)
-    np.testing.assert_array_equal(layers.displacement_mm, part.displacement_layers_mm)
-    np.testing.assert_array_equal(layers.dB_rel, part.dB_rel_layers)
+    np.testing.assert_array_equal(layers.dB_rel, layers.dB_rel_layers)
     laws = layer_laws(g.layers, doc.material, mechanics)
+    np.testing.assert_array_equal(Stack(laws).displacement_mm(part.force_N), part.displacement_layers_mm)
     F = part.force_N
     np.testing.assert_array_equal(Stack(laws, 0.0).displacement_mm(F), Stack(laws).displacement_mm(F))
+    rigid_cap = lp.CappedLayer(laws[-1], 0.0)
+    assert rigid_cap.lock_force_N == laws[-1].lock_force_N
+    np.testing.assert_array_equal(rigid_cap.displacement_mm(F), laws[-1].displacement_mm(F))
     for a, b in zip(layers.regimes, part.regimes):
         assert a.sensitivity_secant_per_N == a.sensitivity_layers_secant_per_N == b.sensitivity_layers_secant_per_N
-        assert a.force_to_N == b.force_to_N  # the same force passes every member: the locks stay
 
 
 def test_the_parts_compliance_is_the_closed_forms_sum(forward):
-    """In every regime 1/k_effective = the layers' compliance + cap + plates + cover, and the
-    drop is the layers' compression plus the members' compliance times the force."""
+    """Before the first lock the drop is the layers' compression plus (cap + plates + cover) x F,
+    and 1/k_effective the layers' compliance plus the members'; the cap closes the top layer's
+    cavity where the layer's compression plus the cap's bending reach d_lock."""
     doc, g = forward
     part = simulate(g, doc.material)
     parts = lp.members(g, doc.material)
     assert part.members == parts
     assert parts.total_mm_per_N == pytest.approx(parts.cap_mm_per_N + sum(parts.plates_mm_per_N) + parts.cover_mm_per_N)
-    stack = Stack(layer_laws(g.layers, doc.material, "spring"))
-    layer_c = lp.layer_compliances_mm_per_N(stack).sum(axis=1)
-    for r, c in zip(part.regimes, layer_c):
-        assert 1.0 / r.k_effective_N_per_mm == pytest.approx(c + parts.total_mm_per_N, rel=1e-9)
+    laws = layer_laws(g.layers, doc.material, "spring")
+    first = part.force_N <= part.lock_forces_N[0]
     np.testing.assert_allclose(
-        part.displacement_mm, part.displacement_layers_mm + parts.total_mm_per_N * part.force_N, rtol=1e-12, atol=1e-15
+        part.displacement_mm[first],
+        Stack(laws).displacement_mm(part.force_N[first]) + parts.total_mm_per_N * part.force_N[first],
+        rtol=1e-12,
+        atol=1e-15,
     )
+    layer_c = sum(1.0 / law.k_N_per_mm for law in laws)  # the forward design's laws are bilinear
+    assert 1.0 / part.regimes[0].k_effective_N_per_mm == pytest.approx(layer_c + parts.total_mm_per_N, rel=1e-9)
+    top = laws[-1]
+    closes = lp.CappedLayer(top, parts.cap_mm_per_N).lock_force_N
+    assert float(top.displacement_mm(closes)) + parts.cap_mm_per_N * closes == pytest.approx(top.d_lock_mm, rel=1e-12)
+    assert closes == pytest.approx(top.d_lock_mm / (1.0 / top.k_N_per_mm + parts.cap_mm_per_N), rel=1e-12)
+    assert closes == pytest.approx(min(part.lock_forces_N), rel=1e-12)  # the soft cap closes it first: 3.8 N
+    assert closes < laws[0].lock_force_N
 
 
 def test_the_field_change_per_newton_is_the_gradient_times_the_compliance(forward):
@@ -93,6 +105,7 @@ def test_the_design_loop_predicts_what_simulate_does(forward):
     laws = layer_laws(cells, doc.material, "spring")
     k, dl, kl, R = (np.array([getattr(law, a) for law in laws]) for a in ("k_N_per_mm", "d_lock_mm", "k_locked_N_per_mm", "lock_force_N"))
     field = lambda gap: field_magnitude_T(gap, g, part.field_model)  # noqa: E731
-    R_sorted, S, _, _ = regime_kernel(k, dl, kl, g.gap0_mm, field, R, members)
+    cap, plates, cover = lp.member_compliances(scene, theta, t, h)
+    R_sorted, S, _, _ = regime_kernel(k, dl, kl, g.gap0_mm, field, R, plates.sum() + cover, cap)
     np.testing.assert_allclose(R_sorted, part.lock_forces_N, rtol=1e-12)
     np.testing.assert_allclose(S, [r.sensitivity_secant_per_N for r in part.regimes], rtol=1e-9)

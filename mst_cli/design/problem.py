@@ -66,13 +66,13 @@ import numpy as np
 from mst_cli.model import chip as mlx
 from mst_cli.model.assembly import unloaded_gap_mm
 from mst_cli.model.cell import CELL_RULES, LENGTH_FLOOR_MM, cell_margins_mm, wall_centreline_length_mm
-from mst_cli.model.load_path import member_scene, members_total_mm_per_N
+from mst_cli.model.load_path import member_compliances, member_scene
 from mst_cli.model.magnet_field import axial_Bz_T, choose_field_model
 from mst_cli.model.material import Material
 from mst_cli.model.mechanics import correction
 from mst_cli.model.mechanics.depth import web_modulus_MPa
 from mst_cli.model.mechanics.spring import spring_arrays
-from mst_cli.model.response import field_magnitude_T, regime_kernel
+from mst_cli.model.response import capped_lock_forces_N, field_magnitude_T, regime_kernel
 from mst_cli.sensor.sections import DEFAULT_OBJECTIVE, OBJECTIVE_TERMS
 
 if TYPE_CHECKING:
@@ -332,22 +332,29 @@ class DesignProblem:
         members = self.members_mm_per_N(theta_deg, t_mm, h_mm)
         return self._responses_of(self.layer_laws(theta_deg, t_mm, h_mm), h_mm, members)
 
-    def members_mm_per_N(self, theta_deg: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike) -> np.ndarray:
-        """The cap's, plates' and cover's compliance in series (...) of candidate stacks, walls as
-        printed (t + printer.wall_offset_mm), as :meth:`layer_laws` sees them."""
+    def member_parts(self, theta_deg: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike) -> tuple:
+        """(cap (...), plates (..., n - 1), cover (...)) compliance in mm/N of candidate stacks,
+        walls as printed (t + printer.wall_offset_mm), as :meth:`layer_laws` sees them."""
         t = np.asarray(t_mm, dtype=float)
         if self.wall_offset_mm:
             t = np.maximum(t + self.wall_offset_mm, LENGTH_FLOOR_MM)
-        return members_total_mm_per_N(self.members, np.radians(theta_deg), t, h_mm)
+        return member_compliances(self.members, np.radians(theta_deg), t, h_mm)
+
+    def members_mm_per_N(self, theta_deg: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike) -> tuple:
+        """(the cap's, the plates' and cover's in series) compliance (...) of candidate stacks."""
+        cap, plates, cover = self.member_parts(theta_deg, t_mm, h_mm)
+        return cap, plates.sum(axis=-1) + cover
 
     def _responses_of(
-        self, laws: tuple, h_mm: np.ndarray, members_mm_per_N: ArrayLike = 0.0
+        self, laws: tuple, h_mm: np.ndarray, members: tuple | None = None
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """:meth:`responses` of stacks whose layer laws (and members' compliance) are known."""
+        """:meth:`responses` of stacks whose layer laws (and members' (cap, rest) compliance) are
+        known: R is each layer's lock force, the top one's where the cap closes its cavity."""
         k, d_lock, R, k_locked = laws
+        cap, rest = (None, 0.0) if members is None else members
         gap0 = cast(np.ndarray, self.gap0_mm(h_mm.sum(axis=-1)))  # candidates' sums: an array
-        _, S, _, B = regime_kernel(k, d_lock, k_locked, gap0, self.field_T, R, members_mm_per_N)
-        return R, S, B[..., -1], gap0, B[..., 0]
+        _, S, _, B = regime_kernel(k, d_lock, k_locked, gap0, self.field_T, R, rest, cap)
+        return capped_lock_forces_N(k, d_lock, R, cap), S, B[..., -1], gap0, B[..., 0]
 
     def evaluate_physical(self, theta_deg: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike) -> Evaluation:
         return self._evaluate_physical(theta_deg, t_mm, h_mm, False)[0]

@@ -270,6 +270,54 @@ def members(
     return Members(float(cap), tuple(float(p) for p in plates), float(cover), patch_mm, support)
 
 
+@dataclass(frozen=True)
+class CappedLayer:
+    """The top layer with the cap bonded to its top pad (a layer law, the protocol of
+    :mod:`mst_cli.model.mechanics`): the cap bends into the layer's cavity, C x F at its centre,
+    on top of the layer's own compression, until the cavity closes there (``lock_force_N``,
+    below the layer's own R); past it both are locked. C = 0 is the layer itself."""
+
+    law: object
+    cap_mm_per_N: float
+
+    @property
+    def lock_force_N(self) -> float:
+        """Where law.d(F) + C F reaches d_lock: exact on the law's piecewise-linear knots."""
+        law, C = self.law, self.cap_mm_per_N
+        R = float(law.lock_force_N)
+        if C <= 0.0:
+            return R
+        knots = np.array([0.0] + [f for f in law.knots_N if f < R] + [R])
+        reach = law.displacement_mm(knots) + C * knots
+        return float(np.interp(law.d_lock_mm, reach, knots))
+
+    @property
+    def k_N_per_mm(self) -> float:  # the layer and the cap in series, at small load
+        return 1.0 / (1.0 / self.law.k_N_per_mm + self.cap_mm_per_N)
+
+    @property
+    def d_lock_mm(self) -> float:
+        return self.law.d_lock_mm
+
+    @property
+    def k_locked_N_per_mm(self) -> float:
+        return self.law.k_locked_N_per_mm
+
+    @property
+    def knots_N(self) -> tuple[float, ...]:
+        R = self.lock_force_N
+        return tuple(f for f in self.law.knots_N if f < R) + (R,)
+
+    @property
+    def min_stretch_at_lock(self):  # the wall's squeeze at its own lock, when the cap lets it get there
+        return getattr(self.law, "min_stretch_at_lock", None) if self.cap_mm_per_N <= 0.0 else None
+
+    def displacement_mm(self, force_N) -> np.ndarray:
+        F, R = np.asarray(force_N, dtype=float), self.lock_force_N
+        closed = self.d_lock_mm + (F - R) / self.k_locked_N_per_mm
+        return np.where(F <= R, self.law.displacement_mm(F) + self.cap_mm_per_N * F, closed)
+
+
 def layer_compliances_mm_per_N(stack) -> np.ndarray:
     """(n_regimes, n_layers): each layer's dd/dF at the middle of each regime (a locked layer on
     its locked branch), from its own law (Stack.layers)."""

@@ -17,10 +17,10 @@ import numpy as np
 from mst_cli.model import chip as mlx
 from mst_cli.model import magnet_field as fld
 from mst_cli.model.assembly import SensorGeometry
-from mst_cli.model.load_path import FINGERTIP_PATCH_MM, Members, members
+from mst_cli.model.load_path import FINGERTIP_PATCH_MM, CappedLayer, Members, members
 from mst_cli.model.material import CREASE_ONSET_STRETCH, Material
 from mst_cli.model.mechanics import layer_laws
-from mst_cli.model.stack import Stack, series_displacement_mm
+from mst_cli.model.stack import Stack, capped_lock_force_N, series_displacement_mm
 
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
@@ -42,6 +42,7 @@ def regime_kernel(
     field_T: Callable[[np.ndarray], np.ndarray],
     lock_force_N: ArrayLike | None = None,
     members_mm_per_N: ArrayLike = 0.0,
+    cap_mm_per_N: ArrayLike | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Lock forces and secant sensitivities of many L0 stacks at once, the members that are not
     layers (cap, plates, cover) in series as a linear spring.
@@ -52,7 +53,9 @@ def regime_kernel(
     lock_force_N : array (..., n_layers), optional    [default k * d_lock, bilinear layers]
     gap0_mm : array (...)       unloaded magnet-to-chip gap
     field_T : callable          |B| (T) of an array of gaps (mm)
-    members_mm_per_N : array (...), optional    the members' compliance [default 0: rigid]
+    members_mm_per_N : array (...), optional    the plates' and cover's compliance [default 0: rigid]
+    cap_mm_per_N : array (...), optional        the cap's, bending into the top layer's cavity until
+                                                it closes there [default None: rigid]
 
     Returns
     -------
@@ -63,14 +66,24 @@ def regime_kernel(
     """
     k = np.asarray(k_N_per_mm, dtype=float)
     R = k * np.asarray(d_lock_mm, dtype=float) if lock_force_N is None else np.asarray(lock_force_N, dtype=float)
-    R_sorted = np.sort(R, axis=-1)
+    R_sorted = np.sort(capped_lock_forces_N(k, d_lock_mm, R, cap_mm_per_N), axis=-1)
     F = np.concatenate([np.zeros(R_sorted.shape[:-1] + (1,)), R_sorted], axis=-1)
-    d = series_displacement_mm(F, k, d_lock_mm, k_locked_N_per_mm, R, members_mm_per_N)
+    d = series_displacement_mm(F, k, d_lock_mm, k_locked_N_per_mm, R, members_mm_per_N, cap_mm_per_N)
     gap = np.asarray(gap0_mm, dtype=float)[..., None] - d
     B = field_T(gap)
     rel = B / B[..., :1] - 1.0
     S = np.diff(rel, axis=-1) / np.maximum(np.diff(F, axis=-1), 1e-300)
     return R_sorted, S, gap, B
+
+
+def capped_lock_forces_N(k: ArrayLike, d_lock_mm: ArrayLike, R: np.ndarray, cap_mm_per_N: ArrayLike | None) -> np.ndarray:
+    """Every layer's lock force (..., n), the top one's where the cap closes its cavity
+    (:func:`~mst_cli.model.stack.capped_lock_force_N`); ``cap_mm_per_N`` None: R itself."""
+    if cap_mm_per_N is None:
+        return R
+    out = np.array(R, dtype=float)
+    out[..., -1] = capped_lock_force_N(np.asarray(k)[..., -1], np.asarray(d_lock_mm)[..., -1], R[..., -1], cap_mm_per_N)
+    return out
 
 
 @dataclass
@@ -157,7 +170,10 @@ def simulate(
     model = fld.choose_field_model(geometry.chip_offset_mm, geometry.magnet_tilt_deg, field_model)
     laws = layer_laws(geometry.layers, material, mechanics)
     parts = members(geometry, material, patch_mm) if whole_part else Members.rigid(patch_mm, len(laws) - 1)
-    stack = Stack(laws, parts.total_mm_per_N)
+    layer_stack = Stack(laws)
+    if whole_part:  # the cap bends into the top layer's cavity; the plates and cover in series
+        laws = (*laws[:-1], CappedLayer(laws[-1], parts.cap_mm_per_N))
+    stack = Stack(laws, parts.total_mm_per_N - parts.cap_mm_per_N)
     edges = stack.regime_bounds_N
     F = _force_grid(edges, points_per_regime, overload)
     F_last = edges[-1]
@@ -172,7 +188,7 @@ def simulate(
     gap_edges = gap0 - stack.displacement_mm(edges)
     S, degenerate, B_edges = _secant_sensitivities(stack, gap_edges, field_T, B0)
     B_full = float(B_edges[-1])
-    layers_only = _layers_only(stack, F, gap0, field_T, B0)
+    layers_only = _layers_only(layer_stack, F, gap0, field_T, B0)
     Bmax_vec = np.abs(Bvec[F <= F_last + 1e-12]).max(axis=0)
     setting = mlx.choose_setting(max(Bmax_vec[0], Bmax_vec[1]), Bmax_vec[2])
     saturated = setting is None or B_full >= mlx.SATURATION_T
@@ -207,9 +223,9 @@ def simulate(
 def _layers_only(
     stack: Stack, F: np.ndarray, gap0: float, field_T: Callable[[np.ndarray], np.ndarray], B0: float
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(compression, dB/B0 at the forces ``F``, secant S per regime) of the layers alone between
-    rigid plates: the curve the ladder verifies layer by layer (the same lock forces)."""
-    layers = stack.layers_only()
+    """(compression, dB/B0 at the forces ``F``, secant S per regime of its own lock forces) of the
+    layers alone between rigid plates: the curve the ladder verifies layer by layer."""
+    layers = stack
     d = layers.displacement_mm(F)
     gap_edges = gap0 - layers.displacement_mm(layers.regime_bounds_N)
     S = _secant_sensitivities(layers, gap_edges, field_T, B0)[0]

@@ -18,10 +18,25 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from mst_cli.model.mechanics.spring import layer_displacement_mm
+from mst_cli.model.mechanics.spring import KNEE_FRACTION, layer_displacement_mm
 
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
+
+
+def capped_lock_force_N(k_N_per_mm: ArrayLike, d_lock_mm: ArrayLike, lock_force_N: ArrayLike, cap_mm_per_N: ArrayLike):
+    """Where the top layer's cavity closes at its centre when the cap bonded to its top pad also
+    bends into it by cap_mm_per_N x F: the force F' at which d(F') + C F' = d_lock, for L0 laws
+    (slope k to the knee KNEE_FRACTION x R, straight on to (d_lock, R)), vectorised. Past F'
+    the cap rests on the cavity's floor and the layer is locked (docs/design.md 4.6); C = 0
+    gives R itself, to the bit."""
+    k, dl, R, C = (np.asarray(a, dtype=float) for a in (k_N_per_mm, d_lock_mm, lock_force_N, cap_mm_per_N))
+    F1 = KNEE_FRACTION * R
+    d1 = F1 / k
+    soft = (dl - d1) / np.maximum(R - F1, 1e-300)  # mm/N between the knee and the lock
+    g1 = d1 + C * F1
+    closes = np.where(dl <= g1, dl / (1.0 / k + C), F1 + (dl - g1) / (soft + C))
+    return np.where(C > 0, closes, R)
 
 
 def series_displacement_mm(
@@ -31,9 +46,12 @@ def series_displacement_mm(
     k_locked_N_per_mm: ArrayLike,
     lock_force_N: ArrayLike | None = None,
     members_mm_per_N: ArrayLike = 0.0,
+    cap_mm_per_N: ArrayLike | None = None,
 ) -> np.ndarray:
     """Stack compression of L0 layers in series, vectorised over designs, with the members that
-    are not layers (``members_mm_per_N``, shape (...), a linear spring) in series too.
+    are not layers (``members_mm_per_N``, shape (...), a linear spring) in series too, and the
+    cap (``cap_mm_per_N``, shape (...)) bending into the top layer's cavity until it closes
+    there (:func:`capped_lock_force_N`).
 
     ``k``, ``d_lock``, ``k_locked`` and ``lock_force_N`` (None: R = k d_lock, bilinear) have
     shape (..., n_layers); ``force_N`` has shape (..., m) (broadcast against the leading axes).
@@ -46,7 +64,15 @@ def series_displacement_mm(
     d_layer = layer_displacement_mm(
         F, k[..., None, :], dl[..., None, :], R[..., None, :], np.asarray(k_locked_N_per_mm, dtype=float)[..., None, :]
     )
-    return d_layer.sum(axis=-1) + np.asarray(members_mm_per_N, dtype=float)[..., None] * F[..., 0]
+    d = d_layer.sum(axis=-1) + np.asarray(members_mm_per_N, dtype=float)[..., None] * F[..., 0]
+    if cap_mm_per_N is None:
+        return d
+    C = np.asarray(cap_mm_per_N, dtype=float)[..., None]
+    Rc = capped_lock_force_N(k[..., -1], dl[..., -1], R[..., -1], cap_mm_per_N)[..., None]
+    top, Ft = d_layer[..., -1], F[..., 0]
+    # before the contact: the top layer's own law and the cap's bending; after: locked
+    closed = dl[..., -1, None] + (Ft - Rc) / np.asarray(k_locked_N_per_mm, dtype=float)[..., -1, None]
+    return d - top + np.where(Ft <= Rc, top + C * Ft, closed)
 
 
 @dataclass(frozen=True)
