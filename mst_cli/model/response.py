@@ -153,13 +153,14 @@ def simulate(
     overload: float = 0.25,
     whole_part: bool = True,
     patch_mm: float = FINGERTIP_PATCH_MM,
+    parts: Members | None = None,
 ) -> Response:
     """Curves and per-regime figures of one design: by default of the whole part, the cap's,
     the plates' and the cover's compliance (:func:`mst_cli.model.load_path.members`, a centred
     press ``patch_mm`` wide) in series with the layers, docs/design.md 4.6. The layers' own
     curve (rigid members, the ladder's verified rungs) rides along as ``displacement_layers_mm``,
     ``dB_rel_layers`` and each regime's ``sensitivity_layers_secant_per_N``; ``whole_part=False``
-    makes it the response itself.
+    makes it the response itself; ``parts`` gives the members instead (an insert's, another press).
 
     The force axis runs from 0 to (1 + overload) x the last lock force; points past the last
     lock are flagged ``in_range = False`` (the sensor's range has ended there, the model only
@@ -169,11 +170,9 @@ def simulate(
     """
     model = fld.choose_field_model(geometry.chip_offset_mm, geometry.magnet_tilt_deg, field_model)
     laws = layer_laws(geometry.layers, material, mechanics)
-    parts = members(geometry, material, patch_mm) if whole_part else Members.rigid(patch_mm, len(laws) - 1)
-    layer_stack = Stack(laws)
-    if whole_part:  # the cap bends into the top layer's cavity; the plates and cover in series
-        laws = (*laws[:-1], CappedLayer(laws[-1], parts.cap_mm_per_N))
-    stack = Stack(laws, parts.total_mm_per_N - parts.cap_mm_per_N)
+    if parts is None:
+        parts = members(geometry, material, patch_mm) if whole_part else Members.rigid(patch_mm, len(laws) - 1)
+    layer_stack, stack = Stack(laws), part_stack(laws, parts)
     edges = stack.regime_bounds_N
     F = _force_grid(edges, points_per_regime, overload)
     F_last = edges[-1]
@@ -218,6 +217,13 @@ def simulate(
         displacement_layers_mm=layers_only[0],
         dB_rel_layers=layers_only[1],
     )
+
+
+def part_stack(laws: tuple, parts: Members) -> Stack:
+    """The whole part's stack: the cap bends into the top layer's cavity until it closes there
+    (:class:`~mst_cli.model.load_path.CappedLayer`), the plates and the cover in series."""
+    top = CappedLayer(laws[-1], parts.cap_mm_per_N) if parts.cap_mm_per_N > 0 else laws[-1]
+    return Stack((*laws[:-1], top), parts.total_mm_per_N - parts.cap_mm_per_N)
 
 
 def _layers_only(
