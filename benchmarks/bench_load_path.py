@@ -18,6 +18,7 @@ from pathlib import Path
 import mst_cli as mst
 from mst_cli.model import load_path as lp
 from mst_cli.model.mechanics import layer_laws
+from mst_cli.model.response import simulate
 from mst_cli.model.stack import Stack
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -35,6 +36,15 @@ def row(label, g, material, stack, insert=None) -> str:
         shares = lp.motion_shares(stack, lp.members(g, material, support=support, insert=insert))
         cells.append(" / ".join(f"{100 * r['outside_layers']:.0f}" for r in shares))
     return " | ".join(cells) + f" | {g.total_height_mm:.1f} |"
+
+
+def prediction(label, g, material, insert=None) -> str:
+    """One row of the whole part's L0 prediction: lock forces (the layer that locks) and the
+    field change per newton at the chip per regime (secant, uT/N)."""
+    part = simulate(g, material, parts=lp.members(g, material, insert=insert))
+    locks = " / ".join(f"{r.force_to_N:.1f} ({r.layer})" for r in part.regimes)
+    uT = " / ".join(f"{r.sensitivity_secant_per_N * part.B0_T * 1e6:.0f}" for r in part.regimes)
+    return f"| {label} | {locks} | {uT} |"
 
 
 def main() -> None:
@@ -55,6 +65,21 @@ def main() -> None:
         gi = replace(g, housing=replace(g.housing, cap_top_mm=g.housing.cap_top_mm + t))
         insert = lp.Insert(name, E / (1.0 - nu**2), nu, t, z)
         print(row(f"{name} {t:g} mm over the magnet", gi, m, stack, insert))
+    layers = simulate(g, m, whole_part=False)
+    print(f"\n{doc.name}: the prediction of `mst simulate` (rung L0, a centred {lp.FINGERTIP_PATCH_MM:g} mm press)")
+    print("| model | lock forces N (layer) | field change per newton uT/N, per regime |\n|---|---|---|")
+    print(
+        "| layers alone (rigid members) | "
+        + " / ".join(f"{r.force_to_N:.1f} ({r.layer})" for r in layers.regimes)
+        + " | "
+        + " / ".join(f"{r.sensitivity_secant_per_N * layers.B0_T * 1e6:.0f}" for r in layers.regimes)
+        + " |"
+    )
+    print(prediction(f"whole part, as exported (cap top {g.housing.cap_top_mm:g} mm)", g, m))
+    print(prediction("whole part, cap top 8 mm", replace(g, housing=replace(g.housing, cap_top_mm=8.0)), m))
+    for name, E, nu, t in INSERTS[1::2]:
+        gi = replace(g, housing=replace(g.housing, cap_top_mm=g.housing.cap_top_mm + t))
+        print(prediction(f"whole part, {name} {t:g} mm", gi, m, lp.Insert(name, E / (1.0 - nu**2), nu, t, z)))
 
 
 if __name__ == "__main__":

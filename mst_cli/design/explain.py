@@ -184,6 +184,8 @@ def _members_dominate(problem: DesignProblem, u: ArrayLike) -> list[tuple[str, s
     its own bending before the target R_n (below d_lock / C_cap), or the members alone give a
     regime more field change per newton than its target (the cap until that closure, the plates
     and cover always; the tangent at the unloaded gap, below the secant as the gap closes)."""
+    if not problem.whole_part:
+        return []
     theta, t, h = problem.to_physical(u)
     _, d_lock, _, _ = problem.layer_laws(theta, t, h)
     cap, rest = (float(c) for c in problem.members_mm_per_N(theta, t, h))
@@ -219,6 +221,8 @@ def _members_dominate(problem: DesignProblem, u: ArrayLike) -> list[tuple[str, s
 def _members_share(problem: DesignProblem, u: ArrayLike, achieved_S: ArrayLike) -> str:
     """'' or, when the members outside the layers carry a third or more of some regime's motion at
     the nearest design, that share and the member: what the layers have to work around."""
+    if not problem.whole_part:
+        return ""
     theta, t, h = problem.to_physical(u)
     cap, plates, cover = problem.member_parts(theta, t, h)
     parts = {"cap": float(cap), "plates": float(np.sum(plates)), "housing's cover": float(cover)}

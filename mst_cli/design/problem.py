@@ -191,6 +191,7 @@ class DesignProblem:
         self.height_offset_mm = probe.total_height_mm - sum(c.h_mm for c in probe_cells)
         # the whole part: the cap, plates and cover in series with the layers, in the printed
         # TPU, under a fingertip's press (docs/design.md 4.6); the cells come per candidate
+        self.whole_part = doc.whole_part  # model.load_path: part (else the layers alone)
         printed_tpu = Material(doc.material.name, self.E_MPa, self.nu)
         self.members = member_scene(probe, printed_tpu)
         self.B_limit_T = min(1.0 - self.saturation_margin_rel, 1.0 / CHIP_HEADROOM) * mlx.SATURATION_T
@@ -329,7 +330,7 @@ class DesignProblem:
         self, theta_deg: np.ndarray, t_mm: np.ndarray, h_mm: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """(R_N per layer, S_per_N per regime, B_full_T, gap0_mm, B0_T) of candidate stacks."""
-        members = self.members_mm_per_N(theta_deg, t_mm, h_mm)
+        members = self.members_mm_per_N(theta_deg, t_mm, h_mm) if self.whole_part else None
         return self._responses_of(self.layer_laws(theta_deg, t_mm, h_mm), h_mm, members)
 
     def member_parts(self, theta_deg: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike) -> tuple:
@@ -377,7 +378,8 @@ class DesignProblem:
             H = np.broadcast_to(h_mm, (3,) + h_mm.shape)
             dt = self.wall_tolerance_mm  # the members see the shifted walls too
             T3 = np.stack([t_mm, np.maximum(t_mm + dt, LENGTH_FLOOR_MM), np.maximum(t_mm - dt, LENGTH_FLOOR_MM)])
-            R3, S3, B_full3, gap03, B03 = self._responses_of(laws, H, self.members_mm_per_N(theta_deg, T3, H))
+            members = self.members_mm_per_N(theta_deg, T3, H) if self.whole_part else None
+            R3, S3, B_full3, gap03, B03 = self._responses_of(laws, H, members)
             R, S, B_full, gap0, B0 = R3[0], S3[0], B_full3[0], gap03[0], B03[0]
             base = np.log(np.maximum(np.concatenate([S, R], axis=-1), TINY))
             shifts = np.log(np.maximum(np.concatenate([S3[1:], R3[1:]], axis=-1), TINY)) - base[None]
