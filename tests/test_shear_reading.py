@@ -161,7 +161,9 @@ def test_design_states_what_a_two_chip_layout_tells_apart(tmp_path):
     assert res.exit_code == 0, res.output
     assert "shear_bound" not in json.loads((tmp_path / "o" / "report.json").read_text())["design"]
     assert "2 chips: what they tell apart" in res.output and "--shear-ratio 0.2,0.1" in res.output
-    res = run(["simulate", tmp_path / "o" / "design.yaml", "--out", tmp_path / "s", "--no-plot", "--shear-ratio", "0.2,0.1"])
+    res = run(
+        ["simulate", tmp_path / "o" / "design.yaml", "--out", tmp_path / "s", "--no-plot", "--shear-ratio", "0.2,0.1"]
+    )
     assert res.exit_code == 0, res.output
     b = json.loads((tmp_path / "s" / "report.json").read_text())["shear_bound"]
     assert b["chips_mm"] == [[-7.0, 0.0], [7.0, 6.0]] and len(b["estimates"]) == 5 and b["shear_ratio"] == [0.2, 0.1]

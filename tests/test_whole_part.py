@@ -103,7 +103,10 @@ def test_the_design_loop_predicts_what_simulate_does(forward):
     members = lp.members_total_mm_per_N(scene, theta, t, h)
     assert members == pytest.approx(part.members.total_mm_per_N, rel=1e-12)
     laws = layer_laws(cells, doc.material, "spring")
-    k, dl, kl, R = (np.array([getattr(law, a) for law in laws]) for a in ("k_N_per_mm", "d_lock_mm", "k_locked_N_per_mm", "lock_force_N"))
+    k, dl, kl, R = (
+        np.array([getattr(law, a) for law in laws])
+        for a in ("k_N_per_mm", "d_lock_mm", "k_locked_N_per_mm", "lock_force_N")
+    )
     field = lambda gap: field_magnitude_T(gap, g, part.field_model)  # noqa: E731
     cap, plates, cover = lp.member_compliances(scene, theta, t, h)
     R_sorted, S, _, _ = regime_kernel(k, dl, kl, g.gap0_mm, field, R, plates.sum() + cover, cap)

@@ -170,7 +170,10 @@ def diagnose(
     to its message (from the verification).
     """
     reasons = _members_dominate(problem, u) + _beyond_limits(problem) + _rising_sensitivities(problem, achieved_S)
-    reasons += [(name, reason + _members_share(problem, u, achieved_S)) for name, reason in _worst_miss(problem, u, achieved_S, achieved_R)]
+    reasons += [
+        (name, reason + _members_share(problem, u, achieved_S))
+        for name, reason in _worst_miss(problem, u, achieved_S, achieved_R)
+    ]
     for name, message in checks.items():
         reasons.append((name, message))
     if not reasons:  # nothing failed: the caller should not have asked

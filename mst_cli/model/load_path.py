@@ -27,6 +27,7 @@ the same for both. Pure numpy, no I/O.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -39,12 +40,12 @@ FINGERTIP_PATCH_MM = 6.0
 SUPPORTS = ("simple", "clamped")
 
 
-def _value(x):
+def _value(x) -> Any:
     """A 0-d result as a numpy scalar (a float), an array as itself."""
     return np.asarray(x)[()]
 
 
-def strip_bending_mm_per_N(span_mm, patch_mm, EI_Nmm2, support: str):
+def strip_bending_mm_per_N(span_mm, patch_mm, EI_Nmm2, support: str) -> float | np.ndarray:
     """Centre deflection per newton of a beam of ``span_mm`` under a centred uniform strip load
     ``patch_mm`` wide (clipped to the span), bending only; numbers or arrays (broadcast).
 
@@ -65,14 +66,14 @@ def strip_bending_mm_per_N(span_mm, patch_mm, EI_Nmm2, support: str):
     return _value(np.where(narrow, point, strip))
 
 
-def strip_shear_mm_per_N(span_mm, patch_mm, kGA_N):
+def strip_shear_mm_per_N(span_mm, patch_mm, kGA_N) -> float | np.ndarray:
     """Centre deflection per newton from shear (Timoshenko), any symmetric supports: the shear
     force is F/2 up to the strip and falls linearly to 0 across it, so delta = F (L - c/2)/(4 kGA)."""
     c = np.clip(patch_mm, 0.0, span_mm)
     return _value((span_mm - 0.5 * c) / (4.0 * kGA_N))
 
 
-def two_load_mm_per_N(span_mm, offset_mm, EI_Nmm2, kGA_N, support: str):
+def two_load_mm_per_N(span_mm, offset_mm, EI_Nmm2, kGA_N, support: str) -> float | np.ndarray:
     """Deflection per newton (total force F, F/2 at each load) under two symmetric line loads
     ``offset_mm`` inside each support of a beam of ``span_mm`` (a plate loaded by the walls above
     it, held by the walls below); numbers or arrays. Bending under each load: P e^2 (3L - 4e)/(6 EI)
@@ -265,7 +266,10 @@ def members(
     scene = member_scene(geometry, material, patch_mm, support, insert)
     cells = geometry.layers
     cap, plates, cover = member_compliances(
-        scene, np.array([c.theta_rad for c in cells]), np.array([c.t_mm for c in cells]), np.array([c.h_mm for c in cells])
+        scene,
+        np.array([c.theta_rad for c in cells]),
+        np.array([c.t_mm for c in cells]),
+        np.array([c.h_mm for c in cells]),
     )
     return Members(float(cap), tuple(float(p) for p in plates), float(cover), patch_mm, support)
 
@@ -277,7 +281,7 @@ class CappedLayer:
     on top of the layer's own compression, until the cavity closes there (``lock_force_N``,
     below the layer's own R); past it both are locked. C = 0 is the layer itself."""
 
-    law: object
+    law: Any  # a layer law of any rung (k_N_per_mm, d_lock_mm, lock_force_N, knots_N, displacement_mm ...)
     cap_mm_per_N: float
 
     @property
@@ -287,7 +291,7 @@ class CappedLayer:
         R = float(law.lock_force_N)
         if C <= 0.0:
             return R
-        knots = np.array([0.0] + [f for f in law.knots_N if f < R] + [R])
+        knots = np.array([0.0, *(f for f in law.knots_N if f < R), R], dtype=float)
         reach = law.displacement_mm(knots) + C * knots
         return float(np.interp(law.d_lock_mm, reach, knots))
 
@@ -309,7 +313,7 @@ class CappedLayer:
         return tuple(f for f in self.law.knots_N if f < R) + (R,)
 
     @property
-    def min_stretch_at_lock(self):  # the wall's squeeze at its own lock, when the cap lets it get there
+    def min_stretch_at_lock(self) -> float | None:  # the wall's squeeze at its own lock, when the cap lets it get there
         return getattr(self.law, "min_stretch_at_lock", None) if self.cap_mm_per_N <= 0.0 else None
 
     def displacement_mm(self, force_N) -> np.ndarray:

@@ -76,7 +76,9 @@ def regime_kernel(
     return R_sorted, S, gap, B
 
 
-def capped_lock_forces_N(k: ArrayLike, d_lock_mm: ArrayLike, R: np.ndarray, cap_mm_per_N: ArrayLike | None) -> np.ndarray:
+def capped_lock_forces_N(
+    k: ArrayLike, d_lock_mm: ArrayLike, R: np.ndarray, cap_mm_per_N: ArrayLike | None
+) -> np.ndarray:
     """Every layer's lock force (..., n), the top one's where the cap closes its cavity
     (:func:`~mst_cli.model.stack.capped_lock_force_N`); ``cap_mm_per_N`` None: R itself."""
     if cap_mm_per_N is None:

@@ -24,7 +24,9 @@ if TYPE_CHECKING:
     from numpy.typing import ArrayLike
 
 
-def capped_lock_force_N(k_N_per_mm: ArrayLike, d_lock_mm: ArrayLike, lock_force_N: ArrayLike, cap_mm_per_N: ArrayLike):
+def capped_lock_force_N(
+    k_N_per_mm: ArrayLike, d_lock_mm: ArrayLike, lock_force_N: ArrayLike, cap_mm_per_N: ArrayLike
+) -> np.ndarray:
     """Where the top layer's cavity closes at its centre when the cap bonded to its top pad also
     bends into it by cap_mm_per_N x F: the force F' at which d(F') + C F' = d_lock, for L0 laws
     (slope k to the knee KNEE_FRACTION x R, straight on to (d_lock, R)), vectorised. Past F'

@@ -101,7 +101,10 @@ class Document:
             )
         if name == "model":
             return ModelSection(
-                mechanics=self.mechanics, field=self.field_model, load_path=self.load_path, accuracy_rel=self.accuracy_rel
+                mechanics=self.mechanics,
+                field=self.field_model,
+                load_path=self.load_path,
+                accuracy_rel=self.accuracy_rel,
             )
         if name == "design":
             return DesignOptions(**self.design)

@@ -209,12 +209,15 @@ def response_csv(resp: Response) -> str:
     data = np.column_stack(
         [resp.force_N, resp.displacement_mm, resp.gap_mm, resp.B_T * 1e3, resp.B_abs_T * 1e3, resp.dB_rel]
     )
+    assert resp.displacement_layers_mm is not None and resp.dB_rel_layers is not None  # simulate fills both
     layers = np.column_stack([resp.displacement_layers_mm, resp.dB_rel_layers])
     # what the chip would output along z at the chosen GAIN_SEL/RES (empty when saturated)
     setting = resp.chip_setting
     codes = quantise_lsb(resp.B_T[:, 2], setting.z_uT_per_lsb) if setting is not None else [""] * len(data)
     for row, ok, code, alone in zip(data, resp.in_range, codes, layers):
-        buf.write(",".join(f"{v:.9g}" for v in row) + f",{int(ok)},{code}," + ",".join(f"{v:.9g}" for v in alone) + "\n")
+        buf.write(
+            ",".join(f"{v:.9g}" for v in row) + f",{int(ok)},{code}," + ",".join(f"{v:.9g}" for v in alone) + "\n"
+        )
     return buf.getvalue()
 
 
