@@ -157,32 +157,21 @@ def simulate(
     patch_mm: float = FINGERTIP_PATCH_MM,
     parts: Members | None = None,
 ) -> Response:
-    """Curves and per-regime figures of one design: by default of the whole part, the cap's,
-    the plates' and the cover's compliance (:func:`mst_cli.model.load_path.members`, a centred
-    press ``patch_mm`` wide) in series with the layers, docs/design.md 4.6. The layers' own
-    curve (rigid members, the ladder's verified rungs) rides along as ``displacement_layers_mm``,
-    ``dB_rel_layers`` and each regime's ``sensitivity_layers_secant_per_N``; ``whole_part=False``
-    makes it the response itself; ``parts`` gives the members instead (an insert's, another press).
-
-    The force axis runs from 0 to (1 + overload) x the last lock force; points past the last
-    lock are flagged ``in_range = False`` (the sensor's range has ended there, the model only
-    shows the stiff locked branch). ``mechanics`` names the rung of the layers' laws,
-    ``field_model`` the magnet's [default: chosen from the chip offset and tilt], and
-    ``noise_uT_rms`` the chip's field noise (uT) that sets the force resolution.
+    """Curves and per-regime figures of one design, by default of the whole part: the cap, plates
+    and cover (``parts`` [default: :func:`~mst_cli.model.load_path.members` under a centred press
+    ``patch_mm`` wide]) in series with the layers of rung ``mechanics`` (docs/design.md 4.6); the
+    layers' own curve rides along (``*_layers*``), ``whole_part=False`` makes it the response.
+    Forces run to (1 + overload) x the last lock, ``in_range`` False past it; ``field_model``
+    [default: from the chip offset and tilt]; ``noise_uT_rms`` sets the force resolution.
     """
     model = fld.choose_field_model(geometry.chip_offset_mm, geometry.magnet_tilt_deg, field_model)
     laws = layer_laws(geometry.layers, material, mechanics)
-    if parts is None:
-        parts = members(geometry, material, patch_mm) if whole_part else Members.rigid(patch_mm, len(laws) - 1)
+    parts = parts or (members(geometry, material, patch_mm) if whole_part else Members.rigid(patch_mm, len(laws) - 1))
     layer_stack, stack = Stack(laws), part_stack(laws, parts)
     edges = stack.regime_bounds_N
     F = _force_grid(edges, points_per_regime, overload)
     F_last = edges[-1]
-    d = stack.displacement_mm(F)
-    gap0 = geometry.gap0_mm
-    gap = gap0 - d
-    Bvec = fld.field_at_chip_T(gap, geometry.magnet, model, geometry.chip_offset_mm, geometry.magnet_tilt_deg)
-    Babs = np.linalg.norm(Bvec, axis=-1)
+    gap0, (d, gap, Bvec, Babs) = geometry.gap0_mm, _curve(stack, F, geometry, model)
     B0 = float(Babs[0])
     field_T = partial(field_magnitude_T, geometry=geometry, model=model)  # |B| (T) of gaps (mm)
     slope, band = _local_slope(stack, F, gap, field_T, B0)
@@ -190,10 +179,7 @@ def simulate(
     S, degenerate, B_edges = _secant_sensitivities(stack, gap_edges, field_T, B0)
     B_full = float(B_edges[-1])
     layers_only = _layers_only(layer_stack, F, gap0, field_T, B0)
-    Bmax_vec = np.abs(Bvec[F <= F_last + 1e-12]).max(axis=0)
-    setting = mlx.choose_setting(max(Bmax_vec[0], Bmax_vec[1]), Bmax_vec[2])
-    saturated = setting is None or B_full >= mlx.SATURATION_T
-    res_T = mlx.field_resolution_T(setting, noise_uT_rms) if setting else float("nan")
+    setting, saturated, res_T = _chip(Bvec[F <= F_last + 1e-12], B_full, noise_uT_rms)
     return Response(
         mechanics=mechanics,
         field_model=model,
@@ -219,6 +205,22 @@ def simulate(
         displacement_layers_mm=layers_only[0],
         dB_rel_layers=layers_only[1],
     )
+
+
+def _curve(stack: Stack, F: np.ndarray, geometry: SensorGeometry, model: str) -> tuple:
+    """(drop mm, gap mm, B vector (m, 3) T, |B| T) at the forces ``F``."""
+    d = stack.displacement_mm(F)
+    gap = geometry.gap0_mm - d
+    Bvec = fld.field_at_chip_T(gap, geometry.magnet, model, geometry.chip_offset_mm, geometry.magnet_tilt_deg)
+    return d, gap, Bvec, np.linalg.norm(Bvec, axis=-1)
+
+
+def _chip(B_in_range_T: np.ndarray, B_full_T: float, noise_uT_rms: float) -> tuple:
+    """(the MLX90393 setting for the in-range fields (m, 3) in T, saturated?, field resolution T)."""
+    Bmax_vec = np.abs(B_in_range_T).max(axis=0)
+    setting = mlx.choose_setting(max(Bmax_vec[0], Bmax_vec[1]), Bmax_vec[2])
+    saturated = setting is None or B_full_T >= mlx.SATURATION_T
+    return setting, saturated, mlx.field_resolution_T(setting, noise_uT_rms) if setting else float("nan")
 
 
 def part_stack(laws: tuple, parts: Members) -> Stack:
