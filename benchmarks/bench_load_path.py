@@ -22,6 +22,7 @@ from mst_cli.model import load_path as lp
 from mst_cli.model.assembly import InsertPlate
 from mst_cli.model.components import INSERT_MATERIALS
 from mst_cli.model.mechanics import layer_laws
+from mst_cli.model.response import simulate
 from mst_cli.model.stack import Stack
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -37,6 +38,15 @@ def row(label, g, material, stack) -> str:
         shares = lp.motion_shares(stack, lp.members(g, material, support=support))
         cells.append(" / ".join(f"{100 * r['outside_layers']:.0f}" for r in shares))
     return " | ".join(cells) + f" | {g.total_height_mm:.1f} |"
+
+
+def prediction(label, g, material, insert=None) -> str:
+    """One row of the whole part's L0 prediction: lock forces (the layer that locks) and the
+    field change per newton at the chip per regime (secant, uT/N)."""
+    part = simulate(g, material, parts=lp.members(g, material, insert=insert))
+    locks = " / ".join(f"{r.force_to_N:.1f} ({r.layer})" for r in part.regimes)
+    uT = " / ".join(f"{r.sensitivity_secant_per_N * part.B0_T * 1e6:.0f}" for r in part.regimes)
+    return f"| {label} | {locks} | {uT} |"
 
 
 def main() -> None:
@@ -59,6 +69,21 @@ def main() -> None:
     for material, t in INSERTS:
         gi = replace(g, insert_plate=InsertPlate(material, t))
         print(row(f"{INSERT_MATERIALS[material].name} {t:g} mm over the magnet", gi, m, stack))
+    layers = simulate(g, m, whole_part=False)
+    print(f"\n{doc.name}: the prediction of `mst simulate` (rung L0, a centred {lp.FINGERTIP_PATCH_MM:g} mm press)")
+    print("| model | lock forces N (layer) | field change per newton uT/N, per regime |\n|---|---|---|")
+    print(
+        "| layers alone (rigid members) | "
+        + " / ".join(f"{r.force_to_N:.1f} ({r.layer})" for r in layers.regimes)
+        + " | "
+        + " / ".join(f"{r.sensitivity_secant_per_N * layers.B0_T * 1e6:.0f}" for r in layers.regimes)
+        + " |"
+    )
+    print(prediction(f"whole part, as designed (insert: {said})", g, m))
+    print(prediction(f"whole part, no insert (cap top {g.housing.cap_top_mm:g} mm)", bare, m))
+    for material, t in INSERTS[1::2]:
+        gi = replace(g, insert_plate=InsertPlate(material, t))
+        print(prediction(f"whole part, {INSERT_MATERIALS[material].name} {t:g} mm", gi, m))
 
 
 if __name__ == "__main__":

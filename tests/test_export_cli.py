@@ -42,9 +42,11 @@ def test_every_design_in_configs_exports_and_checks(design, tmp_path):
     assert r.exit_code == 0, r.output + r.stderr
     assert {p.name for p in out.iterdir()} == {"sensor.stl", "insert.stl", "sensor.step", "export.json"}
     c = run(["check", out, "--json"])
-    assert c.exit_code == 0, c.output
     summary = json.loads(c.stdout)
-    assert summary["passed"] and summary["failed"] == []
+    # every check passes but the load path: the part as exported has a TPU cap over a 25 mm span
+    # and no stiff insert yet, which leaves 39 % of regime 1's compliance uncertain against a 5 %
+    # budget (docs/design.md 4.6); with a stiff insert over the magnet this list is empty
+    assert c.exit_code == 1 and summary["failed"] == ["load_path"], c.output
 
 
 def test_export_writes_files_progress_and_pause_height(reference_export):
@@ -73,7 +75,9 @@ def test_export_writes_files_progress_and_pause_height(reference_export):
 
 def test_check_table_and_exit_zero(reference_export):
     out, _ = reference_export
-    r = run(["check", out / "sensor.stl"])
+    # --load-path-max 1: the load path reported, not judged (its default bound fails the part as
+    # exported, whose TPU cap has no stiff insert yet: docs/design.md 4.6); the mesh checks here
+    r = run(["check", out / "sensor.stl", "--load-path-max", "1"])
     assert r.exit_code == 0, r.output
     for name in ("watertight", "manifold3d", "one_body", "magnet_chip_gap", "overhang"):
         assert name in r.stdout
@@ -92,7 +96,7 @@ def test_check_names_the_failed_check(reference_export, tmp_path):
     manifest = json.loads((out / "export.json").read_text())
     manifest["body"]["volume_mm3"] *= 1.01
     (bad / "export.json").write_text(json.dumps(manifest))
-    r = run(["check", bad, "--json"])
+    r = run(["check", bad, "--json", "--load-path-max", "1"])  # the mesh checks (see above)
     assert r.exit_code == 1 and json.loads(r.stdout)["failed"] == ["volume"]
 
 
@@ -133,8 +137,10 @@ def test_default_out_dir_and_default_formats(tmp_path, monkeypatch):
 
 # --------------------------------------------------------------------------- bad input: exit 2
 def test_a_spec_is_designed_first_and_its_design_written(tmp_path):
-    out = tmp_path / "o"
-    r = run(["export", SPEC, "--out", out])
+    out, spec = tmp_path / "o", tmp_path / "layers.yaml"
+    # the paper's targets: the layers alone reach them, the part as exported does not (design.md 4.6)
+    spec.write_text(SPEC.read_text() + "model:\n  load_path: layers\n")
+    r = run(["export", spec, "--out", out])
     assert r.exit_code == 0, r.output + r.stderr
     assert "is a spec: designing" in r.stderr
     assert {p.name for p in out.iterdir()} == {"sensor.stl", "insert.stl", "sensor.step", "design.yaml", "export.json"}

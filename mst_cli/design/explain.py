@@ -169,13 +169,78 @@ def diagnose(
     one per layer, come from the forward model on it; ``checks`` maps a failed constraint name
     to its message (from the verification).
     """
-    reasons = _beyond_limits(problem) + _rising_sensitivities(problem, achieved_S)
-    reasons += _worst_miss(problem, u, achieved_S, achieved_R)
+    reasons = _members_dominate(problem, u) + _beyond_limits(problem) + _rising_sensitivities(problem, achieved_S)
+    reasons += [
+        (name, reason + _members_share(problem, u, achieved_S))
+        for name, reason in _worst_miss(problem, u, achieved_S, achieved_R)
+    ]
     for name, message in checks.items():
         reasons.append((name, message))
     if not reasons:  # nothing failed: the caller should not have asked
         return "", []
     return reasons[0][0], [r for _, r in reasons]
+
+
+def _members_dominate(problem: DesignProblem, u: ArrayLike) -> list[tuple[str, str]]:
+    """(name, reason) when the members outside the layers make a target unreachable at the nearest
+    design, which no layer can help (docs/design.md 4.6): the cap closes the top layer's cavity by
+    its own bending before the target R_n (below d_lock / C_cap), or the members alone give a
+    regime more field change per newton than its target (the cap until that closure, the plates
+    and cover always; the tangent at the unloaded gap, below the secant as the gap closes)."""
+    if not problem.whole_part:
+        return []
+    theta, t, h = problem.to_physical(u)
+    _, d_lock, _, _ = problem.layer_laws(theta, t, h)
+    cap, rest = (float(c) for c in problem.members_mm_per_N(theta, t, h))
+    tol, n = problem.tolerance_rel, problem.n
+    if cap > 0 and problem.R_target[-1] * (1 - tol) > d_lock[-1] / cap:
+        return [
+            (
+                "the cap dominates",
+                f"the cap is too soft: it bends {cap:.3g} mm/N into layer {n}'s cavity and closes it by itself "
+                f"at {d_lock[-1] / cap:.3g} N, below the target R_{n} = {problem.R_target[-1]:g} N; a stiffer cap "
+                "(an insert) is needed (docs/design.md 4.6)",
+            )
+        ]
+    gap0 = float(problem.gap0_mm(float(np.sum(h))))
+    B = problem.field_T(np.array([gap0 - 1e-4, gap0, gap0 + 1e-4]))
+    per_mm = float((B[0] - B[2]) / (2e-4 * B[1]))  # (d|B|/dgap)/B0, 1/mm
+    floor = per_mm * np.array([cap + rest] + [rest] * (n - 1))  # S (1/N) of the members alone
+    over = np.flatnonzero(floor > problem.S_target * (1 + tol))
+    if not len(over):
+        return []
+    i = int(over[-1])
+    name = "cap" if i == 0 and cap > rest else "plates and cover"
+    return [
+        (
+            f"the {name} dominate{'s' if name == 'cap' else ''}",
+            f"the {name} {'is' if name == 'cap' else 'are'} too soft: the members outside the layers alone give "
+            f"S >= {floor[i]:.3g} 1/N in regime {i + 1}, above its target {problem.S_target[i]:g} 1/N, which no "
+            "layer can lower; a stiffer cap (an insert), plates or a cover supported all round (docs/design.md 4.6)",
+        )
+    ]
+
+
+def _members_share(problem: DesignProblem, u: ArrayLike, achieved_S: ArrayLike) -> str:
+    """'' or, when the members outside the layers carry a third or more of some regime's motion at
+    the nearest design, that share and the member: what the layers have to work around."""
+    if not problem.whole_part:
+        return ""
+    theta, t, h = problem.to_physical(u)
+    cap, plates, cover = problem.member_parts(theta, t, h)
+    parts = {"cap": float(cap), "plates": float(np.sum(plates)), "housing's cover": float(cover)}
+    gap0 = float(problem.gap0_mm(float(np.sum(h))))
+    B = problem.field_T(np.array([gap0 - 1e-4, gap0, gap0 + 1e-4]))
+    per_mm = float((B[0] - B[2]) / (2e-4 * B[1]))  # (d|B|/dgap)/B0: S over the compliance, 1/mm
+    share = sum(parts.values()) * per_mm / np.maximum(np.asarray(achieved_S, float), 1e-300)
+    i = int(np.argmax(share))
+    if share[i] < 1.0 / 3.0:
+        return ""
+    name = max(parts, key=lambda k: parts[k])
+    return (
+        f"; the members outside the layers carry about {100 * min(share[i], 1.0):.0f} % of regime {i + 1}'s "
+        f"motion, most the {name} ({parts[name]:.3g} mm/N, docs/design.md 4.6)"
+    )
 
 
 def _beyond_limits(problem: DesignProblem) -> list[tuple[str, str]]:

@@ -66,11 +66,13 @@ import numpy as np
 from mst_cli.model import chip as mlx
 from mst_cli.model.assembly import unloaded_gap_mm
 from mst_cli.model.cell import CELL_RULES, LENGTH_FLOOR_MM, cell_margins_mm, wall_centreline_length_mm
+from mst_cli.model.load_path import member_compliances, member_scene
 from mst_cli.model.magnet_field import axial_Bz_T, choose_field_model
+from mst_cli.model.material import Material
 from mst_cli.model.mechanics import correction
 from mst_cli.model.mechanics.depth import web_modulus_MPa
 from mst_cli.model.mechanics.spring import spring_arrays
-from mst_cli.model.response import field_magnitude_T, regime_kernel
+from mst_cli.model.response import capped_lock_forces_N, field_magnitude_T, regime_kernel
 from mst_cli.sensor.sections import DEFAULT_OBJECTIVE, OBJECTIVE_TERMS
 
 if TYPE_CHECKING:
@@ -187,6 +189,11 @@ class DesignProblem:
         requested = None if doc.field_model == "auto" else doc.field_model
         self.field_model = choose_field_model(probe.chip_offset_mm, probe.magnet_tilt_deg, requested)
         self.height_offset_mm = probe.total_height_mm - sum(c.h_mm for c in probe_cells)
+        # the whole part: the cap, plates and cover in series with the layers, in the printed
+        # TPU, under a fingertip's press (docs/design.md 4.6); the cells come per candidate
+        self.whole_part = doc.whole_part  # model.load_path: part (else the layers alone)
+        printed_tpu = Material(doc.material.name, self.E_MPa, self.nu)
+        self.members = member_scene(probe, printed_tpu)
         self.B_limit_T = min(1.0 - self.saturation_margin_rel, 1.0 / CHIP_HEADROOM) * mlx.SATURATION_T
         # L0's fitted corrections hold for walls up to this t/L; stubbier walls are extrapolation
         # (the design loop otherwise drifts there: it is where k and R grow fastest)
@@ -323,16 +330,32 @@ class DesignProblem:
         self, theta_deg: np.ndarray, t_mm: np.ndarray, h_mm: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """(R_N per layer, S_per_N per regime, B_full_T, gap0_mm, B0_T) of candidate stacks."""
-        return self._responses_of(self.layer_laws(theta_deg, t_mm, h_mm), h_mm)
+        members = self.members_mm_per_N(theta_deg, t_mm, h_mm) if self.whole_part else None
+        return self._responses_of(self.layer_laws(theta_deg, t_mm, h_mm), h_mm, members)
+
+    def member_parts(self, theta_deg: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike) -> tuple:
+        """(cap (...), plates (..., n - 1), cover (...)) compliance in mm/N of candidate stacks,
+        walls as printed (t + printer.wall_offset_mm), as :meth:`layer_laws` sees them."""
+        t = np.asarray(t_mm, dtype=float)
+        if self.wall_offset_mm:
+            t = np.maximum(t + self.wall_offset_mm, LENGTH_FLOOR_MM)
+        return member_compliances(self.members, np.radians(theta_deg), t, h_mm)
+
+    def members_mm_per_N(self, theta_deg: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike) -> tuple:
+        """(the cap's, the plates' and cover's in series) compliance (...) of candidate stacks."""
+        cap, plates, cover = self.member_parts(theta_deg, t_mm, h_mm)
+        return cap, plates.sum(axis=-1) + cover
 
     def _responses_of(
-        self, laws: tuple, h_mm: np.ndarray
+        self, laws: tuple, h_mm: np.ndarray, members: tuple | None = None
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """:meth:`responses` of stacks whose layer laws are known."""
+        """:meth:`responses` of stacks whose layer laws (and members' (cap, rest) compliance) are
+        known: R is each layer's lock force, the top one's where the cap closes its cavity."""
         k, d_lock, R, k_locked = laws
+        cap, rest = (None, 0.0) if members is None else members
         gap0 = cast(np.ndarray, self.gap0_mm(h_mm.sum(axis=-1)))  # candidates' sums: an array
-        _, S, _, B = regime_kernel(k, d_lock, k_locked, gap0, self.field_T, R)
-        return R, S, B[..., -1], gap0, B[..., 0]
+        _, S, _, B = regime_kernel(k, d_lock, k_locked, gap0, self.field_T, R, rest, cap)
+        return capped_lock_forces_N(k, d_lock, R, cap), S, B[..., -1], gap0, B[..., 0]
 
     def evaluate_physical(self, theta_deg: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike) -> Evaluation:
         return self._evaluate_physical(theta_deg, t_mm, h_mm, False)[0]
@@ -353,7 +376,10 @@ class DesignProblem:
         if with_shifts:  # nominal, thicker, thinner walls (print_shift_log's steps)
             laws = self.shifted_layer_laws(theta_deg, t_mm, h_mm, self.wall_tolerance_mm)
             H = np.broadcast_to(h_mm, (3,) + h_mm.shape)
-            R3, S3, B_full3, gap03, B03 = self._responses_of(laws, H)
+            dt = self.wall_tolerance_mm  # the members see the shifted walls too
+            T3 = np.stack([t_mm, np.maximum(t_mm + dt, LENGTH_FLOOR_MM), np.maximum(t_mm - dt, LENGTH_FLOOR_MM)])
+            members = self.members_mm_per_N(theta_deg, T3, H) if self.whole_part else None
+            R3, S3, B_full3, gap03, B03 = self._responses_of(laws, H, members)
             R, S, B_full, gap0, B0 = R3[0], S3[0], B_full3[0], gap03[0], B03[0]
             base = np.log(np.maximum(np.concatenate([S, R], axis=-1), TINY))
             shifts = np.log(np.maximum(np.concatenate([S3[1:], R3[1:]], axis=-1), TINY)) - base[None]

@@ -136,6 +136,7 @@ class _PrintedRuns:
             mechanics=rung,
             field_model=self.field_model,
             noise_uT_rms=self.noise_uT_rms,
+            whole_part=self.designed.whole_part,
         )
 
 

@@ -29,8 +29,11 @@ the same for both. Pure numpy, no I/O.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
+
+from mst_cli.model.cell import pad_half_width_mm
 
 SHEAR_FACTOR = 5.0 / 6.0  # kappa of a rectangular section
 # a fingertip pressed on the face: a contact patch about 6 mm wide (the width the issue's
@@ -39,50 +42,57 @@ FINGERTIP_PATCH_MM = 6.0
 SUPPORTS = ("simple", "clamped")
 
 
-def strip_bending_mm_per_N(span_mm: float, patch_mm: float, EI_Nmm2: float, support: str) -> float:
+def _value(x) -> Any:
+    """A 0-d result as a numpy scalar (a float), an array as itself."""
+    return np.asarray(x)[()]
+
+
+def strip_bending_mm_per_N(span_mm, patch_mm, EI_Nmm2, support: str) -> float | np.ndarray:
     """Centre deflection per newton of a beam of ``span_mm`` under a centred uniform strip load
-    ``patch_mm`` wide (clipped to the span), bending only.
+    ``patch_mm`` wide (clipped to the span), bending only; numbers or arrays (broadcast).
 
     The influence of a point load at a <= L/2 on the mid-span deflection is a (3L^2 - 4a^2)/(48 EI)
     (simply supported) or a^2 (3L - 4a)/(48 EI) (clamped at both ends); integrated over the strip
     with q = F/c. The limit c -> 0 is F L^3/(48 EI) and F L^3/(192 EI)."""
-    L = span_mm
-    c = min(max(patch_mm, 0.0), L)
+    L = np.asarray(span_mm, dtype=float)
+    c = np.clip(patch_mm, 0.0, L)
     a0, a1 = 0.5 * (L - c), 0.5 * L
-    if c < 1e-9 * L:
-        return L**3 / ((48.0 if support == "simple" else 192.0) * EI_Nmm2)
     if support == "simple":
+        point = L**3 / (48.0 * EI_Nmm2)
         prim = lambda a: 1.5 * L**2 * a**2 - a**4  # noqa: E731  (the antiderivative of a (3L^2 - 4a^2))
     else:
+        point = L**3 / (192.0 * EI_Nmm2)
         prim = lambda a: L * a**3 - a**4  # noqa: E731  (of a^2 (3L - 4a))
-    return 2.0 * (prim(a1) - prim(a0)) / (c * 48.0 * EI_Nmm2)
+    narrow = c < 1e-9 * L
+    strip = 2.0 * (prim(a1) - prim(a0)) / (np.where(narrow, 1.0, c) * 48.0 * EI_Nmm2)
+    return _value(np.where(narrow, point, strip))
 
 
-def strip_shear_mm_per_N(span_mm: float, patch_mm: float, kGA_N: float) -> float:
+def strip_shear_mm_per_N(span_mm, patch_mm, kGA_N) -> float | np.ndarray:
     """Centre deflection per newton from shear (Timoshenko), any symmetric supports: the shear
     force is F/2 up to the strip and falls linearly to 0 across it, so delta = F (L - c/2)/(4 kGA)."""
-    c = min(max(patch_mm, 0.0), span_mm)
-    return (span_mm - 0.5 * c) / (4.0 * kGA_N)
+    c = np.clip(patch_mm, 0.0, span_mm)
+    return _value((span_mm - 0.5 * c) / (4.0 * kGA_N))
 
 
-def two_load_mm_per_N(span_mm: float, offset_mm: float, EI_Nmm2: float, kGA_N: float, support: str) -> float:
+def two_load_mm_per_N(span_mm, offset_mm, EI_Nmm2, kGA_N, support: str) -> float | np.ndarray:
     """Deflection per newton (total force F, F/2 at each load) under two symmetric line loads
     ``offset_mm`` inside each support of a beam of ``span_mm`` (a plate loaded by the walls above
-    it, held by the walls below). Bending under each load: P e^2 (3L - 4e)/(6 EI) simply supported
-    (four-point bending), less the end moments' lift when clamped (:func:`_clamped_two_load`);
-    shear P e/(kGA). A load outside the supports (e < 0) hangs on an overhang |e| long from a
-    support held level by symmetry: P |e|^3/(3 EI) + P |e|/(kGA)."""
-    P, e, L = 0.5, offset_mm, span_mm
-    if abs(e) < 1e-12:
-        return 0.0
-    if e < 0:  # outside the supports: each load on a cantilever of |e|, the span held level by symmetry
-        return P * abs(e) ** 3 / (3.0 * EI_Nmm2) + P * abs(e) / kGA_N
-    e = min(e, 0.5 * L)
-    bend = P * e**2 * (3 * L - 4 * e) / (6.0 * EI_Nmm2) if support == "simple" else _clamped_two_load(P, e, L, EI_Nmm2)
-    return bend + P * e / kGA_N
+    it, held by the walls below); numbers or arrays. Bending under each load: P e^2 (3L - 4e)/(6 EI)
+    simply supported (four-point bending), less the end moments' lift when clamped
+    (:func:`_clamped_two_load`); shear P e/(kGA). A load outside the supports (e < 0) hangs on an
+    overhang |e| long from a support held level by symmetry: P |e|^3/(3 EI) + P |e|/(kGA)."""
+    P, e, L = 0.5, np.asarray(offset_mm, dtype=float), np.asarray(span_mm, dtype=float)
+    overhang = P * np.abs(e) ** 3 / (3.0 * EI_Nmm2) + P * np.abs(e) / kGA_N
+    inside = np.clip(e, 0.0, 0.5 * L)
+    if support == "simple":
+        bend = P * inside**2 * (3 * L - 4 * inside) / (6.0 * EI_Nmm2)
+    else:
+        bend = _clamped_two_load(P, inside, L, EI_Nmm2)
+    return _value(np.where(e < 0, overhang, bend + P * inside / kGA_N))
 
 
-def _clamped_two_load(P: float, e: float, L: float, EI: float) -> float:
+def _clamped_two_load(P, e, L, EI):
     """Deflection under each of two symmetric loads P at e from the ends of a clamped-clamped beam:
     the simply supported one less the end moments' rotation, M = P e (L - e)/L each end, which
     lift the load point by M e (L - e)/(2 EI)."""
@@ -93,30 +103,34 @@ def _clamped_two_load(P: float, e: float, L: float, EI: float) -> float:
 
 def section_EI_kGA(
     depth_mm: float,
-    thickness_mm: float,
+    thickness_mm,
     E_prime_MPa: float,
     G_MPa: float,
     hole_width_mm: float = 0.0,
-    hole_z_mm: tuple[float, float] = (0.0, 0.0),
+    hole_z_mm: tuple = (0.0, 0.0),
     insert: Insert | None = None,
-) -> tuple[float, float]:
+    insert_z_mm=None,
+) -> tuple:
     """(E'I in N mm^2, kappa G A in N) of a rectangle ``depth_mm`` x ``thickness_mm`` less a hole
     ``hole_width_mm`` wide (along the depth) between heights ``hole_z_mm`` above its bottom, and
-    with an optional bonded ``insert`` (:class:`Insert`, at its ``z_mm`` above the bottom, over
-    the whole depth, replacing the TPU there): the transformed section about its own neutral axis."""
+    with an optional bonded ``insert`` (:class:`Insert`, its underside at ``insert_z_mm`` [default:
+    its own ``z_mm``] above the bottom, over the whole depth, replacing the TPU there): the
+    transformed section about its own neutral axis. Thicknesses and heights may be arrays."""
     b, T = depth_mm, thickness_mm
     # strips (z0, z1, width x modulus), parallel axes about the modulus-weighted centroid
     strips = [(0.0, T, b * E_prime_MPa), (hole_z_mm[0], hole_z_mm[1], -hole_width_mm * E_prime_MPa)]
-    shear = SHEAR_FACTOR * G_MPa * (b * T - hole_width_mm * max(hole_z_mm[1] - hole_z_mm[0], 0.0))
+    hole_height = np.maximum(np.subtract(hole_z_mm[1], hole_z_mm[0]), 0.0)
+    shear = SHEAR_FACTOR * G_MPa * (b * np.asarray(T) - hole_width_mm * hole_height)
     if insert is not None:
-        z0, z1 = insert.z_mm, insert.z_mm + insert.thickness_mm
+        z0 = insert.z_mm if insert_z_mm is None else insert_z_mm
+        z1 = z0 + insert.thickness_mm
         bi = b if insert.depth_mm is None else min(insert.depth_mm, b)  # the plate's own depth
         strips.append((z0, z1, bi * (insert.modulus_MPa - E_prime_MPa)))
-        shear += SHEAR_FACTOR * bi * (z1 - z0) * (insert.shear_modulus_MPa - G_MPa)
+        shear = shear + SHEAR_FACTOR * bi * insert.thickness_mm * (insert.shear_modulus_MPa - G_MPa)
     EA = sum(w * (z1 - z0) for z0, z1, w in strips)
     zc = sum(w * (z1 - z0) * 0.5 * (z0 + z1) for z0, z1, w in strips) / EA
     EI = sum(w * ((z1 - z0) ** 3 / 12.0 + (z1 - z0) * (0.5 * (z0 + z1) - zc) ** 2) for z0, z1, w in strips)
-    return EI, shear
+    return _value(EI), _value(shear)
 
 
 @dataclass(frozen=True)
@@ -161,39 +175,155 @@ class Members:
         return cls(0.0, (0.0,) * n_plates, 0.0, patch_mm, "rigid")
 
 
+@dataclass(frozen=True)
+class MemberScene:
+    """Everything the members' compliance depends on besides the cells: the part's fixed
+    dimensions (mm), the TPU's plane-strain bending modulus and shear modulus (MPa), the
+    insert, the press and the supports. One per design problem: the design loop evaluates
+    thousands of candidate stacks against it in one numpy call (:func:`member_compliances`)."""
+
+    depth_mm: float
+    width_mm: float
+    cap_above_stack_mm: float  # the cap over the top layer's top pad: pocket floor, pocket, cap top
+    pocket_floor_mm: float  # the pocket's floor above the top pad
+    pocket_width_mm: float  # 2 x the pocket's radius
+    pocket_depth_mm: float
+    plate_mm: float
+    cover_mm: float
+    half_slot_mm: float  # the board slot's half width: the cover's span over it
+    E_prime_MPa: float
+    G_MPa: float
+    insert: Insert | None = None
+    insert_above_pad_mm: float = 0.0  # the insert's underside above the top pad's top face
+    patch_mm: float = FINGERTIP_PATCH_MM
+    support: str = "simple"
+
+
+def member_scene(
+    geometry, material, patch_mm: float = FINGERTIP_PATCH_MM, support: str = "simple", insert: Insert | None = None
+) -> MemberScene:
+    """The :class:`MemberScene` of ``geometry`` (a SensorGeometry) in ``material``; ``insert``
+    [default: the geometry's own, when it declares one]."""
+    if support not in SUPPORTS:
+        raise ValueError(f"support must be one of {SUPPORTS}")
+    insert = getattr(geometry, "insert", None) if insert is None else insert
+    top = geometry.layers[-1]
+    x0, x1 = geometry.board_slots[0].x_mm
+    return MemberScene(
+        depth_mm=geometry.depth_mm,
+        width_mm=top.width_mm,
+        cap_above_stack_mm=geometry.total_height_mm - geometry.z_stack_top_mm,
+        pocket_floor_mm=geometry.housing.pocket_floor_mm,
+        pocket_width_mm=2.0 * geometry.pocket_radius_mm,
+        pocket_depth_mm=geometry.pocket_depth_mm,
+        plate_mm=geometry.housing.plate_mm,
+        cover_mm=geometry.housing.cover_mm,
+        half_slot_mm=0.5 * (x1 - x0),
+        E_prime_MPa=material.youngs_modulus_MPa / (1.0 - material.poisson_ratio**2),
+        G_MPa=material.shear_modulus_MPa,
+        insert=insert,
+        insert_above_pad_mm=0.0 if insert is None else insert.z_mm - top.t_mm,
+        patch_mm=patch_mm,
+        support=support,
+    )
+
+
+def member_compliances(scene: MemberScene, theta_rad, t_mm, h_mm) -> tuple:
+    """(cap (...), plates (..., n - 1), cover (...)) in mm/N of stacks of cells given as arrays
+    (..., n) of theta (rad), t and h (mm), bottom to top (module docstring); the kernel both
+    :func:`members` and the design loop use."""
+    s = scene
+    theta, t = np.asarray(theta_rad, dtype=float), np.asarray(t_mm, dtype=float)
+    # the wall heads: the mid-point of each pad's outer and inner corners (wall_head_x_mm)
+    head = pad_half_width_mm(theta, h_mm, s.width_mm) - 0.5 * t * np.tan(0.5 * theta)
+    E, G, D = s.E_prime_MPa, s.G_MPa, s.depth_mm
+    t_top = t[..., -1]
+    z_pocket = t_top + s.pocket_floor_mm
+    EI, kGA = section_EI_kGA(
+        D, t_top + s.cap_above_stack_mm, E, G, s.pocket_width_mm, (z_pocket, z_pocket + s.pocket_depth_mm),
+        s.insert, t_top + s.insert_above_pad_mm,
+    )  # fmt: skip
+    span = 2.0 * head[..., -1]
+    cap = strip_bending_mm_per_N(span, s.patch_mm, EI, s.support) + strip_shear_mm_per_N(span, s.patch_mm, kGA)
+    EI_p, kGA_p = section_EI_kGA(D, t[..., :-1] + s.plate_mm + t[..., 1:], E, G)
+    below, above = head[..., :-1], head[..., 1:]
+    plates = two_load_mm_per_N(2.0 * below, below - above, EI_p, kGA_p, s.support)
+    EI_c, kGA_c = section_EI_kGA(D, s.cover_mm + t[..., 0], E, G)
+    # walls over the slot's solid side walls bear on them: no overhang (unlike a plate's edge)
+    on_slot = np.maximum(s.half_slot_mm - head[..., 0], 0.0)
+    cover = two_load_mm_per_N(2.0 * s.half_slot_mm, on_slot, EI_c, kGA_c, s.support)
+    return cap, np.asarray(plates), cover
+
+
+def members_total_mm_per_N(scene: MemberScene, theta_rad, t_mm, h_mm) -> np.ndarray:
+    """The cap's, the plates' and the cover's compliance in series (...), mm/N."""
+    cap, plates, cover = member_compliances(scene, theta_rad, t_mm, h_mm)
+    return cap + plates.sum(axis=-1) + cover
+
+
 def members(
     geometry, material, patch_mm: float = FINGERTIP_PATCH_MM, support: str = "simple", insert: Insert | None = None
 ) -> Members:
     """The cap's, the plates' and the cover's compliance of ``geometry`` (a SensorGeometry) in
     ``material`` under a centred press ``patch_mm`` wide (module docstring); ``insert``, a stiff
-    plate in the cap (its own modulus, in plane strain as given), by default the geometry's own."""
-    insert = getattr(geometry, "insert", None) if insert is None else insert
-    if support not in SUPPORTS:
-        raise ValueError(f"support must be one of {SUPPORTS}")
-    E = material.youngs_modulus_MPa / (1.0 - material.poisson_ratio**2)
-    G, D = material.shear_modulus_MPa, geometry.depth_mm
-    top = geometry.layers[-1]
-    # the cap: top pad + everything above the stack, less the pocket (its heights above the pad's underside)
-    T = top.t_mm + geometry.total_height_mm - geometry.z_stack_top_mm
-    z_pocket = top.t_mm + geometry.housing.pocket_floor_mm
-    EI, kGA = section_EI_kGA(
-        D, T, E, G, 2.0 * geometry.pocket_radius_mm, (z_pocket, z_pocket + geometry.pocket_depth_mm), insert
+    plate in the cap (its own modulus, in plane strain as given)."""
+    scene = member_scene(geometry, material, patch_mm, support, insert)
+    cells = geometry.layers
+    cap, plates, cover = member_compliances(
+        scene,
+        np.array([c.theta_rad for c in cells]),
+        np.array([c.t_mm for c in cells]),
+        np.array([c.h_mm for c in cells]),
     )
-    span = 2.0 * wall_head_x_mm(top)
-    cap = strip_bending_mm_per_N(span, patch_mm, EI, support) + strip_shear_mm_per_N(span, patch_mm, kGA)
-    plates = []
-    for below, above in zip(geometry.layers[:-1], geometry.layers[1:]):
-        EI_p, kGA_p = section_EI_kGA(D, below.t_mm + geometry.housing.plate_mm + above.t_mm, E, G)
-        s, a = wall_head_x_mm(below), wall_head_x_mm(above)
-        plates.append(two_load_mm_per_N(2.0 * s, s - a, EI_p, kGA_p, support))
-    first = geometry.layers[0]
-    EI_c, kGA_c = section_EI_kGA(D, geometry.housing.cover_mm + first.t_mm, E, G)
-    x0, x1 = geometry.board_slots[0].x_mm
-    half_slot = 0.5 * (x1 - x0)  # the slot's half width: the cover's span over it
-    inside = half_slot - wall_head_x_mm(first)  # how far inside the slot's edge layer 1's walls land
-    # walls past the slot's edge stand on the base's solid side walls: the cover does not bend
-    cover = two_load_mm_per_N(2.0 * half_slot, inside, EI_c, kGA_c, support) if inside > 0.0 else 0.0
-    return Members(cap, tuple(plates), cover, patch_mm, support)
+    return Members(float(cap), tuple(float(p) for p in plates), float(cover), patch_mm, support)
+
+
+@dataclass(frozen=True)
+class CappedLayer:
+    """The top layer with the cap bonded to its top pad (a layer law, the protocol of
+    :mod:`mst_cli.model.mechanics`): the cap bends into the layer's cavity, C x F at its centre,
+    on top of the layer's own compression, until the cavity closes there (``lock_force_N``,
+    below the layer's own R); past it both are locked. C = 0 is the layer itself."""
+
+    law: Any  # a layer law of any rung (k_N_per_mm, d_lock_mm, lock_force_N, knots_N, displacement_mm ...)
+    cap_mm_per_N: float
+
+    @property
+    def lock_force_N(self) -> float:
+        """Where law.d(F) + C F reaches d_lock: exact on the law's piecewise-linear knots."""
+        law, C = self.law, self.cap_mm_per_N
+        R = float(law.lock_force_N)
+        if C <= 0.0:
+            return R
+        knots = np.array([0.0, *(f for f in law.knots_N if f < R), R], dtype=float)
+        reach = law.displacement_mm(knots) + C * knots
+        return float(np.interp(law.d_lock_mm, reach, knots))
+
+    @property
+    def k_N_per_mm(self) -> float:  # the layer and the cap in series, at small load
+        return 1.0 / (1.0 / self.law.k_N_per_mm + self.cap_mm_per_N)
+
+    @property
+    def d_lock_mm(self) -> float:
+        return self.law.d_lock_mm
+
+    @property
+    def k_locked_N_per_mm(self) -> float:
+        return self.law.k_locked_N_per_mm
+
+    @property
+    def knots_N(self) -> tuple[float, ...]:
+        R = self.lock_force_N
+        return tuple(f for f in self.law.knots_N if f < R) + (R,)
+
+    @property
+    def min_stretch_at_lock(self) -> float | None:  # the wall's squeeze at its own lock, when the cap lets it get there
+        return getattr(self.law, "min_stretch_at_lock", None) if self.cap_mm_per_N <= 0.0 else None
+
+    def displacement_mm(self, force_N) -> np.ndarray:
+        F, R = np.asarray(force_N, dtype=float), self.lock_force_N
+        closed = self.d_lock_mm + (F - R) / self.k_locked_N_per_mm
+        return np.where(F <= R, self.law.displacement_mm(F) + self.cap_mm_per_N * F, closed)
 
 
 def layer_compliances_mm_per_N(stack) -> np.ndarray:
@@ -257,11 +387,44 @@ def load_path_report(geometry, material, stack, patch_mm: float = FINGERTIP_PATC
         "plates_mm_per_N": list(simple.plates_mm_per_N),
         "housing_mm_per_N": simple.cover_mm_per_N,
         "cap_clamped_mm_per_N": clamped.cap_mm_per_N,
+        "members_simple_mm_per_N": _by_member(simple),
+        "members_clamped_mm_per_N": _by_member(clamped),
         "regimes": regimes,
         "outside_layers_max": max(r["outside_layers"] for r in regimes),
         "patch_dependence": patch_dependence(geometry, material, stack),
         "not_modelled": "the cover's bending along the depth over the cable windows (3D; walls on both sides)",
     }
+
+
+# the accuracy an independent model of the part asks of the field change per newton: before the
+# first lock, after one, after two or more (issue 44; that model's own uncertainty on a closed layer)
+ACCURACY_BUDGET_REL = (0.05, 0.08, 0.20)
+
+
+def support_uncertainty(report: dict) -> list[dict]:
+    """Per regime of :func:`load_path_report`: the share of the part's compliance the members'
+    closed form leaves uncertain, between its simply supported and clamped wall heads
+    ((C_simple - C_clamped) / the part's compliance), against the regime's accuracy budget
+    (:data:`ACCURACY_BUDGET_REL`), with the member whose supports matter most. The tolerance on
+    the share outside the layers that ``mst check`` applies by default."""
+    simple, clamped = report["members_simple_mm_per_N"], report["members_clamped_mm_per_N"]
+    spread = {k: simple[k] - clamped[k] for k in simple}
+    rows = []
+    for i, row in enumerate(report["regimes"]):
+        total = row["compliance_mm_per_N"]
+        rows.append(
+            {
+                "regime": row["regime"],
+                "uncertain_share": sum(spread.values()) / total,
+                "budget": ACCURACY_BUDGET_REL[min(i, len(ACCURACY_BUDGET_REL) - 1)],
+                "member": max(spread, key=lambda k: spread[k]),
+            }
+        )
+    return rows
+
+
+def _by_member(parts: Members) -> dict:
+    return {"cap": parts.cap_mm_per_N, "plates": sum(parts.plates_mm_per_N), "housing": parts.cover_mm_per_N}
 
 
 def dominant_member(row: dict) -> tuple[str, float]:

@@ -18,10 +18,27 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from mst_cli.model.mechanics.spring import layer_displacement_mm
+from mst_cli.model.mechanics.spring import KNEE_FRACTION, layer_displacement_mm
 
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
+
+
+def capped_lock_force_N(
+    k_N_per_mm: ArrayLike, d_lock_mm: ArrayLike, lock_force_N: ArrayLike, cap_mm_per_N: ArrayLike
+) -> np.ndarray:
+    """Where the top layer's cavity closes at its centre when the cap bonded to its top pad also
+    bends into it by cap_mm_per_N x F: the force F' at which d(F') + C F' = d_lock, for L0 laws
+    (slope k to the knee KNEE_FRACTION x R, straight on to (d_lock, R)), vectorised. Past F'
+    the cap rests on the cavity's floor and the layer is locked (docs/design.md 4.6); C = 0
+    gives R itself, to the bit."""
+    k, dl, R, C = (np.asarray(a, dtype=float) for a in (k_N_per_mm, d_lock_mm, lock_force_N, cap_mm_per_N))
+    F1 = KNEE_FRACTION * R
+    d1 = F1 / k
+    soft = (dl - d1) / np.maximum(R - F1, 1e-300)  # mm/N between the knee and the lock
+    g1 = d1 + C * F1
+    closes = np.where(dl <= g1, dl / (1.0 / k + C), F1 + (dl - g1) / (soft + C))
+    return np.where(C > 0, closes, R)
 
 
 def series_displacement_mm(
@@ -30,8 +47,13 @@ def series_displacement_mm(
     d_lock_mm: ArrayLike,
     k_locked_N_per_mm: ArrayLike,
     lock_force_N: ArrayLike | None = None,
+    members_mm_per_N: ArrayLike = 0.0,
+    cap_mm_per_N: ArrayLike | None = None,
 ) -> np.ndarray:
-    """Stack compression of L0 layers in series, vectorised over designs.
+    """Stack compression of L0 layers in series, vectorised over designs, with the members that
+    are not layers (``members_mm_per_N``, shape (...), a linear spring) in series too, and the
+    cap (``cap_mm_per_N``, shape (...)) bending into the top layer's cavity until it closes
+    there (:func:`capped_lock_force_N`).
 
     ``k``, ``d_lock``, ``k_locked`` and ``lock_force_N`` (None: R = k d_lock, bilinear) have
     shape (..., n_layers); ``force_N`` has shape (..., m) (broadcast against the leading axes).
@@ -44,7 +66,15 @@ def series_displacement_mm(
     d_layer = layer_displacement_mm(
         F, k[..., None, :], dl[..., None, :], R[..., None, :], np.asarray(k_locked_N_per_mm, dtype=float)[..., None, :]
     )
-    return d_layer.sum(axis=-1)
+    d = d_layer.sum(axis=-1) + np.asarray(members_mm_per_N, dtype=float)[..., None] * F[..., 0]
+    if cap_mm_per_N is None:
+        return d
+    C = np.asarray(cap_mm_per_N, dtype=float)[..., None]
+    Rc = capped_lock_force_N(k[..., -1], dl[..., -1], R[..., -1], cap_mm_per_N)[..., None]
+    top, Ft = d_layer[..., -1], F[..., 0]
+    # before the contact: the top layer's own law and the cap's bending; after: locked
+    closed = dl[..., -1, None] + (Ft - Rc) / np.asarray(k_locked_N_per_mm, dtype=float)[..., -1, None]
+    return d - top + np.where(Ft <= Rc, top + C * Ft, closed)
 
 
 @dataclass(frozen=True)
@@ -52,10 +82,19 @@ class Stack:
     """A stack of layer laws (see :mod:`mst_cli.model.mechanics`), listed bottom to top.
 
     Every law is piecewise linear between its knots, so the sum d(F) is piecewise linear
-    between the union of all knots: interpolating on them is exact.
+    between the union of all knots: interpolating on them is exact. The members in series add
+    ``members_mm_per_N`` x F, linear too, so the interpolation stays exact. The lock forces
+    are the layers' own: the same force passes through every member.
     """
 
     layers: tuple
+    # the members that are not layers (cap, plates, cover: mst_cli.model.load_path), a linear
+    # spring in series with the layers; 0: the layers between rigid plates (L0/L1/L2 as verified)
+    members_mm_per_N: float = 0.0
+
+    def layers_only(self) -> Stack:
+        """The same layers between rigid plates (the ladder's own verification)."""
+        return Stack(self.layers)
 
     @property
     def lock_forces_N(self) -> np.ndarray:
@@ -98,12 +137,12 @@ class Stack:
     def _knot_displacement_mm(self) -> tuple[np.ndarray, np.ndarray]:
         """(knots, d at the knots), each layer's law summed there once."""
         knots = self.knots_N
-        return knots, sum(law.displacement_mm(knots) for law in self.layers)
+        return knots, sum(law.displacement_mm(knots) for law in self.layers) + self.members_mm_per_N * knots
 
     @property
     def locked_compliance_mm_per_N(self) -> float:
         """Past the last lock every layer is on its locked branch."""
-        return sum(1.0 / law.k_locked_N_per_mm for law in self.layers)
+        return sum(1.0 / law.k_locked_N_per_mm for law in self.layers) + self.members_mm_per_N
 
     def local_compliance_mm_per_N(self, force_N: ArrayLike) -> float | np.ndarray:
         """dd/dF on the segment that contains ``force_N`` (right-continuous at knots), for a
@@ -123,7 +162,7 @@ class Stack:
         """
         F = self.regime_bounds_N[regime]
         step = 1e-9 * max(F, 1e-12)
-        total = 0.0
+        total = self.members_mm_per_N
         for pos, j in enumerate(self.lock_order):
             law = self.layers[j]
             if pos < regime:

@@ -77,6 +77,12 @@ class Document:
     accuracy_rel: float | None = None  # model.accuracy_rel: requested accuracy of k and R
     chip_positions_mm: tuple[tuple[float, float], ...] | None = None  # magnetometer.positions_mm
     insert: InsertPlate = InsertPlate()  # the insert section (material none: no plate)
+    load_path: str = "part"  # model.load_path: the whole part, or the layers alone (docs/design.md 4.6)
+
+    @property
+    def whole_part(self) -> bool:
+        """The predictions include the cap, plates and cover (model.load_path: part)."""
+        return self.load_path == "part"
 
     @property
     def chips_mm(self) -> list[tuple[float, float]]:
@@ -95,7 +101,12 @@ class Document:
                 positions_mm=self.chip_positions_mm,
             )
         if name == "model":
-            return ModelSection(mechanics=self.mechanics, field=self.field_model, accuracy_rel=self.accuracy_rel)
+            return ModelSection(
+                mechanics=self.mechanics,
+                field=self.field_model,
+                load_path=self.load_path,
+                accuracy_rel=self.accuracy_rel,
+            )
         if name == "design":
             return DesignOptions(**self.design)
         return getattr(self, name)  # family, material, magnet, housing, insert, printer: as the file has them
@@ -226,6 +237,7 @@ def parse_document(raw: Any, source: str = "<memory>") -> Document:
         accuracy_rel=model.accuracy_rel,
         chip_positions_mm=meter.positions_mm,
         insert=insert,
+        load_path=model.load_path,
     )
 
 

@@ -171,6 +171,14 @@ class ModelSection:
         meaning="magnet field model; `auto` is the cheapest exact one: `axial` on the axis, "
         "`cylinder` off it (`dipole` only when asked)",
     )
+    load_path: str = spec(
+        "part",
+        choices=("part", "layers"),
+        omit_default=True,
+        meaning="what carries the press in `mst simulate`'s and `mst design`'s predictions: `part`, the layers "
+        "with the cap, plates and cover in series (the cap closing the top layer's cavity as it bends), or "
+        "`layers`, the layers alone between rigid plates (the ladder's own verification; docs/design.md 4.6)",
+    )
     # relative accuracy of layer stiffness and lock force against the continuum reference: the
     # tool picks the cheapest mechanics rung whose measured median errors meet it (mst_cli.model.ladder)
     accuracy_rel: float | None = spec(
