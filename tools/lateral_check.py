@@ -43,6 +43,7 @@ from skfem.models.elasticity import lame_parameters, linear_elasticity
 
 from mst_cli.model.cell import HexCell
 from mst_cli.model.material import Material
+from mst_cli.model.mechanics.whole_part_mesh import edge_distance, point_in_polygon, polygon_area
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from continuum_3d import extrude, graded_depth  # the 3D check's prism split
@@ -59,24 +60,6 @@ SPACING_IN_T = 0.2  # lattice spacing, in wall thicknesses
 LEVELS = 3  # rounds of refinement at the corners
 
 
-def _inside(pts: np.ndarray, poly: np.ndarray) -> np.ndarray:
-    """Even-odd test of points (n, 2) against a closed polygon (m, 2)."""
-    x, z = pts[:, 0][:, None], pts[:, 1][:, None]
-    x0, z0 = poly[:, 0][None, :], poly[:, 1][None, :]
-    x1, z1 = np.roll(poly[:, 0], -1)[None, :], np.roll(poly[:, 1], -1)[None, :]
-    crosses = ((z0 > z) != (z1 > z)) & (x < (x1 - x0) * (z - z0) / np.where(z1 != z0, z1 - z0, 1.0) + x0)
-    return crosses.sum(axis=1) % 2 == 1
-
-
-def _edge_distance(pts: np.ndarray, poly: np.ndarray) -> np.ndarray:
-    """Distance of points (n, 2) to the edges of a closed polygon (m, 2)."""
-    a, b = poly, np.roll(poly, -1, axis=0)
-    ab = b - a
-    rel = pts[:, None, :] - a[None, :, :]
-    s = np.clip((rel * ab).sum(-1) / (ab * ab).sum(-1), 0.0, 1.0)
-    return np.hypot(*(rel - s[..., None] * ab).transpose(2, 0, 1)).min(axis=1)
-
-
 def _edge_points(poly: np.ndarray, spacing: float) -> np.ndarray:
     out = []
     for a, b in zip(poly, np.roll(poly, -1, axis=0)):
@@ -88,11 +71,6 @@ def _edge_points(poly: np.ndarray, spacing: float) -> np.ndarray:
 def _lattice_row(x0: float, x1: float, spacing: float, z: float) -> np.ndarray:
     xs = np.arange(x0, x1, spacing)
     return np.stack([xs, np.full_like(xs, z)], axis=1)
-
-
-def _polygon_area(poly: np.ndarray) -> float:
-    x, z = poly[:, 0], poly[:, 1]
-    return 0.5 * abs(float(np.dot(x, np.roll(z, -1)) - np.dot(z, np.roll(x, -1))))
 
 
 def polygon_mesh(
@@ -107,18 +85,18 @@ def polygon_mesh(
         [_lattice_row(lo[0] + (i % 2) * 0.5 * spacing, hi[0], spacing, z) for i, z in enumerate(rows)]
     )
     edges = [outer] + ([hole] if hole is not None else [])
-    keep = _inside(lattice, outer) & (_edge_distance(lattice, outer) > 0.45 * spacing)
+    keep = point_in_polygon(lattice, outer) & (edge_distance(lattice, outer) > 0.45 * spacing)
     if hole is not None:
-        keep &= ~_inside(lattice, hole) & (_edge_distance(lattice, hole) > 0.45 * spacing)
+        keep &= ~point_in_polygon(lattice, hole) & (edge_distance(lattice, hole) > 0.45 * spacing)
     pts = np.concatenate([lattice[keep]] + [_edge_points(e, spacing) for e in edges])
     tri = Delaunay(pts).simplices
     mid = pts[tri].mean(axis=1)
-    solid = _inside(mid, outer) & (~_inside(mid, hole) if hole is not None else True)
+    solid = point_in_polygon(mid, outer) & (~point_in_polygon(mid, hole) if hole is not None else True)
     e1, e2 = pts[tri[:, 1]] - pts[tri[:, 0]], pts[tri[:, 2]] - pts[tri[:, 0]]
     area = 0.5 * np.abs(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0])
     flat = area < 1e-9 * spacing * spacing  # qhull's slivers on collinear edge points
     tri, area = tri[solid & ~flat], area[solid & ~flat]
-    want = _polygon_area(outer) - (_polygon_area(hole) if hole is not None else 0.0)
+    want = polygon_area(outer) - (polygon_area(hole) if hole is not None else 0.0)
     if abs(area.sum() - want) > 1e-9 * want:
         raise ValueError(f"lattice mesh covers {area.sum():.9g} mm^2 of {want:.9g}")
     mesh = MeshTri(pts.T.copy(), np.ascontiguousarray(tri.T))

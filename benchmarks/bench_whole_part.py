@@ -1,0 +1,133 @@
+"""The whole-part rung against L0 + members and L2 (issue 44, docs/design.md section 4.7).
+
+Per bundled config (configs/*.yaml) and regime, the field change per newton at the chip under
+a centred 6 mm strip, the base's bottom face held, the layers locked before the regime closed:
+
+* ``part``: the whole-part rung (mst_cli/model/mechanics/whole_part.py; plane strain, the magnet
+  resting loose on its pocket's floor, as printed); ``bonded``: the magnet glued in (an N42
+  block filling the pocket);
+* ``rigid``: the same section with the cap, plates and base 1e4 times stiffer (the control);
+* ``L2``: the layers alone between rigid plates, L2's small-strain k (plane strain; regime 1
+  only, where no layer is closed), and the control's ratio to it;
+* ``L0+m``: the closed form: each open layer's plane-strain small-load L0 compliance, each
+  closed one's locked L0 compliance, plus load_path.members(...).total (simply supported; the
+  clamped bound in brackets), times the same dB_z/dz;
+* ``mst``: what ``mst simulate`` states (the layers' laws in the web, at the middle of each
+  regime, plus the members): for reference, not like for like (the rung is small-strain and
+  plane strain).
+
+Also the cost (dofs, seconds per solve), a convergence line and the cap alone against the beam.
+
+    PYTHONPATH=. .venv/bin/python benchmarks/bench_whole_part.py [--configs a.yaml ...] [--spacing-mm 0.3]
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+from pathlib import Path
+
+import mst_cli as mst
+import mst_cli.api
+from mst_cli.model import load_path as lp
+from mst_cli.model.mechanics import layer_laws, uncached_layer_law
+from mst_cli.model.mechanics import whole_part as wp
+from mst_cli.model.mechanics.continuum import linear_stiffness_N_per_mm
+from mst_cli.model.stack import Stack
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def closed_form_mm_per_N(g, m, locked: tuple[int, ...], support: str) -> float:
+    """Plane-strain L0 layers (small-load or locked) plus the members' closed form."""
+    laws = [uncached_layer_law(c, m, "spring") for c in g.layers]
+    layers = sum(1.0 / (law.k_locked_N_per_mm if i in locked else law.k_N_per_mm) for i, law in enumerate(laws))
+    return layers + lp.members(g, m, support=support).total_mm_per_N
+
+
+def config_rows(path: Path, spacing: float | None, times: list[float]) -> list[str]:
+    doc = mst.load(path)
+    if not doc.is_design:  # a spec: its design (the default seed), as `mst design` gives it
+        doc = mst.api.design(doc, plot=False).document
+    g, m = doc.geometry(), doc.material
+    stack = Stack(layer_laws(g.layers, m, "spring"))
+    per_mm = wp.field_per_drop_uT_per_mm(g)
+    mst_rows = lp.motion_shares(stack, lp.members(g, m))
+    l2 = sum(1.0 / linear_stiffness_N_per_mm(c, m) for c in g.layers)
+    rows = []
+    for r, locked in enumerate(wp.regime_locked(stack)):
+        part = wp.press(g, m, wp.PartOptions(spacing_mm=spacing, locked=locked))
+        rigid = wp.press(g, m, wp.PartOptions(spacing_mm=spacing, locked=locked, member_factor=wp.RIGID_FACTOR))
+        bonded = wp.press(g, m, wp.PartOptions(spacing_mm=spacing, locked=locked, magnet="bonded"))
+        times += [part.seconds, rigid.seconds, bonded.seconds]
+        cf, cf_c = (closed_form_mm_per_N(g, m, locked, s) for s in lp.SUPPORTS)
+        l2_cell = f"{per_mm * l2:.1f} ({rigid.drop_mm_per_N / l2 - 1:+.1%})" if not locked else ""
+        mst_f = per_mm * mst_rows[r]["compliance_mm_per_N"]
+        rows.append(
+            f"| {doc.name} | {r + 1} | {per_mm * part.drop_mm_per_N:.1f} | {per_mm * bonded.drop_mm_per_N:.1f} | "
+            f"{per_mm * rigid.drop_mm_per_N:.1f} | "
+            f"{l2_cell} | {per_mm * cf:.1f} ({per_mm * cf_c:.1f}) | {cf / part.drop_mm_per_N - 1:+.1%} | "
+            f"{mst_f:.1f} | {part.dofs} |"
+        )
+    return rows
+
+
+def convergence(spacing: float | None) -> str:
+    doc = mst.load(ROOT / "configs" / "mohammadi2021-forward.yaml")
+    g, m = doc.geometry(), doc.material
+    spacing = wp.default_spacing_mm(g) if spacing is None else spacing
+    cells = []
+    for s, lv in (
+        (2 * spacing, wp.DEFAULT_LEVELS - 1),
+        (spacing, wp.DEFAULT_LEVELS),
+        (0.5 * spacing, wp.DEFAULT_LEVELS + 1),
+    ):
+        mo = wp.press(g, m, wp.PartOptions(spacing_mm=s, levels=lv))
+        cells.append(f"spacing {s:g} mm, {lv} levels: {mo.drop_mm_per_N:.5f} mm/N ({mo.dofs} dofs, {mo.seconds:.1f} s)")
+    return "forward design, regime 1: " + "; ".join(cells)
+
+
+def off_centre(spacing: float | None) -> list[str]:
+    """The forward design under a press 3 mm off centre and a tangential pull: the magnet's turn
+    per moment, slide and turn per tangential newton, as printed against rigid members."""
+    doc = mst.load(ROOT / "configs" / "mohammadi2021-forward.yaml")
+    g, m = doc.geometry(), doc.material
+    rows = ["| members | turn per moment, mrad/(N mm) | slide per tangential N, mm/N | turn per tangential N, mrad/N |"]
+    rows.append("|---|---|---|---|")
+    for label, factor in (("as printed", 1.0), ("rigid", wp.RIGID_FACTOR)):
+        off = wp.press(g, m, wp.PartOptions(spacing_mm=spacing, offset_mm=3.0, member_factor=factor))
+        tan = wp.press(g, m, wp.PartOptions(spacing_mm=spacing, tangential=True, member_factor=factor))
+        rows.append(
+            f"| {label} | {1e3 * off.turn_rad_per_N / 3.0:.3f} | {tan.side_mm_per_N:.3f} | "
+            f"{1e3 * tan.turn_rad_per_N:.3f} |"
+        )
+    return rows
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--configs", nargs="*", default=sorted(str(p) for p in (ROOT / "configs").glob("*.yaml")))
+    ap.add_argument("--spacing-mm", type=float, default=None, help="lattice spacing [default: the rung's own]")
+    ap.add_argument("--no-convergence", action="store_true")
+    ap.add_argument("--off-centre", action="store_true", help="also the off-centre and tangential loads")
+    args = ap.parse_args()
+    print("field change per newton at the chip, uT/N (centred 6 mm strip)")
+    print(
+        "| design | regime | part | bonded | rigid members | L2 layers (rigid/L2 - 1) | "
+        "L0+members simple (clamped) | L0+m/part - 1 | mst | dofs |"
+    )
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    times: list[float] = []
+    for path in args.configs:
+        for line in config_rows(Path(path), args.spacing_mm, times):
+            print(line, flush=True)
+    print(f"cost: median {statistics.median(times):.2f} s per solve ({len(times)} solves)")
+    if not args.no_convergence:
+        print(convergence(args.spacing_mm))
+    if args.off_centre:
+        print("forward design, regime 1, a 6 mm strip 3 mm off centre / pulling along +x:")
+        print("\n".join(off_centre(args.spacing_mm)))
+
+
+if __name__ == "__main__":
+    main()

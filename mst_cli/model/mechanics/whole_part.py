@@ -1,0 +1,291 @@
+"""The whole-part rung: the section of the part as exported, in plane strain, pressed over a
+centred strip (docs/design.md section 4.7).
+
+Rungs L0-L2 model the layers between rigid plates; :mod:`mst_cli.model.load_path` adds the
+cap, plates and cover as beams in closed form. This rung models them all at once: the section at
+mid-depth (:mod:`~mst_cli.model.mechanics.whole_part_mesh`, from the one geometry the CAD
+extrudes), P2 triangles, linear small-strain plane-strain elasticity (scikit-fem), each region
+its own material (TPU; the magnet N42-stiff or the pocket left empty; an insert in its own), the
+base's bottom face held, a uniform pressure over the centred strip ``patch_mm`` wide on the top
+face (the force per mm of depth 1/D, so every figure is per newton on the part D deep).
+
+Per regime the layers locked before it are taken as closed (their cavity filled), as the
+issue's independent model does; the contacts that bending closes elsewhere are not modelled
+(a linear solve: an upper bound on the compliance where a gap would close). The magnet's
+motion is the rigid-body least-squares fit of the displacement at the magnet's (or the empty
+pocket's floor's) nodes: drop, side motion and turn; the field change per newton at the chip is
+the drop times dB_z/dz on the axis at the unloaded gap (:mod:`mst_cli.model.magnet_field`).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from mst_cli.model.load_path import FINGERTIP_PATCH_MM, Insert
+from mst_cli.model.magnet_field import axial_dBz_dz_T_per_mm
+from mst_cli.model.mechanics.whole_part_mesh import TAGS, Region, mesh_section, rect, section_regions
+
+if TYPE_CHECKING:
+    from skfem import MeshTri
+
+N42_MODULUS_MPA = 160e3  # sintered NdFeB, Young's modulus ~160 GPa (Arnold Magnetic Technologies datasheet)
+N42_POISSON = 0.24
+RIGID_FACTOR = 1e4  # the rigid-member control: cap, plates and base this much stiffer than TPU
+# lattice spacing of the production mesh (benchmarks/bench_whole_part.py): 0.3 mm, or half the
+# thinnest wall when that is finer (two P2 triangles across a wall)
+DEFAULT_SPACING_MM = 0.3
+DEFAULT_LEVELS = 3  # rounds of refinement at the layers' corners
+MEMBER_TAGS = ("base", "plate", "cap")
+# how the magnet sits: "resting" loose in its pocket as printed (0.1 mm clearance: it rides on
+# the pocket's floor and stiffens nothing; its motion the floor's under it), "bonded" glued in,
+# an N42 block filling the pocket (its motion its own)
+MAGNET_SEATS = ("resting", "bonded")
+
+
+@dataclass(frozen=True)
+class PartOptions:
+    """How the section is built and pressed: the strip's width (mm), the mesh spacing (mm), its
+    offset and direction (down, or along +x), the corner refinements, the magnet
+    (:data:`MAGNET_SEATS`), the members' stiffness factor (1: as printed; :data:`RIGID_FACTOR`:
+    the rigid-member control), locked layers by index, an insert
+    (:class:`~mst_cli.model.load_path.Insert`; None: the geometry's own, if it has one)."""
+
+    patch_mm: float = FINGERTIP_PATCH_MM
+    spacing_mm: float | None = None  # None: :func:`default_spacing_mm`
+    offset_mm: float = 0.0  # the strip's centre on the top face (x, mm): an off-centre press
+    tangential: bool = False  # the strip pulls along +x instead of pressing down
+    magnet: str = "resting"
+    member_factor: float = 1.0
+    locked: tuple[int, ...] = ()
+    insert: Insert | None = None
+    levels: int = DEFAULT_LEVELS
+
+
+@dataclass(frozen=True)
+class MagnetMotion:
+    """The magnet's rigid motion per newton of press: drop (mm/N, > 0 down), side (mm/N, +x),
+    turn (rad/N, about +y); the problem's size and its solve time."""
+
+    drop_mm_per_N: float
+    side_mm_per_N: float
+    turn_rad_per_N: float
+    dofs: int
+    seconds: float
+    extra: dict = field(default_factory=dict)
+
+
+def part_insert(geometry, options: PartOptions) -> Insert | None:
+    """The insert pressed with: the options' own, else the geometry's (``geometry.insert``, the
+    one source of its size and place, once the spec declares it), else None."""
+    return options.insert if options.insert is not None else getattr(geometry, "insert", None)
+
+
+def _moduli(material, options: PartOptions, insert) -> tuple[np.ndarray, np.ndarray]:
+    """(E, nu) per tag (:data:`TAGS`)."""
+    E = {t: material.youngs_modulus_MPa for t in TAGS}
+    nu = {t: material.poisson_ratio for t in TAGS}
+    for t in MEMBER_TAGS:
+        E[t] *= options.member_factor
+    E["magnet"], nu["magnet"] = N42_MODULUS_MPA, N42_POISSON
+    if insert is not None:
+        # load_path.Insert keeps its modulus in plane strain; back to E for the plane-strain form
+        E["insert"] = insert.modulus_MPa * (1.0 - insert.poisson_ratio**2)
+        nu["insert"] = insert.poisson_ratio
+    return np.array([E[t] for t in TAGS]), np.array([nu[t] for t in TAGS])
+
+
+def press_points(geometry, patch_mm: float, offset_mm: float = 0.0) -> np.ndarray:
+    """The press's edges on the top face, so that the mesh has nodes there."""
+    c = min(patch_mm, geometry.width_mm)
+    x = np.clip([offset_mm - 0.5 * c, offset_mm + 0.5 * c], -0.5 * geometry.width_mm, 0.5 * geometry.width_mm)
+    return np.array([[x[0], geometry.total_height_mm], [x[1], geometry.total_height_mm]])
+
+
+def default_spacing_mm(geometry) -> float:
+    """The production mesh's lattice spacing: :data:`DEFAULT_SPACING_MM` or half the thinnest wall."""
+    return min(DEFAULT_SPACING_MM, 0.5 * min(c.t_mm for c in geometry.layers))
+
+
+def build_mesh(geometry, options: PartOptions) -> tuple[MeshTri, np.ndarray]:
+    """The section's MeshTri and each triangle's tag index: the lattice mesh, then
+    ``options.levels`` rounds of refinement within t / 2^i of each layer's corners (the cavity's
+    tips and the walls' roots, where the strain is singular, as in L2's own mesh)."""
+    from skfem import MeshTri as _MeshTri  # deferred: scikit-fem loads when this rung is asked for
+
+    if options.magnet not in MAGNET_SEATS:
+        raise ValueError(f"magnet must be one of {MAGNET_SEATS}, not {options.magnet!r}")
+    regions = section_regions(geometry, options.locked, options.magnet == "bonded", part_insert(geometry, options))
+    spacing = options.spacing_mm if options.spacing_mm is not None else default_spacing_mm(geometry)
+    p, t, _ = mesh_section(regions, spacing, press_points(geometry, options.patch_mm, options.offset_mm))
+    mesh = _MeshTri(p, t)
+    corners = np.concatenate([np.array(e) for r in regions if r.tag == "layer" for e in r.edges()])
+    radius = 0.5 * min(c.t_mm for c in geometry.layers)
+    for i in range(options.levels):
+        mid = mesh.p[:, mesh.t].mean(axis=1)
+        d2 = ((mid.T[:, None, :] - corners[None, :, :]) ** 2).sum(-1).min(axis=1)
+        marked = np.flatnonzero(d2 < (radius * 0.5**i) ** 2)
+        if marked.size:
+            mesh = mesh.refined(marked)
+    mid = mesh.p[:, mesh.t].mean(axis=1).T
+    tag = np.full(mesh.t.shape[1], -1)
+    for r in regions[::-1]:
+        tag[r.contains(mid)] = TAGS.index(r.tag)
+    return mesh, tag
+
+
+def _stiffness(basis, tag: np.ndarray, E: np.ndarray, nu: np.ndarray):
+    """Plane-strain linear elasticity with a modulus per triangle."""
+    # deferred: scikit-fem loads when this rung is asked for
+    from skfem import BilinearForm, asm
+    from skfem.helpers import ddot, sym_grad, trace
+
+    lam_e = E * nu / ((1.0 + nu) * (1.0 - 2.0 * nu))
+    mu_e = E / (2.0 * (1.0 + nu))
+    lam, mu = lam_e[tag][:, None], mu_e[tag][:, None]  # (elements, 1): constant over each
+
+    @BilinearForm
+    def elasticity(u, v, w):
+        eu, ev = sym_grad(u), sym_grad(v)
+        return 2.0 * mu * ddot(eu, ev) + lam * trace(eu) * trace(ev)
+
+    return asm(elasticity, basis)
+
+
+def _load(geometry, basis_mesh, element, patch_mm: float, offset_mm: float = 0.0, tangential: bool = False):
+    """The strip's traction: 1/D N per mm of depth over |x - offset| <= c/2 of the top face,
+    pressing down (or, ``tangential``, along +x)."""
+    # deferred: scikit-fem loads when this rung is asked for
+    from skfem import FacetBasis, LinearForm, asm
+
+    H, c = geometry.total_height_mm, min(patch_mm, geometry.width_mm)
+    tol = 1e-7
+    facets = basis_mesh.facets_satisfying(
+        lambda x: (np.abs(x[1] - H) < tol) & (np.abs(x[0] - offset_mm) <= 0.5 * c + tol), boundaries_only=True
+    )
+    fb = FacetBasis(basis_mesh, element, facets=facets)
+    q = 1.0 / (c * geometry.depth_mm)  # N/mm^2 on the strip, per mm of depth: F = 1 N on D
+    component = 0 if tangential else 1
+    sign = 1.0 if tangential else -1.0
+
+    @LinearForm
+    def traction(v, w):
+        return sign * q * v[component]
+
+    return asm(traction, fb)
+
+
+def rigid_fit(xz: np.ndarray, u: np.ndarray) -> tuple[float, float, float]:
+    """(U_x, U_z, theta) of the least-squares rigid motion u ~ U + theta e_y x (x - c) of points
+    ``xz`` (n, 2) moved by ``u`` (n, 2); theta about +y in the (x, z) plane: u_x = -theta dz,
+    u_z = theta dx (counter-clockwise in x-z seen from -y positive)."""
+    c = xz.mean(axis=0)
+    d = xz - c
+    U = u.mean(axis=0)
+    du = u - U
+    theta = float((d[:, 0] * du[:, 1] - d[:, 1] * du[:, 0]).sum() / (d**2).sum())
+    return float(U[0]), float(U[1]), theta
+
+
+def press(geometry, material, options: PartOptions = PartOptions()) -> MagnetMotion:
+    """The magnet's rigid motion per newton under the centred strip (module docstring)."""
+    # deferred: scikit-fem loads when this rung is asked for
+    from skfem import Basis, ElementTriP2, ElementVector, condense, solve
+
+    t0 = time.perf_counter()
+    mesh, tag = build_mesh(geometry, options)
+    element = ElementVector(ElementTriP2())
+    basis = Basis(mesh, element)
+    E, nu = _moduli(material, options, part_insert(geometry, options))
+    K = _stiffness(basis, tag, E, nu)
+    f = _load(geometry, mesh, element, options.patch_mm, options.offset_mm, options.tangential)
+    held = basis.get_dofs(lambda x: np.abs(x[1]) < 1e-7).all()
+    u = solve(*condense(K, f, D=held))
+    xz, uv = _magnet_points(geometry, basis, tag, u, options.magnet == "bonded")
+    Ux, Uz, th = rigid_fit(xz, uv)
+    return MagnetMotion(-Uz, Ux, th, basis.N, time.perf_counter() - t0, {"elements": mesh.t.shape[1]})
+
+
+def _magnet_points(geometry, basis, tag: np.ndarray, u: np.ndarray, magnet: bool):
+    """(positions (n, 2), displacements (n, 2)) of the magnet's nodes, or of the empty pocket's
+    floor's under the magnet (where it rests; a rigid magnet on a floor that sags rides on its
+    edges, a few per cent of the floor's own bending from this fit)."""
+    ux, uz = u[basis.nodal_dofs[0]], u[basis.nodal_dofs[1]]
+    p = basis.mesh.p
+    if magnet:
+        nodes = np.unique(basis.mesh.t[:, tag == TAGS.index("magnet")])
+    else:
+        r, z0 = geometry.magnet.radius_mm, geometry.z_magnet_bottom_mm
+        nodes = np.flatnonzero((np.abs(p[1] - z0) < 1e-7) & (np.abs(p[0]) <= r + 1e-7))
+    return p[:, nodes].T, np.stack([ux[nodes], uz[nodes]], axis=1)
+
+
+def field_per_drop_uT_per_mm(geometry) -> float:
+    """|dB_z/dz| on the magnet's axis at the unloaded gap, uT per mm of drop."""
+    m = geometry.magnet
+    return 1e6 * abs(float(axial_dBz_dz_T_per_mm(geometry.gap0_mm, m.radius_mm, m.thickness_mm, m.remanence_T)))
+
+
+def regime_locked(stack) -> list[tuple[int, ...]]:
+    """Per regime, the layers locked before it (the stack's lock order)."""
+    order = [int(i) for i in stack.lock_order]
+    return [tuple(sorted(order[:r])) for r in range(len(order))]
+
+
+def regime_responses(geometry, material, stack, options: PartOptions = PartOptions()) -> list[dict]:
+    """Per regime: the magnet's motion and the field change per newton at the chip (uT/N)."""
+    per_mm = field_per_drop_uT_per_mm(geometry)
+    out = []
+    for r, locked in enumerate(regime_locked(stack)):
+        mo = press(geometry, material, PartOptions(**{**options.__dict__, "locked": locked}))
+        out.append({"regime": r + 1, "locked": locked, "motion": mo, "field_uT_per_N": per_mm * mo.drop_mm_per_N})
+    return out
+
+
+def beam_on_two_supports_mm_per_N(
+    length_mm: float, thickness_mm: float, span_mm: float, depth_mm: float, material, patch_mm: float, spacing_mm: float
+) -> float:
+    """The check of the beam closed form (load_path's cap): a TPU rectangle ``length_mm`` x
+    ``thickness_mm`` in plane strain on two line supports ``span_mm`` apart on its underside
+    (held in z, one also in x), pressed by the centred strip; the deflection per newton (on
+    ``depth_mm``) of its centre line at mid-span."""
+    # deferred: scikit-fem loads when this rung is asked for
+    from skfem import Basis, ElementTriP2, ElementVector, condense, solve
+    from skfem import MeshTri as _MeshTri
+
+    w2, s2 = 0.5 * length_mm, 0.5 * span_mm
+    region = Region("cap", rect(-w2, w2, 0.0, thickness_mm))
+    extra = np.array(
+        [
+            [-s2, 0.0],
+            [s2, 0.0],
+            [0.0, 0.5 * thickness_mm],
+            [-0.5 * patch_mm, thickness_mm],
+            [0.5 * patch_mm, thickness_mm],
+        ]
+    )
+    p, t, tag = mesh_section([region], spacing_mm, extra)
+    mesh = _MeshTri(p, t)
+    element = ElementVector(ElementTriP2())
+    basis = Basis(mesh, element)
+    E = np.full(len(TAGS), material.youngs_modulus_MPa)
+    K = _stiffness(basis, tag, E, np.full(len(TAGS), material.poisson_ratio))
+    geometry_like = _Face(thickness_mm, length_mm, depth_mm)
+    f = _load(geometry_like, mesh, element, patch_mm)
+    at = lambda x, z: int(np.argmin((mesh.p[0] - x) ** 2 + (mesh.p[1] - z) ** 2))  # noqa: E731
+    left, right, centre = at(-s2, 0.0), at(s2, 0.0), at(0.0, 0.5 * thickness_mm)
+    held = np.array([basis.nodal_dofs[1][left], basis.nodal_dofs[1][right], basis.nodal_dofs[0][left]])
+    u = solve(*condense(K, f, D=held))
+    return -float(u[basis.nodal_dofs[1][centre]])
+
+
+@dataclass(frozen=True)
+class _Face:
+    """What :func:`_load` reads of a geometry: the top face's height, width and depth."""
+
+    total_height_mm: float
+    width_mm: float
+    depth_mm: float

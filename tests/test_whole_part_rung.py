@@ -1,0 +1,123 @@
+"""The whole-part rung (issue 44, docs/design.md 4.7): its section is the exported part's, its
+rigid-member limit is L2's layers, its cap alone is the beam closed form of load_path.py, and
+its mesh converges."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+import mst_cli as mst
+from mst_cli.cli.app import main
+from mst_cli.model import load_path as lp
+from mst_cli.model.material import Material
+from mst_cli.model.mechanics import whole_part as wp
+from mst_cli.model.mechanics import whole_part_mesh as wm
+from mst_cli.model.mechanics.continuum import linear_stiffness_N_per_mm
+
+ROOT = Path(__file__).resolve().parents[1]
+FORWARD = ROOT / "configs" / "mohammadi2021-forward.yaml"
+COARSE = {"spacing_mm": 0.4, "levels": 2}
+
+
+@pytest.fixture(scope="module")
+def forward():
+    doc = mst.load(FORWARD)
+    return doc.geometry(), doc.material
+
+
+def stl_section(stl: Path, depth_mm: float) -> tuple[float, np.ndarray, np.ndarray]:
+    """(area, lower bounds, upper bounds) of the STL's section at mid-depth, in the sensor
+    frame's (x, z): print (x, y, z) = (x, -z, y + D/2). The area by the divergence theorem over
+    the cut segments, each with its face's outward normal (no polygon library needed)."""
+    import trimesh
+
+    mesh = trimesh.load(stl)
+    seg, faces = trimesh.intersections.mesh_plane(mesh, [0, 0, 1], [0, 0, 0.5 * depth_mm], return_faces=True)
+    n = mesh.face_normals[faces][:, :2]
+    n /= np.linalg.norm(n, axis=1)[:, None]
+    length = np.linalg.norm(seg[:, 1, :2] - seg[:, 0, :2], axis=1)
+    area = 0.5 * float(((seg[:, :, :2].mean(axis=1) * n).sum(1) * length).sum())
+    xz = seg[:, :, :2].reshape(-1, 2) * [1.0, -1.0]
+    return area, xz.min(axis=0), xz.max(axis=0)
+
+
+@pytest.mark.slow
+def test_section_is_the_exported_parts(forward, tmp_path):
+    """The regions (windows cut, the pocket empty) are the STL's section at mid-depth: the same
+    area to 1e-6 and the same bounds to 1e-4 mm (the STL is written in single precision)."""
+    g, _ = forward
+    r = CliRunner().invoke(main, ["export", str(FORWARD), "--stl", "--out", str(tmp_path / "out")])
+    assert r.exit_code == 0, r.output
+    area, lo, hi = stl_section(tmp_path / "out" / "sensor.stl", g.depth_mm)
+    regions = wm.section_regions(g, magnet=False, windows=True)
+    pts = np.concatenate([np.array(reg.outer) for reg in regions])
+    assert wm.section_area_mm2(regions) == pytest.approx(area, rel=1e-6)
+    np.testing.assert_allclose(lo, pts.min(axis=0), atol=1e-4)
+    np.testing.assert_allclose(hi, pts.max(axis=0), atol=1e-4)
+
+
+@pytest.mark.parametrize("locked", [(), (0,), (0, 1)])
+def test_mesh_covers_the_section_exactly(forward, locked):
+    """The kept triangles' area is the regions' exact area (mesh_section raises otherwise), and
+    a closed layer adds its cavity's area."""
+    g, _ = forward
+    regions = wm.section_regions(g, locked=locked)
+    p, t, tag = wm.mesh_section(regions, 0.4)
+    area = wm.triangle_areas(p.T, t.T).sum()
+    assert area == pytest.approx(wm.section_area_mm2(regions), rel=1e-6)
+    cavities = sum(wm.polygon_area(np.array(c.inner_profile_xz())) for i, c in enumerate(g.layers) if i in locked)
+    assert area - wm.section_area_mm2(wm.section_regions(g)) == pytest.approx(cavities, abs=1e-6 * area)
+
+
+@pytest.mark.slow
+def test_rigid_members_reproduce_l2(forward):
+    """Cap, plates and base 1e4 times stiffer: the magnet drops as the three layers of L2 in
+    series (plane strain, small strain), within 1 % on the default mesh (measured 0.5 %)."""
+    g, m = forward
+    rigid = wp.press(g, m, wp.PartOptions(member_factor=wp.RIGID_FACTOR))
+    l2 = sum(1.0 / linear_stiffness_N_per_mm(c, m) for c in g.layers)
+    assert rigid.drop_mm_per_N == pytest.approx(l2, rel=0.01)
+    assert abs(rigid.turn_rad_per_N) < 1e-4 * rigid.drop_mm_per_N  # rad/N against mm/N: no turn
+
+
+@pytest.mark.parametrize("thickness_mm, span_mm", [(3.3, 24.9), (2.0, 24.9), (1.0, 20.0)])
+def test_cap_alone_bends_as_the_beam_closed_form(thickness_mm, span_mm):
+    """A TPU rectangle on two line supports under the 6 mm strip: load_path's simply supported
+    Timoshenko beam (bending + shear, plane strain) within 1 % (measured 0.1-0.3 %)."""
+    m = Material()
+    fe = wp.beam_on_two_supports_mm_per_N(span_mm + 5.0, thickness_mm, span_mm, 20.0, m, 6.0, 0.1 * thickness_mm)
+    E_prime = m.youngs_modulus_MPa / (1.0 - m.poisson_ratio**2)
+    EI, kGA = lp.section_EI_kGA(20.0, thickness_mm, E_prime, m.shear_modulus_MPa)
+    beam = lp.strip_bending_mm_per_N(span_mm, 6.0, EI, "simple") + lp.strip_shear_mm_per_N(span_mm, 6.0, kGA)
+    assert fe == pytest.approx(beam, rel=0.01)
+
+
+def test_members_add_compliance_and_a_stiff_insert_takes_it_back(forward):
+    """As printed the members add to the layers' drop; a 1 mm steel plate over the magnet
+    (across the face) takes most of it away; a bonded magnet stiffens the cap."""
+    g, m = forward
+    as_printed = wp.press(g, m, wp.PartOptions(**COARSE)).drop_mm_per_N
+    bonded = wp.press(g, m, wp.PartOptions(magnet="bonded", **COARSE)).drop_mm_per_N
+    rigid = wp.press(g, m, wp.PartOptions(member_factor=wp.RIGID_FACTOR, **COARSE)).drop_mm_per_N
+    z = g.layers[-1].t_mm + g.housing.pocket_floor_mm + g.pocket_depth_mm
+    steel = lp.Insert("steel", 200e3 / (1 - 0.3**2), 0.3, 1.0, z)
+    g_ins = g.__class__(**{**g.__dict__, "housing": g.housing.__class__(**{**g.housing.__dict__, "cap_top_mm": 1.8})})
+    with_insert = wp.press(g_ins, m, wp.PartOptions(insert=steel, **COARSE)).drop_mm_per_N
+    assert rigid < with_insert < bonded < as_printed
+
+
+def test_unknown_magnet_seat_is_refused(forward):
+    g, m = forward
+    with pytest.raises(ValueError, match="magnet must be one of"):
+        wp.press(g, m, wp.PartOptions(magnet="glued"))
+
+
+@pytest.mark.slow
+def test_mesh_converges(forward):
+    """Halving the spacing and one more corner refinement changes the drop by under 1 %."""
+    g, m = forward
+    default = wp.press(g, m, wp.PartOptions()).drop_mm_per_N
+    fine = wp.press(g, m, wp.PartOptions(spacing_mm=0.5 * wp.DEFAULT_SPACING_MM, levels=wp.DEFAULT_LEVELS + 1))
+    assert default == pytest.approx(fine.drop_mm_per_N, rel=0.01)
