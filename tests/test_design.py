@@ -35,7 +35,7 @@ PRINT_ERROR_T_MM = Printer().wall_tolerance_mm  # the default printer's wall tol
 def layers_only(doc):
     """The spec designed for its layers between rigid plates (model.load_path: layers): the
     optimiser's own tests on the paper's targets, which the part with today's TPU cap, plates and
-    cover cannot reach (docs/design.md 4.6; tests/test_whole_part.py designs the whole part)."""
+    cover cannot reach (docs/design.md 4.6; tests/test_part_prediction.py designs the whole part)."""
     return replace(doc, load_path="layers")
 
 

@@ -23,7 +23,7 @@ def run(args):
 def layers_spec(tmp_path, source=SPEC):
     """``source`` designed for its layers between rigid plates (model.load_path: layers): the
     paper's targets, which the part with today's TPU cap, plates and cover cannot reach
-    (docs/design.md 4.6; tests/test_whole_part.py designs the whole part)."""
+    (docs/design.md 4.6; tests/test_part_prediction.py designs the whole part)."""
     raw = yaml.safe_load(source.read_text())
     raw["model"] = {**(raw.get("model") or {}), "load_path": "layers"}
     path = tmp_path / f"layers-{source.name}"
