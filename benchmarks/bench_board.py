@@ -12,7 +12,8 @@ out of range (beyond the last lock). Per class: the median and worst instruction
 and the time at 64 MHz (M4F) or 48 MHz (M0+) taking one instruction a cycle (the M4F's FPU
 divides in 14 cycles, loads take 2: a lower bound within a factor of about 1.5; the M0+ has no
 FPU, its float arithmetic is the soft-float library's instructions, counted). Also the flash
-(text + data) and the deepest stack of the compiled program (-fstack-usage, the reader's frames).
+(text + data) and the reader's stack: its deepest call chain below <kind>_from_codes, summed from
+-fstack-usage's frames (the caller's own frame comes on top).
 Needs arm-none-eabi-gcc, libnewlib-arm-none-eabi and qemu-system-arm.
 """
 
@@ -97,8 +98,30 @@ def build(folder: Path, header: str, kind: str, codes: np.ndarray, cpu: str) -> 
     mem = [f"-Wl,--defsym=FLASH_K={flash}", f"-Wl,--defsym=RAM_K={ram}"]
     subprocess.run([*cc, *link, *mem, folder / "s.o", folder / "c.o", "-lm", "-o", elf], check=True)
     size = subprocess.run(["arm-none-eabi-size", elf], capture_output=True, text=True).stdout.splitlines()[-1]
-    frames = [int(m) for m in re.findall(r"\t(\d+)\t", (folder / "c.su").read_text())]
-    return elf, size, sum(sorted(frames)[-3:])  # main, the solve and the step: the deepest chain
+    return elf, size, reader_stack((folder / "c.su").read_text())
+
+
+# the reader's call chains below <kind>_from_codes (a function gcc inlined has no frame of its own)
+CHAINS = (
+    ("from_codes", "descend_", "held_step_", "step_"),
+    ("from_codes", "descend_", "field_", "trilinear_"),
+    ("from_codes", "descend_", "field_", "locate_"),
+    ("from_codes", "judge_", "trilinear_"),
+    ("from_codes", "judge_", "locate_"),
+)
+
+
+def reader_stack(su: str) -> int:
+    """The deepest of the reader's call chains (CHAINS) in bytes, from -fstack-usage's frames."""
+    frames: dict[str, int] = {}
+    for name, size in re.findall(r":([A-Za-z_][\w.]*)\t(\d+)\t", su):
+        key = name.split(".")[0]
+        frames[key] = max(frames.get(key, 0), int(size))
+
+    def frame(part: str) -> int:
+        return max((v for k, v in frames.items() if k.endswith(part) and k.startswith("mst_")), default=0)
+
+    return max(sum(frame(f) for f in chain) for chain in CHAINS)
 
 
 def run(elf: Path, cpu: str) -> tuple[np.ndarray, np.ndarray]:

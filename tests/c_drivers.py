@@ -26,7 +26,9 @@ def driver_source(kind: str, headers: list[str]) -> str:
     """The driver of ``kind``'s reader, including every header named in ``headers``."""
     name, fields = KINDS[kind]
     printed = ", ".join(f"(double)e.{f}" for f in fields.split(", "))
-    includes = "".join(f'#include "{h}"\n' for h in headers)
+    # the one file that defines each header's table and code (single-file headers)
+    includes = "#define MST_OFF_IMPLEMENTATION\n#define MST_SHR_IMPLEMENTATION\n"
+    includes += "".join(f'#include "{h}"\n' for h in headers)
     return (
         f"#include <stdio.h>\n{includes}int main(void)\n{{\n    long x, y, z;\n"
         '    while (scanf("%ld %ld %ld", &x, &y, &z) == 3) {\n'

@@ -1,12 +1,14 @@
 """offset_table.h and shear_table.h against the Python reader: each header compiled with the
 system C compiler reads 10,000 raw code triples (the bundled design's coarse table, loads drawn
-over the force range and the face or the friction cone, 2 uT of noise, plus readings below the
-range and saturated ones) as `mst read --estimate offset` (`shear`) does on the same table.
+over the force range and the face or the friction cone, 2 uT of noise; readings at rest and of
+light touch (the first regime's lower half); out of range (beyond the last lock, below the
+unloaded field), saturated, and with the magnet flipped) as `mst read --estimate offset`
+(`shear`) does on the same table: one direct inverse, in float in C and in double in Python.
 
-The criterion: the same flag on >= 99 % of the readings, and the force (with shear: the normal
-and both tangential forces) within 1 % of full scale (the last lock's force) on >= 99 % of those
-both call ok (float against double: a reading on a flag's edge, or with two roots of equal
-misfit, may go either way).
+The criterion (issue 45 item 7): the same flag on >= 99.9 % of the readings, and the force (with
+shear: the normal and both tangential forces) within 1 % of full scale (the last lock's force)
+on >= 99.9 % of those both call ok (float against double: a reading on a flag's edge may go
+either way).
 """
 
 import os
@@ -39,15 +41,26 @@ def c_compiler() -> str:
 
 
 def codes_of(table, imap, setting, rng) -> np.ndarray:
-    """Raw codes: presses over the range and the face with 2 uT noise, readings below the range
-    and saturated ones."""
+    """Raw codes: presses over the range and the face (or cone) with 2 uT noise, at rest, light
+    touch, beyond the last lock, below the range, saturated, and the magnet flipped."""
     g = table.grid
-    n = N_READINGS - 200
-    p = np.column_stack(
-        [rng.uniform(0.0, 1.05 * g.force_N[-1], n), rng.uniform(*g.u[[0, -1]], n), rng.uniform(*g.v[[0, -1]], n)]
+    at = RegularGridInterpolator((g.force_N, g.u, g.v), 1e6 * table.B_T)
+
+    def presses(n, lo, hi):
+        p = np.column_stack([rng.uniform(lo, hi, n), rng.uniform(*g.u[[0, -1]], n), rng.uniform(*g.v[[0, -1]], n)])
+        return at(p) + rng.normal(0.0, 2.0, (n, 3))
+
+    n = N_READINGS - 1600
+    first = float(imap.edges_N[1])
+    B_uT = np.vstack(
+        [
+            presses(n, 0.0, g.force_N[-1]),
+            at(np.zeros((500, 3))) + rng.normal(0.0, 2.0, (500, 3)),  # rest
+            presses(500, 0.02 * first, 0.5 * first),  # light touch
+            at(np.column_stack([np.full(200, g.force_N[-1]), np.zeros((200, 2))])) * rng.uniform(1.05, 1.3, (200, 1)),
+            -presses(200, 0.0, g.force_N[-1]),  # the magnet flipped
+        ]
     )
-    p[:, 0] = np.minimum(p[:, 0], g.force_N[-1])
-    B_uT = RegularGridInterpolator((g.force_N, g.u, g.v), 1e6 * table.B_T)(p) + rng.normal(0.0, 2.0, (n, 3))
     lsb = np.array([setting.xy_uT_per_lsb, setting.xy_uT_per_lsb, setting.z_uT_per_lsb])
     codes = np.rint(B_uT / lsb).astype(np.int64)
     low = np.rint(rng.uniform(0.0, 0.8 * imap.B_abs_T[0] * 1e6, (100, 3)) / np.sqrt(3) / lsb)
@@ -93,8 +106,8 @@ def test_the_compiled_header_reads_codes_as_the_python_reader_does(tmp_path, kin
         np.all(np.abs(c_out[both][:, [1 + k for k in forces]] - py_values[both][:, forces]) <= 0.01 * top, 1)
     )
     print(f"{kind}: same flag on {100 * same:.2f} %, within 1 % of full scale on {100 * close:.2f} % of {both.sum()}")
-    assert same >= 0.99, f"the same flag on {100 * same:.2f} %"
-    assert both.sum() >= 1000 and close >= 0.99, f"within 1 % of full scale on {100 * close:.2f} %"
-    asked = ("ok", "not_identifiable", "below_range", "saturated") if kind == "offset" else ("ok", "below_range")
-    for f in (*asked, "saturated"):
+    assert same >= 0.999, f"the same flag on {100 * same:.2f} %"
+    assert both.sum() >= 1000 and close >= 0.999, f"within 1 % of full scale on {100 * close:.2f} %"
+    asked = ("ok", "not_identifiable", "below_range", "no_fit") if kind == "offset" else ("ok", "below_range", "no_fit")
+    for f in (*asked, "saturated", "above_range"):
         assert np.any(py_flag == f)  # every kind of reading was asked

@@ -98,3 +98,70 @@ def test_an_unsign_extended_code_is_refused_in_c_and_in_python(headers, tmp_path
     py_flag, _ = read_codes(shear, imap, setting, codes)
     assert [C_FLAGS[int(f)] for f in c_out[:, 0]] == list(py_flag)
     assert py_flag[1] == "bad_code" and py_flag[0] != "bad_code"
+
+
+def test_the_table_is_defined_once_in_a_program_of_two_files(headers, tmp_path):
+    # one file defines MST_SHR_IMPLEMENTATION (the table and the code), another includes the header
+    # plainly: the program links, the table is in the first object only, and both read alike
+    cc = c_compiler()
+    texts, shear, imap, setting = headers
+    (tmp_path / "shear_table.h").write_text(texts["shear_table.h"])
+    (tmp_path / "one.c").write_text('#define MST_SHR_IMPLEMENTATION\n#include "shear_table.h"\n')
+    (tmp_path / "two.c").write_text(
+        '#include <stdio.h>\n#include "shear_table.h"\nint main(void)\n{\n    long x, y, z;\n'
+        '    while (scanf("%ld %ld %ld", &x, &y, &z) == 3) {\n        struct mst_shear e = {0};\n'
+        "        int flag = mst_shear_from_codes((int32_t)x, (int32_t)y, (int32_t)z, &e);\n"
+        '        printf("%d %.9g %.9g %.9g\\n", flag, (double)e.force_N, (double)e.shear_x_N, (double)e.shear_y_N);\n'
+        "    }\n    return 0;\n}\n"
+    )
+    objs = []
+    for name in ("one", "two"):
+        obj = tmp_path / f"{name}.o"
+        subprocess.run([cc, "-std=c99", "-O2", *c_drivers.STRICT, "-c", tmp_path / f"{name}.c", "-o", obj], check=True)
+        objs.append(obj)
+    nm = shutil.which("nm")
+    if nm is not None:
+        symbols = [subprocess.run([nm, o], capture_output=True, text=True).stdout for o in objs]
+        assert "mst_shr_B_uT" in symbols[0] and "mst_shr_B_uT" not in symbols[1]
+    exe = tmp_path / "two"
+    subprocess.run([cc, *objs, "-o", exe, "-lm"], check=True)
+    top = float(imap.force_N[-1])
+    lsb = np.array([setting.xy_uT_per_lsb, setting.xy_uT_per_lsb, setting.z_uT_per_lsb])
+    # presses at nodes, with negative X and Y codes among them
+    B_uT = 1e6 * shear.table.B_T[[1, 2, 4], [0, 0, 1], [0, 1, 0]]
+    codes = np.rint(B_uT / lsb).astype(np.int64)
+    assert np.any(codes[:, :2] < 0)
+    out = subprocess.run([exe], input="".join(f"{x} {y} {z}\n" for x, y, z in codes), capture_output=True, text=True)
+    two = np.array([[float(v) for v in line.split()] for line in out.stdout.splitlines()])
+    flag, values = read_codes(shear, imap, setting, codes)
+    assert [C_FLAGS[int(f)] for f in two[:, 0]] == list(flag) == ["ok"] * 3
+    np.testing.assert_allclose(two[:, 1:4], values[:, :3], atol=0.01 * top)
+
+
+def test_the_sketch_sign_extends_the_chips_words(headers, tmp_path):
+    # the sketch compiled for the host with a stub I2C bus that answers the chip's two's-complement
+    # words for negative codes: they come back negative, as int32_t, through the header
+    cc = c_compiler()
+    texts, shear, imap, setting = headers
+    (tmp_path / "shear_table.h").write_text(texts["shear_table.h"])
+    codes = [-300, 450, -200]  # |B| below the range: the sketch prints the flag and the codes it read
+    words = [c & 0xFFFF for c in codes]
+    rx = ", ".join(str(b) for w in words for b in (w >> 8, w & 0xFF))
+    (tmp_path / "board.c").write_text(
+        "#include <stddef.h>\n#include <stdint.h>\n#include <stdio.h>\n#include <stdlib.h>\n#include <string.h>\n"
+        "int board_i2c(uint8_t addr, const uint8_t *tx, size_t n_tx, uint8_t *rx, size_t n_rx);\n"
+        "void board_delay_ms(uint32_t ms);\nvoid board_print(const char *line);\n"
+        f"static const uint8_t answer[7] = {{0, {rx}}};\n"
+        "int board_i2c(uint8_t addr, const uint8_t *tx, size_t n_tx, uint8_t *rx, size_t n_rx)\n{\n"
+        "    (void)addr; (void)tx; (void)n_tx;\n    if (n_rx == 7) memcpy(rx, answer, 7); else memset(rx, 0, n_rx);\n"
+        "    return 0;\n}\nvoid board_delay_ms(uint32_t ms) { (void)ms; }\n"
+        "void board_print(const char *line) { puts(line); exit(0); }\n"
+    )
+    exe = tmp_path / "sketch"
+    subprocess.run(
+        [cc, "-std=c99", "-O2", *c_drivers.STRICT, "-I", tmp_path, SKETCH, tmp_path / "board.c", "-o", exe, "-lm"],
+        check=True,
+    )
+    line = subprocess.run([exe], capture_output=True, text=True, check=True).stdout.strip()
+    flag, _ = read_codes(shear, imap, setting, np.array([codes]))
+    assert line == f"{flag[0]} (codes -300 450 -200)"

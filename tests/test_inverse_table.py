@@ -1,10 +1,10 @@
-"""The offset reader's table (`mst read --estimate offset`): its census of roots, its Cramer-Rao
+"""The offset reader's table (`mst read --estimate offset`): its direct inverse, its Cramer-Rao
 sigmas and the command around it.
 
 On fields given in closed form the roots are known by algebra: a field linear in (F, x0, y0) is
 trilinear exactly, so the table gives its root and the analytic covariance sigma^2 (A^T A)^-1; a
-field that folds over has two roots, and the census finds both wherever they are (no start to
-fall on one side); a field blind to x0 leaves x0 unidentifiable. On the bundled design's own
+field that folds over has two roots, and the direct inverse finds both (its second start, the
+first end mirrored, reaches the other side); a field blind to x0 leaves x0 unidentifiable. On the bundled design's own
 tilt rung, readings at the table's nodes come back exactly (trilinear interpolation is exact at
 its nodes), and the exact solve polishes a reading between them to the truth.
 """

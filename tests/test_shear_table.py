@@ -1,5 +1,5 @@
 """``mst read --estimate shear`` (one chip): the shear table over (Fz, Fx / Fz, Fy / Fz) of a
-centred press, its census, its Cramer-Rao sigmas and the command around it.
+centred press, its direct inverse, its Cramer-Rao sigmas and the command around it.
 
 Numbers fixed outside the table: the general-load model evaluated load by load
 (:func:`~mst_cli.model.general_load.field_T`, not the table's paths), the chain rule of the

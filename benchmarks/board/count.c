@@ -3,6 +3,8 @@
  * SysTick counts the board's clock of it, so ticks convert to instructions by the first line
  * printed: "cal TICKS" for a loop of CAL_INSNS instructions (2 a turn: subs, bne). */
 #include <stdint.h>
+#define MST_OFF_IMPLEMENTATION
+#define MST_SHR_IMPLEMENTATION
 #include "table.h"
 #include "codes.h"
 

@@ -1,6 +1,6 @@
 """The one-chip readers' tables (``mst read --estimate offset`` and ``--estimate shear``): the
-model's field tabulated once per model over the loads the reader supports, and inverted by a
-census of every cell.
+model's field tabulated once per model over the loads the reader supports, and inverted
+directly: a start from the field, then a bounded Gauss-Newton on the table.
 
 The field (Bx, By, Bz) is tabulated on a grid of nodes in the normal force (0 to the last lock)
 and two more coordinates (u, v), one force path up the forces per (u, v) node; between nodes it
@@ -12,23 +12,23 @@ is trilinear. The table's ``kind`` says what (u, v) are:
   press (a friction cone: a box in the ratios), each a
   :func:`~mst_cli.model.general_load.load_path` path; an estimate is given as (Fz, Fx, Fy) =
   (F, u F, v F), its Jacobian carried over by the chain rule before the bound is taken.
- A trilinear cell's field is a convex
-combination of its eight corners', so it lies in their bounding box: a reading that a press in
-the cell explains to within k noise sigmas lies inside that box widened by k sigma. The census
-takes every such cell (a vectorised test over all cells and readings), solves the cell's
-trilinear field for the reading by Newton inside the cell (every candidate of every reading at
-once) and keeps each solve that ends in its cell within k sigma of the reading: every root of
-the table, found by construction, not by where a start fell. The flags are the exact reader's
-(:mod:`~mst_cli.calibrate.offset_reading`): ``no_fit`` without a root, ``ambiguous`` when two
-roots lie further apart than twice their combined 1-sigma, ``not_identifiable`` when the best
-root's offset 1-sigma is over the bound, else ``ok``. Each root's 1-sigma is the Cramer-Rao bound
-of the reading there, sqrt(diag((J^T J / sigma^2)^-1)), J the table's field Jacobian
-dB/d(F, x0, y0) and sigma the chip's noise and the table's own interpolation error in that force
-slab in quadrature (:meth:`InverseTable.slab_error_uT`; the same sigma widens the census and
-judges the misfit): the stated 1-sigma covers what the table adds.
+
+The table is inverted directly (the same steps as the C header's, batched here over readings):
+the start is the node nearest the reading among the force slabs whose |B| range, widened by k
+noise sigmas, holds the reading's |B| (:func:`start_nodes`); from it a bounded Gauss-Newton on
+the trilinear field that never climbs (:func:`_gauss_newton`); a second start at that end's
+mirror through the middle of (u, v) (:func:`mirror_start`), where a field that folds over has
+its other root. An end within k sigma of the reading is a root. The flags are the exact
+reader's (:mod:`~mst_cli.calibrate.offset_reading`): ``no_fit`` without a root, ``ambiguous``
+when two roots lie further apart than twice their combined 1-sigma, ``not_identifiable`` when
+the best root's offset 1-sigma is over the bound, else ``ok``. Each root's 1-sigma is the
+Cramer-Rao bound of the reading there, sqrt(diag((J^T J / sigma^2)^-1)), J the table's field
+Jacobian dB/d(F, x0, y0) and sigma the chip's noise and the table's own interpolation error in
+that force slab in quadrature (:meth:`InverseTable.slab_error_uT`; the same sigma widens the
+start's slab test and judges the misfit): the stated 1-sigma covers what the table adds.
 
 The arithmetic is written so that the C header (:mod:`~mst_cli.calibrate.table_header`) can do
-the same steps in float: a fixed number of Newton steps on a 3 x 3 system solved by Cramer's rule.
+the same steps in float: at most STEPS Gauss-Newton steps on a 3 x 3 system solved by Cramer's rule.
 """
 
 from __future__ import annotations
@@ -43,6 +43,7 @@ from typing import Any, BinaryIO
 import numpy as np
 
 from mst_cli.calibrate.table_file import MAX_TABLE_BYTES, PARSE_ERRORS, TABLE_KEYS, checked_arrays, npz_arrays
+from mst_cli.calibrate.trilinear import crb_sigmas, normal_step, to_output, trilinear
 from mst_cli.errors import InputError
 from mst_cli.io.files import read_input
 from mst_cli.model.assembly import SensorGeometry
@@ -55,13 +56,16 @@ TABLE_FILE = "inverse_table.npz"  # the offset table's file beside the model ...
 SHEAR_TABLE_FILE = "shear_table.npz"  # ... and the shear table's
 TABLE_FORMAT = 2  # bumped when the table's contents change meaning: an older file is rebuilt
 FIT_SIGMAS = 3.0  # a cell whose best point is further off the reading than this found no root
-NEWTON_STEPS = 8  # Newton steps inside a cell (trilinear: quadratic convergence from its centre)
-PRUNE_AFTER = 1  # ... from which on a solve pinned outside its cell is dropped
-OUTSIDE = 0.5  # a cell's Newton may leave it by this share of the cell before it is clipped ...
-INSIDE_TOL = 1e-3  # ... and a solve ends in its cell within this share of it
-RIDGE = 1e-9  # the Newton system's ridge, relative to its trace (a flat direction stays put)
-CHUNK = 256  # readings per census block (cells x CHUNK booleans at a time)
-BLOCK = 4096  # readings per estimate (their candidate cells' corners at a time)
+# the direct inverse (the C header takes the same numbers): from each start, Gauss-Newton steps on
+# the table's trilinear field, from the nearest node of the force slabs the reading's |B| allows
+# (start_nodes) and from its end's mirror (mirror_start)
+STEPS = 10  # steps at most from each start (most converge in 2 to 5)
+STEP_CELLS = 2.0  # a step moves each coordinate by at most this many of its cells
+CONVERGED = 1e-4  # a start whose step moved less than this share of a cell has converged: it stops ...
+MIN_GAIN = 1e-3  # ... as does one whose step lowered the squared misfit by less than this share of it
+HALVINGS = 3  # a step that does not lower the misfit is halved up to this many times
+PROBE = 1e-3  # the share of a step that says which cell it enters (its Jacobian is that cell's)
+BLOCK = 4096  # readings per estimate (their starts' corners at a time)
 
 # (forces, mm between offsets): the default grid, 1 mm over the face and the range in 32 steps
 # (docs/design.md section 4.2 says what it costs in accuracy against the exact solve: the
@@ -71,7 +75,7 @@ GRID_DEFAULT = (33, 1.0)
 GRID_COARSE = (17, 2.0)
 KINDS = ("offset", "shear")
 # the shear table's friction cone |Fx / Fz|, |Fy / Fz| <= SHEAR_TABLE_RATIO (a reading beyond it is
-# no_fit: TPU on TPU or skin slips near 0.5 to 1) and its (forces, ratio step); the census's cost
+# no_fit: TPU on TPU or skin slips near 0.5 to 1) and its (forces, ratio step); the start's scan
 # grows with the nodes (docs/design.md section 4.5)
 SHEAR_TABLE_RATIO = 0.5
 SHEAR_GRID_DEFAULT = (33, 0.05)
@@ -136,8 +140,8 @@ class TableGrid:
 class TableEstimates:
     """Per reading: the estimate p (n, 3) (offset: force N, x0 mm, y0 mm; shear: Fz, Fx, Fy N;
     NaN unless ``ok``), its Cramer-Rao 1-sigma (n, 3), the flag (ok, not_identifiable, ambiguous,
-    no_fit) and how many roots the census found (solves that ended in their cell: a root on the
-    face between two cells counts in each)."""
+    no_fit) and how many distinct roots the direct inverse found (0 to 2: two ends within each
+    other's combined 2-sigma count once)."""
 
     p: np.ndarray
     sigma: np.ndarray
@@ -180,8 +184,6 @@ class InverseTable:
     B_T: np.ndarray
     source_hash: str
     _corners: np.ndarray | None = field(default=None, repr=False, compare=False)
-    _boxes: tuple[np.ndarray, np.ndarray] | None = field(default=None, repr=False, compare=False)
-    _centre: tuple[np.ndarray, np.ndarray] | None = field(default=None, repr=False, compare=False)
     _slab_error: np.ndarray | None = field(default=None, repr=False, compare=False)
 
     @property
@@ -207,31 +209,12 @@ class InverseTable:
             self._corners = C.reshape(-1, 2, 2, 2, 3)
         return self._corners
 
-    def boxes_uT(self) -> tuple[np.ndarray, np.ndarray]:
-        """Each cell's field box over its eight corners: (lo, hi), each (n_cells, 3) in uT."""
-        if self._boxes is None:
-            C = self.corners_uT().reshape(-1, 8, 3)
-            self._boxes = C.min(axis=1), C.max(axis=1)
-        return self._boxes
-
-    def centre_steps(self) -> tuple[np.ndarray, np.ndarray]:
-        """Each cell's field at its centre (n_cells, 3) uT and the matrix (n_cells, 3, 3) of its
-        first Newton step from there, dt = M (b - v): the ridged (J^T J + ridge)^-1 J^T."""
-        if self._centre is None:
-            C = self.corners_uT()
-            v, J = _trilinear(C, np.full((len(C), 3), 0.5))
-            A = np.einsum("pki,pkj->pij", J, J)
-            A += (RIDGE * (A[:, 0, 0] + A[:, 1, 1] + A[:, 2, 2]) + 1e-30)[:, None, None] * np.eye(3)
-            M = np.stack([_solve3(A, J[:, k, :]) for k in range(3)], axis=2)  # column k: A^-1 J^T e_k
-            self._centre = v, np.nan_to_num(M)
-        return self._centre
-
     def slab_error_uT(self) -> np.ndarray:
         """The table's own interpolation error per force slab (n_F - 1,), uT per axis
         (:func:`_miss_per_slab`). A table of every other node of another knows it: what it
         misses at the other's nodes. Any other table estimates it: trilinear interpolation errs
         as the square of the node spacing, so a quarter of what its table of every other node
-        misses at its nodes. The census takes it as field noise of that slab, in quadrature with
+        misses at its nodes. The direct inverse takes it as field noise of that slab, in quadrature with
         the chip's: a root within it counts, and the stated 1-sigma covers it (docs/design.md
         section 4.5). 0 where an axis has fewer than 3 nodes."""
         if self._slab_error is None:
@@ -356,29 +339,6 @@ def build_table(
     return InverseTable(grid, np.ascontiguousarray(B), source)
 
 
-def census(table: InverseTable, B_uT: np.ndarray, margin_uT: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(reading index, cell index) of every cell whose corners' box, widened by ``margin_uT``
-    (per cell, or one for all), holds the reading (uT). Readings go in blocks of CHUNK by
-    ascending Bz, each block against the cells whose Bz box meets the block's Bz span."""
-    lo, hi = table.boxes_uT()
-    m = np.broadcast_to(np.asarray(margin_uT, dtype=float), (len(lo),))[:, None]
-    lo, hi = lo - m, hi + m
-    by_z = np.argsort(B_uT[:, 2], kind="stable")
-    reads, cells = [], []
-    for start in range(0, len(B_uT), CHUNK):
-        rows = by_z[start : start + CHUNK]
-        b = B_uT[rows]
-        near = np.flatnonzero((lo[:, 2] <= b[-1, 2]) & (hi[:, 2] >= b[0, 2]))
-        l, h = lo[near], hi[near]
-        inside = (b[:, None, 2] >= l[None, :, 2]) & (b[:, None, 2] <= h[None, :, 2])
-        for axis in (0, 1):
-            inside &= (b[:, None, axis] >= l[None, :, axis]) & (b[:, None, axis] <= h[None, :, axis])
-        r, c = np.nonzero(inside)
-        reads.append(rows[r])
-        cells.append(near[c])
-    return np.concatenate(reads), np.concatenate(cells)
-
-
 def _miss_per_slab(coarse: InverseTable, fine: InverseTable) -> np.ndarray:
     """What ``coarse`` misses at ``fine``'s nodes (uT), per coarse force slab: the worst axis at
     each node, RMS over each force's (u, v) nodes, the worst force of the slab (its ends included).
@@ -393,188 +353,203 @@ def _miss_per_slab(coarse: InverseTable, fine: InverseTable) -> np.ndarray:
     return np.max(within * per_node, axis=1)
 
 
+def _locate(
+    table: InverseTable, p: np.ndarray, toward: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The cell of points p (P, 3) (its flat index, clipped to the table; of the points ``toward``
+    when given: the cell a step from p enters), p's coordinates t (P, 3) in it, the cell's widths
+    (P, 3) and its force slab (P,)."""
+    g = table.grid
+    nodes = (g.force_N, g.u, g.v)
+    at = p if toward is None else toward
+    idx = [np.clip(np.searchsorted(nodes[a], at[:, a], side="right") - 1, 0, len(nodes[a]) - 2) for a in range(3)]
+    w = np.stack([nodes[a][idx[a] + 1] - nodes[a][idx[a]] for a in range(3)], axis=1)
+    t = np.stack([(p[:, a] - nodes[a][idx[a]]) for a in range(3)], axis=1) / w
+    cell = np.ravel_multi_index(tuple(idx), tuple(n - 1 for n in g.shape))
+    return cell, t, w, idx[0]
+
+
 def _interpolate(table: InverseTable, pts: np.ndarray) -> np.ndarray:
     """The table's trilinear field (uT) at points (..., 3) of (F, u, v) inside its grid."""
-    g = table.grid
-    out = np.empty((*pts.shape[:-1], 3))
     flat = pts.reshape(-1, 3)
-    nodes = (g.force_N, g.u, g.v)
-    idx = [np.clip(np.searchsorted(nodes[a], flat[:, a], side="right") - 1, 0, len(nodes[a]) - 2) for a in range(3)]
-    t = np.stack(
-        [(flat[:, a] - nodes[a][idx[a]]) / (nodes[a][idx[a] + 1] - nodes[a][idx[a]]) for a in range(3)], axis=1
-    )
-    cell = np.ravel_multi_index(tuple(idx), tuple(n - 1 for n in g.shape))
-    out.reshape(-1, 3)[:] = _trilinear(table.corners_uT()[cell], t)[0]
+    cell, t, _, _ = _locate(table, flat)
+    return trilinear(table.corners_uT()[cell], t)[0].reshape(*pts.shape[:-1], 3)
+
+
+def slab_babs_uT(table: InverseTable) -> tuple[np.ndarray, np.ndarray]:
+    """Each force slab's |B| range over its nodes (both force ends, every (u, v)): (lo, hi), each
+    (n_F - 1,) uT. A trilinear field's size is at most its corners' largest."""
+    babs = np.linalg.norm(1e6 * table.B_T, axis=3).reshape(len(table.grid.force_N), -1)
+    lo, hi = babs.min(axis=1), babs.max(axis=1)
+    return np.minimum(lo[:-1], lo[1:]), np.maximum(hi[:-1], hi[1:])
+
+
+def start_nodes(table: InverseTable, B_uT: np.ndarray, noise_uT: np.ndarray) -> np.ndarray:
+    """The first start of each reading (n, 3) uT: the node nearest it (least squared distance,
+    the first in C order on a tie) among the nodes of every force slab whose |B| range, widened
+    by FIT_SIGMAS of the slab's noise ``noise_uT`` (n_F - 1,), holds the reading's |B| (a field
+    within that of the reading lies in no other slab: | |b| - |B| | <= |b - B|); NaN where no
+    slab holds it; on the no-load face, where every (u, v) gives the same field, the middle of
+    (u, v). Force node by force node, each against the readings it may hold (the distances by
+    a matrix product: C's float sums differ from them only in near-ties)."""
+    g = table.grid
+    lo, hi = slab_babs_uT(table)
+    margin = FIT_SIGMAS * noise_uT
+    babs = np.linalg.norm(B_uT, axis=1)[:, None]
+    slab = (babs >= lo - margin) & (babs <= hi + margin)
+    take = np.zeros((len(B_uT), len(g.force_N)), dtype=bool)
+    take[:, :-1] |= slab
+    take[:, 1:] |= slab
+    field = 1e6 * table.B_T.reshape(len(g.force_N), -1, 3)
+    size2 = np.sum(field * field, axis=2)
+    best = np.full(len(B_uT), np.inf)
+    node = np.full(len(B_uT), -1)
+    for k in range(len(g.force_N)):
+        rows = np.flatnonzero(take[:, k])
+        if not len(rows):
+            continue
+        b = B_uT[rows]
+        d2 = size2[k][None, :] - 2.0 * (b @ field[k].T)  # the squared distance less |b|^2 (a product)
+        j = np.argmin(d2, axis=1)
+        near = d2[np.arange(len(rows)), j] + np.sum(b * b, axis=1)
+        better = near < best[rows]
+        best[rows[better]], node[rows[better]] = near[better], k * field.shape[1] + j[better]
+    nodes = np.stack(np.meshgrid(g.force_N, g.u, g.v, indexing="ij"), axis=-1).reshape(-1, 3)
+    out = np.where((node >= 0)[:, None], nodes[np.maximum(node, 0)], np.nan)
+    out[out[:, 0] == g.force_N[0], 1:] = middle_uv(g)[0]  # no load: every (u, v) has its field
     return out
 
 
-def cell_sigma_uT(table: InverseTable, sigma_uT: float, cell: np.ndarray) -> np.ndarray:
-    """The field noise each cell's solve is judged by (uT): the chip's ``sigma_uT`` and the
-    table's interpolation error in its force slab (:meth:`InverseTable.slab_error_uT`), in
-    quadrature."""
-    per_slab = (table.grid.shape[1] - 1) * (table.grid.shape[2] - 1)
-    return np.hypot(sigma_uT, table.slab_error_uT()[cell // per_slab])
-
-
-def _bilinear(X: np.ndarray, u: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """X (P, 2, 2, 3) at (u, v) (P, 1) each."""
-    x0 = X[:, 0, 0] + (X[:, 0, 1] - X[:, 0, 0]) * v
-    x1 = X[:, 1, 0] + (X[:, 1, 1] - X[:, 1, 0]) * v
-    return x0 + (x1 - x0) * u
-
-
-def _trilinear(C: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The trilinear field (P, 3) of cells with corners C (P, 2, 2, 2, 3) at cell coordinates t
-    (P, 3), and its Jacobian (P, 3, 3) in those coordinates."""
-    t0, t1, t2 = t[:, 0:1], t[:, 1:2], t[:, 2:3]
-    lower, upper = _bilinear(C[:, 0], t1, t2), _bilinear(C[:, 1], t1, t2)
-    d1 = _bilinear(C[:, :, 1] - C[:, :, 0], t0, t2)
-    d2 = _bilinear(C[:, :, :, 1] - C[:, :, :, 0], t0, t1)
-    return lower + (upper - lower) * t0, np.stack([upper - lower, d1, d2], axis=2)
-
-
-def _solve3(A: np.ndarray, g: np.ndarray) -> np.ndarray:
-    """x of A x = g for many symmetric 3 x 3 systems (P, 3, 3) by Cramer's rule (as the C header
-    does); inf or NaN where A is singular."""
-    a, b, c = A[:, 0, 0], A[:, 0, 1], A[:, 0, 2]
-    d, e, f = A[:, 1, 1], A[:, 1, 2], A[:, 2, 2]
-    c00, c01, c02 = d * f - e * e, c * e - b * f, b * e - c * d
-    c11, c12, c22 = a * f - c * c, b * c - a * e, a * d - b * b
-    det = a * c00 + b * c01 + c * c02
-    g0, g1, g2 = g[:, 0], g[:, 1], g[:, 2]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        return (
-            np.stack(
-                [c00 * g0 + c01 * g1 + c02 * g2, c01 * g0 + c11 * g1 + c12 * g2, c02 * g0 + c12 * g1 + c22 * g2], axis=1
-            )
-            / det[:, None]
-        )
-
-
-def _normal(J: np.ndarray, r: np.ndarray, held: np.ndarray) -> np.ndarray:
-    """The ridged Gauss-Newton step of J dt = r, with the ``held`` coordinates' columns left out."""
-    Jh = J * ~held[:, None, :]
-    A = np.einsum("pki,pkj->pij", Jh, Jh)
-    A += (RIDGE * (A[:, 0, 0] + A[:, 1, 1] + A[:, 2, 2]) + 1e-30)[:, None, None] * np.eye(3)
-    return np.nan_to_num(_solve3(A, np.einsum("pki,pk->pi", Jh, r)))
-
-
-def _newton(
-    C: np.ndarray, b: np.ndarray, t: np.ndarray, lo_t: np.ndarray, hi_t: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
-    """Newton steps 2 to NEWTON_STEPS from t (the first step's end): (t (P, 3), still in play
-    (P,)). A solve pinned on its clip bound (OUTSIDE its cell, not the table's edge) from
-    PRUNE_AFTER steps on has no root in its cell (a neighbour's census has it) and is dropped."""
-    live = np.arange(len(C))
-    for step in range(1, NEWTON_STEPS):
-        val, J = _trilinear(C[live], t[live])
-        r = b[live] - val
-        tl, lo, hi = t[live], lo_t[live], hi_t[live]
-        dt = _normal(J, r, np.zeros_like(tl, dtype=bool))
-        held = ((tl <= lo) & (dt < 0.0)) | ((tl >= hi) & (dt > 0.0))
-        some = held.any(axis=1)
-        if some.any():
-            dt[some] = _normal(J[some], r[some], held[some])
-        t[live] = np.clip(tl + dt, lo, hi)
-        if step + 1 >= PRUNE_AFTER:
-            live = live[~_pinned_outside(t[live], lo, hi)]
-    kept = np.zeros(len(C), dtype=bool)
-    kept[live] = True
-    return t, kept
-
-
-def _pinned_outside(t: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
-    return np.any(((t <= lo) & (lo < 0.0)) | ((t >= hi) & (hi > 1.0)), axis=1)
-
-
-def solve_cells(
-    table: InverseTable, b_uT: np.ndarray, cell: np.ndarray
+def _field(
+    table: InverseTable, b: np.ndarray, p: np.ndarray, toward: np.ndarray | None = None
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Each (reading, cell) pair's trilinear solve, for the pairs still in play after the first
-    Newton step (from the cell's centre, by its precomputed matrix): (their indices among the
-    pairs, p (K, 3) force N / x0 mm / y0 mm, misfit uT, in-cell (K,), the field Jacobian dB/dp
-    (K, 3, 3) in uT per unit of p). A coordinate may leave its cell by OUTSIDE, except at the
-    table's edge, where it is held on the edge."""
-    shape = tuple(n - 1 for n in table.grid.shape)
-    idx = np.stack(np.unravel_index(cell, shape), axis=1)
-    lo_t = np.where(idx == 0, 0.0, -OUTSIDE)
-    hi_t = np.where(idx == np.array(shape) - 1, 1.0, 1.0 + OUTSIDE)
-    v, M = table.centre_steps()
-    t = np.clip(0.5 + np.einsum("pij,pj->pi", M[cell], b_uT - v[cell]), lo_t, hi_t)
-    play = np.flatnonzero(~_pinned_outside(t, lo_t, hi_t)) if PRUNE_AFTER <= 1 else np.arange(len(cell))
-    idx, C, b = idx[play], table.corners_uT()[cell[play]], b_uT[play]
-    t, kept = _newton(C, b, t[play], lo_t[play], hi_t[play])
-    val, J = _trilinear(C, t)
-    misfit = np.where(kept, np.linalg.norm(b - val, axis=1), np.inf)
-    inside = np.all((t >= -INSIDE_TOL) & (t <= 1.0 + INSIDE_TOL), axis=1)
-    nodes = (table.grid.force_N, table.grid.u, table.grid.v)
-    width = np.stack([nodes[a][idx[:, a] + 1] - nodes[a][idx[:, a]] for a in range(3)], axis=1)
-    p = np.stack([nodes[a][idx[:, a]] for a in range(3)], axis=1) + t * width
-    return play, p, misfit, inside, J / width[:, None, :]
+    """At points p (P, 3), in their cells (:func:`_locate`): the residual b - field (P, 3) uT, its
+    square sum (P,), the field's Jacobian in cell coordinates (P, 3, 3), the cells' widths (P, 3)
+    and the cells (P,)."""
+    cell, t, w, _ = _locate(table, p, toward)
+    val, J = trilinear(table.corners_uT()[cell], t)
+    r = b - val
+    return r, np.sum(r * r, axis=1), J, w, cell
 
 
-def crb_sigmas(J: np.ndarray, sigma: float | np.ndarray) -> np.ndarray:
-    """The Cramer-Rao 1-sigma of (F, x0, y0), sqrt(diag((J^T J / sigma^2)^-1)), for Jacobians
-    (P, 3, 3) in field units per unit of p and the noise ``sigma`` per axis in the same field
-    units (one, or (P,)); inf where J^T J is singular."""
-    s2 = np.reshape(np.asarray(sigma, dtype=float) ** 2, (-1, 1, 1))
-    A = np.einsum("pki,pkj->pij", J, J) / s2
-    cov = _solve3_matrix(A)
-    return np.sqrt(np.where(np.isfinite(cov) & (cov > 0), cov, np.inf))
+def _held_step(J: np.ndarray, r: np.ndarray, q: np.ndarray, box: tuple[np.ndarray, np.ndarray]) -> np.ndarray:
+    """The Gauss-Newton step (cell coordinates) from q (P, 3), a coordinate on the box's face
+    whose step would leave it held, at most STEP_CELLS cells per coordinate."""
+    dt = normal_step(J, r, np.zeros_like(q, dtype=bool))
+    held = ((q <= box[0]) & (dt < 0.0)) | ((q >= box[1]) & (dt > 0.0))
+    some = held.any(axis=1)
+    if some.any():
+        dt[some] = normal_step(J[some], r[some], held[some])
+    return np.clip(dt, -STEP_CELLS, STEP_CELLS)
 
 
-def _solve3_matrix(A: np.ndarray) -> np.ndarray:
-    """diag(A^-1) for symmetric 3 x 3 matrices (P, 3, 3); inf where singular or not positive."""
-    c0 = A[:, 1, 1] * A[:, 2, 2] - A[:, 1, 2] ** 2
-    c1 = A[:, 0, 0] * A[:, 2, 2] - A[:, 0, 2] ** 2
-    c2 = A[:, 0, 0] * A[:, 1, 1] - A[:, 0, 1] ** 2
-    det = np.linalg.det(A)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        out = np.stack([c0, c1, c2], axis=1) / det[:, None]
-    return np.where((det > 0)[:, None], out, np.inf)
+def _gauss_newton(table: InverseTable, b: np.ndarray, p: np.ndarray) -> np.ndarray:
+    """Up to STEPS ridged Gauss-Newton steps on the table's trilinear field from starts p (P, 3)
+    to readings b (P, 3) uT (:func:`_held_step`), each taken with the Jacobian of the cell it
+    enters (from a node or a face, the one whose side it goes to), clamped to the table's box and
+    halved up to HALVINGS times until the misfit falls; a start stops when no step lowers it,
+    once its step moves less than CONVERGED of a cell, or once it lowers the squared misfit by
+    less than MIN_GAIN of it. The ends (P, 3)."""
+    g = table.grid
+    box = (np.array([g.force_N[0], g.u[0], g.v[0]]), np.array([g.force_N[-1], g.u[-1], g.v[-1]]))
+    r, m2, J, w, cell = _field(table, b, p)
+    live = np.arange(len(p))
+    for _ in range(STEPS):
+        if not len(live):
+            break
+        q = p[live]
+        dt = _held_step(J[live], r[live], q, box)
+        _, _, Jp, wp, cp = _field(table, b[live], q, np.clip(q + PROBE * dt * w[live], *box))
+        turn = np.flatnonzero(cp != cell[live])
+        if len(turn):
+            J[live[turn]], w[live[turn]], cell[live[turn]] = Jp[turn], wp[turn], cp[turn]
+            dt[turn] = _held_step(Jp[turn], r[live[turn]], q[turn], box)
+        dp = dt * w[live]
+        pending, go = np.arange(len(live)), np.zeros(len(live), dtype=bool)
+        for h in range(HALVINGS + 1):
+            rows = live[pending]
+            new = np.clip(q[pending] + 0.5**h * dp[pending], *box)
+            rn, m2n, Jn, wn, cn = _field(table, b[rows], new)
+            better = m2n < m2[rows]
+            done = rows[better]
+            gain = m2n[better] < (1.0 - MIN_GAIN) * m2[done]
+            moved = np.max(np.abs(new[better] - q[pending[better]]) / w[done], axis=1)
+            p[done], r[done], m2[done], J[done], w[done] = new[better], rn[better], m2n[better], Jn[better], wn[better]
+            cell[done] = cn[better]
+            go[pending[better]] = (moved >= CONVERGED) & gain
+            pending = pending[~better]
+            if not len(pending):
+                break
+        live = live[go]
+    return p
 
 
-def to_output(kind: str, p: np.ndarray, J: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The roots p (K, 3) and field Jacobians J (K, 3, 3) in the estimate's coordinates: the
-    offset table's are its own; the shear table's (F, u, v) become (Fz, Fx, Fy) = (F, u F, v F),
-    dB/dq = dB/dp dp/dq with dp/dq the inverse of [[1, 0, 0], [u, F, 0], [v, 0, F]]."""
-    if kind != "shear":
-        return p, J
-    F = np.maximum(p[:, 0], 1e-12)  # a press of no force has no shear (its ratio is any)
-    q = np.column_stack([p[:, 0], p[:, 1] * p[:, 0], p[:, 2] * p[:, 0]])
-    Jq = np.empty_like(J)
-    Jq[:, :, 1], Jq[:, :, 2] = J[:, :, 1] / F[:, None], J[:, :, 2] / F[:, None]
-    Jq[:, :, 0] = J[:, :, 0] - (p[:, 1] / F)[:, None] * J[:, :, 1] - (p[:, 2] / F)[:, None] * J[:, :, 2]
-    return q, Jq
+def middle_uv(grid: TableGrid) -> tuple[np.ndarray, np.ndarray]:
+    """The middle of the table's (u, v) box (the first start's) and its mean node spacing."""
+    mid = np.array([0.5 * (grid.u[0] + grid.u[-1]), 0.5 * (grid.v[0] + grid.v[-1])])
+    return mid, np.array([(grid.u[-1] - grid.u[0]) / (len(grid.u) - 1), (grid.v[-1] - grid.v[0]) / (len(grid.v) - 1)])
+
+
+def mirror_start(grid: TableGrid, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The second start of each end p (P, 3): its (u, v) mirrored through the middle of the table
+    (a field symmetric about it, or folding over, has its other root there), and whether it is
+    taken (the end lies more than one mean node spacing from the middle)."""
+    mid, step = middle_uv(grid)
+    far = np.any(np.abs(p[:, 1:] - mid) > step, axis=1)
+    return np.column_stack([p[:, 0], 2.0 * mid - p[:, 1:]]), far
+
+
+def solve_starts(
+    table: InverseTable, B_uT: np.ndarray, noise_uT: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The direct inverse of readings (n, 3) uT from both starts: the nearest node
+    (:func:`start_nodes`, slot 0) and its end's mirror (:func:`mirror_start`, slot 1, where
+    taken): (p (n, 2, 3) in the table's coordinates, NaN for an empty slot; misfit (n, 2) uT, inf
+    there; the field Jacobian dB/dp (n, 2, 3, 3) in uT per unit of p; the force slab of each end
+    (n, 2))."""
+    n = len(B_uT)
+    P = np.full((n, 2, 3), np.nan)
+    P[:, 0] = start_nodes(table, B_uT, noise_uT)
+    first = np.flatnonzero(np.isfinite(P[:, 0, 0]))
+    P[first, 0] = ends = _gauss_newton(table, B_uT[first], P[first, 0].copy())
+    start, far = mirror_start(table.grid, ends)
+    second = first[far]
+    P[second, 1] = _gauss_newton(table, B_uT[second], start[far])
+    flat = P.reshape(-1, 3)
+    rows = np.flatnonzero(np.isfinite(flat[:, 0]))
+    cell, t, w, slab = _locate(table, flat[rows])
+    val, Jt = trilinear(table.corners_uT()[cell], t)
+    misfit = np.full(2 * n, np.inf)
+    J = np.zeros((2 * n, 3, 3))
+    slabs = np.zeros(2 * n, dtype=int)
+    misfit[rows] = np.linalg.norm(np.repeat(B_uT, 2, axis=0)[rows] - val, axis=1)
+    J[rows], slabs[rows] = Jt / w[:, None, :], slab
+    return P, misfit.reshape(n, 2), J.reshape(n, 2, 3, 3), slabs.reshape(n, 2)
 
 
 def estimate_many(table: InverseTable, B_T: np.ndarray, sigma_T: float, max_sigma_mm: float) -> TableEstimates:
-    """The census and its flags for readings B_T (n, 3) in T (see the module's docstring); the
-    offset's bound ``max_sigma_mm`` on x0 and y0 (the shear table has none: its sigmas say)."""
-    n = len(B_T)
-    sigma_uT = 1e6 * sigma_T
-    B_uT = 1e6 * B_T
-    every = np.arange(np.prod([n - 1 for n in table.grid.shape]))
-    read, cell = census(table, B_uT, FIT_SIGMAS * cell_sigma_uT(table, sigma_uT, every))
-    play, p, misfit, inside, J = solve_cells(table, B_uT[read], cell)
-    read, noise = read[play], cell_sigma_uT(table, sigma_uT, cell[play])
-    root = inside & (misfit <= FIT_SIGMAS * noise)
-    read, misfit = read[root], misfit[root]
-    p, J = to_output(table.grid.kind, p[root], J[root])
-    sig = crb_sigmas(J, noise[root])
-    roots = np.bincount(read, minlength=n)
-    # the best root of each reading: the least misfit (ties: the first found)
-    order = np.lexsort((misfit, read))
-    first = order[np.searchsorted(read[order], np.arange(n))[roots > 0]]
-    best_of = np.full(n, -1)
-    best_of[read[first]] = first
-    b = best_of[read]
-    far = np.any(np.abs(p - p[b]) > 2.0 * np.hypot(sig, sig[b]), axis=1)
-    ambiguous = np.bincount(read, weights=far, minlength=n) > 0
-    has = best_of >= 0
-    pb = np.full((n, 3), np.nan)
-    sb = np.full((n, 3), np.nan)
-    pb[has], sb[has] = p[best_of[has]], sig[best_of[has]]
+    """The direct inverse and its flags for readings B_T (n, 3) in T (see the module's
+    docstring); the offset's bound ``max_sigma_mm`` on x0 and y0 (the shear table has none: its
+    sigmas say)."""
+    n, S = len(B_T), 2
+    slab_noise = np.hypot(1e6 * sigma_T, table.slab_error_uT())
+    p, misfit, J, slab = solve_starts(table, 1e6 * B_T, slab_noise)
+    noise = slab_noise[slab]
+    root = misfit <= FIT_SIGMAS * noise
+    q, Jq = to_output(table.grid.kind, np.nan_to_num(p.reshape(-1, 3)), J.reshape(-1, 3, 3))
+    q, sig = q.reshape(n, S, 3), crb_sigmas(Jq, noise.ravel()).reshape(n, S, 3)
+    # pairs of roots: far when they lie further apart than twice their combined 1-sigma on an axis
+    with np.errstate(invalid="ignore"):
+        far = np.any(np.abs(q[:, :, None] - q[:, None, :]) > 2.0 * np.hypot(sig[:, :, None], sig[:, None, :]), axis=3)
+    pair = root[:, :, None] & root[:, None, :]
+    ambiguous = np.any(far & pair, axis=(1, 2))
+    earlier = np.tril(np.ones((S, S), dtype=bool), -1)  # [s, r]: r before s
+    roots = np.sum(root & ~np.any(pair & ~far & earlier, axis=2), axis=1)
+    best = np.argmin(np.where(root, misfit, np.inf), axis=1)
+    has = root.any(axis=1)
+    i = np.arange(n)
+    pb = np.where(has[:, None], q[i, best], np.nan)
+    sb = np.where(has[:, None], sig[i, best], np.nan)
     flag = np.full(n, "no_fit", dtype=object)
     flag[has] = "ok"
     if table.grid.kind == "offset":

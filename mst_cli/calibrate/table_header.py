@@ -1,5 +1,6 @@
-"""``offset_table.h`` and ``shear_table.h``: a one-chip table reader and its census as a C99
-header (float, no dynamic memory), for a microcontroller that reads the MLX90393's three axes:
+"""``offset_table.h`` and ``shear_table.h``: a one-chip table reader and its direct inverse as a
+C99 single-file header (float, no dynamic memory; defined in the one .c file that defines
+``MST_OFF_IMPLEMENTATION`` / ``MST_SHR_IMPLEMENTATION``), for a microcontroller that reads the MLX90393's three axes:
 raw codes -> the three estimates of the table's kind (offset: force, press x, y; shear: Fz, Fx,
 Fy of a centred press), their Cramer-Rao 1-sigma and the reader's flag.
 
@@ -23,12 +24,13 @@ from mst_cli.calibrate.header import c_float, fill_template
 from mst_cli.calibrate.inverse_map import InverseMap
 from mst_cli.calibrate.load_readings import LoadReadings
 from mst_cli.calibrate.table_reader import OffsetTableReader, ShearTableReader
+from mst_cli.calibrate.trilinear import RIDGE
 from mst_cli.model.chip import CODE_RANGE_LSB, SATURATION_T, ChipSetting
 
 OFFSET_HEADER_FILE = "offset_table.h"
 SHEAR_HEADER_FILE = "shear_table.h"
 TEMPLATE = "table_reader.h.in"
-# what differs between the kinds: names, what is estimated, the verdict after the census
+# what differs between the kinds: names, what is estimated, the verdict after the inverse
 KIND_TEXT = {
     "offset": {
         "file": OFFSET_HEADER_FILE,
@@ -85,16 +87,15 @@ def _c_floats(cname: str, values: np.ndarray, per_line: int = 8) -> str:
     return f"static const float {cname}[{len(vals)}] = {{\n" + ",\n".join(lines) + "\n};\n"
 
 
-def _boxes(table: it.InverseTable, p: str) -> dict[str, str]:
-    """The C arrays of every cell's field box and every force slab's (lo, hi per axis, uT), from
-    the corners as the header stores them (float), so its census takes the cells Python's does."""
-    as_c = np.array([float(f"{v:.8g}") for v in np.ravel(1e6 * table.B_T)])  # what _c_floats writes
-    corners = as_c.astype(np.float32).astype(float).reshape(table.B_T.shape)
-    lo, hi = it.InverseTable(table.grid, corners * 1e-6, "").boxes_uT()
-    per_slab = (table.grid.shape[1] - 1) * (table.grid.shape[2] - 1)
-    slab_lo, slab_hi = lo.reshape(-1, per_slab, 3).min(axis=1), hi.reshape(-1, per_slab, 3).max(axis=1)
-    arrays = {"box_lo": lo, "box_hi": hi, "slab_lo": slab_lo, "slab_hi": slab_hi}
-    return {k: _c_floats(f"{p}_{k}_uT", v, per_line=6) for k, v in arrays.items()}
+def start_arrays(table: it.InverseTable, p: str) -> dict[str, str]:
+    """The C arrays of the direct inverse's starts: each force slab's |B| range (uT), the middle
+    of (u, v) and its mean node spacing, as :func:`~mst_cli.calibrate.inverse_table.solve_starts`
+    takes them."""
+    lo, hi = it.slab_babs_uT(table)
+    return {
+        "slab_babs": _c_floats(f"{p}_slab_babs_lo_uT", lo) + _c_floats(f"{p}_slab_babs_hi_uT", hi),
+        "middle": _c_floats(f"{p}_middle_uv", np.ravel(it.middle_uv(table.grid))),
+    }
 
 
 def range_bounds_uT(imap: InverseMap) -> tuple[float, float, float]:
@@ -141,7 +142,7 @@ def table_header(
         xy_uT_per_lsb_c=c_float(setting.xy_uT_per_lsb, 8),
         z_uT_per_lsb_c=c_float(setting.z_uT_per_lsb, 8),
         saturated_lsb=min(CODE_RANGE_LSB[setting.res] - 1, int(SATURATION_T * 1e6 / setting.z_uT_per_lsb)),
-        table_bytes=table.size_bytes_float32 + 4 * 6 * (nf - 1) * ((nx - 1) * (ny - 1) + 1),
+        table_bytes=table.size_bytes_float32 + 4 * (3 * (nf - 1) + 4),
         nf=nf,
         nx=nx,
         ny=ny,
@@ -151,14 +152,16 @@ def table_header(
         babs_below_uT=c_float(below, 9),
         babs_above_uT=c_float(above, 9),
         babs_calibrated_uT=c_float(calibrated, 9),
-        newton_steps=it.NEWTON_STEPS,
-        prune_after=it.PRUNE_AFTER,
-        outside=c_float(it.OUTSIDE),
-        inside_tol=c_float(it.INSIDE_TOL),
-        ridge=c_float(it.RIDGE),
+        steps=it.STEPS,
+        step_cells=c_float(it.STEP_CELLS),
+        converged=c_float(it.CONVERGED),
+        min_gain=c_float(it.MIN_GAIN),
+        halvings=it.HALVINGS,
+        probe=c_float(it.PROBE),
+        ridge=c_float(RIDGE),
         code_range=CODE_RANGE_LSB[setting.res],
         slab_sigma=_c_floats(f"{p}_slab_sigma_uT", np.hypot(1e6 * reader.sigma_T, table.slab_error_uT())),
-        **_boxes(table, str(p)),
+        **start_arrays(table, str(p)),
         force_nodes=_c_floats(f"{p}_force_N_nodes", table.grid.force_N),
         x_nodes=_c_floats(f"{p}_u_nodes", table.grid.u),
         y_nodes=_c_floats(f"{p}_v_nodes", table.grid.v),

@@ -31,12 +31,12 @@ from mst_cli.calibrate.inverse_table import (
     TableEstimates,
     TableGrid,
     build_table,
-    crb_sigmas,
     source_hash,
 )
 from mst_cli.calibrate.load_readings import LoadReadings, from_estimates
 from mst_cli.calibrate.offset_reading import DEFAULT_MAX_SIGMA_MM, OffsetEstimator, OffsetReadings
 from mst_cli.calibrate.shear_reading import CHI2_FLAG, ShearReader
+from mst_cli.calibrate.trilinear import crb_sigmas
 from mst_cli.calibrate.two_chip_table import TwoChipReader
 from mst_cli.errors import CalibrationFailed, InputError
 from mst_cli.io.cache import cached_path, keep, touch
@@ -49,7 +49,7 @@ from mst_cli.sensor.document import Document
 @dataclass
 class OffsetTableReader:
     """(force, x0, y0) of readings from a table, with the chip's noise ``sigma_T``; ``exact``
-    (the model's Gauss-Newton) polishes each root the census found when given."""
+    (the model's Gauss-Newton) polishes the best root the direct inverse found when given."""
 
     table: InverseTable
     sigma_T: float
@@ -58,7 +58,7 @@ class OffsetTableReader:
     chips = 1  # the readings it takes: chip 1's
 
     def estimate_table(self, B_T: np.ndarray) -> TableEstimates:
-        """The census's estimates of readings (n, 3) in T, polished when ``exact`` is set."""
+        """The direct inverse's estimates of readings (n, 3) in T, polished when ``exact`` is set."""
         est = self.table.estimate(B_T, self.sigma_T, self.max_sigma_mm)
         if self.exact is not None:
             self._polish(B_T, est)
@@ -66,7 +66,7 @@ class OffsetTableReader:
 
     def _polish(self, B_T: np.ndarray, est: TableEstimates) -> None:
         """The exact solve from each reading's best root; its root, its Cramer-Rao sigmas and its
-        identifiability replace the table's (the census's ambiguity stands)."""
+        identifiability replace the table's (the table's ambiguity stands)."""
         assert self.exact is not None
         for i in np.flatnonzero(np.isin(est.flag, ("ok", "not_identifiable"))):
             s = self.exact._solve_from(B_T[i], est.best[i].copy())
@@ -122,7 +122,7 @@ class ShearTableReader:
 
     def _polish(self, B_T: np.ndarray, est: TableEstimates) -> None:
         """The exact fit from each ok reading's root; it replaces the table's where it stays within
-        the noise (the census's flags stand)."""
+        the noise (the table's flags stand)."""
         assert self.exact is not None
         for i in np.flatnonzero(est.flag == "ok"):
             theta = np.array([*est.best[i], 0.0, 0.0])

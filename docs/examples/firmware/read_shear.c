@@ -16,6 +16,7 @@
 #include <stdint.h>
 #include <stdio.h>
 
+#define MST_SHR_IMPLEMENTATION /* this file defines the table and its code (one file of the program does) */
 #include "shear_table.h"
 
 #define MLX_ADDR 0x0C /* A0 = A1 = 0 (Adafruit 4022: 0x0C) */
