@@ -41,6 +41,7 @@ from mst_cli.calibrate.loadtest import (
 )
 from mst_cli.calibrate.missing_force import check_force_sentinel
 from mst_cli.calibrate.plot import plot_calibration
+from mst_cli.calibrate.reading import reading_resolution_T
 from mst_cli.calibrate.rig_calibration import RigAnalysis, analyse, describe
 from mst_cli.calibrate.tables import lookup_csv, residuals_csv
 from mst_cli.calibrate.temperature_fit import (
@@ -259,9 +260,7 @@ def calibrate(
     aligned, alignment = align(read, measure=use_branches)  # the calibration that ignores branches: no lag
     lt_all, presses = _split_presses(aligned, doc)
     rig = analyse(lt_all, max(cal.MIN_POINTS, cal.MIN_POINTS_PER_PARAMETER * len(params)), use_branches, alignment)
-    fitted, temperature = _fit_in_temperature(
-        doc, rig.readings.subset(rig.fit_rows), Path(load_test_file).name, mechanics, tuple(params), progress
-    )
+    fitted, temperature = _fit_in_temperature(doc, rig, Path(load_test_file).name, mechanics, tuple(params), progress)
     lt = fitted.lt  # the rows fitted (referred to 20 degC when the load test has T_C)
     imap, setting = fitted.imap, fitted.setting
     header, header_reason = _header(fitted, f"{Path(design_file).name} and {Path(load_test_file).name}")
@@ -300,15 +299,17 @@ def calibrate(
 
 def _fit_in_temperature(
     doc: Document,
-    lt: Readings,
+    rig: RigAnalysis,
     load_test_name: str,
     mechanics: str,
     names: tuple[str, ...],
     progress: Callable[[str], None] | None,
 ) -> tuple[_Fitted, TemperatureCalibration | None]:
-    """The fit on the rows referred to 20 degC (:mod:`~mst_cli.calibrate.temperature_fit`; as they
-    are without T_C) and, when the load test's temperatures fix the modulus coefficient, the fit
-    again with it."""
+    """The fit on the rig's rows to fit, referred to 20 degC (:mod:`~mst_cli.calibrate.temperature_fit`;
+    as they are without T_C) and, when the load test's temperatures fix the modulus coefficient,
+    the fit again with it; its inverse map's resolution at the noise the rig logged at rest, when it
+    logged rests (the readers' noise, as mst read's: :func:`~mst_cli.calibrate.reading.reading_resolution_T`)."""
+    lt = rig.readings.subset(rig.fit_rows)
     alpha = remanence_coeff_of(doc)
     fitted = _fit(doc, referred(lt, alpha, 0.0), load_test_name, mechanics, names, progress)
     temperature = None
@@ -318,6 +319,9 @@ def _fit_in_temperature(
             break
         beta = temperature.modulus_coeff_per_K
         fitted = _fit(doc, referred(lt, alpha, beta), load_test_name, mechanics, names, progress)
+    if rig.zero is not None and rig.zero.noise_T:
+        noise_uT = 1e6 * rig.zero.noise_T
+        fitted.imap.field_resolution_T = reading_resolution_T(0.0, fitted.setting, doc.noise_uT_rms, noise_uT)
     return fitted, temperature
 
 

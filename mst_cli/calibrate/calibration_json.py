@@ -132,6 +132,13 @@ class CalibrationRecord:
         value = checked(tilt, "tilt", "lever_factor")  # InputError beyond the fit's bounds
         return 1.0 if value is None else value
 
+    def rest_noise_uT(self) -> float | None:
+        """The chip's noise the load test logged at rest (``zero.rest_noise_uT``, uT): the noise
+        a reader of this calibration states its 1-sigma with; None when the log had no rests.
+        InputError when the file holds something else there."""
+        noise = checked(self.zero, "zero", "rest_noise_uT")
+        return noise if noise is not None and noise > 0.0 else None
+
     def calibrated_top_N(self) -> float | None:
         """The load test's largest force, when the record holds a usable one."""
         top = self.calibrated_to_N

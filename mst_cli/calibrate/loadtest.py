@@ -448,6 +448,36 @@ class _RowSettings:
         return self.first if len(settings) == 1 else None
 
 
+def fields_of(
+    values: np.ndarray, raw: bool, setting: mlx.ChipSetting | None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(fields (m, 3) in T, saturated (m,), beyond (m, 3): a value no chip at ``setting`` gives)
+    of samples ``values`` (m, 3): x, y, z in microtesla, or raw codes (``setting`` given).
+
+    A raw code must be an integer within the codes the chip outputs at its RES; a field within
+    what the chip reads at its setting (unchecked without one). Saturated: a code within one of
+    the end, a field within 1.5 LSB of the range's end, or past the Hall plates' saturation."""
+    v = np.asarray(values, dtype=float).reshape(-1, 3)
+    if raw:
+        assert setting is not None
+        limit = mlx.CODE_RANGE_LSB[setting.res]
+        beyond = (v != np.trunc(v)) | (np.abs(v) > limit)
+        B_uT = v * np.array([setting.xy_uT_per_lsb, setting.xy_uT_per_lsb, setting.z_uT_per_lsb])
+        saturated = np.any(np.abs(v) >= limit - 1, axis=1)
+    else:
+        B_uT = v
+        beyond = np.zeros(v.shape, dtype=bool)
+        saturated = np.zeros(len(v), dtype=bool)
+        if setting is not None:
+            ranges = np.array([setting.xy_range_T, setting.xy_range_T, setting.z_range_T])
+            lsbs = np.array([setting.xy_uT_per_lsb, setting.xy_uT_per_lsb, setting.z_uT_per_lsb])
+            beyond = np.abs(v) * 1e-6 > ranges + 1.5e-6 * lsbs
+            saturated = np.any(np.abs(v) * 1e-6 >= ranges - 1.5e-6 * lsbs, axis=1)
+    # compared in microtesla, as read: 50000 uT x 1e-6 is 0.049999999999999996 T, below 50 mT
+    saturated |= np.any(np.abs(B_uT) >= mlx.SATURATION_T * 1e6, axis=1)
+    return B_uT * 1e-6, saturated, beyond
+
+
 def field_of(
     values: Sequence[float],
     raw: bool,
@@ -455,54 +485,41 @@ def field_of(
     where: str,
     columns: Sequence[str] | None = None,
 ) -> tuple[np.ndarray, bool]:
-    """(field vector in T, saturated) of one sample: x, y, z in microtesla, or raw codes.
+    """(field vector in T, saturated) of one sample: x, y, z in microtesla, or raw codes
+    (:func:`fields_of`).
 
     InputError when the sample cannot come from ``setting`` (a code or a field beyond what the
     chip outputs there), or raw codes arrive without a setting."""
+    if raw and setting is None:
+        raise InputError(
+            "--gain-sel/--res",
+            None,
+            "raw codes need the chip setting they were read at: give --gain-sel and --res (or gain_sel,res columns)",
+        )
+    B, saturated, beyond = fields_of(np.asarray(values, dtype=float), raw, setting)
+    if beyond.any():
+        raise beyond_error(values, raw, setting, where, columns)
+    return B[0], bool(saturated[0])
+
+
+def beyond_error(
+    values: Sequence[float], raw: bool, setting: mlx.ChipSetting | None, where: str, columns: Sequence[str] | None
+) -> InputError:
+    """The error of a sample with a value :func:`fields_of` finds beyond the chip, naming the first."""
+    assert setting is not None  # unchecked without a setting
     cols = columns or (CODE_COLUMNS if raw else UT_COLUMNS)
-    if raw:
-        if setting is None:
-            raise InputError(
-                "--gain-sel/--res",
-                None,
-                "raw codes need the chip setting they were read at: give --gain-sel "
-                "and --res (or gain_sel,res columns)",
-            )
-        limit = mlx.CODE_RANGE_LSB[setting.res]
-        for c, v in zip(cols, values):
-            if v != int(v):
-                raise InputError(f"{where} {c}", v, "a raw code must be an integer")
-            if abs(v) > limit:
-                raise InputError(
-                    f"{where} {c}",
-                    v,
-                    f"outside the +-{limit} codes the chip outputs at RES {setting.res}: "
-                    "the readings come from another chip setting",
-                )
-        lsb = np.array([setting.xy_uT_per_lsb, setting.xy_uT_per_lsb, setting.z_uT_per_lsb])
-        B_uT = np.asarray(values, dtype=float) * lsb
-        saturated = any(abs(v) >= limit - 1 for v in values)
-    else:
-        B_uT = np.asarray(values, dtype=float)
-        saturated = False
-        if setting is not None:
-            ranges = (setting.xy_range_T, setting.xy_range_T, setting.z_range_T)
-            lsbs = (setting.xy_uT_per_lsb, setting.xy_uT_per_lsb, setting.z_uT_per_lsb)
-            for c, v, rng, lsb_uT in zip(cols, values, ranges, lsbs):
-                if abs(v) * 1e-6 > rng + 1.5e-6 * lsb_uT:
-                    raise InputError(
-                        f"{where} {c}",
-                        v,
-                        f"beyond the {rng * 1e6:.6g} uT the chip reads at GAIN_SEL "
-                        f"{setting.gain_sel}, RES {setting.res}: the readings come from "
-                        "another chip setting",
-                    )
-                if abs(v) * 1e-6 >= rng - 1.5e-6 * lsb_uT:
-                    saturated = True
-    # compared in microtesla, as read: 50000 uT x 1e-6 is 0.049999999999999996 T, below 50 mT
-    if np.any(np.abs(B_uT) >= mlx.SATURATION_T * 1e6):
-        saturated = True
-    return B_uT * 1e-6, bool(saturated)
+    beyond = fields_of(np.asarray(values, dtype=float), raw, setting)[2][0]
+    k = int(np.argmax(beyond))
+    c, v = cols[k], values[k]
+    if raw and v != int(v):
+        return InputError(f"{where} {c}", v, "a raw code must be an integer")
+    rng = setting.z_range_T if k == 2 else setting.xy_range_T
+    what = (
+        f"outside the +-{mlx.CODE_RANGE_LSB[setting.res]} codes the chip outputs at RES {setting.res}"
+        if raw
+        else f"beyond the {rng * 1e6:.6g} uT the chip reads at GAIN_SEL {setting.gain_sel}, RES {setting.res}"
+    )
+    return InputError(f"{where} {c}", v, f"{what}: the readings come from another chip setting")
 
 
 def check_field_unit(rd: Readings, B_unloaded_T: float, B_full_T: float) -> None:

@@ -145,6 +145,19 @@ def estimates_impossible(est: OffsetReadings | LoadReadings, centred_N: np.ndarr
     F[bad] = centred_N[bad]
 
 
+def reading_resolution_T(
+    design_T: float, chip: ChipSetting | None, design_noise_uT: float, measured_uT: float | None
+) -> float:
+    """The field resolution a reader states its 1-sigma with (the plain read's uncertainty, the
+    no-load band, the tables' and the two-chip estimator's noise): the chip's noise its load test
+    logged at rest (``measured_uT``: calibration.json's ``zero.rest_noise_uT``) when it logged
+    one, else the design's (``design_noise_uT``; the design's resolution ``design_T`` at least),
+    and never below one LSB of ``chip``."""
+    if measured_uT is not None:
+        return field_resolution_T(chip, measured_uT) if chip is not None else 1e-6 * measured_uT
+    return max(design_T, field_resolution_T(chip, design_noise_uT)) if chip is not None else design_T
+
+
 def _branch_columns(forces_csv_text: str, bf: BranchForces) -> str:
     """forces.csv with the branch each reading was read on and its force's 1-sigma uncertainty
     (resolution, the unloading model's residual, the hysteresis a hold leaves open)."""
@@ -174,10 +187,10 @@ class ForceReader:
         the chip's (else the one the model chooses): its LSB bounds the field resolution.
         CalibrationFailed when the model has no monotone map."""
         imap, resp = inverse_map(doc, mechanics)
-        chip = setting or resp.chip_setting
-        if chip is not None:
-            imap.field_resolution_T = max(imap.field_resolution_T, field_resolution_T(chip, doc.noise_uT_rms))
         note, record = record_beside(Path(model_file))
+        measured_uT = record.rest_noise_uT() if record is not None else None
+        chip = setting or resp.chip_setting
+        imap.field_resolution_T = reading_resolution_T(imap.field_resolution_T, chip, doc.noise_uT_rms, measured_uT)
         top = record.calibrated_top_N() if record else None
         if top is not None:
             imap.calibrated_to_N = min(top, float(imap.force_N[-1]))

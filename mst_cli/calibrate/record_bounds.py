@@ -24,7 +24,8 @@ The table :data:`BOUNDS` holds one :class:`Bound` per key (a new fitted key is o
   ``residual_rms_N`` is a spread (finite, >= 0, at most MAX_FORCE_N), ``rows`` a count
   (0 to the load test's MAX_ROWS);
 * ``zero`` (:func:`~mst_cli.calibrate.zero_drift.zero_law_of`): fields within what the chip
-  reads (MAX_FIELD_UT), a drift within MAX_DRIFT_UT_PER_MIN, ``rests`` a count;
+  reads (MAX_FIELD_UT), a drift within MAX_DRIFT_UT_PER_MIN, ``rests`` a count; its
+  ``rest_noise_uT`` (the chip's noise logged at rest, the reader's noise) within what it reads;
 * ``tilt.lever_factor``: inside the bounds the fit searches (LEVER_FACTOR_BOUNDS).
 
 Pure: no file or terminal I/O.
@@ -103,6 +104,7 @@ BOUNDS: dict[str, Bound] = {
         Bound("zero.recovery_uT_per_decade", -MAX_FIELD_UT, MAX_FIELD_UT, "uT", "a |B| the MLX90393 can read"),
         Bound("zero.span_uT", 0.0, MAX_FIELD_UT, "uT", "a |B| the MLX90393 can read"),
         Bound("zero.rests", 0, MAX_ROWS, "", "a count of rests", integer=True),
+        Bound("zero.rest_noise_uT", 0.0, MAX_FIELD_UT, "uT", "a noise the MLX90393 can read"),
         Bound("tilt.lever_factor", *LEVER_FACTOR_BOUNDS, "", "the range the tilt fit searches"),
     )
 }

@@ -237,7 +237,13 @@ class TwoChipModel:
         F, rx, ry = _ratios(theta)
         slide = self.stack.slides_mm(F, (rx, ry))
         shift, rotvec = magnet_pose(self.stack.geometry, states[..., 0], states[..., 1:], slide)
-        return np.concatenate([magnet_field_T(self.stack.geometry, shift, rotvec, c) for c in self.chips_mm], axis=1)
+        # every chip in one call of the field (its cost is mostly per call): chip j seen from the
+        # first chip's place, the magnet moved back by the chips' spacing
+        first = self.chips_mm[0]
+        moved = [shift - np.array([cx - first[0], cy - first[1], 0.0]) for cx, cy in self.chips_mm]
+        k, m = len(self.chips_mm), len(theta)
+        B = magnet_field_T(self.stack.geometry, np.concatenate(moved), np.tile(rotvec, (k, 1)), first)
+        return B.reshape(k, m, 3).transpose(1, 0, 2).reshape(m, 3 * k)
 
 
 def _ratios(theta: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -32,14 +32,17 @@ from __future__ import annotations
 
 import contextlib
 import errno
+import functools
 import math
 import os
+import queue
 import re
 import select
 import stat
+import threading
 import time
-from collections.abc import Iterator
-from dataclasses import dataclass
+from collections.abc import Generator, Iterator
+from typing import NamedTuple
 
 from mst_cli.io.line_columns import ColumnMap, default_map, header_map
 
@@ -68,13 +71,16 @@ TEMPERATURE = re.compile(
 BARE = re.compile(rf"^\s*(?:{NUMBER})(?:\s*[,;\s]\s*(?:{NUMBER}))*\s*[,;]?\s*({UNIT})?\s*$", re.IGNORECASE)
 BARE_NUMBER = re.compile(NUMBER, re.IGNORECASE)
 TRAILING_UNIT = re.compile(rf"({UNIT})\s*$", re.IGNORECASE)
+PLAIN_NUMBER = r"[-+]?\d+(?:\.\d*)?"
+# digits and points, one separator throughout ("-0.45,1.50,3072.19", tab-separated chips): a bare line
+PLAIN = re.compile(rf"{PLAIN_NUMBER}(?:(?P<sep>[,;\t ]){PLAIN_NUMBER}(?:(?P=sep){PLAIN_NUMBER})*)?")
+AXIS_LETTER = re.compile(r"[XYZ]", re.IGNORECASE)  # a labelled line names an axis; a bare one has none
 HEADER_SPLIT = re.compile(r"\s*[,;\t]\s*|\s+")
 LINE_END = re.compile(rb"\r\n|\r|\n")
 READ_BYTES = 1 << 16
 
 
-@dataclass(frozen=True)
-class LineSample:
+class LineSample(NamedTuple):
     """One sample of a line: ``values`` x, y, z of every chip (3 k; microtesla, or raw codes),
     ``cells`` the same as written (as forces.csv echoes them), the chip's temperature (degC)
     and its cell, None when the line has none."""
@@ -95,32 +101,51 @@ def parse_line(line: str, raw: bool = False, columns: ColumnMap | None = None, c
     line = line.strip()
     if not line:
         return None
-    found: dict[str, tuple[str, str]] = {}
-    for label, number, unit in LABELLED.findall(line):
-        found.setdefault(label.lower(), (number, unit))
-    if set(found) == {"x", "y", "z"} and chips == 1:
-        trailing = TRAILING_UNIT.search(line)
-        default = trailing.group(1) if trailing else ""
-        values = [_value(found[a][0], found[a][1] or default, raw) for a in "xyz"]
-        t = TEMPERATURE.search(line)
-        return _sample(values, [found[a][0] for a in "xyz"], [found[a][1] or default for a in "xyz"], t and t.group(1))
+    plain = PLAIN.fullmatch(line)
+    if plain is not None:  # the commonest stream, read without the general forms' searches
+        return _bare(line.split(plain.group("sep")) if plain.group("sep") else [line], "", raw, columns, chips)
+    if chips == 1 and AXIS_LETTER.search(line) is not None:  # a labelled line names its axes
+        found: dict[str, tuple[str, str]] = {}
+        for label, number, unit in LABELLED.findall(line):
+            found.setdefault(label.lower(), (number, unit))
+        if set(found) == {"x", "y", "z"}:
+            trailing = TRAILING_UNIT.search(line)
+            default = trailing.group(1) if trailing else ""
+            values = [_value(found[a][0], found[a][1] or default, raw) for a in "xyz"]
+            t = TEMPERATURE.search(line)
+            units = [found[a][1] or default for a in "xyz"]
+            return _sample(values, [found[a][0] for a in "xyz"], units, t and t.group(1))
     m = BARE.match(line)
     if m is None:
         return None
     numbers = BARE_NUMBER.findall(line[: m.start(1)] if m.group(1) else line)
-    where = (columns or default_map(len(numbers), chips) or ColumnMap(group=("x", "y", "z"))).place(len(numbers), chips)
+    return _bare(numbers, m.group(1) or "", raw, columns, chips)
+
+
+def _bare(numbers: list[str], unit: str, raw: bool, columns: ColumnMap | None, chips: int) -> LineSample | None:
+    """The sample of a line of bare ``numbers`` (as written) in ``unit``, placed by ``columns``."""
+    where = _placement(columns, len(numbers), chips)
     if where is None:
         return None
     xyz, t_at = where
-    unit = m.group(1) or ""
     values = [_value(numbers[i], unit, raw) for i in xyz]
     return _sample(values, [numbers[i] for i in xyz], [unit] * len(xyz), None if t_at is None else numbers[t_at])
+
+
+@functools.lru_cache(maxsize=256)
+def _placement(columns: ColumnMap | None, n_numbers: int, chips: int) -> tuple[tuple[int, ...], int | None] | None:
+    """Where x, y, z (and t) sit among a bare line's ``n_numbers`` numbers (:meth:`ColumnMap.place`),
+    found once per map and count: a stream's lines share both."""
+    return (columns or default_map(n_numbers, chips) or ColumnMap(group=("x", "y", "z"))).place(n_numbers, chips)
 
 
 def _sample(values: list[float], cells: list[str], units: list[str], t_cell: str | None) -> LineSample:
     """The sample of parsed values, their cells as written (converted where a unit scaled them)
     and the temperature's cell; BadLine for a temperature no chip reads."""
-    shown = [c if UNIT_SCALE_uT.get(u.lower(), 1.0) == 1.0 else f"{v:.9g}" for c, u, v in zip(cells, units, values)]
+    if any(units):  # a scaled number is shown converted
+        shown = [c if UNIT_SCALE_uT.get(u.lower(), 1.0) == 1.0 else f"{v:.9g}" for c, u, v in zip(cells, units, values)]
+    else:
+        shown = cells
     if t_cell is None:
         return LineSample(tuple(values), tuple(shown))
     T = float(t_cell)
@@ -159,12 +184,13 @@ class SampleParser:
         self._axes: dict[str, tuple[float, str]] = {}
 
     def feed(self, line: str) -> LineSample | None:
-        if not line.strip():
+        if not line or line.isspace():
             return None  # a blank line (a CRLF split across reads, an empty println): nothing to count
         try:
             sample = parse_line(line, self.raw, self.columns, self.chips)
             if sample is not None:
-                self._axes = {}
+                if self._axes:
+                    self._axes = {}
                 return sample
             if self._header(line):
                 return None
@@ -224,6 +250,7 @@ class LineSource:
         self._fd = None
         self.is_tty = True
         self.cut_off: str | None = None  # a last line without its end, from a port that closed mid-line
+        self._stopping = False  # set by :meth:`waiting`'s caller being done: the reading thread ends
         try:
             import termios  # noqa: F401  # deferred: POSIX only (the test of the platform)
 
@@ -292,7 +319,7 @@ class LineSource:
         buf = b""
         last = asked = time.monotonic()
         self._write()
-        while True:
+        while not self._stopping:
             data = self._read(0.2)
             if data is None:
                 break
@@ -309,10 +336,50 @@ class LineSource:
                 self._write()  # a request lost (or the sketch was not listening yet)
             if len(buf) > READ_BYTES:  # no line end in 64 KB: not a line protocol
                 buf = b""
+        if self._stopping:
+            return  # the reader is done: a line still arriving is not cut off
         if buf.strip() and self.is_tty:  # a board stopped mid-line: its numbers are cut off
             self.cut_off = buf.decode("utf-8", errors="replace")
         elif buf.strip():  # a captured file's last line without its line end
             yield [buf.decode("utf-8", errors="replace")]
+
+    def waiting(self) -> Generator[list[tuple[float, list[str]]], None, None]:
+        """Everything that arrived while the caller was busy: lists of (its arrival time on
+        ``time.monotonic``, the batch's lines). The port is read by a thread of its own, so it is
+        drained while a batch is estimated (a pseudo-terminal holds 4 kB, a board's USB buffer
+        little more: left unread, the board would wait and the batches stay small). close() the
+        iterator when done: the thread ends within 0.2 s. The port's errors are raised here."""
+        got: queue.SimpleQueue = queue.SimpleQueue()
+
+        def read() -> None:
+            try:
+                for batch in self.batches():
+                    got.put((time.monotonic(), batch))
+            except BaseException as exc:  # raised in the caller's thread
+                got.put(exc)
+            got.put(None)
+
+        thread = threading.Thread(target=read, name=f"read {self.port}", daemon=True)
+        thread.start()
+        try:
+            while True:
+                try:
+                    items = [got.get(timeout=0.2)]  # a timeout: Ctrl-C is seen while waiting
+                except queue.Empty:
+                    continue
+                while not got.empty():
+                    items.append(got.get_nowait())
+                for item in items:
+                    if isinstance(item, BaseException):
+                        raise item
+                batches = [item for item in items if item is not None]
+                if batches:
+                    yield batches
+                if None in items:
+                    return
+        finally:
+            self._stopping = True
+            thread.join()
 
     def __iter__(self) -> Iterator[str]:
         for batch in self.batches():

@@ -20,13 +20,13 @@ session says so, quoting one.
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from mst_cli.calibrate.chip_columns import chip_column_names
-from mst_cli.calibrate.loadtest import CODE_COLUMNS, UT_COLUMNS, Readings, field_of
+from mst_cli.calibrate.loadtest import CODE_COLUMNS, UT_COLUMNS, Readings, beyond_error, field_of, fields_of
 from mst_cli.calibrate.reading import ForceReader, ForceReadings
 from mst_cli.calibrate.temperature_fit import T_COLUMN
 from mst_cli.errors import InputError
@@ -36,6 +36,26 @@ from mst_cli.model.chip import ChipSetting
 
 UNRECOGNISED_NOTE = 5  # unrecognised lines before the session says so (once)
 TIME_COLUMN = "time_s"
+
+
+class _Rows:
+    """A float or bool array that grows by blocks of rows (appended in amortised O(rows), read
+    as one array): a long session's fields without re-joining them at every batch."""
+
+    def __init__(self, shape: tuple[int, ...], dtype: type):
+        self._a: np.ndarray = np.empty((64, *shape), dtype=dtype)
+        self.n = 0
+
+    def extend(self, block: np.ndarray) -> None:
+        if self.n + len(block) > len(self._a):
+            grown = np.empty((max(2 * len(self._a), self.n + len(block)), *self._a.shape[1:]), dtype=self._a.dtype)
+            grown[: self.n] = self._a[: self.n]
+            self._a = grown
+        self._a[self.n : self.n + len(block)] = block
+        self.n += len(block)
+
+    def __getitem__(self, rows: slice) -> np.ndarray:
+        return self._a[: self.n][rows]
 
 
 @dataclass
@@ -48,31 +68,63 @@ class StreamRecord:
     chips: int
     setting: ChipSetting | None
     cells: list[list[str]] = field(default_factory=list)
-    B_T: list[np.ndarray] = field(default_factory=list)  # (chips, 3) each
-    saturated: list[bool] = field(default_factory=list)
     times_s: list[float] = field(default_factory=list)
     with_T: bool | None = None  # decided by the first sample
+
+    def __post_init__(self) -> None:
+        self._B_T = _Rows((self.chips, 3), float)
+        self._saturated = _Rows((), bool)
 
     def __len__(self) -> int:
         return len(self.cells)
 
+    @property
+    def B_T(self) -> np.ndarray:
+        """(n, chips, 3) every sample's fields in T."""
+        return self._B_T[:]
+
     def add(self, s: LineSample, t_s: float) -> None:
-        """One sample; InputError when it is one no chip gives (a code or field beyond the
-        setting) or it drops or adds the temperature the first sample had."""
-        where = f"{self.source} sample {len(self) + 1}"
-        if self.with_T is not None and (s.T_C is not None) != self.with_T:
-            raise InputError(where, s.T_cell, "the first sample's lines " + ("had" if self.with_T else "had no") + " T")
-        names = [self._names(k) for k in range(self.chips)]
-        B = np.empty((self.chips, 3))
-        sat = False
+        """One sample (:meth:`add_many`); its InputError raised."""
+        for _, exc in self.add_many([s], t_s):
+            raise exc
+
+    def add_many(self, samples: list[LineSample], t_s: float) -> list[tuple[int, InputError]]:
+        """The samples that arrived together at ``t_s``, their fields checked at once; the
+        (index, InputError) of each that is one no chip gives (a code or field beyond the
+        setting), or that drops or adds the temperature the first sample had: not added."""
+        if not samples:
+            return []
+        if self.raw and self.setting is None:
+            field_of((0.0, 0.0, 0.0), self.raw, self.setting, self.source)  # raises: raw codes need a setting
+        values = np.array([s.values for s in samples], dtype=float).reshape(-1, 3)
+        B, sat, beyond = fields_of(values, self.raw, self.setting)
+        B, sat, beyond = B.reshape(-1, self.chips, 3), sat.reshape(-1, self.chips), beyond.reshape(-1, 3 * self.chips)
+        bad_rows = np.asarray(beyond.any(axis=1))
+        errors: list[tuple[int, InputError]] = []
+        kept: list[int] = []
+        for i, s in enumerate(samples):
+            where = f"{self.source} sample {len(self) + 1}"  # the cells of those kept are in already
+            if self.with_T is not None and (s.T_C is not None) != self.with_T:
+                had = "had" if self.with_T else "had no"
+                errors.append((i, InputError(where, s.T_cell, f"the first sample's lines {had} T")))
+            elif bad_rows[i]:
+                errors.append((i, self._beyond(s, where)))
+            else:
+                self.with_T = s.T_C is not None
+                kept.append(i)
+                self.cells.append([*s.cells, *([s.T_cell] if s.T_cell is not None else [])])
+        self._B_T.extend(B[kept])
+        self._saturated.extend(np.asarray(sat[kept].any(axis=1)))
+        self.times_s.extend([t_s] * len(kept))
+        return errors
+
+    def _beyond(self, s: LineSample, where: str) -> InputError:
+        """The error of the first chip of ``s`` with a value beyond the setting."""
         for k in range(self.chips):
-            B[k], s_k = field_of(s.values[3 * k : 3 * k + 3], self.raw, self.setting, where, names[k])
-            sat |= s_k
-        self.with_T = s.T_C is not None
-        self.cells.append([*s.cells, *([s.T_cell] if s.T_cell is not None else [])])
-        self.B_T.append(B)
-        self.saturated.append(sat)
-        self.times_s.append(t_s)
+            xyz = s.values[3 * k : 3 * k + 3]
+            if fields_of(np.array(xyz), self.raw, self.setting)[2].any():
+                return beyond_error(xyz, self.raw, self.setting, where, self._names(k))
+        raise AssertionError("no value beyond the setting")
 
     def _names(self, chip: int) -> tuple[str, str, str]:
         if chip == 0:
@@ -86,14 +138,14 @@ class StreamRecord:
     def readings(self, start: int = 0, stop: int | None = None) -> Readings:
         """Samples ``start`` to ``stop`` as a readings file (lines: the samples' numbers)."""
         stop = len(self) if stop is None else stop
-        B = np.array(self.B_T[start:stop]).reshape(-1, self.chips, 3)
+        B = self._B_T[start:stop]
         return Readings(
             source=self.source,
             header=self.header(),
             rows=self.cells[start:stop],
             lines=list(range(start + 1, stop + 1)),
             B_T=B[:, 0],
-            saturated=np.array(self.saturated[start:stop], dtype=bool),
+            saturated=self._saturated[start:stop],
             force_N=None,
             raw=self.raw,
             setting=self.setting,
@@ -168,11 +220,13 @@ def read_stream(
     record = StreamRecord(port, opts.raw, chips, setting)
     parser = SampleParser(opts.raw, opts.columns, chips)
     live = _Live(reader, offsets, opts.tare, show)
+    arriving = src.waiting()
     try:
-        _read_batches(src, parser, record, live, opts.count, warn)
+        _read_batches(arriving, parser, record, live, opts.count, warn)
     except KeyboardInterrupt:
         pass
     finally:
+        arriving.close()  # the reading thread ends before the port closes
         src.close()
     if src.cut_off is not None:
         parser.bad += 1
@@ -195,35 +249,46 @@ def read_stream(
 
 
 def _read_batches(
-    src: LineSource,
+    arriving: Iterator[list[tuple[float, list[str]]]],
     parser: SampleParser,
     record: StreamRecord,
     live: _Live,
     count: int | None,
     warn: Callable[[str], None] | None,
 ) -> None:
-    """Every batch of ``src`` into ``record`` (a sample no chip gives is a bad line), shown by
-    ``live``, until the port ends or ``count`` samples came."""
+    """Every batch ``arriving`` (:meth:`LineSource.waiting`) into ``record`` (a sample no chip
+    gives is a bad line), all that waited shown by ``live`` at once, until the port ends or
+    ``count`` samples came."""
     said: set[str] = set()
     t0 = time.monotonic()
-    for batch in src.batches():
-        t = time.monotonic() - t0
-        for line in batch:
-            sample = parser.feed(line)
-            if sample is None:
-                continue
-            try:
-                record.add(sample, t)
-            except InputError as exc:
-                parser.bad += 1
-                parser.first_bad = parser.first_bad or (line.strip(), str(exc))
-                continue
-            if count is not None and len(record) >= count:
-                break
+    for waited in arriving:
+        for t, batch in waited:
+            lines = iter(batch)
+            while count is None or len(record) < count:  # again while bad samples fell short of count
+                samples, texts = _samples(parser, lines, None if count is None else count - len(record))
+                if not samples:
+                    break
+                for i, exc in record.add_many(samples, t - t0):
+                    parser.bad += 1
+                    parser.first_bad = parser.first_bad or (texts[i].strip(), str(exc))
         _say_once(parser, len(record), said, warn)
         live.show_new(record)
         if count is not None and len(record) >= count:
             return
+
+
+def _samples(parser: SampleParser, lines: Iterator[str], most: int | None) -> tuple[list[LineSample], list[str]]:
+    """The next samples of ``lines`` (at most ``most``) and the lines they came from."""
+    samples: list[LineSample] = []
+    texts: list[str] = []
+    for line in lines:
+        sample = parser.feed(line)
+        if sample is not None:
+            samples.append(sample)
+            texts.append(line)
+            if most is not None and len(samples) >= most:
+                break
+    return samples, texts
 
 
 def _say_once(parser: SampleParser, samples: int, said: set[str], warn: Callable[[str], None] | None) -> None:
