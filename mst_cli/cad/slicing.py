@@ -20,7 +20,8 @@ import numpy as np
 from mst_cli.cad import gcode as G
 from mst_cli.cad import layer_measure as M
 from mst_cli.cad import slicer as S
-from mst_cli.cad.checks import Check, ExportFiles, resolve_export
+from mst_cli.cad.checks import Check
+from mst_cli.cad.export_files import ExportFiles, resolve_export
 from mst_cli.cad.manifest import SliceManifest, load_manifest
 from mst_cli.cad.print_check import (
     cavity_gaps,
