@@ -21,7 +21,8 @@ Constraints (g <= 0 is satisfied; every g is scaled to order one)
       (:func:`~mst_cli.model.mechanics.correction.fitted_t_over_L_max`);
     * lock order with margin: R_(i+1) >= (1 + lock_margin_rel) R_i, so regime i ends when layer
       i locks and the layers lock bottom to top in file order;
-    * chip below saturation: |B| at the last lock <= (1 - saturation_margin_rel) x 50 mT, and
+    * chip below saturation: |B| at the last lock (at gap 0 when the magnet would reach the chip
+      before it) <= (1 - saturation_margin_rel) x 50 mT, and
       never above what the MLX90393's coarsest setting reads with the headroom
       :func:`~mst_cli.model.chip.choose_setting` keeps;
     * optional total height: SensorGeometry.total_height_mm <= design.max_height_mm;
@@ -354,8 +355,11 @@ class DesignProblem:
         k, d_lock, R, k_locked = laws
         cap, rest = (None, 0.0) if members is None else members
         gap0 = cast(np.ndarray, self.gap0_mm(h_mm.sum(axis=-1)))  # candidates' sums: an array
-        _, S, _, B = regime_kernel(k, d_lock, k_locked, gap0, self.field_T, R, rest, cap)
-        return capped_lock_forces_N(k, d_lock, R, cap), S, B[..., -1], gap0, B[..., 0]
+        _, S, gap, B = regime_kernel(k, d_lock, k_locked, gap0, self.field_T, R, rest, cap)
+        # the chip's largest field on the way is at the smallest gap: a stack whose members let
+        # the magnet reach the chip (gap <= 0 at the last lock) saturates it on the way there
+        B_full = np.where(gap[..., -1] > 0.0, B[..., -1], self.field_T(np.zeros_like(gap[..., -1])))
+        return capped_lock_forces_N(k, d_lock, R, cap), S, B_full, gap0, B[..., 0]
 
     def evaluate_physical(self, theta_deg: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike) -> Evaluation:
         return self._evaluate_physical(theta_deg, t_mm, h_mm, False)[0]

@@ -11,6 +11,12 @@ The targets pin one layer each, given the gap:
   they are chosen: the loop runs from the top layer down), the locked ones below take
   dF / k_locked (small), and layer i takes the rest.
 
+On the whole part (``model.load_path: part``) the members add to every regime: the cap bends
+into the top layer's cavity until it closes (the top layer's lock force and increments are its
+capped law's), and the plates and the cover add their compliance x dF. A plate depends on the
+two layers it joins and the cover on layer 1, so each layer's candidates are weighed with the
+members they make given the layers already chosen (exact once the passes stop changing).
+
 So each layer is a two-target, three-variable choice from one table of cells evaluated once
 (a grid over the unit box of (theta, t, h), the same for every layer): the cell nearest to
 (R_i, its increment) in log terms among those that meet every per-layer rule. The gap depends
@@ -30,6 +36,7 @@ import numpy as np
 
 from mst_cli.design.problem import TINY
 from mst_cli.model.mechanics.spring import layer_displacement_mm
+from mst_cli.model.stack import capped_lock_force_N
 
 if TYPE_CHECKING:
     from mst_cli.design.problem import DesignProblem
@@ -62,13 +69,35 @@ class CellTable:
         ok = np.all(problem.layer_constraints(theta, t, h) + slack <= 0.0, axis=-1)
         k, d_lock, R, k_locked = problem.layer_laws(theta[ok], t[ok], h[ok])
         self.u = u[ok]
-        self.h_mm = h[ok]
+        self.theta_deg, self.t_mm, self.h_mm = theta[ok], t[ok], h[ok]
         self.k, self.d_lock, self.R, self.k_locked = k, d_lock, R, k_locked
         self.cells = len(u)
+        # each cell on top of the whole part: the cap bonded to its pad (0: the layers alone)
+        cap = problem.member_parts(theta[ok, None], t[ok, None], h[ok, None])[0] if problem.whole_part else 0.0
+        self.cap_mm_per_N = np.broadcast_to(np.asarray(cap, dtype=float), self.R.shape)
+        self.R_top = capped_lock_force_N(k, d_lock, R, self.cap_mm_per_N)
 
-    def displacement_mm(self, force_N: float) -> np.ndarray:
-        """Compression of every table cell at ``force_N``."""
-        return layer_displacement_mm(force_N, self.k, self.d_lock, self.R, self.k_locked)
+    def displacement_mm(self, force_N: float, top: bool = False) -> np.ndarray:
+        """Compression of every table cell at ``force_N``; ``top``: as the top layer, the cap's
+        bending into its cavity included until it closes there."""
+        if not top:
+            return layer_displacement_mm(force_N, self.k, self.d_lock, self.R, self.k_locked)
+        own = layer_displacement_mm(force_N, self.k, self.d_lock, self.R, self.k_locked) + self.cap_mm_per_N * force_N
+        return np.where(force_N <= self.R_top, own, self.d_lock + (force_N - self.R_top) / self.k_locked)
+
+    def rest_mm_per_N(self, problem: DesignProblem, chosen: np.ndarray, j: int) -> np.ndarray:
+        """The plates' and the cover's compliance (cells,) of the stacks ``chosen`` with every
+        table cell in place of layer ``j`` (0 on the layers alone)."""
+        if not problem.whole_part:
+            return np.zeros(len(self.u))
+        cells = [
+            a[np.broadcast_to(chosen, (len(self.u), len(chosen))).copy()]
+            for a in (self.theta_deg, self.t_mm, self.h_mm)
+        ]
+        for a, own in zip(cells, (self.theta_deg, self.t_mm, self.h_mm)):
+            a[:, j] = own
+        _, plates, cover = problem.member_parts(*cells)
+        return plates.sum(axis=-1) + cover
 
 
 def _edge_gaps_mm(problem: DesignProblem, gap0_mm: float) -> np.ndarray | None:
@@ -99,11 +128,13 @@ def seed_start(problem: DesignProblem, slack: float, table: CellTable | None = N
         return None, 0
     n = problem.n
     F = np.concatenate([[0.0], R_target])
-    d_at = [table.displacement_mm(f) for f in F]  # every cell at every edge force
-    increment = [d_at[i + 1] - d_at[i] for i in range(n)]
+    # every cell at every edge force, as a lower layer and as the top one (its cap included)
+    increment, increment_top = (np.diff([table.displacement_mm(f, top) for f in F], axis=0) for top in (False, True))
     log_R = np.log(np.maximum(table.R, TINY))
+    log_R_top = np.log(np.maximum(table.R_top, TINY))
     # first guess: each layer's lock force alone; the passes then add the field's demands
     chosen = np.argmin(np.abs(log_R[None, :] - np.log(R_target)[:, None]), axis=1)
+    chosen[-1] = int(np.argmin(np.abs(log_R_top - np.log(R_target[-1]))))
     candidates = []
     for _ in range(PASSES):
         before = chosen.copy()
@@ -112,10 +143,12 @@ def seed_start(problem: DesignProblem, slack: float, table: CellTable | None = N
             break
         stack_increment = -np.diff(gaps)  # D_i - D_(i-1), i = 1..n
         for j in range(n - 1, -1, -1):
-            above = sum(increment[j][chosen[m]] for m in range(j + 1, n))
+            own, lock = (increment_top, log_R_top) if j == n - 1 else (increment, log_R)
+            above = sum((increment_top if m == n - 1 else increment)[j][chosen[m]] for m in range(j + 1, n))
             below = sum((F[j + 1] - F[j]) / table.k_locked[chosen[m]] for m in range(j))
-            need = max(stack_increment[j] - above - below, 1e-3 * stack_increment[j])
-            miss = (log_R - np.log(R_target[j])) ** 2 + (np.log(np.maximum(increment[j], TINY)) - np.log(need)) ** 2
+            members = table.rest_mm_per_N(problem, chosen, j) * (F[j + 1] - F[j])  # (cells,)
+            need = np.maximum(stack_increment[j] - above - below - members, 1e-3 * stack_increment[j])
+            miss = (lock - np.log(R_target[j])) ** 2 + (np.log(np.maximum(own[j], TINY)) - np.log(need)) ** 2
             chosen[j] = int(np.argmin(miss))
         candidates.append(table.u[chosen].reshape(-1))
         if np.array_equal(chosen, before):
