@@ -7,7 +7,6 @@ The sensor: configs/mohammadi2021-forward.yaml as printed, spring rung, chips at
 (10, 6) mm (tests/test_shear_reading.py's layout, studies/shear_roundtrip.py's default).
 """
 
-from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -33,10 +32,7 @@ FIELD_BOUND_T = 1e-9  # the vectorised model against the exact field: 1/500 of t
 def stack():
     doc, _ = load_design_document(FORWARD)
     printed = as_printed(doc)
-    # the part as 0.17 printed it, without the insert plate (issue 44): with the plate's geometry
-    # one noise-free press of 20 lands on a false minimum (chi^2 2.7, flagged ok) and the table's
-    # 1-sigma is 25 % off the exact one at one press -- an open estimator issue, not this file's
-    return loaded_stack(replace(printed.geometry(), insert_plate=None), printed.material, "spring")
+    return loaded_stack(printed.geometry(), printed.material, "spring")
 
 
 @pytest.fixture(scope="module")

@@ -54,7 +54,7 @@ from mst_cli.parallel import fork_map
 
 TABLE_FILE = "inverse_table.npz"  # the offset table's file beside the model ...
 SHEAR_TABLE_FILE = "shear_table.npz"  # ... and the shear table's
-TABLE_FORMAT = 2  # bumped when the table's contents change meaning: an older file is rebuilt
+TABLE_FORMAT = 3  # bumped when the table's contents change meaning: an older file is rebuilt
 FIT_SIGMAS = 3.0  # a cell whose best point is further off the reading than this found no root
 # the direct inverse (the C header takes the same numbers): from each start, Gauss-Newton steps on
 # the table's trilinear field, from the nearest node of the force slabs the reading's |B| allows
@@ -313,20 +313,22 @@ def build_table(
     grid: TableGrid,
     lever_factor: float = 1.0,
     source: str = "",
+    whole_part: bool = True,
 ) -> InverseTable:
     """The model's field at every node: one force path per (u, v) node (in worker processes
     where the platform forks; the same numbers either way). ``offset``: the tilt rung's; ``shear``:
-    the general load's, pressed at the centre."""
+    the general load's, pressed at the centre; the part's members with the layers unless
+    ``whole_part`` is False (model.load_path: layers)."""
     nodes = [(float(u), float(v)) for u in grid.u for v in grid.v]
     if grid.kind == "shear":
-        stack = loaded_stack(geometry, material, mechanics, lever_factor)
+        stack = loaded_stack(geometry, material, mechanics, lever_factor, whole_part)
 
         def path(node: tuple[float, float]) -> np.ndarray:  # node: (Fx / Fz, Fy / Fz)
             d, tilt, slide = load_path(stack, grid.force_N, (0.0, 0.0), node)
             return magnet_field_T(geometry, *magnet_pose(geometry, d, tilt, slide))
 
     else:
-        laws = tilt_laws(geometry, material, mechanics, lever_factor)
+        laws = tilt_laws(geometry, material, mechanics, lever_factor, whole_part)
 
         def path(node: tuple[float, float]) -> np.ndarray:  # node: (x0, y0) mm
             return pose_field_T(geometry, laws, grid.force_N, node)

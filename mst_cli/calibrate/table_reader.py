@@ -159,7 +159,7 @@ class TwoChipLoadReader:
 def two_chip_reader(doc: Document, imap: InverseMap, lever: float, mechanics: str, polish: bool) -> TwoChipLoadReader:
     """The two-chip reader of the model ``doc`` (its chips, the inverse map's field resolution as
     the noise, ``lever``: its calibration's factor): its tables are built now, a few seconds."""
-    stack = loaded_stack(doc.geometry(), doc.material, mechanics, lever)
+    stack = loaded_stack(doc.geometry(), doc.material, mechanics, lever, doc.whole_part)
     return TwoChipLoadReader(TwoChipReader(stack, doc.chips_mm, imap.field_resolution_T), polish)
 
 
@@ -201,7 +201,8 @@ def build_beside(
     """The table of ``kind`` and ``grid`` (:func:`grid_of`, its forces following the regimes
     ``edges_N``) for the model in ``model_file``, hashed as current beside it."""
     g = grid_of(kind, doc, force_max_N, grid, edges_N)
-    return build_table(doc.geometry(), doc.material, mechanics, g, lever_factor, table_hash(model_file, mechanics, g))
+    source = table_hash(model_file, mechanics, g)
+    return build_table(doc.geometry(), doc.material, mechanics, g, lever_factor, source, doc.whole_part)
 
 
 def table_beside(
@@ -269,7 +270,9 @@ def offset_table_reader(
         )
     exact = None
     if polish:
-        exact = OffsetEstimator(doc.geometry(), doc.material, mechanics, sigma_T, force_max_N, max_sigma_mm, lever)
+        exact = OffsetEstimator(
+            doc.geometry(), doc.material, mechanics, sigma_T, force_max_N, max_sigma_mm, lever, doc.whole_part
+        )
     return OffsetTableReader(table, sigma_T, max_sigma_mm, exact), note
 
 
@@ -292,7 +295,7 @@ def shear_table_reader(
     table, note = table_beside(model_file, doc, mechanics, lever, float(imap.force_N[-1]), "shear", imap.edges_N)
     exact = None
     if polish:
-        exact = ShearReader(loaded_stack(doc.geometry(), doc.material, mechanics, lever))
+        exact = ShearReader(loaded_stack(doc.geometry(), doc.material, mechanics, lever, doc.whole_part))
     return ShearTableReader(table, imap.field_resolution_T, exact), note
 
 

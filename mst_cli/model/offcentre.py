@@ -77,21 +77,29 @@ def simulate_offcentre(
     points_per_regime: int = 100,
     overload: float = 0.25,
     shear_ratio: tuple[float, float] = (0.0, 0.0),
+    whole_part: bool = True,
 ) -> OffCentreResponse:
     """The response to a force pressed at ``offset_mm`` = (x0, y0) on the top face, over the
     centred model's force grid (0 to 1 + ``overload`` times the last lock), with a tangential
-    force ``shear_ratio`` = (Fx, Fy) / Fz along it (:mod:`mst_cli.model.general_load`). Raises
+    force ``shear_ratio`` = (Fx, Fy) / Fz along it (:mod:`mst_cli.model.general_load`); the part's
+    members with the layers unless ``whole_part`` is False (model.load_path: layers). Raises
     TiltError when a layer's equilibrium is not found."""
     axial = simulate_axial(
-        geometry, material, mechanics, field_model, points_per_regime=points_per_regime, overload=overload
+        geometry,
+        material,
+        mechanics,
+        field_model,
+        points_per_regime=points_per_regime,
+        overload=overload,
+        whole_part=whole_part,
     )
     F = axial.force_N
     slide = None
     if shear_ratio[0] == 0.0 and shear_ratio[1] == 0.0:
-        layers = tilt_laws(geometry, material, mechanics)
+        layers = tilt_laws(geometry, material, mechanics, whole_part=whole_part)
         offsets = np.broadcast_to(np.asarray(offset_mm, dtype=float), (len(layers), 2))
     else:
-        stack = loaded_stack(geometry, material, mechanics)
+        stack = loaded_stack(geometry, material, mechanics, whole_part=whole_part)
         layers, offsets = stack.tilt, stack.layer_offsets_mm(offset_mm, shear_ratio)
         slide = stack.slides_mm(F, shear_ratio)
     d, tilt = stack_path(layers, F, offsets)
@@ -204,16 +212,17 @@ def offset_map(
     region_frac: float = 0.8,
     fractions: tuple[float, ...] = (0.25, 0.5, 0.75),
     region_mm: tuple[float, float] | None = None,
+    whole_part: bool = True,
 ) -> OffsetMap:
     """:class:`OffsetMap` over a ``grid`` (nx, ny) spanning ``region_frac`` of the top face
     (W x D), or +-``region_mm`` (half extents) when given, at ``fractions`` of every regime's
-    force band."""
+    force band; the part's members with the layers unless ``whole_part`` is False."""
     # dense: the map reads each force back by interpolating this curve (its error falls like 1/n^2)
-    axial = simulate_axial(geometry, material, mechanics, field_model, points_per_regime=400)
+    axial = simulate_axial(geometry, material, mechanics, field_model, points_per_regime=400, whole_part=whole_part)
     edges = np.concatenate([[0.0], np.asarray(axial.lock_forces_N)])
     F = np.array([lo + f * (hi - lo) for lo, hi in zip(edges[:-1], edges[1:]) for f in fractions])
     regime = np.repeat(np.arange(1, len(edges)), len(fractions))
-    layers = tilt_laws(geometry, material, mechanics)
+    layers = tilt_laws(geometry, material, mechanics, whole_part=whole_part)
     half = region_mm or (0.5 * region_frac * geometry.width_mm, 0.5 * region_frac * geometry.depth_mm)
     xs = np.linspace(-1.0, 1.0, grid[0]) * half[0]
     ys = np.linspace(-1.0, 1.0, grid[1]) * half[1]

@@ -1,0 +1,90 @@
+"""The part's members in the general load: each member rides with the layer whose walls load it
+(docs/design.md 4.6 and 5.5).
+
+The axial model (:func:`mst_cli.model.response.part_stack`) puts the cap, the plates and the
+housing's cover in series with the layers (:mod:`mst_cli.model.load_path`). The general load
+solves every layer's equilibrium under a force and two moments (the tilt rung,
+:mod:`mst_cli.model.mechanics.tilt`), so here each member joins the law of the layer that loads
+it, and the tilt rung sees the layer and its member as one unit:
+
+* the cap, bonded to the top layer's top pad, bends into that layer's cavity until it closes
+  there (:class:`~mst_cli.model.load_path.CappedLayer`, the axial model's own law);
+* plate j, between layers j and j + 1, is loaded by layer j + 1's wall feet: in series with
+  layer j + 1 (:class:`SeriesMember`); the cover, under layer 1's wall feet: with layer 1.
+
+A centred press then gives the axial part's drop exactly (the units' compressions sum to
+part_stack's, on the same knots). Under a moment each chevron line carries its side's force
+through the member's compliance, half of it a side, so the member adds to the unit's tilt per
+moment C / x_c^2 (C the member's centred compliance, x_c the chevron lever): for the cap at a
+small offset that is the simply supported beam's mid-span slope, L / (12 E'I) per N mm for a
+point load, when x_c is half the span (the wall heads). The members are stiff in their own
+plane, so a tangential force slides no member; its moment turns them with their layer. Pure.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
+
+from mst_cli.model.load_path import CappedLayer, Members
+from mst_cli.model.mechanics.tilt import LayerTiltLaw
+
+
+@dataclass(frozen=True)
+class SeriesMember:
+    """A layer law with a member that never closes (a plate, the cover) in series: the layer's
+    compression plus ``member_mm_per_N`` x F at every force, the lock still the layer's own."""
+
+    law: Any  # a layer law of any rung, or a CappedLayer
+    member_mm_per_N: float
+
+    @property
+    def lock_force_N(self) -> float:
+        return float(self.law.lock_force_N)
+
+    @property
+    def knots_N(self) -> tuple[float, ...]:
+        return tuple(self.law.knots_N)
+
+    @property
+    def k_N_per_mm(self) -> float:
+        return 1.0 / (1.0 / self.law.k_N_per_mm + self.member_mm_per_N)
+
+    @property
+    def d_lock_mm(self) -> float:  # the unit's closure when the layer locks
+        return float(self.law.d_lock_mm) + self.member_mm_per_N * self.lock_force_N
+
+    @property
+    def k_locked_N_per_mm(self) -> float:
+        return 1.0 / (1.0 / self.law.k_locked_N_per_mm + self.member_mm_per_N)
+
+    def displacement_mm(self, force_N) -> np.ndarray:
+        F = np.asarray(force_N, dtype=float)
+        return np.asarray(self.law.displacement_mm(F)) + self.member_mm_per_N * F
+
+
+def part_layer_laws(laws: tuple, parts: Members) -> tuple:
+    """The layer laws (bottom to top) with the members folded in (module docstring); rigid
+    members (all compliances 0) give ``laws`` themselves."""
+    top = CappedLayer(laws[-1], parts.cap_mm_per_N) if parts.cap_mm_per_N > 0 else laws[-1]
+    units = (*laws[:-1], top)
+    under = (parts.cover_mm_per_N, *parts.plates_mm_per_N)  # the member under each layer's wall feet
+    return tuple(SeriesMember(u, c) if c > 0 else u for u, c in zip(units, under))
+
+
+def unit_tilt_law(law, cell, modulus_MPa: float, poisson_ratio: float) -> LayerTiltLaw:
+    """:meth:`LayerTiltLaw.from_layer` of a unit of :func:`part_layer_laws`. Past the lock the
+    rung puts the walls and the pads side by side; a member in series softens both alike, so
+    the centred unit keeps the member's compliance there too."""
+    tilt = LayerTiltLaw.from_layer(law, cell, modulus_MPa, poisson_ratio)
+    if not isinstance(law, SeriesMember):
+        return tilt
+    own = LayerTiltLaw.from_layer(law.law, cell, modulus_MPa, poisson_ratio)
+    scale = law.k_locked_N_per_mm / (own.walls.k_after_N_per_mm + own.pad_stiffness_N_per_mm)
+    return replace(
+        tilt,
+        walls=replace(tilt.walls, k_after_N_per_mm=own.walls.k_after_N_per_mm * scale),
+        pad_stiffness_N_per_mm=own.pad_stiffness_N_per_mm * scale,
+    )
