@@ -87,3 +87,33 @@ def test_l0_within_its_stated_out_of_sample_error(cell):
 def test_depth_end_factor_is_one_for_an_infinite_web_and_falls_with_depth():
     assert lateral.depth_end_factor(1.0, 2.0, np.inf) == pytest.approx(1.0)
     assert lateral.depth_end_factor(1.0, 2.0, 10.0) < lateral.depth_end_factor(1.0, 2.0, 40.0) < 1.0
+
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tools"))
+from fit_lateral import corner_cells  # noqa: E402
+
+CORNERS = corner_cells(1, seed=4039)  # one cell near each corner of the box neither fitted nor verified on
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("cell", CORNERS, ids=[f"{c.theta_deg:g}-{c.t_mm:g}-{c.h_mm:g}" for c in CORNERS])
+def test_l0_within_3_percent_at_the_corners_of_the_box(cell):
+    """Issue 44: L0's lateral stiffness within 3 % of L2 (which the independent whole-profile FE
+    of tools/lateral_check.py matches to 0.2 %) near every corner of the verified box, the
+    shallow thin cells among them (k_y infinitely deep). The one exception, stated in
+    docs/design.md 4.4: k_x of a shallow thick cell whose chevrons share a pad shorter than half
+    a wall thickness (the beam picture's limit), within 5 %."""
+    k_x, k_y = lateral.lateral_stiffness_N_per_mm(cell, MAT)
+    k_y_inf = k_y / float(lateral.depth_end_factor(cell.t_mm, cell.wall_length_mm, cell.depth_mm))
+    shared_pad = cell.p_inner_mm < 0.5 * cell.t_mm
+    assert k_x == pytest.approx(CL.lateral_stiffness_x_N_per_mm(cell, MAT), rel=0.05 if shared_pad else 0.03)
+    assert k_y_inf == pytest.approx(CL.lateral_stiffness_y_N_per_mm(cell, MAT), rel=0.03)
+
+
+@pytest.mark.slow
+def test_l0_within_3_percent_of_the_independent_fe_on_a_shallow_thin_cell():
+    """The issue's case (theta under 15 deg, t under 0.5 mm), against the independent FE itself."""
+    cell = HexCell(12, 0.45, 2.0)
+    assert not cell.violations()
+    k_x, _ = lateral.lateral_stiffness_N_per_mm(cell, MAT)
+    assert k_x == pytest.approx(LC.check_k_x_N_per_mm(cell, MAT), rel=0.03)

@@ -62,7 +62,9 @@ TABLE_STEP_TOL = 3e-2  # ... on the tables' states (the exact states' fit goes o
 LAMBDA_0, LAMBDA_MAX = 1e-3, 1e8
 START_FRACTION = 0.25  # the four off-centre starts: this share of the face's width and depth out
 NEWTON_STEPS = 12  # the tilt rung's Newton steps from the tables' states (most loads need 2 to 6, a few 10)
-EXACT_ITER = 12  # fit steps on the exact states, from the tables' fit
+# Of 100 random presses on tests/test_two_chip_table.py's sensor, the fit on the exact states ends
+# within 3 steps for 92, within 12 for 98 and within 20 for all (a flat valley past the lock).
+EXACT_ITER = 40  # at most this many fit steps on the exact states, from the tables' fit
 MAX_FITS = 3  # distinct fits per reading carried to the exact states
 FLAGS = ("ok", "ambiguous", "no_fit")
 

@@ -13,9 +13,12 @@ centre-line length L = (h - t) / (2 sin theta), and the odd (antisymmetric) late
 * along the depth, antiplane shear through a strip t thick and L long: G t / L per mm, the layer
   k_y = b G t / L (the same count);
 
-then each times a fitted factor exp(sum c_i term_i(t/L, theta)) (:data:`TERMS`, coefficients in
-model/data/lateral_fit.json, written by tools/fit_lateral.py from L2 on a seeded sample of
-valid cells and verified on another). The depth's L2 is an infinitely deep web; a web D deep
+then each times a fitted factor exp(sum c_i term_i(t/L, theta, e)) (:data:`TERMS`: a cubic in
+t/L and theta, 1/theta for the shallow walls, and e = exp(-p_i/t), p_i the inner pad's half
+width, for the shallow thick cells whose two chevrons share a pad shorter than a few t, where
+the beam picture fails; coefficients in model/data/lateral_fit.json, written by
+tools/fit_lateral.py from L2 on a seeded sample of valid cells topped up at the corners of the
+verified box, and verified on another). The depth's L2 is an infinitely deep web; a web D deep
 loses stiffness at its free faces y = +-D/2, the factor :func:`depth_end_factor` fitted to the
 3D check (tools/lateral_check.py). Across the width the layer is plane strain, as the normal
 stiffness (section 4.1 of docs/design.md).
@@ -30,7 +33,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from mst_cli.model.cell import HexCell, wall_centreline_length_mm
+from mst_cli.model.cell import HexCell, inner_pad_half_width_mm, wall_centreline_length_mm
 from mst_cli.model.material import Material
 from mst_cli.model.mechanics.spring import SHEAR_COEFFICIENT_RECT, plane_strain_modulus_MPa
 
@@ -38,7 +41,11 @@ if TYPE_CHECKING:
     from mst_cli.model.arrays import Floats
 
 DATA = Path(__file__).resolve().parent.parent / "data" / "lateral_fit.json"
-TERMS = ("1", "x", "th", "x^2", "x*th", "th^2")  # x = t / L, th = theta in radians
+# x = t / L, th = theta in radians, e = exp(-p_i / t) (p_i the inner pad's half width)
+TERMS = (
+    "1", "x", "th", "x^2", "x*th", "th^2", "x^3", "x^2*th", "x*th^2", "th^3",
+    "1/th", "x/th", "e", "e*th", "e*x", "e^2", "e*x^2", "e^4", "e^4*x",
+)  # fmt: skip
 
 
 def beam_k_x_N_per_mm(
@@ -59,10 +66,16 @@ def beam_k_y_N_per_mm(theta_rad: Floats, t_mm: Floats, h_mm: Floats, b_mm: Float
     return np.asarray(b_mm * G_MPa * t_mm / wall_centreline_length_mm(theta_rad, t_mm, h_mm))
 
 
-def design_matrix(t_over_L: Floats, theta_rad: Floats) -> np.ndarray:
-    """The fitted factors' terms (:data:`TERMS`) at each (t/L, theta): shape (..., len(TERMS))."""
-    x, th = np.broadcast_arrays(np.asarray(t_over_L, float), np.asarray(theta_rad, float))
-    return np.stack([np.ones_like(x), x, th, x * x, x * th, th * th], axis=-1)
+def design_matrix(t_over_L: Floats, theta_rad: Floats, pad_over_t: Floats) -> np.ndarray:
+    """The fitted factors' terms (:data:`TERMS`) at each (t/L, theta, p_i/t): shape (..., len(TERMS))."""
+    x, th, pad = np.broadcast_arrays(
+        np.asarray(t_over_L, float), np.asarray(theta_rad, float), np.asarray(pad_over_t, float)
+    )
+    e = np.exp(-pad)
+    one = np.ones_like(x)
+    cubic = [one, x, th, x * x, x * th, th * th, x**3, x * x * th, x * th * th, th**3]
+    e4 = e**4
+    return np.stack(cubic + [1.0 / th, x / th, e, e * th, e * x, e * e, e * x * x, e4, e4 * x], axis=-1)
 
 
 @cache
@@ -75,9 +88,9 @@ def clear_caches() -> None:
     _fit.cache_clear()
 
 
-def lateral_factors(t_over_L: Floats, theta_rad: Floats) -> tuple[np.ndarray, np.ndarray]:
+def lateral_factors(t_over_L: Floats, theta_rad: Floats, pad_over_t: Floats) -> tuple[np.ndarray, np.ndarray]:
     """(L2 / beam for k_x, L2 / strip for k_y) from the fitted coefficients."""
-    A = design_matrix(t_over_L, theta_rad)
+    A = design_matrix(t_over_L, theta_rad, pad_over_t)
     fit = _fit()
     return np.exp(A @ np.array(fit["x"]["coef"])), np.exp(A @ np.array(fit["y"]["coef"]))
 
@@ -90,11 +103,12 @@ def depth_end_factor(t_mm: Floats, wall_length_mm: Floats, depth_mm: Floats) -> 
 
 
 def lateral_stiffness_arrays(
-    theta_rad: Floats, t_mm: Floats, h_mm: Floats, depth_mm: Floats, E_MPa: Floats, nu: Floats
+    theta_rad: Floats, t_mm: Floats, h_mm: Floats, width_mm: Floats, depth_mm: Floats, E_MPa: Floats, nu: Floats
 ) -> tuple[np.ndarray, np.ndarray]:
     """(k_x, k_y) in N/mm at small load, vectorised over cells (module docstring)."""
     L = wall_centreline_length_mm(theta_rad, t_mm, h_mm)
-    g_x, g_y = lateral_factors(np.asarray(t_mm) / L, theta_rad)
+    pad = inner_pad_half_width_mm(theta_rad, t_mm, h_mm, width_mm) / np.asarray(t_mm)
+    g_x, g_y = lateral_factors(np.asarray(t_mm) / L, theta_rad, pad)
     G = np.asarray(E_MPa) / (2.0 * (1.0 + np.asarray(nu)))
     k_x = g_x * beam_k_x_N_per_mm(theta_rad, t_mm, h_mm, depth_mm, E_MPa, nu)
     k_y = g_y * beam_k_y_N_per_mm(theta_rad, t_mm, h_mm, depth_mm, G) * depth_end_factor(t_mm, L, depth_mm)
@@ -106,7 +120,7 @@ def lateral_stiffness_N_per_mm(cell: HexCell, material: Material, depth_mm: floa
     given): k_x across the width, k_y along the depth (module docstring)."""
     D = cell.depth_mm if depth_mm is None else depth_mm
     k_x, k_y = lateral_stiffness_arrays(
-        cell.theta_rad, cell.t_mm, cell.h_mm, D, material.youngs_modulus_MPa, material.poisson_ratio
+        cell.theta_rad, cell.t_mm, cell.h_mm, cell.width_mm, D, material.youngs_modulus_MPa, material.poisson_ratio
     )
     return float(k_x), float(k_y)
 
