@@ -19,6 +19,15 @@ layers' compression plus each member's bending:
   base under it is solid). The side walls carry it over the whole depth but
   at the cable windows, which end just above their sockets (docs/design.md section 10): the
   cover spans a window's 6-7 mm along the depth with wall on both sides, no cantilever.
+* **slot walls** (part of the housing) -- the base's two side walls beside the board slot, TPU
+  columns as tall as the slot and as wide as the base beyond it, carry the whole press to the
+  held bottom. Each is squeezed (P H / (E' A)) and, with layer 1's walls standing off its
+  centre line by e (on the bundled designs they stand over the slot's edge, a column's width
+  inside its centre), turned by the moment P e: a column held at its foot turns its top by
+  M H / (E' I), the cover across the slot resisting with 2 E'I_cover / L (a beam turned
+  equally and oppositely at both ends), so the load drops by e x the turn. Exact for a column
+  on a held foot: the whole-part rung with every other member rigid agrees within a few per
+  cent (tests/test_load_path.py).
 
 Each beam is a plane-strain Timoshenko beam (E' = E/(1 - nu^2) in bending, G in shear, shear
 factor 5/6) with its supports either simply supported (the default: the wall heads turn with
@@ -28,18 +37,23 @@ the same for both. Pure numpy, no I/O.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from mst_cli.model.cell import pad_half_width_mm
+from mst_cli.model.cell import pad_half_width_mm, wall_centreline_length_mm
 
 SHEAR_FACTOR = 5.0 / 6.0  # kappa of a rectangular section
 # a fingertip pressed on the face: a contact patch about 6 mm wide (the width the issue's
 # independent check presses over); the press runs the whole depth (a strip, in plane strain)
 FINGERTIP_PATCH_MM = 6.0
 SUPPORTS = ("simple", "clamped")
+# a wall's far end (the hexagon's side vertex) for its restraint of the pad's turn, c in c EI/L:
+# by the cell's symmetry the vertex does not turn; it either moves freely across the wall (1, the
+# soft bound: the cell's vertices spread as it is pressed) or is held (4, the stiff bound)
+WALL_FAR_END = {"simple": 1.0, "clamped": 4.0}
 
 
 def _value(x) -> Any:
@@ -99,6 +113,29 @@ def _clamped_two_load(P, e, L, EI):
     simple = P * e**2 * (3 * L - 4 * e) / (6.0 * EI)
     M = P * e * (L - e) / L
     return simple - M * e * (L - e) / (2.0 * EI)
+
+
+def end_fixity(k_rot_Nmm_per_rad, EI_Nmm2, span_mm) -> float | np.ndarray:
+    """The share of the clamped end moments a symmetric load on a beam of ``span_mm`` gets when
+    each end turns against a rotational spring ``k_rot`` (N mm/rad): the beam turns both ends
+    equally and oppositely with 2 EI / L, so M = M_clamped k / (k + 2 EI / L). 0: simply
+    supported, 1: clamped (k infinite); the deflection is simple - fixity x (simple - clamped),
+    exactly, by superposition."""
+    k = np.asarray(k_rot_Nmm_per_rad, dtype=float)
+    beam = 2.0 * np.asarray(EI_Nmm2, dtype=float) / np.asarray(span_mm, dtype=float)
+    held = np.isinf(k)
+    finite = np.where(held, 0.0, k)
+    return _value(np.where(held, 1.0, finite / (finite + beam)))
+
+
+def wall_head_restraint_Nmm_per_rad(theta_rad, t_mm, h_mm, depth_mm, E_prime_MPa, support: str) -> np.ndarray:
+    """A layer's wall resisting the turn of the pad at its head: a beam of the wall's centre-line
+    length L_w and thickness t, c E'I/L_w with its far end (the hexagon's side vertex, where it
+    meets the other wall, kept from turning by the cell's symmetry) free to move across the wall
+    (c = 1, ``support`` "simple": the soft bound) or held (c = 4, "clamped": the stiff bound)."""
+    c = WALL_FAR_END[support]
+    t = np.asarray(t_mm, dtype=float)
+    return c * E_prime_MPa * depth_mm * t**3 / 12.0 / wall_centreline_length_mm(theta_rad, t, h_mm)
 
 
 def section_EI_kGA(
@@ -197,6 +234,10 @@ class MemberScene:
     insert_above_pad_mm: float = 0.0  # the insert's underside above the top pad's top face
     patch_mm: float = FINGERTIP_PATCH_MM
     support: str = "simple"
+    # the slot's side walls (columns from the slot's floor to the cover, out to the base's
+    # sides): widths (left, right) and height, mm; 0: rigid (the layers' own rungs)
+    slot_wall_widths_mm: tuple[float, float] = (0.0, 0.0)
+    slot_height_mm: float = 0.0
 
 
 def member_scene(
@@ -225,6 +266,8 @@ def member_scene(
         insert_above_pad_mm=0.0 if insert is None else insert.z_mm - top.t_mm,
         patch_mm=patch_mm,
         support=support,
+        slot_wall_widths_mm=(x0 + 0.5 * geometry.base_length_mm, 0.5 * geometry.base_length_mm - x1),
+        slot_height_mm=geometry.z_cover_bottom_mm - geometry.z_board_bottom_mm,
     )
 
 
@@ -244,15 +287,52 @@ def member_compliances(scene: MemberScene, theta_rad, t_mm, h_mm) -> tuple:
         s.insert, t_top + s.insert_above_pad_mm,
     )  # fmt: skip
     span = 2.0 * head[..., -1]
-    cap = strip_bending_mm_per_N(span, s.patch_mm, EI, s.support) + strip_shear_mm_per_N(span, s.patch_mm, kGA)
+    # each beam's ends turn against what holds them (end_fixity): the walls below it, the slot's walls
+    walls = wall_head_restraint_Nmm_per_rad(theta, t, h_mm, D, E, s.support)  # (..., n)
+    fix = end_fixity(walls[..., -1], EI, span)
+    bend = [strip_bending_mm_per_N(span, s.patch_mm, EI, b) for b in SUPPORTS]
+    cap = bend[0] - fix * (bend[0] - bend[1]) + strip_shear_mm_per_N(span, s.patch_mm, kGA)
     EI_p, kGA_p = section_EI_kGA(D, t[..., :-1] + s.plate_mm + t[..., 1:], E, G)
     below, above = head[..., :-1], head[..., 1:]
-    plates = two_load_mm_per_N(2.0 * below, below - above, EI_p, kGA_p, s.support)
+    fix = end_fixity(walls[..., :-1], EI_p, 2.0 * below)
+    plate = [two_load_mm_per_N(2.0 * below, below - above, EI_p, kGA_p, b) for b in SUPPORTS]
+    plates = plate[0] - fix * (plate[0] - plate[1])
     EI_c, kGA_c = section_EI_kGA(D, s.cover_mm + t[..., 0], E, G)
     # walls over the slot's solid side walls bear on them: no overhang (unlike a plate's edge)
     on_slot = np.maximum(s.half_slot_mm - head[..., 0], 0.0)
-    cover = two_load_mm_per_N(2.0 * s.half_slot_mm, on_slot, EI_c, kGA_c, s.support)
+    fix = end_fixity(slot_wall_restraint_Nmm_per_rad(s), EI_c, 2.0 * s.half_slot_mm)
+    over = [two_load_mm_per_N(2.0 * s.half_slot_mm, on_slot, EI_c, kGA_c, b) for b in SUPPORTS]
+    cover = over[0] - fix * (over[0] - over[1]) + slot_walls_mm_per_N(s, head[..., 0], EI_c)
     return cap, np.asarray(plates), cover
+
+
+def slot_wall_restraint_Nmm_per_rad(scene: MemberScene) -> float:
+    """The slot's side walls resisting the cover's turn at their tops: columns held at the foot,
+    E'I/H (the mean of the two sides); infinite (clamped) when the scene has none (height 0)."""
+    s = scene
+    if s.slot_height_mm <= 0.0:
+        return math.inf
+    return float(np.mean([s.E_prime_MPa * s.depth_mm * w**3 / 12.0 / s.slot_height_mm for w in s.slot_wall_widths_mm]))
+
+
+def slot_walls_mm_per_N(scene: MemberScene, head_mm, cover_EI_Nmm2) -> float | np.ndarray:
+    """The drop per newton (total press F, F/2 on each side) of layer 1's wall feet at
+    |x| = ``head_mm`` on the slot's two side walls (module docstring): each a column w wide and
+    H tall, squeezed and turned by the load's offset e from its centre line, the cover across
+    the slot (``cover_EI_Nmm2`` over the slot's width) resisting the turn; the mean of the two
+    sides. 0 when the scene has no slot walls (height 0)."""
+    s, P = scene, 0.5
+    H, D, E = s.slot_height_mm, s.depth_mm, s.E_prime_MPa
+    if H <= 0.0:
+        return 0.0 * np.asarray(head_mm)
+    k_cover = 2.0 * np.asarray(cover_EI_Nmm2) / (2.0 * s.half_slot_mm)  # N mm / rad at each end
+    drops = []
+    for w in s.slot_wall_widths_mm:
+        e = np.asarray(head_mm) - (s.half_slot_mm + 0.5 * w)  # the load's offset from the centre line
+        EI = E * D * w**3 / 12.0
+        turn = P * e / (EI / H + k_cover)
+        drops.append(P * H / (E * w * D) + e * turn)
+    return _value(0.5 * (drops[0] + drops[1]))
 
 
 def members_total_mm_per_N(scene: MemberScene, theta_rad, t_mm, h_mm) -> np.ndarray:
