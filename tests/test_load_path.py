@@ -277,18 +277,32 @@ def test_a_beam_with_elastically_held_ends_matches_compatibility(k):
     assert want == pytest.approx({0.0: simple, np.inf: clamped}.get(k, want), rel=1e-12)
 
 
-def test_the_slot_walls_are_squeezed_and_turned_by_the_offset_load():
-    """Layer 1's walls over the slot walls' centre lines: only the squeeze P H/(E' w D), P = F/2
-    on each side; off them by e, the turn P e / (E'I/H + 2 E'I_cover/L) adds e x that turn (a
-    column held at its foot, the cover across the slot resisting); no slot walls: nothing."""
+def test_the_housing_limits():
+    """Layer 1's walls on the slot walls' centre lines: only the squeeze P H/(E' w D), P = F/2 on
+    each side, the cover not bent. Walls over the slot on a cover of one section: rigid slot walls
+    (or none) give the clamped four-point beam; slot walls of stiffness k = E'I/H give the end
+    moment from compatibility by hand, M = (P e (L - e)/(2 E'I) - P w/(2k)) / (L/(2 E'I) + 1/k),
+    and the drop P e^2 (3L - 4e)/(6 E'I) - M e (L - e)/(2 E'I) + P e/kGA + squeeze + (w/2) phi."""
     doc = mst.load(FORWARD)
     g, m = doc.geometry(), doc.material
     s = replace(lp.member_scene(g, m), slot_wall_widths_mm=(2.0, 2.0))
-    E, D, H, w = s.E_prime_MPa, s.depth_mm, s.slot_height_mm, 2.0
-    centre = s.half_slot_mm + 1.0
-    squeeze = 0.5 * H / (E * w * D)
-    assert lp.slot_walls_mm_per_N(s, centre, 50.0) == pytest.approx(squeeze, rel=1e-12)
-    EI = E * D * w**3 / 12
-    turn = 0.5 * -1.5 / (EI / H + 2 * 50.0 / (2 * s.half_slot_mm))
-    assert lp.slot_walls_mm_per_N(s, centre - 1.5, 50.0) == pytest.approx(squeeze - 1.5 * turn, rel=1e-12)
-    assert lp.slot_walls_mm_per_N(replace(s, slot_height_mm=0.0), centre - 1.5, 50.0) == 0.0
+    E, D, H, w, L2 = s.E_prime_MPa, s.depth_mm, s.slot_height_mm, 2.0, s.half_slot_mm
+    EI, kGA, P, L = 60.0, 900.0, 0.5, 2 * s.half_slot_mm
+    one = (EI, kGA)
+    squeeze = P * H / (E * w * D)
+    over, walls = lp.housing_mm_per_N(s, L2 + 1.0, L2, one, one)
+    assert over == 0.0 and walls == pytest.approx(squeeze, rel=1e-12)
+    e, head = 4.0, L2 - 4.0
+    clamped = lp.two_load_mm_per_N(L, e, EI, kGA, "clamped")
+    assert lp.housing_mm_per_N(replace(s, slot_height_mm=0.0), head, L2, one, one)[0] == pytest.approx(
+        clamped, rel=1e-12
+    )
+    # slot walls 10 m wide: k ~ w^3, the limit to 1e-4 (their turn, P w/(2k) ~ 1/w^2 of a wide lever)
+    wide = replace(s, slot_wall_widths_mm=(1e4, 1e4))
+    assert lp.housing_mm_per_N(wide, head, L2, one, one)[0] == pytest.approx(clamped, rel=1e-4)
+    k = E * D * w**3 / 12 / H
+    M = (P * e * (L - e) / (2 * EI) - P * w / (2 * k)) / (L / (2 * EI) + 1 / k)
+    phi = (P * w / 2 + M) / k
+    bend = P * e**2 * (3 * L - 4 * e) / (6 * EI) - M * e * (L - e) / (2 * EI) + P * e / kGA
+    over, walls = lp.housing_mm_per_N(s, head, L2, one, one)
+    assert over == pytest.approx(bend + w / 2 * phi, rel=1e-12) and walls == pytest.approx(squeeze, rel=1e-12)

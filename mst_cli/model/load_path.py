@@ -201,6 +201,10 @@ class Members:
     cover_mm_per_N: float
     patch_mm: float
     support: str
+    # the cover's bending over the slot (part of cover_mm_per_N), which stops when the cover has
+    # dropped the air under it onto the board (cover_travel_mm; inf: never)
+    cover_contact_mm_per_N: float = 0.0
+    cover_travel_mm: float = math.inf
 
     @property
     def total_mm_per_N(self) -> float:
@@ -238,6 +242,7 @@ class MemberScene:
     # sides): widths (left, right) and height, mm; 0: rigid (the layers' own rungs)
     slot_wall_widths_mm: tuple[float, float] = (0.0, 0.0)
     slot_height_mm: float = 0.0
+    cover_air_mm: float = math.inf  # between the cover and the board's tallest part: its bending's travel
 
 
 def member_scene(
@@ -268,6 +273,7 @@ def member_scene(
         support=support,
         slot_wall_widths_mm=(x0 + 0.5 * geometry.base_length_mm, 0.5 * geometry.base_length_mm - x1),
         slot_height_mm=geometry.z_cover_bottom_mm - geometry.z_board_bottom_mm,
+        cover_air_mm=geometry.housing.chip_clearance_mm,
     )
 
 
@@ -275,6 +281,13 @@ def member_compliances(scene: MemberScene, theta_rad, t_mm, h_mm) -> tuple:
     """(cap (...), plates (..., n - 1), cover (...)) in mm/N of stacks of cells given as arrays
     (..., n) of theta (rad), t and h (mm), bottom to top (module docstring); the kernel both
     :func:`members` and the design loop use."""
+    cap, plates, over_slot, slot_walls = member_parts(scene, theta_rad, t_mm, h_mm)
+    return cap, plates, over_slot + slot_walls
+
+
+def member_parts(scene: MemberScene, theta_rad, t_mm, h_mm) -> tuple:
+    """:func:`member_compliances` with the cover's two parts apart: (cap, plates, the cover's
+    bending over the slot (which stops on the board), the slot walls' squeeze and turn)."""
     s = scene
     theta, t = np.asarray(theta_rad, dtype=float), np.asarray(t_mm, dtype=float)
     # the wall heads: the mid-point of each pad's outer and inner corners (wall_head_x_mm)
@@ -297,42 +310,59 @@ def member_compliances(scene: MemberScene, theta_rad, t_mm, h_mm) -> tuple:
     fix = end_fixity(walls[..., :-1], EI_p, 2.0 * below)
     plate = [two_load_mm_per_N(2.0 * below, below - above, EI_p, kGA_p, b) for b in SUPPORTS]
     plates = plate[0] - fix * (plate[0] - plate[1])
-    EI_c, kGA_c = section_EI_kGA(D, s.cover_mm + t[..., 0], E, G)
-    # walls over the slot's solid side walls bear on them: no overhang (unlike a plate's edge)
-    on_slot = np.maximum(s.half_slot_mm - head[..., 0], 0.0)
-    fix = end_fixity(slot_wall_restraint_Nmm_per_rad(s), EI_c, 2.0 * s.half_slot_mm)
-    over = [two_load_mm_per_N(2.0 * s.half_slot_mm, on_slot, EI_c, kGA_c, b) for b in SUPPORTS]
-    cover = over[0] - fix * (over[0] - over[1]) + slot_walls_mm_per_N(s, head[..., 0], EI_c)
-    return cap, np.asarray(plates), cover
+    pad = pad_half_width_mm(theta[..., 0], np.asarray(h_mm, dtype=float)[..., 0], s.width_mm)
+    over_slot, slot_walls = housing_mm_per_N(
+        s, head[..., 0], pad, section_EI_kGA(D, s.cover_mm + t[..., 0], E, G), section_EI_kGA(D, s.cover_mm, E, G)
+    )
+    return cap, np.asarray(plates), over_slot, slot_walls
 
 
-def slot_wall_restraint_Nmm_per_rad(scene: MemberScene) -> float:
-    """The slot's side walls resisting the cover's turn at their tops: columns held at the foot,
-    E'I/H (the mean of the two sides); infinite (clamped) when the scene has none (height 0)."""
-    s = scene
-    if s.slot_height_mm <= 0.0:
-        return math.inf
-    return float(np.mean([s.E_prime_MPa * s.depth_mm * w**3 / 12.0 / s.slot_height_mm for w in s.slot_wall_widths_mm]))
+def housing_mm_per_N(scene: MemberScene, head_mm, pad_mm, cover_pad, cover_alone) -> tuple:
+    """(what stops when the cover lands on the board: the cover's bending over the slot and the
+    drop of its edges, the rest: the slot walls' squeeze and a foot's turn on them) of the drop per newton (total
+    press F, P = F/2 on each side) of layer 1's wall feet at |x| = ``head_mm`` (module
+    docstring); the mean of the two sides, each a column w wide and H tall held at its foot
+    (k = E'I/H against its top's turn phi) with the cover bonded to it. The cover is a beam of
+    two sections: with layer 1's bottom pad under |x| < ``pad_mm`` (``cover_pad``, (E'I, kGA)),
+    the cover alone beyond (``cover_alone``).
 
-
-def slot_walls_mm_per_N(scene: MemberScene, head_mm, cover_EI_Nmm2) -> float | np.ndarray:
-    """The drop per newton (total press F, F/2 on each side) of layer 1's wall feet at
-    |x| = ``head_mm`` on the slot's two side walls (module docstring): each a column w wide and
-    H tall, squeezed and turned by the load's offset e from its centre line, the cover across
-    the slot (``cover_EI_Nmm2`` over the slot's width) resisting the turn; the mean of the two
-    sides. 0 when the scene has no slot walls (height 0)."""
+    A foot on the column, a from its centre line: phi = P a / (k + 2 / int(1/E'I)) (the cover
+    resists turning equally and oppositely at both ends) and the foot drops a phi. A foot over
+    the slot, e inside its edge: the cover carries P to the column's inner edge (w/2 from the
+    centre line) and turns with it; phi = (P w/2 + M)/k, and the cover's end moment M follows
+    from its end slope matching phi. By virtual work over the half span (x from the edge, m(x) =
+    P min(x, e) - M): slope = P C1 - M B, drop at the foot = P C2 - M C1, with C_j = int
+    min(x, e)^j / E'I dx and B = int dx / E'I; plus shear P int_0^e dx / kGA. The column adds
+    its squeeze P H/(E' w D) and its inner edge's drop (w/2) phi. No slot walls (height 0):
+    the cover clamped on rigid supports (phi = 0)."""
     s, P = scene, 0.5
-    H, D, E = s.slot_height_mm, s.depth_mm, s.E_prime_MPa
+    head = np.asarray(head_mm, dtype=float)
+    L2, H, D, E = s.half_slot_mm, s.slot_height_mm, s.depth_mm, s.E_prime_MPa
+    e = np.clip(L2 - head, 0.0, L2)  # the foot's distance inside the slot's edge
+    x_pad = np.clip(L2 - np.asarray(pad_mm, dtype=float), 0.0, L2)  # where the pad starts, from the edge
+    (EI_in, kGA_in), (EI_out, kGA_out) = cover_pad, cover_alone
+
+    def over_half_span(j: int):  # int_0^{L/2} min(x, e)^j / E'I dx, the section changing at x_pad
+        def prim(x):
+            inside = np.minimum(x, e)
+            return inside ** (j + 1) / (j + 1) + e**j * np.maximum(x - e, 0.0)
+
+        return (prim(x_pad) - prim(0.0)) / EI_out + (prim(L2) - prim(x_pad)) / EI_in
+
+    B, C1, C2 = over_half_span(0), over_half_span(1), over_half_span(2)
+    shear = P * (np.minimum(e, x_pad) / kGA_out + np.maximum(e - x_pad, 0.0) / kGA_in)
     if H <= 0.0:
-        return 0.0 * np.asarray(head_mm)
-    k_cover = 2.0 * np.asarray(cover_EI_Nmm2) / (2.0 * s.half_slot_mm)  # N mm / rad at each end
-    drops = []
+        return _value(P * C2 - P * C1 / B * C1 + shear), _value(0.0 * head)
+    over_slot, walls = [], []
     for w in s.slot_wall_widths_mm:
-        e = np.asarray(head_mm) - (s.half_slot_mm + 0.5 * w)  # the load's offset from the centre line
-        EI = E * D * w**3 / 12.0
-        turn = P * e / (EI / H + k_cover)
-        drops.append(P * H / (E * w * D) + e * turn)
-    return _value(0.5 * (drops[0] + drops[1]))
+        k = E * D * w**3 / 12.0 / H
+        M = np.where(e > 0, (P * C1 - P * 0.5 * w / k) / (B + 1.0 / k), 0.0)
+        a = (L2 + 0.5 * w) - np.maximum(head, L2)  # a foot on the column: its lever about the centre line
+        phi = np.where(e > 0, (P * 0.5 * w + M) / k, P * a / (k + 1.0 / B))
+        # over the slot the cover's bending and its edge's drop stop when the cover lands on the board
+        over_slot.append(P * C2 - M * C1 + shear + np.where(e > 0, 0.5 * w * phi, 0.0))
+        walls.append(P * H / (E * w * D) + np.where(e > 0, 0.0, a * phi))
+    return _value(0.5 * (over_slot[0] + over_slot[1])), _value(0.5 * (walls[0] + walls[1]))
 
 
 def members_total_mm_per_N(scene: MemberScene, theta_rad, t_mm, h_mm) -> np.ndarray:
@@ -349,13 +379,15 @@ def members(
     plate in the cap (its own modulus, in plane strain as given)."""
     scene = member_scene(geometry, material, patch_mm, support, insert)
     cells = geometry.layers
-    cap, plates, cover = member_compliances(
+    cap, plates, over_slot, slot_walls = member_parts(
         scene,
         np.array([c.theta_rad for c in cells]),
         np.array([c.t_mm for c in cells]),
         np.array([c.h_mm for c in cells]),
     )
-    return Members(float(cap), tuple(float(p) for p in plates), float(cover), patch_mm, support)
+    cover = float(over_slot + slot_walls)
+    plates_ = tuple(float(p) for p in plates)
+    return Members(float(cap), plates_, cover, patch_mm, support, float(over_slot), scene.cover_air_mm)
 
 
 @dataclass(frozen=True)
