@@ -293,7 +293,8 @@ def check_load_path(m: Measurements, x: Manifest, share_max: float | None = None
     against the cap, plates and cover in closed form, from the design in export.json. Fails,
     naming the member, when the share outside the layers in some regime exceeds ``share_max``
     (``--load-path-max``) or, without it, when the share the closed form leaves uncertain
-    (simply supported against clamped wall heads) exceeds the regime's accuracy budget
+    (the beams' ends held at the soft and at the stiff bound of what restrains them) exceeds the
+    regime's accuracy budget
     (5 % before the first lock, 8 % after one, 20 % after two: load_path.support_uncertainty)."""
     if x.design is None:
         return Check("load_path", True, "no design in export.json", "the design's members", info=True)
@@ -310,7 +311,7 @@ def check_load_path(m: Measurements, x: Manifest, share_max: float | None = None
         bound = "uncertain share <= " + " / ".join(f"{100 * b['budget']:.0f}" for b in budget) + " % per regime"
         note = (
             f"regime {row['regime']}: {100 * row['outside_layers']:.0f} % of the magnet's motion is outside the "
-            f"layers, {100 * worst['uncertain_share']:.0f} % uncertain between simple and clamped supports "
+            f"layers, {100 * worst['uncertain_share']:.0f} % uncertain between its supports' soft and stiff bounds "
             f"(budget {100 * worst['budget']:.0f} %), most in the {name}"
         )
         bad = bool(over)

@@ -67,7 +67,7 @@ import numpy as np
 from mst_cli.model import chip as mlx
 from mst_cli.model.assembly import unloaded_gap_mm
 from mst_cli.model.cell import CELL_RULES, LENGTH_FLOOR_MM, cell_margins_mm, wall_centreline_length_mm
-from mst_cli.model.load_path import member_compliances, member_scene
+from mst_cli.model.load_path import member_compliances, member_parts, member_scene
 from mst_cli.model.magnet_field import axial_Bz_T, choose_field_model
 from mst_cli.model.material import Material
 from mst_cli.model.mechanics import correction
@@ -331,7 +331,7 @@ class DesignProblem:
         self, theta_deg: np.ndarray, t_mm: np.ndarray, h_mm: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """(R_N per layer, S_per_N per regime, B_full_T, gap0_mm, B0_T) of candidate stacks."""
-        members = self.members_mm_per_N(theta_deg, t_mm, h_mm) if self.whole_part else None
+        members = self.part_members(theta_deg, t_mm, h_mm) if self.whole_part else None
         return self._responses_of(self.layer_laws(theta_deg, t_mm, h_mm), h_mm, members)
 
     def member_parts(self, theta_deg: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike) -> tuple:
@@ -347,15 +347,28 @@ class DesignProblem:
         cap, plates, cover = self.member_parts(theta_deg, t_mm, h_mm)
         return cap, plates.sum(axis=-1) + cover
 
+    def part_members(self, theta_deg: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike) -> tuple:
+        """(each layer's cap (..., n): the plate above it, the cap on the top one; the cover;
+        (the cover's bending over the slot, the air under it): what stops on the board) of
+        candidate stacks, for :meth:`_responses_of`."""
+        t = np.asarray(t_mm, dtype=float)
+        if self.wall_offset_mm:
+            t = np.maximum(t + self.wall_offset_mm, LENGTH_FLOOR_MM)
+        cap, plates, over_slot, slot_walls = member_parts(self.members, np.radians(theta_deg), t, h_mm)
+        caps = np.concatenate([plates, np.asarray(cap)[..., None]], axis=-1)  # each layer's: the plate or cap above it
+        return caps, over_slot + slot_walls, (over_slot, self.members.cover_air_mm)
+
     def _responses_of(
         self, laws: tuple, h_mm: np.ndarray, members: tuple | None = None
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """:meth:`responses` of stacks whose layer laws (and members' (cap, rest) compliance) are
-        known: R is each layer's lock force, the top one's where the cap closes its cavity."""
+        """:meth:`responses` of stacks whose layer laws (and members' (caps, rest[, cover contact])
+        compliance) are known: R is each layer's lock force, where the plate or cap above it
+        closes its cavity."""
         k, d_lock, R, k_locked = laws
-        cap, rest = (None, 0.0) if members is None else members
+        cap, rest = (None, 0.0) if members is None else members[:2]
+        contact = members[2] if members is not None and len(members) > 2 else None
         gap0 = cast(np.ndarray, self.gap0_mm(h_mm.sum(axis=-1)))  # candidates' sums: an array
-        _, S, gap, B = regime_kernel(k, d_lock, k_locked, gap0, self.field_T, R, rest, cap)
+        _, S, gap, B = regime_kernel(k, d_lock, k_locked, gap0, self.field_T, R, rest, cap, contact)
         # the chip's largest field on the way is at the smallest gap: a stack whose members let
         # the magnet reach the chip (gap <= 0 at the last lock) saturates it on the way there
         B_full = np.where(gap[..., -1] > 0.0, B[..., -1], self.field_T(np.zeros_like(gap[..., -1])))
@@ -382,7 +395,7 @@ class DesignProblem:
             H = np.broadcast_to(h_mm, (3,) + h_mm.shape)
             dt = self.wall_tolerance_mm  # the members see the shifted walls too
             T3 = np.stack([t_mm, np.maximum(t_mm + dt, LENGTH_FLOOR_MM), np.maximum(t_mm - dt, LENGTH_FLOOR_MM)])
-            members = self.members_mm_per_N(theta_deg, T3, H) if self.whole_part else None
+            members = self.part_members(theta_deg, T3, H) if self.whole_part else None
             R3, S3, B_full3, gap03, B03 = self._responses_of(laws, H, members)
             R, S, B_full, gap0, B0 = R3[0], S3[0], B_full3[0], gap03[0], B03[0]
             base = np.log(np.maximum(np.concatenate([S, R], axis=-1), TINY))

@@ -19,6 +19,15 @@ layers' compression plus each member's bending:
   base under it is solid). The side walls carry it over the whole depth but
   at the cable windows, which end just above their sockets (docs/design.md section 10): the
   cover spans a window's 6-7 mm along the depth with wall on both sides, no cantilever.
+* **slot walls** (part of the housing) -- the base's two side walls beside the board slot, TPU
+  columns as tall as the slot and as wide as the base beyond it, carry the whole press to the
+  held bottom. Each is squeezed (P H / (E' A)) and, with layer 1's walls standing off its
+  centre line by e (on the bundled designs they stand over the slot's edge, a column's width
+  inside its centre), turned by the moment P e: a column held at its foot turns its top by
+  M H / (E' I), the cover across the slot resisting with 2 E'I_cover / L (a beam turned
+  equally and oppositely at both ends), so the load drops by e x the turn. Exact for a column
+  on a held foot: the whole-part rung with every other member rigid agrees within a few per
+  cent (tests/test_load_path.py).
 
 Each beam is a plane-strain Timoshenko beam (E' = E/(1 - nu^2) in bending, G in shear, shear
 factor 5/6) with its supports either simply supported (the default: the wall heads turn with
@@ -28,18 +37,23 @@ the same for both. Pure numpy, no I/O.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from mst_cli.model.cell import pad_half_width_mm
+from mst_cli.model.cell import pad_half_width_mm, wall_centreline_length_mm
 
 SHEAR_FACTOR = 5.0 / 6.0  # kappa of a rectangular section
 # a fingertip pressed on the face: a contact patch about 6 mm wide (the width the issue's
 # independent check presses over); the press runs the whole depth (a strip, in plane strain)
 FINGERTIP_PATCH_MM = 6.0
 SUPPORTS = ("simple", "clamped")
+# a wall's far end (the hexagon's side vertex) for its restraint of the pad's turn, c in c EI/L:
+# by the cell's symmetry the vertex does not turn; it either moves freely across the wall (1, the
+# soft bound: the cell's vertices spread as it is pressed) or is held (4, the stiff bound)
+WALL_FAR_END = {"simple": 1.0, "clamped": 4.0}
 
 
 def _value(x) -> Any:
@@ -99,6 +113,29 @@ def _clamped_two_load(P, e, L, EI):
     simple = P * e**2 * (3 * L - 4 * e) / (6.0 * EI)
     M = P * e * (L - e) / L
     return simple - M * e * (L - e) / (2.0 * EI)
+
+
+def end_fixity(k_rot_Nmm_per_rad, EI_Nmm2, span_mm) -> float | np.ndarray:
+    """The share of the clamped end moments a symmetric load on a beam of ``span_mm`` gets when
+    each end turns against a rotational spring ``k_rot`` (N mm/rad): the beam turns both ends
+    equally and oppositely with 2 EI / L, so M = M_clamped k / (k + 2 EI / L). 0: simply
+    supported, 1: clamped (k infinite); the deflection is simple - fixity x (simple - clamped),
+    exactly, by superposition."""
+    k = np.asarray(k_rot_Nmm_per_rad, dtype=float)
+    beam = 2.0 * np.asarray(EI_Nmm2, dtype=float) / np.asarray(span_mm, dtype=float)
+    held = np.isinf(k)
+    finite = np.where(held, 0.0, k)
+    return _value(np.where(held, 1.0, finite / (finite + beam)))
+
+
+def wall_head_restraint_Nmm_per_rad(theta_rad, t_mm, h_mm, depth_mm, E_prime_MPa, support: str) -> np.ndarray:
+    """A layer's wall resisting the turn of the pad at its head: a beam of the wall's centre-line
+    length L_w and thickness t, c E'I/L_w with its far end (the hexagon's side vertex, where it
+    meets the other wall, kept from turning by the cell's symmetry) free to move across the wall
+    (c = 1, ``support`` "simple": the soft bound) or held (c = 4, "clamped": the stiff bound)."""
+    c = WALL_FAR_END[support]
+    t = np.asarray(t_mm, dtype=float)
+    return c * E_prime_MPa * depth_mm * t**3 / 12.0 / wall_centreline_length_mm(theta_rad, t, h_mm)
 
 
 def section_EI_kGA(
@@ -164,6 +201,10 @@ class Members:
     cover_mm_per_N: float
     patch_mm: float
     support: str
+    # the cover's bending over the slot (part of cover_mm_per_N), which stops when the cover has
+    # dropped the air under it onto the board (cover_travel_mm; inf: never)
+    cover_contact_mm_per_N: float = 0.0
+    cover_travel_mm: float = math.inf
 
     @property
     def total_mm_per_N(self) -> float:
@@ -197,6 +238,11 @@ class MemberScene:
     insert_above_pad_mm: float = 0.0  # the insert's underside above the top pad's top face
     patch_mm: float = FINGERTIP_PATCH_MM
     support: str = "simple"
+    # the slot's side walls (columns from the slot's floor to the cover, out to the base's
+    # sides): widths (left, right) and height, mm; 0: rigid (the layers' own rungs)
+    slot_wall_widths_mm: tuple[float, float] = (0.0, 0.0)
+    slot_height_mm: float = 0.0
+    cover_air_mm: float = math.inf  # between the cover and the board's tallest part: its bending's travel
 
 
 def member_scene(
@@ -225,6 +271,9 @@ def member_scene(
         insert_above_pad_mm=0.0 if insert is None else insert.z_mm - top.t_mm,
         patch_mm=patch_mm,
         support=support,
+        slot_wall_widths_mm=(x0 + 0.5 * geometry.base_length_mm, 0.5 * geometry.base_length_mm - x1),
+        slot_height_mm=geometry.z_cover_bottom_mm - geometry.z_board_bottom_mm,
+        cover_air_mm=geometry.housing.chip_clearance_mm,
     )
 
 
@@ -232,6 +281,13 @@ def member_compliances(scene: MemberScene, theta_rad, t_mm, h_mm) -> tuple:
     """(cap (...), plates (..., n - 1), cover (...)) in mm/N of stacks of cells given as arrays
     (..., n) of theta (rad), t and h (mm), bottom to top (module docstring); the kernel both
     :func:`members` and the design loop use."""
+    cap, plates, over_slot, slot_walls = member_parts(scene, theta_rad, t_mm, h_mm)
+    return cap, plates, over_slot + slot_walls
+
+
+def member_parts(scene: MemberScene, theta_rad, t_mm, h_mm) -> tuple:
+    """:func:`member_compliances` with the cover's two parts apart: (cap, plates, the cover's
+    bending over the slot (which stops on the board), the slot walls' squeeze and turn)."""
     s = scene
     theta, t = np.asarray(theta_rad, dtype=float), np.asarray(t_mm, dtype=float)
     # the wall heads: the mid-point of each pad's outer and inner corners (wall_head_x_mm)
@@ -244,15 +300,69 @@ def member_compliances(scene: MemberScene, theta_rad, t_mm, h_mm) -> tuple:
         s.insert, t_top + s.insert_above_pad_mm,
     )  # fmt: skip
     span = 2.0 * head[..., -1]
-    cap = strip_bending_mm_per_N(span, s.patch_mm, EI, s.support) + strip_shear_mm_per_N(span, s.patch_mm, kGA)
+    # each beam's ends turn against what holds them (end_fixity): the walls below it, the slot's walls
+    walls = wall_head_restraint_Nmm_per_rad(theta, t, h_mm, D, E, s.support)  # (..., n)
+    fix = end_fixity(walls[..., -1], EI, span)
+    bend = [strip_bending_mm_per_N(span, s.patch_mm, EI, b) for b in SUPPORTS]
+    cap = bend[0] - fix * (bend[0] - bend[1]) + strip_shear_mm_per_N(span, s.patch_mm, kGA)
     EI_p, kGA_p = section_EI_kGA(D, t[..., :-1] + s.plate_mm + t[..., 1:], E, G)
     below, above = head[..., :-1], head[..., 1:]
-    plates = two_load_mm_per_N(2.0 * below, below - above, EI_p, kGA_p, s.support)
-    EI_c, kGA_c = section_EI_kGA(D, s.cover_mm + t[..., 0], E, G)
-    # walls over the slot's solid side walls bear on them: no overhang (unlike a plate's edge)
-    on_slot = np.maximum(s.half_slot_mm - head[..., 0], 0.0)
-    cover = two_load_mm_per_N(2.0 * s.half_slot_mm, on_slot, EI_c, kGA_c, s.support)
-    return cap, np.asarray(plates), cover
+    fix = end_fixity(walls[..., :-1], EI_p, 2.0 * below)
+    plate = [two_load_mm_per_N(2.0 * below, below - above, EI_p, kGA_p, b) for b in SUPPORTS]
+    plates = plate[0] - fix * (plate[0] - plate[1])
+    pad = pad_half_width_mm(theta[..., 0], np.asarray(h_mm, dtype=float)[..., 0], s.width_mm)
+    over_slot, slot_walls = housing_mm_per_N(
+        s, head[..., 0], pad, section_EI_kGA(D, s.cover_mm + t[..., 0], E, G), section_EI_kGA(D, s.cover_mm, E, G)
+    )
+    return cap, np.asarray(plates), over_slot, slot_walls
+
+
+def housing_mm_per_N(scene: MemberScene, head_mm, pad_mm, cover_pad, cover_alone) -> tuple:
+    """(what stops when the cover lands on the board: the cover's bending over the slot and the
+    drop of its edges, the rest: the slot walls' squeeze and a foot's turn on them) of the drop per newton (total
+    press F, P = F/2 on each side) of layer 1's wall feet at |x| = ``head_mm`` (module
+    docstring); the mean of the two sides, each a column w wide and H tall held at its foot
+    (k = E'I/H against its top's turn phi) with the cover bonded to it. The cover is a beam of
+    two sections: with layer 1's bottom pad under |x| < ``pad_mm`` (``cover_pad``, (E'I, kGA)),
+    the cover alone beyond (``cover_alone``).
+
+    A foot on the column, a from its centre line: phi = P a / (k + 2 / int(1/E'I)) (the cover
+    resists turning equally and oppositely at both ends) and the foot drops a phi. A foot over
+    the slot, e inside its edge: the cover carries P to the column's inner edge (w/2 from the
+    centre line) and turns with it; phi = (P w/2 + M)/k, and the cover's end moment M follows
+    from its end slope matching phi. By virtual work over the half span (x from the edge, m(x) =
+    P min(x, e) - M): slope = P C1 - M B, drop at the foot = P C2 - M C1, with C_j = int
+    min(x, e)^j / E'I dx and B = int dx / E'I; plus shear P int_0^e dx / kGA. The column adds
+    its squeeze P H/(E' w D) and its inner edge's drop (w/2) phi. No slot walls (height 0):
+    the cover clamped on rigid supports (phi = 0)."""
+    s, P = scene, 0.5
+    head = np.asarray(head_mm, dtype=float)
+    L2, H, D, E = s.half_slot_mm, s.slot_height_mm, s.depth_mm, s.E_prime_MPa
+    e = np.clip(L2 - head, 0.0, L2)  # the foot's distance inside the slot's edge
+    x_pad = np.clip(L2 - np.asarray(pad_mm, dtype=float), 0.0, L2)  # where the pad starts, from the edge
+    (EI_in, kGA_in), (EI_out, kGA_out) = cover_pad, cover_alone
+
+    def over_half_span(j: int):  # int_0^{L/2} min(x, e)^j / E'I dx, the section changing at x_pad
+        def prim(x):
+            inside = np.minimum(x, e)
+            return inside ** (j + 1) / (j + 1) + e**j * np.maximum(x - e, 0.0)
+
+        return (prim(x_pad) - prim(0.0)) / EI_out + (prim(L2) - prim(x_pad)) / EI_in
+
+    B, C1, C2 = over_half_span(0), over_half_span(1), over_half_span(2)
+    shear = P * (np.minimum(e, x_pad) / kGA_out + np.maximum(e - x_pad, 0.0) / kGA_in)
+    if H <= 0.0:
+        return _value(P * C2 - P * C1 / B * C1 + shear), _value(0.0 * head)
+    over_slot, walls = [], []
+    for w in s.slot_wall_widths_mm:
+        k = E * D * w**3 / 12.0 / H
+        M = np.where(e > 0, (P * C1 - P * 0.5 * w / k) / (B + 1.0 / k), 0.0)
+        a = (L2 + 0.5 * w) - np.maximum(head, L2)  # a foot on the column: its lever about the centre line
+        phi = np.where(e > 0, (P * 0.5 * w + M) / k, P * a / (k + 1.0 / B))
+        # over the slot the cover's bending and its edge's drop stop when the cover lands on the board
+        over_slot.append(P * C2 - M * C1 + shear + np.where(e > 0, 0.5 * w * phi, 0.0))
+        walls.append(P * H / (E * w * D) + np.where(e > 0, 0.0, a * phi))
+    return _value(0.5 * (over_slot[0] + over_slot[1])), _value(0.5 * (walls[0] + walls[1]))
 
 
 def members_total_mm_per_N(scene: MemberScene, theta_rad, t_mm, h_mm) -> np.ndarray:
@@ -269,13 +379,15 @@ def members(
     plate in the cap (its own modulus, in plane strain as given)."""
     scene = member_scene(geometry, material, patch_mm, support, insert)
     cells = geometry.layers
-    cap, plates, cover = member_compliances(
+    cap, plates, over_slot, slot_walls = member_parts(
         scene,
         np.array([c.theta_rad for c in cells]),
         np.array([c.t_mm for c in cells]),
         np.array([c.h_mm for c in cells]),
     )
-    return Members(float(cap), tuple(float(p) for p in plates), float(cover), patch_mm, support)
+    cover = float(over_slot + slot_walls)
+    plates_ = tuple(float(p) for p in plates)
+    return Members(float(cap), plates_, cover, patch_mm, support, float(over_slot), scene.cover_air_mm)
 
 
 @dataclass(frozen=True)

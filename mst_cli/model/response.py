@@ -20,7 +20,7 @@ from mst_cli.model.assembly import SensorGeometry
 from mst_cli.model.load_path import FINGERTIP_PATCH_MM, CappedLayer, Members, members
 from mst_cli.model.material import CREASE_ONSET_STRETCH, Material
 from mst_cli.model.mechanics import layer_laws
-from mst_cli.model.stack import Stack, capped_lock_force_N, series_displacement_mm
+from mst_cli.model.stack import Stack, capped_lock_force_N, layer_caps, series_displacement_mm
 
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
@@ -43,6 +43,7 @@ def regime_kernel(
     lock_force_N: ArrayLike | None = None,
     members_mm_per_N: ArrayLike = 0.0,
     cap_mm_per_N: ArrayLike | None = None,
+    contact: tuple | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Lock forces and secant sensitivities of many L0 stacks at once, the members that are not
     layers (cap, plates, cover) in series as a linear spring.
@@ -56,6 +57,8 @@ def regime_kernel(
     members_mm_per_N : array (...), optional    the plates' and cover's compliance [default 0: rigid]
     cap_mm_per_N : array (...), optional        the cap's, bending into the top layer's cavity until
                                                 it closes there [default None: rigid]
+    contact : (C, travel) arrays (...), optional  the part of the members that stops after travel
+                                                (the cover landing on the board) [default None]
 
     Returns
     -------
@@ -68,7 +71,7 @@ def regime_kernel(
     R = k * np.asarray(d_lock_mm, dtype=float) if lock_force_N is None else np.asarray(lock_force_N, dtype=float)
     R_sorted = np.sort(capped_lock_forces_N(k, d_lock_mm, R, cap_mm_per_N), axis=-1)
     F = np.concatenate([np.zeros(R_sorted.shape[:-1] + (1,)), R_sorted], axis=-1)
-    d = series_displacement_mm(F, k, d_lock_mm, k_locked_N_per_mm, R, members_mm_per_N, cap_mm_per_N)
+    d = series_displacement_mm(F, k, d_lock_mm, k_locked_N_per_mm, R, members_mm_per_N, cap_mm_per_N, contact)
     gap = np.asarray(gap0_mm, dtype=float)[..., None] - d
     B = field_T(gap)
     rel = B / B[..., :1] - 1.0
@@ -79,13 +82,12 @@ def regime_kernel(
 def capped_lock_forces_N(
     k: ArrayLike, d_lock_mm: ArrayLike, R: np.ndarray, cap_mm_per_N: ArrayLike | None
 ) -> np.ndarray:
-    """Every layer's lock force (..., n), the top one's where the cap closes its cavity
+    """Every layer's lock force (..., n), each capped one's where its cap (the top layer's cap,
+    the plate above a lower one: :func:`~mst_cli.model.stack.layer_caps`) closes its cavity
     (:func:`~mst_cli.model.stack.capped_lock_force_N`); ``cap_mm_per_N`` None: R itself."""
     if cap_mm_per_N is None:
         return R
-    out = np.array(R, dtype=float)
-    out[..., -1] = capped_lock_force_N(np.asarray(k)[..., -1], np.asarray(d_lock_mm)[..., -1], R[..., -1], cap_mm_per_N)
-    return out
+    return capped_lock_force_N(k, d_lock_mm, R, layer_caps(cap_mm_per_N, np.shape(R)))
 
 
 @dataclass
@@ -225,9 +227,12 @@ def _chip(B_in_range_T: np.ndarray, B_full_T: float, noise_uT_rms: float) -> tup
 
 def part_stack(laws: tuple, parts: Members) -> Stack:
     """The whole part's stack: the cap bends into the top layer's cavity until it closes there
-    (:class:`~mst_cli.model.load_path.CappedLayer`), the plates and the cover in series."""
-    top = CappedLayer(laws[-1], parts.cap_mm_per_N) if parts.cap_mm_per_N > 0 else laws[-1]
-    return Stack((*laws[:-1], top), parts.total_mm_per_N - parts.cap_mm_per_N)
+    (:class:`~mst_cli.model.load_path.CappedLayer`), each plate into the cavity of the layer
+    under it likewise, the cover in series, its bending over the slot until it lands on the board."""
+    plates = (*parts.plates_mm_per_N, *(0.0,) * (len(laws) - 1 - len(parts.plates_mm_per_N)))
+    caps = (*plates[: len(laws) - 1], parts.cap_mm_per_N)
+    capped = tuple(CappedLayer(law, c) if c > 0 else law for law, c in zip(laws, caps))
+    return Stack(capped, parts.cover_mm_per_N, parts.cover_contact_mm_per_N, parts.cover_travel_mm)
 
 
 def _layers_only(
