@@ -102,3 +102,18 @@ def test_a_press_mirrored_in_x_mirrors_the_field_with_the_members(scene):
     b = pose_field_T(geometry, laws, F, (-5.0, 2.0))
     # the chip sits on the axis: mirrored in x, Bx changes sign, By and Bz do not
     np.testing.assert_allclose(b, a * np.array([-1.0, 1.0, 1.0]), rtol=1e-9, atol=1e-15)
+
+
+def test_a_layers_spec_reads_the_layers_alone_through_the_api(scene):
+    # model.load_path: layers keeps the old general load exactly: the layers between rigid plates
+    import mst_cli.api as mst
+    from mst_cli.model.offcentre import simulate_offcentre
+
+    geometry, material = scene
+    doc, _ = load_design_document(FORWARD)
+    layers = mst.simulate_offcentre(replace(doc, load_path="layers"), (4.0, -2.0))
+    assert not layers.whole_part
+    bare = simulate_offcentre(geometry, material, (4.0, -2.0), whole_part=False)
+    np.testing.assert_array_equal(layers.B_T, bare.B_T)
+    part = mst.simulate_offcentre(doc, (4.0, -2.0))
+    assert part.whole_part and np.max(np.abs(part.B_T - layers.B_T)) > 1e-6  # the members move the magnet
