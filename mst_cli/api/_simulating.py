@@ -302,5 +302,10 @@ def offset_map(
 def _offset_map(doc: Document, mechanics: str | None, field_model: str | None, region_mm) -> OffsetMap:
     scene = printed_scene(doc, mechanics, field_model)
     return run_offset_map(
-        scene.geometry, scene.material, scene.mechanics, scene.field_model, region_mm=region_mm, whole_part=doc.whole_part
+        scene.geometry,
+        scene.material,
+        scene.mechanics,
+        scene.field_model,
+        region_mm=region_mm,
+        whole_part=doc.whole_part,
     )

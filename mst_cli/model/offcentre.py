@@ -2,7 +2,8 @@
 three axes, and the force a reading taken as axial would give (issue 24).
 
 Each layer answers the load at (x0, y0) with a compression and two tilts
-(:mod:`mst_cli.model.mechanics.tilt`, plates rigid). Small rotations add: layer j turns
+(:mod:`mst_cli.model.mechanics.tilt`), with the part's members its walls load unless the
+load path is the layers alone (:mod:`mst_cli.model.part_laws`). Small rotations add: layer j turns
 everything above it by (phi_y, phi_x) about a pivot at its mid-height (a layer symmetric about
 its mid-plane turns about its centre under a pure moment), so the magnet's centre moves down by
 sum d_j and sideways by sum phi_j (z_magnet - z_mid,j), toward the load, and the magnet turns
@@ -51,6 +52,7 @@ class OffCentreResponse:
     shear_ratio: tuple[float, float] = (0.0, 0.0)  # (Fx, Fy) / Fz along the curve
     layer_slide_mm: np.ndarray | None = None  # (m, n, 2) each layer's lateral slide (None: no shear)
     rotation_flag: np.ndarray | None = None  # (m,) ROTATION_FLAGS: where the model stops (set by simulate_offcentre)
+    whole_part: bool = True  # the members ride with their layers (model.load_path: part), else the layers alone
 
     @property
     def force_x_N(self) -> np.ndarray:
@@ -125,6 +127,7 @@ def simulate_offcentre(
         axial=axial,
         shear_ratio=(float(shear_ratio[0]), float(shear_ratio[1])),
         layer_slide_mm=slide,
+        whole_part=whole_part,
     )
     out.rotation_flag = rotation_flags(out, geometry.layers)
     return out

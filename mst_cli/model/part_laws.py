@@ -1,5 +1,5 @@
 """The part's members in the general load: each member rides with the layer whose walls load it
-(docs/design.md 4.6 and 5.5).
+(docs/design.md 4.5 and 4.6).
 
 The axial model (:func:`mst_cli.model.response.part_stack`) puts the cap, the plates and the
 housing's cover in series with the layers (:mod:`mst_cli.model.load_path`). The general load
