@@ -239,7 +239,7 @@ def _housing_height_mm() -> float:
 
 
 def test_max_print_deviation_is_met_or_names_the_lowest_height(tmp_path):
-    limit = 0.5
+    limit = 0.75
     low = round(_housing_height_mm() + 4.95, 2)  # 4.95 mm for three layers: a low part, not the lowest
     tight = run(
         [
