@@ -162,13 +162,16 @@ class ForwardModel:
         drawn = [la.drawn for la in self.doc.layers]
         return tuple(fam.cell(theta, t + wall_offset_mm, h) for theta, t, h in drawn)
 
+    def _scene_key(self, gap_offset_mm: float) -> float:
+        """0 unless the gap offset eats into the pocket floor or the cover (then the offset)."""
+        return 0.0 if gap_offset_mm >= -self.doc.housing.chip_clearance_mm else round(float(gap_offset_mm), 9)
+
     def _scene(self, gap_offset_mm: float) -> MemberScene | None:
         """The members' scene of the part with this gap offset written into its housing (the one
         of the design unless the offset eats into the pocket floor or the cover)."""
         if not self.doc.whole_part:
             return None
-        hs = self.doc.housing
-        key = 0.0 if gap_offset_mm >= -hs.chip_clearance_mm else round(float(gap_offset_mm), 9)
+        key = self._scene_key(gap_offset_mm)
         if key not in self._scenes:
             printed = apply_parameters(self.doc, {"gap_offset_mm": key})[0] if key else self.doc
             self._scenes[key] = member_scene(printed.geometry(), self.doc.material)
@@ -189,21 +192,21 @@ class ForwardModel:
         return Members(f * float(cap), tuple(f * float(p) for p in plates), f * float(cover), tpu.patch_mm, tpu.support)
 
     def stack(self, values: dict, mechanics: str = "spring") -> Stack:
-        """The part's stack at these values (forces in the design's modulus units, F / f)."""
+        """The part's stack at these values (forces in the design's modulus units, F / f); a
+        finite-difference step in the gap or the remanence finds it cached."""
         v = full_values(values)
-        parts = self.members(v)
-        key = (mechanics, round(v["wall_offset_mm"], 12), parts)
+        wall = round(v["wall_offset_mm"], 12)
+        key = (mechanics, wall, v["modulus_factor"], self._scene_key(v["gap_offset_mm"]))
         st = self._stacks.get(key)
         if st is None:
             if len(self._stacks) > 256:
                 self._stacks.clear()
-            lkey = (mechanics, key[1])
-            if lkey not in self._laws:
+            if (mechanics, wall) not in self._laws:
                 if len(self._laws) > 64:
                     self._laws.clear()
                 cells = self.cells(v["wall_offset_mm"])
-                self._laws[lkey] = tuple(layer_law(c, self.doc.material, mechanics) for c in cells)
-            st = self._stacks[key] = part_stack(self._laws[lkey], parts)
+                self._laws[mechanics, wall] = tuple(layer_law(c, self.doc.material, mechanics) for c in cells)
+            st = self._stacks[key] = part_stack(self._laws[mechanics, wall], self.members(v))
         return st
 
     def update_correction(self, values: dict) -> None:
