@@ -25,6 +25,7 @@ from mst_cli.model.assembly import SensorGeometry
 from mst_cli.model.general_load import loaded_stack
 from mst_cli.model.material import Material
 from mst_cli.model.mechanics.tilt import LayerTiltLaw, solve_layer_tilt
+from mst_cli.model.part_laws import closure_limit_mm, part_units
 from mst_cli.model.response import Response
 from mst_cli.model.response import simulate as simulate_axial
 from mst_cli.model.stack_pose import magnet_field_T, magnet_pose, pose_field_T, stack_path, tilt_laws
@@ -129,7 +130,10 @@ def simulate_offcentre(
         layer_slide_mm=slide,
         whole_part=whole_part,
     )
-    out.rotation_flag = rotation_flags(out, geometry.layers)
+    cavity = [c.cavity_height_mm for c in geometry.layers]
+    if whole_part:
+        cavity = [closure_limit_mm(u, h) for u, h in zip(part_units(geometry, material, mechanics), cavity)]
+    out.rotation_flag = rotation_flags(out, geometry.layers, np.array(cavity))
     return out
 
 
@@ -143,13 +147,16 @@ SMALL_ROTATION_DEG = 10.0
 ROTATION_FLAGS = ("ok", "past_small_rotations", "past_closure")
 
 
-def rotation_flags(r: OffCentreResponse, cells) -> np.ndarray:
+def rotation_flags(r: OffCentreResponse, cells, closure_limit_mm: np.ndarray | None = None) -> np.ndarray:
     """(m,) ROTATION_FLAGS of each force sample: past_closure where some layer's pads would
     interpenetrate, else past_small_rotations where the magnet or a layer turns over
-    SMALL_ROTATION_DEG, else ok. ``cells`` are the layers' HexCells, bottom to top."""
+    SMALL_ROTATION_DEG, else ok. ``cells`` are the layers' HexCells, bottom to top;
+    ``closure_limit_mm`` (n,): each layer's closure at which its pads pass through each other
+    [default: its cavity's height; with the part's members,
+    :func:`~mst_cli.model.part_laws.closure_limit_mm`]."""
     tilt = np.abs(r.layer_tilt_rad)  # (m, n, 2)
     p = np.array([c.p_mm for c in cells])
-    cavity = np.array([c.cavity_height_mm for c in cells])
+    cavity = np.array([c.cavity_height_mm for c in cells]) if closure_limit_mm is None else closure_limit_mm
     edge = r.layer_d_mm + tilt.max(axis=-1) * p  # the deepest pad edge's closure, mm
     closed = (edge > cavity + 1e-9).any(axis=-1)
     turned = (np.degrees(tilt.max(axis=(-1, -2))) > SMALL_ROTATION_DEG) | (

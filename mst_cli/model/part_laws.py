@@ -28,7 +28,8 @@ from typing import Any
 
 import numpy as np
 
-from mst_cli.model.load_path import CappedLayer, Members
+from mst_cli.model.load_path import CappedLayer, Members, members
+from mst_cli.model.mechanics import layer_laws
 from mst_cli.model.mechanics.tilt import LayerTiltLaw
 
 
@@ -72,6 +73,29 @@ def part_layer_laws(laws: tuple, parts: Members) -> tuple:
     units = (*laws[:-1], top)
     under = (parts.cover_mm_per_N, *parts.plates_mm_per_N)  # the member under each layer's wall feet
     return tuple(SeriesMember(u, c) if c > 0 else u for u, c in zip(units, under))
+
+
+def part_units(geometry, material, mechanics: str) -> tuple:
+    """The layer laws of ``geometry`` (a SensorGeometry) in ``material`` on the rung
+    ``mechanics``, each with the members of :func:`~mst_cli.model.load_path.members` its walls
+    load (:func:`part_layer_laws`)."""
+    return part_layer_laws(layer_laws(geometry.layers, material, mechanics), members(geometry, material))
+
+
+def closure_limit_mm(unit, cavity_mm: float) -> float:
+    """The unit's closure at which its own pads would reach the cavity's height ``cavity_mm``
+    (the rotation flag's past_closure). Past the lock the rung softens the pads by the member in
+    series with them (:func:`unit_tilt_law`), so of the unit's closure past its pad gap only the
+    share s = k_locked(unit) / k_locked(layer) closes the pads; the cap rests on the cavity's
+    floor once the layer's own closure is d_lock - C R', so the unit reaches the pads' own
+    closure C R' later."""
+    if isinstance(unit, SeriesMember):
+        inner = unit.law
+        share = unit.k_locked_N_per_mm / inner.k_locked_N_per_mm
+        return unit.d_lock_mm + (closure_limit_mm(inner, cavity_mm) - inner.d_lock_mm) / share
+    if isinstance(unit, CappedLayer):
+        return cavity_mm + unit.cap_mm_per_N * unit.lock_force_N
+    return cavity_mm
 
 
 def unit_tilt_law(law, cell, modulus_MPa: float, poisson_ratio: float) -> LayerTiltLaw:

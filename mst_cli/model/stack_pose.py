@@ -19,12 +19,11 @@ import numpy as np
 
 from mst_cli.model import magnet_field as fld
 from mst_cli.model.assembly import SensorGeometry
-from mst_cli.model.load_path import members
 from mst_cli.model.material import Material
 from mst_cli.model.mechanics import layer_laws
 from mst_cli.model.mechanics.depth import in_web
 from mst_cli.model.mechanics.tilt import LayerTiltLaw, solve_layer_tilt
-from mst_cli.model.part_laws import part_layer_laws, unit_tilt_law
+from mst_cli.model.part_laws import part_units, unit_tilt_law
 
 
 def tilt_laws(
@@ -39,9 +38,7 @@ def tilt_laws(
     (model.load_path: part, as ``mst simulate``): each layer with the members its walls load,
     the cap, the plates and the cover of :func:`~mst_cli.model.load_path.members`
     (:mod:`mst_cli.model.part_laws`); False: the layers alone between rigid plates."""
-    laws = layer_laws(geometry.layers, material, mechanics)
-    if whole_part:
-        laws = part_layer_laws(laws, members(geometry, material))
+    laws = part_units(geometry, material, mechanics) if whole_part else layer_laws(geometry.layers, material, mechanics)
     return [
         unit_tilt_law(law, c, in_web(c, material).youngs_modulus_MPa, material.poisson_ratio).with_lever_factor(
             lever_factor
