@@ -90,6 +90,7 @@ def test_calibration_recovers_the_print_errors(loadtest):
     rep = loadtest["report"]
     par = rep["parameters"]
     assert rep["identifiability"]["held"] == {}
+    assert rep["models"]["load_path"] == "part"  # the fit's model is the whole part, as the truth's
     assert all(par[n]["identifiable"] for n in TRUTH)
     tolerance = {"modulus_factor": 0.01, "wall_offset_mm": 0.005, "gap_offset_mm": 0.12, "remanence_factor": 0.02}
     for name, true in TRUTH.items():
