@@ -90,6 +90,7 @@ def test_calibration_recovers_the_print_errors(loadtest):
     rep = loadtest["report"]
     par = rep["parameters"]
     assert rep["identifiability"]["held"] == {}
+    assert rep["models"]["load_path"] == "part"  # the fit's model is the whole part, as the truth's
     assert all(par[n]["identifiable"] for n in TRUTH)
     tolerance = {"modulus_factor": 0.01, "wall_offset_mm": 0.005, "gap_offset_mm": 0.12, "remanence_factor": 0.02}
     for name, true in TRUTH.items():
@@ -616,3 +617,24 @@ def test_a_load_test_that_stays_on_the_first_spring_holds_what_it_cannot_see(sen
     r = run(["read", tmp_path / "o" / "calibrated.yaml", path, "--out", tmp_path / "r"])
     _, rows = read_forces(tmp_path / "r" / "forces.csv")
     assert [x["flag"] for x in rows] == ["ok", "above_calibrated"] and rows[1]["force_N"]
+
+
+@pytest.mark.parametrize("load_path", ["part", "layers"])
+@pytest.mark.parametrize("gap_offset_mm", [0.3, -0.5])  # -0.5: past the chip clearance, into the pocket floor
+def test_the_fit_model_is_simulate_of_the_printed_file(load_path, gap_offset_mm):
+    """The fit's forward model at any values is `mst simulate` of the file those values write
+    (apply_parameters): the part's members re-evaluated at the modulus factor (the insert keeps
+    its own modulus), the wall offset and a gap offset that thins the pocket floor, or the layers
+    alone for model.load_path: layers."""
+    from dataclasses import replace
+
+    from mst_cli.sensor.as_printed import apply_parameters
+
+    doc = replace(load_document(DESIGN), load_path=load_path)
+    values = {**TRUTH, "gap_offset_mm": gap_offset_mm}
+    printed, _ = apply_parameters(doc, values)
+    resp = simulate(printed.geometry(), printed.material, whole_part=printed.whole_part)
+    F = resp.force_N[resp.in_range]
+    got = cal.ForwardModel(doc).field_abs_T(F, values)
+    assert np.max(np.abs(got - resp.B_abs_T[resp.in_range])) < 1e-8  # 0.01 uT
+    assert (resp.members.total_mm_per_N > 0) == (load_path == "part")
