@@ -37,25 +37,31 @@ from mst_cli.model.stack import Stack
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def exported(config: Path, out: Path):
-    """(the export folder, the designed geometry, its material)."""
+def exported(config: Path, out: Path, reuse: bool = False):
+    """(the export folder, the designed geometry, its material); ``reuse``: an export already in
+    the folder (its design.yaml for a spec) is taken as it is."""
     folder = out / config.stem
+    if reuse and (folder / "export.json").exists():
+        doc = mst.load(folder / "design.yaml" if (folder / "design.yaml").exists() else config)
+        return folder, doc.geometry(), doc.material
     files = mst.export(config, folder)
     doc = files.designed.document if files.designed is not None else mst.load(config)
     return folder, files.geometry, doc.material
 
 
-def row(config: Path, out: Path, options: Check3DOptions) -> str:
-    folder, g, m = exported(config, out)
+def row(config: Path, out: Path, options: Check3DOptions, reuse: bool) -> str:
+    folder, g, m = exported(config, out, reuse)
     r3 = press_exported(folder, options)
     t0 = time.perf_counter()
     rung = wp.press(g, m, wp.PartOptions())
     t_rung = time.perf_counter() - t0
     per_mm = wp.field_per_drop_uT_per_mm(g)
-    mst_uT = per_mm * lp.motion_shares(Stack(layer_laws(g.layers, m, "spring")), lp.members(g, m))[0]["compliance_mm_per_N"]
+    mst_uT = (
+        per_mm * lp.motion_shares(Stack(layer_laws(g.layers, m, "spring")), lp.members(g, m))[0]["compliance_mm_per_N"]
+    )
     dBz = r3.field_uT_per_N[2]
     return (
-        f"| {g.name} | {dBz:.1f} | {per_mm * rung.drop_mm_per_N:.1f} | {mst_uT:.1f} | {dBz / mst_uT - 1:+.1%} | "
+        f"| {r3.name} | {dBz:.1f} | {per_mm * rung.drop_mm_per_N:.1f} | {mst_uT:.1f} | {dBz / mst_uT - 1:+.1%} | "
         f"{r3.drop_mm_per_N:.4f} | {1e3 * r3.translation_mm_per_N[1]:.2f} | "
         f"{1e3 * abs(r3.rotation_rad_per_N[0]):.2f} | {rung.drop_mm_per_N:.4f} | "
         f"q{options.radius_edge_ratio:g}, {options.max_volume_mm3:g} mm3, P{options.order} | {r3.tets} | {r3.dofs} | "
@@ -65,7 +71,10 @@ def row(config: Path, out: Path, options: Check3DOptions) -> str:
 
 def convergence(out: Path, order: int, ratios: list[float], volume: float) -> list[str]:
     folder, *_ = exported(ROOT / "configs" / "mohammadi2021-forward.yaml", out)
-    lines = ["| radius-edge bound | order | tets | dofs | drop, mm/N | dB_z/dF, uT/N | mesh + solve, s |", "|---|---|---|---|---|---|---|"]
+    lines = [
+        "| radius-edge bound | order | tets | dofs | drop, mm/N | dB_z/dF, uT/N | mesh + solve, s |",
+        "|---|---|---|---|---|---|---|",
+    ]
     print("\n".join(lines))
     for q in ratios:
         r = press_exported(folder, Check3DOptions(max_volume_mm3=volume, radius_edge_ratio=q, order=order))
@@ -86,10 +95,13 @@ def main() -> None:
     ap.add_argument("--convergence", nargs="*", type=float, default=None, metavar="RATIO",
                     help="also the forward design at these radius-edge bounds (e.g. 3 2 1.5)")  # fmt: skip
     ap.add_argument("--out", type=Path, default=None, help="export folder [default: a temporary one]")
+    ap.add_argument("--reuse", action="store_true", help="take an export already in --out as it is")
     args = ap.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         out = args.out or Path(tmp)
-        options = Check3DOptions(max_volume_mm3=args.max_volume_mm3, radius_edge_ratio=args.radius_edge, order=args.order)
+        options = Check3DOptions(
+            max_volume_mm3=args.max_volume_mm3, radius_edge_ratio=args.radius_edge, order=args.order
+        )
         print("regime 1, centred 6 mm strip, bottom face held: field change per newton at the chip, uT/N")
         print(
             "| design | 3D dB_z/dF | plane-strain rung | mst | 3D/mst - 1 | 3D drop, mm/N | 3D side y, um/N | "
@@ -97,7 +109,7 @@ def main() -> None:
         )
         print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
         for path in args.configs:
-            print(row(Path(path), out, options), flush=True)
+            print(row(Path(path), out, options, args.reuse), flush=True)
         if args.convergence:
             print("forward design, regime 1, mesh convergence:")
             convergence(out, args.order, args.convergence, args.max_volume_mm3)

@@ -134,7 +134,10 @@ def test_a_coarse_whole_part_press(forward_export):
     assert r.drop_mm_per_N > 0
     assert abs(r.translation_mm_per_N[0]) < 0.05 * r.drop_mm_per_N  # mirror symmetry in x
     gap = scene.magnet_box_mm[0][2] - scene.chip_mm[2]
-    axial = 1e6 * r.drop_mm_per_N * abs(float(axial_dBz_dz_T_per_mm(gap, 0.5 * scene.diameter_mm,
-                                                                     scene.thickness_mm, scene.remanence_T)))
+    axial = (
+        1e6
+        * r.drop_mm_per_N
+        * abs(float(axial_dBz_dz_T_per_mm(gap, 0.5 * scene.diameter_mm, scene.thickness_mm, scene.remanence_T)))
+    )
     assert r.field_uT_per_N[2] == pytest.approx(axial, rel=0.1)
     assert math.isfinite(r.dofs) and r.dofs > 1000

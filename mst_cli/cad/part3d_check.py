@@ -126,7 +126,9 @@ def read_scene(path: str | Path) -> ExportedScene:
     raw = json.loads(read_input(found.manifest, MAX_JSON_BYTES, field="PATH", what="export.json"))
     parts = {p.get("name"): (i, p) for i, p in enumerate(raw.get("parts", [])) if isinstance(p, dict)}
     if "magnet" not in parts or manifest.design is None:
-        raise InputError("export.json", str(found.manifest), "has no parts.magnet or design: rewrite it with 'mst export'")
+        raise InputError(
+            "export.json", str(found.manifest), "has no parts.magnet or design: rewrite it with 'mst export'"
+        )
     magnet = next(p for p in manifest.parts if p.name == "magnet")
     insert = manifest.insert
     i_ins, ins_raw = parts.get("insert", (None, {}))
@@ -138,7 +140,9 @@ def read_scene(path: str | Path) -> ExportedScene:
         faces=mesh.faces,
         tpu=_elastic(raw["design"].get("material"), "export.json.design.material"),
         magnet_box_mm=(lo, hi),
-        magnet_material=_elastic(parts["magnet"][1].get("material"), f"export.json.parts[{parts['magnet'][0]}].material"),
+        magnet_material=_elastic(
+            parts["magnet"][1].get("material"), f"export.json.parts[{parts['magnet'][0]}].material"
+        ),
         insert_box_mm=_box(insert) if insert is not None else None,
         insert_material=_elastic(ins_raw.get("material"), f"export.json.parts[{i_ins}].material") if insert else None,
         insert_volume_mm3=float(ins_raw["volume_mm3"]) if insert is not None and "volume_mm3" in ins_raw else None,
