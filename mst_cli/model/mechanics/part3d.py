@@ -46,7 +46,7 @@ class Solution:
     """The displacement per newton at every dof, the basis it lives on, and the cost."""
 
     u_mm_per_N: np.ndarray
-    basis: object
+    basis: Basis
     dofs: int
     seconds: float
 

@@ -72,7 +72,12 @@ def tetrahedralize(
     tio.setup_plc(np.asarray(vertices_mm, dtype=float), np.asarray(faces).tolist(), regions=regions)
     # p: a piecewise linear complex; q: quality; A: region attributes; a: largest volume; Q: quiet
     switches = f"pq{radius_edge_ratio:g}/{MIN_DIHEDRAL_DEG[radius_edge_ratio]:g}Aa{max_volume_mm3:g}Q"
-    out = tetgenpy.tetrahedralize(switches, tio)
+    try:
+        out = tetgenpy.tetrahedralize(switches, tio)
+    except RuntimeError as exc:  # TetGen gives no reason through the wrapper
+        raise RuntimeError(
+            f"TetGen failed on the surface with switches {switches!r}: try another radius-edge bound"
+        ) from exc
     points = np.asarray(out.points(), dtype=float)
     tets = np.asarray(out.tetrahedra(), dtype=np.int64)
     attrs = np.asarray(out.tetrahedronattributes(), dtype=float).reshape(len(tets), -1)
