@@ -112,7 +112,7 @@ def test_the_exported_part_meshes_to_its_declared_volumes(forward_export):
     from mst_cli.cad.part3d_check import Check3DOptions, mesh_scene, read_scene
 
     scene = read_scene(forward_export)
-    mesh, E, _ = mesh_scene(scene, Check3DOptions(max_volume_mm3=4.0))
+    mesh, E, _ = mesh_scene(scene, Check3DOptions(max_volume_mm3=100.0, radius_edge_ratio=3.0))
     body = json.loads((forward_export / "export.json").read_text())["body"]
     vol = mesh.volumes_mm3()
     assert (vol > 0).all()
@@ -129,12 +129,15 @@ def test_a_coarse_whole_part_press(forward_export):
     pytest.importorskip("tetgenpy")
     from mst_cli.cad.part3d_check import Check3DOptions, press_exported, read_scene
 
-    r = press_exported(forward_export, Check3DOptions(max_volume_mm3=4.0, order=1))
+    r = press_exported(forward_export, Check3DOptions(max_volume_mm3=100.0, radius_edge_ratio=3.0, order=1))
     scene = read_scene(forward_export)
     assert r.drop_mm_per_N > 0
     assert abs(r.translation_mm_per_N[0]) < 0.05 * r.drop_mm_per_N  # mirror symmetry in x
     gap = scene.magnet_box_mm[0][2] - scene.chip_mm[2]
-    axial = 1e6 * r.drop_mm_per_N * abs(float(axial_dBz_dz_T_per_mm(gap, 0.5 * scene.diameter_mm,
-                                                                     scene.thickness_mm, scene.remanence_T)))
+    axial = (
+        1e6
+        * r.drop_mm_per_N
+        * abs(float(axial_dBz_dz_T_per_mm(gap, 0.5 * scene.diameter_mm, scene.thickness_mm, scene.remanence_T)))
+    )
     assert r.field_uT_per_N[2] == pytest.approx(axial, rel=0.1)
     assert math.isfinite(r.dofs) and r.dofs > 1000

@@ -17,8 +17,9 @@ from dataclasses import dataclass
 import numpy as np
 
 BODY = 0  # the region of the tetrahedra outside every seeded void
-RADIUS_EDGE_RATIO = 1.5  # TetGen's -q bound: a tetrahedron's circumradius / shortest edge
-MIN_DIHEDRAL_DEG = 15.0  # TetGen's -q bound on the smallest dihedral angle
+# TetGen's -q bounds: a tetrahedron's circumradius / shortest edge, and its smallest dihedral
+# angle by radius-edge ratio (the finer the ratio, the more tetrahedra the thin walls take)
+MIN_DIHEDRAL_DEG = {3.0: 5.0, 2.0: 10.0, 1.5: 15.0}
 
 
 @dataclass(frozen=True)
@@ -48,23 +49,35 @@ class TetMesh:
 
 
 def tetrahedralize(
-    vertices_mm: np.ndarray, faces: np.ndarray, seeds_mm: Sequence[Sequence[float]], max_volume_mm3: float
+    vertices_mm: np.ndarray,
+    faces: np.ndarray,
+    seeds_mm: Sequence[Sequence[float]],
+    max_volume_mm3: float,
+    radius_edge_ratio: float = 2.0,
 ) -> TetMesh:
     """Quality tetrahedra of the closed surface (``vertices_mm`` (n, 3), ``faces`` (m, 3)), no
-    larger than ``max_volume_mm3``; the void holding ``seeds_mm[k]`` is region k + 1."""
+    larger than ``max_volume_mm3``, their radius-edge ratio at most ``radius_edge_ratio`` (a key
+    of :data:`MIN_DIHEDRAL_DEG`); the void holding ``seeds_mm[k]`` is region k + 1."""
     try:
         import tetgenpy  # deferred: optional, only the 3D check meshes in 3D
     except ImportError as exc:  # pragma: no cover - depends on the environment
         raise ImportError("the 3D check needs TetGen's wrapper: pip install tetgenpy") from exc
     if not max_volume_mm3 > 0.0:
         raise ValueError(f"max_volume_mm3 must be > 0, not {max_volume_mm3!r}")
+    if radius_edge_ratio not in MIN_DIHEDRAL_DEG:
+        raise ValueError(f"radius_edge_ratio must be one of {sorted(MIN_DIHEDRAL_DEG)}, not {radius_edge_ratio!r}")
     tio = tetgenpy.TetgenIO()
     # one region attribute per seed (k + 1), no volume bound of its own (-1: the global one)
     regions = np.array([[*s, k + 1, -1.0] for k, s in enumerate(seeds_mm)], dtype=float).reshape(-1, 5)
     tio.setup_plc(np.asarray(vertices_mm, dtype=float), np.asarray(faces).tolist(), regions=regions)
     # p: a piecewise linear complex; q: quality; A: region attributes; a: largest volume; Q: quiet
-    switches = f"pq{RADIUS_EDGE_RATIO}/{MIN_DIHEDRAL_DEG}Aa{max_volume_mm3:g}Q"
-    out = tetgenpy.tetrahedralize(switches, tio)
+    switches = f"pq{radius_edge_ratio:g}/{MIN_DIHEDRAL_DEG[radius_edge_ratio]:g}Aa{max_volume_mm3:g}Q"
+    try:
+        out = tetgenpy.tetrahedralize(switches, tio)
+    except RuntimeError as exc:  # TetGen gives no reason through the wrapper
+        raise RuntimeError(
+            f"TetGen failed on the surface with switches {switches!r}: try another radius-edge bound"
+        ) from exc
     points = np.asarray(out.points(), dtype=float)
     tets = np.asarray(out.tetrahedra(), dtype=np.int64)
     attrs = np.asarray(out.tetrahedronattributes(), dtype=float).reshape(len(tets), -1)
