@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -87,15 +88,8 @@ def simulate_offcentre(
     force ``shear_ratio`` = (Fx, Fy) / Fz along it (:mod:`mst_cli.model.general_load`); the part's
     members with the layers unless ``whole_part`` is False (model.load_path: layers). Raises
     TiltError when a layer's equilibrium is not found."""
-    axial = simulate_axial(
-        geometry,
-        material,
-        mechanics,
-        field_model,
-        points_per_regime=points_per_regime,
-        overload=overload,
-        whole_part=whole_part,
-    )
+    grid: dict[str, Any] = {"points_per_regime": points_per_regime, "overload": overload, "whole_part": whole_part}
+    axial = simulate_axial(geometry, material, mechanics, field_model, **grid)
     F = axial.force_N
     slide = None
     if shear_ratio[0] == 0.0 and shear_ratio[1] == 0.0:
@@ -130,11 +124,18 @@ def simulate_offcentre(
         layer_slide_mm=slide,
         whole_part=whole_part,
     )
+    limits = _closure_limits_mm(geometry, material, mechanics, whole_part)
+    out.rotation_flag = rotation_flags(out, geometry.layers, limits)
+    return out
+
+
+def _closure_limits_mm(geometry: SensorGeometry, material: Material, mechanics: str, whole_part: bool) -> np.ndarray:
+    """(n,) each layer's closure at which its pads pass through each other: its cavity's height,
+    with the part's members :func:`~mst_cli.model.part_laws.closure_limit_mm`."""
     cavity = [c.cavity_height_mm for c in geometry.layers]
     if whole_part:
         cavity = [closure_limit_mm(u, h) for u, h in zip(part_units(geometry, material, mechanics), cavity)]
-    out.rotation_flag = rotation_flags(out, geometry.layers, np.array(cavity))
-    return out
+    return np.array(cavity)
 
 
 AXIAL_READING_FLAGS = ("ok", "below_no_load", "above_range")  # why a force read as axial is missing
