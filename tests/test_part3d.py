@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -95,11 +96,11 @@ def test_a_pure_drop_changes_the_field_by_the_axial_gradient():
 
 
 @pytest.fixture(scope="module")
-def forward_export(tmp_path_factory, configs_dir):
+def forward_export(tmp_path_factory):
     import mst_cli as mst
 
     out = tmp_path_factory.mktemp("fe3d") / "forward"
-    mst.export(configs_dir / "mohammadi2021-forward.yaml", out)
+    mst.export(Path(__file__).resolve().parents[1] / "configs" / "mohammadi2021-forward.yaml", out)
     return out
 
 
