@@ -25,8 +25,6 @@ Constraints (g <= 0 is satisfied; every g is scaled to order one)
       before it) <= (1 - saturation_margin_rel) x 50 mT, and
       never above what the MLX90393's coarsest setting reads with the headroom
       :func:`~mst_cli.model.chip.choose_setting` keeps;
-    * on the whole part, the housing's cover stays off the board up to the last lock: its drop over
-      the slot stops there on the board's parts, a support no model here describes (issue 44);
     * optional total height: SensorGeometry.total_height_mm <= design.max_height_mm;
     * optional print deviation (``design.max_print_deviation_rel``): every S_i and R_i changes by
       at most that fraction when every wall is printed +- printer.wall_tolerance_mm (one smooth
@@ -206,7 +204,6 @@ class DesignProblem:
             + self.n
             + (self.n - 1)
             + 1
-            + (1 if self.whole_part else 0)
             + (1 if self.max_height_mm is not None else 0)
             + (8 * self.n if self.max_print_deviation_rel is not None else 0)
         )
@@ -332,9 +329,8 @@ class DesignProblem:
 
     def responses(
         self, theta_deg: np.ndarray, t_mm: np.ndarray, h_mm: np.ndarray
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """(R_N per layer, S_per_N per regime, B_full_T, gap0_mm, B0_T, the cover's drop over the
-        slot at the last lock over the air under it (< 1: it stays off the board)) of candidate stacks."""
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """(R_N per layer, S_per_N per regime, B_full_T, gap0_mm, B0_T) of candidate stacks."""
         members = self.part_members(theta_deg, t_mm, h_mm) if self.whole_part else None
         return self._responses_of(self.layer_laws(theta_deg, t_mm, h_mm), h_mm, members)
 
@@ -364,23 +360,19 @@ class DesignProblem:
 
     def _responses_of(
         self, laws: tuple, h_mm: np.ndarray, members: tuple | None = None
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """:meth:`responses` of stacks whose layer laws (and members' (caps, rest[, cover contact])
         compliance) are known: R is each layer's lock force, where the plate or cap above it
         closes its cavity."""
         k, d_lock, R, k_locked = laws
         cap, rest = (None, 0.0) if members is None else members[:2]
         contact = members[2] if members is not None and len(members) > 2 else None
-        # the cover's landing on the board, as a share of the way to it at the last lock (0: never)
-        landing = 0.0 if contact is None else contact[0] / contact[1]
         gap0 = cast(np.ndarray, self.gap0_mm(h_mm.sum(axis=-1)))  # candidates' sums: an array
         _, S, gap, B = regime_kernel(k, d_lock, k_locked, gap0, self.field_T, R, rest, cap, contact)
         # the chip's largest field on the way is at the smallest gap: a stack whose members let
         # the magnet reach the chip (gap <= 0 at the last lock) saturates it on the way there
         B_full = np.where(gap[..., -1] > 0.0, B[..., -1], self.field_T(np.zeros_like(gap[..., -1])))
-        R_capped = capped_lock_forces_N(k, d_lock, R, cap)
-        landing = np.broadcast_to(landing * R_capped.max(axis=-1), gap0.shape)
-        return R_capped, S, B_full, gap0, B[..., 0], landing
+        return capped_lock_forces_N(k, d_lock, R, cap), S, B_full, gap0, B[..., 0]
 
     def evaluate_physical(self, theta_deg: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike) -> Evaluation:
         return self._evaluate_physical(theta_deg, t_mm, h_mm, False)[0]
@@ -404,12 +396,12 @@ class DesignProblem:
             dt = self.wall_tolerance_mm  # the members see the shifted walls too
             T3 = np.stack([t_mm, np.maximum(t_mm + dt, LENGTH_FLOOR_MM), np.maximum(t_mm - dt, LENGTH_FLOOR_MM)])
             members = self.part_members(theta_deg, T3, H) if self.whole_part else None
-            R3, S3, B_full3, gap03, B03, landing3 = self._responses_of(laws, H, members)
-            R, S, B_full, gap0, B0, landing = R3[0], S3[0], B_full3[0], gap03[0], B03[0], landing3[0]
+            R3, S3, B_full3, gap03, B03 = self._responses_of(laws, H, members)
+            R, S, B_full, gap0, B0 = R3[0], S3[0], B_full3[0], gap03[0], B03[0]
             base = np.log(np.maximum(np.concatenate([S, R], axis=-1), TINY))
             shifts = np.log(np.maximum(np.concatenate([S3[1:], R3[1:]], axis=-1), TINY)) - base[None]
         else:
-            R, S, B_full, gap0, B0, landing = self.responses(theta_deg, t_mm, h_mm)
+            R, S, B_full, gap0, B0 = self.responses(theta_deg, t_mm, h_mm)
         margins, t_over_L_g = self._layer_rules(theta_deg, t_mm, h_mm)
         height = self.height_offset_mm + h_mm.sum(axis=-1)
 
@@ -418,8 +410,6 @@ class DesignProblem:
         if self.n > 1:
             g.append(math.log1p(self.lock_margin_rel) - np.diff(logR, axis=-1))
         g.append(np.log(np.maximum(B_full, TINY) / self.B_limit_T)[..., None])
-        if self.whole_part:  # the cover stays off the board up to the last lock (past it: no model)
-            g.append(np.log(np.maximum(landing, TINY))[..., None])
         if self.max_height_mm is not None:
             g.append(((height - self.max_height_mm) / pr.nozzle_mm)[..., None])
         if self.max_print_deviation_rel is not None:
@@ -475,7 +465,7 @@ class DesignProblem:
         shifts = np.array(steps).reshape((len(steps),) + (1,) * t_mm.ndim)
         T = np.broadcast_to(theta_deg, (len(steps),) + theta_deg.shape)
         H = np.broadcast_to(h_mm, (len(steps),) + h_mm.shape)
-        R, S, *_ = self.responses(T, np.maximum(t_mm + shifts, LENGTH_FLOOR_MM), H)
+        R, S, _, _, _ = self.responses(T, np.maximum(t_mm + shifts, LENGTH_FLOOR_MM), H)
         out = np.log(np.maximum(np.concatenate([S, R], axis=-1), TINY))
         if nominal is None:
             return out[1:] - out[:1]
@@ -536,8 +526,6 @@ class DesignProblem:
             for i in range(self.n - 1)
         ]
         names.append(f"chip saturation: field at full load <= {self.B_limit_T * 1e3:.1f} mT")
-        if self.whole_part:
-            names.append("the housing's cover stays off the board up to the last lock")
         if self.max_height_mm is not None:
             names.append(f"total height <= {self.max_height_mm:g} mm")
         if self.max_print_deviation_rel is not None:
@@ -573,7 +561,7 @@ class DesignProblem:
         total = 0
         for _ in range(max_batches):
             theta, t, h = self.to_physical(rng.random((batch, self.dim)))
-            R, *_ = self.responses(theta, t, h)
+            R, _, _, _, _ = self.responses(theta, t, h)
             order = np.argsort(R, axis=-1)
             theta, t, h = (np.take_along_axis(a, order, axis=-1) for a in (theta, t, h))
             ok = np.all(self.evaluate_physical(theta, t, h).constraints <= -slack, axis=-1)
