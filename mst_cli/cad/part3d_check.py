@@ -35,8 +35,10 @@ from mst_cli.model.mechanics import part3d
 from mst_cli.model.mechanics.part3d_mesh import BODY, TetMesh, tetrahedralize
 
 MAX_JSON_BYTES = 10_000_000  # export.json is a few kB; anything near this is not one
-DEFAULT_MAX_VOLUME_MM3 = 4.0  # TetGen's largest tetrahedron (mm^3) and radius-edge bound: the production
-DEFAULT_RADIUS_EDGE = 2.0  # mesh, chosen by the benchmark's convergence (docs/design.md 4.8)
+# TetGen's largest tetrahedron (mm^3) and radius-edge bound: the finest mesh that solved in minutes
+# here (75-95 k P2 dofs); not converged on walls under 1 mm (docs/design.md 4.8)
+DEFAULT_MAX_VOLUME_MM3 = 4.0
+DEFAULT_RADIUS_EDGE = 2.0
 MAGNET_SEATS = ("resting", "bonded")
 POCKET, SLOT = 1, 2  # the regions seeded inside the magnet's pocket and the insert's slot
 

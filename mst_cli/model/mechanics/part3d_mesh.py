@@ -1,8 +1,9 @@
 """Tetrahedra of a closed triangulated body, for the 3D check of the part as exported
 (docs/design.md section 4.8).
 
-TetGen (through ``tetgenpy``, an optional dependency loaded only here) fills the body's surface
-with quality tetrahedra (radius-edge ratio and dihedral bounds, a largest volume). The exported
+TetGen (through ``tetgenpy``, an optional dependency: this module and the 3D check that imports
+it need it, nothing else does) fills the body's surface with quality tetrahedra (radius-edge
+ratio and dihedral bounds, a largest volume). The exported
 body has closed internal voids (the magnet's pocket, the insert's slot): TetGen fills them too,
 and a seed point inside each tags its tetrahedra, so the caller keeps, drops or gives them their
 own material. Every kept tetrahedron is positively oriented; the volume of each region is the
@@ -15,6 +16,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+import tetgenpy  # optional (pip install tetgenpy): only the 3D check imports this module
 
 BODY = 0  # the region of the tetrahedra outside every seeded void
 # TetGen's -q bounds: a tetrahedron's circumradius / shortest edge, and its smallest dihedral
@@ -58,10 +60,6 @@ def tetrahedralize(
     """Quality tetrahedra of the closed surface (``vertices_mm`` (n, 3), ``faces`` (m, 3)), no
     larger than ``max_volume_mm3``, their radius-edge ratio at most ``radius_edge_ratio`` (a key
     of :data:`MIN_DIHEDRAL_DEG`); the void holding ``seeds_mm[k]`` is region k + 1."""
-    try:
-        import tetgenpy  # deferred: optional, only the 3D check meshes in 3D
-    except ImportError as exc:  # pragma: no cover - depends on the environment
-        raise ImportError("the 3D check needs TetGen's wrapper: pip install tetgenpy") from exc
     if not max_volume_mm3 > 0.0:
         raise ValueError(f"max_volume_mm3 must be > 0, not {max_volume_mm3!r}")
     if radius_edge_ratio not in MIN_DIHEDRAL_DEG:
