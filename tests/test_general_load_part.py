@@ -18,7 +18,7 @@ from mst_cli.model.load_path import Members, members
 from mst_cli.model.mechanics import layer_laws
 from mst_cli.model.mechanics.depth import in_web
 from mst_cli.model.mechanics.tilt import solve_layer_tilt
-from mst_cli.model.part_laws import part_layer_laws, unit_tilt_law
+from mst_cli.model.part_laws import cover_host, part_layer_laws, unit_tilt_law
 from mst_cli.model.response import simulate
 from mst_cli.model.stack_pose import magnet_field_T, magnet_pose, pose_field_T, stack_path, tilt_laws
 from mst_cli.sensor.as_printed import as_printed
@@ -64,8 +64,10 @@ def test_each_member_turns_its_layer_as_a_spring_under_each_chevron(scene):
     laws = layer_laws(geometry.layers, material, "spring")
     units = tilt_laws(geometry, material, "spring")
     bare = tilt_laws(geometry, material, "spring", whole_part=False)
-    under = [parts.cover_mm_per_N, *parts.plates_mm_per_N]
-    under[-1] += parts.cap_mm_per_N  # the top layer carries the cap and the plate below it
+    # layer j carries its own top pad's bending (plate j, the cap on the top layer), and one
+    # layer the cover too (part_stack's members; below the landing all of it bends)
+    under = [*parts.plates_mm_per_N, parts.cap_mm_per_N]
+    under[cover_host(list(part_layer_laws(laws, parts)), parts)] += parts.cover_mm_per_N
     F, x0 = 0.02, 5.0
     for law, unit, own, C in zip(laws, units, bare, under):
         assert C > 0.0
@@ -84,6 +86,7 @@ def test_members_far_stiffer_than_the_layers_give_the_layers_alone(scene):
         cap_mm_per_N=1e-9 * parts.cap_mm_per_N,
         plates_mm_per_N=tuple(1e-9 * p for p in parts.plates_mm_per_N),
         cover_mm_per_N=1e-9 * parts.cover_mm_per_N,
+        cover_contact_mm_per_N=1e-9 * parts.cover_contact_mm_per_N,
     )
     F = np.linspace(0.5, 30.0, 7)
     near = pose_field_T(geometry, units_tilt_laws(geometry, material, stiff), F, (4.0, -3.0))

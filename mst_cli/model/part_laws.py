@@ -8,9 +8,13 @@ solves every layer's equilibrium under a force and two moments (the tilt rung,
 it, and the tilt rung sees the layer and its member as one unit:
 
 * the cap, bonded to the top layer's top pad, bends into that layer's cavity until it closes
-  there (:class:`~mst_cli.model.load_path.CappedLayer`, the axial model's own law);
-* plate j, between layers j and j + 1, is loaded by layer j + 1's wall feet: in series with
-  layer j + 1 (:class:`SeriesMember`); the cover, under layer 1's wall feet: with layer 1.
+  there (:class:`~mst_cli.model.load_path.CappedLayer`, the axial model's own law); plate j,
+  the top pad of layer j, likewise bends into layer j's cavity under layer j + 1's wall feet
+  (part_stack's own caps);
+* the cover, under layer 1's wall feet, is in series with layer 1 (:class:`SeriesMember`), its
+  bending over the slot stopping once it has dropped the air under it onto the board (when that
+  landing comes after layer 1's lock, the cover rides with the lowest layer still open then,
+  :func:`cover_host`).
 
 A centred press then gives the axial part's drop exactly (the units' compressions sum to
 part_stack's, on the same knots). Under a moment each chevron line carries its side's force
@@ -23,6 +27,7 @@ plane, so a tangential force slides no member; its moment turns them with their 
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, replace
 from typing import Any
 
@@ -35,11 +40,30 @@ from mst_cli.model.mechanics.tilt import LayerTiltLaw
 
 @dataclass(frozen=True)
 class SeriesMember:
-    """A layer law with a member that never closes (a plate, the cover) in series: the layer's
-    compression plus ``member_mm_per_N`` x F at every force, the lock still the layer's own."""
+    """A layer law with a member that never closes (the cover) in series: the layer's
+    compression plus ``member_mm_per_N`` x F at every force, less the part ``contact_mm_per_N``
+    that stops once it has moved ``contact_travel_mm`` (:attr:`Stack.contact_mm_per_N`); the
+    lock still the layer's own."""
 
     law: Any  # a layer law of any rung, or a CappedLayer
     member_mm_per_N: float
+    contact_mm_per_N: float = 0.0
+    contact_travel_mm: float = math.inf
+
+    @property
+    def contact_force_N(self) -> float:
+        C = self.contact_mm_per_N
+        return self.contact_travel_mm / C if C > 0.0 else math.inf
+
+    def member_mm(self, force_N) -> np.ndarray:
+        """The member's drop at ``force_N``."""
+        F = np.asarray(force_N, dtype=float)
+        stopped = np.maximum(self.contact_mm_per_N * F - self.contact_travel_mm, 0.0) if self.contact_mm_per_N else 0.0
+        return self.member_mm_per_N * F - stopped
+
+    def _compliance_past(self, force_N: float) -> float:
+        landed = force_N >= self.contact_force_N
+        return self.member_mm_per_N - (self.contact_mm_per_N if landed else 0.0)
 
     @property
     def lock_force_N(self) -> float:
@@ -47,32 +71,50 @@ class SeriesMember:
 
     @property
     def knots_N(self) -> tuple[float, ...]:
-        return tuple(self.law.knots_N)
+        contact = self.contact_force_N
+        extra = (contact,) if math.isfinite(contact) and contact < self.lock_force_N else ()
+        return tuple(sorted((*self.law.knots_N, *extra)))
 
     @property
     def k_N_per_mm(self) -> float:
-        return 1.0 / (1.0 / self.law.k_N_per_mm + self.member_mm_per_N)
+        return 1.0 / (1.0 / self.law.k_N_per_mm + self._compliance_past(0.0))
 
     @property
     def d_lock_mm(self) -> float:  # the unit's closure when the layer locks
-        return float(self.law.d_lock_mm) + self.member_mm_per_N * self.lock_force_N
+        return float(self.law.d_lock_mm) + float(self.member_mm(self.lock_force_N))
 
     @property
     def k_locked_N_per_mm(self) -> float:
-        return 1.0 / (1.0 / self.law.k_locked_N_per_mm + self.member_mm_per_N)
+        return 1.0 / (1.0 / self.law.k_locked_N_per_mm + self._compliance_past(self.lock_force_N))
 
     def displacement_mm(self, force_N) -> np.ndarray:
         F = np.asarray(force_N, dtype=float)
-        return np.asarray(self.law.displacement_mm(F)) + self.member_mm_per_N * F
+        return np.asarray(self.law.displacement_mm(F)) + self.member_mm(F)
 
 
 def part_layer_laws(laws: tuple, parts: Members) -> tuple:
-    """The layer laws (bottom to top) with the members folded in (module docstring); rigid
-    members (all compliances 0) give ``laws`` themselves."""
-    top = CappedLayer(laws[-1], parts.cap_mm_per_N) if parts.cap_mm_per_N > 0 else laws[-1]
-    units = (*laws[:-1], top)
-    under = (parts.cover_mm_per_N, *parts.plates_mm_per_N)  # the member under each layer's wall feet
-    return tuple(SeriesMember(u, c) if c > 0 else u for u, c in zip(units, under))
+    """The layer laws (bottom to top) with the members folded in as
+    :func:`~mst_cli.model.response.part_stack` folds them (module docstring); rigid members (all
+    compliances 0) give ``laws`` themselves."""
+    plates = (*parts.plates_mm_per_N, *(0.0,) * (len(laws) - 1 - len(parts.plates_mm_per_N)))
+    caps = (*plates[: len(laws) - 1], parts.cap_mm_per_N)
+    units = [CappedLayer(law, c) if c > 0 else law for law, c in zip(laws, caps)]
+    if parts.cover_mm_per_N > 0:
+        j = cover_host(units, parts)
+        units[j] = SeriesMember(units[j], parts.cover_mm_per_N, parts.cover_contact_mm_per_N, parts.cover_travel_mm)
+    return tuple(units)
+
+
+def cover_host(units: list, parts: Members) -> int:
+    """Which unit carries the cover: layer 1, whose wall feet load it, unless the cover lands on
+    the board after layer 1 has locked; then the lowest layer still open at the landing. The
+    tilt rung follows a unit's knots up to its lock only, so the landing must fall before its
+    host's lock to be a knot. A centred press is the same whichever unit hosts it (every layer
+    carries the whole force); under a moment the cover turns with its host's chevron lever."""
+    C, travel = parts.cover_contact_mm_per_N, parts.cover_travel_mm
+    landing = travel / C if C > 0.0 else math.inf
+    open_at_landing = [j for j, u in enumerate(units) if u.lock_force_N > landing]
+    return 0 if not math.isfinite(landing) or 0 in open_at_landing or not open_at_landing else open_at_landing[0]
 
 
 def part_units(geometry, material, mechanics: str) -> tuple:
