@@ -8,7 +8,9 @@ under -icount shift=0 (benchmarks/board/count.c). Prints markdown tables; assert
 On the bundled sensor (configs/mohammadi2021-forward.yaml, spring), the header-sized tables
 (regime-following force nodes; offset 2 mm, shear ratio step 0.1), readings in classes: rest
 (no load, 2 uT noise), light touch (the first regime's lower half), loaded (over the range),
-out of range (beyond the last lock). Per class: the median and worst instructions per reading,
+out of range (beyond the last lock); and loaded to the edges (any force, anywhere in the cone or
+on the whole face, as tests/test_c_header.py draws: the tail). Per class: the median, 99th
+percentile and worst instructions per reading,
 and the time at 64 MHz (M4F) or 48 MHz (M0+) taking one instruction a cycle (the M4F's FPU
 divides in 14 cycles, loads take 2: a lower bound within a factor of about 1.5; the M0+ has no
 FPU, its float arithmetic is the soft-float library's instructions, counted). Also the flash
@@ -63,9 +65,9 @@ def readings(table, imap, rng, n: int) -> dict[str, np.ndarray]:
     at = RegularGridInterpolator((g.force_N, g.u, g.v), 1e6 * table.B_T)
     top, first = g.force_N[-1], imap.edges_N[1]
 
-    def draw(lo, hi):
+    def draw(lo, hi, reach=0.6):
         p = np.column_stack(
-            [rng.uniform(lo, hi, n), rng.uniform(*g.u[[0, -1]], n) * 0.6, rng.uniform(*g.v[[0, -1]], n) * 0.6]
+            [rng.uniform(lo, hi, n), rng.uniform(*g.u[[0, -1]], n) * reach, rng.uniform(*g.v[[0, -1]], n) * reach]
         )
         return at(p) + rng.normal(0.0, 2.0, (n, 3))
 
@@ -75,6 +77,7 @@ def readings(table, imap, rng, n: int) -> dict[str, np.ndarray]:
         "light touch": draw(0.02 * first, 0.5 * first),
         "loaded": draw(0.05 * top, top),
         "out of range": beyond,
+        "loaded, to the edges": draw(0.0, top, 1.0),
     }
 
 
@@ -154,6 +157,23 @@ def run(elf: Path, cpu: str) -> tuple[np.ndarray, np.ndarray]:
     return vals[:, 0].astype(int), vals[:, 1] * per_tick
 
 
+def two_chip_table(doc, top: float, edges, grids) -> str:
+    """What a two-chip header's table would hold: the fields at both chips (6 numbers) on every
+    node of the five coordinates (F, Fx / Fz, Fy / Fz, x0, y0), the shear table's force and ratio
+    nodes by the offset table's press positions, at ``grids`` ((shear grid, offset grid) pairs),
+    as int16 (the most compact that keeps the chip's resolution) and as float."""
+    rows = []
+    for name, (shear, offset) in grids.items():
+        s, o = grid_of("shear", doc, top, shear, edges).shape, grid_of("offset", doc, top, offset, edges).shape
+        nodes = s[0] * s[1] * s[2] * o[1] * o[2]
+        rows.append(
+            f"| {name} | {s[0]} x {s[1]} x {s[2]} x {o[1]} x {o[2]} | {nodes:,} | "
+            f"{6 * 2 * nodes / 2**20:.1f} MB | {6 * 4 * nodes / 2**20:.1f} MB |"
+        )
+    head = "| two-chip table | nodes (F, Fx/Fz, Fy/Fz, x0, y0) | count | int16 | float |\n|---|---|---|---|---|\n"
+    return head + "\n".join(rows)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--per-class", type=int, default=40)
@@ -169,7 +189,7 @@ def main() -> None:
     imap, resp = inverse_map(doc, "spring")
     setting, top = resp.chip_setting, float(imap.force_N[-1])
     lsb = np.array([setting.xy_uT_per_lsb, setting.xy_uT_per_lsb, setting.z_uT_per_lsb])
-    print("| header | CPU | class | flags | instructions median / worst | ms median / worst | flash | stack B |")
+    print("| header | CPU | class | flags | instructions median / p99 / worst | ms median / worst | flash | stack B |")
     print("|---|---|---|---|---|---|---|---|")
     for kind, grid in (("shear", (17, 0.1)), ("offset", (17, 2.0))):
         table = build_table(doc.geometry(), doc.material, "spring", grid_of(kind, doc, top, grid, imap.edges_N))
@@ -186,12 +206,15 @@ def main() -> None:
             for k, name in enumerate(classes):
                 part = slice(k * args.per_class, (k + 1) * args.per_class)
                 f = ", ".join(f"{int(np.sum(flags[part] == i))} {C_FLAGS[i]}" for i in np.unique(flags[part]))
-                m, w = np.median(insns[part]), np.max(insns[part])
+                m, q, w = np.median(insns[part]), np.percentile(insns[part], 99), np.max(insns[part])
                 print(
-                    f"| {kind}_table.h {table.grid.shape} | {cpu} | {name} | {f} | {m:,.0f} / {w:,.0f} | "
+                    f"| {kind}_table.h {table.grid.shape} | {cpu} | {name} | {f} | {m:,.0f} / {q:,.0f} / {w:,.0f} | "
                     f"{m / mhz / 1e3:.2f} / {w / mhz / 1e3:.2f} | {(text + data) / 1024:.0f} kB | {stack} |"
                 )
         sys.stdout.flush()
+    print()
+    grids = {"the headers' grids": ((17, 0.1), (17, 2.0)), "the default tables' grids": (None, None)}
+    print(two_chip_table(doc, top, imap.edges_N, grids))
 
 
 if __name__ == "__main__":

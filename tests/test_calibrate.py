@@ -265,7 +265,7 @@ def test_lookup_table_and_c_header(loadtest, tmp_path):
     )
     # and it gives the Python table's forces: compile a tiny program against it
     (tmp_path / "main.c").write_text(
-        '#include <stdio.h>\n#include <stdlib.h>\n#include "force_table.h"\n'
+        '#include <stdio.h>\n#include <stdlib.h>\n#define MST_FORCE_IMPLEMENTATION\n#include "force_table.h"\n'
         "int main(int argc, char **argv) { for (int i = 1; i < argc; i++) { int32_t f = -1; uint8_t r = 0;\n"
         '  int flag = mst_force_from_z((int32_t)atol(argv[i]), &f, &r); printf("%d %ld %d\\n", flag, (long)f, r); }\n'
         "  return 0; }\n"

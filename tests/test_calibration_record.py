@@ -108,7 +108,7 @@ def test_c_header_tabulates_the_inverse_map(calibrated_map, tmp_path):
     )
     # halfway between two entries the C lookup interpolates linearly, in integer mN
     (tmp_path / "main.c").write_text(
-        '#include <stdio.h>\n#include <stdlib.h>\n#include "force_table.h"\n'
+        '#include <stdio.h>\n#include <stdlib.h>\n#define MST_FORCE_IMPLEMENTATION\n#include "force_table.h"\n'
         "int main(int argc, char **argv) { int32_t f = -1; uint8_t r = 0;\n"
         '  int flag = mst_force_from_z((int32_t)atol(argv[1]), &f, &r); printf("%d %ld %d\\n", flag, (long)f, r);\n'
         "  return 0; }\n"
@@ -127,6 +127,44 @@ def test_c_header_tabulates_the_inverse_map(calibrated_map, tmp_path):
     f0, f1 = round(F[i] * 1e3), round(F[i + 1] * 1e3)
     assert flag == 0 and reg == regime[i]
     assert force == f0 + (f1 - f0) * (mid - codes[i]) // (codes[i + 1] - codes[i])
+
+
+def test_force_table_h_is_defined_once_in_a_program_of_two_files(calibrated_map, tmp_path):
+    # one file defines MST_FORCE_IMPLEMENTATION (the tables and the function), another includes
+    # the header plainly and reads a table and the function: the program links, the tables are in
+    # the first object only, and the lookup gives the Python table's entry at a node
+    imap, setting = calibrated_map
+    gcc = shutil.which("gcc")
+    if gcc is None:
+        pytest.skip("gcc not installed: the header is not compiled")
+    (tmp_path / "force_table.h").write_text(c_header(imap, setting, "unit", "a test", ["one limitation"]))
+    (tmp_path / "one.c").write_text('#define MST_FORCE_IMPLEMENTATION\n#include "force_table.h"\n')
+    (tmp_path / "two.c").write_text(
+        '#include <stdio.h>\n#include <stdlib.h>\n#include "force_table.h"\n'
+        "int main(int argc, char **argv)\n{\n    int32_t f = -1;\n    uint8_t r = 0;\n    (void)argc;\n"
+        "    int flag = mst_force_from_z(mst_z_code[atoi(argv[1])], &f, &r);\n"
+        '    printf("%d %ld %d\\n", flag, (long)f, r);\n    return 0;\n}\n'
+    )
+    strict = ["-Wall", "-Wextra", "-Wpedantic", "-Wshadow", "-Wconversion", "-Wdouble-promotion", "-Werror"]
+    objs = []
+    for name in ("one", "two"):
+        obj = tmp_path / f"{name}.o"
+        subprocess.run([gcc, "-std=c99", "-O2", *strict, "-c", tmp_path / f"{name}.c", "-o", obj], check=True)
+        objs.append(obj)
+    nm = shutil.which("nm")
+    if nm is not None:
+        symbols = [subprocess.run([nm, o], capture_output=True, text=True).stdout for o in objs]
+        for table in ("mst_z_code", "mst_force_mN", "mst_regime", "mst_resolution_mN", "mst_force_from_z"):
+            assert f" R {table}" in symbols[0] or f" T {table}" in symbols[0]  # defined in one.o ...
+            assert f" U {table}" in symbols[1] or table not in symbols[1]  # ... only referenced in two.o
+    exe = tmp_path / "two"
+    subprocess.run([gcc, *objs, "-o", exe], check=True)
+    codes, F, regime, _ = imap.z_code_table(setting)
+    i = len(codes) // 2
+    flag, force, reg = map(
+        int, subprocess.run([exe, str(i)], check=True, capture_output=True, text=True).stdout.split()
+    )
+    assert (flag, force, reg) == (0, round(F[i] * 1e3), regime[i])  # an entry's own force, exactly
 
 
 @pytest.fixture(scope="module")

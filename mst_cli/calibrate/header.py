@@ -1,5 +1,7 @@
 """``force_table.h``: the calibrated sensor's raw Z code -> force table as a C99 header, for a
-microcontroller that reads the MLX90393 and has no room for the model.
+microcontroller that reads the MLX90393 and has no room for the model: a single-file header (its
+tables and function defined in the one .c file that defines ``MST_FORCE_IMPLEMENTATION``, declared
+for every other).
 
 The C text is a template in package data (``data/force_table.h.in``, ``string.Template``
 placeholders) so it reads as C; this module computes what fills it from an
@@ -47,10 +49,11 @@ def c_float(value: float, digits: int = 4) -> str:
 
 
 def c_array(ctype: str, cname: str, values: Iterable, fmt: Callable[[float], str], per_line: int = 10) -> str:
-    """``static const ctype cname[MST_TABLE_LEN] = {...};``, ``per_line`` values a line."""
+    """``const ctype cname[MST_TABLE_LEN] = {...};`` (defined once, where MST_FORCE_IMPLEMENTATION
+    is; declared extern for every file), ``per_line`` values a line."""
     values = list(values)
     lines = ["    " + ", ".join(fmt(v) for v in values[i : i + per_line]) for i in range(0, len(values), per_line)]
-    return f"static const {ctype} {cname}[MST_TABLE_LEN] = {{\n" + ",\n".join(lines) + "\n};\n"
+    return f"const {ctype} {cname}[MST_TABLE_LEN] = {{\n" + ",\n".join(lines) + "\n};\n"
 
 
 def c_header(

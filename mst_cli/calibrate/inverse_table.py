@@ -43,6 +43,7 @@ from typing import Any, BinaryIO
 import numpy as np
 
 from mst_cli.calibrate.table_file import MAX_TABLE_BYTES, PARSE_ERRORS, TABLE_KEYS, checked_arrays, npz_arrays
+from mst_cli.calibrate.table_start import middle_uv, start_nodes
 from mst_cli.calibrate.trilinear import crb_sigmas, normal_step, to_output, trilinear
 from mst_cli.errors import InputError
 from mst_cli.io.files import read_input
@@ -59,10 +60,13 @@ FIT_SIGMAS = 3.0  # a cell whose best point is further off the reading than this
 # the direct inverse (the C header takes the same numbers): from each start, Gauss-Newton steps on
 # the table's trilinear field, from the nearest node of the force slabs the reading's |B| allows
 # (start_nodes) and from its end's mirror (mirror_start)
-STEPS = 10  # steps at most from each start (most converge in 2 to 5)
+STEPS = 10  # steps at most from the first start (most converge in 2 to 5) ...
+SECOND_STEPS = 6  # ... and from the second (a root near the mirror; a walk back to the first root is cut)
 STEP_CELLS = 2.0  # a step moves each coordinate by at most this many of its cells
 CONVERGED = 1e-4  # a start whose step moved less than this share of a cell has converged: it stops ...
 MIN_GAIN = 1e-3  # ... as does one whose step lowered the squared misfit by less than this share of it
+STOP_SIGMAS = 0.1  # ... and one whose step would change the field by less than this many noise sigmas
+STOP_GAIN = 0.1  # ... and lower the squared misfit by less than this share of it (what is left is noise)
 HALVINGS = 3  # a step that does not lower the misfit is halved up to this many times
 PROBE = 1e-3  # the share of a step that says which cell it enters (its Jacobian is that cell's)
 BLOCK = 4096  # readings per estimate (their starts' corners at a time)
@@ -378,50 +382,6 @@ def _interpolate(table: InverseTable, pts: np.ndarray) -> np.ndarray:
     return trilinear(table.corners_uT()[cell], t)[0].reshape(*pts.shape[:-1], 3)
 
 
-def slab_babs_uT(table: InverseTable) -> tuple[np.ndarray, np.ndarray]:
-    """Each force slab's |B| range over its nodes (both force ends, every (u, v)): (lo, hi), each
-    (n_F - 1,) uT. A trilinear field's size is at most its corners' largest."""
-    babs = np.linalg.norm(1e6 * table.B_T, axis=3).reshape(len(table.grid.force_N), -1)
-    lo, hi = babs.min(axis=1), babs.max(axis=1)
-    return np.minimum(lo[:-1], lo[1:]), np.maximum(hi[:-1], hi[1:])
-
-
-def start_nodes(table: InverseTable, B_uT: np.ndarray, noise_uT: np.ndarray) -> np.ndarray:
-    """The first start of each reading (n, 3) uT: the node nearest it (least squared distance,
-    the first in C order on a tie) among the nodes of every force slab whose |B| range, widened
-    by FIT_SIGMAS of the slab's noise ``noise_uT`` (n_F - 1,), holds the reading's |B| (a field
-    within that of the reading lies in no other slab: | |b| - |B| | <= |b - B|); NaN where no
-    slab holds it; on the no-load face, where every (u, v) gives the same field, the middle of
-    (u, v). Force node by force node, each against the readings it may hold (the distances by
-    a matrix product: C's float sums differ from them only in near-ties)."""
-    g = table.grid
-    lo, hi = slab_babs_uT(table)
-    margin = FIT_SIGMAS * noise_uT
-    babs = np.linalg.norm(B_uT, axis=1)[:, None]
-    slab = (babs >= lo - margin) & (babs <= hi + margin)
-    take = np.zeros((len(B_uT), len(g.force_N)), dtype=bool)
-    take[:, :-1] |= slab
-    take[:, 1:] |= slab
-    field = 1e6 * table.B_T.reshape(len(g.force_N), -1, 3)
-    size2 = np.sum(field * field, axis=2)
-    best = np.full(len(B_uT), np.inf)
-    node = np.full(len(B_uT), -1)
-    for k in range(len(g.force_N)):
-        rows = np.flatnonzero(take[:, k])
-        if not len(rows):
-            continue
-        b = B_uT[rows]
-        d2 = size2[k][None, :] - 2.0 * (b @ field[k].T)  # the squared distance less |b|^2 (a product)
-        j = np.argmin(d2, axis=1)
-        near = d2[np.arange(len(rows)), j] + np.sum(b * b, axis=1)
-        better = near < best[rows]
-        best[rows[better]], node[rows[better]] = near[better], k * field.shape[1] + j[better]
-    nodes = np.stack(np.meshgrid(g.force_N, g.u, g.v, indexing="ij"), axis=-1).reshape(-1, 3)
-    out = np.where((node >= 0)[:, None], nodes[np.maximum(node, 0)], np.nan)
-    out[out[:, 0] == g.force_N[0], 1:] = middle_uv(g)[0]  # no load: every (u, v) has its field
-    return out
-
-
 def _field(
     table: InverseTable, b: np.ndarray, p: np.ndarray, toward: np.ndarray | None = None
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -445,18 +405,41 @@ def _held_step(J: np.ndarray, r: np.ndarray, q: np.ndarray, box: tuple[np.ndarra
     return np.clip(dt, -STEP_CELLS, STEP_CELLS)
 
 
-def _gauss_newton(table: InverseTable, b: np.ndarray, p: np.ndarray) -> np.ndarray:
-    """Up to STEPS ridged Gauss-Newton steps on the table's trilinear field from starts p (P, 3)
+def _worth_trying(J: np.ndarray, dt: np.ndarray, m2: np.ndarray, noise_uT: np.ndarray) -> np.ndarray:
+    """Whether steps dt (P, 3) (cell coordinates) are tried: not when the field they would change
+    (J dt, uT) is under STOP_SIGMAS of the noise and its square, about the squared misfit they
+    would take off, under STOP_GAIN of the misfit m2 (P,) (what is left is noise)."""
+    change = np.einsum("pij,pj->pi", J, dt)
+    size = np.sum(change * change, axis=1)
+    return (size >= (STOP_SIGMAS * noise_uT) ** 2) | (size >= STOP_GAIN * m2)
+
+
+def _gauss_newton(
+    table: InverseTable,
+    b: np.ndarray,
+    p: np.ndarray,
+    noise_uT: np.ndarray,
+    joins: np.ndarray | None = None,
+    steps: int = STEPS,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Up to ``steps`` ridged Gauss-Newton steps on the table's trilinear field from starts p (P, 3)
     to readings b (P, 3) uT (:func:`_held_step`), each taken with the Jacobian of the cell it
     enters (from a node or a face, the one whose side it goes to), clamped to the table's box and
     halved up to HALVINGS times until the misfit falls; a start stops when no step lowers it,
-    once its step moves less than CONVERGED of a cell, or once it lowers the squared misfit by
-    less than MIN_GAIN of it. The ends (P, 3)."""
+    once its step would change the field by less than STOP_SIGMAS of the noise ``noise_uT`` of
+    its force slab (n_F - 1,) and lower the squared misfit by less than STOP_GAIN of it (then it
+    is not tried: the misfit left is noise, and the step would move each coordinate by less than
+    STOP_SIGMAS of its 1-sigma, by Cauchy-Schwarz), once it moves less than CONVERGED of a cell,
+    or once it lowers the squared misfit by less than MIN_GAIN of it. With ``joins`` (P, 3), another descent's
+    ends: a start stops once it lies within a cell of its end on every axis (it has joined that
+    root: it would only walk on to it). The ends (P, 3) and whether each joined."""
     g = table.grid
     box = (np.array([g.force_N[0], g.u[0], g.v[0]]), np.array([g.force_N[-1], g.u[-1], g.v[-1]]))
     r, m2, J, w, cell = _field(table, b, p)
+    cells_per_slab = (g.shape[1] - 1) * (g.shape[2] - 1)
+    joined = np.zeros(len(p), dtype=bool)
     live = np.arange(len(p))
-    for _ in range(STEPS):
+    for _ in range(steps):
         if not len(live):
             break
         q = p[live]
@@ -467,8 +450,11 @@ def _gauss_newton(table: InverseTable, b: np.ndarray, p: np.ndarray) -> np.ndarr
             J[live[turn]], w[live[turn]], cell[live[turn]] = Jp[turn], wp[turn], cp[turn]
             dt[turn] = _held_step(Jp[turn], r[live[turn]], q[turn], box)
         dp = dt * w[live]
-        pending, go = np.arange(len(live)), np.zeros(len(live), dtype=bool)
+        pending = np.flatnonzero(_worth_trying(J[live], dt, m2[live], noise_uT[cell[live] // cells_per_slab]))
+        go, took = np.zeros(len(live), dtype=bool), np.zeros(len(live), dtype=bool)
         for h in range(HALVINGS + 1):
+            if not len(pending):
+                break
             rows = live[pending]
             new = np.clip(q[pending] + 0.5**h * dp[pending], *box)
             rn, m2n, Jn, wn, cn = _field(table, b[rows], new)
@@ -479,17 +465,14 @@ def _gauss_newton(table: InverseTable, b: np.ndarray, p: np.ndarray) -> np.ndarr
             p[done], r[done], m2[done], J[done], w[done] = new[better], rn[better], m2n[better], Jn[better], wn[better]
             cell[done] = cn[better]
             go[pending[better]] = (moved >= CONVERGED) & gain
+            took[pending[better]] = True
             pending = pending[~better]
-            if not len(pending):
-                break
+        if joins is not None:
+            near = took & np.all(np.abs(p[live, 1:] - joins[live, 1:]) <= w[live, 1:], axis=1)
+            joined[live[near]] = True
+            go &= ~near
         live = live[go]
-    return p
-
-
-def middle_uv(grid: TableGrid) -> tuple[np.ndarray, np.ndarray]:
-    """The middle of the table's (u, v) box (the first start's) and its mean node spacing."""
-    mid = np.array([0.5 * (grid.u[0] + grid.u[-1]), 0.5 * (grid.v[0] + grid.v[-1])])
-    return mid, np.array([(grid.u[-1] - grid.u[0]) / (len(grid.u) - 1), (grid.v[-1] - grid.v[0]) / (len(grid.v) - 1)])
+    return p, joined
 
 
 def mirror_start(grid: TableGrid, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -511,12 +494,13 @@ def solve_starts(
     (n, 2))."""
     n = len(B_uT)
     P = np.full((n, 2, 3), np.nan)
-    P[:, 0] = start_nodes(table, B_uT, noise_uT)
+    P[:, 0] = start_nodes(table, B_uT, FIT_SIGMAS * noise_uT)
     first = np.flatnonzero(np.isfinite(P[:, 0, 0]))
-    P[first, 0] = ends = _gauss_newton(table, B_uT[first], P[first, 0].copy())
+    P[first, 0] = ends = _gauss_newton(table, B_uT[first], P[first, 0].copy(), noise_uT)[0]
     start, far = mirror_start(table.grid, ends)
     second = first[far]
-    P[second, 1] = _gauss_newton(table, B_uT[second], start[far])
+    P[second, 1], joined = _gauss_newton(table, B_uT[second], start[far], noise_uT, ends[far], SECOND_STEPS)
+    P[second[joined], 1] = np.nan  # it joined the first root: no second
     flat = P.reshape(-1, 3)
     rows = np.flatnonzero(np.isfinite(flat[:, 0]))
     cell, t, w, slab = _locate(table, flat[rows])

@@ -20,6 +20,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from mst_cli.calibrate import inverse_table as it
+from mst_cli.calibrate import table_start as ts
 from mst_cli.calibrate.header import c_float, fill_template
 from mst_cli.calibrate.inverse_map import InverseMap
 from mst_cli.calibrate.load_readings import LoadReadings
@@ -91,11 +92,32 @@ def start_arrays(table: it.InverseTable, p: str) -> dict[str, str]:
     """The C arrays of the direct inverse's starts: each force slab's |B| range (uT), the middle
     of (u, v) and its mean node spacing, as :func:`~mst_cli.calibrate.inverse_table.solve_starts`
     takes them."""
-    lo, hi = it.slab_babs_uT(table)
+    lo, hi = ts.slab_babs_uT(table)
+    quantum = ts.start_quantum_uT(table)
+    ints = ts.start_field(1e6 * table.B_T, quantum).astype(int).ravel()
+    rows = [", ".join(str(v) for v in ints[i : i + 12]) for i in range(0, len(ints), 12)]
     return {
+        "start_quantum_uT": c_float(quantum, 9),
+        "start_levels": str(ts.START_LEVELS),
+        "start_field": f"static const int16_t {p}_B_start[{len(ints)}] = {{\n    " + ",\n    ".join(rows) + "\n};\n",
         "slab_babs": _c_floats(f"{p}_slab_babs_lo_uT", lo) + _c_floats(f"{p}_slab_babs_hi_uT", hi),
-        "middle": _c_floats(f"{p}_middle_uv", np.ravel(it.middle_uv(table.grid))),
+        "middle": _c_floats(f"{p}_middle_uv", np.ravel(ts.middle_uv(table.grid))),
     }
+
+
+# the Gauss-Newton descents' constants, as Python's (inverse_table.py) takes them
+DESCENT: dict[str, object] = {
+    "steps": it.STEPS,
+    "second_steps": it.SECOND_STEPS,
+    "step_cells": c_float(it.STEP_CELLS),
+    "converged": c_float(it.CONVERGED),
+    "min_gain": c_float(it.MIN_GAIN),
+    "halvings": it.HALVINGS,
+    "stop_sigmas": c_float(it.STOP_SIGMAS),
+    "stop_gain": c_float(it.STOP_GAIN),
+    "probe": c_float(it.PROBE),
+    "ridge": c_float(RIDGE),
+}
 
 
 def range_bounds_uT(imap: InverseMap) -> tuple[float, float, float]:
@@ -142,7 +164,7 @@ def table_header(
         xy_uT_per_lsb_c=c_float(setting.xy_uT_per_lsb, 8),
         z_uT_per_lsb_c=c_float(setting.z_uT_per_lsb, 8),
         saturated_lsb=min(CODE_RANGE_LSB[setting.res] - 1, int(SATURATION_T * 1e6 / setting.z_uT_per_lsb)),
-        table_bytes=table.size_bytes_float32 + 4 * (3 * (nf - 1) + 4),
+        table_bytes=table.size_bytes_float32 + 4 * (3 * (nf - 1) + 4) + 2 * table.B_T.size,
         nf=nf,
         nx=nx,
         ny=ny,
@@ -152,13 +174,7 @@ def table_header(
         babs_below_uT=c_float(below, 9),
         babs_above_uT=c_float(above, 9),
         babs_calibrated_uT=c_float(calibrated, 9),
-        steps=it.STEPS,
-        step_cells=c_float(it.STEP_CELLS),
-        converged=c_float(it.CONVERGED),
-        min_gain=c_float(it.MIN_GAIN),
-        halvings=it.HALVINGS,
-        probe=c_float(it.PROBE),
-        ridge=c_float(RIDGE),
+        **DESCENT,
         code_range=CODE_RANGE_LSB[setting.res],
         slab_sigma=_c_floats(f"{p}_slab_sigma_uT", np.hypot(1e6 * reader.sigma_T, table.slab_error_uT())),
         **start_arrays(table, str(p)),
