@@ -20,7 +20,7 @@ Parameters (:data:`PARAMETERS`), each with the scale of a typical print or assem
 Forward prediction: :class:`ForwardModel` builds the perturbed cells with the family's own
 :meth:`~mst_cli.sensor.sections.CellFamily.cell`, their layer laws (:func:`mst_cli.model.mechanics.layer_law`)
 and the part's stack as ``mst simulate`` builds it (:func:`mst_cli.model.response.part_stack`: the
-cap, plates and cover of :func:`mst_cli.model.load_path.member_compliances` in series, the cap
+cap, plates and cover of :func:`mst_cli.model.load_path.member_parts` in series, the cap
 closing the top layer's cavity; the layers alone for ``model.load_path: layers``), then the field
 at the chip (:func:`mst_cli.model.magnet_field.field_at_chip_T`). The members are TPU but an
 insert is not: at a modulus factor f the TPU's moduli are f E and the insert's its own, so the
@@ -58,7 +58,7 @@ import numpy as np
 
 from mst_cli.model import magnet_field as fld
 from mst_cli.model.cell import LENGTH_FLOOR_MM, HexCell
-from mst_cli.model.load_path import Members, MemberScene, member_compliances, member_scene
+from mst_cli.model.load_path import Members, MemberScene, member_parts, member_scene
 from mst_cli.model.mechanics import layer_law
 from mst_cli.model.response import part_stack
 from mst_cli.model.stack import Stack
@@ -149,8 +149,8 @@ class ForwardModel:
             g.chip_offset_mm, g.magnet_tilt_deg, None if field_model in (None, "auto") else field_model
         )
         self.gap0_mm = g.gap0_mm
-        # the members' fixed dimensions (None: the layers alone, model.load_path: layers); a gap
-        # offset that eats into the pocket floor or the cover changes them: _scene
+        # the members' fixed dimensions (None: the layers alone, model.load_path: layers), one per
+        # gap offset: _scene
         self._scenes: dict[float, MemberScene | None] = {}
         self._laws: dict[tuple[str, float], tuple] = {}
         self._stacks: dict[tuple, Stack] = {}
@@ -163,12 +163,12 @@ class ForwardModel:
         return tuple(fam.cell(theta, t + wall_offset_mm, h) for theta, t, h in drawn)
 
     def _scene_key(self, gap_offset_mm: float) -> float:
-        """0 unless the gap offset eats into the pocket floor or the cover (then the offset)."""
-        return 0.0 if gap_offset_mm >= -self.doc.housing.chip_clearance_mm else round(float(gap_offset_mm), 9)
+        """The gap offset (rounded): it moves the housing's slot walls, the air under the cover
+        and, past the chip's clearance, the pocket floor, so every member's scene follows it."""
+        return round(float(gap_offset_mm), 9)
 
     def _scene(self, gap_offset_mm: float) -> MemberScene | None:
-        """The members' scene of the part with this gap offset written into its housing (the one
-        of the design unless the offset eats into the pocket floor or the cover)."""
+        """The members' scene of the part with this gap offset written into its housing."""
         if not self.doc.whole_part:
             return None
         key = self._scene_key(gap_offset_mm)
@@ -186,10 +186,18 @@ class ForwardModel:
             return Members.rigid(n_plates=len(self.doc.layers) - 1)
         tpu = replace(scene, E_prime_MPa=f * scene.E_prime_MPa, G_MPa=f * scene.G_MPa)
         cells = self.cells(v["wall_offset_mm"])
-        cap, plates, cover = member_compliances(
+        cap, plates, over_slot, slot_walls = member_parts(
             tpu, *(np.array([getattr(c, k) for c in cells]) for k in ("theta_rad", "t_mm", "h_mm"))
         )
-        return Members(f * float(cap), tuple(f * float(p) for p in plates), f * float(cover), tpu.patch_mm, tpu.support)
+        return Members(
+            f * float(cap),
+            tuple(f * float(p) for p in plates),
+            f * float(over_slot + slot_walls),
+            tpu.patch_mm,
+            tpu.support,
+            f * float(over_slot),  # the cover's bending over the slot stops on the board (members())
+            scene.cover_air_mm,
+        )
 
     def stack(self, values: dict, mechanics: str = "spring") -> Stack:
         """The part's stack at these values (forces in the design's modulus units, F / f); a
