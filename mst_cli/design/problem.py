@@ -33,7 +33,8 @@ Constraints (g <= 0 is satisfied; every g is scaled to order one)
 The part as printed (docs/design.md section 10)
     The variables are the walls as drawn; the physics sees the walls as printed, t +
     printer.wall_offset_mm, with the modulus times printer.modulus_factor and the gap plus
-    printer.gap_offset_mm (what ``mst calibrate`` fitted on an earlier print). The cell rules
+    printer.gap_offset_mm (what ``mst calibrate`` fitted on an earlier print), built into the
+    housing as ``mst simulate`` builds it (the cover's air first: where the cover lands). The cell rules
     judge the drawing (what the slicer gets); the t/L range of L0's fit judges the printed wall.
 
 Preference among the designs that meet the targets (phase 2, ``design.objective``)
@@ -59,7 +60,7 @@ from __future__ import annotations
 
 import inspect
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, cast
 
 import numpy as np
@@ -74,6 +75,7 @@ from mst_cli.model.mechanics import correction
 from mst_cli.model.mechanics.depth import web_modulus_MPa
 from mst_cli.model.mechanics.spring import spring_arrays
 from mst_cli.model.response import capped_lock_forces_N, field_magnitude_T, regime_kernel
+from mst_cli.sensor.as_printed import housing_as_printed
 from mst_cli.sensor.sections import DEFAULT_OBJECTIVE, OBJECTIVE_TERMS
 
 if TYPE_CHECKING:
@@ -175,7 +177,6 @@ class DesignProblem:
         # the part as printed: walls + offset, modulus x factor, gap + offset (module docstring)
         self.wall_offset_mm = float(doc.printer.wall_offset_mm)
         self.wall_tolerance_mm = float(doc.printer.wall_tolerance_mm)
-        self.gap_offset_mm = float(doc.printer.gap_offset_mm)
         self.E_MPa = doc.material.youngs_modulus_MPa * doc.printer.modulus_factor
         self.max_print_deviation_rel = d.get("max_print_deviation_rel")
         self.nu = doc.material.poisson_ratio
@@ -187,6 +188,10 @@ class DesignProblem:
         probe_cells = [doc.family.cell(45.0, 1.0, 3.0) for _ in range(self.n)]
         probe = doc.geometry(probe_cells)
         self.probe = probe
+        # the housing as built (printer.gap_offset_mm in its clearance, else its floor and
+        # cover), as mst simulate builds it: the gap, the cover's air and the slot walls
+        printed_probe = replace(doc, housing=housing_as_printed(doc)).geometry(probe_cells)
+        self.printed_housing = printed_probe.housing
         requested = None if doc.field_model == "auto" else doc.field_model
         self.field_model = choose_field_model(probe.chip_offset_mm, probe.magnet_tilt_deg, requested)
         self.height_offset_mm = probe.total_height_mm - sum(c.h_mm for c in probe_cells)
@@ -194,7 +199,7 @@ class DesignProblem:
         # TPU, under a fingertip's press (docs/design.md 4.6); the cells come per candidate
         self.whole_part = doc.whole_part  # model.load_path: part (else the layers alone)
         printed_tpu = Material(doc.material.name, self.E_MPa, self.nu)
-        self.members = member_scene(probe, printed_tpu)
+        self.members = member_scene(printed_probe, printed_tpu)
         self.B_limit_T = min(1.0 - self.saturation_margin_rel, 1.0 / CHIP_HEADROOM) * mlx.SATURATION_T
         # L0's fitted corrections hold for walls up to this t/L; stubbier walls are extrapolation
         # (the design loop otherwise drifts there: it is where k and R grow fastest)
@@ -244,7 +249,7 @@ class DesignProblem:
 
     def gap0_mm(self, sum_h_mm: Floats) -> Floats:
         """Unloaded magnet-to-chip gap, as built, of stacks whose layer heights add up to ``sum_h_mm``."""
-        return unloaded_gap_mm(sum_h_mm, self.n, self.probe.housing, self.probe.board) + self.gap_offset_mm
+        return unloaded_gap_mm(sum_h_mm, self.n, self.printed_housing, self.probe.board)
 
     def layer_constraints(self, theta_deg: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike) -> np.ndarray:
         """The rules each layer meets on its own, (..., len(CELL_RULES) + 1), g <= 0 satisfied:

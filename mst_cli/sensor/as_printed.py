@@ -157,6 +157,13 @@ def apply_parameters(
     return out, edits
 
 
+def housing_as_printed(doc: Document) -> Housing:
+    """``doc``'s housing as its printer builds it: printer.gap_offset_mm written into its keys as
+    :func:`apply_parameters` writes it (so the cover's air, the slot walls' height and the
+    magnet-chip gap the design loop sees are those ``mst simulate`` sees)."""
+    return _housing_with_gap(doc, doc.printer.gap_offset_mm, [])
+
+
 def _housing_with_gap(doc: Document, gap_offset_mm: float, edits: list[str]) -> Housing:
     """``doc``'s housing with the gap offset taken from housing.chip_clearance_mm (what remains
     below zero from housing.pocket_floor_mm, then housing.cover_mm); the edit appended."""
