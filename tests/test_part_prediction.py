@@ -123,22 +123,36 @@ def test_the_design_loop_predicts_what_simulate_does(forward):
 
 
 @pytest.mark.slow
-def test_design_names_the_member_that_keeps_the_paper_targets_out_of_reach(tmp_path):
-    """The reference spec on the part as exported with the housing's default 0.8 mm cover (the
-    bundled config carries 2.5 mm for this reason): the nearest design misses, and the one line
-    says which member carries the motion (the cover over the open board slot)."""
+def test_design_names_the_member_that_keeps_the_targets_out_of_reach(tmp_path):
+    """The paper's forces at a tenth of its sensitivities (0.03 / 0.01 / 0.004 1/N) on the part as
+    exported: in regime 1 every member outside the layers still moves (the cap, both plates, the
+    cover until it lands on the board), and alone they give the field more change per newton than
+    the target; the nearest design misses and the one line names that member, the one the forward
+    model of the written design gives the largest compliance. The floor it states is the members'
+    alone, so it lies between the target and what the whole part (members and layers in series)
+    reaches. (This test's case was the paper's own targets with the default 0.8 mm cover: since
+    the cover lands on the board after its 0.3 mm of air, mst design meets them, exit 0.)"""
+    import re
+
     import yaml
     from click.testing import CliRunner
 
     from mst_cli.cli.app import main
 
     spec = yaml.safe_load((ROOT / "configs" / "mohammadi2021.yaml").read_text())
-    assert spec.pop("housing") == {"cover_mm": 2.5}
-    (tmp_path / "thin_cover.yaml").write_text(yaml.safe_dump(spec))
-    res = CliRunner().invoke(
-        main, ["design", str(tmp_path / "thin_cover.yaml"), "--out", str(tmp_path / "o"), "--no-plot", "-q"]
-    )
+    assert spec.pop("housing") == {"cover_mm": 2.5}  # the default 0.8 mm cover, as exported
+    S_target = (0.03, 0.01, 0.004)
+    for layer, S in zip(spec["layers"], S_target):
+        layer["target_sensitivity_per_N"] = S
+    (tmp_path / "tenth.yaml").write_text(yaml.safe_dump(spec))
+    res = CliRunner().invoke(main, ["design", str(tmp_path / "tenth.yaml"), "--out", str(tmp_path / "o"), "--no-plot"])
     assert res.exit_code == 1
     line = res.output.strip().splitlines()[-1]
-    assert line.startswith("mst design: targets not met:")
-    assert "the members outside the layers carry about" in line and "most the housing's cover" in line
+    parts = mst.simulate(tmp_path / "o" / "design.yaml")
+    m = parts.members
+    by_member = {"cap": m.cap_mm_per_N, "plates": sum(m.plates_mm_per_N), "housing's cover": m.cover_mm_per_N}
+    name = max(by_member, key=lambda k: by_member[k])
+    assert line.startswith(f"mst design: targets not met: the {name} dominate"), line
+    floor = float(re.search(r"S >= ([0-9.]+) 1/N in regime 1 ", line).group(1))
+    S1 = parts.regimes[0].sensitivity_secant_per_N
+    assert S_target[0] * 1.02 < floor <= S1

@@ -171,7 +171,7 @@ def diagnose(
     """
     reasons = _members_dominate(problem, u) + _beyond_limits(problem) + _rising_sensitivities(problem, achieved_S)
     reasons += [
-        (name, reason + _members_share(problem, u, achieved_S))
+        (name, reason + _members_share(problem, u, achieved_S, achieved_R))
         for name, reason in _worst_miss(problem, u, achieved_S, achieved_R)
     ]
     for name, message in checks.items():
@@ -181,17 +181,36 @@ def diagnose(
     return reasons[0][0], [r for _, r in reasons]
 
 
+def _members_by_regime(problem: DesignProblem, u: ArrayLike, edges_N: ArrayLike) -> tuple[dict, float, np.ndarray]:
+    """({member: the compliance (n,) in mm/N it adds in each regime between ``edges_N`` (0, R_1,
+    ..., R_n)}, (d|B|/dgap)/B0 (1/mm) at the unloaded gap, the layers' d_lock (n,)) of the design
+    at ``u``, as the forward model moves them (model.stack.series_displacement_mm): the cap bends
+    until the top layer locks (every regime), a plate until the layer under it locks (the regimes
+    up to that layer's), the cover's slot walls always and its bending over the slot until it
+    lands on the board (:meth:`DesignProblem.member_parts`)."""
+    theta, t, h = problem.to_physical(u)
+    _, d_lock, _, _ = problem.layer_laws(theta, t, h)
+    cap, plates, cover = problem.member_parts(theta, t, h, edges_N)
+    n = problem.n
+    still_bending = np.array([float(np.sum(plates[i:])) for i in range(n)])  # plate j: layer j's cap
+    parts = {"cap": np.full(n, float(cap)), "plates": still_bending, "housing's cover": np.asarray(cover, float)}
+    gap0 = float(problem.gap0_mm(float(np.sum(h))))
+    B = problem.field_T(np.array([gap0 - 1e-4, gap0, gap0 + 1e-4]))
+    per_mm = float((B[0] - B[2]) / (2e-4 * B[1]))  # (d|B|/dgap)/B0: S over the compliance, 1/mm
+    return parts, per_mm, d_lock
+
+
 def _members_dominate(problem: DesignProblem, u: ArrayLike) -> list[tuple[str, str]]:
     """(name, reason) when the members outside the layers make a target unreachable at the nearest
     design, which no layer can help (docs/design.md 4.6): the cap closes the top layer's cavity by
     its own bending before the target R_n (below d_lock / C_cap), or the members alone give a
-    regime more field change per newton than its target (the cap until that closure, the plates
-    and cover always; the tangent at the unloaded gap, below the secant as the gap closes)."""
+    regime more field change per newton than its target (each member while it still moves in that
+    target band, :func:`_members_by_regime`; the tangent at the unloaded gap, below the secant as
+    the gap closes)."""
     if not problem.whole_part:
         return []
-    theta, t, h = problem.to_physical(u)
-    _, d_lock, _, _ = problem.layer_laws(theta, t, h)
-    cap, rest = (float(c) for c in problem.members_mm_per_N(theta, t, h))
+    parts, per_mm, d_lock = _members_by_regime(problem, u, np.concatenate([[0.0], problem.R_target]))
+    cap = float(parts["cap"][0])
     tol, n = problem.tolerance_rel, problem.n
     if cap > 0 and problem.R_target[-1] * (1 - tol) > d_lock[-1] / cap:
         return [
@@ -202,44 +221,40 @@ def _members_dominate(problem: DesignProblem, u: ArrayLike) -> list[tuple[str, s
                 "(an insert) is needed (docs/design.md 4.6)",
             )
         ]
-    gap0 = float(problem.gap0_mm(float(np.sum(h))))
-    B = problem.field_T(np.array([gap0 - 1e-4, gap0, gap0 + 1e-4]))
-    per_mm = float((B[0] - B[2]) / (2e-4 * B[1]))  # (d|B|/dgap)/B0, 1/mm
-    floor = per_mm * np.array([cap + rest] + [rest] * (n - 1))  # S (1/N) of the members alone
+    floor = per_mm * sum(parts.values())  # S (1/N) of the members alone, per regime
     over = np.flatnonzero(floor > problem.S_target * (1 + tol))
     if not len(over):
         return []
     i = int(over[-1])
-    name = "cap" if i == 0 and cap > rest else "plates and cover"
+    name = max(parts, key=lambda k: parts[k][i])
+    verb = "are" if name == "plates" else "is"
     return [
         (
-            f"the {name} dominate{'s' if name == 'cap' else ''}",
-            f"the {name} {'is' if name == 'cap' else 'are'} too soft: the members outside the layers alone give "
-            f"S >= {floor[i]:.3g} 1/N in regime {i + 1}, above its target {problem.S_target[i]:g} 1/N, which no "
-            "layer can lower; a stiffer cap (an insert), plates or a cover supported all round (docs/design.md 4.6)",
+            f"the {name} dominate{'' if name == 'plates' else 's'}",
+            f"the {name} {verb} too soft: the members outside the layers alone give "
+            f"S >= {floor[i]:.3g} 1/N in regime {i + 1} (most the {name}, {parts[name][i]:.3g} mm/N), above its "
+            f"target {problem.S_target[i]:g} 1/N, which no layer can lower; a stiffer cap (an insert), plates or "
+            "a cover supported all round (docs/design.md 4.6)",
         )
     ]
 
 
-def _members_share(problem: DesignProblem, u: ArrayLike, achieved_S: ArrayLike) -> str:
+def _members_share(problem: DesignProblem, u: ArrayLike, achieved_S: ArrayLike, achieved_R: ArrayLike) -> str:
     """'' or, when the members outside the layers carry a third or more of some regime's motion at
-    the nearest design, that share and the member: what the layers have to work around."""
+    the nearest design, that share and the member (each as it moves in that regime,
+    :func:`_members_by_regime`): what the layers have to work around."""
     if not problem.whole_part:
         return ""
-    theta, t, h = problem.to_physical(u)
-    cap, plates, cover = problem.member_parts(theta, t, h)
-    parts = {"cap": float(cap), "plates": float(np.sum(plates)), "housing's cover": float(cover)}
-    gap0 = float(problem.gap0_mm(float(np.sum(h))))
-    B = problem.field_T(np.array([gap0 - 1e-4, gap0, gap0 + 1e-4]))
-    per_mm = float((B[0] - B[2]) / (2e-4 * B[1]))  # (d|B|/dgap)/B0: S over the compliance, 1/mm
+    edges = np.concatenate([[0.0], np.sort(np.asarray(achieved_R, float))])
+    parts, per_mm, _ = _members_by_regime(problem, u, edges)
     share = sum(parts.values()) * per_mm / np.maximum(np.asarray(achieved_S, float), 1e-300)
     i = int(np.argmax(share))
     if share[i] < 1.0 / 3.0:
         return ""
-    name = max(parts, key=lambda k: parts[k])
+    name = max(parts, key=lambda k: parts[k][i])
     return (
         f"; the members outside the layers carry about {100 * min(share[i], 1.0):.0f} % of regime {i + 1}'s "
-        f"motion, most the {name} ({parts[name]:.3g} mm/N, docs/design.md 4.6)"
+        f"motion, most the {name} ({parts[name][i]:.3g} mm/N, docs/design.md 4.6)"
     )
 
 

@@ -68,7 +68,7 @@ import numpy as np
 from mst_cli.model import chip as mlx
 from mst_cli.model.assembly import unloaded_gap_mm
 from mst_cli.model.cell import CELL_RULES, LENGTH_FLOOR_MM, cell_margins_mm, wall_centreline_length_mm
-from mst_cli.model.load_path import member_compliances, member_parts, member_scene
+from mst_cli.model.load_path import member_parts, member_scene
 from mst_cli.model.magnet_field import axial_Bz_T, choose_field_model
 from mst_cli.model.material import Material
 from mst_cli.model.mechanics import correction
@@ -339,18 +339,25 @@ class DesignProblem:
         members = self.part_members(theta_deg, t_mm, h_mm) if self.whole_part else None
         return self._responses_of(self.layer_laws(theta_deg, t_mm, h_mm), h_mm, members)
 
-    def member_parts(self, theta_deg: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike) -> tuple:
-        """(cap (...), plates (..., n - 1), cover (...)) compliance in mm/N of candidate stacks,
-        walls as printed (t + printer.wall_offset_mm), as :meth:`layer_laws` sees them."""
-        t = np.asarray(t_mm, dtype=float)
-        if self.wall_offset_mm:
-            t = np.maximum(t + self.wall_offset_mm, LENGTH_FLOOR_MM)
-        return member_compliances(self.members, np.radians(theta_deg), t, h_mm)
+    def member_parts(self, theta_deg: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike, edges_N: ArrayLike) -> tuple:
+        """(cap (...), plates (..., n - 1), cover (..., bands)) compliance in mm/N of candidate
+        stacks, walls as printed (t + printer.wall_offset_mm), as :meth:`layer_laws` sees them,
+        the cover's over each force band between ``edges_N`` (..., bands + 1): its slot walls
+        throughout, its bending over the slot only until it lands on the board after its air
+        (the band's mean, what a secant over the band sees)."""
+        caps, cover, (over_slot, air_mm) = self.part_members(theta_deg, t_mm, h_mm)
+        cap, plates, slot_walls = caps[..., -1], caps[..., :-1], cover - over_slot
+        F = np.asarray(edges_N, dtype=float)
+        band = np.maximum(np.diff(F, axis=-1), 1e-300)
+        lands_N = (air_mm / np.maximum(over_slot, 1e-300))[..., None]
+        bending = np.clip(lands_N - F[..., :-1], 0.0, band) / band  # share of the band before it lands
+        return cap, plates, slot_walls[..., None] + over_slot[..., None] * bending
 
-    def members_mm_per_N(self, theta_deg: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike) -> tuple:
-        """(the cap's, the plates' and cover's in series) compliance (...) of candidate stacks."""
-        cap, plates, cover = self.member_parts(theta_deg, t_mm, h_mm)
-        return cap, plates.sum(axis=-1) + cover
+    def members_mm_per_N(self, theta_deg: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike, edges_N: ArrayLike) -> tuple:
+        """(the cap's (...), the plates' and cover's in series over each band (..., bands))
+        compliance of candidate stacks (:meth:`member_parts`)."""
+        cap, plates, cover = self.member_parts(theta_deg, t_mm, h_mm, edges_N)
+        return cap, plates.sum(axis=-1, keepdims=True) + cover
 
     def part_members(self, theta_deg: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike) -> tuple:
         """(each layer's cap (..., n): the plate above it, the cap on the top one; the cover;
