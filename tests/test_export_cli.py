@@ -43,10 +43,11 @@ def test_every_design_in_configs_exports_and_checks(design, tmp_path):
     assert {p.name for p in out.iterdir()} == {"sensor.stl", "insert.stl", "sensor.step", "export.json"}
     c = run(["check", out, "--json"])
     summary = json.loads(c.stdout)
-    # every check passes but the load path: the part as exported has a TPU cap over a 25 mm span
-    # and no stiff insert yet, which leaves 39 % of regime 1's compliance uncertain against a 5 %
-    # budget (docs/design.md 4.6); with a stiff insert over the magnet this list is empty
-    assert c.exit_code == 1 and summary["failed"] == ["load_path"], c.output
+    # every check passes, the load path too: the part as exported carries the default stiff insert
+    # over the magnet (insert.stl), which leaves about 1 % of a regime's compliance uncertain
+    # between the members' soft and stiff supports, within the 5 / 8 / 20 % budgets (docs/design.md
+    # 4.6); the bare TPU cap, 11 % uncertain in regime 1, fails it (tests/test_load_path.py)
+    assert c.exit_code == 0 and summary["failed"] == [], c.output
 
 
 def test_export_writes_files_progress_and_pause_height(reference_export):
