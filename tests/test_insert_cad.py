@@ -239,24 +239,37 @@ def test_crush_ribs_hold_the_magnet_by_their_interference(forward):
 
 
 def test_the_cover_bends_only_where_layer_1_lands_inside_the_slot():
-    """The closed form's cover member: layer 1's walls past the slot's edge stand on the base's
-    solid side walls (no bending); inside it, four-point bending of the cover and layer 1's pad
-    across the slot, P e^2 (3L - 4e) / (6 E'I) + P e / (kGA) with P = F/2."""
+    """The closed form's cover member (the housing's slot walls are TPU columns w wide and H tall,
+    k = E'I/H against a turn, bonded to the cover; P = F/2 a side). Layer 1's walls past the
+    slot's edge stand on a column: the cover does not bend over the slot (nothing lands on the
+    board), the foot only squeezes the column and turns it by its lever a about the column's
+    centre line, P H/(E' w D) + a phi with phi = P a / (k + 1/B), B = (L/2)/E'I of the cover
+    under layer 1's pad (which spans the narrow slot). Inside the slot, the cover bends, and only
+    that part stops on the board; the columns then carry the squeeze alone."""
     base = {"layers": [{"theta_deg": 20, "t_mm": 0.6, "h_mm": 3.0}]}
     narrow = parse_document({**base, "magnetometer": {"board": "bare-qfn"}})
     g, m = narrow.geometry(), narrow.material
-    assert 0.5 * (g.slot_x_mm[1] - g.slot_x_mm[0]) < lp.wall_head_x_mm(g.layers[0])
-    assert lp.members(g, m).cover_mm_per_N == 0.0
+    L2, head = 0.5 * (g.slot_x_mm[1] - g.slot_x_mm[0]), lp.wall_head_x_mm(g.layers[0])
+    assert L2 < head < lp.pad_half_width_mm(g.layers[0].theta_rad, g.layers[0].h_mm, g.width_mm)
+    E, D = m.youngs_modulus_MPa / (1 - m.poisson_ratio**2), g.depth_mm
+    H = g.z_cover_bottom_mm - g.z_board_bottom_mm
+    EI = E * D * (g.housing.cover_mm + g.layers[0].t_mm) ** 3 / 12
+    P, drop = 0.5, []
+    for w in (g.slot_x_mm[0] + 0.5 * g.base_length_mm, 0.5 * g.base_length_mm - g.slot_x_mm[1]):
+        k, a = E * D * w**3 / 12 / H, L2 + 0.5 * w - head
+        drop.append(P * H / (E * w * D) + a * P * a / (k + EI / L2))
+    parts = lp.members(g, m)
+    assert parts.cover_contact_mm_per_N == 0.0  # no bending over the slot: nothing lands
+    assert parts.cover_mm_per_N == pytest.approx(0.5 * sum(drop), rel=1e-12)
     wide = parse_document(base)
     g = wide.geometry()
-    L = g.slot_x_mm[1] - g.slot_x_mm[0]
-    e = 0.5 * L - lp.wall_head_x_mm(g.layers[0])
-    assert e > 0
-    E = m.youngs_modulus_MPa / (1 - m.poisson_ratio**2)
-    T = g.housing.cover_mm + g.layers[0].t_mm
-    EI, kGA = E * g.depth_mm * T**3 / 12, 5 / 6 * m.shear_modulus_MPa * g.depth_mm * T
-    expected = 0.5 * e**2 * (3 * L - 4 * e) / (6 * EI) + 0.5 * e / kGA
-    assert lp.members(g, m).cover_mm_per_N == pytest.approx(expected, rel=1e-12)
+    assert 0.5 * (g.slot_x_mm[1] - g.slot_x_mm[0]) > lp.wall_head_x_mm(g.layers[0])
+    H = g.z_cover_bottom_mm - g.z_board_bottom_mm
+    widths = (g.slot_x_mm[0] + 0.5 * g.base_length_mm, 0.5 * g.base_length_mm - g.slot_x_mm[1])
+    squeeze = 0.5 * sum(P * H / (E * w * D) for w in widths)
+    parts = lp.members(g, m)
+    assert parts.cover_contact_mm_per_N > 10 * squeeze  # the bending over the slot, which lands
+    assert parts.cover_mm_per_N - parts.cover_contact_mm_per_N == pytest.approx(squeeze, rel=1e-12)
 
 
 @pytest.mark.slow
