@@ -175,7 +175,7 @@ def _cap(g, magnet: bool, insert) -> list[Region]:
     """The cap above the stack less the pocket and, when the part has one, the insert's slot (as
     exported: TPU side walls beside it); the pocket as the magnet; the insert. The geometry's own
     plate sits in its slot with its side clearances left open; another insert spans the face."""
-    w2, r = 0.5 * g.width_mm, g.pocket_radius_mm
+    w2 = 0.5 * g.width_mm
     z0, z1 = g.z_stack_top_mm, g.total_height_mm
     pocket = _pocket(g)
     holes = [pocket]
