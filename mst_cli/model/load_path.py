@@ -438,45 +438,77 @@ class CappedLayer:
         return np.where(F <= R, self.law.displacement_mm(F) + self.cap_mm_per_N * F, closed)
 
 
-def layer_compliances_mm_per_N(stack) -> np.ndarray:
-    """(n_regimes, n_layers): each layer's dd/dF at the middle of each regime (a locked layer on
-    its locked branch), from its own law (Stack.layers)."""
-    edges = stack.regime_bounds_N
-    mids = 0.5 * (edges[:-1] + edges[1:])
-    out = np.empty((len(mids), len(stack.layers)))
-    for j, law in enumerate(stack.layers):
-        step = 1e-6 * max(float(edges[-1]), 1e-9)
-        for i, F in enumerate(mids):
-            if F >= law.lock_force_N:
-                out[i, j] = 1.0 / law.k_locked_N_per_mm
-            else:
-                d = law.displacement_mm(np.array([max(F - step, 0.0), F + step]))
-                out[i, j] = float((d[1] - d[0]) / (F + step - max(F - step, 0.0)))
-    return out
+def moving_share(stop_N, edges_N) -> np.ndarray:
+    """(..., bands): the share of each force band between ``edges_N`` (..., bands + 1) over which
+    a member that moves until ``stop_N`` (...; inf: it never stops) still moves, clip(stop - F_lo,
+    0, band) / band: its compliance's mean over the band, what a secant over the band sees (a
+    band of zero width: 1 if it still moves just past it). The one rule of the forward model for
+    the members (model.response.part_stack): the cap and plate j bend until the layer under them
+    locks, the cover's bending over the slot until it lands on the board, its slot walls always.
+    The report's shares (:func:`motion_shares`) and the design's diagnosis use it alike."""
+    F = np.asarray(edges_N, dtype=float)
+    lo, band = F[..., :-1], np.diff(F, axis=-1)
+    stop = np.asarray(stop_N, dtype=float)[..., None]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        part = np.clip(stop - lo, 0.0, band) / np.where(band > 0, band, 1.0)
+    return np.where(band > 0, part, (stop > lo).astype(float))
+
+
+def capped_units(laws: tuple, parts: Members) -> list:
+    """The layer laws ``laws`` (bottom to top) each with the plate or cap above it bonded to its
+    top pad (:class:`CappedLayer`; a rigid one leaves the law itself): the units of the part's
+    stack (model.response.part_stack, model.part_laws)."""
+    n = len(laws)
+    plates = (*parts.plates_mm_per_N, *(0.0,) * (n - 1 - len(parts.plates_mm_per_N)))
+    caps = (*plates[: n - 1], parts.cap_mm_per_N)
+    return [CappedLayer(law, c) if c > 0 else law for law, c in zip(laws, caps)]
+
+
+def member_band_compliances(stack, parts: Members) -> tuple[np.ndarray, np.ndarray, dict]:
+    """(the part's regime edges (n + 1,) in N: 0 and the units' lock forces, sorted; each layer's
+    own secant compliance per regime (n, n) in mm/N; {member: its compliance per regime (n,)}) as
+    the forward model moves them (:func:`moving_share`): the drop of the part over each regime is
+    the sum of all of them times the regime's width, exactly (part_stack's force-displacement)."""
+    units = capped_units(stack.layers, parts)
+    R = np.array([u.lock_force_N for u in units], dtype=float)
+    edges = np.concatenate([[0.0], np.sort(R)])
+    # a regime of zero width (two layers locking together): the slope just past its start
+    hi = np.maximum(edges[1:], edges[:-1] + 1e-9 * max(float(edges[-1]), 1e-12))
+    lo, width = edges[:-1], hi - edges[:-1]
+    bands = np.stack([lo, hi], axis=-1)  # (n, 2): each regime as its own band
+    caps = np.array([getattr(u, "cap_mm_per_N", 0.0) for u in units])
+    caps_moving = caps[:, None] * moving_share(R[:, None], bands)[..., 0]  # (units, regimes)
+    own = np.array([(u.displacement_mm(hi) - u.displacement_mm(lo)) / width for u in units]) - caps_moving
+    landing_N = parts.cover_travel_mm / parts.cover_contact_mm_per_N if parts.cover_contact_mm_per_N > 0 else math.inf
+    bending = parts.cover_contact_mm_per_N * moving_share(landing_N, bands)[..., 0]
+    cover = parts.cover_mm_per_N - parts.cover_contact_mm_per_N + bending
+    moving = {"cap": caps_moving[-1], "plates": caps_moving[:-1].sum(axis=0), "housing": cover}
+    return edges, own.T, moving
 
 
 def motion_shares(stack, parts: Members) -> list[dict]:
-    """Per regime: the share of the magnet's drop per newton from each layer, the cap, the plates
-    and the housing's cover (they sum to 1), and the share outside the layers."""
-    layers = layer_compliances_mm_per_N(stack)
-    edges = stack.regime_bounds_N
+    """Per regime of the part (its layers as the forward model locks them, with the cap and
+    plates bending into their cavities): the share of the magnet's drop over the regime from
+    each layer, the cap, the plates and the housing's cover (they sum to 1), each as the forward
+    model moves it there (:func:`member_band_compliances`), and the share outside the layers.
+    ``stack``: the layers alone (model.stack.Stack)."""
+    edges, layers, moving = member_band_compliances(stack, parts)
     out = []
     for i, row in enumerate(layers):
-        total = float(row.sum()) + parts.total_mm_per_N
+        members_i = {k: float(v[i]) for k, v in moving.items()}
+        outside = sum(members_i.values())
+        total = float(row.sum()) + outside
         shares = {f"layer_{j + 1}": float(c) / total for j, c in enumerate(row)}
-        shares |= {
-            "cap": parts.cap_mm_per_N / total,
-            "plates": sum(parts.plates_mm_per_N) / total,
-            "housing": parts.cover_mm_per_N / total,
-        }
+        shares |= {k: v / total for k, v in members_i.items()}
         out.append(
             {
                 "regime": i + 1,
                 "force_N": [float(edges[i]), float(edges[i + 1])],
                 "compliance_mm_per_N": total,
                 "layers_compliance_mm_per_N": float(row.sum()),
+                "members_mm_per_N": members_i,
                 "shares": shares,
-                "outside_layers": parts.total_mm_per_N / total,
+                "outside_layers": outside / total,
             }
         )
     return out
@@ -491,6 +523,7 @@ def load_path_report(geometry, material, stack, patch_mm: float = FINGERTIP_PATC
     regimes = []
     for row, stiff in zip(motion_shares(stack, simple), bound):
         row["outside_layers_clamped"] = stiff["outside_layers"]
+        row["members_clamped_mm_per_N"] = stiff["members_mm_per_N"]
         regimes.append(row)
     return {
         "patch_mm": patch_mm,
@@ -516,20 +549,20 @@ ACCURACY_BUDGET_REL = (0.05, 0.08, 0.20)
 def support_uncertainty(report: dict) -> list[dict]:
     """Per regime of :func:`load_path_report`: the share of the part's compliance the members'
     closed form leaves uncertain, between its simply supported and clamped wall heads
-    ((C_simple - C_clamped) / the part's compliance), against the regime's accuracy budget
-    (:data:`ACCURACY_BUDGET_REL`), with the member whose supports matter most. The tolerance on
-    the share outside the layers that ``mst check`` applies by default."""
-    simple, clamped = report["members_simple_mm_per_N"], report["members_clamped_mm_per_N"]
-    spread = {k: simple[k] - clamped[k] for k in simple}
+    (|C_simple - C_clamped| of the members as each moves in that regime, over the part's
+    compliance there), against the regime's accuracy budget (:data:`ACCURACY_BUDGET_REL`), with
+    the member whose supports matter most there. The tolerance on the share outside the layers
+    that ``mst check`` applies by default."""
     rows = []
     for i, row in enumerate(report["regimes"]):
-        total = row["compliance_mm_per_N"]
+        simple, clamped = row["members_mm_per_N"], row["members_clamped_mm_per_N"]
+        spread = {k: simple[k] - clamped[k] for k in simple}
         rows.append(
             {
                 "regime": row["regime"],
-                "uncertain_share": sum(spread.values()) / total,
+                "uncertain_share": abs(sum(spread.values())) / row["compliance_mm_per_N"],
                 "budget": ACCURACY_BUDGET_REL[min(i, len(ACCURACY_BUDGET_REL) - 1)],
-                "member": max(spread, key=lambda k: spread[k]),
+                "member": max(spread, key=lambda k: abs(spread[k])),
             }
         )
     return rows

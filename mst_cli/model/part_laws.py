@@ -33,7 +33,7 @@ from typing import Any
 
 import numpy as np
 
-from mst_cli.model.load_path import CappedLayer, Members, members
+from mst_cli.model.load_path import CappedLayer, Members, capped_units, members
 from mst_cli.model.mechanics import layer_laws
 from mst_cli.model.mechanics.tilt import LayerTiltLaw
 
@@ -96,9 +96,7 @@ def part_layer_laws(laws: tuple, parts: Members) -> tuple:
     """The layer laws (bottom to top) with the members folded in as
     :func:`~mst_cli.model.response.part_stack` folds them (module docstring); rigid members (all
     compliances 0) give ``laws`` themselves."""
-    plates = (*parts.plates_mm_per_N, *(0.0,) * (len(laws) - 1 - len(parts.plates_mm_per_N)))
-    caps = (*plates[: len(laws) - 1], parts.cap_mm_per_N)
-    units = [CappedLayer(law, c) if c > 0 else law for law, c in zip(laws, caps)]
+    units = capped_units(laws, parts)
     if parts.cover_mm_per_N > 0:
         j = cover_host(units, parts)
         units[j] = SeriesMember(units[j], parts.cover_mm_per_N, parts.cover_contact_mm_per_N, parts.cover_travel_mm)

@@ -17,7 +17,7 @@ import numpy as np
 from mst_cli.model import chip as mlx
 from mst_cli.model import magnet_field as fld
 from mst_cli.model.assembly import SensorGeometry
-from mst_cli.model.load_path import FINGERTIP_PATCH_MM, CappedLayer, Members, members
+from mst_cli.model.load_path import FINGERTIP_PATCH_MM, Members, capped_units, members
 from mst_cli.model.material import CREASE_ONSET_STRETCH, Material
 from mst_cli.model.mechanics import layer_laws
 from mst_cli.model.stack import Stack, capped_lock_force_N, layer_caps, series_displacement_mm
@@ -229,9 +229,7 @@ def part_stack(laws: tuple, parts: Members) -> Stack:
     """The whole part's stack: the cap bends into the top layer's cavity until it closes there
     (:class:`~mst_cli.model.load_path.CappedLayer`), each plate into the cavity of the layer
     under it likewise, the cover in series, its bending over the slot until it lands on the board."""
-    plates = (*parts.plates_mm_per_N, *(0.0,) * (len(laws) - 1 - len(parts.plates_mm_per_N)))
-    caps = (*plates[: len(laws) - 1], parts.cap_mm_per_N)
-    capped = tuple(CappedLayer(law, c) if c > 0 else law for law, c in zip(laws, caps))
+    capped = tuple(capped_units(laws, parts))
     return Stack(capped, parts.cover_mm_per_N, parts.cover_contact_mm_per_N, parts.cover_travel_mm)
 
 
