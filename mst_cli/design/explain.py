@@ -27,6 +27,7 @@ import numpy as np
 from mst_cli.design.problem import DesignProblem
 from mst_cli.errors import InputError
 from mst_cli.model.cell import cell_margins_mm
+from mst_cli.model.load_path import moving_share
 from mst_cli.model.mechanics.spring import contact_stiffness_N_per_mm
 
 if TYPE_CHECKING:
@@ -184,16 +185,17 @@ def diagnose(
 def _members_by_regime(problem: DesignProblem, u: ArrayLike, edges_N: ArrayLike) -> tuple[dict, float, np.ndarray]:
     """({member: the compliance (n,) in mm/N it adds in each regime between ``edges_N`` (0, R_1,
     ..., R_n)}, (d|B|/dgap)/B0 (1/mm) at the unloaded gap, the layers' d_lock (n,)) of the design
-    at ``u``, as the forward model moves them (model.stack.series_displacement_mm): the cap bends
-    until the top layer locks (every regime), a plate until the layer under it locks (the regimes
-    up to that layer's), the cover's slot walls always and its bending over the slot until it
-    lands on the board (:meth:`DesignProblem.member_parts`)."""
+    at ``u``, as the forward model moves them (model.load_path.moving_share, the rule the report's
+    shares use too): the cap bends until the top layer locks (every regime), a plate until the
+    layer under it locks (the regimes up to that layer's), the cover's slot walls always and its
+    bending over the slot until it lands on the board (:meth:`DesignProblem.member_parts`)."""
     theta, t, h = problem.to_physical(u)
     _, d_lock, _, _ = problem.layer_laws(theta, t, h)
     cap, plates, cover = problem.member_parts(theta, t, h, edges_N)
-    n = problem.n
-    still_bending = np.array([float(np.sum(plates[i:])) for i in range(n)])  # plate j: layer j's cap
-    parts = {"cap": np.full(n, float(cap)), "plates": still_bending, "housing's cover": np.asarray(cover, float)}
+    edges = np.asarray(edges_N, dtype=float)
+    # plate j bends until layer j locks, the cap until the top one: the design's locks R_1 < ... < R_n
+    caps = np.append(plates, cap)[:, None] * moving_share(edges[1:], edges)  # (layers, regimes)
+    parts = {"cap": caps[-1], "plates": caps[:-1].sum(axis=0), "housing's cover": np.asarray(cover, float)}
     gap0 = float(problem.gap0_mm(float(np.sum(h))))
     B = problem.field_T(np.array([gap0 - 1e-4, gap0, gap0 + 1e-4]))
     per_mm = float((B[0] - B[2]) / (2e-4 * B[1]))  # (d|B|/dgap)/B0: S over the compliance, 1/mm

@@ -68,7 +68,7 @@ import numpy as np
 from mst_cli.model import chip as mlx
 from mst_cli.model.assembly import unloaded_gap_mm
 from mst_cli.model.cell import CELL_RULES, LENGTH_FLOOR_MM, cell_margins_mm, wall_centreline_length_mm
-from mst_cli.model.load_path import member_parts, member_scene
+from mst_cli.model.load_path import member_parts, member_scene, moving_share
 from mst_cli.model.magnet_field import axial_Bz_T, choose_field_model
 from mst_cli.model.material import Material
 from mst_cli.model.mechanics import correction
@@ -347,11 +347,8 @@ class DesignProblem:
         (the band's mean, what a secant over the band sees)."""
         caps, cover, (over_slot, air_mm) = self.part_members(theta_deg, t_mm, h_mm)
         cap, plates, slot_walls = caps[..., -1], caps[..., :-1], cover - over_slot
-        F = np.asarray(edges_N, dtype=float)
-        band = np.maximum(np.diff(F, axis=-1), 1e-300)
-        lands_N = (air_mm / np.maximum(over_slot, 1e-300))[..., None]
-        bending = np.clip(lands_N - F[..., :-1], 0.0, band) / band  # share of the band before it lands
-        return cap, plates, slot_walls[..., None] + over_slot[..., None] * bending
+        lands_N = air_mm / np.maximum(over_slot, 1e-300)
+        return cap, plates, slot_walls[..., None] + over_slot[..., None] * moving_share(lands_N, edges_N)
 
     def members_mm_per_N(self, theta_deg: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike, edges_N: ArrayLike) -> tuple:
         """(the cap's (...), the plates' and cover's in series over each band (..., bands))
