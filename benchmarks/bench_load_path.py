@@ -56,7 +56,7 @@ def main() -> None:
     doc = mst.load(args.design)
     g, m = doc.geometry(), doc.material
     stack = Stack(layer_laws(g.layers, m, "spring"))
-    print(f"{doc.name}: outside the layers, regimes 1..{len(g.layers)}, %")
+    print(f"{doc.name}: outside the layers, regimes 1..{len(g.layers)} of the part (its own locks), %")
     print("| option | cap N/mm | simple | clamped | part height mm |\n|---|---|---|---|---|")
     bare = replace(g, insert_plate=None)
     insert = g.insert_plate
