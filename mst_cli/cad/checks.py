@@ -290,7 +290,8 @@ def check_footprint(m: Measurements, x: Manifest) -> Check:
 
 def check_load_path(m: Measurements, x: Manifest, share_max: float | None = None) -> Check:
     """Where a centred press's motion of the magnet goes (docs/design.md 4.6): the layers (L0)
-    against the cap, plates and cover in closed form, from the design in export.json. Fails,
+    against the cap, plates and cover in closed form, each in the part's regimes while the
+    forward model moves it (load_path.motion_shares), from the design in export.json. Fails,
     naming the member, when the share outside the layers in some regime exceeds ``share_max``
     (``--load-path-max``) or, without it, when the share the closed form leaves uncertain
     (the beams' ends held at the soft and at the stiff bound of what restrains them) exceeds the

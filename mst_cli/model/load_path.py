@@ -516,7 +516,8 @@ def motion_shares(stack, parts: Members) -> list[dict]:
 
 def load_path_report(geometry, material, stack, patch_mm: float = FINGERTIP_PATCH_MM) -> dict:
     """report.json's ``load_path``: the members' compliance (simply supported, and the clamped
-    bound) and, per regime, each member's share of the magnet's motion (docs/design.md 4.6)."""
+    bound) and, per regime of the part, each member's share of the magnet's motion as the forward
+    model moves it (:func:`motion_shares`, docs/design.md 4.6)."""
     simple = members(geometry, material, patch_mm, "simple")
     clamped = members(geometry, material, patch_mm, "clamped")
     bound = motion_shares(stack, clamped)
