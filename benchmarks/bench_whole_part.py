@@ -12,9 +12,10 @@ a centred 6 mm strip, the base's bottom face held, the layers locked before the 
 * ``L0+m``: the closed form: each open layer's plane-strain small-load L0 compliance, each
   closed one's locked L0 compliance, plus load_path.members(...).total (simply supported; the
   clamped bound in brackets), times the same dB_z/dz;
-* ``mst``: what ``mst simulate`` states (the layers' laws in the web, at the middle of each
-  regime, plus the members): for reference, not like for like (the rung is small-strain and
-  plane strain).
+* ``mst``: what ``mst simulate``'s part model gives (part_stack's secant over each of the part's
+  regimes, each member counted while it moves: load_path.motion_shares), times the same
+  dB_z/dz: for reference, not like for like (the rung is small-strain and plane strain, and
+  has no contact: its cover never lands on the board).
 
 Also the cost (dofs, seconds per solve), a convergence line and the cap alone against the beam.
 
@@ -78,7 +79,7 @@ def config_rows(path: Path, spacing: float | None, times: list[float]) -> list[s
 def rung_vs_mst_rows(path: Path, spacing: float | None) -> list[str]:
     """Per regime: the whole-part rung's field change per newton at the chip (as printed, the
     layers locked before the regime closed) against what ``mst simulate`` states for the same
-    part (the layers' laws at the middle of the regime plus the members), and their ratio: the
+    part (part_stack's secant over the regime, load_path.motion_shares), and their ratio: the
     issue's 5/8/20 % budget."""
     doc = mst.load(path)
     if not doc.is_design:
