@@ -46,7 +46,7 @@ def test_every_design_in_configs_exports_and_checks(design, tmp_path):
     # every check passes, the load path too: the part as exported carries the default stiff insert
     # over the magnet (insert.stl), which leaves about 1 % of a regime's compliance uncertain
     # between the members' soft and stiff supports, within the 5 / 8 / 20 % budgets (docs/design.md
-    # 4.6); the bare TPU cap, 11 % uncertain in regime 1, fails it (tests/test_load_path.py)
+    # 4.6); the bare TPU cap, 12 % uncertain in regime 1, fails it (tests/test_load_path.py)
     assert c.exit_code == 0 and summary["failed"] == [], c.output
 
 
