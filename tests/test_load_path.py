@@ -207,6 +207,13 @@ def test_report_states_each_members_share_per_regime(tmp_path):
         assert row["outside_layers_clamped"] < row["outside_layers"]  # clamped supports: the stiff bound
     outside = [r["outside_layers"] for r in path["regimes"]]
     assert outside == sorted(outside)  # the locked layers give less and less, the cap the same
+    # the cover's landing: its air over the bending's compliance, inside the forward design's range,
+    # and the terminal says so
+    doc = mst.load(FORWARD)
+    parts = lp.members(doc.geometry(), doc.material)
+    assert path["cover_lands_N"] == pytest.approx(parts.cover_travel_mm / parts.cover_contact_mm_per_N, rel=1e-12)
+    assert path["cover_lands_N"] < path["regimes"][-1]["force_N"][1]
+    assert f"the cover lands on the board's parts at {path['cover_lands_N']:.3g} N, inside the range" in res.output
 
 
 def export_with_cap(tmp_path, cap_top_mm):

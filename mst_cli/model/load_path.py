@@ -464,6 +464,15 @@ def capped_units(laws: tuple, parts: Members) -> list:
     return [CappedLayer(law, c) if c > 0 else law for law, c in zip(laws, caps)]
 
 
+def cover_landing_N(parts: Members) -> float:
+    """The centred press (N) at which the cover's bending over the slot has closed its air onto
+    the board's tallest part (inf: it never bends there). Past it the press bears on the board,
+    the chip and its connectors: a support only the assembled sensor has, not the printed body."""
+    if parts.cover_contact_mm_per_N <= 0.0:
+        return math.inf
+    return parts.cover_travel_mm / parts.cover_contact_mm_per_N
+
+
 def member_band_compliances(stack, parts: Members) -> tuple[np.ndarray, np.ndarray, dict]:
     """(the part's regime edges (n + 1,) in N: 0 and the units' lock forces, sorted; each layer's
     own secant compliance per regime (n, n) in mm/N; {member: its compliance per regime (n,)}) as
@@ -479,8 +488,7 @@ def member_band_compliances(stack, parts: Members) -> tuple[np.ndarray, np.ndarr
     caps = np.array([getattr(u, "cap_mm_per_N", 0.0) for u in units])
     caps_moving = caps[:, None] * moving_share(R[:, None], bands)[..., 0]  # (units, regimes)
     own = np.array([(u.displacement_mm(hi) - u.displacement_mm(lo)) / width for u in units]) - caps_moving
-    landing_N = parts.cover_travel_mm / parts.cover_contact_mm_per_N if parts.cover_contact_mm_per_N > 0 else math.inf
-    bending = parts.cover_contact_mm_per_N * moving_share(landing_N, bands)[..., 0]
+    bending = parts.cover_contact_mm_per_N * moving_share(cover_landing_N(parts), bands)[..., 0]
     cover = parts.cover_mm_per_N - parts.cover_contact_mm_per_N + bending
     moving = {"cap": caps_moving[-1], "plates": caps_moving[:-1].sum(axis=0), "housing": cover}
     return edges, own.T, moving
@@ -537,6 +545,8 @@ def load_path_report(geometry, material, stack, patch_mm: float = FINGERTIP_PATC
         "members_clamped_mm_per_N": _by_member(clamped),
         "regimes": regimes,
         "outside_layers_max": max(r["outside_layers"] for r in regimes),
+        # null: the cover never lands (no bending over the slot)
+        "cover_lands_N": None if math.isinf(landing := cover_landing_N(simple)) else landing,
         "patch_dependence": patch_dependence(geometry, material, stack),
         "not_modelled": "the cover's bending along the depth over the cable windows (3D; walls on both sides)",
     }

@@ -79,11 +79,19 @@ def load_path_line(
     lp = load_path_section(doc, geometry, resp, patch_mm)
     shares = " / ".join(f"{100 * r['outside_layers']:.0f}" for r in lp["regimes"])
     member, _ = dominant_member(max(lp["regimes"], key=lambda r: r["outside_layers"]))
-    return (
+    line = (
         f"load path: {shares} % of the magnet's motion per regime is outside the layers, mostly the {member} "
         f"(cap {lp['cap_mm_per_N']:.3g} mm/N under a {lp['patch_mm']:g} mm press); the prediction above includes "
         "it in series (the layers' alone: report.json sensitivity_layers_secant_per_N, docs/design.md 4.6)"
     )
+    lands, end = lp["cover_lands_N"], lp["regimes"][-1]["force_N"][1]
+    if lands is not None and lands < end:
+        line += (
+            f"; the cover lands on the board's parts at {lands:.3g} N, inside the range (to {end:.3g} N): past it "
+            "the press bears on the chip and connectors, a support the printed body alone lacks "
+            "(housing.cover_mm thicker keeps it off)"
+        )
+    return line
 
 
 def _lateral_stiffness(doc: Document, mechanics: str) -> list[tuple[float, float]]:
