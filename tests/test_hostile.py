@@ -2067,13 +2067,19 @@ def test_the_faces_corner_writes_an_empty_flagged_axial_reading_not_nan(tmp_path
 
 
 def test_the_offset_map_writes_empty_flagged_cells_not_nan(tmp_path, monkeypatch):
+    """The map's forces lie at 25, 50 and 75 % of every regime's band. On the layers' load path
+    the last regime spans 35 to 53 N, and a press on the face's corner at 48.6 N tilts the magnet
+    until |B| falls below no load; on the whole part (the default) the last regime is 33.6 to
+    34.4 N and no cell of the map reaches that tilt, so the case is the layers' path."""
     import mst_cli.api._simulating as S  # where the verb calls the kernel
 
     half = face_half_mm()
     real = S.run_offset_map
     monkeypatch.setattr(S, "run_offset_map", lambda *a, **k: real(*a, **dict(k, region_mm=half, grid=(3, 3))))
+    design = tmp_path / "layers.yaml"
+    design.write_text(FORWARD.read_text() + "model:\n  load_path: layers\n")
     out = tmp_path / "o"
-    r = run(["simulate", FORWARD, "--offset-map", "--out", out, "--no-plot"])
+    r = run(["simulate", design, "--offset-map", "--out", out, "--no-plot"])
     assert r.exit_code == 0, r.stderr
     assert_no_non_finite(out)
     rows = (out / "offset_map.csv").read_text().splitlines()

@@ -105,6 +105,24 @@ def force_nodes(force_max_N: float, n_force: int, edges_N: Edges = None) -> np.n
     return np.concatenate([*bands, [float(force_max_N)]])
 
 
+KNOT_MERGE_REL = 1e-3  # a kink this share of the range from an edge is that edge (no sliver of a band)
+
+
+def kink_edges_N(laws: Sequence[Any], edges_N: Edges, force_max_N: float) -> np.ndarray:
+    """The edges the force nodes follow (:func:`force_nodes`): the regime edges ``edges_N`` and
+    every other kink of the centred tilt laws ``laws`` below ``force_max_N``: a layer's own
+    knots, and on the whole part a member's (the cover's landing on the board,
+    :class:`~mst_cli.model.part_laws.SeriesMember`). Between kinks the centred state is linear
+    in the force, so no cell then straddles a change of slope, whose secant would be the
+    table's Jacobian there."""
+    edges = [float(e) for e in (edges_N if edges_N is not None else ())]
+    knots = sorted(float(k) for law in laws for k in law.walls.F_knots_N if 0.0 < k < force_max_N)
+    for k in knots:
+        if all(abs(k - e) > KNOT_MERGE_REL * force_max_N for e in [*edges, 0.0, force_max_N]):
+            edges.append(k)
+    return np.array(sorted(edges))
+
+
 @dataclass(frozen=True)
 class TableGrid:
     """Nodes of the table: the normal force N and the coordinates u, v, each ascending (``kind``
