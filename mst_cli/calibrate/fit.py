@@ -66,6 +66,7 @@ from mst_cli.sensor.document import Document
 
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
+from mst_cli.calibrate.fit_profile import corner_checked_std
 from mst_cli.errors import CalibrationFailed
 from mst_cli.sensor.as_printed import PARAMETERS, apply_parameters, full_values
 
@@ -500,6 +501,7 @@ def _fit_identifiable(
         n, p = len(force_N), len(free)
         chi2_red = float(2.0 * res.cost / max(n - p, 1))
         s, std, corr = _uncertainty(res.jac, chi2_red)
+        std = corner_checked_std(model, force_N, B_abs_T, sigma_T, free, values, bounds, std, corr, chi2_red)
         if not first_pass:
             first_pass = _first_pass(free, s, std, corr)
         worst = int(np.argmax(std))
