@@ -26,11 +26,14 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
+from mst_cli.errors import CalibrationFailed
 from mst_cli.sensor.as_printed import PARAMETERS
 
 CORNER_SLOPE_REL = 0.5  # one-sided slopes differing by this share of their mean: a corner
 PROFILE_STEPS = 12  # bisections of the profile's 1-sigma crossing
 PROFILE_MAX_SIGMAS = 8.0  # the profile is searched this many linear 2-sigma reaches out
+BOUND_MARGIN = 1e-3  # the profile stays this share of the bounds' span inside them (at a bound
+# the housing cannot take the gap offset)
 PROFILE_SIGMAS = 2.0  # the sigma is the profile's 2-sigma reach halved (module doc)
 
 Residual = Callable[[np.ndarray], np.ndarray]  # scaled parameters -> residuals in noise units
@@ -71,8 +74,10 @@ def _profile_chi2(residual: Residual, x: np.ndarray, i: int, value: float, lo, h
 def _side_sigma(residual: Residual, x: np.ndarray, i: int, sigma: float, side: float, lo, hi, rise: float) -> float:
     """How far parameter ``i`` moves to ``side`` before the profile's chi-square rises by ``rise``."""
     chi0 = _chi2(residual, x)
-    limit = (hi[i] - x[i]) if side > 0 else (x[i] - lo[i])
+    limit = ((hi[i] - x[i]) if side > 0 else (x[i] - lo[i])) - BOUND_MARGIN * (hi[i] - lo[i])
     a, b = 0.0, min(PROFILE_MAX_SIGMAS * sigma, limit)
+    if b <= 0:
+        return 0.0
     if _profile_chi2(residual, x, i, x[i] + side * b, lo, hi) - chi0 < rise:
         return b  # flat as far as searched (or to the bound)
     for _ in range(PROFILE_STEPS):
@@ -94,9 +99,18 @@ def corner_sigmas(
     lo_a, hi_a = np.asarray(lo, float), np.asarray(hi, float)
     rise = PROFILE_SIGMAS**2 * max(chi2_red, 1.0)
     for i, sd in enumerate(std):
-        if not (np.isfinite(sd) and sd > 0) or not at_corner(residual, x, cov[:, i] / sd):
+        if not (np.isfinite(sd) and sd > 0):
             continue
-        sides = [_side_sigma(residual, x, i, PROFILE_SIGMAS * float(sd), s, lo_a, hi_a, rise) for s in (1.0, -1.0)]
+        step = cov[:, i] / sd
+        margin = BOUND_MARGIN * (hi_a - lo_a)
+        if np.any(x - np.abs(step) < lo_a + margin) or np.any(x + np.abs(step) > hi_a - margin):
+            continue  # a sigma reaching a bound: the fit's own bound check speaks there
+        try:
+            if not at_corner(residual, x, step):
+                continue
+            sides = [_side_sigma(residual, x, i, PROFILE_SIGMAS * float(sd), s, lo_a, hi_a, rise) for s in (1.0, -1.0)]
+        except CalibrationFailed:  # values the housing cannot take: no profile
+            continue
         out[i] = max(float(sd), max(sides) / PROFILE_SIGMAS)
     return out
 
