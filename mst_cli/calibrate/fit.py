@@ -33,7 +33,9 @@ the fitted offset stops moving (so the converged model is the dearer rung's own)
 
 The fit (:func:`fit_parameters`): weighted least squares (scipy ``least_squares``, trust region
 reflective within physical bounds) of |B| in units of the chip's noise. Uncertainties from the
-Jacobian, J^T J, scaled by the reduced chi-square when it exceeds 1 (model error). A parameter
+Jacobian, J^T J, scaled by the reduced chi-square when it exceeds 1 (model error); a parameter
+whose cost turns a corner at the fit (the cover landing at the test's largest force) gets its
+profile's sigma instead (:mod:`~mst_cli.calibrate.fit_profile`). A parameter
 is *identifiable* when the data fix it to within a third of its typical deviation; the worst
 one that is not is held at the design's value and the fit repeated, until every free parameter
 is identifiable. The singular values of the scaled Jacobian and the correlation matrix are
