@@ -33,7 +33,9 @@ the fitted offset stops moving (so the converged model is the dearer rung's own)
 
 The fit (:func:`fit_parameters`): weighted least squares (scipy ``least_squares``, trust region
 reflective within physical bounds) of |B| in units of the chip's noise. Uncertainties from the
-Jacobian, J^T J, scaled by the reduced chi-square when it exceeds 1 (model error). A parameter
+Jacobian, J^T J, scaled by the reduced chi-square when it exceeds 1 (model error); a parameter
+whose cost turns a corner at the fit (the cover landing at the test's largest force) gets its
+profile's sigma instead (:mod:`~mst_cli.calibrate.fit_profile`). A parameter
 is *identifiable* when the data fix it to within a third of its typical deviation; the worst
 one that is not is held at the design's value and the fit repeated, until every free parameter
 is identifiable. The singular values of the scaled Jacobian and the correlation matrix are
@@ -66,6 +68,7 @@ from mst_cli.sensor.document import Document
 
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
+from mst_cli.calibrate.fit_profile import corner_checked_std
 from mst_cli.errors import CalibrationFailed
 from mst_cli.sensor.as_printed import PARAMETERS, apply_parameters, full_values
 
@@ -500,6 +503,7 @@ def _fit_identifiable(
         n, p = len(force_N), len(free)
         chi2_red = float(2.0 * res.cost / max(n - p, 1))
         s, std, corr = _uncertainty(res.jac, chi2_red)
+        std = corner_checked_std(model, force_N, B_abs_T, sigma_T, free, values, bounds, std, corr, chi2_red)
         if not first_pass:
             first_pass = _first_pass(free, s, std, corr)
         worst = int(np.argmax(std))
