@@ -177,10 +177,9 @@ def two_chip_table(grids: dict[str, tuple[TableGrid, ...]]) -> str:
 
 def header_grid(kind: str, doc, top: float, edges) -> TableGrid:
     """The grid of the header ``mst calibrate --{kind}-table`` writes: every other node of the
-    default table (its force nodes following every kink of the part's laws, ``edges``), built
-    directly rather than halved from the default table (the same nodes)."""
-    default = grid_of(kind, doc, top, None, edges)
-    return TableGrid(default.force_N[::2], default.u[::2], default.v[::2], default.kind)
+    default table's (its force nodes following every kink of the part's laws, ``edges``); the
+    table is built on it directly rather than halved from the default table (the same nodes)."""
+    return grid_of(kind, doc, top, None, edges).every_other()
 
 
 def main() -> None:
