@@ -73,10 +73,9 @@ BLOCK = 4096  # readings per estimate (their starts' corners at a time)
 
 # (forces, mm between offsets): the default grid, 1 mm over the face and the range in 32 steps
 # (docs/design.md section 4.2 says what it costs in accuracy against the exact solve: the
-# offsets' spacing rules it, 97 forces at 2 mm do no better than 49); a coarse one for a
-# microcontroller's flash
+# offsets' spacing rules it, 97 forces at 2 mm do no better than 49); a microcontroller's header
+# takes every other node of it (TableGrid.every_other)
 GRID_DEFAULT = (33, 1.0)
-GRID_COARSE = (17, 2.0)
 KINDS = ("offset", "shear")
 # the shear table's friction cone |Fx / Fz|, |Fy / Fz| <= SHEAR_TABLE_RATIO (a reading beyond it is
 # no_fit: TPU on TPU or skin slips near 0.5 to 1) and its (forces, ratio step); the start's scan
@@ -156,6 +155,11 @@ class TableGrid:
     @property
     def shape(self) -> tuple[int, int, int]:
         return len(self.force_N), len(self.u), len(self.v)
+
+    def every_other(self) -> TableGrid:
+        """Every second node on each axis (the ends kept where a count is odd): the C header's
+        grid of the default one."""
+        return TableGrid(self.force_N[::2], self.u[::2], self.v[::2], self.kind)
 
 
 @dataclass
@@ -252,9 +256,7 @@ class InverseTable:
     def every_other(self) -> InverseTable:
         """Every second node on each axis (the ends kept where a count is odd: the default grid's
         nodes give the coarse grid's)."""
-        g = self.grid
-        grid = TableGrid(g.force_N[::2], g.u[::2], g.v[::2], g.kind)
-        half = InverseTable(grid, np.ascontiguousarray(self.B_T[::2, ::2, ::2]), self.source_hash)
+        half = InverseTable(self.grid.every_other(), np.ascontiguousarray(self.B_T[::2, ::2, ::2]), self.source_hash)
         half._slab_error = _miss_per_slab(half, self)
         return half
 
