@@ -25,6 +25,10 @@ Constraints (g <= 0 is satisfied; every g is scaled to order one)
       before it) <= (1 - saturation_margin_rel) x 50 mT, and
       never above what the MLX90393's coarsest setting reads with the headroom
       :func:`~mst_cli.model.chip.choose_setting` keeps;
+    * the housing's cover off the board within the range (the whole part): its bending over the
+      slot closes its air onto the board's tallest parts only past the range's end, the larger
+      of the target R_n and the candidate's own last lock: a landing inside the range would be a
+      support of the assembly (the chip and connectors), not of the printed body (design.md 4.6);
     * optional total height: SensorGeometry.total_height_mm <= design.max_height_mm;
     * optional print deviation (``design.max_print_deviation_rel``): every S_i and R_i changes by
       at most that fraction when every wall is printed +- printer.wall_tolerance_mm (one smooth
@@ -89,6 +93,7 @@ CHIP_HEADROOM = inspect.signature(mlx.choose_setting).parameters["margin"].defau
 TINY = 1e-300  # floor of anything a log is taken of (a collapsed output, not a crash)
 VIOLATION_PENALTY = 10.0  # merit per unit of constraint violation (g is scaled to order one)
 DEDUPE_MIN_CELLS = 64  # below this many cells, sorting out repeats costs more than it saves
+COVER_LANDING_RULE = "the housing's cover lands on the board's parts only past the range (R_n)"
 ROUNDING_SAFETY = 1e-3  # constraint slack (nozzles / log units) so that the rounded
 # design written to design.yaml still satisfies every rule
 
@@ -209,6 +214,7 @@ class DesignProblem:
             + self.n
             + (self.n - 1)
             + 1
+            + (1 if self.whole_part else 0)
             + (1 if self.max_height_mm is not None else 0)
             + (8 * self.n if self.max_print_deviation_rel is not None else 0)
         )
@@ -410,7 +416,8 @@ class DesignProblem:
             base = np.log(np.maximum(np.concatenate([S, R], axis=-1), TINY))
             shifts = np.log(np.maximum(np.concatenate([S3[1:], R3[1:]], axis=-1), TINY)) - base[None]
         else:
-            R, S, B_full, gap0, B0 = self.responses(theta_deg, t_mm, h_mm)
+            members = self.part_members(theta_deg, t_mm, h_mm) if self.whole_part else None
+            R, S, B_full, gap0, B0 = self._responses_of(self.layer_laws(theta_deg, t_mm, h_mm), h_mm, members)
         margins, t_over_L_g = self._layer_rules(theta_deg, t_mm, h_mm)
         height = self.height_offset_mm + h_mm.sum(axis=-1)
 
@@ -419,6 +426,9 @@ class DesignProblem:
         if self.n > 1:
             g.append(math.log1p(self.lock_margin_rel) - np.diff(logR, axis=-1))
         g.append(np.log(np.maximum(B_full, TINY) / self.B_limit_T)[..., None])
+        if members is not None:
+            over_slot, air_mm = members[2]
+            g.append(self.cover_landing_constraint(over_slot[0] if with_shifts else over_slot, air_mm, R)[..., None])
         if self.max_height_mm is not None:
             g.append(((height - self.max_height_mm) / pr.nozzle_mm)[..., None])
         if self.max_print_deviation_rel is not None:
@@ -434,6 +444,13 @@ class DesignProblem:
 
     def evaluate(self, u: np.ndarray) -> Evaluation:
         return self.evaluate_physical(*self.to_physical(u))
+
+    def cover_landing_constraint(self, over_slot_mm_per_N: np.ndarray, air_mm: float, R_N: np.ndarray) -> np.ndarray:
+        """(...) g <= 0 when the cover lands on the board (its air over its bending over the slot,
+        model.load_path.cover_landing_N) at or past the range's end: the larger of the target R_n
+        and the candidate's own last lock (simulate's range), in log units."""
+        end_N = np.maximum(self.R_target.max(), np.max(R_N, axis=-1))
+        return np.log(np.maximum(end_N * over_slot_mm_per_N, TINY) / max(air_mm, TINY))
 
     # ----------------------------------------------------------------- preference
     def print_deviation_constraints(
@@ -535,6 +552,8 @@ class DesignProblem:
             for i in range(self.n - 1)
         ]
         names.append(f"chip saturation: field at full load <= {self.B_limit_T * 1e3:.1f} mT")
+        if self.whole_part:
+            names.append(COVER_LANDING_RULE)
         if self.max_height_mm is not None:
             names.append(f"total height <= {self.max_height_mm:g} mm")
         if self.max_print_deviation_rel is not None:
