@@ -197,7 +197,7 @@ def _cover_holds_back(problem: DesignProblem, u: ArrayLike) -> list[tuple[str, s
         (
             "the housing's cover",
             f"the targets need the housing's cover to land on the board's parts: held off them to "
-            f"R_{problem.n} = {problem.R_target[-1]:g} N, its bending over the slot ({float(over_slot):.3g} mm/N, "
+            f"R_{problem.n} = {problem.R_target[-1]:g} N (+{100 * problem.tolerance_rel:g} %), its bending over the slot ({float(over_slot):.3g} mm/N, "
             f"{air_mm:g} mm of air) then adds more motion to the last regimes than their targets allow; past "
             "the landing the press bears on the chip and connectors, which the printed body lacks: a "
             "thicker housing.cover_mm (docs/design.md 4.6)",

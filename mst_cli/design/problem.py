@@ -26,9 +26,9 @@ Constraints (g <= 0 is satisfied; every g is scaled to order one)
       never above what the MLX90393's coarsest setting reads with the headroom
       :func:`~mst_cli.model.chip.choose_setting` keeps;
     * the housing's cover off the board within the range (the whole part): its bending over the
-      slot closes its air onto the board's tallest parts only past the range's end, the larger
-      of the target R_n and the candidate's own last lock: a landing inside the range would be a
-      support of the assembly (the chip and connectors), not of the printed body (design.md 4.6);
+      slot closes its air onto the board's tallest parts only past the range's end, the target
+      R_n at the top of its tolerance: a landing inside the range would be a support of the
+      assembly (the chip and connectors), not of the printed body (design.md 4.6);
     * optional total height: SensorGeometry.total_height_mm <= design.max_height_mm;
     * optional print deviation (``design.max_print_deviation_rel``): every S_i and R_i changes by
       at most that fraction when every wall is printed +- printer.wall_tolerance_mm (one smooth
@@ -93,7 +93,7 @@ CHIP_HEADROOM = inspect.signature(mlx.choose_setting).parameters["margin"].defau
 TINY = 1e-300  # floor of anything a log is taken of (a collapsed output, not a crash)
 VIOLATION_PENALTY = 10.0  # merit per unit of constraint violation (g is scaled to order one)
 DEDUPE_MIN_CELLS = 64  # below this many cells, sorting out repeats costs more than it saves
-COVER_LANDING_RULE = "the housing's cover lands on the board's parts only past the range (R_n)"
+COVER_LANDING_RULE = "the housing's cover lands on the board's parts only past the range (R_n + tolerance)"
 ROUNDING_SAFETY = 1e-3  # constraint slack (nozzles / log units) so that the rounded
 # design written to design.yaml still satisfies every rule
 
@@ -428,7 +428,7 @@ class DesignProblem:
         g.append(np.log(np.maximum(B_full, TINY) / self.B_limit_T)[..., None])
         if members is not None:
             over_slot, air_mm = members[2]
-            g.append(self.cover_landing_constraint(over_slot[0] if with_shifts else over_slot, air_mm, R)[..., None])
+            g.append(self.cover_landing_constraint(over_slot[0] if with_shifts else over_slot, air_mm)[..., None])
         if self.max_height_mm is not None:
             g.append(((height - self.max_height_mm) / pr.nozzle_mm)[..., None])
         if self.max_print_deviation_rel is not None:
@@ -445,12 +445,15 @@ class DesignProblem:
     def evaluate(self, u: np.ndarray) -> Evaluation:
         return self.evaluate_physical(*self.to_physical(u))
 
-    def cover_landing_constraint(self, over_slot_mm_per_N: np.ndarray, air_mm: float, R_N: np.ndarray) -> np.ndarray:
+    def cover_landing_constraint(self, over_slot_mm_per_N: np.ndarray, air_mm: float) -> np.ndarray:
         """(...) g <= 0 when the cover lands on the board (its air over its bending over the slot,
-        model.load_path.cover_landing_N) at or past the range's end: the larger of the target R_n
-        and the candidate's own last lock (simulate's range), in log units."""
-        end_N = np.maximum(self.R_target.max(), np.max(R_N, axis=-1))
-        return np.log(np.maximum(end_N * over_slot_mm_per_N, TINY) / max(air_mm, TINY))
+        model.load_path.cover_landing_N) at or past the range's end: the target R_n at the top of
+        its tolerance, which every design that meets R_n reaches (a constant: the candidate's own
+        last lock in a max would put a kink where the match ends and stall the preference polish).
+        The cover's drop there over its air, minus 1: linear in the bending, so smooth (a log
+        would dive to -inf as layer 1's feet leave the slot) and bounded below by -1."""
+        end_N = float(self.R_target.max()) * (1.0 + self.tolerance_rel)
+        return end_N * np.asarray(over_slot_mm_per_N) / max(air_mm, TINY) - 1.0
 
     # ----------------------------------------------------------------- preference
     def print_deviation_constraints(
