@@ -13,10 +13,9 @@ import pytest
 import yaml
 from click.testing import CliRunner
 
+import mst_cli as mst
 from mst_cli.cli.app import main
 from mst_cli.design.problem import COVER_LANDING_RULE, DesignProblem
-
-import mst_cli as mst
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -25,7 +24,8 @@ def _design_and_simulate(spec: Path, tmp_path: Path):
     """(mst design's result, simulate's report.json and terminal output on the written design)."""
     runner = CliRunner()
     designed = runner.invoke(main, ["design", str(spec), "--out", str(tmp_path / "d"), "--no-plot"])
-    sim = runner.invoke(main, ["simulate", str(tmp_path / "d" / "design.yaml"), "--out", str(tmp_path / "s"), "--no-plot"])
+    written = str(tmp_path / "d" / "design.yaml")
+    sim = runner.invoke(main, ["simulate", written, "--out", str(tmp_path / "s"), "--no-plot"])
     assert sim.exit_code == 0, sim.output
     return designed, json.loads((tmp_path / "s" / "report.json").read_text()), sim.output
 
