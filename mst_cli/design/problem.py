@@ -25,10 +25,8 @@ Constraints (g <= 0 is satisfied; every g is scaled to order one)
       before it) <= (1 - saturation_margin_rel) x 50 mT, and
       never above what the MLX90393's coarsest setting reads with the headroom
       :func:`~mst_cli.model.chip.choose_setting` keeps;
-    * the housing's cover off the board within the range (the whole part): its bending over the
-      slot closes its air onto the board's tallest parts only past the range's end, the target
-      R_n at the top of its tolerance: a landing inside the range would be a support of the
-      assembly (the chip and connectors), not of the printed body (design.md 4.6);
+    * the whole part's cover lands on the board's parts only past R_n + tolerance: a landing
+      inside the range is a support of the assembly, not of the printed body (design.md 4.6);
     * optional total height: SensorGeometry.total_height_mm <= design.max_height_mm;
     * optional print deviation (``design.max_print_deviation_rel``): every S_i and R_i changes by
       at most that fraction when every wall is printed +- printer.wall_tolerance_mm (one smooth
@@ -426,9 +424,8 @@ class DesignProblem:
         if self.n > 1:
             g.append(math.log1p(self.lock_margin_rel) - np.diff(logR, axis=-1))
         g.append(np.log(np.maximum(B_full, TINY) / self.B_limit_T)[..., None])
-        if members is not None:
-            over_slot, air_mm = members[2]
-            g.append(self.cover_landing_constraint(over_slot[0] if with_shifts else over_slot, air_mm)[..., None])
+        if members is not None:  # (the cover's bending over the slot, its air): the nominal stacks'
+            g.append(self.cover_landing_constraint(members[2][0][0] if with_shifts else members[2][0], members[2][1]))
         if self.max_height_mm is not None:
             g.append(((height - self.max_height_mm) / pr.nozzle_mm)[..., None])
         if self.max_print_deviation_rel is not None:
@@ -446,14 +443,11 @@ class DesignProblem:
         return self.evaluate_physical(*self.to_physical(u))
 
     def cover_landing_constraint(self, over_slot_mm_per_N: np.ndarray, air_mm: float) -> np.ndarray:
-        """(...) g <= 0 when the cover lands on the board (its air over its bending over the slot,
-        model.load_path.cover_landing_N) at or past the range's end: the target R_n at the top of
-        its tolerance, which every design that meets R_n reaches (a constant: the candidate's own
-        last lock in a max would put a kink where the match ends and stall the preference polish).
-        The cover's drop there over its air, minus 1: linear in the bending, so smooth (a log
-        would dive to -inf as layer 1's feet leave the slot) and bounded below by -1."""
+        """(..., 1) g <= 0 when the cover lands on the board (model.load_path.cover_landing_N) past
+        R_n + tolerance (a constant: a max with the own last lock kinks where the match ends): its
+        drop there over its air, minus 1 (linear, smooth as layer 1's feet leave the slot)."""
         end_N = float(self.R_target.max()) * (1.0 + self.tolerance_rel)
-        return end_N * np.asarray(over_slot_mm_per_N) / max(air_mm, TINY) - 1.0
+        return (end_N * np.asarray(over_slot_mm_per_N) / max(air_mm, TINY) - 1.0)[..., None]
 
     # ----------------------------------------------------------------- preference
     def print_deviation_constraints(
@@ -555,8 +549,7 @@ class DesignProblem:
             for i in range(self.n - 1)
         ]
         names.append(f"chip saturation: field at full load <= {self.B_limit_T * 1e3:.1f} mT")
-        if self.whole_part:
-            names.append(COVER_LANDING_RULE)
+        names += [COVER_LANDING_RULE] if self.whole_part else []
         if self.max_height_mm is not None:
             names.append(f"total height <= {self.max_height_mm:g} mm")
         if self.max_print_deviation_rel is not None:

@@ -78,7 +78,7 @@ class CellTable:
         self.cover_ok = np.ones(len(self.u), bool)
         if self.whole_part and len(self.u):
             over_slot, air_mm = problem.part_members(self.theta_deg[:, None], self.t_mm[:, None], self.h_mm[:, None])[2]
-            self.cover_ok = problem.cover_landing_constraint(over_slot, air_mm) + slack <= 0.0
+            self.cover_ok = problem.cover_landing_constraint(over_slot, air_mm)[:, 0] + slack <= 0.0
 
     def displacement_mm(self, force_N: float, cap_mm_per_N: np.ndarray | float = 0.0) -> np.ndarray:
         """Compression of every table cell at ``force_N``, the plate or cap above it bending into
