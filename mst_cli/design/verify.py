@@ -23,7 +23,6 @@ from mst_cli.design.result import (
 )
 from mst_cli.model.assembly import SensorGeometry
 from mst_cli.model.load_path import cover_landing_N, members
-from mst_cli.model.printer import Printer
 from mst_cli.model.response import Response, simulate
 from mst_cli.sensor.as_printed import as_printed
 from mst_cli.sensor.document import Document
@@ -64,8 +63,7 @@ def verify_design(
 
     S, R = _layer_outputs(resp, problem.n)
     targets = _target_rows(problem, theta, t, h, S, R)
-    checks = _constraint_checks(problem, geometry, doc.printer, resp, R)
-    checks.update(_cover_landing_check(problem, designed, R))
+    checks = _constraint_checks(problem, designed, geometry, resp, R)
     pe_mechanics = mechanics if print_error_mechanics is None else print_error_mechanics
     nominal = (S, R) if pe_mechanics == mechanics else _layer_outputs(run(0.0, pe_mechanics), problem.n)
     rung = (pe_mechanics, print_error_rule or SAME_RUNG_RULE)
@@ -170,11 +168,12 @@ def _target_rows(
 
 
 def _constraint_checks(
-    problem: DesignProblem, geometry: SensorGeometry, printer: Printer, resp: Response, R: np.ndarray
+    problem: DesignProblem, designed: Document, geometry: SensorGeometry, resp: Response, R: np.ndarray
 ) -> dict[str, str]:
-    """The broken constraints (name -> sentence): cell rules, lock order, chip saturation, height."""
-    checks = {}
-    for v in geometry.violations(printer):
+    """The broken constraints (name -> sentence): cell rules, lock order, chip saturation, height,
+    the cover's landing."""
+    checks = _cover_landing_check(problem, designed, R)
+    for v in geometry.violations(designed.printer):
         layer = 1 + (v.layer or 0)
         checks[f"layer {layer} {v.rule}"] = f"layer {layer}: {v.message}"
     for i in range(1, problem.n):
