@@ -6,7 +6,8 @@ under -icount shift=0 (benchmarks/board/count.c). Prints markdown tables; assert
     python benchmarks/bench_board.py [--per-class 40] [--seed 45]
 
 On the bundled sensor (configs/mohammadi2021-forward.yaml, spring), the header-sized tables
-(regime-following force nodes; offset 2 mm, shear ratio step 0.1), readings in classes: rest
+(every other node of the default tables, as `mst calibrate` writes them: force nodes following
+every kink of the part's laws; offset 2 mm, shear ratio step 0.1), readings in classes: rest
 (no load, 2 uT noise), light touch (the first regime's lower half), loaded (over the range),
 out of range (beyond the last lock); and loaded to the edges (any force, anywhere in the cone or
 on the whole face, as tests/test_c_header.py draws: the tail). Per class: the median, 99th
@@ -36,9 +37,9 @@ import numpy as np
 from scipy.interpolate import RegularGridInterpolator
 
 from mst_cli.calibrate.inverse_map import inverse_map
-from mst_cli.calibrate.inverse_table import build_table
+from mst_cli.calibrate.inverse_table import TableGrid, build_table
 from mst_cli.calibrate.table_header import C_FLAGS, table_header
-from mst_cli.calibrate.table_reader import OffsetTableReader, ShearTableReader, grid_of
+from mst_cli.calibrate.table_reader import OffsetTableReader, ShearTableReader, grid_of, table_edges_N
 from mst_cli.sensor.document import load_design_document
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -157,14 +158,14 @@ def run(elf: Path, cpu: str) -> tuple[np.ndarray, np.ndarray]:
     return vals[:, 0].astype(int), vals[:, 1] * per_tick
 
 
-def two_chip_table(doc, top: float, edges, grids) -> str:
+def two_chip_table(grids: dict[str, tuple[TableGrid, ...]]) -> str:
     """What a two-chip header's table would hold: the fields at both chips (6 numbers) on every
-    node of the five coordinates (F, Fx / Fz, Fy / Fz, x0, y0), the shear table's force and ratio
-    nodes by the offset table's press positions, at ``grids`` ((shear grid, offset grid) pairs),
+    node of the five coordinates (F, Fx / Fz, Fy / Fz, x0, y0), the shear grid's force and ratio
+    nodes by the offset grid's press positions, for ``grids`` ((shear grid, offset grid) pairs),
     as int16 (the most compact that keeps the chip's resolution) and as float."""
     rows = []
     for name, (shear, offset) in grids.items():
-        s, o = grid_of("shear", doc, top, shear, edges).shape, grid_of("offset", doc, top, offset, edges).shape
+        s, o = shear.shape, offset.shape
         nodes = s[0] * s[1] * s[2] * o[1] * o[2]
         rows.append(
             f"| {name} | {s[0]} x {s[1]} x {s[2]} x {o[1]} x {o[2]} | {nodes:,} | "
@@ -172,6 +173,13 @@ def two_chip_table(doc, top: float, edges, grids) -> str:
         )
     head = "| two-chip table | nodes (F, Fx/Fz, Fy/Fz, x0, y0) | count | int16 | float |\n|---|---|---|---|---|\n"
     return head + "\n".join(rows)
+
+
+def header_grid(kind: str, doc, top: float, edges) -> TableGrid:
+    """The grid of the header ``mst calibrate --{kind}-table`` writes: every other node of the
+    default table's (its force nodes following every kink of the part's laws, ``edges``); the
+    table is built on it directly rather than halved from the default table (the same nodes)."""
+    return grid_of(kind, doc, top, None, edges).every_other()
 
 
 def main() -> None:
@@ -191,8 +199,9 @@ def main() -> None:
     lsb = np.array([setting.xy_uT_per_lsb, setting.xy_uT_per_lsb, setting.z_uT_per_lsb])
     print("| header | CPU | class | flags | instructions median / p99 / worst | ms median / worst | flash | stack B |")
     print("|---|---|---|---|---|---|---|---|")
-    for kind, grid in (("shear", (17, 0.1)), ("offset", (17, 2.0))):
-        table = build_table(doc.geometry(), doc.material, "spring", grid_of(kind, doc, top, grid, imap.edges_N))
+    edges = table_edges_N(doc, imap, "spring", 1.0)
+    for kind in ("shear", "offset"):
+        table = build_table(doc.geometry(), doc.material, "spring", header_grid(kind, doc, top, edges))
         reader = ShearTableReader(table, 2e-6) if kind == "shear" else OffsetTableReader(table, 2e-6, 1.0)
         header = table_header(reader, imap, setting, doc.name, "bench_board", ["a benchmark"])
         classes = readings(table, imap, rng, args.per_class)
@@ -213,8 +222,12 @@ def main() -> None:
                 )
         sys.stdout.flush()
     print()
-    grids = {"the headers' grids": ((17, 0.1), (17, 2.0)), "the default tables' grids": (None, None)}
-    print(two_chip_table(doc, top, imap.edges_N, grids))
+    kinds = ("shear", "offset")
+    grids = {
+        "the headers' grids": tuple(header_grid(k, doc, top, edges) for k in kinds),
+        "the default tables' grids": tuple(grid_of(k, doc, top, None, edges) for k in kinds),
+    }
+    print(two_chip_table(grids))
 
 
 if __name__ == "__main__":

@@ -35,8 +35,9 @@ doc, g = load_design_document({design!r})
 mark("load the design")
 v, f = mesh_body.print_mesh(g, 0.01)
 mark("build and mesh the body")
-mesh_io.stl_bytes(v, f); mesh_io.three_mf_bytes(v, f, doc.name, pause_after_z_mm=g.pause_height_mm)
-mark("STL + 3MF bytes")
+mesh_io.stl_bytes(v, f); mesh_io.three_mf_bytes(v, f, doc.name, pause_after_z_mm=[(p.z_mm, p.why) for p in g.pauses])
+mesh_io.stl_bytes(*mesh_body.insert_mesh(g)) if g.has_insert else None
+mark("STL + 3MF bytes (+ insert.stl)")
 """,
     "CAD path (--step)": """
 import build123d
@@ -83,7 +84,8 @@ def main() -> None:
             "mst export --step": ([mst, "export", str(DESIGN), "--step", "--out", f"{tmp}/s{{i}}"], ""),
             "mst check": ([mst, "check", f"{tmp}/ref"], "<= 3"),
         }
-        times = round_robin(cmds, args.repeats)
+        # round_robin takes (argv, goal, env): every command in this environment
+        times = round_robin({name: (argv, goal, None) for name, (argv, goal) in cmds.items()}, args.repeats)
     med = {name: statistics.median(ts) for name, ts in times.items()}
     floor = next(iter(med.values()))
     print(

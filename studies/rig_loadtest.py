@@ -21,7 +21,9 @@ that curve the rig adds, each with a stated truth:
   (-0.12 %/K, mst_cli.model.components) and modulus x (1 + beta (T - 20 degC)) with the test
   coefficient beta = ``modulus_coeff_per_K`` (TPU softens as it warms; -0.8 %/K is a stated test
   value, not a datasheet's). The laws are linear in E, so a modulus x m deflects at F like the
-  reference at F / m: the field at (F, T) is r(T) B_ref(F / m(T)) exactly;
+  reference at F / m: the field at (F, T) is r(T) B_ref(F / m(T)), exactly for a part all of
+  TPU; with the default part's PLA insert, which softens far less, beta is the part's effective
+  coefficient (the law mst_cli.calibrate.temperature fits and the readers apply);
 * the chip: 2 uT RMS noise per component, each component rounded to the chip setting's LSB;
   the load cell: ``force_noise_N`` RMS.
 
@@ -195,6 +197,17 @@ def truth_hysteresis_pct(truth: Truth, lo_N: float, hi_N: float) -> tuple[float,
     h = hysteresis_N(F, F_turn, truth.rig.hysteresis_pct)
     i = int(np.argmax(h))
     return float(100.0 * h[i] / (hi_N - lo_N)), float(F[i])
+
+
+def hysteresis_peak_tolerance_N(truth: Truth, lo_N: float, hi_N: float, rows: int) -> float:
+    """What the rig's noise allows a measured hysteresis peak in [lo, hi] from ``rows``
+    unloading rows: 3 standard errors of a cubic least-squares fit at its band's end, 4 sigma /
+    sqrt(rows), sigma a row's force noise (the chip's noise over the curve's slope at the band's
+    middle, and the load cell's)."""
+    c, F_mid = truth.curve, 0.5 * (lo_N + hi_N)
+    slope_T_per_N = float(np.interp(F_mid, c.force_N, np.gradient(c.field_abs_T(c.force_N), c.force_N)))
+    sigma_N = math.hypot(1e-6 * truth.rig.noise_uT / slope_T_per_N, truth.rig.force_noise_N)
+    return 3.0 * 4.0 * sigma_N / math.sqrt(rows)
 
 
 def main() -> None:

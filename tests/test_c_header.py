@@ -1,5 +1,5 @@
 """offset_table.h and shear_table.h against the Python reader: each header compiled with the
-system C compiler reads 10,000 raw code triples (the bundled design's coarse table, loads drawn
+system C compiler reads 10,000 raw code triples (the bundled design's header table, loads drawn
 over the force range and the face or the friction cone, 2 uT of noise; readings at rest and of
 light touch (the first regime's lower half); out of range (beyond the last lock, below the
 unloaded field), saturated, and with the magnet flipped) as `mst read --estimate offset`
@@ -21,9 +21,9 @@ import pytest
 from scipy.interpolate import RegularGridInterpolator
 
 from mst_cli.calibrate.inverse_map import inverse_map
-from mst_cli.calibrate.inverse_table import GRID_COARSE, SHEAR_GRID_DEFAULT, SHEAR_TABLE_RATIO, TableGrid, build_table
+from mst_cli.calibrate.inverse_table import build_table
 from mst_cli.calibrate.table_header import C_FLAGS, read_codes, table_header
-from mst_cli.calibrate.table_reader import OffsetTableReader, ShearTableReader
+from mst_cli.calibrate.table_reader import OffsetTableReader, ShearTableReader, grid_of, table_edges_N
 from mst_cli.model.chip import CODE_RANGE_LSB
 from mst_cli.sensor.document import load_design_document
 
@@ -69,12 +69,14 @@ def codes_of(table, imap, setting, rng) -> np.ndarray:
 
 
 def reader_of(kind, doc, imap):
+    """The reader of the header ``mst calibrate`` writes: every other node of the default grid,
+    its force nodes on every kink of the part's laws (built on those nodes directly)."""
     top = float(imap.force_N[-1])
+    grid = grid_of(kind, doc, top, None, table_edges_N(doc, imap, "spring", 1.0)).every_other()
+    table = build_table(doc.geometry(), doc.material, "spring", grid)
     if kind == "shear":
-        grid = TableGrid.cone(top, GRID_COARSE[0], SHEAR_TABLE_RATIO, 2 * SHEAR_GRID_DEFAULT[1])
-        return ShearTableReader(build_table(doc.geometry(), doc.material, "spring", grid), imap.field_resolution_T)
-    grid = TableGrid.over(doc.geometry(), top, *GRID_COARSE)
-    return OffsetTableReader(build_table(doc.geometry(), doc.material, "spring", grid), imap.field_resolution_T, 1.0)
+        return ShearTableReader(table, imap.field_resolution_T)
+    return OffsetTableReader(table, imap.field_resolution_T, 1.0)
 
 
 @pytest.mark.slow

@@ -67,31 +67,48 @@ def air_gaps_z(solid, x, y, z_top):
 
 # --------------------------------------------------------------------------- golden reference
 # Sensor frame. z: floor 0.8 + board 1.6 + tallest part 2.95 (JST SH sockets) + air 0.3 + cover 0.8
-#    = 6.45; layers 2 + 2.8 + 3.5; 2 plates x 0.8; pocket floor 0.4 + pocket 2.1 + cap 0.8 -> 19.65
+#    = 6.45; layers 2 + 2.8 + 3.5; 2 plates x 0.8; pocket floor 0.4 + pocket 2.1 + wall 0.8
+#    + the default 2 mm insert plate + cap 0.8 -> 22.45
 # y: the depth, +-10. Print heights are y + 10, on a 0.2 mm grid:
 #    slot floor: chip at y = 0 puts the board's edge at -8.3 (print 1.7, half-way: up to 1.8)
 #    -> y = -8.2; windows from 5.89 (socket edge) - 0.2 above the floor = -2.51 (print 7.49,
 #    down to 7.4) -> y = -2.6; pocket sides up to r = 3.1 (print 13.1, up to 13.2) -> y = 3.2,
-#    then a roof rising half the pocket depth, 1.05, up to whole layers: 1.2
+#    then a roof rising half the pocket depth, 1.05, up to whole layers: 1.2; windows up to the
+#    socket's far edge 11.89 + 0.2 above the floor = 3.89 (print 13.89, up to 14.0) -> y = 4.0,
+#    then a gable rising half the window's 3.25 mm, up to whole layers: 1.8; the insert's slot
+#    from 1.2 above the -y face (y = -8.8) to 1.2 + a 1.0 mm gable under the +y face (y = 7.8)
 # x: slot -12.8 .. 13.0, + side wall 1.2 = 14.2 < the cell's 15 -> +-15 mm
 def test_reference_bbox_golden(reference):
     g, cad = reference
     bb = cad.body.bounding_box()
     assert (bb.min.X, bb.min.Y, bb.min.Z) == pytest.approx((-15.0, -10.0, 0.0), abs=1e-7)
-    assert (bb.max.X, bb.max.Y, bb.max.Z) == pytest.approx((15.0, 10.0, 19.65), abs=1e-7)
+    assert (bb.max.X, bb.max.Y, bb.max.Z) == pytest.approx((15.0, 10.0, 22.45), abs=1e-7)
     assert (g.slot_floor_y_mm, g.pocket_top_y_mm) == pytest.approx((-8.2, 3.2), abs=1e-9)
     assert [w[2] for w in g.cable_windows] == pytest.approx([-2.6, -2.6], abs=1e-9)
+    assert g.board_slots[0].window_tops_y_mm == pytest.approx((4.0, 4.0), abs=1e-9)
+    assert np.ravel(g.insert_slot_box_mm) == pytest.approx([-13.8, -8.8, 19.65, 13.8, 7.8, 21.65], abs=1e-9)
     assert (g.pause_height_mm, g.pause_after_layer) == (pytest.approx(13.2, abs=1e-9), 66)
 
 
 def test_reference_volume_golden(reference):
     g, cad = reference
-    base = 30 * 20 * 6.45 - 25.8 * 18.2 * 4.85 - (2.2 + 2.0) * 12.6 * 3.25
+    window = 6.6 * 3.25 + 0.5 * 3.25 * 1.8  # box and gable, in the y-z plane
+    base = 30 * 20 * 6.45 - 25.8 * 18.2 * 4.85 - (2.2 + 2.0) * window
     layers = sum((shoelace(c.outer_profile_xz()) - shoelace(c.inner_profile_xz())) * 20 for c in g.layers)
     plates = 2 * 30 * 20 * 0.8
     r, d = 3.1, 2.1
     pocket = (math.pi * r**2 / 2 + 2 * r * 3.2) * d + r * d * 1.2  # roof rises 1.2 mm
-    cap = 30 * 20 * 3.3 - pocket
+    # less two crush ribs at x = +-r/2: a triangle 0.8 mm wide, reaching 0.2 mm, from the round
+    # bottom -sqrt(r^2 - x^2) up to the pause at y = 3.2 (scipy's quadrature, independent)
+    from scipy.integrate import quad
+
+    def rib_height(x):
+        return 0.2 * max(0.0, 1.0 - abs(x - r / 2) / 0.4)
+
+    rib = quad(lambda x: rib_height(x) * (3.2 + math.sqrt(r * r - x * x)), r / 2 - 0.4, r / 2 + 0.4, points=[r / 2])[0]
+    pocket -= 2 * rib
+    insert_slot = 27.6 * 2.0 * (16.6 + 0.5 * 1.0)  # box and a 1.0 mm gable
+    cap = 30 * 20 * (3.3 + 0.8 + 2.0) - pocket - insert_slot
     expected = base + layers + plates + cap
     assert cad.body.volume == pytest.approx(expected, rel=1e-9)
     assert body_volume_mm3(g) == pytest.approx(expected, rel=1e-12)
@@ -107,8 +124,8 @@ def test_layer_volume_is_profile_area_times_depth(reference):
 
 def test_gap0_is_what_the_cad_builds(reference):
     g, cad = reference
-    # pocket floor: the topmost air gap on the axis; slot floor: the lowest air gap at the chip
-    pocket_floor = air_gaps_z(cad.body, *RAY_XY, g.total_height_mm)[-1][0]
+    # pocket floor: the air gap on the axis under the insert's slot; slot floor: the lowest air gap at the chip
+    pocket_floor = air_gaps_z(cad.body, *RAY_XY, g.total_height_mm)[-2][0]
     cx, cy = g.chip_xy_printed_mm
     slot_floor, slot_top = air_gaps_z(cad.body, RAY_XY[0] + cx, RAY_XY[1] + cy, g.total_height_mm)[0]
     hall = slot_floor + g.board.thickness_mm + 0.5 * g.board.chip_height_mm

@@ -4,7 +4,8 @@ The printed sensor is the reference design (configs/mohammadi2021-forward.yaml) 
 printed 0.05 mm thick, a modulus 15 % low, the board 0.3 mm further from the magnet and a magnet
 5 % weak. It is built by editing the design file's keys by hand (not through the code under
 test) and simulating it with `mst simulate`'s model; its readings get the MLX90393's noise
-(2 uT RMS per axis, the design's noise_uT_rms) and are rounded to the chip's LSB.
+(2 uT RMS per axis, the design's noise_uT_rms) and are rounded to the chip's LSB
+(studies/printed_sensor.py, which docs/examples/loadtest.csv comes from too).
 """
 
 import json
@@ -20,7 +21,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-import yaml
 from c_drivers import STRICT
 from click.testing import CliRunner
 
@@ -28,60 +28,18 @@ from mst_cli.calibrate import fit as cal
 from mst_cli.calibrate.inverse_map import inverse_map
 from mst_cli.cli.app import main
 from mst_cli.io.serial_lines import BadLine, SampleParser, parse_line
-from mst_cli.model import chip as mlx
-from mst_cli.model.assembly import Housing
-from mst_cli.model.components import grade_remanence_T
 from mst_cli.model.response import simulate
-from mst_cli.sensor.document import load_document, parse_document
+from mst_cli.sensor.document import load_document
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "studies"))
+from printed_sensor import TRUTH, NOISE_uT, PrintedSensor
 
 ROOT = Path(__file__).resolve().parents[1]
 DESIGN = ROOT / "configs" / "mohammadi2021-forward.yaml"
-TRUTH = {"modulus_factor": 0.85, "wall_offset_mm": 0.05, "gap_offset_mm": 0.30, "remanence_factor": 0.95}
-NOISE_uT = 2.0
 
 
 def run(args):
     return CliRunner().invoke(main, [str(a) for a in args])
-
-
-class PrintedSensor:
-    """The design with the print errors of TRUTH written into its keys by hand."""
-
-    def __init__(self):
-        raw = yaml.safe_load(DESIGN.read_text())
-        raw["material"]["youngs_modulus_MPa"] *= TRUTH["modulus_factor"]
-        for layer in raw["layers"]:
-            layer["t_mm"] += TRUTH["wall_offset_mm"]
-        raw["housing"] = {"chip_clearance_mm": Housing().chip_clearance_mm + TRUTH["gap_offset_mm"]}
-        raw["magnet"]["remanence_T"] = TRUTH["remanence_factor"] * grade_remanence_T(raw["magnet"]["grade"])
-        self.doc = parse_document(raw)
-        self.resp = simulate(self.doc.geometry(), self.doc.material, noise_uT_rms=NOISE_uT)
-        self.range_N = self.resp.max_force_N
-        self.setting = self.resp.chip_setting
-
-    def codes(self, force_N, rng):
-        """Raw x, y, z codes at these forces: the model's field + chip noise, rounded to LSB."""
-        B = np.stack([np.interp(force_N, self.resp.force_N, self.resp.B_T[:, i]) for i in range(3)], -1)
-        B = B + rng.normal(0.0, NOISE_uT * 1e-6, B.shape)
-        s = self.setting
-        return np.stack(
-            [
-                mlx.quantise_lsb(B[:, 0], s.xy_uT_per_lsb),
-                mlx.quantise_lsb(B[:, 1], s.xy_uT_per_lsb),
-                mlx.quantise_lsb(B[:, 2], s.z_uT_per_lsb),
-            ],
-            -1,
-        )
-
-    def csv_uT(self, force_N, codes, with_force=True):
-        s = self.setting
-        lines = [("force_N," if with_force else "") + "Bx_uT,By_uT,Bz_uT"]
-        for f, (x, y, z) in zip(force_N, codes):
-            lines.append(
-                (f"{f:.4f}," if with_force else "")
-                + f"{x * s.xy_uT_per_lsb:.4f},{y * s.xy_uT_per_lsb:.4f},{z * s.z_uT_per_lsb:.4f}"
-            )
-        return "\n".join(lines) + "\n"
 
 
 @pytest.fixture(scope="module")
@@ -92,9 +50,7 @@ def sensor():
 @pytest.fixture(scope="module")
 def loadtest(sensor, tmp_path_factory):
     """60 load-test samples spread over the printed sensor's range, and the calibration."""
-    rng = np.random.default_rng(11)
-    F = np.sort(rng.uniform(0.0, sensor.range_N, 60))
-    codes = sensor.codes(F, rng)
+    F, codes = sensor.load_test()
     d = tmp_path_factory.mktemp("cal")
     (d / "loadtest.csv").write_text(sensor.csv_uT(F, codes))
     raw = ["force_N,Bx_code_lsb,By_code_lsb,Bz_code_lsb"] + [f"{f:.4f},{x},{y},{z}" for f, (x, y, z) in zip(F, codes)]
@@ -134,6 +90,7 @@ def test_calibration_recovers_the_print_errors(loadtest):
     rep = loadtest["report"]
     par = rep["parameters"]
     assert rep["identifiability"]["held"] == {}
+    assert rep["models"]["load_path"] == "part"  # the fit's model is the whole part, as the truth's
     assert all(par[n]["identifiable"] for n in TRUTH)
     tolerance = {"modulus_factor": 0.01, "wall_offset_mm": 0.005, "gap_offset_mm": 0.12, "remanence_factor": 0.02}
     for name, true in TRUTH.items():
@@ -660,3 +617,24 @@ def test_a_load_test_that_stays_on_the_first_spring_holds_what_it_cannot_see(sen
     r = run(["read", tmp_path / "o" / "calibrated.yaml", path, "--out", tmp_path / "r"])
     _, rows = read_forces(tmp_path / "r" / "forces.csv")
     assert [x["flag"] for x in rows] == ["ok", "above_calibrated"] and rows[1]["force_N"]
+
+
+@pytest.mark.parametrize("load_path", ["part", "layers"])
+@pytest.mark.parametrize("gap_offset_mm", [0.3, -0.5])  # -0.5: past the chip clearance, into the pocket floor
+def test_the_fit_model_is_simulate_of_the_printed_file(load_path, gap_offset_mm):
+    """The fit's forward model at any values is `mst simulate` of the file those values write
+    (apply_parameters): the part's members re-evaluated at the modulus factor (the insert keeps
+    its own modulus), the wall offset and a gap offset that thins the pocket floor, or the layers
+    alone for model.load_path: layers."""
+    from dataclasses import replace
+
+    from mst_cli.sensor.as_printed import apply_parameters
+
+    doc = replace(load_document(DESIGN), load_path=load_path)
+    values = {**TRUTH, "gap_offset_mm": gap_offset_mm}
+    printed, _ = apply_parameters(doc, values)
+    resp = simulate(printed.geometry(), printed.material, whole_part=printed.whole_part)
+    F = resp.force_N[resp.in_range]
+    got = cal.ForwardModel(doc).field_abs_T(F, values)
+    assert np.max(np.abs(got - resp.B_abs_T[resp.in_range])) < 1e-8  # 0.01 uT
+    assert (resp.members.total_mm_per_N > 0) == (load_path == "part")

@@ -42,11 +42,13 @@ def test_the_fit_counts_its_space_mapping_iterations(load_test, mechanics):
     if mechanics == "spring":  # the fitted rung itself: one solve, no mapping
         assert fit.iterations == 1
         return
-    # the dear rung is corrected at the start's wall offset; the fit moves it, so at least one
-    # more solve follows, and the loop stops once the correction sits at the fitted offset
+    # the dear rung is corrected at the start's wall offset and modulus factor (the insert does
+    # not scale with the TPU); the fit moves them, so at least one more solve follows, and the
+    # loop stops once the correction sits at the fitted values
     assert 2 <= fit.iterations <= cal.MAX_SPACE_MAPPING_ITERATIONS
     if fit.iterations < cal.MAX_SPACE_MAPPING_ITERATIONS:
         assert abs(fit.model.correction.wall_offset_mm - fit.values["wall_offset_mm"]) < 1e-4
+        assert abs(fit.model.correction.modulus_factor - fit.values["modulus_factor"]) < 1e-5
 
 
 def test_force_errors_by_hand():
@@ -168,11 +170,9 @@ def test_force_table_h_is_defined_once_in_a_program_of_two_files(calibrated_map,
 @pytest.fixture(scope="module")
 def calibration(tmp_path_factory):
     """mst_cli.calibrate (the api) on a load test of the printed sensor of test_calibrate."""
-    s = PrintedSensor()
-    rng = np.random.default_rng(11)
-    F = np.sort(rng.uniform(0.0, s.range_N, 60))
     d = tmp_path_factory.mktemp("api")
-    (d / "loadtest.csv").write_text(s.csv_uT(F, s.codes(F, rng)))
+    s = PrintedSensor()
+    (d / "loadtest.csv").write_text(s.csv_uT(*s.load_test()))  # docs/examples/loadtest.csv
     return mst.calibrate(DESIGN, d / "loadtest.csv", out=d / "out"), d / "out"
 
 

@@ -64,6 +64,7 @@ def test_reference_body_passes_every_check(exported):
         "overhang",
         "layer_grid",
         "magnet_pause",
+        "insert_slot",
         "load_path",
     }
     # measured on the mesh, equal to the design's own numbers
@@ -71,8 +72,11 @@ def test_reference_body_passes_every_check(exported):
     assert res["cavity_gap"].values["per_layer_mm"] == pytest.approx([0.8, 0.8, 0.7], abs=1e-4)
     assert res["web_depth"].values["per_layer_mm"] == pytest.approx([20.0] * 3, abs=1e-4)
     assert res["magnet_chip_gap"].values["measured_mm"] == pytest.approx(g.gap0_mm, abs=1e-4)
-    # lying on its side, the only down-facing faces are the pocket's roof, atan(1.2/1.05) steep
-    assert res["overhang"].values["min_inclination_deg"] == pytest.approx(math.degrees(math.atan(1.2 / 1.05)), abs=1e-3)
+    # lying on its side, the only down-facing faces are the roofs: the pocket's, atan(1.2/1.05)
+    # steep, and the insert slot's, a rise of 1.0 mm over half the 2 mm plate: 45 deg
+    roofs = (math.degrees(math.atan(1.2 / 1.05)), math.degrees(math.atan(1.0 / 1.0)))
+    assert g.has_insert and g.insert_plate.thickness_mm == 2.0 and g.insert_slot_roof_rise_mm == 1.0
+    assert res["overhang"].values["min_inclination_deg"] == pytest.approx(min(roofs), abs=1e-3)
     assert res["magnet_pause"].values["roof_start_z_mm"] == pytest.approx(13.2, abs=1e-4)
     # the void shell is the magnet pocket, minus at most delta x curved area
     r = 3.1
@@ -303,7 +307,7 @@ def test_numpy_mesh_reads_and_measures_as_trimesh_does(exported, tmp_path):
     faces = ours.faces[1:]
     holed = mesh_io.Mesh(ours.vertices, faces)
     assert not holed.is_watertight and not holed.is_volume
-    # components of two copies side by side: each is the body and its pocket void
+    # components of two copies side by side: each is the body, its pocket void and its insert's slot
     v = np.concatenate([ours.vertices, ours.vertices + 100.0])
     f = np.concatenate([ours.faces, ours.faces + len(ours.vertices)])
     edges = f[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
@@ -311,7 +315,7 @@ def test_numpy_mesh_reads_and_measures_as_trimesh_does(exported, tmp_path):
     n, ref = connected_components(
         coo_matrix((np.ones(len(edges)), (edges[:, 0], edges[:, 1])), shape=(len(v), len(v))), directed=False
     )
-    assert len(np.unique(labels)) == n == 4
+    assert len(np.unique(labels)) == n == 6
     assert np.array_equal(np.unique(ref, return_inverse=True)[1], np.unique(labels, return_inverse=True)[1])
     res = by_name(checks.run_checks(ours, manifest))
     assert not failed(res.values())

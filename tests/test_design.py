@@ -5,6 +5,7 @@ design as written to design.yaml and loaded back, and compares it with the spec'
 """
 
 import math
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -31,9 +32,17 @@ PAPER = ROOT / "configs" / "mohammadi2021.yaml"  # the paper's own targets
 PRINT_ERROR_T_MM = Printer().wall_tolerance_mm  # the default printer's wall tolerance
 
 
-def spec_doc(targets, **design):
+def layers_only(doc):
+    """The spec designed for its layers between rigid plates (model.load_path: layers): the
+    optimiser's own tests on the paper's targets, which the part with today's TPU cap, plates and
+    cover cannot reach (docs/design.md 4.6; tests/test_part_prediction.py designs the whole part)."""
+    return replace(doc, load_path="layers")
+
+
+def spec_doc(targets, load_path="layers", **design):
     """A spec with the reference file's constants and the given (S, R) targets."""
     raw = yaml.safe_load(SPEC.read_text())
+    raw["model"] = {**(raw.get("model") or {}), "load_path": load_path}
     raw["layers"] = [{"target_sensitivity_per_N": float(s), "target_range_N": float(r)} for s, r in targets]
     raw.setdefault("design", {}).update(design)
     return parse_document(raw)
@@ -45,7 +54,7 @@ def forward(result, tmp_path):
     path.write_text(yaml.safe_dump(result.design_yaml_dict(), sort_keys=False))
     doc = load_document(path)
     geometry = doc.geometry()
-    resp = simulate(geometry, doc.material, mechanics=doc.mechanics)
+    resp = simulate(geometry, doc.material, mechanics=doc.mechanics, whole_part=doc.whole_part)
     S = [r.sensitivity_secant_per_N for r in resp.regimes]
     R = [0.0] * len(doc.layers)
     for r in resp.regimes:
@@ -60,7 +69,7 @@ def random_specs(n_layers, count, seed):
     specs = []
     for j in range(count):
         cells = [probe.family.cell(*x) for x in zip(theta[j], t[j], h[j])]
-        resp = simulate(probe.doc.geometry(cells), probe.doc.material)
+        resp = simulate(probe.doc.geometry(cells), probe.doc.material, whole_part=False)
         specs.append([(r.sensitivity_secant_per_N, r.force_to_N) for r in resp.regimes])
     return specs
 
@@ -70,7 +79,7 @@ def random_specs(n_layers, count, seed):
 def test_paper_targets_are_met_and_the_compact_part_is_at_most_16_mm(config, max_height_mm, tmp_path):
     """The paper's S = 0.26/0.08/0.03 1/N and R = 0.9/4.8/16.2 N (docs/design.md's table), re-simulated
     from the written design.yaml; with a board without connector sockets in at most 16 mm."""
-    result = design_document(load_document(ROOT / "configs" / config))
+    result = design_document(layers_only(load_document(ROOT / "configs" / config)))
     assert result.status == "met", result.reasons
     S, R, designed, geometry, _ = forward(result, tmp_path)
     assert np.all(np.abs(S / [0.26, 0.08, 0.03] - 1) <= 0.02)
@@ -83,9 +92,9 @@ def test_paper_targets_are_met_and_the_compact_part_is_at_most_16_mm(config, max
 def test_issue_round_trip_designs_back_a_simulated_stubby_design(tmp_path):
     """(theta, t, h) = (28, 0.8, 2.6), (36, 1.3, 3.6), (42, 1.8, 4.5) -- walls up to t/L 0.9 --
     simulated, and its S_i, R_i given back as targets: mst design meets them."""
-    doc = load_document(PAPER)
+    doc = layers_only(load_document(PAPER))
     cells = [doc.family.cell(*x) for x in ((28, 0.8, 2.6), (36, 1.3, 3.6), (42, 1.8, 4.5))]
-    resp = simulate(doc.geometry(cells), doc.material)
+    resp = simulate(doc.geometry(cells), doc.material, whole_part=False)
     S = [r.sensitivity_secant_per_N for r in resp.regimes]
     R = [r.force_to_N for r in resp.regimes]
     assert [r.layer for r in resp.regimes] == [1, 2, 3]
@@ -97,7 +106,7 @@ def test_issue_round_trip_designs_back_a_simulated_stubby_design(tmp_path):
 
 
 def test_fingertip_spec_meets_all_six_targets_within_2_percent_with_printable_cells(tmp_path):
-    doc = load_document(SPEC)
+    doc = layers_only(load_document(SPEC))
     result = design_document(doc)
     assert result.status == "met" and result.exit_code == 0, result.reasons
     S, R, designed, geometry, resp = forward(result, tmp_path)
@@ -120,7 +129,7 @@ def test_fingertip_spec_meets_all_six_targets_within_2_percent_with_printable_ce
 
 
 def test_same_spec_and_seed_give_byte_identical_design_yaml():
-    doc = load_document(SPEC)
+    doc = layers_only(load_document(SPEC))
     a = yaml.safe_dump(design_document(doc, seed=7).design_yaml_dict(), sort_keys=False)
     b = yaml.safe_dump(design_document(doc, seed=7).design_yaml_dict(), sort_keys=False)
     assert a == b
@@ -144,7 +153,7 @@ def test_round_trip_recovers_random_valid_designs_targets(n_layers, tmp_path):
 @given(seed=st.integers(0, 2**32 - 1), n_layers=st.integers(1, 6))
 def test_vectorised_problem_agrees_with_the_forward_model(seed, n_layers):
     """The batched S_i, R_i the optimiser sees are the forward model's, for any valid design."""
-    probe = DesignProblem(spec_doc([(1.0, i + 1.0) for i in range(n_layers)]))
+    probe = DesignProblem(spec_doc([(1.0, i + 1.0) for i in range(n_layers)], load_path="part"))
     theta, t, h = probe.sample_feasible(np.random.default_rng(seed), 1)
     ev = probe.evaluate_physical(theta[0], t[0], h[0])
     cells = [probe.family.cell(*x) for x in zip(theta[0], t[0], h[0])]
@@ -155,8 +164,38 @@ def test_vectorised_problem_agrees_with_the_forward_model(seed, n_layers):
     assert float(ev.total_height_mm) == pytest.approx(probe.doc.geometry(cells).total_height_mm, rel=1e-12)
 
 
+@pytest.mark.parametrize("gap_offset_mm", [0.27, -0.5])
+def test_the_problem_builds_the_printers_gap_where_simulate_does(gap_offset_mm):
+    """A printer whose magnet-chip gap is built 0.27 mm wider (what the calibration of
+    tests/test_calibration_record fits) or 0.5 mm narrower: the optimiser's part is the forward
+    model's part as built, the offset in the cover's air over the board (so the cover lands on it
+    later or sooner) and, past that air, in the pocket floor; not only in the gap. The print is
+    written into the file's keys by hand (air 0.3 mm + offset, else 0 and the floor the rest).
+    The cells are a feasible design of the nominal print: 0.5 mm narrower leaves the cover no air,
+    on the board's parts from the start, which the design's cover constraint refuses for any
+    layer 1 over the slot; this test is about the evaluation, not feasibility."""
+    printer = {"wall_offset_mm": 0.05, "modulus_factor": 0.85, "gap_offset_mm": gap_offset_mm}
+    doc = spec_doc([(1.0, 2.0), (0.5, 8.0)], load_path="part")
+    probe = DesignProblem(replace(doc, printer=Printer(**printer)))
+    theta, t, h = DesignProblem(doc).sample_feasible(np.random.default_rng(3), 1)
+    ev = probe.evaluate_physical(theta[0], t[0], h[0])
+    raw = yaml.safe_load(SPEC.read_text())
+    raw["model"] = {"load_path": "part"}
+    raw["material"]["youngs_modulus_MPa"] *= 0.85
+    air_mm, floor_mm = 0.3 + gap_offset_mm, 0.4
+    if air_mm < 0:
+        air_mm, floor_mm = 0.0, floor_mm + air_mm
+    raw["housing"].update(chip_clearance_mm=air_mm, pocket_floor_mm=floor_mm)
+    raw["layers"] = [{"theta_deg": a, "t_mm": b + 0.05, "h_mm": c} for a, b, c in zip(theta[0], t[0], h[0])]
+    printed = parse_document(raw)
+    resp = simulate(printed.geometry(), printed.material)
+    assert ev.S_per_N == pytest.approx([r.sensitivity_secant_per_N for r in resp.regimes], rel=1e-9)
+    assert ev.R_N == pytest.approx([r.force_to_N for r in resp.regimes], rel=1e-9)
+    assert float(ev.gap0_mm) == pytest.approx(resp.gap_mm[0], rel=1e-12)
+
+
 def test_unit_variables_map_onto_the_bounds_and_back():
-    P = DesignProblem(load_document(SPEC))
+    P = DesignProblem(layers_only(load_document(SPEC)))
     theta, t, h = P.to_physical(np.array([0, 0, 0, 1, 1, 1, 0.5, 0.5, 0.5]))
     lo, hi = DEFAULT_DESIGN["theta_deg_bounds"]
     (t0, t1), (h0, h1) = DEFAULT_DESIGN["t_mm_bounds"], DEFAULT_DESIGN["h_mm_bounds"]
@@ -248,7 +287,7 @@ def test_chosen_design_minimises_the_preference_over_the_one_layer_solutions(obj
 def test_preference_terms_are_height_resolution_and_print_shift():
     """The three terms from their definitions: ln of the part height the geometry gives, ln of
     noise / (B0 min S), and the RMS of the +-0.05 mm print shifts."""
-    doc = load_document(SPEC)
+    doc = layers_only(load_document(SPEC))
     P = DesignProblem(doc)
     th, t, h = np.array([25.0, 33.0, 37.0]), np.array([0.6, 1.0, 1.4]), np.array([2.0, 2.8, 3.5])
     ev = P.evaluate_physical(th, t, h)
@@ -264,11 +303,11 @@ def test_preference_terms_are_height_resolution_and_print_shift():
 
 
 def test_reported_print_error_is_the_forward_model_at_t_plus_minus_0p05(tmp_path):
-    doc = load_document(SPEC)
+    doc = layers_only(load_document(SPEC))
     result = design_document(doc)
     S, R, designed, geometry, _ = forward(result, tmp_path)
     cells = [designed.family.cell(c.theta_deg, c.t_mm + PRINT_ERROR_T_MM, c.h_mm) for c in geometry.layers]
-    resp = simulate(designed.geometry(cells), designed.material)
+    resp = simulate(designed.geometry(cells), designed.material, whole_part=designed.whole_part)
     for i, row in enumerate(result.print_error["layers"]):
         assert row["dS_rel_t_plus"] == pytest.approx(resp.regimes[i].sensitivity_secant_per_N / S[i] - 1, rel=1e-9)
         assert row["dR_rel_t_plus"] == pytest.approx(resp.regimes[i].force_to_N / R[i] - 1, rel=1e-9)
@@ -364,7 +403,7 @@ def test_designed_walls_stay_where_the_l0_corrections_were_fitted(tmp_path):
     # box, so this constraint no longer binds inside the default bounds; it guards user bounds)
     from mst_cli.model.mechanics.correction import fitted_t_over_L_max
 
-    result = design_document(load_document(SPEC))
+    result = design_document(layers_only(load_document(SPEC)))
     _, _, _, geometry, _ = forward(result, tmp_path)
     for c in geometry.layers:
         assert c.t_mm / c.wall_length_mm <= fitted_t_over_L_max() * (1 + 1e-6)
@@ -384,6 +423,6 @@ def test_nlopt_generic_failure_ends_a_run_not_the_command(monkeypatch):
         raise failure("nlopt failure")
 
     monkeypatch.setattr(nlopt.opt, "optimize", broken)
-    P = DesignProblem(load_document(SPEC))
+    P = DesignProblem(layers_only(load_document(SPEC)))
     result = solve(P, max_evaluations=2000)
     assert "nlopt failure" in result.stops and result.u is not None

@@ -20,6 +20,17 @@ def run(args):
     return CliRunner().invoke(main, [str(a) for a in args])
 
 
+def layers_spec(tmp_path, source=SPEC):
+    """``source`` designed for its layers between rigid plates (model.load_path: layers): the
+    paper's targets, which the part with today's TPU cap, plates and cover cannot reach
+    (docs/design.md 4.6; tests/test_part_prediction.py designs the whole part)."""
+    raw = yaml.safe_load(source.read_text())
+    raw["model"] = {**(raw.get("model") or {}), "load_path": "layers"}
+    path = tmp_path / f"layers-{source.name}"
+    path.write_text(yaml.safe_dump(raw, sort_keys=False))
+    return path
+
+
 def spec_file(tmp_path, layers, name="s", **design):
     raw = yaml.safe_load(SPEC.read_text())
     raw["name"] = name
@@ -32,7 +43,7 @@ def spec_file(tmp_path, layers, name="s", **design):
 
 def test_reference_spec_writes_a_design_that_mst_simulate_reproduces(tmp_path):
     out = tmp_path / "d"
-    r = run(["design", SPEC, "--out", out])
+    r = run(["design", layers_spec(tmp_path), "--out", out])
     assert r.exit_code == 0, r.output
     assert {p.name for p in out.iterdir()} == {"design.yaml", "report.json", "response.csv", "response.png"}
     assert "all 6 targets met within 2 %" in r.stdout and "S target" in r.stdout
@@ -55,16 +66,17 @@ def test_reference_spec_writes_a_design_that_mst_simulate_reproduces(tmp_path):
 
 
 def test_same_seed_gives_byte_identical_design_yaml(tmp_path):
-    a, b = tmp_path / "a", tmp_path / "b"
-    assert run(["design", SPEC, "--out", a, "--seed", "3", "-q"]).exit_code == 0
-    assert run(["design", SPEC, "--out", b, "--seed", "3", "-q"]).exit_code == 0
+    a, b, spec = tmp_path / "a", tmp_path / "b", layers_spec(tmp_path)
+    assert run(["design", spec, "--out", a, "--seed", "3", "-q"]).exit_code == 0
+    assert run(["design", spec, "--out", b, "--seed", "3", "-q"]).exit_code == 0
     assert (a / "design.yaml").read_bytes() == (b / "design.yaml").read_bytes()
 
 
 def test_quiet_prints_nothing_and_json_prints_the_report(tmp_path):
-    r = run(["design", SPEC, "--out", tmp_path / "q", "--quiet"])
+    spec = layers_spec(tmp_path)
+    r = run(["design", spec, "--out", tmp_path / "q", "--quiet"])
     assert r.exit_code == 0 and r.stdout == "" and r.stderr == ""
-    r = run(["design", SPEC, "--out", tmp_path / "j", "--json"])
+    r = run(["design", spec, "--out", tmp_path / "j", "--json"])
     assert r.exit_code == 0
     rep = json.loads(r.stdout)
     assert rep["design"]["tolerance_rel"] == 0.02 and rep["design"]["seed"] == 0

@@ -40,16 +40,19 @@ def test_every_design_in_configs_exports_and_checks(design, tmp_path):
     out = tmp_path / "out"
     r = run(["export", design, "--out", out])
     assert r.exit_code == 0, r.output + r.stderr
-    assert {p.name for p in out.iterdir()} == {"sensor.stl", "sensor.step", "export.json"}
+    assert {p.name for p in out.iterdir()} == {"sensor.stl", "insert.stl", "sensor.step", "export.json"}
     c = run(["check", out, "--json"])
-    assert c.exit_code == 0, c.output
     summary = json.loads(c.stdout)
-    assert summary["passed"] and summary["failed"] == []
+    # every check passes, the load path too: the part as exported carries the default stiff insert
+    # over the magnet (insert.stl), which leaves about 1 % of a regime's compliance uncertain
+    # between the members' soft and stiff supports, within the 5 / 8 / 20 % budgets (docs/design.md
+    # 4.6); the bare TPU cap, 12 % uncertain in regime 1, fails it (tests/test_load_path.py)
+    assert c.exit_code == 0 and summary["failed"] == [], c.output
 
 
 def test_export_writes_files_progress_and_pause_height(reference_export):
     out, r = reference_export
-    assert {p.name for p in out.iterdir()} == {"sensor.stl", "sensor.step", "sensor.3mf", "export.json"}
+    assert {p.name for p in out.iterdir()} == {"sensor.stl", "insert.stl", "sensor.step", "sensor.3mf", "export.json"}
     assert "wrote sensor.stl" in r.stderr and "wrote sensor.step" in r.stderr
     manifest = json.loads((out / "export.json").read_text())
     # printed on its side: the pause is a height along the 20 mm depth, the magnet's radius
@@ -60,12 +63,22 @@ def test_export_writes_files_progress_and_pause_height(reference_export):
         "why": "drop the magnet into its pocket",
     }
     assert "pause after layer 66 (z = 13.20 mm)" in r.stdout
-    assert manifest["files"] == ["sensor.stl", "sensor.step", "sensor.3mf"]
+    # the insert's pause: its slot's top, side_wall 1.2 mm and a 1 mm gable (half the 2 mm plate)
+    # under the 20 mm top face, on the layer grid: 17.8 mm = layer 89
+    assert manifest["print"]["pauses"][1] == {
+        "after_layer": 89,
+        "z_mm": pytest.approx(17.8),
+        "why": "drop the insert plate into its slot",
+    }
+    assert "pause after layer 89 (z = 17.80 mm)" in r.stdout
+    assert manifest["files"] == ["sensor.stl", "sensor.step", "sensor.3mf", "insert.stl"]
 
 
 def test_check_table_and_exit_zero(reference_export):
     out, _ = reference_export
-    r = run(["check", out / "sensor.stl"])
+    # --load-path-max 1: the load path reported, not judged (its default bound fails the part as
+    # exported, whose TPU cap has no stiff insert yet: docs/design.md 4.6); the mesh checks here
+    r = run(["check", out / "sensor.stl", "--load-path-max", "1"])
     assert r.exit_code == 0, r.output
     for name in ("watertight", "manifold3d", "one_body", "magnet_chip_gap", "overhang"):
         assert name in r.stdout
@@ -84,7 +97,7 @@ def test_check_names_the_failed_check(reference_export, tmp_path):
     manifest = json.loads((out / "export.json").read_text())
     manifest["body"]["volume_mm3"] *= 1.01
     (bad / "export.json").write_text(json.dumps(manifest))
-    r = run(["check", bad, "--json"])
+    r = run(["check", bad, "--json", "--load-path-max", "1"])  # the mesh checks (see above)
     assert r.exit_code == 1 and json.loads(r.stdout)["failed"] == ["volume"]
 
 
@@ -120,16 +133,18 @@ def test_default_out_dir_and_default_formats(tmp_path, monkeypatch):
     r = run(["export", FORWARD])
     assert r.exit_code == 0, r.output
     out = tmp_path / "mst-out" / "mohammadi2021-forward"
-    assert {p.name for p in out.iterdir()} == {"sensor.stl", "sensor.step", "export.json"}
+    assert {p.name for p in out.iterdir()} == {"sensor.stl", "insert.stl", "sensor.step", "export.json"}
 
 
 # --------------------------------------------------------------------------- bad input: exit 2
 def test_a_spec_is_designed_first_and_its_design_written(tmp_path):
-    out = tmp_path / "o"
-    r = run(["export", SPEC, "--out", out])
+    out, spec = tmp_path / "o", tmp_path / "layers.yaml"
+    # the paper's targets: the layers alone reach them, the part as exported does not (design.md 4.6)
+    spec.write_text(SPEC.read_text() + "model:\n  load_path: layers\n")
+    r = run(["export", spec, "--out", out])
     assert r.exit_code == 0, r.output + r.stderr
     assert "is a spec: designing" in r.stderr
-    assert {p.name for p in out.iterdir()} == {"sensor.stl", "sensor.step", "design.yaml", "export.json"}
+    assert {p.name for p in out.iterdir()} == {"sensor.stl", "insert.stl", "sensor.step", "design.yaml", "export.json"}
     assert run(["check", out]).exit_code == 0
     # the written design.yaml rebuilds exactly the same body
     again = tmp_path / "again"

@@ -84,7 +84,7 @@ LOADERS = dict(DESIGNS)
 # --------------------------------------------------------------------------- export + slice
 def export_body(folder: Path, name: str, g, printer, tolerance_mm: float = STL_TOLERANCE_MM) -> dict:
     """Write sensor.stl, sensor.3mf and export.json into folder as `mst export --stl --3mf`
-    does (print orientation, the magnet pause in the 3MF); returns the manifest."""
+    does (print orientation, the magnet's and the insert's pauses in the 3MF); returns the manifest."""
     from mst_cli.cad import mesh_io
     from mst_cli.cad.manifest import MANIFEST_NAME, export_manifest
     from mst_cli.cad.mesh_body import print_mesh
@@ -96,7 +96,11 @@ def export_body(folder: Path, name: str, g, printer, tolerance_mm: float = STL_T
     (folder / "sensor.stl").write_bytes(mesh_io.stl_bytes(vertices, triangles))
     (folder / "sensor.3mf").write_bytes(
         mesh_io.three_mf_bytes(
-            vertices, triangles, name, pause_after_z_mm=g.pause_height_mm, layer_height_mm=g.layer_height_mm
+            vertices,
+            triangles,
+            name,
+            pause_after_z_mm=[(p.z_mm, p.why) for p in g.pauses],
+            layer_height_mm=g.layer_height_mm,
         )
     )
     manifest = export_manifest(name, g, printer, tolerance_mm, ["sensor.stl", "sensor.3mf"])
@@ -139,10 +143,13 @@ def test_sliced_body_prints(sliced):
     longest = rep["free_span"]["longest"]
     assert longest["length_mm"] <= MAX_SPAN_MM, longest
     assert not rep["support"]["needed"], rep["support"]
-    asked = manifest["print"]["pause"]
-    (p,) = rep["pause"]["found"]  # exactly one pause ...
-    assert p["after_layer"] == asked["after_layer"] == g.pause_after_layer  # ... after the right layer
-    assert p["z_mm"] == pytest.approx(asked["z_mm"], abs=1e-3) and not p["mid_layer"]
+    # exactly the pauses asked for (the magnet's; the insert's when the design has one) ...
+    asked, found = manifest["print"]["pauses"], rep["pause"]["found"]
+    assert len(found) == len(asked) == len(g.pauses)
+    for p, a, want in zip(found, asked, g.pauses):  # ... each after the right layer
+        assert p["after_layer"] == a["after_layer"] == want.after_layer
+        assert p["z_mm"] == pytest.approx(a["z_mm"], abs=1e-3) and not p["mid_layer"]
+    assert asked[0]["after_layer"] == g.pause_after_layer
 
 
 def test_mst_check_passes_on_the_same_mesh(sliced):

@@ -18,7 +18,7 @@ def test_single_layer_by_hand():
     cell = HexCell(30, 0.8, 3.0)
     g = SensorGeometry((cell,))
     law = layer_law(cell, MAT)
-    r = simulate(g, MAT)
+    r = simulate(g, MAT, whole_part=False)
     B0 = axial_Bz_T(g.gap0_mm, 3.0, 2.0, 1.3)
     B1 = axial_Bz_T(g.gap0_mm - law.d_lock_mm, 3.0, 2.0, 1.3)
     assert r.B0_T == pytest.approx(B0, rel=1e-12)
@@ -35,7 +35,7 @@ def test_sensitivity_is_gradient_times_secant_compliance_for_a_small_stroke():
     for stroke in (0.02, 0.01, 0.005):
         cell = HexCell(30, 0.8, 1.72, contact_allowance_mm=0.12 - stroke)
         g = SensorGeometry((cell,))
-        r = simulate(g, MAT)
+        r = simulate(g, MAT, whole_part=False)
         grad = -axial_dBz_dz_T_per_mm(g.gap0_mm, 3.0, 2.0, 1.3) / axial_Bz_T(g.gap0_mm, 3.0, 2.0, 1.3)
         law = layer_law(cell, MAT)
         errors.append(r.regimes[0].sensitivity_secant_per_N / (grad * law.d_lock_mm / law.lock_force_N) - 1)
@@ -45,7 +45,7 @@ def test_sensitivity_is_gradient_times_secant_compliance_for_a_small_stroke():
 
 
 def test_secant_lies_between_local_slopes_and_curves_are_monotone():
-    r = simulate(REF, MAT)
+    r = simulate(REF, MAT, whole_part=False)
     assert r.dB_rel[0] == 0.0
     assert np.all(np.diff(r.dB_rel) > 0) and np.all(np.diff(r.displacement_mm) > 0)
     for reg in r.regimes:  # mean value theorem
@@ -56,7 +56,7 @@ def test_secant_lies_between_local_slopes_and_curves_are_monotone():
 
 
 def test_vectorised_kernel_agrees_with_simulate():
-    r = simulate(REF, MAT)
+    r = simulate(REF, MAT, whole_part=False)
     laws = [layer_law(c, MAT) for c in REF.layers]
     k, dl, kl, R_law = (
         np.array([getattr(l, a) for l in laws])
@@ -70,14 +70,14 @@ def test_vectorised_kernel_agrees_with_simulate():
 
 
 def test_force_resolution_is_field_resolution_over_B0_S():
-    r = simulate(REF, MAT, noise_uT_rms=3.0)
+    r = simulate(REF, MAT, noise_uT_rms=3.0, whole_part=False)
     for reg in r.regimes:
         assert reg.force_resolution_N == pytest.approx(3e-6 / (r.B0_T * reg.sensitivity_secant_per_N))
         assert reg.force_resolution_worst_N >= reg.force_resolution_N
 
 
 def test_points_past_the_last_lock_are_flagged_out_of_range():
-    r = simulate(REF, MAT)
+    r = simulate(REF, MAT, whole_part=False)
     last = r.lock_forces_N[-1]
     assert np.all(r.in_range == (r.force_N <= last * (1 + 1e-12)))
     assert r.force_N.max() > last
@@ -86,9 +86,9 @@ def test_points_past_the_last_lock_are_flagged_out_of_range():
 def test_field_model_choice_is_reported_and_dipole_reads_high():
     from dataclasses import replace
 
-    assert simulate(REF, MAT).field_model == "axial"
-    assert simulate(replace(REF, chip_offset_mm=(0.5, 0.0)), MAT).field_model == "cylinder"
-    assert simulate(REF, MAT, field_model="dipole").B0_T > simulate(REF, MAT).B0_T
+    assert simulate(REF, MAT, whole_part=False).field_model == "axial"
+    assert simulate(replace(REF, chip_offset_mm=(0.5, 0.0)), MAT, whole_part=False).field_model == "cylinder"
+    assert simulate(REF, MAT, field_model="dipole", whole_part=False).B0_T > simulate(REF, MAT, whole_part=False).B0_T
 
 
 def test_a_magnet_too_close_saturates_the_chip_and_says_so():
@@ -97,7 +97,7 @@ def test_a_magnet_too_close_saturates_the_chip_and_says_so():
     from mst_cli.model.assembly import Housing
 
     close = replace(REF, layers=(HexCell(30, 0.4, 1.2),), housing=Housing(cover_mm=0.2, pocket_floor_mm=0.2))
-    r = simulate(close, MAT)
+    r = simulate(close, MAT, whole_part=False)
     assert r.B_full_T > 0.05 and r.saturated and r.chip_setting is None
     assert any("saturation" in w for w in r.warnings)
 

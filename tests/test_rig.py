@@ -16,7 +16,7 @@ from mst_cli.errors import InputError
 from mst_cli.model.components import remanence_at_T
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "studies"))
-from rig_loadtest import Rig, forward_curve, rig_loadtest, truth_hysteresis_pct
+from rig_loadtest import Rig, forward_curve, hysteresis_peak_tolerance_N, rig_loadtest, truth_hysteresis_pct
 
 CURVE = forward_curve()  # spring rung, 3 ms
 EDGES = (0.0, *CURVE.lock_forces_N)
@@ -60,12 +60,15 @@ def test_user_hints_are_checked_against_the_force():
 
 
 def test_hysteresis_is_measured_within_a_point_of_full_scale_per_regime():
-    rows, truth = rig_loadtest(Rig(cycles=6, points_per_branch=60, seed=2), CURVE)
+    # 240 rows a branch: the whole part's last regime (the cap closing the top layer's cavity
+    # a few newtons before layer 2 locks) is a tenth of the full scale, ~20 rows a cycle
+    rows, truth = rig_loadtest(Rig(cycles=6, points_per_branch=240, seed=2), CURVE)
     b = find_branches(rows["force_N"], rows["time_s"])
     got = hy.measure_hysteresis(field_abs_T(rows), rows["force_N"], b.label, EDGES)
-    for r, tol in zip(got, (1.0, 1.0, 1.5)):  # the stiff last regime: 0.17 N of noise a row, 1.3 % of its band
+    for r in got:
         pct, _ = truth_hysteresis_pct(truth, r.lo_N, r.hi_N)
-        assert abs(r.max_pct - pct) < tol, (r, pct)
+        tol_N = hysteresis_peak_tolerance_N(truth, r.lo_N, r.hi_N, r.samples)  # what the noise allows
+        assert abs(r.max_pct - pct) / 100 * (r.hi_N - r.lo_N) < tol_N < 0.01 * CURVE.full_scale_N, (r, pct, tol_N)
 
 
 def test_the_unloading_model_leaves_less_than_the_noise():
@@ -152,10 +155,11 @@ def test_a_reading_at_30_and_40_degC_is_corrected_within_1_5_percent():
     got = force_at_T(inverse, B, T, truth.remanence_coeff_pct_per_K, rig.modulus_coeff_per_K)
     for temp in (30.0, 40.0):
         at = T == temp
-        assert abs(np.median(got[at] / F[at]) - 1) < 0.015
-        assert (
-            abs(np.median(inverse(B[at]) / F[at]) - 1) > 0.015
-        )  # uncorrected: off (the softer TPU partly offsets the weaker magnet)
+        assert np.median(np.abs(got[at] / F[at] - 1)) < 0.015
+        # uncorrected: off. The softer TPU partly offsets the weaker magnet, by a share that
+        # changes along the curve (the error changes sign across it), so the typical error, not
+        # the signed median
+        assert np.median(np.abs(inverse(B[at]) / F[at] - 1)) > 0.015
 
 
 def test_the_modulus_coefficient_is_fitted_and_judged_identifiable_only_with_spread():

@@ -155,14 +155,16 @@ def test_a_rig_load_test_is_fitted_on_its_loading_branch_within_two_sigma(rig_ca
 def test_hysteresis_first_cycle_and_unloading_model_are_reported(rig_calibration):
     import json
 
-    from rig_loadtest import truth_hysteresis_pct
+    from rig_loadtest import hysteresis_peak_tolerance_N, truth_hysteresis_pct
 
     result, truth, d = rig_calibration
     h = json.loads((d / "cal" / "calibration.json").read_text())["hysteresis"]
     assert h["rows"] == {"loading": 121, "unloading": 120, "hold": 0} and h["rows_in_fit"] == 80
-    for r in h["by_regime"]:  # within 1 point (of the band) of the truth; the stiff last regime's noise: 1.5
-        pct, _ = truth_hysteresis_pct(truth, r["force_from_N"], r["force_to_N"])
-        assert abs(r["max_pct_of_band"] - pct) < (1.5 if r["regime"] == 3 else 1.0), (r, pct)
+    for r in h["by_regime"]:  # within what the rig's noise allows (tests/test_rig.py: a point of full scale)
+        lo, hi = r["force_from_N"], r["force_to_N"]  # the last regime, a tenth of full scale: ~12 rows
+        pct, _ = truth_hysteresis_pct(truth, lo, hi)
+        tol_N = hysteresis_peak_tolerance_N(truth, lo, hi, r["unloading_rows"])
+        assert abs(r["max_pct_of_band"] - pct) / 100 * (hi - lo) < tol_N, (r, pct, tol_N)
     assert h["first_cycle"]["differs"] and h["first_cycle"]["left_out_of_fit"]
     assert abs(h["first_cycle"]["stiffer_pct"] - 8.0) < 1.0
     x = 1 / np.sqrt(3)  # the truth loop's widest point: 6 % of the turning force
@@ -177,7 +179,11 @@ def test_the_calibration_that_ignores_branches_is_worse(rig_calibration):
     result, _, d = rig_calibration
     before = api.calibrate(DESIGN, d / "lt.csv", use_branches=False)
     miss = abs(before.fit.values["modulus_factor"] - TRUTH["modulus_factor"])
-    assert miss > 2 * WITHIN["modulus_factor"] and before.record.fit_quality["warning"] is not None
+    # the unloading rows read up to 6 % of the turning force less at a field (3.9 % over a loop):
+    # mixed in, half the rows, they pull the modulus by ~2-3 %, outside what the branch-aware fit meets
+    aware = abs(result.fit.values["modulus_factor"] - TRUTH["modulus_factor"])
+    assert miss > max(WITHIN["modulus_factor"], 5 * aware), (miss, aware)
+    assert before.record.fit_quality["warning"] is not None
     assert result.record.fit_quality["warning"] is None
 
 
@@ -379,18 +385,26 @@ def test_read_corrects_with_T_C_within_1_5_percent_and_is_over_5_off_without(war
     from mst_cli import api
 
     _, d = warm_calibration
-    rows, _ = rig_loadtest(Rig(cycles=3, T_C=TEMPS, hysteresis_pct=6.0, seed=11), CURVE)
+    rows, truth = rig_loadtest(Rig(cycles=3, T_C=TEMPS, hysteresis_pct=6.0, seed=11), CURVE)
     got = api.read(d / "cal" / "calibrated.yaml", write_csv(tmp_path / "s.csv", rows))
     plain_csv = write_csv(tmp_path / "p.csv", rows, cols=tuple(c for c in RIG_COLUMNS if c != "T_C"))
     plain = api.read(d / "cal" / "calibrated.yaml", plain_csv)
     for T in TEMPS:
         median, n = temperature_errors(got, rows, T)
         assert median < 0.015 and n > 40, (T, median, n)
-    # uncorrected, on the readings the corrected reader reads at 40 degC (the weaker magnet partly
-    # offsets the softer TPU): 5.2 % median on loading, 4.7 % over both branches
-    same = np.isfinite(got.force_N)
-    assert temperature_errors(plain, rows, 40.0, same & (rows["branch"] == "loading"))[0] > 0.05
-    assert temperature_errors(plain, rows, 40.0, same)[0] > 0.04
+    # uncorrected, on the loading readings the corrected reader reads at 40 degC: off by what the
+    # rig's law gives a reader that ignores T, F_20(r B_20(F / m)) against F (the weaker magnet
+    # partly offsets the softer TPU, by a share that changes along the curve)
+    loading = np.isfinite(got.force_N) & (rows["branch"] == "loading")
+    plain_error = temperature_errors(plain, rows, 40.0, loading)[0]
+    use = loading & (rows["T_C"] == 40.0) & (rows["force_N"] >= 0.1 * CURVE.full_scale_N)
+    r, m = 1 + 0.01 * truth.remanence_coeff_pct_per_K * 20.0, 1 + BETA * 20.0
+    keep = CURVE.force_N <= CURVE.full_scale_N
+    F_plain = np.interp(
+        r * CURVE.field_abs_T(truth.force_load_N[use] / m), CURVE.field_abs_T(CURVE.force_N)[keep], CURVE.force_N[keep]
+    )
+    predicted = float(np.median(np.abs(F_plain / rows["force_N"][use] - 1)))
+    assert abs(plain_error - predicted) < 0.01 and plain_error > 3 * temperature_errors(got, rows, 40.0)[0]
 
 
 # ----------------------------------------------------------------- print 2 (issue 38)

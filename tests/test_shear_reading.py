@@ -146,6 +146,8 @@ def test_simulate_states_what_the_chips_tell_apart(tmp_path):
 
 @pytest.mark.slow
 def test_design_states_what_a_two_chip_layout_tells_apart(tmp_path):
+    """The bound is off the design loop: mst design names the command, mst simulate --shear-ratio
+    states it for the designed layout."""
     spec = (ROOT / "configs" / "mohammadi2021.yaml").read_text()
     two = tmp_path / "two.yaml"
     two.write_text(
@@ -153,10 +155,17 @@ def test_design_states_what_a_two_chip_layout_tells_apart(tmp_path):
             "  board: adafruit-4022\n",
             "  board: bare-qfn\n  chip_offset_mm: [-7, 0]\n  positions_mm: [[-7, 0], [7, 6]]\n",
         )
+        + "model:\n  load_path: layers\n"  # the paper's targets: the layers alone reach them (design.md 4.6)
     )
     res = run(["design", two, "--out", tmp_path / "o", "--no-plot"])
     assert res.exit_code == 0, res.output
-    b = json.loads((tmp_path / "o" / "report.json").read_text())["design"]["shear_bound"]
+    assert "shear_bound" not in json.loads((tmp_path / "o" / "report.json").read_text())["design"]
+    assert "2 chips: what they tell apart" in res.output and "--shear-ratio 0.2,0.1" in res.output
+    res = run(
+        ["simulate", tmp_path / "o" / "design.yaml", "--out", tmp_path / "s", "--no-plot", "--shear-ratio", "0.2,0.1"]
+    )
+    assert res.exit_code == 0, res.output
+    b = json.loads((tmp_path / "s" / "report.json").read_text())["shear_bound"]
     assert b["chips_mm"] == [[-7.0, 0.0], [7.0, 6.0]] and len(b["estimates"]) == 5 and b["shear_ratio"] == [0.2, 0.1]
     lo, hi = (next(r for r in b["noise"] if r["noise_uT"] == n) for n in (0.5, 2.0))
     for name in b["estimates"]:  # the bound is linear in the noise

@@ -19,7 +19,14 @@ from serial_support import read_fed_stream
 
 from mst_cli import api
 from mst_cli.calibrate.inverse_map import inverse_map
-from mst_cli.calibrate.inverse_table import SHEAR_TABLE_FILE, SHEAR_TABLE_RATIO, InverseTable, TableGrid, build_table
+from mst_cli.calibrate.inverse_table import (
+    SHEAR_TABLE_FILE,
+    SHEAR_TABLE_RATIO,
+    InverseTable,
+    TableGrid,
+    build_table,
+    kink_edges_N,
+)
 from mst_cli.calibrate.load_readings import LOAD_COLUMNS
 from mst_cli.calibrate.table_reader import ShearTableReader, build_beside
 from mst_cli.cli.app import main
@@ -38,7 +45,10 @@ def model():
     doc, geo = load_design_document(FORWARD)
     stack = loaded_stack(geo, doc.material, "spring")
     top = max(t.lock_force_N for t in stack.tilt)
-    grid = TableGrid.cone(top, GRID_SMALL[0], SHEAR_TABLE_RATIO, GRID_SMALL[1])
+    # its force nodes at every kink of the part's laws, as the reader's tables (the locks, the
+    # layers' own knots and the cover's landing: 7 bands of 4 cells)
+    edges = kink_edges_N(stack.tilt, None, top)
+    grid = TableGrid.cone(top, GRID_SMALL[0], SHEAR_TABLE_RATIO, GRID_SMALL[1], edges)
     return stack, build_table(geo, doc.material, "spring", grid), top
 
 

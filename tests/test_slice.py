@@ -405,8 +405,10 @@ def test_reference_export_prints(tmp_path):
     assert r.exit_code == 0, r.stderr
     assert rep["free_span"]["longest"]["length_mm"] <= 5.0
     assert not rep["support"]["needed"]
-    (p,) = rep["pause"]["found"]
-    assert p["after_layer"] == manifest["print"]["pause"]["after_layer"]
+    # the magnet's pause, then the insert's: each after the layer export.json asks for
+    found = rep["pause"]["found"]
+    assert [p["after_layer"] for p in found] == [p["after_layer"] for p in manifest["print"]["pauses"]]
+    assert found[0]["after_layer"] == manifest["print"]["pause"]["after_layer"] and len(found) == 2
     # the walls as sliced (0.6, 1.0, 1.4 mm): every wall there, within a tenth of a line of its
     # drawing, in as many lines as fit across it
     walls = rep["walls_as_sliced"]

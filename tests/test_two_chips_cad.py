@@ -31,6 +31,7 @@ import numpy as np
 import pytest
 import trimesh
 from click.testing import CliRunner
+from mesh_rays import triangle_hits
 
 from mst_cli.cad.expected_body import overlap_volume_mm3
 from mst_cli.cli.app import main
@@ -45,7 +46,11 @@ SLOTS_X_MM = [(-26.8, -1.0), (1.0, 26.8)]
 SLOT_Z_MM = (0.8, 5.65)
 SLOT_FLOOR_Y_MM = -8.2
 WINDOW_FLOOR_Y_MM = -2.6
-EXTRA_SLOT_MM3 = 25.8 * (18.2 * 4.85 - 12.6 * 3.25)
+# a window's section: 6.6 mm up the depth (the 6 mm socket, 0.2 mm clearance each side, on the
+# layer grid) x 3.25 mm high, and its gable: 3.25 mm wide, 1.8 mm rise (1.625 up to the grid)
+WINDOW_SECTION_MM2 = 6.6 * 3.25 + 0.5 * 3.25 * 1.8
+# the second slot, less the first chip's +x window over the same x (the one-chip body's)
+EXTRA_SLOT_MM3 = 25.8 * 18.2 * 4.85 - 25.8 * WINDOW_SECTION_MM2
 STL_VOLUME_TOL_MM3 = 0.05  # float32 vertices (~4e-6 mm at 30 mm) over ~6000 mm^2 of surface
 
 
@@ -86,23 +91,8 @@ def sensor_mesh(out: Path) -> trimesh.Trimesh:
 
 
 def ray_hits(mesh: trimesh.Trimesh, origin, direction) -> np.ndarray:
-    """Distances along a ray (unit ``direction``) of its crossings with the mesh's triangles,
-    sorted, repeats (a ray through a shared edge) merged: Moller-Trumbore in numpy, so that the
-    measurement shares nothing with mst's own (manifold3d) ray casts."""
-    o, d = np.asarray(origin, dtype=float), np.asarray(direction, dtype=float)
-    tri = np.asarray(mesh.triangles, dtype=float)
-    e1, e2 = tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]
-    p = np.cross(d, e2)
-    det = np.einsum("ij,ij->i", e1, p)
-    ok = np.abs(det) > 1e-12
-    inv = np.where(ok, 1.0 / np.where(ok, det, 1.0), 0.0)
-    t = o - tri[:, 0]
-    u = np.einsum("ij,ij->i", t, p) * inv
-    q = np.cross(t, e1)
-    v = (q @ d) * inv
-    s = np.einsum("ij,ij->i", e2, q) * inv
-    hit = ok & (u >= 0) & (v >= 0) & (u + v <= 1) & (s > 0)
-    return np.unique(np.round(s[hit], 6))
+    """Distances along a ray of its crossings with the mesh (:func:`mesh_rays.triangle_hits`)."""
+    return triangle_hits(np.asarray(mesh.triangles, dtype=float), origin, direction)
 
 
 def air_along(mesh: trimesh.Trimesh, origin, direction) -> list[tuple[float, float]]:
@@ -137,7 +127,7 @@ def test_each_chip_has_an_empty_slot_of_the_board_outline(exports):
 def test_the_two_chip_body_is_one_volume_lighter_by_the_second_slot(exports):
     one, two = (sensor_mesh(out) for out in exports)
     assert two.is_watertight and two.is_volume
-    assert len(two.split(only_watertight=False)) == 2  # the body and its closed magnet pocket
+    assert len(two.split(only_watertight=False)) == 3  # the body, its magnet pocket and its insert's slot
     assert np.allclose(one.bounds, two.bounds, atol=1e-5)  # both slots reach 26.8 mm: base 56 mm
     assert two.bounds[1][0] - two.bounds[0][0] == pytest.approx(56.0, abs=1e-5)
     assert one.volume - two.volume == pytest.approx(EXTRA_SLOT_MM3, abs=STL_VOLUME_TOL_MM3)
@@ -225,7 +215,12 @@ def test_overlap_of_boxes_counts_what_two_cover():
 STEP_CHIPS = [(-14.0, -0.4), (13.8, 0.5)]
 STEP_FLOORS_Y_MM = [-8.6, -7.8]
 STEP_WINDOW_FLOORS_Y_MM = [[-3.0, -3.0], [-3.0, -2.2]]  # chip 1's -x and link; chip 2's link and +x
-STEP_EXTRA_MM3 = 25.8 * (17.8 * 4.85 - 13.0 * 3.25) - 1.2 * 0.8 * 3.25
+# two chips: the second slot, the link window (2 mm of wall, from the lower floor -3.0 to the
+# higher top 4.4: 7.4 mm) and chip 2's +x window (1.2 mm of wall); one chip: its +x window, 29 mm
+# from its slot to the face
+STEP_EXTRA_MM3 = (
+    25.8 * 17.8 * 4.85 + 2.0 * (7.4 * 3.25 + 0.5 * 3.25 * 1.8) + 1.2 * WINDOW_SECTION_MM2 - 29.0 * WINDOW_SECTION_MM2
+)
 
 
 @pytest.fixture(scope="module")
@@ -249,15 +244,17 @@ def test_chips_at_different_y_each_have_a_slot_on_their_own_floor(step_exports):
     above = air_along(mesh, (-far, -7.5071, 1.6123), (1, 0, 0))
     assert np.allclose([(a - far, b - far) for a, b in above], SLOTS_X_MM, atol=1e-4)
     # the windows' floors, up the depth at the windows' height: -x face, link, +x face
+    # and each window's top: a 45 deg gable over it, the side wall above it up to the +y face
     for x, floor in [(-27.4, -3.0), (0.0, -3.0), (27.4, -2.2)]:
         hits = ray_hits(mesh, (x + 0.0123, -15.0, 4.0123), (0, 1, 0)) - 15.0
-        assert np.allclose(hits, [-DEPTH_MM / 2, floor], atol=1e-4), x
+        assert len(hits) == 4 and hits[-1] == pytest.approx(DEPTH_MM / 2, abs=1e-4), x
+        assert np.allclose(hits[:2], [-DEPTH_MM / 2, floor], atol=1e-4), x
 
 
 def test_the_stepped_body_is_one_volume_lighter_by_the_hand_worked_slot(step_exports):
     one, two = (sensor_mesh(out) for out in step_exports)
     assert two.is_watertight and two.is_volume
-    assert len(two.split(only_watertight=False)) == 2  # the body and its closed magnet pocket
+    assert len(two.split(only_watertight=False)) == 3  # the body, its magnet pocket and its insert's slot
     assert np.allclose(one.bounds, two.bounds, atol=1e-5)
     assert one.volume - two.volume == pytest.approx(STEP_EXTRA_MM3, abs=STL_VOLUME_TOL_MM3)
     slots = json.loads((step_exports[1] / "export.json").read_text())["board_slots"]
@@ -314,7 +311,7 @@ def test_a_link_window_below_the_next_floor_stops_at_that_slot_wall(tmp_path):
     assert r.exit_code == 0, r.output + r.stderr
     mesh = trimesh.load(out / "sensor.stl")
     mesh.apply_transform(np.array([[1, 0, 0, 0], [0, 0, 1, -20.0], [0, -1, 0, 0], [0, 0, 0, 1]], dtype=float))
-    assert mesh.is_watertight and len(mesh.split(only_watertight=False)) == 2
+    assert mesh.is_watertight and len(mesh.split(only_watertight=False)) == 3
     # across at y -5 (between the link's floor and chip 2's), window height: air from the -x
     # face through chip 1's slot and the link to x 1.0, then solid to the +x face
     assert np.allclose(ray_hits(mesh, (-40.0, -5.0071, 4.0123), (1, 0, 0)) - 40.0, [1.0, 28.0], atol=1e-4)

@@ -1,8 +1,9 @@
 """Calibrate a printed sensor from its load test (a CSV) and read forces from field readings.
 
-loadtest.csv beside this script is a load test of the bundled forward design printed with
-known errors (tests/test_examples.py regenerates it): walls 0.05 mm thick, modulus x 0.85,
-the board 0.3 mm further from the magnet, the magnet x 0.95; 2 uT of chip noise.
+loadtest.csv beside this script is a load test of the bundled forward design (the whole part,
+its insert too) printed with known errors: walls 0.05 mm thicker, modulus x 0.85, the board
+0.3 mm further from the magnet, the magnet x 0.95; 2 uT of chip noise. `python
+tools/make_examples.py` writes it from the current model; tests/test_examples.py checks it.
 
     python docs/examples/calibrate_and_read.py  # writes mst-out/examples/calibration/
 """

@@ -133,7 +133,8 @@ def check(path: str | Path, *, nozzle_mm: float | None = None, load_path_max: fl
     []
     """
     # deferred: the CAD layer, 30 ms measured (mst simulate does not pay it)
-    from mst_cli.cad.checks import CheckResults, load_mesh, resolve_export, run_checks
+    from mst_cli.cad.checks import CheckResults, run_checks
+    from mst_cli.cad.export_files import load_mesh, resolve_export
     from mst_cli.cad.manifest import load_manifest
 
     if nozzle_mm is not None:  # one bound: printer.nozzle_mm's in a design file

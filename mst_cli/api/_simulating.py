@@ -209,7 +209,7 @@ def _shear_bound(doc: Document, mechanics: str | None, field_model: str | None, 
     """report.json's shear_bound: each estimate's 1-sigma CRB for the file's chips (one: a centred
     press's Fz, Fx, Fy; more: all five over the middle 60 % of the face)."""
     scene = printed_scene(doc, mechanics, field_model)
-    stack = loaded_stack(scene.geometry, scene.material, scene.mechanics)
+    stack = loaded_stack(scene.geometry, scene.material, scene.mechanics, whole_part=doc.whole_part)
     return bound_report(stack, doc.chips_mm, shear_ratio, doc.noise_uT_rms)
 
 
@@ -249,6 +249,7 @@ def _offcentre(
         scene.mechanics,
         scene.field_model,
         shear_ratio=shear_ratio or (0.0, 0.0),
+        whole_part=doc.whole_part,
     )
 
 
@@ -300,4 +301,11 @@ def offset_map(
 
 def _offset_map(doc: Document, mechanics: str | None, field_model: str | None, region_mm) -> OffsetMap:
     scene = printed_scene(doc, mechanics, field_model)
-    return run_offset_map(scene.geometry, scene.material, scene.mechanics, scene.field_model, region_mm=region_mm)
+    return run_offset_map(
+        scene.geometry,
+        scene.material,
+        scene.mechanics,
+        scene.field_model,
+        region_mm=region_mm,
+        whole_part=doc.whole_part,
+    )

@@ -21,7 +21,12 @@ def body_solids(geometry: SensorGeometry) -> tuple[list[Solid], list[Solid]]:
     (:func:`mst_cli.cad.shapes.body_plan`)."""
     plan = shapes.body_plan(geometry)
     keep = [parts.solid(s) for s in plan.keep]
-    cut = [parts.solid(s) for s in plan.cut] + [parts.fused(plan.pocket)]
+    pocket = parts.fused(plan.pocket)
+    if plan.pocket_ribs:  # the crush ribs stay standing in the pocket
+        pocket = pocket.cut(*(parts.solid(s) for s in plan.pocket_ribs))
+    cut = [parts.solid(s) for s in plan.cut] + [pocket]
+    if plan.insert_slot:
+        cut.append(parts.fused(plan.insert_slot))
     return keep, cut
 
 
@@ -42,17 +47,21 @@ def build_body(geometry: SensorGeometry) -> Solid:
 
 @dataclass(frozen=True)
 class SensorCAD:
-    """The built parts: the printed body, the magnet and the board (PCB + chip)."""
+    """The built parts: the printed body, the magnet, the board (PCB + chip) and the insert
+    plate (None without one)."""
 
     body: Solid
     magnet: Solid
     board: Compound
+    insert: Solid | None = None
+    insert_label: str = "insert"
 
     def assembly(self, name: str) -> Compound:
-        """Named STEP assembly: the body, the magnet and the board as separate parts."""
-        body = Compound([self.body], label="sensor_body")
-        magnet = Compound([self.magnet], label="magnet")
-        return Compound(children=[body, magnet, self.board], label=name)
+        """Named STEP assembly: the body, the magnet, the insert and the board as separate parts."""
+        children = [Compound([self.body], label="sensor_body"), Compound([self.magnet], label="magnet")]
+        if self.insert is not None:
+            children.append(Compound([self.insert], label=self.insert_label))
+        return Compound(children=children + [self.board], label=name)
 
 
 def _board_compound(geometry: SensorGeometry, chip: int, label: str) -> Compound:
@@ -72,7 +81,9 @@ def build_sensor(geometry: SensorGeometry) -> SensorCAD:
         board = _board_compound(geometry, 0, label)
     else:
         board = Compound(children=[_board_compound(geometry, i, f"{label}_chip_{i}") for i in range(n)], label="boards")
-    return SensorCAD(body=body, magnet=parts.magnet_solid(geometry), board=board)
+    insert = parts.solid(shapes.insert_plate(geometry)) if geometry.has_insert else None
+    label = f"insert_{geometry.insert_plate.material}" if geometry.insert_plate is not None else "insert"
+    return SensorCAD(body=body, magnet=parts.magnet_solid(geometry), board=board, insert=insert, insert_label=label)
 
 
 def print_mesh(geometry: SensorGeometry, body: Solid, tolerance_mm: float) -> tuple[np.ndarray, np.ndarray]:

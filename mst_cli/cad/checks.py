@@ -20,14 +20,15 @@ function that compares those measurements with the design's own values in the ty
   the print layers, so the slicer prints it where it was designed) and ``magnet_pause`` (the
   magnet goes in whole before the layer after the pause, which starts the pocket's roof);
 * ``load_path``: each member's share of the magnet's motion under a centred press, from the
-  design (:mod:`mst_cli.model.load_path`); a bound only when one is given.
+  design (:mod:`mst_cli.model.load_path`); fails when the share the closed form leaves
+  uncertain exceeds the regime's accuracy budget, or the share over ``--load-path-max``.
 
-The manifest validated itself on load, so a KeyError or TypeError in here is a bug.
+The export's files are found and read by :mod:`mst_cli.cad.export_files`. The manifest
+validated itself on load, so a KeyError or TypeError in here is a bug.
 """
 
 from __future__ import annotations
 
-import io
 import math
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
@@ -35,13 +36,14 @@ from typing import Any
 
 import numpy as np
 
-from mst_cli.cad.manifest import MAX_COORD_MM, Manifest
+from mst_cli.cad.export_files import ExportFiles as ExportFiles  # re-exported: the checks' inputs
+from mst_cli.cad.export_files import load_mesh as load_mesh
+from mst_cli.cad.export_files import resolve_export as resolve_export
+from mst_cli.cad.manifest import Manifest
 from mst_cli.cad.measure import LAYER_GRID_TOL_MM, Measurements, measure
-from mst_cli.cad.mesh_io import Mesh, binary_stl_triangles, weld
-from mst_cli.errors import InputError
-from mst_cli.io.files import read_input
+from mst_cli.cad.mesh_io import Mesh
 from mst_cli.io.outputs import finite_or_none
-from mst_cli.model.load_path import dominant_member, load_path_report
+from mst_cli.model.load_path import dominant_member, load_path_report, support_uncertainty
 from mst_cli.model.mechanics import layer_laws
 from mst_cli.model.stack import Stack
 
@@ -51,7 +53,6 @@ PLANAR_TOL_MM = 1e-4
 # per-layer shape dimensions (wall, web depth, cavity) go through a section or a sine
 LAYER_TOL_MM = 10 * PLANAR_TOL_MM
 OVERHANG_LIMIT_DEG = 45.0
-MAX_STL_BYTES = 500_000_000
 
 
 @dataclass(frozen=True)
@@ -66,92 +67,6 @@ class Check:
     note: str = ""
     info: bool = False  # report only: never fails
     values: dict = field(default_factory=dict)
-
-
-# --------------------------------------------------------------------------- inputs
-@dataclass(frozen=True)
-class ExportFiles:
-    """The files of a folder ``mst export`` wrote (a mesh that is not there is None)."""
-
-    folder: Path
-    manifest: Path  # export.json
-    stl: Path | None
-    three_mf: Path | None
-
-
-def resolve_export(path: str | Path, need_stl: bool = True) -> ExportFiles:
-    """The export at ``path``: the folder 'mst export' wrote, or the .stl (or, without
-    ``need_stl``, the .3mf) in it. InputError when it does not exist, when its mesh (the STL,
-    ``mst check``'s; either, ``mst slice``'s) or export.json is missing."""
-    path = Path(path)
-    if not path.exists():
-        raise InputError("PATH", str(path), "does not exist: give the folder 'mst export' wrote or the .stl in it")
-    suffix = path.suffix.lower()
-    if path.is_dir():
-        folder, stl = path, path / "sensor.stl"
-    elif suffix == ".stl" or (suffix == ".3mf" and not need_stl):
-        folder, stl = path.parent, path if suffix == ".stl" else path.parent / "sensor.stl"
-    else:
-        raise InputError("PATH", str(path), "must be a folder written by 'mst export' or an .stl in it")
-    three_mf = folder / "sensor.3mf"
-    # mst check reads whatever sits at the STL's name (a FIFO or a folder there is refused by
-    # kind when it is read); mst slice slices only regular files
-    found = ExportFiles(
-        folder,
-        folder / "export.json",
-        stl if (stl.exists() if need_stl else stl.is_file()) else None,
-        three_mf if three_mf.is_file() else None,
-    )
-    if need_stl and found.stl is None:
-        raise InputError("PATH", str(stl), "no such STL file (run 'mst export --stl' first)")
-    if found.stl is None and found.three_mf is None:
-        raise InputError(
-            "PATH",
-            str(folder),
-            "holds neither sensor.3mf nor sensor.stl: run 'mst export DESIGN.yaml --3mf --stl --out DIR' first",
-        )
-    if not found.manifest.exists():
-        raise InputError(
-            "PATH", str(found.manifest), "export.json not found next to the mesh: run 'mst export' to write it"
-        )
-    return found
-
-
-def load_mesh(path: Path) -> Mesh:
-    """Read an STL into a :class:`~mst_cli.cad.mesh_io.Mesh` (vertices welded); InputError when
-    it is not a regular file or not a mesh, or when a coordinate is not finite or beyond
-    +-MAX_COORD_MM (nothing is measured on such a mesh). A binary STL is read with numpy;
-    anything else (an ASCII STL, garbage) goes through trimesh, which says whether it is a
-    mesh at all."""
-    data = read_input(path, MAX_STL_BYTES, field="PATH", what="STL file", too_large=": no body mst exports")
-    corners = binary_stl_triangles(data)
-    if corners is not None:
-        vertices, faces = corners.reshape(-1, 3), np.arange(3 * len(corners)).reshape(-1, 3)
-    else:
-        vertices, faces = _load_with_trimesh(path, data)
-    bad = ~np.isfinite(vertices).all(axis=1) | (np.abs(np.nan_to_num(vertices, nan=0.0)) > MAX_COORD_MM).any(axis=1)
-    if bad.any():
-        i = int(np.flatnonzero(bad)[0])
-        raise InputError(
-            "PATH",
-            str(path),
-            f"vertex {i} at {vertices[i].tolist()} mm: every coordinate "
-            f"must be finite and within +-{MAX_COORD_MM:g} mm",
-        )
-    return weld(vertices, faces)  # what trimesh.load(process=True) does, on finite coordinates
-
-
-def _load_with_trimesh(path: Path, data: bytes) -> tuple[np.ndarray, np.ndarray]:
-    import trimesh  # deferred: heavy (pulls scipy.spatial), only for files that are not binary STL
-
-    try:
-        with np.errstate(all="ignore"):
-            mesh = trimesh.load(io.BytesIO(data), file_type="stl", force="mesh", process=False)
-    except Exception as exc:  # trimesh raises many kinds on garbage; all mean "unreadable"
-        raise InputError("PATH", str(path), f"cannot be read as an STL mesh ({type(exc).__name__})") from None
-    if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
-        raise InputError("PATH", str(path), "holds no triangles")
-    return np.asarray(mesh.vertices, dtype=float), np.asarray(mesh.faces, dtype=np.int64)
 
 
 # --------------------------------------------------------------------------- the checks
@@ -188,7 +103,7 @@ def check_one_body(m: Measurements, x: Manifest) -> Check:
         m.bodies == body.bodies and m.voids == body.internal_voids,
         f"{m.bodies} body, {m.voids} void",
         f"{body.bodies} body, {body.internal_voids} void",
-        "the closed magnet pocket is the only void",
+        "the closed voids are the magnet pocket" + (" and the insert's slot" if x.body.internal_voids > 1 else ""),
         values={"shell_volumes_mm3": m.shell_volumes_mm3},
     )
 
@@ -375,32 +290,48 @@ def check_footprint(m: Measurements, x: Manifest) -> Check:
 
 def check_load_path(m: Measurements, x: Manifest, share_max: float | None = None) -> Check:
     """Where a centred press's motion of the magnet goes (docs/design.md 4.6): the layers (L0)
-    against the cap, plates and cover in closed form, from the design in export.json. Fails when
-    the share outside the layers in some regime exceeds ``share_max`` (``--load-path-max``),
-    naming the member; without it, reported only."""
+    against the cap, plates and cover in closed form, each in the part's regimes while the
+    forward model moves it (load_path.motion_shares), from the design in export.json. Fails,
+    naming the member, when the share outside the layers in some regime exceeds ``share_max``
+    (``--load-path-max``) or, without it, when the share the closed form leaves uncertain
+    (the beams' ends held at the soft and at the stiff bound of what restrains them) exceeds the
+    regime's accuracy budget
+    (5 % before the first lock, 8 % after one, 20 % after two: load_path.support_uncertainty)."""
     if x.design is None:
         return Check("load_path", True, "no design in export.json", "the design's members", info=True)
     doc = x.design
     g = doc.geometry()
     report = load_path_report(g, doc.material, Stack(layer_laws(g.layers, doc.material, "spring")))
     rows = report["regimes"]
-    worst = max(rows, key=lambda r: r["outside_layers"])
-    name, share = dominant_member(worst)
     got = ", ".join(f"{100 * r['outside_layers']:.0f} %" for r in rows)
-    bad = share_max is not None and worst["outside_layers"] > share_max
-    note = (
-        f"regime {worst['regime']}: {100 * worst['outside_layers']:.0f} % of the magnet's motion is outside "
-        "the layers, "
-        f"{100 * share:.0f} % in the {name} ({report['cap_mm_per_N']:.3g} mm/N cap; clamped bound "
-        f"{100 * worst['outside_layers_clamped']:.0f} %)"
-    )
+    if share_max is None:
+        budget = support_uncertainty(report)
+        over = [b for b in budget if b["uncertain_share"] > b["budget"]]
+        worst = max(over or budget, key=lambda b: b["uncertain_share"] / b["budget"])
+        name, row = worst["member"], rows[worst["regime"] - 1]
+        bound = "uncertain share <= " + " / ".join(f"{100 * b['budget']:.0f}" for b in budget) + " % per regime"
+        note = (
+            f"regime {row['regime']}: {100 * row['outside_layers']:.0f} % of the magnet's motion is outside the "
+            f"layers, {100 * worst['uncertain_share']:.0f} % uncertain between its supports' soft and stiff bounds "
+            f"(budget {100 * worst['budget']:.0f} %), most in the {name}"
+        )
+        bad = bool(over)
+    else:
+        row = max(rows, key=lambda r: r["outside_layers"])
+        name, share = dominant_member(row)
+        bound = f"<= {100 * share_max:.0f} % in every regime (--load-path-max)"
+        note = (
+            f"regime {row['regime']}: {100 * row['outside_layers']:.0f} % of the magnet's motion is outside "
+            f"the layers, {100 * share:.0f} % in the {name} ({report['cap_mm_per_N']:.3g} mm/N cap; clamped bound "
+            f"{100 * row['outside_layers_clamped']:.0f} %)"
+        )
+        bad = row["outside_layers"] > share_max
     return Check(
         "load_path",
         not bad,
         f"outside the layers per regime: {got}",
-        "report only" if share_max is None else f"<= {100 * share_max:.0f} % in every regime (--load-path-max)",
+        bound,
         ("the " + name + " is too soft: " + note) if bad else note,
-        info=share_max is None,
         values={"outside_layers": [r["outside_layers"] for r in rows], "dominant_member": name},
     )
 
@@ -485,6 +416,34 @@ def check_magnet_pause(m: Measurements, x: Manifest) -> Check:
     )
 
 
+def check_insert_slot(m: Measurements, x: Manifest) -> Check:
+    """The insert's slot where export.json declares it (width, floor, thickness, the gable's
+    ridge) and its pause at the slot's top, on the grid, above the plate (info without one)."""
+    part = x.insert
+    if part is None or part.sensor_slot_min_mm is None or part.sensor_slot_max_mm is None:
+        return Check("insert_slot", True, "no insert", "no insert", "", info=True)
+    lo, hi = np.asarray(part.sensor_slot_min_mm), np.array(part.sensor_slot_max_mm)
+    hi[1] += part.slot_roof_rise_mm or 0.0  # along y the ray ends at the ridge
+    got_lo, got_hi = np.asarray(m.insert_slot.lo_mm), np.asarray(m.insert_slot.hi_mm)
+    err = float(np.max(np.abs(np.concatenate([got_lo - lo, got_hi - hi]))))
+    pause, lh = part.placed_at_pause, x.print.layer_height_mm
+    z_top = part.sensor_slot_max_mm[1] + 0.5 * x.print.height_mm  # the slot's top, print height
+    pause_ok = not _off_grid(pause.z_mm, lh) and pause.after_layer == round(pause.z_mm / lh)
+    pause_ok &= abs(pause.z_mm - z_top) < 1e-6 and part.sensor_box_max_mm[1] + 0.5 * x.print.height_mm <= pause.z_mm
+    return Check(
+        "insert_slot",
+        bool(err <= PLANAR_TOL_MM and pause_ok),
+        _insert_slot_text(got_lo, got_hi),
+        _insert_slot_text(lo, hi) + f"; pause z {pause.z_mm:.2f}",
+        f"the plate drops in at the pause after layer {pause.after_layer} (z = {pause.z_mm:.2f} mm)",
+        values={"largest_error_mm": err, "pause_z_mm": pause.z_mm, "pause_ok": bool(pause_ok)},
+    )
+
+
+def _insert_slot_text(lo: np.ndarray, hi: np.ndarray) -> str:
+    return f"{hi[0] - lo[0]:.3f} x {hi[2] - lo[2]:.3f} mm, floor y {lo[1]:.3f}, ridge y {hi[1]:.3f}"
+
+
 CHECKS = (
     check_watertight,
     check_is_volume,
@@ -502,6 +461,7 @@ CHECKS = (
     check_overhang,
     check_layer_grid,
     check_magnet_pause,
+    check_insert_slot,
     check_load_path,
 )
 

@@ -12,6 +12,7 @@ import io
 import itertools
 import re
 import zipfile
+from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -43,14 +44,25 @@ PRUSA_CUSTOM_GCODE_MEMBER = "Metadata/Prusa_Slicer_custom_gcode_per_print_z.xml"
 PRUSA_PAUSE_PRINT_TYPE = 1
 
 
-def prusa_pause_xml(pause_after_z_mm: float, layer_height_mm: float, message: str = "") -> str:
-    """The custom G-code member asking for one pause after the layer whose top is
-    ``pause_after_z_mm``: the event sits at the top of the next layer (as the GUI stores it)."""
-    print_z = round(pause_after_z_mm + layer_height_mm, 6)
+Pauses = float | Sequence[tuple[float, str]]  # one pause's height, or (height, message) each
+
+
+def _pause_list(pauses: Pauses, message: str) -> list[tuple[float, str]]:
+    return [(float(pauses), message)] if isinstance(pauses, (int, float)) else [(float(z), m) for z, m in pauses]
+
+
+def prusa_pause_xml(pause_after_z_mm: Pauses, layer_height_mm: float, message: str = "") -> str:
+    """The custom G-code member asking for a pause after the layer whose top is
+    ``pause_after_z_mm`` (or after each of a list of (height, message)): each event sits at the
+    top of the next layer (as the GUI stores it)."""
+    codes = "".join(
+        f'<code print_z="{_xml_number(round(z + layer_height_mm, 6))}" type="{PRUSA_PAUSE_PRINT_TYPE}" '
+        f'extruder="1" color="" extra="{_xml_escape(text)}" gcode="M601"/>\n'
+        for z, text in sorted(_pause_list(pause_after_z_mm, message))
+    )
     return (
         '<?xml version="1.0" encoding="utf-8"?>\n<custom_gcodes_per_print_z>\n'
-        f'<code print_z="{_xml_number(print_z)}" type="{PRUSA_PAUSE_PRINT_TYPE}" extruder="1" '
-        f'color="" extra="{_xml_escape(message)}" gcode="M601"/>\n'
+        f"{codes}"
         '<mode value="SingleExtruder"/>\n</custom_gcodes_per_print_z>\n'
     )
 
@@ -59,17 +71,18 @@ def three_mf_bytes(
     vertices: np.ndarray,
     triangles: np.ndarray,
     name: str,
-    pause_after_z_mm: float | None = None,
+    pause_after_z_mm: Pauses | None = None,
     layer_height_mm: float = 0.2,
     pause_message: str = "insert the magnet",
 ) -> bytes:
     """A 3MF package (3MF Core Specification 1.x) holding one mesh object, unit mm.
 
-    With ``pause_after_z_mm``, the package also carries PrusaSlicer's per-height custom G-code
-    with one "pause print" after the layer whose top is at that height (layers of
-    ``layer_height_mm``): PrusaSlicer's GUI shows the pause on its layer slider and its command
-    line writes the profile's pause_print_gcode (``;PAUSE_PRINT``, ``M117 <message>``, then
-    e.g. M601) between that layer's last move and the next layer's first.
+    With ``pause_after_z_mm`` (a height, or a list of (height, message)), the package also
+    carries PrusaSlicer's per-height custom G-code with a "pause print" after each layer whose
+    top is at that height (layers of ``layer_height_mm``): PrusaSlicer's GUI shows the pauses on
+    its layer slider and its command line writes the profile's pause_print_gcode
+    (``;PAUSE_PRINT``, ``M117 <message>``, then e.g. M601) between that layer's last move and the
+    next layer's first.
     """
     content_types = _CONTENT_TYPES
     if pause_after_z_mm is not None:  # every part of the package needs a content type

@@ -17,6 +17,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from mst_cli.model.board_slots import window_roof_apex_y_mm
+
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
 
@@ -85,10 +87,29 @@ def pocket_section_area_mm2(geometry: SensorGeometry, z_mm: float) -> float:
 
 def pocket_volume_mm3(geometry: SensorGeometry) -> float:
     """The U-shaped pocket (its x-y section times the depth) plus the roof: a triangular
-    prism of base ``pocket_depth`` and height ``pocket_roof_rise_mm``, 2 r long."""
+    prism of base ``pocket_depth`` and height ``pocket_roof_rise_mm``, 2 r long; less the crush
+    ribs (:func:`magnet_ribs_volume_mm3`)."""
     g = geometry
     r, d = g.pocket_radius_mm, g.pocket_depth_mm
-    return (0.5 * math.pi * r * r + 2 * r * g.pocket_top_y_mm) * d + r * d * g.pocket_roof_rise_mm
+    u = (0.5 * math.pi * r * r + 2 * r * g.pocket_top_y_mm) * d + r * d * g.pocket_roof_rise_mm
+    return u - magnet_ribs_volume_mm3(g)
+
+
+def magnet_ribs_volume_mm3(geometry: SensorGeometry) -> float:
+    """The crush ribs inside the pocket: each triangle's height h(x) (reach at its centre, 0 at
+    its base's ends) times the pocket's extent along y at x, from the round bottom
+    -sqrt(r^2 - x^2) to the pause y_top, integrated over x by Gauss-Legendre on each half (a
+    smooth integrand there: exact to rounding with 24 points)."""
+    g = geometry
+    r, w2, reach, y_top = g.pocket_radius_mm, 0.5 * g.magnet_rib_width_mm, g.magnet_rib_reach_mm, g.pocket_top_y_mm
+    s, wts = np.polynomial.legendre.leggauss(24)
+    total = 0.0
+    for xc in g.magnet_rib_x_mm:
+        for a, b in ((xc - w2, xc), (xc, xc + w2)):
+            x = 0.5 * (b - a) * s + 0.5 * (a + b)
+            h = reach * (1.0 - np.abs(x - xc) / w2)
+            total += 0.5 * (b - a) * float(np.sum(wts * h * (y_top + np.sqrt(r * r - x * x))))
+    return total
 
 
 def pocket_curved_area_mm2(geometry: SensorGeometry) -> float:
@@ -114,20 +135,27 @@ def overlap_volume_mm3(boxes: Sequence[tuple[Sequence[float], Sequence[float]]])
 
 
 def base_volume_mm3(geometry: SensorGeometry) -> float:
-    """Base block minus the board slots and the cable windows (open through the +y face); the
-    windows between two slots overlap, and their union is removed once."""
+    """Base block minus the board slots (open through the +y face) and the cable windows, each
+    a box from its floor to its top (or through the +y face) and a 45 deg gable over a closed
+    one; a window between two slots is one window, removed once."""
     g = geometry
     L, D = g.base_length_mm, g.depth_mm
     y_top = 0.5 * D
     z0, z1 = g.z_board_bottom_mm, g.z_cover_bottom_mm
-    boxes = []
-    for s in g.board_slots:
-        boxes.append(((s.x_mm[0], s.floor_y_mm, z0), (s.x_mm[1], y_top, z1)))
-        boxes += [((min(a, b), yf, wz0), (max(a, b), y_top, wz1)) for a, b, yf, wz0, wz1 in s.windows]
+    boxes = [((s.x_mm[0], s.floor_y_mm, z0), (s.x_mm[1], y_top, z1)) for s in g.board_slots]
     slot = sum((s.x_mm[1] - s.x_mm[0]) * (y_top - s.floor_y_mm) * g.slot_height_mm for s in g.board_slots)
-    windows = sum(
-        abs(x_out - x_in) * (y_top - yf) * (wz1 - wz0) for s in g.board_slots for x_in, x_out, yf, wz0, wz1 in s.windows
-    )
+    distinct = {
+        (min(a, b), max(a, b), yf, wz0, wz1, top)
+        for s in g.board_slots
+        for (a, b, yf, wz0, wz1), top in zip(s.windows, s.window_tops_y_mm)
+    }
+    windows = 0.0
+    for lo, hi, yf, wz0, wz1, top in sorted(distinct, key=str):
+        end = y_top if top is None else top
+        boxes.append(((lo, yf, wz0), (hi, end, wz1)))
+        windows += (hi - lo) * (end - yf) * (wz1 - wz0)
+        if top is not None:  # the gable: a triangle of base wz1 - wz0 and height its rise
+            windows += (hi - lo) * 0.5 * (wz1 - wz0) * (window_roof_apex_y_mm(g, top, wz0, wz1) - top)
     return L * D * g.z_base_top_mm - slot - windows + overlap_volume_mm3(boxes)
 
 
@@ -137,10 +165,30 @@ def plates_volume_mm3(geometry: SensorGeometry) -> float:
     return (len(g.layers) - 1) * g.width_mm * g.depth_mm * g.housing.plate_mm
 
 
-def cap_volume_mm3(geometry: SensorGeometry) -> float:
-    """Cap (W x D, from the stack top to the total height) minus the magnet pocket."""
+def insert_slot_volume_mm3(geometry: SensorGeometry) -> float:
+    """The insert's slot: its box plus the gable over it, a triangular prism of base the plate's
+    thickness and height its rise, the slot's width long (0 without an insert)."""
     g = geometry
-    return g.width_mm * g.depth_mm * (g.total_height_mm - g.z_stack_top_mm) - pocket_volume_mm3(g)
+    if not g.has_insert:
+        return 0.0
+    (x0, y0, z0), (x1, y1, z1) = g.insert_slot_box_mm
+    return (x1 - x0) * (z1 - z0) * ((y1 - y0) + 0.5 * g.insert_slot_roof_rise_mm)
+
+
+def insert_volume_mm3(geometry: SensorGeometry) -> float:
+    """The insert plate's volume, its box (0 without an insert)."""
+    if not geometry.has_insert:
+        return 0.0
+    lo, hi = geometry.insert_box_mm
+    return float(np.prod(np.subtract(hi, lo)))
+
+
+def cap_volume_mm3(geometry: SensorGeometry) -> float:
+    """Cap (W x D, from the stack top to the total height) minus the magnet pocket and the
+    insert's slot."""
+    g = geometry
+    block = g.width_mm * g.depth_mm * (g.total_height_mm - g.z_stack_top_mm)
+    return block - pocket_volume_mm3(g) - insert_slot_volume_mm3(g)
 
 
 def body_volume_mm3(geometry: SensorGeometry) -> float:

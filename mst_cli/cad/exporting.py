@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING
 from mst_cli.cad import mesh_io
 from mst_cli.cad.expected_body import body_volume_mm3
 from mst_cli.cad.manifest import MANIFEST_NAME, STL_TOLERANCE_MM, export_manifest
-from mst_cli.cad.mesh_body import print_mesh
+from mst_cli.cad.mesh_body import insert_mesh, print_mesh
 from mst_cli.cad.shapes import check_fits
 from mst_cli.errors import InputError
 from mst_cli.io.outputs import staged
@@ -69,18 +69,22 @@ def write_export(
                         vertices,
                         triangles,
                         doc.name,
-                        pause_after_z_mm=geometry.pause_height_mm,
+                        pause_after_z_mm=[(p.z_mm, p.why) for p in geometry.pauses],
                         layer_height_mm=geometry.layer_height_mm,
                     ),
                 )
                 say("wrote sensor.3mf")
+        if geometry.has_insert and (stl or three_mf):  # the plate for a user who prints it, flat
+            st.write_bytes("insert.stl", mesh_io.stl_bytes(*insert_mesh(geometry)))
+            names.append("insert.stl")
+            say("wrote insert.stl (the plate to print flat and drop in at its pause)")
         if step:
             from mst_cli.cad.assembly import build_sensor  # deferred: build123d takes seconds, only --step needs it
 
             say("building the CAD body: base, layers, plates, cap (one fuse)")
             cad = build_sensor(geometry)
             st.write_bytes("sensor.step", mesh_io.step_bytes(cad.assembly(doc.name)))
-            say("wrote sensor.step (body, magnet, board)")
+            say("wrote sensor.step (body, magnet, board" + (", insert)" if geometry.has_insert else ")"))
         if design_yaml is not None:
             # the design the body was built from, loadable by mst simulate / mst export
             st.write_yaml("design.yaml", design_yaml)
@@ -120,8 +124,8 @@ class ExportedFiles(list[Path]):
                 f"body volume {body_volume_mm3(g):.1f} mm3, sensor height {g.total_height_mm:.2f} mm; "
                 f"prints on its side, {g.depth_mm:g} mm high in "
                 f"{int(round(g.depth_mm / g.layer_height_mm))} layers of {g.layer_height_mm:g} mm",
-                f"pause after layer {g.pause_after_layer} (z = {g.pause_height_mm:.2f} mm) "
-                "to drop the magnet into its pocket" + (" (the 3MF carries the pause)" if three_mf else ""),
+                "; ".join(f"pause after layer {p.after_layer} (z = {p.z_mm:.2f} mm) to {p.why}" for p in g.pauses)
+                + (" (the 3MF carries the pauses)" if three_mf else ""),
                 f"wrote {out}/{', '.join(p.name for p in self)}",
             ]
         )

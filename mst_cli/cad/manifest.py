@@ -41,6 +41,7 @@ from mst_cli.cad.expected_body import (
     wall_centrelines_xz,
     wall_horizontal_width_mm,
 )
+from mst_cli.cad.placed_parts import crush_ribs_section, parts_section
 from mst_cli.errors import InputError
 from mst_cli.io.files import read_input_text
 from mst_cli.sensor.document import Document, design_geometry, parse_document
@@ -107,6 +108,8 @@ def print_section(g: SensorGeometry) -> dict:
             "z_mm": g.pause_height_mm,
             "why": "drop the magnet into its pocket",
         },
+        # every pause, lowest first (the magnet's is print.pause, kept for older readers)
+        "pauses": [{"after_layer": p.after_layer, "z_mm": p.z_mm, "why": p.why} for p in g.pauses],
         "magnet_top_z_mm": g.print_height_mm(g.magnet.radius_mm),
         "cavity_lines": cavity_lines,
         "wall_lines": wall_lines,
@@ -135,6 +138,7 @@ def export_manifest(
         "print": print_section(g),
         "body": _body_section(g, stl_tolerance_mm),
         "magnet_pocket": _pocket_section(g),
+        "parts": parts_section(g),
         **_slots_sections(g),
         "gap0_mm": g.gap0_mm,
         "base_top_z_mm": g.z_base_top_mm,
@@ -184,7 +188,7 @@ def _body_section(g: SensorGeometry, stl_tolerance_mm: float) -> dict:
         "bbox_min_mm": list(bbox_min),
         "bbox_max_mm": list(bbox_max),
         "bodies": 1,
-        "internal_voids": 1,  # the closed magnet pocket
+        "internal_voids": 1 + g.has_insert,  # the closed magnet pocket, and the insert's slot
     }
 
 
@@ -204,6 +208,7 @@ def _pocket_section(g: SensorGeometry) -> dict:
         "curved_area_mm2": pocket_curved_area_mm2(g),
         "magnet_diameter_mm": g.magnet.diameter_mm,
         "magnet_thickness_mm": g.magnet.thickness_mm,
+        "crush_ribs": crush_ribs_section(g),
     }
 
 
@@ -223,8 +228,10 @@ def _slot_section(g: SensorGeometry, chip: int = 0) -> dict:
         "height_mm": g.slot_height_mm,
         "headroom_mm": g.board.headroom_mm,
         "cable_windows": [
+            # top_y_mm: under a 45 deg gable (the side wall over it carries the cover), or the +y face
             {"x_inner_mm": a, "x_outer_mm": b, "floor_y_mm": yf, "z0_mm": z0, "z1_mm": z1}
-            for a, b, yf, z0, z1 in slot.windows
+            | {"top_y_mm": 0.5 * g.depth_mm if top is None else top, "open_through_top_face": top is None}
+            for (a, b, yf, z0, z1), top in zip(slot.windows, slot.window_tops_y_mm)
         ],
         "board_thickness_mm": g.board.thickness_mm,
         "chip_height_mm": g.board.chip_height_mm,
@@ -387,6 +394,20 @@ class Slot:
 
 
 @dataclass(frozen=True)
+class PlacedPart:
+    """An entry of ``parts``: a part that is not the TPU body, and (the insert) the slot the body
+    leaves for it, sensor frame."""
+
+    name: str = _kind("str")
+    sensor_box_min_mm: tuple[float, float, float] = _kind(("num", 3))
+    sensor_box_max_mm: tuple[float, float, float] = _kind(("num", 3))
+    placed_at_pause: Pause = _kind(Pause)
+    sensor_slot_min_mm: tuple[float, float, float] | None = _optional(("num", 3))
+    sensor_slot_max_mm: tuple[float, float, float] | None = _optional(("num", 3))
+    slot_roof_rise_mm: float | None = _optional("num")
+
+
+@dataclass(frozen=True)
 class PrinterLimits:
     nozzle_mm: float = _kind("pos")
     min_gap_mm: float = _kind("pos")
@@ -407,12 +428,18 @@ class Manifest:
     board_slot: Slot = _kind(Slot)
     printer: PrinterLimits = _kind(PrinterLimits)
     board_slots: tuple[Slot, ...] = _optional(ListOf(Slot), ())  # one-chip exports lack it
+    parts: tuple[PlacedPart, ...] = _optional(ListOf(PlacedPart), ())  # exports before issue 44 lack it
     design: Document | None = _optional("design")  # exports before issue 21 lack it
 
     @property
     def slots(self) -> tuple[Slot, ...]:
         """Every chip's board slot: ``board_slots``, else the one ``board_slot``."""
         return self.board_slots or (self.board_slot,)
+
+    @property
+    def insert(self) -> PlacedPart | None:
+        """The insert plate's entry of ``parts`` (None without one)."""
+        return next((p for p in self.parts if p.name == "insert" and p.sensor_slot_min_mm is not None), None)
 
     @classmethod
     def from_dict(cls, data: Any) -> Manifest:
@@ -436,6 +463,7 @@ class SlicePrint:
 
     layer_height_mm: float | None = _optional("pos")
     pause: Pause | None = _optional(Pause)
+    pauses: tuple[Pause, ...] = _optional(ListOf(Pause), ())  # exports before issue 44 give one pause
     cavity_lines: tuple[CavityLine, ...] = _optional(ListOf(CavityLine), ())
     wall_lines: tuple[WallLine, ...] = _optional(ListOf(WallLine), ())
 

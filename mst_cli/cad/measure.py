@@ -132,13 +132,23 @@ def shells(mesh: Mesh | Any) -> tuple[int, int, list[float]]:
     Shells are the connected components of the triangles (sharing vertices); each one's
     signed volume is the divergence-theorem sum of det(a, b, c) / 6 over its triangles.
     """
+    volumes, _ = shell_volumes_and_boxes(mesh)
+    return sum(v > 0 for v in volumes), sum(v < 0 for v in volumes), volumes
+
+
+def shell_volumes_and_boxes(mesh: Mesh | Any) -> tuple[list[float], list[tuple[np.ndarray, np.ndarray]]]:
+    """Each shell's signed volume and its bounding box (lo, hi), in the mesh's frame."""
     faces = np.asarray(mesh.faces)
     labels = vertex_components(len(mesh.vertices), faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2))
     face_label = np.unique(labels[faces[:, 0]], return_inverse=True)[1].reshape(-1)
     tri = np.asarray(mesh.vertices)[faces]
     signed = np.einsum("ij,ij->i", tri[:, 0], np.cross(tri[:, 1], tri[:, 2])) / 6.0
     volumes = np.bincount(face_label, weights=signed).tolist()
-    return sum(v > 0 for v in volumes), sum(v < 0 for v in volumes), volumes
+    boxes = [
+        (tri[face_label == k].reshape(-1, 3).min(axis=0), tri[face_label == k].reshape(-1, 3).max(axis=0))
+        for k in range(len(volumes))
+    ]
+    return volumes, boxes
 
 
 def to_sensor_frame(mesh: Mesh, manifest: Manifest) -> Mesh:
@@ -182,6 +192,38 @@ class SlotSize:
     window_floor_y_mm: tuple[float, ...]
 
 
+@dataclass(frozen=True)
+class InsertSlotSize:
+    """The insert's slot as the mesh leaves it, sensor frame (mm); NaN where it is not found."""
+
+    lo_mm: tuple[float, float, float]  # x across, y the floor (print height), z through the plate
+    hi_mm: tuple[float, float, float]  # y: the gable's ridge
+
+
+NO_SLOT = InsertSlotSize((math.nan,) * 3, (math.nan,) * 3)
+
+
+def _measure_insert_slot(manifold, manifest: Manifest) -> InsertSlotSize:
+    """Rays through the middle of the slot export.json declares: along z (its thickness), x
+    (its width) and y (its floor and its roof's ridge); each takes the air gap around the
+    declared middle."""
+    part = manifest.insert
+    if part is None or part.sensor_slot_min_mm is None or part.sensor_slot_max_mm is None:
+        return NO_SLOT
+    lo, hi = np.asarray(part.sensor_slot_min_mm), np.asarray(part.sensor_slot_max_mm)
+    mid = 0.5 * (lo + hi) + np.array([0.0123, 0.0123, 0.0])  # off the mesh's vertices
+    far = float(np.max(np.abs(manifest.body.bbox_max_mm))) + 1.0 + float(np.max(np.abs(manifest.body.bbox_min_mm)))
+    found = []
+    for axis in range(3):
+        origin = mid.copy()
+        origin[axis] = -far
+        direction = np.eye(3)[axis]
+        gaps = [(a - far, b - far) for a, b in air_gaps(manifold, origin, direction, 2.0 * far)]
+        around = [g for g in gaps if g[0] < mid[axis] < g[1]]
+        found.append(around[0] if len(around) == 1 else (math.nan, math.nan))
+    return InsertSlotSize(tuple(f[0] for f in found), tuple(f[1] for f in found))  # type: ignore[arg-type]
+
+
 @dataclass(frozen=True, eq=False)
 class Measurements:
     """Everything :mod:`mst_cli.cad.checks` compares, measured once on one mesh (mm, deg)."""
@@ -203,6 +245,7 @@ class Measurements:
     down_inclination_deg: np.ndarray
     down_area_mm2: np.ndarray
     flat_heights_mm: np.ndarray
+    insert_slot: InsertSlotSize = NO_SLOT
 
     @property
     def slot(self) -> SlotSize:
@@ -234,11 +277,12 @@ def measure(mesh: Mesh | Any, manifest: Manifest) -> Measurements:
         bbox_min_mm=bbox_min,
         bbox_max_mm=bbox_max,
         layers=tuple(_measure_layer(manifold, layer, axis_gaps) for layer in manifest.layers),
-        pocket=_measure_pocket(manifold, manifest, axis_gaps, shell_volumes if voids else []),
+        pocket=_measure_pocket(manifold, manifest, axis_gaps, _pocket_void_volumes(sensor, manifest)),
         slots=tuple(_measure_slot(manifold, manifest, i) for i in range(len(manifest.slots))),
         down_inclination_deg=down_incl,
         down_area_mm2=down_area,
         flat_heights_mm=flat_heights,
+        insert_slot=_measure_insert_slot(manifold, manifest),
     )
 
 
@@ -256,9 +300,21 @@ def _measure_layer(manifold, layer, axis_gaps) -> LayerSection:
     return LayerSection(wall_cuts=len(boxes), wall_mm=wall, web_depth_mm=depth, cavity_mm=cavity)
 
 
+def _pocket_void_volumes(sensor: Mesh, manifest: Manifest) -> list[float]:
+    """The signed volumes of the voids around the pocket's centre (on the axis, mid-depth): the
+    pocket's own shell, not the insert's slot over it."""
+    pocket = manifest.magnet_pocket
+    centre = np.array([0.0, 0.0, pocket.floor_z_mm + 0.5 * pocket.depth_mm])
+    volumes, boxes = shell_volumes_and_boxes(sensor)
+    return [v for v, (lo, hi) in zip(volumes, boxes) if v < 0 and np.all(lo <= centre) and np.all(centre <= hi)]
+
+
 def _measure_pocket(manifold, manifest: Manifest, axis_gaps, void_shell_volumes) -> PocketSize:
     pocket = manifest.magnet_pocket
-    floor, top = axis_gaps[-1] if axis_gaps else (math.nan, math.nan)
+    # the air gap on the axis around the pocket's mid-depth (the insert's slot lies above it)
+    mid = pocket.floor_z_mm + 0.5 * pocket.depth_mm
+    around = [g for g in axis_gaps if g[0] < mid < g[1]]
+    floor, top = around[0] if around else (math.nan, math.nan)
     # along the build direction (sensor +y) through the pocket's mid-depth: from the U's bottom
     # up to the roof's ridge; the ray starts 1 mm below the bed (print z = sensor y + half)
     half = 0.5 * manifest.print.height_mm

@@ -114,14 +114,22 @@ def body_manifold(geometry: SensorGeometry, tolerance_mm: float) -> manifold3d.M
 
     plan = shapes.body_plan(geometry)
     keep = mf.Manifold.batch_boolean([_manifold(s, tolerance_mm) for s in plan.keep], mf.OpType.Add)
-    pocket = mf.Manifold.batch_boolean([_manifold(s, tolerance_mm) for s in plan.pocket], mf.OpType.Add)
+    voids = [
+        mf.Manifold.batch_boolean([_manifold(s, tolerance_mm) for s in pieces], mf.OpType.Add)
+        for pieces in (plan.pocket, plan.insert_slot)
+        if pieces
+    ]
+    if plan.pocket_ribs:  # the crush ribs stay standing in the pocket
+        ribs = [_manifold(s, tolerance_mm) for s in plan.pocket_ribs]
+        voids[0] = mf.Manifold.batch_boolean([voids[0], *ribs], mf.OpType.Subtract)
     body = mf.Manifold.batch_boolean(
-        [keep, *(_manifold(s, tolerance_mm) for s in plan.cut), pocket], mf.OpType.Subtract
+        [keep, *(_manifold(s, tolerance_mm) for s in plan.cut), *voids], mf.OpType.Subtract
     )
-    # one solid around one void (the closed pocket): two shells, one of negative volume
+    # one solid around its closed voids (the pocket, the insert's slot): one shell of positive
+    # volume and one of negative volume per void
     shells = sorted(part.volume() for part in body.decompose())
-    if body.status().name != "NoError" or len(shells) != 2 or not shells[0] < 0.0 < shells[1]:
-        raise RuntimeError("the meshed body is not one closed solid around the pocket: please report this design")
+    if body.status().name != "NoError" or len(shells) != 1 + plan.voids or not shells[-2] < 0.0 < shells[-1]:
+        raise RuntimeError("the meshed body is not one closed solid around its voids: please report this design")
     return body
 
 
@@ -152,3 +160,14 @@ def print_mesh(geometry: SensorGeometry, tolerance_mm: float) -> tuple[np.ndarra
     """(vertices, triangles) of the body as it lies on the bed (the STL/3MF frame)."""
     vertices, triangles = body_mesh(geometry, tolerance_mm)
     return to_print_frame(geometry, vertices), triangles  # a rotation: winding is kept
+
+
+def insert_mesh(geometry: SensorGeometry) -> tuple[np.ndarray, np.ndarray]:
+    """(vertices, triangles) of the insert plate as it prints: flat on the bed, its thickness
+    up, its corner at the origin (insert.stl)."""
+    import manifold3d as mf  # deferred: manifold3d's native library, only when a body is meshed
+
+    lo, hi = np.asarray(geometry.insert_box_mm, dtype=float)
+    size = hi - lo  # x across the face, y the depth, z the thickness: already flat
+    mesh = mf.Manifold.cube(tuple(size)).to_mesh64()
+    return canonical(np.asarray(mesh.vert_properties, dtype=float)[:, :3], np.asarray(mesh.tri_verts, dtype=np.int64))

@@ -4,8 +4,8 @@ mesh checks are:
 
 * ``free_span``: no extrusion has more than ``max_span_mm`` of its centreline with nothing of
   the layer below under it;
-* ``pause``: exactly the one pause export.json asks for, on its layer boundary (none when it
-  asks for none);
+* ``pause``: exactly the pauses export.json asks for (the magnet's, the insert's), each on its
+  layer boundary (none when it asks for none);
 * ``support``: the slicer, told to generate support automatically, generates none;
 * ``cavity_gaps`` (report only): the designed cavity gaps against the gaps in the sliced layer.
 * ``walls_as_sliced`` (report only): every inclined wall's designed thickness against the width
@@ -29,26 +29,19 @@ from mst_cli.cad.manifest import SliceManifest, WallLine
 Shift = tuple[float, float]  # G-code = print frame + shift (x, y), mm
 
 
+def expected_pauses(manifest: SliceManifest) -> list[dict]:
+    """Every pause export.json asks for, lowest first (print.pauses; an older export's one
+    print.pause), else none."""
+    given = manifest.print.pauses or ((manifest.print.pause,) if manifest.print.pause is not None else ())
+    return [{"after_layer": p.after_layer, "z_mm": p.z_mm, "source": "print.pauses"} for p in given]
+
+
 def expected_pause(manifest: SliceManifest) -> dict:
-    """The pause export.json asks for (print.pause {after_layer, z_mm}), else nothing."""
-    pause = manifest.print.pause
-    if pause is None:
-        return {}
-    return {"after_layer": pause.after_layer, "z_mm": pause.z_mm, "source": "print.pause"}
+    """The first pause export.json asks for (the magnet's), else nothing."""
+    return next(iter(expected_pauses(manifest)), {})
 
 
-def _pause_problem(pauses: list[Pause], expected: dict, layer_height_mm: float) -> str | None:
-    if not expected:
-        return None if len(pauses) <= 1 else f"{len(pauses)} pauses in the G-code, export.json asks for none"
-    if not pauses:
-        return (
-            f"no pause in the G-code (export.json asks for one at z = {expected['z_mm']:.2f} mm"
-            + (f", after layer {expected['after_layer']}" if expected.get("after_layer") else "")
-            + ")"
-        )
-    if len(pauses) > 1:
-        return f"{len(pauses)} pauses in the G-code, export.json asks for one"
-    p = pauses[0]
+def _one_pause_problem(p: Pause, expected: dict, layer_height_mm: float) -> str | None:
     z_ok = abs(p.z_mm - expected["z_mm"]) < 1e-3
     layer_ok = expected.get("after_layer") in (None, p.after_layer)
     boundary = abs(expected["z_mm"] / layer_height_mm - round(expected["z_mm"] / layer_height_mm)) < 1e-3
@@ -65,9 +58,25 @@ def _pause_problem(pauses: list[Pause], expected: dict, layer_height_mm: float) 
     return None
 
 
+def _pause_problem(pauses: list[Pause], expected: list[dict], layer_height_mm: float) -> str | None:
+    if not expected:
+        return None if len(pauses) <= 1 else f"{len(pauses)} pauses in the G-code, export.json asks for none"
+    if not pauses:
+        first = expected[0]
+        return (
+            f"no pause in the G-code (export.json asks for {len(expected)}, the first at z = {first['z_mm']:.2f} mm"
+            + (f", after layer {first['after_layer']}" if first.get("after_layer") else "")
+            + ")"
+        )
+    if len(pauses) != len(expected):
+        return f"{len(pauses)} pauses in the G-code, export.json asks for {len(expected)}"
+    ordered = sorted(pauses, key=lambda p: p.z_mm)
+    return next((why for p, e in zip(ordered, expected) if (why := _one_pause_problem(p, e, layer_height_mm))), None)
+
+
 def check_pause(pauses: list[Pause], manifest: SliceManifest, layer_height_mm: float) -> Check:
-    """The pauses found in the G-code against the one export.json asks for."""
-    expected = expected_pause(manifest)
+    """The pauses found in the G-code against those export.json asks for."""
+    expected = expected_pauses(manifest)
     found = [
         {
             "after_layer": p.after_layer,
@@ -87,16 +96,26 @@ def check_pause(pauses: list[Pause], manifest: SliceManifest, layer_height_mm: f
         )
         or "none"
     )
-    layer = f"after layer {expected['after_layer']}, " if expected.get("after_layer") else ""
-    asked = f"{layer}z {expected['z_mm']:.2f} mm" if expected else "not given"
+    asked = ", ".join(pause_text(e) for e in expected) or "not given"
     return Check(
         "pause",
         problem is None,
         found_text,
         asked,
         problem or "",
-        values={"found": found, "expected": dict(expected) if expected else "not given", "ok": problem is None},
+        values={
+            "found": found,
+            "expected": dict(expected[0]) if expected else "not given",
+            "expected_all": expected,
+            "ok": problem is None,
+        },
     )
+
+
+def pause_text(expected: dict) -> str:
+    """One expected pause as the terminal shows it."""
+    layer = f"after layer {expected['after_layer']}, " if expected.get("after_layer") else ""
+    return f"{layer}z {expected['z_mm']:.2f} mm"
 
 
 def _span_dict(s: Span | None, shift: Shift) -> dict | None:

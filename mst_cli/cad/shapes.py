@@ -16,7 +16,7 @@ import math
 from dataclasses import dataclass
 
 from mst_cli.model.assembly import SensorGeometry
-from mst_cli.model.board_slots import slot_violations
+from mst_cli.model.board_slots import slot_violations, window_roof_apex_y_mm
 from mst_cli.model.cell import HexCell
 
 # Cutting tools that end on an outer face of the part are extended past it by this much, so
@@ -118,11 +118,49 @@ def magnet_pocket(geometry: SensorGeometry) -> list[Cylinder | Box | Prism]:
     y_top = geometry.pocket_top_y_mm
     disc = Cylinder(r, (0.0, 0.0, z0), d)
     sides = box(-r, r, 0.0, y_top, z0, z0 + d)
-    # gable: triangle in the y-z plane (base on y = y_top across the depth, apex at the
-    # ridge), swept along x over the pocket's width
-    tri = ((y_top, z0), (geometry.pocket_roof_apex_y_mm, z0 + 0.5 * d), (y_top, z0 + d))
-    roof = Prism("x", tri, (), -r, 2.0 * r)
-    return [disc, sides, roof]
+    return [disc, sides, gable(y_top, geometry.pocket_roof_apex_y_mm, z0, z0 + d, -r, r)]
+
+
+def magnet_ribs(geometry: SensorGeometry) -> list[Prism]:
+    """The crush ribs left in the pocket on its face over the magnet (sensor +z): each a
+    triangle in the x-z plane (base two lines wide on that face, apex
+    :attr:`SensorGeometry.magnet_rib_reach_mm` towards the magnet) swept along y from below the
+    pocket's round bottom up to the pause, so the magnet slides down them; it meets the round
+    bottom, so no face of a rib hangs over air. Their base runs into the solid above the face
+    (a boolean with no coplanar faces)."""
+    z1 = geometry.z_magnet_bottom_mm + geometry.pocket_depth_mm
+    w2, reach, r = 0.5 * geometry.magnet_rib_width_mm, geometry.magnet_rib_reach_mm, geometry.pocket_radius_mm
+    y_top = geometry.pocket_top_y_mm
+    out = []
+    for x in geometry.magnet_rib_x_mm:
+        profile = ((z1 + OVERCUT_MM, x - w2), (z1, x - w2), (z1 - reach, x), (z1, x + w2), (z1 + OVERCUT_MM, x + w2))
+        out.append(Prism("y", profile, (), -r - OVERCUT_MM, y_top + r + OVERCUT_MM))
+    return out
+
+
+def gable(y_top: float, apex_y: float, z0: float, z1: float, x0: float, x1: float) -> Prism:
+    """A cavity's roof in the print: a triangle in the y-z plane (its base on y = y_top from z0 to
+    z1, its apex at apex_y over the middle) swept along x from x0 to x1. At 45 deg or steeper,
+    every layer over the cavity overhangs less than a layer height: nothing is bridged."""
+    tri = ((y_top, z0), (apex_y, 0.5 * (z0 + z1)), (y_top, z1))
+    return Prism("x", tri, (), x0, x1 - x0)
+
+
+def insert_slot(geometry: SensorGeometry) -> list[Box | Prism]:
+    """The closed slot the insert plate drops into at its pause (none without an insert): the
+    slot's box (:attr:`SensorGeometry.insert_slot_box_mm`, open upwards in the print until the
+    pause) and the 45 deg gable that closes it over the plate's thickness."""
+    if not geometry.has_insert:
+        return []
+    (x0, y0, z0), (x1, y1, z1) = geometry.insert_slot_box_mm
+    roof = gable(y1, y1 + geometry.insert_slot_roof_rise_mm, z0, z1, x0, x1)
+    return [box(x0, x1, y0, y1, z0, z1), roof]
+
+
+def insert_plate(geometry: SensorGeometry) -> Box:
+    """The insert plate as it sits in its slot (:attr:`SensorGeometry.insert_box_mm`)."""
+    lo, hi = geometry.insert_box_mm
+    return Box(lo, hi)
 
 
 def cap_block(geometry: SensorGeometry) -> Box:
@@ -137,15 +175,17 @@ def base_block(geometry: SensorGeometry) -> Box:
     return box(-L2, L2, -d2, d2, 0.0, geometry.z_base_top_mm)
 
 
-def base_cuts(geometry: SensorGeometry) -> list[Box]:
+def base_cuts(geometry: SensorGeometry) -> list[Box | Prism]:
     """Board slots and cable windows, as cutting tools: one slot per chip, its windows after it.
 
     A slot (board outline + clearance, from the base floor to the cover's underside) runs
     from its floor at ``floor_y_mm`` out through the +y face, the face on top in the print:
     the board slides in along -y until it rests on the floor, which puts its chip where the
     design has it. Each connector's cable leaves through a window in the side wall beside it,
-    open through the same face, out to the base's x face or into the next chip's slot (the two
-    facing windows of neighbouring slots are one box, cut once); so nothing in the base is
+    out to the base's x face or into the next chip's slot (the two facing windows of
+    neighbouring slots are one box, cut once), from just below the socket to just above it
+    under a 45 deg gable, so the side wall carries the cover over the rest of the depth (open
+    through the +y face only where that wall would be too thin); nothing in the base is
     bridged. See :mod:`mst_cli.model.board_slots`.
     """
     y_out = 0.5 * geometry.depth_mm + OVERCUT_MM
@@ -157,26 +197,38 @@ def base_cuts(geometry: SensorGeometry) -> list[Box]:
         slot empty above this floor), not into a slot's solid under a higher floor."""
         return OVERCUT_MM if y_floor >= floor_at.get(x_end, -math.inf) - 1e-9 else 0.0
 
-    cuts: list[Box] = []
+    cuts: list[Box | Prism] = []
     for slot in geometry.board_slots:
         x0, x1 = slot.x_mm
         cuts.append(box(x0, x1, slot.floor_y_mm, y_out, z0, z1))
-        for x_in, x_out, y_floor, wz0, wz1 in slot.windows:
+        for (x_in, x_out, y_floor, wz0, wz1), top in zip(slot.windows, slot.window_tops_y_mm):
             lo, hi = sorted((x_in, x_out))
-            window = box(lo - past(lo, y_floor), hi + past(hi, y_floor), y_floor, y_out, wz0, wz1)
+            lo, hi = lo - past(lo, y_floor), hi + past(hi, y_floor)
+            window = box(lo, hi, y_floor, y_out if top is None else top, wz0, wz1)
             if window not in cuts:
                 cuts.append(window)
+                if top is not None:  # the wall stands over it, up to the +y face
+                    cuts.append(gable(top, window_roof_apex_y_mm(geometry, top, wz0, wz1), wz0, wz1, lo, hi))
     return cuts
 
 
 @dataclass(frozen=True)
 class BodyPlan:
     """The printed body: fuse ``keep`` (bottom to top), then cut ``cut`` (the base's slot and
-    windows) and the union of ``pocket`` (the magnet pocket's pieces)."""
+    windows), the union of ``pocket`` (the magnet pocket's pieces) less ``pocket_ribs`` (the
+    crush ribs that hold the magnet) and the union of ``insert_slot`` (the insert's slot and
+    roof; empty without an insert)."""
 
     keep: tuple[Box | Prism, ...]
-    cut: tuple[Box, ...]
+    cut: tuple[Box | Prism, ...]
     pocket: tuple[Cylinder | Box | Prism, ...]
+    insert_slot: tuple[Box | Prism, ...] = ()
+    pocket_ribs: tuple[Prism, ...] = ()  # left standing in the pocket: cut from its union first
+
+    @property
+    def voids(self) -> int:
+        """Closed cavities of the body: the pocket, and the insert's slot when there is one."""
+        return 1 + bool(self.insert_slot)
 
 
 def body_plan(geometry: SensorGeometry) -> BodyPlan:
@@ -186,7 +238,13 @@ def body_plan(geometry: SensorGeometry) -> BodyPlan:
     keep += [layer_web(cell, z_bottom) for cell, z_bottom in zip(geometry.layers, geometry.layer_bottoms_mm)]
     keep += plates(geometry)
     keep.append(cap_block(geometry))
-    return BodyPlan(tuple(keep), tuple(base_cuts(geometry)), tuple(magnet_pocket(geometry)))
+    return BodyPlan(
+        tuple(keep),
+        tuple(base_cuts(geometry)),
+        tuple(magnet_pocket(geometry)),
+        tuple(insert_slot(geometry)),
+        tuple(magnet_ribs(geometry)),
+    )
 
 
 def magnet(geometry: SensorGeometry) -> Cylinder:

@@ -20,9 +20,17 @@ import numpy as np
 from mst_cli.cad import gcode as G
 from mst_cli.cad import layer_measure as M
 from mst_cli.cad import slicer as S
-from mst_cli.cad.checks import Check, ExportFiles, resolve_export
+from mst_cli.cad.checks import Check
+from mst_cli.cad.export_files import ExportFiles, resolve_export
 from mst_cli.cad.manifest import SliceManifest, load_manifest
-from mst_cli.cad.print_check import cavity_gaps, check_free_span, check_pause, check_support, walls_as_sliced
+from mst_cli.cad.print_check import (
+    cavity_gaps,
+    check_free_span,
+    check_pause,
+    check_support,
+    pause_text,
+    walls_as_sliced,
+)
 from mst_cli.cad.print_plot import plot_print
 from mst_cli.cad.sliced_model import predict
 from mst_cli.errors import InputError
@@ -348,12 +356,7 @@ def summary_table(r: dict) -> str:
         )
         or "none"
     )
-    exp = p["expected"]
-    exp_s = (
-        "not given"
-        if exp == "not given"
-        else ((f"after layer {exp['after_layer']}, " if exp.get("after_layer") else "") + f"z {exp['z_mm']:.2f} mm")
-    )
+    exp_s = ", ".join(pause_text(e) for e in p["expected_all"]) or "not given"
     lines.append(f"pause             found {found}; export.json asks {exp_s}  [{ok('pause')}]")
     sup = r["support"]
     support = f"needed: {sup['volume_mm3']:.0f} mm3" if sup["needed"] else "none generated"

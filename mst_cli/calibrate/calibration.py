@@ -445,7 +445,9 @@ def _fit(
     """The fit of ``names`` to the load test, its calibrated design (checked to load) and the
     calibrated inverse map; CalibrationFailed when the fitted values make a design that does not
     load."""
-    design_resp = simulate(doc.geometry(), doc.material, mechanics=mechanics, noise_uT_rms=doc.noise_uT_rms)
+    design_resp = simulate(
+        doc.geometry(), doc.material, mechanics=mechanics, noise_uT_rms=doc.noise_uT_rms, whole_part=doc.whole_part
+    )
     check_field_unit(lt, float(design_resp.B_abs_T[0]), float(design_resp.B_abs_T[design_resp.in_range][-1]))
     check_force_unit(lt, design_resp.B_abs_T[design_resp.in_range], design_resp.force_N[design_resp.in_range])
     check_load_test(lt, len(names), design_resp.max_force_N, cal.MIN_POINTS_PER_PARAMETER, cal.MIN_POINTS)
@@ -517,6 +519,7 @@ def _record(
             "mechanics": fitted.mechanics,
             "field": fit.model.field_model,
             "space_mapping_iterations": fit.iterations,
+            "load_path": doc.load_path,  # the part's members in series with the layers, or the layers alone
         },
         samples=len(lt),
         force_range_N=[float(lt.load_N.min()), float(lt.load_N.max())],

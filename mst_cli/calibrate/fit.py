@@ -19,7 +19,13 @@ Parameters (:data:`PARAMETERS`), each with the scale of a typical print or assem
 
 Forward prediction: :class:`ForwardModel` builds the perturbed cells with the family's own
 :meth:`~mst_cli.sensor.sections.CellFamily.cell`, their layer laws (:func:`mst_cli.model.mechanics.layer_law`)
-and the stack, then the field at the chip (:func:`mst_cli.model.magnet_field.field_at_chip_T`). The cheap
+and the part's stack as ``mst simulate`` builds it (:func:`mst_cli.model.response.part_stack`: the
+cap, plates and cover of :func:`mst_cli.model.load_path.member_parts` in series, the cap
+closing the top layer's cavity; the layers alone for ``model.load_path: layers``), then the field
+at the chip (:func:`mst_cli.model.magnet_field.field_at_chip_T`). The members are TPU but an
+insert is not: at a modulus factor f the TPU's moduli are f E and the insert's its own, so the
+members are re-evaluated at each f (in the design's modulus units, F / f, their compliance is
+f C(f E)) and the fitted model stays the calibrated file's own curve to rounding. The cheap
 ``spring`` rung is evaluated directly (a fraction of a millisecond per load test); a dearer rung
 (``frame``, ``continuum``) by output space mapping: the fit runs on the spring stack plus the
 dearer rung's displacement difference at the current wall offset, which is re-evaluated until
@@ -27,7 +33,9 @@ the fitted offset stops moving (so the converged model is the dearer rung's own)
 
 The fit (:func:`fit_parameters`): weighted least squares (scipy ``least_squares``, trust region
 reflective within physical bounds) of |B| in units of the chip's noise. Uncertainties from the
-Jacobian, J^T J, scaled by the reduced chi-square when it exceeds 1 (model error). A parameter
+Jacobian, J^T J, scaled by the reduced chi-square when it exceeds 1 (model error); a parameter
+whose cost turns a corner at the fit (the cover landing at the test's largest force) gets its
+profile's sigma instead (:mod:`~mst_cli.calibrate.fit_profile`). A parameter
 is *identifiable* when the data fix it to within a third of its typical deviation; the worst
 one that is not is held at the design's value and the fit repeated, until every free parameter
 is identifiable. The singular values of the scaled Jacobian and the correlation matrix are
@@ -45,21 +53,24 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from mst_cli.model import magnet_field as fld
 from mst_cli.model.cell import LENGTH_FLOOR_MM, HexCell
+from mst_cli.model.load_path import Members, MemberScene, member_parts, member_scene
 from mst_cli.model.mechanics import layer_law
+from mst_cli.model.response import part_stack
 from mst_cli.model.stack import Stack
 from mst_cli.sensor.document import Document
 
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
+from mst_cli.calibrate.fit_profile import corner_checked_std
 from mst_cli.errors import CalibrationFailed
-from mst_cli.sensor.as_printed import PARAMETERS, full_values
+from mst_cli.sensor.as_printed import PARAMETERS, apply_parameters, full_values
 
 # --------------------------------------------------------------------------- parameters
 
@@ -102,11 +113,13 @@ def parameter_bounds(doc: Document) -> dict[str, tuple[float, float]]:
 
 # --------------------------------------------------------------------------- forward model
 class _Correction:
-    """Output space mapping: d_dear(F) - d_spring(F) at one wall offset, as a function of the
-    force in the design's modulus units (piecewise linear; linear past the last knot)."""
+    """Output space mapping: d_dear(F) - d_spring(F) at one wall offset and modulus factor (the
+    members' compliance depends on it when the part has an insert), as a function of the force
+    in the design's modulus units (piecewise linear; linear past the last knot)."""
 
-    def __init__(self, wall_offset_mm: float, spring: Stack, dear: Stack):
+    def __init__(self, wall_offset_mm: float, modulus_factor: float, spring: Stack, dear: Stack):
         self.wall_offset_mm = wall_offset_mm
+        self.modulus_factor = modulus_factor
         F_end = max(spring.last_lock_force_N, dear.last_lock_force_N)
         F = np.unique(np.concatenate([spring.knots_N, dear.knots_N, np.linspace(0.0, F_end, 801)]))
         self.F = F
@@ -117,6 +130,13 @@ class _Correction:
         F = np.asarray(F, dtype=float)
         inside = np.interp(F, self.F, self.delta)
         return np.where(F <= self.F[-1], inside, self.delta[-1] + (F - self.F[-1]) * self.slope)
+
+    def anchored_at(self, values: dict) -> bool:
+        """Whether the fitted values are (to 1e-4 of their typical deviation) where it was taken."""
+        return (
+            abs(values["wall_offset_mm"] - self.wall_offset_mm) < 1e-4
+            and abs(values["modulus_factor"] - self.modulus_factor) < 1e-5
+        )
 
 
 class ForwardModel:
@@ -132,7 +152,11 @@ class ForwardModel:
             g.chip_offset_mm, g.magnet_tilt_deg, None if field_model in (None, "auto") else field_model
         )
         self.gap0_mm = g.gap0_mm
-        self._stacks: dict[tuple[str, float], Stack] = {}
+        # the members' fixed dimensions (None: the layers alone, model.load_path: layers), one per
+        # gap offset: _scene
+        self._scenes: dict[float, MemberScene | None] = {}
+        self._laws: dict[tuple[str, float], tuple] = {}
+        self._stacks: dict[tuple, Stack] = {}
         self.correction: _Correction | None = None
         self.evaluations = 0
 
@@ -141,27 +165,72 @@ class ForwardModel:
         drawn = [la.drawn for la in self.doc.layers]
         return tuple(fam.cell(theta, t + wall_offset_mm, h) for theta, t, h in drawn)
 
-    def stack(self, wall_offset_mm: float, mechanics: str = "spring") -> Stack:
-        key = (mechanics, round(float(wall_offset_mm), 12))
+    def _scene_key(self, gap_offset_mm: float) -> float:
+        """The gap offset (rounded): it moves the housing's slot walls, the air under the cover
+        and, past the chip's clearance, the pocket floor, so every member's scene follows it."""
+        return round(float(gap_offset_mm), 9)
+
+    def _scene(self, gap_offset_mm: float) -> MemberScene | None:
+        """The members' scene of the part with this gap offset written into its housing."""
+        if not self.doc.whole_part:
+            return None
+        key = self._scene_key(gap_offset_mm)
+        if key not in self._scenes:
+            printed = apply_parameters(self.doc, {"gap_offset_mm": key})[0] if key else self.doc
+            self._scenes[key] = member_scene(printed.geometry(), self.doc.material)
+        return self._scenes[key]
+
+    def members(self, values: dict) -> Members:
+        """The cap's, plates' and cover's compliance at these values, in the design's modulus units
+        (multiplied by the modulus factor f, as the forces are divided by it)."""
+        v = full_values(values)
+        f, scene = v["modulus_factor"], self._scene(v["gap_offset_mm"])
+        if scene is None:
+            return Members.rigid(n_plates=len(self.doc.layers) - 1)
+        tpu = replace(scene, E_prime_MPa=f * scene.E_prime_MPa, G_MPa=f * scene.G_MPa)
+        cells = self.cells(v["wall_offset_mm"])
+        cap, plates, over_slot, slot_walls = member_parts(
+            tpu, *(np.array([getattr(c, k) for c in cells]) for k in ("theta_rad", "t_mm", "h_mm"))
+        )
+        return Members(
+            f * float(cap),
+            tuple(f * float(p) for p in plates),
+            f * float(over_slot + slot_walls),
+            tpu.patch_mm,
+            tpu.support,
+            f * float(over_slot),  # the cover's bending over the slot stops on the board (members())
+            scene.cover_air_mm,
+        )
+
+    def stack(self, values: dict, mechanics: str = "spring") -> Stack:
+        """The part's stack at these values (forces in the design's modulus units, F / f); a
+        finite-difference step in the gap or the remanence finds it cached."""
+        v = full_values(values)
+        wall = round(v["wall_offset_mm"], 12)
+        key = (mechanics, wall, v["modulus_factor"], self._scene_key(v["gap_offset_mm"]))
         st = self._stacks.get(key)
         if st is None:
             if len(self._stacks) > 256:
                 self._stacks.clear()
-            laws = tuple(layer_law(c, self.doc.material, mechanics) for c in self.cells(wall_offset_mm))
-            st = self._stacks[key] = Stack(laws)
+            if (mechanics, wall) not in self._laws:
+                if len(self._laws) > 64:
+                    self._laws.clear()
+                cells = self.cells(v["wall_offset_mm"])
+                self._laws[mechanics, wall] = tuple(layer_law(c, self.doc.material, mechanics) for c in cells)
+            st = self._stacks[key] = part_stack(self._laws[mechanics, wall], self.members(v))
         return st
 
-    def update_correction(self, wall_offset_mm: float) -> None:
-        """Re-anchor the space mapping at this wall offset (dearer rungs only)."""
+    def update_correction(self, values: dict) -> None:
+        """Re-anchor the space mapping at these values (dearer rungs only)."""
         if self.mechanics != "spring":
-            self.correction = _Correction(
-                wall_offset_mm, self.stack(wall_offset_mm), self.stack(wall_offset_mm, self.mechanics)
-            )
+            v = full_values(values)
+            spring, dear = self.stack(v), self.stack(v, self.mechanics)
+            self.correction = _Correction(v["wall_offset_mm"], v["modulus_factor"], spring, dear)
 
     def displacement_mm(self, force_N: ArrayLike, values: dict) -> np.ndarray:
         v = full_values(values)
         F = np.maximum(np.asarray(force_N, dtype=float), 0.0) / v["modulus_factor"]
-        d = self.stack(v["wall_offset_mm"]).displacement_mm(F)
+        d = self.stack(v).displacement_mm(F)
         if self.correction is not None:
             d = d + self.correction(F)
         return d
@@ -182,7 +251,7 @@ class ForwardModel:
 
     def last_lock_force_N(self, values: dict) -> float:
         v = full_values(values)
-        return v["modulus_factor"] * self.stack(v["wall_offset_mm"], self.mechanics).last_lock_force_N
+        return v["modulus_factor"] * self.stack(v, self.mechanics).last_lock_force_N
 
 
 # --------------------------------------------------------------------------- the fit
@@ -434,6 +503,7 @@ def _fit_identifiable(
         n, p = len(force_N), len(free)
         chi2_red = float(2.0 * res.cost / max(n - p, 1))
         s, std, corr = _uncertainty(res.jac, chi2_red)
+        std = corner_checked_std(model, force_N, B_abs_T, sigma_T, free, values, bounds, std, corr, chi2_red)
         if not first_pass:
             first_pass = _first_pass(free, s, std, corr)
         worst = int(np.argmax(std))
@@ -457,16 +527,16 @@ def _space_mapping(
     """(least-squares result, values, parameters at a bound, iterations): fitted on spring with the
     dear model's correction re-taken at the fitted wall offset until it stops moving."""
     model.correction = None
-    model.update_correction(start["wall_offset_mm"])
+    model.update_correction(start)
     values = start
     iterations = 0
     for iterations in range(1, MAX_SPACE_MAPPING_ITERATIONS + 1):  # noqa: B007 (reported)
         res, values, at_bound = _solve(model, force_N, B_abs_T, sigma_T, tuple(free), values, bounds)
         if model.mechanics == "spring" or model.correction is None:
             break
-        if abs(values["wall_offset_mm"] - model.correction.wall_offset_mm) < 1e-4:
+        if model.correction.anchored_at(values):
             break
-        model.update_correction(values["wall_offset_mm"])
+        model.update_correction(values)
     return res, values, at_bound, iterations
 
 

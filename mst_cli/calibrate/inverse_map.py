@@ -159,6 +159,7 @@ def inverse_map(
         field_model=None if field_model in (None, "auto") else field_model,
         noise_uT_rms=doc.noise_uT_rms,
         points_per_regime=points_per_regime,
+        whole_part=doc.whole_part,
     )
     return InverseMap.from_response(resp), resp
 

@@ -55,7 +55,7 @@ from mst_cli.parallel import fork_map
 
 TABLE_FILE = "inverse_table.npz"  # the offset table's file beside the model ...
 SHEAR_TABLE_FILE = "shear_table.npz"  # ... and the shear table's
-TABLE_FORMAT = 2  # bumped when the table's contents change meaning: an older file is rebuilt
+TABLE_FORMAT = 3  # bumped when the table's contents change meaning: an older file is rebuilt
 FIT_SIGMAS = 3.0  # a cell whose best point is further off the reading than this found no root
 # the direct inverse (the C header takes the same numbers): from each start, Gauss-Newton steps on
 # the table's trilinear field, from the nearest node of the force slabs the reading's |B| allows
@@ -73,10 +73,9 @@ BLOCK = 4096  # readings per estimate (their starts' corners at a time)
 
 # (forces, mm between offsets): the default grid, 1 mm over the face and the range in 32 steps
 # (docs/design.md section 4.2 says what it costs in accuracy against the exact solve: the
-# offsets' spacing rules it, 97 forces at 2 mm do no better than 49); a coarse one for a
-# microcontroller's flash
+# offsets' spacing rules it, 97 forces at 2 mm do no better than 49); a microcontroller's header
+# takes every other node of it (TableGrid.every_other)
 GRID_DEFAULT = (33, 1.0)
-GRID_COARSE = (17, 2.0)
 KINDS = ("offset", "shear")
 # the shear table's friction cone |Fx / Fz|, |Fy / Fz| <= SHEAR_TABLE_RATIO (a reading beyond it is
 # no_fit: TPU on TPU or skin slips near 0.5 to 1) and its (forces, ratio step); the start's scan
@@ -103,6 +102,24 @@ def force_nodes(force_max_N: float, n_force: int, edges_N: Edges = None) -> np.n
     per = max(4, 4 * ((n_force - 1) // (4 * (len(edges) - 1))))
     bands = [np.linspace(lo, hi, per + 1)[:-1] for lo, hi in zip(edges[:-1], edges[1:])]
     return np.concatenate([*bands, [float(force_max_N)]])
+
+
+KNOT_MERGE_REL = 1e-3  # a kink this share of the range from an edge is that edge (no sliver of a band)
+
+
+def kink_edges_N(laws: Sequence[Any], edges_N: Edges, force_max_N: float) -> np.ndarray:
+    """The edges the force nodes follow (:func:`force_nodes`): the regime edges ``edges_N`` and
+    every other kink of the centred tilt laws ``laws`` below ``force_max_N``: a layer's own
+    knots, and on the whole part a member's (the cover's landing on the board,
+    :class:`~mst_cli.model.part_laws.SeriesMember`). Between kinks the centred state is linear
+    in the force, so no cell then straddles a change of slope, whose secant would be the
+    table's Jacobian there."""
+    edges = [float(e) for e in (edges_N if edges_N is not None else ())]
+    knots = sorted(float(k) for law in laws for k in law.walls.F_knots_N if 0.0 < k < force_max_N)
+    for k in knots:
+        if all(abs(k - e) > KNOT_MERGE_REL * force_max_N for e in [*edges, 0.0, force_max_N]):
+            edges.append(k)
+    return np.array(sorted(edges))
 
 
 @dataclass(frozen=True)
@@ -138,6 +155,11 @@ class TableGrid:
     @property
     def shape(self) -> tuple[int, int, int]:
         return len(self.force_N), len(self.u), len(self.v)
+
+    def every_other(self) -> TableGrid:
+        """Every second node on each axis (the ends kept where a count is odd): the C header's
+        grid of the default one."""
+        return TableGrid(self.force_N[::2], self.u[::2], self.v[::2], self.kind)
 
 
 @dataclass
@@ -234,9 +256,7 @@ class InverseTable:
     def every_other(self) -> InverseTable:
         """Every second node on each axis (the ends kept where a count is odd: the default grid's
         nodes give the coarse grid's)."""
-        g = self.grid
-        grid = TableGrid(g.force_N[::2], g.u[::2], g.v[::2], g.kind)
-        half = InverseTable(grid, np.ascontiguousarray(self.B_T[::2, ::2, ::2]), self.source_hash)
+        half = InverseTable(self.grid.every_other(), np.ascontiguousarray(self.B_T[::2, ::2, ::2]), self.source_hash)
         half._slab_error = _miss_per_slab(half, self)
         return half
 
@@ -317,20 +337,22 @@ def build_table(
     grid: TableGrid,
     lever_factor: float = 1.0,
     source: str = "",
+    whole_part: bool = True,
 ) -> InverseTable:
     """The model's field at every node: one force path per (u, v) node (in worker processes
     where the platform forks; the same numbers either way). ``offset``: the tilt rung's; ``shear``:
-    the general load's, pressed at the centre."""
+    the general load's, pressed at the centre; the part's members with the layers unless
+    ``whole_part`` is False (model.load_path: layers)."""
     nodes = [(float(u), float(v)) for u in grid.u for v in grid.v]
     if grid.kind == "shear":
-        stack = loaded_stack(geometry, material, mechanics, lever_factor)
+        stack = loaded_stack(geometry, material, mechanics, lever_factor, whole_part)
 
         def path(node: tuple[float, float]) -> np.ndarray:  # node: (Fx / Fz, Fy / Fz)
             d, tilt, slide = load_path(stack, grid.force_N, (0.0, 0.0), node)
             return magnet_field_T(geometry, *magnet_pose(geometry, d, tilt, slide))
 
     else:
-        laws = tilt_laws(geometry, material, mechanics, lever_factor)
+        laws = tilt_laws(geometry, material, mechanics, lever_factor, whole_part)
 
         def path(node: tuple[float, float]) -> np.ndarray:  # node: (x0, y0) mm
             return pose_field_T(geometry, laws, grid.force_N, node)

@@ -129,9 +129,10 @@ class OffsetEstimator:
         force_max_N: float,
         max_sigma_mm: float = DEFAULT_MAX_SIGMA_MM,
         lever_factor: float = 1.0,
+        whole_part: bool = True,
     ):
         self.geometry = geometry
-        self.layers = tilt_laws(geometry, material, mechanics, lever_factor)
+        self.layers = tilt_laws(geometry, material, mechanics, lever_factor, whole_part)
         self.sigma_T = float(field_sigma_T)
         self.force_max_N = float(force_max_N)
         self.max_sigma_mm = float(max_sigma_mm)

@@ -283,4 +283,5 @@ class ForceReader:
             float(self.inverse_map.force_N[-1]),
             max_sigma_mm,
             self.record.lever_factor() if self.record is not None else 1.0,
+            doc.whole_part,
         )

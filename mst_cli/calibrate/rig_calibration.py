@@ -3,7 +3,7 @@ uses, and what the calibration reports about the rest.
 
 * the branches (:func:`~mst_cli.calibrate.branches.find_branches`) from the force in time order
   (``time_s``, else row order), the rig's own ``branch`` and ``cycle`` columns checked against it;
-* a first cycle that differs from the later ones beyond noise
+* a first cycle that differs from the later ones at its temperature (``T_C``) beyond noise
   (:func:`~mst_cli.calibrate.hysteresis.first_cycle`) is left out of the fit;
 * the elastic model is fitted to the LOADING rows: unloading rows read less force at the same
   field (hysteresis) and hold rows creep, neither is the elastic loading curve. A load test whose
@@ -36,6 +36,7 @@ from mst_cli.calibrate.zero_drift import ZeroLaw, fit_zero, remove_zero, rest_ru
 from mst_cli.errors import CalibrationFailed, InputError
 
 MIN_LOADING_SPAN = 0.5  # loading rows must span this fraction of the force span, else holds are fitted too
+SAME_TEMPERATURE_K = 0.5  # presses within this of press 1's T_C are compared with it (0.4 % of TPU modulus)
 REST_FORCE_REL = 0.05  # a hold below this fraction of the largest force is a rest: no creep, the zero's rows
 
 
@@ -241,6 +242,25 @@ def _zero(lt: Readings, b: Branches, notes: list[str]) -> tuple[Readings, ZeroLa
     return remove_zero(lt, law, t, b.dead_band_N), law
 
 
+def _at_another_temperature(lt: Readings, cycle: np.ndarray, notes: list[str]) -> np.ndarray:
+    """Rows of presses logged more than :data:`SAME_TEMPERATURE_K` from press 1's temperature
+    (``T_C``): a warmer press is softer and its magnet weaker, which a comparison with press 1
+    would read as press 1's softening (-0.8 %/K of TPU modulus: 10 K reads as a press 1 several %
+    stiffer); such presses are left out of the first-press and softening comparisons (noted)."""
+    T = rig_column(lt, "T_C")
+    if T is None or not np.any(cycle == 1):
+        return np.zeros(len(lt), bool)
+    T1 = float(np.median(T[cycle == 1]))
+    press_T = {int(k): float(np.median(T[cycle == k])) for k in np.unique(cycle)}
+    other = [k for k, t in press_T.items() if abs(t - T1) > SAME_TEMPERATURE_K]
+    if other:
+        notes.append(
+            f"press(es) {', '.join(map(str, other))} logged at another T_C than press 1 ({T1:g} degC): "
+            "not compared with it for softening (temperature would read as softening)"
+        )
+    return np.isin(cycle, other)
+
+
 def analyse(lt: Readings, min_rows: int, use_branches: bool = True, alignment: Alignment | None = None) -> RigAnalysis:
     """The branches and the rows the fit uses (module doc); ``min_rows``: what the fit needs.
     The zero's law is removed from the rows first (:mod:`~mst_cli.calibrate.zero_drift`); with
@@ -251,11 +271,12 @@ def analyse(lt: Readings, min_rows: int, use_branches: bool = True, alignment: A
     lt, zero = _zero(lt, b, notes) if use_branches else (lt, None)
     fc, soft = None, None
     if int(b.cycle.max(initial=1)) > 1:
+        label = np.where(_at_another_temperature(lt, b.cycle, notes), "", b.label)
         try:
-            fc = hy.first_cycle(lt.B_abs_T, lt.load_N, b.label, b.cycle)
+            fc = hy.first_cycle(lt.B_abs_T, lt.load_N, label, b.cycle)
         except CalibrationFailed:
             fc = None
-        soft = fit_softening(lt.B_abs_T, lt.load_N, np.where(rest, "", b.label), b.cycle) if use_branches else None
+        soft = fit_softening(lt.B_abs_T, lt.load_N, np.where(rest, "", label), b.cycle) if use_branches else None
     if not use_branches:
         return RigAnalysis(lt, b, np.ones(len(lt), bool), False, fc, notes, rest=rest, alignment=alignment)
     if soft is not None:

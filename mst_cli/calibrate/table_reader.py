@@ -31,6 +31,7 @@ from mst_cli.calibrate.inverse_table import (
     TableEstimates,
     TableGrid,
     build_table,
+    kink_edges_N,
     source_hash,
 )
 from mst_cli.calibrate.load_readings import LoadReadings, from_estimates
@@ -43,6 +44,7 @@ from mst_cli.io.cache import cached_path, keep, touch
 from mst_cli.io.files import read_input_text
 from mst_cli.io.yaml_io import MAX_INPUT_BYTES
 from mst_cli.model.general_load import loaded_stack
+from mst_cli.model.stack_pose import tilt_laws
 from mst_cli.sensor.document import Document
 
 
@@ -159,8 +161,15 @@ class TwoChipLoadReader:
 def two_chip_reader(doc: Document, imap: InverseMap, lever: float, mechanics: str, polish: bool) -> TwoChipLoadReader:
     """The two-chip reader of the model ``doc`` (its chips, the inverse map's field resolution as
     the noise, ``lever``: its calibration's factor): its tables are built now, a few seconds."""
-    stack = loaded_stack(doc.geometry(), doc.material, mechanics, lever)
+    stack = loaded_stack(doc.geometry(), doc.material, mechanics, lever, doc.whole_part)
     return TwoChipLoadReader(TwoChipReader(stack, doc.chips_mm, imap.field_resolution_T), polish)
+
+
+def table_edges_N(doc: Document, imap: InverseMap, mechanics: str, lever: float) -> np.ndarray:
+    """The edges the force nodes of the model's tables follow: the inverse map's regimes and the
+    kinks of the laws the tables are built from (:func:`kink_edges_N`)."""
+    laws = tilt_laws(doc.geometry(), doc.material, mechanics, lever, doc.whole_part)
+    return kink_edges_N(laws, imap.edges_N, float(imap.force_N[-1]))
 
 
 def table_hash(model_file: Path, mechanics: str, grid: TableGrid) -> str:
@@ -201,7 +210,8 @@ def build_beside(
     """The table of ``kind`` and ``grid`` (:func:`grid_of`, its forces following the regimes
     ``edges_N``) for the model in ``model_file``, hashed as current beside it."""
     g = grid_of(kind, doc, force_max_N, grid, edges_N)
-    return build_table(doc.geometry(), doc.material, mechanics, g, lever_factor, table_hash(model_file, mechanics, g))
+    source = table_hash(model_file, mechanics, g)
+    return build_table(doc.geometry(), doc.material, mechanics, g, lever_factor, source, doc.whole_part)
 
 
 def table_beside(
@@ -257,7 +267,8 @@ def offset_table_reader(
     resolution; range: to the last lock; ``lever``: its calibration's factor), and the note of
     :func:`table_beside`. InputError when no press of the table is identifiable at that noise."""
     force_max_N = float(imap.force_N[-1])
-    table, note = table_beside(model_file, doc, mechanics, lever, force_max_N, edges_N=imap.edges_N)
+    edges = table_edges_N(doc, imap, mechanics, lever)
+    table, note = table_beside(model_file, doc, mechanics, lever, force_max_N, edges_N=edges)
     sigma_T = imap.field_resolution_T
     best = best_offset_sigma_mm(table, sigma_T)
     if not best <= max_sigma_mm:
@@ -269,7 +280,9 @@ def offset_table_reader(
         )
     exact = None
     if polish:
-        exact = OffsetEstimator(doc.geometry(), doc.material, mechanics, sigma_T, force_max_N, max_sigma_mm, lever)
+        exact = OffsetEstimator(
+            doc.geometry(), doc.material, mechanics, sigma_T, force_max_N, max_sigma_mm, lever, doc.whole_part
+        )
     return OffsetTableReader(table, sigma_T, max_sigma_mm, exact), note
 
 
@@ -289,10 +302,11 @@ def shear_table_reader(
     """The shear table reader of the model ``doc`` in ``model_file`` (noise: the inverse map's
     field resolution; range: to the last lock; ``lever``: its calibration's factor), and the note
     of :func:`table_beside`."""
-    table, note = table_beside(model_file, doc, mechanics, lever, float(imap.force_N[-1]), "shear", imap.edges_N)
+    edges = table_edges_N(doc, imap, mechanics, lever)
+    table, note = table_beside(model_file, doc, mechanics, lever, float(imap.force_N[-1]), "shear", edges)
     exact = None
     if polish:
-        exact = ShearReader(loaded_stack(doc.geometry(), doc.material, mechanics, lever))
+        exact = ShearReader(loaded_stack(doc.geometry(), doc.material, mechanics, lever, doc.whole_part))
     return ShearTableReader(table, imap.field_resolution_T, exact), note
 
 
@@ -301,10 +315,11 @@ def tables_for(
 ) -> tuple[InverseTable, OffsetTableReader | ShearTableReader]:
     """What ``mst calibrate --offset-table`` (``--shear-table``) writes for the model in
     ``model_file``: its table of ``kind`` (the default grid, current beside it) and the reader of
-    every other node of it (the C header's coarse table: with three regimes the offset's 25 x 31 x
-    21 nodes give 13 x 16 x 11, the shear's 25 x 21 x 21 give 13 x 11 x 11), at the inverse map's
-    noise (and the default bound on the offset's 1-sigma)."""
-    table = build_beside(model_file, doc, mechanics, lever, float(imap.force_N[-1]), kind=kind, edges_N=imap.edges_N)
+    every other node of it (the C header's coarse table: with the reference part's 7 bands between
+    kinks the offset's 29 x 31 x 21 nodes give 15 x 16 x 11, the shear's 29 x 21 x 21 give 15 x 11
+    x 11), at the inverse map's noise (and the default bound on the offset's 1-sigma)."""
+    edges = table_edges_N(doc, imap, mechanics, lever)
+    table = build_beside(model_file, doc, mechanics, lever, float(imap.force_N[-1]), kind=kind, edges_N=edges)
     if kind == "shear":
         return table, ShearTableReader(table.every_other(), imap.field_resolution_T)
     return table, OffsetTableReader(table.every_other(), imap.field_resolution_T, DEFAULT_MAX_SIGMA_MM)

@@ -70,9 +70,8 @@ def start_nodes(table: TableLike, B_uT: np.ndarray, margin_uT: np.ndarray) -> np
     readings it may hold (the distances by a matrix product of integers held in float64: exact)."""
     g = table.grid
     lo, hi = slab_babs_uT(table)
-    margin = margin_uT
     babs = np.linalg.norm(B_uT, axis=1)[:, None]
-    slab = (babs >= lo - margin) & (babs <= hi + margin)
+    slab = (babs >= lo - margin_uT) & (babs <= hi + margin_uT)
     take = np.zeros((len(B_uT), len(g.force_N)), dtype=bool)
     take[:, :-1] |= slab
     take[:, 1:] |= slab

@@ -5,14 +5,14 @@ Two effects, both linear about the calibration temperature T_ref:
 * the magnet: remanence x r(T) = 1 + alpha (T - T_ref), alpha the grade's reversible coefficient
   (mst_cli.model.components, -0.12 %/K for the N grades); the field is linear in the remanence,
   so the field at the chip scales by r(T) at a given deflection;
-* the TPU: modulus x m(T) = 1 + beta (T - T_ref), beta (1/K) a calibration parameter. Every
-  layer law is linear in E at fixed nu, so a sensor of modulus x m deflects at F as the
-  reference does at F / m.
+* the part: stiffness x m(T) = 1 + beta (T - T_ref), beta (1/K) a calibration parameter. Every
+  layer law and every TPU member is linear in E at fixed nu, so a part of modulus x m deflects
+  at F as the reference does at F / m. A stiff insert (PLA, PETG, steel) in the cap softens
+  far less than the TPU, so beta is the part's effective coefficient: the one law the fit
+  measures and every reader applies.
 
 Hence B(F, T) = r(T) B_ref(F / m(T)) and a reading B at T means the force
-F = m(T) F_ref(B / r(T)), F_ref the calibration's inverse map (:func:`force_at_T`); or, for a
-reader that runs the forward model, the calibration's values with modulus_factor x m(T) and
-remanence_factor x r(T) (:func:`values_at_T`).
+F = m(T) F_ref(B / r(T)), F_ref the calibration's inverse map (:func:`force_at_T`).
 
 beta is fixed by the data only when the load test spans enough temperature:
 :func:`modulus_coeff_sigma` gives its 1-sigma from the forward model's Jacobian (together with
@@ -76,22 +76,14 @@ def force_at_T(
     return modulus_scale(T_C, modulus_coeff_per_K, T_ref_C) * np.asarray(force_ref_N(B_ref), float)
 
 
-def values_at_T(
-    values: dict, T_C: float, remanence_coeff_pct_per_K: float, modulus_coeff_per_K: float, T_ref_C: float = 20.0
-) -> dict:
-    """The calibration's values as at T_C: modulus_factor x m(T), remanence_factor x r(T)."""
-    v = full_values(values)
-    v["modulus_factor"] *= float(modulus_scale(T_C, modulus_coeff_per_K, T_ref_C))
-    v["remanence_factor"] *= float(remanence_scale(T_C, remanence_coeff_pct_per_K, T_ref_C))
-    return v
-
-
 def _predict(field_abs_T: FieldAbs, F: np.ndarray, T: np.ndarray, values: dict, alpha: float, beta: float, T_ref_C):
-    """|B| of every row at its own temperature (the model run once per distinct temperature)."""
+    """|B| of every row at its own temperature, r(T) B_ref(F / m(T)) (the model run once per
+    distinct temperature)."""
     out = np.empty(len(F))
     for temp in np.unique(np.round(T, 3)):
         rows = np.round(T, 3) == temp
-        out[rows] = field_abs_T(F[rows], values_at_T(values, float(temp), alpha, beta, T_ref_C))
+        m = float(modulus_scale(temp, beta, T_ref_C))
+        out[rows] = float(remanence_scale(temp, alpha, T_ref_C)) * field_abs_T(F[rows] / m, values)
     return out
 
 

@@ -29,7 +29,7 @@ def field_residuals(doc: Document, mechanics: str, rd: Readings, sigma_T: float,
     """(model - reading) / sigma on every axis of every row (3 n,), rows grouped by their press
     and solved in ascending force."""
     geometry, material = doc.geometry(), doc.material
-    layers = tilt_laws(geometry, material, mechanics, lever_factor)
+    layers = tilt_laws(geometry, material, mechanics, lever_factor, doc.whole_part)
     assert rd.offset_mm is not None and rd.force_N is not None
     B = np.empty_like(rd.B_T)
     presses = np.unique(rd.offset_mm, axis=0)

@@ -24,9 +24,10 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from mst_cli.design.problem import DesignProblem
+from mst_cli.design.problem import COVER_LANDING_RULE, DesignProblem
 from mst_cli.errors import InputError
 from mst_cli.model.cell import cell_margins_mm
+from mst_cli.model.load_path import moving_share
 from mst_cli.model.mechanics.spring import contact_stiffness_N_per_mm
 
 if TYPE_CHECKING:
@@ -169,13 +170,120 @@ def diagnose(
     one per layer, come from the forward model on it; ``checks`` maps a failed constraint name
     to its message (from the verification).
     """
-    reasons = _beyond_limits(problem) + _rising_sensitivities(problem, achieved_S)
-    reasons += _worst_miss(problem, u, achieved_S, achieved_R)
+    reasons = _members_dominate(problem, u) + _cover_holds_back(problem, u) + _beyond_limits(problem)
+    reasons += _rising_sensitivities(problem, achieved_S)
+    reasons += [
+        (name, reason + _members_share(problem, u, achieved_S, achieved_R))
+        for name, reason in _worst_miss(problem, u, achieved_S, achieved_R)
+    ]
     for name, message in checks.items():
         reasons.append((name, message))
     if not reasons:  # nothing failed: the caller should not have asked
         return "", []
     return reasons[0][0], [r for _, r in reasons]
+
+
+def _cover_holds_back(problem: DesignProblem, u: ArrayLike) -> list[tuple[str, str]]:
+    """(name, reason) when the nearest design holds the housing's cover off the board's parts
+    to the range's end (:data:`COVER_LANDING_RULE` binding): the targets need the cover to land
+    there, a support of the assembly (the chip and connectors) the printed body lacks."""
+    if not problem.whole_part:
+        return []
+    theta, t, h = problem.to_physical(u)
+    rule = problem.constraint_names().index(COVER_LANDING_RULE)
+    g = problem.evaluate_physical(theta, t, h).constraints[rule]
+    if g < -ACTIVE_TOL:
+        return []
+    (over_slot, air_mm) = problem.part_members(theta, t, h)[2]
+    return [
+        (
+            "the housing's cover",
+            f"the targets need the housing's cover to land on the board's parts: held off them to "
+            f"R_{problem.n} = {problem.R_target[-1]:g} N (+{100 * problem.tolerance_rel:g} %), its bending over the "
+            f"slot ({float(over_slot):.3g} mm/N, "
+            f"{air_mm:g} mm of air) then adds more motion to the last regimes than their targets allow; past "
+            "the landing the press bears on the chip and connectors, which the printed body lacks: a "
+            "thicker housing.cover_mm (docs/design.md 4.6)",
+        )
+    ]
+
+
+def _members_by_regime(problem: DesignProblem, u: ArrayLike, edges_N: ArrayLike) -> tuple[dict, float, np.ndarray]:
+    """({member: the compliance (n,) in mm/N it adds in each regime between ``edges_N`` (0, R_1,
+    ..., R_n)}, (d|B|/dgap)/B0 (1/mm) at the unloaded gap, the layers' d_lock (n,)) of the design
+    at ``u``, as the forward model moves them (model.load_path.moving_share, the rule the report's
+    shares use too): the cap bends until the top layer locks (every regime), a plate until the
+    layer under it locks (the regimes up to that layer's), the cover's slot walls always and its
+    bending over the slot until it lands on the board (:meth:`DesignProblem.member_parts`)."""
+    theta, t, h = problem.to_physical(u)
+    _, d_lock, _, _ = problem.layer_laws(theta, t, h)
+    cap, plates, cover = problem.member_parts(theta, t, h, edges_N)
+    edges = np.asarray(edges_N, dtype=float)
+    # plate j bends until layer j locks, the cap until the top one: the design's locks R_1 < ... < R_n
+    caps = np.append(plates, cap)[:, None] * moving_share(edges[1:], edges)  # (layers, regimes)
+    parts = {"cap": caps[-1], "plates": caps[:-1].sum(axis=0), "housing's cover": np.asarray(cover, float)}
+    gap0 = float(problem.gap0_mm(float(np.sum(h))))
+    B = problem.field_T(np.array([gap0 - 1e-4, gap0, gap0 + 1e-4]))
+    per_mm = float((B[0] - B[2]) / (2e-4 * B[1]))  # (d|B|/dgap)/B0: S over the compliance, 1/mm
+    return parts, per_mm, d_lock
+
+
+def _members_dominate(problem: DesignProblem, u: ArrayLike) -> list[tuple[str, str]]:
+    """(name, reason) when the members outside the layers make a target unreachable at the nearest
+    design, which no layer can help (docs/design.md 4.6): the cap closes the top layer's cavity by
+    its own bending before the target R_n (below d_lock / C_cap), or the members alone give a
+    regime more field change per newton than its target (each member while it still moves in that
+    target band, :func:`_members_by_regime`; the tangent at the unloaded gap, below the secant as
+    the gap closes)."""
+    if not problem.whole_part:
+        return []
+    parts, per_mm, d_lock = _members_by_regime(problem, u, np.concatenate([[0.0], problem.R_target]))
+    cap = float(parts["cap"][0])
+    tol, n = problem.tolerance_rel, problem.n
+    if cap > 0 and problem.R_target[-1] * (1 - tol) > d_lock[-1] / cap:
+        return [
+            (
+                "the cap dominates",
+                f"the cap is too soft: it bends {cap:.3g} mm/N into layer {n}'s cavity and closes it by itself "
+                f"at {d_lock[-1] / cap:.3g} N, below the target R_{n} = {problem.R_target[-1]:g} N; a stiffer cap "
+                "(an insert) is needed (docs/design.md 4.6)",
+            )
+        ]
+    floor = per_mm * sum(parts.values())  # S (1/N) of the members alone, per regime
+    over = np.flatnonzero(floor > problem.S_target * (1 + tol))
+    if not len(over):
+        return []
+    i = int(over[-1])
+    name = max(parts, key=lambda k: parts[k][i])
+    verb = "are" if name == "plates" else "is"
+    return [
+        (
+            f"the {name} dominate{'' if name == 'plates' else 's'}",
+            f"the {name} {verb} too soft: the members outside the layers alone give "
+            f"S >= {floor[i]:.3g} 1/N in regime {i + 1} (most the {name}, {parts[name][i]:.3g} mm/N), above its "
+            f"target {problem.S_target[i]:g} 1/N, which no layer can lower; a stiffer cap (an insert), plates or "
+            "a cover supported all round (docs/design.md 4.6)",
+        )
+    ]
+
+
+def _members_share(problem: DesignProblem, u: ArrayLike, achieved_S: ArrayLike, achieved_R: ArrayLike) -> str:
+    """'' or, when the members outside the layers carry a third or more of some regime's motion at
+    the nearest design, that share and the member (each as it moves in that regime,
+    :func:`_members_by_regime`): what the layers have to work around."""
+    if not problem.whole_part:
+        return ""
+    edges = np.concatenate([[0.0], np.sort(np.asarray(achieved_R, float))])
+    parts, per_mm, _ = _members_by_regime(problem, u, edges)
+    share = sum(parts.values()) * per_mm / np.maximum(np.asarray(achieved_S, float), 1e-300)
+    i = int(np.argmax(share))
+    if share[i] < 1.0 / 3.0:
+        return ""
+    name = max(parts, key=lambda k: parts[k][i])
+    return (
+        f"; the members outside the layers carry about {100 * min(share[i], 1.0):.0f} % of regime {i + 1}'s "
+        f"motion, most the {name} ({parts[name][i]:.3g} mm/N, docs/design.md 4.6)"
+    )
 
 
 def _beyond_limits(problem: DesignProblem) -> list[tuple[str, str]]:

@@ -21,9 +21,12 @@ Constraints (g <= 0 is satisfied; every g is scaled to order one)
       (:func:`~mst_cli.model.mechanics.correction.fitted_t_over_L_max`);
     * lock order with margin: R_(i+1) >= (1 + lock_margin_rel) R_i, so regime i ends when layer
       i locks and the layers lock bottom to top in file order;
-    * chip below saturation: |B| at the last lock <= (1 - saturation_margin_rel) x 50 mT, and
+    * chip below saturation: |B| at the last lock (at gap 0 when the magnet would reach the chip
+      before it) <= (1 - saturation_margin_rel) x 50 mT, and
       never above what the MLX90393's coarsest setting reads with the headroom
       :func:`~mst_cli.model.chip.choose_setting` keeps;
+    * the whole part's cover lands on the board's parts only past R_n + tolerance: a landing
+      inside the range is a support of the assembly, not of the printed body (design.md 4.6);
     * optional total height: SensorGeometry.total_height_mm <= design.max_height_mm;
     * optional print deviation (``design.max_print_deviation_rel``): every S_i and R_i changes by
       at most that fraction when every wall is printed +- printer.wall_tolerance_mm (one smooth
@@ -32,7 +35,8 @@ Constraints (g <= 0 is satisfied; every g is scaled to order one)
 The part as printed (docs/design.md section 10)
     The variables are the walls as drawn; the physics sees the walls as printed, t +
     printer.wall_offset_mm, with the modulus times printer.modulus_factor and the gap plus
-    printer.gap_offset_mm (what ``mst calibrate`` fitted on an earlier print). The cell rules
+    printer.gap_offset_mm (what ``mst calibrate`` fitted on an earlier print), built into the
+    housing as ``mst simulate`` builds it (the cover's air first: where the cover lands). The cell rules
     judge the drawing (what the slicer gets); the t/L range of L0's fit judges the printed wall.
 
 Preference among the designs that meet the targets (phase 2, ``design.objective``)
@@ -58,7 +62,7 @@ from __future__ import annotations
 
 import inspect
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, cast
 
 import numpy as np
@@ -66,11 +70,14 @@ import numpy as np
 from mst_cli.model import chip as mlx
 from mst_cli.model.assembly import unloaded_gap_mm
 from mst_cli.model.cell import CELL_RULES, LENGTH_FLOOR_MM, cell_margins_mm, wall_centreline_length_mm
+from mst_cli.model.load_path import member_parts, member_scene, moving_share
 from mst_cli.model.magnet_field import axial_Bz_T, choose_field_model
+from mst_cli.model.material import Material
 from mst_cli.model.mechanics import correction
 from mst_cli.model.mechanics.depth import web_modulus_MPa
 from mst_cli.model.mechanics.spring import spring_arrays
-from mst_cli.model.response import field_magnitude_T, regime_kernel
+from mst_cli.model.response import capped_lock_forces_N, field_magnitude_T, regime_kernel
+from mst_cli.sensor.as_printed import housing_as_printed
 from mst_cli.sensor.sections import DEFAULT_OBJECTIVE, OBJECTIVE_TERMS
 
 if TYPE_CHECKING:
@@ -84,6 +91,7 @@ CHIP_HEADROOM = inspect.signature(mlx.choose_setting).parameters["margin"].defau
 TINY = 1e-300  # floor of anything a log is taken of (a collapsed output, not a crash)
 VIOLATION_PENALTY = 10.0  # merit per unit of constraint violation (g is scaled to order one)
 DEDUPE_MIN_CELLS = 64  # below this many cells, sorting out repeats costs more than it saves
+COVER_LANDING_RULE = "the housing's cover lands on the board's parts only past the range (R_n + tolerance)"
 ROUNDING_SAFETY = 1e-3  # constraint slack (nozzles / log units) so that the rounded
 # design written to design.yaml still satisfies every rule
 
@@ -172,7 +180,6 @@ class DesignProblem:
         # the part as printed: walls + offset, modulus x factor, gap + offset (module docstring)
         self.wall_offset_mm = float(doc.printer.wall_offset_mm)
         self.wall_tolerance_mm = float(doc.printer.wall_tolerance_mm)
-        self.gap_offset_mm = float(doc.printer.gap_offset_mm)
         self.E_MPa = doc.material.youngs_modulus_MPa * doc.printer.modulus_factor
         self.max_print_deviation_rel = d.get("max_print_deviation_rel")
         self.nu = doc.material.poisson_ratio
@@ -184,9 +191,18 @@ class DesignProblem:
         probe_cells = [doc.family.cell(45.0, 1.0, 3.0) for _ in range(self.n)]
         probe = doc.geometry(probe_cells)
         self.probe = probe
+        # the housing as built (printer.gap_offset_mm in its clearance, else its floor and
+        # cover), as mst simulate builds it: the gap, the cover's air and the slot walls
+        printed_probe = replace(doc, housing=housing_as_printed(doc)).geometry(probe_cells)
+        self.printed_housing = printed_probe.housing
         requested = None if doc.field_model == "auto" else doc.field_model
         self.field_model = choose_field_model(probe.chip_offset_mm, probe.magnet_tilt_deg, requested)
         self.height_offset_mm = probe.total_height_mm - sum(c.h_mm for c in probe_cells)
+        # the whole part: the cap, plates and cover in series with the layers, in the printed
+        # TPU, under a fingertip's press (docs/design.md 4.6); the cells come per candidate
+        self.whole_part = doc.whole_part  # model.load_path: part (else the layers alone)
+        printed_tpu = Material(doc.material.name, self.E_MPa, self.nu)
+        self.members = member_scene(printed_probe, printed_tpu)
         self.B_limit_T = min(1.0 - self.saturation_margin_rel, 1.0 / CHIP_HEADROOM) * mlx.SATURATION_T
         # L0's fitted corrections hold for walls up to this t/L; stubbier walls are extrapolation
         # (the design loop otherwise drifts there: it is where k and R grow fastest)
@@ -196,6 +212,7 @@ class DesignProblem:
             + self.n
             + (self.n - 1)
             + 1
+            + (1 if self.whole_part else 0)
             + (1 if self.max_height_mm is not None else 0)
             + (8 * self.n if self.max_print_deviation_rel is not None else 0)
         )
@@ -236,7 +253,7 @@ class DesignProblem:
 
     def gap0_mm(self, sum_h_mm: Floats) -> Floats:
         """Unloaded magnet-to-chip gap, as built, of stacks whose layer heights add up to ``sum_h_mm``."""
-        return unloaded_gap_mm(sum_h_mm, self.n, self.probe.housing, self.probe.board) + self.gap_offset_mm
+        return unloaded_gap_mm(sum_h_mm, self.n, self.printed_housing, self.probe.board)
 
     def layer_constraints(self, theta_deg: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike) -> np.ndarray:
         """The rules each layer meets on its own, (..., len(CELL_RULES) + 1), g <= 0 satisfied:
@@ -323,16 +340,52 @@ class DesignProblem:
         self, theta_deg: np.ndarray, t_mm: np.ndarray, h_mm: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """(R_N per layer, S_per_N per regime, B_full_T, gap0_mm, B0_T) of candidate stacks."""
-        return self._responses_of(self.layer_laws(theta_deg, t_mm, h_mm), h_mm)
+        members = self.part_members(theta_deg, t_mm, h_mm) if self.whole_part else None
+        return self._responses_of(self.layer_laws(theta_deg, t_mm, h_mm), h_mm, members)
+
+    def member_parts(self, theta_deg: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike, edges_N: ArrayLike) -> tuple:
+        """(cap (...), plates (..., n - 1), cover (..., bands)) compliance in mm/N of candidate
+        stacks, walls as printed (t + printer.wall_offset_mm), as :meth:`layer_laws` sees them,
+        the cover's over each force band between ``edges_N`` (..., bands + 1): its slot walls
+        throughout, its bending over the slot only until it lands on the board after its air
+        (the band's mean, what a secant over the band sees)."""
+        caps, cover, (over_slot, air_mm) = self.part_members(theta_deg, t_mm, h_mm)
+        cap, plates, slot_walls = caps[..., -1], caps[..., :-1], cover - over_slot
+        lands_N = air_mm / np.maximum(over_slot, 1e-300)
+        return cap, plates, slot_walls[..., None] + over_slot[..., None] * moving_share(lands_N, edges_N)
+
+    def members_mm_per_N(self, theta_deg: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike, edges_N: ArrayLike) -> tuple:
+        """(the cap's (...), the plates' and cover's in series over each band (..., bands))
+        compliance of candidate stacks (:meth:`member_parts`)."""
+        cap, plates, cover = self.member_parts(theta_deg, t_mm, h_mm, edges_N)
+        return cap, plates.sum(axis=-1, keepdims=True) + cover
+
+    def part_members(self, theta_deg: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike) -> tuple:
+        """(each layer's cap (..., n): the plate above it, the cap on the top one; the cover;
+        (the cover's bending over the slot, the air under it): what stops on the board) of
+        candidate stacks, for :meth:`_responses_of`."""
+        t = np.asarray(t_mm, dtype=float)
+        if self.wall_offset_mm:
+            t = np.maximum(t + self.wall_offset_mm, LENGTH_FLOOR_MM)
+        cap, plates, over_slot, slot_walls = member_parts(self.members, np.radians(theta_deg), t, h_mm)
+        caps = np.concatenate([plates, np.asarray(cap)[..., None]], axis=-1)  # each layer's: the plate or cap above it
+        return caps, over_slot + slot_walls, (over_slot, self.members.cover_air_mm)
 
     def _responses_of(
-        self, laws: tuple, h_mm: np.ndarray
+        self, laws: tuple, h_mm: np.ndarray, members: tuple | None = None
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """:meth:`responses` of stacks whose layer laws are known."""
+        """:meth:`responses` of stacks whose layer laws (and members' (caps, rest[, cover contact])
+        compliance) are known: R is each layer's lock force, where the plate or cap above it
+        closes its cavity."""
         k, d_lock, R, k_locked = laws
+        cap, rest = (None, 0.0) if members is None else members[:2]
+        contact = members[2] if members is not None and len(members) > 2 else None
         gap0 = cast(np.ndarray, self.gap0_mm(h_mm.sum(axis=-1)))  # candidates' sums: an array
-        _, S, _, B = regime_kernel(k, d_lock, k_locked, gap0, self.field_T, R)
-        return R, S, B[..., -1], gap0, B[..., 0]
+        _, S, gap, B = regime_kernel(k, d_lock, k_locked, gap0, self.field_T, R, rest, cap, contact)
+        # the chip's largest field on the way is at the smallest gap: a stack whose members let
+        # the magnet reach the chip (gap <= 0 at the last lock) saturates it on the way there
+        B_full = np.where(gap[..., -1] > 0.0, B[..., -1], self.field_T(np.zeros_like(gap[..., -1])))
+        return capped_lock_forces_N(k, d_lock, R, cap), S, B_full, gap0, B[..., 0]
 
     def evaluate_physical(self, theta_deg: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike) -> Evaluation:
         return self._evaluate_physical(theta_deg, t_mm, h_mm, False)[0]
@@ -353,12 +406,16 @@ class DesignProblem:
         if with_shifts:  # nominal, thicker, thinner walls (print_shift_log's steps)
             laws = self.shifted_layer_laws(theta_deg, t_mm, h_mm, self.wall_tolerance_mm)
             H = np.broadcast_to(h_mm, (3,) + h_mm.shape)
-            R3, S3, B_full3, gap03, B03 = self._responses_of(laws, H)
+            dt = self.wall_tolerance_mm  # the members see the shifted walls too
+            T3 = np.stack([t_mm, np.maximum(t_mm + dt, LENGTH_FLOOR_MM), np.maximum(t_mm - dt, LENGTH_FLOOR_MM)])
+            members = self.part_members(theta_deg, T3, H) if self.whole_part else None
+            R3, S3, B_full3, gap03, B03 = self._responses_of(laws, H, members)
             R, S, B_full, gap0, B0 = R3[0], S3[0], B_full3[0], gap03[0], B03[0]
             base = np.log(np.maximum(np.concatenate([S, R], axis=-1), TINY))
             shifts = np.log(np.maximum(np.concatenate([S3[1:], R3[1:]], axis=-1), TINY)) - base[None]
         else:
-            R, S, B_full, gap0, B0 = self.responses(theta_deg, t_mm, h_mm)
+            members = self.part_members(theta_deg, t_mm, h_mm) if self.whole_part else None
+            R, S, B_full, gap0, B0 = self._responses_of(self.layer_laws(theta_deg, t_mm, h_mm), h_mm, members)
         margins, t_over_L_g = self._layer_rules(theta_deg, t_mm, h_mm)
         height = self.height_offset_mm + h_mm.sum(axis=-1)
 
@@ -367,6 +424,8 @@ class DesignProblem:
         if self.n > 1:
             g.append(math.log1p(self.lock_margin_rel) - np.diff(logR, axis=-1))
         g.append(np.log(np.maximum(B_full, TINY) / self.B_limit_T)[..., None])
+        if members is not None:  # (the cover's bending over the slot, its air): the nominal stacks'
+            g.append(self.cover_landing_constraint(members[2][0][0] if with_shifts else members[2][0], members[2][1]))
         if self.max_height_mm is not None:
             g.append(((height - self.max_height_mm) / pr.nozzle_mm)[..., None])
         if self.max_print_deviation_rel is not None:
@@ -382,6 +441,13 @@ class DesignProblem:
 
     def evaluate(self, u: np.ndarray) -> Evaluation:
         return self.evaluate_physical(*self.to_physical(u))
+
+    def cover_landing_constraint(self, over_slot_mm_per_N: np.ndarray, air_mm: float) -> np.ndarray:
+        """(..., 1) g <= 0 when the cover lands on the board (model.load_path.cover_landing_N) past
+        R_n + tolerance (a constant: a max with the own last lock kinks where the match ends): its
+        drop there over its air, minus 1 (linear, smooth as layer 1's feet leave the slot)."""
+        end_N = float(self.R_target.max()) * (1.0 + self.tolerance_rel)
+        return (end_N * np.asarray(over_slot_mm_per_N) / max(air_mm, TINY) - 1.0)[..., None]
 
     # ----------------------------------------------------------------- preference
     def print_deviation_constraints(
@@ -483,6 +549,7 @@ class DesignProblem:
             for i in range(self.n - 1)
         ]
         names.append(f"chip saturation: field at full load <= {self.B_limit_T * 1e3:.1f} mT")
+        names += [COVER_LANDING_RULE] if self.whole_part else []
         if self.max_height_mm is not None:
             names.append(f"total height <= {self.max_height_mm:g} mm")
         if self.max_print_deviation_rel is not None:

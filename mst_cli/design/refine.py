@@ -138,6 +138,7 @@ def _dear_errors(designed: Document, model: str, S_t, R_t):
         mechanics=model,
         field_model=field_model,
         noise_uT_rms=designed.noise_uT_rms,
+        whole_part=designed.whole_part,
     )
     S, R = _layer_outputs(resp, len(S_t))
     return S, R, np.log(S / S_t), np.log(R / R_t)

@@ -66,7 +66,8 @@ class DesignResult:
     warnings: list[str] = field(default_factory=list)
     objective: dict = field(default_factory=dict)  # design.objective's weights and terms
     off_centre: dict | None = None  # design.offcentre_region_mm's figure (api.design fills it)
-    shear_bound: dict | None = None  # two chips or more: what the layout tells apart (api.design fills it)
+    shear_bound: dict | None = None  # two chips or more: what the layout tells apart (when computed)
+    notes: list[str] = field(default_factory=list)  # lines the terminal shows before the warnings
 
     @property
     def exit_code(self) -> int:
@@ -174,6 +175,7 @@ class DesignResult:
             )
         if self.shear_bound is not None:
             lines += shear_bound_lines(self.shear_bound)
+        lines += self.notes
         for w in self.warnings:
             lines.append(f"warning: {w}")
         return lines

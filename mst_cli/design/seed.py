@@ -11,6 +11,13 @@ The targets pin one layer each, given the gap:
   they are chosen: the loop runs from the top layer down), the locked ones below take
   dF / k_locked (small), and layer i takes the rest.
 
+On the whole part (``model.load_path: part``) the members add to every regime: the cap bends
+into the top layer's cavity and each plate into the cavity of the layer under it until it
+closes (a layer's lock force and increments are its capped law's), and the cover adds its
+compliance x dF. A plate depends on the two layers it joins (the one above is chosen first)
+and the cover on layer 1, so each layer's candidates are weighed with the members they make
+given the layers already chosen (exact once the passes stop changing).
+
 So each layer is a two-target, three-variable choice from one table of cells evaluated once
 (a grid over the unit box of (theta, t, h), the same for every layer): the cell nearest to
 (R_i, its increment) in log terms among those that meet every per-layer rule. The gap depends
@@ -30,6 +37,7 @@ import numpy as np
 
 from mst_cli.design.problem import TINY
 from mst_cli.model.mechanics.spring import layer_displacement_mm
+from mst_cli.model.stack import capped_lock_force_N
 
 if TYPE_CHECKING:
     from mst_cli.design.problem import DesignProblem
@@ -62,13 +70,47 @@ class CellTable:
         ok = np.all(problem.layer_constraints(theta, t, h) + slack <= 0.0, axis=-1)
         k, d_lock, R, k_locked = problem.layer_laws(theta[ok], t[ok], h[ok])
         self.u = u[ok]
-        self.h_mm = h[ok]
+        self.theta_deg, self.t_mm, self.h_mm = theta[ok], t[ok], h[ok]
         self.k, self.d_lock, self.R, self.k_locked = k, d_lock, R, k_locked
         self.cells = len(u)
+        self.whole_part = problem.whole_part
+        # as layer 1: its cover lands on the board past the target range (the design's constraint)
+        self.cover_ok = np.ones(len(self.u), bool)
+        if self.whole_part and len(self.u):
+            over_slot, air_mm = problem.part_members(self.theta_deg[:, None], self.t_mm[:, None], self.h_mm[:, None])[2]
+            self.cover_ok = problem.cover_landing_constraint(over_slot, air_mm)[:, 0] + slack <= 0.0
 
-    def displacement_mm(self, force_N: float) -> np.ndarray:
-        """Compression of every table cell at ``force_N``."""
-        return layer_displacement_mm(force_N, self.k, self.d_lock, self.R, self.k_locked)
+    def displacement_mm(self, force_N: float, cap_mm_per_N: np.ndarray | float = 0.0) -> np.ndarray:
+        """Compression of every table cell at ``force_N``, the plate or cap above it bending into
+        its cavity by ``cap_mm_per_N`` (cells,) until it closes there (its capped law)."""
+        return capped_mm(force_N, self.k, self.d_lock, self.R, self.k_locked, cap_mm_per_N)
+
+    def increment_mm(self, cell: int, F0: float, F1: float, cap_mm_per_N: float) -> float:
+        """One cell's compression from F0 to F1 under its plate or cap (its capped law)."""
+        law = (self.k[cell], self.d_lock[cell], self.R[cell], self.k_locked[cell])
+        return float(capped_mm(F1, *law, cap_mm_per_N) - capped_mm(F0, *law, cap_mm_per_N))
+
+    def members_with(self, problem: DesignProblem, chosen: np.ndarray, j: int) -> tuple:
+        """(each layer's cap (cells, n): the plate above it, the cap on the top one; the cover's
+        drop (cells,) at a force, its bending over the slot stopped on the board) of the stacks
+        ``chosen`` with every table cell in place of layer ``j``; zeros on the layers alone."""
+        n = len(chosen)
+        if not self.whole_part:
+            return np.zeros((len(self.u), n)), lambda F: np.zeros(len(self.u))
+        cells = [a[np.broadcast_to(chosen, (len(self.u), n)).copy()] for a in (self.theta_deg, self.t_mm, self.h_mm)]
+        for a, own in zip(cells, (self.theta_deg, self.t_mm, self.h_mm)):
+            a[:, j] = own
+        caps, cover, (over_slot, air) = problem.part_members(*cells)
+        return caps, lambda F: cover * F - np.maximum(over_slot * F - air, 0.0)
+
+
+def capped_mm(force_N, k, d_lock, R, k_locked, cap_mm_per_N) -> np.ndarray:
+    """L0 layers' compression at ``force_N`` with the plate or cap above each bending into its
+    cavity by ``cap_mm_per_N`` until it closes there (the layers' own law where C = 0)."""
+    own = layer_displacement_mm(force_N, k, d_lock, R, k_locked)
+    C = np.asarray(cap_mm_per_N, dtype=float)
+    Rc = capped_lock_force_N(k, d_lock, R, C)
+    return np.where(C > 0, np.where(force_N <= Rc, own + C * force_N, d_lock + (force_N - Rc) / k_locked), own)
 
 
 def _edge_gaps_mm(problem: DesignProblem, gap0_mm: float) -> np.ndarray | None:
@@ -99,11 +141,13 @@ def seed_start(problem: DesignProblem, slack: float, table: CellTable | None = N
         return None, 0
     n = problem.n
     F = np.concatenate([[0.0], R_target])
-    d_at = [table.displacement_mm(f) for f in F]  # every cell at every edge force
-    increment = [d_at[i + 1] - d_at[i] for i in range(n)]
     log_R = np.log(np.maximum(table.R, TINY))
     # first guess: each layer's lock force alone; the passes then add the field's demands
     chosen = np.argmin(np.abs(log_R[None, :] - np.log(R_target)[:, None]), axis=1)
+    for j in range(n - 1, -1, -1):  # then each layer's capped lock force, the layers above it chosen
+        C = table.members_with(problem, chosen, j)[0][:, j]
+        R_capped = capped_lock_force_N(table.k, table.d_lock, table.R, C)
+        chosen[j] = int(np.argmin(np.abs(np.log(np.maximum(R_capped, TINY)) - np.log(R_target[j]))))
     candidates = []
     for _ in range(PASSES):
         before = chosen.copy()
@@ -112,10 +156,17 @@ def seed_start(problem: DesignProblem, slack: float, table: CellTable | None = N
             break
         stack_increment = -np.diff(gaps)  # D_i - D_(i-1), i = 1..n
         for j in range(n - 1, -1, -1):
-            above = sum(increment[j][chosen[m]] for m in range(j + 1, n))
-            below = sum((F[j + 1] - F[j]) / table.k_locked[chosen[m]] for m in range(j))
-            need = max(stack_increment[j] - above - below, 1e-3 * stack_increment[j])
-            miss = (log_R - np.log(R_target[j])) ** 2 + (np.log(np.maximum(increment[j], TINY)) - np.log(need)) ** 2
+            dF = F[j + 1] - F[j]
+            caps, cover = table.members_with(problem, chosen, j)  # the layers above j: already chosen
+            own = table.displacement_mm(F[j + 1], caps[:, j]) - table.displacement_mm(F[j], caps[:, j])
+            lock = np.log(np.maximum(capped_lock_force_N(table.k, table.d_lock, table.R, caps[:, j]), TINY))
+            above = sum(table.increment_mm(chosen[m], F[j], F[j + 1], caps[0, m]) for m in range(j + 1, n))
+            below = sum(dF / table.k_locked[chosen[m]] for m in range(j))
+            members = cover(F[j + 1]) - cover(F[j])
+            need = np.maximum(stack_increment[j] - above - below - members, 1e-3 * stack_increment[j])
+            miss = (lock - np.log(R_target[j])) ** 2 + (np.log(np.maximum(own, TINY)) - np.log(need)) ** 2
+            if j == 0 and table.cover_ok.any():  # layer 1 keeps the cover off the board's parts
+                miss = np.where(table.cover_ok, miss, np.inf)
             chosen[j] = int(np.argmin(miss))
         candidates.append(table.u[chosen].reshape(-1))
         if np.array_equal(chosen, before):

@@ -16,8 +16,11 @@ from typing import TYPE_CHECKING
 
 from mst_cli.model import board_slots
 from mst_cli.model.cell import HexCell
-from mst_cli.model.components import MAGNET_GRADES_T, Board, default_board
+from mst_cli.model.components import INSERT_MATERIALS, MAGNET_GRADES_T, Board, default_board
 from mst_cli.model.file_keys import spec
+from mst_cli.model.insert_plate import InsertPlate as InsertPlate  # re-exported: the file's `insert` section
+from mst_cli.model.insert_plate import PrintPause, insert_violations
+from mst_cli.model.load_path import Insert
 from mst_cli.model.printer import Printer
 from mst_cli.model.violation import Violation
 
@@ -145,6 +148,17 @@ class Housing:
     )
 
 
+# Crush ribs hold the magnet in its pocket (issue 44: loose with 0.1 mm clearance, the cap closed
+# on it after a few newtons and what moved it changed). Two ribs on the pocket's face over the
+# magnet, along the print's build direction, so the magnet slides down them at the pause; each
+# reaches the clearance plus this interference into the pocket. 0.1 mm: the thickness tolerance of
+# a stock 2 mm NdFeB disc (+-0.05 to +-0.1 mm) plus a slit's shrink in print (about half a line
+# width's error, 0.05 mm), so the rib touches the magnet whatever the tolerances; squeezing 0.1 of
+# a 0.2 mm TPU rib two lines wide over 3 mm presses the magnet onto its floor with a few newtons,
+# which a finger overcomes to push it in.
+MAGNET_RIB_INTERFERENCE_MM = 0.1
+
+
 def snap_to_layers_mm(height_mm: float, layer_height_mm: float, mode: str) -> float:
     """A print height snapped to the layer grid: mode "down", "up" or "nearest" (halves up).
     Heights within 1e-9 layers of a boundary count as on it (float noise)."""
@@ -191,6 +205,8 @@ class SensorGeometry:
     # every chip's (x, y) when more than one reads the magnet (magnetometer.positions_mm, the
     # first at chip_offset_mm); None: one chip, at chip_offset_mm
     chip_positions_mm: tuple[tuple[float, float], ...] | None = None
+    # the stiff plate in the cap (the file's `insert` section); None: none, the cap is TPU alone
+    insert_plate: InsertPlate | None = None
 
     def __post_init__(self):
         if self.board is None:
@@ -338,6 +354,24 @@ class SensorGeometry:
         return self.z_magnet_bottom_mm + self.magnet.thickness_mm
 
     @property
+    def magnet_rib_x_mm(self) -> tuple[float, ...]:
+        """The crush ribs' centres across the pocket: half way out to its sides; none in a pocket
+        narrower than two ribs' bases (each must stand wholly on the pocket's face)."""
+        r = self.pocket_radius_mm
+        return (-0.5 * r, 0.5 * r) if r >= self.magnet_rib_width_mm else ()
+
+    @property
+    def magnet_rib_width_mm(self) -> float:
+        """A crush rib's base across the pocket: two extrusion lines."""
+        return 2.0 * self.printer.nozzle_mm
+
+    @property
+    def magnet_rib_reach_mm(self) -> float:
+        """How far a crush rib reaches from the pocket's face over the magnet towards it: the
+        clearance plus the interference (MAGNET_RIB_INTERFERENCE_MM)."""
+        return self.housing.pocket_clearance_mm + MAGNET_RIB_INTERFERENCE_MM
+
+    @property
     def pocket_top_y_mm(self) -> float:
         """y where the pocket's straight sides end (it is a U open towards +y: a half disc
         below y = 0, straight sides above): the pocket radius, snapped up to the layer grid,
@@ -368,8 +402,77 @@ class SensorGeometry:
         return int(round(self.pause_height_mm / self.layer_height_mm))
 
     @property
+    def z_pocket_top_mm(self) -> float:
+        """The pocket's face above the magnet (the magnet, its axial clearance)."""
+        return self.z_magnet_top_mm + self.housing.pocket_clearance_mm
+
+    @property
+    def has_insert(self) -> bool:
+        return self.insert_plate is not None and self.insert_plate.present
+
+    @property
     def total_height_mm(self) -> float:
-        return self.z_magnet_top_mm + self.housing.pocket_clearance_mm + self.housing.cap_top_mm
+        """The top face: cap_top_mm over the pocket, or over the insert when there is one."""
+        top = self.insert_slot_box_mm[1][2] if self.has_insert else self.z_pocket_top_mm
+        return top + self.housing.cap_top_mm
+
+    # -- the insert: its slot and the plate, computed here once (CAD, closed form, FE read them)
+    @property
+    def insert_slot_roof_rise_mm(self) -> float:
+        """Rise of the 45 deg gable over the slot (half the plate's thickness, whole layers), as
+        :attr:`pocket_roof_rise_mm` is over the pocket."""
+        assert self.insert_plate is not None
+        return snap_to_layers_mm(0.5 * self.insert_plate.thickness_mm, self.layer_height_mm, "up")
+
+    @property
+    def insert_slot_box_mm(self) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
+        """(lo, hi) of the insert's slot, sensor frame, without its gable: across the face with
+        side_wall_mm left at each x face; from a floor on the layer grid side_wall_mm above the
+        -y face up to a layer boundary (the pause) that leaves side_wall_mm over the gable; along
+        z from cap_top_mm over the pocket, the plate's thickness."""
+        ip, h = self.insert_plate, self.housing
+        assert ip is not None and ip.present, "no insert"
+        a = 0.5 * self.width_mm - h.side_wall_mm
+        d2 = 0.5 * self.depth_mm
+        y0 = self.snapped_y_mm(-d2 + h.side_wall_mm, "up")
+        y1 = self.snapped_y_mm(d2 - h.side_wall_mm - self.insert_slot_roof_rise_mm, "down")
+        z0 = self.z_pocket_top_mm + h.cap_top_mm
+        return (-a, y0, z0), (a, y1, z0 + ip.thickness_mm)
+
+    @property
+    def insert_box_mm(self) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
+        """(lo, hi) of the plate as it sits, sensor frame: the slot less the clearance at each x
+        side and at the top (it rests on the slot's floor, fills the slot's thickness)."""
+        assert self.insert_plate is not None
+        (x0, y0, z0), (x1, y1, z1) = self.insert_slot_box_mm
+        c = self.insert_plate.clearance_mm
+        return (x0 + c, y0, z0), (x1 - c, y1 - c, z1)
+
+    @property
+    def insert(self) -> Insert | None:
+        """The plate as the closed form takes it (:class:`~mst_cli.model.load_path.Insert`: its
+        plane-strain modulus, its underside above the top pad's underside), or None."""
+        if not self.has_insert:
+            return None
+        assert self.insert_plate is not None
+        m = INSERT_MATERIALS[self.insert_plate.material]
+        (_, y0, z0), (_, y1, _) = self.insert_box_mm
+        z = self.layers[-1].t_mm + z0 - self.z_stack_top_mm
+        return Insert(m.name, m.plane_strain_modulus_MPa, m.poisson_ratio, self.insert_plate.thickness_mm, z, y1 - y0)
+
+    @property
+    def insert_pause(self) -> PrintPause | None:
+        """The pause that drops the plate in: at the top of its slot (a layer boundary)."""
+        if not self.has_insert:
+            return None
+        z = self.print_height_mm(self.insert_slot_box_mm[1][1])
+        return PrintPause(int(round(z / self.layer_height_mm)), z, "drop the insert plate into its slot")
+
+    @property
+    def pauses(self) -> tuple[PrintPause, ...]:
+        """Every pause of the print, lowest first: the magnet's, then the insert's when there is one."""
+        magnet = PrintPause(self.pause_after_layer, self.pause_height_mm, "drop the magnet into its pocket")
+        return (magnet,) if self.insert_pause is None else (magnet, self.insert_pause)
 
     @property
     def gap0_mm(self) -> float:
@@ -474,4 +577,4 @@ class SensorGeometry:
                     "(housing.side_wall_mm above its apex)",
                 )
             )
-        return board_slots.chip_off_face_violations(self) + out  # a chip off the face first
+        return board_slots.chip_off_face_violations(self) + out + insert_violations(self)  # a chip off the face first

@@ -12,8 +12,13 @@ through the base's x face -- or, when another slot lies that way, into that slot
 between two neighbouring slots join them, so one short cable links the facing sockets (an I2C
 daisy chain; the boards need different addresses) and the outermost sockets reach the faces.
 Two facing windows span the same wall, so the link is one box from the lower of their two
-floors: the union of both sockets' own windows, which clears both plugs, opens through the top
-face like every cut (nothing bridged) and is no deeper than a window the rules already allow.
+floors to the higher of their tops: the union of both sockets' own windows, which clears both
+plugs and is no deeper than a window the rules already allow.
+
+A window ends just above its socket under a 45 deg gable (nothing bridged), so the side wall
+stands over it up to the +y face and the cover rests on the wall on both sides of the window
+(issue 44: a window open through the face left the cover on a cantilever over the open slot);
+only where the wall above would be thinner than housing.side_wall_mm does it open through the face.
 """
 
 from __future__ import annotations
@@ -79,6 +84,22 @@ class BoardSlot:
     x_mm: tuple[float, float]  # slot (x0, x1): board outline plus the clearance
     floor_y_mm: float
     windows: tuple[Window, ...]
+    # each window's top (y where its box ends, under a 45 deg gable), or None where the wall over
+    # it is too short for the gable and the window stays open through the +y face
+    window_tops_y_mm: tuple[float | None, ...] = ()
+
+
+def window_roof_apex_y_mm(g: SensorGeometry, top_y_mm: float, z0_mm: float, z1_mm: float) -> float:
+    """The ridge of a window's 45 deg gable over its top: half the window's height, snapped up
+    to the layer grid (as the pocket's roof)."""
+    return g.snapped_y_mm(top_y_mm + 0.5 * (z1_mm - z0_mm), "up")
+
+
+def _window_top_y_mm(g: SensorGeometry, top_y_mm: float, z0_mm: float, z1_mm: float) -> float | None:
+    """The window's top when the side wall over its gable keeps housing.side_wall_mm under the
+    +y face (the cover then rests on the wall on both sides of the window), else None (open)."""
+    apex = window_roof_apex_y_mm(g, top_y_mm, z0_mm, z1_mm)
+    return top_y_mm if apex + g.housing.side_wall_mm <= 0.5 * g.depth_mm + 1e-9 else None
 
 
 def chip_slot_x_mm(g: SensorGeometry, chip_xy_mm: tuple[float, float]) -> tuple[float, float]:
@@ -160,6 +181,13 @@ def _window_end_mm(x_in: float, facing: str, walls: list[tuple[float, float]], h
 def _own_windows(g: SensorGeometry, chip: tuple[float, float], walls: list[tuple[float, float]]) -> list[Window]:
     """The windows of the chip's own sockets: each from a floor just below its socket (snapped
     down to the layer grid) to the base's face or the nearest other slot's wall."""
+    return [w for w, _ in _own_windows_and_tops(g, chip, walls)]
+
+
+def _own_windows_and_tops(
+    g: SensorGeometry, chip: tuple[float, float], walls: list[tuple[float, float]]
+) -> list[tuple[Window, float]]:
+    """Each own window and the top its socket needs: just above the socket (snapped up)."""
     bd, c, L2 = g.board, g.housing.board_clearance_mm, 0.5 * g.base_length_mm
     x0, x1 = chip_slot_x_mm(g, chip)
     floor = chip_floor_y_mm(g, chip)
@@ -169,7 +197,8 @@ def _own_windows(g: SensorGeometry, chip: tuple[float, float], walls: list[tuple
         y_floor = g.snapped_y_mm(floor + con.y0_mm - c, "down")
         x_in = x0 if con.facing == "-x" else x1
         x_out = _window_end_mm(x_in, con.facing, others, L2)
-        out.append((x_in, x_out, y_floor, g.z_board_top_mm, g.z_cover_bottom_mm))
+        top = g.snapped_y_mm(floor + con.y1_mm + c, "up")
+        out.append(((x_in, x_out, y_floor, g.z_board_top_mm, g.z_cover_bottom_mm), top))
     return out
 
 
@@ -178,18 +207,22 @@ def layout(g: SensorGeometry) -> tuple[BoardSlot, ...]:
     takes the lower of the two facing windows' floors (their union, one box)."""
     bd = g.board
     walls = [chip_slot_x_mm(g, chip) for chip in g.chips_xy_mm]
-    own = [_own_windows(g, chip, walls) for chip in g.chips_xy_mm]
+    own = [_own_windows_and_tops(g, chip, walls) for chip in g.chips_xy_mm]
     lowest: dict[tuple[float, float], float] = {}  # a window's span (low x, high x) -> its floor
-    for w in (w for ws in own for w in ws):
+    highest: dict[tuple[float, float], float] = {}  # ... -> its top
+    for w, top in (wt for ws in own for wt in ws):
         span = (min(w[0], w[1]), max(w[0], w[1]))
         lowest[span] = min(lowest.get(span, w[2]), w[2])
+        highest[span] = max(highest.get(span, top), top)
     out = []
     for chip, x_mm, windows in zip(g.chips_xy_mm, walls, own):
         floor = chip_floor_y_mm(g, chip)
         origin = (chip[0] - bd.chip_x_mm, floor)
         printed = (origin[0] + bd.chip_x_mm, origin[1] + bd.chip_y_mm)
-        joined = tuple((a, b, lowest[(min(a, b), max(a, b))], z0, z1) for a, b, _, z0, z1 in windows)
-        out.append(BoardSlot((chip[0], chip[1]), origin, printed, x_mm, floor, joined))
+        spans = [(min(a, b), max(a, b)) for (a, b, *_), _ in windows]
+        joined = tuple((a, b, lowest[span], z0, z1) for ((a, b, _, z0, z1), _), span in zip(windows, spans))
+        tops = tuple(_window_top_y_mm(g, highest[span], w[3], w[4]) for w, span in zip(joined, spans))
+        out.append(BoardSlot((chip[0], chip[1]), origin, printed, x_mm, floor, joined, tops))
     return tuple(out)
 
 

@@ -63,6 +63,11 @@ MAGNET_GRADES_T: dict[str, tuple[float, float]] = {
 }
 
 
+# Sintered NdFeB's elastic constants, any grade: E 150-160 GPa, nu 0.24 (magnet makers' physical
+# property tables, e.g. Arnold Magnetic Technologies' NdFeB data: Young's modulus 160 GPa).
+NDFEB_ELASTIC = {"youngs_modulus_MPa": 160e3, "poisson_ratio": 0.24}
+
+
 def grade_remanence_T(grade: str) -> float:
     lo, hi = MAGNET_GRADES_T[grade]
     return round(0.5 * (lo + hi), 4)
@@ -159,6 +164,54 @@ BOARDS: dict[str, Board] = {
 }
 
 DEFAULT_BOARD = "adafruit-4022"
+
+
+@dataclass(frozen=True)
+class InsertMaterial:
+    """A stiff plate's material (the spec's ``insert.material``): Young's modulus and Poisson's
+    ratio at room temperature, and where the figures come from."""
+
+    key: str
+    name: str
+    youngs_modulus_MPa: float
+    poisson_ratio: float
+    source: str
+
+    @property
+    def plane_strain_modulus_MPa(self) -> float:
+        """E/(1 - nu^2): a plate bent across the face, held along the depth (docs/design.md 4.6)."""
+        return self.youngs_modulus_MPa / (1.0 - self.poisson_ratio**2)
+
+
+# Printed plates take the figure of a printed test bar in the bed plane (the plate prints flat),
+# not the resin's (injection-moulded bars are 20-40 % stiffer): the load path errs soft.
+INSERT_MATERIALS: dict[str, InsertMaterial] = {
+    m.key: m
+    for m in (
+        InsertMaterial(
+            "pla",
+            "printed PLA plate",
+            2539.0,
+            0.36,
+            "Stratasys FDM PLA data sheet: tensile modulus 2539 MPa (ASTM D638, printed XY); nu typical of PLA",
+        ),
+        InsertMaterial(
+            "petg",
+            "printed PETG plate",
+            2100.0,
+            0.38,
+            "Eastman Eastar 6763 copolyester (PETG resin): tensile modulus 2100 MPa; printed XY bars 2-3 GPa",
+        ),
+        InsertMaterial(
+            "steel",
+            "steel shim",
+            200e3,
+            0.30,
+            "carbon spring steel shim (AISI 1095 / 1.1274): E 200-210 GPa, nu 0.29-0.30 (handbook values)",
+        ),
+    )
+}
+NO_INSERT = "none"
 
 
 def default_board() -> Board:

@@ -155,10 +155,16 @@ class LoadedStack:
 
 
 def loaded_stack(
-    geometry: SensorGeometry, material: Material, mechanics: str = "spring", lever_factor: float = 1.0
+    geometry: SensorGeometry,
+    material: Material,
+    mechanics: str = "spring",
+    lever_factor: float = 1.0,
+    whole_part: bool = True,
 ) -> LoadedStack:
-    """The tilt laws and lateral laws of every layer on the named rung."""
-    tilts = tilt_laws(geometry, material, mechanics, lever_factor)
+    """The tilt laws and lateral laws of every layer on the named rung, each layer with the
+    part's members its walls load unless ``whole_part`` is False (model.load_path: layers;
+    :func:`~mst_cli.model.stack_pose.tilt_laws`)."""
+    tilts = tilt_laws(geometry, material, mechanics, lever_factor, whole_part)
     build = _l2_law if mechanics == "continuum" else _l0_law
     lateral = [build(t, c, material) for t, c in zip(tilts, geometry.layers)]
     lever = geometry.total_height_mm - layer_pivots_mm(geometry)

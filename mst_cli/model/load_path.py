@@ -15,8 +15,19 @@ layers' compression plus each member's bending:
   at the same x the load goes straight down and the plate does not bend.
 * **cover** -- the base's cover bonded to layer 1's bottom pad: a beam across the board slot,
   loaded by layer 1's wall feet. It does not bend when the walls stand on the slot's side walls
-  (the slot is narrower than the wall feet); the cable windows' cut of the side walls under it
-  (a 3D tipping of the cover over the open slot) is not in this closed form.
+  or beyond them on the solid base (the slot is narrower than the wall feet: no overhang, the
+  base under it is solid). The side walls carry it over the whole depth but
+  at the cable windows, which end just above their sockets (docs/design.md section 10): the
+  cover spans a window's 6-7 mm along the depth with wall on both sides, no cantilever.
+* **slot walls** (part of the housing) -- the base's two side walls beside the board slot, TPU
+  columns as tall as the slot and as wide as the base beyond it, carry the whole press to the
+  held bottom. Each is squeezed (P H / (E' A)) and, with layer 1's walls standing off its
+  centre line by e (on the bundled designs they stand over the slot's edge, a column's width
+  inside its centre), turned by the moment P e: a column held at its foot turns its top by
+  M H / (E' I), the cover across the slot resisting with 2 E'I_cover / L (a beam turned
+  equally and oppositely at both ends), so the load drops by e x the turn. Exact for a column
+  on a held foot: the whole-part rung with every other member rigid agrees within a few per
+  cent (tests/test_load_path.py).
 
 Each beam is a plane-strain Timoshenko beam (E' = E/(1 - nu^2) in bending, G in shear, shear
 factor 5/6) with its supports either simply supported (the default: the wall heads turn with
@@ -26,94 +37,67 @@ the same for both. Pure numpy, no I/O.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
+
+from mst_cli.model.beams import as_value as _value
+from mst_cli.model.beams import end_fixity, strip_bending_mm_per_N, strip_shear_mm_per_N, two_load_mm_per_N
+from mst_cli.model.cell import pad_half_width_mm, wall_centreline_length_mm
 
 SHEAR_FACTOR = 5.0 / 6.0  # kappa of a rectangular section
 # a fingertip pressed on the face: a contact patch about 6 mm wide (the width the issue's
 # independent check presses over); the press runs the whole depth (a strip, in plane strain)
 FINGERTIP_PATCH_MM = 6.0
 SUPPORTS = ("simple", "clamped")
+# a wall's far end (the hexagon's side vertex) for its restraint of the pad's turn, c in c EI/L:
+# by the cell's symmetry the vertex does not turn; it either moves freely across the wall (1, the
+# soft bound: the cell's vertices spread as it is pressed) or is held (4, the stiff bound)
+WALL_FAR_END = {"simple": 1.0, "clamped": 4.0}
 
 
-def strip_bending_mm_per_N(span_mm: float, patch_mm: float, EI_Nmm2: float, support: str) -> float:
-    """Centre deflection per newton of a beam of ``span_mm`` under a centred uniform strip load
-    ``patch_mm`` wide (clipped to the span), bending only.
-
-    The influence of a point load at a <= L/2 on the mid-span deflection is a (3L^2 - 4a^2)/(48 EI)
-    (simply supported) or a^2 (3L - 4a)/(48 EI) (clamped at both ends); integrated over the strip
-    with q = F/c. The limit c -> 0 is F L^3/(48 EI) and F L^3/(192 EI)."""
-    L = span_mm
-    c = min(max(patch_mm, 0.0), L)
-    a0, a1 = 0.5 * (L - c), 0.5 * L
-    if c < 1e-9 * L:
-        return L**3 / ((48.0 if support == "simple" else 192.0) * EI_Nmm2)
-    if support == "simple":
-        prim = lambda a: 1.5 * L**2 * a**2 - a**4  # noqa: E731  (the antiderivative of a (3L^2 - 4a^2))
-    else:
-        prim = lambda a: L * a**3 - a**4  # noqa: E731  (of a^2 (3L - 4a))
-    return 2.0 * (prim(a1) - prim(a0)) / (c * 48.0 * EI_Nmm2)
-
-
-def strip_shear_mm_per_N(span_mm: float, patch_mm: float, kGA_N: float) -> float:
-    """Centre deflection per newton from shear (Timoshenko), any symmetric supports: the shear
-    force is F/2 up to the strip and falls linearly to 0 across it, so delta = F (L - c/2)/(4 kGA)."""
-    c = min(max(patch_mm, 0.0), span_mm)
-    return (span_mm - 0.5 * c) / (4.0 * kGA_N)
-
-
-def two_load_mm_per_N(span_mm: float, offset_mm: float, EI_Nmm2: float, kGA_N: float, support: str) -> float:
-    """Deflection per newton (total force F, F/2 at each load) under two symmetric line loads
-    ``offset_mm`` inside each support of a beam of ``span_mm`` (a plate loaded by the walls above
-    it, held by the walls below). Bending under each load: P e^2 (3L - 4e)/(6 EI) simply supported
-    (four-point bending), less the end moments' lift when clamped (:func:`_clamped_two_load`);
-    shear P e/(kGA). A load outside the supports (e < 0) hangs on an overhang |e| long from a
-    support held level by symmetry: P |e|^3/(3 EI) + P |e|/(kGA)."""
-    P, e, L = 0.5, offset_mm, span_mm
-    if abs(e) < 1e-12:
-        return 0.0
-    if e < 0:  # outside the supports: each load on a cantilever of |e|, the span held level by symmetry
-        return P * abs(e) ** 3 / (3.0 * EI_Nmm2) + P * abs(e) / kGA_N
-    e = min(e, 0.5 * L)
-    bend = P * e**2 * (3 * L - 4 * e) / (6.0 * EI_Nmm2) if support == "simple" else _clamped_two_load(P, e, L, EI_Nmm2)
-    return bend + P * e / kGA_N
-
-
-def _clamped_two_load(P: float, e: float, L: float, EI: float) -> float:
-    """Deflection under each of two symmetric loads P at e from the ends of a clamped-clamped beam:
-    the simply supported one less the end moments' rotation, M = P e (L - e)/L each end, which
-    lift the load point by M e (L - e)/(2 EI)."""
-    simple = P * e**2 * (3 * L - 4 * e) / (6.0 * EI)
-    M = P * e * (L - e) / L
-    return simple - M * e * (L - e) / (2.0 * EI)
+def wall_head_restraint_Nmm_per_rad(theta_rad, t_mm, h_mm, depth_mm, E_prime_MPa, support: str) -> np.ndarray:
+    """A layer's wall resisting the turn of the pad at its head: a beam of the wall's centre-line
+    length L_w and thickness t, c E'I/L_w with its far end (the hexagon's side vertex, where it
+    meets the other wall, kept from turning by the cell's symmetry) free to move across the wall
+    (c = 1, ``support`` "simple": the soft bound) or held (c = 4, "clamped": the stiff bound)."""
+    c = WALL_FAR_END[support]
+    t = np.asarray(t_mm, dtype=float)
+    return c * E_prime_MPa * depth_mm * t**3 / 12.0 / wall_centreline_length_mm(theta_rad, t, h_mm)
 
 
 def section_EI_kGA(
     depth_mm: float,
-    thickness_mm: float,
+    thickness_mm,
     E_prime_MPa: float,
     G_MPa: float,
     hole_width_mm: float = 0.0,
-    hole_z_mm: tuple[float, float] = (0.0, 0.0),
+    hole_z_mm: tuple = (0.0, 0.0),
     insert: Insert | None = None,
-) -> tuple[float, float]:
+    insert_z_mm=None,
+) -> tuple:
     """(E'I in N mm^2, kappa G A in N) of a rectangle ``depth_mm`` x ``thickness_mm`` less a hole
     ``hole_width_mm`` wide (along the depth) between heights ``hole_z_mm`` above its bottom, and
-    with an optional bonded ``insert`` (:class:`Insert`, at its ``z_mm`` above the bottom, over
-    the whole depth, replacing the TPU there): the transformed section about its own neutral axis."""
+    with an optional bonded ``insert`` (:class:`Insert`, its underside at ``insert_z_mm`` [default:
+    its own ``z_mm``] above the bottom, over the whole depth, replacing the TPU there): the
+    transformed section about its own neutral axis. Thicknesses and heights may be arrays."""
     b, T = depth_mm, thickness_mm
     # strips (z0, z1, width x modulus), parallel axes about the modulus-weighted centroid
     strips = [(0.0, T, b * E_prime_MPa), (hole_z_mm[0], hole_z_mm[1], -hole_width_mm * E_prime_MPa)]
-    shear = SHEAR_FACTOR * G_MPa * (b * T - hole_width_mm * max(hole_z_mm[1] - hole_z_mm[0], 0.0))
+    hole_height = np.maximum(np.subtract(hole_z_mm[1], hole_z_mm[0]), 0.0)
+    shear = SHEAR_FACTOR * G_MPa * (b * np.asarray(T) - hole_width_mm * hole_height)
     if insert is not None:
-        z0, z1 = insert.z_mm, insert.z_mm + insert.thickness_mm
-        strips.append((z0, z1, b * (insert.modulus_MPa - E_prime_MPa)))
-        shear += SHEAR_FACTOR * b * (z1 - z0) * (insert.shear_modulus_MPa - G_MPa)
+        z0 = insert.z_mm if insert_z_mm is None else insert_z_mm
+        z1 = z0 + insert.thickness_mm
+        bi = b if insert.depth_mm is None else min(insert.depth_mm, b)  # the plate's own depth
+        strips.append((z0, z1, bi * (insert.modulus_MPa - E_prime_MPa)))
+        shear = shear + SHEAR_FACTOR * bi * insert.thickness_mm * (insert.shear_modulus_MPa - G_MPa)
     EA = sum(w * (z1 - z0) for z0, z1, w in strips)
     zc = sum(w * (z1 - z0) * 0.5 * (z0 + z1) for z0, z1, w in strips) / EA
     EI = sum(w * ((z1 - z0) ** 3 / 12.0 + (z1 - z0) * (0.5 * (z0 + z1) - zc) ** 2) for z0, z1, w in strips)
-    return EI, shear
+    return _value(EI), _value(shear)
 
 
 @dataclass(frozen=True)
@@ -125,6 +109,7 @@ class Insert:
     poisson_ratio: float
     thickness_mm: float
     z_mm: float = 0.0  # its underside above the cap beam's bottom (the top pad's underside)
+    depth_mm: float | None = None  # along the depth (y); None: the whole depth D
 
     @property
     def shear_modulus_MPa(self) -> float:
@@ -146,6 +131,10 @@ class Members:
     cover_mm_per_N: float
     patch_mm: float
     support: str
+    # the cover's bending over the slot (part of cover_mm_per_N), which stops when the cover has
+    # dropped the air under it onto the board (cover_travel_mm; inf: never)
+    cover_contact_mm_per_N: float = 0.0
+    cover_travel_mm: float = math.inf
 
     @property
     def total_mm_per_N(self) -> float:
@@ -157,77 +146,307 @@ class Members:
         return cls(0.0, (0.0,) * n_plates, 0.0, patch_mm, "rigid")
 
 
+@dataclass(frozen=True)
+class MemberScene:
+    """Everything the members' compliance depends on besides the cells: the part's fixed
+    dimensions (mm), the TPU's plane-strain bending modulus and shear modulus (MPa), the
+    insert, the press and the supports. One per design problem: the design loop evaluates
+    thousands of candidate stacks against it in one numpy call (:func:`member_compliances`)."""
+
+    depth_mm: float
+    width_mm: float
+    cap_above_stack_mm: float  # the cap over the top layer's top pad: pocket floor, pocket, cap top
+    pocket_floor_mm: float  # the pocket's floor above the top pad
+    pocket_width_mm: float  # 2 x the pocket's radius
+    pocket_depth_mm: float
+    plate_mm: float
+    cover_mm: float
+    half_slot_mm: float  # the board slot's half width: the cover's span over it
+    E_prime_MPa: float
+    G_MPa: float
+    insert: Insert | None = None
+    insert_above_pad_mm: float = 0.0  # the insert's underside above the top pad's top face
+    patch_mm: float = FINGERTIP_PATCH_MM
+    support: str = "simple"
+    # the slot's side walls (columns from the slot's floor to the cover, out to the base's
+    # sides): widths (left, right) and height, mm; 0: rigid (the layers' own rungs)
+    slot_wall_widths_mm: tuple[float, float] = (0.0, 0.0)
+    slot_height_mm: float = 0.0
+    cover_air_mm: float = math.inf  # between the cover and the board's tallest part: its bending's travel
+
+
+def member_scene(
+    geometry, material, patch_mm: float = FINGERTIP_PATCH_MM, support: str = "simple", insert: Insert | None = None
+) -> MemberScene:
+    """The :class:`MemberScene` of ``geometry`` (a SensorGeometry) in ``material``; ``insert``
+    [default: the geometry's own, when it declares one]."""
+    if support not in SUPPORTS:
+        raise ValueError(f"support must be one of {SUPPORTS}")
+    insert = getattr(geometry, "insert", None) if insert is None else insert
+    top = geometry.layers[-1]
+    x0, x1 = geometry.board_slots[0].x_mm
+    return MemberScene(
+        depth_mm=geometry.depth_mm,
+        width_mm=top.width_mm,
+        cap_above_stack_mm=geometry.total_height_mm - geometry.z_stack_top_mm,
+        pocket_floor_mm=geometry.housing.pocket_floor_mm,
+        pocket_width_mm=2.0 * geometry.pocket_radius_mm,
+        pocket_depth_mm=geometry.pocket_depth_mm,
+        plate_mm=geometry.housing.plate_mm,
+        cover_mm=geometry.housing.cover_mm,
+        half_slot_mm=0.5 * (x1 - x0),
+        E_prime_MPa=material.youngs_modulus_MPa / (1.0 - material.poisson_ratio**2),
+        G_MPa=material.shear_modulus_MPa,
+        insert=insert,
+        insert_above_pad_mm=0.0 if insert is None else insert.z_mm - top.t_mm,
+        patch_mm=patch_mm,
+        support=support,
+        slot_wall_widths_mm=(x0 + 0.5 * geometry.base_length_mm, 0.5 * geometry.base_length_mm - x1),
+        slot_height_mm=geometry.z_cover_bottom_mm - geometry.z_board_bottom_mm,
+        cover_air_mm=geometry.housing.chip_clearance_mm,
+    )
+
+
+def member_compliances(scene: MemberScene, theta_rad, t_mm, h_mm) -> tuple:
+    """(cap (...), plates (..., n - 1), cover (...)) in mm/N of stacks of cells given as arrays
+    (..., n) of theta (rad), t and h (mm), bottom to top (module docstring); the kernel both
+    :func:`members` and the design loop use."""
+    cap, plates, over_slot, slot_walls = member_parts(scene, theta_rad, t_mm, h_mm)
+    return cap, plates, over_slot + slot_walls
+
+
+def member_parts(scene: MemberScene, theta_rad, t_mm, h_mm) -> tuple:
+    """:func:`member_compliances` with the cover's two parts apart: (cap, plates, the cover's
+    bending over the slot (which stops on the board), the slot walls' squeeze and turn)."""
+    s = scene
+    theta, t = np.asarray(theta_rad, dtype=float), np.asarray(t_mm, dtype=float)
+    # the wall heads: the mid-point of each pad's outer and inner corners (wall_head_x_mm)
+    head = pad_half_width_mm(theta, h_mm, s.width_mm) - 0.5 * t * np.tan(0.5 * theta)
+    E, G, D = s.E_prime_MPa, s.G_MPa, s.depth_mm
+    t_top = t[..., -1]
+    z_pocket = t_top + s.pocket_floor_mm
+    EI, kGA = section_EI_kGA(
+        D, t_top + s.cap_above_stack_mm, E, G, s.pocket_width_mm, (z_pocket, z_pocket + s.pocket_depth_mm),
+        s.insert, t_top + s.insert_above_pad_mm,
+    )  # fmt: skip
+    span = 2.0 * head[..., -1]
+    # each beam's ends turn against what holds them (end_fixity): the walls below it, the slot's walls
+    walls = wall_head_restraint_Nmm_per_rad(theta, t, h_mm, D, E, s.support)  # (..., n)
+    fix = end_fixity(walls[..., -1], EI, span)
+    bend = [strip_bending_mm_per_N(span, s.patch_mm, EI, b) for b in SUPPORTS]
+    cap = bend[0] - fix * (bend[0] - bend[1]) + strip_shear_mm_per_N(span, s.patch_mm, kGA)
+    EI_p, kGA_p = section_EI_kGA(D, t[..., :-1] + s.plate_mm + t[..., 1:], E, G)
+    below, above = head[..., :-1], head[..., 1:]
+    fix = end_fixity(walls[..., :-1], EI_p, 2.0 * below)
+    plate = [two_load_mm_per_N(2.0 * below, below - above, EI_p, kGA_p, b) for b in SUPPORTS]
+    plates = plate[0] - fix * (plate[0] - plate[1])
+    pad = pad_half_width_mm(theta[..., 0], np.asarray(h_mm, dtype=float)[..., 0], s.width_mm)
+    over_slot, slot_walls = housing_mm_per_N(
+        s, head[..., 0], pad, section_EI_kGA(D, s.cover_mm + t[..., 0], E, G), section_EI_kGA(D, s.cover_mm, E, G)
+    )
+    return cap, np.asarray(plates), over_slot, slot_walls
+
+
+def housing_mm_per_N(scene: MemberScene, head_mm, pad_mm, cover_pad, cover_alone) -> tuple:
+    """(what stops when the cover lands on the board: the cover's bending over the slot and the
+    drop of its edges, the rest: the slot walls' squeeze and a foot's turn on them) of the drop per newton (total
+    press F, P = F/2 on each side) of layer 1's wall feet at |x| = ``head_mm`` (module
+    docstring); the mean of the two sides, each a column w wide and H tall held at its foot
+    (k = E'I/H against its top's turn phi) with the cover bonded to it. The cover is a beam of
+    two sections: with layer 1's bottom pad under |x| < ``pad_mm`` (``cover_pad``, (E'I, kGA)),
+    the cover alone beyond (``cover_alone``).
+
+    A foot on the column, a from its centre line: phi = P a / (k + 2 / int(1/E'I)) (the cover
+    resists turning equally and oppositely at both ends) and the foot drops a phi. A foot over
+    the slot, e inside its edge: the cover carries P to the column's inner edge (w/2 from the
+    centre line) and turns with it; phi = (P w/2 + M)/k, and the cover's end moment M follows
+    from its end slope matching phi. By virtual work over the half span (x from the edge, m(x) =
+    P min(x, e) - M): slope = P C1 - M B, drop at the foot = P C2 - M C1, with C_j = int
+    min(x, e)^j / E'I dx and B = int dx / E'I; plus shear P int_0^e dx / kGA. The column adds
+    its squeeze P H/(E' w D) and its inner edge's drop (w/2) phi. No slot walls (height 0):
+    the cover clamped on rigid supports (phi = 0)."""
+    s, P = scene, 0.5
+    head = np.asarray(head_mm, dtype=float)
+    L2, H, D, E = s.half_slot_mm, s.slot_height_mm, s.depth_mm, s.E_prime_MPa
+    e = np.clip(L2 - head, 0.0, L2)  # the foot's distance inside the slot's edge
+    x_pad = np.clip(L2 - np.asarray(pad_mm, dtype=float), 0.0, L2)  # where the pad starts, from the edge
+    (EI_in, kGA_in), (EI_out, kGA_out) = cover_pad, cover_alone
+
+    def over_half_span(j: int):  # int_0^{L/2} min(x, e)^j / E'I dx, the section changing at x_pad
+        def prim(x):
+            inside = np.minimum(x, e)
+            return inside ** (j + 1) / (j + 1) + e**j * np.maximum(x - e, 0.0)
+
+        return (prim(x_pad) - prim(0.0)) / EI_out + (prim(L2) - prim(x_pad)) / EI_in
+
+    B, C1, C2 = over_half_span(0), over_half_span(1), over_half_span(2)
+    shear = P * (np.minimum(e, x_pad) / kGA_out + np.maximum(e - x_pad, 0.0) / kGA_in)
+    if H <= 0.0:
+        return _value(P * C2 - P * C1 / B * C1 + shear), _value(0.0 * head)
+    over_slot, walls = [], []
+    for w in s.slot_wall_widths_mm:
+        k = E * D * w**3 / 12.0 / H
+        M = np.where(e > 0, (P * C1 - P * 0.5 * w / k) / (B + 1.0 / k), 0.0)
+        a = (L2 + 0.5 * w) - np.maximum(head, L2)  # a foot on the column: its lever about the centre line
+        phi = np.where(e > 0, (P * 0.5 * w + M) / k, P * a / (k + 1.0 / B))
+        # over the slot the cover's bending and its edge's drop stop when the cover lands on the board
+        over_slot.append(P * C2 - M * C1 + shear + np.where(e > 0, 0.5 * w * phi, 0.0))
+        walls.append(P * H / (E * w * D) + np.where(e > 0, 0.0, a * phi))
+    return _value(0.5 * (over_slot[0] + over_slot[1])), _value(0.5 * (walls[0] + walls[1]))
+
+
+def members_total_mm_per_N(scene: MemberScene, theta_rad, t_mm, h_mm) -> np.ndarray:
+    """The cap's, the plates' and the cover's compliance in series (...), mm/N."""
+    cap, plates, cover = member_compliances(scene, theta_rad, t_mm, h_mm)
+    return cap + plates.sum(axis=-1) + cover
+
+
 def members(
     geometry, material, patch_mm: float = FINGERTIP_PATCH_MM, support: str = "simple", insert: Insert | None = None
 ) -> Members:
     """The cap's, the plates' and the cover's compliance of ``geometry`` (a SensorGeometry) in
     ``material`` under a centred press ``patch_mm`` wide (module docstring); ``insert``, a stiff
     plate in the cap (its own modulus, in plane strain as given)."""
-    if support not in SUPPORTS:
-        raise ValueError(f"support must be one of {SUPPORTS}")
-    E = material.youngs_modulus_MPa / (1.0 - material.poisson_ratio**2)
-    G, D = material.shear_modulus_MPa, geometry.depth_mm
-    top = geometry.layers[-1]
-    # the cap: top pad + everything above the stack, less the pocket (its heights above the pad's underside)
-    T = top.t_mm + geometry.total_height_mm - geometry.z_stack_top_mm
-    z_pocket = top.t_mm + geometry.housing.pocket_floor_mm
-    EI, kGA = section_EI_kGA(
-        D, T, E, G, 2.0 * geometry.pocket_radius_mm, (z_pocket, z_pocket + geometry.pocket_depth_mm), insert
+    scene = member_scene(geometry, material, patch_mm, support, insert)
+    cells = geometry.layers
+    cap, plates, over_slot, slot_walls = member_parts(
+        scene,
+        np.array([c.theta_rad for c in cells]),
+        np.array([c.t_mm for c in cells]),
+        np.array([c.h_mm for c in cells]),
     )
-    span = 2.0 * wall_head_x_mm(top)
-    cap = strip_bending_mm_per_N(span, patch_mm, EI, support) + strip_shear_mm_per_N(span, patch_mm, kGA)
-    plates = []
-    for below, above in zip(geometry.layers[:-1], geometry.layers[1:]):
-        EI_p, kGA_p = section_EI_kGA(D, below.t_mm + geometry.housing.plate_mm + above.t_mm, E, G)
-        s, a = wall_head_x_mm(below), wall_head_x_mm(above)
-        plates.append(two_load_mm_per_N(2.0 * s, s - a, EI_p, kGA_p, support))
-    first = geometry.layers[0]
-    EI_c, kGA_c = section_EI_kGA(D, geometry.housing.cover_mm + first.t_mm, E, G)
-    x0, x1 = geometry.board_slots[0].x_mm
-    half_slot = 0.5 * (x1 - x0)  # the slot's half width: the cover's span over it
-    cover = two_load_mm_per_N(2.0 * half_slot, half_slot - wall_head_x_mm(first), EI_c, kGA_c, support)
-    return Members(cap, tuple(plates), cover, patch_mm, support)
+    cover = float(over_slot + slot_walls)
+    plates_ = tuple(float(p) for p in plates)
+    return Members(float(cap), plates_, cover, patch_mm, support, float(over_slot), scene.cover_air_mm)
 
 
-def layer_compliances_mm_per_N(stack) -> np.ndarray:
-    """(n_regimes, n_layers): each layer's dd/dF at the middle of each regime (a locked layer on
-    its locked branch), from its own law (Stack.layers)."""
-    edges = stack.regime_bounds_N
-    mids = 0.5 * (edges[:-1] + edges[1:])
-    out = np.empty((len(mids), len(stack.layers)))
-    for j, law in enumerate(stack.layers):
-        step = 1e-6 * max(float(edges[-1]), 1e-9)
-        for i, F in enumerate(mids):
-            if F >= law.lock_force_N:
-                out[i, j] = 1.0 / law.k_locked_N_per_mm
-            else:
-                d = law.displacement_mm(np.array([max(F - step, 0.0), F + step]))
-                out[i, j] = float((d[1] - d[0]) / (F + step - max(F - step, 0.0)))
-    return out
+@dataclass(frozen=True)
+class CappedLayer:
+    """The top layer with the cap bonded to its top pad (a layer law, the protocol of
+    :mod:`mst_cli.model.mechanics`): the cap bends into the layer's cavity, C x F at its centre,
+    on top of the layer's own compression, until the cavity closes there (``lock_force_N``,
+    below the layer's own R); past it both are locked. C = 0 is the layer itself."""
+
+    law: Any  # a layer law of any rung (k_N_per_mm, d_lock_mm, lock_force_N, knots_N, displacement_mm ...)
+    cap_mm_per_N: float
+
+    @property
+    def lock_force_N(self) -> float:
+        """Where law.d(F) + C F reaches d_lock: exact on the law's piecewise-linear knots."""
+        law, C = self.law, self.cap_mm_per_N
+        R = float(law.lock_force_N)
+        if C <= 0.0:
+            return R
+        knots = np.array([0.0, *(f for f in law.knots_N if f < R), R], dtype=float)
+        reach = law.displacement_mm(knots) + C * knots
+        return float(np.interp(law.d_lock_mm, reach, knots))
+
+    @property
+    def k_N_per_mm(self) -> float:  # the layer and the cap in series, at small load
+        return 1.0 / (1.0 / self.law.k_N_per_mm + self.cap_mm_per_N)
+
+    @property
+    def d_lock_mm(self) -> float:
+        return self.law.d_lock_mm
+
+    @property
+    def k_locked_N_per_mm(self) -> float:
+        return self.law.k_locked_N_per_mm
+
+    @property
+    def knots_N(self) -> tuple[float, ...]:
+        R = self.lock_force_N
+        return tuple(f for f in self.law.knots_N if f < R) + (R,)
+
+    @property
+    def min_stretch_at_lock(self) -> float | None:  # the wall's squeeze at its own lock, when the cap lets it get there
+        return getattr(self.law, "min_stretch_at_lock", None) if self.cap_mm_per_N <= 0.0 else None
+
+    def displacement_mm(self, force_N) -> np.ndarray:
+        F, R = np.asarray(force_N, dtype=float), self.lock_force_N
+        closed = self.d_lock_mm + (F - R) / self.k_locked_N_per_mm
+        return np.where(F <= R, self.law.displacement_mm(F) + self.cap_mm_per_N * F, closed)
+
+
+def moving_share(stop_N, edges_N) -> np.ndarray:
+    """(..., bands): the share of each force band between ``edges_N`` (..., bands + 1) over which
+    a member that moves until ``stop_N`` (...; inf: it never stops) still moves, clip(stop - F_lo,
+    0, band) / band: its compliance's mean over the band, what a secant over the band sees (a
+    band of zero width: 1 if it still moves just past it). The one rule of the forward model for
+    the members (model.response.part_stack): the cap and plate j bend until the layer under them
+    locks, the cover's bending over the slot until it lands on the board, its slot walls always.
+    The report's shares (:func:`motion_shares`) and the design's diagnosis use it alike."""
+    F = np.asarray(edges_N, dtype=float)
+    lo, band = F[..., :-1], np.diff(F, axis=-1)
+    stop = np.asarray(stop_N, dtype=float)[..., None]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        part = np.clip(stop - lo, 0.0, band) / np.where(band > 0, band, 1.0)
+    return np.where(band > 0, part, (stop > lo).astype(float))
+
+
+def capped_units(laws: tuple, parts: Members) -> list:
+    """The layer laws ``laws`` (bottom to top) each with the plate or cap above it bonded to its
+    top pad (:class:`CappedLayer`; a rigid one leaves the law itself): the units of the part's
+    stack (model.response.part_stack, model.part_laws)."""
+    n = len(laws)
+    plates = (*parts.plates_mm_per_N, *(0.0,) * (n - 1 - len(parts.plates_mm_per_N)))
+    caps = (*plates[: n - 1], parts.cap_mm_per_N)
+    return [CappedLayer(law, c) if c > 0 else law for law, c in zip(laws, caps)]
+
+
+def cover_landing_N(parts: Members) -> float:
+    """The centred press (N) at which the cover's bending over the slot has closed its air onto
+    the board's tallest part (inf: it never bends there). Past it the press bears on the board,
+    the chip and its connectors: a support only the assembled sensor has, not the printed body."""
+    if parts.cover_contact_mm_per_N <= 0.0:
+        return math.inf
+    return parts.cover_travel_mm / parts.cover_contact_mm_per_N
+
+
+def member_band_compliances(stack, parts: Members) -> tuple[np.ndarray, np.ndarray, dict]:
+    """(the part's regime edges (n + 1,) in N: 0 and the units' lock forces, sorted; each layer's
+    own secant compliance per regime (n, n) in mm/N; {member: its compliance per regime (n,)}) as
+    the forward model moves them (:func:`moving_share`): the drop of the part over each regime is
+    the sum of all of them times the regime's width, exactly (part_stack's force-displacement)."""
+    units = capped_units(stack.layers, parts)
+    R = np.array([u.lock_force_N for u in units], dtype=float)
+    edges = np.concatenate([[0.0], np.sort(R)])
+    # a regime of zero width (two layers locking together): the slope just past its start
+    hi = np.maximum(edges[1:], edges[:-1] + 1e-9 * max(float(edges[-1]), 1e-12))
+    lo, width = edges[:-1], hi - edges[:-1]
+    bands = np.stack([lo, hi], axis=-1)  # (n, 2): each regime as its own band
+    caps = np.array([getattr(u, "cap_mm_per_N", 0.0) for u in units])
+    caps_moving = caps[:, None] * moving_share(R[:, None], bands)[..., 0]  # (units, regimes)
+    own = np.array([(u.displacement_mm(hi) - u.displacement_mm(lo)) / width for u in units]) - caps_moving
+    bending = parts.cover_contact_mm_per_N * moving_share(cover_landing_N(parts), bands)[..., 0]
+    cover = parts.cover_mm_per_N - parts.cover_contact_mm_per_N + bending
+    moving = {"cap": caps_moving[-1], "plates": caps_moving[:-1].sum(axis=0), "housing": cover}
+    return edges, own.T, moving
 
 
 def motion_shares(stack, parts: Members) -> list[dict]:
-    """Per regime: the share of the magnet's drop per newton from each layer, the cap, the plates
-    and the housing's cover (they sum to 1), and the share outside the layers."""
-    layers = layer_compliances_mm_per_N(stack)
-    edges = stack.regime_bounds_N
+    """Per regime of the part (its layers as the forward model locks them, with the cap and
+    plates bending into their cavities): the share of the magnet's drop over the regime from
+    each layer, the cap, the plates and the housing's cover (they sum to 1), each as the forward
+    model moves it there (:func:`member_band_compliances`), and the share outside the layers.
+    ``stack``: the layers alone (model.stack.Stack)."""
+    edges, layers, moving = member_band_compliances(stack, parts)
     out = []
     for i, row in enumerate(layers):
-        total = float(row.sum()) + parts.total_mm_per_N
+        members_i = {k: float(v[i]) for k, v in moving.items()}
+        outside = sum(members_i.values())
+        total = float(row.sum()) + outside
         shares = {f"layer_{j + 1}": float(c) / total for j, c in enumerate(row)}
-        shares |= {
-            "cap": parts.cap_mm_per_N / total,
-            "plates": sum(parts.plates_mm_per_N) / total,
-            "housing": parts.cover_mm_per_N / total,
-        }
+        shares |= {k: v / total for k, v in members_i.items()}
         out.append(
             {
                 "regime": i + 1,
                 "force_N": [float(edges[i]), float(edges[i + 1])],
                 "compliance_mm_per_N": total,
                 "layers_compliance_mm_per_N": float(row.sum()),
+                "members_mm_per_N": members_i,
                 "shares": shares,
-                "outside_layers": parts.total_mm_per_N / total,
+                "outside_layers": outside / total,
             }
         )
     return out
@@ -235,13 +454,15 @@ def motion_shares(stack, parts: Members) -> list[dict]:
 
 def load_path_report(geometry, material, stack, patch_mm: float = FINGERTIP_PATCH_MM) -> dict:
     """report.json's ``load_path``: the members' compliance (simply supported, and the clamped
-    bound) and, per regime, each member's share of the magnet's motion (docs/design.md 4.6)."""
+    bound) and, per regime of the part, each member's share of the magnet's motion as the forward
+    model moves it (:func:`motion_shares`, docs/design.md 4.6)."""
     simple = members(geometry, material, patch_mm, "simple")
     clamped = members(geometry, material, patch_mm, "clamped")
     bound = motion_shares(stack, clamped)
     regimes = []
     for row, stiff in zip(motion_shares(stack, simple), bound):
         row["outside_layers_clamped"] = stiff["outside_layers"]
+        row["members_clamped_mm_per_N"] = stiff["members_mm_per_N"]
         regimes.append(row)
     return {
         "patch_mm": patch_mm,
@@ -250,11 +471,46 @@ def load_path_report(geometry, material, stack, patch_mm: float = FINGERTIP_PATC
         "plates_mm_per_N": list(simple.plates_mm_per_N),
         "housing_mm_per_N": simple.cover_mm_per_N,
         "cap_clamped_mm_per_N": clamped.cap_mm_per_N,
+        "members_simple_mm_per_N": _by_member(simple),
+        "members_clamped_mm_per_N": _by_member(clamped),
         "regimes": regimes,
         "outside_layers_max": max(r["outside_layers"] for r in regimes),
+        # null: the cover never lands (no bending over the slot)
+        "cover_lands_N": None if math.isinf(landing := cover_landing_N(simple)) else landing,
         "patch_dependence": patch_dependence(geometry, material, stack),
-        "not_modelled": "the cover tipping where the cable windows cut its side walls (3D)",
+        "not_modelled": "the cover's bending along the depth over the cable windows (3D; walls on both sides)",
     }
+
+
+# the accuracy an independent model of the part asks of the field change per newton: before the
+# first lock, after one, after two or more (issue 44; that model's own uncertainty on a closed layer)
+ACCURACY_BUDGET_REL = (0.05, 0.08, 0.20)
+
+
+def support_uncertainty(report: dict) -> list[dict]:
+    """Per regime of :func:`load_path_report`: the share of the part's compliance the members'
+    closed form leaves uncertain, between its simply supported and clamped wall heads
+    (|C_simple - C_clamped| of the members as each moves in that regime, over the part's
+    compliance there), against the regime's accuracy budget (:data:`ACCURACY_BUDGET_REL`), with
+    the member whose supports matter most there. The tolerance on the share outside the layers
+    that ``mst check`` applies by default."""
+    rows = []
+    for i, row in enumerate(report["regimes"]):
+        simple, clamped = row["members_mm_per_N"], row["members_clamped_mm_per_N"]
+        spread = {k: simple[k] - clamped[k] for k in simple}
+        rows.append(
+            {
+                "regime": row["regime"],
+                "uncertain_share": abs(sum(spread.values())) / row["compliance_mm_per_N"],
+                "budget": ACCURACY_BUDGET_REL[min(i, len(ACCURACY_BUDGET_REL) - 1)],
+                "member": max(spread, key=lambda k: abs(spread[k])),
+            }
+        )
+    return rows
+
+
+def _by_member(parts: Members) -> dict:
+    return {"cap": parts.cap_mm_per_N, "plates": sum(parts.plates_mm_per_N), "housing": parts.cover_mm_per_N}
 
 
 def dominant_member(row: dict) -> tuple[str, float]:

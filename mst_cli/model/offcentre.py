@@ -2,7 +2,8 @@
 three axes, and the force a reading taken as axial would give (issue 24).
 
 Each layer answers the load at (x0, y0) with a compression and two tilts
-(:mod:`mst_cli.model.mechanics.tilt`, plates rigid). Small rotations add: layer j turns
+(:mod:`mst_cli.model.mechanics.tilt`), with the part's members its walls load unless the
+load path is the layers alone (:mod:`mst_cli.model.part_laws`). Small rotations add: layer j turns
 everything above it by (phi_y, phi_x) about a pivot at its mid-height (a layer symmetric about
 its mid-plane turns about its centre under a pure moment), so the magnet's centre moves down by
 sum d_j and sideways by sum phi_j (z_magnet - z_mid,j), toward the load, and the magnet turns
@@ -17,6 +18,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -24,6 +26,7 @@ from mst_cli.model.assembly import SensorGeometry
 from mst_cli.model.general_load import loaded_stack
 from mst_cli.model.material import Material
 from mst_cli.model.mechanics.tilt import LayerTiltLaw, solve_layer_tilt
+from mst_cli.model.part_laws import closure_limit_mm, part_units
 from mst_cli.model.response import Response
 from mst_cli.model.response import simulate as simulate_axial
 from mst_cli.model.stack_pose import magnet_field_T, magnet_pose, pose_field_T, stack_path, tilt_laws
@@ -51,6 +54,7 @@ class OffCentreResponse:
     shear_ratio: tuple[float, float] = (0.0, 0.0)  # (Fx, Fy) / Fz along the curve
     layer_slide_mm: np.ndarray | None = None  # (m, n, 2) each layer's lateral slide (None: no shear)
     rotation_flag: np.ndarray | None = None  # (m,) ROTATION_FLAGS: where the model stops (set by simulate_offcentre)
+    whole_part: bool = True  # the members ride with their layers (model.load_path: part), else the layers alone
 
     @property
     def force_x_N(self) -> np.ndarray:
@@ -77,21 +81,22 @@ def simulate_offcentre(
     points_per_regime: int = 100,
     overload: float = 0.25,
     shear_ratio: tuple[float, float] = (0.0, 0.0),
+    whole_part: bool = True,
 ) -> OffCentreResponse:
     """The response to a force pressed at ``offset_mm`` = (x0, y0) on the top face, over the
     centred model's force grid (0 to 1 + ``overload`` times the last lock), with a tangential
-    force ``shear_ratio`` = (Fx, Fy) / Fz along it (:mod:`mst_cli.model.general_load`). Raises
+    force ``shear_ratio`` = (Fx, Fy) / Fz along it (:mod:`mst_cli.model.general_load`); the part's
+    members with the layers unless ``whole_part`` is False (model.load_path: layers). Raises
     TiltError when a layer's equilibrium is not found."""
-    axial = simulate_axial(
-        geometry, material, mechanics, field_model, points_per_regime=points_per_regime, overload=overload
-    )
+    grid: dict[str, Any] = {"points_per_regime": points_per_regime, "overload": overload, "whole_part": whole_part}
+    axial = simulate_axial(geometry, material, mechanics, field_model, **grid)
     F = axial.force_N
     slide = None
     if shear_ratio[0] == 0.0 and shear_ratio[1] == 0.0:
-        layers = tilt_laws(geometry, material, mechanics)
+        layers = tilt_laws(geometry, material, mechanics, whole_part=whole_part)
         offsets = np.broadcast_to(np.asarray(offset_mm, dtype=float), (len(layers), 2))
     else:
-        stack = loaded_stack(geometry, material, mechanics)
+        stack = loaded_stack(geometry, material, mechanics, whole_part=whole_part)
         layers, offsets = stack.tilt, stack.layer_offsets_mm(offset_mm, shear_ratio)
         slide = stack.slides_mm(F, shear_ratio)
     d, tilt = stack_path(layers, F, offsets)
@@ -117,9 +122,20 @@ def simulate_offcentre(
         axial=axial,
         shear_ratio=(float(shear_ratio[0]), float(shear_ratio[1])),
         layer_slide_mm=slide,
+        whole_part=whole_part,
     )
-    out.rotation_flag = rotation_flags(out, geometry.layers)
+    limits = _closure_limits_mm(geometry, material, mechanics, whole_part)
+    out.rotation_flag = rotation_flags(out, geometry.layers, limits)
     return out
+
+
+def _closure_limits_mm(geometry: SensorGeometry, material: Material, mechanics: str, whole_part: bool) -> np.ndarray:
+    """(n,) each layer's closure at which its pads pass through each other: its cavity's height,
+    with the part's members :func:`~mst_cli.model.part_laws.closure_limit_mm`."""
+    cavity = [c.cavity_height_mm for c in geometry.layers]
+    if whole_part:
+        cavity = [closure_limit_mm(u, h) for u, h in zip(part_units(geometry, material, mechanics), cavity)]
+    return np.array(cavity)
 
 
 AXIAL_READING_FLAGS = ("ok", "below_no_load", "above_range")  # why a force read as axial is missing
@@ -132,13 +148,16 @@ SMALL_ROTATION_DEG = 10.0
 ROTATION_FLAGS = ("ok", "past_small_rotations", "past_closure")
 
 
-def rotation_flags(r: OffCentreResponse, cells) -> np.ndarray:
+def rotation_flags(r: OffCentreResponse, cells, closure_limit_mm: np.ndarray | None = None) -> np.ndarray:
     """(m,) ROTATION_FLAGS of each force sample: past_closure where some layer's pads would
     interpenetrate, else past_small_rotations where the magnet or a layer turns over
-    SMALL_ROTATION_DEG, else ok. ``cells`` are the layers' HexCells, bottom to top."""
+    SMALL_ROTATION_DEG, else ok. ``cells`` are the layers' HexCells, bottom to top;
+    ``closure_limit_mm`` (n,): each layer's closure at which its pads pass through each other
+    [default: its cavity's height; with the part's members,
+    :func:`~mst_cli.model.part_laws.closure_limit_mm`]."""
     tilt = np.abs(r.layer_tilt_rad)  # (m, n, 2)
     p = np.array([c.p_mm for c in cells])
-    cavity = np.array([c.cavity_height_mm for c in cells])
+    cavity = np.array([c.cavity_height_mm for c in cells]) if closure_limit_mm is None else closure_limit_mm
     edge = r.layer_d_mm + tilt.max(axis=-1) * p  # the deepest pad edge's closure, mm
     closed = (edge > cavity + 1e-9).any(axis=-1)
     turned = (np.degrees(tilt.max(axis=(-1, -2))) > SMALL_ROTATION_DEG) | (
@@ -204,16 +223,17 @@ def offset_map(
     region_frac: float = 0.8,
     fractions: tuple[float, ...] = (0.25, 0.5, 0.75),
     region_mm: tuple[float, float] | None = None,
+    whole_part: bool = True,
 ) -> OffsetMap:
     """:class:`OffsetMap` over a ``grid`` (nx, ny) spanning ``region_frac`` of the top face
     (W x D), or +-``region_mm`` (half extents) when given, at ``fractions`` of every regime's
-    force band."""
+    force band; the part's members with the layers unless ``whole_part`` is False."""
     # dense: the map reads each force back by interpolating this curve (its error falls like 1/n^2)
-    axial = simulate_axial(geometry, material, mechanics, field_model, points_per_regime=400)
+    axial = simulate_axial(geometry, material, mechanics, field_model, points_per_regime=400, whole_part=whole_part)
     edges = np.concatenate([[0.0], np.asarray(axial.lock_forces_N)])
     F = np.array([lo + f * (hi - lo) for lo, hi in zip(edges[:-1], edges[1:]) for f in fractions])
     regime = np.repeat(np.arange(1, len(edges)), len(fractions))
-    layers = tilt_laws(geometry, material, mechanics)
+    layers = tilt_laws(geometry, material, mechanics, whole_part=whole_part)
     half = region_mm or (0.5 * region_frac * geometry.width_mm, 0.5 * region_frac * geometry.depth_mm)
     xs = np.linspace(-1.0, 1.0, grid[0]) * half[0]
     ys = np.linspace(-1.0, 1.0, grid[1]) * half[1]

@@ -17,9 +17,10 @@ import numpy as np
 from mst_cli.model import chip as mlx
 from mst_cli.model import magnet_field as fld
 from mst_cli.model.assembly import SensorGeometry
+from mst_cli.model.load_path import FINGERTIP_PATCH_MM, Members, capped_units, members
 from mst_cli.model.material import CREASE_ONSET_STRETCH, Material
 from mst_cli.model.mechanics import layer_laws
-from mst_cli.model.stack import Stack, series_displacement_mm
+from mst_cli.model.stack import Stack, capped_lock_force_N, layer_caps, series_displacement_mm
 
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
@@ -40,8 +41,12 @@ def regime_kernel(
     gap0_mm: ArrayLike,
     field_T: Callable[[np.ndarray], np.ndarray],
     lock_force_N: ArrayLike | None = None,
+    members_mm_per_N: ArrayLike = 0.0,
+    cap_mm_per_N: ArrayLike | None = None,
+    contact: tuple | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Lock forces and secant sensitivities of many L0 stacks at once.
+    """Lock forces and secant sensitivities of many L0 stacks at once, the members that are not
+    layers (cap, plates, cover) in series as a linear spring.
 
     Parameters
     ----------
@@ -49,6 +54,11 @@ def regime_kernel(
     lock_force_N : array (..., n_layers), optional    [default k * d_lock, bilinear layers]
     gap0_mm : array (...)       unloaded magnet-to-chip gap
     field_T : callable          |B| (T) of an array of gaps (mm)
+    members_mm_per_N : array (...), optional    the plates' and cover's compliance [default 0: rigid]
+    cap_mm_per_N : array (...), optional        the cap's, bending into the top layer's cavity until
+                                                it closes there [default None: rigid]
+    contact : (C, travel) arrays (...), optional  the part of the members that stops after travel
+                                                (the cover landing on the board) [default None]
 
     Returns
     -------
@@ -59,14 +69,25 @@ def regime_kernel(
     """
     k = np.asarray(k_N_per_mm, dtype=float)
     R = k * np.asarray(d_lock_mm, dtype=float) if lock_force_N is None else np.asarray(lock_force_N, dtype=float)
-    R_sorted = np.sort(R, axis=-1)
+    R_sorted = np.sort(capped_lock_forces_N(k, d_lock_mm, R, cap_mm_per_N), axis=-1)
     F = np.concatenate([np.zeros(R_sorted.shape[:-1] + (1,)), R_sorted], axis=-1)
-    d = series_displacement_mm(F, k, d_lock_mm, k_locked_N_per_mm, R)
+    d = series_displacement_mm(F, k, d_lock_mm, k_locked_N_per_mm, R, members_mm_per_N, cap_mm_per_N, contact)
     gap = np.asarray(gap0_mm, dtype=float)[..., None] - d
     B = field_T(gap)
     rel = B / B[..., :1] - 1.0
     S = np.diff(rel, axis=-1) / np.maximum(np.diff(F, axis=-1), 1e-300)
     return R_sorted, S, gap, B
+
+
+def capped_lock_forces_N(
+    k: ArrayLike, d_lock_mm: ArrayLike, R: np.ndarray, cap_mm_per_N: ArrayLike | None
+) -> np.ndarray:
+    """Every layer's lock force (..., n), each capped one's where its cap (the top layer's cap,
+    the plate above a lower one: :func:`~mst_cli.model.stack.layer_caps`) closes its cavity
+    (:func:`~mst_cli.model.stack.capped_lock_force_N`); ``cap_mm_per_N`` None: R itself."""
+    if cap_mm_per_N is None:
+        return R
+    return capped_lock_force_N(k, d_lock_mm, R, layer_caps(cap_mm_per_N, np.shape(R)))
 
 
 @dataclass
@@ -85,6 +106,7 @@ class Regime:
     sensitivity_max_per_N: float
     force_resolution_N: float  # field resolution / (B0 * S secant)
     force_resolution_worst_N: float  # field resolution / (B0 * S min)
+    sensitivity_layers_secant_per_N: float  # the layers' alone, between rigid plates (L0/L2 as verified)
 
 
 @dataclass
@@ -111,6 +133,10 @@ class Response:
     field_resolution_T: float
     noise_uT_rms: float
     warnings: list[str] = field(default_factory=list)
+    # the cap, plates and cover in series with the layers (Members.rigid: the layers alone)
+    members: Members = field(default_factory=Members.rigid)
+    displacement_layers_mm: np.ndarray | None = None  # the layers' compression alone
+    dB_rel_layers: np.ndarray | None = None  # the field change of the layers alone (rigid members)
 
     @property
     def lock_forces_N(self) -> list[float]:
@@ -129,35 +155,33 @@ def simulate(
     noise_uT_rms: float = mlx.DEFAULT_NOISE_uT,
     points_per_regime: int = 200,
     overload: float = 0.25,
+    whole_part: bool = True,
+    patch_mm: float = FINGERTIP_PATCH_MM,
+    parts: Members | None = None,
 ) -> Response:
-    """Curves and per-regime figures of one design.
-
-    The force axis runs from 0 to (1 + overload) x the last lock force; points past the last
-    lock are flagged ``in_range = False`` (the sensor's range has ended there, the model only
-    shows the stiff locked branch). ``mechanics`` names the rung of the layers' laws,
-    ``field_model`` the magnet's [default: chosen from the chip offset and tilt], and
-    ``noise_uT_rms`` the chip's field noise (uT) that sets the force resolution.
+    """Curves and per-regime figures of one design, by default of the whole part: the cap, plates
+    and cover (``parts`` [default: :func:`~mst_cli.model.load_path.members` under a centred press
+    ``patch_mm`` wide]) in series with the layers of rung ``mechanics`` (docs/design.md 4.6); the
+    layers' own curve rides along (``*_layers*``), ``whole_part=False`` makes it the response.
+    Forces run to (1 + overload) x the last lock, ``in_range`` False past it; ``field_model``
+    [default: from the chip offset and tilt]; ``noise_uT_rms`` sets the force resolution.
     """
     model = fld.choose_field_model(geometry.chip_offset_mm, geometry.magnet_tilt_deg, field_model)
-    stack = Stack(layer_laws(geometry.layers, material, mechanics))
+    laws = layer_laws(geometry.layers, material, mechanics)
+    parts = parts or (members(geometry, material, patch_mm) if whole_part else Members.rigid(patch_mm, len(laws) - 1))
+    layer_stack, stack = Stack(laws), part_stack(laws, parts)
     edges = stack.regime_bounds_N
     F = _force_grid(edges, points_per_regime, overload)
     F_last = edges[-1]
-    d = stack.displacement_mm(F)
-    gap0 = geometry.gap0_mm
-    gap = gap0 - d
-    Bvec = fld.field_at_chip_T(gap, geometry.magnet, model, geometry.chip_offset_mm, geometry.magnet_tilt_deg)
-    Babs = np.linalg.norm(Bvec, axis=-1)
+    gap0, (d, gap, Bvec, Babs) = geometry.gap0_mm, _curve(stack, F, geometry, model)
     B0 = float(Babs[0])
     field_T = partial(field_magnitude_T, geometry=geometry, model=model)  # |B| (T) of gaps (mm)
     slope, band = _local_slope(stack, F, gap, field_T, B0)
     gap_edges = gap0 - stack.displacement_mm(edges)
     S, degenerate, B_edges = _secant_sensitivities(stack, gap_edges, field_T, B0)
     B_full = float(B_edges[-1])
-    Bmax_vec = np.abs(Bvec[F <= F_last + 1e-12]).max(axis=0)
-    setting = mlx.choose_setting(max(Bmax_vec[0], Bmax_vec[1]), Bmax_vec[2])
-    saturated = setting is None or B_full >= mlx.SATURATION_T
-    res_T = mlx.field_resolution_T(setting, noise_uT_rms) if setting else float("nan")
+    layers_only = _layers_only(layer_stack, F, gap0, field_T, B0)
+    setting, saturated, res_T = _chip(Bvec[F <= F_last + 1e-12], B_full, noise_uT_rms)
     return Response(
         mechanics=mechanics,
         field_model=model,
@@ -168,7 +192,7 @@ def simulate(
         B_abs_T=Babs,
         dB_rel=Babs / B0 - 1.0,
         in_range=F <= F_last * (1 + 1e-12),
-        regimes=_regimes(stack, S, degenerate, (slope, band), (res_T, B0)),
+        regimes=_regimes(stack, S, degenerate, (slope, band), (res_T, B0), layers_only[2]),
         B0_T=B0,
         B_full_T=B_full,
         gap0_mm=gap0,
@@ -179,7 +203,46 @@ def simulate(
         field_resolution_T=res_T,
         noise_uT_rms=noise_uT_rms,
         warnings=_warnings(stack, degenerate, B_full if saturated else None),
+        members=parts,
+        displacement_layers_mm=layers_only[0],
+        dB_rel_layers=layers_only[1],
     )
+
+
+def _curve(stack: Stack, F: np.ndarray, geometry: SensorGeometry, model: str) -> tuple:
+    """(drop mm, gap mm, B vector (m, 3) T, |B| T) at the forces ``F``."""
+    d = stack.displacement_mm(F)
+    gap = geometry.gap0_mm - d
+    Bvec = fld.field_at_chip_T(gap, geometry.magnet, model, geometry.chip_offset_mm, geometry.magnet_tilt_deg)
+    return d, gap, Bvec, np.linalg.norm(Bvec, axis=-1)
+
+
+def _chip(B_in_range_T: np.ndarray, B_full_T: float, noise_uT_rms: float) -> tuple:
+    """(the MLX90393 setting for the in-range fields (m, 3) in T, saturated?, field resolution T)."""
+    Bmax_vec = np.abs(B_in_range_T).max(axis=0)
+    setting = mlx.choose_setting(max(Bmax_vec[0], Bmax_vec[1]), Bmax_vec[2])
+    saturated = setting is None or B_full_T >= mlx.SATURATION_T
+    return setting, saturated, mlx.field_resolution_T(setting, noise_uT_rms) if setting else float("nan")
+
+
+def part_stack(laws: tuple, parts: Members) -> Stack:
+    """The whole part's stack: the cap bends into the top layer's cavity until it closes there
+    (:class:`~mst_cli.model.load_path.CappedLayer`), each plate into the cavity of the layer
+    under it likewise, the cover in series, its bending over the slot until it lands on the board."""
+    capped = tuple(capped_units(laws, parts))
+    return Stack(capped, parts.cover_mm_per_N, parts.cover_contact_mm_per_N, parts.cover_travel_mm)
+
+
+def _layers_only(
+    stack: Stack, F: np.ndarray, gap0: float, field_T: Callable[[np.ndarray], np.ndarray], B0: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(compression, dB/B0 at the forces ``F``, secant S per regime of its own lock forces) of the
+    layers alone between rigid plates: the curve the ladder verifies layer by layer."""
+    layers = stack
+    d = layers.displacement_mm(F)
+    gap_edges = gap0 - layers.displacement_mm(layers.regime_bounds_N)
+    S = _secant_sensitivities(layers, gap_edges, field_T, B0)[0]
+    return d, field_T(gap0 - d) / B0 - 1.0, S
 
 
 def _force_grid(edges: np.ndarray, points_per_regime: int, overload: float) -> np.ndarray:
@@ -235,9 +298,11 @@ def _regimes(
     degenerate: np.ndarray,
     slopes: tuple[np.ndarray, np.ndarray],
     resolution: tuple[float, float],
+    S_layers: np.ndarray,
 ) -> list[Regime]:
     """Every force band's figures; ``slopes`` = (local slope, band of each force sample),
-    ``resolution`` = (the chip's field resolution, B0), both in T."""
+    ``resolution`` = (the chip's field resolution, B0), both in T; ``S_layers`` the layers'
+    own secant sensitivities (rigid members)."""
     slope, band = slopes
     res_T, B0 = resolution
     edges, order, laws = stack.regime_bounds_N, stack.lock_order, stack.layers
@@ -267,6 +332,7 @@ def _regimes(
                 sensitivity_max_per_N=float(s_hi),
                 force_resolution_N=res_T / (B0 * float(S[i])),
                 force_resolution_worst_N=res_T / (B0 * float(s_lo)),
+                sensitivity_layers_secant_per_N=float(S_layers[i]),
             )
         )
     return regimes

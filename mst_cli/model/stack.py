@@ -12,16 +12,34 @@ Pure numpy; no I/O.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from functools import cached_property
 from typing import TYPE_CHECKING
 
 import numpy as np
 
-from mst_cli.model.mechanics.spring import layer_displacement_mm
+from mst_cli.model.mechanics.spring import KNEE_FRACTION, layer_displacement_mm
 
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
+
+
+def capped_lock_force_N(
+    k_N_per_mm: ArrayLike, d_lock_mm: ArrayLike, lock_force_N: ArrayLike, cap_mm_per_N: ArrayLike
+) -> np.ndarray:
+    """Where the top layer's cavity closes at its centre when the cap bonded to its top pad also
+    bends into it by cap_mm_per_N x F: the force F' at which d(F') + C F' = d_lock, for L0 laws
+    (slope k to the knee KNEE_FRACTION x R, straight on to (d_lock, R)), vectorised. Past F'
+    the cap rests on the cavity's floor and the layer is locked (docs/design.md 4.6); C = 0
+    gives R itself, to the bit."""
+    k, dl, R, C = (np.asarray(a, dtype=float) for a in (k_N_per_mm, d_lock_mm, lock_force_N, cap_mm_per_N))
+    F1 = KNEE_FRACTION * R
+    d1 = F1 / k
+    soft = (dl - d1) / np.maximum(R - F1, 1e-300)  # mm/N between the knee and the lock
+    g1 = d1 + C * F1
+    closes = np.where(dl <= g1, dl / (1.0 / k + C), F1 + (dl - g1) / (soft + C))
+    return np.where(C > 0, closes, R)
 
 
 def series_displacement_mm(
@@ -30,8 +48,16 @@ def series_displacement_mm(
     d_lock_mm: ArrayLike,
     k_locked_N_per_mm: ArrayLike,
     lock_force_N: ArrayLike | None = None,
+    members_mm_per_N: ArrayLike = 0.0,
+    cap_mm_per_N: ArrayLike | None = None,
+    contact: tuple | None = None,
 ) -> np.ndarray:
-    """Stack compression of L0 layers in series, vectorised over designs.
+    """Stack compression of L0 layers in series, vectorised over designs, with the members that
+    are not layers (``members_mm_per_N``, shape (...), a linear spring) in series too, and the
+    cap (``cap_mm_per_N``, shape (...)) bending into the top layer's cavity until it closes
+    there (:func:`capped_lock_force_N`), or per layer (shape (..., n): each plate bends into the
+    cavity of the layer under it, :func:`layer_caps`); ``contact`` (C, travel), shapes (...): the part C of
+    the members that stops once it has moved ``travel`` (:attr:`Stack.contact_mm_per_N`).
 
     ``k``, ``d_lock``, ``k_locked`` and ``lock_force_N`` (None: R = k d_lock, bilinear) have
     shape (..., n_layers); ``force_N`` has shape (..., m) (broadcast against the leading axes).
@@ -44,7 +70,30 @@ def series_displacement_mm(
     d_layer = layer_displacement_mm(
         F, k[..., None, :], dl[..., None, :], R[..., None, :], np.asarray(k_locked_N_per_mm, dtype=float)[..., None, :]
     )
-    return d_layer.sum(axis=-1)
+    d = d_layer.sum(axis=-1) + np.asarray(members_mm_per_N, dtype=float)[..., None] * F[..., 0]
+    if contact is not None:  # (C, travel) (...): that part of the members stops after travel (Stack)
+        C_c, travel = (np.asarray(a, dtype=float)[..., None] for a in contact)
+        d = d - np.maximum(C_c * F[..., 0] - travel, 0.0)
+    if cap_mm_per_N is None:
+        return d
+    C = layer_caps(cap_mm_per_N, k.shape)[..., None, :]  # (..., 1, n)
+    Rc = capped_lock_force_N(k, dl, R, C[..., 0, :])[..., None, :]
+    kl = np.asarray(k_locked_N_per_mm, dtype=float)[..., None, :]
+    # before the contact: each layer's own law and its cap's bending; after: locked
+    capped = np.where(F <= Rc, d_layer + C * F, dl[..., None, :] + (F - Rc) / kl)
+    return d + np.where(C > 0, capped - d_layer, 0.0).sum(axis=-1)
+
+
+def layer_caps(cap_mm_per_N: ArrayLike, shape: tuple) -> np.ndarray:
+    """Every layer's cap (..., n) for layers of ``shape`` (..., n): ``cap_mm_per_N`` given per
+    layer (as many axes as the layers: the plate above each one, the cap on the top one), or for
+    the top layer alone (one axis fewer)."""
+    C = np.asarray(cap_mm_per_N, dtype=float)
+    if C.ndim == len(shape):
+        return np.broadcast_to(C, np.broadcast_shapes(C.shape, shape))
+    out = np.zeros(np.broadcast_shapes(shape, C.shape + (shape[-1],)))
+    out[..., -1] = C
+    return out
 
 
 @dataclass(frozen=True)
@@ -52,10 +101,38 @@ class Stack:
     """A stack of layer laws (see :mod:`mst_cli.model.mechanics`), listed bottom to top.
 
     Every law is piecewise linear between its knots, so the sum d(F) is piecewise linear
-    between the union of all knots: interpolating on them is exact.
+    between the union of all knots: interpolating on them is exact. The members in series add
+    ``members_mm_per_N`` x F, linear too, so the interpolation stays exact. The lock forces
+    are the layers' own: the same force passes through every member.
     """
 
     layers: tuple
+    # the members that are not layers (cap, plates, cover: mst_cli.model.load_path), a linear
+    # spring in series with the layers; 0: the layers between rigid plates (L0/L1/L2 as verified)
+    members_mm_per_N: float = 0.0
+    # the part of members_mm_per_N that stops once it has moved contact_travel_mm (the housing's
+    # cover landing on the board under it): its drop is min(C F, travel)
+    contact_mm_per_N: float = 0.0
+    contact_travel_mm: float = math.inf
+
+    @property
+    def contact_force_N(self) -> float:
+        """Where the members' contact closes (inf: never)."""
+        return self.contact_travel_mm / self.contact_mm_per_N if self.contact_mm_per_N > 0.0 else math.inf
+
+    def members_displacement_mm(self, force_N: ArrayLike) -> np.ndarray:
+        """The members' drop at ``force_N``: linear, less what the contact stops."""
+        F = np.asarray(force_N, dtype=float)
+        stopped = np.maximum(self.contact_mm_per_N * F - self.contact_travel_mm, 0.0) if self.contact_mm_per_N else 0.0
+        return self.members_mm_per_N * F - stopped
+
+    def members_compliance_mm_per_N(self, force_N: float) -> float:
+        """The members' dd/dF just past ``force_N`` (right-continuous at the contact)."""
+        return self.members_mm_per_N - (self.contact_mm_per_N if force_N >= self.contact_force_N else 0.0)
+
+    def layers_only(self) -> Stack:
+        """The same layers between rigid plates (the ladder's own verification)."""
+        return Stack(self.layers)
 
     @property
     def lock_forces_N(self) -> np.ndarray:
@@ -78,10 +155,14 @@ class Stack:
 
     @property
     def knots_N(self) -> np.ndarray:
-        """0 and every layer's knots up to the last lock, ascending and unique."""
+        """0 and every layer's knots up to the last lock, and the members' contact (wherever it
+        closes), ascending and unique."""
         F_end = self.last_lock_force_N
+        contact = [self.contact_force_N] if math.isfinite(self.contact_force_N) else []
         ks = np.sort(
-            np.asarray([0.0, F_end] + [f for law in self.layers for f in law.knots_N if f < F_end], dtype=float)
+            np.asarray(
+                [0.0, F_end, *contact] + [f for law in self.layers for f in law.knots_N if f < F_end], dtype=float
+            )
         )
         # np.unique's own dedupe, without the numpy.ma import it costs (7 ms of a 0.2 s command)
         return ks[np.concatenate(([True], ks[1:] != ks[:-1]))]
@@ -98,12 +179,13 @@ class Stack:
     def _knot_displacement_mm(self) -> tuple[np.ndarray, np.ndarray]:
         """(knots, d at the knots), each layer's law summed there once."""
         knots = self.knots_N
-        return knots, sum(law.displacement_mm(knots) for law in self.layers)
+        return knots, sum(law.displacement_mm(knots) for law in self.layers) + self.members_displacement_mm(knots)
 
     @property
     def locked_compliance_mm_per_N(self) -> float:
-        """Past the last lock every layer is on its locked branch."""
-        return sum(1.0 / law.k_locked_N_per_mm for law in self.layers)
+        """Past the last knot every layer is on its locked branch (and the contact closed)."""
+        beyond = float(self.knots_N[-1])
+        return sum(1.0 / law.k_locked_N_per_mm for law in self.layers) + self.members_compliance_mm_per_N(beyond)
 
     def local_compliance_mm_per_N(self, force_N: ArrayLike) -> float | np.ndarray:
         """dd/dF on the segment that contains ``force_N`` (right-continuous at knots), for a
@@ -123,7 +205,7 @@ class Stack:
         """
         F = self.regime_bounds_N[regime]
         step = 1e-9 * max(F, 1e-12)
-        total = 0.0
+        total = self.members_compliance_mm_per_N(F)
         for pos, j in enumerate(self.lock_order):
             law = self.layers[j]
             if pos < regime:

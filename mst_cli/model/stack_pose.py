@@ -23,18 +23,26 @@ from mst_cli.model.material import Material
 from mst_cli.model.mechanics import layer_laws
 from mst_cli.model.mechanics.depth import in_web
 from mst_cli.model.mechanics.tilt import LayerTiltLaw, solve_layer_tilt
+from mst_cli.model.part_laws import part_units, unit_tilt_law
 
 
 def tilt_laws(
-    geometry: SensorGeometry, material: Material, mechanics: str, lever_factor: float = 1.0
+    geometry: SensorGeometry,
+    material: Material,
+    mechanics: str,
+    lever_factor: float = 1.0,
+    whole_part: bool = True,
 ) -> list[LayerTiltLaw]:
     """Every layer as the tilt rung sees it, from the named rung's laws; ``lever_factor`` scales
-    every lever (1: the rung's own; a calibration's fitted value otherwise)."""
-    laws = layer_laws(geometry.layers, material, mechanics)
+    every lever (1: the rung's own; a calibration's fitted value otherwise). ``whole_part``
+    (model.load_path: part, as ``mst simulate``): each layer with the members its walls load,
+    the cap, the plates and the cover of :func:`~mst_cli.model.load_path.members`
+    (:mod:`mst_cli.model.part_laws`); False: the layers alone between rigid plates."""
+    laws = part_units(geometry, material, mechanics) if whole_part else layer_laws(geometry.layers, material, mechanics)
     return [
-        LayerTiltLaw.from_layer(
-            law, c, in_web(c, material).youngs_modulus_MPa, material.poisson_ratio
-        ).with_lever_factor(lever_factor)
+        unit_tilt_law(law, c, in_web(c, material).youngs_modulus_MPa, material.poisson_ratio).with_lever_factor(
+            lever_factor
+        )
         for law, c in zip(laws, geometry.layers)
     ]
 

@@ -103,6 +103,7 @@ def simulate_as_printed(doc: Document, mechanics: str | None = None, field_model
         mechanics=choice.mechanics,
         field_model=None if field_choice == "auto" else field_choice,
         noise_uT_rms=doc.noise_uT_rms,
+        whole_part=doc.whole_part,
     )
 
 
@@ -154,6 +155,13 @@ def apply_parameters(
     )
     assert all(isinstance(la, LayerEntry) for la in out.layers)
     return out, edits
+
+
+def housing_as_printed(doc: Document) -> Housing:
+    """``doc``'s housing as its printer builds it: printer.gap_offset_mm written into its keys as
+    :func:`apply_parameters` writes it (so the cover's air, the slot walls' height and the
+    magnet-chip gap the design loop sees are those ``mst simulate`` sees)."""
+    return _housing_with_gap(doc, doc.printer.gap_offset_mm, [])
 
 
 def _housing_with_gap(doc: Document, gap_offset_mm: float, edits: list[str]) -> Housing:

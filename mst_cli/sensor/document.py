@@ -30,7 +30,7 @@ from mst_cli.io import field_tables
 from mst_cli.io.files import read_input_text
 from mst_cli.io.rules import Rule, default_of
 from mst_cli.io.yaml_io import MAX_INPUT_BYTES, YAMLRefused, load_text
-from mst_cli.model.assembly import Housing, Magnet, SensorGeometry
+from mst_cli.model.assembly import Housing, InsertPlate, Magnet, SensorGeometry
 from mst_cli.model.cell import HexCell
 from mst_cli.model.components import BOARDS, Board
 from mst_cli.model.material import Material
@@ -76,6 +76,13 @@ class Document:
     source: str = "<memory>"
     accuracy_rel: float | None = None  # model.accuracy_rel: requested accuracy of k and R
     chip_positions_mm: tuple[tuple[float, float], ...] | None = None  # magnetometer.positions_mm
+    insert: InsertPlate = InsertPlate()  # the insert section (material none: no plate)
+    load_path: str = "part"  # model.load_path: the whole part, or the layers alone (docs/design.md 4.6)
+
+    @property
+    def whole_part(self) -> bool:
+        """The predictions include the cap, plates and cover (model.load_path: part)."""
+        return self.load_path == "part"
 
     @property
     def chips_mm(self) -> list[tuple[float, float]]:
@@ -94,10 +101,15 @@ class Document:
                 positions_mm=self.chip_positions_mm,
             )
         if name == "model":
-            return ModelSection(mechanics=self.mechanics, field=self.field_model, accuracy_rel=self.accuracy_rel)
+            return ModelSection(
+                mechanics=self.mechanics,
+                field=self.field_model,
+                load_path=self.load_path,
+                accuracy_rel=self.accuracy_rel,
+            )
         if name == "design":
             return DesignOptions(**self.design)
-        return getattr(self, name)  # family, material, magnet, housing, printer: kept as the file has them
+        return getattr(self, name)  # family, material, magnet, housing, insert, printer: as the file has them
 
     @property
     def is_design(self) -> bool:
@@ -121,6 +133,7 @@ class Document:
             self.magnet_tilt_deg,
             self.printer,
             self.chip_positions_mm,
+            self.insert if self.insert.present else None,
         )
 
     def require_geometry(self) -> None:
@@ -199,18 +212,12 @@ def parse_document(raw: Any, source: str = "<memory>") -> Document:
     meter = MagnetometerSection(**_section(raw, "magnetometer"))
     board = BOARDS[meter.board]
     housing = Housing(**_section(raw, "housing"))
+    insert = InsertPlate(**_section(raw, "insert"))
     printer = Printer(**_section(raw, "printer"))
     model = ModelSection(**_section(raw, "model"))
     design = _design_options(_section(raw, "design"))
 
-    # The housing rules (printable depth, pocket and slots inside the body) do not depend on the
-    # layers' theta, t, h: check them on any cell of the family, before any design work.
-    probe = SensorGeometry(
-        (family.cell(45.0, 1.0, 3.0),), magnet, board, housing, meter.chip_offset_mm, 0.0, printer, meter.positions_mm
-    )
-    for v in probe.housing_violations():
-        raise v.input_error()
-
+    _check_housing(family, magnet, board, housing, meter, printer, insert)
     return Document(
         name=name,
         layers=_layers(raw.get("layers")),
@@ -229,7 +236,36 @@ def parse_document(raw: Any, source: str = "<memory>") -> Document:
         source=source,
         accuracy_rel=model.accuracy_rel,
         chip_positions_mm=meter.positions_mm,
+        insert=insert,
+        load_path=model.load_path,
     )
+
+
+def _check_housing(
+    family: CellFamily,
+    magnet: Magnet,
+    board: Board,
+    housing: Housing,
+    meter: MagnetometerSection,
+    printer: Printer,
+    insert: InsertPlate,
+) -> None:
+    """The housing rules (printable depth, pocket and slots inside the body, the insert) do not
+    depend on the layers' theta, t, h: check them on any cell of the family, before any design
+    work; the first broken one is an InputError."""
+    probe = SensorGeometry(
+        (family.cell(45.0, 1.0, 3.0),),
+        magnet,
+        board,
+        housing,
+        meter.chip_offset_mm,
+        0.0,
+        printer,
+        meter.positions_mm,
+        insert if insert.present else None,
+    )
+    for v in probe.housing_violations():
+        raise v.input_error()
 
 
 def _file_name(value: Any) -> str:

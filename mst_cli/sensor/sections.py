@@ -15,7 +15,7 @@ from dataclasses import dataclass, fields
 
 from mst_cli.errors import InputError
 from mst_cli.io.rules import Rule, adopt, default_of
-from mst_cli.model.assembly import Housing, Magnet, SensorGeometry
+from mst_cli.model.assembly import Housing, InsertPlate, Magnet, SensorGeometry
 from mst_cli.model.cell import HexCell
 from mst_cli.model.chip import DEFAULT_NOISE_uT
 from mst_cli.model.components import BOARDS, DEFAULT_BOARD, grade_remanence_T
@@ -171,6 +171,14 @@ class ModelSection:
         meaning="magnet field model; `auto` is the cheapest exact one: `axial` on the axis, "
         "`cylinder` off it (`dipole` only when asked)",
     )
+    load_path: str = spec(
+        "part",
+        choices=("part", "layers"),
+        omit_default=True,
+        meaning="what carries the press in `mst simulate`'s and `mst design`'s predictions: `part`, the layers "
+        "with the cap, plates and cover in series (the cap closing the top layer's cavity as it bends), or "
+        "`layers`, the layers alone between rigid plates (the ladder's own verification; docs/design.md 4.6)",
+    )
     # relative accuracy of layer stiffness and lock force against the continuum reference: the
     # tool picks the cheapest mechanics rung whose measured median errors meet it (mst_cli.model.ladder)
     accuracy_rel: float | None = spec(
@@ -313,6 +321,7 @@ SECTION_TYPES: dict[str, type] = {
     "magnet": MagnetSection,
     "magnetometer": MagnetometerSection,
     "housing": Housing,
+    "insert": InsertPlate,
     "printer": Printer,
     "model": ModelSection,
     "design": DesignOptions,

@@ -83,7 +83,14 @@ def offcentre_summary(r: OffCentreResponse) -> dict:
         "load_offset_mm": list(r.offset_mm),
         "shear_ratio": list(r.shear_ratio),
         "mechanics": r.mechanics,
-        "tilt_model": "rigid plates; each chevron a depth-long line of the layer law (mst_cli.model.mechanics.tilt)",
+        "tilt_model": (
+            "each chevron a depth-long line of the layer law (mst_cli.model.mechanics.tilt), "
+            + (
+                "each layer with the cap, plate or cover its walls load (mst_cli.model.part_laws)"
+                if r.whole_part
+                else "rigid plates (model.load_path: layers)"
+            )
+        ),
         "shear_model": "the tangential force at the top face adds its moment about every layer's pivot; each "
         "layer's plates slide with its lateral compliance along a press growing from zero "
         "(mst_cli.model.general_load)",

@@ -79,11 +79,19 @@ def load_path_line(
     lp = load_path_section(doc, geometry, resp, patch_mm)
     shares = " / ".join(f"{100 * r['outside_layers']:.0f}" for r in lp["regimes"])
     member, _ = dominant_member(max(lp["regimes"], key=lambda r: r["outside_layers"]))
-    return (
+    line = (
         f"load path: {shares} % of the magnet's motion per regime is outside the layers, mostly the {member} "
-        f"(cap {lp['cap_mm_per_N']:.3g} mm/N under a {lp['patch_mm']:g} mm press), which the layer model leaves out "
-        "(docs/design.md 4.6)"
+        f"(cap {lp['cap_mm_per_N']:.3g} mm/N under a {lp['patch_mm']:g} mm press); the prediction above includes "
+        "it in series (the layers' alone: report.json sensitivity_layers_secant_per_N, docs/design.md 4.6)"
     )
+    lands, end = lp["cover_lands_N"], lp["regimes"][-1]["force_N"][1]
+    if lands is not None and lands < end:
+        line += (
+            f"; the cover lands on the board's parts at {lands:.3g} N, inside the range (to {end:.3g} N): past it "
+            "the press bears on the chip and connectors, a support the printed body alone lacks "
+            "(housing.cover_mm thicker keeps it off)"
+        )
+    return line
 
 
 def _lateral_stiffness(doc: Document, mechanics: str) -> list[tuple[float, float]]:
@@ -132,6 +140,7 @@ def _regime_row(r: Regime) -> dict:
         "sensitivity_local_max_per_N": r.sensitivity_max_per_N,
         "force_resolution_N": r.force_resolution_N,
         "force_resolution_worst_N": r.force_resolution_worst_N,
+        "sensitivity_layers_secant_per_N": r.sensitivity_layers_secant_per_N,
     }
 
 
@@ -201,15 +210,22 @@ def nulls_with_reasons(data: Any, reasons: dict | None = None) -> Any:
 def response_csv(resp: Response) -> str:
     """One row per force sample; units in the header."""
     buf = io.StringIO()
-    buf.write("force_N,displacement_mm,gap_mm,Bx_mT,By_mT,Bz_mT,B_abs_mT,dB_rel,in_range,Bz_code_lsb\n")
+    buf.write(
+        "force_N,displacement_mm,gap_mm,Bx_mT,By_mT,Bz_mT,B_abs_mT,dB_rel,in_range,Bz_code_lsb,"
+        "displacement_layers_mm,dB_rel_layers\n"
+    )
     data = np.column_stack(
         [resp.force_N, resp.displacement_mm, resp.gap_mm, resp.B_T * 1e3, resp.B_abs_T * 1e3, resp.dB_rel]
     )
+    assert resp.displacement_layers_mm is not None and resp.dB_rel_layers is not None  # simulate fills both
+    layers = np.column_stack([resp.displacement_layers_mm, resp.dB_rel_layers])
     # what the chip would output along z at the chosen GAIN_SEL/RES (empty when saturated)
     setting = resp.chip_setting
     codes = quantise_lsb(resp.B_T[:, 2], setting.z_uT_per_lsb) if setting is not None else [""] * len(data)
-    for row, ok, code in zip(data, resp.in_range, codes):
-        buf.write(",".join(f"{v:.9g}" for v in row) + f",{int(ok)},{code}\n")
+    for row, ok, code, alone in zip(data, resp.in_range, codes, layers):
+        buf.write(
+            ",".join(f"{v:.9g}" for v in row) + f",{int(ok)},{code}," + ",".join(f"{v:.9g}" for v in alone) + "\n"
+        )
     return buf.getvalue()
 
 

@@ -51,7 +51,8 @@ class PartOptions:
     """How the section is built and pressed: the strip's width (mm), the mesh spacing (mm), its
     offset and direction (down, or along +x), the corner refinements, the magnet
     (:data:`MAGNET_SEATS`), the members' stiffness factor (1: as printed; :data:`RIGID_FACTOR`:
-    the rigid-member control), locked layers by index, an insert
+    the rigid-member control) and which members it scales (``scaled``, tags of :data:`MEMBER_TAGS`
+    or "insert"), locked layers by index, an insert
     (:class:`~mst_cli.model.load_path.Insert`; None: the geometry's own, if it has one)."""
 
     patch_mm: float = FINGERTIP_PATCH_MM
@@ -60,6 +61,7 @@ class PartOptions:
     tangential: bool = False  # the strip pulls along +x instead of pressing down
     magnet: str = "resting"
     member_factor: float = 1.0
+    scaled: tuple[str, ...] = MEMBER_TAGS  # the members member_factor applies to (one at a time: attribution)
     locked: tuple[int, ...] = ()
     insert: Insert | None = None
     levels: int = DEFAULT_LEVELS
@@ -88,7 +90,7 @@ def _moduli(material, options: PartOptions, insert) -> tuple[np.ndarray, np.ndar
     """(E, nu) per tag (:data:`TAGS`)."""
     E = {t: material.youngs_modulus_MPa for t in TAGS}
     nu = {t: material.poisson_ratio for t in TAGS}
-    for t in MEMBER_TAGS:
+    for t in options.scaled:
         E[t] *= options.member_factor
     E["magnet"], nu["magnet"] = N42_MODULUS_MPA, N42_POISSON
     if insert is not None:

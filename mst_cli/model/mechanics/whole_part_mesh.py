@@ -6,8 +6,9 @@ Every dimension comes from :class:`~mst_cli.model.assembly.SensorGeometry` and
 :class:`~mst_cli.model.cell.HexCell`, the same objects the CAD extrudes (mst_cli/cad/shapes.py
 ``body_plan``): the base block less the board slot and the cable windows that reach y = 0, each
 layer's hexagonal ring (its cavity filled when the layer is taken as locked, closed), the plates,
-the cap less the magnet pocket, the pocket itself (the magnet, its clearance taken as magnet,
-or left empty) and a stiff insert when one is given. The regions do not overlap, so the
+the cap less the magnet pocket (its crush ribs standing in it) and the insert's slot, the pocket
+itself (the magnet, its clearance taken as magnet, or left empty) and a stiff insert when one is
+given (the part's own plate in its slot, its side clearances open). The regions do not overlap, so the
 section's exact area is the sum of theirs and the mesh is checked against it.
 
 The mesh: Delaunay (scipy) of a triangular lattice at ``spacing_mm`` inside the solid, points
@@ -171,27 +172,47 @@ def _notched(outline, cuts) -> tuple[tuple[float, float], ...]:
 
 
 def _cap(g, magnet: bool, insert) -> list[Region]:
-    """The cap above the stack less the pocket; the pocket as the magnet; the insert."""
-    w2, r = 0.5 * g.width_mm, g.pocket_radius_mm
+    """The cap above the stack less the pocket and, when the part has one, the insert's slot (as
+    exported: TPU side walls beside it); the pocket as the magnet; the insert. The geometry's own
+    plate sits in its slot with its side clearances left open; another insert spans the face."""
+    w2 = 0.5 * g.width_mm
     z0, z1 = g.z_stack_top_mm, g.total_height_mm
-    pocket = rect(-r, r, g.z_magnet_bottom_mm, g.z_magnet_bottom_mm + g.pocket_depth_mm)
-    out = []
+    pocket = _pocket(g)
+    holes = [pocket]
+    if getattr(g, "has_insert", False):
+        (sx0, _, sz0), (sx1, _, sz1) = g.insert_slot_box_mm
+        holes.append(rect(sx0, sx1, sz0, sz1))
+    out, pieces = [], [rect(-w2, w2, z0, z1)]
     if insert is not None:
         zi = g.z_stack_top_mm - g.layers[-1].t_mm + insert.z_mm
         zi0, zi1 = max(zi, z0), zi + insert.thickness_mm
-        if zi0 < pocket[2][1] and zi1 > pocket[0][1]:
-            raise ValueError("the insert overlaps the magnet pocket")
-        out.append(Region("insert", rect(-w2, w2, zi0, zi1)))
-        below, above = rect(-w2, w2, z0, zi0), rect(-w2, w2, zi1, z1)
-        for piece in (below, above):
-            if piece[2][1] - piece[0][1] > 1e-9:
-                holes = (pocket,) if piece[0][1] <= pocket[0][1] and piece[2][1] >= pocket[2][1] else ()
-                out.append(Region("cap", piece, holes))
-    else:
-        out.append(Region("cap", rect(-w2, w2, z0, z1), (pocket,)))
+        if len(holes) > 1 and abs(zi0 - holes[1][0][1]) < 1e-9 and abs(zi1 - holes[1][2][1]) < 1e-9:
+            (px0, _, _), (px1, _, _) = g.insert_box_mm  # the part's own plate, in its slot
+            out.append(Region("insert", rect(px0, px1, zi0, zi1)))
+        else:
+            if any(zi0 < h[2][1] and zi1 > h[0][1] for h in holes):
+                raise ValueError("the insert overlaps the magnet pocket or the insert's slot")
+            out.append(Region("insert", rect(-w2, w2, zi0, zi1)))
+            pieces = [rect(-w2, w2, z0, zi0), rect(-w2, w2, zi1, z1)]
+    for piece in pieces:
+        if piece[2][1] - piece[0][1] > 1e-9:
+            inside = tuple(h for h in holes if piece[0][1] <= h[0][1] and h[2][1] <= piece[2][1])
+            out.append(Region("cap", piece, inside))
     if magnet:
         out.append(Region("magnet", pocket))
     return out
+
+
+def _pocket(g) -> tuple[tuple[float, float], ...]:
+    """The magnet pocket's section less the crush ribs on its face over the magnet (as exported:
+    cad/shapes.magnet_ribs, triangles two lines wide reaching clearance + interference down)."""
+    r, zb = g.pocket_radius_mm, g.z_magnet_bottom_mm
+    zt = zb + g.pocket_depth_mm
+    top = [(r, zt)]
+    w2, reach = 0.5 * g.magnet_rib_width_mm, g.magnet_rib_reach_mm
+    for xc in sorted(g.magnet_rib_x_mm, reverse=True):  # along the face from +x to -x
+        top += [(xc + w2, zt), (xc, zt - reach), (xc - w2, zt)]
+    return ((-r, zb), (r, zb), *top, (-r, zt))
 
 
 def section_area_mm2(regions: list[Region]) -> float:

@@ -1,0 +1,122 @@
+"""The part's members in the general load (issue 44: mst_cli/model/part_laws.py): the cap, the
+plates and the cover ride with the layer whose walls load them.
+
+Every number here is fixed outside the code under test: the axial model of the part and of the
+layers alone (``mst simulate``, model.load_path part or layers), the members' closed forms
+(mst_cli/model/load_path.py), the statics of two springs at +-x_c (a unit below its knee under a
+moment), continuity (members far stiffer than the layers give the layers' answer back) and
+mirror symmetry.
+"""
+
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from mst_cli.model.load_path import Members, members
+from mst_cli.model.mechanics import layer_laws
+from mst_cli.model.mechanics.depth import in_web
+from mst_cli.model.mechanics.tilt import solve_layer_tilt
+from mst_cli.model.part_laws import cover_host, part_layer_laws, unit_tilt_law
+from mst_cli.model.response import simulate
+from mst_cli.model.stack_pose import magnet_field_T, magnet_pose, pose_field_T, stack_path, tilt_laws
+from mst_cli.sensor.as_printed import as_printed
+from mst_cli.sensor.document import load_design_document
+
+FORWARD = Path(__file__).resolve().parents[1] / "configs" / "mohammadi2021-forward.yaml"
+
+
+@pytest.fixture(scope="module")
+def scene():
+    doc, _ = load_design_document(FORWARD)
+    printed = as_printed(doc)
+    return printed.geometry(), printed.material
+
+
+def units_tilt_laws(geometry, material, parts: Members):
+    laws = part_layer_laws(layer_laws(geometry.layers, material, "spring"), parts)
+    return [
+        unit_tilt_law(law, c, in_web(c, material).youngs_modulus_MPa, material.poisson_ratio)
+        for law, c in zip(laws, geometry.layers)
+    ]
+
+
+@pytest.mark.parametrize("whole_part", [True, False])
+def test_a_centred_press_is_the_axial_model_of_the_same_load_path(scene, whole_part):
+    geometry, material = scene
+    axial = simulate(geometry, material, whole_part=whole_part)
+    F = axial.force_N
+    laws = tilt_laws(geometry, material, "spring", whole_part=whole_part)
+    d, tilt = stack_path(laws, F, (0.0, 0.0))
+    assert np.all(tilt == 0.0)  # a centred press turns nothing: the part is mirror symmetric
+    np.testing.assert_allclose(d.sum(axis=1), axial.displacement_mm, rtol=1e-12, atol=1e-15)
+    B = magnet_field_T(geometry, *magnet_pose(geometry, d, tilt))
+    np.testing.assert_allclose(B, axial.B_T, rtol=1e-9, atol=1e-15)
+
+
+def test_each_member_turns_its_layer_as_a_spring_under_each_chevron(scene):
+    # below the knee a unit is linear: two chevron lines k/2 at +-x_c, each through its member's
+    # compliance C (the member's centred closed form, half of it a side), so the unit turns by
+    # phi_y = F x0 (1/k + C) / x_c^2, and the member adds F x0 C / x_c^2 to the layer's own turn
+    geometry, material = scene
+    parts = members(geometry, material)
+    laws = layer_laws(geometry.layers, material, "spring")
+    units = tilt_laws(geometry, material, "spring")
+    bare = tilt_laws(geometry, material, "spring", whole_part=False)
+    # layer j carries its own top pad's bending (plate j, the cap on the top layer), and one
+    # layer the cover too (part_stack's members; below the landing all of it bends)
+    under = [*parts.plates_mm_per_N, parts.cap_mm_per_N]
+    under[cover_host(list(part_layer_laws(laws, parts)), parts)] += parts.cover_mm_per_N
+    F, x0 = 0.02, 5.0
+    for law, unit, own, C in zip(laws, units, bare, under):
+        assert C > 0.0
+        got = solve_layer_tilt(unit, F, (x0, 0.0)).phi_y_rad
+        assert got == pytest.approx(F * x0 * (1.0 / law.k_N_per_mm + C) / unit.lever_mm**2, rel=1e-9)
+        assert got - solve_layer_tilt(own, F, (x0, 0.0)).phi_y_rad == pytest.approx(
+            F * x0 * C / unit.lever_mm**2, rel=1e-6
+        )
+
+
+def test_members_far_stiffer_than_the_layers_give_the_layers_alone(scene):
+    geometry, material = scene
+    parts = members(geometry, material)
+    stiff = replace(
+        parts,
+        cap_mm_per_N=1e-9 * parts.cap_mm_per_N,
+        plates_mm_per_N=tuple(1e-9 * p for p in parts.plates_mm_per_N),
+        cover_mm_per_N=1e-9 * parts.cover_mm_per_N,
+        cover_contact_mm_per_N=1e-9 * parts.cover_contact_mm_per_N,
+    )
+    F = np.linspace(0.5, 30.0, 7)
+    near = pose_field_T(geometry, units_tilt_laws(geometry, material, stiff), F, (4.0, -3.0))
+    alone = pose_field_T(geometry, tilt_laws(geometry, material, "spring", whole_part=False), F, (4.0, -3.0))
+    np.testing.assert_allclose(near, alone, rtol=1e-6, atol=1e-12)
+    # and the members as they are move the magnet further: the part is softer than its layers
+    part = pose_field_T(geometry, tilt_laws(geometry, material, "spring"), F, (4.0, -3.0))
+    assert np.all(np.linalg.norm(part, axis=1) > np.linalg.norm(alone, axis=1))
+
+
+def test_a_press_mirrored_in_x_mirrors_the_field_with_the_members(scene):
+    geometry, material = scene
+    laws = tilt_laws(geometry, material, "spring")
+    F = np.array([2.0, 12.0, 30.0])
+    a = pose_field_T(geometry, laws, F, (5.0, 2.0))
+    b = pose_field_T(geometry, laws, F, (-5.0, 2.0))
+    # the chip sits on the axis: mirrored in x, Bx changes sign, By and Bz do not
+    np.testing.assert_allclose(b, a * np.array([-1.0, 1.0, 1.0]), rtol=1e-9, atol=1e-15)
+
+
+def test_a_layers_spec_reads_the_layers_alone_through_the_api(scene):
+    # model.load_path: layers keeps the old general load exactly: the layers between rigid plates
+    import mst_cli.api as mst
+    from mst_cli.model.offcentre import simulate_offcentre
+
+    geometry, material = scene
+    doc, _ = load_design_document(FORWARD)
+    layers = mst.simulate_offcentre(replace(doc, load_path="layers"), (4.0, -2.0))
+    assert not layers.whole_part
+    bare = simulate_offcentre(geometry, material, (4.0, -2.0), whole_part=False)
+    np.testing.assert_array_equal(layers.B_T, bare.B_T)
+    part = mst.simulate_offcentre(doc, (4.0, -2.0))
+    assert part.whole_part and np.max(np.abs(part.B_T - layers.B_T)) > 1e-6  # the members move the magnet
