@@ -170,14 +170,10 @@ def test_the_problem_builds_the_printers_gap_where_simulate_does(gap_offset_mm):
     tests/test_calibration_record fits) or 0.5 mm narrower: the optimiser's part is the forward
     model's part as built, the offset in the cover's air over the board (so the cover lands on it
     later or sooner) and, past that air, in the pocket floor; not only in the gap. The print is
-    written into the file's keys by hand (air 0.3 mm + offset, else 0 and the floor the rest).
-    The cells are a feasible design of the nominal print: 0.5 mm narrower leaves the cover no air,
-    on the board's parts from the start, which the design's cover constraint refuses for any
-    layer 1 over the slot; this test is about the evaluation, not feasibility."""
+    written into the file's keys by hand (air 0.3 mm + offset, else 0 and the floor the rest)."""
     printer = {"wall_offset_mm": 0.05, "modulus_factor": 0.85, "gap_offset_mm": gap_offset_mm}
-    doc = spec_doc([(1.0, 2.0), (0.5, 8.0)], load_path="part")
-    probe = DesignProblem(replace(doc, printer=Printer(**printer)))
-    theta, t, h = DesignProblem(doc).sample_feasible(np.random.default_rng(3), 1)
+    probe = DesignProblem(replace(spec_doc([(1.0, 2.0), (0.5, 8.0)], load_path="part"), printer=Printer(**printer)))
+    theta, t, h = probe.sample_feasible(np.random.default_rng(3), 1)
     ev = probe.evaluate_physical(theta[0], t[0], h[0])
     raw = yaml.safe_load(SPEC.read_text())
     raw["model"] = {"load_path": "part"}

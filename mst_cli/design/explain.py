@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from mst_cli.design.problem import COVER_LANDING_RULE, DesignProblem
+from mst_cli.design.problem import DesignProblem
 from mst_cli.errors import InputError
 from mst_cli.model.cell import cell_margins_mm
 from mst_cli.model.load_path import moving_share
@@ -170,8 +170,7 @@ def diagnose(
     one per layer, come from the forward model on it; ``checks`` maps a failed constraint name
     to its message (from the verification).
     """
-    reasons = _members_dominate(problem, u) + _cover_holds_back(problem, u) + _beyond_limits(problem)
-    reasons += _rising_sensitivities(problem, achieved_S)
+    reasons = _members_dominate(problem, u) + _beyond_limits(problem) + _rising_sensitivities(problem, achieved_S)
     reasons += [
         (name, reason + _members_share(problem, u, achieved_S, achieved_R))
         for name, reason in _worst_miss(problem, u, achieved_S, achieved_R)
@@ -181,31 +180,6 @@ def diagnose(
     if not reasons:  # nothing failed: the caller should not have asked
         return "", []
     return reasons[0][0], [r for _, r in reasons]
-
-
-def _cover_holds_back(problem: DesignProblem, u: ArrayLike) -> list[tuple[str, str]]:
-    """(name, reason) when the nearest design holds the housing's cover off the board's parts
-    to the range's end (:data:`COVER_LANDING_RULE` binding): the targets need the cover to land
-    there, a support of the assembly (the chip and connectors) the printed body lacks."""
-    if not problem.whole_part:
-        return []
-    theta, t, h = problem.to_physical(u)
-    rule = problem.constraint_names().index(COVER_LANDING_RULE)
-    g = problem.evaluate_physical(theta, t, h).constraints[rule]
-    if g < -ACTIVE_TOL:
-        return []
-    (over_slot, air_mm) = problem.part_members(theta, t, h)[2]
-    return [
-        (
-            "the housing's cover",
-            f"the targets need the housing's cover to land on the board's parts: held off them to "
-            f"R_{problem.n} = {problem.R_target[-1]:g} N (+{100 * problem.tolerance_rel:g} %), its bending over the "
-            f"slot ({float(over_slot):.3g} mm/N, "
-            f"{air_mm:g} mm of air) then adds more motion to the last regimes than their targets allow; past "
-            "the landing the press bears on the chip and connectors, which the printed body lacks: a "
-            "thicker housing.cover_mm (docs/design.md 4.6)",
-        )
-    ]
 
 
 def _members_by_regime(problem: DesignProblem, u: ArrayLike, edges_N: ArrayLike) -> tuple[dict, float, np.ndarray]:

@@ -25,8 +25,6 @@ Constraints (g <= 0 is satisfied; every g is scaled to order one)
       before it) <= (1 - saturation_margin_rel) x 50 mT, and
       never above what the MLX90393's coarsest setting reads with the headroom
       :func:`~mst_cli.model.chip.choose_setting` keeps;
-    * the whole part's cover lands on the board's parts only past R_n + tolerance: a landing
-      inside the range is a support of the assembly, not of the printed body (design.md 4.6);
     * optional total height: SensorGeometry.total_height_mm <= design.max_height_mm;
     * optional print deviation (``design.max_print_deviation_rel``): every S_i and R_i changes by
       at most that fraction when every wall is printed +- printer.wall_tolerance_mm (one smooth
@@ -91,7 +89,6 @@ CHIP_HEADROOM = inspect.signature(mlx.choose_setting).parameters["margin"].defau
 TINY = 1e-300  # floor of anything a log is taken of (a collapsed output, not a crash)
 VIOLATION_PENALTY = 10.0  # merit per unit of constraint violation (g is scaled to order one)
 DEDUPE_MIN_CELLS = 64  # below this many cells, sorting out repeats costs more than it saves
-COVER_LANDING_RULE = "the housing's cover lands on the board's parts only past the range (R_n + tolerance)"
 ROUNDING_SAFETY = 1e-3  # constraint slack (nozzles / log units) so that the rounded
 # design written to design.yaml still satisfies every rule
 
@@ -212,7 +209,6 @@ class DesignProblem:
             + self.n
             + (self.n - 1)
             + 1
-            + (1 if self.whole_part else 0)
             + (1 if self.max_height_mm is not None else 0)
             + (8 * self.n if self.max_print_deviation_rel is not None else 0)
         )
@@ -414,8 +410,7 @@ class DesignProblem:
             base = np.log(np.maximum(np.concatenate([S, R], axis=-1), TINY))
             shifts = np.log(np.maximum(np.concatenate([S3[1:], R3[1:]], axis=-1), TINY)) - base[None]
         else:
-            members = self.part_members(theta_deg, t_mm, h_mm) if self.whole_part else None
-            R, S, B_full, gap0, B0 = self._responses_of(self.layer_laws(theta_deg, t_mm, h_mm), h_mm, members)
+            R, S, B_full, gap0, B0 = self.responses(theta_deg, t_mm, h_mm)
         margins, t_over_L_g = self._layer_rules(theta_deg, t_mm, h_mm)
         height = self.height_offset_mm + h_mm.sum(axis=-1)
 
@@ -424,8 +419,6 @@ class DesignProblem:
         if self.n > 1:
             g.append(math.log1p(self.lock_margin_rel) - np.diff(logR, axis=-1))
         g.append(np.log(np.maximum(B_full, TINY) / self.B_limit_T)[..., None])
-        if members is not None:  # (the cover's bending over the slot, its air): the nominal stacks'
-            g.append(self.cover_landing_constraint(members[2][0][0] if with_shifts else members[2][0], members[2][1]))
         if self.max_height_mm is not None:
             g.append(((height - self.max_height_mm) / pr.nozzle_mm)[..., None])
         if self.max_print_deviation_rel is not None:
@@ -441,13 +434,6 @@ class DesignProblem:
 
     def evaluate(self, u: np.ndarray) -> Evaluation:
         return self.evaluate_physical(*self.to_physical(u))
-
-    def cover_landing_constraint(self, over_slot_mm_per_N: np.ndarray, air_mm: float) -> np.ndarray:
-        """(..., 1) g <= 0 when the cover lands on the board (model.load_path.cover_landing_N) past
-        R_n + tolerance (a constant: a max with the own last lock kinks where the match ends): its
-        drop there over its air, minus 1 (linear, smooth as layer 1's feet leave the slot)."""
-        end_N = float(self.R_target.max()) * (1.0 + self.tolerance_rel)
-        return (end_N * np.asarray(over_slot_mm_per_N) / max(air_mm, TINY) - 1.0)[..., None]
 
     # ----------------------------------------------------------------- preference
     def print_deviation_constraints(
@@ -549,7 +535,6 @@ class DesignProblem:
             for i in range(self.n - 1)
         ]
         names.append(f"chip saturation: field at full load <= {self.B_limit_T * 1e3:.1f} mT")
-        names += [COVER_LANDING_RULE] if self.whole_part else []
         if self.max_height_mm is not None:
             names.append(f"total height <= {self.max_height_mm:g} mm")
         if self.max_print_deviation_rel is not None:

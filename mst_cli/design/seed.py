@@ -74,11 +74,6 @@ class CellTable:
         self.k, self.d_lock, self.R, self.k_locked = k, d_lock, R, k_locked
         self.cells = len(u)
         self.whole_part = problem.whole_part
-        # as layer 1: its cover lands on the board past the target range (the design's constraint)
-        self.cover_ok = np.ones(len(self.u), bool)
-        if self.whole_part and len(self.u):
-            over_slot, air_mm = problem.part_members(self.theta_deg[:, None], self.t_mm[:, None], self.h_mm[:, None])[2]
-            self.cover_ok = problem.cover_landing_constraint(over_slot, air_mm)[:, 0] + slack <= 0.0
 
     def displacement_mm(self, force_N: float, cap_mm_per_N: np.ndarray | float = 0.0) -> np.ndarray:
         """Compression of every table cell at ``force_N``, the plate or cap above it bending into
@@ -165,8 +160,6 @@ def seed_start(problem: DesignProblem, slack: float, table: CellTable | None = N
             members = cover(F[j + 1]) - cover(F[j])
             need = np.maximum(stack_increment[j] - above - below - members, 1e-3 * stack_increment[j])
             miss = (lock - np.log(R_target[j])) ** 2 + (np.log(np.maximum(own, TINY)) - np.log(need)) ** 2
-            if j == 0 and table.cover_ok.any():  # layer 1 keeps the cover off the board's parts
-                miss = np.where(table.cover_ok, miss, np.inf)
             chosen[j] = int(np.argmin(miss))
         candidates.append(table.u[chosen].reshape(-1))
         if np.array_equal(chosen, before):

@@ -22,7 +22,7 @@ from mst_cli.design.result import (
     _layer_outputs,
 )
 from mst_cli.model.assembly import SensorGeometry
-from mst_cli.model.load_path import cover_landing_N, members
+from mst_cli.model.printer import Printer
 from mst_cli.model.response import Response, simulate
 from mst_cli.sensor.as_printed import as_printed
 from mst_cli.sensor.document import Document
@@ -63,7 +63,7 @@ def verify_design(
 
     S, R = _layer_outputs(resp, problem.n)
     targets = _target_rows(problem, theta, t, h, S, R)
-    checks = _constraint_checks(problem, designed, geometry, resp, R)
+    checks = _constraint_checks(problem, geometry, doc.printer, resp, R)
     pe_mechanics = mechanics if print_error_mechanics is None else print_error_mechanics
     nominal = (S, R) if pe_mechanics == mechanics else _layer_outputs(run(0.0, pe_mechanics), problem.n)
     rung = (pe_mechanics, print_error_rule or SAME_RUNG_RULE)
@@ -168,12 +168,11 @@ def _target_rows(
 
 
 def _constraint_checks(
-    problem: DesignProblem, designed: Document, geometry: SensorGeometry, resp: Response, R: np.ndarray
+    problem: DesignProblem, geometry: SensorGeometry, printer: Printer, resp: Response, R: np.ndarray
 ) -> dict[str, str]:
-    """The broken constraints (name -> sentence): cell rules, lock order, chip saturation, height,
-    the cover's landing."""
-    checks = _cover_landing_check(problem, designed, R)
-    for v in geometry.violations(designed.printer):
+    """The broken constraints (name -> sentence): cell rules, lock order, chip saturation, height."""
+    checks = {}
+    for v in geometry.violations(printer):
         layer = 1 + (v.layer or 0)
         checks[f"layer {layer} {v.rule}"] = f"layer {layer}: {v.message}"
     for i in range(1, problem.n):
@@ -193,28 +192,6 @@ def _constraint_checks(
             f"design.max_height_mm = {problem.max_height_mm:g} mm"
         )
     return checks
-
-
-COVER_LANDING_CHECK = "cover landing"
-
-
-def _cover_landing_check(problem: DesignProblem, doc: Document, R: np.ndarray) -> dict:
-    """{COVER_LANDING_CHECK: sentence} when the written part's cover, as printed, lands on the
-    board's parts inside the range (model.load_path.cover_landing_N, as simulate's report.json
-    load_path.cover_lands_N):
-    the design would lean on the chip and connectors, a support the printed body lacks."""
-    if not problem.whole_part:
-        return {}
-    printed = as_printed(doc)
-    lands_N = cover_landing_N(members(printed.geometry(), printed.material))
-    end_N = max(float(R[-1]), float(problem.R_target[-1]))
-    if lands_N >= end_N:
-        return {}
-    return {
-        COVER_LANDING_CHECK: f"the housing's cover lands on the board's parts at {lands_N:.3g} N, inside the "
-        f"range (to {end_N:.3g} N): the design leans on the chip and connectors, a support the printed body "
-        "lacks; a thicker housing.cover_mm keeps it off (docs/design.md 4.6)"
-    }
 
 
 def _print_error(
