@@ -82,6 +82,17 @@ def test_the_unloading_model_leaves_less_than_the_noise():
     assert model.residual_rms_N < 1.5 * np.sqrt(np.mean(noise**2))
 
 
+def test_no_turn_means_no_loop_and_never_nan():
+    """h = F_turn p(F / F_turn) with p bounded on [0, 1]: it goes to 0 with F_turn, so a reading
+    before any turn (F_turn = 0) has no loop, not 0/0."""
+    model = hy.UnloadingModel(coefficients=(0.02, 0.1, -0.3, 0.18), residual_rms_N=0.0, samples=10)
+    F = np.array([0.0, 0.5, 3.0])
+    assert np.array_equal(model.h_N(F, np.zeros(3)), np.zeros(3))
+    assert np.array_equal(model.unloading_force_N(F, 0.0), F)
+    tiny = model.h_N(F, np.full(3, 1e-9))
+    assert np.all(np.isfinite(tiny)) and np.max(np.abs(tiny)) < 1e-9
+
+
 @pytest.mark.parametrize("pct", [0.0, 8.0])
 def test_a_stiffer_first_cycle_is_detected_when_8_percent_and_not_when_0(pct):
     rows, _ = rig_loadtest(Rig(first_cycle_pct=pct, seed=3), CURVE)

@@ -155,7 +155,10 @@ class UnloadingModel:
 
     def h_N(self, F_load_N, F_turn_N, after_hold=False) -> np.ndarray:
         F_turn = np.asarray(F_turn_N, dtype=float)
-        x = np.clip(np.asarray(F_load_N, dtype=float) / F_turn, 0.0, 1.0)
+        F_load = np.asarray(F_load_N, dtype=float)
+        # no turn yet (F_turn = 0): no loop, h = 0 (the limit of F_turn p(x) with p bounded on [0, 1])
+        ratio = np.divide(F_load, F_turn, out=np.zeros(np.broadcast(F_load, F_turn).shape), where=F_turn > 0.0)
+        x = np.clip(ratio, 0.0, 1.0)
         poly = np.polynomial.polynomial.polyval(x, np.asarray(self.coefficients, float))
         return F_turn * (poly + np.where(after_hold, self.after_hold * x**4, 0.0))
 
