@@ -22,7 +22,9 @@ Also the cost (dofs, seconds per solve), a convergence line and the cap alone ag
     PYTHONPATH=. .venv/bin/python benchmarks/bench_whole_part.py [--configs a.yaml ...] [--spacing-mm 0.3]
     PYTHONPATH=. .venv/bin/python benchmarks/bench_whole_part.py --rung-vs-mst --configs configs/*.yaml
 
-``--rung-vs-mst`` prints only the rung as printed against mst's prediction (docs/design.md 4.7).
+``--rung-vs-mst`` prints only the rung as printed against mst's prediction (docs/design.md 4.7);
+``--attribute`` only each member's extra drop in the rung (the other members rigid) against its
+closed form, per regime: where the closed form misses.
 """
 
 from __future__ import annotations
@@ -97,6 +99,38 @@ def rung_vs_mst_rows(path: Path, spacing: float | None) -> list[str]:
     return rows
 
 
+def attribution_rows(path: Path, spacing: float | None) -> list[str]:
+    """Per regime, where the closed form misses: the rung with every member rigid, then with one
+    member class as printed (the others rigid), its extra drop against the closed form's member,
+    in MEMBER_TAGS order (the base: the closed form's cover, its bending over the slot and the
+    slot walls; the plates; the cap). Drops in um/N; "rest" is what the members give together beyond their sum."""
+    doc = mst.load(path)
+    if not doc.is_design:
+        doc = mst.api.design(doc, plot=False).document
+    g, m = doc.geometry(), doc.material
+    laws = [uncached_layer_law(c, m, "spring") for c in g.layers]
+    cf = lp.members(g, m)
+    closed = {"cap": cf.cap_mm_per_N, "plate": sum(cf.plates_mm_per_N), "base": cf.cover_mm_per_N}
+    stack = Stack(layer_laws(g.layers, m, "spring"))
+    rows = []
+    for r, locked in enumerate(wp.regime_locked(stack)):
+        layers = sum(1.0 / (law.k_locked_N_per_mm if i in locked else law.k_N_per_mm) for i, law in enumerate(laws))
+        opts = {"spacing_mm": spacing, "locked": locked, "member_factor": wp.RIGID_FACTOR}
+        rigid = wp.press(g, m, wp.PartOptions(**opts)).drop_mm_per_N
+        extra = {}
+        for tag in wp.MEMBER_TAGS:
+            others = tuple(t for t in wp.MEMBER_TAGS if t != tag)
+            extra[tag] = wp.press(g, m, wp.PartOptions(**opts, scaled=others)).drop_mm_per_N - rigid
+        part = wp.press(g, m, wp.PartOptions(spacing_mm=spacing, locked=locked)).drop_mm_per_N
+        cells = " | ".join(f"{1e3 * extra[t]:.2f} / {1e3 * closed[t]:.2f}" for t in wp.MEMBER_TAGS)
+        rest = part - rigid - sum(extra.values())
+        rows.append(
+            f"| {doc.name} | {r + 1} | {1e3 * layers:.2f} | {1e3 * rigid:.2f} | {cells} | "
+            f"{1e3 * rest:+.2f} | {1e3 * part:.2f} |"
+        )
+    return rows
+
+
 def convergence(spacing: float | None) -> str:
     doc = mst.load(ROOT / "configs" / "mohammadi2021-forward.yaml")
     g, m = doc.geometry(), doc.material
@@ -138,7 +172,21 @@ def main() -> None:
     ap.add_argument(
         "--rung-vs-mst", action="store_true", help="only the rung (as printed) against mst's prediction, per regime"
     )
+    ap.add_argument(
+        "--attribute", action="store_true", help="only each member's drop in the rung vs its closed form, per regime"
+    )
     args = ap.parse_args()
+    if args.attribute:
+        print("the magnet's drop per newton, um/N (centred 6 mm strip, locked layers closed): L0's layers, the rung")
+        print("with every member rigid, each member's extra drop in the rung (the others rigid) / its closed form")
+        print(
+            "| design | regime | L0 layers | rung, members rigid | base (the cover and slot walls) | plates | cap | "
+            "rest | rung as printed |"
+        )
+        print("|---|---|---|---|---|---|---|---|---|")
+        for path in args.configs:
+            print("\n".join(attribution_rows(Path(path), args.spacing_mm)), flush=True)
+        return
     if args.rung_vs_mst:
         print("field change per newton at the chip, uT/N (centred 6 mm strip, locked layers closed)")
         print("| design | regime | whole-part rung | mst | mst/rung - 1 | budget |")
