@@ -114,7 +114,10 @@ def _read_commands(mst: list[str], work: Path, inputs: dict[str, Path]) -> list[
         ("read-two-chips-shear", [two, inputs["two_chips.csv"], "--estimate", "shear"]),
     ]
     first = ("calibrate-tables", ["calibrate", fwd, LOADTEST, "--out", cal, "--offset-table", "--shear-table"])
-    return [(name, [*mst, *map(str, args)]) for name, args in [first] + [(n, ["read", *a, "--out", work / n]) for n, a in reads]]
+    return [
+        (name, [*mst, *map(str, args)])
+        for name, args in [first] + [(n, ["read", *a, "--out", work / n]) for n, a in reads]
+    ]
 
 
 def _commands(mst: list[str], work: Path) -> list[tuple[str, list[str]]]:

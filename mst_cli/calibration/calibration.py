@@ -50,12 +50,11 @@ from mst_cli.calibration.temperature_fit import (
 from mst_cli.calibration.tilt_fit import fit_lever_factor
 from mst_cli.calibration.time_alignment import align
 from mst_cli.errors import CalibrationFailed, InputError
-from mst_cli.estimation.inverse_map import InverseMap, field_sigma_T, inverse_map
+from mst_cli.estimation.inverse_map import InverseMap, field_sigma_T, inverse_map, reading_resolution_T
 from mst_cli.firmware.header import HEADER_FILE, c_header
 from mst_cli.io.outputs import staged
 from mst_cli.model.chip import ChipSetting, field_resolution_T
 from mst_cli.model.response import Response, simulate
-from mst_cli.readout.reading import reading_resolution_T
 from mst_cli.sensor.as_printed import PARAMETERS, apply_parameters
 from mst_cli.sensor.document import Document, document_to_dict, parse_document
 from mst_cli.version import package_version
@@ -308,7 +307,7 @@ def _fit_in_temperature(
     """The fit on the rig's rows to fit, referred to 20 degC (:mod:`~mst_cli.calibration.temperature_fit`;
     as they are without T_C) and, when the load test's temperatures fix the modulus coefficient,
     the fit again with it; its inverse map's resolution at the noise the rig logged at rest, when it
-    logged rests (the readers' noise, as mst read's: :func:`~mst_cli.readout.reading.reading_resolution_T`)."""
+    logged rests (the readers' noise, as mst read's: :func:`~mst_cli.estimation.inverse_map.reading_resolution_T`)."""
     lt = rig.readings.subset(rig.fit_rows)
     alpha = remanence_coeff_of(doc)
     fitted = _fit(doc, referred(lt, alpha, 0.0), load_test_name, mechanics, names, progress)

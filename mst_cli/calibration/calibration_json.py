@@ -41,11 +41,10 @@ from mst_cli.io.files import read_input_text
 from mst_cli.io.outputs import finite_or_none
 from mst_cli.io.yaml_io import MAX_INPUT_BYTES
 from mst_cli.model.assembly import printer_violations
-from mst_cli.sensor.as_printed import PARAMETERS
+from mst_cli.sensor.as_printed import CALIBRATION_JSON, PARAMETERS
 from mst_cli.sensor.document import Document, load_document
 from mst_cli.sensor.sections import SECTIONS
 
-CALIBRATION_JSON = "calibration.json"
 CALIBRATED_YAML = "calibrated.yaml"
 SCHEMA_VERSION = 1
 CURVE_CHECK_POINTS = 9
@@ -62,7 +61,7 @@ class CalibrationRecord:
     schema_version: int
     design: str
     load_test: str
-    # what the fitted factors multiply: mst design --calibration reads them (calibrate.record)
+    # what the fitted factors multiply: mst design --calibration reads them (:func:`read_calibration`)
     design_constants: dict | None
     calibrated_yaml: str
     calibrated_yaml_sha256: str | None

@@ -43,8 +43,8 @@ from mst_cli.calibration.loadtest import MAX_ROWS, T_C_RANGE
 from mst_cli.calibration.tilt_fit import LEVER_FACTOR_BOUNDS
 from mst_cli.errors import InputError
 from mst_cli.model.components import REFERENCE_TEMPERATURE_C
+from mst_cli.sensor.as_printed import CALIBRATION_JSON
 
-CALIBRATION_JSON = "calibration.json"
 MIN_MODULUS_SCALE = 0.1  # the least m(T) over the chip's range (module docstring)
 LOOP_MARGIN = 0.05  # of F_turn: a fitted loop's ends within the rig's noise (measured loops are <= 3 % FS)
 MAX_LOOP_TERM = 100.0  # a polynomial term of the loop; |h| <= F_turn bounds their sum (unloading_loop)

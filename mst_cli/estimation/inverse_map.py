@@ -168,3 +168,16 @@ def field_sigma_T(noise_uT_rms: float, setting: mlx.ChipSetting | None) -> float
     """Per-sample standard deviation of a |B| reading: chip noise and LSB rounding."""
     lsb = setting.z_uT_per_lsb if setting is not None else 0.0
     return 1e-6 * math.sqrt(noise_uT_rms**2 + lsb**2 / 12.0) if (noise_uT_rms or lsb) else 1e-6
+
+
+def reading_resolution_T(
+    design_T: float, chip: mlx.ChipSetting | None, design_noise_uT: float, measured_uT: float | None
+) -> float:
+    """The field resolution a reader states its 1-sigma with (the plain read's uncertainty, the
+    no-load band, the tables' and the two-chip estimator's noise): the chip's noise its load test
+    logged at rest (``measured_uT``: calibration.json's ``zero.rest_noise_uT``) when it logged
+    one, else the design's (``design_noise_uT``; the design's resolution ``design_T`` at least),
+    and never below one LSB of ``chip``."""
+    if measured_uT is not None:
+        return mlx.field_resolution_T(chip, measured_uT) if chip is not None else 1e-6 * measured_uT
+    return max(design_T, mlx.field_resolution_T(chip, design_noise_uT)) if chip is not None else design_T

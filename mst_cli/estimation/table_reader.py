@@ -17,7 +17,6 @@ from pathlib import Path
 
 import numpy as np
 
-from mst_cli.calibration.calibration_json import CALIBRATION_JSON
 from mst_cli.errors import CalibrationFailed, InputError
 from mst_cli.estimation.inverse_map import InverseMap
 from mst_cli.estimation.inverse_table import (
@@ -45,6 +44,7 @@ from mst_cli.io.files import read_input_text
 from mst_cli.io.yaml_io import MAX_INPUT_BYTES
 from mst_cli.model.general_load import loaded_stack
 from mst_cli.model.stack_pose import tilt_laws
+from mst_cli.sensor.as_printed import CALIBRATION_JSON
 from mst_cli.sensor.document import Document
 
 

@@ -16,11 +16,11 @@ from mst_cli.calibration.loadtest import Readings, rig_column, unknown_columns
 from mst_cli.calibration.rung_check import read_rung_warning
 from mst_cli.calibration.tables import forces_csv
 from mst_cli.calibration.temperature_fit import reading_scales
-from mst_cli.estimation.inverse_map import FLAGS, InverseMap, inverse_map
+from mst_cli.estimation.inverse_map import FLAGS, InverseMap, inverse_map, reading_resolution_T
 from mst_cli.estimation.load_readings import LOAD_COLUMNS, LoadReadings
 from mst_cli.estimation.offset_reading import OFFSET_COLUMNS, OffsetEstimator, OffsetReadings
 from mst_cli.estimation.table_reader import OffsetTableReader, ShearTableReader, TwoChipLoadReader
-from mst_cli.model.chip import ChipSetting, field_resolution_T
+from mst_cli.model.chip import ChipSetting
 from mst_cli.readout.rig_reading import (
     BranchForces,
     follow_branches,
@@ -143,19 +143,6 @@ def estimates_impossible(est: OffsetReadings | LoadReadings, centred_N: np.ndarr
         if isinstance(a, np.ndarray) and a.dtype.kind == "f":
             a[bad] = np.nan
     F[bad] = centred_N[bad]
-
-
-def reading_resolution_T(
-    design_T: float, chip: ChipSetting | None, design_noise_uT: float, measured_uT: float | None
-) -> float:
-    """The field resolution a reader states its 1-sigma with (the plain read's uncertainty, the
-    no-load band, the tables' and the two-chip estimator's noise): the chip's noise its load test
-    logged at rest (``measured_uT``: calibration.json's ``zero.rest_noise_uT``) when it logged
-    one, else the design's (``design_noise_uT``; the design's resolution ``design_T`` at least),
-    and never below one LSB of ``chip``."""
-    if measured_uT is not None:
-        return field_resolution_T(chip, measured_uT) if chip is not None else 1e-6 * measured_uT
-    return max(design_T, field_resolution_T(chip, design_noise_uT)) if chip is not None else design_T
 
 
 def _branch_columns(forces_csv_text: str, bf: BranchForces) -> str:
