@@ -45,10 +45,11 @@ import numpy as np
 from mst_cli.errors import InputError
 from mst_cli.estimation.table_file import MAX_TABLE_BYTES, PARSE_ERRORS, TABLE_KEYS, checked_arrays, npz_arrays
 from mst_cli.estimation.table_start import middle_uv, start_nodes
-from mst_cli.estimation.trilinear import crb_sigmas, normal_step, to_output, trilinear
+from mst_cli.estimation.trilinear import normal_step, to_output, trilinear
 from mst_cli.io.files import read_input
 from mst_cli.model.assembly import SensorGeometry
 from mst_cli.model.general_load import load_path, loaded_stack
+from mst_cli.model.load_bound import crb_sigma
 from mst_cli.model.material import Material
 from mst_cli.model.stack_pose import magnet_field_T, magnet_pose, pose_field_T, tilt_laws
 from mst_cli.parallel import fork_map
@@ -543,7 +544,7 @@ def estimate_many(table: InverseTable, B_T: np.ndarray, sigma_T: float, max_sigm
     noise = slab_noise[slab]
     root = misfit <= FIT_SIGMAS * noise
     q, Jq = to_output(table.grid.kind, np.nan_to_num(p.reshape(-1, 3)), J.reshape(-1, 3, 3))
-    q, sig = q.reshape(n, S, 3), crb_sigmas(Jq, noise.ravel()).reshape(n, S, 3)
+    q, sig = q.reshape(n, S, 3), crb_sigma(Jq, noise.ravel()).reshape(n, S, 3)
     # pairs of roots: far when they lie further apart than twice their combined 1-sigma on an axis
     with np.errstate(invalid="ignore"):
         far = np.any(np.abs(q[:, :, None] - q[:, None, :]) > 2.0 * np.hypot(sig[:, :, None], sig[:, None, :]), axis=3)

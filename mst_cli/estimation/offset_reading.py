@@ -11,6 +11,12 @@ a light press the stack hardly tilts, so Bx and By say nothing), the two starts 
 roots (*ambiguous*: late in the stack the field folds over, so distant presses give the same
 reading), or neither fits the reading (*no fit*).
 
+The solve is not the shear readers' Levenberg-Marquardt: three equations in three unknowns have
+an exact root, which must lie in the box of the force range and the face, so it is a projected
+Gauss-Newton (a coordinate at the box held, steps halved until the misfit falls), the algorithm
+the one-chip tables' direct inverse runs cell by cell on the trilinear field
+(:mod:`~mst_cli.estimation.inverse_table`, as the C header does) on the exact model instead.
+
 This is the rung's own inverse: it corrects what the tilt rung predicts, and is as good as
 that rung (docs/design.md section 4.2).
 """
@@ -24,6 +30,7 @@ from typing import NamedTuple
 import numpy as np
 
 from mst_cli.model.assembly import SensorGeometry
+from mst_cli.model.load_bound import crb_sigma
 from mst_cli.model.material import Material
 from mst_cli.model.stack_pose import magnet_field_T, magnet_pose, stack_path, tilt_laws
 
@@ -159,11 +166,9 @@ class OffsetEstimator:
         return np.stack(cols, axis=1)
 
     def _sigmas(self, J: np.ndarray) -> np.ndarray:
-        """1-sigma of (force, x0, y0) from the chip's noise and the Jacobian J there: sigma^2 (J^T J)^-1."""
-        try:
-            return np.sqrt(np.maximum(np.diag(self.sigma_T**2 * np.linalg.inv(J.T @ J)), 0.0))
-        except np.linalg.LinAlgError:
-            return np.full(3, math.inf)
+        """1-sigma of (force, x0, y0) from the chip's noise and the Jacobian J there
+        (:func:`~mst_cli.model.load_bound.crb_sigma`)."""
+        return crb_sigma(J, self.sigma_T)
 
     def _solve_from(self, B_T: np.ndarray, p0: np.ndarray, iterations: int = GAUSS_NEWTON_ITERATIONS) -> _Solve:
         """Damped, projected Gauss-Newton from ``p0`` inside the face and the force range.

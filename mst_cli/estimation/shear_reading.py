@@ -13,6 +13,12 @@ reading the model reaches, so that is a reading outside it; with two, one degree
 tests the assumption). A fit is judged by its chi^2 alone: the layer laws are piecewise linear,
 so near a knot the steps can stall short of the step tolerance on a fit already within the noise.
 
+The fit is the algorithm of the two-chip reader's batched :func:`~mst_cli.estimation.two_chip_table.fit_many`
+(Marquardt's diagonal scaling, the damping /10 on a step that lowers chi^2) one reading at a
+time, but a rejected step is retried within its iteration at ten times the damping, where
+fit_many moves on to its next iteration: the two stop on different last digits, so the readers'
+outputs would move if one served both (issue 45 leaves them two until fit_many's own rework lands).
+
 Pure: no I/O; works on arrays of readings (a loop over them; each fit is independent).
 """
 

@@ -37,12 +37,12 @@ from mst_cli.estimation.inverse_table import (
 from mst_cli.estimation.load_readings import LoadReadings, from_estimates
 from mst_cli.estimation.offset_reading import DEFAULT_MAX_SIGMA_MM, OffsetEstimator, OffsetReadings
 from mst_cli.estimation.shear_reading import CHI2_FLAG, ShearReader
-from mst_cli.estimation.trilinear import crb_sigmas
 from mst_cli.estimation.two_chip_table import TwoChipReader
 from mst_cli.io.cache import cached_path, keep, touch
 from mst_cli.io.files import read_input_text
 from mst_cli.io.yaml_io import MAX_INPUT_BYTES
 from mst_cli.model.general_load import loaded_stack
+from mst_cli.model.load_bound import crb_sigma
 from mst_cli.model.stack_pose import tilt_laws
 from mst_cli.sensor.as_printed import CALIBRATION_JSON
 from mst_cli.sensor.document import Document
@@ -291,7 +291,7 @@ def best_offset_sigma_mm(table: InverseTable, sigma_T: float) -> float:
     from the table's field differences (inf: nowhere identifiable)."""
     g, B = table.grid, 1e6 * table.B_T
     J = np.stack([np.gradient(B, g.force_N, axis=0), np.gradient(B, g.u, axis=1), np.gradient(B, g.v, axis=2)], -1)
-    sig = crb_sigmas(J[1:].reshape(-1, 3, 3), 1e6 * sigma_T)
+    sig = crb_sigma(J[1:].reshape(-1, 3, 3), 1e6 * sigma_T)
     worst = np.fmax(sig[:, 1], sig[:, 2])
     return float(np.min(worst)) if len(worst) else float("inf")
 

@@ -1,7 +1,8 @@
 """The trilinear kernels of the one-chip tables (:mod:`~mst_cli.estimation.inverse_table`): a
 cell's field and its Jacobian at cell coordinates, the ridged Gauss-Newton step on it (a 3 x 3
-solve by Cramer's rule, as the C header does), and the Cramer-Rao 1-sigma of an estimate, in the
-table's coordinates or the shear table's forces. Batched over points; no I/O."""
+solve by Cramer's rule, as the C header does), and an estimate and its Jacobian in the table's
+coordinates or the shear table's forces (their Cramer-Rao 1-sigma is the one bound's,
+:func:`~mst_cli.model.load_bound.crb_sigma`). Batched over points; no I/O."""
 
 from __future__ import annotations
 
@@ -53,27 +54,6 @@ def normal_step(J: np.ndarray, r: np.ndarray, held: np.ndarray) -> np.ndarray:
     A += (RIDGE * (A[:, 0, 0] + A[:, 1, 1] + A[:, 2, 2]) + 1e-30)[:, None, None] * np.eye(3)
     dt = solve3(A, np.einsum("pki,pk->pi", Jh, r))
     return np.where(np.isfinite(dt), dt, 0.0)  # 0 where singular (as the C header does)
-
-
-def crb_sigmas(J: np.ndarray, sigma: float | np.ndarray) -> np.ndarray:
-    """The Cramer-Rao 1-sigma of (F, x0, y0), sqrt(diag((J^T J / sigma^2)^-1)), for Jacobians
-    (P, 3, 3) in field units per unit of p and the noise ``sigma`` per axis in the same field
-    units (one, or (P,)); inf where J^T J is singular."""
-    s2 = np.reshape(np.asarray(sigma, dtype=float) ** 2, (-1, 1, 1))
-    A = np.einsum("pki,pkj->pij", J, J) / s2
-    cov = diag_inverse3(A)
-    return np.sqrt(np.where(np.isfinite(cov) & (cov > 0), cov, np.inf))
-
-
-def diag_inverse3(A: np.ndarray) -> np.ndarray:
-    """diag(A^-1) for symmetric 3 x 3 matrices (P, 3, 3); inf where singular or not positive."""
-    c0 = A[:, 1, 1] * A[:, 2, 2] - A[:, 1, 2] ** 2
-    c1 = A[:, 0, 0] * A[:, 2, 2] - A[:, 0, 2] ** 2
-    c2 = A[:, 0, 0] * A[:, 1, 1] - A[:, 0, 1] ** 2
-    det = np.linalg.det(A)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        out = np.stack([c0, c1, c2], axis=1) / det[:, None]
-    return np.where((det > 0)[:, None], out, np.inf)
 
 
 def to_output(kind: str, p: np.ndarray, J: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -46,7 +46,7 @@ import numpy as np
 
 from mst_cli.estimation.shear_reading import CHI2_FLAG, ShearReader
 from mst_cli.model.general_load import LoadedStack
-from mst_cli.model.load_bound import FORCE_STEP_MIN_N, FORCE_STEP_REL, POSITION_STEP_MM, UNKNOWNS
+from mst_cli.model.load_bound import FORCE_STEP_MIN_N, FORCE_STEP_REL, POSITION_STEP_MM, UNKNOWNS, crb_sigma
 from mst_cli.model.mechanics.tilt import LayerTiltLaw
 from mst_cli.model.mechanics.tilt_batch import newton_many, residual_many
 from mst_cli.model.stack_pose import magnet_field_T, magnet_pose, stack_path
@@ -263,19 +263,6 @@ def fd_steps(theta: np.ndarray) -> np.ndarray:
     return np.column_stack([h_F, h_F, h_F, h_p, h_p])
 
 
-def crb_sigma_many(J_T: np.ndarray, noise_T: float) -> np.ndarray:
-    """(m, 5) the Cramer-Rao 1-sigma of every unknown from Jacobians (m, 3 k, 5) in T per unit,
-    as :func:`~mst_cli.model.load_bound.crb_sigma` (inf where the chips cannot tell it apart)."""
-    A = np.einsum("mki,mkj->mij", J_T, J_T)
-    out = np.full((len(A), A.shape[1]), np.inf)
-    cond = np.linalg.cond(A)
-    good = np.isfinite(cond) & (cond <= 1e14)
-    if np.any(good):
-        d = np.diagonal(np.linalg.inv(A[good]), axis1=1, axis2=2)
-        out[good] = np.where(d > 0.0, noise_T * np.sqrt(np.abs(d)), np.inf)
-    return out
-
-
 @dataclass
 class TwoChipEstimates:
     """Per reading: the five unknowns at the best fit whatever its flag (a caller blanks what it
@@ -484,13 +471,13 @@ class TwoChipReader:
             MAX_ITER,
             TABLE_STEP_TOL,
         )
-        keep = _distinct(theta.reshape(n, S, 5), chi2.reshape(n, S), crb_sigma_many(J, self.noise_T).reshape(n, S, 5))
+        keep = _distinct(theta.reshape(n, S, 5), chi2.reshape(n, S), crb_sigma(J, self.noise_T).reshape(n, S, 5))
         owner, slot = np.nonzero(keep)
         cand = theta.reshape(n, S, 5)[owner, slot]
         cand, c_chi2, c_J = fit_many(
             self.exact, B[owner], cand, self.noise_T, self.clip, EXACT_ITER, jacobian=self.model.jacobian_T
         )
-        return self._verdict(n, owner, cand, c_chi2, crb_sigma_many(c_J, self.noise_T))
+        return self._verdict(n, owner, cand, c_chi2, crb_sigma(c_J, self.noise_T))
 
     def _verdict(
         self, n: int, owner: np.ndarray, theta: np.ndarray, chi2: np.ndarray, sigma: np.ndarray
