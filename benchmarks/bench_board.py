@@ -36,10 +36,10 @@ os.environ.setdefault("MST_WORKERS", "2")
 import numpy as np
 from scipy.interpolate import RegularGridInterpolator
 
-from mst_cli.calibrate.inverse_map import inverse_map
-from mst_cli.calibrate.inverse_table import TableGrid, build_table
-from mst_cli.calibrate.table_header import C_FLAGS, table_header
-from mst_cli.calibrate.table_reader import OffsetTableReader, ShearTableReader, grid_of, table_edges_N
+from mst_cli.estimation.inverse_map import inverse_map
+from mst_cli.estimation.inverse_table import TableGrid, build_table
+from mst_cli.estimation.table_reader import OffsetTableReader, ShearTableReader, grid_of, table_edges_N
+from mst_cli.firmware.table_header import C_FLAGS, table_header
 from mst_cli.sensor.document import load_design_document
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -43,11 +43,11 @@ os.environ.setdefault("MST_WORKERS", "1")
 
 import numpy as np
 
-from mst_cli.calibrate.loadtest import parse_readings
-from mst_cli.calibrate.reading import ForceReader
-from mst_cli.calibrate.table_reader import offset_table_reader, shear_table_reader, two_chip_reader
+from mst_cli.calibration.loadtest import parse_readings
+from mst_cli.estimation.table_reader import offset_table_reader, shear_table_reader, two_chip_reader
 from mst_cli.model.general_load import field_T, loaded_stack
 from mst_cli.readout.live import LiveOptions, read_stream
+from mst_cli.readout.reading import ForceReader
 from mst_cli.sensor.document import load_design_document
 
 ROOT = Path(__file__).resolve().parents[1]

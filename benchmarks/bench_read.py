@@ -9,7 +9,7 @@ On the bundled sensor (configs/mohammadi2021-forward.yaml, spring, 2 uT chip noi
 * readings per second on one core: `api.read` of a CSV (parse, centred force, forces.csv) with
   --estimate none and offset, and the table's estimate alone (live rates: bench_live.py);
 * the error against the truth and against the exact solve (the two-start Gauss-Newton of
-  mst_cli/calibrate/offset_reading.py) on presses at random points within 80 % of the face, 3
+  mst_cli/estimation/offset_reading.py) on presses at random points within 80 % of the face, 3
   forces per regime (the tilt rung's own field, so the truth is the reader's model: the table's
   error and the noise, nothing else), noise-free and at 0.5 and 2 uT;
 * the estimator's efficiency, Cramer-Rao variance / empirical mean square error over --repeats
@@ -35,11 +35,11 @@ import c_drivers
 import numpy as np
 
 from mst_cli import api
-from mst_cli.calibrate.inverse_map import inverse_map
-from mst_cli.calibrate.inverse_table import GRID_DEFAULT, InverseTable, TableGrid, build_table
-from mst_cli.calibrate.offset_reading import OffsetEstimator
-from mst_cli.calibrate.table_header import table_header
-from mst_cli.calibrate.table_reader import OffsetTableReader, table_hash
+from mst_cli.estimation.inverse_map import inverse_map
+from mst_cli.estimation.inverse_table import GRID_DEFAULT, InverseTable, TableGrid, build_table
+from mst_cli.estimation.offset_reading import OffsetEstimator
+from mst_cli.estimation.table_reader import OffsetTableReader, table_hash
+from mst_cli.firmware.table_header import table_header
 from mst_cli.model.stack_pose import pose_field_T, tilt_laws
 from mst_cli.sensor.document import load_design_document
 

@@ -38,11 +38,11 @@ import numpy as np
 from scipy.interpolate import RegularGridInterpolator
 
 from mst_cli import api
-from mst_cli.calibrate.inverse_map import inverse_map
-from mst_cli.calibrate.inverse_table import SHEAR_GRID_DEFAULT, SHEAR_TABLE_RATIO, InverseTable, TableGrid, build_table
-from mst_cli.calibrate.shear_reading import ShearReader
-from mst_cli.calibrate.table_header import table_header
-from mst_cli.calibrate.table_reader import ShearTableReader, table_hash
+from mst_cli.estimation.inverse_map import inverse_map
+from mst_cli.estimation.inverse_table import SHEAR_GRID_DEFAULT, SHEAR_TABLE_RATIO, InverseTable, TableGrid, build_table
+from mst_cli.estimation.shear_reading import ShearReader
+from mst_cli.estimation.table_reader import ShearTableReader, table_hash
+from mst_cli.firmware.table_header import table_header
 from mst_cli.model.general_load import field_T, loaded_stack
 from mst_cli.model.load_bound import CENTRED, crb_sigma, field_jacobian
 from mst_cli.sensor.as_printed import as_printed

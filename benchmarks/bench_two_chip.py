@@ -1,5 +1,5 @@
 """Speed and accuracy of the fast two-chip reader of all five unknowns (Fz, Fx, Fy, x, y),
-mst_cli/calibrate/two_chip_table.py, against the exact one (mst_cli/calibrate/shear_reading.py).
+mst_cli/estimation/two_chip_table.py, against the exact one (mst_cli/estimation/shear_reading.py).
 Prints markdown tables; asserts nothing.
 
     python benchmarks/bench_two_chip.py [--readings 2000 --repeats 5 --presses 200 --seed 39 --chips "0,0;10,6"]
@@ -31,8 +31,8 @@ os.environ.setdefault("MST_WORKERS", "1")  # one core: the table build too
 
 import numpy as np
 
-from mst_cli.calibrate.shear_reading import ShearReader
-from mst_cli.calibrate.two_chip_table import NEWTON_STEPS, TwoChipReader
+from mst_cli.estimation.shear_reading import ShearReader
+from mst_cli.estimation.two_chip_table import NEWTON_STEPS, TwoChipReader
 from mst_cli.model.general_load import field_T, loaded_stack
 from mst_cli.model.load_bound import UNKNOWNS, crb_sigma, field_jacobian
 from mst_cli.sensor.as_printed import as_printed

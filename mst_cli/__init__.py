@@ -1,16 +1,16 @@
 """mst: design tool for multi-sensitivity soft tactile sensors.
 
 The command line's verbs are functions in :mod:`mst_cli.api` (``from mst_cli import api as
-mst``). The package re-exports those whose names are not also its subpackages: ``design`` and
-``calibrate`` are (:mod:`mst_cli.design`, :mod:`mst_cli.calibrate`), and Python binds a
-subpackage to its name in the package whenever it is imported, so only ``api.design`` and
-``api.calibrate`` name the verbs reliably. ``mst_cli.__version__`` is the installed version
+mst``). The package re-exports those whose names are not also its subpackages: ``design`` is
+(:mod:`mst_cli.design`), and Python binds a subpackage to its name in the package whenever it is
+imported, so only ``api.design`` names that verb reliably. ``mst_cli.__version__`` is the installed version
 (:mod:`mst_cli.version`). The package sits at the api's layer: nothing below imports it.
 """
 
 from mst_cli import api
 from mst_cli.api import (
     InputError,
+    calibrate,
     check,
     designed,
     export,
@@ -35,6 +35,7 @@ def __getattr__(name: str) -> str:
 __all__ = [
     "api",
     "InputError",
+    "calibrate",
     "check",
     "designed",
     "export",

@@ -25,8 +25,8 @@ from pathlib import Path
 
 import numpy as np
 
-from mst_cli.calibrate.inverse_map import inverse_map
-from mst_cli.calibrate.offset_reading import OffsetEstimator
+from mst_cli.estimation.inverse_map import inverse_map
+from mst_cli.estimation.offset_reading import OffsetEstimator
 from mst_cli.model.stack_pose import pose_field_T, tilt_laws
 from mst_cli.sensor.document import load_design_document
 

@@ -23,7 +23,7 @@ that curve the rig adds, each with a stated truth:
   value, not a datasheet's). The laws are linear in E, so a modulus x m deflects at F like the
   reference at F / m: the field at (F, T) is r(T) B_ref(F / m(T)), exactly for a part all of
   TPU; with the default part's PLA insert, which softens far less, beta is the part's effective
-  coefficient (the law mst_cli.calibrate.temperature fits and the readers apply);
+  coefficient (the law mst_cli.calibration.temperature fits and the readers apply);
 * the chip: 2 uT RMS noise per component, each component rounded to the chip setting's LSB;
   the load cell: ``force_noise_N`` RMS.
 

@@ -28,7 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
-from mst_cli.calibrate.shear_reading import ShearReader
+from mst_cli.estimation.shear_reading import ShearReader
 from mst_cli.model.general_load import field_T, loaded_stack
 from mst_cli.model.load_bound import ALL, CENTRED, crb_sigma, field_jacobian, layout_bound
 from mst_cli.sensor.as_printed import as_printed

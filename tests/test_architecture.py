@@ -25,8 +25,10 @@ LAYERS = (
     ("mst_cli.model",),  # physics kernels: no files, no command line
     ("mst_cli.io",),  # file plumbing: YAML, atomic outputs, serial lines, input rules
     ("mst_cli.sensor",),  # the domain: the sensor description, the part as printed
-    ("mst_cli.design", "mst_cli.calibrate", "mst_cli.bench", "mst_cli.cad", "mst_cli.simulation"),
-    ("mst_cli.readout",),  # mst read's streams: lines to the calibration's reading pipeline
+    ("mst_cli.estimation",),  # a reading to the load: the inverse map, the solves, the tables
+    ("mst_cli.firmware",),  # the C headers of the estimation's maps and tables
+    ("mst_cli.design", "mst_cli.calibration", "mst_cli.bench", "mst_cli.cad", "mst_cli.simulation"),
+    ("mst_cli.readout",),  # mst read: files and streams to forces.csv, the one reading pipeline
     ("mst_cli", "mst_cli.api"),  # the one door; the package re-exports its verbs
     ("mst_cli.cli",),
 )
@@ -222,7 +224,15 @@ HEAVY_LIBRARIES = {
 # The door loads only the layer of the verb that runs (mst simulate does not pay for the design
 # search, the CAD layer or the calibration); the command group loads only the command run.
 LAYER_DEFERRALS = {
-    "mst_cli.api": ("mst_cli.design", "mst_cli.cad", "mst_cli.calibrate", "mst_cli.bench"),
+    "mst_cli.api": (
+        "mst_cli.design",
+        "mst_cli.cad",
+        "mst_cli.calibration",
+        "mst_cli.estimation",
+        "mst_cli.firmware",
+        "mst_cli.readout",
+        "mst_cli.bench",
+    ),
     "mst_cli.cli.app": ("mst_cli.cli",),
 }
 
@@ -304,4 +314,4 @@ def test_the_deferral_rule_refuses_a_light_module():
     assert _deferral_allowed("mst_cli.api._designing", "mst_cli.design.run")
     assert not _deferral_allowed("mst_cli.model.response", "json")
     assert not _deferral_allowed("mst_cli.model.mechanics.tilt", "mst_cli.model.cell")
-    assert not _deferral_allowed("mst_cli.calibrate.fit", "mst_cli.design.run")
+    assert not _deferral_allowed("mst_cli.calibration.fit", "mst_cli.design.run")

@@ -24,9 +24,9 @@ import pytest
 from c_drivers import STRICT
 from click.testing import CliRunner
 
-from mst_cli.calibrate import fit as cal
-from mst_cli.calibrate.inverse_map import inverse_map
+from mst_cli.calibration import fit as cal
 from mst_cli.cli.app import main
+from mst_cli.estimation.inverse_map import inverse_map
 from mst_cli.io.serial_lines import BadLine, SampleParser, parse_line
 from mst_cli.model.response import simulate
 from mst_cli.sensor.document import load_document

@@ -13,13 +13,13 @@ import pytest
 from test_calibrate import DESIGN, TRUTH, PrintedSensor
 
 from mst_cli import api as mst
-from mst_cli.calibrate import fit as cal
-from mst_cli.calibrate.accuracy import force_errors
-from mst_cli.calibrate.calibration_json import CalibrationRecord, record_beside
-from mst_cli.calibrate.header import c_header
-from mst_cli.calibrate.inverse_map import inverse_map
-from mst_cli.calibrate.loadtest import setting_of as loadtest_setting_of
-from mst_cli.calibrate.tables import cell, quoted
+from mst_cli.calibration import fit as cal
+from mst_cli.calibration.accuracy import force_errors
+from mst_cli.calibration.calibration_json import CalibrationRecord, record_beside
+from mst_cli.calibration.loadtest import setting_of as loadtest_setting_of
+from mst_cli.calibration.tables import cell, quoted
+from mst_cli.estimation.inverse_map import inverse_map
+from mst_cli.firmware.header import c_header
 from mst_cli.sensor.as_printed import PARAMETERS
 from mst_cli.sensor.document import load_document
 

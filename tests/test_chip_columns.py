@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from mst_cli.calibrate.loadtest import parse_readings, unknown_columns
+from mst_cli.calibration.loadtest import parse_readings, unknown_columns
 from mst_cli.cli.app import main
 from mst_cli.errors import InputError
 

@@ -1,10 +1,10 @@
-"""The fit's sigma at a corner of its cost (mst_cli.calibrate.fit_profile): on a cost whose two
+"""The fit's sigma at a corner of its cost (mst_cli.calibration.fit_profile): on a cost whose two
 sides are parabolas of known curvature, the profile's sigma is the flat side's, 1 / k_flat."""
 
 import numpy as np
 import pytest
 
-from mst_cli.calibrate.fit_profile import corner_sigmas
+from mst_cli.calibration.fit_profile import corner_sigmas
 
 K_STEEP, K_FLAT = 40.0, 4.0
 

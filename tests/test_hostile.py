@@ -1486,7 +1486,7 @@ def test_api_slice_refuses_post_process_scripts_by_default(exported, tmp_path, f
 
 # ----------------------------------------------------------------- 16. a long load test
 def test_a_load_tests_field_magnitude_is_computed_once():
-    from mst_cli.calibrate.loadtest import parse_readings
+    from mst_cli.calibration.loadtest import parse_readings
 
     rd = parse_readings("Bx_uT,By_uT,Bz_uT\n" + "1,2,3\n" * 5, "r.csv", need_force=False)
     assert rd.B_abs_T is rd.B_abs_T  # a per-row rd.B_abs_T[i] is O(1) now
@@ -1611,9 +1611,9 @@ def any_cell():
 @st.composite
 def reading_files(draw, need_force: bool, resp, setting):
     """A load test (``need_force``) or readings CSV drawn from the column rules of
-    mst_cli.calibrate.loadtest: its column names (uT or raw codes, force, chip setting), the
+    mst_cli.calibration.loadtest: its column names (uT or raw codes, force, chip setting), the
     chip's ranges for the numbers, then hostile cells, rows, headers and separators."""
-    from mst_cli.calibrate import loadtest as lt
+    from mst_cli.calibration import loadtest as lt
     from mst_cli.model import chip as mlx
 
     raw = draw(st.booleans()) and setting is not None
@@ -1717,7 +1717,7 @@ def test_property_readings_from_the_column_rules_keep_the_contract(forward_respo
         assert r.exit_code in (0, 2), r.stderr
         if r.exit_code == 0:
             flags = [row.rsplit(",", 2)[-2] for row in (folder / "o" / "forces.csv").read_text().splitlines()[1:]]
-            from mst_cli.calibrate.inverse_map import FLAGS
+            from mst_cli.estimation.inverse_map import FLAGS
 
             assert set(flags) <= set(FLAGS), flags
 

@@ -26,24 +26,24 @@ from click.testing import CliRunner
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-import mst_cli.calibrate.table_reader as table_reader
-from mst_cli.calibrate.calibration_json import CalibrationRecord
-from mst_cli.calibrate.inverse_table import SHEAR_TABLE_FILE, TABLE_FILE, InverseTable
-from mst_cli.calibrate.loadtest import parse_readings
-from mst_cli.calibrate.reading import ForceReader
-from mst_cli.calibrate.table_reader import (
+import mst_cli.estimation.table_reader as table_reader
+from mst_cli.calibration.calibration_json import CalibrationRecord
+from mst_cli.calibration.loadtest import parse_readings
+from mst_cli.calibration.temperature import modulus_scale
+from mst_cli.cli.app import main
+from mst_cli.errors import InputError
+from mst_cli.estimation.inverse_table import SHEAR_TABLE_FILE, TABLE_FILE, InverseTable
+from mst_cli.estimation.table_reader import (
     OffsetTableReader,
     ShearTableReader,
     TwoChipLoadReader,
     build_beside,
     table_beside,
 )
-from mst_cli.calibrate.temperature import modulus_scale
-from mst_cli.calibrate.two_chip_table import TwoChipReader
-from mst_cli.cli.app import main
-from mst_cli.errors import InputError
+from mst_cli.estimation.two_chip_table import TwoChipReader
 from mst_cli.model.general_load import loaded_stack
 from mst_cli.model.response import simulate
+from mst_cli.readout.reading import ForceReader
 from mst_cli.sensor.document import load_design_document, load_document
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -220,7 +220,7 @@ def test_a_fifo_or_folder_in_the_tables_place_is_passed_over_without_blocking(tm
     else:
         (cal / SHEAR_TABLE_FILE).mkdir()
     script = (
-        "import sys; import mst_cli.calibrate.table_reader as t; t.SHEAR_GRID_DEFAULT = (5, 0.25); "
+        "import sys; import mst_cli.estimation.table_reader as t; t.SHEAR_GRID_DEFAULT = (5, 0.25); "
         "from mst_cli.cli.app import main; sys.exit(main())"
     )
     args = [
@@ -339,7 +339,7 @@ def test_fitted_values_out_of_their_physical_bounds_are_refused_naming_the_key(t
 def test_the_bounds_keep_the_modulus_scale_positive_over_the_chips_range():
     """m(T) = 1 + beta (T - 20) at the bounds is 0.1 at the range's ends (MLX90393: -40..125 degC); an
     unloading reading means a force between none and the turn's, to within 5 % of it."""
-    from mst_cli.calibrate.record_bounds import BOUNDS, MIN_MODULUS_SCALE, unloading_loop
+    from mst_cli.calibration.record_bounds import BOUNDS, MIN_MODULUS_SCALE, unloading_loop
 
     b = BOUNDS["temperature.modulus_temp_coeff_per_K"]
     assert float(modulus_scale(125.0, b.lo)) == pytest.approx(MIN_MODULUS_SCALE, abs=1e-12)

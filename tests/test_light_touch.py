@@ -15,10 +15,10 @@ import numpy as np
 import pytest
 from test_c_header import c_compiler
 
-from mst_cli.calibrate.inverse_map import inverse_map
-from mst_cli.calibrate.inverse_table import SHEAR_TABLE_RATIO, TableGrid, build_table, force_nodes
-from mst_cli.calibrate.table_header import C_FLAGS, read_codes, table_header
-from mst_cli.calibrate.table_reader import ShearTableReader
+from mst_cli.estimation.inverse_map import inverse_map
+from mst_cli.estimation.inverse_table import SHEAR_TABLE_RATIO, TableGrid, build_table, force_nodes
+from mst_cli.estimation.table_reader import ShearTableReader
+from mst_cli.firmware.table_header import C_FLAGS, read_codes, table_header
 from mst_cli.model.general_load import field_T, loaded_stack
 from mst_cli.sensor.document import load_design_document
 

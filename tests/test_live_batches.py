@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from mst_cli.calibrate.loadtest import field_of, setting_of
+from mst_cli.calibration.loadtest import field_of, setting_of
 from mst_cli.errors import InputError
 from mst_cli.io.line_columns import column_map
 from mst_cli.io.serial_lines import BadLine, LineSample, parse_line

@@ -66,10 +66,10 @@ def test_the_fit_gives_the_printed_lever_factor_back(calibrated):
 
 def coarse_table_beside(model: Path) -> None:
     """A coarse offset table (17 forces, 3 mm) beside ``model``, with its calibration's lever."""
-    from mst_cli.calibrate.calibration_json import record_beside
-    from mst_cli.calibrate.inverse_map import inverse_map
-    from mst_cli.calibrate.inverse_table import TABLE_FILE
-    from mst_cli.calibrate.table_reader import build_beside
+    from mst_cli.calibration.calibration_json import record_beside
+    from mst_cli.estimation.inverse_map import inverse_map
+    from mst_cli.estimation.inverse_table import TABLE_FILE
+    from mst_cli.estimation.table_reader import build_beside
 
     doc, _ = load_design_document(model)
     top = float(inverse_map(doc, "spring")[0].force_N[-1])

@@ -11,10 +11,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from mst_cli.calibrate.calibration_json import CALIBRATION_JSON, sha256_text
-from mst_cli.calibrate.loadtest import parse_readings
-from mst_cli.calibrate.reading import ForceReader
+from mst_cli.calibration.calibration_json import sha256_text
+from mst_cli.calibration.loadtest import parse_readings
 from mst_cli.errors import InputError
+from mst_cli.readout.reading import ForceReader
+from mst_cli.sensor.as_printed import CALIBRATION_JSON
 from mst_cli.sensor.document import load_design_document
 
 FORWARD = Path(__file__).resolve().parents[1] / "configs" / "mohammadi2021-forward.yaml"

@@ -8,10 +8,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from mst_cli.calibrate import hysteresis as hy
-from mst_cli.calibrate.branches import find_branches
-from mst_cli.calibrate.fit_quality import fit_quality, runs_test
-from mst_cli.calibrate.temperature import fit_modulus_coeff, force_at_T, modulus_coeff_sigma
+from mst_cli.calibration import hysteresis as hy
+from mst_cli.calibration.branches import find_branches
+from mst_cli.calibration.fit_quality import fit_quality, runs_test
+from mst_cli.calibration.temperature import fit_modulus_coeff, force_at_T, modulus_coeff_sigma
 from mst_cli.errors import InputError
 from mst_cli.model.components import remanence_at_T
 

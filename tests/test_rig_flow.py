@@ -260,7 +260,7 @@ def test_a_load_test_at_another_chip_setting_says_so_in_every_output(tmp_path):
     tables are for 0/0, and the terminal, calibration.json and force_table.h say why."""
     import json
 
-    from mst_cli.calibrate.loadtest import setting_of
+    from mst_cli.calibration.loadtest import setting_of
     from mst_cli.model import chip as mlx
 
     rows, _ = rig_loadtest(Rig(cycles=2, hysteresis_pct=0.0, seed=21), CURVE)
@@ -305,7 +305,7 @@ def percent_apart(line):
 
 
 def test_read_warns_in_one_line_on_another_rung_than_the_calibration(rig_calibration, tmp_path):
-    from mst_cli.calibrate.rung_check import rung_difference
+    from mst_cli.calibration.rung_check import rung_difference
     from mst_cli.sensor.document import load_document
 
     _, _, d = rig_calibration

@@ -10,8 +10,8 @@ import pytest
 from click.testing import CliRunner
 
 from mst_cli import api
-from mst_cli.calibrate import hysteresis as hy
-from mst_cli.calibrate.branches import find_branches
+from mst_cli.calibration import hysteresis as hy
+from mst_cli.calibration.branches import find_branches
 from mst_cli.cli.app import main
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "studies"))

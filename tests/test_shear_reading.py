@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from mst_cli.calibrate.shear_reading import CHI2_FLAG, ShearReader
+from mst_cli.estimation.shear_reading import CHI2_FLAG, ShearReader
 from mst_cli.model.general_load import field_T, loaded_stack
 from mst_cli.model.load_bound import CENTRED, crb_sigma, field_jacobian
 from mst_cli.sensor.as_printed import as_printed

@@ -18,8 +18,9 @@ from click.testing import CliRunner
 from serial_support import read_fed_stream
 
 from mst_cli import api
-from mst_cli.calibrate.inverse_map import inverse_map
-from mst_cli.calibrate.inverse_table import (
+from mst_cli.cli.app import main
+from mst_cli.estimation.inverse_map import inverse_map
+from mst_cli.estimation.inverse_table import (
     SHEAR_TABLE_FILE,
     SHEAR_TABLE_RATIO,
     InverseTable,
@@ -27,9 +28,8 @@ from mst_cli.calibrate.inverse_table import (
     build_table,
     kink_edges_N,
 )
-from mst_cli.calibrate.load_readings import LOAD_COLUMNS
-from mst_cli.calibrate.table_reader import ShearTableReader, build_beside
-from mst_cli.cli.app import main
+from mst_cli.estimation.load_readings import LOAD_COLUMNS
+from mst_cli.estimation.table_reader import ShearTableReader, build_beside
 from mst_cli.model.general_load import field_T, loaded_stack
 from mst_cli.model.load_bound import CENTRED, crb_sigma, field_jacobian
 from mst_cli.sensor.document import load_design_document

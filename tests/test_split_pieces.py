@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from mst_cli.cad.gcode import parse_gcode
-from mst_cli.calibrate.loadtest import parse_readings
+from mst_cli.calibration.loadtest import parse_readings
 from mst_cli.sensor.document import load_document
 
 ROOT = Path(__file__).resolve().parents[1]

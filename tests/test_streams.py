@@ -14,15 +14,16 @@ from click.testing import CliRunner
 from serial_support import PtyFeed, read_fed_lines
 
 from mst_cli import api
-from mst_cli.calibrate.calibration_json import CALIBRATION_JSON, sha256_text
-from mst_cli.calibrate.inverse_map import inverse_map
-from mst_cli.calibrate.inverse_table import SHEAR_TABLE_FILE, TABLE_FILE
-from mst_cli.calibrate.table_reader import build_beside
-from mst_cli.calibrate.temperature import modulus_scale, remanence_scale
-from mst_cli.calibrate.temperature_fit import remanence_coeff_of
+from mst_cli.calibration.calibration_json import sha256_text
+from mst_cli.calibration.temperature import modulus_scale, remanence_scale
+from mst_cli.calibration.temperature_fit import remanence_coeff_of
 from mst_cli.cli.app import main
 from mst_cli.errors import InputError
+from mst_cli.estimation.inverse_map import inverse_map
+from mst_cli.estimation.inverse_table import SHEAR_TABLE_FILE, TABLE_FILE
+from mst_cli.estimation.table_reader import build_beside
 from mst_cli.io.line_columns import column_map
+from mst_cli.sensor.as_printed import CALIBRATION_JSON
 from mst_cli.sensor.document import load_design_document
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -285,9 +286,9 @@ WARM_LOADS = [(12.0, 2.0, -1.0, 3.0, -2.0), (30.0, -4.0, 3.0, -5.0, 2.5), (31.0,
 @pytest.fixture(scope="module")
 def two_chips(tmp_path_factory):
     """(the calibrated two-chip copy, its reader, the two-chip estimator built once, the stack)."""
-    from mst_cli.calibrate.reading import ForceReader
-    from mst_cli.calibrate.table_reader import two_chip_reader
+    from mst_cli.estimation.table_reader import two_chip_reader
     from mst_cli.model.general_load import loaded_stack
+    from mst_cli.readout.reading import ForceReader
 
     text = FORWARD.read_text().replace(
         "  noise_uT_rms: 2.0\n", "  noise_uT_rms: 2.0\n  positions_mm: [[0, 0], [10, 6]]\n"
@@ -320,7 +321,7 @@ def _warm_lines(two_chips):
 
 @pytest.mark.slow
 def test_warm_two_chip_readings_are_ok_within_their_sigma_from_a_file_and_live(two_chips, tmp_path):
-    from mst_cli.calibrate.loadtest import parse_readings
+    from mst_cli.calibration.loadtest import parse_readings
     from mst_cli.readout.live import LiveOptions, read_stream
 
     model, reader, offsets, _ = two_chips

@@ -1,4 +1,4 @@
-"""The fast two-chip reader (mst_cli/calibrate/two_chip_table.py) against what fixes its answers
+"""The fast two-chip reader (mst_cli/estimation/two_chip_table.py) against what fixes its answers
 outside it: the scalar tilt solve and the exact general-load field (mst_cli/model/general_load.py),
 the Cramer-Rao bound at the truth (mst_cli/model/load_bound.py), the chi^2 limit of one degree of
 freedom, and the sensor's mirror symmetry.
@@ -12,8 +12,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from mst_cli.calibrate.shear_reading import CHI2_FLAG
-from mst_cli.calibrate.two_chip_table import NEWTON_STEPS, TwoChipModel, TwoChipReader
+from mst_cli.estimation.shear_reading import CHI2_FLAG
+from mst_cli.estimation.two_chip_table import NEWTON_STEPS, TwoChipModel, TwoChipReader
 from mst_cli.model.general_load import field_T, loaded_stack
 from mst_cli.model.load_bound import crb_sigma, field_jacobian
 from mst_cli.model.mechanics.tilt import _residual, solve_layer_tilt

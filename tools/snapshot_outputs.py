@@ -7,11 +7,23 @@ taken before and one after (issue 37):
     python tools/snapshot_outputs.py --out /tmp/after      # on the new tree
     python tools/snapshot_outputs.py --compare /tmp/before /tmp/after
 
+``--only read`` runs only the commands whose code is the calibration, estimation, readout and
+firmware packages (issue 45's split), in a few minutes: ``mst calibrate`` on the docs' load test
+with both tables (their npz files and headers), and ``mst read`` on the calibrated model plain,
+with ``--tare 3``, warm (the load test's rows with ``T_C`` = 30), ``--estimate offset`` and
+``--estimate shear`` on off-centre sheared presses (each also ``--polish``-ed by the exact solve),
+on the design itself, and on a two-chip copy of it (``positions_mm`` [[0, 0], [10, 6]], as
+tests/test_chip_columns.py builds it) plain and with ``--estimate shear``. The other bundled
+configs are specs (read only after ``mst design``). The presses' readings are fixed numbers below,
+so a change to the model cannot move the inputs; the commands share one fresh ``MST_CACHE_DIR``
+(outside the compared folder), so the tables are built by the code under test.
+
 Each file's digest is its SHA-256 after masking what legitimately differs between two runs of
 the same code: the package version string, wall-clock timings (JSON keys and text cells that
 measure seconds of run time), dates, and the absolute output folder. Binary outputs (PNG, STEP,
 3MF) carry timestamps or renderer noise; the PNG's size in pixels and the STEP's and 3MF's
-geometry (their STL twin) are compared instead, which is what a user sees. Everything else,
+geometry (their STL twin) are compared instead, which is what a user sees; an npz (a zip, its
+members stamped with the time written) by its arrays' names, dtypes, shapes and bytes. Everything else,
 every number of every CSV, JSON, YAML, header and G-code line, must match byte for byte.
 """
 
@@ -26,11 +38,36 @@ import re
 import shutil
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 CONFIGS = ROOT / "configs"
 LOADTEST = ROOT / "docs" / "examples" / "loadtest.csv"
+
+# the forward design's field (uT) at eight presses (0.3-24 N, shear up to 15 % of the force,
+# pressed up to 4 mm off centre) plus 2 uT of noise: its one chip, and chips 1 and 2 of its
+# two-chip copy (written once by the model, kept as numbers)
+ONE_CHIP = """Bx_uT,By_uT,Bz_uT
+0.56,3.59,3415.23
+1.58,0.42,3464.38
+34.30,38.00,3615.36
+-72.32,80.80,3861.68
+-66.01,-143.83,4024.80
+102.51,-18.85,4430.14
+-62.25,-45.09,4702.35
+140.70,-92.67,5060.74
+"""
+TWO_CHIPS = """Bx_uT,By_uT,Bz_uT,Bx2_uT,By2_uT,Bz2_uT
+1.28,-2.96,3417.15,-1068.99,-641.87,756.33
+6.70,1.56,3462.29,-1082.48,-652.78,763.12
+-19.33,35.45,3615.45,-1119.80,-666.11,762.83
+-14.52,67.13,3881.66,-1186.03,-701.29,775.02
+-39.70,138.07,4014.39,-1225.23,-726.21,766.26
+11.25,-69.06,4332.54,-1257.68,-745.64,768.16
+10.32,-75.66,4755.01,-1332.82,-808.23,753.39
+-127.03,-133.04,4974.65,-1333.14,-786.78,714.42
+"""
 
 # keys whose values are wall-clock measurements or run identity, not results
 VOLATILE_KEY = re.compile(r"(elapsed|runtime|duration|seconds|time_per|timing|speedup|version|date|created)", re.I)
@@ -42,6 +79,45 @@ VOLATILE_TEXT = [
     (re.compile(r"\b\d+\.\d+\.\d+(\.dev\d+)?\b"), "<version>"),
     (re.compile(r"\d{4}-\d\d-\d\dT?[ \d:.+Z-]*"), "<date>"),
 ]
+
+
+def _read_inputs(folder: Path) -> dict[str, Path]:
+    """The readings files and the two-chip design the read commands take (outside ``work``)."""
+    folder.mkdir(parents=True, exist_ok=True)
+    fwd = (CONFIGS / "mohammadi2021-forward.yaml").read_text()
+    lines = LOADTEST.read_text().splitlines()
+    texts = {
+        "two.yaml": fwd.replace("  noise_uT_rms: 2.0\n", "  noise_uT_rms: 2.0\n  positions_mm: [[0, 0], [10, 6]]\n"),
+        "one_chip.csv": ONE_CHIP,
+        "two_chips.csv": TWO_CHIPS,
+        "warm.csv": "\n".join([lines[0] + ",T_C"] + [f"{line},30" for line in lines[1:]]) + "\n",
+    }
+    for name, text in texts.items():
+        (folder / name).write_text(text)
+    return {name: folder / name for name in texts}
+
+
+def _read_commands(mst: list[str], work: Path, inputs: dict[str, Path]) -> list[tuple[str, list[str]]]:
+    """mst calibrate with both tables, and mst read in every mode on its model (see --only read)."""
+    fwd, cal = CONFIGS / "mohammadi2021-forward.yaml", work / "cal-tables"
+    model, one, two = cal / "calibrated.yaml", inputs["one_chip.csv"], inputs["two.yaml"]
+    reads = [
+        ("read-plain", [model, LOADTEST]),
+        ("read-tare", [model, LOADTEST, "--tare", "3"]),
+        ("read-warm", [model, inputs["warm.csv"]]),
+        ("read-offset-presses", [model, one, "--estimate", "offset"]),
+        ("read-offset-polish", [model, one, "--estimate", "offset", "--polish"]),
+        ("read-shear", [model, one, "--estimate", "shear"]),
+        ("read-shear-polish", [model, one, "--estimate", "shear", "--polish"]),
+        ("read-design", [fwd, LOADTEST]),
+        ("read-two-chips", [two, inputs["two_chips.csv"]]),
+        ("read-two-chips-shear", [two, inputs["two_chips.csv"], "--estimate", "shear"]),
+    ]
+    first = ("calibrate-tables", ["calibrate", fwd, LOADTEST, "--out", cal, "--offset-table", "--shear-table"])
+    return [
+        (name, [*mst, *map(str, args)])
+        for name, args in [first] + [(n, ["read", *a, "--out", work / n]) for n, a in reads]
+    ]
 
 
 def _commands(mst: list[str], work: Path) -> list[tuple[str, list[str]]]:
@@ -102,6 +178,8 @@ def _digest(path: Path, work: Path, root: Path = ROOT) -> str:
         return f"{suffix[1:]} present"
     if suffix == ".gcode":
         return "gcode present"  # see SLICER_KEY
+    if suffix == ".npz":
+        return _npz_digest(path)
     raw = path.read_bytes()
     if suffix in (".stl",) and not raw[:5].lower().startswith(b"solid"):
         return hashlib.sha256(raw[80:]).hexdigest()  # binary STL: the 80-byte header names the writer
@@ -117,21 +195,37 @@ def _digest(path: Path, work: Path, root: Path = ROOT) -> str:
     return hashlib.sha256(text.encode()).hexdigest()
 
 
-def snapshot(out: Path) -> dict:
+def _npz_digest(path: Path) -> str:
+    import numpy as np  # deferred: only the tables need it
+
+    h = hashlib.sha256()
+    with np.load(path, allow_pickle=False) as z:
+        for key in sorted(z.files):
+            a = np.ascontiguousarray(z[key])
+            h.update(f"{key}|{a.dtype.str}|{a.shape}|".encode() + a.tobytes())
+    return h.hexdigest()
+
+
+def snapshot(out: Path, only: str = "all") -> dict:
     work = out / "work"
     shutil.rmtree(work, ignore_errors=True)
     work.mkdir(parents=True)
     # this tree's package, whatever the environment has installed
     mst = [sys.executable, "-c", "import sys; from mst_cli.cli.app import main; sys.argv[0] = 'mst'; main()"]
-    env = {**os.environ, "PYTHONPATH": str(ROOT), "MPLBACKEND": "Agg"}
+    shutil.rmtree(out / "cache", ignore_errors=True)
+    env = {**os.environ, "PYTHONPATH": str(ROOT), "MPLBACKEND": "Agg", "MST_CACHE_DIR": str(out / "cache")}
     record: dict = {"root": str(ROOT), "commands": {}, "files": {}}
-    for name, cmd in _commands(mst, work):
+    commands = _read_commands(mst, work, _read_inputs(out / "inputs"))
+    if only == "all":
+        commands = _commands(mst, work) + commands
+    for name, cmd in commands:
+        t0 = time.perf_counter()
         done = subprocess.run(cmd, capture_output=True, text=True, cwd=work, env=env)
         stdout = done.stdout.replace(str(work), "<work>").replace(str(ROOT), "<root>")
         record["commands"][name] = {"rc": done.returncode}
         (out / f"{name}.stdout").write_text(stdout)
         (out / f"{name}.stderr").write_text(done.stderr)
-        print(f"{name:<16} rc {done.returncode}", flush=True)
+        print(f"{name:<20} rc {done.returncode}  {time.perf_counter() - t0:6.1f} s", flush=True)
     for path in sorted(p for p in work.rglob("*") if p.is_file()):
         record["files"][str(path.relative_to(work))] = _digest(path, work)
     (out / "snapshot.json").write_text(json.dumps(record, indent=1, sort_keys=True))
@@ -178,12 +272,15 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", type=Path, help="folder for a new snapshot")
     parser.add_argument("--compare", nargs=2, type=Path, metavar=("BEFORE", "AFTER"))
+    parser.add_argument(
+        "--only", choices=("all", "read"), default="all", help="read: only mst calibrate and mst read (a few minutes)"
+    )
     args = parser.parse_args()
     if args.compare:
         return compare(*args.compare)
     if not args.out:
         parser.error("give --out DIR or --compare BEFORE AFTER")
-    snapshot(args.out)
+    snapshot(args.out, args.only)
     return 0
 
 

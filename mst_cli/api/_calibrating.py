@@ -22,9 +22,9 @@ from mst_cli.model.mechanics import MODELS
 from mst_cli.sensor.document import Document
 
 if TYPE_CHECKING:
-    from mst_cli.calibrate.calibration import Calibration
-    from mst_cli.calibrate.reading import ForceReadings
+    from mst_cli.calibration.calibration import Calibration
     from mst_cli.readout.live import SerialSamples
+    from mst_cli.readout.reading import ForceReadings
 
 
 def parse_params(text: str) -> tuple[str, ...]:
@@ -50,7 +50,7 @@ def parse_params(text: str) -> tuple[str, ...]:
     >>> mst.parse_params("modulus_factor,gap_offset_mm")  # doctest: +SKIP
     ('modulus_factor', 'gap_offset_mm')
     """
-    from mst_cli.calibrate.calibration import parse_params as parse  # deferred: scipy.optimize, 330 ms measured
+    from mst_cli.calibration.calibration import parse_params as parse  # deferred: scipy.optimize, 330 ms measured
 
     return parse(text)
 
@@ -160,7 +160,9 @@ def calibrate(
     --------
     >>> cal = mst.calibrate("configs/mohammadi2021-forward.yaml", "loadtest.csv", out="cal")  # doctest: +SKIP
     """
-    from mst_cli.calibrate.calibration import calibrate as run_calibration  # deferred: scipy.optimize, 330 ms measured
+    from mst_cli.calibration.calibration import (
+        calibrate as run_calibration,  # deferred: scipy.optimize, 330 ms measured
+    )
 
     params = _checked_fit_options(mechanics, params, table_size)
     check_argument_order(design, load_test, "calibrate")
@@ -198,10 +200,10 @@ def _write_tables(out: Path, result: Calibration, kinds: Sequence[str], progress
     if not kinds:
         return
     # deferred: the calibrate layer, as calibrate's
-    from mst_cli.calibrate.calibration_json import CALIBRATED_YAML
-    from mst_cli.calibrate.reading import ForceReader
-    from mst_cli.calibrate.table_header import KIND_TEXT, table_header
-    from mst_cli.calibrate.table_reader import tables_for
+    from mst_cli.calibration.calibration_json import CALIBRATED_YAML
+    from mst_cli.estimation.table_reader import tables_for
+    from mst_cli.firmware.table_header import KIND_TEXT, table_header
+    from mst_cli.readout.reading import ForceReader
 
     model = out / CALIBRATED_YAML
     doc = load_design(model)
@@ -225,7 +227,7 @@ def _write_tables(out: Path, result: Calibration, kinds: Sequence[str], progress
 def _checked_fit_options(mechanics: str, params: Sequence[str] | str | None, table_size: int) -> tuple[str, ...]:
     """The parameter names to fit, after the rules of --mechanics, --params (known names, each
     once) and --table-size."""
-    from mst_cli.calibrate.fit import DEFAULT_PARAMETERS  # deferred: the calibrate layer, 5 ms measured
+    from mst_cli.calibration.fit import DEFAULT_PARAMETERS  # deferred: the calibrate layer, 5 ms measured
 
     _one_of("--mechanics", mechanics, MODELS)
     if params is None:
@@ -250,9 +252,9 @@ def _reader(
     estimate: str = "none",
 ):
     # deferred: the calibrate layer, 30 ms measured (mst simulate does not pay it)
-    from mst_cli.calibrate.chip_columns import check_chips_match
-    from mst_cli.calibrate.loadtest import check_field_unit, parse_readings, read_text, setting_of
-    from mst_cli.calibrate.reading import ForceReader
+    from mst_cli.calibration.chip_columns import check_chips_match
+    from mst_cli.calibration.loadtest import check_field_unit, parse_readings, read_text, setting_of
+    from mst_cli.readout.reading import ForceReader
 
     _one_of("--mechanics", mechanics, MODELS)
     check_argument_order(design, readings, "read")
@@ -361,7 +363,7 @@ def _estimator(reader, estimate: str, mechanics: str | None, model_file, max_sig
     ``polish`` None: a live stream (never polished). InputError when the layout cannot identify
     the estimate anywhere in its range."""
     # deferred: the calibrate layer, as _reader
-    from mst_cli.calibrate.table_reader import (
+    from mst_cli.estimation.table_reader import (
         OffsetTableReader,
         ShearTableReader,
         offset_table_reader,

@@ -17,7 +17,7 @@ from mst_cli.model.file_keys import SEED_RANGE as SEED_RANGE
 from mst_cli.sensor.document import Document
 
 if TYPE_CHECKING:
-    from mst_cli.calibrate.calibration_json import PrinterCalibration
+    from mst_cli.calibration.calibration_json import PrinterCalibration
     from mst_cli.design.pareto import ParetoDesign
     from mst_cli.design.result import DesignResult
     from mst_cli.design.run import DesignRun
@@ -211,7 +211,7 @@ def _calibrated(doc: Document, calibration: str | Path | None) -> tuple[Document
     """``doc`` with the printer a calibration.json measured (and that record), or as it is."""
     if calibration is None:
         return doc, None
-    from mst_cli.calibrate.calibration_json import apply_calibration, read_calibration  # deferred: 7 ms measured
+    from mst_cli.calibration.calibration_json import apply_calibration, read_calibration  # deferred: 7 ms measured
 
     cal = read_calibration(calibration, doc)
     return apply_calibration(doc, cal), cal
@@ -222,8 +222,8 @@ def _other_rung(cal: PrinterCalibration | None, mechanics: str, warn: Callable[[
     two read forces on the calibrated design (calibrated.yaml beside calibration.json, when it loads)."""
     if cal is None or warn is None or cal.mechanics is None or cal.mechanics == mechanics:
         return
-    from mst_cli.calibrate.calibration_json import CALIBRATED_YAML  # deferred: the calibrate layer
-    from mst_cli.calibrate.rung_check import rung_warning  # deferred: the calibrate layer
+    from mst_cli.calibration.calibration_json import CALIBRATED_YAML  # deferred: the calibrate layer
+    from mst_cli.calibration.rung_check import rung_warning  # deferred: the calibrate layer
 
     try:
         calibrated: Document | None = load_design(Path(cal.path).with_name(CALIBRATED_YAML))

@@ -1,6 +1,6 @@
 """``mst calibrate``: fit a printed sensor to its load test.
 
-Options only: the calibration and its files are :mod:`mst_cli.calibrate.calibration` (through
+Options only: the calibration and its files are :mod:`mst_cli.calibration.calibration` (through
 :mod:`mst_cli.api`, as a script would call it).
 """
 

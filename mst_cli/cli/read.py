@@ -1,6 +1,6 @@
 """``mst read``: MLX90393 readings (a CSV or a live serial stream) -> forces.
 
-Options only: the reading is :mod:`mst_cli.calibrate.reading` (through :mod:`mst_cli.api`, as a
+Options only: the reading is :mod:`mst_cli.readout.reading` (through :mod:`mst_cli.api`, as a
 script would call it).
 """
 

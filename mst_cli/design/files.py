@@ -10,7 +10,7 @@ from mst_cli.design.pareto import pareto_csv, plot_pareto
 from mst_cli.simulation.report import write_simulation
 
 if TYPE_CHECKING:
-    from mst_cli.calibrate.calibration_json import PrinterCalibration
+    from mst_cli.calibration.calibration_json import PrinterCalibration
     from mst_cli.design.pareto import ParetoDesign
     from mst_cli.design.result import DesignResult
     from mst_cli.io.outputs import Staging

@@ -22,7 +22,7 @@ from mst_cli.sensor.document import Document
 from mst_cli.simulation.run import printed_scene
 
 if TYPE_CHECKING:
-    from mst_cli.calibrate.calibration_json import PrinterCalibration
+    from mst_cli.calibration.calibration_json import PrinterCalibration
 
 
 def design_choice(doc: Document, refine: str | None, pareto_count: int | None) -> MechanicsChoice:

@@ -50,7 +50,7 @@ def printer_violations(printer: Printer, housing: Housing, contact_allowance_mm:
     """Broken rules of the printer's deviations (``Violation.of_field``: field, value, what is allowed): every cell the
     printing rules allow must still print with a wall and an open cavity (so that the drawn
     rules guarantee the printed cell works), and the gap offset must fit the housing's
-    clearance, pocket floor and cover (what ``calibrate.fit.apply_parameters`` can close)."""
+    clearance, pocket floor and cover (what ``calibration.fit.apply_parameters`` can close)."""
     out = []
     hi = 0.5 * (printer.min_gap_mm - contact_allowance_mm)
     if not -printer.min_wall_mm < printer.wall_offset_mm < hi:

@@ -26,6 +26,7 @@ ALL = (0, 1, 2, 3, 4)
 FORCE_STEP_REL = 1e-4  # finite-difference steps: of the normal force (floored at FORCE_STEP_MIN_N)
 FORCE_STEP_MIN_N = 1e-3
 POSITION_STEP_MM = 1e-3
+MAX_CONDITION = 1e14  # of the scaled Fisher information: beyond, double precision cannot invert it
 
 
 def fields_T(stack: LoadedStack, theta, chips_mm: Sequence[tuple[float, float]]) -> np.ndarray:
@@ -62,18 +63,32 @@ def field_jacobian(
     return np.stack(cols, axis=-1)
 
 
-def crb_sigma(J: np.ndarray, noise_T: float) -> np.ndarray:
-    """The 1-sigma Cramer-Rao bound of every unknown of ``J``'s columns at a noise ``noise_T``
-    per axis (inf where the chips cannot tell that unknown from the others)."""
-    info = J.T @ J
-    try:
-        cov = np.linalg.inv(info)
-    except np.linalg.LinAlgError:
-        return np.full(J.shape[1], np.inf)
-    d = np.diag(cov)
-    if np.linalg.cond(info) > 1e14 or np.any(d <= 0):
-        return np.full(J.shape[1], np.inf)
-    return noise_T * np.sqrt(d)
+def crb_sigma(J: np.ndarray, noise: float | np.ndarray) -> np.ndarray:
+    """The 1-sigma Cramer-Rao bound noise sqrt(diag((J^T J)^-1)) of every unknown of ``J``'s
+    columns: the one bound of every estimator (the exact solves, the tables, the two-chip reader,
+    the layout bound). ``J`` is a batch of Jacobians (..., m, n) (one Jacobian (m, n) is a batch of
+    one), ``noise`` the noise per axis in J's field unit, one or one per Jacobian (...); returns
+    (..., n). Every unknown of a Jacobian is inf when the data cannot tell its unknowns apart: a
+    column of zeros, or J^T J scaled to a unit diagonal (so that the units of the unknowns do not
+    count) has a condition number above :data:`MAX_CONDITION`; one whose variance comes out <= 0 is
+    inf too."""
+    J = np.asarray(J, dtype=float)
+    A = np.einsum("...ki,...kj->...ij", J, J)
+    n = A.shape[-1]
+    info = A.reshape(-1, n, n)
+    per_axis = np.broadcast_to(np.asarray(noise, dtype=float), A.shape[:-2]).reshape(-1)
+    out = np.full((len(info), n), np.inf)
+    diag = np.diagonal(info, axis1=1, axis2=2)
+    seen = np.all(diag > 0, axis=1)  # NaN too: no bound
+    good = np.zeros(len(info), dtype=bool)
+    if np.any(seen):
+        s = 1.0 / np.sqrt(diag[seen])
+        w = np.linalg.eigvalsh(info[seen] * s[:, :, None] * s[:, None, :])  # ascending
+        good[seen] = (w[:, 0] > 0) & (w[:, -1] <= MAX_CONDITION * w[:, 0])
+    if np.any(good):
+        d = np.diagonal(np.linalg.inv(info[good]), axis1=1, axis2=2)
+        out[good] = np.where(d > 0.0, per_axis[good, None] * np.sqrt(np.abs(d)), np.inf)
+    return out.reshape(A.shape[:-1])
 
 
 @dataclass

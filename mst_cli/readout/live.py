@@ -3,7 +3,7 @@
 Every line waiting on the port is parsed at once (:class:`~mst_cli.io.serial_lines.LineSource`
 batches), its samples are added to a :class:`StreamRecord` -- the readings file the stream
 amounts to, the numbers as the sketch wrote them -- and the new rows are read together by
-:meth:`~mst_cli.calibrate.reading.ForceReader.read` (the tare, the temperature law, no load,
+:meth:`~mst_cli.readout.reading.ForceReader.read` (the tare, the temperature law, no load,
 the estimate, the branch), then shown one line per sample. A batch is estimated in one
 vectorised call, so the reader keeps up with the chip whatever the rate, as long as a batch
 takes less time than its samples took to arrive.
@@ -25,14 +25,14 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from mst_cli.calibrate.chip_columns import chip_column_names
-from mst_cli.calibrate.loadtest import CODE_COLUMNS, UT_COLUMNS, Readings, beyond_error, field_of, fields_of
-from mst_cli.calibrate.reading import ForceReader, ForceReadings
-from mst_cli.calibrate.temperature_fit import T_COLUMN
+from mst_cli.calibration.chip_columns import chip_column_names
+from mst_cli.calibration.loadtest import CODE_COLUMNS, UT_COLUMNS, Readings, beyond_error, field_of, fields_of
+from mst_cli.calibration.temperature_fit import T_COLUMN
 from mst_cli.errors import InputError
 from mst_cli.io.line_columns import ColumnMap
 from mst_cli.io.serial_lines import LineSample, LineSource, SampleParser
 from mst_cli.model.chip import ChipSetting
+from mst_cli.readout.reading import ForceReader, ForceReadings
 
 UNRECOGNISED_NOTE = 5  # unrecognised lines before the session says so (once)
 TIME_COLUMN = "time_s"

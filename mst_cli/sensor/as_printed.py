@@ -36,6 +36,10 @@ if TYPE_CHECKING:
 
 from mst_cli.errors import CalibrationFailed
 
+# the record of a fitted print beside its calibrated.yaml: mst calibrate writes it, mst read
+# trusts the model by it and the readers' tables are keyed by it
+CALIBRATION_JSON = "calibration.json"
+
 
 @dataclass(frozen=True)
 class Parameter:

@@ -5,7 +5,7 @@ written over arrays of m loads: the walls' integral over the depth cut at every 
 line crosses (a fixed count of cuts, pieces outside the depth of zero length), the pads' pressed
 polygon with a fixed count of vertex slots (an unused slot repeats its neighbour, so its edge adds
 nothing to Green's sums). Newton from a guess close to the answer (a table's, or the previous
-load's) then needs no damping: the fast readers (:mod:`mst_cli.calibrate.two_chip_table`) take a
+load's) then needs no damping: the fast readers (:mod:`mst_cli.estimation.two_chip_table`) take a
 few full steps and make a tabulated state exact.
 
 Pure numpy, no I/O.

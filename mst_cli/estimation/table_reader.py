@@ -1,0 +1,325 @@
+"""``mst read --estimate offset`` and ``--estimate shear`` at stream speed: the one-chip readers
+on the model's :class:`~mst_cli.estimation.inverse_table.InverseTable` of that kind, and the
+two-chip reader of all five unknowns (:mod:`~mst_cli.estimation.two_chip_table`), each polished
+by the exact solve where asked.
+
+The tables are built once per calibrated model (``mst calibrate --offset-table`` writes
+``inverse_table.npz``, ``--shear-table`` ``shear_table.npz`` beside calibrated.yaml); one that is missing or
+stale (its hash is not the model file's, its calibration.json's, the mechanics' and the grid's)
+is built on first use and handed back to be written with the readings' results.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from mst_cli.errors import CalibrationFailed, InputError
+from mst_cli.estimation.inverse_map import InverseMap
+from mst_cli.estimation.inverse_table import (
+    FIT_SIGMAS,
+    GRID_DEFAULT,
+    SHEAR_GRID_DEFAULT,
+    SHEAR_TABLE_FILE,
+    SHEAR_TABLE_RATIO,
+    TABLE_FILE,
+    Edges,
+    InverseTable,
+    TableEstimates,
+    TableGrid,
+    build_table,
+    kink_edges_N,
+    source_hash,
+)
+from mst_cli.estimation.load_readings import LoadReadings, from_estimates
+from mst_cli.estimation.offset_reading import DEFAULT_MAX_SIGMA_MM, OffsetEstimator, OffsetReadings
+from mst_cli.estimation.shear_reading import CHI2_FLAG, ShearReader
+from mst_cli.estimation.two_chip_table import TwoChipReader
+from mst_cli.io.cache import cached_path, keep, touch
+from mst_cli.io.files import read_input_text
+from mst_cli.io.yaml_io import MAX_INPUT_BYTES
+from mst_cli.model.general_load import loaded_stack
+from mst_cli.model.load_bound import crb_sigma
+from mst_cli.model.stack_pose import tilt_laws
+from mst_cli.sensor.as_printed import CALIBRATION_JSON
+from mst_cli.sensor.document import Document
+
+
+@dataclass
+class OffsetTableReader:
+    """(force, x0, y0) of readings from a table, with the chip's noise ``sigma_T``; ``exact``
+    (the model's Gauss-Newton) polishes the best root the direct inverse found when given."""
+
+    table: InverseTable
+    sigma_T: float
+    max_sigma_mm: float
+    exact: OffsetEstimator | None = None
+    chips = 1  # the readings it takes: chip 1's
+
+    def estimate_table(self, B_T: np.ndarray) -> TableEstimates:
+        """The direct inverse's estimates of readings (n, 3) in T, polished when ``exact`` is set."""
+        est = self.table.estimate(B_T, self.sigma_T, self.max_sigma_mm)
+        if self.exact is not None:
+            self._polish(B_T, est)
+        return est
+
+    def _polish(self, B_T: np.ndarray, est: TableEstimates) -> None:
+        """The exact solve from each reading's best root; its root, its Cramer-Rao sigmas and its
+        identifiability replace the table's (the table's ambiguity stands)."""
+        assert self.exact is not None
+        for i in np.flatnonzero(np.isin(est.flag, ("ok", "not_identifiable"))):
+            s = self.exact._solve_from(B_T[i], est.best[i].copy())
+            if not (s.converged and s.misfit_T <= FIT_SIGMAS * self.sigma_T):
+                continue  # the table's root stands (the exact solve stalled on the box)
+            sig = self.exact._sigmas(s.J)
+            est.best[i] = s.p
+            ok = bool(np.all(np.isfinite(sig)) and max(sig[1], sig[2]) <= self.max_sigma_mm)
+            est.flag[i] = "ok" if ok else "not_identifiable"
+            values = (*s.p, *sig) if ok else (np.nan,) * 6
+            est.force_N[i], est.x_mm[i], est.y_mm[i] = values[:3]
+            est.sigma_force_N[i], est.sigma_x_mm[i], est.sigma_y_mm[i] = values[3:]
+
+    def estimate_all(self, B_T: np.ndarray, force_axial_N: np.ndarray) -> OffsetReadings:
+        """Every reading with a finite centred force (the others keep their own flag, and "" here);
+        a reading not ``ok`` keeps its centred force."""
+        n = len(B_T)
+        use = np.isfinite(force_axial_N)
+        cols = np.full((6, n), np.nan)
+        flag = np.full(n, "", dtype=object)
+        if use.any():
+            est = self.estimate_table(np.asarray(B_T, dtype=float)[use])
+            cols[:, use] = [est.force_N, est.x_mm, est.y_mm, est.sigma_x_mm, est.sigma_y_mm, est.sigma_force_N]
+            flag[use] = est.flag
+        ok = flag == "ok"
+        F = np.where(ok, cols[0], force_axial_N)
+        return OffsetReadings(F, cols[1], cols[2], cols[3], cols[4], cols[5], flag)
+
+
+@dataclass
+class ShearTableReader:
+    """(Fz, Fx, Fy) of centred presses from the shear table, with the chip's noise ``sigma_T``;
+    ``exact`` (the general load's Gauss-Newton, :class:`ShearReader`) polishes each reading's best
+    root when given."""
+
+    table: InverseTable
+    sigma_T: float
+    exact: ShearReader | None = None
+    chips = 1  # the readings it takes: chip 1's
+
+    def estimate_all(self, B_T: np.ndarray, force_axial_N: np.ndarray) -> LoadReadings:
+        """Every reading with a finite centred force (the others keep their own flag, and "" here);
+        a reading not ``ok`` keeps its centred force."""
+        use = np.isfinite(force_axial_N)
+        B = np.asarray(B_T, dtype=float)[use]
+        est = self.table.estimate(B, self.sigma_T, np.inf)
+        if self.exact is not None:
+            self._polish(B, est)
+        zeros = np.zeros((len(B), 2))
+        five = np.column_stack([est.p, np.where(est.flag[:, None] == "ok", zeros, np.nan)])
+        sig = np.column_stack([est.sigma, np.full((len(B), 2), np.nan)])
+        return from_estimates(five, sig, est.flag, np.asarray(force_axial_N, dtype=float), "centred")
+
+    def _polish(self, B_T: np.ndarray, est: TableEstimates) -> None:
+        """The exact fit from each ok reading's root; it replaces the table's where it stays within
+        the noise (the table's flags stand)."""
+        assert self.exact is not None
+        for i in np.flatnonzero(est.flag == "ok"):
+            theta = np.array([*est.best[i], 0.0, 0.0])
+            p, sig, chi2, _ = self.exact._fit(B_T[i], self.sigma_T, theta)
+            if chi2 <= CHI2_FLAG[0]:
+                est.p[i], est.sigma[i] = p[:3], sig
+
+
+@dataclass
+class TwoChipLoadReader:
+    """All five unknowns (Fz, Fx, Fy, x, y) of readings of every chip (the fast two-chip reader,
+    :mod:`~mst_cli.estimation.two_chip_table`), polished by the exact fit when ``polish``."""
+
+    reader: TwoChipReader
+    polish: bool = False
+
+    @property
+    def chips(self) -> int:
+        return len(self.reader.model.chips_mm)
+
+    def estimate_all(self, B_T: np.ndarray, force_axial_N: np.ndarray) -> LoadReadings:
+        """Readings (n, k, 3) in T with a finite centred force (from chip 1; the others keep their
+        own flag, and "" here); a reading not ``ok`` keeps its centred force."""
+        use = np.isfinite(force_axial_N)
+        B = np.asarray(B_T, dtype=float)[use]
+        if not len(B):  # every reading flagged before the estimate
+            return from_estimates(np.empty((0, 5)), np.empty((0, 5)), np.empty(0, dtype=object), force_axial_N, "none")
+        est = self.reader.estimate(B)
+        if self.polish and len(B):
+            est = self.reader.polish(B, est)
+        return from_estimates(est.theta, est.sigma, est.flag, np.asarray(force_axial_N, dtype=float), "none")
+
+
+def two_chip_reader(doc: Document, imap: InverseMap, lever: float, mechanics: str, polish: bool) -> TwoChipLoadReader:
+    """The two-chip reader of the model ``doc`` (its chips, the inverse map's field resolution as
+    the noise, ``lever``: its calibration's factor): its tables are built now, a few seconds."""
+    stack = loaded_stack(doc.geometry(), doc.material, mechanics, lever, doc.whole_part)
+    return TwoChipLoadReader(TwoChipReader(stack, doc.chips_mm, imap.field_resolution_T), polish)
+
+
+def table_edges_N(doc: Document, imap: InverseMap, mechanics: str, lever: float) -> np.ndarray:
+    """The edges the force nodes of the model's tables follow: the inverse map's regimes and the
+    kinks of the laws the tables are built from (:func:`kink_edges_N`)."""
+    laws = tilt_laws(doc.geometry(), doc.material, mechanics, lever, doc.whole_part)
+    return kink_edges_N(laws, imap.edges_N, float(imap.force_N[-1]))
+
+
+def table_hash(model_file: Path, mechanics: str, grid: TableGrid) -> str:
+    """The hash a current table of ``grid`` beside ``model_file`` carries."""
+    return source_hash(_text(model_file) or "", _text(model_file.parent / CALIBRATION_JSON), mechanics, grid)
+
+
+def _text(path: Path) -> str | None:
+    """A file's text read as every input file is (None: none to read there)."""
+    try:
+        return read_input_text(path, MAX_INPUT_BYTES, field=str(path))
+    except InputError:
+        return None
+
+
+def grid_of(
+    kind: str, doc: Document, force_max_N: float, grid: tuple[int, float] | None = None, edges_N: Edges = None
+) -> TableGrid:
+    """The table grid of ``kind`` (offset: forces, mm between offsets; shear: forces, the step of
+    the ratios up to SHEAR_TABLE_RATIO; the default when ``grid`` is None), its force nodes
+    following the regimes ``edges_N`` (the inverse map's) when given."""
+    if kind == "shear":
+        n, step = grid or SHEAR_GRID_DEFAULT
+        return TableGrid.cone(force_max_N, n, SHEAR_TABLE_RATIO, step, edges_N)
+    return TableGrid.over(doc.geometry(), force_max_N, *(grid or GRID_DEFAULT), edges_N=edges_N)
+
+
+def build_beside(
+    model_file: Path,
+    doc: Document,
+    mechanics: str,
+    lever_factor: float,
+    force_max_N: float,
+    grid: tuple[int, float] | None = None,
+    kind: str = "offset",
+    edges_N: Edges = None,
+) -> InverseTable:
+    """The table of ``kind`` and ``grid`` (:func:`grid_of`, its forces following the regimes
+    ``edges_N``) for the model in ``model_file``, hashed as current beside it."""
+    g = grid_of(kind, doc, force_max_N, grid, edges_N)
+    source = table_hash(model_file, mechanics, g)
+    return build_table(doc.geometry(), doc.material, mechanics, g, lever_factor, source, doc.whole_part)
+
+
+def table_beside(
+    model_file: Path,
+    doc: Document,
+    mechanics: str,
+    lever_factor: float,
+    force_max_N: float,
+    kind: str = "offset",
+    edges_N: Edges = None,
+) -> tuple[InverseTable, str | None]:
+    """The table of ``kind`` of the model in ``model_file``: the one beside it when it is current
+    (of any grid: the one its maker chose), else the one an earlier call kept in the cache (of the
+    default grid, found by its hash), else one built now and kept there for the next call; and a
+    note saying what was built or passed over (None: a table beside it was current). Every file
+    is read through :meth:`InverseTable.read`: one that is not a good table is passed over and
+    named. CalibrationFailed naming the file when no table can be built."""
+    path = model_file.parent / (SHEAR_TABLE_FILE if kind == "shear" else TABLE_FILE)
+    table, why = InverseTable.read(path)
+    if (
+        table is not None
+        and table.grid.kind == kind
+        and table.source_hash == table_hash(model_file, mechanics, table.grid)
+    ):
+        return table, None
+    passed = None if why == "file not found" else f"{path} is {why or 'stale'}"
+    key = table_hash(model_file, mechanics, grid_of(kind, doc, force_max_N, edges_N=edges_N))
+    kept = cached_path(f"{kind}-{key}.npz")
+    found = InverseTable.read(kept)[0] if kept is not None else None
+    if found is not None and found.grid.kind == kind and found.source_hash == key:
+        touch(kept)  # type: ignore[arg-type]  # found: kept is a path
+        return found, None if passed is None else f"{passed}: used the {kind} table kept in {kept}"
+    t0 = time.perf_counter()
+    try:
+        table = build_beside(model_file, doc, mechanics, lever_factor, force_max_N, kind=kind, edges_N=edges_N)
+    except (CalibrationFailed, ValueError, FloatingPointError) as exc:
+        raise CalibrationFailed(
+            f"{passed or f'{path} is missing'} and the {kind} table cannot be rebuilt: {exc}"
+        ) from None
+    stored, not_kept = keep(f"{kind}-{key}.npz", table.dump)
+    where = f"kept it in {stored} for the next call" if stored else f"could not keep it for the next call: {not_kept}"
+    note = (
+        f"{passed or f'{path} is missing'}: built the {kind} table in {time.perf_counter() - t0:.0f} s, {where} "
+        f"and wrote it with the results (mst calibrate --{kind}-table writes it beside the model)"
+    )
+    return table, note
+
+
+def offset_table_reader(
+    doc: Document, imap: InverseMap, lever: float, model_file: Path, mechanics: str, max_sigma_mm: float, polish: bool
+) -> tuple[OffsetTableReader, str | None]:
+    """The table reader of the model ``doc`` in ``model_file`` (noise: the inverse map's field
+    resolution; range: to the last lock; ``lever``: its calibration's factor), and the note of
+    :func:`table_beside`. InputError when no press of the table is identifiable at that noise."""
+    force_max_N = float(imap.force_N[-1])
+    edges = table_edges_N(doc, imap, mechanics, lever)
+    table, note = table_beside(model_file, doc, mechanics, lever, force_max_N, edges_N=edges)
+    sigma_T = imap.field_resolution_T
+    best = best_offset_sigma_mm(table, sigma_T)
+    if not best <= max_sigma_mm:
+        raise InputError(
+            "--estimate offset",
+            doc.name,
+            f"this layout cannot tell where a press was: the offset's 1-sigma is at best {best:.3g} mm "
+            f"at {1e6 * sigma_T:.3g} uT noise, over the --max-offset-sigma-mm bound {max_sigma_mm:g} mm",
+        )
+    exact = None
+    if polish:
+        exact = OffsetEstimator(
+            doc.geometry(), doc.material, mechanics, sigma_T, force_max_N, max_sigma_mm, lever, doc.whole_part
+        )
+    return OffsetTableReader(table, sigma_T, max_sigma_mm, exact), note
+
+
+def best_offset_sigma_mm(table: InverseTable, sigma_T: float) -> float:
+    """The least Cramer-Rao 1-sigma of the offset (the worse of x0 and y0) over the table's nodes,
+    from the table's field differences (inf: nowhere identifiable)."""
+    g, B = table.grid, 1e6 * table.B_T
+    J = np.stack([np.gradient(B, g.force_N, axis=0), np.gradient(B, g.u, axis=1), np.gradient(B, g.v, axis=2)], -1)
+    sig = crb_sigma(J[1:].reshape(-1, 3, 3), 1e6 * sigma_T)
+    worst = np.fmax(sig[:, 1], sig[:, 2])
+    return float(np.min(worst)) if len(worst) else float("inf")
+
+
+def shear_table_reader(
+    doc: Document, imap: InverseMap, lever: float, model_file: Path, mechanics: str, polish: bool
+) -> tuple[ShearTableReader, str | None]:
+    """The shear table reader of the model ``doc`` in ``model_file`` (noise: the inverse map's
+    field resolution; range: to the last lock; ``lever``: its calibration's factor), and the note
+    of :func:`table_beside`."""
+    edges = table_edges_N(doc, imap, mechanics, lever)
+    table, note = table_beside(model_file, doc, mechanics, lever, float(imap.force_N[-1]), "shear", edges)
+    exact = None
+    if polish:
+        exact = ShearReader(loaded_stack(doc.geometry(), doc.material, mechanics, lever, doc.whole_part))
+    return ShearTableReader(table, imap.field_resolution_T, exact), note
+
+
+def tables_for(
+    model_file: Path, doc: Document, imap: InverseMap, lever: float, mechanics: str, kind: str = "offset"
+) -> tuple[InverseTable, OffsetTableReader | ShearTableReader]:
+    """What ``mst calibrate --offset-table`` (``--shear-table``) writes for the model in
+    ``model_file``: its table of ``kind`` (the default grid, current beside it) and the reader of
+    every other node of it (the C header's coarse table: with the reference part's 7 bands between
+    kinks the offset's 29 x 31 x 21 nodes give 15 x 16 x 11, the shear's 29 x 21 x 21 give 15 x 11
+    x 11), at the inverse map's noise (and the default bound on the offset's 1-sigma)."""
+    edges = table_edges_N(doc, imap, mechanics, lever)
+    table = build_beside(model_file, doc, mechanics, lever, float(imap.force_N[-1]), kind=kind, edges_N=edges)
+    if kind == "shear":
+        return table, ShearTableReader(table.every_other(), imap.field_resolution_T)
+    return table, OffsetTableReader(table.every_other(), imap.field_resolution_T, DEFAULT_MAX_SIGMA_MM)

@@ -1,0 +1,530 @@
+"""A fast reader of all five unknowns (Fz, Fx, Fy, x, y) from two chips or more (issue 39): the
+general-load model (:mod:`mst_cli.model.general_load`) evaluated for many loads at once, and a
+Levenberg-Marquardt fit of every reading at once.
+
+Where the exact reader (:mod:`mst_cli.estimation.shear_reading`) spends its time is the tilt
+rung's equilibrium, one scalar Newton solve per layer per load. A layer answers only to the
+normal force and where it sees it pressed, (F, ox, oy) (the shear's moment moves that point by
+lever_j (Fx, Fy) / Fz), so each layer's state (d, phi_y, phi_x) is tabulated once over
+(F, |ox|, |oy|) nodes, the offsets past the face by lever_j x the largest shear ratio supported
+(the cell is mirror symmetric in x and y: d is even in both offsets, phi_y odd in ox, phi_x odd
+in oy, so a quadrant of nodes holds it all). Read trilinearly the tables are a guess, not the
+answer: past the lock the pads' pressed patch bends the states between the offsets' nodes, and
+on the bundled sensor (mohammadi2021-forward, spring, chips (0, 0) and (10, 6) mm, 200 random
+loads over the tables' range) the trilinear field is a median 4 uT off (max 49 uT) at the default
+nodes (2 mm, 33 forces) and still 1.2 uT (max 13 uT) at 1 mm and 65 forces, more than the chip
+noise. From that guess a few steps of the same Newton, vectorised
+(:mod:`mst_cli.model.mechanics.tilt_batch`), give the exact states: the field then within 1e-9 T
+of the exact one (benchmarks/bench_two_chip.py). The slides (a compliance law per layer), the
+magnet's pose and its exact cylinder field are cheap and exact already. The Jacobian moves the
+states along their own tangent (the implicit function theorem on the equilibrium: no solve per
+difference).
+
+The fit is the exact reader's, vectorised: Levenberg-damped Gauss-Newton on the chi^2 of the
+readings weighted by the chip noise, every step clipped to the model's domain (Fz in (0, the
+tables' top force], |Fx|, |Fy| <= ratio_max Fz, the press on the face). Every reading is fitted
+from five starts (the centred press whose |B| at the first chip is the reading's, and that
+force pressed a quarter of the face out toward each corner) on the tables alone; each reading's
+distinct fits (further apart than twice their combined 1-sigma) go on to the exact states. The
+best chi^2 is the estimate. Flags: ``no_fit`` past the exact reader's chi^2 limit
+(:data:`~mst_cli.estimation.shear_reading.CHI2_FLAG`), ``ambiguous`` when two fits within it lie
+further apart than twice their combined Cramer-Rao 1-sigma in any unknown, else ``ok``. Each
+estimate's 1-sigma is the Cramer-Rao bound at the fit.
+
+Pure: no I/O.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from mst_cli.estimation.shear_reading import CHI2_FLAG, ShearReader
+from mst_cli.model.general_load import LoadedStack
+from mst_cli.model.load_bound import FORCE_STEP_MIN_N, FORCE_STEP_REL, POSITION_STEP_MM, UNKNOWNS, crb_sigma
+from mst_cli.model.mechanics.tilt import LayerTiltLaw
+from mst_cli.model.mechanics.tilt_batch import newton_many, residual_many
+from mst_cli.model.stack_pose import magnet_field_T, magnet_pose, stack_path
+from mst_cli.parallel import fork_map
+
+RATIO_MAX = 0.5  # |Fx| / Fz and |Fy| / Fz the table supports
+FORCE_TOP = 1.5  # the table's top force, x the stack's last lock (the exact reader's span)
+N_FORCE = 33  # force nodes, 0 to the top force (the layer laws' knots added)
+STEP_MM = 2.0  # offsets' spacing
+MAX_ITER = 60
+STEP_TOL = 1e-3  # a fit ends once a step is this share of the bound's sigma in every unknown ...
+TABLE_STEP_TOL = 3e-2  # ... on the tables' states (the exact states' fit goes on from there)
+LAMBDA_0, LAMBDA_MAX = 1e-3, 1e8
+START_FRACTION = 0.25  # the four off-centre starts: this share of the face's width and depth out
+NEWTON_STEPS = 12  # the tilt rung's Newton steps from the tables' states (most loads need 2 to 6, a few 10)
+# Of 100 random presses on tests/test_two_chip_table.py's sensor, the fit on the exact states ends
+# within 3 steps for 92, within 12 for 98 and within 20 for all (a flat valley past the lock).
+EXACT_ITER = 40  # at most this many fit steps on the exact states, from the tables' fit
+MAX_FITS = 3  # distinct fits per reading carried to the exact states
+FLAGS = ("ok", "ambiguous", "no_fit")
+
+
+@dataclass(frozen=True)
+class LayerTable:
+    """One layer's state (d mm, phi_y rad, phi_x rad) on nodes (force N, |ox| mm, |oy| mm), all
+    ascending from 0; (n_F, n_x, n_y, 3)."""
+
+    force_N: np.ndarray
+    x_mm: np.ndarray
+    y_mm: np.ndarray
+    state: np.ndarray
+
+    def at(self, force_N: np.ndarray, ox_mm: np.ndarray, oy_mm: np.ndarray) -> np.ndarray:
+        """(m, 3) the state by trilinear interpolation (linear extrapolation past the nodes),
+        the tilts' signs from the offsets' (the mirror symmetries)."""
+        parts = [
+            _cell(nodes, v)
+            for nodes, v in ((self.force_N, force_N), (self.x_mm, np.abs(ox_mm)), (self.y_mm, np.abs(oy_mm)))
+        ]
+        (i, u), (j, v), (k, w) = parts
+        _, nx, ny, _ = self.state.shape
+        flat = self.state.reshape(-1, 3)
+        base = (i * nx + j) * ny + k
+        u, v, w = u[:, None], v[:, None], w[:, None]
+
+        def along_y(at: np.ndarray) -> np.ndarray:
+            low, high = flat[at], flat[at + 1]
+            return low + w * (high - low)
+
+        def along_x(at: np.ndarray) -> np.ndarray:
+            low, high = along_y(at), along_y(at + ny)
+            return low + v * (high - low)
+
+        low, high = along_x(base), along_x(base + nx * ny)
+        out = low + u * (high - low)
+        out[:, 1] *= np.where(ox_mm < 0.0, -1.0, 1.0)
+        out[:, 2] *= np.where(oy_mm < 0.0, -1.0, 1.0)
+        return out
+
+
+def _cell(nodes: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(the index of the cell holding each v, the share of the way across it), end cells taking
+    what lies past the nodes."""
+    i = np.clip(np.searchsorted(nodes, v, side="right") - 1, 0, len(nodes) - 2)
+    return i, (v - nodes[i]) / (nodes[i + 1] - nodes[i])
+
+
+def _nodes(half_mm: float, step_mm: float) -> np.ndarray:
+    """From 0 to ``half_mm``, about ``step_mm`` apart, both ends nodes."""
+    return np.linspace(0.0, half_mm, max(2, int(math.ceil(half_mm / step_mm)) + 1))
+
+
+def _force_nodes(law: LayerTiltLaw, force_max_N: float, n_force: int) -> np.ndarray:
+    """``n_force`` forces from 0 to ``force_max_N`` and the layer law's knots among them: the
+    centred state is piecewise linear in the force, its kinks at the knots."""
+    knots = law.walls.F_knots_N[(law.walls.F_knots_N > 0.0) & (law.walls.F_knots_N < force_max_N)]
+    return np.unique(np.concatenate([np.linspace(0.0, force_max_N, n_force), knots]))
+
+
+def _path_task(task: tuple[LayerTiltLaw, np.ndarray, float, float]) -> np.ndarray:
+    """(n_F, 3) one layer's state up the forces at one offset."""
+    law, F, ox, oy = task
+    d, tilt = stack_path([law], F, (ox, oy))
+    return np.column_stack([d[:, 0], tilt[:, 0, :]])
+
+
+def layer_tables(
+    stack: LoadedStack, force_max_N: float, ratio_max: float, n_force: int, step_mm: float
+) -> list[LayerTable]:
+    """Every layer's table, its offsets over the face widened by its lever x ``ratio_max`` (one
+    force path per offset node, in forked workers where the platform allows)."""
+    g = stack.geometry
+    grids = []
+    tasks = []
+    for law, lever in zip(stack.tilt, stack.lever_mm):
+        F = _force_nodes(law, force_max_N, n_force)
+        xs = _nodes(0.5 * g.width_mm + lever * ratio_max, step_mm)
+        ys = _nodes(0.5 * g.depth_mm + lever * ratio_max, step_mm)
+        grids.append((F, xs, ys))
+        tasks += [(law, F, float(x), float(y)) for x in xs for y in ys]
+    paths = fork_map(_path_task, tasks)
+    if paths is None:
+        paths = [_path_task(t) for t in tasks]
+    out, at = [], 0
+    for F, xs, ys in grids:
+        block = np.stack(paths[at : at + len(xs) * len(ys)]).reshape(len(xs), len(ys), len(F), 3)
+        out.append(LayerTable(F, xs, ys, np.ascontiguousarray(block.transpose(2, 0, 1, 3))))
+        at += len(xs) * len(ys)
+    return out
+
+
+@dataclass
+class TwoChipModel:
+    """The general-load model of one stack at its chips, its tilts tabulated: fields of many
+    loads at once."""
+
+    stack: LoadedStack
+    chips_mm: list[tuple[float, float]]
+    tables: list[LayerTable]
+    ratio_max: float
+
+    @classmethod
+    def build(
+        cls,
+        stack: LoadedStack,
+        chips_mm: Sequence[tuple[float, float]],
+        ratio_max: float = RATIO_MAX,
+        force_max_N: float | None = None,
+        n_force: int = N_FORCE,
+        step_mm: float = STEP_MM,
+    ) -> TwoChipModel:
+        """The tables up to ``force_max_N`` (FORCE_TOP x the last lock unless given)."""
+        top = FORCE_TOP * max(t.lock_force_N for t in stack.tilt) if force_max_N is None else force_max_N
+        tables = layer_tables(stack, top, ratio_max, n_force, step_mm)
+        return cls(stack, [(float(c[0]), float(c[1])) for c in chips_mm], tables, ratio_max)
+
+    @property
+    def force_max_N(self) -> float:
+        return float(self.tables[0].force_N[-1])
+
+    def states(self, theta: np.ndarray, newton_steps: int = 0, near: np.ndarray | None = None) -> np.ndarray:
+        """(m, n, 3) every layer's (d, phi_y, phi_x) at the loads ``theta`` (m, 5): the tables'
+        and, with ``newton_steps``, that many Newton steps of the tilt rung's equilibrium from
+        there, or from the states ``near`` (m, n, 3) (a close load's: the Jacobian's steps)."""
+        F, rx, ry = _ratios(theta)
+        out = np.empty((len(F), len(self.tables), 3))
+        for j, (table, law, lever) in enumerate(zip(self.tables, self.stack.tilt, self.stack.lever_mm)):
+            off = np.column_stack([theta[:, 3] + lever * rx, theta[:, 4] + lever * ry])
+            s = table.at(F, off[:, 0], off[:, 1]) if near is None else near[:, j]
+            out[:, j] = newton_many(law, F, off, s, newton_steps) if newton_steps else s
+        return out
+
+    def fields_T(self, theta: np.ndarray, newton_steps: int = 0) -> np.ndarray:
+        """(m, 3 k) the chips' fields in T at the loads ``theta`` (m, 5) = (Fz, Fx, Fy, x, y)."""
+        theta = np.atleast_2d(np.asarray(theta, dtype=float))
+        return self.fields_of(theta, self.states(theta, newton_steps))
+
+    def state_tangent(self, theta: np.ndarray, states: np.ndarray) -> np.ndarray:
+        """(m, 5, n, 3) d(states)/d(theta) at equilibrium ``states`` of the loads ``theta``: each
+        layer's tangent K solved against the load's derivative (the implicit function theorem;
+        the layer carries (F, F ox, F oy) = (Fz, Fz x + lever Fx, Fz y + lever Fy))."""
+        m = len(theta)
+        out = np.zeros((m, 5, len(self.tables), 3))
+        for j, (law, lever) in enumerate(zip(self.stack.tilt, self.stack.lever_mm)):
+            _, K = residual_many(law, states[:, j], np.zeros((m, 3)))
+            dload = np.zeros((m, 3, 5))
+            dload[:, 0, 0] = 1.0
+            dload[:, 1, 0], dload[:, 1, 1], dload[:, 1, 3] = theta[:, 3], lever, theta[:, 0]
+            dload[:, 2, 0], dload[:, 2, 2], dload[:, 2, 4] = theta[:, 4], lever, theta[:, 0]
+            ok = np.abs(np.linalg.det(K)) > 1e-300
+            out[ok, :, j, :] = np.linalg.solve(K[ok], dload[ok]).transpose(0, 2, 1)
+        return out
+
+    def jacobian_T(self, theta: np.ndarray, at: np.ndarray, states: np.ndarray) -> np.ndarray:
+        """(m, 3 k, 5) dB/dtheta at equilibrium ``states``, ``at`` the fields there: forward
+        differences with the states moved along their tangent (no solve)."""
+        h = fd_steps(theta)
+        m = len(theta)
+        tangent = self.state_tangent(theta, states)
+        shifted = np.repeat(theta[None, :, :], 5, axis=0)
+        moved = np.repeat(states[None], 5, axis=0)
+        for i in range(5):
+            shifted[i, :, i] += h[:, i]
+            moved[i] += h[:, i, None, None] * tangent[:, i]
+        B = self.fields_of(shifted.reshape(5 * m, 5), moved.reshape(5 * m, *states.shape[1:])).reshape(5, m, -1)
+        return ((B - at[None, :, :]) / h.T[:, :, None]).transpose(1, 2, 0)
+
+    def fields_of(self, theta: np.ndarray, states: np.ndarray) -> np.ndarray:
+        """(m, 3 k) the chips' fields at the loads ``theta`` with the layers' ``states``."""
+        F, rx, ry = _ratios(theta)
+        slide = self.stack.slides_mm(F, (rx, ry))
+        shift, rotvec = magnet_pose(self.stack.geometry, states[..., 0], states[..., 1:], slide)
+        # every chip in one call of the field (its cost is mostly per call): chip j seen from the
+        # first chip's place, the magnet moved back by the chips' spacing
+        first = self.chips_mm[0]
+        moved = [shift - np.array([cx - first[0], cy - first[1], 0.0]) for cx, cy in self.chips_mm]
+        k, m = len(self.chips_mm), len(theta)
+        B = magnet_field_T(self.stack.geometry, np.concatenate(moved), np.tile(rotvec, (k, 1)), first)
+        return B.reshape(k, m, 3).transpose(1, 0, 2).reshape(m, 3 * k)
+
+
+def _ratios(theta: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(Fz, Fx / Fz, Fy / Fz) of loads (m, 5) (ratios 0 at Fz <= 0)."""
+    F = theta[:, 0]
+    safe = np.where(F > 0.0, F, 1.0)
+    return F, np.where(F > 0.0, theta[:, 1] / safe, 0.0), np.where(F > 0.0, theta[:, 2] / safe, 0.0)
+
+
+def fd_steps(theta: np.ndarray) -> np.ndarray:
+    """(m, 5) the finite-difference step of every unknown (the exact reader's,
+    :func:`~mst_cli.model.load_bound.steps`)."""
+    h_F = np.maximum(FORCE_STEP_REL * np.abs(theta[:, 0]), FORCE_STEP_MIN_N)
+    h_p = np.full(len(theta), POSITION_STEP_MM)
+    return np.column_stack([h_F, h_F, h_F, h_p, h_p])
+
+
+@dataclass
+class TwoChipEstimates:
+    """Per reading: the five unknowns at the best fit whatever its flag (a caller blanks what it
+    does not trust), their Cramer-Rao 1-sigma there (inf where the chips cannot tell one apart),
+    the fit's chi^2 and flag (:data:`FLAGS`), and how many distinct fits went on to the exact
+    states."""
+
+    force_N: np.ndarray
+    shear_x_N: np.ndarray
+    shear_y_N: np.ndarray
+    x_mm: np.ndarray
+    y_mm: np.ndarray
+    sigma_force_N: np.ndarray
+    sigma_shear_x_N: np.ndarray
+    sigma_shear_y_N: np.ndarray
+    sigma_x_mm: np.ndarray
+    sigma_y_mm: np.ndarray
+    chi2: np.ndarray
+    flag: np.ndarray
+    fits: np.ndarray
+
+    @classmethod
+    def of(
+        cls, theta: np.ndarray, sigma: np.ndarray, chi2: np.ndarray, flag: np.ndarray, fits: np.ndarray
+    ) -> TwoChipEstimates:
+        """From the estimates (n, 5) and their 1-sigma (n, 5) in the order of UNKNOWNS."""
+        columns = {name: theta[:, i] for i, name in enumerate(UNKNOWNS)}
+        columns.update({"sigma_" + name: sigma[:, i] for i, name in enumerate(UNKNOWNS)})
+        return cls(**columns, chi2=chi2, flag=flag, fits=fits)
+
+    @property
+    def theta(self) -> np.ndarray:
+        """(n, 5) the estimates in the order of :data:`~mst_cli.model.load_bound.UNKNOWNS`."""
+        return np.column_stack([getattr(self, name) for name in UNKNOWNS])
+
+    @property
+    def sigma(self) -> np.ndarray:
+        """(n, 5) their 1-sigma, in the same order."""
+        return np.column_stack([getattr(self, "sigma_" + name) for name in UNKNOWNS])
+
+
+# loads (m, 5) and the layers' states of close loads (m, n, 3) or None -> (fields, states)
+Model = Callable[[np.ndarray, np.ndarray | None], tuple[np.ndarray, np.ndarray]]
+Jacobian = Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray]  # (theta, fields, states) -> (m, 3 k, 5)
+
+
+def jacobian_many(fields: Model, theta: np.ndarray, at: np.ndarray, states: np.ndarray) -> np.ndarray:
+    """(m, 3 k, 5) dB/dtheta by forward differences from ``at`` = fields(theta) (the layers in
+    ``states``, where each step's solve starts), every unknown's step in one call of the model."""
+    h = fd_steps(theta)
+    m = len(theta)
+    shifted = np.repeat(theta[None, :, :], 5, axis=0)
+    for i in range(5):
+        shifted[i, :, i] += h[:, i]
+    near = np.broadcast_to(states, (5, *states.shape)).reshape(5 * m, *states.shape[1:])
+    B = fields(shifted.reshape(5 * m, 5), near)[0].reshape(5, m, -1)
+    return ((B - at[None, :, :]) / h.T[:, :, None]).transpose(1, 2, 0)
+
+
+def fit_many(
+    fields: Model,
+    B_T: np.ndarray,
+    theta: np.ndarray,
+    noise_T: float,
+    clip: Callable[[np.ndarray], np.ndarray],
+    max_iter: int,
+    step_tol: float = STEP_TOL,
+    jacobian: Jacobian | None = None,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Levenberg-damped Gauss-Newton of every row of ``theta`` (m, 5) against its reading
+    ``B_T`` (m, 3 k) at once, each on its own damping, each step clipped by ``clip``: (theta,
+    chi^2, the Jacobian (m, 3 k, 5) there). A row ends once its step is within ``step_tol`` of
+    its bound's sigma in every unknown or lowers chi^2 by less than ``step_tol``^2 (of chi^2 or of
+    1, whichever is more), or once its damping passes LAMBDA_MAX. ``jacobian`` (theta, fields,
+    states) -> (m, 3 k, 5): the model's own (else forward differences of ``fields``)."""
+    jac = jacobian if jacobian is not None else functools.partial(jacobian_many, fields)
+    theta = clip(np.array(theta, dtype=float))
+    model, states = fields(theta, None)
+    cost = np.sum(((model - B_T) / noise_T) ** 2, axis=1)
+    J = jac(theta, model, states)
+    lam = np.full(len(theta), LAMBDA_0)
+    active = np.arange(len(theta))
+    for _ in range(max_iter):
+        if not len(active):
+            break
+        Jw = J[active] / noise_T
+        A = np.einsum("mki,mkj->mij", Jw, Jw)
+        g = np.einsum("mki,mk->mi", Jw, (model[active] - B_T[active]) / noise_T)
+        scale2 = np.maximum(np.diagonal(A, axis1=1, axis2=2), 1e-300)
+        damped = A + lam[active, None, None] * (scale2[:, :, None] * np.eye(5))
+        trial = clip(theta[active] - np.linalg.solve(damped, g[:, :, None])[:, :, 0])
+        t_model, t_states = fields(trial, states[active])
+        t_cost = np.sum(((t_model - B_T[active]) / noise_T) ** 2, axis=1)
+        better = t_cost <= cost[active]
+        small = np.all(np.abs(trial - theta[active]) * np.sqrt(scale2) <= step_tol, axis=1)
+        small |= cost[active] - t_cost <= step_tol**2 * np.maximum(cost[active], 1.0)  # chi^2 all but still
+        acc = active[better]
+        theta[acc], model[acc], cost[acc], states[acc] = (
+            trial[better],
+            t_model[better],
+            t_cost[better],
+            t_states[better],
+        )
+        lam[acc] = np.maximum(lam[acc] / 10.0, 1e-6)
+        lam[active[~better]] *= 10.0
+        done = (better & small) | (lam[active] > LAMBDA_MAX)
+        if len(acc):
+            J[acc] = jac(theta[acc], model[acc], states[acc])
+        active = active[~done]
+
+    return theta, cost, J
+
+
+class TwoChipReader:
+    """The fast estimator of all five unknowns from two chips or more: the tabulated model
+    (:class:`TwoChipModel`), fitted from every start on the tables alone, then each reading's
+    distinct fits (at most MAX_FITS) made exact (the tables' states put through ``newton_steps``
+    of the tilt rung's Newton) by a few more steps on the exact states. ``model``: tables built
+    already (then ``stack`` and ``ratio_max`` are its); the tables depend on the stack and the
+    shear ratio only, so readers of other chip layouts may share them,
+    ``TwoChipModel(stack, chips_mm, other.model.tables, other.model.ratio_max)``."""
+
+    def __init__(
+        self,
+        stack: LoadedStack,
+        chips_mm: Sequence[tuple[float, float]],
+        noise_T: float,
+        ratio_max: float = RATIO_MAX,
+        model: TwoChipModel | None = None,
+        newton_steps: int = NEWTON_STEPS,
+    ):
+        if len(chips_mm) < 2:
+            raise ValueError("two chips or more estimate all five unknowns")
+        self.model = model if model is not None else TwoChipModel.build(stack, chips_mm, ratio_max)
+        self.noise_T = float(noise_T)
+        self.newton_steps = newton_steps
+        dof = 3 * len(self.model.chips_mm) - 5
+        self.chi2_limit = CHI2_FLAG.get(dof, 3.0 * dof + 10.0)  # the exact reader's
+        F = np.linspace(0.0, self.model.force_max_N, 257)
+        centred = np.column_stack([F, np.zeros((len(F), 4))])
+        self._start_F = F
+        self._start_B = np.linalg.norm(self.exact(centred)[0][:, :3], axis=1)  # |B| at the first chip
+
+    def table(self, theta: np.ndarray, near: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """(the chips' fields (m, 3 k), the layers' states) on the tables' states (``near``, the
+        :data:`Model` signature's, unused: the tables need no start)."""
+        states = self.model.states(theta)
+        return self.model.fields_of(theta, states), states
+
+    def exact(self, theta: np.ndarray, near: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """(the chips' fields (m, 3 k), the layers' states) on the exact states, the Newton
+        started from the tables' or from ``near``."""
+        states = self.model.states(theta, self.newton_steps, near)
+        return self.model.fields_of(theta, states), states
+
+    def clip(self, theta: np.ndarray) -> np.ndarray:
+        """Loads kept inside the model's domain: Fz in (0, the tables' top], the shear inside
+        |Fx|, |Fy| <= ratio_max Fz, the press on the face."""
+        g = self.model.stack.geometry
+        t = theta.copy()
+        t[:, 0] = np.clip(t[:, 0], 1e-3, self.model.force_max_N)
+        lim = self.model.ratio_max * t[:, 0]
+        t[:, 1], t[:, 2] = np.clip(t[:, 1], -lim, lim), np.clip(t[:, 2], -lim, lim)
+        t[:, 3] = np.clip(t[:, 3], -0.5 * g.width_mm, 0.5 * g.width_mm)
+        t[:, 4] = np.clip(t[:, 4], -0.5 * g.depth_mm, 0.5 * g.depth_mm)
+        return t
+
+    def starts(self, B: np.ndarray) -> np.ndarray:
+        """(n, 5 starts, 5): the centred press whose |B| at the first chip is the reading's, and
+        that force pressed START_FRACTION of the face out toward each corner."""
+        g = self.model.stack.geometry
+        F0 = np.maximum(np.interp(np.linalg.norm(B[:, :3], axis=1), self._start_B, self._start_F), 1e-2)
+        spots = [(0.0, 0.0)] + [(sx * g.width_mm, sy * g.depth_mm) for sx in (-1, 1) for sy in (-1, 1)]
+        out = np.zeros((len(B), len(spots), 5))
+        out[:, :, 0] = F0[:, None]
+        out[:, 1:, 3:] = START_FRACTION * np.array(spots[1:])[None, :, :]
+        return out
+
+    def estimate(self, B_T: np.ndarray, every_start: bool = True) -> TwoChipEstimates:
+        """The estimates from readings ``B_T`` (n, k, 3) or (n, 3 k) in T. ``every_start`` False:
+        the centred start alone, the other four only where its fit is ``no_fit`` (the exact
+        reader's way: about twice as fast, but a second fit within the noise, ``ambiguous``, is
+        looked for only there)."""
+        B = np.asarray(B_T, dtype=float).reshape(len(B_T), -1)
+        starts = self.starts(B)
+        if every_start:
+            return self._estimate_from(B, starts)
+        out = self._estimate_from(B, starts[:, :1])
+        again = np.flatnonzero(out.flag == "no_fit")
+        if len(again):
+            more = self._estimate_from(B[again], starts[again])
+            for name in (f.name for f in dataclasses.fields(TwoChipEstimates)):
+                getattr(out, name)[again] = getattr(more, name)
+        return out
+
+    def _estimate_from(self, B: np.ndarray, starts: np.ndarray) -> TwoChipEstimates:
+        """The readings ``B`` (n, 3 k) fitted from ``starts`` (n, S, 5): every start on the tables,
+        each reading's distinct fits on the exact states, the verdict."""
+        n, S = starts.shape[:2]
+        theta, chi2, J = fit_many(
+            self.table,
+            np.repeat(B, S, axis=0),
+            starts.reshape(n * S, 5),
+            self.noise_T,
+            self.clip,
+            MAX_ITER,
+            TABLE_STEP_TOL,
+        )
+        keep = _distinct(theta.reshape(n, S, 5), chi2.reshape(n, S), crb_sigma(J, self.noise_T).reshape(n, S, 5))
+        owner, slot = np.nonzero(keep)
+        cand = theta.reshape(n, S, 5)[owner, slot]
+        cand, c_chi2, c_J = fit_many(
+            self.exact, B[owner], cand, self.noise_T, self.clip, EXACT_ITER, jacobian=self.model.jacobian_T
+        )
+        return self._verdict(n, owner, cand, c_chi2, crb_sigma(c_J, self.noise_T))
+
+    def _verdict(
+        self, n: int, owner: np.ndarray, theta: np.ndarray, chi2: np.ndarray, sigma: np.ndarray
+    ) -> TwoChipEstimates:
+        """Each reading's best fit by chi^2 and its flag from all its fits (``owner``: whose)."""
+        order = np.lexsort((chi2, owner))  # by reading, then by chi^2
+        owner, theta, chi2, sigma = owner[order], theta[order], chi2[order], sigma[order]
+        first = np.flatnonzero(np.r_[True, owner[1:] != owner[:-1]])
+        best = np.full(n, -1)
+        best[owner[first]] = first
+        fits = np.bincount(owner, minlength=n)
+        ok = chi2 <= self.chi2_limit
+        far = np.abs(theta - theta[best[owner]]) > 2.0 * np.sqrt(sigma**2 + sigma[best[owner]] ** 2)
+        rival = ok & np.any(far, axis=1) & ok[best[owner]]
+        ambiguous = np.bincount(owner, weights=rival, minlength=n) > 0
+        t, s, c = theta[best], sigma[best], chi2[best]
+        flag = np.where(c <= self.chi2_limit, np.where(ambiguous, "ambiguous", "ok"), "no_fit").astype(object)
+        return TwoChipEstimates.of(t, s, c, flag, fits)
+
+    def polish(self, B_T: np.ndarray, estimates: TwoChipEstimates) -> TwoChipEstimates:
+        """The estimates put through the exact reader's fit (:class:`ShearReader`), one reading at
+        a time from the fast estimate (0.1 to 0.5 s each): the exact model's least squares.
+        An ``ambiguous`` flag stays (the polish refines the best fit only)."""
+        B = np.asarray(B_T, dtype=float).reshape(len(B_T), -1)
+        exact = ShearReader(self.model.stack, self.model.chips_mm)
+        theta, sigma, chi2 = estimates.theta.copy(), estimates.sigma.copy(), estimates.chi2.copy()
+        for i in range(len(B)):
+            theta[i], sigma[i], chi2[i], _ = exact._fit(B[i], self.noise_T, self.clip(theta[i : i + 1])[0])
+        flag = np.where(chi2 <= self.chi2_limit, np.where(estimates.flag == "ambiguous", "ambiguous", "ok"), "no_fit")
+        return TwoChipEstimates.of(theta, sigma, chi2, flag.astype(object), estimates.fits)
+
+
+def _distinct(theta: np.ndarray, chi2: np.ndarray, sigma: np.ndarray) -> np.ndarray:
+    """(n, S) which of every reading's S fits to keep: the best, and each further one (by chi^2)
+    further than twice the combined 1-sigma from every fit kept before it, at most MAX_FITS."""
+    n, S = chi2.shape
+    order = np.argsort(chi2, axis=1)
+    t = np.take_along_axis(theta, order[:, :, None], axis=1)
+    s = np.take_along_axis(np.where(np.isfinite(sigma), sigma, 0.0), order[:, :, None], axis=1)
+    kept = np.zeros((n, S), dtype=bool)
+    kept[:, 0] = True
+    for a in range(1, S):
+        close = np.zeros(n, dtype=bool)
+        for b in range(a):
+            same = np.all(np.abs(t[:, a] - t[:, b]) <= 2.0 * np.sqrt(s[:, a] ** 2 + s[:, b] ** 2), axis=1)
+            close |= kept[:, b] & same
+        kept[:, a] = ~close & (kept.sum(axis=1) < MAX_FITS)
+    out = np.zeros((n, S), dtype=bool)
+    np.put_along_axis(out, order, kept, axis=1)
+    return out
