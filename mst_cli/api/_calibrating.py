@@ -160,9 +160,7 @@ def calibrate(
     --------
     >>> cal = mst.calibrate("configs/mohammadi2021-forward.yaml", "loadtest.csv", out="cal")  # doctest: +SKIP
     """
-    from mst_cli.calibration.calibration import (
-        calibrate as run_calibration,  # deferred: scipy.optimize, 330 ms measured
-    )
+    from mst_cli.calibration.calibration import calibrate as run_calibration  # deferred: scipy.optimize, 330 ms
 
     params = _checked_fit_options(mechanics, params, table_size)
     check_argument_order(design, load_test, "calibrate")
