@@ -16,7 +16,7 @@ per reading, how many readings take longer than the goal (1 ms on the M4F, 20 ms
 and the time at 64 MHz (M4F) or 48 MHz (M0+) taking one instruction a cycle (the M4F's FPU
 divides in 14 cycles, loads take 2: a lower bound within a factor of about 1.5; the M0+ has no
 FPU, its float arithmetic is the soft-float library's instructions, counted). Also the flash
-(text + data) and the reader's stack: its deepest call chain below <kind>_from_codes, summed from
+(text + data, the list of readings left out) and the reader's stack: its deepest call chain below <kind>_from_codes, summed from
 -fstack-usage's frames (the caller's own frame comes on top).
 Needs arm-none-eabi-gcc, libnewlib-arm-none-eabi and qemu-system-arm.
 """
@@ -125,8 +125,8 @@ def reader_stack(su: str) -> int:
         key = name.split(".")[0]
         frames[key] = max(frames.get(key, 0), int(size))
 
-    def frame(part: str) -> int:
-        return max((v for k, v in frames.items() if k.endswith(part) and k.startswith("mst_")), default=0)
+    def frame(part: str) -> int:  # mst_<prefix>_<part> (held_step_ is not step_)
+        return max((v for k, v in frames.items() if k.startswith("mst_") and k.split("_", 2)[-1] == part), default=0)
 
     return max(sum(frame(f) for f in chain) for chain in CHAINS)
 
@@ -159,6 +159,24 @@ def run(elf: Path, cpu: str) -> tuple[np.ndarray, np.ndarray]:
     per_tick = CAL_INSNS / float(out[1])
     vals = np.array(out[2:], dtype=float).reshape(-1, 2)
     return vals[:, 0].astype(int), vals[:, 1] * per_tick
+
+
+CHUNK = 6000  # readings per program: their codes (12 bytes each) share the M0+'s 256 kB of flash
+
+
+def count(header: str, kind: str, codes: np.ndarray, cpu: str) -> tuple[np.ndarray, np.ndarray, int, int]:
+    """(flags, instructions) per reading of ``codes`` through ``header`` on ``cpu``, CHUNK
+    readings a program; the program's flash (text + data) less its list of codes, and the
+    reader's stack (bytes)."""
+    flags, insns = [], []
+    for part in np.array_split(codes, -(-len(codes) // CHUNK)):
+        with tempfile.TemporaryDirectory() as tmp:
+            elf, size, stack = build(Path(tmp), header, kind, part, cpu)
+            f, i = run(elf, cpu)
+        flags.append(f)
+        insns.append(i)
+        text, data = (int(v) for v in size.split()[:2])
+    return np.concatenate(flags), np.concatenate(insns), text + data - 12 * len(part), stack
 
 
 def two_chip_table(grids: dict[str, tuple[TableGrid, ...]]) -> str:
@@ -215,10 +233,7 @@ def main() -> None:
         classes = readings(table, imap, rng, args.per_class, args.tail or args.per_class)
         codes = np.vstack([np.rint(b / lsb) for b in classes.values()]).astype(np.int64)
         for cpu in TARGETS:
-            with tempfile.TemporaryDirectory() as tmp:
-                elf, size, stack = build(Path(tmp), header, kind, codes, cpu)
-                flags, insns = run(elf, cpu)
-            text, data = (int(v) for v in size.split()[:2])
+            flags, insns, flash, stack = count(header, kind, codes, cpu)
             mhz = TARGETS[cpu][4]
             ends = np.cumsum([0, *(len(c) for c in classes.values())])
             for k, name in enumerate(classes):
@@ -229,7 +244,7 @@ def main() -> None:
                 print(
                     f"| {kind}_table.h {table.grid.shape} | {cpu} | {name} | {f} | {m:,.0f} / {q:,.0f} / {w:,.0f} | "
                     f"{m / mhz / 1e3:.2f} / {w / mhz / 1e3:.2f} | {over} of {ends[k + 1] - ends[k]} | "
-                    f"{(text + data) / 1024:.0f} kB | {stack} |"
+                    f"{flash / 1024:.0f} kB | {stack} |"
                 )
         sys.stdout.flush()
     print()

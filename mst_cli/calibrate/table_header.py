@@ -176,7 +176,7 @@ def table_header(
         xy_uT_per_lsb_c=c_float(setting.xy_uT_per_lsb, 8),
         z_uT_per_lsb_c=c_float(setting.z_uT_per_lsb, 8),
         saturated_lsb=min(CODE_RANGE_LSB[setting.res] - 1, int(SATURATION_T * 1e6 / setting.z_uT_per_lsb)),
-        table_bytes=table.size_bytes_float32 + 4 * (3 * (nf - 1) + 4) + 3 * table.B_T.size,
+        table_bytes=table.size_bytes_float32 + 4 * (3 * (nf - 1) + 4 + nf + nx + ny - 3) + 3 * table.B_T.size,
         nf=nf,
         nx=nx,
         ny=ny,
@@ -193,6 +193,10 @@ def table_header(
         force_nodes=_c_floats(f"{p}_force_N_nodes", table.grid.force_N),
         x_nodes=_c_floats(f"{p}_u_nodes", table.grid.u),
         y_nodes=_c_floats(f"{p}_v_nodes", table.grid.v),
+        inv_widths="".join(
+            _c_floats(f"{p}_{name}_inv_widths", 1.0 / np.diff(nodes))
+            for name, nodes in (("force_N", table.grid.force_N), ("u", table.grid.u), ("v", table.grid.v))
+        ),
         field=_c_floats(f"{p}_B_uT", 1e6 * table.B_T, per_line=6),
     )
 
