@@ -16,8 +16,8 @@ per reading, how many readings take longer than the goal (1 ms on the M4F, 20 ms
 and the time at 64 MHz (M4F) or 48 MHz (M0+) taking one instruction a cycle (the M4F's FPU
 divides in 14 cycles, loads take 2: a lower bound within a factor of about 1.5; the M0+ has no
 FPU, its float arithmetic is the soft-float library's instructions, counted). Also the flash
-(text + data, the list of readings left out) and the reader's stack: its deepest call chain below <kind>_from_codes, summed from
--fstack-usage's frames (the caller's own frame comes on top).
+(text + data, the list of readings left out) and the reader's stack: its deepest call chain
+below <kind>_from_codes, summed from -fstack-usage's frames (the caller's own frame comes on top).
 Needs arm-none-eabi-gcc, libnewlib-arm-none-eabi and qemu-system-arm.
 """
 
