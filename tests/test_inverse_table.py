@@ -21,6 +21,7 @@ from mst_cli.cli.app import main
 from mst_cli.estimation.inverse_map import inverse_map
 from mst_cli.estimation.inverse_table import TABLE_FILE, InverseTable, TableGrid, source_hash
 from mst_cli.estimation.table_reader import build_beside, table_beside, table_hash
+from mst_cli.estimation.table_start import start_field, start_index, start_nodes, start_quantum_uT
 from mst_cli.model.response import simulate
 from mst_cli.model.stack_pose import pose_field_T, tilt_laws
 from mst_cli.sensor.document import load_design_document
@@ -77,6 +78,45 @@ def test_a_field_blind_to_the_offset_leaves_it_unidentifiable_and_a_field_off_th
     est = table_of(blind).estimate(np.array([blind(np.array([21.0, 3.1, 1.1])), [1e-5, 2e-4, 0.0]]), SIGMA_T, 5.0)
     assert list(est.flag) == ["not_identifiable", "no_fit"]
     assert est.roots[1] == 0
+
+
+def index_scan(table: InverseTable, B_uT: np.ndarray) -> np.ndarray:
+    """The C header's first start over every slab, written out: outward from the reading's place
+    in :func:`start_index`'s order, each side stopped once the index's axis alone is further
+    than the nearest node so far, a tie to the node first in C order."""
+    axis, order = start_index(table)
+    q = start_quantum_uT(table)
+    field, out = start_field(1e6 * table.B_T, q).reshape(-1, 3)[order], []
+    for b in start_field(B_uT, q):
+        best, node, lo = np.inf, -1, int(np.searchsorted(field[:, axis], b[axis], side="left"))
+        for side in (range(lo, len(order)), range(lo - 1, -1, -1)):
+            for s in side:
+                if (field[s, axis] - b[axis]) ** 2 > best:
+                    break
+                d = float(np.sum((field[s] - b) ** 2))
+                if d < best or (d == best and order[s] < node):
+                    best, node = d, int(order[s])
+        out.append(node)
+    return np.array(out)
+
+
+@pytest.mark.parametrize("field", [linear, folded, blind])
+def test_the_headers_indexed_start_is_the_nearest_node_ties_in_c_order(field):
+    # blind ties every x0 node; readings at nodes and between them, and far off the table
+    table = table_of(field)
+    rng = np.random.default_rng(3)
+    p = np.column_stack([rng.uniform(0, 50, 60), rng.uniform(-10, 10, 60), rng.uniform(-10, 10, 60)])
+    on_table = 1e6 * np.array([field(x) for x in p]) + rng.normal(0.0, 0.5, (60, 3))
+    at_nodes = 1e6 * np.array([table.B_T[2, 3, 4], table.B_T[7, 0, 8], 2 * table.B_T[10, 10, 0]])
+    B_uT = np.vstack([on_table, at_nodes])
+    nodes = np.stack(np.meshgrid(GRID.force_N, GRID.u, GRID.v, indexing="ij"), axis=-1).reshape(-1, 3)
+    q = start_quantum_uT(table)
+    ints = start_field(1e6 * table.B_T, q).reshape(-1, 3)
+    brute = [int(np.argmin(np.sum((ints - b) ** 2, axis=1))) for b in start_field(B_uT, q)]  # the first on a tie
+    assert list(index_scan(table, B_uT)) == brute
+    starts = start_nodes(table, B_uT, np.full(len(GRID.force_N) - 1, 1e9))  # every slab allowed
+    at_rest = nodes[brute][:, 0] == 0.0  # the no-load face's start is the middle of (u, v)
+    np.testing.assert_array_equal(starts[~at_rest], nodes[brute][~at_rest])
 
 
 @pytest.fixture(scope="module")

@@ -60,6 +60,17 @@ def start_field(B_uT: np.ndarray, quantum_uT: float) -> np.ndarray:
     return np.clip(np.floor(B_uT / quantum_uT + 0.5), -START_LEVELS, START_LEVELS)
 
 
+def start_index(table: TableLike) -> tuple[int, np.ndarray]:
+    """The C header's index of the same search (its result is :func:`start_nodes`', exactly): the
+    axis whose integer field spreads the most, and the nodes (flat, C order) sorted by their
+    integer field on it (ties in C order). The header scans outward from the reading's place in
+    that order and stops on each side once the axis alone is further than the nearest node so
+    far: a few hundred nodes instead of every node of the allowed slabs."""
+    field = start_field(1e6 * table.B_T, start_quantum_uT(table)).reshape(-1, 3)
+    axis = int(np.argmax(np.std(field, axis=0)))
+    return axis, np.argsort(field[:, axis], kind="stable")
+
+
 def start_nodes(table: TableLike, B_uT: np.ndarray, margin_uT: np.ndarray) -> np.ndarray:
     """The first start of each reading (n, 3) uT: the node nearest it (least squared distance in
     the integer units of :func:`start_field`, the first in C order on a tie) among the nodes of

@@ -91,15 +91,27 @@ def _c_floats(cname: str, values: np.ndarray, per_line: int = 8) -> str:
 def start_arrays(table: it.InverseTable, p: str) -> dict[str, str]:
     """The C arrays of the direct inverse's starts: each force slab's |B| range (uT), the middle
     of (u, v) and its mean node spacing, as :func:`~mst_cli.estimation.inverse_table.solve_starts`
-    takes them."""
+    takes them, and the start search's integer field in its index's order
+    (:func:`~mst_cli.estimation.table_start.start_index`) with each entry's node and force node."""
     lo, hi = ts.slab_babs_uT(table)
     quantum = ts.start_quantum_uT(table)
-    ints = ts.start_field(1e6 * table.B_T, quantum).astype(int).ravel()
-    rows = [", ".join(str(v) for v in ints[i : i + 12]) for i in range(0, len(ints), 12)]
+    axis, order = ts.start_index(table)  # the field's nodes in the search's order
+    per_slab = table.grid.shape[1] * table.grid.shape[2]
+
+    def ints(cname: str, ctype: str, values: np.ndarray, per_line: int = 12) -> str:
+        v = [str(int(x)) for x in np.ravel(values)]
+        rows = [", ".join(v[i : i + per_line]) for i in range(0, len(v), per_line)]
+        return f"static const {ctype} {cname}[{len(v)}] = {{\n    " + ",\n    ".join(rows) + "\n};\n"
+
+    node_type = "uint16_t" if len(order) <= 0xFFFF else "uint32_t"
     return {
         "start_quantum_uT": c_float(quantum, 9),
         "start_levels": str(ts.START_LEVELS),
-        "start_field": f"static const int16_t {p}_B_start[{len(ints)}] = {{\n    " + ",\n    ".join(rows) + "\n};\n",
+        "start_axis": str(axis),
+        "start_nodes": str(len(order)),
+        "start_field": ints(f"{p}_B_start", "int16_t", ts.start_field(1e6 * table.B_T, quantum).reshape(-1, 3)[order])
+        + ints(f"{p}_start_node", node_type, order)
+        + ints(f"{p}_start_force", "uint8_t" if table.grid.shape[0] <= 0xFF else "uint16_t", order // per_slab),
         "slab_babs": _c_floats(f"{p}_slab_babs_lo_uT", lo) + _c_floats(f"{p}_slab_babs_hi_uT", hi),
         "middle": _c_floats(f"{p}_middle_uv", np.ravel(ts.middle_uv(table.grid))),
     }
@@ -164,7 +176,7 @@ def table_header(
         xy_uT_per_lsb_c=c_float(setting.xy_uT_per_lsb, 8),
         z_uT_per_lsb_c=c_float(setting.z_uT_per_lsb, 8),
         saturated_lsb=min(CODE_RANGE_LSB[setting.res] - 1, int(SATURATION_T * 1e6 / setting.z_uT_per_lsb)),
-        table_bytes=table.size_bytes_float32 + 4 * (3 * (nf - 1) + 4) + 2 * table.B_T.size,
+        table_bytes=table.size_bytes_float32 + 4 * (3 * (nf - 1) + 4 + nf + nx + ny - 3) + 3 * table.B_T.size,
         nf=nf,
         nx=nx,
         ny=ny,
@@ -181,6 +193,10 @@ def table_header(
         force_nodes=_c_floats(f"{p}_force_N_nodes", table.grid.force_N),
         x_nodes=_c_floats(f"{p}_u_nodes", table.grid.u),
         y_nodes=_c_floats(f"{p}_v_nodes", table.grid.v),
+        inv_widths="".join(
+            _c_floats(f"{p}_{name}_inv_widths", 1.0 / np.diff(nodes))
+            for name, nodes in (("force_N", table.grid.force_N), ("u", table.grid.u), ("v", table.grid.v))
+        ),
         field=_c_floats(f"{p}_B_uT", 1e6 * table.B_T, per_line=6),
     )
 
