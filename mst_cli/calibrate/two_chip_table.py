@@ -60,6 +60,7 @@ MAX_ITER = 60
 STEP_TOL = 1e-3  # a fit ends once a step is this share of the bound's sigma in every unknown ...
 TABLE_STEP_TOL = 3e-2  # ... on the tables' states (the exact states' fit goes on from there)
 LAMBDA_0, LAMBDA_MAX = 1e-3, 1e8
+LAMBDA_GN = 1e-2  # a step damped this little is Gauss-Newton's
 START_FRACTION = 0.25  # the four off-centre starts: this share of the face's width and depth out
 NEWTON_STEPS = 12  # the tilt rung's Newton steps from the tables' states (most loads need 2 to 6, a few 10)
 # Of 100 random presses on tests/test_two_chip_table.py's sensor, the fit on the exact states ends
@@ -349,7 +350,8 @@ def fit_many(
     ``B_T`` (m, 3 k) at once, each on its own damping, each step clipped by ``clip``: (theta,
     chi^2, the Jacobian (m, 3 k, 5) there). A row ends once its step is within ``step_tol`` of
     its bound's sigma in every unknown or lowers chi^2 by less than ``step_tol``^2 (of chi^2 or of
-    1, whichever is more), or once its damping passes LAMBDA_MAX. ``jacobian`` (theta, fields,
+    1, whichever is more), once such a short step at Gauss-Newton's damping (LAMBDA_GN) is no
+    better, or once its damping passes LAMBDA_MAX. ``jacobian`` (theta, fields,
     states) -> (m, 3 k, 5): the model's own (else forward differences of ``fields``)."""
     jac = jacobian if jacobian is not None else functools.partial(jacobian_many, fields)
     theta = clip(np.array(theta, dtype=float))
@@ -370,8 +372,11 @@ def fit_many(
         t_model, t_states = fields(trial, states[active])
         t_cost = np.sum(((t_model - B_T[active]) / noise_T) ** 2, axis=1)
         better = t_cost <= cost[active]
-        small = np.all(np.abs(trial - theta[active]) * np.sqrt(scale2) <= step_tol, axis=1)
-        small |= cost[active] - t_cost <= step_tol**2 * np.maximum(cost[active], 1.0)  # chi^2 all but still
+        short = np.all(np.abs(trial - theta[active]) * np.sqrt(scale2) <= step_tol, axis=1)
+        small = short | (cost[active] - t_cost <= step_tol**2 * np.maximum(cost[active], 1.0))  # chi^2 all but still
+        # a step that short, little damped (Gauss-Newton's) and no better: the minimum to round-off
+        # (raising the damping to LAMBDA_MAX, as before, took up to 14 more calls to say so)
+        stalled = ~better & short & (lam[active] <= LAMBDA_GN)
         acc = active[better]
         theta[acc], model[acc], cost[acc], states[acc] = (
             trial[better],
@@ -381,7 +386,7 @@ def fit_many(
         )
         lam[acc] = np.maximum(lam[acc] / 10.0, 1e-6)
         lam[active[~better]] *= 10.0
-        done = (better & small) | (lam[active] > LAMBDA_MAX)
+        done = (better & small) | stalled | (lam[active] > LAMBDA_MAX)
         if len(acc):
             J[acc] = jac(theta[acc], model[acc], states[acc])
         active = active[~done]
