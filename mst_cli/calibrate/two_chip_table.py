@@ -67,6 +67,7 @@ NEWTON_STEPS = 12  # the tilt rung's Newton steps from the tables' states (most 
 # within 3 steps for 92, within 12 for 98 and within 20 for all (a flat valley past the lock).
 EXACT_ITER = 40  # at most this many fit steps on the exact states, from the tables' fit
 MAX_FITS = 3  # distinct fits per reading carried to the exact states
+MERGE_SIGMA = 1.0  # a start's fit this close to a better one's (in its step's scale) ends there
 FLAGS = ("ok", "ambiguous", "no_fit")
 
 
@@ -345,6 +346,7 @@ def fit_many(
     max_iter: int,
     step_tol: float = STEP_TOL,
     jacobian: Jacobian | None = None,
+    siblings: int = 1,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Levenberg-damped Gauss-Newton of every row of ``theta`` (m, 5) against its reading
     ``B_T`` (m, 3 k) at once, each on its own damping, each step clipped by ``clip``: (theta,
@@ -352,7 +354,10 @@ def fit_many(
     its bound's sigma in every unknown or lowers chi^2 by less than ``step_tol``^2 (of chi^2 or of
     1, whichever is more), once such a short step at Gauss-Newton's damping (LAMBDA_GN) is no
     better, or once its damping passes LAMBDA_MAX. ``jacobian`` (theta, fields,
-    states) -> (m, 3 k, 5): the model's own (else forward differences of ``fields``)."""
+    states) -> (m, 3 k, 5): the model's own (else forward differences of ``fields``).
+    ``siblings``: the rows come in runs of that many fits of one reading (its starts); a row
+    ends too once it lies within MERGE_SIGMA of its step's scale of a sibling of lower chi^2 in
+    every unknown (the same minimum ahead: :func:`_distinct` would merge them)."""
     jac = jacobian if jacobian is not None else functools.partial(jacobian_many, fields)
     theta = clip(np.array(theta, dtype=float))
     model, states = fields(theta, None)
@@ -387,11 +392,25 @@ def fit_many(
         lam[acc] = np.maximum(lam[acc] / 10.0, 1e-6)
         lam[active[~better]] *= 10.0
         done = (better & small) | stalled | (lam[active] > LAMBDA_MAX)
+        if siblings > 1:
+            done |= _behind_a_sibling(theta, cost, active, np.sqrt(scale2), siblings)
         if len(acc):
             J[acc] = jac(theta[acc], model[acc], states[acc])
         active = active[~done]
 
     return theta, cost, J
+
+
+def _behind_a_sibling(
+    theta: np.ndarray, cost: np.ndarray, active: np.ndarray, inv_step: np.ndarray, siblings: int
+) -> np.ndarray:
+    """Which ``active`` rows lie within MERGE_SIGMA / ``inv_step`` (per unknown) of another row of
+    their reading (rows in runs of ``siblings``) whose chi^2 is lower (or equal and first)."""
+    first = active - active % siblings
+    others = first[:, None] + np.arange(siblings)[None, :]  # (a, S) every row of the reading
+    near = np.all(np.abs(theta[others] - theta[active, None, :]) * inv_step[:, None, :] <= MERGE_SIGMA, axis=2)
+    lower = (cost[others] < cost[active, None]) | ((cost[others] == cost[active, None]) & (others < active[:, None]))
+    return np.any(near & lower, axis=1)
 
 
 class TwoChipReader:
@@ -488,6 +507,7 @@ class TwoChipReader:
             self.clip,
             MAX_ITER,
             TABLE_STEP_TOL,
+            siblings=S,
         )
         keep = _distinct(theta.reshape(n, S, 5), chi2.reshape(n, S), crb_sigma_many(J, self.noise_T).reshape(n, S, 5))
         owner, slot = np.nonzero(keep)
