@@ -355,9 +355,8 @@ def fit_many(
     1, whichever is more), once such a short step at Gauss-Newton's damping (LAMBDA_GN) is no
     better, or once its damping passes LAMBDA_MAX. ``jacobian`` (theta, fields,
     states) -> (m, 3 k, 5): the model's own (else forward differences of ``fields``).
-    ``siblings``: the rows come in runs of that many fits of one reading (its starts); a row
-    ends too once it lies within MERGE_SIGMA of its step's scale of a sibling of lower chi^2 in
-    every unknown (the same minimum ahead: :func:`_distinct` would merge them)."""
+    ``siblings``: rows in runs of that many starts of one reading; a row ends once within
+    MERGE_SIGMA steps' scale of a sibling of lower chi^2 (the same minimum: :func:`_distinct`'s)."""
     jac = jacobian if jacobian is not None else functools.partial(jacobian_many, fields)
     theta = clip(np.array(theta, dtype=float))
     model, states = fields(theta, None)
@@ -379,8 +378,7 @@ def fit_many(
         better = t_cost <= cost[active]
         short = np.all(np.abs(trial - theta[active]) * np.sqrt(scale2) <= step_tol, axis=1)
         small = short | (cost[active] - t_cost <= step_tol**2 * np.maximum(cost[active], 1.0))  # chi^2 all but still
-        # a step that short, little damped (Gauss-Newton's) and no better: the minimum to round-off
-        # (raising the damping to LAMBDA_MAX, as before, took up to 14 more calls to say so)
+        # a short Gauss-Newton step no better: the minimum to round-off (more damping only shortens it)
         stalled = ~better & short & (lam[active] <= LAMBDA_GN)
         acc = active[better]
         theta[acc], model[acc], cost[acc], states[acc] = (
