@@ -2,7 +2,7 @@
 flat out, against the same readings from a file. Prints a markdown table; asserts nothing.
 
     python benchmarks/bench_live.py [--readings 4000] [--two-chip-readings 1000] [--rate 2000] [--repeats 3]
-                                    [--one-chip]
+                                    [--one-chip | --two-chip]
 
 On the bundled sensor (configs/mohammadi2021-forward.yaml, spring; its offset and shear tables
 found or built as `mst read` does, kept in the cache for the next run: the first run builds them,
@@ -229,12 +229,13 @@ def main() -> None:
     ap.add_argument("--rate", type=float, default=2000.0, help="lines a second fed to the pseudo-terminal")
     ap.add_argument("--repeats", type=int, default=3, help="runs of every row (the median is printed)")
     ap.add_argument("--one-chip", action="store_true", help="one chip only (no two-chip tables to build)")
+    ap.add_argument("--two-chip", action="store_true", help="two chips only (no one-chip tables to find)")
     ap.add_argument("--two-chip-readings", type=int, default=1000, help="readings of the two-chip rows")
     ap.add_argument("--seed", type=int, default=3)
     args = ap.parse_args()
     rng = np.random.default_rng(args.seed)
     with tempfile.TemporaryDirectory() as tmp:
-        rows = one_chip_rows(Path(tmp), args.readings, rng)
+        rows = [] if args.two_chip else one_chip_rows(Path(tmp), args.readings, rng)
         if not args.one_chip:
             rows += two_chip_rows(Path(tmp), args.two_chip_readings, rng)
         for k in range(args.repeats):

@@ -60,12 +60,14 @@ MAX_ITER = 60
 STEP_TOL = 1e-3  # a fit ends once a step is this share of the bound's sigma in every unknown ...
 TABLE_STEP_TOL = 3e-2  # ... on the tables' states (the exact states' fit goes on from there)
 LAMBDA_0, LAMBDA_MAX = 1e-3, 1e8
+LAMBDA_GN = 1e-2  # a step damped this little is Gauss-Newton's
 START_FRACTION = 0.25  # the four off-centre starts: this share of the face's width and depth out
 NEWTON_STEPS = 12  # the tilt rung's Newton steps from the tables' states (most loads need 2 to 6, a few 10)
 # Of 100 random presses on tests/test_two_chip_table.py's sensor, the fit on the exact states ends
 # within 3 steps for 92, within 12 for 98 and within 20 for all (a flat valley past the lock).
 EXACT_ITER = 40  # at most this many fit steps on the exact states, from the tables' fit
 MAX_FITS = 3  # distinct fits per reading carried to the exact states
+MERGE_SIGMA = 1.0  # a start's fit this close to a better one's (in its step's scale) ends there
 FLAGS = ("ok", "ambiguous", "no_fit")
 
 
@@ -331,13 +333,17 @@ def fit_many(
     max_iter: int,
     step_tol: float = STEP_TOL,
     jacobian: Jacobian | None = None,
+    siblings: int = 1,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Levenberg-damped Gauss-Newton of every row of ``theta`` (m, 5) against its reading
     ``B_T`` (m, 3 k) at once, each on its own damping, each step clipped by ``clip``: (theta,
     chi^2, the Jacobian (m, 3 k, 5) there). A row ends once its step is within ``step_tol`` of
     its bound's sigma in every unknown or lowers chi^2 by less than ``step_tol``^2 (of chi^2 or of
-    1, whichever is more), or once its damping passes LAMBDA_MAX. ``jacobian`` (theta, fields,
-    states) -> (m, 3 k, 5): the model's own (else forward differences of ``fields``)."""
+    1, whichever is more), once such a short step at Gauss-Newton's damping (LAMBDA_GN) is no
+    better, or once its damping passes LAMBDA_MAX. ``jacobian`` (theta, fields,
+    states) -> (m, 3 k, 5): the model's own (else forward differences of ``fields``).
+    ``siblings``: rows in runs of that many starts of one reading; a row ends once within
+    MERGE_SIGMA steps' scale of a sibling of lower chi^2 (the same minimum: :func:`_distinct`'s)."""
     jac = jacobian if jacobian is not None else functools.partial(jacobian_many, fields)
     theta = clip(np.array(theta, dtype=float))
     model, states = fields(theta, None)
@@ -357,8 +363,10 @@ def fit_many(
         t_model, t_states = fields(trial, states[active])
         t_cost = np.sum(((t_model - B_T[active]) / noise_T) ** 2, axis=1)
         better = t_cost <= cost[active]
-        small = np.all(np.abs(trial - theta[active]) * np.sqrt(scale2) <= step_tol, axis=1)
-        small |= cost[active] - t_cost <= step_tol**2 * np.maximum(cost[active], 1.0)  # chi^2 all but still
+        short = np.all(np.abs(trial - theta[active]) * np.sqrt(scale2) <= step_tol, axis=1)
+        small = short | (cost[active] - t_cost <= step_tol**2 * np.maximum(cost[active], 1.0))  # chi^2 all but still
+        # a short Gauss-Newton step no better: the minimum to round-off (more damping only shortens it)
+        stalled = ~better & short & (lam[active] <= LAMBDA_GN)
         acc = active[better]
         theta[acc], model[acc], cost[acc], states[acc] = (
             trial[better],
@@ -368,12 +376,26 @@ def fit_many(
         )
         lam[acc] = np.maximum(lam[acc] / 10.0, 1e-6)
         lam[active[~better]] *= 10.0
-        done = (better & small) | (lam[active] > LAMBDA_MAX)
+        done = (better & small) | stalled | (lam[active] > LAMBDA_MAX)
+        if siblings > 1:
+            done |= _behind_a_sibling(theta, cost, active, np.sqrt(scale2), siblings)
         if len(acc):
             J[acc] = jac(theta[acc], model[acc], states[acc])
         active = active[~done]
 
     return theta, cost, J
+
+
+def _behind_a_sibling(
+    theta: np.ndarray, cost: np.ndarray, active: np.ndarray, inv_step: np.ndarray, siblings: int
+) -> np.ndarray:
+    """Which ``active`` rows lie within MERGE_SIGMA / ``inv_step`` (per unknown) of another row of
+    their reading (rows in runs of ``siblings``) whose chi^2 is lower (or equal and first)."""
+    first = active - active % siblings
+    others = first[:, None] + np.arange(siblings)[None, :]  # (a, S) every row of the reading
+    near = np.all(np.abs(theta[others] - theta[active, None, :]) * inv_step[:, None, :] <= MERGE_SIGMA, axis=2)
+    lower = (cost[others] < cost[active, None]) | ((cost[others] == cost[active, None]) & (others < active[:, None]))
+    return np.any(near & lower, axis=1)
 
 
 class TwoChipReader:
@@ -470,6 +492,7 @@ class TwoChipReader:
             self.clip,
             MAX_ITER,
             TABLE_STEP_TOL,
+            siblings=S,
         )
         keep = _distinct(theta.reshape(n, S, 5), chi2.reshape(n, S), crb_sigma(J, self.noise_T).reshape(n, S, 5))
         owner, slot = np.nonzero(keep)

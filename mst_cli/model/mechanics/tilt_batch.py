@@ -104,15 +104,17 @@ def newton_many(
     """(m, 3) the states after ``steps`` Newton steps from ``guess`` (m, 3) toward the equilibrium
     under ``force_N`` (m,) pressed at ``offset_mm`` (m, 2): each step halved until the residual
     (relative to the load, as the scalar solve measures it) falls, for each load on its own; a
-    load whose step cannot lower it stays put, one within the scalar solve's tolerance too."""
+    load whose step cannot lower it stays put (and is not tried again: its next step would be the
+    same), one within the scalar solve's tolerance too."""
     F = np.asarray(force_N, dtype=float)
     target = np.column_stack([F, F * offset_mm[:, 0], F * offset_mm[:, 1]])
     norm = np.array([1.0, layer.lever_mm, 0.5 * layer.depth_mm])[None, :] * np.maximum(np.abs(F), 1e-12)[:, None]
     u = np.array(guess, dtype=float)
     r, K = residual_many(layer, u, target)
     size = np.max(np.abs(r) / norm, axis=1)
+    stuck = np.zeros(len(u), dtype=bool)  # no step lowered the residual: the next would be the same
     for _ in range(steps):
-        todo = np.flatnonzero((size > NEWTON_TOL_REL) & (np.abs(np.linalg.det(K)) > 1e-300))
+        todo = np.flatnonzero((size > NEWTON_TOL_REL) & ~stuck & (np.abs(np.linalg.det(K)) > 1e-300))
         if not len(todo):
             break
         du = np.linalg.solve(K[todo], -r[todo][:, :, None])[:, :, 0]
@@ -126,4 +128,5 @@ def newton_many(
             take = todo[down]
             u[take], r[take], K[take], size[take] = trial[down], r_t[down], K_t[down], s_t[down]
             todo, du = todo[~down], du[~down]
+        stuck[todo] = True
     return u
