@@ -44,17 +44,25 @@ from mst_cli.model.stack import Stack
 ROOT = Path(__file__).resolve().parents[1]
 
 
+def designed(path: Path):
+    """The file's design: itself, or a spec's design (the default seed), as `mst design` gives it."""
+    doc = mst.load(path)
+    return doc if doc.is_design else mst.api.design(doc, plot=False).document
+
+
+def l0_layers_mm_per_N(g, m, locked: tuple[int, ...]) -> float:
+    """Plane-strain L0 layers in series: each open one's small-load, each closed one's locked compliance."""
+    laws = [uncached_layer_law(c, m, "spring") for c in g.layers]
+    return sum(1.0 / (law.k_locked_N_per_mm if i in locked else law.k_N_per_mm) for i, law in enumerate(laws))
+
+
 def closed_form_mm_per_N(g, m, locked: tuple[int, ...], support: str) -> float:
     """Plane-strain L0 layers (small-load or locked) plus the members' closed form."""
-    laws = [uncached_layer_law(c, m, "spring") for c in g.layers]
-    layers = sum(1.0 / (law.k_locked_N_per_mm if i in locked else law.k_N_per_mm) for i, law in enumerate(laws))
-    return layers + lp.members(g, m, support=support).total_mm_per_N
+    return l0_layers_mm_per_N(g, m, locked) + lp.members(g, m, support=support).total_mm_per_N
 
 
 def config_rows(path: Path, spacing: float | None, times: list[float]) -> list[str]:
-    doc = mst.load(path)
-    if not doc.is_design:  # a spec: its design (the default seed), as `mst design` gives it
-        doc = mst.api.design(doc, plot=False).document
+    doc = designed(path)
     g, m = doc.geometry(), doc.material
     stack = Stack(layer_laws(g.layers, m, "spring"))
     per_mm = wp.field_per_drop_uT_per_mm(g)
@@ -83,9 +91,7 @@ def rung_vs_mst_rows(path: Path, spacing: float | None) -> list[str]:
     layers locked before the regime closed) against what ``mst simulate`` states for the same
     part (part_stack's secant over the regime, load_path.motion_shares), and their ratio: the
     issue's 5/8/20 % budget."""
-    doc = mst.load(path)
-    if not doc.is_design:
-        doc = mst.api.design(doc, plot=False).document
+    doc = designed(path)
     g, m = doc.geometry(), doc.material
     stack = Stack(layer_laws(g.layers, m, "spring"))
     per_mm = wp.field_per_drop_uT_per_mm(g)
@@ -104,17 +110,14 @@ def attribution_rows(path: Path, spacing: float | None) -> list[str]:
     member class as printed (the others rigid), its extra drop against the closed form's member,
     in MEMBER_TAGS order (the base: the closed form's cover, its bending over the slot and the
     slot walls; the plates; the cap). Drops in um/N; "rest" is what the members give together beyond their sum."""
-    doc = mst.load(path)
-    if not doc.is_design:
-        doc = mst.api.design(doc, plot=False).document
+    doc = designed(path)
     g, m = doc.geometry(), doc.material
-    laws = [uncached_layer_law(c, m, "spring") for c in g.layers]
     cf = lp.members(g, m)
     closed = {"cap": cf.cap_mm_per_N, "plate": sum(cf.plates_mm_per_N), "base": cf.cover_mm_per_N}
     stack = Stack(layer_laws(g.layers, m, "spring"))
     rows = []
     for r, locked in enumerate(wp.regime_locked(stack)):
-        layers = sum(1.0 / (law.k_locked_N_per_mm if i in locked else law.k_N_per_mm) for i, law in enumerate(laws))
+        layers = l0_layers_mm_per_N(g, m, locked)
         opts = {"spacing_mm": spacing, "locked": locked, "member_factor": wp.RIGID_FACTOR}
         rigid = wp.press(g, m, wp.PartOptions(**opts)).drop_mm_per_N
         extra = {}
