@@ -11,9 +11,10 @@ import pytest
 from mst_cli.calibration import hysteresis as hy
 from mst_cli.calibration.branches import find_branches
 from mst_cli.calibration.fit_quality import fit_quality, runs_test
-from mst_cli.calibration.temperature import fit_modulus_coeff, force_at_T, modulus_coeff_sigma
+from mst_cli.calibration.temperature import fit_modulus_coeff, modulus_coeff_sigma
 from mst_cli.errors import InputError
 from mst_cli.model.components import remanence_at_T
+from mst_cli.model.temperature import force_at_T
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "studies"))
 from rig_loadtest import Rig, forward_curve, hysteresis_peak_tolerance_N, rig_loadtest, truth_hysteresis_pct

@@ -42,7 +42,7 @@ import numpy as np
 from mst_cli.calibration.loadtest import MAX_ROWS, T_C_RANGE
 from mst_cli.calibration.tilt_fit import LEVER_FACTOR_BOUNDS
 from mst_cli.errors import InputError
-from mst_cli.model.components import REFERENCE_TEMPERATURE_C
+from mst_cli.model.temperature import REFERENCE_TEMPERATURE_C
 from mst_cli.sensor.as_printed import CALIBRATION_JSON
 
 MIN_MODULUS_SCALE = 0.1  # the least m(T) over the chip's range (module docstring)

@@ -1,18 +1,9 @@
-"""A reading at another temperature than the calibration's (issue 38).
+"""The modulus temperature coefficient of a load test (issue 38): its identifiability and its fit.
 
-Two effects, both linear about the calibration temperature T_ref:
-
-* the magnet: remanence x r(T) = 1 + alpha (T - T_ref), alpha the grade's reversible coefficient
-  (mst_cli.model.components, -0.12 %/K for the N grades); the field is linear in the remanence,
-  so the field at the chip scales by r(T) at a given deflection;
-* the part: stiffness x m(T) = 1 + beta (T - T_ref), beta (1/K) a calibration parameter. Every
-  layer law and every TPU member is linear in E at fixed nu, so a part of modulus x m deflects
-  at F as the reference does at F / m. A stiff insert (PLA, PETG, steel) in the cap softens
-  far less than the TPU, so beta is the part's effective coefficient: the one law the fit
-  measures and every reader applies.
-
-Hence B(F, T) = r(T) B_ref(F / m(T)) and a reading B at T means the force
-F = m(T) F_ref(B / r(T)), F_ref the calibration's inverse map (:func:`force_at_T`).
+It fits the part's modulus coefficient beta of :mod:`mst_cli.model.temperature`'s laws,
+B(F, T) = r(T) B_ref(F / m(T)). A stiff insert (PLA, PETG, steel) in the cap softens far less
+than the TPU, so beta is the part's effective coefficient: the one law the fit measures and every
+reader applies.
 
 beta is fixed by the data only when the load test spans enough temperature:
 :func:`modulus_coeff_sigma` gives its 1-sigma from the forward model's Jacobian (together with
@@ -34,7 +25,7 @@ from scipy.optimize import least_squares
 
 from mst_cli.calibration.fit import IDENTIFIABLE_STD
 from mst_cli.errors import CalibrationFailed
-from mst_cli.model.components import REFERENCE_TEMPERATURE_C
+from mst_cli.model.temperature import REFERENCE_TEMPERATURE_C, modulus_scale, remanence_scale
 from mst_cli.sensor.as_printed import PARAMETERS, full_values
 
 # A typical size of TPU's modulus temperature coefficient near room temperature: the unit beta's
@@ -43,37 +34,6 @@ MODULUS_COEFF_SCALE_PER_K = 0.005
 STEP = 1e-3  # relative finite-difference step, in units of each parameter's scale
 
 FieldAbs = Callable[[np.ndarray, dict], np.ndarray]  # |B| (T) of forces (N) at parameter values
-
-
-def remanence_scale(T_C, remanence_coeff_pct_per_K: float, T_ref_C: float = REFERENCE_TEMPERATURE_C) -> np.ndarray:
-    return 1.0 + 0.01 * remanence_coeff_pct_per_K * (np.asarray(T_C, float) - T_ref_C)
-
-
-def modulus_scale(T_C, modulus_coeff_per_K: float, T_ref_C: float = REFERENCE_TEMPERATURE_C) -> np.ndarray:
-    return 1.0 + modulus_coeff_per_K * (np.asarray(T_C, float) - T_ref_C)
-
-
-def corrected_field_T(
-    B_T, T_C, remanence_coeff_pct_per_K: float, T_ref_C: float = REFERENCE_TEMPERATURE_C
-) -> np.ndarray:
-    """The field (a component array or |B|) the magnet would give at T_ref: B / r(T)."""
-    r = remanence_scale(T_C, remanence_coeff_pct_per_K, T_ref_C)
-    B = np.asarray(B_T, float)
-    return B / (r[..., None] if B.ndim > r.ndim else r)
-
-
-def force_at_T(
-    force_ref_N: Callable[[np.ndarray], np.ndarray],
-    B_abs_T,
-    T_C,
-    remanence_coeff_pct_per_K: float,
-    modulus_coeff_per_K: float,
-    T_ref_C: float = REFERENCE_TEMPERATURE_C,
-) -> np.ndarray:
-    """Force of readings |B| at T_C from the calibration's inverse map at T_ref:
-    F = m(T) F_ref(B / r(T))."""
-    B_ref = corrected_field_T(B_abs_T, T_C, remanence_coeff_pct_per_K, T_ref_C)
-    return modulus_scale(T_C, modulus_coeff_per_K, T_ref_C) * np.asarray(force_ref_N(B_ref), float)
 
 
 def _predict(field_abs_T: FieldAbs, F: np.ndarray, T: np.ndarray, values: dict, alpha: float, beta: float, T_ref_C):

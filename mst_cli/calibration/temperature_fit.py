@@ -27,13 +27,14 @@ import numpy as np
 
 from mst_cli.calibration.loadtest import Readings, rig_column
 from mst_cli.calibration.record_bounds import checked
-from mst_cli.calibration.temperature import fit_modulus_coeff, modulus_scale, remanence_scale
+from mst_cli.calibration.temperature import fit_modulus_coeff
 from mst_cli.errors import CalibrationFailed
 from mst_cli.model.components import (
     MAGNET_REMANENCE_COEFF_PCT_PER_K,
     NDFEB_REMANENCE_COEFF_PCT_PER_K,
     REFERENCE_TEMPERATURE_C,
 )
+from mst_cli.model.temperature import modulus_scale, remanence_scale
 from mst_cli.sensor.document import Document
 
 T_COLUMN = "T_C"

@@ -11,6 +11,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from mst_cli.model.temperature import REFERENCE_TEMPERATURE_C, remanence_scale
+
 
 @dataclass(frozen=True)
 class Connector:
@@ -79,7 +81,6 @@ def grade_remanence_T(grade: str) -> float:
 # against one named sheet: a typical value, measure the batch when it matters.
 MAGNET_REMANENCE_COEFF_PCT_PER_K: dict[str, float] = dict.fromkeys(MAGNET_GRADES_T, -0.12)
 NDFEB_REMANENCE_COEFF_PCT_PER_K = -0.12  # a remanence given as a number (no grade): the family's
-REFERENCE_TEMPERATURE_C = 20.0  # datasheets state Br at room temperature, 20 degC
 
 
 def remanence_at_T(
@@ -98,7 +99,7 @@ def remanence_at_T(
     else:
         Br = float(grade_or_Br)
         alpha = NDFEB_REMANENCE_COEFF_PCT_PER_K if coeff_pct_per_K is None else coeff_pct_per_K
-    out = Br * (1.0 + 0.01 * alpha * (np.asarray(T_C, dtype=float) - T_ref_C))
+    out = Br * remanence_scale(T_C, alpha, T_ref_C)
     return float(out) if np.ndim(out) == 0 else out
 
 
