@@ -38,7 +38,8 @@ from mst_cli import api
 from mst_cli.estimation.inverse_map import inverse_map
 from mst_cli.estimation.inverse_table import GRID_DEFAULT, InverseTable, TableGrid, build_table
 from mst_cli.estimation.offset_reading import OffsetEstimator
-from mst_cli.estimation.table_reader import OffsetTableReader, table_hash
+from mst_cli.estimation.table_reader import OffsetTableReader
+from mst_cli.estimation.table_store import table_hash
 from mst_cli.firmware.table_header import table_header
 from mst_cli.model.stack_pose import pose_field_T, tilt_laws
 from mst_cli.sensor.document import load_design_document

@@ -41,7 +41,8 @@ from mst_cli import api
 from mst_cli.estimation.inverse_map import inverse_map
 from mst_cli.estimation.inverse_table import SHEAR_GRID_DEFAULT, SHEAR_TABLE_RATIO, InverseTable, TableGrid, build_table
 from mst_cli.estimation.shear_reading import ShearReader
-from mst_cli.estimation.table_reader import ShearTableReader, table_hash
+from mst_cli.estimation.table_reader import ShearTableReader
+from mst_cli.estimation.table_store import table_hash
 from mst_cli.firmware.table_header import table_header
 from mst_cli.model.general_load import field_T, loaded_stack
 from mst_cli.model.load_bound import CENTRED, crb_sigma, field_jacobian

@@ -22,7 +22,8 @@ from scipy.interpolate import RegularGridInterpolator
 
 from mst_cli.estimation.inverse_map import inverse_map
 from mst_cli.estimation.inverse_table import build_table
-from mst_cli.estimation.table_reader import OffsetTableReader, ShearTableReader, grid_of, table_edges_N
+from mst_cli.estimation.table_reader import OffsetTableReader, ShearTableReader
+from mst_cli.estimation.table_store import grid_of, table_edges_N
 from mst_cli.firmware.table_header import C_FLAGS, read_codes, table_header
 from mst_cli.model.chip import CODE_RANGE_LSB
 from mst_cli.sensor.document import load_design_document

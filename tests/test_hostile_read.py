@@ -26,23 +26,18 @@ from click.testing import CliRunner
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-import mst_cli.estimation.table_reader as table_reader
+import mst_cli.estimation.table_store as table_store
 from mst_cli.calibration.calibration_json import CalibrationRecord
 from mst_cli.calibration.loadtest import parse_readings
-from mst_cli.calibration.temperature import modulus_scale
 from mst_cli.cli.app import main
 from mst_cli.errors import InputError
 from mst_cli.estimation.inverse_table import SHEAR_TABLE_FILE, TABLE_FILE, InverseTable
-from mst_cli.estimation.table_reader import (
-    OffsetTableReader,
-    ShearTableReader,
-    TwoChipLoadReader,
-    build_beside,
-    table_beside,
-)
+from mst_cli.estimation.table_reader import OffsetTableReader, ShearTableReader, TwoChipLoadReader
+from mst_cli.estimation.table_store import build_beside, table_beside
 from mst_cli.estimation.two_chip_table import TwoChipReader
 from mst_cli.model.general_load import loaded_stack
 from mst_cli.model.response import simulate
+from mst_cli.model.temperature import modulus_scale
 from mst_cli.readout.reading import ForceReader
 from mst_cli.sensor.document import load_design_document, load_document
 
@@ -68,8 +63,8 @@ def refused(r, field: str) -> str:
 
 @pytest.fixture
 def small_grids(monkeypatch):
-    monkeypatch.setattr(table_reader, "SHEAR_GRID_DEFAULT", SMALL_SHEAR)
-    monkeypatch.setattr(table_reader, "GRID_DEFAULT", SMALL_OFFSET)
+    monkeypatch.setattr(table_store, "SHEAR_GRID_DEFAULT", SMALL_SHEAR)
+    monkeypatch.setattr(table_store, "GRID_DEFAULT", SMALL_OFFSET)
 
 
 @pytest.fixture(scope="module")
@@ -220,7 +215,7 @@ def test_a_fifo_or_folder_in_the_tables_place_is_passed_over_without_blocking(tm
     else:
         (cal / SHEAR_TABLE_FILE).mkdir()
     script = (
-        "import sys; import mst_cli.estimation.table_reader as t; t.SHEAR_GRID_DEFAULT = (5, 0.25); "
+        "import sys; import mst_cli.estimation.table_store as t; t.SHEAR_GRID_DEFAULT = (5, 0.25); "
         "from mst_cli.cli.app import main; sys.exit(main())"
     )
     args = [
@@ -246,7 +241,7 @@ def test_a_table_that_cannot_be_rebuilt_is_one_line_naming_the_file(tmp_path, fi
     def fails(*args, **kwargs):
         raise ValueError("the model gives no field here")
 
-    monkeypatch.setattr(table_reader, "build_table", fails)
+    monkeypatch.setattr(table_store, "build_table", fails)
     r = run(
         ["read", cal / "calibrated.yaml", files["dir"] / "readings.csv", "--estimate", "shear", "--out", tmp_path / "o"]
     )
@@ -372,11 +367,11 @@ def readers(design, files):
     top = float(reader.inverse_map.force_N[-1])
     sigma = reader.inverse_map.field_resolution_T
     geometry = doc.geometry()
-    shear = table_reader.build_table(
-        geometry, doc.material, "spring", table_reader.grid_of("shear", doc, top, SMALL_SHEAR)
+    shear = table_store.build_table(
+        geometry, doc.material, "spring", table_store.grid_of("shear", doc, top, SMALL_SHEAR)
     )
-    offset = table_reader.build_table(
-        geometry, doc.material, "spring", table_reader.grid_of("offset", doc, top, SMALL_OFFSET)
+    offset = table_store.build_table(
+        geometry, doc.material, "spring", table_store.grid_of("offset", doc, top, SMALL_OFFSET)
     )
     return {
         "reader": reader,

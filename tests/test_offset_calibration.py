@@ -69,7 +69,7 @@ def coarse_table_beside(model: Path) -> None:
     from mst_cli.calibration.calibration_json import record_beside
     from mst_cli.estimation.inverse_map import inverse_map
     from mst_cli.estimation.inverse_table import TABLE_FILE
-    from mst_cli.estimation.table_reader import build_beside
+    from mst_cli.estimation.table_store import build_beside
 
     doc, _ = load_design_document(model)
     top = float(inverse_map(doc, "spring")[0].force_N[-1])

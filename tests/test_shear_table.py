@@ -29,7 +29,8 @@ from mst_cli.estimation.inverse_table import (
     kink_edges_N,
 )
 from mst_cli.estimation.load_readings import LOAD_COLUMNS
-from mst_cli.estimation.table_reader import ShearTableReader, build_beside
+from mst_cli.estimation.table_reader import ShearTableReader
+from mst_cli.estimation.table_store import build_beside
 from mst_cli.model.general_load import field_T, loaded_stack
 from mst_cli.model.load_bound import CENTRED, crb_sigma, field_jacobian
 from mst_cli.sensor.document import load_design_document

@@ -15,14 +15,14 @@ from serial_support import PtyFeed, read_fed_lines
 
 from mst_cli import api
 from mst_cli.calibration.calibration_json import sha256_text
-from mst_cli.calibration.temperature import modulus_scale, remanence_scale
 from mst_cli.calibration.temperature_fit import remanence_coeff_of
 from mst_cli.cli.app import main
 from mst_cli.errors import InputError
 from mst_cli.estimation.inverse_map import inverse_map
 from mst_cli.estimation.inverse_table import SHEAR_TABLE_FILE, TABLE_FILE
-from mst_cli.estimation.table_reader import build_beside
+from mst_cli.estimation.table_store import build_beside
 from mst_cli.io.line_columns import column_map
+from mst_cli.model.temperature import modulus_scale, remanence_scale
 from mst_cli.sensor.as_printed import CALIBRATION_JSON
 from mst_cli.sensor.document import load_design_document
 
