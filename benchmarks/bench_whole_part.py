@@ -33,13 +33,17 @@ import argparse
 import statistics
 from pathlib import Path
 
+import numpy as np
+
 import mst_cli as mst
 import mst_cli.api
 from mst_cli.model import load_path as lp
+from mst_cli.model.general_load import load_path, loaded_stack
 from mst_cli.model.mechanics import layer_laws, uncached_layer_law
 from mst_cli.model.mechanics import whole_part as wp
 from mst_cli.model.mechanics.continuum import linear_stiffness_N_per_mm
 from mst_cli.model.stack import Stack
+from mst_cli.model.stack_pose import magnet_pose
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -151,19 +155,46 @@ def convergence(spacing: float | None) -> str:
 
 def off_centre(spacing: float | None) -> list[str]:
     """The forward design under a press 3 mm off centre and a tangential pull: the magnet's turn
-    per moment, slide and turn per tangential newton, as printed against rigid members."""
+    per moment, slide and turn per tangential newton, as printed, with rigid members, with one
+    member class as printed (the others rigid), and what mst's general-load model gives."""
     doc = mst.load(ROOT / "configs" / "mohammadi2021-forward.yaml")
     g, m = doc.geometry(), doc.material
     rows = ["| members | turn per moment, mrad/(N mm) | slide per tangential N, mm/N | turn per tangential N, mrad/N |"]
     rows.append("|---|---|---|---|")
-    for label, factor in (("as printed", 1.0), ("rigid", wp.RIGID_FACTOR)):
-        off = wp.press(g, m, wp.PartOptions(spacing_mm=spacing, offset_mm=3.0, member_factor=factor))
-        tan = wp.press(g, m, wp.PartOptions(spacing_mm=spacing, tangential=True, member_factor=factor))
+    cases = [("as printed", 1.0, wp.MEMBER_TAGS), ("rigid", wp.RIGID_FACTOR, wp.MEMBER_TAGS)]
+    cases += [
+        (f"only the {tag} as printed", wp.RIGID_FACTOR, tuple(t for t in wp.MEMBER_TAGS if t != tag))
+        for tag in wp.MEMBER_TAGS
+    ]
+    for label, factor, scaled in cases:
+        opts = {"spacing_mm": spacing, "member_factor": factor, "scaled": scaled}
+        off = wp.press(g, m, wp.PartOptions(**opts, offset_mm=3.0))
+        tan = wp.press(g, m, wp.PartOptions(**opts, tangential=True))
         rows.append(
             f"| {label} | {1e3 * off.turn_rad_per_N / 3.0:.3f} | {tan.side_mm_per_N:.3f} | "
             f"{1e3 * tan.turn_rad_per_N:.3f} |"
         )
+    for label, whole_part in (("mst, the part (general load)", True), ("mst, layers alone", False)):
+        turn_off, slide_tan, turn_tan = mst_off_centre(g, m, whole_part)
+        rows.append(f"| {label} | {turn_off:.3f} | {slide_tan:.3f} | {turn_tan:.3f} |")
     return rows
+
+
+def mst_off_centre(g, m, whole_part: bool, force_N: float = 0.5, ratio: float = 0.2) -> tuple[float, float, float]:
+    """What mst's general-load model (model.general_load, L0) gives for the same loads at a small
+    normal force: the magnet's turn per moment (a press 3 mm off centre), its slide and turn per
+    tangential newton (Fx = ``ratio`` Fz), in the rung's convention (a turn that moves the top
+    toward -x is positive: minus the right-handed turn about y)."""
+    stack = loaded_stack(g, m, "spring", 1.0, whole_part)
+
+    def pose(offset_mm, shear_ratio):
+        d, tilt, slide = load_path(stack, np.array([force_N]), offset_mm, shear_ratio)
+        shift, rotvec = magnet_pose(g, d, tilt, slide)
+        return shift[0], -rotvec[0, 1]
+
+    (s0, t0), (_, t_off), (s_tan, t_tan) = pose((0, 0), (0, 0)), pose((3.0, 0), (0, 0)), pose((0, 0), (ratio, 0))
+    tangential_N = ratio * force_N
+    return 1e3 * (t_off - t0) / (3.0 * force_N), (s_tan[0] - s0[0]) / tangential_N, 1e3 * (t_tan - t0) / tangential_N
 
 
 def main() -> None:
@@ -171,7 +202,9 @@ def main() -> None:
     ap.add_argument("--configs", nargs="*", default=sorted(str(p) for p in (ROOT / "configs").glob("*.yaml")))
     ap.add_argument("--spacing-mm", type=float, default=None, help="lattice spacing [default: the rung's own]")
     ap.add_argument("--no-convergence", action="store_true")
-    ap.add_argument("--off-centre", action="store_true", help="also the off-centre and tangential loads")
+    ap.add_argument(
+        "--off-centre", action="store_true", help="only the off-centre and tangential loads (forward design, regime 1)"
+    )
     ap.add_argument(
         "--rung-vs-mst", action="store_true", help="only the rung (as printed) against mst's prediction, per regime"
     )
@@ -189,6 +222,10 @@ def main() -> None:
         print("|---|---|---|---|---|---|---|---|---|")
         for path in args.configs:
             print("\n".join(attribution_rows(Path(path), args.spacing_mm)), flush=True)
+        return
+    if args.off_centre:
+        print("forward design, regime 1, a 6 mm strip 3 mm off centre / pulling along +x:")
+        print("\n".join(off_centre(args.spacing_mm)))
         return
     if args.rung_vs_mst:
         print("field change per newton at the chip, uT/N (centred 6 mm strip, locked layers closed)")
@@ -210,9 +247,6 @@ def main() -> None:
     print(f"cost: median {statistics.median(times):.2f} s per solve ({len(times)} solves)")
     if not args.no_convergence:
         print(convergence(args.spacing_mm))
-    if args.off_centre:
-        print("forward design, regime 1, a 6 mm strip 3 mm off centre / pulling along +x:")
-        print("\n".join(off_centre(args.spacing_mm)))
 
 
 if __name__ == "__main__":
