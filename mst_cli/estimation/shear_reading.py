@@ -29,6 +29,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from mst_cli.estimation.least_squares import levenberg_marquardt
 from mst_cli.model.general_load import SHEAR_RATIO_MAX, LoadedStack, load_path
 from mst_cli.model.load_bound import ALL, CENTRED, UNKNOWNS, crb_sigma, field_jacobian, fields_T
 from mst_cli.model.mechanics.tilt import TiltError
@@ -69,20 +70,18 @@ class ShearReader:
     def read(self, B_T: np.ndarray, noise_T: float) -> ShearReading:
         """The estimates from readings ``B_T`` (m, k, 3) or, one chip, (m, 3), in T."""
         B = np.asarray(B_T, dtype=float).reshape(len(B_T), len(self.chips_mm) * 3)
-        m, p = len(B), len(self.free)
-        est = np.zeros((m, 5))
-        sig = np.full((m, p), np.nan)
-        chi2 = np.full(m, np.nan)
-        flag = np.full(m, "ok", dtype=object)
-        dof = len(B[0]) - p
+        dof = len(B[0]) - len(self.free)
         limit = CHI2_FLAG.get(dof, 3.0 * dof + 10.0)
-        for i in range(m):
-            est[i], sig[i], chi2[i], flag[i] = self._fit(B[i], noise_T, self._start(B[i]))
-            for start in self._restarts(B[i]) if not chi2[i] <= limit else ():
-                fit = self._fit(B[i], noise_T, start)
-                if fit[2] < chi2[i]:
-                    est[i], sig[i], chi2[i], flag[i] = fit
-        flag[:] = np.where(chi2 <= limit, "ok", "no_fit")  # a stall at the cone's edge too
+        est, sig, chi2 = self.fit(B, noise_T, np.array([self._start(b) for b in B]).reshape(len(B), 5))
+        again = np.flatnonzero(~(chi2 <= limit))
+        if len(again):  # four more starts each; the first of the lowest chi^2 kept
+            starts = np.array([s for i in again for s in self._restarts(B[i])])
+            more = self.fit(np.repeat(B[again], 4, axis=0), noise_T, starts)
+            for i, rows in zip(again, np.arange(len(again) * 4).reshape(-1, 4)):
+                k = int(np.argmin(np.r_[chi2[i], more[2][rows]]))
+                if k:
+                    est[i], sig[i], chi2[i] = more[0][rows[k - 1]], more[1][rows[k - 1]], more[2][rows[k - 1]]
+        flag = np.where(chi2 <= limit, "ok", "no_fit").astype(object)  # a stall at the cone's edge too
         return ShearReading(
             {name: est[:, j] for j, name in enumerate(UNKNOWNS)},
             {UNKNOWNS[j]: sig[:, k] for k, j in enumerate(self.free)},
@@ -106,48 +105,40 @@ class ShearReader:
         return [np.array([s[0], sx * push, sy * push, 0.0, 0.0]) for sx in (-1, 1) for sy in (-1, 1)]
 
     def _clip(self, theta: np.ndarray) -> np.ndarray:
-        """Keep the load inside what the model takes: Fz > 0, the friction cone, the top face."""
+        """Loads (m, 5) kept inside what the model takes: Fz > 0, the friction cone, the top face."""
         g = self.stack.geometry
         t = theta.copy()
-        t[0] = max(t[0], 1e-3)
-        lim = SHEAR_RATIO_MAX * t[0]
-        t[1:3] = np.clip(t[1:3], -lim, lim)
-        t[3] = np.clip(t[3], -0.5 * g.width_mm, 0.5 * g.width_mm)
-        t[4] = np.clip(t[4], -0.5 * g.depth_mm, 0.5 * g.depth_mm)
+        t[:, 0] = np.maximum(t[:, 0], 1e-3)
+        lim = SHEAR_RATIO_MAX * t[:, 0]
+        t[:, 1], t[:, 2] = np.clip(t[:, 1], -lim, lim), np.clip(t[:, 2], -lim, lim)
+        t[:, 3] = np.clip(t[:, 3], -0.5 * g.width_mm, 0.5 * g.width_mm)
+        t[:, 4] = np.clip(t[:, 4], -0.5 * g.depth_mm, 0.5 * g.depth_mm)
         return t
 
-    def _residual(self, theta: np.ndarray, B: np.ndarray, noise_T: float) -> tuple[np.ndarray, float]:
-        """(the model's fields, chi^2) at ``theta``; chi^2 inf where the model has no answer."""
-        try:
-            model = fields_T(self.stack, theta, self.chips_mm)
-        except TiltError:
-            return np.full_like(B, np.nan), np.inf
-        return model, float(np.sum(((model - B) / noise_T) ** 2))
+    def _fields(self, theta: np.ndarray, warm: None = None) -> tuple[np.ndarray, None]:
+        """(the chips' fields (m, 3 k) at the loads ``theta`` (m, 5), NaN where the model has no
+        answer, None: no warm start)."""
+        out = np.full((len(theta), 3 * len(self.chips_mm)), np.nan)
+        for i, t in enumerate(theta):
+            try:
+                out[i] = fields_T(self.stack, t, self.chips_mm)
+            except TiltError:
+                pass
+        return out, None
 
-    def _fit(self, B: np.ndarray, noise_T: float, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray, float, str]:
-        """Levenberg-damped Gauss-Newton from ``theta``: (theta, CRB sigma, chi^2, flag)."""
-        model, cost = self._residual(theta, B, noise_T)
-        lam = 1e-3
-        free = list(self.free)
-        for _ in range(MAX_ITER):
-            J = field_jacobian(self.stack, theta, self.chips_mm, free, at=model) / noise_T
-            r = (model - B) / noise_T
-            A, g = J.T @ J, J.T @ r
-            scale = np.sqrt(np.maximum(np.diag(A), 1e-300))
-            while True:
-                step = -np.linalg.solve(A + lam * np.diag(scale**2), g)
-                trial = theta.copy()
-                trial[free] += step
-                trial = self._clip(trial)
-                t_model, t_cost = self._residual(trial, B, noise_T)
-                if t_cost <= cost or lam > 1e8:
-                    break
-                lam *= 10.0
-            if t_cost > cost:
-                break
-            theta, model, cost, lam = trial, t_model, t_cost, max(lam / 10.0, 1e-6)
-            if np.all(np.abs(step) * scale <= STEP_TOL):
-                break
-        J = field_jacobian(self.stack, theta, self.chips_mm, free)
-        sigma = crb_sigma(J, noise_T)
-        return theta, sigma, cost, "ok"
+    def _jacobian(self, theta: np.ndarray, at: np.ndarray, warm: None = None) -> np.ndarray:
+        """(m, 3 k, free) dB/dtheta by forward differences from the fields ``at``."""
+        J = [field_jacobian(self.stack, t, self.chips_mm, self.free, at=a) for t, a in zip(theta, at)]
+        return np.array(J).reshape(len(theta), 3 * len(self.chips_mm), len(self.free))
+
+    def fit(self, B_T: np.ndarray, noise_T: float, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Readings ``B_T`` (m, 3 k) fitted from the loads ``theta`` (m, 5) by the estimators' one
+        solver (:func:`~mst_cli.estimation.least_squares.levenberg_marquardt`), each row on its
+        own: (the loads (m, 5), their CRB 1-sigma (m, free) by central differences, chi^2 (m,))."""
+        B = np.asarray(B_T, dtype=float).reshape(len(theta), -1)
+        fit = levenberg_marquardt(
+            self._fields, self._jacobian, B, theta, noise_T, self._clip, MAX_ITER, STEP_TOL, self.free
+        )
+        J = np.array([field_jacobian(self.stack, t, self.chips_mm, self.free) for t in fit.theta])
+        J = J.reshape(len(B), B.shape[1], len(self.free))
+        return fit.theta, crb_sigma(J, noise_T), fit.chi2

@@ -44,6 +44,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from mst_cli.estimation.least_squares import levenberg_marquardt
 from mst_cli.estimation.shear_reading import CHI2_FLAG, ShearReader
 from mst_cli.model.general_load import LoadedStack
 from mst_cli.model.load_bound import FORCE_STEP_MIN_N, FORCE_STEP_REL, POSITION_STEP_MM, UNKNOWNS, crb_sigma
@@ -59,8 +60,6 @@ STEP_MM = 2.0  # offsets' spacing
 MAX_ITER = 60
 STEP_TOL = 1e-3  # a fit ends once a step is this share of the bound's sigma in every unknown ...
 TABLE_STEP_TOL = 3e-2  # ... on the tables' states (the exact states' fit goes on from there)
-LAMBDA_0, LAMBDA_MAX = 1e-3, 1e8
-LAMBDA_GN = 1e-2  # a step damped this little is Gauss-Newton's
 START_FRACTION = 0.25  # the four off-centre starts: this share of the face's width and depth out
 NEWTON_STEPS = 12  # the tilt rung's Newton steps from the tables' states (most loads need 2 to 6, a few 10)
 # Of 100 random presses on tests/test_two_chip_table.py's sensor, the fit on the exact states ends
@@ -335,67 +334,17 @@ def fit_many(
     jacobian: Jacobian | None = None,
     siblings: int = 1,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Levenberg-damped Gauss-Newton of every row of ``theta`` (m, 5) against its reading
-    ``B_T`` (m, 3 k) at once, each on its own damping, each step clipped by ``clip``: (theta,
-    chi^2, the Jacobian (m, 3 k, 5) there). A row ends once its step is within ``step_tol`` of
-    its bound's sigma in every unknown or lowers chi^2 by less than ``step_tol``^2 (of chi^2 or of
-    1, whichever is more), once such a short step at Gauss-Newton's damping (LAMBDA_GN) is no
-    better, or once its damping passes LAMBDA_MAX. ``jacobian`` (theta, fields,
+    """Every row of ``theta`` (m, 5) fitted to its reading ``B_T`` (m, 3 k) by the estimators' one
+    solver (:func:`~mst_cli.estimation.least_squares.levenberg_marquardt`, its default damping):
+    (theta, chi^2, the Jacobian (m, 3 k, 5) there). ``jacobian`` (theta, fields,
     states) -> (m, 3 k, 5): the model's own (else forward differences of ``fields``).
-    ``siblings``: rows in runs of that many starts of one reading; a row ends once within
+    ``siblings``: rows in runs of that many starts of one reading, a row ending once within
     MERGE_SIGMA steps' scale of a sibling of lower chi^2 (the same minimum: :func:`_distinct`'s)."""
     jac = jacobian if jacobian is not None else functools.partial(jacobian_many, fields)
-    theta = clip(np.array(theta, dtype=float))
-    model, states = fields(theta, None)
-    cost = np.sum(((model - B_T) / noise_T) ** 2, axis=1)
-    J = jac(theta, model, states)
-    lam = np.full(len(theta), LAMBDA_0)
-    active = np.arange(len(theta))
-    for _ in range(max_iter):
-        if not len(active):
-            break
-        Jw = J[active] / noise_T
-        A = np.einsum("mki,mkj->mij", Jw, Jw)
-        g = np.einsum("mki,mk->mi", Jw, (model[active] - B_T[active]) / noise_T)
-        scale2 = np.maximum(np.diagonal(A, axis1=1, axis2=2), 1e-300)
-        damped = A + lam[active, None, None] * (scale2[:, :, None] * np.eye(5))
-        trial = clip(theta[active] - np.linalg.solve(damped, g[:, :, None])[:, :, 0])
-        t_model, t_states = fields(trial, states[active])
-        t_cost = np.sum(((t_model - B_T[active]) / noise_T) ** 2, axis=1)
-        better = t_cost <= cost[active]
-        short = np.all(np.abs(trial - theta[active]) * np.sqrt(scale2) <= step_tol, axis=1)
-        small = short | (cost[active] - t_cost <= step_tol**2 * np.maximum(cost[active], 1.0))  # chi^2 all but still
-        # a short Gauss-Newton step no better: the minimum to round-off (more damping only shortens it)
-        stalled = ~better & short & (lam[active] <= LAMBDA_GN)
-        acc = active[better]
-        theta[acc], model[acc], cost[acc], states[acc] = (
-            trial[better],
-            t_model[better],
-            t_cost[better],
-            t_states[better],
-        )
-        lam[acc] = np.maximum(lam[acc] / 10.0, 1e-6)
-        lam[active[~better]] *= 10.0
-        done = (better & small) | stalled | (lam[active] > LAMBDA_MAX)
-        if siblings > 1:
-            done |= _behind_a_sibling(theta, cost, active, np.sqrt(scale2), siblings)
-        if len(acc):
-            J[acc] = jac(theta[acc], model[acc], states[acc])
-        active = active[~done]
-
-    return theta, cost, J
-
-
-def _behind_a_sibling(
-    theta: np.ndarray, cost: np.ndarray, active: np.ndarray, inv_step: np.ndarray, siblings: int
-) -> np.ndarray:
-    """Which ``active`` rows lie within MERGE_SIGMA / ``inv_step`` (per unknown) of another row of
-    their reading (rows in runs of ``siblings``) whose chi^2 is lower (or equal and first)."""
-    first = active - active % siblings
-    others = first[:, None] + np.arange(siblings)[None, :]  # (a, S) every row of the reading
-    near = np.all(np.abs(theta[others] - theta[active, None, :]) * inv_step[:, None, :] <= MERGE_SIGMA, axis=2)
-    lower = (cost[others] < cost[active, None]) | ((cost[others] == cost[active, None]) & (others < active[:, None]))
-    return np.any(near & lower, axis=1)
+    fit = levenberg_marquardt(
+        fields, jac, B_T, theta, noise_T, clip, max_iter, step_tol, siblings=siblings, merge_sigma=MERGE_SIGMA
+    )
+    return fit.theta, fit.chi2, fit.jacobian
 
 
 class TwoChipReader:
@@ -521,14 +470,12 @@ class TwoChipReader:
         return TwoChipEstimates.of(t, s, c, flag, fits)
 
     def polish(self, B_T: np.ndarray, estimates: TwoChipEstimates) -> TwoChipEstimates:
-        """The estimates put through the exact reader's fit (:class:`ShearReader`), one reading at
-        a time from the fast estimate (0.1 to 0.5 s each): the exact model's least squares.
+        """The estimates put through the exact reader's fit (:class:`ShearReader`) from the fast
+        estimate (0.1 to 0.5 s a reading): the exact model's least squares.
         An ``ambiguous`` flag stays (the polish refines the best fit only)."""
         B = np.asarray(B_T, dtype=float).reshape(len(B_T), -1)
         exact = ShearReader(self.model.stack, self.model.chips_mm)
-        theta, sigma, chi2 = estimates.theta.copy(), estimates.sigma.copy(), estimates.chi2.copy()
-        for i in range(len(B)):
-            theta[i], sigma[i], chi2[i], _ = exact._fit(B[i], self.noise_T, self.clip(theta[i : i + 1])[0])
+        theta, sigma, chi2 = exact.fit(B, self.noise_T, self.clip(estimates.theta))
         flag = np.where(chi2 <= self.chi2_limit, np.where(estimates.flag == "ambiguous", "ambiguous", "ok"), "no_fit")
         return TwoChipEstimates.of(theta, sigma, chi2, flag.astype(object), estimates.fits)
 
