@@ -74,14 +74,13 @@ DAMPING = Damping()
 @dataclass
 class Fit:
     """Where every row ended: the loads (m, p), chi^2 (m,), the Jacobian (m, K, len(free)) and
-    fields (m, K) there, the model's warm start there, the iterations the batch ran."""
+    fields (m, K) there, and the model's warm start there."""
 
     theta: np.ndarray
     chi2: np.ndarray
     jacobian: np.ndarray
     fields: np.ndarray
     warm: Any
-    iterations: int
 
 
 def _chi2(fields: np.ndarray, data: np.ndarray, noise: float) -> np.ndarray:
@@ -117,8 +116,7 @@ def levenberg_marquardt(
     J = jacobian(theta, fields, warm)
     lam = np.full(len(theta), damping.start)
     active = np.arange(len(theta))
-    done_iter = 0
-    for done_iter in range(max_iter):
+    for _ in range(max_iter):
         if not len(active):
             break
         trial, scale = _trial(J[active], fields[active] - data[active], noise, lam[active], theta[active], cols, clip)
@@ -140,7 +138,7 @@ def levenberg_marquardt(
         if len(acc):
             J[acc] = jacobian(theta[acc], fields[acc], _rows(warm, acc))
         active = active[~done]
-    return Fit(theta, cost, J, fields, warm, done_iter + 1)
+    return Fit(theta, cost, J, fields, warm)
 
 
 def _trial(

@@ -30,10 +30,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from mst_cli.estimation.least_squares import levenberg_marquardt
-from mst_cli.model.general_load import SHEAR_RATIO_MAX, LoadedStack, load_path
-from mst_cli.model.load_bound import ALL, CENTRED, UNKNOWNS, crb_sigma, field_jacobian, fields_T
-from mst_cli.model.mechanics.tilt import TiltError
-from mst_cli.model.stack_pose import magnet_field_T, magnet_pose
+from mst_cli.model.general_load import SHEAR_RATIO_MAX, LoadedStack, field_jacobian_T, fields_T, path_fields_T
+from mst_cli.model.load_bound import ALL, CENTRED, UNKNOWNS, crb_sigma
 
 CHI2_FLAG = {0: 9.0, 1: 10.83}  # the model more than 3 sigma off (no dof), p = 0.001 (one dof)
 MAX_ITER = 40
@@ -62,9 +60,7 @@ class ShearReader:
         self.free = CENTRED if len(self.chips_mm) == 1 else ALL
         top = max(t.lock_force_N for t in stack.tilt)
         self.table_F = np.linspace(0.0, 1.5 * top, 301)
-        d, tilt, slide = load_path(stack, self.table_F, (0.0, 0.0))
-        shift, rotvec = magnet_pose(stack.geometry, d, tilt, slide)
-        B0 = magnet_field_T(stack.geometry, shift, rotvec, self.chips_mm[0])
+        B0 = path_fields_T(stack, self.table_F, (0.0, 0.0), chips_mm=self.chips_mm[:1])
         self.table_B = np.linalg.norm(B0, axis=-1)  # |B| at the first chip, centred presses
 
     def read(self, B_T: np.ndarray, noise_T: float) -> ShearReading:
@@ -117,19 +113,12 @@ class ShearReader:
 
     def _fields(self, theta: np.ndarray, warm: None = None) -> tuple[np.ndarray, None]:
         """(the chips' fields (m, 3 k) at the loads ``theta`` (m, 5), NaN where the model has no
-        answer, None: no warm start)."""
-        out = np.full((len(theta), 3 * len(self.chips_mm)), np.nan)
-        for i, t in enumerate(theta):
-            try:
-                out[i] = fields_T(self.stack, t, self.chips_mm)
-            except TiltError:
-                pass
-        return out, None
+        answer; None: each load solved afresh)."""
+        return fields_T(self.stack, theta, self.chips_mm, unsolved_nan=True), None
 
     def _jacobian(self, theta: np.ndarray, at: np.ndarray, warm: None = None) -> np.ndarray:
         """(m, 3 k, free) dB/dtheta by forward differences from the fields ``at``."""
-        J = [field_jacobian(self.stack, t, self.chips_mm, self.free, at=a) for t, a in zip(theta, at)]
-        return np.array(J).reshape(len(theta), 3 * len(self.chips_mm), len(self.free))
+        return field_jacobian_T(self.stack, theta, self.chips_mm, self.free, at)
 
     def fit(self, B_T: np.ndarray, noise_T: float, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Readings ``B_T`` (m, 3 k) fitted from the loads ``theta`` (m, 5) by the estimators' one
@@ -139,6 +128,5 @@ class ShearReader:
         fit = levenberg_marquardt(
             self._fields, self._jacobian, B, theta, noise_T, self._clip, MAX_ITER, STEP_TOL, self.free
         )
-        J = np.array([field_jacobian(self.stack, t, self.chips_mm, self.free) for t in fit.theta])
-        J = J.reshape(len(B), B.shape[1], len(self.free))
+        J = field_jacobian_T(self.stack, fit.theta, self.chips_mm, self.free)
         return fit.theta, crb_sigma(J, noise_T), fit.chi2

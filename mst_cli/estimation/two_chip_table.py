@@ -46,11 +46,11 @@ import numpy as np
 
 from mst_cli.estimation.least_squares import levenberg_marquardt
 from mst_cli.estimation.shear_reading import CHI2_FLAG, ShearReader
-from mst_cli.model.general_load import LoadedStack
-from mst_cli.model.load_bound import FORCE_STEP_MIN_N, FORCE_STEP_REL, POSITION_STEP_MM, UNKNOWNS, crb_sigma
+from mst_cli.model.general_load import LoadedStack, fields_of, load_ratios, stepped_loads
+from mst_cli.model.load_bound import ALL, UNKNOWNS, crb_sigma
 from mst_cli.model.mechanics.tilt import LayerTiltLaw
 from mst_cli.model.mechanics.tilt_batch import newton_many, residual_many
-from mst_cli.model.stack_pose import magnet_field_T, magnet_pose, stack_path
+from mst_cli.model.stack_pose import stack_path
 from mst_cli.parallel import fork_map
 
 RATIO_MAX = 0.5  # |Fx| / Fz and |Fy| / Fz the table supports
@@ -192,7 +192,7 @@ class TwoChipModel:
         """(m, n, 3) every layer's (d, phi_y, phi_x) at the loads ``theta`` (m, 5): the tables'
         and, with ``newton_steps``, that many Newton steps of the tilt rung's equilibrium from
         there, or from the states ``near`` (m, n, 3) (a close load's: the Jacobian's steps)."""
-        F, rx, ry = _ratios(theta)
+        F, rx, ry = load_ratios(theta)
         out = np.empty((len(F), len(self.tables), 3))
         for j, (table, law, lever) in enumerate(zip(self.tables, self.stack.tilt, self.stack.lever_mm)):
             off = np.column_stack([theta[:, 3] + lever * rx, theta[:, 4] + lever * ry])
@@ -224,44 +224,19 @@ class TwoChipModel:
     def jacobian_T(self, theta: np.ndarray, at: np.ndarray, states: np.ndarray) -> np.ndarray:
         """(m, 3 k, 5) dB/dtheta at equilibrium ``states``, ``at`` the fields there: forward
         differences with the states moved along their tangent (no solve)."""
-        h = fd_steps(theta)
         m = len(theta)
         tangent = self.state_tangent(theta, states)
-        shifted = np.repeat(theta[None, :, :], 5, axis=0)
+        shifted, h = stepped_loads(theta, ALL)
         moved = np.repeat(states[None], 5, axis=0)
         for i in range(5):
-            shifted[i, :, i] += h[:, i]
             moved[i] += h[:, i, None, None] * tangent[:, i]
         B = self.fields_of(shifted.reshape(5 * m, 5), moved.reshape(5 * m, *states.shape[1:])).reshape(5, m, -1)
         return ((B - at[None, :, :]) / h.T[:, :, None]).transpose(1, 2, 0)
 
     def fields_of(self, theta: np.ndarray, states: np.ndarray) -> np.ndarray:
-        """(m, 3 k) the chips' fields at the loads ``theta`` with the layers' ``states``."""
-        F, rx, ry = _ratios(theta)
-        slide = self.stack.slides_mm(F, (rx, ry))
-        shift, rotvec = magnet_pose(self.stack.geometry, states[..., 0], states[..., 1:], slide)
-        # every chip in one call of the field (its cost is mostly per call): chip j seen from the
-        # first chip's place, the magnet moved back by the chips' spacing
-        first = self.chips_mm[0]
-        moved = [shift - np.array([cx - first[0], cy - first[1], 0.0]) for cx, cy in self.chips_mm]
-        k, m = len(self.chips_mm), len(theta)
-        B = magnet_field_T(self.stack.geometry, np.concatenate(moved), np.tile(rotvec, (k, 1)), first)
-        return B.reshape(k, m, 3).transpose(1, 0, 2).reshape(m, 3 * k)
-
-
-def _ratios(theta: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(Fz, Fx / Fz, Fy / Fz) of loads (m, 5) (ratios 0 at Fz <= 0)."""
-    F = theta[:, 0]
-    safe = np.where(F > 0.0, F, 1.0)
-    return F, np.where(F > 0.0, theta[:, 1] / safe, 0.0), np.where(F > 0.0, theta[:, 2] / safe, 0.0)
-
-
-def fd_steps(theta: np.ndarray) -> np.ndarray:
-    """(m, 5) the finite-difference step of every unknown (the exact reader's,
-    :func:`~mst_cli.model.load_bound.steps`)."""
-    h_F = np.maximum(FORCE_STEP_REL * np.abs(theta[:, 0]), FORCE_STEP_MIN_N)
-    h_p = np.full(len(theta), POSITION_STEP_MM)
-    return np.column_stack([h_F, h_F, h_F, h_p, h_p])
+        """(m, 3 k) the chips' fields at the loads ``theta`` with the layers' ``states``: the
+        forward model's (:func:`~mst_cli.model.general_load.fields_of`)."""
+        return fields_of(self.stack, theta, states, self.chips_mm)
 
 
 @dataclass
@@ -313,11 +288,8 @@ Jacobian = Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray]  # (theta,
 def jacobian_many(fields: Model, theta: np.ndarray, at: np.ndarray, states: np.ndarray) -> np.ndarray:
     """(m, 3 k, 5) dB/dtheta by forward differences from ``at`` = fields(theta) (the layers in
     ``states``, where each step's solve starts), every unknown's step in one call of the model."""
-    h = fd_steps(theta)
     m = len(theta)
-    shifted = np.repeat(theta[None, :, :], 5, axis=0)
-    for i in range(5):
-        shifted[i, :, i] += h[:, i]
+    shifted, h = stepped_loads(theta, ALL)
     near = np.broadcast_to(states, (5, *states.shape)).reshape(5 * m, *states.shape[1:])
     B = fields(shifted.reshape(5 * m, 5), near)[0].reshape(5, m, -1)
     return ((B - at[None, :, :]) / h.T[:, :, None]).transpose(1, 2, 0)
