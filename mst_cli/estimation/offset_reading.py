@@ -11,7 +11,9 @@ a light press the stack hardly tilts, so Bx and By say nothing), the two starts 
 roots (*ambiguous*: late in the stack the field folds over, so distant presses give the same
 reading), or neither fits the reading (*no fit*).
 
-The solve is not the shear readers' Levenberg-Marquardt: three equations in three unknowns have
+The field is the general load's forward model (:func:`~mst_cli.model.general_load.fields_T`'s
+parts, no shear, warm-started from the last call). The solve is not the shear readers'
+Levenberg-Marquardt (:mod:`~mst_cli.estimation.least_squares` says why): three equations in three unknowns have
 an exact root, which must lie in the box of the force range and the face, so it is a projected
 Gauss-Newton (a coordinate at the box held, steps halved until the misfit falls), the algorithm
 the one-chip tables' direct inverse runs cell by cell on the trilinear field

@@ -2,24 +2,20 @@
 
 One 3-axis chip gives three numbers, so three unknowns: a press taken as centred gives (Fz,
 Fx, Fy) from (Bx, By, Bz). Two chips give six numbers, enough for all five, (Fz, Fx, Fy, x, y).
-Either way the estimate is the general-load model's (:mod:`mst_cli.model.general_load`) least
-squares fit to the reading, each axis weighted by the chip's noise: Gauss-Newton with a
-Levenberg damping, its Jacobian by forward differences, started from the centred press that
-gives the first chip's |B| (and, where that fit stalls beyond the noise, again from four other
-starts, the best kept). Each estimate comes with its 1-sigma Cramer-Rao bound at the fit
-(:mod:`mst_cli.model.load_bound`) and a flag: ``no_fit`` where the model cannot come within the
-noise of the reading (chi^2 past :data:`CHI2_FLAG`: with one chip no residual is left for a
-reading the model reaches, so that is a reading outside it; with two, one degree of freedom
-tests the assumption). A fit is judged by its chi^2 alone: the layer laws are piecewise linear,
-so near a knot the steps can stall short of the step tolerance on a fit already within the noise.
+Either way the estimate is the general-load model's (:func:`mst_cli.model.general_load.fields_T`,
+each load's layers solved exactly) least squares fit to the reading, each axis weighted by the
+chip's noise, by the estimators' one solver
+(:func:`~mst_cli.estimation.least_squares.levenberg_marquardt`, the readings a batch), its
+Jacobian by forward differences, started from the centred press that gives the first chip's |B|
+(and, where that fit stalls beyond the noise, again from four other starts, the best kept). Each
+estimate comes with its 1-sigma Cramer-Rao bound at the fit (:mod:`mst_cli.model.load_bound`) and
+a flag: ``no_fit`` where the model cannot come within the noise of the reading (chi^2 past
+:data:`CHI2_FLAG`: with one chip no residual is left for a reading the model reaches, so that is a
+reading outside it; with two, one degree of freedom tests the assumption). A fit is judged by its
+chi^2 alone: the layer laws are piecewise linear, so near a knot the steps can stall short of the
+step tolerance on a fit already within the noise.
 
-The fit is the algorithm of the two-chip reader's batched :func:`~mst_cli.estimation.two_chip_table.fit_many`
-(Marquardt's diagonal scaling, the damping /10 on a step that lowers chi^2) one reading at a
-time, but a rejected step is retried within its iteration at ten times the damping, where
-fit_many moves on to its next iteration: the two stop on different last digits, so the readers'
-outputs would move if one served both (issue 45 leaves them two until fit_many's own rework lands).
-
-Pure: no I/O; works on arrays of readings (a loop over them; each fit is independent).
+Pure: no I/O; works on arrays of readings (each fit independent, all fitted as one batch).
 """
 
 from __future__ import annotations

@@ -1,5 +1,5 @@
 """A fast reader of all five unknowns (Fz, Fx, Fy, x, y) from two chips or more (issue 39): the
-general-load model (:mod:`mst_cli.model.general_load`) evaluated for many loads at once, and a
+general-load model (:mod:`mst_cli.model.general_load`) with its layers' states tabulated, and a
 Levenberg-Marquardt fit of every reading at once.
 
 Where the exact reader (:mod:`mst_cli.estimation.shear_reading`) spends its time is the tilt
@@ -15,13 +15,15 @@ loads over the tables' range) the trilinear field is a median 4 uT off (max 49 u
 nodes (2 mm, 33 forces) and still 1.2 uT (max 13 uT) at 1 mm and 65 forces, more than the chip
 noise. From that guess a few steps of the same Newton, vectorised
 (:mod:`mst_cli.model.mechanics.tilt_batch`), give the exact states: the field then within 1e-9 T
-of the exact one (benchmarks/bench_two_chip.py). The slides (a compliance law per layer), the
-magnet's pose and its exact cylinder field are cheap and exact already. The Jacobian moves the
+of the exact one (benchmarks/bench_two_chip.py). From the states on, the fields are the
+forward model's own (:func:`~mst_cli.model.general_load.fields_of`: the slides, the magnet's pose,
+its exact cylinder field at every chip), cheap and exact already. The Jacobian moves the
 states along their own tangent (the implicit function theorem on the equilibrium: no solve per
 difference).
 
-The fit is the exact reader's, vectorised: Levenberg-damped Gauss-Newton on the chi^2 of the
-readings weighted by the chip noise, every step clipped to the model's domain (Fz in (0, the
+The fit is the exact reader's, the estimators' one solver
+(:func:`~mst_cli.estimation.least_squares.levenberg_marquardt`): Levenberg-damped Gauss-Newton on
+the chi^2 of the readings weighted by the chip noise, every step clipped to the model's domain (Fz in (0, the
 tables' top force], |Fx|, |Fy| <= ratio_max Fz, the press on the face). Every reading is fitted
 from five starts (the centred press whose |B| at the first chip is the reading's, and that
 force pressed a quarter of the face out toward each corner) on the tables alone; each reading's

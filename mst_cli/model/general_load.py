@@ -24,7 +24,19 @@ The load model and what it assumes:
 * The magnet's pose adds the tilts' turns and shifts and the slides
   (:func:`mst_cli.model.stack_pose.magnet_pose`); its exact field at each chip follows.
 
-At Fx = Fy = 0 it is the off-centre press (:mod:`mst_cli.model.offcentre`) exactly. Pure: no I/O.
+At Fx = Fy = 0 it is the off-centre press (:mod:`mst_cli.model.offcentre`) exactly.
+
+The forward model is written once, batched: :func:`fields_T` takes loads (m, 5) = (Fz, Fx, Fy, x,
+y) (one load is a batch of one) to the fields at every chip (m, 3 k), in two parts that its
+callers may take apart: :func:`layer_states`, every layer's equilibrium solved exactly per load
+(warm-started where a caller knows a close load's), and :func:`fields_of`, the slides, the magnet's
+pose and its exact field at every chip in one call. Its Jacobian is :func:`field_jacobian_T`
+(differences, the steps :func:`fd_steps`), and :func:`path_fields_T` its fields up a force path
+(what a table holds). Its callers: the Cramer-Rao bound (:mod:`mst_cli.model.load_bound`), the exact
+shear reader, the offset estimator (on :func:`normal_stack`, no slides), the shear table's paths,
+and the two-chip reader, whose tabulated states go through :func:`fields_of`.
+
+Pure: no I/O.
 """
 
 from __future__ import annotations

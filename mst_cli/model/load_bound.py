@@ -6,7 +6,8 @@ The unknowns are the normal force Fz, the tangential force (Fx, Fy) and where th
 of the same sigma. The Fisher information is J^T J / sigma^2 (J the field's Jacobian), so the
 1-sigma bound of estimate i is sigma_CRB,i = sigma sqrt((J^T J)^-1_ii): no unbiased estimator
 does better at that noise. One chip gives three numbers: three unknowns at most (the centred
-press's Fz, Fx, Fy); two chips give six, enough for all five.
+press's Fz, Fx, Fy); two chips give six, enough for all five. The Jacobian is the forward
+model's (:func:`~mst_cli.model.general_load.field_jacobian_T`), a layout's grid of presses one batch.
 
 Pure: no I/O.
 """
