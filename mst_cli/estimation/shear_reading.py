@@ -62,7 +62,7 @@ class ShearReader:
     def read(self, B_T: np.ndarray, noise_T: float) -> ShearReading:
         """The estimates from readings ``B_T`` (m, k, 3) or, one chip, (m, 3), in T."""
         B = np.asarray(B_T, dtype=float).reshape(len(B_T), len(self.chips_mm) * 3)
-        dof = len(B[0]) - len(self.free)
+        dof = B.shape[1] - len(self.free)
         limit = CHI2_FLAG.get(dof, 3.0 * dof + 10.0)
         est, sig, chi2 = self.fit(B, noise_T, np.array([self._start(b) for b in B]).reshape(len(B), 5))
         again = np.flatnonzero(~(chi2 <= limit))
@@ -120,7 +120,7 @@ class ShearReader:
         """Readings ``B_T`` (m, 3 k) fitted from the loads ``theta`` (m, 5) by the estimators' one
         solver (:func:`~mst_cli.estimation.least_squares.levenberg_marquardt`), each row on its
         own: (the loads (m, 5), their CRB 1-sigma (m, free) by central differences, chi^2 (m,))."""
-        B = np.asarray(B_T, dtype=float).reshape(len(theta), -1)
+        B = np.asarray(B_T, dtype=float).reshape(len(theta), 3 * len(self.chips_mm))
         fit = levenberg_marquardt(
             self._fields, self._jacobian, B, theta, noise_T, self._clip, MAX_ITER, STEP_TOL, self.free
         )

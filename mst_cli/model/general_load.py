@@ -246,6 +246,8 @@ def _chips_field_T(
     """(m, 3 k) the field of the magnet in the poses (m, 3), (m, 3) at every chip, one call."""
     chips = np.array([geometry.chip_offset_mm] if chips_mm is None else chips_mm, dtype=float)
     k, m = len(chips), len(shift)
+    if not m:  # no load (the field takes at least one observer)
+        return np.zeros((0, 3 * k))
     B = magnet_field_T(geometry, np.tile(shift, (k, 1)), np.tile(rotvec, (k, 1)), np.repeat(chips, m, axis=0))
     return B.reshape(k, m, 3).transpose(1, 0, 2).reshape(m, 3 * k)
 
@@ -320,11 +322,11 @@ def field_jacobian_T(
     loads ``theta`` (m, 5), by differences of :func:`fields_T`: central, or forward from ``at``
     (m, 3 k), the fields there already known; all the moved loads in one batch."""
     theta = np.atleast_2d(np.asarray(theta, dtype=float))
-    m, q = len(theta), len(free)
+    m, q, K = len(theta), len(free), 3 * (1 if chips_mm is None else len(chips_mm))
     up, h = stepped_loads(theta, free)
-    B_up = fields_T(stack, up.reshape(q * m, 5), chips_mm).reshape(q, m, -1)
+    B_up = fields_T(stack, up.reshape(q * m, 5), chips_mm).reshape(q, m, K)
     if at is None:
-        B_down = fields_T(stack, stepped_loads(theta, free, -1.0)[0].reshape(q * m, 5), chips_mm).reshape(q, m, -1)
+        B_down = fields_T(stack, stepped_loads(theta, free, -1.0)[0].reshape(q * m, 5), chips_mm).reshape(q, m, K)
         return ((B_up - B_down) / (2 * h.T[:, :, None])).transpose(1, 2, 0)
     return ((B_up - np.atleast_2d(at)[None]) / h.T[:, :, None]).transpose(1, 2, 0)
 
