@@ -17,7 +17,8 @@ import pytest
 from click.testing import CliRunner
 
 from mst_cli.cli.app import main
-from mst_cli.model.general_load import field_T, loaded_stack
+from mst_cli.estimation.offset_reading import OffsetEstimator
+from mst_cli.model.general_load import field_jacobian_T, field_T, fields_T, loaded_stack
 from mst_cli.model.mechanics.lateral import lateral_stiffness_N_per_mm
 from mst_cli.model.offcentre import simulate_offcentre
 from mst_cli.model.stack_pose import pose_field_T
@@ -49,6 +50,27 @@ def test_no_shear_is_the_off_centre_press_exactly(scene, stack):
     np.testing.assert_allclose(got, want, rtol=1e-9, atol=1e-14)  # one solve from the axis vs the curve's
     # along the whole curve (each solve warm-started from the last) the issue-24 field, bit for bit
     np.testing.assert_array_equal(plain.B_T, pose_field_T(geometry, stack.tilt, plain.force_N, (4.0, -2.0)))
+
+
+def test_one_forward_model_a_load_is_a_batch_of_one(scene, stack):
+    """The batched model's rows are the loads solved alone (the magnet's field, one call for the
+    batch, rounds alike to 1e-15); the offset estimator's field is its normal-load case, the
+    off-centre press's path at one force; the Jacobian is the differences of single loads."""
+    loads = np.array([[5.0, 1.0, -0.5, 2.0, 1.0], [20.0, -3.0, 2.0, -4.0, 2.0], [8.0, 0.0, 2.0, -6.0, -3.0]])
+    chips = [(0.0, 0.0), (10.0, 6.0)]
+    alone = np.array([field_T(stack, t[0], t[1:3], t[3:], chips).ravel() for t in loads])
+    np.testing.assert_allclose(fields_T(stack, loads, chips), alone, rtol=1e-14, atol=1e-20)
+    est = OffsetEstimator(*scene, "spring", 1e-6, 50.0)
+    press = pose_field_T(scene[0], stack.tilt, np.array([12.0]), (3.0, -2.0))[0]
+    np.testing.assert_array_equal(est.field_T(np.array([12.0, 3.0, -2.0])), press)
+    J = field_jacobian_T(stack, loads[:1], chips, (0, 3))
+    h = (1e-3, 1e-3)  # the steps: 1e-4 of 5 N floored at 1 mN, and 1 um
+    for c, (i, step) in enumerate(zip((0, 3), h)):
+        up, down = loads[0].copy(), loads[0].copy()
+        up[i] += step
+        down[i] -= step
+        diff = field_T(stack, up[0], up[1:3], up[3:], chips) - field_T(stack, down[0], down[1:3], down[3:], chips)
+        np.testing.assert_allclose(J[0, :, c], diff.ravel() / (2 * step), rtol=1e-6, atol=1e-12)
 
 
 @pytest.mark.parametrize("axis", [0, 1])

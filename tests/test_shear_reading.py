@@ -171,3 +171,11 @@ def test_design_states_what_a_two_chip_layout_tells_apart(tmp_path):
     for name in b["estimates"]:  # the bound is linear in the noise
         assert hi[f"{name}_crb_median"] == pytest.approx(4 * lo[f"{name}_crb_median"], rel=1e-9)
     assert "can tell apart" in res.output
+
+
+@pytest.mark.parametrize("chips", [None, TWO_CHIPS])
+def test_no_readings_give_no_estimates(stack, chips):
+    """A batch of none (a stream's empty block, a polish with no ok reading) is no fit at all."""
+    r = ShearReader(stack, chips).read(np.zeros((0, 3 * len(chips or [0]))), 1e-6)
+    assert r.chi2.shape == (0,) and r.flag.shape == (0,)
+    assert all(v.shape == (0,) for v in (*r.estimate.values(), *r.sigma.values()))

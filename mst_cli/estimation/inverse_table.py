@@ -7,10 +7,10 @@ and two more coordinates (u, v), one force path up the forces per (u, v) node; b
 is trilinear. The table's ``kind`` says what (u, v) are:
 
 * ``offset``: where a press without shear was pressed, x0 over the face's width and y0 over its
-  depth (mm), each a :func:`~mst_cli.model.stack_pose.pose_field_T` path;
+  depth (mm), each a :func:`~mst_cli.model.general_load.path_fields_T` path (no slides);
 * ``shear``: the tangential force's ratios to the normal one, Fx / Fz and Fy / Fz, of a centred
   press (a friction cone: a box in the ratios), each a
-  :func:`~mst_cli.model.general_load.load_path` path; an estimate is given as (Fz, Fx, Fy) =
+  :func:`~mst_cli.model.general_load.path_fields_T` path; an estimate is given as (Fz, Fx, Fy) =
   (F, u F, v F), its Jacobian carried over by the chain rule before the bound is taken.
 
 The table is inverted directly (the same steps as the C header's, batched here over readings):
@@ -48,10 +48,10 @@ from mst_cli.estimation.table_start import middle_uv, start_nodes
 from mst_cli.estimation.trilinear import normal_step, to_output, trilinear
 from mst_cli.io.files import read_input
 from mst_cli.model.assembly import SensorGeometry
-from mst_cli.model.general_load import load_path, loaded_stack
+from mst_cli.model.general_load import loaded_stack, normal_stack, path_fields_T
 from mst_cli.model.load_bound import crb_sigma
 from mst_cli.model.material import Material
-from mst_cli.model.stack_pose import magnet_field_T, magnet_pose, pose_field_T, tilt_laws
+from mst_cli.model.stack_pose import tilt_laws
 from mst_cli.parallel import fork_map
 
 TABLE_FILE = "inverse_table.npz"  # the offset table's file beside the model ...
@@ -349,14 +349,13 @@ def build_table(
         stack = loaded_stack(geometry, material, mechanics, lever_factor, whole_part)
 
         def path(node: tuple[float, float]) -> np.ndarray:  # node: (Fx / Fz, Fy / Fz)
-            d, tilt, slide = load_path(stack, grid.force_N, (0.0, 0.0), node)
-            return magnet_field_T(geometry, *magnet_pose(geometry, d, tilt, slide))
+            return path_fields_T(stack, grid.force_N, (0.0, 0.0), node)
 
     else:
-        laws = tilt_laws(geometry, material, mechanics, lever_factor, whole_part)
+        pressed = normal_stack(geometry, tilt_laws(geometry, material, mechanics, lever_factor, whole_part), mechanics)
 
         def path(node: tuple[float, float]) -> np.ndarray:  # node: (x0, y0) mm
-            return pose_field_T(geometry, laws, grid.force_N, node)
+            return path_fields_T(pressed, grid.force_N, node)
 
     paths = fork_map(path, nodes)
     if paths is None:

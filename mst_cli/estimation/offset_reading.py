@@ -11,7 +11,9 @@ a light press the stack hardly tilts, so Bx and By say nothing), the two starts 
 roots (*ambiguous*: late in the stack the field folds over, so distant presses give the same
 reading), or neither fits the reading (*no fit*).
 
-The solve is not the shear readers' Levenberg-Marquardt: three equations in three unknowns have
+The field is the general load's forward model (:func:`~mst_cli.model.general_load.fields_T`'s
+parts, no shear, warm-started from the last call). The solve is not the shear readers'
+Levenberg-Marquardt (:mod:`~mst_cli.estimation.least_squares` says why): three equations in three unknowns have
 an exact root, which must lie in the box of the force range and the face, so it is a projected
 Gauss-Newton (a coordinate at the box held, steps halved until the misfit falls), the algorithm
 the one-chip tables' direct inverse runs cell by cell on the trilinear field
@@ -30,9 +32,10 @@ from typing import NamedTuple
 import numpy as np
 
 from mst_cli.model.assembly import SensorGeometry
+from mst_cli.model.general_load import fields_of, layer_states, normal_stack
 from mst_cli.model.load_bound import crb_sigma
 from mst_cli.model.material import Material
-from mst_cli.model.stack_pose import magnet_field_T, magnet_pose, stack_path, tilt_laws
+from mst_cli.model.stack_pose import tilt_laws
 
 DEFAULT_MAX_SIGMA_MM = 1.0  # an offset less certain than this is not identifiable
 GAUSS_NEWTON_ITERATIONS = 30
@@ -139,7 +142,8 @@ class OffsetEstimator:
         whole_part: bool = True,
     ):
         self.geometry = geometry
-        self.layers = tilt_laws(geometry, material, mechanics, lever_factor, whole_part)
+        laws = tilt_laws(geometry, material, mechanics, lever_factor, whole_part)
+        self.stack = normal_stack(geometry, laws, mechanics)
         self.sigma_T = float(field_sigma_T)
         self.force_max_N = float(force_max_N)
         self.max_sigma_mm = float(max_sigma_mm)
@@ -147,14 +151,15 @@ class OffsetEstimator:
         self._start: np.ndarray | None = None  # the layers' last (d, phi_y, phi_x)
 
     def field_T(self, p: np.ndarray) -> np.ndarray:
-        """The model's field (3,) at p = (force N, x0 mm, y0 mm); each layer's solve starts from
-        the last call's answer (the estimate moves by small steps)."""
+        """The forward model's field (3,) (:func:`~mst_cli.model.general_load.fields_T`) at p =
+        (force N, x0 mm, y0 mm); each layer's solve starts from the last call's answer (the
+        estimate moves by small steps)."""
         F = max(float(p[0]), 0.0)
-        if F == 0.0:
-            return magnet_field_T(self.geometry, np.zeros((1, 3)), np.zeros((1, 3)))[0]
-        d, tilt = stack_path(self.layers, np.array([F]), (float(p[1]), float(p[2])), self._start)
-        self._start = np.column_stack([d[0], tilt[0]])
-        return magnet_field_T(self.geometry, *magnet_pose(self.geometry, d, tilt))[0]
+        theta = np.array([[F, 0.0, 0.0, float(p[1]), float(p[2])]])
+        states = layer_states(self.stack, theta, None if self._start is None else self._start[None])
+        if F > 0.0:
+            self._start = states[0]
+        return fields_of(self.stack, theta, states)[0]
 
     def _jacobian(self, p: np.ndarray, B0: np.ndarray) -> np.ndarray:
         steps = np.array([STEP_FORCE_REL * self.force_max_N, STEP_OFFSET_MM, STEP_OFFSET_MM])

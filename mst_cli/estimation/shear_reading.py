@@ -2,24 +2,20 @@
 
 One 3-axis chip gives three numbers, so three unknowns: a press taken as centred gives (Fz,
 Fx, Fy) from (Bx, By, Bz). Two chips give six numbers, enough for all five, (Fz, Fx, Fy, x, y).
-Either way the estimate is the general-load model's (:mod:`mst_cli.model.general_load`) least
-squares fit to the reading, each axis weighted by the chip's noise: Gauss-Newton with a
-Levenberg damping, its Jacobian by forward differences, started from the centred press that
-gives the first chip's |B| (and, where that fit stalls beyond the noise, again from four other
-starts, the best kept). Each estimate comes with its 1-sigma Cramer-Rao bound at the fit
-(:mod:`mst_cli.model.load_bound`) and a flag: ``no_fit`` where the model cannot come within the
-noise of the reading (chi^2 past :data:`CHI2_FLAG`: with one chip no residual is left for a
-reading the model reaches, so that is a reading outside it; with two, one degree of freedom
-tests the assumption). A fit is judged by its chi^2 alone: the layer laws are piecewise linear,
-so near a knot the steps can stall short of the step tolerance on a fit already within the noise.
+Either way the estimate is the general-load model's (:func:`mst_cli.model.general_load.fields_T`,
+each load's layers solved exactly) least squares fit to the reading, each axis weighted by the
+chip's noise, by the estimators' one solver
+(:func:`~mst_cli.estimation.least_squares.levenberg_marquardt`, the readings a batch), its
+Jacobian by forward differences, started from the centred press that gives the first chip's |B|
+(and, where that fit stalls beyond the noise, again from four other starts, the best kept). Each
+estimate comes with its 1-sigma Cramer-Rao bound at the fit (:mod:`mst_cli.model.load_bound`) and
+a flag: ``no_fit`` where the model cannot come within the noise of the reading (chi^2 past
+:data:`CHI2_FLAG`: with one chip no residual is left for a reading the model reaches, so that is a
+reading outside it; with two, one degree of freedom tests the assumption). A fit is judged by its
+chi^2 alone: the layer laws are piecewise linear, so near a knot the steps can stall short of the
+step tolerance on a fit already within the noise.
 
-The fit is the algorithm of the two-chip reader's batched :func:`~mst_cli.estimation.two_chip_table.fit_many`
-(Marquardt's diagonal scaling, the damping /10 on a step that lowers chi^2) one reading at a
-time, but a rejected step is retried within its iteration at ten times the damping, where
-fit_many moves on to its next iteration: the two stop on different last digits, so the readers'
-outputs would move if one served both (issue 45 leaves them two until fit_many's own rework lands).
-
-Pure: no I/O; works on arrays of readings (a loop over them; each fit is independent).
+Pure: no I/O; works on arrays of readings (each fit independent, all fitted as one batch).
 """
 
 from __future__ import annotations
@@ -29,10 +25,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mst_cli.model.general_load import SHEAR_RATIO_MAX, LoadedStack, load_path
-from mst_cli.model.load_bound import ALL, CENTRED, UNKNOWNS, crb_sigma, field_jacobian, fields_T
-from mst_cli.model.mechanics.tilt import TiltError
-from mst_cli.model.stack_pose import magnet_field_T, magnet_pose
+from mst_cli.estimation.least_squares import levenberg_marquardt
+from mst_cli.model.general_load import SHEAR_RATIO_MAX, LoadedStack, field_jacobian_T, fields_T, path_fields_T
+from mst_cli.model.load_bound import ALL, CENTRED, UNKNOWNS, crb_sigma
 
 CHI2_FLAG = {0: 9.0, 1: 10.83}  # the model more than 3 sigma off (no dof), p = 0.001 (one dof)
 MAX_ITER = 40
@@ -61,28 +56,24 @@ class ShearReader:
         self.free = CENTRED if len(self.chips_mm) == 1 else ALL
         top = max(t.lock_force_N for t in stack.tilt)
         self.table_F = np.linspace(0.0, 1.5 * top, 301)
-        d, tilt, slide = load_path(stack, self.table_F, (0.0, 0.0))
-        shift, rotvec = magnet_pose(stack.geometry, d, tilt, slide)
-        B0 = magnet_field_T(stack.geometry, shift, rotvec, self.chips_mm[0])
+        B0 = path_fields_T(stack, self.table_F, (0.0, 0.0), chips_mm=self.chips_mm[:1])
         self.table_B = np.linalg.norm(B0, axis=-1)  # |B| at the first chip, centred presses
 
     def read(self, B_T: np.ndarray, noise_T: float) -> ShearReading:
         """The estimates from readings ``B_T`` (m, k, 3) or, one chip, (m, 3), in T."""
         B = np.asarray(B_T, dtype=float).reshape(len(B_T), len(self.chips_mm) * 3)
-        m, p = len(B), len(self.free)
-        est = np.zeros((m, 5))
-        sig = np.full((m, p), np.nan)
-        chi2 = np.full(m, np.nan)
-        flag = np.full(m, "ok", dtype=object)
-        dof = len(B[0]) - p
+        dof = B.shape[1] - len(self.free)
         limit = CHI2_FLAG.get(dof, 3.0 * dof + 10.0)
-        for i in range(m):
-            est[i], sig[i], chi2[i], flag[i] = self._fit(B[i], noise_T, self._start(B[i]))
-            for start in self._restarts(B[i]) if not chi2[i] <= limit else ():
-                fit = self._fit(B[i], noise_T, start)
-                if fit[2] < chi2[i]:
-                    est[i], sig[i], chi2[i], flag[i] = fit
-        flag[:] = np.where(chi2 <= limit, "ok", "no_fit")  # a stall at the cone's edge too
+        est, sig, chi2 = self.fit(B, noise_T, np.array([self._start(b) for b in B]).reshape(len(B), 5))
+        again = np.flatnonzero(~(chi2 <= limit))
+        if len(again):  # four more starts each; the first of the lowest chi^2 kept
+            starts = np.array([s for i in again for s in self._restarts(B[i])])
+            more = self.fit(np.repeat(B[again], 4, axis=0), noise_T, starts)
+            for i, rows in zip(again, np.arange(len(again) * 4).reshape(-1, 4)):
+                k = int(np.argmin(np.r_[chi2[i], more[2][rows]]))
+                if k:
+                    est[i], sig[i], chi2[i] = more[0][rows[k - 1]], more[1][rows[k - 1]], more[2][rows[k - 1]]
+        flag = np.where(chi2 <= limit, "ok", "no_fit").astype(object)  # a stall at the cone's edge too
         return ShearReading(
             {name: est[:, j] for j, name in enumerate(UNKNOWNS)},
             {UNKNOWNS[j]: sig[:, k] for k, j in enumerate(self.free)},
@@ -106,48 +97,32 @@ class ShearReader:
         return [np.array([s[0], sx * push, sy * push, 0.0, 0.0]) for sx in (-1, 1) for sy in (-1, 1)]
 
     def _clip(self, theta: np.ndarray) -> np.ndarray:
-        """Keep the load inside what the model takes: Fz > 0, the friction cone, the top face."""
+        """Loads (m, 5) kept inside what the model takes: Fz > 0, the friction cone, the top face."""
         g = self.stack.geometry
         t = theta.copy()
-        t[0] = max(t[0], 1e-3)
-        lim = SHEAR_RATIO_MAX * t[0]
-        t[1:3] = np.clip(t[1:3], -lim, lim)
-        t[3] = np.clip(t[3], -0.5 * g.width_mm, 0.5 * g.width_mm)
-        t[4] = np.clip(t[4], -0.5 * g.depth_mm, 0.5 * g.depth_mm)
+        t[:, 0] = np.maximum(t[:, 0], 1e-3)
+        lim = SHEAR_RATIO_MAX * t[:, 0]
+        t[:, 1], t[:, 2] = np.clip(t[:, 1], -lim, lim), np.clip(t[:, 2], -lim, lim)
+        t[:, 3] = np.clip(t[:, 3], -0.5 * g.width_mm, 0.5 * g.width_mm)
+        t[:, 4] = np.clip(t[:, 4], -0.5 * g.depth_mm, 0.5 * g.depth_mm)
         return t
 
-    def _residual(self, theta: np.ndarray, B: np.ndarray, noise_T: float) -> tuple[np.ndarray, float]:
-        """(the model's fields, chi^2) at ``theta``; chi^2 inf where the model has no answer."""
-        try:
-            model = fields_T(self.stack, theta, self.chips_mm)
-        except TiltError:
-            return np.full_like(B, np.nan), np.inf
-        return model, float(np.sum(((model - B) / noise_T) ** 2))
+    def _fields(self, theta: np.ndarray, warm: None = None) -> tuple[np.ndarray, None]:
+        """(the chips' fields (m, 3 k) at the loads ``theta`` (m, 5), NaN where the model has no
+        answer; None: each load solved afresh)."""
+        return fields_T(self.stack, theta, self.chips_mm, unsolved_nan=True), None
 
-    def _fit(self, B: np.ndarray, noise_T: float, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray, float, str]:
-        """Levenberg-damped Gauss-Newton from ``theta``: (theta, CRB sigma, chi^2, flag)."""
-        model, cost = self._residual(theta, B, noise_T)
-        lam = 1e-3
-        free = list(self.free)
-        for _ in range(MAX_ITER):
-            J = field_jacobian(self.stack, theta, self.chips_mm, free, at=model) / noise_T
-            r = (model - B) / noise_T
-            A, g = J.T @ J, J.T @ r
-            scale = np.sqrt(np.maximum(np.diag(A), 1e-300))
-            while True:
-                step = -np.linalg.solve(A + lam * np.diag(scale**2), g)
-                trial = theta.copy()
-                trial[free] += step
-                trial = self._clip(trial)
-                t_model, t_cost = self._residual(trial, B, noise_T)
-                if t_cost <= cost or lam > 1e8:
-                    break
-                lam *= 10.0
-            if t_cost > cost:
-                break
-            theta, model, cost, lam = trial, t_model, t_cost, max(lam / 10.0, 1e-6)
-            if np.all(np.abs(step) * scale <= STEP_TOL):
-                break
-        J = field_jacobian(self.stack, theta, self.chips_mm, free)
-        sigma = crb_sigma(J, noise_T)
-        return theta, sigma, cost, "ok"
+    def _jacobian(self, theta: np.ndarray, at: np.ndarray, warm: None = None) -> np.ndarray:
+        """(m, 3 k, free) dB/dtheta by forward differences from the fields ``at``."""
+        return field_jacobian_T(self.stack, theta, self.chips_mm, self.free, at)
+
+    def fit(self, B_T: np.ndarray, noise_T: float, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Readings ``B_T`` (m, 3 k) fitted from the loads ``theta`` (m, 5) by the estimators' one
+        solver (:func:`~mst_cli.estimation.least_squares.levenberg_marquardt`), each row on its
+        own: (the loads (m, 5), their CRB 1-sigma (m, free) by central differences, chi^2 (m,))."""
+        B = np.asarray(B_T, dtype=float).reshape(len(theta), 3 * len(self.chips_mm))
+        fit = levenberg_marquardt(
+            self._fields, self._jacobian, B, theta, noise_T, self._clip, MAX_ITER, STEP_TOL, self.free
+        )
+        J = field_jacobian_T(self.stack, fit.theta, self.chips_mm, self.free)
+        return fit.theta, crb_sigma(J, noise_T), fit.chi2

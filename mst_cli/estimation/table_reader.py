@@ -109,11 +109,11 @@ class ShearTableReader:
         """The exact fit from each ok reading's root; it replaces the table's where it stays within
         the noise (the table's flags stand)."""
         assert self.exact is not None
-        for i in np.flatnonzero(est.flag == "ok"):
-            theta = np.array([*est.best[i], 0.0, 0.0])
-            p, sig, chi2, _ = self.exact._fit(B_T[i], self.sigma_T, theta)
-            if chi2 <= CHI2_FLAG[0]:
-                est.p[i], est.sigma[i] = p[:3], sig
+        ok = np.flatnonzero(est.flag == "ok")
+        theta = np.column_stack([est.best[ok], np.zeros((len(ok), 2))])
+        p, sig, chi2 = self.exact.fit(B_T[ok], self.sigma_T, theta)
+        kept = chi2 <= CHI2_FLAG[0]
+        est.p[ok[kept]], est.sigma[ok[kept]] = p[kept, :3], sig[kept]
 
 
 @dataclass

@@ -1,5 +1,5 @@
 """A fast reader of all five unknowns (Fz, Fx, Fy, x, y) from two chips or more (issue 39): the
-general-load model (:mod:`mst_cli.model.general_load`) evaluated for many loads at once, and a
+general-load model (:mod:`mst_cli.model.general_load`) with its layers' states tabulated, and a
 Levenberg-Marquardt fit of every reading at once.
 
 Where the exact reader (:mod:`mst_cli.estimation.shear_reading`) spends its time is the tilt
@@ -15,13 +15,15 @@ loads over the tables' range) the trilinear field is a median 4 uT off (max 49 u
 nodes (2 mm, 33 forces) and still 1.2 uT (max 13 uT) at 1 mm and 65 forces, more than the chip
 noise. From that guess a few steps of the same Newton, vectorised
 (:mod:`mst_cli.model.mechanics.tilt_batch`), give the exact states: the field then within 1e-9 T
-of the exact one (benchmarks/bench_two_chip.py). The slides (a compliance law per layer), the
-magnet's pose and its exact cylinder field are cheap and exact already. The Jacobian moves the
+of the exact one (benchmarks/bench_two_chip.py). From the states on, the fields are the
+forward model's own (:func:`~mst_cli.model.general_load.fields_of`: the slides, the magnet's pose,
+its exact cylinder field at every chip), cheap and exact already. The Jacobian moves the
 states along their own tangent (the implicit function theorem on the equilibrium: no solve per
 difference).
 
-The fit is the exact reader's, vectorised: Levenberg-damped Gauss-Newton on the chi^2 of the
-readings weighted by the chip noise, every step clipped to the model's domain (Fz in (0, the
+The fit is the exact reader's, the estimators' one solver
+(:func:`~mst_cli.estimation.least_squares.levenberg_marquardt`): Levenberg-damped Gauss-Newton on
+the chi^2 of the readings weighted by the chip noise, every step clipped to the model's domain (Fz in (0, the
 tables' top force], |Fx|, |Fy| <= ratio_max Fz, the press on the face). Every reading is fitted
 from five starts (the centred press whose |B| at the first chip is the reading's, and that
 force pressed a quarter of the face out toward each corner) on the tables alone; each reading's
@@ -44,12 +46,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from mst_cli.estimation.least_squares import levenberg_marquardt
 from mst_cli.estimation.shear_reading import CHI2_FLAG, ShearReader
-from mst_cli.model.general_load import LoadedStack
-from mst_cli.model.load_bound import FORCE_STEP_MIN_N, FORCE_STEP_REL, POSITION_STEP_MM, UNKNOWNS, crb_sigma
+from mst_cli.model.general_load import LoadedStack, fields_of, load_ratios, stepped_loads
+from mst_cli.model.load_bound import ALL, UNKNOWNS, crb_sigma
 from mst_cli.model.mechanics.tilt import LayerTiltLaw
 from mst_cli.model.mechanics.tilt_batch import newton_many, residual_many
-from mst_cli.model.stack_pose import magnet_field_T, magnet_pose, stack_path
+from mst_cli.model.stack_pose import stack_path
 from mst_cli.parallel import fork_map
 
 RATIO_MAX = 0.5  # |Fx| / Fz and |Fy| / Fz the table supports
@@ -59,8 +62,6 @@ STEP_MM = 2.0  # offsets' spacing
 MAX_ITER = 60
 STEP_TOL = 1e-3  # a fit ends once a step is this share of the bound's sigma in every unknown ...
 TABLE_STEP_TOL = 3e-2  # ... on the tables' states (the exact states' fit goes on from there)
-LAMBDA_0, LAMBDA_MAX = 1e-3, 1e8
-LAMBDA_GN = 1e-2  # a step damped this little is Gauss-Newton's
 START_FRACTION = 0.25  # the four off-centre starts: this share of the face's width and depth out
 NEWTON_STEPS = 12  # the tilt rung's Newton steps from the tables' states (most loads need 2 to 6, a few 10)
 # Of 100 random presses on tests/test_two_chip_table.py's sensor, the fit on the exact states ends
@@ -193,7 +194,7 @@ class TwoChipModel:
         """(m, n, 3) every layer's (d, phi_y, phi_x) at the loads ``theta`` (m, 5): the tables'
         and, with ``newton_steps``, that many Newton steps of the tilt rung's equilibrium from
         there, or from the states ``near`` (m, n, 3) (a close load's: the Jacobian's steps)."""
-        F, rx, ry = _ratios(theta)
+        F, rx, ry = load_ratios(theta)
         out = np.empty((len(F), len(self.tables), 3))
         for j, (table, law, lever) in enumerate(zip(self.tables, self.stack.tilt, self.stack.lever_mm)):
             off = np.column_stack([theta[:, 3] + lever * rx, theta[:, 4] + lever * ry])
@@ -225,44 +226,19 @@ class TwoChipModel:
     def jacobian_T(self, theta: np.ndarray, at: np.ndarray, states: np.ndarray) -> np.ndarray:
         """(m, 3 k, 5) dB/dtheta at equilibrium ``states``, ``at`` the fields there: forward
         differences with the states moved along their tangent (no solve)."""
-        h = fd_steps(theta)
         m = len(theta)
         tangent = self.state_tangent(theta, states)
-        shifted = np.repeat(theta[None, :, :], 5, axis=0)
+        shifted, h = stepped_loads(theta, ALL)
         moved = np.repeat(states[None], 5, axis=0)
         for i in range(5):
-            shifted[i, :, i] += h[:, i]
             moved[i] += h[:, i, None, None] * tangent[:, i]
         B = self.fields_of(shifted.reshape(5 * m, 5), moved.reshape(5 * m, *states.shape[1:])).reshape(5, m, -1)
         return ((B - at[None, :, :]) / h.T[:, :, None]).transpose(1, 2, 0)
 
     def fields_of(self, theta: np.ndarray, states: np.ndarray) -> np.ndarray:
-        """(m, 3 k) the chips' fields at the loads ``theta`` with the layers' ``states``."""
-        F, rx, ry = _ratios(theta)
-        slide = self.stack.slides_mm(F, (rx, ry))
-        shift, rotvec = magnet_pose(self.stack.geometry, states[..., 0], states[..., 1:], slide)
-        # every chip in one call of the field (its cost is mostly per call): chip j seen from the
-        # first chip's place, the magnet moved back by the chips' spacing
-        first = self.chips_mm[0]
-        moved = [shift - np.array([cx - first[0], cy - first[1], 0.0]) for cx, cy in self.chips_mm]
-        k, m = len(self.chips_mm), len(theta)
-        B = magnet_field_T(self.stack.geometry, np.concatenate(moved), np.tile(rotvec, (k, 1)), first)
-        return B.reshape(k, m, 3).transpose(1, 0, 2).reshape(m, 3 * k)
-
-
-def _ratios(theta: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(Fz, Fx / Fz, Fy / Fz) of loads (m, 5) (ratios 0 at Fz <= 0)."""
-    F = theta[:, 0]
-    safe = np.where(F > 0.0, F, 1.0)
-    return F, np.where(F > 0.0, theta[:, 1] / safe, 0.0), np.where(F > 0.0, theta[:, 2] / safe, 0.0)
-
-
-def fd_steps(theta: np.ndarray) -> np.ndarray:
-    """(m, 5) the finite-difference step of every unknown (the exact reader's,
-    :func:`~mst_cli.model.load_bound.steps`)."""
-    h_F = np.maximum(FORCE_STEP_REL * np.abs(theta[:, 0]), FORCE_STEP_MIN_N)
-    h_p = np.full(len(theta), POSITION_STEP_MM)
-    return np.column_stack([h_F, h_F, h_F, h_p, h_p])
+        """(m, 3 k) the chips' fields at the loads ``theta`` with the layers' ``states``: the
+        forward model's (:func:`~mst_cli.model.general_load.fields_of`)."""
+        return fields_of(self.stack, theta, states, self.chips_mm)
 
 
 @dataclass
@@ -314,11 +290,8 @@ Jacobian = Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray]  # (theta,
 def jacobian_many(fields: Model, theta: np.ndarray, at: np.ndarray, states: np.ndarray) -> np.ndarray:
     """(m, 3 k, 5) dB/dtheta by forward differences from ``at`` = fields(theta) (the layers in
     ``states``, where each step's solve starts), every unknown's step in one call of the model."""
-    h = fd_steps(theta)
     m = len(theta)
-    shifted = np.repeat(theta[None, :, :], 5, axis=0)
-    for i in range(5):
-        shifted[i, :, i] += h[:, i]
+    shifted, h = stepped_loads(theta, ALL)
     near = np.broadcast_to(states, (5, *states.shape)).reshape(5 * m, *states.shape[1:])
     B = fields(shifted.reshape(5 * m, 5), near)[0].reshape(5, m, -1)
     return ((B - at[None, :, :]) / h.T[:, :, None]).transpose(1, 2, 0)
@@ -335,67 +308,17 @@ def fit_many(
     jacobian: Jacobian | None = None,
     siblings: int = 1,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Levenberg-damped Gauss-Newton of every row of ``theta`` (m, 5) against its reading
-    ``B_T`` (m, 3 k) at once, each on its own damping, each step clipped by ``clip``: (theta,
-    chi^2, the Jacobian (m, 3 k, 5) there). A row ends once its step is within ``step_tol`` of
-    its bound's sigma in every unknown or lowers chi^2 by less than ``step_tol``^2 (of chi^2 or of
-    1, whichever is more), once such a short step at Gauss-Newton's damping (LAMBDA_GN) is no
-    better, or once its damping passes LAMBDA_MAX. ``jacobian`` (theta, fields,
+    """Every row of ``theta`` (m, 5) fitted to its reading ``B_T`` (m, 3 k) by the estimators' one
+    solver (:func:`~mst_cli.estimation.least_squares.levenberg_marquardt`, its default damping):
+    (theta, chi^2, the Jacobian (m, 3 k, 5) there). ``jacobian`` (theta, fields,
     states) -> (m, 3 k, 5): the model's own (else forward differences of ``fields``).
-    ``siblings``: rows in runs of that many starts of one reading; a row ends once within
+    ``siblings``: rows in runs of that many starts of one reading, a row ending once within
     MERGE_SIGMA steps' scale of a sibling of lower chi^2 (the same minimum: :func:`_distinct`'s)."""
     jac = jacobian if jacobian is not None else functools.partial(jacobian_many, fields)
-    theta = clip(np.array(theta, dtype=float))
-    model, states = fields(theta, None)
-    cost = np.sum(((model - B_T) / noise_T) ** 2, axis=1)
-    J = jac(theta, model, states)
-    lam = np.full(len(theta), LAMBDA_0)
-    active = np.arange(len(theta))
-    for _ in range(max_iter):
-        if not len(active):
-            break
-        Jw = J[active] / noise_T
-        A = np.einsum("mki,mkj->mij", Jw, Jw)
-        g = np.einsum("mki,mk->mi", Jw, (model[active] - B_T[active]) / noise_T)
-        scale2 = np.maximum(np.diagonal(A, axis1=1, axis2=2), 1e-300)
-        damped = A + lam[active, None, None] * (scale2[:, :, None] * np.eye(5))
-        trial = clip(theta[active] - np.linalg.solve(damped, g[:, :, None])[:, :, 0])
-        t_model, t_states = fields(trial, states[active])
-        t_cost = np.sum(((t_model - B_T[active]) / noise_T) ** 2, axis=1)
-        better = t_cost <= cost[active]
-        short = np.all(np.abs(trial - theta[active]) * np.sqrt(scale2) <= step_tol, axis=1)
-        small = short | (cost[active] - t_cost <= step_tol**2 * np.maximum(cost[active], 1.0))  # chi^2 all but still
-        # a short Gauss-Newton step no better: the minimum to round-off (more damping only shortens it)
-        stalled = ~better & short & (lam[active] <= LAMBDA_GN)
-        acc = active[better]
-        theta[acc], model[acc], cost[acc], states[acc] = (
-            trial[better],
-            t_model[better],
-            t_cost[better],
-            t_states[better],
-        )
-        lam[acc] = np.maximum(lam[acc] / 10.0, 1e-6)
-        lam[active[~better]] *= 10.0
-        done = (better & small) | stalled | (lam[active] > LAMBDA_MAX)
-        if siblings > 1:
-            done |= _behind_a_sibling(theta, cost, active, np.sqrt(scale2), siblings)
-        if len(acc):
-            J[acc] = jac(theta[acc], model[acc], states[acc])
-        active = active[~done]
-
-    return theta, cost, J
-
-
-def _behind_a_sibling(
-    theta: np.ndarray, cost: np.ndarray, active: np.ndarray, inv_step: np.ndarray, siblings: int
-) -> np.ndarray:
-    """Which ``active`` rows lie within MERGE_SIGMA / ``inv_step`` (per unknown) of another row of
-    their reading (rows in runs of ``siblings``) whose chi^2 is lower (or equal and first)."""
-    first = active - active % siblings
-    others = first[:, None] + np.arange(siblings)[None, :]  # (a, S) every row of the reading
-    near = np.all(np.abs(theta[others] - theta[active, None, :]) * inv_step[:, None, :] <= MERGE_SIGMA, axis=2)
-    lower = (cost[others] < cost[active, None]) | ((cost[others] == cost[active, None]) & (others < active[:, None]))
-    return np.any(near & lower, axis=1)
+    fit = levenberg_marquardt(
+        fields, jac, B_T, theta, noise_T, clip, max_iter, step_tol, siblings=siblings, merge_sigma=MERGE_SIGMA
+    )
+    return fit.theta, fit.chi2, fit.jacobian
 
 
 class TwoChipReader:
@@ -521,14 +444,12 @@ class TwoChipReader:
         return TwoChipEstimates.of(t, s, c, flag, fits)
 
     def polish(self, B_T: np.ndarray, estimates: TwoChipEstimates) -> TwoChipEstimates:
-        """The estimates put through the exact reader's fit (:class:`ShearReader`), one reading at
-        a time from the fast estimate (0.1 to 0.5 s each): the exact model's least squares.
+        """The estimates put through the exact reader's fit (:class:`ShearReader`) from the fast
+        estimate (0.1 to 0.5 s a reading): the exact model's least squares.
         An ``ambiguous`` flag stays (the polish refines the best fit only)."""
         B = np.asarray(B_T, dtype=float).reshape(len(B_T), -1)
         exact = ShearReader(self.model.stack, self.model.chips_mm)
-        theta, sigma, chi2 = estimates.theta.copy(), estimates.sigma.copy(), estimates.chi2.copy()
-        for i in range(len(B)):
-            theta[i], sigma[i], chi2[i], _ = exact._fit(B[i], self.noise_T, self.clip(theta[i : i + 1])[0])
+        theta, sigma, chi2 = exact.fit(B, self.noise_T, self.clip(estimates.theta))
         flag = np.where(chi2 <= self.chi2_limit, np.where(estimates.flag == "ambiguous", "ambiguous", "ok"), "no_fit")
         return TwoChipEstimates.of(theta, sigma, chi2, flag.astype(object), estimates.fits)
 

@@ -24,7 +24,19 @@ The load model and what it assumes:
 * The magnet's pose adds the tilts' turns and shifts and the slides
   (:func:`mst_cli.model.stack_pose.magnet_pose`); its exact field at each chip follows.
 
-At Fx = Fy = 0 it is the off-centre press (:mod:`mst_cli.model.offcentre`) exactly. Pure: no I/O.
+At Fx = Fy = 0 it is the off-centre press (:mod:`mst_cli.model.offcentre`) exactly.
+
+The forward model is written once, batched: :func:`fields_T` takes loads (m, 5) = (Fz, Fx, Fy, x,
+y) (one load is a batch of one) to the fields at every chip (m, 3 k), in two parts that its
+callers may take apart: :func:`layer_states`, every layer's equilibrium solved exactly per load
+(warm-started where a caller knows a close load's), and :func:`fields_of`, the slides, the magnet's
+pose and its exact field at every chip in one call. Its Jacobian is :func:`field_jacobian_T`
+(differences, the steps :func:`fd_steps`), and :func:`path_fields_T` its fields up a force path
+(what a table holds). Its callers: the Cramer-Rao bound (:mod:`mst_cli.model.load_bound`), the exact
+shear reader, the offset estimator (on :func:`normal_stack`, no slides), the shear table's paths,
+and the two-chip reader, whose tabulated states go through :func:`fields_of`.
+
+Pure: no I/O.
 """
 
 from __future__ import annotations
@@ -38,7 +50,7 @@ import numpy as np
 from mst_cli.model.assembly import SensorGeometry
 from mst_cli.model.material import Material
 from mst_cli.model.mechanics.lateral import depth_end_factor, lateral_stiffness_N_per_mm
-from mst_cli.model.mechanics.tilt import LayerTiltLaw, centred_compression_mm
+from mst_cli.model.mechanics.tilt import LayerTiltLaw, TiltError, centred_compression_mm
 from mst_cli.model.stack_pose import layer_pivots_mm, magnet_field_T, magnet_pose, stack_path, tilt_laws
 
 SHEAR_RATIO_MAX = 1.0  # |Fx / Fz|, |Fy / Fz| the model takes (a friction cone of TPU on skin or TPU)
@@ -171,6 +183,12 @@ def loaded_stack(
     return LoadedStack(geometry, mechanics, tilts, lateral, lever)
 
 
+def normal_stack(geometry: SensorGeometry, tilts: list[LayerTiltLaw], mechanics: str) -> LoadedStack:
+    """A stack for normal loads alone (the off-centre press's, without the lateral laws' cost):
+    its layers' tilt laws ``tilts``, no slide (a tangential load on it is not modelled)."""
+    return LoadedStack(geometry, mechanics, tilts, [], geometry.total_height_mm - layer_pivots_mm(geometry))
+
+
 def load_path(
     stack: LoadedStack, force_N: np.ndarray, offset_mm, ratio=(0.0, 0.0)
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -179,6 +197,138 @@ def load_path(
     F = np.asarray(force_N, dtype=float)
     d, tilt = stack_path(stack.tilt, F, stack.layer_offsets_mm(offset_mm, ratio))
     return d, tilt, stack.slides_mm(F, ratio)
+
+
+def load_ratios(theta: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(Fz, Fx / Fz, Fy / Fz) of loads (m, 5) (ratios 0 at Fz <= 0)."""
+    F = theta[:, 0]
+    safe = np.where(F > 0.0, F, 1.0)
+    return F, np.where(F > 0.0, theta[:, 1] / safe, 0.0), np.where(F > 0.0, theta[:, 2] / safe, 0.0)
+
+
+def layer_states(
+    stack: LoadedStack, theta: np.ndarray, start: np.ndarray | None = None, unsolved_nan: bool = False
+) -> np.ndarray:
+    """(m, n, 3) every layer's (d mm, phi_y rad, phi_x rad) under the loads ``theta`` (m, 5) =
+    (Fz, Fx, Fy, x, y), each load's tilt rung solved on its own from ``start`` (m, n, 3) when given
+    (a close load's states), else from the centred answer. A load whose equilibrium is not found
+    raises TiltError, or gets NaN states with ``unsolved_nan``."""
+    F, rx, ry = load_ratios(theta)
+    out = np.zeros((len(theta), len(stack.tilt), 3))
+    for i in range(len(theta)):
+        offsets = stack.layer_offsets_mm(theta[i, 3:5], (rx[i], ry[i]))
+        try:
+            d, tilt = stack_path(stack.tilt, F[i : i + 1], offsets, None if start is None else start[i])
+        except TiltError:
+            if not unsolved_nan:
+                raise
+            out[i] = np.nan
+            continue
+        out[i] = np.column_stack([d[0], tilt[0]])
+    return out
+
+
+def fields_of(
+    stack: LoadedStack, theta: np.ndarray, states: np.ndarray, chips_mm: Sequence[tuple[float, float]] | None = None
+) -> np.ndarray:
+    """(m, 3 k) the fields in T at the chips ``chips_mm`` (the geometry's one chip unless given)
+    under the loads ``theta`` (m, 5) with the layers in ``states`` (m, n, 3): the slides, the
+    magnet's pose and its exact field, every chip in one call of the field (its cost is mostly
+    per call)."""
+    F, rx, ry = load_ratios(theta)
+    shift, rotvec = magnet_pose(stack.geometry, states[..., 0], states[..., 1:], stack.slides_mm(F, (rx, ry)))
+    return _chips_field_T(stack.geometry, shift, rotvec, chips_mm)
+
+
+def _chips_field_T(
+    geometry: SensorGeometry, shift: np.ndarray, rotvec: np.ndarray, chips_mm: Sequence[tuple[float, float]] | None
+) -> np.ndarray:
+    """(m, 3 k) the field of the magnet in the poses (m, 3), (m, 3) at every chip, one call."""
+    chips = np.array([geometry.chip_offset_mm] if chips_mm is None else chips_mm, dtype=float)
+    k, m = len(chips), len(shift)
+    if not m:  # no load (the field takes at least one observer)
+        return np.zeros((0, 3 * k))
+    B = magnet_field_T(geometry, np.tile(shift, (k, 1)), np.tile(rotvec, (k, 1)), np.repeat(chips, m, axis=0))
+    return B.reshape(k, m, 3).transpose(1, 0, 2).reshape(m, 3 * k)
+
+
+def path_fields_T(
+    stack: LoadedStack,
+    force_N: np.ndarray,
+    offset_mm,
+    ratio=(0.0, 0.0),
+    chips_mm: Sequence[tuple[float, float]] | None = None,
+) -> np.ndarray:
+    """(m, 3 k) the forward model's fields along the normal forces ``force_N`` (m,) ascending,
+    pressed at ``offset_mm`` with the tangential force ``ratio`` x the normal one, each solve
+    started from the previous force's (:func:`load_path`): what a table holds at its nodes."""
+    d, tilt, slide = load_path(stack, force_N, offset_mm, ratio)
+    return _chips_field_T(stack.geometry, *magnet_pose(stack.geometry, d, tilt, slide), chips_mm)
+
+
+def fields_T(
+    stack: LoadedStack,
+    theta,
+    chips_mm: Sequence[tuple[float, float]] | None = None,
+    start: np.ndarray | None = None,
+    unsolved_nan: bool = False,
+) -> np.ndarray:
+    """The forward model: (m, 3 k) the fields in T at the chips ``chips_mm`` (the geometry's one
+    chip unless given) under the loads ``theta`` (m, 5) = (Fz N, Fx N, Fy N, x mm, y mm), Fz >= 0
+    (one load (5,) is a batch of one), each layer's equilibrium solved exactly (from ``start``,
+    :func:`layer_states`). A load whose equilibrium is not found raises TiltError, or gives a
+    row of NaN with ``unsolved_nan``."""
+    theta = np.atleast_2d(np.asarray(theta, dtype=float))
+    states = layer_states(stack, theta, start, unsolved_nan)
+    if not unsolved_nan:
+        return fields_of(stack, theta, states, chips_mm)
+    solved = np.all(np.isfinite(states), axis=(1, 2))
+    out = np.full((len(theta), 3 * (1 if chips_mm is None else len(chips_mm))), np.nan)
+    out[solved] = fields_of(stack, theta[solved], states[solved], chips_mm)
+    return out
+
+
+FORCE_STEP_REL = 1e-4  # finite-difference steps: of the normal force (floored at FORCE_STEP_MIN_N)
+FORCE_STEP_MIN_N = 1e-3
+POSITION_STEP_MM = 1e-3
+
+
+def fd_steps(theta: np.ndarray) -> np.ndarray:
+    """(m, 5) the finite-difference step of every unknown of the loads ``theta`` (m, 5) (N for
+    forces, mm for positions)."""
+    h_F = np.maximum(FORCE_STEP_REL * np.abs(theta[:, 0]), FORCE_STEP_MIN_N)
+    h_p = np.full(len(theta), POSITION_STEP_MM)
+    return np.column_stack([h_F, h_F, h_F, h_p, h_p])
+
+
+def stepped_loads(theta: np.ndarray, free: Sequence[int], sign: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+    """(the loads (q, m, 5), each free unknown's own moved by ``sign`` x its step, the steps
+    (m, q)) of the loads ``theta`` (m, 5): the differences of a Jacobian's q columns."""
+    h = fd_steps(theta)[:, list(free)]
+    shifted = np.repeat(theta[None, :, :], len(free), axis=0)
+    for c, i in enumerate(free):
+        shifted[c, :, i] += sign * h[:, c]
+    return shifted, h
+
+
+def field_jacobian_T(
+    stack: LoadedStack,
+    theta,
+    chips_mm: Sequence[tuple[float, float]] | None = None,
+    free: Sequence[int] = (0, 1, 2, 3, 4),
+    at: np.ndarray | None = None,
+) -> np.ndarray:
+    """The forward model's Jacobian: (m, 3 k, len(free)) dB/dtheta in T per N or per mm at the
+    loads ``theta`` (m, 5), by differences of :func:`fields_T`: central, or forward from ``at``
+    (m, 3 k), the fields there already known; all the moved loads in one batch."""
+    theta = np.atleast_2d(np.asarray(theta, dtype=float))
+    m, q, K = len(theta), len(free), 3 * (1 if chips_mm is None else len(chips_mm))
+    up, h = stepped_loads(theta, free)
+    B_up = fields_T(stack, up.reshape(q * m, 5), chips_mm).reshape(q, m, K)
+    if at is None:
+        B_down = fields_T(stack, stepped_loads(theta, free, -1.0)[0].reshape(q * m, 5), chips_mm).reshape(q, m, K)
+        return ((B_up - B_down) / (2 * h.T[:, :, None])).transpose(1, 2, 0)
+    return ((B_up - np.atleast_2d(at)[None]) / h.T[:, :, None]).transpose(1, 2, 0)
 
 
 def field_T(
@@ -190,9 +340,7 @@ def field_T(
 ) -> np.ndarray:
     """The field (k, 3) in T at each of the chips ``chips_mm`` (the geometry's one chip unless
     given) under the normal force ``force_N`` (> 0) and tangential ``shear_N`` = (Fx, Fy)
-    pressed at ``offset_mm``. Raises TiltError when a layer's equilibrium is not found."""
-    ratio = (shear_N[0] / force_N, shear_N[1] / force_N)
-    d, tilt, slide = load_path(stack, np.array([force_N]), offset_mm, ratio)
-    shift, rotvec = magnet_pose(stack.geometry, d, tilt, slide)
-    chips = [stack.geometry.chip_offset_mm] if chips_mm is None else chips_mm
-    return np.concatenate([magnet_field_T(stack.geometry, shift, rotvec, (c[0], c[1])) for c in chips])
+    pressed at ``offset_mm``: :func:`fields_T` of one load. Raises TiltError when a layer's
+    equilibrium is not found."""
+    theta = [force_N, shear_N[0], shear_N[1], offset_mm[0], offset_mm[1]]
+    return fields_T(stack, theta, chips_mm).reshape(-1, 3)

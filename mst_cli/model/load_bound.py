@@ -6,7 +6,8 @@ The unknowns are the normal force Fz, the tangential force (Fx, Fy) and where th
 of the same sigma. The Fisher information is J^T J / sigma^2 (J the field's Jacobian), so the
 1-sigma bound of estimate i is sigma_CRB,i = sigma sqrt((J^T J)^-1_ii): no unbiased estimator
 does better at that noise. One chip gives three numbers: three unknowns at most (the centred
-press's Fz, Fx, Fy); two chips give six, enough for all five.
+press's Fz, Fx, Fy); two chips give six, enough for all five. The Jacobian is the forward
+model's (:func:`~mst_cli.model.general_load.field_jacobian_T`), a layout's grid of presses one batch.
 
 Pure: no I/O.
 """
@@ -18,27 +19,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mst_cli.model.general_load import LoadedStack, field_T
+from mst_cli.model.general_load import LoadedStack, field_jacobian_T
 
 UNKNOWNS = ("force_N", "shear_x_N", "shear_y_N", "x_mm", "y_mm")
 CENTRED = (0, 1, 2)  # the unknowns of a centred press: Fz, Fx, Fy
 ALL = (0, 1, 2, 3, 4)
-FORCE_STEP_REL = 1e-4  # finite-difference steps: of the normal force (floored at FORCE_STEP_MIN_N)
-FORCE_STEP_MIN_N = 1e-3
-POSITION_STEP_MM = 1e-3
 MAX_CONDITION = 1e14  # of the scaled Fisher information: beyond, double precision cannot invert it
-
-
-def fields_T(stack: LoadedStack, theta, chips_mm: Sequence[tuple[float, float]]) -> np.ndarray:
-    """The chips' fields (3 k,) in T at the load ``theta`` = (Fz, Fx, Fy, x, y)."""
-    Fz, Fx, Fy, x, y = (float(v) for v in theta)
-    return field_T(stack, Fz, (Fx, Fy), (x, y), chips_mm).ravel()
-
-
-def steps(theta) -> np.ndarray:
-    """The finite-difference step of every unknown at ``theta`` (N for forces, mm for positions)."""
-    h_F = max(FORCE_STEP_REL * abs(float(theta[0])), FORCE_STEP_MIN_N)
-    return np.array([h_F, h_F, h_F, POSITION_STEP_MM, POSITION_STEP_MM])
 
 
 def field_jacobian(
@@ -48,19 +34,10 @@ def field_jacobian(
     free: Sequence[int] = ALL,
     at: np.ndarray | None = None,
 ) -> np.ndarray:
-    """dB/dtheta (3 k, len(free)) in T per N or per mm, by differences: central, or forward from
-    ``at`` (the fields at ``theta``, already known)."""
-    theta = np.asarray(theta, dtype=float)
-    h = steps(theta)
-    cols = []
-    for i in free:
-        e = np.zeros(5)
-        e[i] = h[i]
-        if at is None:
-            cols.append((fields_T(stack, theta + e, chips_mm) - fields_T(stack, theta - e, chips_mm)) / (2 * h[i]))
-        else:
-            cols.append((fields_T(stack, theta + e, chips_mm) - at) / h[i])
-    return np.stack(cols, axis=-1)
+    """dB/dtheta (3 k, len(free)) in T per N or per mm at one load ``theta`` (5,): the forward
+    model's Jacobian (:func:`~mst_cli.model.general_load.field_jacobian_T`) of a batch of one,
+    central, or forward from ``at`` (the fields at ``theta``, already known)."""
+    return field_jacobian_T(stack, theta, chips_mm, free, None if at is None else np.asarray(at)[None])[0]
 
 
 def crb_sigma(J: np.ndarray, noise: float | np.ndarray) -> np.ndarray:
@@ -140,12 +117,9 @@ def layout_bound(
     if free == CENTRED:
         xs, ys = np.zeros(1), np.zeros(1)
     F = np.asarray(force_N, dtype=float)
-    sigma = np.zeros((len(F), len(ys), len(xs), len(free)))
-    for k, f in enumerate(F):
-        for iy, y in enumerate(ys):
-            for ix, x in enumerate(xs):
-                theta = (f, shear_ratio[0] * f, shear_ratio[1] * f, x, y)
-                sigma[k, iy, ix] = crb_sigma(field_jacobian(stack, theta, chips_mm, free), 1.0)
+    f, y, x = (a.ravel() for a in np.meshgrid(F, ys, xs, indexing="ij"))
+    theta = np.column_stack([f, shear_ratio[0] * f, shear_ratio[1] * f, x, y])
+    sigma = crb_sigma(field_jacobian_T(stack, theta, chips_mm, free), 1.0).reshape(len(F), len(ys), len(xs), len(free))
     return LayoutBound([(float(c[0]), float(c[1])) for c in chips_mm], free, xs, ys, F, shear_ratio, sigma)
 
 

@@ -108,13 +108,14 @@ def magnet_field_T(
     geometry: SensorGeometry,
     shift_mm: np.ndarray,
     rotvec_rad: np.ndarray,
-    chip_mm: tuple[float, float] | None = None,
+    chip_mm: tuple[float, float] | np.ndarray | None = None,
 ) -> np.ndarray:
-    """The field (m, 3) at the chip at ``chip_mm`` = (x, y) (the geometry's chip_offset_mm
-    unless given) for the magnet displaced and turned (its own tilt about y added to the load's
-    turn)."""
+    """The field (m, 3) at the chip at ``chip_mm`` = (x, y), or one chip per row (m, 2) (the
+    geometry's chip_offset_mm unless given), for the magnet displaced and turned (its own tilt
+    about y added to the load's turn)."""
     half = 0.5 * geometry.magnet.thickness_mm
-    cx, cy = geometry.chip_offset_mm if chip_mm is None else chip_mm
+    chip = np.asarray(geometry.chip_offset_mm if chip_mm is None else chip_mm, dtype=float)
+    cx, cy = chip[..., 0], chip[..., 1]
     r = np.stack(
         [cx - shift_mm[:, 0], cy - shift_mm[:, 1], -(geometry.gap0_mm + half) - shift_mm[:, 2]],
         axis=-1,
