@@ -45,11 +45,19 @@ from dataclasses import dataclass
 import numpy as np
 
 from mst_cli.estimation.shear_reading import CHI2_FLAG, ShearReader
+from mst_cli.model.cylinder_table import CylinderFieldTable, rotation_and_left_jacobian
 from mst_cli.model.general_load import LoadedStack
 from mst_cli.model.load_bound import FORCE_STEP_MIN_N, FORCE_STEP_REL, POSITION_STEP_MM, UNKNOWNS, crb_sigma
 from mst_cli.model.mechanics.tilt import LayerTiltLaw
 from mst_cli.model.mechanics.tilt_batch import newton_many, residual_many
-from mst_cli.model.stack_pose import magnet_field_T, magnet_pose, stack_path
+from mst_cli.model.stack_pose import (
+    chip_from_magnet_mm,
+    layer_pivots_mm,
+    magnet_field_T,
+    magnet_pose,
+    magnet_rotvec_rad,
+    stack_path,
+)
 from mst_cli.parallel import fork_map
 
 RATIO_MAX = 0.5  # |Fx| / Fz and |Fy| / Fz the table supports
@@ -67,6 +75,9 @@ NEWTON_STEPS = 12  # the tilt rung's Newton steps from the tables' states (most 
 # within 3 steps for 92, within 12 for 98 and within 20 for all (a flat valley past the lock).
 EXACT_ITER = 40  # at most this many fit steps on the exact states, from the tables' fit
 MAX_FITS = 3  # distinct fits per reading carried to the exact states
+CENSUS_NODES = 7  # loads a side of the census the field table's domain is found from (7^5)
+FIELD_MARGIN_MM = 1.0  # the field table's domain past the census
+FIELD_STEP_MM = 0.1  # the field table's nodes' spacing
 MERGE_SIGMA = 1.0  # a start's fit this close to a better one's (in its step's scale) ends there
 FLAGS = ("ok", "ambiguous", "no_fit")
 
@@ -84,36 +95,50 @@ class LayerTable:
     def at(self, force_N: np.ndarray, ox_mm: np.ndarray, oy_mm: np.ndarray) -> np.ndarray:
         """(m, 3) the state by trilinear interpolation (linear extrapolation past the nodes),
         the tilts' signs from the offsets' (the mirror symmetries)."""
-        parts = [
-            _cell(nodes, v)
-            for nodes, v in ((self.force_N, force_N), (self.x_mm, np.abs(ox_mm)), (self.y_mm, np.abs(oy_mm)))
+        return self.read(force_N, ox_mm, oy_mm, gradient=False)[0]
+
+    def read(
+        self, force_N: np.ndarray, ox_mm: np.ndarray, oy_mm: np.ndarray, gradient: bool = True
+    ) -> tuple[np.ndarray, np.ndarray | None]:
+        """((m, 3) the state as :meth:`at`, (m, 3, 3) its exact gradient in (force, ox, oy)
+        inside each cell (the forward side on a face; None without ``gradient``))."""
+        (i, u, hu), (j, v, hv), (k, w, hw) = [
+            _cell(nodes, val)
+            for nodes, val in ((self.force_N, force_N), (self.x_mm, np.abs(ox_mm)), (self.y_mm, np.abs(oy_mm)))
         ]
-        (i, u), (j, v), (k, w) = parts
         _, nx, ny, _ = self.state.shape
         flat = self.state.reshape(-1, 3)
         base = (i * nx + j) * ny + k
         u, v, w = u[:, None], v[:, None], w[:, None]
+        corner = [[[flat[base + a * nx * ny + b * ny + c] for c in (0, 1)] for b in (0, 1)] for a in (0, 1)]
+        along_y = [[low + w * (high - low) for low, high in row] for row in corner]  # [a][b]
+        along_x = [low + v * (high - low) for low, high in along_y]  # [a]
+        out = along_x[0] + u * (along_x[1] - along_x[0])
+        sx, sy = np.where(ox_mm < 0.0, -1.0, 1.0), np.where(oy_mm < 0.0, -1.0, 1.0)
+        sign = np.column_stack([np.ones_like(sx), sx, sy])  # the state's and the offsets' mirror signs
+        out *= sign
+        if not gradient:
+            return out, None
+        d_y = [[(high - low) / hw[:, None] for low, high in row] for row in corner]
+        d_y = [low + v * (high - low) for low, high in d_y]
+        d_x = [(high - low) / hv[:, None] for low, high in along_y]
+        grad = np.stack(
+            [
+                (along_x[1] - along_x[0]) / hu[:, None],
+                d_x[0] + u * (d_x[1] - d_x[0]),
+                d_y[0] + u * (d_y[1] - d_y[0]),
+            ],
+            axis=-1,
+        )
+        return out, grad * sign[:, :, None] * sign[:, None, :]
 
-        def along_y(at: np.ndarray) -> np.ndarray:
-            low, high = flat[at], flat[at + 1]
-            return low + w * (high - low)
 
-        def along_x(at: np.ndarray) -> np.ndarray:
-            low, high = along_y(at), along_y(at + ny)
-            return low + v * (high - low)
-
-        low, high = along_x(base), along_x(base + nx * ny)
-        out = low + u * (high - low)
-        out[:, 1] *= np.where(ox_mm < 0.0, -1.0, 1.0)
-        out[:, 2] *= np.where(oy_mm < 0.0, -1.0, 1.0)
-        return out
-
-
-def _cell(nodes: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(the index of the cell holding each v, the share of the way across it), end cells taking
-    what lies past the nodes."""
+def _cell(nodes: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(the index of the cell holding each v, the share of the way across it, its width), end
+    cells taking what lies past the nodes."""
     i = np.clip(np.searchsorted(nodes, v, side="right") - 1, 0, len(nodes) - 2)
-    return i, (v - nodes[i]) / (nodes[i + 1] - nodes[i])
+    width = nodes[i + 1] - nodes[i]
+    return i, (v - nodes[i]) / width, width
 
 
 def _nodes(half_mm: float, step_mm: float) -> np.ndarray:
@@ -223,24 +248,19 @@ class TwoChipModel:
         return out
 
     def jacobian_T(self, theta: np.ndarray, at: np.ndarray, states: np.ndarray) -> np.ndarray:
-        """(m, 3 k, 5) dB/dtheta at equilibrium ``states``, ``at`` the fields there: forward
-        differences with the states moved along their tangent (no solve)."""
-        h = fd_steps(theta)
-        m = len(theta)
-        tangent = self.state_tangent(theta, states)
-        shifted = np.repeat(theta[None, :, :], 5, axis=0)
-        moved = np.repeat(states[None], 5, axis=0)
-        for i in range(5):
-            shifted[i, :, i] += h[:, i]
-            moved[i] += h[:, i, None, None] * tangent[:, i]
-        B = self.fields_of(shifted.reshape(5 * m, 5), moved.reshape(5 * m, *states.shape[1:])).reshape(5, m, -1)
-        return ((B - at[None, :, :]) / h.T[:, :, None]).transpose(1, 2, 0)
+        """(m, 3 k, 5) dB/dtheta at equilibrium ``states``: the states' tangent chained through
+        the pose to the field table's gradient (:meth:`chain_T`; the exact field's within its
+        table's error, no call of the exact field). ``at``: the :data:`Jacobian` signature's, unused."""
+        return self.chain_T(theta, states, self.state_tangent(theta, states).transpose(0, 2, 3, 1))
 
-    def fields_of(self, theta: np.ndarray, states: np.ndarray) -> np.ndarray:
-        """(m, 3 k) the chips' fields at the loads ``theta`` with the layers' ``states``."""
-        F, rx, ry = _ratios(theta)
-        slide = self.stack.slides_mm(F, (rx, ry))
-        shift, rotvec = magnet_pose(self.stack.geometry, states[..., 0], states[..., 1:], slide)
+    def fields_of(self, theta: np.ndarray, states: np.ndarray, exact: bool = True) -> np.ndarray:
+        """(m, 3 k) the chips' fields at the loads ``theta`` with the layers' ``states``: the
+        exact cylinder field, or (``exact`` False) its (rho, z) table's (:attr:`field_table`)."""
+        shift, rotvec = self.pose(theta, states)
+        if not exact:
+            return np.concatenate(
+                [self.field_table.field_T(q, rot, gradient=False)[0] for q, rot in self._seen(shift, rotvec)]
+            ).T
         # every chip in one call of the field (its cost is mostly per call): chip j seen from the
         # first chip's place, the magnet moved back by the chips' spacing
         first = self.chips_mm[0]
@@ -248,6 +268,112 @@ class TwoChipModel:
         k, m = len(self.chips_mm), len(theta)
         B = magnet_field_T(self.stack.geometry, np.concatenate(moved), np.tile(rotvec, (k, 1)), first)
         return B.reshape(k, m, 3).transpose(1, 0, 2).reshape(m, 3 * k)
+
+    def pose(self, theta: np.ndarray, states: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(the magnet centre's displacement (m, 3) mm, its rotation vector (m, 3)) at the loads
+        ``theta`` with the layers' ``states``."""
+        F, rx, ry = _ratios(theta)
+        return magnet_pose(self.stack.geometry, states[..., 0], states[..., 1:], self.stack.slides_mm(F, (rx, ry)))
+
+    def _seen(self, shift: np.ndarray, rotvec: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
+        """Per chip (q (3, m) the chip from the magnet's centre, the magnet's turn (3, m)), components first."""
+        g = self.stack.geometry
+        rot = magnet_rotvec_rad(g, rotvec).T
+        return [(chip_from_magnet_mm(g, shift, c).T, rot) for c in self.chips_mm]
+
+    @functools.cached_property
+    def field_table(self) -> CylinderFieldTable:
+        """The magnet's field tabulated over where the chips are seen from it at every load the
+        fit may try: a census of the domain (:data:`CENSUS_NODES` a side) on the tables' states,
+        widened by FIELD_MARGIN_MM."""
+        g = self.stack.geometry
+        t = np.linspace(-1.0, 1.0, CENSUS_NODES)
+        F, rx, ry, x, y = np.meshgrid(np.linspace(0.0, self.force_max_N, CENSUS_NODES), t, t, t, t, indexing="ij")
+        theta = np.column_stack(
+            [
+                F.ravel(),
+                (rx * F).ravel() * self.ratio_max,
+                (ry * F).ravel() * self.ratio_max,
+                0.5 * g.width_mm * x.ravel(),
+                0.5 * g.depth_mm * y.ravel(),
+            ]
+        )
+        shift, rotvec = self.pose(theta, self.states(theta))
+        R = rotation_and_left_jacobian(magnet_rotvec_rad(g, rotvec).T)[0]
+        own = np.concatenate(
+            [np.einsum("jim,jm->im", R, chip_from_magnet_mm(g, shift, c).T) for c in self.chips_mm], axis=1
+        )
+        rho_max = float(np.hypot(own[0], own[1]).max()) + FIELD_MARGIN_MM
+        half = 0.5 * g.magnet.thickness_mm
+        z_range = (
+            float(own[2].min()) - FIELD_MARGIN_MM,
+            min(float(own[2].max()) + FIELD_MARGIN_MM, -half - FIELD_MARGIN_MM),
+        )
+        mag = g.magnet
+        return CylinderFieldTable.build(
+            mag.diameter_mm, mag.thickness_mm, mag.remanence_T, rho_max, z_range, FIELD_STEP_MM
+        )
+
+    def table_jacobian_T(self, theta: np.ndarray, at: np.ndarray, states: np.ndarray) -> np.ndarray:
+        """(m, 3 k, 5) dB/dtheta of the tables' model (:meth:`fields_of` not ``exact``, the
+        states the tables'), exact: the tables' gradient in their cells chained (:meth:`chain_T`).
+        ``at``, ``states``: the :data:`Jacobian` signature's, unused (read afresh with the gradient)."""
+        return self.chain_T(theta, *self._table_state_gradient(theta))
+
+    def chain_T(self, theta: np.ndarray, states: np.ndarray, dstates: np.ndarray) -> np.ndarray:
+        """(m, 3 k, 5) dB/dtheta of the field table's field at the loads ``theta`` with the
+        layers' ``states`` (m, n, 3) moving by ``dstates`` (m, n, 3, 5) = d(states)/dtheta: the
+        slides', the pose's (linear) and the field table's derivatives chained."""
+        g = self.stack.geometry
+        arm = g.z_magnet_bottom_mm + 0.5 * g.magnet.thickness_mm - layer_pivots_mm(g)  # magnet_pose's
+        dshift = np.stack(
+            [
+                np.einsum("mjk,j->mk", dstates[:, :, 1], arm),
+                np.einsum("mjk,j->mk", dstates[:, :, 2], arm),
+                -dstates[:, :, 0].sum(axis=1),
+            ],
+            axis=1,
+        )  # (m, 3, 5)
+        dshift[:, :2] += self._slide_gradient(theta)
+        drot = np.zeros_like(dshift)
+        drot[:, 0], drot[:, 1] = -dstates[:, :, 2].sum(axis=1), dstates[:, :, 1].sum(axis=1)
+        out = []
+        for q, rot in self._seen(*self.pose(theta, states)):
+            _, dB_dq, dB_drot = self.field_table.field_T(q, rot)
+            out.append(np.einsum("ijm,mjk->mik", dB_drot, drot) - np.einsum("ijm,mjk->mik", dB_dq, dshift))
+        return np.concatenate(out, axis=1)
+
+    def _table_state_gradient(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """((m, n, 3) every layer's tables' state, (m, n, 3, 5) its derivative in theta: the
+        tables' gradient in (F, ox, oy) times the layer's load's in theta (ox = x + lever Fx / Fz,
+        oy likewise))."""
+        F, rx, ry = _ratios(theta)
+        safe = np.where(F > 0.0, F, 1.0)
+        m = len(theta)
+        states = np.empty((m, len(self.tables), 3))
+        out = np.empty((m, len(self.tables), 3, 5))
+        for j, (table, lever) in enumerate(zip(self.tables, self.stack.lever_mm)):
+            states[:, j], grad = table.read(F, theta[:, 3] + lever * rx, theta[:, 4] + lever * ry)
+            dload = np.zeros((m, 3, 5))
+            dload[:, 0, 0] = 1.0
+            dload[:, 1, 0], dload[:, 1, 1], dload[:, 1, 3] = -lever * rx / safe, lever / safe, 1.0
+            dload[:, 2, 0], dload[:, 2, 2], dload[:, 2, 4] = -lever * ry / safe, lever / safe, 1.0
+            out[:, j] = grad @ dload
+        return states, out
+
+    def _slide_gradient(self, theta: np.ndarray) -> np.ndarray:
+        """(m, 2, 5) d(the layers' summed slide)/dtheta: each slide is Fx c_x(Fz) (Fy c_y(Fz)),
+        c's slope by a forward difference (piecewise smooth in Fz)."""
+        F = theta[:, 0]
+        h = np.maximum(1e-6 * np.abs(F), 1e-9)
+        out = np.zeros((len(theta), 2, 5))
+        for law in self.stack.lateral:
+            c, c_up = np.array(law.compliance_mm_per_N(F)), np.array(law.compliance_mm_per_N(F + h))
+            out[:, 0, 0] += theta[:, 1] * (c_up[0] - c[0]) / h
+            out[:, 1, 0] += theta[:, 2] * (c_up[1] - c[1]) / h
+            out[:, 0, 1] += c[0]
+            out[:, 1, 2] += c[1]
+        return out
 
 
 def _ratios(theta: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -425,14 +551,15 @@ class TwoChipReader:
         self.chi2_limit = CHI2_FLAG.get(dof, 3.0 * dof + 10.0)  # the exact reader's
         F = np.linspace(0.0, self.model.force_max_N, 257)
         centred = np.column_stack([F, np.zeros((len(F), 4))])
+        _ = self.model.field_table  # built now, not in a reading's time
         self._start_F = F
         self._start_B = np.linalg.norm(self.exact(centred)[0][:, :3], axis=1)  # |B| at the first chip
 
     def table(self, theta: np.ndarray, near: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-        """(the chips' fields (m, 3 k), the layers' states) on the tables' states (``near``, the
-        :data:`Model` signature's, unused: the tables need no start)."""
+        """(the chips' fields (m, 3 k), the layers' states) on the tables' states, the field the
+        field table's (``near``, the :data:`Model` signature's, unused: the tables need no start)."""
         states = self.model.states(theta)
-        return self.model.fields_of(theta, states), states
+        return self.model.fields_of(theta, states, exact=False), states
 
     def exact(self, theta: np.ndarray, near: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
         """(the chips' fields (m, 3 k), the layers' states) on the exact states, the Newton
@@ -492,6 +619,7 @@ class TwoChipReader:
             self.clip,
             MAX_ITER,
             TABLE_STEP_TOL,
+            jacobian=self.model.table_jacobian_T,
             siblings=S,
         )
         keep = _distinct(theta.reshape(n, S, 5), chi2.reshape(n, S), crb_sigma(J, self.noise_T).reshape(n, S, 5))
