@@ -15,10 +15,14 @@ loads over the tables' range) the trilinear field is a median 4 uT off (max 49 u
 nodes (2 mm, 33 forces) and still 1.2 uT (max 13 uT) at 1 mm and 65 forces, more than the chip
 noise. From that guess a few steps of the same Newton, vectorised
 (:mod:`mst_cli.model.mechanics.tilt_batch`), give the exact states: the field then within 1e-9 T
-of the exact one (benchmarks/bench_two_chip.py). The slides (a compliance law per layer), the
-magnet's pose and its exact cylinder field are cheap and exact already. The Jacobian moves the
-states along their own tangent (the implicit function theorem on the equilibrium: no solve per
-difference).
+of the exact one (benchmarks/bench_two_chip.py). The slides (a compliance law per layer) and the
+magnet's pose are cheap and exact already. The fit on the tables, a guess too, reads the magnet's
+field from its (rho, z) table (:mod:`mst_cli.model.cylinder_table`, built once per reader over
+where the chips are seen from the magnet at a census of the loads the fit may try; within 1e-8 T
+of magpylib's), the fit on the exact states the exact cylinder field (magpylib). Both fits'
+Jacobians are chained analytically: the states' derivative (the tables' gradient in their cells,
+or the states' own tangent at equilibrium, by the implicit function theorem: no solve per
+unknown), the slides', the pose's and the field table's gradient; no model call per unknown.
 
 The fit is the exact reader's, vectorised: Levenberg-damped Gauss-Newton on the chi^2 of the
 readings weighted by the chip noise, every step clipped to the model's domain (Fz in (0, the
@@ -258,15 +262,16 @@ class TwoChipModel:
     def _slide_gradient(self, theta: np.ndarray) -> np.ndarray:
         """(m, 2, 5) d(the layers' summed slide)/dtheta: each slide is Fx c_x(Fz) (Fy c_y(Fz)),
         c's slope by a forward difference (piecewise smooth in Fz)."""
-        F = theta[:, 0]
+        F, m = theta[:, 0], len(theta)
         h = np.maximum(1e-6 * np.abs(F), 1e-9)
-        out = np.zeros((len(theta), 2, 5))
+        out = np.zeros((m, 2, 5))
         for law in self.stack.lateral:
-            c, c_up = np.array(law.compliance_mm_per_N(F)), np.array(law.compliance_mm_per_N(F + h))
-            out[:, 0, 0] += theta[:, 1] * (c_up[0] - c[0]) / h
-            out[:, 1, 0] += theta[:, 2] * (c_up[1] - c[1]) / h
-            out[:, 0, 1] += c[0]
-            out[:, 1, 2] += c[1]
+            c = np.array(law.compliance_mm_per_N(np.concatenate([F, F + h])))  # (2, 2 m): at F, at F + h
+            slope = (c[:, m:] - c[:, :m]) / h
+            out[:, 0, 0] += theta[:, 1] * slope[0]
+            out[:, 1, 0] += theta[:, 2] * slope[1]
+            out[:, 0, 1] += c[0, :m]
+            out[:, 1, 2] += c[1, :m]
         return out
 
 

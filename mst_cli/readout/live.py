@@ -34,7 +34,7 @@ from mst_cli.errors import InputError
 from mst_cli.io.line_columns import ColumnMap
 from mst_cli.io.serial_lines import LineSample, LineSource, SampleParser
 from mst_cli.model.chip import ChipSetting
-from mst_cli.parallel import Helper, helper
+from mst_cli.parallel import Helper, helper, one_blas_thread
 from mst_cli.readout.reading import ForceReader, ForceReadings
 
 SPLIT_MIN = 4  # readings a batch's half holds at least before the helper takes it (fewer: the pickling costs more)
@@ -223,7 +223,10 @@ def read_stream(
     chips = len(reader.document.chips_mm)
     record = StreamRecord(port, opts.raw, chips, setting)
     parser = SampleParser(opts.raw, opts.columns, chips)
-    with helper(lambda batch: offsets.estimate_all(*batch)) if offsets is not None else nullcontext() as other:
+    with (
+        helper(lambda batch: offsets.estimate_all(*batch)) if offsets is not None else nullcontext() as other,
+        one_blas_thread() if other is not None else nullcontext(),  # idle BLAS threads here spin on the helper's core
+    ):
         live = _Live(reader, offsets if other is None else _Halves(offsets, other), opts.tare, show)
         arriving = src.waiting()  # the reading thread starts after the helper's fork
         try:
