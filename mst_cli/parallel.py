@@ -7,9 +7,7 @@ runs them in worker processes forked from this one, so a worker starts with ever
 already imported and costs milliseconds; each result comes back pickled. Where fork is not
 the platform's safe default (not Linux, or another thread running here) or ``MST_WORKERS=1``,
 it declines and the caller works in turn. Each result is the same function of its input
-either way (the callers' tests compare them bit for bit). :func:`helper` keeps one such worker
-for a session: a live stream's batches, half of each estimated there
-(:mod:`mst_cli.readout.live`).
+either way (the callers' tests compare them bit for bit).
 """
 
 from __future__ import annotations
@@ -104,55 +102,3 @@ def fork_map(function: Callable[[Any], Any], items: Sequence[Any]) -> list | Non
                 pool.shutdown(wait=True, cancel_futures=True)
     finally:
         _TASK.clear()
-
-
-_HELPER_TASK: list[Callable[[Any], Any]] = []  # what the helper process calls, set as it starts
-
-
-def _helper_start(function: Callable[[Any], Any]) -> None:
-    _worker()
-    _HELPER_TASK[:] = [function]
-
-
-def _helper_call(item: Any) -> Any:
-    return _HELPER_TASK[0](item)
-
-
-def _nothing() -> None:
-    return None
-
-
-class Helper:
-    """One worker process forked once and kept (:func:`helper`): ``function(item)`` computed there
-    while this process does something else, a batch at a time."""
-
-    def __init__(self, pool: Any):
-        self._pool = pool
-
-    def submit(self, item: Any) -> Any:
-        """A future of ``function(item)``: its ``result()`` raises what the function raised there."""
-        return self._pool.submit(_helper_call, item)
-
-
-@contextlib.contextmanager
-def helper(function: Callable[[Any], Any]) -> Iterator[Helper | None]:
-    """A :class:`Helper` running ``function`` (forked now, so it starts with what this process
-    holds: a reader and its tables), ended with the block; None where fewer than two workers
-    would run or forking is not safe here (:func:`fork_map`'s rules)."""
-    if workers() < 2 or not can_fork():
-        yield None
-        return
-    import multiprocessing  # deferred: as fork_map's
-    from concurrent.futures import ProcessPoolExecutor  # deferred: as multiprocessing
-
-    from threadpoolctl import threadpool_limits  # deferred: as fork_map's
-
-    with threadpool_limits(limits=1, user_api="blas"):  # inherited by the helper (fork_map's reason)
-        pool = ProcessPoolExecutor(
-            1, mp_context=multiprocessing.get_context("fork"), initializer=_helper_start, initargs=(function,)
-        )
-        pool.submit(_nothing).result()  # forked now, before any other thread of this process starts
-    try:
-        yield Helper(pool)
-    finally:
-        pool.shutdown(wait=True, cancel_futures=True)

@@ -7,7 +7,7 @@ from concurrent.futures.process import BrokenProcessPool
 import pytest
 
 from mst_cli.errors import InputError
-from mst_cli.parallel import can_fork, fork_map, helper, one_blas_thread, workers
+from mst_cli.parallel import can_fork, fork_map, one_blas_thread, workers
 
 WORKERS_ALLOWED = "a whole number of worker processes >= 1 (1: work in turn)"
 
@@ -47,40 +47,6 @@ def test_a_worker_that_dies_is_an_error_not_a_wait(monkeypatch):
     monkeypatch.setenv("MST_WORKERS", "2")
     with pytest.raises(BrokenProcessPool):
         fork_map(lambda x: os._exit(3) if x == 1 else x, [0, 1, 2])
-
-
-@needs_fork
-def test_a_helper_is_one_process_kept_for_every_item(monkeypatch):
-    monkeypatch.setenv("MST_WORKERS", "2")
-    local = {"offset": 10}  # forked with what this process holds, never pickled
-    with helper(lambda x: (os.getpid(), x + local["offset"])) as other:
-        assert other is not None
-        out = [other.submit(x).result() for x in (1, 2, 3)]
-    assert [v for _, v in out] == [11, 12, 13]
-    pids = {pid for pid, _ in out}
-    assert len(pids) == 1 and os.getpid() not in pids
-    with helper(lambda x: 1 / x) as other:
-        assert other is not None
-        with pytest.raises(ZeroDivisionError):
-            other.submit(0).result()  # raised here, as in turn
-
-
-def test_one_worker_or_another_thread_gives_no_helper(monkeypatch):
-    monkeypatch.setenv("MST_WORKERS", "1")
-    with helper(abs) as other:
-        assert other is None
-    monkeypatch.setenv("MST_WORKERS", "2")
-    import threading
-
-    stop = threading.Event()
-    running = threading.Thread(target=stop.wait)
-    running.start()
-    try:
-        with helper(abs) as other:  # forking beside a running thread is not safe
-            assert other is None
-    finally:
-        stop.set()
-        running.join()
 
 
 @pytest.mark.parametrize("setting, items", [("1", [1, 2, 3]), ("4", [1])])

@@ -342,37 +342,3 @@ def test_warm_two_chip_readings_are_ok_within_their_sigma_from_a_file_and_live(t
     finally:
         feed.close()
     assert "\n".join(line.split(",", 1)[1] for line in live.csv().splitlines()) + "\n" == got.csv()
-
-
-@pytest.mark.slow
-def test_live_batches_halved_with_a_helper_give_the_files_forces(two_chips, monkeypatch):
-    import pty
-    import tty
-
-    from mst_cli import parallel
-    from mst_cli.calibration.loadtest import parse_readings
-    from mst_cli.readout.live import LiveOptions, read_stream
-
-    model, reader, offsets, _ = two_chips
-    monkeypatch.setenv("MST_WORKERS", "2")
-    halves: list[int] = []
-    submit = parallel.Helper.submit
-    monkeypatch.setattr(
-        parallel.Helper, "submit", lambda self, item: (halves.append(len(item[0])), submit(self, item))[1]
-    )
-    lines, _ = _warm_lines(two_chips)
-    master, slave = pty.openpty()
-    tty.setraw(slave)
-    # every line waiting in the port before the session: no feeding thread, so the helper forks
-    os.write(master, "".join(line + "\n" for line in lines).encode())
-    try:
-        live = read_stream(
-            reader, os.ttyname(slave), LiveOptions(count=len(lines), timeout_s=5.0), None, lambda _: None, offsets
-        )
-    finally:
-        os.close(master)
-        os.close(slave)
-    assert halves and sum(halves) <= len(lines) // 2, halves  # the helper estimated the first halves
-    header = "Bx_uT,By_uT,Bz_uT,Bx2_uT,By2_uT,Bz2_uT,T_C"
-    got = reader.read(parse_readings(header + "\n" + "\n".join(lines) + "\n", "warm.csv", need_force=False), offsets)
-    assert "\n".join(line.split(",", 1)[1] for line in live.csv().splitlines()) + "\n" == got.csv()

@@ -21,9 +21,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Iterator
-from contextlib import nullcontext
 from dataclasses import dataclass, field
-from typing import Any
 
 import numpy as np
 
@@ -34,10 +32,8 @@ from mst_cli.errors import InputError
 from mst_cli.io.line_columns import ColumnMap
 from mst_cli.io.serial_lines import LineSample, LineSource, SampleParser
 from mst_cli.model.chip import ChipSetting
-from mst_cli.parallel import Helper, helper, one_blas_thread
 from mst_cli.readout.reading import ForceReader, ForceReadings
 
-SPLIT_MIN = 4  # readings a batch's half holds at least before the helper takes it (fewer: the pickling costs more)
 UNRECOGNISED_NOTE = 5  # unrecognised lines before the session says so (once)
 TIME_COLUMN = "time_s"
 
@@ -223,19 +219,15 @@ def read_stream(
     chips = len(reader.document.chips_mm)
     record = StreamRecord(port, opts.raw, chips, setting)
     parser = SampleParser(opts.raw, opts.columns, chips)
-    with (
-        helper(lambda batch: offsets.estimate_all(*batch)) if offsets is not None else nullcontext() as other,
-        one_blas_thread() if other is not None else nullcontext(),  # idle BLAS threads here spin on the helper's core
-    ):
-        live = _Live(reader, offsets if other is None else _Halves(offsets, other), opts.tare, show)
-        arriving = src.waiting()  # the reading thread starts after the helper's fork
-        try:
-            _read_batches(arriving, parser, record, live, opts.count, warn)
-        except KeyboardInterrupt:
-            pass
-        finally:
-            arriving.close()  # the reading thread ends before the port closes
-            src.close()
+    live = _Live(reader, offsets, opts.tare, show)
+    arriving = src.waiting()
+    try:
+        _read_batches(arriving, parser, record, live, opts.count, warn)
+    except KeyboardInterrupt:
+        pass
+    finally:
+        arriving.close()  # the reading thread ends before the port closes
+        src.close()
     if src.cut_off is not None:
         parser.bad += 1
         parser.first_bad = parser.first_bad or (src.cut_off.strip(), "cut off: the port closed mid-line")
@@ -349,35 +341,6 @@ class _Live:
         for i in range(n - self.shown):
             self.show(f"{self.shown + i + 1:6d}  {_terminal(got, i)}  |B| {B_abs[i] * 1e3:.4f} mT")
         self.shown = n
-
-
-@dataclass
-class _Halves:
-    """The estimator ``inner`` with each batch's first half estimated by a helper process
-    (:func:`~mst_cli.parallel.helper`) as this one estimates the rest: both cores at a reading's
-    estimate, which is a function of the reading alone, whichever half or batch it is in."""
-
-    inner: Any
-    other: Helper
-
-    @property
-    def chips(self) -> int:
-        return getattr(self.inner, "chips", 1)
-
-    def estimate_all(self, B_T: np.ndarray, force_axial_N: np.ndarray) -> Any:
-        half = len(B_T) // 2
-        if half < SPLIT_MIN:
-            return self.inner.estimate_all(B_T, force_axial_N)
-        from concurrent.futures.process import BrokenProcessPool  # deferred: imported with the helper
-
-        first = (B_T[:half], force_axial_N[:half])
-        there = self.other.submit(first)
-        here = self.inner.estimate_all(B_T[half:], force_axial_N[half:])
-        try:
-            done = there.result()
-        except BrokenProcessPool:  # the helper ended (Ctrl-C reaches it too): the half made here
-            done = self.inner.estimate_all(*first)
-        return type(here).concat([done, here])
 
 
 def _terminal(got: ForceReadings, i: int) -> str:
