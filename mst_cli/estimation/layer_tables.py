@@ -16,6 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from mst_cli.estimation.trilinear import trilinear
 from mst_cli.model.general_load import LoadedStack
 from mst_cli.model.mechanics.tilt import LayerTiltLaw
 from mst_cli.model.stack_pose import stack_path
@@ -47,30 +48,15 @@ class LayerTable:
             for nodes, val in ((self.force_N, force_N), (self.x_mm, np.abs(ox_mm)), (self.y_mm, np.abs(oy_mm)))
         ]
         _, nx, ny, _ = self.state.shape
-        flat = self.state.reshape(-1, 3)
-        base = (i * nx + j) * ny + k
-        u, v, w = u[:, None], v[:, None], w[:, None]
-        corner = [[[flat[base + a * nx * ny + b * ny + c] for c in (0, 1)] for b in (0, 1)] for a in (0, 1)]
-        along_y = [[low + w * (high - low) for low, high in row] for row in corner]  # [a][b]
-        along_x = [low + v * (high - low) for low, high in along_y]  # [a]
-        out = along_x[0] + u * (along_x[1] - along_x[0])
+        corners = np.array([(a * nx + b) * ny + c for a in (0, 1) for b in (0, 1) for c in (0, 1)])
+        C = self.state.reshape(-1, 3)[((i * nx + j) * ny + k)[:, None] + corners].reshape(-1, 2, 2, 2, 3)
+        out, grad = trilinear(C, np.column_stack([u, v, w]))
         sx, sy = np.where(ox_mm < 0.0, -1.0, 1.0), np.where(oy_mm < 0.0, -1.0, 1.0)
         sign = np.column_stack([np.ones_like(sx), sx, sy])  # the state's and the offsets' mirror signs
         out *= sign
         if not gradient:
             return out, None
-        d_y = [[(high - low) / hw[:, None] for low, high in row] for row in corner]
-        d_y = [low + v * (high - low) for low, high in d_y]
-        d_x = [(high - low) / hv[:, None] for low, high in along_y]
-        grad = np.stack(
-            [
-                (along_x[1] - along_x[0]) / hu[:, None],
-                d_x[0] + u * (d_x[1] - d_x[0]),
-                d_y[0] + u * (d_y[1] - d_y[0]),
-            ],
-            axis=-1,
-        )
-        return out, grad * sign[:, :, None] * sign[:, None, :]
+        return out, grad / np.column_stack([hu, hv, hw])[:, None, :] * sign[:, :, None] * sign[:, None, :]
 
 
 def _cell(nodes: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
