@@ -238,6 +238,7 @@ class TwoChipModel:
         out = []
         for q, rot in self._seen(*self.pose(theta, states)):
             _, dB_dq, dB_drot = self.field_table.field_T(q, rot)
+            assert dB_dq is not None and dB_drot is not None
             out.append(np.einsum("ijm,mjk->mik", dB_drot, drot) - np.einsum("ijm,mjk->mik", dB_dq, dshift))
         return np.concatenate(out, axis=1)
 
@@ -252,6 +253,7 @@ class TwoChipModel:
         out = np.empty((m, len(self.tables), 3, 5))
         for j, (table, lever) in enumerate(zip(self.tables, self.stack.lever_mm)):
             states[:, j], grad = table.read(F, theta[:, 3] + lever * rx, theta[:, 4] + lever * ry)
+            assert grad is not None
             dload = np.zeros((m, 3, 5))
             dload[:, 0, 0] = 1.0
             dload[:, 1, 0], dload[:, 1, 1], dload[:, 1, 3] = -lever * rx / safe, lever / safe, 1.0
