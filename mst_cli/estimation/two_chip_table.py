@@ -53,13 +53,7 @@ from mst_cli.model.cylinder_table import CylinderFieldTable, rotation_and_left_j
 from mst_cli.model.general_load import LoadedStack
 from mst_cli.model.load_bound import FORCE_STEP_MIN_N, FORCE_STEP_REL, POSITION_STEP_MM, UNKNOWNS, crb_sigma
 from mst_cli.model.mechanics.tilt_batch import newton_many, residual_many
-from mst_cli.model.stack_pose import (
-    chip_from_magnet_mm,
-    layer_pivots_mm,
-    magnet_field_T,
-    magnet_pose,
-    magnet_rotvec_rad,
-)
+from mst_cli.model.stack_pose import chip_from_magnet_mm, magnet_field_T, magnet_pose, magnet_rotvec_rad
 
 RATIO_MAX = 0.5  # |Fx| / Fz and |Fy| / Fz the table supports
 FORCE_TOP = 1.5  # the table's top force, x the stack's last lock (the exact reader's span)
@@ -222,19 +216,13 @@ class TwoChipModel:
         """(m, 3 k, 5) dB/dtheta of the field table's field at the loads ``theta`` with the
         layers' ``states`` (m, n, 3) moving by ``dstates`` (m, n, 3, 5) = d(states)/dtheta: the
         slides', the pose's (linear) and the field table's derivatives chained."""
-        g = self.stack.geometry
-        arm = g.z_magnet_bottom_mm + 0.5 * g.magnet.thickness_mm - layer_pivots_mm(g)  # magnet_pose's
-        dshift = np.stack(
-            [
-                np.einsum("mjk,j->mk", dstates[:, :, 1], arm),
-                np.einsum("mjk,j->mk", dstates[:, :, 2], arm),
-                -dstates[:, :, 0].sum(axis=1),
-            ],
-            axis=1,
-        )  # (m, 3, 5)
-        dshift[:, :2] += self._slide_gradient(theta)
-        drot = np.zeros_like(dshift)
-        drot[:, 0], drot[:, 1] = -dstates[:, :, 2].sum(axis=1), dstates[:, :, 1].sum(axis=1)
+        m, n = dstates.shape[:2]
+        per_unknown = dstates.transpose(0, 3, 1, 2).reshape(5 * m, n, 3)  # row 5 i + k: d(states_i)/dtheta_k
+        # the pose is linear in the states and the slides, without a constant: their derivatives' pose is its derivative
+        dshift, drot = magnet_pose(
+            self.stack.geometry, per_unknown[..., 0], per_unknown[..., 1:], self._slide_gradient(theta)
+        )
+        dshift, drot = dshift.reshape(m, 5, 3).transpose(0, 2, 1), drot.reshape(m, 5, 3).transpose(0, 2, 1)
         out = []
         for q, rot in self._seen(*self.pose(theta, states)):
             _, dB_dq, dB_drot = self.field_table.field_T(q, rot)
@@ -262,19 +250,17 @@ class TwoChipModel:
         return states, out
 
     def _slide_gradient(self, theta: np.ndarray) -> np.ndarray:
-        """(m, 2, 5) d(the layers' summed slide)/dtheta: each slide is Fx c_x(Fz) (Fy c_y(Fz)),
-        c's slope by a forward difference (piecewise smooth in Fz)."""
+        """(5 m, n, 2) d(every layer's slide)/dtheta, row 5 i + k the load i's in theta_k: each
+        slide is Fx c_x(Fz) (Fy c_y(Fz)), c's slope by a forward difference (piecewise smooth in Fz)."""
         F, m = theta[:, 0], len(theta)
         h = np.maximum(1e-6 * np.abs(F), 1e-9)
-        out = np.zeros((m, 2, 5))
-        for law in self.stack.lateral:
+        out = np.zeros((m, 5, len(self.stack.lateral), 2))
+        for j, law in enumerate(self.stack.lateral):
             c = np.array(law.compliance_mm_per_N(np.concatenate([F, F + h])))  # (2, 2 m): at F, at F + h
             slope = (c[:, m:] - c[:, :m]) / h
-            out[:, 0, 0] += theta[:, 1] * slope[0]
-            out[:, 1, 0] += theta[:, 2] * slope[1]
-            out[:, 0, 1] += c[0, :m]
-            out[:, 1, 2] += c[1, :m]
-        return out
+            out[:, 0, j] = theta[:, 1:3] * slope.T
+            out[:, 1, j, 0], out[:, 2, j, 1] = c[0, :m], c[1, :m]
+        return out.reshape(5 * m, -1, 2)
 
 
 def _ratios(theta: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
