@@ -196,11 +196,9 @@ class TwoChipModel:
             [np.einsum("jim,jm->im", R, chip_from_magnet_mm(g, shift, c).T) for c in self.chips_mm], axis=1
         )
         rho_max = float(np.hypot(own[0], own[1]).max()) + FIELD_MARGIN_MM
-        half = 0.5 * g.magnet.thickness_mm
-        z_range = (
-            float(own[2].min()) - FIELD_MARGIN_MM,
-            min(float(own[2].max()) + FIELD_MARGIN_MM, -half - FIELD_MARGIN_MM),
-        )
+        z_top = min(float(own[2].max()) + FIELD_MARGIN_MM, -0.5 * g.magnet.thickness_mm - FIELD_MARGIN_MM)
+        # short of the magnet's face (its edge is singular); a chip nearer is read from the end cells
+        z_range = (min(float(own[2].min()) - FIELD_MARGIN_MM, z_top - FIELD_MARGIN_MM), z_top)
         mag = g.magnet
         return CylinderFieldTable.build(
             mag.diameter_mm, mag.thickness_mm, mag.remanence_T, rho_max, z_range, FIELD_STEP_MM
