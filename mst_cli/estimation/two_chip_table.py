@@ -150,9 +150,8 @@ class TwoChipModel:
         exact cylinder field, or (``exact`` False) its (rho, z) table's (:attr:`field_table`)."""
         shift, rotvec = self.pose(theta, states)
         if not exact:
-            return np.concatenate(
-                [self.field_table.field_T(q, rot, gradient=False)[0] for q, rot in self._seen(shift, rotvec)]
-            ).T
+            B = self.field_table.field_T(*self._seen(shift, rotvec), gradient=False)[0]  # (3, k m)
+            return B.reshape(3, len(self.chips_mm), len(theta)).transpose(2, 1, 0).reshape(len(theta), -1)
         # every chip in one call of the field (its cost is mostly per call): chip j seen from the
         # first chip's place, the magnet moved back by the chips' spacing
         first = self.chips_mm[0]
@@ -167,11 +166,12 @@ class TwoChipModel:
         F, rx, ry = _ratios(theta)
         return magnet_pose(self.stack.geometry, states[..., 0], states[..., 1:], self.stack.slides_mm(F, (rx, ry)))
 
-    def _seen(self, shift: np.ndarray, rotvec: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
-        """Per chip (q (3, m) the chip from the magnet's centre, the magnet's turn (3, m)), components first."""
+    def _seen(self, shift: np.ndarray, rotvec: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(q (3, k m) every chip from the magnet's centre, chip by chip; the magnet's turn (3, k m)),
+        components first: every chip in one call of the field table."""
         g = self.stack.geometry
-        rot = magnet_rotvec_rad(g, rotvec).T
-        return [(chip_from_magnet_mm(g, shift, c).T, rot) for c in self.chips_mm]
+        q = np.concatenate([chip_from_magnet_mm(g, shift, c) for c in self.chips_mm])
+        return q.T, np.tile(magnet_rotvec_rad(g, rotvec), (len(self.chips_mm), 1)).T
 
     @functools.cached_property
     def field_table(self) -> CylinderFieldTable:
@@ -191,10 +191,8 @@ class TwoChipModel:
             ]
         )
         shift, rotvec = self.pose(theta, self.states(theta))
-        R = rotation_and_left_jacobian(magnet_rotvec_rad(g, rotvec).T)[0]
-        own = np.concatenate(
-            [np.einsum("jim,jm->im", R, chip_from_magnet_mm(g, shift, c).T) for c in self.chips_mm], axis=1
-        )
+        q, rot = self._seen(shift, rotvec)
+        own = np.einsum("jim,jm->im", rotation_and_left_jacobian(rot)[0], q)  # R^T q: in the magnet's frame
         rho_max = float(np.hypot(own[0], own[1]).max()) + FIELD_MARGIN_MM
         z_top = min(float(own[2].max()) + FIELD_MARGIN_MM, -0.5 * g.magnet.thickness_mm - FIELD_MARGIN_MM)
         # short of the magnet's face (its edge is singular); a chip nearer is read from the end cells
@@ -221,12 +219,12 @@ class TwoChipModel:
             self.stack.geometry, per_unknown[..., 0], per_unknown[..., 1:], self._slide_gradient(theta)
         )
         dshift, drot = dshift.reshape(m, 5, 3).transpose(0, 2, 1), drot.reshape(m, 5, 3).transpose(0, 2, 1)
-        out = []
-        for q, rot in self._seen(*self.pose(theta, states)):
-            _, dB_dq, dB_drot = self.field_table.field_T(q, rot)
-            assert dB_dq is not None and dB_drot is not None
-            out.append(np.einsum("ijm,mjk->mik", dB_drot, drot) - np.einsum("ijm,mjk->mik", dB_dq, dshift))
-        return np.concatenate(out, axis=1)
+        _, dB_dq, dB_drot = self.field_table.field_T(*self._seen(*self.pose(theta, states)))
+        assert dB_dq is not None and dB_drot is not None
+        k = len(self.chips_mm)
+        dB_dq, dB_drot = dB_dq.reshape(3, 3, k, m), dB_drot.reshape(3, 3, k, m)
+        J = np.einsum("ijcm,mjk->mcik", dB_drot, drot) - np.einsum("ijcm,mjk->mcik", dB_dq, dshift)
+        return J.reshape(m, 3 * k, 5)
 
     def _table_state_gradient(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """((m, n, 3) every layer's tables' state, (m, n, 3, 5) its derivative in theta: the
