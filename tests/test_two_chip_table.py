@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from mst_cli.estimation.shear_reading import CHI2_FLAG
-from mst_cli.estimation.two_chip_table import NEWTON_STEPS, TwoChipModel, TwoChipReader
+from mst_cli.estimation.two_chip_table import NEWTON_STEPS, TwoChipModel, TwoChipReader, fd_steps
 from mst_cli.model.general_load import field_T, loaded_stack
 from mst_cli.model.load_bound import crb_sigma, field_jacobian
 from mst_cli.model.mechanics.tilt import _residual, solve_layer_tilt
@@ -88,6 +88,26 @@ def test_the_vectorised_model_is_the_exact_field(stack, reader):
     J = model.jacobian_T(t, B, S)
     J_exact = np.array([field_jacobian(stack, x, TWO_CHIPS) for x in t])
     assert np.max(np.abs(J - J_exact)) < 1e-3 * np.max(np.abs(J_exact))
+
+
+def test_the_tables_model_and_its_jacobian(stack, reader):
+    rng = np.random.default_rng(12)
+    model = reader.model
+    theta = loads(stack, rng, 200, (0.02, 1.5), ratio=model.ratio_max, face_frac=1.0)  # the tables' whole range
+    states = model.states(theta)
+    # the field table over every pose the tables give: the exact (magpylib's) field
+    assert np.max(np.abs(model.fields_of(theta, states, exact=False) - model.fields_of(theta, states))) < FIELD_BOUND_T
+    # the chained Jacobian: the tables' model's central differences (steps well inside a cell)
+    J = model.table_jacobian_T(theta, None, None)
+    h = 1e-2 * fd_steps(theta)
+    for i in range(5):
+        up, down = theta.copy(), theta.copy()
+        up[:, i] += h[:, i]
+        down[:, i] -= h[:, i]
+        fd = (model.fields_of(up, model.states(up), False) - model.fields_of(down, model.states(down), False)) / (
+            2 * h[:, i, None]
+        )
+        assert np.max(np.abs(J[:, :, i] - fd)) < 1e-4 * np.max(np.abs(fd)), i
 
 
 def test_noise_free_readings_give_the_load_back(stack, reader):

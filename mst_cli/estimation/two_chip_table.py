@@ -15,11 +15,15 @@ loads over the tables' range) the trilinear field is a median 4 uT off (max 49 u
 nodes (2 mm, 33 forces) and still 1.2 uT (max 13 uT) at 1 mm and 65 forces, more than the chip
 noise. From that guess a few steps of the same Newton, vectorised
 (:mod:`mst_cli.model.mechanics.tilt_batch`), give the exact states: the field then within 1e-9 T
-of the exact one (benchmarks/bench_two_chip.py). From the states on, the fields are the
-forward model's own (:func:`~mst_cli.model.general_load.fields_of`: the slides, the magnet's pose,
-its exact cylinder field at every chip), cheap and exact already. The Jacobian moves the
-states along their own tangent (the implicit function theorem on the equilibrium: no solve per
-difference).
+of the exact one (benchmarks/bench_two_chip.py). The fit on the tables, a guess too, reads the
+magnet's field from its (rho, z) table (:mod:`mst_cli.model.cylinder_table`, built once per reader
+over where the chips are seen from the magnet at a census of the loads the fit may try; within
+1e-8 T of magpylib's); on the exact states the fields are the forward model's own
+(:func:`~mst_cli.model.general_load.fields_of`: the slides, the magnet's pose, its exact cylinder
+field at every chip). Both fits' Jacobians are chained analytically: the states' derivative (the
+tables' gradient in their cells, or the states' own tangent at equilibrium, by the implicit
+function theorem: no solve per unknown), the slides', the pose's and the field table's gradient;
+no model call per unknown.
 
 The fit is the exact reader's, the estimators' one solver
 (:func:`~mst_cli.estimation.least_squares.levenberg_marquardt`): Levenberg-damped Gauss-Newton on
@@ -40,20 +44,19 @@ from __future__ import annotations
 
 import dataclasses
 import functools
-import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
+from mst_cli.estimation.layer_tables import LayerTable, layer_tables
 from mst_cli.estimation.least_squares import levenberg_marquardt
 from mst_cli.estimation.shear_reading import CHI2_FLAG, ShearReader
-from mst_cli.model.general_load import LoadedStack, fields_of, load_ratios, stepped_loads
+from mst_cli.model.cylinder_table import CylinderFieldTable, rotation_and_left_jacobian
+from mst_cli.model.general_load import LoadedStack, fields_of, load_ratios, magnet_pose_of, stepped_loads
 from mst_cli.model.load_bound import ALL, UNKNOWNS, crb_sigma
-from mst_cli.model.mechanics.tilt import LayerTiltLaw
 from mst_cli.model.mechanics.tilt_batch import newton_many, residual_many
-from mst_cli.model.stack_pose import stack_path
-from mst_cli.parallel import fork_map
+from mst_cli.model.stack_pose import chip_from_magnet_mm, magnet_pose, magnet_rotvec_rad
 
 RATIO_MAX = 0.5  # |Fx| / Fz and |Fy| / Fz the table supports
 FORCE_TOP = 1.5  # the table's top force, x the stack's last lock (the exact reader's span)
@@ -68,97 +71,11 @@ NEWTON_STEPS = 12  # the tilt rung's Newton steps from the tables' states (most 
 # within 3 steps for 92, within 12 for 98 and within 20 for all (a flat valley past the lock).
 EXACT_ITER = 40  # at most this many fit steps on the exact states, from the tables' fit
 MAX_FITS = 3  # distinct fits per reading carried to the exact states
+CENSUS_NODES = 7  # loads a side of the census the field table's domain is found from (7^5)
+FIELD_MARGIN_MM = 1.0  # the field table's domain past the census
+FIELD_STEP_MM = 0.1  # the field table's nodes' spacing
 MERGE_SIGMA = 1.0  # a start's fit this close to a better one's (in its step's scale) ends there
 FLAGS = ("ok", "ambiguous", "no_fit")
-
-
-@dataclass(frozen=True)
-class LayerTable:
-    """One layer's state (d mm, phi_y rad, phi_x rad) on nodes (force N, |ox| mm, |oy| mm), all
-    ascending from 0; (n_F, n_x, n_y, 3)."""
-
-    force_N: np.ndarray
-    x_mm: np.ndarray
-    y_mm: np.ndarray
-    state: np.ndarray
-
-    def at(self, force_N: np.ndarray, ox_mm: np.ndarray, oy_mm: np.ndarray) -> np.ndarray:
-        """(m, 3) the state by trilinear interpolation (linear extrapolation past the nodes),
-        the tilts' signs from the offsets' (the mirror symmetries)."""
-        parts = [
-            _cell(nodes, v)
-            for nodes, v in ((self.force_N, force_N), (self.x_mm, np.abs(ox_mm)), (self.y_mm, np.abs(oy_mm)))
-        ]
-        (i, u), (j, v), (k, w) = parts
-        _, nx, ny, _ = self.state.shape
-        flat = self.state.reshape(-1, 3)
-        base = (i * nx + j) * ny + k
-        u, v, w = u[:, None], v[:, None], w[:, None]
-
-        def along_y(at: np.ndarray) -> np.ndarray:
-            low, high = flat[at], flat[at + 1]
-            return low + w * (high - low)
-
-        def along_x(at: np.ndarray) -> np.ndarray:
-            low, high = along_y(at), along_y(at + ny)
-            return low + v * (high - low)
-
-        low, high = along_x(base), along_x(base + nx * ny)
-        out = low + u * (high - low)
-        out[:, 1] *= np.where(ox_mm < 0.0, -1.0, 1.0)
-        out[:, 2] *= np.where(oy_mm < 0.0, -1.0, 1.0)
-        return out
-
-
-def _cell(nodes: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(the index of the cell holding each v, the share of the way across it), end cells taking
-    what lies past the nodes."""
-    i = np.clip(np.searchsorted(nodes, v, side="right") - 1, 0, len(nodes) - 2)
-    return i, (v - nodes[i]) / (nodes[i + 1] - nodes[i])
-
-
-def _nodes(half_mm: float, step_mm: float) -> np.ndarray:
-    """From 0 to ``half_mm``, about ``step_mm`` apart, both ends nodes."""
-    return np.linspace(0.0, half_mm, max(2, int(math.ceil(half_mm / step_mm)) + 1))
-
-
-def _force_nodes(law: LayerTiltLaw, force_max_N: float, n_force: int) -> np.ndarray:
-    """``n_force`` forces from 0 to ``force_max_N`` and the layer law's knots among them: the
-    centred state is piecewise linear in the force, its kinks at the knots."""
-    knots = law.walls.F_knots_N[(law.walls.F_knots_N > 0.0) & (law.walls.F_knots_N < force_max_N)]
-    return np.unique(np.concatenate([np.linspace(0.0, force_max_N, n_force), knots]))
-
-
-def _path_task(task: tuple[LayerTiltLaw, np.ndarray, float, float]) -> np.ndarray:
-    """(n_F, 3) one layer's state up the forces at one offset."""
-    law, F, ox, oy = task
-    d, tilt = stack_path([law], F, (ox, oy))
-    return np.column_stack([d[:, 0], tilt[:, 0, :]])
-
-
-def layer_tables(
-    stack: LoadedStack, force_max_N: float, ratio_max: float, n_force: int, step_mm: float
-) -> list[LayerTable]:
-    """Every layer's table, its offsets over the face widened by its lever x ``ratio_max`` (one
-    force path per offset node, in forked workers where the platform allows)."""
-    g = stack.geometry
-    grids = []
-    tasks = []
-    for law, lever in zip(stack.tilt, stack.lever_mm):
-        F = _force_nodes(law, force_max_N, n_force)
-        xs = _nodes(0.5 * g.width_mm + lever * ratio_max, step_mm)
-        ys = _nodes(0.5 * g.depth_mm + lever * ratio_max, step_mm)
-        grids.append((F, xs, ys))
-        tasks += [(law, F, float(x), float(y)) for x in xs for y in ys]
-    paths = fork_map(_path_task, tasks)
-    if paths is None:
-        paths = [_path_task(t) for t in tasks]
-    out, at = [], 0
-    for F, xs, ys in grids:
-        block = np.stack(paths[at : at + len(xs) * len(ys)]).reshape(len(xs), len(ys), len(F), 3)
-        out.append(LayerTable(F, xs, ys, np.ascontiguousarray(block.transpose(2, 0, 1, 3))))
-        at += len(xs) * len(ys)
-    return out
 
 
 @dataclass
@@ -224,21 +141,116 @@ class TwoChipModel:
         return out
 
     def jacobian_T(self, theta: np.ndarray, at: np.ndarray, states: np.ndarray) -> np.ndarray:
-        """(m, 3 k, 5) dB/dtheta at equilibrium ``states``, ``at`` the fields there: forward
-        differences with the states moved along their tangent (no solve)."""
-        m = len(theta)
-        tangent = self.state_tangent(theta, states)
-        shifted, h = stepped_loads(theta, ALL)
-        moved = np.repeat(states[None], 5, axis=0)
-        for i in range(5):
-            moved[i] += h[:, i, None, None] * tangent[:, i]
-        B = self.fields_of(shifted.reshape(5 * m, 5), moved.reshape(5 * m, *states.shape[1:])).reshape(5, m, -1)
-        return ((B - at[None, :, :]) / h.T[:, :, None]).transpose(1, 2, 0)
+        """(m, 3 k, 5) dB/dtheta at equilibrium ``states``: the states' tangent chained through
+        the pose to the field table's gradient (:meth:`chain_T`; the exact field's within its
+        table's error, no call of the exact field). ``at``: the :data:`Jacobian` signature's, unused."""
+        return self.chain_T(theta, states, self.state_tangent(theta, states).transpose(0, 2, 3, 1))
 
-    def fields_of(self, theta: np.ndarray, states: np.ndarray) -> np.ndarray:
+    def fields_of(self, theta: np.ndarray, states: np.ndarray, exact: bool = True) -> np.ndarray:
         """(m, 3 k) the chips' fields at the loads ``theta`` with the layers' ``states``: the
-        forward model's (:func:`~mst_cli.model.general_load.fields_of`)."""
-        return fields_of(self.stack, theta, states, self.chips_mm)
+        forward model's (:func:`~mst_cli.model.general_load.fields_of`, the exact cylinder field),
+        or (``exact`` False) the field from its (rho, z) table (:attr:`field_table`)."""
+        if exact:
+            return fields_of(self.stack, theta, states, self.chips_mm)
+        B = self.field_table.field_T(*self._seen(*self.pose(theta, states)), gradient=False)[0]  # (3, k m)
+        return B.reshape(3, len(self.chips_mm), len(theta)).transpose(2, 1, 0).reshape(len(theta), -1)
+
+    def pose(self, theta: np.ndarray, states: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(the magnet centre's displacement (m, 3) mm, its rotation vector (m, 3)) at the loads
+        ``theta`` with the layers' ``states``."""
+        return magnet_pose_of(self.stack, theta, states)
+
+    def _seen(self, shift: np.ndarray, rotvec: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(q (3, k m) every chip from the magnet's centre, chip by chip; the magnet's turn (3, k m)),
+        components first: every chip in one call of the field table."""
+        g = self.stack.geometry
+        q = np.concatenate([chip_from_magnet_mm(g, shift, c) for c in self.chips_mm])
+        return q.T, np.tile(magnet_rotvec_rad(g, rotvec), (len(self.chips_mm), 1)).T
+
+    @functools.cached_property
+    def field_table(self) -> CylinderFieldTable:
+        """The magnet's field tabulated over where the chips are seen from it at every load the
+        fit may try: a census of the domain (:data:`CENSUS_NODES` a side) on the tables' states,
+        widened by FIELD_MARGIN_MM."""
+        g = self.stack.geometry
+        t = np.linspace(-1.0, 1.0, CENSUS_NODES)
+        F, rx, ry, x, y = np.meshgrid(np.linspace(0.0, self.force_max_N, CENSUS_NODES), t, t, t, t, indexing="ij")
+        theta = np.column_stack(
+            [
+                F.ravel(),
+                (rx * F).ravel() * self.ratio_max,
+                (ry * F).ravel() * self.ratio_max,
+                0.5 * g.width_mm * x.ravel(),
+                0.5 * g.depth_mm * y.ravel(),
+            ]
+        )
+        shift, rotvec = self.pose(theta, self.states(theta))
+        q, rot = self._seen(shift, rotvec)
+        own = np.einsum("jim,jm->im", rotation_and_left_jacobian(rot)[0], q)  # R^T q: in the magnet's frame
+        rho_max = float(np.hypot(own[0], own[1]).max()) + FIELD_MARGIN_MM
+        z_top = min(float(own[2].max()) + FIELD_MARGIN_MM, -0.5 * g.magnet.thickness_mm - FIELD_MARGIN_MM)
+        # short of the magnet's face (its edge is singular); a chip nearer is read from the end cells
+        z_range = (min(float(own[2].min()) - FIELD_MARGIN_MM, z_top - FIELD_MARGIN_MM), z_top)
+        mag = g.magnet
+        return CylinderFieldTable.build(
+            mag.diameter_mm, mag.thickness_mm, mag.remanence_T, rho_max, z_range, FIELD_STEP_MM
+        )
+
+    def table_jacobian_T(self, theta: np.ndarray, at: np.ndarray, states: np.ndarray) -> np.ndarray:
+        """(m, 3 k, 5) dB/dtheta of the tables' model (:meth:`fields_of` not ``exact``, the
+        states the tables'), exact: the tables' gradient in their cells chained (:meth:`chain_T`).
+        ``at``, ``states``: the :data:`Jacobian` signature's, unused (read afresh with the gradient)."""
+        return self.chain_T(theta, *self._table_state_gradient(theta))
+
+    def chain_T(self, theta: np.ndarray, states: np.ndarray, dstates: np.ndarray) -> np.ndarray:
+        """(m, 3 k, 5) dB/dtheta of the field table's field at the loads ``theta`` with the
+        layers' ``states`` (m, n, 3) moving by ``dstates`` (m, n, 3, 5) = d(states)/dtheta: the
+        slides', the pose's (linear) and the field table's derivatives chained."""
+        m, n = dstates.shape[:2]
+        per_unknown = dstates.transpose(0, 3, 1, 2).reshape(5 * m, n, 3)  # row 5 i + k: d(states_i)/dtheta_k
+        # the pose is linear in the states and the slides, without a constant: their derivatives' pose is its derivative
+        dshift, drot = magnet_pose(
+            self.stack.geometry, per_unknown[..., 0], per_unknown[..., 1:], self._slide_gradient(theta)
+        )
+        dshift, drot = dshift.reshape(m, 5, 3).transpose(0, 2, 1), drot.reshape(m, 5, 3).transpose(0, 2, 1)
+        _, dB_dq, dB_drot = self.field_table.field_T(*self._seen(*self.pose(theta, states)))
+        assert dB_dq is not None and dB_drot is not None
+        k = len(self.chips_mm)
+        dB_dq, dB_drot = dB_dq.reshape(3, 3, k, m), dB_drot.reshape(3, 3, k, m)
+        J = np.einsum("ijcm,mjk->mcik", dB_drot, drot) - np.einsum("ijcm,mjk->mcik", dB_dq, dshift)
+        return J.reshape(m, 3 * k, 5)
+
+    def _table_state_gradient(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """((m, n, 3) every layer's tables' state, (m, n, 3, 5) its derivative in theta: the
+        tables' gradient in (F, ox, oy) times the layer's load's in theta (ox = x + lever Fx / Fz,
+        oy likewise))."""
+        F, rx, ry = load_ratios(theta)
+        safe = np.where(F > 0.0, F, 1.0)
+        m = len(theta)
+        states = np.empty((m, len(self.tables), 3))
+        out = np.empty((m, len(self.tables), 3, 5))
+        for j, (table, lever) in enumerate(zip(self.tables, self.stack.lever_mm)):
+            states[:, j], grad = table.read(F, theta[:, 3] + lever * rx, theta[:, 4] + lever * ry)
+            assert grad is not None
+            dload = np.zeros((m, 3, 5))
+            dload[:, 0, 0] = 1.0
+            dload[:, 1, 0], dload[:, 1, 1], dload[:, 1, 3] = -lever * rx / safe, lever / safe, 1.0
+            dload[:, 2, 0], dload[:, 2, 2], dload[:, 2, 4] = -lever * ry / safe, lever / safe, 1.0
+            out[:, j] = grad @ dload
+        return states, out
+
+    def _slide_gradient(self, theta: np.ndarray) -> np.ndarray:
+        """(5 m, n, 2) d(every layer's slide)/dtheta, row 5 i + k the load i's in theta_k: each
+        slide is Fx c_x(Fz) (Fy c_y(Fz)), c's slope by a forward difference (piecewise smooth in Fz)."""
+        F, m = theta[:, 0], len(theta)
+        h = np.maximum(1e-6 * np.abs(F), 1e-9)
+        out = np.zeros((m, 5, len(self.stack.lateral), 2))
+        for j, law in enumerate(self.stack.lateral):
+            c = np.array(law.compliance_mm_per_N(np.concatenate([F, F + h])))  # (2, 2 m): at F, at F + h
+            slope = (c[:, m:] - c[:, :m]) / h
+            out[:, 0, j] = theta[:, 1:3] * slope.T
+            out[:, 1, j, 0], out[:, 2, j, 1] = c[0, :m], c[1, :m]
+        return out.reshape(5 * m, -1, 2)
 
 
 @dataclass
@@ -348,14 +360,15 @@ class TwoChipReader:
         self.chi2_limit = CHI2_FLAG.get(dof, 3.0 * dof + 10.0)  # the exact reader's
         F = np.linspace(0.0, self.model.force_max_N, 257)
         centred = np.column_stack([F, np.zeros((len(F), 4))])
+        _ = self.model.field_table  # built now, not in a reading's time
         self._start_F = F
         self._start_B = np.linalg.norm(self.exact(centred)[0][:, :3], axis=1)  # |B| at the first chip
 
     def table(self, theta: np.ndarray, near: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-        """(the chips' fields (m, 3 k), the layers' states) on the tables' states (``near``, the
-        :data:`Model` signature's, unused: the tables need no start)."""
+        """(the chips' fields (m, 3 k), the layers' states) on the tables' states, the field the
+        field table's (``near``, the :data:`Model` signature's, unused: the tables need no start)."""
         states = self.model.states(theta)
-        return self.model.fields_of(theta, states), states
+        return self.model.fields_of(theta, states, exact=False), states
 
     def exact(self, theta: np.ndarray, near: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
         """(the chips' fields (m, 3 k), the layers' states) on the exact states, the Newton
@@ -415,6 +428,7 @@ class TwoChipReader:
             self.clip,
             MAX_ITER,
             TABLE_STEP_TOL,
+            jacobian=self.model.table_jacobian_T,
             siblings=S,
         )
         keep = _distinct(theta.reshape(n, S, 5), chi2.reshape(n, S), crb_sigma(J, self.noise_T).reshape(n, S, 5))

@@ -235,9 +235,15 @@ def fields_of(
     under the loads ``theta`` (m, 5) with the layers in ``states`` (m, n, 3): the slides, the
     magnet's pose and its exact field, every chip in one call of the field (its cost is mostly
     per call)."""
+    return _chips_field_T(stack.geometry, *magnet_pose_of(stack, theta, states), chips_mm)
+
+
+def magnet_pose_of(stack: LoadedStack, theta: np.ndarray, states: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(the magnet centre's displacement (m, 3) mm, its rotation vector (m, 3)) under the loads
+    ``theta`` (m, 5) with the layers in ``states`` (m, n, 3): their compressions and tilts, and
+    the slides the loads give."""
     F, rx, ry = load_ratios(theta)
-    shift, rotvec = magnet_pose(stack.geometry, states[..., 0], states[..., 1:], stack.slides_mm(F, (rx, ry)))
-    return _chips_field_T(stack.geometry, shift, rotvec, chips_mm)
+    return magnet_pose(stack.geometry, states[..., 0], states[..., 1:], stack.slides_mm(F, (rx, ry)))
 
 
 def _chips_field_T(

@@ -113,13 +113,26 @@ def magnet_field_T(
     """The field (m, 3) at the chip at ``chip_mm`` = (x, y), or one chip per row (m, 2) (the
     geometry's chip_offset_mm unless given), for the magnet displaced and turned (its own tilt
     about y added to the load's turn)."""
+    mag = geometry.magnet
+    r, rot = chip_from_magnet_mm(geometry, shift_mm, chip_mm), magnet_rotvec_rad(geometry, rotvec_rad)
+    return fld.cylinder_pose_B_T(r, mag.diameter_mm, mag.thickness_mm, mag.remanence_T, rot)
+
+
+def chip_from_magnet_mm(
+    geometry: SensorGeometry, shift_mm: np.ndarray, chip_mm: tuple[float, float] | np.ndarray | None = None
+) -> np.ndarray:
+    """(m, 3) the chip at ``chip_mm`` (x, y), or one chip per row (m, 2) (the geometry's
+    chip_offset_mm unless given), seen from the magnet's centre displaced by ``shift_mm`` (m, 3)."""
     half = 0.5 * geometry.magnet.thickness_mm
     chip = np.asarray(geometry.chip_offset_mm if chip_mm is None else chip_mm, dtype=float)
     cx, cy = chip[..., 0], chip[..., 1]
-    r = np.stack(
+    return np.stack(
         [cx - shift_mm[:, 0], cy - shift_mm[:, 1], -(geometry.gap0_mm + half) - shift_mm[:, 2]],
         axis=-1,
     )
-    rot = rotvec_rad + np.array([0.0, math.radians(geometry.magnet_tilt_deg), 0.0])
-    mag = geometry.magnet
-    return fld.cylinder_pose_B_T(r, mag.diameter_mm, mag.thickness_mm, mag.remanence_T, rot)
+
+
+def magnet_rotvec_rad(geometry: SensorGeometry, rotvec_rad: np.ndarray) -> np.ndarray:
+    """(m, 3) the magnet's turn: the load's ``rotvec_rad`` and its own tilt about y, small
+    rotations added."""
+    return rotvec_rad + np.array([0.0, math.radians(geometry.magnet_tilt_deg), 0.0])
