@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 
 from mst_cli.estimation.shear_reading import CHI2_FLAG
-from mst_cli.estimation.two_chip_table import NEWTON_STEPS, TwoChipModel, TwoChipReader, fd_steps
-from mst_cli.model.general_load import field_T, loaded_stack
+from mst_cli.estimation.two_chip_table import NEWTON_STEPS, TwoChipModel, TwoChipReader
+from mst_cli.model.general_load import fd_steps, field_T, loaded_stack
 from mst_cli.model.load_bound import crb_sigma, field_jacobian
 from mst_cli.model.mechanics.tilt import _residual, solve_layer_tilt
 from mst_cli.model.mechanics.tilt_batch import newton_many, residual_many
