@@ -41,7 +41,8 @@ from mst_cli.estimation.offset_reading import OffsetEstimator
 from mst_cli.estimation.table_reader import OffsetTableReader
 from mst_cli.estimation.table_store import table_hash
 from mst_cli.firmware.table_header import table_header
-from mst_cli.model.stack_pose import pose_field_T, tilt_laws
+from mst_cli.model.general_load import pose_field_T
+from mst_cli.model.stack_pose import tilt_laws
 from mst_cli.sensor.document import load_design_document
 
 ROOT = Path(__file__).resolve().parents[1]

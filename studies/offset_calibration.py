@@ -32,7 +32,8 @@ from pathlib import Path
 import numpy as np
 
 from mst_cli import api
-from mst_cli.model.stack_pose import pose_field_T, tilt_laws
+from mst_cli.model.general_load import pose_field_T
+from mst_cli.model.stack_pose import tilt_laws
 from mst_cli.sensor.document import load_design_document
 
 DESIGN = Path(__file__).resolve().parents[1] / "configs" / "mohammadi2021-forward.yaml"

@@ -27,7 +27,8 @@ import numpy as np
 
 from mst_cli.estimation.inverse_map import inverse_map
 from mst_cli.estimation.offset_reading import OffsetEstimator
-from mst_cli.model.stack_pose import pose_field_T, tilt_laws
+from mst_cli.model.general_load import pose_field_T
+from mst_cli.model.stack_pose import tilt_laws
 from mst_cli.sensor.document import load_design_document
 
 DESIGN = Path(__file__).resolve().parents[1] / "configs" / "mohammadi2021-forward.yaml"

@@ -18,10 +18,9 @@ from click.testing import CliRunner
 
 from mst_cli.cli.app import main
 from mst_cli.estimation.offset_reading import OffsetEstimator
-from mst_cli.model.general_load import field_jacobian_T, field_T, fields_T, loaded_stack
+from mst_cli.model.general_load import field_jacobian_T, field_T, fields_T, loaded_stack, pose_field_T
 from mst_cli.model.mechanics.lateral import lateral_stiffness_N_per_mm
 from mst_cli.model.offcentre import simulate_offcentre
-from mst_cli.model.stack_pose import pose_field_T
 from mst_cli.sensor.as_printed import as_printed
 from mst_cli.sensor.document import load_design_document
 

@@ -14,13 +14,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from mst_cli.model.general_load import pose_field_T
 from mst_cli.model.load_path import Members, members
 from mst_cli.model.mechanics import layer_laws
 from mst_cli.model.mechanics.depth import in_web
 from mst_cli.model.mechanics.tilt import solve_layer_tilt
 from mst_cli.model.part_laws import cover_host, part_layer_laws, unit_tilt_law
 from mst_cli.model.response import simulate
-from mst_cli.model.stack_pose import magnet_field_T, magnet_pose, pose_field_T, stack_path, tilt_laws
+from mst_cli.model.stack_pose import magnet_field_T, magnet_pose, stack_path, tilt_laws
 from mst_cli.sensor.as_printed import as_printed
 from mst_cli.sensor.document import load_design_document
 

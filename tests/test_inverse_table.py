@@ -22,8 +22,9 @@ from mst_cli.estimation.inverse_map import inverse_map
 from mst_cli.estimation.inverse_table import TABLE_FILE, InverseTable, TableGrid, source_hash
 from mst_cli.estimation.table_start import start_field, start_index, start_nodes, start_quantum_uT
 from mst_cli.estimation.table_store import build_beside, table_beside, table_hash
+from mst_cli.model.general_load import pose_field_T
 from mst_cli.model.response import simulate
-from mst_cli.model.stack_pose import pose_field_T, tilt_laws
+from mst_cli.model.stack_pose import tilt_laws
 from mst_cli.sensor.document import load_design_document
 
 FORWARD = Path(__file__).resolve().parents[1] / "configs" / "mohammadi2021-forward.yaml"

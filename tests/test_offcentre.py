@@ -255,7 +255,8 @@ def test_read_estimates_the_offset_and_corrects_the_force(tmp_path):
     from mst_cli.estimation.inverse_map import inverse_map
     from mst_cli.estimation.inverse_table import TABLE_FILE
     from mst_cli.estimation.table_store import build_beside
-    from mst_cli.model.stack_pose import pose_field_T, tilt_laws
+    from mst_cli.model.general_load import pose_field_T
+    from mst_cli.model.stack_pose import tilt_laws
 
     doc, _ = load_design_document(FORWARD)
     model = tmp_path / "model.yaml"

@@ -13,7 +13,8 @@ import pytest
 from click.testing import CliRunner
 
 from mst_cli.cli.app import main
-from mst_cli.model.stack_pose import pose_field_T, tilt_laws
+from mst_cli.model.general_load import pose_field_T
+from mst_cli.model.stack_pose import tilt_laws
 from mst_cli.sensor.document import load_design_document
 
 ROOT = Path(__file__).resolve().parents[1]

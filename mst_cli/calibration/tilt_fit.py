@@ -18,7 +18,8 @@ import numpy as np
 from scipy.optimize import minimize_scalar
 
 from mst_cli.calibration.loadtest import Readings
-from mst_cli.model.stack_pose import pose_field_T, tilt_laws
+from mst_cli.model.general_load import pose_field_T
+from mst_cli.model.stack_pose import tilt_laws
 from mst_cli.sensor.document import Document
 
 LEVER_FACTOR_BOUNDS = (0.3, 3.0)  # a lever a third or three times the rung's: beyond is not a tilt

@@ -33,8 +33,9 @@ callers may take apart: :func:`layer_states`, every layer's equilibrium solved e
 pose and its exact field at every chip in one call. Its Jacobian is :func:`field_jacobian_T`
 (differences, the steps :func:`fd_steps`), and :func:`path_fields_T` its fields up a force path
 (what a table holds). Its callers: the Cramer-Rao bound (:mod:`mst_cli.model.load_bound`), the exact
-shear reader, the offset estimator (on :func:`normal_stack`, no slides), the shear table's paths,
-and the two-chip reader, whose tabulated states go through :func:`fields_of`.
+shear reader, the offset estimator (on :func:`normal_stack`, no slides), the tables' paths, the
+off-centre press's field (:func:`pose_field_T`: ``mst simulate``'s offset map, the tilt
+calibration), and the two-chip reader, whose states go through :func:`fields_of`.
 
 Pure: no I/O.
 """
@@ -270,6 +271,15 @@ def path_fields_T(
     started from the previous force's (:func:`load_path`): what a table holds at its nodes."""
     d, tilt, slide = load_path(stack, force_N, offset_mm, ratio)
     return _chips_field_T(stack.geometry, *magnet_pose(stack.geometry, d, tilt, slide), chips_mm)
+
+
+def pose_field_T(
+    geometry: SensorGeometry, layers: list[LayerTiltLaw], force_N: np.ndarray, offset_mm: tuple[float, float]
+) -> np.ndarray:
+    """The field at the chip (m, 3) in T for normal forces ``force_N`` (m,) ascending, pressed at
+    ``offset_mm``, the layers' tilt laws ``layers`` given: :func:`path_fields_T` on their
+    :func:`normal_stack` (the stack's tilts, the magnet's pose, the exact field)."""
+    return path_fields_T(normal_stack(geometry, list(layers), "given"), np.asarray(force_N, dtype=float), offset_mm)
 
 
 def fields_T(

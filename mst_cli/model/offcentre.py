@@ -23,13 +23,13 @@ from typing import Any
 import numpy as np
 
 from mst_cli.model.assembly import SensorGeometry
-from mst_cli.model.general_load import loaded_stack
+from mst_cli.model.general_load import loaded_stack, pose_field_T
 from mst_cli.model.material import Material
 from mst_cli.model.mechanics.tilt import LayerTiltLaw, solve_layer_tilt
 from mst_cli.model.part_laws import closure_limit_mm, part_units
 from mst_cli.model.response import Response
 from mst_cli.model.response import simulate as simulate_axial
-from mst_cli.model.stack_pose import magnet_field_T, magnet_pose, pose_field_T, stack_path, tilt_laws
+from mst_cli.model.stack_pose import magnet_field_T, magnet_pose, stack_path, tilt_laws
 
 SIDE_LOCK_BISECTIONS = 50  # halvings of the force bracket of a side's lock (to ~1e-15 of it)
 

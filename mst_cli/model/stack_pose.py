@@ -70,16 +70,6 @@ def stack_path(
     return d, tilt
 
 
-def pose_field_T(
-    geometry: SensorGeometry, layers: list[LayerTiltLaw], force_N: np.ndarray, offset_mm: tuple[float, float]
-) -> np.ndarray:
-    """The field at the chip (m, 3) in T for forces ``force_N`` (m,) ascending, pressed at
-    ``offset_mm``: the stack's tilts, the magnet's pose, the exact field."""
-    d, tilt = stack_path(layers, np.asarray(force_N, dtype=float), offset_mm)
-    shift, rotvec = magnet_pose(geometry, d, tilt)
-    return magnet_field_T(geometry, shift, rotvec)
-
-
 def layer_pivots_mm(geometry: SensorGeometry) -> np.ndarray:
     """(n,) the height of every layer's pivot, its mid-plane."""
     return np.array([b + 0.5 * c.h_mm for b, c in zip(geometry.layer_bottoms_mm, geometry.layers)])
