@@ -53,8 +53,8 @@ from mst_cli.estimation.layer_tables import LayerTable, layer_tables
 from mst_cli.estimation.least_squares import levenberg_marquardt
 from mst_cli.estimation.shear_reading import CHI2_FLAG, ShearReader
 from mst_cli.model.cylinder_table import CylinderFieldTable, rotation_and_left_jacobian
-from mst_cli.model.general_load import LoadedStack, fields_of, load_ratios, magnet_pose_of, stepped_loads
-from mst_cli.model.load_bound import ALL, UNKNOWNS, crb_sigma
+from mst_cli.model.general_load import LoadedStack, fields_of, load_ratios, magnet_pose_of
+from mst_cli.model.load_bound import UNKNOWNS, crb_sigma
 from mst_cli.model.mechanics.tilt_batch import newton_many, residual_many
 from mst_cli.model.stack_pose import chip_from_magnet_mm, magnet_pose, magnet_rotvec_rad
 
@@ -299,16 +299,6 @@ Model = Callable[[np.ndarray, np.ndarray | None], tuple[np.ndarray, np.ndarray]]
 Jacobian = Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray]  # (theta, fields, states) -> (m, 3 k, 5)
 
 
-def jacobian_many(fields: Model, theta: np.ndarray, at: np.ndarray, states: np.ndarray) -> np.ndarray:
-    """(m, 3 k, 5) dB/dtheta by forward differences from ``at`` = fields(theta) (the layers in
-    ``states``, where each step's solve starts), every unknown's step in one call of the model."""
-    m = len(theta)
-    shifted, h = stepped_loads(theta, ALL)
-    near = np.broadcast_to(states, (5, *states.shape)).reshape(5 * m, *states.shape[1:])
-    B = fields(shifted.reshape(5 * m, 5), near)[0].reshape(5, m, -1)
-    return ((B - at[None, :, :]) / h.T[:, :, None]).transpose(1, 2, 0)
-
-
 def fit_many(
     fields: Model,
     B_T: np.ndarray,
@@ -317,18 +307,19 @@ def fit_many(
     clip: Callable[[np.ndarray], np.ndarray],
     max_iter: int,
     step_tol: float = STEP_TOL,
-    jacobian: Jacobian | None = None,
+    *,
+    jacobian: Jacobian,
     siblings: int = 1,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Every row of ``theta`` (m, 5) fitted to its reading ``B_T`` (m, 3 k) by the estimators' one
     solver (:func:`~mst_cli.estimation.least_squares.levenberg_marquardt`, its default damping):
     (theta, chi^2, the Jacobian (m, 3 k, 5) there). ``jacobian`` (theta, fields,
-    states) -> (m, 3 k, 5): the model's own (else forward differences of ``fields``).
+    states) -> (m, 3 k, 5): the model's own, analytic (:meth:`TwoChipModel.jacobian_T`,
+    :meth:`TwoChipModel.table_jacobian_T`).
     ``siblings``: rows in runs of that many starts of one reading, a row ending once within
     MERGE_SIGMA steps' scale of a sibling of lower chi^2 (the same minimum: :func:`_distinct`'s)."""
-    jac = jacobian if jacobian is not None else functools.partial(jacobian_many, fields)
     fit = levenberg_marquardt(
-        fields, jac, B_T, theta, noise_T, clip, max_iter, step_tol, siblings=siblings, merge_sigma=MERGE_SIGMA
+        fields, jacobian, B_T, theta, noise_T, clip, max_iter, step_tol, siblings=siblings, merge_sigma=MERGE_SIGMA
     )
     return fit.theta, fit.chi2, fit.jacobian
 
