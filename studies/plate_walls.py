@@ -2,7 +2,8 @@
 4.7): two mechanisms of the walls' roots, put against the whole-part rung. Prints a table,
 changes nothing.
 
-    PYTHONPATH=. .venv/bin/python studies/plate_walls.py [--configs a.yaml ...] [--no-identical]
+    PYTHONPATH=. .venv/bin/python studies/plate_walls.py [--configs a.yaml ...]
+    PYTHONPATH=. .venv/bin/python studies/plate_walls.py --plate-sweep
 
 The closed form of :mod:`mst_cli.model.load_path` bends a plate only by the offset of the wall
 feet above it from the wall heads below it, and on the bundled designs the two nearly coincide.
@@ -29,6 +30,10 @@ c is fitted on two designs whose three layers are the same (the forward design's
 and that layer 0.5 mm thick), in regime 1, where the second mechanism vanishes by symmetry;
 the rest is prediction. The rung is solved twice per regime (members rigid; plates as printed),
 about 10 s a solve.
+
+``--plate-sweep``: on the two same-layer designs, regime 1 (the first mechanism alone), the plate
+0.4, 0.8, 1.6 and 3.0 mm thick, the c that matches the rung on each (about 3 min): whether one
+c serves every plate and wall.
 """
 
 from __future__ import annotations
@@ -59,14 +64,18 @@ def designed(path: Path):
     return doc if doc.is_design else mst.api.design(doc, plot=False).document
 
 
-def identical_designs(folder: Path) -> list[Path]:
-    """The forward config with its middle layer three times, as drawn and at each thickness of IDENTICAL."""
+def identical_designs(folder: Path, plate_mm: float | None = None) -> list[Path]:
+    """The forward config with its middle layer three times, at each thickness of IDENTICAL (and
+    its plates ``plate_mm`` thick, when given)."""
     base = yaml.safe_load(FORWARD.read_text())
     out = []
     for i, (name, t) in enumerate(IDENTICAL.items()):
         layer = dict(base["layers"][1], t_mm=t)
+        doc = {**base, "name": name, "layers": [layer] * 3}
+        if plate_mm is not None:
+            doc["housing"] = {"plate_mm": plate_mm}
         path = folder / f"identical{i}.yaml"
-        path.write_text(yaml.safe_dump({**base, "name": name, "layers": [layer] * 3}))
+        path.write_text(yaml.safe_dump(doc))
         out.append(path)
     return out
 
@@ -105,13 +114,14 @@ def mechanisms(g, m, locked: tuple[int, ...], c: float) -> tuple[float, float]:
     return local, bend
 
 
-def rung_rows(path: Path) -> list[dict]:
-    """Per regime: the rung's extra drop with the plates as printed (cap and base rigid)."""
+def rung_rows(path: Path, regimes: int | None = None) -> list[dict]:
+    """Per regime (the first ``regimes``, or all): the rung's extra drop with the plates as
+    printed (cap and base rigid)."""
     doc = designed(path)
     g, m = doc.geometry(), doc.material
     stack = Stack(layer_laws(g.layers, m, "spring"))
     rows = []
-    for r, locked in enumerate(wp.regime_locked(stack)):
+    for r, locked in enumerate(wp.regime_locked(stack)[:regimes]):
         opts = {"locked": locked, "member_factor": wp.RIGID_FACTOR}
         rigid = wp.press(g, m, wp.PartOptions(**opts)).drop_mm_per_N
         plates = wp.press(g, m, wp.PartOptions(**opts, scaled=("base", "cap"))).drop_mm_per_N
@@ -135,12 +145,26 @@ def fit_c(rows: list[dict]) -> float:
     return math.sqrt(lo * hi)
 
 
+def plate_sweep() -> None:
+    """The c that matches the rung's regime 1 on each same-layer design at each plate thickness."""
+    print("| plate, mm | " + " | ".join(f"{name}: rung um/N, c" for name in IDENTICAL) + " |")
+    print("|---" * (1 + len(IDENTICAL)) + "|")
+    for plate in (0.4, 0.8, 1.6, 3.0):
+        with tempfile.TemporaryDirectory() as tmp:
+            rows = [rung_rows(p, regimes=1)[0] for p in identical_designs(Path(tmp), plate)]
+        print(f"| {plate} | " + " | ".join(f"{1e3 * r['rung']:.2f}, {fit_c([r]):.3f}" for r in rows) + " |")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     default = [ROOT / "configs" / n for n in ("mohammadi2021-forward.yaml", "mohammadi2021.yaml", "fingertip.yaml",
                                              "mohammadi2021-compact.yaml")]  # fmt: skip
     ap.add_argument("--configs", nargs="*", type=Path, default=default)
+    ap.add_argument("--plate-sweep", action="store_true", help="only c per plate thickness, same-layer designs")
     args = ap.parse_args()
+    if args.plate_sweep:
+        plate_sweep()
+        return
     with tempfile.TemporaryDirectory() as tmp:
         print("solving the rung (members rigid, then the plates as printed):")
         same = [row for p in identical_designs(Path(tmp)) for row in rung_rows(p)]
