@@ -24,7 +24,7 @@ roots, neither in the closed form, are tried here, each in closed form:
   mirror symmetry about each layer's mid-plane, the upper walls of the layer below and the lower
   walls of the layer above put opposite moments into the plate, so only their difference turns it,
   against the plate and both walls (E'I / L each for a guided far end); a locked layer's walls
-  put none.
+  put none, and the layer bends with the plate as one block of its whole height.
 
 c is fitted on two designs whose three layers are the same (the forward design's middle layer,
 and that layer 0.5 mm thick), in regime 1, where the second mechanism vanishes by symmetry;
@@ -108,7 +108,10 @@ def mechanisms(g, m, locked: tuple[int, ...], c: float) -> tuple[float, float]:
             local += 0.5 * root_turn_mm_per_N(L, EI, cos, c * E * D * g.layers[i].t_mm ** 2)
             moment_arm += s * 0.5 * L * cos
             stiff += EI / L
-        plate = g.layers[j].t_mm + g.housing.plate_mm + g.layers[j + 1].t_mm
+        # the sandwich the moments bend: the two pads and the plate, or a locked layer's whole height
+        # (its cavity closed, it bends with the plate as one block)
+        below, above = (g.layers[i].h_mm if i in locked else g.layers[i].t_mm for i in (j, j + 1))
+        plate = below + g.housing.plate_mm + above
         k_plate = E * D * plate**3 / 12.0 / (0.5 * (heads[j] + heads[j + 1]))
         bend += 0.5 * moment_arm**2 / (k_plate + stiff)  # each chevron carries half the force
     return local, bend
