@@ -3,6 +3,7 @@ mst_cli/estimation/two_chip_table.py, against the exact one (mst_cli/estimation/
 Prints markdown tables; asserts nothing.
 
     python benchmarks/bench_two_chip.py [--readings 2000 --repeats 5 --presses 200 --seed 39 --chips "0,0;10,6"]
+                                        [--batches 50,200,800,2000]
 
 On the bundled sensor as printed (configs/mohammadi2021-forward.yaml, --mechanics spring), chips
 at (0, 0) and (10, 6) mm (studies/shear_roundtrip.py's default layout), one core (MST_WORKERS=1):
@@ -13,6 +14,12 @@ at (0, 0) and (10, 6) mm (studies/shear_roundtrip.py's default layout), one core
   face): the trilinear tables alone and made exact by the batched Newton;
 * readings per second: the fast reader on --readings readings (median of --repeats), the exact
   reader on 10;
+* where a batch's time goes (--batches): the estimate of batches of 50 to 2,000 readings, its
+  CPU split between the fit on the tables, the fit on the exact states and the rest (starts,
+  distinct fits, the verdict). A live session estimates everything waiting at once, so it keeps
+  up with a board writing r readings a second only if some batch of n readings is estimated in
+  n / r seconds: the best rate over the batches is its ceiling (a batch pays numpy's cost per call
+  once per fit iteration, and its slowest reading sets the iterations);
 * at 0.5 and 2 uT, on --presses presses as studies/shear_roundtrip.py draws them (Fz 5 to 100 %
   of the last lock, shear up to 0.3, the middle 60 % of the face), the truth from field_T: the
   median errors, and per unknown the median |error| / sigma_CRB / 0.6745 (1 for an efficient
@@ -23,6 +30,7 @@ at (0, 0) and (10, 6) mm (studies/shear_roundtrip.py's default layout), one core
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
 import time
 from pathlib import Path
@@ -31,6 +39,7 @@ os.environ.setdefault("MST_WORKERS", "1")  # one core: the table build too
 
 import numpy as np
 
+import mst_cli.estimation.two_chip_table as two_chip_table
 from mst_cli.estimation.shear_reading import ShearReader
 from mst_cli.estimation.two_chip_table import NEWTON_STEPS, TwoChipReader
 from mst_cli.model.general_load import field_T, loaded_stack
@@ -101,6 +110,54 @@ def speed(reader, stack, rng, n: int, repeats: int, top_N: float, half_mm) -> No
     print(f"| fast then polished by the exact fit | 10 | {polish:.2f} |")
 
 
+@contextlib.contextmanager
+def stage_clock(reader):
+    """Seconds of CPU spent in the reader's fit on its tables and on the exact states, summed
+    over the calls made inside the block (the module's fit_many, wrapped for the block only)."""
+    spent = {"tables": 0.0, "exact": 0.0}
+    inner = two_chip_table.fit_many
+
+    def timed(fields, *args, **kwargs):
+        t0 = time.process_time()
+        try:
+            return inner(fields, *args, **kwargs)
+        finally:
+            spent["tables" if fields == reader.table else "exact"] += time.process_time() - t0
+
+    two_chip_table.fit_many = timed
+    try:
+        yield spent
+    finally:
+        two_chip_table.fit_many = inner
+
+
+def batch_costs(reader, rng, sizes: list[int], repeats: int, top_N: float, half_mm) -> None:
+    """The CPU of one estimate per batch size, split by stage, and the line C + c n through it."""
+    print(f"\nWhere a batch's time goes, CPU ms per reading (median of {repeats}; 2 uT readings, one core):")
+    print("| batch | fit on the tables | fit on the exact states | the rest | total | readings/s |")
+    print("|---|---|---|---|---|---|")
+    totals = []
+    for n in sizes:
+        theta = draw(rng, n, top_N, 0.3, half_mm)
+        B = reader.exact(theta)[0] + rng.normal(0.0, 2e-6, (n, 6))
+        runs = []
+        for _ in range(repeats):
+            with stage_clock(reader) as spent:
+                t0 = time.process_time()
+                reader.estimate(B)
+                total = time.process_time() - t0
+            runs.append((spent["tables"], spent["exact"], total - spent["tables"] - spent["exact"], total))
+        tables, exact_s, rest, total = np.median(np.array(runs), axis=0)
+        totals.append(total)
+        cells = " | ".join(f"{1e3 * v / n:.2f}" for v in (tables, exact_s, rest, total))
+        print(f"| {n} | {cells} | {n / total:,.0f} |")
+    best = max(n / t for n, t in zip(sizes, totals))
+    print(
+        f"\nA live session keeps up with r readings a second only if some batch of n is estimated in "
+        f"n / r s: the best here is {best:,.0f} a second (2,000 needs {2000 / best:.1f}x that)."
+    )
+
+
 def accuracy(reader, stack, rng, n: int, top_N: float, half_mm) -> None:
     theta = draw(rng, n, top_N, 0.3, half_mm)
     clean = exact(stack, theta)
@@ -132,6 +189,9 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=39)
     ap.add_argument("--mechanics", default="spring", choices=("spring", "frame", "continuum"))
     ap.add_argument("--chips", default="0,0;10,6", help="the chips' x,y in mm, ';' between chips")
+    ap.add_argument(
+        "--batches", default="50,200,800,2000", help="batch sizes of the stage split, ',' between ('' skips it)"
+    )
     args = ap.parse_args()
     CHIPS[:] = [tuple(float(v) for v in c.split(",")) for c in args.chips.split(";")]  # every function's layout
     doc, _ = load_design_document(DESIGN)
@@ -149,6 +209,8 @@ def main() -> None:
     print(f"\nTables built in {build:.1f} s on one core; nodes (F, |ox|, |oy|) per layer: {shape}")
     model_error(reader, stack, rng, args.presses)
     speed(reader, stack, rng, args.readings, args.repeats, top, half)
+    if args.batches:
+        batch_costs(reader, rng, [int(b) for b in args.batches.split(",")], args.repeats, top, half)
     accuracy(reader, stack, rng, args.presses, top, half)
 
 
