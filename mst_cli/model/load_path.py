@@ -239,7 +239,7 @@ def layer_supports(scene: MemberScene, theta_rad, t_mm, h_mm) -> tuple:
     return pad, head, walls
 
 
-def cap_mm_per_N(scene: MemberScene, t_top_mm, head_mm, walls_Nmm_per_rad):
+def cap_mm_per_N(scene: MemberScene, t_top_mm, head_mm, walls_Nmm_per_rad) -> Any:
     """The cap's compliance, mm/N, over the top layer (its t, wall heads and walls' restraint,
     :func:`layer_supports`): a beam across the wall heads under the press's strip, its ends
     turning against the walls (end_fixity)."""
@@ -256,7 +256,7 @@ def cap_mm_per_N(scene: MemberScene, t_top_mm, head_mm, walls_Nmm_per_rad):
     return bend[0] - fix * (bend[0] - bend[1]) + strip_shear_mm_per_N(span, s.patch_mm, kGA)
 
 
-def plates_mm_per_N(scene: MemberScene, t_below_mm, t_above_mm, head_below_mm, head_above_mm, walls_below):
+def plates_mm_per_N(scene: MemberScene, t_below_mm, t_above_mm, head_below_mm, head_above_mm, walls_below) -> Any:
     """A plate's compliance, mm/N, between the layer below it and the one above it (their
     :func:`layer_supports`): a beam across the lower layer's wall heads, loaded by the upper
     layer's wall feet, its ends turning against the lower layer's walls."""
