@@ -99,3 +99,26 @@ def test_finite_difference_batch_computes_each_distinct_cell_once_with_the_same_
     for a, b in zip(problem.layer_laws(theta, t, h), direct):
         np.testing.assert_array_equal(a, b)
     assert sizes == [problem.n + 2 * problem.dim]
+
+
+@pytest.mark.parametrize("n_layers", [1, 2, 4])
+def test_members_with_one_layer_varied_are_the_whole_stacks_members_bit_for_bit(n_layers):
+    """The start's members (only those resting on the varied layer computed over the table) are,
+    to the bit, DesignProblem.part_members of the stacks written out in full, for every layer."""
+    base = load_document(ROOT / "configs" / "mohammadi2021.yaml")
+    problem = DesignProblem(
+        base.with_layers([LayerEntry(target_sensitivity_per_N=0.1, target_range_N=i + 1.0) for i in range(n_layers)])
+    )
+    assert problem.whole_part
+    table = seed.CellTable(problem, SLACK, (5, 6, 7))
+    chosen = np.random.default_rng(n_layers).choice(len(table.u), n_layers)
+    for j in range(n_layers):
+        index = np.broadcast_to(chosen, (len(table.u), n_layers)).copy()
+        index[:, j] = np.arange(len(table.u))
+        caps, cover, (over_slot, air) = problem.part_members(
+            table.theta_deg[index], table.t_mm[index], table.h_mm[index]
+        )
+        caps_j, cover_at = table.members_with(problem, chosen, j)
+        np.testing.assert_array_equal(caps_j, caps)
+        for F in (0.5, 20.0):
+            np.testing.assert_array_equal(cover_at(F), cover * F - np.maximum(over_slot * F - air, 0.0))

@@ -380,3 +380,19 @@ def test_a_stacks_laws_from_one_call_are_each_cells_own_law():
     cells = [HexCell(20 + 5 * j, 0.5 + 0.2 * j, 2.0 + 0.6 * j) for j in range(6)]
     mat = Material(youngs_modulus_MPa=12.0, poisson_ratio=0.45)
     assert spring_layers(cells, mat) == tuple(spring_layer(c, mat) for c in cells)
+
+
+def test_stacked_terms_is_numpys_stack_of_the_broadcast_terms():
+    """The fits' design matrices are filled in place (model.arrays.stacked_terms): the same
+    array as np.stack of the broadcast terms, in the same (C) order, so a matmul or an einsum
+    over it gives the same bits."""
+    from mst_cli.model.arrays import stacked_terms
+
+    x = np.linspace(0.1, 0.9, 4)
+    y = np.arange(3.0)[:, None]
+    terms = (x, y, 2.5, x * y, np.ones_like(x))
+    ours, numpys = stacked_terms(*terms), np.stack(np.broadcast_arrays(*terms), axis=-1)
+    assert ours.shape == numpys.shape == (3, 4, 5) and ours.flags.c_contiguous and ours.dtype == numpys.dtype
+    np.testing.assert_array_equal(ours, numpys)
+    coef = np.array([0.3, -1.7, 2.2, 0.9, -0.4])
+    np.testing.assert_array_equal(np.einsum("...j,j->...", ours, coef), np.einsum("...j,j->...", numpys, coef))

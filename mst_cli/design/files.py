@@ -6,7 +6,6 @@ from __future__ import annotations
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from mst_cli.design.pareto import pareto_csv, plot_pareto
 from mst_cli.simulation.report import write_simulation
 
 if TYPE_CHECKING:
@@ -57,6 +56,8 @@ def _write_front(st: Staging, front: list[ParetoDesign] | None, plot: bool, titl
         st.remove("pareto.csv")
         st.remove("pareto.png")
         return
+    from mst_cli.design.pareto import pareto_csv, plot_pareto  # deferred: the front's layer, only with one
+
     st.write_text("pareto.csv", pareto_csv(front))
     if plot:
         plot_pareto(front, st.path("pareto.png"), title=title)

@@ -356,13 +356,16 @@ class DesignProblem:
         cap, plates, cover = self.member_parts(theta_deg, t_mm, h_mm, edges_N)
         return cap, plates.sum(axis=-1, keepdims=True) + cover
 
+    def printed_t_mm(self, t_mm: ArrayLike) -> np.ndarray:
+        """Walls as printed (drawn + printer.wall_offset_mm, floored): what the members rest on."""
+        t = np.asarray(t_mm, dtype=float)
+        return np.maximum(t + self.wall_offset_mm, LENGTH_FLOOR_MM) if self.wall_offset_mm else t
+
     def part_members(self, theta_deg: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike) -> tuple:
         """(each layer's cap (..., n): the plate above it, the cap on the top one; the cover;
         (the cover's bending over the slot, the air under it): what stops on the board) of
         candidate stacks, for :meth:`_responses_of`."""
-        t = np.asarray(t_mm, dtype=float)
-        if self.wall_offset_mm:
-            t = np.maximum(t + self.wall_offset_mm, LENGTH_FLOOR_MM)
+        t = self.printed_t_mm(t_mm)
         cap, plates, over_slot, slot_walls = member_parts(self.members, np.radians(theta_deg), t, h_mm)
         caps = np.concatenate([plates, np.asarray(cap)[..., None]], axis=-1)  # each layer's: the plate or cap above it
         return caps, over_slot + slot_walls, (over_slot, self.members.cover_air_mm)

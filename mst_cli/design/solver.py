@@ -226,8 +226,10 @@ def newton_match(problem: DesignProblem, u0: np.ndarray, tracker: Tracker, budge
     return False
 
 
-def _match(problem, rng, search: Search):
-    """Screening and phase 1: (best u, matched, starts used)."""
+def _match(problem, rng_seed: int, search: Search):
+    """Screening and phase 1: (best u, matched, starts used). The screening's generator is
+    seeded only when the screening runs: the layer-by-layer start and its match rarely need
+    it, and numpy.random's import is about 10 ms of a quick design's start-up."""
     dim, budget = problem.dim, search.budget
     per_iter, iters = _per_iter(problem, search.local), _iters_per_start(problem, search.local)
     m = _Matcher(problem)
@@ -252,7 +254,7 @@ def _match(problem, rng, search: Search):
             return best.u, True, starts_used
     # -- screening: one vectorised batch
     n_screen = int(max(1, min(SCREEN_PER_DIM * dim, budget.left // 4)))
-    U = rng.random((n_screen, dim))
+    U = np.random.default_rng(rng_seed).random((n_screen, dim))
     ev = problem.evaluate(U)
     viol = np.sum(np.maximum(ev.safe_constraints, 0.0), axis=-1)
     order = np.argsort(ev.merit(ROUNDING_SAFETY), kind="stable")
@@ -329,7 +331,7 @@ def prefer(
 
 def _matched(problem: DesignProblem, seed: int, search: Search) -> SolveResult:
     """Screening and phase 1 under ``search``'s budget: the SolveResult of the match."""
-    u, matched, starts_used = _match(problem, np.random.default_rng(seed), search)
+    u, matched, starts_used = _match(problem, seed, search)
     return SolveResult(
         u=u,
         matched=matched,

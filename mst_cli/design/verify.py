@@ -7,9 +7,9 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
-from numpy.typing import ArrayLike
 
 from mst_cli.design import explain
 from mst_cli.design.problem import DesignProblem
@@ -27,6 +27,9 @@ from mst_cli.model.response import Response, simulate
 from mst_cli.sensor.as_printed import as_printed
 from mst_cli.sensor.document import Document
 from mst_cli.sensor.sections import LayerEntry
+
+if TYPE_CHECKING:
+    from numpy.typing import ArrayLike  # annotations only: numpy.typing costs start-up time
 
 
 def verify_design(

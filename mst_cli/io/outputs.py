@@ -33,6 +33,9 @@ from typing import Any
 import yaml
 
 STAGING_PREFIX = ".mst-staging-"
+# libyaml's emitter where PyYAML was built with it: the same text as PyYAML's own emitter (the
+# representer, which turns numbers into text, is PyYAML's in both), about 5 times faster
+YAML_DUMPER = getattr(yaml, "CSafeDumper", yaml.SafeDumper)
 STALE_AFTER_S = 15 * 60
 _LIVE: set[Path] = set()  # staging folders of this process still in use
 _SIGNALS = tuple(getattr(signal, name) for name in ("SIGTERM", "SIGHUP") if hasattr(signal, name))
@@ -189,7 +192,7 @@ class Staging:
         self.write_text(name, dumps_json(data, indent=2, sort_keys=False) + "\n")
 
     def write_yaml(self, name: str, data: Any) -> None:
-        self.write_text(name, yaml.safe_dump(data, sort_keys=False, default_flow_style=None))
+        self.write_text(name, yaml.dump(data, Dumper=YAML_DUMPER, sort_keys=False, default_flow_style=None))
 
     def remove(self, name: str) -> None:
         """Remove out_dir/``name`` when the staged files are committed (with them, under the same

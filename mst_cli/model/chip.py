@@ -13,7 +13,7 @@ from __future__ import annotations
 import csv
 from dataclasses import dataclass
 from functools import lru_cache
-from importlib import resources
+from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -24,6 +24,8 @@ if TYPE_CHECKING:
 SATURATION_T = 50e-3
 CODE_RANGE_LSB = {0: 32768, 1: 32768, 2: 22000, 3: 11000}
 DEFAULT_NOISE_uT = 2.0
+# beside the model's other data, read as they are (importlib.resources would import zipfile for it)
+SETTINGS_CSV = Path(__file__).resolve().parent / "data" / "mlx90393.csv"
 
 
 @dataclass(frozen=True)
@@ -45,7 +47,7 @@ class ChipSetting:
 @lru_cache(maxsize=1)
 def settings_table() -> tuple[ChipSetting, ...]:
     """Every GAIN_SEL x RES setting, finest z resolution first."""
-    text = resources.files("mst_cli.model").joinpath("data/mlx90393.csv").read_text()
+    text = SETTINGS_CSV.read_text()
     rows = [r for r in csv.DictReader(line for line in text.splitlines() if not line.startswith("#"))]
     table = [
         ChipSetting(int(r["gain_sel"]), int(r["res"]), float(r["xy_uT_per_lsb"]), float(r["z_uT_per_lsb"]))

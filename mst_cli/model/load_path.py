@@ -218,33 +218,63 @@ def member_compliances(scene: MemberScene, theta_rad, t_mm, h_mm) -> tuple:
 def member_parts(scene: MemberScene, theta_rad, t_mm, h_mm) -> tuple:
     """:func:`member_compliances` with the cover's two parts apart: (cap, plates, the cover's
     bending over the slot (which stops on the board), the slot walls' squeeze and turn)."""
-    s = scene
-    theta, t = np.asarray(theta_rad, dtype=float), np.asarray(t_mm, dtype=float)
-    # the wall heads: the mid-point of each pad's outer and inner corners (wall_head_x_mm)
-    head = pad_half_width_mm(theta, h_mm, s.width_mm) - 0.5 * t * np.tan(0.5 * theta)
-    E, G, D = s.E_prime_MPa, s.G_MPa, s.depth_mm
-    t_top = t[..., -1]
-    z_pocket = t_top + s.pocket_floor_mm
-    EI, kGA = section_EI_kGA(
-        D, t_top + s.cap_above_stack_mm, E, G, s.pocket_width_mm, (z_pocket, z_pocket + s.pocket_depth_mm),
-        s.insert, t_top + s.insert_above_pad_mm,
-    )  # fmt: skip
-    span = 2.0 * head[..., -1]
-    # each beam's ends turn against what holds them (end_fixity): the walls below it, the slot's walls
-    walls = wall_head_restraint_Nmm_per_rad(theta, t, h_mm, D, E, s.support)  # (..., n)
-    fix = end_fixity(walls[..., -1], EI, span)
-    bend = [strip_bending_mm_per_N(span, s.patch_mm, EI, b) for b in SUPPORTS]
-    cap = bend[0] - fix * (bend[0] - bend[1]) + strip_shear_mm_per_N(span, s.patch_mm, kGA)
-    EI_p, kGA_p = section_EI_kGA(D, t[..., :-1] + s.plate_mm + t[..., 1:], E, G)
-    below, above = head[..., :-1], head[..., 1:]
-    fix = end_fixity(walls[..., :-1], EI_p, 2.0 * below)
-    plate = [two_load_mm_per_N(2.0 * below, below - above, EI_p, kGA_p, b) for b in SUPPORTS]
-    plates = plate[0] - fix * (plate[0] - plate[1])
-    pad = pad_half_width_mm(theta[..., 0], np.asarray(h_mm, dtype=float)[..., 0], s.width_mm)
-    over_slot, slot_walls = housing_mm_per_N(
-        s, head[..., 0], pad, section_EI_kGA(D, s.cover_mm + t[..., 0], E, G), section_EI_kGA(D, s.cover_mm, E, G)
-    )
+    t = np.asarray(t_mm, dtype=float)
+    pad, head, walls = layer_supports(scene, theta_rad, t, h_mm)
+    cap = cap_mm_per_N(scene, t[..., -1], head[..., -1], walls[..., -1])
+    plates = plates_mm_per_N(scene, t[..., :-1], t[..., 1:], head[..., :-1], head[..., 1:], walls[..., :-1])
+    over_slot, slot_walls = cover_parts_mm_per_N(scene, t[..., 0], pad[..., 0], head[..., 0])
     return cap, np.asarray(plates), over_slot, slot_walls
+
+
+def layer_supports(scene: MemberScene, theta_rad, t_mm, h_mm) -> tuple:
+    """What the members take from each layer, cell by cell (arrays (...) of theta in rad, t and h
+    in mm): (its outer pad's half width, its wall heads' x (wall_head_x_mm), its walls' restraint
+    of a pad's turn in N mm/rad). A member rests on one layer or two, so a batch of stacks that
+    differ in one layer needs these of that layer's cells only (the design's start)."""
+    theta, t = np.asarray(theta_rad, dtype=float), np.asarray(t_mm, dtype=float)
+    pad = pad_half_width_mm(theta, h_mm, scene.width_mm)
+    # the wall heads: the mid-point of each pad's outer and inner corners (wall_head_x_mm)
+    head = pad - 0.5 * t * np.tan(0.5 * theta)
+    walls = wall_head_restraint_Nmm_per_rad(theta, t, h_mm, scene.depth_mm, scene.E_prime_MPa, scene.support)
+    return pad, head, walls
+
+
+def cap_mm_per_N(scene: MemberScene, t_top_mm, head_mm, walls_Nmm_per_rad) -> Any:
+    """The cap's compliance, mm/N, over the top layer (its t, wall heads and walls' restraint,
+    :func:`layer_supports`): a beam across the wall heads under the press's strip, its ends
+    turning against the walls (end_fixity)."""
+    s = scene
+    E, G, D = s.E_prime_MPa, s.G_MPa, s.depth_mm
+    z_pocket = t_top_mm + s.pocket_floor_mm
+    EI, kGA = section_EI_kGA(
+        D, t_top_mm + s.cap_above_stack_mm, E, G, s.pocket_width_mm, (z_pocket, z_pocket + s.pocket_depth_mm),
+        s.insert, t_top_mm + s.insert_above_pad_mm,
+    )  # fmt: skip
+    span = 2.0 * head_mm
+    fix = end_fixity(walls_Nmm_per_rad, EI, span)
+    bend = [strip_bending_mm_per_N(span, s.patch_mm, EI, b) for b in SUPPORTS]
+    return bend[0] - fix * (bend[0] - bend[1]) + strip_shear_mm_per_N(span, s.patch_mm, kGA)
+
+
+def plates_mm_per_N(scene: MemberScene, t_below_mm, t_above_mm, head_below_mm, head_above_mm, walls_below) -> Any:
+    """A plate's compliance, mm/N, between the layer below it and the one above it (their
+    :func:`layer_supports`): a beam across the lower layer's wall heads, loaded by the upper
+    layer's wall feet, its ends turning against the lower layer's walls."""
+    s = scene
+    EI_p, kGA_p = section_EI_kGA(s.depth_mm, t_below_mm + s.plate_mm + t_above_mm, s.E_prime_MPa, s.G_MPa)
+    fix = end_fixity(walls_below, EI_p, 2.0 * head_below_mm)
+    plate = [two_load_mm_per_N(2.0 * head_below_mm, head_below_mm - head_above_mm, EI_p, kGA_p, b) for b in SUPPORTS]
+    return plate[0] - fix * (plate[0] - plate[1])
+
+
+def cover_parts_mm_per_N(scene: MemberScene, t_bottom_mm, pad_mm, head_mm) -> tuple:
+    """:func:`housing_mm_per_N` under layer 1 (its t, outer pad and wall heads,
+    :func:`layer_supports`): the cover with that pad bonded on it, the cover alone beyond."""
+    s = scene
+    E, G, D = s.E_prime_MPa, s.G_MPa, s.depth_mm
+    return housing_mm_per_N(
+        s, head_mm, pad_mm, section_EI_kGA(D, s.cover_mm + t_bottom_mm, E, G), section_EI_kGA(D, s.cover_mm, E, G)
+    )
 
 
 def housing_mm_per_N(scene: MemberScene, head_mm, pad_mm, cover_pad, cover_alone) -> tuple:

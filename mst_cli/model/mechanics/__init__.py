@@ -24,7 +24,6 @@ from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
 from mst_cli.model.mechanics.depth import in_web
-from mst_cli.model.mechanics.frame import frame_layer  # numpy only: 6 ms, not worth a deferral
 from mst_cli.model.mechanics.spring import spring_layer, spring_layers
 
 if TYPE_CHECKING:
@@ -48,6 +47,8 @@ def _plane_strain_law(cell: HexCell, material: Material, model: str) -> LinearLo
     if model == "spring":
         return spring_layer(cell, material)
     if model == "frame":
+        from mst_cli.model.mechanics.frame import frame_layer  # deferred: L1 and its path follower, 6 ms
+
         return frame_layer(cell, material)
     if model == "continuum":
         from mst_cli.model.mechanics.continuum import continuum_layer  # deferred: L2 (scikit-fem) loads when asked
@@ -76,6 +77,8 @@ def uncached_layer_law(
     """The rung's plane-strain law without the per-cell caches (for timing and for the fits,
     which compare plane-strain rungs)."""
     if model == "frame":
+        from mst_cli.model.mechanics.frame import frame_layer  # deferred: as in _plane_strain_law
+
         return frame_layer.__wrapped__(cell, material)
     if model == "continuum":
         from mst_cli.model.mechanics.continuum import continuum_layer  # deferred: L2 (scikit-fem) loads when asked

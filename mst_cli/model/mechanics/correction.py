@@ -60,6 +60,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from mst_cli.model.arrays import stacked_terms
+
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
 
@@ -156,26 +158,23 @@ def design_matrix(t_over_L: ArrayLike, theta_rad: ArrayLike) -> np.ndarray:
     s = th - np.pi / 4
     y = _y(x, th)
     ly = -np.log1p(-y)
-    return np.stack(
-        np.broadcast_arrays(
-            x,
-            x**2,
-            x**3,
-            x * s,
-            x**2 * s,
-            x * s**2,
-            x**2 * s**2,
-            x * s**3,
-            x**3 * s,
-            ly,
-            ly * s,
-            ly * s**2,
-            ly**2,
-            ly**2 * s,
-            y,
-            y * s,
-        ),
-        axis=-1,
+    return stacked_terms(
+        x,
+        x**2,
+        x**3,
+        x * s,
+        x**2 * s,
+        x * s**2,
+        x**2 * s**2,
+        x * s**3,
+        x**3 * s,
+        ly,
+        ly * s,
+        ly * s**2,
+        ly**2,
+        ly**2 * s,
+        y,
+        y * s,
     )
 
 
@@ -189,42 +188,39 @@ def lock_design_matrix(t_over_L: ArrayLike, theta_rad: ArrayLike, sigma: ArrayLi
     e = np.exp(-2.0 * x / np.maximum(sig, 1e-12))
     w = _face_beyond_wedge(x, y)
     r = allowance_over_t(x, th, sig)
-    return np.stack(
-        np.broadcast_arrays(
-            np.ones_like(x),
-            x,
-            s,
-            x**2,
-            x * s,
-            s**2,
-            x**3,
-            x**2 * s,
-            x * s**2,
-            s**3,
-            y,
-            y * s,
-            y**2,
-            y * x,
-            sig,
-            sig * x,
-            sig * s,
-            sig**2,
-            sig * y,
-            e,
-            e * s,
-            e * x,
-            e**2,
-            e * sig,
-            w,
-            w * s,
-            w * x,
-            w**2,
-            w * sig,
-            r,
-            r * s,
-            r * sig,
-        ),
-        axis=-1,
+    return stacked_terms(
+        np.ones_like(x),
+        x,
+        s,
+        x**2,
+        x * s,
+        s**2,
+        x**3,
+        x**2 * s,
+        x * s**2,
+        s**3,
+        y,
+        y * s,
+        y**2,
+        y * x,
+        sig,
+        sig * x,
+        sig * s,
+        sig**2,
+        sig * y,
+        e,
+        e * s,
+        e * x,
+        e**2,
+        e * sig,
+        w,
+        w * s,
+        w * x,
+        w**2,
+        w * sig,
+        r,
+        r * s,
+        r * sig,
     )
 
 
@@ -253,7 +249,7 @@ def hinge_design_matrix(
     s = np.asarray(theta_rad, dtype=float) - np.pi / 4
     sig = np.asarray(sigma, dtype=float)
     p = _hinge(np.asarray(ln_stroke_ratio, dtype=float), width, offset)
-    return np.stack(np.broadcast_arrays(p, p * x, p * s, p * sig, p * p, p * x * x, p * s * s), axis=-1)
+    return stacked_terms(p, p * x, p * s, p * sig, p * p, p * x * x, p * s * s)
 
 
 def hinge_sum(x: np.ndarray, theta: np.ndarray, sig: np.ndarray, ln_q: np.ndarray, coef, width, offset) -> np.ndarray:

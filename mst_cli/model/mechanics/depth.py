@@ -27,6 +27,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from mst_cli.model.arrays import stacked_terms
+
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
 
@@ -46,7 +48,7 @@ def design_matrix(theta_rad: ArrayLike, y: ArrayLike) -> np.ndarray:
     is a mix of the wall's thickness and the layer's height, weighted by the wall angle."""
     s = np.asarray(theta_rad, dtype=float) - np.pi / 4
     inv_y = 1.0 / np.maximum(np.asarray(y, dtype=float), Y_MIN)
-    return np.stack(np.broadcast_arrays(np.ones_like(s), s, s**2, inv_y, s * inv_y, s**2 * inv_y), axis=-1)
+    return stacked_terms(np.ones_like(s), s, s**2, inv_y, s * inv_y, s**2 * inv_y)
 
 
 @functools.lru_cache(maxsize=1)
