@@ -36,7 +36,6 @@ from pathlib import Path
 import numpy as np
 
 import mst_cli as mst
-import mst_cli.api
 from mst_cli.model import load_path as lp
 from mst_cli.model.general_load import load_path, loaded_stack
 from mst_cli.model.mechanics import layer_laws, uncached_layer_law
@@ -46,12 +45,6 @@ from mst_cli.model.stack import Stack
 from mst_cli.model.stack_pose import magnet_pose
 
 ROOT = Path(__file__).resolve().parents[1]
-
-
-def designed(path: Path):
-    """The file's design: itself, or a spec's design (the default seed), as `mst design` gives it."""
-    doc = mst.load(path)
-    return doc if doc.is_design else mst.api.design(doc, plot=False).document
 
 
 def l0_layers_mm_per_N(g, m, locked: tuple[int, ...]) -> float:
@@ -66,7 +59,7 @@ def closed_form_mm_per_N(g, m, locked: tuple[int, ...], support: str) -> float:
 
 
 def config_rows(path: Path, spacing: float | None, times: list[float]) -> list[str]:
-    doc = designed(path)
+    doc, _ = mst.designed(path)
     g, m = doc.geometry(), doc.material
     stack = Stack(layer_laws(g.layers, m, "spring"))
     per_mm = wp.field_per_drop_uT_per_mm(g)
@@ -95,7 +88,7 @@ def rung_vs_mst_rows(path: Path, spacing: float | None) -> list[str]:
     layers locked before the regime closed) against what ``mst simulate`` states for the same
     part (part_stack's secant over the regime, load_path.motion_shares), and their ratio: the
     issue's 5/8/20 % budget."""
-    doc = designed(path)
+    doc, _ = mst.designed(path)
     g, m = doc.geometry(), doc.material
     stack = Stack(layer_laws(g.layers, m, "spring"))
     per_mm = wp.field_per_drop_uT_per_mm(g)
@@ -114,7 +107,7 @@ def attribution_rows(path: Path, spacing: float | None) -> list[str]:
     member class as printed (the others rigid), its extra drop against the closed form's member,
     in MEMBER_TAGS order (the base: the closed form's cover, its bending over the slot and the
     slot walls; the plates; the cap). Drops in um/N; "rest" is what the members give together beyond their sum."""
-    doc = designed(path)
+    doc, _ = mst.designed(path)
     g, m = doc.geometry(), doc.material
     cf = lp.members(g, m)
     closed = {"cap": cf.cap_mm_per_N, "plate": sum(cf.plates_mm_per_N), "base": cf.cover_mm_per_N}

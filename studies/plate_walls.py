@@ -46,7 +46,6 @@ from pathlib import Path
 import yaml
 
 import mst_cli as mst
-import mst_cli.api
 from mst_cli.model import load_path as lp
 from mst_cli.model.cell import wall_centreline_length_mm
 from mst_cli.model.mechanics import layer_laws
@@ -56,12 +55,6 @@ from mst_cli.model.stack import Stack
 ROOT = Path(__file__).resolve().parents[1]
 FORWARD = ROOT / "configs" / "mohammadi2021-forward.yaml"
 IDENTICAL = {"same-layers-t1.0": 1.0, "same-layers-t0.5": 0.5}  # the forward design's middle layer, 3 times
-
-
-def designed(path: Path):
-    """The file's design: itself, or a spec's design (the default seed), as `mst export` gives it."""
-    doc = mst.load(path)
-    return doc if doc.is_design else mst.api.design(doc, plot=False).document
 
 
 def identical_designs(folder: Path, plate_mm: float | None = None) -> list[Path]:
@@ -120,7 +113,7 @@ def mechanisms(g, m, locked: tuple[int, ...], c: float) -> tuple[float, float]:
 def rung_rows(path: Path, regimes: int | None = None) -> list[dict]:
     """Per regime (the first ``regimes``, or all): the rung's extra drop with the plates as
     printed (cap and base rigid)."""
-    doc = designed(path)
+    doc, _ = mst.designed(path)
     g, m = doc.geometry(), doc.material
     stack = Stack(layer_laws(g.layers, m, "spring"))
     rows = []
