@@ -35,9 +35,15 @@ from mst_cli.design import explain
 from mst_cli.design.problem import DesignProblem
 from mst_cli.design.result import ROUND_DECIMALS, DesignResult, design_dict
 from mst_cli.design.solver import solve
-from mst_cli.design.verify import verify_design
+from mst_cli.design.verify import verify_design, with_cells
 from mst_cli.errors import InputError
+from mst_cli.sensor.as_printed import simulate_as_printed
 from mst_cli.sensor.document import Document
+
+# model.load_path section (:func:`_section_rounds`): at most this many designs corrected by the
+# whole-part rung, until the correction moves no regime's compliance by more than this share
+SECTION_ROUNDS = 3
+SECTION_TOL_REL = 0.01
 
 
 def design_document(
@@ -81,6 +87,8 @@ def design_document(
     max_evaluations = int(doc.design["max_evaluations"] if max_evaluations is None else max_evaluations)
 
     sol = solve(problem, seed=seed, max_evaluations=max_evaluations, progress=progress, local=local)
+    if doc.section_rung:
+        sol = _section_rounds(doc, problem, sol, seed, max_evaluations, progress, local)
     theta, t, h = (np.round(a, ROUND_DECIMALS) for a in problem.to_physical(sol.u))
     result = verify_design(
         doc,
@@ -99,6 +107,37 @@ def design_document(
     if solution is not None:
         solution.append(sol)
     return result
+
+
+def _section_rounds(doc, problem: DesignProblem, sol, seed: int, max_evaluations: int, progress, local: str):
+    """model.load_path section: the design's closed form corrected by the whole-part rung until
+    the two agree (output space mapping). Each round measures the rung's correction per regime
+    on the design as printed (:func:`~mst_cli.model.mechanics.whole_part.section_members`, 2
+    solves a regime) and designs again with it held; it stops once the correction measured on the
+    new design moves the part's compliance in every regime by less than SECTION_TOL_REL from the
+    one it was designed with, after SECTION_ROUNDS designs, or once a design with the correction
+    held cannot match the targets (the members as measured leave them out of reach: the
+    diagnosis says which). The forward model that verifies
+    the design (:func:`verify_design`) measures the rung on the final design once more (the
+    same section: its solves are memoised), so what the design states is the rung's there."""
+    held = None
+    for round_ in range(1, SECTION_ROUNDS + 2):
+        theta, t, h = (np.round(a, ROUND_DECIMALS) for a in problem.to_physical(sol.u))
+        if progress is not None:
+            progress(round_ - 1, SECTION_ROUNDS + 1, f"the whole-part rung on design {round_}", float("nan"))
+        resp = simulate_as_printed(with_cells(doc, theta, t, h), "spring")
+        extra = np.asarray(resp.members.regime_extra_mm_per_N, dtype=float)
+        compliance = np.array([1.0 / r.k_effective_N_per_mm for r in resp.regimes])
+        if held is not None and len(held) == len(extra):
+            if np.max(np.abs(extra - held) / compliance) < SECTION_TOL_REL:
+                break
+        if round_ > SECTION_ROUNDS:
+            break
+        problem.regime_extra_mm_per_N = held = extra
+        sol = solve(problem, seed=seed, max_evaluations=max_evaluations, progress=progress, local=local)
+        if not sol.matched:  # the targets are out of reach with the members as measured: no round will help
+            break
+    return sol
 
 
 def _spec_problem(doc: Document) -> DesignProblem:

@@ -223,7 +223,9 @@ def _members_dominate(problem: DesignProblem, u: ArrayLike) -> list[tuple[str, s
                 "(an insert) is needed (docs/design.md 4.6)",
             )
         ]
-    floor = per_mm * sum(parts.values())  # S (1/N) of the members alone, per regime
+    extra = problem.regime_extra_mm_per_N  # model.load_path section: the whole-part rung's correction
+    measured = extra is not None and len(extra) == n
+    floor = per_mm * (sum(parts.values()) + (extra if measured else 0.0))  # S (1/N) of the members alone
     over = np.flatnonzero(floor > problem.S_target * (1 + tol))
     if not len(over):
         return []
@@ -234,7 +236,9 @@ def _members_dominate(problem: DesignProblem, u: ArrayLike) -> list[tuple[str, s
         (
             f"the {name} dominate{'' if name == 'plates' else 's'}",
             f"the {name} {verb} too soft: the members outside the layers alone give "
-            f"S >= {floor[i]:.3g} 1/N in regime {i + 1} (most the {name}, {parts[name][i]:.3g} mm/N), above its "
+            + ("(as the whole-part rung measures them on the last design) " if measured else "")
+            + f"S >= {floor[i]:.3g} 1/N in regime {i + 1} (most the {name}{' in closed form' if measured else ''}, "
+            f"{parts[name][i]:.3g} mm/N), above its "
             f"target {problem.S_target[i]:g} 1/N, which no layer can lower; a stiffer cap (an insert), plates or "
             "a cover supported all round (docs/design.md 4.6)",
         )

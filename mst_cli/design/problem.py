@@ -200,6 +200,9 @@ class DesignProblem:
         self.whole_part = doc.whole_part  # model.load_path: part (else the layers alone)
         printed_tpu = Material(doc.material.name, self.E_MPa, self.nu)
         self.members = member_scene(printed_probe, printed_tpu)
+        # model.load_path section: the whole-part rung's correction per regime (mm/N), measured on
+        # the last design and held while the next is found (design.document's rounds); None: none
+        self.regime_extra_mm_per_N: np.ndarray | None = None
         self.B_limit_T = min(1.0 - self.saturation_margin_rel, 1.0 / CHIP_HEADROOM) * mlx.SATURATION_T
         # L0's fitted corrections hold for walls up to this t/L; stubbier walls are extrapolation
         # (the design loop otherwise drifts there: it is where k and R grow fastest)
@@ -380,7 +383,8 @@ class DesignProblem:
         cap, rest = (None, 0.0) if members is None else members[:2]
         contact = members[2] if members is not None and len(members) > 2 else None
         gap0 = cast(np.ndarray, self.gap0_mm(h_mm.sum(axis=-1)))  # candidates' sums: an array
-        _, S, gap, B = regime_kernel(k, d_lock, k_locked, gap0, self.field_T, R, rest, cap, contact)
+        extra = self.regime_extra_mm_per_N if members is not None else None
+        _, S, gap, B = regime_kernel(k, d_lock, k_locked, gap0, self.field_T, R, rest, cap, contact, extra)
         # the chip's largest field on the way is at the smallest gap: a stack whose members let
         # the magnet reach the chip (gap <= 0 at the last lock) saturates it on the way there
         B_full = np.where(gap[..., -1] > 0.0, B[..., -1], self.field_T(np.zeros_like(gap[..., -1])))

@@ -59,7 +59,7 @@ def verify_design(
     """
     t_start = time.perf_counter() if t_start is None else t_start
     theta, t, h = (np.asarray(a, dtype=float) for a in (theta, t, h))
-    designed = _with_cells(doc, theta, t, h)
+    designed = with_cells(doc, theta, t, h)
     geometry = designed.geometry()  # as drawn: what export draws
     run = _PrintedRuns(designed, None if doc.field_model == "auto" else doc.field_model, doc.noise_uT_rms)
     resp = run(0.0, mechanics)
@@ -113,7 +113,7 @@ def _why_not_met(
     return binding, reasons
 
 
-def _with_cells(doc: Document, theta: np.ndarray, t: np.ndarray, h: np.ndarray) -> Document:
+def with_cells(doc: Document, theta: np.ndarray, t: np.ndarray, h: np.ndarray) -> Document:
     """The spec ``doc`` with every layer's theta (deg), t, h (mm) written in, targets kept."""
     layers = [
         LayerEntry(float(a), float(b), float(c), la.target_sensitivity_per_N, la.target_range_N, la.weight)
@@ -140,6 +140,7 @@ class _PrintedRuns:
             field_model=self.field_model,
             noise_uT_rms=self.noise_uT_rms,
             whole_part=self.designed.whole_part,
+            section=self.designed.section_rung,
         )
 
 

@@ -38,7 +38,8 @@ the same for both. Pure numpy, no I/O.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -135,6 +136,9 @@ class Members:
     # dropped the air under it onto the board (cover_travel_mm; inf: never)
     cover_contact_mm_per_N: float = 0.0
     cover_travel_mm: float = math.inf
+    # per regime of the part, what the whole-part rung adds to the closed form above (mm/N, may be
+    # negative; :func:`section_correction`, docs/design.md 4.7); (): the closed form alone
+    regime_extra_mm_per_N: tuple[float, ...] = ()
 
     @property
     def total_mm_per_N(self) -> float:
@@ -451,7 +455,43 @@ def member_band_compliances(stack, parts: Members) -> tuple[np.ndarray, np.ndarr
     bending = parts.cover_contact_mm_per_N * moving_share(cover_landing_N(parts), bands)[..., 0]
     cover = parts.cover_mm_per_N - parts.cover_contact_mm_per_N + bending
     moving = {"cap": caps_moving[-1], "plates": caps_moving[:-1].sum(axis=0), "housing": cover}
+    if parts.regime_extra_mm_per_N:
+        moving["section_correction"] = np.asarray(parts.regime_extra_mm_per_N, dtype=float)
     return edges, own.T, moving
+
+
+def section_correction(stack, parts: Members, outside_mm_per_N: Sequence[float]) -> tuple[float, ...]:
+    """Per regime of the part (``stack``: its layers alone, ``parts``: the closed form), what the
+    whole-part rung's compliance outside the layers, ``outside_mm_per_N`` (one per regime: the
+    section as printed less the same section with its members rigid, the layers locked before
+    the regime closed), adds to the closed form's members as the forward model moves them there
+    (:func:`member_band_compliances`): the additive correction of :attr:`Members.regime_extra_mm_per_N`
+    (output space mapping: at the design it was measured on, the part's compliance in each
+    regime is the layers' own plus the rung's outside them)."""
+    _, _, moving = member_band_compliances(stack, replace(parts, regime_extra_mm_per_N=()))
+    closed = sum(np.asarray(v, dtype=float) for v in moving.values())
+    outside = np.asarray(outside_mm_per_N, dtype=float)
+    if outside.shape != closed.shape:
+        raise ValueError(f"{outside.size} regimes measured for a part of {closed.size}")
+    return tuple(float(v) for v in outside - closed)
+
+
+def small_load_layers_mm_per_N(stack, parts: Members) -> np.ndarray:
+    """(n,) per regime of the part (``stack``: its layers alone, locking in the part's order), the
+    layers' compliance as a linear model of the part gives it: the layers locked before the
+    regime on their locked branch, the others at their small-load stiffness (the whole-part
+    rung's and the issue's independent model's kind of figure; the secant over the regime
+    includes the open layers' softening before their lock)."""
+    k = np.array([law.k_N_per_mm for law in stack.layers], dtype=float)
+    k_locked = np.array([law.k_locked_N_per_mm for law in stack.layers], dtype=float)
+    units = capped_units(stack.layers, parts)
+    order = np.argsort([u.lock_force_N for u in units], kind="stable")  # as member_band_compliances sorts
+    out = np.empty(len(order))
+    for r in range(len(order)):
+        locked = np.zeros(len(order), dtype=bool)
+        locked[order[:r]] = True
+        out[r] = np.sum(np.where(locked, 1.0 / k_locked, 1.0 / k))
+    return out
 
 
 def motion_shares(stack, parts: Members) -> list[dict]:
@@ -461,6 +501,7 @@ def motion_shares(stack, parts: Members) -> list[dict]:
     model moves it there (:func:`member_band_compliances`), and the share outside the layers.
     ``stack``: the layers alone (model.stack.Stack)."""
     edges, layers, moving = member_band_compliances(stack, parts)
+    linear = small_load_layers_mm_per_N(stack, parts)
     out = []
     for i, row in enumerate(layers):
         members_i = {k: float(v[i]) for k, v in moving.items()}
@@ -474,6 +515,8 @@ def motion_shares(stack, parts: Members) -> list[dict]:
                 "force_N": [float(edges[i]), float(edges[i + 1])],
                 "compliance_mm_per_N": total,
                 "layers_compliance_mm_per_N": float(row.sum()),
+                # a linear model's: the open layers' small-load, the locked ones' locked compliance
+                "small_load_compliance_mm_per_N": float(linear[i]) + outside,
                 "members_mm_per_N": members_i,
                 "shares": shares,
                 "outside_layers": outside / total,
@@ -482,19 +525,23 @@ def motion_shares(stack, parts: Members) -> list[dict]:
     return out
 
 
-def load_path_report(geometry, material, stack, patch_mm: float = FINGERTIP_PATCH_MM) -> dict:
+def load_path_report(
+    geometry, material, stack, patch_mm: float = FINGERTIP_PATCH_MM, regime_extra_mm_per_N: tuple = ()
+) -> dict:
     """report.json's ``load_path``: the members' compliance (simply supported, and the clamped
     bound) and, per regime of the part, each member's share of the magnet's motion as the forward
-    model moves it (:func:`motion_shares`, docs/design.md 4.6)."""
-    simple = members(geometry, material, patch_mm, "simple")
-    clamped = members(geometry, material, patch_mm, "clamped")
+    model moves it (:func:`motion_shares`, docs/design.md 4.6), with the whole-part rung's
+    correction per regime when one is given (model.load_path: section, both bounds alike)."""
+    extra = tuple(regime_extra_mm_per_N)
+    simple = replace(members(geometry, material, patch_mm, "simple"), regime_extra_mm_per_N=extra)
+    clamped = replace(members(geometry, material, patch_mm, "clamped"), regime_extra_mm_per_N=extra)
     bound = motion_shares(stack, clamped)
     regimes = []
     for row, stiff in zip(motion_shares(stack, simple), bound):
         row["outside_layers_clamped"] = stiff["outside_layers"]
         row["members_clamped_mm_per_N"] = stiff["members_mm_per_N"]
         regimes.append(row)
-    return {
+    report = {
         "patch_mm": patch_mm,
         "support": "simple (clamped: the stiff bound)",
         "cap_mm_per_N": simple.cap_mm_per_N,
@@ -510,6 +557,9 @@ def load_path_report(geometry, material, stack, patch_mm: float = FINGERTIP_PATC
         "patch_dependence": patch_dependence(geometry, material, stack),
         "not_modelled": "the cover's bending along the depth over the cable windows (3D; walls on both sides)",
     }
+    if extra:  # model.load_path section: what the whole-part rung adds per regime (docs/design.md 4.7)
+        report["section_correction_mm_per_N"] = list(extra)
+    return report
 
 
 # the accuracy an independent model of the part asks of the field change per newton: before the

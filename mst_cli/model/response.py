@@ -44,6 +44,7 @@ def regime_kernel(
     members_mm_per_N: ArrayLike = 0.0,
     cap_mm_per_N: ArrayLike | None = None,
     contact: tuple | None = None,
+    regime_extra_mm_per_N: ArrayLike | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Lock forces and secant sensitivities of many L0 stacks at once, the members that are not
     layers (cap, plates, cover) in series as a linear spring.
@@ -59,6 +60,8 @@ def regime_kernel(
                                                 it closes there [default None: rigid]
     contact : (C, travel) arrays (...), optional  the part of the members that stops after travel
                                                 (the cover landing on the board) [default None]
+    regime_extra_mm_per_N : array (..., n), optional  a compliance added in each regime (the
+                                                whole-part rung's correction) [default None]
 
     Returns
     -------
@@ -71,7 +74,9 @@ def regime_kernel(
     R = k * np.asarray(d_lock_mm, dtype=float) if lock_force_N is None else np.asarray(lock_force_N, dtype=float)
     R_sorted = np.sort(capped_lock_forces_N(k, d_lock_mm, R, cap_mm_per_N), axis=-1)
     F = np.concatenate([np.zeros(R_sorted.shape[:-1] + (1,)), R_sorted], axis=-1)
-    d = series_displacement_mm(F, k, d_lock_mm, k_locked_N_per_mm, R, members_mm_per_N, cap_mm_per_N, contact)
+    d = series_displacement_mm(
+        F, k, d_lock_mm, k_locked_N_per_mm, R, members_mm_per_N, cap_mm_per_N, contact, regime_extra_mm_per_N
+    )
     gap = np.asarray(gap0_mm, dtype=float)[..., None] - d
     B = field_T(gap)
     rel = B / B[..., :1] - 1.0
@@ -158,6 +163,7 @@ def simulate(
     whole_part: bool = True,
     patch_mm: float = FINGERTIP_PATCH_MM,
     parts: Members | None = None,
+    section: bool = False,
 ) -> Response:
     """Curves and per-regime figures of one design, by default of the whole part: the cap, plates
     and cover (``parts`` [default: :func:`~mst_cli.model.load_path.members` under a centred press
@@ -165,9 +171,16 @@ def simulate(
     layers' own curve rides along (``*_layers*``), ``whole_part=False`` makes it the response.
     Forces run to (1 + overload) x the last lock, ``in_range`` False past it; ``field_model``
     [default: from the chip offset and tilt]; ``noise_uT_rms`` sets the force resolution.
+    ``section``: the members' closed form corrected per regime by the whole-part rung
+    (:func:`~mst_cli.model.mechanics.whole_part.section_members`, model.load_path: section; 2
+    finite-element solves a regime).
     """
     model = fld.choose_field_model(geometry.chip_offset_mm, geometry.magnet_tilt_deg, field_model)
     laws = layer_laws(geometry.layers, material, mechanics)
+    if parts is None and whole_part and section:
+        from mst_cli.model.mechanics.whole_part import section_members  # deferred: scikit-fem's rung
+
+        parts = section_members(geometry, material, laws, patch_mm)[0]
     parts = parts or (members(geometry, material, patch_mm) if whole_part else Members.rigid(patch_mm, len(laws) - 1))
     layer_stack, stack = Stack(laws), part_stack(laws, parts)
     edges = stack.regime_bounds_N
@@ -228,9 +241,12 @@ def _chip(B_in_range_T: np.ndarray, B_full_T: float, noise_uT_rms: float) -> tup
 def part_stack(laws: tuple, parts: Members) -> Stack:
     """The whole part's stack: the cap bends into the top layer's cavity until it closes there
     (:class:`~mst_cli.model.load_path.CappedLayer`), each plate into the cavity of the layer
-    under it likewise, the cover in series, its bending over the slot until it lands on the board."""
+    under it likewise, the cover in series, its bending over the slot until it lands on the board,
+    and the whole-part rung's correction per regime when the members carry one."""
     capped = tuple(capped_units(laws, parts))
-    return Stack(capped, parts.cover_mm_per_N, parts.cover_contact_mm_per_N, parts.cover_travel_mm)
+    return Stack(
+        capped, parts.cover_mm_per_N, parts.cover_contact_mm_per_N, parts.cover_travel_mm, parts.regime_extra_mm_per_N
+    )
 
 
 def _layers_only(

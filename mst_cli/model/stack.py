@@ -51,13 +51,17 @@ def series_displacement_mm(
     members_mm_per_N: ArrayLike = 0.0,
     cap_mm_per_N: ArrayLike | None = None,
     contact: tuple | None = None,
+    regime_extra_mm_per_N: ArrayLike | None = None,
 ) -> np.ndarray:
     """Stack compression of L0 layers in series, vectorised over designs, with the members that
     are not layers (``members_mm_per_N``, shape (...), a linear spring) in series too, and the
     cap (``cap_mm_per_N``, shape (...)) bending into the top layer's cavity until it closes
     there (:func:`capped_lock_force_N`), or per layer (shape (..., n): each plate bends into the
     cavity of the layer under it, :func:`layer_caps`); ``contact`` (C, travel), shapes (...): the part C of
-    the members that stops once it has moved ``travel`` (:attr:`Stack.contact_mm_per_N`).
+    the members that stops once it has moved ``travel`` (:attr:`Stack.contact_mm_per_N`);
+    ``regime_extra_mm_per_N`` (..., n): a compliance added in each regime between the (capped)
+    lock forces, the last one's past the last lock too (:func:`regime_extra_displacement_mm`:
+    the whole-part rung's correction, docs/design.md 4.7).
 
     ``k``, ``d_lock``, ``k_locked`` and ``lock_force_N`` (None: R = k d_lock, bilinear) have
     shape (..., n_layers); ``force_N`` has shape (..., m) (broadcast against the leading axes).
@@ -74,6 +78,9 @@ def series_displacement_mm(
     if contact is not None:  # (C, travel) (...): that part of the members stops after travel (Stack)
         C_c, travel = (np.asarray(a, dtype=float)[..., None] for a in contact)
         d = d - np.maximum(C_c * F[..., 0] - travel, 0.0)
+    if regime_extra_mm_per_N is not None:
+        Rs = R if cap_mm_per_N is None else capped_lock_force_N(k, dl, R, layer_caps(cap_mm_per_N, k.shape))
+        d = d + regime_extra_displacement_mm(F[..., 0], np.sort(Rs, axis=-1), regime_extra_mm_per_N)
     if cap_mm_per_N is None:
         return d
     C = layer_caps(cap_mm_per_N, k.shape)[..., None, :]  # (..., 1, n)
@@ -82,6 +89,19 @@ def series_displacement_mm(
     # before the contact: each layer's own law and its cap's bending; after: locked
     capped = np.where(F <= Rc, d_layer + C * F, dl[..., None, :] + (F - Rc) / kl)
     return d + np.where(C > 0, capped - d_layer, 0.0).sum(axis=-1)
+
+
+def regime_extra_displacement_mm(force_N: ArrayLike, edges_N: ArrayLike, extra_mm_per_N: ArrayLike) -> np.ndarray:
+    """(..., m) the drop of a compliance ``extra_mm_per_N`` (..., n) that takes regime r's value
+    between the sorted lock forces ``edges_N`` (..., n) (0 to the first, ..., the (n-1)-th to
+    the last) and the last regime's past the last lock: the integral of a piecewise-constant
+    compliance, so piecewise linear with knots at the lock forces (the stack's knots already)."""
+    F = np.asarray(force_N, dtype=float)[..., :, None]  # (..., m, 1)
+    R = np.asarray(edges_N, dtype=float)[..., None, :]
+    lo = np.concatenate([np.zeros_like(R[..., :1]), R[..., :-1]], axis=-1)
+    hi = np.concatenate([R[..., :-1], np.full_like(R[..., :1], np.inf)], axis=-1)  # the last runs on
+    inside = np.clip(F, lo, hi) - lo
+    return (np.asarray(extra_mm_per_N, dtype=float)[..., None, :] * inside).sum(axis=-1)
 
 
 def layer_caps(cap_mm_per_N: ArrayLike, shape: tuple) -> np.ndarray:
@@ -114,6 +134,9 @@ class Stack:
     # cover landing on the board under it): its drop is min(C F, travel)
     contact_mm_per_N: float = 0.0
     contact_travel_mm: float = math.inf
+    # a compliance added per regime (the whole-part rung's correction to the members' closed
+    # form, docs/design.md 4.7), between the lock forces, the last one's past the last lock; (): none
+    regime_extra_mm_per_N: tuple[float, ...] = ()
 
     @property
     def contact_force_N(self) -> float:
@@ -124,11 +147,20 @@ class Stack:
         """The members' drop at ``force_N``: linear, less what the contact stops."""
         F = np.asarray(force_N, dtype=float)
         stopped = np.maximum(self.contact_mm_per_N * F - self.contact_travel_mm, 0.0) if self.contact_mm_per_N else 0.0
-        return self.members_mm_per_N * F - stopped
+        d = self.members_mm_per_N * F - stopped
+        if self.regime_extra_mm_per_N:
+            d = d + regime_extra_displacement_mm(F.ravel(), self.regime_bounds_N[1:], self.regime_extra_mm_per_N).reshape(
+                F.shape
+            )
+        return d
 
     def members_compliance_mm_per_N(self, force_N: float) -> float:
-        """The members' dd/dF just past ``force_N`` (right-continuous at the contact)."""
-        return self.members_mm_per_N - (self.contact_mm_per_N if force_N >= self.contact_force_N else 0.0)
+        """The members' dd/dF just past ``force_N`` (right-continuous at the contact and the locks)."""
+        C = self.members_mm_per_N - (self.contact_mm_per_N if force_N >= self.contact_force_N else 0.0)
+        if self.regime_extra_mm_per_N:
+            r = min(int(np.searchsorted(self.regime_bounds_N[1:], force_N, side="right")), len(self.layers) - 1)
+            C += self.regime_extra_mm_per_N[r]
+        return C
 
     def layers_only(self) -> Stack:
         """The same layers between rigid plates (the ladder's own verification)."""

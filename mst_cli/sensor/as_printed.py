@@ -108,6 +108,7 @@ def simulate_as_printed(doc: Document, mechanics: str | None = None, field_model
         field_model=None if field_choice == "auto" else field_choice,
         noise_uT_rms=doc.noise_uT_rms,
         whole_part=doc.whole_part,
+        section=doc.section_rung,
     )
 
 

@@ -81,8 +81,13 @@ class Document:
 
     @property
     def whole_part(self) -> bool:
-        """The predictions include the cap, plates and cover (model.load_path: part)."""
-        return self.load_path == "part"
+        """The predictions include the cap, plates and cover (model.load_path: part or section)."""
+        return self.load_path in ("part", "section")
+
+    @property
+    def section_rung(self) -> bool:
+        """The members' closed form is corrected per regime by the whole-part rung (model.load_path: section)."""
+        return self.load_path == "section"
 
     @property
     def chips_mm(self) -> list[tuple[float, float]]:

@@ -56,6 +56,7 @@ def check_chip_positions(positions, chip_offset_mm) -> None:
 # part is over 33 mm tall and its worst force resolution coarser than 0.4 N with the default magnet.
 MAX_LAYERS = 12
 MECHANICS_MODELS = ("spring", "frame", "continuum")
+LOAD_PATHS = ("part", "section", "layers")  # model.load_path: closed form, closed form + whole-part rung, layers alone
 
 
 # --------------------------------------------------------------------------- the sections
@@ -173,11 +174,14 @@ class ModelSection:
     )
     load_path: str = spec(
         "part",
-        choices=("part", "layers"),
+        choices=LOAD_PATHS,
         omit_default=True,
         meaning="what carries the press in `mst simulate`'s and `mst design`'s predictions: `part`, the layers "
-        "with the cap, plates and cover in series (the cap closing the top layer's cavity as it bends), or "
-        "`layers`, the layers alone between rigid plates (the ladder's own verification; docs/design.md 4.6)",
+        "with the cap, plates and cover in series in closed form (the cap closing the top layer's cavity as it "
+        "bends); `section`, the same with each regime's compliance outside the layers measured by the whole-part "
+        "rung (the exported part's section in plane strain, 2 finite-element solves a regime, about 10-30 s; "
+        "`mst design` corrects its closed form by it until the two agree: docs/design.md 4.7); or `layers`, the "
+        "layers alone between rigid plates (the ladder's own verification; docs/design.md 4.6)",
     )
     # relative accuracy of layer stiffness and lock force against the continuum reference: the
     # tool picks the cheapest mechanics rung whose measured median errors meet it (mst_cli.model.ladder)

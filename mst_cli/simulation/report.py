@@ -69,7 +69,12 @@ def load_path_section(
     """Where the magnet's motion goes under a centred press ``patch_mm`` wide, per regime: the
     layers of this response's rung, and the cap, plates and cover in closed form (docs/design.md 4.6)."""
     stack = Stack(layer_laws(geometry.layers, doc.material, resp.mechanics))
-    return load_path_report(geometry, doc.material, stack, patch_mm)
+    extra = resp.members.regime_extra_mm_per_N if resp.members.patch_mm == patch_mm else ()
+    if doc.section_rung and not extra:  # another press than the response's: the rung for it
+        from mst_cli.model.mechanics.whole_part import section_members  # deferred: scikit-fem's rung
+
+        extra = section_members(geometry, doc.material, stack.layers, patch_mm)[0].regime_extra_mm_per_N
+    return load_path_report(geometry, doc.material, stack, patch_mm, extra)
 
 
 def load_path_line(
@@ -84,6 +89,12 @@ def load_path_line(
         f"(cap {lp['cap_mm_per_N']:.3g} mm/N under a {lp['patch_mm']:g} mm press); the prediction above includes "
         "it in series (the layers' alone: report.json sensitivity_layers_secant_per_N, docs/design.md 4.6)"
     )
+    if lp.get("section_correction_mm_per_N"):
+        added = " / ".join(f"{1e3 * c:+.3g}" for c in lp["section_correction_mm_per_N"])
+        line += (
+            f"; the whole-part rung (model.load_path: section, the part's section in plane strain) adds {added} "
+            "um/N per regime to the members' closed form, in the prediction above (docs/design.md 4.7)"
+        )
     lands, end = lp["cover_lands_N"], lp["regimes"][-1]["force_N"][1]
     if lands is not None and lands < end:
         line += (
@@ -247,7 +258,8 @@ def terminal_table(
     """The short table ``mst simulate`` prints (its load-path line for a press ``patch_mm`` wide)."""
     targets = {i + 1: la for i, la in enumerate(doc.layers)}
     lines = [
-        f"{doc.name}: {len(geometry.layers)} layers, mechanics={resp.mechanics}, field={resp.field_model}",
+        f"{doc.name}: {len(geometry.layers)} layers, mechanics={resp.mechanics}, field={resp.field_model}"
+        + (", load path=section (the whole-part rung)" if resp.members.regime_extra_mm_per_N else ""),
         f"{'regime':>6} {'layer':>5} {'theta':>6} {'t':>5} {'h':>5} {'k':>7} "
         f"{'band [N]':>15} {'S [1/N]':>8} {'S min..max':>15} {'dF [mN]':>8}",
         f"{'':>6} {'':>5} {'[deg]':>6} {'[mm]':>5} {'[mm]':>5} {'[N/mm]':>7}",
