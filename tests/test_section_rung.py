@@ -63,7 +63,8 @@ def test_the_forward_model_and_the_design_kernel_add_the_same_correction(forward
         assert 1.0 / b.k_effective_N_per_mm == pytest.approx(1.0 / a.k_effective_N_per_mm + extra[r], rel=1e-9)
     laws = layer_laws(g.layers, doc.material, "spring")
     k, dl, kl, R = (
-        np.array([getattr(law, n) for law in laws]) for n in ("k_N_per_mm", "d_lock_mm", "k_locked_N_per_mm", "lock_force_N")
+        np.array([getattr(law, n) for law in laws])
+        for n in ("k_N_per_mm", "d_lock_mm", "k_locked_N_per_mm", "lock_force_N")
     )
     scene = lp.member_scene(g, doc.material)
     theta, t, h = (np.array([getattr(c, n) for c in g.layers]) for n in ("theta_rad", "t_mm", "h_mm"))
@@ -82,18 +83,18 @@ def test_the_corrected_members_carry_what_the_rung_measured(forward):
     laws = layer_laws(g.layers, doc.material, "spring")
     parts = lp.members(g, doc.material)
     measured = [0.0364, 0.0297, 0.0276]
-    corrected = replace(parts, regime_extra_mm_per_N=lp.section_correction(Stack(laws), parts, measured))
+    corrected = replace(parts, regime_extra_mm_per_N=wp.section_correction(Stack(laws), parts, measured))
     rows = lp.motion_shares(Stack(laws), corrected)
     np.testing.assert_allclose([sum(r["members_mm_per_N"].values()) for r in rows], measured, rtol=1e-12)
     with pytest.raises(ValueError, match="2 regimes measured for a part of 3"):
-        lp.section_correction(Stack(laws), parts, measured[:2])
+        wp.section_correction(Stack(laws), parts, measured[:2])
 
 
 def _truth(scale: float):
     """A stand-in for the rung whose members are ``scale`` x the closed form's as the forward
     model moves them, on whatever design it is handed: a known truth that moves with the design."""
 
-    def outside_layers(geometry, material, locked_sets, options=wp.PartOptions()):
+    def outside_layers(geometry, material, locked_sets, options):
         laws = layer_laws(geometry.layers, material, "spring")
         _, _, moving = lp.member_band_compliances(Stack(laws), lp.members(geometry, material, options.patch_mm))
         closed = sum(np.asarray(v, dtype=float) for v in moving.values())

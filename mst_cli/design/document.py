@@ -86,9 +86,7 @@ def design_document(
     seed = int(doc.design["seed"] if seed is None else seed)
     max_evaluations = int(doc.design["max_evaluations"] if max_evaluations is None else max_evaluations)
 
-    sol = solve(problem, seed=seed, max_evaluations=max_evaluations, progress=progress, local=local)
-    if doc.section_rung:
-        sol = _section_rounds(doc, problem, sol, seed, max_evaluations, progress, local)
+    sol = _solve_spec(doc, problem, seed, max_evaluations, progress, local)
     theta, t, h = (np.round(a, ROUND_DECIMALS) for a in problem.to_physical(sol.u))
     result = verify_design(
         doc,
@@ -109,8 +107,9 @@ def design_document(
     return result
 
 
-def _section_rounds(doc, problem: DesignProblem, sol, seed: int, max_evaluations: int, progress, local: str):
-    """model.load_path section: the design's closed form corrected by the whole-part rung until
+def _solve_spec(doc, problem: DesignProblem, seed: int, max_evaluations: int, progress, local: str):
+    """The solver's design of the spec; with model.load_path section, the design's closed form
+    corrected by the whole-part rung until
     the two agree (output space mapping). Each round measures the rung's correction per regime
     on the design as printed (:func:`~mst_cli.model.mechanics.whole_part.section_members`, 2
     solves a regime) and designs again with it held; it stops once the correction measured on the
@@ -120,6 +119,9 @@ def _section_rounds(doc, problem: DesignProblem, sol, seed: int, max_evaluations
     diagnosis says which). The forward model that verifies
     the design (:func:`verify_design`) measures the rung on the final design once more (the
     same section: its solves are memoised), so what the design states is the rung's there."""
+    sol = solve(problem, seed=seed, max_evaluations=max_evaluations, progress=progress, local=local)
+    if not doc.section_rung:
+        return sol
     held = None
     for round_ in range(1, SECTION_ROUNDS + 2):
         theta, t, h = (np.round(a, ROUND_DECIMALS) for a in problem.to_physical(sol.u))
@@ -128,9 +130,8 @@ def _section_rounds(doc, problem: DesignProblem, sol, seed: int, max_evaluations
         resp = simulate_as_printed(with_cells(doc, theta, t, h), "spring")
         extra = np.asarray(resp.members.regime_extra_mm_per_N, dtype=float)
         compliance = np.array([1.0 / r.k_effective_N_per_mm for r in resp.regimes])
-        if held is not None and len(held) == len(extra):
-            if np.max(np.abs(extra - held) / compliance) < SECTION_TOL_REL:
-                break
+        if held is not None and len(held) == len(extra) and np.max(np.abs(extra - held) / compliance) < SECTION_TOL_REL:
+            break
         if round_ > SECTION_ROUNDS:
             break
         problem.regime_extra_mm_per_N = held = extra

@@ -38,7 +38,6 @@ the same for both. Pure numpy, no I/O.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from typing import Any
 
@@ -137,7 +136,7 @@ class Members:
     cover_contact_mm_per_N: float = 0.0
     cover_travel_mm: float = math.inf
     # per regime of the part, what the whole-part rung adds to the closed form above (mm/N, may be
-    # negative; :func:`section_correction`, docs/design.md 4.7); (): the closed form alone
+    # negative; mechanics.whole_part.section_correction, docs/design.md 4.7); (): the closed form alone
     regime_extra_mm_per_N: tuple[float, ...] = ()
 
     @property
@@ -460,22 +459,6 @@ def member_band_compliances(stack, parts: Members) -> tuple[np.ndarray, np.ndarr
     return edges, own.T, moving
 
 
-def section_correction(stack, parts: Members, outside_mm_per_N: Sequence[float]) -> tuple[float, ...]:
-    """Per regime of the part (``stack``: its layers alone, ``parts``: the closed form), what the
-    whole-part rung's compliance outside the layers, ``outside_mm_per_N`` (one per regime: the
-    section as printed less the same section with its members rigid, the layers locked before
-    the regime closed), adds to the closed form's members as the forward model moves them there
-    (:func:`member_band_compliances`): the additive correction of :attr:`Members.regime_extra_mm_per_N`
-    (output space mapping: at the design it was measured on, the part's compliance in each
-    regime is the layers' own plus the rung's outside them)."""
-    _, _, moving = member_band_compliances(stack, replace(parts, regime_extra_mm_per_N=()))
-    closed = sum(np.asarray(v, dtype=float) for v in moving.values())
-    outside = np.asarray(outside_mm_per_N, dtype=float)
-    if outside.shape != closed.shape:
-        raise ValueError(f"{outside.size} regimes measured for a part of {closed.size}")
-    return tuple(float(v) for v in outside - closed)
-
-
 def small_load_layers_mm_per_N(stack, parts: Members) -> np.ndarray:
     """(n,) per regime of the part (``stack``: its layers alone, locking in the part's order), the
     layers' compliance as a linear model of the part gives it: the layers locked before the
@@ -484,14 +467,11 @@ def small_load_layers_mm_per_N(stack, parts: Members) -> np.ndarray:
     includes the open layers' softening before their lock)."""
     k = np.array([law.k_N_per_mm for law in stack.layers], dtype=float)
     k_locked = np.array([law.k_locked_N_per_mm for law in stack.layers], dtype=float)
-    units = capped_units(stack.layers, parts)
-    order = np.argsort([u.lock_force_N for u in units], kind="stable")  # as member_band_compliances sorts
-    out = np.empty(len(order))
-    for r in range(len(order)):
-        locked = np.zeros(len(order), dtype=bool)
-        locked[order[:r]] = True
-        out[r] = np.sum(np.where(locked, 1.0 / k_locked, 1.0 / k))
-    return out
+    order = np.argsort([u.lock_force_N for u in capped_units(stack.layers, parts)], kind="stable")  # the part's
+    position = np.empty(len(order), dtype=int)
+    position[order] = np.arange(len(order))
+    locked = position[None, :] < np.arange(len(order))[:, None]  # (regime, layer): locked before the regime
+    return np.where(locked, 1.0 / k_locked, 1.0 / k).sum(axis=1)
 
 
 def motion_shares(stack, parts: Members) -> list[dict]:

@@ -170,22 +170,14 @@ def simulate(
     ``patch_mm`` wide]) in series with the layers of rung ``mechanics`` (docs/design.md 4.6); the
     layers' own curve rides along (``*_layers*``), ``whole_part=False`` makes it the response.
     Forces run to (1 + overload) x the last lock, ``in_range`` False past it; ``field_model``
-    [default: from the chip offset and tilt]; ``noise_uT_rms`` sets the force resolution.
-    ``section``: the members' closed form corrected per regime by the whole-part rung
-    (:func:`~mst_cli.model.mechanics.whole_part.section_members`, model.load_path: section; 2
-    finite-element solves a regime).
-    """
+    [default: from the chip offset and tilt]; ``noise_uT_rms`` sets the force resolution;
+    ``section``: the members corrected by the whole-part rung (model.load_path: section, 4.7)."""
     model = fld.choose_field_model(geometry.chip_offset_mm, geometry.magnet_tilt_deg, field_model)
     laws = layer_laws(geometry.layers, material, mechanics)
-    if parts is None and whole_part and section:
-        from mst_cli.model.mechanics.whole_part import section_members  # deferred: scikit-fem's rung
-
-        parts = section_members(geometry, material, laws, patch_mm)[0]
-    parts = parts or (members(geometry, material, patch_mm) if whole_part else Members.rigid(patch_mm, len(laws) - 1))
+    parts = parts or _members_of(geometry, material, laws, patch_mm, whole_part, section)
     layer_stack, stack = Stack(laws), part_stack(laws, parts)
     edges = stack.regime_bounds_N
-    F = _force_grid(edges, points_per_regime, overload)
-    F_last = edges[-1]
+    F, F_last = _force_grid(edges, points_per_regime, overload), edges[-1]
     gap0, (d, gap, Bvec, Babs) = geometry.gap0_mm, _curve(stack, F, geometry, model)
     B0 = float(Babs[0])
     field_T = partial(field_magnitude_T, geometry=geometry, model=model)  # |B| (T) of gaps (mm)
@@ -220,6 +212,20 @@ def simulate(
         displacement_layers_mm=layers_only[0],
         dB_rel_layers=layers_only[1],
     )
+
+
+def _members_of(
+    geometry: SensorGeometry, material: Material, laws: tuple, patch_mm: float, whole_part: bool, section: bool
+):
+    """:func:`simulate`'s members: rigid (the layers alone), the closed form, or the closed form
+    corrected by the whole-part rung (``section``)."""
+    if not whole_part:
+        return Members.rigid(patch_mm, len(laws) - 1)
+    if section:
+        from mst_cli.model.mechanics.whole_part import section_members  # deferred: scikit-fem's rung
+
+        return section_members(geometry, material, laws, patch_mm)[0]
+    return members(geometry, material, patch_mm)
 
 
 def _curve(stack: Stack, F: np.ndarray, geometry: SensorGeometry, model: str) -> tuple:

@@ -149,9 +149,9 @@ class Stack:
         stopped = np.maximum(self.contact_mm_per_N * F - self.contact_travel_mm, 0.0) if self.contact_mm_per_N else 0.0
         d = self.members_mm_per_N * F - stopped
         if self.regime_extra_mm_per_N:
-            d = d + regime_extra_displacement_mm(F.ravel(), self.regime_bounds_N[1:], self.regime_extra_mm_per_N).reshape(
-                F.shape
-            )
+            d = d + regime_extra_displacement_mm(
+                F.ravel(), self.regime_bounds_N[1:], self.regime_extra_mm_per_N
+            ).reshape(F.shape)
         return d
 
     def members_compliance_mm_per_N(self, force_N: float) -> float:

@@ -20,12 +20,20 @@ the drop times dB_z/dz on the axis at the unloaded gap (:mod:`mst_cli.model.magn
 from __future__ import annotations
 
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING
 
 import numpy as np
 
-from mst_cli.model.load_path import FINGERTIP_PATCH_MM, Insert, capped_units, members, section_correction
+from mst_cli.model.load_path import (
+    FINGERTIP_PATCH_MM,
+    Insert,
+    Members,
+    capped_units,
+    member_band_compliances,
+    members,
+)
 from mst_cli.model.magnet_field import axial_dBz_dz_T_per_mm
 from mst_cli.model.mechanics.whole_part_mesh import TAGS, Region, mesh_section, rect, section_regions
 from mst_cli.model.stack import Stack
@@ -346,3 +354,19 @@ def section_members(geometry, material, laws: tuple, patch_mm: float = FINGERTIP
     rows = outside_layers(geometry, material, regime_locked(part), opts)
     extra = section_correction(Stack(laws), parts, [r["outside_mm_per_N"] for r in rows])
     return replace(parts, regime_extra_mm_per_N=extra), rows
+
+
+def section_correction(stack, parts: Members, outside_mm_per_N: Sequence[float]) -> tuple[float, ...]:
+    """Per regime of the part (``stack``: its layers alone, ``parts``: the closed form), what the
+    rung's compliance outside the layers, ``outside_mm_per_N`` (one per regime: the section as
+    printed less the same section with its members rigid, the layers locked before the regime
+    closed), adds to the closed form's members as the forward model moves them there
+    (:func:`~mst_cli.model.load_path.member_band_compliances`): ``Members.regime_extra_mm_per_N``,
+    an additive correction (output space mapping: at the design it was measured on, the part's
+    compliance in each regime is then the layers' own plus the rung's outside them)."""
+    _, _, moving = member_band_compliances(stack, replace(parts, regime_extra_mm_per_N=()))
+    closed = np.sum([np.asarray(v, dtype=float) for v in moving.values()], axis=0)
+    outside = np.asarray(outside_mm_per_N, dtype=float)
+    if outside.shape != closed.shape:
+        raise ValueError(f"{outside.size} regimes measured for a part of {closed.size}")
+    return tuple(float(v) for v in outside - closed)
