@@ -116,7 +116,7 @@ def _solve_spec(doc, problem: DesignProblem, seed: int, max_evaluations: int, pr
     new design moves the part's compliance in every regime by less than SECTION_TOL_REL from the
     one it was designed with, after SECTION_ROUNDS designs, or once a design with the correction
     held cannot match the targets (the members as measured leave them out of reach: the
-    diagnosis says which). The forward model that verifies
+    design returned is then the last one measured, the diagnosis its). The forward model that verifies
     the design (:func:`verify_design`) measures the rung on the final design once more (the
     same section: its solves are memoised), so what the design states is the rung's there."""
     sol = solve(problem, seed=seed, max_evaluations=max_evaluations, progress=progress, local=local)
@@ -135,9 +135,10 @@ def _solve_spec(doc, problem: DesignProblem, seed: int, max_evaluations: int, pr
         if round_ > SECTION_ROUNDS:
             break
         problem.regime_extra_mm_per_N = held = extra
-        sol = solve(problem, seed=seed, max_evaluations=max_evaluations, progress=progress, local=local)
-        if not sol.matched:  # the targets are out of reach with the members as measured: no round will help
+        corrected = solve(problem, seed=seed, max_evaluations=max_evaluations, progress=progress, local=local)
+        if not corrected.matched:  # out of reach with the members as measured on this design: say so of it
             break
+        sol = corrected
     return sol
 
 

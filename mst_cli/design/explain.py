@@ -230,15 +230,24 @@ def _members_dominate(problem: DesignProblem, u: ArrayLike) -> list[tuple[str, s
     if not len(over):
         return []
     i = int(over[-1])
+    if measured:  # the rung measures the members outside the layers together, not one by one
+        return [
+            (
+                "the members outside the layers dominate",
+                "the members outside the layers are too soft: as the whole-part rung measures them on the "
+                f"design, they alone give S >= {floor[i]:.3g} 1/N in regime {i + 1} "
+                f"({1e3 * (sum(parts.values())[i] + extra[i]):.3g} um/N), above its target {problem.S_target[i]:g} "
+                "1/N, which no layer can lower; stiffer members are needed: a stiff insert per plate, a cover "
+                "supported all round (docs/design.md 4.7)",
+            )
+        ]
     name = max(parts, key=lambda k: parts[k][i])
     verb = "are" if name == "plates" else "is"
     return [
         (
             f"the {name} dominate{'' if name == 'plates' else 's'}",
             f"the {name} {verb} too soft: the members outside the layers alone give "
-            + ("(as the whole-part rung measures them on the last design) " if measured else "")
-            + f"S >= {floor[i]:.3g} 1/N in regime {i + 1} (most the {name}{' in closed form' if measured else ''}, "
-            f"{parts[name][i]:.3g} mm/N), above its "
+            f"S >= {floor[i]:.3g} 1/N in regime {i + 1} (most the {name}, {parts[name][i]:.3g} mm/N), above its "
             f"target {problem.S_target[i]:g} 1/N, which no layer can lower; a stiffer cap (an insert), plates or "
             "a cover supported all round (docs/design.md 4.6)",
         )

@@ -19,6 +19,7 @@ from mst_cli.model.assembly import SensorGeometry
 from mst_cli.model.chip import quantise_lsb
 from mst_cli.model.general_load import small_load_lateral_N_per_mm
 from mst_cli.model.load_path import FINGERTIP_PATCH_MM, dominant_member, load_path_report
+from mst_cli.model.magnet_field import axial_dBz_dz_T_per_mm
 from mst_cli.model.mechanics import layer_laws
 from mst_cli.model.response import Regime, Response
 from mst_cli.model.stack import Stack
@@ -74,7 +75,12 @@ def load_path_section(
         from mst_cli.model.mechanics.whole_part import section_members  # deferred: scikit-fem's rung
 
         extra = section_members(geometry, doc.material, stack.layers, patch_mm)[0].regime_extra_mm_per_N
-    return load_path_report(geometry, doc.material, stack, patch_mm, extra)
+    report = load_path_report(geometry, doc.material, stack, patch_mm, extra)
+    m = geometry.magnet  # a linear model's field change: the drop times dB_z/dz on the axis at the unloaded gap
+    per_mm = 1e6 * abs(float(axial_dBz_dz_T_per_mm(geometry.gap0_mm, m.radius_mm, m.thickness_mm, m.remanence_T)))
+    for row in report["regimes"]:
+        row["field_change_small_load_uT_per_N"] = per_mm * row["small_load_compliance_mm_per_N"]
+    return report
 
 
 def load_path_line(
