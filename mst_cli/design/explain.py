@@ -223,8 +223,9 @@ def _members_dominate(problem: DesignProblem, u: ArrayLike) -> list[tuple[str, s
                 "(an insert) is needed (docs/design.md 4.6)",
             )
         ]
-    extra = problem.regime_extra_mm_per_N  # model.load_path section: the whole-part rung's correction
-    measured = extra is not None and len(extra) == n
+    held = problem.regime_extra_mm_per_N  # model.load_path section: the whole-part rung's correction
+    measured = held is not None and len(held) == n
+    extra = np.asarray(held, dtype=float) if measured else np.zeros(n)
     floor = per_mm * (sum(parts.values()) + (extra if measured else 0.0))  # S (1/N) of the members alone
     over = np.flatnonzero(floor > problem.S_target * (1 + tol))
     if not len(over):
