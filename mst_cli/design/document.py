@@ -41,7 +41,7 @@ from mst_cli.errors import InputError
 from mst_cli.sensor.as_printed import simulate_as_printed
 from mst_cli.sensor.document import Document
 
-# model.load_path section (:func:`_section_rounds`): at most this many designs corrected by the
+# model.load_path section (:func:`_solve_spec`): at most this many designs corrected by the
 # whole-part rung, until the correction moves no regime's compliance by more than this share
 SECTION_ROUNDS = 3
 SECTION_TOL_REL = 0.01

@@ -68,7 +68,9 @@ def load_path_section(
     doc: Document, geometry: SensorGeometry, resp: Response, patch_mm: float = FINGERTIP_PATCH_MM
 ) -> dict:
     """Where the magnet's motion goes under a centred press ``patch_mm`` wide, per regime: the
-    layers of this response's rung, and the cap, plates and cover in closed form (docs/design.md 4.6)."""
+    layers of this response's rung, and the cap, plates and cover in closed form (docs/design.md
+    4.6), corrected by the whole-part rung with model.load_path: section (4.7); and each regime's
+    field change per newton as a linear model of the part gives it."""
     stack = Stack(layer_laws(geometry.layers, doc.material, resp.mechanics))
     extra = resp.members.regime_extra_mm_per_N if resp.members.patch_mm == patch_mm else ()
     if doc.section_rung and not extra:  # another press than the response's: the rung for it
