@@ -24,6 +24,7 @@ from mst_cli.model.mechanics import layer_laws
 from mst_cli.model.mechanics import whole_part as wp
 from mst_cli.model.response import field_magnitude_T, regime_kernel, simulate
 from mst_cli.model.stack import Stack, regime_extra_displacement_mm
+from mst_cli.sensor.as_printed import simulate_as_printed
 
 ROOT = Path(__file__).resolve().parents[1]
 FORWARD = ROOT / "configs" / "mohammadi2021-forward.yaml"
@@ -142,3 +143,48 @@ def test_the_section_model_is_the_rung_within_the_layers_error(forward):
     for row, stated in zip(rows, lp.motion_shares(Stack(laws), parts)):
         assert stated["small_load_compliance_mm_per_N"] == pytest.approx(row["part_mm_per_N"], rel=0.03)
         assert 0.0 < row["rigid_mm_per_N"] < row["part_mm_per_N"]
+
+
+def test_the_trust_region_is_a_box_around_the_last_design():
+    """The rounds' trust region: every variable within the radius of the centre, in the solver's
+    unit coordinates, as named constraints that are <= 0 inside and > 0 outside; none without it."""
+    from mst_cli.design.problem import DesignProblem
+
+    problem = DesignProblem(mst.load(PAPER))
+    base = problem.n_constraints
+    centre = np.full(problem.dim, 0.5)
+    problem.trust_region = (centre, 0.1)
+    assert problem.n_constraints == base + problem.dim
+    names = problem.constraint_names()
+    assert len(names) == problem.n_constraints and names[-1] == "layer 3 h within the trust region"
+    inside = problem.evaluate(centre + 0.05).constraints[-problem.dim :]
+    assert np.all(inside <= 0.0)
+    outside = centre.copy()
+    outside[4] += 0.2  # layer 2's t
+    g = problem.evaluate(outside).constraints[-problem.dim :]
+    assert g[4] == pytest.approx(1.0) and np.all(np.delete(g, 4) <= 0.0)
+    problem.trust_region = None
+    assert problem.n_constraints == base
+
+
+def test_the_rounds_never_return_a_design_further_off_than_the_first(monkeypatch, tmp_path):
+    """Members in truth 3 x the closed form's: the paper's targets are out of reach. Whatever the
+    rounds try, the design returned is, as measured on the truth, no further from its targets
+    than the closed form's own design."""
+    spec = yaml.safe_load(PAPER.read_text())
+    spec["model"] = {"load_path": "section"}
+    path = tmp_path / "spec.yaml"
+    path.write_text(yaml.safe_dump(spec, sort_keys=False))
+    fake, _ = _truth(3.0)
+    monkeypatch.setattr(wp, "outside_layers", fake)
+    result = api.design(path)
+    closed_form = replace(api.design(PAPER).document, load_path="section")
+
+    def worst(resp) -> float:
+        S = [r.sensitivity_secant_per_N for r in resp.regimes]
+        errs = [abs(np.log(s / la["target_sensitivity_per_N"])) for s, la in zip(S, spec["layers"])]
+        errs += [abs(np.log(r / la["target_range_N"])) for r, la in zip(resp.lock_forces_N, spec["layers"])]
+        return max(errs)
+
+    assert result.status == "not met"
+    assert worst(result.response) <= worst(simulate_as_printed(closed_form, "spring")) + 1e-12

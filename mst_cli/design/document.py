@@ -45,6 +45,9 @@ from mst_cli.sensor.document import Document
 # whole-part rung, until the correction moves no regime's compliance by more than this share
 SECTION_ROUNDS = 3
 SECTION_TOL_REL = 0.01
+# ... each corrected design within this of the best measured, in the solver's unit coordinates
+# (theta linear, t and h logarithmic between their bounds): 0.15 is 10.5 deg, or t times or over 1.35 on 0.4-3 mm
+TRUST_RADIUS = 0.15
 
 
 def design_document(
@@ -110,42 +113,43 @@ def design_document(
 
 def _solve_spec(doc, problem: DesignProblem, seed: int, max_evaluations: int, progress, local: str):
     """The solver's design of the spec; with model.load_path section, the design's closed form
-    corrected by the whole-part rung until the two agree (output space mapping).
+    corrected by the whole-part rung until the two agree (output space mapping in a trust region).
 
-    Each round measures the rung's correction per regime on the design as printed
-    (:func:`~mst_cli.model.mechanics.whole_part.section_members`, 2 solves a regime) and designs
-    again with it held. It stops once the correction measured on the new design moves the part's
-    compliance in every regime by less than SECTION_TOL_REL from the one it was designed with,
-    after SECTION_ROUNDS designs, or once a design with the correction held cannot match the
-    targets (the members as measured leave them out of reach). The correction can move with the
-    walls faster than a round follows it, so of the designs measured the one whose measured
-    figures lie nearest the targets is returned, its correction held for the diagnosis. The
-    forward model that verifies it (:func:`verify_design`) measures the rung there once more
-    (the same section: its solves are memoised), so what the design states is the rung's."""
+    Each round measures the rung's correction per regime on a design as printed
+    (:func:`~mst_cli.model.mechanics.whole_part.section_members`, 2 solves a regime), then designs
+    again with it held, every variable within TRUST_RADIUS (in the solver's unit coordinates) of
+    the best design measured so far: the correction moves with the walls, and it holds only near
+    where it was measured. A design measured nearer the targets than the best becomes the best;
+    one further off halves the radius. The rounds stop once the correction measured on the new
+    design moves the part's compliance in every regime by less than SECTION_TOL_REL from the one
+    it was designed with, or after SECTION_ROUNDS corrected designs. The best design is returned,
+    its correction held for the diagnosis. The forward model that verifies it (:func:`verify_design`)
+    measures the rung there once more (the same section: its solves are memoised)."""
     sol = solve(problem, seed=seed, max_evaluations=max_evaluations, progress=progress, local=local)
     if not doc.section_rung:
         return sol
-    held = None
     best: tuple = (math.inf, sol, None)  # (worst log error as measured, design, its correction)
-    for round_ in range(1, SECTION_ROUNDS + 2):
+    held, radius = None, TRUST_RADIUS
+    for round_ in range(SECTION_ROUNDS + 1):
         theta, t, h = (np.round(a, ROUND_DECIMALS) for a in problem.to_physical(sol.u))
         if progress is not None:
-            progress(round_ - 1, SECTION_ROUNDS + 1, f"the whole-part rung on design {round_}", float("nan"))
+            progress(round_, SECTION_ROUNDS + 1, f"the whole-part rung on design {round_ + 1}", float("nan"))
         resp = simulate_as_printed(with_cells(doc, theta, t, h), "spring")
         extra = np.asarray(resp.members.regime_extra_mm_per_N, dtype=float)
         compliance = np.array([1.0 / r.k_effective_N_per_mm for r in resp.regimes])
         error = _worst_log_error(problem, resp)
         if error < best[0]:
             best = (error, sol, extra)
+        else:
+            radius *= 0.5
         if held is not None and len(held) == len(extra) and np.max(np.abs(extra - held) / compliance) < SECTION_TOL_REL:
             break
-        if round_ > SECTION_ROUNDS:
+        if round_ == SECTION_ROUNDS:
             break
-        problem.regime_extra_mm_per_N = held = extra
-        corrected = solve(problem, seed=seed, max_evaluations=max_evaluations, progress=progress, local=local)
-        if not corrected.matched:  # out of reach with the members as measured
-            break
-        sol = corrected
+        problem.regime_extra_mm_per_N = held = best[2]
+        problem.trust_region = (np.asarray(best[1].u, dtype=float), radius)
+        sol = solve(problem, seed=seed, max_evaluations=max_evaluations, progress=progress, local=local)
+        problem.trust_region = None
     _, sol, problem.regime_extra_mm_per_N = best
     return sol
 

@@ -207,7 +207,7 @@ class DesignProblem:
         # L0's fitted corrections hold for walls up to this t/L; stubbier walls are extrapolation
         # (the design loop otherwise drifts there: it is where k and R grow fastest)
         self.t_over_L_max = correction.fitted_t_over_L_max()
-        self.n_constraints = (
+        self._spec_constraints = (
             self.n * len(CELL_RULES)
             + self.n
             + (self.n - 1)
@@ -215,6 +215,13 @@ class DesignProblem:
             + (1 if self.max_height_mm is not None else 0)
             + (8 * self.n if self.max_print_deviation_rel is not None else 0)
         )
+        # model.load_path section's rounds: (centre u (3n,), radius) every variable stays within,
+        # |u - centre| <= radius (design.document's trust region); None: the spec's bounds alone
+        self.trust_region: tuple[np.ndarray, float] | None = None
+
+    @property
+    def n_constraints(self) -> int:
+        return self._spec_constraints + (self.dim if self.trust_region is not None else 0)
 
     # ----------------------------------------------------------------- variables
     @property
@@ -430,6 +437,9 @@ class DesignProblem:
             g.append(((height - self.max_height_mm) / pr.nozzle_mm)[..., None])
         if self.max_print_deviation_rel is not None:
             g.append(self.print_deviation_constraints(theta_deg, t_mm, h_mm, S, R, shifts))
+        if self.trust_region is not None:  # inside the box around the last design measured: <= 0
+            centre, radius = self.trust_region
+            g.append((np.abs(self.to_unit(theta_deg, t_mm, h_mm) - centre) - radius) / radius)
         constraints = np.concatenate(g, axis=-1)
 
         log_err = np.concatenate([np.log(np.maximum(S, TINY) / self.S_target), logR - np.log(self.R_target)], axis=-1)
@@ -554,6 +564,8 @@ class DesignProblem:
                 for side in ("<=", ">=")
                 for o in outs
             ]
+        if self.trust_region is not None:
+            names += [f"layer {i + 1} {v} within the trust region" for i in range(self.n) for v in ("theta", "t", "h")]
         return names
 
     def output_names(self) -> list[str]:
