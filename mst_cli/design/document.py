@@ -90,7 +90,7 @@ def design_document(
     seed = int(doc.design["seed"] if seed is None else seed)
     max_evaluations = int(doc.design["max_evaluations"] if max_evaluations is None else max_evaluations)
 
-    sol = _solve_spec(doc, problem, seed, max_evaluations, progress, local)
+    sol, rounds = _solve_spec(doc, problem, seed, max_evaluations, progress, local)
     theta, t, h = (np.round(a, ROUND_DECIMALS) for a in problem.to_physical(sol.u))
     result = verify_design(
         doc,
@@ -104,6 +104,7 @@ def design_document(
         mechanics=doc.mechanics,
         t_start=t_start,
     )
+    result.notes += rounds
     if name_height and result.status != "met" and problem.max_print_deviation_rel is not None:
         _name_lowest_height(doc, result, seed=seed, max_evaluations=max_evaluations, local=local)
     if solution is not None:
@@ -111,7 +112,7 @@ def design_document(
     return result
 
 
-def _solve_spec(doc, problem: DesignProblem, seed: int, max_evaluations: int, progress, local: str):
+def _solve_spec(doc, problem: DesignProblem, seed: int, max_evaluations: int, progress, local: str) -> tuple:
     """The solver's design of the spec; with model.load_path section, the design's closed form
     corrected by the whole-part rung until the two agree (output space mapping in a trust region).
 
@@ -124,12 +125,14 @@ def _solve_spec(doc, problem: DesignProblem, seed: int, max_evaluations: int, pr
     design moves the part's compliance in every regime by less than SECTION_TOL_REL from the one
     it was designed with, or after SECTION_ROUNDS corrected designs. The best design is returned,
     its correction held for the diagnosis. The forward model that verifies it (:func:`verify_design`)
-    measures the rung there once more (the same section: its solves are memoised)."""
+    measures the rung there once more (the same section: its solves are memoised). Returns
+    (the design, the terminal's notes: with section, one line of each design's worst error as
+    measured and which was kept)."""
     sol = solve(problem, seed=seed, max_evaluations=max_evaluations, progress=progress, local=local)
     if not doc.section_rung:
-        return sol
-    best: tuple = (math.inf, sol, None)  # (worst log error as measured, design, its correction)
-    held, radius = None, TRUST_RADIUS
+        return sol, []
+    best: tuple = (math.inf, sol, None, 0)  # (worst log error as measured, design, its correction, which)
+    held, radius, measured = None, TRUST_RADIUS, []
     for round_ in range(SECTION_ROUNDS + 1):
         theta, t, h = (np.round(a, ROUND_DECIMALS) for a in problem.to_physical(sol.u))
         if progress is not None:
@@ -138,8 +141,9 @@ def _solve_spec(doc, problem: DesignProblem, seed: int, max_evaluations: int, pr
         extra = np.asarray(resp.members.regime_extra_mm_per_N, dtype=float)
         compliance = np.array([1.0 / r.k_effective_N_per_mm for r in resp.regimes])
         error = _worst_log_error(problem, resp)
+        measured.append(f"{100 * math.expm1(error):.3g} %")
         if error < best[0]:
-            best = (error, sol, extra)
+            best = (error, sol, extra, round_ + 1)
         else:
             radius *= 0.5
         if held is not None and len(held) == len(extra) and np.max(np.abs(extra - held) / compliance) < SECTION_TOL_REL:
@@ -150,8 +154,12 @@ def _solve_spec(doc, problem: DesignProblem, seed: int, max_evaluations: int, pr
         problem.trust_region = (np.asarray(best[1].u, dtype=float), radius)
         sol = solve(problem, seed=seed, max_evaluations=max_evaluations, progress=progress, local=local)
         problem.trust_region = None
-    _, sol, problem.regime_extra_mm_per_N = best
-    return sol
+    _, sol, problem.regime_extra_mm_per_N, kept = best
+    note = (
+        "the whole-part rung (model.load_path: section): the designs' worst error as measured, "
+        f"{', '.join(measured)} (the first the closed form's); kept design {kept} (docs/design.md 4.7)"
+    )
+    return sol, [note]
 
 
 def _worst_log_error(problem: DesignProblem, resp) -> float:

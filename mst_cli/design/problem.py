@@ -200,9 +200,9 @@ class DesignProblem:
         self.whole_part = doc.whole_part  # model.load_path: part (else the layers alone)
         printed_tpu = Material(doc.material.name, self.E_MPa, self.nu)
         self.members = member_scene(printed_probe, printed_tpu)
-        # model.load_path section: the whole-part rung's correction per regime (mm/N), measured on
-        # the last design and held while the next is found (design.document's rounds); None: none
+        # section rounds (design.document): the rung's correction held (mm/N a regime); the box |u - centre| <= radius
         self.regime_extra_mm_per_N: np.ndarray | None = None
+        self.trust_region: tuple[np.ndarray, float] | None = None
         self.B_limit_T = min(1.0 - self.saturation_margin_rel, 1.0 / CHIP_HEADROOM) * mlx.SATURATION_T
         # L0's fitted corrections hold for walls up to this t/L; stubbier walls are extrapolation
         # (the design loop otherwise drifts there: it is where k and R grow fastest)
@@ -215,9 +215,6 @@ class DesignProblem:
             + (1 if self.max_height_mm is not None else 0)
             + (8 * self.n if self.max_print_deviation_rel is not None else 0)
         )
-        # model.load_path section's rounds: (centre u (3n,), radius) every variable stays within,
-        # |u - centre| <= radius (design.document's trust region); None: the spec's bounds alone
-        self.trust_region: tuple[np.ndarray, float] | None = None
 
     @property
     def n_constraints(self) -> int:
@@ -437,9 +434,8 @@ class DesignProblem:
             g.append(((height - self.max_height_mm) / pr.nozzle_mm)[..., None])
         if self.max_print_deviation_rel is not None:
             g.append(self.print_deviation_constraints(theta_deg, t_mm, h_mm, S, R, shifts))
-        if self.trust_region is not None:  # inside the box around the last design measured: <= 0
-            centre, radius = self.trust_region
-            g.append((np.abs(self.to_unit(theta_deg, t_mm, h_mm) - centre) - radius) / radius)
+        if self.trust_region is not None:  # <= 0 inside the box around the best design measured
+            g.append(np.abs(self.to_unit(theta_deg, t_mm, h_mm) - self.trust_region[0]) / self.trust_region[1] - 1.0)
         constraints = np.concatenate(g, axis=-1)
 
         log_err = np.concatenate([np.log(np.maximum(S, TINY) / self.S_target), logR - np.log(self.R_target)], axis=-1)
