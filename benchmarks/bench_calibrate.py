@@ -17,23 +17,18 @@ import time
 from pathlib import Path
 
 import numpy as np
-
-from mst_cli.model.response import simulate
-from mst_cli.sensor.document import load_document
+from design_curve import fields_along_curve, mst_exe
+from user_env import as_installed
 
 ROOT = Path(__file__).resolve().parents[1]
 FORWARD = ROOT / "configs" / "mohammadi2021-forward.yaml"
 
 
 def load_test(path: Path, n: int) -> None:
-    """``n`` samples over the design's range, its own field plus 2 uT of noise (seed 2)."""
-    doc = load_document(FORWARD)
-    resp = simulate(doc.geometry(), doc.material, noise_uT_rms=doc.noise_uT_rms)
-    rng = np.random.default_rng(2)
-    F = np.sort(rng.uniform(0, resp.max_force_N, n))
-    B = np.stack([np.interp(F, resp.force_N, resp.B_T[:, i]) for i in range(3)], -1) * 1e6
-    B += rng.normal(0, 2.0, B.shape)
-    rows = "".join(f"{a:.4f},{x:.3f},{y:.3f},{z:.3f}\n" for a, (x, y, z) in zip(F, B))
+    """``n`` samples over the design's range, its own field plus 2 uT of noise (seed 2), by force."""
+    F, B = fields_along_curve(FORWARD, n, 1.0, 2.0, seed=2)
+    order = np.argsort(F)
+    rows = "".join(f"{a:.4f},{x:.3f},{y:.3f},{z:.3f}\n" for a, (x, y, z) in zip(F[order], B[order]))
     path.write_text("force_N,Bx_uT,By_uT,Bz_uT\n" + rows)
 
 
@@ -42,12 +37,13 @@ def main() -> None:
     ap.add_argument("--samples", type=int, default=40_000)
     ap.add_argument("--repeats", type=int, default=3)
     args = ap.parse_args()
+    as_installed()
     with tempfile.TemporaryDirectory() as tmp:
         data = Path(tmp) / "big.csv"
         load_test(data, args.samples)
         times = []
         for i in range(args.repeats):
-            cmd = [str(Path(sys.executable).parent / "mst"), "calibrate", str(FORWARD), str(data)]
+            cmd = [mst_exe(), "calibrate", str(FORWARD), str(data)]
             t0 = time.perf_counter()
             done = subprocess.run([*cmd, "--out", f"{tmp}/o{i}", "--no-plot"], capture_output=True, text=True)
             times.append(time.perf_counter() - t0)

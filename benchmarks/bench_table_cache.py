@@ -16,7 +16,7 @@ import tempfile
 import time
 from pathlib import Path
 
-import numpy as np
+from design_curve import fields_along_curve, mst_exe
 from user_env import as_installed
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -25,21 +25,8 @@ DESIGN = ROOT / "configs" / "mohammadi2021-forward.yaml"
 
 def readings(path: Path, n: int) -> None:
     """``n`` readings along the design's curve (the field of centred presses, 1 uT of noise)."""
-    from mst_cli.model.response import simulate
-    from mst_cli.sensor.document import load_document
-
-    doc = load_document(DESIGN)
-    resp = simulate(doc.geometry(), doc.material, noise_uT_rms=doc.noise_uT_rms)
-    rng = np.random.default_rng(1)
-    F = rng.uniform(0.0, 0.9 * resp.max_force_N, n)
-    B = np.stack([np.interp(F, resp.force_N, resp.B_T[:, i]) for i in range(3)], -1) * 1e6
-    B += rng.normal(0.0, 1.0, B.shape)
+    _, B = fields_along_curve(DESIGN, n, 0.9, 1.0, seed=1)
     path.write_text("Bx_uT,By_uT,Bz_uT\n" + "".join(f"{x:.3f},{y:.3f},{z:.3f}\n" for x, y, z in B))
-
-
-def mst_exe() -> str:
-    exe = Path(sys.executable).with_name("mst")
-    return str(exe) if exe.exists() else "mst"
 
 
 def main() -> None:
