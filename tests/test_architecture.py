@@ -217,6 +217,7 @@ HEAVY_LIBRARIES = {
     "concurrent": "as multiprocessing",
     "threadpoolctl": "BLAS introspection: only where a dear rung solves",
     "importlib.metadata": "10 ms (the email package): only a file that names the version",
+    "numba": "0.15 s, and its kernels' compiled code: the two-chip reader only",
     "serial": "pyserial, optional: mst read --serial",
     "fcntl": "POSIX only",
     "termios": "POSIX only",

@@ -6,6 +6,9 @@ guess is from the exact states and how they are made exact).
 The cell is mirror symmetric in x and y: d is even in both offsets, phi_y odd in ox, phi_x odd in
 oy, so a quadrant of nodes holds it all.
 
+Read in a compiled loop (numba), a load at a time: the fit reads every layer's table at every load
+it tries, and numpy's array calls cost several times the arithmetic on these shapes (issue 45).
+
 Pure: no I/O.
 """
 
@@ -15,8 +18,8 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
-from mst_cli.estimation.trilinear import trilinear
 from mst_cli.model.general_load import LoadedStack
 from mst_cli.model.mechanics.tilt import LayerTiltLaw
 from mst_cli.model.stack_pose import stack_path
@@ -43,28 +46,59 @@ class LayerTable:
     ) -> tuple[np.ndarray, np.ndarray | None]:
         """((m, 3) the state as :meth:`at`, (m, 3, 3) its exact gradient in (force, ox, oy)
         inside each cell (the forward side on a face; None without ``gradient``))."""
-        (i, u, hu), (j, v, hv), (k, w, hw) = [
-            _cell(nodes, val)
-            for nodes, val in ((self.force_N, force_N), (self.x_mm, np.abs(ox_mm)), (self.y_mm, np.abs(oy_mm)))
-        ]
-        _, nx, ny, _ = self.state.shape
-        corners = np.array([(a * nx + b) * ny + c for a in (0, 1) for b in (0, 1) for c in (0, 1)])
-        C = self.state.reshape(-1, 3)[((i * nx + j) * ny + k)[:, None] + corners].reshape(-1, 2, 2, 2, 3)
-        out, grad = trilinear(C, np.column_stack([u, v, w]))
-        sx, sy = np.where(ox_mm < 0.0, -1.0, 1.0), np.where(oy_mm < 0.0, -1.0, 1.0)
-        sign = np.column_stack([np.ones_like(sx), sx, sy])  # the state's and the offsets' mirror signs
-        out *= sign
-        if not gradient:
-            return out, None
-        return out, grad / np.column_stack([hu, hv, hw])[:, None, :] * sign[:, :, None] * sign[:, None, :]
+        F = np.ascontiguousarray(force_N, dtype=float).ravel()
+        ox = np.ascontiguousarray(ox_mm, dtype=float).ravel()
+        oy = np.ascontiguousarray(oy_mm, dtype=float).ravel()
+        out, grad = np.empty((len(F), 3)), np.empty((len(F), 3, 3))
+        _read_rows(self.force_N, self.x_mm, self.y_mm, self.state, F, ox, oy, out, grad)
+        return out, (grad if gradient else None)
 
 
-def _cell(nodes: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(the index of the cell holding each v, the share of the way across it, its width), end
-    cells taking what lies past the nodes."""
-    i = np.clip(np.searchsorted(nodes, v, side="right") - 1, 0, len(nodes) - 2)
+@njit(cache=True, nogil=True)
+def _cell(nodes, v):  # pragma: no cover - compiled
+    """(the index of the cell holding v, the share of the way across it, its width), end cells
+    taking what lies past the nodes (linear extrapolation)."""
+    lo, hi = 0, len(nodes)
+    while lo < hi:  # searchsorted, side right
+        mid = (lo + hi) // 2
+        if nodes[mid] <= v:
+            lo = mid + 1
+        else:
+            hi = mid
+    i = min(max(lo - 1, 0), len(nodes) - 2)
     width = nodes[i + 1] - nodes[i]
     return i, (v - nodes[i]) / width, width
+
+
+@njit(cache=True, nogil=True)
+def _read_rows(force_N, x_mm, y_mm, state, F, ox, oy, out, grad):  # pragma: no cover - compiled
+    """out (m, 3), grad (m, 3, 3): the trilinear state and its gradient in (F, ox, oy) of every
+    load, the tilts' signs from the offsets' (phi_y odd in ox, phi_x odd in oy, d even in both)."""
+    sign = np.empty(3)
+    for r in range(len(F)):
+        i, u, hu = _cell(force_N, F[r])
+        j, v, hv = _cell(x_mm, abs(ox[r]))
+        k, w, hw = _cell(y_mm, abs(oy[r]))
+        sign[0], sign[1], sign[2] = 1.0, (-1.0 if ox[r] < 0.0 else 1.0), (-1.0 if oy[r] < 0.0 else 1.0)
+        for c in range(3):
+            c000, c001 = state[i, j, k, c], state[i, j, k + 1, c]
+            c010, c011 = state[i, j + 1, k, c], state[i, j + 1, k + 1, c]
+            c100, c101 = state[i + 1, j, k, c], state[i + 1, j, k + 1, c]
+            c110, c111 = state[i + 1, j + 1, k, c], state[i + 1, j + 1, k + 1, c]
+            # along w, then v, then u; each derivative the difference of the faces' bilinear values
+            c00, c01 = c000 + (c001 - c000) * w, c010 + (c011 - c010) * w
+            c10, c11 = c100 + (c101 - c100) * w, c110 + (c111 - c110) * w
+            c0, c1 = c00 + (c01 - c00) * v, c10 + (c11 - c10) * v
+            value = c0 + (c1 - c0) * u
+            d_u = c1 - c0
+            d_v = (c01 - c00) + ((c11 - c10) - (c01 - c00)) * u
+            lo_w = (c000 + (c010 - c000) * v) + ((c100 + (c110 - c100) * v) - (c000 + (c010 - c000) * v)) * u
+            hi_w = (c001 + (c011 - c001) * v) + ((c101 + (c111 - c101) * v) - (c001 + (c011 - c001) * v)) * u
+            d_w = hi_w - lo_w
+            out[r, c] = value * sign[c]
+            grad[r, c, 0] = d_u / hu * sign[c]
+            grad[r, c, 1] = d_v / hv * sign[c] * sign[1]
+            grad[r, c, 2] = d_w / hw * sign[c] * sign[2]
 
 
 def _nodes(half_mm: float, step_mm: float) -> np.ndarray:

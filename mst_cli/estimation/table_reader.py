@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -25,10 +26,12 @@ from mst_cli.estimation.load_readings import LoadReadings, from_estimates
 from mst_cli.estimation.offset_reading import DEFAULT_MAX_SIGMA_MM, OffsetEstimator, OffsetReadings
 from mst_cli.estimation.shear_reading import CHI2_FLAG, ShearReader
 from mst_cli.estimation.table_store import build_beside, table_beside, table_edges_N
-from mst_cli.estimation.two_chip_table import TwoChipReader
 from mst_cli.model.general_load import loaded_stack
 from mst_cli.model.load_bound import crb_sigma
 from mst_cli.sensor.document import Document
+
+if TYPE_CHECKING:  # the two-chip reader's compiled kernels load numba: only a two-chip read imports it
+    from mst_cli.estimation.two_chip_table import TwoChipReader
 
 
 @dataclass
@@ -144,6 +147,8 @@ class TwoChipLoadReader:
 def two_chip_reader(doc: Document, imap: InverseMap, lever: float, mechanics: str, polish: bool) -> TwoChipLoadReader:
     """The two-chip reader of the model ``doc`` (its chips, the inverse map's field resolution as
     the noise, ``lever``: its calibration's factor): its tables are built now, a few seconds."""
+    from mst_cli.estimation.two_chip_table import TwoChipReader
+
     stack = loaded_stack(doc.geometry(), doc.material, mechanics, lever, doc.whole_part)
     return TwoChipLoadReader(TwoChipReader(stack, doc.chips_mm, imap.field_resolution_T), polish)
 
