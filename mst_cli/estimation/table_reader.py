@@ -147,6 +147,7 @@ class TwoChipLoadReader:
 def two_chip_reader(doc: Document, imap: InverseMap, lever: float, mechanics: str, polish: bool) -> TwoChipLoadReader:
     """The two-chip reader of the model ``doc`` (its chips, the inverse map's field resolution as
     the noise, ``lever``: its calibration's factor): its tables are built now, a few seconds."""
+    # deferred: the two-chip reader's compiled kernels load numba, which no one-chip read needs
     from mst_cli.estimation.two_chip_table import TwoChipReader
 
     stack = loaded_stack(doc.geometry(), doc.material, mechanics, lever, doc.whole_part)
