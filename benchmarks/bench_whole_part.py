@@ -39,7 +39,7 @@ import numpy as np
 
 import mst_cli as mst
 from mst_cli.model import load_path as lp
-from mst_cli.model.general_load import load_path, loaded_stack
+from mst_cli.model.general_load import linear_response, load_path, loaded_stack
 from mst_cli.model.mechanics import layer_laws, uncached_layer_law
 from mst_cli.model.mechanics import whole_part as wp
 from mst_cli.model.mechanics.continuum import linear_stiffness_N_per_mm
@@ -198,6 +198,48 @@ def mst_off_centre(g, m, whole_part: bool, force_N: float = 0.5, ratio: float = 
     return 1e3 * (t_off - t0) / (3.0 * force_N), (s_tan[0] - s0[0]) / tangential_N, 1e3 * (t_tan - t0) / tangential_N
 
 
+def general_rows(path: Path, spacing: float | None) -> list[str]:
+    """Per regime (the layers locked before it closed): the rung's turn per off-centre moment,
+    slide and turn per tangential newton (wp.press_general) with its members rigid, against mst's
+    general-load model of the layers alone (L0), and what the members add: in the rung, as printed
+    less rigid; in mst, the part's closed-form members less the layers alone. mst is read where the
+    regime starts, where its layers are nearest the rung's linear ones: at 2 % of the first lock,
+    else 2 % past the lock that opens the regime. The rung's sign (a turn that moves the top
+    toward -x is positive)."""
+    doc, _ = mst.designed(path)
+    g, m = doc.geometry(), doc.material
+    part = Stack(tuple(lp.capped_units(layer_laws(g.layers, m, "spring"), lp.members(g, m))))
+    stacks = {kind: loaded_stack(g, m, "spring", 1.0, kind == "part") for kind in ("part", "layers")}
+    locks = np.sort([t.lock_force_N for t in stacks["part"].tilt])
+    rows = []
+    for r, locked in enumerate(wp.regime_locked(part)):
+        F = 0.02 * locks[0] if r == 0 else 1.02 * locks[r - 1]
+        printed, rigid = (
+            wp.press_general(g, m, wp.PartOptions(spacing_mm=spacing, locked=locked, member_factor=factor))
+            for factor in (1.0, wp.RIGID_FACTOR)
+        )
+        rung = [
+            np.array([1e3 * x.turn_per_moment_rad_per_Nmm, x.pull.side_mm_per_N, 1e3 * x.pull.turn_rad_per_N])
+            for x in (printed, rigid)
+        ]
+        mst_part, mst_layers = (np.array(mst_increments(stacks[k], F)) for k in ("part", "layers"))
+        cells = []
+        for i in range(3):
+            layers = f"{rung[1][i]:.3f} / {mst_layers[i]:.3f} ({mst_layers[i] / rung[1][i] - 1:+.0%})"
+            members = f"{rung[0][i] - rung[1][i]:+.3f} / {mst_part[i] - mst_layers[i]:+.3f}"
+            total = f"{rung[0][i]:.3f} / {mst_part[i]:.3f} ({mst_part[i] / rung[0][i] - 1:+.0%})"
+            cells.append(f"{layers} | {members} | {total}")
+        rows.append(f"| {doc.name} | {r + 1} | {F:.2f} | " + " | ".join(cells) + " |")
+    return rows
+
+
+def mst_increments(stack, force_N: float) -> tuple[float, float, float]:
+    """general_load.linear_response in the rung's units and sign (mrad per N mm, mm/N, mrad/N; a
+    turn that moves the top toward -x is positive)."""
+    per_moment, slide, turn = linear_response(stack, force_N)
+    return -1e3 * per_moment, slide, -1e3 * turn
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--configs", nargs="*", default=sorted(str(p) for p in (ROOT / "configs").glob("*.yaml")))
@@ -212,7 +254,26 @@ def main() -> None:
     ap.add_argument(
         "--attribute", action="store_true", help="only each member's drop in the rung vs its closed form, per regime"
     )
+    ap.add_argument(
+        "--general",
+        action="store_true",
+        help="only the off-centre and tangential loads per regime: the rung against mst's general-load model",
+    )
     args = ap.parse_args()
+    if args.general:
+        print("per regime, mst read at F (N): turn per moment mrad/(N mm), slide per tangential N mm/N, turn per")
+        print("tangential N mrad/N; for each: the layers (rung, members rigid / mst, layers alone), what the members")
+        print("add (rung / mst's closed form) and the part (rung as printed / mst)")
+        heads = [
+            f"{f}: {w}"
+            for f in ("turn/moment", "slide/tangential N", "turn/tangential N")
+            for w in ("layers", "members", "part")
+        ]
+        print("| design | regime | F | " + " | ".join(heads) + " |")
+        print("|---" * (3 + len(heads)) + "|")
+        for path in args.configs:
+            print("\n".join(general_rows(Path(path), args.spacing_mm)), flush=True)
+        return
     if args.attribute:
         print("the magnet's drop per newton, um/N (centred 6 mm strip, locked layers closed): L0's layers, the rung")
         print("with every member rigid, each member's extra drop in the rung (the others rigid) / its closed form")

@@ -2,6 +2,7 @@
 rigid-member limit is L2's layers, its cap alone is the beam closed form of load_path.py, and
 its mesh converges."""
 
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -11,6 +12,7 @@ from click.testing import CliRunner
 import mst_cli as mst
 from mst_cli.cli.app import main
 from mst_cli.model import load_path as lp
+from mst_cli.model.general_load import linear_response, loaded_stack
 from mst_cli.model.material import Material
 from mst_cli.model.mechanics import whole_part as wp
 from mst_cli.model.mechanics import whole_part_mesh as wm
@@ -146,3 +148,35 @@ def test_the_housing_alone_matches_its_closed_form(forward, layer_1, cover_mm):
     everything = wp.press(g, m, wp.PartOptions(**rigid)).drop_mm_per_N
     housing = wp.press(g, m, wp.PartOptions(scaled=("cap", "plate", "insert"), **rigid)).drop_mm_per_N - everything
     assert lp.members(g, m).cover_mm_per_N == pytest.approx(housing, rel=0.10)
+
+
+@pytest.mark.slow
+def test_the_three_loads_share_one_solve(forward):
+    """press_general's press, pull and off-centre press, one factorised stiffness, against three
+    separate solves (press()): the same magnet motion (its mesh has the edges of both strips; the
+    forward design's lattice has them already), and the off-centre press's lever its offset (the
+    strip's edges are nodes)."""
+    g, m = forward
+    opts = wp.PartOptions(**COARSE)
+    three = wp.press_general(g, m, opts, offset_mm=3.0)
+    alone = [wp.press(g, m, replace(opts, **kw)) for kw in ({}, {"tangential": True}, {"offset_mm": 3.0})]
+    for got, want in zip((three.press, three.pull, three.off_centre), alone):
+        for key in ("drop_mm_per_N", "side_mm_per_N", "turn_rad_per_N"):
+            assert getattr(got, key) == pytest.approx(getattr(want, key), rel=2e-3, abs=1e-9), key
+    assert three.arm_mm == pytest.approx(3.0, abs=1e-9)
+
+
+@pytest.mark.slow
+def test_rigid_members_reproduce_the_layers_general_load(forward):
+    """With its members rigid, the rung turns and slides the magnet under a moment and a
+    tangential force as mst's general-load model of the layers alone (the tilt rung and L0's
+    lateral law, linearised at small load), plane-strain FE against closed form: within 5 %
+    (measured 2-3 %, benchmarks/bench_whole_part.py --general)."""
+    g, m = forward
+    rigid = wp.press_general(g, m, wp.PartOptions(member_factor=wp.RIGID_FACTOR))
+    stack = loaded_stack(g, m, "spring", 1.0, whole_part=False)
+    per_moment, slide, turn = linear_response(stack, 0.02 * min(t.lock_force_N for t in stack.tilt))
+    # the rung's turn: counter-clockwise seen from -y, minus mst's right-handed turn about +y
+    assert -rigid.turn_per_moment_rad_per_Nmm == pytest.approx(per_moment, rel=0.05)
+    assert rigid.pull.side_mm_per_N == pytest.approx(slide, rel=0.05)
+    assert -rigid.pull.turn_rad_per_N == pytest.approx(turn, rel=0.05)

@@ -207,6 +207,33 @@ def load_ratios(theta: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return F, np.where(F > 0.0, theta[:, 1] / safe, 0.0), np.where(F > 0.0, theta[:, 2] / safe, 0.0)
 
 
+def linear_response(
+    stack: LoadedStack, force_N: float, offset_mm: float = 0.05, ratio: float = 1e-3
+) -> tuple[float, float, float]:
+    """The general load linearised about the centred press ``force_N`` in the x-z plane, as a
+    linear model of the part (the whole-part rung) is: (the magnet's turn about +y per N mm of an
+    off-centre press's moment, its slide along +x per newton of tangential force along +x, its
+    turn about +y per newton of that force); turns right-handed, in rad. A small ``offset_mm`` and
+    shear ``ratio`` at that normal force: the tilts' elastic equilibrium, plus the layers' tangent
+    lateral compliance there (the slides' path integral's slope; the model's slides follow the
+    load's ray, so its own secant is not a linear model's figure)."""
+    F = np.array([float(force_N)])
+
+    def pose(offset: tuple[float, float], shear: tuple[float, float]) -> tuple[float, float]:
+        d, tilt, _ = load_path(stack, F, offset, shear)
+        shift, rotvec = magnet_pose(stack.geometry, d, tilt)
+        return float(shift[0, 0]), float(rotvec[0, 1])
+
+    x0, t0 = pose((0.0, 0.0), (0.0, 0.0))
+    _, t_off = pose((offset_mm, 0.0), (0.0, 0.0))
+    x_t, t_t = pose((0.0, 0.0), (ratio, 0.0))
+    h = 1e-3 * float(force_N)
+    unit = (1.0, 0.0)  # slides_mm at ratio 1: the path integral U(F) itself
+    lateral = float((stack.slides_mm(F + h, unit) - stack.slides_mm(F, unit))[0, :, 0].sum()) / h
+    tangential_N = ratio * float(force_N)
+    return (t_off - t0) / (float(force_N) * offset_mm), (x_t - x0) / tangential_N + lateral, (t_t - t0) / tangential_N
+
+
 def layer_states(
     stack: LoadedStack, theta: np.ndarray, start: np.ndarray | None = None, unsolved_nan: bool = False
 ) -> np.ndarray:

@@ -122,17 +122,20 @@ def default_spacing_mm(geometry) -> float:
     return min(DEFAULT_SPACING_MM, 0.5 * min(c.t_mm for c in geometry.layers))
 
 
-def build_mesh(geometry, options: PartOptions) -> tuple[MeshTri, np.ndarray]:
-    """The section's MeshTri and each triangle's tag index: the lattice mesh, then
-    ``options.levels`` rounds of refinement within t / 2^i of each layer's corners (the cavity's
-    tips and the walls' roots, where the strain is singular, as in L2's own mesh)."""
+def build_mesh(geometry, options: PartOptions, offsets_mm: Sequence[float] | None = None) -> tuple[MeshTri, np.ndarray]:
+    """The section's MeshTri and each triangle's tag index: the lattice mesh with nodes at the
+    edges of the strip pressed at each of ``offsets_mm`` (``options.offset_mm`` alone unless
+    given), then ``options.levels`` rounds of refinement within t / 2^i of each layer's corners
+    (the cavity's tips and the walls' roots, where the strain is singular, as in L2's own mesh)."""
     from skfem import MeshTri as _MeshTri  # deferred: scikit-fem loads when this rung is asked for
 
     if options.magnet not in MAGNET_SEATS:
         raise ValueError(f"magnet must be one of {MAGNET_SEATS}, not {options.magnet!r}")
     regions = section_regions(geometry, options.locked, options.magnet == "bonded", part_insert(geometry, options))
     spacing = options.spacing_mm if options.spacing_mm is not None else default_spacing_mm(geometry)
-    p, t, _ = mesh_section(regions, spacing, press_points(geometry, options.patch_mm, options.offset_mm))
+    offsets = (options.offset_mm,) if offsets_mm is None else offsets_mm
+    edges = np.concatenate([press_points(geometry, options.patch_mm, x) for x in offsets])
+    p, t, _ = mesh_section(regions, spacing, edges)
     mesh = _MeshTri(p, t)
     corners = np.concatenate([np.array(e) for r in regions if r.tag == "layer" for e in r.edges()])
     radius = 0.5 * min(c.t_mm for c in geometry.layers)
@@ -219,6 +222,71 @@ def press(geometry, material, options: PartOptions = PartOptions()) -> MagnetMot
     xz, uv = _magnet_points(geometry, basis, tag, u, options.magnet == "bonded")
     Ux, Uz, th = rigid_fit(xz, uv)
     return MagnetMotion(-Uz, Ux, th, basis.N, time.perf_counter() - t0, {"elements": mesh.t.shape[1]})
+
+
+OFF_CENTRE_MM = 3.0  # where press_general's off-centre strip is centred (a new user's offset)
+
+
+@dataclass(frozen=True)
+class GeneralMotion:
+    """The magnet's rigid motion per newton under the three loads of the plane: the centred
+    press (down), a tangential pull along +x on the same strip, and the strip pressed
+    ``arm_mm`` off centre (toward +x); ``arm_mm`` the assembled press's own lever (the strip as
+    the mesh resolves it)."""
+
+    press: MagnetMotion
+    pull: MagnetMotion
+    off_centre: MagnetMotion
+    arm_mm: float
+
+    @property
+    def turn_per_moment_rad_per_Nmm(self) -> float:
+        """The off-centre press's turn per N mm of its moment (the centred press turns nothing)."""
+        return (self.off_centre.turn_rad_per_N - self.press.turn_rad_per_N) / self.arm_mm
+
+
+def press_general(
+    geometry, material, options: PartOptions = PartOptions(), offset_mm: float = OFF_CENTRE_MM
+) -> GeneralMotion:
+    """The section pressed, pulled and pressed ``offset_mm`` off centre, on the centred press's
+    mesh with one factorised stiffness for the three (``options.offset_mm`` and ``tangential``
+    unused). Each load is scaled by its own assembled resultant (x is in the P2 space, so the
+    load vector's sums are the traction's integrals): per newton exactly, the off-centre press's
+    lever its own, whatever the mesh makes of the strip's edges."""
+    # deferred: scikit-fem and scipy load when this rung is asked for
+    from scipy.sparse.linalg import splu
+    from skfem import Basis, ElementTriP2, ElementVector, condense
+
+    t0 = time.perf_counter()
+    opts = replace(options, offset_mm=0.0, tangential=False)
+    mesh, tag = build_mesh(geometry, opts, (0.0, offset_mm))
+    element = ElementVector(ElementTriP2())
+    basis = Basis(mesh, element)
+    E, nu = _moduli(material, opts, part_insert(geometry, opts))
+    K = _stiffness(basis, tag, E, nu)
+    loads = (
+        _load(geometry, mesh, element, opts.patch_mm),
+        _load(geometry, mesh, element, opts.patch_mm, tangential=True),
+        _load(geometry, mesh, element, opts.patch_mm, offset_mm),
+    )
+    is_z = np.zeros(basis.N, dtype=bool)
+    is_z[basis.nodal_dofs[1]] = True
+    is_z[basis.facet_dofs[1]] = True
+    x_of = basis.doflocs[0]
+    D = geometry.depth_mm  # the traction is per mm of depth
+    units = (-D * loads[0][is_z].sum(), D * loads[1][~is_z].sum(), -D * loads[2][is_z].sum())
+    arm = float(-D * (loads[2][is_z] * x_of[is_z]).sum() / units[2])
+    held = basis.get_dofs(lambda x: np.abs(x[1]) < 1e-7).all()
+    A, _, _, free = condense(K, loads[0], D=held)
+    lu = splu(A.tocsc())
+    motions = []
+    for f, unit in zip(loads, units):
+        u = np.zeros(basis.N)
+        u[free] = lu.solve(np.asarray(f[free], dtype=float) / unit)
+        xz, uv = _magnet_points(geometry, basis, tag, u, opts.magnet == "bonded")
+        Ux, Uz, th = rigid_fit(xz, uv)
+        motions.append(MagnetMotion(-Uz, Ux, th, basis.N, time.perf_counter() - t0, {"elements": mesh.t.shape[1]}))
+    return GeneralMotion(motions[0], motions[1], motions[2], arm)
 
 
 def _magnet_points(geometry, basis, tag: np.ndarray, u: np.ndarray, magnet: bool):
