@@ -26,7 +26,10 @@ Also the cost (dofs, seconds per solve), a convergence line and the cap alone ag
 and corrected by the rung (``model.load_path: section``), as a secant and as a linear model's
 small-load figure (docs/design.md 4.7);
 ``--attribute`` only each member's extra drop in the rung (the other members rigid) against its
-closed form, per regime: where the closed form misses.
+closed form, per regime: where the closed form misses; ``--general`` only the turn per off-centre
+moment and the slide and turn per tangential newton per regime (the rung's three loads on one
+factorised stiffness, wp.press_general) against mst's general load linearised there
+(general_load.linear_response), the layers and the members apart.
 """
 
 from __future__ import annotations
