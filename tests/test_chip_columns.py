@@ -114,6 +114,7 @@ def test_mst_read_estimates_all_five_from_two_chips(tmp_path):
     csv_path.write_text("Bx_uT,By_uT,Bz_uT,Bx2_uT,By2_uT,Bz2_uT\n" + "\n".join(rows) + "\n")
     res = run(["read", model, csv_path, "--estimate", "shear", "--out", tmp_path / "o"])
     assert res.exit_code == 0, res.output
+    assert "building the two-chip reader's layer tables" in res.stderr  # said before the seconds it takes
     import csv
 
     got = list(csv.DictReader((tmp_path / "o" / "forces.csv").open()))
