@@ -11,6 +11,7 @@ from click.testing import CliRunner
 from mst_cli.calibration.loadtest import parse_readings, unknown_columns
 from mst_cli.cli.app import main
 from mst_cli.errors import InputError
+from mst_cli.io.cache import cache_dir
 
 ROOT = Path(__file__).resolve().parents[1]
 FORWARD = ROOT / "configs" / "mohammadi2021-forward.yaml"
@@ -115,6 +116,16 @@ def test_mst_read_estimates_all_five_from_two_chips(tmp_path):
     res = run(["read", model, csv_path, "--estimate", "shear", "--out", tmp_path / "o"])
     assert res.exit_code == 0, res.output
     assert "building the two-chip reader's layer tables" in res.stderr  # said before the seconds it takes
+    # the tables are kept: a second read (another --out) builds nothing and writes the same forces
+    again = run(["read", model, csv_path, "--estimate", "shear", "--out", tmp_path / "o2"])
+    assert again.exit_code == 0 and "layer tables" not in again.stderr, again.stderr
+    assert (tmp_path / "o2" / "forces.csv").read_text() == (tmp_path / "o" / "forces.csv").read_text()
+    # a kept file that is not such a table is passed over and built anew
+    (kept,) = cache_dir().glob("two-chip-*.npz")
+    kept.write_bytes(b"not a table")
+    third = run(["read", model, csv_path, "--estimate", "shear", "--out", tmp_path / "o3"])
+    assert third.exit_code == 0 and "building the two-chip reader's layer tables" in third.stderr
+    assert (tmp_path / "o3" / "forces.csv").read_text() == (tmp_path / "o" / "forces.csv").read_text()
     import csv
 
     got = list(csv.DictReader((tmp_path / "o" / "forces.csv").open()))

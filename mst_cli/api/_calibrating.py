@@ -378,12 +378,7 @@ def _estimator(reader, estimate: str, mechanics: str | None, model_file, max_sig
     lever = reader.record.lever_factor() if reader.record is not None else 1.0
     offsets: OffsetTableReader | ShearTableReader
     if estimate == "shear" and len(doc.chips_mm) > 1:
-        if warn is not None:  # said before the wait: the tables are not kept (seconds each run)
-            warn(
-                "building the two-chip reader's layer tables (about 10 s on one core; the first two-chip read "
-                "after an install also compiles its kernels, about 5 s)"
-            )
-        return two_chip_reader(doc, reader.inverse_map, lever, mech, bool(polish)), None
+        return two_chip_reader(doc, reader.inverse_map, lever, mech, bool(polish), warn), None
     if estimate == "shear":
         offsets, note = shear_table_reader(doc, reader.inverse_map, lever, Path(model_file), mech, bool(polish))
     else:

@@ -14,6 +14,7 @@ Pure: no I/O.
 
 from __future__ import annotations
 
+import hashlib
 import math
 from dataclasses import dataclass
 
@@ -99,6 +100,24 @@ def _read_rows(force_N, x_mm, y_mm, state, F, ox, oy, out, grad):  # pragma: no 
             grad[r, c, 0] = d_u / hu * sign[c]
             grad[r, c, 1] = d_v / hv * sign[c] * sign[1]
             grad[r, c, 2] = d_w / hw * sign[c] * sign[2]
+
+
+TABLES_FORMAT = 1  # bump when the tables' build or file form changes: every kept file turns stale
+
+
+def tables_key(stack: LoadedStack, force_max_N: float, ratio_max: float, n_force: int, step_mm: float) -> str:
+    """The hash of everything :func:`layer_tables` reads: each layer's tilt law (its walls' knots
+    and slopes, lever, depth and pads), the stack's levers, the face, and the nodes asked for. A
+    kept file with another key is stale."""
+    h = hashlib.sha256(f"layer-tables {TABLES_FORMAT} {n_force} {step_mm!r} {ratio_max!r}".encode())
+    numbers = [force_max_N, stack.geometry.width_mm, stack.geometry.depth_mm, *np.ravel(stack.lever_mm)]
+    for law in stack.tilt:
+        w = law.walls
+        numbers += [w.k_tension_N_per_mm, w.k_after_N_per_mm, law.lever_mm, law.depth_mm]
+        numbers += [law.pad_half_width_mm, law.pad_gap_mm, law.pad_stiffness_N_per_mm, len(w.d_knots_mm)]
+        numbers += [*w.d_knots_mm, *w.F_knots_N]
+    h.update(np.asarray(numbers, dtype=float).tobytes())
+    return h.hexdigest()
 
 
 def _nodes(half_mm: float, step_mm: float) -> np.ndarray:

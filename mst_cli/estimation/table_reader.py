@@ -9,6 +9,7 @@ else built once and kept).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -25,7 +26,7 @@ from mst_cli.estimation.inverse_table import (
 from mst_cli.estimation.load_readings import LoadReadings, from_estimates
 from mst_cli.estimation.offset_reading import DEFAULT_MAX_SIGMA_MM, OffsetEstimator, OffsetReadings
 from mst_cli.estimation.shear_reading import CHI2_FLAG, ShearReader
-from mst_cli.estimation.table_store import build_beside, table_beside, table_edges_N
+from mst_cli.estimation.table_store import build_beside, table_beside, table_edges_N, two_chip_layer_tables
 from mst_cli.model.general_load import loaded_stack
 from mst_cli.model.load_bound import crb_sigma
 from mst_cli.sensor.document import Document
@@ -144,14 +145,24 @@ class TwoChipLoadReader:
         return from_estimates(est.theta, est.sigma, est.flag, np.asarray(force_axial_N, dtype=float), "none")
 
 
-def two_chip_reader(doc: Document, imap: InverseMap, lever: float, mechanics: str, polish: bool) -> TwoChipLoadReader:
+def two_chip_reader(
+    doc: Document,
+    imap: InverseMap,
+    lever: float,
+    mechanics: str,
+    polish: bool,
+    say: Callable[[str], None] | None = None,
+) -> TwoChipLoadReader:
     """The two-chip reader of the model ``doc`` (its chips, the inverse map's field resolution as
-    the noise, ``lever``: its calibration's factor): its tables are built now, a few seconds."""
+    the noise, ``lever``: its calibration's factor): its layer tables from the cache, else built now
+    (``say`` told first: seconds) and kept (:func:`~mst_cli.estimation.table_store.two_chip_layer_tables`)."""
     # deferred: the two-chip reader's compiled kernels load numba, which no one-chip read needs
-    from mst_cli.estimation.two_chip_table import TwoChipReader
+    from mst_cli.estimation.two_chip_table import RATIO_MAX, TwoChipModel, TwoChipReader
 
     stack = loaded_stack(doc.geometry(), doc.material, mechanics, lever, doc.whole_part)
-    return TwoChipLoadReader(TwoChipReader(stack, doc.chips_mm, imap.field_resolution_T), polish)
+    chips = [(float(c[0]), float(c[1])) for c in doc.chips_mm]
+    model = TwoChipModel(stack, chips, two_chip_layer_tables(stack, say), RATIO_MAX)
+    return TwoChipLoadReader(TwoChipReader(stack, doc.chips_mm, imap.field_resolution_T, model=model), polish)
 
 
 def offset_table_reader(

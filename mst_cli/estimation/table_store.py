@@ -11,7 +11,10 @@ file side.
 from __future__ import annotations
 
 import time
+import zipfile
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any, BinaryIO
 
 import numpy as np
 
@@ -33,6 +36,7 @@ from mst_cli.estimation.inverse_table import (
 from mst_cli.io.cache import cached_path, keep, touch
 from mst_cli.io.files import read_input_text
 from mst_cli.io.yaml_io import MAX_INPUT_BYTES
+from mst_cli.model.general_load import LoadedStack
 from mst_cli.model.stack_pose import tilt_laws
 from mst_cli.sensor.as_printed import CALIBRATION_JSON
 from mst_cli.sensor.document import Document
@@ -131,3 +135,56 @@ def table_beside(
         f"and wrote it with the results (mst calibrate --{kind}-table writes it beside the model)"
     )
     return table, note
+
+
+def two_chip_layer_tables(stack: LoadedStack, say: Callable[[str], None] | None = None) -> list:
+    """The two-chip reader's layer tables of ``stack`` at its default nodes
+    (:func:`~mst_cli.estimation.layer_tables.layer_tables`): the ones an earlier call kept in the
+    cache, found by the hash of everything they are built from, else built now (``say`` is told
+    first: seconds) and kept there for the next call."""
+    # deferred: the layer tables' compiled read loads numba, which no one-chip read needs
+    from mst_cli.estimation.layer_tables import LayerTable, layer_tables, tables_key
+    from mst_cli.estimation.two_chip_table import N_FORCE, RATIO_MAX, STEP_MM, table_top_N
+
+    top = table_top_N(stack)
+    key = tables_key(stack, top, RATIO_MAX, N_FORCE, STEP_MM)
+    kept = cached_path(f"two-chip-{key}.npz")
+    if kept is not None:
+        found = _read_layer_tables(kept, key, len(stack.tilt), LayerTable)
+        if found is not None:
+            touch(kept)
+            return found
+    if say is not None:
+        say(
+            "building the two-chip reader's layer tables (about 10 s on one core, once per model: kept in the "
+            "cache for the next call; the first two-chip read after an install also compiles its kernels, about 5 s)"
+        )
+    tables = layer_tables(stack, top, RATIO_MAX, N_FORCE, STEP_MM)
+    _, not_kept = keep(f"two-chip-{key}.npz", lambda fh: _write_layer_tables(tables, key, fh))
+    if not_kept is not None and say is not None:
+        say(f"could not keep the two-chip reader's layer tables for the next call: {not_kept}")
+    return tables
+
+
+def _write_layer_tables(tables: list, key: str, fh: BinaryIO) -> None:
+    arrays: dict[str, Any] = {"key": np.array(key)}
+    for j, t in enumerate(tables):
+        arrays.update({f"force_N_{j}": t.force_N, f"x_mm_{j}": t.x_mm, f"y_mm_{j}": t.y_mm, f"state_{j}": t.state})
+    np.savez(fh, **arrays)
+
+
+def _read_layer_tables(path: Path, key: str, layers: int, table_type) -> list | None:
+    """The layer tables kept in ``path`` for ``key`` (None: missing, stale, or not such a file)."""
+    try:
+        with np.load(path, allow_pickle=False) as f:
+            if str(f["key"]) != key:
+                return None
+            out = []
+            for j in range(layers):
+                F, x, y, state = (np.asarray(f[f"{n}_{j}"], dtype=float) for n in ("force_N", "x_mm", "y_mm", "state"))
+                if state.shape != (len(F), len(x), len(y), 3) or not np.all(np.isfinite(state)):
+                    return None
+                out.append(table_type(F, x, y, np.ascontiguousarray(state)))
+            return out
+    except (OSError, KeyError, ValueError, EOFError, zipfile.BadZipFile):  # not a kept table: built anew
+        return None

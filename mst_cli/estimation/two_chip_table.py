@@ -78,6 +78,11 @@ MERGE_SIGMA = 1.0  # a start's fit this close to a better one's (in its step's s
 FLAGS = ("ok", "ambiguous", "no_fit")
 
 
+def table_top_N(stack: LoadedStack) -> float:
+    """The tables' top force: FORCE_TOP x the stack's last lock."""
+    return FORCE_TOP * max(t.lock_force_N for t in stack.tilt)
+
+
 @dataclass
 class TwoChipModel:
     """The general-load model of one stack at its chips, its tilts tabulated: fields of many
@@ -99,7 +104,7 @@ class TwoChipModel:
         step_mm: float = STEP_MM,
     ) -> TwoChipModel:
         """The tables up to ``force_max_N`` (FORCE_TOP x the last lock unless given)."""
-        top = FORCE_TOP * max(t.lock_force_N for t in stack.tilt) if force_max_N is None else force_max_N
+        top = table_top_N(stack) if force_max_N is None else force_max_N
         tables = layer_tables(stack, top, ratio_max, n_force, step_mm)
         return cls(stack, [(float(c[0]), float(c[1])) for c in chips_mm], tables, ratio_max)
 
