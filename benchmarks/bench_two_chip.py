@@ -24,7 +24,9 @@ at (0, 0) and (10, 6) mm (studies/shear_roundtrip.py's default layout), one core
   of the last lock, shear up to 0.3, the middle 60 % of the face), the truth from field_T: the
   median errors, and per unknown the median |error| / sigma_CRB / 0.6745 (1 for an efficient
   Gaussian estimate) and the mean-square efficiency sum(sigma_CRB^2) / sum(error^2), the bound
-  from the exact model's Jacobian at the truth; the flags.
+  from the exact model's Jacobian at the truth; the flags;
+* the compiled kernels' cost to a new process (numba's import, the first calls) with an empty
+  numba cache (they compile) and with the cache that run kept (they load).
 """
 
 from __future__ import annotations
@@ -32,6 +34,10 @@ from __future__ import annotations
 import argparse
 import contextlib
 import os
+import shutil
+import subprocess
+import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -181,6 +187,42 @@ def accuracy(reader, stack, rng, n: int, top_N: float, half_mm) -> None:
         )
 
 
+KERNELS_FIRST_CALL = """
+import time
+import numpy as np
+t0 = time.perf_counter()
+import numba
+tn = time.perf_counter()
+from mst_cli.estimation.layer_tables import LayerTable
+from mst_cli.model.mechanics.tilt import LayerTiltLaw, PiecewiseForce
+from mst_cli.model.mechanics.tilt_batch import newton_many, residual_many
+t1 = time.perf_counter()
+law = LayerTiltLaw(PiecewiseForce(np.array([0.0, 1.0]), np.array([0.0, 2.0]), 2.0, 50.0), 5.0, 20.0, 2.0, 1.0, 30.0)
+newton_many(law, np.ones(1), np.zeros((1, 2)), np.zeros((1, 3)), 3)
+residual_many(law, np.zeros((1, 3)), np.zeros((1, 3)))
+nodes = np.array([0.0, 1.0])
+LayerTable(nodes, nodes, nodes, np.zeros((2, 2, 2, 3))).read(np.ones(1), np.ones(1), np.ones(1))
+print(f"{tn - t0:.3f} {t1 - tn:.3f} {time.perf_counter() - t1:.3f}")
+"""
+
+
+def kernel_times() -> None:
+    """The compiled kernels' cost to a new process: importing numba and the kernels' modules, and
+    their first calls, with an empty numba cache (they compile) and then with that cache (they load)."""
+    cache = tempfile.mkdtemp(prefix="mst-numba-")
+    env = {**os.environ, "NUMBA_CACHE_DIR": cache}
+    rows = []
+    for label in ("empty cache: compiled", "cache kept: loaded"):
+        out = subprocess.run([sys.executable, "-c", KERNELS_FIRST_CALL], env=env, capture_output=True, text=True)
+        numba_s, modules_s, first_s = (float(v) for v in out.stdout.split())
+        rows.append(f"| {label} | {numba_s:.2f} | {modules_s:.2f} | {first_s:.2f} |")
+    shutil.rmtree(cache, ignore_errors=True)
+    print("\nThe compiled kernels in a new process (s):")
+    print("| numba cache | import numba | import the kernels' modules | first calls |")
+    print("|---|---|---|---|")
+    print("\n".join(rows))
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--readings", type=int, default=2000)
@@ -212,6 +254,7 @@ def main() -> None:
     if args.batches:
         batch_costs(reader, rng, [int(b) for b in args.batches.split(",")], args.repeats, top, half)
     accuracy(reader, stack, rng, args.presses, top, half)
+    kernel_times()
 
 
 if __name__ == "__main__":

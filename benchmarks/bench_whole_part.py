@@ -42,12 +42,11 @@ import numpy as np
 
 import mst_cli as mst
 from mst_cli.model import load_path as lp
-from mst_cli.model.general_load import linear_response, load_path, loaded_stack
+from mst_cli.model.general_load import linear_response, loaded_stack
 from mst_cli.model.mechanics import layer_laws, uncached_layer_law
 from mst_cli.model.mechanics import whole_part as wp
 from mst_cli.model.mechanics.continuum import linear_stiffness_N_per_mm
 from mst_cli.model.stack import Stack
-from mst_cli.model.stack_pose import magnet_pose
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -158,9 +157,10 @@ def convergence(spacing: float | None) -> str:
 
 
 def off_centre(spacing: float | None) -> list[str]:
-    """The forward design under a press 3 mm off centre and a tangential pull: the magnet's turn
-    per moment, slide and turn per tangential newton, as printed, with rigid members, with one
-    member class as printed (the others rigid), and what mst's general-load model gives."""
+    """The forward design, regime 1: the magnet's turn per off-centre moment, slide and turn per
+    tangential newton (wp.press_general), as printed, with rigid members, with one member class as
+    printed (the others rigid), and what mst's general-load model gives linearised at small load
+    (the part, the layers alone)."""
     doc = mst.load(ROOT / "configs" / "mohammadi2021-forward.yaml")
     g, m = doc.geometry(), doc.material
     rows = ["| members | turn per moment, mrad/(N mm) | slide per tangential N, mm/N | turn per tangential N, mrad/N |"]
@@ -171,34 +171,16 @@ def off_centre(spacing: float | None) -> list[str]:
         for tag in wp.MEMBER_TAGS
     ]
     for label, factor, scaled in cases:
-        opts = {"spacing_mm": spacing, "member_factor": factor, "scaled": scaled}
-        off = wp.press(g, m, wp.PartOptions(**opts, offset_mm=3.0))
-        tan = wp.press(g, m, wp.PartOptions(**opts, tangential=True))
+        x = wp.press_general(g, m, wp.PartOptions(spacing_mm=spacing, member_factor=factor, scaled=scaled))
         rows.append(
-            f"| {label} | {1e3 * off.turn_rad_per_N / 3.0:.3f} | {tan.side_mm_per_N:.3f} | "
-            f"{1e3 * tan.turn_rad_per_N:.3f} |"
+            f"| {label} | {1e3 * x.turn_per_moment_rad_per_Nmm:.3f} | {x.pull.side_mm_per_N:.3f} | "
+            f"{1e3 * x.pull.turn_rad_per_N:.3f} |"
         )
     for label, whole_part in (("mst, the part (general load)", True), ("mst, layers alone", False)):
-        turn_off, slide_tan, turn_tan = mst_off_centre(g, m, whole_part)
+        stack = loaded_stack(g, m, "spring", 1.0, whole_part)
+        turn_off, slide_tan, turn_tan = mst_increments(stack, 0.02 * min(t.lock_force_N for t in stack.tilt))
         rows.append(f"| {label} | {turn_off:.3f} | {slide_tan:.3f} | {turn_tan:.3f} |")
     return rows
-
-
-def mst_off_centre(g, m, whole_part: bool, force_N: float = 0.5, ratio: float = 0.2) -> tuple[float, float, float]:
-    """What mst's general-load model (model.general_load, L0) gives for the same loads at a small
-    normal force: the magnet's turn per moment (a press 3 mm off centre), its slide and turn per
-    tangential newton (Fx = ``ratio`` Fz), in the rung's convention (a turn that moves the top
-    toward -x is positive: minus the right-handed turn about y)."""
-    stack = loaded_stack(g, m, "spring", 1.0, whole_part)
-
-    def pose(offset_mm, shear_ratio):
-        d, tilt, slide = load_path(stack, np.array([force_N]), offset_mm, shear_ratio)
-        shift, rotvec = magnet_pose(g, d, tilt, slide)
-        return shift[0], -rotvec[0, 1]
-
-    (s0, t0), (_, t_off), (s_tan, t_tan) = pose((0, 0), (0, 0)), pose((3.0, 0), (0, 0)), pose((0, 0), (ratio, 0))
-    tangential_N = ratio * force_N
-    return 1e3 * (t_off - t0) / (3.0 * force_N), (s_tan[0] - s0[0]) / tangential_N, 1e3 * (t_tan - t0) / tangential_N
 
 
 def general_rows(path: Path, spacing: float | None) -> list[str]:

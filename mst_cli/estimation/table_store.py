@@ -157,7 +157,7 @@ def two_chip_layer_tables(stack: LoadedStack, say: Callable[[str], None] | None 
     if say is not None:
         say(
             "building the two-chip reader's layer tables (about 10 s on one core, once per model: kept in the "
-            "cache for the next call; the first two-chip read after an install also compiles its kernels, about 5 s)"
+            "cache for the next call; the first two-chip read after an install also compiles its kernels, about 6 s)"
         )
     tables = layer_tables(stack, top, RATIO_MAX, N_FORCE, STEP_MM)
     _, not_kept = keep(f"two-chip-{key}.npz", lambda fh: _write_layer_tables(tables, key, fh))

@@ -205,7 +205,7 @@ class TwoChipModel:
         """(m, 3 k, 5) dB/dtheta of the tables' model (:meth:`fields_of` not ``exact``, the
         states the tables'), exact: the tables' gradient in their cells chained (:meth:`chain_T`).
         ``at``, ``states``: the :data:`Jacobian` signature's, unused (read afresh with the gradient)."""
-        return self.chain_T(theta, *self._table_state_gradient(theta))
+        return self.table_fields_and_jacobian_T(theta)[1]
 
     def table_fields_and_jacobian_T(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """((m, 3 k) the tables' model's fields, (m, 3 k, 5) their Jacobian) in one pass: the

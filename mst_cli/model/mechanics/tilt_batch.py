@@ -241,7 +241,7 @@ def _newton_rows(knots, F_knots, slopes, sc, F, off, u, steps, alphas, tol):  # 
         _residual(knots, F_knots, slopes, sc, d, py, px, t0, t1, t2, r, K, work, f_pad, J_pad)
         size = max(abs(r[0]) / norm[0], abs(r[1]) / norm[1], abs(r[2]) / norm[2])
         for _ in range(steps):
-            if not size > tol or not abs(_det3(K)) > 1e-300:
+            if not size > tol or not abs(_det3(K)) > _DET_MIN:
                 break
             for q in range(3):
                 minus_r[q] = -r[q]

@@ -208,20 +208,33 @@ def rigid_fit(xz: np.ndarray, u: np.ndarray) -> tuple[float, float, float]:
 def press(geometry, material, options: PartOptions = PartOptions()) -> MagnetMotion:
     """The magnet's rigid motion per newton under the centred strip (module docstring)."""
     # deferred: scikit-fem loads when this rung is asked for
-    from skfem import Basis, ElementTriP2, ElementVector, condense, solve
+    from skfem import condense, solve
 
     t0 = time.perf_counter()
-    mesh, tag = build_mesh(geometry, options)
+    mesh, tag, element, basis, K, held = _system(geometry, material, options)
+    f = _load(geometry, mesh, element, options.patch_mm, options.offset_mm, options.tangential)
+    return _motion(geometry, basis, tag, solve(*condense(K, f, D=held)), options, t0)
+
+
+def _system(geometry, material, options: PartOptions, offsets_mm: Sequence[float] | None = None):
+    """(mesh, tags, element, basis, stiffness, held dofs) of the section as ``options`` builds it,
+    its mesh with nodes at the edges of the strips at ``offsets_mm`` (:func:`build_mesh`)."""
+    # deferred: scikit-fem loads when this rung is asked for
+    from skfem import Basis, ElementTriP2, ElementVector
+
+    mesh, tag = build_mesh(geometry, options, offsets_mm)
     element = ElementVector(ElementTriP2())
     basis = Basis(mesh, element)
     E, nu = _moduli(material, options, part_insert(geometry, options))
-    K = _stiffness(basis, tag, E, nu)
-    f = _load(geometry, mesh, element, options.patch_mm, options.offset_mm, options.tangential)
-    held = basis.get_dofs(lambda x: np.abs(x[1]) < 1e-7).all()
-    u = solve(*condense(K, f, D=held))
+    held = basis.get_dofs(lambda x: np.abs(x[1]) < 1e-7).all()  # the base's bottom face
+    return mesh, tag, element, basis, _stiffness(basis, tag, E, nu), held
+
+
+def _motion(geometry, basis, tag: np.ndarray, u: np.ndarray, options: PartOptions, t0: float) -> MagnetMotion:
+    """The magnet's rigid motion in the displacement ``u`` (the least-squares fit of its nodes')."""
     xz, uv = _magnet_points(geometry, basis, tag, u, options.magnet == "bonded")
     Ux, Uz, th = rigid_fit(xz, uv)
-    return MagnetMotion(-Uz, Ux, th, basis.N, time.perf_counter() - t0, {"elements": mesh.t.shape[1]})
+    return MagnetMotion(-Uz, Ux, th, basis.N, time.perf_counter() - t0, {"elements": basis.mesh.t.shape[1]})
 
 
 OFF_CENTRE_MM = 3.0  # where press_general's off-centre strip is centred (a new user's offset)
@@ -241,7 +254,8 @@ class GeneralMotion:
 
     @property
     def turn_per_moment_rad_per_Nmm(self) -> float:
-        """The off-centre press's turn per N mm of its moment (the centred press turns nothing)."""
+        """The off-centre press's turn per N mm of its moment, less the centred press's own turn
+        (the section is not symmetric: the slot opens on one side)."""
         return (self.off_centre.turn_rad_per_N - self.press.turn_rad_per_N) / self.arm_mm
 
 
@@ -255,15 +269,11 @@ def press_general(
     lever its own, whatever the mesh makes of the strip's edges."""
     # deferred: scikit-fem and scipy load when this rung is asked for
     from scipy.sparse.linalg import splu
-    from skfem import Basis, ElementTriP2, ElementVector, condense
+    from skfem import condense
 
     t0 = time.perf_counter()
     opts = replace(options, offset_mm=0.0, tangential=False)
-    mesh, tag = build_mesh(geometry, opts, (0.0, offset_mm))
-    element = ElementVector(ElementTriP2())
-    basis = Basis(mesh, element)
-    E, nu = _moduli(material, opts, part_insert(geometry, opts))
-    K = _stiffness(basis, tag, E, nu)
+    mesh, tag, element, basis, K, held = _system(geometry, material, opts, (0.0, offset_mm))
     loads = (
         _load(geometry, mesh, element, opts.patch_mm),
         _load(geometry, mesh, element, opts.patch_mm, tangential=True),
@@ -276,16 +286,13 @@ def press_general(
     D = geometry.depth_mm  # the traction is per mm of depth
     units = (-D * loads[0][is_z].sum(), D * loads[1][~is_z].sum(), -D * loads[2][is_z].sum())
     arm = float(-D * (loads[2][is_z] * x_of[is_z]).sum() / units[2])
-    held = basis.get_dofs(lambda x: np.abs(x[1]) < 1e-7).all()
     A, _, _, free = condense(K, loads[0], D=held)
     lu = splu(A.tocsc())
     motions = []
     for f, unit in zip(loads, units):
         u = np.zeros(basis.N)
         u[free] = lu.solve(np.asarray(f[free], dtype=float) / unit)
-        xz, uv = _magnet_points(geometry, basis, tag, u, opts.magnet == "bonded")
-        Ux, Uz, th = rigid_fit(xz, uv)
-        motions.append(MagnetMotion(-Uz, Ux, th, basis.N, time.perf_counter() - t0, {"elements": mesh.t.shape[1]}))
+        motions.append(_motion(geometry, basis, tag, u, opts, t0))
     return GeneralMotion(motions[0], motions[1], motions[2], arm)
 
 
