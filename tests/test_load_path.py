@@ -3,6 +3,7 @@
 reported per regime in report.json and bounded by `mst check --load-path-max`."""
 
 import json
+import re
 from dataclasses import replace
 from pathlib import Path
 
@@ -13,6 +14,7 @@ from click.testing import CliRunner
 import mst_cli as mst
 from mst_cli.cli.app import main
 from mst_cli.model import load_path as lp
+from mst_cli.model.cover_air import air_keeping_cover_off_mm
 from mst_cli.model.material import Material
 from mst_cli.model.mechanics import layer_laws
 from mst_cli.model.response import part_stack
@@ -214,6 +216,30 @@ def test_report_states_each_members_share_per_regime(tmp_path):
     assert path["cover_lands_N"] == pytest.approx(parts.cover_travel_mm / parts.cover_contact_mm_per_N, rel=1e-12)
     assert path["cover_lands_N"] < path["regimes"][-1]["force_N"][1]
     assert f"the cover lands on the board's parts at {path['cover_lands_N']:.3g} N, inside the range" in res.output
+
+
+def test_the_air_the_terminal_advises_keeps_the_cover_off_the_board(tmp_path):
+    """The landing is the air over the bending's compliance, and the air is part of the slot
+    walls' height (taller walls turn more): the advised air is the fixed point that puts the
+    landing at 1.1 x the range's end, more than the air scaled by the landing alone would say.
+    With it the warning goes and no lock moves."""
+    res = run(["simulate", FORWARD, "--out", tmp_path / "a", "--no-plot"])
+    advised = re.search(r"housing.chip_clearance_mm >= ([0-9.]+) mm keeps it off", res.output)
+    assert advised, res.output
+    path = json.loads((tmp_path / "a" / "report.json").read_text())["load_path"]
+    end = path["regimes"][-1]["force_N"][1]
+    doc = mst.load(FORWARD)
+    air = air_keeping_cover_off_mm(doc.geometry(), doc.material, end)
+    assert float(advised.group(1)) == pytest.approx(air, abs=0.005)  # as printed, 2 decimals
+    assert air > 0.3 * 1.1 * end / path["cover_lands_N"]  # the default 0.3 mm scaled: the walls' growth left out
+    spec = tmp_path / "air.yaml"
+    spec.write_text(FORWARD.read_text() + f"housing:\n  chip_clearance_mm: {air!r}\n")
+    res = run(["simulate", spec, "--out", tmp_path / "b", "--no-plot"])
+    assert res.exit_code == 0, res.output
+    moved = json.loads((tmp_path / "b" / "report.json").read_text())["load_path"]
+    assert moved["regimes"][-1]["force_N"][1] == pytest.approx(end, rel=1e-12)  # the air moves no lock
+    assert moved["cover_lands_N"] == pytest.approx(1.1 * end, rel=1e-6)
+    assert "the cover lands" not in res.output
 
 
 def export_with_cap(tmp_path, cap_top_mm):

@@ -17,6 +17,7 @@ import numpy as np
 from mst_cli.io.outputs import Staging, staged
 from mst_cli.model.assembly import SensorGeometry
 from mst_cli.model.chip import quantise_lsb
+from mst_cli.model.cover_air import LANDING_MARGIN_REL, air_keeping_cover_off_mm
 from mst_cli.model.general_load import small_load_lateral_N_per_mm
 from mst_cli.model.load_path import FINGERTIP_PATCH_MM, dominant_member, load_path_report
 from mst_cli.model.magnet_field import axial_dBz_dz_T_per_mm
@@ -108,7 +109,8 @@ def load_path_line(
         line += (
             f"; the cover lands on the board's parts at {lands:.3g} N, inside the range (to {end:.3g} N): past it "
             "the press bears on the chip and connectors, a support the printed body alone lacks "
-            "(housing.cover_mm thicker keeps it off)"
+            f"(housing.chip_clearance_mm >= {air_keeping_cover_off_mm(geometry, doc.material, end, patch_mm):.2f} mm "
+            f"keeps it off past {1 + LANDING_MARGIN_REL:g} x the range's end)"
         )
     return line
 

@@ -1,0 +1,32 @@
+"""The cover's air: how much of it keeps the cover off the board over the whole range
+(docs/design.md 4.6, Contacts). The cover bends over the board's slot until it has closed the air
+over the board's tallest part (:func:`~mst_cli.model.load_path.cover_landing_N`); past that the
+press bears on the chip and its connectors, a support only the assembled sensor has. Pure.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+from mst_cli.model.load_path import FINGERTIP_PATCH_MM, members
+
+LANDING_MARGIN_REL = 0.1  # the cover should land no earlier than 1.1 x the range's end (the design's lock margin)
+
+
+def air_keeping_cover_off_mm(
+    geometry, material, end_N: float, patch_mm: float = FINGERTIP_PATCH_MM, margin_rel: float = LANDING_MARGIN_REL
+) -> float:
+    """The cover's air, housing.chip_clearance_mm, at which its bending over the slot closes that
+    air only at (1 + ``margin_rel``) x ``end_N`` (the range's end), for ``geometry`` (a
+    SensorGeometry) in ``material``. A fixed point, not a ratio: the air is part of the slot
+    walls' height, and taller walls turn more, so the bending grows with the air (4.3 % for
+    0.25 mm more on the forward design). The iteration contracts: that growth is far below 1."""
+    target_N = (1.0 + margin_rel) * end_N
+    air_mm = geometry.housing.chip_clearance_mm
+    for _ in range(60):
+        g = replace(geometry, housing=replace(geometry.housing, chip_clearance_mm=air_mm))
+        new_mm = target_N * members(g, material, patch_mm, "simple").cover_contact_mm_per_N
+        if abs(new_mm - air_mm) <= 1e-9:
+            break
+        air_mm = new_mm
+    return new_mm
