@@ -41,7 +41,9 @@ class PrintedSensor:
         raw["material"]["youngs_modulus_MPa"] *= TRUTH["modulus_factor"]
         for layer in raw["layers"]:
             layer["t_mm"] += TRUTH["wall_offset_mm"]
-        raw["housing"] = {"chip_clearance_mm": Housing().chip_clearance_mm + TRUTH["gap_offset_mm"]}
+        housing = raw.get("housing") or {}  # the design's own air, else the default's
+        air_mm = housing.get("chip_clearance_mm", Housing().chip_clearance_mm)
+        raw["housing"] = {**housing, "chip_clearance_mm": air_mm + TRUTH["gap_offset_mm"]}
         raw["magnet"]["remanence_T"] = TRUTH["remanence_factor"] * grade_remanence_T(raw["magnet"]["grade"])
         self.doc = parse_document(raw)
         self.resp = simulate(
