@@ -1,6 +1,7 @@
 """A synthetic rig load test with known truth (issue 38): what a real TPU sensor on a rig gives.
 
-The sensor is the bundled design configs/mohammadi2021-forward.yaml as printed with walls
+The sensor is the bundled design configs/mohammadi2021-forward.yaml with the default 0.3 mm of air
+over the board (:func:`rig_design`), as printed with walls
 +0.04 mm, modulus x0.9 and the chip 0.2 mm further (``apply_parameters``), simulated once on the
 spring rung (3 ms; the continuum rung takes about 0.8 s and moves the lock forces by 2-4 %, so
 ``forward_curve("continuum")`` is there for a study, the tests use the spring rung). On top of
@@ -33,11 +34,14 @@ Run:  .venv/bin/python studies/rig_loadtest.py [--seed 1]
 from __future__ import annotations
 
 import argparse
+import functools
 import math
+import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+import yaml
 
 from mst_cli.model import chip as mlx
 from mst_cli.model.components import MAGNET_REMANENCE_COEFF_PCT_PER_K
@@ -47,6 +51,23 @@ from mst_cli.sensor.document import load_document
 
 ROOT = Path(__file__).resolve().parents[1]
 DESIGN = ROOT / "configs" / "mohammadi2021-forward.yaml"
+RIG_AIR_MM = 0.3  # the default housing.chip_clearance_mm: the cover lands inside the range
+
+
+@functools.lru_cache(maxsize=1)
+def rig_design() -> Path:
+    """The rig's sensor as a design file (in a temporary folder): the bundled forward design with
+    the default 0.3 mm of air, on which issue 38's rig was defined. Its cover lands on the board
+    inside the range, and that corner of the load curve tells the gap offset from the remanence
+    within 0.05 mm. The bundled config keeps the cover off the board (0.65 mm); there a rig's gap
+    offset spreads 0.08 mm RMS over noise seeds (docs/design.md 4.6, Contacts)."""
+    raw = yaml.safe_load(DESIGN.read_text())
+    raw["housing"] = {**raw.get("housing", {}), "chip_clearance_mm": RIG_AIR_MM}
+    path = Path(tempfile.mkdtemp(prefix="mst-rig-")) / DESIGN.name
+    path.write_text(yaml.safe_dump(raw, sort_keys=False))
+    return path
+
+
 PRINT = {"wall_offset_mm": 0.04, "modulus_factor": 0.9, "gap_offset_mm": 0.2}
 NOISE_uT = 2.0
 G_MAX = 2.0 / (3.0 * math.sqrt(3.0))  # max of x - x^3 on [0, 1], at x = 1/sqrt(3)
@@ -79,7 +100,7 @@ class Curve:
 
 def forward_curve(mechanics: str = "spring") -> Curve:
     """The printed sensor's curve (the design as printed with :data:`PRINT`)."""
-    doc = load_document(DESIGN)
+    doc = load_document(rig_design())
     printed, _ = apply_parameters(doc, PRINT)
     resp = simulate(printed.geometry(), printed.material, mechanics=mechanics, noise_uT_rms=NOISE_uT)
     s = resp.chip_setting

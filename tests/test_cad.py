@@ -66,34 +66,34 @@ def air_gaps_z(solid, x, y, z_top):
 
 
 # --------------------------------------------------------------------------- golden reference
-# Sensor frame. z: floor 0.8 + board 1.6 + tallest part 2.95 (JST SH sockets) + air 0.3 + cover 0.8
-#    = 6.45; layers 2 + 2.8 + 3.5; 2 plates x 0.8; pocket floor 0.4 + pocket 2.1 + wall 0.8
-#    + the default 2 mm insert plate + cap 0.8 -> 22.45
+# Sensor frame. z: floor 0.8 + board 1.6 + tallest part 2.95 (JST SH sockets) + air 0.65 (the
+#    config's) + cover 0.8 = 6.8; layers 2 + 2.8 + 3.5; 2 plates x 0.8; pocket floor 0.4 + pocket
+#    2.1 + wall 0.8 + the default 2 mm insert plate + cap 0.8 -> 22.8
 # y: the depth, +-10. Print heights are y + 10, on a 0.2 mm grid:
 #    slot floor: chip at y = 0 puts the board's edge at -8.3 (print 1.7, half-way: up to 1.8)
 #    -> y = -8.2; windows from 5.89 (socket edge) - 0.2 above the floor = -2.51 (print 7.49,
 #    down to 7.4) -> y = -2.6; pocket sides up to r = 3.1 (print 13.1, up to 13.2) -> y = 3.2,
 #    then a roof rising half the pocket depth, 1.05, up to whole layers: 1.2; windows up to the
 #    socket's far edge 11.89 + 0.2 above the floor = 3.89 (print 13.89, up to 14.0) -> y = 4.0,
-#    then a gable rising half the window's 3.25 mm, up to whole layers: 1.8; the insert's slot
+#    then a gable rising half the window's 3.6 mm (board top 2.4 to the cover 6.0), on the grid: 1.8; the insert's slot
 #    from 1.2 above the -y face (y = -8.8) to 1.2 + a 1.0 mm gable under the +y face (y = 7.8)
 # x: slot -12.8 .. 13.0, + side wall 1.2 = 14.2 < the cell's 15 -> +-15 mm
 def test_reference_bbox_golden(reference):
     g, cad = reference
     bb = cad.body.bounding_box()
     assert (bb.min.X, bb.min.Y, bb.min.Z) == pytest.approx((-15.0, -10.0, 0.0), abs=1e-7)
-    assert (bb.max.X, bb.max.Y, bb.max.Z) == pytest.approx((15.0, 10.0, 22.45), abs=1e-7)
+    assert (bb.max.X, bb.max.Y, bb.max.Z) == pytest.approx((15.0, 10.0, 22.8), abs=1e-7)
     assert (g.slot_floor_y_mm, g.pocket_top_y_mm) == pytest.approx((-8.2, 3.2), abs=1e-9)
     assert [w[2] for w in g.cable_windows] == pytest.approx([-2.6, -2.6], abs=1e-9)
     assert g.board_slots[0].window_tops_y_mm == pytest.approx((4.0, 4.0), abs=1e-9)
-    assert np.ravel(g.insert_slot_box_mm) == pytest.approx([-13.8, -8.8, 19.65, 13.8, 7.8, 21.65], abs=1e-9)
+    assert np.ravel(g.insert_slot_box_mm) == pytest.approx([-13.8, -8.8, 20.0, 13.8, 7.8, 22.0], abs=1e-9)
     assert (g.pause_height_mm, g.pause_after_layer) == (pytest.approx(13.2, abs=1e-9), 66)
 
 
 def test_reference_volume_golden(reference):
     g, cad = reference
-    window = 6.6 * 3.25 + 0.5 * 3.25 * 1.8  # box and gable, in the y-z plane
-    base = 30 * 20 * 6.45 - 25.8 * 18.2 * 4.85 - (2.2 + 2.0) * window
+    window = 6.6 * 3.6 + 0.5 * 3.6 * 1.8  # box and gable, in the y-z plane
+    base = 30 * 20 * 6.8 - 25.8 * 18.2 * 5.2 - (2.2 + 2.0) * window
     layers = sum((shoelace(c.outer_profile_xz()) - shoelace(c.inner_profile_xz())) * 20 for c in g.layers)
     plates = 2 * 30 * 20 * 0.8
     r, d = 3.1, 2.1
@@ -130,8 +130,8 @@ def test_gap0_is_what_the_cad_builds(reference):
     slot_floor, slot_top = air_gaps_z(cad.body, RAY_XY[0] + cx, RAY_XY[1] + cy, g.total_height_mm)[0]
     hall = slot_floor + g.board.thickness_mm + 0.5 * g.board.chip_height_mm
     assert pocket_floor - hall == pytest.approx(g.gap0_mm, abs=1e-9)
-    assert pocket_floor - hall == pytest.approx(13.85, abs=1e-9)  # 16.75 - (0.8 + 1.6 + 0.5)
-    assert slot_top - slot_floor == pytest.approx(1.6 + 2.95 + 0.3, abs=1e-9)
+    assert pocket_floor - hall == pytest.approx(14.2, abs=1e-9)  # 17.1 - (0.8 + 1.6 + 0.5)
+    assert slot_top - slot_floor == pytest.approx(1.6 + 2.95 + 0.65, abs=1e-9)
 
 
 @pytest.mark.parametrize("key", sorted(BOARDS))

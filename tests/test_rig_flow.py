@@ -11,10 +11,10 @@ from click.testing import CliRunner
 from mst_cli.cli.app import main
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "studies"))
-from rig_loadtest import Rig, forward_curve, rig_loadtest
+from rig_loadtest import Rig, forward_curve, rig_design, rig_loadtest
 
 ROOT = Path(__file__).resolve().parents[1]
-DESIGN = ROOT / "configs" / "mohammadi2021-forward.yaml"
+DESIGN = rig_design()  # the forward design with the default air (studies/rig_loadtest.py)
 CURVE = forward_curve()
 RIG_COLUMNS = ("force_N", "Bx_uT", "By_uT", "Bz_uT", "time_s", "cycle", "branch", "T_C")
 

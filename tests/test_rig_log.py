@@ -15,11 +15,11 @@ from mst_cli.calibration.branches import find_branches
 from mst_cli.cli.app import main
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "studies"))
-from rig_loadtest import forward_curve
+from rig_loadtest import forward_curve, rig_design
 from rig_log import SOFTENING_X, RigLog, all_off, loop_h, rig_log, stiffness, write_log
 
 ROOT = Path(__file__).resolve().parents[1]
-DESIGN = ROOT / "configs" / "mohammadi2021-forward.yaml"
+DESIGN = rig_design()  # the forward design with the default air (studies/rig_loadtest.py)
 CURVE = forward_curve()
 QUIET = {"noise_uT": (0.5, 0.5, 0.5), "force_noise_N": 0.005}  # a little noise: sigmas stay finite
 

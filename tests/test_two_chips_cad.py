@@ -6,22 +6,22 @@ The reference is configs/mohammadi2021-forward.yaml (Adafruit 4022 board, defaul
 D = 20 mm, 0.2 mm layers) with its chips at x = -14 and +13.8 mm, y = 0. Numbers worked by
 hand from the board (25.4 x 17.78 x 1.6 mm, chip at (12.6, 8.3) from its corner, JST SH
 sockets 2.95 mm tall, 6 mm along the short edges) and the housing defaults (clearance 0.2,
-base floor 0.8, chip clearance 0.3, side wall 1.2 mm):
+base floor 0.8, side wall 1.2 mm) and the config's chip clearance 0.65 mm:
 
-* slot z: 0.8 (base floor) .. 0.8 + 1.6 + 2.95 + 0.3 = 5.65 mm;
+* slot z: 0.8 (base floor) .. 0.8 + 1.6 + 2.95 + 0.65 = 6.0 mm;
 * slot floor: the chip's y 0 less 8.3 is print height 1.7 mm, snapped to the nearest layer
   (halves up) 1.8 mm: y = -8.2 mm; the slot runs from there to the top face y = 10;
 * chip 1's slot x: -14 - 12.6 - 0.2 = -26.8 .. -26.6 + 25.4 + 0.2 = -1.0; chip 2's:
   13.8 - 12.8 = 1.0 .. 13.8 + 13.0 = 26.8 (2 mm of wall between, 1.2 needed); both reach
   26.8 mm from the axis, so they need a face 2 (26.8 + 1.2) = 56 mm wide: the reference's
   family.width_mm is set to 56 (the footprint is the spec's; a narrower face is refused);
-* windows: z 2.4 (board top) .. 5.65; floor y: -8.2 + 5.89 - 0.2 = -2.51, print height 7.49
+* windows: z 2.4 (board top) .. 6.0; floor y: -8.2 + 5.89 - 0.2 = -2.51, print height 7.49
   snapped down 7.4: y = -2.6.
 
 One chip (at -14): its +x window runs from -1.0 out to the face at 28. Two chips: that span
 is the 2 mm link window, chip 2's slot and its own 1.2 mm window to the face; the body loses
 chip 2's slot less the part of it the one-chip window had already removed:
-25.8 x (18.2 x 4.85 - 12.6 x 3.25) = 1220.856 mm^3.
+25.8 x (18.2 x 5.2 - 12.6 x 3.6) = 1271.424 mm^3.
 """
 
 import json
@@ -43,14 +43,14 @@ DEPTH_MM = 20.0
 FACE_WIDTH_MM = 56.0  # 2 (26.8 + 1.2): both slots with a side wall outside them
 CHIPS = [(-14.0, 0.0), (13.8, 0.0)]
 SLOTS_X_MM = [(-26.8, -1.0), (1.0, 26.8)]
-SLOT_Z_MM = (0.8, 5.65)
+SLOT_Z_MM = (0.8, 6.0)
 SLOT_FLOOR_Y_MM = -8.2
 WINDOW_FLOOR_Y_MM = -2.6
 # a window's section: 6.6 mm up the depth (the 6 mm socket, 0.2 mm clearance each side, on the
-# layer grid) x 3.25 mm high, and its gable: 3.25 mm wide, 1.8 mm rise (1.625 up to the grid)
-WINDOW_SECTION_MM2 = 6.6 * 3.25 + 0.5 * 3.25 * 1.8
+# layer grid) x 3.6 mm high, and its gable: 3.6 mm wide, 1.8 mm rise (half its width, on the grid)
+WINDOW_SECTION_MM2 = 6.6 * 3.6 + 0.5 * 3.6 * 1.8
 # the second slot, less the first chip's +x window over the same x (the one-chip body's)
-EXTRA_SLOT_MM3 = 25.8 * 18.2 * 4.85 - 25.8 * WINDOW_SECTION_MM2
+EXTRA_SLOT_MM3 = 25.8 * 18.2 * 5.2 - 25.8 * WINDOW_SECTION_MM2
 STL_VOLUME_TOL_MM3 = 0.05  # float32 vertices (~4e-6 mm at 30 mm) over ~6000 mm^2 of surface
 
 
@@ -121,7 +121,7 @@ def test_each_chip_has_an_empty_slot_of_the_board_outline(exports):
     above = air_along(mesh, (0.0123, WINDOW_FLOOR_Y_MM + 0.3071, -1.0), (0, 0, 1))[0]
     assert np.allclose(np.array(above) - 1.0, (2.4, SLOT_Z_MM[1]), atol=1e-4)
     below = air_along(mesh, (0.0123, WINDOW_FLOOR_Y_MM - 0.3071, -1.0), (0, 0, 1))[0]
-    assert below[0] - 1.0 > 6.45 - 1e-4  # the first air is a layer's cavity, above the base
+    assert below[0] - 1.0 > 6.8 - 1e-4  # the first air is a layer's cavity, above the base
 
 
 def test_the_two_chip_body_is_one_volume_lighter_by_the_second_slot(exports):
@@ -210,8 +210,8 @@ def test_overlap_of_boxes_counts_what_two_cover():
 # (13.8, 0.5): 0.5 - 8.3 is print height 2.2 (on the grid): floor y -7.8; its windows -2.11,
 # print 7.89 down to 7.8: y -2.2. The link window between them takes the lower floor, -3.0.
 # Against chip 1 alone (its +x window from -1 to the face at 28, floor -3.0): over chip 2's
-# slot (x 1..26.8) the body loses 25.8 x (17.8 x 4.85 - 13 x 3.25); beyond it (x 26.8..28) chip
-# 2's own window starts 0.8 mm higher than chip 1's did, so the body keeps 1.2 x 0.8 x 3.25.
+# slot (x 1..26.8) the body loses 25.8 x (17.8 x 5.2 - 13 x 3.6); beyond it (x 26.8..28) chip
+# 2's own window starts 0.8 mm higher than chip 1's did, so the body keeps 1.2 x 0.8 x 3.6.
 STEP_CHIPS = [(-14.0, -0.4), (13.8, 0.5)]
 STEP_FLOORS_Y_MM = [-8.6, -7.8]
 STEP_WINDOW_FLOORS_Y_MM = [[-3.0, -3.0], [-3.0, -2.2]]  # chip 1's -x and link; chip 2's link and +x
@@ -219,7 +219,7 @@ STEP_WINDOW_FLOORS_Y_MM = [[-3.0, -3.0], [-3.0, -2.2]]  # chip 1's -x and link; 
 # higher top 4.4: 7.4 mm) and chip 2's +x window (1.2 mm of wall); one chip: its +x window, 29 mm
 # from its slot to the face
 STEP_EXTRA_MM3 = (
-    25.8 * 17.8 * 4.85 + 2.0 * (7.4 * 3.25 + 0.5 * 3.25 * 1.8) + 1.2 * WINDOW_SECTION_MM2 - 29.0 * WINDOW_SECTION_MM2
+    25.8 * 17.8 * 5.2 + 2.0 * (7.4 * 3.6 + 0.5 * 3.6 * 1.8) + 1.2 * WINDOW_SECTION_MM2 - 29.0 * WINDOW_SECTION_MM2
 )
 
 

@@ -22,6 +22,8 @@ from mst_cli.model.material import CREASE_ONSET_STRETCH, Material
 from mst_cli.model.mechanics import layer_laws
 from mst_cli.model.stack import Stack, capped_lock_force_N, layer_caps, series_displacement_mm
 
+OVERLOAD_REL = 0.25  # simulate's curve runs on past the last lock to (1 + this) x it, out of range
+
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
 
@@ -159,7 +161,7 @@ def simulate(
     field_model: str | None = None,
     noise_uT_rms: float = mlx.DEFAULT_NOISE_uT,
     points_per_regime: int = 200,
-    overload: float = 0.25,
+    overload: float = OVERLOAD_REL,
     whole_part: bool = True,
     patch_mm: float = FINGERTIP_PATCH_MM,
     parts: Members | None = None,
