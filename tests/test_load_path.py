@@ -259,6 +259,22 @@ def test_the_air_the_terminal_advises_keeps_the_cover_off_the_board(tmp_path):
     assert "the cover lands" not in res.output
 
 
+def test_the_bundled_forward_design_keeps_its_cover_off_the_board(tmp_path):
+    """The bundled config's 0.65 mm of air: the cover lands past the end of everything `mst
+    simulate` draws, 1.25 x the last lock (the general load's tilt rung cannot follow a landing
+    past every lock), and the terminal has no landing to report."""
+    res = run(["simulate", FORWARD, "--out", tmp_path / "s", "--no-plot"])
+    assert res.exit_code == 0, res.output
+    path = json.loads((tmp_path / "s" / "report.json").read_text())["load_path"]
+    end = path["regimes"][-1]["force_N"][1]
+    doc = mst.load(FORWARD)
+    parts = lp.members(doc.geometry(), doc.material)
+    lands = parts.cover_travel_mm / parts.cover_contact_mm_per_N  # the air over the bending
+    assert path["cover_lands_N"] == pytest.approx(lands, rel=1e-12)
+    assert lands > 1.25 * end
+    assert "the cover lands" not in res.output
+
+
 def export_with_cap(tmp_path, cap_top_mm):
     """The forward design with its cap top and no insert: the TPU cap alone (the default air)."""
     spec = forward_spec(
