@@ -178,6 +178,25 @@ def real(seed: int) -> None:
         print(f"{b:<18} {row[0]} {row[1]:>31}")
 
 
+def gap_without_landing(seeds: int) -> None:
+    """The gap offset fitted on the bundled forward config (0.65 mm of air: its cover does not
+    land inside the range, so no corner of the load curve tells the gap from the remanence),
+    over noise seeds 1..``seeds`` of the done-when rig (docs/design.md 4.6, Contacts)."""
+    bundled = ROOT / "configs" / "mohammadi2021-forward.yaml"
+    curve = forward_curve(design=bundled)
+    truth = PRINT["gap_offset_mm"]
+    print(f"gap offset on {bundled.name} (truth {truth} mm), fitted +- the fit's sigma:")
+    misses = []
+    with tempfile.TemporaryDirectory() as d:
+        for seed in range(1, seeds + 1):
+            rows, _ = rig_loadtest(Rig(cycles=3, hysteresis_pct=6.0, first_cycle_pct=8.0, seed=seed), curve)
+            fit = api.calibrate(bundled, write_csv(Path(d) / f"lt{seed}.csv", rows), out=Path(d) / f"c{seed}").fit
+            value, sd = fit.values["gap_offset_mm"], fit.std["gap_offset_mm"]
+            misses.append(value - truth)
+            print(f"  seed {seed}: {value:.3f} +- {sd:.3f} mm")
+    print(f"RMS error {np.sqrt(np.mean(np.square(misses))):.3f} mm over {seeds} seeds")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seed", type=int, default=1)
@@ -185,7 +204,12 @@ def main() -> None:
     ap.add_argument("--fit-mechanics", default="spring", help="the calibration's and the reader's rung")
     ap.add_argument("--temperature", action="store_true", help="the table at 20, 30 and 40 degC instead")
     ap.add_argument("--real", action="store_true", help="the real rig's log (issue 47) instead")
+    ap.add_argument(
+        "--gap-without-landing", type=int, metavar="SEEDS", help="the gap offset on the bundled config, SEEDS seeds"
+    )
     args = ap.parse_args()
+    if args.gap_without_landing:
+        return gap_without_landing(args.gap_without_landing)
     if args.temperature:
         return temperature(args.seed)
     if args.real:

@@ -98,9 +98,10 @@ class Curve:
         return np.linalg.norm(self.field_T(force_N), axis=-1)
 
 
-def forward_curve(mechanics: str = "spring") -> Curve:
-    """The printed sensor's curve (the design as printed with :data:`PRINT`)."""
-    doc = load_document(rig_design())
+def forward_curve(mechanics: str = "spring", design: Path | None = None) -> Curve:
+    """The printed sensor's curve (``design``, by default :func:`rig_design`, as printed with
+    :data:`PRINT`)."""
+    doc = load_document(design or rig_design())
     printed, _ = apply_parameters(doc, PRINT)
     resp = simulate(printed.geometry(), printed.material, mechanics=mechanics, noise_uT_rms=NOISE_uT)
     s = resp.chip_setting
