@@ -101,7 +101,15 @@ def _to_export(design, progress):
     return load_design(design), None
 
 
-def check(path: str | Path, *, nozzle_mm: float | None = None, load_path_max: float | None = None) -> CheckResults:
+def check(
+    path: str | Path,
+    *,
+    nozzle_mm: float | None = None,
+    load_path_max: float | None = None,
+    whole_part: bool = False,
+    progress: Callable[[str], None] | None = None,
+    rung_spacing_mm: float | None = None,
+) -> CheckResults:
     """Measure an exported mesh against its export.json (``mst check``).
 
     Parameters
@@ -113,6 +121,11 @@ def check(path: str | Path, *, nozzle_mm: float | None = None, load_path_max: fl
     load_path_max : float, optional
         Fail when the share of the magnet's motion outside the layers (cap, plates, cover) exceeds
         this in any regime, 0 to 1 [default: reported only].
+    whole_part : bool, optional
+        Also the ``whole_part`` check: the part's section on the whole-part rung against the
+        design's stated field change per newton, per regime (docs/design.md 4.7; seconds to
+        minutes). ``progress`` gets a line before its solves; ``rung_spacing_mm`` sets the
+        rung's lattice [default: its production mesh].
 
     Returns
     -------
@@ -137,19 +150,35 @@ def check(path: str | Path, *, nozzle_mm: float | None = None, load_path_max: fl
     from mst_cli.cad.export_files import load_mesh, resolve_export
     from mst_cli.cad.manifest import load_manifest
 
+    _check_options(nozzle_mm, load_path_max)
+    found = resolve_export(path)
+    # both inputs are validated before anything is measured (every field the checks read, every
+    # STL coordinate): past this point a KeyError or TypeError is a bug in a check, not bad input
+    manifest = cast("Manifest", load_manifest(found.manifest))  # kind=Manifest by default
+    assert found.stl is not None  # resolve_export found one (need_stl)
+    checks = run_checks(load_mesh(found.stl), manifest, nozzle_mm, load_path_max)
+    if whole_part:
+        checks.append(_whole_part_check(manifest, found.manifest, progress, rung_spacing_mm))
+    return CheckResults(checks, found.stl)
+
+
+def _check_options(nozzle_mm: float | None, load_path_max: float | None) -> None:
+    """Refuse a nozzle outside printer.nozzle_mm's bounds or a share outside 0 to 1."""
     if nozzle_mm is not None:  # one bound: printer.nozzle_mm's in a design file
         lo, hi = next((f.metadata["lo"], f.metadata["hi"]) for f in fields(Printer) if f.name == "nozzle_mm")
         if not lo <= nozzle_mm <= hi:
             raise InputError("--nozzle", nozzle_mm, f"must be a nozzle diameter from {lo:g} to {hi:g} mm")
     if load_path_max is not None and not 0.0 <= load_path_max <= 1.0:
         raise InputError("--load-path-max", load_path_max, "must be a share from 0 to 1")
-    found = resolve_export(path)
-    # both inputs are validated before anything is measured: every field the checks read (type,
-    # nesting, finite and sane size) and every STL coordinate (finite, within a metre). Past
-    # this point a KeyError or TypeError is a bug in a check, not bad input.
-    manifest = cast("Manifest", load_manifest(found.manifest))  # kind=Manifest by default
-    assert found.stl is not None  # resolve_export found one (need_stl)
-    return CheckResults(run_checks(load_mesh(found.stl), manifest, nozzle_mm, load_path_max), found.stl)
+
+
+def _whole_part_check(manifest, manifest_path, progress, spacing_mm):
+    """``mst check --whole-part``'s check of the design in export.json (cad.whole_part_check)."""
+    if manifest.design is None:
+        raise InputError("--whole-part", str(manifest_path), "needs the design in export.json (mst export writes it)")
+    from mst_cli.cad.whole_part_check import check_whole_part  # deferred: scikit-fem's rung
+
+    return check_whole_part(manifest.design, progress, spacing_mm)
 
 
 def slice(

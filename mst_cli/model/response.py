@@ -176,7 +176,7 @@ def simulate(
     ``section``: the members corrected by the whole-part rung (model.load_path: section, 4.7)."""
     model = fld.choose_field_model(geometry.chip_offset_mm, geometry.magnet_tilt_deg, field_model)
     laws = layer_laws(geometry.layers, material, mechanics)
-    parts = parts or _members_of(geometry, material, laws, patch_mm, whole_part, section)
+    parts = parts or model_members(geometry, material, laws, patch_mm, whole_part, section)
     layer_stack, stack = Stack(laws), part_stack(laws, parts)
     edges = stack.regime_bounds_N
     F, F_last = _force_grid(edges, points_per_regime, overload), edges[-1]
@@ -216,9 +216,9 @@ def simulate(
     )
 
 
-def _members_of(
+def model_members(
     geometry: SensorGeometry, material: Material, laws: tuple, patch_mm: float, whole_part: bool, section: bool
-):
+) -> Members:
     """:func:`simulate`'s members: rigid (the layers alone), the closed form, or the closed form
     corrected by the whole-part rung (``section``)."""
     if not whole_part:

@@ -1,0 +1,100 @@
+"""``mst check --whole-part`` (mst_cli/cad/whole_part_check.py): the exported part's section on the
+whole-part rung against the field change per newton its design states, per regime, within the
+issue's 5 / 8 / 20 % budget, naming the member the closed form misses.
+
+The truth here is not mst's closed form: the rung is checked on its own in
+tests/test_whole_part_rung.py (its members rigid it is L2, its cap alone the beam closed form,
+and it converges with the mesh). What these tests assert is physics the two must share: members
+only add compliance, they nearly add in series, and the bundled forward design, whose cover stays
+off the board, is within budget, while the same part with the default 0.3 mm of air, whose cover
+lands on the board in mst's model (a contact the printed body does not have), is not."""
+
+import json
+import math
+from pathlib import Path
+
+import pytest
+import yaml
+from click.testing import CliRunner
+
+import mst_cli as mst
+from mst_cli.cli.app import main
+from mst_cli.model.cover_air import air_keeping_cover_off_mm
+from mst_cli.model.load_path import ACCURACY_BUDGET_REL
+
+ROOT = Path(__file__).resolve().parents[1]
+FORWARD = ROOT / "configs" / "mohammadi2021-forward.yaml"
+
+
+@pytest.fixture(scope="module")
+def exports(tmp_path_factory) -> dict[str, Path]:
+    """The bundled forward design, and the same part with the default 0.3 mm of air over the board."""
+    folder = tmp_path_factory.mktemp("whole_part_check")
+    raw = yaml.safe_load(FORWARD.read_text())
+    raw["housing"] = {**raw.get("housing", {}), "chip_clearance_mm": 0.3}
+    landing = folder / "landing.yaml"
+    landing.write_text(yaml.safe_dump(raw, sort_keys=False))
+    out = {}
+    for name, design in (("forward", FORWARD), ("landing", landing)):
+        mst.export(design, folder / name, stl=True)
+        out[name] = folder / name
+    return out
+
+
+def whole_part(results):
+    (check,) = [c for c in results if c.name == "whole_part"]
+    return check
+
+
+def test_the_bundled_forward_part_gives_what_its_design_states(exports):
+    lines = []
+    check = whole_part(mst.check(exports["forward"], whole_part=True, progress=lines.append))
+    assert check.passed, check.note
+    assert lines and "whole-part rung" in lines[0]
+    regimes = check.values["regimes"]
+    assert [r["regime"] for r in regimes] == [1, 2, 3]
+    assert [r["locked_layers"] for r in regimes] == [[], [1], [1, 2]]  # layer 1 locks first on this design
+    for r, budget in zip(regimes, ACCURACY_BUDGET_REL):
+        assert r["budget_rel"] == budget
+        assert abs(r["error_rel"]) <= budget
+        assert r["error_rel"] == pytest.approx(r["stated_uT_per_N"] / r["rung_uT_per_N"] - 1.0, rel=1e-12)
+        assert r["rung_outside_layers_mm_per_N"] > 0.0  # TPU members only add compliance to the layers'
+    # every layer that locks stiffens the part, in the rung as in the design
+    rung = [r["rung_uT_per_N"] for r in regimes]
+    assert rung[0] > rung[1] > rung[2]
+
+
+def test_a_cover_that_lands_on_the_board_fails_and_names_the_housing(exports, tmp_path):
+    check = whole_part(mst.check(exports["landing"], whole_part=True))
+    assert not check.passed
+    regimes = check.values["regimes"]
+    # mst's cover stops bending at its landing (22.4 N, inside regime 2); the printed body's never does
+    assert regimes[2]["error_rel"] < -regimes[2]["budget_rel"]
+    members = check.values["regime_members_mm_per_N"]
+    assert members["regime"] == 3
+    gaps = {k: v["rung"] - v["stated"] for k, v in members.items() if k != "regime"}
+    assert max(gaps, key=lambda k: abs(gaps[k])) == "housing"
+    assert "housing" in check.note
+    # the members nearly add in series (docs/design.md 4.7: within a few per cent of the part's drop)
+    outside = regimes[2]["rung_outside_layers_mm_per_N"]
+    total = regimes[2]["rung_uT_per_N"] / check.values["field_per_drop_uT_per_mm"]
+    assert abs(sum(v["rung"] for k, v in members.items() if k != "regime") - outside) < 0.05 * total
+    # the remedy is the air that keeps the cover off past 1.25 x the range's end, rounded up
+    doc = mst.load(exports["landing"].parent / "landing.yaml")
+    air = air_keeping_cover_off_mm(doc.geometry(), doc.material, regimes[2]["force_N"][1])
+    assert 0.3 < air < 0.65  # the bundled config's 0.65 mm is past it
+    assert f"housing.chip_clearance_mm >= {math.ceil(air * 100) / 100:.2f} mm" in check.note
+
+
+def test_the_command_fails_naming_the_check_and_writes_its_figures(exports):
+    res = CliRunner().invoke(main, ["check", str(exports["landing"]), "--whole-part", "--json"])
+    assert res.exit_code == 1
+    assert "mst check: failed: whole_part" in res.stderr
+    assert "whole-part rung:" in res.stderr  # progress before the solves
+    doc = json.loads(res.stdout)
+    (row,) = [c for c in doc["checks"] if c["name"] == "whole_part"]
+    assert len(row["values"]["regimes"]) == 3 and not row["passed"]
+
+
+def test_without_the_flag_no_rung_is_solved(exports):
+    assert "whole_part" not in {c.name for c in mst.check(exports["forward"])}
