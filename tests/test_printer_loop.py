@@ -241,7 +241,9 @@ def _housing_height_mm() -> float:
 
 def test_max_print_deviation_is_met_or_names_the_lowest_height(tmp_path):
     limit = 0.5
-    low = round(_housing_height_mm() + 4.95, 2)  # 4.95 mm for three layers: a low part, not the lowest
+    # 5.6 mm for three layers: above the spec's own design (5.37 mm of layers with its 1.6 mm
+    # plates), below what the limit needs
+    low = round(_housing_height_mm() + 5.6, 2)
     tight = run(
         [
             "design",
