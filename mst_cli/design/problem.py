@@ -308,7 +308,7 @@ class DesignProblem:
         shape, (theta, t, h), inverse = self._distinct_cells(theta_deg, t_mm, h_mm)
         floor = LENGTH_FLOOR_MM
         t3 = np.concatenate([t, np.maximum(t + dt_mm, floor), np.maximum(t - dt_mm, floor)])
-        laws = self._cell_laws(np.tile(theta, 3), t3, np.tile(h, 3))
+        laws = self._cell_laws(np.concatenate([theta] * 3), t3, np.concatenate([h] * 3))
         distinct = np.arange(len(t)) if inverse is None else inverse
         index = np.arange(3)[:, None] * len(t) + distinct  # (3, cells)
         k, d_lock, R, k_locked = (a[index].reshape((3,) + shape) for a in laws)
@@ -428,7 +428,7 @@ class DesignProblem:
         logR = np.log(np.maximum(R, TINY))
         g = [(-margins / pr.nozzle_mm).reshape(margins.shape[:-2] + (-1,)), t_over_L_g]
         if self.n > 1:
-            g.append(math.log1p(self.lock_margin_rel) - np.diff(logR, axis=-1))
+            g.append(math.log1p(self.lock_margin_rel) - (logR[..., 1:] - logR[..., :-1]))  # np.diff's, unwrapped
         g.append(np.log(np.maximum(B_full, TINY) / self.B_limit_T)[..., None])
         if self.max_height_mm is not None:
             g.append(((height - self.max_height_mm) / pr.nozzle_mm)[..., None])

@@ -173,6 +173,34 @@ def _edge_gaps_mm(problem: DesignProblem, gap0_mm: float) -> np.ndarray | None:
     return np.interp(want, B, gaps)
 
 
+def _layer_choice(
+    problem: DesignProblem,
+    table: CellTable,
+    chosen: np.ndarray,
+    j: int,
+    F: np.ndarray,
+    increment_mm: float,
+    terms: dict,
+) -> int:
+    """The table cell for layer j nearest (R_j, the compression its regime must add, of which the
+    layers above, the locked ones below and the members take their share), the layers above it
+    chosen; ``terms`` keeps what depends on the plate or cap above layer j alone (over the table)."""
+    n, dF = problem.n, F[j + 1] - F[j]
+    caps, cover = table.members_with(problem, chosen, j)  # the layers above j: already chosen
+    key = (j, int(chosen[j + 1]) if j < n - 1 else -1)  # the cells the plate or cap above j rests on
+    if key not in terms:
+        R_capped = table.capped_lock_N(caps[:, j])
+        own = table.displacement_mm(F[j + 1], caps[:, j], R_capped) - table.displacement_mm(F[j], caps[:, j], R_capped)
+        lock = np.log(np.maximum(R_capped, TINY))
+        terms[key] = (lock - np.log(problem.R_target[j])) ** 2, np.log(np.maximum(own, TINY))
+    lock_miss, log_own = terms[key]
+    above = sum(table.increment_mm(chosen[m], F[j], F[j + 1], caps[0, m]) for m in range(j + 1, n))
+    below = sum(dF / table.k_locked[chosen[m]] for m in range(j))
+    members = cover(F[j + 1]) - cover(F[j])
+    need = np.maximum(increment_mm - above - below - members, 1e-3 * increment_mm)
+    return int(np.argmin(lock_miss + (log_own - np.log(need)) ** 2))
+
+
 def seed_start(problem: DesignProblem, slack: float, table: CellTable | None = None) -> tuple[np.ndarray | None, int]:
     """(normalised start (3n,) built layer by layer, candidate stacks evaluated for it; the
     table's cells not counted). The start is None when the targets give the decomposition
@@ -193,27 +221,23 @@ def seed_start(problem: DesignProblem, slack: float, table: CellTable | None = N
         C = table.members_with(problem, chosen, j)[0][:, j]
         R_capped = capped_lock_force_N(table.k, table.d_lock, table.R, C)
         chosen[j] = int(np.argmin(np.abs(np.log(np.maximum(R_capped, TINY)) - np.log(R_target[j]))))
-    candidates = []
+    # the passes may end in a cycle (a layer swapping between two cells): a pass from a start
+    # made before gives the same choices, and a layer's terms under the same plate or cap the same
+    candidates: list[np.ndarray] = []
+    passes: dict[bytes, np.ndarray] = {}
+    terms: dict[tuple, tuple] = {}
     for _ in range(PASSES):
         before = chosen.copy()
-        gaps = _edge_gaps_mm(problem, float(problem.gap0_mm(table.h_mm[chosen].sum())))
-        if gaps is None:
-            break
-        stack_increment = -np.diff(gaps)  # D_i - D_(i-1), i = 1..n
-        for j in range(n - 1, -1, -1):
-            dF = F[j + 1] - F[j]
-            caps, cover = table.members_with(problem, chosen, j)  # the layers above j: already chosen
-            R_capped = table.capped_lock_N(caps[:, j])
-            own = table.displacement_mm(F[j + 1], caps[:, j], R_capped) - table.displacement_mm(
-                F[j], caps[:, j], R_capped
-            )
-            lock = np.log(np.maximum(R_capped, TINY))
-            above = sum(table.increment_mm(chosen[m], F[j], F[j + 1], caps[0, m]) for m in range(j + 1, n))
-            below = sum(dF / table.k_locked[chosen[m]] for m in range(j))
-            members = cover(F[j + 1]) - cover(F[j])
-            need = np.maximum(stack_increment[j] - above - below - members, 1e-3 * stack_increment[j])
-            miss = (lock - np.log(R_target[j])) ** 2 + (np.log(np.maximum(own, TINY)) - np.log(need)) ** 2
-            chosen[j] = int(np.argmin(miss))
+        if before.tobytes() in passes:
+            chosen = passes[before.tobytes()].copy()
+        else:
+            gaps = _edge_gaps_mm(problem, float(problem.gap0_mm(table.h_mm[chosen].sum())))
+            if gaps is None:
+                break
+            stack_increment = -np.diff(gaps)  # D_i - D_(i-1), i = 1..n
+            for j in range(n - 1, -1, -1):
+                chosen[j] = _layer_choice(problem, table, chosen, j, F, stack_increment[j], terms)
+            passes[before.tobytes()] = chosen.copy()
         candidates.append(table.u[chosen].reshape(-1))
         if np.array_equal(chosen, before):
             break

@@ -127,9 +127,13 @@ def section_EI_kGA(
         bi = b if insert.depth_mm is None else min(insert.depth_mm, b)  # the plate's own depth
         strips.append((z0, z1, bi * (insert.modulus_MPa - E_prime_MPa)))
         shear = shear + SHEAR_FACTOR * bi * insert.thickness_mm * (insert.shear_modulus_MPa - G_MPa)
-    EA = sum(w * (z1 - z0) for z0, z1, w in strips)
-    zc = sum(w * (z1 - z0) * 0.5 * (z0 + z1) for z0, z1, w in strips) / EA
-    EI = sum(w * ((z1 - z0) ** 3 / 12.0 + (z1 - z0) * (0.5 * (z0 + z1) - zc) ** 2) for z0, z1, w in strips)
+    EA = zc_EA = EI = 0  # the strips' sums, in order (plain loops: the design loop's small batches)
+    for z0, z1, w in strips:
+        EA = EA + w * (z1 - z0)
+        zc_EA = zc_EA + w * (z1 - z0) * 0.5 * (z0 + z1)
+    zc = zc_EA / EA
+    for z0, z1, w in strips:
+        EI = EI + w * ((z1 - z0) ** 3 / 12.0 + (z1 - z0) * (0.5 * (z0 + z1) - zc) ** 2)
     return as_value(EI), as_value(shear)
 
 

@@ -86,7 +86,7 @@ def regime_kernel(
     gap = np.asarray(gap0_mm, dtype=float)[..., None] - d
     B = field_T(gap)
     rel = B / B[..., :1] - 1.0
-    S = np.diff(rel, axis=-1) / np.maximum(np.diff(F, axis=-1), 1e-300)
+    S = (rel[..., 1:] - rel[..., :-1]) / np.maximum(F[..., 1:] - F[..., :-1], 1e-300)  # np.diff's, unwrapped
     return R_sorted, S, gap, B
 
 
