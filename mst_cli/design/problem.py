@@ -308,7 +308,7 @@ class DesignProblem:
         shape, (theta, t, h), inverse = self._distinct_cells(theta_deg, t_mm, h_mm)
         floor = LENGTH_FLOOR_MM
         t3 = np.concatenate([t, np.maximum(t + dt_mm, floor), np.maximum(t - dt_mm, floor)])
-        laws = self._cell_laws(np.tile(theta, 3), t3, np.tile(h, 3))
+        laws = self._cell_laws(np.concatenate([theta] * 3), t3, np.concatenate([h] * 3))
         distinct = np.arange(len(t)) if inverse is None else inverse
         index = np.arange(3)[:, None] * len(t) + distinct  # (3, cells)
         k, d_lock, R, k_locked = (a[index].reshape((3,) + shape) for a in laws)
@@ -317,18 +317,17 @@ class DesignProblem:
     def _distinct_cells(self, theta_deg, t_mm, h_mm) -> tuple[tuple, tuple, np.ndarray | None]:
         """(the cells' shape, their distinct (theta, t, h) as contiguous columns, the index of
         every cell among them, or None when they were not sorted out: fewer than DEDUPE_MIN_CELLS)."""
-        cells = np.stack(np.broadcast_arrays(theta_deg, t_mm, h_mm), axis=-1)
-        flat = cells.reshape(-1, 3)
-        inverse = None
-        if len(flat) >= DEDUPE_MIN_CELLS:
-            order = np.lexsort(flat.T[::-1])
-            ordered = flat[order]
-            first = np.concatenate([[True], np.any(ordered[1:] != ordered[:-1], axis=1)])
-            inverse = np.empty(len(flat), dtype=np.intp)
-            inverse[order] = np.cumsum(first) - 1
-            flat = ordered[first]
-        theta, t, h = np.ascontiguousarray(flat.T)  # contiguous columns: numpy's vector loops
-        return cells.shape[:-1], (theta, t, h), inverse
+        columns = np.broadcast_arrays(theta_deg, t_mm, h_mm)
+        if columns[0].size < DEDUPE_MIN_CELLS:  # the same columns, without the stacking
+            return columns[0].shape, tuple(np.ravel(a) for a in columns), None
+        flat = np.stack(columns, axis=-1).reshape(-1, 3)
+        order = np.lexsort(flat.T[::-1])
+        ordered = flat[order]
+        first = np.concatenate([[True], np.any(ordered[1:] != ordered[:-1], axis=1)])
+        inverse = np.empty(len(flat), dtype=np.intp)
+        inverse[order] = np.cumsum(first) - 1
+        theta, t, h = np.ascontiguousarray(ordered[first].T)  # contiguous columns: numpy's vector loops
+        return columns[0].shape, (theta, t, h), inverse
 
     def _cell_laws(self, theta: np.ndarray, t: np.ndarray, h: np.ndarray) -> tuple[np.ndarray, ...]:
         """(k, d_lock, R, k_locked) of cells given as 1-d columns, the walls as drawn."""
@@ -382,17 +381,18 @@ class DesignProblem:
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """:meth:`responses` of stacks whose layer laws (and members' (caps, rest[, cover contact])
         compliance) are known: R is each layer's lock force, where the plate or cap above it
-        closes its cavity."""
+        closes its cavity (computed once for the kernel and the answer)."""
         k, d_lock, R, k_locked = laws
         cap, rest = (None, 0.0) if members is None else members[:2]
         contact = members[2] if members is not None and len(members) > 2 else None
         gap0 = cast(np.ndarray, self.gap0_mm(h_mm.sum(axis=-1)))  # candidates' sums: an array
         extra = self.regime_extra_mm_per_N if members is not None else None
-        _, S, gap, B = regime_kernel(k, d_lock, k_locked, gap0, self.field_T, R, rest, cap, contact, extra)
+        Rc = capped_lock_forces_N(k, d_lock, R, cap)
+        _, S, gap, B = regime_kernel(k, d_lock, k_locked, gap0, self.field_T, R, rest, cap, contact, extra, Rc)
         # the chip's largest field on the way is at the smallest gap: a stack whose members let
         # the magnet reach the chip (gap <= 0 at the last lock) saturates it on the way there
         B_full = np.where(gap[..., -1] > 0.0, B[..., -1], self.field_T(np.zeros_like(gap[..., -1])))
-        return capped_lock_forces_N(k, d_lock, R, cap), S, B_full, gap0, B[..., 0]
+        return Rc, S, B_full, gap0, B[..., 0]
 
     def evaluate_physical(self, theta_deg: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike) -> Evaluation:
         return self._evaluate_physical(theta_deg, t_mm, h_mm, False)[0]
@@ -418,8 +418,8 @@ class DesignProblem:
             members = self.part_members(theta_deg, T3, H) if self.whole_part else None
             R3, S3, B_full3, gap03, B03 = self._responses_of(laws, H, members)
             R, S, B_full, gap0, B0 = R3[0], S3[0], B_full3[0], gap03[0], B03[0]
-            base = np.log(np.maximum(np.concatenate([S, R], axis=-1), TINY))
-            shifts = np.log(np.maximum(np.concatenate([S3[1:], R3[1:]], axis=-1), TINY)) - base[None]
+            logs = np.log(np.maximum(np.concatenate([S3, R3], axis=-1), TINY))  # nominal, thicker, thinner
+            shifts = logs[1:] - logs[:1]
         else:
             R, S, B_full, gap0, B0 = self.responses(theta_deg, t_mm, h_mm)
         margins, t_over_L_g = self._layer_rules(theta_deg, t_mm, h_mm)
@@ -428,7 +428,7 @@ class DesignProblem:
         logR = np.log(np.maximum(R, TINY))
         g = [(-margins / pr.nozzle_mm).reshape(margins.shape[:-2] + (-1,)), t_over_L_g]
         if self.n > 1:
-            g.append(math.log1p(self.lock_margin_rel) - np.diff(logR, axis=-1))
+            g.append(math.log1p(self.lock_margin_rel) - (logR[..., 1:] - logR[..., :-1]))  # np.diff's, unwrapped
         g.append(np.log(np.maximum(B_full, TINY) / self.B_limit_T)[..., None])
         if self.max_height_mm is not None:
             g.append(((height - self.max_height_mm) / pr.nozzle_mm)[..., None])

@@ -76,11 +76,25 @@ class CellTable:
         self.cells = len(u)
         self.whole_part = problem.whole_part
         self._supports: tuple | None = None  # (t as printed, layer_supports) of the cells, for members_with
+        # members_with's members by the cells they rest on (the start's passes repeat them) and
+        # the cells' own compression by force: the same arrays, each computed once
+        self._members: dict[tuple, np.ndarray] = {}
+        self._own: dict[float, np.ndarray] = {}
 
-    def displacement_mm(self, force_N: float, cap_mm_per_N: np.ndarray | float = 0.0) -> np.ndarray:
+    def displacement_mm(
+        self, force_N: float, cap_mm_per_N: np.ndarray | float = 0.0, capped_lock_N: np.ndarray | None = None
+    ) -> np.ndarray:
         """Compression of every table cell at ``force_N``, the plate or cap above it bending into
-        its cavity by ``cap_mm_per_N`` (cells,) until it closes there (its capped law)."""
-        return capped_mm(force_N, self.k, self.d_lock, self.R, self.k_locked, cap_mm_per_N)
+        its cavity by ``cap_mm_per_N`` (cells,) until it closes there (its capped law);
+        ``capped_lock_N``: :meth:`capped_lock_N` of that cap, when the caller has it."""
+        own = self._own.get(force_N)
+        if own is None:
+            own = self._own[force_N] = layer_displacement_mm(force_N, self.k, self.d_lock, self.R, self.k_locked)
+        return capped_mm(force_N, self.k, self.d_lock, self.R, self.k_locked, cap_mm_per_N, capped_lock_N, own)
+
+    def capped_lock_N(self, cap_mm_per_N: np.ndarray) -> np.ndarray:
+        """Every cell's lock force under a plate or cap bending into its cavity by ``cap_mm_per_N``."""
+        return capped_lock_force_N(self.k, self.d_lock, self.R, cap_mm_per_N)
 
     def increment_mm(self, cell: int, F0: float, F1: float, cap_mm_per_N: float) -> float:
         """One cell's compression from F0 to F1 under its plate or cap (its capped law)."""
@@ -107,26 +121,40 @@ class CellTable:
         def at(a: np.ndarray, i: int) -> np.ndarray:  # layer i's: every cell at j, the chosen one elsewhere
             return a if i == j else a[chosen[i] : chosen[i] + 1]
 
+        def cell(i: int) -> int:  # the key of layer i's cells: -1 the table's, else the chosen one
+            return -1 if i == j else int(chosen[i])
+
+        def member(key: tuple, compute):  # a member depends on the cells it rests on alone
+            value = self._members.get(key)
+            if value is None:
+                value = self._members[key] = compute()
+            return value
+
         scene = problem.members
-        cap = cap_mm_per_N(scene, at(t, n - 1), at(head, n - 1), at(walls, n - 1))
+        cap = member(("cap", cell(n - 1)), lambda: cap_mm_per_N(scene, at(t, n - 1), at(head, n - 1), at(walls, n - 1)))
         plates = [
-            plates_mm_per_N(scene, at(t, i), at(t, i + 1), at(head, i), at(head, i + 1), at(walls, i))
+            member(
+                ("plate", cell(i), cell(i + 1)),
+                lambda i=i: plates_mm_per_N(scene, at(t, i), at(t, i + 1), at(head, i), at(head, i + 1), at(walls, i)),
+            )
             for i in range(n - 1)
         ]
         over_slot, slot_walls = (
-            np.broadcast_to(a, (cells,)) for a in cover_parts_mm_per_N(scene, at(t, 0), at(pad, 0), at(head, 0))
+            np.broadcast_to(a, (cells,))
+            for a in member(("cover", cell(0)), lambda: cover_parts_mm_per_N(scene, at(t, 0), at(pad, 0), at(head, 0)))
         )
         caps = np.stack(np.broadcast_arrays(*plates, cap), axis=-1)
         cover, air = over_slot + slot_walls, scene.cover_air_mm
         return caps, lambda F: cover * F - np.maximum(over_slot * F - air, 0.0)
 
 
-def capped_mm(force_N, k, d_lock, R, k_locked, cap_mm_per_N) -> np.ndarray:
+def capped_mm(force_N, k, d_lock, R, k_locked, cap_mm_per_N, Rc=None, own=None) -> np.ndarray:
     """L0 layers' compression at ``force_N`` with the plate or cap above each bending into its
-    cavity by ``cap_mm_per_N`` until it closes there (the layers' own law where C = 0)."""
-    own = layer_displacement_mm(force_N, k, d_lock, R, k_locked)
+    cavity by ``cap_mm_per_N`` until it closes there (the layers' own law where C = 0); ``Rc``
+    (their capped lock forces) and ``own`` (their own law's compression), when the caller has them."""
+    own = layer_displacement_mm(force_N, k, d_lock, R, k_locked) if own is None else own
     C = np.asarray(cap_mm_per_N, dtype=float)
-    Rc = capped_lock_force_N(k, d_lock, R, C)
+    Rc = capped_lock_force_N(k, d_lock, R, C) if Rc is None else Rc
     return np.where(C > 0, np.where(force_N <= Rc, own + C * force_N, d_lock + (force_N - Rc) / k_locked), own)
 
 
@@ -143,6 +171,34 @@ def _edge_gaps_mm(problem: DesignProblem, gap0_mm: float) -> np.ndarray | None:
     if stop < 2 or want[-1] > B[-1]:
         return None
     return np.interp(want, B, gaps)
+
+
+def _layer_choice(
+    problem: DesignProblem,
+    table: CellTable,
+    chosen: np.ndarray,
+    j: int,
+    F: np.ndarray,
+    increment_mm: float,
+    terms: dict,
+) -> int:
+    """The table cell for layer j nearest (R_j, the compression its regime must add, of which the
+    layers above, the locked ones below and the members take their share), the layers above it
+    chosen; ``terms`` keeps what depends on the plate or cap above layer j alone (over the table)."""
+    n, dF = problem.n, F[j + 1] - F[j]
+    caps, cover = table.members_with(problem, chosen, j)  # the layers above j: already chosen
+    key = (j, int(chosen[j + 1]) if j < n - 1 else -1)  # the cells the plate or cap above j rests on
+    if key not in terms:
+        R_capped = table.capped_lock_N(caps[:, j])
+        own = table.displacement_mm(F[j + 1], caps[:, j], R_capped) - table.displacement_mm(F[j], caps[:, j], R_capped)
+        lock = np.log(np.maximum(R_capped, TINY))
+        terms[key] = (lock - np.log(problem.R_target[j])) ** 2, np.log(np.maximum(own, TINY))
+    lock_miss, log_own = terms[key]
+    above = sum(table.increment_mm(chosen[m], F[j], F[j + 1], caps[0, m]) for m in range(j + 1, n))
+    below = sum(dF / table.k_locked[chosen[m]] for m in range(j))
+    members = cover(F[j + 1]) - cover(F[j])
+    need = np.maximum(increment_mm - above - below - members, 1e-3 * increment_mm)
+    return int(np.argmin(lock_miss + (log_own - np.log(need)) ** 2))
 
 
 def seed_start(problem: DesignProblem, slack: float, table: CellTable | None = None) -> tuple[np.ndarray | None, int]:
@@ -165,24 +221,23 @@ def seed_start(problem: DesignProblem, slack: float, table: CellTable | None = N
         C = table.members_with(problem, chosen, j)[0][:, j]
         R_capped = capped_lock_force_N(table.k, table.d_lock, table.R, C)
         chosen[j] = int(np.argmin(np.abs(np.log(np.maximum(R_capped, TINY)) - np.log(R_target[j]))))
-    candidates = []
+    # the passes may end in a cycle (a layer swapping between two cells): a pass from a start
+    # made before gives the same choices, and a layer's terms under the same plate or cap the same
+    candidates: list[np.ndarray] = []
+    passes: dict[bytes, np.ndarray] = {}
+    terms: dict[tuple, tuple] = {}
     for _ in range(PASSES):
         before = chosen.copy()
-        gaps = _edge_gaps_mm(problem, float(problem.gap0_mm(table.h_mm[chosen].sum())))
-        if gaps is None:
-            break
-        stack_increment = -np.diff(gaps)  # D_i - D_(i-1), i = 1..n
-        for j in range(n - 1, -1, -1):
-            dF = F[j + 1] - F[j]
-            caps, cover = table.members_with(problem, chosen, j)  # the layers above j: already chosen
-            own = table.displacement_mm(F[j + 1], caps[:, j]) - table.displacement_mm(F[j], caps[:, j])
-            lock = np.log(np.maximum(capped_lock_force_N(table.k, table.d_lock, table.R, caps[:, j]), TINY))
-            above = sum(table.increment_mm(chosen[m], F[j], F[j + 1], caps[0, m]) for m in range(j + 1, n))
-            below = sum(dF / table.k_locked[chosen[m]] for m in range(j))
-            members = cover(F[j + 1]) - cover(F[j])
-            need = np.maximum(stack_increment[j] - above - below - members, 1e-3 * stack_increment[j])
-            miss = (lock - np.log(R_target[j])) ** 2 + (np.log(np.maximum(own, TINY)) - np.log(need)) ** 2
-            chosen[j] = int(np.argmin(miss))
+        if before.tobytes() in passes:
+            chosen = passes[before.tobytes()].copy()
+        else:
+            gaps = _edge_gaps_mm(problem, float(problem.gap0_mm(table.h_mm[chosen].sum())))
+            if gaps is None:
+                break
+            stack_increment = -np.diff(gaps)  # D_i - D_(i-1), i = 1..n
+            for j in range(n - 1, -1, -1):
+                chosen[j] = _layer_choice(problem, table, chosen, j, F, stack_increment[j], terms)
+            passes[before.tobytes()] = chosen.copy()
         candidates.append(table.u[chosen].reshape(-1))
         if np.array_equal(chosen, before):
             break

@@ -1,15 +1,19 @@
 """Closed-form beams of the part's members (model.load_path): a beam's centre deflection per
 newton under a centred strip load and under two symmetric line loads, simply supported or
-clamped, with its shear (Timoshenko), and how far elastically held ends go toward clamped.
+clamped, with its shear (Timoshenko), how far elastically held ends go toward clamped, and a
+member's section (E'I, kGA).
 Numbers or arrays (broadcast); pure numpy, no I/O. Formulas from the standard beam tables
 (Roark's Formulas for Stress and Strain, 7th ed., table 8.1), integrated over the strip here.
 """
 
 from __future__ import annotations
 
+import functools
 from typing import Any
 
 import numpy as np
+
+SHEAR_FACTOR = 5.0 / 6.0  # kappa of a rectangular section
 
 
 def as_value(x) -> Any:
@@ -24,18 +28,26 @@ def strip_bending_mm_per_N(span_mm, patch_mm, EI_Nmm2, support: str) -> float | 
     The influence of a point load at a <= L/2 on the mid-span deflection is a (3L^2 - 4a^2)/(48 EI)
     (simply supported) or a^2 (3L - 4a)/(48 EI) (clamped at both ends); integrated over the strip
     with q = F/c. The limit c -> 0 is F L^3/(48 EI) and F L^3/(192 EI)."""
+    simple, clamped = strip_bending_pair_mm_per_N(span_mm, patch_mm, EI_Nmm2)
+    return simple if support == "simple" else clamped
+
+
+def strip_bending_pair_mm_per_N(span_mm, patch_mm, EI_Nmm2) -> tuple:
+    """(simply supported, clamped) :func:`strip_bending_mm_per_N`, their shared terms computed
+    once (the design loop's members call both on small batches: numpy's cost per call)."""
     L = np.asarray(span_mm, dtype=float)
     c = np.clip(patch_mm, 0.0, L)
     a0, a1 = 0.5 * (L - c), 0.5 * L
-    if support == "simple":
-        point = L**3 / (48.0 * EI_Nmm2)
-        prim = lambda a: 1.5 * L**2 * a**2 - a**4  # noqa: E731  (the antiderivative of a (3L^2 - 4a^2))
-    else:
-        point = L**3 / (192.0 * EI_Nmm2)
-        prim = lambda a: L * a**3 - a**4  # noqa: E731  (of a^2 (3L - 4a))
+    L3, a0_4, a1_4 = L**3, a0**4, a1**4
     narrow = c < 1e-9 * L
-    strip = 2.0 * (prim(a1) - prim(a0)) / (np.where(narrow, 1.0, c) * 48.0 * EI_Nmm2)
-    return as_value(np.where(narrow, point, strip))
+    strip_N = np.where(narrow, 1.0, c) * 48.0 * EI_Nmm2
+    L2 = 1.5 * L**2  # the antiderivatives of a (3L^2 - 4a^2) and a^2 (3L - 4a): 1.5 L^2 a^2 - a^4, L a^3 - a^4
+    simple = 2.0 * ((L2 * a1**2 - a1_4) - (L2 * a0**2 - a0_4)) / strip_N
+    clamped = 2.0 * ((L * a1**3 - a1_4) - (L * a0**3 - a0_4)) / strip_N
+    return (
+        as_value(np.where(narrow, L3 / (48.0 * EI_Nmm2), simple)),
+        as_value(np.where(narrow, L3 / (192.0 * EI_Nmm2), clamped)),
+    )
 
 
 def strip_shear_mm_per_N(span_mm, patch_mm, kGA_N) -> float | np.ndarray:
@@ -50,25 +62,24 @@ def two_load_mm_per_N(span_mm, offset_mm, EI_Nmm2, kGA_N, support: str) -> float
     ``offset_mm`` inside each support of a beam of ``span_mm`` (a plate loaded by the walls above
     it, held by the walls below); numbers or arrays. Bending under each load: P e^2 (3L - 4e)/(6 EI)
     simply supported (four-point bending), less the end moments' lift when clamped
-    (:func:`_clamped_two_load`); shear P e/(kGA). A load outside the supports (e < 0) hangs on an
+    (:func:`two_load_pair_mm_per_N`); shear P e/(kGA). A load outside the supports (e < 0) hangs on an
     overhang |e| long from a support held level by symmetry: P |e|^3/(3 EI) + P |e|/(kGA)."""
+    simple, clamped = two_load_pair_mm_per_N(span_mm, offset_mm, EI_Nmm2, kGA_N)
+    return simple if support == "simple" else clamped
+
+
+def two_load_pair_mm_per_N(span_mm, offset_mm, EI_Nmm2, kGA_N) -> tuple:
+    """(simply supported, clamped) :func:`two_load_mm_per_N`, their shared terms computed once.
+    Clamped: the simply supported deflection less the end moments' rotation, M = P e (L - e)/L
+    each end, which lift the load point by M e (L - e)/(2 EI)."""
     P, e, L = 0.5, np.asarray(offset_mm, dtype=float), np.asarray(span_mm, dtype=float)
     overhang = P * np.abs(e) ** 3 / (3.0 * EI_Nmm2) + P * np.abs(e) / kGA_N
     inside = np.clip(e, 0.0, 0.5 * L)
-    if support == "simple":
-        bend = P * inside**2 * (3 * L - 4 * inside) / (6.0 * EI_Nmm2)
-    else:
-        bend = _clamped_two_load(P, inside, L, EI_Nmm2)
-    return as_value(np.where(e < 0, overhang, bend + P * inside / kGA_N))
-
-
-def _clamped_two_load(P, e, L, EI):
-    """Deflection under each of two symmetric loads P at e from the ends of a clamped-clamped beam:
-    the simply supported one less the end moments' rotation, M = P e (L - e)/L each end, which
-    lift the load point by M e (L - e)/(2 EI)."""
-    simple = P * e**2 * (3 * L - 4 * e) / (6.0 * EI)
-    M = P * e * (L - e) / L
-    return simple - M * e * (L - e) / (2.0 * EI)
+    bend = P * inside**2 * (3 * L - 4 * inside) / (6.0 * EI_Nmm2)
+    M = P * inside * (L - inside) / L
+    clamped = bend - M * inside * (L - inside) / (2.0 * EI_Nmm2)
+    shear, beyond = P * inside / kGA_N, e < 0
+    return as_value(np.where(beyond, overhang, bend + shear)), as_value(np.where(beyond, overhang, clamped + shear))
 
 
 def end_fixity(k_rot_Nmm_per_rad, EI_Nmm2, span_mm) -> float | np.ndarray:
@@ -82,3 +93,52 @@ def end_fixity(k_rot_Nmm_per_rad, EI_Nmm2, span_mm) -> float | np.ndarray:
     held = np.isinf(k)
     finite = np.where(held, 0.0, k)
     return as_value(np.where(held, 1.0, finite / (finite + beam)))
+
+
+def section_EI_kGA(
+    depth_mm: float,
+    thickness_mm,
+    E_prime_MPa: float,
+    G_MPa: float,
+    hole_width_mm: float = 0.0,
+    hole_z_mm: tuple = (0.0, 0.0),
+    insert=None,
+    insert_z_mm=None,
+) -> tuple:
+    """(E'I in N mm^2, kappa G A in N) of a rectangle ``depth_mm`` x ``thickness_mm`` less a hole
+    ``hole_width_mm`` wide (along the depth) between heights ``hole_z_mm`` above its bottom, and
+    with an optional bonded ``insert`` (:class:`~mst_cli.model.load_path.Insert`, its underside at
+    ``insert_z_mm`` [default: its own ``z_mm``] above the bottom, over the whole depth, replacing
+    the TPU there): the transformed section about its own neutral axis. Thicknesses and heights
+    may be arrays."""
+    b, T = depth_mm, thickness_mm
+    # strips (z0, z1, width x modulus), parallel axes about the modulus-weighted centroid; a hole
+    # of no width adds exactly nothing to any sum (a plate's or the cover's section: not computed)
+    strips = [(0.0, T, b * E_prime_MPa)]
+    if hole_width_mm:
+        strips.append((hole_z_mm[0], hole_z_mm[1], -hole_width_mm * E_prime_MPa))
+        hole_height = np.maximum(np.subtract(hole_z_mm[1], hole_z_mm[0]), 0.0)
+        shear = SHEAR_FACTOR * G_MPa * (b * np.asarray(T) - hole_width_mm * hole_height)
+    else:
+        shear = SHEAR_FACTOR * G_MPa * (b * np.asarray(T))
+    if insert is not None:
+        z0 = insert.z_mm if insert_z_mm is None else insert_z_mm
+        z1 = z0 + insert.thickness_mm
+        bi = b if insert.depth_mm is None else min(insert.depth_mm, b)  # the plate's own depth
+        strips.append((z0, z1, bi * (insert.modulus_MPa - E_prime_MPa)))
+        shear = shear + SHEAR_FACTOR * bi * insert.thickness_mm * (insert.shear_modulus_MPa - G_MPa)
+    EA = zc_EA = EI = 0  # the strips' sums, in order (plain loops: the design loop's small batches)
+    for z0, z1, w in strips:
+        EA = EA + w * (z1 - z0)
+        zc_EA = zc_EA + w * (z1 - z0) * 0.5 * (z0 + z1)
+    zc = zc_EA / EA
+    for z0, z1, w in strips:
+        EI = EI + w * ((z1 - z0) ** 3 / 12.0 + (z1 - z0) * (0.5 * (z0 + z1) - zc) ** 2)
+    return as_value(EI), as_value(shear)
+
+
+@functools.lru_cache(maxsize=64)
+def plain_section(depth_mm: float, thickness_mm: float, E_prime_MPa: float, G_MPa: float) -> tuple:
+    """:func:`section_EI_kGA` of a plain rectangle of given numbers: the cover alone's, the same
+    for every candidate of a design run (computed once, not once a kernel call)."""
+    return section_EI_kGA(depth_mm, thickness_mm, E_prime_MPa, G_MPa)

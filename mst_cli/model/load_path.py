@@ -43,11 +43,20 @@ from typing import Any
 
 import numpy as np
 
+from mst_cli.model.beams import SHEAR_FACTOR as SHEAR_FACTOR  # the section's and one-support forms, re-exported
 from mst_cli.model.beams import as_value as _value
-from mst_cli.model.beams import end_fixity, strip_bending_mm_per_N, strip_shear_mm_per_N, two_load_mm_per_N
+from mst_cli.model.beams import (
+    end_fixity,
+    plain_section,
+    strip_bending_pair_mm_per_N,
+    strip_shear_mm_per_N,
+    two_load_pair_mm_per_N,
+)
+from mst_cli.model.beams import section_EI_kGA as section_EI_kGA
+from mst_cli.model.beams import strip_bending_mm_per_N as strip_bending_mm_per_N
+from mst_cli.model.beams import two_load_mm_per_N as two_load_mm_per_N
 from mst_cli.model.cell import pad_half_width_mm, wall_centreline_length_mm
 
-SHEAR_FACTOR = 5.0 / 6.0  # kappa of a rectangular section
 # a fingertip pressed on the face: a contact patch about 6 mm wide (the width the issue's
 # independent check presses over); the press runs the whole depth (a strip, in plane strain)
 FINGERTIP_PATCH_MM = 6.0
@@ -66,38 +75,6 @@ def wall_head_restraint_Nmm_per_rad(theta_rad, t_mm, h_mm, depth_mm, E_prime_MPa
     c = WALL_FAR_END[support]
     t = np.asarray(t_mm, dtype=float)
     return c * E_prime_MPa * depth_mm * t**3 / 12.0 / wall_centreline_length_mm(theta_rad, t, h_mm)
-
-
-def section_EI_kGA(
-    depth_mm: float,
-    thickness_mm,
-    E_prime_MPa: float,
-    G_MPa: float,
-    hole_width_mm: float = 0.0,
-    hole_z_mm: tuple = (0.0, 0.0),
-    insert: Insert | None = None,
-    insert_z_mm=None,
-) -> tuple:
-    """(E'I in N mm^2, kappa G A in N) of a rectangle ``depth_mm`` x ``thickness_mm`` less a hole
-    ``hole_width_mm`` wide (along the depth) between heights ``hole_z_mm`` above its bottom, and
-    with an optional bonded ``insert`` (:class:`Insert`, its underside at ``insert_z_mm`` [default:
-    its own ``z_mm``] above the bottom, over the whole depth, replacing the TPU there): the
-    transformed section about its own neutral axis. Thicknesses and heights may be arrays."""
-    b, T = depth_mm, thickness_mm
-    # strips (z0, z1, width x modulus), parallel axes about the modulus-weighted centroid
-    strips = [(0.0, T, b * E_prime_MPa), (hole_z_mm[0], hole_z_mm[1], -hole_width_mm * E_prime_MPa)]
-    hole_height = np.maximum(np.subtract(hole_z_mm[1], hole_z_mm[0]), 0.0)
-    shear = SHEAR_FACTOR * G_MPa * (b * np.asarray(T) - hole_width_mm * hole_height)
-    if insert is not None:
-        z0 = insert.z_mm if insert_z_mm is None else insert_z_mm
-        z1 = z0 + insert.thickness_mm
-        bi = b if insert.depth_mm is None else min(insert.depth_mm, b)  # the plate's own depth
-        strips.append((z0, z1, bi * (insert.modulus_MPa - E_prime_MPa)))
-        shear = shear + SHEAR_FACTOR * bi * insert.thickness_mm * (insert.shear_modulus_MPa - G_MPa)
-    EA = sum(w * (z1 - z0) for z0, z1, w in strips)
-    zc = sum(w * (z1 - z0) * 0.5 * (z0 + z1) for z0, z1, w in strips) / EA
-    EI = sum(w * ((z1 - z0) ** 3 / 12.0 + (z1 - z0) * (0.5 * (z0 + z1) - zc) ** 2) for z0, z1, w in strips)
-    return _value(EI), _value(shear)
 
 
 @dataclass(frozen=True)
@@ -255,8 +232,8 @@ def cap_mm_per_N(scene: MemberScene, t_top_mm, head_mm, walls_Nmm_per_rad) -> An
     )  # fmt: skip
     span = 2.0 * head_mm
     fix = end_fixity(walls_Nmm_per_rad, EI, span)
-    bend = [strip_bending_mm_per_N(span, s.patch_mm, EI, b) for b in SUPPORTS]
-    return bend[0] - fix * (bend[0] - bend[1]) + strip_shear_mm_per_N(span, s.patch_mm, kGA)
+    simple, clamped = strip_bending_pair_mm_per_N(span, s.patch_mm, EI)
+    return simple - fix * (simple - clamped) + strip_shear_mm_per_N(span, s.patch_mm, kGA)
 
 
 def plates_mm_per_N(scene: MemberScene, t_below_mm, t_above_mm, head_below_mm, head_above_mm, walls_below) -> Any:
@@ -266,8 +243,8 @@ def plates_mm_per_N(scene: MemberScene, t_below_mm, t_above_mm, head_below_mm, h
     s = scene
     EI_p, kGA_p = section_EI_kGA(s.depth_mm, t_below_mm + s.plate_mm + t_above_mm, s.E_prime_MPa, s.G_MPa)
     fix = end_fixity(walls_below, EI_p, 2.0 * head_below_mm)
-    plate = [two_load_mm_per_N(2.0 * head_below_mm, head_below_mm - head_above_mm, EI_p, kGA_p, b) for b in SUPPORTS]
-    return plate[0] - fix * (plate[0] - plate[1])
+    simple, clamped = two_load_pair_mm_per_N(2.0 * head_below_mm, head_below_mm - head_above_mm, EI_p, kGA_p)
+    return simple - fix * (simple - clamped)
 
 
 def cover_parts_mm_per_N(scene: MemberScene, t_bottom_mm, pad_mm, head_mm) -> tuple:
@@ -276,7 +253,7 @@ def cover_parts_mm_per_N(scene: MemberScene, t_bottom_mm, pad_mm, head_mm) -> tu
     s = scene
     E, G, D = s.E_prime_MPa, s.G_MPa, s.depth_mm
     return housing_mm_per_N(
-        s, head_mm, pad_mm, section_EI_kGA(D, s.cover_mm + t_bottom_mm, E, G), section_EI_kGA(D, s.cover_mm, E, G)
+        s, head_mm, pad_mm, section_EI_kGA(D, s.cover_mm + t_bottom_mm, E, G), plain_section(D, s.cover_mm, E, G)
     )
 
 
@@ -305,26 +282,30 @@ def housing_mm_per_N(scene: MemberScene, head_mm, pad_mm, cover_pad, cover_alone
     x_pad = np.clip(L2 - np.asarray(pad_mm, dtype=float), 0.0, L2)  # where the pad starts, from the edge
     (EI_in, kGA_in), (EI_out, kGA_out) = cover_pad, cover_alone
 
-    def over_half_span(j: int):  # int_0^{L/2} min(x, e)^j / E'I dx, the section changing at x_pad
-        def prim(x):
-            inside = np.minimum(x, e)
-            return inside ** (j + 1) / (j + 1) + e**j * np.maximum(x - e, 0.0)
+    # int_0^{L/2} min(x, e)^j / E'I dx, the section changing at x_pad, through the antiderivative
+    # prim_j(x) = min(x, e)^(j+1) / (j+1) + e^j max(x - e, 0); prim_j(0) = 0 (e is finite, >= 0)
+    inside_pad, inside_L2 = np.minimum(x_pad, e), np.minimum(L2, e)
+    beyond_pad, beyond_L2 = np.maximum(x_pad - e, 0.0), np.maximum(L2 - e, 0.0)
 
-        return (prim(x_pad) - prim(0.0)) / EI_out + (prim(L2) - prim(x_pad)) / EI_in
+    def over_half_span(j: int):
+        at_pad = inside_pad ** (j + 1) / (j + 1) + e**j * beyond_pad
+        return at_pad / EI_out + (inside_L2 ** (j + 1) / (j + 1) + e**j * beyond_L2 - at_pad) / EI_in
 
     B, C1, C2 = over_half_span(0), over_half_span(1), over_half_span(2)
     shear = P * (np.minimum(e, x_pad) / kGA_out + np.maximum(e - x_pad, 0.0) / kGA_in)
     if H <= 0.0:
         return _value(P * C2 - P * C1 / B * C1 + shear), _value(0.0 * head)
     over_slot, walls = [], []
+    over = e > 0  # the foot over the slot, else on the column
+    PC1, bend, on_column, column_turn = P * C1, P * C2, np.maximum(head, L2), 1.0 / B
     for w in s.slot_wall_widths_mm:
         k = E * D * w**3 / 12.0 / H
-        M = np.where(e > 0, (P * C1 - P * 0.5 * w / k) / (B + 1.0 / k), 0.0)
-        a = (L2 + 0.5 * w) - np.maximum(head, L2)  # a foot on the column: its lever about the centre line
-        phi = np.where(e > 0, (P * 0.5 * w + M) / k, P * a / (k + 1.0 / B))
+        M = np.where(over, (PC1 - P * 0.5 * w / k) / (B + 1.0 / k), 0.0)
+        a = (L2 + 0.5 * w) - on_column  # a foot on the column: its lever about the centre line
+        phi = np.where(over, (P * 0.5 * w + M) / k, P * a / (k + column_turn))
         # over the slot the cover's bending and its edge's drop stop when the cover lands on the board
-        over_slot.append(P * C2 - M * C1 + shear + np.where(e > 0, 0.5 * w * phi, 0.0))
-        walls.append(P * H / (E * w * D) + np.where(e > 0, 0.0, a * phi))
+        over_slot.append(bend - M * C1 + shear + np.where(over, 0.5 * w * phi, 0.0))
+        walls.append(P * H / (E * w * D) + np.where(over, 0.0, a * phi))
     return _value(0.5 * (over_slot[0] + over_slot[1])), _value(0.5 * (walls[0] + walls[1]))
 
 

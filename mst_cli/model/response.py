@@ -47,6 +47,7 @@ def regime_kernel(
     cap_mm_per_N: ArrayLike | None = None,
     contact: tuple | None = None,
     regime_extra_mm_per_N: ArrayLike | None = None,
+    capped_lock_N: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Lock forces and secant sensitivities of many L0 stacks at once, the members that are not
     layers (cap, plates, cover) in series as a linear spring.
@@ -64,6 +65,8 @@ def regime_kernel(
                                                 (the cover landing on the board) [default None]
     regime_extra_mm_per_N : array (..., n), optional  a compliance added in each regime (the
                                                 whole-part rung's correction) [default None]
+    capped_lock_N : array (..., n), optional    :func:`capped_lock_forces_N` of these, when the
+                                                caller has them [default: computed]
 
     Returns
     -------
@@ -74,15 +77,16 @@ def regime_kernel(
     """
     k = np.asarray(k_N_per_mm, dtype=float)
     R = k * np.asarray(d_lock_mm, dtype=float) if lock_force_N is None else np.asarray(lock_force_N, dtype=float)
-    R_sorted = np.sort(capped_lock_forces_N(k, d_lock_mm, R, cap_mm_per_N), axis=-1)
+    Rc = capped_lock_forces_N(k, d_lock_mm, R, cap_mm_per_N) if capped_lock_N is None else capped_lock_N
+    R_sorted = np.sort(Rc, axis=-1)
     F = np.concatenate([np.zeros(R_sorted.shape[:-1] + (1,)), R_sorted], axis=-1)
     d = series_displacement_mm(
-        F, k, d_lock_mm, k_locked_N_per_mm, R, members_mm_per_N, cap_mm_per_N, contact, regime_extra_mm_per_N
+        F, k, d_lock_mm, k_locked_N_per_mm, R, members_mm_per_N, cap_mm_per_N, contact, regime_extra_mm_per_N, Rc
     )
     gap = np.asarray(gap0_mm, dtype=float)[..., None] - d
     B = field_T(gap)
     rel = B / B[..., :1] - 1.0
-    S = np.diff(rel, axis=-1) / np.maximum(np.diff(F, axis=-1), 1e-300)
+    S = (rel[..., 1:] - rel[..., :-1]) / np.maximum(F[..., 1:] - F[..., :-1], 1e-300)  # np.diff's, unwrapped
     return R_sorted, S, gap, B
 
 

@@ -52,6 +52,7 @@ def series_displacement_mm(
     cap_mm_per_N: ArrayLike | None = None,
     contact: tuple | None = None,
     regime_extra_mm_per_N: ArrayLike | None = None,
+    capped_lock_N: np.ndarray | None = None,
 ) -> np.ndarray:
     """Stack compression of L0 layers in series, vectorised over designs, with the members that
     are not layers (``members_mm_per_N``, shape (...), a linear spring) in series too, and the
@@ -64,8 +65,9 @@ def series_displacement_mm(
     the whole-part rung's correction, docs/design.md 4.7).
 
     ``k``, ``d_lock``, ``k_locked`` and ``lock_force_N`` (None: R = k d_lock, bilinear) have
-    shape (..., n_layers); ``force_N`` has shape (..., m) (broadcast against the leading axes).
-    Returns shape (..., m).
+    shape (..., n_layers), and so has ``capped_lock_N``, the capped lock forces when the caller
+    has them (:func:`capped_lock_force_N` of every layer and its cap); ``force_N`` has shape
+    (..., m) (broadcast against the leading axes). Returns shape (..., m).
     """
     k = np.asarray(k_N_per_mm, dtype=float)
     dl = np.asarray(d_lock_mm, dtype=float)
@@ -78,13 +80,19 @@ def series_displacement_mm(
     if contact is not None:  # (C, travel) (...): that part of the members stops after travel (Stack)
         C_c, travel = (np.asarray(a, dtype=float)[..., None] for a in contact)
         d = d - np.maximum(C_c * F[..., 0] - travel, 0.0)
+    # each layer's lock force, where its cap closes its cavity
+    if cap_mm_per_N is None:
+        Rc = R
+    elif capped_lock_N is None:
+        Rc = capped_lock_force_N(k, dl, R, layer_caps(cap_mm_per_N, k.shape))
+    else:
+        Rc = capped_lock_N
     if regime_extra_mm_per_N is not None:
-        Rs = R if cap_mm_per_N is None else capped_lock_force_N(k, dl, R, layer_caps(cap_mm_per_N, k.shape))
-        d = d + regime_extra_displacement_mm(F[..., 0], np.sort(Rs, axis=-1), regime_extra_mm_per_N)
+        d = d + regime_extra_displacement_mm(F[..., 0], np.sort(Rc, axis=-1), regime_extra_mm_per_N)
     if cap_mm_per_N is None:
         return d
     C = layer_caps(cap_mm_per_N, k.shape)[..., None, :]  # (..., 1, n)
-    Rc = capped_lock_force_N(k, dl, R, C[..., 0, :])[..., None, :]
+    Rc = Rc[..., None, :]
     kl = np.asarray(k_locked_N_per_mm, dtype=float)[..., None, :]
     # before the contact: each layer's own law and its cap's bending; after: locked
     capped = np.where(F <= Rc, d_layer + C * F, dl[..., None, :] + (F - Rc) / kl)
