@@ -95,8 +95,8 @@ def check_whole_part(design, progress: Callable[[str], None] | None = None, spac
     note = (
         f"regime {worst['regime']}: the part as exported gives {worst['rung_uT_per_N']:.4g} uT/N at the chip on "
         f"the whole-part rung, the design states {worst['stated_uT_per_N']:.4g} "
-        f"({100 * worst['error_rel']:+.1f} %, budget {100 * worst['budget_rel']:.0f} %). Most of it is the "
-        f"{MEMBER_WORDS[name]}: {1e3 * blame[name]['rung']:.3g} um/N in the rung against "
+        f"({100 * worst['error_rel']:+.1f} %, budget {100 * worst['budget_rel']:.0f} %). The member the closed "
+        f"form misses most there is the {MEMBER_WORDS[name]}: {1e3 * blame[name]['rung']:.3g} um/N in the rung against "
         f"{1e3 * blame[name]['stated']:.3g} stated; {remedy(name, g, m, parts, stated)}"
     )
     return Check("whole_part", False, measured, expected, note, values=values)
