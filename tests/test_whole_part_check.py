@@ -98,3 +98,15 @@ def test_the_command_fails_naming_the_check_and_writes_its_figures(exports):
 
 def test_without_the_flag_no_rung_is_solved(exports):
     assert "whole_part" not in {c.name for c in mst.check(exports["forward"])}
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ["mohammadi2021", "fingertip"])
+def test_the_bundled_specs_parts_give_what_their_designs_state(name, tmp_path):
+    """The specs as bundled (1.6 mm plates, docs/design.md 4.7's sweep), designed and exported as
+    `mst export SPEC` does: on the whole-part rung their parts are within the 5 / 8 / 20 % budget
+    of what the design states. With the default 0.8 mm plates neither is (-11 / -30 / -39 % and
+    -3 / -18 / -28 %); 20 s each on a quiet 2-core machine (the rung at 0.2 mm on their 0.4 mm walls)."""
+    mst.export(ROOT / "configs" / f"{name}.yaml", tmp_path / "part", stl=True)
+    check = whole_part(mst.check(tmp_path / "part", whole_part=True))
+    assert check.passed, check.note
