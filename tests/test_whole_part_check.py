@@ -57,7 +57,6 @@ def test_the_bundled_forward_part_gives_what_its_design_states(exports):
     for r, budget in zip(regimes, ACCURACY_BUDGET_REL):
         assert r["budget_rel"] == budget
         assert abs(r["error_rel"]) <= budget
-        assert r["error_rel"] == pytest.approx(r["stated_uT_per_N"] / r["rung_uT_per_N"] - 1.0, rel=1e-12)
         assert r["rung_outside_layers_mm_per_N"] > 0.0  # TPU members only add compliance to the layers'
     # every layer that locks stiffens the part, in the rung as in the design
     rung = [r["rung_uT_per_N"] for r in regimes]
