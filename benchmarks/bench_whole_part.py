@@ -29,18 +29,23 @@ small-load figure (docs/design.md 4.7);
 closed form, per regime: where the closed form misses; ``--general`` only the turn per off-centre
 moment and the slide and turn per tangential newton per regime (the rung's three loads on one
 factorised stiffness, wp.press_general) against mst's general load linearised there
-(general_load.linear_response), the layers and the members apart.
+(general_load.linear_response), the layers and the members apart; ``--off-centre`` the same three
+in regime 1 with each member class as printed in turn (the forward design unless ``--configs`` is
+given); ``--base-sway`` the base alone as printed (all above it rigid) pulled: the cover's slide
+against two Timoshenko cantilevers.
 """
 
 from __future__ import annotations
 
 import argparse
 import statistics
+import sys
 from pathlib import Path
 
 import numpy as np
 
 import mst_cli as mst
+from mst_cli.cad.whole_part_check import stated_shear_figures
 from mst_cli.model import load_path as lp
 from mst_cli.model.general_load import linear_response, loaded_stack
 from mst_cli.model.mechanics import layer_laws, uncached_layer_law
@@ -156,12 +161,12 @@ def convergence(spacing: float | None) -> str:
     return "forward design, regime 1: " + "; ".join(cells)
 
 
-def off_centre(spacing: float | None) -> list[str]:
-    """The forward design, regime 1: the magnet's turn per off-centre moment, slide and turn per
-    tangential newton (wp.press_general), as printed, with rigid members, with one member class as
-    printed (the others rigid), and what mst's general-load model gives linearised at small load
+def off_centre(path: Path, spacing: float | None) -> list[str]:
+    """The design at ``path``, regime 1: the magnet's turn per off-centre moment, slide and turn
+    per tangential newton (wp.press_general), as printed, with rigid members, with one member class
+    as printed (the others rigid), and what mst's general-load model gives linearised at small load
     (the part, the layers alone)."""
-    doc = mst.load(ROOT / "configs" / "mohammadi2021-forward.yaml")
+    doc, _ = mst.designed(path)
     g, m = doc.geometry(), doc.material
     rows = ["| members | turn per moment, mrad/(N mm) | slide per tangential N, mm/N | turn per tangential N, mrad/N |"]
     rows.append("|---|---|---|---|")
@@ -181,6 +186,29 @@ def off_centre(spacing: float | None) -> list[str]:
         turn_off, slide_tan, turn_tan = mst_increments(stack, 0.02 * min(t.lock_force_N for t in stack.tilt))
         rows.append(f"| {label} | {turn_off:.3f} | {slide_tan:.3f} | {turn_tan:.3f} |")
     return rows
+
+
+def base_sway_row(path: Path, spacing: float | None) -> str:
+    """The base alone as printed (the layers, plates, cap and magnet rigid), pulled at the top face:
+    the cover's slide per newton (the magnet's slide carried down the rigid body above by its turn)
+    against two Timoshenko cantilevers, the slot's walls from the floor's top to the cover's
+    underside, in plane strain (shear factor 5/6)."""
+    doc, _ = mst.designed(path)
+    g, m = doc.geometry(), doc.material
+    rigid_above = ("layer", "plate", "cap", "insert", "magnet")
+    x = wp.press_general(g, m, wp.PartOptions(spacing_mm=spacing, member_factor=wp.RIGID_FACTOR, scaled=rigid_above))
+    z_magnet = g.z_magnet_bottom_mm + 0.5 * g.magnet.thickness_mm
+    cover_slide = x.pull.side_mm_per_N + x.pull.turn_rad_per_N * (z_magnet - g.z_base_top_mm)
+    E, nu, D = m.youngs_modulus_MPa, m.poisson_ratio, g.depth_mm
+    E_plane, G = E / (1.0 - nu**2), E / (2.0 * (1.0 + nu))
+    H = g.z_cover_bottom_mm - g.housing.base_floor_mm
+    half = 0.5 * g.base_length_mm
+    walls = [w for slot in g.board_slots for w in (slot.x_mm[0] + half, half - slot.x_mm[1])]
+    k = sum(1.0 / (H**3 / (3.0 * E_plane * D * w**3 / 12.0) + H / (5.0 / 6.0 * G * D * w)) for w in walls)
+    return (
+        f"| {doc.name} | {', '.join(f'{w:.2f}' for w in walls)} | {H:.2f} | {g.housing.cover_mm:g} | "
+        f"{cover_slide:.4f} | {1.0 / k:.4f} ({cover_slide * k - 1.0:+.0%}) |"
+    )
 
 
 def general_rows(path: Path, spacing: float | None) -> list[str]:
@@ -220,9 +248,8 @@ def general_rows(path: Path, spacing: float | None) -> list[str]:
 
 def mst_increments(stack, force_N: float) -> tuple[float, float, float]:
     """general_load.linear_response in the rung's units and sign (mrad per N mm, mm/N, mrad/N; a
-    turn that moves the top toward -x is positive)."""
-    per_moment, slide, turn = linear_response(stack, force_N)
-    return -1e3 * per_moment, slide, -1e3 * turn
+    turn that moves the top toward -x is positive): what ``mst check --whole-part`` reports."""
+    return tuple(stated_shear_figures(linear_response(stack, force_N)).values())
 
 
 def main() -> None:
@@ -231,7 +258,12 @@ def main() -> None:
     ap.add_argument("--spacing-mm", type=float, default=None, help="lattice spacing [default: the rung's own]")
     ap.add_argument("--no-convergence", action="store_true")
     ap.add_argument(
-        "--off-centre", action="store_true", help="only the off-centre and tangential loads (forward design, regime 1)"
+        "--off-centre",
+        action="store_true",
+        help="only the off-centre and tangential loads in regime 1, each member class apart [default: forward design]",
+    )
+    ap.add_argument(
+        "--base-sway", action="store_true", help="only the base's sway under a pull against two cantilevers"
     )
     ap.add_argument(
         "--rung-vs-mst", action="store_true", help="only the rung (as printed) against mst's prediction, per regime"
@@ -245,6 +277,7 @@ def main() -> None:
         help="only the off-centre and tangential loads per regime: the rung against mst's general-load model",
     )
     args = ap.parse_args()
+    args.configs_given = any(a.startswith("--configs") for a in sys.argv[1:])
     if args.general:
         print("per regime, mst read at F (N): turn per moment mrad/(N mm), slide per tangential N mm/N, turn per")
         print("tangential N mrad/N; for each: the layers (rung, members rigid / mst, layers alone), what the members")
@@ -271,8 +304,16 @@ def main() -> None:
             print("\n".join(attribution_rows(Path(path), args.spacing_mm)), flush=True)
         return
     if args.off_centre:
-        print("forward design, regime 1, a 6 mm strip 3 mm off centre / pulling along +x:")
-        print("\n".join(off_centre(args.spacing_mm)))
+        for path in args.configs if args.configs_given else [str(ROOT / "configs" / "mohammadi2021-forward.yaml")]:
+            print(f"{Path(path).stem}, regime 1, a 6 mm strip 3 mm off centre / pulling along +x:")
+            print("\n".join(off_centre(Path(path), args.spacing_mm)), flush=True)
+        return
+    if args.base_sway:
+        print("the base alone as printed, pulled at the top face: the cover's slide, mm/N, against two cantilevers")
+        print("| design | walls, mm | wall height, mm | cover, mm | rung | cantilevers (rung / cantilevers - 1) |")
+        print("|---|---|---|---|---|---|")
+        for path in args.configs:
+            print(base_sway_row(Path(path), args.spacing_mm), flush=True)
         return
     if args.rung_vs_mst:
         print("field change per newton at the chip, uT/N (centred 6 mm strip, locked layers closed)")

@@ -158,7 +158,7 @@ def check(
     assert found.stl is not None  # resolve_export found one (need_stl)
     checks = run_checks(load_mesh(found.stl), manifest, nozzle_mm, load_path_max)
     if whole_part:
-        checks.append(_whole_part_check(manifest, found.manifest, progress, rung_spacing_mm))
+        checks += _whole_part_checks(manifest, found.manifest, progress, rung_spacing_mm)
     return CheckResults(checks, found.stl)
 
 
@@ -172,13 +172,18 @@ def _check_options(nozzle_mm: float | None, load_path_max: float | None) -> None
         raise InputError("--load-path-max", load_path_max, "must be a share from 0 to 1")
 
 
-def _whole_part_check(manifest, manifest_path, progress, spacing_mm):
-    """``mst check --whole-part``'s check of the design in export.json (cad.whole_part_check)."""
+def _whole_part_checks(manifest, manifest_path, progress, spacing_mm) -> list:
+    """``mst check --whole-part``'s check of the design in export.json and its shear report
+    (cad.whole_part_check)."""
     if manifest.design is None:
         raise InputError("--whole-part", str(manifest_path), "needs the design in export.json (mst export writes it)")
-    from mst_cli.cad.whole_part_check import check_whole_part  # deferred: scikit-fem's rung
+    # deferred: scikit-fem's rung
+    from mst_cli.cad.whole_part_check import check_whole_part, check_whole_part_shear
 
-    return check_whole_part(manifest.design, progress, spacing_mm)
+    return [
+        check_whole_part(manifest.design, progress, spacing_mm),
+        check_whole_part_shear(manifest.design, progress, spacing_mm),
+    ]
 
 
 def slice(
