@@ -29,9 +29,11 @@ small-load figure (docs/design.md 4.7);
 closed form, per regime: where the closed form misses; ``--general`` only the turn per off-centre
 moment and the slide and turn per tangential newton per regime (the rung's three loads on one
 factorised stiffness, wp.press_general) against mst's general load linearised there
-(general_load.linear_response), the layers and the members apart; ``--off-centre`` the same three
+(general_load.linear_response), the layers and the members apart (``--section``: mst's part
+with ``model.load_path: section``, the members' pose measured on the rung); ``--off-centre`` the same three
 in regime 1 with each member class as printed in turn (the forward design unless ``--configs`` is
-given); ``--base-sway`` the base alone as printed (all above it rigid) pulled: the cover's slide
+given); ``--general-convergence`` those figures in regime 1 on three meshes and at five levers;
+``--base-sway`` the base alone as printed (all above it rigid) pulled: the cover's slide
 against two Timoshenko cantilevers.
 """
 
@@ -51,6 +53,7 @@ from mst_cli.model.general_load import linear_response, loaded_stack
 from mst_cli.model.mechanics import layer_laws, uncached_layer_law
 from mst_cli.model.mechanics import whole_part as wp
 from mst_cli.model.mechanics.continuum import linear_stiffness_N_per_mm
+from mst_cli.model.section_pose import section_member_pose
 from mst_cli.model.stack import Stack
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -161,6 +164,32 @@ def convergence(spacing: float | None) -> str:
     return "forward design, regime 1: " + "; ".join(cells)
 
 
+def general_convergence(path: Path, spacing: float | None, offsets_mm: tuple[float, ...]) -> list[str]:
+    """The design at ``path``, regime 1, as printed: the three general-load figures on the mesh
+    twice as coarse, the production mesh and one twice as fine (with one refinement round fewer
+    and more), then on the production mesh with the off-centre strip at each of ``offsets_mm``
+    (a linear model's turn per moment does not depend on the lever: a sawtooth is the mesh)."""
+    doc, _ = mst.designed(path)
+    g, m = doc.geometry(), doc.material
+    base = wp.default_spacing_mm(g) if spacing is None else spacing
+    rows = [
+        "| mesh | strip offset, mm | turn per moment, mrad/(N mm) | slide per tangential N, mm/N | "
+        "turn per tangential N, mrad/N | dofs | s |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    cases = [(2 * base, wp.DEFAULT_LEVELS - 1, wp.OFF_CENTRE_MM), (base, wp.DEFAULT_LEVELS, wp.OFF_CENTRE_MM)]
+    cases += [(0.5 * base, wp.DEFAULT_LEVELS + 1, wp.OFF_CENTRE_MM)]
+    cases += [(base, wp.DEFAULT_LEVELS, x) for x in offsets_mm if x != wp.OFF_CENTRE_MM]
+    for s, levels, offset in cases:
+        x = wp.press_general(g, m, wp.PartOptions(spacing_mm=s, levels=levels), offset_mm=offset)
+        rows.append(
+            f"| {s:g} mm, {levels} levels | {offset:g} | {1e3 * x.turn_per_moment_rad_per_Nmm:.4f} | "
+            f"{x.pull.side_mm_per_N:.4f} | {1e3 * x.pull.turn_rad_per_N:.3f} | {x.press.dofs} | "
+            f"{x.off_centre.seconds:.1f} |"
+        )
+    return rows
+
+
 def off_centre(path: Path, spacing: float | None) -> list[str]:
     """The design at ``path``, regime 1: the magnet's turn per off-centre moment, slide and turn
     per tangential newton (wp.press_general), as printed, with rigid members, with one member class
@@ -211,7 +240,7 @@ def base_sway_row(path: Path, spacing: float | None) -> str:
     )
 
 
-def general_rows(path: Path, spacing: float | None) -> list[str]:
+def general_rows(path: Path, spacing: float | None, section: bool = False) -> list[str]:
     """Per regime (the layers locked before it closed): the rung's turn per off-centre moment,
     slide and turn per tangential newton (wp.press_general) with its members rigid, against mst's
     general-load model of the layers alone (L0), and what the members add: in the rung, as printed
@@ -223,6 +252,8 @@ def general_rows(path: Path, spacing: float | None) -> list[str]:
     g, m = doc.geometry(), doc.material
     part = Stack(tuple(lp.capped_units(layer_laws(g.layers, m, "spring"), lp.members(g, m))))
     stacks = {kind: loaded_stack(g, m, "spring", 1.0, kind == "part") for kind in ("part", "layers")}
+    if section:  # model.load_path: section: the members' pose measured on the rung (section_pose)
+        stacks["part"] = loaded_stack(g, m, "spring", 1.0, True, section_member_pose(g, m, "spring"))
     locks = np.sort([t.lock_force_N for t in stacks["part"].tilt])
     rows = []
     for r, locked in enumerate(wp.regime_locked(part)):
@@ -252,6 +283,27 @@ def mst_increments(stack, force_N: float) -> tuple[float, float, float]:
     return tuple(stated_shear_figures(linear_response(stack, force_N)).values())
 
 
+def member_studies(args) -> bool:
+    """``--off-centre``, ``--general-convergence`` or ``--base-sway``: print it, True; else False."""
+    if args.off_centre:
+        for path in args.configs if args.configs_given else [str(ROOT / "configs" / "mohammadi2021-forward.yaml")]:
+            print(f"{Path(path).stem}, regime 1, a 6 mm strip 3 mm off centre / pulling along +x:")
+            print("\n".join(off_centre(Path(path), args.spacing_mm)), flush=True)
+    elif args.general_convergence:
+        for path in args.configs:
+            print(f"{Path(path).stem}, regime 1, as printed: the general load's figures against the mesh and the lever")
+            print("\n".join(general_convergence(Path(path), args.spacing_mm, (1.0, 2.0, 4.0, 5.0))), flush=True)
+    elif args.base_sway:
+        print("the base alone as printed, pulled at the top face: the cover's slide, mm/N, against two cantilevers")
+        print("| design | walls, mm | wall height, mm | cover, mm | rung | cantilevers (rung / cantilevers - 1) |")
+        print("|---|---|---|---|---|---|")
+        for path in args.configs:
+            print(base_sway_row(Path(path), args.spacing_mm), flush=True)
+    else:
+        return False
+    return True
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--configs", nargs="*", default=sorted(str(p) for p in (ROOT / "configs").glob("*.yaml")))
@@ -263,6 +315,11 @@ def main() -> None:
         help="only the off-centre and tangential loads in regime 1, each member class apart [default: forward design]",
     )
     ap.add_argument(
+        "--general-convergence",
+        action="store_true",
+        help="only the general load's figures in regime 1 on three meshes and at five levers",
+    )
+    ap.add_argument(
         "--base-sway", action="store_true", help="only the base's sway under a pull against two cantilevers"
     )
     ap.add_argument(
@@ -271,6 +328,7 @@ def main() -> None:
     ap.add_argument(
         "--attribute", action="store_true", help="only each member's drop in the rung vs its closed form, per regime"
     )
+    ap.add_argument("--section", action="store_true", help="with --general: mst's part with model.load_path: section")
     ap.add_argument(
         "--general",
         action="store_true",
@@ -290,7 +348,7 @@ def main() -> None:
         print("| design | regime | F | " + " | ".join(heads) + " |")
         print("|---" * (3 + len(heads)) + "|")
         for path in args.configs:
-            print("\n".join(general_rows(Path(path), args.spacing_mm)), flush=True)
+            print("\n".join(general_rows(Path(path), args.spacing_mm, args.section)), flush=True)
         return
     if args.attribute:
         print("the magnet's drop per newton, um/N (centred 6 mm strip, locked layers closed): L0's layers, the rung")
@@ -303,17 +361,7 @@ def main() -> None:
         for path in args.configs:
             print("\n".join(attribution_rows(Path(path), args.spacing_mm)), flush=True)
         return
-    if args.off_centre:
-        for path in args.configs if args.configs_given else [str(ROOT / "configs" / "mohammadi2021-forward.yaml")]:
-            print(f"{Path(path).stem}, regime 1, a 6 mm strip 3 mm off centre / pulling along +x:")
-            print("\n".join(off_centre(Path(path), args.spacing_mm)), flush=True)
-        return
-    if args.base_sway:
-        print("the base alone as printed, pulled at the top face: the cover's slide, mm/N, against two cantilevers")
-        print("| design | walls, mm | wall height, mm | cover, mm | rung | cantilevers (rung / cantilevers - 1) |")
-        print("|---|---|---|---|---|---|")
-        for path in args.configs:
-            print(base_sway_row(Path(path), args.spacing_mm), flush=True)
+    if member_studies(args):
         return
     if args.rung_vs_mst:
         print("field change per newton at the chip, uT/N (centred 6 mm strip, locked layers closed)")

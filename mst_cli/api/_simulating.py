@@ -20,7 +20,7 @@ from mst_cli.model.ladder import choose_mechanics
 from mst_cli.model.load_bound import bound_report
 from mst_cli.model.load_path import FINGERTIP_PATCH_MM
 from mst_cli.model.mechanics import MODELS
-from mst_cli.model.offcentre import OffCentreResponse, OffsetMap
+from mst_cli.model.offcentre import OffCentreResponse, OffsetMap, section_members_pose
 from mst_cli.model.offcentre import offset_map as run_offset_map
 from mst_cli.model.offcentre import simulate_offcentre as run_offcentre
 from mst_cli.model.response import Response
@@ -209,7 +209,9 @@ def _shear_bound(doc: Document, mechanics: str | None, field_model: str | None, 
     """report.json's shear_bound: each estimate's 1-sigma CRB for the file's chips (one: a centred
     press's Fz, Fx, Fy; more: all five over the middle 60 % of the face)."""
     scene = printed_scene(doc, mechanics, field_model)
-    stack = loaded_stack(scene.geometry, scene.material, scene.mechanics, whole_part=doc.whole_part)
+    g, m = scene.geometry, scene.material
+    members = section_members_pose(g, m, scene.mechanics, doc.whole_part and doc.section_rung)
+    stack = loaded_stack(g, m, scene.mechanics, whole_part=doc.whole_part, members=members)
     return bound_report(stack, doc.chips_mm, shear_ratio, doc.noise_uT_rms)
 
 
@@ -250,6 +252,7 @@ def _offcentre(
         scene.field_model,
         shear_ratio=shear_ratio or (0.0, 0.0),
         whole_part=doc.whole_part,
+        section=doc.section_rung,
     )
 
 
@@ -308,4 +311,5 @@ def _offset_map(doc: Document, mechanics: str | None, field_model: str | None, r
         scene.field_model,
         region_mm=region_mm,
         whole_part=doc.whole_part,
+        section=doc.section_rung,
     )

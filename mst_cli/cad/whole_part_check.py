@@ -31,6 +31,7 @@ from mst_cli.model.general_load import linear_response, loaded_stack
 from mst_cli.model.load_path import ACCURACY_BUDGET_REL, capped_units, cover_landing_N, motion_shares
 from mst_cli.model.mechanics import layer_laws
 from mst_cli.model.mechanics import whole_part as wp
+from mst_cli.model.offcentre import section_members_pose
 from mst_cli.model.response import OVERLOAD_REL, model_members
 from mst_cli.model.stack import Stack
 from mst_cli.parallel import fork_map
@@ -163,7 +164,8 @@ def check_whole_part_shear(
     calibrates the tilt's lever from the part's own off-centre rows (docs/design.md 4.7)."""
     say = progress or (lambda _message: None)
     g, m = design.geometry(), design.material
-    stacks = {"part": loaded_stack(g, m, design.mechanics, 1.0, design.whole_part)}
+    section = section_members_pose(g, m, design.mechanics, design.whole_part and design.section_rung)
+    stacks = {"part": loaded_stack(g, m, design.mechanics, 1.0, design.whole_part, section)}
     stacks["layers"] = loaded_stack(g, m, design.mechanics, 1.0, False)
     force_N = SHEAR_LOAD_REL * min(float(t.lock_force_N) for t in stacks["part"].tilt)
     say("whole-part rung: 2 solves (regime 1 pressed off centre and pulled, as printed and with its members rigid)")

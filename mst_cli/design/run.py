@@ -122,8 +122,15 @@ def with_offcentre_figure(result: DesignResult, region: Sequence[float] | None) 
     if region is not None:
         mech = result.response.mechanics
         scene = printed_scene(result.document, mech, None)
+        doc = result.document
         omap = offset_map(
-            scene.geometry, scene.material, scene.mechanics, scene.field_model, region_mm=(region[0], region[1])
+            scene.geometry,
+            scene.material,
+            scene.mechanics,
+            scene.field_model,
+            region_mm=(region[0], region[1]),
+            whole_part=doc.whole_part,
+            section=doc.section_rung,
         )
         result.off_centre = worst_read_errors(omap) | {"mechanics": mech}
     return result

@@ -52,6 +52,7 @@ from mst_cli.model.assembly import SensorGeometry
 from mst_cli.model.material import Material
 from mst_cli.model.mechanics.lateral import depth_end_factor, lateral_stiffness_N_per_mm
 from mst_cli.model.mechanics.tilt import LayerTiltLaw, TiltError, centred_compression_mm
+from mst_cli.model.member_pose import MemberPose
 from mst_cli.model.stack_pose import layer_pivots_mm, magnet_field_T, magnet_pose, stack_path, tilt_laws
 
 SHEAR_RATIO_MAX = 1.0  # |Fx / Fz|, |Fy / Fz| the model takes (a friction cone of TPU on skin or TPU)
@@ -150,6 +151,21 @@ class LoadedStack:
     tilt: list[LayerTiltLaw]
     lateral: list[LayerLateralLaw]
     lever_mm: np.ndarray  # (n,) the top face's height over each layer's pivot
+    # model.load_path section: what the whole-part rung's members add beyond the closed form
+    members_pose: MemberPose | None = None
+
+    def pose(
+        self, force_N: np.ndarray, d: np.ndarray, tilt: np.ndarray, slide: np.ndarray | None, ratio_x, offset_x_mm
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """(the magnet centre's displacement (m, 3) mm, its rotation vector (m, 3)) from the
+        layers' compressions, tilts and slides at the normal forces ``force_N`` (m,), plus what
+        the members add in section mode (pressed at x = ``offset_x_mm``, the tangential force
+        along x ``ratio_x`` x the normal one)."""
+        shift, rotvec = magnet_pose(self.geometry, d, tilt, slide)
+        if self.members_pose is not None:
+            extra_shift, extra_turn = self.members_pose.pose(force_N, ratio_x, offset_x_mm)
+            shift, rotvec = shift + extra_shift, rotvec + extra_turn
+        return shift, rotvec
 
     def layer_offsets_mm(self, offset_mm, ratio) -> np.ndarray:
         """(n, 2): where each layer sees Fz pressed, the tangential force's moment included;
@@ -173,21 +189,27 @@ def loaded_stack(
     mechanics: str = "spring",
     lever_factor: float = 1.0,
     whole_part: bool = True,
+    members: MemberPose | None = None,
 ) -> LoadedStack:
     """The tilt laws and lateral laws of every layer on the named rung, each layer with the
     part's members its walls load unless ``whole_part`` is False (model.load_path: layers;
-    :func:`~mst_cli.model.stack_pose.tilt_laws`)."""
+    :func:`~mst_cli.model.stack_pose.tilt_laws`), and ``members``, what the whole-part rung's
+    members add beyond their closed form, when given (model.load_path: section,
+    :func:`~mst_cli.model.offcentre.section_members_pose`)."""
     tilts = tilt_laws(geometry, material, mechanics, lever_factor, whole_part)
     build = _l2_law if mechanics == "continuum" else _l0_law
     lateral = [build(t, c, material) for t, c in zip(tilts, geometry.layers)]
     lever = geometry.total_height_mm - layer_pivots_mm(geometry)
-    return LoadedStack(geometry, mechanics, tilts, lateral, lever)
+    return LoadedStack(geometry, mechanics, tilts, lateral, lever, members)
 
 
-def normal_stack(geometry: SensorGeometry, tilts: list[LayerTiltLaw], mechanics: str) -> LoadedStack:
+def normal_stack(
+    geometry: SensorGeometry, tilts: list[LayerTiltLaw], mechanics: str, members: MemberPose | None = None
+) -> LoadedStack:
     """A stack for normal loads alone (the off-centre press's, without the lateral laws' cost):
-    its layers' tilt laws ``tilts``, no slide (a tangential load on it is not modelled)."""
-    return LoadedStack(geometry, mechanics, tilts, [], geometry.total_height_mm - layer_pivots_mm(geometry))
+    its layers' tilt laws ``tilts``, no slide (a tangential load on it is not modelled), and
+    ``members`` (model.load_path: section) when given."""
+    return LoadedStack(geometry, mechanics, tilts, [], geometry.total_height_mm - layer_pivots_mm(geometry), members)
 
 
 def load_path(
@@ -216,7 +238,8 @@ def linear_response(
     turn about +y per newton of that force); turns right-handed, in rad. A small ``offset_mm`` and
     shear ``ratio`` at that normal force: the tilts' elastic equilibrium, plus the layers' tangent
     lateral compliance there (the slides' path integral's slope; the model's slides follow the
-    load's ray, so its own secant is not a linear model's figure)."""
+    load's ray, so its own secant is not a linear model's figure), and in section mode the
+    members' figures of the regime there (their pose's slope along the ray, likewise)."""
     F = np.array([float(force_N)])
 
     def pose(offset: tuple[float, float], shear: tuple[float, float]) -> tuple[float, float]:
@@ -231,7 +254,31 @@ def linear_response(
     unit = (1.0, 0.0)  # slides_mm at ratio 1: the path integral U(F) itself
     lateral = float((stack.slides_mm(F + h, unit) - stack.slides_mm(F, unit))[0, :, 0].sum()) / h
     tangential_N = ratio * float(force_N)
-    return (t_off - t0) / (float(force_N) * offset_mm), (x_t - x0) / tangential_N + lateral, (t_t - t0) / tangential_N
+    per_moment, slide, per_tangential = (
+        (t_off - t0) / (float(force_N) * offset_mm),
+        (x_t - x0) / tangential_N + lateral,
+        (t_t - t0) / tangential_N,
+    )
+    if stack.members_pose is None:
+        return per_moment, slide, per_tangential
+    # the members' pose follows the load's ray too: its tangent there is its regime's figures
+    m = stack.members_pose.at(force_N)
+    return (
+        per_moment + m["turn_per_moment_rad_per_Nmm"],
+        slide + m["slide_mm_per_N"],
+        per_tangential + m["turn_per_tangential_rad_per_N"],
+    )
+
+
+def centred_response(stack: LoadedStack, force_N: float) -> tuple[float, float, float]:
+    """The centred press's tangent at ``force_N``: the magnet's drop (mm/N, down > 0), its
+    motion along +x (mm/N) and its turn about +y (rad/N, right-handed) per newton, by a forward
+    difference of 1e-3 x the force (the model is piecewise linear between its knots)."""
+    F = float(force_N) * np.array([1.0, 1.0 + 1e-3])
+    d, tilt, _ = load_path(stack, F, (0.0, 0.0))
+    shift, rotvec = stack.pose(F, d, tilt, None, 0.0, 0.0)
+    h = F[1] - F[0]
+    return -(shift[1, 2] - shift[0, 2]) / h, (shift[1, 0] - shift[0, 0]) / h, (rotvec[1, 1] - rotvec[0, 1]) / h
 
 
 def layer_states(
@@ -271,7 +318,7 @@ def magnet_pose_of(stack: LoadedStack, theta: np.ndarray, states: np.ndarray) ->
     ``theta`` (m, 5) with the layers in ``states`` (m, n, 3): their compressions and tilts, and
     the slides the loads give."""
     F, rx, ry = load_ratios(theta)
-    return magnet_pose(stack.geometry, states[..., 0], states[..., 1:], stack.slides_mm(F, (rx, ry)))
+    return stack.pose(F, states[..., 0], states[..., 1:], stack.slides_mm(F, (rx, ry)), rx, theta[:, 3])
 
 
 def _chips_field_T(
@@ -297,16 +344,23 @@ def path_fields_T(
     pressed at ``offset_mm`` with the tangential force ``ratio`` x the normal one, each solve
     started from the previous force's (:func:`load_path`): what a table holds at its nodes."""
     d, tilt, slide = load_path(stack, force_N, offset_mm, ratio)
-    return _chips_field_T(stack.geometry, *magnet_pose(stack.geometry, d, tilt, slide), chips_mm)
+    F = np.asarray(force_N, dtype=float)
+    return _chips_field_T(stack.geometry, *stack.pose(F, d, tilt, slide, ratio[0], offset_mm[0]), chips_mm)
 
 
 def pose_field_T(
-    geometry: SensorGeometry, layers: list[LayerTiltLaw], force_N: np.ndarray, offset_mm: tuple[float, float]
+    geometry: SensorGeometry,
+    layers: list[LayerTiltLaw],
+    force_N: np.ndarray,
+    offset_mm: tuple[float, float],
+    members: MemberPose | None = None,
 ) -> np.ndarray:
     """The field at the chip (m, 3) in T for normal forces ``force_N`` (m,) ascending, pressed at
     ``offset_mm``, the layers' tilt laws ``layers`` given: :func:`path_fields_T` on their
-    :func:`normal_stack` (the stack's tilts, the magnet's pose, the exact field)."""
-    return path_fields_T(normal_stack(geometry, list(layers), "given"), np.asarray(force_N, dtype=float), offset_mm)
+    :func:`normal_stack` (the stack's tilts, the members' pose in section mode, the magnet's
+    pose, the exact field)."""
+    stack = normal_stack(geometry, list(layers), "given", members)
+    return path_fields_T(stack, np.asarray(force_N, dtype=float), offset_mm)
 
 
 def fields_T(

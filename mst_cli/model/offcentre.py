@@ -26,6 +26,7 @@ from mst_cli.model.assembly import SensorGeometry
 from mst_cli.model.general_load import loaded_stack, pose_field_T
 from mst_cli.model.material import Material
 from mst_cli.model.mechanics.tilt import LayerTiltLaw, solve_layer_tilt
+from mst_cli.model.member_pose import MemberPose
 from mst_cli.model.part_laws import closure_limit_mm, part_units
 from mst_cli.model.response import Response
 from mst_cli.model.response import simulate as simulate_axial
@@ -82,14 +83,16 @@ def simulate_offcentre(
     overload: float = 0.25,
     shear_ratio: tuple[float, float] = (0.0, 0.0),
     whole_part: bool = True,
+    section: bool = False,
 ) -> OffCentreResponse:
     """The response to a force pressed at ``offset_mm`` = (x0, y0) on the top face, over the
     centred model's force grid (0 to 1 + ``overload`` times the last lock), with a tangential
     force ``shear_ratio`` = (Fx, Fy) / Fz along it (:mod:`mst_cli.model.general_load`); the part's
-    members with the layers unless ``whole_part`` is False (model.load_path: layers). Raises
-    TiltError when a layer's equilibrium is not found."""
+    members with the layers unless ``whole_part`` is False (model.load_path: layers), with
+    ``section`` the whole-part rung's (:func:`section_members_pose`). Raises TiltError when a
+    layer's equilibrium is not found."""
     grid: dict[str, Any] = {"points_per_regime": points_per_regime, "overload": overload, "whole_part": whole_part}
-    axial = simulate_axial(geometry, material, mechanics, field_model, **grid)
+    axial = simulate_axial(geometry, material, mechanics, field_model, **grid, section=section)
     F = axial.force_N
     slide = None
     if shear_ratio[0] == 0.0 and shear_ratio[1] == 0.0:
@@ -101,6 +104,9 @@ def simulate_offcentre(
         slide = stack.slides_mm(F, shear_ratio)
     d, tilt = stack_path(layers, F, offsets)
     shift, rotvec = magnet_pose(geometry, d, tilt, slide)
+    extra = section_members_pose(geometry, material, mechanics, whole_part and section)
+    if extra is not None:  # the members' pose beyond the closed form, on the load's ray
+        shift, rotvec = (a + b for a, b in zip((shift, rotvec), extra.pose(F, shear_ratio[0], offset_mm[0])))
     B = magnet_field_T(geometry, shift, rotvec)
     B_abs = np.linalg.norm(B, axis=-1)
     side_lock = np.array(
@@ -224,12 +230,17 @@ def offset_map(
     fractions: tuple[float, ...] = (0.25, 0.5, 0.75),
     region_mm: tuple[float, float] | None = None,
     whole_part: bool = True,
+    section: bool = False,
 ) -> OffsetMap:
     """:class:`OffsetMap` over a ``grid`` (nx, ny) spanning ``region_frac`` of the top face
     (W x D), or +-``region_mm`` (half extents) when given, at ``fractions`` of every regime's
-    force band; the part's members with the layers unless ``whole_part`` is False."""
+    force band; the part's members with the layers unless ``whole_part`` is False, corrected by the
+    whole-part rung with ``section`` (as :func:`simulate_offcentre`)."""
     # dense: the map reads each force back by interpolating this curve (its error falls like 1/n^2)
-    axial = simulate_axial(geometry, material, mechanics, field_model, points_per_regime=400, whole_part=whole_part)
+    axial = simulate_axial(
+        geometry, material, mechanics, field_model, points_per_regime=400, whole_part=whole_part, section=section
+    )
+    extra = section_members_pose(geometry, material, mechanics, whole_part and section)
     edges = np.concatenate([[0.0], np.asarray(axial.lock_forces_N)])
     F = np.array([lo + f * (hi - lo) for lo, hi in zip(edges[:-1], edges[1:]) for f in fractions])
     regime = np.repeat(np.arange(1, len(edges)), len(fractions))
@@ -241,7 +252,7 @@ def offset_map(
     flag = np.full(err.shape, "ok", dtype=object)
     for iy, y in enumerate(ys):
         for ix, x in enumerate(xs):
-            B_abs = np.linalg.norm(pose_field_T(geometry, layers, F, (float(x), float(y))), axis=-1)
+            B_abs = np.linalg.norm(pose_field_T(geometry, layers, F, (float(x), float(y)), extra), axis=-1)
             err[:, iy, ix] = _read_as_axial(axial, B_abs) / F - 1.0
             flag[:, iy, ix] = axial_reading_flags(axial, B_abs)
     return OffsetMap(xs, ys, F, regime, err, flag)
@@ -266,3 +277,16 @@ def worst_read_errors(m: OffsetMap) -> dict:
         "regimes": regimes,
         "worst_read_error_rel": max(abs(float(r["worst_read_error_rel"])) for r in regimes),
     }
+
+
+def section_members_pose(
+    geometry: SensorGeometry, material: Material, mechanics: str, section: bool
+) -> MemberPose | None:
+    """What the whole-part rung's members add to the magnet's pose beyond their closed form
+    (:func:`~mst_cli.model.section_pose.section_member_pose`, model.load_path: section), or None
+    (``section`` False: the closed form alone)."""
+    if not section:
+        return None
+    from mst_cli.model.section_pose import section_member_pose  # deferred: scikit-fem's rung
+
+    return section_member_pose(geometry, material, mechanics)
