@@ -53,7 +53,7 @@ from mst_cli.model.general_load import linear_response, loaded_stack
 from mst_cli.model.mechanics import layer_laws, uncached_layer_law
 from mst_cli.model.mechanics import whole_part as wp
 from mst_cli.model.mechanics.continuum import linear_stiffness_N_per_mm
-from mst_cli.model.section_pose import section_member_pose
+from mst_cli.model.section_pose import regime_start_N, section_member_pose
 from mst_cli.model.stack import Stack
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -246,18 +246,22 @@ def general_rows(path: Path, spacing: float | None, section: bool = False) -> li
     general-load model of the layers alone (L0), and what the members add: in the rung, as printed
     less rigid; in mst, the part's closed-form members less the layers alone. mst is read where the
     regime starts, where its layers are nearest the rung's linear ones: at 2 % of the first lock,
-    else 2 % past the lock that opens the regime. The rung's sign (a turn that moves the top
-    toward -x is positive)."""
+    else 2 % past the lock that opens the regime, the part and the layers alone each at their own
+    (the part's members close a cavity before its layer locks alone; section_pose.regime_start_N).
+    The rung's sign (a turn that moves the top toward -x is positive)."""
     doc, _ = mst.designed(path)
     g, m = doc.geometry(), doc.material
     part = Stack(tuple(lp.capped_units(layer_laws(g.layers, m, "spring"), lp.members(g, m))))
     stacks = {kind: loaded_stack(g, m, "spring", 1.0, kind == "part") for kind in ("part", "layers")}
     if section:  # model.load_path: section: the members' pose measured on the rung (section_pose)
         stacks["part"] = loaded_stack(g, m, "spring", 1.0, True, section_member_pose(g, m, "spring"))
-    locks = np.sort([t.lock_force_N for t in stacks["part"].tilt])
+    locks = {k: np.sort([t.lock_force_N for t in stacks[k].tilt]) for k in stacks}
+    layer_order = np.argsort([t.lock_force_N for t in stacks["layers"].tilt])
     rows = []
     for r, locked in enumerate(wp.regime_locked(part)):
-        F = 0.02 * locks[0] if r == 0 else 1.02 * locks[r - 1]
+        F = regime_start_N(locks["part"], r)
+        if tuple(sorted(int(j) for j in layer_order[:r])) != tuple(locked):
+            print(f"{doc.name} regime {r + 1}: the layers alone lock in another order than the part", flush=True)
         printed, rigid = (
             wp.press_general(g, m, wp.PartOptions(spacing_mm=spacing, locked=locked, member_factor=factor))
             for factor in (1.0, wp.RIGID_FACTOR)
@@ -266,7 +270,8 @@ def general_rows(path: Path, spacing: float | None, section: bool = False) -> li
             np.array([1e3 * x.turn_per_moment_rad_per_Nmm, x.pull.side_mm_per_N, 1e3 * x.pull.turn_rad_per_N])
             for x in (printed, rigid)
         ]
-        mst_part, mst_layers = (np.array(mst_increments(stacks[k], F)) for k in ("part", "layers"))
+        mst_part = np.array(mst_increments(stacks["part"], F))
+        mst_layers = np.array(mst_increments(stacks["layers"], regime_start_N(locks["layers"], r)))
         cells = []
         for i in range(3):
             layers = f"{rung[1][i]:.3f} / {mst_layers[i]:.3f} ({mst_layers[i] / rung[1][i] - 1:+.0%})"
@@ -339,7 +344,8 @@ def main() -> None:
     if args.general:
         print("per regime, mst read at F (N): turn per moment mrad/(N mm), slide per tangential N mm/N, turn per")
         print("tangential N mrad/N; for each: the layers (rung, members rigid / mst, layers alone), what the members")
-        print("add (rung / mst's closed form) and the part (rung as printed / mst)")
+        print("add (rung / mst's closed form; with --section, its pose measured on the rung) and the part (rung as")
+        print("printed / mst)")
         heads = [
             f"{f}: {w}"
             for f in ("turn/moment", "slide/tangential N", "turn/tangential N")

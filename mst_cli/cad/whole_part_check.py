@@ -164,6 +164,8 @@ def check_whole_part_shear(
     calibrates the tilt's lever from the part's own off-centre rows (docs/design.md 4.7)."""
     say = progress or (lambda _message: None)
     g, m = design.geometry(), design.material
+    if design.whole_part and design.section_rung:
+        say("whole-part rung: the members' pose of model.load_path: section (2 more solves a regime)")
     section = section_members_pose(g, m, design.mechanics, design.whole_part and design.section_rung)
     stacks = {"part": loaded_stack(g, m, design.mechanics, 1.0, design.whole_part, section)}
     stacks["layers"] = loaded_stack(g, m, design.mechanics, 1.0, False)
@@ -201,7 +203,13 @@ def check_whole_part_shear(
     worst_key = max(rows, key=lambda k: abs(rows[k]["error_rel"]))
     within = abs(rows[worst_key]["error_rel"]) <= SHEAR_BUDGET_REL
     return Check(
-        "whole_part_shear", within, measured, expected, shear_note(rows, worst_key, within, force_N), True, values
+        "whole_part_shear",
+        within,
+        measured,
+        expected,
+        shear_note(rows, worst_key, within, force_N, section is not None),
+        info=True,
+        values=values,
     )
 
 
@@ -226,8 +234,9 @@ def stated_shear_figures(response: tuple[float, float, float]) -> dict:
     }
 
 
-def shear_note(rows: dict, key: str, within: bool, force_N: float) -> str:
-    """Where the worst figure's error comes from: the layers' general load, or the members'."""
+def shear_note(rows: dict, key: str, within: bool, force_N: float, section: bool) -> str:
+    """Where the worst figure's error comes from: the layers' general load, or the members'
+    (``section``: mst's members are the rung's own, model.load_path: section)."""
     r = rows[key]
     if within:
         return (
@@ -239,7 +248,13 @@ def shear_note(rows: dict, key: str, within: bool, force_N: float) -> str:
         f"before the first lock ({force_N:.3g} N) mst's {SHEAR_FIGURES[key]} is {100 * r['error_rel']:+.0f} % off "
         f"the part as exported ({r['stated']:.4g} against {r['rung']:.4g}). The layers alone agree to "
         f"{100 * layers:+.0f} %; the members add {r['members_rung']:+.4g} in the rung against "
-        f"{r['members_stated']:+.4g} in mst's closed form, which has no sway of the slot's walls and turns the "
-        f"members only with their layers (docs/design.md 4.7). Shear and offsets read from this part need "
-        f"its own calibration"
+        f"{r['members_stated']:+.4g} in mst"
+        + (
+            " (model.load_path: section, the members' pose measured on this rung: what is left is the layers')"
+            if section
+            else "'s closed form, which has no sway of the slot's walls and turns the members only with their "
+            "layers (docs/design.md 4.7); model.load_path: section puts the rung's measure of them in mst simulate's "
+            "general load"
+        )
+        + ". Shear and offsets read from this part need its own calibration"
     )

@@ -5,8 +5,9 @@ Per regime of the part (the layers locked before it closed, as the axial model's
 correction takes them), the rung's three loads of the plane on one factorised stiffness
 (:func:`~mst_cli.model.mechanics.whole_part.press_general`), as printed and with the members
 rigid: what the members add is the difference. mst's closed form's own share is its general
-load with the members (``whole_part``) less without, linearised where the regime starts (2 % of
-the first lock, else 2 % past the lock that opens it), as ``mst check --whole-part`` reads it.
+load with the members (``whole_part``) less without, each linearised where its own regime starts
+(2 % of the first lock, else 2 % past the lock that opens it: the part's locks come before the
+layers' own, its cap and plates closing a cavity early), as ``mst check --whole-part`` reads it.
 The :class:`~mst_cli.model.member_pose.MemberPose` carries the rung's share less the closed
 form's; its drop is the axial model's own correction (``Members.regime_extra_mm_per_N``), so a
 centred press gives the axial section model's drop, as the closed form's general load gives the
@@ -57,11 +58,15 @@ def section_member_pose(
 
     motions = fork_map(solve, jobs) or [solve(job) for job in jobs]
     closed = {whole: loaded_stack(geometry, material, mechanics, 1.0, whole) for whole in (True, False)}
+    layer_locks = sorted(float(t.lock_force_N) for t in closed[False].tilt)
     rows = []
     for r in range(len(edges)):
-        force_N = REGIME_START_REL * edges[0] if r == 0 else (1.0 + REGIME_START_REL) * edges[r - 1]
         rung = rung_figures(motions[2 * r]) - rung_figures(motions[2 * r + 1])
-        stated = closed_figures(closed[True], force_N) - closed_figures(closed[False], force_N)
+        # each model where its own regime r starts: the part's members lock its layers earlier
+        # than the layers alone lock (a cap bends into its cavity), so one force would read the
+        # layers in another state than the part's
+        with_members = closed_figures(closed[True], regime_start_N(edges, r))
+        stated = with_members - closed_figures(closed[False], regime_start_N(layer_locks, r))
         rows.append(rung - stated)
     figures = dict(zip(MEMBER_POSE_FIGURES, np.array(rows).T))
     figures["drop_mm_per_N"] = np.asarray(parts.regime_extra_mm_per_N, dtype=float)
@@ -70,6 +75,12 @@ def section_member_pose(
     while len(_MEMO) > MEMO_SIZE:
         _MEMO.pop(next(iter(_MEMO)))
     return pose
+
+
+def regime_start_N(locks_N, regime: int) -> float:
+    """Where regime ``regime`` (from 0) of a stack whose sorted lock forces are ``locks_N`` is
+    linearised: 2 % of the first lock, else 2 % past the lock that opens it."""
+    return REGIME_START_REL * locks_N[0] if regime == 0 else (1.0 + REGIME_START_REL) * locks_N[regime - 1]
 
 
 def rung_figures(motion: wp.GeneralMotion) -> np.ndarray:
