@@ -56,6 +56,7 @@ class OffCentreResponse:
     layer_slide_mm: np.ndarray | None = None  # (m, n, 2) each layer's lateral slide (None: no shear)
     rotation_flag: np.ndarray | None = None  # (m,) ROTATION_FLAGS: where the model stops (set by simulate_offcentre)
     whole_part: bool = True  # the members ride with their layers (model.load_path: part), else the layers alone
+    members_pose: MemberPose | None = None  # model.load_path: section: the rung's members beyond the closed form
 
     @property
     def force_x_N(self) -> np.ndarray:
@@ -129,6 +130,7 @@ def simulate_offcentre(
         shear_ratio=(float(shear_ratio[0]), float(shear_ratio[1])),
         layer_slide_mm=slide,
         whole_part=whole_part,
+        members_pose=extra,
     )
     limits = _closure_limits_mm(geometry, material, mechanics, whole_part)
     out.rotation_flag = rotation_flags(out, geometry.layers, limits)

@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from mst_cli.model.member_pose import MEMBER_POSE_FIGURES
 from mst_cli.model.offcentre import SMALL_ROTATION_DEG
 
 if TYPE_CHECKING:
@@ -109,6 +110,24 @@ def offcentre_summary(r: OffCentreResponse) -> dict:
         "rotation": _rotation_summary(r),
         "magnet_tilt_at_last_lock_deg": [float(v) for v in r.magnet_tilt_deg[in_range][-1]],
         "magnet_shift_at_last_lock_mm": [float(v) for v in r.magnet_shift_mm[in_range][-1]],
+        "members_pose": _members_pose(r),
+    }
+
+
+def _members_pose(r: OffCentreResponse) -> dict | None:
+    """report.json's off_centre.members_pose: with model.load_path: section, what the whole-part
+    rung's members add per regime beyond their closed form (None: the closed form alone)."""
+    pose = r.members_pose
+    if pose is None:
+        return None
+    figures = [{k: float(getattr(pose, k)[i]) for k in MEMBER_POSE_FIGURES} for i in range(len(pose.edges_N))]
+    return {
+        "model": "per regime of the part, the whole-part rung's members (as printed less rigid) less the closed "
+        "form's, integrated along the load's ray, in the x-z plane (mst_cli.model.section_pose)",
+        "regimes": [
+            {"regime": i + 1, "ends_at_lock_N": float(edge), **row}
+            for i, (edge, row) in enumerate(zip(pose.edges_N, figures))
+        ],
     }
 
 
