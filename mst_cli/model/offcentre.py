@@ -88,10 +88,9 @@ def simulate_offcentre(
 ) -> OffCentreResponse:
     """The response to a force pressed at ``offset_mm`` = (x0, y0) on the top face, over the
     centred model's force grid (0 to 1 + ``overload`` times the last lock), with a tangential
-    force ``shear_ratio`` = (Fx, Fy) / Fz along it (:mod:`mst_cli.model.general_load`); the part's
-    members with the layers unless ``whole_part`` is False (model.load_path: layers), with
-    ``section`` the whole-part rung's (:func:`section_members_pose`). Raises TiltError when a
-    layer's equilibrium is not found."""
+    force ``shear_ratio`` = (Fx, Fy) / Fz along it (:mod:`mst_cli.model.general_load`); the members
+    with the layers unless ``whole_part`` is False, with ``section`` the whole-part rung's
+    (:func:`section_members_pose`). Raises TiltError when a layer's equilibrium is not found."""
     grid: dict[str, Any] = {"points_per_regime": points_per_regime, "overload": overload, "whole_part": whole_part}
     axial = simulate_axial(geometry, material, mechanics, field_model, **grid, section=section)
     F = axial.force_N
