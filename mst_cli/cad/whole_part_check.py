@@ -34,9 +34,10 @@ from mst_cli.model.general_load import linear_response, loaded_stack
 from mst_cli.model.load_path import ACCURACY_BUDGET_REL, capped_units, cover_landing_N, motion_shares
 from mst_cli.model.mechanics import layer_laws
 from mst_cli.model.mechanics import whole_part as wp
+from mst_cli.model.member_pose import MEMBER_POSE_FIGURES
 from mst_cli.model.offcentre import section_members_pose
 from mst_cli.model.response import OVERLOAD_REL, model_members
-from mst_cli.model.section_pose import regime_start_N
+from mst_cli.model.section_pose import regime_start_N, rung_figures
 from mst_cli.model.stack import Stack
 from mst_cli.parallel import fork_map
 
@@ -227,12 +228,13 @@ def shear_rows(rung_part: dict, rung_rigid: dict, said_part: dict, said_layers: 
 
 
 def rung_shear_figures(motion) -> dict:
-    """The rung's three figures (:data:`SHEAR_FIGURES`; its sign: a turn moving the top toward -x
-    is positive)."""
+    """The rung's three figures (:data:`SHEAR_FIGURES`) in its own sign (a turn moving the top
+    toward -x is positive), from :func:`~mst_cli.model.section_pose.rung_figures` (right-handed)."""
+    figures = dict(zip(MEMBER_POSE_FIGURES, (float(v) for v in rung_figures(motion))))  # JSON: plain floats
     return {
-        "turn_per_moment_mrad_per_Nmm": 1e3 * motion.turn_per_moment_rad_per_Nmm,
-        "slide_per_tangential_mm_per_N": motion.pull.side_mm_per_N,
-        "turn_per_tangential_mrad_per_N": 1e3 * motion.pull.turn_rad_per_N,
+        "turn_per_moment_mrad_per_Nmm": -1e3 * figures["turn_per_moment_rad_per_Nmm"],
+        "slide_per_tangential_mm_per_N": figures["slide_mm_per_N"],
+        "turn_per_tangential_mrad_per_N": -1e3 * figures["turn_per_tangential_rad_per_N"],
     }
 
 
