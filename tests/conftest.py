@@ -8,8 +8,15 @@ from pathlib import Path
 
 import pytest
 
+from mst_cli.sensor import rung_store
+
 os.environ.setdefault("MPLBACKEND", "Agg")  # before any test imports matplotlib
 os.environ.setdefault("MST_CACHE_DIR", tempfile.mkdtemp(prefix="mst-test-cache-"))  # module fixtures too
+
+# The whole-part rung's solves are pure functions of what they are keyed by: one folder for the
+# session's tests (each worker's), so a part solved by one test is not solved again by the next
+# (mst_cli.sensor.rung_store; the tables above stay each test's own).
+rung_store.install(Path(tempfile.mkdtemp(prefix="mst-test-rung-")))
 
 ROOT = Path(__file__).resolve().parents[1]
 CONFIGS = ROOT / "configs"

@@ -15,11 +15,14 @@ from mst_cli.io.outputs import Interrupted as Interrupted
 from mst_cli.io.outputs import check_out_dir
 from mst_cli.model.board_slots import slot_violations
 from mst_cli.model.file_keys import SEED_RANGE as SEED_RANGE
+from mst_cli.sensor import rung_store
 from mst_cli.sensor.document import Document, design_geometry, load_design_document, load_document
 
 if TYPE_CHECKING:
     pass
 
+
+rung_store.install()  # the whole-part rung's solves kept in mst's cache folder, for every verb
 
 # also here for the command line, which imports nothing else of the package: Interrupted (a
 # signal ended a run), SEED_RANGE (--seed's bounds), is_machine_fault and os_error_text

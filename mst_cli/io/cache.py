@@ -35,16 +35,16 @@ def cache_dir() -> Path | None:
         return None
 
 
-def cached_path(name: str) -> Path | None:
-    """Where the file ``name`` is kept (None without a cache folder)."""
-    folder = cache_dir()
+def cached_path(name: str, folder: Path | None = None) -> Path | None:
+    """Where the file ``name`` is kept (in ``folder``, else the cache folder; None without one)."""
+    folder = folder if folder is not None else cache_dir()
     return None if folder is None else folder / name
 
 
-def keep(name: str, write: Callable[[BinaryIO], None]) -> tuple[Path | None, str | None]:
-    """``write`` the file ``name`` into the cache: (its path, None), or (None, why it was not
-    kept). Nothing half-written is left under ``name``."""
-    path = cached_path(name)
+def keep(name: str, write: Callable[[BinaryIO], None], folder: Path | None = None) -> tuple[Path | None, str | None]:
+    """``write`` the file ``name`` into the cache (``folder``, else the cache folder): (its path,
+    None), or (None, why it was not kept). Nothing half-written is left under ``name``."""
+    path = cached_path(name, folder)
     if path is None:
         return None, "no cache folder (set MST_CACHE_DIR)"
     tmp = None

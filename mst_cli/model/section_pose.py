@@ -27,7 +27,6 @@ from mst_cli.model.material import Material
 from mst_cli.model.mechanics import layer_laws
 from mst_cli.model.member_pose import MEMBER_POSE_FIGURES, MemberPose
 from mst_cli.model.response import part_stack
-from mst_cli.parallel import fork_map
 
 REGIME_START_REL = 0.02  # where a regime's closed form is linearised: 2 % into it
 _MEMO: dict = {}
@@ -50,13 +49,12 @@ def section_member_pose(
     part = part_stack(laws, parts)
     edges = tuple(float(f) for f in part.regime_bounds_N[1:])
     opts = wp.PartOptions(patch_mm=patch_mm) if options is None else replace(options, patch_mm=patch_mm)
-    jobs = [(tuple(locked), factor) for locked in wp.regime_locked(part) for factor in (1.0, wp.RIGID_FACTOR)]
-
-    def solve(job: tuple) -> wp.GeneralMotion:
-        locked, factor = job
-        return wp.press_general(geometry, material, replace(opts, locked=locked, member_factor=factor))
-
-    motions = fork_map(solve, jobs) or [solve(job) for job in jobs]
+    jobs = [
+        replace(opts, locked=tuple(locked), member_factor=factor)
+        for locked in wp.regime_locked(part)
+        for factor in (1.0, wp.RIGID_FACTOR)
+    ]
+    motions = wp.general_motions(geometry, material, jobs)
     closed = {whole: loaded_stack(geometry, material, mechanics, 1.0, whole) for whole in (True, False)}
     layer_locks = sorted(float(t.lock_force_N) for t in closed[False].tilt)
     rows = []

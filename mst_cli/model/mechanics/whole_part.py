@@ -19,6 +19,7 @@ the drop times dB_z/dz on the axis at the unloaded gap (:mod:`mst_cli.model.magn
 
 from __future__ import annotations
 
+import contextlib
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
@@ -35,6 +36,7 @@ from mst_cli.model.load_path import (
     members,
 )
 from mst_cli.model.magnet_field import axial_dBz_dz_T_per_mm
+from mst_cli.model.mechanics import rung_keep
 from mst_cli.model.mechanics.whole_part_mesh import TAGS, Region, mesh_section, rect, section_regions
 from mst_cli.model.stack import Stack
 from mst_cli.parallel import fork_map
@@ -88,6 +90,13 @@ class MagnetMotion:
     dofs: int
     seconds: float
     extra: dict = field(default_factory=dict)
+
+
+MOTION_NUMBERS = ("drop_mm_per_N", "side_mm_per_N", "turn_rad_per_N", "dofs", "seconds")
+
+
+def _motion_numbers(motion: MagnetMotion) -> dict:
+    return {f: getattr(motion, f) for f in MOTION_NUMBERS}
 
 
 def part_insert(geometry, options: PartOptions) -> Insert | None:
@@ -252,6 +261,24 @@ class GeneralMotion:
     off_centre: MagnetMotion
     arm_mm: float
 
+    def as_dict(self) -> dict:
+        """Plain numbers (a :class:`RungStore`'s value)."""
+        return {
+            "arm_mm": self.arm_mm,
+            **{k: _motion_numbers(getattr(self, k)) for k in ("press", "pull", "off_centre")},
+        }
+
+    @classmethod
+    def from_dict(cls, d: dict) -> GeneralMotion:
+        """The motion :meth:`as_dict` wrote."""
+        motions = {}
+        for k in ("press", "pull", "off_centre"):
+            drop, side, turn, dofs, seconds = (float(d[k][f]) for f in MOTION_NUMBERS)
+            if not np.all(np.isfinite([drop, side, turn, dofs, seconds])):
+                raise ValueError("a motion that is not a number")
+            motions[k] = MagnetMotion(drop, side, turn, int(dofs), seconds)
+        return cls(**motions, arm_mm=float(d["arm_mm"]))
+
     @property
     def turn_per_moment_rad_per_Nmm(self) -> float:
         """The off-centre press's turn per N mm of its moment, less the centred press's own turn
@@ -314,6 +341,33 @@ def field_per_drop_uT_per_mm(geometry) -> float:
     """|dB_z/dz| on the magnet's axis at the unloaded gap, uT per mm of drop."""
     m = geometry.magnet
     return 1e6 * abs(float(axial_dBz_dz_T_per_mm(geometry.gap0_mm, m.radius_mm, m.thickness_mm, m.remanence_T)))
+
+
+GENERAL_MEMO_SIZE = 24  # press_general solves this process keeps (:func:`general_motions`)
+_GENERAL_MEMO: dict = {}
+
+
+def general_motions(geometry, material, options: Sequence[PartOptions]) -> list[GeneralMotion]:
+    """:func:`press_general` for each of ``options``, the missing ones side by side
+    (:func:`mst_cli.parallel.fork_map`), memoised in this process: ``model.load_path: section``'s
+    members' pose and ``mst check --whole-part``'s shear report ask for the same solves."""
+    keys = [(repr(geometry), repr(material), o) for o in options]
+    for key in dict.fromkeys(k for k in keys if k not in _GENERAL_MEMO):
+        kept = rung_keep.stored("general", key)
+        with contextlib.suppress(KeyError, TypeError, ValueError):  # none kept, or not what was written
+            _GENERAL_MEMO[key] = GeneralMotion.from_dict(kept)  # type: ignore[arg-type]
+    todo = list(dict.fromkeys(k for k in keys if k not in _GENERAL_MEMO))
+
+    def solve(key: tuple) -> GeneralMotion:
+        return press_general(geometry, material, key[2])
+
+    for key, motion in zip(todo, fork_map(solve, todo) or [solve(k) for k in todo]):
+        _GENERAL_MEMO[key] = motion
+        rung_keep.store("general", key, motion.as_dict())
+    out = [_GENERAL_MEMO[k] for k in keys]
+    while len(_GENERAL_MEMO) > GENERAL_MEMO_SIZE:
+        _GENERAL_MEMO.pop(next(iter(_GENERAL_MEMO)))
+    return out
 
 
 def regime_locked(stack) -> list[tuple[int, ...]]:
@@ -391,6 +445,10 @@ def outside_layers(geometry, material, locked_sets, options: PartOptions = PartO
     key = (repr(geometry), repr(material), tuple(tuple(int(j) for j in locked) for locked in locked_sets), options)
     if key in _OUTSIDE_MEMO:  # the same section again (design's last round, then its verification)
         return [dict(row) for row in _OUTSIDE_MEMO[key]]
+    kept = rung_keep.stored("outside", key)
+    if isinstance(kept, list) and _rows_fit(kept, locked_sets):
+        _OUTSIDE_MEMO[key] = kept
+        return [dict(row) for row in kept]
     jobs = [(tuple(locked), factor) for locked in locked_sets for factor in (1.0, RIGID_FACTOR)]
 
     def solve_one(job: tuple) -> MagnetMotion:
@@ -413,9 +471,22 @@ def outside_layers(geometry, material, locked_sets, options: PartOptions = PartO
             }
         )
     _OUTSIDE_MEMO[key] = rows
+    rung_keep.store("outside", key, rows)
     while len(_OUTSIDE_MEMO) > OUTSIDE_MEMO_SIZE:
         _OUTSIDE_MEMO.pop(next(iter(_OUTSIDE_MEMO)))
     return [dict(row) for row in rows]
+
+
+def _rows_fit(rows: list, locked_sets) -> bool:
+    """Whether ``rows`` (a store's) are :func:`outside_layers`'s rows of ``locked_sets``."""
+    numbers = ("part_mm_per_N", "rigid_mm_per_N", "outside_mm_per_N", "dofs", "seconds")
+    try:
+        return len(rows) == len(locked_sets) and all(
+            row["locked"] == [int(j) for j in locked] and all(np.isfinite(float(row[k])) for k in numbers)
+            for row, locked in zip(rows, locked_sets)
+        )
+    except (KeyError, TypeError, ValueError):
+        return False
 
 
 def section_members(geometry, material, laws: tuple, patch_mm: float = FINGERTIP_PATCH_MM, options=None) -> tuple:
