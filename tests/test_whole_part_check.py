@@ -18,6 +18,7 @@ import yaml
 from click.testing import CliRunner
 
 import mst_cli as mst
+from mst_cli import api
 from mst_cli.cad.whole_part_check import SHEAR_FIGURES
 from mst_cli.cli.app import main
 from mst_cli.model.cover_air import air_keeping_cover_off_mm
@@ -54,37 +55,44 @@ def whole_part(results, name: str = "whole_part"):
     return check
 
 
-def test_the_bundled_forward_part_gives_what_its_design_states(forward_checked):
+def test_the_bundled_forward_part_is_softer_than_its_closed_form_like_for_like(forward_checked):
+    """The bundled forward design (the closed form): like for like, the design's linear figure
+    against the rung's, every regime of the part is softer than the closed form states (the TPU
+    members only add compliance, and the closed form holds the plates too stiff), beyond the 5 %
+    budget before the first lock (docs/design.md 4.7: -7.7 / -8.0 / -10.2 %), and the check names
+    the plates. The secant S sits above the linear figure in every regime: the layers' softening
+    that hid the gap when S was judged."""
     results, lines = forward_checked
     check = whole_part(results)
-    assert check.passed, check.note
     assert lines and "whole-part rung" in lines[0]
     regimes = check.values["regimes"]
     assert [r["regime"] for r in regimes] == [1, 2, 3]
     assert [r["locked_layers"] for r in regimes] == [[], [1], [1, 2]]  # layer 1 locks first on this design
     for r, budget in zip(regimes, ACCURACY_BUDGET_REL):
         assert r["budget_rel"] == budget
-        assert abs(r["error_rel"]) <= budget
-        assert r["rung_outside_layers_mm_per_N"] > 0.0  # TPU members only add compliance to the layers'
+        assert r["error_rel"] < 0.0 and r["secant_error_rel"] > r["error_rel"]
+        assert r["rung_outside_layers_mm_per_N"] > r["stated_outside_layers_mm_per_N"] > 0.0
+    assert not check.passed and regimes[0]["error_rel"] < -regimes[0]["budget_rel"]
+    assert check.values["regime_members_mm_per_N"]["regime"] == 1 and "plates" in check.note
     # every layer that locks stiffens the part, in the rung as in the design
     rung = [r["rung_uT_per_N"] for r in regimes]
     assert rung[0] > rung[1] > rung[2]
 
 
-def test_a_cover_that_lands_on_the_board_fails_and_names_the_housing(exports, tmp_path):
+def test_a_cover_that_lands_on_the_board_fails_and_names_the_air_that_keeps_it_off(exports, tmp_path):
+    """The forward part with the default 0.3 mm of air: mst's cover lands on the board at 22.4 N,
+    inside regime 2, and is held there in regime 3, a contact the printed body does not have; like
+    for like regime 3 is then far further off than on the bundled part (0.65 mm of air: -10 %),
+    and the check names the air that keeps the cover off, whatever member it names first."""
     check = whole_part(mst.check(exports["landing"], whole_part=True))
     assert not check.passed
     regimes = check.values["regimes"]
-    # mst's cover stops bending at its landing (22.4 N, inside regime 2); the printed body's never does
-    assert regimes[2]["error_rel"] < -regimes[2]["budget_rel"]
+    assert regimes[2]["error_rel"] < -2.0 * regimes[2]["budget_rel"]  # -47 %
     members = check.values["regime_members_mm_per_N"]
-    assert members["regime"] == 3
-    gaps = {k: v["rung"] - v["stated"] for k, v in members.items() if k != "regime"}
-    assert max(gaps, key=lambda k: abs(gaps[k])) == "housing"
-    assert "housing" in check.note
+    worst = regimes[members["regime"] - 1]
     # the members nearly add in series (docs/design.md 4.7: within a few per cent of the part's drop)
-    outside = regimes[2]["rung_outside_layers_mm_per_N"]
-    total = regimes[2]["rung_uT_per_N"] / check.values["field_per_drop_uT_per_mm"]
+    outside = worst["rung_outside_layers_mm_per_N"]
+    total = worst["rung_uT_per_N"] / check.values["field_per_drop_uT_per_mm"]
     assert abs(sum(v["rung"] for k, v in members.items() if k != "regime") - outside) < 0.05 * total
     # the remedy is the air that keeps the cover off past 1.25 x the range's end, rounded up
     doc = mst.load(exports["landing"].parent / "landing.yaml")
@@ -109,12 +117,33 @@ def test_without_the_flag_no_rung_is_solved(exports):
 
 @pytest.mark.slow
 @pytest.mark.parametrize("name", ["mohammadi2021", "fingertip"])
-def test_the_bundled_specs_parts_give_what_their_designs_state(name, tmp_path):
-    """The specs as bundled (1.6 mm plates, docs/design.md 4.7's sweep), designed and exported as
-    `mst export SPEC` does: on the whole-part rung their parts are within the 5 / 8 / 20 % budget
-    of what the design states. With the default 0.8 mm plates neither is (-11 / -30 / -39 % and
-    -3 / -18 / -28 %); 20 s each on a quiet 2-core machine (the rung at 0.2 mm on their 0.4 mm walls)."""
+def test_the_specs_closed_form_misses_the_plates_like_for_like(name, tmp_path):
+    """The specs as bundled (closed form, 1.6 mm plates), designed and exported as `mst export
+    SPEC` does: like for like, the whole-part rung's part is softer than the design's linear figure
+    in every regime (TPU members the closed form holds too stiff: the walls' roots turning on the
+    plates), by more than the budget, and the check names the plates (docs/design.md 4.7:
+    -10 / -20 / -49 % and -9 / -20 / -32 %). Judged on S, the secant, the layers' softening hid it."""
     mst.export(ROOT / "configs" / f"{name}.yaml", tmp_path / "part", stl=True)
+    check = whole_part(mst.check(tmp_path / "part", whole_part=True))
+    assert not check.passed
+    regimes = check.values["regimes"]
+    assert all(x["error_rel"] < 0.0 for x in regimes)
+    assert all(x["secant_error_rel"] > x["error_rel"] for x in regimes)  # S holds the layers' softening
+    assert "plates" in check.note
+
+
+@pytest.mark.slow
+def test_the_fingertip_spec_in_section_mode_gives_what_its_design_states(tmp_path):
+    """The fingertip spec with ``model.load_path: section``: designed (the rung's correction held
+    until the two agree), exported and checked, its linear figure is the rung's within budget in
+    every regime; the section rounds' solves are the check's (kept in the rung store)."""
+    raw = yaml.safe_load((ROOT / "configs" / "fingertip.yaml").read_text())
+    raw["model"] = {**(raw.get("model") or {}), "load_path": "section"}
+    spec = tmp_path / "fingertip-section.yaml"
+    spec.write_text(yaml.safe_dump(raw, sort_keys=False))
+    result = api.design(spec, out=tmp_path / "design", plot=False)
+    assert result.status == "met", result.reasons
+    mst.export(tmp_path / "design" / "design.yaml", tmp_path / "part", stl=True)
     check = whole_part(mst.check(tmp_path / "part", whole_part=True))
     assert check.passed, check.note
 
@@ -126,11 +155,11 @@ def test_the_shear_report_holds_the_layers_to_the_rung_and_never_fails_the_part(
     into the rung's sign, agree within 5 % (a sign or unit slip in either conversion is a factor
     of -1 or 1000), and past it every figure keeps its sign. The members as printed only add
     compliance: the part slides and turns more than its layers. The report is information: the
-    bundled forward part, whose slide per tangential newton mst's closed form misses by half
-    (docs/design.md 4.7), still passes ``mst check``."""
+    bundled forward part's slide per tangential newton, which mst's closed form misses by half
+    (docs/design.md 4.7), fails nothing."""
     results, lines = forward_checked
     report = whole_part(results, "whole_part_shear")
-    assert report.info and "whole_part_shear" not in results.failed and not results.failed
+    assert report.info and "whole_part_shear" not in results.failed
     assert any("pulled" in line for line in lines)
     regimes = report.values["regimes"]
     assert [r["locked_layers"] for r in regimes] == [[], [1], [1, 2]]  # as the centred check's

@@ -105,11 +105,13 @@ def export(
     "--whole-part",
     is_flag=True,
     help="Also solve the part's section as exported on the whole-part rung (plane strain, every member as "
-    "printed) and fail where its field change per newton at the chip differs from the design's stated figure "
-    "by more than the regime's budget (5 / 8 / 20 %), naming the member the closed form misses. Two solves a "
-    "regime, three more where it fails; two more a regime for a report (never failing) of the turn per "
-    "off-centre moment and the slide and turn per tangential newton in each regime against mst's general "
-    "load: seconds to a few minutes. docs/design.md 4.7.",
+    "printed) and fail where its field change per newton at the chip differs from the design's own linear "
+    "figure (like for like: report.json load_path.regimes[].field_change_small_load_uT_per_N; the secant S is "
+    "shown beside it) by more than the regime's budget (5 / 8 / 20 %), naming the member the closed form "
+    "misses. Two solves a regime, three more where it fails; two more a regime for a report (never failing) "
+    "of the turn per off-centre moment and the slide and turn per tangential newton in each regime against "
+    "mst's general load: seconds to a few minutes the first time, the solves kept in mst's cache. "
+    "docs/design.md 4.7.",
 )
 @handles_input_errors
 def check(path: Path, as_json: bool, nozzle_mm: float | None, load_path_max: float | None, whole_part: bool) -> None:
