@@ -54,7 +54,9 @@ def forward(result, tmp_path):
     path.write_text(yaml.safe_dump(result.design_yaml_dict(), sort_keys=False))
     doc = load_document(path)
     geometry = doc.geometry()
-    resp = simulate(geometry, doc.material, mechanics=doc.mechanics, whole_part=doc.whole_part)
+    resp = simulate(
+        geometry, doc.material, mechanics=doc.mechanics, whole_part=doc.whole_part, section=doc.section_rung
+    )
     S = [r.sensitivity_secant_per_N for r in resp.regimes]
     R = [0.0] * len(doc.layers)
     for r in resp.regimes:
@@ -75,11 +77,17 @@ def random_specs(n_layers, count, seed):
 
 
 # --------------------------------------------------------------------------- the reference spec
-@pytest.mark.parametrize("config, max_height_mm", [("mohammadi2021.yaml", None), ("mohammadi2021-compact.yaml", 16.0)])
+@pytest.mark.parametrize(
+    "config, max_height_mm",
+    [("mohammadi2021.yaml", None), pytest.param("mohammadi2021-compact.yaml", 16.0, marks=pytest.mark.slow)],
+)
 def test_paper_targets_are_met_and_the_compact_part_is_at_most_16_mm(config, max_height_mm, tmp_path):
     """The paper's S = 0.26/0.08/0.03 1/N and R = 0.9/4.8/16.2 N (docs/design.md's table), re-simulated
-    from the written design.yaml; with a board without connector sockets in at most 16 mm."""
-    result = design_document(layers_only(load_document(ROOT / "configs" / config)))
+    from the written design.yaml; with a board without connector sockets in at most 16 mm, the part
+    as the whole-part rung measures it (the compact config's model.load_path: section; its layers
+    alone between rigid plates would need more height than 16 mm)."""
+    doc = load_document(ROOT / "configs" / config)
+    result = design_document(doc if doc.section_rung else layers_only(doc))
     assert result.status == "met", result.reasons
     S, R, designed, geometry, _ = forward(result, tmp_path)
     assert np.all(np.abs(S / [0.26, 0.08, 0.03] - 1) <= 0.02)
