@@ -34,17 +34,23 @@ with ``model.load_path: section``, the members' pose measured on the rung); ``--
 in regime 1 with each member class as printed in turn (the forward design unless ``--configs`` is
 given); ``--general-convergence`` those figures in regime 1 on three meshes and at five levers;
 ``--base-sway`` the base alone as printed (all above it rigid) pulled: the cover's slide
-against two Timoshenko cantilevers.
+against two Timoshenko cantilevers; ``--store`` ``mst simulate`` in section mode from a fresh
+cache folder, then again from the one it filled (the rung's solves kept between runs).
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import statistics
+import subprocess
 import sys
+import tempfile
+import time
 from pathlib import Path
 
 import numpy as np
+import yaml
 
 import mst_cli as mst
 from mst_cli.cad.whole_part_check import stated_shear_figures
@@ -288,8 +294,36 @@ def mst_increments(stack, force_N: float) -> tuple[float, float, float]:
     return tuple(stated_shear_figures(linear_response(stack, force_N)).values())
 
 
+def store_rows(paths, repeats: int = 3) -> list[str]:
+    """``mst simulate`` of each design in section mode (``model.load_path: section``), from a
+    fresh cache folder and once more from the folder the first run filled: median seconds of
+    ``repeats`` pairs, each a subprocess (the rung's solves kept by mst_cli/sensor/rung_store.py)."""
+    mst = Path(sys.executable).with_name("mst")
+    rows = ["| design | first run, s | second run, s | ratio |", "|---|---|---|---|"]
+    for path in paths:
+        raw = yaml.safe_load(Path(path).read_text())
+        raw["model"] = {**(raw.get("model") or {}), "load_path": "section"}
+        times: list[tuple[float, float]] = []
+        for _ in range(repeats):
+            with tempfile.TemporaryDirectory() as tmp:
+                spec = Path(tmp) / "section.yaml"
+                spec.write_text(yaml.safe_dump(raw, sort_keys=False))
+                env = {**os.environ, "MST_CACHE_DIR": str(Path(tmp) / "cache")}
+                pair = []
+                for _run in range(2):
+                    t0 = time.perf_counter()
+                    cmd = [str(mst), "simulate", str(spec), "--no-plot", "--out", str(Path(tmp) / "out")]
+                    subprocess.run(cmd, check=True, capture_output=True, env=env)
+                    pair.append(time.perf_counter() - t0)
+                times.append((pair[0], pair[1]))
+        cold, warm = (statistics.median(t[i] for t in times) for i in (0, 1))
+        rows.append(f"| {Path(path).stem} | {cold:.2f} | {warm:.2f} | {cold / warm:.0f}x |")
+    return rows
+
+
 def member_studies(args) -> bool:
-    """``--off-centre``, ``--general-convergence`` or ``--base-sway``: print it, True; else False."""
+    """``--off-centre``, ``--general-convergence``, ``--store`` or ``--base-sway``: print it, True;
+    else False."""
     if args.off_centre:
         for path in args.configs if args.configs_given else [str(ROOT / "configs" / "mohammadi2021-forward.yaml")]:
             print(f"{Path(path).stem}, regime 1, a 6 mm strip 3 mm off centre / pulling along +x:")
@@ -298,6 +332,10 @@ def member_studies(args) -> bool:
         for path in args.configs:
             print(f"{Path(path).stem}, regime 1, as printed: the general load's figures against the mesh and the lever")
             print("\n".join(general_convergence(Path(path), args.spacing_mm, (1.0, 2.0, 4.0, 5.0))), flush=True)
+    elif args.store:
+        print("mst simulate in section mode: the first run solves the rung, the second reads its solves back")
+        paths = args.configs if args.configs_given else [str(ROOT / "configs" / "mohammadi2021-forward.yaml")]
+        print("\n".join(store_rows(paths)), flush=True)
     elif args.base_sway:
         print("the base alone as printed, pulled at the top face: the cover's slide, mm/N, against two cantilevers")
         print("| design | walls, mm | wall height, mm | cover, mm | rung | cantilevers (rung / cantilevers - 1) |")
@@ -326,6 +364,11 @@ def main() -> None:
     )
     ap.add_argument(
         "--base-sway", action="store_true", help="only the base's sway under a pull against two cantilevers"
+    )
+    ap.add_argument(
+        "--store",
+        action="store_true",
+        help="only mst simulate in section mode, a fresh cache then a filled one [default: forward design]",
     )
     ap.add_argument(
         "--rung-vs-mst", action="store_true", help="only the rung (as printed) against mst's prediction, per regime"

@@ -8,6 +8,8 @@ import time
 
 import click
 
+RUNG_PHASE = "the whole-part rung"  # the phase of mst_cli.design.document's section rounds
+
 
 class DesignProgress:
     """A compact progress line on stderr: live on a terminal, a line every few seconds otherwise.
@@ -21,18 +23,24 @@ class DesignProgress:
         self.t0 = time.monotonic()
         self.last = self.t0
         self.shown = False
+        self.phase = ""
 
     def __call__(self, done: int, total: int, phase: str, worst_err: float) -> None:
         if self.quiet:
             return
         now = time.monotonic()
-        if now - self.t0 < 1.0 or now - self.last < (0.2 if self.tty else 5.0):
+        # a new phase is said at once: the whole-part rung's rounds are few and long
+        new_phase, self.phase = phase != self.phase, phase
+        if now - self.t0 < 1.0 or (not new_phase and now - self.last < (0.2 if self.tty else 5.0)):
             return
         self.last = now
         width = 24
         fill = int(width * done / max(total, 1))
         worst = f"worst error {100 * worst_err:.2f} %" if math.isfinite(worst_err) else "no candidate yet"
-        line = f"mst design: [{'#' * fill}{'.' * (width - fill)}] {done}/{total} evaluations, {phase}, {worst}"
+        if phase.startswith(RUNG_PHASE):  # design.document's section rounds count designs, not evaluations
+            line = f"mst design: [{'#' * fill}{'.' * (width - fill)}] {phase} of at most {total}"
+        else:
+            line = f"mst design: [{'#' * fill}{'.' * (width - fill)}] {done}/{total} evaluations, {phase}, {worst}"
         if self.tty:
             click.echo("\r" + line, err=True, nl=False)
             self.shown = True
