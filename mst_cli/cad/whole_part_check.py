@@ -124,9 +124,10 @@ def regime_row(row: dict, said: dict, per_mm: float) -> dict:
 
 
 def softening_words(regimes: list[dict]) -> str:
-    """What the secant S adds to the linear figure per regime: the open layers' softening before
-    their lock (and the field's rise as the magnet nears the chip), which a linear model of the
-    part does not have (docs/design.md 4.7)."""
+    """What the secant adds to the linear figure per regime: the open layers' softening before
+    their lock, which a linear model of the part does not have (both taken at the unloaded gap's
+    field gradient here; ``mst simulate``'s S also has the field's rise as the magnet nears the
+    chip; docs/design.md 4.7)."""
     excess = ", ".join(f"{100 * (x['stated_secant_uT_per_N'] / x['stated_uT_per_N'] - 1.0):+.0f} %" for x in regimes)
     return (
         f"S, the secant over each regime, is {excess} above the linear figure: the layers' softening "
