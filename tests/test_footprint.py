@@ -70,6 +70,23 @@ def test_a_layout_needing_a_wider_body_is_refused_in_one_line(tmp_path, verb, ch
     assert not out.exists()
 
 
+@pytest.mark.parametrize("verb", ["simulate", "read"])
+def test_section_mode_refuses_a_layout_whose_boards_do_not_fit(tmp_path, verb):
+    """model.load_path: section meshes the part's housing (docs/design.md 4.7), so the part must be
+    one ``mst export`` makes: the layout 52.4 mm wide is refused before any solve, where the
+    closed form simulates it (its cover over the slot is a beam, whatever the slot's place)."""
+    path = with_meter(FORWARD, tmp_path, "adafruit-4022", [(0.0, 0.0), (12.0, 0.0)])
+    section = path.with_name("section.yaml")
+    section.write_text(path.read_text() + "model:\n  load_path: section\n")
+    readings = tmp_path / "r.csv"
+    readings.write_text("Bx_uT,By_uT,Bz_uT\n0,0,-20000\n")
+    out = tmp_path / "out"
+    args = ["simulate", section, "--out", out, "--no-plot"] if verb == "simulate" else ["read", section, readings]
+    one_line_refusal(run(args), "positions_mm", "needs a face 52.4 mm wide")
+    assert not out.exists()
+    assert run(["simulate", path, "--out", tmp_path / "closed", "--no-plot"]).exit_code == 0
+
+
 def test_the_body_is_never_wider_than_the_face(tmp_path):
     res = run(["export", FORWARD, "--stl", "--out", tmp_path / "o"])
     assert res.exit_code == 0, res.output

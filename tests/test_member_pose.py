@@ -66,3 +66,30 @@ def test_a_linear_models_tangent_is_the_regime_it_reads_in():
 def test_every_figure_needs_one_value_per_regime():
     with pytest.raises(ValueError, match="one value per regime"):
         MemberPose(EDGES, *([(0.0, 0.0)] * len(MEMBER_POSE_FIGURES)))
+
+
+def test_the_gradient_is_the_poses_central_differences():
+    p = pose_of(
+        drop_mm_per_N=(0.1, 0.05, 0.02),
+        side_mm_per_N=(0.01, -0.02, 0.005),
+        turn_rad_per_N=(2e-4, 1e-4, -3e-4),
+        slide_mm_per_N=(0.3, 0.2, 0.1),
+        turn_per_moment_rad_per_Nmm=(5e-4, 3e-4, 1e-4),
+        turn_per_tangential_rad_per_N=(4e-3, 2e-3, 1e-3),
+    )
+    # (Fz, Fx, Fy, x, y) in every regime, each a step's width from a lock
+    theta = np.array([[1.0, 0.2, -0.1, 3.0, 1.0], [3.5, -0.7, 0.3, -2.0, 0.0], [12.0, 2.4, 1.0, 5.0, -4.0]])
+
+    def pose(t):
+        F = t[:, 0]
+        return p.pose(F, t[:, 1] / F, t[:, 3])
+
+    dshift, drot = p.pose_gradient(theta)
+    h = 1e-6
+    for k in range(5):
+        up, down = theta.copy(), theta.copy()
+        up[:, k] += h
+        down[:, k] -= h
+        (su, ru), (sd, rd) = pose(up), pose(down)
+        np.testing.assert_allclose(dshift[:, :, k], (su - sd) / (2 * h), atol=1e-8)
+        np.testing.assert_allclose(drot[:, :, k], (ru - rd) / (2 * h), atol=1e-8)

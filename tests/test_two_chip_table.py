@@ -7,6 +7,7 @@ The sensor: configs/mohammadi2021-forward.yaml as printed, spring rung, chips at
 (10, 6) mm (tests/test_shear_reading.py's layout, studies/shear_roundtrip.py's default).
 """
 
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -18,6 +19,7 @@ from mst_cli.model.general_load import fd_steps, field_T, loaded_stack
 from mst_cli.model.load_bound import crb_sigma, field_jacobian
 from mst_cli.model.mechanics.tilt import _residual, solve_layer_tilt
 from mst_cli.model.mechanics.tilt_batch import newton_many, residual_many
+from mst_cli.model.member_pose import MemberPose
 from mst_cli.sensor.as_printed import as_printed
 from mst_cli.sensor.document import load_design_document
 
@@ -123,6 +125,36 @@ def test_the_tables_model_and_its_jacobian(stack, reader):
     # the field table over every pose the tables give: the exact (magpylib's) field
     assert np.max(np.abs(model.fields_of(theta, states, exact=False) - model.fields_of(theta, states))) < FIELD_BOUND_T
     # the chained Jacobian: the tables' model's central differences (steps well inside a cell)
+    J = model.table_jacobian_T(theta, None, None)
+    h = 1e-2 * fd_steps(theta)
+    for i in range(5):
+        up, down = theta.copy(), theta.copy()
+        up[:, i] += h[:, i]
+        down[:, i] -= h[:, i]
+        fd = (model.fields_of(up, model.states(up), False) - model.fields_of(down, model.states(down), False)) / (
+            2 * h[:, i, None]
+        )
+        assert np.max(np.abs(J[:, :, i] - fd)) < 1e-4 * np.max(np.abs(fd)), i
+
+
+def test_the_members_pose_of_section_mode_is_in_the_chained_jacobian(stack, reader):
+    """model.load_path: section adds the whole-part rung's members to the pose, linear in the load
+    per regime (figures of the rung's size, made up here: what is asserted is the chain rule)."""
+    edges = tuple(sorted(t.lock_force_N for t in stack.tilt))
+    figures = {
+        "drop_mm_per_N": (0.01, 0.008, 0.006),
+        "side_mm_per_N": (0.002, -0.001, 0.001),
+        "turn_rad_per_N": (2e-4, 1e-4, -1e-4),
+        "slide_mm_per_N": (0.01, 0.02, 0.005),
+        "turn_per_moment_rad_per_Nmm": (5e-5, 3e-5, 1e-5),
+        "turn_per_tangential_rad_per_N": (1e-3, 5e-4, 2e-4),
+    }
+    section = replace(stack, members_pose=MemberPose(edges, **figures))
+    model = TwoChipModel(section, TWO_CHIPS, reader.model.tables, reader.model.ratio_max)
+    theta = loads(stack, np.random.default_rng(13), 60, (0.02, 1.5), ratio=model.ratio_max, face_frac=1.0)
+    theta = theta[np.min(np.abs(theta[:, :1] - np.array(edges)[None]), axis=1) > 0.05]  # off the knots
+    B = model.fields_of(theta, model.states(theta), False)
+    assert np.max(np.abs(B - reader.model.fields_of(theta, reader.model.states(theta), False))) > 10 * NOISE_T
     J = model.table_jacobian_T(theta, None, None)
     h = 1e-2 * fd_steps(theta)
     for i in range(5):

@@ -94,10 +94,14 @@ def load_design(path: str | Path | Document) -> Document:
 
 
 def _design_and_geometry(design):
-    """(a valid design's Document, its sensor as drawn), the file read once."""
-    if isinstance(design, (str, Path)):
-        return load_design_document(design)
-    return design, design_geometry(design)
+    """(a valid design's Document, its sensor as drawn), the file read once. In section mode the
+    model meshes the part's housing, so its boards must fit as ``mst export`` needs them to."""
+    doc, geometry = (
+        load_design_document(design) if isinstance(design, (str, Path)) else (design, design_geometry(design))
+    )
+    if doc.section_rung:
+        refuse_unhoused_chips(doc)
+    return doc, geometry
 
 
 def refuse_unhoused_chips(doc: Document) -> Document:

@@ -445,8 +445,9 @@ def _fit(
     calibrated inverse map; CalibrationFailed when the fitted values make a design that does not
     load."""
     design_resp = simulate(
-        doc.geometry(), doc.material, mechanics=mechanics, noise_uT_rms=doc.noise_uT_rms, whole_part=doc.whole_part
-    )
+        doc.geometry(), doc.material, mechanics, noise_uT_rms=doc.noise_uT_rms, whole_part=doc.whole_part,
+        section=doc.section_rung,
+    )  # fmt: skip
     check_field_unit(lt, float(design_resp.B_abs_T[0]), float(design_resp.B_abs_T[design_resp.in_range][-1]))
     check_force_unit(lt, design_resp.B_abs_T[design_resp.in_range], design_resp.force_N[design_resp.in_range])
     check_load_test(lt, len(names), design_resp.max_force_N, cal.MIN_POINTS_PER_PARAMETER, cal.MIN_POINTS)

@@ -21,7 +21,8 @@ Forward prediction: :class:`ForwardModel` builds the perturbed cells with the fa
 :meth:`~mst_cli.sensor.sections.CellFamily.cell`, their layer laws (:func:`mst_cli.model.mechanics.layer_law`)
 and the part's stack as ``mst simulate`` builds it (:func:`mst_cli.model.response.part_stack`: the
 cap, plates and cover of :func:`mst_cli.model.load_path.member_parts` in series, the cap
-closing the top layer's cavity; the layers alone for ``model.load_path: layers``), then the field
+closing the top layer's cavity; the layers alone for ``model.load_path: layers``; with ``section``
+the whole-part rung's correction per regime at the design's values), then the field
 at the chip (:func:`mst_cli.model.magnet_field.field_at_chip_T`). The members are TPU but an
 insert is not: at a modulus factor f the TPU's moduli are f E and the insert's its own, so the
 members are re-evaluated at each f (in the design's modulus units, F / f, their compliance is
@@ -51,6 +52,7 @@ Pure: no file or terminal I/O.
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
@@ -60,9 +62,9 @@ import numpy as np
 
 from mst_cli.model import magnet_field as fld
 from mst_cli.model.cell import LENGTH_FLOOR_MM, HexCell
-from mst_cli.model.load_path import Members, MemberScene, member_parts, member_scene
+from mst_cli.model.load_path import FINGERTIP_PATCH_MM, Members, MemberScene, member_parts, member_scene
 from mst_cli.model.mechanics import layer_law
-from mst_cli.model.response import part_stack
+from mst_cli.model.response import model_members, part_stack
 from mst_cli.model.stack import Stack
 from mst_cli.sensor.document import Document
 
@@ -200,7 +202,19 @@ class ForwardModel:
             tpu.support,
             f * float(over_slot),  # the cover's bending over the slot stops on the board (members())
             scene.cover_air_mm,
+            self.section_extra_mm_per_N,
         )
+
+    @functools.cached_property
+    def section_extra_mm_per_N(self) -> tuple[float, ...]:
+        """model.load_path: section: what the whole-part rung adds to the members' closed form per
+        regime, at the design's values and held there through the fit (() otherwise). In the
+        design's modulus units it does not move with the modulus factor: f C(f E) = C(E) for TPU."""
+        if not self.doc.section_rung:
+            return ()
+        g, m = self.geometry, self.doc.material
+        laws = tuple(layer_law(c, m, self.mechanics) for c in g.layers)
+        return model_members(g, m, laws, FINGERTIP_PATCH_MM, True, True).regime_extra_mm_per_N
 
     def stack(self, values: dict, mechanics: str = "spring") -> Stack:
         """The part's stack at these values (forces in the design's modulus units, F / f); a

@@ -19,6 +19,8 @@ from scipy.optimize import minimize_scalar
 
 from mst_cli.calibration.loadtest import Readings
 from mst_cli.model.general_load import pose_field_T
+from mst_cli.model.member_pose import MemberPose
+from mst_cli.model.offcentre import section_members_pose
 from mst_cli.model.stack_pose import tilt_laws
 from mst_cli.sensor.document import Document
 
@@ -26,9 +28,12 @@ LEVER_FACTOR_BOUNDS = (0.3, 3.0)  # a lever a third or three times the rung's: b
 LEVER_STEP = 1e-4  # finite-difference step of the 1-sigma
 
 
-def field_residuals(doc: Document, mechanics: str, rd: Readings, sigma_T: float, lever_factor: float) -> np.ndarray:
+def field_residuals(
+    doc: Document, mechanics: str, rd: Readings, sigma_T: float, lever_factor: float, members: MemberPose | None = None
+) -> np.ndarray:
     """(model - reading) / sigma on every axis of every row (3 n,), rows grouped by their press
-    and solved in ascending force."""
+    and solved in ascending force; ``members``: what the whole-part rung adds (model.load_path:
+    section, not scaled by the lever factor: it is the members', not the layers')."""
     geometry, material = doc.geometry(), doc.material
     layers = tilt_laws(geometry, material, mechanics, lever_factor, doc.whole_part)
     assert rd.offset_mm is not None and rd.force_N is not None
@@ -38,7 +43,7 @@ def field_residuals(doc: Document, mechanics: str, rd: Readings, sigma_T: float,
         rows = np.flatnonzero(np.all(rd.offset_mm == press, axis=1))
         order = rows[np.argsort(rd.force_N[rows], kind="stable")]
         B[order] = pose_field_T(
-            geometry, layers, np.maximum(rd.force_N[order], 0.0), (float(press[0]), float(press[1]))
+            geometry, layers, np.maximum(rd.force_N[order], 0.0), (float(press[0]), float(press[1])), members
         )
     return ((B - rd.B_T) / sigma_T).ravel()
 
@@ -46,19 +51,23 @@ def field_residuals(doc: Document, mechanics: str, rd: Readings, sigma_T: float,
 def fit_lever_factor(doc: Document, mechanics: str, rd: Readings, sigma_T: float) -> dict:
     """calibration.json's ``tilt``: the lever factor with its 1-sigma, the rows and presses it
     came from, and the RMS field residual (uT) at the fit and at factor 1."""
+    members = section_members_pose(doc.geometry(), doc.material, mechanics, doc.section_rung)
+
+    def residuals(f: float) -> np.ndarray:
+        return field_residuals(doc, mechanics, rd, sigma_T, f, members)
 
     def cost(f: float) -> float:
-        return float(np.sum(field_residuals(doc, mechanics, rd, sigma_T, f) ** 2))
+        return float(np.sum(residuals(f) ** 2))
 
     res = minimize_scalar(cost, bounds=LEVER_FACTOR_BOUNDS, method="bounded", options={"xatol": 1e-5})
     f = float(res.x)
-    r = field_residuals(doc, mechanics, rd, sigma_T, f)
-    J = (field_residuals(doc, mechanics, rd, sigma_T, f + LEVER_STEP) - r) / LEVER_STEP
+    r = residuals(f)
+    J = (residuals(f + LEVER_STEP) - r) / LEVER_STEP
     dof = max(r.size - 1, 1)
     chi2_red = float(np.sum(r**2)) / dof
     std = math.sqrt(max(chi2_red, 1.0) / float(J @ J)) if float(J @ J) > 0 else math.inf
     at_bound = min(abs(f - b) for b in LEVER_FACTOR_BOUNDS) < 1e-3
-    r1 = field_residuals(doc, mechanics, rd, sigma_T, 1.0)
+    r1 = residuals(1.0)
     assert rd.offset_mm is not None
     return {
         "lever_factor": f,

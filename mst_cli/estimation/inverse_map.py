@@ -160,6 +160,7 @@ def inverse_map(
         noise_uT_rms=doc.noise_uT_rms,
         points_per_regime=points_per_regime,
         whole_part=doc.whole_part,
+        section=doc.section_rung,  # model.load_path: section reads what mst simulate states
     )
     return InverseMap.from_response(resp), resp
 

@@ -51,12 +51,14 @@ from mst_cli.model.assembly import SensorGeometry
 from mst_cli.model.general_load import loaded_stack, normal_stack, path_fields_T
 from mst_cli.model.load_bound import crb_sigma
 from mst_cli.model.material import Material
+from mst_cli.model.member_pose import MemberPose
 from mst_cli.model.stack_pose import tilt_laws
 from mst_cli.parallel import fork_map
 
 TABLE_FILE = "inverse_table.npz"  # the offset table's file beside the model ...
 SHEAR_TABLE_FILE = "shear_table.npz"  # ... and the shear table's
-TABLE_FORMAT = 3  # bumped when the table's contents change meaning: an older file is rebuilt
+# bumped when the table's contents change meaning: an older file is rebuilt (4: section mode's members)
+TABLE_FORMAT = 4
 FIT_SIGMAS = 3.0  # a cell whose best point is further off the reading than this found no root
 # the direct inverse (the C header takes the same numbers): from each start, Gauss-Newton steps on
 # the table's trilinear field, from the nearest node of the force slabs the reading's |B| allows
@@ -339,20 +341,23 @@ def build_table(
     lever_factor: float = 1.0,
     source: str = "",
     whole_part: bool = True,
+    members: MemberPose | None = None,
 ) -> InverseTable:
     """The model's field at every node: one force path per (u, v) node (in worker processes
     where the platform forks; the same numbers either way). ``offset``: the tilt rung's; ``shear``:
     the general load's, pressed at the centre; the part's members with the layers unless
-    ``whole_part`` is False (model.load_path: layers)."""
+    ``whole_part`` is False (model.load_path: layers), and what the whole-part rung adds to them
+    (``members``, model.load_path: section)."""
     nodes = [(float(u), float(v)) for u in grid.u for v in grid.v]
     if grid.kind == "shear":
-        stack = loaded_stack(geometry, material, mechanics, lever_factor, whole_part)
+        stack = loaded_stack(geometry, material, mechanics, lever_factor, whole_part, members)
 
         def path(node: tuple[float, float]) -> np.ndarray:  # node: (Fx / Fz, Fy / Fz)
             return path_fields_T(stack, grid.force_N, (0.0, 0.0), node)
 
     else:
-        pressed = normal_stack(geometry, tilt_laws(geometry, material, mechanics, lever_factor, whole_part), mechanics)
+        laws = tilt_laws(geometry, material, mechanics, lever_factor, whole_part)
+        pressed = normal_stack(geometry, laws, mechanics, members)
 
         def path(node: tuple[float, float]) -> np.ndarray:  # node: (x0, y0) mm
             return path_fields_T(pressed, grid.force_N, node)

@@ -35,6 +35,7 @@ from mst_cli.model.assembly import SensorGeometry
 from mst_cli.model.general_load import fields_of, layer_states, normal_stack
 from mst_cli.model.load_bound import crb_sigma
 from mst_cli.model.material import Material
+from mst_cli.model.member_pose import MemberPose
 from mst_cli.model.stack_pose import tilt_laws
 
 DEFAULT_MAX_SIGMA_MM = 1.0  # an offset less certain than this is not identifiable
@@ -140,10 +141,11 @@ class OffsetEstimator:
         max_sigma_mm: float = DEFAULT_MAX_SIGMA_MM,
         lever_factor: float = 1.0,
         whole_part: bool = True,
+        members: MemberPose | None = None,  # model.load_path: section: what the whole-part rung adds
     ):
         self.geometry = geometry
         laws = tilt_laws(geometry, material, mechanics, lever_factor, whole_part)
-        self.stack = normal_stack(geometry, laws, mechanics)
+        self.stack = normal_stack(geometry, laws, mechanics, members)
         self.sigma_T = float(field_sigma_T)
         self.force_max_N = float(force_max_N)
         self.max_sigma_mm = float(max_sigma_mm)

@@ -29,6 +29,7 @@ from mst_cli.estimation.shear_reading import CHI2_FLAG, ShearReader
 from mst_cli.estimation.table_store import build_beside, table_beside, table_edges_N, two_chip_layer_tables
 from mst_cli.model.general_load import loaded_stack
 from mst_cli.model.load_bound import crb_sigma
+from mst_cli.model.offcentre import section_members_pose
 from mst_cli.sensor.document import Document
 
 if TYPE_CHECKING:  # the two-chip reader's compiled kernels load numba: only a two-chip read imports it
@@ -159,7 +160,9 @@ def two_chip_reader(
     # deferred: the two-chip reader's compiled kernels load numba, which no one-chip read needs
     from mst_cli.estimation.two_chip_table import RATIO_MAX, TwoChipModel, TwoChipReader
 
-    stack = loaded_stack(doc.geometry(), doc.material, mechanics, lever, doc.whole_part)
+    g, m = doc.geometry(), doc.material
+    members = section_members_pose(g, m, mechanics, doc.section_rung)
+    stack = loaded_stack(g, m, mechanics, lever, doc.whole_part, members)
     chips = [(float(c[0]), float(c[1])) for c in doc.chips_mm]
     model = TwoChipModel(stack, chips, two_chip_layer_tables(stack, say), RATIO_MAX)
     return TwoChipLoadReader(TwoChipReader(stack, doc.chips_mm, imap.field_resolution_T, model=model), polish)
@@ -185,9 +188,9 @@ def offset_table_reader(
         )
     exact = None
     if polish:
-        exact = OffsetEstimator(
-            doc.geometry(), doc.material, mechanics, sigma_T, force_max_N, max_sigma_mm, lever, doc.whole_part
-        )
+        g, m = doc.geometry(), doc.material
+        members = section_members_pose(g, m, mechanics, doc.section_rung)
+        exact = OffsetEstimator(g, m, mechanics, sigma_T, force_max_N, max_sigma_mm, lever, doc.whole_part, members)
     return OffsetTableReader(table, sigma_T, max_sigma_mm, exact), note
 
 
@@ -211,7 +214,9 @@ def shear_table_reader(
     table, note = table_beside(model_file, doc, mechanics, lever, float(imap.force_N[-1]), "shear", edges)
     exact = None
     if polish:
-        exact = ShearReader(loaded_stack(doc.geometry(), doc.material, mechanics, lever, doc.whole_part))
+        g, m = doc.geometry(), doc.material
+        members = section_members_pose(g, m, mechanics, doc.section_rung)
+        exact = ShearReader(loaded_stack(g, m, mechanics, lever, doc.whole_part, members))
     return ShearTableReader(table, imap.field_resolution_T, exact), note
 
 

@@ -37,6 +37,7 @@ from mst_cli.io.cache import cached_path, keep, touch
 from mst_cli.io.files import read_input_text
 from mst_cli.io.yaml_io import MAX_INPUT_BYTES
 from mst_cli.model.general_load import LoadedStack
+from mst_cli.model.offcentre import section_members_pose
 from mst_cli.model.stack_pose import tilt_laws
 from mst_cli.sensor.as_printed import CALIBRATION_JSON
 from mst_cli.sensor.document import Document
@@ -88,7 +89,9 @@ def build_beside(
     ``edges_N``) for the model in ``model_file``, hashed as current beside it."""
     g = grid_of(kind, doc, force_max_N, grid, edges_N)
     source = table_hash(model_file, mechanics, g)
-    return build_table(doc.geometry(), doc.material, mechanics, g, lever_factor, source, doc.whole_part)
+    geometry, material = doc.geometry(), doc.material
+    members = section_members_pose(geometry, material, mechanics, doc.section_rung)
+    return build_table(geometry, material, mechanics, g, lever_factor, source, doc.whole_part, members)
 
 
 def table_beside(

@@ -228,6 +228,9 @@ class TwoChipModel:
             self.stack.geometry, per_unknown[..., 0], per_unknown[..., 1:], self._slide_gradient(theta)
         )
         dshift, drot = dshift.reshape(m, 5, 3).transpose(0, 2, 1), drot.reshape(m, 5, 3).transpose(0, 2, 1)
+        if self.stack.members_pose is not None:  # section mode: the members' pose moves with the load itself
+            extra_shift, extra_rot = self.stack.members_pose.pose_gradient(theta)
+            dshift, drot = dshift + extra_shift, drot + extra_rot
         B, dB_dq, dB_drot = self.field_table.field_T(*self._seen(*self.pose(theta, states)))
         assert dB_dq is not None and dB_drot is not None
         k = len(self.chips_mm)

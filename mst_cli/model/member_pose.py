@@ -65,6 +65,30 @@ class MemberPose:
         """The figure's compliance integrated from 0 to each force (m,)."""
         return regime_extra_displacement_mm(force_N, self.edges_N, getattr(self, figure))
 
+    def pose_gradient(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(d shift (m, 3, 5) mm, d rotation vector (m, 3, 5)): :meth:`pose`'s derivative in the
+        loads ``theta`` (m, 5) = (Fz N, Fx N, Fy N, x mm, y mm), the ratio rx = Fx / Fz (0 at Fz <= 0).
+        Each figure's integral W has its regime's figure for slope (:meth:`at`: right-continuous
+        at a lock); d rx / dFz = -rx / Fz, d rx / dFx = 1 / Fz."""
+        theta = np.atleast_2d(np.asarray(theta, dtype=float))
+        F, x = theta[:, 0], theta[:, 3]
+        safe = np.where(F > 0.0, F, 1.0)
+        rx = np.where(F > 0.0, theta[:, 1] / safe, 0.0)
+        r = np.minimum(np.searchsorted(self.edges_N, F, side="right"), len(self.edges_N) - 1)
+        W = {k: self._integral(F, k) for k in MEMBER_POSE_FIGURES}
+        c = {k: np.asarray(getattr(self, k))[r] for k in MEMBER_POSE_FIGURES}
+        drx_dF, drx_dFx = -rx / safe, 1.0 / safe
+        dshift, drot = np.zeros((len(F), 3, 5)), np.zeros((len(F), 3, 5))
+        dshift[:, 0, 0] = c["side_mm_per_N"] + drx_dF * W["slide_mm_per_N"] + rx * c["slide_mm_per_N"]
+        dshift[:, 0, 1] = drx_dFx * W["slide_mm_per_N"]
+        dshift[:, 2, 0] = -c["drop_mm_per_N"]
+        tpt = "turn_per_tangential_rad_per_N"
+        turn_F = c["turn_rad_per_N"] + x * c["turn_per_moment_rad_per_Nmm"] + drx_dF * W[tpt] + rx * c[tpt]
+        drot[:, 1, 0] = turn_F
+        drot[:, 1, 1] = drx_dFx * W[tpt]
+        drot[:, 1, 3] = W["turn_per_moment_rad_per_Nmm"]
+        return dshift, drot
+
     def pose(self, force_N, ratio_x, offset_x_mm) -> tuple[np.ndarray, np.ndarray]:
         """(shift (m, 3) mm, rotation vector (m, 3) rad) the members add at the normal forces
         ``force_N`` (m,), the tangential force along x ``ratio_x`` (m,) x the normal one, pressed

@@ -21,6 +21,7 @@ from mst_cli.estimation.load_readings import LOAD_COLUMNS, LoadReadings
 from mst_cli.estimation.offset_reading import OFFSET_COLUMNS, OffsetEstimator, OffsetReadings
 from mst_cli.estimation.table_reader import OffsetTableReader, ShearTableReader, TwoChipLoadReader
 from mst_cli.model.chip import ChipSetting
+from mst_cli.model.offcentre import section_members_pose
 from mst_cli.readout.rig_reading import (
     BranchForces,
     follow_branches,
@@ -271,4 +272,5 @@ class ForceReader:
             max_sigma_mm,
             self.record.lever_factor() if self.record is not None else 1.0,
             doc.whole_part,
+            section_members_pose(doc.geometry(), doc.material, mechanics, doc.section_rung),
         )

@@ -1,0 +1,111 @@
+"""``model.load_path: section`` on the read side: ``mst read`` and ``mst calibrate`` invert the
+model ``mst simulate`` states.
+
+Before 2026-11-30 the read side took the members' closed form whatever the file said: a
+section-mode design's simulated press read back 9-17 % high (the closed form misses the plates'
+share the rung measures, docs/design.md 4.7), and a calibration absorbed the difference into the
+modulus. These are round trips, so their truth is mst's own section model: they prove the
+inverse and the two commands' agreement, not the model (the rung is checked on its own in
+tests/test_whole_part_rung.py). Each also reads the same fields with the closed form, to show
+the test would see the read side fall back to it.
+
+The calibration test rests on a law, not on the model's output: the section model's members are
+TPU but the insert, and in linear elasticity their compliance scales as 1/E, so a part whose TPU
+is 15 % softer is the nominal part's stack with every TPU compliance x 1/0.85; the fit must find
+the factor (to the insert's share, which does not scale).
+"""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+
+from mst_cli import api
+
+ROOT = Path(__file__).resolve().parents[1]
+FORWARD = ROOT / "configs" / "mohammadi2021-forward.yaml"
+SOFTER = 0.85  # the printed TPU's modulus over the data sheet's in the calibration test
+
+
+def forward_copy(folder: Path, load_path: str, modulus_factor: float = 1.0) -> Path:
+    """The forward design with ``model.load_path`` set, its TPU's modulus scaled."""
+    raw = yaml.safe_load(FORWARD.read_text())
+    raw["model"] = {**(raw.get("model") or {}), "load_path": load_path}
+    raw["material"]["youngs_modulus_MPa"] *= modulus_factor
+    spec = folder / f"forward-{load_path}-{modulus_factor:g}.yaml"
+    spec.write_text(yaml.safe_dump(raw, sort_keys=False))
+    return spec
+
+
+def fields_csv(path: Path, force_N: np.ndarray, B_T: np.ndarray) -> Path:
+    """A readings file of the forces and the fields (T) at them, as a rig writes it."""
+    rows = "".join(f"{f:.6f},{1e6 * b[0]:.4f},{1e6 * b[1]:.4f},{1e6 * b[2]:.4f}\n" for f, b in zip(force_N, B_T))
+    path.write_text("force_N,Bx_uT,By_uT,Bz_uT\n" + rows)
+    return path
+
+
+def quiet(_line: str) -> None:
+    """A design file read as a model warns that its forces are the design's: expected here."""
+
+
+@pytest.fixture(scope="module")
+def section_spec(tmp_path_factory):
+    return forward_copy(tmp_path_factory.mktemp("section"), "section")
+
+
+def test_a_centred_press_reads_back_the_force_mst_simulate_states(section_spec, tmp_path):
+    resp = api.simulate(section_spec)
+    inside = np.flatnonzero(resp.in_range)
+    rows = np.linspace(5, inside[-1] - 5, 12).astype(int)  # every regime, off the ends
+    csv = fields_csv(tmp_path / "fields.csv", resp.force_N[rows], resp.B_T[rows])
+    got = api.read(section_spec, csv, warn=quiet)
+    np.testing.assert_allclose(got.force_N, resp.force_N[rows], rtol=2e-3)
+    closed = api.read(forward_copy(tmp_path, "part"), csv, warn=quiet).force_N[:4]  # regime 1
+    assert np.all(closed / resp.force_N[rows][:4] - 1.0 > 0.05)
+
+
+def test_an_off_centre_press_reads_back_its_force_and_place(section_spec, tmp_path):
+    press_mm = (3.0, 2.0)
+    r = api.simulate_offcentre(section_spec, offset_mm=press_mm)
+    last = r.axial.regimes[-1].force_to_N
+    rows = np.flatnonzero((r.force_N > 0.05 * last) & (r.force_N < 0.95 * last))
+    rows = rows[:: max(1, len(rows) // 10)]
+    csv = fields_csv(tmp_path / "press.csv", r.force_N[rows], r.B_T[rows])
+    got = api.read(section_spec, csv, estimate="offset", polish=True, warn=quiet)
+    placed = got.offset.flag == "ok"  # the lightest press may not tell where it is
+    assert placed.sum() >= len(rows) - 1
+    np.testing.assert_allclose(got.offset.force_N[placed], r.force_N[rows][placed], rtol=5e-3)
+    np.testing.assert_allclose(got.offset.x_mm[placed], press_mm[0], atol=0.01)
+    np.testing.assert_allclose(got.offset.y_mm[placed], press_mm[1], atol=0.01)
+    closed = api.read(forward_copy(tmp_path, "part"), csv, estimate="offset", polish=True, warn=quiet).offset
+    fits = closed.flag == "ok"  # near the range's end the closed form finds no root at all
+    assert np.min(closed.force_N[fits] / r.force_N[rows][fits] - 1.0) > 0.05
+
+
+@pytest.mark.slow
+def test_calibration_finds_a_softer_tpu_in_section_mode(section_spec, tmp_path):
+    printed = api.simulate(forward_copy(tmp_path, "section", SOFTER))
+    rows = np.flatnonzero(printed.in_range)[::4]
+    load_test = fields_csv(tmp_path / "load_test.csv", printed.force_N[rows], printed.B_T[rows])
+    fitted = api.calibrate(section_spec, load_test, params="modulus_factor").fit.values["modulus_factor"]
+    assert abs(fitted / SOFTER - 1.0) < 0.01  # the insert's share does not scale with the TPU
+    closed = api.calibrate(forward_copy(tmp_path, "part"), load_test, params="modulus_factor")
+    assert closed.fit.values["modulus_factor"] / SOFTER - 1.0 < -0.05  # the closed form calls it softer still
+
+
+def test_a_centred_press_with_shear_reads_back_its_tangential_force(section_spec, tmp_path):
+    ratio = (0.2, 0.0)  # along x: the section's plane, where the rung measures the members' slide
+    r = api.simulate_offcentre(section_spec, offset_mm=(0.0, 0.0), shear_ratio=ratio)
+    last = r.axial.regimes[-1].force_to_N
+    rows = np.flatnonzero((r.force_N > 0.1 * last) & (r.force_N < 0.9 * last))
+    rows = rows[:: max(1, len(rows) // 8)]
+    csv = fields_csv(tmp_path / "shear.csv", r.force_N[rows], r.B_T[rows])
+    got = api.read(section_spec, csv, estimate="shear", polish=True, warn=quiet).offset
+    fits = got.flag == "ok"
+    assert fits.sum() >= len(rows) - 1
+    np.testing.assert_allclose(got.force_N[fits], r.force_N[rows][fits], rtol=5e-3)
+    np.testing.assert_allclose(got.shear_x_N[fits], ratio[0] * r.force_N[rows][fits], rtol=0.02)
+    closed = api.read(forward_copy(tmp_path, "part"), csv, estimate="shear", polish=True, warn=quiet).offset
+    ok = closed.flag == "ok"
+    assert np.all(np.abs(closed.shear_x_N[ok] / (ratio[0] * r.force_N[rows][ok]) - 1.0) > 0.05)
