@@ -180,7 +180,8 @@ class ModelSection:
         "with the cap, plates and cover in series in closed form (the cap closing the top layer's cavity as it "
         "bends); `section`, the same with each regime's compliance outside the layers measured by the whole-part "
         "rung (the exported part's section in plane strain, 2 finite-element solves a regime, about 10-30 s; "
-        "`mst design` corrects its closed form by it until the two agree: docs/design.md 4.7); or `layers`, the "
+        "`mst design` corrects its closed form by it until the two agree, `mst calibrate` and `mst read` take it "
+        "too; the boards must fit the face, as `mst export` needs: docs/design.md 4.7); or `layers`, the "
         "layers alone between rigid plates (the ladder's own verification; docs/design.md 4.6)",
     )
     # relative accuracy of layer stiffness and lock force against the continuum reference: the
