@@ -34,6 +34,7 @@ def store(tmp_path, monkeypatch):
     monkeypatch.setattr(wp, "_GENERAL_MEMO", {})
     kept = rung_store.FileRungStore(tmp_path)
     monkeypatch.setattr(rung_keep, "_STORE", [kept])
+    monkeypatch.setattr(rung_keep, "_LISTENER", [])  # a command's listener ends with the test
     doc = mst.load(FORWARD)
     return doc.geometry(), doc.material, solves, tmp_path
 
@@ -46,6 +47,19 @@ def test_a_kept_solve_is_read_back_without_solving(store, monkeypatch):
     assert wp.outside_layers(g, m, LOCKED_SETS) == first and len(solves) == 6
     # the members add what the two solves differ by: 0.1 / (1 + locked) less half of it
     assert [r["outside_mm_per_N"] for r in first] == pytest.approx([0.05, 0.025, 0.05 / 3])
+
+
+def test_a_listener_hears_of_the_solves_to_come_and_not_of_kept_ones(store, monkeypatch):
+    """The command's progress line: said before the solves start, with their count; a kept
+    result is read in silence."""
+    g, m, solves, _ = store
+    heard: list[str] = []
+    rung_keep.set_listener(heard.append)
+    wp.outside_layers(g, m, LOCKED_SETS)
+    assert len(heard) == 1 and heard[0].startswith("whole-part rung: 6 solves of the part's section")
+    monkeypatch.setattr(wp, "_OUTSIDE_MEMO", {})  # a new process: the store has them
+    wp.outside_layers(g, m, LOCKED_SETS)
+    assert len(heard) == 1 and len(solves) == 6
 
 
 @pytest.mark.parametrize(
@@ -86,3 +100,16 @@ def test_the_name_is_the_key_and_the_models_source():
     assert name.startswith("rung/outside-") and name == rung_store.file_name("outside", key)
     assert name != rung_store.file_name("outside", (*key[:2], wp.PartOptions(locked=(0,))))
     assert name != rung_store.file_name("general", key)
+
+
+def test_mst_simulate_says_so_on_stderr_before_it_solves(store, tmp_path):
+    from click.testing import CliRunner
+
+    from mst_cli.cli.app import main
+
+    spec = tmp_path / "section.yaml"
+    spec.write_text(FORWARD.read_text() + "model:\n  load_path: section\n")
+    args = ["simulate", str(spec), "--no-plot", "--out"]
+    said = CliRunner().invoke(main, [*args, str(tmp_path / "a")]).stderr
+    assert said.startswith("mst simulate: whole-part rung: 6 solves of the part's section"), said
+    assert CliRunner().invoke(main, [*args, str(tmp_path / "b")]).stderr == ""  # kept: nothing to say

@@ -17,6 +17,7 @@ from __future__ import annotations
 from mst_cli.api._calibrating import ESTIMATES as ESTIMATES
 from mst_cli.api._calibrating import calibrate, check_argument_order, parse_params, read, read_serial
 from mst_cli.api._common import load, load_design
+from mst_cli.api._common import tell_rung_solves as tell_rung_solves
 from mst_cli.api._designing import design, designed, pareto, run_design
 from mst_cli.api._making import check, export, slice
 from mst_cli.api._measuring import bench
@@ -53,7 +54,8 @@ __all__ = [
 ]
 # also here for the command line, which imports nothing else of the package: Interrupted (a
 # signal ended a run), SEED_RANGE (--seed's bounds), ESTIMATES (--estimate's choices),
-# FINGERTIP_PATCH_MM (--press-width-mm's default), is_machine_fault and os_error_text
+# FINGERTIP_PATCH_MM (--press-width-mm's default), is_machine_fault and os_error_text,
+# tell_rung_solves (the progress line before the whole-part rung's solves)
 
 
 def __getattr__(name: str):

@@ -4,7 +4,7 @@ Part of the api's one door, :mod:`mst_cli.api`."""
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -15,6 +15,7 @@ from mst_cli.io.outputs import Interrupted as Interrupted
 from mst_cli.io.outputs import check_out_dir
 from mst_cli.model.board_slots import slot_violations
 from mst_cli.model.file_keys import SEED_RANGE as SEED_RANGE
+from mst_cli.model.mechanics import rung_keep
 from mst_cli.sensor import rung_store
 from mst_cli.sensor.document import Document, design_geometry, load_design_document, load_document
 
@@ -102,6 +103,12 @@ def _design_and_geometry(design):
     if doc.section_rung:
         refuse_unhoused_chips(doc)
     return doc, geometry
+
+
+def tell_rung_solves(say: Callable[[str], None] | None) -> None:
+    """Tell ``say`` before the whole-part rung solves what mst's cache has not kept
+    (``model.load_path: section``: seconds a solve); None: tell no one."""
+    rung_keep.set_listener(say)
 
 
 def refuse_unhoused_chips(doc: Document) -> Document:

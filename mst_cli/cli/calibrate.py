@@ -21,6 +21,7 @@ from mst_cli.cli.common import (
     no_plot_option,
     one_line,
     out_dir_option,
+    say_rung_solves,
 )
 
 MECHANICS = ["spring", "frame", "continuum"]
@@ -112,6 +113,7 @@ def calibrate(
     names = api.parse_params(params)  # --params is refused before the design is read
     api.check_argument_order(design_file, load_test, "calibrate")
     doc = api.load_design(design_file)
+    say_rung_solves("calibrate")
     out = out_dir or default_out_dir(f"{doc.name}-calibration")
     try:
         result = api.calibrate(

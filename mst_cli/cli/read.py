@@ -14,7 +14,7 @@ import click
 from mst_cli import api
 from mst_cli.cli import help_texts
 from mst_cli.cli.calibrate import MECHANICS, fail_fit
-from mst_cli.cli.common import default_out_dir, handles_input_errors
+from mst_cli.cli.common import default_out_dir, handles_input_errors, say_rung_solves
 
 BAUD_RATES = (1200, 2400, 4800, 9600, 19200, 38400, 57600, 115200, 230400, 460800, 921600)
 
@@ -99,6 +99,7 @@ def read(
     _check_sources(readings, port, raw or columns is not None or send is not None, polish, track_zero)
     api.check_argument_order(model_file, readings, "read")
     doc = api.load_design(model_file)
+    say_rung_solves("read")
     out = out_dir if (out_dir is not None or port is not None) else default_out_dir(f"{doc.name}-read")
     options: dict[str, Any] = dict(model_file=model_file, mechanics=mechanics, gain_sel=gain_sel, res=res, warn=_warn)
     options.update(estimate=estimate, max_offset_sigma_mm=max_offset_sigma_mm, tare=tare)

@@ -9,7 +9,7 @@ from pathlib import Path
 import click
 
 from mst_cli import api
-from mst_cli.cli.common import default_out_dir, handles_input_errors, no_plot_option, out_dir_option
+from mst_cli.cli.common import default_out_dir, handles_input_errors, no_plot_option, out_dir_option, say_rung_solves
 from mst_cli.errors import InputError
 
 
@@ -90,6 +90,7 @@ def simulate(
     mst design --calibration carries them; they are 0, 1, 0 by default).
     """
     doc = api.load_design(design_file)
+    say_rung_solves("simulate")
     out = out_dir or default_out_dir(doc.name)
     plot = not (no_plot or as_json)
     run = api.run_simulate(

@@ -5,6 +5,7 @@ light (no scipy, no mesh), so the api can install a store without loading the ru
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Protocol
 
 
@@ -18,6 +19,19 @@ class RungStore(Protocol):
 
 
 _STORE: list[RungStore] = []  # at most one: set_store's
+_LISTENER: list[Callable[[str], None]] = []  # at most one: set_listener's
+
+
+def set_listener(say: Callable[[str], None] | None) -> None:
+    """Tell ``say`` (a command's progress line) whenever the rung starts solves it has not kept
+    (None: tell no one). Seconds each: the wait a user should hear about before it starts."""
+    _LISTENER[:] = [] if say is None else [say]
+
+
+def solving(count: int, what: str) -> None:
+    """Say that ``count`` solves of ``what`` start now (nothing without a listener)."""
+    if _LISTENER and count:
+        _LISTENER[0](f"whole-part rung: {count} solves of {what} (seconds each; kept in mst's cache for the next run)")
 
 
 def set_store(store: RungStore | None) -> None:

@@ -361,6 +361,7 @@ def general_motions(geometry, material, options: Sequence[PartOptions]) -> list[
     def solve(key: tuple) -> GeneralMotion:
         return press_general(geometry, material, key[2])
 
+    rung_keep.solving(len(todo), "the part's section under its three loads (the general load)")
     for key, motion in zip(todo, fork_map(solve, todo) or [solve(k) for k in todo]):
         _GENERAL_MEMO[key] = motion
         rung_keep.store("general", key, motion.as_dict())
@@ -455,6 +456,7 @@ def outside_layers(geometry, material, locked_sets, options: PartOptions = PartO
         locked, factor = job
         return press(geometry, material, PartOptions(**{**options.__dict__, "locked": locked, "member_factor": factor}))
 
+    rung_keep.solving(len(jobs), "the part's section, each regime as printed and with its members rigid")
     motions = fork_map(solve_one, jobs) or [solve_one(job) for job in jobs]
     rows = []
     for i, locked in enumerate(locked_sets):
