@@ -113,3 +113,14 @@ def test_mst_simulate_says_so_on_stderr_before_it_solves(store, tmp_path):
     said = CliRunner().invoke(main, [*args, str(tmp_path / "a")]).stderr
     assert said.startswith("mst simulate: whole-part rung: 6 solves of the part's section"), said
     assert CliRunner().invoke(main, [*args, str(tmp_path / "b")]).stderr == ""  # kept: nothing to say
+
+
+def test_a_kept_press_is_read_back_and_a_spoiled_one_solved_again(store):
+    """``mst check --whole-part``'s attribution solves (each member class as printed in turn)."""
+    g, m, solves, folder = store
+    options = wp.PartOptions(member_factor=wp.RIGID_FACTOR, scaled=("base", "cap"))
+    first = wp.kept_press(g, m, options)
+    assert wp.kept_press(g, m, options) == first and len(solves) == 1
+    (path,) = (folder / "rung").glob("press-*.json")
+    path.write_text(json.dumps({**json.loads(path.read_text()), "drop_mm_per_N": "NaN"}))
+    assert wp.kept_press(g, m, options) == first and len(solves) == 2

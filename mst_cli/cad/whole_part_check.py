@@ -144,7 +144,7 @@ def member_gaps(g, m, locked, said: dict, options) -> dict:
 
     def solve(scaled: tuple) -> float:
         opts = wp.PartOptions(**{**options.__dict__, **rigid, "scaled": scaled or wp.MEMBER_TAGS})
-        return wp.press(g, m, opts).drop_mm_per_N
+        return wp.kept_press(g, m, opts).drop_mm_per_N  # the check run again reads them back
 
     drops = fork_map(solve, jobs) or [solve(job) for job in jobs]
     stated = said["members_mm_per_N"]

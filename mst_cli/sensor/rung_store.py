@@ -17,7 +17,7 @@ import json
 from functools import cache
 from pathlib import Path
 
-from mst_cli.io.cache import cache_dir, cached_path, keep, touch
+from mst_cli.io.cache import cached_path, keep, touch
 from mst_cli.model.mechanics import rung_keep
 
 SUBFOLDER = "rung"
@@ -88,5 +88,5 @@ def install(folder: Path | None = None) -> None:
     if folder is not None:
         _CHOSEN[:] = [folder]
         rung_keep.set_store(FileRungStore(folder))
-    elif not _CHOSEN:
-        rung_keep.set_store(FileRungStore() if cache_dir() is not None else None)
+    elif not _CHOSEN:  # the cache folder as the environment names it at each call (none: nothing kept)
+        rung_keep.set_store(FileRungStore())

@@ -20,6 +20,7 @@ the drop times dB_z/dz on the axis at the unloaded gap (:mod:`mst_cli.model.magn
 from __future__ import annotations
 
 import contextlib
+import math
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
@@ -223,6 +224,20 @@ def press(geometry, material, options: PartOptions = PartOptions()) -> MagnetMot
     mesh, tag, element, basis, K, held = _system(geometry, material, options)
     f = _load(geometry, mesh, element, options.patch_mm, options.offset_mm, options.tangential)
     return _motion(geometry, basis, tag, solve(*condense(K, f, D=held)), options, t0)
+
+
+def kept_press(geometry, material, options: PartOptions) -> MagnetMotion:
+    """:func:`press`, its result kept in the rung's store (:mod:`rung_keep`) and read back from it
+    when it is there and every number finite (anything else is solved again)."""
+    key = (repr(geometry), repr(material), options)
+    kept = rung_keep.stored("press", key)
+    with contextlib.suppress(KeyError, TypeError, ValueError):
+        drop, side, turn, dofs, seconds = (float(kept[k]) for k in MOTION_NUMBERS)  # type: ignore[index]
+        if all(math.isfinite(v) for v in (drop, side, turn, dofs, seconds)):
+            return MagnetMotion(drop, side, turn, int(dofs), seconds)
+    motion = press(geometry, material, options)
+    rung_keep.store("press", key, _motion_numbers(motion))
+    return motion
 
 
 def _system(geometry, material, options: PartOptions, offsets_mm: Sequence[float] | None = None):
