@@ -21,8 +21,8 @@ from mst_cli.cli.common import (
     no_plot_option,
     one_line,
     out_dir_option,
-    say_rung_solves,
 )
+from mst_cli.cli.progress import say_rung_solves
 
 MECHANICS = ["spring", "frame", "continuum"]
 
@@ -51,12 +51,7 @@ def fail_fit(reason: str, what: str = "calibration failed") -> NoReturn:
     show_default=True,
     help="Parameters to fit (comma separated).",
 )
-@click.option(
-    "--gain-sel",
-    type=click.IntRange(0, 7),
-    default=None,
-    help="GAIN_SEL the load test was read at (needed for raw codes; the C header's setting).",
-)
+@click.option("--gain-sel", type=click.IntRange(0, 7), default=None, help=help_texts.CALIBRATE_GAIN_SEL)
 @click.option("--res", type=click.IntRange(0, 3), default=None, help="RES the load test was read at.")
 @click.option(
     "--table-size",

@@ -46,12 +46,6 @@ def exit_for_os_error(exc: OSError) -> NoReturn:
     sys.exit(EXIT_FAULT if machine else EXIT_INPUT)
 
 
-def say_rung_solves(verb: str) -> None:
-    """On stderr, before a section-mode model (``model.load_path: section``) solves the whole-part
-    rung afresh: seconds each, which a user should hear about before they start."""
-    api.tell_rung_solves(lambda line: click.echo(one_line(f"mst {verb}: {line}"), err=True))
-
-
 def handles_input_errors(func: Callable[_P, _R]) -> Callable[_P, _R]:
     """Turn :class:`~mst_cli.errors.InputError` into one line on stderr and exit code 2, and an
     OSError into one line naming the path and the errno reason (exit 2 for a bad path, 1 for a

@@ -95,3 +95,5 @@ READ_TARE = (
 READ_SERIAL = "Read a live stream from this serial port (one sample per line) instead of a file."
 READ_COUNT = "Stop --serial after this many samples [default: until the port closes or Ctrl-C]."
 READ_TIMEOUT = "Stop --serial after this many seconds without a byte (a positive, finite number)."
+
+CALIBRATE_GAIN_SEL = "GAIN_SEL the load test was read at (needed for raw codes; the C header's setting)."

@@ -8,7 +8,16 @@ import time
 
 import click
 
+from mst_cli import api
+from mst_cli.cli.common import one_line
+
 RUNG_PHASE = "the whole-part rung"  # the phase of mst_cli.design.document's section rounds
+
+
+def say_rung_solves(verb: str) -> None:
+    """On stderr, before a section-mode model (``model.load_path: section``) solves the whole-part
+    rung afresh: seconds each, which a user should hear about before they start."""
+    api.tell_rung_solves(lambda line: click.echo(one_line(f"mst {verb}: {line}"), err=True))
 
 
 class DesignProgress:

@@ -14,7 +14,8 @@ import click
 from mst_cli import api
 from mst_cli.cli import help_texts
 from mst_cli.cli.calibrate import MECHANICS, fail_fit
-from mst_cli.cli.common import default_out_dir, handles_input_errors, say_rung_solves
+from mst_cli.cli.common import default_out_dir, handles_input_errors
+from mst_cli.cli.progress import say_rung_solves
 
 BAUD_RATES = (1200, 2400, 4800, 9600, 19200, 38400, 57600, 115200, 230400, 460800, 921600)
 

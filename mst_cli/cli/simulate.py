@@ -9,7 +9,8 @@ from pathlib import Path
 import click
 
 from mst_cli import api
-from mst_cli.cli.common import default_out_dir, handles_input_errors, no_plot_option, out_dir_option, say_rung_solves
+from mst_cli.cli.common import default_out_dir, handles_input_errors, no_plot_option, out_dir_option
+from mst_cli.cli.progress import say_rung_solves
 from mst_cli.errors import InputError
 
 
