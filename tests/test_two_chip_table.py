@@ -117,14 +117,9 @@ def test_the_vectorised_model_is_the_exact_field(stack, reader):
     assert np.max(np.abs(J - J_exact)) < 1e-3 * np.max(np.abs(J_exact))
 
 
-def test_the_tables_model_and_its_jacobian(stack, reader):
-    rng = np.random.default_rng(12)
-    model = reader.model
-    theta = loads(stack, rng, 200, (0.02, 1.5), ratio=model.ratio_max, face_frac=1.0)  # the tables' whole range
-    states = model.states(theta)
-    # the field table over every pose the tables give: the exact (magpylib's) field
-    assert np.max(np.abs(model.fields_of(theta, states, exact=False) - model.fields_of(theta, states))) < FIELD_BOUND_T
-    # the chained Jacobian: the tables' model's central differences (steps well inside a cell)
+def assert_jacobian_is_central_differences(model, theta) -> None:
+    """The chained Jacobian of the tables' model against its central differences (steps well
+    inside a cell), every unknown."""
     J = model.table_jacobian_T(theta, None, None)
     h = 1e-2 * fd_steps(theta)
     for i in range(5):
@@ -135,6 +130,16 @@ def test_the_tables_model_and_its_jacobian(stack, reader):
             2 * h[:, i, None]
         )
         assert np.max(np.abs(J[:, :, i] - fd)) < 1e-4 * np.max(np.abs(fd)), i
+
+
+def test_the_tables_model_and_its_jacobian(stack, reader):
+    rng = np.random.default_rng(12)
+    model = reader.model
+    theta = loads(stack, rng, 200, (0.02, 1.5), ratio=model.ratio_max, face_frac=1.0)  # the tables' whole range
+    states = model.states(theta)
+    # the field table over every pose the tables give: the exact (magpylib's) field
+    assert np.max(np.abs(model.fields_of(theta, states, exact=False) - model.fields_of(theta, states))) < FIELD_BOUND_T
+    assert_jacobian_is_central_differences(model, theta)
 
 
 def test_the_members_pose_of_section_mode_is_in_the_chained_jacobian(stack, reader):
@@ -155,16 +160,7 @@ def test_the_members_pose_of_section_mode_is_in_the_chained_jacobian(stack, read
     theta = theta[np.min(np.abs(theta[:, :1] - np.array(edges)[None]), axis=1) > 0.05]  # off the knots
     B = model.fields_of(theta, model.states(theta), False)
     assert np.max(np.abs(B - reader.model.fields_of(theta, reader.model.states(theta), False))) > 10 * NOISE_T
-    J = model.table_jacobian_T(theta, None, None)
-    h = 1e-2 * fd_steps(theta)
-    for i in range(5):
-        up, down = theta.copy(), theta.copy()
-        up[:, i] += h[:, i]
-        down[:, i] -= h[:, i]
-        fd = (model.fields_of(up, model.states(up), False) - model.fields_of(down, model.states(down), False)) / (
-            2 * h[:, i, None]
-        )
-        assert np.max(np.abs(J[:, :, i] - fd)) < 1e-4 * np.max(np.abs(fd)), i
+    assert_jacobian_is_central_differences(model, theta)
 
 
 def test_noise_free_readings_give_the_load_back(stack, reader):
