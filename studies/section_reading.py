@@ -27,16 +27,19 @@ FORWARD = ROOT / "configs" / "mohammadi2021-forward.yaml"
 SOFTER = 0.85
 
 
-def copy(folder: Path, load_path: str, modulus_factor: float = 1.0) -> Path:
+def forward_copy(folder: Path, load_path: str, modulus_factor: float = 1.0) -> Path:
+    """The forward design with ``model.load_path`` set, its TPU's modulus scaled (the tests'
+    copies too, tests/test_section_reading.py)."""
     raw = yaml.safe_load(FORWARD.read_text())
-    raw["model"] = {"load_path": load_path}
+    raw["model"] = {**(raw.get("model") or {}), "load_path": load_path}
     raw["material"]["youngs_modulus_MPa"] *= modulus_factor
     path = folder / f"forward-{load_path}-{modulus_factor:g}.yaml"
     path.write_text(yaml.safe_dump(raw, sort_keys=False))
     return path
 
 
-def readings(path: Path, force_N: np.ndarray, B_T: np.ndarray) -> Path:
+def fields_csv(path: Path, force_N: np.ndarray, B_T: np.ndarray) -> Path:
+    """A readings file of the forces and the fields (T) at them, as a rig writes it."""
     rows = "".join(f"{f:.6f},{1e6 * b[0]:.4f},{1e6 * b[1]:.4f},{1e6 * b[2]:.4f}\n" for f, b in zip(force_N, B_T))
     path.write_text("force_N,Bx_uT,By_uT,Bz_uT\n" + rows)
     return path
@@ -51,11 +54,11 @@ def main() -> None:
     quiet = lambda _line: None  # noqa: E731 -- a design file read as a model warns that it is one
     with tempfile.TemporaryDirectory() as tmp:
         d = Path(tmp)
-        models = {"section": copy(d, "section"), "closed form": copy(d, "part")}
+        models = {"section": forward_copy(d, "section"), "closed form": forward_copy(d, "part")}
         rows = []
         resp = api.simulate(models["section"])
         pick = np.linspace(5, np.flatnonzero(resp.in_range)[-1] - 5, 12).astype(int)
-        csv = readings(d / "centred.csv", resp.force_N[pick], resp.B_T[pick])
+        csv = fields_csv(d / "centred.csv", resp.force_N[pick], resp.B_T[pick])
         for name, model in models.items():
             got = api.read(model, csv, warn=quiet).force_N
             rows.append(("centred, force", name, span(got / resp.force_N[pick] - 1)))
@@ -66,7 +69,7 @@ def main() -> None:
             r = api.simulate_offcentre(models["section"], **kw)
             last = r.axial.regimes[-1].force_to_N
             pick = np.flatnonzero((r.force_N > 0.1 * last) & (r.force_N < 0.9 * last))[::10]
-            csv = readings(d / f"{est}.csv", r.force_N[pick], r.B_T[pick])
+            csv = fields_csv(d / f"{est}.csv", r.force_N[pick], r.B_T[pick])
             for name, model in models.items():
                 got = api.read(model, csv, estimate=est, polish=True, warn=quiet).offset
                 ok = got.flag == "ok"
@@ -77,9 +80,9 @@ def main() -> None:
                     rows.append((f"{label}, place", name, f"at most {off.max():.3f} mm off"))
                 else:
                     rows.append((f"{label}, Fx", name, span(got.shear_x_N[ok] / (0.2 * F) - 1)))
-        printed = api.simulate(copy(d, "section", SOFTER))
+        printed = api.simulate(forward_copy(d, "section", SOFTER))
         pick = np.flatnonzero(printed.in_range)[::4]
-        test = readings(d / "load_test.csv", printed.force_N[pick], printed.B_T[pick])
+        test = fields_csv(d / "load_test.csv", printed.force_N[pick], printed.B_T[pick])
         for name, model in models.items():
             f = api.calibrate(model, test, params="modulus_factor").fit.values["modulus_factor"]
             rows.append((f"TPU x {SOFTER}: modulus factor", name, f"{f:.4f}"))

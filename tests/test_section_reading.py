@@ -15,34 +15,11 @@ is 15 % softer is the nominal part's stack with every TPU compliance x 1/0.85; t
 the factor (to the insert's share, which does not scale).
 """
 
-from pathlib import Path
-
 import numpy as np
 import pytest
-import yaml
 
 from mst_cli import api
-
-ROOT = Path(__file__).resolve().parents[1]
-FORWARD = ROOT / "configs" / "mohammadi2021-forward.yaml"
-SOFTER = 0.85  # the printed TPU's modulus over the data sheet's in the calibration test
-
-
-def forward_copy(folder: Path, load_path: str, modulus_factor: float = 1.0) -> Path:
-    """The forward design with ``model.load_path`` set, its TPU's modulus scaled."""
-    raw = yaml.safe_load(FORWARD.read_text())
-    raw["model"] = {**(raw.get("model") or {}), "load_path": load_path}
-    raw["material"]["youngs_modulus_MPa"] *= modulus_factor
-    spec = folder / f"forward-{load_path}-{modulus_factor:g}.yaml"
-    spec.write_text(yaml.safe_dump(raw, sort_keys=False))
-    return spec
-
-
-def fields_csv(path: Path, force_N: np.ndarray, B_T: np.ndarray) -> Path:
-    """A readings file of the forces and the fields (T) at them, as a rig writes it."""
-    rows = "".join(f"{f:.6f},{1e6 * b[0]:.4f},{1e6 * b[1]:.4f},{1e6 * b[2]:.4f}\n" for f, b in zip(force_N, B_T))
-    path.write_text("force_N,Bx_uT,By_uT,Bz_uT\n" + rows)
-    return path
+from studies.section_reading import SOFTER, fields_csv, forward_copy  # the study's own copies (examples as tests)
 
 
 def quiet(_line: str) -> None:
