@@ -26,6 +26,10 @@ roots, neither in the closed form, are tried here, each in closed form:
   against the plate and both walls (E'I / L each for a guided far end); a locked layer's walls
   put none, and the layer bends with the plate as one block of its whole height.
 
+(Since 2026-11-30 the closed form carries a fitted form of the first, with the plate's squeeze
+under the roots: mst_cli.model.plate_joint, fitted by studies/root_turn_sweep.py; the "closed
+form" column here stays the plates' beams alone, as the study was written.)
+
 c is fitted on two designs whose three layers are the same (the forward design's middle layer,
 and that layer 0.5 mm thick), in regime 1, where the second mechanism vanishes by symmetry;
 the rest is prediction. The rung is solved twice per regime (members rigid; plates as printed),
@@ -50,6 +54,7 @@ from mst_cli.model import load_path as lp
 from mst_cli.model.cell import wall_centreline_length_mm
 from mst_cli.model.mechanics import layer_laws
 from mst_cli.model.mechanics import whole_part as wp
+from mst_cli.model.plate_joint import root_turn_mm_per_N
 from mst_cli.model.stack import Stack
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -77,12 +82,6 @@ def wall(cell, E_prime: float, depth: float) -> tuple[float, float, float]:
     """(L, E'I, cos theta) of the cell's inclined wall."""
     L = float(wall_centreline_length_mm(cell.theta_rad, cell.t_mm, cell.h_mm))
     return L, E_prime * depth * cell.t_mm**3 / 12.0, math.cos(cell.theta_rad)
-
-
-def root_turn_mm_per_N(L: float, EI: float, cos: float, k: float) -> float:
-    """A clamped-guided wall's extra vertical compliance when its root turns against k (N mm/rad)."""
-    m = (L * L / (2.0 * EI)) / (1.0 / k + L / EI)
-    return cos * cos * (m * L / k + (m * L * L / 2.0 - L**3 / 6.0) / EI - L**3 / (12.0 * EI))
 
 
 def mechanisms(g, m, locked: tuple[int, ...], c: float) -> tuple[float, float]:

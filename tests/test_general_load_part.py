@@ -65,9 +65,10 @@ def test_each_member_turns_its_layer_as_a_spring_under_each_chevron(scene):
     laws = layer_laws(geometry.layers, material, "spring")
     units = tilt_laws(geometry, material, "spring")
     bare = tilt_laws(geometry, material, "spring", whole_part=False)
-    # layer j carries its own top pad's bending (plate j, the cap on the top layer), and one
-    # layer the cover too (part_stack's members; below the landing all of it bends)
-    under = [*parts.plates_mm_per_N, parts.cap_mm_per_N]
+    # layer j carries its own top pad's bending (plate j, the cap on the top layer) and its walls'
+    # joints with the plates, and one layer the cover too (part_stack's members; below the
+    # landing all of it bends)
+    under = [c + j for c, j in zip([*parts.plates_mm_per_N, parts.cap_mm_per_N], parts.joints_mm_per_N)]
     under[cover_host(list(part_layer_laws(laws, parts)), parts)] += parts.cover_mm_per_N
     F, x0 = 0.02, 5.0
     for law, unit, own, C in zip(laws, units, bare, under):
@@ -86,6 +87,7 @@ def test_members_far_stiffer_than_the_layers_give_the_layers_alone(scene):
         parts,
         cap_mm_per_N=1e-9 * parts.cap_mm_per_N,
         plates_mm_per_N=tuple(1e-9 * p for p in parts.plates_mm_per_N),
+        joints_mm_per_N=tuple(1e-9 * j for j in parts.joints_mm_per_N),
         cover_mm_per_N=1e-9 * parts.cover_mm_per_N,
         cover_contact_mm_per_N=1e-9 * parts.cover_contact_mm_per_N,
     )

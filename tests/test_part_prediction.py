@@ -57,7 +57,9 @@ def test_the_parts_compliance_is_the_closed_forms_sum(forward):
     part = simulate(g, doc.material)
     parts = lp.members(g, doc.material)
     assert part.members == parts
-    assert parts.total_mm_per_N == pytest.approx(parts.cap_mm_per_N + sum(parts.plates_mm_per_N) + parts.cover_mm_per_N)
+    outside = parts.cap_mm_per_N + sum(parts.plates_mm_per_N) + sum(parts.joints_mm_per_N) + parts.cover_mm_per_N
+    assert parts.total_mm_per_N == pytest.approx(outside)
+    assert len(parts.joints_mm_per_N) == len(g.layers) and min(parts.joints_mm_per_N) > 0.0  # every layer on a plate
     laws = layer_laws(g.layers, doc.material, "spring")
     first = part.force_N <= part.lock_forces_N[0]
     np.testing.assert_allclose(
@@ -68,10 +70,10 @@ def test_the_parts_compliance_is_the_closed_forms_sum(forward):
     )
     layer_c = sum(1.0 / law.k_N_per_mm for law in laws)  # the forward design's laws are bilinear
     assert 1.0 / part.regimes[0].k_effective_N_per_mm == pytest.approx(layer_c + parts.total_mm_per_N, rel=1e-9)
-    top = laws[-1]
-    closes = lp.CappedLayer(top, parts.cap_mm_per_N).lock_force_N
-    assert float(top.displacement_mm(closes)) + parts.cap_mm_per_N * closes == pytest.approx(top.d_lock_mm, rel=1e-12)
-    assert closes == pytest.approx(top.d_lock_mm / (1.0 / top.k_N_per_mm + parts.cap_mm_per_N), rel=1e-12)
+    top, C = laws[-1], parts.cap_mm_per_N + parts.joints_mm_per_N[-1]  # the cap and the top layer's joints
+    closes = lp.CappedLayer(top, C).lock_force_N
+    assert float(top.displacement_mm(closes)) + C * closes == pytest.approx(top.d_lock_mm, rel=1e-12)
+    assert closes == pytest.approx(top.d_lock_mm / (1.0 / top.k_N_per_mm + C), rel=1e-12)
     assert closes == pytest.approx(min(part.lock_forces_N), rel=1e-12)  # the soft cap closes it first: 3.8 N
     assert closes < laws[0].lock_force_N
 
@@ -97,7 +99,7 @@ def test_the_field_change_per_newton_is_the_gradient_times_the_compliance(forwar
 
 
 def test_the_design_loop_predicts_what_simulate_does(forward):
-    """The vectorised kernel (regime_kernel with the members' compliance from member_compliances)
+    """The vectorised kernel (regime_kernel with the members' compliance from layer_caps_mm_per_N)
     gives simulate's whole-part S and R for the L0 laws."""
     doc, g = forward
     part = simulate(g, doc.material)
@@ -112,12 +114,12 @@ def test_the_design_loop_predicts_what_simulate_does(forward):
         for a in ("k_N_per_mm", "d_lock_mm", "k_locked_N_per_mm", "lock_force_N")
     )
     field = lambda gap: field_magnitude_T(gap, g, part.field_model)  # noqa: E731
-    cap, plates, cover = lp.member_compliances(scene, theta, t, h)
-    # each plate bends into the cavity under it as the cap into the top one's: caps per layer; the
-    # cover's drop over the slot stops on the board after the air under it (at 22 N here)
-    over_slot = lp.member_parts(scene, theta, t, h)[2]
+    # each plate bends into the cavity under it as the cap into the top one's, each layer's joints
+    # with the plates close its own: caps per layer; the cover's drop over the slot stops on the
+    # board after the air under it (at 22 N here)
+    caps, over_slot, slot_walls = lp.layer_caps_mm_per_N(scene, theta, t, h)
     contact = (over_slot, g.housing.chip_clearance_mm)
-    R_sorted, S, _, _ = regime_kernel(k, dl, kl, g.gap0_mm, field, R, cover, np.append(plates, cap), contact)
+    R_sorted, S, _, _ = regime_kernel(k, dl, kl, g.gap0_mm, field, R, over_slot + slot_walls, caps, contact)
     np.testing.assert_allclose(R_sorted, part.lock_forces_N, rtol=1e-12)
     np.testing.assert_allclose(S, [r.sensitivity_secant_per_N for r in part.regimes], rtol=1e-9)
 

@@ -69,10 +69,9 @@ def test_the_forward_model_and_the_design_kernel_add_the_same_correction(forward
     )
     scene = lp.member_scene(g, doc.material)
     theta, t, h = (np.array([getattr(c, n) for c in g.layers]) for n in ("theta_rad", "t_mm", "h_mm"))
-    cap, plates, over_slot, slot_walls = lp.member_parts(scene, theta, t, h)
+    caps, over_slot, slot_walls = lp.layer_caps_mm_per_N(scene, theta, t, h)  # with the layers' joints
     field = lambda gap: field_magnitude_T(gap, g, part.field_model)  # noqa: E731
     contact = (over_slot, g.housing.chip_clearance_mm)
-    caps = np.append(plates, cap)
     _, S, _, _ = regime_kernel(k, dl, kl, g.gap0_mm, field, R, over_slot + slot_walls, caps, contact, np.array(extra))
     np.testing.assert_allclose(S, [r.sensitivity_secant_per_N for r in part.regimes], rtol=1e-9)
 

@@ -62,8 +62,9 @@ import numpy as np
 
 from mst_cli.model import magnet_field as fld
 from mst_cli.model.cell import LENGTH_FLOOR_MM, HexCell
-from mst_cli.model.load_path import FINGERTIP_PATCH_MM, Members, MemberScene, member_parts, member_scene
+from mst_cli.model.load_path import CELL_KEYS, FINGERTIP_PATCH_MM, Members, MemberScene, member_parts, member_scene
 from mst_cli.model.mechanics import layer_law
+from mst_cli.model.plate_joint import layer_joints_mm_per_N
 from mst_cli.model.response import model_members, part_stack
 from mst_cli.model.stack import Stack
 from mst_cli.sensor.document import Document
@@ -191,9 +192,9 @@ class ForwardModel:
             return Members.rigid(n_plates=len(self.doc.layers) - 1)
         tpu = replace(scene, E_prime_MPa=f * scene.E_prime_MPa, G_MPa=f * scene.G_MPa)
         cells = self.cells(v["wall_offset_mm"])
-        cap, plates, over_slot, slot_walls = member_parts(
-            tpu, *(np.array([getattr(c, k) for c in cells]) for k in ("theta_rad", "t_mm", "h_mm"))
-        )
+        arrays = [np.array([getattr(c, k) for c in cells]) for k in CELL_KEYS]
+        cap, plates, over_slot, slot_walls = member_parts(tpu, *arrays)
+        joints = layer_joints_mm_per_N(tpu, *arrays)
         return Members(
             f * float(cap),
             tuple(f * float(p) for p in plates),
@@ -203,6 +204,7 @@ class ForwardModel:
             f * float(over_slot),  # the cover's bending over the slot stops on the board (members())
             scene.cover_air_mm,
             self.section_extra_mm_per_N,
+            tuple(f * float(j) for j in joints),
         )
 
     @functools.cached_property

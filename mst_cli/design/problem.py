@@ -68,7 +68,7 @@ import numpy as np
 from mst_cli.model import chip as mlx
 from mst_cli.model.assembly import unloaded_gap_mm
 from mst_cli.model.cell import CELL_RULES, LENGTH_FLOOR_MM, cell_margins_mm, wall_centreline_length_mm
-from mst_cli.model.load_path import member_parts, member_scene, moving_share
+from mst_cli.model.load_path import layer_caps_mm_per_N, member_scene, moving_share
 from mst_cli.model.magnet_field import axial_Bz_T, choose_field_model
 from mst_cli.model.material import Material
 from mst_cli.model.mechanics import correction
@@ -347,7 +347,8 @@ class DesignProblem:
 
     def member_parts(self, theta_deg: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike, edges_N: ArrayLike) -> tuple:
         """(cap (...), plates (..., n - 1), cover (..., bands)) compliance in mm/N of candidate
-        stacks, walls as printed (t + printer.wall_offset_mm), as :meth:`layer_laws` sees them,
+        stacks (each with the joints of the layer under it with its plates, model.plate_joint),
+        walls as printed (t + printer.wall_offset_mm), as :meth:`layer_laws` sees them,
         the cover's over each force band between ``edges_N`` (..., bands + 1): its slot walls
         throughout, its bending over the slot only until it lands on the board after its air
         (the band's mean, what a secant over the band sees)."""
@@ -368,12 +369,11 @@ class DesignProblem:
         return np.maximum(t + self.wall_offset_mm, LENGTH_FLOOR_MM) if self.wall_offset_mm else t
 
     def part_members(self, theta_deg: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike) -> tuple:
-        """(each layer's cap (..., n): the plate above it, the cap on the top one; the cover;
-        (the cover's bending over the slot, the air under it): what stops on the board) of
-        candidate stacks, for :meth:`_responses_of`."""
+        """(each layer's cap (..., n): the plate above it, the cap on the top one, and its joints
+        with the plates (model.plate_joint); the cover; (the cover's bending over the slot, the
+        air under it): what stops on the board) of candidate stacks, for :meth:`_responses_of`."""
         t = self.printed_t_mm(t_mm)
-        cap, plates, over_slot, slot_walls = member_parts(self.members, np.radians(theta_deg), t, h_mm)
-        caps = np.concatenate([plates, np.asarray(cap)[..., None]], axis=-1)  # each layer's: the plate or cap above it
+        caps, over_slot, slot_walls = layer_caps_mm_per_N(self.members, np.radians(theta_deg), t, h_mm)
         return caps, over_slot + slot_walls, (over_slot, self.members.cover_air_mm)
 
     def _responses_of(

@@ -38,6 +38,7 @@ import numpy as np
 from mst_cli.design.problem import TINY
 from mst_cli.model.load_path import cap_mm_per_N, cover_parts_mm_per_N, layer_supports, plates_mm_per_N
 from mst_cli.model.mechanics.spring import layer_displacement_mm
+from mst_cli.model.plate_joint import joint_scene, plates_beside, root_joint_mm_per_N
 from mst_cli.model.stack import capped_lock_force_N
 
 if TYPE_CHECKING:
@@ -143,7 +144,12 @@ class CellTable:
             np.broadcast_to(a, (cells,))
             for a in member(("cover", cell(0)), lambda: cover_parts_mm_per_N(scene, at(t, 0), at(pad, 0), at(head, 0)))
         )
-        caps = np.stack(np.broadcast_arrays(*plates, cap), axis=-1)
+        # each layer's joints with the plates beside it (model.plate_joint): its own cells alone
+        beside = plates_beside(n)
+        theta_rad = np.radians(self.theta_deg)
+        one = member(("joint",), lambda: root_joint_mm_per_N(theta_rad, t, self.h_mm, *joint_scene(scene)))
+        joints = [at(one, i) * beside[i] for i in range(n)]
+        caps = np.stack(np.broadcast_arrays(*plates, cap), axis=-1) + np.stack(np.broadcast_arrays(*joints), axis=-1)
         cover, air = over_slot + slot_walls, scene.cover_air_mm
         return caps, lambda F: cover * F - np.maximum(over_slot * F - air, 0.0)
 

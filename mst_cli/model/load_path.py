@@ -56,6 +56,7 @@ from mst_cli.model.beams import section_EI_kGA as section_EI_kGA
 from mst_cli.model.beams import strip_bending_mm_per_N as strip_bending_mm_per_N
 from mst_cli.model.beams import two_load_mm_per_N as two_load_mm_per_N
 from mst_cli.model.cell import pad_half_width_mm, wall_centreline_length_mm
+from mst_cli.model.plate_joint import layer_joints_mm_per_N
 
 # a fingertip pressed on the face: a contact patch about 6 mm wide (the width the issue's
 # independent check presses over); the press runs the whole depth (a strip, in plane strain)
@@ -65,6 +66,7 @@ SUPPORTS = ("simple", "clamped")
 # by the cell's symmetry the vertex does not turn; it either moves freely across the wall (1, the
 # soft bound: the cell's vertices spread as it is pressed) or is held (4, the stiff bound)
 WALL_FAR_END = {"simple": 1.0, "clamped": 4.0}
+CELL_KEYS = ("theta_rad", "t_mm", "h_mm")  # a cell's attributes the kernels take, in their order
 
 
 def wall_head_restraint_Nmm_per_rad(theta_rad, t_mm, h_mm, depth_mm, E_prime_MPa, support: str) -> np.ndarray:
@@ -115,10 +117,13 @@ class Members:
     # per regime of the part, what the whole-part rung adds to the closed form above (mm/N, may be
     # negative; mechanics.whole_part.section_correction, docs/design.md 4.7); (): the closed form alone
     regime_extra_mm_per_N: tuple[float, ...] = ()
+    # each layer's walls' joints with the plates beside it (model.plate_joint), bottom to top: they
+    # close that layer's cavity and stop when it locks; (): none (the layer rungs' rigid plates)
+    joints_mm_per_N: tuple[float, ...] = ()
 
     @property
     def total_mm_per_N(self) -> float:
-        return self.cap_mm_per_N + sum(self.plates_mm_per_N) + self.cover_mm_per_N
+        return self.cap_mm_per_N + sum(self.plates_mm_per_N) + sum(self.joints_mm_per_N) + self.cover_mm_per_N
 
     @classmethod
     def rigid(cls, patch_mm: float = FINGERTIP_PATCH_MM, n_plates: int = 0) -> Members:
@@ -193,6 +198,15 @@ def member_compliances(scene: MemberScene, theta_rad, t_mm, h_mm) -> tuple:
     :func:`members` and the design loop use."""
     cap, plates, over_slot, slot_walls = member_parts(scene, theta_rad, t_mm, h_mm)
     return cap, plates, over_slot + slot_walls
+
+
+def layer_caps_mm_per_N(scene: MemberScene, theta_rad, t_mm, h_mm) -> tuple:
+    """((..., n) what closes each layer's cavity with it: the plate above it (the cap on the top
+    one) and its joints with the plates; the cover's bending over the slot; its slot walls) of
+    stacks given as arrays (..., n), mm/N: the design loop's members."""
+    cap, plates, over_slot, slot_walls = member_parts(scene, theta_rad, t_mm, h_mm)
+    caps = np.concatenate([plates, np.asarray(cap)[..., None]], axis=-1)
+    return caps + layer_joints_mm_per_N(scene, theta_rad, t_mm, h_mm), over_slot, slot_walls
 
 
 def member_parts(scene: MemberScene, theta_rad, t_mm, h_mm) -> tuple:
@@ -310,9 +324,10 @@ def housing_mm_per_N(scene: MemberScene, head_mm, pad_mm, cover_pad, cover_alone
 
 
 def members_total_mm_per_N(scene: MemberScene, theta_rad, t_mm, h_mm) -> np.ndarray:
-    """The cap's, the plates' and the cover's compliance in series (...), mm/N."""
+    """The cap's, the plates' (with the layers' joints with them) and the cover's compliance in
+    series (...), mm/N: every member at a small load."""
     cap, plates, cover = member_compliances(scene, theta_rad, t_mm, h_mm)
-    return cap + plates.sum(axis=-1) + cover
+    return cap + plates.sum(axis=-1) + layer_joints_mm_per_N(scene, theta_rad, t_mm, h_mm).sum(axis=-1) + cover
 
 
 def members(
@@ -322,16 +337,12 @@ def members(
     ``material`` under a centred press ``patch_mm`` wide (module docstring); ``insert``, a stiff
     plate in the cap (its own modulus, in plane strain as given)."""
     scene = member_scene(geometry, material, patch_mm, support, insert)
-    cells = geometry.layers
-    cap, plates, over_slot, slot_walls = member_parts(
-        scene,
-        np.array([c.theta_rad for c in cells]),
-        np.array([c.t_mm for c in cells]),
-        np.array([c.h_mm for c in cells]),
-    )
+    arrays = [np.array([getattr(c, k) for c in geometry.layers]) for k in CELL_KEYS]
+    cap, plates, over_slot, slot_walls = member_parts(scene, *arrays)
     cover = float(over_slot + slot_walls)
     plates_ = tuple(float(p) for p in plates)
-    return Members(float(cap), plates_, cover, patch_mm, support, float(over_slot), scene.cover_air_mm)
+    joints = tuple(float(j) for j in layer_joints_mm_per_N(scene, *arrays))
+    return Members(float(cap), plates_, cover, patch_mm, support, float(over_slot), scene.cover_air_mm, (), joints)
 
 
 @dataclass(frozen=True)
@@ -404,7 +415,8 @@ def capped_units(laws: tuple, parts: Members) -> list:
     stack (model.response.part_stack, model.part_laws)."""
     n = len(laws)
     plates = (*parts.plates_mm_per_N, *(0.0,) * (n - 1 - len(parts.plates_mm_per_N)))
-    caps = (*plates[: n - 1], parts.cap_mm_per_N)
+    joints = (*parts.joints_mm_per_N, *(0.0,) * (n - len(parts.joints_mm_per_N)))
+    caps = [c + j for c, j in zip((*plates[: n - 1], parts.cap_mm_per_N), joints)]
     return [CappedLayer(law, c) if c > 0 else law for law, c in zip(laws, caps)]
 
 
@@ -430,11 +442,12 @@ def member_band_compliances(stack, parts: Members) -> tuple[np.ndarray, np.ndarr
     lo, width = edges[:-1], hi - edges[:-1]
     bands = np.stack([lo, hi], axis=-1)  # (n, 2): each regime as its own band
     caps = np.array([getattr(u, "cap_mm_per_N", 0.0) for u in units])
-    caps_moving = caps[:, None] * moving_share(R[:, None], bands)[..., 0]  # (units, regimes)
-    own = np.array([(u.displacement_mm(hi) - u.displacement_mm(lo)) / width for u in units]) - caps_moving
+    share = moving_share(R[:, None], bands)[..., 0]  # (units, regimes): what closes each unit's cavity moves
+    own = np.array([(u.displacement_mm(hi) - u.displacement_mm(lo)) / width for u in units]) - caps[:, None] * share
     bending = parts.cover_contact_mm_per_N * moving_share(cover_landing_N(parts), bands)[..., 0]
     cover = parts.cover_mm_per_N - parts.cover_contact_mm_per_N + bending
-    moving = {"cap": caps_moving[-1], "plates": caps_moving[:-1].sum(axis=0), "housing": cover}
+    cap = parts.cap_mm_per_N * share[-1]  # the plates' moving: the rest of the caps', the joints' with them
+    moving = {"cap": cap, "plates": (caps[:, None] * share).sum(axis=0) - cap, "housing": cover}
     if parts.regime_extra_mm_per_N:
         moving["section_correction"] = np.asarray(parts.regime_extra_mm_per_N, dtype=float)
     return edges, own.T, moving
@@ -507,6 +520,7 @@ def load_path_report(
         "support": "simple (clamped: the stiff bound)",
         "cap_mm_per_N": simple.cap_mm_per_N,
         "plates_mm_per_N": list(simple.plates_mm_per_N),
+        "plate_joints_mm_per_N": list(simple.joints_mm_per_N),  # each layer's, model.plate_joint
         "housing_mm_per_N": simple.cover_mm_per_N,
         "cap_clamped_mm_per_N": clamped.cap_mm_per_N,
         "members_simple_mm_per_N": _by_member(simple),
@@ -551,7 +565,8 @@ def support_uncertainty(report: dict) -> list[dict]:
 
 
 def _by_member(parts: Members) -> dict:
-    return {"cap": parts.cap_mm_per_N, "plates": sum(parts.plates_mm_per_N), "housing": parts.cover_mm_per_N}
+    plates = sum(parts.plates_mm_per_N) + sum(parts.joints_mm_per_N)  # the plates' bending and their joints
+    return {"cap": parts.cap_mm_per_N, "plates": plates, "housing": parts.cover_mm_per_N}
 
 
 def dominant_member(row: dict) -> tuple[str, float]:

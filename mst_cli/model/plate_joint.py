@@ -1,0 +1,92 @@
+"""The walls' joints with the TPU plates between the layers: what a wall gives beyond its rung's
+clamped root when it stands on a plate of the printed part (issue 44, docs/design.md 4.7).
+
+Every layer rung (L0, L1, L2) clamps a wall's root to a rigid plate. In the exported part the
+plate is TPU, and the whole-part rung (mechanics.whole_part) finds the plates giving 7-8 times
+what their bending as beams (model.load_path) gives: the walls' roots turn into the plate, and
+the plate is squeezed under them. Per root on a plate, for the vertical press's share through it:
+
+* **the root turns** against a rotational spring M / phi = c sin(theta)^a (L/t)^b E'D t^2 (D the
+  depth, t the wall's thickness, L its centre-line length): the clamped-guided wall of L0 with
+  that spring at its root gives L/k m + (m L^2/2 - L^3/6)/E'I - L^3/(12 E'I) more,
+  m = (L^2 / 2E'I) / (1/k + L/E'I), times cos^2 theta for the vertical. The spring is of the
+  order of a rigid strip's on a half-plane t wide (pi/8 E'D t^2, pi/8 = 0.39: Johnson, Contact
+  Mechanics, 1985, section 2.8); a shallow wall bears on a wider, slanted footprint (a < 0);
+* **the plate is squeezed** under the root: s p / (E'D t), p the plate's thickness.
+
+A layer's walls stand on a plate at their feet (a plate below) and at their heads (a plate
+above); half of the layer's vertical compliance passes each, so each root counts half. The cover
+and the cap carry their own closed forms (model.load_path), so only the plates' roots count here.
+A locked layer's walls carry nothing, so its joints stop with it, as the layer does.
+
+c, a, b and s are fitted, not derived: on the whole-part rung's plates of 102 same-layer designs
+over the design box (studies/root_turn_sweep.py, its data in studies/data/: theta 12-58 deg,
+t 0.4-1.4 mm, h 1.8-3.6 mm, plates 0.8-2.4 mm; regime 1, where the plates' turn at the heads
+vanishes by symmetry), against the layers' and plates' compliance together, what the part's
+prediction sees. Over the sweep they leave that within 3.1 % of the rung's (1.1 % rms); the
+plates' share alone is within 32 % (13 % rms), one constant spring's 135 %. Between unlike
+layers, and next to a locked one, the plate also turns at the wall heads, which this leaves out
+(docs/design.md 4.7: the bundled designs, not in the fit, are its check). Pure numpy, no I/O.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from mst_cli.model.beams import as_value
+from mst_cli.model.cell import wall_centreline_length_mm
+
+# studies/root_turn_sweep.py --fit studies/data/root_turn_*.csv (docs/design.md 4.7): the root's
+# spring and the plate's squeeze
+ROOT_SPRING_C = 0.471
+ROOT_SPRING_SLANT = -0.797  # the exponent a of sin(theta)
+ROOT_SPRING_SLENDER = -0.285  # the exponent b of the wall's slenderness L / t
+PLATE_SQUEEZE = 0.864
+
+
+def root_turn_mm_per_N(L_mm, EI_Nmm2, cos_theta, k_Nmm_per_rad) -> Any:
+    """A clamped-guided wall's extra vertical compliance (mm/N) when its root turns against
+    ``k_Nmm_per_rad`` (module docstring); numbers or arrays."""
+    L, EI, k = (np.asarray(a, dtype=float) for a in (L_mm, EI_Nmm2, k_Nmm_per_rad))
+    m = (L * L / (2.0 * EI)) / (1.0 / k + L / EI)
+    return as_value(cos_theta**2 * (m * L / k + (m * L * L / 2.0 - L**3 / 6.0) / EI - L**3 / (12.0 * EI)))
+
+
+def root_joint_mm_per_N(theta_rad, t_mm, h_mm, plate_mm: float, depth_mm: float, E_prime_MPa: float) -> Any:
+    """One root of a layer's walls on a plate ``plate_mm`` thick: its turn and the plate's squeeze
+    under it, mm/N of the layer's vertical compliance (half a layer's: module docstring)."""
+    theta, t = np.asarray(theta_rad, dtype=float), np.asarray(t_mm, dtype=float)
+    ED = E_prime_MPa * depth_mm
+    L = wall_centreline_length_mm(theta, t, h_mm)
+    k = ROOT_SPRING_C * np.sin(theta) ** ROOT_SPRING_SLANT * (L / t) ** ROOT_SPRING_SLENDER * ED * t**2
+    turn = root_turn_mm_per_N(L, ED * t**3 / 12.0, np.cos(theta), k)
+    return as_value(0.5 * turn + 0.25 * PLATE_SQUEEZE * plate_mm / (ED * t))
+
+
+def plates_beside(n_layers: int) -> np.ndarray:
+    """(n,) how many plates each layer's walls stand on: one for the bottom and the top layer,
+    two for those between, none for a single layer (the cover and the cap are not plates)."""
+    beside = np.full(n_layers, 2.0)
+    beside[0] -= 1.0
+    beside[-1] -= 1.0
+    return np.maximum(beside, 0.0)
+
+
+def stack_joints_mm_per_N(theta_rad, t_mm, h_mm, plate_mm: float, depth_mm: float, E_prime_MPa: float) -> Any:
+    """(..., n) each layer's joints with the plates beside it, mm/N, of stacks given as arrays
+    (..., n) of theta (rad), t and h (mm), bottom to top (:func:`root_joint_mm_per_N` per root)."""
+    t = np.asarray(t_mm, dtype=float)
+    one = root_joint_mm_per_N(theta_rad, t, h_mm, plate_mm, depth_mm, E_prime_MPa)
+    return np.asarray(one) * plates_beside(t.shape[-1])
+
+
+def joint_scene(scene) -> tuple[float, float, float]:
+    """(the plates' thickness, the depth, in mm; E' in MPa) of a model.load_path.MemberScene."""
+    return scene.plate_mm, scene.depth_mm, scene.E_prime_MPa
+
+
+def layer_joints_mm_per_N(scene, theta_rad, t_mm, h_mm) -> Any:
+    """:func:`stack_joints_mm_per_N` of the part a model.load_path.MemberScene describes."""
+    return stack_joints_mm_per_N(theta_rad, t_mm, h_mm, *joint_scene(scene))
