@@ -83,7 +83,7 @@ def test_read_uses_the_calibrated_lever_factor(calibrated):
     coarse_table_beside(d / "cal" / "calibrated.yaml")
     write(
         d / "readings.csv",
-        [(r[0], *r[3:]) for r in rows_at([(-7.0, 4.0)], np.array([10.0, 20.0, 35.0]))],
+        [(r[0], *r[3:]) for r in rows_at([(-7.0, 4.0)], np.array([10.0, 20.0, 30.0]))],  # range: 32.6 N
         "force_N,Bx_uT,By_uT,Bz_uT",
     )
     res = run(

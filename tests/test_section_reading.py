@@ -7,7 +7,8 @@ share the rung measures, docs/design.md 4.7), and a calibration absorbed the dif
 modulus. These are round trips, so their truth is mst's own section model: they prove the
 inverse and the two commands' agreement, not the model (the rung is checked on its own in
 tests/test_whole_part_rung.py). Each also reads the same fields with the closed form, to show
-the test would see the read side fall back to it.
+the test would see the read side fall back to it (since the closed form took the walls' joints
+with the plates, its centred reads are only 1-2 % off the section's, so those bounds are tighter).
 
 The calibration test rests on a law, not on the model's output: the section model's members are
 TPU but the insert, and in linear elasticity their compliance scales as 1/E, so a part whose TPU
@@ -38,8 +39,9 @@ def test_a_centred_press_reads_back_the_force_mst_simulate_states(section_spec, 
     csv = fields_csv(tmp_path / "fields.csv", resp.force_N[rows], resp.B_T[rows])
     got = api.read(section_spec, csv, warn=quiet)
     np.testing.assert_allclose(got.force_N, resp.force_N[rows], rtol=2e-3)
-    closed = api.read(forward_copy(tmp_path, "part"), csv, warn=quiet).force_N[:4]  # regime 1
-    assert np.all(closed / resp.force_N[rows][:4] - 1.0 > 0.05)
+    closed = api.read(forward_copy(tmp_path, "part"), csv, warn=quiet).force_N  # +0.9 to +2.4 %
+    read = np.isfinite(closed)  # the closed form's range ends before the section's last reading
+    assert read.sum() >= len(rows) - 1 and np.all(closed[read] / resp.force_N[rows][read] - 1.0 > 3 * 2e-3)
 
 
 def test_an_off_centre_press_reads_back_its_force_and_place(section_spec, tmp_path):
@@ -57,7 +59,8 @@ def test_an_off_centre_press_reads_back_its_force_and_place(section_spec, tmp_pa
     np.testing.assert_allclose(got.offset.y_mm[placed], press_mm[1], atol=0.01)
     closed = api.read(forward_copy(tmp_path, "part"), csv, estimate="offset", polish=True, warn=quiet).offset
     fits = closed.flag == "ok"  # near the range's end the closed form finds no root at all
-    assert np.min(closed.force_N[fits] / r.force_N[rows][fits] - 1.0) > 0.05
+    off_mm = np.hypot(closed.x_mm[fits] - press_mm[0], closed.y_mm[fits] - press_mm[1])
+    assert np.max(off_mm) > 10 * 0.01  # up to 1 mm off (studies/section_reading.py)
 
 
 @pytest.mark.slow
@@ -68,7 +71,7 @@ def test_calibration_finds_a_softer_tpu_in_section_mode(section_spec, tmp_path):
     fitted = api.calibrate(section_spec, load_test, params="modulus_factor").fit.values["modulus_factor"]
     assert abs(fitted / SOFTER - 1.0) < 0.01  # the insert's share does not scale with the TPU
     closed = api.calibrate(forward_copy(tmp_path, "part"), load_test, params="modulus_factor")
-    assert closed.fit.values["modulus_factor"] / SOFTER - 1.0 < -0.05  # the closed form calls it softer still
+    assert closed.fit.values["modulus_factor"] / SOFTER - 1.0 < -0.015  # the closed form calls it softer still
 
 
 def test_a_centred_press_with_shear_reads_back_its_tangential_force(section_spec, tmp_path):

@@ -55,13 +55,13 @@ def whole_part(results, name: str = "whole_part"):
     return check
 
 
-def test_the_bundled_forward_part_is_softer_than_its_closed_form_like_for_like(forward_checked):
-    """The bundled forward design (the closed form): like for like, the design's linear figure
-    against the rung's, every regime of the part is softer than the closed form states (the TPU
-    members only add compliance, and the closed form holds the plates too stiff), beyond the 5 %
-    budget before the first lock (docs/design.md 4.7: -7.7 / -8.0 / -10.2 %), and the check names
-    the plates. The secant S sits above the linear figure in every regime: the layers' softening
-    that hid the gap when S was judged."""
+def test_the_bundled_forward_part_gives_what_its_closed_form_states_like_for_like(forward_checked):
+    """The bundled forward design (the closed form, with the walls' joints with the plates of
+    model.plate_joint): like for like, the design's linear figure against the rung's, every regime
+    is within its budget (docs/design.md 4.7: -0.1 / -0.4 / -7.8 %; -7.7 / -8.0 / -10.2 % before
+    the joints). The members as printed only add compliance, in the rung as in the design, and
+    the secant S sits above the linear figure in every regime: the layers' softening before
+    their lock, which no linear model has."""
     results, lines = forward_checked
     check = whole_part(results)
     assert lines and "whole-part rung" in lines[0]
@@ -70,10 +70,9 @@ def test_the_bundled_forward_part_is_softer_than_its_closed_form_like_for_like(f
     assert [r["locked_layers"] for r in regimes] == [[], [1], [1, 2]]  # layer 1 locks first on this design
     for r, budget in zip(regimes, ACCURACY_BUDGET_REL):
         assert r["budget_rel"] == budget
-        assert r["error_rel"] < 0.0 and r["secant_error_rel"] > r["error_rel"]
-        assert r["rung_outside_layers_mm_per_N"] > r["stated_outside_layers_mm_per_N"] > 0.0
-    assert not check.passed and regimes[0]["error_rel"] < -regimes[0]["budget_rel"]
-    assert check.values["regime_members_mm_per_N"]["regime"] == 1 and "plates" in check.note
+        assert abs(r["error_rel"]) <= budget and r["secant_error_rel"] > r["error_rel"]
+        assert r["rung_outside_layers_mm_per_N"] > 0.0 and r["stated_outside_layers_mm_per_N"] > 0.0
+    assert check.passed and "whole_part" not in results.failed
     # every layer that locks stiffens the part, in the rung as in the design
     rung = [r["rung_uT_per_N"] for r in regimes]
     assert rung[0] > rung[1] > rung[2]
@@ -120,9 +119,10 @@ def test_without_the_flag_no_rung_is_solved(exports):
 def test_the_specs_closed_form_misses_the_plates_like_for_like(name, tmp_path):
     """The specs as bundled (closed form, 1.6 mm plates), designed and exported as `mst export
     SPEC` does: like for like, the whole-part rung's part is softer than the design's linear figure
-    in every regime (TPU members the closed form holds too stiff: the walls' roots turning on the
-    plates), by more than the budget, and the check names the plates (docs/design.md 4.7:
-    -10 / -20 / -49 % and -9 / -20 / -32 %). Judged on S, the secant, the layers' softening hid it."""
+    in every regime (the plates between unlike layers turn at the wall heads, which the closed
+    form leaves out), by more than the budget, and the check names the plates (docs/design.md 4.7:
+    -6.0 / -11.7 / -43.6 % and -4.6 / -11.2 / -26.2 %). Judged on S, the secant, the layers'
+    softening hid it."""
     mst.export(ROOT / "configs" / f"{name}.yaml", tmp_path / "part", stl=True)
     check = whole_part(mst.check(tmp_path / "part", whole_part=True))
     assert not check.passed
