@@ -6,8 +6,8 @@ field change per newton at the chip from the layers' rung with the cap, plates a
 closed form (:mod:`mst_cli.model.load_path`, the walls' joints with the plates in
 :mod:`mst_cli.model.plate_joint`). That closed form misses the plates turning at the wall heads
 between unlike or locked layers and the cover bending under a locked layer, by up to 44 % on
-designs with thin, shallow walls (docs/design.md 4.7). This check measures the part's section as exported, in plane
-strain, with every member as printed (:mod:`mst_cli.model.mechanics.whole_part`: the rung checked
+designs with thin, shallow walls (docs/design.md 4.7). This check measures the part's section
+as exported, in plane strain, with every member as printed (:mod:`mst_cli.model.mechanics.whole_part`: the rung checked
 against L2 with its members rigid, against the beam closed form and by mesh convergence). Per
 regime it compares the rung's field change per newton at the chip with the design's own linear
 figure, like for like: each open layer at its small-load stiffness, each closed one locked, the

@@ -10,8 +10,9 @@ the plate is squeezed under them. Per root on a plate, for the vertical press's 
   depth, t the wall's thickness, L its centre-line length): the clamped-guided wall of L0 with
   that spring at its root gives L/k m + (m L^2/2 - L^3/6)/E'I - L^3/(12 E'I) more,
   m = (L^2 / 2E'I) / (1/k + L/E'I), times cos^2 theta for the vertical. The spring is of the
-  order of a rigid strip's on a half-plane t wide (pi/8 E'D t^2, pi/8 = 0.39: Johnson, Contact
-  Mechanics, 1985, section 2.8); a shallow wall bears on a wider, slanted footprint (a < 0);
+  order of a rigid flat punch's t wide, tilted on an elastic half-plane (pi/8 E'D t^2, pi/8 =
+  0.39; Johnson, Contact Mechanics, 1985, chapter 2); a shallow wall bears on a wider, slanted
+  footprint (a < 0);
 * **the plate is squeezed** under the root: s p / (E'D t), p the plate's thickness.
 
 A layer's walls stand on a plate at their feet (a plate below) and at their heads (a plate
