@@ -167,3 +167,23 @@ def test_calibrate_writes_current_offset_and_shear_tables_and_their_c_headers(ca
     )
     assert res.exit_code == 0 and "stale" not in res.output and "missing" not in res.output, res.output
     assert not (tmp_path / "s" / "shear_table.npz").exists()
+
+
+def test_a_press_past_the_range_is_no_fit_not_the_ranges_end(calibrated):
+    """A 35 N press at (-7, 4) mm, past the calibrated part's last lock (32.6 N): the coarse
+    table's root passes within its own slab error, at the range's end, but the exact polish
+    ends there far off the reading (tens of noise sigmas), so no force is stated for it (issue 46)
+    while a 30 N press at the same place reads as before."""
+    d, _ = calibrated
+    coarse_table_beside(d / "cal" / "calibrated.yaml")
+    rows = rows_at([(-7.0, 4.0)], np.array([30.0, 35.0]))
+    write(d / "past.csv", [(r[0], *r[3:]) for r in rows], "force_N,Bx_uT,By_uT,Bz_uT")
+    res = run(
+        ["read", d / "cal" / "calibrated.yaml", d / "past.csv", "--out", d / "past", "--estimate-offset", "--polish"]
+    )
+    assert res.exit_code == 0, res.output
+    import csv
+
+    inside, past = csv.DictReader((d / "past" / "forces.csv").open())
+    assert inside["offset_flag"] == "ok" and float(inside["force_N"]) == pytest.approx(30.0, rel=0.03)
+    assert past["offset_flag"] == "no_fit" and past["x_mm"] == "" and past["force_N_sigma"] == ""

@@ -177,6 +177,19 @@ class OffsetEstimator:
         (:func:`~mst_cli.model.load_bound.crb_sigma`)."""
         return crb_sigma(J, self.sigma_T)
 
+    def _box(self) -> tuple[np.ndarray, np.ndarray]:
+        """(lower, upper) bounds of (force N, x0 mm, y0 mm): no force to the range's end, the face."""
+        return (
+            np.array([0.0, -self.half_face_mm[0], -self.half_face_mm[1]]),
+            np.array([self.force_max_N, self.half_face_mm[0], self.half_face_mm[1]]),
+        )
+
+    def on_box_edge(self, p: np.ndarray) -> bool:
+        """Whether (force, x0, y0) ``p`` sits on a bound of the solve's box (the range's end, the
+        face's edge; zero force aside): where a solve stops when the root lies past it."""
+        lo, hi = self._box()
+        return bool(p[0] >= hi[0] or np.any(p[1:] <= lo[1:]) or np.any(p[1:] >= hi[1:]))
+
     def _solve_from(self, B_T: np.ndarray, p0: np.ndarray, iterations: int = GAUSS_NEWTON_ITERATIONS) -> _Solve:
         """Damped, projected Gauss-Newton from ``p0`` inside the face and the force range.
 
@@ -184,8 +197,7 @@ class OffsetEstimator:
         cut to the box, then halved (up to MAX_HALVINGS times) until it lowers the misfit. A
         plain step clipped to the box overshoots where the field flattens late in the stack and
         pins the force at the range's end, far from the root."""
-        lo = np.array([0.0, -self.half_face_mm[0], -self.half_face_mm[1]])
-        hi = np.array([self.force_max_N, self.half_face_mm[0], self.half_face_mm[1]])
+        lo, hi = self._box()
         p = np.clip(p0, lo, hi)
         B0 = self.field_T(p)
         misfit = float(np.linalg.norm(B_T - B0))

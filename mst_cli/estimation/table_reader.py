@@ -56,12 +56,20 @@ class OffsetTableReader:
 
     def _polish(self, B_T: np.ndarray, est: TableEstimates) -> None:
         """The exact solve from each reading's best root; its root, its Cramer-Rao sigmas and its
-        identifiability replace the table's (the table's ambiguity stands)."""
+        identifiability replace the table's (the table's ambiguity stands). A solve that ends on
+        the box's edge (a force past the range's end, a press off the face) further off the
+        reading than the noise allows found no root: ``no_fit``, which the table's coarser slab
+        error had let pass (a force no sensor can give, issue 46)."""
         assert self.exact is not None
         for i in np.flatnonzero(np.isin(est.flag, ("ok", "not_identifiable"))):
             s = self.exact._solve_from(B_T[i], est.best[i].copy())
+            if s.misfit_T > FIT_SIGMAS * self.sigma_T and self.exact.on_box_edge(s.p):
+                est.flag[i] = "no_fit"
+                est.force_N[i] = est.x_mm[i] = est.y_mm[i] = np.nan
+                est.sigma_force_N[i] = est.sigma_x_mm[i] = est.sigma_y_mm[i] = np.nan
+                continue
             if not (s.converged and s.misfit_T <= FIT_SIGMAS * self.sigma_T):
-                continue  # the table's root stands (the exact solve stalled on the box)
+                continue  # the table's root stands (the exact solve stalled)
             sig = self.exact._sigmas(s.J)
             est.best[i] = s.p
             ok = bool(np.all(np.isfinite(sig)) and max(sig[1], sig[2]) <= self.max_sigma_mm)
