@@ -27,7 +27,6 @@ import mst_cli as mst
 from mst_cli.errors import InputError
 from mst_cli.model import load_path as lp
 from mst_cli.model import plate_joint as pj
-from mst_cli.model.cell import wall_centreline_length_mm
 from mst_cli.model.mechanics import layer_laws
 from studies.plate_walls import FORWARD, fit_c, rung_rows
 
@@ -93,13 +92,10 @@ def features(paths: list[Path]) -> dict[str, np.ndarray]:
     return {k: np.array(v) for k, v in cols.items()}
 
 
-def joints(f: dict[str, np.ndarray], c: float, a: float, b: float, s: float) -> np.ndarray:
+def joints(f: dict[str, np.ndarray], *constants: float) -> np.ndarray:
     """model.plate_joint's joints of a same-layer stack of three (4 roots on its 2 plates), mm/N,
     with the constants (c, a, b, s)."""
-    ED, t, theta = f["E"] * f["depth"], f["t"], f["theta"]
-    L = wall_centreline_length_mm(theta, t, f["h"])
-    k = c * np.sin(theta) ** a * (L / t) ** b * ED * t**2
-    return 4.0 * (0.5 * pj.root_turn_mm_per_N(L, ED * t**3 / 12.0, np.cos(theta), k) + 0.25 * s * f["plate"] / (ED * t))
+    return 4.0 * pj.root_joint_mm_per_N(f["theta"], f["t"], f["h"], f["plate"], f["depth"], f["E"], constants)
 
 
 def fit(paths: list[Path]) -> None:
@@ -112,7 +108,7 @@ def fit(paths: list[Path]) -> None:
     truth, total = f["rung"] - f["beams"], f["layers"] + f["rung"]
     found = least_squares(lambda x: (joints(f, *x) - truth) / total, [0.4, -0.8, 0.0, 0.8]).x
     (c,) = least_squares(lambda x: (joints(f, x[0], 0.0, 0.0, 0.0) - truth) / total, [0.4]).x
-    model = (pj.ROOT_SPRING_C, pj.ROOT_SPRING_SLANT, pj.ROOT_SPRING_SLENDER, pj.PLATE_SQUEEZE)
+    model = pj.FITTED
     print(f"{len(truth)} designs; c, a, b, s fitted: " + ", ".join(f"{x:.3f}" for x in found))
     for name, x in (("fitted", found), ("one spring alone (c only)", (c, 0.0, 0.0, 0.0)), ("model.plate_joint", model)):
         on_total = (joints(f, *x) - truth) / total

@@ -48,7 +48,7 @@ def test_the_joints_scale_as_one_over_the_modulus_and_grow_with_the_plate():
     one = pj.root_joint_mm_per_N(0.5, 0.6, 2.2, 0.8, 20.0, 30.0)
     assert pj.root_joint_mm_per_N(0.5, 0.6, 2.2, 0.8, 20.0, 60.0) == pytest.approx(0.5 * one, rel=1e-12)
     thicker = pj.root_joint_mm_per_N(0.5, 0.6, 2.2, 1.6, 20.0, 30.0)
-    assert thicker - one == pytest.approx(0.25 * pj.PLATE_SQUEEZE * 0.8 / (20.0 * 30.0 * 0.6), rel=1e-12)
+    assert thicker - one == pytest.approx(0.25 * pj.FITTED[3] * 0.8 / (20.0 * 30.0 * 0.6), rel=1e-12)
 
 
 def test_the_fitted_form_holds_the_rungs_plates_over_the_design_box():
@@ -58,6 +58,5 @@ def test_the_fitted_form_holds_the_rungs_plates_over_the_design_box():
     f = features(sorted(DATA.glob("root_turn_*.csv")))
     assert f["rung"].size == 102
     truth, total = f["rung"] - f["beams"], f["layers"] + f["rung"]
-    model = (pj.ROOT_SPRING_C, pj.ROOT_SPRING_SLANT, pj.ROOT_SPRING_SLENDER, pj.PLATE_SQUEEZE)
-    assert np.max(np.abs(joints(f, *model) - truth) / total) < 0.032
+    assert np.max(np.abs(joints(f, *pj.FITTED) - truth) / total) < 0.032
     assert np.max(np.abs(joints(f, 0.4, 0.0, 0.0, 0.0) - truth) / total) > 0.2

@@ -40,11 +40,9 @@ from mst_cli.model.beams import as_value
 from mst_cli.model.cell import wall_centreline_length_mm
 
 # studies/root_turn_sweep.py --fit studies/data/root_turn_*.csv (docs/design.md 4.7): the root's
-# spring and the plate's squeeze
-ROOT_SPRING_C = 0.471
-ROOT_SPRING_SLANT = -0.797  # the exponent a of sin(theta)
-ROOT_SPRING_SLENDER = -0.285  # the exponent b of the wall's slenderness L / t
-PLATE_SQUEEZE = 0.864
+# spring (c, the exponent a of sin(theta), the exponent b of the wall's slenderness L / t) and
+# the plate's squeeze s
+FITTED = (0.471, -0.797, -0.285, 0.864)
 
 
 def root_turn_mm_per_N(L_mm, EI_Nmm2, cos_theta, k_Nmm_per_rad) -> Any:
@@ -55,15 +53,19 @@ def root_turn_mm_per_N(L_mm, EI_Nmm2, cos_theta, k_Nmm_per_rad) -> Any:
     return as_value(cos_theta**2 * (m * L / k + (m * L * L / 2.0 - L**3 / 6.0) / EI - L**3 / (12.0 * EI)))
 
 
-def root_joint_mm_per_N(theta_rad, t_mm, h_mm, plate_mm: float, depth_mm: float, E_prime_MPa: float) -> Any:
+def root_joint_mm_per_N(
+    theta_rad, t_mm, h_mm, plate_mm, depth_mm, E_prime_MPa, constants: tuple[float, ...] = FITTED
+) -> Any:
     """One root of a layer's walls on a plate ``plate_mm`` thick: its turn and the plate's squeeze
-    under it, mm/N of the layer's vertical compliance (half a layer's: module docstring)."""
+    under it, mm/N of the layer's vertical compliance (half a layer's: module docstring), with the
+    ``constants`` (c, a, b, s) [default: the fitted ones; studies/root_turn_sweep.py fits them]."""
+    c, a, b, s = constants
     theta, t = np.asarray(theta_rad, dtype=float), np.asarray(t_mm, dtype=float)
     ED = E_prime_MPa * depth_mm
     L = wall_centreline_length_mm(theta, t, h_mm)
-    k = ROOT_SPRING_C * np.sin(theta) ** ROOT_SPRING_SLANT * (L / t) ** ROOT_SPRING_SLENDER * ED * t**2
+    k = c * np.sin(theta) ** a * (L / t) ** b * ED * t**2
     turn = root_turn_mm_per_N(L, ED * t**3 / 12.0, np.cos(theta), k)
-    return as_value(0.5 * turn + 0.25 * PLATE_SQUEEZE * plate_mm / (ED * t))
+    return as_value(0.5 * turn + 0.25 * s * plate_mm / (ED * t))
 
 
 def plates_beside(n_layers: int) -> np.ndarray:
