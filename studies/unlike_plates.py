@@ -12,19 +12,35 @@ rung's plates (their extra drop, plates in TPU less every member rigid: studies/
 rung_rows), the closed form's (the plates' beams and the layers' joints with them), and what is
 missing, also as a share of the layers' and plates' compliance. Two rung solves a stack, about
 10 s each.
+
+``--per-plate`` (two more solves a stack, 10 min in all): each plate alone in TPU, the other held
+rigid (``PartOptions.rigid_plates``), against the closed form's beam and joints of that plate.
+Plate 1 stands on A's heads under B's feet, plate 2 on B's heads under A's feet: one is the
+other's mirror image about B's mid-plane, so the rung gives both the same. The closed form's beam
+does not: where the feet above stand outside the heads below (an overhang, e = head below - head
+above < 0) it bends only the overhang, clamped at the head; where they stand inside, the span
+between the heads bends too. The last column is the free body both cases share, a beam loaded by
+P = 1/2 at each foot and held by P at each head: the span between the nearer pair carries the
+moment P |e| and the rest bends as a cantilever, P (e^2 x_near + |e|^3 / 3) / E'I (x_near the
+nearer pair's x, E'I the plate with both pads), without the walls' restraint.
 """
 
 from __future__ import annotations
 
+import argparse
 import itertools
 import tempfile
 from pathlib import Path
 
+import numpy as np
 import yaml
 
 import mst_cli as mst
 from mst_cli.model import load_path as lp
+from mst_cli.model.beams import section_EI_kGA
 from mst_cli.model.mechanics import layer_laws
+from mst_cli.model.mechanics import whole_part as wp
+from mst_cli.model.plate_joint import root_joint_mm_per_N
 from studies.plate_walls import FORWARD, rung_rows
 
 THETA_DEG = (13.0, 20.0, 28.0, 40.0, 57.0)
@@ -41,7 +57,50 @@ def stack(folder: Path, theta_a: float, theta_b: float) -> Path:
     return path
 
 
+def plate_rows(path: Path) -> list[dict]:
+    """Per plate of the stack at ``path``, regime 1: the rung's extra drop with that plate alone in
+    TPU (the other plates, the cap and the base rigid), the closed form's beam and joints of it,
+    the offset e and the free body's beam (module docstring), mm/N and mm."""
+    doc, _ = mst.designed(path)
+    g, m = doc.geometry(), doc.material
+    rigid = wp.press(g, m, wp.PartOptions(member_factor=wp.RIGID_FACTOR)).drop_mm_per_N
+    scene = lp.member_scene(g, m)
+    theta, t, h = (np.array([getattr(c, k) for c in g.layers]) for k in lp.CELL_KEYS)
+    _, head, _, _ = lp.layer_supports(scene, theta, t, h)
+    joint = root_joint_mm_per_N(theta, t, h, scene.plate_mm, scene.depth_mm, scene.E_prime_MPa)
+    beams = lp.members(g, m).plates_mm_per_N
+    rows = []
+    for j in range(len(g.layers) - 1):
+        others = tuple(k for k in range(len(g.layers) - 1) if k != j)
+        opts = wp.PartOptions(member_factor=wp.RIGID_FACTOR, scaled=("base", "cap"), rigid_plates=others)
+        EI, _ = section_EI_kGA(scene.depth_mm, t[j] + scene.plate_mm + t[j + 1], scene.E_prime_MPa, scene.G_MPa)
+        e, near = head[j] - head[j + 1], min(head[j], head[j + 1])
+        free = 0.5 * (e * e * near + abs(e) ** 3 / 3.0) / EI
+        rung = wp.press(g, m, opts).drop_mm_per_N - rigid
+        rows.append({"rung": rung, "beam": beams[j], "joints": joint[j] + joint[j + 1], "e": e, "free": free})
+    return rows
+
+
+def per_plate() -> None:
+    print("| θ_A, ° | θ_B, ° | plate | e, mm | rung, µm/N | closed form: beam + joints | free-body beam |")
+    print("|---|---|---|---|---|---|---|")
+    with tempfile.TemporaryDirectory() as tmp:
+        for theta_a, theta_b in itertools.combinations(THETA_DEG, 2):
+            for j, row in enumerate(plate_rows(stack(Path(tmp), theta_a, theta_b))):
+                um = {k: 1e3 * row[k] for k in ("rung", "beam", "joints", "free")}
+                print(
+                    f"| {theta_a:g} | {theta_b:g} | {j + 1} | {row['e']:+.2f} | {um['rung']:.1f} | "
+                    f"{um['beam']:.1f} + {um['joints']:.1f} | {um['free']:.1f} |",
+                    flush=True,
+                )
+
+
 def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--per-plate", action="store_true", help="each plate alone in TPU (module docstring)")
+    if parser.parse_args().per_plate:
+        per_plate()
+        return
     print("| θ_A, ° | θ_B, ° | rung, µm/N | closed form | missing | / layers and plates |")
     print("|---|---|---|---|---|---|")
     with tempfile.TemporaryDirectory() as tmp:

@@ -117,7 +117,7 @@ class CellTable:
         if self._supports is None:
             t = problem.printed_t_mm(self.t_mm)
             self._supports = (t, *layer_supports(problem.members, np.radians(self.theta_deg), t, self.h_mm))
-        t, pad, head, walls = self._supports
+        t, pad, head, walls, sway = self._supports
 
         def at(a: np.ndarray, i: int) -> np.ndarray:  # layer i's: every cell at j, the chosen one elsewhere
             return a if i == j else a[chosen[i] : chosen[i] + 1]
@@ -136,7 +136,9 @@ class CellTable:
         plates = [
             member(
                 ("plate", cell(i), cell(i + 1)),
-                lambda i=i: plates_mm_per_N(scene, at(t, i), at(t, i + 1), at(head, i), at(head, i + 1), at(walls, i)),
+                lambda i=i: plates_mm_per_N(
+                    scene, at(t, i), at(t, i + 1), at(head, i), at(head, i + 1), at(sway, i), at(sway, i + 1)
+                ),
             )
             for i in range(n - 1)
         ]

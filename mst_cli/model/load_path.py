@@ -10,9 +10,9 @@ layers' compression plus each member's bending:
   patch (a centred strip ``patch_mm`` wide, all of the depth). The section is the pad plus the
   cap, less the magnet pocket over its width 2r (the magnet's own stiffness is left out: an
   upper bound on the compliance, by the pocket's share of the section).
-* **plates** -- each plate bonded to the pads above and below it: a beam across the lower
-  layer's wall heads, loaded by the upper layer's wall feet. When the two layers' walls stand
-  at the same x the load goes straight down and the plate does not bend.
+* **plates** -- each plate bonded to the pads above and below it, loaded by the upper layer's
+  wall feet, held by the lower layer's wall heads, its turn resisted by both layers' walls; when
+  they stand at the same x the load goes straight down and the plate does not bend.
 * **cover** -- the base's cover bonded to layer 1's bottom pad: a beam across the board slot,
   loaded by layer 1's wall feet. It does not bend when the walls stand on the slot's side walls
   or beyond them on the solid base (the slot is narrower than the wall feet: no overhang, the
@@ -30,9 +30,8 @@ layers' compression plus each member's bending:
   cent (tests/test_load_path.py).
 
 Each beam is a plane-strain Timoshenko beam (E' = E/(1 - nu^2) in bending, G in shear, shear
-factor 5/6) with its supports either simply supported (the default: the wall heads turn with
-the slender walls) or clamped (the stiff bound); a symmetric load, so the shear deflection is
-the same for both. Pure numpy, no I/O.
+factor 5/6); the cap's supports are simply supported (the default: the wall heads turn with the
+slender walls) or clamped (the stiff bound). Pure numpy, no I/O.
 """
 
 from __future__ import annotations
@@ -47,10 +46,10 @@ from mst_cli.model.beams import SHEAR_FACTOR as SHEAR_FACTOR  # the section's an
 from mst_cli.model.beams import as_value as _value
 from mst_cli.model.beams import (
     end_fixity,
+    offset_pair_mm_per_N,
     plain_section,
     strip_bending_pair_mm_per_N,
     strip_shear_mm_per_N,
-    two_load_pair_mm_per_N,
 )
 from mst_cli.model.beams import section_EI_kGA as section_EI_kGA
 from mst_cli.model.beams import strip_bending_mm_per_N as strip_bending_mm_per_N
@@ -213,24 +212,25 @@ def member_parts(scene: MemberScene, theta_rad, t_mm, h_mm) -> tuple:
     """:func:`member_compliances` with the cover's two parts apart: (cap, plates, the cover's
     bending over the slot (which stops on the board), the slot walls' squeeze and turn)."""
     t = np.asarray(t_mm, dtype=float)
-    pad, head, walls = layer_supports(scene, theta_rad, t, h_mm)
+    pad, head, walls, sway = layer_supports(scene, theta_rad, t, h_mm)
     cap = cap_mm_per_N(scene, t[..., -1], head[..., -1], walls[..., -1])
-    plates = plates_mm_per_N(scene, t[..., :-1], t[..., 1:], head[..., :-1], head[..., 1:], walls[..., :-1])
+    plates = plates_mm_per_N(
+        scene, t[..., :-1], t[..., 1:], head[..., :-1], head[..., 1:], sway[..., :-1], sway[..., 1:]
+    )
     over_slot, slot_walls = cover_parts_mm_per_N(scene, t[..., 0], pad[..., 0], head[..., 0])
     return cap, np.asarray(plates), over_slot, slot_walls
 
 
 def layer_supports(scene: MemberScene, theta_rad, t_mm, h_mm) -> tuple:
-    """What the members take from each layer, cell by cell (arrays (...) of theta in rad, t and h
-    in mm): (its outer pad's half width, its wall heads' x (wall_head_x_mm), its walls' restraint
-    of a pad's turn in N mm/rad). A member rests on one layer or two, so a batch of stacks that
-    differ in one layer needs these of that layer's cells only (the design's start)."""
+    """What the members take from each layer, cell by cell (theta in rad, t, h in mm): (its outer
+    pad's half width, its wall heads' x (wall_head_x_mm), its walls' restraint of a pad's turn
+    and of a plate's turn (:func:`plates_mm_per_N`), N mm/rad). A member rests on one layer or
+    two, so stacks that differ in one layer need these of that layer's cells only."""
     theta, t = np.asarray(theta_rad, dtype=float), np.asarray(t_mm, dtype=float)
     pad = pad_half_width_mm(theta, h_mm, scene.width_mm)
-    # the wall heads: the mid-point of each pad's outer and inner corners (wall_head_x_mm)
     head = pad - 0.5 * t * np.tan(0.5 * theta)
     walls = wall_head_restraint_Nmm_per_rad(theta, t, h_mm, scene.depth_mm, scene.E_prime_MPa, scene.support)
-    return pad, head, walls
+    return pad, head, walls, walls * (12.0 / WALL_FAR_END[scene.support])  # 12 E'I/L_w
 
 
 def cap_mm_per_N(scene: MemberScene, t_top_mm, head_mm, walls_Nmm_per_rad) -> Any:
@@ -250,15 +250,20 @@ def cap_mm_per_N(scene: MemberScene, t_top_mm, head_mm, walls_Nmm_per_rad) -> An
     return simple - fix * (simple - clamped) + strip_shear_mm_per_N(span, s.patch_mm, kGA)
 
 
-def plates_mm_per_N(scene: MemberScene, t_below_mm, t_above_mm, head_below_mm, head_above_mm, walls_below) -> Any:
+def plates_mm_per_N(
+    scene: MemberScene, t_below_mm, t_above_mm, head_below_mm, head_above_mm, sway_below, sway_above
+) -> Any:
     """A plate's compliance, mm/N, between the layer below it and the one above it (their
-    :func:`layer_supports`): a beam across the lower layer's wall heads, loaded by the upper
-    layer's wall feet, its ends turning against the lower layer's walls."""
+    :func:`layer_supports`): the plate with both pads, loaded by the upper layer's wall feet and
+    held by the lower layer's wall heads (:func:`~mst_cli.model.beams.offset_pair_mm_per_N`: the
+    same whichever pair stands outside), its turn resisted by both layers' walls: the turn swings
+    a wall's far end (the side vertex) across it by L_w a radian, against its sway stiffness
+    12 E'I/L_w^3 (ends held from turning), so 12 E'I/L_w (studies/unlike_plates.py --per-plate
+    measures 12.9 per wall, docs/design.md 4.7)."""
     s = scene
     EI_p, kGA_p = section_EI_kGA(s.depth_mm, t_below_mm + s.plate_mm + t_above_mm, s.E_prime_MPa, s.G_MPa)
-    fix = end_fixity(walls_below, EI_p, 2.0 * head_below_mm)
-    simple, clamped = two_load_pair_mm_per_N(2.0 * head_below_mm, head_below_mm - head_above_mm, EI_p, kGA_p)
-    return simple - fix * (simple - clamped)
+    near, offset = np.minimum(head_below_mm, head_above_mm), head_below_mm - head_above_mm
+    return offset_pair_mm_per_N(near, offset, EI_p, kGA_p, sway_below + sway_above)
 
 
 def cover_parts_mm_per_N(scene: MemberScene, t_bottom_mm, pad_mm, head_mm) -> tuple:

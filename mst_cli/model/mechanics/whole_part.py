@@ -65,7 +65,7 @@ class PartOptions:
     offset and direction (down, or along +x), the corner refinements, the magnet
     (:data:`MAGNET_SEATS`), the members' stiffness factor (1: as printed; :data:`RIGID_FACTOR`:
     the rigid-member control) and which members it scales (``scaled``, tags of :data:`MEMBER_TAGS`
-    or "insert"), locked layers by index, an insert
+    or "insert"), locked layers and plates held rigid whatever ``scaled`` says by index, an insert
     (:class:`~mst_cli.model.load_path.Insert`; None: the geometry's own, if it has one)."""
 
     patch_mm: float = FINGERTIP_PATCH_MM
@@ -76,6 +76,7 @@ class PartOptions:
     member_factor: float = 1.0
     scaled: tuple[str, ...] = MEMBER_TAGS  # the members member_factor applies to (one at a time: attribution)
     locked: tuple[int, ...] = ()
+    rigid_plates: tuple[int, ...] = ()  # plates (bottom first) held rigid whatever ``scaled`` says
     insert: Insert | None = None
     levels: int = DEFAULT_LEVELS
 
@@ -112,6 +113,7 @@ def _moduli(material, options: PartOptions, insert) -> tuple[np.ndarray, np.ndar
     nu = {t: material.poisson_ratio for t in TAGS}
     for t in options.scaled:
         E[t] *= options.member_factor
+    E["rigid_plate"] = material.youngs_modulus_MPa * RIGID_FACTOR
     E["magnet"], nu["magnet"] = N42_MODULUS_MPA, N42_POISSON
     if insert is not None:
         # load_path.Insert keeps its modulus in plane strain; back to E for the plane-strain form
@@ -141,7 +143,10 @@ def build_mesh(geometry, options: PartOptions, offsets_mm: Sequence[float] | Non
 
     if options.magnet not in MAGNET_SEATS:
         raise ValueError(f"magnet must be one of {MAGNET_SEATS}, not {options.magnet!r}")
-    regions = section_regions(geometry, options.locked, options.magnet == "bonded", part_insert(geometry, options))
+    regions = section_regions(
+        geometry, options.locked, options.magnet == "bonded", part_insert(geometry, options),
+        rigid_plates=options.rigid_plates,
+    )  # fmt: skip
     spacing = options.spacing_mm if options.spacing_mm is not None else default_spacing_mm(geometry)
     offsets = (options.offset_mm,) if offsets_mm is None else offsets_mm
     edges = np.concatenate([press_points(geometry, options.patch_mm, x) for x in offsets])

@@ -23,7 +23,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import Delaunay
 
-TAGS = ("base", "layer", "plate", "cap", "magnet", "insert")  # what each region is, for its modulus
+TAGS = ("base", "layer", "plate", "cap", "magnet", "insert", "rigid_plate")  # what each region is, for its modulus
+# ("rigid_plate": a plate the attribution holds rigid, one plate at a time)
 
 
 @dataclass(frozen=True)
@@ -116,7 +117,12 @@ def polygon_segments(polys: list[np.ndarray]) -> np.ndarray:
 
 
 def section_regions(
-    geometry, locked: tuple[int, ...] = (), magnet: bool = True, insert=None, windows: bool = False
+    geometry,
+    locked: tuple[int, ...] = (),
+    magnet: bool = True,
+    insert=None,
+    windows: bool = False,
+    rigid_plates: tuple[int, ...] = (),
 ) -> list[Region]:
     """The part's section at y = 0 (module docstring), bottom to top. ``locked``: indices of the
     layers taken as closed (their cavity filled); ``magnet``: the pocket filled by the magnet
@@ -124,7 +130,8 @@ def section_regions(
     width, its underside ``insert.z_mm`` above the top layer's top pad's underside (replacing TPU);
     ``windows``: cut the cable windows that reach y = 0 too. They cut the side walls over part
     of the depth only, and in the section they would leave the cover with no support at all (a
-    plane-strain model cannot carry it): off by default, their 3D tipping is the 3D check's."""
+    plane-strain model cannot carry it): off by default, their 3D tipping is the 3D check's.
+    ``rigid_plates``: indices of plates (bottom first) tagged "rigid_plate" (the attribution's)."""
     g, w2 = geometry, 0.5 * geometry.width_mm
     L2 = 0.5 * g.base_length_mm
     cuts = []
@@ -140,8 +147,9 @@ def section_regions(
         outer = tuple((x, z + zb) for x, z in cell.outer_profile_xz())
         inner = tuple((x, z + zb) for x, z in cell.inner_profile_xz())
         regions.append(Region("layer", outer) if i in locked else Region("layer", outer, (inner,)))
-    for cell, zb in zip(g.layers[:-1], g.layer_bottoms_mm[:-1]):
-        regions.append(Region("plate", rect(-w2, w2, zb + cell.h_mm, zb + cell.h_mm + g.housing.plate_mm)))
+    for j, (cell, zb) in enumerate(zip(g.layers[:-1], g.layer_bottoms_mm[:-1])):
+        tag = "rigid_plate" if j in rigid_plates else "plate"
+        regions.append(Region(tag, rect(-w2, w2, zb + cell.h_mm, zb + cell.h_mm + g.housing.plate_mm)))
     regions += _cap(g, magnet, insert)
     return regions
 
