@@ -41,6 +41,7 @@ def load_path_report(
         "cap_mm_per_N": simple.cap_mm_per_N,
         "plates_mm_per_N": list(simple.plates_mm_per_N),
         "plate_joints_mm_per_N": list(simple.joints_mm_per_N),  # each layer's, model.plate_joint
+        "plates_over_locked_mm_per_N": list(simple.locked_plates_mm_per_N),  # each plate's, model.past_lock
         "housing_mm_per_N": simple.cover_mm_per_N,
         "cap_clamped_mm_per_N": clamped.cap_mm_per_N,
         "members_simple_mm_per_N": _by_member(simple),
