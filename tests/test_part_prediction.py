@@ -146,7 +146,7 @@ def test_design_names_the_member_that_keeps_the_targets_out_of_reach(tmp_path):
 
     spec = yaml.safe_load((ROOT / "configs" / "mohammadi2021.yaml").read_text())
     # the default 0.8 mm cover and plates, as exported
-    assert spec.pop("housing") == {"cover_mm": 2.5, "plate_mm": 1.6}
+    assert spec.pop("housing") == {"cover_mm": 3.0, "chip_clearance_mm": 1.5, "plate_mm": 1.6}
     S_target = (0.03, 0.01, 0.004)
     for layer, S in zip(spec["layers"], S_target):
         layer["target_sensitivity_per_N"] = S

@@ -25,13 +25,14 @@ PLATE, DEPTH, E_PRIME, G = 1.6, 20.0, 15.0, 4.1
 
 def test_each_plate_acts_while_the_layer_under_it_is_locked_and_the_one_above_open():
     """Regime r has the r layers of least lock force locked; plate j acts while j is and j + 1 is
-    not (worked by hand for both lock orders of three layers, and a batch of both)."""
+    not, and past the last lock none does (worked by hand for three lock orders of three layers,
+    and a batch of two)."""
     X = [1.0, 2.0]
-    np.testing.assert_array_equal(by_regime(X, [1.0, 5.0, 9.0]), [0.0, 1.0, 2.0])  # bottom first
-    np.testing.assert_array_equal(by_regime(X, [5.0, 1.0, 9.0]), [0.0, 2.0, 2.0])  # the middle first
-    np.testing.assert_array_equal(by_regime(X, [9.0, 5.0, 1.0]), [0.0, 0.0, 0.0])  # top first: none over
+    np.testing.assert_array_equal(by_regime(X, [1.0, 5.0, 9.0]), [0.0, 1.0, 2.0, 0.0])  # bottom first
+    np.testing.assert_array_equal(by_regime(X, [5.0, 1.0, 9.0]), [0.0, 2.0, 2.0, 0.0])  # the middle first
+    np.testing.assert_array_equal(by_regime(X, [9.0, 5.0, 1.0]), [0.0, 0.0, 0.0, 0.0])  # top first: none over
     batch = by_regime(np.array([X, X]), np.array([[1.0, 5.0, 9.0], [5.0, 1.0, 9.0]]))
-    np.testing.assert_array_equal(batch, [[0.0, 1.0, 2.0], [0.0, 2.0, 2.0]])
+    np.testing.assert_array_equal(batch, [[0.0, 1.0, 2.0, 0.0], [0.0, 2.0, 2.0, 0.0]])
 
 
 def test_feet_over_the_block_leave_the_joints_share_and_an_overhang_hangs_as_a_cantilever():
