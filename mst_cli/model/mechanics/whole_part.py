@@ -65,7 +65,8 @@ class PartOptions:
     offset and direction (down, or along +x), the corner refinements, the magnet
     (:data:`MAGNET_SEATS`), the members' stiffness factor (1: as printed; :data:`RIGID_FACTOR`:
     the rigid-member control) and which members it scales (``scaled``, tags of :data:`MEMBER_TAGS`
-    or "insert"), locked layers and plates held rigid whatever ``scaled`` says by index, an insert
+    or "insert"), the locked layers by index, the plates held rigid whatever ``scaled`` says
+    (``rigid_plates``, by index: one plate's share alone), an insert
     (:class:`~mst_cli.model.load_path.Insert`; None: the geometry's own, if it has one)."""
 
     patch_mm: float = FINGERTIP_PATCH_MM
