@@ -22,9 +22,7 @@ above < 0) it bends only the overhang, clamped at the head; where they stand ins
 between the heads bends too. The last column is the free body both cases share, a beam loaded by
 P = 1/2 at each foot and held by P at each head: the span between the nearer pair carries the
 moment P |e| and the rest bends as a cantilever, P (e^2 x_near + |e|^3 / 3) / E'I (x_near the
-nearer pair's x, E'I the plate with both pads), without the walls' restraint (the branch
-plates-past-lock puts it in the closed form with the walls' restraint 12 E'I/L_w a wall:
-docs/design.md 4.7).
+nearer pair's x, E'I the plate with both pads), without the walls' restraint.
 """
 
 from __future__ import annotations
@@ -68,7 +66,7 @@ def plate_rows(path: Path) -> list[dict]:
     rigid = wp.press(g, m, wp.PartOptions(member_factor=wp.RIGID_FACTOR)).drop_mm_per_N
     scene = lp.member_scene(g, m)
     theta, t, h = (np.array([getattr(c, k) for c in g.layers]) for k in lp.CELL_KEYS)
-    _, head, _ = lp.layer_supports(scene, theta, t, h)
+    _, head, _, _ = lp.layer_supports(scene, theta, t, h)
     joint = root_joint_mm_per_N(theta, t, h, scene.plate_mm, scene.depth_mm, scene.E_prime_MPa)
     beams = lp.members(g, m).plates_mm_per_N
     rows = []

@@ -178,7 +178,7 @@ def test_the_problem_builds_the_printers_gap_where_simulate_does(gap_offset_mm):
     tests/test_calibration_record fits) or 0.5 mm narrower: the optimiser's part is the forward
     model's part as built, the offset in the cover's air over the board (so the cover lands on it
     later or sooner) and, past that air, in the pocket floor; not only in the gap. The print is
-    written into the file's keys by hand (air 0.3 mm + offset, else 0 and the floor the rest)."""
+    written into the file's keys by hand (the spec's air + offset, else 0 and the floor the rest)."""
     printer = {"wall_offset_mm": 0.05, "modulus_factor": 0.85, "gap_offset_mm": gap_offset_mm}
     probe = DesignProblem(replace(spec_doc([(1.0, 2.0), (0.5, 8.0)], load_path="part"), printer=Printer(**printer)))
     theta, t, h = probe.sample_feasible(np.random.default_rng(3), 1)
@@ -186,7 +186,7 @@ def test_the_problem_builds_the_printers_gap_where_simulate_does(gap_offset_mm):
     raw = yaml.safe_load(SPEC.read_text())
     raw["model"] = {"load_path": "part"}
     raw["material"]["youngs_modulus_MPa"] *= 0.85
-    air_mm, floor_mm = 0.3 + gap_offset_mm, 0.4
+    air_mm, floor_mm = raw["housing"].get("chip_clearance_mm", 0.3) + gap_offset_mm, 0.4
     if air_mm < 0:
         air_mm, floor_mm = 0.0, floor_mm + air_mm
     raw["housing"].update(chip_clearance_mm=air_mm, pocket_floor_mm=floor_mm)

@@ -88,6 +88,7 @@ def test_members_far_stiffer_than_the_layers_give_the_layers_alone(scene):
         cap_mm_per_N=1e-9 * parts.cap_mm_per_N,
         plates_mm_per_N=tuple(1e-9 * p for p in parts.plates_mm_per_N),
         joints_mm_per_N=tuple(1e-9 * j for j in parts.joints_mm_per_N),
+        locked_plates_mm_per_N=tuple(1e-9 * x for x in parts.locked_plates_mm_per_N),
         cover_mm_per_N=1e-9 * parts.cover_mm_per_N,
         cover_contact_mm_per_N=1e-9 * parts.cover_contact_mm_per_N,
     )

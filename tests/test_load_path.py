@@ -15,6 +15,7 @@ from click.testing import CliRunner
 import mst_cli as mst
 from mst_cli.cli.app import main
 from mst_cli.model import load_path as lp
+from mst_cli.model import load_path_report as lpr
 from mst_cli.model.cover_air import air_keeping_cover_off_mm
 from mst_cli.model.material import Material
 from mst_cli.model.mechanics import layer_laws
@@ -166,7 +167,8 @@ def test_each_member_counts_only_while_the_forward_model_moves_it(tmp_path):
     assert housing == pytest.approx([parts.cover_mm_per_N, walls + bent * parts.cover_contact_mm_per_N, walls])
     plates = [r["members_mm_per_N"]["plates"] for r in rows]
     p, j = parts.plates_mm_per_N, parts.joints_mm_per_N  # a layer's joints with the plates lock with it
-    assert plates == pytest.approx([sum(p) + sum(j), p[1] + j[1] + j[2], j[2]], rel=1e-12)
+    x = parts.locked_plates_mm_per_N  # plate i over locked layer i, under open layer i + 1 (past_lock)
+    assert plates == pytest.approx([sum(p) + sum(j), p[1] + j[1] + j[2] + x[0], j[2] + x[1]], rel=1e-12)
 
 
 def test_the_cap_is_the_beam_across_the_top_layers_wall_heads():
@@ -322,9 +324,9 @@ def test_the_default_bound_is_the_closed_forms_spread_against_the_accuracy_budge
     doc = mst.load(FORWARD)
     g, stack = stack_of(doc)
     for geometry, within in ((bare(g), False), (g, True)):
-        report = lp.load_path_report(geometry, doc.material, stack)
+        report = lpr.load_path_report(geometry, doc.material, stack)
         soft, stiff = lp.members(geometry, doc.material), lp.members(geometry, doc.material, support="clamped")
-        rows = lp.support_uncertainty(report)
+        rows = lpr.support_uncertainty(report)
         pairs = zip(lp.motion_shares(stack, soft), lp.motion_shares(stack, stiff))
         for row, budget, (s_row, c_row) in zip(rows, lp.ACCURACY_BUDGET_REL, pairs):
             spread = sum(s_row["members_mm_per_N"].values()) - sum(c_row["members_mm_per_N"].values())
@@ -338,7 +340,7 @@ def test_a_wider_press_bends_the_cap_less():
     doc = mst.load(FORWARD)
     g, stack = stack_of(doc)
     g = bare(g)
-    rows = lp.patch_dependence(g, doc.material, stack)
+    rows = lpr.patch_dependence(g, doc.material, stack)
     assert [r["patch_mm"] for r in rows] == [3.0, 6.0, 12.0, 30.0]
     caps = [r["cap_mm_per_N"] for r in rows]
     assert caps == sorted(caps, reverse=True)

@@ -13,7 +13,8 @@ import pytest
 import mst_cli as mst
 from mst_cli.model import load_path as lp
 from mst_cli.model.mechanics import layer_laws
-from mst_cli.model.response import field_magnitude_T, regime_kernel, simulate
+from mst_cli.model.past_lock import by_regime
+from mst_cli.model.response import capped_lock_forces_N, field_magnitude_T, regime_kernel, simulate
 from mst_cli.model.stack import Stack
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -116,10 +117,12 @@ def test_the_design_loop_predicts_what_simulate_does(forward):
     field = lambda gap: field_magnitude_T(gap, g, part.field_model)  # noqa: E731
     # each plate bends into the cavity under it as the cap into the top one's, each layer's joints
     # with the plates close its own: caps per layer; the cover's drop over the slot stops on the
-    # board after the air under it (at 22 N here)
-    caps, over_slot, slot_walls = lp.layer_caps_mm_per_N(scene, theta, t, h)
+    # board after the air under it (at 22 N here); each plate over a locked layer adds its share in
+    # the regimes it acts in (model.past_lock)
+    caps, over_slot, slot_walls, locked = lp.layer_caps_mm_per_N(scene, theta, t, h)
     contact = (over_slot, g.housing.chip_clearance_mm)
-    R_sorted, S, _, _ = regime_kernel(k, dl, kl, g.gap0_mm, field, R, over_slot + slot_walls, caps, contact)
+    extra = by_regime(locked, capped_lock_forces_N(k, dl, R, caps))
+    R_sorted, S, _, _ = regime_kernel(k, dl, kl, g.gap0_mm, field, R, over_slot + slot_walls, caps, contact, extra)
     np.testing.assert_allclose(R_sorted, part.lock_forces_N, rtol=1e-12)
     np.testing.assert_allclose(S, [r.sensitivity_secant_per_N for r in part.regimes], rtol=1e-9)
 
@@ -143,7 +146,7 @@ def test_design_names_the_member_that_keeps_the_targets_out_of_reach(tmp_path):
 
     spec = yaml.safe_load((ROOT / "configs" / "mohammadi2021.yaml").read_text())
     # the default 0.8 mm cover and plates, as exported
-    assert spec.pop("housing") == {"cover_mm": 2.5, "plate_mm": 1.6}
+    assert spec.pop("housing") == {"cover_mm": 3.0, "chip_clearance_mm": 1.5, "plate_mm": 1.6}
     S_target = (0.03, 0.01, 0.004)
     for layer, S in zip(spec["layers"], S_target):
         layer["target_sensitivity_per_N"] = S

@@ -22,8 +22,9 @@ from mst_cli import api
 from mst_cli.model import load_path as lp
 from mst_cli.model.mechanics import layer_laws
 from mst_cli.model.mechanics import whole_part as wp
-from mst_cli.model.response import field_magnitude_T, regime_kernel, simulate
-from mst_cli.model.stack import Stack, regime_extra_displacement_mm
+from mst_cli.model.past_lock import by_regime
+from mst_cli.model.response import capped_lock_forces_N, field_magnitude_T, regime_kernel, simulate
+from mst_cli.model.stack import Stack, regime_extra_displacement_mm, run_on
 from mst_cli.sensor.as_printed import simulate_as_printed
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -69,10 +70,11 @@ def test_the_forward_model_and_the_design_kernel_add_the_same_correction(forward
     )
     scene = lp.member_scene(g, doc.material)
     theta, t, h = (np.array([getattr(c, n) for c in g.layers]) for n in ("theta_rad", "t_mm", "h_mm"))
-    caps, over_slot, slot_walls = lp.layer_caps_mm_per_N(scene, theta, t, h)  # with the layers' joints
+    caps, over_slot, slot_walls, locked = lp.layer_caps_mm_per_N(scene, theta, t, h)  # with the layers' joints
     field = lambda gap: field_magnitude_T(gap, g, part.field_model)  # noqa: E731
     contact = (over_slot, g.housing.chip_clearance_mm)
-    _, S, _, _ = regime_kernel(k, dl, kl, g.gap0_mm, field, R, over_slot + slot_walls, caps, contact, np.array(extra))
+    both = by_regime(locked, capped_lock_forces_N(k, dl, R, caps)) + run_on(extra)  # the plates over locked layers too
+    _, S, _, _ = regime_kernel(k, dl, kl, g.gap0_mm, field, R, over_slot + slot_walls, caps, contact, both)
     np.testing.assert_allclose(S, [r.sensitivity_secant_per_N for r in part.regimes], rtol=1e-9)
 
 

@@ -115,10 +115,10 @@ def test_members_with_one_layer_varied_are_the_whole_stacks_members_bit_for_bit(
     for j in range(n_layers):
         index = np.broadcast_to(chosen, (len(table.u), n_layers)).copy()
         index[:, j] = np.arange(len(table.u))
-        caps, cover, (over_slot, air) = problem.part_members(
+        caps, cover, (over_slot, air), _ = problem.part_members(
             table.theta_deg[index], table.t_mm[index], table.h_mm[index]
         )
-        caps_j, cover_at = table.members_with(problem, chosen, j)
+        caps_j, cover_at, _ = table.members_with(problem, chosen, j)
         np.testing.assert_array_equal(caps_j, caps)
         for F in (0.5, 20.0):
             np.testing.assert_array_equal(cover_at(F), cover * F - np.maximum(over_slot * F - air, 0.0))

@@ -116,20 +116,33 @@ def test_without_the_flag_no_rung_is_solved(exports):
 
 @pytest.mark.slow
 @pytest.mark.parametrize("name", ["mohammadi2021", "fingertip"])
-def test_the_specs_closed_form_misses_the_plates_like_for_like(name, tmp_path):
-    """The specs as bundled (closed form, 1.6 mm plates), designed and exported as `mst export
-    SPEC` does: like for like, the whole-part rung's part is softer than the design's linear figure
-    in every regime (the plates between unlike layers turn at the wall heads, which the closed
-    form leaves out), by more than the budget, and the check names the plates (docs/design.md 4.7:
-    -6.0 / -11.7 / -43.6 % and -4.6 / -11.2 / -26.2 %). Judged on S, the secant, the layers'
-    softening hid it."""
+def test_the_specs_as_bundled_give_what_their_design_states_like_for_like(name, tmp_path):
+    """The specs as bundled (closed form, 1.6 mm plates, the cover held 1.5 mm off the board),
+    designed and exported as `mst export SPEC` does: like for like, the whole-part rung's linear
+    field change per newton is the design's within the 5 / 8 / 20 % budget in every regime
+    (docs/design.md 4.7: -1.7 / +6.2 / +8.8 % and -1.3 / +6.5 / +4.2 %)."""
     mst.export(ROOT / "configs" / f"{name}.yaml", tmp_path / "part", stl=True)
     check = whole_part(mst.check(tmp_path / "part", whole_part=True))
-    assert not check.passed
+    assert check.passed, check.note
     regimes = check.values["regimes"]
-    assert all(x["error_rel"] < 0.0 for x in regimes)
-    assert all(x["secant_error_rel"] > x["error_rel"] for x in regimes)  # S holds the layers' softening
-    assert "plates" in check.note
+    assert [abs(x["error_rel"]) <= x["budget_rel"] for x in regimes] == [True, True, True]
+
+
+@pytest.mark.slow
+def test_a_spec_that_lets_the_cover_land_fails_and_names_the_air_that_keeps_it_off(tmp_path):
+    """The paper's targets with the default 0.3 mm over the board: the design leans on the cover
+    landing on the connectors inside the range, a support the printed body has not, so the rung's
+    part is far softer after the second lock (docs/design.md 4.7: -57 %); the check fails and says
+    what air keeps the cover off. Judged on S, the secant, the layers' softening hides part of it."""
+    raw = yaml.safe_load((ROOT / "configs" / "mohammadi2021.yaml").read_text())
+    del raw["housing"]["chip_clearance_mm"]
+    spec = tmp_path / "landing.yaml"
+    spec.write_text(yaml.safe_dump(raw, sort_keys=False))
+    mst.export(spec, tmp_path / "part", stl=True)
+    check = whole_part(mst.check(tmp_path / "part", whole_part=True))
+    assert not check.passed
+    assert check.values["regimes"][-1]["error_rel"] < -0.20
+    assert "chip_clearance_mm >=" in check.note and "lands on the board" in check.note
 
 
 @pytest.mark.slow

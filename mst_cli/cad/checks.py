@@ -43,7 +43,7 @@ from mst_cli.cad.manifest import Manifest
 from mst_cli.cad.measure import LAYER_GRID_TOL_MM, Measurements, measure
 from mst_cli.cad.mesh_io import Mesh
 from mst_cli.io.outputs import finite_or_none
-from mst_cli.model.load_path import dominant_member, load_path_report, support_uncertainty
+from mst_cli.model.load_path_report import dominant_member, load_path_report, support_uncertainty
 from mst_cli.model.mechanics import layer_laws
 from mst_cli.model.stack import Stack
 

@@ -62,9 +62,8 @@ import numpy as np
 
 from mst_cli.model import magnet_field as fld
 from mst_cli.model.cell import LENGTH_FLOOR_MM, HexCell
-from mst_cli.model.load_path import CELL_KEYS, FINGERTIP_PATCH_MM, Members, MemberScene, member_parts, member_scene
+from mst_cli.model.load_path import CELL_KEYS, FINGERTIP_PATCH_MM, Members, MemberScene, member_scene, scene_members
 from mst_cli.model.mechanics import layer_law
-from mst_cli.model.plate_joint import layer_joints_mm_per_N
 from mst_cli.model.response import model_members, part_stack
 from mst_cli.model.stack import Stack
 from mst_cli.sensor.document import Document
@@ -192,20 +191,8 @@ class ForwardModel:
             return Members.rigid(n_plates=len(self.doc.layers) - 1)
         tpu = replace(scene, E_prime_MPa=f * scene.E_prime_MPa, G_MPa=f * scene.G_MPa)
         cells = self.cells(v["wall_offset_mm"])
-        arrays = [np.array([getattr(c, k) for c in cells]) for k in CELL_KEYS]
-        cap, plates, over_slot, slot_walls = member_parts(tpu, *arrays)
-        joints = layer_joints_mm_per_N(tpu, *arrays)
-        return Members(
-            f * float(cap),
-            tuple(f * float(p) for p in plates),
-            f * float(over_slot + slot_walls),
-            tpu.patch_mm,
-            tpu.support,
-            f * float(over_slot),  # the cover's bending over the slot stops on the board (members())
-            scene.cover_air_mm,
-            self.section_extra_mm_per_N,
-            tuple(f * float(j) for j in joints),
-        )
+        theta, t, h = (np.array([getattr(c, k) for c in cells]) for k in CELL_KEYS)
+        return scene_members(tpu, theta, t, h, f, self.section_extra_mm_per_N)
 
     @functools.cached_property
     def section_extra_mm_per_N(self) -> tuple[float, ...]:

@@ -74,7 +74,9 @@ from mst_cli.model.material import Material
 from mst_cli.model.mechanics import correction
 from mst_cli.model.mechanics.depth import web_modulus_MPa
 from mst_cli.model.mechanics.spring import spring_arrays
+from mst_cli.model.past_lock import by_regime
 from mst_cli.model.response import capped_lock_forces_N, field_magnitude_T, regime_kernel
+from mst_cli.model.stack import run_on
 from mst_cli.sensor.as_printed import housing_as_printed
 from mst_cli.sensor.sections import DEFAULT_OBJECTIVE, OBJECTIVE_TERMS
 
@@ -347,12 +349,10 @@ class DesignProblem:
 
     def member_parts(self, theta_deg: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike, edges_N: ArrayLike) -> tuple:
         """(cap (...), plates (..., n - 1), cover (..., bands)) compliance in mm/N of candidate
-        stacks (each with the joints of the layer under it with its plates, model.plate_joint),
-        walls as printed (t + printer.wall_offset_mm), as :meth:`layer_laws` sees them,
-        the cover's over each force band between ``edges_N`` (..., bands + 1): its slot walls
-        throughout, its bending over the slot only until it lands on the board after its air
-        (the band's mean, what a secant over the band sees)."""
-        caps, cover, (over_slot, air_mm) = self.part_members(theta_deg, t_mm, h_mm)
+        stacks (with the joints of the layer under each, model.plate_joint), walls as printed, the
+        cover's over each force band between ``edges_N`` (..., bands + 1): its slot walls, and its
+        bending over the slot until it lands on the board (the band's mean, as a secant sees it)."""
+        caps, cover, (over_slot, air_mm), _ = self.part_members(theta_deg, t_mm, h_mm)
         cap, plates, slot_walls = caps[..., -1], caps[..., :-1], cover - over_slot
         lands_N = air_mm / np.maximum(over_slot, 1e-300)
         return cap, plates, slot_walls[..., None] + over_slot[..., None] * moving_share(lands_N, edges_N)
@@ -369,25 +369,25 @@ class DesignProblem:
         return np.maximum(t + self.wall_offset_mm, LENGTH_FLOOR_MM) if self.wall_offset_mm else t
 
     def part_members(self, theta_deg: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike) -> tuple:
-        """(each layer's cap (..., n): the plate above it, the cap on the top one, and its joints
-        with the plates (model.plate_joint); the cover; (the cover's bending over the slot, the
-        air under it): what stops on the board) of candidate stacks, for :meth:`_responses_of`."""
+        """(each layer's cap (..., n): the plate above it or the cap, and its joints (model.plate_joint);
+        the cover; (its bending over the slot, the air under it): what stops on the board; the
+        plates over locked layers (..., n - 1), model.past_lock) of candidate stacks."""
         t = self.printed_t_mm(t_mm)
-        caps, over_slot, slot_walls = layer_caps_mm_per_N(self.members, np.radians(theta_deg), t, h_mm)
-        return caps, over_slot + slot_walls, (over_slot, self.members.cover_air_mm)
+        caps, over_slot, slot_walls, locked = layer_caps_mm_per_N(self.members, np.radians(theta_deg), t, h_mm)
+        return caps, over_slot + slot_walls, (over_slot, self.members.cover_air_mm), locked
 
     def _responses_of(
         self, laws: tuple, h_mm: np.ndarray, members: tuple | None = None
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """:meth:`responses` of stacks whose layer laws (and members' (caps, rest[, cover contact])
-        compliance) are known: R is each layer's lock force, where the plate or cap above it
-        closes its cavity (computed once for the kernel and the answer)."""
+        """:meth:`responses` of stacks whose layer laws (and members, :meth:`part_members`) are known:
+        R is each layer's lock force, where the plate or cap above it closes its cavity."""
         k, d_lock, R, k_locked = laws
-        cap, rest = (None, 0.0) if members is None else members[:2]
-        contact = members[2] if members is not None and len(members) > 2 else None
+        cap, rest, contact, locked = (None, 0.0, None, None) if members is None else members
         gap0 = cast(np.ndarray, self.gap0_mm(h_mm.sum(axis=-1)))  # candidates' sums: an array
-        extra = self.regime_extra_mm_per_N if members is not None else None
         Rc = capped_lock_forces_N(k, d_lock, R, cap)
+        held = self.regime_extra_mm_per_N  # the rung's correction, of the problem's stacks (not one cell's)
+        section = run_on(held) if held is not None and len(held) == Rc.shape[-1] else 0.0
+        extra = None if members is None else by_regime(locked, Rc) + section
         _, S, gap, B = regime_kernel(k, d_lock, k_locked, gap0, self.field_T, R, rest, cap, contact, extra, Rc)
         # the chip's largest field on the way is at the smallest gap: a stack whose members let
         # the magnet reach the chip (gap <= 0 at the last lock) saturates it on the way there

@@ -38,6 +38,7 @@ import numpy as np
 from mst_cli.design.problem import TINY
 from mst_cli.model.load_path import cap_mm_per_N, cover_parts_mm_per_N, layer_supports, plates_mm_per_N
 from mst_cli.model.mechanics.spring import layer_displacement_mm
+from mst_cli.model.past_lock import locked_plates_mm_per_N
 from mst_cli.model.plate_joint import joint_scene, plates_beside, root_joint_mm_per_N
 from mst_cli.model.stack import capped_lock_force_N
 
@@ -104,8 +105,9 @@ class CellTable:
 
     def members_with(self, problem: DesignProblem, chosen: np.ndarray, j: int) -> tuple:
         """(each layer's cap (cells, n): the plate above it, the cap on the top one; the cover's
-        drop (cells,) at a force, its bending over the slot stopped on the board) of the stacks
-        ``chosen`` with every table cell in place of layer ``j``; zeros on the layers alone.
+        drop (cells,) at a force, its bending over the slot stopped on the board; the plate over
+        layer j - 1 while it is locked, model.past_lock (cells,)) of the stacks ``chosen`` with
+        every table cell in place of layer ``j``; zeros on the layers alone.
 
         :meth:`DesignProblem.part_members` of those stacks, bit for bit (elementwise kernels),
         at a fraction of its cost: a member rests on one layer or two, so only the members on
@@ -113,11 +115,11 @@ class CellTable:
         :func:`~mst_cli.model.load_path.layer_supports` (computed on the first call)."""
         cells, n = len(self.u), len(chosen)
         if not self.whole_part:
-            return np.zeros((cells, n)), lambda F: np.zeros(cells)
+            return np.zeros((cells, n)), lambda F: np.zeros(cells), np.zeros(cells)
         if self._supports is None:
             t = problem.printed_t_mm(self.t_mm)
             self._supports = (t, *layer_supports(problem.members, np.radians(self.theta_deg), t, self.h_mm))
-        t, pad, head, walls = self._supports
+        t, pad, head, walls, sway = self._supports
 
         def at(a: np.ndarray, i: int) -> np.ndarray:  # layer i's: every cell at j, the chosen one elsewhere
             return a if i == j else a[chosen[i] : chosen[i] + 1]
@@ -136,7 +138,9 @@ class CellTable:
         plates = [
             member(
                 ("plate", cell(i), cell(i + 1)),
-                lambda i=i: plates_mm_per_N(scene, at(t, i), at(t, i + 1), at(head, i), at(head, i + 1), at(walls, i)),
+                lambda i=i: plates_mm_per_N(
+                    scene, at(t, i), at(t, i + 1), at(head, i), at(head, i + 1), at(sway, i), at(sway, i + 1)
+                ),
             )
             for i in range(n - 1)
         ]
@@ -151,7 +155,14 @@ class CellTable:
         joints = [at(one, i) * beside[i] for i in range(n)]
         caps = np.stack(np.broadcast_arrays(*plates, cap), axis=-1) + np.stack(np.broadcast_arrays(*joints), axis=-1)
         cover, air = over_slot + slot_walls, scene.cover_air_mm
-        return caps, lambda F: cover * F - np.maximum(over_slot * F - air, 0.0)
+        locked = np.zeros(cells)
+        if j > 0:  # the plate over layer j - 1, locked in layer j's regime, under its cells
+            th2, t2, h2, x2 = (
+                np.stack(np.broadcast_arrays(at(a, j - 1), at(a, j)), -1) for a in (theta_rad, t, self.h_mm, head)
+            )
+            past = lambda: locked_plates_mm_per_N(th2, t2, h2, x2, *joint_scene(scene), scene.G_MPa)[..., 0]  # noqa: E731
+            locked = member(("locked", cell(j - 1), cell(j)), past)
+        return caps, lambda F: cover * F - np.maximum(over_slot * F - air, 0.0), np.broadcast_to(locked, (cells,))
 
 
 def capped_mm(force_N, k, d_lock, R, k_locked, cap_mm_per_N, Rc=None, own=None) -> np.ndarray:
@@ -192,7 +203,7 @@ def _layer_choice(
     layers above, the locked ones below and the members take their share), the layers above it
     chosen; ``terms`` keeps what depends on the plate or cap above layer j alone (over the table)."""
     n, dF = problem.n, F[j + 1] - F[j]
-    caps, cover = table.members_with(problem, chosen, j)  # the layers above j: already chosen
+    caps, cover, locked = table.members_with(problem, chosen, j)  # the layers above j: already chosen
     key = (j, int(chosen[j + 1]) if j < n - 1 else -1)  # the cells the plate or cap above j rests on
     if key not in terms:
         R_capped = table.capped_lock_N(caps[:, j])
@@ -202,7 +213,7 @@ def _layer_choice(
     lock_miss, log_own = terms[key]
     above = sum(table.increment_mm(chosen[m], F[j], F[j + 1], caps[0, m]) for m in range(j + 1, n))
     below = sum(dF / table.k_locked[chosen[m]] for m in range(j))
-    members = cover(F[j + 1]) - cover(F[j])
+    members = cover(F[j + 1]) - cover(F[j]) + locked * dF
     need = np.maximum(increment_mm - above - below - members, 1e-3 * increment_mm)
     return int(np.argmin(lock_miss + (log_own - np.log(need)) ** 2))
 

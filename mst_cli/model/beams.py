@@ -82,6 +82,23 @@ def two_load_pair_mm_per_N(span_mm, offset_mm, EI_Nmm2, kGA_N) -> tuple:
     return as_value(np.where(beyond, overhang, bend + shear)), as_value(np.where(beyond, overhang, clamped + shear))
 
 
+def offset_pair_mm_per_N(near_mm, offset_mm, EI_Nmm2, kGA_N, k_rot_Nmm_per_rad) -> Any:
+    """The drop per newton (total F, F/2 at each) of two symmetric line loads at |x| = near + |e|
+    relative to two symmetric supports at |x| = near (``offset_mm`` e < 0), or of loads at near
+    relative to supports at near + e (e > 0): a plate loaded by the walls above it and held by the
+    walls below. Either way the free body is the same (its mirror image about the plate's
+    mid-plane swaps loads and supports): the span between the nearer pair carries the moment
+    P |e| less what the springs ``k_rot`` there take as it turns (N mm/rad, the walls' restraint
+    of the pad's turn, all of it at the nearer pair), and the rest bends as a cantilever:
+    P (rho e^2 near + |e|^3/3)/EI + P |e|/kGA, rho = 1/(1 + k near/EI) (the span's half turns by
+    M near/EI under its end moment M). k = 0, e > 0 is the simply supported four-point beam
+    (:func:`two_load_pair_mm_per_N`, span 2 (near + e)); k infinite, a cantilever |e| long."""
+    P, e = 0.5, np.abs(np.asarray(offset_mm, dtype=float))
+    near, EI = np.asarray(near_mm, dtype=float), np.asarray(EI_Nmm2, dtype=float)
+    rho = 1.0 / (1.0 + np.asarray(k_rot_Nmm_per_rad, dtype=float) * near / EI)
+    return as_value(P * (rho * e * e * near + e**3 / 3.0) / EI + P * e / kGA_N)
+
+
 def end_fixity(k_rot_Nmm_per_rad, EI_Nmm2, span_mm) -> float | np.ndarray:
     """The share of the clamped end moments a symmetric load on a beam of ``span_mm`` gets when
     each end turns against a rotational spring ``k_rot`` (N mm/rad): the beam turns both ends

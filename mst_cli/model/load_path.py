@@ -10,9 +10,9 @@ layers' compression plus each member's bending:
   patch (a centred strip ``patch_mm`` wide, all of the depth). The section is the pad plus the
   cap, less the magnet pocket over its width 2r (the magnet's own stiffness is left out: an
   upper bound on the compliance, by the pocket's share of the section).
-* **plates** -- each plate bonded to the pads above and below it: a beam across the lower
-  layer's wall heads, loaded by the upper layer's wall feet. When the two layers' walls stand
-  at the same x the load goes straight down and the plate does not bend.
+* **plates** -- each plate bonded to the pads above and below it, loaded by the upper layer's
+  wall feet, held by the lower layer's wall heads, its turn resisted by both layers' walls; when
+  they stand at the same x the load goes straight down and the plate does not bend.
 * **cover** -- the base's cover bonded to layer 1's bottom pad: a beam across the board slot,
   loaded by layer 1's wall feet. It does not bend when the walls stand on the slot's side walls
   or beyond them on the solid base (the slot is narrower than the wall feet: no overhang, the
@@ -30,15 +30,14 @@ layers' compression plus each member's bending:
   cent (tests/test_load_path.py).
 
 Each beam is a plane-strain Timoshenko beam (E' = E/(1 - nu^2) in bending, G in shear, shear
-factor 5/6) with its supports either simply supported (the default: the wall heads turn with
-the slender walls) or clamped (the stiff bound); a symmetric load, so the shear deflection is
-the same for both. Pure numpy, no I/O.
+factor 5/6); the cap's supports are simply supported (the default: the wall heads turn with the
+slender walls) or clamped (the stiff bound). Pure numpy, no I/O.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -47,15 +46,16 @@ from mst_cli.model.beams import SHEAR_FACTOR as SHEAR_FACTOR  # the section's an
 from mst_cli.model.beams import as_value as _value
 from mst_cli.model.beams import (
     end_fixity,
+    offset_pair_mm_per_N,
     plain_section,
     strip_bending_pair_mm_per_N,
     strip_shear_mm_per_N,
-    two_load_pair_mm_per_N,
 )
 from mst_cli.model.beams import section_EI_kGA as section_EI_kGA
 from mst_cli.model.beams import strip_bending_mm_per_N as strip_bending_mm_per_N
 from mst_cli.model.beams import two_load_mm_per_N as two_load_mm_per_N
 from mst_cli.model.cell import pad_half_width_mm, wall_centreline_length_mm
+from mst_cli.model.past_lock import by_regime, scene_locked_plates_mm_per_N
 from mst_cli.model.plate_joint import layer_joints_mm_per_N
 
 # a fingertip pressed on the face: a contact patch about 6 mm wide (the width the issue's
@@ -120,6 +120,9 @@ class Members:
     # each layer's walls' joints with the plates beside it (model.plate_joint), bottom to top: they
     # close that layer's cavity and stop when it locks; (): none (the layer rungs' rigid plates)
     joints_mm_per_N: tuple[float, ...] = ()
+    # each plate over a locked layer under an open one, past its closed form (model.past_lock):
+    # it moves while the layer under it is locked and the one above open; (): none
+    locked_plates_mm_per_N: tuple[float, ...] = ()
 
     @property
     def total_mm_per_N(self) -> float:
@@ -202,35 +205,45 @@ def member_compliances(scene: MemberScene, theta_rad, t_mm, h_mm) -> tuple:
 
 def layer_caps_mm_per_N(scene: MemberScene, theta_rad, t_mm, h_mm) -> tuple:
     """((..., n) what closes each layer's cavity with it: the plate above it (the cap on the top
-    one) and its joints with the plates; the cover's bending over the slot; its slot walls) of
-    stacks given as arrays (..., n), mm/N: the design loop's members."""
+    one) and its joints with the plates; the cover's bending over the slot; its slot walls; (...,
+    n - 1) the plates over locked layers, model.past_lock) of stacks given as arrays (..., n),
+    mm/N: the design loop's members."""
     cap, plates, over_slot, slot_walls = member_parts(scene, theta_rad, t_mm, h_mm)
     caps = np.concatenate([plates, np.asarray(cap)[..., None]], axis=-1)
-    return caps + layer_joints_mm_per_N(scene, theta_rad, t_mm, h_mm), over_slot, slot_walls
+    joints = layer_joints_mm_per_N(scene, theta_rad, t_mm, h_mm)
+    return caps + joints, over_slot, slot_walls, locked_plates_of(scene, theta_rad, t_mm, h_mm)
+
+
+def locked_plates_of(scene: MemberScene, theta_rad, t_mm, h_mm) -> Any:
+    """(..., n - 1) the plates over locked layers (model.past_lock) of stacks given as arrays
+    (..., n) of theta (rad), t and h (mm), bottom to top."""
+    head = layer_supports(scene, theta_rad, t_mm, h_mm)[1]
+    return scene_locked_plates_mm_per_N(scene, theta_rad, t_mm, h_mm, head)
 
 
 def member_parts(scene: MemberScene, theta_rad, t_mm, h_mm) -> tuple:
     """:func:`member_compliances` with the cover's two parts apart: (cap, plates, the cover's
     bending over the slot (which stops on the board), the slot walls' squeeze and turn)."""
     t = np.asarray(t_mm, dtype=float)
-    pad, head, walls = layer_supports(scene, theta_rad, t, h_mm)
+    pad, head, walls, sway = layer_supports(scene, theta_rad, t, h_mm)
     cap = cap_mm_per_N(scene, t[..., -1], head[..., -1], walls[..., -1])
-    plates = plates_mm_per_N(scene, t[..., :-1], t[..., 1:], head[..., :-1], head[..., 1:], walls[..., :-1])
+    plates = plates_mm_per_N(
+        scene, t[..., :-1], t[..., 1:], head[..., :-1], head[..., 1:], sway[..., :-1], sway[..., 1:]
+    )
     over_slot, slot_walls = cover_parts_mm_per_N(scene, t[..., 0], pad[..., 0], head[..., 0])
     return cap, np.asarray(plates), over_slot, slot_walls
 
 
 def layer_supports(scene: MemberScene, theta_rad, t_mm, h_mm) -> tuple:
-    """What the members take from each layer, cell by cell (arrays (...) of theta in rad, t and h
-    in mm): (its outer pad's half width, its wall heads' x (wall_head_x_mm), its walls' restraint
-    of a pad's turn in N mm/rad). A member rests on one layer or two, so a batch of stacks that
-    differ in one layer needs these of that layer's cells only (the design's start)."""
+    """What the members take from each layer, cell by cell (theta in rad, t, h in mm): (its outer
+    pad's half width, its wall heads' x (wall_head_x_mm), its walls' restraint of a pad's turn
+    and of a plate's turn (:func:`plates_mm_per_N`), N mm/rad). A member rests on one layer or
+    two, so stacks that differ in one layer need these of that layer's cells only."""
     theta, t = np.asarray(theta_rad, dtype=float), np.asarray(t_mm, dtype=float)
     pad = pad_half_width_mm(theta, h_mm, scene.width_mm)
-    # the wall heads: the mid-point of each pad's outer and inner corners (wall_head_x_mm)
     head = pad - 0.5 * t * np.tan(0.5 * theta)
     walls = wall_head_restraint_Nmm_per_rad(theta, t, h_mm, scene.depth_mm, scene.E_prime_MPa, scene.support)
-    return pad, head, walls
+    return pad, head, walls, walls * (12.0 / WALL_FAR_END[scene.support])  # 12 E'I/L_w
 
 
 def cap_mm_per_N(scene: MemberScene, t_top_mm, head_mm, walls_Nmm_per_rad) -> Any:
@@ -250,15 +263,20 @@ def cap_mm_per_N(scene: MemberScene, t_top_mm, head_mm, walls_Nmm_per_rad) -> An
     return simple - fix * (simple - clamped) + strip_shear_mm_per_N(span, s.patch_mm, kGA)
 
 
-def plates_mm_per_N(scene: MemberScene, t_below_mm, t_above_mm, head_below_mm, head_above_mm, walls_below) -> Any:
+def plates_mm_per_N(
+    scene: MemberScene, t_below_mm, t_above_mm, head_below_mm, head_above_mm, sway_below, sway_above
+) -> Any:
     """A plate's compliance, mm/N, between the layer below it and the one above it (their
-    :func:`layer_supports`): a beam across the lower layer's wall heads, loaded by the upper
-    layer's wall feet, its ends turning against the lower layer's walls."""
+    :func:`layer_supports`): the plate with both pads, loaded by the upper layer's wall feet and
+    held by the lower layer's wall heads (:func:`~mst_cli.model.beams.offset_pair_mm_per_N`: the
+    same whichever pair stands outside), its turn resisted by both layers' walls: the turn swings
+    a wall's far end (the side vertex) across it by L_w a radian, against its sway stiffness
+    12 E'I/L_w^3 (ends held from turning), so 12 E'I/L_w (studies/unlike_plates.py --per-plate
+    measures 12.9 per wall, docs/design.md 4.7)."""
     s = scene
     EI_p, kGA_p = section_EI_kGA(s.depth_mm, t_below_mm + s.plate_mm + t_above_mm, s.E_prime_MPa, s.G_MPa)
-    fix = end_fixity(walls_below, EI_p, 2.0 * head_below_mm)
-    simple, clamped = two_load_pair_mm_per_N(2.0 * head_below_mm, head_below_mm - head_above_mm, EI_p, kGA_p)
-    return simple - fix * (simple - clamped)
+    near, offset = np.minimum(head_below_mm, head_above_mm), head_below_mm - head_above_mm
+    return offset_pair_mm_per_N(near, offset, EI_p, kGA_p, sway_below + sway_above)
 
 
 def cover_parts_mm_per_N(scene: MemberScene, t_bottom_mm, pad_mm, head_mm) -> tuple:
@@ -337,12 +355,22 @@ def members(
     ``material`` under a centred press ``patch_mm`` wide (module docstring); ``insert``, a stiff
     plate in the cap (its own modulus, in plane strain as given)."""
     scene = member_scene(geometry, material, patch_mm, support, insert)
-    arrays = [np.array([getattr(c, k) for c in geometry.layers]) for k in CELL_KEYS]
-    cap, plates, over_slot, slot_walls = member_parts(scene, *arrays)
-    cover = float(over_slot + slot_walls)
-    plates_ = tuple(float(p) for p in plates)
-    joints = tuple(float(j) for j in layer_joints_mm_per_N(scene, *arrays))
-    return Members(float(cap), plates_, cover, patch_mm, support, float(over_slot), scene.cover_air_mm, (), joints)
+    theta, t, h = (np.array([getattr(c, k) for c in geometry.layers]) for k in CELL_KEYS)
+    return scene_members(scene, theta, t, h)
+
+
+def scene_members(scene: MemberScene, theta_rad, t_mm, h_mm, scale: float = 1.0, regime_extra: tuple = ()) -> Members:
+    """:func:`members` of the scene's stack (arrays (n,) of theta in rad, t and h in mm, bottom to
+    top), every compliance times ``scale``, with the rung's correction ``regime_extra``."""
+    cap, plates, over_slot, slot_walls = member_parts(scene, theta_rad, t_mm, h_mm)
+    joints = layer_joints_mm_per_N(scene, theta_rad, t_mm, h_mm)
+    locked = np.atleast_1d(locked_plates_of(scene, theta_rad, t_mm, h_mm))
+    s, air = scale, scene.cover_air_mm  # the cover's bending over the slot stops on the board
+    return Members(
+        s * float(cap), tuple(s * float(p) for p in plates), s * float(over_slot + slot_walls), scene.patch_mm,
+        scene.support, s * float(over_slot), air, regime_extra, tuple(s * float(j) for j in joints),
+        tuple(s * float(x) for x in locked),
+    )  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -447,7 +475,9 @@ def member_band_compliances(stack, parts: Members) -> tuple[np.ndarray, np.ndarr
     bending = parts.cover_contact_mm_per_N * moving_share(cover_landing_N(parts), bands)[..., 0]
     cover = parts.cover_mm_per_N - parts.cover_contact_mm_per_N + bending
     cap = parts.cap_mm_per_N * share[-1]  # the plates' moving: the rest of the caps', the joints' with them
-    moving = {"cap": cap, "plates": (caps[:, None] * share).sum(axis=0) - cap, "housing": cover}
+    locked = parts.locked_plates_mm_per_N or np.zeros(len(R) - 1)  # the plates over locked layers (past_lock)
+    plates = (caps[:, None] * share).sum(axis=0) - cap + by_regime(locked, R)[:-1]
+    moving = {"cap": cap, "plates": plates, "housing": cover}
     if parts.regime_extra_mm_per_N:
         moving["section_correction"] = np.asarray(parts.regime_extra_mm_per_N, dtype=float)
     return edges, own.T, moving
@@ -499,97 +529,6 @@ def motion_shares(stack, parts: Members) -> list[dict]:
     return out
 
 
-def load_path_report(
-    geometry, material, stack, patch_mm: float = FINGERTIP_PATCH_MM, regime_extra_mm_per_N: tuple = ()
-) -> dict:
-    """report.json's ``load_path``: the members' compliance (simply supported, and the clamped
-    bound) and, per regime of the part, each member's share of the magnet's motion as the forward
-    model moves it (:func:`motion_shares`, docs/design.md 4.6), with the whole-part rung's
-    correction per regime when one is given (model.load_path: section, both bounds alike)."""
-    extra = tuple(regime_extra_mm_per_N)
-    simple = replace(members(geometry, material, patch_mm, "simple"), regime_extra_mm_per_N=extra)
-    clamped = replace(members(geometry, material, patch_mm, "clamped"), regime_extra_mm_per_N=extra)
-    bound = motion_shares(stack, clamped)
-    regimes = []
-    for row, stiff in zip(motion_shares(stack, simple), bound):
-        row["outside_layers_clamped"] = stiff["outside_layers"]
-        row["members_clamped_mm_per_N"] = stiff["members_mm_per_N"]
-        regimes.append(row)
-    report = {
-        "patch_mm": patch_mm,
-        "support": "simple (clamped: the stiff bound)",
-        "cap_mm_per_N": simple.cap_mm_per_N,
-        "plates_mm_per_N": list(simple.plates_mm_per_N),
-        "plate_joints_mm_per_N": list(simple.joints_mm_per_N),  # each layer's, model.plate_joint
-        "housing_mm_per_N": simple.cover_mm_per_N,
-        "cap_clamped_mm_per_N": clamped.cap_mm_per_N,
-        "members_simple_mm_per_N": _by_member(simple),
-        "members_clamped_mm_per_N": _by_member(clamped),
-        "regimes": regimes,
-        "outside_layers_max": max(r["outside_layers"] for r in regimes),
-        # null: the cover never lands (no bending over the slot)
-        "cover_lands_N": None if math.isinf(landing := cover_landing_N(simple)) else landing,
-        "patch_dependence": patch_dependence(geometry, material, stack),
-        "not_modelled": "the cover's bending along the depth over the cable windows (3D; walls on both sides)",
-    }
-    if extra:  # model.load_path section: what the whole-part rung adds per regime (docs/design.md 4.7)
-        report["section_correction_mm_per_N"] = list(extra)
-    return report
-
-
 # the accuracy an independent model of the part asks of the field change per newton: before the
 # first lock, after one, after two or more (issue 44; that model's own uncertainty on a closed layer)
 ACCURACY_BUDGET_REL = (0.05, 0.08, 0.20)
-
-
-def support_uncertainty(report: dict) -> list[dict]:
-    """Per regime of :func:`load_path_report`: the share of the part's compliance the members'
-    closed form leaves uncertain, between its simply supported and clamped wall heads
-    (|C_simple - C_clamped| of the members as each moves in that regime, over the part's
-    compliance there), against the regime's accuracy budget (:data:`ACCURACY_BUDGET_REL`), with
-    the member whose supports matter most there. The tolerance on the share outside the layers
-    that ``mst check`` applies by default."""
-    rows = []
-    for i, row in enumerate(report["regimes"]):
-        simple, clamped = row["members_mm_per_N"], row["members_clamped_mm_per_N"]
-        spread = {k: simple[k] - clamped[k] for k in simple}
-        rows.append(
-            {
-                "regime": row["regime"],
-                "uncertain_share": abs(sum(spread.values())) / row["compliance_mm_per_N"],
-                "budget": ACCURACY_BUDGET_REL[min(i, len(ACCURACY_BUDGET_REL) - 1)],
-                "member": max(spread, key=lambda k: abs(spread[k])),
-            }
-        )
-    return rows
-
-
-def _by_member(parts: Members) -> dict:
-    plates = sum(parts.plates_mm_per_N) + sum(parts.joints_mm_per_N)  # the plates' bending and their joints
-    return {"cap": parts.cap_mm_per_N, "plates": plates, "housing": parts.cover_mm_per_N}
-
-
-def dominant_member(row: dict) -> tuple[str, float]:
-    """The member outside the layers with the largest share in a regime row of :func:`motion_shares`."""
-    name = max(("cap", "plates", "housing"), key=lambda k: row["shares"][k])
-    return name, row["shares"][name]
-
-
-def patch_dependence(geometry, material, stack) -> list[dict]:
-    """How the response depends on the press's contact patch: the cap's compliance and the share
-    outside the layers in the first and last regimes, for a fingertip's half, itself, twice it
-    and the whole face."""
-    rows = []
-    for patch in (0.5 * FINGERTIP_PATCH_MM, FINGERTIP_PATCH_MM, 2.0 * FINGERTIP_PATCH_MM, geometry.width_mm):
-        parts = members(geometry, material, patch)
-        shares = motion_shares(stack, parts)
-        rows.append(
-            {
-                "patch_mm": patch,
-                "cap_mm_per_N": parts.cap_mm_per_N,
-                "compliance_first_regime_mm_per_N": shares[0]["compliance_mm_per_N"],
-                "outside_layers_first_regime": shares[0]["outside_layers"],
-                "outside_layers_last_regime": shares[-1]["outside_layers"],
-            }
-        )
-    return rows

@@ -11,6 +11,8 @@ it, and the tilt rung sees the layer and its member as one unit:
   there (:class:`~mst_cli.model.load_path.CappedLayer`, the axial model's own law); plate j,
   the top pad of layer j, likewise bends into layer j's cavity under layer j + 1's wall feet
   (part_stack's own caps);
+* plate j over a locked layer j gives more under layer j + 1's feet until that layer locks
+  (:class:`OverLockedMember`, model.past_lock);
 * the cover, under layer 1's wall feet, is in series with layer 1 (:class:`SeriesMember`), its
   bending over the slot stopping once it has dropped the air under it onto the board (when that
   landing comes after layer 1's lock, the cover rides with the lowest layer still open then,
@@ -92,11 +94,55 @@ class SeriesMember:
         return np.asarray(self.law.displacement_mm(F)) + self.member_mm(F)
 
 
+@dataclass(frozen=True)
+class OverLockedMember:
+    """A layer law standing on a plate over a locked layer (model.past_lock): the plate gives
+    ``member_mm_per_N`` x F more from the lower layer's lock ``start_N`` until this layer locks,
+    then holds (the axial model's by_regime); the lock still the layer's own."""
+
+    law: Any  # a layer law of any rung, or a CappedLayer
+    member_mm_per_N: float
+    start_N: float
+
+    def member_mm(self, force_N) -> np.ndarray:
+        span = max(self.lock_force_N - self.start_N, 0.0)
+        return self.member_mm_per_N * np.clip(np.asarray(force_N, dtype=float) - self.start_N, 0.0, span)
+
+    @property
+    def lock_force_N(self) -> float:
+        return float(self.law.lock_force_N)
+
+    @property
+    def knots_N(self) -> tuple[float, ...]:
+        extra = (self.start_N,) if 0.0 < self.start_N < self.lock_force_N else ()
+        return tuple(sorted((*self.law.knots_N, *extra)))
+
+    @property
+    def k_N_per_mm(self) -> float:  # from no load: the lower layer is open
+        return self.law.k_N_per_mm if self.start_N > 0.0 else 1.0 / (1.0 / self.law.k_N_per_mm + self.member_mm_per_N)
+
+    @property
+    def d_lock_mm(self) -> float:
+        return float(self.law.d_lock_mm) + float(self.member_mm(self.lock_force_N))
+
+    @property
+    def k_locked_N_per_mm(self) -> float:
+        return self.law.k_locked_N_per_mm
+
+    def displacement_mm(self, force_N) -> np.ndarray:
+        F = np.asarray(force_N, dtype=float)
+        return np.asarray(self.law.displacement_mm(F)) + self.member_mm(F)
+
+
 def part_layer_laws(laws: tuple, parts: Members) -> tuple:
     """The layer laws (bottom to top) with the members folded in as
     :func:`~mst_cli.model.response.part_stack` folds them (module docstring); rigid members (all
     compliances 0) give ``laws`` themselves."""
     units = capped_units(laws, parts)
+    starts = [u.lock_force_N for u in units]
+    for j, X in enumerate(parts.locked_plates_mm_per_N, start=1):  # plate j - 1 under layer j's feet
+        if X > 0.0 and starts[j - 1] < starts[j]:
+            units[j] = OverLockedMember(units[j], X, starts[j - 1])
     if parts.cover_mm_per_N > 0:
         j = cover_host(units, parts)
         units[j] = SeriesMember(units[j], parts.cover_mm_per_N, parts.cover_contact_mm_per_N, parts.cover_travel_mm)

@@ -20,7 +20,8 @@ from mst_cli.model.assembly import SensorGeometry
 from mst_cli.model.load_path import FINGERTIP_PATCH_MM, Members, capped_units, members
 from mst_cli.model.material import CREASE_ONSET_STRETCH, Material
 from mst_cli.model.mechanics import layer_laws
-from mst_cli.model.stack import Stack, capped_lock_force_N, layer_caps, series_displacement_mm
+from mst_cli.model.past_lock import by_regime
+from mst_cli.model.stack import Stack, capped_lock_force_N, layer_caps, run_on, series_displacement_mm
 
 OVERLOAD_REL = 0.25  # simulate's curve runs on past the last lock to (1 + this) x it, out of range
 
@@ -254,11 +255,14 @@ def part_stack(laws: tuple, parts: Members) -> Stack:
     """The whole part's stack: the cap bends into the top layer's cavity until it closes there
     (:class:`~mst_cli.model.load_path.CappedLayer`), each plate into the cavity of the layer
     under it likewise, the cover in series, its bending over the slot until it lands on the board,
-    and the whole-part rung's correction per regime when the members carry one."""
+    and per regime the plates over locked layers (model.past_lock) and the whole-part rung's
+    correction when the members carry one."""
     capped = tuple(capped_units(laws, parts))
-    return Stack(
-        capped, parts.cover_mm_per_N, parts.cover_contact_mm_per_N, parts.cover_travel_mm, parts.regime_extra_mm_per_N
-    )
+    extra: tuple = parts.regime_extra_mm_per_N
+    if parts.locked_plates_mm_per_N:
+        locked = by_regime(parts.locked_plates_mm_per_N, [u.lock_force_N for u in capped])
+        extra = tuple(float(v) for v in np.add(locked, run_on(extra)))
+    return Stack(capped, parts.cover_mm_per_N, parts.cover_contact_mm_per_N, parts.cover_travel_mm, extra)
 
 
 def _layers_only(

@@ -15,7 +15,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from functools import cached_property
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -102,14 +102,25 @@ def series_displacement_mm(
 def regime_extra_displacement_mm(force_N: ArrayLike, edges_N: ArrayLike, extra_mm_per_N: ArrayLike) -> np.ndarray:
     """(..., m) the drop of a compliance ``extra_mm_per_N`` (..., n) that takes regime r's value
     between the sorted lock forces ``edges_N`` (..., n) (0 to the first, ..., the (n-1)-th to
-    the last) and the last regime's past the last lock: the integral of a piecewise-constant
-    compliance, so piecewise linear with knots at the lock forces (the stack's knots already)."""
+    the last) and the last regime's past the last lock, or (..., n + 1) its own value past it:
+    the integral of a piecewise-constant compliance, so piecewise linear with knots at the lock
+    forces (the stack's knots already)."""
     F = np.asarray(force_N, dtype=float)[..., :, None]  # (..., m, 1)
-    R = np.asarray(edges_N, dtype=float)[..., None, :]
-    lo = np.concatenate([np.zeros_like(R[..., :1]), R[..., :-1]], axis=-1)
-    hi = np.concatenate([R[..., :-1], np.full_like(R[..., :1], np.inf)], axis=-1)  # the last runs on
+    E = np.asarray(extra_mm_per_N, dtype=float)
+    R = np.asarray(edges_N, dtype=float)[..., None, : E.shape[-1] - 1]
+    lo = np.concatenate([np.zeros_like(R[..., :1]), R], axis=-1)
+    hi = np.concatenate([R, np.full_like(R[..., :1], np.inf)], axis=-1)  # the last runs on
     inside = np.clip(F, lo, hi) - lo
-    return (np.asarray(extra_mm_per_N, dtype=float)[..., None, :] * inside).sum(axis=-1)
+    return (E[..., None, :] * inside).sum(axis=-1)
+
+
+def run_on(extra_mm_per_N) -> Any:
+    """A per-regime compliance (..., n) with its last regime's value past the last lock too
+    (..., n + 1), as :func:`regime_extra_displacement_mm` takes it; None: 0."""
+    if extra_mm_per_N is None or len(extra_mm_per_N) == 0:
+        return 0.0
+    E = np.asarray(extra_mm_per_N, dtype=float)
+    return np.concatenate([E, E[..., -1:]], axis=-1)
 
 
 def layer_caps(cap_mm_per_N: ArrayLike, shape: tuple) -> np.ndarray:

@@ -19,7 +19,8 @@ from mst_cli.model.assembly import SensorGeometry
 from mst_cli.model.chip import quantise_lsb
 from mst_cli.model.cover_air import LANDING_MARGIN_REL, air_keeping_cover_off_mm
 from mst_cli.model.general_load import small_load_lateral_N_per_mm
-from mst_cli.model.load_path import FINGERTIP_PATCH_MM, dominant_member, load_path_report
+from mst_cli.model.load_path import FINGERTIP_PATCH_MM
+from mst_cli.model.load_path_report import dominant_member, load_path_report
 from mst_cli.model.magnet_field import axial_dBz_dz_T_per_mm
 from mst_cli.model.mechanics import layer_laws
 from mst_cli.model.response import Regime, Response

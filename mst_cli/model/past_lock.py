@@ -1,0 +1,73 @@
+"""The plate over a locked layer: what it gives beyond its closed form while the layer above it
+is still open (issue 44, docs/design.md 4.7).
+
+mst stops a plate's bending when the layer under it locks (model.load_path: it closes that
+layer's cavity). The whole-part rung takes a locked layer as closed, its cavity filled, as the
+issue's independent model does, and finds the plate over it still giving several times the
+upper layer's root joint (model.plate_joint) alone: 6.6 to 75 um/N on stacks whose joint there
+is 4 to 30 (studies/locked_plates.py). Two things the closed form leaves out:
+
+* **the upper walls' root turns unbalanced.** Between two open layers the plate sits on the
+  lower walls' heads, whose root moment meets the upper walls' (the cell's mirror symmetry);
+  over a filled layer nothing meets it, and the root turns further: the joint times (1 + a);
+* **the feet above can overhang the block.** The filled layer's top ends at its wall heads;
+  where the feet above stand further out (c = head above - head below > 0) the plate and the
+  upper pad (p + t thick) hang as a cantilever c long from the block, its root turning against a
+  spring k E'D (p + t)^2 (the form of an end built into a body of the same modulus):
+  P c^3/(3 E'I) + P c/kGA + P c^2/(k E'D (p + t)^2), P = 1/2.
+
+a and k are fitted, not derived: on the rung's plate over the locked lower layer of 25 stacks
+A, B, A (each of 13, 20, 28, 40 and 57 degrees below and above, t 0.4, h 1.8 mm, 1.6 mm plates;
+studies/locked_plates.py --fit, its data in studies/data/locked_plates.csv), they leave it
+within 18 % (8 % rms), against the joint alone's 95 % (53 % rms). The filled block here is one
+layer on the rigid cover; a deeper block is softer (the bundled designs, not in the fit, are
+its check). Pure numpy, no I/O.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from mst_cli.model.beams import as_value, section_EI_kGA
+from mst_cli.model.plate_joint import joint_scene, root_joint_mm_per_N
+
+# studies/locked_plates.py --fit studies/data/locked_plates.csv (docs/design.md 4.7): the upper
+# root's turn past the joint (a) and the overhang's root spring (k)
+LOCKED_FITTED = (0.446, 0.101)
+
+
+def locked_plates_mm_per_N(
+    theta_rad, t_mm, h_mm, head_mm, plate_mm: float, depth_mm: float, E_prime_MPa: float, G_MPa: float,
+    constants: tuple[float, float] = LOCKED_FITTED,
+) -> Any:  # fmt: skip
+    """(..., n - 1) what plate j gives, mm/N, while the layer under it is locked and the one
+    above it open, beyond the upper layer's root joint on it (module docstring), of stacks given
+    as arrays (..., n) of theta (rad), t, h and the wall heads' x (mm), bottom to top."""
+    a, k = constants
+    theta, t, h, head = (np.asarray(v, dtype=float) for v in (theta_rad, t_mm, h_mm, head_mm))
+    upper = root_joint_mm_per_N(theta[..., 1:], t[..., 1:], h[..., 1:], plate_mm, depth_mm, E_prime_MPa)
+    c = np.maximum(head[..., 1:] - head[..., :-1], 0.0)
+    thick = plate_mm + t[..., 1:]
+    EI, kGA = section_EI_kGA(depth_mm, thick, E_prime_MPa, G_MPa)
+    root = k * E_prime_MPa * depth_mm * thick**2
+    overhang = 0.5 * (c**3 / (3.0 * EI) + c / kGA + c * c / root)
+    return as_value(a * np.asarray(upper) + overhang)
+
+
+def scene_locked_plates_mm_per_N(scene, theta_rad, t_mm, h_mm, head_mm) -> Any:
+    """:func:`locked_plates_mm_per_N` of the part a model.load_path.MemberScene describes."""
+    return locked_plates_mm_per_N(theta_rad, t_mm, h_mm, head_mm, *joint_scene(scene), scene.G_MPa)
+
+
+def by_regime(locked_plates_mm_per_N, lock_N) -> np.ndarray:
+    """(..., n + 1) what the plates over locked layers add per regime of the part, past the last
+    lock too (model.stack.regime_extra_displacement_mm): regime r (from 0, in the order of
+    ``lock_N`` (..., n), each layer's lock force) has its r first layers locked, and plate j
+    gives its share (``locked_plates_mm_per_N`` (..., n - 1)) while layer j is locked and layer
+    j + 1 open."""
+    X, R = np.asarray(locked_plates_mm_per_N, dtype=float), np.asarray(lock_N, dtype=float)
+    rank = np.argsort(np.argsort(R, axis=-1, kind="stable"), axis=-1, kind="stable")  # each layer's place
+    locked = rank[..., None, :] < np.arange(R.shape[-1] + 1)[:, None]  # (..., regimes, layers)
+    return np.where(locked[..., :-1] & ~locked[..., 1:], X[..., None, :], 0.0).sum(axis=-1)
