@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 
 import mst_cli as mst
-from mst_cli.model.mechanics import whole_part as wp
 from mst_cli.model import load_path as lp
 from mst_cli.model.beams import offset_pair_mm_per_N
+from mst_cli.model.mechanics import whole_part as wp
 from studies.unlike_plates import plate_rows, stack
 
 EI, KGA, P = 350.0, 900.0, 0.5
