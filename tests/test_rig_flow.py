@@ -1,6 +1,7 @@
 """Issue 38, wired in: load tests as rigs write them (time_s, cycle, branch, T_C), and the
 defects the issue lists. The synthetic rig is studies/rig_loadtest.py (spring rung)."""
 
+import json
 import re
 import sys
 from pathlib import Path
@@ -447,6 +448,8 @@ def test_print_2_designed_from_the_rig_meets_its_targets_within_2_percent(rig_ca
     spec.write_text(spec_text)
     r = run(["design", spec, "--calibration", d / "cal" / "calibration.json", "--out", tmp_path / "p2", "--no-plot"])
     assert r.exit_code == 0, r.output
+    report = json.loads((tmp_path / "p2" / "report.json").read_text())
+    assert report["load_path"]["cover_lands_N"] > report["range_N"]  # the 5 mm cover stays off
     dS, dR = print2_errors(tmp_path / "p2" / "design.yaml")
     assert np.all(np.abs(dS) < 0.02) and np.all(np.abs(dR) < 0.02), (dS, dR)
     first, _ = print2_errors(SPEC.parent / "mohammadi2021-forward.yaml")  # the rig's print 1, printed the same way
