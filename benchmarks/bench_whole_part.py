@@ -26,7 +26,8 @@ Also the cost (dofs, seconds per solve), a convergence line and the cap alone ag
 and corrected by the rung (``model.load_path: section``), as a secant and as a linear model's
 small-load figure (docs/design.md 4.7);
 ``--attribute`` only each member's extra drop in the rung (the other members rigid) against its
-closed form, per regime: where the closed form misses; ``--general`` only the turn per off-centre
+closed form, per regime: where the closed form misses; ``--pairs`` each pair of members as printed
+against their own sum: where the attribution's rest comes from; ``--general`` only the turn per off-centre
 moment and the slide and turn per tangential newton per regime (the rung's three loads on one
 factorised stiffness, wp.press_general) against mst's general load linearised there
 (general_load.linear_response), the layers and the members apart (``--section``: mst's part
@@ -128,16 +129,19 @@ def rung_vs_mst_rows(path: Path, spacing: float | None) -> list[str]:
 
 def attribution_rows(path: Path, spacing: float | None) -> list[str]:
     """Per regime, where the closed form misses: the rung with every member rigid, then with one
-    member class as printed (the others rigid), its extra drop against the closed form's member,
-    in MEMBER_TAGS order (the base: the closed form's cover, its bending over the slot and the
-    slot walls; the plates; the cap). Drops in um/N; "rest" is what the members give together beyond their sum."""
+    member class as printed (the others rigid), its extra drop against the closed form's member as
+    the forward model moves it in that regime, in MEMBER_TAGS order (the base: the closed form's
+    cover, its bending over the slot and the slot walls; the plates; the cap). Drops in um/N;
+    "rest" is what the members give together beyond their sum."""
     doc, _ = mst.designed(path)
     g, m = doc.geometry(), doc.material
-    cf = lp.members(g, m)
-    closed = {"cap": cf.cap_mm_per_N, "plate": sum(cf.plates_mm_per_N), "base": cf.cover_mm_per_N}
     stack = Stack(layer_laws(g.layers, m, "spring"))
+    # each member as the closed form moves it in each regime (the plates with their joints, each
+    # stopping with its layer; the plates over locked layers; the cover until it lands)
+    moving = lp.member_band_compliances(stack, lp.members(g, m))[2]
     rows = []
     for r, locked in enumerate(wp.regime_locked(stack)):
+        closed = {"cap": moving["cap"][r], "plate": moving["plates"][r], "base": moving["housing"][r]}
         layers = l0_layers_mm_per_N(g, m, locked)
         opts = {"spacing_mm": spacing, "locked": locked, "member_factor": wp.RIGID_FACTOR}
         rigid = wp.press(g, m, wp.PartOptions(**opts)).drop_mm_per_N
@@ -152,6 +156,30 @@ def attribution_rows(path: Path, spacing: float | None) -> list[str]:
             f"| {doc.name} | {r + 1} | {1e3 * layers:.2f} | {1e3 * rigid:.2f} | {cells} | "
             f"{1e3 * rest:+.2f} | {1e3 * part:.2f} |"
         )
+    return rows
+
+
+def pair_rows(path: Path, spacing: float | None) -> list[str]:
+    """Per regime, which members' interplay the attribution's "rest" is: each pair of member
+    classes as printed (the third rigid), its extra drop against the sum of the pair's own extras
+    (:func:`attribution_rows`), um/N."""
+    doc, _ = mst.designed(path)
+    g, m = doc.geometry(), doc.material
+    rows = []
+    for r, locked in enumerate(wp.regime_locked(Stack(layer_laws(g.layers, m, "spring")))):
+        opts = {"spacing_mm": spacing, "locked": locked, "member_factor": wp.RIGID_FACTOR}
+        rigid = wp.press(g, m, wp.PartOptions(**opts)).drop_mm_per_N
+
+        def extra(flexible: tuple, opts: dict = opts, rigid: float = rigid) -> float:
+            scaled = tuple(t for t in wp.MEMBER_TAGS if t not in flexible)
+            return wp.press(g, m, wp.PartOptions(**opts, scaled=scaled)).drop_mm_per_N - rigid
+
+        alone = {t: extra((t,)) for t in wp.MEMBER_TAGS}
+        cells = []
+        for a, b in ((0, 1), (0, 2), (1, 2)):
+            pair = (wp.MEMBER_TAGS[a], wp.MEMBER_TAGS[b])
+            cells.append(f"{1e3 * extra(pair):.2f} / {1e3 * (alone[pair[0]] + alone[pair[1]]):.2f}")
+        rows.append(f"| {doc.name} | {r + 1} | " + " | ".join(cells) + " |")
     return rows
 
 
@@ -376,6 +404,9 @@ def main() -> None:
     ap.add_argument(
         "--attribute", action="store_true", help="only each member's drop in the rung vs its closed form, per regime"
     )
+    ap.add_argument(
+        "--pairs", action="store_true", help="only each pair of members' drop in the rung vs their own sum, per regime"
+    )
     ap.add_argument("--section", action="store_true", help="with --general: mst's part with model.load_path: section")
     ap.add_argument(
         "--general",
@@ -409,6 +440,16 @@ def main() -> None:
         print("|---|---|---|---|---|---|---|---|---|")
         for path in args.configs:
             print("\n".join(attribution_rows(Path(path), args.spacing_mm)), flush=True)
+        return
+    if args.pairs:
+        print("the magnet's drop per newton, um/N (as --attribute): each pair of member classes as printed, the")
+        print("third rigid, against the sum of the pair's own extras")
+        tags = wp.MEMBER_TAGS
+        heads = [f"{tags[a]} + {tags[b]}" for a, b in ((0, 1), (0, 2), (1, 2))]
+        print("| design | regime | " + " | ".join(heads) + " |")
+        print("|---" * (2 + len(heads)) + "|")
+        for path in args.configs:
+            print("\n".join(pair_rows(Path(path), args.spacing_mm)), flush=True)
         return
     if member_studies(args):
         return
