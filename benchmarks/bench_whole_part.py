@@ -26,14 +26,15 @@ Also the cost (dofs, seconds per solve), a convergence line and the cap alone ag
 and corrected by the rung (``model.load_path: section``), as a secant and as a linear model's
 small-load figure (docs/design.md 4.7);
 ``--attribute`` only each member's extra drop in the rung (the other members rigid) against its
-closed form, per regime: where the closed form misses; ``--pairs`` each pair of members as printed
-against their own sum: where the attribution's rest comes from; ``--general`` only the turn per off-centre
-moment and the slide and turn per tangential newton per regime (the rung's three loads on one
-factorised stiffness, wp.press_general) against mst's general load linearised there
-(general_load.linear_response), the layers and the members apart (``--section``: mst's part
-with ``model.load_path: section``, the members' pose measured on the rung); ``--off-centre`` the same three
-in regime 1 with each member class as printed in turn (the forward design unless ``--configs`` is
-given); ``--general-convergence`` those figures in regime 1 on three meshes and at five levers;
+closed form, per regime: where the closed form misses; ``--pairs`` each pair of members as
+printed against their own sum: where the attribution's rest comes from; ``--general`` only the
+turn per off-centre moment and the slide and turn per tangential newton per regime (the rung's
+three loads on one factorised stiffness, wp.press_general) against mst's general load
+linearised there (general_load.linear_response), the layers and the members apart
+(``--section``: mst's part with ``model.load_path: section``, the members' pose measured on the
+rung); ``--off-centre`` the same three in regime 1 with each member class as printed in turn
+(the forward design unless ``--configs`` is given; ``--every-regime``: the rung's cases in every
+regime); ``--general-convergence`` those figures in regime 1 on three meshes and at five levers;
 ``--base-sway`` the base alone as printed (all above it rigid) pulled: the cover's slide
 against two Timoshenko cantilevers; ``--store`` ``mst simulate`` in section mode from a fresh
 cache folder, then again from the one it filled (the rung's solves kept between runs).
@@ -251,6 +252,26 @@ def off_centre(path: Path, spacing: float | None) -> list[str]:
     return rows
 
 
+def off_centre_regime_rows(path: Path, spacing: float | None) -> list[str]:
+    """:func:`off_centre`'s rung cases in every regime of the design at ``path`` (the layers locked
+    before it closed): how each member class's share of the three general-load figures moves as
+    the layers lock (mst's rows are ``--general``'s)."""
+    doc, _ = mst.designed(path)
+    g, m = doc.geometry(), doc.material
+    cases = [("as printed", 1.0, wp.MEMBER_TAGS), ("rigid", wp.RIGID_FACTOR, wp.MEMBER_TAGS)]
+    cases += [(f"only the {t}", wp.RIGID_FACTOR, tuple(o for o in wp.MEMBER_TAGS if o != t)) for t in wp.MEMBER_TAGS]
+    rows = []
+    for r, locked in enumerate(wp.regime_locked(Stack(layer_laws(g.layers, m, "spring")))):
+        for label, factor, scaled in cases:
+            opts = wp.PartOptions(spacing_mm=spacing, member_factor=factor, scaled=scaled, locked=locked)
+            x = wp.press_general(g, m, opts)
+            rows.append(
+                f"| {doc.name} | {r + 1} | {label} | {1e3 * x.turn_per_moment_rad_per_Nmm:.3f} | "
+                f"{x.pull.side_mm_per_N:.3f} | {1e3 * x.pull.turn_rad_per_N:.3f} |"
+            )
+    return rows
+
+
 def base_sway_row(path: Path, spacing: float | None) -> str:
     """The base alone as printed (the layers, plates, cap and magnet rigid), pulled at the top face:
     the cover's slide per newton (the magnet's slide carried down the rigid body above by its turn)
@@ -352,7 +373,14 @@ def store_rows(paths, repeats: int = 3) -> list[str]:
 def member_studies(args) -> bool:
     """``--off-centre``, ``--general-convergence``, ``--store`` or ``--base-sway``: print it, True;
     else False."""
-    if args.off_centre:
+    if args.off_centre and args.every_regime:
+        print("per regime, the rung: turn per moment mrad/(N mm), slide per tangential N mm/N, turn per")
+        print("tangential N mrad/N")
+        print("| design | regime | members | turn per moment | slide per tangential N | turn per tangential N |")
+        print("|---|---|---|---|---|---|")
+        for path in args.configs if args.configs_given else [str(ROOT / "configs" / "mohammadi2021-forward.yaml")]:
+            print("\n".join(off_centre_regime_rows(Path(path), args.spacing_mm)), flush=True)
+    elif args.off_centre:
         for path in args.configs if args.configs_given else [str(ROOT / "configs" / "mohammadi2021-forward.yaml")]:
             print(f"{Path(path).stem}, regime 1, a 6 mm strip 3 mm off centre / pulling along +x:")
             print("\n".join(off_centre(Path(path), args.spacing_mm)), flush=True)
@@ -385,6 +413,7 @@ def main() -> None:
         action="store_true",
         help="only the off-centre and tangential loads in regime 1, each member class apart [default: forward design]",
     )
+    ap.add_argument("--every-regime", action="store_true", help="with --off-centre: the rung's cases in every regime")
     ap.add_argument(
         "--general-convergence",
         action="store_true",
