@@ -61,6 +61,9 @@ def test_user_hints_are_checked_against_the_force():
 
 
 def test_hysteresis_is_measured_within_a_point_of_full_scale_per_regime():
+    """Each regime's peak within 3 standard errors of the noise (hysteresis_peak_tolerance_N):
+    over the three regimes, 198 of 200 noise seeds hold (studies/rig_seeds.py; the worst
+    1.4 x the bound), as 3-sigma claims on three bands should (~1 % fail)."""
     # 240 rows a branch: the whole part's last regime (the cap closing the top layer's cavity
     # a few newtons before layer 2 locks) is a tenth of the full scale, ~20 rows a cycle
     rows, truth = rig_loadtest(Rig(cycles=6, points_per_branch=240, seed=2), CURVE)
@@ -73,6 +76,8 @@ def test_hysteresis_is_measured_within_a_point_of_full_scale_per_regime():
 
 
 def test_the_unloading_model_leaves_less_than_the_noise():
+    """Half the noise is a stated multiple, not a derived bound: it held on 198 of 200 noise
+    seeds (studies/rig_seeds.py; worst 1.12 x), the residual's 1.5 x on all 200."""
     rows, truth = rig_loadtest(Rig(cycles=6, turn_fraction=(1, 0.5, 0.75, 1, 0.6, 0.9), seed=4), CURVE)
     b = find_branches(rows["force_N"], rows["time_s"])
     model = hy.fit_unloading(field_abs_T(rows), rows["force_N"], b.label, b.turn_force_N)
@@ -105,6 +110,8 @@ def test_a_stiffer_first_cycle_is_detected_when_8_percent_and_not_when_0(pct):
 
 
 def test_creep_per_decade_is_recovered_within_two_sigma():
+    """A 2-sigma claim on the fit's own sigma: it held on 198 of 200 noise seeds
+    (studies/rig_seeds.py; 3 sigma on all 200), so the sigma is honest or a little wide."""
     rows, _ = rig_loadtest(Rig(turn_fraction=(1, 0.6, 1), cycles=3, hold_cycles=(2,), creep_pct_per_decade=1.0), CURVE)
     b = find_branches(rows["force_N"], rows["time_s"])
     B = field_abs_T(rows)
@@ -115,6 +122,8 @@ def test_creep_per_decade_is_recovered_within_two_sigma():
 
 
 def test_white_noise_gives_no_warning_and_chi2_near_one():
+    """4 sd of chi2_nu and 3 of the runs z: over 200 draws (studies/rig_seeds.py) chi2_nu held on
+    all, the runs z on 197 (it is a count, normal only roughly), the warning never came."""
     r = np.random.default_rng(7).standard_normal(400)
     q = fit_quality(r, 3, time_s=np.arange(400.0), sigma={"modulus_factor": 0.02})
     assert abs(q.chi2_nu - 1) < 4 * np.sqrt(2 / 397) and abs(q.runs_z) < 3 and q.warning is None
@@ -131,18 +140,27 @@ def _residual_of_a_loading_fit(rows, truth_curve_values=None):
     return (field_abs_T(rows) - CURVE.field_abs_T(rows["force_N"])) / 2e-6
 
 
-def test_drift_gives_the_warning_names_drift_and_inflates_sigmas():
-    rows, _ = rig_loadtest(Rig(hysteresis_pct=0.0, drift_uT_per_s=0.05, seed=5), CURVE)
+@pytest.mark.parametrize("seed", range(10))  # a few ms a seed
+def test_drift_gives_the_warning_names_drift_and_inflates_sigmas(seed):
+    """A drift alone, on ten noise seeds: before the branch and trend t were fitted together
+    (mst_cli/calibration/fit_quality.py), 5 of these 10 seeds (91 of 200) failed: the drift's
+    residuals, mostly of one sign, left the runs z above -3 (no warning, 46), or offset the
+    unloading rows (each follows its loading) to a Welch t past 4 (named hysteresis, 45).
+    Now 200 of 200 hold (studies/rig_seeds.py)."""
+    rows, _ = rig_loadtest(Rig(hysteresis_pct=0.0, drift_uT_per_s=0.05, seed=seed), CURVE)
     q = fit_quality(_residual_of_a_loading_fit(rows), 4, rows["branch"], rows["time_s"], {"modulus_factor": 0.02})
     assert q.warning and q.cause == "drift" and q.sigma["modulus_factor"] > 0.02 * 1.4
     assert q.identifiable["modulus_factor"] == (q.sigma["modulus_factor"] <= 0.1 / 3)
 
 
-def test_hysteresis_and_an_unmodelled_nonlinearity_are_told_apart():
-    rows, _ = rig_loadtest(Rig(hysteresis_pct=3.0, seed=6), CURVE)
+@pytest.mark.parametrize("seed", [6, 13])
+def test_hysteresis_and_an_unmodelled_nonlinearity_are_told_apart(seed):
+    """Seed 13 is one of the 5 of 200 on which the 3 % loop (chi2_nu 210, branch t -24) got no
+    warning before the branch t counted as structure: its runs z was -2.5."""
+    rows, _ = rig_loadtest(Rig(hysteresis_pct=3.0, seed=seed), CURVE)
     q = fit_quality(_residual_of_a_loading_fit(rows), 4, rows["branch"], rows["time_s"])
     assert q.warning and q.cause == "hysteresis"
-    rows, _ = rig_loadtest(Rig(hysteresis_pct=0.0, seed=6), CURVE)
+    rows, _ = rig_loadtest(Rig(hysteresis_pct=0.0, seed=seed), CURVE)
     bend = 2e-6 * 6 * np.sin(2 * np.pi * rows["force_N"] / CURVE.full_scale_N)  # 6 sigma the model lacks
     q = fit_quality(_residual_of_a_loading_fit(rows) + bend / 2e-6, 4, rows["branch"], rows["time_s"])
     assert q.warning and q.cause == "model" and q.chi2_nu > 2
@@ -175,6 +193,8 @@ def test_a_reading_at_30_and_40_degC_is_corrected_within_1_5_percent():
 
 
 def test_the_modulus_coefficient_is_fitted_and_judged_identifiable_only_with_spread():
+    """3 sigma of the fit's own sigma: each held on 199 of 200 noise seeds (studies/rig_seeds.py),
+    as a 3-sigma claim should (0.3 % fail)."""
     rig = Rig(cycles=3, T_C=(20.0, 30.0, 40.0), hysteresis_pct=0.0, seed=9)
     rows, truth = rig_loadtest(rig, CURVE)
     load = rows["branch"] == "loading"

@@ -147,10 +147,18 @@ def rig_calibration(tmp_path_factory):
 
 
 def test_a_rig_load_test_is_fitted_on_its_loading_branch_within_two_sigma(rig_calibration):
+    """Each parameter within 2 of the fit's own sigma; the modulus and walls also within WITHIN.
+    Not the gap: at one temperature the fit knows it only to ~0.047 mm (1 sigma; the
+    remanence trades with it), and over noise seeds 1-5 it missed by up to 0.095 mm, within
+    0.05 mm on seed 1 alone (studies/rig_seeds.py; the three-temperature rig fixes it to ~2 um,
+    test_the_modulus_temperature_coefficient_is_fitted_from_T_C). The 2-sigma claims: one of
+    the three just past 2 sigma (1.03-1.06 x) on 2 of those 5 seeds, as three 2-sigma claims
+    should (~1 seed in 8); all within 3 sigma."""
     result, _, _ = rig_calibration
     for name, value in TRUTH.items():
         got, sd = result.fit.values[name], result.fit.std[name]
-        assert abs(got - value) < 2 * sd and abs(got - value) < WITHIN[name], (name, got, sd)
+        assert abs(got - value) < 2 * sd, (name, got, sd)
+        assert name == "gap_offset_mm" or abs(got - value) < WITHIN[name], (name, got, sd)
     assert len(result.load_test) == 80  # loading rows of cycles 2 and 3 (cycle 1 is 8 % stiffer)
 
 
@@ -195,8 +203,15 @@ def held_out_stream(seed=11, **rig):
 
 
 def branch_errors(got, rows, branch):
+    """(median, p95) of |F - F_true| / F_true from a tenth of full scale. A turn at full scale
+    can read past the calibrated map's end (the calibration seed 3, stream 13 of
+    studies/rig_seeds.py: the peak row, 27.861 of 27.863 N): no force, flagged above_range, and
+    left out, only within 1 % of full scale."""
     F_true = rows["force_N"]
     use = (rows["branch"] == branch) & (F_true >= 0.1 * CURVE.full_scale_N)
+    past = use & ~np.isfinite(got.force_N)
+    assert np.all(got.flag[past] == "above_range") and np.all(F_true[past] > 0.99 * CURVE.full_scale_N)
+    use &= ~past
     rel = np.abs(got.force_N[use] - F_true[use]) / F_true[use]
     return float(np.median(rel)), float(np.percentile(rel, 95))
 
@@ -438,7 +453,7 @@ def test_print_2_designed_from_the_rig_meets_its_targets_within_2_percent(rig_ca
     """Print 2 of the paper's targets with a 5 mm cover: with the spec's 3 mm (1.5 mm over the
     board) the design from this calibration (modulus x0.9) lands its cover on the board's parts at
     8.7 N, inside its range, and its last regime then hangs on the cover's air, i.e. on the fitted
-    gap (the rig's gap is fitted to +-0.05 mm: S_3 3.1 % off at seed 1), which is the landing's
+    gap (the rig's gap is fitted to +-0.05 mm, 1 sigma: S_3 3.1 % off at seed 1), which is the landing's
     sensitivity, not the calibration's. With 5 mm the cover bends too little to land inside the
     range, so what is tested is what calibration recovers (load_path.cover_lands_N)."""
     _, _, d = rig_calibration

@@ -172,6 +172,11 @@ def test_the_real_rig_gets_the_modulus_within_3_percent_and_the_walls_within_15_
 
 
 def test_the_real_rig_reports_lag_zero_and_softening_with_sigma_in_one_line_each(real_rig):
+    """The lag holds on seed 1 only by luck: over noise seeds 1-5 (studies/rig_seeds.py) the lag
+    read 214, 225, 234, 229, 215 ms (+-8..18 ms from the blocks): a bias of about +23 ms, past
+    the loop's +15 and the zero's -6 the estimator's doc names, and past max(3 sigma, 15 ms) on
+    seeds 2 and 3. A known failure of mst_cli/calibration/time_alignment.py, reported, not
+    hidden by a wider bound."""
     _, out, rec, truth = real_rig
     a, z, s = rec["time_alignment"], rec["zero"], rec["softening"]
     assert abs(a["lag_s"] - 0.2) < max(3 * a["lag_sigma_s"], 0.015)
@@ -184,6 +189,10 @@ def test_the_real_rig_reports_lag_zero_and_softening_with_sigma_in_one_line_each
 
 @pytest.mark.parametrize("branch", ["loading", "unloading"])
 def test_a_held_out_stream_reads_within_2_percent_median_and_5_at_p95(real_rig, branch):
+    """Holds on calibration seeds 1 and 5, not on 2, 3, 4 (studies/rig_seeds.py: unloading p95
+    5.6-7.2 %, seed 3's loading median 2.1 %; the stream's own seed moves them by 0.3 %). The
+    cause is the lag's bias (the test above): seed 2 calibrated with the true 0.2 s reads
+    0.4 / 1.6 % and 0.7 / 2.7 %. The done-when holds for this seed, not yet for the rig."""
     d, _, _, _ = real_rig
     stream, truth = rig_log(RigLog(cycles=4, first_cycle=11, zero_shift_uT=117.0, hold_cycles=(13,), seed=7), CURVE)
     cols = ("time_s", "Bx_uT", "By_uT", "Bz_uT")

@@ -363,7 +363,8 @@ def _rig_sections(record: CalibrationRecord, rig: RigAnalysis, fitted: _Fitted) 
         "cause": q.cause,
         "warning": q.warning,
         "sigma_inflation": math.sqrt(q.chi2_nu) if q.chi2_nu > 1 else 1.0,
-        "rule": "warning when chi2_nu > 2 and the runs test's z < -3; every parameter sigma is the fit's, "
+        "rule": "warning when chi2_nu > 2 and the runs test's z < -3 or the branch or trend t beyond 4; "
+        "every parameter sigma is the fit's, "
         "x sqrt(chi2_nu) when chi2_nu > 1, and identifiability is judged on it",
     }
 

@@ -535,6 +535,10 @@ def _space_mapping(
     iterations = 0
     for iterations in range(1, MAX_SPACE_MAPPING_ITERATIONS + 1):  # noqa: B007 (reported)
         res, values, at_bound = _solve(model, force_N, B_abs_T, sigma_T, tuple(free), values, bounds)
+        if res.status == 0:  # out of evaluations: the trust region crawls along a lock's kink
+            # (the real rig of tests/test_rig_log.py, seed 4: still moving after 400, done in 46
+            # more from a fresh region); a fit that still does not converge fails as before
+            res, values, at_bound = _solve(model, force_N, B_abs_T, sigma_T, tuple(free), values, bounds)
         if model.mechanics == "spring" or model.correction is None:
             break
         if model.correction.anchored_at(values):
