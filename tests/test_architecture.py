@@ -222,10 +222,19 @@ HEAVY_LIBRARIES = {
     "fcntl": "POSIX only",
     "termios": "POSIX only",
 }
+# a quick design loads the off-centre and general-load models (their tilt laws and poses, 5 ms)
+# only when its spec asks for the off-centre figure or places two chips
+OFF_CENTRE = ("mst_cli.model.offcentre", "mst_cli.simulation.run", "mst_cli.model.load_bound")
 # The door loads only the layer of the verb that runs (mst simulate does not pay for the design
 # search, the CAD layer or the calibration); the command group loads only the command run.
 LAYER_DEFERRALS = {
     "mst_cli.api": (
+        # the door's own verb families: a command loads its own (mst design not the calibration's)
+        "mst_cli.api._calibrating",
+        "mst_cli.api._designing",
+        "mst_cli.api._making",
+        "mst_cli.api._measuring",
+        "mst_cli.api._simulating",
         "mst_cli.design",
         "mst_cli.cad",
         "mst_cli.calibration",
