@@ -246,8 +246,9 @@ LAYER_DEFERRALS = {
     "mst_cli.cli.app": ("mst_cli.cli",),
     # a design run loads the front's and the dearer rungs' search only when asked for (--pareto,
     # --refine): 8 ms of every quick design's start (benchmarks/bench_simulate.py)
-    "mst_cli.design.run": ("mst_cli.design.pareto", "mst_cli.design.refine"),
+    "mst_cli.design.run": ("mst_cli.design.pareto", "mst_cli.design.refine", *OFF_CENTRE),
     "mst_cli.design.files": ("mst_cli.design.pareto",),
+    "mst_cli.design.result": OFF_CENTRE,
     # the rung a law is asked of: L1 (the frame and its path follower, 6 ms) only when asked for,
     # as L2 (scikit-fem) is; the quick commands use L0 alone
     "mst_cli.model.mechanics": ("mst_cli.model.mechanics.frame",),
