@@ -216,6 +216,7 @@ HEAVY_LIBRARIES = {
     "multiprocessing": "20 ms of process machinery: only where workers are forked",
     "concurrent": "as multiprocessing",
     "threadpoolctl": "BLAS introspection: only where a dear rung solves",
+    "hashlib": "3 ms (OpenSSL): only the whole-part rung's kept solves and the tables' file hashes",
     "importlib.metadata": "10 ms (the email package): only a file that names the version",
     "numba": "0.15 s, and its kernels' compiled code: the two-chip reader only",
     "serial": "pyserial, optional: mst read --serial",
