@@ -216,16 +216,26 @@ HEAVY_LIBRARIES = {
     "multiprocessing": "20 ms of process machinery: only where workers are forked",
     "concurrent": "as multiprocessing",
     "threadpoolctl": "BLAS introspection: only where a dear rung solves",
+    "hashlib": "3 ms (OpenSSL): only the whole-part rung's kept solves and the tables' file hashes",
     "importlib.metadata": "10 ms (the email package): only a file that names the version",
     "numba": "0.15 s, and its kernels' compiled code: the two-chip reader only",
     "serial": "pyserial, optional: mst read --serial",
     "fcntl": "POSIX only",
     "termios": "POSIX only",
 }
+# a quick design loads the off-centre and general-load models (their tilt laws and poses, 5 ms)
+# only when its spec asks for the off-centre figure or places two chips
+OFF_CENTRE = ("mst_cli.model.offcentre", "mst_cli.simulation.run", "mst_cli.model.load_bound")
 # The door loads only the layer of the verb that runs (mst simulate does not pay for the design
 # search, the CAD layer or the calibration); the command group loads only the command run.
 LAYER_DEFERRALS = {
     "mst_cli.api": (
+        # the door's own verb families: a command loads its own (mst design not the calibration's)
+        "mst_cli.api._calibrating",
+        "mst_cli.api._designing",
+        "mst_cli.api._making",
+        "mst_cli.api._measuring",
+        "mst_cli.api._simulating",
         "mst_cli.design",
         "mst_cli.cad",
         "mst_cli.calibration",
@@ -237,8 +247,9 @@ LAYER_DEFERRALS = {
     "mst_cli.cli.app": ("mst_cli.cli",),
     # a design run loads the front's and the dearer rungs' search only when asked for (--pareto,
     # --refine): 8 ms of every quick design's start (benchmarks/bench_simulate.py)
-    "mst_cli.design.run": ("mst_cli.design.pareto", "mst_cli.design.refine"),
+    "mst_cli.design.run": ("mst_cli.design.pareto", "mst_cli.design.refine", *OFF_CENTRE),
     "mst_cli.design.files": ("mst_cli.design.pareto",),
+    "mst_cli.design.result": OFF_CENTRE,
     # the rung a law is asked of: L1 (the frame and its path follower, 6 ms) only when asked for,
     # as L2 (scikit-fem) is; the quick commands use L0 alone
     "mst_cli.model.mechanics": ("mst_cli.model.mechanics.frame",),

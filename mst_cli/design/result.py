@@ -9,7 +9,6 @@ from typing import Protocol
 import numpy as np
 
 from mst_cli.model.assembly import SensorGeometry
-from mst_cli.model.load_bound import shear_bound_lines
 from mst_cli.model.response import Response
 from mst_cli.sensor.document import Document, document_to_dict
 from mst_cli.simulation.report import height_budget_line, load_path_line
@@ -174,6 +173,8 @@ class DesignResult:
                 + " at worst in the regimes (design.offcentre_region_mm; mst read --estimate-offset corrects it)"
             )
         if self.shear_bound is not None:
+            from mst_cli.model.load_bound import shear_bound_lines  # deferred: the general load's model, 5 ms
+
             lines += shear_bound_lines(self.shear_bound)
         lines += self.notes
         for w in self.warnings:

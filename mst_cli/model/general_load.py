@@ -94,18 +94,6 @@ def lateral_law(tilt: LayerTiltLaw, k_x, k_y) -> LayerLateralLaw:
     return LayerLateralLaw(F, integrals[0], integrals[1])
 
 
-def small_load_lateral_N_per_mm(cell, material: Material, mechanics: str) -> tuple[float, float]:
-    """(k_x, k_y) at small load from the rung ``mst simulate`` uses: L0's closed forms for the
-    spring and frame rungs, L2's solves (k_y with L0's free-face factor) for the continuum."""
-    if mechanics != "continuum":
-        return lateral_stiffness_N_per_mm(cell, material)
-    from mst_cli.model.mechanics import continuum_lateral as l2  # deferred: L2 (scikit-fem) loads when asked
-
-    L = cell.wall_length_mm
-    k_y = l2.lateral_stiffness_y_N_per_mm(cell, material) * float(depth_end_factor(cell.t_mm, L, cell.depth_mm))
-    return l2.lateral_stiffness_x_N_per_mm(cell, material), k_y
-
-
 def _l0_law(tilt: LayerTiltLaw, cell, material: Material) -> LayerLateralLaw:
     """L0: the small-load k up to the lock, stuck (no slide) past it."""
     k0 = lateral_stiffness_N_per_mm(cell, material)

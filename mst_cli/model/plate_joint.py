@@ -50,7 +50,8 @@ def root_turn_mm_per_N(L_mm, EI_Nmm2, cos_theta, k_Nmm_per_rad) -> Any:
     ``k_Nmm_per_rad`` (module docstring); numbers or arrays."""
     L, EI, k = (np.asarray(a, dtype=float) for a in (L_mm, EI_Nmm2, k_Nmm_per_rad))
     m = (L * L / (2.0 * EI)) / (1.0 / k + L / EI)
-    return as_value(cos_theta**2 * (m * L / k + (m * L * L / 2.0 - L**3 / 6.0) / EI - L**3 / (12.0 * EI)))
+    L3 = L**3  # once: a float power is the costliest step over the start's tables
+    return as_value(cos_theta**2 * (m * L / k + (m * L * L / 2.0 - L3 / 6.0) / EI - L3 / (12.0 * EI)))
 
 
 def root_joint_mm_per_N(

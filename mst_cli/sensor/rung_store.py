@@ -12,7 +12,6 @@ be written costs a solve, nothing more.
 
 from __future__ import annotations
 
-import hashlib
 import json
 from functools import cache
 from pathlib import Path
@@ -27,6 +26,8 @@ MAX_FILE_BYTES = 1 << 20  # a kept solve is well under a kilobyte a regime
 @cache
 def model_source_hash() -> str:
     """The hash of the physics modules' source (every ``mst_cli/model/**/*.py``)."""
+    import hashlib  # deferred: OpenSSL, 3 ms of every start; only a section-mode model keeps solves
+
     root = Path(rung_keep.__file__).resolve().parents[1]  # mst_cli/model
     digest = hashlib.sha256()
     for path in sorted(root.rglob("*.py")):
@@ -37,6 +38,8 @@ def model_source_hash() -> str:
 
 def file_name(kind: str, key: tuple) -> str:
     """Where the solve ``kind`` of ``key`` is kept, inside the cache folder."""
+    import hashlib  # deferred: as model_source_hash's
+
     digest = hashlib.sha256(f"{kind}\n{model_source_hash()}\n{key!r}".encode()).hexdigest()
     return f"{SUBFOLDER}/{kind}-{digest[:32]}.json"
 
