@@ -314,20 +314,9 @@ def log_effects_alone(seed: int, tmp: Path) -> None:
 def log_loop(seed: int) -> None:
     """The unloading model on the loop alone (no calibration: milliseconds)."""
     import test_rig_log as t
-    from rig_log import all_off, loop_h, rig_log
+    from rig_log import loop_h
 
-    from mst_cli.calibration import hysteresis as hy
-    from mst_cli.calibration.branches import find_branches
-
-    rig = all_off(cycles=6, hold_cycles=(3, 5), noise_uT=(1.0,) * 3,
-                  loop_pct=(-3.0, -0.4, 2.0, 1.5, 0.0), open_after_hold_pct=2.5, seed=seed)  # fmt: skip
-    rows, _ = rig_log(rig, t.CURVE)
-    B = 1e-6 * np.linalg.norm(np.stack([rows[c] for c in ("Bx_uT", "By_uT", "Bz_uT")], -1), axis=1)
-    b = find_branches(rows["force_N"], rows["time_s"])
-    after = hy.rows_after_holds(b.label, b.holds)
-    u = hy.fit_unloading(B, rows["force_N"], b.label, b.turn_force_N, rows["force_N"] > 0.01, after)
-    x = np.linspace(0.05, 0.95, 19)
-    got = np.polynomial.polynomial.polyval(x, u.coefficients)
+    rig, u, x, got = t.fitted_loop(seed)
     check("log::loop", "|h - truth| < 0.5 % of F_turn", seed, np.max(np.abs(got - loop_h(rig, x, False))), 0.005)
     held = got + u.after_hold * x**4
     check("log::loop", "after a hold, x > 0.5: < 1 %", seed, np.max(np.abs(held - loop_h(rig, x, True))[x > 0.5]), 0.01)

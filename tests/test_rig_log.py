@@ -111,18 +111,24 @@ def test_the_zero_its_drift_and_recovery_are_recovered(tmp_path):
     assert abs(cal.fit.values["wall_offset_mm"] - 0.04) < 0.005
 
 
-def test_a_loop_of_either_sign_open_after_a_hold_is_fitted():
-    """The unloading model on the loop alone (the rows as the rig pressed them: the lag's own
-    estimate is tested above)."""
+def fitted_loop(seed: int = 0):
+    """(the rig, its unloading model, x, the model's loop at x) of a loop alone, as pressed
+    (studies/rig_seeds.py sweeps it over seeds)."""
     rig = all_off(cycles=6, hold_cycles=(3, 5), noise_uT=(1.0,) * 3,
-                  loop_pct=(-3.0, -0.4, 2.0, 1.5, 0.0), open_after_hold_pct=2.5)  # fmt: skip
-    rows, truth = rig_log(rig, CURVE)
+                  loop_pct=(-3.0, -0.4, 2.0, 1.5, 0.0), open_after_hold_pct=2.5, seed=seed)  # fmt: skip
+    rows, _ = rig_log(rig, CURVE)
     B = 1e-6 * np.linalg.norm(np.stack([rows[c] for c in ("Bx_uT", "By_uT", "Bz_uT")], -1), axis=1)
     b = find_branches(rows["force_N"], rows["time_s"])
     after = hy.rows_after_holds(b.label, b.holds)
     u = hy.fit_unloading(B, rows["force_N"], b.label, b.turn_force_N, rows["force_N"] > 0.01, after)
     x = np.linspace(0.05, 0.95, 19)
-    got = np.polynomial.polynomial.polyval(x, u.coefficients)
+    return rig, u, x, np.polynomial.polynomial.polyval(x, u.coefficients)
+
+
+def test_a_loop_of_either_sign_open_after_a_hold_is_fitted():
+    """The unloading model on the loop alone (the rows as the rig pressed them: the lag's own
+    estimate is tested above)."""
+    rig, u, x, got = fitted_loop()
     assert np.max(np.abs(got - loop_h(rig, x, False))) < 0.005  # of the turning force
     held = got + u.after_hold * x**4
     assert np.max(np.abs(held - loop_h(rig, x, True))[x > 0.5]) < 0.01
