@@ -302,7 +302,7 @@ def test_check_fails_a_thin_cap_naming_it_and_passes_a_thick_one(tmp_path):
     res = run(["check", thin])
     assert res.exit_code == 1
     assert "load_path: the cap is too soft: regime 1: 66 % of the magnet's motion is outside the layers" in res.output
-    assert "(budget 5 %), most in the cap" in res.output
+    assert "(budget 5 %), most of that in the cap's supports" in res.output
     res = run(["check", thin, "--load-path-max", "0.6"])
     assert res.exit_code == 1
     assert "load_path: the cap is too soft: regime 1: 66 % of the magnet's motion is outside the layers" in res.output

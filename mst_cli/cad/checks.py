@@ -313,7 +313,7 @@ def check_load_path(m: Measurements, x: Manifest, share_max: float | None = None
         note = (
             f"regime {row['regime']}: {100 * row['outside_layers']:.0f} % of the magnet's motion is outside the "
             f"layers, {100 * worst['uncertain_share']:.0f} % uncertain between its supports' soft and stiff bounds "
-            f"(budget {100 * worst['budget']:.0f} %), most in the {name}"
+            f"(budget {100 * worst['budget']:.0f} %), most of that in the {name}'s supports"
         )
         bad = bool(over)
     else:
