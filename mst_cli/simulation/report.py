@@ -22,7 +22,7 @@ from mst_cli.model.load_path import FINGERTIP_PATCH_MM
 from mst_cli.model.load_path_report import dominant_member, load_path_report
 from mst_cli.model.magnet_field import axial_dBz_dz_T_per_mm
 from mst_cli.model.mechanics import layer_laws
-from mst_cli.model.mechanics.lateral import depth_end_factor, lateral_stiffness_N_per_mm
+from mst_cli.model.mechanics.lateral import small_load_lateral_N_per_mm  # not model.general_load's tilt laws
 from mst_cli.model.response import Regime, Response
 from mst_cli.model.stack import Stack
 from mst_cli.sensor.as_printed import as_printed
@@ -120,16 +120,7 @@ def _lateral_stiffness(doc: Document, mechanics: str) -> list[tuple[float, float
     """Every layer's small-load (k_x, k_y) as printed, from the rung ``mst simulate`` uses: L0's
     closed forms for the spring and frame rungs, L2 for the continuum (docs/design.md 4.4)."""
     printed = as_printed(doc)
-    cells, material = printed.geometry().layers, printed.material
-    if mechanics != "continuum":  # here, not in model.general_load: a design never loads its tilt laws
-        return [lateral_stiffness_N_per_mm(c, material) for c in cells]
-    from mst_cli.model.mechanics import continuum_lateral as l2  # deferred: L2 (scikit-fem) loads when asked
-
-    def k_y(c) -> float:  # L2's solve with L0's free-face factor
-        end = float(depth_end_factor(c.t_mm, c.wall_length_mm, c.depth_mm))
-        return l2.lateral_stiffness_y_N_per_mm(c, material) * end
-
-    return [(l2.lateral_stiffness_x_N_per_mm(c, material), k_y(c)) for c in cells]
+    return [small_load_lateral_N_per_mm(c, printed.material, mechanics) for c in printed.geometry().layers]
 
 
 def _layer_rows(geometry: SensorGeometry, resp: Response, lateral: list[tuple[float, float]]) -> list[dict]:

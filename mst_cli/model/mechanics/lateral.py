@@ -125,6 +125,19 @@ def lateral_stiffness_N_per_mm(cell: HexCell, material: Material, depth_mm: floa
     return float(k_x), float(k_y)
 
 
+def small_load_lateral_N_per_mm(cell: HexCell, material: Material, mechanics: str) -> tuple[float, float]:
+    """(k_x, k_y) at small load from the rung ``mst simulate`` uses: L0's closed forms for the
+    spring and frame rungs, L2's solves (k_y with L0's free-face factor) for the continuum."""
+    if mechanics != "continuum":
+        return lateral_stiffness_N_per_mm(cell, material)
+    from mst_cli.model.mechanics import continuum_lateral as l2  # deferred: L2 (scikit-fem) loads when asked
+
+    k_y = l2.lateral_stiffness_y_N_per_mm(cell, material) * float(
+        depth_end_factor(cell.t_mm, cell.wall_length_mm, cell.depth_mm)
+    )
+    return l2.lateral_stiffness_x_N_per_mm(cell, material), k_y
+
+
 def expected_error_rel() -> dict[str, float]:
     """The fit's out-of-sample errors against L2 (max relative, per direction), as stored."""
     fit = _fit()
