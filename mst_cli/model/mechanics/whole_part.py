@@ -80,6 +80,9 @@ class PartOptions:
     rigid_plates: tuple[int, ...] = ()  # plates (bottom first) held rigid whatever ``scaled`` says
     insert: Insert | None = None
     levels: int = DEFAULT_LEVELS
+    # one part of the base held rigid whatever ``scaled`` says (the attribution's): "cover" (the
+    # base above the slot's roof) or "slot_walls" (below it: the slot's side walls and floor); "": none
+    rigid_base: str = ""
 
 
 @dataclass(frozen=True)
@@ -165,6 +168,12 @@ def build_mesh(geometry, options: PartOptions, offsets_mm: Sequence[float] | Non
     tag = np.full(mesh.t.shape[1], -1)
     for r in regions[::-1]:
         tag[r.contains(mid)] = TAGS.index(r.tag)
+    if options.rigid_base:
+        # by the triangle's centroid: over the slot its roof is a region edge, beyond it a zigzag
+        # one lattice spacing deep (a study's split, not the production mesh)
+        above = mid[:, 1] >= geometry.z_cover_bottom_mm
+        part = {"cover": above, "slot_walls": ~above}[options.rigid_base]
+        tag[(tag == TAGS.index("base")) & part] = TAGS.index("rigid_plate")
     return mesh, tag
 
 
