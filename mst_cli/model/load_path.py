@@ -36,6 +36,7 @@ slender walls) or clamped (the stiff bound). Pure numpy, no I/O.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 from typing import Any
@@ -386,7 +387,7 @@ class CappedLayer:
     law: Any  # a layer law of any rung (k_N_per_mm, d_lock_mm, lock_force_N, knots_N, displacement_mm ...)
     cap_mm_per_N: float
 
-    @property
+    @functools.cached_property  # the forward model and its report ask each layer's dozens of times
     def lock_force_N(self) -> float:
         """Where law.d(F) + C F reaches d_lock: exact on the law's piecewise-linear knots."""
         law, C = self.law, self.cap_mm_per_N
