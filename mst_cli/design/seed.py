@@ -38,7 +38,7 @@ import numpy as np
 from mst_cli.design.problem import TINY
 from mst_cli.model.load_path import cap_mm_per_N, cover_parts_mm_per_N, layer_supports, plates_mm_per_N
 from mst_cli.model.mechanics.spring import layer_displacement_mm
-from mst_cli.model.past_lock import locked_plates_mm_per_N
+from mst_cli.model.past_lock import plate_overhang_mm_per_N, upper_layer_terms
 from mst_cli.model.plate_joint import joint_scene, plates_beside, root_joint_mm_per_N
 from mst_cli.model.stack import capped_lock_force_N
 
@@ -154,14 +154,13 @@ class CellTable:
         one = member(("joint",), lambda: root_joint_mm_per_N(theta_rad, t, self.h_mm, *joint_scene(scene)))
         joints = [at(one, i) * beside[i] for i in range(n)]
         caps = np.stack(np.broadcast_arrays(*plates, cap), axis=-1) + np.stack(np.broadcast_arrays(*joints), axis=-1)
-        cover, air = over_slot + slot_walls, scene.cover_air_mm
+        cover, air, G = over_slot + slot_walls, scene.cover_air_mm, scene.G_MPa
         locked = np.zeros(cells)
         if j > 0:  # the plate over layer j - 1, locked in layer j's regime, under its cells
-            th2, t2, h2, x2 = (
-                np.stack(np.broadcast_arrays(at(a, j - 1), at(a, j)), -1) for a in (theta_rad, t, self.h_mm, head)
-            )
-            past = lambda: locked_plates_mm_per_N(th2, t2, h2, x2, *joint_scene(scene), scene.G_MPa)[..., 0]  # noqa: E731
-            locked = member(("locked", cell(j - 1), cell(j)), past)
+            # what layer j's cells give it, once a run; then only how far their feet overhang
+            upper = member(("upper",), lambda: upper_layer_terms(theta_rad, t, self.h_mm, *joint_scene(scene), G))
+            overhang = lambda: plate_overhang_mm_per_N(np.maximum(head - at(head, j - 1), 0.0), upper)  # noqa: E731
+            locked = member(("locked", cell(j - 1), cell(j)), overhang)
         return caps, lambda F: cover * F - np.maximum(over_slot * F - air, 0.0), np.broadcast_to(locked, (cells,))
 
 

@@ -144,13 +144,19 @@ def section_EI_kGA(
         bi = b if insert.depth_mm is None else min(insert.depth_mm, b)  # the plate's own depth
         strips.append((z0, z1, bi * (insert.modulus_MPa - E_prime_MPa)))
         shear = shear + SHEAR_FACTOR * bi * insert.thickness_mm * (insert.shear_modulus_MPa - G_MPa)
-    EA = zc_EA = EI = 0  # the strips' sums, in order (plain loops: the design loop's small batches)
+    # the strips' sums, in order (plain loops: the design loop's small batches); each strip's
+    # height and mid-height once (w dz 0.5 (z0 + z1) is w dz x mid to the bit: halving is exact)
+    EA = zc_EA = EI = 0
+    heights = []
     for z0, z1, w in strips:
-        EA = EA + w * (z1 - z0)
-        zc_EA = zc_EA + w * (z1 - z0) * 0.5 * (z0 + z1)
+        dz, mid = z1 - z0, 0.5 * (z0 + z1)
+        w_dz = w * dz
+        EA = EA + w_dz
+        zc_EA = zc_EA + w_dz * mid
+        heights.append((dz, mid, w))
     zc = zc_EA / EA
-    for z0, z1, w in strips:
-        EI = EI + w * ((z1 - z0) ** 3 / 12.0 + (z1 - z0) * (0.5 * (z0 + z1) - zc) ** 2)
+    for dz, mid, w in heights:
+        EI = EI + w * (dz**3 / 12.0 + dz * (mid - zc) ** 2)
     return as_value(EI), as_value(shear)
 
 

@@ -36,6 +36,7 @@ slender walls) or clamped (the stiff bound). Pure numpy, no I/O.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 from typing import Any
@@ -56,7 +57,7 @@ from mst_cli.model.beams import strip_bending_mm_per_N as strip_bending_mm_per_N
 from mst_cli.model.beams import two_load_mm_per_N as two_load_mm_per_N
 from mst_cli.model.cell import pad_half_width_mm, wall_centreline_length_mm
 from mst_cli.model.past_lock import by_regime, scene_locked_plates_mm_per_N
-from mst_cli.model.plate_joint import layer_joints_mm_per_N
+from mst_cli.model.plate_joint import joint_scene, layer_joints_mm_per_N, plates_beside, root_joint_mm_per_N
 
 # a fingertip pressed on the face: a contact patch about 6 mm wide (the width the issue's
 # independent check presses over); the press runs the whole depth (a strip, in plane strain)
@@ -208,24 +209,28 @@ def layer_caps_mm_per_N(scene: MemberScene, theta_rad, t_mm, h_mm) -> tuple:
     one) and its joints with the plates; the cover's bending over the slot; its slot walls; (...,
     n - 1) the plates over locked layers, model.past_lock) of stacks given as arrays (..., n),
     mm/N: the design loop's members."""
-    cap, plates, over_slot, slot_walls = member_parts(scene, theta_rad, t_mm, h_mm)
+    cap, plates, over_slot, slot_walls, joints, locked = all_member_parts(scene, theta_rad, t_mm, h_mm)
     caps = np.concatenate([plates, np.asarray(cap)[..., None]], axis=-1)
-    joints = layer_joints_mm_per_N(scene, theta_rad, t_mm, h_mm)
-    return caps + joints, over_slot, slot_walls, locked_plates_of(scene, theta_rad, t_mm, h_mm)
+    return caps + joints, over_slot, slot_walls, locked
 
 
-def locked_plates_of(scene: MemberScene, theta_rad, t_mm, h_mm) -> Any:
-    """(..., n - 1) the plates over locked layers (model.past_lock) of stacks given as arrays
-    (..., n) of theta (rad), t and h (mm), bottom to top."""
-    head = layer_supports(scene, theta_rad, t_mm, h_mm)[1]
-    return scene_locked_plates_mm_per_N(scene, theta_rad, t_mm, h_mm, head)
-
-
-def member_parts(scene: MemberScene, theta_rad, t_mm, h_mm) -> tuple:
-    """:func:`member_compliances` with the cover's two parts apart: (cap, plates, the cover's
-    bending over the slot (which stops on the board), the slot walls' squeeze and turn)."""
+def all_member_parts(scene: MemberScene, theta_rad, t_mm, h_mm) -> tuple:
+    """(:func:`member_parts`, each layer's joints with the plates beside it (model.plate_joint),
+    the plates over locked layers (model.past_lock)) of stacks given as arrays (..., n): the
+    layers' supports and root joints computed once for all three."""
     t = np.asarray(t_mm, dtype=float)
-    pad, head, walls, sway = layer_supports(scene, theta_rad, t, h_mm)
+    supports = layer_supports(scene, theta_rad, t, h_mm)
+    one = np.asarray(root_joint_mm_per_N(theta_rad, t, h_mm, *joint_scene(scene)))  # a root on one plate
+    locked = scene_locked_plates_mm_per_N(scene, theta_rad, t, h_mm, supports[1], one)
+    return *member_parts(scene, theta_rad, t, h_mm, supports), one * plates_beside(t.shape[-1]), locked
+
+
+def member_parts(scene: MemberScene, theta_rad, t_mm, h_mm, supports: tuple | None = None) -> tuple:
+    """:func:`member_compliances` with the cover's two parts apart: (cap, plates, the cover's
+    bending over the slot (which stops on the board), the slot walls' squeeze and turn);
+    ``supports``: the layers' :func:`layer_supports`, when the caller has them."""
+    t = np.asarray(t_mm, dtype=float)
+    pad, head, walls, sway = layer_supports(scene, theta_rad, t, h_mm) if supports is None else supports
     cap = cap_mm_per_N(scene, t[..., -1], head[..., -1], walls[..., -1])
     plates = plates_mm_per_N(
         scene, t[..., :-1], t[..., 1:], head[..., :-1], head[..., 1:], sway[..., :-1], sway[..., 1:]
@@ -362,9 +367,8 @@ def members(
 def scene_members(scene: MemberScene, theta_rad, t_mm, h_mm, scale: float = 1.0, regime_extra: tuple = ()) -> Members:
     """:func:`members` of the scene's stack (arrays (n,) of theta in rad, t and h in mm, bottom to
     top), every compliance times ``scale``, with the rung's correction ``regime_extra``."""
-    cap, plates, over_slot, slot_walls = member_parts(scene, theta_rad, t_mm, h_mm)
-    joints = layer_joints_mm_per_N(scene, theta_rad, t_mm, h_mm)
-    locked = np.atleast_1d(locked_plates_of(scene, theta_rad, t_mm, h_mm))
+    cap, plates, over_slot, slot_walls, joints, all_locked = all_member_parts(scene, theta_rad, t_mm, h_mm)
+    locked = np.atleast_1d(all_locked)
     s, air = scale, scene.cover_air_mm  # the cover's bending over the slot stops on the board
     return Members(
         s * float(cap), tuple(s * float(p) for p in plates), s * float(over_slot + slot_walls), scene.patch_mm,
@@ -383,7 +387,7 @@ class CappedLayer:
     law: Any  # a layer law of any rung (k_N_per_mm, d_lock_mm, lock_force_N, knots_N, displacement_mm ...)
     cap_mm_per_N: float
 
-    @property
+    @functools.cached_property  # the forward model and its report ask each layer's dozens of times
     def lock_force_N(self) -> float:
         """Where law.d(F) + C F reaches d_lock: exact on the law's piecewise-linear knots."""
         law, C = self.law, self.cap_mm_per_N

@@ -40,25 +40,52 @@ LOCKED_FITTED = (0.446, 0.101)
 
 def locked_plates_mm_per_N(
     theta_rad, t_mm, h_mm, head_mm, plate_mm: float, depth_mm: float, E_prime_MPa: float, G_MPa: float,
-    constants: tuple[float, float] = LOCKED_FITTED,
+    constants: tuple[float, float] = LOCKED_FITTED, joints_mm_per_N=None,
 ) -> Any:  # fmt: skip
     """(..., n - 1) what plate j gives, mm/N, while the layer under it is locked and the one
     above it open, beyond the upper layer's root joint on it (module docstring), of stacks given
-    as arrays (..., n) of theta (rad), t, h and the wall heads' x (mm), bottom to top."""
-    a, k = constants
+    as arrays (..., n) of theta (rad), t, h and the wall heads' x (mm), bottom to top;
+    ``joints_mm_per_N`` (..., n): every layer's root joint on one plate, when the caller has it."""
     theta, t, h, head = (np.asarray(v, dtype=float) for v in (theta_rad, t_mm, h_mm, head_mm))
-    upper = root_joint_mm_per_N(theta[..., 1:], t[..., 1:], h[..., 1:], plate_mm, depth_mm, E_prime_MPa)
-    c = np.maximum(head[..., 1:] - head[..., :-1], 0.0)
-    thick = plate_mm + t[..., 1:]
+    joint = None if joints_mm_per_N is None else np.asarray(joints_mm_per_N)[..., 1:]
+    upper = upper_layer_terms(
+        theta[..., 1:], t[..., 1:], h[..., 1:], plate_mm, depth_mm, E_prime_MPa, G_MPa, constants, joint
+    )
+    return plate_overhang_mm_per_N(np.maximum(head[..., 1:] - head[..., :-1], 0.0), upper)
+
+
+def upper_layer_terms(
+    theta_rad, t_mm, h_mm, plate_mm: float, depth_mm: float, E_prime_MPa: float, G_MPa: float,
+    constants: tuple[float, float] = LOCKED_FITTED, joint_mm_per_N=None,
+) -> tuple:  # fmt: skip
+    """(a x the root joint, the overhang's E'I and kGA, its root spring) of the plate under
+    layers of cells given as arrays (theta in rad, t, h in mm): what :func:`locked_plates_mm_per_N`
+    takes from the open layer above the plate alone (the design's start reuses them over its
+    table of cells, whatever layer is locked under it); ``joint_mm_per_N``: the cells' root
+    joint (model.plate_joint), when the caller has it."""
+    a, k = constants
+    upper = (
+        root_joint_mm_per_N(theta_rad, t_mm, h_mm, plate_mm, depth_mm, E_prime_MPa)
+        if joint_mm_per_N is None
+        else joint_mm_per_N
+    )
+    thick = plate_mm + np.asarray(t_mm, dtype=float)
     EI, kGA = section_EI_kGA(depth_mm, thick, E_prime_MPa, G_MPa)
-    root = k * E_prime_MPa * depth_mm * thick**2
-    overhang = 0.5 * (c**3 / (3.0 * EI) + c / kGA + c * c / root)
-    return as_value(a * np.asarray(upper) + overhang)
+    return a * np.asarray(upper), EI, kGA, k * E_prime_MPa * depth_mm * thick**2
 
 
-def scene_locked_plates_mm_per_N(scene, theta_rad, t_mm, h_mm, head_mm) -> Any:
+def plate_overhang_mm_per_N(c_mm, upper_terms: tuple) -> Any:
+    """:func:`locked_plates_mm_per_N` of feet standing ``c_mm`` (>= 0) beyond the locked layer's
+    wall heads, the layer above given by its :func:`upper_layer_terms`."""
+    joint, EI, kGA, root = upper_terms
+    c = c_mm
+    return as_value(joint + 0.5 * (c**3 / (3.0 * EI) + c / kGA + c * c / root))
+
+
+def scene_locked_plates_mm_per_N(scene, theta_rad, t_mm, h_mm, head_mm, joints_mm_per_N=None) -> Any:
     """:func:`locked_plates_mm_per_N` of the part a model.load_path.MemberScene describes."""
-    return locked_plates_mm_per_N(theta_rad, t_mm, h_mm, head_mm, *joint_scene(scene), scene.G_MPa)
+    G, fitted = scene.G_MPa, LOCKED_FITTED
+    return locked_plates_mm_per_N(theta_rad, t_mm, h_mm, head_mm, *joint_scene(scene), G, fitted, joints_mm_per_N)
 
 
 def by_regime(locked_plates_mm_per_N, lock_N) -> np.ndarray:

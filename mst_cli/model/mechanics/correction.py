@@ -355,14 +355,14 @@ def _weighted_sum(terms: np.ndarray, coef: np.ndarray) -> np.ndarray:
     return np.einsum("...j,j->...", terms, coef)
 
 
-def _lock_ratios(keys, t_over_L, theta_rad, sigma):
+def _lock_ratios(keys, t_over_L, theta_rad, sigma, clipped=None):
     """exp(sigma g(x, theta, sigma')) for each fit in ``keys``, one design matrix for all: the
     leading sigma is the cell's own (held in [0, the largest fitted]), so the ratio tends to 1
     with the stroke; the terms g are taken at the nearest fitted cell, (x, theta) in the box and
     sigma' = :func:`_on_cells`. The lock force adds the wall-pinch hinge on the lock-stroke
-    fit's own ln q (HINGE_TERMS)."""
+    fit's own ln q (HINGE_TERMS). ``clipped``: :func:`_clipped` (t/L, theta), when the caller has it."""
     sig = np.clip(np.asarray(sigma, dtype=float), 0.0, _fit()["fitted_on"]["stroke_ratio_range"][1])
-    x, theta = _clipped(t_over_L, theta_rad)
+    x, theta = _clipped(t_over_L, theta_rad) if clipped is None else clipped
     terms = lock_design_matrix(x, theta, _on_cells(x, theta, sig))
     hinge = _coef("lock_force_hinge") if "lock_force" in keys else ()
     ln = {key: sig * _weighted_sum(terms, _coef(key)) for key in (*keys, *(("lock_stroke",) if len(hinge) else ()))}
@@ -378,10 +378,12 @@ def _lock_ratio(key, t_over_L, theta_rad, sigma):
     return _lock_ratios((key,), t_over_L, theta_rad, sigma)[0]
 
 
-def lock_factors(t_over_L: ArrayLike, theta_rad: ArrayLike, sigma: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
+def lock_factors(
+    t_over_L: ArrayLike, theta_rad: ArrayLike, sigma: ArrayLike, clipped: tuple | None = None
+) -> tuple[np.ndarray, np.ndarray]:
     """(:func:`lock_force_factor`, :func:`lock_stroke_factor`) from one design matrix: what
     the design loop's L0 kernel needs per call, at half the cost of the two calls."""
-    force, stroke = _lock_ratios(("lock_force", "lock_stroke"), t_over_L, theta_rad, sigma)
+    force, stroke = _lock_ratios(("lock_force", "lock_stroke"), t_over_L, theta_rad, sigma, clipped)
     return (
         np.minimum(force, _fit()["lock_force"]["ratio_range"][1]),
         np.minimum(stroke, _fit()["lock_stroke"]["ratio_range"][1]),
@@ -415,6 +417,14 @@ def stiffness_factor(t_over_L: ArrayLike, theta_rad: ArrayLike) -> np.ndarray:
     """
     x, theta = _clipped(t_over_L, theta_rad)
     return np.exp(_weighted_sum(design_matrix(x, theta), _coef()))
+
+
+def spring_factors(t_over_L: ArrayLike, theta_rad: ArrayLike, sigma: ArrayLike) -> tuple:
+    """(:func:`stiffness_factor`, then :func:`lock_factors`) with (t/L, theta) held in the fitted
+    box once: the three corrections the L0 kernel applies (model.mechanics.spring)."""
+    clipped = _clipped(t_over_L, theta_rad)
+    stiffness = np.exp(_weighted_sum(design_matrix(*clipped), _coef()))
+    return stiffness, *lock_factors(t_over_L, theta_rad, sigma, clipped)
 
 
 def expected_error_rel(t_over_L: ArrayLike, theta_rad: ArrayLike, t_mm: ArrayLike | None = None) -> np.ndarray:

@@ -240,8 +240,8 @@ def spring_arrays(
         L = wall_centreline_length_mm(theta_rad, t_mm, h_mm)
         t_over_L = t_mm / L
         sigma = correction.stroke_ratio(d_lock, L, theta_rad)
-        k = k * correction.stiffness_factor(t_over_L, theta_rad)
-        force_factor, stroke_factor = correction.lock_factors(t_over_L, theta_rad, sigma)
+        stiffness_factor, force_factor, stroke_factor = correction.spring_factors(t_over_L, theta_rad, sigma)
+        k = k * stiffness_factor
         R = k * d_lock * force_factor
         d_lock = d_lock * stroke_factor
         R = np.minimum(R, k * d_lock)  # walls only soften before the lock
