@@ -11,7 +11,12 @@ the cover, which ties the two walls), the load's lever on its top a w/2 (1/3: a 
 pressure), and the cover's end turning into the wall's top, a spring c_r E'D c^2 (c the cover's
 thickness: an end built into a body of the same modulus) in series with the column.
 
-    PYTHONPATH=. .venv/bin/python studies/slot_wall_turn.py member_regimes.csv --designs 40 --seed 1
+    PYTHONPATH=. .venv/bin/python studies/slot_wall_turn.py studies/data/member_regimes.csv --designs 40 --seed 1 \
+        --check studies/data/member_regimes_bundled.csv
+
+Beside each design it prints the cover alone on the rung (the walls rigid) against the closed
+form's cover clamped at the slot's edges and layer 1's roots turning into the cover, which the
+closed form lacks (taken as model.plate_joint takes them on a plate).
 """
 
 from __future__ import annotations
@@ -21,6 +26,7 @@ import csv
 import itertools
 import math
 import tempfile
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -28,6 +34,7 @@ import numpy as np
 import mst_cli as mst
 from mst_cli.model import load_path as lp
 from mst_cli.model.beams import plain_section, section_EI_kGA
+from mst_cli.model.plate_joint import root_joint_mm_per_N
 from studies import member_regimes as mr
 
 C_K = (1.0, 2.0, 4.0, 8.0, 16.0)  # the grid searched
@@ -62,9 +69,11 @@ def together_um_per_N(scene, head_mm: float, pad_mm: float, t_bottom_mm: float, 
 
 
 def over_slot_rows(path: Path, designs: int, seed: int) -> list[tuple]:
-    """(name, cover mm, scene, layer 1's wall heads, outer pad and t, the rung's together um/N) of
-    the CSV's regime-1 rows whose layer 1 stands over the slot (sampled designs rebuilt from the
-    seed, others from configs/<name>.yaml)."""
+    """(name, cover mm, scene, layer 1's wall heads, outer pad and t, the rung's together, the
+    rung's cover alone, the closed form's cover clamped on rigid walls, layer 1's roots turning
+    into the cover as model.plate_joint takes them on a plate; um/N) of the CSV's regime-1 rows
+    whose layer 1 stands over the slot (sampled designs rebuilt from the seed, others from
+    configs/<name>.yaml)."""
     with path.open() as f:
         rows = {r["name"]: r for r in csv.DictReader(f) if r["regime"] == "1"}
     out = []
@@ -78,8 +87,30 @@ def over_slot_rows(path: Path, designs: int, seed: int) -> list[tuple]:
             pad, head, _, _ = lp.layer_supports(s, theta, t, h)
             together = float(r["rung_base"]) - float(r["rung_cover"]) - float(r["rung_slot_walls"])
             if s.half_slot_mm > head[0] and together > 0.0:
-                out.append((name, s.cover_mm, s, float(head[0]), float(pad[0]), float(t[0]), together))
+                clamped = sum(lp.cover_parts_mm_per_N(replace(s, slot_height_mm=0.0), t[0], pad[0], head[0]))
+                roots = root_joint_mm_per_N(theta[0], t[0], h[0], s.cover_mm, s.depth_mm, s.E_prime_MPa)
+                cover = (float(r["rung_cover"]), 1e3 * float(clamped), 1e3 * float(roots))
+                out.append((name, s.cover_mm, s, float(head[0]), float(pad[0]), float(t[0]), together, *cover))
     return out
+
+
+def errors(data: list[tuple], c: tuple) -> list[float]:
+    """log(variant / rung) of the walls' turn with the constants ``c`` per row of ``data``."""
+    return [math.log(max(together_um_per_N(d[2], d[3], d[4], d[5], *c), 1e-9) / d[6]) for d in data]
+
+
+def table(data: list[tuple], variants: tuple) -> None:
+    """Per design: the rung's together and each variant's error; the cover alone on the rung
+    against the closed form's clamped cover and the roots it lacks."""
+    print(
+        "| design | cover, mm | rung, um/N | "
+        + " | ".join(label for label, _ in variants)
+        + " | cover alone: rung / beam + roots |"
+    )
+    print("|---" * (4 + len(variants)) + "|")
+    for d in data:
+        cells = " | ".join(f"{math.expm1(errors([d], c)[0]):+.0%}" for _, c in variants)
+        print(f"| {d[0]} | {d[1]:g} | {d[6]:.2f} | {cells} | {d[7]:.2f} / {d[8]:.2f} + {d[9]:.2f} |")
 
 
 def main() -> None:
@@ -87,25 +118,23 @@ def main() -> None:
     ap.add_argument("csv", type=Path, help="a CSV of studies/member_regimes.py")
     ap.add_argument("--designs", type=int, default=0, help="how many designs its run sampled")
     ap.add_argument("--seed", type=int, default=1, help="and its seed")
+    ap.add_argument("--check", type=Path, help="another such CSV (e.g. the bundled designs'): the same constants on it")
     args = ap.parse_args()
     data = over_slot_rows(args.csv, args.designs, args.seed)
 
-    def errors(c: tuple) -> list[float]:
-        return [math.log(max(together_um_per_N(d[2], d[3], d[4], d[5], *c), 1e-9) / d[6]) for d in data]
-
     def rms(c: tuple) -> float:
-        return math.sqrt(float(np.mean(np.square(errors(c)))))
+        return math.sqrt(float(np.mean(np.square(errors(data, c)))))
 
     today, derived = (1.0, 1.0, 0.0), (4.0, 1.0 / 3.0, 0.0)
     best = min(itertools.product(C_K, LEVER, C_R), key=rms)
     print(f"{len(data)} designs with layer 1 over the slot; rms of log(variant / rung):")
-    variants = (("closed form today", today), ("held from swaying, a triangle", derived), ("best on the grid", best))
+    variants = (("today", today), ("held, triangle", derived), ("best", best))
     for label, c in variants:
         print(f"  {label} (c_k {c[0]:g}, lever {c[1]:.2f}, c_r {c[2]:g}): {rms(c):.3f}")
-    print("| design | cover, mm | rung, um/N | today | held, triangle | best |")
-    print("|---|---|---|---|---|---|")
-    for d, *e in zip(data, errors(today), errors(derived), errors(best)):
-        print(f"| {d[0]} | {d[1]:g} | {d[6]:.2f} | " + " | ".join(f"{math.expm1(x):+.0%}" for x in e) + " |")
+    table(data, variants)
+    if args.check is not None:
+        print(f"\n{args.check}, the same constants:")
+        table(over_slot_rows(args.check, 0, args.seed), variants)
 
 
 if __name__ == "__main__":
