@@ -89,8 +89,11 @@ def test_members_far_stiffer_than_the_layers_give_the_layers_alone(scene):
         plates_mm_per_N=tuple(1e-9 * p for p in parts.plates_mm_per_N),
         joints_mm_per_N=tuple(1e-9 * j for j in parts.joints_mm_per_N),
         locked_plates_mm_per_N=tuple(1e-9 * x for x in parts.locked_plates_mm_per_N),
+        two_locked_plates_mm_per_N=tuple(1e-9 * x for x in parts.two_locked_plates_mm_per_N),
         cover_mm_per_N=1e-9 * parts.cover_mm_per_N,
         cover_contact_mm_per_N=1e-9 * parts.cover_contact_mm_per_N,
+        cover_locked_mm_per_N=1e-9 * parts.cover_contact[3] + 1e-9 * parts.cover_mm_per_N,
+        cover_contact_locked_mm_per_N=1e-9 * parts.cover_contact[2],
     )
     F = np.linspace(0.5, 30.0, 7)
     near = pose_field_T(geometry, units_tilt_laws(geometry, material, stiff), F, (4.0, -3.0))

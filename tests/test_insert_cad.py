@@ -22,6 +22,8 @@ from mst_cli.errors import InputError
 from mst_cli.model import load_path as lp
 from mst_cli.model.assembly import InsertPlate
 from mst_cli.model.components import INSERT_MATERIALS
+from mst_cli.model.housing_base import BEARING
+from mst_cli.model.plate_joint import root_joint_mm_per_N
 from mst_cli.sensor.document import load_design_document, parse_document
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -238,14 +240,24 @@ def test_crush_ribs_hold_the_magnet_by_their_interference(forward):
     assert hi - lo == pytest.approx(g.magnet.thickness_mm + g.housing.pocket_clearance_mm, abs=1e-4)
 
 
+def local_drop(g, E: float, D: float, outside_mm: float) -> float:
+    """Layer 1's roots turning into the cover (a plate as thick as it) and its feet's bearing at
+    the slot's edge, ``outside_mm`` from it (model.housing_base), mm/N."""
+    cell, c = g.layers[0], g.housing.cover_mm
+    roots = root_joint_mm_per_N(cell.theta_rad, cell.t_mm, cell.h_mm, c, D, E)
+    return roots + 0.5 * math.exp(-((outside_mm / c) ** 2)) / (BEARING * E * D)
+
+
 def test_the_cover_bends_only_where_layer_1_lands_inside_the_slot():
-    """The closed form's cover member (the housing's slot walls are TPU columns w wide and H tall,
-    k = E'I/H against a turn, bonded to the cover; P = F/2 a side). Layer 1's walls past the
-    slot's edge stand on a column: the cover does not bend over the slot (nothing lands on the
-    board), the foot only squeezes the column and turns it by its lever a about the column's
-    centre line, P H/(E' w D) + a phi with phi = P a / (k + 1/B), B = (L/2)/E'I of the cover
-    under layer 1's pad (which spans the narrow slot). Inside the slot, the cover bends, and only
-    that part stops on the board; the columns then carry the squeeze alone."""
+    """The closed form's cover member (model.housing_base: the slot walls are TPU columns w wide
+    and H tall, their tops tied by the cover, E'I/H / (1 - (3/4) kappa/(1 + kappa)) against a
+    turn, kappa = (E'cD/(L/2)) H^3/(3 E'I); P = F/2 a side). Layer 1's
+    walls past the slot's edge stand on a column: the cover does not bend over the slot (nothing
+    lands on the board), the foot squeezes the column and turns it by its lever a about the
+    column's centre line, P H/(E' w D) + a phi with phi = P a / (k + 1/B), B = (L/2)/E'I of the
+    cover under layer 1's pad (which spans the narrow slot); layer 1's roots turn into the cover
+    and the feet bear on the slot's edge. Inside the slot, the cover bends, and only that part
+    stops on the board; the columns then carry the squeeze, the roots and the bearing."""
     base = {"layers": [{"theta_deg": 20, "t_mm": 0.6, "h_mm": 3.0}]}
     narrow = parse_document({**base, "magnetometer": {"board": "bare-qfn"}})
     g, m = narrow.geometry(), narrow.material
@@ -256,20 +268,23 @@ def test_the_cover_bends_only_where_layer_1_lands_inside_the_slot():
     EI = E * D * (g.housing.cover_mm + g.layers[0].t_mm) ** 3 / 12
     P, drop = 0.5, []
     for w in (g.slot_x_mm[0] + 0.5 * g.base_length_mm, 0.5 * g.base_length_mm - g.slot_x_mm[1]):
-        k, a = E * D * w**3 / 12 / H, L2 + 0.5 * w - head
+        kappa = (E * g.housing.cover_mm * D / L2) * H**3 / (3 * E * D * w**3 / 12)  # the cover's tie
+        k, a = E * D * w**3 / 12 / H / (1 - 0.75 * kappa / (1 + kappa)), L2 + 0.5 * w - head
         drop.append(P * H / (E * w * D) + a * P * a / (k + EI / L2))
+    local = local_drop(g, E, D, head - L2)
     parts = lp.members(g, m)
     assert parts.cover_contact_mm_per_N == 0.0  # no bending over the slot: nothing lands
-    assert parts.cover_mm_per_N == pytest.approx(0.5 * sum(drop), rel=1e-12)
+    assert parts.cover_mm_per_N == pytest.approx(0.5 * sum(drop) + local, rel=1e-12)
     wide = parse_document(base)
     g = wide.geometry()
     assert 0.5 * (g.slot_x_mm[1] - g.slot_x_mm[0]) > lp.wall_head_x_mm(g.layers[0])
     H = g.z_cover_bottom_mm - g.z_board_bottom_mm
     widths = (g.slot_x_mm[0] + 0.5 * g.base_length_mm, 0.5 * g.base_length_mm - g.slot_x_mm[1])
     squeeze = 0.5 * sum(P * H / (E * w * D) for w in widths)
+    local = local_drop(g, E, D, 0.5 * (g.slot_x_mm[1] - g.slot_x_mm[0]) - lp.wall_head_x_mm(g.layers[0]))
     parts = lp.members(g, m)
     assert parts.cover_contact_mm_per_N > 10 * squeeze  # the bending over the slot, which lands
-    assert parts.cover_mm_per_N - parts.cover_contact_mm_per_N == pytest.approx(squeeze, rel=1e-12)
+    assert parts.cover_mm_per_N - parts.cover_contact_mm_per_N == pytest.approx(squeeze + local, rel=1e-12)
 
 
 @pytest.mark.slow

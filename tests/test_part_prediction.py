@@ -119,9 +119,10 @@ def test_the_design_loop_predicts_what_simulate_does(forward):
     # with the plates close its own: caps per layer; the cover's drop over the slot stops on the
     # board after the air under it (at 22 N here); each plate over a locked layer adds its share in
     # the regimes it acts in (model.past_lock)
-    caps, over_slot, slot_walls, locked = lp.layer_caps_mm_per_N(scene, theta, t, h)
-    contact = (over_slot, g.housing.chip_clearance_mm)
-    extra = by_regime(locked, capped_lock_forces_N(k, dl, R, caps))
+    caps, over_slot, slot_walls, locked, (over_locked, walls_locked) = lp.layer_caps_mm_per_N(scene, theta, t, h)
+    delta = over_locked + walls_locked - over_slot - slot_walls  # the cover under a locked layer 1
+    contact = (over_slot, g.housing.chip_clearance_mm, over_locked, delta)
+    extra = by_regime(locked[0], capped_lock_forces_N(k, dl, R, caps), locked[1])
     R_sorted, S, _, _ = regime_kernel(k, dl, kl, g.gap0_mm, field, R, over_slot + slot_walls, caps, contact, extra)
     np.testing.assert_allclose(R_sorted, part.lock_forces_N, rtol=1e-12)
     np.testing.assert_allclose(S, [r.sensitivity_secant_per_N for r in part.regimes], rtol=1e-9)

@@ -13,7 +13,14 @@ import mst_cli as mst
 from mst_cli.model import load_path as lp
 from mst_cli.model.beams import section_EI_kGA
 from mst_cli.model.mechanics import layer_laws
-from mst_cli.model.past_lock import by_regime, locked_plates_mm_per_N
+from mst_cli.model.past_lock import (
+    LOCKED_FITTED,
+    by_regime,
+    locked_plates_mm_per_N,
+    over_two_locked_mm_per_N,
+    plate_overhang_mm_per_N,
+    upper_layer_terms,
+)
 from mst_cli.model.plate_joint import root_joint_mm_per_N
 from mst_cli.model.response import part_stack
 from studies.locked_plates import closed_form_um_per_N
@@ -81,3 +88,34 @@ def test_the_forward_model_adds_each_plate_over_a_locked_layer_in_its_regime_onl
     assert gained[2] - gained[1] == pytest.approx(
         with_plates.locked_plates_mm_per_N[0] * (edges[2] - edges[1]), rel=1e-9
     )
+
+
+def test_over_two_locked_blocks_the_upper_block_hangs_from_the_lower_one():
+    """Block j inside block j - 1 (or flush with it): plate j over one block (its overhang from
+    block j's edge). Standing out by a with the feet at its edge (no thin overhang): the composite
+    cantilever by hand, P a^3/(3 E'I) + P a/kGA + P a^2/(k E'D d^2), d = 2p + h_j + t_(j+1), beyond
+    the upper root's a x joint. Continuous as block j's edge passes block j - 1's: a sweep of it
+    has no jump."""
+    t, h = np.array([0.5, 0.5, 0.6]), np.array([2.0, 2.2, 2.4])
+    theta = np.radians(40.0)
+    upper = upper_layer_terms(theta, t[2], h[2], PLATE, DEPTH, E_PRIME, G)
+    inside = over_two_locked_mm_per_N(t, h, [12.0, 11.5, 12.5], PLATE, DEPTH, E_PRIME, G, upper)
+    assert inside == pytest.approx(plate_overhang_mm_per_N(1.0, upper), rel=1e-12)
+    a, k = 1.2, LOCKED_FITTED[1]
+    d = 2 * PLATE + h[1] + t[2]
+    EI, kGA = section_EI_kGA(DEPTH, d, E_PRIME, G)
+    feet_at_edge = over_two_locked_mm_per_N(t, h, [12.0, 12.0 + a, 12.0 + a], PLATE, DEPTH, E_PRIME, G, upper)
+    by_hand = 0.5 * (a**3 / (3 * EI) + a / kGA + a * a / (k * E_PRIME * DEPTH * d * d))
+    assert feet_at_edge == pytest.approx(upper[0] + by_hand, rel=1e-12)
+    mids = 12.0 + np.linspace(-0.2, 0.2, 401)
+    sweep = np.array([over_two_locked_mm_per_N(t, h, [12.0, m, 13.0], PLATE, DEPTH, E_PRIME, G, upper) for m in mids])
+    steps = np.abs(np.diff(sweep))
+    assert steps.max() < 5 * np.median(steps) + 1e-12  # no jump where block j's edge meets block j - 1's
+
+
+def test_a_plate_over_two_locked_layers_acts_only_when_both_are():
+    """by_regime with the second figure: plate j takes it while layers j - 1 and j are locked and
+    j + 1 open, the first while only layer j is (three layers, by hand)."""
+    X, X2 = [1.0, 2.0], [1.0, 5.0]
+    np.testing.assert_array_equal(by_regime(X, [1.0, 5.0, 9.0], X2), [0.0, 1.0, 5.0, 0.0])  # bottom first
+    np.testing.assert_array_equal(by_regime(X, [5.0, 1.0, 9.0], X2), [0.0, 2.0, 5.0, 0.0])  # the middle first

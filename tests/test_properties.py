@@ -58,5 +58,10 @@ def test_simulate_valid_designs_is_finite_monotone_and_silent(layers):
             r = simulate(SensorGeometry(cells), Material(), points_per_regime=40)
     assert np.all(np.isfinite(r.dB_rel)) and np.all(np.diff(r.dB_rel) >= 0)
     assert np.all(np.diff(r.force_N) >= 0) and np.all(np.diff(r.displacement_mm) >= 0)
+    # members soft enough to close the whole gap inside the range: said, and past it the field holds
+    reaches = r.gap_min_mm <= 0.0
+    assert reaches == any("the magnet reaches the chip" in w for w in r.warnings)
+    contact_N = r.force_N[np.argmax(r.gap_mm <= 0.0)] if reaches else np.inf
     for reg in r.regimes:
-        assert np.isfinite(reg.sensitivity_secant_per_N) and reg.sensitivity_secant_per_N > 0
+        assert np.isfinite(reg.sensitivity_secant_per_N)
+        assert reg.sensitivity_secant_per_N > 0 or reg.force_from_N >= contact_N

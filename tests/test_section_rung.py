@@ -70,10 +70,15 @@ def test_the_forward_model_and_the_design_kernel_add_the_same_correction(forward
     )
     scene = lp.member_scene(g, doc.material)
     theta, t, h = (np.array([getattr(c, n) for c in g.layers]) for n in ("theta_rad", "t_mm", "h_mm"))
-    caps, over_slot, slot_walls, locked = lp.layer_caps_mm_per_N(scene, theta, t, h)  # with the layers' joints
+    caps, over_slot, slot_walls, locked, (over_locked, walls_locked) = lp.layer_caps_mm_per_N(
+        scene, theta, t, h
+    )  # with the layers' joints
     field = lambda gap: field_magnitude_T(gap, g, part.field_model)  # noqa: E731
-    contact = (over_slot, g.housing.chip_clearance_mm)
-    both = by_regime(locked, capped_lock_forces_N(k, dl, R, caps)) + run_on(extra)  # the plates over locked layers too
+    delta = over_locked + walls_locked - over_slot - slot_walls  # the cover under a locked layer 1
+    contact = (over_slot, g.housing.chip_clearance_mm, over_locked, delta)
+    both = by_regime(locked[0], capped_lock_forces_N(k, dl, R, caps), locked[1]) + run_on(
+        extra
+    )  # the plates over locked layers too
     _, S, _, _ = regime_kernel(k, dl, kl, g.gap0_mm, field, R, over_slot + slot_walls, caps, contact, both)
     np.testing.assert_allclose(S, [r.sensitivity_secant_per_N for r in part.regimes], rtol=1e-9)
 

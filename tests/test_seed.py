@@ -115,10 +115,13 @@ def test_members_with_one_layer_varied_are_the_whole_stacks_members_bit_for_bit(
     for j in range(n_layers):
         index = np.broadcast_to(chosen, (len(table.u), n_layers)).copy()
         index[:, j] = np.arange(len(table.u))
-        caps, cover, (over_slot, air), _ = problem.part_members(
+        caps, cover, (over_slot, air, over_locked, delta), _ = problem.part_members(
             table.theta_deg[index], table.t_mm[index], table.h_mm[index]
         )
         caps_j, cover_at, _ = table.members_with(problem, chosen, j)
         np.testing.assert_array_equal(caps_j, caps)
+        R1 = problem.R_target[0]  # layer 1 locks first, at its target: the cover under it stiffens
         for F in (0.5, 20.0):
-            np.testing.assert_array_equal(cover_at(F), cover * F - np.maximum(over_slot * F - air, 0.0))
+            moved = over_slot * min(F, R1) + over_locked * max(F - R1, 0.0)
+            want = cover * F + delta * max(F - R1, 0.0) - np.maximum(moved - air, 0.0)
+            np.testing.assert_allclose(cover_at(F), want, rtol=1e-14, atol=1e-18)

@@ -36,7 +36,7 @@ import numpy as np
 from mst_cli.cad.checks import Check
 from mst_cli.model.cover_air import air_keeping_cover_off_mm
 from mst_cli.model.general_load import linear_response, loaded_stack
-from mst_cli.model.load_path import ACCURACY_BUDGET_REL, capped_units, cover_landing_N, motion_shares
+from mst_cli.model.load_path import ACCURACY_BUDGET_REL, capped_units, cover_landing_N, first_lock_N, motion_shares
 from mst_cli.model.mechanics import layer_laws
 from mst_cli.model.mechanics import whole_part as wp
 from mst_cli.model.member_pose import MEMBER_POSE_FIGURES
@@ -63,6 +63,7 @@ def check_whole_part(design, progress: Callable[[str], None] | None = None, spac
     laws = layer_laws(g.layers, m, design.mechanics)
     parts = model_members(g, m, laws, wp.FINGERTIP_PATCH_MM, design.whole_part, design.section_rung)
     stated = motion_shares(Stack(laws), parts)
+    lands_N = cover_landing_N(parts, first_lock_N(laws, parts))
     locked_sets = wp.regime_locked(Stack(tuple(capped_units(laws, parts))))  # the part's lock order
     options = wp.PartOptions(spacing_mm=spacing_mm)
     say(f"whole-part rung: {2 * len(locked_sets)} solves (each regime as printed and with its members rigid)")
@@ -94,10 +95,10 @@ def check_whole_part(design, progress: Callable[[str], None] | None = None, spac
         f"({100 * worst['error_rel']:+.1f} %, budget {100 * worst['budget_rel']:.0f} %; its secant S "
         f"{worst['stated_secant_uT_per_N']:.4g}). The member the closed "
         f"form misses most there is the {MEMBER_WORDS[name]}: {1e3 * blame[name]['rung']:.3g} um/N in the rung against "
-        f"{1e3 * blame[name]['stated']:.3g} stated; {remedy(name, g, m, parts, stated)}"
+        f"{1e3 * blame[name]['stated']:.3g} stated; {remedy(name, g, m, lands_N, stated, design.mechanics)}"
     )
-    if name != "housing" and cover_landing_N(parts) < (1.0 + OVERLOAD_REL) * stated[-1]["force_N"][1]:
-        note += f"; besides, {remedy('housing', g, m, parts, stated)}"  # a landing no section has
+    if name != "housing" and lands_N < (1.0 + OVERLOAD_REL) * stated[-1]["force_N"][1]:
+        note += f"; besides, {remedy('housing', g, m, lands_N, stated, design.mechanics)}"  # a landing no section has
     return Check("whole_part", False, measured, expected, note, values=values)
 
 
@@ -156,12 +157,12 @@ def member_gaps(g, m, locked, said: dict, options) -> dict:
     }
 
 
-def remedy(member: str, g, m, parts, stated: list[dict]) -> str:
-    """What keeps ``member`` within what the design states (docs/design.md 4.6 and 4.7)."""
+def remedy(member: str, g, m, lands: float, stated: list[dict], mechanics: str) -> str:
+    """What keeps ``member`` within what the design states (docs/design.md 4.6 and 4.7); ``lands``:
+    where the design's cover lands on the board, N; ``mechanics``: its layers' rung."""
     end_N = stated[-1]["force_N"][1]
-    if member == "housing" and cover_landing_N(parts) < (1.0 + OVERLOAD_REL) * end_N:
-        air = air_keeping_cover_off_mm(g, m, end_N)
-        lands = cover_landing_N(parts)
+    if member == "housing" and lands < (1.0 + OVERLOAD_REL) * end_N:
+        air = air_keeping_cover_off_mm(g, m, end_N, mechanics=mechanics)
         return (
             f"the cover lands on the board at {lands:.3g} N in the design's model, a contact the printed body "
             f"does not have: housing.chip_clearance_mm >= {math.ceil(air * 100) / 100:.2f} mm keeps it off"

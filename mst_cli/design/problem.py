@@ -76,7 +76,7 @@ from mst_cli.model.mechanics.depth import web_modulus_MPa
 from mst_cli.model.mechanics.spring import spring_arrays
 from mst_cli.model.past_lock import by_regime
 from mst_cli.model.response import capped_lock_forces_N, field_magnitude_T, regime_kernel
-from mst_cli.model.stack import run_on
+from mst_cli.model.stack import contact_force_N, run_on
 from mst_cli.sensor.as_printed import housing_as_printed
 from mst_cli.sensor.sections import DEFAULT_OBJECTIVE, OBJECTIVE_TERMS
 
@@ -352,16 +352,14 @@ class DesignProblem:
         stacks (with the joints of the layer under each, model.plate_joint), walls as printed, the
         cover's over each force band between ``edges_N`` (..., bands + 1): its slot walls, and its
         bending over the slot until it lands on the board (the band's mean, as a secant sees it)."""
-        caps, cover, (over_slot, air_mm), _ = self.part_members(theta_deg, t_mm, h_mm)
-        cap, plates, slot_walls = caps[..., -1], caps[..., :-1], cover - over_slot
-        lands_N = air_mm / np.maximum(over_slot, 1e-300)
-        return cap, plates, slot_walls[..., None] + over_slot[..., None] * moving_share(lands_N, edges_N)
-
-    def members_mm_per_N(self, theta_deg: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike, edges_N: ArrayLike) -> tuple:
-        """(the cap's (...), the plates' and cover's in series over each band (..., bands))
-        compliance of candidate stacks (:meth:`member_parts`)."""
-        cap, plates, cover = self.member_parts(theta_deg, t_mm, h_mm, edges_N)
-        return cap, plates.sum(axis=-1, keepdims=True) + cover
+        caps, cover, (over_slot, air_mm, over_locked, delta), _ = self.part_members(theta_deg, t_mm, h_mm)
+        cap, plates, edges = caps[..., -1], caps[..., :-1], np.asarray(edges_N, dtype=float)
+        R1 = edges[..., 1:2]  # layer 1 locks first, at the first band's end (the targets rise)
+        past = edges[..., :-1] >= R1
+        lands_N = contact_force_N(R1[..., 0], over_slot, over_locked, air_mm)
+        bending = np.where(past, over_locked[..., None], over_slot[..., None]) * moving_share(lands_N, edges)
+        walls = np.where(past, (cover + delta - over_locked)[..., None], (cover - over_slot)[..., None])
+        return cap, plates, walls + bending
 
     def printed_t_mm(self, t_mm: ArrayLike) -> np.ndarray:
         """Walls as printed (drawn + printer.wall_offset_mm, floored): what the members rest on."""
@@ -370,11 +368,12 @@ class DesignProblem:
 
     def part_members(self, theta_deg: ArrayLike, t_mm: ArrayLike, h_mm: ArrayLike) -> tuple:
         """(each layer's cap (..., n): the plate above it or the cap, and its joints (model.plate_joint);
-        the cover; (its bending over the slot, the air under it): what stops on the board; the
-        plates over locked layers (..., n - 1), model.past_lock) of candidate stacks."""
+        the cover; (its bending over the slot, the air under it, that bending once layer 1 is
+        locked, the cover's change then): model.stack's contact; the plates over locked layers
+        (..., n - 1), model.past_lock) of candidate stacks."""
         t = self.printed_t_mm(t_mm)
-        caps, over_slot, slot_walls, locked = layer_caps_mm_per_N(self.members, np.radians(theta_deg), t, h_mm)
-        return caps, over_slot + slot_walls, (over_slot, self.members.cover_air_mm), locked
+        caps, over, walls, locked, (over_l, walls_l) = layer_caps_mm_per_N(self.members, np.radians(theta_deg), t, h_mm)
+        return caps, over + walls, (over, self.members.cover_air_mm, over_l, over_l + walls_l - over - walls), locked
 
     def _responses_of(
         self, laws: tuple, h_mm: np.ndarray, members: tuple | None = None
@@ -387,7 +386,7 @@ class DesignProblem:
         Rc = capped_lock_forces_N(k, d_lock, R, cap)
         held = self.regime_extra_mm_per_N  # the rung's correction, of the problem's stacks (not one cell's)
         section = run_on(held) if held is not None and len(held) == Rc.shape[-1] else 0.0
-        extra = None if members is None else by_regime(locked, Rc) + section
+        extra = None if members is None else by_regime(locked[0], Rc, locked[1]) + section
         _, S, gap, B = regime_kernel(k, d_lock, k_locked, gap0, self.field_T, R, rest, cap, contact, extra, Rc)
         # the chip's largest field on the way is at the smallest gap: a stack whose members let
         # the magnet reach the chip (gap <= 0 at the last lock) saturates it on the way there

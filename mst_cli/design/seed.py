@@ -36,11 +36,17 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from mst_cli.design.problem import TINY
-from mst_cli.model.load_path import cap_mm_per_N, cover_parts_mm_per_N, layer_supports, plates_mm_per_N
+from mst_cli.model.load_path import (
+    cap_mm_per_N,
+    cover_parts_locked_mm_per_N,
+    cover_parts_mm_per_N,
+    layer_supports,
+    plates_mm_per_N,
+)
 from mst_cli.model.mechanics.spring import layer_displacement_mm
-from mst_cli.model.past_lock import plate_overhang_mm_per_N, upper_layer_terms
+from mst_cli.model.past_lock import over_two_locked_mm_per_N, plate_overhang_mm_per_N, upper_layer_terms
 from mst_cli.model.plate_joint import joint_scene, plates_beside, root_joint_mm_per_N
-from mst_cli.model.stack import capped_lock_force_N
+from mst_cli.model.stack import capped_lock_force_N, contact_drop_mm
 
 if TYPE_CHECKING:
     from mst_cli.design.problem import DesignProblem
@@ -103,6 +109,48 @@ class CellTable:
         law = (self.k[cell], self.d_lock[cell], self.R[cell], self.k_locked[cell])
         return float(capped_mm(F1, *law, cap_mm_per_N) - capped_mm(F0, *law, cap_mm_per_N))
 
+    def _locked_plate(self, scene, j: int, at, cell, member) -> np.ndarray:
+        """The plate over layer j - 1, locked in layer j's regime, under layer j's cells (j > 0),
+        model.past_lock: what layer j's cells give it once a run, then only how far their feet
+        overhang; over two blocks when layer j - 2 is locked too (the targets rise)."""
+        assert self._supports is not None  # members_with computed them
+        t, _, head, _, _ = self._supports
+        theta_rad, G = np.radians(self.theta_deg), scene.G_MPa
+        upper = member(("upper",), lambda: upper_layer_terms(theta_rad, t, self.h_mm, *joint_scene(scene), G))
+        if j >= 2:
+            return member(
+                ("two locked", cell(j - 2), cell(j - 1), cell(j)), lambda: self._over_two(scene, j, at, upper)
+            )
+        overhang = lambda: plate_overhang_mm_per_N(np.maximum(head - at(head, j - 1), 0.0), upper)  # noqa: E731
+        return member(("locked", cell(j - 1), cell(j)), overhang)
+
+    def _cover_drop(self, problem: DesignProblem, on_bottom: tuple, at, cell, member):
+        """The cover's drop (cells,) at a force F under layer 1's cells ``on_bottom`` (t, pad,
+        head, theta, h), model.stack.members_drop_mm's: its bending over the slot stopped on the
+        board, both rates changing at layer 1's lock, taken at its target (the targets rise)."""
+        scene, cells = problem.members, len(self.u)
+        t, pad, head, _, h = on_bottom
+        open_ = member(("cover", cell(0)), lambda: cover_parts_mm_per_N(scene, *on_bottom))
+        closed = member(("locked cover", cell(0)), lambda: cover_parts_locked_mm_per_N(scene, t, h, pad, head))
+        (over, walls), (over_l, walls_l) = ((np.broadcast_to(a, (cells,)) for a in pair) for pair in (open_, closed))
+        cover, air, R1 = over + walls, scene.cover_air_mm, problem.R_target[0]
+        delta = over_l + walls_l - cover
+
+        def cover_mm(F: float) -> np.ndarray:
+            moved = contact_drop_mm(F, R1, over, over_l)
+            return cover * F + delta * max(F - R1, 0.0) - np.maximum(moved - air, 0.0)
+
+        return cover_mm
+
+    def _over_two(self, scene, j: int, at, upper: tuple) -> np.ndarray:
+        """Plate j - 1 over locked layers j - 2 and j - 1 under layer j's cells (model.past_lock
+        .over_two_locked_mm_per_N), ``at`` picking each layer's cells, ``upper`` the table's terms."""
+        assert self._supports is not None  # members_with computed them
+        t, _, head, _, _ = self._supports
+        three = lambda a: np.stack(np.broadcast_arrays(at(a, j - 2), at(a, j - 1), a), axis=-1)  # noqa: E731
+        args = (three(t), three(self.h_mm), three(head), *joint_scene(scene), scene.G_MPa, upper)
+        return over_two_locked_mm_per_N(*args)
+
     def members_with(self, problem: DesignProblem, chosen: np.ndarray, j: int) -> tuple:
         """(each layer's cap (cells, n): the plate above it, the cap on the top one; the cover's
         drop (cells,) at a force, its bending over the slot stopped on the board; the plate over
@@ -134,7 +182,10 @@ class CellTable:
             return value
 
         scene = problem.members
-        cap = member(("cap", cell(n - 1)), lambda: cap_mm_per_N(scene, at(t, n - 1), at(head, n - 1), at(walls, n - 1)))
+        theta_rad, top = np.radians(self.theta_deg), n - 1
+        on_bottom = tuple(at(a, 0) for a in (t, pad, head, theta_rad, self.h_mm))  # t, pad, head, theta, h
+        on_top = tuple(at(a, top) for a in (t, head, walls, theta_rad, self.h_mm))
+        cap = member(("cap", cell(top)), lambda: cap_mm_per_N(scene, *on_top))
         plates = [
             member(
                 ("plate", cell(i), cell(i + 1)),
@@ -144,24 +195,14 @@ class CellTable:
             )
             for i in range(n - 1)
         ]
-        over_slot, slot_walls = (
-            np.broadcast_to(a, (cells,))
-            for a in member(("cover", cell(0)), lambda: cover_parts_mm_per_N(scene, at(t, 0), at(pad, 0), at(head, 0)))
-        )
         # each layer's joints with the plates beside it (model.plate_joint): its own cells alone
         beside = plates_beside(n)
-        theta_rad = np.radians(self.theta_deg)
         one = member(("joint",), lambda: root_joint_mm_per_N(theta_rad, t, self.h_mm, *joint_scene(scene)))
         joints = [at(one, i) * beside[i] for i in range(n)]
         caps = np.stack(np.broadcast_arrays(*plates, cap), axis=-1) + np.stack(np.broadcast_arrays(*joints), axis=-1)
-        cover, air, G = over_slot + slot_walls, scene.cover_air_mm, scene.G_MPa
-        locked = np.zeros(cells)
-        if j > 0:  # the plate over layer j - 1, locked in layer j's regime, under its cells
-            # what layer j's cells give it, once a run; then only how far their feet overhang
-            upper = member(("upper",), lambda: upper_layer_terms(theta_rad, t, self.h_mm, *joint_scene(scene), G))
-            overhang = lambda: plate_overhang_mm_per_N(np.maximum(head - at(head, j - 1), 0.0), upper)  # noqa: E731
-            locked = member(("locked", cell(j - 1), cell(j)), overhang)
-        return caps, lambda F: cover * F - np.maximum(over_slot * F - air, 0.0), np.broadcast_to(locked, (cells,))
+        locked = self._locked_plate(scene, j, at, cell, member) if j > 0 else np.zeros(cells)
+        cover_mm = self._cover_drop(problem, on_bottom, at, cell, member)
+        return caps, cover_mm, np.broadcast_to(locked, (cells,))
 
 
 def capped_mm(force_N, k, d_lock, R, k_locked, cap_mm_per_N, Rc=None, own=None) -> np.ndarray:

@@ -82,7 +82,7 @@ def two_load_pair_mm_per_N(span_mm, offset_mm, EI_Nmm2, kGA_N) -> tuple:
     return as_value(np.where(beyond, overhang, bend + shear)), as_value(np.where(beyond, overhang, clamped + shear))
 
 
-def offset_pair_mm_per_N(near_mm, offset_mm, EI_Nmm2, kGA_N, k_rot_Nmm_per_rad) -> Any:
+def offset_pair_mm_per_N(near_mm, offset_mm, EI_Nmm2, kGA_N, k_rot_Nmm_per_rad, overhang=None) -> Any:
     """The drop per newton (total F, F/2 at each) of two symmetric line loads at |x| = near + |e|
     relative to two symmetric supports at |x| = near (``offset_mm`` e < 0), or of loads at near
     relative to supports at near + e (e > 0): a plate loaded by the walls above it and held by the
@@ -92,11 +92,14 @@ def offset_pair_mm_per_N(near_mm, offset_mm, EI_Nmm2, kGA_N, k_rot_Nmm_per_rad) 
     of the pad's turn, all of it at the nearer pair), and the rest bends as a cantilever:
     P (rho e^2 near + |e|^3/3)/EI + P |e|/kGA, rho = 1/(1 + k near/EI) (the span's half turns by
     M near/EI under its end moment M). k = 0, e > 0 is the simply supported four-point beam
-    (:func:`two_load_pair_mm_per_N`, span 2 (near + e)); k infinite, a cantilever |e| long."""
+    (:func:`two_load_pair_mm_per_N`, span 2 (near + e)); k infinite, a cantilever |e| long.
+    ``overhang``: the cantilever's own (E'I, kGA) when its section is not the span's (the
+    plate between unlike layers: only the outer layer's pad reaches past the nearer pair)."""
     P, e = 0.5, np.abs(np.asarray(offset_mm, dtype=float))
     near, EI = np.asarray(near_mm, dtype=float), np.asarray(EI_Nmm2, dtype=float)
+    EI_out, kGA_out = (EI, kGA_N) if overhang is None else overhang
     rho = 1.0 / (1.0 + np.asarray(k_rot_Nmm_per_rad, dtype=float) * near / EI)
-    return as_value(P * (rho * e * e * near + e**3 / 3.0) / EI + P * e / kGA_N)
+    return as_value(P * (rho * e * e * near / EI + e**3 / 3.0 / EI_out) + P * e / kGA_out)
 
 
 def end_fixity(k_rot_Nmm_per_rad, EI_Nmm2, span_mm) -> float | np.ndarray:

@@ -13,21 +13,13 @@ layers' compression plus each member's bending:
 * **plates** -- each plate bonded to the pads above and below it, loaded by the upper layer's
   wall feet, held by the lower layer's wall heads, its turn resisted by both layers' walls; when
   they stand at the same x the load goes straight down and the plate does not bend.
-* **cover** -- the base's cover bonded to layer 1's bottom pad: a beam across the board slot,
-  loaded by layer 1's wall feet. It does not bend when the walls stand on the slot's side walls
-  or beyond them on the solid base (the slot is narrower than the wall feet: no overhang, the
-  base under it is solid). The side walls carry it over the whole depth but
-  at the cable windows, which end just above their sockets (docs/design.md section 10): the
-  cover spans a window's 6-7 mm along the depth with wall on both sides, no cantilever.
-* **slot walls** (part of the housing) -- the base's two side walls beside the board slot, TPU
-  columns as tall as the slot and as wide as the base beyond it, carry the whole press to the
-  held bottom. Each is squeezed (P H / (E' A)) and, with layer 1's walls standing off its
-  centre line by e (on the bundled designs they stand over the slot's edge, a column's width
-  inside its centre), turned by the moment P e: a column held at its foot turns its top by
-  M H / (E' I), the cover across the slot resisting with 2 E'I_cover / L (a beam turned
-  equally and oppositely at both ends), so the load drops by e x the turn. Exact for a column
-  on a held foot: the whole-part rung with every other member rigid agrees within a few per
-  cent (tests/test_load_path.py).
+* **cover and slot walls** (the housing's base) -- the cover over the board's slot, bonded to
+  layer 1's bottom pad and loaded by its wall feet, and the slot's two walls under it: the walls'
+  squeeze and turn, the cover's bending with its ends built into them, layer 1's roots turning
+  into it, and once layer 1 is locked its block deepening the cover and bearing on it
+  (model.housing_base). The side walls carry it over the whole depth but at the cable windows,
+  which end just above their sockets (docs/design.md section 10): the cover spans a window's
+  6-7 mm along the depth with wall on both sides, no cantilever.
 
 Each beam is a plane-strain Timoshenko beam (E' = E/(1 - nu^2) in bending, G in shear, shear
 factor 5/6); the cap's supports are simply supported (the default: the wall heads turn with the
@@ -44,11 +36,9 @@ from typing import Any
 import numpy as np
 
 from mst_cli.model.beams import SHEAR_FACTOR as SHEAR_FACTOR  # the section's and one-support forms, re-exported
-from mst_cli.model.beams import as_value as _value
 from mst_cli.model.beams import (
     end_fixity,
     offset_pair_mm_per_N,
-    plain_section,
     strip_bending_pair_mm_per_N,
     strip_shear_mm_per_N,
 )
@@ -56,8 +46,18 @@ from mst_cli.model.beams import section_EI_kGA as section_EI_kGA
 from mst_cli.model.beams import strip_bending_mm_per_N as strip_bending_mm_per_N
 from mst_cli.model.beams import two_load_mm_per_N as two_load_mm_per_N
 from mst_cli.model.cell import pad_half_width_mm, wall_centreline_length_mm
+from mst_cli.model.housing_base import cover_parts_locked_mm_per_N as cover_parts_locked_mm_per_N
+from mst_cli.model.housing_base import cover_parts_mm_per_N as cover_parts_mm_per_N
+from mst_cli.model.housing_base import housing_mm_per_N as housing_mm_per_N
 from mst_cli.model.past_lock import by_regime, scene_locked_plates_mm_per_N
-from mst_cli.model.plate_joint import joint_scene, layer_joints_mm_per_N, plates_beside, root_joint_mm_per_N
+from mst_cli.model.plate_joint import (
+    cap_root_mm_per_N,
+    joint_scene,
+    layer_joints_mm_per_N,
+    plates_beside,
+    root_joint_mm_per_N,
+)
+from mst_cli.model.stack import contact_force_N
 
 # a fingertip pressed on the face: a contact patch about 6 mm wide (the width the issue's
 # independent check presses over); the press runs the whole depth (a strip, in plane strain)
@@ -124,6 +124,21 @@ class Members:
     # each plate over a locked layer under an open one, past its closed form (model.past_lock):
     # it moves while the layer under it is locked and the one above open; (): none
     locked_plates_mm_per_N: tuple[float, ...] = ()
+    # the cover and its part over the slot once layer 1 is locked on it, its closed block deepening
+    # the cover under its pad (cover_parts_locked_mm_per_N); None: as before the lock
+    cover_locked_mm_per_N: float | None = None
+    cover_contact_locked_mm_per_N: float | None = None
+    # each plate while the layer under that one is locked too (model.past_lock.over_two_locked_mm_per_N,
+    # the bottom plate's as above); (): the same as locked_plates_mm_per_N
+    two_locked_plates_mm_per_N: tuple[float, ...] = ()
+
+    @property
+    def cover_contact(self) -> tuple[float, float, float, float]:
+        """(the cover's part over the slot, mm/N; the air it closes, mm; that part once layer 1 is
+        locked; the change of the whole cover at that lock, mm/N): model.stack's contact."""
+        C, C_locked = self.cover_contact_mm_per_N, self.cover_contact_locked_mm_per_N
+        locked = self.cover_mm_per_N if self.cover_locked_mm_per_N is None else self.cover_locked_mm_per_N
+        return C, self.cover_travel_mm, C if C_locked is None else C_locked, locked - self.cover_mm_per_N
 
     @property
     def total_mm_per_N(self) -> float:
@@ -207,22 +222,26 @@ def member_compliances(scene: MemberScene, theta_rad, t_mm, h_mm) -> tuple:
 def layer_caps_mm_per_N(scene: MemberScene, theta_rad, t_mm, h_mm) -> tuple:
     """((..., n) what closes each layer's cavity with it: the plate above it (the cap on the top
     one) and its joints with the plates; the cover's bending over the slot; its slot walls; (...,
-    n - 1) the plates over locked layers, model.past_lock) of stacks given as arrays (..., n),
-    mm/N: the design loop's members."""
-    cap, plates, over_slot, slot_walls, joints, locked = all_member_parts(scene, theta_rad, t_mm, h_mm)
+    n - 1) the plates over locked layers, model.past_lock; (the bending and the walls) once layer
+    1 is locked, :func:`cover_parts_locked_mm_per_N`) of stacks given as arrays (..., n), mm/N:
+    the design loop's members."""
+    cap, plates, over_slot, slot_walls, joints, locked, cover_locked = all_member_parts(scene, theta_rad, t_mm, h_mm)
     caps = np.concatenate([plates, np.asarray(cap)[..., None]], axis=-1)
-    return caps + joints, over_slot, slot_walls, locked
+    return caps + joints, over_slot, slot_walls, locked, cover_locked
 
 
 def all_member_parts(scene: MemberScene, theta_rad, t_mm, h_mm) -> tuple:
     """(:func:`member_parts`, each layer's joints with the plates beside it (model.plate_joint),
-    the plates over locked layers (model.past_lock)) of stacks given as arrays (..., n): the
-    layers' supports and root joints computed once for all three."""
+    the plates over locked layers (model.past_lock), the cover's two parts once layer 1 is locked
+    (:func:`cover_parts_locked_mm_per_N`)) of stacks given as arrays (..., n): the layers'
+    supports and root joints computed once for all."""
     t = np.asarray(t_mm, dtype=float)
     supports = layer_supports(scene, theta_rad, t, h_mm)
     one = np.asarray(root_joint_mm_per_N(theta_rad, t, h_mm, *joint_scene(scene)))  # a root on one plate
     locked = scene_locked_plates_mm_per_N(scene, theta_rad, t, h_mm, supports[1], one)
-    return *member_parts(scene, theta_rad, t, h_mm, supports), one * plates_beside(t.shape[-1]), locked
+    bottom = (np.asarray(h_mm, dtype=float)[..., 0], supports[0][..., 0], supports[1][..., 0])
+    cover_locked = cover_parts_locked_mm_per_N(scene, t[..., 0], *bottom)
+    return *member_parts(scene, theta_rad, t, h_mm, supports), one * plates_beside(t.shape[-1]), locked, cover_locked
 
 
 def member_parts(scene: MemberScene, theta_rad, t_mm, h_mm, supports: tuple | None = None) -> tuple:
@@ -231,11 +250,13 @@ def member_parts(scene: MemberScene, theta_rad, t_mm, h_mm, supports: tuple | No
     ``supports``: the layers' :func:`layer_supports`, when the caller has them."""
     t = np.asarray(t_mm, dtype=float)
     pad, head, walls, sway = layer_supports(scene, theta_rad, t, h_mm) if supports is None else supports
-    cap = cap_mm_per_N(scene, t[..., -1], head[..., -1], walls[..., -1])
+    top = (np.asarray(theta_rad, dtype=float)[..., -1], np.asarray(h_mm, dtype=float)[..., -1])
+    cap = cap_mm_per_N(scene, t[..., -1], head[..., -1], walls[..., -1], *top)
     plates = plates_mm_per_N(
         scene, t[..., :-1], t[..., 1:], head[..., :-1], head[..., 1:], sway[..., :-1], sway[..., 1:]
     )
-    over_slot, slot_walls = cover_parts_mm_per_N(scene, t[..., 0], pad[..., 0], head[..., 0])
+    bottom = (np.asarray(theta_rad, dtype=float)[..., 0], np.asarray(h_mm, dtype=float)[..., 0])
+    over_slot, slot_walls = cover_parts_mm_per_N(scene, t[..., 0], pad[..., 0], head[..., 0], *bottom)
     return cap, np.asarray(plates), over_slot, slot_walls
 
 
@@ -251,10 +272,11 @@ def layer_supports(scene: MemberScene, theta_rad, t_mm, h_mm) -> tuple:
     return pad, head, walls, walls * (12.0 / WALL_FAR_END[scene.support])  # 12 E'I/L_w
 
 
-def cap_mm_per_N(scene: MemberScene, t_top_mm, head_mm, walls_Nmm_per_rad) -> Any:
+def cap_mm_per_N(scene: MemberScene, t_top_mm, head_mm, walls_Nmm_per_rad, theta_top_rad, h_top_mm) -> Any:
     """The cap's compliance, mm/N, over the top layer (its t, wall heads and walls' restraint,
-    :func:`layer_supports`): a beam across the wall heads under the press's strip, its ends
-    turning against the walls (end_fixity)."""
+    :func:`layer_supports`; its theta in rad and h in mm): a beam across the wall heads under the
+    press's strip, its ends turning against the walls (end_fixity), and the top layer's roots
+    turning into it (:func:`~mst_cli.model.plate_joint.cap_root_mm_per_N`)."""
     s = scene
     E, G, D = s.E_prime_MPa, s.G_MPa, s.depth_mm
     z_pocket = t_top_mm + s.pocket_floor_mm
@@ -265,7 +287,8 @@ def cap_mm_per_N(scene: MemberScene, t_top_mm, head_mm, walls_Nmm_per_rad) -> An
     span = 2.0 * head_mm
     fix = end_fixity(walls_Nmm_per_rad, EI, span)
     simple, clamped = strip_bending_pair_mm_per_N(span, s.patch_mm, EI)
-    return simple - fix * (simple - clamped) + strip_shear_mm_per_N(span, s.patch_mm, kGA)
+    roots = cap_root_mm_per_N(theta_top_rad, t_top_mm, h_top_mm, D, E)
+    return simple - fix * (simple - clamped) + strip_shear_mm_per_N(span, s.patch_mm, kGA) + roots
 
 
 def plates_mm_per_N(
@@ -277,73 +300,17 @@ def plates_mm_per_N(
     same whichever pair stands outside), its turn resisted by both layers' walls: the turn swings
     a wall's far end (the side vertex) across it by L_w a radian, against its sway stiffness
     12 E'I/L_w^3 (ends held from turning), so 12 E'I/L_w (studies/unlike_plates.py --per-plate
-    measures 12.9 per wall, docs/design.md 4.7)."""
+    measures 12.9 per wall, docs/design.md 4.7). Between the two pairs of walls only the outer
+    layer's pad is bonded to the plate (the inner layer's pad ends at its own walls), so the
+    overhang bends as the plate with that pad alone, as a plate over a locked layer's does
+    (model.past_lock)."""
     s = scene
-    EI_p, kGA_p = section_EI_kGA(s.depth_mm, t_below_mm + s.plate_mm + t_above_mm, s.E_prime_MPa, s.G_MPa)
+    t_below, t_above = np.asarray(t_below_mm, dtype=float), np.asarray(t_above_mm, dtype=float)
+    EI_p, kGA_p = section_EI_kGA(s.depth_mm, t_below + s.plate_mm + t_above, s.E_prime_MPa, s.G_MPa)
+    outer_pad = np.where(head_below_mm > head_above_mm, t_below, t_above)
+    overhang = section_EI_kGA(s.depth_mm, outer_pad + s.plate_mm, s.E_prime_MPa, s.G_MPa)
     near, offset = np.minimum(head_below_mm, head_above_mm), head_below_mm - head_above_mm
-    return offset_pair_mm_per_N(near, offset, EI_p, kGA_p, sway_below + sway_above)
-
-
-def cover_parts_mm_per_N(scene: MemberScene, t_bottom_mm, pad_mm, head_mm) -> tuple:
-    """:func:`housing_mm_per_N` under layer 1 (its t, outer pad and wall heads,
-    :func:`layer_supports`): the cover with that pad bonded on it, the cover alone beyond."""
-    s = scene
-    E, G, D = s.E_prime_MPa, s.G_MPa, s.depth_mm
-    return housing_mm_per_N(
-        s, head_mm, pad_mm, section_EI_kGA(D, s.cover_mm + t_bottom_mm, E, G), plain_section(D, s.cover_mm, E, G)
-    )
-
-
-def housing_mm_per_N(scene: MemberScene, head_mm, pad_mm, cover_pad, cover_alone) -> tuple:
-    """(what stops when the cover lands on the board: the cover's bending over the slot and the
-    drop of its edges, the rest: the slot walls' squeeze and a foot's turn on them) of the drop per newton (total
-    press F, P = F/2 on each side) of layer 1's wall feet at |x| = ``head_mm`` (module
-    docstring); the mean of the two sides, each a column w wide and H tall held at its foot
-    (k = E'I/H against its top's turn phi) with the cover bonded to it. The cover is a beam of
-    two sections: with layer 1's bottom pad under |x| < ``pad_mm`` (``cover_pad``, (E'I, kGA)),
-    the cover alone beyond (``cover_alone``).
-
-    A foot on the column, a from its centre line: phi = P a / (k + 2 / int(1/E'I)) (the cover
-    resists turning equally and oppositely at both ends) and the foot drops a phi. A foot over
-    the slot, e inside its edge: the cover carries P to the column's inner edge (w/2 from the
-    centre line) and turns with it; phi = (P w/2 + M)/k, and the cover's end moment M follows
-    from its end slope matching phi. By virtual work over the half span (x from the edge, m(x) =
-    P min(x, e) - M): slope = P C1 - M B, drop at the foot = P C2 - M C1, with C_j = int
-    min(x, e)^j / E'I dx and B = int dx / E'I; plus shear P int_0^e dx / kGA. The column adds
-    its squeeze P H/(E' w D) and its inner edge's drop (w/2) phi. No slot walls (height 0):
-    the cover clamped on rigid supports (phi = 0)."""
-    s, P = scene, 0.5
-    head = np.asarray(head_mm, dtype=float)
-    L2, H, D, E = s.half_slot_mm, s.slot_height_mm, s.depth_mm, s.E_prime_MPa
-    e = np.clip(L2 - head, 0.0, L2)  # the foot's distance inside the slot's edge
-    x_pad = np.clip(L2 - np.asarray(pad_mm, dtype=float), 0.0, L2)  # where the pad starts, from the edge
-    (EI_in, kGA_in), (EI_out, kGA_out) = cover_pad, cover_alone
-
-    # int_0^{L/2} min(x, e)^j / E'I dx, the section changing at x_pad, through the antiderivative
-    # prim_j(x) = min(x, e)^(j+1) / (j+1) + e^j max(x - e, 0); prim_j(0) = 0 (e is finite, >= 0)
-    inside_pad, inside_L2 = np.minimum(x_pad, e), np.minimum(L2, e)
-    beyond_pad, beyond_L2 = np.maximum(x_pad - e, 0.0), np.maximum(L2 - e, 0.0)
-
-    def over_half_span(j: int):
-        at_pad = inside_pad ** (j + 1) / (j + 1) + e**j * beyond_pad
-        return at_pad / EI_out + (inside_L2 ** (j + 1) / (j + 1) + e**j * beyond_L2 - at_pad) / EI_in
-
-    B, C1, C2 = over_half_span(0), over_half_span(1), over_half_span(2)
-    shear = P * (np.minimum(e, x_pad) / kGA_out + np.maximum(e - x_pad, 0.0) / kGA_in)
-    if H <= 0.0:
-        return _value(P * C2 - P * C1 / B * C1 + shear), _value(0.0 * head)
-    over_slot, walls = [], []
-    over = e > 0  # the foot over the slot, else on the column
-    PC1, bend, on_column, column_turn = P * C1, P * C2, np.maximum(head, L2), 1.0 / B
-    for w in s.slot_wall_widths_mm:
-        k = E * D * w**3 / 12.0 / H
-        M = np.where(over, (PC1 - P * 0.5 * w / k) / (B + 1.0 / k), 0.0)
-        a = (L2 + 0.5 * w) - on_column  # a foot on the column: its lever about the centre line
-        phi = np.where(over, (P * 0.5 * w + M) / k, P * a / (k + column_turn))
-        # over the slot the cover's bending and its edge's drop stop when the cover lands on the board
-        over_slot.append(bend - M * C1 + shear + np.where(over, 0.5 * w * phi, 0.0))
-        walls.append(P * H / (E * w * D) + np.where(over, 0.0, a * phi))
-    return _value(0.5 * (over_slot[0] + over_slot[1])), _value(0.5 * (walls[0] + walls[1]))
+    return offset_pair_mm_per_N(near, offset, EI_p, kGA_p, sway_below + sway_above, overhang)
 
 
 def members_total_mm_per_N(scene: MemberScene, theta_rad, t_mm, h_mm) -> np.ndarray:
@@ -367,13 +334,16 @@ def members(
 def scene_members(scene: MemberScene, theta_rad, t_mm, h_mm, scale: float = 1.0, regime_extra: tuple = ()) -> Members:
     """:func:`members` of the scene's stack (arrays (n,) of theta in rad, t and h in mm, bottom to
     top), every compliance times ``scale``, with the rung's correction ``regime_extra``."""
-    cap, plates, over_slot, slot_walls, joints, all_locked = all_member_parts(scene, theta_rad, t_mm, h_mm)
-    locked = np.atleast_1d(all_locked)
+    cap, plates, over_slot, slot_walls, joints, (one, two), (over_locked, walls_locked) = all_member_parts(
+        scene, theta_rad, t_mm, h_mm
+    )
+    locked, two_locked = np.atleast_1d(one), np.atleast_1d(two)
     s, air = scale, scene.cover_air_mm  # the cover's bending over the slot stops on the board
     return Members(
         s * float(cap), tuple(s * float(p) for p in plates), s * float(over_slot + slot_walls), scene.patch_mm,
         scene.support, s * float(over_slot), air, regime_extra, tuple(s * float(j) for j in joints),
-        tuple(s * float(x) for x in locked),
+        tuple(s * float(x) for x in locked), s * float(over_locked + walls_locked), s * float(over_locked),
+        tuple(s * float(x) for x in two_locked),
     )  # fmt: skip
 
 
@@ -452,13 +422,20 @@ def capped_units(laws: tuple, parts: Members) -> list:
     return [CappedLayer(law, c) if c > 0 else law for law, c in zip(laws, caps)]
 
 
-def cover_landing_N(parts: Members) -> float:
+def cover_landing_N(parts: Members, first_lock_N: float = math.inf) -> float:
     """The centred press (N) at which the cover's bending over the slot has closed its air onto
-    the board's tallest part (inf: it never bends there). Past it the press bears on the board,
-    the chip and its connectors: a support only the assembled sensor has, not the printed body."""
-    if parts.cover_contact_mm_per_N <= 0.0:
-        return math.inf
-    return parts.cover_travel_mm / parts.cover_contact_mm_per_N
+    the board's tallest part (inf: it never bends there), layer 1 locking at ``first_lock_N`` (its
+    capped unit's, :func:`capped_units`; inf: never, or the landing comes first). Past it the press
+    bears on the board, the chip and its connectors: a support only the assembled sensor has, not
+    the printed body."""
+    C, travel, C_locked, _ = parts.cover_contact
+    return float(contact_force_N(first_lock_N, C, C_locked, travel))
+
+
+def first_lock_N(laws: tuple, parts: Members) -> float:
+    """Layer 1's lock force in the part (its capped unit's, :func:`capped_units`; ``laws``: the
+    layers', bottom to top): where the cover under it stiffens (:func:`cover_parts_locked_mm_per_N`)."""
+    return float(capped_units(laws, parts)[0].lock_force_N)
 
 
 def member_band_compliances(stack, parts: Members) -> tuple[np.ndarray, np.ndarray, dict]:
@@ -476,11 +453,15 @@ def member_band_compliances(stack, parts: Members) -> tuple[np.ndarray, np.ndarr
     caps = np.array([getattr(u, "cap_mm_per_N", 0.0) for u in units])
     share = moving_share(R[:, None], bands)[..., 0]  # (units, regimes): what closes each unit's cavity moves
     own = np.array([(u.displacement_mm(hi) - u.displacement_mm(lo)) / width for u in units]) - caps[:, None] * share
-    bending = parts.cover_contact_mm_per_N * moving_share(cover_landing_N(parts), bands)[..., 0]
-    cover = parts.cover_mm_per_N - parts.cover_contact_mm_per_N + bending
+    C, _, C_locked, delta = parts.cover_contact  # past layer 1's lock, the cover under its closed block
+    past = lo >= R[0]
+    C_now = np.where(past, C_locked, C)
+    bending = C_now * moving_share(cover_landing_N(parts, float(R[0])), bands)[..., 0]
+    cover = parts.cover_mm_per_N + np.where(past, delta, 0.0) - C_now + bending
     cap = parts.cap_mm_per_N * share[-1]  # the plates' moving: the rest of the caps', the joints' with them
     locked = parts.locked_plates_mm_per_N or np.zeros(len(R) - 1)  # the plates over locked layers (past_lock)
-    plates = (caps[:, None] * share).sum(axis=0) - cap + by_regime(locked, R)[:-1]
+    over = by_regime(locked, R, parts.two_locked_plates_mm_per_N or None)[:-1]
+    plates = (caps[:, None] * share).sum(axis=0) - cap + over
     moving = {"cap": cap, "plates": plates, "housing": cover}
     if parts.regime_extra_mm_per_N:
         moving["section_correction"] = np.asarray(parts.regime_extra_mm_per_N, dtype=float)

@@ -14,6 +14,7 @@ from mst_cli.model.load_path import (
     FINGERTIP_PATCH_MM,
     Members,
     cover_landing_N,
+    first_lock_N,
     members,
     motion_shares,
 )
@@ -35,6 +36,7 @@ def load_path_report(
         row["outside_layers_clamped"] = stiff["outside_layers"]
         row["members_clamped_mm_per_N"] = stiff["members_mm_per_N"]
         regimes.append(row)
+    first_lock = first_lock_N(stack.layers, simple)  # layer 1's in the part: the cover stiffens under it
     report = {
         "patch_mm": patch_mm,
         "support": "simple (clamped: the stiff bound)",
@@ -43,13 +45,15 @@ def load_path_report(
         "plate_joints_mm_per_N": list(simple.joints_mm_per_N),  # each layer's, model.plate_joint
         "plates_over_locked_mm_per_N": list(simple.locked_plates_mm_per_N),  # each plate's, model.past_lock
         "housing_mm_per_N": simple.cover_mm_per_N,
+        # once layer 1 is locked on the cover (its closed block deepens the cover: load_path)
+        "housing_under_locked_layer_1_mm_per_N": simple.cover_mm_per_N + simple.cover_contact[3],
         "cap_clamped_mm_per_N": clamped.cap_mm_per_N,
         "members_simple_mm_per_N": _by_member(simple),
         "members_clamped_mm_per_N": _by_member(clamped),
         "regimes": regimes,
         "outside_layers_max": max(r["outside_layers"] for r in regimes),
         # null: the cover never lands (no bending over the slot)
-        "cover_lands_N": None if math.isinf(landing := cover_landing_N(simple)) else landing,
+        "cover_lands_N": None if math.isinf(landing := cover_landing_N(simple, first_lock)) else landing,
         "patch_dependence": patch_dependence(geometry, material, stack),
         "not_modelled": "the cover's bending along the depth over the cable windows (3D; walls on both sides)",
     }

@@ -35,37 +35,45 @@ from typing import Any
 
 import numpy as np
 
-from mst_cli.model.load_path import CappedLayer, Members, capped_units, members
+from mst_cli.model.load_path import CappedLayer, Members, capped_units, cover_landing_N, members
 from mst_cli.model.mechanics import layer_laws
 from mst_cli.model.mechanics.tilt import LayerTiltLaw
+from mst_cli.model.stack import contact_force_N, members_drop_mm, members_rate_mm_per_N
 
 
 @dataclass(frozen=True)
 class SeriesMember:
     """A layer law with a member that never closes (the cover) in series: the layer's
     compression plus ``member_mm_per_N`` x F at every force, less the part ``contact_mm_per_N``
-    that stops once it has moved ``contact_travel_mm`` (:attr:`Stack.contact_mm_per_N`); the
-    lock still the layer's own."""
+    that stops once it has moved ``contact_travel_mm``, both changing past layer 1's lock
+    (model.stack.members_drop_mm, :class:`~mst_cli.model.stack.Stack`'s own); the lock still the
+    layer's own."""
 
     law: Any  # a layer law of any rung, or a CappedLayer
     member_mm_per_N: float
     contact_mm_per_N: float = 0.0
     contact_travel_mm: float = math.inf
+    first_lock_N: float = math.inf  # layer 1's (its capped unit's): the cover under it stiffens there
+    contact_locked_mm_per_N: float | None = None  # the contact part past it (None: the same)
+    locked_delta_mm_per_N: float = 0.0  # the member's change past it
+
+    @property
+    def _member_law(self) -> tuple:
+        C = self.contact_mm_per_N
+        C_locked = C if self.contact_locked_mm_per_N is None else self.contact_locked_mm_per_N
+        return self.member_mm_per_N, C, self.contact_travel_mm, self.first_lock_N, C_locked, self.locked_delta_mm_per_N
 
     @property
     def contact_force_N(self) -> float:
-        C = self.contact_mm_per_N
-        return self.contact_travel_mm / C if C > 0.0 else math.inf
+        _, C, travel, R1, C_locked, _ = self._member_law
+        return float(contact_force_N(R1, C, C_locked, travel))
 
     def member_mm(self, force_N) -> np.ndarray:
         """The member's drop at ``force_N``."""
-        F = np.asarray(force_N, dtype=float)
-        stopped = np.maximum(self.contact_mm_per_N * F - self.contact_travel_mm, 0.0) if self.contact_mm_per_N else 0.0
-        return self.member_mm_per_N * F - stopped
+        return members_drop_mm(force_N, *self._member_law)
 
     def _compliance_past(self, force_N: float) -> float:
-        landed = force_N >= self.contact_force_N
-        return self.member_mm_per_N - (self.contact_mm_per_N if landed else 0.0)
+        return members_rate_mm_per_N(force_N, *self._member_law)
 
     @property
     def lock_force_N(self) -> float:
@@ -73,9 +81,10 @@ class SeriesMember:
 
     @property
     def knots_N(self) -> tuple[float, ...]:
-        contact = self.contact_force_N
-        extra = (contact,) if math.isfinite(contact) and contact < self.lock_force_N else ()
-        return tuple(sorted((*self.law.knots_N, *extra)))
+        inside = (
+            f for f in (self.contact_force_N, self.first_lock_N) if math.isfinite(f) and 0.0 < f < self.lock_force_N
+        )
+        return tuple(sorted({*self.law.knots_N, *inside}))
 
     @property
     def k_N_per_mm(self) -> float:
@@ -98,15 +107,22 @@ class SeriesMember:
 class OverLockedMember:
     """A layer law standing on a plate over a locked layer (model.past_lock): the plate gives
     ``member_mm_per_N`` x F more from the lower layer's lock ``start_N`` until this layer locks,
-    then holds (the axial model's by_regime); the lock still the layer's own."""
+    ``deeper_mm_per_N`` more past ``deeper_start_N`` (the layer under that one locked too), then
+    holds (the axial model's by_regime); the lock still the layer's own."""
 
     law: Any  # a layer law of any rung, or a CappedLayer
     member_mm_per_N: float
     start_N: float
+    deeper_mm_per_N: float = 0.0
+    deeper_start_N: float = math.inf
 
     def member_mm(self, force_N) -> np.ndarray:
-        span = max(self.lock_force_N - self.start_N, 0.0)
-        return self.member_mm_per_N * np.clip(np.asarray(force_N, dtype=float) - self.start_N, 0.0, span)
+        F, R = np.asarray(force_N, dtype=float), self.lock_force_N
+        d = self.member_mm_per_N * np.clip(F - self.start_N, 0.0, max(R - self.start_N, 0.0))
+        if self.deeper_mm_per_N:
+            both = max(self.start_N, self.deeper_start_N)
+            d = d + self.deeper_mm_per_N * np.clip(F - both, 0.0, max(R - both, 0.0))
+        return d
 
     @property
     def lock_force_N(self) -> float:
@@ -114,7 +130,8 @@ class OverLockedMember:
 
     @property
     def knots_N(self) -> tuple[float, ...]:
-        extra = (self.start_N,) if 0.0 < self.start_N < self.lock_force_N else ()
+        both = max(self.start_N, self.deeper_start_N) if self.deeper_mm_per_N else math.inf
+        extra = tuple(f for f in {self.start_N, both} if 0.0 < f < self.lock_force_N)
         return tuple(sorted((*self.law.knots_N, *extra)))
 
     @property
@@ -140,12 +157,16 @@ def part_layer_laws(laws: tuple, parts: Members) -> tuple:
     compliances 0) give ``laws`` themselves."""
     units = capped_units(laws, parts)
     starts = [u.lock_force_N for u in units]
+    two = parts.two_locked_plates_mm_per_N or parts.locked_plates_mm_per_N
     for j, X in enumerate(parts.locked_plates_mm_per_N, start=1):  # plate j - 1 under layer j's feet
         if X > 0.0 and starts[j - 1] < starts[j]:
-            units[j] = OverLockedMember(units[j], X, starts[j - 1])
+            deeper = (two[j - 1] - X, starts[j - 2]) if j >= 2 else (0.0, math.inf)  # layer j - 2 locked too
+            units[j] = OverLockedMember(units[j], X, starts[j - 1], *deeper)
     if parts.cover_mm_per_N > 0:
         j = cover_host(units, parts)
-        units[j] = SeriesMember(units[j], parts.cover_mm_per_N, parts.cover_contact_mm_per_N, parts.cover_travel_mm)
+        C, travel, C_locked, delta = parts.cover_contact
+        R1 = float(units[0].lock_force_N)
+        units[j] = SeriesMember(units[j], parts.cover_mm_per_N, C, travel, R1, C_locked, delta)
     return tuple(units)
 
 
@@ -155,8 +176,7 @@ def cover_host(units: list, parts: Members) -> int:
     tilt rung follows a unit's knots up to its lock only, so the landing must fall before its
     host's lock to be a knot. A centred press is the same whichever unit hosts it (every layer
     carries the whole force); under a moment the cover turns with its host's chevron lever."""
-    C, travel = parts.cover_contact_mm_per_N, parts.cover_travel_mm
-    landing = travel / C if C > 0.0 else math.inf
+    landing = cover_landing_N(parts, float(units[0].lock_force_N))
     open_at_landing = [j for j, u in enumerate(units) if u.lock_force_N > landing]
     return 0 if not math.isfinite(landing) or 0 in open_at_landing or not open_at_landing else open_at_landing[0]
 

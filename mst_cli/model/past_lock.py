@@ -82,19 +82,67 @@ def plate_overhang_mm_per_N(c_mm, upper_terms: tuple) -> Any:
     return as_value(joint + 0.5 * (c**3 / (3.0 * EI) + c / kGA + c * c / root))
 
 
-def scene_locked_plates_mm_per_N(scene, theta_rad, t_mm, h_mm, head_mm, joints_mm_per_N=None) -> Any:
-    """:func:`locked_plates_mm_per_N` of the part a model.load_path.MemberScene describes."""
+def over_two_locked_mm_per_N(
+    t_mm, h_mm, head_mm, plate_mm: float, depth_mm: float, E_prime_MPa: float, G_MPa: float, upper_terms: tuple,
+    k: float = LOCKED_FITTED[1],
+) -> Any:  # fmt: skip
+    """What plate j gives, mm/N, while layers j - 1 and j are both locked and j + 1 open (module
+    docstring), of three consecutive layers given as arrays (..., 3) of t, h and the wall heads' x
+    (mm): where block j stands out beyond block j - 1 (its heads further out), plate j - 1, block j
+    and plate j hang together from block j - 1 out to layer j + 1's feet, a cantilever d = 2 p +
+    h_j + t_(j+1) deep built into block j - 1 (the root spring k E'D d^2 of a plate over one
+    block; its turn under P (deep + thin) less P thin, which block j's own root takes, so the
+    figure is continuous where block j's edge meets block j - 1's); beyond block j plate j hangs on
+    as over one block (:func:`plate_overhang_mm_per_N`, ``upper_terms`` of layer j + 1). Where
+    block j stands inside block j - 1, the plate over one block alone."""
+    t, h, head = (np.asarray(v, dtype=float) for v in (t_mm, h_mm, head_mm))
+    low, mid, feet = head[..., 0], head[..., 1], head[..., 2]
+    thin = np.maximum(feet - mid, 0.0)
+    deep = np.where(mid > low, np.maximum(np.minimum(feet, mid) - low, 0.0), 0.0)
+    d = 2.0 * plate_mm + h[..., 1] + t[..., 2]
+    EI, kGA = section_EI_kGA(depth_mm, d, E_prime_MPa, G_MPa)
+    P, lever = 0.5, deep + thin
+    hangs = P * ((deep**3 / 3.0 + deep * deep * thin + deep * thin * thin) / EI + deep / kGA)
+    # block j - 1's root turns under the composite's moment P (deep + thin), less what block j's own
+    # root (in plate_overhang_mm_per_N) takes: nothing more as block j's edge nears block j - 1's
+    root = P * (lever * lever - thin * thin) / (k * E_prime_MPa * depth_mm * d * d)
+    return as_value(plate_overhang_mm_per_N(thin, upper_terms) + hangs + root)
+
+
+def scene_locked_plates_mm_per_N(scene, theta_rad, t_mm, h_mm, head_mm, joints_mm_per_N=None) -> tuple:
+    """(:func:`locked_plates_mm_per_N`, each plate's while the layer under that one is locked too,
+    :func:`over_two_locked_mm_per_N`; the bottom plate's the same) of the part a
+    model.load_path.MemberScene describes, arrays (..., n - 1)."""
     G, fitted = scene.G_MPa, LOCKED_FITTED
-    return locked_plates_mm_per_N(theta_rad, t_mm, h_mm, head_mm, *joint_scene(scene), G, fitted, joints_mm_per_N)
+    one = locked_plates_mm_per_N(theta_rad, t_mm, h_mm, head_mm, *joint_scene(scene), G, fitted, joints_mm_per_N)
+    one = np.asarray(one, dtype=float)
+    t, h, head = (np.asarray(v, dtype=float) for v in (t_mm, h_mm, head_mm))
+    two = [one[..., :1]]
+    for j in range(1, t.shape[-1] - 1):
+        joint = None if joints_mm_per_N is None else np.asarray(joints_mm_per_N)[..., j + 1]
+        upper = upper_layer_terms(
+            np.asarray(theta_rad)[..., j + 1], t[..., j + 1], h[..., j + 1], *joint_scene(scene), G, fitted, joint
+        )
+        span = slice(j - 1, j + 2)
+        two.append(
+            np.asarray(
+                over_two_locked_mm_per_N(t[..., span], h[..., span], head[..., span], *joint_scene(scene), G, upper)
+            )[..., None]
+        )
+    return one, np.concatenate(two, axis=-1)
 
 
-def by_regime(locked_plates_mm_per_N, lock_N) -> np.ndarray:
+def by_regime(locked_plates_mm_per_N, lock_N, over_two_locked_mm_per_N=None) -> np.ndarray:
     """(..., n + 1) what the plates over locked layers add per regime of the part, past the last
     lock too (model.stack.regime_extra_displacement_mm): regime r (from 0, in the order of
     ``lock_N`` (..., n), each layer's lock force) has its r first layers locked, and plate j
     gives its share (``locked_plates_mm_per_N`` (..., n - 1)) while layer j is locked and layer
-    j + 1 open."""
+    j + 1 open, ``over_two_locked_mm_per_N`` (the same shape; None: the same) while layer j - 1
+    is locked too."""
     X, R = np.asarray(locked_plates_mm_per_N, dtype=float), np.asarray(lock_N, dtype=float)
+    X2 = X if over_two_locked_mm_per_N is None else np.asarray(over_two_locked_mm_per_N, dtype=float)
     rank = np.argsort(np.argsort(R, axis=-1, kind="stable"), axis=-1, kind="stable")  # each layer's place
     locked = rank[..., None, :] < np.arange(R.shape[-1] + 1)[:, None]  # (..., regimes, layers)
-    return np.where(locked[..., :-1] & ~locked[..., 1:], X[..., None, :], 0.0).sum(axis=-1)
+    acts = locked[..., :-1] & ~locked[..., 1:]
+    below = np.concatenate([np.zeros_like(locked[..., :1]), locked[..., :-2]], axis=-1)  # layer j - 1 locked
+    return np.where(acts, np.where(below, X2[..., None, :], X[..., None, :]), 0.0).sum(axis=-1)

@@ -17,7 +17,8 @@ the plate is squeezed under them. Per root on a plate, for the vertical press's 
 
 A layer's walls stand on a plate at their feet (a plate below) and at their heads (a plate
 above); half of the layer's vertical compliance passes each, so each root counts half. The cover
-and the cap carry their own closed forms (model.load_path), so only the plates' roots count here.
+carries its own closed form (model.load_path), so only the plates' roots count here; the
+top layer's roots in the cap are the cap's (:func:`cap_root_mm_per_N`).
 A locked layer's walls carry nothing, so its joints stop with it, as the layer does.
 
 c, a, b and s are fitted, not derived: on the whole-part rung's plates of 102 same-layer designs
@@ -67,6 +68,22 @@ def root_joint_mm_per_N(
     k = c * np.sin(theta) ** a * (L / t) ** b * ED * t**2
     turn = root_turn_mm_per_N(L, ED * t**3 / 12.0, np.cos(theta), k)
     return as_value(0.5 * turn + 0.25 * s * plate_mm / (ED * t))
+
+
+def cap_root_mm_per_N(theta_rad, t_mm, h_mm, depth_mm: float, E_prime_MPa: float) -> Any:
+    """The top layer's roots turning into the cap, mm/N: :func:`root_joint_mm_per_N` with the
+    squeezed depth the root's own width t (the cap is no thin plate: under a strip t wide the
+    load has spread out after about t). Part of the cap's closed form (model.load_path), so it
+    stops with the top layer's lock as the cap's bending does."""
+    return root_joint_mm_per_N(theta_rad, t_mm, h_mm, t_mm, depth_mm, E_prime_MPa)
+
+
+def cover_root_mm_per_N(theta_rad, t_mm, h_mm, cover_mm: float, depth_mm: float, E_prime_MPa: float) -> Any:
+    """Layer 1's roots turning into the housing's cover, mm/N: :func:`root_joint_mm_per_N` on a
+    plate as thick as the cover (it stands on the slot's walls as a plate on the walls below it).
+    Part of the cover's closed form (model.load_path); it stops with layer 1's lock, as a plate's
+    joints do."""
+    return root_joint_mm_per_N(theta_rad, t_mm, h_mm, cover_mm, depth_mm, E_prime_MPa)
 
 
 def plates_beside(n_layers: int) -> np.ndarray:

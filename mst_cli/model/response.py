@@ -7,6 +7,7 @@ the curves, local slopes, the chip setting and the force resolution. Pure: no I/
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import partial
@@ -32,8 +33,10 @@ GAP_STEP_MM = 1e-4  # central-difference step for d|B|/d gap with the non-closed
 
 
 def field_magnitude_T(gap_mm: ArrayLike, geometry: SensorGeometry, model: str) -> np.ndarray:
-    """|B| at the chip for an array of gaps (the quantity the sensor reads)."""
-    B = fld.field_at_chip_T(gap_mm, geometry.magnet, model, geometry.chip_offset_mm, geometry.magnet_tilt_deg)
+    """|B| at the chip for an array of gaps (the quantity the sensor reads); a gap below 0 (a stack
+    whose members let the magnet reach the chip) reads the field at 0: the magnet cannot pass it."""
+    gap = np.maximum(np.asarray(gap_mm, dtype=float), 0.0)
+    B = fld.field_at_chip_T(gap, geometry.magnet, model, geometry.chip_offset_mm, geometry.magnet_tilt_deg)
     return np.linalg.norm(B, axis=-1)
 
 
@@ -214,7 +217,7 @@ def simulate(
         saturated=saturated,
         field_resolution_T=res_T,
         noise_uT_rms=noise_uT_rms,
-        warnings=_warnings(stack, degenerate, B_full if saturated else None),
+        warnings=_warnings(stack, degenerate, B_full if saturated else None, gap0),
         members=parts,
         displacement_layers_mm=layers_only[0],
         dB_rel_layers=layers_only[1],
@@ -236,10 +239,12 @@ def model_members(
 
 
 def _curve(stack: Stack, F: np.ndarray, geometry: SensorGeometry, model: str) -> tuple:
-    """(drop mm, gap mm, B vector (m, 3) T, |B| T) at the forces ``F``."""
+    """(drop mm, gap mm, B vector (m, 3) T, |B| T) at the forces ``F``; past a gap of 0 the field
+    is the field at 0 (:func:`field_magnitude_T`)."""
     d = stack.displacement_mm(F)
     gap = geometry.gap0_mm - d
-    Bvec = fld.field_at_chip_T(gap, geometry.magnet, model, geometry.chip_offset_mm, geometry.magnet_tilt_deg)
+    at = np.maximum(gap, 0.0)
+    Bvec = fld.field_at_chip_T(at, geometry.magnet, model, geometry.chip_offset_mm, geometry.magnet_tilt_deg)
     return d, gap, Bvec, np.linalg.norm(Bvec, axis=-1)
 
 
@@ -260,9 +265,11 @@ def part_stack(laws: tuple, parts: Members) -> Stack:
     capped = tuple(capped_units(laws, parts))
     extra: tuple = parts.regime_extra_mm_per_N
     if parts.locked_plates_mm_per_N:
-        locked = by_regime(parts.locked_plates_mm_per_N, [u.lock_force_N for u in capped])
+        lock_N = [u.lock_force_N for u in capped]
+        locked = by_regime(parts.locked_plates_mm_per_N, lock_N, parts.two_locked_plates_mm_per_N or None)
         extra = tuple(float(v) for v in np.add(locked, run_on(extra)))
-    return Stack(capped, parts.cover_mm_per_N, parts.cover_contact_mm_per_N, parts.cover_travel_mm, extra)
+    C, travel, C_locked, delta = parts.cover_contact
+    return Stack(capped, parts.cover_mm_per_N, C, travel, extra, C_locked, delta)
 
 
 def _layers_only(
@@ -362,18 +369,25 @@ def _regimes(
                 sensitivity_secant_per_N=float(S[i]),
                 sensitivity_min_per_N=float(s_lo),
                 sensitivity_max_per_N=float(s_hi),
-                force_resolution_N=res_T / (B0 * float(S[i])),
-                force_resolution_worst_N=res_T / (B0 * float(s_lo)),
+                force_resolution_N=res_T / (B0 * float(S[i])) if S[i] > 0 else math.inf,  # 0: the magnet on the chip
+                force_resolution_worst_N=res_T / (B0 * float(s_lo)) if s_lo > 0 else math.inf,
                 sensitivity_layers_secant_per_N=float(S_layers[i]),
             )
         )
     return regimes
 
 
-def _warnings(stack: Stack, degenerate: np.ndarray, saturated_at_T: float | None) -> list[str]:
-    """Zero-width regimes, a lock order other than the file's, a saturated chip (|B| in T)."""
+def _warnings(stack: Stack, degenerate: np.ndarray, saturated_at_T: float | None, gap0_mm: float) -> list[str]:
+    """Zero-width regimes, a lock order other than the file's, a saturated chip (|B| in T), the
+    magnet reaching the chip inside the range (the stack's drop reaching ``gap0_mm``)."""
     edges, order = stack.regime_bounds_N, stack.lock_order
     warnings = []
+    if float(stack.displacement_mm(edges[-1])) >= gap0_mm:
+        warnings.append(
+            f"the magnet reaches the chip at {float(stack.force_N(gap0_mm)):.4g} N, inside the range (to "
+            f"{edges[-1]:.4g} N): the layers and members give more than the {gap0_mm:.3g} mm gap, and past it "
+            "the field stays the chip's at contact (a sensitivity of 0)"
+        )
     for i in np.flatnonzero(degenerate):
         warnings.append(
             f"layers {', '.join(str(int(j) + 1) for j in order[i - 1 : i + 1])} lock at the "

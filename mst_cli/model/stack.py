@@ -42,6 +42,46 @@ def capped_lock_force_N(
     return np.where(C > 0, closes, R)
 
 
+def contact_drop_mm(force_N: ArrayLike, first_lock_N: ArrayLike, C: ArrayLike, C_locked: ArrayLike) -> np.ndarray:
+    """How far the members' contact part (the cover over the board's slot) has moved at
+    ``force_N``, before it lands: C per newton until layer 1 (bonded on the cover) locks at
+    ``first_lock_N``, C_locked past it (the closed layer deepens the cover's section,
+    model.load_path.cover_parts_locked_mm_per_N); broadcast arrays, inf: layer 1 never locks."""
+    F, R1 = np.asarray(force_N, dtype=float), np.asarray(first_lock_N, dtype=float)
+    return np.asarray(C, dtype=float) * np.minimum(F, R1) + np.asarray(C_locked, dtype=float) * np.maximum(F - R1, 0.0)
+
+
+def contact_force_N(first_lock_N: ArrayLike, C: ArrayLike, C_locked: ArrayLike, travel_mm: ArrayLike) -> np.ndarray:
+    """Where :func:`contact_drop_mm` reaches ``travel_mm`` (the cover lands on the board; inf:
+    never), broadcast arrays."""
+    R1, C, C_locked, travel = (np.asarray(a, dtype=float) for a in (first_lock_N, C, C_locked, travel_mm))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        early = np.where(C > 0.0, travel / C, np.inf)
+        late = R1 + np.where(C_locked > 0.0, (travel - C * R1) / C_locked, np.inf)
+    return np.where(early <= R1, early, late)
+
+
+def members_drop_mm(
+    force_N: ArrayLike, rate: float, C: float, travel_mm: float, first_lock_N: float, C_locked: float, delta: float
+) -> np.ndarray:
+    """The drop of members in series at ``force_N``: ``rate`` per newton, ``delta`` more past layer
+    1's lock ``first_lock_N``, less what their contact part (C, C_locked past that lock,
+    :func:`contact_drop_mm`) has moved beyond ``travel_mm`` (the cover's air): :class:`Stack`'s
+    and model.part_laws.SeriesMember's."""
+    F = np.asarray(force_N, dtype=float)
+    d = rate * F + delta * np.maximum(F - first_lock_N, 0.0)
+    return d - np.maximum(contact_drop_mm(F, first_lock_N, C, C_locked) - travel_mm, 0.0)
+
+
+def members_rate_mm_per_N(
+    force_N: float, rate: float, C: float, travel_mm: float, first_lock_N: float, C_locked: float, delta: float
+) -> float:
+    """d/dF of :func:`members_drop_mm` just past ``force_N`` (right-continuous at the lock and the landing)."""
+    past = force_N >= first_lock_N
+    landed = force_N >= float(contact_force_N(first_lock_N, C, C_locked, travel_mm))
+    return rate + (delta if past else 0.0) - ((C_locked if past else C) if landed else 0.0)
+
+
 def series_displacement_mm(
     force_N: ArrayLike,
     k_N_per_mm: ArrayLike,
@@ -58,8 +98,9 @@ def series_displacement_mm(
     are not layers (``members_mm_per_N``, shape (...), a linear spring) in series too, and the
     cap (``cap_mm_per_N``, shape (...)) bending into the top layer's cavity until it closes
     there (:func:`capped_lock_force_N`), or per layer (shape (..., n): each plate bends into the
-    cavity of the layer under it, :func:`layer_caps`); ``contact`` (C, travel), shapes (...): the part C of
-    the members that stops once it has moved ``travel`` (:attr:`Stack.contact_mm_per_N`);
+    cavity of the layer under it, :func:`layer_caps`); ``contact`` (C, travel[, C_locked, delta]), shapes
+    (...): the part C of the members that stops once it has moved ``travel`` (:attr:`Stack.contact_mm_per_N`),
+    C_locked per newton past layer 1's lock, when the members' compliance changes by delta;
     ``regime_extra_mm_per_N`` (..., n): a compliance added in each regime between the (capped)
     lock forces, the last one's past the last lock too (:func:`regime_extra_displacement_mm`:
     the whole-part rung's correction, docs/design.md 4.7).
@@ -77,9 +118,6 @@ def series_displacement_mm(
         F, k[..., None, :], dl[..., None, :], R[..., None, :], np.asarray(k_locked_N_per_mm, dtype=float)[..., None, :]
     )
     d = d_layer.sum(axis=-1) + np.asarray(members_mm_per_N, dtype=float)[..., None] * F[..., 0]
-    if contact is not None:  # (C, travel) (...): that part of the members stops after travel (Stack)
-        C_c, travel = (np.asarray(a, dtype=float)[..., None] for a in contact)
-        d = d - np.maximum(C_c * F[..., 0] - travel, 0.0)
     # each layer's lock force, where its cap closes its cavity
     if cap_mm_per_N is None:
         Rc = R
@@ -87,6 +125,12 @@ def series_displacement_mm(
         Rc = capped_lock_force_N(k, dl, R, layer_caps(cap_mm_per_N, k.shape))
     else:
         Rc = capped_lock_N
+    if contact is not None:  # that part of the members stops after travel; past layer 1's lock, its rates (Stack)
+        full = contact if len(contact) == 4 else (*contact, contact[0], 0.0)  # (C, travel): no change at the lock
+        C_c, travel, C_locked, delta = (np.asarray(a, dtype=float)[..., None] for a in full)
+        R1 = Rc[..., :1]
+        d = d + delta * np.maximum(F[..., 0] - R1, 0.0)
+        d = d - np.maximum(contact_drop_mm(F[..., 0], R1, C_c, C_locked) - travel, 0.0)
     if regime_extra_mm_per_N is not None:
         d = d + regime_extra_displacement_mm(F[..., 0], np.sort(Rc, axis=-1), regime_extra_mm_per_N)
     if cap_mm_per_N is None:
@@ -156,17 +200,41 @@ class Stack:
     # a compliance added per regime (the whole-part rung's correction to the members' closed
     # form, docs/design.md 4.7), between the lock forces, the last one's past the last lock; (): none
     regime_extra_mm_per_N: tuple[float, ...] = ()
+    # past layer 1's lock (the first layer's, on the cover): the contact part's compliance (None: the
+    # same) and the change of the members' (the cover under the closed layer, model.load_path)
+    contact_locked_mm_per_N: float | None = None
+    members_locked_delta_mm_per_N: float = 0.0
+
+    @property
+    def first_lock_N(self) -> float:
+        """Layer 1's lock force (inf: no layers)."""
+        return float(self.layers[0].lock_force_N) if self.layers else math.inf
+
+    @property
+    def _member_law(self) -> tuple:
+        """(rate, C, travel, layer 1's lock, C past it, the change past it): :func:`members_drop_mm`'s."""
+        C = self.contact_mm_per_N
+        C_locked = C if self.contact_locked_mm_per_N is None else self.contact_locked_mm_per_N
+        return (
+            self.members_mm_per_N,
+            C,
+            self.contact_travel_mm,
+            self.first_lock_N,
+            C_locked,
+            self.members_locked_delta_mm_per_N,
+        )
 
     @property
     def contact_force_N(self) -> float:
         """Where the members' contact closes (inf: never)."""
-        return self.contact_travel_mm / self.contact_mm_per_N if self.contact_mm_per_N > 0.0 else math.inf
+        _, C, travel, R1, C_locked, _ = self._member_law
+        return float(contact_force_N(R1, C, C_locked, travel))
 
     def members_displacement_mm(self, force_N: ArrayLike) -> np.ndarray:
-        """The members' drop at ``force_N``: linear, less what the contact stops."""
+        """The members' drop at ``force_N``: linear (its rate changing at layer 1's lock), less
+        what the contact stops, plus the regimes' extra."""
         F = np.asarray(force_N, dtype=float)
-        stopped = np.maximum(self.contact_mm_per_N * F - self.contact_travel_mm, 0.0) if self.contact_mm_per_N else 0.0
-        d = self.members_mm_per_N * F - stopped
+        d = members_drop_mm(F, *self._member_law)
         if self.regime_extra_mm_per_N:
             d = d + regime_extra_displacement_mm(
                 F.ravel(), self.regime_bounds_N[1:], self.regime_extra_mm_per_N
@@ -175,7 +243,7 @@ class Stack:
 
     def members_compliance_mm_per_N(self, force_N: float) -> float:
         """The members' dd/dF just past ``force_N`` (right-continuous at the contact and the locks)."""
-        C = self.members_mm_per_N - (self.contact_mm_per_N if force_N >= self.contact_force_N else 0.0)
+        C = members_rate_mm_per_N(force_N, *self._member_law)
         if self.regime_extra_mm_per_N:
             r = min(int(np.searchsorted(self.regime_bounds_N[1:], force_N, side="right")), len(self.layers) - 1)
             C += self.regime_extra_mm_per_N[r]

@@ -107,10 +107,11 @@ def load_path_line(
         )
     lands, end = lp["cover_lands_N"], lp["regimes"][-1]["force_N"][1]
     if lands is not None and lands < end:
+        air = air_keeping_cover_off_mm(geometry, doc.material, end, patch_mm, mechanics=resp.mechanics)
         line += (
             f"; the cover lands on the board's parts at {lands:.3g} N, inside the range (to {end:.3g} N): past it "
             "the press bears on the chip and connectors, a support the printed body alone lacks "
-            f"(housing.chip_clearance_mm >= {air_keeping_cover_off_mm(geometry, doc.material, end, patch_mm):.2f} mm "
+            f"(housing.chip_clearance_mm >= {air:.2f} mm "
             f"keeps it off past {1 + LANDING_MARGIN_REL:g} x the range's end)"
         )
     return line

@@ -1,0 +1,127 @@
+"""The housing's base in closed form (model.housing_base; docs/design.md 4.7): its limits and its
+pieces by hand."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import mst_cli as mst
+from mst_cli.model import housing_base as hb
+from mst_cli.model import load_path as lp
+from mst_cli.model.beams import plain_section, section_EI_kGA
+from mst_cli.model.plate_joint import root_joint_mm_per_N
+
+FORWARD = Path(__file__).resolve().parents[1] / "configs" / "mohammadi2021-forward.yaml"
+EI, KGA, P = 60.0, 900.0, 0.5  # a cover of one section (N mm^2, N) and each side's share of 1 N
+
+
+def scene():
+    doc = mst.load(FORWARD)
+    return replace(lp.member_scene(doc.geometry(), doc.material), slot_wall_widths_mm=(2.0, 2.0))
+
+
+def test_the_feet_bear_on_the_slots_edge_fading_over_the_covers_thickness():
+    """P/(c_b E'D) at the edge, the same a cover's thickness either side (exp(-1) of it), 1e-4 of
+    it three thicknesses away."""
+    s = scene()
+    at_edge = P / (hb.BEARING * s.E_prime_MPa * s.depth_mm)
+    c, edge = s.cover_mm, s.half_slot_mm
+    assert hb.corner_mm_per_N(s, edge) == pytest.approx(at_edge, rel=1e-12)
+    for e in (-c, c):
+        assert hb.corner_mm_per_N(s, edge - e) == pytest.approx(at_edge / math.e, rel=1e-12)
+    assert hb.corner_mm_per_N(s, edge - 3 * c) < 2e-4 * at_edge
+
+
+def test_the_cover_ties_the_walls_tops_between_free_and_held():
+    """A cantilever of E'I on a held foot, its top on a lateral spring k_s: its top's turn under a
+    moment is M H/E'I (1 - (3/4) kappa/(1 + kappa)), kappa = k_s H^3/(3 E'I); no cover (k_s -> 0):
+    E'I/H, free to sway; a rigid tie: 4 E'I/H, held."""
+    s = scene()
+    E, D, H, w = s.E_prime_MPa, s.depth_mm, s.slot_height_mm, 2.0
+    EI = E * D * w**3 / 12
+    assert hb.wall_turn_Nmm_per_rad(replace(s, cover_mm=1e-12), w) == pytest.approx(EI / H, rel=1e-9)
+    assert hb.wall_turn_Nmm_per_rad(replace(s, cover_mm=1e9), w) == pytest.approx(4 * EI / H, rel=1e-6)
+    thin, thick = (hb.wall_turn_Nmm_per_rad(replace(s, cover_mm=c), w) for c in (0.8, 3.0))
+    assert EI / H < thin < thick < 4 * EI / H
+
+
+def test_a_foot_on_the_walls_centre_line_only_squeezes_them():
+    s = scene()
+    over, walls, bend = hb.housing_mm_per_N(s, s.half_slot_mm + 1.0, s.half_slot_mm, (EI, KGA), (EI, KGA))
+    squeeze = P * s.slot_height_mm / (s.E_prime_MPa * 2.0 * s.depth_mm)
+    assert over == 0.0 and bend == 0.0 and walls == pytest.approx(squeeze, rel=1e-12)
+
+
+def test_no_slot_walls_clamp_the_cover_and_rigid_ones_hold_its_built_in_ends():
+    """Height 0: the clamped four-point beam. Walls 10 m wide (their turn ~ 1/w^3): the cover with
+    its ends built into rigid walls, the third figure, to 1e-4; a cover 1 m thick (its ends' spring
+    ~ c^2) on them: clamped again."""
+    s = scene()
+    L, e = 2 * s.half_slot_mm, 4.0
+    head = s.half_slot_mm - e
+    clamped = lp.two_load_mm_per_N(L, e, EI, KGA, "clamped")
+    flat = hb.housing_mm_per_N(replace(s, slot_height_mm=0.0), head, s.half_slot_mm, (EI, KGA), (EI, KGA))
+    assert flat[0] == pytest.approx(clamped, rel=1e-12) and flat[2] == pytest.approx(clamped, rel=1e-12)
+    wide = replace(s, slot_wall_widths_mm=(1e4, 1e4))
+    over, _, bend = hb.housing_mm_per_N(wide, head, s.half_slot_mm, (EI, KGA), (EI, KGA))
+    assert over == pytest.approx(bend, rel=1e-4) and bend > clamped
+    thick = replace(wide, cover_mm=1e3)
+    assert hb.housing_mm_per_N(thick, head, s.half_slot_mm, (EI, KGA), (EI, KGA))[0] == pytest.approx(clamped, rel=1e-4)
+
+
+def test_a_foot_over_the_slot_by_hand():
+    """A cover of one section, e inside the slot's edge: by virtual work over the half span, C1 =
+    e (L - e)/(2 E'I), C2 = e^2 (3L - 4e)/(6 E'I), B = L/(2 E'I); the end turns with the wall's
+    top under P w/2 + M, k_w = E'I_w/H / (1 - (3/4) kappa/(1 + kappa)) (a cantilever whose top the
+    cover ties, kappa = k_s H^3/(3 E'I_w), k_s = E'cD/(L/2)), and on its own built-in end, pi/8
+    E'D c^2, under M: M = (P C1 - P (w/2)/k_w) / (B + 1/k_w + 1/k_end); the wall turns by
+    (P w/2 + M)/k_w and drops its inner edge by w/2 x that."""
+    s = scene()
+    E, D, H, w, c = s.E_prime_MPa, s.depth_mm, s.slot_height_mm, 2.0, s.cover_mm
+    L, e = 2 * s.half_slot_mm, 4.0
+    B, C1, C2 = L / (2 * EI), e * (L - e) / (2 * EI), e**2 * (3 * L - 4 * e) / (6 * EI)
+    EI_w = E * D * w**3 / 12
+    kappa = (E * c * D / s.half_slot_mm) * H**3 / (3 * EI_w)  # the cover's stretch against the walls' sway
+    k_wall, k_end = EI_w / H / (1 - 0.75 * kappa / (1 + kappa)), math.pi / 8 * E * D * c**2
+    k = 1 / (1 / k_wall + 1 / k_end)
+    M = (P * C1 - P * w / 2 / k_wall) / (B + 1 / k)
+    turn = (P * w / 2 + M) / k_wall
+    over, walls, bend = hb.housing_mm_per_N(s, s.half_slot_mm - e, s.half_slot_mm, (EI, KGA), (EI, KGA))
+    assert over == pytest.approx(P * C2 - M * C1 + P * e / KGA + w / 2 * turn, rel=1e-12)
+    assert walls == pytest.approx(P * H / (E * w * D), rel=1e-12)
+    assert bend == pytest.approx(P * C2 - P * C1**2 / (B + 1 / k_end) + P * e / KGA, rel=1e-12)
+
+
+def test_layer_1s_roots_turn_into_the_cover_until_it_locks_and_its_block_then_bears_on_it():
+    """Open: the walls' part is the housing's plus layer 1's roots as on a plate as thick as the
+    cover and the feet's bearing at the slot's edge. Locked: the cover's bending with the section
+    cover + h_1 under the pad, the walls' turn as before, no roots, the feet's bearing and the
+    block's, P/(c_b E'D)."""
+    s = scene()
+    doc = mst.load(FORWARD)
+    cell = doc.geometry().layers[0]
+    E, G, D = s.E_prime_MPa, s.G_MPa, s.depth_mm
+    theta, t, h = cell.theta_rad, cell.t_mm, cell.h_mm
+    head, pad = s.half_slot_mm - 3.0, s.half_slot_mm - 2.5  # a foot over the slot
+    alone = plain_section(D, s.cover_mm, E, G)
+    thin = section_EI_kGA(D, s.cover_mm + t, E, G)
+    deep = section_EI_kGA(D, s.cover_mm + h, E, G)
+    over, walls, bend = hb.housing_mm_per_N(s, head, pad, thin, alone)
+    roots = root_joint_mm_per_N(theta, t, h, s.cover_mm, D, E)
+    edge = P * math.exp(-((3.0 / s.cover_mm) ** 2)) / (hb.BEARING * E * D)  # the feet 3 mm inside the edge
+    assert hb.cover_parts_mm_per_N(s, t, pad, head, theta, h) == pytest.approx((over, walls + roots + edge), rel=1e-12)
+    deep_bend = hb.housing_mm_per_N(s, head, pad, deep, alone)[2]
+    assert 0.0 < deep_bend < bend
+    locked = hb.cover_parts_locked_mm_per_N(s, t, h, pad, head)
+    bearing = P / (hb.BEARING * E * D)
+    assert locked == pytest.approx((over - bend + deep_bend, walls + edge + bearing), rel=1e-12)
+    # the members carry both: before and after layer 1's lock (model.load_path)
+    parts = lp.members(doc.geometry(), doc.material)
+    C, _, C_locked, delta = parts.cover_contact
+    assert C_locked <= C and parts.cover_mm_per_N + delta > 0.0
+    assert np.isfinite(delta)
