@@ -8,7 +8,7 @@ modulus. These are round trips, so their truth is mst's own section model: they 
 inverse and the two commands' agreement, not the model (the rung is checked on its own in
 tests/test_whole_part_rung.py). Each also reads the same fields with the closed form, to show
 the test would see the read side fall back to it (since the closed form took the walls' joints
-with the plates, its centred reads are only 1-2 % off the section's, so those bounds are tighter).
+with the plates, its centred reads are only 1-4 % off the section's, so those bounds are tighter).
 
 The calibration test rests on a law, not on the model's output: the section model's members are
 TPU but the insert, and in linear elasticity their compliance scales as 1/E, so a part whose TPU
@@ -39,9 +39,11 @@ def test_a_centred_press_reads_back_the_force_mst_simulate_states(section_spec, 
     csv = fields_csv(tmp_path / "fields.csv", resp.force_N[rows], resp.B_T[rows])
     got = api.read(section_spec, csv, warn=quiet)
     np.testing.assert_allclose(got.force_N, resp.force_N[rows], rtol=2e-3)
-    closed = api.read(forward_copy(tmp_path, "part"), csv, warn=quiet).force_N  # +0.9 to +2.4 %
-    read = np.isfinite(closed)  # the closed form's range ends before the section's last reading
-    assert read.sum() >= len(rows) - 1 and np.all(closed[read] / resp.force_N[rows][read] - 1.0 > 3 * 2e-3)
+    closed = api.read(forward_copy(tmp_path, "part"), csv, warn=quiet).force_N  # +0.9 to +4.0 %
+    read = np.isfinite(closed)  # past the second lock the closed form is stiffer than the rung (docs
+    # 4.7: -15 % on this design), so its range ends before the section's last readings there
+    before_last = resp.force_N[rows] < resp.regimes[-1].force_from_N
+    assert np.all(read[before_last]) and np.all(closed[read] / resp.force_N[rows][read] - 1.0 > 3 * 2e-3)
 
 
 def test_an_off_centre_press_reads_back_its_force_and_place(section_spec, tmp_path):

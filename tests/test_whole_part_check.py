@@ -6,8 +6,8 @@ The truth here is not mst's closed form: the rung is checked on its own in
 tests/test_whole_part_rung.py (its members rigid it is L2, its cap alone the beam closed form,
 and it converges with the mesh). What these tests assert is physics the two must share: members
 only add compliance, they nearly add in series, and the bundled forward design, whose cover stays
-off the board, is within budget, while the same part with the default 0.3 mm of air, whose cover
-lands on the board in mst's model (a contact the printed body does not have), is not."""
+off the board, is within budget, while the same part with 0.1 mm of air, whose cover lands on
+the board in mst's model (a contact the printed body does not have), is not."""
 
 import json
 import math
@@ -26,14 +26,15 @@ from mst_cli.model.load_path import ACCURACY_BUDGET_REL
 
 ROOT = Path(__file__).resolve().parents[1]
 FORWARD = ROOT / "configs" / "mohammadi2021-forward.yaml"
+LANDING_AIR_MM = 0.1  # the forward part's cover lands on the board inside its range (25 N) with this air
 
 
 @pytest.fixture(scope="module")
 def exports(tmp_path_factory) -> dict[str, Path]:
-    """The bundled forward design, and the same part with the default 0.3 mm of air over the board."""
+    """The bundled forward design, and the same part with 0.1 mm of air over the board."""
     folder = tmp_path_factory.mktemp("whole_part_check")
     raw = yaml.safe_load(FORWARD.read_text())
-    raw["housing"] = {**raw.get("housing", {}), "chip_clearance_mm": 0.3}
+    raw["housing"] = {**raw.get("housing", {}), "chip_clearance_mm": LANDING_AIR_MM}
     landing = folder / "landing.yaml"
     landing.write_text(yaml.safe_dump(raw, sort_keys=False))
     out = {}
@@ -79,14 +80,14 @@ def test_the_bundled_forward_part_gives_what_its_closed_form_states_like_for_lik
 
 
 def test_a_cover_that_lands_on_the_board_fails_and_names_the_air_that_keeps_it_off(exports, tmp_path):
-    """The forward part with the default 0.3 mm of air: mst's cover lands on the board at 22.4 N,
-    inside regime 2, and is held there in regime 3, a contact the printed body does not have; like
-    for like regime 3 is then far further off than on the bundled part (0.65 mm of air: -10 %),
-    and the check names the air that keeps the cover off, whatever member it names first."""
+    """The forward part with 0.1 mm of air: mst's cover lands on the board at 15.3 N, inside
+    regime 2, and is held there in regime 3, a contact the printed body does not have; like for
+    like regime 3 is then past its budget (-29 %; the bundled part, 0.65 mm of air: -15 %), and the
+    check names the air that keeps the cover off, whatever member it names first."""
     check = whole_part(mst.check(exports["landing"], whole_part=True))
     assert not check.passed
     regimes = check.values["regimes"]
-    assert regimes[2]["error_rel"] < -2.0 * regimes[2]["budget_rel"]  # -47 %
+    assert regimes[2]["error_rel"] < -regimes[2]["budget_rel"]  # -29 %
     members = check.values["regime_members_mm_per_N"]
     worst = regimes[members["regime"] - 1]
     # the members nearly add in series (docs/design.md 4.7: within a few per cent of the part's drop)
@@ -96,7 +97,7 @@ def test_a_cover_that_lands_on_the_board_fails_and_names_the_air_that_keeps_it_o
     # the remedy is the air that keeps the cover off past 1.25 x the range's end, rounded up
     doc = mst.load(exports["landing"].parent / "landing.yaml")
     air = air_keeping_cover_off_mm(doc.geometry(), doc.material, regimes[2]["force_N"][1])
-    assert 0.3 < air < 0.65  # the bundled config's 0.65 mm is past it
+    assert LANDING_AIR_MM < air < 0.65  # the bundled config's 0.65 mm is past it
     assert f"housing.chip_clearance_mm >= {math.ceil(air * 100) / 100:.2f} mm" in check.note
 
 
