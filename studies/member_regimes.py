@@ -91,7 +91,7 @@ def closed_rows(g, m, stack) -> list[dict]:
         }
         row["closed_part"] = 1e3 * share["small_load_compliance_mm_per_N"]
         row["regime_from_N"], row["regime_to_N"] = (float(f) for f in share["force_N"])
-        rows.append(row | {"cover_lands_N": lp.cover_landing_N(parts)})
+        rows.append(row | {"cover_lands_N": lp.cover_landing_N(parts, lp.first_lock_N(stack.layers, parts))})
     return rows
 
 
