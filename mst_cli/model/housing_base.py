@@ -5,7 +5,7 @@ The base is a block with the board's slot cut under its cover. Layer 1's bottom 
 the cover; its walls' feet load it at |x| = head, P = F/2 on each side. The slot's walls are
 TPU columns w wide and H tall from the held floor to the cover. Each piece below is a mechanism
 the whole-part rung shows on its own (studies/member_regimes.py, its base split into the cover
-alone and the walls alone; studies/member_fixes.py):
+alone and the walls alone; studies/member_closed_form.py):
 
 * **the walls' squeeze**, P H / (E' w D): the walls alone, the cover rigid, within 5-30 % above
   it (the floor under them squeezes too);
