@@ -9,10 +9,12 @@ layers' compression plus each member's bending:
   a beam of depth b = D across the top layer's two wall heads, loaded by the press's contact
   patch (a centred strip ``patch_mm`` wide, all of the depth). The section is the pad plus the
   cap, less the magnet pocket over its width 2r (the magnet's own stiffness is left out: an
-  upper bound on the compliance, by the pocket's share of the section).
+  upper bound on the compliance, by the pocket's share of the section); the top layer's roots
+  turn into it as into a plate (model.plate_joint.cap_root_mm_per_N).
 * **plates** -- each plate bonded to the pads above and below it, loaded by the upper layer's
   wall feet, held by the lower layer's wall heads, its turn resisted by both layers' walls; when
-  they stand at the same x the load goes straight down and the plate does not bend.
+  they stand at the same x the load goes straight down and the plate does not bend; past the
+  nearer pair only the outer layer's pad is bonded to it. Over locked layers, model.past_lock.
 * **cover and slot walls** (the housing's base) -- the cover over the board's slot, bonded to
   layer 1's bottom pad and loaded by its wall feet, and the slot's two walls under it: the walls'
   squeeze and turn, the cover's bending with its ends built into them, layer 1's roots turning
