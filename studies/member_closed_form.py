@@ -10,6 +10,8 @@ wall) and over the slot, and the part's closed / rung - 1 with how many designs 
     PYTHONPATH=. .venv/bin/python studies/member_closed_form.py studies/data/member_regimes.csv --designs 40 --seed 1
     PYTHONPATH=. .venv/bin/python studies/member_closed_form.py --per-plate configs/mohammadi2021.yaml
 
+``--fit-bearing``: the base's rms log error against the rung per regime for each value of its one
+fitted constant, model.housing_base.BEARING, on a grid (a few seconds).
 ``--per-plate``: past each lock of each config's design, the rung with plate 1 alone, plate 2
 alone and both in TPU (base and cap rigid) against the closed form's plates now: the plates over
 two locked layers (model.past_lock.over_two_locked_mm_per_N). 5 solves a regime, a few minutes.
@@ -82,6 +84,28 @@ def tables(out: dict) -> None:
         print(f"| {regime} | {len(before)} | {cells} |")
 
 
+def fit_bearing(rows: list[dict], designs: dict) -> None:
+    """The base's one fitted constant (model.housing_base.BEARING): the base's rms log error
+    against the rung per regime, and their sum, for each c_b on the grid."""
+    from mst_cli.model import housing_base as hb
+
+    kept = hb.BEARING
+    print("| c_b | rms log, regime 1 | regime 2 | regime 3 | sum |")
+    print("|---|---|---|---|---|")
+    try:
+        for c_b in (0.6, 0.8, 1.0, 1.2, 1.5, 2.0):
+            hb.BEARING = c_b
+            out = ratios(rows, designs)
+            rms = [
+                float(np.sqrt(np.mean([np.log(v) ** 2 for (r, k, w), vs in out.items() if r == regime
+                                       and k.startswith("base") and w == "now" for v in vs])))
+                for regime in (1, 2, 3)
+            ]  # fmt: skip
+            print(f"| {c_b:g} | {rms[0]:.3f} | {rms[1]:.3f} | {rms[2]:.3f} | {sum(rms):.3f} |", flush=True)
+    finally:
+        hb.BEARING = kept
+
+
 def per_plate(configs: list[Path]) -> None:
     """Past each lock of the part, the rung's plates one at a time and together against the
     closed form's plates as the forward model moves them, um/N."""
@@ -110,6 +134,7 @@ def main() -> None:
     ap.add_argument("--designs", type=int, default=0, help="how many designs its run sampled")
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--per-plate", type=Path, nargs="*", default=[], help="configs: each plate alone on the rung")
+    ap.add_argument("--fit-bearing", action="store_true", help="the base's rms log error for each c_b on the grid")
     args = ap.parse_args()
     if args.per_plate or args.csv is None:
         per_plate(args.per_plate)
@@ -117,7 +142,8 @@ def main() -> None:
     with args.csv.open() as f:
         rows = list(csv.DictReader(f))
     with tempfile.TemporaryDirectory() as tmp:
-        tables(ratios(rows, {p.stem: p for p in mr.sampled_designs(Path(tmp), args.designs, args.seed)}))
+        designs = {p.stem: p for p in mr.sampled_designs(Path(tmp), args.designs, args.seed)}
+        (fit_bearing if args.fit_bearing else lambda r, d: tables(ratios(r, d)))(rows, designs)
 
 
 if __name__ == "__main__":
