@@ -120,6 +120,10 @@ def test_layer_1s_roots_turn_into_the_cover_until_it_locks_and_its_block_then_be
     locked = hb.cover_parts_locked_mm_per_N(s, t, h, pad, head)
     bearing = P / (hb.BEARING * E * D)
     assert locked == pytest.approx((over - bend + deep_bend, walls + edge + bearing), rel=1e-12)
+    # the design loop's one pass gives both (the open beam solved once)
+    both = hb.cover_parts_both_mm_per_N(s, t, pad, head, theta, h)
+    assert both[0] == pytest.approx((over, walls + roots + edge), rel=1e-12)
+    assert both[1] == pytest.approx((over - bend + deep_bend, walls + edge + bearing), rel=1e-12)
     # the members carry both: before and after layer 1's lock (model.load_path)
     parts = lp.members(doc.geometry(), doc.material)
     C, _, C_locked, delta = parts.cover_contact

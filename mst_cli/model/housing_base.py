@@ -82,10 +82,31 @@ def cover_parts_locked_mm_per_N(scene, t_bottom_mm, h_bottom_mm, pad_mm, head_mm
     s = scene
     E, G, D = s.E_prime_MPa, s.G_MPa, s.depth_mm
     alone = plain_section(D, s.cover_mm, E, G)
-    open_over, walls, open_bend = housing_mm_per_N(
-        s, head_mm, pad_mm, section_EI_kGA(D, s.cover_mm + t_bottom_mm, E, G), alone
-    )
-    _, _, deep_bend = housing_mm_per_N(s, head_mm, pad_mm, section_EI_kGA(D, s.cover_mm + h_bottom_mm, E, G), alone)
+    opened = housing_mm_per_N(s, head_mm, pad_mm, section_EI_kGA(D, s.cover_mm + t_bottom_mm, E, G), alone)
+    return _locked_from_open(s, h_bottom_mm, pad_mm, head_mm, opened, alone)
+
+
+def cover_parts_both_mm_per_N(scene, t_bottom_mm, pad_mm, head_mm, theta_bottom_rad, h_bottom_mm) -> tuple:
+    """(:func:`cover_parts_mm_per_N`, :func:`cover_parts_locked_mm_per_N`) of the same layer 1,
+    the open cover over the slot solved once for both (the design loop asks for both)."""
+    s = scene
+    E, G, D = s.E_prime_MPa, s.G_MPa, s.depth_mm
+    alone = plain_section(D, s.cover_mm, E, G)
+    opened = housing_mm_per_N(s, head_mm, pad_mm, section_EI_kGA(D, s.cover_mm + t_bottom_mm, E, G), alone)
+    roots = cover_root_mm_per_N(theta_bottom_rad, t_bottom_mm, h_bottom_mm, s.cover_mm, D, E)
+    open_parts = (opened[0], opened[1] + roots + corner_mm_per_N(s, head_mm))
+    return open_parts, _locked_from_open(s, h_bottom_mm, pad_mm, head_mm, opened, alone)
+
+
+def _locked_from_open(scene, h_bottom_mm, pad_mm, head_mm, opened: tuple, alone: tuple) -> tuple:
+    """The locked cover's two parts from the open one's :func:`housing_mm_per_N` ``opened``: its
+    bending swapped for the deep section's (cover + h_1 under the pad), the walls' part kept,
+    the feet's bearing at the edge and the block's added."""
+    s = scene
+    E, G, D = s.E_prime_MPa, s.G_MPa, s.depth_mm
+    open_over, walls, open_bend = opened
+    deep = section_EI_kGA(D, s.cover_mm + h_bottom_mm, E, G)
+    deep_bend = cover_bending_mm_per_N(s, head_mm, pad_mm, deep, alone)
     return open_over - open_bend + deep_bend, walls + corner_mm_per_N(s, head_mm) + 0.5 / (BEARING * E * D)
 
 
@@ -118,26 +139,11 @@ def housing_mm_per_N(scene, head_mm, pad_mm, cover_pad, cover_alone) -> tuple:
     s, P = scene, 0.5
     head = np.asarray(head_mm, dtype=float)
     L2, H, D, E = s.half_slot_mm, s.slot_height_mm, s.depth_mm, s.E_prime_MPa
-    e = np.clip(L2 - head, 0.0, L2)  # the foot's distance inside the slot's edge
-    x_pad = np.clip(L2 - np.asarray(pad_mm, dtype=float), 0.0, L2)  # where the pad starts, from the edge
-    (EI_in, kGA_in), (EI_out, kGA_out) = cover_pad, cover_alone
-
-    # int_0^{L/2} min(x, e)^j / E'I dx, the section changing at x_pad, through the antiderivative
-    # prim_j(x) = min(x, e)^(j+1) / (j+1) + e^j max(x - e, 0); prim_j(0) = 0 (e is finite, >= 0)
-    inside_pad, inside_L2 = np.minimum(x_pad, e), np.minimum(L2, e)
-    beyond_pad, beyond_L2 = np.maximum(x_pad - e, 0.0), np.maximum(L2 - e, 0.0)
-
-    def over_half_span(j: int):
-        at_pad = inside_pad ** (j + 1) / (j + 1) + e**j * beyond_pad
-        return at_pad / EI_out + (inside_L2 ** (j + 1) / (j + 1) + e**j * beyond_L2 - at_pad) / EI_in
-
-    B, C1, C2 = over_half_span(0), over_half_span(1), over_half_span(2)
-    shear = P * (np.minimum(e, x_pad) / kGA_out + np.maximum(e - x_pad, 0.0) / kGA_in)
+    e, B, C1, C2, shear = integrals = _cover_integrals(s, head, pad_mm, cover_pad, cover_alone)
+    bend = _bending_on_rigid_walls(s, integrals)
     if H <= 0.0:
-        clamped = P * C2 - P * C1 / B * C1 + shear
-        return as_value(clamped), as_value(0.0 * head), as_value(clamped)
+        return bend, as_value(0.0 * head), bend
     k_end = END_BUILT_IN * E * D * s.cover_mm**2
-    bend_alone = P * C2 - P * C1 * C1 / (B + 1.0 / k_end) + shear  # the walls rigid
     over = e > 0  # the foot over the slot, else on the wall
     on_wall = np.maximum(head, L2)
     over_slot, walls = [], []
@@ -151,5 +157,45 @@ def housing_mm_per_N(scene, head_mm, pad_mm, cover_pad, cover_alone) -> tuple:
         turn = np.where(over, (P * arm + M) / k_wall, P * a / (k_wall + 1.0 / B))
         over_slot.append(P * C2 - M * C1 + shear + np.where(over, 0.5 * w * turn, 0.0))
         walls.append(P * H / (E * w * D) + np.where(over, 0.0, a * turn))
-    bend = np.where(over, bend_alone, 0.0)
-    return as_value(0.5 * (over_slot[0] + over_slot[1])), as_value(0.5 * (walls[0] + walls[1])), as_value(bend)
+    return as_value(0.5 * (over_slot[0] + over_slot[1])), as_value(0.5 * (walls[0] + walls[1])), bend
+
+
+def cover_bending_mm_per_N(scene, head_mm, pad_mm, cover_pad, cover_alone) -> Any:
+    """:func:`housing_mm_per_N`'s third part alone: the cover's bending over the slot under a foot
+    inside its edge, its ends built into rigid walls (0 for a foot on the wall); the locked
+    cover's deep section needs only this."""
+    head = np.asarray(head_mm, dtype=float)
+    return _bending_on_rigid_walls(scene, _cover_integrals(scene, head, pad_mm, cover_pad, cover_alone))
+
+
+def _bending_on_rigid_walls(scene, integrals: tuple) -> Any:
+    """The cover's bending from its :func:`_cover_integrals`, its ends built into rigid walls
+    (pi/8 E'D c^2), 0 for a foot on the wall; no slot walls (height 0): clamped, wherever the foot."""
+    e, B, C1, C2, shear = integrals
+    P = 0.5
+    if scene.slot_height_mm <= 0.0:
+        return as_value(P * C2 - P * C1 / B * C1 + shear)
+    k_end = END_BUILT_IN * scene.E_prime_MPa * scene.depth_mm * scene.cover_mm**2
+    return as_value(np.where(e > 0, P * C2 - P * C1 * C1 / (B + 1.0 / k_end) + shear, 0.0))
+
+
+def _cover_integrals(scene, head: np.ndarray, pad_mm, cover_pad, cover_alone) -> tuple:
+    """(e, B, C1, C2, shear) of :func:`housing_mm_per_N`'s virtual work over the half span: the
+    foot's distance inside the slot's edge, int dx / E'I, int min(x, e)^j / E'I dx (j = 1, 2) and
+    P int_0^e dx / kGA, the section changing where the pad starts (P = 1/2)."""
+    P, L2 = 0.5, scene.half_slot_mm
+    e = np.clip(L2 - head, 0.0, L2)  # the foot's distance inside the slot's edge
+    x_pad = np.clip(L2 - np.asarray(pad_mm, dtype=float), 0.0, L2)  # where the pad starts, from the edge
+    (EI_in, kGA_in), (EI_out, kGA_out) = cover_pad, cover_alone
+
+    # int_0^{L/2} min(x, e)^j / E'I dx, the section changing at x_pad, through the antiderivative
+    # prim_j(x) = min(x, e)^(j+1) / (j+1) + e^j max(x - e, 0); prim_j(0) = 0 (e is finite, >= 0)
+    inside_pad, inside_L2 = np.minimum(x_pad, e), np.minimum(L2, e)
+    beyond_pad, beyond_L2 = np.maximum(x_pad - e, 0.0), np.maximum(L2 - e, 0.0)
+
+    def over_half_span(j: int):
+        at_pad = inside_pad ** (j + 1) / (j + 1) + e**j * beyond_pad
+        return at_pad / EI_out + (inside_L2 ** (j + 1) / (j + 1) + e**j * beyond_L2 - at_pad) / EI_in
+
+    shear = P * (np.minimum(e, x_pad) / kGA_out + np.maximum(e - x_pad, 0.0) / kGA_in)
+    return e, over_half_span(0), over_half_span(1), over_half_span(2), shear

@@ -48,6 +48,7 @@ from mst_cli.model.beams import section_EI_kGA as section_EI_kGA
 from mst_cli.model.beams import strip_bending_mm_per_N as strip_bending_mm_per_N
 from mst_cli.model.beams import two_load_mm_per_N as two_load_mm_per_N
 from mst_cli.model.cell import pad_half_width_mm, wall_centreline_length_mm
+from mst_cli.model.housing_base import cover_parts_both_mm_per_N
 from mst_cli.model.housing_base import cover_parts_locked_mm_per_N as cover_parts_locked_mm_per_N
 from mst_cli.model.housing_base import cover_parts_mm_per_N as cover_parts_mm_per_N
 from mst_cli.model.housing_base import housing_mm_per_N as housing_mm_per_N
@@ -241,15 +242,19 @@ def all_member_parts(scene: MemberScene, theta_rad, t_mm, h_mm) -> tuple:
     supports = layer_supports(scene, theta_rad, t, h_mm)
     one = np.asarray(root_joint_mm_per_N(theta_rad, t, h_mm, *joint_scene(scene)))  # a root on one plate
     locked = scene_locked_plates_mm_per_N(scene, theta_rad, t, h_mm, supports[1], one)
-    bottom = (np.asarray(h_mm, dtype=float)[..., 0], supports[0][..., 0], supports[1][..., 0])
-    cover_locked = cover_parts_locked_mm_per_N(scene, t[..., 0], *bottom)
-    return *member_parts(scene, theta_rad, t, h_mm, supports), one * plates_beside(t.shape[-1]), locked, cover_locked
+    first = (t[..., 0], supports[0][..., 0], supports[1][..., 0], np.asarray(theta_rad, dtype=float)[..., 0])
+    cover, cover_locked = cover_parts_both_mm_per_N(scene, *first, np.asarray(h_mm, dtype=float)[..., 0])
+    parts = member_parts(scene, theta_rad, t, h_mm, supports, cover)
+    return *parts, one * plates_beside(t.shape[-1]), locked, cover_locked
 
 
-def member_parts(scene: MemberScene, theta_rad, t_mm, h_mm, supports: tuple | None = None) -> tuple:
+def member_parts(
+    scene: MemberScene, theta_rad, t_mm, h_mm, supports: tuple | None = None, cover: tuple | None = None
+) -> tuple:
     """:func:`member_compliances` with the cover's two parts apart: (cap, plates, the cover's
     bending over the slot (which stops on the board), the slot walls' squeeze and turn);
-    ``supports``: the layers' :func:`layer_supports`, when the caller has them."""
+    ``supports``: the layers' :func:`layer_supports`, ``cover``: the cover's two parts
+    (:func:`cover_parts_mm_per_N`), when the caller has them."""
     t = np.asarray(t_mm, dtype=float)
     pad, head, walls, sway = layer_supports(scene, theta_rad, t, h_mm) if supports is None else supports
     top = (np.asarray(theta_rad, dtype=float)[..., -1], np.asarray(h_mm, dtype=float)[..., -1])
@@ -257,9 +262,10 @@ def member_parts(scene: MemberScene, theta_rad, t_mm, h_mm, supports: tuple | No
     plates = plates_mm_per_N(
         scene, t[..., :-1], t[..., 1:], head[..., :-1], head[..., 1:], sway[..., :-1], sway[..., 1:]
     )
-    bottom = (np.asarray(theta_rad, dtype=float)[..., 0], np.asarray(h_mm, dtype=float)[..., 0])
-    over_slot, slot_walls = cover_parts_mm_per_N(scene, t[..., 0], pad[..., 0], head[..., 0], *bottom)
-    return cap, np.asarray(plates), over_slot, slot_walls
+    if cover is None:
+        bottom = (np.asarray(theta_rad, dtype=float)[..., 0], np.asarray(h_mm, dtype=float)[..., 0])
+        cover = cover_parts_mm_per_N(scene, t[..., 0], pad[..., 0], head[..., 0], *bottom)
+    return cap, np.asarray(plates), *cover
 
 
 def layer_supports(scene: MemberScene, theta_rad, t_mm, h_mm) -> tuple:
