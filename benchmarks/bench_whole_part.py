@@ -34,10 +34,11 @@ linearised there (general_load.linear_response), the layers and the members apar
 (``--section``: mst's part with ``model.load_path: section``, the members' pose measured on the
 rung); ``--off-centre`` the same three in regime 1 with each member class as printed in turn
 (the forward design unless ``--configs`` is given; ``--every-regime``: the rung's cases in every
-regime); ``--general-convergence`` those figures in regime 1 on three meshes and at five levers;
-``--base-sway`` the base alone as printed (all above it rigid) pulled: the cover's slide
-against two Timoshenko cantilevers; ``--store`` ``mst simulate`` in section mode from a fresh
-cache folder, then again from the one it filled (the rung's solves kept between runs).
+regime, and the base with its cover or its slot walls held rigid); ``--general-convergence``
+those figures in regime 1 on three meshes and at five levers; ``--base-sway`` the base alone as
+printed (all above it rigid) pulled: the cover's slide against two Timoshenko cantilevers;
+``--store`` ``mst simulate`` in section mode from a fresh cache folder, then again from the one
+it filled (the rung's solves kept between runs).
 """
 
 from __future__ import annotations
@@ -258,12 +259,21 @@ def off_centre_regime_rows(path: Path, spacing: float | None) -> list[str]:
     the layers lock (mst's rows are ``--general``'s)."""
     doc, _ = mst.designed(path)
     g, m = doc.geometry(), doc.material
-    cases = [("as printed", 1.0, wp.MEMBER_TAGS), ("rigid", wp.RIGID_FACTOR, wp.MEMBER_TAGS)]
-    cases += [(f"only the {t}", wp.RIGID_FACTOR, tuple(o for o in wp.MEMBER_TAGS if o != t)) for t in wp.MEMBER_TAGS]
+    cases = [("as printed", 1.0, wp.MEMBER_TAGS, ""), ("rigid", wp.RIGID_FACTOR, wp.MEMBER_TAGS, "")]
+    cases += [
+        (f"only the {t}", wp.RIGID_FACTOR, tuple(o for o in wp.MEMBER_TAGS if o != t), "") for t in wp.MEMBER_TAGS
+    ]
+    # the base's two parts, each alone (the other held rigid): a portal frame is not their sum
+    cases += [
+        (f"only the base, its {part.replace('_', ' ')} rigid", wp.RIGID_FACTOR, ("plate", "cap"), part)
+        for part in ("cover", "slot_walls")
+    ]
     rows = []
     for r, locked in enumerate(wp.regime_locked(Stack(layer_laws(g.layers, m, "spring")))):
-        for label, factor, scaled in cases:
-            opts = wp.PartOptions(spacing_mm=spacing, member_factor=factor, scaled=scaled, locked=locked)
+        for label, factor, scaled, rigid_base in cases:
+            opts = wp.PartOptions(
+                spacing_mm=spacing, member_factor=factor, scaled=scaled, locked=locked, rigid_base=rigid_base
+            )
             x = wp.press_general(g, m, opts)
             rows.append(
                 f"| {doc.name} | {r + 1} | {label} | {1e3 * x.turn_per_moment_rad_per_Nmm:.3f} | "

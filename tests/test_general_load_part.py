@@ -19,7 +19,7 @@ from mst_cli.model.load_path import Members, members
 from mst_cli.model.mechanics import layer_laws
 from mst_cli.model.mechanics.depth import in_web
 from mst_cli.model.mechanics.tilt import solve_layer_tilt
-from mst_cli.model.part_laws import cover_host, part_layer_laws, unit_tilt_law
+from mst_cli.model.part_laws import SeriesMember, cover_host, part_layer_laws, unit_tilt_law
 from mst_cli.model.response import simulate
 from mst_cli.model.stack_pose import magnet_field_T, magnet_pose, stack_path, tilt_laws
 from mst_cli.sensor.as_printed import as_printed
@@ -78,6 +78,32 @@ def test_each_member_turns_its_layer_as_a_spring_under_each_chevron(scene):
         assert got - solve_layer_tilt(own, F, (x0, 0.0)).phi_y_rad == pytest.approx(
             F * x0 * C / unit.lever_mm**2, rel=1e-6
         )
+
+
+def test_past_its_lock_the_covers_unit_turns_by_the_layer_and_the_beam_as_before(scene):
+    # past the lock a layer is walls at +-x_c (k_w) beside pads pressed over +-a (k_p): under a
+    # small moment it turns by 1 / (k_w x_c^2 + k_p a^2 / 3) per N mm (the statics of a line pair
+    # and of a uniform bed). The cover in series, outside the layer's contact, adds its turn as a
+    # beam's under a couple, C / x_c^2 per N mm (C its compliance past the lock: the unit's less the
+    # layer's), in every regime, and its drop C per N; the pads' contact is the layer's own
+    geometry, material = scene
+    parts = members(geometry, material)
+    units = part_layer_laws(layer_laws(geometry.layers, material, "spring"), parts)
+    j = cover_host(list(units), parts)
+    unit, cell = units[j], geometry.layers[j]
+    assert isinstance(unit, SeriesMember)
+    law = unit_tilt_law(unit, cell, in_web(cell, material).youngs_modulus_MPa, material.poisson_ratio)
+    own = replace(law, member=None)
+    C = 1.0 / unit.k_locked_N_per_mm - 1.0 / unit.law.k_locked_N_per_mm
+    assert C > 0.0
+    k_w, k_p, x_c, a = own.walls.k_after_N_per_mm, own.pad_stiffness_N_per_mm, own.lever_mm, own.pad_half_width_mm
+    F, x0, dF = 1.5 * unit.lock_force_N, 0.02, 0.1
+    pressed, alone = solve_layer_tilt(law, F, (x0, 0.0)), solve_layer_tilt(own, F, (x0, 0.0))
+    assert pressed.phi_y_rad == pytest.approx(F * x0 * (1.0 / (k_w * x_c**2 + k_p * a**2 / 3.0) + C / x_c**2), rel=1e-6)
+    assert alone.phi_y_rad == pytest.approx(F * x0 / (k_w * x_c**2 + k_p * a**2 / 3.0), rel=1e-6)
+    assert pressed.pad_end_mm == pytest.approx(alone.pad_end_mm, rel=1e-9) and pressed.pads_touch == alone.pads_touch
+    more = solve_layer_tilt(law, F + dF, (0.0, 0.0)).d_mm - solve_layer_tilt(law, F, (0.0, 0.0)).d_mm
+    assert more == pytest.approx(dF / unit.k_locked_N_per_mm, rel=1e-9)
 
 
 def test_members_far_stiffer_than_the_layers_give_the_layers_alone(scene):

@@ -102,7 +102,7 @@ def _read_rows(force_N, x_mm, y_mm, state, F, ox, oy, out, grad):  # pragma: no 
             grad[r, c, 2] = d_w / hw * sign[c] * sign[2]
 
 
-TABLES_FORMAT = 1  # bump when the tables' build or file form changes: every kept file turns stale
+TABLES_FORMAT = 2  # bump when the tables' build or file form changes: every kept file turns stale
 
 
 def tables_key(stack: LoadedStack, force_max_N: float, ratio_max: float, n_force: int, step_mm: float) -> str:
@@ -116,6 +116,9 @@ def tables_key(stack: LoadedStack, force_max_N: float, ratio_max: float, n_force
         numbers += [w.k_tension_N_per_mm, w.k_after_N_per_mm, law.lever_mm, law.depth_mm]
         numbers += [law.pad_half_width_mm, law.pad_gap_mm, law.pad_stiffness_N_per_mm, len(w.d_knots_mm)]
         numbers += [*w.d_knots_mm, *w.F_knots_N]
+        if law.member is not None:  # the cover in series (model.mechanics.tilt.MemberInSeries)
+            member = law.member
+            numbers += [len(member.F_knots_N), *member.F_knots_N, *member.drop_mm, member.rate_after_mm_per_N]
     h.update(np.asarray(numbers, dtype=float).tobytes())
     return h.hexdigest()
 
@@ -126,9 +129,10 @@ def _nodes(half_mm: float, step_mm: float) -> np.ndarray:
 
 
 def _force_nodes(law: LayerTiltLaw, force_max_N: float, n_force: int) -> np.ndarray:
-    """``n_force`` forces from 0 to ``force_max_N`` and the layer law's knots among them: the
-    centred state is piecewise linear in the force, its kinks at the knots."""
-    knots = law.walls.F_knots_N[(law.walls.F_knots_N > 0.0) & (law.walls.F_knots_N < force_max_N)]
+    """``n_force`` forces from 0 to ``force_max_N`` and the layer law's knots among them (its
+    member's too): the centred state is piecewise linear in the force, its kinks at the knots."""
+    knots = law.walls.F_knots_N if law.member is None else np.concatenate([law.walls.F_knots_N, law.member.F_knots_N])
+    knots = knots[(knots > 0.0) & (knots < force_max_N)]
     return np.unique(np.concatenate([np.linspace(0.0, force_max_N, n_force), knots]))
 
 

@@ -55,6 +55,7 @@ from mst_cli.estimation.shear_reading import CHI2_FLAG, ShearReader
 from mst_cli.model.cylinder_table import CylinderFieldTable, rotation_and_left_jacobian
 from mst_cli.model.general_load import LoadedStack, fields_of, load_ratios, magnet_pose_of
 from mst_cli.model.load_bound import UNKNOWNS, crb_sigma
+from mst_cli.model.mechanics.tilt import member_compliance
 from mst_cli.model.mechanics.tilt_batch import newton_many, residual_many
 from mst_cli.model.stack_pose import chip_from_magnet_mm, magnet_pose, magnet_rotvec_rad
 
@@ -135,14 +136,20 @@ class TwoChipModel:
         the layer carries (F, F ox, F oy) = (Fz, Fz x + lever Fx, Fz y + lever Fy))."""
         m = len(theta)
         out = np.zeros((m, 5, len(self.tables), 3))
+        F, rx, ry = load_ratios(theta)
         for j, (law, lever) in enumerate(zip(self.stack.tilt, self.stack.lever_mm)):
-            _, K = residual_many(law, states[:, j], np.zeros((m, 3)))
+            target = np.column_stack([F, F * (theta[:, 3] + lever * rx), F * (theta[:, 4] + lever * ry)])
+            _, K = residual_many(law, states[:, j], target)  # K in the layer's own state
             dload = np.zeros((m, 3, 5))
             dload[:, 0, 0] = 1.0
             dload[:, 1, 0], dload[:, 1, 1], dload[:, 1, 3] = theta[:, 3], lever, theta[:, 0]
             dload[:, 2, 0], dload[:, 2, 2], dload[:, 2, 4] = theta[:, 4], lever, theta[:, 0]
             ok = np.abs(np.linalg.det(K)) > 1e-300
-            out[ok, :, j, :] = np.linalg.solve(K[ok], dload[ok]).transpose(0, 2, 1)
+            own = np.zeros((m, 3, 5))
+            own[ok] = np.linalg.solve(K[ok], dload[ok])
+            # the member in series (the cover) adds its compliance to the layer's, load by load
+            member = member_compliance(law, F)[:, :, None] * dload
+            out[:, :, j, :] = np.where(ok[:, None, None], own + member, 0.0).transpose(0, 2, 1)
         return out
 
     def jacobian_T(self, theta: np.ndarray, at: np.ndarray, states: np.ndarray) -> np.ndarray:

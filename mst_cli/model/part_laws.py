@@ -23,8 +23,11 @@ part_stack's, on the same knots). Under a moment each chevron line carries its s
 through the member's compliance, half of it a side, so the member adds to the unit's tilt per
 moment C / x_c^2 (C the member's centred compliance, x_c the chevron lever): for the cap at a
 small offset that is the simply supported beam's mid-span slope, L / (12 E'I) per N mm for a
-point load, when x_c is half the span (the wall heads). The members are stiff in their own
-plane, so a tangential force slides no member; its moment turns them with their layer. Pure.
+point load, when x_c is half the span (the wall heads). The cover never closes, so it stays
+outside its layer's contact problem (:func:`unit_tilt_law`): it adds that drop and turn to the
+layer's own in every regime, and the layer's pads touch by the layer's own closure. The members
+are stiff in their own plane, so a tangential force slides no member; its moment turns them
+with their layer. Pure.
 """
 
 from __future__ import annotations
@@ -37,7 +40,7 @@ import numpy as np
 
 from mst_cli.model.load_path import CappedLayer, Members, capped_units, cover_landing_N, members
 from mst_cli.model.mechanics import layer_laws
-from mst_cli.model.mechanics.tilt import LayerTiltLaw
+from mst_cli.model.mechanics.tilt import LayerTiltLaw, MemberInSeries
 from mst_cli.model.stack import contact_force_N, members_drop_mm, members_rate_mm_per_N
 
 
@@ -205,16 +208,19 @@ def closure_limit_mm(unit, cavity_mm: float) -> float:
 
 
 def unit_tilt_law(law, cell, modulus_MPa: float, poisson_ratio: float) -> LayerTiltLaw:
-    """:meth:`LayerTiltLaw.from_layer` of a unit of :func:`part_layer_laws`. Past the lock the
-    rung puts the walls and the pads side by side; a member in series softens both alike, so
-    the centred unit keeps the member's compliance there too."""
-    tilt = LayerTiltLaw.from_layer(law, cell, modulus_MPa, poisson_ratio)
+    """:meth:`LayerTiltLaw.from_layer` of a unit of :func:`part_layer_laws`. A unit with the
+    cover (:class:`SeriesMember`) is its layer's own tilt law with the cover in series outside
+    the layer's contact problem (:class:`~mst_cli.model.mechanics.tilt.MemberInSeries`): its drop
+    the unit's less the layer's, its turn as a beam's under the couple in every regime."""
     if not isinstance(law, SeriesMember):
-        return tilt
+        return LayerTiltLaw.from_layer(law, cell, modulus_MPa, poisson_ratio)
     own = LayerTiltLaw.from_layer(law.law, cell, modulus_MPa, poisson_ratio)
-    scale = law.k_locked_N_per_mm / (own.walls.k_after_N_per_mm + own.pad_stiffness_N_per_mm)
-    return replace(
-        tilt,
-        walls=replace(tilt.walls, k_after_N_per_mm=own.walls.k_after_N_per_mm * scale),
-        pad_stiffness_N_per_mm=own.pad_stiffness_N_per_mm * scale,
-    )
+    return replace(own, member=member_in_series(law))
+
+
+def member_in_series(unit: SeriesMember) -> MemberInSeries:
+    """The cover of ``unit`` as the tilt rung carries it: its drop at 0 and at each knot of its
+    law (where it lands on the board, layer 1's lock), its rate past the last."""
+    kinks = (unit.contact_force_N, unit.first_lock_N)
+    F = np.array([0.0, *sorted({float(f) for f in kinks if math.isfinite(f) and f > 0.0})])
+    return MemberInSeries(F, np.asarray(unit.member_mm(F), dtype=float), float(unit._compliance_past(float(F[-1]))))

@@ -37,6 +37,11 @@ deflection along its run. L2 measures it at small strain (two linear solves,
 a = (x_c - x_r) / (W/2 - x_r) in theta, t/L, t/(h - t) and t/(t + a) (tools/fit_tilt_lever.py,
 mst_cli/model/data/tilt_lever.json, with its out-of-sample error).
 
+A member in series that never closes (the housing's cover under layer 1,
+:class:`MemberInSeries`) stays outside the layer's contact problem: the layer solves its own
+equilibrium, and the member adds its drop and its turns as a beam's under the couple; the pads'
+contact is the layer's own closure.
+
 Pure numpy; the lever's coefficients load once from the package data. At (x0, y0) = (0, 0) it is
 the axial model exactly (phi = 0).
 """
@@ -115,8 +120,37 @@ def depth_moments(law: PiecewiseForce, a_mm: float, s: float, half_depth_mm: flo
 
 
 @dataclass(frozen=True)
+class MemberInSeries:
+    """A member in series with a layer and outside its contact problem (the housing's cover under
+    layer 1, :class:`~mst_cli.model.part_laws.SeriesMember`): its drop m(F), piecewise linear in
+    the layer's force (through ``F_knots_N`` from 0 and ``drop_mm`` there, ``rate_after_mm_per_N``
+    past the last knot), and its turns as a beam under the layer's couple, c(F) M_y / x_c^2 and
+    c(F) M_x / (D^2 / 12) (c = dm/dF: the chevron lines' pair and the depth's uniform strip)."""
+
+    F_knots_N: np.ndarray
+    drop_mm: np.ndarray
+    rate_after_mm_per_N: float
+
+    @functools.cached_property
+    def rates_mm_per_N(self) -> np.ndarray:
+        """dm/dF on every piece between knots and past the last one."""
+        return np.append(np.diff(self.drop_mm) / np.diff(self.F_knots_N), self.rate_after_mm_per_N)
+
+    def rate_mm_per_N(self, force_N) -> np.ndarray:
+        """dm/dF just past ``force_N`` (right-continuous at a knot)."""
+        i = np.searchsorted(self.F_knots_N, np.asarray(force_N, dtype=float), side="right") - 1
+        return self.rates_mm_per_N[np.clip(i, 0, len(self.F_knots_N) - 1)]
+
+    def drop_at_mm(self, force_N) -> np.ndarray:
+        F = np.asarray(force_N, dtype=float)
+        i = np.clip(np.searchsorted(self.F_knots_N, F, side="right") - 1, 0, len(self.F_knots_N) - 1)
+        return self.drop_mm[i] + self.rates_mm_per_N[i] * (F - self.F_knots_N[i])
+
+
+@dataclass(frozen=True)
 class LayerTiltLaw:
-    """One layer as the tilt rung sees it (module docstring): walls on two lines, pads between."""
+    """One layer as the tilt rung sees it (module docstring): walls on two lines, pads between,
+    and a member in series outside the contact problem (``member``; None: none)."""
 
     walls: PiecewiseForce  # the web's walls at a uniform closure (N against mm)
     lever_mm: float  # x_c of the chevrons' lines
@@ -124,6 +158,7 @@ class LayerTiltLaw:
     pad_half_width_mm: float  # a
     pad_gap_mm: float  # the lock stroke: the pads touch past it
     pad_stiffness_N_per_mm: float  # the closed pads' column, over their whole area
+    member: MemberInSeries | None = None
 
     @classmethod
     def from_layer(cls, law, cell, modulus_MPa: float, poisson_ratio: float) -> LayerTiltLaw:
@@ -151,9 +186,32 @@ class LayerTiltLaw:
         return replace(self, lever_mm=self.lever_mm * factor, pad_half_width_mm=self.pad_half_width_mm * factor)
 
 
+def member_state(layer: LayerTiltLaw, target: np.ndarray) -> np.ndarray:
+    """(..., 3) what the layer's member adds to its (d, phi_y, phi_x) under the loads ``target``
+    (..., 3) = (F, M_y, M_x): (m(F), c M_y / x_c^2, c M_x / (D^2 / 12)) (:class:`MemberInSeries`);
+    zeros without one."""
+    target = np.asarray(target, dtype=float)
+    if layer.member is None:
+        return np.zeros_like(target)
+    F = target[..., 0]
+    turns = member_compliance(layer, F)[..., 1:] * target[..., 1:]
+    return np.concatenate([layer.member.drop_at_mm(F)[..., None], turns], axis=-1)
+
+
+def member_compliance(layer: LayerTiltLaw, force_N) -> np.ndarray:
+    """(..., 3) d :func:`member_state` / d (F, M_y, M_x) just past ``force_N``: (c, c / x_c^2,
+    12 c / D^2), c = dm/dF (zeros without a member)."""
+    F = np.asarray(force_N, dtype=float)
+    if layer.member is None:
+        return np.zeros((*F.shape, 3))
+    c = layer.member.rate_mm_per_N(F)[..., None]
+    return c * np.array([1.0, 1.0 / layer.lever_mm**2, 12.0 / layer.depth_mm**2])
+
+
 @dataclass(frozen=True)
 class LayerTilt:
-    """One layer's answer to an off-centre load: compression at the axis and rotations."""
+    """One layer's answer to an off-centre load: compression at the axis and rotations, its
+    member's included; the pads' ends and contact its own."""
 
     d_mm: float  # compression at x = y = 0
     phi_y_rad: float  # rotation about y: the +x side closes by phi_y x more
@@ -204,13 +262,16 @@ def solve_layer_tilt(
     previous force's answer on a curve) or the axial solution. Raises TiltError."""
     x0, y0 = offset_mm
     target = np.array([force_N, force_N * x0, force_N * y0])
+    shift = member_state(layer, target)  # the member in series: the layer's own state is the rest
     u = np.array(guess if guess is not None else (_axial_guess(layer, force_N), 0.0, 0.0), dtype=float)
+    if guess is not None:
+        u = u - shift
     norm = np.array([1.0, layer.lever_mm, 0.5 * layer.depth_mm]) * max(abs(force_N), 1e-12)
     r, K = _residual(layer, u, target)
     r_norm = float(np.max(np.abs(r) / norm))
     for _ in range(NEWTON_MAX_ITER):
         if r_norm <= NEWTON_TOL_REL:
-            return _layer_tilt(layer, u)
+            return _layer_tilt(layer, u, shift)
         du = np.linalg.solve(K, -r)
         # damped: a full step across a stiff knot (the pads touching) can overshoot into a flip-flop;
         # the accepted trial's residual and tangent are the next iteration's
@@ -221,17 +282,18 @@ def solve_layer_tilt(
                 break
         u, r, K, r_norm = u + alpha * du, r_try, K_try, norm_try
     if r_norm <= NEWTON_FLOOR_REL:
-        return _layer_tilt(layer, u)
+        return _layer_tilt(layer, u, shift)
     raise TiltError(f"no equilibrium for {force_N:.4g} N at ({x0:g}, {y0:g}) mm (residual {r_norm:.2g} of the load)")
 
 
 def _axial_guess(layer: LayerTiltLaw, force_N: float) -> float:
-    """The centred closure at this force (walls and pads together)."""
+    """The layer's own centred closure at this force (walls and pads together)."""
     return float(centred_compression_mm(layer, force_N))
 
 
 def centred_compression_mm(layer: LayerTiltLaw, force_N) -> np.ndarray:
-    """The layer's closure under a centred force (walls and pads together), over an array of forces."""
+    """The layer's own closure under a centred force (walls and pads together, its member's drop
+    not included), over an array of forces."""
     w = layer.walls
     F = np.asarray(force_N, dtype=float)
     k_locked = max(w.k_after_N_per_mm + layer.pad_stiffness_N_per_mm, 1e-300)
@@ -263,8 +325,12 @@ def _residual(layer: LayerTiltLaw, u: np.ndarray, target: np.ndarray) -> tuple[n
     return r, K
 
 
-def _layer_tilt(layer: LayerTiltLaw, u: np.ndarray) -> LayerTilt:
+def _layer_tilt(layer: LayerTiltLaw, u: np.ndarray, shift: np.ndarray) -> LayerTilt:
+    """The unit's answer from the layer's own state ``u`` and its member's ``shift``: the pads'
+    ends and contact are the layer's own closure."""
     d, phi_y, phi_x = (float(v) for v in u)
     a, spread = layer.pad_half_width_mm, abs(phi_x) * 0.5 * layer.depth_mm
     ends = (d - phi_y * a + spread, d + phi_y * a + spread)
-    return LayerTilt(d, phi_y, phi_x, ends, (ends[0] > layer.pad_gap_mm, ends[1] > layer.pad_gap_mm))
+    unit = u + shift
+    touch = (ends[0] > layer.pad_gap_mm, ends[1] > layer.pad_gap_mm)
+    return LayerTilt(float(unit[0]), float(unit[1]), float(unit[2]), ends, touch)

@@ -5,8 +5,9 @@ The same residual and exact tangent as :func:`~mst_cli.model.mechanics.tilt.solv
 one load at a time in a compiled loop (numba): the walls' integral over the depth cut at every knot
 the closure line crosses, the pads' pressed polygon clipped from their rectangle, its area moments
 by Green's theorem. Newton from a guess close to the answer (a table's, or the previous load's)
-then needs no damping: the fast readers (:mod:`mst_cli.estimation.two_chip_table`) take a few full
-steps and make a tabulated state exact.
+then mostly takes full steps (the scalar solve's damping is kept for a step across the pads'
+stiff contact): the fast readers (:mod:`mst_cli.estimation.two_chip_table`) take a few steps and
+make a tabulated state exact.
 
 Why compiled: a live two-chip stream at 2,000 readings a second leaves 0.5 ms a reading, and the
 same arithmetic as numpy's array calls cost about 9 us a load per residual, mostly in the calls'
@@ -22,7 +23,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from mst_cli.model.mechanics.tilt import NEWTON_TOL_REL, LayerTiltLaw
+from mst_cli.model.mechanics.tilt import NEWTON_TOL_REL, LayerTiltLaw, member_state
 
 ALPHAS = (1.0, 0.5, 0.25, 0.125, 0.0625, 0.03125)  # the step's shares tried, as the scalar solve's
 _ALPHAS = np.array(ALPHAS)
@@ -246,27 +247,27 @@ def _newton_rows(knots, F_knots, slopes, sc, F, off, u, steps, alphas, tol):  # 
             for q in range(3):
                 minus_r[q] = -r[q]
             _solve3(K, minus_r, du)
-            moved = False
+            # the scalar solve's rule: the first share that lowers the residual, else the smallest
+            # (a step across the pads' stiff contact can raise it before the next one falls)
             for alpha in alphas:
                 td, tpy, tpx = d + alpha * du[0], py + alpha * du[1], px + alpha * du[2]
                 _residual(knots, F_knots, slopes, sc, td, tpy, tpx, t0, t1, t2, r_t, K_t, work, f_pad, J_pad)
                 s_t = max(abs(r_t[0]) / norm[0], abs(r_t[1]) / norm[1], abs(r_t[2]) / norm[2])
                 if s_t < size:
-                    d, py, px, size = td, tpy, tpx, s_t
-                    r[:] = r_t
-                    K[:, :] = K_t
-                    moved = True
                     break
-            if not moved:
-                break  # stuck: the next step would be the same
+            d, py, px, size = td, tpy, tpx, s_t
+            r[:] = r_t
+            K[:, :] = K_t
         u[i, 0], u[i, 1], u[i, 2] = d, py, px
 
 
 def residual_many(layer: LayerTiltLaw, u: np.ndarray, target: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The equilibrium residual (m, 3) (force, M_y, M_x) at states ``u`` (m, 3) = (d, phi_y,
-    phi_x) against ``target`` (m, 3), and its exact tangent (m, 3, 3)."""
-    u = np.ascontiguousarray(u, dtype=float).reshape(-1, 3)
-    target = np.ascontiguousarray(np.broadcast_to(np.asarray(target, dtype=float), u.shape))
+    phi_x) against ``target`` (m, 3), and its exact tangent (m, 3, 3) in the layer's own state
+    (the state less what its member adds under ``target``, :func:`~mst_cli.model.mechanics.tilt.member_state`)."""
+    target = np.ascontiguousarray(np.broadcast_to(np.asarray(target, dtype=float), np.shape(u)), dtype=float)
+    target = target.reshape(-1, 3)
+    u = np.ascontiguousarray(np.asarray(u, dtype=float).reshape(-1, 3) - member_state(layer, target))
     r, K = np.empty((len(u), 3)), np.empty((len(u), 3, 3))
     _residual_rows(*_law_arrays(layer), u, target, r, K)
     return r, K
@@ -277,10 +278,13 @@ def newton_many(
 ) -> np.ndarray:
     """(m, 3) the states after ``steps`` Newton steps from ``guess`` (m, 3) toward the equilibrium
     under ``force_N`` (m,) pressed at ``offset_mm`` (m, 2): each step halved until the residual
-    (relative to the load, as the scalar solve measures it) falls, for each load on its own; a
-    load whose step cannot lower it stays put, one within the scalar solve's tolerance too."""
+    (relative to the load, as the scalar solve measures it) falls, the smallest share taken when
+    none does (the scalar solve's rule), for each load on its own; a load within the scalar
+    solve's tolerance stays put. The states are the unit's: its member's part (the cover's,
+    :func:`~mst_cli.model.mechanics.tilt.member_state`) taken off before and put back after."""
     F = np.ascontiguousarray(force_N, dtype=float).ravel()
     off = np.ascontiguousarray(offset_mm, dtype=float).reshape(-1, 2)
-    u = np.array(guess, dtype=float).reshape(-1, 3)
+    shift = member_state(layer, np.column_stack([F, F * off[:, 0], F * off[:, 1]]))  # the member in series
+    u = np.array(guess, dtype=float).reshape(-1, 3) - shift
     _newton_rows(*_law_arrays(layer), F, off, u, int(steps), _ALPHAS, NEWTON_TOL_REL)
-    return u
+    return u + shift
