@@ -142,6 +142,7 @@ class MemberInSeries:
         return self.rates_mm_per_N[np.clip(i, 0, len(self.F_knots_N) - 1)]
 
     def drop_at_mm(self, force_N) -> np.ndarray:
+        """m(F), mm: linear on each piece, on past the last knot at ``rate_after_mm_per_N``."""
         F = np.asarray(force_N, dtype=float)
         i = np.clip(np.searchsorted(self.F_knots_N, F, side="right") - 1, 0, len(self.F_knots_N) - 1)
         return self.drop_mm[i] + self.rates_mm_per_N[i] * (F - self.F_knots_N[i])
