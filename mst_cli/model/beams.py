@@ -132,6 +132,8 @@ def section_EI_kGA(
     the TPU there): the transformed section about its own neutral axis. Thicknesses and heights
     may be arrays."""
     b, T = depth_mm, thickness_mm
+    if not hole_width_mm and insert is None:  # a plain rectangle (most calls of the design loop)
+        return as_value((b * E_prime_MPa) * (T**3 / 12.0)), as_value(SHEAR_FACTOR * G_MPa * (b * np.asarray(T)))
     # strips (z0, z1, width x modulus), parallel axes about the modulus-weighted centroid; a hole
     # of no width adds exactly nothing to any sum (a plate's or the cover's section: not computed)
     strips = [(0.0, T, b * E_prime_MPa)]
