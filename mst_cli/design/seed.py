@@ -36,13 +36,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from mst_cli.design.problem import TINY
-from mst_cli.model.load_path import (
-    cap_mm_per_N,
-    cover_parts_locked_mm_per_N,
-    cover_parts_mm_per_N,
-    layer_supports,
-    plates_mm_per_N,
-)
+from mst_cli.model.housing_base import cover_parts_both_mm_per_N
+from mst_cli.model.load_path import cap_mm_per_N, layer_supports, plates_mm_per_N
 from mst_cli.model.mechanics.spring import layer_displacement_mm
 from mst_cli.model.past_lock import over_two_locked_mm_per_N, plate_overhang_mm_per_N, upper_layer_terms
 from mst_cli.model.plate_joint import joint_scene, plates_beside, root_joint_mm_per_N
@@ -129,10 +124,8 @@ class CellTable:
         head, theta, h), model.stack.members_drop_mm's: its bending over the slot stopped on the
         board, both rates changing at layer 1's lock, taken at its target (the targets rise)."""
         scene, cells = problem.members, len(self.u)
-        t, pad, head, _, h = on_bottom
-        open_ = member(("cover", cell(0)), lambda: cover_parts_mm_per_N(scene, *on_bottom))
-        closed = member(("locked cover", cell(0)), lambda: cover_parts_locked_mm_per_N(scene, t, h, pad, head))
-        (over, walls), (over_l, walls_l) = ((np.broadcast_to(a, (cells,)) for a in pair) for pair in (open_, closed))
+        both = member(("cover", cell(0)), lambda: cover_parts_both_mm_per_N(scene, *on_bottom))  # one open beam
+        (over, walls), (over_l, walls_l) = ((np.broadcast_to(a, (cells,)) for a in pair) for pair in both)
         cover, air, R1 = over + walls, scene.cover_air_mm, problem.R_target[0]
         delta = over_l + walls_l - cover
 
