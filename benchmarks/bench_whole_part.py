@@ -57,6 +57,7 @@ import yaml
 
 import mst_cli as mst
 from mst_cli.cad.whole_part_check import stated_shear_figures
+from mst_cli.model import housing_base as hb
 from mst_cli.model import load_path as lp
 from mst_cli.model.general_load import linear_response, loaded_stack
 from mst_cli.model.mechanics import layer_laws, uncached_layer_law
@@ -284,24 +285,38 @@ def off_centre_regime_rows(path: Path, spacing: float | None) -> list[str]:
 
 def base_sway_row(path: Path, spacing: float | None) -> str:
     """The base alone as printed (the layers, plates, cap and magnet rigid), pulled at the top face:
-    the cover's slide per newton (the magnet's slide carried down the rigid body above by its turn)
-    against two Timoshenko cantilevers, the slot's walls from the floor's top to the cover's
-    underside, in plane strain (shear factor 5/6)."""
+    the cover's slide per newton (the magnet's slide carried down the rigid body above by its turn),
+    as printed and with the cover rigid too, against mst's closed form
+    (housing_base.base_sway_mm_per_N; with a rigid cover its columns' tops held, to the cover's
+    underside) and two Timoshenko cantilevers from the floor's top to the cover's underside."""
     doc, _ = mst.designed(path)
     g, m = doc.geometry(), doc.material
     rigid_above = ("layer", "plate", "cap", "insert", "magnet")
-    x = wp.press_general(g, m, wp.PartOptions(spacing_mm=spacing, member_factor=wp.RIGID_FACTOR, scaled=rigid_above))
     z_magnet = g.z_magnet_bottom_mm + 0.5 * g.magnet.thickness_mm
-    cover_slide = x.pull.side_mm_per_N + x.pull.turn_rad_per_N * (z_magnet - g.z_base_top_mm)
-    E, nu, D = m.youngs_modulus_MPa, m.poisson_ratio, g.depth_mm
-    E_plane, G = E / (1.0 - nu**2), E / (2.0 * (1.0 + nu))
-    H = g.z_cover_bottom_mm - g.housing.base_floor_mm
-    half = 0.5 * g.base_length_mm
-    walls = [w for slot in g.board_slots for w in (slot.x_mm[0] + half, half - slot.x_mm[1])]
-    k = sum(1.0 / (H**3 / (3.0 * E_plane * D * w**3 / 12.0) + H / (5.0 / 6.0 * G * D * w)) for w in walls)
+    slides = []
+    for rigid_base in ("", "cover"):
+        opts = wp.PartOptions(
+            spacing_mm=spacing, member_factor=wp.RIGID_FACTOR, scaled=rigid_above, rigid_base=rigid_base
+        )
+        x = wp.press_general(g, m, opts)
+        slides.append(x.pull.side_mm_per_N + x.pull.turn_rad_per_N * (z_magnet - g.z_base_top_mm))
+    s = lp.member_scene(g, m)
+    E, G, D, H = s.E_prime_MPa, s.G_MPa, s.depth_mm, s.slot_height_mm
+    walls = s.slot_wall_widths_mm
+
+    def columns(k_top) -> float:
+        root = [hb.END_BUILT_IN * E * D * w * w for w in walls]
+        return 1.0 / sum(
+            1.0 / hb.column_sway_mm_per_N(H, E * D * w**3 / 12.0, 5.0 / 6.0 * G * D * w, k_top, r)
+            for w, r in zip(walls, root)
+        )
+
+    closed, held = hb.base_sway_mm_per_N(s), columns(np.inf)
+    cantilevers = 1.0 / sum(1.0 / (H**3 / (3.0 * E * D * w**3 / 12.0) + H / (5.0 / 6.0 * G * D * w)) for w in walls)
     return (
         f"| {doc.name} | {', '.join(f'{w:.2f}' for w in walls)} | {H:.2f} | {g.housing.cover_mm:g} | "
-        f"{cover_slide:.4f} | {1.0 / k:.4f} ({cover_slide * k - 1.0:+.0%}) |"
+        f"{slides[0]:.4f} | {closed:.4f} ({closed / slides[0] - 1.0:+.0%}) | {slides[1]:.4f} | "
+        f"{held:.4f} ({held / slides[1] - 1.0:+.0%}) | {cantilevers:.4f} ({cantilevers / slides[0] - 1.0:+.0%}) |"
     )
 
 
@@ -403,9 +418,12 @@ def member_studies(args) -> bool:
         paths = args.configs if args.configs_given else [str(ROOT / "configs" / "mohammadi2021-forward.yaml")]
         print("\n".join(store_rows(paths)), flush=True)
     elif args.base_sway:
-        print("the base alone as printed, pulled at the top face: the cover's slide, mm/N, against two cantilevers")
-        print("| design | walls, mm | wall height, mm | cover, mm | rung | cantilevers (rung / cantilevers - 1) |")
-        print("|---|---|---|---|---|---|")
+        print("the base alone, pulled at the top face: the cover's slide, mm/N, the rung against mst's closed form")
+        print(
+            "| design | walls, mm | wall height, mm | cover, mm | rung | mst (mst / rung - 1) | rung, cover rigid | "
+            "mst, tops held | two cantilevers |"
+        )
+        print("|---|---|---|---|---|---|---|---|---|")
         for path in args.configs:
             print(base_sway_row(Path(path), args.spacing_mm), flush=True)
     else:

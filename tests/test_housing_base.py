@@ -129,3 +129,63 @@ def test_layer_1s_roots_turn_into_the_cover_until_it_locks_and_its_block_then_be
     C, _, C_locked, delta = parts.cover_contact
     assert C_locked <= C and parts.cover_mm_per_N + delta > 0.0
     assert np.isfinite(delta)
+
+
+def _column_by_stiffness(H, EI, kGA, k_top, k_root, F=1.0):
+    """The same column by the stiffness method, independently of the flexibility form: one
+    Timoshenko beam element (its textbook stiffness with phi = 12 EI / (kGA H^2)), the root's
+    turn against a spring to the ground, the top's against one, the root held in sway."""
+    phi = 12.0 * EI / (kGA * H * H)
+    k = EI / (H**3 * (1.0 + phi))
+    # dofs (root sway, root turn, top sway, top turn); the root's sway is held below
+    K = k * np.array(
+        [
+            [12.0, 6.0 * H, -12.0, 6.0 * H],
+            [6.0 * H, (4.0 + phi) * H * H, -6.0 * H, (2.0 - phi) * H * H],
+            [-12.0, -6.0 * H, 12.0, -6.0 * H],
+            [6.0 * H, (2.0 - phi) * H * H, -6.0 * H, (4.0 + phi) * H * H],
+        ]
+    )
+    K[1, 1] += k_root
+    K[3, 3] += k_top
+    u = np.linalg.solve(K[1:, 1:], np.array([0.0, F, 0.0]))
+    return u[1]
+
+
+@pytest.mark.parametrize(
+    ("H", "EI", "kGA", "k_top", "k_root"),
+    [(5.2, 270.0, 30.0, 75.0, 570.0), (6.0, 90.0, 10.0, 1e3, 60.0), (3.0, 500.0, 5.0, 1.0, 1e4)],
+)
+def test_a_slot_wall_sways_as_the_stiffness_method_gives(H, EI, kGA, k_top, k_root):
+    """The column's flexibility form against one Timoshenko element solved with its springs."""
+    expected = _column_by_stiffness(H, EI, kGA, k_top, k_root)
+    assert hb.column_sway_mm_per_N(H, EI, kGA, k_top, k_root) == pytest.approx(expected, rel=1e-10)
+
+
+def test_a_slot_wall_sways_between_a_cantilever_and_a_guided_column():
+    """Its top free: H^3/3EI + H/kGA (+ H^2/k_root with a turning root); held against a turn on a
+    held root: H^3/12EI + H/kGA; the sway falls as the top's spring stiffens."""
+    H, E_I, kGA, k_root = 5.2, 270.0, 30.0, 570.0
+    free = H**3 / (3 * E_I) + H / kGA
+    assert hb.column_sway_mm_per_N(H, E_I, kGA, 0.0, math.inf) == pytest.approx(free, rel=1e-12)
+    assert hb.column_sway_mm_per_N(H, E_I, kGA, 0.0, k_root) == pytest.approx(free + H * H / k_root, rel=1e-12)
+    guided = H**3 / (12 * E_I) + H / kGA
+    assert hb.column_sway_mm_per_N(H, E_I, kGA, math.inf, math.inf) == pytest.approx(guided, rel=1e-12)
+    sways = [hb.column_sway_mm_per_N(H, E_I, kGA, k, k_root) for k in (0.0, 10.0, 100.0, 1e3, math.inf)]
+    assert all(a > b for a, b in zip(sways, sways[1:]))
+
+
+def test_the_base_sways_as_its_two_walls_side_by_side():
+    """Two like walls: half one column's sway, to the cover's mid-plane, each root built into the
+    floor and each top into the cover (pi/8 E'D w^2, pi/8 E'D c^2); no slot walls: no sway."""
+    s = scene()
+    E, G, D, c, w = s.E_prime_MPa, s.G_MPa, s.depth_mm, s.cover_mm, 2.0
+    one = hb.column_sway_mm_per_N(
+        s.slot_height_mm + 0.5 * c,
+        E * D * w**3 / 12.0,
+        5.0 / 6.0 * G * D * w,
+        math.pi / 8.0 * E * D * c * c,
+        math.pi / 8.0 * E * D * w * w,
+    )
+    assert hb.base_sway_mm_per_N(s) == pytest.approx(0.5 * one, rel=1e-12)
+    assert hb.base_sway_mm_per_N(replace(s, slot_height_mm=0.0)) == 0.0

@@ -298,9 +298,9 @@ def shear_note(regime: dict, key: str, within: bool, section: bool) -> str:
         + (
             " (model.load_path: section, the members' pose measured on this rung: what is left is the layers')"
             if section
-            else "'s closed form, which has no sway of the slot's walls and turns the members only with their "
-            "layers (docs/design.md 4.7); model.load_path: section puts the rung's measure of them in mst simulate's "
-            "general load"
+            else "'s closed form, which sways the slot's walls as a frame, turns the members only with their layers "
+            "and slides no plate (docs/design.md 4.7); model.load_path: section puts the rung's measure of them in "
+            "mst simulate's general load"
         )
         + ". Shear and offsets read from this part need its own calibration"
     )

@@ -57,8 +57,9 @@ from mst_cli.parallel import fork_map
 
 TABLE_FILE = "inverse_table.npz"  # the offset table's file beside the model ...
 SHEAR_TABLE_FILE = "shear_table.npz"  # ... and the shear table's
-# bumped when the table's contents change meaning: an older file is rebuilt (4: section mode's members)
-TABLE_FORMAT = 4
+# bumped when the table's contents change meaning: an older file is rebuilt (4: section mode's members;
+# 5: the cover in series outside its layer's contact, the base's sway)
+TABLE_FORMAT = 5
 FIT_SIGMAS = 3.0  # a cell whose best point is further off the reading than this found no root
 # the direct inverse (the C header takes the same numbers): from each start, Gauss-Newton steps on
 # the table's trilinear field, from the nearest node of the force slabs the reading's |B| allows

@@ -21,6 +21,8 @@ The load model and what it assumes:
   its free one, docs/design.md section 4.4); ``continuum`` takes L2's lateral tangents along
   its compression path (:func:`~mst_cli.model.mechanics.continuum_lateral.lateral_path`),
   frictionless before the lock and stuck past it, k_y times L0's free-face factor.
+* With the part's members, the housing's base sways too, by c_b Fx at every normal force
+  (:func:`base_sway_law`: a portal frame of the slot's walls, model.housing_base).
 * The magnet's pose adds the tilts' turns and shifts and the slides
   (:func:`mst_cli.model.stack_pose.magnet_pose`); its exact field at each chip follows.
 
@@ -49,6 +51,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from mst_cli.model.assembly import SensorGeometry
+from mst_cli.model.housing_base import base_sway_mm_per_N
+from mst_cli.model.load_path import member_scene
 from mst_cli.model.material import Material
 from mst_cli.model.mechanics.lateral import depth_end_factor, lateral_stiffness_N_per_mm
 from mst_cli.model.mechanics.tilt import LayerTiltLaw, TiltError, centred_compression_mm
@@ -137,7 +141,7 @@ class LoadedStack:
     geometry: SensorGeometry
     mechanics: str
     tilt: list[LayerTiltLaw]
-    lateral: list[LayerLateralLaw]
+    lateral: list[LayerLateralLaw]  # the layers', bottom first, then (the whole part) the base's sway
     lever_mm: np.ndarray  # (n,) the top face's height over each layer's pivot
     # model.load_path section: what the whole-part rung's members add beyond the closed form
     members_pose: MemberPose | None = None
@@ -187,8 +191,18 @@ def loaded_stack(
     tilts = tilt_laws(geometry, material, mechanics, lever_factor, whole_part)
     build = _l2_law if mechanics == "continuum" else _l0_law
     lateral = [build(t, c, material) for t, c in zip(tilts, geometry.layers)]
+    if whole_part:
+        lateral.append(base_sway_law(geometry, material))
     lever = geometry.total_height_mm - layer_pivots_mm(geometry)
     return LoadedStack(geometry, mechanics, tilts, lateral, lever, members)
+
+
+def base_sway_law(geometry: SensorGeometry, material: Material) -> LayerLateralLaw:
+    """The housing's base swaying under the whole tangential force along x, as a lateral law of
+    constant compliance (:func:`~mst_cli.model.housing_base.base_sway_mm_per_N`) that no lock
+    stops; none along y, where the slot's walls stand in their own plane."""
+    c_x = base_sway_mm_per_N(member_scene(geometry, material))
+    return LayerLateralLaw(np.array([0.0, 1.0]), np.array([0.0, c_x]), np.zeros(2))
 
 
 def normal_stack(

@@ -33,6 +33,12 @@ alone and the walls alone; studies/member_closed_form.py):
   turn stays what it was (the rung's turn does not change at the lock), the roots no longer
   turn, and the block bears on the cover, P / (c_b E'D).
 
+Under a tangential force along x the base sways as a portal frame (:func:`base_sway_mm_per_N`):
+the slot's walls are Timoshenko columns from the floor to the cover's mid-plane, each root built
+into the floor (pi/8 E'D w^2) and each top into the cover's end (pi/8 E'D c^2), the two side by
+side; the cover's own stretch and the frame's turn are left out (the general load turns the cover
+with layer 1 under the force's moment).
+
 Over the slot the cover's bending (and its edges' drop) stops when it lands on the board; the
 squeeze, the turn of a wall under a foot standing on it, the roots and the bearings do not.
 Fitted: c_b alone (0.8), the one value for both bearings, on a grid of 0.6-2.0 by the base's
@@ -47,7 +53,7 @@ from typing import Any
 
 import numpy as np
 
-from mst_cli.model.beams import as_value, plain_section, section_EI_kGA
+from mst_cli.model.beams import SHEAR_FACTOR, as_value, plain_section, section_EI_kGA
 from mst_cli.model.plate_joint import cover_root_mm_per_N
 
 WALL_LEVER = 0.5  # the cover's reaction at the wall's inner edge, w/2 from its centre line
@@ -199,3 +205,37 @@ def _cover_integrals(scene, head: np.ndarray, pad_mm, cover_pad, cover_alone) ->
 
     shear = P * (np.minimum(e, x_pad) / kGA_out + np.maximum(e - x_pad, 0.0) / kGA_in)
     return e, over_half_span(0), over_half_span(1), over_half_span(2), shear
+
+
+def base_sway_mm_per_N(scene) -> float:
+    """The cover's slide per newton of tangential force along x at it, mm/N: the slot's walls as a
+    portal frame (module docstring), the two columns side by side; 0 without slot walls."""
+    s = scene
+    E, G, D = s.E_prime_MPa, s.G_MPa, s.depth_mm
+    if s.slot_height_mm <= 0.0:
+        return 0.0
+    H = s.slot_height_mm + 0.5 * s.cover_mm  # to the cover's mid-plane, the frame's beam line
+    k_top = END_BUILT_IN * E * D * s.cover_mm**2
+    walls = [w for w in s.slot_wall_widths_mm if w > 0.0]
+    if not walls:
+        raise ValueError("the housing's cover stands on no slot wall: the board slot spans the base")
+    stiffness = sum(
+        1.0 / column_sway_mm_per_N(H, E * D * w**3 / 12.0, SHEAR_FACTOR * G * D * w, k_top, END_BUILT_IN * E * D * w**2)
+        for w in walls
+    )
+    return 1.0 / stiffness
+
+
+def column_sway_mm_per_N(H_mm, EI_Nmm2, kGA_N, k_top_Nmm_per_rad, k_root_Nmm_per_rad) -> float:
+    """A Timoshenko column H tall's top sway per newton of a force along it there, mm/N, its root
+    turning against ``k_root`` and its top held against a turn by ``k_top`` (the top's moment
+    M = k_top phi): b0 - k_top a1^2 / (1 + k_top a2), with the top's turn per unit force
+    a1 = H^2 / 2EI + H / k_root and per unit moment a2 = H / EI + 1 / k_root, b0 the free
+    cantilever's H^3 / 3EI + H / kGA + H^2 / k_root. H^3 / 12EI + H / kGA held at both ends."""
+    H, EI, kr = H_mm, EI_Nmm2, k_root_Nmm_per_rad
+    a1 = H * H / (2.0 * EI) + H / kr
+    a2 = H / EI + 1.0 / kr
+    free = H**3 / (3.0 * EI) + H / kGA_N + H * H / kr
+    if math.isinf(k_top_Nmm_per_rad):
+        return free - a1 * a1 / a2
+    return free - k_top_Nmm_per_rad * a1 * a1 / (1.0 + k_top_Nmm_per_rad * a2)
