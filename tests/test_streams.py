@@ -300,8 +300,8 @@ def two_chips(tmp_path_factory):
     return model, reader, offsets, loaded_stack(geo, doc.material, "spring")
 
 
-def _warm_lines(two_chips):
-    """Each load of WARM_LOADS at 25, 30 and 40 degC, as six fields and T_C: B = r(T) B_20(L / m(T)).
+def _warm_lines(two_chips, loads=WARM_LOADS, temperatures_C=(25.0, 30.0, 40.0)):
+    """Each load of ``loads`` at each of ``temperatures_C``, as six fields and T_C: B = r(T) B_20(L / m(T)).
     The fields are the loading branch's, so the stream only loads (the loads ascending, each at
     the three temperatures): a fall from 28 N to 12 N is an unloading the reader follows with the
     calibration's unloading model (rig_reading.follow_branches), which these fields do not hold."""
@@ -310,8 +310,8 @@ def _warm_lines(two_chips):
     model, reader, _, stack = two_chips
     alpha = remanence_coeff_of(reader.document)
     lines, truth = [], []
-    for F, fx, fy, x, y in WARM_LOADS:
-        for T in (25.0, 30.0, 40.0):
+    for F, fx, fy, x, y in loads:
+        for T in temperatures_C:
             r, m = float(remanence_scale(T, alpha)), float(modulus_scale(T, BETA_PER_K))
             B = r * 1e6 * field_T(stack, F / m, (fx / m, fy / m), (x, y), reader.document.chips_mm).ravel()
             lines.append(",".join(f"{b:.4f}" for b in B) + f",{T:.1f}")
@@ -342,3 +342,20 @@ def test_warm_two_chip_readings_are_ok_within_their_sigma_from_a_file_and_live(t
     finally:
         feed.close()
     assert "\n".join(line.split(",", 1)[1] for line in live.csv().splitlines()) + "\n" == got.csv()
+
+
+@pytest.mark.slow
+def test_a_warm_press_past_the_last_lock_at_its_temperature_is_not_ok(two_chips):
+    """The last lock's force scales with the modulus: at 40 degC (m = 0.92) the part's last lock,
+    30.6 N at 20 degC, comes at 28.2 N. A 30 N press is inside the range at 20 degC and past it at
+    40 degC (the stack feels it as 32.6 N would at 20 degC), so only the cold one is ok."""
+    from mst_cli.calibration.loadtest import parse_readings
+
+    _, reader, offsets, _ = two_chips
+    load = [(30.0, 2.0, -1.0, 1.0, 1.0)]
+    assert float(reader.inverse_map.force_N[-1]) == pytest.approx(30.6, abs=0.05)  # the lock the docstring counts on
+    lines = _warm_lines(two_chips, load, (20.0,))[0] + _warm_lines(two_chips, load, (40.0,))[0]
+    header = "Bx_uT,By_uT,Bz_uT,Bx2_uT,By2_uT,Bz2_uT,T_C"
+    got = reader.read(parse_readings(header + "\n" + "\n".join(lines) + "\n", "warm.csv", need_force=False), offsets)
+    assert got.offset.flag[0] == "ok" and got.force_N[0] == pytest.approx(30.0, abs=3 * got.offset.sigma[0, 0])
+    assert got.offset.flag[1] != "ok" and not (got.flag[1] == "ok" and got.force_N[1] > 30.6 * 0.92)

@@ -216,7 +216,8 @@ class ForceReader:
         zero = no_load_rows(B, flag, float(imap.B_abs_T[0]), imap.field_resolution_T)
         F_ref[zero], regime[zero], flag[zero] = 0.0, 1, "ok"
         F = F_ref * m
-        top = float(imap.force_N[-1]) * np.maximum(m, 1.0)  # the last lock's force at each T
+        # the last lock's force at each T: the stack locks at the same stroke, so at m(T) x its 20 degC force
+        top = float(imap.force_N[-1]) * m
         flag_impossible(F, flag, top)
         F_ref = np.where(flag == "ok", F_ref, np.nan)
         res = imap.local_resolution_N(np.where(np.isfinite(F), F, 0.0))
