@@ -159,6 +159,19 @@ def test_a_table_is_stale_once_its_model_or_calibration_changes(coarse_model, tm
     assert source_hash(text + "\n# edited\n", None, "spring", table.grid) != table.source_hash
 
 
+def test_a_table_is_stale_under_another_version_of_the_model(coarse_model, monkeypatch):
+    """A table kept from another version of the physics modules is not read as current, with no
+    manual format bump: the modules' source is hashed in (the same model file, calibration,
+    mechanics and grid)."""
+    from mst_cli.estimation import inverse_table
+    from mst_cli.sensor.rung_store import model_source_hash
+
+    table = InverseTable.load(coarse_model.parent / TABLE_FILE)
+    assert table is not None and table.source_hash == table_hash(coarse_model, "spring", table.grid)
+    monkeypatch.setattr(inverse_table, "model_source_hash", lambda: model_source_hash() + " edited")
+    assert table_hash(coarse_model, "spring", table.grid) != table.source_hash
+
+
 def run(args):
     return CliRunner().invoke(main, [str(a) for a in args])
 

@@ -102,6 +102,26 @@ def test_the_name_is_the_key_and_the_models_source():
     assert name != rung_store.file_name("general", key)
 
 
+def test_the_models_source_counts_its_fitted_data(tmp_path, monkeypatch):
+    """A refit of a model's data file is another model, as an edit of its source is: a copy of
+    mst_cli/model with one data file changed hashes otherwise."""
+    import shutil
+    from pathlib import Path
+
+    model = Path(rung_keep.__file__).resolve().parents[1]
+    copy = tmp_path / "model"
+    shutil.copytree(model, copy, ignore=shutil.ignore_patterns("__pycache__"))
+    monkeypatch.setattr(rung_keep, "__file__", str(copy / "mechanics" / "rung_keep.py"))
+    hashes = []
+    for edit in ("", " ", "# edited\n"):
+        (copy / "data" / "tilt_lever.json").write_text((model / "data" / "tilt_lever.json").read_text() + edit)
+        (copy / "ladder.py").write_text((model / "ladder.py").read_text() + ("" if edit != "# edited\n" else edit))
+        rung_store.model_source_hash.cache_clear()
+        hashes.append(rung_store.model_source_hash())
+    rung_store.model_source_hash.cache_clear()
+    assert len(set(hashes)) == 3  # the data's edit, then the source's, each another model
+
+
 def test_mst_simulate_says_so_on_stderr_before_it_solves(store, tmp_path):
     from click.testing import CliRunner
 

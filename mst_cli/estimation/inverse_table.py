@@ -54,11 +54,13 @@ from mst_cli.model.material import Material
 from mst_cli.model.member_pose import MemberPose
 from mst_cli.model.stack_pose import tilt_laws
 from mst_cli.parallel import fork_map
+from mst_cli.sensor.rung_store import model_source_hash
 
 TABLE_FILE = "inverse_table.npz"  # the offset table's file beside the model ...
 SHEAR_TABLE_FILE = "shear_table.npz"  # ... and the shear table's
-# bumped when the table's contents change meaning: an older file is rebuilt (4: section mode's members;
-# 5: the cover in series outside its layer's contact, the base's sway)
+# bumped when the table's file or its builder change meaning: an older file is rebuilt (4: section
+# mode's members; 5: the cover in series outside its layer's contact, the base's sway). A change of
+# the model itself needs no bump: its source is in every table's hash (source_hash)
 TABLE_FORMAT = 5
 FIT_SIGMAS = 3.0  # a cell whose best point is further off the reading than this found no root
 # the direct inverse (the C header takes the same numbers): from each start, Gauss-Newton steps on
@@ -323,9 +325,11 @@ class InverseTable:
 
 
 def source_hash(model_text: str, calibration_text: str | None, mechanics: str, grid: TableGrid) -> str:
-    """What a table depends on, hashed: a table whose hash differs is stale."""
+    """What a table depends on, hashed: a table whose hash differs is stale. The physics modules'
+    source is part of it (:func:`~mst_cli.sensor.rung_store.model_source_hash`), so a table made
+    by another version of the model is never read as current."""
     h = hashlib.sha256()
-    for part in (str(TABLE_FORMAT), model_text, calibration_text or "", mechanics):
+    for part in (str(TABLE_FORMAT), model_source_hash(), model_text, calibration_text or "", mechanics):
         h.update(part.encode("utf-8"))
         h.update(b"\0")
     h.update(grid.kind.encode("utf-8"))

@@ -2,7 +2,8 @@
 calibrate --offset-table`` writes ``inverse_table.npz``, ``--shear-table`` ``shear_table.npz`` beside
 calibrated.yaml), else in the user's cache keyed by its hash, else built now and kept there (issue
 45 item 5: a table is built once per model, whatever ``--out`` says). A table is current when its
-hash is that of the model file, its calibration.json, the mechanics and the grid.
+hash is that of the model file, its calibration.json, the mechanics, the grid and the physics
+modules' source (:func:`~mst_cli.estimation.inverse_table.source_hash`).
 
 The readers on the tables are :mod:`mst_cli.estimation.table_reader`'s; this module is their
 file side.

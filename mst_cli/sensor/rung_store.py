@@ -5,9 +5,9 @@ design, a second ``mst simulate``, a test suite's many processes.
 
 A file is named by the hash of what the solve depends on (the rung's memo key: the geometry, the
 material and the options, as their reprs) and of the source of every physics module
-(``mst_cli/model``), so a file from another version of the model is never found. A file that does
-not parse, or parses to anything but what was written, is treated as missing; a cache that cannot
-be written costs a solve, nothing more.
+(``mst_cli/model``, its fitted data included), so a file from another version of the model is
+never found. A file that does not parse, or parses to anything but what was written, is treated
+as missing; a cache that cannot be written costs a solve, nothing more.
 """
 
 from __future__ import annotations
@@ -25,12 +25,13 @@ MAX_FILE_BYTES = 1 << 20  # a kept solve is well under a kilobyte a regime
 
 @cache
 def model_source_hash() -> str:
-    """The hash of the physics modules' source (every ``mst_cli/model/**/*.py``)."""
+    """The hash of the physics modules' source and their fitted data (every ``mst_cli/model/**/*.py``
+    and ``mst_cli/model/data/*``: a refit changes the model as an edit does)."""
     import hashlib  # deferred: OpenSSL, 3 ms of every start; only a section-mode model keeps solves
 
     root = Path(rung_keep.__file__).resolve().parents[1]  # mst_cli/model
     digest = hashlib.sha256()
-    for path in sorted(root.rglob("*.py")):
+    for path in sorted([*root.rglob("*.py"), *(root / "data").glob("*")]):
         digest.update(path.relative_to(root).as_posix().encode())
         digest.update(path.read_bytes())
     return digest.hexdigest()
