@@ -303,15 +303,7 @@ def base_sway_row(path: Path, spacing: float | None) -> str:
     s = lp.member_scene(g, m)
     E, G, D, H = s.E_prime_MPa, s.G_MPa, s.depth_mm, s.slot_height_mm
     walls = s.slot_wall_widths_mm
-
-    def columns(k_top) -> float:
-        root = [hb.END_BUILT_IN * E * D * w * w for w in walls]
-        return 1.0 / sum(
-            1.0 / hb.column_sway_mm_per_N(H, E * D * w**3 / 12.0, 5.0 / 6.0 * G * D * w, k_top, r)
-            for w, r in zip(walls, root)
-        )
-
-    closed, held = hb.base_sway_mm_per_N(s), columns(np.inf)
+    closed, held = hb.base_sway_mm_per_N(s), hb.base_sway_mm_per_N(s, tops_held=True)
     cantilevers = 1.0 / sum(1.0 / (H**3 / (3.0 * E * D * w**3 / 12.0) + H / (5.0 / 6.0 * G * D * w)) for w in walls)
     return (
         f"| {doc.name} | {', '.join(f'{w:.2f}' for w in walls)} | {H:.2f} | {g.housing.cover_mm:g} | "

@@ -189,3 +189,15 @@ def test_the_base_sways_as_its_two_walls_side_by_side():
     )
     assert hb.base_sway_mm_per_N(s) == pytest.approx(0.5 * one, rel=1e-12)
     assert hb.base_sway_mm_per_N(replace(s, slot_height_mm=0.0)) == 0.0
+
+
+def test_a_rigid_cover_holds_the_walls_tops_at_its_underside():
+    """tops_held: each wall a column to the cover's underside, its top guided, its root on the
+    floor's spring k: H/kGA + H^2 u (u/12 + v/3) / (u + v), u = H/EI, v = 1/k (solved by hand:
+    H^3/12EI for a built-in root, H^3/3EI for a hinged one); two like walls halve it."""
+    s = scene()
+    E, G, D, H, w = s.E_prime_MPa, s.G_MPa, s.depth_mm, s.slot_height_mm, 2.0
+    u, v = H / (E * D * w**3 / 12.0), 1.0 / (math.pi / 8.0 * E * D * w * w)
+    one = H / (5.0 / 6.0 * G * D * w) + H * H * u * (u / 12.0 + v / 3.0) / (u + v)
+    assert hb.base_sway_mm_per_N(s, tops_held=True) == pytest.approx(0.5 * one, rel=1e-12)
+    assert hb.base_sway_mm_per_N(s, tops_held=True) < hb.base_sway_mm_per_N(s)

@@ -207,15 +207,20 @@ def _cover_integrals(scene, head: np.ndarray, pad_mm, cover_pad, cover_alone) ->
     return e, over_half_span(0), over_half_span(1), over_half_span(2), shear
 
 
-def base_sway_mm_per_N(scene) -> float:
+def base_sway_mm_per_N(scene, tops_held: bool = False) -> float:
     """The cover's slide per newton of tangential force along x at it, mm/N: the slot's walls as a
-    portal frame (module docstring), the two columns side by side; 0 without slot walls."""
+    portal frame (module docstring), the two columns side by side; 0 without slot walls. With
+    ``tops_held`` the cover is rigid: the columns end at its underside with their tops held (the
+    whole-part rung's rigid-cover control, benchmarks/bench_whole_part.py --base-sway)."""
     s = scene
     E, G, D = s.E_prime_MPa, s.G_MPa, s.depth_mm
     if s.slot_height_mm <= 0.0:
         return 0.0
-    H = s.slot_height_mm + 0.5 * s.cover_mm  # to the cover's mid-plane, the frame's beam line
-    k_top = END_BUILT_IN * E * D * s.cover_mm**2
+    if tops_held:
+        H, k_top = s.slot_height_mm, math.inf
+    else:
+        H = s.slot_height_mm + 0.5 * s.cover_mm  # to the cover's mid-plane, the frame's beam line
+        k_top = END_BUILT_IN * E * D * s.cover_mm**2
     walls = [w for w in s.slot_wall_widths_mm if w > 0.0]
     if not walls:
         raise ValueError("the housing's cover stands on no slot wall: the board slot spans the base")
