@@ -29,11 +29,12 @@ import numpy as np
 from scipy.optimize import least_squares
 
 import mst_cli as mst
+from mst_cli.errors import InputError
 from mst_cli.model import load_path as lp
 from mst_cli.model.mechanics import whole_part as wp
 from mst_cli.model.past_lock import LOCKED_FITTED, locked_plates_mm_per_N
 from mst_cli.model.plate_joint import root_joint_mm_per_N
-from studies.unlike_plates import THETA_DEG, stack
+from studies.unlike_plates import PLATE_MM, T_MM, THETA_DEG, stack
 
 COLUMNS = ("theta_a_deg", "theta_b_deg", "t_a_mm", "t_b_mm", "h_a_mm", "h_b_mm", "head_a_mm", "head_b_mm",
            "plate_mm", "depth_mm", "E_prime_MPa", "G_MPa", "rung_um_per_N")  # fmt: skip
@@ -68,12 +69,20 @@ def closed_form_um_per_N(row: dict, constants: tuple[float, float] | None) -> fl
     return 1e3 * (joint + float(np.asarray(extra)[0]))
 
 
-def sweep(out: Path) -> None:
+def sweep(out: Path, t_b_mm: tuple[float, ...] = (T_MM,), plates_mm: tuple[float, ...] = (PLATE_MM,)) -> None:
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
-        for theta_a, theta_b in itertools.product(THETA_DEG, THETA_DEG):
-            rows.append(rung_row(stack(Path(tmp), theta_a, theta_b)))
-            print(f"  A {theta_a:g}, B {theta_b:g}: rung {rows[-1]['rung_um_per_N']:.2f} um/N", flush=True)
+        for theta_a, theta_b, t_b, plate in itertools.product(THETA_DEG, THETA_DEG, t_b_mm, plates_mm):
+            try:
+                rows.append(rung_row(stack(Path(tmp), theta_a, theta_b, t_b, plate)))
+            except InputError as e:  # a cell that cannot be drawn
+                print(f"  skipped A {theta_a:g}, B {theta_b:g} (t {t_b:g} mm), plate {plate:g} mm: {e}", flush=True)
+                continue
+            print(
+                f"  A {theta_a:g}, B {theta_b:g} (t {t_b:g} mm), plate {plate:g} mm: "
+                f"rung {rows[-1]['rung_um_per_N']:.2f} um/N",
+                flush=True,
+            )
     with out.open("w", newline="") as f:
         writer = csv.DictWriter(f, fieldnames=COLUMNS)
         writer.writeheader()
@@ -81,23 +90,29 @@ def sweep(out: Path) -> None:
     print(f"wrote {out}")
 
 
-def fit(path: Path) -> None:
+def fit(path: Path, refit: bool = True) -> None:
+    """Fit (a, k) to the rows at ``path`` and print them; with ``refit`` False, only the errors of
+    model.past_lock's own constants on them (rows the fit did not see: a check)."""
     with path.open() as f:
         rows = [{k: float(v) for k, v in r.items()} for r in csv.DictReader(f)]
 
     def logs(q) -> list[float]:
         return [math.log(closed_form_um_per_N(r, tuple(q)) / r["rung_um_per_N"]) for r in rows]
 
-    q = least_squares(logs, [0.5, 1.0], bounds=([-1.0, 1e-3], [10.0, 100.0])).x
-    print("| θ_A, ° | θ_B, ° | rung, µm/N | joint alone | joint + past_lock (fitted) |")
-    print("|---|---|---|---|---|")
-    errors: dict[str, list[float]] = {"alone": [], "fitted": []}
+    q = least_squares(logs, [0.5, 1.0], bounds=([-1.0, 1e-3], [10.0, 100.0])).x if refit else LOCKED_FITTED
+    said = "fitted" if refit else "model.past_lock's"
+    print(f"| θ_A, ° | θ_B, ° | t_B, mm | plate, mm | rung, µm/N | joint alone | joint + past_lock ({said}) |")
+    print("|---|---|---|---|---|---|---|")
+    errors: dict[str, list[float]] = {"alone": [], said: []}
     for r in rows:
         rung, alone, fitted = r["rung_um_per_N"], closed_form_um_per_N(r, None), closed_form_um_per_N(r, tuple(q))
         errors["alone"].append(100 * (alone / rung - 1))
-        errors["fitted"].append(100 * (fitted / rung - 1))
-        print(f"| {r['theta_a_deg']:.0f} | {r['theta_b_deg']:.0f} | {rung:.1f} | {alone:.1f} | {fitted:.1f} |")
-    print(f"\nfitted a = {q[0]:.3f}, k = {q[1]:.3f} (model.past_lock.LOCKED_FITTED: {LOCKED_FITTED})")
+        errors[said].append(100 * (fitted / rung - 1))
+        print(
+            f"| {r['theta_a_deg']:.0f} | {r['theta_b_deg']:.0f} | {r['t_b_mm']:g} | {r['plate_mm']:g} | {rung:.1f} | "
+            f"{alone:.1f} | {fitted:.1f} |"
+        )
+    print(f"\n{said} a = {q[0]:.3f}, k = {q[1]:.3f} (model.past_lock.LOCKED_FITTED: {LOCKED_FITTED})")
     for name, e in errors.items():
         rms = math.sqrt(sum(v * v for v in e) / len(e))
         print(f"{name}: worst {max(map(abs, e)):.1f} %, rms {rms:.1f} %")
@@ -107,13 +122,18 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--out", type=Path, help="solve the sweep and write its rows here (CSV)")
     parser.add_argument("--fit", type=Path, help="fit past_lock's constants to these rows (CSV)")
+    parser.add_argument("--check", type=Path, help="past_lock's own constants' errors on these rows (CSV)")
+    parser.add_argument("--t-b", type=float, nargs="*", default=[T_MM], help="with --out: B's walls, mm")
+    parser.add_argument("--plates", type=float, nargs="*", default=[PLATE_MM], help="with --out: the plates, mm")
     args = parser.parse_args()
-    if args.out is None and args.fit is None:
-        parser.error("give --out FILE (the sweep) or --fit FILE (the fit)")
+    if args.out is None and args.fit is None and args.check is None:
+        parser.error("give --out FILE (the sweep), --fit FILE (the fit) or --check FILE")
     if args.out is not None:
-        sweep(args.out)
+        sweep(args.out, tuple(args.t_b), tuple(args.plates))
     if args.fit is not None:
         fit(args.fit)
+    if args.check is not None:
+        fit(args.check, refit=False)
 
 
 if __name__ == "__main__":
