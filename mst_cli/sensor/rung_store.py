@@ -27,7 +27,7 @@ MAX_FILE_BYTES = 1 << 20  # a kept solve is well under a kilobyte a regime
 def model_source_hash() -> str:
     """The hash of the physics modules' source and their fitted data (every ``mst_cli/model/**/*.py``
     and ``mst_cli/model/data/*``: a refit changes the model as an edit does)."""
-    import hashlib  # deferred: OpenSSL, 3 ms of every start; only a section-mode model keeps solves
+    import hashlib  # deferred: OpenSSL, 3 ms of every start; only kept solves and the tables hash the model
 
     root = Path(rung_keep.__file__).resolve().parents[1]  # mst_cli/model
     digest = hashlib.sha256()
