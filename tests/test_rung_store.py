@@ -112,14 +112,20 @@ def test_the_models_source_counts_its_fitted_data(tmp_path, monkeypatch):
     copy = tmp_path / "model"
     shutil.copytree(model, copy, ignore=shutil.ignore_patterns("__pycache__"))
     monkeypatch.setattr(rung_keep, "__file__", str(copy / "mechanics" / "rung_keep.py"))
-    hashes = []
-    for edit in ("", " ", "# edited\n"):
-        (copy / "data" / "tilt_lever.json").write_text((model / "data" / "tilt_lever.json").read_text() + edit)
-        (copy / "ladder.py").write_text((model / "ladder.py").read_text() + ("" if edit != "# edited\n" else edit))
+
+    def hashed() -> str:
         rung_store.model_source_hash.cache_clear()
-        hashes.append(rung_store.model_source_hash())
+        return rung_store.model_source_hash()
+
+    as_shipped = hashed()
+    with (copy / "data" / "tilt_lever.json").open("a") as f:
+        f.write(" ")  # a refit's data file
+    refitted = hashed()
+    with (copy / "ladder.py").open("a") as f:
+        f.write("# edited\n")  # a source edit
+    edited = hashed()
     rung_store.model_source_hash.cache_clear()
-    assert len(set(hashes)) == 3  # the data's edit, then the source's, each another model
+    assert len({as_shipped, refitted, edited}) == 3
 
 
 def test_mst_simulate_says_so_on_stderr_before_it_solves(store, tmp_path):

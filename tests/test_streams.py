@@ -354,7 +354,7 @@ def test_a_warm_press_past_the_last_lock_at_its_temperature_is_not_ok(two_chips)
     _, reader, offsets, _ = two_chips
     load = [(30.0, 2.0, -1.0, 1.0, 1.0)]
     assert float(reader.inverse_map.force_N[-1]) == pytest.approx(30.6, abs=0.05)  # the lock the docstring counts on
-    lines = _warm_lines(two_chips, load, (20.0,))[0] + _warm_lines(two_chips, load, (40.0,))[0]
+    lines, _ = _warm_lines(two_chips, load, (20.0, 40.0))
     header = "Bx_uT,By_uT,Bz_uT,Bx2_uT,By2_uT,Bz2_uT,T_C"
     got = reader.read(parse_readings(header + "\n" + "\n".join(lines) + "\n", "warm.csv", need_force=False), offsets)
     assert got.offset.flag[0] == "ok" and got.force_N[0] == pytest.approx(30.0, abs=3 * got.offset.sigma[0, 0])
