@@ -30,34 +30,12 @@ import numpy as np
 import mst_cli as mst
 from mst_cli.model import housing_base as hb
 from mst_cli.model import load_path as lp
+from mst_cli.model.plane_frame import element_stiffness
 
 ROOT = Path(__file__).resolve().parents[1]
 CONFIGS = ("mohammadi2021-forward", "mohammadi2021", "fingertip")
 STIFF = 1e6  # a rigid link's factor on E'D
 SEGMENTS = 6  # beam elements between stations
-
-
-def element_stiffness(a, b, EA, EI, kGA) -> np.ndarray:
-    """A Timoshenko frame element's stiffness (6, 6) in global (u, v, turn) at both ends, from
-    node a to node b (x, z in mm)."""
-    L = math.hypot(b[0] - a[0], b[1] - a[1])
-    c, s = (b[0] - a[0]) / L, (b[1] - a[1]) / L
-    phi = 0.0 if math.isinf(kGA) else 12.0 * EI / (kGA * L * L)
-    k, axial = EI / (L**3 * (1.0 + phi)), EA / L
-    local = np.zeros((6, 6))
-    local[np.ix_([0, 3], [0, 3])] = axial * np.array([[1, -1], [-1, 1]])
-    bend = k * np.array(
-        [
-            [12, 6 * L, -12, 6 * L],
-            [6 * L, (4 + phi) * L * L, -6 * L, (2 - phi) * L * L],
-            [-12, -6 * L, 12, -6 * L],
-            [6 * L, (2 - phi) * L * L, -6 * L, (4 + phi) * L * L],
-        ]
-    )
-    local[np.ix_([1, 2, 4, 5], [1, 2, 4, 5])] = bend
-    R = np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])
-    T = np.kron(np.eye(2), R)
-    return T.T @ local @ T
 
 
 def frame_response(scene, pad_mm, head_mm, pad_section_mm, lever_mm, root="joint") -> dict:

@@ -4,6 +4,10 @@ changes nothing.
 
     PYTHONPATH=. .venv/bin/python studies/plate_slide.py [--configs ...]
     PYTHONPATH=. .venv/bin/python studies/plate_slide.py --sweep
+    PYTHONPATH=. .venv/bin/python studies/plate_slide.py --sweep --out studies/data/plate_slide_sweep.csv
+
+``--out``: the rows also as CSV (the design's name, regime, plate, the rung's translation), what
+studies/plate_frame.py --check reads.
 
 ``--sweep``: instead of the configs, same-layer designs over the box in regime 1
 (studies/root_turn_sweep.py's designs: the forward config with three layers (theta, t, h) and
@@ -31,6 +35,7 @@ rung's slide less the turn's share over that sum. Nine to twelve rung solves a d
 from __future__ import annotations
 
 import argparse
+import csv
 import itertools
 import tempfile
 from pathlib import Path
@@ -47,6 +52,7 @@ from mst_cli.model.stack import Stack
 from studies.root_turn_sweep import design
 
 ROOT = Path(__file__).resolve().parents[1]
+CSV_COLUMNS = ("design", "regime", "plate", "rung_mm_per_N")
 CONFIGS = ("mohammadi2021", "mohammadi2021-forward", "fingertip")
 SWEEP_THETA_DEG, SWEEP_T_MM, SWEEP_H_MM, SWEEP_PLATE_MM = (15.0, 33.0, 50.0), (0.4, 0.8), (2.4,), 1.6
 
@@ -63,10 +69,11 @@ def root_slides_mm_per_N(geometry, material) -> np.ndarray:
     return 2.0 * M * M / k
 
 
-def rows(path: Path, regimes: int | None = None) -> list[float]:
+def rows(path: Path, regimes: int | None = None, out: list | None = None) -> list[float]:
     """Print per regime (the first ``regimes``; None: all) and plate of the design at ``path``:
     the rung's slide (mm/N) and turn (mrad/N) that plate adds, the roots' estimate and the ratio;
-    return the ratios (where the roots' estimate is not 0)."""
+    return the ratios (where the roots' estimate is not 0); append (name, regime, plate, the
+    translation) to ``out`` when given."""
     doc, _ = mst.designed(path)
     g, m = doc.geometry(), doc.material
     roots = root_slides_mm_per_N(g, m)
@@ -90,6 +97,8 @@ def rows(path: Path, regimes: int | None = None) -> list[float]:
             ratio = f"{moved / estimate:.1f}" if estimate > 0.0 else "-"
             if estimate > 0.0:
                 ratios.append(moved / estimate)
+            if out is not None:
+                out.append((doc.name, r + 1, j + 1, f"{moved:.6f}"))
             print(
                 f"| {doc.name} | {r + 1} | {j + 1} | {rigid.side_mm_per_N:.4f} | {slide:.4f} | {1e3 * turn:+.2f} | "
                 f"{moved:.4f} | {estimate:.4f} | {ratio} |",
@@ -102,21 +111,28 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--configs", nargs="*", type=Path, default=[ROOT / "configs" / f"{c}.yaml" for c in CONFIGS])
     ap.add_argument("--sweep", action="store_true", help="same-layer designs over the box, regime 1")
+    ap.add_argument("--out", type=Path, help="the rows also as CSV here")
     args = ap.parse_args()
     print("per newton along +x at the top face; a plate alone in TPU, the rest rigid, less all rigid")
     print("| design | regime | plate | slide, all rigid, mm/N | plate's slide, mm/N | plate's turn, mrad/N |", end="")
     print(" less the turn's share, mm/N | roots' M^2/k, mm/N | rung / roots |")
     print("|---|---|---|---|---|---|---|---|---|")
+    table: list = []
     if not args.sweep:
         for path in args.configs:
-            rows(path)
-        return
-    ratios = []
-    with tempfile.TemporaryDirectory() as tmp:
-        for theta, t, h in itertools.product(SWEEP_THETA_DEG, SWEEP_T_MM, SWEEP_H_MM):
-            ratios += rows(design(Path(tmp), theta, t, h, SWEEP_PLATE_MM), regimes=1)
-    spread = f"{min(ratios):.2f} to {max(ratios):.2f}"
-    print(f"rung / roots over {len(ratios)} plates: median {np.median(ratios):.2f}, {spread}")
+            rows(path, out=table)
+    else:
+        ratios = []
+        with tempfile.TemporaryDirectory() as tmp:
+            for theta, t, h in itertools.product(SWEEP_THETA_DEG, SWEEP_T_MM, SWEEP_H_MM):
+                ratios += rows(design(Path(tmp), theta, t, h, SWEEP_PLATE_MM), regimes=1, out=table)
+        spread = f"{min(ratios):.2f} to {max(ratios):.2f}"
+        print(f"rung / roots over {len(ratios)} plates: median {np.median(ratios):.2f}, {spread}")
+    if args.out:
+        with args.out.open("w", newline="") as f:
+            w = csv.writer(f)
+            w.writerow(CSV_COLUMNS)
+            w.writerows(table)
 
 
 if __name__ == "__main__":

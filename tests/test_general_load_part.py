@@ -157,17 +157,18 @@ def test_a_layers_spec_reads_the_layers_alone_through_the_api(scene):
 
 
 def test_past_every_lock_a_tangential_force_slides_the_magnet_by_the_bases_sway_alone(scene):
-    """Past the last lock every layer is stuck (its slide holds), so a tangential force along x
-    slides the magnet further only by the base's sway, c_b per newton at every normal force
-    (model.housing_base.base_sway_mm_per_N); none along y; the layers alone have no base."""
+    """Past the last lock every layer is stuck (its slide holds) and every plate lies between
+    filled blocks (the plates' sway is 0), so a tangential force along x slides the magnet further
+    only by the base's sway, c_b per newton at every normal force
+    (model.housing_base.base_sway_mm_per_N); none along y; the layers alone have neither."""
     geometry, material = scene
     part = loaded_stack(geometry, material, "spring", whole_part=True)
     alone = loaded_stack(geometry, material, "spring", whole_part=False)
-    assert len(part.lateral) == len(alone.lateral) + 1 == len(geometry.layers) + 1
+    assert len(part.lateral) == len(alone.lateral) + 2 == len(geometry.layers) + 2
     c_b = base_sway_mm_per_N(member_scene(geometry, material))
     last = max(t.lock_force_N for t in part.tilt)
     F = np.array([1.5, 2.0, 3.0]) * last
     slide = part.slides_mm(F, (1.0, 1.0)).sum(axis=1)  # per unit of Fx / Fz and Fy / Fz: U(F)
     np.testing.assert_allclose(np.diff(slide[:, 0]) / np.diff(F), c_b, rtol=1e-9)
     np.testing.assert_allclose(np.diff(slide[:, 1]) / np.diff(F), 0.0, atol=1e-15)
-    np.testing.assert_allclose(part.slides_mm(F, (1.0, 0.0))[:, -1, 0], c_b * F, rtol=1e-12)
+    np.testing.assert_allclose(part.slides_mm(F, (1.0, 0.0))[:, -2, 0], c_b * F, rtol=1e-12)

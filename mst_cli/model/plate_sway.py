@@ -1,0 +1,221 @@
+"""The plates' sway: how far the TPU plates between the layers let the magnet translate under a
+tangential force, regime by regime (issue 44, docs/design.md 4.7, "The plates' sway: built").
+
+Under a force along x the walls of the layer under a plate and of the layer over it both bend the
+plate at their ends, in the same sense, as a storey's columns load its beam in a sway frame. A
+plate 0.8 to 1.6 mm thick across 20 to 30 mm turns at those ends and the walls above it swing:
+the whole-part rung finds each plate adding 0.02 to 0.07 mm/N to the magnet's slide, less its
+turn's share, while its layers are open (studies/plate_slide.py), which the layers' lateral rungs,
+clamped between rigid plates, cannot see.
+
+The closed form is a plane frame (plane strain, per the part's depth D; :mod:`model.plane_frame`):
+
+* each layer's four walls are Timoshenko beams along their centre lines, t thick, from the wall's
+  end on its pad's mid line (x = the wall head's, model.load_path.layer_supports) to the
+  chevron's tip (W/2 - t / (2 sin theta), h/2); their stiffness is scaled, layer by layer, so that
+  the layer alone between rigid plates (the plate above held from turning) has L0's k_x
+  (model.mechanics.lateral): the frame carries the plates, L0 the walls;
+* the part of a wall inside its pad (its end to the pad's face) is rigid, and so is the plate
+  under a wall's footprint, t / sin(theta) wide;
+* each plate is a beam on its mid-plane as thick as the plate and the pads it carries (a layer's
+  pad, t thick, under |x| < its wall heads); the wall ends are tied to it by rigid offsets and
+  turn into it against model.plate_joint's fitted root spring;
+* the cover is held and the cap is rigid (their sway is model.housing_base's); a locked layer is
+  its filled block, rigid, over |x| < its wall heads.
+
+A force of 1 N along +x at the top face. What a plate adds is its translation: the magnet's slide
+with that plate in TPU less with it rigid, less the share of the cap's turn about the plate's
+mid-plane (mst's stack already turns the plates with their layers), summed over the plates, each
+alone in TPU (the rung's measure). Along y (the depth) nothing is added: the frame is the
+section's. Against the rung's measure it is 0.83 to 1.23 times it on same-layer designs and 0.47
+to 1.59 on the bundled ones, short beside a locked layer (studies/plate_frame.py). Pure numpy,
+no I/O.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from mst_cli.model.beams import SHEAR_FACTOR
+from mst_cli.model.cell import wall_centreline_length_mm
+from mst_cli.model.load_path import CELL_KEYS, layer_supports, member_scene
+from mst_cli.model.mechanics.lateral import lateral_stiffness_N_per_mm
+from mst_cli.model.plane_frame import Frame
+from mst_cli.model.plate_joint import FITTED
+
+RIGID = 1e5  # a rigid member's factor on E'D: the figures within 0.1 % of 1e6's, the system better conditioned
+
+
+@dataclass(frozen=True)
+class StackSection:
+    """The section the frame is built on: the layers bottom first (theta in rad, t, h, their wall
+    heads' x and bottoms' z, mm; L0's k_x, N/mm) and the part's dimensions (mm), the TPU's plane-
+    strain modulus and shear modulus (MPa)."""
+
+    theta_rad: np.ndarray
+    t_mm: np.ndarray
+    h_mm: np.ndarray
+    head_mm: np.ndarray
+    bottom_mm: np.ndarray
+    k_x_N_per_mm: np.ndarray
+    width_mm: float
+    depth_mm: float
+    plate_mm: float
+    cover_mm: float
+    cap_above_stack_mm: float  # the cap over the top layer's top pad
+    z_magnet_mm: float  # the magnet's centre
+    E_prime_MPa: float
+    G_MPa: float
+
+
+def stack_section(geometry, material) -> StackSection:
+    """The :class:`StackSection` of a part (a model.assembly.SensorGeometry and its material)."""
+    s = member_scene(geometry, material)
+    theta, t, h = (np.array([getattr(c, k) for c in geometry.layers], dtype=float) for k in CELL_KEYS)
+    _, head, _, _ = layer_supports(s, theta, t, h)
+    k_x = np.array([lateral_stiffness_N_per_mm(c, material)[0] for c in geometry.layers])
+    z_magnet = geometry.z_magnet_bottom_mm + 0.5 * geometry.magnet.thickness_mm
+    return StackSection(
+        theta, t, h, np.asarray(head, dtype=float), np.array(geometry.layer_bottoms_mm), k_x, s.width_mm, s.depth_mm,
+        s.plate_mm, s.cover_mm, s.cap_above_stack_mm, z_magnet, s.E_prime_MPa, s.G_MPa,
+    )  # fmt: skip
+
+
+def root_spring_Nmm_per_rad(sec: StackSection) -> np.ndarray:
+    """(n,) a wall's root turning into a TPU plate (model.plate_joint's fitted spring), N mm/rad."""
+    c, a, b, _ = FITTED
+    L = wall_centreline_length_mm(sec.theta_rad, sec.t_mm, sec.h_mm)
+    return c * np.sin(sec.theta_rad) ** a * (L / sec.t_mm) ** b * sec.E_prime_MPa * sec.depth_mm * sec.t_mm**2
+
+
+def _beam_z_mm(sec: StackSection) -> list[float]:
+    """The mid-planes of the cover (0), the plates (1 .. n - 1) and the cap's node (n)."""
+    cap = sec.bottom_mm[-1] + sec.h_mm[-1] + 0.5 * sec.cap_above_stack_mm
+    return [sec.bottom_mm[0] - 0.5 * sec.cover_mm, *(sec.bottom_mm[1:] - 0.5 * sec.plate_mm), cap]
+
+
+def frame_pull(
+    sec: StackSection, locked=(), tpu_plate: int | None = None, walls=None, guided: bool = False,
+    zones: tuple[bool, bool] = (True, True), roots: bool = True,
+) -> tuple[float, float]:  # fmt: skip
+    """(the magnet's slide along +x, mm, the cap's turn, counter-clockwise from x to z, rad) per
+    newton along +x at the top face, with layers ``locked`` (indices from 0) filled, plate
+    ``tpu_plate`` (from 0: the plate over layer j) in TPU and every other member rigid, the walls'
+    stiffness times ``walls`` (n,) [1], the cap held from turning when ``guided``; ``zones``
+    (under the walls' footprints on the plates, the walls' ends in their pads), ``roots``: the
+    rigid zones and the root springs (module docstring; studies/plate_frame.py switches them)."""
+    n, s = len(sec.theta_rad), sec
+    rigid = RIGID * s.E_prime_MPa * s.depth_mm
+    f = Frame(tie_N_per_mm=rigid)
+    beam_z = _beam_z_mm(s)
+    k_root = root_spring_Nmm_per_rad(s)
+    walls = np.ones(n) if walls is None else np.asarray(walls, dtype=float)
+    beams = [_plate_beam(f, s, j, z, locked, tpu_plate, zones) for j, z in enumerate(beam_z)]
+    for node in beams[0].values():
+        f.hold(node)
+    for i in range(n):
+        if i in locked:  # the filled block ties the two plates
+            f.beam(beams[i][0.0], beams[i + 1][0.0], rigid, rigid, math.inf)
+            continue
+        _walls(f, s, i, beams, walls[i], k_root[i], tpu_plate, zones, roots)
+    cap = beams[n][0.0]
+    if guided:
+        f.hold(cap, (2,))
+    z_top = s.bottom_mm[-1] + s.h_mm[-1] + s.cap_above_stack_mm
+    u = f.solve({3 * cap: 1.0, 3 * cap + 2: -(z_top - beam_z[n])})
+    turn = u[3 * cap + 2]
+    return float(u[3 * cap] - turn * (s.z_magnet_mm - beam_z[n])), float(turn)
+
+
+def _plate_beam(f: Frame, s: StackSection, j: int, z: float, locked, tpu_plate, zones) -> dict:
+    """Beam j (0 the cover, n the cap) into ``f`` on its mid-plane z: {x: node} at its stations.
+    Rigid but where it is plate ``tpu_plate``, outside the open walls' footprints (``zones[0]``)
+    and outside any filled block beside it (a locked layer has no walls of its own)."""
+    n, E, G, D = len(s.theta_rad), s.E_prime_MPa, s.G_MPa, s.depth_mm
+    layers = [i for i in (j - 1, j) if 0 <= i < n]  # under beam j (its heads), over it (its feet)
+    half_print = 0.5 * s.t_mm / np.sin(s.theta_rad)  # half a wall's footprint on its pad
+    xs, zone = {0.0}, []
+    for i in layers:
+        for x in (-float(s.head_mm[i]), float(s.head_mm[i])):
+            xs.add(x)
+            if zones[0] and i not in locked:
+                zone.append((x - half_print[i], x + half_print[i]))
+                xs |= {x - half_print[i], x + half_print[i]}
+    stations = {x: f.node(x, z) for x in sorted(xs)}
+    tpu = 0 < j < n and j - 1 == tpu_plate
+    ordered = sorted(stations)
+    for xa, xb in zip(ordered[:-1], ordered[1:]):
+        mid = 0.5 * (xa + xb)
+        thick = (s.cover_mm if j == 0 else s.plate_mm) + sum(s.t_mm[i] for i in layers if abs(mid) < s.head_mm[i])
+        blocked = any(i in locked and abs(mid) < s.head_mm[i] for i in layers)
+        k = RIGID if (not tpu or blocked or any(a <= mid <= b for a, b in zone)) else 1.0
+        f.beam(
+            stations[xa], stations[xb], k * E * thick * D, k * E * D * thick**3 / 12.0, k * SHEAR_FACTOR * G * thick * D
+        )
+    return stations
+
+
+def _walls(f: Frame, s: StackSection, i: int, beams, factor, k_root, tpu_plate, zones, roots: bool) -> None:
+    """Layer i's four walls, each from its end on a pad to the chevron's tip, into ``f``."""
+    n, E, G, D, t = len(s.theta_rad), s.E_prime_MPa, s.G_MPa, s.depth_mm, s.t_mm[i]
+    rigid = RIGID * E * D
+    z0, tip_x = s.bottom_mm[i], 0.5 * s.width_mm - 0.5 * t / math.sin(s.theta_rad[i])
+    for sign in (-1.0, 1.0):
+        x = sign * s.head_mm[i]
+        tip = f.node(sign * tip_x, z0 + 0.5 * s.h_mm[i])
+        for j, z_end in ((i, z0 + 0.5 * t), (i + 1, z0 + s.h_mm[i] - 0.5 * t)):
+            tpu = 0 < j < n and j - 1 == tpu_plate
+            offset, end = f.node(x, z_end), f.node(x, z_end)
+            f.beam(beams[j][float(x)], offset, rigid, rigid, math.inf)
+            f.spring(offset, end, k_root if (roots and tpu) else rigid)
+            start = end
+            if zones[1]:  # the wall's end inside its pad, from the pad's mid line to its face
+                frac = t / (s.h_mm[i] - t)
+                (xe, ze), (xt, zt) = f.nodes[end], f.nodes[tip]
+                start = f.node(xe + frac * (xt - xe), ze + frac * (zt - ze))
+                f.beam(end, start, rigid, rigid, math.inf)
+            f.beam(start, tip, factor * E * t * D, factor * E * D * t**3 / 12.0, factor * SHEAR_FACTOR * G * t * D)
+
+
+def wall_factors(sec: StackSection, zones: tuple[bool, bool] = (True, True)) -> np.ndarray:
+    """(n,) the factor on each layer's walls that gives the frame's layer alone between rigid
+    plates, the plate above held from turning, L0's k_x. The slide is c_w / f + c_r in the
+    factor f (c_r: the rigid members' own), so two solves fix it."""
+    n = len(sec.theta_rad)
+    out = []
+    for i in range(n):
+        others = tuple(j for j in range(n) if j != i)
+        once, twice = (
+            frame_pull(sec, others, None, np.full(n, f), guided=True, zones=zones, roots=False)[0] for f in (1.0, 2.0)
+        )
+        walls = 2.0 * (once - twice)
+        out.append(walls / (1.0 / sec.k_x_N_per_mm[i] - (once - walls)))
+    return np.array(out)
+
+
+def plate_translations_mm_per_N(
+    sec: StackSection, locked=(), walls=None, zones: tuple[bool, bool] = (True, True), roots: bool = True
+) -> np.ndarray:
+    """(n - 1,) what each plate alone in TPU adds to the magnet's translation, mm per newton along
+    x, with layers ``locked`` filled (module docstring)."""
+    n = len(sec.theta_rad)
+    walls = wall_factors(sec, zones) if walls is None else walls
+    beam_z = _beam_z_mm(sec)
+    slide0, turn0 = frame_pull(sec, locked, None, walls, zones=zones, roots=roots)
+    out = []
+    for j in range(n - 1):
+        slide, turn = frame_pull(sec, locked, j, walls, zones=zones, roots=roots)
+        # a turn counter-clockwise moves the magnet dz above the plate by -turn dz: not a translation
+        out.append((slide - slide0) + (turn - turn0) * (sec.z_magnet_mm - beam_z[j + 1]))
+    return np.array(out)
+
+
+def regime_sway_mm_per_N(sec: StackSection, lock_order) -> np.ndarray:
+    """(n + 1,) the plates' translation per newton along x in each regime, regime r having the
+    first r layers of ``lock_order`` (layer indices, first to lock first) locked."""
+    walls = wall_factors(sec)
+    order = [int(i) for i in lock_order]
+    return np.array([plate_translations_mm_per_N(sec, tuple(order[:r]), walls).sum() for r in range(len(order) + 1)])

@@ -1,0 +1,106 @@
+"""The plates' sway (model.plate_sway) against the whole-part rung's measure of it, and the frame's
+choices side by side (issue 44, docs/design.md 4.7, "The plates' sway: built"). Prints a table,
+changes nothing.
+
+    PYTHONPATH=. .venv/bin/python studies/plate_frame.py --check studies/data/plate_slide.csv \
+        studies/data/plate_slide_sweep.csv
+
+The CSVs are studies/plate_slide.py's ``--out``: per design, regime and plate, what that plate
+alone in TPU adds to the magnet's translation on the rung (every other member rigid). Here each
+design is designed again (a bundled config by its name, a same-layer design ``same-THETA-T-H-P``
+by studies/root_turn_sweep.design) and model.plate_sway's frame gives the same figure, in its
+chosen form and in four others: without the rigid zones under the walls' footprints on the plates
+(``no plate zones``), without the walls' ends rigid in their pads (``no wall zones``), without the
+root springs (``no roots``), and with the walls as beams, not scaled to L0's k_x (``beam walls``).
+Per form: each row's frame / rung, their median and spread, and the rms of the log ratio. Rows
+whose rung figure is under 0.005 mm/N (a plate between two locked layers) are printed, not counted.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+import mst_cli as mst
+from mst_cli.model import plate_sway as ps
+from mst_cli.model.mechanics import layer_laws
+from mst_cli.model.mechanics import whole_part as wp
+from mst_cli.model.plate_sway import stack_section
+from mst_cli.model.stack import Stack
+from studies.root_turn_sweep import design
+
+ROOT = Path(__file__).resolve().parents[1]
+SMALL_MM_PER_N = 0.005  # below it a rung figure is a plate between locked layers: printed, not counted
+# (name, zones (plate, wall), roots, walls scaled to L0)
+FORMS = (
+    ("chosen", (True, True), True, True),
+    ("no plate zones", (False, True), True, True),
+    ("no wall zones", (True, False), True, True),
+    ("no roots", (True, True), False, True),
+    ("beam walls", (True, True), True, False),
+)
+
+
+def config_path(name: str, folder: Path) -> Path:
+    """A bundled config by its name, or a same-layer design ``same-THETA-T-H-PLATE`` made anew."""
+    if name.startswith("same-"):
+        theta, t, h, plate = (float(v) for v in name.split("-")[1:])
+        return design(folder, theta, t, h, plate)
+    return ROOT / "configs" / f"{name}.yaml"
+
+
+def frame_rows(name: str, folder: Path) -> dict[tuple[int, int], list[float]]:
+    """{(regime, plate) from 1: each form's figure, mm/N} of one design."""
+    doc, _ = mst.designed(config_path(name, folder))
+    g, m = doc.geometry(), doc.material
+    sec = stack_section(g, m)
+    regimes = wp.regime_locked(Stack(layer_laws(g.layers, m, doc.mechanics)))
+    out: dict[tuple[int, int], list[float]] = {}
+    for _, zones, roots, scaled in FORMS:
+        walls = ps.wall_factors(sec, zones) if scaled else np.ones(len(g.layers))
+        for r, locked in enumerate(regimes):
+            moved = ps.plate_translations_mm_per_N(sec, tuple(locked), walls, zones, roots)
+            for j, v in enumerate(moved):
+                out.setdefault((r + 1, j + 1), []).append(float(v))
+    return out
+
+
+def check(paths: list[Path]) -> None:
+    rows = [row for p in paths for row in csv.DictReader(p.open())]
+    print("| design | regime | plate | rung, mm/N | " + " | ".join(f"{f[0]} / rung" for f in FORMS) + " |")
+    print("|---|---|---|---|" + "---|" * len(FORMS))
+    ratios: list[list[float]] = [[] for _ in FORMS]
+    cache: dict[str, dict] = {}
+    with tempfile.TemporaryDirectory() as tmp:
+        for row in rows:
+            name, r, j, rung = row["design"], int(row["regime"]), int(row["plate"]), float(row["rung_mm_per_N"])
+            if name not in cache:
+                cache[name] = frame_rows(name, Path(tmp))
+            figures = cache[name][(r, j)]
+            counted = rung >= SMALL_MM_PER_N
+            cells = [f"{v / rung:.2f}" if counted else f"({v:.4f})" for v in figures]
+            print(f"| {name} | {r} | {j} | {rung:.4f} | " + " | ".join(cells) + " |", flush=True)
+            if counted:
+                for k, v in enumerate(figures):
+                    ratios[k].append(v / rung)
+    print()
+    print("| form | rows | frame / rung: median (spread) | rms log ratio |")
+    print("|---|---|---|---|")
+    for (form, *_), q in zip(FORMS, ratios):
+        q = np.array(q)
+        rms = float(np.sqrt(np.mean(np.log(np.maximum(q, 1e-3)) ** 2)))  # a form giving 0: 1e-3
+        print(f"| {form} | {len(q)} | {np.median(q):.2f} ({q.min():.2f} to {q.max():.2f}) | {rms:.3f} |")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--check", type=Path, nargs="+", required=True, help="studies/plate_slide.py --out CSVs")
+    check(ap.parse_args().check)
+
+
+if __name__ == "__main__":
+    main()
