@@ -14,6 +14,9 @@ chosen form and in four others: without the rigid zones under the walls' footpri
 root springs (``no roots``), and with the walls as beams, not scaled to L0's k_x (``beam walls``).
 Per form: each row's frame / rung, their median and spread, and the rms of the log ratio. Rows
 whose rung figure is under 0.005 mm/N (a plate between two locked layers) are printed, not counted.
+Rows of plate 0 (studies/plate_slide.py --base) are the housing's base, in the frame as
+model.housing_base's portal (``plate_sway.base_translation_mm_per_N``), counted apart, with mst's
+column form (``housing_base.base_sway_mm_per_N``, what the general load takes) beside them.
 """
 
 from __future__ import annotations
@@ -26,7 +29,9 @@ from pathlib import Path
 import numpy as np
 
 import mst_cli as mst
+from mst_cli.model import load_path as lp
 from mst_cli.model import plate_sway as ps
+from mst_cli.model.housing_base import base_sway_mm_per_N
 from mst_cli.model.mechanics import layer_laws
 from mst_cli.model.mechanics import whole_part as wp
 from mst_cli.model.plate_sway import stack_section
@@ -66,6 +71,7 @@ def frame_rows(name: str, folder: Path) -> dict[tuple[int, int], list[float]]:
             moved = ps.plate_translations_mm_per_N(sec, tuple(locked), walls, zones, roots)
             for j, v in enumerate(moved):
                 out.setdefault((r + 1, j + 1), []).append(float(v))
+            out.setdefault((r + 1, 0), []).append(ps.base_translation_mm_per_N(sec, tuple(locked), walls, zones, roots))
     return out
 
 
@@ -73,7 +79,7 @@ def check(paths: list[Path]) -> None:
     rows = [row for p in paths for row in csv.DictReader(p.open())]
     print("| design | regime | plate | rung, mm/N | " + " | ".join(f"{f[0]} / rung" for f in FORMS) + " |")
     print("|---|---|---|---|" + "---|" * len(FORMS))
-    ratios: list[list[float]] = [[] for _ in FORMS]
+    ratios: dict[str, list[list[float]]] = {"plates": [[] for _ in FORMS], "base": [[] for _ in FORMS]}
     cache: dict[str, dict] = {}
     with tempfile.TemporaryDirectory() as tmp:
         for row in rows:
@@ -83,17 +89,30 @@ def check(paths: list[Path]) -> None:
             figures = cache[name][(r, j)]
             counted = rung >= SMALL_MM_PER_N
             cells = [f"{v / rung:.2f}" if counted else f"({v:.4f})" for v in figures]
-            print(f"| {name} | {r} | {j} | {rung:.4f} | " + " | ".join(cells) + " |", flush=True)
+            print(f"| {name} | {r} | {j or 'base'} | {rung:.4f} | " + " | ".join(cells) + " |", flush=True)
             if counted:
                 for k, v in enumerate(figures):
-                    ratios[k].append(v / rung)
+                    ratios["base" if j == 0 else "plates"][k].append(v / rung)
+    bases = [row for row in rows if int(row["plate"]) == 0]
+    if bases:
+        print()
+        print("| design | regime | the base on the rung, mm/N | frame / rung | mst's column form / rung |")
+        print("|---|---|---|---|---|")
+        for row in bases:
+            name, r, rung = row["design"], int(row["regime"]), float(row["rung_mm_per_N"])
+            doc, _ = mst.designed(config_path(name, Path(".")))
+            column = base_sway_mm_per_N(lp.member_scene(doc.geometry(), doc.material))
+            print(f"| {name} | {r} | {rung:.4f} | {cache[name][(r, 0)][0] / rung:.2f} | {column / rung:.2f} |")
     print()
-    print("| form | rows | frame / rung: median (spread) | rms log ratio |")
-    print("|---|---|---|---|")
-    for (form, *_), q in zip(FORMS, ratios):
-        q = np.array(q)
-        rms = float(np.sqrt(np.mean(np.log(np.maximum(q, 1e-3)) ** 2)))  # a form giving 0: 1e-3
-        print(f"| {form} | {len(q)} | {np.median(q):.2f} ({q.min():.2f} to {q.max():.2f}) | {rms:.3f} |")
+    print("| members | form | rows | frame / rung: median (spread) | rms log ratio |")
+    print("|---|---|---|---|---|")
+    for member, by_form in ratios.items():
+        for (form, *_), q in zip(FORMS, by_form):
+            if not q:
+                continue
+            q = np.array(q)
+            rms = float(np.sqrt(np.mean(np.log(np.maximum(q, 1e-3)) ** 2)))  # a form giving 0: 1e-3
+            print(f"| {member} | {form} | {len(q)} | {np.median(q):.2f} ({q.min():.2f} to {q.max():.2f}) | {rms:.3f} |")
 
 
 def main() -> None:

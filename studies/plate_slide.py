@@ -7,7 +7,9 @@ changes nothing.
     PYTHONPATH=. .venv/bin/python studies/plate_slide.py --sweep --out studies/data/plate_slide_sweep.csv
 
 ``--out``: the rows also as CSV (the design's name, regime, plate, the rung's translation), what
-studies/plate_frame.py --check reads.
+studies/plate_frame.py --check reads. ``--base``: the housing's base instead (the cover, the
+slot's walls and floor) alone in TPU, its translation less its turn's share about the cover's
+mid-plane, as "plate 0".
 
 ``--sweep``: instead of the configs, same-layer designs over the box in regime 1
 (studies/root_turn_sweep.py's designs: the forward config with three layers (theta, t, h) and
@@ -107,18 +109,41 @@ def rows(path: Path, regimes: int | None = None, out: list | None = None) -> lis
     return ratios
 
 
+def base_rows(path: Path, out: list | None = None) -> None:
+    """Print per regime the rung's slide and turn the base alone adds to the magnet's, and what is
+    left less the turn's share about the cover's mid-plane; append the rows to ``out`` as plate 0."""
+    doc, _ = mst.designed(path)
+    g, m = doc.geometry(), doc.material
+    z_magnet = g.z_magnet_bottom_mm + 0.5 * g.magnet.thickness_mm
+    z_cover = g.z_base_top_mm - 0.5 * g.housing.cover_mm
+    for r, locked in enumerate(wp.regime_locked(Stack(layer_laws(g.layers, m, doc.mechanics)))):
+        rigid = wp.press_general(g, m, wp.PartOptions(member_factor=wp.RIGID_FACTOR, locked=locked)).pull
+        alone = wp.PartOptions(member_factor=wp.RIGID_FACTOR, scaled=("plate", "cap"), locked=locked)
+        x = wp.press_general(g, m, alone).pull
+        slide, turn = x.side_mm_per_N - rigid.side_mm_per_N, x.turn_rad_per_N - rigid.turn_rad_per_N
+        moved = slide + turn * (z_magnet - z_cover)
+        print(f"| {doc.name} | {r + 1} | base | {rigid.side_mm_per_N:.4f} | {slide:.4f} | {1e3 * turn:+.2f} | "
+              f"{moved:.4f} | - | - |", flush=True)  # fmt: skip
+        if out is not None:
+            out.append((doc.name, r + 1, 0, f"{moved:.6f}"))
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--configs", nargs="*", type=Path, default=[ROOT / "configs" / f"{c}.yaml" for c in CONFIGS])
     ap.add_argument("--sweep", action="store_true", help="same-layer designs over the box, regime 1")
     ap.add_argument("--out", type=Path, help="the rows also as CSV here")
+    ap.add_argument("--base", action="store_true", help="the housing's base alone in TPU instead of each plate")
     args = ap.parse_args()
     print("per newton along +x at the top face; a plate alone in TPU, the rest rigid, less all rigid")
     print("| design | regime | plate | slide, all rigid, mm/N | plate's slide, mm/N | plate's turn, mrad/N |", end="")
     print(" less the turn's share, mm/N | roots' M^2/k, mm/N | rung / roots |")
     print("|---|---|---|---|---|---|---|---|---|")
     table: list = []
-    if not args.sweep:
+    if args.base:
+        for path in args.configs:
+            base_rows(path, out=table)
+    elif not args.sweep:
         for path in args.configs:
             rows(path, out=table)
     else:

@@ -41,6 +41,7 @@ import numpy as np
 
 from mst_cli.model.beams import SHEAR_FACTOR
 from mst_cli.model.cell import wall_centreline_length_mm
+from mst_cli.model.housing_base import END_BUILT_IN
 from mst_cli.model.load_path import CELL_KEYS, layer_supports, member_scene
 from mst_cli.model.mechanics.lateral import lateral_stiffness_N_per_mm
 from mst_cli.model.plane_frame import Frame
@@ -69,6 +70,9 @@ class StackSection:
     z_magnet_mm: float  # the magnet's centre
     E_prime_MPa: float
     G_MPa: float
+    half_slot_mm: float = 0.0  # the board slot under the cover: its half width
+    slot_wall_widths_mm: tuple[float, float] = (0.0, 0.0)  # its side walls (left, right)
+    slot_height_mm: float = 0.0  # from the slot's floor to the cover's underside; 0: no slot (the base rigid)
 
 
 def stack_section(geometry, material) -> StackSection:
@@ -80,7 +84,8 @@ def stack_section(geometry, material) -> StackSection:
     z_magnet = geometry.z_magnet_bottom_mm + 0.5 * geometry.magnet.thickness_mm
     return StackSection(
         theta, t, h, np.asarray(head, dtype=float), np.array(geometry.layer_bottoms_mm), k_x, s.width_mm, s.depth_mm,
-        s.plate_mm, s.cover_mm, s.cap_above_stack_mm, z_magnet, s.E_prime_MPa, s.G_MPa,
+        s.plate_mm, s.cover_mm, s.cap_above_stack_mm, z_magnet, s.E_prime_MPa, s.G_MPa, s.half_slot_mm,
+        tuple(s.slot_wall_widths_mm), s.slot_height_mm,
     )  # fmt: skip
 
 
@@ -103,8 +108,8 @@ def frame_pull(
 ) -> tuple[float, float]:  # fmt: skip
     """(the magnet's slide along +x, mm, the cap's turn, counter-clockwise from x to z, rad) per
     newton along +x at the top face, with layers ``locked`` (indices from 0) filled, plate
-    ``tpu_plate`` (from 0: the plate over layer j) in TPU and every other member rigid, the walls'
-    stiffness times ``walls`` (n,) [1], the cap held from turning when ``guided``; ``zones``
+    ``tpu_plate`` (from 0: the plate over layer j; -1: the housing's base) in TPU and every other
+    member rigid, the walls' stiffness times ``walls`` (n,) [1], the cap held from turning when ``guided``; ``zones``
     (under the walls' footprints on the plates, the walls' ends in their pads), ``roots``: the
     rigid zones and the root springs (module docstring; studies/plate_frame.py switches them)."""
     n, s = len(sec.theta_rad), sec
@@ -114,8 +119,11 @@ def frame_pull(
     k_root = root_spring_Nmm_per_rad(s)
     walls = np.ones(n) if walls is None else np.asarray(walls, dtype=float)
     beams = [_plate_beam(f, s, j, z, locked, tpu_plate, zones) for j, z in enumerate(beam_z)]
-    for node in beams[0].values():
-        f.hold(node)
+    if tpu_plate == -1:
+        _base(f, s, beams[0], beam_z[0])
+    else:
+        for node in beams[0].values():
+            f.hold(node)
     for i in range(n):
         if i in locked:  # the filled block ties the two plates
             f.beam(beams[i][0.0], beams[i + 1][0.0], rigid, rigid, math.inf)
@@ -144,18 +152,48 @@ def _plate_beam(f: Frame, s: StackSection, j: int, z: float, locked, tpu_plate, 
             if zones[0] and i not in locked:
                 zone.append((x - half_print[i], x + half_print[i]))
                 xs |= {x - half_print[i], x + half_print[i]}
+    base = j == 0 and tpu_plate == -1
+    if base:
+        xs |= {-s.half_slot_mm, s.half_slot_mm}
     stations = {x: f.node(x, z) for x in sorted(xs)}
-    tpu = 0 < j < n and j - 1 == tpu_plate
+    tpu = (0 < j < n and j - 1 == tpu_plate) or base
     ordered = sorted(stations)
     for xa, xb in zip(ordered[:-1], ordered[1:]):
         mid = 0.5 * (xa + xb)
         thick = (s.cover_mm if j == 0 else s.plate_mm) + sum(s.t_mm[i] for i in layers if abs(mid) < s.head_mm[i])
         blocked = any(i in locked and abs(mid) < s.head_mm[i] for i in layers)
+        over_wall = base and abs(mid) > s.half_slot_mm  # the cover over the slot's walls
+        if over_wall and s.half_slot_mm in (abs(xa), abs(xb)):
+            continue  # it rides on the wall's top, not on the cover's end (_base ties it)
+        blocked |= over_wall
         k = RIGID if (not tpu or blocked or any(a <= mid <= b for a, b in zone)) else 1.0
         f.beam(
             stations[xa], stations[xb], k * E * thick * D, k * E * D * thick**3 / 12.0, k * SHEAR_FACTOR * G * thick * D
         )
     return stations
+
+
+def _base(f: Frame, s: StackSection, cover: dict, z_cover: float) -> None:
+    """The housing's base under the cover's beam ``cover`` ({x: node} on its mid-plane z_cover),
+    as model.housing_base's portal frame (studies/base_frame.py): each slot wall a Timoshenko
+    column from the slot's floor to the cover's underside, its root built into the floor
+    (pi/8 E'D w^2) and its top, by a rigid offset to the cover's end at the wall's inner edge,
+    into the cover (pi/8 E'D c^2); the cover beyond the slot's edges rides on the walls' tops."""
+    E, G, D, L2, c = s.E_prime_MPa, s.G_MPa, s.depth_mm, s.half_slot_mm, s.cover_mm
+    rigid = RIGID * E * D
+    z_root = z_cover - 0.5 * c - s.slot_height_mm
+    for sign, w in zip((-1.0, 1.0), s.slot_wall_widths_mm):
+        x = sign * (L2 + 0.5 * w)
+        ground, root, top = f.node(x, z_root), f.node(x, z_root), f.node(x, z_cover - 0.5 * c)
+        f.hold(ground)
+        f.spring(ground, root, END_BUILT_IN * E * D * w * w)
+        f.beam(root, top, E * w * D, E * D * w**3 / 12.0, SHEAR_FACTOR * G * w * D)
+        edge = f.node(sign * L2, z_cover)
+        f.beam(top, edge, rigid, rigid, math.inf)
+        f.spring(edge, cover[sign * L2], END_BUILT_IN * E * D * c * c)
+        beyond = [x_ for x_ in cover if sign * x_ > L2]
+        if beyond:  # the cover over the wall: rides on its top
+            f.beam(edge, cover[min(beyond, key=abs)], rigid, rigid, math.inf)
 
 
 def _walls(f: Frame, s: StackSection, i: int, beams, factor, k_root, tpu_plate, zones, roots: bool) -> None:
@@ -211,6 +249,21 @@ def plate_translations_mm_per_N(
         # a turn counter-clockwise moves the magnet dz above the plate by -turn dz: not a translation
         out.append((slide - slide0) + (turn - turn0) * (sec.z_magnet_mm - beam_z[j + 1]))
     return np.array(out)
+
+
+def base_translation_mm_per_N(
+    sec: StackSection, locked=(), walls=None, zones: tuple[bool, bool] = (True, True), roots: bool = True
+) -> float:
+    """What the housing's base alone in TPU adds to the magnet's translation, mm per newton along
+    x, less the cap's turn's share about the cover's mid-plane, with layers ``locked`` filled; 0
+    without a slot (the base solid)."""
+    if sec.slot_height_mm <= 0.0:
+        return 0.0
+    walls = wall_factors(sec, zones) if walls is None else walls
+    z_cover = _beam_z_mm(sec)[0]
+    slide0, turn0 = frame_pull(sec, locked, None, walls, zones=zones, roots=roots)
+    slide, turn = frame_pull(sec, locked, -1, walls, zones=zones, roots=roots)
+    return (slide - slide0) + (turn - turn0) * (sec.z_magnet_mm - z_cover)
 
 
 def regime_sway_mm_per_N(sec: StackSection, lock_order) -> np.ndarray:
