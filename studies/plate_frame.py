@@ -71,7 +71,8 @@ def frame_rows(name: str, folder: Path) -> dict[tuple[int, int], list[float]]:
             moved = ps.plate_translations_mm_per_N(sec, tuple(locked), walls, zones, roots)
             for j, v in enumerate(moved):
                 out.setdefault((r + 1, j + 1), []).append(float(v))
-            out.setdefault((r + 1, 0), []).append(ps.base_translation_mm_per_N(sec, tuple(locked), walls, zones, roots))
+            base = ps.base_translation_mm_per_N(sec, tuple(locked), walls, zones, roots)
+            out.setdefault((r + 1, 0), []).append(base)
     return out
 
 

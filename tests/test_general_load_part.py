@@ -15,12 +15,12 @@ import numpy as np
 import pytest
 
 from mst_cli.model.general_load import loaded_stack, pose_field_T
-from mst_cli.model.housing_base import base_sway_mm_per_N
-from mst_cli.model.load_path import Members, member_scene, members
+from mst_cli.model.load_path import Members, members
 from mst_cli.model.mechanics import layer_laws
 from mst_cli.model.mechanics.depth import in_web
 from mst_cli.model.mechanics.tilt import solve_layer_tilt
 from mst_cli.model.part_laws import SeriesMember, cover_host, part_layer_laws, unit_tilt_law
+from mst_cli.model.plate_sway import regime_sways_mm_per_N, stack_section
 from mst_cli.model.response import simulate
 from mst_cli.model.stack_pose import magnet_field_T, magnet_pose, stack_path, tilt_laws
 from mst_cli.sensor.as_printed import as_printed
@@ -156,19 +156,20 @@ def test_a_layers_spec_reads_the_layers_alone_through_the_api(scene):
     assert part.whole_part and np.max(np.abs(part.B_T - layers.B_T)) > 1e-6  # the members move the magnet
 
 
-def test_past_every_lock_a_tangential_force_slides_the_magnet_by_the_bases_sway_alone(scene):
-    """Past the last lock every layer is stuck (its slide holds) and every plate lies between
-    filled blocks (the plates' sway is 0), so a tangential force along x slides the magnet further
-    only by the base's sway, c_b per newton at every normal force
-    (model.housing_base.base_sway_mm_per_N); none along y; the layers alone have neither."""
+def test_past_every_lock_a_tangential_force_slides_the_magnet_by_the_sections_sway_alone(scene):
+    """Past the last lock every layer is stuck (its slide holds), so a tangential force along x
+    slides the magnet further only by the base's and the plates' sway with every layer filled
+    (model.plate_sway.regime_sways_mm_per_N's last regime) per newton at every normal force; none
+    along y; the layers alone have neither."""
     geometry, material = scene
     part = loaded_stack(geometry, material, "spring", whole_part=True)
     alone = loaded_stack(geometry, material, "spring", whole_part=False)
     assert len(part.lateral) == len(alone.lateral) + 2 == len(geometry.layers) + 2
-    c_b = base_sway_mm_per_N(member_scene(geometry, material))
+    order = np.argsort([t.lock_force_N for t in part.tilt], kind="stable")
+    base, plates = regime_sways_mm_per_N(stack_section(geometry, material), order)
     last = max(t.lock_force_N for t in part.tilt)
     F = np.array([1.5, 2.0, 3.0]) * last
     slide = part.slides_mm(F, (1.0, 1.0)).sum(axis=1)  # per unit of Fx / Fz and Fy / Fz: U(F)
-    np.testing.assert_allclose(np.diff(slide[:, 0]) / np.diff(F), c_b, rtol=1e-9)
+    np.testing.assert_allclose(np.diff(slide[:, 0]) / np.diff(F), base[-1] + plates[-1], rtol=1e-6)
     np.testing.assert_allclose(np.diff(slide[:, 1]) / np.diff(F), 0.0, atol=1e-15)
-    np.testing.assert_allclose(part.slides_mm(F, (1.0, 0.0))[:, -2, 0], c_b * F, rtol=1e-12)
+    assert base[-1] > 0.01 and abs(plates[-1]) < 1e-7  # the slot's walls sway; filled blocks tie the plates

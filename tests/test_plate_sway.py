@@ -1,5 +1,6 @@
-"""The plates' sway (model.plate_sway, general_load.plate_sway_law; docs/design.md 4.7): its walls
-carry L0's k_x, its limits, a sweep of the plates' thickness, and the law by regime."""
+"""The section's sway (model.plate_sway, general_load.section_sway_laws; docs/design.md 4.7): its
+walls carry L0's k_x, its limits, sweeps of the plates' and the cover's thickness, and the laws by
+regime."""
 
 from __future__ import annotations
 
@@ -11,7 +12,7 @@ import pytest
 
 import mst_cli as mst
 from mst_cli.model import plate_sway as ps
-from mst_cli.model.general_load import loaded_stack, plate_sway_law
+from mst_cli.model.general_load import loaded_stack, section_sway_laws
 
 CONFIGS = Path(__file__).resolve().parents[1] / "configs"
 FORWARD = CONFIGS / "mohammadi2021-forward.yaml"
@@ -37,15 +38,22 @@ def test_each_layers_walls_carry_l0s_lateral_stiffness():
         assert slide == pytest.approx(1.0 / sec.k_x_N_per_mm[i], rel=1e-5)  # the solve: about 3e-6
 
 
-def test_a_plate_between_two_locked_layers_or_rigid_adds_nothing():
+def test_a_plate_between_two_filled_blocks_adds_nothing():
     """Between two filled blocks a plate is tied over its whole loaded width: it adds no
-    translation; every plate rigid is the reference itself."""
+    translation; between open layers it adds tens of um per newton."""
     _, _, sec = section()
     n = len(sec.theta_rad)
-    moved = ps.plate_translations_mm_per_N(sec, locked=tuple(range(n)))
-    np.testing.assert_allclose(moved, 0.0, atol=1e-7)
-    open_ = ps.plate_translations_mm_per_N(sec)
-    assert np.all(open_ > 1e-3)  # 0.8 mm plates between open layers: tens of um per newton
+    np.testing.assert_allclose(ps.plate_translations_mm_per_N(sec, locked=tuple(range(n))), 0.0, atol=1e-7)
+    assert np.all(ps.plate_translations_mm_per_N(sec) > 1e-2)
+
+
+def test_the_base_sways_less_once_layer_1_is_locked_and_not_at_all_without_a_slot():
+    """The cover bends under layer 1's feet while it is open (as a plate does), not once the
+    block is on it; a part without a slot has a solid base."""
+    _, _, sec = section()
+    open_, locked = (ps.base_translation_mm_per_N(sec, lk) for lk in ((), (0,)))
+    assert open_ > 1.5 * locked > 0.0
+    assert ps.base_translation_mm_per_N(replace(sec, slot_height_mm=0.0)) == 0.0
 
 
 def test_the_sway_falls_smoothly_as_the_plates_thicken():
@@ -55,26 +63,41 @@ def test_the_sway_falls_smoothly_as_the_plates_thicken():
     rows = []
     for p in thick:
         _, _, sec = section(plate_mm=float(p))
-        rows.append(ps.regime_sway_mm_per_N(sec, (0, 1, 2))[:2])
+        rows.append(ps.regime_sways_mm_per_N(sec, (0, 1, 2))[1][:2])
     c = np.array(rows)  # (9, 2): regimes 1 and 2
     assert np.all(np.diff(c, axis=0) < 0.0)
     ratio = c[1:] / c[:-1]
     assert np.all(np.abs(np.diff(ratio, axis=0)) < 0.05)
 
 
-def test_the_law_steps_at_the_locks_and_holds_along_y():
-    """general_load's plates' law: within each regime the slide per tangential newton is that
-    regime's sway (regime_sway_mm_per_N), stepping at the part's lock forces; nothing along y;
-    report.json's load_path states the same figures."""
+def test_the_laws_step_at_the_locks_and_hold_along_y():
+    """general_load's base and plates laws: within each regime the slide per tangential newton is
+    that regime's sway (regime_sways_mm_per_N), stepping at the part's lock forces; nothing along
+    y; the part's stack carries them last."""
     g, m, sec = section()
     stack = loaded_stack(g, m, "spring", whole_part=True)
-    law = plate_sway_law(g, m, stack.tilt)
+    laws = section_sway_laws(g, m, stack.tilt)
     locks = np.sort([t.lock_force_N for t in stack.tilt])
-    c = ps.regime_sway_mm_per_N(sec, np.argsort([t.lock_force_N for t in stack.tilt]))
+    sways = ps.regime_sways_mm_per_N(sec, np.argsort([t.lock_force_N for t in stack.tilt]))
     edges = np.concatenate([[0.0], locks, [2.0 * locks[-1]]])
-    for r in range(len(c)):
-        a, b = edges[r] + 0.25 * (edges[r + 1] - edges[r]), edges[r] + 0.75 * (edges[r + 1] - edges[r])
-        U = [law.compliance_mm_per_N(F)[0] * F for F in (a, b)]
-        assert (U[1] - U[0]) / (b - a) == pytest.approx(c[r], rel=1e-6)  # the solves: 1e-7 between BLAS threads
-    assert np.all(law.integral_y_mm == 0.0)
-    assert stack.lateral[-1].integral_x_mm == pytest.approx(law.integral_x_mm, rel=1e-12)
+    for law, c in zip(laws, sways):
+        for r in range(len(c)):
+            a, b = edges[r] + 0.25 * (edges[r + 1] - edges[r]), edges[r] + 0.75 * (edges[r + 1] - edges[r])
+            U = [law.compliance_mm_per_N(F)[0] * F for F in (a, b)]
+            assert (U[1] - U[0]) / (b - a) == pytest.approx(c[r], rel=1e-6)  # the solves: 1e-7 between BLAS threads
+        assert np.all(law.integral_y_mm == 0.0)
+    for law, kept in zip(laws, stack.lateral[-2:]):
+        assert kept.integral_x_mm == pytest.approx(law.integral_x_mm, rel=1e-12)
+
+
+def test_the_base_sways_smoothly_less_as_the_cover_thickens():
+    """Swept over the cover's thickness (0.8 to 3 mm, the forward design), the base's sway with
+    layer 1 open and locked falls, in regular steps: no jump, no sawtooth."""
+    rows = []
+    for c in np.linspace(0.8, 3.0, 12):
+        _, _, sec = section(cover_mm=float(c))
+        rows.append([ps.base_translation_mm_per_N(sec, lk) for lk in ((), (0,))])
+    b = np.array(rows)
+    assert np.all(np.diff(b, axis=0) < 0.0)
+    ratio = b[1:] / b[:-1]
+    assert np.all(np.abs(np.diff(ratio, axis=0)) < 0.05)

@@ -21,11 +21,10 @@ The load model and what it assumes:
   its free one, docs/design.md section 4.4); ``continuum`` takes L2's lateral tangents along
   its compression path (:func:`~mst_cli.model.mechanics.continuum_lateral.lateral_path`),
   frictionless before the lock and stuck past it, k_y times L0's free-face factor.
-* With the part's members, the housing's base sways too, by c_b Fx at every normal force
-  (:func:`base_sway_law`: a portal frame of the slot's walls, model.housing_base), and the TPU
-  plates between the layers let the stack translate by c_p Fx, c_p stepping down as the layers
-  beside a plate lock (:func:`plate_sway_law`: a plane frame of the walls and plates,
-  model.plate_sway).
+* With the part's members, the housing's base and the TPU plates between the layers let the
+  stack translate too, by c_b Fx and c_p Fx, each stepping as the layers lock
+  (:func:`section_sway_laws`: a plane frame of the walls, the plates, the cover and the slot's
+  walls, model.plate_sway).
 * The magnet's pose adds the tilts' turns and shifts and the slides
   (:func:`mst_cli.model.stack_pose.magnet_pose`); its exact field at each chip follows.
 
@@ -54,13 +53,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from mst_cli.model.assembly import SensorGeometry
-from mst_cli.model.housing_base import base_sway_mm_per_N
-from mst_cli.model.load_path import member_scene
 from mst_cli.model.material import Material
 from mst_cli.model.mechanics.lateral import depth_end_factor, lateral_stiffness_N_per_mm
 from mst_cli.model.mechanics.tilt import LayerTiltLaw, TiltError, centred_compression_mm
 from mst_cli.model.member_pose import MemberPose
-from mst_cli.model.plate_sway import regime_sway_mm_per_N, stack_section
+from mst_cli.model.plate_sway import regime_sways_mm_per_N, stack_section
 from mst_cli.model.stack_pose import layer_pivots_mm, magnet_field_T, magnet_pose, stack_path, tilt_laws
 from mst_cli.parallel import one_blas_thread
 
@@ -197,38 +194,33 @@ def loaded_stack(
     build = _l2_law if mechanics == "continuum" else _l0_law
     lateral = [build(t, c, material) for t, c in zip(tilts, geometry.layers)]
     if whole_part:
-        lateral += [base_sway_law(geometry, material), plate_sway_law(geometry, material, tilts)]
+        lateral += section_sway_laws(geometry, material, tilts)
     lever = geometry.total_height_mm - layer_pivots_mm(geometry)
     return LoadedStack(geometry, mechanics, tilts, lateral, lever, members)
 
 
-def base_sway_law(geometry: SensorGeometry, material: Material) -> LayerLateralLaw:
-    """The housing's base swaying under the whole tangential force along x, as a lateral law of
-    constant compliance (:func:`~mst_cli.model.housing_base.base_sway_mm_per_N`) that no lock
-    stops; none along y, where the slot's walls stand in their own plane."""
-    c_x = base_sway_mm_per_N(member_scene(geometry, material))
-    return LayerLateralLaw(np.array([0.0, 1.0]), np.array([0.0, c_x]), np.zeros(2))
-
-
-def plate_sway_law(geometry: SensorGeometry, material: Material, tilts: list[LayerTiltLaw]) -> LayerLateralLaw:
-    """The plates' translation under the tangential force along x as a lateral law: a compliance
-    constant within each regime (:func:`~mst_cli.model.plate_sway.regime_sway_mm_per_N`), stepping
-    at the layers' lock forces ``tilts``; none along y (the frame is the section's)."""
+def section_sway_laws(geometry: SensorGeometry, material: Material, tilts: list[LayerTiltLaw]) -> list[LayerLateralLaw]:
+    """[the housing's base, the plates]: their translation under the tangential force along x as
+    lateral laws, each a compliance constant within a regime
+    (:func:`~mst_cli.model.plate_sway.regime_sways_mm_per_N`), stepping at the layers' lock forces
+    ``tilts``; none along y (the frame is the section's)."""
     locks = np.array([t.lock_force_N for t in tilts], dtype=float)
     order = np.argsort(locks, kind="stable")
-    c = _regime_sway(geometry, material, tuple(int(i) for i in order))
     edges = np.concatenate([[0.0], locks[order]])
     force = np.concatenate([edges, [edges[-1] + 1.0]])  # past the last lock: its slope goes on
-    integral = np.concatenate([[0.0], np.cumsum(np.diff(force) * c)])
-    return LayerLateralLaw(force, integral, np.zeros_like(force))
+    laws = []
+    for c in _regime_sways(geometry, material, tuple(int(i) for i in order)):
+        integral = np.concatenate([[0.0], np.cumsum(np.diff(force) * c)])
+        laws.append(LayerLateralLaw(force, integral, np.zeros_like(force)))
+    return laws
 
 
 @functools.lru_cache(maxsize=32)
-def _regime_sway(geometry: SensorGeometry, material: Material, lock_order: tuple[int, ...]) -> np.ndarray:
-    """The plates' sway per regime (about 30 ms of frame solves), kept per part: every stack of one
-    design (its tables, its readers) takes the same."""
-    with one_blas_thread():  # 18 solves of about 300 dofs: BLAS's threads cost 6 times what they give
-        c = regime_sway_mm_per_N(stack_section(geometry, material), lock_order)
+def _regime_sways(geometry: SensorGeometry, material: Material, lock_order: tuple[int, ...]) -> np.ndarray:
+    """(2, n + 1) the base's and the plates' sway per regime (about 40 ms of frame solves), kept
+    per part: every stack of one design (its tables, its readers) takes the same."""
+    with one_blas_thread():  # some 30 solves of 300-500 dofs: BLAS's threads cost more than they give
+        c = np.array(regime_sways_mm_per_N(stack_section(geometry, material), lock_order))
     c.flags.writeable = False
     return c
 

@@ -9,14 +9,12 @@ from __future__ import annotations
 import math
 from dataclasses import replace
 
-from mst_cli.model.housing_base import base_sway_mm_per_N
 from mst_cli.model.load_path import (
     ACCURACY_BUDGET_REL,
     FINGERTIP_PATCH_MM,
     Members,
     cover_landing_N,
     first_lock_N,
-    member_scene,
     members,
     motion_shares,
 )
@@ -56,8 +54,6 @@ def load_path_report(
         "outside_layers_max": max(r["outside_layers"] for r in regimes),
         # null: the cover never lands (no bending over the slot)
         "cover_lands_N": None if math.isinf(landing := cover_landing_N(simple, first_lock)) else landing,
-        # a tangential force along x sways the slot's walls under the cover (general_load.base_sway_law)
-        "base_sway_mm_per_N": base_sway_mm_per_N(member_scene(geometry, material, patch_mm)),
         "patch_dependence": patch_dependence(geometry, material, stack),
         "not_modelled": "the cover's bending along the depth over the cable windows (3D; walls on both sides)",
     }

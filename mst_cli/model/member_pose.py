@@ -2,8 +2,8 @@
 regime of the part (``model.load_path: section`` in the general load, docs/design.md 4.7).
 
 The general load folds the cap, the plates and the cover into the layers they ride with
-(:mod:`mst_cli.model.part_laws`): each turns with its layer under a moment, only the base slides
-(a portal frame, :func:`~mst_cli.model.general_load.base_sway_law`). The
+(:mod:`mst_cli.model.part_laws`): each turns with its layer under a moment; the base and the
+plates also translate (a plane frame, :func:`~mst_cli.model.general_load.section_sway_laws`). The
 whole-part rung (:func:`~mst_cli.model.mechanics.whole_part.press_general`) measures what the
 members really add in the part's section: the slot's walls sway, the walls' roots turn on the
 plates. With ``load_path: section`` the difference is carried as a linear compliance per regime,

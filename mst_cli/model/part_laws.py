@@ -28,7 +28,7 @@ outside its layer's contact problem (:func:`unit_tilt_law`): it adds that drop a
 layer's own in every regime, and the layer's pads touch by the layer's own closure. The cap and
 the plates are stiff in their own plane, so a tangential force slides neither; its moment turns
 them with their layer. The base under the cover sways as a frame, a lateral law of its own
-(:func:`mst_cli.model.general_load.base_sway_law`). Pure.
+(:func:`mst_cli.model.general_load.section_sway_laws`). Pure.
 """
 
 from __future__ import annotations

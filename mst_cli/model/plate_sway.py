@@ -1,5 +1,6 @@
-"""The plates' sway: how far the TPU plates between the layers let the magnet translate under a
-tangential force, regime by regime (issue 44, docs/design.md 4.7, "The plates' sway: built").
+"""The section's sway: how far the TPU plates between the layers and the housing's base let the
+magnet translate under a tangential force, regime by regime (issue 44, docs/design.md 4.7, "The
+section's sway: built").
 
 Under a force along x the walls of the layer under a plate and of the layer over it both bend the
 plate at their ends, in the same sense, as a storey's columns load its beam in a sway frame. A
@@ -20,16 +21,19 @@ The closed form is a plane frame (plane strain, per the part's depth D; :mod:`mo
 * each plate is a beam on its mid-plane as thick as the plate and the pads it carries (a layer's
   pad, t thick, under |x| < its wall heads); the wall ends are tied to it by rigid offsets and
   turn into it against model.plate_joint's fitted root spring;
-* the cover is held and the cap is rigid (their sway is model.housing_base's); a locked layer is
-  its filled block, rigid, over |x| < its wall heads.
+* the cap is rigid; the cover is a beam too, on the board slot's two walls (model.housing_base's
+  portal: Timoshenko columns, their roots and tops built in), or held where there is no slot;
+* a locked layer is its filled block, rigid over |x| < its wall heads.
 
 A force of 1 N along +x at the top face. What a plate adds is its translation: the magnet's slide
 with that plate in TPU less with it rigid, less the share of the cap's turn about the plate's
 mid-plane (mst's stack already turns the plates with their layers), summed over the plates, each
-alone in TPU (the rung's measure). Along y (the depth) nothing is added: the frame is the
-section's. Against the rung's measure it is 0.83 to 1.23 times it on same-layer designs and 0.47
-to 1.59 on the bundled ones, short beside a locked layer (studies/plate_frame.py). Pure numpy,
-no I/O.
+alone in TPU (the rung's measure); the base's the same, about the cover's mid-plane. Along y (the
+depth) nothing is added: the frame is the section's. Against the rung's measure
+(studies/plate_frame.py) the plates are 0.83 to 1.23 times it on same-layer designs, 0.86 to 1.59
+between open layers on the bundled ones and 0.47 to 1.08 beside a locked layer; the base is 0.76
+to 1.08 in every regime of the bundled designs, where the column form alone
+(model.housing_base.base_sway_mm_per_N) was 0.50 to 1.35. Pure numpy, no I/O.
 """
 
 from __future__ import annotations
@@ -85,7 +89,7 @@ def stack_section(geometry, material) -> StackSection:
     return StackSection(
         theta, t, h, np.asarray(head, dtype=float), np.array(geometry.layer_bottoms_mm), k_x, s.width_mm, s.depth_mm,
         s.plate_mm, s.cover_mm, s.cap_above_stack_mm, z_magnet, s.E_prime_MPa, s.G_MPa, s.half_slot_mm,
-        tuple(s.slot_wall_widths_mm), s.slot_height_mm,
+        s.slot_wall_widths_mm, s.slot_height_mm,
     )  # fmt: skip
 
 
@@ -266,9 +270,15 @@ def base_translation_mm_per_N(
     return (slide - slide0) + (turn - turn0) * (sec.z_magnet_mm - z_cover)
 
 
-def regime_sway_mm_per_N(sec: StackSection, lock_order) -> np.ndarray:
-    """(n + 1,) the plates' translation per newton along x in each regime, regime r having the
-    first r layers of ``lock_order`` (layer indices, first to lock first) locked."""
+def regime_sways_mm_per_N(sec: StackSection, lock_order) -> tuple[np.ndarray, np.ndarray]:
+    """((n + 1,) the base's, (n + 1,) the plates' translation per newton along x) in each regime,
+    regime r having the first r layers of ``lock_order`` (layer indices, first to lock first)
+    locked."""
     walls = wall_factors(sec)
     order = [int(i) for i in lock_order]
-    return np.array([plate_translations_mm_per_N(sec, tuple(order[:r]), walls).sum() for r in range(len(order) + 1)])
+    base, plates = [], []
+    for r in range(len(order) + 1):
+        locked = tuple(order[:r])
+        base.append(base_translation_mm_per_N(sec, locked, walls))
+        plates.append(plate_translations_mm_per_N(sec, locked, walls).sum())
+    return np.array(base), np.array(plates)
