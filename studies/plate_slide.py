@@ -49,7 +49,7 @@ from mst_cli.model import load_path as lp
 from mst_cli.model.cell import wall_centreline_length_mm
 from mst_cli.model.mechanics import layer_laws
 from mst_cli.model.mechanics import whole_part as wp
-from mst_cli.model.plate_joint import FITTED
+from mst_cli.model.plate_joint import root_spring_Nmm_per_rad
 from mst_cli.model.stack import Stack
 from studies.root_turn_sweep import design
 
@@ -65,8 +65,7 @@ def root_slides_mm_per_N(geometry, material) -> np.ndarray:
     s = lp.member_scene(geometry, material)
     theta, t, h = (np.array([getattr(c, k) for c in geometry.layers], dtype=float) for k in lp.CELL_KEYS)
     L = wall_centreline_length_mm(theta, t, h)
-    c, a, b, _ = FITTED
-    k = c * np.sin(theta) ** a * (L / t) ** b * s.E_prime_MPa * s.depth_mm * t**2
+    k = root_spring_Nmm_per_rad(theta, t, L, s.depth_mm, s.E_prime_MPa)
     M = 0.5 * np.sin(theta) * L
     return 2.0 * M * M / k
 

@@ -55,19 +55,28 @@ def root_turn_mm_per_N(L_mm, EI_Nmm2, cos_theta, k_Nmm_per_rad) -> Any:
     return as_value(cos_theta**2 * (m * L / k + (m * L * L / 2.0 - L3 / 6.0) / EI - L3 / (12.0 * EI)))
 
 
+def root_spring_Nmm_per_rad(
+    theta_rad, t_mm, L_mm, depth_mm, E_prime_MPa, constants: tuple[float, ...] = FITTED
+) -> np.ndarray:
+    """A wall's root turning into a TPU plate, M / phi = c sin(theta)^a (L/t)^b E'D t^2, N mm/rad,
+    of walls theta (rad), t and their centre line L (mm) long (module docstring)."""
+    c, a, b, _ = constants
+    t, ED = np.asarray(t_mm, dtype=float), E_prime_MPa * depth_mm
+    return c * np.sin(theta_rad) ** a * (L_mm / t) ** b * ED * t**2
+
+
 def root_joint_mm_per_N(
     theta_rad, t_mm, h_mm, plate_mm, depth_mm, E_prime_MPa, constants: tuple[float, ...] = FITTED
 ) -> Any:
     """One root of a layer's walls on a plate ``plate_mm`` thick: its turn and the plate's squeeze
     under it, mm/N of the layer's vertical compliance (half a layer's: module docstring), with the
     ``constants`` (c, a, b, s) [default: the fitted ones; studies/root_turn_sweep.py fits them]."""
-    c, a, b, s = constants
     theta, t = np.asarray(theta_rad, dtype=float), np.asarray(t_mm, dtype=float)
     ED = E_prime_MPa * depth_mm
     L = wall_centreline_length_mm(theta, t, h_mm)
-    k = c * np.sin(theta) ** a * (L / t) ** b * ED * t**2
+    k = root_spring_Nmm_per_rad(theta, t, L, depth_mm, E_prime_MPa, constants)
     turn = root_turn_mm_per_N(L, ED * t**3 / 12.0, np.cos(theta), k)
-    return as_value(0.5 * turn + 0.25 * s * plate_mm / (ED * t))
+    return as_value(0.5 * turn + 0.25 * constants[3] * plate_mm / (ED * t))
 
 
 def cap_root_mm_per_N(theta_rad, t_mm, h_mm, depth_mm: float, E_prime_MPa: float) -> Any:

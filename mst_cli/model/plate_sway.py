@@ -49,7 +49,7 @@ from mst_cli.model.housing_base import END_BUILT_IN
 from mst_cli.model.load_path import CELL_KEYS, layer_supports, member_scene
 from mst_cli.model.mechanics.lateral import lateral_stiffness_N_per_mm
 from mst_cli.model.plane_frame import Frame
-from mst_cli.model.plate_joint import FITTED
+from mst_cli.model.plate_joint import root_spring_Nmm_per_rad
 
 RIGID = 1e5  # a rigid member's factor on E'D: the figures within 0.1 % of 1e6's, the system better conditioned
 
@@ -93,13 +93,6 @@ def stack_section(geometry, material) -> StackSection:
     )  # fmt: skip
 
 
-def root_spring_Nmm_per_rad(sec: StackSection) -> np.ndarray:
-    """(n,) a wall's root turning into a TPU plate (model.plate_joint's fitted spring), N mm/rad."""
-    c, a, b, _ = FITTED
-    L = wall_centreline_length_mm(sec.theta_rad, sec.t_mm, sec.h_mm)
-    return c * np.sin(sec.theta_rad) ** a * (L / sec.t_mm) ** b * sec.E_prime_MPa * sec.depth_mm * sec.t_mm**2
-
-
 def _beam_z_mm(sec: StackSection) -> list[float]:
     """The mid-planes of the cover (0), the plates (1 .. n - 1) and the cap's node (n)."""
     cap = sec.bottom_mm[-1] + sec.h_mm[-1] + 0.5 * sec.cap_above_stack_mm
@@ -120,10 +113,11 @@ def frame_pull(
     rigid = RIGID * s.E_prime_MPa * s.depth_mm
     f = Frame(tie_N_per_mm=rigid)
     beam_z = _beam_z_mm(s)
-    k_root = root_spring_Nmm_per_rad(s)
+    L = wall_centreline_length_mm(s.theta_rad, s.t_mm, s.h_mm)
+    k_root = root_spring_Nmm_per_rad(s.theta_rad, s.t_mm, L, s.depth_mm, s.E_prime_MPa)
     walls = np.ones(n) if walls is None else np.asarray(walls, dtype=float)
     beams = [_plate_beam(f, s, j, z, locked, tpu_plate, zones) for j, z in enumerate(beam_z)]
-    if tpu_plate == -1:
+    if tpu_plate == -1 and s.slot_height_mm > 0.0:
         _base(f, s, beams[0], beam_z[0])
     else:
         for node in beams[0].values():
