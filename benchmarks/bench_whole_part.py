@@ -387,9 +387,28 @@ def store_rows(paths, repeats: int = 3) -> list[str]:
     return rows
 
 
+def section_sway_row(path: Path) -> str:
+    """The design at ``path``: the section's sway per regime (general_load's laws) and its cost."""
+    from mst_cli.model.plate_sway import regime_sways_mm_per_N, stack_section
+    from mst_cli.parallel import one_blas_thread
+
+    doc, _ = mst.designed(path)
+    g, m = doc.geometry(), doc.material
+    order = np.argsort([t.lock_force_N for t in loaded_stack(g, m, "spring", 1.0, True).tilt], kind="stable")
+    times = []
+    for _ in range(5):
+        start = time.perf_counter()
+        with one_blas_thread():
+            base, plates = regime_sways_mm_per_N(stack_section(g, m), order)
+        times.append(time.perf_counter() - start)
+    column = hb.base_sway_mm_per_N(lp.member_scene(g, m))
+    cells = (" / ".join(f"{v:.4f}" for v in base), " / ".join(f"{v:.4f}" for v in plates))
+    return f"| {doc.name} | {cells[0]} | {cells[1]} | {column:.4f} | {1e3 * float(np.median(times)):.0f} |"
+
+
 def member_studies(args) -> bool:
-    """``--off-centre``, ``--general-convergence``, ``--store`` or ``--base-sway``: print it, True;
-    else False."""
+    """``--off-centre``, ``--general-convergence``, ``--store``, ``--section-sway`` or ``--base-sway``:
+    print it, True; else False."""
     if args.off_centre and args.every_regime:
         print("per regime, the rung: turn per moment mrad/(N mm), slide per tangential N mm/N, turn per")
         print("tangential N mrad/N")
@@ -409,6 +428,13 @@ def member_studies(args) -> bool:
         print("mst simulate in section mode: the first run solves the rung, the second reads its solves back")
         paths = args.configs if args.configs_given else [str(ROOT / "configs" / "mohammadi2021-forward.yaml")]
         print("\n".join(store_rows(paths)), flush=True)
+    elif args.section_sway:
+        print("the section's frame (model.plate_sway) as the general load builds it: the base's and the plates'")
+        print("sway per regime, mm/N, beside the base's column form, and its cost (median of 5, BLAS on one thread)")
+        print("| design | base, regimes 1.. | plates, regimes 1.. | column form | ms |")
+        print("|---|---|---|---|---|")
+        for path in args.configs:
+            print(section_sway_row(Path(path)), flush=True)
     elif args.base_sway:
         print("the base alone, pulled at the top face: the cover's slide, mm/N, the rung against mst's closed form")
         print(
@@ -441,6 +467,9 @@ def main() -> None:
     )
     ap.add_argument(
         "--base-sway", action="store_true", help="only the base's sway under a pull against two cantilevers"
+    )
+    ap.add_argument(
+        "--section-sway", action="store_true", help="only the section's frame per regime (no rung) and its cost"
     )
     ap.add_argument(
         "--store",
