@@ -207,19 +207,21 @@ def section_sway_laws(geometry: SensorGeometry, material: Material, tilts: list[
     locks = np.array([t.lock_force_N for t in tilts], dtype=float)
     order = np.argsort(locks, kind="stable")
     edges = np.concatenate([[0.0], locks[order]])
+    edges = edges[np.isfinite(edges)]  # a layer that never locks: the regimes past it are never reached
     force = np.concatenate([edges, [edges[-1] + 1.0]])  # past the last lock: its slope goes on
     laws = []
     for c in _regime_sways(geometry, material, tuple(int(i) for i in order)):
-        integral = np.concatenate([[0.0], np.cumsum(np.diff(force) * c)])
+        integral = np.concatenate([[0.0], np.cumsum(np.diff(force) * c[: len(edges)])])
         laws.append(LayerLateralLaw(force, integral, np.zeros_like(force)))
     return laws
 
 
 @functools.lru_cache(maxsize=32)
 def _regime_sways(geometry: SensorGeometry, material: Material, lock_order: tuple[int, ...]) -> np.ndarray:
-    """(2, n + 1) the base's and the plates' sway per regime (about 40 ms of frame solves), kept
-    per part: every stack of one design (its tables, its readers) takes the same."""
-    with one_blas_thread():  # some 30 solves of 300-500 dofs: BLAS's threads cost more than they give
+    """(2, n + 1) the base's and the plates' sway per regime (26 frame solves on three layers, 65 to
+    88 ms: benchmarks/bench_whole_part.py --section-sway), kept per part: every stack of one design
+    (its tables, its readers) takes the same."""
+    with one_blas_thread():  # solves of about 300 dofs: BLAS's threads cost more than they give
         c = np.array(regime_sways_mm_per_N(stack_section(geometry, material), lock_order))
     c.flags.writeable = False
     return c
