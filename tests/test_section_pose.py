@@ -81,9 +81,9 @@ def test_a_centred_press_gives_the_axial_section_models_drop(forward):
 
 def test_mst_simulate_off_centre_takes_the_pose_and_says_so(forward, tmp_path):
     """The off-centre press of a section-mode design carries the members' pose into its magnet and
-    report.json (off_centre.members_pose), and moves the magnet further along a pull than the
-    closed form does (the rung's members slide: the slot's walls sway); the default design's
-    report has none."""
+    report.json (off_centre.members_pose): along a pull it moves the magnet as the rung does, which
+    the closed form, its members swaying as the section's frame, comes within 10 % of (it was half
+    of it before the frame); the default design's report has none."""
     from mst_cli.simulation.offcentre_files import offcentre_summary
 
     spec = section_copy(tmp_path)
@@ -93,7 +93,8 @@ def test_mst_simulate_off_centre_takes_the_pose_and_says_so(forward, tmp_path):
     rows = offcentre_summary(section)["members_pose"]["regimes"]
     assert [r["slide_mm_per_N"] for r in rows] == list(section.members_pose.slide_mm_per_N)
     early = (section.force_N > 0.0) & (section.force_N < 0.5 * section.members_pose.edges_N[0])
-    assert np.all(section.magnet_shift_mm[early, 0] > closed.magnet_shift_mm[early, 0])
+    ratio = section.magnet_shift_mm[early, 0] / closed.magnet_shift_mm[early, 0]
+    assert np.all(np.abs(ratio - 1.0) > 0.01) and np.all(np.abs(ratio - 1.0) < 0.10)
 
 
 def test_the_check_of_a_section_part_judges_like_for_like_and_names_the_softening(tmp_path):

@@ -88,6 +88,9 @@ def test_a_centred_press_with_shear_reads_back_its_tangential_force(section_spec
     assert fits.sum() >= len(rows) - 1
     np.testing.assert_allclose(got.force_N[fits], r.force_N[rows][fits], rtol=5e-3)
     np.testing.assert_allclose(got.shear_x_N[fits], ratio[0] * r.force_N[rows][fits], rtol=0.02)
+    # the closed form, whose slide is within 14 % of the rung's in every regime since the section's
+    # frame (docs/design.md 4.7, "The section's sway"; 30 % short before it), reads it within 10 %
     closed = api.read(forward_copy(tmp_path, "part"), csv, estimate="shear", polish=True, warn=quiet).offset
     ok = closed.flag == "ok"
-    assert np.all(np.abs(closed.shear_x_N[ok] / (ratio[0] * r.force_N[rows][ok]) - 1.0) > 0.05)
+    errors = closed.shear_x_N[ok] / (ratio[0] * r.force_N[rows][ok]) - 1.0
+    assert ok.sum() >= len(rows) - 1 and np.all(np.abs(errors) < 0.10) and np.any(np.abs(errors) > 0.02)

@@ -169,8 +169,8 @@ def test_the_shear_report_holds_the_layers_to_the_rung_and_never_fails_the_part(
     into the rung's sign, agree within 5 % (a sign or unit slip in either conversion is a factor
     of -1 or 1000), and past it every figure keeps its sign. The members as printed only add
     compliance: the part slides and turns more than its layers. The report is information: the
-    bundled forward part's slide per tangential newton, which mst's closed form misses by half
-    (docs/design.md 4.7), fails nothing."""
+    bundled forward part's turn per tangential newton past a lock, which mst's closed form
+    overstates several times (docs/design.md 4.7), fails nothing."""
     results, lines = forward_checked
     report = whole_part(results, "whole_part_shear")
     assert report.info and "whole_part_shear" not in results.failed
