@@ -21,8 +21,9 @@ The closed form is a plane frame (plane strain, per the part's depth D; :mod:`mo
 * each plate is a beam on its mid-plane as thick as the plate and the pads it carries (a layer's
   pad, t thick, under |x| < its wall heads); the wall ends are tied to it by rigid offsets and
   turn into it against model.plate_joint's fitted root spring;
-* the cap is rigid; the cover is a beam too, on the board slot's two walls (model.housing_base's
-  portal: Timoshenko columns, their roots and tops built in), or held where there is no slot;
+* the cap is rigid; the cover is a beam too, layer 1's roots turning into it alike, on the board
+  slot's two walls (model.housing_base's portal: Timoshenko columns, their roots and tops built
+  in), or held where there is no slot;
 * a locked layer is its filled block, rigid over |x| < its wall heads.
 
 A force of 1 N along +x at the top face. What a plate adds is its translation: the magnet's slide
@@ -32,7 +33,7 @@ alone in TPU (the rung's measure); the base's the same, about the cover's mid-pl
 depth) nothing is added: the frame is the section's. Against the rung's measure
 (studies/plate_frame.py) the plates are 0.83 to 1.23 times it on same-layer designs, 0.86 to 1.59
 between open layers on the bundled ones and 0.47 to 1.08 beside a locked layer; the base is 0.76
-to 1.08 in every regime of the bundled designs, where the column form alone
+to 1.12 in every regime of the bundled designs, where the column form alone
 (model.housing_base.base_sway_mm_per_N) was 0.50 to 1.35. Pure numpy, no I/O.
 """
 
@@ -203,7 +204,7 @@ def _walls(f: Frame, s: StackSection, i: int, beams, factor, k_root, tpu_plate, 
         x = sign * s.head_mm[i]
         tip = f.node(sign * tip_x, z0 + 0.5 * s.h_mm[i])
         for j, z_end in ((i, z0 + 0.5 * t), (i + 1, z0 + s.h_mm[i] - 0.5 * t)):
-            tpu = 0 < j < n and j - 1 == tpu_plate
+            tpu = (0 < j < n and j - 1 == tpu_plate) or (j == 0 and tpu_plate == -1)  # the cover's roots too
             offset, end = f.node(x, z_end), f.node(x, z_end)
             f.beam(beams[j][float(x)], offset, rigid, rigid, math.inf)
             f.spring(offset, end, k_root if (roots and tpu) else rigid)
