@@ -233,36 +233,40 @@ def wall_factors(sec: StackSection, zones: tuple[bool, bool] = (True, True)) -> 
     return np.array(out)
 
 
-def plate_translations_mm_per_N(
-    sec: StackSection, locked=(), walls=None, zones: tuple[bool, bool] = (True, True), roots: bool = True
+def member_translations_mm_per_N(
+    sec: StackSection, members, locked=(), walls=None, zones: tuple[bool, bool] = (True, True), roots: bool = True
 ) -> np.ndarray:
-    """(n - 1,) what each plate alone in TPU adds to the magnet's translation, mm per newton along
-    x, with layers ``locked`` filled (module docstring)."""
-    n = len(sec.theta_rad)
+    """(len(members),) what each of ``members`` (-1 the housing's base, j >= 0 the plate over layer
+    j) alone in TPU adds to the magnet's translation, mm per newton along x, with layers
+    ``locked`` filled: its slide less all rigid, less the share of the cap's turn about the
+    member's mid-plane (module docstring); the all-rigid solve once for them all."""
     walls = wall_factors(sec, zones) if walls is None else walls
     beam_z = _beam_z_mm(sec)
     slide0, turn0 = frame_pull(sec, locked, None, walls, zones=zones, roots=roots)
     out = []
-    for j in range(n - 1):
+    for j in members:
+        if j == -1 and sec.slot_height_mm <= 0.0:  # no slot: the base is solid
+            out.append(0.0)
+            continue
         slide, turn = frame_pull(sec, locked, j, walls, zones=zones, roots=roots)
-        # a turn counter-clockwise moves the magnet dz above the plate by -turn dz: not a translation
+        # a turn counter-clockwise moves the magnet dz above the member by -turn dz: not a translation
         out.append((slide - slide0) + (turn - turn0) * (sec.z_magnet_mm - beam_z[j + 1]))
     return np.array(out)
+
+
+def plate_translations_mm_per_N(
+    sec: StackSection, locked=(), walls=None, zones: tuple[bool, bool] = (True, True), roots: bool = True
+) -> np.ndarray:
+    """(n - 1,) what each plate alone in TPU adds (:func:`member_translations_mm_per_N`)."""
+    return member_translations_mm_per_N(sec, range(len(sec.theta_rad) - 1), locked, walls, zones, roots)
 
 
 def base_translation_mm_per_N(
     sec: StackSection, locked=(), walls=None, zones: tuple[bool, bool] = (True, True), roots: bool = True
 ) -> float:
-    """What the housing's base alone in TPU adds to the magnet's translation, mm per newton along
-    x, less the cap's turn's share about the cover's mid-plane, with layers ``locked`` filled; 0
-    without a slot (the base solid)."""
-    if sec.slot_height_mm <= 0.0:
-        return 0.0
-    walls = wall_factors(sec, zones) if walls is None else walls
-    z_cover = _beam_z_mm(sec)[0]
-    slide0, turn0 = frame_pull(sec, locked, None, walls, zones=zones, roots=roots)
-    slide, turn = frame_pull(sec, locked, -1, walls, zones=zones, roots=roots)
-    return (slide - slide0) + (turn - turn0) * (sec.z_magnet_mm - z_cover)
+    """What the housing's base alone in TPU adds (:func:`member_translations_mm_per_N`); 0 without
+    a slot."""
+    return float(member_translations_mm_per_N(sec, [-1], locked, walls, zones, roots)[0])
 
 
 def regime_sways_mm_per_N(sec: StackSection, lock_order) -> tuple[np.ndarray, np.ndarray]:
@@ -271,9 +275,6 @@ def regime_sways_mm_per_N(sec: StackSection, lock_order) -> tuple[np.ndarray, np
     locked."""
     walls = wall_factors(sec)
     order = [int(i) for i in lock_order]
-    base, plates = [], []
-    for r in range(len(order) + 1):
-        locked = tuple(order[:r])
-        base.append(base_translation_mm_per_N(sec, locked, walls))
-        plates.append(plate_translations_mm_per_N(sec, locked, walls).sum())
-    return np.array(base), np.array(plates)
+    members = [-1, *range(len(sec.theta_rad) - 1)]
+    moved = np.array([member_translations_mm_per_N(sec, members, order[:r], walls) for r in range(len(order) + 1)])
+    return moved[:, 0], moved[:, 1:].sum(axis=1)
