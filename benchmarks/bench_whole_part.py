@@ -388,22 +388,31 @@ def store_rows(paths, repeats: int = 3) -> list[str]:
 
 
 def section_sway_row(path: Path) -> str:
-    """The design at ``path``: the section's sway per regime (general_load's laws) and its cost."""
-    from mst_cli.model.plate_sway import regime_sways_mm_per_N, stack_section
+    """The design at ``path``: the section's sway per regime (general_load's laws), the walls'
+    factors to L0, and the cost: median of 5, BLAS on one thread (as general_load runs it) and
+    with its threads as they come."""
+    import contextlib
+
+    from mst_cli.model.plate_sway import regime_sways_mm_per_N, stack_section, wall_factors
+    from mst_cli.model.stack_pose import tilt_laws
     from mst_cli.parallel import one_blas_thread
 
     doc, _ = mst.designed(path)
     g, m = doc.geometry(), doc.material
-    order = np.argsort([t.lock_force_N for t in loaded_stack(g, m, "spring", 1.0, True).tilt], kind="stable")
-    times = []
-    for _ in range(5):
-        start = time.perf_counter()
-        with one_blas_thread():
-            base, plates = regime_sways_mm_per_N(stack_section(g, m), order)
-        times.append(time.perf_counter() - start)
+    order = np.argsort([t.lock_force_N for t in tilt_laws(g, m, "spring", 1.0, True)], kind="stable")
+    ms = []
+    for limit in (one_blas_thread, contextlib.nullcontext):
+        times = []
+        for _ in range(5):
+            start = time.perf_counter()
+            with limit():
+                base, plates = regime_sways_mm_per_N(stack_section(g, m), order)
+            times.append(time.perf_counter() - start)
+        ms.append(1e3 * float(np.median(times)))
     column = hb.base_sway_mm_per_N(lp.member_scene(g, m))
+    walls = " / ".join(f"{w:.2f}" for w in wall_factors(stack_section(g, m)))
     cells = (" / ".join(f"{v:.4f}" for v in base), " / ".join(f"{v:.4f}" for v in plates))
-    return f"| {doc.name} | {cells[0]} | {cells[1]} | {column:.4f} | {1e3 * float(np.median(times)):.0f} |"
+    return f"| {doc.name} | {cells[0]} | {cells[1]} | {column:.4f} | {walls} | {ms[0]:.0f} | {ms[1]:.0f} |"
 
 
 def member_studies(args) -> bool:
@@ -430,9 +439,10 @@ def member_studies(args) -> bool:
         print("\n".join(store_rows(paths)), flush=True)
     elif args.section_sway:
         print("the section's frame (model.plate_sway) as the general load builds it: the base's and the plates'")
-        print("sway per regime, mm/N, beside the base's column form, and its cost (median of 5, BLAS on one thread)")
-        print("| design | base, regimes 1.. | plates, regimes 1.. | column form | ms |")
-        print("|---|---|---|---|---|")
+        print("sway per regime, mm/N, beside the base's column form, the walls' factors to L0's k_x, and its cost")
+        print("(median of 5: BLAS on one thread, as general_load runs it, and with its own threads)")
+        print("| design | base, regimes 1.. | plates, regimes 1.. | column form | walls' factors | ms | ms, threads |")
+        print("|---|---|---|---|---|---|---|")
         for path in args.configs:
             print(section_sway_row(Path(path)), flush=True)
     elif args.base_sway:

@@ -218,10 +218,10 @@ def section_sway_laws(geometry: SensorGeometry, material: Material, tilts: list[
 
 @functools.lru_cache(maxsize=32)
 def _regime_sways(geometry: SensorGeometry, material: Material, lock_order: tuple[int, ...]) -> np.ndarray:
-    """(2, n + 1) the base's and the plates' sway per regime (26 frame solves on three layers, 65 to
-    88 ms: benchmarks/bench_whole_part.py --section-sway), kept per part: every stack of one design
-    (its tables, its readers) takes the same."""
-    with one_blas_thread():  # solves of about 300 dofs: BLAS's threads cost more than they give
+    """(2, n + 1) the base's and the plates' sway per regime (26 frame solves on three layers, 21 to
+    32 ms idle: benchmarks/bench_whole_part.py --section-sway), kept per part: every stack of one
+    design (its tables, its readers) takes the same."""
+    with one_blas_thread():  # solves of about 300 dofs: BLAS's threads give nothing, and cost on a busy machine
         c = np.array(regime_sways_mm_per_N(stack_section(geometry, material), lock_order))
     c.flags.writeable = False
     return c
