@@ -44,6 +44,7 @@ it filled (the rung's solves kept between runs).
 from __future__ import annotations
 
 import argparse
+import csv
 import os
 import statistics
 import subprocess
@@ -312,7 +313,7 @@ def base_sway_row(path: Path, spacing: float | None) -> str:
     )
 
 
-def general_rows(path: Path, spacing: float | None, section: bool = False) -> list[str]:
+def general_rows(path: Path, spacing: float | None, section: bool = False, records: list | None = None) -> list[str]:
     """Per regime (the layers locked before it closed): the rung's turn per off-centre moment,
     slide and turn per tangential newton (wp.press_general) with its members rigid, against mst's
     general-load model of the layers alone (L0), and what the members add: in the rung, as printed
@@ -320,7 +321,8 @@ def general_rows(path: Path, spacing: float | None, section: bool = False) -> li
     regime starts, where its layers are nearest the rung's linear ones: at 2 % of the first lock,
     else 2 % past the lock that opens the regime, the part and the layers alone each at their own
     (the part's members close a cavity before its layer locks alone; section_pose.regime_start_N).
-    The rung's sign (a turn that moves the top toward -x is positive)."""
+    The rung's sign (a turn that moves the top toward -x is positive). ``records``, when given,
+    gains the rung's figures as printed, a dict a regime (``--out``'s rows)."""
     doc, _ = mst.designed(path)
     g, m = doc.geometry(), doc.material
     part = Stack(tuple(lp.capped_units(layer_laws(g.layers, m, "spring"), lp.members(g, m))))
@@ -351,6 +353,9 @@ def general_rows(path: Path, spacing: float | None, section: bool = False) -> li
             total = f"{rung[0][i]:.3f} / {mst_part[i]:.3f} ({mst_part[i] / rung[0][i] - 1:+.0%})"
             cells.append(f"{layers} | {members} | {total}")
         rows.append(f"| {doc.name} | {r + 1} | {F:.2f} | " + " | ".join(cells) + " |")
+        if records is not None:
+            names = ("turn_per_moment_mrad_per_Nmm", "slide_mm_per_N", "turn_per_tangential_mrad_per_N")
+            records.append({"design": doc.name, "regime": r + 1, **{k: f"{v:.6g}" for k, v in zip(names, rung[0])}})
     return rows
 
 
@@ -393,7 +398,7 @@ def section_sway_row(path: Path) -> str:
     with its threads as they come."""
     import contextlib
 
-    from mst_cli.model.plate_sway import regime_sways_mm_per_N, stack_section, wall_factors
+    from mst_cli.model.plate_sway import section_regimes, stack_section, wall_factors
     from mst_cli.model.stack_pose import tilt_laws
     from mst_cli.parallel import one_blas_thread
 
@@ -406,13 +411,20 @@ def section_sway_row(path: Path) -> str:
         for _ in range(5):
             start = time.perf_counter()
             with limit():
-                base, plates = regime_sways_mm_per_N(stack_section(g, m), order)
+                regimes = section_regimes(stack_section(g, m), order)
             times.append(time.perf_counter() - start)
         ms.append(1e3 * float(np.median(times)))
     column = hb.base_sway_mm_per_N(lp.member_scene(g, m))
     walls = " / ".join(f"{w:.2f}" for w in wall_factors(stack_section(g, m)))
-    cells = (" / ".join(f"{v:.4f}" for v in base), " / ".join(f"{v:.4f}" for v in plates))
-    return f"| {doc.name} | {cells[0]} | {cells[1]} | {column:.4f} | {walls} | {ms[0]:.0f} | {ms[1]:.0f} |"
+    cells = [
+        " / ".join(f"{v:{spec}}" for v in values)
+        for values, spec in (
+            (regimes.base_sway_mm_per_N, ".4f"),
+            (regimes.plate_sway_mm_per_N, ".4f"),
+            (regimes.member_turn_ratio, ".2f"),
+        )
+    ]
+    return f"| {doc.name} | {' | '.join(cells)} | {column:.4f} | {walls} | {ms[0]:.0f} | {ms[1]:.0f} |"
 
 
 def member_studies(args) -> bool:
@@ -439,10 +451,14 @@ def member_studies(args) -> bool:
         print("\n".join(store_rows(paths)), flush=True)
     elif args.section_sway:
         print("the section's frame (model.plate_sway) as the general load builds it: the base's and the plates'")
-        print("sway per regime, mm/N, beside the base's column form, the walls' factors to L0's k_x, and its cost")
+        print("sway per regime, mm/N, the members' turn ratio (under the pull over under its moment alone,")
+        print("model.counter_turn), beside the base's column form, the walls' factors to L0's k_x, and its cost")
         print("(median of 5: BLAS on one thread, as general_load runs it, and with its own threads)")
-        print("| design | base, regimes 1.. | plates, regimes 1.. | column form | walls' factors | ms | ms, threads |")
-        print("|---|---|---|---|---|---|---|")
+        print(
+            "| design | base, regimes 1.. | plates, regimes 1.. | turn ratio, regimes 1.. | column form | "
+            "walls' factors | ms | ms, threads |"
+        )
+        print("|---|---|---|---|---|---|---|---|")
         for path in args.configs:
             print(section_sway_row(Path(path)), flush=True)
     elif args.base_sway:
@@ -501,6 +517,7 @@ def main() -> None:
         action="store_true",
         help="only the off-centre and tangential loads per regime: the rung against mst's general-load model",
     )
+    ap.add_argument("--out", default=None, help="with --general: write the rung's figures per regime to this CSV")
     args = ap.parse_args()
     args.configs_given = any(a.startswith("--configs") for a in sys.argv[1:])
     if args.general:
@@ -515,8 +532,14 @@ def main() -> None:
         ]
         print("| design | regime | F | " + " | ".join(heads) + " |")
         print("|---" * (3 + len(heads)) + "|")
+        records: list[dict] = []
         for path in args.configs:
-            print("\n".join(general_rows(Path(path), args.spacing_mm, args.section)), flush=True)
+            print("\n".join(general_rows(Path(path), args.spacing_mm, args.section, records)), flush=True)
+        if args.out:  # the rung's figures, what tests/test_counter_turn.py holds mst to
+            with open(args.out, "w", newline="") as fh:
+                writer = csv.DictWriter(fh, fieldnames=list(records[0]))
+                writer.writeheader()
+                writer.writerows(records)
         return
     if args.attribute:
         print("the magnet's drop per newton, um/N (centred 6 mm strip, locked layers closed): L0's layers, the rung")

@@ -21,7 +21,7 @@ from mst_cli.estimation.offset_reading import OffsetEstimator
 from mst_cli.model.general_load import field_jacobian_T, field_T, fields_T, loaded_stack, pose_field_T
 from mst_cli.model.mechanics.lateral import lateral_stiffness_N_per_mm
 from mst_cli.model.offcentre import simulate_offcentre
-from mst_cli.model.plate_sway import regime_sways_mm_per_N, stack_section
+from mst_cli.model.plate_sway import section_regimes, stack_section
 from mst_cli.sensor.as_printed import as_printed
 from mst_cli.sensor.document import load_design_document
 
@@ -107,7 +107,8 @@ def test_small_loads_slide_as_l0_springs_in_series(scene, stack):
     n = len(geometry.layers)  # the layers', then the base's and the plates' sway (along x, per regime)
     np.testing.assert_allclose(slide[:, :n, 0], 0.2 * F[:, None] / k[None, :, 0], rtol=2e-3)
     np.testing.assert_allclose(slide[:, :n, 1], -0.1 * F[:, None] / k[None, :, 1], rtol=2e-3)
-    sways = regime_sways_mm_per_N(stack_section(geometry, material), np.argsort(locks, kind="stable"))
+    regimes = section_regimes(stack_section(geometry, material), np.argsort(locks, kind="stable"))
+    sways = (regimes.base_sway_mm_per_N, regimes.plate_sway_mm_per_N)
     for j, c in zip((n, n + 1), sways):  # before the first lock: regime 1's compliance
         np.testing.assert_allclose(slide[:, j], np.outer(0.2 * F * c[0], [1.0, 0.0]), rtol=1e-6)
     # past its lock a layer's pads stick: its slide stays where the lock left it

@@ -20,7 +20,7 @@ from mst_cli.model.mechanics import layer_laws
 from mst_cli.model.mechanics.depth import in_web
 from mst_cli.model.mechanics.tilt import solve_layer_tilt
 from mst_cli.model.part_laws import SeriesMember, cover_host, part_layer_laws, unit_tilt_law
-from mst_cli.model.plate_sway import regime_sways_mm_per_N, stack_section
+from mst_cli.model.plate_sway import section_regimes, stack_section
 from mst_cli.model.response import simulate
 from mst_cli.model.stack_pose import magnet_field_T, magnet_pose, stack_path, tilt_laws
 from mst_cli.sensor.as_printed import as_printed
@@ -159,14 +159,15 @@ def test_a_layers_spec_reads_the_layers_alone_through_the_api(scene):
 def test_past_every_lock_a_tangential_force_slides_the_magnet_by_the_sections_sway_alone(scene):
     """Past the last lock every layer is stuck (its slide holds), so a tangential force along x
     slides the magnet further only by the base's and the plates' sway with every layer filled
-    (model.plate_sway.regime_sways_mm_per_N's last regime) per newton at every normal force; none
+    (model.plate_sway.section_regimes' last regime) per newton at every normal force; none
     along y; the layers alone have neither."""
     geometry, material = scene
     part = loaded_stack(geometry, material, "spring", whole_part=True)
     alone = loaded_stack(geometry, material, "spring", whole_part=False)
     assert len(part.lateral) == len(alone.lateral) + 2 == len(geometry.layers) + 2
     order = np.argsort([t.lock_force_N for t in part.tilt], kind="stable")
-    base, plates = regime_sways_mm_per_N(stack_section(geometry, material), order)
+    regimes = section_regimes(stack_section(geometry, material), order)
+    base, plates = regimes.base_sway_mm_per_N, regimes.plate_sway_mm_per_N
     last = max(t.lock_force_N for t in part.tilt)
     F = np.array([1.5, 2.0, 3.0]) * last
     slide = part.slides_mm(F, (1.0, 1.0)).sum(axis=1)  # per unit of Fx / Fz and Fy / Fz: U(F)

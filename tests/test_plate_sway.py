@@ -16,6 +16,7 @@ from mst_cli.model import plate_sway as ps
 from mst_cli.model.general_load import loaded_stack, section_sway_laws
 from mst_cli.model.mechanics import layer_laws
 from mst_cli.model.stack import Stack
+from mst_cli.parallel import one_blas_thread
 
 CONFIGS = Path(__file__).resolve().parents[1] / "configs"
 FORWARD = CONFIGS / "mohammadi2021-forward.yaml"
@@ -66,7 +67,7 @@ def test_the_sway_falls_smoothly_as_the_plates_thicken():
     rows = []
     for p in thick:
         _, _, sec = section(plate_mm=float(p))
-        rows.append(ps.regime_sways_mm_per_N(sec, (0, 1, 2))[1][:2])
+        rows.append(ps.section_regimes(sec, (0, 1, 2)).plate_sway_mm_per_N[:2])
     c = np.array(rows)  # (9, 2): regimes 1 and 2
     assert np.all(np.diff(c, axis=0) < 0.0)
     ratio = c[1:] / c[:-1]
@@ -75,13 +76,15 @@ def test_the_sway_falls_smoothly_as_the_plates_thicken():
 
 def test_the_laws_step_at_the_locks_and_hold_along_y():
     """general_load's base and plates laws: within each regime the slide per tangential newton is
-    that regime's sway (regime_sways_mm_per_N), stepping at the part's lock forces; nothing along
+    that regime's sway (section_regimes), stepping at the part's lock forces; nothing along
     y; the part's stack carries them last."""
     g, m, sec = section()
     stack = loaded_stack(g, m, "spring", whole_part=True)
-    laws = section_sway_laws(g, m, stack.tilt)
+    with one_blas_thread():  # as general_load solves them: BLAS's threads differ in the 8th digit
+        regimes = ps.section_regimes(sec, np.argsort([t.lock_force_N for t in stack.tilt]))
+    laws = section_sway_laws(stack.tilt, regimes)
     locks = np.sort([t.lock_force_N for t in stack.tilt])
-    sways = ps.regime_sways_mm_per_N(sec, np.argsort([t.lock_force_N for t in stack.tilt]))
+    sways = (regimes.base_sway_mm_per_N, regimes.plate_sway_mm_per_N)
     edges = np.concatenate([[0.0], locks, [2.0 * locks[-1]]])
     for law, c in zip(laws, sways):
         for r in range(len(c)):

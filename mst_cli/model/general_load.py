@@ -53,11 +53,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from mst_cli.model.assembly import SensorGeometry
+from mst_cli.model.counter_turn import CounterTurn, counter_turn
 from mst_cli.model.material import Material
 from mst_cli.model.mechanics.lateral import depth_end_factor, lateral_stiffness_N_per_mm
 from mst_cli.model.mechanics.tilt import LayerTiltLaw, TiltError, centred_compression_mm
 from mst_cli.model.member_pose import MemberPose
-from mst_cli.model.plate_sway import regime_sways_mm_per_N, stack_section
+from mst_cli.model.plate_sway import SectionRegimes, section_regimes, stack_section
 from mst_cli.model.stack_pose import layer_pivots_mm, magnet_field_T, magnet_pose, stack_path, tilt_laws
 from mst_cli.parallel import one_blas_thread
 
@@ -147,6 +148,18 @@ class LoadedStack:
     lever_mm: np.ndarray  # (n,) the top face's height over each layer's pivot
     # model.load_path section: what the whole-part rung's members add beyond the closed form
     members_pose: MemberPose | None = None
+    counter_turn: CounterTurn | None = None  # the whole part: its members' turn under a pull, the frame's
+
+    def tilts_with_counter_turn(self, force_N, tilt: np.ndarray, ratio_x, tangent: bool = False) -> np.ndarray:
+        """The layers' tilts (m, n, 2) at normal forces ``force_N`` (m,) with the members'
+        counter-turn on the ray whose tangential force is ``ratio_x`` x the normal one added (its
+        path integral; with ``tangent``, its rate there, as a linear model of the part)."""
+        if self.counter_turn is None:
+            return tilt
+        if tangent:
+            F = np.asarray(force_N, dtype=float)
+            return tilt + self.counter_turn.tangent_tilt_rad(F, np.asarray(ratio_x, dtype=float) * F)
+        return tilt + self.counter_turn.tilt_rad(force_N, ratio_x)
 
     def pose(
         self, force_N: np.ndarray, d: np.ndarray, tilt: np.ndarray, slide: np.ndarray | None, ratio_x, offset_x_mm
@@ -155,7 +168,7 @@ class LoadedStack:
         layers' compressions, tilts and slides at the normal forces ``force_N`` (m,), plus what
         the members add in section mode (pressed at x = ``offset_x_mm``, the tangential force
         along x ``ratio_x`` x the normal one)."""
-        shift, rotvec = magnet_pose(self.geometry, d, tilt, slide)
+        shift, rotvec = magnet_pose(self.geometry, d, self.tilts_with_counter_turn(force_N, tilt, ratio_x), slide)
         if self.members_pose is not None:
             extra_shift, extra_turn = self.members_pose.pose(force_N, ratio_x, offset_x_mm)
             shift, rotvec = shift + extra_shift, rotvec + extra_turn
@@ -193,38 +206,53 @@ def loaded_stack(
     tilts = tilt_laws(geometry, material, mechanics, lever_factor, whole_part)
     build = _l2_law if mechanics == "continuum" else _l0_law
     lateral = [build(t, c, material) for t, c in zip(tilts, geometry.layers)]
-    if whole_part:
-        lateral += section_sway_laws(geometry, material, tilts)
     lever = geometry.total_height_mm - layer_pivots_mm(geometry)
-    return LoadedStack(geometry, mechanics, tilts, lateral, lever, members)
+    if not whole_part:
+        return LoadedStack(geometry, mechanics, tilts, lateral, lever, members)
+    lateral += section_sway_laws(tilts, _section_regimes(geometry, material, _lock_order(tilts)))
+    turn = _counter_turn(geometry, material, mechanics, lever_factor)
+    return LoadedStack(geometry, mechanics, tilts, lateral, lever, members, turn)
 
 
-def section_sway_laws(geometry: SensorGeometry, material: Material, tilts: list[LayerTiltLaw]) -> list[LayerLateralLaw]:
+@functools.lru_cache(maxsize=32)
+def _counter_turn(geometry: SensorGeometry, material: Material, mechanics: str, lever_factor: float) -> CounterTurn:
+    """The part's members' counter-turn (model.counter_turn; 4 to 7 ms on the bundled designs past
+    the frame's solves), kept per part and rung as the frame is."""
+    part = tilt_laws(geometry, material, mechanics, lever_factor, True)
+    alone = tilt_laws(geometry, material, mechanics, lever_factor, False)
+    lever = geometry.total_height_mm - layer_pivots_mm(geometry)
+    regimes = _section_regimes(geometry, material, _lock_order(part))
+    return counter_turn(part, alone, lever, regimes.member_turn_ratio)
+
+
+def _lock_order(tilts: list[LayerTiltLaw]) -> tuple[int, ...]:
+    """The layers' indices, first to lock first."""
+    return tuple(int(i) for i in np.argsort([t.lock_force_N for t in tilts], kind="stable"))
+
+
+def section_sway_laws(tilts: list[LayerTiltLaw], regimes: SectionRegimes) -> list[LayerLateralLaw]:
     """[the housing's base, the plates]: their translation under the tangential force along x as
-    lateral laws, each a compliance constant within a regime
-    (:func:`~mst_cli.model.plate_sway.regime_sways_mm_per_N`), stepping at the layers' lock forces
-    ``tilts``; none along y (the frame is the section's)."""
-    locks = np.array([t.lock_force_N for t in tilts], dtype=float)
-    order = np.argsort(locks, kind="stable")
-    edges = np.concatenate([[0.0], locks[order]])
+    lateral laws, each a compliance constant within a regime (``regimes``: the section's frame,
+    :func:`~mst_cli.model.plate_sway.section_regimes` in the lock order of ``tilts``), stepping at
+    the layers' lock forces; none along y (the frame is the section's)."""
+    locks = np.sort([t.lock_force_N for t in tilts])
+    edges = np.concatenate([[0.0], locks])
     edges = edges[np.isfinite(edges)]  # a layer that never locks: the regimes past it are never reached
     force = np.concatenate([edges, [edges[-1] + 1.0]])  # past the last lock: its slope goes on
     laws = []
-    for c in _regime_sways(geometry, material, tuple(int(i) for i in order)):
+    for c in (regimes.base_sway_mm_per_N, regimes.plate_sway_mm_per_N):
         integral = np.concatenate([[0.0], np.cumsum(np.diff(force) * c[: len(edges)])])
         laws.append(LayerLateralLaw(force, integral, np.zeros_like(force)))
     return laws
 
 
 @functools.lru_cache(maxsize=32)
-def _regime_sways(geometry: SensorGeometry, material: Material, lock_order: tuple[int, ...]) -> np.ndarray:
-    """(2, n + 1) the base's and the plates' sway per regime (26 frame solves on three layers, 21 to
-    32 ms idle: benchmarks/bench_whole_part.py --section-sway), kept per part: every stack of one
-    design (its tables, its readers) takes the same."""
+def _section_regimes(geometry: SensorGeometry, material: Material, lock_order: tuple[int, ...]) -> SectionRegimes:
+    """The section's frame per regime (26 frame solves on three layers, 21 to 32 ms idle:
+    benchmarks/bench_whole_part.py --section-sway), kept per part: every stack of one design (its
+    tables, its readers) takes the same."""
     with one_blas_thread():  # solves of about 300 dofs: BLAS's threads give nothing, and cost on a busy machine
-        c = np.array(regime_sways_mm_per_N(stack_section(geometry, material), lock_order))
-    c.flags.writeable = False
-    return c
+        return section_regimes(stack_section(geometry, material), lock_order)
 
 
 def normal_stack(
@@ -268,7 +296,7 @@ def linear_response(
 
     def pose(offset: tuple[float, float], shear: tuple[float, float]) -> tuple[float, float]:
         d, tilt, _ = load_path(stack, F, offset, shear)
-        shift, rotvec = magnet_pose(stack.geometry, d, tilt)
+        shift, rotvec = magnet_pose(stack.geometry, d, stack.tilts_with_counter_turn(F, tilt, shear[0], tangent=True))
         return float(shift[0, 0]), float(rotvec[0, 1])
 
     x0, t0 = pose((0.0, 0.0), (0.0, 0.0))

@@ -96,12 +96,18 @@ class Frame:
 
     def solve(self, loads: dict[int, float]) -> np.ndarray:
         """(3 x nodes,) the displacements under ``loads`` (a global dof, 3 node + d: N or N mm)."""
+        return self.solve_cases([loads])[0]
+
+    def solve_cases(self, cases: list[dict[int, float]]) -> np.ndarray:
+        """(len(cases), 3 x nodes) the displacements under each load case (as :meth:`solve`'s),
+        the stiffness assembled and factorised once."""
         K = self.stiffness()
         n = K.shape[0]
-        f = np.zeros(n)
-        for dof, value in loads.items():
-            f[dof] += value
+        f = np.zeros((n, len(cases)))
+        for c, loads in enumerate(cases):
+            for dof, value in loads.items():
+                f[dof, c] += value
         free = np.setdiff1d(np.arange(n), self.held)
-        u = np.zeros(n)
+        u = np.zeros((n, len(cases)))
         u[free] = np.linalg.solve(K[np.ix_(free, free)], f[free])
-        return u
+        return u.T

@@ -104,8 +104,19 @@ def frame_pull(
     sec: StackSection, locked=(), tpu_plate: int | None = None, walls=None, guided: bool = False,
     zones: tuple[bool, bool] = (True, True), roots: bool = True,
 ) -> tuple[float, float]:  # fmt: skip
+    """(the magnet's slide, the cap's turn) per newton along +x at the top face: the first two of
+    :func:`frame_response` (its arguments)."""
+    slide, turn, _ = frame_response(sec, locked, tpu_plate, walls, guided, zones, roots)
+    return slide, turn
+
+
+def frame_response(
+    sec: StackSection, locked=(), tpu_plate: int | None = None, walls=None, guided: bool = False,
+    zones: tuple[bool, bool] = (True, True), roots: bool = True,
+) -> tuple[float, float, float]:  # fmt: skip
     """(the magnet's slide along +x, mm, the cap's turn, counter-clockwise from x to z, rad) per
-    newton along +x at the top face, with layers ``locked`` (indices from 0) filled, plate
+    newton along +x at the top face, and the cap's turn per N mm of a pure moment (counter-
+    clockwise) there, both on one factorisation, with layers ``locked`` (indices from 0) filled, plate
     ``tpu_plate`` (from 0: the plate over layer j; -1: the housing's base) in TPU and every other
     member rigid, the walls' stiffness times ``walls`` (n,) [1], the cap held from turning when ``guided``; ``zones``
     (under the walls' footprints on the plates, the walls' ends in their pads), ``roots``: the
@@ -132,9 +143,9 @@ def frame_pull(
     if guided:
         f.hold(cap, (2,))
     z_top = s.bottom_mm[-1] + s.h_mm[-1] + s.cap_above_stack_mm
-    u = f.solve({3 * cap: 1.0, 3 * cap + 2: -(z_top - beam_z[n])})
-    turn = u[3 * cap + 2]
-    return float(u[3 * cap] - turn * (s.z_magnet_mm - beam_z[n])), float(turn)
+    pull, moment = f.solve_cases([{3 * cap: 1.0, 3 * cap + 2: -(z_top - beam_z[n])}, {3 * cap + 2: 1.0}])
+    turn = pull[3 * cap + 2]
+    return float(pull[3 * cap] - turn * (s.z_magnet_mm - beam_z[n])), float(turn), float(moment[3 * cap + 2])
 
 
 def _plate_beam(f: Frame, s: StackSection, j: int, z: float, locked, tpu_plate, zones) -> dict:
@@ -233,25 +244,52 @@ def wall_factors(sec: StackSection, zones: tuple[bool, bool] = (True, True)) -> 
     return np.array(out)
 
 
-def member_translations_mm_per_N(
+@dataclass(frozen=True)
+class MemberMotions:
+    """What each of some members alone in TPU adds, per newton along +x at the top face (module
+    docstring): the magnet's translation (mm/N), the cap's turn (rad/N, counter-clockwise from x
+    to z) and the turn the pull's moment about the member's mid-plane alone would give it (rad/N),
+    each less all rigid."""
+
+    translation_mm_per_N: np.ndarray
+    turn_rad_per_N: np.ndarray
+    moment_turn_rad_per_N: np.ndarray
+
+
+def member_motions(
     sec: StackSection, members, locked=(), walls=None, zones: tuple[bool, bool] = (True, True), roots: bool = True
-) -> np.ndarray:
-    """(len(members),) what each of ``members`` (-1 the housing's base, j >= 0 the plate over layer
-    j) alone in TPU adds to the magnet's translation, mm per newton along x, with layers
-    ``locked`` filled: its slide less all rigid, less the share of the cap's turn about the
-    member's mid-plane (module docstring); the all-rigid solve once for them all."""
+) -> MemberMotions:
+    """:class:`MemberMotions` of ``members`` (-1 the housing's base, j >= 0 the plate over layer
+    j), each alone in TPU, with layers ``locked`` filled; the all-rigid solve once for them all."""
     walls = wall_factors(sec, zones) if walls is None else walls
     beam_z = _beam_z_mm(sec)
-    slide0, turn0 = frame_pull(sec, locked, None, walls, zones=zones, roots=roots)
+    z_top = sec.bottom_mm[-1] + sec.h_mm[-1] + sec.cap_above_stack_mm
+    slide0, turn0, per_moment0 = frame_response(sec, locked, None, walls, zones=zones, roots=roots)
     out = []
     for j in members:
         if j == -1 and sec.slot_height_mm <= 0.0:  # no slot: the base is solid
-            out.append(0.0)
+            out.append((0.0, 0.0, 0.0))
             continue
-        slide, turn = frame_pull(sec, locked, j, walls, zones=zones, roots=roots)
-        # a turn counter-clockwise moves the magnet dz above the member by -turn dz: not a translation
-        out.append((slide - slide0) + (turn - turn0) * (sec.z_magnet_mm - beam_z[j + 1]))
-    return np.array(out)
+        slide, turn, per_moment = frame_response(sec, locked, j, walls, zones=zones, roots=roots)
+        arm = sec.z_magnet_mm - beam_z[j + 1]
+        # a turn counter-clockwise moves the magnet dz above the member by -turn dz: not a translation;
+        # the pull's moment about the member's mid-plane is -(z_top - z) per newton
+        out.append(
+            (
+                (slide - slide0) + (turn - turn0) * arm,
+                turn - turn0,
+                -(z_top - beam_z[j + 1]) * (per_moment - per_moment0),
+            )
+        )
+    return MemberMotions(*(np.array(col, dtype=float) for col in zip(*out)))
+
+
+def member_translations_mm_per_N(
+    sec: StackSection, members, locked=(), walls=None, zones: tuple[bool, bool] = (True, True), roots: bool = True
+) -> np.ndarray:
+    """(len(members),) what each of ``members`` alone in TPU adds to the magnet's translation, mm
+    per newton along x (:func:`member_motions`)."""
+    return member_motions(sec, members, locked, walls, zones, roots).translation_mm_per_N
 
 
 def plate_translations_mm_per_N(
@@ -269,12 +307,33 @@ def base_translation_mm_per_N(
     return float(member_translations_mm_per_N(sec, [-1], locked, walls, zones, roots)[0])
 
 
-def regime_sways_mm_per_N(sec: StackSection, lock_order) -> tuple[np.ndarray, np.ndarray]:
-    """((n + 1,) the base's, (n + 1,) the plates' translation per newton along x) in each regime,
-    regime r having the first r layers of ``lock_order`` (layer indices, first to lock first)
-    locked."""
+@dataclass(frozen=True)
+class SectionRegimes:
+    """Per regime (regime r: the first r layers of a lock order locked), per newton along x: the
+    base's and the plates' translation (mm/N), and the members' turn ratio: what the plates and
+    the base turn the cap under the pull over what the pull's moment alone would turn them (1
+    where they turn nothing). The walls' end moments, carrying the pull's shear into the plates,
+    turn them against the moment's couple: the frame's counter-turn."""
+
+    base_sway_mm_per_N: np.ndarray
+    plate_sway_mm_per_N: np.ndarray
+    member_turn_ratio: np.ndarray
+
+
+TURN_FLOOR_RAD_PER_N = 1e-9  # members that turn less than this under the moment: no ratio (1)
+
+
+def section_regimes(sec: StackSection, lock_order) -> SectionRegimes:
+    """:class:`SectionRegimes` of the section ``sec`` for the layers locking in ``lock_order``
+    (layer indices, first to lock first)."""
     walls = wall_factors(sec)
     order = [int(i) for i in lock_order]
     members = [-1, *range(len(sec.theta_rad) - 1)]
-    moved = np.array([member_translations_mm_per_N(sec, members, order[:r], walls) for r in range(len(order) + 1)])
-    return moved[:, 0], moved[:, 1:].sum(axis=1)
+    base, plates, ratio = [], [], []
+    for r in range(len(order) + 1):
+        m = member_motions(sec, members, order[:r], walls)
+        base.append(m.translation_mm_per_N[0])
+        plates.append(m.translation_mm_per_N[1:].sum())
+        moment = m.moment_turn_rad_per_N.sum()
+        ratio.append(m.turn_rad_per_N.sum() / moment if abs(moment) > TURN_FLOOR_RAD_PER_N else 1.0)
+    return SectionRegimes(np.array(base), np.array(plates), np.array(ratio))

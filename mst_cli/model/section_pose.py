@@ -22,13 +22,13 @@ import numpy as np
 
 import mst_cli.model.mechanics.whole_part as wp
 from mst_cli.model.assembly import SensorGeometry
+from mst_cli.model.counter_turn import regime_start_N
 from mst_cli.model.general_load import centred_response, linear_response, loaded_stack
 from mst_cli.model.material import Material
 from mst_cli.model.mechanics import layer_laws
 from mst_cli.model.member_pose import MEMBER_POSE_FIGURES, MemberPose
 from mst_cli.model.response import part_stack
 
-REGIME_START_REL = 0.02  # where a regime's closed form is linearised: 2 % into it
 _MEMO: dict = {}
 MEMO_SIZE = 4
 
@@ -73,12 +73,6 @@ def section_member_pose(
     while len(_MEMO) > MEMO_SIZE:
         _MEMO.pop(next(iter(_MEMO)))
     return pose
-
-
-def regime_start_N(locks_N, regime: int) -> float:
-    """Where regime ``regime`` (from 0) of a stack whose sorted lock forces are ``locks_N`` is
-    linearised: 2 % of the first lock, else 2 % past the lock that opens it."""
-    return REGIME_START_REL * locks_N[0] if regime == 0 else (1.0 + REGIME_START_REL) * locks_N[regime - 1]
 
 
 def rung_figures(motion: wp.GeneralMotion) -> np.ndarray:

@@ -287,6 +287,15 @@ def solve_layer_tilt(
     raise TiltError(f"no equilibrium for {force_N:.4g} N at ({x0:g}, {y0:g}) mm (residual {r_norm:.2g} of the load)")
 
 
+def tilt_compliance_rad_per_Nmm(layer: LayerTiltLaw, force_N: float) -> float:
+    """The layer's turn about y per N mm of moment about y at the centred force ``force_N``, its
+    member's included: the equilibrium's tangent at the centred state (right-continuous at a
+    knot, as :func:`member_compliance`)."""
+    d = float(centred_compression_mm(layer, force_N))
+    _, K = _residual(layer, np.array([d, 0.0, 0.0]), np.zeros(3))
+    return float(np.linalg.inv(K)[1, 1] + member_compliance(layer, force_N)[1])
+
+
 def _axial_guess(layer: LayerTiltLaw, force_N: float) -> float:
     """The layer's own centred closure at this force (walls and pads together)."""
     return float(centred_compression_mm(layer, force_N))

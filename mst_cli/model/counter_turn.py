@@ -1,0 +1,99 @@
+"""The members' turn under a tangential force (issue 44, docs/design.md 4.7, "The members' turn
+under a tangential force: built").
+
+The general load gives each layer the tangential force's moment, Fx h_j about its pivot
+(:mod:`mst_cli.model.general_load`), and the members that ride with the layer (the cap, the
+plates, the cover: :mod:`mst_cli.model.part_laws`) turn under it as under an off-centre press's
+moment. Under a pull they turn less, or the other way: the walls carry the pull's shear into the
+plates and the cover as end moments, which turn them against the moment's couple, as a storey's
+columns turn its beam in a sway frame. The whole-part rung finds the members adding -0.06, +0.21
+and +0.15 mrad/N to the forward design's turn per tangential newton in its three regimes, where
+the closed form's tilt laws give -2.6, -2.0 and -1.7.
+
+The section's frame (:func:`mst_cli.model.plate_sway.section_regimes`) gives, per regime, the
+ratio rho of what the plates and the base turn the cap under the pull to what the pull's moment
+alone would turn them. Here each layer's members' share of the tangential force's turn, as the
+closed form gives it (the layer's tilt compliance with its members less without, each where its
+own regime starts, as ``mst check --whole-part`` reads them), is scaled by that ratio: the
+layer's tilt gains -(1 - rho_r) h_j dC_j,r per newton of Fx. The frame's own members turn 0.4 to
+0.6 times the rung's under a moment (its cap is rigid, it has no pocket and no depth), so its
+ratio, not its turn, is what is taken. Along y nothing (the frame is the section's). Pure.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from mst_cli.model.mechanics.tilt import LayerTiltLaw, tilt_compliance_rad_per_Nmm
+
+REGIME_START_REL = 0.02  # where a regime's closed form is linearised: 2 % into it
+
+
+def regime_start_N(locks_N, regime: int) -> float:
+    """Where regime ``regime`` (from 0) of a stack whose sorted lock forces are ``locks_N`` is
+    linearised: 2 % of the first lock, else 2 % past the lock that opens it."""
+    return REGIME_START_REL * locks_N[0] if regime == 0 else (1.0 + REGIME_START_REL) * locks_N[regime - 1]
+
+
+@dataclass(frozen=True)
+class CounterTurn:
+    """What the members' counter-turn adds to each layer's tilt about y, per newton of the
+    tangential force along x, in each regime of the part (module docstring). The press grows
+    along a ray, so, as a layer's slide (model.general_load.LayerLateralLaw), the tilt is the path
+    integral of the regimes' rates: continuous at the locks."""
+
+    edges_N: np.ndarray  # (k,) the part's finite lock forces, ascending: regime r from edges_N[r - 1]
+    tilt_rad_per_N: np.ndarray  # (k + 1, n)
+
+    def _regime(self, force_N) -> tuple[np.ndarray, np.ndarray]:
+        F = np.atleast_1d(np.asarray(force_N, dtype=float))
+        return F, np.searchsorted(self.edges_N, F, side="right")
+
+    def tilt_rad(self, force_N, ratio_x) -> np.ndarray:
+        """(m, n, 2) the layers' extra (phi_y, phi_x) at normal forces ``force_N`` (m,) on the ray
+        whose tangential force along x is ``ratio_x`` x the normal one: ratio x int_0^F rate dF."""
+        F, regime = self._regime(force_N)
+        knots = np.concatenate([[0.0], self.edges_N])
+        rates = self.tilt_rad_per_N
+        at_knots = np.concatenate(
+            [np.zeros((1, rates.shape[1])), np.cumsum(np.diff(knots)[:, None] * rates[:-1], axis=0)]
+        )
+        integral = at_knots[regime] + rates[regime] * (F - knots[regime])[:, None]
+        out = np.zeros((len(F), rates.shape[1], 2))
+        out[..., 0] = integral * np.broadcast_to(np.asarray(ratio_x, dtype=float), F.shape)[:, None]
+        return out
+
+    def tangent_tilt_rad(self, force_N, fx_N) -> np.ndarray:
+        """(m, n, 2) the same for a small tangential force ``fx_N`` (m,) added at the normal forces
+        ``force_N``: the regime's rate (what a linear model of the part gives)."""
+        F, regime = self._regime(force_N)
+        out = np.zeros((len(F), self.tilt_rad_per_N.shape[1], 2))
+        out[..., 0] = self.tilt_rad_per_N[regime] * np.broadcast_to(np.asarray(fx_N, dtype=float), F.shape)[:, None]
+        return out
+
+
+def counter_turn(
+    part: list[LayerTiltLaw], alone: list[LayerTiltLaw], lever_mm: np.ndarray, turn_ratio: np.ndarray
+) -> CounterTurn:
+    """The :class:`CounterTurn` of a stack whose layers' tilt laws are ``part`` (with their
+    members) and ``alone`` (without), the top face ``lever_mm`` (n,) over each layer's pivot, and
+    the frame's members' turn ratio per regime ``turn_ratio`` (model.plate_sway.SectionRegimes,
+    in the part's lock order)."""
+    locks = np.sort([t.lock_force_N for t in part])
+    edges = locks[np.isfinite(locks)]
+    locks_alone = np.sort([t.lock_force_N for t in alone])
+    rows = []
+    for r in range(len(edges) + 1):
+        at_part = regime_start_N(locks, r)
+        at_alone = regime_start_N(locks_alone, r)
+        at_alone = at_alone if np.isfinite(at_alone) else at_part
+        members = np.array(
+            [
+                tilt_compliance_rad_per_Nmm(p, at_part) - tilt_compliance_rad_per_Nmm(a, at_alone)
+                for p, a in zip(part, alone)
+            ]
+        )
+        rows.append(-(1.0 - turn_ratio[r]) * np.asarray(lever_mm, dtype=float) * members)
+    return CounterTurn(edges, np.array(rows))
