@@ -25,6 +25,10 @@ The load model and what it assumes:
   stack translate too, by c_b Fx and c_p Fx, each stepping as the layers lock
   (:func:`section_sway_laws`: a plane frame of the walls, the plates, the cover and the slot's
   walls, model.plate_sway).
+* With the part's members, a tangential force turns them less than its moment alone would: the
+  walls' end moments turn the plates and the cover back. Each layer's members' share of the
+  pull's turn is scaled by the section frame's ratio of the two, per regime
+  (:mod:`mst_cli.model.counter_turn`).
 * The magnet's pose adds the tilts' turns and shifts and the slides
   (:func:`mst_cli.model.stack_pose.magnet_pose`); its exact field at each chip follows.
 

@@ -25,10 +25,10 @@ moment C / x_c^2 (C the member's centred compliance, x_c the chevron lever): for
 small offset that is the simply supported beam's mid-span slope, L / (12 E'I) per N mm for a
 point load, when x_c is half the span (the wall heads). The cover never closes, so it stays
 outside its layer's contact problem (:func:`unit_tilt_law`): it adds that drop and turn to the
-layer's own in every regime, and the layer's pads touch by the layer's own closure. The cap and
-the plates are stiff in their own plane, so a tangential force slides neither; its moment turns
-them with their layer. The base under the cover sways as a frame, a lateral law of its own
-(:func:`mst_cli.model.general_load.section_sway_laws`). Pure.
+layer's own in every regime, and the layer's pads touch by the layer's own closure. A tangential
+force's moment turns the members with their layer; the base and the plates also translate, and
+turn back under the walls' end moments, as a plane frame of the section
+(:func:`mst_cli.model.general_load.section_sway_laws`, :mod:`mst_cli.model.counter_turn`). Pure.
 """
 
 from __future__ import annotations

@@ -34,7 +34,9 @@ depth) nothing is added: the frame is the section's. Against the rung's measure
 (studies/plate_frame.py) the plates are 0.83 to 1.23 times it on same-layer designs, 0.86 to 1.59
 between open layers on the bundled ones and 0.47 to 1.08 beside a locked layer; the base is 0.76
 to 1.12 in every regime of the bundled designs, where the column form alone
-(model.housing_base.base_sway_mm_per_N) was 0.50 to 1.35. Pure numpy, no I/O.
+(model.housing_base.base_sway_mm_per_N) was 0.50 to 1.35. The same solves, with a pure moment at
+the cap beside the pull, give the members' turn ratio (:class:`SectionRegimes`) that
+:mod:`mst_cli.model.counter_turn` takes. Pure numpy, no I/O.
 """
 
 from __future__ import annotations
