@@ -115,3 +115,35 @@ def test_the_counter_turn_takes_the_turn_per_tangential_newton_toward_the_rung(n
             assert abs(now - rung) < abs(before - rung), (name, r + 1, rung, now, before)
         if r == 2 and name != "mohammadi2021-compact":
             assert now == pytest.approx(rung, rel=0.15), (name, rung, now)
+
+
+def test_the_counter_turns_gradient_is_its_differences():
+    """tilt_gradient_rad (the two-chip reader's chain rule): d(Fx U(Fz) / Fz)/d(Fz, Fx) against
+    central differences off the locks, nothing in Fy, x, y."""
+    ct = CounterTurn(np.array([1.0, 4.0]), np.array([[2e-3, -1e-3], [5e-4, 3e-3], [-2e-3, 1e-3]]))
+    theta = np.array([[0.5, 0.2, -0.1, 1.0, 2.0], [2.5, -0.4, 0.3, 0.0, 0.0], [6.0, 1.1, 0.0, -3.0, 1.0]])
+    grad = ct.tilt_gradient_rad(theta)
+
+    def phi(t):
+        return ct.tilt_rad(t[:, 0], t[:, 1] / t[:, 0])[..., 0]
+
+    for k in range(5):
+        h = np.zeros(5)
+        h[k] = 1e-5
+        np.testing.assert_allclose(grad[:, k], (phi(theta + h) - phi(theta - h)) / 2e-5, rtol=1e-7, atol=1e-12)
+
+
+def test_mst_simulate_with_a_shear_ratio_is_the_batched_forward_model():
+    """The off-centre curve with a tangential force (``mst simulate --shear-ratio``) and the one
+    batched forward model (general_load.path_fields_T) are one model: the counter-turn in both."""
+    from mst_cli.model.general_load import path_fields_T
+    from mst_cli.model.offcentre import simulate_offcentre
+
+    g, m = designed("mohammadi2021-forward")
+    curve = simulate_offcentre(g, m, (2.0, 0.0), shear_ratio=(0.3, 0.0))
+    stack = loaded_stack(g, m, "spring")
+    np.testing.assert_allclose(
+        path_fields_T(stack, curve.force_N, (2.0, 0.0), (0.3, 0.0)), curve.B_T, rtol=1e-9, atol=1e-15
+    )
+    without = path_fields_T(replace(stack, counter_turn=None), curve.force_N, (2.0, 0.0), (0.3, 0.0))
+    assert np.max(np.abs(without - curve.B_T)) > 1e-6  # the counter-turn moves the field

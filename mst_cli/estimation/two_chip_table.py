@@ -230,6 +230,9 @@ class TwoChipModel:
         """((m, 3 k) the field table's fields, (m, 3 k, 5) :meth:`chain_T`'s Jacobian)."""
         m, n = dstates.shape[:2]
         per_unknown = dstates.transpose(0, 3, 1, 2).reshape(5 * m, n, 3)  # row 5 i + k: d(states_i)/dtheta_k
+        if self.stack.counter_turn is not None:  # the members' counter-turn: phi_y = Fx U(Fz) / Fz, on the tilts
+            per_unknown = per_unknown.copy()
+            per_unknown[..., 1] += self.stack.counter_turn.tilt_gradient_rad(theta).reshape(5 * m, n)
         # the pose is linear in the states and the slides, without a constant: their derivatives' pose is its derivative
         dshift, drot = magnet_pose(
             self.stack.geometry, per_unknown[..., 0], per_unknown[..., 1:], self._slide_gradient(theta)

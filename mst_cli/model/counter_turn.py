@@ -51,19 +51,36 @@ class CounterTurn:
         F = np.atleast_1d(np.asarray(force_N, dtype=float))
         return F, np.searchsorted(self.edges_N, F, side="right")
 
-    def tilt_rad(self, force_N, ratio_x) -> np.ndarray:
-        """(m, n, 2) the layers' extra (phi_y, phi_x) at normal forces ``force_N`` (m,) on the ray
-        whose tangential force along x is ``ratio_x`` x the normal one: ratio x int_0^F rate dF."""
+    def integral_rad(self, force_N) -> np.ndarray:
+        """(m, n) int_0^F rate dF at normal forces ``force_N`` (m,): each layer's extra phi_y on the
+        ray whose tangential force along x equals the normal one."""
         F, regime = self._regime(force_N)
         knots = np.concatenate([[0.0], self.edges_N])
         rates = self.tilt_rad_per_N
         at_knots = np.concatenate(
             [np.zeros((1, rates.shape[1])), np.cumsum(np.diff(knots)[:, None] * rates[:-1], axis=0)]
         )
-        integral = at_knots[regime] + rates[regime] * (F - knots[regime])[:, None]
-        out = np.zeros((len(F), rates.shape[1], 2))
-        out[..., 0] = integral * np.broadcast_to(np.asarray(ratio_x, dtype=float), F.shape)[:, None]
+        return at_knots[regime] + rates[regime] * (F - knots[regime])[:, None]
+
+    def tilt_rad(self, force_N, ratio_x) -> np.ndarray:
+        """(m, n, 2) the layers' extra (phi_y, phi_x) at normal forces ``force_N`` (m,) on the ray
+        whose tangential force along x is ``ratio_x`` x the normal one: ratio x int_0^F rate dF."""
+        integral = self.integral_rad(force_N)
+        out = np.zeros((*integral.shape, 2))
+        out[..., 0] = integral * np.broadcast_to(np.asarray(ratio_x, dtype=float), integral.shape[:1])[:, None]
         return out
+
+    def tilt_gradient_rad(self, theta: np.ndarray) -> np.ndarray:
+        """(m, 5, n) d(each layer's extra phi_y)/d(Fz, Fx, Fy, x, y) at the loads ``theta`` (m, 5)
+        (:mod:`mst_cli.model.general_load`'s): Fx U(Fz) / Fz differentiated, U' the regime's rate
+        (0 at Fz <= 0)."""
+        F, regime = self._regime(theta[:, 0])
+        safe = np.where(F > 0.0, F, 1.0)[:, None]
+        U, rate = self.integral_rad(F), self.tilt_rad_per_N[regime]
+        out = np.zeros((len(F), 5, U.shape[1]))
+        out[:, 0] = theta[:, 1:2] * (rate * safe - U) / safe**2
+        out[:, 1] = U / safe
+        return np.where((F > 0.0)[:, None, None], out, 0.0)
 
     def tangent_tilt_rad(self, force_N, fx_N) -> np.ndarray:
         """(m, n, 2) the same for a small tangential force ``fx_N`` (m,) added at the normal forces

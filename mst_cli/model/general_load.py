@@ -226,7 +226,15 @@ def _counter_turn(geometry: SensorGeometry, material: Material, mechanics: str, 
     alone = tilt_laws(geometry, material, mechanics, lever_factor, False)
     lever = geometry.total_height_mm - layer_pivots_mm(geometry)
     regimes = _section_regimes(geometry, material, _lock_order(part))
-    return counter_turn(part, alone, lever, regimes.member_turn_ratio)
+    turn = counter_turn(part, alone, lever, regimes.member_turn_ratio)
+    return _frozen(turn, turn.edges_N, turn.tilt_rad_per_N)
+
+
+def _frozen(kept, *arrays: np.ndarray):
+    """``kept``, a cached answer, with its ``arrays`` read-only: every caller shares them."""
+    for a in arrays:
+        a.flags.writeable = False
+    return kept
 
 
 def _lock_order(tilts: list[LayerTiltLaw]) -> tuple[int, ...]:
@@ -256,7 +264,8 @@ def _section_regimes(geometry: SensorGeometry, material: Material, lock_order: t
     benchmarks/bench_whole_part.py --section-sway), kept per part: every stack of one design (its
     tables, its readers) takes the same."""
     with one_blas_thread():  # solves of about 300 dofs: BLAS's threads give nothing, and cost on a busy machine
-        return section_regimes(stack_section(geometry, material), lock_order)
+        r = section_regimes(stack_section(geometry, material), lock_order)
+    return _frozen(r, r.base_sway_mm_per_N, r.plate_sway_mm_per_N, r.member_turn_ratio)
 
 
 def normal_stack(

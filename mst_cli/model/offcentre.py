@@ -94,7 +94,7 @@ def simulate_offcentre(
     grid: dict[str, Any] = {"points_per_regime": points_per_regime, "overload": overload, "whole_part": whole_part}
     axial = simulate_axial(geometry, material, mechanics, field_model, **grid, section=section)
     F = axial.force_N
-    slide = None
+    slide, stack = None, None
     if shear_ratio[0] == 0.0 and shear_ratio[1] == 0.0:
         layers = tilt_laws(geometry, material, mechanics, whole_part=whole_part)
         offsets = np.broadcast_to(np.asarray(offset_mm, dtype=float), (len(layers), 2))
@@ -103,6 +103,8 @@ def simulate_offcentre(
         layers, offsets = stack.tilt, stack.layer_offsets_mm(offset_mm, shear_ratio)
         slide = stack.slides_mm(F, shear_ratio)
     d, tilt = stack_path(layers, F, offsets)
+    if stack is not None:  # the members' counter-turn under the tangential force (model.counter_turn)
+        tilt = stack.tilts_with_counter_turn(F, tilt, shear_ratio[0])
     shift, rotvec = magnet_pose(geometry, d, tilt, slide)
     extra = section_members_pose(geometry, material, mechanics, whole_part and section)
     if extra is not None:  # the members' pose beyond the closed form, on the load's ray
