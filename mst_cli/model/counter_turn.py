@@ -15,8 +15,8 @@ ratio rho of what the plates and the base turn the cap under the pull to what th
 alone would turn them. Here each layer's members' share of the tangential force's turn, as the
 closed form gives it (the layer's tilt compliance with its members less without, each where its
 own regime starts, as ``mst check --whole-part`` reads them), is scaled by that ratio: the
-layer's tilt gains -(1 - rho_r) h_j dC_j,r per newton of Fx. The frame's own members turn 0.4 to
-0.6 times the rung's under a moment (its cap is rigid, it has no pocket and no depth), so its
+layer's tilt gains -(1 - rho_r) h_j dC_j,r per newton of Fx. The frame's own members turn 0.3 to
+0.7 times the rung's under a moment (its cap is rigid, it has no pocket and no depth), so its
 ratio, not its turn, is what is taken. Along y nothing (the frame is the section's). Pure.
 """
 

@@ -111,9 +111,6 @@ def simulate_offcentre(
         shift, rotvec = (a + b for a, b in zip((shift, rotvec), extra.pose(F, shear_ratio[0], offset_mm[0])))
     B = magnet_field_T(geometry, shift, rotvec)
     B_abs = np.linalg.norm(B, axis=-1)
-    side_lock = np.array(
-        [[_side_lock_N(layer, tuple(off), side) for side in (0, 1)] for layer, off in zip(layers, offsets)]
-    )
     out = OffCentreResponse(
         offset_mm=(float(offset_mm[0]), float(offset_mm[1])),
         mechanics=mechanics,
@@ -126,7 +123,7 @@ def simulate_offcentre(
         B_abs_T=B_abs,
         force_read_axial_N=_read_as_axial(axial, B_abs),
         axial_reading_flag=axial_reading_flags(axial, B_abs),
-        side_lock_N=side_lock,
+        side_lock_N=_side_locks_N(layers, offsets),
         axial=axial,
         shear_ratio=(float(shear_ratio[0]), float(shear_ratio[1])),
         layer_slide_mm=slide,
@@ -191,6 +188,11 @@ def _read_as_axial(axial: Response, B_abs_T: np.ndarray) -> np.ndarray:
     B_ax, F_ax = axial.B_abs_T, axial.force_N
     read = np.interp(B_abs_T, B_ax, F_ax)
     return np.where((B_abs_T < B_ax[0] * (1 - 1e-12)) | (B_abs_T > B_ax[-1]), np.nan, read)
+
+
+def _side_locks_N(layers, offsets) -> np.ndarray:
+    """(n, 2) where each layer locks on its -x and +x sides, pressed at its ``offsets`` (n, 2)."""
+    return np.array([[_side_lock_N(layer, tuple(off), side) for side in (0, 1)] for layer, off in zip(layers, offsets)])
 
 
 def _side_lock_N(layer: LayerTiltLaw, offset_mm, side: int) -> float:
