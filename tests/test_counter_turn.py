@@ -147,3 +147,21 @@ def test_mst_simulate_with_a_shear_ratio_is_the_batched_forward_model():
     )
     without = path_fields_T(replace(stack, counter_turn=None), curve.force_N, (2.0, 0.0), (0.3, 0.0))
     assert np.max(np.abs(without - curve.B_T)) > 1e-6  # the counter-turn moves the field
+
+
+def test_the_turn_ratio_moves_smoothly_with_the_cover():
+    """Swept over the cover's thickness (0.8 to 3 mm, the forward design's layers), each regime's
+    turn ratio moves in regular steps, no jump or sawtooth, and past layer 1's lock it rises: the
+    thinner the cover on the slot's walls, the further they turn it back against the moment."""
+    from mst_cli.model import plate_sway as ps
+
+    doc = mst.load(ROOT / "configs" / "mohammadi2021-forward.yaml")
+    g, m = doc.geometry(), doc.material
+    order = np.argsort([t.lock_force_N for t in tilt_laws(g, m, "spring")], kind="stable")
+    rows = []
+    for c in np.linspace(0.8, 3.0, 12):
+        part = replace(g, housing=replace(g.housing, cover_mm=float(c)))
+        rows.append(ps.section_regimes(ps.stack_section(part, m), order).member_turn_ratio)
+    ratio = np.array(rows)  # (12, 4): regimes 1, 2, 3 and past the last lock
+    assert np.all(np.abs(np.diff(ratio, 2, axis=0)) < 0.03)
+    assert np.all(np.diff(ratio[:, 1:], axis=0) > 0.0)
