@@ -393,13 +393,13 @@ def store_rows(paths, repeats: int = 3) -> list[str]:
 
 
 def section_sway_row(path: Path) -> str:
-    """The design at ``path``: the section's sway per regime (general_load's laws), the walls'
-    factors to L0, and the cost: median of 5, BLAS on one thread (as general_load runs it) and
-    with its threads as they come."""
+    """The design at ``path``: the section's sway and turn ratio per regime, the walls' factors, the cost
+    (median of 5: BLAS on one thread, as general_load runs it, and threaded) and the counter-turn's."""
     import contextlib
 
+    from mst_cli.model.counter_turn import counter_turn
     from mst_cli.model.plate_sway import section_regimes, stack_section, wall_factors
-    from mst_cli.model.stack_pose import tilt_laws
+    from mst_cli.model.stack_pose import layer_pivots_mm, tilt_laws
     from mst_cli.parallel import one_blas_thread
 
     doc, _ = mst.designed(path)
@@ -414,6 +414,13 @@ def section_sway_row(path: Path) -> str:
                 regimes = section_regimes(stack_section(g, m), order)
             times.append(time.perf_counter() - start)
         ms.append(1e3 * float(np.median(times)))
+    part, alone = (tilt_laws(g, m, "spring", 1.0, whole) for whole in (True, False))
+    times = []
+    for _ in range(5):  # the counter-turn's layer tangents (general_load keeps it per part, beside the frame)
+        start = time.perf_counter()
+        counter_turn(part, alone, g.total_height_mm - layer_pivots_mm(g), regimes.member_turn_ratio)
+        times.append(time.perf_counter() - start)
+    ms.append(1e3 * float(np.median(times)))
     column = hb.base_sway_mm_per_N(lp.member_scene(g, m))
     walls = " / ".join(f"{w:.2f}" for w in wall_factors(stack_section(g, m)))
     cells = [
@@ -424,7 +431,7 @@ def section_sway_row(path: Path) -> str:
             (regimes.member_turn_ratio, ".2f"),
         )
     ]
-    return f"| {doc.name} | {' | '.join(cells)} | {column:.4f} | {walls} | {ms[0]:.0f} | {ms[1]:.0f} |"
+    return f"| {doc.name} | {' | '.join(cells)} | {column:.4f} | {walls} | {ms[0]:.0f} | {ms[1]:.0f} | {ms[2]:.1f} |"
 
 
 def member_studies(args) -> bool:
@@ -456,9 +463,9 @@ def member_studies(args) -> bool:
         print("(median of 5: BLAS on one thread, as general_load runs it, and with its own threads)")
         print(
             "| design | base, regimes 1.. | plates, regimes 1.. | turn ratio, regimes 1.. | column form | "
-            "walls' factors | ms | ms, threads |"
+            "walls' factors | ms | ms, threads | counter-turn ms |"
         )
-        print("|---|---|---|---|---|---|---|---|")
+        print("|---|---|---|---|---|---|---|---|---|")
         for path in args.configs:
             print(section_sway_row(Path(path)), flush=True)
     elif args.base_sway:

@@ -220,7 +220,7 @@ def loaded_stack(
 
 @functools.lru_cache(maxsize=32)
 def _counter_turn(geometry: SensorGeometry, material: Material, mechanics: str, lever_factor: float) -> CounterTurn:
-    """The part's members' counter-turn (model.counter_turn; 4 to 7 ms on the bundled designs past
+    """The part's members' counter-turn (model.counter_turn; 5 to 10 ms on the bundled designs past
     the frame's solves), kept per part and rung as the frame is."""
     part = tilt_laws(geometry, material, mechanics, lever_factor, True)
     alone = tilt_laws(geometry, material, mechanics, lever_factor, False)
