@@ -17,6 +17,11 @@ whose rung figure is under 0.005 mm/N (a plate between two locked layers) are pr
 Rows of plate 0 (studies/plate_slide.py --base) are the housing's base, in the frame as
 model.housing_base's portal (``plate_sway.base_translation_mm_per_N``), counted apart, with mst's
 column form (``housing_base.base_sway_mm_per_N``, what the general load takes) beside them.
+
+``--edge-joint CONFIG ...`` (a probe, not kept; docs/design.md 4.7): per regime, the frame's base
+(its translation, its turn under the pull and under the pull's moment, mrad/N) and the members'
+turn ratio, with the cover's end joined to its slot wall's top as the model has it (pi/8 E'D c^2)
+and rigid wherever an open layer 1's wall footprint straddles the slot's edge.
 """
 
 from __future__ import annotations
@@ -116,10 +121,61 @@ def check(paths: list[Path]) -> None:
             print(f"| {member} | {form} | {len(q)} | {np.median(q):.2f} ({q.min():.2f} to {q.max():.2f}) | {rms:.3f} |")
 
 
+def rigid_edge_base(f, s, cover: dict, z_cover: float) -> None:
+    """plate_sway._base with the cover's end joint rigid where layer 1's wall footprint (open or
+    not: the probe) straddles the slot's edge (the rigid zone under it reaching the joint)."""
+    half_print = 0.5 * s.t_mm[0] / np.sin(s.theta_rad[0])
+    if abs(s.half_slot_mm - s.head_mm[0]) >= half_print:
+        return KEPT_BASE(f, s, cover, z_cover)
+    spring = f.spring
+
+    def joint(a, b, k):  # of the base's springs only the cover's end joint stands at the edge
+        edge = any(abs(abs(f.nodes[n][0]) - s.half_slot_mm) < 1e-9 for n in (a, b))
+        return spring(a, b, ps.RIGID * s.E_prime_MPa * s.depth_mm if edge else k)
+
+    f.spring = joint
+    try:
+        KEPT_BASE(f, s, cover, z_cover)
+    finally:
+        f.spring = spring
+
+
+KEPT_BASE = ps._base
+
+
+def edge_joint(configs: list[Path]) -> None:
+    print("| design | regime | joint | base: translation mm/N | turn | moment's turn | members' ratio |")
+    print("|---|---|---|---|---|---|---|")
+    for path in configs:
+        doc, _ = mst.designed(path)
+        g, m = doc.geometry(), doc.material
+        sec = stack_section(g, m)
+        walls = ps.wall_factors(sec)
+        members = [-1, *range(len(g.layers) - 1)]
+        for r, locked in enumerate(wp.regime_locked(Stack(layer_laws(g.layers, m, doc.mechanics)))):
+            for label, base in (("as modelled", KEPT_BASE), ("rigid at the edge", rigid_edge_base)):
+                ps._base = base
+                try:
+                    mo = ps.member_motions(sec, members, tuple(locked), walls)
+                finally:
+                    ps._base = KEPT_BASE
+                ratio = mo.turn_rad_per_N.sum() / mo.moment_turn_rad_per_N.sum()
+                cells = f"{mo.translation_mm_per_N[0]:.4f} | {1e3 * mo.turn_rad_per_N[0]:.3f} | "
+                cells += f"{1e3 * mo.moment_turn_rad_per_N[0]:.3f} | {ratio:.3f}"
+                print(f"| {doc.name} | {r + 1} | {label} | {cells} |")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--check", type=Path, nargs="+", required=True, help="studies/plate_slide.py --out CSVs")
-    check(ap.parse_args().check)
+    ap.add_argument("--check", type=Path, nargs="+", help="studies/plate_slide.py --out CSVs")
+    ap.add_argument("--edge-joint", type=Path, nargs="+", help="configs: the cover's edge joint probe")
+    args = ap.parse_args()
+    if args.edge_joint:
+        edge_joint(args.edge_joint)
+    elif args.check:
+        check(args.check)
+    else:
+        ap.error("give --check CSVs or --edge-joint configs")
 
 
 if __name__ == "__main__":
