@@ -29,9 +29,14 @@ alone and the walls alone; studies/member_closed_form.py):
   distance e from the edge over the cover's thickness c (a local compliance of the form of a
   line load's on a half-plane, whose displacement grows as 2P / (pi E'D) per e-fold of distance);
 * **past layer 1's lock** its cavity is closed and the layer a block h_1 tall bonded on the
-  cover under its pad: the cover's bending is that of the section cover + h_1 there, the walls'
-  turn stays what it was (the rung's turn does not change at the lock), the roots no longer
-  turn, and the block bears on the cover, P / (c_b E'D).
+  cover under its pad. With the plate over it the block and the cover under it go down as one
+  body (the whole-part rung's profile, studies/locked_base.py --profile), so the block is rigid
+  here and the cover is a short link from the slot's wall to inside the block's edge: it reaches
+  b c into the block (the cover under the block's edge, held on its top face only, shears with
+  the link; b = LINK_INTO_BLOCK), and its end there turns as its end in the wall's top does,
+  pi/8 E'D c^2. The feet's load reaches the link at the block's edge, the walls squeeze and turn
+  under it as before the lock, the roots no longer turn, and the block bears on the cover,
+  P / (c_b E'D).
 
 Under a tangential force along x the base sways as a portal frame (:func:`base_sway_mm_per_N`):
 the slot's walls are Timoshenko columns from the floor to the cover's mid-plane, each root built
@@ -41,9 +46,12 @@ with layer 1 under the force's moment).
 
 Over the slot the cover's bending (and its edges' drop) stops when it lands on the board; the
 squeeze, the turn of a wall under a foot standing on it, the roots and the bearings do not.
-Fitted: c_b alone (0.8), the one value for both bearings, on a grid of 0.6-2.0 by the base's
-rms log error against the whole-part rung's over the three regimes of 40 sampled designs
-(studies/member_closed_form.py; docs/design.md 4.7). Pure numpy, no I/O.
+Fitted: c_b (0.8), the one value for both bearings, on a grid of 0.6-2.0 by the base's rms
+log error against the whole-part rung's over the three regimes of 40 sampled designs
+(studies/member_closed_form.py; docs/design.md 4.7); and b (0.225), by the locked base's rms log
+error against the rung's (every other member rigid) on the 38 of them with layer 1 locked in some
+regime (studies/locked_base.py --fit: 0.070, where the form before it, a free deep block, was
+0.76-1.25 of the rung). Pure numpy, no I/O.
 """
 
 from __future__ import annotations
@@ -59,6 +67,10 @@ from mst_cli.model.plate_joint import cover_root_mm_per_N
 WALL_LEVER = 0.5  # the cover's reaction at the wall's inner edge, w/2 from its centre line
 END_BUILT_IN = math.pi / 8.0  # the cover's end in the wall's top: pi/8 E'D c^2 (Johnson 1985, ch. 2)
 BEARING = 0.8  # fitted (module docstring): a local bearing on the cover, P / (c_b E'D)
+# fitted (module docstring, studies/member_closed_form.py --fit-link): how far into a locked
+# layer 1's block, in cover thicknesses, the cover's link to the slot's wall reaches
+LINK_INTO_BLOCK = 0.225
+RIGID_SECTION = (math.inf, math.inf)  # (E'I, kGA) of a section that does not bend
 
 
 def cover_parts_mm_per_N(scene, t_bottom_mm, pad_mm, head_mm, theta_bottom_rad, h_bottom_mm) -> tuple:
@@ -81,39 +93,24 @@ def corner_mm_per_N(scene, head_mm) -> Any:
     return as_value(0.5 * np.exp(-((e / scene.cover_mm) ** 2)) / (BEARING * scene.E_prime_MPa * scene.depth_mm))
 
 
-def cover_parts_locked_mm_per_N(scene, t_bottom_mm, h_bottom_mm, pad_mm, head_mm) -> tuple:
-    """:func:`cover_parts_mm_per_N` once layer 1 is locked (module docstring): the cover's bending
-    with the section cover + h_1 under the pad, the walls' turn as before the lock, no roots, the
-    feet's bearing at the edge and the block's."""
+def cover_parts_locked_mm_per_N(scene, pad_mm, head_mm) -> tuple:
+    """:func:`cover_parts_mm_per_N` once layer 1 is locked (module docstring), its pad's and its
+    wall heads' half widths given: the block rigid, the cover a link from inside the block's
+    edge to the slot's walls, the feet's bearing at the edge and the block's."""
     s = scene
     E, G, D = s.E_prime_MPa, s.G_MPa, s.depth_mm
-    alone = plain_section(D, s.cover_mm, E, G)
-    opened = housing_mm_per_N(s, head_mm, pad_mm, section_EI_kGA(D, s.cover_mm + t_bottom_mm, E, G), alone)
-    return _locked_from_open(s, h_bottom_mm, pad_mm, head_mm, opened, alone)
+    edge = np.asarray(pad_mm, dtype=float) - LINK_INTO_BLOCK * s.cover_mm  # the link's end in the block
+    # the block carries its feet's load to that end
+    at_edge = np.minimum(np.asarray(head_mm, dtype=float), edge)
+    over, walls, _ = housing_mm_per_N(s, at_edge, edge, RIGID_SECTION, plain_section(D, s.cover_mm, E, G), True)
+    return over, walls + corner_mm_per_N(s, head_mm) + 0.5 / (BEARING * E * D)
 
 
 def cover_parts_both_mm_per_N(scene, t_bottom_mm, pad_mm, head_mm, theta_bottom_rad, h_bottom_mm) -> tuple:
-    """(:func:`cover_parts_mm_per_N`, :func:`cover_parts_locked_mm_per_N`) of the same layer 1,
-    the open cover over the slot solved once for both (the design loop asks for both)."""
-    s = scene
-    E, G, D = s.E_prime_MPa, s.G_MPa, s.depth_mm
-    alone = plain_section(D, s.cover_mm, E, G)
-    opened = housing_mm_per_N(s, head_mm, pad_mm, section_EI_kGA(D, s.cover_mm + t_bottom_mm, E, G), alone)
-    roots = cover_root_mm_per_N(theta_bottom_rad, t_bottom_mm, h_bottom_mm, s.cover_mm, D, E)
-    open_parts = (opened[0], opened[1] + roots + corner_mm_per_N(s, head_mm))
-    return open_parts, _locked_from_open(s, h_bottom_mm, pad_mm, head_mm, opened, alone)
-
-
-def _locked_from_open(scene, h_bottom_mm, pad_mm, head_mm, opened: tuple, alone: tuple) -> tuple:
-    """The locked cover's two parts from the open one's :func:`housing_mm_per_N` ``opened``: its
-    bending swapped for the deep section's (cover + h_1 under the pad), the walls' part kept,
-    the feet's bearing at the edge and the block's added."""
-    s = scene
-    E, G, D = s.E_prime_MPa, s.G_MPa, s.depth_mm
-    open_over, walls, open_bend = opened
-    deep = section_EI_kGA(D, s.cover_mm + h_bottom_mm, E, G)
-    deep_bend = cover_bending_mm_per_N(s, head_mm, pad_mm, deep, alone)
-    return open_over - open_bend + deep_bend, walls + corner_mm_per_N(s, head_mm) + 0.5 / (BEARING * E * D)
+    """(:func:`cover_parts_mm_per_N`, :func:`cover_parts_locked_mm_per_N`) of the same layer 1
+    (the design loop asks for both)."""
+    opened = cover_parts_mm_per_N(scene, t_bottom_mm, pad_mm, head_mm, theta_bottom_rad, h_bottom_mm)
+    return opened, cover_parts_locked_mm_per_N(scene, pad_mm, head_mm)
 
 
 def wall_turn_Nmm_per_rad(scene, w_mm: float) -> float:
@@ -128,7 +125,7 @@ def wall_turn_Nmm_per_rad(scene, w_mm: float) -> float:
     return EI / H / (1.0 - 0.75 * kappa / (1.0 + kappa))
 
 
-def housing_mm_per_N(scene, head_mm, pad_mm, cover_pad, cover_alone) -> tuple:
+def housing_mm_per_N(scene, head_mm, pad_mm, cover_pad, cover_alone, pad_joint: bool = False) -> tuple:
     """(the cover's part over the slot: its bending and its edges' drop; the walls' part: their
     squeeze and the turn under a foot standing on them; the cover's bending alone, its ends built
     into rigid walls) of the drop per newton (P = F/2 on each side) of layer 1's wall feet at
@@ -140,12 +137,16 @@ def housing_mm_per_N(scene, head_mm, pad_mm, cover_pad, cover_alone) -> tuple:
     int min(x, e)^j / E'I dx, B = int dx / E'I, plus shear P int_0^e dx / kGA. The end turns by
     the wall's turn (P w/2 + M) / k_w (:func:`wall_turn_Nmm_per_rad`) plus the end's own M /
     (pi/8 E'D c^2), which sets M; the wall's turn drops its inner edge by w/2 x it. A foot on
-    the wall, a from its centre line: the turn P a / (k_w + 1/B), the drop a x the turn. No slot
-    walls (height 0): the cover clamped on rigid supports."""
+    the wall, a from its centre line: the turn P a / (k_w + 1/(B + 1/k_end)) (the cover's end
+    turning into the wall's top as over the slot: the two meet as the foot crosses the edge), the
+    drop a x the turn. No slot
+    walls (height 0): the cover clamped on rigid supports. ``pad_joint``: the cover's section
+    changes at |x| = ``pad_mm`` (at the slot's edge at the latest) through a joint that turns as
+    its end in the wall's top does (a locked block's edge)."""
     s, P = scene, 0.5
     head = np.asarray(head_mm, dtype=float)
     L2, H, D, E = s.half_slot_mm, s.slot_height_mm, s.depth_mm, s.E_prime_MPa
-    e, B, C1, C2, shear = integrals = _cover_integrals(s, head, pad_mm, cover_pad, cover_alone)
+    e, B, C1, C2, shear = integrals = _cover_integrals(s, head, pad_mm, cover_pad, cover_alone, pad_joint)
     bend = _bending_on_rigid_walls(s, integrals)
     if H <= 0.0:
         return bend, as_value(0.0 * head), bend
@@ -160,7 +161,7 @@ def housing_mm_per_N(scene, head_mm, pad_mm, cover_pad, cover_alone) -> tuple:
         # the end's slope is the wall's turn (under P arm + M) plus the end's own (under M)
         M = np.where(over, (P * C1 - P * arm / k_wall) / (B + 1.0 / k), 0.0)
         a = (L2 + 0.5 * w) - on_wall  # a foot on the wall: its lever about the centre line
-        turn = np.where(over, (P * arm + M) / k_wall, P * a / (k_wall + 1.0 / B))
+        turn = np.where(over, (P * arm + M) / k_wall, P * a / (k_wall + 1.0 / (B + 1.0 / k_end)))
         over_slot.append(P * C2 - M * C1 + shear + np.where(over, 0.5 * w * turn, 0.0))
         walls.append(P * H / (E * w * D) + np.where(over, 0.0, a * turn))
     return as_value(0.5 * (over_slot[0] + over_slot[1])), as_value(0.5 * (walls[0] + walls[1])), bend
@@ -185,10 +186,11 @@ def _bending_on_rigid_walls(scene, integrals: tuple) -> Any:
     return as_value(np.where(e > 0, P * C2 - P * C1 * C1 / (B + 1.0 / k_end) + shear, 0.0))
 
 
-def _cover_integrals(scene, head: np.ndarray, pad_mm, cover_pad, cover_alone) -> tuple:
+def _cover_integrals(scene, head: np.ndarray, pad_mm, cover_pad, cover_alone, pad_joint: bool = False) -> tuple:
     """(e, B, C1, C2, shear) of :func:`housing_mm_per_N`'s virtual work over the half span: the
     foot's distance inside the slot's edge, int dx / E'I, int min(x, e)^j / E'I dx (j = 1, 2) and
-    P int_0^e dx / kGA, the section changing where the pad starts (P = 1/2)."""
+    P int_0^e dx / kGA, the section changing where the pad starts (P = 1/2); ``pad_joint``: a
+    joint there of stiffness pi/8 E'D c^2 adds min(x_pad, e)^j to each (a point of 1/E'I)."""
     P, L2 = 0.5, scene.half_slot_mm
     e = np.clip(L2 - head, 0.0, L2)  # the foot's distance inside the slot's edge
     x_pad = np.clip(L2 - np.asarray(pad_mm, dtype=float), 0.0, L2)  # where the pad starts, from the edge
@@ -204,7 +206,12 @@ def _cover_integrals(scene, head: np.ndarray, pad_mm, cover_pad, cover_alone) ->
         return at_pad / EI_out + (inside_L2 ** (j + 1) / (j + 1) + e**j * beyond_L2 - at_pad) / EI_in
 
     shear = P * (np.minimum(e, x_pad) / kGA_out + np.maximum(e - x_pad, 0.0) / kGA_in)
-    return e, over_half_span(0), over_half_span(1), over_half_span(2), shear
+    B, C1, C2 = over_half_span(0), over_half_span(1), over_half_span(2)
+    if pad_joint:
+        k = END_BUILT_IN * scene.E_prime_MPa * scene.depth_mm * scene.cover_mm**2
+        at = np.minimum(x_pad, e)  # at the slot's edge where the block reaches over the wall
+        B, C1, C2 = B + 1.0 / k, C1 + at / k, C2 + at * at / k
+    return e, B, C1, C2, shear
 
 
 def base_sway_mm_per_N(scene, tops_held: bool = False) -> float:
