@@ -31,6 +31,7 @@ import csv
 import statistics
 import tempfile
 from pathlib import Path
+from unittest import mock
 
 import numpy as np
 
@@ -150,16 +151,12 @@ def box_table(csv_path: Path, folder: Path) -> None:
 def fit(csv_path: Path, folder: Path) -> None:
     """The base's rms log error (rung / closed) over the box for each LINK_INTO_BLOCK on a grid."""
     rows = [(layer_1(path)[1:], rung[3]) for path, rung in box_rows(csv_path, folder)]
-    kept = hb.LINK_INTO_BLOCK
     print("| LINK_INTO_BLOCK | rms log | median rung / closed |")
     print("|---|---|---|")
-    try:
-        for b in (0.0, 0.1, 0.15, 0.175, 0.2, 0.225, 0.25, 0.3, 0.5):
-            hb.LINK_INTO_BLOCK = b
+    for b in (0.0, 0.1, 0.15, 0.175, 0.2, 0.225, 0.25, 0.3, 0.5):
+        with mock.patch.object(hb, "LINK_INTO_BLOCK", b):
             r = np.array([rung / now_locked(s, pad, head)[0] for (s, _, _, pad, head), rung in rows])
-            print(f"| {b:g} | {np.sqrt(np.mean(np.log(r) ** 2)):.3f} | {np.median(r):.2f} |")
-    finally:
-        hb.LINK_INTO_BLOCK = kept
+        print(f"| {b:g} | {np.sqrt(np.mean(np.log(r) ** 2)):.3f} | {np.median(r):.2f} |")
 
 
 def profile(path: Path, xs_mm=(0.0, 4.0, 8.0, 10.0, 11.0, 12.0, 12.9, 14.5)) -> None:

@@ -93,7 +93,7 @@ def fit_bearing(rows: list[dict], designs: dict) -> None:
     print("| c_b | rms log, regime 1 | regime 2 | regime 3 | sum |")
     print("|---|---|---|---|---|")
     try:
-        for c_b in (0.4, 0.5, 0.6, 0.7, 0.8, 1.0, 1.2, 1.5, 2.0):
+        for c_b in (0.6, 0.8, 1.0, 1.2, 1.5, 2.0):
             hb.BEARING = c_b
             out = ratios(rows, designs)
             rms = [

@@ -254,8 +254,9 @@ def test_the_cover_bends_only_where_layer_1_lands_inside_the_slot():
     turn, kappa = (E'cD/(L/2)) H^3/(3 E'I); P = F/2 a side). Layer 1's
     walls past the slot's edge stand on a column: the cover does not bend over the slot (nothing
     lands on the board), the foot squeezes the column and turns it by its lever a about the
-    column's centre line, P H/(E' w D) + a phi with phi = P a / (k + 1/B), B = (L/2)/E'I of the
-    cover under layer 1's pad (which spans the narrow slot); layer 1's roots turn into the cover
+    column's centre line, P H/(E' w D) + a phi with phi = P a / (k + 1/(B + 1/k_end)), B = (L/2)/E'I
+    of the cover under layer 1's pad (which spans the narrow slot), k_end = pi/8 E'D c^2 its end's
+    turn into the column's top; layer 1's roots turn into the cover
     and the feet bear on the slot's edge. Inside the slot, the cover bends, and only that part
     stops on the board; the columns then carry the squeeze, the roots and the bearing."""
     base = {"layers": [{"theta_deg": 20, "t_mm": 0.6, "h_mm": 3.0}]}
@@ -270,7 +271,8 @@ def test_the_cover_bends_only_where_layer_1_lands_inside_the_slot():
     for w in (g.slot_x_mm[0] + 0.5 * g.base_length_mm, 0.5 * g.base_length_mm - g.slot_x_mm[1]):
         kappa = (E * g.housing.cover_mm * D / L2) * H**3 / (3 * E * D * w**3 / 12)  # the cover's tie
         k, a = E * D * w**3 / 12 / H / (1 - 0.75 * kappa / (1 + kappa)), L2 + 0.5 * w - head
-        drop.append(P * H / (E * w * D) + a * P * a / (k + EI / L2))
+        k_end = math.pi / 8 * E * D * g.housing.cover_mm**2
+        drop.append(P * H / (E * w * D) + a * P * a / (k + 1 / (L2 / EI + 1 / k_end)))
     local = local_drop(g, E, D, head - L2)
     parts = lp.members(g, m)
     assert parts.cover_contact_mm_per_N == 0.0  # no bending over the slot: nothing lands

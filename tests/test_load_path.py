@@ -164,7 +164,7 @@ def test_each_member_counts_only_while_the_forward_model_moves_it(tmp_path):
     # the cover bends over the slot at C until layer 1 locks (the first lock), then at C_locked under
     # the closed layer, the whole cover changing by delta; its air closes inside regime 2
     C, air, C_locked, delta = parts.cover_contact
-    assert part.first_lock_N == edges[1] and C * edges[1] < air and 0.0 < C_locked < C and delta < 0.0
+    assert part.first_lock_N == edges[1] and C * edges[1] < air and 0.0 < C_locked and delta < 0.0
     landing = edges[1] + (air - C * edges[1]) / C_locked
     assert landing == pytest.approx(part.contact_force_N, rel=1e-12) and edges[1] < landing < edges[2]
     walls_locked = parts.cover_mm_per_N + delta - C_locked
