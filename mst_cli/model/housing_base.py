@@ -67,8 +67,8 @@ from mst_cli.model.plate_joint import cover_root_mm_per_N
 WALL_LEVER = 0.5  # the cover's reaction at the wall's inner edge, w/2 from its centre line
 END_BUILT_IN = math.pi / 8.0  # the cover's end in the wall's top: pi/8 E'D c^2 (Johnson 1985, ch. 2)
 BEARING = 0.8  # fitted (module docstring): a local bearing on the cover, P / (c_b E'D)
-# fitted (module docstring, studies/member_closed_form.py --fit-link): how far into a locked
-# layer 1's block, in cover thicknesses, the cover's link to the slot's wall reaches
+# fitted (module docstring, studies/locked_base.py --fit): how far into a locked layer 1's
+# block, in cover thicknesses, the cover's link to the slot's wall reaches
 LINK_INTO_BLOCK = 0.225
 RIGID_SECTION = (math.inf, math.inf)  # (E'I, kGA) of a section that does not bend
 
@@ -139,10 +139,9 @@ def housing_mm_per_N(scene, head_mm, pad_mm, cover_pad, cover_alone, pad_joint: 
     (pi/8 E'D c^2), which sets M; the wall's turn drops its inner edge by w/2 x it. A foot on
     the wall, a from its centre line: the turn P a / (k_w + 1/(B + 1/k_end)) (the cover's end
     turning into the wall's top as over the slot: the two meet as the foot crosses the edge), the
-    drop a x the turn. No slot
-    walls (height 0): the cover clamped on rigid supports. ``pad_joint``: the cover's section
-    changes at |x| = ``pad_mm`` (at the slot's edge at the latest) through a joint that turns as
-    its end in the wall's top does (a locked block's edge)."""
+    drop a x the turn. No slot walls (height 0): the cover clamped on rigid supports.
+    ``pad_joint``: the cover's section changes at |x| = ``pad_mm`` (at the slot's edge at the
+    latest) through a joint that turns as its end in the wall's top does (a locked block's edge)."""
     s, P = scene, 0.5
     head = np.asarray(head_mm, dtype=float)
     L2, H, D, E = s.half_slot_mm, s.slot_height_mm, s.depth_mm, s.E_prime_MPa
@@ -169,8 +168,7 @@ def housing_mm_per_N(scene, head_mm, pad_mm, cover_pad, cover_alone, pad_joint: 
 
 def cover_bending_mm_per_N(scene, head_mm, pad_mm, cover_pad, cover_alone) -> Any:
     """:func:`housing_mm_per_N`'s third part alone: the cover's bending over the slot under a foot
-    inside its edge, its ends built into rigid walls (0 for a foot on the wall); the locked
-    cover's deep section needs only this."""
+    inside its edge, its ends built into rigid walls (0 for a foot on the wall)."""
     head = np.asarray(head_mm, dtype=float)
     return _bending_on_rigid_walls(scene, _cover_integrals(scene, head, pad_mm, cover_pad, cover_alone))
 

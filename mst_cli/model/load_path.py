@@ -18,10 +18,10 @@ layers' compression plus each member's bending:
 * **cover and slot walls** (the housing's base) -- the cover over the board's slot, bonded to
   layer 1's bottom pad and loaded by its wall feet, and the slot's two walls under it: the walls'
   squeeze and turn, the cover's bending with its ends built into them, layer 1's roots turning
-  into it, and once layer 1 is locked its block deepening the cover and bearing on it
-  (model.housing_base). The side walls carry it over the whole depth but at the cable windows,
-  which end just above their sockets (docs/design.md section 10): the cover spans a window's
-  6-7 mm along the depth with wall on both sides, no cantilever.
+  into it, and once layer 1 is locked its block, rigid, on a short link of the cover to the
+  walls and bearing on it (model.housing_base). The side walls carry it over the whole depth
+  but at the cable windows, which end just above their sockets (docs/design.md section 10): the
+  cover spans a window's 6-7 mm along the depth with wall on both sides, no cantilever.
 
 Each beam is a plane-strain Timoshenko beam (E' = E/(1 - nu^2) in bending, G in shear, shear
 factor 5/6); the cap's supports are simply supported (the default: the wall heads turn with the
@@ -127,8 +127,8 @@ class Members:
     # each plate over a locked layer under an open one, past its closed form (model.past_lock):
     # it moves while the layer under it is locked and the one above open; (): none
     locked_plates_mm_per_N: tuple[float, ...] = ()
-    # the cover and its part over the slot once layer 1 is locked on it, its closed block deepening
-    # the cover under its pad (cover_parts_locked_mm_per_N); None: as before the lock
+    # the cover and its part over the slot once layer 1 is locked on it, its closed block on the
+    # cover's link to the walls (cover_parts_locked_mm_per_N); None: as before the lock
     cover_locked_mm_per_N: float | None = None
     cover_contact_locked_mm_per_N: float | None = None
     # each plate while the layer under that one is locked too (model.past_lock.over_two_locked_mm_per_N,

@@ -45,7 +45,7 @@ def load_path_report(
         "plate_joints_mm_per_N": list(simple.joints_mm_per_N),  # each layer's, model.plate_joint
         "plates_over_locked_mm_per_N": list(simple.locked_plates_mm_per_N),  # each plate's, model.past_lock
         "housing_mm_per_N": simple.cover_mm_per_N,
-        # once layer 1 is locked on the cover (its closed block deepens the cover: load_path)
+        # once layer 1 is locked on the cover (its closed block on the cover's link: load_path)
         "housing_under_locked_layer_1_mm_per_N": simple.cover_mm_per_N + simple.cover_contact[3],
         "cap_clamped_mm_per_N": clamped.cap_mm_per_N,
         "members_simple_mm_per_N": _by_member(simple),

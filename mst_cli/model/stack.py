@@ -45,7 +45,7 @@ def capped_lock_force_N(
 def contact_drop_mm(force_N: ArrayLike, first_lock_N: ArrayLike, C: ArrayLike, C_locked: ArrayLike) -> np.ndarray:
     """How far the members' contact part (the cover over the board's slot) has moved at
     ``force_N``, before it lands: C per newton until layer 1 (bonded on the cover) locks at
-    ``first_lock_N``, C_locked past it (the closed layer deepens the cover's section,
+    ``first_lock_N``, C_locked past it (the closed layer's block on the cover's link to the walls,
     model.load_path.cover_parts_locked_mm_per_N); broadcast arrays, inf: layer 1 never locks."""
     F, R1 = np.asarray(force_N, dtype=float), np.asarray(first_lock_N, dtype=float)
     return np.asarray(C, dtype=float) * np.minimum(F, R1) + np.asarray(C_locked, dtype=float) * np.maximum(F - R1, 0.0)
