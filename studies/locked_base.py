@@ -68,18 +68,15 @@ def before_locked(s, t_bottom_mm: float, h_bottom_mm: float, pad_mm: float, head
     opened = section_EI_kGA(D, s.cover_mm + t_bottom_mm, E, G)
     deep = section_EI_kGA(D, s.cover_mm + h_bottom_mm, E, G)
     open_over, walls, open_bend = hb.housing_mm_per_N(s, head_mm, pad_mm, opened, alone)
-    deep_bend = hb.cover_bending_mm_per_N(s, head_mm, pad_mm, deep, alone)
+    deep_bend = hb.housing_mm_per_N(s, head_mm, pad_mm, deep, alone)[2]
     bearings = hb.corner_mm_per_N(s, head_mm) + 0.5 / (hb.BEARING * E * D)
     return float(open_over - open_bend + deep_bend + walls + bearings), float(deep_bend + bearings)
 
 
 def now_locked(s, pad_mm: float, head_mm: float) -> tuple[float, float]:
     """(the base, the cover on rigid walls) of the model's locked form, mm/N."""
-    E, G, D = s.E_prime_MPa, s.G_MPa, s.depth_mm
-    edge = pad_mm - hb.LINK_INTO_BLOCK * s.cover_mm
-    alone = plain_section(D, s.cover_mm, E, G)
-    bend = hb.housing_mm_per_N(s, min(head_mm, edge), edge, hb.RIGID_SECTION, alone, True)[2]
-    bearings = hb.corner_mm_per_N(s, head_mm) + 0.5 / (hb.BEARING * E * D)
+    bend = hb.locked_link_mm_per_N(s, pad_mm, head_mm)[2]
+    bearings = hb.corner_mm_per_N(s, head_mm) + 0.5 / (hb.BEARING * s.E_prime_MPa * s.depth_mm)
     return float(sum(hb.cover_parts_locked_mm_per_N(s, pad_mm, head_mm))), float(bend + bearings)
 
 

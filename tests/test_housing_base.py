@@ -151,16 +151,20 @@ def test_a_locked_block_on_the_cover_by_hand():
     assert P * H / (E * w * D) + bearings < sum(locked) < sum(opened)
 
 
-@pytest.mark.parametrize("edge_mm", np.linspace(-1.5, 1.5, 31))
-def test_the_locked_base_is_smooth_as_the_block_crosses_the_slots_edge(edge_mm):
-    """Swept across the slot's edge (the block's end from 1.5 mm inside it to 1.5 mm over the
-    wall): finite, positive, and no jump larger than the sweep's own slope allows."""
+def test_the_base_is_smooth_as_its_feet_cross_the_slots_edge():
+    """Swept across the slot's edge in 3001 steps of 1 um (layer 1's feet, or the locked block's
+    end, from 1.5 mm inside it to 1.5 mm over the wall), open and locked: finite, positive, and no
+    step more than twice the sweep's 95th-percentile step (a jump where the over-slot and the
+    on-the-wall branches meet would be tens of times it; measured 1.13 for both)."""
     s = scene()
-    c = s.cover_mm
-    pads = s.half_slot_mm + edge_mm + hb.LINK_INTO_BLOCK * c + np.array([-1e-3, 0.0, 1e-3])
-    values = np.array([sum(hb.cover_parts_locked_mm_per_N(s, p, p - 0.05)) for p in pads])
-    assert np.all(np.isfinite(values)) and np.all(values > 0.0)
-    assert abs(values[2] - values[1]) < 0.05 * values[1] and abs(values[1] - values[0]) < 0.05 * values[1]
+    cell = mst.load(FORWARD).geometry().layers[0]
+    x = s.half_slot_mm + np.linspace(-1.5, 1.5, 3001)
+    locked = np.sum(hb.cover_parts_locked_mm_per_N(s, x + hb.LINK_INTO_BLOCK * s.cover_mm, x - 0.05), axis=0)
+    opened = np.sum(hb.cover_parts_mm_per_N(s, cell.t_mm, x + 0.05, x, cell.theta_rad, cell.h_mm), axis=0)
+    for values in (locked, opened):
+        assert np.all(np.isfinite(values)) and np.all(values > 0.0)
+        steps = np.abs(np.diff(values))
+        assert steps.max() < 2.0 * np.percentile(steps, 95)
 
 
 def test_the_locked_base_follows_the_rung_over_the_box():

@@ -95,15 +95,21 @@ def corner_mm_per_N(scene, head_mm) -> Any:
 
 def cover_parts_locked_mm_per_N(scene, pad_mm, head_mm) -> tuple:
     """:func:`cover_parts_mm_per_N` once layer 1 is locked (module docstring), its pad's and its
-    wall heads' half widths given: the block rigid, the cover a link from inside the block's
-    edge to the slot's walls, the feet's bearing at the edge and the block's."""
+    wall heads' half widths given: :func:`locked_link_mm_per_N`'s first two parts, the feet's
+    bearing at the edge and the block's on the walls' part."""
+    over, walls, _ = locked_link_mm_per_N(scene, pad_mm, head_mm)
+    return over, walls + corner_mm_per_N(scene, head_mm) + 0.5 / (BEARING * scene.E_prime_MPa * scene.depth_mm)
+
+
+def locked_link_mm_per_N(scene, pad_mm, head_mm) -> tuple:
+    """:func:`housing_mm_per_N`'s three parts under a locked layer 1 (module docstring): the block
+    rigid, the cover a link from the slot's walls to LINK_INTO_BLOCK c inside the block's edge,
+    jointed there, the feet's load reaching it at the block."""
     s = scene
-    E, G, D = s.E_prime_MPa, s.G_MPa, s.depth_mm
     edge = np.asarray(pad_mm, dtype=float) - LINK_INTO_BLOCK * s.cover_mm  # the link's end in the block
-    # the block carries its feet's load to that end
     at_edge = np.minimum(np.asarray(head_mm, dtype=float), edge)
-    over, walls, _ = housing_mm_per_N(s, at_edge, edge, RIGID_SECTION, plain_section(D, s.cover_mm, E, G), True)
-    return over, walls + corner_mm_per_N(s, head_mm) + 0.5 / (BEARING * E * D)
+    alone = plain_section(s.depth_mm, s.cover_mm, s.E_prime_MPa, s.G_MPa)
+    return housing_mm_per_N(s, at_edge, edge, RIGID_SECTION, alone, pad_joint=True)
 
 
 def cover_parts_both_mm_per_N(scene, t_bottom_mm, pad_mm, head_mm, theta_bottom_rad, h_bottom_mm) -> tuple:
@@ -164,13 +170,6 @@ def housing_mm_per_N(scene, head_mm, pad_mm, cover_pad, cover_alone, pad_joint: 
         over_slot.append(P * C2 - M * C1 + shear + np.where(over, 0.5 * w * turn, 0.0))
         walls.append(P * H / (E * w * D) + np.where(over, 0.0, a * turn))
     return as_value(0.5 * (over_slot[0] + over_slot[1])), as_value(0.5 * (walls[0] + walls[1])), bend
-
-
-def cover_bending_mm_per_N(scene, head_mm, pad_mm, cover_pad, cover_alone) -> Any:
-    """:func:`housing_mm_per_N`'s third part alone: the cover's bending over the slot under a foot
-    inside its edge, its ends built into rigid walls (0 for a foot on the wall)."""
-    head = np.asarray(head_mm, dtype=float)
-    return _bending_on_rigid_walls(scene, _cover_integrals(scene, head, pad_mm, cover_pad, cover_alone))
 
 
 def _bending_on_rigid_walls(scene, integrals: tuple) -> Any:
