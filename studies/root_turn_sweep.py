@@ -3,6 +3,13 @@ docs/design.md 4.7): the whole-part rung on same-layer designs, swept over the w
 thickness and the plate's thickness. Writes a CSV, changes nothing.
 
     PYTHONPATH=. .venv/bin/python studies/root_turn_sweep.py [--out root_turn.csv]
+    PYTHONPATH=. .venv/bin/python studies/root_turn_sweep.py --fit studies/data/root_turn_*.csv
+
+studies/data/root_turn_low.csv is the low corner the designs reach (``--h 1.5 --theta 8 12 26 45
+65 75 --t 0.4 0.55 --plates 0.8 1.6`` and ``--h 1.22 --theta 8 12 18 26 35 45 58 65 75 --t 0.4
+--plates 0.8 1.6 2.4``, the undrawable cells skipped). ``--fit`` also fits a squeeze logarithmic
+in the plate, s ln(1 + w plate/t)/(E'D) (studies/data/plate_joint_log_squeeze.patch puts it in the
+model; docs/design.md 4.7, "The low corner").
 
 Each design is the forward config with three identical layers (theta, t, h) and plates ``plate``
 mm thick; in regime 1 (every layer open) the plates' turn at the wall heads vanishes by the
@@ -94,7 +101,12 @@ def features(paths: list[Path]) -> dict[str, np.ndarray]:
 
 def joints(f: dict[str, np.ndarray], *constants: float) -> np.ndarray:
     """model.plate_joint's joints of a same-layer stack of three (4 roots on its 2 plates), mm/N,
-    with the constants (c, a, b, s)."""
+    with the constants (c, a, b, s); with five (c, a, b, s, w), the squeeze s ln(1 + w plate/t)/(E'D)
+    in place of the model's s plate/(E'D t)."""
+    if len(constants) == 5:
+        c, a, b, s, w = constants
+        turn = joints(f, c, a, b, 0.0)
+        return turn + s * np.log1p(w * f["plate"] / f["t"]) / (f["E"] * f["depth"])  # 4 roots x 1/4
     return 4.0 * pj.root_joint_mm_per_N(f["theta"], f["t"], f["h"], f["plate"], f["depth"], f["E"], constants)
 
 
@@ -107,10 +119,13 @@ def fit(paths: list[Path]) -> None:
     f = features(paths)
     truth, total = f["rung"] - f["beams"], f["layers"] + f["rung"]
     found = least_squares(lambda x: (joints(f, *x) - truth) / total, [0.4, -0.8, 0.0, 0.8]).x
+    log = least_squares(lambda x: (joints(f, *x) - truth) / total, [0.4, -0.8, 0.0, 0.8, 1.0]).x
     (c,) = least_squares(lambda x: (joints(f, x[0], 0.0, 0.0, 0.0) - truth) / total, [0.4]).x
     model = pj.FITTED
     print(f"{len(truth)} designs; c, a, b, s fitted: " + ", ".join(f"{x:.3f}" for x in found))
-    for name, x in (("fitted", found), ("one spring alone (c only)", (c, 0.0, 0.0, 0.0)), ("model.plate_joint", model)):
+    print("  with the logarithmic squeeze, c, a, b, s, w: " + ", ".join(f"{x:.3f}" for x in log))
+    forms = (("fitted", found), ("logarithmic squeeze, fitted", log), ("one spring alone (c only)", (c, 0.0, 0.0, 0.0)))
+    for name, x in (*forms, ("model.plate_joint", model)):
         on_total = (joints(f, *x) - truth) / total
         on_plates = (joints(f, *x) + f["beams"]) / f["rung"] - 1.0
         print(f"  {name}: layers and plates worst {100 * np.max(np.abs(on_total)):.2f} %, rms "
