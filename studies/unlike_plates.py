@@ -47,12 +47,14 @@ THETA_DEG = (13.0, 20.0, 28.0, 40.0, 57.0)
 T_MM, H_MM, PLATE_MM = 0.4, 1.8, 1.6
 
 
-def stack(folder: Path, theta_a: float, theta_b: float, t_b_mm: float = T_MM, plate_mm: float = PLATE_MM) -> Path:
+def stack(
+    folder: Path, theta_a: float, theta_b: float, t_b_mm: float = T_MM, plate_mm: float = PLATE_MM, h_b_mm: float = H_MM
+) -> Path:
     """The forward config with layers A, B, A (angles ``theta_a``, ``theta_b``; B's walls
-    ``t_b_mm`` thick, A's T_MM) and plates ``plate_mm`` thick."""
+    ``t_b_mm`` thick and ``h_b_mm`` high, A's T_MM and H_MM) and plates ``plate_mm`` thick."""
     base = yaml.safe_load(FORWARD.read_text())
-    a, b = ({"theta_deg": th, "t_mm": t, "h_mm": H_MM} for th, t in ((theta_a, T_MM), (theta_b, t_b_mm)))
-    name = f"aba-{theta_a:g}-{theta_b:g}-{t_b_mm:g}-{plate_mm:g}"
+    a, b = ({"theta_deg": th, "t_mm": t, "h_mm": h} for th, t, h in ((theta_a, T_MM, H_MM), (theta_b, t_b_mm, h_b_mm)))
+    name = f"aba-{theta_a:g}-{theta_b:g}-{t_b_mm:g}-{plate_mm:g}" + ("" if h_b_mm == H_MM else f"-{h_b_mm:g}")
     path = folder / f"{name}.yaml"
     path.write_text(yaml.safe_dump({**base, "name": name, "layers": [a, b, a], "housing": {"plate_mm": plate_mm}}))
     return path
