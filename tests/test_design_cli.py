@@ -123,3 +123,21 @@ def test_importing_the_cli_does_not_import_nlopt_or_the_design_package():
     )
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert r.returncode == 0, r.stdout + r.stderr
+
+
+def test_a_design_outside_the_plate_joints_fitted_cells_says_so_and_the_layers_alone_do_not(tmp_path):
+    """The fingertip spec in the closed form puts a layer below h = 1.8 mm, under the cells
+    model.plate_joint was fitted on (docs/design.md 4.7, "The low corner"): the terminal and
+    report.json's design block name the layer and the remedy; designed for its layers alone (no
+    joints) there is no such line."""
+    out = tmp_path / "d"
+    r = run(["design", SPEC, "--out", out, "--no-plot"])
+    assert r.exit_code == 0, r.output
+    said = [w for w in json.loads((out / "report.json").read_text())["design"]["warnings"] if "plate joints" in w]
+    assert len(said) == 1 and "mst check --whole-part" in said[0]
+    cells = yaml.safe_load((out / "design.yaml").read_text())["layers"]
+    low = [i + 1 for i, c in enumerate(cells) if c["h_mm"] < 1.8]
+    assert low and all(f"{i} (θ" in said[0] for i in low)
+    assert "plate joints" in r.output
+    alone = run(["design", layers_spec(tmp_path), "--out", tmp_path / "a", "--no-plot"])
+    assert alone.exit_code == 0 and "plate joints" not in alone.output

@@ -60,3 +60,15 @@ def test_the_fitted_form_holds_the_rungs_plates_over_the_design_box():
     truth, total = f["rung"] - f["beams"], f["layers"] + f["rung"]
     assert np.max(np.abs(joints(f, *pj.FITTED) - truth) / total) < 0.032
     assert np.max(np.abs(joints(f, 0.4, 0.0, 0.0, 0.0) - truth) / total) > 0.2
+
+
+def test_the_fitted_box_flags_each_layer_outside_it_and_a_single_layer_never():
+    """outside_fitted_box against the box by hand: inside at its faces, outside by a hair below
+    h or past theta; plates outside it flag every layer standing on them; one layer has no plate."""
+    lo, hi = pj.FITTED_BOX["h_mm"]
+    theta, t = [30.0, 30.0, 30.0], [0.5, 0.5, 0.5]
+    assert pj.outside_fitted_box(theta, t, [lo, hi, 2.4], 1.6) == []
+    assert pj.outside_fitted_box(theta, t, [lo - 1e-6, 2.4, 2.4], 1.6) == [0]
+    assert pj.outside_fitted_box([30.0, 58.001, 30.0], t, [2.4, 2.4, 2.4], 1.6) == [1]
+    assert pj.outside_fitted_box(theta, t, [2.4, 2.4, 2.4], 3.0) == [0, 1, 2]
+    assert pj.outside_fitted_box([30.0], [0.5], [1.2], 3.0) == []

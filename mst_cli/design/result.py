@@ -93,6 +93,7 @@ class DesignResult:
                 "evaluations": self.evaluations,
                 "max_evaluations": self.max_evaluations,
                 "solver": self.solver,
+                "warnings": list(self.warnings),  # the design's own, as the terminal shows them
             }
             | ({"off_centre": self.off_centre} if self.off_centre is not None else {})
             | ({"shear_bound": self.shear_bound} if self.shear_bound is not None else {})

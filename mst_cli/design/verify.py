@@ -22,6 +22,7 @@ from mst_cli.design.result import (
     _layer_outputs,
 )
 from mst_cli.model.assembly import SensorGeometry
+from mst_cli.model.plate_joint import FITTED_BOX, LOW_CORNER_WORST_REL, outside_fitted_box
 from mst_cli.model.printer import Printer
 from mst_cli.model.response import Response, simulate
 from mst_cli.sensor.as_printed import as_printed
@@ -89,7 +90,7 @@ def verify_design(
         max_evaluations=max_evaluations,
         solver=_solver_info(sol),
         elapsed_s=time.perf_counter() - t_start,
-        warnings=_warnings(resp, print_error),
+        warnings=_warnings(resp, print_error) + _joint_box_warnings(designed, geometry),
         objective=_objective(doc, geometry, resp, print_error),
     )
 
@@ -266,6 +267,27 @@ def _warnings(resp: Response, print_error: dict) -> list[str]:
             "design.max_print_deviation_rel)"
         )
     return warnings
+
+
+def _joint_box_warnings(doc: Document, geometry: SensorGeometry) -> list[str]:
+    """One line when the closed form's plate joints (model.plate_joint) serve a layer outside the
+    cells they were fitted on: up to 22 % soft there (docs/design.md 4.7, "The low corner")."""
+    if doc.load_path != "part":  # the layers alone have no joints; the section rung measures them
+        return []
+    cells = geometry.layers
+    theta, t, h = ([getattr(c, k) for c in cells] for k in ("theta_deg", "t_mm", "h_mm"))
+    out = outside_fitted_box(theta, t, h, geometry.housing.plate_mm)
+    if not out:
+        return []
+    named = " and ".join(f"{i + 1} (θ {theta[i]:.3g}°, t {t[i]:.3g} mm, h {h[i]:.3g} mm)" for i in out)
+    (th0, th1), (t0, t1), (h0, h1), (p0, p1) = (FITTED_BOX[k] for k in ("theta_deg", "t_mm", "h_mm", "plate_mm"))
+    return [
+        f"{'layers' if len(out) > 1 else 'layer'} {named} on {geometry.housing.plate_mm:g} mm plates: outside the "
+        f"cells the plate joints were fitted on (θ {th0:g}–{th1:g}°, t {t0:g}–{t1:g} mm, h {h0:g}–{h1:g} mm, "
+        f"plates {p0:g}–{p1:g} mm); at h 1.2-1.5 mm they are up to {100 * LOW_CORNER_WORST_REL:.0f} % soft on "
+        'the layers and plates (docs/design.md 4.7, "The low corner"): check the part with mst check --whole-part '
+        "before printing, or design with model.load_path: section"
+    ]
 
 
 def _objective(doc: Document, geometry: SensorGeometry, resp: Response, print_error: dict) -> dict:

@@ -44,6 +44,27 @@ from mst_cli.model.cell import wall_centreline_length_mm
 # spring (c, the exponent a of sin(theta), the exponent b of the wall's slenderness L / t) and
 # the plate's squeeze s
 FITTED = (0.471, -0.797, -0.285, 0.864)
+# the cells and plates those designs span (studies/data/root_turn_box.csv and _shallow.csv); at
+# h 1.22-1.5 mm (studies/data/root_turn_low.csv) the joints are up to LOW_CORNER_WORST_REL soft on
+# the layers and plates, under steep walls on thick plates (docs/design.md 4.7, "The low corner")
+FITTED_BOX = {"theta_deg": (12.0, 58.0), "t_mm": (0.4, 1.4), "h_mm": (1.8, 3.6), "plate_mm": (0.8, 2.4)}
+LOW_CORNER_WORST_REL = 0.224
+
+
+def outside_fitted_box(theta_deg, t_mm, h_mm, plate_mm: float) -> list[int]:
+    """The layers (0-based, given as arrays (n,) of theta in degrees, t and h in mm) whose cell, or
+    the plates ``plate_mm`` thick they stand on, lie outside the box the constants were fitted on
+    (:data:`FITTED_BOX`; a tolerance of 1e-9 at its faces)."""
+    values = {"theta_deg": theta_deg, "t_mm": t_mm, "h_mm": h_mm}
+    lo_p, hi_p = FITTED_BOX["plate_mm"]
+    plate_out = not (lo_p - 1e-9 <= plate_mm <= hi_p + 1e-9)
+    n = len(np.atleast_1d(theta_deg))
+    out = np.full(n, plate_out and n > 1)
+    for key, v in values.items():
+        lo, hi = FITTED_BOX[key]
+        v = np.atleast_1d(np.asarray(v, dtype=float))
+        out |= (v < lo - 1e-9) | (v > hi + 1e-9)
+    return [int(i) for i in np.flatnonzero(out)] if n > 1 else []  # one layer stands on no plate
 
 
 def root_turn_mm_per_N(L_mm, EI_Nmm2, cos_theta, k_Nmm_per_rad) -> Any:
