@@ -69,14 +69,14 @@ def before_locked(s, t_bottom_mm: float, h_bottom_mm: float, pad_mm: float, head
     deep = section_EI_kGA(D, s.cover_mm + h_bottom_mm, E, G)
     open_over, walls, open_bend = hb.housing_mm_per_N(s, head_mm, pad_mm, opened, alone)
     deep_bend = hb.housing_mm_per_N(s, head_mm, pad_mm, deep, alone)[2]
-    bearings = hb.corner_mm_per_N(s, head_mm) + 0.5 / (hb.BEARING * E * D)
+    bearings = hb.locked_bearings_mm_per_N(s, head_mm)
     return float(open_over - open_bend + deep_bend + walls + bearings), float(deep_bend + bearings)
 
 
 def now_locked(s, pad_mm: float, head_mm: float) -> tuple[float, float]:
     """(the base, the cover on rigid walls) of the model's locked form, mm/N."""
     bend = hb.locked_link_mm_per_N(s, pad_mm, head_mm)[2]
-    bearings = hb.corner_mm_per_N(s, head_mm) + 0.5 / (hb.BEARING * s.E_prime_MPa * s.depth_mm)
+    bearings = hb.locked_bearings_mm_per_N(s, head_mm)
     return float(sum(hb.cover_parts_locked_mm_per_N(s, pad_mm, head_mm))), float(bend + bearings)
 
 

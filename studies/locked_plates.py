@@ -11,7 +11,7 @@ in TPU (plate 2, the cap and the base rigid: ``PartOptions.rigid_plates``) less 
 rigid is what that plate gives over the locked layer, B's root joint on it included. Two rung
 solves a stack, about 10 s each (kept in mst's cache: a second run reads them back).
 
-``--fit`` fits model.past_lock's two constants (a, k) to those rows, the error of each row being
+``--fit`` (one file or several) fits model.past_lock's two constants (a, k) to those rows, the error of each row being
 the log of the closed form (B's root joint, model.plate_joint, plus past_lock's term) over the
 rung, and prints the rows, the constants and the joint alone's errors beside them (2 s).
 """
@@ -90,16 +90,26 @@ def sweep(out: Path, t_b_mm: tuple[float, ...] = (T_MM,), plates_mm: tuple[float
     print(f"wrote {out}")
 
 
-def fit(path: Path, refit: bool = True) -> None:
-    """Fit (a, k) to the rows at ``path`` and print them; with ``refit`` False, only the errors of
-    model.past_lock's own constants on them (rows the fit did not see: a check)."""
-    with path.open() as f:
-        rows = [{k: float(v) for k, v in r.items()} for r in csv.DictReader(f)]
+def constant_bounds() -> tuple[list[float], list[float]]:
+    """least_squares' bounds on model.past_lock's constants: a in [-1, 10], k in [1e-3, 100], and
+    any further ones (a patched form's, studies/data/past_lock_richer.patch) in [0, 100]."""
+    extra = len(LOCKED_FITTED) - 2
+    return [-1.0, 1e-3] + [0.0] * extra, [10.0, 100.0] + [100.0] * extra
+
+
+def fit(paths: list[Path], refit: bool = True) -> None:
+    """Fit model.past_lock's constants (a, k; as many as LOCKED_FITTED has, the first two bounded
+    as a and k, any more at >= 0) to the rows in ``paths`` and print them; with ``refit`` False,
+    only the errors of model.past_lock's own constants on them (rows the fit did not see: a check)."""
+    rows = []
+    for path in paths:
+        with path.open() as f:
+            rows += [{k: float(v) for k, v in r.items()} for r in csv.DictReader(f)]
 
     def logs(q) -> list[float]:
         return [math.log(closed_form_um_per_N(r, tuple(q)) / r["rung_um_per_N"]) for r in rows]
 
-    q = least_squares(logs, [0.5, 1.0], bounds=([-1.0, 1e-3], [10.0, 100.0])).x if refit else LOCKED_FITTED
+    q = least_squares(logs, list(LOCKED_FITTED), bounds=constant_bounds()).x if refit else LOCKED_FITTED
     said = "fitted" if refit else "model.past_lock's"
     print(f"| θ_A, ° | θ_B, ° | t_B, mm | plate, mm | rung, µm/N | joint alone | joint + past_lock ({said}) |")
     print("|---|---|---|---|---|---|---|")
@@ -112,7 +122,7 @@ def fit(path: Path, refit: bool = True) -> None:
             f"| {r['theta_a_deg']:.0f} | {r['theta_b_deg']:.0f} | {r['t_b_mm']:g} | {r['plate_mm']:g} | {rung:.1f} | "
             f"{alone:.1f} | {fitted:.1f} |"
         )
-    print(f"\n{said} a = {q[0]:.3f}, k = {q[1]:.3f} (model.past_lock.LOCKED_FITTED: {LOCKED_FITTED})")
+    print(f"\n{said}: {', '.join(f'{v:.3f}' for v in q)} (model.past_lock.LOCKED_FITTED: {LOCKED_FITTED})")
     for name, e in errors.items():
         rms = math.sqrt(sum(v * v for v in e) / len(e))
         print(f"{name}: worst {max(map(abs, e)):.1f} %, rms {rms:.1f} %")
@@ -121,8 +131,8 @@ def fit(path: Path, refit: bool = True) -> None:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--out", type=Path, help="solve the sweep and write its rows here (CSV)")
-    parser.add_argument("--fit", type=Path, help="fit past_lock's constants to these rows (CSV)")
-    parser.add_argument("--check", type=Path, help="past_lock's own constants' errors on these rows (CSV)")
+    parser.add_argument("--fit", type=Path, nargs="+", help="fit past_lock's constants to these rows (CSVs)")
+    parser.add_argument("--check", type=Path, nargs="+", help="past_lock's own constants' errors on these rows (CSVs)")
     parser.add_argument("--t-b", type=float, nargs="*", default=[T_MM], help="with --out: B's walls, mm")
     parser.add_argument("--plates", type=float, nargs="*", default=[PLATE_MM], help="with --out: the plates, mm")
     args = parser.parse_args()

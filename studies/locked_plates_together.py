@@ -17,7 +17,9 @@ member rigid, against the closed form's plates in that regime
 (model.load_path.member_band_compliances: the open plates' joints and bending, the plate over
 the locked layer). Two rung solves a stack, about 10 s each.
 
-``--fit`` fits model.past_lock's constants (a, k) to those rows, the error of each the
+``--alone DESIGN.yaml`` prints a design's plates in its second regime, each alone and together,
+beside the closed form's (4 rung solves on three layers). ``--fit`` fits model.past_lock's
+constants (a, k) to those rows, the error of each the
 log of the closed form's plates over the rung's, with the open plates' closed form as it is
 (model.plate_joint, fitted on its own), and prints the rows and both sets' errors (a minute).
 """
@@ -40,6 +42,7 @@ from mst_cli.model import past_lock
 from mst_cli.model.mechanics import layer_laws
 from mst_cli.model.mechanics import whole_part as wp
 from mst_cli.model.stack import Stack
+from studies.locked_plates import constant_bounds
 from studies.unlike_plates import H_MM, PLATE_MM, T_MM, THETA_DEG, stack
 
 COLUMNS = ("theta_a_deg", "theta_b_deg", "t_b_mm", "h_b_mm", "plate_mm", "locked", "rung_um_per_N")
@@ -48,10 +51,10 @@ COLUMNS = ("theta_a_deg", "theta_b_deg", "t_b_mm", "h_b_mm", "plate_mm", "locked
 def second_regime(g, m) -> tuple[int, np.ndarray, dict]:
     """(the layer locked first, as the forward model orders the locks; the closed form's members
     per regime, model.load_path.member_band_compliances) of a geometry."""
-    parts = lp.members(g, m)
-    units = lp.capped_units(layer_laws(g.layers, m, "spring"), parts)
+    parts, laws = lp.members(g, m), layer_laws(g.layers, m, "spring")
+    units = lp.capped_units(laws, parts)
     first = int(np.argsort([u.lock_force_N for u in units], kind="stable")[0])
-    moving = lp.member_band_compliances(Stack(layer_laws(g.layers, m, "spring")), parts)[2]
+    moving = lp.member_band_compliances(Stack(laws), parts)[2]
     return first, moving["plates"], moving
 
 
@@ -67,21 +70,42 @@ def rung_row(path: Path, row: dict) -> dict:
 
 
 def sweep(out: Path, t_b: tuple, plates: tuple, h_b: tuple) -> None:
-    rows = []
-    with tempfile.TemporaryDirectory() as tmp:
+    with tempfile.TemporaryDirectory() as tmp, out.open("w", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=COLUMNS)
+        writer.writeheader()
         for theta_a, theta_b, t, plate, h in itertools.product(THETA_DEG, THETA_DEG, t_b, plates, h_b):
             row = {"theta_a_deg": theta_a, "theta_b_deg": theta_b, "t_b_mm": t, "h_b_mm": h, "plate_mm": plate}
             try:
-                rows.append(rung_row(stack(Path(tmp), theta_a, theta_b, t, plate, h), row))
+                done = rung_row(stack(Path(tmp), theta_a, theta_b, t, plate, h), row)
             except InputError as e:  # a cell that cannot be drawn
                 print(f"  skipped {row}: {e}", flush=True)
                 continue
-            print(f"  {row}: locked {rows[-1]['locked']}, rung {rows[-1]['rung_um_per_N']:.2f} um/N", flush=True)
-            with out.open("w", newline="") as f:  # each row as it comes: a long sweep can be stopped
-                writer = csv.DictWriter(f, fieldnames=COLUMNS)
-                writer.writeheader()
-                writer.writerows(rows)
+            print(f"  {row}: locked {done['locked']}, rung {done['rung_um_per_N']:.2f} um/N", flush=True)
+            writer.writerow(done)
+            f.flush()  # each row as it comes: a long sweep can be stopped
     print(f"wrote {out}")
+
+
+def alone_and_together(path: Path) -> None:
+    """The plates of a design on the rung in its second regime (its first lock closed): each plate
+    alone in TPU (the others, the cap and the base rigid), and all of them together, less every
+    member rigid, um/N; the closed form's plates there beside them."""
+    doc, _ = mst.designed(path)
+    g, m = doc.geometry(), doc.material
+    first, plates, _ = second_regime(g, m)
+    base = {"locked": (first,), "member_factor": wp.RIGID_FACTOR}
+    rigid = wp.kept_press(g, m, wp.PartOptions(**base)).drop_mm_per_N
+    count = len(g.layers) - 1
+    alone = []
+    for j in range(count):
+        others = tuple(i for i in range(count) if i != j)
+        opts = wp.PartOptions(**base, scaled=("base", "cap"), rigid_plates=others)
+        alone.append(1e3 * (wp.kept_press(g, m, opts).drop_mm_per_N - rigid))
+    both = 1e3 * (wp.kept_press(g, m, wp.PartOptions(**base, scaled=("base", "cap"))).drop_mm_per_N - rigid)
+    each = ", ".join(f"{a:.1f}" for a in alone)
+    closed = 1e3 * float(plates[1])
+    print(f"{doc.name}, layer {first + 1} locked: each plate alone {each} um/N (sum {sum(alone):.1f}); "
+          f"together {both:.1f}; the closed form's plates {closed:.1f}")  # fmt: skip
 
 
 def closed_um_per_N(rows: list[dict], folder: Path) -> list:
@@ -121,8 +145,7 @@ def fit(paths: list[Path], bottom_first: bool = False) -> None:
         def logs(q) -> np.ndarray:
             return np.log(np.array([c(q) for c in closed]) / rung)
 
-        # (a, k): the joint's share and the overhang's root spring
-        q = least_squares(logs, list(past_lock.LOCKED_FITTED), bounds=([-1.0, 1e-3], [10.0, 100.0])).x
+        q = least_squares(logs, list(past_lock.LOCKED_FITTED), bounds=constant_bounds()).x
         now, fitted = np.exp(logs(past_lock.LOCKED_FITTED)) - 1, np.exp(logs(q)) - 1
     print("| θ_A, ° | θ_B, ° | t_B, mm | h_B, mm | plate, mm | locked | rung, µm/N | model.past_lock's | fitted |")
     print("|---|---|---|---|---|---|---|---|---|")
@@ -140,6 +163,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--out", type=Path, help="solve the sweep and write its rows here (CSV)")
     parser.add_argument("--fit", type=Path, nargs="+", help="fit past_lock's constants to these rows (CSVs)")
+    parser.add_argument("--alone", type=Path, help="a design (YAML): its plates alone and together, second regime")
     parser.add_argument(
         "--bottom-first", action="store_true", help="with --fit: only the stacks whose bottom locks first"
     )
@@ -147,8 +171,10 @@ def main() -> None:
     parser.add_argument("--h-b", type=float, nargs="*", default=[H_MM], help="with --out: B's height, mm")
     parser.add_argument("--plates", type=float, nargs="*", default=[PLATE_MM], help="with --out: the plates, mm")
     args = parser.parse_args()
-    if args.out is None and args.fit is None:
-        parser.error("give --out FILE (the sweep) or --fit FILE ...")
+    if args.out is None and args.fit is None and args.alone is None:
+        parser.error("give --out FILE (the sweep), --fit FILE ... or --alone DESIGN")
+    if args.alone is not None:
+        alone_and_together(args.alone)
     if args.out is not None:
         sweep(args.out, tuple(args.t_b), tuple(args.plates), tuple(args.h_b))
     if args.fit is not None:

@@ -98,7 +98,12 @@ def cover_parts_locked_mm_per_N(scene, pad_mm, head_mm) -> tuple:
     wall heads' half widths given: :func:`locked_link_mm_per_N`'s first two parts, the feet's
     bearing at the edge and the block's on the walls' part."""
     over, walls, _ = locked_link_mm_per_N(scene, pad_mm, head_mm)
-    return over, walls + corner_mm_per_N(scene, head_mm) + 0.5 / (BEARING * scene.E_prime_MPa * scene.depth_mm)
+    return over, walls + locked_bearings_mm_per_N(scene, head_mm)
+
+
+def locked_bearings_mm_per_N(scene, head_mm) -> Any:
+    """The feet's bearing at the slot's edge and the locked block's on the cover (module docstring)."""
+    return corner_mm_per_N(scene, head_mm) + 0.5 / (BEARING * scene.E_prime_MPa * scene.depth_mm)
 
 
 def locked_link_mm_per_N(scene, pad_mm, head_mm) -> tuple:

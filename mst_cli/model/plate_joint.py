@@ -55,16 +55,19 @@ def outside_fitted_box(theta_deg, t_mm, h_mm, plate_mm: float) -> list[int]:
     """The layers (0-based, given as arrays (n,) of theta in degrees, t and h in mm) whose cell, or
     the plates ``plate_mm`` thick they stand on, lie outside the box the constants were fitted on
     (:data:`FITTED_BOX`; a tolerance of 1e-9 at its faces)."""
-    values = {"theta_deg": theta_deg, "t_mm": t_mm, "h_mm": h_mm}
-    lo_p, hi_p = FITTED_BOX["plate_mm"]
-    plate_out = not (lo_p - 1e-9 <= plate_mm <= hi_p + 1e-9)
     n = len(np.atleast_1d(theta_deg))
-    out = np.full(n, plate_out and n > 1)
-    for key, v in values.items():
+    if n < 2:
+        return []  # one layer stands on no plate
+
+    def outside(key: str, value) -> np.ndarray:
         lo, hi = FITTED_BOX[key]
-        v = np.atleast_1d(np.asarray(v, dtype=float))
-        out |= (v < lo - 1e-9) | (v > hi + 1e-9)
-    return [int(i) for i in np.flatnonzero(out)] if n > 1 else []  # one layer stands on no plate
+        v = np.asarray(value, dtype=float)
+        return (v < lo - 1e-9) | (v > hi + 1e-9)
+
+    out = outside("plate_mm", np.full(n, plate_mm))
+    for key, value in (("theta_deg", theta_deg), ("t_mm", t_mm), ("h_mm", h_mm)):
+        out |= outside(key, value)
+    return [int(i) for i in np.flatnonzero(out)]
 
 
 def root_turn_mm_per_N(L_mm, EI_Nmm2, cos_theta, k_Nmm_per_rad) -> Any:
