@@ -8,9 +8,9 @@ table; writes a CSV when asked.
 
 studies/locked_plates.py measures one plate alone in TPU (the other rigid), the plate over the
 locked layer. In the part both plates give at once, and on a stack with a short layer between
-them the two together give more than the sum of each alone (a fingertip design made on
-studies/data/past_lock_richer.patch and plate_joint_log_squeeze.patch: 240 against 122.6 + 49.7
-um/N in its second regime). Here each stack A, B, A (studies/unlike_plates.py, every A and B
+them the two together give more than the sum of each alone (the fingertip spec designed
+with studies/data/past_lock_richer.patch and plate_joint_log_squeeze.patch applied: 240.9 against
+123.1 + 49.9 um/N in its second regime, ``--alone``). Here each stack A, B, A (studies/unlike_plates.py, every A and B
 of 13, 20, 28, 40 and 57 degrees) is solved in its own second regime (its first lock, as mst's
 forward model orders them), its plates together in TPU (the cap and the base rigid) less every
 member rigid, against the closed form's plates in that regime
