@@ -131,6 +131,12 @@ def fit(paths: list[Path]) -> None:
         print(f"  {name}: layers and plates worst {100 * np.max(np.abs(on_total)):.2f} %, rms "
               f"{100 * np.sqrt(np.mean(on_total**2)):.2f} %; the plates alone worst "
               f"{100 * np.max(np.abs(on_plates)):.0f} %, rms {100 * np.sqrt(np.mean(on_plates**2)):.0f} %")  # fmt: skip
+    worst = np.argsort(-np.abs(joints(f, *model) - truth) / total)[:5]  # on the layers and plates
+    print("  model.plate_joint's five furthest designs (theta, t, h, plate; the rung's plates / the model's, um/N):")
+    mine = joints(f, *model) + f["beams"]
+    for i in worst:
+        cell = f"{np.degrees(f['theta'][i]):.0f} deg, {f['t'][i]:g}, {f['h'][i]:g}, {f['plate'][i]:g} mm"
+        print(f"    {cell}: {1e3 * f['rung'][i]:.1f} / {1e3 * mine[i]:.1f}")
 
 
 if __name__ == "__main__":
