@@ -34,7 +34,8 @@ linearised there (general_load.linear_response), the layers and the members apar
 (``--section``: mst's part with ``model.load_path: section``, the members' pose measured on the
 rung); ``--off-centre`` the same three in regime 1 with each member class as printed in turn
 (the forward design unless ``--configs`` is given; ``--every-regime``: the rung's cases in every
-regime, and the base with its cover or its slot walls held rigid); ``--general-convergence``
+regime, and the base with its cover or its slot walls held rigid; ``--magnet bonded``: the magnet
+glued in, in regime 1); ``--general-convergence``
 those figures in regime 1 on three meshes and at five levers; ``--base-sway`` the base alone as
 printed (all above it rigid) pulled: the cover's slide against two Timoshenko cantilevers;
 ``--store`` ``mst simulate`` in section mode from a fresh cache folder, then again from the one
@@ -228,11 +229,12 @@ def general_convergence(path: Path, spacing: float | None, offsets_mm: tuple[flo
     return rows
 
 
-def off_centre(path: Path, spacing: float | None) -> list[str]:
+def off_centre(path: Path, spacing: float | None, magnet: str = "resting") -> list[str]:
     """The design at ``path``, regime 1: the magnet's turn per off-centre moment, slide and turn
     per tangential newton (wp.press_general), as printed, with rigid members, with one member class
     as printed (the others rigid), and what mst's general-load model gives linearised at small load
-    (the part, the layers alone)."""
+    (the part, the layers alone); the magnet ``magnet`` (wp.MAGNET_SEATS: "bonded", glued in, takes
+    the pocket's own sway out of the cap's figures)."""
     doc, _ = mst.designed(path)
     g, m = doc.geometry(), doc.material
     rows = ["| members | turn per moment, mrad/(N mm) | slide per tangential N, mm/N | turn per tangential N, mrad/N |"]
@@ -243,7 +245,8 @@ def off_centre(path: Path, spacing: float | None) -> list[str]:
         for tag in wp.MEMBER_TAGS
     ]
     for label, factor, scaled in cases:
-        x = wp.press_general(g, m, wp.PartOptions(spacing_mm=spacing, member_factor=factor, scaled=scaled))
+        opts = wp.PartOptions(spacing_mm=spacing, member_factor=factor, scaled=scaled, magnet=magnet)
+        x = wp.press_general(g, m, opts)
         rows.append(
             f"| {label} | {1e3 * x.turn_per_moment_rad_per_Nmm:.3f} | {x.pull.side_mm_per_N:.3f} | "
             f"{1e3 * x.pull.turn_rad_per_N:.3f} |"
@@ -397,9 +400,9 @@ def section_sway_row(path: Path) -> str:
     (median of 5: BLAS on one thread, as general_load runs it, and threaded) and the counter-turn's."""
     import contextlib
 
-    from mst_cli.model.counter_turn import counter_turn
+    from mst_cli.model.general_load import part_counter_turn
     from mst_cli.model.plate_sway import section_regimes, stack_section, wall_factors
-    from mst_cli.model.stack_pose import layer_pivots_mm, tilt_laws
+    from mst_cli.model.stack_pose import tilt_laws
     from mst_cli.parallel import one_blas_thread
 
     doc, _ = mst.designed(path)
@@ -414,11 +417,10 @@ def section_sway_row(path: Path) -> str:
                 regimes = section_regimes(stack_section(g, m), order)
             times.append(time.perf_counter() - start)
         ms.append(1e3 * float(np.median(times)))
-    part, alone = (tilt_laws(g, m, "spring", 1.0, whole) for whole in (True, False))
     times = []
     for _ in range(5):  # the counter-turn's layer tangents (general_load keeps it per part, beside the frame)
         start = time.perf_counter()
-        counter_turn(part, alone, g.total_height_mm - layer_pivots_mm(g), regimes.member_turn_ratio)
+        part_counter_turn(g, m, "spring", 1.0, regimes)
         times.append(time.perf_counter() - start)
     ms.append(1e3 * float(np.median(times)))
     column = hb.base_sway_mm_per_N(lp.member_scene(g, m))
@@ -446,8 +448,9 @@ def member_studies(args) -> bool:
             print("\n".join(off_centre_regime_rows(Path(path), args.spacing_mm)), flush=True)
     elif args.off_centre:
         for path in args.configs if args.configs_given else [str(ROOT / "configs" / "mohammadi2021-forward.yaml")]:
-            print(f"{Path(path).stem}, regime 1, a 6 mm strip 3 mm off centre / pulling along +x:")
-            print("\n".join(off_centre(Path(path), args.spacing_mm)), flush=True)
+            where = "a 6 mm strip 3 mm off centre / pulling along +x"
+            print(f"{Path(path).stem}, regime 1, {where}, the magnet {args.magnet}:")
+            print("\n".join(off_centre(Path(path), args.spacing_mm, args.magnet)), flush=True)
     elif args.general_convergence:
         for path in args.configs:
             print(f"{Path(path).stem}, regime 1, as printed: the general load's figures against the mesh and the lever")
@@ -487,43 +490,22 @@ def main() -> None:
     ap.add_argument("--configs", nargs="*", default=sorted(str(p) for p in (ROOT / "configs").glob("*.yaml")))
     ap.add_argument("--spacing-mm", type=float, default=None, help="lattice spacing [default: the rung's own]")
     ap.add_argument("--no-convergence", action="store_true")
-    ap.add_argument(
-        "--off-centre",
-        action="store_true",
-        help="only the off-centre and tangential loads in regime 1, each member class apart [default: forward design]",
-    )
+    only = {  # each prints one study and nothing else
+        "--off-centre": "only the off-centre and tangential loads in regime 1, class by class [default: forward]",
+        "--general-convergence": "only the general load's figures in regime 1 on three meshes and at five levers",
+        "--base-sway": "only the base's sway under a pull against two cantilevers",
+        "--section-sway": "only the section's frame per regime (no rung) and its cost",
+        "--store": "only mst simulate in section mode, a fresh cache then a filled one [default: forward design]",
+        "--rung-vs-mst": "only the rung (as printed) against mst's prediction, per regime",
+        "--attribute": "only each member's drop in the rung vs its closed form, per regime",
+        "--pairs": "only each pair of members' drop in the rung vs their own sum, per regime",
+        "--general": "only the off-centre and tangential loads per regime: the rung against mst's general-load model",
+    }
+    for flag, text in only.items():
+        ap.add_argument(flag, action="store_true", help=text)
     ap.add_argument("--every-regime", action="store_true", help="with --off-centre: the rung's cases in every regime")
-    ap.add_argument(
-        "--general-convergence",
-        action="store_true",
-        help="only the general load's figures in regime 1 on three meshes and at five levers",
-    )
-    ap.add_argument(
-        "--base-sway", action="store_true", help="only the base's sway under a pull against two cantilevers"
-    )
-    ap.add_argument(
-        "--section-sway", action="store_true", help="only the section's frame per regime (no rung) and its cost"
-    )
-    ap.add_argument(
-        "--store",
-        action="store_true",
-        help="only mst simulate in section mode, a fresh cache then a filled one [default: forward design]",
-    )
-    ap.add_argument(
-        "--rung-vs-mst", action="store_true", help="only the rung (as printed) against mst's prediction, per regime"
-    )
-    ap.add_argument(
-        "--attribute", action="store_true", help="only each member's drop in the rung vs its closed form, per regime"
-    )
-    ap.add_argument(
-        "--pairs", action="store_true", help="only each pair of members' drop in the rung vs their own sum, per regime"
-    )
+    ap.add_argument("--magnet", choices=wp.MAGNET_SEATS, default="resting", help="with --off-centre: the magnet's seat")
     ap.add_argument("--section", action="store_true", help="with --general: mst's part with model.load_path: section")
-    ap.add_argument(
-        "--general",
-        action="store_true",
-        help="only the off-centre and tangential loads per regime: the rung against mst's general-load model",
-    )
     ap.add_argument("--out", default=None, help="with --general: write the rung's figures per regime to this CSV")
     args = ap.parse_args()
     args.configs_given = any(a.startswith("--configs") for a in sys.argv[1:])

@@ -10,14 +10,18 @@ columns turn its beam in a sway frame. The whole-part rung finds the members add
 and +0.15 mrad/N to the forward design's turn per tangential newton in its three regimes, where
 the closed form's tilt laws give -2.6, -2.0 and -1.7.
 
-The section's frame (:func:`mst_cli.model.plate_sway.section_regimes`) gives, per regime, the
-ratio rho of what the plates and the base turn the cap under the pull to what the pull's moment
-alone would turn them. Here each layer's members' share of the tangential force's turn, as the
-closed form gives it (the layer's tilt compliance with its members less without, each where its
-own regime starts, as ``mst check --whole-part`` reads them), is scaled by that ratio: the
-layer's tilt gains -(1 - rho_r) h_j dC_j,r per newton of Fx. The frame's own members turn 0.3 to
-0.7 times the rung's under a moment (its cap is rigid, it has no pocket and no depth), so its
-ratio, not its turn, is what is taken. Along y nothing (the frame is the section's). Pure.
+The section's frame (:func:`mst_cli.model.plate_sway.section_regimes`) gives, per regime and per
+member (the base, each plate, the cap), the pull's lever on it: its turn under the pull over its
+turn per N mm of a pure moment. Each layer's members, as they ride with it in that regime
+(:func:`mst_cli.model.part_laws.unit_members`), weighed by the compliance each adds, give the
+layer's lever a_j,r (:func:`unit_arms_mm`); the closed form turns them by the pull's moment about
+the layer's pivot, h_j dC_j,r (dC its tilt compliance with its members less without, where its own
+regime starts, as ``mst check --whole-part`` reads them), so the layer's tilt gains
+(a_j,r - h_j) dC_j,r per newton of Fx. One ratio for every member at the layer's lever, as
+before 2026-12-02, missed the plate over a locked layer, which the pull turns twice as far as its
+moment (docs/design.md 4.7, "Each member at its own lever"). The frame's own members turn 0.3 to
+0.7 times the rung's under a moment (no pocket, no depth), so its levers, not its turns, are what
+is taken. Along y nothing (the frame is the section's). Pure.
 """
 
 from __future__ import annotations
@@ -91,13 +95,30 @@ class CounterTurn:
         return out
 
 
+def unit_arms_mm(riding: list[list[list[tuple[float, int]]]], member_arm_mm: np.ndarray, lever_mm) -> np.ndarray:
+    """(regimes, n) each unit's members' lever under the pull: their own levers (the frame's
+    ``member_arm_mm``, columns the cover, the plates, the cap) weighed by the compliance each adds
+    to the unit (``riding``: model.part_laws.unit_members; under a moment a unit's members turn in
+    that proportion, all on the unit's one chevron lever); a unit with none takes ``lever_mm``, the
+    pull's own lever on it: no counter-turn."""
+    lever = np.asarray(lever_mm, dtype=float)
+    out = np.tile(lever, (len(riding), 1))
+    for r, units in enumerate(riding):
+        for j, members in enumerate(units):
+            total = sum(c for c, _ in members)
+            if total > 0.0:
+                out[r, j] = sum(c * member_arm_mm[r, k + 1] for c, k in members) / total
+    return out
+
+
 def counter_turn(
-    part: list[LayerTiltLaw], alone: list[LayerTiltLaw], lever_mm: np.ndarray, turn_ratio: np.ndarray
+    part: list[LayerTiltLaw], alone: list[LayerTiltLaw], lever_mm: np.ndarray, arm_mm: np.ndarray
 ) -> CounterTurn:
     """The :class:`CounterTurn` of a stack whose layers' tilt laws are ``part`` (with their
     members) and ``alone`` (without), the top face ``lever_mm`` (n,) over each layer's pivot, and
-    the frame's members' turn ratio per regime ``turn_ratio`` (model.plate_sway.SectionRegimes,
-    in the part's lock order)."""
+    each unit's members' lever under the pull per regime ``arm_mm`` (regimes, n; :func:`unit_arms_mm`,
+    in the part's lock order): the tilt rung turns a unit's members by the pull's moment about the
+    layer's pivot, lever x dC; the frame turns them by arm x dC, so the difference is added."""
     locks = np.sort([t.lock_force_N for t in part])
     edges = locks[np.isfinite(locks)]
     locks_alone = np.sort([t.lock_force_N for t in alone])
@@ -112,5 +133,5 @@ def counter_turn(
                 for p, a in zip(part, alone)
             ]
         )
-        rows.append(-(1.0 - turn_ratio[r]) * np.asarray(lever_mm, dtype=float) * members)
+        rows.append((np.asarray(arm_mm[r], dtype=float) - np.asarray(lever_mm, dtype=float)) * members)
     return CounterTurn(edges, np.array(rows))

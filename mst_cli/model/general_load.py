@@ -57,11 +57,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from mst_cli.model.assembly import SensorGeometry
-from mst_cli.model.counter_turn import CounterTurn, counter_turn
+from mst_cli.model.counter_turn import CounterTurn, counter_turn, unit_arms_mm
+from mst_cli.model.load_path import members
 from mst_cli.model.material import Material
+from mst_cli.model.mechanics import layer_laws
 from mst_cli.model.mechanics.lateral import depth_end_factor, lateral_stiffness_N_per_mm
 from mst_cli.model.mechanics.tilt import LayerTiltLaw, TiltError, centred_compression_mm
 from mst_cli.model.member_pose import MemberPose
+from mst_cli.model.part_laws import unit_members
 from mst_cli.model.plate_sway import SectionRegimes, section_regimes, stack_section
 from mst_cli.model.stack_pose import layer_pivots_mm, magnet_field_T, magnet_pose, stack_path, tilt_laws
 from mst_cli.parallel import one_blas_thread
@@ -223,11 +226,23 @@ def _counter_turn(geometry: SensorGeometry, material: Material, mechanics: str, 
     """The part's members' counter-turn (model.counter_turn; 5 to 10 ms on the bundled designs past
     the frame's solves), kept per part and rung as the frame is."""
     part = tilt_laws(geometry, material, mechanics, lever_factor, True)
+    regimes = _section_regimes(geometry, material, _lock_order(part))
+    turn = part_counter_turn(geometry, material, mechanics, lever_factor, regimes)
+    return _frozen(turn, turn.edges_N, turn.tilt_rad_per_N)
+
+
+def part_counter_turn(
+    geometry: SensorGeometry, material: Material, mechanics: str, lever_factor: float, regimes: SectionRegimes
+) -> CounterTurn:
+    """The counter-turn of a part from its section's frame ``regimes`` (in the part's lock order):
+    each unit's members, as they ride with it regime by regime (model.part_laws.unit_members),
+    turned by the pull at their own levers (model.counter_turn.unit_arms_mm)."""
+    part = tilt_laws(geometry, material, mechanics, lever_factor, True)
     alone = tilt_laws(geometry, material, mechanics, lever_factor, False)
     lever = geometry.total_height_mm - layer_pivots_mm(geometry)
-    regimes = _section_regimes(geometry, material, _lock_order(part))
-    turn = counter_turn(part, alone, lever, regimes.member_turn_ratio)
-    return _frozen(turn, turn.edges_N, turn.tilt_rad_per_N)
+    laws = layer_laws(geometry.layers, material, mechanics)
+    riding = unit_members(laws, members(geometry, material), _lock_order(part))
+    return counter_turn(part, alone, lever, unit_arms_mm(riding, regimes.member_arm_mm, lever))
 
 
 def _frozen(kept, *arrays: np.ndarray):
@@ -265,7 +280,7 @@ def _section_regimes(geometry: SensorGeometry, material: Material, lock_order: t
     tables, its readers) takes the same."""
     with one_blas_thread():  # solves of about 300 dofs: BLAS's threads give nothing, and cost on a busy machine
         r = section_regimes(stack_section(geometry, material), lock_order)
-    return _frozen(r, r.base_sway_mm_per_N, r.plate_sway_mm_per_N, r.member_turn_ratio)
+    return _frozen(r, r.base_sway_mm_per_N, r.plate_sway_mm_per_N, r.member_turn_ratio, r.member_arm_mm)
 
 
 def normal_stack(

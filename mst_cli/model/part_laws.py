@@ -174,6 +174,42 @@ def part_layer_laws(laws: tuple, parts: Members) -> tuple:
     return tuple(units)
 
 
+def unit_members(laws: tuple, parts: Members, lock_order) -> list[list[list[tuple[float, int]]]]:
+    """Per regime r (the first r layers of ``lock_order`` locked) and per unit j of
+    :func:`part_layer_laws`: the members that ride with it then, each (its centred compliance, mm/N;
+    which: -1 the cover, k < n - 1 the plate over layer k, n - 1 the cap), by the rules above: an
+    open layer's plate or cap and half its walls' joints on each side; the plate over a locked layer
+    under it, and what the plate under that one adds once its layer is locked too; the cover on its
+    host in every regime. model.counter_turn weighs each member's lever under a pull by them."""
+    n = len(laws)
+
+    def padded(values, size):
+        return (*values, *(0.0,) * (size - len(values)))
+
+    plates, joints = padded(parts.plates_mm_per_N, n - 1), padded(parts.joints_mm_per_N, n)
+    over = padded(parts.locked_plates_mm_per_N, n - 1)
+    two = padded(parts.two_locked_plates_mm_per_N or parts.locked_plates_mm_per_N, n - 1)
+    host = cover_host(capped_units(laws, parts), parts) if parts.cover_mm_per_N > 0 else None
+    out = []
+    for r in range(n + 1):
+        locked = {int(i) for i in lock_order[:r]}
+        rows = []
+        for j in range(n):
+            riding = []
+            if j not in locked:
+                riding += [(plates[j] if j < n - 1 else parts.cap_mm_per_N, j), (0.5 * joints[j], j)]
+                riding.append((0.5 * joints[j], j - 1))
+                if j >= 1 and j - 1 in locked:
+                    riding.append((over[j - 1], j - 1))
+                if j >= 2 and {j - 1, j - 2} <= locked:  # the plates and the block between them hang together
+                    riding.append((two[j - 1] - over[j - 1], j - 2))
+            if j == host:
+                riding.append((parts.cover_mm_per_N, -1))
+            rows.append([(float(c), k) for c, k in riding if c > 0.0])
+        out.append(rows)
+    return out
+
+
 def cover_host(units: list, parts: Members) -> int:
     """Which unit carries the cover: layer 1, whose wall feet load it, unless the cover lands on
     the board after layer 1 has locked; then the lowest layer still open at the landing. The

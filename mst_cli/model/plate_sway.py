@@ -21,9 +21,10 @@ The closed form is a plane frame (plane strain, per the part's depth D; :mod:`mo
 * each plate is a beam on its mid-plane as thick as the plate and the pads it carries (a layer's
   pad, t thick, under |x| < its wall heads); the wall ends are tied to it by rigid offsets and
   turn into it against model.plate_joint's fitted root spring;
-* the cap is rigid; the cover is a beam too, layer 1's roots turning into it alike, on the board
-  slot's two walls (model.housing_base's portal: Timoshenko columns, their roots and tops built
-  in), or held where there is no slot;
+* the cap is rigid, but where its own lever under a pull is asked for (member n - 1): then a
+  beam with model.load_path's section of it (its pocket and its insert); the cover is a beam too,
+  layer 1's roots turning into it alike, on the board slot's two walls (model.housing_base's
+  portal: Timoshenko columns, their roots and tops built in), or held where there is no slot;
 * a locked layer is its filled block, rigid over |x| < its wall heads.
 
 A force of 1 N along +x at the top face. What a plate adds is its translation: the magnet's slide
@@ -46,7 +47,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mst_cli.model.beams import SHEAR_FACTOR
+from mst_cli.model.beams import SHEAR_FACTOR, section_EI_kGA
 from mst_cli.model.cell import wall_centreline_length_mm
 from mst_cli.model.housing_base import END_BUILT_IN
 from mst_cli.model.load_path import CELL_KEYS, layer_supports, member_scene
@@ -80,6 +81,8 @@ class StackSection:
     half_slot_mm: float = 0.0  # the board slot under the cover: its half width
     slot_wall_widths_mm: tuple[float, float] = (0.0, 0.0)  # its side walls (left, right)
     slot_height_mm: float = 0.0  # from the slot's floor to the cover's underside; 0: no slot (the base rigid)
+    cap_EI_Nmm2: float = 0.0  # the cap's section with its pocket and insert (model.load_path's); 0: TPU plain
+    cap_kGA_N: float = 0.0
 
 
 def stack_section(geometry, material) -> StackSection:
@@ -92,8 +95,19 @@ def stack_section(geometry, material) -> StackSection:
     return StackSection(
         theta, t, h, np.asarray(head, dtype=float), np.array(geometry.layer_bottoms_mm), k_x, s.width_mm, s.depth_mm,
         s.plate_mm, s.cover_mm, s.cap_above_stack_mm, z_magnet, s.E_prime_MPa, s.G_MPa, s.half_slot_mm,
-        s.slot_wall_widths_mm, s.slot_height_mm,
+        s.slot_wall_widths_mm, s.slot_height_mm, *_cap_section(s, float(t[-1])),
     )  # fmt: skip
+
+
+def _cap_section(s, t_top_mm: float) -> tuple[float, float]:
+    """(E'I, kGA) of the cap over the top layer's pad ``t_top_mm`` thick, with its magnet pocket
+    and insert: model.load_path's own cap section (scene ``s``, a MemberScene)."""
+    z_pocket = t_top_mm + s.pocket_floor_mm
+    EI, kGA = section_EI_kGA(
+        s.depth_mm, t_top_mm + s.cap_above_stack_mm, s.E_prime_MPa, s.G_MPa, s.pocket_width_mm,
+        (z_pocket, z_pocket + s.pocket_depth_mm), s.insert, t_top_mm + s.insert_above_pad_mm,
+    )  # fmt: skip
+    return float(EI), float(kGA)
 
 
 def _beam_z_mm(sec: StackSection) -> list[float]:
@@ -168,17 +182,21 @@ def _plate_beam(f: Frame, s: StackSection, j: int, z: float, locked, tpu_plate, 
     if base:
         xs |= {-s.half_slot_mm, s.half_slot_mm}
     stations = {x: f.node(x, z) for x in sorted(xs)}
-    tpu = (0 < j < n and j - 1 == tpu_plate) or base
+    tpu = (0 < j <= n and j - 1 == tpu_plate) or base  # j = n: the cap (tpu_plate n - 1)
     ordered = sorted(stations)
     for xa, xb in zip(ordered[:-1], ordered[1:]):
         mid = 0.5 * (xa + xb)
-        thick = (s.cover_mm if j == 0 else s.plate_mm) + sum(s.t_mm[i] for i in layers if abs(mid) < s.head_mm[i])
+        own = s.cover_mm if j == 0 else s.cap_above_stack_mm if (j == n and tpu) else s.plate_mm
+        thick = own + sum(s.t_mm[i] for i in layers if abs(mid) < s.head_mm[i])
         blocked = any(i in locked and abs(mid) < s.head_mm[i] for i in layers)
         over_wall = base and abs(mid) > s.half_slot_mm  # the cover over the slot's walls
         if over_wall and s.half_slot_mm in (abs(xa), abs(xb)):
             continue  # it rides on the wall's top, not on the cover's end (_base ties it)
         blocked |= over_wall
         k = RIGID if (not tpu or blocked or any(a <= mid <= b for a, b in zone)) else 1.0
+        if j == n and tpu and s.cap_EI_Nmm2 > 0.0:
+            f.beam(stations[xa], stations[xb], k * E * thick * D, k * s.cap_EI_Nmm2, k * s.cap_kGA_N)
+            continue
         f.beam(
             stations[xa], stations[xb], k * E * thick * D, k * E * D * thick**3 / 12.0, k * SHEAR_FACTOR * G * thick * D
         )
@@ -217,7 +235,7 @@ def _walls(f: Frame, s: StackSection, i: int, beams, factor, k_root, tpu_plate, 
         x = sign * s.head_mm[i]
         tip = f.node(sign * tip_x, z0 + 0.5 * s.h_mm[i])
         for j, z_end in ((i, z0 + 0.5 * t), (i + 1, z0 + s.h_mm[i] - 0.5 * t)):
-            tpu = (0 < j < n and j - 1 == tpu_plate) or (j == 0 and tpu_plate == -1)  # the cover's roots too
+            tpu = (0 < j <= n and j - 1 == tpu_plate) or (j == 0 and tpu_plate == -1)  # the cover's, the cap's too
             offset, end = f.node(x, z_end), f.node(x, z_end)
             f.beam(beams[j][float(x)], offset, rigid, rigid, math.inf)
             f.spring(offset, end, k_root if (roots and tpu) else rigid)
@@ -262,7 +280,8 @@ def member_motions(
     sec: StackSection, members, locked=(), walls=None, zones: tuple[bool, bool] = (True, True), roots: bool = True
 ) -> MemberMotions:
     """:class:`MemberMotions` of ``members`` (-1 the housing's base, j >= 0 the plate over layer
-    j), each alone in TPU, with layers ``locked`` filled; the all-rigid solve once for them all."""
+    j, n - 1 the cap), each alone in TPU, with layers ``locked`` filled; the all-rigid solve once
+    for them all."""
     walls = wall_factors(sec, zones) if walls is None else walls
     beam_z = _beam_z_mm(sec)
     z_top = sec.bottom_mm[-1] + sec.h_mm[-1] + sec.cap_above_stack_mm
@@ -315,11 +334,16 @@ class SectionRegimes:
     base's and the plates' translation (mm/N), and the members' turn ratio: what the plates and
     the base turn the cap under the pull over what the pull's moment alone would turn them (1
     where they turn nothing). The walls' end moments, carrying the pull's shear into the plates,
-    turn them against the moment's couple: the frame's counter-turn."""
+    turn them against the moment's couple: the frame's counter-turn. ``member_arm_mm`` (regimes,
+    n + 1), per member (the base, the plates over layers 0 .. n - 2, the cap): the pull's lever on
+    it, its turn under the pull over its turn per N mm of a pure moment, mm; its own depth under
+    the top face where the moment turns it less than TURN_FLOOR (it turns with the moment about its
+    own mid-plane)."""
 
     base_sway_mm_per_N: np.ndarray
     plate_sway_mm_per_N: np.ndarray
     member_turn_ratio: np.ndarray
+    member_arm_mm: np.ndarray
 
 
 TURN_FLOOR_RAD_PER_N = 1e-9  # members that turn less than this under the moment: no ratio (1)
@@ -330,12 +354,19 @@ def section_regimes(sec: StackSection, lock_order) -> SectionRegimes:
     (layer indices, first to lock first)."""
     walls = wall_factors(sec)
     order = [int(i) for i in lock_order]
-    members = [-1, *range(len(sec.theta_rad) - 1)]
-    base, plates, ratio = [], [], []
+    n = len(sec.theta_rad)
+    members = [-1, *range(n)]  # the base, the plates, the cap
+    z_top = sec.bottom_mm[-1] + sec.h_mm[-1] + sec.cap_above_stack_mm
+    depth = z_top - np.array(_beam_z_mm(sec))  # the base's, the plates', the cap's mid-planes under the top face
+    base, plates, ratio, arms = [], [], [], []
     for r in range(len(order) + 1):
         m = member_motions(sec, members, order[:r], walls)
         base.append(m.translation_mm_per_N[0])
-        plates.append(m.translation_mm_per_N[1:].sum())
-        moment = m.moment_turn_rad_per_N.sum()
-        ratio.append(m.turn_rad_per_N.sum() / moment if abs(moment) > TURN_FLOOR_RAD_PER_N else 1.0)
-    return SectionRegimes(np.array(base), np.array(plates), np.array(ratio))
+        plates.append(m.translation_mm_per_N[1:n].sum())
+        moment = m.moment_turn_rad_per_N[:n].sum()
+        ratio.append(m.turn_rad_per_N[:n].sum() / moment if abs(moment) > TURN_FLOOR_RAD_PER_N else 1.0)
+        # moment_turn is the moment's turn times the depth: turn / moment_turn x depth is the arm
+        turns = np.abs(m.moment_turn_rad_per_N) > TURN_FLOOR_RAD_PER_N
+        own = np.where(turns, m.turn_rad_per_N / np.where(turns, m.moment_turn_rad_per_N, 1.0), 1.0) * depth
+        arms.append(own)
+    return SectionRegimes(np.array(base), np.array(plates), np.array(ratio), np.array(arms))
