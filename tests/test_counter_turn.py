@@ -240,3 +240,28 @@ def test_the_members_levers_move_smoothly_with_the_cover():
     host = arms[:, :, 0]
     assert np.all(np.abs(np.diff(host, 2, axis=0)) < 0.05 * np.ptp(host, axis=0))
     np.testing.assert_allclose(arms[:, :, 1:], np.broadcast_to(arms[:1, :, 1:], arms[:, :, 1:].shape), rtol=1e-4)
+
+
+def test_a_member_turns_the_magnet_about_its_own_plane():
+    """A member turned by phi under a pull moves the magnet phi x (its height over the member's
+    mid-plane), not over its layer's pivot (rigid rotation about y): stack_pose.magnet_pose's slide
+    from the layer's tilt plus counter_turn.own_plane_slide_mm_per_N's is that, for the cover, a
+    plate and the cap, whatever unit carries them."""
+    from mst_cli.model import plate_sway as ps
+    from mst_cli.model.counter_turn import own_plane_slide_mm_per_N
+    from mst_cli.model.stack_pose import layer_pivots_mm, magnet_pose
+
+    g, m = designed("mohammadi2021-forward")
+    planes = ps.member_planes_mm(ps.stack_section(g, m))
+    z_magnet = g.z_magnet_bottom_mm + 0.5 * g.magnet.thickness_mm
+    phi, lever = 2e-3, 1.7  # the member's turn per newton of Fx, as its lever x its tilt per N mm
+    for unit, member in ((0, -1), (1, 0), (2, 1), (2, 2)):
+        tilt = np.zeros((1, 3))
+        tilt[0, unit] = phi / lever
+        riding = [[[(1.0, member)] if j == unit else [] for j in range(3)]]
+        arms = np.full((1, 4), lever)
+        extra = own_plane_slide_mm_per_N(riding, arms, tilt, layer_pivots_mm(g), planes)[0]
+        tilts = np.zeros((1, 3, 2))
+        tilts[0, unit, 0] = phi
+        shift, _ = magnet_pose(g, np.zeros((1, 3)), tilts)
+        assert shift[0, 0] + extra == pytest.approx(phi * (z_magnet - planes[member + 1]), rel=1e-12)

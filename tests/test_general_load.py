@@ -139,7 +139,9 @@ def test_cli_shear_ratio_mirrors_and_zero_is_todays_curve(tmp_path):
     p, m = rows(outs["p"] / "offcentre.csv"), rows(tmp_path / "m" / "offcentre.csv")
     for a, b in zip(p, m):
         assert float(a["Bx_mT"]) == pytest.approx(-float(b["Bx_mT"]), rel=1e-9, abs=1e-15)
-        assert a["Bz_mT"] == b["Bz_mT"] and float(a["Fx_N"]) == pytest.approx(0.3 * float(a["force_N"]))
+        # the mirror's Bz agrees to 1e-13 (the pose's solves), so a printed last digit may round apart
+        assert float(a["Bz_mT"]) == pytest.approx(float(b["Bz_mT"]), rel=1e-8)
+        assert float(a["Fx_N"]) == pytest.approx(0.3 * float(a["force_N"]))
     rep = json.loads((outs["p"] / "report.json").read_text())
     assert rep["off_centre"]["shear_ratio"] == [0.3, 0.0]
 

@@ -159,18 +159,20 @@ def test_a_layers_spec_reads_the_layers_alone_through_the_api(scene):
 def test_past_every_lock_a_tangential_force_slides_the_magnet_by_the_sections_sway_alone(scene):
     """Past the last lock every layer is stuck (its slide holds), so a tangential force along x
     slides the magnet further only by the base's and the plates' sway with every layer filled
-    (model.plate_sway.section_regimes' last regime) per newton at every normal force; none
-    along y; the layers alone have neither."""
+    (model.plate_sway.section_regimes' last regime) and by the cover, which never locks, turning
+    about its own plane (model.counter_turn's slide past the last lock) per newton at every normal
+    force; none along y; the layers alone have none of them."""
     geometry, material = scene
     part = loaded_stack(geometry, material, "spring", whole_part=True)
     alone = loaded_stack(geometry, material, "spring", whole_part=False)
-    assert len(part.lateral) == len(alone.lateral) + 2 == len(geometry.layers) + 2
+    assert len(part.lateral) == len(alone.lateral) + 3 == len(geometry.layers) + 3
     order = np.argsort([t.lock_force_N for t in part.tilt], kind="stable")
     regimes = section_regimes(stack_section(geometry, material), order)
     base, plates = regimes.base_sway_mm_per_N, regimes.plate_sway_mm_per_N
     last = max(t.lock_force_N for t in part.tilt)
     F = np.array([1.5, 2.0, 3.0]) * last
     slide = part.slides_mm(F, (1.0, 1.0)).sum(axis=1)  # per unit of Fx / Fz and Fy / Fz: U(F)
-    np.testing.assert_allclose(np.diff(slide[:, 0]) / np.diff(F), base[-1] + plates[-1], rtol=1e-6)
+    own_plane = part.counter_turn.slide_mm_per_N[-1]
+    np.testing.assert_allclose(np.diff(slide[:, 0]) / np.diff(F), base[-1] + plates[-1] + own_plane, rtol=1e-6)
     np.testing.assert_allclose(np.diff(slide[:, 1]) / np.diff(F), 0.0, atol=1e-15)
     assert base[-1] > 0.01 and abs(plates[-1]) < 1e-7  # the slot's walls sway; filled blocks tie the plates

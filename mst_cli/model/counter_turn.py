@@ -50,6 +50,9 @@ class CounterTurn:
 
     edges_N: np.ndarray  # (k,) the part's finite lock forces, ascending: regime r from edges_N[r - 1]
     tilt_rad_per_N: np.ndarray  # (k + 1, n)
+    # (k + 1,) the magnet's slide per newton of Fx from each member turning about its own mid-plane,
+    # not its layer's pivot (:func:`own_plane_slide_mm_per_N`); None: not given
+    slide_mm_per_N: np.ndarray | None = None
 
     def _regime(self, force_N) -> tuple[np.ndarray, np.ndarray]:
         F = np.atleast_1d(np.asarray(force_N, dtype=float))
@@ -111,14 +114,10 @@ def unit_arms_mm(riding: list[list[list[tuple[float, int]]]], member_arm_mm: np.
     return out
 
 
-def counter_turn(
-    part: list[LayerTiltLaw], alone: list[LayerTiltLaw], lever_mm: np.ndarray, arm_mm: np.ndarray
-) -> CounterTurn:
-    """The :class:`CounterTurn` of a stack whose layers' tilt laws are ``part`` (with their
-    members) and ``alone`` (without), the top face ``lever_mm`` (n,) over each layer's pivot, and
-    each unit's members' lever under the pull per regime ``arm_mm`` (regimes, n; :func:`unit_arms_mm`,
-    in the part's lock order): the tilt rung turns a unit's members by the pull's moment about the
-    layer's pivot, lever x dC; the frame turns them by arm x dC, so the difference is added."""
+def members_tilt_rad_per_Nmm(part: list[LayerTiltLaw], alone: list[LayerTiltLaw]) -> tuple[np.ndarray, np.ndarray]:
+    """(the part's finite lock forces (k,), ascending; (k + 1, n) each layer's tilt per N mm with its
+    members less without, where each regime starts) of a stack whose layers' tilt laws are ``part``
+    (with their members) and ``alone`` (without)."""
     locks = np.sort([t.lock_force_N for t in part])
     edges = locks[np.isfinite(locks)]
     locks_alone = np.sort([t.lock_force_N for t in alone])
@@ -127,11 +126,46 @@ def counter_turn(
         at_part = regime_start_N(locks, r)
         at_alone = regime_start_N(locks_alone, r)
         at_alone = at_alone if np.isfinite(at_alone) else at_part
-        members = np.array(
+        rows.append(
             [
                 tilt_compliance_rad_per_Nmm(p, at_part) - tilt_compliance_rad_per_Nmm(a, at_alone)
                 for p, a in zip(part, alone)
             ]
         )
-        rows.append((np.asarray(arm_mm[r], dtype=float) - np.asarray(lever_mm, dtype=float)) * members)
-    return CounterTurn(edges, np.array(rows))
+    return edges, np.array(rows)
+
+
+def counter_turn(
+    part: list[LayerTiltLaw], alone: list[LayerTiltLaw], lever_mm: np.ndarray, arm_mm: np.ndarray, slide_mm_per_N=None
+) -> CounterTurn:
+    """The :class:`CounterTurn` of a stack whose layers' tilt laws are ``part`` (with their
+    members) and ``alone`` (without), the top face ``lever_mm`` (n,) over each layer's pivot, and
+    each unit's members' lever under the pull per regime ``arm_mm`` (regimes, n; :func:`unit_arms_mm`,
+    in the part's lock order): the tilt rung turns a unit's members by the pull's moment about the
+    layer's pivot, lever x dC; the frame turns them by arm x dC, so the difference is added.
+    ``slide_mm_per_N``: :func:`own_plane_slide_mm_per_N`'s, carried along."""
+    edges, tilt = members_tilt_rad_per_Nmm(part, alone)
+    arm = np.asarray(arm_mm, dtype=float)[: len(tilt)]
+    return CounterTurn(edges, (arm - np.asarray(lever_mm, dtype=float)) * tilt, slide_mm_per_N)
+
+
+def own_plane_slide_mm_per_N(
+    riding: list[list[list[tuple[float, int]]]], member_arm_mm: np.ndarray, members_tilt: np.ndarray,
+    pivot_mm: np.ndarray, member_z_mm: np.ndarray,
+) -> np.ndarray:  # fmt: skip
+    """(regimes,) per regime, what the members' turn under a pull moves the magnet along x, per
+    newton of Fx, beyond what it gives turning about their layer's pivot: each member k of unit j
+    (``riding``, :func:`unit_arms_mm`'s) turns by arm_k x its share of dC_j (``members_tilt``,
+    :func:`members_tilt_rad_per_Nmm`'s), about its own mid-plane at ``member_z_mm`` [k + 1] (the
+    cover, the plates, the cap; the pivots ``pivot_mm`` (n,) in the same frame), so the magnet
+    moves that turn x (pivot_j - z_k) more: a turn phi about y moves a point dz above its centre
+    by phi dz along x."""
+    out = []
+    for r, tilt in enumerate(members_tilt):
+        slide = 0.0
+        for j, members in enumerate(riding[r]):
+            total = sum(c for c, _ in members)
+            for c, k in members:
+                slide += member_arm_mm[r, k + 1] * (c / total) * tilt[j] * (pivot_mm[j] - member_z_mm[k + 1])
+        out.append(slide)
+    return np.array(out)

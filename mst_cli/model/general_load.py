@@ -57,7 +57,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from mst_cli.model.assembly import SensorGeometry
-from mst_cli.model.counter_turn import CounterTurn, counter_turn, unit_arms_mm
+from mst_cli.model.counter_turn import (
+    CounterTurn,
+    counter_turn,
+    members_tilt_rad_per_Nmm,
+    own_plane_slide_mm_per_N,
+    unit_arms_mm,
+)
 from mst_cli.model.load_path import members
 from mst_cli.model.material import Material
 from mst_cli.model.mechanics import layer_laws
@@ -65,7 +71,7 @@ from mst_cli.model.mechanics.lateral import depth_end_factor, lateral_stiffness_
 from mst_cli.model.mechanics.tilt import LayerTiltLaw, TiltError, centred_compression_mm
 from mst_cli.model.member_pose import MemberPose
 from mst_cli.model.part_laws import unit_members
-from mst_cli.model.plate_sway import SectionRegimes, section_regimes, stack_section
+from mst_cli.model.plate_sway import SectionRegimes, member_planes_mm, section_regimes, stack_section
 from mst_cli.model.stack_pose import layer_pivots_mm, magnet_field_T, magnet_pose, stack_path, tilt_laws
 from mst_cli.parallel import one_blas_thread
 
@@ -218,6 +224,8 @@ def loaded_stack(
         return LoadedStack(geometry, mechanics, tilts, lateral, lever, members)
     lateral += section_sway_laws(tilts, _section_regimes(geometry, material, _lock_order(tilts)))
     turn = _counter_turn(geometry, material, mechanics, lever_factor)
+    assert turn.slide_mm_per_N is not None  # part_counter_turn gives it
+    lateral += regime_lateral_laws(tilts, turn.slide_mm_per_N)  # the members' turn about their own planes
     return LoadedStack(geometry, mechanics, tilts, lateral, lever, members, turn)
 
 
@@ -228,7 +236,8 @@ def _counter_turn(geometry: SensorGeometry, material: Material, mechanics: str, 
     part = tilt_laws(geometry, material, mechanics, lever_factor, True)
     regimes = _section_regimes(geometry, material, _lock_order(part))
     turn = part_counter_turn(geometry, material, mechanics, lever_factor, regimes)
-    return _frozen(turn, turn.edges_N, turn.tilt_rad_per_N)
+    assert turn.slide_mm_per_N is not None  # part_counter_turn gives it
+    return _frozen(turn, turn.edges_N, turn.tilt_rad_per_N, turn.slide_mm_per_N)
 
 
 def part_counter_turn(
@@ -242,7 +251,10 @@ def part_counter_turn(
     lever = geometry.total_height_mm - layer_pivots_mm(geometry)
     laws = layer_laws(geometry.layers, material, mechanics)
     riding = unit_members(laws, members(geometry, material), _lock_order(part))
-    return counter_turn(part, alone, lever, unit_arms_mm(riding, regimes.member_arm_mm, lever))
+    _, tilt = members_tilt_rad_per_Nmm(part, alone)
+    z = member_planes_mm(stack_section(geometry, material))
+    slide = own_plane_slide_mm_per_N(riding, regimes.member_arm_mm, tilt, layer_pivots_mm(geometry), z)
+    return counter_turn(part, alone, lever, unit_arms_mm(riding, regimes.member_arm_mm, lever), slide)
 
 
 def _frozen(kept, *arrays: np.ndarray):
@@ -259,15 +271,21 @@ def _lock_order(tilts: list[LayerTiltLaw]) -> tuple[int, ...]:
 
 def section_sway_laws(tilts: list[LayerTiltLaw], regimes: SectionRegimes) -> list[LayerLateralLaw]:
     """[the housing's base, the plates]: their translation under the tangential force along x as
-    lateral laws, each a compliance constant within a regime (``regimes``: the section's frame,
-    :func:`~mst_cli.model.plate_sway.section_regimes` in the lock order of ``tilts``), stepping at
-    the layers' lock forces; none along y (the frame is the section's)."""
+    lateral laws (:func:`regime_lateral_laws`; ``regimes``: the section's frame,
+    :func:`~mst_cli.model.plate_sway.section_regimes` in the lock order of ``tilts``)."""
+    return regime_lateral_laws(tilts, regimes.base_sway_mm_per_N, regimes.plate_sway_mm_per_N)
+
+
+def regime_lateral_laws(tilts: list[LayerTiltLaw], *compliances: np.ndarray) -> list[LayerLateralLaw]:
+    """Each of ``compliances`` (a slide along x per newton of Fx per regime, in the lock order of
+    ``tilts``) as a lateral law: constant within a regime, stepping at the layers' lock forces; none
+    along y (the frame is the section's)."""
     locks = np.sort([t.lock_force_N for t in tilts])
     edges = np.concatenate([[0.0], locks])
     edges = edges[np.isfinite(edges)]  # a layer that never locks: the regimes past it are never reached
     force = np.concatenate([edges, [edges[-1] + 1.0]])  # past the last lock: its slope goes on
     laws = []
-    for c in (regimes.base_sway_mm_per_N, regimes.plate_sway_mm_per_N):
+    for c in compliances:
         integral = np.concatenate([[0.0], np.cumsum(np.diff(force) * c[: len(edges)])])
         laws.append(LayerLateralLaw(force, integral, np.zeros_like(force)))
     return laws

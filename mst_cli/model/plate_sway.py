@@ -110,6 +110,12 @@ def _cap_section(s, t_top_mm: float) -> tuple[float, float]:
     return float(EI), float(kGA)
 
 
+def member_planes_mm(sec: StackSection) -> np.ndarray:
+    """(n + 1,) the heights of the cover's, the plates' and the cap's mid-planes (the part's frame,
+    as ``bottom_mm``): where each member turns."""
+    return np.array(_beam_z_mm(sec))
+
+
 def _beam_z_mm(sec: StackSection) -> list[float]:
     """The mid-planes of the cover (0), the plates (1 .. n - 1) and the cap's node (n)."""
     cap = sec.bottom_mm[-1] + sec.h_mm[-1] + 0.5 * sec.cap_above_stack_mm
