@@ -157,19 +157,22 @@ def test_mst_simulate_with_a_shear_ratio_is_the_batched_forward_model():
     assert np.max(np.abs(without - curve.B_T)) > 1e-6  # the counter-turn moves the field
 
 
+def covers(steps: int) -> list:
+    """The forward design with its cover 0.8 to 3 mm thick in ``steps``: (geometry, material, the
+    layers' lock order), the order of the design as bundled."""
+    doc = mst.load(ROOT / "configs" / "mohammadi2021-forward.yaml")
+    g, m = doc.geometry(), doc.material
+    order = np.argsort([t.lock_force_N for t in tilt_laws(g, m, "spring")], kind="stable")
+    return [(replace(g, housing=replace(g.housing, cover_mm=float(c))), m, order) for c in np.linspace(0.8, 3.0, steps)]
+
+
 def test_the_turn_ratio_moves_smoothly_with_the_cover():
     """Swept over the cover's thickness (0.8 to 3 mm, the forward design's layers), each regime's
     turn ratio moves in regular steps, no jump or sawtooth, and past layer 1's lock it rises: the
     thinner the cover on the slot's walls, the further they turn it back against the moment."""
     from mst_cli.model import plate_sway as ps
 
-    doc = mst.load(ROOT / "configs" / "mohammadi2021-forward.yaml")
-    g, m = doc.geometry(), doc.material
-    order = np.argsort([t.lock_force_N for t in tilt_laws(g, m, "spring")], kind="stable")
-    rows = []
-    for c in np.linspace(0.8, 3.0, 12):
-        part = replace(g, housing=replace(g.housing, cover_mm=float(c)))
-        rows.append(ps.section_regimes(ps.stack_section(part, m), order).member_turn_ratio)
+    rows = [ps.section_regimes(ps.stack_section(part, m), order).member_turn_ratio for part, m, order in covers(12)]
     ratio = np.array(rows)  # (12, 4): regimes 1, 2, 3 and past the last lock
     assert np.all(np.abs(np.diff(ratio, 2, axis=0)) < 0.03)
     assert np.all(np.diff(ratio[:, 1:], axis=0) > 0.0)
@@ -227,12 +230,8 @@ def test_the_members_levers_move_smoothly_with_the_cover():
     from mst_cli.model.mechanics import layer_laws
     from mst_cli.model.part_laws import unit_members
 
-    doc = mst.load(ROOT / "configs" / "mohammadi2021-forward.yaml")
-    g, m = doc.geometry(), doc.material
-    order = np.argsort([t.lock_force_N for t in tilt_laws(g, m, "spring")], kind="stable")
     rows = []
-    for c in np.linspace(0.8, 3.0, 24):
-        part = replace(g, housing=replace(g.housing, cover_mm=float(c)))
+    for part, m, order in covers(24):
         regimes = ps.section_regimes(ps.stack_section(part, m), order)
         riding = unit_members(layer_laws(part.layers, m, "spring"), members(part, m), order)
         rows.append(unit_arms_mm(riding, regimes.member_arm_mm, np.zeros(3)))
