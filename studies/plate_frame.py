@@ -165,17 +165,68 @@ def edge_joint(configs: list[Path]) -> None:
                 print(f"| {doc.name} | {r + 1} | {label} | {cells} |")
 
 
+def scaled_columns_base(factor: float):
+    """plate_sway._base with the slot's two walls (their columns and their roots' springs) ``factor``
+    times as stiff: the probe of what the walls' give does to the cover's turn."""
+
+    def base(f, s, cover: dict, z_cover: float) -> None:
+        beam, spring = f.beam, f.spring
+        z_root = z_cover - 0.5 * s.cover_mm - s.slot_height_mm
+
+        def column(a, b, EA, EI, kGA):  # the only vertical beams of the base are its walls
+            vertical = abs(f.nodes[a][0] - f.nodes[b][0]) < 1e-12
+            k = factor if vertical else 1.0
+            return beam(a, b, k * EA, k * EI, k * kGA)
+
+        def root(a, b, k):  # the roots' springs stand at the slot's floor
+            return spring(a, b, factor * k if abs(f.nodes[a][1] - z_root) < 1e-12 else k)
+
+        f.beam, f.spring = column, root
+        try:
+            KEPT_BASE(f, s, cover, z_cover)
+        finally:
+            f.beam, f.spring = beam, spring
+
+    return base
+
+
+def base_columns(configs: list[Path]) -> None:
+    """Per config and regime, the base alone in TPU (the frame's): its translation, its turn under
+    the pull and the pull's moment-equivalent, with the slot's walls as modelled and 1e5 times as
+    stiff (the rung's counterpart: bench_whole_part.py --off-centre --every-regime, "only the base,
+    its slot walls rigid")."""
+    print("| design | regime | slot walls | base: translation mm/N | turn under the pull, mrad/N | moment's turn |")
+    print("|---|---|---|---|---|---|")
+    for path in configs:
+        doc, _ = mst.designed(path)
+        g, m = doc.geometry(), doc.material
+        sec = stack_section(g, m)
+        walls = ps.wall_factors(sec)
+        for r, locked in enumerate(wp.regime_locked(Stack(layer_laws(g.layers, m, doc.mechanics)))):
+            for label, base in (("as modelled", KEPT_BASE), ("rigid", scaled_columns_base(ps.RIGID))):
+                ps._base = base
+                try:
+                    mo = ps.member_motions(sec, [-1], tuple(locked), walls)
+                finally:
+                    ps._base = KEPT_BASE
+                cells = f"{mo.translation_mm_per_N[0]:.4f} | {1e3 * mo.turn_rad_per_N[0]:.3f} | "
+                print(f"| {doc.name} | {r + 1} | {label} | {cells}{1e3 * mo.moment_turn_rad_per_N[0]:.3f} |")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--check", type=Path, nargs="+", help="studies/plate_slide.py --out CSVs")
     ap.add_argument("--edge-joint", type=Path, nargs="+", help="configs: the cover's edge joint probe")
+    ap.add_argument("--base-columns", type=Path, nargs="+", help="configs: the slot's walls made rigid, a probe")
     args = ap.parse_args()
     if args.edge_joint:
         edge_joint(args.edge_joint)
+    elif args.base_columns:
+        base_columns(args.base_columns)
     elif args.check:
         check(args.check)
     else:
-        ap.error("give --check CSVs or --edge-joint configs")
+        ap.error("give --check CSVs, --edge-joint or --base-columns configs")
 
 
 if __name__ == "__main__":
