@@ -165,9 +165,10 @@ def edge_joint(configs: list[Path]) -> None:
                 print(f"| {doc.name} | {r + 1} | {label} | {cells} |")
 
 
-def scaled_columns_base(factor: float):
+def scaled_columns_base(factor: float, joint_factor: float = 1.0):
     """plate_sway._base with the slot's two walls (their columns and their roots' springs) ``factor``
-    times as stiff: the probe of what the walls' give does to the cover's turn."""
+    times as stiff, and the cover's end joints into their tops ``joint_factor`` times: the probe of
+    what the walls' give does to the cover's turn."""
 
     def base(f, s, cover: dict, z_cover: float) -> None:
         beam, spring = f.beam, f.spring
@@ -178,8 +179,11 @@ def scaled_columns_base(factor: float):
             k = factor if vertical else 1.0
             return beam(a, b, k * EA, k * EI, k * kGA)
 
-        def root(a, b, k):  # the roots' springs stand at the slot's floor
-            return spring(a, b, factor * k if abs(f.nodes[a][1] - z_root) < 1e-12 else k)
+        def root(a, b, k):  # the roots' springs stand at the slot's floor, the cover's joints at its edge
+            if abs(f.nodes[a][1] - z_root) < 1e-12:
+                return spring(a, b, factor * k)
+            edge = any(abs(abs(f.nodes[n][0]) - s.half_slot_mm) < 1e-9 for n in (a, b))
+            return spring(a, b, joint_factor * k if edge else k)
 
         f.beam, f.spring = column, root
         try:
@@ -190,11 +194,11 @@ def scaled_columns_base(factor: float):
     return base
 
 
-def base_columns(configs: list[Path]) -> None:
+def base_columns(configs: list[Path], joint_factor: float = 1.0) -> None:
     """Per config and regime, the base alone in TPU (the frame's): its translation, its turn under
     the pull and the pull's moment-equivalent, with the slot's walls as modelled and 1e5 times as
     stiff (the rung's counterpart: bench_whole_part.py --off-centre --every-regime, "only the base,
-    its slot walls rigid")."""
+    its slot walls rigid"), the cover's end joints ``joint_factor`` times as stiff."""
     print("| design | regime | slot walls | base: translation mm/N | turn under the pull, mrad/N | moment's turn |")
     print("|---|---|---|---|---|---|")
     for path in configs:
@@ -203,7 +207,11 @@ def base_columns(configs: list[Path]) -> None:
         sec = stack_section(g, m)
         walls = ps.wall_factors(sec)
         for r, locked in enumerate(wp.regime_locked(Stack(layer_laws(g.layers, m, doc.mechanics)))):
-            for label, base in (("as modelled", KEPT_BASE), ("rigid", scaled_columns_base(ps.RIGID))):
+            cases = (
+                ("as modelled", scaled_columns_base(1.0, joint_factor)),
+                ("rigid", scaled_columns_base(ps.RIGID, joint_factor)),
+            )
+            for label, base in cases:
                 ps._base = base
                 try:
                     mo = ps.member_motions(sec, [-1], tuple(locked), walls)
@@ -218,11 +226,12 @@ def main() -> None:
     ap.add_argument("--check", type=Path, nargs="+", help="studies/plate_slide.py --out CSVs")
     ap.add_argument("--edge-joint", type=Path, nargs="+", help="configs: the cover's edge joint probe")
     ap.add_argument("--base-columns", type=Path, nargs="+", help="configs: the slot's walls made rigid, a probe")
+    ap.add_argument("--joint-factor", type=float, default=1.0, help="with --base-columns: on the cover's end joints")
     args = ap.parse_args()
     if args.edge_joint:
         edge_joint(args.edge_joint)
     elif args.base_columns:
-        base_columns(args.base_columns)
+        base_columns(args.base_columns, args.joint_factor)
     elif args.check:
         check(args.check)
     else:
