@@ -136,15 +136,17 @@ def members_tilt_rad_per_Nmm(part: list[LayerTiltLaw], alone: list[LayerTiltLaw]
 
 
 def counter_turn(
-    part: list[LayerTiltLaw], alone: list[LayerTiltLaw], lever_mm: np.ndarray, arm_mm: np.ndarray, slide_mm_per_N=None
-) -> CounterTurn:
+    part: list[LayerTiltLaw], alone: list[LayerTiltLaw], lever_mm: np.ndarray, arm_mm: np.ndarray,
+    slide_mm_per_N=None, members_tilt: tuple[np.ndarray, np.ndarray] | None = None,
+) -> CounterTurn:  # fmt: skip
     """The :class:`CounterTurn` of a stack whose layers' tilt laws are ``part`` (with their
     members) and ``alone`` (without), the top face ``lever_mm`` (n,) over each layer's pivot, and
     each unit's members' lever under the pull per regime ``arm_mm`` (regimes, n; :func:`unit_arms_mm`,
     in the part's lock order): the tilt rung turns a unit's members by the pull's moment about the
     layer's pivot, lever x dC; the frame turns them by arm x dC, so the difference is added.
-    ``slide_mm_per_N``: :func:`own_plane_slide_mm_per_N`'s, carried along."""
-    edges, tilt = members_tilt_rad_per_Nmm(part, alone)
+    ``slide_mm_per_N``: :func:`own_plane_slide_mm_per_N`'s, carried along; ``members_tilt``:
+    :func:`members_tilt_rad_per_Nmm`'s of the two, when the caller has it already."""
+    edges, tilt = members_tilt_rad_per_Nmm(part, alone) if members_tilt is None else members_tilt
     arm = np.asarray(arm_mm, dtype=float)[: len(tilt)]
     return CounterTurn(edges, (arm - np.asarray(lever_mm, dtype=float)) * tilt, slide_mm_per_N)
 

@@ -251,10 +251,10 @@ def part_counter_turn(
     lever = geometry.total_height_mm - layer_pivots_mm(geometry)
     laws = layer_laws(geometry.layers, material, mechanics)
     riding = unit_members(laws, members(geometry, material), _lock_order(part))
-    _, tilt = members_tilt_rad_per_Nmm(part, alone)
+    tilt = members_tilt_rad_per_Nmm(part, alone)
     z = member_planes_mm(stack_section(geometry, material))
-    slide = own_plane_slide_mm_per_N(riding, regimes.member_arm_mm, tilt, layer_pivots_mm(geometry), z)
-    return counter_turn(part, alone, lever, unit_arms_mm(riding, regimes.member_arm_mm, lever), slide)
+    slide = own_plane_slide_mm_per_N(riding, regimes.member_arm_mm, tilt[1], layer_pivots_mm(geometry), z)
+    return counter_turn(part, alone, lever, unit_arms_mm(riding, regimes.member_arm_mm, lever), slide, tilt)
 
 
 def _frozen(kept, *arrays: np.ndarray):
