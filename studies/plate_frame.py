@@ -143,26 +143,38 @@ def rigid_edge_base(f, s, cover: dict, z_cover: float) -> None:
 KEPT_BASE = ps._base
 
 
-def edge_joint(configs: list[Path]) -> None:
-    print("| design | regime | joint | base: translation mm/N | turn | moment's turn | members' ratio |")
-    print("|---|---|---|---|---|---|---|")
+def regimes_of(configs: list[Path]):
+    """For each config and regime: (the design's name, the regime from 1, its frame section, the
+    walls' factors, the layers locked before it)."""
     for path in configs:
         doc, _ = mst.designed(path)
         g, m = doc.geometry(), doc.material
         sec = stack_section(g, m)
         walls = ps.wall_factors(sec)
-        members = [-1, *range(len(g.layers) - 1)]
         for r, locked in enumerate(wp.regime_locked(Stack(layer_laws(g.layers, m, doc.mechanics)))):
-            for label, base in (("as modelled", KEPT_BASE), ("rigid at the edge", rigid_edge_base)):
-                ps._base = base
-                try:
-                    mo = ps.member_motions(sec, members, tuple(locked), walls)
-                finally:
-                    ps._base = KEPT_BASE
-                ratio = mo.turn_rad_per_N.sum() / mo.moment_turn_rad_per_N.sum()
-                cells = f"{mo.translation_mm_per_N[0]:.4f} | {1e3 * mo.turn_rad_per_N[0]:.3f} | "
-                cells += f"{1e3 * mo.moment_turn_rad_per_N[0]:.3f} | {ratio:.3f}"
-                print(f"| {doc.name} | {r + 1} | {label} | {cells} |")
+            yield doc.name, r + 1, sec, walls, tuple(locked)
+
+
+def motions_with_base(base, sec, members, locked, walls):
+    """ps.member_motions with the frame's base built by ``base`` for the call only."""
+    ps._base = base
+    try:
+        return ps.member_motions(sec, members, locked, walls)
+    finally:
+        ps._base = KEPT_BASE
+
+
+def edge_joint(configs: list[Path]) -> None:
+    print("| design | regime | joint | base: translation mm/N | turn | moment's turn | members' ratio |")
+    print("|---|---|---|---|---|---|---|")
+    for name, regime, sec, walls, locked in regimes_of(configs):
+        members = [-1, *range(len(sec.theta_rad) - 1)]
+        for label, base in (("as modelled", KEPT_BASE), ("rigid at the edge", rigid_edge_base)):
+            mo = motions_with_base(base, sec, members, locked, walls)
+            ratio = mo.turn_rad_per_N.sum() / mo.moment_turn_rad_per_N.sum()
+            cells = f"{mo.translation_mm_per_N[0]:.4f} | {1e3 * mo.turn_rad_per_N[0]:.3f} | "
+            cells += f"{1e3 * mo.moment_turn_rad_per_N[0]:.3f} | {ratio:.3f}"
+            print(f"| {name} | {regime} | {label} | {cells} |")
 
 
 def scaled_columns_base(factor: float, joint_factor: float = 1.0):
@@ -201,24 +213,12 @@ def base_columns(configs: list[Path], joint_factor: float = 1.0) -> None:
     its slot walls rigid"), the cover's end joints ``joint_factor`` times as stiff."""
     print("| design | regime | slot walls | base: translation mm/N | turn under the pull, mrad/N | moment's turn |")
     print("|---|---|---|---|---|---|")
-    for path in configs:
-        doc, _ = mst.designed(path)
-        g, m = doc.geometry(), doc.material
-        sec = stack_section(g, m)
-        walls = ps.wall_factors(sec)
-        for r, locked in enumerate(wp.regime_locked(Stack(layer_laws(g.layers, m, doc.mechanics)))):
-            cases = (
-                ("as modelled", scaled_columns_base(1.0, joint_factor)),
-                ("rigid", scaled_columns_base(ps.RIGID, joint_factor)),
-            )
-            for label, base in cases:
-                ps._base = base
-                try:
-                    mo = ps.member_motions(sec, [-1], tuple(locked), walls)
-                finally:
-                    ps._base = KEPT_BASE
-                cells = f"{mo.translation_mm_per_N[0]:.4f} | {1e3 * mo.turn_rad_per_N[0]:.3f} | "
-                print(f"| {doc.name} | {r + 1} | {label} | {cells}{1e3 * mo.moment_turn_rad_per_N[0]:.3f} |")
+    cases = (("as modelled", 1.0), ("rigid", ps.RIGID))
+    for name, regime, sec, walls, locked in regimes_of(configs):
+        for label, factor in cases:
+            mo = motions_with_base(scaled_columns_base(factor, joint_factor), sec, [-1], locked, walls)
+            cells = f"{mo.translation_mm_per_N[0]:.4f} | {1e3 * mo.turn_rad_per_N[0]:.3f} | "
+            print(f"| {name} | {regime} | {label} | {cells}{1e3 * mo.moment_turn_rad_per_N[0]:.3f} |")
 
 
 def main() -> None:
