@@ -108,10 +108,16 @@ def unit_arms_mm(riding: list[list[list[tuple[float, int]]]], member_arm_mm: np.
     out = np.tile(lever, (len(riding), 1))
     for r, units in enumerate(riding):
         for j, members in enumerate(units):
-            total = sum(c for c, _ in members)
-            if total > 0.0:
-                out[r, j] = sum(c * member_arm_mm[r, k + 1] for c, k in members) / total
+            if members:
+                out[r, j] = sum(share * member_arm_mm[r, k + 1] for share, k in _shares(members))
     return out
+
+
+def _shares(members: list[tuple[float, int]]) -> list[tuple[float, int]]:
+    """A unit's riding members (compliance, which) as (the share of the unit's members' compliance,
+    which): how its members' turn under a moment divides among them."""
+    total = sum(c for c, _ in members)
+    return [(c / total, k) for c, k in members]
 
 
 def members_tilt_rad_per_Nmm(part: list[LayerTiltLaw], alone: list[LayerTiltLaw]) -> tuple[np.ndarray, np.ndarray]:
@@ -166,8 +172,7 @@ def own_plane_slide_mm_per_N(
     for r, tilt in enumerate(members_tilt):
         slide = 0.0
         for j, members in enumerate(riding[r]):
-            total = sum(c for c, _ in members)
-            for c, k in members:
-                slide += member_arm_mm[r, k + 1] * (c / total) * tilt[j] * (pivot_mm[j] - member_z_mm[k + 1])
+            for share, k in _shares(members):
+                slide += member_arm_mm[r, k + 1] * share * tilt[j] * (pivot_mm[j] - member_z_mm[k + 1])
         out.append(slide)
     return np.array(out)
