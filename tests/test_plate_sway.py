@@ -122,7 +122,9 @@ def rung_rows(name: str) -> list[tuple[str, int, int, float]]:
 def test_the_same_layer_plates_follow_the_whole_part_rung(tmp_path):
     """Against the whole-part rung's own measure of each plate (an independent plane-strain FE of
     the part's section, studies/plate_slide.py --sweep, kept in studies/data): same-layer stacks
-    over the box, regime 1, frame / rung within 0.80-1.25 (measured 0.83-1.23, docs 4.7)."""
+    over the box, regime 1, frame / rung within 0.75-1.25 (measured 0.78-1.22 against the magnet
+    centre's slide; 0.83-1.23 against its pocket floor's, the rung's measure before 2026-12-02,
+    when this bound was 0.80; docs 4.7)."""
     base = yaml.safe_load(FORWARD.read_text())
     for name, _, plate, rung in rung_rows("plate_slide_sweep.csv"):
         theta, t, h, p = (float(v) for v in name.split("-")[1:])
@@ -131,7 +133,7 @@ def test_the_same_layer_plates_follow_the_whole_part_rung(tmp_path):
         path = tmp_path / f"{name}.yaml"
         path.write_text(yaml.safe_dump(spec))
         _, _, sec = section(path)
-        assert 0.80 < ps.plate_translations_mm_per_N(sec)[plate - 1] / rung < 1.25, (name, plate)
+        assert 0.75 < ps.plate_translations_mm_per_N(sec)[plate - 1] / rung < 1.25, (name, plate)
 
 
 def test_the_base_follows_the_whole_part_rung_in_every_regime():

@@ -218,15 +218,19 @@ def _load(geometry, basis_mesh, element, patch_mm: float, offset_mm: float = 0.0
     return asm(traction, fb)
 
 
-def rigid_fit(xz: np.ndarray, u: np.ndarray) -> tuple[float, float, float]:
+def rigid_fit(xz: np.ndarray, u: np.ndarray, about_xz=None) -> tuple[float, float, float]:
     """(U_x, U_z, theta) of the least-squares rigid motion u ~ U + theta e_y x (x - c) of points
     ``xz`` (n, 2) moved by ``u`` (n, 2); theta about +y in the (x, z) plane: u_x = -theta dz,
-    u_z = theta dx (counter-clockwise in x-z seen from -y positive)."""
+    u_z = theta dx (counter-clockwise in x-z seen from -y positive). U is the motion of the
+    points' centroid c, or of the point ``about_xz`` when given (the same rigid motion)."""
     c = xz.mean(axis=0)
     d = xz - c
     U = u.mean(axis=0)
     du = u - U
     theta = float((d[:, 0] * du[:, 1] - d[:, 1] * du[:, 0]).sum() / (d**2).sum())
+    if about_xz is not None:
+        dx, dz = np.asarray(about_xz, dtype=float) - c
+        U = U + np.array([-theta * dz, theta * dx])
     return float(U[0]), float(U[1]), theta
 
 
@@ -270,9 +274,13 @@ def _system(geometry, material, options: PartOptions, offsets_mm: Sequence[float
 
 
 def _motion(geometry, basis, tag: np.ndarray, u: np.ndarray, options: PartOptions, t0: float) -> MagnetMotion:
-    """The magnet's rigid motion in the displacement ``u`` (the least-squares fit of its nodes')."""
+    """The magnet's rigid motion in the displacement ``u``: the least-squares fit of its nodes' (or
+    of the floor's it rests on), the translation its centre's. The resting magnet's points lie on
+    its pocket's floor, half its thickness below its centre: a turn moves the centre that much
+    further along x than the floor (before 2026-12-02 the slide was the floor's)."""
     xz, uv = _magnet_points(geometry, basis, tag, u, options.magnet == "bonded")
-    Ux, Uz, th = rigid_fit(xz, uv)
+    centre = (0.0, geometry.z_magnet_bottom_mm + 0.5 * geometry.magnet.thickness_mm)
+    Ux, Uz, th = rigid_fit(xz, uv, centre)
     return MagnetMotion(-Uz, Ux, th, basis.N, time.perf_counter() - t0, {"elements": basis.mesh.t.shape[1]})
 
 
