@@ -19,7 +19,7 @@ from click.testing import CliRunner
 from mst_cli.cli.app import main
 from mst_cli.estimation.offset_reading import OffsetEstimator
 from mst_cli.model.general_load import field_jacobian_T, field_T, fields_T, loaded_stack, pose_field_T
-from mst_cli.model.mechanics.lateral import lateral_stiffness_N_per_mm
+from mst_cli.model.mechanics.lateral import closed_block_lateral_N_per_mm, lateral_stiffness_N_per_mm
 from mst_cli.model.offcentre import simulate_offcentre
 from mst_cli.model.plate_sway import section_regimes, stack_section
 from mst_cli.sensor.as_printed import as_printed
@@ -111,9 +111,11 @@ def test_small_loads_slide_as_l0_springs_in_series(scene, stack):
     sways = (regimes.base_sway_mm_per_N, regimes.plate_sway_mm_per_N)
     for j, c in zip((n, n + 1), sways):  # before the first lock: regime 1's compliance
         np.testing.assert_allclose(slide[:, j], np.outer(0.2 * F * c[0], [1.0, 0.0]), rtol=1e-6)
-    # past its lock a layer's pads stick: its slide stays where the lock left it
+    # past its lock a layer's pads stick and it shears as its filled block (90 times stiffer here)
+    block = closed_block_lateral_N_per_mm(geometry.layers[0], material)
+    assert 50.0 * k[0, 0] < block
     past = stack.slides_mm(np.array([1.5 * locks[0]]), (0.2, 0.0))[0, 0, 0]
-    assert past == pytest.approx(0.2 * locks[0] / k[0, 0], rel=2e-3)
+    assert past == pytest.approx(0.2 * (locks[0] / k[0, 0] + 0.5 * locks[0] / block), rel=2e-3)
 
 
 def run(args):

@@ -109,11 +109,16 @@ def polygon_mesh(
     return mesh
 
 
-def ring_mesh(cell: HexCell, spacing_in_t: float = SPACING_IN_T, levels: int = LEVELS, mirror: bool = False):
-    """The whole profile's mesh (``mirror``: built on the profile mirrored in x, x -> -x)."""
+def ring_mesh(
+    cell: HexCell, spacing_in_t: float = SPACING_IN_T, levels: int = LEVELS, mirror: bool = False, filled: bool = False
+):
+    """The whole profile's mesh (``mirror``: built on the profile mirrored in x, x -> -x;
+    ``filled``: the outer hexagon with its cavity filled, a closed layer)."""
     outer, inner = np.array(cell.outer_profile_xz()), np.array(cell.inner_profile_xz())
     if mirror:
         outer, inner = outer[::-1] * [-1, 1], inner[::-1] * [-1, 1]
+    if filled:
+        return polygon_mesh(outer, None, spacing_in_t * cell.t_mm, outer, levels, 0.5 * cell.t_mm)
     corners = np.concatenate([outer, inner])
     return polygon_mesh(outer, inner, spacing_in_t * cell.t_mm, corners, levels, 0.5 * cell.t_mm)
 
@@ -142,10 +147,12 @@ def _held_solve(K, N: int, values: dict[int, float] | np.ndarray, held: np.ndarr
 
 
 def check_k_x_N_per_mm(
-    cell: HexCell, material: Material, spacing_in_t: float = SPACING_IN_T, levels: int = LEVELS, mirror: bool = False
-) -> float:
-    """k_x (N/mm) of the whole profile in plane-strain linear elasticity: bottom held, top at (1, 0)."""
-    basis = Basis(ring_mesh(cell, spacing_in_t, levels, mirror), ElementVector(ElementTriP2()))
+    cell: HexCell, material: Material, spacing_in_t: float = SPACING_IN_T, levels: int = LEVELS, mirror: bool = False,
+    filled: bool = False,
+) -> float:  # fmt: skip
+    """k_x (N/mm) of the whole profile in plane-strain linear elasticity: bottom held, top at (1, 0)
+    (``filled``: of the cavity filled)."""
+    basis = Basis(ring_mesh(cell, spacing_in_t, levels, mirror, filled), ElementVector(ElementTriP2()))
     K = asm(linear_elasticity(*lame_parameters(material.youngs_modulus_MPa, material.poisson_ratio)), basis).tocsr()
     z = basis.doflocs[1]
     tol = 1e-9 * cell.h_mm
@@ -160,11 +167,11 @@ def check_k_x_N_per_mm(
 
 
 def check_k_y_inf_N_per_mm(
-    cell: HexCell, material: Material, spacing_in_t: float = SPACING_IN_T, levels: int = LEVELS
+    cell: HexCell, material: Material, spacing_in_t: float = SPACING_IN_T, levels: int = LEVELS, filled: bool = False
 ) -> float:
     """k_y (N/mm) of an infinitely deep web: antiplane shear G laplace(u_y) = 0 on the whole
-    profile, bottom at 0, top at 1, times the depth D."""
-    basis = Basis(ring_mesh(cell, spacing_in_t, levels), ElementTriP2())
+    profile (``filled``: the cavity filled), bottom at 0, top at 1, times the depth D."""
+    basis = Basis(ring_mesh(cell, spacing_in_t, levels, filled=filled), ElementTriP2())
     G = material.shear_modulus_MPa
 
     @BilinearForm

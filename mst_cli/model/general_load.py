@@ -16,9 +16,10 @@ The load model and what it assumes:
   friction cone), so a layer's slide is the integral of dF_t / k_t along its compression path:
   c(Fz) = (1 / Fz) int_0^Fz dF / k(d(F)), d(F) the layer's centred compression (the tilt's
   change of it ignored). k from the rung: ``spring`` and ``frame`` take L0's small-load closed
-  forms (:mod:`mst_cli.model.mechanics.lateral`) up to the layer's lock and no further slide
-  past it (the pads pressed together stick: L2's stuck tangent past the lock is 8 to 40 times
-  its free one, docs/design.md section 4.4); ``continuum`` takes L2's lateral tangents along
+  forms (:mod:`mst_cli.model.mechanics.lateral`) up to the layer's lock, and past it the
+  pads pressed together stick (L2's stuck tangent past the lock is 8 to 40 times its free one,
+  docs/design.md section 4.4) and the closed layer shears as its filled block, as the whole-part
+  rung closes it (a few um/N; it was taken rigid before 2026-12-02); ``continuum`` takes L2's lateral tangents along
   its compression path (:func:`~mst_cli.model.mechanics.continuum_lateral.lateral_path`),
   frictionless before the lock and stuck past it, k_y times L0's free-face factor.
 * With the part's members, the housing's base and the TPU plates between the layers let the
@@ -67,7 +68,11 @@ from mst_cli.model.counter_turn import (
 from mst_cli.model.load_path import members
 from mst_cli.model.material import Material
 from mst_cli.model.mechanics import layer_laws
-from mst_cli.model.mechanics.lateral import depth_end_factor, lateral_stiffness_N_per_mm
+from mst_cli.model.mechanics.lateral import (
+    closed_block_lateral_N_per_mm,
+    depth_end_factor,
+    lateral_stiffness_N_per_mm,
+)
 from mst_cli.model.mechanics.tilt import LayerTiltLaw, TiltError, centred_compression_mm
 from mst_cli.model.member_pose import MemberPose
 from mst_cli.model.part_laws import unit_members
@@ -115,10 +120,12 @@ def lateral_law(tilt: LayerTiltLaw, k_x, k_y) -> LayerLateralLaw:
 
 
 def _l0_law(tilt: LayerTiltLaw, cell, material: Material) -> LayerLateralLaw:
-    """L0: the small-load k up to the lock, stuck (no slide) past it."""
+    """L0: the small-load k up to the lock; past it the pads stick and the closed layer shears as
+    its filled block (:func:`~mst_cli.model.mechanics.lateral.closed_block_lateral_N_per_mm`)."""
     k0 = lateral_stiffness_N_per_mm(cell, material)
+    closed = closed_block_lateral_N_per_mm(cell, material)
     lock = tilt.pad_gap_mm
-    return lateral_law(tilt, *(lambda d, k=k: np.where(d < lock, k, np.inf) for k in k0))
+    return lateral_law(tilt, *(lambda d, k=k: np.where(d < lock, k, closed) for k in k0))
 
 
 L2_FRACTIONS = (0.0, 0.25, 0.5, 0.75, 0.95, 1.05)  # of the lock stroke where L2's lateral tangents are solved

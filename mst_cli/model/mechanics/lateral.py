@@ -125,6 +125,17 @@ def lateral_stiffness_N_per_mm(cell: HexCell, material: Material, depth_mm: floa
     return float(k_x), float(k_y)
 
 
+def closed_block_lateral_N_per_mm(cell: HexCell, material: Material) -> float:
+    """The lateral stiffness (N/mm, along x or y alike) of a layer past its lock taken as its
+    closed cavity filled, as the whole-part rung and the issue's independent model close it: a
+    TPU block bonded to the plates, in shear through the pads' width, G D 2p / h. The tips'
+    triangles beyond the pads, their faces free and sloping at theta, carry little of it: against
+    an independent plane-strain FE of the filled hexagon (tools/lateral_check.py's mesh; tests/
+    test_lateral.py) this is 1-3 % stiff along x and 0-5 % soft along y, where the whole hexagon
+    in uniform shear over each height is up to 33 % stiff (11 degree walls)."""
+    return material.shear_modulus_MPa * cell.depth_mm * 2.0 * cell.p_mm / cell.h_mm
+
+
 def small_load_lateral_N_per_mm(cell: HexCell, material: Material, mechanics: str) -> tuple[float, float]:
     """(k_x, k_y) at small load from the rung ``mst simulate`` uses: L0's closed forms for the
     spring and frame rungs, L2's solves (k_y with L0's free-face factor) for the continuum."""
