@@ -18,6 +18,7 @@ from mst_cli.model.general_load import loaded_stack, pose_field_T
 from mst_cli.model.load_path import Members, members
 from mst_cli.model.mechanics import layer_laws
 from mst_cli.model.mechanics.depth import in_web
+from mst_cli.model.mechanics.lateral import closed_block_lateral_N_per_mm
 from mst_cli.model.mechanics.tilt import solve_layer_tilt
 from mst_cli.model.part_laws import SeriesMember, cover_host, part_layer_laws, unit_tilt_law
 from mst_cli.model.plate_sway import section_regimes, stack_section
@@ -157,11 +158,12 @@ def test_a_layers_spec_reads_the_layers_alone_through_the_api(scene):
 
 
 def test_past_every_lock_a_tangential_force_slides_the_magnet_by_the_sections_sway_alone(scene):
-    """Past the last lock every layer is stuck (its slide holds), so a tangential force along x
-    slides the magnet further only by the base's and the plates' sway with every layer filled
-    (model.plate_sway.section_regimes' last regime) and by the cover, which never locks, turning
+    """Past the last lock every layer is stuck and shears as its filled block
+    (lateral.closed_block_lateral_N_per_mm), so a tangential force along x slides the magnet
+    further by those blocks in series, the base's and the plates' sway with every layer filled
+    (model.plate_sway.section_regimes' last regime) and the cover, which never locks, turning
     about its own plane (model.counter_turn's slide past the last lock) per newton at every normal
-    force; none along y; the layers alone have none of them."""
+    force; along y by the blocks alone; the layers alone have none of the members' terms."""
     geometry, material = scene
     part = loaded_stack(geometry, material, "spring", whole_part=True)
     alone = loaded_stack(geometry, material, "spring", whole_part=False)
@@ -173,6 +175,8 @@ def test_past_every_lock_a_tangential_force_slides_the_magnet_by_the_sections_sw
     F = np.array([1.5, 2.0, 3.0]) * last
     slide = part.slides_mm(F, (1.0, 1.0)).sum(axis=1)  # per unit of Fx / Fz and Fy / Fz: U(F)
     own_plane = part.counter_turn.slide_mm_per_N[-1]
-    np.testing.assert_allclose(np.diff(slide[:, 0]) / np.diff(F), base[-1] + plates[-1] + own_plane, rtol=1e-6)
-    np.testing.assert_allclose(np.diff(slide[:, 1]) / np.diff(F), 0.0, atol=1e-15)
+    blocks = sum(1.0 / closed_block_lateral_N_per_mm(c, material) for c in geometry.layers)
+    rate = np.diff(slide, axis=0) / np.diff(F)[:, None]
+    np.testing.assert_allclose(rate[:, 0], blocks + base[-1] + plates[-1] + own_plane, rtol=1e-6)
+    np.testing.assert_allclose(rate[:, 1], blocks, rtol=1e-6)
     assert base[-1] > 0.01 and abs(plates[-1]) < 1e-7  # the slot's walls sway; filled blocks tie the plates
