@@ -19,9 +19,10 @@ The load model and what it assumes:
   forms (:mod:`mst_cli.model.mechanics.lateral`) up to the layer's lock, and past it the
   pads pressed together stick (L2's stuck tangent past the lock is 8 to 40 times its free one,
   docs/design.md section 4.4) and the closed layer shears as its filled block, as the whole-part
-  rung closes it (a few um/N; it was taken rigid before 2026-12-02); ``continuum`` takes L2's lateral tangents along
-  its compression path (:func:`~mst_cli.model.mechanics.continuum_lateral.lateral_path`),
-  frictionless before the lock and stuck past it, k_y times L0's free-face factor.
+  rung closes it (a few um/N; it was taken rigid before 2026-12-02); ``continuum`` takes L2's
+  lateral tangents along its compression path
+  (:func:`~mst_cli.model.mechanics.continuum_lateral.lateral_path`), frictionless before the lock
+  and stuck past it, k_y times L0's free-face factor.
 * With the part's members, the housing's base and the TPU plates between the layers let the
   stack translate too, by c_b Fx and c_p Fx, each stepping as the layers lock
   (:func:`section_sway_laws`: a plane frame of the walls, the plates, the cover and the slot's

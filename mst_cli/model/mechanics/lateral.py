@@ -131,7 +131,7 @@ def closed_block_lateral_N_per_mm(cell: HexCell, material: Material) -> float:
     TPU block bonded to the plates, in shear through the pads' width, G D 2p / h. The tips'
     triangles beyond the pads, their faces free and sloping at theta, carry little of it: against
     an independent plane-strain FE of the filled hexagon (tools/lateral_check.py's mesh; tests/
-    test_lateral.py) this is 1-3 % stiff along x and 0-5 % soft along y, where the whole hexagon
+    test_lateral.py) this is 1-3 % stiff along x and 1-5 % soft along y, where the whole hexagon
     in uniform shear over each height is up to 33 % stiff (11 degree walls)."""
     return material.shear_modulus_MPa * cell.depth_mm * 2.0 * cell.p_mm / cell.h_mm
 
