@@ -241,20 +241,21 @@ def loaded_stack(
 def _counter_turn(geometry: SensorGeometry, material: Material, mechanics: str, lever_factor: float) -> CounterTurn:
     """The part's members' counter-turn (model.counter_turn; 5 to 10 ms on the bundled designs past
     the frame's solves), kept per part and rung as the frame is."""
-    part = tilt_laws(geometry, material, mechanics, lever_factor, True)
-    regimes = _section_regimes(geometry, material, _lock_order(part))
-    turn = part_counter_turn(geometry, material, mechanics, lever_factor, regimes)
+    turn = part_counter_turn(geometry, material, mechanics, lever_factor)
     assert turn.slide_mm_per_N is not None  # part_counter_turn gives it
     return _frozen(turn, turn.edges_N, turn.tilt_rad_per_N, turn.slide_mm_per_N)
 
 
 def part_counter_turn(
-    geometry: SensorGeometry, material: Material, mechanics: str, lever_factor: float, regimes: SectionRegimes
-) -> CounterTurn:
-    """The counter-turn of a part from its section's frame ``regimes`` (in the part's lock order):
-    each unit's members, as they ride with it regime by regime (model.part_laws.unit_members),
-    turned by the pull at their own levers (model.counter_turn.unit_arms_mm)."""
+    geometry: SensorGeometry, material: Material, mechanics: str, lever_factor: float,
+    regimes: SectionRegimes | None = None,
+) -> CounterTurn:  # fmt: skip
+    """The counter-turn of a part from its section's frame ``regimes`` (in the part's lock order;
+    None: the part's own, kept per part): each unit's members, as they ride with it regime by
+    regime (model.part_laws.unit_members), turned by the pull at their own levers
+    (model.counter_turn.unit_arms_mm)."""
     part = tilt_laws(geometry, material, mechanics, lever_factor, True)
+    regimes = _section_regimes(geometry, material, _lock_order(part)) if regimes is None else regimes
     alone = tilt_laws(geometry, material, mechanics, lever_factor, False)
     lever = geometry.total_height_mm - layer_pivots_mm(geometry)
     laws = layer_laws(geometry.layers, material, mechanics)
