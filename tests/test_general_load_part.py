@@ -179,4 +179,8 @@ def test_past_every_lock_a_tangential_force_slides_the_magnet_by_the_sections_sw
     rate = np.diff(slide, axis=0) / np.diff(F)[:, None]
     np.testing.assert_allclose(rate[:, 0], blocks + base[-1] + plates[-1] + own_plane, rtol=1e-6)
     np.testing.assert_allclose(rate[:, 1], blocks, rtol=1e-6)
-    assert base[-1] > 0.01 and abs(plates[-1]) < 1e-7  # the slot's walls sway; filled blocks tie the plates
+    assert base[-1] > 0.01  # the slot's walls sway
+    # between two filled blocks a plate gives only its own shear and turn on the blocks' beds: on
+    # the rung (studies/data/plate_slide.csv, past two locks) 0.0004 to 0.0017 mm/N against the
+    # base's 0.09 to 0.11, under 2 % of it; here (the forward design past every lock) 1.8 %
+    assert 0.0 < plates[-1] < 0.05 * base[-1]

@@ -1,5 +1,6 @@
 """A plane frame by the stiffness method: Timoshenko beam elements, rotational springs between two
-nodes tied in position, held dofs, nodal loads. Each node has three dofs (u along x, w along z,
+nodes tied in position, translational links (two nodes' positions tied by springs along x and z,
+their turns free), held dofs, nodal loads. Each node has three dofs (u along x, w along z,
 a turn counter-clockwise from x to z). Pure numpy, no I/O.
 
 Used by :mod:`mst_cli.model.plate_sway` (the stack under a tangential force) and
@@ -51,13 +52,15 @@ def element_stiffnesses(a, b, EA, EI, kGA) -> np.ndarray:
 
 class Frame:
     """Nodes, elements (a, b, EA, EI, kGA), springs (a, b, k_turn: the two nodes tied in position
-    by ``tie`` N/mm, their turns through k_turn N mm/rad) and held dofs, assembled on solve."""
+    by ``tie`` N/mm, their turns through k_turn N mm/rad), links (a, b, k_x, k_z: the positions
+    tied along x and z, N/mm, the turns free) and held dofs, assembled on solve."""
 
     def __init__(self, tie_N_per_mm: float) -> None:
         self.tie_N_per_mm = tie_N_per_mm
         self.nodes: list[tuple[float, float]] = []
         self.elements: list[tuple[int, int, float, float, float]] = []
         self.springs: list[tuple[int, int, float]] = []
+        self.links: list[tuple] = []  # (a, b, k_x, k_z, offset of a (x, z), offset of b (x, z))
         self.held: list[int] = []
 
     def node(self, x_mm: float, z_mm: float) -> int:
@@ -69,6 +72,14 @@ class Frame:
 
     def spring(self, a: int, b: int, k_turn_Nmm_per_rad: float) -> None:
         self.springs.append((a, b, k_turn_Nmm_per_rad))
+
+    def link(
+        self, a: int, b: int, k_x_N_per_mm: float, k_z_N_per_mm: float,
+        offset_a_mm: tuple[float, float] = (0.0, 0.0), offset_b_mm: tuple[float, float] = (0.0, 0.0),
+    ) -> None:  # fmt: skip
+        """Springs along x and z between a point held rigidly at ``offset_a_mm`` (x, z) from node
+        a and one at ``offset_b_mm`` from node b (a rigid body's point: exact, no stiff element)."""
+        self.links.append((a, b, k_x_N_per_mm, k_z_N_per_mm, *offset_a_mm, *offset_b_mm))
 
     def hold(self, node: int, dofs: tuple[int, ...] = (0, 1, 2)) -> None:
         self.held += [3 * node + d for d in dofs]
@@ -92,6 +103,8 @@ class Frame:
             np.add.at(K, (j, j), k)
             np.add.at(K, (i, j), -k)
             np.add.at(K, (j, i), -k)
+        if self.links:
+            _add_links(K, np.array(self.links, dtype=float))
         return K
 
     def solve(self, loads: dict[int, float]) -> np.ndarray:
@@ -111,3 +124,18 @@ class Frame:
         u = np.zeros((n, len(cases)))
         u[free] = np.linalg.solve(K[np.ix_(free, free)], f[free])
         return u.T
+
+
+def _add_links(K: np.ndarray, links: np.ndarray) -> None:
+    """Add :meth:`Frame.link`'s springs (rows a, b, k_x, k_z, offsets) to ``K`` in place. A point
+    (dx, dz) off a node moves (u - turn dz, w + turn dx); the springs act on the two points'
+    relative motion, so the element is B^T diag(k_x, k_z) B with B = [-T_a, T_b]."""
+    m = len(links)
+    a, b = links[:, 0].astype(int), links[:, 1].astype(int)
+    B = np.zeros((m, 2, 6))
+    for col, sign, (ox, oz) in ((0, -1.0, (4, 5)), (3, 1.0, (6, 7))):
+        B[:, 0, col], B[:, 1, col + 1] = sign, sign
+        B[:, 0, col + 2], B[:, 1, col + 2] = -sign * links[:, oz], sign * links[:, ox]
+    k_e = np.einsum("mri,mr,mrj->mij", B, links[:, 2:4], B)
+    dofs = np.concatenate([3 * a[:, None] + np.arange(3), 3 * b[:, None] + np.arange(3)], axis=1)
+    np.add.at(K, (dofs[:, :, None], dofs[:, None, :]), k_e)

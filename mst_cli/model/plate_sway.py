@@ -25,19 +25,22 @@ The closed form is a plane frame (plane strain, per the part's depth D; :mod:`mo
   beam with model.load_path's section of it (its pocket and its insert); the cover is a beam too,
   layer 1's roots turning into it alike, on the board slot's two walls (model.housing_base's
   portal: Timoshenko columns, their roots and tops built in), or held where there is no slot;
-* a locked layer is its filled block, rigid over |x| < its wall heads.
+* a locked layer is its filled block over |x| < its wall heads: a rigid core at mid-height on a
+  bed of springs to the plates under and over it (the block's shear and squeeze, the oedometric
+  modulus along z), on which a TPU plate bends; rigid only where the walls are scaled to L0 (the
+  layers alone between rigid plates, :func:`wall_factors`).
 
 A force of 1 N along +x at the top face. What a plate adds is its translation: the magnet's slide
 with that plate in TPU less with it rigid, less the share of the cap's turn about the plate's
 mid-plane (mst's stack already turns the plates with their layers), summed over the plates, each
 alone in TPU (the rung's measure); the base's the same, about the cover's mid-plane. Along y (the
 depth) nothing is added: the frame is the section's. Against the rung's measure
-(studies/plate_frame.py) the plates are 0.83 to 1.23 times it on same-layer designs, 0.86 to 1.59
-between open layers on the bundled ones and 0.47 to 1.08 beside a locked layer; the base is 0.76
-to 1.12 in every regime of the bundled designs, where the column form alone
-(model.housing_base.base_sway_mm_per_N) was 0.50 to 1.35. The same solves, with a pure moment at
-the cap beside the pull, give the members' turn ratio (:class:`SectionRegimes`) that
-:mod:`mst_cli.model.counter_turn` takes. Pure numpy, no I/O.
+(studies/plate_frame.py) the plates are 0.78 to 1.22 times it on same-layer designs, 0.65 to 1.16
+between open layers on the bundled ones and 1.24 to 1.88 beside a locked layer (0.43 to 0.84 with
+the block rigid); the base is 0.83 to 1.11 in every regime of the bundled designs (0.76 to 1.11),
+where the column form alone (model.housing_base.base_sway_mm_per_N) was 0.50 to 1.35. The same
+solves, with a pure moment at the cap beside the pull, give the members' turn ratio
+(:class:`SectionRegimes`) that :mod:`mst_cli.model.counter_turn` takes. Pure numpy, no I/O.
 """
 
 from __future__ import annotations
@@ -124,17 +127,17 @@ def _beam_z_mm(sec: StackSection) -> list[float]:
 
 def frame_pull(
     sec: StackSection, locked=(), tpu_plate: int | None = None, walls=None, guided: bool = False,
-    zones: tuple[bool, bool] = (True, True), roots: bool = True,
+    zones: tuple[bool, bool] = (True, True), roots: bool = True, rigid_blocks: bool = False,
 ) -> tuple[float, float]:  # fmt: skip
     """(the magnet's slide, the cap's turn) per newton along +x at the top face: the first two of
     :func:`frame_response` (its arguments)."""
-    slide, turn, _ = frame_response(sec, locked, tpu_plate, walls, guided, zones, roots)
+    slide, turn, _ = frame_response(sec, locked, tpu_plate, walls, guided, zones, roots, rigid_blocks)
     return slide, turn
 
 
 def frame_response(
     sec: StackSection, locked=(), tpu_plate: int | None = None, walls=None, guided: bool = False,
-    zones: tuple[bool, bool] = (True, True), roots: bool = True,
+    zones: tuple[bool, bool] = (True, True), roots: bool = True, rigid_blocks: bool = False,
 ) -> tuple[float, float, float]:  # fmt: skip
     """(the magnet's slide along +x, mm, the cap's turn, counter-clockwise from x to z, rad) per
     newton along +x at the top face, and the cap's turn per N mm of a pure moment (counter-
@@ -142,7 +145,9 @@ def frame_response(
     ``tpu_plate`` (from 0: the plate over layer j; -1: the housing's base) in TPU and every other
     member rigid, the walls' stiffness times ``walls`` (n,) [1], the cap held from turning when ``guided``; ``zones``
     (under the walls' footprints on the plates, the walls' ends in their pads), ``roots``: the
-    rigid zones and the root springs (module docstring; studies/plate_frame.py switches them)."""
+    rigid zones and the root springs (module docstring; studies/plate_frame.py switches them);
+    ``rigid_blocks``: a locked layer a rigid tie between its plates (the layers alone between
+    rigid plates, :func:`wall_factors`), not its elastic block (:func:`_block`)."""
     n, s = len(sec.theta_rad), sec
     rigid = RIGID * s.E_prime_MPa * s.depth_mm
     f = Frame(tie_N_per_mm=rigid)
@@ -150,13 +155,17 @@ def frame_response(
     L = wall_centreline_length_mm(s.theta_rad, s.t_mm, s.h_mm)
     k_root = root_spring_Nmm_per_rad(s.theta_rad, s.t_mm, L, s.depth_mm, s.E_prime_MPa)
     walls = np.ones(n) if walls is None else np.asarray(walls, dtype=float)
-    beams = [_plate_beam(f, s, j, z, locked, tpu_plate, zones) for j, z in enumerate(beam_z)]
+    blocks = () if rigid_blocks else tuple(locked)
+    beams = [_plate_beam(f, s, j, z, locked, tpu_plate, zones, blocks) for j, z in enumerate(beam_z)]
     if tpu_plate == -1 and s.slot_height_mm > 0.0:
         _base(f, s, beams[0], beam_z[0])
     else:
         for node in beams[0].values():
             f.hold(node)
     for i in range(n):
+        if i in blocks:
+            _block(f, s, i, beams, tpu_plate)
+            continue
         if i in locked:  # the filled block ties the two plates
             f.beam(beams[i][0.0], beams[i + 1][0.0], rigid, rigid, math.inf)
             continue
@@ -170,10 +179,12 @@ def frame_response(
     return float(pull[3 * cap] - turn * (s.z_magnet_mm - beam_z[n])), float(turn), float(moment[3 * cap + 2])
 
 
-def _plate_beam(f: Frame, s: StackSection, j: int, z: float, locked, tpu_plate, zones) -> dict:
+def _plate_beam(f: Frame, s: StackSection, j: int, z: float, locked, tpu_plate, zones, blocks=()) -> dict:
     """Beam j (0 the cover, n the cap) into ``f`` on its mid-plane z: {x: node} at its stations.
     Rigid but where it is plate ``tpu_plate``, outside the open walls' footprints (``zones[0]``)
-    and outside any filled block beside it (a locked layer has no walls of its own)."""
+    and outside any filled block beside it (a locked layer has no walls of its own) unless that
+    block is elastic (``blocks``, :func:`_block`): then the plate over it bends on it, its
+    stations the block's."""
     n, E, G, D = len(s.theta_rad), s.E_prime_MPa, s.G_MPa, s.depth_mm
     layers = [i for i in (j - 1, j) if 0 <= i < n]  # under beam j (its heads), over it (its feet)
     half_print = 0.5 * s.t_mm / np.sin(s.theta_rad)  # half a wall's footprint on its pad
@@ -184,6 +195,9 @@ def _plate_beam(f: Frame, s: StackSection, j: int, z: float, locked, tpu_plate, 
             if zones[0] and i not in locked:
                 zone.append((x - half_print[i], x + half_print[i]))
                 xs |= {x - half_print[i], x + half_print[i]}
+    if _is_tpu(j, n, tpu_plate):  # it bends on the blocks beside it
+        for i in set(layers) & set(blocks):
+            xs |= {float(x) for x in block_stations_mm(s, i)}
     base = j == 0 and tpu_plate == -1
     if base:
         xs |= {-s.half_slot_mm, s.half_slot_mm}
@@ -193,8 +207,9 @@ def _plate_beam(f: Frame, s: StackSection, j: int, z: float, locked, tpu_plate, 
     for xa, xb in zip(ordered[:-1], ordered[1:]):
         mid = 0.5 * (xa + xb)
         own = s.cover_mm if j == 0 else s.cap_above_stack_mm if (j == n and tpu) else s.plate_mm
-        thick = own + sum(s.t_mm[i] for i in layers if abs(mid) < s.head_mm[i])
-        blocked = any(i in locked and abs(mid) < s.head_mm[i] for i in layers)
+        # a closed layer's pads are its block's (_block), not the plate's
+        thick = own + sum(s.t_mm[i] for i in layers if abs(mid) < s.head_mm[i] and i not in blocks)
+        blocked = any(i in locked and i not in blocks and abs(mid) < s.head_mm[i] for i in layers)
         over_wall = base and abs(mid) > s.half_slot_mm  # the cover over the slot's walls
         if over_wall and s.half_slot_mm in (abs(xa), abs(xb)):
             continue  # it rides on the wall's top, not on the cover's end (_base ties it)
@@ -207,6 +222,57 @@ def _plate_beam(f: Frame, s: StackSection, j: int, z: float, locked, tpu_plate, 
             stations[xa], stations[xb], k * E * thick * D, k * E * D * thick**3 / 12.0, k * SHEAR_FACTOR * G * thick * D
         )
     return stations
+
+
+BLOCK_STATIONS = 48  # across a block (docs/design.md 4.7): the plates' sway within 0.7 % of 192's
+
+
+def block_stations_mm(s: StackSection, i: int) -> np.ndarray:
+    """The x of the stations across locked layer i's block, |x| <= its wall heads."""
+    # finer at the edges, where a wall's foot stands; sin gives 0 and +-1 exactly (the beams' keys)
+    return s.head_mm[i] * np.sin(np.linspace(-0.5 * math.pi, 0.5 * math.pi, BLOCK_STATIONS + 1))
+
+
+def oedometric_modulus_MPa(E_prime_MPa: float, G_MPa: float) -> float:
+    """The constrained (oedometric) modulus E (1 - nu) / ((1 + nu) (1 - 2 nu)) of the material
+    whose plane-strain modulus E' = E / (1 - nu^2) and shear modulus G = E / (2 (1 + nu)) are given:
+    a layer bonded between plates and wide against its height cannot widen as it is squeezed."""
+    nu = 1.0 - 2.0 * G_MPa / E_prime_MPa  # E'/G = 2 / (1 - nu)
+    return 2.0 * G_MPa * (1.0 - nu) / (1.0 - 2.0 * nu)
+
+
+def _block(f: Frame, s: StackSection, i: int, beams, tpu_plate) -> None:
+    """Locked layer i as its filled block (the closed hexagon, |x| < its wall heads): a rigid core
+    at its mid-height, tied to the plate under it and the plate over it by a bed of springs, each
+    station's strip dx wide a column h/2 tall: M D dx / (h/2) along z (M the oedometric modulus,
+    :func:`oedometric_modulus_MPa`), G D dx / (h/2) along x; taller by half the plate's thickness
+    where that plate is TPU (its own squeeze and shear through its thickness), whose stations
+    then bend on the bed; a rigid plate takes the bed at its centre, rigidly. In series the two
+    halves give the block's shear G D 2 head / h (model.mechanics.lateral's closed block) and its
+    rocking M D (2 head)^3 / (12 h)."""
+    n, G, D = len(s.theta_rad), s.G_MPa, s.depth_mm
+    oedometric = oedometric_modulus_MPa(s.E_prime_MPa, G)
+    xs = block_stations_mm(s, i)
+    dx = np.diff(np.r_[xs[0], 0.5 * (xs[1:] + xs[:-1]), xs[-1]])  # each station's strip
+    z_core = s.bottom_mm[i] + 0.5 * s.h_mm[i]
+    core = f.node(0.0, z_core)
+    for j, z_face in ((i, s.bottom_mm[i]), (i + 1, s.bottom_mm[i] + s.h_mm[i])):
+        tpu = _is_tpu(j, n, tpu_plate)
+        own = s.cover_mm if j == 0 else s.plate_mm
+        tall = 0.5 * s.h_mm[i] + (0.5 * own if tpu else 0.0)
+        z_plate = f.nodes[beams[j][0.0]][1]
+        for x, w in zip(xs, dx):
+            x = float(x)
+            # both ends of each spring at one point, on the block's face: a rigid turn of the whole
+            # stretches none of them (springs between points apart would resist it)
+            node, at = (beams[j][x], (0.0, z_face - z_plate)) if tpu else (beams[j][0.0], (x, z_face - z_plate))
+            f.link(core, node, G * D * w / tall, oedometric * D * w / tall, (x, z_face - z_core), at)
+
+
+def _is_tpu(j: int, n: int, tpu_plate) -> bool:
+    """Whether beam j (0 the cover, n the cap) is the member ``tpu_plate`` in TPU (the frame's
+    numbering: -1 the base, j - 1 the plate over layer j - 1, n - 1 the cap)."""
+    return (0 < j <= n and j - 1 == tpu_plate) or (j == 0 and tpu_plate == -1)
 
 
 def _base(f: Frame, s: StackSection, cover: dict, z_cover: float) -> None:
@@ -263,7 +329,8 @@ def wall_factors(sec: StackSection, zones: tuple[bool, bool] = (True, True)) -> 
     for i in range(n):
         others = tuple(j for j in range(n) if j != i)
         once, twice = (
-            frame_pull(sec, others, None, np.full(n, f), guided=True, zones=zones, roots=False)[0] for f in (1.0, 2.0)
+            frame_pull(sec, others, None, np.full(n, f), guided=True, zones=zones, roots=False, rigid_blocks=True)[0]
+            for f in (1.0, 2.0)
         )
         walls = 2.0 * (once - twice)
         out.append(walls / (1.0 / sec.k_x_N_per_mm[i] - (once - walls)))
@@ -283,7 +350,13 @@ class MemberMotions:
 
 
 def member_motions(
-    sec: StackSection, members, locked=(), walls=None, zones: tuple[bool, bool] = (True, True), roots: bool = True
+    sec: StackSection,
+    members,
+    locked=(),
+    walls=None,
+    zones: tuple[bool, bool] = (True, True),
+    roots: bool = True,
+    rigid_blocks: bool = False,
 ) -> MemberMotions:
     """:class:`MemberMotions` of ``members`` (-1 the housing's base, j >= 0 the plate over layer
     j, n - 1 the cap), each alone in TPU, with layers ``locked`` filled; the all-rigid solve once
@@ -291,13 +364,17 @@ def member_motions(
     walls = wall_factors(sec, zones) if walls is None else walls
     beam_z = _beam_z_mm(sec)
     z_top = sec.bottom_mm[-1] + sec.h_mm[-1] + sec.cap_above_stack_mm
-    slide0, turn0, per_moment0 = frame_response(sec, locked, None, walls, zones=zones, roots=roots)
+    slide0, turn0, per_moment0 = frame_response(
+        sec, locked, None, walls, zones=zones, roots=roots, rigid_blocks=rigid_blocks
+    )
     out = []
     for j in members:
         if j == -1 and sec.slot_height_mm <= 0.0:  # no slot: the base is solid
             out.append((0.0, 0.0, 0.0))
             continue
-        slide, turn, per_moment = frame_response(sec, locked, j, walls, zones=zones, roots=roots)
+        slide, turn, per_moment = frame_response(
+            sec, locked, j, walls, zones=zones, roots=roots, rigid_blocks=rigid_blocks
+        )
         arm = sec.z_magnet_mm - beam_z[j + 1]
         # a turn counter-clockwise moves the magnet dz above the member by -turn dz: not a translation;
         # the pull's moment about the member's mid-plane is -(z_top - z) per newton
