@@ -1,6 +1,6 @@
 """A plane frame by the stiffness method: Timoshenko beam elements, rotational springs between two
-nodes tied in position, translational links (two nodes' positions tied by springs along x and z,
-their turns free), held dofs, nodal loads. Each node has three dofs (u along x, w along z,
+nodes tied in position, links (springs along x and z between two points, each held rigidly off
+a node), held dofs, nodal loads. Each node has three dofs (u along x, w along z,
 a turn counter-clockwise from x to z). Pure numpy, no I/O.
 
 Used by :mod:`mst_cli.model.plate_sway` (the stack under a tangential force) and
@@ -52,8 +52,8 @@ def element_stiffnesses(a, b, EA, EI, kGA) -> np.ndarray:
 
 class Frame:
     """Nodes, elements (a, b, EA, EI, kGA), springs (a, b, k_turn: the two nodes tied in position
-    by ``tie`` N/mm, their turns through k_turn N mm/rad), links (a, b, k_x, k_z: the positions
-    tied along x and z, N/mm, the turns free) and held dofs, assembled on solve."""
+    by ``tie`` N/mm, their turns through k_turn N mm/rad), links (:meth:`link`) and held dofs,
+    assembled on solve."""
 
     def __init__(self, tie_N_per_mm: float) -> None:
         self.tie_N_per_mm = tie_N_per_mm

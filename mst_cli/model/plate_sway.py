@@ -202,7 +202,7 @@ def _plate_beam(f: Frame, s: StackSection, j: int, z: float, locked, tpu_plate, 
     if base:
         xs |= {-s.half_slot_mm, s.half_slot_mm}
     stations = {x: f.node(x, z) for x in sorted(xs)}
-    tpu = (0 < j <= n and j - 1 == tpu_plate) or base  # j = n: the cap (tpu_plate n - 1)
+    tpu = _is_tpu(j, n, tpu_plate)  # j = n: the cap (tpu_plate n - 1)
     ordered = sorted(stations)
     for xa, xb in zip(ordered[:-1], ordered[1:]):
         mid = 0.5 * (xa + xb)
@@ -249,7 +249,7 @@ def _block(f: Frame, s: StackSection, i: int, beams, tpu_plate) -> None:
     where that plate is TPU (its own squeeze and shear through its thickness), whose stations
     then bend on the bed; a rigid plate takes the bed at its centre, rigidly. In series the two
     halves give the block's shear G D 2 head / h (model.mechanics.lateral's closed block) and its
-    rocking M D (2 head)^3 / (12 h)."""
+    rocking M D (2 head)^3 / (12 h); each spring's two ends are one point on the block's face."""
     n, G, D = len(s.theta_rad), s.G_MPa, s.depth_mm
     oedometric = oedometric_modulus_MPa(s.E_prime_MPa, G)
     xs = block_stations_mm(s, i)
@@ -307,7 +307,7 @@ def _walls(f: Frame, s: StackSection, i: int, beams, factor, k_root, tpu_plate, 
         x = sign * s.head_mm[i]
         tip = f.node(sign * tip_x, z0 + 0.5 * s.h_mm[i])
         for j, z_end in ((i, z0 + 0.5 * t), (i + 1, z0 + s.h_mm[i] - 0.5 * t)):
-            tpu = (0 < j <= n and j - 1 == tpu_plate) or (j == 0 and tpu_plate == -1)  # the cover's, the cap's too
+            tpu = _is_tpu(j, n, tpu_plate)  # the cover's, the cap's too
             offset, end = f.node(x, z_end), f.node(x, z_end)
             f.beam(beams[j][float(x)], offset, rigid, rigid, math.inf)
             f.spring(offset, end, k_root if (roots and tpu) else rigid)
