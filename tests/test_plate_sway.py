@@ -76,6 +76,18 @@ def test_a_filled_block_shears_and_rocks_as_its_closed_forms(layer):
     assert slide == pytest.approx(h / (G * D * 2.0 * head) + h * h / (2.0 * rocking), rel=1e-4)
 
 
+def test_the_base_under_a_locked_layer_1_sways_the_same_whatever_locks_above_it():
+    """Statics: with every plate rigid, plate 1 passes the pull's force and moment to layer 1's
+    block whatever stands on it, so the base's sway is the same past one lock, two and three (the
+    rung's: 0.1064 and 0.1062 mm/N past one and two on the forward design). A bed whose springs
+    resisted a rigid turn of the whole made it grow with each lock (docs 4.7)."""
+    _, _, sec = section()
+    walls = ps.wall_factors(sec)
+    sways = [ps.base_translation_mm_per_N(sec, locked, walls) for locked in ((0,), (0, 1), (0, 1, 2))]
+    np.testing.assert_allclose(sways, sways[0], rtol=1e-6)
+    assert sways[0] > 0.01
+
+
 def test_a_plate_on_a_filled_block_converges_with_the_beds_stations():
     """The plates' and the base's translation beside a locked layer at the bed's 48 stations is
     within 1 % of 192's (a finer sweep): the stations are graded toward the block's edges, where
