@@ -232,12 +232,13 @@ class Phase:
         opt.set_lower_bounds(lower)
         opt.set_upper_bounds(upper)
         opt.set_min_objective(self.objective)
-        opt.add_inequality_mconstraint(self.constraints, np.zeros(self.batch.m))
+        opt.add_inequality_mconstraint(self.constraints, np.full(self.batch.m, FEASIBILITY_TOL))
         opt.set_initial_step(np.full(dim, settings.step))
         opt.set_maxeval(max(int(settings.maxeval), 1))
         opt.set_maxtime(self.budget.time_left())
         opt.set_xtol_rel(1e-10)
         opt.set_ftol_abs(1e-16)
+        opt.set_ftol_rel(1e-12)
         try:
             opt.optimize(np.clip(np.asarray(x0, float), settings.lower, settings.upper))
         except _Stop as stop:

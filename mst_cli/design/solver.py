@@ -203,27 +203,47 @@ def newton_match(problem: DesignProblem, u0: np.ndarray, tracker: Tracker, budge
             return False
         J = ((r[1 : dim + 1] - r[dim + 1 :]) / (2 * FD_STEP)).T  # (2n, dim)
         G = ((g[1 : dim + 1] - g[dim + 1 :]) / (2 * FD_STEP)).T  # (m, dim)
-        rows, rhs = [J], [-r[0]]
-        held_g = np.zeros(len(g[0]), bool)
-        held_u = np.zeros(dim, bool)
-        for _ in range(NEWTON_ACTIVE_PASSES):
-            du = np.linalg.lstsq(np.concatenate(rows), np.concatenate(rhs), rcond=None)[0]
-            new_g = (g[0] + G @ du > 0.0) & ~held_g
-            new_u = ((u + du < 0.0) | (u + du > 1.0)) & ~held_u
-            if not (new_g.any() or new_u.any()):
-                break
-            rows += [G[new_g], np.eye(dim)[new_u]]
-            rhs += [-g[0][new_g], np.where(u + du < 0.0, -u, 1.0 - u)[new_u]]
-            held_g |= new_g
-            held_u |= new_u
+        du, held = _newton_step(u, r[0], J, g[0], G, g[0])
         trials = np.clip(u + np.asarray(NEWTON_BACKTRACK)[:, None] * du, 0.0, 1.0)
         et = problem.evaluate(trials)
         budget.spend(len(trials), phase, float(et.max_err.min()))
         better = np.flatnonzero(et.merit(ROUNDING_SAFETY) < merit[0])
+        if len(better) == 0 and held.any():
+            # second-order correction: a held constraint the full step broke by its curvature is
+            # aimed below zero by what the step overshot, the Jacobians kept (one more batch)
+            overshoot = np.where(held, np.maximum(et.safe_constraints[0], 0.0), 0.0)
+            du, _ = _newton_step(u, r[0], J, g[0], G, g[0] + overshoot)
+            trials = np.clip(u + np.asarray(NEWTON_BACKTRACK)[:, None] * du, 0.0, 1.0)
+            et = problem.evaluate(trials)
+            budget.spend(len(trials), phase, float(et.max_err.min()))
+            better = np.flatnonzero(et.merit(ROUNDING_SAFETY) < merit[0])
         if len(better) == 0:
             return False
         u = trials[better[0]]
     return False
+
+
+def _newton_step(u, r0, J, g0, G, g_aim) -> tuple[np.ndarray, np.ndarray]:
+    """(du, the constraints held) of one Gauss-Newton step from ``u``: the minimum-norm du of
+    J du = -r0, with every constraint the linearised step would break (g0 + G du > 0) held at
+    g_aim + G du = 0 and every bound it would cross held on the bound, solved again until
+    nothing new breaks (NEWTON_ACTIVE_PASSES at most)."""
+    dim = len(u)
+    rows, rhs = [J], [-r0]
+    held_g = np.zeros(len(g0), bool)
+    held_u = np.zeros(dim, bool)
+    du = np.zeros(dim)
+    for _ in range(NEWTON_ACTIVE_PASSES):
+        du = np.linalg.lstsq(np.concatenate(rows), np.concatenate(rhs), rcond=None)[0]
+        new_g = ((g0 + G @ du > 0.0) | (g_aim > g0)) & ~held_g
+        new_u = ((u + du < 0.0) | (u + du > 1.0)) & ~held_u
+        if not (new_g.any() or new_u.any()):
+            break
+        rows += [G[new_g], np.eye(dim)[new_u]]
+        rhs += [-g_aim[new_g], np.where(u + du < 0.0, -u, 1.0 - u)[new_u]]
+        held_g |= new_g
+        held_u |= new_u
+    return du, held_g
 
 
 def _match(problem, rng_seed: int, search: Search):
