@@ -9,9 +9,11 @@ The CSVs are studies/plate_slide.py's ``--out``: per design, regime and plate, w
 alone in TPU adds to the magnet's translation on the rung (every other member rigid). Here each
 design is designed again (a bundled config by its name, a same-layer design ``same-THETA-T-H-P``
 by studies/root_turn_sweep.design) and model.plate_sway's frame gives the same figure, in its
-chosen form and in four others: without the rigid zones under the walls' footprints on the plates
-(``no plate zones``), without the walls' ends rigid in their pads (``no wall zones``), without the
-root springs (``no roots``), and with the walls as beams, not scaled to L0's k_x (``beam walls``).
+chosen form (``plate_sway.ZONES``: the plates rigid under the walls' footprints, the walls' ends
+in their pads elastic) and in four others: without the rigid zones under the footprints (``no
+plate zones``), with the walls' ends rigid in their pads as well (``walls' ends rigid``, the chosen
+form before 2026-12-02), without the root springs (``no roots``), and with the walls as beams, not
+scaled to L0's k_x (``beam walls``).
 Per form: each row's frame / rung, their median and spread, and the rms of the log ratio. Rows
 whose rung figure is under 0.005 mm/N (a plate between two locked layers) are printed, not counted.
 Rows of plate 0 (studies/plate_slide.py --base) are the housing's base, in the frame as
@@ -47,11 +49,11 @@ ROOT = Path(__file__).resolve().parents[1]
 SMALL_MM_PER_N = 0.005  # below it a rung figure is a plate between locked layers: printed, not counted
 # (name, zones (plate, wall), roots, walls scaled to L0)
 FORMS = (
-    ("chosen", (True, True), True, True),
-    ("no plate zones", (False, True), True, True),
-    ("no wall zones", (True, False), True, True),
-    ("no roots", (True, True), False, True),
-    ("beam walls", (True, True), True, False),
+    ("chosen", ps.ZONES, True, True),
+    ("no plate zones", (False, ps.ZONES[1]), True, True),
+    ("walls' ends rigid", (ps.ZONES[0], True), True, True),
+    ("no roots", ps.ZONES, False, True),
+    ("beam walls", ps.ZONES, True, False),
 )
 
 

@@ -16,8 +16,8 @@ The closed form is a plane frame (plane strain, per the part's depth D; :mod:`mo
   chevron's tip (W/2 - t / (2 sin theta), h/2); their stiffness is scaled, layer by layer, so that
   the layer alone between rigid plates (the plate above held from turning) has L0's k_x
   (model.mechanics.lateral): the frame carries the plates, L0 the walls;
-* the part of a wall inside its pad (its end to the pad's face) is rigid, and so is the plate
-  under a wall's footprint, t / sin(theta) wide;
+* the plate under a wall's footprint, t / sin(theta) wide, is rigid; the part of a wall inside its
+  pad (its end to the pad's face) is not (:data:`ZONES`);
 * each plate is a beam on its mid-plane as thick as the plate and the pads it carries (a layer's
   pad, t thick, under |x| < its wall heads); the wall ends are tied to it by rigid offsets and
   turn into it against model.plate_joint's fitted root spring;
@@ -35,10 +35,11 @@ with that plate in TPU less with it rigid, less the share of the cap's turn abou
 mid-plane (mst's stack already turns the plates with their layers), summed over the plates, each
 alone in TPU (the rung's measure); the base's the same, about the cover's mid-plane. Along y (the
 depth) nothing is added: the frame is the section's. Against the rung's measure
-(studies/plate_frame.py) the plates are 0.78 to 1.22 times it on same-layer designs, 0.65 to 1.16
-between open layers on the bundled ones and 1.24 to 1.88 beside a locked layer (0.43 to 0.84 with
-the block rigid); the base is 0.83 to 1.11 in every regime of the bundled designs (0.76 to 1.11),
-where the column form alone (model.housing_base.base_sway_mm_per_N) was 0.50 to 1.35. The same
+(studies/plate_frame.py) the plates are 0.88 to 1.22 times it on same-layer designs, 0.68 to 1.18
+between open layers on the bundled ones and 1.21 to 1.73 beside a locked layer (0.43 to 0.84 with
+the block rigid); the base is 0.83 to 1.04 in every regime of the bundled designs (0.76 to 1.11 with
+the block and the walls' ends rigid), where the column form alone (model.housing_base.
+base_sway_mm_per_N) was 0.50 to 1.35. The same
 solves, with a pure moment at the cap beside the pull, give the members' turn ratio
 (:class:`SectionRegimes`) that :mod:`mst_cli.model.counter_turn` takes. Pure numpy, no I/O.
 """
@@ -59,6 +60,13 @@ from mst_cli.model.plane_frame import Frame
 from mst_cli.model.plate_joint import root_spring_Nmm_per_rad
 
 RIGID = 1e5  # a rigid member's factor on E'D: the figures within 0.1 % of 1e6's, the system better conditioned
+# the rigid zones (under the walls' footprints on the plates, the walls' ends inside their pads):
+# the first only. With the walls' ends rigid too (the form before 2026-12-02) the frame's plates
+# read 0.228 rms log off the rung's translations against 0.203, its base 0.125 against 0.121
+# (studies/plate_frame.py --check), and mst's turn per tangential newton on the forward design
+# +36 / +18 / -14 % off the rung against +8 / +11 / -9 % (docs/design.md 4.7, "The walls' ends in
+# their pads, elastic")
+ZONES = (True, False)
 
 
 @dataclass(frozen=True)
@@ -127,7 +135,7 @@ def _beam_z_mm(sec: StackSection) -> list[float]:
 
 def frame_pull(
     sec: StackSection, locked=(), tpu_plate: int | None = None, walls=None, guided: bool = False,
-    zones: tuple[bool, bool] = (True, True), roots: bool = True, rigid_blocks: bool = False,
+    zones: tuple[bool, bool] = ZONES, roots: bool = True, rigid_blocks: bool = False,
 ) -> tuple[float, float]:  # fmt: skip
     """(the magnet's slide, the cap's turn) per newton along +x at the top face: the first two of
     :func:`frame_response` (its arguments)."""
@@ -137,7 +145,7 @@ def frame_pull(
 
 def frame_response(
     sec: StackSection, locked=(), tpu_plate: int | None = None, walls=None, guided: bool = False,
-    zones: tuple[bool, bool] = (True, True), roots: bool = True, rigid_blocks: bool = False,
+    zones: tuple[bool, bool] = ZONES, roots: bool = True, rigid_blocks: bool = False,
 ) -> tuple[float, float, float]:  # fmt: skip
     """(the magnet's slide along +x, mm, the cap's turn, counter-clockwise from x to z, rad) per
     newton along +x at the top face, and the cap's turn per N mm of a pure moment (counter-
@@ -320,7 +328,7 @@ def _walls(f: Frame, s: StackSection, i: int, beams, factor, k_root, tpu_plate, 
             f.beam(start, tip, factor * E * t * D, factor * E * D * t**3 / 12.0, factor * SHEAR_FACTOR * G * t * D)
 
 
-def wall_factors(sec: StackSection, zones: tuple[bool, bool] = (True, True)) -> np.ndarray:
+def wall_factors(sec: StackSection, zones: tuple[bool, bool] = ZONES) -> np.ndarray:
     """(n,) the factor on each layer's walls that gives the frame's layer alone between rigid
     plates, the plate above held from turning, L0's k_x. The slide is c_w / f + c_r in the
     factor f (c_r: the rigid members' own), so two solves fix it."""
@@ -354,7 +362,7 @@ def member_motions(
     members,
     locked=(),
     walls=None,
-    zones: tuple[bool, bool] = (True, True),
+    zones: tuple[bool, bool] = ZONES,
     roots: bool = True,
     rigid_blocks: bool = False,
 ) -> MemberMotions:
@@ -389,7 +397,7 @@ def member_motions(
 
 
 def member_translations_mm_per_N(
-    sec: StackSection, members, locked=(), walls=None, zones: tuple[bool, bool] = (True, True), roots: bool = True
+    sec: StackSection, members, locked=(), walls=None, zones: tuple[bool, bool] = ZONES, roots: bool = True
 ) -> np.ndarray:
     """(len(members),) what each of ``members`` alone in TPU adds to the magnet's translation, mm
     per newton along x (:func:`member_motions`)."""
@@ -397,14 +405,14 @@ def member_translations_mm_per_N(
 
 
 def plate_translations_mm_per_N(
-    sec: StackSection, locked=(), walls=None, zones: tuple[bool, bool] = (True, True), roots: bool = True
+    sec: StackSection, locked=(), walls=None, zones: tuple[bool, bool] = ZONES, roots: bool = True
 ) -> np.ndarray:
     """(n - 1,) what each plate alone in TPU adds (:func:`member_translations_mm_per_N`)."""
     return member_translations_mm_per_N(sec, range(len(sec.theta_rad) - 1), locked, walls, zones, roots)
 
 
 def base_translation_mm_per_N(
-    sec: StackSection, locked=(), walls=None, zones: tuple[bool, bool] = (True, True), roots: bool = True
+    sec: StackSection, locked=(), walls=None, zones: tuple[bool, bool] = ZONES, roots: bool = True
 ) -> float:
     """What the housing's base alone in TPU adds (:func:`member_translations_mm_per_N`); 0 without
     a slot."""
