@@ -38,10 +38,10 @@ depth) nothing is added: the frame is the section's. Against the rung's measure
 (studies/plate_frame.py) the plates are 0.88 to 1.22 times it on same-layer designs, 0.68 to 1.18
 between open layers on the bundled ones and 1.21 to 1.73 beside a locked layer (0.43 to 0.84 with
 the block rigid); the base is 0.83 to 1.04 in every regime of the bundled designs (0.76 to 1.11 with
-the block and the walls' ends rigid), where the column form alone (model.housing_base.
-base_sway_mm_per_N) was 0.50 to 1.35. The same
-solves, with a pure moment at the cap beside the pull, give the members' turn ratio
-(:class:`SectionRegimes`) that :mod:`mst_cli.model.counter_turn` takes. Pure numpy, no I/O.
+the block and the walls' ends rigid), where the column form alone
+(model.housing_base.base_sway_mm_per_N) was 0.50 to 1.35. The same solves, with a pure moment at
+the cap beside the pull, give the members' turn ratio (:class:`SectionRegimes`) that
+:mod:`mst_cli.model.counter_turn` takes. Pure numpy, no I/O.
 """
 
 from __future__ import annotations
@@ -61,7 +61,7 @@ from mst_cli.model.plate_joint import root_spring_Nmm_per_rad
 
 RIGID = 1e5  # a rigid member's factor on E'D: the figures within 0.1 % of 1e6's, the system better conditioned
 # the rigid zones (under the walls' footprints on the plates, the walls' ends inside their pads):
-# the first only. With the walls' ends rigid too (the form before 2026-12-02) the frame's plates
+# the first only. With the walls' ends rigid too (the form until late on 2026-12-02) the frame's plates
 # read 0.228 rms log off the rung's translations against 0.203, its base 0.125 against 0.121
 # (studies/plate_frame.py --check), and mst's turn per tangential newton on the forward design
 # +36 / +18 / -14 % off the rung against +8 / +11 / -9 % (docs/design.md 4.7, "The walls' ends in
