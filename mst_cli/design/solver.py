@@ -204,23 +204,27 @@ def newton_match(problem: DesignProblem, u0: np.ndarray, tracker: Tracker, budge
         J = ((r[1 : dim + 1] - r[dim + 1 :]) / (2 * FD_STEP)).T  # (2n, dim)
         G = ((g[1 : dim + 1] - g[dim + 1 :]) / (2 * FD_STEP)).T  # (m, dim)
         du, held = _newton_step(u, r[0], J, g[0], G, g[0])
-        trials = np.clip(u + np.asarray(NEWTON_BACKTRACK)[:, None] * du, 0.0, 1.0)
-        et = problem.evaluate(trials)
-        budget.spend(len(trials), phase, float(et.max_err.min()))
-        better = np.flatnonzero(et.merit(ROUNDING_SAFETY) < merit[0])
-        if len(better) == 0 and held.any():
+        step, full = _backtrack(problem, u, du, merit[0], budget, phase)
+        if step is None and held.any() and budget.left >= len(NEWTON_BACKTRACK):
             # second-order correction: a held constraint the full step broke by its curvature is
             # aimed below zero by what the step overshot, the Jacobians kept (one more batch)
-            overshoot = np.where(held, np.maximum(et.safe_constraints[0], 0.0), 0.0)
+            overshoot = np.where(held, np.maximum(full, 0.0), 0.0)
             du, _ = _newton_step(u, r[0], J, g[0], G, g[0] + overshoot)
-            trials = np.clip(u + np.asarray(NEWTON_BACKTRACK)[:, None] * du, 0.0, 1.0)
-            et = problem.evaluate(trials)
-            budget.spend(len(trials), phase, float(et.max_err.min()))
-            better = np.flatnonzero(et.merit(ROUNDING_SAFETY) < merit[0])
-        if len(better) == 0:
+            step, _ = _backtrack(problem, u, du, merit[0], budget, phase)
+        if step is None:
             return False
-        u = trials[better[0]]
+        u = step
     return False
+
+
+def _backtrack(problem, u, du, merit0: float, budget: Budget, phase: str) -> tuple[np.ndarray | None, np.ndarray]:
+    """(the longest of the NEWTON_BACKTRACK fractions of ``du`` from ``u`` whose merit is below
+    ``merit0``, or None; the full step's constraints), the fractions evaluated in one batch."""
+    trials = np.clip(u + np.asarray(NEWTON_BACKTRACK)[:, None] * du, 0.0, 1.0)
+    et = problem.evaluate(trials)
+    budget.spend(len(trials), phase, float(et.max_err.min()))
+    better = np.flatnonzero(et.merit(ROUNDING_SAFETY) < merit0)
+    return (trials[better[0]] if len(better) else None), et.safe_constraints[0]
 
 
 def _newton_step(u, r0, J, g0, G, g_aim) -> tuple[np.ndarray, np.ndarray]:
