@@ -27,10 +27,16 @@ FD_STEP = 1e-6  # central-difference step in normalised variables
 FEASIBILITY_TOL = 1e-9  # SLSQP lands on active constraints to ~1e-13; far inside the
 # ROUNDING_SAFETY slack, so such points count as feasible
 MAX_TIME_S = 120.0  # safety net only; normal runs stop on evaluation counts
+# a run whose callbacks have met feasible points of one score (to STALL_REL of it, or of STALL_FLOOR
+# when smaller) STALL_CALLS times in a row has stalled: SLSQP's line searches at a converged point
+# repeat its score to 1e-8 without ending (docs/performance.md, "The search stops where it has stalled")
+STALL_CALLS = 6
+STALL_REL = 1e-8
+STALL_FLOOR = 1e-3
 LOCAL_METHODS = ("slsqp", "cobyla")
 # how a run ends when nlopt stopped on its own rules or the phase's goal was reached (not the
 # evaluation count, a failure, roundoff or a forced stop)
-CONVERGED = frozenset({"success", "stopval", "ftol", "xtol", "maxtime", "goal reached"})
+CONVERGED = frozenset({"success", "stopval", "ftol", "xtol", "maxtime", "goal reached", "stalled"})
 
 
 @dataclass
@@ -178,12 +184,31 @@ class Phase:
 
     With a gradient-based method the callback evaluates u and its 2*dim central-difference
     neighbours in one batch. The nominal point of every callback is offered to ``tracker``;
-    ``goal(f, g, err)`` True ends the run (ForcedStop, the tracker keeps the point).
+    ``goal(f, g, err)`` True ends the run (ForcedStop, the tracker keeps the point). With
+    ``stall_calls``, a run whose feasible points have kept one score (to :data:`STALL_REL`) for
+    that many callbacks in a row ends "stalled" (a phase with no goal: the preference polish).
     """
 
-    def __init__(self, batch: Batch, tracker: Tracker, budget: Budget, label: str, goal: Callable | None = None):
+    def __init__(
+        self, batch: Batch, tracker: Tracker, budget: Budget, label: str, goal: Callable | None = None,
+        stall_calls: int = 0,
+    ) -> None:  # fmt: skip
         self.batch, self.tracker, self.budget, self.label, self.goal = batch, tracker, budget, label, goal
         self.key: tuple | None = None
+        self.stall_calls, self._since = stall_calls, 0
+        self._level: float | None = None  # the score the callbacks since the last move stay at
+
+    def _stalled(self, score: float, violation: float) -> bool:
+        """Whether the run has stalled: ``stall_calls`` callbacks in a row at feasible points whose
+        score stays within STALL_REL (of itself, or of STALL_FLOOR when smaller) of the level the
+        first of them set. An infeasible point, or one off the level, sets it again."""
+        level = self._level
+        moved = level is None or not abs(score - level) <= STALL_REL * max(abs(level), STALL_FLOOR)
+        if violation > FEASIBILITY_TOL or moved:
+            self._level, self._since = score, 0
+            return False
+        self._since += 1
+        return self._since >= self.stall_calls
 
     def _compute(self, u, want_grad):
         key = (u.tobytes(), want_grad)
@@ -206,6 +231,8 @@ class Phase:
         self.budget.spend(self.batch.cost * len(U), self.label, values.err)
         if self.goal is not None and self.goal(self.f, self.g, values.err):
             raise _Stop("goal reached")
+        if self.stall_calls and self._stalled(self.f, values.violation):
+            raise _Stop("stalled")
 
     def objective(self, u, grad) -> float:
         self._compute(u, grad.size > 0)

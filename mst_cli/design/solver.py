@@ -46,6 +46,7 @@ from mst_cli.design.phase import (
     FEASIBILITY_TOL,
     LOCAL_METHODS,
     MAX_TIME_S,
+    STALL_CALLS,
     Batch,
     Budget,
     LocalRun,
@@ -322,7 +323,8 @@ def prefer(
         tracker = Tracker()
         tracker.offer(u0, pref0, 0.0)
         if budget.left > 3 * per_iter:
-            phase = Phase(_PreferenceBatch(problem, weights, band, points), tracker, budget, "preference")
+            batch = _PreferenceBatch(problem, weights, band, points)
+            phase = Phase(batch, tracker, budget, "preference", stall_calls=STALL_CALLS)
             search.run(phase, u0, min(iters, budget.left // (3 * per_iter)), step)
         return tracker.u
 
