@@ -1,0 +1,193 @@
+"""Past two locks the cap and the plate under the top layer give more together than alone: a
+plane frame of that layer's cell finds why (issue 44, docs/design.md 4.7, "The cap and the plate
+together, past two locks").
+
+In regime 3 of a three-layer part (layers 1 and 2 locked, their cavities closed) the whole-part
+rung's members add more than their parts: the "rest" (as printed, less every member alone) is a
+median 6.7 % of the part over the box (studies/data/member_regimes.csv), and most of it is the
+cap with the plates (studies/member_closed_form.py's rows; on three designs 0.9, 2.8 and 6.1 um/N
+of 0.9 to 6.1). mst's closed form sums each member alone, so it misses it.
+
+The frame (model.plane_frame) is half the top layer's cell, symmetric about x = 0: the cap from
+the centre to the wall heads, the two half-walls of the hexagon (head, side vertex, foot), the
+plate from the foot to the locked block's edge (a cantilever when the feet stand beyond it, its
+root turning into the block against past_lock's k E'D d^2), the walls' roots turning into cap and
+plate (model.plate_joint's springs), the press 1/2 N at the cap's centre. The cap and the plate
+are each the closed form's section (the cap with its pocket and insert; the plate with the pad
+over it, p + t). What the closed form's members do not have is **where the walls meet them**: a
+wall's end is at the underside of the cap (the cap's mid-plane cap_above/2 above it) and on the
+top of the plate (its mid-plane p/2 below). The hexagon's walls thrust along the cap and the
+plate; off their mid-planes the thrust bends them, and how much thrust there is depends on how
+freely the wall's other end turns. So a soft cap and a soft plate feed each other. With the
+offsets set to 0 (``--no-offsets``, the control) the frame's interaction nearly vanishes.
+
+Per design: the rung with the plates alone in TPU, the cap alone, both (the base rigid), against
+the frame's same three (each less its rigid case). 3 rung solves a design more than the rigid
+one, kept in mst's cache (a second run reads them back).
+
+    PYTHONPATH=. .venv/bin/python studies/cap_plate_thrust.py --configs configs/mohammadi2021-forward.yaml
+    PYTHONPATH=. .venv/bin/python studies/cap_plate_thrust.py --box 40 [--no-offsets]
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+import mst_cli as mst
+from mst_cli.model import load_path as lp
+from mst_cli.model.beams import section_EI_kGA
+from mst_cli.model.cell import wall_centreline_length_mm
+from mst_cli.model.mechanics import layer_laws
+from mst_cli.model.mechanics import whole_part as wp
+from mst_cli.model.past_lock import LOCKED_FITTED
+from mst_cli.model.plane_frame import Frame
+from mst_cli.model.plate_joint import root_spring_Nmm_per_rad
+from mst_cli.model.stack import Stack
+
+RIGID = 1e4  # the rigid members' modulus factor, as the rung's control
+TIE_N_PER_MM = 1e9  # a spring's two nodes tied in position
+STIFF = 1e12  # the short offsets from a wall's end to a member's mid-plane: rigid
+
+
+def offset_node(f: Frame, node: int, x_mm: float, z_mm: float) -> int:
+    """A node at (x, z) held rigidly to ``node`` (``node`` itself where they coincide)."""
+    if np.hypot(x_mm - f.nodes[node][0], z_mm - f.nodes[node][1]) < 1e-12:
+        return node
+    other = f.node(x_mm, z_mm)
+    f.beam(node, other, STIFF, STIFF, np.inf)
+    return other
+
+
+def frame_drop_um_per_N(g, m, cap_rigid: bool, plate_rigid: bool, offsets: bool = True) -> float:
+    """The cap centre's drop, um/N, of the top layer's half cell (module docstring) over the
+    locked layer below it; ``cap_rigid``, ``plate_rigid``: that member (and the root springs
+    into it) RIGID times stiffer."""
+    s = lp.member_scene(g, m)
+    theta, t, h = (np.array([getattr(c, k) for c in g.layers]) for k in lp.CELL_KEYS)
+    head = lp.layer_supports(s, theta, t, h)[1]
+    E, G, D = s.E_prime_MPa, s.G_MPa, s.depth_mm
+    ED, j = E * D, len(t) - 1
+    th, tt, hh, x_head, x_block = theta[j], t[j], h[j], float(head[j]), float(head[j - 1])
+    L = float(wall_centreline_length_mm(th, tt, hh))
+    root = float(root_spring_Nmm_per_rad(th, tt, L, D, E))
+    cap_f, plate_f = (RIGID if r else 1.0 for r in (cap_rigid, plate_rigid))
+    z_pocket = tt + s.pocket_floor_mm
+    EI_c, kGA_c = section_EI_kGA(
+        D, tt + s.cap_above_stack_mm, E, G, s.pocket_width_mm, (z_pocket, z_pocket + s.pocket_depth_mm),
+        s.insert, tt + s.insert_above_pad_mm,
+    )  # fmt: skip
+    d = s.plate_mm + tt  # the plate and the pad over it
+    EI_p, kGA_p = section_EI_kGA(D, d, E, G)
+    # the wall's centre line: foot at t/2, side vertex at h/2, head at h - t/2 (the plate's top z = 0)
+    z_foot, z_head = 0.5 * tt, hh - 0.5 * tt
+    e_cap, e_plate = (0.5 * s.cap_above_stack_mm, 0.5 * s.plate_mm) if offsets else (0.0, 0.0)
+    f = Frame(TIE_N_PER_MM)
+    centre, cap_end = f.node(0.0, z_head + e_cap), f.node(x_head, z_head + e_cap)
+    f.beam(centre, cap_end, STIFF, EI_c * cap_f, kGA_c * cap_f)
+    f.hold(centre, (0, 2))  # the symmetry plane
+    head_node, head_wall = offset_node(f, cap_end, x_head, z_head), f.node(x_head, z_head)
+    f.spring(head_node, head_wall, root * cap_f)
+    vertex = f.node(x_head + L * np.cos(th), 0.5 * hh)
+    foot_wall, foot = f.node(x_head, z_foot), f.node(x_head, z_foot)
+    wall = (ED * tt, ED * tt**3 / 12.0, 5.0 / 6.0 * G * D * tt)
+    f.beam(head_wall, vertex, *wall)
+    f.beam(vertex, foot_wall, *wall)
+    f.spring(foot_wall, foot, root * plate_f)
+    plate_end = offset_node(f, foot, x_head, z_foot - e_plate)
+    block_root = LOCKED_FITTED[1] * ED * d * d * plate_f
+    if x_head > x_block:  # the feet beyond the block's edge: the plate hangs from it
+        edge = f.node(x_block, z_foot - e_plate)
+        f.beam(plate_end, edge, STIFF, EI_p * plate_f, kGA_p * plate_f)
+    else:
+        edge = plate_end
+    ground = f.node(*f.nodes[edge])
+    f.hold(ground)
+    f.hold(edge, (0, 1))
+    f.spring(edge, ground, block_root)
+    return -1e3 * float(f.solve({3 * centre + 1: -0.5})[3 * centre + 1])
+
+
+def rung_um_per_N(g, m) -> tuple[float, float, float]:
+    """The rung's plates alone, cap alone and both (the base rigid), each less every member
+    rigid, um/N, layers 1 and 2 locked."""
+    opts = {"locked": (0, 1), "member_factor": wp.RIGID_FACTOR}
+    rigid = wp.kept_press(g, m, wp.PartOptions(**opts)).drop_mm_per_N
+    out = []
+    for stiff in (("base", "cap"), ("base", "plate"), ("base",)):
+        out.append(1e3 * (wp.kept_press(g, m, wp.PartOptions(**opts, scaled=stiff)).drop_mm_per_N - rigid))
+    return out[0], out[1], out[2]
+
+
+def frame_um_per_N(g, m, offsets: bool) -> tuple[float, float, float]:
+    both = frame_drop_um_per_N(g, m, True, True, offsets)
+    plate = frame_drop_um_per_N(g, m, True, False, offsets) - both
+    cap = frame_drop_um_per_N(g, m, False, True, offsets) - both
+    return plate, cap, frame_drop_um_per_N(g, m, False, False, offsets) - both
+
+
+def bottom_first(g, m) -> bool:
+    """Whether the part's layers lock bottom first (the frame's case: layers 1 and 2 locked)."""
+    stack = Stack(layer_laws(g.layers, m, "spring"))
+    part = Stack(tuple(lp.capped_units(stack.layers, lp.members(g, m))))
+    locked = wp.regime_locked(part)
+    return len(g.layers) == 3 and len(locked) > 2 and tuple(locked[2]) == (0, 1)
+
+
+def rows(paths: list[Path], offsets: bool) -> list[dict]:
+    out = []
+    for path in paths:
+        doc, _ = mst.designed(path)
+        g, m = doc.geometry(), doc.material
+        if not bottom_first(g, m):
+            continue
+        rung, frame = rung_um_per_N(g, m), frame_um_per_N(g, m, offsets)
+        row = {"design": doc.name, "rung": rung, "frame": frame}
+        row["rung_extra"] = rung[2] - rung[0] - rung[1]
+        row["frame_extra"] = frame[2] - frame[0] - frame[1]
+        out.append(row)
+        r, f = rung, frame
+        print(
+            f"| {doc.name} | {r[0]:.2f} / {f[0]:.2f} | {r[1]:.2f} / {f[1]:.2f} | {r[2]:.2f} / {f[2]:.2f} | "
+            f"**{row['rung_extra']:+.2f} / {row['frame_extra']:+.2f}** |",
+            flush=True,
+        )
+    return out
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--configs", type=Path, nargs="*", default=[])
+    ap.add_argument("--box", type=int, default=0, help="this many of studies/member_regimes.py's sampled designs")
+    ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--no-offsets", action="store_true", help="the control: walls meet cap and plate at mid-plane")
+    args = ap.parse_args()
+    print("past two locks, um/N, rung / frame:\n")
+    print("| design | plates alone | cap alone | both | together less alone |")
+    print("|---|---|---|---|---|")
+    with tempfile.TemporaryDirectory() as tmp:
+        paths = list(args.configs)
+        if args.box:
+            from studies import member_regimes as mr
+
+            paths += mr.sampled_designs(Path(tmp), args.box, args.seed)
+        done = rows(paths, not args.no_offsets)
+    if len(done) > 1:
+        summary(done, "all")
+        summary([r for r in done if abs(r["frame"][0] / r["rung"][0] - 1.0) <= 0.2], "plates alone within 20 %")
+
+
+def summary(done: list[dict], label: str) -> None:
+    """The frame's extra over the rung's, median (least to most), of ``done``'s rows."""
+    ratio = [r["frame_extra"] / r["rung_extra"] for r in done if r["rung_extra"] > 0.05]
+    if ratio:
+        print(f"{label}: {len(done)} designs; frame / rung of the extra: median {statistics.median(ratio):.2f} "
+              f"({min(ratio):.2f} to {max(ratio):.2f}, of {len(ratio)} with a rung extra over 0.05 um/N)")  # fmt: skip
+
+
+if __name__ == "__main__":
+    main()
