@@ -27,6 +27,11 @@ one, kept in mst's cache (a second run reads them back).
 
     PYTHONPATH=. .venv/bin/python studies/cap_plate_thrust.py --configs configs/mohammadi2021-forward.yaml
     PYTHONPATH=. .venv/bin/python studies/cap_plate_thrust.py --box 40 [--no-offsets]
+    PYTHONPATH=. .venv/bin/python studies/cap_plate_thrust.py --part studies/data/member_regimes.csv
+
+``--part``: the closed form's regime 3 over the box (the CSV's rung) as it is and with the
+frame's extra added to it, what a closed form of the thrust at the frame's strength would give
+(no rung solves, seconds).
 """
 
 from __future__ import annotations
@@ -159,13 +164,52 @@ def rows(paths: list[Path], offsets: bool) -> list[dict]:
     return out
 
 
+def part_with_frame(csv_path: Path, paths: list[Path]) -> None:
+    """Regime 3 of each design that studies/member_closed_form.py counts (layers 1 and 2 locked
+    in the rung and in the closed form, the cover landed in neither): the closed form's part /
+    the rung's - 1 as it is and with the frame's extra added, and how many are within 5 %."""
+    import csv
+
+    from studies import member_regimes as mr
+
+    with csv_path.open() as f:
+        kept = [r for r in csv.DictReader(f) if r["regime"] == "3" and r["locked"].split() == ["0", "1"]]
+    errors: dict[str, list[float]] = {"now": [], "with the frame's extra": []}
+    for path in paths:
+        doc, _ = mst.designed(path)
+        mine = [r for r in kept if r["name"] == doc.name]
+        if not mine:
+            continue
+        g, m = doc.geometry(), doc.material
+        now = mr.closed_rows(g, m, Stack(layer_laws(g.layers, m, "spring")))[2]
+        row = mine[0]
+        if min(float(row["cover_lands_N"]), now["cover_lands_N"]) < float(row["regime_to_N"]):
+            continue
+        frame = frame_um_per_N(g, m, True)
+        extra, printed = frame[2] - frame[0] - frame[1], float(row["printed"])
+        errors["now"].append(now["closed_part"] / printed - 1.0)
+        errors["with the frame's extra"].append((now["closed_part"] + extra) / printed - 1.0)
+    print("\n| regime 3, closed / rung - 1 | designs | median (least to most) | within 5 % |")
+    print("|---|---|---|---|")
+    for name, e in errors.items():
+        within = sum(abs(v) <= 0.05 for v in e)
+        print(f"| {name} | {len(e)} | {statistics.median(e):+.1%} ({min(e):+.1%} to {max(e):+.1%}) | {within} |")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--configs", type=Path, nargs="*", default=[])
     ap.add_argument("--box", type=int, default=0, help="this many of studies/member_regimes.py's sampled designs")
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--no-offsets", action="store_true", help="the control: walls meet cap and plate at mid-plane")
+    ap.add_argument("--part", type=Path, help="studies/data/member_regimes.csv: the box's regime 3 with the extra")
     args = ap.parse_args()
+    if args.part is not None:
+        from studies import member_regimes as mr
+
+        with tempfile.TemporaryDirectory() as tmp:
+            part_with_frame(args.part, mr.sampled_designs(Path(tmp), args.box or 40, args.seed))
+        return
     print("past two locks, um/N, rung / frame:\n")
     print("| design | plates alone | cap alone | both | together less alone |")
     print("|---|---|---|---|---|")
