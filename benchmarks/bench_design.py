@@ -35,7 +35,7 @@ from pathlib import Path
 
 import numpy as np
 import yaml
-from user_env import as_installed
+from user_env import as_installed, libraries
 
 ROOT = Path(__file__).resolve().parents[1]
 SPEC = ROOT / "configs" / "mohammadi2021.yaml"
@@ -201,7 +201,7 @@ def main():
     print(
         f"reference spec {SPEC.name}: `mst design` command median {statistics.median(cli):.2f} s "
         f"(min {min(cli):.2f}, max {max(cli):.2f}, {args.repeats} runs, interpreter start and all "
-        f"outputs included; goal <= 2 s)"
+        f"outputs included; goal <= 2 s; {libraries()})"
     )
     print(
         f"  library design_document median {statistics.median(lib):.3f} s, {res.evaluations} "

@@ -35,7 +35,7 @@ import time
 from pathlib import Path
 
 import numpy as np
-from user_env import as_installed
+from user_env import as_installed, libraries
 
 ROOT = Path(__file__).resolve().parents[1]
 FORWARD = ROOT / "configs" / "mohammadi2021-forward.yaml"
@@ -181,7 +181,7 @@ def main() -> None:
     med = {name: statistics.median(ts) for name, ts in times.items()}
     floor = next(iter(med.values()))
     print(
-        f"# bench_simulate ({args.repeats} rounds, {sys.platform}, python {sys.version.split()[0]}); "
+        f"# bench_simulate ({args.repeats} rounds, {sys.platform}, {libraries()}); "
         f"ratios against the floor measured in the same run"
     )
     width = max(len(name) for name in cmds)

@@ -24,7 +24,7 @@ import sys
 import time
 from pathlib import Path
 
-from user_env import as_installed
+from user_env import as_installed, libraries
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -105,6 +105,7 @@ def main() -> None:
             if i:
                 runs[name].append(json.loads(done.stdout.strip().splitlines()[-1]))
     names = list(trees)
+    print(f"# profile_design ({libraries()})")
     print(f"{'part (least of ' + str(args.repeats) + ' runs)':<40}" + "".join(f"{n:>14}" for n in names))
     first = runs[names[0]][0]
     for key in [k for k in first if k != "kernel calls"] + ["kernel calls"]:

@@ -9,6 +9,20 @@ click) always start from bytecode, so without this the ratios would compare unli
 """
 
 import os
+import sys
+from importlib import metadata
+
+
+def libraries() -> str:
+    """The interpreter and the libraries the design's path depends on, with their versions: the
+    same tree takes another number of kernel calls on another numpy (docs/performance.md)."""
+    found = []
+    for name in ("numpy", "scipy", "nlopt"):
+        try:
+            found.append(f"{name} {metadata.version(name)}")
+        except metadata.PackageNotFoundError:
+            found.append(f"{name} not installed")
+    return f"python {sys.version.split()[0]}, " + ", ".join(found)
 
 
 def as_installed() -> None:
