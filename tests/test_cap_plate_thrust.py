@@ -47,3 +47,29 @@ def test_the_walls_thrust_needs_the_offsets(forward):
     with_offsets, control = (cpt.frame_um_per_N(g, m, o) for o in (True, False))
     extra = [f[2] - f[0] - f[1] for f in (with_offsets, control)]
     assert extra[0] > 3.0 * extra[1] > 0.0
+
+
+@pytest.mark.parametrize("cap_rigid, plate_rigid", [(False, False), (True, False), (False, True), (True, True)])
+@pytest.mark.parametrize("offsets", [True, False])
+def test_the_chain_is_the_frame(forward, cap_rigid, plate_rigid, offsets):
+    """The vectorised chain (flexibility method) and the study's frame (stiffness method, with
+    stiff links for the offsets) are one structure: the same drop to 1e-3 (the links' round-off is
+    about 1e-4), on the forward design (its feet on the block) and with its top layer's heads moved
+    1 mm out (the plate hangs 0.75 mm beyond the block)."""
+    g, m = forward
+    s = lp.member_scene(g, m)
+    theta, t, h = (np.array([getattr(c, k) for c in g.layers]) for k in lp.CELL_KEYS)
+    head = lp.layer_supports(s, theta, t, h)[1]
+    factors = (cpt.RIGID if cap_rigid else 1.0, cpt.RIGID if plate_rigid else 1.0)
+    chain = 1e3 * cpt.chain_drop_mm_per_N(s, theta[-1], t[-1], h[-1], head[-1], head[-2], *factors, offsets)
+    frame = cpt.frame_drop_um_per_N(g, m, cap_rigid, plate_rigid, offsets)
+    assert float(chain) == pytest.approx(frame, rel=1e-3)
+    # the heads moved 1 mm out: the plate hangs beyond the block, in both
+    out = float(head[-1]) + 1.0
+    hanging = 1e3 * cpt.chain_drop_mm_per_N(s, theta[-1], t[-1], h[-1], out, head[-2], *factors, offsets)
+    by_frame = cpt.cell_frame_drop_um_per_N(s, theta[-1], t[-1], h[-1], out, head[-2], cap_rigid, plate_rigid, offsets)
+    assert float(hanging) == pytest.approx(by_frame, rel=1e-3)
+    both = 1e3 * cpt.chain_drop_mm_per_N(
+        s, theta[-1], t[-1], h[-1], head[-1] + np.array([0.0, 1.0]), head[-2], *factors, offsets
+    )
+    np.testing.assert_allclose(both, [float(chain), float(hanging)], rtol=1e-12)  # one call over an array
