@@ -31,7 +31,7 @@ one, kept in mst's cache (a second run reads them back).
 
 :func:`chain_drop_mm_per_N` is the same frame by another method, vectorised over stacks as the
 design loop's members are: the flexibility of the chain from the block to the cap's centre (no
-stiff links, so exact where the stiffness method loses about 1e-4 to them); about 2 ms for 1000
+stiff links, so exact where the stiffness method loses about 1e-4 to them); about 9 ms for 1000
 stacks, four rigid cases each.
 
 ``--part``: the closed form's regime 3 over the box (the CSV's rung) as it is and with the
