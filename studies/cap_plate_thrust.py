@@ -31,8 +31,12 @@ one, kept in mst's cache (a second run reads them back).
 
 :func:`chain_drop_mm_per_N` is the same frame by another method, vectorised over stacks as the
 design loop's members are: the flexibility of the chain from the block to the cap's centre (no
-stiff links, so exact where the stiffness method loses about 1e-4 to them); about 9 ms for 1000
-stacks, four rigid cases each.
+stiff links, so exact where the stiffness method loses about 1e-4 to them); 8.6 ms for 1000
+stacks, four rigid cases each (``--cost``).
+
+``--decompose``: where the closed form's regime 3 falls short of the rung over the box, member by
+member and the rest, % of the part (and the walls' two roots solved together); ``--cost``: the
+chain's time. Both without rung solves.
 
 ``--part``: the closed form's regime 3 over the box (the CSV's rung) as it is and with the
 frame's extra added to it, what a closed form of the thrust at the frame's strength would give
@@ -261,17 +265,16 @@ def rows(paths: list[Path], offsets: bool) -> list[dict]:
     return out
 
 
-def part_with_frame(csv_path: Path, paths: list[Path]) -> None:
-    """Regime 3 of each design that studies/member_closed_form.py counts (layers 1 and 2 locked
-    in the rung and in the closed form, the cover landed in neither): the closed form's part /
-    the rung's - 1 as it is and with the frame's extra added, and how many are within 5 %."""
+def counted_regime3(csv_path: Path, paths: list[Path]):
+    """(name, geometry, material, the CSV's regime-3 row, the closed form's now) of each design
+    studies/member_closed_form.py counts: layers 1 and 2 locked in the rung and in the closed
+    form, the cover landed in neither."""
     import csv
 
     from studies import member_regimes as mr
 
     with csv_path.open() as f:
         kept = [r for r in csv.DictReader(f) if r["regime"] == "3" and r["locked"].split() == ["0", "1"]]
-    errors: dict[str, list[float]] = {"now": [], "with the frame's extra": []}
     for path in paths:
         doc, _ = mst.designed(path)
         mine = [r for r in kept if r["name"] == doc.name]
@@ -279,9 +282,16 @@ def part_with_frame(csv_path: Path, paths: list[Path]) -> None:
             continue
         g, m = doc.geometry(), doc.material
         now = mr.closed_rows(g, m, Stack(layer_laws(g.layers, m, "spring")))[2]
-        row = mine[0]
-        if min(float(row["cover_lands_N"]), now["cover_lands_N"]) < float(row["regime_to_N"]):
+        if min(float(mine[0]["cover_lands_N"]), now["cover_lands_N"]) < float(mine[0]["regime_to_N"]):
             continue
+        yield doc.name, g, m, mine[0], now
+
+
+def part_with_frame(csv_path: Path, paths: list[Path]) -> None:
+    """The closed form's part / the rung's - 1 in regime 3 (:func:`counted_regime3`) as it is and
+    with the frame's extra added, and how many are within 5 %."""
+    errors: dict[str, list[float]] = {"now": [], "with the frame's extra": []}
+    for _, g, m, row, now in counted_regime3(csv_path, paths):
         frame = frame_um_per_N(g, m, True)
         extra, printed = frame[2] - frame[0] - frame[1], float(row["printed"])
         errors["now"].append(now["closed_part"] / printed - 1.0)
@@ -293,6 +303,73 @@ def part_with_frame(csv_path: Path, paths: list[Path]) -> None:
         print(f"| {name} | {len(e)} | {statistics.median(e):+.1%} ({min(e):+.1%} to {max(e):+.1%}) | {within} |")
 
 
+def two_roots_um_per_N(g, m) -> float:
+    """What the top layer's walls give, um/N, with both roots' springs (model.plate_joint) solved
+    together beyond each root alone: the clamped-guided wall with springs k1 at its foot (the
+    plate over the closed layer, k / (1 + a) for past_lock's unbalanced root) and k at its head,
+    M1 = V (L/k2 + L^2/(2 E'I)) / (L/E'I + 1/k1 + 1/k2), two walls in parallel."""
+    s = lp.member_scene(g, m)
+    theta, t, h = (np.array([getattr(c, k) for c in g.layers]) for k in lp.CELL_KEYS)
+    th, tt, hh = theta[-1], t[-1], h[-1]
+    L = float(wall_centreline_length_mm(th, tt, hh))
+    EI = s.E_prime_MPa * s.depth_mm * tt**3 / 12.0
+    k = float(root_spring_Nmm_per_rad(th, tt, L, s.depth_mm, s.E_prime_MPa))
+    k1 = k / (1.0 + LOCKED_FITTED[0])
+
+    def extra(k_foot: float, k_head: float) -> float:  # over both roots rigid, per unit shear
+        moment = (L / k_head + L * L / (2.0 * EI)) / (L / EI + 1.0 / k_foot + 1.0 / k_head)
+        return moment * L / k_foot + (moment * L * L / 2.0 - L**3 / 6.0) / EI - L**3 / (12.0 * EI)
+
+    alone = extra(k1, np.inf) + extra(np.inf, k)
+    return 1e3 * 0.5 * np.cos(th) ** 2 * (extra(k1, k) - alone)
+
+
+def decompose(csv_path: Path, paths: list[Path]) -> None:
+    """Regime 3 over the box: where the closed form's part falls short of the rung, % of the part
+    as printed (the layers: L0 less the rung with every member rigid; each member: the closed form
+    less the rung with that member alone in TPU; the rest: what the rung's members give together
+    beyond each alone, with its sign turned), and the walls' two roots solved together."""
+    keys = ("layers", "base", "plates", "cap", "rest", "part", "two roots")
+    shares: dict[str, list[float]] = {k: [] for k in keys}
+    print("| design | rest, um/N | " + " | ".join(f"{k}, %" for k in keys) + " |")
+    print("|---|---|" + "---|" * len(keys))
+    for name, g, m, row, now in counted_regime3(csv_path, paths):
+        printed = float(row["printed"])
+        members = now["closed_base"] + now["closed_plate"] + now["closed_cap"]
+        gap = {
+            "layers": now["closed_part"] - members - float(row["rigid"]),
+            "base": now["closed_base"] - float(row["rung_base"]),
+            "plates": now["closed_plate"] - float(row["rung_plate"]),
+            "cap": now["closed_cap"] - float(row["rung_cap"]),
+            "rest": -float(row["rest"]),
+            "part": now["closed_part"] - printed,
+            "two roots": two_roots_um_per_N(g, m),
+        }
+        for k in keys:
+            shares[k].append(100.0 * gap[k] / printed)
+        print(f"| {name} | {float(row['rest']):.2f} | " + " | ".join(f"{shares[k][-1]:+.1f}" for k in keys) + " |")
+    print("| median | | " + " | ".join(f"{statistics.median(shares[k]):+.1f}" for k in keys) + " |")
+
+
+def chain_cost_s(stacks: int = 1000, repeats: int = 5) -> float:
+    """The least time, s, of the chain's four rigid cases over ``stacks`` random top layers in the
+    forward design's scene."""
+    import time
+
+    doc, _ = mst.designed(Path(__file__).resolve().parents[1] / "configs" / "mohammadi2021-forward.yaml")
+    s = lp.member_scene(doc.geometry(), doc.material)
+    rng = np.random.default_rng(0)
+    theta, t = np.radians(rng.uniform(15.0, 60.0, stacks)), rng.uniform(0.4, 1.4, stacks)
+    h, head, below = 2.0 * t + rng.uniform(0.5, 2.0, stacks), rng.uniform(10, 13, stacks), rng.uniform(10, 13, stacks)
+    best = np.inf
+    for _ in range(repeats):
+        start = time.perf_counter()
+        for cap, plate in ((1.0, 1.0), (np.inf, 1.0), (1.0, np.inf), (np.inf, np.inf)):
+            chain_drop_mm_per_N(s, theta, t, h, head, below, cap, plate)
+        best = min(best, time.perf_counter() - start)
+    return best
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--configs", type=Path, nargs="*", default=[])
@@ -300,12 +377,18 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--no-offsets", action="store_true", help="the control: walls meet cap and plate at mid-plane")
     ap.add_argument("--part", type=Path, help="studies/data/member_regimes.csv: the box's regime 3 with the extra")
+    ap.add_argument("--decompose", type=Path, help="studies/data/member_regimes.csv: where regime 3 falls short")
+    ap.add_argument("--cost", action="store_true", help="the chain's four rigid cases over 1000 stacks, s")
     args = ap.parse_args()
-    if args.part is not None:
+    if args.cost:
+        print(f"the chain, four rigid cases, 1000 stacks: {1e3 * chain_cost_s():.1f} ms (least of 5)")
+        return
+    if args.part is not None or args.decompose is not None:
         from studies import member_regimes as mr
 
         with tempfile.TemporaryDirectory() as tmp:
-            part_with_frame(args.part, mr.sampled_designs(Path(tmp), args.box or 40, args.seed))
+            paths = mr.sampled_designs(Path(tmp), args.box or 40, args.seed)
+            (part_with_frame if args.part is not None else decompose)(args.part or args.decompose, paths)
         return
     print("past two locks, um/N, rung / frame:\n")
     print("| design | plates alone | cap alone | both | together less alone |")
