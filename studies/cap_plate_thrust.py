@@ -29,18 +29,17 @@ one, kept in mst's cache (a second run reads them back).
     PYTHONPATH=. .venv/bin/python studies/cap_plate_thrust.py --box 40 [--no-offsets]
     PYTHONPATH=. .venv/bin/python studies/cap_plate_thrust.py --part studies/data/member_regimes.csv
 
-:func:`chain_drop_mm_per_N` is the same frame by another method, vectorised over stacks as the
-design loop's members are: the flexibility of the chain from the block to the cap's centre (no
-stiff links, so exact where the stiffness method loses about 1e-4 to them); 8.6 ms for 1000
-stacks, four rigid cases each (``--cost``).
+model.wall_thrust.chain_drop_mm_per_N is the same frame by another method, vectorised over
+stacks as the design loop's members are: the flexibility of the chain from the block to the cap's
+centre (no stiff links, so exact where the stiffness method loses about 1e-4 to them); its four
+rigid cases' signed sum is the thrust term the closed form now carries (``--cost``: its time).
 
 ``--decompose``: where the closed form's regime 3 falls short of the rung over the box, member by
 member and the rest, % of the part (and the walls' two roots solved together); ``--cost``: the
 chain's time. Both without rung solves.
 
-``--part``: the closed form's regime 3 over the box (the CSV's rung) as it is and with the
-frame's extra added to it, what a closed form of the thrust at the frame's strength would give
-(no rung solves, seconds).
+``--part``: the closed form's regime 3 over the box (the CSV's rung) without the thrust term and
+with it, as the model has it (no rung solves, seconds).
 """
 
 from __future__ import annotations
@@ -62,6 +61,8 @@ from mst_cli.model.past_lock import LOCKED_FITTED
 from mst_cli.model.plane_frame import Frame
 from mst_cli.model.plate_joint import root_spring_Nmm_per_rad
 from mst_cli.model.stack import Stack
+from mst_cli.model.wall_thrust import chain_drop_mm_per_N as chain_drop_mm_per_N
+from mst_cli.model.wall_thrust import scene_thrust_mm_per_N, thrust_extra_mm_per_N
 
 RIGID = 1e4  # the rigid members' modulus factor, as the rung's control
 TIE_N_PER_MM = 1e9  # a spring's two nodes tied in position
@@ -134,90 +135,6 @@ def cell_frame_drop_um_per_N(
     return -1e3 * float(f.solve({3 * centre + 1: -0.5})[3 * centre + 1])
 
 
-def _beam_flexibility(a_xz, b_xz, EA, EI, kGA) -> np.ndarray:
-    """(..., 3, 3) a Timoshenko beam's flexibility at its end b, a held, in global (u, w, turn):
-    the local [[L/EA, 0, 0], [0, L^3/(3 EI) + L/kGA, L^2/(2 EI)], [0, L^2/(2 EI), L/EI]] turned
-    from the beam's axis (a to b) to x (EA, kGA inf: no stretch, no shear)."""
-    d = np.asarray(b_xz, dtype=float) - np.asarray(a_xz, dtype=float)
-    L = np.hypot(d[..., 0], d[..., 1])
-    c, s = d[..., 0] / L, d[..., 1] / L
-    local = np.zeros(L.shape + (3, 3))
-    local[..., 0, 0] = L / EA
-    local[..., 1, 1] = L**3 / (3.0 * EI) + L / kGA
-    local[..., 1, 2] = local[..., 2, 1] = L * L / (2.0 * EI)
-    local[..., 2, 2] = L / EI
-    R = np.zeros(L.shape + (3, 3))
-    R[..., 0, 0], R[..., 0, 1], R[..., 1, 0], R[..., 1, 1], R[..., 2, 2] = c, s, -s, c, 1.0
-    return np.swapaxes(R, -1, -2) @ local @ R
-
-
-def _to_tip(b_xz, tip_xz) -> np.ndarray:
-    """(..., 3, 3) the load at point b of a load (Fx, Fz, M) at the tip: the same forces and the
-    moment M + (x_tip - x_b) Fz - (z_tip - z_b) Fx (turns counter-clockwise from x to z)."""
-    r = np.asarray(tip_xz, dtype=float) - np.asarray(b_xz, dtype=float)
-    B = np.zeros(r.shape[:-1] + (3, 3))
-    B[..., 0, 0] = B[..., 1, 1] = B[..., 2, 2] = 1.0
-    B[..., 2, 0], B[..., 2, 1] = -r[..., 1], r[..., 0]
-    return B
-
-
-def chain_drop_mm_per_N(
-    scene, theta_rad, t_mm, h_mm, head_mm, head_below_mm, cap_factor=1.0, plate_factor=1.0, offsets: bool = True
-) -> np.ndarray:  # fmt: skip
-    """:func:`frame_drop_um_per_N`'s frame, mm/N, of top layers given as arrays (...,) (theta in
-    rad; t, h, their wall heads' x and the heads' x of the closed layer below, mm), by the
-    flexibility of the chain from the block to the cap's centre: each member's flexibility carried
-    to the centre (the load there (Fx, Fz, M) to the load at the member's end), summed; then the
-    centre held from moving along x and from turning (the symmetry plane), under 1/2 N down.
-    ``cap_factor``, ``plate_factor``: those members' (and their roots') stiffness times that."""
-    s = scene
-    theta, t, h = (np.asarray(v, dtype=float) for v in (theta_rad, t_mm, h_mm))
-    x_head, x_block = np.asarray(head_mm, dtype=float), np.asarray(head_below_mm, dtype=float)
-    E, G, D = s.E_prime_MPa, s.G_MPa, s.depth_mm
-    ED = E * D
-    L = wall_centreline_length_mm(theta, t, h)
-    root = root_spring_Nmm_per_rad(theta, t, L, D, E)
-    z_pocket = t + s.pocket_floor_mm
-    EI_c, kGA_c = section_EI_kGA(
-        D, t + s.cap_above_stack_mm, E, G, s.pocket_width_mm, (z_pocket, z_pocket + s.pocket_depth_mm),
-        s.insert, t + s.insert_above_pad_mm,
-    )  # fmt: skip
-    d = s.plate_mm + t
-    EI_p, kGA_p = section_EI_kGA(D, d, E, G)
-    z_foot, z_head = 0.5 * t, h - 0.5 * t
-    e_cap, e_plate = (0.5 * s.cap_above_stack_mm, 0.5 * s.plate_mm) if offsets else (0.0, 0.0)
-    xz = lambda x, z: np.stack(np.broadcast_arrays(x, z), axis=-1)  # noqa: E731
-    tip = xz(0.0 * x_head, z_head + e_cap)
-    foot, vertex, head = xz(x_head, z_foot), xz(x_head + L * np.cos(theta), 0.5 * h), xz(x_head, z_head)
-    plate_end, edge = xz(x_head, z_foot - e_plate), xz(np.minimum(x_block, x_head), z_foot - e_plate)
-
-    def turn_only(k) -> np.ndarray:
-        f = np.zeros(np.shape(k) + (3, 3))
-        f[..., 2, 2] = 1.0 / k
-        return f
-
-    wall = (ED * t, ED * t**3 / 12.0, 5.0 / 6.0 * G * D * t)
-    hangs = x_head > x_block
-    c = np.where(hangs, x_head - x_block, 1.0)  # a dummy length where the feet stand on the block
-    plate_f = _beam_flexibility(
-        xz(x_head - c, z_foot - e_plate), plate_end, np.inf, EI_p * plate_factor, kGA_p * plate_factor
-    )
-    members = (
-        (edge, turn_only(LOCKED_FITTED[1] * ED * d * d * plate_factor)),  # the plate's root in the block
-        (plate_end, np.where(hangs[..., None, None], plate_f, 0.0)),
-        (foot, turn_only(root * plate_factor)),
-        (vertex, _beam_flexibility(foot, vertex, *wall)),
-        (head, _beam_flexibility(vertex, head, *wall)),
-        (head, turn_only(root * cap_factor)),
-        (tip, _beam_flexibility(xz(x_head, z_head + e_cap), tip, np.inf, EI_c * cap_factor, kGA_c * cap_factor)),
-    )
-    F = sum(np.swapaxes(_to_tip(b, tip), -1, -2) @ f @ _to_tip(b, tip) for b, f in members)
-    Fz = -0.5
-    held = F[..., [0, 2], :][..., :, [0, 2]]
-    Fx, M = np.moveaxis(np.linalg.solve(held, -Fz * F[..., [0, 2], 1][..., None])[..., 0], -1, 0)
-    return -(F[..., 1, 0] * Fx + F[..., 1, 1] * Fz + F[..., 1, 2] * M)
-
-
 def rung_um_per_N(g, m) -> tuple[float, float, float]:
     """The rung's plates alone, cap alone and both (the base rigid), each less every member
     rigid, um/N, layers 1 and 2 locked."""
@@ -288,19 +205,27 @@ def counted_regime3(csv_path: Path, paths: list[Path]):
 
 
 def part_with_frame(csv_path: Path, paths: list[Path]) -> None:
-    """The closed form's part / the rung's - 1 in regime 3 (:func:`counted_regime3`) as it is and
-    with the frame's extra added, and how many are within 5 %."""
-    errors: dict[str, list[float]] = {"now": [], "with the frame's extra": []}
+    """The closed form's part / the rung's - 1 in regime 3 (:func:`counted_regime3`) without the
+    walls' thrust (model.wall_thrust, in the closed form since it went in) and with it, and how
+    many are within 5 %."""
+    errors: dict[str, list[float]] = {"without the thrust": [], "with it (the model)": []}
     for _, g, m, row, now in counted_regime3(csv_path, paths):
-        frame = frame_um_per_N(g, m, True)
-        extra, printed = frame[2] - frame[0] - frame[1], float(row["printed"])
-        errors["now"].append(now["closed_part"] / printed - 1.0)
-        errors["with the frame's extra"].append((now["closed_part"] + extra) / printed - 1.0)
+        thrust, printed = 1e3 * model_thrust_mm_per_N(g, m), float(row["printed"])
+        errors["without the thrust"].append((now["closed_part"] - thrust) / printed - 1.0)
+        errors["with it (the model)"].append(now["closed_part"] / printed - 1.0)
     print("\n| regime 3, closed / rung - 1 | designs | median (least to most) | within 5 % |")
     print("|---|---|---|---|")
     for name, e in errors.items():
         within = sum(abs(v) <= 0.05 for v in e)
         print(f"| {name} | {len(e)} | {statistics.median(e):+.1%} ({min(e):+.1%} to {max(e):+.1%}) | {within} |")
+
+
+def model_thrust_mm_per_N(g, m) -> float:
+    """The walls' thrust the closed form adds past the lock under the top layer, mm/N
+    (model.wall_thrust, on the plate under it)."""
+    s = lp.member_scene(g, m)
+    theta, t, h = (np.array([getattr(c, k) for c in g.layers]) for k in lp.CELL_KEYS)
+    return float(scene_thrust_mm_per_N(s, theta, t, h, lp.layer_supports(s, theta, t, h)[1])[-1])
 
 
 def two_roots_um_per_N(g, m) -> float:
@@ -364,8 +289,7 @@ def chain_cost_s(stacks: int = 1000, repeats: int = 5) -> float:
     best = np.inf
     for _ in range(repeats):
         start = time.perf_counter()
-        for cap, plate in ((1.0, 1.0), (np.inf, 1.0), (1.0, np.inf), (np.inf, np.inf)):
-            chain_drop_mm_per_N(s, theta, t, h, head, below, cap, plate)
+        thrust_extra_mm_per_N(s, theta, t, h, head, below)  # the four cases in one call, as the model runs it
         best = min(best, time.perf_counter() - start)
     return best
 
@@ -376,12 +300,17 @@ def main() -> None:
     ap.add_argument("--box", type=int, default=0, help="this many of studies/member_regimes.py's sampled designs")
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--no-offsets", action="store_true", help="the control: walls meet cap and plate at mid-plane")
-    ap.add_argument("--part", type=Path, help="studies/data/member_regimes.csv: the box's regime 3 with the extra")
+    ap.add_argument(
+        "--part", type=Path, help="studies/data/member_regimes.csv: the box's regime 3 without the thrust and with"
+    )
     ap.add_argument("--decompose", type=Path, help="studies/data/member_regimes.csv: where regime 3 falls short")
-    ap.add_argument("--cost", action="store_true", help="the chain's four rigid cases over 1000 stacks, s")
+    ap.add_argument(
+        "--cost", action="store_true", help="the thrust term (the chain's four rigid cases) of 1000 stacks, s"
+    )
     args = ap.parse_args()
     if args.cost:
-        print(f"the chain, four rigid cases, 1000 stacks: {1e3 * chain_cost_s():.1f} ms (least of 5)")
+        for n in (1000, 20):
+            print(f"the thrust term (four rigid chains), {n} stacks: {1e3 * chain_cost_s(n):.2f} ms (least of 5)")
         return
     if args.part is not None or args.decompose is not None:
         from studies import member_regimes as mr

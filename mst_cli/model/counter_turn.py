@@ -98,7 +98,7 @@ class CounterTurn:
         return out
 
 
-def unit_arms_mm(riding: list[list[list[tuple[float, int]]]], member_arm_mm: np.ndarray, lever_mm) -> np.ndarray:
+def unit_arms_mm(riding: list[list[list[tuple[float, int | None]]]], member_arm_mm: np.ndarray, lever_mm) -> np.ndarray:
     """(regimes, n) each unit's members' lever under the pull: their own levers (the frame's
     ``member_arm_mm``, columns the cover, the plates, the cap) weighed by the compliance each adds
     to the unit (``riding``: model.part_laws.unit_members; under a moment a unit's members turn in
@@ -109,11 +109,12 @@ def unit_arms_mm(riding: list[list[list[tuple[float, int]]]], member_arm_mm: np.
     for r, units in enumerate(riding):
         for j, members in enumerate(units):
             if members:
-                out[r, j] = sum(share * member_arm_mm[r, k + 1] for share, k in _shares(members))
+                arms = (lever[j] if k is None else member_arm_mm[r, k + 1] for _, k in members)
+                out[r, j] = sum(share * arm for (share, _), arm in zip(_shares(members), arms))
     return out
 
 
-def _shares(members: list[tuple[float, int]]) -> list[tuple[float, int]]:
+def _shares(members: list[tuple[float, int | None]]) -> list[tuple[float, int | None]]:
     """A unit's riding members (compliance, which) as (the share of the unit's members' compliance,
     which): how its members' turn under a moment divides among them."""
     total = sum(c for c, _ in members)
@@ -158,7 +159,7 @@ def counter_turn(
 
 
 def own_plane_slide_mm_per_N(
-    riding: list[list[list[tuple[float, int]]]], member_arm_mm: np.ndarray, members_tilt: np.ndarray,
+    riding: list[list[list[tuple[float, int | None]]]], member_arm_mm: np.ndarray, members_tilt: np.ndarray,
     pivot_mm: np.ndarray, member_z_mm: np.ndarray,
 ) -> np.ndarray:  # fmt: skip
     """(regimes,) per regime, what the members' turn under a pull moves the magnet along x, per
@@ -173,6 +174,7 @@ def own_plane_slide_mm_per_N(
         slide = 0.0
         for j, members in enumerate(riding[r]):
             for share, k in _shares(members):
-                slide += member_arm_mm[r, k + 1] * share * tilt[j] * (pivot_mm[j] - member_z_mm[k + 1])
+                if k is not None:  # a term at its layer's own lever turns about the layer's pivot
+                    slide += member_arm_mm[r, k + 1] * share * tilt[j] * (pivot_mm[j] - member_z_mm[k + 1])
         out.append(slide)
     return np.array(out)
