@@ -42,7 +42,7 @@ from mst_cli.model.mechanics.spring import layer_displacement_mm
 from mst_cli.model.past_lock import over_two_locked_mm_per_N, plate_overhang_mm_per_N, upper_layer_terms
 from mst_cli.model.plate_joint import joint_scene, plates_beside, root_joint_mm_per_N
 from mst_cli.model.stack import capped_lock_force_N, contact_drop_mm
-from mst_cli.model.wall_thrust import thrust_extra_mm_per_N
+from mst_cli.model.wall_thrust import thrust_on_block, top_chain
 
 if TYPE_CHECKING:
     from mst_cli.design.problem import DesignProblem
@@ -196,9 +196,8 @@ class CellTable:
         caps = np.stack(np.broadcast_arrays(*plates, cap), axis=-1) + np.stack(np.broadcast_arrays(*joints), axis=-1)
         locked = self._locked_plate(scene, j, at, cell, member) if j > 0 else np.zeros(cells)
         if j == top and j > 0:  # the top layer's walls' thrust on that plate (model.wall_thrust)
-            thrust = lambda: thrust_extra_mm_per_N(  # noqa: E731
-                scene, theta_rad, t, self.h_mm, head, at(head, j - 1)
-            )
+            chain = member(("top chain",), lambda: top_chain(scene, theta_rad, t, self.h_mm, head))
+            thrust = lambda: thrust_on_block(chain, at(head, j - 1))  # noqa: E731
             locked = locked + member(("thrust", cell(j - 1), cell(j)), thrust)
         cover_mm = self._cover_drop(problem, on_bottom, at, cell, member)
         return caps, cover_mm, np.broadcast_to(locked, (cells,))

@@ -12,14 +12,18 @@ frame of half the top layer's cell (model.plane_frame) and finds its interaction
 rung's over the design box (0.10 with the offsets removed, its control).
 
 :func:`chain_drop_mm_per_N` is that frame by the flexibility method, vectorised over stacks: each
-member's 3 x 3 flexibility carried to the cap's centre and summed, the centre then held by the
-symmetry plane. :func:`thrust_extra_mm_per_N` is the interaction the closed form lacks, the drop
+member's 3 x 3 flexibility (its six entries, elementwise) carried to the cap's centre and summed,
+the centre then held by the symmetry plane. The top layer alone fixes the walls' and the cap's
+part (:func:`top_chain`); the block under it enters last (:func:`drop_on_block`), and a member
+made k times stiffer divides its part by k, so the four rigid cases cost one chain. :func:`thrust_extra_mm_per_N` is the interaction the closed form lacks, the drop
 with both members as printed, less with the cap rigid, less with the plate rigid, plus with both
 rigid. It is a centred press's term: under a moment or a tangential force the walls' thrusts
 differ side to side, so it carries no member's lever (model.part_laws). Pure numpy, no I/O.
 """
 
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -33,47 +37,75 @@ RIGID_CASES = ((1.0, 1.0), (np.inf, 1.0), (1.0, np.inf), (np.inf, np.inf))
 RIGID_SIGNS = (1.0, -1.0, -1.0, 1.0)
 
 
-def beam_flexibility(a_xz, b_xz, EA, EI, kGA) -> np.ndarray:
-    """(..., 3, 3) a Timoshenko beam's flexibility at its end b, a held, in global (u, w, turn):
-    the local [[L/EA, 0, 0], [0, L^3/(3 EI) + L/kGA, L^2/(2 EI)], [0, L^2/(2 EI), L/EI]] turned
-    from the beam's axis (a to b) to x (EA, kGA inf: no stretch, no shear)."""
-    d = np.asarray(b_xz, dtype=float) - np.asarray(a_xz, dtype=float)
-    L = np.hypot(d[..., 0], d[..., 1])
-    c, s = d[..., 0] / L, d[..., 1] / L
-    L, EA, EI, kGA, c, s = np.broadcast_arrays(L, EA, EI, kGA, c, s)
-    local = np.zeros(L.shape + (3, 3))
-    local[..., 0, 0] = L / EA
-    local[..., 1, 1] = L**3 / (3.0 * EI) + L / kGA
-    local[..., 1, 2] = local[..., 2, 1] = L * L / (2.0 * EI)
-    local[..., 2, 2] = L / EI
-    R = np.zeros(L.shape + (3, 3))
-    R[..., 0, 0], R[..., 0, 1], R[..., 1, 0], R[..., 1, 1], R[..., 2, 2] = c, s, -s, c, 1.0
-    return np.swapaxes(R, -1, -2) @ local @ R
+def beam_flexibility(a_xz: tuple, b_xz: tuple, EA, EI, kGA) -> tuple:
+    """A Timoshenko beam's flexibility at its end b, a held, in global (u, w, turn), as its six
+    entries (uu, uw, ut, ww, wt, tt) of arrays: the local [[L/EA, 0, 0], [0, L^3/(3 EI) + L/kGA,
+    L^2/(2 EI)], [0, L^2/(2 EI), L/EI]] turned from the beam's axis (a to b) to x (EA, kGA inf: no
+    stretch, no shear). Entries, not (..., 3, 3) stacks: the design's start evaluates this over
+    thousands of cells, where small stacked matrix products cost ten times the arithmetic."""
+    dx, dz = b_xz[0] - a_xz[0], b_xz[1] - a_xz[1]
+    L = np.hypot(dx, dz)
+    c, s = dx / L, dz / L
+    axial, bend = L / EA, L**3 / (3.0 * EI) + L / kGA
+    couple, turn = L * L / (2.0 * EI), L / EI
+    uu, ww = axial * c * c + bend * s * s, axial * s * s + bend * c * c
+    return (uu, (axial - bend) * c * s, -s * couple, ww, c * couple, turn)
 
 
-def load_transfer(b_xz, tip_xz) -> np.ndarray:
-    """(..., 3, 3) the load at point b of a load (Fx, Fz, M) at the tip: the same forces and the
-    moment M + (x_tip - x_b) Fz - (z_tip - z_b) Fx (turns counter-clockwise from x to z)."""
-    r = np.asarray(tip_xz, dtype=float) - np.asarray(b_xz, dtype=float)
-    B = np.zeros(r.shape[:-1] + (3, 3))
-    B[..., 0, 0] = B[..., 1, 1] = B[..., 2, 2] = 1.0
-    B[..., 2, 0], B[..., 2, 1] = -r[..., 1], r[..., 0]
-    return B
+def carried(f: tuple, b_xz: tuple, tip_xz: tuple) -> tuple:
+    """The flexibility ``f`` (six entries) at point b seen at the tip, B^T f B, where B carries a
+    tip load (Fx, Fz, M) to b: the same forces and the moment M + (x_tip - x_b) Fz - (z_tip - z_b)
+    Fx (turns counter-clockwise from x to z); with a = (-(z_tip - z_b), x_tip - x_b, 0), entry ij
+    gains f_i,turn a_j + a_i f_turn,j + f_turn,turn a_i a_j."""
+    a0, a1 = b_xz[1] - tip_xz[1], tip_xz[0] - b_xz[0]
+    uu, uw, ut, ww, wt, tt = f
+    return (
+        uu + 2.0 * ut * a0 + tt * a0 * a0,
+        uw + ut * a1 + wt * a0 + tt * a0 * a1,
+        ut + tt * a0,
+        ww + 2.0 * wt * a1 + tt * a1 * a1,
+        wt + tt * a1,
+        tt,
+    )
 
 
-def chain_drop_mm_per_N(
-    scene, theta_rad, t_mm, h_mm, head_mm, head_below_mm, cap_factor=1.0, plate_factor=1.0, offsets: bool = True
-) -> np.ndarray:  # fmt: skip
-    """The cap centre's drop, mm/N, of top layers given as arrays (...) (theta in rad; t, h, their
-    wall heads' x and the heads' x of the closed layer below, mm) in ``scene`` (a
-    model.load_path.MemberScene): the frame's chain from the block to the cap's centre (module
-    docstring) under 1/2 N down on the half cell, the centre held from moving along x and from
-    turning. ``cap_factor``, ``plate_factor``: those members' (and their roots') stiffness times
-    that (inf: rigid; arrays broadcast with the stacks); ``offsets``: False puts the walls' ends on
-    the members' mid-planes (the study's control)."""
+@dataclass(frozen=True)
+class TopChain:
+    """The part of the frame's chain that the top layer alone fixes, arrays (...): the walls', the
+    cap's (its root spring and its half span) and the plate root's at the walls' feet flexibilities
+    carried to the cap's centre (six entries each, :func:`carried`'s), and what the plate's hang
+    from the block needs. The block (the closed layer's wall heads) enters in :func:`drop_on_block`,
+    so a design start that tries every cell under one top layer builds this once."""
+
+    walls: tuple
+    cap: tuple
+    foot: tuple  # the plate's root at the walls' feet (turns with the plate's stiffness)
+    x_head_mm: np.ndarray
+    z_plate_mm: np.ndarray  # the plate's mid-plane (the walls' feet's, without the offsets)
+    tip_z_mm: np.ndarray
+    EI_plate: np.ndarray
+    kGA_plate: np.ndarray
+    block_root_Nmm_per_rad: np.ndarray  # the plate's root in the block (model.past_lock)
+
+
+def rotational_spring(k, b_xz: tuple, tip_xz: tuple) -> tuple:
+    """A rotational spring ``k`` (N mm/rad) at b seen at the tip: :func:`carried` of f = 1/k in turn
+    alone, its six entries."""
+    a0, a1, tt = b_xz[1] - tip_xz[1], tip_xz[0] - b_xz[0], 1.0 / k
+    return (tt * a0 * a0, tt * a0 * a1, tt * a0, tt * a1 * a1, tt * a1, tt)
+
+
+def _summed(*parts: tuple) -> tuple:
+    return tuple(sum(entries) for entries in zip(*parts))
+
+
+def top_chain(scene, theta_rad, t_mm, h_mm, head_mm, offsets: bool = True) -> TopChain:
+    """:class:`TopChain` of top layers given as arrays (...) (theta in rad; t, h and their wall
+    heads' x, mm) in ``scene`` (a model.load_path.MemberScene); ``offsets``: False puts the walls'
+    ends on the members' mid-planes (the study's control)."""
     s = scene
     theta, t, h = (np.asarray(v, dtype=float) for v in (theta_rad, t_mm, h_mm))
-    x_head, x_block = np.asarray(head_mm, dtype=float), np.asarray(head_below_mm, dtype=float)
+    x_head = np.asarray(head_mm, dtype=float)
     E, G, D = s.E_prime_MPa, s.G_MPa, s.depth_mm
     ED = E * D
     L = wall_centreline_length_mm(theta, t, h)
@@ -87,45 +119,74 @@ def chain_drop_mm_per_N(
     EI_p, kGA_p = section_EI_kGA(D, d, E, G)
     z_foot, z_head = 0.5 * t, h - 0.5 * t  # the wall's centre line: foot, head (the plate's top at z = 0)
     e_cap, e_plate = (0.5 * s.cap_above_stack_mm, 0.5 * s.plate_mm) if offsets else (0.0, 0.0)
-    xz = lambda x, z: np.stack(np.broadcast_arrays(x, z), axis=-1)  # noqa: E731
-    tip = xz(0.0 * x_head, z_head + e_cap)
-    foot, vertex, head = xz(x_head, z_foot), xz(x_head + L * np.cos(theta), 0.5 * h), xz(x_head, z_head)
-    plate_end, edge = xz(x_head, z_foot - e_plate), xz(np.minimum(x_block, x_head), z_foot - e_plate)
-    cap_f, plate_f = np.asarray(cap_factor, dtype=float), np.asarray(plate_factor, dtype=float)
-
-    def turn_only(k) -> np.ndarray:
-        f = np.zeros(np.shape(k) + (3, 3))
-        f[..., 2, 2] = 1.0 / k
-        return f
-
+    # points as (x, z), mm
+    tip = (0.0, z_head + e_cap)
+    foot, vertex, head = (x_head, z_foot), (x_head + L * np.cos(theta), 0.5 * h), (x_head, z_head)
     wall = (ED * t, ED * t**3 / 12.0, 5.0 / 6.0 * G * D * t)
+    walls = _summed(
+        carried(beam_flexibility(foot, vertex, *wall), vertex, tip),
+        carried(beam_flexibility(vertex, head, *wall), head, tip),
+    )
+    cap = _summed(
+        rotational_spring(root, head, tip), beam_flexibility((x_head, z_head + e_cap), tip, np.inf, EI_c, kGA_c)
+    )
+    return TopChain(
+        walls, cap, rotational_spring(root, foot, tip), x_head, z_foot - e_plate, tip[1], EI_p, kGA_p,
+        LOCKED_FITTED[1] * ED * d * d,
+    )  # fmt: skip
+
+
+def drop_on_block(chain: TopChain, head_below_mm, cap_factor=1.0, plate_factor=1.0) -> np.ndarray:
+    """The cap centre's drop, mm/N, of the chain's top layers on the closed layer below, whose wall
+    heads stand at ``head_below_mm``: under 1/2 N down on the half cell, the centre held from
+    moving along x and from turning. ``cap_factor``, ``plate_factor``: those members' (and their
+    roots') stiffness times that (inf: rigid; arrays broadcast with the stacks)."""
+    x_head, z_plate, tip = chain.x_head_mm, chain.z_plate_mm, (0.0, chain.tip_z_mm)
+    x_block = np.asarray(head_below_mm, dtype=float)
     hangs = x_head > x_block  # the feet beyond the block's edge: the plate hangs from it
     c = np.where(hangs, x_head - x_block, 1.0)  # a dummy length where the feet stand on the block
-    plate = beam_flexibility(xz(x_head - c, z_foot - e_plate), plate_end, np.inf, EI_p * plate_f, kGA_p * plate_f)
-    members = (
-        (edge, turn_only(LOCKED_FITTED[1] * ED * d * d * plate_f)),  # the plate's root in the block (past_lock)
-        (plate_end, np.where(hangs[..., None, None], plate, 0.0)),
-        (foot, turn_only(root * plate_f)),
-        (vertex, beam_flexibility(foot, vertex, *wall)),
-        (head, beam_flexibility(vertex, head, *wall)),
-        (head, turn_only(root * cap_f)),
-        (tip, beam_flexibility(xz(x_head, z_head + e_cap), tip, np.inf, EI_c * cap_f, kGA_c * cap_f)),
+    plate_end = (x_head, z_plate)
+    plate = beam_flexibility((x_head - c, z_plate), plate_end, np.inf, chain.EI_plate, chain.kGA_plate)
+    plate_side = _summed(
+        rotational_spring(chain.block_root_Nmm_per_rad, (np.minimum(x_block, x_head), z_plate), tip),
+        carried(tuple(np.where(hangs, f, 0.0) for f in plate), plate_end, tip),
+        chain.foot,
     )
-    F = sum(np.swapaxes(load_transfer(b, tip), -1, -2) @ f @ load_transfer(b, tip) for b, f in members)
+    # a member's flexibility is inversely proportional to its stiffness: the factors divide it
+    cap_f, plate_f = (1.0 / np.asarray(f, dtype=float) for f in (cap_factor, plate_factor))
+    uu, uw, ut, ww, wt, tt = (w + p * plate_f + k * cap_f for w, p, k in zip(chain.walls, plate_side, chain.cap))
+    # the centre held along x and in turn under Fz: [[uu, ut], [ut, tt]] (Fx, M) = -Fz (uw, wt)
     Fz = -0.5
-    held = F[..., [0, 2], :][..., :, [0, 2]]
-    Fx, M = np.moveaxis(np.linalg.solve(held, -Fz * F[..., [0, 2], 1][..., None])[..., 0], -1, 0)
-    return -(F[..., 1, 0] * Fx + F[..., 1, 1] * Fz + F[..., 1, 2] * M)
+    det = uu * tt - ut * ut
+    Fx = -Fz * (uw * tt - ut * wt) / det
+    M = -Fz * (uu * wt - ut * uw) / det
+    return -(uw * Fx + ww * Fz + wt * M)
+
+
+def chain_drop_mm_per_N(
+    scene, theta_rad, t_mm, h_mm, head_mm, head_below_mm, cap_factor=1.0, plate_factor=1.0, offsets: bool = True
+) -> np.ndarray:  # fmt: skip
+    """The cap centre's drop, mm/N, of top layers given as arrays (...) (theta in rad; t, h, their
+    wall heads' x and the heads' x of the closed layer below, mm) in ``scene`` (a
+    model.load_path.MemberScene): the frame's chain from the block to the cap's centre (module
+    docstring), :func:`top_chain` on :func:`drop_on_block`, whose arguments these are."""
+    chain = top_chain(scene, theta_rad, t_mm, h_mm, head_mm, offsets)
+    return drop_on_block(chain, head_below_mm, cap_factor, plate_factor)
+
+
+def thrust_on_block(chain: TopChain, head_below_mm) -> np.ndarray:
+    """(...) what the cap and the plate under the chain's top layers give together beyond each
+    alone, mm/N, on the closed layer whose wall heads stand at ``head_below_mm``: its four rigid
+    cases in one call, signed as the module docstring says."""
+    shape = np.broadcast_shapes(np.shape(chain.x_head_mm), np.shape(head_below_mm))
+    cases = np.array(RIGID_CASES).reshape((4, 2) + (1,) * len(shape))
+    drops = drop_on_block(chain, head_below_mm, cases[:, 0], cases[:, 1])
+    return np.tensordot(np.array(RIGID_SIGNS), drops, axes=1)
 
 
 def thrust_extra_mm_per_N(scene, theta_rad, t_mm, h_mm, head_mm, head_below_mm) -> np.ndarray:
-    """(...) what the cap and the plate under the top layer give together beyond each alone, mm/N,
-    of top layers given as arrays (:func:`chain_drop_mm_per_N`'s): its four rigid cases in one
-    call, signed as the module docstring says."""
-    shape = np.broadcast_shapes(*(np.shape(v) for v in (theta_rad, t_mm, h_mm, head_mm, head_below_mm)))
-    cases = np.array(RIGID_CASES).reshape((4, 2) + (1,) * len(shape))
-    drops = chain_drop_mm_per_N(scene, theta_rad, t_mm, h_mm, head_mm, head_below_mm, cases[:, 0], cases[:, 1])
-    return np.tensordot(np.array(RIGID_SIGNS), drops, axes=1)
+    """(...) :func:`thrust_on_block` of top layers given as arrays (:func:`chain_drop_mm_per_N`'s)."""
+    return thrust_on_block(top_chain(scene, theta_rad, t_mm, h_mm, head_mm), head_below_mm)
 
 
 def scene_thrust_mm_per_N(scene, theta_rad, t_mm, h_mm, head_mm) -> np.ndarray:
