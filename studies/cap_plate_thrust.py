@@ -53,7 +53,6 @@ import numpy as np
 
 import mst_cli as mst
 from mst_cli.model import load_path as lp
-from mst_cli.model.beams import section_EI_kGA
 from mst_cli.model.cell import wall_centreline_length_mm
 from mst_cli.model.mechanics import layer_laws
 from mst_cli.model.mechanics import whole_part as wp
@@ -62,7 +61,7 @@ from mst_cli.model.plane_frame import Frame
 from mst_cli.model.plate_joint import root_spring_Nmm_per_rad
 from mst_cli.model.stack import Stack
 from mst_cli.model.wall_thrust import chain_drop_mm_per_N as chain_drop_mm_per_N
-from mst_cli.model.wall_thrust import scene_thrust_mm_per_N, thrust_extra_mm_per_N
+from mst_cli.model.wall_thrust import chain_members, scene_thrust_mm_per_N, thrust_extra_mm_per_N
 
 RIGID = 1e4  # the rigid members' modulus factor, as the rung's control
 TIE_N_PER_MM = 1e9  # a spring's two nodes tied in position
@@ -94,21 +93,12 @@ def cell_frame_drop_um_per_N(
 ) -> float:  # fmt: skip
     """:func:`frame_drop_um_per_N` of a top layer (theta in rad; t, h, its wall heads' x and the
     closed layer's below, mm) in the scene ``s`` (a model.load_path.MemberScene)."""
-    E, G, D = s.E_prime_MPa, s.G_MPa, s.depth_mm
-    ED = E * D
-    L = float(wall_centreline_length_mm(th, tt, hh))
-    root = float(root_spring_Nmm_per_rad(th, tt, L, D, E))
+    m = chain_members(s, th, tt, hh, offsets)  # the members the chain takes (model.wall_thrust)
+    L, root = float(m.L_mm), float(m.root_Nmm_per_rad)
     cap_f, plate_f = (RIGID if r else 1.0 for r in (cap_rigid, plate_rigid))
-    z_pocket = tt + s.pocket_floor_mm
-    EI_c, kGA_c = section_EI_kGA(
-        D, tt + s.cap_above_stack_mm, E, G, s.pocket_width_mm, (z_pocket, z_pocket + s.pocket_depth_mm),
-        s.insert, tt + s.insert_above_pad_mm,
-    )  # fmt: skip
-    d = s.plate_mm + tt  # the plate and the pad over it
-    EI_p, kGA_p = section_EI_kGA(D, d, E, G)
+    (EI_c, kGA_c), (EI_p, kGA_p), wall = m.cap, m.plate, m.wall
     # the wall's centre line: foot at t/2, side vertex at h/2, head at h - t/2 (the plate's top z = 0)
-    z_foot, z_head = 0.5 * tt, hh - 0.5 * tt
-    e_cap, e_plate = (0.5 * s.cap_above_stack_mm, 0.5 * s.plate_mm) if offsets else (0.0, 0.0)
+    z_foot, z_head, e_cap, e_plate = float(m.z_foot_mm), float(m.z_head_mm), m.e_cap_mm, m.e_plate_mm
     f = Frame(TIE_N_PER_MM)
     centre, cap_end = f.node(0.0, z_head + e_cap), f.node(x_head, z_head + e_cap)
     f.beam(centre, cap_end, STIFF, EI_c * cap_f, kGA_c * cap_f)
@@ -117,12 +107,11 @@ def cell_frame_drop_um_per_N(
     f.spring(head_node, head_wall, root * cap_f)
     vertex = f.node(x_head + L * np.cos(th), 0.5 * hh)
     foot_wall, foot = f.node(x_head, z_foot), f.node(x_head, z_foot)
-    wall = (ED * tt, ED * tt**3 / 12.0, 5.0 / 6.0 * G * D * tt)
     f.beam(head_wall, vertex, *wall)
     f.beam(vertex, foot_wall, *wall)
     f.spring(foot_wall, foot, root * plate_f)
     plate_end = offset_node(f, foot, x_head, z_foot - e_plate)
-    block_root = LOCKED_FITTED[1] * ED * d * d * plate_f
+    block_root = m.block_root_Nmm_per_rad * plate_f
     if x_head > x_block:  # the feet beyond the block's edge: the plate hangs from it
         edge = f.node(x_block, z_foot - e_plate)
         f.beam(plate_end, edge, STIFF, EI_p * plate_f, kGA_p * plate_f)

@@ -14,10 +14,11 @@ rung's over the design box (0.10 with the offsets removed, its control).
 :func:`chain_drop_mm_per_N` is that frame by the flexibility method, vectorised over stacks: each
 member's 3 x 3 flexibility (its six entries, elementwise) carried to the cap's centre and summed,
 the centre then held by the symmetry plane. The top layer alone fixes the walls' and the cap's
-part (:func:`top_chain`); the block under it enters last (:func:`drop_on_block`), and a member
-made k times stiffer divides its part by k, so the four rigid cases cost one chain. :func:`thrust_extra_mm_per_N` is the interaction the closed form lacks, the drop
-with both members as printed, less with the cap rigid, less with the plate rigid, plus with both
-rigid. It is a centred press's term: under a moment or a tangential force the walls' thrusts
+part (:func:`top_chain`, on :func:`chain_members`, which the study's frame takes too); the block
+under it enters last (:func:`drop_on_block`), and a member made k times stiffer divides its part by
+k, so the four rigid cases cost one chain. :func:`thrust_extra_mm_per_N` is the interaction the
+closed form lacks, the drop with both members as printed, less with the cap rigid, less with the
+plate rigid, plus with both rigid. It is a centred press's term: under a moment or a tangential force the walls' thrusts
 differ side to side, so it carries no member's lever (model.part_laws). Pure numpy, no I/O.
 """
 
@@ -99,30 +100,62 @@ def _summed(*parts: tuple) -> tuple:
     return tuple(sum(entries) for entries in zip(*parts))
 
 
-def top_chain(scene, theta_rad, t_mm, h_mm, head_mm, offsets: bool = True) -> TopChain:
-    """:class:`TopChain` of top layers given as arrays (...) (theta in rad; t, h and their wall
-    heads' x, mm) in ``scene`` (a model.load_path.MemberScene); ``offsets``: False puts the walls'
-    ends on the members' mid-planes (the study's control)."""
+@dataclass(frozen=True)
+class ChainMembers:
+    """The members of the top layer's half-cell frame, arrays (...): each wall's centre line (L,
+    mm, from its foot at z_foot to its head at z_head, the plate's top at z = 0) and section (EA,
+    EI, kGA: N, N mm^2, N), its ends' root spring (N mm/rad, model.plate_joint), the cap's and the
+    plate's sections (EI, kGA), the plate and the pad over it d thick, its root in the block under
+    it (N mm/rad, model.past_lock), and the cap's and the plate's mid-planes' offsets from the
+    walls' ends (mm; 0 in the study's control)."""
+
+    L_mm: np.ndarray
+    wall: tuple
+    root_Nmm_per_rad: np.ndarray
+    cap: tuple
+    plate: tuple
+    d_mm: np.ndarray
+    block_root_Nmm_per_rad: np.ndarray
+    z_foot_mm: np.ndarray
+    z_head_mm: np.ndarray
+    e_cap_mm: float
+    e_plate_mm: float
+
+
+def chain_members(scene, theta_rad, t_mm, h_mm, offsets: bool = True) -> ChainMembers:
+    """:class:`ChainMembers` of top layers given as arrays (theta in rad; t, h, mm) in ``scene``
+    (a model.load_path.MemberScene): the frame the chain here and the study's stiffness-method
+    frame (studies/cap_plate_thrust.py) both solve."""
     s = scene
     theta, t, h = (np.asarray(v, dtype=float) for v in (theta_rad, t_mm, h_mm))
-    x_head = np.asarray(head_mm, dtype=float)
     E, G, D = s.E_prime_MPa, s.G_MPa, s.depth_mm
     ED = E * D
     L = wall_centreline_length_mm(theta, t, h)
-    root = root_spring_Nmm_per_rad(theta, t, L, D, E)
     z_pocket = t + s.pocket_floor_mm
-    EI_c, kGA_c = section_EI_kGA(
+    cap = section_EI_kGA(
         D, t + s.cap_above_stack_mm, E, G, s.pocket_width_mm, (z_pocket, z_pocket + s.pocket_depth_mm),
         s.insert, t + s.insert_above_pad_mm,
     )  # fmt: skip
     d = s.plate_mm + t  # the plate and the pad over it
-    EI_p, kGA_p = section_EI_kGA(D, d, E, G)
-    z_foot, z_head = 0.5 * t, h - 0.5 * t  # the wall's centre line: foot, head (the plate's top at z = 0)
     e_cap, e_plate = (0.5 * s.cap_above_stack_mm, 0.5 * s.plate_mm) if offsets else (0.0, 0.0)
+    return ChainMembers(
+        L, (ED * t, ED * t**3 / 12.0, 5.0 / 6.0 * G * D * t), root_spring_Nmm_per_rad(theta, t, L, D, E), cap,
+        section_EI_kGA(D, d, E, G), d, LOCKED_FITTED[1] * ED * d * d, 0.5 * t, h - 0.5 * t, e_cap, e_plate,
+    )  # fmt: skip
+
+
+def top_chain(scene, theta_rad, t_mm, h_mm, head_mm, offsets: bool = True) -> TopChain:
+    """:class:`TopChain` of top layers given as arrays (...) (theta in rad; t, h and their wall
+    heads' x, mm) in ``scene`` (a model.load_path.MemberScene); ``offsets``: False puts the walls'
+    ends on the members' mid-planes (the study's control)."""
+    m = chain_members(scene, theta_rad, t_mm, h_mm, offsets)
+    theta, h = np.asarray(theta_rad, dtype=float), np.asarray(h_mm, dtype=float)
+    x_head = np.asarray(head_mm, dtype=float)
+    L, root, (EI_c, kGA_c), (EI_p, kGA_p) = m.L_mm, m.root_Nmm_per_rad, m.cap, m.plate
+    z_foot, z_head, e_cap, e_plate, wall = m.z_foot_mm, m.z_head_mm, m.e_cap_mm, m.e_plate_mm, m.wall
     # points as (x, z), mm
     tip = (0.0, z_head + e_cap)
     foot, vertex, head = (x_head, z_foot), (x_head + L * np.cos(theta), 0.5 * h), (x_head, z_head)
-    wall = (ED * t, ED * t**3 / 12.0, 5.0 / 6.0 * G * D * t)
     walls = _summed(
         carried(beam_flexibility(foot, vertex, *wall), vertex, tip),
         carried(beam_flexibility(vertex, head, *wall), head, tip),
@@ -132,7 +165,7 @@ def top_chain(scene, theta_rad, t_mm, h_mm, head_mm, offsets: bool = True) -> To
     )
     return TopChain(
         walls, cap, rotational_spring(root, foot, tip), x_head, z_foot - e_plate, tip[1], EI_p, kGA_p,
-        LOCKED_FITTED[1] * ED * d * d,
+        m.block_root_Nmm_per_rad,
     )  # fmt: skip
 
 
