@@ -84,18 +84,19 @@ def frame_drop_um_per_N(g, m, cap_rigid: bool, plate_rigid: bool, offsets: bool 
     s = lp.member_scene(g, m)
     theta, t, h = (np.array([getattr(c, k) for c in g.layers]) for k in lp.CELL_KEYS)
     head = lp.layer_supports(s, theta, t, h)[1]
-    return cell_frame_drop_um_per_N(s, theta[-1], t[-1], h[-1], head[-1], head[-2], cap_rigid, plate_rigid, offsets)
+    factors = (RIGID if rigid else 1.0 for rigid in (cap_rigid, plate_rigid))
+    return cell_frame_drop_um_per_N(s, theta[-1], t[-1], h[-1], head[-1], head[-2], *factors, offsets)
 
 
 def cell_frame_drop_um_per_N(
-    s, th: float, tt: float, hh: float, x_head: float, x_block: float, cap_rigid: bool, plate_rigid: bool,
+    s, th: float, tt: float, hh: float, x_head: float, x_block: float, cap_f: float, plate_f: float,
     offsets: bool = True,
 ) -> float:  # fmt: skip
     """:func:`frame_drop_um_per_N` of a top layer (theta in rad; t, h, its wall heads' x and the
-    closed layer's below, mm) in the scene ``s`` (a model.load_path.MemberScene)."""
+    closed layer's below, mm) in the scene ``s`` (a model.load_path.MemberScene), the cap's and the
+    plate's stiffness (and their roots') times ``cap_f`` and ``plate_f`` (:data:`RIGID`: rigid)."""
     m = chain_members(s, th, tt, hh, offsets)  # the members the chain takes (model.wall_thrust)
     L, root = float(m.L_mm), float(m.root_Nmm_per_rad)
-    cap_f, plate_f = (RIGID if r else 1.0 for r in (cap_rigid, plate_rigid))
     (EI_c, kGA_c), (EI_p, kGA_p), wall = m.cap, m.plate, m.wall
     # the wall's centre line: foot at t/2, side vertex at h/2, head at h - t/2 (the plate's top z = 0)
     z_foot, z_head, e_cap, e_plate = float(m.z_foot_mm), float(m.z_head_mm), m.e_cap_mm, m.e_plate_mm

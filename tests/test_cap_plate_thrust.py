@@ -67,9 +67,28 @@ def test_the_chain_is_the_frame(forward, cap_rigid, plate_rigid, offsets):
     # the heads moved 1 mm out: the plate hangs beyond the block, in both
     out = float(head[-1]) + 1.0
     hanging = 1e3 * cpt.chain_drop_mm_per_N(s, theta[-1], t[-1], h[-1], out, head[-2], *factors, offsets)
-    by_frame = cpt.cell_frame_drop_um_per_N(s, theta[-1], t[-1], h[-1], out, head[-2], cap_rigid, plate_rigid, offsets)
+    frame_factors = (cpt.RIGID if rigid else 1.0 for rigid in (cap_rigid, plate_rigid))
+    by_frame = cpt.cell_frame_drop_um_per_N(s, theta[-1], t[-1], h[-1], out, head[-2], *frame_factors, offsets)
     assert float(hanging) == pytest.approx(by_frame, rel=1e-3)
     both = 1e3 * cpt.chain_drop_mm_per_N(
         s, theta[-1], t[-1], h[-1], head[-1] + np.array([0.0, 1.0]), head[-2], *factors, offsets
     )
     np.testing.assert_allclose(both, [float(chain), float(hanging)], rtol=1e-12)  # one call over an array
+
+
+@pytest.mark.parametrize("hang_mm", [0.0, 1.0])
+def test_a_stiffer_member_divides_its_part_of_the_chain(forward, hang_mm):
+    """The chain scales each member's flexibility by 1 / its factor (the four rigid cases cost one
+    chain); the study's frame scales the members' stiffness in its stiffness matrix: the same
+    drop to 1e-3 with the cap 2.5 times and the plate 0.4 times as stiff, and the drop between the
+    printed chain's and the cap's rigid one."""
+    g, m = forward
+    s = lp.member_scene(g, m)
+    theta, t, h = (np.array([getattr(c, k) for c in g.layers]) for k in lp.CELL_KEYS)
+    head = lp.layer_supports(s, theta, t, h)[1]
+    top = (s, theta[-1], t[-1], h[-1], float(head[-1]) + hang_mm, head[-2])
+    chain = 1e3 * float(cpt.chain_drop_mm_per_N(*top, 2.5, 0.4))
+    assert chain == pytest.approx(cpt.cell_frame_drop_um_per_N(*top, 2.5, 0.4), rel=1e-3)
+    printed, cap_rigid = (1e3 * float(cpt.chain_drop_mm_per_N(*top, f, 1.0)) for f in (1.0, np.inf))
+    stiffer = 1e3 * float(cpt.chain_drop_mm_per_N(*top, 2.5, 1.0))
+    assert cap_rigid < stiffer < printed

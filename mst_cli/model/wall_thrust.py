@@ -18,8 +18,9 @@ part (:func:`top_chain`, on :func:`chain_members`, which the study's frame takes
 under it enters last (:func:`drop_on_block`), and a member made k times stiffer divides its part by
 k, so the four rigid cases cost one chain. :func:`thrust_extra_mm_per_N` is the interaction the
 closed form lacks, the drop with both members as printed, less with the cap rigid, less with the
-plate rigid, plus with both rigid. It is a centred press's term: under a moment or a tangential force the walls' thrusts
-differ side to side, so it carries no member's lever (model.part_laws). Pure numpy, no I/O.
+plate rigid, plus with both rigid. It is a centred press's term: under a moment or a tangential
+force the walls' thrusts differ side to side, so it carries no member's lever (model.part_laws).
+Pure numpy, no I/O.
 """
 
 from __future__ import annotations
@@ -82,7 +83,7 @@ class TopChain:
     cap: tuple
     foot: tuple  # the plate's root at the walls' feet (turns with the plate's stiffness)
     x_head_mm: np.ndarray
-    z_plate_mm: np.ndarray  # the plate's mid-plane (the walls' feet's, without the offsets)
+    z_plate_mm: np.ndarray  # the plate's mid-plane: the walls' feet less the plate's offset
     tip_z_mm: np.ndarray
     EI_plate: np.ndarray
     kGA_plate: np.ndarray
