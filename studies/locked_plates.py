@@ -11,9 +11,11 @@ in TPU (plate 2, the cap and the base rigid: ``PartOptions.rigid_plates``) less 
 rigid is what that plate gives over the locked layer, B's root joint on it included. Two rung
 solves a stack, about 10 s each (kept in mst's cache: a second run reads them back).
 
-``--fit`` (one file or several) fits model.past_lock's two constants (a, k) to those rows, the error of each row being
-the log of the closed form (B's root joint, model.plate_joint, plus past_lock's term) over the
-rung, and prints the rows, the constants and the joint alone's errors beside them (2 s).
+``--fit`` (one file or several) fits model.past_lock's constants (a, k, g) to those rows, the error of
+each row being the log of the closed form (B's root joint, model.plate_joint, plus past_lock's
+term) over the rung, and prints the rows, the constants and the joint alone's errors beside them
+(2 s); ``--fit-press`` the feet's press g alone, a and k held (how g was found: on
+locked_plates.csv and locked_plates_thick.csv together).
 """
 
 from __future__ import annotations
@@ -92,15 +94,16 @@ def sweep(out: Path, t_b_mm: tuple[float, ...] = (T_MM,), plates_mm: tuple[float
 
 def constant_bounds() -> tuple[list[float], list[float]]:
     """least_squares' bounds on model.past_lock's constants: a in [-1, 10], k in [1e-3, 100], and
-    any further ones (a patched form's, studies/data/past_lock_richer.patch) in [0, 100]."""
+    any further ones (g, the feet's press) in [0, 100]."""
     extra = len(LOCKED_FITTED) - 2
     return [-1.0, 1e-3] + [0.0] * extra, [10.0, 100.0] + [100.0] * extra
 
 
-def fit(paths: list[Path], refit: bool = True) -> None:
-    """Fit model.past_lock's constants (a, k; as many as LOCKED_FITTED has, the first two bounded
-    as a and k, any more at >= 0) to the rows in ``paths`` and print them; with ``refit`` False,
-    only the errors of model.past_lock's own constants on them (rows the fit did not see: a check)."""
+def fit(paths: list[Path], refit: bool = True, press_only: bool = False) -> None:
+    """Fit model.past_lock's constants (a, k, g; as many as LOCKED_FITTED has, the first two bounded
+    as a and k, any more at >= 0) to the rows in ``paths`` and print them; with ``press_only`` the
+    feet's press g alone, a and k held at the model's; with ``refit`` False, only the errors of
+    model.past_lock's own constants on them (rows the fit did not see: a check)."""
     rows = []
     for path in paths:
         with path.open() as f:
@@ -109,7 +112,12 @@ def fit(paths: list[Path], refit: bool = True) -> None:
     def logs(q) -> list[float]:
         return [math.log(closed_form_um_per_N(r, tuple(q)) / r["rung_um_per_N"]) for r in rows]
 
-    q = least_squares(logs, list(LOCKED_FITTED), bounds=constant_bounds()).x if refit else LOCKED_FITTED
+    if press_only:
+        held = LOCKED_FITTED[:2]
+        g = least_squares(lambda x: logs((*held, *x)), list(LOCKED_FITTED[2:]), bounds=(0.0, 100.0)).x
+        q = (*held, *g)
+    else:
+        q = least_squares(logs, list(LOCKED_FITTED), bounds=constant_bounds()).x if refit else LOCKED_FITTED
     said = "fitted" if refit else "model.past_lock's"
     print(f"| θ_A, ° | θ_B, ° | t_B, mm | plate, mm | rung, µm/N | joint alone | joint + past_lock ({said}) |")
     print("|---|---|---|---|---|---|---|")
@@ -133,17 +141,20 @@ def main() -> None:
     parser.add_argument("--out", type=Path, help="solve the sweep and write its rows here (CSV)")
     parser.add_argument("--fit", type=Path, nargs="+", help="fit past_lock's constants to these rows (CSVs)")
     parser.add_argument("--check", type=Path, nargs="+", help="past_lock's own constants' errors on these rows (CSVs)")
+    parser.add_argument("--fit-press", type=Path, nargs="+", help="fit the feet's press g alone, a and k held (CSVs)")
     parser.add_argument("--t-b", type=float, nargs="*", default=[T_MM], help="with --out: B's walls, mm")
     parser.add_argument("--plates", type=float, nargs="*", default=[PLATE_MM], help="with --out: the plates, mm")
     args = parser.parse_args()
-    if args.out is None and args.fit is None and args.check is None:
-        parser.error("give --out FILE (the sweep), --fit FILE (the fit) or --check FILE")
+    if args.out is None and args.fit is None and args.check is None and args.fit_press is None:
+        parser.error("give --out FILE (the sweep), --fit FILE or --fit-press FILE (the fit) or --check FILE")
     if args.out is not None:
         sweep(args.out, tuple(args.t_b), tuple(args.plates))
     if args.fit is not None:
         fit(args.fit)
     if args.check is not None:
         fit(args.check, refit=False)
+    if args.fit_press is not None:
+        fit(args.fit_press, press_only=True)
 
 
 if __name__ == "__main__":

@@ -104,13 +104,17 @@ def test_the_centred_press_gains_it_past_the_lock_under_the_top_layer_only(forwa
 
 def test_under_a_pull_it_rides_with_its_layer_at_its_own_lever(forward):
     """model.part_laws.unit_members: past two locks the top layer carries the plate under it less
-    the thrust at that plate's lever and the thrust at its own (OWN_LEVER), their sum the axial
-    model's; below the lock under it, no thrust rides."""
+    the thrust (and the feet's press, model.past_lock) at that plate's lever and both at its own
+    (OWN_LEVER), their sum the axial model's; below the lock under it no thrust rides, only the
+    press of layer 2's feet on the block of layer 1."""
     g, m, *_ = forward
     parts = lp.members(g, m)
     riding = unit_members(layer_laws(g.layers, m, "spring"), parts, (0, 1, 2))
-    thrust = parts.thrust_mm_per_N[1]
+    thrust, press = parts.thrust_mm_per_N, parts.press_mm_per_N
+    assert thrust[0] == 0.0 and thrust[1] > 0.0
     top = riding[2][2]
-    assert (pytest.approx(thrust, rel=1e-12), OWN_LEVER) in top
-    assert (pytest.approx(parts.locked_plates_mm_per_N[1] - thrust, rel=1e-12), 1) in top
-    assert all(k is not OWN_LEVER for regime in riding[:2] for unit in regime for _, k in unit)
+    assert (pytest.approx(thrust[1] + press[1], rel=1e-12), OWN_LEVER) in top
+    assert (pytest.approx(parts.locked_plates_mm_per_N[1] - thrust[1] - press[1], rel=1e-12), 1) in top
+    assert all(k is not OWN_LEVER for unit in riding[0] for _, k in unit)
+    own = [(c, j) for j, unit in enumerate(riding[1]) for c, k in unit if k is OWN_LEVER]
+    assert own == [(pytest.approx(press[0], rel=1e-12), 1)]

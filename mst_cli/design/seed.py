@@ -117,7 +117,7 @@ class CellTable:
             return member(
                 ("two locked", cell(j - 2), cell(j - 1), cell(j)), lambda: self._over_two(scene, j, at, upper)
             )
-        overhang = lambda: plate_overhang_mm_per_N(np.maximum(head - at(head, j - 1), 0.0), upper)  # noqa: E731
+        overhang = lambda: plate_overhang_mm_per_N(head - at(head, j - 1), upper)  # noqa: E731
         return member(("locked", cell(j - 1), cell(j)), overhang)
 
     def _cover_drop(self, problem: DesignProblem, on_bottom: tuple, at, cell, member):

@@ -135,9 +135,11 @@ class Members:
     # each plate while the layer under that one is locked too (model.past_lock.over_two_locked_mm_per_N,
     # the bottom plate's as above); (): the same as locked_plates_mm_per_N
     two_locked_plates_mm_per_N: tuple[float, ...] = ()
-    # of each of the two above, the top layer's walls' thrust (model.wall_thrust): a centred press's
-    # term, which rides with no member's lever (model.part_laws.unit_members); (): none
+    # of each of the two above, the top layer's walls' thrust (model.wall_thrust) and the feet's
+    # press into the locked block's edge (model.past_lock.foot_press_mm_per_N): a centred press's
+    # terms, which ride with no member's lever (model.part_laws.unit_members); (): none
     thrust_mm_per_N: tuple[float, ...] = ()
+    press_mm_per_N: tuple[float, ...] = ()
 
     @property
     def cover_contact(self) -> tuple[float, float, float, float]:
@@ -240,15 +242,16 @@ def layer_caps_mm_per_N(scene: MemberScene, theta_rad, t_mm, h_mm) -> tuple:
 def all_member_parts(scene: MemberScene, theta_rad, t_mm, h_mm) -> tuple:
     """(:func:`member_parts`, each layer's joints with the plates beside it (model.plate_joint),
     the plates over locked layers (model.past_lock: over one block, over two; each with the top
-    layer's walls' thrust, model.wall_thrust, which is the third), the cover's two parts once layer
+    layer's walls' thrust, model.wall_thrust, which is the third, and the feet's press, the
+    fourth), the cover's two parts once layer
     1 is locked (:func:`cover_parts_locked_mm_per_N`)) of stacks given as arrays (..., n): the
     layers' supports and root joints computed once for all."""
     t = np.asarray(t_mm, dtype=float)
     supports = layer_supports(scene, theta_rad, t, h_mm)
     one = np.asarray(root_joint_mm_per_N(theta_rad, t, h_mm, *joint_scene(scene)))  # a root on one plate
-    one_block, two_blocks = scene_locked_plates_mm_per_N(scene, theta_rad, t, h_mm, supports[1], one)
+    one_block, two_blocks, press = scene_locked_plates_mm_per_N(scene, theta_rad, t, h_mm, supports[1], one)
     thrust = scene_thrust_mm_per_N(scene, theta_rad, t, h_mm, supports[1])  # moves as the plate it bends
-    locked = (one_block + thrust, two_blocks + thrust, thrust)
+    locked = (one_block + thrust, two_blocks + thrust, thrust, press)
     first = (t[..., 0], supports[0][..., 0], supports[1][..., 0], np.asarray(theta_rad, dtype=float)[..., 0])
     cover, cover_locked = cover_parts_both_mm_per_N(scene, *first, np.asarray(h_mm, dtype=float)[..., 0])
     parts = member_parts(scene, theta_rad, t, h_mm, supports, cover)
@@ -349,9 +352,8 @@ def members(
 def scene_members(scene: MemberScene, theta_rad, t_mm, h_mm, scale: float = 1.0, regime_extra: tuple = ()) -> Members:
     """:func:`members` of the scene's stack (arrays (n,) of theta in rad, t and h in mm, bottom to
     top), every compliance times ``scale``, with the rung's correction ``regime_extra``."""
-    cap, plates, over_slot, slot_walls, joints, (one, two, thrust), (over_locked, walls_locked) = all_member_parts(
-        scene, theta_rad, t_mm, h_mm
-    )
+    cap, plates, over_slot, slot_walls, joints, locked_parts, cover = all_member_parts(scene, theta_rad, t_mm, h_mm)
+    (one, two, thrust, press), (over_locked, walls_locked) = locked_parts, cover
     locked, two_locked = np.atleast_1d(one), np.atleast_1d(two)
     s, air = scale, scene.cover_air_mm  # the cover's bending over the slot stops on the board
     return Members(
@@ -359,6 +361,7 @@ def scene_members(scene: MemberScene, theta_rad, t_mm, h_mm, scale: float = 1.0,
         scene.support, s * float(over_slot), air, regime_extra, tuple(s * float(j) for j in joints),
         tuple(s * float(x) for x in locked), s * float(over_locked + walls_locked), s * float(over_locked),
         tuple(s * float(x) for x in two_locked), tuple(s * float(x) for x in np.atleast_1d(thrust)),
+        tuple(s * float(x) for x in np.atleast_1d(press)),
     )  # fmt: skip
 
 

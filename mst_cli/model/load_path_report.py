@@ -44,6 +44,9 @@ def load_path_report(
         "plates_mm_per_N": list(simple.plates_mm_per_N),
         "plate_joints_mm_per_N": list(simple.joints_mm_per_N),  # each layer's, model.plate_joint
         "plates_over_locked_mm_per_N": list(simple.locked_plates_mm_per_N),  # each plate's, model.past_lock
+        # of which the top layer's walls' thrust (model.wall_thrust) and the feet's press into the block
+        "plates_over_locked_thrust_mm_per_N": list(simple.thrust_mm_per_N),
+        "plates_over_locked_press_mm_per_N": list(simple.press_mm_per_N),
         "housing_mm_per_N": simple.cover_mm_per_N,
         # once layer 1 is locked on the cover (its closed block on the cover's link: load_path)
         "housing_under_locked_layer_1_mm_per_N": simple.cover_mm_per_N + simple.cover_contact[3],

@@ -180,12 +180,14 @@ def unit_members(laws: tuple, parts: Members, lock_order) -> list[list[list[tupl
     """Per regime r (the first r layers of ``lock_order`` locked) and per unit j of
     :func:`part_layer_laws`: the members that ride with it then, each (its centred compliance, mm/N;
     which: -1 the cover, k < n - 1 the plate over layer k, n - 1 the cap, OWN_LEVER the top layer's
-    walls' thrust), by the rules above: an open layer's plate or cap and half its walls' joints on
-    each side; the plate over a locked layer under it, and what the plate under that one adds once
-    its layer is locked too; the cover on its host in every regime. model.counter_turn weighs each
-    member's lever under a pull by them. The walls' thrust (model.wall_thrust) is the centred
-    press's: under a pull the two sides' thrusts differ in sign, so it bends no member against the
-    pull's couple and turns with its layer at the pull's own lever."""
+    walls' thrust and the feet's press), by the rules above: an open layer's plate or cap and half
+    its walls' joints on each side; the plate over a locked layer under it, and what the plate
+    under that one adds once its layer is locked too; the cover on its host in every regime.
+    model.counter_turn weighs each member's lever under a pull by them. The walls' thrust
+    (model.wall_thrust) and the feet's press into a locked block's edge
+    (model.past_lock.foot_press_mm_per_N) are the centred press's: under a pull the two sides'
+    feet carry forces of opposite sign, so they bend no member against the pull's couple and turn
+    with their layer at the pull's own lever."""
     n = len(laws)
 
     def padded(values, size):
@@ -194,7 +196,8 @@ def unit_members(laws: tuple, parts: Members, lock_order) -> list[list[list[tupl
     plates, joints = padded(parts.plates_mm_per_N, n - 1), padded(parts.joints_mm_per_N, n)
     over = padded(parts.locked_plates_mm_per_N, n - 1)
     two = padded(parts.two_locked_plates_mm_per_N or parts.locked_plates_mm_per_N, n - 1)
-    thrust = padded(parts.thrust_mm_per_N, n - 1)  # in both of the above
+    thrust = padded(parts.thrust_mm_per_N, n - 1)  # in both of the above, and so is the feet's press
+    own = [a + b for a, b in zip(thrust, padded(parts.press_mm_per_N, n - 1))]
     host = cover_host(capped_units(laws, parts), parts) if parts.cover_mm_per_N > 0 else None
     out = []
     for r in range(n + 1):
@@ -206,7 +209,7 @@ def unit_members(laws: tuple, parts: Members, lock_order) -> list[list[list[tupl
                 riding += [(plates[j] if j < n - 1 else parts.cap_mm_per_N, j), (0.5 * joints[j], j)]
                 riding.append((0.5 * joints[j], j - 1))
                 if j >= 1 and j - 1 in locked:
-                    riding += [(over[j - 1] - thrust[j - 1], j - 1), (thrust[j - 1], OWN_LEVER)]
+                    riding += [(over[j - 1] - own[j - 1], j - 1), (own[j - 1], OWN_LEVER)]
                 if j >= 2 and {j - 1, j - 2} <= locked:  # the plates and the block between them hang together
                     riding.append((two[j - 1] - over[j - 1], j - 2))
             if j == host:

@@ -16,12 +16,22 @@ is 4 to 30 (studies/locked_plates.py). Two things the closed form leaves out:
   spring k E'D (p + t)^2 (the form of an end built into a body of the same modulus):
   P c^3/(3 E'I) + P c/kGA + P c^2/(k E'D (p + t)^2), P = 1/2.
 
+* **the foot presses into the block's edge.** Where B's feet stand on the block near its edge,
+  or hang from it, the corner of the block under them gives way: g P/(E'D) e^(-s/t), s how far
+  inside the edge the foot's centre line stands (0 where it hangs beyond), decaying over the
+  foot's own width t (a strip's indentation of a body of its own modulus is of the order of
+  1/(E'D), its logarithm left in g; under a quarter-plane, at the edge, it is largest). Thin
+  feet well inside give nothing; B's 1.4 mm feet on the forward design, 0.25 mm inside layer
+  2's heads, give most of what its plate 2 showed beyond the first two terms.
+
 a and k are fitted, not derived: on the rung's plate over the locked lower layer of 25 stacks
 A, B, A (each of 13, 20, 28, 40 and 57 degrees below and above, t 0.4, h 1.8 mm, 1.6 mm plates;
 studies/locked_plates.py --fit, its data in studies/data/locked_plates.csv), they leave it
-within 18 % (8 % rms), against the joint alone's 95 % (53 % rms). The filled block here is one
-layer on the rigid cover; a deeper block is softer (the bundled designs, not in the fit, are
-its check). Pure numpy, no I/O.
+within 18 % (8 % rms), against the joint alone's 95 % (53 % rms). g is fitted with a and k held,
+on those 25 and the 50 with B's walls 0.7 mm over 0.8 and 1.6 mm plates
+(studies/data/locked_plates_thick.csv; docs/design.md 4.7, "The foot's press into the block").
+The filled block here is one layer on the rigid cover; a deeper block is softer (the bundled
+designs, not in the fit, are its check). Pure numpy, no I/O.
 """
 
 from __future__ import annotations
@@ -34,13 +44,15 @@ from mst_cli.model.beams import as_value, section_EI_kGA
 from mst_cli.model.plate_joint import joint_scene, root_joint_mm_per_N
 
 # studies/locked_plates.py --fit studies/data/locked_plates.csv (docs/design.md 4.7): the upper
-# root's turn past the joint (a) and the overhang's root spring (k)
-LOCKED_FITTED = (0.446, 0.101)
+# root's turn past the joint (a) and the overhang's root spring (k); the foot's press into the
+# block's edge (g), fitted with a and k held (--fit-press, the thick walls' rows too)
+LOCKED_FITTED = (0.446, 0.101, 0.836)
+P_N = 0.5  # each side's share of a newton through the cell
 
 
 def locked_plates_mm_per_N(
     theta_rad, t_mm, h_mm, head_mm, plate_mm: float, depth_mm: float, E_prime_MPa: float, G_MPa: float,
-    constants: tuple[float, float] = LOCKED_FITTED, joints_mm_per_N=None,
+    constants: tuple[float, ...] = LOCKED_FITTED, joints_mm_per_N=None,
 ) -> Any:  # fmt: skip
     """(..., n - 1) what plate j gives, mm/N, while the layer under it is locked and the one
     above it open, beyond the upper layer's root joint on it (module docstring), of stacks given
@@ -51,35 +63,47 @@ def locked_plates_mm_per_N(
     upper = upper_layer_terms(
         theta[..., 1:], t[..., 1:], h[..., 1:], plate_mm, depth_mm, E_prime_MPa, G_MPa, constants, joint
     )
-    return plate_overhang_mm_per_N(np.maximum(head[..., 1:] - head[..., :-1], 0.0), upper)
+    return plate_overhang_mm_per_N(head[..., 1:] - head[..., :-1], upper)
 
 
 def upper_layer_terms(
     theta_rad, t_mm, h_mm, plate_mm: float, depth_mm: float, E_prime_MPa: float, G_MPa: float,
-    constants: tuple[float, float] = LOCKED_FITTED, joint_mm_per_N=None,
+    constants: tuple[float, ...] = LOCKED_FITTED, joint_mm_per_N=None,
 ) -> tuple:  # fmt: skip
-    """(a x the root joint, the overhang's E'I and kGA, its root spring) of the plate under
-    layers of cells given as arrays (theta in rad, t, h in mm): what :func:`locked_plates_mm_per_N`
-    takes from the open layer above the plate alone (the design's start reuses them over its
-    table of cells, whatever layer is locked under it); ``joint_mm_per_N``: the cells' root
-    joint (model.plate_joint), when the caller has it."""
-    a, k = constants
+    """(a x the root joint, the overhang's E'I and kGA, its root spring, the foot's press at the
+    block's edge g P/(E'D), the foot's width t) of the plate under layers of cells given as arrays
+    (theta in rad, t, h in mm): what :func:`locked_plates_mm_per_N` takes from the open layer
+    above the plate alone (the design's start reuses them over its table of cells, whatever layer
+    is locked under it); ``joint_mm_per_N``: the cells' root joint (model.plate_joint), when the
+    caller has it."""
+    a, k, g = constants
+    t = np.asarray(t_mm, dtype=float)
     upper = (
-        root_joint_mm_per_N(theta_rad, t_mm, h_mm, plate_mm, depth_mm, E_prime_MPa)
+        root_joint_mm_per_N(theta_rad, t, h_mm, plate_mm, depth_mm, E_prime_MPa)
         if joint_mm_per_N is None
         else joint_mm_per_N
     )
-    thick = plate_mm + np.asarray(t_mm, dtype=float)
+    ED, thick = E_prime_MPa * depth_mm, plate_mm + t
     EI, kGA = section_EI_kGA(depth_mm, thick, E_prime_MPa, G_MPa)
-    return a * np.asarray(upper), EI, kGA, k * E_prime_MPa * depth_mm * thick**2
+    return a * np.asarray(upper), EI, kGA, k * ED * thick**2, g * P_N / ED, t
 
 
 def plate_overhang_mm_per_N(c_mm, upper_terms: tuple) -> Any:
-    """:func:`locked_plates_mm_per_N` of feet standing ``c_mm`` (>= 0) beyond the locked layer's
-    wall heads, the layer above given by its :func:`upper_layer_terms`."""
-    joint, EI, kGA, root = upper_terms
-    c = c_mm
-    return as_value(joint + 0.5 * (c**3 / (3.0 * EI) + c / kGA + c * c / root))
+    """:func:`locked_plates_mm_per_N` of feet standing ``c_mm`` beyond the locked layer's wall
+    heads (negative: inside them), the layer above given by its :func:`upper_layer_terms`."""
+    joint, EI, kGA, root, _, _ = upper_terms
+    c = np.maximum(c_mm, 0.0)
+    bends = P_N * (c**3 / (3.0 * EI) + c / kGA + c * c / root)
+    return as_value(joint + bends + foot_press_mm_per_N(c_mm, *upper_terms[4:]))
+
+
+def foot_press_mm_per_N(c_mm, press_mm_per_N, foot_mm) -> Any:
+    """The part of :func:`plate_overhang_mm_per_N` that is the feet's press into the block's edge
+    (module docstring), feet ``foot_mm`` wide standing ``c_mm`` beyond it, ``press_mm_per_N`` its
+    g P/(E'D): a centred press's term, which under a moment or a pull acts as the layer's own
+    axial give, not as the plate's bending (model.part_laws.unit_members)."""
+    inside = np.maximum(-np.asarray(c_mm, dtype=float), 0.0)
+    return as_value(press_mm_per_N * np.exp(-inside / foot_mm))
 
 
 def over_two_locked_mm_per_N(
@@ -106,17 +130,20 @@ def over_two_locked_mm_per_N(
     # block j - 1's root turns under the composite's moment P (deep + thin), less what block j's own
     # root (in plate_overhang_mm_per_N) takes: nothing more as block j's edge nears block j - 1's
     root = P * (lever * lever - thin * thin) / (k * E_prime_MPa * depth_mm * d * d)
-    return as_value(plate_overhang_mm_per_N(thin, upper_terms) + hangs + root)
+    return as_value(plate_overhang_mm_per_N(feet - mid, upper_terms) + hangs + root)
 
 
 def scene_locked_plates_mm_per_N(scene, theta_rad, t_mm, h_mm, head_mm, joints_mm_per_N=None) -> tuple:
     """(:func:`locked_plates_mm_per_N`, each plate's while the layer under that one is locked too,
-    :func:`over_two_locked_mm_per_N`; the bottom plate's the same) of the part a
-    model.load_path.MemberScene describes, arrays (..., n - 1)."""
+    :func:`over_two_locked_mm_per_N`, the bottom plate's the same; the part of both that is the
+    feet's press, :func:`foot_press_mm_per_N`) of the part a model.load_path.MemberScene
+    describes, arrays (..., n - 1)."""
     G, fitted = scene.G_MPa, LOCKED_FITTED
     one = locked_plates_mm_per_N(theta_rad, t_mm, h_mm, head_mm, *joint_scene(scene), G, fitted, joints_mm_per_N)
     one = np.asarray(one, dtype=float)
     t, h, head = (np.asarray(v, dtype=float) for v in (t_mm, h_mm, head_mm))
+    plate_mm, depth_mm, E_prime_MPa = joint_scene(scene)
+    press = foot_press_mm_per_N(head[..., 1:] - head[..., :-1], fitted[2] * P_N / (E_prime_MPa * depth_mm), t[..., 1:])
     two = [one[..., :1]]
     for j in range(1, t.shape[-1] - 1):
         joint = None if joints_mm_per_N is None else np.asarray(joints_mm_per_N)[..., j + 1]
@@ -129,7 +156,7 @@ def scene_locked_plates_mm_per_N(scene, theta_rad, t_mm, h_mm, head_mm, joints_m
                 over_two_locked_mm_per_N(t[..., span], h[..., span], head[..., span], *joint_scene(scene), G, upper)
             )[..., None]
         )
-    return one, np.concatenate(two, axis=-1)
+    return one, np.concatenate(two, axis=-1), np.asarray(press, dtype=float)
 
 
 def by_regime(locked_plates_mm_per_N, lock_N, over_two_locked_mm_per_N=None) -> np.ndarray:
