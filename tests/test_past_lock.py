@@ -136,9 +136,7 @@ def test_the_feet_press_into_the_blocks_edge_and_fade_inside_it():
         assert got[0] == pytest.approx(edge * np.exp(-s / t[1]), rel=1e-12)
     assert foot_press_mm_per_N(0.7, edge, t[1]) == pytest.approx(edge, rel=1e-15)
     heads = 12.0 + np.linspace(-0.3, 0.3, 601)
-    whole = np.array(
-        [locked_plates_mm_per_N(theta, t, h, [12.0, x], PLATE, DEPTH, E_PRIME, G)[0] for x in heads]
-    )
+    whole = np.array([locked_plates_mm_per_N(theta, t, h, [12.0, x], PLATE, DEPTH, E_PRIME, G)[0] for x in heads])
     steps = np.abs(np.diff(whole))
     assert steps.max() < 5 * np.median(steps) + 1e-12
 
