@@ -145,9 +145,9 @@ def test_the_press_brings_thick_feet_near_the_edge_to_the_rung():
     """The rung's plate over a locked layer (studies/data/locked_plates*.csv: 25 stacks with B's
     walls 0.4 mm thick, 50 with 0.7 mm walls on 0.8 and 1.6 mm plates; g is fitted on all 75 with
     a and k held). Where B's 0.7 mm feet stand within a foot's width inside the block's edge (14
-    stacks), the form without the press was 31 % off rms (56 % at worst, all short); with it, 11 %
-    (18 %). On the 0.4 mm walls a and k were fitted on it stays within 8.5 % rms, and over all 75 it
-    is no worse at rms."""
+    stacks), the form without the press was 31 % off rms (56 % at worst; short by 27 % on average);
+    with it, 11 % (18 %; 4 % short on average). On the 0.4 mm walls a and k were fitted on it
+    stays within 8.5 % rms, and over all 75 it is no worse at rms."""
 
     def rows_of(path):
         with path.open() as f:
@@ -162,7 +162,7 @@ def test_the_press_brings_thick_feet_near_the_edge_to_the_rung():
     near = [r for r in thick if -r["t_b_mm"] <= r["head_b_mm"] - r["head_a_mm"] <= 0.0]
     assert len(thick) == 50 and len(near) == 14
     before, after = errors(near, without), errors(near, LOCKED_FITTED)
-    assert rms(before) > 0.3 and (before < 0).all()
+    assert rms(before) > 0.3 and np.mean(before) < -0.25 and abs(np.mean(after)) < 0.05
     assert rms(after) < 0.12 and np.abs(after).max() < 0.19
     assert rms(errors(thin, LOCKED_FITTED)) < 0.085
     assert rms(errors(thin + thick, LOCKED_FITTED)) < rms(errors(thin + thick, without))

@@ -203,11 +203,15 @@ def test_the_calibration_that_ignores_branches_is_worse(rig_calibration):
 
     result, _, d = rig_calibration
     before = api.calibrate(DESIGN, d / "lt.csv", use_branches=False)
-    miss = abs(before.fit.values["modulus_factor"] - TRUTH["modulus_factor"])
+
+    def worst(fit):  # the worst parameter's miss, in its WITHIN
+        return max(abs(fit.values[k] - TRUTH[k]) / WITHIN[k] for k in TRUTH)
+
     # the unloading rows read up to 6 % of the turning force less at a field (3.9 % over a loop):
-    # mixed in, half the rows, they pull the modulus by ~2-3 %, outside what the branch-aware fit meets
-    aware = abs(result.fit.values["modulus_factor"] - TRUTH["modulus_factor"])
-    assert miss > max(WITHIN["modulus_factor"], 5 * aware), (miss, aware)
+    # mixed in, half the rows, they pull a parameter outside what the branch-aware fit meets (the
+    # modulus by 5.8 % before the feet's press went into the forward model; since, the gap by 0.41 mm)
+    miss, aware = worst(before.fit), worst(result.fit)
+    assert miss > max(1.0, 5 * aware), (miss, aware)
     assert before.record.fit_quality["warning"] is not None
     assert result.record.fit_quality["warning"] is None
 

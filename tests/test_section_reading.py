@@ -8,7 +8,8 @@ modulus. These are round trips, so their truth is mst's own section model: they 
 inverse and the two commands' agreement, not the model (the rung is checked on its own in
 tests/test_whole_part_rung.py). Each also reads the same fields with the closed form, to show
 the test would see the read side fall back to it (since the closed form took the walls' joints
-with the plates, its centred reads are only 1-4 % off the section's, so those bounds are tighter).
+with the plates, its centred reads are only 1-4 % off the section's, since the feet's press 0-2 %,
+so those bounds are tighter).
 
 The calibration test rests on a law, not on the model's output: the section model's members are
 TPU but the insert, and in linear elasticity their compliance scales as 1/E, so a part whose TPU
@@ -39,11 +40,14 @@ def test_a_centred_press_reads_back_the_force_mst_simulate_states(section_spec, 
     csv = fields_csv(tmp_path / "fields.csv", resp.force_N[rows], resp.B_T[rows])
     got = api.read(section_spec, csv, warn=quiet)
     np.testing.assert_allclose(got.force_N, resp.force_N[rows], rtol=2e-3)
-    closed = api.read(forward_copy(tmp_path, "part"), csv, warn=quiet).force_N  # +0.9 to +4.0 %
-    read = np.isfinite(closed)  # past the second lock the closed form is stiffer than the rung (docs
-    # 4.7: -15 % on this design), so its range ends before the section's last readings there
+    closed = api.read(forward_copy(tmp_path, "part"), csv, warn=quiet).force_N
+    # the closed form reads these +0.0 to +1.7 % off (+0.9 to +4.0 % before the feet's press,
+    # model.past_lock, brought its regime 3 within 5 % of the rung): a read side that fell back to
+    # it would miss the 2e-3 above by more than three times, in the first two regimes
+    off = closed / resp.force_N[rows] - 1.0
     before_last = resp.force_N[rows] < resp.regimes[-1].force_from_N
-    assert np.all(read[before_last]) and np.all(closed[read] / resp.force_N[rows][read] - 1.0 > 3 * 2e-3)
+    assert np.all(np.isfinite(closed[before_last])) and np.all(off[before_last] > 0.0)
+    assert np.max(off[before_last]) > 3 * 2e-3
 
 
 def test_an_off_centre_press_reads_back_its_force_and_place(section_spec, tmp_path):
@@ -72,8 +76,11 @@ def test_calibration_finds_a_softer_tpu_in_section_mode(section_spec, tmp_path):
     load_test = fields_csv(tmp_path / "load_test.csv", printed.force_N[rows], printed.B_T[rows])
     fitted = api.calibrate(section_spec, load_test, params="modulus_factor").fit.values["modulus_factor"]
     assert abs(fitted / SOFTER - 1.0) < 0.01  # the insert's share does not scale with the TPU
+    # the closed form calls it softer still, by less than the fit's own 1 % since the feet's press
+    # (model.past_lock) brought it within 5 % of the rung in every regime (-0.6 %; -1.5 % or more
+    # before): on this design the modulus no longer tells the two apart, the reads above still do
     closed = api.calibrate(forward_copy(tmp_path, "part"), load_test, params="modulus_factor")
-    assert closed.fit.values["modulus_factor"] / SOFTER - 1.0 < -0.015  # the closed form calls it softer still
+    assert -0.01 < closed.fit.values["modulus_factor"] / SOFTER - 1.0 < fitted / SOFTER - 1.0
 
 
 def test_a_centred_press_with_shear_reads_back_its_tangential_force(section_spec, tmp_path):
