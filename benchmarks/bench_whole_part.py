@@ -258,10 +258,11 @@ def off_centre(path: Path, spacing: float | None, magnet: str = "resting") -> li
     return rows
 
 
-def off_centre_regime_rows(path: Path, spacing: float | None) -> list[str]:
+def off_centre_regime_rows(path: Path, spacing: float | None, records: list | None = None) -> list[str]:
     """:func:`off_centre`'s rung cases in every regime of the design at ``path`` (the layers locked
     before it closed): how each member class's share of the three general-load figures moves as
-    the layers lock (mst's rows are ``--general``'s)."""
+    the layers lock (mst's rows are ``--general``'s); ``records`` gains each row as a dict
+    (``--out``'s, what tests/test_base_portal.py holds the section frame to)."""
     doc, _ = mst.designed(path)
     g, m = doc.geometry(), doc.material
     cases = [("as printed", 1.0, wp.MEMBER_TAGS, ""), ("rigid", wp.RIGID_FACTOR, wp.MEMBER_TAGS, "")]
@@ -280,10 +281,12 @@ def off_centre_regime_rows(path: Path, spacing: float | None) -> list[str]:
                 spacing_mm=spacing, member_factor=factor, scaled=scaled, locked=locked, rigid_base=rigid_base
             )
             x = wp.press_general(g, m, opts)
-            rows.append(
-                f"| {doc.name} | {r + 1} | {label} | {1e3 * x.turn_per_moment_rad_per_Nmm:.3f} | "
-                f"{x.pull.side_mm_per_N:.3f} | {1e3 * x.pull.turn_rad_per_N:.3f} |"
-            )
+            figures = (1e3 * x.turn_per_moment_rad_per_Nmm, x.pull.side_mm_per_N, 1e3 * x.pull.turn_rad_per_N)
+            rows.append(f"| {doc.name} | {r + 1} | {label} | {figures[0]:.3f} | {figures[1]:.3f} | {figures[2]:.3f} |")
+            if records is not None:
+                names = ("turn_per_moment_mrad_per_Nmm", "slide_mm_per_N", "turn_per_tangential_mrad_per_N")
+                row = {"design": doc.name, "regime": r + 1, "members": label}
+                records.append({**row, **{k: f"{v:.6g}" for k, v in zip(names, figures)}})
     return rows
 
 
@@ -444,8 +447,11 @@ def member_studies(args) -> bool:
         print("tangential N mrad/N")
         print("| design | regime | members | turn per moment | slide per tangential N | turn per tangential N |")
         print("|---|---|---|---|---|---|")
+        records: list[dict] = []
         for path in args.configs if args.configs_given else [str(ROOT / "configs" / "mohammadi2021-forward.yaml")]:
-            print("\n".join(off_centre_regime_rows(Path(path), args.spacing_mm)), flush=True)
+            print("\n".join(off_centre_regime_rows(Path(path), args.spacing_mm, records)), flush=True)
+        if args.out:
+            write_records(args.out, records)
     elif args.off_centre:
         for path in args.configs if args.configs_given else [str(ROOT / "configs" / "mohammadi2021-forward.yaml")]:
             where = "a 6 mm strip 3 mm off centre / pulling along +x"
@@ -485,6 +491,14 @@ def member_studies(args) -> bool:
     return True
 
 
+def write_records(path: str, records: list[dict]) -> None:
+    """``records`` (dicts with the same keys) as a CSV at ``path``."""
+    with open(path, "w", newline="") as fh:
+        writer = csv.DictWriter(fh, fieldnames=list(records[0]))
+        writer.writeheader()
+        writer.writerows(records)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--configs", nargs="*", default=sorted(str(p) for p in (ROOT / "configs").glob("*.yaml")))
@@ -506,7 +520,9 @@ def main() -> None:
     ap.add_argument("--every-regime", action="store_true", help="with --off-centre: the rung's cases in every regime")
     ap.add_argument("--magnet", choices=wp.MAGNET_SEATS, default="resting", help="with --off-centre: the magnet's seat")
     ap.add_argument("--section", action="store_true", help="with --general: mst's part with model.load_path: section")
-    ap.add_argument("--out", default=None, help="with --general: write the rung's figures per regime to this CSV")
+    ap.add_argument(
+        "--out", default=None, help="with --general or --off-centre --every-regime: the rung's figures to this CSV"
+    )
     args = ap.parse_args()
     args.configs_given = any(a.startswith("--configs") for a in sys.argv[1:])
     if args.general:
@@ -525,10 +541,7 @@ def main() -> None:
         for path in args.configs:
             print("\n".join(general_rows(Path(path), args.spacing_mm, args.section, records)), flush=True)
         if args.out:  # the rung's figures, what tests/test_counter_turn.py holds mst to
-            with open(args.out, "w", newline="") as fh:
-                writer = csv.DictWriter(fh, fieldnames=list(records[0]))
-                writer.writeheader()
-                writer.writerows(records)
+            write_records(args.out, records)
         return
     if args.attribute:
         print("the magnet's drop per newton, um/N (centred 6 mm strip, locked layers closed): L0's layers, the rung")

@@ -119,6 +119,7 @@ def tables_key(stack: LoadedStack, force_max_N: float, ratio_max: float, n_force
         if law.member is not None:  # the cover in series (model.mechanics.tilt.MemberInSeries)
             member = law.member
             numbers += [len(member.F_knots_N), *member.F_knots_N, *member.drop_mm, member.rate_after_mm_per_N]
+            numbers += [*member.moment_gain_after]
     h.update(np.asarray(numbers, dtype=float).tobytes())
     return h.hexdigest()
 

@@ -253,20 +253,34 @@ def closure_limit_mm(unit, cavity_mm: float) -> float:
     return cavity_mm
 
 
-def unit_tilt_law(law, cell, modulus_MPa: float, poisson_ratio: float) -> LayerTiltLaw:
+def unit_tilt_law(
+    law, cell, modulus_MPa: float, poisson_ratio: float, locked_base_turn_rad_per_Nmm: float | None = None
+) -> LayerTiltLaw:
     """:meth:`LayerTiltLaw.from_layer` of a unit of :func:`part_layer_laws`. A unit with the
     cover (:class:`SeriesMember`) is its layer's own tilt law with the cover in series outside
     the layer's contact problem (:class:`~mst_cli.model.mechanics.tilt.MemberInSeries`): its drop
-    the unit's less the layer's, its turn as a beam's under the couple in every regime."""
+    the unit's less the layer's, its turn as a beam's under the couple, C / x_c^2, until layer 1
+    locks; past that lock, when ``locked_base_turn_rad_per_Nmm`` is given (the section frame's
+    base under a locked layer 1, :func:`mst_cli.model.plate_sway.locked_base_turn_rad_per_Nmm`),
+    that turn per N mm instead, in proportion to the cover's rate should it land on the board.
+    Under a moment the cover and the slot's walls work as a portal: the cover's ends turn its
+    walls' tops, which sway, so its turn is not its centred drop's C / x_c^2 (docs/design.md
+    4.7, "The base's portal under a moment")."""
     if not isinstance(law, SeriesMember):
         return LayerTiltLaw.from_layer(law, cell, modulus_MPa, poisson_ratio)
     own = LayerTiltLaw.from_layer(law.law, cell, modulus_MPa, poisson_ratio)
-    return replace(own, member=member_in_series(law))
+    gain = (math.inf, 1.0)
+    free_locked = law.member_mm_per_N + law.locked_delta_mm_per_N  # the cover's rate past the lock, not landed
+    if locked_base_turn_rad_per_Nmm is not None and math.isfinite(law.first_lock_N) and free_locked > 0.0:
+        gain = (law.first_lock_N, locked_base_turn_rad_per_Nmm * own.lever_mm**2 / free_locked)
+    return replace(own, member=member_in_series(law, gain))
 
 
-def member_in_series(unit: SeriesMember) -> MemberInSeries:
+def member_in_series(unit: SeriesMember, moment_gain_after: tuple[float, float] = (math.inf, 1.0)) -> MemberInSeries:
     """The cover of ``unit`` as the tilt rung carries it: its drop at 0 and at each knot of its
-    law (where it lands on the board, layer 1's lock), its rate past the last."""
+    law (where it lands on the board, layer 1's lock), its rate past the last; its turn under a
+    moment ``moment_gain_after`` (F_N, g): g times C / x_c^2 from F_N on."""
     kinks = (unit.contact_force_N, unit.first_lock_N)
     F = np.array([0.0, *sorted({float(f) for f in kinks if math.isfinite(f) and f > 0.0})])
-    return MemberInSeries(F, np.asarray(unit.member_mm(F), dtype=float), float(unit._compliance_past(float(F[-1]))))
+    drop = np.asarray(unit.member_mm(F), dtype=float)
+    return MemberInSeries(F, drop, float(unit._compliance_past(float(F[-1]))), moment_gain_after)

@@ -46,6 +46,7 @@ the cap beside the pull, give the members' turn ratio (:class:`SectionRegimes`) 
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -417,6 +418,27 @@ def base_translation_mm_per_N(
     """What the housing's base alone in TPU adds (:func:`member_translations_mm_per_N`); 0 without
     a slot."""
     return float(member_translations_mm_per_N(sec, [-1], locked, walls, zones, roots)[0])
+
+
+def base_turn_per_moment_rad_per_Nmm(sec: StackSection, locked=(), walls=None) -> float:
+    """What the housing's base alone in TPU adds to the cap's turn per N mm of a pure moment at
+    the cap (turns counter-clockwise per counter-clockwise moment), rad/(N mm), with layers
+    ``locked`` (indices from 0) filled: the cover on the slot's walls as a portal; 0 without a slot."""
+    if sec.slot_height_mm <= 0.0:
+        return 0.0
+    walls = wall_factors(sec) if walls is None else walls
+    rigid = frame_response(sec, locked, None, walls)[2]
+    return frame_response(sec, locked, -1, walls)[2] - rigid
+
+
+@functools.lru_cache(maxsize=32)
+def locked_base_turn_rad_per_Nmm(geometry, material) -> float | None:
+    """:func:`base_turn_per_moment_rad_per_Nmm` of a part (a SensorGeometry in a Material) with
+    its layer 1 locked, kept per part (the tilt rung asks for it with every stack); None without
+    a slot (the closed form's cover stands)."""
+    sec = stack_section(geometry, material)
+    turn = base_turn_per_moment_rad_per_Nmm(sec, (0,))
+    return turn if sec.slot_height_mm > 0.0 else None
 
 
 @dataclass(frozen=True)

@@ -24,6 +24,7 @@ from mst_cli.model.mechanics import layer_laws
 from mst_cli.model.mechanics.depth import in_web
 from mst_cli.model.mechanics.tilt import LayerTiltLaw, solve_layer_tilt
 from mst_cli.model.part_laws import part_units, unit_tilt_law
+from mst_cli.model.plate_sway import locked_base_turn_rad_per_Nmm
 
 
 def tilt_laws(
@@ -39,8 +40,9 @@ def tilt_laws(
     the cap, the plates and the cover of :func:`~mst_cli.model.load_path.members`
     (:mod:`mst_cli.model.part_laws`); False: the layers alone between rigid plates."""
     laws = part_units(geometry, material, mechanics) if whole_part else layer_laws(geometry.layers, material, mechanics)
+    base = locked_base_turn_rad_per_Nmm(geometry, material) if whole_part else None  # the cover's portal
     return [
-        unit_tilt_law(law, c, in_web(c, material).youngs_modulus_MPa, material.poisson_ratio).with_lever_factor(
+        unit_tilt_law(law, c, in_web(c, material).youngs_modulus_MPa, material.poisson_ratio, base).with_lever_factor(
             lever_factor
         )
         for law, c in zip(laws, geometry.layers)

@@ -125,11 +125,14 @@ class MemberInSeries:
     layer 1, :class:`~mst_cli.model.part_laws.SeriesMember`): its drop m(F), piecewise linear in
     the layer's force (through ``F_knots_N`` from 0 and ``drop_mm`` there, ``rate_after_mm_per_N``
     past the last knot), and its turns as a beam under the layer's couple, c(F) M_y / x_c^2 and
-    c(F) M_x / (D^2 / 12) (c = dm/dF: the chevron lines' pair and the depth's uniform strip)."""
+    c(F) M_x / (D^2 / 12) (c = dm/dF: the chevron lines' pair and the depth's uniform strip);
+    ``moment_gain_after`` (F_N, g): from F_N on, the turn under M_y is g times that (the cover's
+    portal under a locked layer 1, :func:`mst_cli.model.part_laws.unit_tilt_law`)."""
 
     F_knots_N: np.ndarray
     drop_mm: np.ndarray
     rate_after_mm_per_N: float
+    moment_gain_after: tuple[float, float] = (math.inf, 1.0)
 
     @functools.cached_property
     def rates_mm_per_N(self) -> np.ndarray:
@@ -200,13 +203,17 @@ def member_state(layer: LayerTiltLaw, target: np.ndarray) -> np.ndarray:
 
 
 def member_compliance(layer: LayerTiltLaw, force_N) -> np.ndarray:
-    """(..., 3) d :func:`member_state` / d (F, M_y, M_x) just past ``force_N``: (c, c / x_c^2,
-    12 c / D^2), c = dm/dF (zeros without a member)."""
+    """(..., 3) d :func:`member_state` / d (F, M_y, M_x) just past ``force_N``: (c, g c / x_c^2,
+    12 c / D^2), c = dm/dF, g the member's moment gain there (zeros without a member)."""
     F = np.asarray(force_N, dtype=float)
     if layer.member is None:
         return np.zeros((*F.shape, 3))
     c = layer.member.rate_mm_per_N(F)[..., None]
-    return c * np.array([1.0, 1.0 / layer.lever_mm**2, 12.0 / layer.depth_mm**2])
+    out = c * np.array([1.0, 1.0 / layer.lever_mm**2, 12.0 / layer.depth_mm**2])
+    start, gain = layer.member.moment_gain_after
+    if gain != 1.0:
+        out[..., 1] *= np.where(F >= start, gain, 1.0)
+    return out
 
 
 @dataclass(frozen=True)
