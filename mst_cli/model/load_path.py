@@ -243,9 +243,9 @@ def all_member_parts(scene: MemberScene, theta_rad, t_mm, h_mm) -> tuple:
     """(:func:`member_parts`, each layer's joints with the plates beside it (model.plate_joint),
     the plates over locked layers (model.past_lock: over one block, over two; each with the top
     layer's walls' thrust, model.wall_thrust, which is the third, and the feet's press, the
-    fourth), the cover's two parts once layer
-    1 is locked (:func:`cover_parts_locked_mm_per_N`)) of stacks given as arrays (..., n): the
-    layers' supports and root joints computed once for all."""
+    fourth), the cover's two parts once layer 1 is locked (:func:`cover_parts_locked_mm_per_N`))
+    of stacks given as arrays (..., n): the layers' supports and root joints computed once for
+    all."""
     t = np.asarray(t_mm, dtype=float)
     supports = layer_supports(scene, theta_rad, t, h_mm)
     one = np.asarray(root_joint_mm_per_N(theta_rad, t, h_mm, *joint_scene(scene)))  # a root on one plate

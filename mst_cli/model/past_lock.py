@@ -29,7 +29,8 @@ A, B, A (each of 13, 20, 28, 40 and 57 degrees below and above, t 0.4, h 1.8 mm,
 studies/locked_plates.py --fit, its data in studies/data/locked_plates.csv), they leave it
 within 18 % (8 % rms), against the joint alone's 95 % (53 % rms). g is fitted with a and k held,
 on those 25 and the 50 with B's walls 0.7 mm over 0.8 and 1.6 mm plates
-(studies/data/locked_plates_thick.csv; docs/design.md 4.7, "The foot's press into the block").
+(studies/data/locked_plates_thick.csv; docs/design.md 4.7, "The feet's press into the locked
+block: built").
 The filled block here is one layer on the rigid cover; a deeper block is softer (the bundled
 designs, not in the fit, are its check). Pure numpy, no I/O.
 """
