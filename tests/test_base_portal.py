@@ -8,6 +8,7 @@ part's by ``--general --out studies/data/general_regimes.csv``)."""
 from __future__ import annotations
 
 import csv
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -109,3 +110,24 @@ def test_the_turn_per_moment_past_layer_1s_lock_is_the_rungs(name):
     for r in range(1, len(locks)):
         stated = stated_shear_figures(linear_response(part, regime_start_N(locks, r)))["turn_per_moment_mrad_per_Nmm"]
         assert stated == pytest.approx(rung[r + 1], rel=BUDGET_REL), (name, r + 1)
+
+
+def test_the_portals_turn_moves_smoothly_with_the_cover():
+    """Swept over the cover's thickness (0.8 to 3 mm, the forward design's layers, layer 1 locked),
+    the section frame's base turn per N mm falls as the cover thickens (a stiffer beam on the same
+    slot walls) and has no jump or sawtooth: at every point of the 0.2 mm sweep, halving the step
+    takes the second difference down to less than half, as a smooth curve's (a jump would leave it
+    at half or more)."""
+    doc = mst.load(ROOT / "configs" / "mohammadi2021-forward.yaml")
+    g, m = doc.geometry(), doc.material
+
+    def turns(steps: int) -> np.ndarray:
+        covers = np.linspace(0.8, 3.0, steps)
+        return np.array([locked_base_turn_rad_per_Nmm(replace(g, housing=replace(g.housing, cover_mm=float(c))), m)
+                         for c in covers])  # fmt: skip
+
+    coarse, fine = turns(12), turns(23)  # steps of 0.2 and 0.1 mm: coarse point i is fine point 2i
+    assert np.all(np.diff(fine) < 0.0)
+    at_coarse = np.abs(np.diff(coarse, 2))  # centred on coarse points 1 to 10
+    at_fine = np.abs(np.diff(fine, 2))[1::2]  # centred on fine points 2 to 20: the same places
+    assert np.all(at_fine < 0.5 * at_coarse), at_fine / at_coarse
