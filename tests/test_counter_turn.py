@@ -123,9 +123,7 @@ def test_the_counter_turn_takes_the_turn_per_tangential_newton_toward_the_rung(n
             assert now == pytest.approx(rung, rel=BUDGET_REL), (name, rung, now)
 
 
-@pytest.mark.xfail(
-    strict=True, reason="the frame turns its thin cover's base 1.55 x the rung's under a pull (docs 4.7)"
-)
+@pytest.mark.xfail(strict=True, reason="on a thin cover the frame's 5 % in the portal's sway is 35 % in the net")
 def test_the_forward_designs_turn_per_tangential_newton_past_two_locks_is_within_budget():
     """A known miss, kept in view: the forward design's turn per tangential newton past two locks,
     within 10 % of the rung's (-9 % before the walls' thrust, +3 % with it; +16 % with the feet's
@@ -134,7 +132,10 @@ def test_the_forward_designs_turn_per_tangential_newton_past_two_locks_is_within
     -0.206 against -0.215 mrad/(N mm)), but under the pull the frame turns that base 1.55 times
     as far as the rung does (0.578 against 0.361 mrad/N), where it is within 2 % on
     mohammadi2021; the figure was within budget only while the cover's C / x_c^2, 0.65 of the
-    rung's turn, cancelled that. Strict: it fails the run once the figure is within budget."""
+    rung's turn, cancelled that. Under the pull the base's turn is the pull's moment's less the
+    portal's sway turning it back, and on the 0.8 mm cover the sway cancels all but a seventh of
+    it: the frame's sway, 5 % above the rung's (as on the specs, where it does not matter), is 35 %
+    in the net (studies/base_portal.py). Strict: it fails the run once the figure is within budget."""
     g, m = designed("mohammadi2021-forward")
     part = loaded_stack(g, m, "spring")
     locks = np.sort([t.lock_force_N for t in part.tilt])
