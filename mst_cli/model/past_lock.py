@@ -86,7 +86,13 @@ def upper_layer_terms(
     )
     ED, thick = E_prime_MPa * depth_mm, plate_mm + t
     EI, kGA = section_EI_kGA(depth_mm, thick, E_prime_MPa, G_MPa)
-    return a * np.asarray(upper), EI, kGA, k * ED * thick**2, g * P_N / ED, t
+    return a * np.asarray(upper), EI, kGA, k * ED * thick**2, edge_press_mm_per_N(g, plate_mm, depth_mm, E_prime_MPa), t
+
+
+def edge_press_mm_per_N(g: float, plate_mm: float, depth_mm: float, E_prime_MPa: float) -> float:
+    """The feet's press at the block's edge, g P/(E'D), mm/N (module docstring; ``plate_mm``
+    unused, in model.plate_joint.joint_scene's order)."""
+    return g * P_N / (E_prime_MPa * depth_mm)
 
 
 def plate_overhang_mm_per_N(c_mm, upper_terms: tuple) -> Any:
@@ -139,24 +145,18 @@ def scene_locked_plates_mm_per_N(scene, theta_rad, t_mm, h_mm, head_mm, joints_m
     :func:`over_two_locked_mm_per_N`, the bottom plate's the same; the part of both that is the
     feet's press, :func:`foot_press_mm_per_N`) of the part a model.load_path.MemberScene
     describes, arrays (..., n - 1)."""
-    G, fitted = scene.G_MPa, LOCKED_FITTED
-    one = locked_plates_mm_per_N(theta_rad, t_mm, h_mm, head_mm, *joint_scene(scene), G, fitted, joints_mm_per_N)
-    one = np.asarray(one, dtype=float)
+    G, fitted, plates = scene.G_MPa, LOCKED_FITTED, joint_scene(scene)
+    one = np.asarray(locked_plates_mm_per_N(theta_rad, t_mm, h_mm, head_mm, *plates, G, fitted, joints_mm_per_N))
     t, h, head = (np.asarray(v, dtype=float) for v in (t_mm, h_mm, head_mm))
-    plate_mm, depth_mm, E_prime_MPa = joint_scene(scene)
-    press = foot_press_mm_per_N(head[..., 1:] - head[..., :-1], fitted[2] * P_N / (E_prime_MPa * depth_mm), t[..., 1:])
+    press = foot_press_mm_per_N(head[..., 1:] - head[..., :-1], edge_press_mm_per_N(fitted[2], *plates), t[..., 1:])
     two = [one[..., :1]]
     for j in range(1, t.shape[-1] - 1):
         joint = None if joints_mm_per_N is None else np.asarray(joints_mm_per_N)[..., j + 1]
-        upper = upper_layer_terms(
-            np.asarray(theta_rad)[..., j + 1], t[..., j + 1], h[..., j + 1], *joint_scene(scene), G, fitted, joint
-        )
+        cell = (np.asarray(theta_rad)[..., j + 1], t[..., j + 1], h[..., j + 1])
+        upper = upper_layer_terms(*cell, *plates, G, fitted, joint)
         span = slice(j - 1, j + 2)
-        two.append(
-            np.asarray(
-                over_two_locked_mm_per_N(t[..., span], h[..., span], head[..., span], *joint_scene(scene), G, upper)
-            )[..., None]
-        )
+        over_two = over_two_locked_mm_per_N(t[..., span], h[..., span], head[..., span], *plates, G, upper)
+        two.append(np.asarray(over_two)[..., None])
     return one, np.concatenate(two, axis=-1), np.asarray(press, dtype=float)
 
 
