@@ -2,7 +2,9 @@
 studies/member_regimes.py ran (the CSV's closed columns, 137b3e2) and as it is now (issue 44,
 docs/design.md 4.7, "The members' closed form, rebuilt"). No rung solves unless --per-plate.
 
-Per regime (the layers locked in order, the cover not landed in either form) it prints each
+Per regime (the layers locked in order, in the rung's regime, the layers alone's, and in the
+part's, whose members can lock another layer first: those are counted apart, "other order", as
+they compare two states; the cover not landed in either form) it prints each
 member class's rung / closed form (median, least, most) before and now, the base apart for
 layer 1 standing on the slot's walls (its wall heads within 0.3 mm of the slot's edge or on the
 wall) and over the slot, and the part's closed / rung - 1 with how many designs are within 5 %.
@@ -54,10 +56,17 @@ def ratios(rows: list[dict], designs: dict) -> dict:
         theta, t, h = (np.array([getattr(c, k) for c in g.layers]) for k in lp.CELL_KEYS)
         head = lp.layer_supports(s, theta, t, h)[1]
         where = "base, over the slot" if s.half_slot_mm - head[0] > ON_WALL_MM else "base, on the wall"
-        for row, now in zip(mine, mr.closed_rows(g, m, Stack(layer_laws(g.layers, m, "spring")))):
+        laws = layer_laws(g.layers, m, "spring")
+        part_locked = list(wp.regime_locked(Stack(tuple(lp.capped_units(laws, lp.members(g, m))))))
+        for row, now in zip(mine, mr.closed_rows(g, m, Stack(laws))):
             regime = int(row["regime"])
             landed = min(float(row["cover_lands_N"]), now["cover_lands_N"]) < float(row["regime_to_N"])
             if landed or row["locked"].split() != [str(j) for j in range(regime - 1)]:
+                continue
+            if tuple(part_locked[regime - 1]) != tuple(range(regime - 1)):
+                # the rung's regime is the layers alone's (layers locked in order); the part's
+                # members lock another layer first, so its regime here is another state
+                out.setdefault((regime, "other order", "now"), []).append(1.0)
                 continue
             for k, key in (("base", where), ("plate", "plates"), ("cap", "cap")):
                 rung, before = float(row[f"rung_{k}"]), float(row[f"closed_{k}"])
@@ -73,15 +82,15 @@ def ratios(rows: list[dict], designs: dict) -> dict:
 def tables(out: dict) -> None:
     print("| regime | member | rung / closed form, before | now |")
     print("|---|---|---|---|")
-    for regime, key in sorted({(r, k) for r, k, _ in out if k != "part"}):
+    for regime, key in sorted({(r, k) for r, k, _ in out if k not in ("part", "other order")}):
         print(f"| {regime} | {key} | {spread(out[(regime, key, 'before')])} | {spread(out[(regime, key, 'now')])} |")
-    print("\n| regime | designs | part: closed / rung - 1, before | within 5 % | now | within 5 % |")
-    print("|---|---|---|---|---|---|")
+    print("\n| regime | designs | part: closed / rung - 1, before | within 5 % | now | within 5 % | other order |")
+    print("|---|---|---|---|---|---|---|")
     for regime in sorted({r for r, k, _ in out if k == "part"}):
         before, now = out[(regime, "part", "before")], out[(regime, "part", "now")]
         within = [sum(abs(e) <= 0.05 for e in v) for v in (before, now)]
         cells = f"{spread(before, '+.1%')} | {within[0]} | {spread(now, '+.1%')} | {within[1]}"
-        print(f"| {regime} | {len(before)} | {cells} |")
+        print(f"| {regime} | {len(before)} | {cells} | {len(out.get((regime, 'other order', 'now'), []))} |")
 
 
 def fit_bearing(rows: list[dict], designs: dict) -> None:
