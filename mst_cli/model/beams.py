@@ -9,11 +9,15 @@ Numbers or arrays (broadcast); pure numpy, no I/O. Formulas from the standard be
 from __future__ import annotations
 
 import functools
+import math
 from typing import Any
 
 import numpy as np
 
 SHEAR_FACTOR = 5.0 / 6.0  # kappa of a rectangular section
+# an end built into a body of its own modulus turns against pi/8 E'D d^2, d the end's thickness: a
+# rigid flat punch d wide tilted on an elastic half-plane (Johnson, Contact Mechanics, 1985, ch. 2)
+END_BUILT_IN = math.pi / 8.0
 
 
 def as_value(x) -> Any:
@@ -82,7 +86,9 @@ def two_load_pair_mm_per_N(span_mm, offset_mm, EI_Nmm2, kGA_N) -> tuple:
     return as_value(np.where(beyond, overhang, bend + shear)), as_value(np.where(beyond, overhang, clamped + shear))
 
 
-def offset_pair_mm_per_N(near_mm, offset_mm, EI_Nmm2, kGA_N, k_rot_Nmm_per_rad, overhang=None) -> Any:
+def offset_pair_mm_per_N(
+    near_mm, offset_mm, EI_Nmm2, kGA_N, k_rot_Nmm_per_rad, overhang=None, root_Nmm_per_rad=None
+) -> Any:
     """The drop per newton (total F, F/2 at each) of two symmetric line loads at |x| = near + |e|
     relative to two symmetric supports at |x| = near (``offset_mm`` e < 0), or of loads at near
     relative to supports at near + e (e > 0): a plate loaded by the walls above it and held by the
@@ -94,12 +100,17 @@ def offset_pair_mm_per_N(near_mm, offset_mm, EI_Nmm2, kGA_N, k_rot_Nmm_per_rad, 
     M near/EI under its end moment M). k = 0, e > 0 is the simply supported four-point beam
     (:func:`two_load_pair_mm_per_N`, span 2 (near + e)); k infinite, a cantilever |e| long.
     ``overhang``: the cantilever's own (E'I, kGA) when its section is not the span's (the
-    plate between unlike layers: only the outer layer's pad reaches past the nearer pair)."""
+    plate between unlike layers: only the outer layer's pad reaches past the nearer pair).
+    ``root_Nmm_per_rad``: the cantilever's root turning against a spring there (its end built
+    into the span's thicker section, not held), P e^2 / k more; None: held."""
     P, e = 0.5, np.abs(np.asarray(offset_mm, dtype=float))
     near, EI = np.asarray(near_mm, dtype=float), np.asarray(EI_Nmm2, dtype=float)
     EI_out, kGA_out = (EI, kGA_N) if overhang is None else overhang
     rho = 1.0 / (1.0 + np.asarray(k_rot_Nmm_per_rad, dtype=float) * near / EI)
-    return as_value(P * (rho * e * e * near / EI + e**3 / 3.0 / EI_out) + P * e / kGA_out)
+    drop = P * (rho * e * e * near / EI + e**3 / 3.0 / EI_out) + P * e / kGA_out
+    if root_Nmm_per_rad is not None:
+        drop = drop + P * e * e / np.asarray(root_Nmm_per_rad, dtype=float)
+    return as_value(drop)
 
 
 def end_fixity(k_rot_Nmm_per_rad, EI_Nmm2, span_mm) -> float | np.ndarray:

@@ -61,11 +61,11 @@ from typing import Any
 
 import numpy as np
 
+from mst_cli.model.beams import END_BUILT_IN as END_BUILT_IN  # the cover's end in the wall's top, pi/8 E'D c^2
 from mst_cli.model.beams import SHEAR_FACTOR, as_value, plain_section, section_EI_kGA
 from mst_cli.model.plate_joint import cover_root_mm_per_N
 
 WALL_LEVER = 0.5  # the cover's reaction at the wall's inner edge, w/2 from its centre line
-END_BUILT_IN = math.pi / 8.0  # the cover's end in the wall's top: pi/8 E'D c^2 (Johnson 1985, ch. 2)
 BEARING = 0.8  # fitted (module docstring): a local bearing on the cover, P / (c_b E'D)
 # fitted (module docstring, studies/locked_base.py --fit): how far into a locked layer 1's
 # block, in cover thicknesses, the cover's link to the slot's wall reaches

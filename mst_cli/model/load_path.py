@@ -37,13 +37,14 @@ from typing import Any
 
 import numpy as np
 
-from mst_cli.model.beams import SHEAR_FACTOR as SHEAR_FACTOR  # the section's and one-support forms, re-exported
 from mst_cli.model.beams import (
+    END_BUILT_IN,
     end_fixity,
     offset_pair_mm_per_N,
     strip_bending_pair_mm_per_N,
     strip_shear_mm_per_N,
 )
+from mst_cli.model.beams import SHEAR_FACTOR as SHEAR_FACTOR  # the section's and one-support forms, re-exported
 from mst_cli.model.beams import section_EI_kGA as section_EI_kGA
 from mst_cli.model.beams import strip_bending_mm_per_N as strip_bending_mm_per_N
 from mst_cli.model.beams import two_load_mm_per_N as two_load_mm_per_N
@@ -321,14 +322,19 @@ def plates_mm_per_N(
     measures 12.9 per wall, docs/design.md 4.7). Between the two pairs of walls only the outer
     layer's pad is bonded to the plate (the inner layer's pad ends at its own walls), so the
     overhang bends as the plate with that pad alone, as a plate over a locked layer's does
-    (model.past_lock)."""
+    (model.past_lock), and its root, an end of that section built into the thicker span, turns
+    against pi/8 E'D d^2 (d the overhang's thickness; :data:`~mst_cli.model.beams.END_BUILT_IN`,
+    as the cover's ends in the slot's walls): held there, the plates between open layers read
+    0.87-1.38 times the rung's over the box (median 1.11), 0.85-1.22 (1.05) with it
+    (studies/member_closed_form.py; docs/design.md 4.7, "The overhang's root")."""
     s = scene
     t_below, t_above = np.asarray(t_below_mm, dtype=float), np.asarray(t_above_mm, dtype=float)
     EI_p, kGA_p = section_EI_kGA(s.depth_mm, t_below + s.plate_mm + t_above, s.E_prime_MPa, s.G_MPa)
-    outer_pad = np.where(head_below_mm > head_above_mm, t_below, t_above)
-    overhang = section_EI_kGA(s.depth_mm, outer_pad + s.plate_mm, s.E_prime_MPa, s.G_MPa)
+    outer = np.where(head_below_mm > head_above_mm, t_below, t_above) + s.plate_mm  # the overhang's thickness
+    overhang = section_EI_kGA(s.depth_mm, outer, s.E_prime_MPa, s.G_MPa)
+    root = END_BUILT_IN * s.E_prime_MPa * s.depth_mm * outer * outer
     near, offset = np.minimum(head_below_mm, head_above_mm), head_below_mm - head_above_mm
-    return offset_pair_mm_per_N(near, offset, EI_p, kGA_p, sway_below + sway_above, overhang)
+    return offset_pair_mm_per_N(near, offset, EI_p, kGA_p, sway_below + sway_above, overhang, root)
 
 
 def members_total_mm_per_N(scene: MemberScene, theta_rad, t_mm, h_mm) -> np.ndarray:
