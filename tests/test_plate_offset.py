@@ -97,16 +97,17 @@ def test_the_overhangs_root_spring_adds_its_turn_times_the_lever(e):
     assert sprung - held == pytest.approx(P * e * e / k_root, rel=1e-12)
 
 
-def test_on_thin_plates_the_overhangs_root_brings_the_closed_form_to_the_rung():
-    """Stacks A, B, A with 0.8 mm plates (A 13 or 20 or 28 degrees, B 40 or 57; t 0.4, h 1.8;
-    offsets 1.0 to 2.8 mm), regime 1, each plate alone in TPU on the rung (an independent FE of
+def test_on_thin_plates_the_overhangs_root_brings_the_closed_form_nearer_the_rung():
+    """Stacks A, B, A with 0.8 mm plates (A 13, 20 or 28 degrees, B 40 or 57; t 0.4, h 1.8;
+    offsets 1.0 to 3.2 mm), regime 1, each plate alone in TPU on the rung (an independent FE of
     the section). The overhang's root turning into the span, pi/8 E'D d^2 (d = the outer pad and
-    the plate), takes the closed form from -21 to -10 % of the rung (the root held) to -14 to
-    -2 % (docs/design.md 4.7, "The overhang's root"): every plate nearer the rung. (Not every
-    stack is: 13 against 57 degrees reads +10 % with it, +0 % held, and 13 against 40 over 1.6 mm
-    plates +7 against +1 %: the term is the textbook root, not a fit.)"""
+    the plate), takes the closed form's rms error over the set from 14 % (the root held: -21 to
+    +0 %) to 9 % (-14 to +10 %; docs/design.md 4.7, "The overhang's root"). Not every stack
+    nearer: 13 against 57 degrees reads +10 % with it, +0 % held; the term is the textbook end,
+    not a fit, so the set is judged whole."""
+    errors: dict[str, list[float]] = {"root": [], "held": []}
     with tempfile.TemporaryDirectory() as tmp:
-        for a, b in ((13.0, 40.0), (20.0, 57.0), (20.0, 40.0), (28.0, 57.0)):
+        for a, b in ((13.0, 40.0), (13.0, 57.0), (20.0, 57.0), (20.0, 40.0), (28.0, 57.0)):
             path = stack(Path(tmp), a, b, plate_mm=0.8)
             doc, _ = mst.designed(path)
             scene = lp.member_scene(doc.geometry(), doc.material)
@@ -114,4 +115,7 @@ def test_on_thin_plates_the_overhangs_root_brings_the_closed_form_to_the_rung():
             for row in plate_rows(path):
                 closed = row["beam"] + row["joints"]
                 held = closed - P * row["e"] ** 2 / (math.pi / 8.0 * E * D * d * d)
-                assert abs(closed / row["rung"] - 1.0) < abs(held / row["rung"] - 1.0), (a, b, row)
+                errors["root"].append(closed / row["rung"] - 1.0)
+                errors["held"].append(held / row["rung"] - 1.0)
+    rms = {k: math.sqrt(sum(x * x for x in v) / len(v)) for k, v in errors.items()}
+    assert rms["root"] < rms["held"], rms
