@@ -9,7 +9,7 @@ inverse and the two commands' agreement, not the model (the rung is checked on i
 tests/test_whole_part_rung.py). Each also reads the same fields with the closed form, to show
 the test would see the read side fall back to it (since the closed form took the walls' joints
 with the plates, its centred reads are only 1-4 % off the section's, since the feet's press 0-2 %,
-so those bounds are tighter).
+since the plates' overhang turns at its root -0.1 to +1.5 %, so those bounds are tighter).
 
 The calibration test rests on a law, not on the model's output: the section model's members are
 TPU but the insert, and in linear elasticity their compliance scales as 1/E, so a part whose TPU
@@ -41,13 +41,14 @@ def test_a_centred_press_reads_back_the_force_mst_simulate_states(section_spec, 
     got = api.read(section_spec, csv, warn=quiet)
     np.testing.assert_allclose(got.force_N, resp.force_N[rows], rtol=2e-3)
     closed = api.read(forward_copy(tmp_path, "part"), csv, warn=quiet).force_N
-    # the closed form reads these +0.0 to +1.7 % off (+0.9 to +4.0 % before the feet's press,
-    # model.past_lock, brought its regime 3 within 5 % of the rung): a read side that fell back to
-    # it would miss the 2e-3 above by more than three times, in the first two regimes
+    # the closed form reads these -0.1 to +1.5 % off (+0.9 to +4.0 % before the feet's press,
+    # model.past_lock, +0.0 to +1.7 % before the plates' overhang turned at its root): two models
+    # whose difference has no sign of its own, but a read side that fell back to the closed form
+    # would still miss the 2e-3 above by more than three times, in the first two regimes
     off = closed / resp.force_N[rows] - 1.0
     before_last = resp.force_N[rows] < resp.regimes[-1].force_from_N
-    assert np.all(np.isfinite(closed[before_last])) and np.all(off[before_last] > 0.0)
-    assert np.max(off[before_last]) > 3 * 2e-3
+    assert np.all(np.isfinite(closed[before_last]))
+    assert np.max(np.abs(off[before_last])) > 3 * 2e-3
 
 
 def test_an_off_centre_press_reads_back_its_force_and_place(section_spec, tmp_path):
