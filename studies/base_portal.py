@@ -52,13 +52,27 @@ def mst_cover_turns(g, m) -> tuple[list[float], list[float]]:
     return now, before
 
 
+def cover_depth_mm(sec) -> float:
+    """H: the cover's mid-plane under the top face of the section ``sec`` (a plate_sway.StackSection),
+    mm: the pull's lever on the base."""
+    return float(sec.bottom_mm[-1] + sec.h_mm[-1] + sec.cap_above_stack_mm - ps.member_planes_mm(sec)[0])
+
+
+def member_rows(rows: list[dict], name: str) -> tuple[dict, dict]:
+    """({(regime, members): turn per moment, mrad/(N mm)}, {...: turn per tangential N, mrad/N}) of
+    design ``name`` in the rows of member_turns.csv."""
+    mine = [r for r in rows if r["design"] == name]
+    turn = {(int(r["regime"]), r["members"]): float(r["turn_per_moment_mrad_per_Nmm"]) for r in mine}
+    pull = {(int(r["regime"]), r["members"]): float(r["turn_per_tangential_mrad_per_N"]) for r in mine}
+    return turn, pull
+
+
 def pull_rows(name: str, g, m, turn: dict, pull: dict, order: list[int]) -> list[str]:
     """The base under the pull, past layer 1's lock: the pull's moment turns it by H k_M (H the
     cover's mid-plane under the top face, k_M its turn per N mm), the portal's sway turns it back by
     S; the net is S - H k_M, the rung's (its member rows) and the frame's (model.plate_sway), mrad/N."""
     sec = ps.stack_section(g, m)
-    z_top = sec.bottom_mm[-1] + sec.h_mm[-1] + sec.cap_above_stack_mm
-    H = z_top - ps.member_planes_mm(sec)[0]
+    H = cover_depth_mm(sec)
     motion = ps.member_motions(sec, [-1], (0,))
     frame_net, frame_kM = 1e3 * float(motion.turn_rad_per_N[0]), 1e3 * ps.base_turn_per_moment_rad_per_Nmm(sec, (0,))
     rows = []
@@ -90,10 +104,7 @@ def main() -> None:
         sec = ps.stack_section(g, m)
         frame = {lock: 1e3 * ps.base_turn_per_moment_rad_per_Nmm(sec, lock) for lock in ((), (0,))}
         now, before = mst_cover_turns(g, m)
-        turn = {(int(r["regime"]), r["members"]): float(r["turn_per_moment_mrad_per_Nmm"]) for r in rows
-                if r["design"] == name}  # fmt: skip
-        pull = {(int(r["regime"]), r["members"]): float(r["turn_per_tangential_mrad_per_N"]) for r in rows
-                if r["design"] == name}  # fmt: skip
+        turn, pull = member_rows(rows, name)
         under_pull += pull_rows(name, g, m, turn, pull, order)
         for regime in sorted({k[0] for k in turn}):
             locked = 0 in order[: regime - 1]

@@ -37,26 +37,27 @@ from mst_cli.model import plate_sway as ps
 from mst_cli.model.mechanics import layer_laws
 from mst_cli.model.mechanics import whole_part as wp
 from mst_cli.model.stack import Stack
+from studies.base_portal import cover_depth_mm, member_rows
 
 ROOT = Path(__file__).resolve().parents[1]
 CLASSES = ("only the base", "only the plate", "only the cap")
 TARGET_REL = 0.10  # the done-when's budget on the turn per tangential newton
 
 
-def pull_terms(rows: dict, regime: int, H_mm: float, layer_1_locked: bool) -> dict[str, float]:
+def pull_terms(turn: dict, pull: dict, regime: int, H_mm: float, layer_1_locked: bool) -> dict[str, float]:
     """The rung's turn per tangential newton in ``regime`` as its terms, mrad/N (module docstring);
-    ``rows`` {(regime, members): (turn per moment, turn per tangential N)} of one design, ``H_mm``
-    the cover's mid-plane under the top face."""
-    rigid = rows[(regime, "rigid")][1]
-    added = {c: rows[(regime, c)][1] - rigid for c in CLASSES}
+    ``turn``, ``pull``: one design's rows (studies/base_portal.member_rows), ``H_mm`` the cover's
+    mid-plane under the top face."""
+    rigid = pull[(regime, "rigid")]
+    added = {c: pull[(regime, c)] - rigid for c in CLASSES}
     terms = {"layers": rigid}
     if layer_1_locked:  # the base's net is S - H k_M (studies/base_portal.py)
-        k_M = rows[(regime, "rigid")][0] - rows[(regime, "only the base")][0]
+        k_M = turn[(regime, "rigid")] - turn[(regime, "only the base")]
         terms |= {"base: S": added["only the base"] + H_mm * k_M, "base: -H k_M": -H_mm * k_M}
     else:
         terms["base"] = added["only the base"]
     terms |= {"plates": added["only the plate"], "cap": added["only the cap"]}
-    terms["interaction"] = rows[(regime, "as printed")][1] - rigid - sum(added.values())
+    terms["interaction"] = pull[(regime, "as printed")] - rigid - sum(added.values())
     return terms
 
 
@@ -119,18 +120,10 @@ def main() -> None:
         doc, _ = mst.designed(ROOT / "configs" / f"{name}.yaml")
         g, m = doc.geometry(), doc.material
         order = [int(i) for i in Stack(layer_laws(g.layers, m, "spring")).lock_order]
-        sec = ps.stack_section(g, m)
-        H = sec.bottom_mm[-1] + sec.h_mm[-1] + sec.cap_above_stack_mm - ps.member_planes_mm(sec)[0]
-        rows = {
-            (int(r["regime"]), r["members"]): (
-                float(r["turn_per_moment_mrad_per_Nmm"]),
-                float(r["turn_per_tangential_mrad_per_N"]),
-            )
-            for r in raw
-            if r["design"] == name
-        }
-        for regime in sorted({k[0] for k in rows}):
-            terms = pull_terms(rows, regime, H, 0 in order[: regime - 1])
+        H = cover_depth_mm(ps.stack_section(g, m))
+        turn, pull = member_rows(raw, name)
+        for regime in sorted({k[0] for k in pull}):
+            terms = pull_terms(turn, pull, regime, H, 0 in order[: regime - 1])
             total, kappa, a = conditioning(terms)
             listed = ", ".join(f"{k} {v:+.3f}" for k, v in terms.items())
             print(f"| {name} | {regime} | {listed} | {total:.3f} | {kappa:.1f} | {a:.1f} | {TARGET_REL / a:.1%} |")

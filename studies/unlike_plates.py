@@ -22,7 +22,10 @@ above < 0) it bends only the overhang, clamped at the head; where they stand ins
 between the heads bends too. The last column is the free body both cases share, a beam loaded by
 P = 1/2 at each foot and held by P at each head: the span between the nearer pair carries the
 moment P |e| and the rest bends as a cantilever, P (e^2 x_near + |e|^3 / 3) / E'I (x_near the
-nearer pair's x, E'I the plate with both pads), without the walls' restraint.
+nearer pair's x, E'I the plate with both pads), without the walls' restraint. The last two are
+the closed form's error and what it was with the overhang's root held (its turn against pi/8 E'D
+d^2 taken out of the beam; docs/design.md 4.7, "The overhang's root"). ``--plate-mm`` and
+``--pairs 13,40 20,57 ...`` choose the stacks.
 """
 
 from __future__ import annotations
@@ -37,7 +40,7 @@ import yaml
 
 import mst_cli as mst
 from mst_cli.model import load_path as lp
-from mst_cli.model.beams import section_EI_kGA
+from mst_cli.model.beams import END_BUILT_IN, section_EI_kGA
 from mst_cli.model.mechanics import layer_laws
 from mst_cli.model.mechanics import whole_part as wp
 from mst_cli.model.plate_joint import root_joint_mm_per_N
@@ -79,21 +82,32 @@ def plate_rows(path: Path) -> list[dict]:
         EI, _ = section_EI_kGA(scene.depth_mm, t[j] + scene.plate_mm + t[j + 1], scene.E_prime_MPa, scene.G_MPa)
         e, near = head[j] - head[j + 1], min(head[j], head[j + 1])
         free = 0.5 * (e * e * near + abs(e) ** 3 / 3.0) / EI
+        d = (t[j] if head[j] > head[j + 1] else t[j + 1]) + scene.plate_mm  # the overhang's thickness
+        root = 0.5 * e * e / (END_BUILT_IN * scene.E_prime_MPa * scene.depth_mm * d * d)  # in the beam
         rung = wp.press(g, m, opts).drop_mm_per_N - rigid
-        rows.append({"rung": rung, "beam": beams[j], "joints": joint[j] + joint[j + 1], "e": e, "free": free})
+        rows.append(
+            {"rung": rung, "beam": beams[j], "joints": joint[j] + joint[j + 1], "e": e, "free": free, "root": root}
+        )
     return rows
 
 
-def per_plate() -> None:
-    print("| θ_A, ° | θ_B, ° | plate | e, mm | rung, µm/N | closed form: beam + joints | free-body beam |")
-    print("|---|---|---|---|---|---|---|")
+def per_plate(plate_mm: float = PLATE_MM, pairs=None) -> None:
+    """The ``--per-plate`` table for stacks with ``plate_mm`` plates, every pair of THETA_DEG or
+    ``pairs`` ((theta_A, theta_B), ...)."""
+    print(
+        "| θ_A, ° | θ_B, ° | plate | e, mm | rung, µm/N | closed form: beam + joints | free-body beam | "
+        "closed / rung - 1 | its root held |"
+    )
+    print("|---|---|---|---|---|---|---|---|---|")
     with tempfile.TemporaryDirectory() as tmp:
-        for theta_a, theta_b in itertools.combinations(THETA_DEG, 2):
-            for j, row in enumerate(plate_rows(stack(Path(tmp), theta_a, theta_b))):
+        for theta_a, theta_b in pairs or itertools.combinations(THETA_DEG, 2):
+            for j, row in enumerate(plate_rows(stack(Path(tmp), theta_a, theta_b, plate_mm=plate_mm))):
                 um = {k: 1e3 * row[k] for k in ("rung", "beam", "joints", "free")}
+                closed = row["beam"] + row["joints"]
                 print(
                     f"| {theta_a:g} | {theta_b:g} | {j + 1} | {row['e']:+.2f} | {um['rung']:.1f} | "
-                    f"{um['beam']:.1f} + {um['joints']:.1f} | {um['free']:.1f} |",
+                    f"{um['beam']:.1f} + {um['joints']:.1f} | {um['free']:.1f} | {closed / row['rung'] - 1:+.1%} | "
+                    f"{(closed - row['root']) / row['rung'] - 1:+.1%} |",
                     flush=True,
                 )
 
@@ -101,8 +115,12 @@ def per_plate() -> None:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--per-plate", action="store_true", help="each plate alone in TPU (module docstring)")
-    if parser.parse_args().per_plate:
-        per_plate()
+    parser.add_argument("--plate-mm", type=float, default=PLATE_MM, help="with --per-plate: the plates' thickness")
+    parser.add_argument("--pairs", nargs="*", default=None, help="with --per-plate: theta_A,theta_B pairs [all]")
+    args = parser.parse_args()
+    if args.per_plate:
+        pairs = [tuple(float(x) for x in p.split(",")) for p in args.pairs] if args.pairs else None
+        per_plate(args.plate_mm, pairs)
         return
     print("| θ_A, ° | θ_B, ° | rung, µm/N | closed form | missing | / layers and plates |")
     print("|---|---|---|---|---|---|")
